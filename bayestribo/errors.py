@@ -1,0 +1,49 @@
+"""The package's own exceptions and warnings.
+
+Every error a user can provoke with bad input derives from :class:`BayestriboError`,
+so a caller can catch the package's errors apart from programming errors. Errors
+about argument *values* of pure functions are ``ValueError`` subclasses as well, so
+``except ValueError`` keeps working for numerical callers.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "AcquisitionError",
+    "BayestriboError",
+    "ConvergenceWarning",
+    "RecordingError",
+    "RunFormatError",
+]
+
+
+class BayestriboError(Exception):
+    """Base class of every error raised by bayestribo on bad input or bad data."""
+
+
+class RecordingError(BayestriboError, ValueError):
+    """A recorded signal cannot be analysed (too short, irregular, not oscillating...).
+
+    Parameters
+    ----------
+    message : str
+        What is wrong, naming the field and what was expected.
+    where : str, optional
+        The file, channel or sample range concerned.
+    """
+
+    def __init__(self, message: str, where: str | None = None) -> None:
+        self.where = where
+        super().__init__(f"{where}: {message}" if where else message)
+
+
+class RunFormatError(RecordingError):
+    """A run file or its sidecar does not follow the expected format."""
+
+
+class AcquisitionError(BayestriboError, OSError):
+    """The acquisition link failed (timeout, disconnect, bad frame, busy port)."""
+
+
+class ConvergenceWarning(UserWarning):
+    """A sampler run did not meet its convergence criteria."""
