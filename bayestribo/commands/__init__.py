@@ -1,0 +1,1 @@
+"""Sub-commands of the ``bayestribo`` command line, one module each."""
