@@ -1,0 +1,47 @@
+"""Errors of the acquisition link, all :class:`bayestribo.errors.AcquisitionError`.
+
+Each names the port or file concerned and what was expected, so the command line
+can print it as one clear line.
+"""
+
+from __future__ import annotations
+
+from bayestribo.errors import AcquisitionError
+
+__all__ = [
+    "AcquisitionTimeout",
+    "DeviceError",
+    "DisconnectedError",
+    "FrameError",
+    "HeaderError",
+    "PortBusyError",
+    "PortNotFoundError",
+]
+
+
+class PortNotFoundError(AcquisitionError):
+    """The serial port (device path or URL) does not exist or cannot be reached."""
+
+
+class PortBusyError(AcquisitionError):
+    """The serial port is held by another program."""
+
+
+class AcquisitionTimeout(AcquisitionError):
+    """The device did not answer, or stopped sending, within the timeout."""
+
+
+class DisconnectedError(AcquisitionError):
+    """The device went away in the middle of a conversation (cable pulled, reset)."""
+
+
+class FrameError(AcquisitionError):
+    """A frame passed its checksum but its payload does not follow the protocol."""
+
+
+class HeaderError(FrameError):
+    """The run header does not parse (bad length, unsupported version, bad values)."""
+
+
+class DeviceError(AcquisitionError):
+    """The device answered a command with an ERROR frame."""

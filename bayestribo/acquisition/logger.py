@@ -1,0 +1,378 @@
+"""Logging that loses nothing: the append-only raw log and the atomic run files.
+
+Every byte received is appended to the raw log as it arrives (written straight to
+the operating system, so it survives the death of the process, and synced to disk
+at least every :data:`SYNC_INTERVAL_S`). When the run ends, for whatever reason, the
+parsed run is written in the canonical format (CSV ``time_s, displacement_m,
+velocity_m_per_s`` and a JSON sidecar of the same stem) into a temporary directory
+and moved into place with :func:`os.replace`, so a reader never sees half a run.
+A ``<stem>.sha256`` manifest (``sha256sum -c`` format) lists the raw log and the run
+files.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import platform
+import re
+import tempfile
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from bayestribo import __version__
+from bayestribo.acquisition.assembly import AssembledRun
+from bayestribo.errors import AcquisitionError
+
+__all__ = [
+    "SYNC_INTERVAL_S",
+    "OperatorInputs",
+    "RawLog",
+    "RunFiles",
+    "make_run_id",
+    "run_metadata",
+    "sha256_file",
+    "utc_now",
+    "write_json_atomic",
+    "write_run_files",
+]
+
+#: Longest time a received byte may wait before the raw log is synced to disk [s].
+SYNC_INTERVAL_S = 0.5
+
+
+def utc_now() -> str:
+    """Host time now, ISO 8601 in UTC with microseconds."""
+    return datetime.now(UTC).isoformat(timespec="microseconds")
+
+
+def sha256_file(path: str | os.PathLike[str]) -> str:
+    """SHA-256 of a file's bytes, hexadecimal."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+class RawLog:
+    """Append-only log of every byte received, synced to disk at least once a second.
+
+    Parameters
+    ----------
+    path : path-like
+        The log file; created if absent, appended to otherwise (never truncated).
+    sync_interval_s : float
+        Longest time between a write and the next ``fsync`` [s] (checked on every
+        write and every :meth:`tick`; the acquisition loop ticks at least 10 times a
+        second).
+    """
+
+    def __init__(
+        self, path: str | os.PathLike[str], sync_interval_s: float = SYNC_INTERVAL_S
+    ) -> None:
+        self.path = Path(path)
+        try:
+            self._fd: int | None = os.open(
+                self.path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644
+            )
+        except OSError as exc:
+            raise AcquisitionError(f"{self.path}: cannot open the raw log ({exc})") from None
+        self.sync_interval_s = sync_interval_s
+        self.bytes_written = 0
+        self.syncs = 0
+        self._dirty_since: float | None = None
+
+    def write(self, data: bytes) -> None:
+        """Append bytes (written to the OS immediately; synced per the interval)."""
+        if self._fd is None:
+            raise AcquisitionError(f"{self.path}: raw log already closed")
+        view = memoryview(data)
+        while view:
+            written = os.write(self._fd, view)
+            view = view[written:]
+        self.bytes_written += len(data)
+        if data and self._dirty_since is None:
+            self._dirty_since = time.monotonic()
+        self.tick()
+
+    def tick(self) -> None:
+        """Sync to disk if bytes have waited for the sync interval."""
+        if (
+            self._dirty_since is not None
+            and time.monotonic() - self._dirty_since >= self.sync_interval_s
+        ):
+            self.sync()
+
+    def sync(self) -> None:
+        """Force the log to disk now."""
+        if self._fd is not None:
+            os.fsync(self._fd)
+            self.syncs += 1
+            self._dirty_since = None
+
+    def close(self) -> None:
+        """Sync and close (idempotent)."""
+        if self._fd is not None:
+            self.sync()
+            os.close(self._fd)
+            self._fd = None
+
+    def __enter__(self) -> RawLog:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+class OperatorInputs(dict[str, Any]):
+    """The operator's inputs for a run (a plain dict with checked, canonical keys).
+
+    Parameters
+    ----------
+    load_N : float
+        Normal load N [N], >= 0.
+    lubricant : str
+        Lubricant name (e.g. ``"glycerol"``, ``"water"``, ``"dry"``).
+    repeat : int
+        Repeat number of this condition, >= 1.
+    water_mass_fraction : float, optional
+        Mass fraction of water in the lubricant, in [0, 1].
+    temperature_C : float, optional
+        Temperature [°C].
+    notes : str
+        Free text.
+    mass_kg : float, optional
+        Oscillating mass m [kg].
+    natural_frequency_Hz : float, optional
+        Natural frequency f [Hz].
+    """
+
+    def __init__(
+        self,
+        *,
+        load_N: float,
+        lubricant: str,
+        repeat: int,
+        water_mass_fraction: float | None = None,
+        temperature_C: float | None = None,
+        notes: str = "",
+        mass_kg: float | None = None,
+        natural_frequency_Hz: float | None = None,
+    ) -> None:
+        def check(name: str, value: float | None, lo: float, hi: float) -> float | None:
+            if value is None:
+                return None
+            value = float(value)
+            if not (lo <= value <= hi):
+                raise AcquisitionError(f"{name}: {value!r} outside the range [{lo}, {hi}]")
+            return value
+
+        if not isinstance(lubricant, str) or not lubricant.strip():
+            raise AcquisitionError(f"lubricant: expected a non-empty name, got {lubricant!r}")
+        if int(repeat) != repeat or repeat < 1:
+            raise AcquisitionError(f"repeat: expected an integer >= 1, got {repeat!r}")
+        super().__init__(
+            load_N=check("load_N", load_N, 0.0, 1e4),
+            lubricant=lubricant.strip(),
+            repeat=int(repeat),
+            water_mass_fraction=check("water_mass_fraction", water_mass_fraction, 0.0, 1.0),
+            temperature_C=check("temperature_C", temperature_C, -273.15, 1e4),
+            notes=str(notes),
+            mass_kg=check("mass_kg", mass_kg, 1e-9, 1e6),
+            natural_frequency_Hz=check("natural_frequency_Hz", natural_frequency_Hz, 1e-6, 1e9),
+        )
+
+
+def make_run_id(inputs: Mapping[str, Any], when: datetime | None = None) -> str:
+    """A file-name-safe run id: UTC time, lubricant, load and repeat.
+
+    Example: ``20261122T061500Z_glycerol_N0.31_r2``.
+    """
+    when = when or datetime.now(UTC)
+    lubricant = re.sub(r"[^A-Za-z0-9.-]+", "-", str(inputs["lubricant"])).strip("-") or "x"
+    return f"{when:%Y%m%dT%H%M%SZ}_{lubricant}_N{inputs['load_N']:g}_r{inputs['repeat']}"
+
+
+def write_json_atomic(path: str | os.PathLike[str], data: Mapping[str, Any]) -> None:
+    """Write JSON through a temporary file in the same directory and :func:`os.replace`."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            json.dump(data, fh, indent=2, sort_keys=False, allow_nan=False)
+            fh.write("\n")
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def run_metadata(
+    run: AssembledRun,
+    inputs: Mapping[str, Any],
+    *,
+    run_id: str,
+    raw_log: Path,
+    port: str | None,
+    started_utc: str | None,
+    ended_utc: str | None,
+    recovered: bool = False,
+) -> dict[str, Any]:
+    """The sidecar metadata of a run: canonical keys, operator inputs, device header, host.
+
+    Parameters
+    ----------
+    run : AssembledRun
+        The assembled samples and their report.
+    inputs : mapping
+        The operator's inputs (:class:`OperatorInputs` keys).
+    run_id : str
+        The run's id (also the file stem).
+    raw_log : Path
+        The raw log the run was parsed from (its SHA-256 is recorded).
+    port, started_utc, ended_utc : str or None
+        Port URL and host times of the acquisition.
+    recovered : bool
+        True when rebuilt from a raw log after a crash.
+    """
+    header = run.report["device_header"]
+    assert isinstance(header, dict)
+    return {
+        "run_id": run_id,
+        "load_N": inputs.get("load_N"),
+        "mass_kg": inputs.get("mass_kg"),
+        "natural_frequency_Hz": inputs.get("natural_frequency_Hz"),
+        "displacement_resolution_m": header["displacement_scale_m_per_count"],
+        "velocity_resolution_m_per_s": header["velocity_scale_m_per_s_per_count"],
+        "sample_rate_Hz": header["sample_rate_Hz"],
+        "lubricant": inputs.get("lubricant"),
+        "water_mass_fraction": inputs.get("water_mass_fraction"),
+        "repeat": inputs.get("repeat"),
+        "temperature_C": inputs.get("temperature_C"),
+        "notes": inputs.get("notes", ""),
+        "complete": run.complete,
+        "fault": run.report["fault"],
+        "gaps": run.report["gaps"],
+        "samples_missing": run.report["samples_missing"],
+        "acquisition": {
+            **run.report,
+            "port": port,
+            "host": platform.node(),
+            "host_time_start_utc": started_utc,
+            "host_time_end_utc": ended_utc,
+            "host_time_written_utc": utc_now(),
+            "package": "bayestribo",
+            "package_version": __version__,
+            "raw_log": raw_log.name,
+            "raw_log_bytes": raw_log.stat().st_size,
+            "raw_log_sha256": sha256_file(raw_log),
+            "recovered_from_raw_log": recovered,
+        },
+    }
+
+
+@dataclass(frozen=True)
+class RunFiles:
+    """Paths of a written run and the SHA-256 of each file, by file name."""
+
+    csv: Path
+    json: Path
+    raw: Path
+    manifest: Path
+    digests: dict[str, str]
+
+
+def _write_canonical(
+    directory: Path, stem: str, run: AssembledRun, metadata: Mapping[str, Any]
+) -> tuple[Path, Path]:
+    """Write the canonical CSV and JSON sidecar of a run into ``directory``.
+
+    The one place that knows the file format; the caller moves the files into place.
+    Rows are the received samples only, at their own times: gaps show as jumps in
+    ``time_s`` and are listed in the sidecar, never filled.
+    """
+    csv_path = directory / f"{stem}.csv"
+    json_path = directory / f"{stem}.json"
+    table = np.column_stack([run.time_s, run.displacement_m, run.velocity_m_per_s])
+    with open(csv_path, "w", encoding="utf-8", newline="\n") as fh:
+        fh.write("time_s,displacement_m,velocity_m_per_s\n")
+        np.savetxt(fh, table, delimiter=",", fmt="%.17g")
+    with open(json_path, "w", encoding="utf-8") as fh:
+        json.dump(dict(metadata), fh, indent=2, allow_nan=False)
+        fh.write("\n")
+    return csv_path, json_path
+
+
+def write_run_files(
+    out_dir: str | os.PathLike[str],
+    stem: str,
+    run: AssembledRun,
+    metadata: Mapping[str, Any],
+    raw_log: Path,
+) -> RunFiles:
+    """Write a run atomically: temporary directory in ``out_dir``, fsync, :func:`os.replace`.
+
+    Parameters
+    ----------
+    out_dir : path-like
+        Directory of the run files (same file system as the temporary directory).
+    stem : str
+        File stem (the run id).
+    run : AssembledRun
+        The samples.
+    metadata : mapping
+        The sidecar content (:func:`run_metadata`).
+    raw_log : Path
+        The raw log, listed in the ``.sha256`` manifest.
+
+    Returns
+    -------
+    RunFiles
+        Paths of the CSV, JSON, raw log and manifest, and their digests.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix=f".{stem}.", dir=out) as tmp:
+        csv_tmp, json_tmp = _write_canonical(Path(tmp), stem, run, metadata)
+        digests = {p.name: sha256_file(p) for p in (csv_tmp, json_tmp)}
+        digests[raw_log.name] = sha256_file(raw_log)
+        manifest_tmp = Path(tmp) / f"{stem}.sha256"
+        manifest_tmp.write_text(
+            "".join(f"{digest}  {name}\n" for name, digest in digests.items()), encoding="utf-8"
+        )
+        for path in (csv_tmp, json_tmp, manifest_tmp):
+            with open(path, "rb") as fh:
+                os.fsync(fh.fileno())
+        for path in (csv_tmp, json_tmp, manifest_tmp):
+            os.replace(path, out / path.name)
+    _fsync_dir(out)
+    return RunFiles(
+        csv=out / csv_tmp.name,
+        json=out / json_tmp.name,
+        raw=raw_log,
+        manifest=out / manifest_tmp.name,
+        digests=digests,
+    )
+
+
+def _fsync_dir(directory: Path) -> None:
+    try:
+        fd = os.open(directory, os.O_RDONLY)
+    except OSError:  # pragma: no cover - platforms without directory fds
+        return
+    try:
+        os.fsync(fd)
+    except OSError:  # pragma: no cover
+        pass
+    finally:
+        os.close(fd)

@@ -1,0 +1,362 @@
+"""The host side of one acquisition: identify, configure, arm, release, stream, write.
+
+:func:`acquire_run` talks to a device speaking the protocol of ``docs/protocol.md``
+on any port URL, appends every byte received to the raw log, and writes the run
+when it ends, completely or not:
+
+* a fault before the run header (no port, no answer, header that does not parse)
+  raises the package's own error; the raw log keeps the bytes received;
+* a fault during the run (stall, disconnect, Ctrl-C) ends the run: everything
+  received is written as an incomplete run with the fault and the gaps in its
+  metadata, and the result says why.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, NamedTuple
+
+from bayestribo import __version__
+from bayestribo.acquisition.assembly import AssembledRun, RunAssembler
+from bayestribo.acquisition.faults import AcquisitionTimeout, DeviceError
+from bayestribo.acquisition.logger import (
+    OperatorInputs,
+    RawLog,
+    RunFiles,
+    make_run_id,
+    run_metadata,
+    utc_now,
+    write_json_atomic,
+    write_run_files,
+)
+from bayestribo.acquisition.port import DEFAULT_BAUDRATE, Link, open_port
+from bayestribo.acquisition.protocol import FrameParser
+from bayestribo.errors import AcquisitionError
+
+__all__ = ["AcquisitionResult", "Progress", "acquire_run", "finish_run"]
+
+
+class Progress(NamedTuple):
+    """Progress of a streaming run, passed to the progress callback."""
+
+    samples: int
+    frames: int
+    bytes_received: int
+    discarded_bytes: int
+    elapsed_s: float
+    sample_rate_Hz: float
+
+
+@dataclass(frozen=True)
+class AcquisitionResult:
+    """What an acquisition (or a recovery) produced.
+
+    Attributes
+    ----------
+    run_id : str
+        Run id and file stem.
+    files : RunFiles
+        The written files and their SHA-256.
+    run : AssembledRun
+        The samples and the report.
+    metadata : dict
+        The sidecar content.
+    fault : str or None
+        Why the run ended early, if it did.
+    interrupted : bool
+        True when the operator pressed Ctrl-C.
+    catalog_id : int or None
+        Id of the run in the results catalog, if registered.
+    """
+
+    run_id: str
+    files: RunFiles
+    run: AssembledRun
+    metadata: dict[str, Any]
+    fault: str | None
+    interrupted: bool = False
+    catalog_id: int | None = None
+
+    @property
+    def complete(self) -> bool:
+        """True when every frame and sample of the run arrived."""
+        return self.run.complete
+
+
+class _Conversation:
+    """Pump bytes from the link into the raw log, the parser and the assembler."""
+
+    def __init__(self, link: Link, raw: RawLog, timeout_s: float) -> None:
+        self.link = link
+        self.raw = raw
+        self.timeout_s = timeout_s
+        self.parser = FrameParser()
+        self.assembler = RunAssembler()
+        self.last_byte = time.monotonic()
+
+    def pump_once(self) -> int:
+        data = self.link.read_available()
+        self.raw.tick()
+        if data:
+            self.raw.write(data)
+            self.last_byte = time.monotonic()
+            for frame in self.parser.feed(data):
+                self.assembler.add(frame)
+        return len(data)
+
+    def wait_for(self, done: Callable[[], bool], what: str, timeout_s: float | None = None) -> None:
+        """Pump until ``done()``; raise :class:`AcquisitionTimeout` after ``timeout_s`` idle."""
+        limit = self.timeout_s if timeout_s is None else timeout_s
+        start = time.monotonic()
+        while not done():
+            self.pump_once()
+            now = time.monotonic()
+            if now - max(start, self.last_byte) > limit:
+                raise AcquisitionTimeout(
+                    f"{self.link.url}: no {what} within {limit:g} s "
+                    f"({self.raw.bytes_written} bytes received in all, "
+                    f"{self.parser.frames_parsed} valid frames)"
+                )
+
+    def command(self, line: str, answer: str) -> None:
+        """Send a configuration command and wait for its ACK (ERROR raises)."""
+        before = len(self.assembler.messages)
+        self.link.write_line(line)
+        self.wait_for(lambda: len(self.assembler.messages) > before, f"{answer} to {line!r}")
+        reply = self.assembler.messages[before]
+        if reply.startswith("ERROR"):
+            raise DeviceError(f"{self.link.url}: device refused {line!r}: {reply[6:]}")
+
+
+def _session_path(raw_path: Path) -> Path:
+    return raw_path.with_name(raw_path.stem + ".session.json")
+
+
+def acquire_run(
+    port: str,
+    out_dir: str | os.PathLike[str],
+    inputs: OperatorInputs,
+    *,
+    baudrate: int = DEFAULT_BAUDRATE,
+    timeout_s: float = 2.0,
+    pretrigger_s: float = 0.05,
+    sample_rate_Hz: float | None = None,
+    samples_per_frame: int | None = None,
+    duration_s: float | None = None,
+    run_id: str | None = None,
+    progress: Callable[[Progress], None] | None = None,
+    progress_interval_s: float = 0.25,
+    catalog: str | os.PathLike[str] | None = None,
+) -> AcquisitionResult:
+    """Acquire one run from a device on ``port`` and write it to ``out_dir``.
+
+    Parameters
+    ----------
+    port : str
+        Device path or pyserial URL (``socket://host:port``, ``loop://``...).
+    out_dir : path-like
+        Directory of the raw log, the session file and the run files.
+    inputs : OperatorInputs
+        Load, lubricant, repeat, water fraction, temperature, notes, rig constants.
+    baudrate : int
+        Serial baud rate [bit/s].
+    timeout_s : float
+        Longest silence accepted from the device, for answers and while streaming [s].
+    pretrigger_s : float
+        Time streamed after ARM before FIRE releases the pin [s].
+    sample_rate_Hz, samples_per_frame, duration_s : optional
+        Configuration sent before ARM (``RATE``, ``SPF``, ``DUR``); the device's
+        own settings otherwise.
+    run_id : str, optional
+        Run id and file stem; from time, lubricant, load and repeat by default.
+    progress : callable, optional
+        Called with a :class:`Progress` about every ``progress_interval_s`` seconds.
+    progress_interval_s : float
+        Interval of the progress calls [s].
+    catalog : path-like, optional
+        SQLite results catalog in which to register the run.
+
+    Returns
+    -------
+    AcquisitionResult
+
+    Raises
+    ------
+    PortNotFoundError, PortBusyError
+        If the port cannot be opened.
+    AcquisitionTimeout
+        If the device does not answer before the run header.
+    HeaderError
+        If the run header does not parse.
+    DeviceError
+        If the device refuses a configuration command.
+    KeyboardInterrupt
+        If Ctrl-C is pressed before the run header (after it, the run is written).
+    """
+    out = Path(out_dir)
+    started = utc_now()
+    run_id = run_id or make_run_id(inputs)
+    raw_path = out / f"{run_id}.raw"
+    if raw_path.exists():
+        raise AcquisitionError(f"{raw_path}: a raw log of this run id exists already")
+    link = open_port(port, baudrate=baudrate)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        write_json_atomic(
+            _session_path(raw_path),
+            {
+                "run_id": run_id,
+                "port": port,
+                "host_time_start_utc": started,
+                "package_version": __version__,
+                "operator_inputs": dict(inputs),
+            },
+        )
+        raw = RawLog(raw_path)
+        talk = _Conversation(link, raw, timeout_s)
+        try:
+            talk.link.write_line("ID?")
+            talk.wait_for(lambda: talk.assembler.ident is not None, "answer to 'ID?'")
+            for name, value in (
+                ("RATE", sample_rate_Hz),
+                ("SPF", samples_per_frame),
+                ("DUR", duration_s),
+            ):
+                if value is not None:
+                    talk.command(f"{name} {value:g}", "ACK")
+            talk.link.write_line("ARM")
+            talk.wait_for(lambda: talk.assembler.started, "run header after 'ARM'")
+        except BaseException as exc:
+            _stop_quietly(talk)
+            raw.close()
+            if isinstance(exc, AcquisitionError):
+                exc.args = (f"{exc}; raw log kept in {raw_path}",)
+            raise
+        fault: str | None = None
+        interrupted = False
+        try:
+            _stream(talk, pretrigger_s, progress, progress_interval_s)
+        except AcquisitionError as exc:
+            fault = str(exc)
+        except KeyboardInterrupt:
+            interrupted = True
+            fault = "interrupted by the operator (Ctrl-C)"
+            _stop_quietly(talk)
+        finally:
+            for frame in talk.parser.finish():
+                talk.assembler.add(frame)
+            raw.close()
+    finally:
+        link.close()
+    run = talk.assembler.build(talk.parser, fault=fault)
+    return finish_run(
+        run,
+        inputs,
+        out_dir=out,
+        run_id=run_id,
+        raw_log=raw_path,
+        port=port,
+        started_utc=started,
+        catalog=catalog,
+        fault=fault,
+        interrupted=interrupted,
+    )
+
+
+def _stream(
+    talk: _Conversation,
+    pretrigger_s: float,
+    progress: Callable[[Progress], None] | None,
+    interval_s: float,
+) -> None:
+    start = time.monotonic()
+    fired = False
+    next_report = start
+    assert talk.assembler.header is not None
+    rate = talk.assembler.header.sample_rate_Hz
+    while not talk.assembler.ended:
+        now = time.monotonic()
+        if not fired and now - start >= pretrigger_s:
+            talk.link.write_line("FIRE")
+            fired = True
+        talk.pump_once()
+        now = time.monotonic()
+        if now - talk.last_byte > talk.timeout_s:
+            raise AcquisitionTimeout(
+                f"{talk.link.url}: device stopped sending for {talk.timeout_s:g} s "
+                f"in the middle of the run"
+            )
+        if progress is not None and now >= next_report:
+            next_report = now + interval_s
+            progress(
+                Progress(
+                    samples=talk.assembler.samples_received,
+                    frames=len(talk.assembler.seqs),
+                    bytes_received=talk.raw.bytes_written,
+                    discarded_bytes=talk.parser.discarded_bytes,
+                    elapsed_s=now - start,
+                    sample_rate_Hz=rate,
+                )
+            )
+
+
+def _stop_quietly(talk: _Conversation) -> None:
+    """Ask the device to stop and collect what it still sends (best effort, 0.3 s)."""
+    try:
+        talk.link.write_line("STOP")
+        deadline = time.monotonic() + 0.3
+        while time.monotonic() < deadline and not talk.assembler.ended:
+            talk.pump_once()
+    except (AcquisitionError, KeyboardInterrupt):
+        pass
+
+
+def finish_run(
+    run: AssembledRun,
+    inputs: Mapping[str, Any],
+    *,
+    out_dir: Path,
+    run_id: str,
+    raw_log: Path,
+    port: str | None,
+    started_utc: str | None,
+    catalog: str | os.PathLike[str] | None,
+    fault: str | None,
+    interrupted: bool = False,
+    recovered: bool = False,
+) -> AcquisitionResult:
+    """Write an assembled run atomically and register it in the catalog."""
+    metadata = run_metadata(
+        run,
+        inputs,
+        run_id=run_id,
+        raw_log=raw_log,
+        port=port,
+        started_utc=started_utc,
+        ended_utc=utc_now(),
+        recovered=recovered,
+    )
+    files = write_run_files(out_dir, run_id, run, metadata, raw_log)
+    catalog_id = None
+    if catalog is not None:
+        from bayestribo.catalog import register_run
+
+        catalog_id = register_run(
+            catalog,
+            path=files.csv,
+            sha256=files.digests[files.csv.name],
+            metadata=metadata,
+        )
+    return AcquisitionResult(
+        run_id=run_id,
+        files=files,
+        run=run,
+        metadata=metadata,
+        fault=fault,
+        interrupted=interrupted,
+        catalog_id=catalog_id,
+    )
