@@ -135,9 +135,7 @@ class RunAssembler:
             return
         self.seqs.add(frame.seq)
 
-    def build(
-        self, parser: FrameParser | None = None, *, fault: str | None = None
-    ) -> AssembledRun:
+    def build(self, parser: FrameParser | None = None, *, fault: str | None = None) -> AssembledRun:
         """Assemble the samples received so far.
 
         Parameters
@@ -218,7 +216,7 @@ class RunAssembler:
             "frames_received": len(self.seqs) - (1 if self.end is not None else 0),
             "frames_missing": frames_missing,
             "missing_sequence_numbers": missing_seqs,
-            "samples_received": int(len(index)),
+            "samples_received": len(index),
             "samples_missing": int(sum(int(g["n_samples"]) for g in gaps)),
             "gaps": gaps,
             "malformed_frames": self.malformed_frames,

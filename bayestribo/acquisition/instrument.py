@@ -142,7 +142,7 @@ class SimulationConfig:
         omega = 2 * math.pi * self.natural_frequency_Hz
         k = self.mass_kg * omega**2
         ell = self.load_N / k
-        n = int(round(self.duration_s * self.sample_rate_Hz))
+        n = round(self.duration_s * self.sample_rate_Hz)
         tau = np.arange(n) / self.sample_rate_Hz * omega
         mu_s = self.mu_k if self.mu_s is None else self.mu_s
         y, yp = exact_response(tau, self.x0_m / ell, self.zeta, self.mu_k, mu_s)

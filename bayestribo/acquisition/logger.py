@@ -80,9 +80,7 @@ class RawLog:
     ) -> None:
         self.path = Path(path)
         try:
-            self._fd: int | None = os.open(
-                self.path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644
-            )
+            self._fd: int | None = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
         except OSError as exc:
             raise AcquisitionError(f"{self.path}: cannot open the raw log ({exc})") from None
         self.sync_interval_s = sync_interval_s

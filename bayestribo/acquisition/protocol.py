@@ -293,19 +293,16 @@ class RunHeader:
 
     def to_payload(self) -> bytes:
         """Encode as a HEADER payload (44 fixed bytes, then the UTF-8 range label)."""
-        return (
-            _HEADER.pack(
-                self.version,
-                self.channels,
-                self.samples_per_frame,
-                self.sample_rate_Hz,
-                self.displacement_scale_m,
-                self.velocity_scale_m_per_s,
-                self.displacement_range_m,
-                self.velocity_range_m_per_s,
-            )
-            + self.range_label.encode("utf-8")
-        )
+        return _HEADER.pack(
+            self.version,
+            self.channels,
+            self.samples_per_frame,
+            self.sample_rate_Hz,
+            self.displacement_scale_m,
+            self.velocity_scale_m_per_s,
+            self.displacement_range_m,
+            self.velocity_range_m_per_s,
+        ) + self.range_label.encode("utf-8")
 
     @classmethod
     def from_payload(cls, payload: bytes) -> RunHeader:
@@ -322,9 +319,7 @@ class RunHeader:
             raise HeaderError(
                 f"run header: payload of {len(payload)} bytes, expected at least {_HEADER.size}"
             )
-        version, channels, spf, rate, dscale, vscale, drange, vrange = _HEADER.unpack_from(
-            payload
-        )
+        version, channels, spf, rate, dscale, vscale, drange, vrange = _HEADER.unpack_from(payload)
         if version != PROTOCOL_VERSION:
             raise HeaderError(
                 f"run header: protocol version {version}, this host speaks {PROTOCOL_VERSION}"

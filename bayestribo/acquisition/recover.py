@@ -84,8 +84,7 @@ def recover_run(
     merged.update({k: v for k, v in (inputs or {}).items() if v is not None})
     if "load_N" not in merged or "lubricant" not in merged or "repeat" not in merged:
         raise AcquisitionError(
-            f"{raw}: no session file with the operator's inputs; give load, lubricant "
-            "and repeat"
+            f"{raw}: no session file with the operator's inputs; give load, lubricant and repeat"
         )
     operator = OperatorInputs(**merged)
     out = Path(out_dir) if out_dir is not None else raw.parent
