@@ -1,0 +1,214 @@
+"""One entry to read a run from any supported file, and one to write it.
+
+``read_run(path, **metadata)`` picks the reader from the file suffix (or
+``file_format=``), reads the JSON sidecar beside the file when there is one, lets
+keyword metadata fill or override it, builds a :class:`~bayestribo.run.Run` and
+checks it with :func:`~bayestribo.io.validation.validate_run`. ``write_run`` writes
+the canonical CSV and its sidecar, which read back identically.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from bayestribo.errors import RunFormatError
+from bayestribo.io.sidecar import read_sidecar, sidecar_path, write_sidecar
+from bayestribo.io.tdms import read_tdms
+from bayestribo.io.text import read_text, write_csv
+from bayestribo.io.uff import read_uff
+from bayestribo.io.validation import validate_run
+from bayestribo.run import DISPLACEMENT, TIME, VELOCITY, Run
+
+__all__ = ["FORMATS", "read_run", "write_run"]
+
+#: File formats and their suffixes.
+FORMATS: Mapping[str, tuple[str, ...]] = {
+    "text": (".csv", ".txt", ".dat", ".tsv", ".asc", ".prn"),
+    "uff": (".uff", ".unv", ".uf", ".58"),
+    "tdms": (".tdms",),
+}
+
+_OPTIONS = {
+    "columns": ("text",),
+    "delimiter": ("text",),
+    "decimal": ("text",),
+    "skip_rows": ("text",),
+    "group": ("tdms",),
+    "channels": ("uff", "tdms"),
+}
+
+
+def _format_of(path: Path, file_format: str | None) -> str:
+    if file_format is not None:
+        if file_format not in FORMATS:
+            raise RunFormatError(
+                f"file_format: expected one of {sorted(FORMATS)}, got {file_format!r}", str(path)
+            )
+        return file_format
+    suffix = path.suffix.lower()
+    for name, suffixes in FORMATS.items():
+        if suffix in suffixes:
+            return name
+    raise RunFormatError(
+        f"unknown file type {suffix!r}; expected one of "
+        f"{sorted(s for v in FORMATS.values() for s in v)}, or give file_format=",
+        str(path),
+    )
+
+
+def read_run(
+    path: str | Path,
+    *,
+    columns: Sequence[str] | None = None,
+    scale: Mapping[str, float] | None = None,
+    delimiter: str | None = None,
+    decimal: str = ".",
+    skip_rows: int = 0,
+    group: str | None = None,
+    channels: Mapping[str, Any] | None = None,
+    file_format: str | None = None,
+    sidecar: bool | str | Path = True,
+    validate: bool = True,
+    **metadata: Any,
+) -> Run:
+    """Read one run from a file.
+
+    Parameters
+    ----------
+    path : str or Path
+        Canonical CSV, other delimited text (``.csv .txt .dat .tsv .asc .prn``), UFF
+        58/58b (``.uff .unv .uf .58``) or TDMS (``.tdms``).
+    columns : list of str, optional
+        Text files: one canonical name (``time_s``, ``displacement_m``,
+        ``velocity_m_per_s``) or ``"ignore"`` per column, in file order. Needed when
+        the file has no canonical header row.
+    scale : mapping, optional
+        Factor per canonical name converting the file's unit to s, m or m/s, e.g.
+        ``{"displacement_m": 1e-3}`` for millimetres.
+    delimiter, decimal, skip_rows
+        Text files: column separator (default: guessed), decimal mark, lines to skip.
+    group : str, optional
+        TDMS: the group holding the channels.
+    channels : mapping, optional
+        TDMS: channel name per canonical name (required). UFF: record index per
+        canonical name (when the records' types are ambiguous).
+    file_format : {"text", "uff", "tdms"}, optional
+        Overrides the choice by suffix.
+    sidecar : bool or path
+        Read the JSON sidecar with the file's stem if it exists (``True``), do not
+        (``False``), or read this sidecar file (which must exist).
+    validate : bool
+        Run the data checks of :func:`~bayestribo.io.validation.validate_run`.
+    **metadata
+        Metadata keys that fill or override the sidecar's, e.g. ``load_N=0.31``,
+        ``length_unit="arbitrary"``.
+
+    Returns
+    -------
+    Run
+        With ``source`` set to the path.
+
+    Raises
+    ------
+    RunFormatError
+        For a file or sidecar that cannot be read as its format, naming the file, line
+        or field and what was expected.
+    RecordingError
+        For data that fail the checks (NaN, irregular time, clipping, units...).
+    FileNotFoundError
+        If the file does not exist.
+
+    Examples
+    --------
+    A two-column text file of time [s] and position in an unknown unit:
+
+    >>> run = read_run("HarmOsc1.txt", columns=["time_s", "displacement_m"],
+    ...                length_unit="arbitrary")  # doctest: +SKIP
+    """
+    path = Path(path)
+    where = str(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{where}: no such run file")
+    kind = _format_of(path, file_format)
+    given = {
+        "columns": columns,
+        "delimiter": delimiter,
+        "decimal": None if decimal == "." else decimal,
+        "skip_rows": skip_rows or None,
+        "group": group,
+        "channels": channels,
+    }
+    for option, value in given.items():
+        if value is not None and kind not in _OPTIONS[option]:
+            raise RunFormatError(
+                f"option {option!r} applies to {' and '.join(_OPTIONS[option])} files, not to "
+                f"a {kind} file",
+                where,
+            )
+    if kind == "text":
+        signals = read_text(
+            path,
+            columns=columns,
+            scale=scale,
+            delimiter=delimiter,
+            decimal=decimal,
+            skip_rows=skip_rows,
+        )
+    elif kind == "uff":
+        signals = read_uff(path, channels=channels, scale=scale)
+    else:
+        signals = read_tdms(path, channels=channels, group=group, scale=scale)
+
+    meta: dict[str, Any] = {}
+    if sidecar is True:
+        side = sidecar_path(path)
+        if side.is_file() and side != path:
+            meta.update(read_sidecar(side))
+    elif sidecar is not False:
+        side = Path(sidecar)
+        if not side.is_file():
+            raise FileNotFoundError(f"{side}: no such sidecar file")
+        meta.update(read_sidecar(side))
+    meta.update(metadata)
+    run = Run(
+        signals[TIME],
+        signals.get(DISPLACEMENT),
+        signals.get(VELOCITY),
+        meta,
+        source=where,
+    )
+    if validate:
+        validate_run(run)
+    return run
+
+
+def write_run(run: Run, path: str | Path) -> Path:
+    """Write a run in the canonical format: ``path`` (CSV) and its JSON sidecar.
+
+    Parameters
+    ----------
+    run : Run
+        The run to write (its ``source`` is not written).
+    path : str or Path
+        The ``.csv`` file; the sidecar is the same path with suffix ``.json``.
+
+    Returns
+    -------
+    Path
+        The CSV path. ``read_run(path)`` gives a run equal to ``run``.
+
+    Raises
+    ------
+    RunFormatError
+        If the path does not end in ``.csv``.
+    """
+    path = Path(path)
+    if path.suffix.lower() != ".csv":
+        raise RunFormatError(
+            f"the canonical run file is a .csv file; got suffix {path.suffix!r}", str(path)
+        )
+    write_csv(run.signals, path)
+    write_sidecar(run.metadata, sidecar_path(path))
+    return path

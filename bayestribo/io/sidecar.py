@@ -1,0 +1,95 @@
+"""The JSON sidecar of a run file: ``run.csv`` -> ``run.json`` (same stem).
+
+The sidecar is one JSON object of metadata (see :data:`bayestribo.run.METADATA_KEYS`).
+Numbers are written with Python's shortest round-trip representation, so reading
+a written sidecar gives back exactly the same values.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from bayestribo.errors import RunFormatError
+from bayestribo.run import METADATA_KEYS, check_metadata
+
+__all__ = ["read_sidecar", "sidecar_path", "write_sidecar"]
+
+
+def sidecar_path(path: str | Path) -> Path:
+    """The sidecar of a run file: same folder and stem, suffix ``.json``."""
+    return Path(path).with_suffix(".json")
+
+
+def _no_constant(name: str) -> Any:
+    raise ValueError(f"{name} is not a JSON number")
+
+
+def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict:
+    out: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in out:
+            raise ValueError(f"key {key!r} appears twice")
+        out[key] = value
+    return out
+
+
+def read_sidecar(path: str | Path) -> dict:
+    """Read and check a sidecar file.
+
+    Parameters
+    ----------
+    path : str or Path
+        The ``.json`` file itself.
+
+    Returns
+    -------
+    dict
+        Checked metadata (see :func:`bayestribo.run.check_metadata`).
+
+    Raises
+    ------
+    RunFormatError
+        If the file is not UTF-8 JSON holding one object, repeats a key, holds NaN
+        or infinity, or has a value of the wrong type.
+    """
+    path = Path(path)
+    where = str(path)
+    try:
+        text = path.read_bytes().decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise RunFormatError(f"sidecar is not UTF-8 text ({exc.reason})", where) from None
+    try:
+        data = json.loads(text, parse_constant=_no_constant, object_pairs_hook=_no_duplicates)
+    except ValueError as exc:  # json.JSONDecodeError is a ValueError
+        raise RunFormatError(f"sidecar is not valid JSON: {exc}", where) from None
+    if not isinstance(data, dict):
+        raise RunFormatError(
+            f"sidecar must hold one JSON object of metadata; got {type(data).__name__}", where
+        )
+    return check_metadata(data, where)
+
+
+def write_sidecar(metadata: Mapping[str, Any], path: str | Path) -> Path:
+    """Write metadata as a sidecar (known keys first, in their documented order).
+
+    Parameters
+    ----------
+    metadata : mapping
+        Checked metadata (a :class:`~bayestribo.run.Run`'s ``metadata``).
+    path : str or Path
+        The ``.json`` file to write.
+
+    Returns
+    -------
+    Path
+        The path written.
+    """
+    path = Path(path)
+    ordered = {k: metadata[k] for k in METADATA_KEYS if k in metadata}
+    ordered.update({k: v for k, v in metadata.items() if k not in METADATA_KEYS})
+    text = json.dumps(ordered, indent=2, ensure_ascii=False, allow_nan=False)
+    path.write_text(text + "\n", encoding="utf-8")
+    return path

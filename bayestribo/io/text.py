@@ -1,0 +1,259 @@
+"""Delimited text files: the canonical CSV and any other column layout.
+
+The canonical file has a header row naming its columns with the canonical names
+``time_s``, ``displacement_m`` and ``velocity_m_per_s``. Any other text file of
+numbers in columns (comma, semicolon, tab or white-space separated, with or without
+a header, ``#`` comment lines allowed) reads with ``columns=[...]``: one canonical
+name or ``"ignore"`` per column, in file order, and optionally a scale factor per
+column converting the file's unit to the canonical one (for instance
+``scale={"displacement_m": 1e-3}`` for a column in millimetres).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bayestribo.errors import RunFormatError
+from bayestribo.run import COLUMNS, DISPLACEMENT, TIME, VELOCITY
+
+__all__ = ["IGNORE", "check_scale", "read_text", "write_csv"]
+
+#: Column name that skips a column of a text file.
+IGNORE = "ignore"
+
+_DELIMITERS = (",", ";", "\t")
+
+
+def check_scale(
+    scale: Mapping[str, float] | None, present: Sequence[str], where: str
+) -> dict[str, float]:
+    """Check per-column scale factors: canonical names of present columns -> finite, non-zero."""
+    if scale is None:
+        return {}
+    if not isinstance(scale, Mapping):
+        raise RunFormatError(
+            "scale: expected a mapping of canonical column name to factor, for instance "
+            f"{{'displacement_m': 1e-3}}; got {type(scale).__name__}",
+            where,
+        )
+    out = {}
+    for name, factor in scale.items():
+        if name not in present:
+            raise RunFormatError(
+                f"scale: column {name!r} is not read from this file; the columns read are "
+                f"{list(present)}",
+                where,
+            )
+        try:
+            value = float(factor)
+        except (TypeError, ValueError):
+            value = math.nan
+        if not math.isfinite(value) or value == 0.0 or isinstance(factor, bool):
+            raise RunFormatError(
+                f"scale[{name!r}]: expected a finite non-zero number, got {factor!r}", where
+            )
+        out[name] = value
+    return out
+
+
+def _split(line: str, delimiter: str | None) -> list[str]:
+    if delimiter is None:
+        return line.split()
+    return [field.strip() for field in line.split(delimiter)]
+
+
+def _as_float(text: str) -> float | None:
+    try:
+        return float(text)
+    except ValueError:
+        return None
+
+
+def _check_columns(columns: Sequence[str], where: str) -> list[str]:
+    if isinstance(columns, str) or not isinstance(columns, Sequence):
+        raise RunFormatError(
+            "columns: expected a list with one name per column of the file, for instance "
+            f"['time_s', 'displacement_m']; got {columns!r}",
+            where,
+        )
+    names = list(columns)
+    for name in names:
+        if name not in (*COLUMNS, IGNORE):
+            raise RunFormatError(
+                f"columns: unknown column name {name!r}; expected one of "
+                f"{[*COLUMNS, IGNORE]} per column of the file",
+                where,
+            )
+    used = [n for n in names if n != IGNORE]
+    for name in set(used):
+        if used.count(name) > 1:
+            raise RunFormatError(f"columns: {name!r} is given {used.count(name)} times", where)
+    if TIME not in used:
+        raise RunFormatError(f"columns: a {TIME!r} column is needed; got {names}", where)
+    if DISPLACEMENT not in used and VELOCITY not in used:
+        raise RunFormatError(
+            f"columns: a {DISPLACEMENT!r} or {VELOCITY!r} column is needed; got {names}", where
+        )
+    return names
+
+
+def read_text(
+    path: str | Path,
+    *,
+    columns: Sequence[str] | None = None,
+    scale: Mapping[str, float] | None = None,
+    delimiter: str | None = None,
+    decimal: str = ".",
+    skip_rows: int = 0,
+) -> dict[str, NDArray]:
+    """Read a delimited text file of samples.
+
+    Parameters
+    ----------
+    path : str or Path
+        The text file (UTF-8).
+    columns : list of str, optional
+        One canonical name or ``"ignore"`` per column, in file order. Without it the
+        file must start with a header row of canonical names (the canonical CSV).
+        With it, a header row (a first line that is not all numbers) is skipped.
+    scale : mapping, optional
+        Factor per canonical column converting the file's unit into the canonical
+        unit (s, m, m/s), e.g. ``{"time_s": 1e-3, "displacement_m": 1e-6}``.
+    delimiter : str, optional
+        Column separator; by default the first of ``,``, ``;``, tab found in the first
+        line, else white space.
+    decimal : str
+        Decimal mark, ``"."`` or ``","``.
+    skip_rows : int
+        Lines to skip at the top before the header or data (an instrument preamble).
+
+    Returns
+    -------
+    dict
+        Arrays by canonical column name (time first).
+
+    Raises
+    ------
+    RunFormatError
+        Naming the file, the line and the column, for text that is not UTF-8, an
+        unknown header name, a row with the wrong number of fields, or a field that is
+        not a number.
+    """
+    path = Path(path)
+    where = str(path)
+    if decimal not in (".", ","):
+        raise RunFormatError(f"decimal: expected '.' or ',', got {decimal!r}", where)
+    if decimal == "," and delimiter == ",":
+        raise RunFormatError("delimiter and decimal mark cannot both be ','", where)
+    if not isinstance(skip_rows, int) or isinstance(skip_rows, bool) or skip_rows < 0:
+        raise RunFormatError(f"skip_rows: expected an integer >= 0, got {skip_rows!r}", where)
+    if columns is not None:
+        columns = _check_columns(columns, where)
+    try:
+        text = path.read_bytes().decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise RunFormatError(f"the file is not UTF-8 text ({exc.reason})", where) from None
+    lines = [
+        (number, line)
+        for number, line in enumerate(text.splitlines()[skip_rows:], start=skip_rows + 1)
+        if line.strip() and not line.lstrip().startswith("#")
+    ]
+    if not lines:
+        raise RunFormatError("the file holds no data rows", where)
+    if delimiter is None:
+        first = lines[0][1]
+        candidates = _DELIMITERS[1:] if decimal == "," else _DELIMITERS
+        delimiter = next((d for d in candidates if d in first), None)
+
+    first_fields = _split(lines[0][1], delimiter)
+    if decimal == ",":
+        first_fields = [f.replace(",", ".") for f in first_fields]
+    has_header = any(_as_float(f) is None for f in first_fields)
+    if columns is None:
+        if not has_header:
+            raise RunFormatError(
+                "no header row: name the columns in file order, for instance "
+                "read_run(path, columns=['time_s', 'displacement_m'])",
+                where,
+            )
+        names = [f.strip().strip('"').strip("'") for f in _split(lines[0][1], delimiter)]
+        for name in names:
+            if name not in COLUMNS:
+                raise RunFormatError(
+                    f"header (line {lines[0][0]}): unknown column {name!r}; expected the "
+                    f"canonical names {list(COLUMNS)}, or pass columns=[...] with one of "
+                    f"{[*COLUMNS, IGNORE]} per column",
+                    where,
+                )
+        names = _check_columns(names, where)
+    else:
+        names = columns
+        if has_header and len(first_fields) != len(names):
+            raise RunFormatError(
+                f"header (line {lines[0][0]}) has {len(first_fields)} column(s) but columns= "
+                f"names {len(names)}; expected one name per column",
+                where,
+            )
+    rows = lines[1:] if has_header else lines
+    if not rows:
+        raise RunFormatError("the file holds a header but no data rows", where)
+
+    keep = [(i, n) for i, n in enumerate(names) if n != IGNORE]
+    data = np.empty((len(rows), len(keep)), dtype=np.float64)
+    width = len(names)
+    for r, (number, line) in enumerate(rows):
+        fields = _split(line, delimiter)
+        if len(fields) != width:
+            raise RunFormatError(
+                f"line {number}: expected {width} field(s) ({', '.join(names)}), got "
+                f"{len(fields)}: {line[:80]!r}",
+                where,
+            )
+        for c, (i, name) in enumerate(keep):
+            field = fields[i].replace(",", ".") if decimal == "," else fields[i]
+            value = _as_float(field)
+            if value is None:
+                raise RunFormatError(
+                    f"line {number}, column {name!r}: {fields[i][:40]!r} is not a number", where
+                )
+            data[r, c] = value
+
+    factors = check_scale(scale, [n for _, n in keep], where)
+    out: dict[str, NDArray] = {}
+    for c, (_, name) in enumerate(keep):
+        column = data[:, c].copy()
+        if name in factors:
+            column *= factors[name]
+        out[name] = column
+    return {name: out[name] for name in COLUMNS if name in out}
+
+
+def write_csv(signals: Mapping[str, NDArray], path: str | Path) -> Path:
+    """Write signals as a canonical CSV (header row, comma separated, shortest exact repr).
+
+    Every value is written with Python's shortest representation that reads back to
+    the same float64, so reading the file gives back bit-identical arrays.
+
+    Parameters
+    ----------
+    signals : mapping
+        Arrays by canonical column name, written in the canonical column order.
+    path : str or Path
+        The ``.csv`` file to write.
+
+    Returns
+    -------
+    Path
+        The path written.
+    """
+    path = Path(path)
+    names = [name for name in COLUMNS if signals.get(name) is not None]
+    columns = [np.asarray(signals[name], dtype=np.float64).tolist() for name in names]
+    body = "\n".join(",".join(map(repr, row)) for row in zip(*columns, strict=True))
+    path.write_text(",".join(names) + "\n" + body + "\n", encoding="utf-8")
+    return path

@@ -1,0 +1,254 @@
+"""Data checks of a run: what makes a recording unusable, with a clear message.
+
+:func:`validate_run` checks, in this order, and raises
+:class:`~bayestribo.errors.RecordingError` naming the file, the field and what was
+expected at the first problem found:
+
+1. every sample of every field is finite (no NaN, no infinity);
+2. there are at least ``min_samples`` samples;
+3. the time stamps strictly increase and are regular (each step within
+   ``time_rtol`` of the median step); a declared ``sample_rate_Hz`` agrees with
+   them, and the sampling resolves a declared natural frequency (Nyquist);
+4. no signal is clipped: none reaches a declared sensor range
+   (``displacement_range_m``, ``velocity_range_m_per_s``), and none holds its
+   maximum or minimum value for ``clip_samples`` samples or more away from the ends
+   of the record (a flat top; the rest before release and the rest after the stop
+   touch the ends and are not flat tops);
+5. with both signals, the displacement matches the time integral of the velocity
+   (gain within a factor of two of 1): this catches a displacement in millimetres
+   or micrometres in a column that says metres, a velocity in mm/s, or a velocity
+   of the wrong sign.
+
+Nothing is repaired, clipped or dropped: a run either passes unchanged or fails.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bayestribo.errors import RecordingError
+from bayestribo.run import DISPLACEMENT, TIME, VELOCITY, Run
+
+__all__ = [
+    "CLIP_SAMPLES",
+    "MIN_SAMPLES",
+    "TIME_RTOL",
+    "UNIT_GAIN_TOLERANCE",
+    "validate_run",
+]
+
+#: Fewest samples accepted: a decay analysis needs several oscillation periods of
+#: several samples each; 64 is a floor, not a guarantee that a run is long enough.
+MIN_SAMPLES = 64
+
+#: Largest relative deviation of a time step from the median step. A dropped or
+#: doubled sample deviates by 100 %; time stamps printed with four significant digits
+#: of the step deviate by at most 0.05 %, so 1 % separates the two with margin.
+TIME_RTOL = 0.01
+
+#: A signal holding its extreme value this many consecutive samples is a flat top.
+#: A smooth peak repeats its exact extreme rarely: the real recordings of a spring
+#: oscillator (3 decimals at 100 Hz and 6 decimals at 1 kHz) repeat it at most 3 times.
+CLIP_SAMPLES = 5
+
+#: Accepted range of the gain between displacement and the integral of velocity.
+#: Trapezoid integration with 10 samples per period errs by about 3 %, two sensor
+#: channels may disagree by some per cent; a unit mistake is a factor of 1000.
+UNIT_GAIN_TOLERANCE = 2.0
+
+#: The unit check runs only when displacement and the integral of velocity are
+#: clearly related (correlation above this); otherwise there is no motion to compare.
+_UNIT_MIN_CORRELATION = 0.9
+
+
+def _fail(message: str, where: str | None) -> RecordingError:
+    return RecordingError(message, where)
+
+
+def _check_finite(run: Run, where: str | None) -> None:
+    for name, values in run.signals.items():
+        bad = ~np.isfinite(values)
+        if bad.any():
+            first = int(np.flatnonzero(bad)[0])
+            raise _fail(
+                f"field {name!r}: {int(bad.sum())} sample(s) are NaN or infinite, the first "
+                f"is sample {first} (counting from 0) with value {values[first]!r}; expected "
+                "finite numbers (gaps must not be filled in the file: cut the run instead)",
+                where,
+            )
+
+
+def _check_time(run: Run, where: str | None, time_rtol: float) -> float:
+    t = run.time
+    step = np.diff(t)
+    bad = np.flatnonzero(step <= 0.0)
+    if bad.size:
+        i = int(bad[0]) + 1
+        raise _fail(
+            f"field {TIME!r} is not strictly increasing: sample {i} (t = {t[i]!r} s) follows "
+            f"t = {t[i - 1]!r} s; expected increasing time stamps",
+            where,
+        )
+    median = float(np.median(step))
+    deviation = np.abs(step - median) / median
+    worst = int(np.argmax(deviation))
+    if deviation[worst] > time_rtol:
+        raise _fail(
+            f"field {TIME!r} is irregular: the step from sample {worst} to {worst + 1} is "
+            f"{step[worst]!r} s but the median step is {median!r} s; expected regular "
+            f"sampling (every step within {time_rtol:.0%} of the median; a missing sample "
+            "or a restart of the clock gives this)",
+            where,
+        )
+    rate = 1.0 / median
+    declared = run.metadata.get("sample_rate_Hz")
+    if declared is not None and abs(declared - rate) > time_rtol * rate:
+        raise _fail(
+            f"metadata 'sample_rate_Hz' is {declared!r} Hz but the time stamps give "
+            f"{rate:.6g} Hz; expected them to agree within {time_rtol:.0%}",
+            where,
+        )
+    f = run.metadata.get("natural_frequency_Hz")
+    if f is not None and rate <= 2.0 * f:
+        raise _fail(
+            f"field {TIME!r}: sample rate {rate:.6g} Hz does not resolve the natural frequency "
+            f"{f!r} Hz (metadata 'natural_frequency_Hz'); expected more than {2.0 * f:.6g} Hz "
+            "(two samples per period)",
+            where,
+        )
+    return rate
+
+
+def _interior_plateau(values: NDArray, level: float, length: int) -> tuple[int, int] | None:
+    """First run of >= ``length`` samples equal to ``level`` touching neither end."""
+    hit = np.concatenate(([0], (values == level).astype(np.int8), [0]))
+    edges = np.flatnonzero(np.diff(hit))
+    starts, stops = edges[::2], edges[1::2]
+    for start, stop in zip(starts, stops, strict=True):
+        if stop - start >= length and start > 0 and stop < values.size:
+            return int(start), int(stop - start)
+    return None
+
+
+def _check_clipping(run: Run, where: str | None, clip_samples: int) -> None:
+    ranges = {
+        DISPLACEMENT: ("displacement_range_m", run.displacement),
+        VELOCITY: ("velocity_range_m_per_s", run.velocity),
+    }
+    for name, (key, values) in ranges.items():
+        if values is None:
+            continue
+        limit = run.metadata.get(key)
+        if limit is not None:
+            over = np.flatnonzero(np.abs(values) >= limit)
+            if over.size:
+                i = int(over[0])
+                raise _fail(
+                    f"field {name!r} is clipped: {over.size} sample(s) reach the sensor range "
+                    f"±{limit!r} (metadata {key!r}), the first is sample {i} with value "
+                    f"{values[i]!r}; expected |{name}| < {limit!r} (choose a larger range on "
+                    "the vibrometer or a smaller initial displacement)",
+                    where,
+                )
+        for kind, level in (("maximum", values.max()), ("minimum", values.min())):
+            found = _interior_plateau(values, level, clip_samples)
+            if found is not None:
+                start, length = found
+                raise _fail(
+                    f"field {name!r} looks clipped: it holds its {kind} {level!r} for {length} "
+                    f"consecutive samples from sample {start} (t = {run.time[start]!r} s) in "
+                    f"the middle of the record; expected a smooth peak (fewer than "
+                    f"{clip_samples} repeats), as a signal beyond the sensor range is cut flat",
+                    where,
+                )
+
+
+def _unit_hint(gain: float) -> str:
+    if gain < 0:
+        return "the velocity has the opposite sign of the rate of change of the displacement"
+    for factor, hint in (
+        (1e3, "the displacement looks like millimetres in a column that says metres"),
+        (1e6, "the displacement looks like micrometres in a column that says metres"),
+        (1e-3, "the velocity looks like mm/s in a column that says m/s"),
+        (1e-6, "the velocity looks like µm/s in a column that says m/s"),
+    ):
+        if factor / 2 <= gain <= factor * 2:
+            return hint
+    return "the two signals are not in consistent units"
+
+
+def _check_units(run: Run, where: str | None) -> None:
+    x, v, t = run.displacement, run.velocity, run.time
+    if x is None or v is None:
+        return
+    # Time integral of the velocity (trapezoid rule), compared with x up to an offset.
+    integral = np.concatenate(([0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))))
+    xc = x - x.mean()
+    ic = integral - integral.mean()
+    sxx, sii = float(xc @ xc), float(ic @ ic)
+    if sxx == 0.0 or sii == 0.0:
+        return
+    correlation = float(xc @ ic) / math.sqrt(sxx * sii)
+    if abs(correlation) < _UNIT_MIN_CORRELATION:
+        return
+    gain = float(xc @ ic) / sii
+    if not 1.0 / UNIT_GAIN_TOLERANCE <= gain <= UNIT_GAIN_TOLERANCE:
+        raise _fail(
+            f"fields {DISPLACEMENT!r} and {VELOCITY!r} disagree: the displacement is "
+            f"{gain:.4g} times the time integral of the velocity; expected 1 (within a factor "
+            f"of {UNIT_GAIN_TOLERANCE:g}): {_unit_hint(gain)}; give a scale factor for the "
+            "column when reading (scale={...})",
+            where,
+        )
+
+
+def validate_run(
+    run: Run,
+    *,
+    where: str | None = None,
+    min_samples: int = MIN_SAMPLES,
+    time_rtol: float = TIME_RTOL,
+    clip_samples: int = CLIP_SAMPLES,
+) -> Run:
+    """Check that a run's data can be analysed; return it unchanged.
+
+    Parameters
+    ----------
+    run : Run
+        The run to check.
+    where : str, optional
+        File or origin named in the messages; default ``run.source``.
+    min_samples : int
+        Fewest samples accepted (default :data:`MIN_SAMPLES`).
+    time_rtol : float
+        Largest relative deviation of a time step from the median step, and of a
+        declared ``sample_rate_Hz`` from the measured one [-].
+    clip_samples : int
+        Length of a run of repeated extreme values that counts as a flat top.
+
+    Returns
+    -------
+    Run
+        The same run.
+
+    Raises
+    ------
+    RecordingError
+        At the first failed check (see the module documentation), naming the file,
+        the field and what was expected.
+    """
+    where = where if where is not None else run.source
+    _check_finite(run, where)
+    if run.n_samples < min_samples:
+        raise _fail(
+            f"field {TIME!r}: {run.n_samples} sample(s); expected at least {min_samples} "
+            "samples for a decay analysis",
+            where,
+        )
+    _check_time(run, where, time_rtol)
+    _check_clipping(run, where, clip_samples)
+    _check_units(run, where)
+    return run
