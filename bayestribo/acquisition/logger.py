@@ -25,8 +25,6 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from bayestribo import __version__
 from bayestribo.acquisition.assembly import AssembledRun
 from bayestribo.errors import AcquisitionError
@@ -252,6 +250,9 @@ def run_metadata(
         "natural_frequency_Hz": inputs.get("natural_frequency_Hz"),
         "displacement_resolution_m": header["displacement_scale_m_per_count"],
         "velocity_resolution_m_per_s": header["velocity_scale_m_per_s_per_count"],
+        "displacement_range_m": header["displacement_range_m"],
+        "velocity_range_m_per_s": header["velocity_range_m_per_s"],
+        "length_unit": "m",
         "sample_rate_Hz": header["sample_rate_Hz"],
         "lubricant": inputs.get("lubricant"),
         "water_mass_fraction": inputs.get("water_mass_fraction"),
@@ -295,20 +296,19 @@ def _write_canonical(
 ) -> tuple[Path, Path]:
     """Write the canonical CSV and JSON sidecar of a run into ``directory``.
 
-    The one place that knows the file format; the caller moves the files into place.
-    Rows are the received samples only, at their own times: gaps show as jumps in
-    ``time_s`` and are listed in the sidecar, never filled.
+    The one place that knows the file format (:func:`bayestribo.io.write_run`); the
+    caller moves the files into place. Rows are the received samples only, at their
+    own times: gaps show as jumps in ``time_s`` (which :func:`bayestribo.io.read_run`
+    refuses unless ``validate=False``) and are listed in the sidecar, never filled.
     """
-    csv_path = directory / f"{stem}.csv"
-    json_path = directory / f"{stem}.json"
-    table = np.column_stack([run.time_s, run.displacement_m, run.velocity_m_per_s])
-    with open(csv_path, "w", encoding="utf-8", newline="\n") as fh:
-        fh.write("time_s,displacement_m,velocity_m_per_s\n")
-        np.savetxt(fh, table, delimiter=",", fmt="%.17g")
-    with open(json_path, "w", encoding="utf-8") as fh:
-        json.dump(dict(metadata), fh, indent=2, allow_nan=False)
-        fh.write("\n")
-    return csv_path, json_path
+    from bayestribo.io import write_run
+    from bayestribo.run import Run
+
+    csv_path = write_run(
+        Run(run.time_s, run.displacement_m, run.velocity_m_per_s, metadata),
+        directory / f"{stem}.csv",
+    )
+    return csv_path, csv_path.with_suffix(".json")
 
 
 def write_run_files(
