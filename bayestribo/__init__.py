@@ -28,6 +28,8 @@ _LAZY: dict[str, str] = {
     "Scaling": "bayestribo.scaling",
     "energy_decay": "bayestribo.decay",
     "EnergyDecay": "bayestribo.decay",
+    "estimate_all": "bayestribo.estimators",
+    "Estimate": "bayestribo.estimators",
 }
 
 __all__ = ["__version__", *sorted(_LAZY)]
