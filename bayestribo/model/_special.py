@@ -10,25 +10,30 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["expm1_ratio", "geometric_sum", "gminus", "log1p_ratio"]
+__all__ = ["TINY", "expm1_ratio", "geometric_sum", "gminus", "log1p_ratio"]
 
 _SERIES_CUTOFF = 1e-3
+# Arguments below this are treated as 0: the limit is then exact to double precision,
+# while subnormal arguments would lose their significant digits.
+TINY = 1e-100
 
 
 def expm1_ratio(a: NDArray, length: NDArray) -> NDArray:
     """(1 - exp(-a L))/a, the integral of exp(-a s) over [0, L]; equals L at a = 0."""
     a = np.asarray(a, dtype=float)
     length = np.asarray(length, dtype=float)
-    safe = np.where(a == 0.0, 1.0, a)
-    return np.where(a == 0.0, length, -np.expm1(-safe * length) / safe)
+    tiny = np.abs(a) < TINY
+    safe = np.where(tiny, 1.0, a)
+    return np.where(tiny, length, -np.expm1(-safe * length) / safe)
 
 
 def log1p_ratio(w: NDArray) -> NDArray:
     """-log(1 - w)/w for 0 <= w <= 1; equals 1 at w = 0 and +inf at w = 1."""
     w = np.asarray(w, dtype=float)
-    safe = np.where(w == 0.0, 0.5, w)
+    tiny = w < TINY
+    safe = np.where(tiny, 0.5, w)
     with np.errstate(divide="ignore"):
-        return np.where(w == 0.0, 1.0, -np.log1p(-safe) / safe)
+        return np.where(tiny, 1.0, -np.log1p(-safe) / safe)
 
 
 def gminus(z: NDArray) -> NDArray:
@@ -42,5 +47,6 @@ def geometric_sum(length: NDArray, x: NDArray) -> NDArray:
     """Σ_{i<L} exp(-i x) = (1 - e^{-Lx})/(1 - e^{-x}); equals L at x = 0."""
     length = np.asarray(length, dtype=float)
     x = np.asarray(x, dtype=float)
-    safe = np.where(x == 0.0, 1.0, x)
-    return np.where(x == 0.0, length, np.expm1(-safe * length) / np.expm1(-safe))
+    tiny = x < TINY
+    safe = np.where(tiny, 1.0, x)
+    return np.where(tiny, length, np.expm1(-safe * length) / np.expm1(-safe))
