@@ -109,7 +109,8 @@ def averaged_energy(tau: ArrayLike, y0: ArrayLike, zeta: ArrayLike, mu_k: ArrayL
 def _pi_of_amplitude(a: NDArray, z: NDArray, mk: NDArray) -> NDArray:
     """∫_0^a (α²/2)/(ζα + c) dα with c = 2μ_k/π, stable for every ζ, μ_k >= 0."""
     c = 2.0 * mk / np.pi
-    with np.errstate(divide="ignore", invalid="ignore"):
+    # Branches not selected may overflow for extreme ratios of ζ to μ_k.
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         w = np.where(c > 0.0, z * a / np.where(c > 0.0, c, 1.0), np.inf)
         # w <= 1: a³ ψ(w)/(2c), ψ(w) = (ln(1+w) - w + w²/2)/w³ = Σ (-w)^k/(k+3).
         ws = np.where(w <= 1.0, w, 0.0)
