@@ -30,6 +30,10 @@ _LAZY: dict[str, str] = {
     "EnergyDecay": "bayestribo.decay",
     "estimate_all": "bayestribo.estimators",
     "Estimate": "bayestribo.estimators",
+    "Run": "bayestribo.run",
+    "read_run": "bayestribo.io",
+    "write_run": "bayestribo.io",
+    "simulate": "bayestribo.simulation",
 }
 
 __all__ = ["__version__", *sorted(_LAZY)]

@@ -24,6 +24,7 @@ COMMANDS: tuple[str, ...] = (
     "decay",
     "acquire",
     "estimate",
+    "simulate",
 )
 
 
