@@ -203,7 +203,9 @@ class FaultPlan:
 class SentFrame(NamedTuple):
     """A DATA frame the instrument produced.
 
-    ``intact`` is True when it went on the wire unmodified (not dropped or corrupted).
+    ``intact`` is True when it went on the wire unmodified (not dropped or corrupted);
+    ``offset`` is where it starts in :attr:`SimulatedInstrument.sent` (None if dropped
+    or not completely written) and ``size`` its length on the wire [bytes].
     """
 
     number: int
@@ -211,6 +213,8 @@ class SentFrame(NamedTuple):
     first_index: int
     counts: NDArray[np.int16]
     intact: bool
+    offset: int | None
+    size: int
 
 
 class _Channel:
@@ -473,9 +477,11 @@ class SimulatedInstrument:
                 damaged = bytearray(frame)
                 damaged[13] ^= 0xFF
                 frame = bytes(damaged)
+            offset = None
             if number not in self.faults.drop:
+                offset = len(self.sent)
                 self._send(frame)
-            self.frames.append(SentFrame(number, seq, index, counts, intact))
+            self.frames.append(SentFrame(number, seq, index, counts, intact, offset, len(frame)))
             seq += 1
             number += 1
             index += n
@@ -536,8 +542,18 @@ class SimulatedInstrument:
         """Close the link once the host has read everything (a pty loses unread bytes)."""
         channel = self._channel
         assert channel is not None
+        # Bytes written to a pty master reach the slave's queue asynchronously: wait
+        # until the queue has stayed empty for 60 ms (or 2 s in all).
         deadline = time.monotonic() + 2.0
-        while channel.pending_for_host() and time.monotonic() < deadline:
+        empty_since: float | None = None
+        while time.monotonic() < deadline:
+            now = time.monotonic()
+            if channel.pending_for_host():
+                empty_since = None
+            elif empty_since is None:
+                empty_since = now
+            elif now - empty_since >= 0.06:
+                break
             if self._stop.wait(0.005):
                 break
         self.disconnected = True

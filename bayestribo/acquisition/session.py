@@ -14,6 +14,8 @@ when it ends, completely or not:
 from __future__ import annotations
 
 import os
+import signal
+import threading
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -21,7 +23,7 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 from bayestribo import __version__
-from bayestribo.acquisition.assembly import AssembledRun, RunAssembler
+from bayestribo.acquisition.assembly import AssembledRun, RunAssembler, assemble_bytes
 from bayestribo.acquisition.faults import AcquisitionTimeout, DeviceError
 from bayestribo.acquisition.logger import (
     OperatorInputs,
@@ -87,18 +89,55 @@ class AcquisitionResult:
         return self.run.complete
 
 
+class _DeferredInterrupt:
+    """Turn Ctrl-C into a flag checked at safe points (main thread only).
+
+    A KeyboardInterrupt raised between reading bytes from the port and appending them
+    to the raw log would lose them; with the flag, the loop stops between two reads.
+    """
+
+    def __init__(self) -> None:
+        self.pending = False
+        self._previous: Any = None
+        self._installed = False
+
+    def __enter__(self) -> _DeferredInterrupt:
+        if threading.current_thread() is threading.main_thread():
+            self._previous = signal.signal(signal.SIGINT, self._handle)
+            self._installed = True
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self._installed:
+            signal.signal(signal.SIGINT, self._previous)
+            self._installed = False
+
+    def _handle(self, signum: int, frame: object) -> None:
+        self.pending = True
+
+    def check(self) -> None:
+        """Raise KeyboardInterrupt if Ctrl-C was pressed since the last check."""
+        if self.pending:
+            self.pending = False
+            raise KeyboardInterrupt
+
+
 class _Conversation:
     """Pump bytes from the link into the raw log, the parser and the assembler."""
 
-    def __init__(self, link: Link, raw: RawLog, timeout_s: float) -> None:
+    def __init__(
+        self, link: Link, raw: RawLog, timeout_s: float, interrupt: _DeferredInterrupt
+    ) -> None:
         self.link = link
         self.raw = raw
         self.timeout_s = timeout_s
+        self.interrupt = interrupt
         self.parser = FrameParser()
         self.assembler = RunAssembler()
         self.last_byte = time.monotonic()
 
     def pump_once(self) -> int:
+        self.interrupt.check()
         data = self.link.read_available()
         self.raw.tick()
         if data:
@@ -204,6 +243,45 @@ def acquire_run(
     if raw_path.exists():
         raise AcquisitionError(f"{raw_path}: a raw log of this run id exists already")
     link = open_port(port, baudrate=baudrate)
+    with _DeferredInterrupt() as interrupt:
+        return _acquire(
+            link,
+            out,
+            inputs,
+            raw_path=raw_path,
+            run_id=run_id,
+            started=started,
+            interrupt=interrupt,
+            timeout_s=timeout_s,
+            pretrigger_s=pretrigger_s,
+            config=(
+                ("RATE", sample_rate_Hz),
+                ("SPF", samples_per_frame),
+                ("DUR", duration_s),
+            ),
+            progress=progress,
+            progress_interval_s=progress_interval_s,
+            catalog=catalog,
+        )
+
+
+def _acquire(
+    link: Link,
+    out: Path,
+    inputs: OperatorInputs,
+    *,
+    raw_path: Path,
+    run_id: str,
+    started: str,
+    interrupt: _DeferredInterrupt,
+    timeout_s: float,
+    pretrigger_s: float,
+    config: tuple[tuple[str, float | None], ...],
+    progress: Callable[[Progress], None] | None,
+    progress_interval_s: float,
+    catalog: str | os.PathLike[str] | None,
+) -> AcquisitionResult:
+    port = link.url
     try:
         out.mkdir(parents=True, exist_ok=True)
         write_json_atomic(
@@ -217,15 +295,11 @@ def acquire_run(
             },
         )
         raw = RawLog(raw_path)
-        talk = _Conversation(link, raw, timeout_s)
+        talk = _Conversation(link, raw, timeout_s, interrupt)
         try:
             talk.link.write_line("ID?")
             talk.wait_for(lambda: talk.assembler.ident is not None, "answer to 'ID?'")
-            for name, value in (
-                ("RATE", sample_rate_Hz),
-                ("SPF", samples_per_frame),
-                ("DUR", duration_s),
-            ):
+            for name, value in config:
                 if value is not None:
                     talk.command(f"{name} {value:g}", "ACK")
             talk.link.write_line("ARM")
@@ -247,12 +321,12 @@ def acquire_run(
             fault = "interrupted by the operator (Ctrl-C)"
             _stop_quietly(talk)
         finally:
-            for frame in talk.parser.finish():
-                talk.assembler.add(frame)
             raw.close()
     finally:
         link.close()
-    run = talk.assembler.build(talk.parser, fault=fault)
+    # The run is assembled from the raw log itself, the record of every byte received:
+    # the same bytes give the same run here and in a recovery.
+    run = assemble_bytes(raw_path.read_bytes(), fault=fault)
     return finish_run(
         run,
         inputs,
