@@ -1,0 +1,142 @@
+"""Canonical CSV + JSON sidecar: exact round trip, sidecar rules, keyword metadata."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
+
+from bayestribo import Run, read_run, simulate, write_run
+from bayestribo.errors import RunFormatError
+
+
+def _run(**meta: object) -> Run:
+    t = 12.5 + np.arange(200) / 5000.0
+    x = 1e-3 * np.exp(-t) * np.cos(205.0 * t) + 3e-5
+    v = np.gradient(x, t)
+    return Run(t, x, v, meta)
+
+
+def test_round_trip_is_exact_with_metadata(tmp_path: Path) -> None:
+    run = _run(
+        load_N=0.31,
+        mass_kg=0.035,
+        natural_frequency_Hz=32.6,
+        repeat=2,
+        lubricant="glycerol",
+        operator="B. Smith",
+        nested={"list": [1, 2.5, None, True], "text": "é"},
+    )
+    path = write_run(run, tmp_path / "run.csv")
+    assert (tmp_path / "run.json").is_file()
+    back = read_run(path)
+    assert back == run
+    assert back.source == str(path)
+    assert back.metadata["nested"]["text"] == "é"
+    # Bit-identical floats (== on arrays would accept -0.0 for 0.0).
+    assert back.velocity.tobytes() == run.velocity.tobytes()
+
+
+def test_written_header_and_sidecar_follow_the_format(tmp_path: Path) -> None:
+    run = Run([0.0, 0.5, 1.0], velocity=[0.0, -0.25, 1e-300], metadata={"load_N": 0})
+    write_run(run, tmp_path / "r.csv")
+    lines = (tmp_path / "r.csv").read_text().splitlines()
+    assert lines == ["time_s,velocity_m_per_s", "0.0,0.0", "0.5,-0.25", "1.0,1e-300"]
+    assert json.loads((tmp_path / "r.json").read_text()) == {"load_N": 0.0}
+
+
+finite = st.floats(allow_nan=False, allow_infinity=False, width=64)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    data=hnp.arrays(np.float64, st.integers(1, 40), elements=finite),
+    signal=st.sampled_from(["displacement", "velocity", "both"]),
+)
+def test_any_finite_floats_round_trip_bit_exactly(tmp_path_factory, data, signal) -> None:
+    path = tmp_path_factory.mktemp("rt") / "run.csv"
+    t = np.arange(data.size, dtype=float)
+    run = Run(
+        t,
+        data if signal in ("displacement", "both") else None,
+        data[::-1] if signal in ("velocity", "both") else None,
+    )
+    write_run(run, path)
+    back = read_run(path, validate=False)
+    assert back == run
+    for name, values in run.signals.items():
+        assert back.signals[name].tobytes() == values.tobytes()
+
+
+def test_simulated_run_round_trips(tmp_path: Path) -> None:
+    run = simulate(load_N=0.46, seed=11, quantise=True, time_origin_s=3.1415)
+    assert read_run(write_run(run, tmp_path / "sim.csv")) == run
+
+
+def test_missing_sidecar_is_allowed_and_keywords_fill_or_override(tmp_path: Path) -> None:
+    run = _run(load_N=0.31, repeat=1)
+    path = write_run(run, tmp_path / "r.csv")
+    assert read_run(path, load_N=0.46).metadata["load_N"] == 0.46
+    assert read_run(path, temperature_C=21.5).metadata["repeat"] == 1
+    (tmp_path / "r.json").unlink()
+    bare = read_run(path)
+    assert dict(bare.metadata) == {}
+    assert bare.rig() is None
+    assert read_run(path, natural_frequency_Hz=32.6).rig().load_N is None
+
+
+def test_sidecar_can_be_skipped_or_given(tmp_path: Path) -> None:
+    path = write_run(_run(load_N=0.31), tmp_path / "r.csv")
+    assert dict(read_run(path, sidecar=False).metadata) == {}
+    other = tmp_path / "other.json"
+    other.write_text('{"load_N": 0.07}')
+    assert read_run(path, sidecar=other).metadata["load_N"] == 0.07
+    with pytest.raises(FileNotFoundError, match="missing.json"):
+        read_run(path, sidecar=tmp_path / "missing.json")
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        ("{not json", "not valid JSON"),
+        ("[1, 2]", "one JSON object"),
+        ('{"load_N": 0.3, "load_N": 0.4}', "appears twice"),
+        ('{"load_N": NaN}', "NaN is not a JSON number"),
+        ('{"load_N": "0.31"}', "metadata 'load_N'.*expected a finite number.*got str"),
+        ('{"repeat": 1.0}', "metadata 'repeat'.*expected an integer"),
+    ],
+)
+def test_bad_sidecar_raises_naming_file_and_key(tmp_path: Path, text: str, match: str) -> None:
+    path = write_run(_run(), tmp_path / "r.csv")
+    (tmp_path / "r.json").write_text(text)
+    with pytest.raises(RunFormatError, match=match) as info:
+        read_run(path)
+    assert "r.json" in str(info.value)
+
+
+def test_sidecar_not_utf8_raises(tmp_path: Path) -> None:
+    path = write_run(_run(), tmp_path / "r.csv")
+    (tmp_path / "r.json").write_bytes(b'{"lubricant": "\xff"}')
+    with pytest.raises(RunFormatError, match="r.json.*not UTF-8"):
+        read_run(path)
+
+
+def test_write_needs_csv_suffix_and_read_needs_known_type(tmp_path: Path) -> None:
+    with pytest.raises(RunFormatError, match=r"\.csv"):
+        write_run(_run(), tmp_path / "r.txt.gz")
+    (tmp_path / "r.xyz").write_text("1,2\n")
+    with pytest.raises(RunFormatError, match="unknown file type '.xyz'"):
+        read_run(tmp_path / "r.xyz")
+    with pytest.raises(FileNotFoundError, match="nope.csv"):
+        read_run(tmp_path / "nope.csv")
+
+
+def test_option_for_another_format_is_refused(tmp_path: Path) -> None:
+    path = write_run(_run(), tmp_path / "r.csv")
+    with pytest.raises(RunFormatError, match="option 'group' applies to tdms"):
+        read_run(path, group="Vibrometer")
