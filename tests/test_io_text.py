@@ -1,0 +1,155 @@
+"""Delimited text files with other layouts, and the real recordings of ../shared."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from bayestribo import read_run
+from bayestribo.errors import RunFormatError
+
+EXTERNAL = (
+    Path(__file__).resolve().parents[2]
+    / "shared"
+    / "external-data"
+    / "appstat2020-harmonic-oscillator"
+)
+
+# From the data set's README: rows, sample step and first time stamp of each file.
+APPSTAT = [
+    ("HarmOsc1.txt", 3806, 0.01, 10.0),
+    ("HarmOsc2.txt", 3616, 0.01, 0.0),
+    ("HarmOsc3.txt", 13700, 0.001, 0.0),
+]
+
+
+@pytest.mark.parametrize(("name", "rows", "step", "first"), APPSTAT)
+def test_real_recordings_read_with_one_documented_call(
+    name: str, rows: int, step: float, first: float
+) -> None:
+    path = EXTERNAL / name
+    if not path.is_file():
+        pytest.skip(f"external data not present at {path}")
+    run = read_run(path, columns=["time_s", "displacement_m"], length_unit="arbitrary")
+    assert run.n_samples == rows
+    assert run.time[0] == first
+    assert run.sample_rate_Hz == pytest.approx(1.0 / step, rel=1e-9)
+    assert run.velocity is None
+    assert run.length_unit == "arbitrary"
+    # Same numbers as an independent parser of the same file.
+    np.testing.assert_array_equal(run.displacement, np.loadtxt(path)[:, 1])
+    # No load, mass or frequency: friction can only be a friction displacement.
+    assert run.rig() is None
+    assert not run.scaling(natural_frequency_Hz=1.0).friction_defined
+
+
+def _sine(n: int = 400, rate: float = 2000.0) -> tuple[list[float], list[float]]:
+    t = np.arange(n) / rate
+    return t.tolist(), (1e-3 * np.sin(2 * np.pi * 32.6 * t + 0.3)).tolist()
+
+
+def test_headerless_two_columns_whitespace(tmp_path: Path) -> None:
+    t, x = _sine()
+    path = tmp_path / "pos.txt"
+    path.write_text("".join(f"{a!r}   {b!r}\n" for a, b in zip(t, x)))
+    run = read_run(path, columns=["time_s", "displacement_m"])
+    np.testing.assert_array_equal(run.time, t)
+    np.testing.assert_array_equal(run.displacement, x)
+
+
+def test_other_names_units_delimiter_decimal_comma_and_ignored_column(tmp_path: Path) -> None:
+    t, x = _sine()
+    v = np.gradient(x, t).tolist()
+    path = tmp_path / "export.csv"
+    lines = ["# exported by some software", "Zeit [ms];Kanal;Weg [mm];v [mm/s]"]
+    lines += [
+        f"{1e3 * a:.6f};7;{1e3 * b:.9f};{1e3 * c:.9f}".replace(".", ",") for a, b, c in zip(t, x, v)
+    ]
+    path.write_text("\n".join(lines) + "\n")
+    run = read_run(
+        path,
+        columns=["time_s", "ignore", "displacement_m", "velocity_m_per_s"],
+        scale={"time_s": 1e-3, "displacement_m": 1e-3, "velocity_m_per_s": 1e-3},
+        decimal=",",
+    )
+    # Printed with 6 decimals in ms and 9 in mm: rounding below 1e-9 s and 1e-12 m.
+    np.testing.assert_allclose(run.time, t, atol=1e-9)
+    np.testing.assert_allclose(run.displacement, x, atol=1e-12)
+    np.testing.assert_allclose(run.velocity, v, atol=1e-12)
+
+
+def test_instrument_preamble_is_skipped(tmp_path: Path) -> None:
+    t, x = _sine()
+    path = tmp_path / "inst.dat"
+    path.write_text(
+        "Instrument XYZ v2\nDate: today\n" + "".join(f"{a!r}\t{b!r}\n" for a, b in zip(t, x))
+    )
+    run = read_run(path, columns=["time_s", "displacement_m"], skip_rows=2)
+    assert run.n_samples == len(t)
+
+
+def _write(tmp_path: Path, text: str, name: str = "bad.csv") -> Path:
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def _good_rows(n: int = 100) -> str:
+    t, x = _sine(n)
+    return "".join(f"{a!r},{b!r}\n" for a, b in zip(t, x))
+
+
+BAD_TEXT = [
+    ("time_s,pos\n" + _good_rows(), {}, "unknown column 'pos'.*columns="),
+    (_good_rows(), {}, "no header row.*columns="),
+    (
+        "time_s,displacement_m\n0.0,1.0\n0.001\n" + _good_rows(),
+        {},
+        "line 3: expected 2 field",
+    ),
+    (
+        "time_s,displacement_m\n0.0,1.0\n0.001,abc\n",
+        {},
+        "line 3, column 'displacement_m': 'abc' is not a number",
+    ),
+    (_good_rows(), {"columns": ["time_s", "position"]}, "unknown column name 'position'"),
+    (_good_rows(), {"columns": ["time_s", "time_s"]}, "'time_s' is given 2 times"),
+    (_good_rows(), {"columns": ["ignore", "displacement_m"]}, "a 'time_s' column"),
+    (_good_rows(), {"columns": ["time_s", "ignore"]}, "'displacement_m' or"),
+    ("a,b,c\n" + _good_rows(), {"columns": ["time_s", "displacement_m"]}, "header"),
+    ("", {}, "no data rows"),
+    ("time_s,displacement_m\n", {}, "header but no data"),
+    (
+        _good_rows(),
+        {"columns": ["time_s", "displacement_m"], "scale": {"velocity_m_per_s": 2}},
+        "scale: column 'velocity_m_per_s' is not read",
+    ),
+    (
+        _good_rows(),
+        {"columns": ["time_s", "displacement_m"], "scale": {"displacement_m": 0}},
+        "finite non-zero",
+    ),
+    (_good_rows(), {"columns": "time_s"}, "one name per column"),
+    (_good_rows(), {"columns": ["time_s", "displacement_m"], "decimal": ";"}, "decimal"),
+]
+
+
+@pytest.mark.parametrize(
+    ("text", "kwargs", "match"), BAD_TEXT, ids=[case[2][:32] for case in BAD_TEXT]
+)
+def test_bad_text_raises_naming_file_and_what_was_expected(
+    tmp_path: Path, text: str, kwargs: dict, match: str
+) -> None:
+    path = _write(tmp_path, text)
+    with pytest.raises(RunFormatError, match=match) as info:
+        read_run(path, **kwargs)
+    assert str(path) in str(info.value)
+
+
+def test_not_utf8_raises(tmp_path: Path) -> None:
+    path = tmp_path / "bin.csv"
+    path.write_bytes(b"time_s,displacement_m\n\xff\xfe,1\n")
+    with pytest.raises(RunFormatError, match="bin.csv.*not UTF-8"):
+        read_run(path)
