@@ -197,13 +197,16 @@ def estimate_noise(signal: ArrayLike) -> float:
 
 
 def _dominant_period(t: NDArray, s: NDArray) -> float:
-    """Period [s] of the spectral peak of the mean-removed signal.
+    """Period [s] of the spectral peak of the first difference of the signal.
 
-    No taper: a free decay is already concentrated at the start of the record, which a
-    taper would suppress. The period only sets search distances and fit windows.
+    The difference turns a step (rest before the release, a drift) into a spike with a
+    flat spectrum, so the oscillation's peak dominates. No taper: a free decay is
+    concentrated at the start of the record, which a taper would suppress. The period
+    only sets search distances and fit windows.
     """
     dt = float(np.median(np.diff(t)))
-    x = s - np.mean(s)
+    x = np.diff(s)
+    x = x - np.mean(x)
     n = 1 << math.ceil(math.log2(4 * s.size))
     spec = np.abs(np.fft.rfft(x, n))
     spec[0] = 0.0
