@@ -89,6 +89,8 @@ def read_tdms(
         groups = {g.name: g for g in tdms.groups()}
     except Exception as exc:  # third-party parser, untrusted file: any failure is a format error
         raise RunFormatError(f"could not read the file as TDMS: {exc!r}", where) from None
+    if not groups:
+        raise RunFormatError("the file holds no TDMS group (empty, or not a TDMS file)", where)
     if group is None:
         if len(groups) != 1:
             raise RunFormatError(
