@@ -58,7 +58,7 @@ def test_offset_and_noise_are_estimated():
     assert pk.noise == pytest.approx(sigma, rel=0.06)
     # the offset fit averages ~60 mid-points of noise σ_peak ≈ 1.5e-3: SE ~3e-4
     assert pk.offset + pk.drift * t.mean() == pytest.approx(3.0, abs=2e-3)
-    t_true, y_true = _truth(0.01, 0.02, 10.0, len(pk))
+    _, y_true = _truth(0.01, 0.02, 10.0, len(pk))
     # each peak value: noise of a parabola over ~11 samples (value_noise) + bias
     err = pk.value - y_true
     assert np.std(err) < 3 * pk.value_noise + 1e-3
