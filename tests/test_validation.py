@@ -1,0 +1,253 @@
+"""Validation: every bad input has its own clear error; good recordings pass unchanged."""
+
+from __future__ import annotations
+
+import string
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from bayestribo import Run, read_run, simulate, write_run
+from bayestribo.errors import BayestriboError, RecordingError, RunFormatError
+from bayestribo.io import validate_run
+
+EXTERNAL = (
+    Path(__file__).resolve().parents[2]
+    / "shared"
+    / "external-data"
+    / "appstat2020-harmonic-oscillator"
+)
+
+
+@pytest.fixture(scope="module")
+def good() -> Run:
+    """A realistic simulated run (noise and quantisation at the vibrometer's resolution)."""
+    return simulate(load_N=0.31, sample_rate_Hz=5000.0, quantise=True, seed=7)
+
+
+def _replace(run: Run, **changes: object) -> Run:
+    fields = {
+        "time": run.time,
+        "displacement": run.displacement,
+        "velocity": run.velocity,
+        "metadata": run.metadata,
+    }
+    fields.update(changes)
+    return Run(**fields)
+
+
+def _with(array: np.ndarray, index: int, value: float) -> np.ndarray:
+    out = array.copy()
+    out[index] = value
+    return out
+
+
+def _swap(array: np.ndarray, i: int) -> np.ndarray:
+    out = array.copy()
+    out[i], out[i + 1] = out[i + 1], out[i]
+    return out
+
+
+def _clip_flat(values: np.ndarray, fraction: float) -> np.ndarray:
+    limit = fraction * np.abs(values).max()
+    return np.clip(values, -limit, limit)
+
+
+# (id, corruption of the good run, regex the message must match)
+BAD: list[tuple[str, Callable[[Run], Run], str]] = [
+    (
+        "nan-displacement",
+        lambda r: _replace(r, displacement=_with(r.displacement, 500, np.nan)),
+        r"field 'displacement_m': 1 sample\(s\) are NaN or infinite.*sample 500.*finite",
+    ),
+    (
+        "inf-velocity",
+        lambda r: _replace(r, velocity=_with(r.velocity, 20, -np.inf)),
+        r"field 'velocity_m_per_s'.*NaN or infinite.*sample 20",
+    ),
+    (
+        "nan-time",
+        lambda r: _replace(r, time=_with(r.time, 3, np.nan)),
+        r"field 'time_s'.*NaN or infinite.*sample 3",
+    ),
+    (
+        "time-not-increasing",
+        lambda r: _replace(r, time=_swap(r.time, 100)),
+        r"field 'time_s' is not strictly increasing: sample 101",
+    ),
+    (
+        "time-repeated",
+        lambda r: _replace(r, time=_with(r.time, 100, r.time[99])),
+        r"field 'time_s' is not strictly increasing: sample 100",
+    ),
+    (
+        "time-irregular-missing-sample",
+        lambda r: _replace(
+            r,
+            time=np.delete(r.time, 300),
+            displacement=np.delete(r.displacement, 300),
+            velocity=np.delete(r.velocity, 300),
+        ),
+        r"field 'time_s' is irregular: the step from sample 299 to 300.*median step",
+    ),
+    (
+        "too-few-samples",
+        lambda r: _replace(
+            r, time=r.time[:40], displacement=r.displacement[:40], velocity=r.velocity[:40]
+        ),
+        r"field 'time_s': 40 sample\(s\); expected at least 64",
+    ),
+    (
+        "sample-rate-disagrees",
+        lambda r: r.with_metadata(sample_rate_Hz=10_000.0),
+        r"metadata 'sample_rate_Hz' is 10000.0 Hz but the time stamps give 5000 Hz",
+    ),
+    (
+        "undersampled",
+        lambda r: r.with_metadata(natural_frequency_Hz=3000.0, sample_rate_Hz=None),
+        r"sample rate 5000 Hz does not resolve the natural frequency 3000.0 Hz",
+    ),
+    (
+        "clipped-at-declared-range",
+        lambda r: _replace(
+            r,
+            velocity=_clip_flat(r.velocity, 0.8),
+            metadata={**r.metadata, "velocity_range_m_per_s": 0.8 * np.abs(r.velocity).max()},
+        ),
+        r"field 'velocity_m_per_s' is clipped: \d+ sample\(s\) reach the sensor range",
+    ),
+    (
+        "clipped-flat-top-no-range",
+        lambda r: _replace(r, displacement=_clip_flat(r.displacement, 0.7)),
+        r"field 'displacement_m' looks clipped: it holds its (maximum|minimum).*consecutive",
+    ),
+    (
+        "displacement-in-millimetres",
+        lambda r: _replace(r, displacement=1e3 * r.displacement),
+        r"displacement is 1000 times the time integral.*millimetres in a column that says metres",
+    ),
+    (
+        "displacement-in-micrometres",
+        lambda r: _replace(r, displacement=1e6 * r.displacement),
+        r"micrometres in a column that says metres",
+    ),
+    (
+        "velocity-in-mm-per-s",
+        lambda r: _replace(r, velocity=1e3 * r.velocity),
+        r"0\.001 times the time integral.*velocity looks like mm/s",
+    ),
+    (
+        "velocity-wrong-sign",
+        lambda r: _replace(r, velocity=-r.velocity),
+        r"-1 times the time integral.*opposite sign",
+    ),
+]
+
+
+@pytest.mark.parametrize(("corrupt", "match"), [b[1:] for b in BAD], ids=[b[0] for b in BAD])
+def test_each_bad_recording_has_its_own_clear_error(
+    tmp_path: Path, good: Run, corrupt: Callable[[Run], Run], match: str
+) -> None:
+    bad = corrupt(good)
+    path = write_run(bad, tmp_path / "bad_run.csv")
+    with pytest.raises(RecordingError, match=match) as info:
+        read_run(path)
+    assert str(path) in str(info.value)
+    # The same check on the object, without a file.
+    with pytest.raises(RecordingError, match=match):
+        validate_run(bad, where="memory")
+    # Nothing repaired: reading without validation gives the bad data back as written.
+    assert read_run(path, validate=False) == bad
+
+
+def test_unknown_sidecar_value_type_names_file_key_and_expectation(
+    tmp_path: Path, good: Run
+) -> None:
+    path = write_run(good, tmp_path / "r.csv")
+    (tmp_path / "r.json").write_text('{"load_N": [0.31], "mass_kg": 0.035}')
+    with pytest.raises(
+        RunFormatError, match=r"r\.json: metadata 'load_N'.*expected a finite number >= 0.*list"
+    ):
+        read_run(path)
+    with pytest.raises(RunFormatError, match=r"metadata 'operator': unknown value type"):
+        read_run(write_run(good, tmp_path / "s.csv"), operator=object())
+
+
+def test_good_simulated_run_passes_unchanged(good: Run) -> None:
+    assert validate_run(good) is good
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_no_false_alarm_on_noise_free_or_coarse_quantised_runs(seed: int) -> None:
+    # Noise-free and quantised: the rest before release is flat at the maximum, but it
+    # touches the start of the record, so it is not a flat top.
+    rng = np.random.default_rng(seed)
+    run = simulate(
+        load_N=float(rng.uniform(0.07, 0.6)),
+        displacement_noise_m=0.0,
+        velocity_noise_m_per_s=0.0,
+        quantise=True,
+        sample_rate_Hz=float(rng.choice([1000.0, 2000.0, 10_000.0])),
+        seed=seed,
+    )
+    validate_run(run)
+
+
+@pytest.mark.parametrize("name", ["HarmOsc1.txt", "HarmOsc2.txt", "HarmOsc3.txt"])
+def test_real_recordings_pass_validation(name: str) -> None:
+    path = EXTERNAL / name
+    if not path.is_file():
+        pytest.skip(f"external data not present at {path}")
+    read_run(path, columns=["time_s", "displacement_m"], length_unit="arbitrary")
+
+
+def test_time_stamps_printed_with_few_digits_are_regular(tmp_path: Path) -> None:
+    # 3 kHz stamps printed with 6 decimals: each step deviates by up to 0.3 % from 1/3 ms.
+    t = np.round(np.arange(3000) / 3000.0, 6)
+    x = 1e-3 * np.sin(2 * np.pi * 32.6 * t)
+    validate_run(Run(t, x))
+
+
+# -- robustness: nothing but the package's own errors on arbitrary input ---------------
+
+_CSV_ALPHABET = string.digits + ",;.\t\n -+eE#" + "nafi"
+_CSV_TOKENS = st.one_of(
+    st.text(_CSV_ALPHABET, max_size=40),
+    st.sampled_from(
+        ["time_s", "displacement_m", "velocity_m_per_s", "nan", "inf", "1e999", "\ufeff", '"']
+    ),
+)
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    text=st.lists(_CSV_TOKENS, max_size=30).map("".join),
+    columns=st.sampled_from([None, ["time_s", "displacement_m"], ["time_s", "ignore"]]),
+)
+def test_random_csv_text_raises_only_package_errors(tmp_path_factory, text, columns) -> None:
+    path = tmp_path_factory.mktemp("fuzz") / "run.csv"
+    path.write_text(text, encoding="utf-8")
+    try:
+        read_run(path, columns=columns)
+    except BayestriboError:
+        pass
+
+
+@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    data=st.binary(max_size=600),
+    suffix=st.sampled_from([".csv", ".txt", ".uff", ".tdms"]),
+    prefix=st.sampled_from([b"", b"TDSm", b"    -1\n    58\n", b"time_s,displacement_m\n"]),
+)
+def test_random_bytes_raise_only_package_errors(tmp_path_factory, data, suffix, prefix) -> None:
+    path = tmp_path_factory.mktemp("fuzz") / f"run{suffix}"
+    path.write_bytes(prefix + data)
+    channels = {"displacement_m": "x"} if suffix == ".tdms" else None
+    try:
+        read_run(path, channels=channels)
+    except BayestriboError:
+        pass
