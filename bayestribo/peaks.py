@@ -273,7 +273,11 @@ def _rest_tail_start(s: NDArray, band: float, min_len: int) -> int | None:
 
 
 def estimate_offset(
-    values: ArrayLike, times: ArrayLike | None = None, drift: bool = False
+    values: ArrayLike,
+    times: ArrayLike | None = None,
+    drift: bool = False,
+    noise: float = 0.0,
+    rel_error: float = 5e-4,
 ) -> tuple[float, float]:
     """Equilibrium level of alternating raw extrema p_n (viscous + Coulomb decay).
 
@@ -286,7 +290,10 @@ def estimate_offset(
       fit of m_n on (1, (-r)^n) gives c; with ``drift`` the equilibrium is
       c0 + c1 t and the fit is on (1, t_n', (-r)^n), t_n' the mid-point times.
 
-    The same holds for velocity extrema (with another b), so this serves both.
+    The same holds for velocity extrema (with another b), so this serves both. The
+    fits are weighted by 1/√(noise² + (rel_error·h_n)²): a measured extremum carries
+    the noise and an interpolation error proportional to its size (about 3e-4, see
+    :func:`_refine`), which would otherwise swamp the small late extrema.
 
     Parameters
     ----------
@@ -296,6 +303,10 @@ def estimate_offset(
         Their times [s]; needed with ``drift``.
     drift : bool
         Fit a linear drift of the equilibrium.
+    noise : float
+        Standard deviation of one extremum [signal unit].
+    rel_error : float
+        Relative error of one extremum from its interpolation.
 
     Returns
     -------
@@ -312,8 +323,10 @@ def estimate_offset(
             f"{' and its drift' if drift else ''}, got {p.size}"
         )
     h = np.abs(np.diff(p))
+    sd = np.sqrt(noise**2 + (rel_error * h) ** 2)
+    sd = np.where(sd > 0, sd, 1.0)
     if h.size >= 3:
-        r = float(np.polyfit(h[:-1], h[1:], 1)[0])
+        r = float(np.polyfit(h[:-1], h[1:], 1, w=1.0 / sd[1:])[0])
     else:
         r = float(h[-1] / h[0])
     # r outside (0, 1] only from noise on nearly undamped records: the mid-point fit
@@ -331,7 +344,8 @@ def estimate_offset(
                 f"estimate_offset: times must have the shape of values {p.shape}, got {tt.shape}"
             )
         cols.append(0.5 * (tt[:-1] + tt[1:]))
-    coef = np.linalg.lstsq(np.column_stack(cols), m, rcond=None)[0]
+    a = np.column_stack(cols) / sd[:, None]
+    coef = np.linalg.lstsq(a, m / sd, rcond=None)[0]
     return float(coef[0]), float(coef[2]) if drift else 0.0
 
 
@@ -442,6 +456,8 @@ def find_peaks(
         )
 
     rest_raw = None if tail is None else float(np.median(s[tail:]))
+    # a parabola over n = 2w+1 samples: variance of its vertex value ≈ (9/4)σ²/n
+    value_noise = sigma * math.sqrt(9.0 / 4.0 / (2 * half_width + 1))
     slope = 0.0
     if offset is None:
         c = 0.0
@@ -453,9 +469,9 @@ def find_peaks(
         if kind == "velocity" and rest_raw is not None:
             c = rest_raw
         elif offset == "auto" and kind == "displacement" and vp.size >= 8:
-            c, slope = estimate_offset(vp, tp, drift=True)
+            c, slope = estimate_offset(vp, tp, drift=True, noise=value_noise)
         elif vp.size >= 4:
-            c, _ = estimate_offset(vp)
+            c, _ = estimate_offset(vp, noise=value_noise)
         else:
             c = 0.5 * (float(np.max(vp)) + float(np.min(vp)))
     else:
@@ -463,8 +479,6 @@ def find_peaks(
         if not math.isfinite(c):
             raise RecordingError(f"offset must be finite, got {offset!r}")
 
-    # a parabola over n = 2w+1 samples: variance of its vertex value ≈ (9/4)σ²/n
-    value_noise = sigma * math.sqrt(9.0 / 4.0 / (2 * half_width + 1))
     return Peaks(
         t=tp,
         value=vp - c - slope * tp,
