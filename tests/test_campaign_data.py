@@ -1,0 +1,134 @@
+"""The bundled synthetic campaign in data/: programme, true parameters, regeneration."""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import filecmp
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from bayestribo import read_run
+from bayestribo.campaign_data import (
+    CAMPAIGN_SEED,
+    LOADS_N,
+    MANIFEST_COLUMNS,
+    WATER_FRACTIONS,
+    campaign_plan,
+)
+from bayestribo.commands import simulate as simulate_command
+from bayestribo.viscosity import glycerol_water_viscosity
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+
+
+@pytest.fixture(scope="module")
+def plan():
+    return campaign_plan()
+
+
+@pytest.fixture(scope="module")
+def manifest() -> list[dict[str, str]]:
+    with (DATA / "manifest.csv").open(newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def test_programme_of_the_paper(plan) -> None:
+    series = [p.series for p in plan]
+    assert series.count("air") == 3
+    assert series.count("glycerol") == 15
+    assert series.count("glycerol-water") == 6 * 2 * 3
+    assert len({p.run_id for p in plan}) == len(plan)
+    glycerol = [p.simulate_kwargs for p in plan if p.series == "glycerol"]
+    assert sorted({k["load_N"] for k in glycerol}) == list(LOADS_N)
+    water = [p.simulate_kwargs for p in plan if p.series == "glycerol-water"]
+    fractions = sorted({k["metadata"]["water_mass_fraction"] for k in water})
+    assert fractions == list(WATER_FRACTIONS)
+    for k in water:
+        assert k["metadata"]["repeat"] in (1, 2, 3)
+    air = [p.simulate_kwargs for p in plan if p.series == "air"]
+    assert all(k["load_N"] == 0.0 and k["mu_k"] == 0.0 for k in air)
+
+
+def test_glycerol_scatter_is_the_papers(plan) -> None:
+    kw = [p.simulate_kwargs for p in plan if p.series == "glycerol"]
+    zeta = np.array([k["zeta"] for k in kw])
+    mu = np.array([k["mu_k"] for k in kw])
+    n = zeta.size
+    # Means of 15 draws: standard error σ/sqrt(15); 4 standard errors.
+    assert abs(zeta.mean() - 0.0236) < 4 * 0.0012 / math.sqrt(n)
+    assert abs(mu.mean() - 0.0294) < 4 * 0.0036 / math.sqrt(n)
+    # Sample standard deviations within the 99.8 % chi-square interval for 14 d.o.f.
+    # (chi2.ppf(0.001, 14) = 4.18, chi2.ppf(0.999, 14) = 36.12).
+    for values, sigma in ((zeta, 0.0012), (mu, 0.0036)):
+        s2 = values.var(ddof=1)
+        assert 4.18 / 14 < s2 / sigma**2 < 36.12 / 14
+
+
+def test_zeta_rises_with_viscosity_and_mu_k_jumps_above_six_percent_water(plan) -> None:
+    kw = [p.simulate_kwargs for p in plan if p.series == "glycerol-water"]
+    by_water: dict[float, list[dict]] = {}
+    for k in kw:
+        by_water.setdefault(k["metadata"]["water_mass_fraction"], []).append(k)
+    zeta = [np.mean([k["zeta"] for k in by_water[w]]) for w in WATER_FRACTIONS]
+    mu = {w: np.mean([k["mu_k"] for k in by_water[w]]) for w in WATER_FRACTIONS}
+    nu = glycerol_water_viscosity(list(WATER_FRACTIONS))
+    # ζ ordered like viscosity (decreasing with water).
+    assert np.all(np.diff(zeta) < 0) and np.all(np.diff(nu) < 0)
+    low = [mu[w] for w in WATER_FRACTIONS if w <= 0.06]
+    assert max(low) < 1.3 * min(low)  # almost constant up to 6 %
+    assert mu[0.08] > 1.5 * np.mean(low) and mu[0.09] > 2.2 * np.mean(low)
+
+
+def test_manifest_lists_every_run_with_its_true_parameters(plan, manifest) -> None:
+    assert list(manifest[0]) == list(MANIFEST_COLUMNS)
+    assert [row["run_id"] for row in manifest] == [p.run_id for p in plan]
+    for row, planned in zip(manifest, plan, strict=True):
+        kw = planned.simulate_kwargs
+        assert float(row["zeta"]) == kw["zeta"]
+        assert float(row["mu_k"]) == kw["mu_k"]
+        assert float(row["load_N"]) == kw["load_N"]
+        assert (DATA / row["file"]).is_file()
+
+
+def test_every_bundled_run_reads_and_matches_the_manifest(manifest) -> None:
+    for row in manifest:
+        run = read_run(DATA / row["file"])
+        assert run.n_samples == int(row["n_samples"])
+        assert run.metadata["run_id"] == row["run_id"]
+        assert run.metadata["simulation"]["zeta"] == float(row["zeta"])
+        assert run.metadata["sample_rate_Hz"] == float(row["sample_rate_Hz"])
+        rig = run.rig()
+        assert rig.natural_frequency_Hz == 32.6 and rig.mass_kg == 0.035
+        if row["series"] == "glycerol":
+            assert run.metadata["sample_rate_Hz"] == 10_000.0
+
+
+def test_glycerol_runs_have_about_half_a_second_of_motion_at_10_khz(manifest) -> None:
+    # From 2 mm the motion lasts 0.8 s at 0.07 N down to 0.4 s at 0.59 N (more friction
+    # force stops it sooner); the middle loads give the "10 kHz, ~0.6 s" benchmark case.
+    motion = [float(r["motion_duration_s"]) for r in manifest if r["series"] == "glycerol"]
+    assert all(0.35 < m < 0.9 for m in motion)
+    assert sum(0.45 < m < 0.8 for m in motion) >= 6
+
+
+def test_bundle_is_small() -> None:
+    total = sum(p.stat().st_size for p in DATA.rglob("*") if p.is_file())
+    assert total < 8e6, f"data/ holds {total / 1e6:.1f} MB"
+
+
+def test_one_command_regenerates_the_bundle_exactly(tmp_path: Path) -> None:
+    parser = argparse.ArgumentParser(prog="bayestribo")
+    simulate_command.register(parser.add_subparsers(dest="command"))
+    args = parser.parse_args(["simulate", "--campaign", str(tmp_path)])
+    assert args.handler(args) == 0
+    bundled = sorted(p.relative_to(DATA) for p in (DATA / "runs").iterdir())
+    fresh = sorted(p.relative_to(tmp_path) for p in (tmp_path / "runs").iterdir())
+    assert fresh == bundled
+    names = [str(p) for p in bundled] + ["manifest.csv"]
+    match, mismatch, errors = filecmp.cmpfiles(DATA, tmp_path, names, shallow=False)
+    assert not mismatch and not errors, (mismatch, errors)
+    assert CAMPAIGN_SEED == 20100320
