@@ -34,6 +34,8 @@ _LAZY: dict[str, str] = {
     "read_run": "bayestribo.io",
     "write_run": "bayestribo.io",
     "simulate": "bayestribo.simulation",
+    "acquire_run": "bayestribo.acquisition",
+    "recover_run": "bayestribo.acquisition",
 }
 
 __all__ = ["__version__", *sorted(_LAZY)]
