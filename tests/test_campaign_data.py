@@ -129,6 +129,6 @@ def test_one_command_regenerates_the_bundle_exactly(tmp_path: Path) -> None:
     fresh = sorted(p.relative_to(tmp_path) for p in (tmp_path / "runs").iterdir())
     assert fresh == bundled
     names = [str(p) for p in bundled] + ["manifest.csv"]
-    match, mismatch, errors = filecmp.cmpfiles(DATA, tmp_path, names, shallow=False)
+    _match, mismatch, errors = filecmp.cmpfiles(DATA, tmp_path, names, shallow=False)
     assert not mismatch and not errors, (mismatch, errors)
     assert CAMPAIGN_SEED == 20100320

@@ -96,7 +96,7 @@ def test_sidecar_can_be_skipped_or_given(tmp_path: Path) -> None:
     other = tmp_path / "other.json"
     other.write_text('{"load_N": 0.07}')
     assert read_run(path, sidecar=other).metadata["load_N"] == 0.07
-    with pytest.raises(FileNotFoundError, match="missing.json"):
+    with pytest.raises(FileNotFoundError, match=r"missing\.json"):
         read_run(path, sidecar=tmp_path / "missing.json")
 
 
@@ -122,7 +122,7 @@ def test_bad_sidecar_raises_naming_file_and_key(tmp_path: Path, text: str, match
 def test_sidecar_not_utf8_raises(tmp_path: Path) -> None:
     path = write_run(_run(), tmp_path / "r.csv")
     (tmp_path / "r.json").write_bytes(b'{"lubricant": "\xff"}')
-    with pytest.raises(RunFormatError, match="r.json.*not UTF-8"):
+    with pytest.raises(RunFormatError, match=r"r\.json.*not UTF-8"):
         read_run(path)
 
 
@@ -130,9 +130,9 @@ def test_write_needs_csv_suffix_and_read_needs_known_type(tmp_path: Path) -> Non
     with pytest.raises(RunFormatError, match=r"\.csv"):
         write_run(_run(), tmp_path / "r.txt.gz")
     (tmp_path / "r.xyz").write_text("1,2\n")
-    with pytest.raises(RunFormatError, match="unknown file type '.xyz'"):
+    with pytest.raises(RunFormatError, match=r"unknown file type \'\.xyz\'"):
         read_run(tmp_path / "r.xyz")
-    with pytest.raises(FileNotFoundError, match="nope.csv"):
+    with pytest.raises(FileNotFoundError, match=r"nope\.csv"):
         read_run(tmp_path / "nope.csv")
 
 

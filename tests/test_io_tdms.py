@@ -26,7 +26,9 @@ def _write(path: Path, *channels: ChannelObject) -> Path:
 def _wave(group: str, name: str, data: np.ndarray, **props: object) -> ChannelObject:
     base = {"wf_increment": 1.0 / RATE, "wf_start_offset": 2.5}
     base.update(props)
-    return ChannelObject(group, name, data, properties={k: v for k, v in base.items() if v is not None})
+    return ChannelObject(
+        group, name, data, properties={k: v for k, v in base.items() if v is not None}
+    )
 
 
 def test_channels_by_name_with_units_and_waveform_time(tmp_path: Path) -> None:
@@ -78,7 +80,7 @@ def test_bad_choices_list_what_is_in_the_file(
 
 def test_missing_time_information_and_mismatched_lengths(tmp_path: Path) -> None:
     path = _write(tmp_path / "notime.tdms", ChannelObject("G", "x", X))
-    with pytest.raises(RunFormatError, match="no time information.*time_s"):
+    with pytest.raises(RunFormatError, match=r"no time information.*time_s"):
         read_run(path, channels={"displacement_m": "x"})
     path = _write(tmp_path / "len.tdms", _wave("G", "x", X), _wave("G", "v", V[:-1]))
     with pytest.raises(RunFormatError, match="different lengths"):

@@ -53,7 +53,7 @@ def _sine(n: int = 400, rate: float = 2000.0) -> tuple[list[float], list[float]]
 def test_headerless_two_columns_whitespace(tmp_path: Path) -> None:
     t, x = _sine()
     path = tmp_path / "pos.txt"
-    path.write_text("".join(f"{a!r}   {b!r}\n" for a, b in zip(t, x)))
+    path.write_text("".join(f"{a!r}   {b!r}\n" for a, b in zip(t, x, strict=True)))
     run = read_run(path, columns=["time_s", "displacement_m"])
     np.testing.assert_array_equal(run.time, t)
     np.testing.assert_array_equal(run.displacement, x)
@@ -65,7 +65,8 @@ def test_other_names_units_delimiter_decimal_comma_and_ignored_column(tmp_path: 
     path = tmp_path / "export.csv"
     lines = ["# exported by some software", "Zeit [ms];Kanal;Weg [mm];v [mm/s]"]
     lines += [
-        f"{1e3 * a:.6f};7;{1e3 * b:.9f};{1e3 * c:.9f}".replace(".", ",") for a, b, c in zip(t, x, v)
+        f"{1e3 * a:.6f};7;{1e3 * b:.9f};{1e3 * c:.9f}".replace(".", ",")
+        for a, b, c in zip(t, x, v, strict=True)
     ]
     path.write_text("\n".join(lines) + "\n")
     run = read_run(
@@ -84,7 +85,8 @@ def test_instrument_preamble_is_skipped(tmp_path: Path) -> None:
     t, x = _sine()
     path = tmp_path / "inst.dat"
     path.write_text(
-        "Instrument XYZ v2\nDate: today\n" + "".join(f"{a!r}\t{b!r}\n" for a, b in zip(t, x))
+        "Instrument XYZ v2\nDate: today\n"
+        + "".join(f"{a!r}\t{b!r}\n" for a, b in zip(t, x, strict=True))
     )
     run = read_run(path, columns=["time_s", "displacement_m"], skip_rows=2)
     assert run.n_samples == len(t)
@@ -98,7 +100,7 @@ def _write(tmp_path: Path, text: str, name: str = "bad.csv") -> Path:
 
 def _good_rows(n: int = 100) -> str:
     t, x = _sine(n)
-    return "".join(f"{a!r},{b!r}\n" for a, b in zip(t, x))
+    return "".join(f"{a!r},{b!r}\n" for a, b in zip(t, x, strict=True))
 
 
 BAD_TEXT = [
@@ -151,5 +153,5 @@ def test_bad_text_raises_naming_file_and_what_was_expected(
 def test_not_utf8_raises(tmp_path: Path) -> None:
     path = tmp_path / "bin.csv"
     path.write_bytes(b"time_s,displacement_m\n\xff\xfe,1\n")
-    with pytest.raises(RunFormatError, match="bin.csv.*not UTF-8"):
+    with pytest.raises(RunFormatError, match=r"bin\.csv.*not UTF-8"):
         read_run(path)

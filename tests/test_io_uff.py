@@ -98,8 +98,8 @@ def test_different_time_axes_are_refused(tmp_path: Path) -> None:
 
 def test_garbage_and_empty_files_raise_format_errors(tmp_path: Path) -> None:
     (tmp_path / "junk.uff").write_bytes(b"    -1\n    58\nnot a data set\n    -1\n")
-    with pytest.raises(RunFormatError, match="junk.uff"):
+    with pytest.raises(RunFormatError, match=r"junk\.uff"):
         read_run(tmp_path / "junk.uff")
     (tmp_path / "empty.uff").write_text("")
-    with pytest.raises(RunFormatError, match="empty.uff"):
+    with pytest.raises(RunFormatError, match=r"empty\.uff"):
         read_run(tmp_path / "empty.uff")

@@ -44,7 +44,7 @@ def test_sample_rate_from_time_stamps() -> None:
 def test_bad_structure_raises_run_format_error(kwargs: dict, match: str) -> None:
     with pytest.raises(RunFormatError, match=match):
         Run(T, source="file.csv", **kwargs)
-    with pytest.raises(RunFormatError, match="file.csv"):
+    with pytest.raises(RunFormatError, match=r"file\.csv"):
         Run(T, source="file.csv", **kwargs)
 
 
@@ -137,9 +137,7 @@ def test_rig_and_scaling_from_metadata() -> None:
 
 
 def test_arbitrary_length_unit_drops_load_and_mass_from_the_rig() -> None:
-    run = Run(
-        T, X, metadata={"load_N": 0.31, "mass_kg": 0.035, "length_unit": "arbitrary"}
-    )
+    run = Run(T, X, metadata={"load_N": 0.31, "mass_kg": 0.035, "length_unit": "arbitrary"})
     assert run.length_unit == "arbitrary"
     assert run.rig() is None  # no natural frequency known
     rig = run.rig(natural_frequency_Hz=1.2)

@@ -59,8 +59,8 @@ def _reference(
         def rhs(time, y, c=c, mk=mk, d=direction):
             return [y[1], (-c * y[1] - K * y[0] - d * mk * load + magnet(time)) / M]
 
-        def turn(time, y, d=direction):
-            return y[1] * d if time > s + 1e-9 / omega else 1.0
+        def turn(time, y, d=direction, start=s):
+            return y[1] * d if time > start + 1e-9 / omega else 1.0
 
         turn.terminal = True
         sol = solve_ivp(
@@ -188,7 +188,7 @@ def test_magnet_pull_fades_smoothly_during_the_first_oscillation() -> None:
     assert fade == pytest.approx(0.25 / F)
     # Ideal release: acceleration -(k x0 - μ_k N)/m at once. With the fading magnet the
     # pin starts with zero acceleration, so it has moved much less after fade/4 ...
-    i = int(round(fade / 4 * 20_000))
+    i = round(fade / 4 * 20_000)
     drop_magnet = 1.5e-3 - magnet.displacement[i]
     drop_ideal = 1.5e-3 - ideal.displacement[i]
     assert 0 <= drop_magnet < 0.2 * drop_ideal
@@ -306,7 +306,7 @@ def test_simulate_command_writes_a_run_that_reads_back_identically(
 
 
 def test_simulate_command_errors_are_package_errors(tmp_path: Path) -> None:
-    with pytest.raises(BayestriboError, match="OUT.csv or --campaign"):
+    with pytest.raises(BayestriboError, match=r"OUT\.csv or --campaign"):
         _cli(["simulate"])
     with pytest.raises(BayestriboError, match="zeta must satisfy"):
         _cli(["simulate", str(tmp_path / "x.csv"), "--zeta", "2"])

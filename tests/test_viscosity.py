@@ -18,7 +18,9 @@ TABLE1_WATER = [0.023, 0.03, 0.06, 0.08, 0.09]
 TABLE1_EMPIRICAL = [718.8, 625.5, 356.7, 252.5, 214.2]
 
 
-@pytest.mark.parametrize(("water", "printed"), list(zip(TABLE1_WATER, TABLE1_EMPIRICAL)))
+@pytest.mark.parametrize(
+    ("water", "printed"), list(zip(TABLE1_WATER, TABLE1_EMPIRICAL, strict=True))
+)
 def test_eq43_reproduces_table1_empirical_row(water: float, printed: float) -> None:
     # The table prints one decimal: the exact value lies within half a unit of it.
     assert abs(float(glycerol_water_viscosity(water)) - printed) <= 0.05 + 1e-9
