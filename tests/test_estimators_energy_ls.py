@@ -89,7 +89,7 @@ def test_without_rig_frequency_comes_from_the_record():
 
 
 def test_offset_and_lead_in_are_handled():
-    t, x, v = sampled(0.0236, 0.0294, 10.0, offset=5.0, lead=0.3)
+    t, x, _ = sampled(0.0236, 0.0294, 10.0, offset=5.0, lead=0.3)
     est = energy_least_squares(t, x, None, rig=RIG, model="exact")
     assert est.zeta == pytest.approx(0.0236, rel=0.01)
     assert est.friction_displacement == pytest.approx(0.0294, rel=0.02)
