@@ -223,6 +223,16 @@ def test_header_that_does_not_parse_is_a_clear_error(tmp_path):
     assert not (tmp_path / "badheader.csv").exists()
 
 
+def test_lost_header_times_out_even_while_data_streams(tmp_path):
+    # The header fails its checksum; DATA keeps coming but cannot be scaled.
+    with simulated(FaultPlan(corrupt_header=True), realtime=True) as (sim, path):
+        with pytest.raises(AcquisitionTimeout, match=r"no run header after 'ARM' within 0\.4 s"):
+            acquire_run(path, tmp_path, INPUTS, timeout_s=0.4, run_id="lost")
+        sim.stop()
+        assert (tmp_path / "lost.raw").read_bytes() == bytes(sim.sent)
+    assert len(sim.frames) > 0  # DATA frames did arrive meanwhile
+
+
 def test_nonexistent_port_is_a_clear_error_and_writes_nothing(tmp_path):
     with pytest.raises(PortNotFoundError, match="/dev/no-such-port-bt: no such port"):
         acquire_run("/dev/no-such-port-bt", tmp_path / "out", INPUTS)

@@ -75,6 +75,16 @@ class RunAssembler:
     duplicate_frames: int = 0
     frames_after_end: int = 0
     samples_received: int = 0
+    anomalies_not_listed: int = 0
+
+    #: Longest list of anomalies kept; further ones are only counted.
+    MAX_LISTED = 100
+
+    def _note(self, message: str) -> None:
+        if len(self.anomalies) < self.MAX_LISTED:
+            self.anomalies.append(message)
+        else:
+            self.anomalies_not_listed += 1
 
     @property
     def ended(self) -> bool:
@@ -98,30 +108,30 @@ class RunAssembler:
         if kind == FrameType.HEADER:
             header = RunHeader.from_payload(frame.payload)
             if self.header is not None and header != self.header:
-                self.anomalies.append(f"second, different HEADER at byte {frame.offset} ignored")
+                self._note(f"second, different HEADER at byte {frame.offset} ignored")
                 return
             self.header = header
             self.seqs.add(frame.seq)
             return
         if self.header is None:
-            self.anomalies.append(
+            self._note(
                 f"{FRAME_TYPES[kind]} frame before the run header at byte {frame.offset} ignored"
             )
             return
         if self.end is not None:
             self.frames_after_end += 1
-            self.anomalies.append(f"{FRAME_TYPES[kind]} frame after END at byte {frame.offset}")
+            self._note(f"{FRAME_TYPES[kind]} frame after END at byte {frame.offset}")
             return
         if frame.seq in self.seqs:
             self.duplicate_frames += 1
-            self.anomalies.append(f"duplicate sequence number {frame.seq} at byte {frame.offset}")
+            self._note(f"duplicate sequence number {frame.seq} at byte {frame.offset}")
             return
         try:
             if kind == FrameType.DATA:
                 first, counts = decode_data(frame.payload)
                 if first in self.data:
                     self.duplicate_frames += 1
-                    self.anomalies.append(f"duplicate DATA for sample {first} ignored")
+                    self._note(f"duplicate DATA for sample {first} ignored")
                     return
                 self.data[first] = counts
                 self.samples_received += len(counts)
@@ -131,7 +141,7 @@ class RunAssembler:
                 self.end = decode_end(frame.payload)
         except FrameError as exc:
             self.malformed_frames += 1
-            self.anomalies.append(f"{exc} (seq {frame.seq}, byte {frame.offset})")
+            self._note(f"{exc} (seq {frame.seq}, byte {frame.offset})")
             return
         self.seqs.add(frame.seq)
 
@@ -165,7 +175,7 @@ class RunAssembler:
                 gaps.append(self._gap(expected, first))
             elif first < expected:
                 overlaps += 1
-                self.anomalies.append(f"DATA for sample {first} overlaps earlier samples")
+                self._note(f"DATA for sample {first} overlaps earlier samples")
                 keep = expected - first
                 counts = counts[keep:]
                 first = expected
@@ -223,6 +233,7 @@ class RunAssembler:
             "duplicate_frames": self.duplicate_frames,
             "overlapping_frames": overlaps,
             "anomalies": list(self.anomalies),
+            "anomalies_not_listed": self.anomalies_not_listed,
             "discarded_bytes": None if parser is None else parser.discarded_bytes,
             "rejected_frame_candidates": None if parser is None else parser.rejected_candidates,
         }

@@ -184,6 +184,8 @@ class FaultPlan:
         Close the link after this many DATA frames (after the host has read them).
     bad_header : bool
         Send a run header whose payload does not parse (valid checksum).
+    corrupt_header : bool
+        Send the run header with one byte flipped (the checksum fails: header lost).
     silent : bool
         Never answer anything.
     garbage_bytes : int
@@ -196,6 +198,7 @@ class FaultPlan:
     stall: Mapping[int, float] = field(default_factory=dict)
     disconnect_after: int | None = None
     bad_header: bool = False
+    corrupt_header: bool = False
     silent: bool = False
     garbage_bytes: int = 64
 
@@ -437,7 +440,10 @@ class SimulatedInstrument:
                         payload = cfg.header.to_payload()
                         if self.faults.bad_header:
                             payload = payload[:20]
-                        self._send(encode_frame(FrameType.HEADER, 0, payload))
+                        frame = encode_frame(FrameType.HEADER, 0, payload)
+                        if self.faults.corrupt_header:
+                            frame = frame[:12] + bytes([frame[12] ^ 0xFF]) + frame[13:]
+                        self._send(frame)
                         seq, number, index, release = 1, 0, 0, None
                         streaming, t0 = True, time.monotonic()
                     elif command == "FIRE" and streaming and release is None:

@@ -148,13 +148,16 @@ class _Conversation:
         return len(data)
 
     def wait_for(self, done: Callable[[], bool], what: str, timeout_s: float | None = None) -> None:
-        """Pump until ``done()``; raise :class:`AcquisitionTimeout` after ``timeout_s`` idle."""
+        """Pump until ``done()``; raise :class:`AcquisitionTimeout` after ``timeout_s``.
+
+        The limit counts from the call, not from the last byte: a device that streams
+        but never sends the awaited frame (a run header lost to corruption) times out.
+        """
         limit = self.timeout_s if timeout_s is None else timeout_s
         start = time.monotonic()
         while not done():
             self.pump_once()
-            now = time.monotonic()
-            if now - max(start, self.last_byte) > limit:
+            if time.monotonic() - start > limit:
                 raise AcquisitionTimeout(
                     f"{self.link.url}: no {what} within {limit:g} s "
                     f"({self.raw.bytes_written} bytes received in all, "
@@ -283,7 +286,10 @@ def _acquire(
 ) -> AcquisitionResult:
     port = link.url
     try:
-        out.mkdir(parents=True, exist_ok=True)
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise AcquisitionError(f"{out}: cannot create the output directory ({exc})") from None
         write_json_atomic(
             _session_path(raw_path),
             {
