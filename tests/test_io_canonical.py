@@ -96,7 +96,7 @@ def test_sidecar_can_be_skipped_or_given(tmp_path: Path) -> None:
     other = tmp_path / "other.json"
     other.write_text('{"load_N": 0.07}')
     assert read_run(path, sidecar=other).metadata["load_N"] == 0.07
-    with pytest.raises(FileNotFoundError, match=r"missing\.json"):
+    with pytest.raises(RunFormatError, match=r"missing\.json: no such sidecar file"):
         read_run(path, sidecar=tmp_path / "missing.json")
 
 
@@ -132,7 +132,7 @@ def test_write_needs_csv_suffix_and_read_needs_known_type(tmp_path: Path) -> Non
     (tmp_path / "r.xyz").write_text("1,2\n")
     with pytest.raises(RunFormatError, match=r"unknown file type \'\.xyz\'"):
         read_run(tmp_path / "r.xyz")
-    with pytest.raises(FileNotFoundError, match=r"nope\.csv"):
+    with pytest.raises(RunFormatError, match=r"nope\.csv: no such run file"):
         read_run(tmp_path / "nope.csv")
 
 

@@ -117,8 +117,8 @@ def read_run(
         or field and what was expected.
     RecordingError
         For data that fail the checks (NaN, irregular time, clipping, units...).
-    FileNotFoundError
-        If the file does not exist.
+        A missing file or sidecar is a ``RunFormatError`` too, so that one ``except``
+        of the package's errors covers every bad input.
 
     Examples
     --------
@@ -130,7 +130,7 @@ def read_run(
     path = Path(path)
     where = str(path)
     if not path.is_file():
-        raise FileNotFoundError(f"{where}: no such run file")
+        raise RunFormatError("no such run file; expected an existing file", where)
     kind = _format_of(path, file_format)
     given = {
         "columns": columns,
@@ -169,7 +169,7 @@ def read_run(
     elif sidecar is not False:
         side = Path(sidecar)
         if not side.is_file():
-            raise FileNotFoundError(f"{side}: no such sidecar file")
+            raise RunFormatError("no such sidecar file; expected an existing file", str(side))
         meta.update(read_sidecar(side))
     meta.update(metadata)
     run = Run(
