@@ -135,6 +135,7 @@ def test_clean_run_is_complete_with_full_context(tmp_path):
     # Registered in the catalog under the CSV's SHA-256.
     record = find_run(tmp_path / "c.sqlite", sha256=result.files.digests[result.files.csv.name])
     assert record is not None and record.id == result.catalog_id
+    assert record.metadata["files_sha256"] == result.files.digests
     # Progress was reported while streaming, in non-decreasing sample counts.
     assert progress and all(a.samples <= b.samples for a, b in itertools.pairwise(progress))
     # No temporary file left behind by the atomic writes.

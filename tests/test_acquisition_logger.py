@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import time
 
 import numpy as np
 import pytest
@@ -157,3 +158,17 @@ def test_run_id_is_file_name_safe():
     inputs = OperatorInputs(load_N=0.31, lubricant="glycerol / water 50%", repeat=2)
     when = datetime(2026, 11, 22, 6, 15, tzinfo=UTC)
     assert make_run_id(inputs, when) == "20261122T061500Z_glycerol-water-50_N0.31_r2"
+
+
+def test_background_sync_needs_no_calls_from_the_reader(tmp_path, monkeypatch):
+    synced = []
+    real_fsync = os.fsync
+    monkeypatch.setattr(logger_module.os, "fsync", lambda fd: synced.append(fd) or real_fsync(fd))
+    log = RawLog(tmp_path / "r.raw", sync_interval_s=0.05, background=True)
+    log.write(b"x")  # and then no tick() at all
+    deadline = time.monotonic() + 5.0  # generous: only that it happens, not how fast
+    while not synced and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert len(synced) == 1
+    log.close()
+    assert (tmp_path / "r.raw").read_bytes() == b"x"

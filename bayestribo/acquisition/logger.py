@@ -18,6 +18,7 @@ import os
 import platform
 import re
 import tempfile
+import threading
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -42,7 +43,8 @@ __all__ = [
     "write_run_files",
 ]
 
-#: Longest time a received byte may wait before the raw log is synced to disk [s].
+#: Sync interval of the raw log [s]; with the background thread's period of a quarter
+#: of it, a received byte waits at most 0.625 s for ``fsync``.
 SYNC_INTERVAL_S = 0.5
 
 
@@ -68,13 +70,26 @@ class RawLog:
     path : path-like
         The log file; created if absent, appended to otherwise (never truncated).
     sync_interval_s : float
-        Longest time between a write and the next ``fsync`` [s] (checked on every
-        write and every :meth:`tick`; the acquisition loop ticks at least 10 times a
-        second).
+        Longest time a written byte waits for ``fsync`` [s].
+    background : bool
+        Sync from a background thread, so the reading loop never waits for the disk
+        (a slow ``fsync`` must not let the serial driver's buffer overflow). Without
+        it, syncs happen in :meth:`write` and :meth:`tick`, which the caller must call
+        often enough.
+
+    Notes
+    -----
+    Bytes are handed to the operating system at once (``os.write`` on an ``O_APPEND``
+    descriptor, no user-space buffer), so they survive the death of the process; the
+    periodic ``fsync`` makes them survive a crash of the machine.
     """
 
     def __init__(
-        self, path: str | os.PathLike[str], sync_interval_s: float = SYNC_INTERVAL_S
+        self,
+        path: str | os.PathLike[str],
+        sync_interval_s: float = SYNC_INTERVAL_S,
+        *,
+        background: bool = False,
     ) -> None:
         self.path = Path(path)
         try:
@@ -85,6 +100,14 @@ class RawLog:
         self.bytes_written = 0
         self.syncs = 0
         self._dirty_since: float | None = None
+        self._lock = threading.Lock()
+        self._closing = threading.Event()
+        self._thread: threading.Thread | None = None
+        if background:
+            self._thread = threading.Thread(
+                target=self._sync_loop, name="raw-log-sync", daemon=True
+            )
+            self._thread.start()
 
     def write(self, data: bytes) -> None:
         """Append bytes (written to the OS immediately; synced per the interval)."""
@@ -95,9 +118,12 @@ class RawLog:
             written = os.write(self._fd, view)
             view = view[written:]
         self.bytes_written += len(data)
-        if data and self._dirty_since is None:
-            self._dirty_since = time.monotonic()
-        self.tick()
+        if data:
+            with self._lock:
+                if self._dirty_since is None:
+                    self._dirty_since = time.monotonic()
+        if self._thread is None:
+            self.tick()
 
     def tick(self) -> None:
         """Sync to disk if bytes have waited for the sync interval."""
@@ -109,17 +135,29 @@ class RawLog:
 
     def sync(self) -> None:
         """Force the log to disk now."""
-        if self._fd is not None:
-            os.fsync(self._fd)
+        with self._lock:  # never held during fsync: writes do not wait for the disk
+            self._dirty_since = None  # bytes written from now on wait for the next sync
+            fd = self._fd
+        if fd is not None:
+            os.fsync(fd)
             self.syncs += 1
-            self._dirty_since = None
+
+    def _sync_loop(self) -> None:
+        # Wake at a quarter of the interval: a byte waits at most 1.25 intervals.
+        while not self._closing.wait(self.sync_interval_s / 4):
+            self.tick()
 
     def close(self) -> None:
         """Sync and close (idempotent)."""
+        self._closing.set()
+        if self._thread is not None:
+            self._thread.join()
+            self._thread = None
         if self._fd is not None:
             self.sync()
-            os.close(self._fd)
-            self._fd = None
+            with self._lock:
+                os.close(self._fd)
+                self._fd = None
 
     def __enter__(self) -> RawLog:
         return self

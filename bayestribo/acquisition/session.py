@@ -300,7 +300,7 @@ def _acquire(
                 "operator_inputs": dict(inputs),
             },
         )
-        raw = RawLog(raw_path)
+        raw = RawLog(raw_path, background=True)
         talk = _Conversation(link, raw, timeout_s, interrupt)
         try:
             talk.link.write_line("ID?")
@@ -429,7 +429,7 @@ def finish_run(
             catalog,
             path=files.csv,
             sha256=files.digests[files.csv.name],
-            metadata=metadata,
+            metadata={**metadata, "files_sha256": files.digests},
         )
     return AcquisitionResult(
         run_id=run_id,
