@@ -27,7 +27,8 @@ Rigaud et al. (2010) ran three series on the same rig (m = 0.035 kg, f = 32.6 Hz
   displacement offset uniform in ±0.3 mm, time origin uniform in [0, 100) s.
 
 Every run is recorded like the paper's vibrometer: noise at the resolution
-(0.15 µm, 0.015 µm/s) and quantisation at the resolution, 50 ms at rest before the
+(0.15 µm, 0.015 µm/s) and quantisation at the resolution, the ranges of section 2.3
+(±5 mm, ±0.5 m/s; no run reaches them), 50 ms at rest before the
 release and 100 ms after the stop. Sample rates keep the folder small: 10 kHz for
 the ``glycerol`` series (about 0.4-0.85 s of motion), 2 kHz for the other two (still
 61 samples per period); the air runs record 3 s of their (never-ending) decay.
@@ -68,6 +69,8 @@ WATER_FRACTIONS = (0.0055, 0.023, 0.03, 0.06, 0.08, 0.09)
 WATER_LOADS_N = (0.12, 0.46)
 REPEATS = 3
 MASS_KG, FREQUENCY_HZ = 0.035, 32.6
+#: Vibrometer ranges of the paper (section 2.3): 10 mm and 1 m/s peak to peak.
+DISPLACEMENT_RANGE_M, VELOCITY_RANGE_M_PER_S = 5e-3, 0.5
 
 #: Columns of ``manifest.csv``.
 MANIFEST_COLUMNS = (
@@ -146,6 +149,8 @@ def campaign_plan(seed: int = CAMPAIGN_SEED) -> list[PlannedRun]:
             "rest_before_s": 0.05,
             "rest_after_s": 0.1,
             "quantise": True,
+            "displacement_range_m": DISPLACEMENT_RANGE_M,
+            "velocity_range_m_per_s": VELOCITY_RANGE_M_PER_S,
             "seed": int(noise_seeds[index]),
         }
         common.update(kwargs)
