@@ -138,3 +138,28 @@ def test_errors():
     t_bad[100] = t_bad[99]
     with pytest.raises(RecordingError, match="increasing"):
         energy_least_squares(t_bad, x)
+
+
+def test_eq40_41_corrected_constant_against_quadrature():
+    # Π_app(τ) = ∫_τ^{T_f} ½(Λe^{-ζθ} - Γ)² dθ (Eq. 35, 38, 39); the fit relies on the
+    # closed form Eq. 40 with A = (Γ²/ζ)(3/4 - ½ ln(Γ/Λ)), not the printed 3/4 - ln(Γ/Λ)
+    from scipy.integrate import quad
+
+    from bayestribo.model import averaged_pi
+
+    zeta, mu, y0 = 0.0236, 0.0294, 10.0
+    gam = 2 * mu / (math.pi * zeta)
+    lam = y0 + gam
+    t_f = -math.log(gam / lam) / zeta
+    for tau in (0.0, 50.0, 0.9 * t_f):
+        ref = quad(lambda s: 0.5 * (lam * math.exp(-zeta * s) - gam) ** 2, tau, t_f)[0]
+        assert float(averaged_pi(tau, y0, zeta, mu)) == pytest.approx(ref, rel=1e-9)
+        eq40 = (
+            lam**2 / (4 * zeta) * math.exp(-2 * zeta * tau)
+            - lam * gam / zeta * math.exp(-zeta * tau)
+            - gam**2 / 2 * tau
+        )
+        a_corrected = gam**2 / zeta * (0.75 - 0.5 * math.log(gam / lam))
+        a_printed = gam**2 / zeta * (0.75 - math.log(gam / lam))
+        assert eq40 + a_corrected == pytest.approx(ref, rel=1e-9)
+        assert abs(eq40 + a_printed - ref) > 1.0

@@ -26,6 +26,8 @@ method gives them, and the Bayesian fit exists to do better.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
@@ -37,7 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 from bayestribo.errors import RecordingError
 from bayestribo.estimators.feeny_liang import feeny_liang
 from bayestribo.estimators.result import Estimate, friction_fraction
-from bayestribo.peaks import find_peaks, prepare_signal
+from bayestribo.peaks import Peaks, find_peaks, prepare_signal
 from bayestribo.scaling import Rig
 
 __all__ = ["EnergyData", "energy_data", "energy_least_squares"]
@@ -45,6 +47,7 @@ __all__ = ["EnergyData", "energy_data", "energy_least_squares"]
 Model = Literal["averaged", "exact"]
 
 
+@dataclass(frozen=True)
 class EnergyData:
     """Dimensionless energy decay of a recording, ready for the Π least squares.
 
@@ -72,8 +75,17 @@ class EnergyData:
         Which signals were measured and which derived.
     """
 
-    def __init__(self, **kw: object) -> None:
-        self.__dict__.update(kw)
+    tau: NDArray
+    y: NDArray
+    yp: NDArray
+    energy: NDArray
+    pi: NDArray
+    tau_end: float
+    omega: float
+    length_scale: float
+    peaks: Peaks
+    stopped: bool
+    source: str
 
 
 def _uniform_dt(t: NDArray) -> float:
@@ -146,12 +158,10 @@ def energy_data(
         dt = _uniform_dt(t)
         x = scipy.integrate.cumulative_trapezoid(v, dx=dt, initial=0.0)
         sources.append("x integrated from v")
-        x_meas_noise = None
     else:
         sources.append("x measured")
-        x_meas_noise = None
     pk = find_peaks(t, x, kind="displacement", skip=skip, offset=offset)
-    x_noise = pk.noise if x_meas_noise is None else x_meas_noise
+    x_noise = pk.noise
     x = x - (pk.offset + pk.drift * t)
     if len(pk) < 3:
         raise RecordingError(f"the energy fit needs 3 turning points, found {len(pk)}")
@@ -200,7 +210,7 @@ def energy_data(
     )
 
 
-def _model_pi(model: Model, mu_s: float | None):
+def _model_pi(model: Model, mu_s: float | None) -> Callable[..., NDArray]:
     from bayestribo.model import averaged_pi, exact_pi
 
     if model == "averaged":
