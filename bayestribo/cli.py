@@ -20,7 +20,6 @@ __all__ = ["build_parser", "main"]
 
 #: Sub-command modules under ``bayestribo.commands``, in the order of ``--help``.
 COMMANDS: tuple[str, ...] = (
-    "demo",
     "decay",
     "acquire",
     "estimate",
