@@ -49,6 +49,9 @@ DISPLACEMENT_RESOLUTION_M = 0.15e-6
 #: Velocity resolution of the laser vibrometer of the paper, 0.015 µm/s (section 2.3).
 VELOCITY_RESOLUTION_M_PER_S = 0.015e-6
 
+#: Cap on the half cycles simulated one by one with amplitude-dependent parameters.
+_MAX_HALF_CYCLES = 10_000
+
 #: A parameter that depends on the oscillation amplitude: ``law(amplitude_m) -> value``.
 AmplitudeLaw = Callable[[float], float]
 
@@ -131,9 +134,14 @@ def _free_segments(
 
     if not callable(zeta) and not callable(mu_k):
         return [_Segment(start, math.inf, y, yp, *params(amplitude_m))]
-    segments = []
+    segments: list[_Segment] = []
     amp = amplitude_m
     while True:
+        if len(segments) >= _MAX_HALF_CYCLES:
+            raise ValueError(
+                f"the motion does not stop within {_MAX_HALF_CYCLES} half cycles: give "
+                "motion_duration_s, the time to record after the release"
+            )
         z, m, s = params(amp)
         stop = float(stop_time(y, z, m, s, yp))
         tau_n, y_n = turning_points(y, z, m, s, yp, max_count=2 if yp == 0.0 else 1)
@@ -372,6 +380,11 @@ def simulate(
     tau_fade = omega * fade_s
     magnet = _magnet_phase(y0, z0, m0, s0, tau_fade) if tau_fade > 0.0 else None
     y_f, yp_f = magnet.end_state if magnet is not None else (y0, 0.0)
+    if motion_duration_s is None and not friction:
+        raise ValueError(
+            "the motion never stops (no friction without contact): give motion_duration_s, "
+            "the time to record after the release"
+        )
     tau_limit = math.inf if motion_duration_s is None else omega * motion_duration_s
     segments = _free_segments(
         tau_fade, y_f, yp_f, zeta, mu_k, mu_s, ell, friction, x0, max(tau_limit, tau_fade)

@@ -277,6 +277,7 @@ def test_sensor_range_saturates_and_the_run_is_then_rejected(tmp_path: Path) -> 
         ({"channels": ("position",)}, "channels"),
         ({"displacement_noise_m": -1.0}, "displacement_noise_m"),
         ({"zeta": lambda a: -1.0}, r"zeta\(.*returned -1.0"),
+        ({"zeta": lambda a: 0.05, "load_N": 0.0}, "never stops.*motion_duration_s"),
     ],
 )
 def test_bad_arguments_raise_value_errors_naming_them(kwargs: dict, match: str) -> None:
