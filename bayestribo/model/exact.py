@@ -308,7 +308,9 @@ def _whole_half_cycles(tr: _Trajectory, length: NDArray, amp: NDArray) -> NDArra
     # x² underflows below ~1e-154: there ζ has no effect in double precision, and the
     # ζ = 0 polynomials are used.
     negligible = x < _NEGLIGIBLE_X
-    special = np.broadcast_to(negligible, n.shape) | (nx < _GMINUS_SERIES)
+    # L = 0 is exact in the closed forms (every sum vanishes), and so is L = 1 when
+    # gminus(x) is not a series (the same operations cancel exactly).
+    special = np.broadcast_to(negligible, n.shape) | ((nx < _GMINUS_SERIES) & (n >= 1.0))
     if np.any(special):
         xb = np.broadcast_to(x, n.shape)[special]
         qb = np.broadcast_to(q, n.shape)[special]
