@@ -83,28 +83,33 @@ def default_pq(n_peaks: int) -> tuple[int, int]:
     return max(1, m // 2), m
 
 
-def _roots(f, beta_min: float, beta_max: float) -> list[tuple[float, float]]:
-    neg = -np.geomspace(-beta_min, 1e-6, 100) if beta_min < 0 else np.empty(0)
-    grid = np.concatenate([neg, [0.0], np.geomspace(1e-6, beta_max, 400)])
-    vals = np.array([f(b) for b in grid])
-    brackets = []
-    for i in range(grid.size - 1):
-        if vals[i] == 0.0:
-            brackets.append((grid[i], grid[i]))
-        elif vals[i] * vals[i + 1] < 0:
-            brackets.append((grid[i], grid[i + 1]))
-    return brackets
+def _eq25(beta: np.ndarray, a0: float, a2p: float, a2q: float, p: int, q: int) -> np.ndarray:
+    """Eq. 25 as μ_p(β) - μ_q(β) on an array of β (the factor 1 + r cancels)."""
+    x = np.pi * beta
+    with np.errstate(invalid="ignore", divide="ignore"):
+        g = np.where(x == 0.0, 1.0, np.expm1(-x))
+        gp = np.where(x == 0.0, 2.0 * p, np.expm1(-2 * p * x) / g)
+        gq = np.where(x == 0.0, 2.0 * q, np.expm1(-2 * q * x) / g)
+    return (a0 * np.exp(-2 * p * x) - a2p) / gp - (a0 * np.exp(-2 * q * x) - a2q) / gq
 
 
 def _solve(
     a0: float, a2p: float, a2q: float, p: int, q: int, beta_min: float, beta_max: float
 ) -> list[float]:
+    """Roots of Eq. 25: sign changes on a grid of β, each refined by Brent's method."""
+    neg = -np.geomspace(-beta_min, 1e-6, 100) if beta_min < 0 else np.empty(0)
+    grid = np.concatenate([neg, [0.0], np.geomspace(1e-6, beta_max, 400)])
+    vals = _eq25(grid, a0, a2p, a2q, p, q)
+
     def f(b: float) -> float:
-        return eq24_friction(b, a0, a2p, p) - eq24_friction(b, a0, a2q, q)
+        return float(_eq25(np.array(b), a0, a2p, a2q, p, q))
 
     out = []
-    for lo, hi in _roots(f, beta_min, beta_max):
-        out.append(lo if lo == hi else scipy.optimize.brentq(f, lo, hi, xtol=1e-14, rtol=1e-12))
+    for i in range(grid.size - 1):
+        if vals[i] == 0.0:
+            out.append(float(grid[i]))
+        elif vals[i] * vals[i + 1] < 0:
+            out.append(scipy.optimize.brentq(f, grid[i], grid[i + 1], xtol=1e-14, rtol=1e-12))
     return out
 
 
