@@ -205,6 +205,28 @@ def test_real_recordings_pass_validation(name: str) -> None:
     read_run(path, columns=["time_s", "displacement_m"], length_unit="arbitrary")
 
 
+def _decaying(rate: float) -> tuple[np.ndarray, np.ndarray]:
+    t = np.arange(int(30 * rate)) / rate
+    return t, np.round(0.7 * np.exp(-0.1 * t) * np.sin(2 * np.pi * t), 3)
+
+
+def test_coarsely_quantised_oversampled_peaks_are_not_flat_tops() -> None:
+    # A 1 Hz oscillation sampled at 10 kHz and printed with 3 decimals repeats its
+    # peak value dozens of times, but enters and leaves it by single 0.001 steps.
+    t, x = _decaying(10_000.0)
+    assert np.sum(x == x.max()) > 20
+    validate_run(Run(t, x))
+
+
+def test_flat_top_of_a_clipped_coarsely_quantised_signal_is_found() -> None:
+    # At 100 Hz (like the real 100 Hz recordings) a cut at 80 % of the amplitude is
+    # reached with steps of about 0.026, 26 quantisation steps.
+    t, x = _decaying(100.0)
+    validate_run(Run(t, x))
+    with pytest.raises(RecordingError, match="looks clipped"):
+        validate_run(Run(t, np.clip(x, -0.56, 0.56)))
+
+
 def test_time_stamps_printed_with_few_digits_are_regular(tmp_path: Path) -> None:
     # 3 kHz stamps printed with 6 decimals: each step deviates by up to 0.3 % from 1/3 ms.
     t = np.round(np.arange(3000) / 3000.0, 6)

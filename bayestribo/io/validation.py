@@ -10,10 +10,13 @@ expected at the first problem found:
    ``time_rtol`` of the median step); a declared ``sample_rate_Hz`` agrees with
    them, and the sampling resolves a declared natural frequency (Nyquist);
 4. no signal is clipped: none reaches a declared sensor range
-   (``displacement_range_m``, ``velocity_range_m_per_s``), and none holds its
-   maximum or minimum value for ``clip_samples`` samples or more away from the ends
-   of the record (a flat top; the rest before release and the rest after the stop
-   touch the ends and are not flat tops);
+   (``displacement_range_m``, ``velocity_range_m_per_s``), and none has a flat top:
+   its maximum or minimum value held for ``clip_samples`` samples or more, away from
+   the ends of the record, entered and left by steps of more than three quantisation
+   steps (the rest before release and the rest after the stop touch the ends; the
+   peak of a finely sampled, coarsely quantised signal is entered by single steps;
+   a signal that changes by less than a quantisation step per sample cannot show a
+   cut this way: declare the sensor range to have it checked);
 5. with both signals, the displacement matches the time integral of the velocity
    (gain within a factor of two of 1): this catches a displacement in millimetres
    or micrometres in a column that says metres, a velocity in mm/s, or a velocity
@@ -122,13 +125,29 @@ def _check_time(run: Run, where: str | None, time_rtol: float) -> float:
     return rate
 
 
-def _interior_plateau(values: NDArray, level: float, length: int) -> tuple[int, int] | None:
-    """First run of >= ``length`` samples equal to ``level`` touching neither end."""
+def _flat_top(values: NDArray, level: float, length: int) -> tuple[int, int] | None:
+    """First flat top at ``level``: (start, length), or None.
+
+    A flat top is a run of >= ``length`` samples equal to ``level`` that touches neither
+    end of the record and is entered and left by steps larger than three quantisation
+    steps (the smallest non-zero step of the signal). A smooth peak of a finely sampled,
+    coarsely quantised signal also repeats its extreme, but it is entered and left by
+    single quantisation steps; a signal cut flat arrives at the cut with its slope.
+    """
+    steps = np.abs(np.diff(values))
+    nonzero = steps[steps > 0]
+    if nonzero.size == 0:
+        return None
+    quantum = float(nonzero.min())
     hit = np.concatenate(([0], (values == level).astype(np.int8), [0]))
     edges = np.flatnonzero(np.diff(hit))
     starts, stops = edges[::2], edges[1::2]
     for start, stop in zip(starts, stops, strict=True):
-        if stop - start >= length and start > 0 and stop < values.size:
+        if stop - start < length or start == 0 or stop == values.size:
+            continue
+        entry = abs(values[start - 1] - level)
+        exit_ = abs(values[stop] - level)
+        if min(entry, exit_) > 3.0 * quantum:
             return int(start), int(stop - start)
     return None
 
@@ -154,7 +173,7 @@ def _check_clipping(run: Run, where: str | None, clip_samples: int) -> None:
                     where,
                 )
         for kind, level in (("maximum", values.max()), ("minimum", values.min())):
-            found = _interior_plateau(values, level, clip_samples)
+            found = _flat_top(values, level, clip_samples)
             if found is not None:
                 start, length = found
                 raise _fail(
