@@ -172,3 +172,11 @@ def test_background_sync_needs_no_calls_from_the_reader(tmp_path, monkeypatch):
     assert len(synced) == 1
     log.close()
     assert (tmp_path / "r.raw").read_bytes() == b"x"
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full (Linux)")
+def test_full_disk_is_a_clear_error():
+    log = RawLog("/dev/full")
+    with pytest.raises(AcquisitionError, match="cannot append to the raw log"):
+        log.write(b"abc")
+    log.close()

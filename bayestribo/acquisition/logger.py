@@ -12,6 +12,7 @@ files.
 
 from __future__ import annotations
 
+import errno
 import hashlib
 import json
 import os
@@ -114,10 +115,16 @@ class RawLog:
         if self._fd is None:
             raise AcquisitionError(f"{self.path}: raw log already closed")
         view = memoryview(data)
-        while view:
-            written = os.write(self._fd, view)
-            view = view[written:]
-        self.bytes_written += len(data)
+        try:
+            while view:
+                written = os.write(self._fd, view)
+                self.bytes_written += written
+                view = view[written:]
+        except OSError as exc:
+            raise AcquisitionError(
+                f"{self.path}: cannot append to the raw log ({exc}); "
+                f"{len(view)} bytes just received are not logged"
+            ) from None
         if data:
             with self._lock:
                 if self._dirty_since is None:
@@ -139,7 +146,11 @@ class RawLog:
             self._dirty_since = None  # bytes written from now on wait for the next sync
             fd = self._fd
         if fd is not None:
-            os.fsync(fd)
+            try:
+                os.fsync(fd)
+            except OSError as exc:
+                if exc.errno != errno.EINVAL:  # EINVAL: a device or pipe, nothing to sync
+                    raise
             self.syncs += 1
 
     def _sync_loop(self) -> None:

@@ -320,6 +320,9 @@ def _acquire(
         interrupted = False
         try:
             _stream(talk, pretrigger_s, progress, progress_interval_s)
+        except AcquisitionTimeout as exc:
+            fault = str(exc)
+            _stop_quietly(talk)  # a stalled device may come back: end its run
         except AcquisitionError as exc:
             fault = str(exc)
         except KeyboardInterrupt:
