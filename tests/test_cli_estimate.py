@@ -66,8 +66,12 @@ def test_text_file_with_columns_and_arbitrary_unit(capsys) -> None:
 
 
 def test_missing_file_is_an_error(tmp_path: Path, capsys) -> None:
-    assert _cli(["estimate", str(tmp_path / "nope.csv")]) == 2
-    assert "nope.csv" in capsys.readouterr().err
+    from bayestribo.cli import main
+
+    # through the dispatcher: one line on standard error, exit status 2
+    assert main(["estimate", str(tmp_path / "nope.csv")]) == 2
+    err = capsys.readouterr().err
+    assert "bayestribo estimate: error:" in err and "nope.csv" in err
 
 
 def test_unreadable_text_is_a_package_error(tmp_path: Path) -> None:
