@@ -136,6 +136,8 @@ class EnergyDecay:
         Noise measured in the record, in signal units.
     derived_channel : str or None
         ``"velocity"`` or ``"displacement"`` when that channel was derived.
+    savgol_window : int or None
+        Samples in the Savitzky-Golay window of a derived velocity.
     peaks : Peaks
         Displacement turning points of the analysed window (about the equilibrium).
     """
@@ -159,6 +161,7 @@ class EnergyDecay:
     damped_frequency_Hz: float
     noise: NoiseLevels
     derived_channel: str | None
+    savgol_window: int | None
     peaks: Peaks
 
     @property
@@ -240,9 +243,14 @@ def _check_signal(name: str, values: ArrayLike | None, n: int) -> NDArray | None
     return s
 
 
+def _savgol_window(t: NDArray, period: float) -> int:
+    """Odd window of about 1/8 of a period, at least 7 samples."""
+    return max(7, round(period / float(np.median(np.diff(t))) / 8.0) | 1)
+
+
 def _savgol_derivative(t: NDArray, x: NDArray, period: float) -> NDArray:
     dt = float(np.median(np.diff(t)))
-    window = max(7, round(period / dt / 8.0) | 1)
+    window = _savgol_window(t, period)
     if window > x.size:
         raise RecordingError(
             f"the displacement has {x.size} samples, fewer than the {window} needed to "
@@ -531,5 +539,6 @@ def energy_decay(
         damped_frequency_Hz=damped_hz,
         noise=noise,
         derived_channel=derived,
+        savgol_window=_savgol_window(t, period) if derived == "velocity" else None,
         peaks=window,
     )

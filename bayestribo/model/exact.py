@@ -98,12 +98,44 @@ def _amplitude(n: NDArray, a0: NDArray, mu_k: NDArray, x: NDArray) -> NDArray:
     return a0 * np.exp(-n * x) - 2.0 * mu_k * geometric_sum(n, x)
 
 
+def _start(
+    y0: NDArray, yp0: NDArray, z: NDArray, mk: NDArray, omega: NDArray
+) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    """Offset σ₀, amplitude A_0, sign of Y_0 and first stoppable index of the start."""
+    moving = yp0 != 0.0
+    if not np.any(moving):
+        # Start at a turning point (y'_0 = 0): Eq. 15.
+        zero = np.zeros_like(y0)
+        return zero, np.abs(y0) - mk, np.where(y0 >= 0.0, 1.0, -1.0), zero
+    # Start inside a half cycle: locate its virtual turning point σ₀ earlier.
+    sv = np.sign(yp0)
+    r = y0 + mk * sv + z * yp0  # displacement about the centre c = -μ_k sgn(y'_0), plus ζy'_0
+    sigma_mv = np.arctan2(omega * np.abs(yp0), -sv * r) / omega
+    a_mv = np.hypot(omega * yp0, r) * np.exp(z * sigma_mv)
+    if np.all(moving):
+        return sigma_mv, a_mv, -sv, np.ones_like(y0)
+    return (
+        np.where(moving, sigma_mv, 0.0),
+        np.where(moving, a_mv, np.abs(y0) - mk),
+        np.where(moving, -sv, np.where(y0 >= 0.0, 1.0, -1.0)),
+        np.where(moving, 1.0, 0.0),
+    )
+
+
 def _trajectory(
-    y0: ArrayLike, zeta: ArrayLike, mu_k: ArrayLike, mu_s: ArrayLike, yp0: ArrayLike
+    y0: ArrayLike,
+    zeta: ArrayLike,
+    mu_k: ArrayLike,
+    mu_s: ArrayLike,
+    yp0: ArrayLike,
+    validate: bool = True,
 ) -> _Trajectory:
-    y0 = as_finite("y0", y0)
-    yp0 = as_finite("yp0", yp0)
-    z, mk, ms = check_parameters(zeta, mu_k, mu_s)
+    if validate:
+        y0 = as_finite("y0", y0)
+        yp0 = as_finite("yp0", yp0)
+        z, mk, ms = check_parameters(zeta, mu_k, mu_s)
+    else:
+        y0, yp0, z, mk, ms = (np.asarray(a, dtype=float) for a in (y0, yp0, zeta, mu_k, mu_s))
     y0, yp0, z, mk, ms = np.broadcast_arrays(y0, yp0, z, mk, ms)
 
     omega = np.sqrt((1.0 - z) * (1.0 + z))
@@ -111,23 +143,7 @@ def _trajectory(
     x = np.pi * beta
     q = np.exp(-x)
     half = np.pi / omega
-
-    # Start at a turning point (y'_0 = 0): Eq. 15.
-    moving = yp0 != 0.0
-    sign_tp = np.where(y0 >= 0.0, 1.0, -1.0)
-    a_tp = np.abs(y0) - mk
-    # Start inside a half cycle: locate its virtual turning point σ₀ earlier.
-    sv = np.sign(yp0)
-    u0 = y0 + mk * sv  # displacement about the centre c = -μ_k sgn(y'_0)
-    r = u0 + z * yp0
-    theta = np.arctan2(omega * np.abs(yp0), -sv * r)
-    sigma_mv = theta / omega
-    a_mv = np.hypot(omega * yp0, r) * np.exp(z * sigma_mv)
-
-    sigma0 = np.where(moving, sigma_mv, 0.0)
-    a0 = np.where(moving, a_mv, a_tp)
-    sign0 = np.where(moving, -sv, sign_tp)
-    n_min = np.where(moving, 1.0, 0.0)
+    sigma0, a0, sign0, n_min = _start(y0, yp0, z, mk, omega)
 
     # First n >= n_min with A_n <= μ_s - μ_k: solve q^n (A_0 + r) = δ + r, r = 2μ_k/(1-q).
     delta = ms - mk
@@ -198,6 +214,8 @@ def exact_response(
     mu_k: ArrayLike,
     mu_s: ArrayLike,
     yp0: ArrayLike = 0.0,
+    *,
+    validate: bool = True,
 ) -> tuple[NDArray, NDArray]:
     """Exact dimensionless displacement and velocity, with sticking (Eq. 16-17, 8).
 
@@ -217,6 +235,9 @@ def exact_response(
         turning point with ``|y| <= μ_s``.
     yp0 : array_like, optional
         Initial dimensionless velocity y'(0); 0 starts at a turning point (Eq. 15).
+    validate : bool, optional
+        Check the arguments (default). A caller that has checked them already (a
+        sampler whose priors keep the parameters in range) may skip the checks.
 
     Returns
     -------
@@ -229,8 +250,8 @@ def exact_response(
     ValueError
         For negative τ, ζ outside [0, 1), μ_k < 0, μ_s < μ_k or non-finite values.
     """
-    tr = _trajectory(y0, zeta, mu_k, mu_s, yp0)
-    t = _check_tau(tau)
+    tr = _trajectory(y0, zeta, mu_k, mu_s, yp0, validate)
+    t = _check_tau(tau) if validate else np.asarray(tau, dtype=float)
     return over_tau_blocks(lambda block: _response(tr, block), t, tr.zeta.shape)
 
 
@@ -350,6 +371,8 @@ def exact_pi(
     mu_s: ArrayLike,
     yp0: ArrayLike = 0.0,
     tau_end: ArrayLike | None = None,
+    *,
+    validate: bool = True,
 ) -> NDArray:
     """Retrograde integral of the exact energy, Π(τ) = ∫_τ^{T} E(θ) dθ (Eq. 39).
 
@@ -361,6 +384,8 @@ def exact_pi(
         End of the record. The integral runs to ``T = min(stop, tau_end)``, the end of
         motion or of the record, whichever comes first; the energy of the pin at rest
         after the stop is never counted. ``None``: to the end of motion.
+    validate : bool, optional
+        Check the arguments (default); see :func:`exact_response`.
 
     Returns
     -------
@@ -374,12 +399,12 @@ def exact_pi(
     closed-form series (see the module notes), so the cost does not grow with the
     number of oscillations.
     """
-    tr = _trajectory(y0, zeta, mu_k, mu_s, yp0)
-    t = _check_tau(tau)
+    tr = _trajectory(y0, zeta, mu_k, mu_s, yp0, validate)
+    t = _check_tau(tau) if validate else np.asarray(tau, dtype=float)
     if tau_end is None:
         upper, tail, end = tr.n_moving, np.zeros(()), tr.tau_stop
     else:
-        te = _check_tau(tau_end, "tau_end")
+        te = _check_tau(tau_end, "tau_end") if validate else np.asarray(tau_end, dtype=float)
         n_e, s_e, trunc = _locate(tr, te)
         # Whole half cycles run up to the one holding tau_end, minus its unused part.
         upper = np.where(trunc, n_e + 1.0, tr.n_moving)

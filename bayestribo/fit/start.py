@@ -1,0 +1,164 @@
+"""Starting point of the sampler: maximum a posteriori and a Laplace approximation.
+
+1. A first guess of ζ and μ_k from the Feeny-Liang peak decrement (Eq. 20-21) of the
+   analysed window (falling back to ζ = 0.01 and a friction of 1 % of the amplitude).
+2. For the exact model, μ_s/μ_k is scanned over its prior range: it decides at which
+   turning point the model sticks, which the data pin down sharply.
+3. Gauss-Newton least squares (:func:`scipy.optimize.least_squares`) of the
+   standardized residuals over the continuous parameters, from which the Laplace
+   covariance (JᵀJ)⁻¹ follows.
+4. Walkers are drawn from that Gaussian (μ_s/μ_k uniformly over the ratios within
+   0.5 of the best log density), each kept only if its log density is within
+   ``d + 10`` of the best, so that every ensemble starts in the typical set.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import least_squares
+
+from bayestribo.decay import EnergyDecay
+from bayestribo.errors import BayestriboError
+from bayestribo.fit.posterior import Posterior
+
+__all__ = ["initial_walkers", "maximum_a_posteriori"]
+
+_RATIO_GRID = np.linspace(1.0, 3.0, 81)
+
+
+def _first_guess(decay: EnergyDecay, posterior: Posterior) -> dict[str, float]:
+    guess = {"zeta": 0.01, "mu_k": 0.01 * abs(posterior.likelihood.data.y0)}
+    try:
+        from bayestribo.estimators.feeny_liang import feeny_liang
+
+        est = feeny_liang(decay.peaks)
+        if est.zeta is not None and 0.0 <= est.zeta < 0.3:
+            guess["zeta"] = float(est.zeta)
+        friction = est.friction_displacement
+        if friction is not None and friction > 0:
+            guess["mu_k"] = float(friction) / decay.scaling.length_scale
+    except (BayestriboError, ValueError, ArithmeticError):
+        pass
+    return guess
+
+
+def _vector(posterior: Posterior, values: dict[str, float]) -> NDArray:
+    return np.array([values[n] for n in posterior.names], dtype=float)
+
+
+def _scan_ratio(posterior: Posterior, theta: NDArray) -> tuple[NDArray, NDArray]:
+    i = posterior.names.index("mu_s_ratio")
+    rows = np.repeat(theta[None, :], _RATIO_GRID.size, axis=0)
+    rows[:, i] = _RATIO_GRID
+    return rows, posterior(rows)
+
+
+def maximum_a_posteriori(
+    posterior: Posterior, decay: EnergyDecay
+) -> tuple[NDArray, NDArray, tuple[float, float] | None]:
+    """Maximum a posteriori, Laplace covariance and the plausible μ_s/μ_k interval.
+
+    Returns
+    -------
+    theta : ndarray
+        The MAP in sampling coordinates.
+    cov : ndarray
+        Laplace covariance of the continuous coordinates (ratio excluded: its row and
+        column are zero).
+    ratio_range : tuple or None
+        Range of μ_s/μ_k within 0.5 of the best log density (exact model with friction).
+    """
+    names = posterior.names
+    values = {"zeta": 0.0, "y0": posterior.likelihood.data.y0}
+    values.update(_first_guess(decay, posterior))
+    values["mu_s_ratio"] = 1.2
+    values["log10_discrepancy"] = -5.0
+    theta = _vector(posterior, {n: values[n] for n in names})
+    has_ratio = "mu_s_ratio" in names
+    if has_ratio:
+        rows, lp = _scan_ratio(posterior, theta)
+        if np.any(np.isfinite(lp)):
+            theta = rows[int(np.argmax(lp))]
+
+    free = [i for i, n in enumerate(names) if n not in ("mu_s_ratio", "log10_discrepancy")]
+    scale = np.array([max(abs(theta[i]), 1e-3) for i in free]) * 1e-3
+
+    def residuals(u: NDArray) -> NDArray:
+        th = theta.copy()
+        th[free] = theta[free] + u * scale
+        lp = posterior(th[None])[0]
+        if not np.isfinite(lp):
+            return np.full(posterior.likelihood.data.increments.size, 1e6)
+        return posterior.standardized_residuals(th[None])[0]
+
+    sol = least_squares(residuals, np.zeros(len(free)), x_scale="jac", method="trf")
+    theta[free] = theta[free] + sol.x * scale
+    jac = sol.jac / scale[None, :]
+    try:
+        cov_free = np.linalg.inv(jac.T @ jac)
+    except np.linalg.LinAlgError:
+        cov_free = np.diag((1e-3 * np.maximum(np.abs(theta[free]), 1e-6)) ** 2)
+    cov = np.zeros((len(names), len(names)))
+    cov[np.ix_(free, free)] = cov_free
+
+    ratio_range = None
+    if has_ratio:
+        rows, lp = _scan_ratio(posterior, theta)
+        best = np.max(lp)
+        if np.isfinite(best):
+            good = _RATIO_GRID[lp >= best - 0.5]
+            theta = rows[int(np.argmax(lp))]
+            step = _RATIO_GRID[1] - _RATIO_GRID[0]
+            ratio_range = (max(1.0, good.min() - step), min(3.0, good.max() + step))
+    return theta, cov, ratio_range
+
+
+def initial_walkers(
+    posterior: Posterior,
+    theta: NDArray,
+    cov: NDArray,
+    ratio_range: tuple[float, float] | None,
+    n_ensembles: int,
+    n_walkers: int,
+    rng: np.random.Generator,
+    max_tries: int = 200,
+) -> NDArray:
+    """Starting positions (n_ensembles, n_walkers, d) in the typical set.
+
+    Raises
+    ------
+    BayestriboError
+        If no starting point with a finite posterior density is found (the data and
+        the model disagree everywhere near the optimum).
+    """
+    names = posterior.names
+    d = len(names)
+    best = posterior(theta[None])[0]
+    if not np.isfinite(best):
+        raise BayestriboError(
+            "the posterior density is zero at the optimum: the model cannot reproduce "
+            "this record with the given priors"
+        )
+    need = n_ensembles * n_walkers
+    kept: list[NDArray] = []
+    jitter = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    for _ in range(max_tries):
+        draws = rng.multivariate_normal(theta, cov, size=2 * need, method="eigh")
+        for i, name in enumerate(names):
+            if name == "mu_s_ratio" and ratio_range is not None:
+                draws[:, i] = rng.uniform(*ratio_range, size=draws.shape[0])
+            elif name == "log10_discrepancy":
+                draws[:, i] = theta[i] + rng.normal(0.0, 0.5, size=draws.shape[0])
+            elif jitter[i] == 0.0:
+                draws[:, i] = theta[i] * (1.0 + 1e-6 * rng.standard_normal(draws.shape[0]))
+        lp = posterior(draws)
+        kept.extend(draws[np.isfinite(lp) & (lp >= best - (d + 10.0))])
+        if len(kept) >= need:
+            break
+    if len(kept) < need:
+        raise BayestriboError(
+            f"found only {len(kept)} of {need} starting points near the optimum; the "
+            "posterior may be multimodal or the priors too narrow"
+        )
+    return np.asarray(kept[:need]).reshape(n_ensembles, n_walkers, d)
