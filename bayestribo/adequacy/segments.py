@@ -1,0 +1,368 @@
+r"""Stretches of an analysed decay and the least-squares fit of one stretch.
+
+A *segment* is a stretch of an :class:`bayestribo.decay.EnergyDecay` that starts at a
+displacement turning point (y' = 0, the initial state of Eq. 15) and ends at a later
+turning point, or at the end of the analysed decay. The same fit serves the whole
+decay (one segment) and each window of the windowed analysis (section 3.1 of the
+paper, after Wu et al. 2007).
+
+The fit maximises the likelihood the Bayesian fit uses: the retrograde integral
+Π (Eq. 39) restricted to the segment, observed on a grid as independent increments
+``D_j = ∫_{τ_j}^{τ_{j+1}} E dτ`` (composite Simpson rule on the samples), each with
+the variance its measurement noise gives it, against the same increments of the
+exact model's Π (:func:`bayestribo.model.exact_pi`, started at the segment's first
+turning point with amplitude Y_0 fitted, μ_s = μ_k). The free parameters are ζ, the
+dimensionless friction μ (μ_k with a loaded rig, else the friction displacement in
+signal units) and Y_0.
+
+Noise. With both channels recorded the per-sample energy noise is white with
+variance ``y²σ_y² + y'²σ_y'²``; E is corrected for its mean ``½(σ_y² + σ_y'²)``. When
+the velocity was derived from the displacement (Savitzky-Golay derivative, as in
+:func:`bayestribo.decay.energy_decay`) its noise is correlated with the displacement's:
+the increment variances and the bias are then propagated by Monte Carlo through the
+same derivative filter (seeded, linearised in the noise). A derived displacement
+(integrated velocity) is treated as noise-free: its error is a slow drift absorbed
+by the equilibrium fit.
+
+Uncertainty. The covariance is the inverse Fisher information of the increments,
+``(JᵀWJ)⁻¹``, multiplied by the reduced χ² of the fit when that exceeds one (a
+model that does not describe the data within its noise widens its own intervals
+instead of claiming a precision it does not have). Intervals are Gaussian,
+labelled as such.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import scipy.optimize
+import scipy.signal
+from numpy.typing import NDArray
+
+from bayestribo.decay import EnergyDecay
+from bayestribo.errors import RecordingError
+
+__all__ = [
+    "PARAMETERS",
+    "SegmentFit",
+    "fit_segment",
+    "peak_positions",
+    "segment_noise",
+    "whole_decay_fit",
+]
+
+#: Names of the fitted parameters, in the order of the covariance.
+PARAMETERS: tuple[str, str, str] = ("zeta", "mu", "y0")
+
+#: Increments per half cycle of the observation grid (an even number of samples each).
+INCREMENTS_PER_HALF_CYCLE = 8
+
+#: Monte Carlo replicates used to propagate the noise through a derivative filter.
+NOISE_REPLICATES = 200
+
+
+@dataclass(frozen=True)
+class SegmentFit:
+    """Least-squares fit of ζ, μ and Y_0 to one stretch of a decay.
+
+    Attributes
+    ----------
+    zeta, mu, y0 : float
+        Estimates: viscous damping ζ [-], friction μ [-] (μ_k with a loaded rig,
+        else the friction displacement in signal units, since ℓ = 1) and the
+        amplitude Y_0 of the segment's first turning point [-].
+    covariance : ndarray
+        3×3 covariance of (ζ, μ, Y_0), inflated by ``chi2_reduced`` when above 1.
+    chi2_reduced : float
+        χ² of the increments over their degrees of freedom.
+    n_increments : int
+        Number of Π increments fitted.
+    tau_start, tau_end : float
+        Segment limits on the decay's τ axis [-].
+    at_bound : tuple of str
+        Parameters whose estimate sits on a bound (e.g. μ = 0); their Gaussian
+        interval is one-sided in truth.
+    notes : str
+        Optimiser messages, if any.
+    """
+
+    zeta: float
+    mu: float
+    y0: float
+    covariance: NDArray
+    chi2_reduced: float
+    n_increments: int
+    tau_start: float
+    tau_end: float
+    at_bound: tuple[str, ...] = ()
+    notes: str = ""
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def se(self, name: str) -> float:
+        """Standard error of ``name`` (one of :data:`PARAMETERS`)."""
+        i = PARAMETERS.index(name)
+        return math.sqrt(max(float(self.covariance[i, i]), 0.0))
+
+    @property
+    def values(self) -> NDArray:
+        """(ζ, μ, Y_0) as an array."""
+        return np.array([self.zeta, self.mu, self.y0])
+
+
+def peak_positions(decay: EnergyDecay) -> NDArray:
+    """Sample index in the decay's arrays of each displacement turning point."""
+    idx = np.asarray(decay.peaks.index, dtype=int)
+    if idx.size and idx[0] >= 0:
+        pos = idx - idx[0]
+    else:
+        pos = np.searchsorted(decay.t, decay.peaks.t)
+    return np.clip(pos, 0, decay.t.size - 1)
+
+
+@dataclass(frozen=True)
+class _Noise:
+    sigma_y: float
+    sigma_yp: float
+    derived: str | None
+    filter_window: int
+    dt: float
+    omega: float
+
+
+def segment_noise(decay: EnergyDecay) -> _Noise:
+    """Noise levels of a decay in units of y and y', with how the channels were made."""
+    sy = decay.noise_y
+    syp = decay.noise_yp
+    dt = float(np.median(np.diff(decay.t)))
+    period = 2.0 * decay.peaks.half_period
+    window = max(7, round(period / dt / 8.0) | 1)  # as energy_decay's derivative
+    if sy is None and syp is None:
+        raise RecordingError("the decay has no noise level on either channel")
+    return _Noise(
+        sigma_y=0.0 if sy is None else float(sy),
+        sigma_yp=0.0 if syp is None else float(syp),
+        derived=decay.derived_channel,
+        filter_window=int(window),
+        dt=dt,
+        omega=float(decay.scaling.omega),
+    )
+
+
+def _simpson(n_intervals: int, h: NDArray) -> NDArray:
+    """Composite Simpson weights over samples with local steps ``h`` (n_intervals even)."""
+    w = np.zeros(n_intervals + 1)
+    if n_intervals == 1:
+        w[:] = 0.5 * h[0]
+        return w
+    if n_intervals % 2:
+        # Simpson on all but the last interval, trapezoid on the last one.
+        w[:-1] = _simpson(n_intervals - 1, h[:-1])
+        w[-2:] += 0.5 * h[-1]
+        return w
+    hh = float(np.mean(h))
+    w[0:-1:2] += hh / 3.0
+    w[1::2] += 4.0 * hh / 3.0
+    w[2::2] += hh / 3.0
+    return w
+
+
+def _grid(n_samples: int, samples_per_half: float) -> NDArray:
+    """Grid edges (sample indices) with an even number of samples per increment."""
+    step = max(2, 2 * round(samples_per_half / INCREMENTS_PER_HALF_CYCLE / 2.0))
+    edges = np.arange(0, n_samples, step)
+    if edges[-1] != n_samples - 1:
+        if n_samples - 1 - edges[-1] < step // 2 and edges.size > 1:
+            edges[-1] = n_samples - 1
+        else:
+            edges = np.append(edges, n_samples - 1)
+    return edges
+
+
+def _increment_matrix(tau: NDArray, edges: NDArray) -> list[tuple[int, int, NDArray]]:
+    out = []
+    for a, b in itertools.pairwise(edges):
+        out.append((int(a), int(b), _simpson(int(b - a), np.diff(tau[a : b + 1]))))
+    return out
+
+
+def _observed(
+    tau: NDArray, y: NDArray, yp: NDArray, noise: _Noise, edges: NDArray, seed: int
+) -> tuple[NDArray, NDArray]:
+    """Observed increments (bias-corrected) and their noise variances."""
+    parts = _increment_matrix(tau, edges)
+    energy = 0.5 * (y * y + yp * yp)
+    if noise.derived == "velocity" and noise.sigma_y > 0.0:
+        rng = np.random.default_rng(seed)
+        eps = noise.sigma_y * rng.standard_normal((NOISE_REPLICATES, y.size))
+        eta = (
+            scipy.signal.savgol_filter(
+                eps,
+                min(noise.filter_window, y.size - (1 - y.size % 2)),
+                5,
+                deriv=1,
+                delta=noise.dt,
+                mode="interp",
+                axis=1,
+            )
+            / noise.omega
+        )
+        bias = 0.5 * (noise.sigma_y**2 + float(np.mean(eta * eta)))
+        d_energy = y * eps + yp * eta  # linearised noise of E
+        var = np.array([np.var(d_energy[:, a : b + 1] @ w) for a, b, w in parts])
+    else:
+        sy2 = noise.sigma_y**2 if noise.derived != "displacement" else 0.0
+        syp2 = noise.sigma_yp**2
+        bias = 0.5 * (sy2 + syp2)
+        ve = y * y * sy2 + yp * yp * syp2 + 0.5 * (sy2 * sy2 + syp2 * syp2)
+        var = np.array([float(ve[a : b + 1] @ (w * w)) for a, b, w in parts])
+    e = energy - bias
+    obs = np.array([float(e[a : b + 1] @ w) for a, b, w in parts])
+    floor = 1e-12 * max(float(np.max(var)), 1e-300)
+    return obs, np.maximum(var, floor)
+
+
+def _start_values(peaks_abs: NDArray) -> tuple[float, float]:
+    """ζ and μ from the successive-peak regression A_{n+1} = r A_n - (1+r)μ (Eq. 20)."""
+    if peaks_abs.size >= 3:
+        r, c = np.polyfit(peaks_abs[:-1], peaks_abs[1:], 1)
+        if 0.0 < r < 1.0:
+            beta = -math.log(r) / math.pi
+            return beta / math.sqrt(1.0 + beta * beta), max(-c / (1.0 + r), 0.0)
+    if peaks_abs.size >= 2 and peaks_abs[1] < peaks_abs[0]:
+        beta = -math.log(peaks_abs[1] / peaks_abs[0]) / math.pi
+        return beta / math.sqrt(1.0 + beta * beta), 0.0
+    return 0.01, 0.0
+
+
+def fit_segment(
+    decay: EnergyDecay,
+    start: int,
+    stop: int,
+    peaks_abs: NDArray,
+    *,
+    noise: _Noise | None = None,
+    seed: int = 0,
+    fixed_mu: float | None = None,
+) -> SegmentFit:
+    """Fit ζ, μ and Y_0 to the Π increments of samples ``start:stop`` of a decay.
+
+    Parameters
+    ----------
+    decay : EnergyDecay
+        The analysed decay.
+    start, stop : int
+        Sample range in the decay's arrays; ``start`` must be a turning point.
+    peaks_abs : ndarray
+        |Y_n| of the turning points inside the segment (dimensionless), first one
+        at ``start``: starting values and the bound on μ.
+    noise : optional
+        Pre-computed :func:`segment_noise` of the decay.
+    seed : int
+        Seed of the noise propagation for a derived channel.
+    fixed_mu : float, optional
+        Hold μ at this value (dimensionless) and fit ζ and Y_0 only: the
+        *equivalent* damping of the segment, all of its dissipation beyond that
+        friction counted as viscous. Its row and column of the covariance are 0.
+
+    Returns
+    -------
+    SegmentFit
+
+    Raises
+    ------
+    RecordingError
+        A segment too short to fit (fewer than 8 increments).
+    """
+    from bayestribo.model import exact_pi
+
+    noise = segment_noise(decay) if noise is None else noise
+    tau = decay.tau[start:stop] - decay.tau[start]
+    y, yp = decay.y[start:stop], decay.yp[start:stop]
+    if peaks_abs.size < 2 or tau.size < 16:
+        raise RecordingError(
+            f"a segment of {tau.size} samples and {peaks_abs.size} turning points is too "
+            "short to fit; use a longer window"
+        )
+    samples_per_half = (tau.size - 1) / max(peaks_abs.size - 1, 1)
+    edges = _grid(tau.size, samples_per_half)
+    if edges.size < 9:
+        raise RecordingError(
+            f"a segment with {edges.size - 1} Π increments is too short to fit; use a longer window"
+        )
+    obs, var = _observed(tau, y, yp, noise, edges, seed)
+    sd = np.sqrt(var)
+    tau_e = tau[edges]
+    tau_end = float(tau[-1])
+    amp = float(peaks_abs[0])
+    sign = 1.0 if y[0] >= 0.0 else -1.0
+    yp0 = float(yp[0])  # the sample nearest the turning point is not exactly on it
+    z0, m0 = _start_values(peaks_abs)
+    z0 = min(max(z0, 1e-4), 0.5)
+    m0 = min(max(m0, 1e-4 * amp), 0.5 * amp)
+
+    free = np.array([True, fixed_mu is None, True])
+    if fixed_mu is not None:
+        if not (math.isfinite(fixed_mu) and 0.0 <= fixed_mu < amp):
+            raise RecordingError(f"fixed_mu must be in [0, {amp:.6g}), got {fixed_mu!r}")
+        m0 = float(fixed_mu)
+
+    def full(q: NDArray) -> NDArray:
+        p = np.array([z0, m0, amp])
+        p[free] = q
+        return p
+
+    def resid(q: NDArray) -> NDArray:
+        p = full(q)
+        pi = exact_pi(tau_e, sign * p[2], p[0], p[1], p[1], yp0, tau_end=tau_end)
+        return (pi[:-1] - pi[1:] - obs) / sd
+
+    lower = np.array([0.0, 0.0, 0.5 * amp])
+    upper = np.array([0.95, amp, 2.0 * amp])
+    scale = np.array([max(z0, 1e-3), max(m0, 1e-3 * amp), amp])
+    sol = scipy.optimize.least_squares(
+        resid,
+        np.array([z0, m0, amp])[free],
+        bounds=(lower[free], upper[free]),
+        x_scale=scale[free],
+        xtol=1e-10,
+        ftol=1e-10,
+        gtol=1e-10,
+        max_nfev=500,
+    )
+    n = obs.size
+    n_free = int(np.count_nonzero(free))
+    chi2 = float(np.sum(sol.fun**2))
+    red = chi2 / max(n - n_free, 1)
+    jac = sol.jac
+    cov = np.zeros((3, 3))
+    cov[np.ix_(free, free)] = np.linalg.pinv(jac.T @ jac) * max(red, 1.0)
+    x = full(sol.x)
+    tol = 1e-6 * np.array([1.0, amp, amp])
+    at_bound = tuple(
+        name
+        for name, v, lo, hi, t, f in zip(PARAMETERS, x, lower, upper, tol, free, strict=True)
+        if f and (v <= lo + t or v >= hi - t)
+    )
+    return SegmentFit(
+        zeta=float(x[0]),
+        mu=float(x[1]),
+        y0=float(x[2]),
+        covariance=cov,
+        chi2_reduced=red,
+        n_increments=n,
+        tau_start=float(decay.tau[start]),
+        tau_end=float(decay.tau[stop - 1]),
+        at_bound=at_bound,
+        notes="" if sol.success else f"optimiser: {sol.message}",
+        extra={"fixed_mu": fixed_mu},
+    )
+
+
+def whole_decay_fit(decay: EnergyDecay, *, seed: int = 0) -> SegmentFit:
+    """The same fit on the whole analysed decay (one segment from its first turning point)."""
+    peaks_abs = np.abs(decay.peaks.value) / decay.scaling.length_scale
+    return fit_segment(decay, 0, decay.t.size, peaks_abs, seed=seed)

@@ -1,0 +1,504 @@
+"""Windowed fits: ζ and μ_k in windows of a few oscillations moving along the decay.
+
+The paper checks that the friction law holds along the whole decay by moving an
+observation window of fixed length along the time axis and finding the same (ζ, μ_k)
+in every window (Rigaud et al. 2010, section 3.1, after Wu et al. 2007). Here the
+analysed decay (:func:`bayestribo.decay.energy_decay`) is cut at its displacement
+turning points into consecutive, non-overlapping windows of ``window`` oscillations
+(2·``window`` half cycles); what is left after the last whole window (less than
+``window`` oscillations, up to the end of motion) joins the last window, so no
+sample is left out. Non-overlapping windows keep the window estimates independent,
+which the constancy test (:mod:`bayestribo.adequacy.constancy`) relies on.
+
+Each window is fitted by :func:`bayestribo.adequacy.segments.fit_segment`: least
+squares on the window's Π increments with the exact model, i.e. the maximum of the
+likelihood the Bayesian fit samples, with Gaussian intervals from its curvature
+(``method="least_squares"``). With ``method="bayes"`` each window is cut out of the
+run as a run of its own and passed to the Bayesian fit
+(:func:`bayestribo.fit.fit`, or any function given as ``fitter``), and the intervals
+are posterior quantiles.
+
+Each window reports its amplitude range (the |Y_n| of its turning points) and its
+peak-velocity range (the largest |v| of each of its half cycles), in signal units.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bayestribo.adequacy.segments import (
+    SegmentFit,
+    fit_segment,
+    peak_positions,
+    segment_noise,
+    whole_decay_fit,
+)
+from bayestribo.decay import EnergyDecay, energy_decay
+from bayestribo.errors import BayestriboError, RecordingError
+
+__all__ = [
+    "WindowEstimate",
+    "WindowedAnalysis",
+    "analysed_decay",
+    "window_bounds",
+    "windowed_fits",
+]
+
+Method = Literal["least_squares", "bayes"]
+Friction = Literal["auto", "fit", "fixed"]
+
+#: Two-sided probability of the reported intervals.
+INTERVAL_PROB = 0.95
+_Z95 = 1.959963984540054
+
+
+def analysed_decay(run: Any, *, skip_oscillations: int = 1) -> EnergyDecay:
+    """The energy decay of a run (a :class:`bayestribo.run.Run`, a path, or a decay).
+
+    Raises
+    ------
+    RecordingError
+        When the argument is none of those, or the recording cannot be analysed.
+    """
+    if isinstance(run, EnergyDecay):
+        return run
+    if isinstance(run, str | Path):
+        from bayestribo.io import read_run
+
+        run = read_run(run)
+    if not (hasattr(run, "time") and hasattr(run, "displacement")):
+        raise RecordingError(
+            f"run must be a bayestribo Run, a run file path or an EnergyDecay, got {type(run)}"
+        )
+    rig = run.rig() if hasattr(run, "rig") else None
+    return energy_decay(
+        run.time, run.displacement, run.velocity, rig=rig, skip_oscillations=skip_oscillations
+    )
+
+
+def _check_window(window: Any) -> int:
+    if isinstance(window, bool) or not isinstance(window, int | np.integer) or window < 1:
+        raise RecordingError(f"window must be a whole number of oscillations >= 1, got {window!r}")
+    return int(window)
+
+
+def window_bounds(decay: EnergyDecay, window: int) -> list[tuple[int, int, int, int]]:
+    """Windows of ``window`` oscillations along a decay.
+
+    Returns
+    -------
+    list of (start, stop, first_peak, last_peak)
+        Sample range ``start:stop`` in the decay's arrays and the range of turning
+        points ``first_peak..last_peak`` (inclusive) each window holds. The last
+        window runs to the end of the analysed decay.
+
+    Raises
+    ------
+    RecordingError
+        When the decay holds less than one window.
+    """
+    window = _check_window(window)
+    pos = peak_positions(decay)
+    half = 2 * window
+    n_peaks = pos.size
+    count = (n_peaks - 1) // half
+    if count < 1:
+        raise RecordingError(
+            f"the analysed decay holds {(n_peaks - 1) / 2:g} oscillations, fewer than one "
+            f"window of {window}; choose a shorter window"
+        )
+    out = []
+    for k in range(count):
+        first, last = k * half, (k + 1) * half
+        if k == count - 1:
+            out.append((int(pos[first]), decay.t.size, first, n_peaks - 1))
+        else:
+            out.append((int(pos[first]), int(pos[last]) + 1, first, last))
+    return out
+
+
+@dataclass(frozen=True)
+class WindowEstimate:
+    """ζ and μ in one window, with the window's amplitude and velocity range.
+
+    Attributes
+    ----------
+    index : int
+        Window number along the decay (0 first).
+    t_start, t_end : float
+        Window limits [s] (recording time).
+    n_oscillations : float
+        Oscillations in the window (half cycles / 2).
+    amplitude : float
+        Mean |Y_n| of the turning points that start its half cycles [signal length
+        unit]: the amplitude the window's estimates belong to.
+    amplitude_range : tuple of float
+        Smallest and largest |Y_n| of its turning points [signal length unit].
+    velocity_range : tuple of float
+        Smallest and largest peak |v| of its half cycles [signal length unit/s].
+    zeta, mu : float
+        Estimates (posterior medians for the Bayesian fit) of ζ [-] and of the
+        friction: μ_k [-] with a loaded rig, else the friction displacement x_c
+        [signal length unit].
+    zeta_interval, mu_interval : tuple of float
+        95 % intervals.
+    covariance : ndarray
+        2×2 covariance of (ζ, μ) (posterior covariance for the Bayesian fit).
+    method : str
+        ``"least_squares"`` or ``"bayes"``.
+    chi2_reduced : float or None
+        Reduced χ² of the window's least-squares fit.
+    notes : str
+        Bounds reached, convergence.
+    """
+
+    index: int
+    t_start: float
+    t_end: float
+    n_oscillations: float
+    amplitude: float
+    amplitude_range: tuple[float, float]
+    velocity_range: tuple[float, float]
+    zeta: float
+    mu: float
+    zeta_interval: tuple[float, float]
+    mu_interval: tuple[float, float]
+    covariance: NDArray
+    method: str
+    chi2_reduced: float | None = None
+    notes: str = ""
+    at_bound: tuple[str, ...] = ()
+
+    @property
+    def regular(self) -> bool:
+        """False when the estimate sits on a parameter bound (not a Gaussian summary)."""
+        return not self.at_bound
+
+    @property
+    def zeta_se(self) -> float:
+        """Standard deviation of ζ [-]."""
+        return math.sqrt(max(float(self.covariance[0, 0]), 0.0))
+
+    @property
+    def mu_se(self) -> float:
+        """Standard deviation of μ (same unit as ``mu``)."""
+        return math.sqrt(max(float(self.covariance[1, 1]), 0.0))
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready mapping."""
+        return {
+            "index": self.index,
+            "t_start_s": self.t_start,
+            "t_end_s": self.t_end,
+            "n_oscillations": self.n_oscillations,
+            "amplitude": self.amplitude,
+            "amplitude_range": list(self.amplitude_range),
+            "velocity_range": list(self.velocity_range),
+            "zeta": self.zeta,
+            "zeta_se": self.zeta_se,
+            "zeta_interval": list(self.zeta_interval),
+            "mu": self.mu,
+            "mu_se": self.mu_se,
+            "mu_interval": list(self.mu_interval),
+            "method": self.method,
+            "chi2_reduced": self.chi2_reduced,
+            "notes": self.notes,
+            "at_bound": list(self.at_bound),
+        }
+
+
+@dataclass(frozen=True)
+class WindowedAnalysis:
+    """Window estimates of one decay.
+
+    Attributes
+    ----------
+    windows : list of WindowEstimate
+    window_oscillations : int
+        Window length requested [oscillations].
+    method : str
+    friction_name : str
+        ``"mu_k"`` (dimensionless, loaded rig) or ``"friction_displacement"``
+        (signal length unit).
+    length_unit : str
+        Unit of amplitudes (``"m"`` or ``"signal unit"``).
+    length_scale : float
+        ℓ of the decay's scaling [length unit]: μ_k·ℓ is the friction displacement.
+    interval_kind : str
+        How the intervals were obtained.
+    """
+
+    windows: list[WindowEstimate]
+    window_oscillations: int
+    method: str
+    friction_name: str
+    length_unit: str
+    length_scale: float
+    interval_kind: str
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return len(self.windows)
+
+    def column(self, name: str) -> NDArray:
+        """One attribute over the windows as an array (``"zeta"``, ``"amplitude"``...)."""
+        return np.array([getattr(w, name) for w in self.windows], dtype=float)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready mapping."""
+        return {
+            "window_oscillations": self.window_oscillations,
+            "method": self.method,
+            "friction": self.friction_name,
+            "length_unit": self.length_unit,
+            "interval": self.interval_kind,
+            **self.extra,
+            "windows": [w.to_dict() for w in self.windows],
+        }
+
+
+def _velocity_peaks(yp: NDArray, pos: NDArray) -> NDArray:
+    """Largest |y'| of each half cycle between successive turning points."""
+    out = []
+    for a, b in itertools.pairwise(pos):
+        seg = np.abs(yp[a : b + 1])
+        out.append(float(np.max(seg)) if seg.size else 0.0)
+    return np.array(out)
+
+
+def _window_ranges(
+    decay: EnergyDecay, start: int, stop: int, first: int, last: int
+) -> tuple[float, tuple[float, float], tuple[float, float]]:
+    ell = decay.scaling.length_scale
+    omega = decay.scaling.omega
+    amps = np.abs(decay.peaks.value[first : last + 1])
+    pos = np.append(peak_positions(decay)[first : last + 1], stop - 1)
+    pos = np.unique(np.clip(pos, start, stop - 1))
+    vel = _velocity_peaks(decay.yp, pos) * ell * omega
+    vel = vel[vel > 0.0] if np.any(vel > 0.0) else vel
+    mean_amp = float(np.mean(amps[:-1])) if amps.size > 1 else float(amps[0])
+    return (
+        mean_amp,
+        (float(np.min(amps)), float(np.max(amps))),
+        (float(np.min(vel)), float(np.max(vel))) if vel.size else (0.0, 0.0),
+    )
+
+
+def _from_fit(fit: SegmentFit, mu_scale: float) -> tuple[float, float, NDArray, str]:
+    cov = fit.covariance[:2, :2].copy()
+    cov[1, :] *= mu_scale
+    cov[:, 1] *= mu_scale
+    notes = []
+    if fit.at_bound:
+        notes.append("at a bound: " + ", ".join(fit.at_bound))
+    if fit.notes:
+        notes.append(fit.notes)
+    return fit.zeta, fit.mu * mu_scale, cov, "; ".join(notes)
+
+
+def _sub_run(run: Any, t_from: float, t_to: float) -> Any:
+    from bayestribo.run import Run
+
+    sel = (run.time >= t_from) & (run.time <= t_to)
+    return Run(
+        time=run.time[sel],
+        displacement=None if run.displacement is None else run.displacement[sel],
+        velocity=None if run.velocity is None else run.velocity[sel],
+        metadata=dict(run.metadata),
+        source=run.source,
+    )
+
+
+def _posterior_window(result: Any, friction_name: str) -> tuple[float, float, NDArray, str]:
+    zeta = np.asarray(result.samples("zeta"), dtype=float)
+    mu = np.asarray(result.samples(friction_name), dtype=float)
+    cov = np.cov(np.vstack([zeta, mu]))
+    notes = "" if getattr(result, "converged", True) else "sampler not converged"
+    return float(np.median(zeta)), float(np.median(mu)), cov, notes
+
+
+def windowed_fits(
+    run: Any,
+    *,
+    window: int = 2,
+    method: Method = "least_squares",
+    skip_oscillations: int = 1,
+    fitter: Callable[[Any], Any] | None = None,
+    seed: int = 0,
+    friction: Friction = "auto",
+) -> WindowedAnalysis:
+    """Fit ζ and μ_k in consecutive windows of ``window`` oscillations along a decay.
+
+    Parameters
+    ----------
+    run : Run, path or EnergyDecay
+        The recording (an EnergyDecay only with ``method="least_squares"``).
+    window : int
+        Window length [oscillations], default 2.
+    method : {"least_squares", "bayes"}
+        Least squares on the window's Π increments (Gaussian intervals), or the
+        Bayesian fit on each window cut out as a run (posterior intervals).
+    skip_oscillations : int
+        Oscillations after the release left out (as :func:`energy_decay`).
+    fitter : callable, optional
+        ``fitter(run) -> result`` with ``result.samples(name)`` for ``method="bayes"``;
+        default :func:`bayestribo.fit.fit`.
+    seed : int
+        Seed of the noise propagation (least squares) or base seed of the sampler.
+    friction : {"auto", "fit", "fixed"}
+        Least squares only. ``"fit"``: ζ and μ in every window. ``"fixed"``: μ held
+        at the whole-decay estimate and ζ fitted per window, i.e. the *equivalent*
+        damping of each window (what a viscous-like law that changes with amplitude
+        shows). ``"auto"``: ``"fit"`` when the whole-decay fit resolves the friction
+        (μ above three standard errors) and most windows then give estimates inside
+        the parameter bounds, else ``"fixed"`` (in a window of a few oscillations ζ
+        and μ cannot be told apart when the friction is weak or the noise high).
+
+    Returns
+    -------
+    WindowedAnalysis
+
+    Raises
+    ------
+    RecordingError
+        Bad window, a decay shorter than one window, or a recording that cannot be
+        analysed.
+    BayestriboError
+        ``method="bayes"`` without the Bayesian fit available, or on an EnergyDecay.
+    """
+    if method not in ("least_squares", "bayes"):
+        raise RecordingError(f"method must be 'least_squares' or 'bayes', got {method!r}")
+    window = _check_window(window)
+    decay = analysed_decay(run, skip_oscillations=skip_oscillations)
+    bounds = window_bounds(decay, window)
+    ell = decay.scaling.length_scale
+    friction_name = "mu_k" if decay.scaling.friction_defined else "friction_displacement"
+    mu_scale = 1.0 if decay.scaling.friction_defined else ell
+    length_unit = "m" if decay.scaling.friction_defined else "signal unit"
+    peaks_abs = np.abs(decay.peaks.value) / ell
+    noise = segment_noise(decay)
+    if friction not in ("auto", "fit", "fixed"):
+        raise RecordingError(f"friction must be 'auto', 'fit' or 'fixed', got {friction!r}")
+    whole = whole_decay_fit(decay, seed=seed)
+    resolved = "mu" not in whole.at_bound and whole.mu > 3.0 * whole.se("mu")
+    mode = ("fit" if resolved else "fixed") if friction == "auto" else friction
+    fixed_mu = whole.mu if mode == "fixed" else None
+    if method == "bayes":
+        if isinstance(run, EnergyDecay):
+            raise BayestriboError("method='bayes' needs the run itself, not an EnergyDecay")
+        if isinstance(run, str | Path):
+            from bayestribo.io import read_run
+
+            run = read_run(run)
+        if fitter is None:
+            try:
+                from bayestribo.fit import fit as bayes_fit
+            except ImportError as exc:
+                raise BayestriboError(
+                    "method='bayes' needs bayestribo.fit, which is not available"
+                ) from exc
+
+            def fitter(sub: Any) -> Any:
+                return bayes_fit(sub, model="exact", seed=seed)
+
+    period = 2.0 * decay.peaks.half_period
+
+    def run_windows(fixed_mu: float | None) -> list[WindowEstimate]:
+        out: list[WindowEstimate] = []
+        for k, (start, stop, first, last) in enumerate(bounds):
+            amp, amp_range, vel_range = _window_ranges(decay, start, stop, first, last)
+            if method == "least_squares":
+                fit = fit_segment(
+                    decay,
+                    start,
+                    stop,
+                    peaks_abs[first : last + 1],
+                    noise=noise,
+                    seed=seed + k,
+                    fixed_mu=fixed_mu,
+                )
+                zeta, mu, cov, notes = _from_fit(fit, mu_scale)
+                se = np.sqrt(np.maximum(np.diag(cov), 0.0))
+                zi = (zeta - _Z95 * se[0], zeta + _Z95 * se[0])
+                mi = (mu - _Z95 * se[1], mu + _Z95 * se[1])
+                red: float | None = fit.chi2_reduced
+                bound = fit.at_bound
+            else:
+                # The sub-run starts one oscillation early: the fit skips it as the release.
+                t_from = float(decay.t[start]) - period - 0.25 * period
+                sub = _sub_run(run, t_from, float(decay.t[stop - 1]))
+                result = fitter(sub)
+                zeta, mu, cov, notes = _posterior_window(result, friction_name)
+                zi = tuple(float(v) for v in np.quantile(result.samples("zeta"), [0.025, 0.975]))
+                mi = tuple(
+                    float(v) for v in np.quantile(result.samples(friction_name), [0.025, 0.975])
+                )
+                red = None
+                bound = ()
+            out.append(
+                WindowEstimate(
+                    index=k,
+                    t_start=float(decay.t[start]),
+                    t_end=float(decay.t[stop - 1]),
+                    n_oscillations=(last - first) / 2.0,
+                    amplitude=amp,
+                    amplitude_range=amp_range,
+                    velocity_range=vel_range,
+                    zeta=zeta,
+                    mu=mu,
+                    zeta_interval=(float(zi[0]), float(zi[1])),
+                    mu_interval=(float(mi[0]), float(mi[1])),
+                    covariance=np.asarray(cov, dtype=float),
+                    method=method,
+                    chi2_reduced=red,
+                    notes=notes,
+                    at_bound=bound,
+                )
+            )
+        return out
+
+    out = run_windows(fixed_mu)
+    irregular = sum(not w.regular for w in out)
+    if (
+        method == "least_squares"
+        and friction == "auto"
+        and mode == "fit"
+        and 2 * irregular > len(out)
+    ):
+        # ζ and μ cannot be told apart in most windows: equivalent damping instead.
+        mode, fixed_mu = "fixed", whole.mu
+        out = run_windows(fixed_mu)
+    kind = (
+        "Gaussian 95 % interval from the least-squares curvature (scaled by the reduced χ² "
+        "when above 1)"
+        if method == "least_squares"
+        else "posterior 2.5-97.5 % quantiles"
+    )
+    return WindowedAnalysis(
+        windows=out,
+        window_oscillations=window,
+        method=method,
+        friction_name=friction_name,
+        length_unit=length_unit,
+        length_scale=ell,
+        interval_kind=kind,
+        extra={
+            "friction_mode": mode if method == "least_squares" else "fit",
+            "fixed_friction": None if fixed_mu is None else fixed_mu * mu_scale,
+            "whole_decay": {
+                "zeta": whole.zeta,
+                "zeta_se": whole.se("zeta"),
+                "mu": whole.mu * mu_scale,
+                "mu_se": whole.se("mu") * mu_scale,
+                "chi2_reduced": whole.chi2_reduced,
+            },
+        },
+    )
