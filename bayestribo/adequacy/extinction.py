@@ -1,0 +1,153 @@
+"""Predicted end of motion against the end detected in the recording.
+
+With Coulomb friction the motion stops in finite time. The averaged model gives the
+duration ``T_f = ln(1 + πζa_0/(2μ_k))/ζ`` (Eq. 38,
+:func:`bayestribo.model.extinction_time`); the exact model stops at the last turning
+point, the first one inside the static-friction band (Eq. 8,
+:func:`bayestribo.model.stop_time`). Both are evaluated for every parameter draw
+(posterior, or the labelled Gaussian stand-in) and compared with the end of motion
+that :func:`bayestribo.decay.energy_decay` detected (start of the rest tail, known
+to about two sample periods, which widen the predicted interval). Times
+are in seconds after the start of the analysed decay (its first turning point).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bayestribo.adequacy.draws import ParameterDraws
+from bayestribo.decay import EnergyDecay
+
+__all__ = ["ExtinctionCheck", "extinction_check"]
+
+
+def _summary(values: NDArray) -> dict[str, Any]:
+    finite = values[np.isfinite(values)]
+    out: dict[str, Any] = {"fraction_finite": float(finite.size / max(values.size, 1))}
+    if finite.size:
+        lo, med, hi = np.quantile(finite, [0.025, 0.5, 0.975])
+        out.update(median=float(med), interval=[float(lo), float(hi)])
+    else:
+        out.update(median=None, interval=None)
+    return out
+
+
+@dataclass(frozen=True)
+class ExtinctionCheck:
+    """Predicted and measured duration of the analysed motion.
+
+    Attributes
+    ----------
+    measured : float or None
+        Detected end of motion [s after the analysis start]; None when the record
+        ends before the motion does.
+    record_end : float
+        End of the analysed record [s after the analysis start].
+    averaged, exact : ndarray
+        Predicted durations per draw [s] (``inf`` where the motion never stops).
+    label : str
+        Origin of the draws.
+    resolution : float
+        Time resolution of the detected end [s]: two sample periods (the end is the
+        first sample of the rest tail); the prediction interval is widened by it.
+    """
+
+    measured: float | None
+    record_end: float
+    averaged: NDArray
+    exact: NDArray
+    label: str
+    resolution: float = 0.0
+
+    def quantile_of_measured(self, which: str = "exact") -> float | None:
+        """Fraction of predicted durations below the measured one (None if not measured)."""
+        if self.measured is None:
+            return None
+        pred = self.exact if which == "exact" else self.averaged
+        return float(np.mean(pred < self.measured))
+
+    def consistent(self, which: str = "exact") -> bool | None:
+        """True when the measured end lies inside the central 95 % of the predictions.
+
+        Without a measured end: True when the predictions allow the motion to last
+        beyond the record (at least 2.5 % of them do).
+        """
+        pred = self.exact if which == "exact" else self.averaged
+        if self.measured is None:
+            return bool(np.mean(pred > self.record_end) >= 0.025)
+        finite = pred[np.isfinite(pred)]
+        if finite.size == 0:
+            return False
+        lo, hi = np.quantile(finite, [0.025, 0.975])
+        return bool(lo - self.resolution <= self.measured <= hi + self.resolution)
+
+    @property
+    def statement(self) -> str:
+        """One plain sentence."""
+        ex = _summary(self.exact)
+        av = _summary(self.averaged)
+
+        def fmt(s: dict[str, Any]) -> str:
+            if s["median"] is None:
+                return "never stops"
+            lo, hi = s["interval"]
+            return f"{s['median']:.4g} s (95 % {lo:.4g} to {hi:.4g} s)"
+
+        pred = f"predicted end of motion: exact model {fmt(ex)}, averaged Eq. 38 {fmt(av)}"
+        if self.measured is None:
+            return (
+                f"{pred}; the record ends at {self.record_end:.4g} s while still moving "
+                f"({'consistent' if self.consistent() else 'not consistent'} with the prediction)"
+            )
+        verdict = "inside" if self.consistent() else "outside"
+        return f"{pred}; measured {self.measured:.4g} s, {verdict} the exact model's 95 % interval"
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready mapping."""
+        return {
+            "measured_s": self.measured,
+            "record_end_s": self.record_end,
+            "exact": _summary(self.exact),
+            "averaged": _summary(self.averaged),
+            "quantile_of_measured_exact": self.quantile_of_measured("exact"),
+            "quantile_of_measured_averaged": self.quantile_of_measured("averaged"),
+            "consistent_exact": self.consistent("exact"),
+            "consistent_averaged": self.consistent("averaged"),
+            "resolution_s": self.resolution,
+            "draws": self.label,
+            "statement": self.statement,
+        }
+
+
+def extinction_check(decay: EnergyDecay, draws: ParameterDraws) -> ExtinctionCheck:
+    """Predicted end of motion (Eq. 38 and the exact model) against the detected one.
+
+    Parameters
+    ----------
+    decay : EnergyDecay
+        The analysed decay; its start is the initial turning point of the draws.
+    draws : ParameterDraws
+        Parameter draws (posterior, or the labelled Gaussian stand-in).
+
+    Returns
+    -------
+    ExtinctionCheck
+    """
+    from bayestribo.model import extinction_time, stop_time
+
+    omega = decay.scaling.omega
+    tf = np.asarray(extinction_time(draws.y0, draws.zeta, draws.mu), dtype=float)
+    ts = np.asarray(stop_time(draws.y0, draws.zeta, draws.mu, draws.mu_s), dtype=float)
+    measured = decay.tau_end / omega if decay.motion_ended else None
+    return ExtinctionCheck(
+        measured=None if measured is None else float(measured),
+        record_end=float(decay.tau_end / omega),
+        averaged=tf / omega,
+        exact=ts / omega,
+        label=draws.label,
+        resolution=2.0 * float(np.median(np.diff(decay.t))),
+    )
