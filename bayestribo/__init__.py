@@ -36,6 +36,7 @@ _LAZY: dict[str, str] = {
     "simulate": "bayestribo.simulation",
     "acquire_run": "bayestribo.acquisition",
     "recover_run": "bayestribo.acquisition",
+    "check_adequacy": "bayestribo.adequacy",
 }
 
 __all__ = ["__version__", *sorted(_LAZY)]

@@ -24,6 +24,7 @@ COMMANDS: tuple[str, ...] = (
     "acquire",
     "estimate",
     "simulate",
+    "check",
 )
 
 
