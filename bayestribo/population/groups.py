@@ -1,0 +1,264 @@
+"""The population of repeats per group: a mean and a between-run σ per parameter.
+
+Runs are grouped by any metadata key (``load_N``, ``lubricant``, ``water_mass_fraction``
+...). Within a group, each parameter is drawn from Normal(mean, σ²), independently
+across parameters (:mod:`bayestribo.population.likelihood`); groups are independent, so
+each is sampled on its own, and the pooled population treats all runs as one group.
+The posterior of σ is the Bayesian answer to a "standard deviation of three repeats".
+"""
+
+from __future__ import annotations
+
+import itertools
+import zlib
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bayestribo.errors import BayestriboError
+from bayestribo.population.hyperpriors import SigmaPrior, sigma_priors
+from bayestribo.population.likelihood import MarginalLikelihood
+from bayestribo.population.sampler import sample_hyperparameters
+from bayestribo.population.samples import FitLike, RunSamples, as_run_samples
+from bayestribo.population.summary import check_prob, summarize
+
+__all__ = ["POOLED", "GroupPosterior", "Population", "difference", "population"]
+
+#: Label of the population pooled over all groups.
+POOLED = "all"
+
+
+@dataclass(frozen=True)
+class GroupPosterior:
+    """Posterior of one group's population.
+
+    Attributes
+    ----------
+    label : str
+        ``"<key>=<value>"``, or :data:`POOLED`.
+    value : object
+        The group's value of the grouping key (None when pooled).
+    runs : tuple of str
+        Names of the runs in the group.
+    parameters : tuple of str
+        Parameter names.
+    mean, sigma : dict of str to ndarray
+        Posterior samples of the population mean and between-run σ per parameter.
+    sigma_prior : dict of str to str
+        Description of the σ prior of each parameter.
+    diagnostics : dict
+        Sampler diagnostics (:class:`bayestribo.population.sampler.HyperSamples`).
+    """
+
+    label: str
+    value: Any
+    runs: tuple[str, ...]
+    parameters: tuple[str, ...]
+    mean: dict[str, NDArray[np.float64]]
+    sigma: dict[str, NDArray[np.float64]]
+    sigma_prior: dict[str, str]
+    diagnostics: dict[str, Any] = field(default_factory=dict)
+
+    def summary(self, prob: float = 0.95) -> dict[str, Any]:
+        """JSON-ready summary: per parameter the mean's and σ's posterior summaries."""
+        return {
+            "label": self.label,
+            "value": self.value,
+            "runs": list(self.runs),
+            "n_runs": len(self.runs),
+            "parameters": {
+                name: {
+                    "mean": summarize(self.mean[name], prob),
+                    "sigma": summarize(self.sigma[name], prob),
+                    "sigma_prior": self.sigma_prior[name],
+                }
+                for name in self.parameters
+            },
+            "diagnostics": dict(self.diagnostics),
+        }
+
+
+def difference(
+    a: GroupPosterior, b: GroupPosterior, parameter: str, prob: float = 0.95, *, seed: int = 0
+) -> dict[str, Any]:
+    """Posterior of mean_a − mean_b for one parameter (independent groups).
+
+    The two groups' posteriors are independent, so draws are paired after a seeded
+    shuffle of each. Returns :func:`~bayestribo.population.summary.summarize` of the
+    difference plus ``prob_positive`` = P(mean_a > mean_b | data).
+    """
+    if parameter not in a.mean or parameter not in b.mean:
+        raise BayestriboError(f"parameter: {parameter!r} is not in both groups")
+    rng = np.random.default_rng(seed)
+    n = min(len(a.mean[parameter]), len(b.mean[parameter]))
+    da = rng.permutation(a.mean[parameter])[:n]
+    db = rng.permutation(b.mean[parameter])[:n]
+    d = da - db
+    out = summarize(d, prob)
+    out.update({"a": a.label, "b": b.label, "prob_positive": float(np.mean(d > 0))})
+    return out
+
+
+@dataclass(frozen=True)
+class Population:
+    """The population of repeats: per-group and pooled posteriors.
+
+    Attributes
+    ----------
+    by : str or None
+        The grouping key.
+    parameters : tuple of str
+        Parameter names.
+    groups : dict
+        Group value -> :class:`GroupPosterior`, sorted by value.
+    pooled : GroupPosterior or None
+        All runs as one population.
+    """
+
+    by: str | None
+    parameters: tuple[str, ...]
+    groups: dict[Any, GroupPosterior]
+    pooled: GroupPosterior | None
+
+    def difference(self, parameter: str, a: Any, b: Any, prob: float = 0.95) -> dict[str, Any]:
+        """Posterior of the difference of two groups' means (group values ``a``, ``b``)."""
+        for value in (a, b):
+            if value not in self.groups:
+                raise BayestriboError(
+                    f"group: {value!r} is not among the groups {list(self.groups)}"
+                )
+        return difference(self.groups[a], self.groups[b], parameter, prob)
+
+    def differences(self, parameter: str, prob: float = 0.95) -> list[dict[str, Any]]:
+        """Differences of every pair of groups (a before b in the group order)."""
+        return [
+            self.difference(parameter, a, b, prob)
+            for a, b in itertools.combinations(self.groups, 2)
+        ]
+
+    def to_dict(self, prob: float = 0.95) -> dict[str, Any]:
+        """JSON-ready summary of every group, the pooled population and the differences."""
+        return {
+            "by": self.by,
+            "parameters": list(self.parameters),
+            "groups": [g.summary(prob) for g in self.groups.values()],
+            "pooled": None if self.pooled is None else self.pooled.summary(prob),
+            "differences": {name: self.differences(name, prob) for name in self.parameters},
+        }
+
+
+def _group_seed(seed: int, label: str) -> int:
+    """A seed per group from the campaign seed and the group's label (not its position)."""
+    return int(np.random.SeedSequence([seed, zlib.crc32(label.encode())]).generate_state(1)[0])
+
+
+def _fit_group(
+    label: str,
+    value: Any,
+    runs: Sequence[RunSamples],
+    parameters: tuple[str, ...],
+    priors: Mapping[str, SigmaPrior],
+    seed: int,
+    sampler_kwargs: Mapping[str, Any],
+) -> GroupPosterior:
+    like = MarginalLikelihood(runs, parameters)
+    hyper = sample_hyperparameters(
+        like, [priors[p] for p in parameters], seed=_group_seed(seed, label), **sampler_kwargs
+    )
+    return GroupPosterior(
+        label=label,
+        value=value,
+        runs=tuple(r.name for r in runs),
+        parameters=parameters,
+        mean={p: hyper.beta[:, 0, j] for j, p in enumerate(parameters)},
+        sigma={p: hyper.sigma[:, j] for j, p in enumerate(parameters)},
+        sigma_prior={p: priors[p].describe() for p in parameters},
+        diagnostics=hyper.diagnostics,
+    )
+
+
+def _sort_key(value: Any) -> tuple[int, Any]:
+    return (0, value) if isinstance(value, int | float) else (1, str(value))
+
+
+def population(
+    runs: Iterable[RunSamples | FitLike],
+    parameters: Sequence[str] = ("zeta", "mu_k"),
+    *,
+    by: str | None = None,
+    pooled: bool = True,
+    sigma_prior: Mapping[str, SigmaPrior | float] | None = None,
+    seed: int = 0,
+    max_samples: int | None = 1000,
+    n_walkers: int = 32,
+    n_steps: int = 2500,
+    burn: int | None = None,
+    prob: float = 0.95,
+    progress: bool = False,
+) -> Population:
+    """Infer the population of repeats from per-run posterior samples.
+
+    Parameters
+    ----------
+    runs : iterable of RunSamples or fit results
+        Per-run posteriors (fit results need ``samples``, ``prior_logpdf`` and
+        ``metadata``, as :class:`bayestribo.fit.FitResult` has).
+    parameters : sequence of str
+        Parameters modelled jointly, default ζ and μ_k (dimensionless).
+    by : str, optional
+        Metadata key to group by (e.g. ``"load_N"``, ``"lubricant"``); None: only the
+        pooled population.
+    pooled : bool
+        Also infer the population of all runs together.
+    sigma_prior : mapping, optional
+        Prior on the between-run σ per parameter: a prior object or a half-Cauchy scale
+        (:func:`bayestribo.population.hyperpriors.sigma_priors`).
+    seed : int
+        Campaign seed; each group's sampler seed derives from it and the group label.
+    max_samples : int, optional
+        Per-run samples kept (a seeded random subset).
+    n_walkers, n_steps, burn : int
+        emcee settings per group.
+    prob : float
+        Only checked here; intervals are chosen when summarising.
+    progress : bool
+        Show emcee's progress bars.
+
+    Returns
+    -------
+    Population
+
+    Raises
+    ------
+    BayestriboError
+        If a run lacks the grouping key or a parameter, or nothing is asked for.
+    """
+    check_prob(prob)
+    parameters = tuple(parameters)
+    if not parameters:
+        raise BayestriboError("parameters: expected at least one parameter name")
+    if by is None and not pooled:
+        raise BayestriboError("by, pooled: nothing to infer (no grouping key and pooled=False)")
+    samples = as_run_samples(runs, parameters, max_samples=max_samples, seed=seed)
+    priors = sigma_priors(parameters, sigma_prior)
+    kwargs = {"n_walkers": n_walkers, "n_steps": n_steps, "burn": burn, "progress": progress}
+    groups: dict[Any, GroupPosterior] = {}
+    if by is not None:
+        members: dict[Any, list[RunSamples]] = {}
+        for run in samples:
+            if by not in run.metadata or run.metadata[by] is None:
+                raise BayestriboError(f"run {run.name!r}: metadata has no {by!r} to group by")
+            members.setdefault(run.metadata[by], []).append(run)
+        for group in members.values():
+            group.sort(key=lambda r: r.name)  # results independent of the runs' order
+        for value in sorted(members, key=_sort_key):
+            label = f"{by}={value}"
+            groups[value] = _fit_group(
+                label, value, members[value], parameters, priors, seed, kwargs
+            )
+    samples.sort(key=lambda r: r.name)
+    whole = _fit_group(POOLED, None, samples, parameters, priors, seed, kwargs) if pooled else None
+    return Population(by, parameters, groups, whole)

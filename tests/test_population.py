@@ -1,0 +1,373 @@
+"""Population of repeats from per-run posterior samples, against exact answers.
+
+The reference case is the normal-normal model: run i measures y_i ~ N(θ_i, s_i²) and
+θ_i ~ N(μ, σ²). Each run is "fitted" alone with a normal prior, so its posterior is
+normal and is sampled exactly; the joint posterior of (μ, σ) follows from
+y_i ~ N(μ, σ² + s_i²) by numerical integration on a grid. The sample-reuse route
+(per-run samples, per-run priors divided out) must agree with it.
+
+Tolerances. The population sampler keeps ~2000 steps × 32 walkers with autocorrelation
+times of ~30-50 steps: an effective sample size of about 1500, so a quantile's Monte
+Carlo standard error is about 0.04 posterior sd; the importance-sampling estimate with
+S = 1000 samples per run adds a similar error. Quantiles must agree to 0.2 posterior sd
+(about 4 combined standard errors), which the tests also show is tight enough to reject
+the answer obtained without dividing out the per-run priors.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pytest
+
+from bayestribo.errors import BayestriboError, ConvergenceWarning
+from bayestribo.population import (
+    HalfCauchy,
+    HalfNormal,
+    MarginalLikelihood,
+    RunSamples,
+    population,
+    run_samples,
+    sigma_priors,
+    slope_probabilities,
+    trend,
+)
+
+QS = np.array([0.1, 0.5, 0.9])
+TOL_SD = 0.2  # in posterior standard deviations; see the module docstring
+
+
+def _normal_logpdf(x, mean, sd):
+    return -0.5 * ((x - mean) / sd) ** 2 - math.log(sd * math.sqrt(2 * math.pi))
+
+
+def _normal_runs(y, s, prior_mean, prior_sd, rng, n_samples=1000, meta=None):
+    """Exact per-run posterior samples of the normal-normal model, one parameter."""
+    runs = []
+    for i, (yi, si) in enumerate(zip(y, s, strict=True)):
+        v = 1 / (1 / si**2 + 1 / prior_sd**2)
+        m = v * (yi / si**2 + prior_mean / prior_sd**2)
+        x = rng.normal(m, math.sqrt(v), n_samples)
+        md = {"run_id": f"r{i}", **(meta[i] if meta else {})}
+        runs.append(RunSamples(f"r{i}", {"zeta": x}, _normal_logpdf(x, prior_mean, prior_sd), md))
+    return runs
+
+
+def _grid_quantiles(grid, weights, qs):
+    c = np.cumsum(weights) / weights.sum()
+    return np.interp(qs, c, grid)
+
+
+def _grid_posterior(y, s, prior):
+    """Exact marginal posteriors of μ (flat prior) and σ on a fine grid."""
+    mus = np.linspace(y.min() - 0.05, y.max() + 0.05, 1201)
+    sigs = np.linspace(1e-7, 0.1, 4000)
+    m, sg = np.meshgrid(mus, sigs, indexing="ij")
+    ll = prior.logpdf(sg)
+    for yi, si in zip(y, s, strict=True):
+        var = sg**2 + si**2
+        ll = ll - 0.5 * (yi - m) ** 2 / var - 0.5 * np.log(var)
+    p = np.exp(ll - ll.max())
+    return mus, p.sum(axis=1), sigs, p.sum(axis=0)
+
+
+def _sd(grid, w):
+    w = w / w.sum()
+    return math.sqrt((w * grid**2).sum() - (w * grid).sum() ** 2)
+
+
+@pytest.fixture(scope="module")
+def normal_case():
+    rng = np.random.default_rng(11)
+    s = np.array([0.002, 0.0015, 0.003, 0.0025])
+    theta = rng.normal(0.02, 0.003, len(s))
+    y = rng.normal(theta, s)
+    # An informative per-run prior (mean 0.03, sd 0.004): dividing it out matters.
+    runs = _normal_runs(y, s, 0.03, 0.004, rng, n_samples=1000)
+    return y, s, runs
+
+
+def test_sample_reuse_agrees_with_the_exact_joint_posterior(normal_case):
+    y, s, runs = normal_case
+    prior = HalfCauchy(0.01)
+    pop = population(runs, ("zeta",), seed=5, n_steps=2500, burn=500)
+    g = pop.pooled
+    assert g.diagnostics["converged"]
+    mus, pm, sigs, ps = _grid_posterior(y, s, prior)
+    for samples, grid, w in ((g.mean["zeta"], mus, pm), (g.sigma["zeta"], sigs, ps)):
+        exact = _grid_quantiles(grid, w, QS)
+        got = np.quantile(samples, QS)
+        np.testing.assert_array_less(np.abs(got - exact), TOL_SD * _sd(grid, w))
+
+
+def test_not_dividing_out_the_prior_is_rejected_by_the_same_tolerance(normal_case):
+    # The same samples with a flat "prior" (nothing divided out) double-count the
+    # informative per-run prior: the test's tolerance must see the difference.
+    y, s, runs = normal_case
+    wrong = [RunSamples(r.name, r.values, np.zeros(r.n_samples), r.metadata) for r in runs]
+    g = population(wrong, ("zeta",), seed=5, n_steps=1000, burn=200).pooled
+    mus, pm, _, _ = _grid_posterior(y, s, HalfCauchy(0.01))
+    exact = _grid_quantiles(mus, pm, QS)
+    assert np.abs(np.median(g.mean["zeta"]) - exact[1]) > 3 * TOL_SD * _sd(mus, pm)
+
+
+def test_correlated_parameters_agree_with_a_joint_fit():
+    """Two parameters with correlated per-run posteriors (like ζ and μ_k).
+
+    Reference: the joint model with each run's θ_i integrated out analytically,
+    y_i ~ N₂(m, C_i + diag(σ²)), sampled by its own emcee run.
+    """
+    import emcee
+
+    rng = np.random.default_rng(3)
+    n = 5
+    m_true, sig_true = np.array([0.024, 0.029]), np.array([0.0012, 0.0036])
+    sd = np.array([0.0015, 0.003])
+    cov = np.array([[sd[0] ** 2, -0.8 * sd[0] * sd[1]], [-0.8 * sd[0] * sd[1], sd[1] ** 2]])
+    ys = rng.normal(m_true, sig_true, (n, 2))
+    ys = np.array([rng.multivariate_normal(t, cov) for t in ys])
+    p_mean, p_sd = np.array([0.03, 0.03]), np.array([0.02, 0.02])
+    p_cov = np.diag(p_sd**2)
+    runs = []
+    for i in range(n):
+        post_cov = np.linalg.inv(np.linalg.inv(cov) + np.linalg.inv(p_cov))
+        post_mean = post_cov @ (np.linalg.solve(cov, ys[i]) + np.linalg.solve(p_cov, p_mean))
+        x = rng.multivariate_normal(post_mean, post_cov, 1000)
+        lp = _normal_logpdf(x[:, 0], p_mean[0], p_sd[0]) + _normal_logpdf(
+            x[:, 1], p_mean[1], p_sd[1]
+        )
+        runs.append(RunSamples(f"r{i}", {"zeta": x[:, 0], "mu_k": x[:, 1]}, lp))
+    g = population(runs, ("zeta", "mu_k"), seed=2, n_steps=2500, burn=500).pooled
+    assert g.diagnostics["converged"]
+
+    prior = HalfCauchy(0.01)
+
+    def log_post(p):  # vectorised over walkers: p has shape (W, 4)
+        m, ls = p[:, :2], np.clip(p[:, 2:], -50, 50)
+        sig2 = np.exp(2 * ls)
+        a = cov[0, 0] + sig2[:, 0]
+        d = cov[1, 1] + sig2[:, 1]
+        det = a * d - cov[0, 1] ** 2
+        out = prior.logpdf(np.exp(ls)).sum(axis=1) + ls.sum(axis=1) - 0.5 * n * np.log(det)
+        for y in ys:
+            u, v = y[0] - m[:, 0], y[1] - m[:, 1]
+            out = out - 0.5 * (d * u * u - 2 * cov[0, 1] * u * v + a * v * v) / det
+        return out
+
+    start = np.concatenate([ys.mean(0), np.log(sd)]) + 1e-4 * rng.normal(size=(32, 4))
+    ref = emcee.EnsembleSampler(32, 4, log_post, vectorize=True)
+    ref.random_state = np.random.RandomState(1).get_state()
+    ref.run_mcmc(start, 3000)
+    chain = ref.get_chain(discard=600, flat=True)
+    pairs = {
+        "mean zeta": (g.mean["zeta"], chain[:, 0]),
+        "mean mu_k": (g.mean["mu_k"], chain[:, 1]),
+        "sigma zeta": (g.sigma["zeta"], np.exp(chain[:, 2])),
+        "sigma mu_k": (g.sigma["mu_k"], np.exp(chain[:, 3])),
+    }
+    for name, (got, want) in pairs.items():
+        diff = np.abs(np.quantile(got, QS) - np.quantile(want, QS))
+        # Both sides are Monte Carlo estimates: √2 × the one-sided tolerance.
+        assert np.all(diff < math.sqrt(2) * TOL_SD * want.std()), name
+
+
+def test_three_repeats_say_little_about_sigma_many_repeats_pin_it_down():
+    rng = np.random.default_rng(8)
+    mu, sigma = 0.0236, 0.0012
+    s_run = 0.0003  # per-run posterior sd, small against σ as in the paper's runs
+
+    def fit(n):
+        y = rng.normal(rng.normal(mu, sigma, n), s_run)
+        runs = _normal_runs(y, np.full(n, s_run), 0.03, 0.02, rng, n_samples=400)
+        return population(runs, ("zeta",), seed=1, n_steps=2000, burn=400).pooled
+
+    few, many = fit(3), fit(30)
+    lo3, hi3 = np.quantile(few.sigma["zeta"], [0.025, 0.975])
+    lo30, hi30 = np.quantile(many.sigma["zeta"], [0.025, 0.975])
+    # The classical 95 % interval of a standard deviation from n values spans a factor
+    # √(χ²_{0.975}/χ²_{0.025}) with n − 1 degrees of freedom: about 12 for n = 3, 1.8
+    # for n = 30. The posterior must say as much: wider than 10 for three repeats;
+    # narrower than 2.5 and covering the truth for thirty.
+    assert hi3 / lo3 > 10
+    assert lo30 < sigma < hi30 and hi30 / lo30 < 2.5
+    assert np.quantile(many.mean["zeta"], 0.025) < mu < np.quantile(many.mean["zeta"], 0.975)
+
+
+def _trend_exact(x, y, s, prior, sig_grid):
+    """Exact posterior of the slope: flat (a, b) integrated analytically per σ."""
+    design = np.column_stack([np.ones_like(x), x])
+    log_w, means, sds = [], [], []
+    for sg in sig_grid:
+        w = 1 / (sg**2 + s**2)
+        a = design.T @ (w[:, None] * design)
+        beta = np.linalg.solve(a, design.T @ (w * y))
+        resid = y - design @ beta
+        cov = np.linalg.inv(a)
+        log_w.append(
+            prior.logpdf(sg)
+            + 0.5 * np.log(w).sum()
+            - 0.5 * (w * resid**2).sum()
+            - 0.5 * np.linalg.slogdet(a)[1]
+        )
+        means.append(beta[1])
+        sds.append(math.sqrt(cov[1, 1]))
+    log_w = np.array(log_w)
+    wts = np.exp(log_w - log_w.max())
+    return wts / wts.sum(), np.array(means), np.array(sds)
+
+
+def test_trend_slope_agrees_with_the_exact_posterior():
+    from scipy.stats import norm
+
+    rng = np.random.default_rng(21)
+    loads = np.repeat([0.07, 0.12, 0.31, 0.46, 0.59], 2)
+    s = np.full(len(loads), 0.001)
+    y = rng.normal(0.022 + 0.004 * loads + rng.normal(0, 0.001, len(loads)), s)
+    meta = [{"load_N": float(v)} for v in loads]
+    runs = _normal_runs(y, s, 0.03, 0.02, rng, n_samples=1000, meta=meta)
+    tr = trend(runs, "load_N", ("zeta",), seed=4, n_steps=2000, burn=400)
+    assert tr.diagnostics["converged"]
+    w, means, sds = _trend_exact(loads, y, s, HalfCauchy(0.01), np.linspace(1e-6, 0.05, 3000))
+    grid = np.linspace(means.min() - 8 * sds.max(), means.max() + 8 * sds.max(), 4000)
+    cdf = (w[:, None] * norm.cdf((grid[None] - means[:, None]) / sds[:, None])).sum(0)
+    exact_q = np.interp(QS, cdf, grid)
+    exact_sd = math.sqrt((w * (sds**2 + means**2)).sum() - (w * means).sum() ** 2)
+    got = tr.slope["zeta"]
+    np.testing.assert_array_less(np.abs(np.quantile(got, QS) - exact_q), TOL_SD * exact_sd)
+    p_pos = float((w * norm.sf(-means / sds)).sum())
+    # P(b > 0): Monte Carlo error of a probability p with ESS ~ 1500 is < 0.013.
+    assert abs(tr.slope_summary("zeta")["prob_positive"] - p_pos) < 0.04
+    # The intercept is reported at load 0.
+    assert abs(np.median(tr.intercept["zeta"]) - 0.022) < 4 * tr.intercept["zeta"].std()
+
+
+def test_trend_finds_a_simulated_slope_and_none_without_one():
+    rng = np.random.default_rng(5)
+    loads = np.repeat([0.07, 0.12, 0.31, 0.46, 0.59], 3)
+    s = np.full(len(loads), 0.0005)
+    meta = [{"load_N": float(v)} for v in loads]
+    out = {}
+    for slope in (0.0, 0.01):
+        y = rng.normal(0.0236 + slope * loads + rng.normal(0, 0.0012, len(loads)), s)
+        runs = _normal_runs(y, s, 0.03, 0.02, rng, n_samples=300, meta=meta)
+        out[slope] = trend(
+            runs, "load_N", ("zeta",), seed=1, n_steps=1200, burn=300, rope={"zeta": 0.001}
+        ).slope_summary("zeta")
+    assert out[0.01]["prob_positive"] > 0.99 and out[0.01]["interval"][0] > 0
+    assert out[0.01]["prob_outside_rope"] > 0.95
+    assert out[0.0]["interval"][0] < 0 < out[0.0]["interval"][1]
+    assert out[0.0]["prob_sign"] < 0.975
+
+
+def test_groups_differences_and_pooled():
+    rng = np.random.default_rng(9)
+    s = np.full(3, 0.0005)
+    runs = []
+    for load, mean in ((0.12, 0.02), (0.46, 0.04)):
+        y = rng.normal(rng.normal(mean, 0.001, 3), s)
+        for r in _normal_runs(y, s, 0.03, 0.02, rng, n_samples=300):
+            runs.append(RunSamples(f"{load}-{r.name}", r.values, r.log_prior, {"load_N": load}))
+    pop = population(runs, ("zeta",), by="load_N", seed=3, n_steps=1200, burn=300)
+    assert list(pop.groups) == [0.12, 0.46]
+    assert pop.groups[0.12].runs == ("0.12-r0", "0.12-r1", "0.12-r2")
+    assert pop.pooled is not None and len(pop.pooled.runs) == 6
+    d = pop.difference("zeta", 0.46, 0.12)
+    assert d["prob_positive"] > 0.99 and d["interval"][0] > 0
+    assert abs(d["mean"] - 0.02) < 4 * d["sd"]
+    assert len(pop.differences("zeta")) == 1
+    summary = pop.to_dict()
+    assert summary["groups"][0]["parameters"]["zeta"]["sigma_prior"] == "half-Cauchy(scale=0.01)"
+    assert summary["pooled"]["n_runs"] == 6
+    # Reproducible, and independent of the order of the runs.
+    again = population(
+        runs[::-1], ("zeta",), by="load_N", pooled=False, seed=3, n_steps=1200, burn=300
+    )
+    np.testing.assert_array_equal(again.groups[0.46].sigma["zeta"], pop.groups[0.46].sigma["zeta"])
+    with pytest.raises(BayestriboError, match="not among the groups"):
+        pop.difference("zeta", 0.12, 0.99)
+
+
+@dataclass
+class _Fit:
+    """Stand-in for bayestribo.fit.FitResult: samples, prior_logpdf, metadata."""
+
+    draws: dict[str, np.ndarray]
+    metadata: dict[str, Any] = field(default_factory=dict)
+    run_name: str = "run"
+
+    def samples(self, name):
+        return self.draws[name]
+
+    def prior_logpdf(self, name, values):
+        return np.where(values > 0, -math.log(0.2), -np.inf)  # uniform on (0, 0.2)
+
+
+def test_run_samples_from_a_fit_result_divides_the_joint_prior():
+    rng = np.random.default_rng(0)
+    fit = _Fit(
+        {"zeta": rng.uniform(0.01, 0.03, 50), "mu_k": rng.uniform(0.02, 0.04, 50)},
+        {"run_id": "a", "load_N": 0.31},
+        "a",
+    )
+    rs = run_samples(fit, ("zeta", "mu_k"), max_samples=20, seed=1)
+    assert rs.n_samples == 20 and rs.name == "a" and rs.metadata["load_N"] == 0.31
+    np.testing.assert_allclose(rs.log_prior, 2 * -math.log(0.2))
+    assert set(rs.values["zeta"]) <= set(fit.draws["zeta"])
+
+
+def test_bad_input_is_a_package_error_naming_the_field():
+    x = np.linspace(0.01, 0.02, 10)
+    with pytest.raises(BayestriboError, match="prior density is zero"):
+        RunSamples("a", {"zeta": x}, np.full(10, -np.inf))
+    with pytest.raises(BayestriboError, match="shape"):
+        RunSamples("a", {"zeta": x}, np.zeros(9))
+    good = RunSamples("a", {"zeta": x}, np.zeros(10), {"load_N": 0.1})
+    with pytest.raises(BayestriboError, match="duplicate run names"):
+        population([good, good], ("zeta",))
+    with pytest.raises(BayestriboError, match="no 'lubricant' to group by"):
+        population([good], ("zeta",), by="lubricant")
+    with pytest.raises(BayestriboError, match="no default scale"):
+        sigma_priors(("friction_displacement",))
+    with pytest.raises(BayestriboError, match="scale"):
+        HalfNormal(-1.0)
+    with pytest.raises(BayestriboError, match="two or more distinct values"):
+        trend([good], "load_N", ("zeta",))
+    with pytest.raises(BayestriboError, match="no posterior samples"):
+        population([good], ("zeta", "mu_k"))
+    with pytest.raises(BayestriboError, match="rope"):
+        slope_probabilities(np.zeros(3), rope=-1.0)
+
+
+def test_hyperprior_densities_are_normalised():
+    from scipy.integrate import quad
+
+    for prior in (HalfCauchy(0.01), HalfNormal(0.003)):
+        total, _ = quad(lambda v, p=prior: math.exp(float(p.logpdf(v))), 0, np.inf)
+        assert total == pytest.approx(1.0, rel=1e-8)
+        assert prior.logpdf(-1.0) == -np.inf
+
+
+def test_likelihood_matches_direct_evaluation():
+    rng = np.random.default_rng(2)
+    runs = [
+        RunSamples(f"r{i}", {"a": rng.normal(0.02, 0.002, 50 + i)}, rng.normal(size=50 + i))
+        for i in range(3)
+    ]
+    like = MarginalLikelihood(runs, ("a",))
+    m, sg = 0.021, 0.0015
+    direct = 0.0
+    for r in runs:
+        terms = np.exp(_normal_logpdf(r.values["a"], m, sg) - r.log_prior)
+        direct += math.log(terms.mean())
+    got = like(np.array([[[m]]]), np.array([[math.log(sg)]]))
+    assert got[0] == pytest.approx(direct, rel=1e-12)
+
+
+def test_short_runs_warn():
+    rng = np.random.default_rng(1)
+    runs = _normal_runs(rng.normal(0.02, 0.001, 3), np.full(3, 0.001), 0.03, 0.02, rng, 100)
+    with pytest.warns(ConvergenceWarning, match="autocorrelation times"):
+        population(runs, ("zeta",), n_steps=60, burn=10)
