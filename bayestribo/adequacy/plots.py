@@ -1,0 +1,146 @@
+"""Figures of the adequacy checks (matplotlib).
+
+Each function draws on the axes or figure it is given (a new one if none) and
+returns it; none shows or saves a figure.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from bayestribo.adequacy.constancy import ConstancyTest
+from bayestribo.adequacy.extinction import ExtinctionCheck
+from bayestribo.adequacy.predictive import PredictiveCheck
+from bayestribo.adequacy.windows import WindowedAnalysis
+
+__all__ = ["plot_extinction", "plot_peak_residuals", "plot_windows"]
+
+
+def _figure(fig: Any, nrows: int) -> Any:
+    if fig is None:
+        import matplotlib.pyplot as plt
+
+        fig = plt.figure(figsize=(6.4, 2.6 * nrows))
+    if not fig.axes:
+        fig.subplots(nrows, 1, sharex=True)
+    return fig
+
+
+def plot_windows(
+    windows: WindowedAnalysis, constancy: ConstancyTest | None = None, fig: Any = None
+) -> Any:
+    """ζ and μ per window against the window amplitude, with 95 % intervals.
+
+    Horizontal bars span each window's amplitude range; the constancy test's line
+    (if given) is drawn over the windows it used.
+
+    Parameters
+    ----------
+    windows : WindowedAnalysis
+    constancy : ConstancyTest, optional
+    fig : matplotlib Figure, optional
+        With two axes, or empty (two are added).
+
+    Returns
+    -------
+    matplotlib Figure
+    """
+    fig = _figure(fig, 2)
+    ax_z, ax_m = fig.axes[:2]
+    amp = windows.column("amplitude")
+    lo_a = amp - np.array([w.amplitude_range[0] for w in windows.windows])
+    hi_a = np.array([w.amplitude_range[1] for w in windows.windows]) - amp
+    regular = np.array([w.regular for w in windows.windows])
+    for ax, name, trend in (
+        (ax_z, "zeta", None if constancy is None else constancy.zeta),
+        (ax_m, "mu", None if constancy is None else constancy.mu),
+    ):
+        val = windows.column(name)
+        iv = np.array([getattr(w, f"{name}_interval") for w in windows.windows])
+        err = np.vstack([val - iv[:, 0], iv[:, 1] - val])
+        for mask, style in ((regular, "o"), (~regular, "x")):
+            if np.any(mask):
+                ax.errorbar(
+                    amp[mask],
+                    val[mask],
+                    yerr=err[:, mask],
+                    xerr=np.vstack([lo_a, hi_a])[:, mask],
+                    fmt=style,
+                    capsize=2,
+                    label="on a bound" if style == "x" else f"{windows.method} per window",
+                )
+        if trend is not None:
+            a = np.linspace(*constancy.amplitude_range, 50)
+            mean_amp = float(np.mean(amp[regular]))
+            ax.plot(a, trend.mean + trend.slope * (a - mean_amp), "k--", label="trend")
+        ax.grid(alpha=0.3)
+    ax_z.set_ylabel("ζ [-]")
+    unit = "" if windows.friction_name == "mu_k" else f" [{windows.length_unit}]"
+    ax_m.set_ylabel(f"{windows.friction_name}{unit}")
+    ax_m.set_xlabel(f"window amplitude [{windows.length_unit}]")
+    ax_z.legend(fontsize="small")
+    if constancy is not None:
+        ax_z.set_title(
+            ("constant" if constancy.constant else "not constant")
+            + f" (p = {constancy.p_value:.2g})"
+        )
+    return fig
+
+
+def plot_extinction(check: ExtinctionCheck, ax: Any = None) -> Any:
+    """Histograms of the predicted end of motion (exact and Eq. 38) and the measured end.
+
+    Returns
+    -------
+    matplotlib Axes
+    """
+    if ax is None:
+        import matplotlib.pyplot as plt
+
+        _, ax = plt.subplots(figsize=(6.4, 3.2))
+    for values, label in ((check.exact, "exact model"), (check.averaged, "averaged, Eq. 38")):
+        finite = values[np.isfinite(values)]
+        if finite.size:
+            ax.hist(finite, bins=40, density=True, alpha=0.5, label=label)
+    if check.measured is not None:
+        ax.axvline(check.measured, color="k", label="measured end")
+    else:
+        ax.axvline(check.record_end, color="k", ls=":", label="record ends (still moving)")
+    ax.set_xlabel("end of motion after the analysis start [s]")
+    ax.set_ylabel("density [1/s]")
+    ax.legend(fontsize="small")
+    return ax
+
+
+def plot_peak_residuals(check: PredictiveCheck, fig: Any = None) -> Any:
+    """Peak residuals (recorded minus predicted) with their 95 % predictive intervals.
+
+    Top: displacement peaks |Y_n|; bottom: velocity peaks, both dimensionless.
+
+    Returns
+    -------
+    matplotlib Figure
+    """
+    fig = _figure(fig, 2)
+    for ax, peaks in zip(fig.axes[:2], (check.displacement, check.velocity), strict=True):
+        ax.fill_between(
+            peaks.t,
+            peaks.low - peaks.predicted,
+            peaks.high - peaks.predicted,
+            color="C0",
+            alpha=0.3,
+            step="mid",
+            label="95 % predictive interval",
+        )
+        ax.plot(peaks.t, peaks.residual, "o", ms=3, color="C1", label="recorded - predicted")
+        ax.axhline(0.0, color="k", lw=0.8)
+        ax.set_ylabel(f"{peaks.kind} peak residual [-]")
+        ax.grid(alpha=0.3)
+    fig.axes[0].legend(fontsize="small")
+    fig.axes[0].set_title(
+        f"{100 * check.coverage:.0f} % inside, RMS standardized {check.rms_standardized:.2g}"
+    )
+    fig.axes[1].set_xlabel("t [s]")
+    return fig

@@ -1,0 +1,139 @@
+"""Windowed fits along the decay (bayestribo.adequacy.windows, segments)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from bayestribo.adequacy.segments import _simpson, fit_segment, peak_positions, whole_decay_fit
+from bayestribo.adequacy.windows import analysed_decay, window_bounds, windowed_fits
+from bayestribo.errors import BayestriboError, RecordingError
+from bayestribo.simulation import simulate
+
+ZETA, MU = 0.0236, 0.0294
+
+
+@pytest.fixture(scope="module")
+def decay():
+    return analysed_decay(simulate(seed=11))
+
+
+def test_simpson_weights_integrate_cubics_exactly():
+    # Independent check of the quadrature: Simpson is exact for cubics (even count),
+    # and the odd-count variant (trapezoid on the last step) for linear functions.
+    x = np.linspace(0.0, 2.0, 11)
+    w = _simpson(10, np.diff(x))
+    assert w @ (x**3 - x + 1) == pytest.approx(2.0**4 / 4 - 2.0 + 2.0, rel=1e-13)
+    x = np.linspace(0.0, 1.0, 8)
+    w = _simpson(7, np.diff(x))
+    assert w @ (3 * x + 1) == pytest.approx(2.5, rel=1e-13)
+
+
+def test_windows_cover_the_decay_without_gaps(decay):
+    bounds = window_bounds(decay, 2)
+    pos = peak_positions(decay)
+    assert bounds[0][0] == 0
+    assert bounds[-1][1] == decay.t.size  # the rest of the decay joins the last window
+    for (a0, b0, f0, l0), (a1, _, f1, _) in zip(bounds[:-1], bounds[1:], strict=True):
+        assert l0 == f1 and a1 == b0 - 1 == pos[l0]  # consecutive windows share a turning point
+        assert l0 - f0 == 4  # 2 oscillations = 4 half cycles
+    assert bounds[-1][3] == pos.size - 1
+
+
+@pytest.mark.parametrize("bad", [0, -1, 1.5, True, "2"])
+def test_bad_window_is_refused(decay, bad):
+    with pytest.raises(RecordingError, match="window"):
+        windowed_fits(decay, window=bad)
+
+
+def test_window_longer_than_the_decay_is_refused(decay):
+    with pytest.raises(RecordingError, match="fewer than one window"):
+        window_bounds(decay, 50)
+
+
+def test_whole_decay_fit_recovers_the_simulated_values(decay):
+    fit = whole_decay_fit(decay)
+    # tolerance: 4 standard errors of the fit itself (plus 1e-6 for the sub-sample start)
+    assert abs(fit.zeta - ZETA) < 4 * fit.se("zeta") + 1e-6
+    assert abs(fit.mu - MU) < 4 * fit.se("mu") + 1e-6
+    assert fit.chi2_reduced < 3.0  # the noise model describes the increments
+
+
+def test_window_intervals_are_calibrated():
+    # Statistical: over 5 seeded runs x 6 windows, the Gaussian 95 % intervals of ζ
+    # and μ_k must hold the true values about 95 % of the time; with 30 windows,
+    # P(fewer than 24 inside | 95 %) < 0.2 %.
+    inside_z = inside_m = total = 0
+    for seed in range(5):
+        w = windowed_fits(simulate(seed=100 + seed), window=2, seed=seed)
+        assert w.extra["friction_mode"] == "fit"
+        for x in w.windows:
+            inside_z += x.zeta_interval[0] <= ZETA <= x.zeta_interval[1]
+            inside_m += x.mu_interval[0] <= MU <= x.mu_interval[1]
+            total += 1
+    assert total >= 25
+    assert inside_z >= 0.8 * total
+    assert inside_m >= 0.8 * total
+
+
+def test_window_ranges_in_signal_units(decay):
+    w = windowed_fits(decay, window=3)
+    amps = [x.amplitude for x in w.windows]
+    assert all(a > b for a, b in zip(amps[:-1], amps[1:], strict=True))  # a decay
+    x0 = w.windows[0]
+    assert x0.amplitude_range[0] <= x0.amplitude <= x0.amplitude_range[1]
+    # peak velocity ≈ Ω × amplitude for a lightly damped oscillator (within 15 %)
+    omega = decay.scaling.omega
+    assert x0.velocity_range[1] == pytest.approx(omega * x0.amplitude_range[1], rel=0.15)
+    d = w.to_dict()
+    assert d["friction"] == "mu_k" and len(d["windows"]) == len(w)
+
+
+def test_fixed_friction_fits_only_zeta(decay):
+    w = windowed_fits(decay, window=2, friction="fixed")
+    assert all(x.mu_se == 0.0 for x in w.windows)
+    assert w.extra["fixed_friction"] == pytest.approx(w.extra["whole_decay"]["mu"])
+    with pytest.raises(RecordingError, match="friction"):
+        windowed_fits(decay, window=2, friction="none")
+
+
+def test_fixed_mu_out_of_range_is_refused(decay):
+    pa = np.abs(decay.peaks.value) / decay.scaling.length_scale
+    with pytest.raises(RecordingError, match="fixed_mu"):
+        fit_segment(decay, 0, decay.t.size, pa, fixed_mu=-1.0)
+
+
+class _StandIn:
+    """A Bayesian-fit stand-in: Gaussian samples about given values."""
+
+    def __init__(self, zeta: float, mu: float) -> None:
+        rng = np.random.default_rng(0)
+        self._s = {"zeta": zeta + 1e-4 * rng.standard_normal(2000)}
+        self._s["mu_k"] = mu + 1e-4 * rng.standard_normal(2000)
+        self.converged = True
+
+    def samples(self, name: str) -> np.ndarray:
+        return self._s[name]
+
+
+def test_bayes_method_cuts_each_window_as_a_run():
+    run = simulate(seed=5)
+    seen = []
+
+    def fitter(sub):
+        seen.append((sub.time[0], sub.time[-1]))
+        return _StandIn(ZETA, MU)
+
+    w = windowed_fits(run, window=2, method="bayes", fitter=fitter)
+    assert len(seen) == len(w) >= 3
+    for (t0, t1), x in zip(seen, w.windows, strict=True):
+        assert t0 < x.t_start and t1 == pytest.approx(x.t_end)  # one oscillation before
+        assert x.zeta_interval[0] < ZETA < x.zeta_interval[1]
+    assert w.interval_kind.startswith("posterior")
+    with pytest.raises(BayestriboError, match="EnergyDecay"):
+        windowed_fits(analysed_decay(run), method="bayes", fitter=fitter)
+
+
+def test_not_a_run_is_refused():
+    with pytest.raises(RecordingError, match="run must be"):
+        windowed_fits(42)
