@@ -41,7 +41,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.fit.data import PiData
-from bayestribo.model import averaged_pi, exact_pi
+from bayestribo.model import averaged_pi
+from bayestribo.model._kernel import exact_pi_grid
 
 __all__ = ["MODELS", "PiLikelihood"]
 
@@ -86,8 +87,10 @@ class PiLikelihood:
         tau = self.data.tau_grid[:-1]
         end = None if self.data.motion_ended else self.data.tau_end
         if self.model == "exact":
-            # The priors keep the parameters in the model's range: skip its checks.
-            return exact_pi(tau, y0, zeta, mu_k, mu_s, self.data.yp0, tau_end=end, validate=False)
+            # The priors keep the parameters in the model's range; a sampler evaluates
+            # a few walkers per call, where the compiled kernel is 5-10x faster than
+            # the numpy implementation (they agree to 1e-12, see the tests).
+            return exact_pi_grid(tau, y0, zeta, mu_k, mu_s, self.data.yp0, end)
         amplitude = np.hypot(y0, self.data.yp0)
         return averaged_pi(tau, amplitude, zeta, mu_k, tau_end=end)
 
@@ -107,17 +110,27 @@ class PiLikelihood:
 
     # -- nuisance -----------------------------------------------------------------
     def _solve(self, resid: NDArray, var: NDArray) -> tuple[NDArray, NDArray, NDArray]:
-        """Conditional mean δ̂ of the offset nuisance, b·δ̂ and log|A| per row."""
+        """Conditional mean δ̂ of the offset nuisance, b·δ̂ and log|A| per row.
+
+        A = XᵀWX + P⁻¹ is 2 × 2: solved in closed form (Cramer's rule), which is
+        several times faster than batched ``numpy.linalg`` on a few walkers.
+        """
         x = self.data.offset_design  # (m, 2)
         w = 1.0 / var  # (m,) or (n, m)
-        prior_prec = np.diag([self.offset_sd**-2, self.drift_sd**-2])
-        wx = w[..., :, None] * x  # (..., m, 2)
-        a = np.einsum("...mi,mj->...ij", wx, x) + prior_prec  # (..., 2, 2)
-        b = np.einsum("...m,...mi->...i", resid, wx)  # (n, 2)
-        a = np.broadcast_to(a, (*b.shape[:-1], 2, 2))
-        delta = np.linalg.solve(a, b[..., None])[..., 0]
-        logdet = np.linalg.slogdet(a)[1]
-        return delta, np.sum(b * delta, axis=-1), logdet
+        x0, x1 = x[:, 0], x[:, 1]
+        a00 = w @ (x0 * x0) if w.ndim == 1 else (w * x0 * x0).sum(-1)
+        a01 = w @ (x0 * x1) if w.ndim == 1 else (w * x0 * x1).sum(-1)
+        a11 = w @ (x1 * x1) if w.ndim == 1 else (w * x1 * x1).sum(-1)
+        a00 = a00 + self.offset_sd**-2
+        a11 = a11 + self.drift_sd**-2
+        rw = resid * w
+        b0 = rw @ x0
+        b1 = rw @ x1
+        det = a00 * a11 - a01 * a01
+        d0 = (a11 * b0 - a01 * b1) / det
+        d1 = (a00 * b1 - a01 * b0) / det
+        delta = np.stack([d0, d1], axis=-1)
+        return delta, b0 * d0 + b1 * d1, np.log(det) * np.ones_like(b0)
 
     @property
     def _log_prior_det(self) -> float:
