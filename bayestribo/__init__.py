@@ -34,6 +34,7 @@ _LAZY: dict[str, str] = {
     "read_run": "bayestribo.io",
     "write_run": "bayestribo.io",
     "simulate": "bayestribo.simulation",
+    "fit_many": "bayestribo.many",
     "acquire_run": "bayestribo.acquisition",
     "recover_run": "bayestribo.acquisition",
     "check_adequacy": "bayestribo.adequacy",

@@ -1,0 +1,126 @@
+"""fit_many: per-run seeds by identity, any executor, failures reported, progress.
+
+A cheap stand-in replaces the Bayesian fit: it draws from its seed, so equal results
+across executors mean equal seeds per run.
+"""
+
+from __future__ import annotations
+
+import io
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pytest
+
+from bayestribo.errors import BayestriboError, RecordingError
+from bayestribo.many import RunOutcome, fit_many, run_identity, run_seed
+
+
+@dataclass(frozen=True)
+class FakeRun:
+    metadata: dict[str, Any] = field(default_factory=dict)
+
+
+def cheap_fit(run: Any, *, seed: int, scale: float = 1.0) -> dict[str, Any]:
+    """Stand-in fit: a few draws from the run's seed; fails on runs named 'bad*'."""
+    name = run_identity(run)
+    if name.startswith("bad"):
+        raise RecordingError("no oscillation found", where=name)
+    return {"name": name, "draws": (scale * np.random.default_rng(seed).normal(size=4)).tolist()}
+
+
+RUNS = [FakeRun({"run_id": f"glycerol-L{i}-r{r}"}) for i in range(3) for r in range(2)]
+
+
+def _by_name(outcomes: list[RunOutcome]) -> dict[str, Any]:
+    return {o.name: (o.seed, o.result, o.error) for o in outcomes}
+
+
+@pytest.fixture(scope="module")
+def serial():
+    with ThreadPoolExecutor(1) as pool:
+        return fit_many(RUNS, pool, campaign_seed=7, function=cheap_fit, progress=False)
+
+
+def test_results_do_not_depend_on_executor_workers_or_order(serial):
+    assert [o.name for o in serial] == [r.metadata["run_id"] for r in RUNS]
+    assert all(o.ok for o in serial)
+    with ThreadPoolExecutor(4) as pool:
+        threads = fit_many(RUNS[::-1], pool, campaign_seed=7, function=cheap_fit, progress=False)
+    processes = fit_many(
+        RUNS, campaign_seed=7, function=cheap_fit, max_workers=2, progress=False
+    )  # the default executor: a process pool
+    assert _by_name(threads) == _by_name(serial) == _by_name(processes)
+    assert [o.name for o in threads] == [r.metadata["run_id"] for r in RUNS[::-1]]
+
+
+def test_seeds_follow_the_campaign_seed_and_the_identity(serial):
+    seeds = [o.seed for o in serial]
+    assert len(set(seeds)) == len(seeds)
+    assert all(0 <= s < 2**63 for s in seeds)
+    assert seeds == [run_seed(7, o.name) for o in serial]
+    assert run_seed(8, serial[0].name) != seeds[0]
+    # A run keeps its seed when other runs are added or removed.
+    with ThreadPoolExecutor(2) as pool:
+        one = fit_many(RUNS[2:3], pool, campaign_seed=7, function=cheap_fit, progress=False)
+    assert one[0].seed == seeds[2] and one[0].result == serial[2].result
+
+
+def test_a_failed_run_is_reported_and_the_others_go_on(tmp_path):
+    runs = [*RUNS[:2], FakeRun({"run_id": "bad-r1"}), tmp_path / "glycerol-L9-r1.csv"]
+    stream = io.StringIO()
+    seen: list[str] = []
+    outcomes = fit_many(
+        runs,
+        campaign_seed=3,
+        function=cheap_fit,
+        max_workers=2,
+        progress_stream=stream,
+        callback=lambda o: seen.append(o.name),
+        scale=2.0,
+    )
+    assert [o.ok for o in outcomes] == [True, True, False, True]
+    bad = outcomes[2]
+    assert bad.result is None and bad.error == "RecordingError: bad-r1: no oscillation found"
+    assert "Traceback" in bad.traceback and "cheap_fit" in bad.traceback
+    assert outcomes[3].name == "glycerol-L9-r1"  # a path's identity is its file stem
+    assert sorted(seen) == sorted(o.name for o in outcomes)
+    # fit keyword arguments reach the function.
+    expected = 2.0 * np.random.default_rng(outcomes[0].seed).normal(size=4)
+    np.testing.assert_array_equal(outcomes[0].result["draws"], expected)
+    text = stream.getvalue()
+    assert "4/4" in text and "1 failed" in text and text.endswith("\n")
+
+
+def test_no_progress_output_when_disabled():
+    stream = io.StringIO()
+    with ThreadPoolExecutor(1) as pool:
+        fit_many(RUNS[:1], pool, function=cheap_fit, progress=False, progress_stream=stream)
+    assert stream.getvalue() == ""
+
+
+def test_bad_input_is_a_package_error():
+    with pytest.raises(BayestriboError, match="duplicate run identities"):
+        fit_many([RUNS[0], RUNS[0]], function=cheap_fit, progress=False)
+    with pytest.raises(BayestriboError, match="without metadata 'run_id'"):
+        fit_many([FakeRun({})], function=cheap_fit, progress=False)
+    with pytest.raises(BayestriboError, match="campaign_seed"):
+        fit_many(RUNS, campaign_seed=-1, function=cheap_fit, progress=False)
+
+
+def test_dask_cluster_gives_the_same_results_as_the_process_pool(serial):
+    distributed = pytest.importorskip("dask.distributed", reason="dask.distributed not installed")
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        assert len(client.scheduler_info()["workers"]) == 2
+        outcomes = fit_many(
+            RUNS, client.get_executor(), campaign_seed=7, function=cheap_fit, progress=False
+        )
+    processes = fit_many(RUNS, campaign_seed=7, function=cheap_fit, max_workers=2, progress=False)
+    assert _by_name(outcomes) == _by_name(processes) == _by_name(serial)
