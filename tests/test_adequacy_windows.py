@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 
@@ -34,7 +36,7 @@ def test_windows_cover_the_decay_without_gaps(decay):
     pos = peak_positions(decay)
     assert bounds[0][0] == 0
     assert bounds[-1][1] == decay.t.size  # the rest of the decay joins the last window
-    for (a0, b0, f0, l0), (a1, _, f1, _) in zip(bounds[:-1], bounds[1:], strict=True):
+    for (_a0, b0, f0, l0), (a1, _, f1, _) in itertools.pairwise(bounds):
         assert l0 == f1 and a1 == b0 - 1 == pos[l0]  # consecutive windows share a turning point
         assert l0 - f0 == 4  # 2 oscillations = 4 half cycles
     assert bounds[-1][3] == pos.size - 1
@@ -79,7 +81,7 @@ def test_window_intervals_are_calibrated():
 def test_window_ranges_in_signal_units(decay):
     w = windowed_fits(decay, window=3)
     amps = [x.amplitude for x in w.windows]
-    assert all(a > b for a, b in zip(amps[:-1], amps[1:], strict=True))  # a decay
+    assert all(a > b for a, b in itertools.pairwise(amps))  # a decay
     x0 = w.windows[0]
     assert x0.amplitude_range[0] <= x0.amplitude <= x0.amplitude_range[1]
     # peak velocity ≈ Ω × amplitude for a lightly damped oscillator (within 15 %)

@@ -1,0 +1,170 @@
+"""Extinction time, predictive check, draws, report and plots (bayestribo.adequacy)."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+
+from bayestribo.adequacy import (
+    ParameterDraws,
+    check_adequacy,
+    draws_from_least_squares,
+    draws_from_posterior,
+    extinction_check,
+    predictive_check,
+)
+from bayestribo.adequacy.plots import plot_extinction, plot_peak_residuals, plot_windows
+from bayestribo.adequacy.segments import whole_decay_fit
+from bayestribo.adequacy.windows import analysed_decay
+from bayestribo.errors import BayestriboError
+from bayestribo.model import exact_response, turning_points
+from bayestribo.simulation import simulate
+
+
+@pytest.fixture(scope="module")
+def report():
+    return check_adequacy(simulate(seed=21))
+
+
+def test_constant_law_run_passes_the_checks(report):
+    # The extinction and peak checks must pass on a run simulated with the model;
+    # the constancy decision has a 5 % false-alarm rate (this seed happens to be
+    # one, p = 0.04: tested over many runs in test_adequacy_constancy), and the
+    # verdict follows it.
+    assert report.extinction.consistent()
+    assert report.predictive.coverage >= 0.9
+    assert "not a posterior" in report.predictive.statement  # stand-in draws labelled
+    assert report.constancy is not None
+    assert report.adequate == report.constancy.constant
+    text = report.to_text()
+    assert f"verdict: {report.verdict}" in text
+    assert report.to_dict()["adequate"] == report.adequate
+
+
+def test_extinction_matches_the_model_and_the_recording(report):
+    ex = report.extinction
+    draws = report.draws
+    # the exact stop time is the last turning point of turning_points (independent path)
+    tau_n, _ = turning_points(
+        float(draws.y0[0]), float(draws.zeta[0]), float(draws.mu[0]), float(draws.mu_s[0])
+    )
+    assert ex.exact[0] == pytest.approx(tau_n[-1] / report.decay.scaling.omega, rel=1e-9)
+    # the recorded end is within two samples (0.2 ms) of the simulated one
+    assert abs(np.median(ex.exact) - ex.measured) < 2.5e-4
+    # Eq. 38 (averaged) and the exact end differ by less than a half period
+    assert abs(np.median(ex.averaged) - np.median(ex.exact)) < 0.5 / 32.6
+    d = ex.to_dict()
+    assert d["consistent_exact"] is True and d["measured_s"] == pytest.approx(ex.measured)
+
+
+def test_predictive_peaks_of_the_true_parameters():
+    # Draws all equal to the simulated values: predicted peaks are the model's
+    # turning points and the recorded peaks must match them within their intervals.
+    run = simulate(seed=22, magnet_fade_s=0.0)
+    decay = analysed_decay(run)
+    ell = decay.scaling.length_scale
+    y0 = abs(decay.peaks.value[0]) / ell
+    n = 50
+    draws = ParameterDraws(
+        zeta=np.full(n, 0.0236),
+        mu=np.full(n, 0.0294),
+        y0=np.full(n, y0),
+        mu_s=np.full(n, 0.0294),
+        label="true values",
+    )
+    check = predictive_check(decay, draws)
+    _, y_n = turning_points(y0, 0.0236, 0.0294, 0.0294, max_count=len(decay.peaks))
+    # the predicted displacement peaks equal |Y_n| to the parabola's 3e-4 relative bias
+    k = min(y_n.size, check.displacement.predicted.size)
+    np.testing.assert_allclose(
+        check.displacement.predicted[:k], np.abs(y_n[:k]), rtol=1e-3, atol=1e-3
+    )
+    assert check.coverage >= 0.9
+    # the band's median is the model's response
+    y, _ = exact_response(
+        (check.band_t[:5] - decay.t[0]) * decay.scaling.omega,
+        np.sign(decay.peaks.value[0]) * y0,
+        0.0236,
+        0.0294,
+        0.0294,
+    )
+    np.testing.assert_allclose(check.y_band[1, :5], y, atol=1e-9)
+
+
+def test_wrong_parameters_fail_the_predictive_check():
+    decay = analysed_decay(simulate(seed=23))
+    fit = whole_decay_fit(decay)
+    wrong = ParameterDraws(
+        zeta=np.full(50, fit.zeta * 1.2),
+        mu=np.full(50, fit.mu),
+        y0=np.full(50, fit.y0),
+        mu_s=np.full(50, fit.mu),
+        label="ζ 20 % too large",
+    )
+    check = predictive_check(decay, wrong)
+    assert check.coverage < 0.5 and check.rms_standardized > 3
+    assert not extinction_check(decay, wrong).consistent()
+
+
+def test_least_squares_draws_follow_the_covariance():
+    decay = analysed_decay(simulate(seed=24))
+    fit = whole_decay_fit(decay)
+    d = draws_from_least_squares(fit, 4000, seed=1)
+    # sample sd within 5 % of the covariance's (4000 draws: sd of the sd ≈ 1.1 %)
+    assert np.std(d.zeta) == pytest.approx(fit.se("zeta"), rel=0.05)
+    assert np.mean(d.mu) == pytest.approx(fit.mu, abs=4 * fit.se("mu") / np.sqrt(4000) * 3)
+    with pytest.raises(BayestriboError, match="n_draws"):
+        draws_from_least_squares(fit, 3)
+
+
+class _Posterior:
+    parameter_names = ("zeta", "mu_k", "mu_s", "y0")
+
+    def __init__(self):
+        rng = np.random.default_rng(0)
+        self._s = {
+            "zeta": 0.0236 + 1e-5 * rng.standard_normal(1000),
+            "mu_k": 0.0294 + 1e-5 * rng.standard_normal(1000),
+            "mu_s": 0.0300 + 1e-5 * rng.standard_normal(1000),
+            "y0": 5.6 + 1e-3 * rng.standard_normal(1000),
+        }
+
+    def samples(self, name):
+        return self._s[name]
+
+
+def test_posterior_draws_are_used_and_labelled():
+    decay = analysed_decay(simulate(seed=25))
+    d = draws_from_posterior(_Posterior(), decay, 200)
+    assert len(d) == 200 and d.label.startswith("posterior")
+    assert np.all(d.mu_s >= d.mu)
+
+    class Empty:
+        parameter_names = ("zeta",)
+
+        def samples(self, name):
+            raise KeyError(name)
+
+    with pytest.raises(BayestriboError, match="samples"):
+        draws_from_posterior(Empty(), decay)
+
+
+def test_plots_render(report, tmp_path):
+    fig = plot_windows(report.windows, report.constancy)
+    fig.savefig(tmp_path / "windows.png")
+    ax = plot_extinction(report.extinction)
+    ax.figure.savefig(tmp_path / "extinction.png")
+    fig2 = plot_peak_residuals(report.predictive)
+    fig2.savefig(tmp_path / "peaks.png")
+    for name in ("windows", "extinction", "peaks"):
+        assert (tmp_path / f"{name}.png").stat().st_size > 5000
+    assert len(fig.axes) == 2 and fig.axes[0].get_ylabel() == "ζ [-]"
+    # given axes are used, not replaced
+    _, a = plt.subplots()
+    assert plot_extinction(report.extinction, ax=a) is a
+    plt.close("all")
