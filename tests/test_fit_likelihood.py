@@ -1,0 +1,116 @@
+"""The likelihood: marginalised equilibrium error, models, discrepancy term."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.special import logsumexp
+
+from bayestribo.decay import energy_decay
+from bayestribo.fit.data import pi_data
+from bayestribo.fit.likelihood import PiLikelihood
+from bayestribo.fit.noise import noise_model
+from bayestribo.fit.posterior import Posterior
+from bayestribo.fit.priors import default_priors
+from bayestribo.simulation import simulate
+
+TRUE = {"zeta": 0.0236, "mu_k": 0.0294}
+
+
+@pytest.fixture(scope="module")
+def setup():
+    run = simulate(
+        seed=12,
+        displacement_noise_m=1.5e-6,
+        velocity_noise_m_per_s=1.5e-7,
+        sample_rate_Hz=5000.0,
+        offset_m=2e-4,
+        **TRUE,
+    )
+    decay = energy_decay(run.time, run.displacement, run.velocity, rig=run.rig())
+    data = pi_data(decay, noise_model(decay, run.metadata), grid_points=40)
+    return run, decay, data
+
+
+def _col(v):
+    return np.array([[v]])
+
+
+def test_marginal_equals_numerical_integral_over_the_offset(setup):
+    """Analytic marginalisation of (δ₀, δ₁) against a brute-force 2-D quadrature."""
+    _, _, data = setup
+    lik = PiLikelihood(data, offset_sd=2e-3, drift_sd=2e-5)
+    args = (_col(0.02361), _col(0.02938), _col(0.0353), _col(data.y0))
+    analytic = lik.log_likelihood(*args)[0]
+    model = lik.model_increments(*args)[0]
+    delta_hat = lik.offset(*args)[0]
+    # The conditional density is Gaussian in δ: integrate on a grid ±10 widths wide.
+    x = data.offset_design
+    w = 1.0 / data.variance
+    prec = x.T @ (w[:, None] * x) + np.diag([2e-3**-2, 2e-5**-2])
+    width = np.sqrt(np.diag(np.linalg.inv(prec)))
+    g0 = delta_hat[0] + np.linspace(-10, 10, 401) * width[0]
+    g1 = delta_hat[1] + np.linspace(-10, 10, 401) * width[1]
+    d0, d1 = np.meshgrid(g0, g1, indexing="ij")
+    shift = d0[..., None] * x[:, 0] + d1[..., None] * x[:, 1]
+    resid = data.increments - shift - model
+    cond = -0.5 * np.sum(resid**2 * w + np.log(2 * np.pi * data.variance), axis=-1)
+    prior = -0.5 * (d0 / 2e-3) ** 2 - 0.5 * (d1 / 2e-5) ** 2 - np.log(2 * np.pi * 2e-3 * 2e-5)
+    cell = (g0[1] - g0[0]) * (g1[1] - g1[0])
+    numeric = logsumexp(cond + prior) + np.log(cell)
+    assert analytic == pytest.approx(numeric, abs=1e-6)
+
+
+def test_equilibrium_error_is_recovered(setup):
+    """The conditional δ₀ matches the error of the equilibrium estimate."""
+    run, decay, data = setup
+    lik = PiLikelihood(data)
+    sim = run.metadata["simulation"]
+    delta = lik.offset(_col(sim["zeta"]), _col(sim["mu_k"]), _col(sim["mu_s"]), _col(data.y0))
+    error = (decay.equilibrium - sim["offset_m"]) / decay.scaling.length_scale
+    # δ₀ is the offset at τ = 0 of the error, in units of y; the estimate's own
+    # uncertainty is about σ_y/√(samples) ≈ 1e-4 here.
+    assert delta[0, 0] == pytest.approx(-error, abs=5e-4)
+
+
+def test_averaged_model_bias_shows_at_vibrometer_precision(setup):
+    """At the truth the exact model fits; the averaged one is many σ off (bias ~2ζ²)."""
+    run, _, data = setup
+    sim = run.metadata["simulation"]
+    lik_exact = PiLikelihood(data, model="exact")
+    lik_avg = PiLikelihood(data, model="averaged")
+    args = (_col(sim["zeta"]), _col(sim["mu_k"]), _col(sim["mu_s"]), _col(data.y0))
+    r_exact = lik_exact.standardized_residuals(*args)
+    r_avg = lik_avg.standardized_residuals(*args)
+    # y0 is the noisy observed value (off by ~σ_y): allow a loose χ² for the exact one.
+    assert np.sum(r_exact**2) < 20 * data.increments.size
+    assert np.sum(r_avg**2) > 20 * np.sum(r_exact**2)
+
+
+def test_discrepancy_term_inflates_variance_independently_of_grid(setup):
+    run, decay, _ = setup
+    noise = noise_model(decay, run.metadata)
+    coarse = pi_data(decay, noise, grid_points=20)
+    fine = pi_data(decay, noise, grid_points=80)
+    # ∫E² over the record, the discrepancy's variance scale, is additive.
+    assert coarse.energy_squared.sum() == pytest.approx(fine.energy_squared.sum(), rel=1e-3)
+    assert coarse.variance[:-1].sum() == pytest.approx(fine.variance[:-1].sum(), rel=0.05)
+    lik = PiLikelihood(coarse)
+    assert np.all(lik.variance(np.array([[1e-3]])) > coarse.variance)
+
+
+def test_posterior_skips_impossible_priors_and_refuses_nan(setup):
+    _, _, data = setup
+    post = Posterior(default_priors(data.y0), PiLikelihood(data))
+    rows = np.array([[0.0236, 0.0294, 1.2, data.y0], [-0.1, 0.0294, 1.2, data.y0]])
+    lp = post(rows)
+    assert np.isfinite(lp[0]) and lp[1] == -np.inf
+    assert post(np.array([[0.0236, np.nan, 1.2, data.y0]]))[0] == -np.inf  # outside prior
+
+    class NaNLikelihood(PiLikelihood):
+        def log_likelihood(self, *args, **kwargs):
+            return np.full(np.shape(args[0])[0], np.nan)
+
+    broken = Posterior(default_priors(data.y0), NaNLikelihood(data))
+    with pytest.raises(FloatingPointError, match="zeta=0.0236"):
+        broken(rows[:1])
