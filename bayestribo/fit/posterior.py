@@ -83,7 +83,7 @@ class Posterior:
             bad = np.isnan(ll)
             if np.any(bad):
                 row = theta[ok][bad][0]
-                named = ", ".join(f"{n}={v!r}" for n, v in zip(self.names, row, strict=True))
+                named = ", ".join(f"{n}={float(v)!r}" for n, v in zip(self.names, row, strict=True))
                 raise FloatingPointError(f"the log-likelihood is NaN at {named}")
             lp[ok] = lp[ok] + ll
         return lp
