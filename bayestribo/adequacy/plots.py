@@ -34,7 +34,9 @@ def plot_windows(
     """ζ and μ per window against the window amplitude, with 95 % intervals.
 
     Horizontal bars span each window's amplitude range; the constancy test's line
-    (if given) is drawn over the windows it used.
+    (if given) is drawn over the windows it used. Windows whose estimate sits on a
+    parameter bound are drawn as crosses, and the vertical scale is set by the
+    other windows (a bound estimate's interval is meaningless and huge).
 
     Parameters
     ----------
@@ -71,6 +73,11 @@ def plot_windows(
                     capsize=2,
                     label="on a bound" if style == "x" else f"{windows.method} per window",
                 )
+        if np.any(regular):
+            # scale on the regular windows: estimates on a bound have huge intervals
+            lo, hi = float(np.min(iv[regular, 0])), float(np.max(iv[regular, 1]))
+            pad = 0.15 * (hi - lo) if hi > lo else 0.05 * max(abs(hi), 1e-12)
+            ax.set_ylim(lo - pad, hi + pad)
         if trend is not None:
             a = np.linspace(*constancy.amplitude_range, 50)
             mean_amp = float(np.mean(amp[regular]))

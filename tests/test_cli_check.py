@@ -1,0 +1,45 @@
+"""``bayestribo check`` on the command line."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from bayestribo.cli import main
+from bayestribo.io import write_run
+from bayestribo.simulation import simulate
+
+
+@pytest.fixture(scope="module")
+def run_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("check") / "run.csv"
+    write_run(simulate(seed=31), path)
+    return path
+
+
+def test_check_prints_a_report(run_file, capsys):
+    assert main(["check", str(run_file), "--window", "3"]) == 0
+    out = capsys.readouterr().out
+    assert "windows of 3 oscillations" in out
+    assert "constancy:" in out and "extinction:" in out and "peaks:" in out
+    assert "verdict:" in out
+
+
+def test_check_json(run_file, capsys):
+    assert main(["check", str(run_file), "--json", "--draws", "100"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["windows"]["window_oscillations"] == 2
+    assert len(data["windows"]["windows"]) >= 3
+    assert set(data) >= {"adequate", "constancy", "extinction", "predictive", "verdict"}
+    assert data["predictive"]["draws"].endswith("(not a posterior)")
+
+
+def test_bad_window_is_a_package_error(run_file, capsys):
+    assert main(["check", str(run_file), "--window", "0"]) == 2
+    assert "window must be a whole number" in capsys.readouterr().err
+
+
+def test_missing_file(tmp_path, capsys):
+    assert main(["check", str(tmp_path / "none.csv")]) == 2
+    assert "error" in capsys.readouterr().err
