@@ -23,6 +23,7 @@ COMMANDS: tuple[str, ...] = (
     "decay",
     "acquire",
     "estimate",
+    "fit",
     "simulate",
     "check",
 )

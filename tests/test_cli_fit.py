@@ -1,0 +1,112 @@
+"""``bayestribo fit``: one JSON object, the table, output files, exit statuses."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from bayestribo.cli import build_parser, main
+from bayestribo.errors import BayestriboError
+from bayestribo.fit import FitResult
+
+DIAGNOSTICS = {
+    "converged",
+    "n_walkers",
+    "n_steps",
+    "autocorr_time_max",
+    "ess_min",
+    "acceptance_fraction",
+}
+SUMMARY = {"mean", "sd", "median", "ci95"}
+
+
+@pytest.fixture(scope="module")
+def run_file(tmp_path_factory) -> Path:
+    from bayestribo.io import write_run
+    from bayestribo.simulation import simulate
+
+    # 2 kHz: a converged fit in a few seconds
+    path = tmp_path_factory.mktemp("runs") / "glycerol-2k.csv"
+    write_run(simulate(load_N=0.31, sample_rate_Hz=2000.0, seed=21), path)
+    return path
+
+
+@pytest.fixture(scope="module")
+def json_run(run_file: Path, tmp_path_factory) -> tuple[int, dict, Path, str]:
+    out_dir = tmp_path_factory.mktemp("out")
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        status = main(["fit", str(run_file), "--seed", "4", "--json", "--out", str(out_dir)])
+    text = buf.getvalue()
+    return status, json.loads(text), out_dir, text
+
+
+def test_fit_is_a_registered_command() -> None:
+    args = build_parser().parse_args(["fit", "x.csv", "--model", "averaged", "--seed", "3"])
+    assert args.model == "averaged" and args.seed == 3 and args.json is False
+
+
+def test_json_is_one_object_with_the_issue_shape(json_run, run_file: Path) -> None:
+    status, record, _, text = json_run
+    assert status == 0
+    assert text.count("\n") == 1  # exactly one JSON object on one line
+    assert record["run"] == str(run_file) and record["model"] == "exact"
+    assert record["seed"] == 4
+    assert DIAGNOSTICS <= set(record["diagnostics"])
+    assert record["diagnostics"]["converged"] is True
+    assert isinstance(record["seconds"], float) and record["seconds"] > 0
+    assert {"zeta", "mu_k", "mu_s", "friction_displacement"} <= set(record["parameters"])
+    for name, s in record["parameters"].items():
+        assert set(s) == SUMMARY, name
+        lo, hi = s["ci95"]
+        assert lo <= s["median"] <= hi and s["sd"] > 0
+    # the simulated truth (ζ = 0.0236, μ_k = 0.0294) inside the 95 % intervals; the
+    # seed is fixed, so this is one draw of a calibrated interval, checked once
+    for name, truth in (("zeta", 0.0236), ("mu_k", 0.0294)):
+        lo, hi = record["parameters"][name]["ci95"]
+        assert lo < truth < hi, (name, lo, hi)
+    assert "displacement" in record["noise"] and "description" in record["noise"]
+
+
+def test_out_writes_netcdf_and_figures(json_run, run_file: Path) -> None:
+    _, record, out_dir, _ = json_run
+    stem = run_file.stem
+    for suffix in ("_corner.png", "_trace.png", "_pi.png"):
+        path = out_dir / f"{stem}{suffix}"
+        assert path.stat().st_size > 5000, path
+    saved = FitResult.load(out_dir / f"{stem}.nc")
+    assert saved.run_name == str(run_file) and saved.seed == 4
+    np.testing.assert_allclose(
+        saved.summary()["zeta"]["mean"], record["parameters"]["zeta"]["mean"], rtol=1e-12
+    )
+
+
+def test_table_and_non_convergence_exit_status(run_file: Path, capsys) -> None:
+    # 200 steps are far fewer than 50 autocorrelation times: not converged, status 1,
+    # and the table says so
+    status = main(["fit", str(run_file), "--seed", "1", "--max-steps", "200"])
+    captured = capsys.readouterr()
+    assert status == 1
+    assert "NOT CONVERGED" in captured.out
+    assert "zeta" in captured.out and "mu_k" in captured.out
+    assert "did not converge" in captured.err
+
+
+def test_missing_file_is_a_package_error(tmp_path: Path, capsys) -> None:
+    status = main(["fit", str(tmp_path / "nope.csv")])
+    assert status == 2
+    assert "nope.csv" in capsys.readouterr().err
+
+
+def test_out_that_is_a_file_is_a_package_error(tmp_path: Path) -> None:
+    from bayestribo.commands.fit import write_outputs
+
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    with pytest.raises(BayestriboError, match="--out"):
+        write_outputs(None, blocker, "x")
