@@ -43,9 +43,9 @@ def _synthetic(rng, n=6, slope=0.0, sd=(1e-4, 2e-4), rho=-0.8, fixed=False):
 
 @pytest.mark.parametrize("fixed", [False, True])
 def test_false_alarm_rate_is_nominal_on_known_gaussian_estimates(fixed):
-    # Statistical, seeded: 800 sets of 6 windows with correct covariances and no
+    # Statistical, seeded: 500 sets of 6 windows with correct covariances and no
     # trend; the rejection rate must be <= alpha (Bonferroni makes it slightly
-    # conservative) and not absurdly small: binomial sd at 5 % is 0.8 %.
+    # conservative) and not absurdly small: binomial sd at 5 % is 1 %.
     rng = np.random.default_rng(1)
     flagged = np.mean(
         [not constancy_test(_synthetic(rng, fixed=fixed)).constant for _ in range(2000)]

@@ -129,7 +129,7 @@ def test_bayes_method_cuts_each_window_as_a_run():
     w = windowed_fits(run, window=2, method="bayes", fitter=fitter)
     assert len(seen) == len(w) >= 3
     for (t0, t1), x in zip(seen, w.windows, strict=True):
-        assert t0 < x.t_start and t1 == pytest.approx(x.t_end)  # one oscillation before
+        assert t0 < x.t_start and t1 == pytest.approx(x.t_end)  # a quarter period before
         assert x.zeta_interval[0] < ZETA < x.zeta_interval[1]
     assert w.interval_kind.startswith("posterior")
     with pytest.raises(BayestriboError, match="EnergyDecay"):

@@ -123,6 +123,7 @@ def check_adequacy(
     fit_result: Any | None = None,
     seed: int = 0,
     skip_oscillations: int = 1,
+    bayes: bool = False,
 ) -> AdequacyReport:
     """Windowed fits, constancy test, extinction time and predictive check of one run.
 
@@ -145,6 +146,10 @@ def check_adequacy(
         Seed of the draws and of the noise propagation.
     skip_oscillations : int
         Oscillations after the release left out.
+    bayes : bool
+        Use the Bayesian fit (:func:`bayestribo.fit.fit`): on each window (posterior
+        intervals) and, unless ``fit_result`` is given, on the whole run for the
+        draws. Needs the run itself (not an EnergyDecay); takes seconds per window.
 
     Returns
     -------
@@ -153,7 +158,16 @@ def check_adequacy(
     decay = analysed_decay(run, skip_oscillations=skip_oscillations)
     if window is None:
         window = default_window(decay)
-    windows = windowed_fits(decay, window=window, seed=seed)
+    if bayes:
+        windows = windowed_fits(
+            run, window=window, method="bayes", seed=seed, skip_oscillations=skip_oscillations
+        )
+        if fit_result is None:
+            from bayestribo.fit import fit
+
+            fit_result = fit(run, seed=seed, skip_oscillations=skip_oscillations)
+    else:
+        windows = windowed_fits(decay, window=window, seed=seed)
     try:
         constancy: ConstancyTest | None = constancy_test(windows, alpha=alpha)
         note = ""

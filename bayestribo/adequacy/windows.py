@@ -14,9 +14,10 @@ Each window is fitted by :func:`bayestribo.adequacy.segments.fit_segment`: least
 squares on the window's Π increments with the exact model, i.e. the maximum of the
 likelihood the Bayesian fit samples, with Gaussian intervals from its curvature
 (``method="least_squares"``). With ``method="bayes"`` each window is cut out of the
-run as a run of its own and passed to the Bayesian fit
-(:func:`bayestribo.fit.fit`, or any function given as ``fitter``), and the intervals
-are posterior quantiles.
+run as a run of its own, from a quarter period before its first turning point, and
+passed to the Bayesian fit (:func:`bayestribo.fit.fit` with
+``skip_oscillations=0``, or any function given as ``fitter``); the intervals are
+posterior quantiles.
 
 Each window reports its amplitude range (the |Y_n| of its turning points) and its
 peak-velocity range (the largest |v| of each of its half cycles), in signal units.
@@ -407,7 +408,7 @@ def windowed_fits(
                 ) from exc
 
             def fitter(sub: Any) -> Any:
-                return bayes_fit(sub, model="exact", seed=seed)
+                return bayes_fit(sub, model="exact", seed=seed, skip_oscillations=0)
 
     period = 2.0 * decay.peaks.half_period
 

@@ -42,6 +42,11 @@ def register(subparsers: Any) -> None:
     p.add_argument("--alpha", type=float, default=0.05, help="false-alarm rate of the test")
     p.add_argument("--draws", type=int, default=400, help="parameter draws for the checks")
     p.add_argument("--seed", type=int, default=0, help="seed of the draws")
+    p.add_argument(
+        "--bayes",
+        action="store_true",
+        help="Bayesian fit on each window and on the whole run (posterior draws; slower)",
+    )
     p.add_argument("--json", action="store_true", help="print JSON instead of a report")
     p.set_defaults(handler=run)
 
@@ -56,7 +61,12 @@ def run(args: argparse.Namespace) -> int:
         print(f"bayestribo check: error: {exc}", file=sys.stderr)
         return 2
     report = check_adequacy(
-        recording, window=args.window, alpha=args.alpha, n_draws=args.draws, seed=args.seed
+        recording,
+        window=args.window,
+        alpha=args.alpha,
+        n_draws=args.draws,
+        seed=args.seed,
+        bayes=args.bayes,
     )
     if args.json:
         print(json.dumps(report.to_dict(), indent=2, ensure_ascii=False))
