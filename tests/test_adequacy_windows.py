@@ -126,14 +126,17 @@ def test_bayes_method_cuts_each_window_as_a_run():
         seen.append((sub.time[0], sub.time[-1]))
         return _StandIn(ZETA, MU)
 
-    w = windowed_fits(run, window=2, method="bayes", fitter=fitter)
+    w = windowed_fits(run, window=3, method="bayes", fitter=fitter)
     assert len(seen) == len(w) >= 3
     for (t0, t1), x in zip(seen, w.windows, strict=True):
         assert t0 < x.t_start and t1 == pytest.approx(x.t_end)  # a quarter period before
         assert x.zeta_interval[0] < ZETA < x.zeta_interval[1]
     assert w.interval_kind.startswith("posterior")
     with pytest.raises(BayestriboError, match="EnergyDecay"):
-        windowed_fits(analysed_decay(run), method="bayes", fitter=fitter)
+        windowed_fits(analysed_decay(run), window=3, method="bayes", fitter=fitter)
+    # a window run must be analysable on its own: at least 3 oscillations
+    with pytest.raises(RecordingError, match="at least 3 oscillations"):
+        windowed_fits(run, window=2, method="bayes", fitter=fitter)
 
 
 def test_not_a_run_is_refused():

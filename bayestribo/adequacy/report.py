@@ -149,7 +149,8 @@ def check_adequacy(
     bayes : bool
         Use the Bayesian fit (:func:`bayestribo.fit.fit`): on each window (posterior
         intervals) and, unless ``fit_result`` is given, on the whole run for the
-        draws. Needs the run itself (not an EnergyDecay); takes seconds per window.
+        draws. Needs the run itself (not an EnergyDecay) and windows of at least 3
+        oscillations (the default window is raised to 3); takes seconds per window.
 
     Returns
     -------
@@ -158,6 +159,10 @@ def check_adequacy(
     decay = analysed_decay(run, skip_oscillations=skip_oscillations)
     if window is None:
         window = default_window(decay)
+        if bayes:
+            from bayestribo.decay import MIN_OSCILLATIONS
+
+            window = max(window, MIN_OSCILLATIONS)
     if bayes:
         windows = windowed_fits(
             run, window=window, method="bayes", seed=seed, skip_oscillations=skip_oscillations

@@ -393,6 +393,13 @@ def windowed_fits(
     mode = ("fit" if resolved else "fixed") if friction == "auto" else friction
     fixed_mu = whole.mu if mode == "fixed" else None
     if method == "bayes":
+        from bayestribo.decay import MIN_OSCILLATIONS
+
+        if window < MIN_OSCILLATIONS:
+            raise RecordingError(
+                f"window must be at least {MIN_OSCILLATIONS} oscillations with method='bayes' "
+                f"(a run shorter than that cannot be analysed on its own), got {window}"
+            )
         if isinstance(run, EnergyDecay):
             raise BayestriboError("method='bayes' needs the run itself, not an EnergyDecay")
         if isinstance(run, str | Path):
