@@ -138,9 +138,7 @@ def _derived(
     return out
 
 
-def _positive_draws(
-    rng: np.random.Generator, value: float, sd: float | None, size: int
-) -> NDArray:
+def _positive_draws(rng: np.random.Generator, value: float, sd: float | None, size: int) -> NDArray:
     if sd is None or sd == 0:
         return np.full(size, value)
     draws = rng.normal(value, float(sd), size)
@@ -167,8 +165,9 @@ def _inference_data(
     )
     # Posterior predictive Π: model increments plus noise (and discrepancy), for a
     # subset of the draws, with the conditional equilibrium offset applied.
-    pick = np.sort(rng.choice(flat.shape[0], size=min(_PREDICTIVE_DRAWS, flat.shape[0]),
-                              replace=False))
+    pick = np.sort(
+        rng.choice(flat.shape[0], size=min(_PREDICTIVE_DRAWS, flat.shape[0]), replace=False)
+    )
     p = posterior.physical(flat[pick])
     lik = posterior.likelihood
     model_inc = lik.model_increments(p["zeta"], p["mu_k"], p["mu_s"], p["y0"])
@@ -207,7 +206,7 @@ def fit(
     max_steps: int = 20_000,
     discrepancy: bool = False,
     priors: Mapping[str, Prior] | None = None,
-    grid_points: int = 64,
+    grid_points: int | None = None,
     skip_oscillations: int = 1,
     progress: bool = False,
     read_kwargs: Mapping[str, Any] | None = None,
@@ -231,8 +230,9 @@ def fit(
         Add the model-discrepancy term (a relative error on E with its own prior).
     priors : mapping, optional
         Replacement priors by parameter name (see :func:`default_priors`).
-    grid_points : int
-        Number of Π increments.
+    grid_points : int, optional
+        Number of Π increments; default one per half cycle (see
+        :mod:`bayestribo.fit.data`).
     skip_oscillations : int
         Oscillations skipped after the release.
     progress : bool
@@ -279,8 +279,9 @@ def fit(
     theta, cov, ratio_range = maximum_a_posteriori(posterior, decay)
     settings = SamplerSettings(n_walkers=n_walkers, n_ensembles=n_ensembles, max_steps=max_steps)
     walkers = initial_walkers(posterior, theta, cov, ratio_range, n_ensembles, n_walkers, rng)
-    sampler = run_ensembles(posterior, walkers, settings, seed=int(rng.integers(2**31)),
-                            progress=progress)
+    sampler = run_ensembles(
+        posterior, walkers, settings, seed=int(rng.integers(2**31)), progress=progress
+    )
 
     flat = sampler.chains.reshape(-1, sampler.chains.shape[-1])
     derived = _derived(posterior, flat, decay, metadata, rng)
@@ -318,8 +319,12 @@ def fit(
         "noise_json": json.dumps(_plain(noise_info)),
         "priors_json": json.dumps(prior_set.to_spec()),
         "settings_json": json.dumps(
-            {"grid_points": grid_points, "skip_oscillations": skip_oscillations,
-             "discrepancy": discrepancy, "max_steps": max_steps}
+            {
+                "grid_points": grid_points,
+                "skip_oscillations": skip_oscillations,
+                "discrepancy": discrepancy,
+                "max_steps": max_steps,
+            }
         ),
         "diagnostics_json": json.dumps(_plain(diagnostics)),
         "prior_sensitivity_json": json.dumps(_plain(prior_sensitivity(flat, prior_set))),
@@ -329,8 +334,7 @@ def fit(
     idata.posterior.attrs["seconds"] = time.perf_counter() - start
     if not sampler.converged:
         warnings.warn(
-            f"the sampler did not converge on {name or 'the run'}: "
-            + "; ".join(sampler.reasons),
+            f"the sampler did not converge on {name or 'the run'}: " + "; ".join(sampler.reasons),
             ConvergenceWarning,
             stacklevel=2,
         )
