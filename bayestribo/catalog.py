@@ -11,6 +11,12 @@ migrate it. Version 1 has two tables::
 A run is identified by its content: registering the same file (same SHA-256) twice
 returns the existing id; registering a different file under an existing run id is an
 error.
+
+A fit record (:func:`record_fit`) belongs to a run row and stores the fit's settings
+as canonical JSON (sorted keys), so :func:`find_fit` can tell whether a run was
+fitted already with the same data (the run row, i.e. the same SHA-256) and the same
+settings; a campaign then skips it. Fit records use the version-1 ``fits`` table as
+it is: catalogs written before fit records existed read and write unchanged.
 """
 
 from __future__ import annotations
@@ -30,11 +36,16 @@ from bayestribo.errors import BayestriboError
 __all__ = [
     "SCHEMA_VERSION",
     "CatalogError",
+    "FitRecord",
     "RunRecord",
     "connect",
+    "find_fit",
     "find_run",
+    "list_fits",
     "list_runs",
+    "record_fit",
     "register_run",
+    "settings_key",
     "transaction",
 ]
 
@@ -259,3 +270,154 @@ def list_runs(catalog: str | os.PathLike[str]) -> list[RunRecord]:
             "SELECT id, run_id, path, sha256, metadata, registered_utc FROM runs ORDER BY id"
         ).fetchall()
     return [_record(row) for row in rows]
+
+
+@dataclass(frozen=True)
+class FitRecord:
+    """A fit of a registered run.
+
+    Attributes
+    ----------
+    id : int
+        Row id of the fit.
+    run : int
+        Row id of the run it fits.
+    settings : dict
+        The fit's settings (model, seed, sampler settings...).
+    package_version : str
+        bayestribo version that made the fit.
+    summary : dict
+        Posterior summaries (and, by convention, where the full result is stored).
+    diagnostics : dict
+        Sampler diagnostics.
+    created_utc : str
+        When it was recorded (ISO 8601, UTC).
+    """
+
+    id: int
+    run: int
+    settings: dict[str, Any]
+    package_version: str
+    summary: dict[str, Any]
+    diagnostics: dict[str, Any]
+    created_utc: str
+
+
+def settings_key(settings: Mapping[str, Any]) -> str:
+    """Canonical JSON of fit settings (sorted keys): equal settings give equal text.
+
+    Raises
+    ------
+    CatalogError
+        If the settings are not JSON data.
+    """
+    try:
+        return json.dumps(dict(settings), sort_keys=True, allow_nan=False)
+    except (TypeError, ValueError) as exc:
+        raise CatalogError(f"settings: not JSON-serialisable ({exc})") from None
+
+
+def _json(value: Mapping[str, Any], field: str) -> str:
+    # Diagnostics may hold inf (an autocorrelation time that could not be estimated):
+    # Python's JSON writes and reads it back as Infinity.
+    try:
+        return json.dumps(dict(value), sort_keys=True)
+    except (TypeError, ValueError) as exc:
+        raise CatalogError(f"{field}: not JSON-serialisable ({exc})") from None
+
+
+def _run_row(conn: sqlite3.Connection, catalog: Any, run: int | str) -> int:
+    column = "run_id" if isinstance(run, str) else "id"
+    row = conn.execute(f"SELECT id FROM runs WHERE {column} = ?", (run,)).fetchone()
+    if row is None:
+        raise CatalogError(f"{catalog}: run {run!r} is not registered")
+    return int(row[0])
+
+
+def _fit(row: tuple[Any, ...]) -> FitRecord:
+    return FitRecord(
+        row[0], row[1], json.loads(row[2]), row[3], json.loads(row[4]), json.loads(row[5]), row[6]
+    )
+
+
+_FIT_COLUMNS = "id, run, settings, package_version, summary, diagnostics, created_utc"
+
+
+def record_fit(
+    catalog: str | os.PathLike[str],
+    *,
+    run: int | str,
+    settings: Mapping[str, Any],
+    summary: Mapping[str, Any],
+    diagnostics: Mapping[str, Any],
+    package_version: str | None = None,
+) -> int:
+    """Record a fit of a registered run (one transaction); return the fit's row id.
+
+    Parameters
+    ----------
+    catalog : path-like
+        The catalog file.
+    run : int or str
+        The run's row id or run id.
+    settings, summary, diagnostics : mapping
+        JSON data: fit settings, posterior summaries, sampler diagnostics.
+    package_version : str, optional
+        Default: this bayestribo's version.
+
+    Raises
+    ------
+    CatalogError
+        If the run is not registered or a mapping is not JSON data.
+    """
+    if package_version is None:
+        from bayestribo import __version__ as package_version
+    key = settings_key(settings)
+    summary_text, diagnostics_text = _json(summary, "summary"), _json(diagnostics, "diagnostics")
+    with connect(catalog) as conn, transaction(conn):
+        run_row = _run_row(conn, catalog, run)
+        cursor = conn.execute(
+            "INSERT INTO fits (run, settings, package_version, summary, diagnostics, "
+            "created_utc) VALUES (?, ?, ?, ?, ?, ?)",
+            (run_row, key, package_version, summary_text, diagnostics_text, _now()),
+        )
+        return int(cursor.lastrowid or 0)
+
+
+def find_fit(
+    catalog: str | os.PathLike[str],
+    *,
+    run: int | str,
+    settings: Mapping[str, Any],
+    package_version: str | None = None,
+) -> FitRecord | None:
+    """The latest fit of ``run`` with exactly these settings (and version, if given).
+
+    Returns None if there is none, or if the run is not registered.
+    """
+    key = settings_key(settings)
+    with connect(catalog) as conn:
+        try:
+            run_row = _run_row(conn, catalog, run)
+        except CatalogError:
+            return None
+        query = f"SELECT {_FIT_COLUMNS} FROM fits WHERE run = ? AND settings = ?"
+        args: tuple[Any, ...] = (run_row, key)
+        if package_version is not None:
+            query += " AND package_version = ?"
+            args += (package_version,)
+        row = conn.execute(query + " ORDER BY id DESC LIMIT 1", args).fetchone()
+    return None if row is None else _fit(row)
+
+
+def list_fits(catalog: str | os.PathLike[str], *, run: int | str | None = None) -> list[FitRecord]:
+    """All fit records (of one run if given), in the order they were recorded."""
+    with connect(catalog) as conn:
+        if run is None:
+            rows = conn.execute(f"SELECT {_FIT_COLUMNS} FROM fits ORDER BY id").fetchall()
+        else:
+            run_row = _run_row(conn, catalog, run)
+            rows = conn.execute(
+                f"SELECT {_FIT_COLUMNS} FROM fits WHERE run = ? ORDER BY id", (run_row,)
+            ).fetchall()
+    return [_fit(row) for row in rows]

@@ -28,7 +28,14 @@ import numpy as np
 
 from bayestribo.errors import BayestriboError
 
-__all__ = ["RunOutcome", "dask_executor", "fit_many", "run_identity", "run_seed"]
+__all__ = [
+    "RunOutcome",
+    "dask_executor",
+    "fit_catalogued",
+    "fit_many",
+    "run_identity",
+    "run_seed",
+]
 
 
 @dataclass(frozen=True)
@@ -50,6 +57,8 @@ class RunOutcome:
         The formatted traceback of a failure (from the worker).
     elapsed_s : float
         Wall time of the fit in the worker [s] (nan when the worker did not report).
+    cached : bool
+        True when the result was read back from an earlier fit (:func:`fit_catalogued`).
     """
 
     name: str
@@ -58,6 +67,7 @@ class RunOutcome:
     error: str | None = None
     traceback: str | None = None
     elapsed_s: float = float("nan")
+    cached: bool = False
 
     @property
     def ok(self) -> bool:
@@ -145,11 +155,11 @@ class _Progress:
         width = 30
         filled = width * self.done // max(self.total, 1)
         elapsed = time.perf_counter() - self.start
-        eta = elapsed / self.done * (self.total - self.done) if self.done else float("nan")
+        left = f"{elapsed / self.done * (self.total - self.done):.0f}s" if self.done else "?"
         failed = f", {self.failed} failed" if self.failed else ""
         self.stream.write(
             f"\rfit runs [{'#' * filled}{'.' * (width - filled)}] {self.done}/{self.total}"
-            f"{failed} {elapsed:.0f}s elapsed, {eta:.0f}s left "
+            f"{failed} {elapsed:.0f}s elapsed, {left} left "
         )
         if self.done == self.total:
             self.stream.write("\n")
@@ -186,7 +196,10 @@ def fit_many(
         :func:`bayestribo.fit.fit` (imported in the worker). It must be picklable
         (a module-level function) for a process pool or a cluster.
     max_workers : int, optional
-        Workers of the default process pool; default one per core.
+        Workers of the default process pool; default one per core. The pool starts
+        its workers with the ``forkserver`` method (safe with threads), so a script
+        that calls :func:`fit_many` must guard its top level with
+        ``if __name__ == "__main__":``.
     progress : bool
         Show a progress line on ``progress_stream`` (default standard error).
     callback : callable, optional
@@ -279,3 +292,169 @@ def dask_executor(address: str | None = None, **cluster_kwargs: Any) -> Iterator
     else:
         with Client(address) as client:
             yield client.get_executor()
+
+
+def _sha256(path: Path) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def _function_name(function: Callable[..., Any] | None) -> str:
+    if function is None:
+        return "bayestribo.fit.fit"
+    return f"{getattr(function, '__module__', '?')}.{getattr(function, '__qualname__', '?')}"
+
+
+def _load_fit(path: str) -> Any:
+    from bayestribo.fit import FitResult
+
+    return FitResult.load(path)
+
+
+def fit_catalogued(
+    paths: Iterable[str | os.PathLike[str]],
+    catalog: str | os.PathLike[str],
+    out_dir: str | os.PathLike[str],
+    executor: Executor | None = None,
+    *,
+    campaign_seed: int = 0,
+    function: Callable[..., Any] | None = None,
+    loader: Callable[[str], Any] | None = None,
+    refit: bool = False,
+    max_workers: int | None = None,
+    progress: bool = True,
+    progress_stream: IO[str] | None = None,
+    **fit_kwargs: Any,
+) -> list[RunOutcome]:
+    """Fit run files with :func:`fit_many`, recording each fit in a results catalog.
+
+    Each run file is registered in the catalog (SHA-256 and sidecar metadata). A run
+    with a recorded fit of the same data, sidecar, settings (fit keyword arguments,
+    seed, fit function) and package version whose result file still exists is not
+    fitted again: its result is read back (``cached`` True). New fits are saved as
+    ``<out_dir>/<run_id>.nc`` and recorded as they complete, each in its own
+    transaction, so an interrupted campaign keeps the fits it finished.
+
+    Parameters
+    ----------
+    paths : iterable of path-like
+        Run files (each with its ``.json`` sidecar).
+    catalog : path-like
+        SQLite results catalog (:mod:`bayestribo.catalog`), created if absent.
+    out_dir : path-like
+        Folder of the per-run result files (created if absent).
+    executor, campaign_seed, function, max_workers, progress, progress_stream, **fit_kwargs
+        As in :func:`fit_many`. The results must have ``save(path)``, ``summary()``,
+        ``converged`` and ``diagnostics`` (as :class:`bayestribo.fit.FitResult`).
+    loader : callable, optional
+        Reads a saved result back; default :meth:`bayestribo.fit.FitResult.load`.
+    refit : bool
+        Fit every run even if a matching fit is recorded.
+
+    Returns
+    -------
+    list of RunOutcome
+        One per path, in order.
+
+    Raises
+    ------
+    BayestriboError
+        If a sidecar's ``run_id`` differs from its file's stem, or the catalog
+        refuses a run (another file registered under the same run id).
+    """
+    from bayestribo import __version__
+    from bayestribo.catalog import find_fit, record_fit, register_run
+    from bayestribo.io.sidecar import read_sidecar, sidecar_path
+
+    paths = [Path(p) for p in paths]
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    loader = loader or _load_fit
+    names = [run_identity(p) for p in paths]
+    settings: list[dict[str, Any]] = []
+    rows: list[int] = []
+    for path, name in zip(paths, names, strict=True):
+        side = sidecar_path(path)
+        metadata = read_sidecar(side) if side.exists() else {}
+        if metadata.get("run_id", name) != name:
+            raise BayestriboError(
+                f"{side}: run_id {metadata['run_id']!r} differs from the file name {name!r}"
+            )
+        metadata = {**metadata, "run_id": name}
+        rows.append(register_run(catalog, path=path, sha256=_sha256(path), metadata=metadata))
+        settings.append(
+            {
+                "fit_kwargs": fit_kwargs,
+                "function": _function_name(function),
+                "campaign_seed": int(campaign_seed),
+                "seed": run_seed(campaign_seed, name),
+                "sidecar_sha256": _sha256(side) if side.exists() else None,
+            }
+        )
+    outcomes: dict[str, RunOutcome] = {}
+    todo: list[int] = []
+    for i, name in enumerate(names):
+        record = (
+            None
+            if refit
+            else find_fit(catalog, run=rows[i], settings=settings[i], package_version=__version__)
+        )
+        result_path = None if record is None else record.summary.get("result_path")
+        if result_path and Path(result_path).exists():
+            seed = settings[i]["seed"]
+            outcomes[name] = RunOutcome(name, seed, loader(result_path), cached=True)
+        else:
+            todo.append(i)
+
+    unrecorded: dict[str, str] = {}
+
+    def record(outcome: RunOutcome) -> None:
+        if not outcome.ok:
+            return
+        try:
+            save_and_record(outcome)
+        except Exception as exc:  # the fit stands; the run is reported as not recorded
+            unrecorded[outcome.name] = f"{type(exc).__name__}: {exc}"
+
+    def save_and_record(outcome: RunOutcome) -> None:
+        i = names.index(outcome.name)
+        target = out / f"{outcome.name}.nc"
+        outcome.result.save(target)
+        record_fit(
+            catalog,
+            run=rows[i],
+            settings=settings[i],
+            summary={
+                "result_path": str(target.resolve()),
+                "converged": bool(outcome.result.converged),
+                "posterior": outcome.result.summary(),
+                "elapsed_s": outcome.elapsed_s,
+            },
+            diagnostics=outcome.result.diagnostics,
+            package_version=__version__,
+        )
+
+    fitted = (
+        fit_many(
+            [paths[i] for i in todo],
+            executor,
+            campaign_seed=campaign_seed,
+            function=function,
+            max_workers=max_workers,
+            progress=progress,
+            progress_stream=progress_stream,
+            callback=record,
+            **fit_kwargs,
+        )
+        if todo
+        else []
+    )
+    for o in fitted:
+        if o.name in unrecorded:
+            error = f"fitted but not saved or recorded: {unrecorded[o.name]}"
+            o = RunOutcome(o.name, o.seed, o.result, error, None, o.elapsed_s)
+        outcomes[o.name] = o
+    return [outcomes[name] for name in names]

@@ -9,6 +9,7 @@ from __future__ import annotations
 import io
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -124,3 +125,96 @@ def test_dask_cluster_gives_the_same_results_as_the_process_pool(serial):
         )
     processes = fit_many(RUNS, campaign_seed=7, function=cheap_fit, max_workers=2, progress=False)
     assert _by_name(outcomes) == _by_name(processes) == _by_name(serial)
+
+
+@dataclass
+class SavedFit:
+    """Stand-in fit result with what fit_catalogued needs."""
+
+    name: str
+    draws: list[float]
+    converged: bool = True
+    diagnostics: dict[str, Any] = field(default_factory=lambda: {"autocorr_time_max": np.inf})
+
+    def summary(self) -> dict[str, Any]:
+        return {"zeta": {"mean": float(np.mean(self.draws))}}
+
+    def save(self, path) -> None:
+        import json
+
+        Path(path).write_text(json.dumps({"name": self.name, "draws": self.draws}))
+
+
+def load_saved(path: str) -> SavedFit:
+    import json
+
+    return SavedFit(**json.loads(Path(path).read_text()))
+
+
+def saved_fit(run: Any, *, seed: int, scale: float = 1.0) -> SavedFit:
+    out = cheap_fit(run, seed=seed, scale=scale)
+    return SavedFit(out["name"], out["draws"])
+
+
+def _write_run_files(folder: Path, names: list[str]) -> list[Path]:
+    import json
+
+    paths = []
+    for i, name in enumerate(names):
+        csv = folder / f"{name}.csv"
+        csv.write_text(f"time_s,displacement_m\n0,{i + 1}e-6\n")  # distinct contents
+        (folder / f"{name}.json").write_text(json.dumps({"run_id": name, "load_N": 0.12}))
+        paths.append(csv)
+    return paths
+
+
+def test_fit_catalogued_records_fits_and_skips_them_on_a_rerun(tmp_path):
+    from bayestribo.catalog import find_fit, list_fits, list_runs
+    from bayestribo.many import fit_catalogued
+
+    paths = _write_run_files(tmp_path, ["a-r1", "a-r2", "bad-r3"])
+    db, out = tmp_path / "cat.sqlite", tmp_path / "fits"
+    kwargs = {"function": saved_fit, "loader": load_saved, "progress": False, "scale": 2.0}
+    with ThreadPoolExecutor(2) as pool:
+        first = fit_catalogued(paths, db, out, pool, campaign_seed=4, **kwargs)
+    assert [(o.ok, o.cached) for o in first] == [(True, False), (True, False), (False, False)]
+    assert [r.run_id for r in list_runs(db)] == ["a-r1", "a-r2", "bad-r3"]
+    fits = list_fits(db)
+    assert len(fits) == 2 and all(f.summary["converged"] for f in fits)
+    assert fits[0].diagnostics["autocorr_time_max"] == np.inf
+    assert Path(fits[0].summary["result_path"]).parent == out.resolve()
+    # Re-run: the two fitted runs are read back; the failed one is tried again.
+    with ThreadPoolExecutor(2) as pool:
+        again = fit_catalogued(paths, db, out, pool, campaign_seed=4, **kwargs)
+    assert [(o.ok, o.cached) for o in again] == [(True, True), (True, True), (False, False)]
+    assert again[0].result == first[0].result and again[0].seed == first[0].seed
+    assert len(list_fits(db)) == 2
+    # Other settings (campaign seed, fit keyword arguments) are fitted anew.
+    with ThreadPoolExecutor(2) as pool:
+        other = fit_catalogued(paths[:1], db, out, pool, campaign_seed=5, **kwargs)
+    assert not other[0].cached and other[0].result != first[0].result
+    settings = {
+        "fit_kwargs": {"scale": 2.0},
+        "function": f"{__name__}.saved_fit",
+        "campaign_seed": 4,
+        "seed": run_seed(4, "a-r2"),
+        "sidecar_sha256": __import__("hashlib")
+        .sha256(paths[1].with_suffix(".json").read_bytes())
+        .hexdigest(),
+    }
+    assert find_fit(db, run="a-r2", settings=settings) is not None
+    assert find_fit(db, run="a-r2", settings={**settings, "seed": 1}) is None
+    assert find_fit(db, run="nope", settings=settings) is None
+
+
+def test_fit_records_are_refused_for_unknown_runs_and_non_json(tmp_path):
+    from bayestribo.catalog import CatalogError, record_fit, register_run
+
+    db = tmp_path / "c.sqlite"
+    with pytest.raises(CatalogError, match="not registered"):
+        record_fit(db, run="r1", settings={}, summary={}, diagnostics={})
+    register_run(db, path="x.csv", sha256="a" * 64, metadata={"run_id": "r1"})
+    with pytest.raises(CatalogError, match="settings: not JSON"):
+        record_fit(db, run="r1", settings={"x": object()}, summary={}, diagnostics={})
+    with pytest.raises(CatalogError, match="summary: not JSON"):
+        record_fit(db, run=1, settings={}, summary={"x": object()}, diagnostics={})

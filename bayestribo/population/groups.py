@@ -108,8 +108,8 @@ class Population:
 
     Attributes
     ----------
-    by : str or None
-        The grouping key.
+    by : str, tuple of str or None
+        The grouping key(s).
     parameters : tuple of str
         Parameter names.
     groups : dict
@@ -118,7 +118,7 @@ class Population:
         All runs as one population.
     """
 
-    by: str | None
+    by: str | tuple[str, ...] | None
     parameters: tuple[str, ...]
     groups: dict[Any, GroupPosterior]
     pooled: GroupPosterior | None
@@ -180,7 +180,9 @@ def _fit_group(
     )
 
 
-def _sort_key(value: Any) -> tuple[int, Any]:
+def _sort_key(value: Any) -> tuple[Any, ...]:
+    if isinstance(value, tuple):
+        return tuple(_sort_key(v) for v in value)
     return (0, value) if isinstance(value, int | float) else (1, str(value))
 
 
@@ -188,7 +190,7 @@ def population(
     runs: Iterable[RunSamples | FitLike],
     parameters: Sequence[str] = ("zeta", "mu_k"),
     *,
-    by: str | None = None,
+    by: str | Sequence[str] | None = None,
     pooled: bool = True,
     sigma_prior: Mapping[str, SigmaPrior | float] | None = None,
     seed: int = 0,
@@ -208,9 +210,10 @@ def population(
         ``metadata``, as :class:`bayestribo.fit.FitResult` has).
     parameters : sequence of str
         Parameters modelled jointly, default ζ and μ_k (dimensionless).
-    by : str, optional
-        Metadata key to group by (e.g. ``"load_N"``, ``"lubricant"``); None: only the
-        pooled population.
+    by : str or sequence of str, optional
+        Metadata key to group by (e.g. ``"load_N"``, ``"lubricant"``), or several keys
+        (a group per combination; its value is then a tuple); None: only the pooled
+        population.
     pooled : bool
         Also infer the population of all runs together.
     sigma_prior : mapping, optional
@@ -247,18 +250,25 @@ def population(
     kwargs = {"n_walkers": n_walkers, "n_steps": n_steps, "burn": burn, "progress": progress}
     groups: dict[Any, GroupPosterior] = {}
     if by is not None:
+        keys = (by,) if isinstance(by, str) else tuple(by)
+        if not keys:
+            raise BayestriboError("by: expected a metadata key or a non-empty sequence of keys")
         members: dict[Any, list[RunSamples]] = {}
         for run in samples:
-            if by not in run.metadata or run.metadata[by] is None:
-                raise BayestriboError(f"run {run.name!r}: metadata has no {by!r} to group by")
-            members.setdefault(run.metadata[by], []).append(run)
+            for key in keys:
+                if key not in run.metadata or run.metadata[key] is None:
+                    raise BayestriboError(f"run {run.name!r}: metadata has no {key!r} to group by")
+            value = tuple(run.metadata[k] for k in keys)
+            members.setdefault(value[0] if len(keys) == 1 else value, []).append(run)
         for group in members.values():
             group.sort(key=lambda r: r.name)  # results independent of the runs' order
         for value in sorted(members, key=_sort_key):
-            label = f"{by}={value}"
+            values = (value,) if len(keys) == 1 else value
+            label = ",".join(f"{k}={v}" for k, v in zip(keys, values, strict=True))
             groups[value] = _fit_group(
                 label, value, members[value], parameters, priors, seed, kwargs
             )
     samples.sort(key=lambda r: r.name)
     whole = _fit_group(POOLED, None, samples, parameters, priors, seed, kwargs) if pooled else None
-    return Population(by, parameters, groups, whole)
+    by_keys = by if by is None or isinstance(by, str) else tuple(by)
+    return Population(by_keys, parameters, groups, whole)
