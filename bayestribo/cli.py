@@ -26,6 +26,7 @@ COMMANDS: tuple[str, ...] = (
     "fit",
     "simulate",
     "check",
+    "campaign",
 )
 
 

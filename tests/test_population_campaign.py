@@ -1,0 +1,110 @@
+"""Campaign analysis on stand-in fit results: partition, groups, ζ₀, ζ_k, d_k, trends.
+
+Short population samplings (600 steps): these tests check the bookkeeping and exact
+relations, not the sampler (tests/test_population.py does).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pytest
+
+from bayestribo.errors import BayestriboError
+from bayestribo.population.campaign import analyse_campaign
+
+pytestmark = pytest.mark.filterwarnings("ignore::bayestribo.errors.ConvergenceWarning")
+
+
+@dataclass
+class _Fit:
+    """Stand-in for bayestribo.fit.FitResult with exact normal posteriors."""
+
+    draws: dict[str, np.ndarray]
+    metadata: dict[str, Any] = field(default_factory=dict)
+    converged: bool = True
+
+    @property
+    def run_name(self) -> str:
+        return self.metadata["run_id"]
+
+    @property
+    def parameter_names(self) -> list[str]:
+        return list(self.draws)
+
+    def samples(self, name):
+        return self.draws[name]
+
+    def prior_logpdf(self, name, values):
+        return np.where((values > 0) & (values < 0.3), -math.log(0.3), -np.inf)
+
+
+RIG = {"mass_kg": 0.035, "natural_frequency_Hz": 32.6}
+
+
+def _campaign(rng):
+    fits = []
+    for load in (0.12, 0.46):
+        for r in range(3):
+            z, m = rng.normal(0.0236, 0.0012), rng.normal(0.0294, 0.0036)
+            meta = {"run_id": f"g-N{load}-r{r}", "lubricant": "glycerol", "load_N": load, **RIG}
+            fits.append(
+                _Fit({"zeta": rng.normal(z, 2e-5, 400), "mu_k": rng.normal(m, 5e-5, 400)}, meta)
+            )
+    for r in range(3):
+        meta = {"run_id": f"air-r{r}", "lubricant": "none", "load_N": 0.0, **RIG}
+        fits.append(_Fit({"zeta": rng.normal(rng.normal(0.0033, 1e-4), 1e-6, 400)}, meta))
+    return fits
+
+
+@pytest.fixture(scope="module")
+def analysis():
+    return analyse_campaign(_campaign(np.random.default_rng(2)), seed=1, n_steps=600)
+
+
+def test_runs_are_split_into_contact_groups_and_zeta0(analysis):
+    # water_mass_fraction is in no run: left out of the grouping keys.
+    assert analysis.by == ("lubricant", "load_N")
+    assert list(analysis.contact.groups) == [("glycerol", 0.12), ("glycerol", 0.46)]
+    assert analysis.contact.pooled.runs == tuple(
+        f"g-N{n}-r{r}" for n in (0.12, 0.46) for r in range(3)
+    )
+    assert analysis.zeta0.parameters == ("zeta",)
+    assert analysis.zeta0.pooled.runs == ("air-r0", "air-r1", "air-r2")
+    z0 = analysis.zeta0.pooled.mean["zeta"]
+    assert np.quantile(z0, 0.025) < 0.0033 < np.quantile(z0, 0.975)
+    assert list(analysis.trends) == ["lubricant=glycerol"]
+    assert {r["parameter"] for r in analysis.trend_rows()} == {"zeta", "mu_k"}
+    assert len(analysis.group_rows()) == 2 * 3 + 1  # 2 groups + pooled, 2 params; ζ₀
+    assert [r["run_id"] for r in analysis.runs][-1] == "air-r2"
+    assert "mu_k" not in analysis.runs[-1]
+
+
+def test_derived_d_k_is_2_zeta_k_m_omega_over_load(analysis):
+    for row in analysis.derived:
+        factor = 2 * RIG["mass_kg"] * 2 * math.pi * RIG["natural_frequency_Hz"] / row["load_N"]
+        # A positive linear map: medians and interval ends map exactly.
+        assert row["d_k_N_s_per_m"]["median"] == pytest.approx(
+            factor * row["zeta_k"]["median"], rel=1e-9
+        )
+        assert row["d_k_N_s_per_m"]["interval"] == pytest.approx(
+            [factor * v for v in row["zeta_k"]["interval"]], rel=1e-9
+        )
+        # ζ_k ≈ 0.0236 − 0.0033 within its interval.
+        lo, hi = row["zeta_k"]["interval"]
+        assert lo < 0.0203 < hi
+
+
+def test_report_is_json_ready(analysis):
+    import json
+
+    text = json.dumps(analysis.to_dict())
+    assert '"zeta0"' in text and '"derived"' in text
+
+
+def test_no_runs_is_an_error():
+    with pytest.raises(BayestriboError, match="no fitted runs"):
+        analyse_campaign([])
