@@ -11,9 +11,13 @@ and :func:`bayestribo.adequacy.constancy_test` at α = 0.05:
 * amplitude-dependent damping: ζ(a) = ζ_end (1 + 0.2 a/x₀), a 20 % change of ζ from
   the initial amplitude to the end of the decay (mean ζ as the paper's): the
   fraction of runs flagged (detection rate, target >= 90 %);
-* the same at 10x the noise.
+* the same at 10x the noise;
+* the peak-by-peak predictive check of the same runs (median fraction of peaks
+  inside their 95 % interval, draws from the least-squares covariance);
+* a smaller set with the Bayesian fit on windows of 3 oscillations
+  (``--bayes-runs``, default 20 per case: a few seconds per window).
 
-Run: ``python benchmarks/adequacy.py [--runs N]`` (default 120 per case). Prints a
+Run: ``python benchmarks/adequacy.py [--runs N] [--bayes-runs M]`` (default 120 per case). Prints a
 table and writes ``benchmarks/results/adequacy.json``.
 """
 
@@ -32,7 +36,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _machine import write_results
 
 from bayestribo.adequacy.constancy import constancy_test
-from bayestribo.adequacy.windows import windowed_fits
+from bayestribo.adequacy.draws import draws_from_least_squares
+from bayestribo.adequacy.predictive import predictive_check
+from bayestribo.adequacy.segments import whole_decay_fit
+from bayestribo.adequacy.windows import analysed_decay, windowed_fits
 from bayestribo.simulation import simulate
 
 ZETA = 0.0236
@@ -46,10 +53,19 @@ def _interval(k: int, n: int) -> list[float]:
     return [lo, hi]
 
 
-def _case(name: str, runs: int, noise_factor: float, dependent: bool, seed0: int) -> dict:
+def _case(
+    name: str,
+    runs: int,
+    noise_factor: float,
+    dependent: bool,
+    seed0: int,
+    method: str = "least_squares",
+    window: int = 2,
+) -> dict:
     flagged = 0
     failed = 0
     changes = []
+    coverage = []
     t0 = time.perf_counter()
     zeta_end = ZETA / 1.1  # mean over the amplitudes ≈ the paper's ζ
 
@@ -64,7 +80,11 @@ def _case(name: str, runs: int, noise_factor: float, dependent: bool, seed0: int
             seed=seed0 + i,
         )
         try:
-            test = constancy_test(windowed_fits(run, window=2, seed=i))
+            test = constancy_test(windowed_fits(run, window=window, method=method, seed=i))
+            if method == "least_squares":
+                decay = analysed_decay(run)
+                draws = draws_from_least_squares(whole_decay_fit(decay), 200, seed=i)
+                coverage.append(predictive_check(decay, draws, seed=i).coverage)
         except Exception as exc:  # counted and reported, never hidden
             failed += 1
             print(f"  {name} run {i}: {type(exc).__name__}: {exc}", file=sys.stderr)
@@ -82,6 +102,12 @@ def _case(name: str, runs: int, noise_factor: float, dependent: bool, seed0: int
         "rate": flagged / done if done else None,
         "rate_interval_95": _interval(flagged, done) if done else None,
         "median_relative_change_zeta": float(np.median(changes)) if changes else None,
+        "method": method,
+        "window_oscillations": window,
+        "predictive_coverage_median": float(np.median(coverage)) if coverage else None,
+        "predictive_coverage_at_least_0.8": float(np.mean(np.array(coverage) >= 0.8))
+        if coverage
+        else None,
         "seconds_per_run": (time.perf_counter() - t0) / runs,
     }
 
@@ -89,6 +115,7 @@ def _case(name: str, runs: int, noise_factor: float, dependent: bool, seed0: int
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=120)
+    parser.add_argument("--bayes-runs", type=int, default=20)
     args = parser.parse_args()
     cases = [
         _case("constant law, resolution noise (false alarm)", args.runs, 1.0, False, 10_000),
@@ -96,15 +123,38 @@ def main() -> None:
         _case("constant law, 10x noise (false alarm)", args.runs, 10.0, False, 30_000),
         _case("20 % change of zeta, 10x noise (detection)", args.runs, 10.0, True, 40_000),
     ]
+    if args.bayes_runs > 0:
+        cases += [
+            _case(
+                "Bayesian windows of 3, constant law (false alarm)",
+                args.bayes_runs,
+                1.0,
+                False,
+                50_000,
+                "bayes",
+                3,
+            ),
+            _case(
+                "Bayesian windows of 3, 20 % change of zeta (detection)",
+                args.bayes_runs,
+                1.0,
+                True,
+                60_000,
+                "bayes",
+                3,
+            ),
+        ]
     print(
         f"{'case':55s} {'runs':>5s} {'flagged':>8s} {'rate':>7s} "
-        f"{'95 % interval':>16s} {'s/run':>6s}"
+        f"{'95 % interval':>16s} {'peaks in 95 %':>14s} {'s/run':>6s}"
     )
     for c in cases:
         lo, hi = c["rate_interval_95"]
+        cov = c["predictive_coverage_median"]
+        cov_text = "-" if cov is None else f"{cov:.2f}"
         print(
             f"{c['case']:55s} {c['analysed']:5d} {c['flagged']:8d} {c['rate']:7.3f} "
-            f"{lo:7.3f}-{hi:<8.3f} {c['seconds_per_run']:6.2f}"
+            f"{lo:7.3f}-{hi:<8.3f} {cov_text:>14s} {c['seconds_per_run']:6.2f}"
         )
     path = write_results(
         "adequacy",

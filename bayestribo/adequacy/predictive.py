@@ -34,6 +34,7 @@ from numpy.typing import NDArray
 from bayestribo.adequacy.draws import ParameterDraws
 from bayestribo.adequacy.segments import peak_positions
 from bayestribo.decay import EnergyDecay
+from bayestribo.errors import BayestriboError
 from bayestribo.peaks import estimate_noise
 
 __all__ = ["PeakResiduals", "PredictiveCheck", "predictive_check"]
@@ -258,6 +259,10 @@ def predictive_check(
     """
     from bayestribo.model import exact_response
 
+    if not (math.isfinite(relative_error) and relative_error >= 0.0):
+        raise BayestriboError(
+            f"relative_error must be a finite number >= 0, got {relative_error!r}"
+        )
     rng = np.random.default_rng(seed)
     ell = decay.scaling.length_scale
     pos = peak_positions(decay)
@@ -285,23 +290,24 @@ def predictive_check(
     z = draws.zeta[:, None]
     m = draws.mu[:, None]
     ms = np.maximum(draws.mu_s, draws.mu)[:, None]
-    a0 = sign0 * draws.y0[:, None]
+    y_start = np.asarray(draws.y0, dtype=float)
     w = np.sqrt(1.0 - z * z)
     half = np.pi / w
     k = np.arange(n)[None, :]
-    tau_y = np.maximum(k * half, 0.0)[:, :, None] + offsets_y[None, :, :]
+    tau_y = np.maximum(np.maximum(k * half, 0.0)[:, :, None] + offsets_y[None, :, :], 0.0)
     s_star = np.arctan2(w, z) / w
     tau_v = (np.arange(n - 1)[None, :] * half + s_star)[:, :, None] + offsets_v[None, :, :]
-    y_sim, _ = exact_response(
-        np.maximum(tau_y, 0.0), a0[:, :, None], z[:, :, None], m[:, :, None], ms[:, :, None]
-    )
-    _, v_sim = exact_response(
-        np.maximum(tau_v, 0.0), a0[:, :, None], z[:, :, None], m[:, :, None], ms[:, :, None]
-    )
-    model_y = _parabola_peak(offsets_y, y_sim * sign_seq[None, :, None])
-    model_v = _parabola_peak(offsets_v, -v_sim * sign_seq[None, :-1, None])
-    model_y = np.maximum(model_y, 0.0)
-    model_v = np.maximum(model_v, 0.0)
+    tau_v = np.maximum(tau_v, 0.0)
+    z3, m3, ms3 = z[:, :, None], m[:, :, None], ms[:, :, None]
+
+    def processed_displacement(start: NDArray) -> NDArray:
+        y_sim, _ = exact_response(tau_y, sign0 * start[:, None, None], z3, m3, ms3)
+        return np.maximum(_parabola_peak(offsets_y, y_sim * sign_seq[None, :, None]), 0.0)
+
+    model_y = processed_displacement(y_start)
+    a0 = sign0 * y_start[:, None]
+    _, v_sim = exact_response(tau_v, a0[:, :, None], z3, m3, ms3)
+    model_v = np.maximum(_parabola_peak(offsets_v, -v_sim * sign_seq[None, :-1, None]), 0.0)
 
     noise_y = decay.peaks.value_noise / ell
     sd_yp = decay.noise_yp if decay.noise_yp else estimate_noise(decay.yp)
@@ -315,7 +321,7 @@ def predictive_check(
     tau = decay.tau[idx] - decay.tau[0]
     y_sim, yp_sim = exact_response(
         tau,
-        sign0 * draws.y0[:, None],
+        a0,
         draws.zeta[:, None],
         draws.mu[:, None],
         np.maximum(draws.mu_s, draws.mu)[:, None],
