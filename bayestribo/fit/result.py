@@ -211,8 +211,10 @@ class FitResult:
             f"noise     {self.noise.get('description', '')}",
         ]
         d = self.diagnostics
-        status = "converged" if d.get("converged") else "NOT CONVERGED: " + "; ".join(
-            d.get("reasons", [])
+        status = (
+            "converged"
+            if d.get("converged")
+            else "NOT CONVERGED: " + "; ".join(d.get("reasons", []))
         )
         lines.append(
             f"sampler   {status}; {d.get('n_walkers')} walkers × {d.get('n_ensembles')} "
