@@ -168,3 +168,18 @@ def test_plots_render(report, tmp_path):
     _, a = plt.subplots()
     assert plot_extinction(report.extinction, ax=a) is a
     plt.close("all")
+
+
+def test_bad_relative_error_is_refused(report):
+    with pytest.raises(BayestriboError, match="relative_error"):
+        predictive_check(report.decay, report.draws, relative_error=-0.1)
+
+
+def test_report_of_a_decay_and_its_json(report):
+    again = check_adequacy(report.decay, window=3, n_draws=50)
+    assert again.run_name is None and again.windows.window_oscillations == 3
+    import json
+
+    data = json.loads(json.dumps(again.to_dict()))
+    assert data["predictive"]["displacement"]["n_peaks"] == len(report.decay.peaks)
+    assert data["extinction"]["draws"] == again.draws.label

@@ -142,3 +142,20 @@ def test_bayes_method_cuts_each_window_as_a_run():
 def test_not_a_run_is_refused():
     with pytest.raises(RecordingError, match="run must be"):
         windowed_fits(42)
+
+
+def test_position_only_window_intervals_are_calibrated():
+    # The velocity derived from the displacement carries correlated noise, which the
+    # fit propagates by Monte Carlo through the same derivative filter. Statistical,
+    # seeded: 4 position-only runs at 10x the resolution noise, about 24 windows;
+    # P(fewer than 19 inside | 95 %) < 0.5 %.
+    inside = total = 0
+    for seed in range(4):
+        run = simulate(seed=500 + seed, channels=("displacement",), displacement_noise_m=1.5e-6)
+        w = windowed_fits(run, window=2, seed=seed)
+        for x in w.windows:
+            inside += x.zeta_interval[0] <= ZETA <= x.zeta_interval[1]
+            total += 1
+            assert x.chi2_reduced < 4.0  # the propagated noise describes the increments
+    assert total >= 20
+    assert inside >= 0.8 * total
