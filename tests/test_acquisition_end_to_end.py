@@ -1,9 +1,4 @@
-"""Simulated instrument -> pty -> acquire -> canonical run file -> classical estimators.
-
-The issue's end-to-end check with ``bayestribo fit`` (credible intervals) needs the
-Bayesian fit, which is not built yet; this test runs the same chain up to the run file
-and checks it with the classical estimators instead.
-"""
+"""Simulated instrument -> pty -> acquire -> canonical run file -> estimators and fit."""
 
 from __future__ import annotations
 
@@ -14,9 +9,13 @@ import pytest
 from bayestribo.acquisition import OperatorInputs, acquire_run
 from bayestribo.acquisition.instrument import SimulatedInstrument, SimulationConfig
 from bayestribo.estimators import estimate_all
+from bayestribo.fit import fit
 from bayestribo.io import read_run
 
-pytestmark = pytest.mark.skipif(os.name != "posix", reason="pseudo-terminals are POSIX")
+pytestmark = [
+    pytest.mark.skipif(os.name != "posix", reason="pseudo-terminals are POSIX"),
+    pytest.mark.filterwarnings("ignore::FutureWarning"),
+]
 
 
 def test_acquired_run_gives_back_the_simulated_damping_and_friction(tmp_path):
@@ -48,3 +47,10 @@ def test_acquired_run_gives_back_the_simulated_damping_and_friction(tmp_path):
         # a lost or misplaced frame, or a wrong time base, which move them by far more.
         assert e.zeta == pytest.approx(zeta, rel=0.01), e
         assert e.mu_k == pytest.approx(mu_k, rel=0.01), e
+    # The Bayesian fit of the acquired file: the simulated values inside the 99 %
+    # credible intervals (noise model from the header's count resolution).
+    posterior = fit(run, seed=1)
+    assert posterior.converged
+    for name, true in (("zeta", zeta), ("mu_k", mu_k)):
+        lo, hi = posterior.interval(name, 0.99)
+        assert lo < true < hi, (name, lo, hi)

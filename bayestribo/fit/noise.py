@@ -21,6 +21,7 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 from bayestribo.decay import EnergyDecay
+from bayestribo.errors import RecordingError
 
 __all__ = ["RANGE_RESOLUTION", "NoiseModel", "noise_model"]
 
@@ -103,13 +104,20 @@ class NoiseModel:
 
 def _choose(nominal: float | None, measured: float | None, channel: str) -> tuple[float, str]:
     if nominal is None and measured is None:
-        raise ValueError(
+        raise RecordingError(
             f"no noise level for the {channel}: give its resolution (sidecar key "
             f"'{channel}_resolution_...') or record a quiescent segment"
         )
     if measured is None or (nominal is not None and nominal >= measured):
-        return float(nominal), "nominal"  # type: ignore[arg-type]
-    return float(measured), "measured"
+        value, source = float(nominal), "nominal"  # type: ignore[arg-type]
+    else:
+        value, source = float(measured), "measured"
+    if not value > 0:
+        raise RecordingError(
+            f"the {channel} noise is {value!r}: a likelihood needs a positive noise level; "
+            f"give the {channel} resolution in the metadata"
+        )
+    return value, source
 
 
 def noise_model(
