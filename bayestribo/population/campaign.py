@@ -43,8 +43,7 @@ def _has_friction(result: Any) -> bool:
 
 def _run_summary(result: Any, prob: float) -> dict[str, Any]:
     md = dict(getattr(result, "metadata", {}) or {})
-    name = str(getattr(result, "run_name", None) or md.get("run_id"))
-    out: dict[str, Any] = {"run_id": md.get("run_id", name)}
+    out: dict[str, Any] = {"run_id": md.get("run_id") or getattr(result, "run_name", None)}
     for key in ("series", "lubricant", "water_mass_fraction", "load_N", "repeat"):
         out[key] = md.get(key)
     for p in ("zeta", "mu_k"):
@@ -159,7 +158,7 @@ def _paired_difference(a: np.ndarray, b: np.ndarray, rng: np.random.Generator) -
 def _derived(contact: Population, zeta0: Population, runs: Sequence[Any], seed: int, prob: float):
     assert zeta0.pooled is not None
     rng = np.random.default_rng(seed)
-    by_name = {str(getattr(r, "run_name", None) or r.metadata.get("run_id")): r for r in runs}
+    by_name = {str(r.metadata.get("run_id") or getattr(r, "run_name", None)): r for r in runs}
     out = []
     for g in contact.groups.values():
         zeta_k = _paired_difference(g.mean["zeta"], zeta0.pooled.mean["zeta"], rng)

@@ -106,11 +106,11 @@ def run_samples(
         Seed of the subset; combined with the run's name, so a run keeps the same
         subset whatever the order of the runs.
     name : str, optional
-        The run's name; default ``result.run_name`` or ``metadata["run_id"]``.
+        The run's name; default ``metadata["run_id"]``, else ``result.run_name``.
     """
     metadata = dict(getattr(result, "metadata", {}) or {})
     if name is None:
-        name = str(getattr(result, "run_name", None) or metadata.get("run_id", "run"))
+        name = str(metadata.get("run_id") or getattr(result, "run_name", None) or "run")
     values: dict[str, NDArray[np.float64]] = {}
     log_prior: NDArray[np.float64] | None = None
     for key in parameters:

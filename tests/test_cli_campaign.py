@@ -1,0 +1,93 @@
+"""``bayestribo campaign`` end to end on three bundled runs (real fits, short settings).
+
+The fits use a low step ceiling (they need not converge: the test checks the pipeline,
+the catalog's skipping and that a Dask cluster gives the same fits as the process
+pool, not the posteriors; tests/test_population.py checks those).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import pytest
+
+from bayestribo.cli import main
+
+DATA = Path(__file__).resolve().parents[1] / "data" / "runs"
+RUNS = ("glycerol-N0.07-r1", "glycerol-N0.59-r1", "air-r1")
+FAST = ["--max-steps", "400", "--population-steps", "400", "--quiet", "--json"]
+
+pytestmark = [
+    pytest.mark.slow,
+    pytest.mark.filterwarnings("ignore::bayestribo.errors.ConvergenceWarning"),
+    pytest.mark.skipif(not DATA.is_dir(), reason="bundled data/ folder not present"),
+]
+
+
+@pytest.fixture(scope="module")
+def campaign_dir(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("runs")
+    for name in RUNS:
+        for suffix in (".csv", ".json"):
+            os.symlink(DATA / f"{name}{suffix}", folder / f"{name}{suffix}")
+    return folder
+
+
+def _run(capsys, *argv):
+    status = main(["campaign", *map(str, argv)])
+    out = capsys.readouterr().out
+    return status, json.loads(out)
+
+
+def _per_run(report):
+    return {r["run_id"]: (r.get("zeta"), r.get("mu_k")) for r in report["runs"]}
+
+
+def test_campaign_fits_reports_and_skips_on_a_rerun(campaign_dir, tmp_path, capsys):
+    out = tmp_path / "out"
+    status, report = _run(capsys, campaign_dir, "--out", out, "--workers", 2, *FAST)
+    assert status == 0 and report["failures"] == [] and report["n_cached"] == 0
+    for name in ("population.json", "groups.csv", "trends.csv", "runs.csv", "catalog.sqlite"):
+        assert (out / name).is_file(), name
+    assert sorted(p.name for p in (out / "fits").iterdir()) == sorted(f"{n}.nc" for n in RUNS)
+    assert sorted(p.name for p in (out / "figures").iterdir()) == [
+        "forest.png",
+        "means_vs_load.png",
+        "zeta_k_d_k.png",
+    ]
+    assert report["zeta0"]["pooled"]["runs"] == ["air-r1"]
+    assert [g["value"] for g in report["contact"]["groups"]] == [
+        ["glycerol", 0.0055, 0.07],
+        ["glycerol", 0.0055, 0.59],
+    ]
+    assert list(report["trends"]) == ["lubricant=glycerol,water_mass_fraction=0.0055"]
+    # A re-run reads every fit back from the catalog.
+    status, again = _run(capsys, campaign_dir, "--out", out, *FAST)
+    assert status == 0 and again["n_cached"] == 3
+    assert _per_run(again) == _per_run(report)
+
+    # The same campaign on a Dask cluster gives the same fits as the process pool.
+    distributed = pytest.importorskip("dask.distributed")
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None
+    ) as cluster:
+        status, on_dask = _run(
+            capsys,
+            campaign_dir,
+            "--out",
+            tmp_path / "dask",
+            "--dask-scheduler",
+            cluster.scheduler_address,
+            *FAST,
+        )
+    assert status == 0 and on_dask["n_cached"] == 0
+    assert _per_run(on_dask) == _per_run(report)
+
+
+def test_a_folder_without_runs_is_a_package_error(tmp_path, capsys):
+    assert main(["campaign", str(tmp_path), "--out", str(tmp_path / "o")]) == 2
+    assert "no run files" in capsys.readouterr().err
+    assert main(["campaign", str(tmp_path / "missing")]) == 2
+    assert "is not a folder" in capsys.readouterr().err
