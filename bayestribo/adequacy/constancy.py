@@ -291,6 +291,9 @@ def constancy_test(
     if fixed:
         friction = f"{windows.friction_name} held at the whole-decay value {tm.mean:.3g}"
         head = head.replace(f"ζ and {windows.friction_name} are", "the equivalent ζ is")
+        head = head.replace(
+            "the damping law is not constant", "the equivalent ζ changes with amplitude"
+        )
     else:
         friction = _describe(windows.friction_name, tm)
     statement = f"{head}; {_describe('ζ', tz)}; {friction}."
