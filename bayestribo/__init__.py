@@ -38,6 +38,7 @@ _LAZY: dict[str, str] = {
     "acquire_run": "bayestribo.acquisition",
     "recover_run": "bayestribo.acquisition",
     "check_adequacy": "bayestribo.adequacy",
+    "run_report": "bayestribo.report",
 }
 
 __all__ = ["__version__", *sorted(_LAZY)]

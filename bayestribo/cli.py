@@ -27,6 +27,8 @@ COMMANDS: tuple[str, ...] = (
     "simulate",
     "check",
     "campaign",
+    "report",
+    "demo",
 )
 
 

@@ -1,0 +1,167 @@
+"""``bayestribo report``: a run or a campaign folder as one self-contained HTML report.
+
+Runs the single-run notebook (for a run file) or the campaign notebook across loads (for
+a folder) on the user's data, and renders it as HTML with the figures embedded, so a
+report can be sent without opening Jupyter.
+
+Examples::
+
+    bayestribo report data/runs/glycerol-N0.31-r1.csv --out report.html
+    bayestribo report HarmOsc3.txt --columns t x --length-unit arbitrary --out osc3.html
+    bayestribo report data/ --out campaign.html --param repeats=[1] --hide-code
+"""
+
+from __future__ import annotations
+
+import argparse
+import ast
+import sys
+from pathlib import Path
+from typing import Any
+
+__all__ = ["notebook_for", "parse_params", "register"]
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``report`` sub-command."""
+    from bayestribo.commands._common import COLUMN_ALIASES
+
+    p = subparsers.add_parser(
+        "report",
+        help="HTML report of a run (single-run notebook) or a campaign folder (loads notebook)",
+        description=(
+            "Run the report notebook on PATH and write it as one HTML file with the figures "
+            "embedded. A run file gets the single-run report (signals, energy decay, "
+            "classical estimates, Bayesian fit, diagnostics, corner plot, Π with its "
+            "predictive band, comparison table, adequacy checks); a folder gets the "
+            "campaign report across loads (per-run fits, forest plot, population of "
+            "repeats, ζ and μ_k against load, ζ_k and d_k)."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    p.add_argument("path", metavar="PATH", help="run file, or campaign folder")
+    p.add_argument("--out", type=Path, help="HTML file to write (default: <PATH stem>-report.html)")
+    p.add_argument(
+        "--columns",
+        nargs="+",
+        metavar="NAME",
+        help="run file without a canonical header: the role of each column "
+        f"(time_s, displacement_m, velocity_m_per_s, ignore; short: {', '.join(COLUMN_ALIASES)})",
+    )
+    p.add_argument(
+        "--length-unit",
+        choices=("m", "arbitrary"),
+        help="length unit of the signals (arbitrary: friction as a displacement only)",
+    )
+    p.add_argument("--frequency", type=float, help="nominal natural frequency f [Hz]")
+    p.add_argument("--load", type=float, help="normal load N [N]")
+    p.add_argument("--mass", type=float, help="oscillating mass m [kg]")
+    p.add_argument("--seed", type=int, help="seed of the fits (the notebook's default otherwise)")
+    p.add_argument(
+        "--param",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="set a notebook parameter (VALUE a Python literal, e.g. max_steps=5000, "
+        "repeats=[1]); repeatable",
+    )
+    p.add_argument("--figures", type=Path, metavar="DIR", help="also write the figures (PNG)")
+    p.add_argument(
+        "--executed", type=Path, metavar="NOTEBOOK", help="also write the executed notebook"
+    )
+    p.add_argument("--hide-code", action="store_true", help="leave the code cells out")
+    p.set_defaults(handler=run)
+
+
+def parse_params(items: list[str]) -> dict[str, Any]:
+    """``KEY=VALUE`` strings to a dict; VALUE a Python literal, else kept as a string.
+
+    Raises
+    ------
+    ReportError
+        For an item without ``=`` or with an empty key.
+    """
+    from bayestribo.report import ReportError
+
+    out: dict[str, Any] = {}
+    for item in items:
+        key, sep, text = item.partition("=")
+        key = key.strip()
+        if not sep or not key.isidentifier():
+            raise ReportError(f"--param {item!r}: expected KEY=VALUE with KEY a parameter name")
+        try:
+            out[key] = ast.literal_eval(text)
+        except (ValueError, SyntaxError):
+            out[key] = text
+    return out
+
+
+def notebook_for(path: Path) -> str:
+    """``"single_run"`` for a file, ``"loads"`` for a folder holding runs.
+
+    Raises
+    ------
+    ReportError
+        If the path does not exist, or a folder holds neither a ``manifest.csv`` nor a
+        run file with a sidecar.
+    """
+    from bayestribo.report import ReportError
+
+    if path.is_file():
+        return "single_run"
+    if path.is_dir():
+        has_runs = (path / "manifest.csv").is_file() or any(
+            f.with_suffix(".json").is_file() for f in path.rglob("*.csv")
+        )
+        if not has_runs:
+            raise ReportError(
+                f"{path}: a campaign folder needs a manifest.csv or run files (.csv) with "
+                "their sidecars (.json)"
+            )
+        return "loads"
+    raise ReportError(f"{path}: no such run file or folder")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Choose the notebook, inject the parameters, execute, write the HTML."""
+    from bayestribo.commands._common import columns_from_args
+    from bayestribo.report import ReportError, run_report
+
+    path = Path(args.path).resolve()
+    notebook = notebook_for(path)
+    params: dict[str, Any] = {}
+    if notebook == "single_run":
+        read_kwargs: dict[str, Any] = {}
+        columns = columns_from_args(args.columns)
+        if columns is not None:
+            read_kwargs["columns"] = columns
+        for key, value in (
+            ("length_unit", args.length_unit),
+            ("natural_frequency_Hz", args.frequency),
+            ("load_N", args.load),
+            ("mass_kg", args.mass),
+        ):
+            if value is not None:
+                read_kwargs[key] = value
+        params.update({"run_path": str(path), "read_kwargs": read_kwargs})
+        if args.seed is not None:
+            params["seed"] = args.seed
+    else:
+        if args.columns or args.length_unit or args.frequency or args.load or args.mass:
+            raise ReportError(
+                "--columns, --length-unit, --frequency, --load and --mass describe one run "
+                "file; a campaign folder's runs need sidecars"
+            )
+        params["data_dir"] = str(path)
+        if args.seed is not None:
+            params["campaign_seed"] = args.seed
+    if args.figures is not None:
+        params["figure_dir"] = str(args.figures.resolve())
+    params.update(parse_params(args.param))
+    out = args.out or Path(f"{path.stem or path.name}-report.html")
+    print(f"running the {notebook} report on {path} ...", file=sys.stderr)
+    run_report(notebook, params, html=out, executed=args.executed, hide_code=args.hide_code)
+    print(f"report written to {out.resolve()}")
+    if args.figures is not None:
+        print(f"figures in {args.figures.resolve()}")
+    return 0
