@@ -108,6 +108,8 @@ def test_fixed_mu_out_of_range_is_refused(decay):
 class _StandIn:
     """A Bayesian-fit stand-in: Gaussian samples about given values."""
 
+    parameter_names = ("zeta", "mu_k")
+
     def __init__(self, zeta: float, mu: float) -> None:
         rng = np.random.default_rng(0)
         self._s = {"zeta": zeta + 1e-4 * rng.standard_normal(2000)}

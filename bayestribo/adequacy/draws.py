@@ -87,8 +87,11 @@ def draws_from_posterior(
 ) -> ParameterDraws:
     """Posterior draws of a Bayesian fit (``result.samples(name)``), thinned to ``n_draws``.
 
-    The friction is ``mu_k`` or, without a loaded rig, ``friction_displacement``
-    divided by the decay's length scale; ``mu_s`` is used when sampled.
+    The model's friction is the sampled friction displacement divided by the decay's
+    length scale (``mu_k`` of a fit also carries the load and mass calibration
+    uncertainties, which do not change the motion); ``mu_k`` only when no
+    displacement is given. μ_s is μ times ``mu_s_ratio`` when sampled, else
+    ``mu_s``, else μ.
 
     Raises
     ------
@@ -99,12 +102,17 @@ def draws_from_posterior(
     try:
         zeta = np.asarray(result.samples("zeta"), dtype=float)
         y0 = np.abs(np.asarray(result.samples("y0"), dtype=float))
-        if "mu_k" in names:
-            mu = np.asarray(result.samples("mu_k"), dtype=float)
-        else:
+        if "friction_displacement" in names:
             mu = np.asarray(result.samples("friction_displacement"), dtype=float)
             mu = mu / decay.scaling.length_scale
-        mu_s = np.asarray(result.samples("mu_s"), dtype=float) if "mu_s" in names else mu
+        else:
+            mu = np.asarray(result.samples("mu_k"), dtype=float)
+        if "mu_s_ratio" in names:
+            mu_s = mu * np.asarray(result.samples("mu_s_ratio"), dtype=float)
+        elif "mu_s" in names:
+            mu_s = np.asarray(result.samples("mu_s"), dtype=float)
+        else:
+            mu_s = mu
     except (KeyError, ValueError, AttributeError) as exc:
         raise BayestriboError(f"the fit result has no usable samples: {exc}") from exc
     rng = np.random.default_rng(seed)

@@ -318,9 +318,24 @@ def _sub_run(run: Any, t_from: float, t_to: float) -> Any:
     )
 
 
-def _posterior_window(result: Any, friction_name: str) -> tuple[float, float, NDArray, str]:
+def _posterior_samples(result: Any, mu_factor: float) -> tuple[NDArray, NDArray]:
+    """ζ and friction samples of a window fit, the friction in the windows' unit.
+
+    The friction is taken from ``friction_displacement`` (what the data fix) times
+    ``mu_factor`` (1/ℓ for μ_k, 1 for a displacement), so that a calibration
+    uncertainty of the load or the mass, common to all windows, does not enter the
+    comparison between windows; ``mu_k`` only when no displacement is given.
+    """
     zeta = np.asarray(result.samples("zeta"), dtype=float)
-    mu = np.asarray(result.samples(friction_name), dtype=float)
+    names = list(getattr(result, "parameter_names", ["friction_displacement"]))
+    if "friction_displacement" in names:
+        mu = np.asarray(result.samples("friction_displacement"), dtype=float) * mu_factor
+    else:
+        mu = np.asarray(result.samples("mu_k"), dtype=float)
+    return zeta, mu
+
+
+def _posterior_window(zeta: NDArray, mu: NDArray, result: Any) -> tuple[float, float, NDArray, str]:
     cov = np.cov(np.vstack([zeta, mu]))
     notes = "" if getattr(result, "converged", True) else "sampler not converged"
     return float(np.median(zeta)), float(np.median(mu)), cov, notes
@@ -444,11 +459,10 @@ def windowed_fits(
                 t_from = float(decay.t[start]) - period - 0.25 * period
                 sub = _sub_run(run, t_from, float(decay.t[stop - 1]))
                 result = fitter(sub)
-                zeta, mu, cov, notes = _posterior_window(result, friction_name)
-                zi = tuple(float(v) for v in np.quantile(result.samples("zeta"), [0.025, 0.975]))
-                mi = tuple(
-                    float(v) for v in np.quantile(result.samples(friction_name), [0.025, 0.975])
-                )
+                zs, ms = _posterior_samples(result, mu_scale / ell)
+                zeta, mu, cov, notes = _posterior_window(zs, ms, result)
+                zi = tuple(float(v) for v in np.quantile(zs, [0.025, 0.975]))
+                mi = tuple(float(v) for v in np.quantile(ms, [0.025, 0.975]))
                 red = None
                 bound = ()
             out.append(
