@@ -91,3 +91,20 @@ def test_a_folder_without_runs_is_a_package_error(tmp_path, capsys):
     assert "no run files" in capsys.readouterr().err
     assert main(["campaign", str(tmp_path / "missing")]) == 2
     assert "is not a folder" in capsys.readouterr().err
+
+
+def test_law_rows_flatten_the_comparison_for_the_csv_table():
+    # The PSIS-LOO comparison itself is tested in tests/test_comparison.py; running it
+    # through the command (three fits per run) is too slow for the default suite.
+    from bayestribo.commands.campaign import _law_row
+
+    entry = {
+        "run": "air-r1",
+        "verdict": "viscous",
+        "best": "both",
+        "table": {"viscous": {"elpd_loo": 10.0, "elpd_diff": 0.2}, "both": {"elpd_loo": 10.2}},
+    }
+    row = _law_row(entry)
+    assert list(row)[:3] == ["run", "verdict", "best"]
+    assert row["viscous_elpd_diff"] == 0.2 and row["coulomb_elpd_loo"] is None
+    assert _law_row({"run": "x", "error": "RecordingError: bad"})["error"].startswith("Rec")

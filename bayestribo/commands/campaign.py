@@ -5,11 +5,13 @@ Examples::
     bayestribo campaign data/ --out results/
     bayestribo campaign data/runs --by load_N --json
     bayestribo campaign data/ --dask-scheduler tcp://10.0.0.5:8786
+    bayestribo campaign data/ --compare-laws
 
 Fits each run (skipping runs the catalog holds a fit of, with the same data and
 settings), writes each run's NetCDF, the populations per group with the between-run σ,
 ζ₀ from the runs without contact, ζ_k and d_k, the load trends (JSON and CSV tables)
-and figures.
+and figures; with ``--compare-laws``, which dissipation law each run supports
+(``laws.csv``).
 """
 
 from __future__ import annotations
@@ -58,6 +60,11 @@ def register(subparsers: Any) -> None:
     p.add_argument("--grid-points", type=int, help="Π increments per run")
     p.add_argument("--population-steps", type=int, default=2500, help="population sampler steps")
     p.add_argument("--prob", type=float, default=0.95, help="credible-interval probability")
+    p.add_argument(
+        "--compare-laws",
+        action="store_true",
+        help="also compare viscous, Coulomb and both per run by PSIS-LOO (three fits a run)",
+    )
     p.add_argument("--no-figures", action="store_true", help="skip the figures")
     p.add_argument("--quiet", action="store_true", help="no progress line")
     p.set_defaults(handler=run)
@@ -101,6 +108,38 @@ def _text(analysis: Any, failures: list[dict[str, str]]) -> str:
     return "\n".join(lines)
 
 
+def _compare_laws(
+    paths: list[Path], executor: Any, args: argparse.Namespace, fit_kwargs: dict[str, Any]
+) -> list[dict[str, Any]]:
+    from bayestribo.comparison import compare_dissipation_laws
+    from bayestribo.many import fit_many
+
+    outcomes = fit_many(
+        paths,
+        executor,
+        campaign_seed=args.seed,
+        function=compare_dissipation_laws,
+        max_workers=args.workers,
+        progress=not args.quiet,
+        **fit_kwargs,
+    )
+    return [
+        {"run": o.name, **o.result.to_dict()} if o.ok else {"run": o.name, "error": o.error}
+        for o in outcomes
+    ]
+
+
+def _law_row(entry: dict[str, Any]) -> dict[str, Any]:
+    row: dict[str, Any] = {"run": entry["run"], "verdict": entry.get("verdict")}
+    row["best"] = entry.get("best")
+    for law in ("viscous", "coulomb", "both"):
+        stats = entry.get("table", {}).get(law, {})
+        row[f"{law}_elpd_loo"] = stats.get("elpd_loo")
+        row[f"{law}_elpd_diff"] = stats.get("elpd_diff")
+    row["error"] = entry.get("error")
+    return row
+
+
 def run(args: argparse.Namespace) -> int:
     """Find the runs, fit them, analyse, write the outputs."""
     from bayestribo.errors import BayestriboError
@@ -138,6 +177,7 @@ def run(args: argparse.Namespace) -> int:
             progress=not args.quiet,
             **fit_kwargs,
         )
+        laws = _compare_laws(paths, executor, args, fit_kwargs) if args.compare_laws else None
     failures = [{"run": o.name, "error": str(o.error)} for o in outcomes if not o.ok]
     fitted = [o.result for o in outcomes if o.ok]
     by = tuple(k for k in args.by.split(",") if k)
@@ -152,6 +192,9 @@ def run(args: argparse.Namespace) -> int:
         "catalog": str(catalog),
         "settings": {"seed": args.seed, "fit": fit_kwargs},
     }
+    if laws is not None:
+        report["laws"] = laws
+        _write_csv(out / "laws.csv", [_law_row(r) for r in laws])
     (out / "population.json").write_text(json.dumps(report, indent=2, default=str) + "\n")
     _write_csv(out / "groups.csv", analysis.group_rows())
     _write_csv(out / "trends.csv", analysis.trend_rows())
