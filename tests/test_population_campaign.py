@@ -108,3 +108,31 @@ def test_report_is_json_ready(analysis):
 def test_no_runs_is_an_error():
     with pytest.raises(BayestriboError, match="no fitted runs"):
         analyse_campaign([])
+
+
+def test_glycerol_water_series_get_a_trend_against_viscosity():
+    from bayestribo.population.campaign import VISCOSITY_KEY
+    from bayestribo.viscosity import glycerol_water_viscosity
+
+    rng = np.random.default_rng(4)
+    fits = []
+    for w in (0.0055, 0.09):
+        nu = float(glycerol_water_viscosity(w))
+        for r in range(2):
+            meta = {
+                "run_id": f"w{w}-r{r}",
+                "lubricant": "glycerol-water",
+                "water_mass_fraction": w,
+                "load_N": 0.12,
+                **RIG,
+            }
+            zeta = 0.004 + 2e-5 * nu  # rises with ν
+            draws = {"zeta": rng.normal(zeta, 2e-5, 300), "mu_k": rng.normal(0.03, 5e-5, 300)}
+            fits.append(_Fit(draws, meta))
+    a = analyse_campaign(fits, seed=2, n_steps=600)
+    label = "viscosity:lubricant=glycerol-water,load_N=0.12"
+    assert label in a.trends and a.trends[label].covariate == VISCOSITY_KEY
+    # Centre of the covariate = mean ν of the runs, computed with Eq. 43.
+    expected = np.mean([glycerol_water_viscosity(w) for w in (0.0055, 0.0055, 0.09, 0.09)])
+    assert a.trends[label].center == pytest.approx(expected, rel=1e-12)
+    assert a.trends[label].slope_summary("zeta")["prob_positive"] > 0.9

@@ -4,7 +4,9 @@ The runs of a campaign are split into tests without contact (``load_N`` = 0, or 
 μ_k in the fit), whose pooled population gives ζ₀, and tests with contact, whose ζ
 and μ_k populations are inferred per group of the ``by`` keys (default lubricant,
 water fraction and load). For every series (the ``by`` keys other than the load)
-with runs at two or more loads, the trend against load is inferred. Derived per
+with runs at two or more loads, the trend against load is inferred; for glycerol-water
+series with two or more water fractions, the trend against the kinematic viscosity of
+Eq. 43 (labels ``viscosity:...``; the paper's ζ rises with ν, Fig. 10a). Derived per
 group (section 2.5 of the paper):
 
 * ζ_k = ζ̄ − ζ₀ (group mean minus the pooled ζ₀, independent posteriors);
@@ -28,7 +30,10 @@ from bayestribo.population.samples import FitLike, RunSamples, run_samples
 from bayestribo.population.summary import summarize
 from bayestribo.population.trend import Trend, trend
 
-__all__ = ["DEFAULT_BY", "CampaignAnalysis", "analyse_campaign"]
+__all__ = ["DEFAULT_BY", "VISCOSITY_KEY", "CampaignAnalysis", "analyse_campaign"]
+
+#: Metadata key of the kinematic viscosity computed with Eq. 43 [mm²/s].
+VISCOSITY_KEY = "kinematic_viscosity_mm2_per_s"
 
 #: Default grouping keys of a campaign.
 DEFAULT_BY: tuple[str, ...] = ("lubricant", "water_mass_fraction", "load_N")
@@ -173,6 +178,46 @@ def _derived(contact: Population, zeta0: Population, runs: Sequence[Any], seed: 
     return out
 
 
+def _viscosity_trends(
+    samples: list[RunSamples], keys: tuple[str, ...], kw: Mapping[str, Any]
+) -> dict[str, Trend]:
+    """Trends against the kinematic viscosity of Eq. 43 for glycerol-water series.
+
+    A series is a value of the grouping keys other than the water fraction, whose
+    lubricant name contains "glycerol", with runs at two or more water fractions.
+    """
+    from bayestribo.viscosity import glycerol_water_viscosity
+
+    if "water_mass_fraction" not in keys:
+        return {}
+    other = tuple(k for k in keys if k != "water_mass_fraction")
+    series: dict[tuple[Any, ...], list[RunSamples]] = {}
+    for s in samples:
+        if "glycerol" in str(s.metadata.get("lubricant", "")):
+            series.setdefault(tuple(s.metadata.get(k) for k in other), []).append(s)
+    out = {}
+    for value, members in series.items():
+        if len({m.metadata["water_mass_fraction"] for m in members}) < 2:
+            continue
+        with_nu = [
+            RunSamples(
+                m.name,
+                m.values,
+                m.log_prior,
+                {
+                    **m.metadata,
+                    VISCOSITY_KEY: float(
+                        glycerol_water_viscosity(m.metadata["water_mass_fraction"])
+                    ),
+                },
+            )
+            for m in members
+        ]
+        label = ",".join(f"{k}={v}" for k, v in zip(other, value, strict=True))
+        out[f"viscosity:{label}"] = trend(with_nu, VISCOSITY_KEY, ("zeta", "mu_k"), **kw)
+    return out
+
+
 def analyse_campaign(
     results: Sequence[FitLike],
     by: Sequence[str] = DEFAULT_BY,
@@ -223,6 +268,7 @@ def analyse_campaign(
             if len(xs) >= 2 and all(isinstance(x, int | float) for x in xs):
                 label = ",".join(f"{k}={v}" for k, v in zip(series_keys, value, strict=True))
                 trends[label or "all"] = trend(members, covariate, ("zeta", "mu_k"), **kw)
+        trends.update(_viscosity_trends(samples, keys, kw))
     if free_runs:
         zs = [run_samples(r, ("zeta",), max_samples=max_samples, seed=seed) for r in free_runs]
         zeta0 = population(zs, ("zeta",), **kw)
