@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 from pathlib import Path
@@ -88,9 +89,18 @@ def campaign_folder(cache: Path | None = None) -> tuple[Path, str]:
     return folder, "simulated earlier (cache)"
 
 
-def _interval(summary: dict[str, Any]) -> str:
+def _interval(summary: dict[str, Any], significant: bool = False) -> str:
+    """``mean [low, high]`` with enough decimals to show the interval's width.
+
+    With ``significant``, two significant digits each (for a σ whose interval starts
+    near zero).
+    """
     lo, hi = summary.get("ci95") or summary.get("interval")
-    return f"{summary['mean']:.5f} [{lo:.5f}, {hi:.5f}]"
+    if significant:
+        return f"{summary['mean']:.2g} [{lo:.2g}, {hi:.2g}]"
+    width = hi - lo
+    decimals = 5 if width <= 0 else min(max(1 - math.floor(math.log10(width)), 4), 9)
+    return f"{summary['mean']:.{decimals}f} [{lo:.{decimals}f}, {hi:.{decimals}f}]"
 
 
 def summary_lines(single: dict[str, Any], campaign: dict[str, Any]) -> list[str]:
@@ -103,6 +113,12 @@ def summary_lines(single: dict[str, Any], campaign: dict[str, Any]) -> list[str]
         f"{'  Bayesian fit':34}"
         + "".join(f"{_interval(fit[p]) if p in fit else '-':<{w}}" for p in PAPER)
     )
+    true = single.get("true") or {}
+    if true:
+        lines.append(
+            f"{'  true value (simulated run)':34}"
+            + "".join(f"{true[p] if p in true else '-':<{w}.6g}" for p in PAPER)
+        )
     pooled = (campaign.get("population") or {}).get("pooled")
     if pooled:
         params = pooled["parameters"]
@@ -114,7 +130,7 @@ def summary_lines(single: dict[str, Any], campaign: dict[str, Any]) -> list[str]
         )
         lines.append(
             f"{'  between-run σ':34}"
-            + "".join(f"{_interval(params[p]['sigma']):<{w}}" for p in PAPER)
+            + "".join(f"{_interval(params[p]['sigma'], significant=True):<{w}}" for p in PAPER)
         )
     lines.append(
         f"{'paper, glycerol (mean, σ)':34}"

@@ -1,0 +1,69 @@
+"""``bayestribo demo``: the quick start fits, reports and prints the intervals."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+from bayestribo.cli import main
+from bayestribo.commands import demo
+
+pytest.importorskip("nbclient")
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+@pytest.mark.skipif(not (REPO / "data").is_dir(), reason="the bundled campaign data/ is absent")
+def test_quick_demo_prints_intervals_beside_the_paper_and_writes_reports(tmp_path, capsys):
+    pytest.importorskip("nbconvert")
+    out = tmp_path / "demo"
+    assert main(["demo", "--quick", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "paper, glycerol (mean, σ)" in text
+    assert "0.0236 (σ 0.0012)" in text and "0.0294 (σ 0.0036)" in text
+    fit_line = next(line for line in text.splitlines() if "Bayesian fit" in line)
+    intervals = re.findall(r"([\d.]+) \[([\d.]+), ([\d.]+)\]", fit_line)
+    assert len(intervals) == 2  # ζ and μ_k
+    for mean, lo, hi in intervals:
+        assert float(lo) <= float(mean) <= float(hi)
+    assert "population" in text and "between-run σ" in text
+    for name in ("single-run-report.html", "campaign-report.html"):
+        assert (out / name).is_file()
+        assert str(out / name) in text  # says where they are
+        assert "data:image/png;base64" in (out / name).read_text(encoding="utf-8")
+    assert list((out / "figures" / "single-run").glob("*.png"))
+    assert list((out / "figures" / "campaign").glob("*.png"))
+
+
+def test_campaign_is_simulated_into_the_cache_when_data_is_absent(tmp_path, monkeypatch):
+    calls = []
+
+    def fake_write_campaign(folder):
+        calls.append(Path(folder))
+        Path(folder).mkdir(parents=True)
+        (Path(folder) / "manifest.csv").write_text("run_id,file\n")
+        return Path(folder) / "manifest.csv"
+
+    monkeypatch.setenv("BAYESTRIBO_DATA", str(tmp_path / "no-data-here"))
+    monkeypatch.setattr("bayestribo.campaign_data.write_campaign", fake_write_campaign)
+    folder, origin = demo.campaign_folder(cache=tmp_path / "cache")
+    assert origin == "simulated now" and calls == [folder]
+    assert folder.parent == tmp_path / "cache"
+    again, origin = demo.campaign_folder(cache=tmp_path / "cache")
+    assert again == folder and origin.startswith("simulated earlier") and len(calls) == 1
+
+
+def test_bundled_data_is_used_when_present(monkeypatch):
+    if not (REPO / "data" / "manifest.csv").is_file():
+        pytest.skip("the bundled campaign data/ is absent")
+    monkeypatch.delenv("BAYESTRIBO_DATA", raising=False)
+    folder, origin = demo.campaign_folder()
+    assert folder == REPO / "data" and origin == "bundled"
+
+
+def test_quick_and_full_exclude_each_other(capsys):
+    with pytest.raises(SystemExit):
+        main(["demo", "--quick", "--full"])
+    assert "not allowed with" in capsys.readouterr().err
