@@ -1,7 +1,9 @@
 """Starting point of the sampler: maximum a posteriori and a Laplace approximation.
 
-1. A first guess of ζ and μ_k from the Feeny-Liang peak decrement (Eq. 20-21) of the
-   analysed window (falling back to ζ = 0.01 and a friction of 1 % of the amplitude).
+1. First guesses of ζ and μ_k: the Feeny-Liang peak decrement (Eq. 20-21) of the
+   analysed window (falling back to ζ = 0.01 and a friction of 1 % of the amplitude),
+   and the same decay rate put all into viscous damping or all into friction; the
+   best optimum of the three is kept.
 2. For the exact model, μ_s/μ_k is scanned over its prior range: it decides at which
    turning point the model sticks, which the data pin down sharply.
 3. Gauss-Newton least squares (:func:`scipy.optimize.least_squares`) of the
@@ -14,6 +16,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import least_squares
@@ -21,26 +25,42 @@ from scipy.optimize import least_squares
 from bayestribo.decay import EnergyDecay
 from bayestribo.errors import BayestriboError
 from bayestribo.fit.posterior import Posterior
+from bayestribo.fit.priors import Normal
 
 __all__ = ["initial_walkers", "maximum_a_posteriori"]
 
 _RATIO_GRID = np.linspace(1.0, 3.0, 81)
 
 
-def _first_guess(decay: EnergyDecay, posterior: Posterior) -> dict[str, float]:
-    guess = {"zeta": 0.01, "mu_k": 0.01 * abs(posterior.likelihood.data.y0)}
+def _first_guesses(decay: EnergyDecay, posterior: Posterior) -> list[dict[str, float]]:
+    """Starting points: the Feeny-Liang estimate and its pure viscous / pure Coulomb ends.
+
+    On long, lightly damped decays ζ and μ_k trade off almost perfectly (correlation
+    beyond 0.999), and a local optimiser started at one end of that ridge can stop
+    there; starting from both ends and from the peak estimate finds the right end.
+    """
+    amp = abs(posterior.likelihood.data.y0)
+    zeta, mu_k = 0.01, 0.01 * amp
     try:
         from bayestribo.estimators.feeny_liang import feeny_liang
 
         est = feeny_liang(decay.peaks)
         if est.zeta is not None and 0.0 <= est.zeta < 0.3:
-            guess["zeta"] = float(est.zeta)
+            zeta = float(est.zeta)
         friction = est.friction_displacement
         if friction is not None and friction > 0:
-            guess["mu_k"] = float(friction) / decay.scaling.length_scale
+            mu_k = float(friction) / decay.scaling.length_scale
     except (BayestriboError, ValueError, ArithmeticError):
         pass
-    return guess
+    # The same decay per half cycle, all viscous (Eq. 34: a' = -ζa - 2μ_k/π) or all
+    # Coulomb, evaluated at the mean amplitude.
+    total = zeta + 2.0 * mu_k / (math.pi * max(0.5 * amp, 1e-300))
+    guesses = [{"zeta": zeta, "mu_k": mu_k}]
+    if posterior.friction:
+        guesses.append({"zeta": min(total, 0.29), "mu_k": 1e-4 * mu_k})
+        guesses.append({"zeta": 1e-4 * zeta, "mu_k": min(0.5 * math.pi * total * 0.5 * amp,
+                                                          0.24 * amp)})
+    return guesses
 
 
 def _vector(posterior: Posterior, values: dict[str, float]) -> NDArray:
@@ -52,6 +72,45 @@ def _scan_ratio(posterior: Posterior, theta: NDArray) -> tuple[NDArray, NDArray]
     rows = np.repeat(theta[None, :], _RATIO_GRID.size, axis=0)
     rows[:, i] = _RATIO_GRID
     return rows, posterior(rows)
+
+
+def _optimise(posterior: Posterior, guess: dict[str, float]) -> tuple[NDArray, NDArray]:
+    """Gauss-Newton optimum from one guess, and the Laplace covariance there."""
+    names = posterior.names
+    values = {"zeta": 0.0, "y0": posterior.likelihood.data.y0, "mu_s_ratio": 1.2,
+              "log10_discrepancy": -5.0, **guess}
+    theta = _vector(posterior, {n: values[n] for n in names})
+    if "mu_s_ratio" in names:
+        rows, lp = _scan_ratio(posterior, theta)
+        if np.any(np.isfinite(lp)):
+            theta = rows[int(np.argmax(lp))]
+
+    free = [i for i, n in enumerate(names) if n not in ("mu_s_ratio", "log10_discrepancy")]
+    scale = np.array([max(abs(theta[i]), 1e-3) for i in free]) * 1e-3
+    size = posterior.likelihood.data.increments.size
+
+    # Gaussian priors enter the least squares as residuals (θ - μ)/σ: a MAP, not an MLE.
+    gaussian = [(j, posterior.priors[names[i]]) for j, i in enumerate(free)
+                if isinstance(posterior.priors[names[i]], Normal)]
+
+    def residuals(u: NDArray) -> NDArray:
+        th = theta.copy()
+        th[free] = theta[free] + u * scale
+        if not np.isfinite(posterior(th[None])[0]):
+            return np.full(size + len(gaussian), 1e6)
+        prior_resid = [(th[free[j]] - p.mu) / p.sigma for j, p in gaussian]
+        return np.concatenate([posterior.standardized_residuals(th[None])[0], prior_resid])
+
+    sol = least_squares(residuals, np.zeros(len(free)), x_scale="jac", method="trf")
+    theta[free] = theta[free] + sol.x * scale
+    jac = sol.jac / scale[None, :]  # includes the Gaussian priors' rows
+    try:
+        cov_free = np.linalg.inv(jac.T @ jac)
+    except np.linalg.LinAlgError:
+        cov_free = np.diag((1e-3 * np.maximum(np.abs(theta[free]), 1e-6)) ** 2)
+    cov = np.zeros((len(names), len(names)))
+    cov[np.ix_(free, free)] = cov_free
+    return theta, cov
 
 
 def maximum_a_posteriori(
@@ -70,44 +129,16 @@ def maximum_a_posteriori(
         Range of μ_s/μ_k within 0.5 of the best log density (exact model with friction).
     """
     names = posterior.names
-    values = {"zeta": 0.0, "y0": posterior.likelihood.data.y0}
-    values.update(_first_guess(decay, posterior))
-    values["mu_s_ratio"] = 1.2
-    values["log10_discrepancy"] = -5.0
-    theta = _vector(posterior, {n: values[n] for n in names})
-    has_ratio = "mu_s_ratio" in names
-    if has_ratio:
-        rows, lp = _scan_ratio(posterior, theta)
-        if np.any(np.isfinite(lp)):
-            theta = rows[int(np.argmax(lp))]
-
-    free = [i for i, n in enumerate(names) if n not in ("mu_s_ratio", "log10_discrepancy")]
-    scale = np.array([max(abs(theta[i]), 1e-3) for i in free]) * 1e-3
-
-    def residuals(u: NDArray) -> NDArray:
-        th = theta.copy()
-        th[free] = theta[free] + u * scale
-        lp = posterior(th[None])[0]
-        if not np.isfinite(lp):
-            return np.full(posterior.likelihood.data.increments.size, 1e6)
-        return posterior.standardized_residuals(th[None])[0]
-
-    sol = least_squares(residuals, np.zeros(len(free)), x_scale="jac", method="trf")
-    theta[free] = theta[free] + sol.x * scale
-    jac = sol.jac / scale[None, :]
-    try:
-        cov_free = np.linalg.inv(jac.T @ jac)
-    except np.linalg.LinAlgError:
-        cov_free = np.diag((1e-3 * np.maximum(np.abs(theta[free]), 1e-6)) ** 2)
-    cov = np.zeros((len(names), len(names)))
-    cov[np.ix_(free, free)] = cov_free
+    optima = [_optimise(posterior, guess) for guess in _first_guesses(decay, posterior)]
+    scores = [float(posterior(theta[None])[0]) for theta, _ in optima]
+    theta, cov = optima[int(np.argmax(scores))]
 
     ratio_range = None
-    if has_ratio:
+    if "mu_s_ratio" in names:
         rows, lp = _scan_ratio(posterior, theta)
-        best = np.max(lp)
-        if np.isfinite(best):
-            good = _RATIO_GRID[lp >= best - 0.5]
+        top = np.max(lp)
+        if np.isfinite(top):
+            good = _RATIO_GRID[lp >= top - 0.5]
             theta = rows[int(np.argmax(lp))]
             step = _RATIO_GRID[1] - _RATIO_GRID[0]
             ratio_range = (max(1.0, good.min() - step), min(3.0, good.max() + step))
