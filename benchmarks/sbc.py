@@ -169,7 +169,9 @@ def plot(levels: dict[str, Any], path: Path) -> None:
         for j, name in enumerate(RANKED):
             ax = axes[i, j]
             p = entry["parameters"][name]
-            ax.bar(np.arange(N_BINS), p["histogram"], width=1.0, color="0.6", edgecolor="k")
+            width = (N_DRAWS + 1) / N_BINS
+            edges = np.arange(N_BINS) * width
+            ax.bar(edges, p["histogram"], width=width, align="edge", color="0.6", edgecolor="k")
             ax.axhspan(lo, hi, color="C0", alpha=0.2, label="99 % band (uniform)")
             ax.axhline(n / N_BINS, color="C0")
             ax.set_title(
@@ -177,7 +179,7 @@ def plot(levels: dict[str, Any], path: Path) -> None:
                 f"n = {n}, χ² p = {p['chi2_p']:.3f}",
                 fontsize=9,
             )
-            ax.set_xlabel(f"rank of the truth among {N_DRAWS} draws (bins of 5)")
+            ax.set_xlabel(f"rank of the truth among {N_DRAWS} draws")
             ax.set_ylabel("replications")
     axes[0, 0].legend(fontsize=7)
     fig.tight_layout()

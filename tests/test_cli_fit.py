@@ -110,3 +110,40 @@ def test_out_that_is_a_file_is_a_package_error(tmp_path: Path) -> None:
     blocker.write_text("")
     with pytest.raises(BayestriboError, match="--out"):
         write_outputs(None, blocker, "x")
+
+
+def test_options_reach_the_fit(json_run, run_file: Path, monkeypatch, capsys) -> None:
+    import bayestribo.fit
+
+    _, _, out_dir, _ = json_run
+    saved = FitResult.load(out_dir / f"{run_file.stem}.nc")
+    seen = {}
+
+    def fake_fit(run, **kwargs):
+        seen.update(kwargs, run=run)
+        return saved
+
+    monkeypatch.setattr(bayestribo.fit, "fit", fake_fit)
+    argv = [
+        "fit",
+        str(run_file),
+        "--model",
+        "averaged",
+        "--seed",
+        "9",
+        "--discrepancy",
+        "--progress",
+        "--skip",
+        "2",
+        "--load",
+        "0.5",
+        "--mass",
+        "0.04",
+    ]
+    assert main(argv) == 0
+    assert seen["model"] == "averaged" and seen["seed"] == 9
+    assert seen["discrepancy"] is True and seen["progress"] is True
+    assert seen["skip_oscillations"] == 2
+    # --load and --mass override the sidecar, as for the other commands
+    assert seen["run"].metadata["load_N"] == 0.5 and seen["run"].metadata["mass_kg"] == 0.04
+    assert "zeta" in capsys.readouterr().out
