@@ -36,6 +36,7 @@ import scipy.optimize
 import scipy.signal
 from numpy.typing import ArrayLike, NDArray
 
+from bayestribo.decay import derive_velocity
 from bayestribo.errors import RecordingError
 from bayestribo.estimators.feeny_liang import feeny_liang
 from bayestribo.estimators.result import Estimate, friction_fraction
@@ -100,14 +101,10 @@ def _uniform_dt(t: NDArray) -> float:
 
 
 def _derivative(t: NDArray, x: NDArray, period: float, sigma: float) -> tuple[NDArray, float]:
-    """Savitzky-Golay (cubic) derivative over ~1/10 period; returns (v, noise std of v)."""
-    dt = _uniform_dt(t)
-    win = max(5, round(period / dt / 10.0) | 1)
-    if win > x.size:
-        raise RecordingError(f"the record ({x.size} samples) is shorter than one fit window")
-    v = scipy.signal.savgol_filter(x, win, 3, deriv=1, delta=dt)
-    coeffs = scipy.signal.savgol_coeffs(win, 3, deriv=1, delta=dt)
-    return v, sigma * float(np.linalg.norm(coeffs))
+    """Velocity from the displacement (:func:`bayestribo.decay.derive_velocity`) and its noise."""
+    _uniform_dt(t)
+    v, gain = derive_velocity(t, x, period)
+    return v, sigma * gain
 
 
 def energy_data(
