@@ -25,6 +25,8 @@ __all__ = ["HyperSamples", "sample_hyperparameters"]
 
 #: Minimum run length in autocorrelation times before a ConvergenceWarning.
 MIN_AUTOCORR_TIMES = 50
+#: Bound on |log σ| of the sampled hyperparameters.
+_LOG_SIGMA_LIMIT = 100.0
 #: Median importance-sampling effective sample size below which a run is flagged.
 MIN_IS_ESS = 10.0
 
@@ -113,13 +115,15 @@ def sample_hyperparameters(
     def log_prob(x: NDArray[np.float64]) -> NDArray[np.float64]:
         beta = x[:, : p * k].reshape(-1, p, k)
         log_sigma = x[:, p * k :]
-        lp = log_sigma.sum(axis=1)  # Jacobian of σ = exp(log σ)
-        for j, prior in enumerate(priors):
-            lp = lp + prior.logpdf(np.exp(log_sigma[:, j]))
-        ok = np.isfinite(lp) & np.all(np.abs(log_sigma) < 700, axis=1)
         out = np.full(len(x), -np.inf)
-        if ok.any():
-            out[ok] = lp[ok] + like(beta[ok], log_sigma[ok])
+        # σ outside e^±100 has no prior mass worth a float: refused before exp overflows.
+        ok = np.all(np.abs(log_sigma) < _LOG_SIGMA_LIMIT, axis=1)
+        if not ok.any():
+            return out
+        lp = log_sigma[ok].sum(axis=1)  # Jacobian of σ = exp(log σ)
+        for j, prior in enumerate(priors):
+            lp = lp + prior.logpdf(np.exp(log_sigma[ok, j]))
+        out[ok] = lp + like(beta[ok], log_sigma[ok])
         return np.where(np.isfinite(out), out, -np.inf)
 
     rng = np.random.default_rng(seed)
