@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from bayestribo.cli import main
-from bayestribo.commands.report import notebook_for, parse_params
+from bayestribo.commands.report import campaign_selection, notebook_for, parse_params
 from bayestribo.report import ReportError
 
 pytest.importorskip("nbclient")
@@ -90,3 +90,11 @@ def test_parse_params_literals_and_strings():
     }
     with pytest.raises(ReportError, match="KEY=VALUE"):
         parse_params(["no_equals_sign"])
+
+
+def test_campaign_selection_follows_the_manifest(tmp_path):
+    if RUN.is_file():
+        assert campaign_selection(RUN.parent.parent) == {}  # bundled: glycerol and air series
+    (tmp_path / "manifest.csv").write_text("run_id,file,series\nr1,runs/r1.csv,oil\n")
+    assert campaign_selection(tmp_path) == {"series": None, "air_series": None}
+    assert campaign_selection(tmp_path / "no-manifest") == {"series": None, "air_series": None}

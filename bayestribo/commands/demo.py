@@ -164,7 +164,7 @@ def run(args: argparse.Namespace) -> int:
         campaign_params.update(
             {
                 "loads": [0.31, 0.59],
-                "air_series": None,
+                "fit_air": False,
                 "population_steps": 600,
                 "fit_kwargs": {"grid_points": 32},
             }

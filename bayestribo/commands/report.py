@@ -19,7 +19,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-__all__ = ["notebook_for", "parse_params", "register"]
+__all__ = ["campaign_selection", "notebook_for", "parse_params", "register"]
 
 
 def register(subparsers: Any) -> None:
@@ -122,6 +122,28 @@ def notebook_for(path: Path) -> str:
     raise ReportError(f"{path}: no such run file or folder")
 
 
+def campaign_selection(folder: Path) -> dict[str, Any]:
+    """Series parameters of the campaign notebook for ``folder``.
+
+    The notebook's defaults select the series ``glycerol`` (runs with contact) and
+    ``air`` (runs without) of a manifest like the bundled one; a folder without those
+    series is selected by load instead (load_N > 0: contact, load_N = 0: air).
+    """
+    import csv
+
+    manifest = folder / "manifest.csv"
+    series: set[str | None] = set()
+    if manifest.is_file():
+        with manifest.open(newline="", encoding="utf-8") as fh:
+            series = {row.get("series") for row in csv.DictReader(fh)}
+    out: dict[str, Any] = {}
+    if "glycerol" not in series:
+        out["series"] = None
+    if "air" not in series:
+        out["air_series"] = None
+    return out
+
+
 def run(args: argparse.Namespace) -> int:
     """Choose the notebook, inject the parameters, execute, write the HTML."""
     from bayestribo.commands._common import columns_from_args
@@ -153,6 +175,7 @@ def run(args: argparse.Namespace) -> int:
                 "file; a campaign folder's runs need sidecars"
             )
         params["data_dir"] = str(path)
+        params.update(campaign_selection(path))
         if args.seed is not None:
             params["campaign_seed"] = args.seed
     if args.figures is not None:
