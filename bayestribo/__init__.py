@@ -35,6 +35,7 @@ _LAZY: dict[str, str] = {
     "write_run": "bayestribo.io",
     "simulate": "bayestribo.simulation",
     "fit_many": "bayestribo.many",
+    "compare_dissipation_laws": "bayestribo.comparison",
     "acquire_run": "bayestribo.acquisition",
     "recover_run": "bayestribo.acquisition",
     "check_adequacy": "bayestribo.adequacy",

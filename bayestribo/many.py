@@ -7,6 +7,10 @@ the campaign seed and the run's *identity* (its ``run_id`` or file stem) with
 :class:`numpy.random.SeedSequence`, never from the order of submission or of
 completion, so the results do not depend on the executor or on the number of workers.
 A failed run is reported with its error and traceback; the others go on.
+
+:func:`fit_catalogued` does the same for run files and records every fit in the
+results catalog (:mod:`bayestribo.catalog`), so that a re-run skips the runs already
+fitted with the same data and settings.
 """
 
 from __future__ import annotations
