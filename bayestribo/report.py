@@ -64,6 +64,18 @@ class ReportError(BayestriboError):
     """A report notebook is missing, malformed, or failed while running."""
 
 
+def _require(module: str) -> Any:
+    """Import a Jupyter package the reports need, or say how to install it."""
+    import importlib
+
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        raise ReportError(
+            f"reports need {module}: pip install nbformat nbclient ipykernel nbconvert"
+        ) from None
+
+
 def notebooks_dir() -> Path:
     """The folder of the report notebooks.
 
@@ -118,8 +130,7 @@ def notebook_path(name: str) -> Path:
 
 def read_notebook(name: str | Path) -> Any:
     """Read a notebook (short name or path) as an nbformat v4 node."""
-    import nbformat
-
+    nbformat = _require("nbformat")
     path = notebook_path(str(name))
     return nbformat.read(path, as_version=4)
 
@@ -233,8 +244,8 @@ def execute_notebook(
         If a cell raises: the message names the cell and the error, and the
         partially executed notebook is in the exception's ``notebook`` attribute.
     """
-    from nbclient import NotebookClient
-    from nbclient.exceptions import CellExecutionError
+    NotebookClient = _require("nbclient").NotebookClient
+    CellExecutionError = _require("nbclient.exceptions").CellExecutionError
 
     folder = Path(cwd) if cwd is not None else notebooks_dir()
     client = NotebookClient(
@@ -274,10 +285,7 @@ def to_html(nb: Any, *, hide_code: bool = False) -> str:
     hide_code : bool
         Leave out the input cells (a report for readers who do not want the code).
     """
-    try:
-        from nbconvert import HTMLExporter
-    except ImportError:  # pragma: no cover - depends on the environment
-        raise ReportError("rendering HTML needs nbconvert: pip install nbconvert") from None
+    HTMLExporter = _require("nbconvert").HTMLExporter
 
     exporter = HTMLExporter(
         exclude_input=hide_code, exclude_input_prompt=hide_code, exclude_output_prompt=hide_code
@@ -326,8 +334,7 @@ def run_report(
     ReportError
         For a missing notebook, a bad parameter, or a cell that fails.
     """
-    import nbformat
-
+    nbformat = _require("nbformat")
     nb = read_notebook(notebook)
     inject_parameters(nb, dict(parameters or {}))
     execute_notebook(nb, cwd=cwd, timeout=timeout)

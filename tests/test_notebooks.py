@@ -10,6 +10,7 @@ from __future__ import annotations
 import importlib.util
 import json
 import os
+import sys
 from pathlib import Path
 
 import pytest
@@ -237,3 +238,9 @@ def test_notebooks_folder_from_the_environment(tmp_path, monkeypatch):
     monkeypatch.setenv("BAYESTRIBO_NOTEBOOKS", str(tmp_path / "missing"))
     with pytest.raises(ReportError, match="BAYESTRIBO_NOTEBOOKS"):
         report.notebooks_dir()
+
+
+def test_a_missing_jupyter_package_is_a_report_error_saying_what_to_install(monkeypatch):
+    monkeypatch.setitem(sys.modules, "nbconvert", None)  # import fails as if not installed
+    with pytest.raises(ReportError, match="reports need nbconvert: pip install"):
+        to_html(nbformat.v4.new_notebook())
