@@ -53,9 +53,10 @@ def _test_parameters(name: str, tmp: Path) -> dict:
     if name == "loads":
         return {
             **common,
-            "loads": [0.31, 0.59],
+            "loads": [0.12, 0.31, 0.59],  # three loads: the slope is inferred
             "repeats": [1],
             "air_repeats": [1],
+            "fit_kwargs": {"grid_points": 32},
             "population_steps": 600,
             "max_workers": 2,
             "summary_path": str(tmp / "summary.json"),
@@ -213,7 +214,9 @@ def test_notebook_executes_with_test_parameters(name, tmp_path):
     if name in ("loads", "viscosity"):
         record = json.loads(summary.read_text())
         assert not record["failed"]
-        assert len(record["runs"]) == {"loads": 3, "viscosity": 2}[name]
+        assert len(record["runs"]) == {"loads": 4, "viscosity": 2}[name]
+    if name == "loads":
+        assert record["trend"] is not None and record["contact_damping"]
     if name == "real_data":
         record = json.loads(summary.read_text())
         verdict = {r["recording"]: r["dominated by"] for r in record["verdict"]}
