@@ -15,6 +15,11 @@ population analysis, and how often the per-run 95 % intervals of ζ and μ_k con
 manifest's true values. Wall times include starting the workers (imports and the
 compiled kernels' first call) as a user would see them.
 
+Workers import bayestribo when they start, so every configuration must see the same
+code: run it on a tree nobody is editing, e.g. an exported snapshot
+(``git archive HEAD | tar -x -C /tmp/snap; cd /tmp/snap; PYTHONPATH=. python
+benchmarks/campaign.py``), and copy ``benchmarks/results/campaign.json`` back.
+
 Run: ``python benchmarks/campaign.py [--runs N]``. Prints a table and writes
 ``benchmarks/results/campaign.json``.
 """
