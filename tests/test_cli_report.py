@@ -4,11 +4,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from bayestribo.cli import main
 from bayestribo.commands.report import campaign_selection, notebook_for, parse_params
-from bayestribo.report import ReportError
+from bayestribo.io import read_run
+from bayestribo.report import ReportError, inject_parameters, read_notebook
 
 pytest.importorskip("nbclient")
 
@@ -16,37 +18,58 @@ REPO = Path(__file__).resolve().parents[1]
 RUN = REPO / "data" / "runs" / "glycerol-N0.31-r1.csv"
 
 
+@pytest.fixture
+def captured(monkeypatch):
+    """Replace the notebook run by a recorder: the command's own work is the parameters.
+
+    The notebooks themselves are executed and rendered in tests/test_notebooks.py and,
+    through the same ``run_report``, end to end by the demo test.
+    """
+    calls = []
+
+    def fake_run_report(notebook, parameters, **kwargs):
+        calls.append((notebook, dict(parameters), kwargs))
+        Path(kwargs["html"]).write_text("<html></html>")
+
+    monkeypatch.setattr("bayestribo.report.run_report", fake_run_report)
+    return calls
+
+
+def test_report_of_a_text_file_passes_the_reading_options_to_the_notebook(
+    tmp_path, captured, capsys
+):
+    t = np.arange(0.0, 5.0, 0.01)
+    text = tmp_path / "decay.txt"
+    np.savetxt(text, np.column_stack([t, np.exp(-0.1 * t) * np.cos(2 * np.pi * t)]))
+    html = tmp_path / "out.html"
+    argv = ["report", str(text), "--out", str(html), "--columns", "t", "x"]
+    argv += ["--length-unit", "arbitrary", "--seed", "7", "--param", "max_steps=500"]
+    argv += ["--figures", str(tmp_path / "figs"), "--hide-code"]
+    assert main(argv) == 0
+    [(notebook, params, kwargs)] = captured
+    assert notebook == "single_run"
+    assert params["run_path"] == str(text.resolve())
+    assert params["read_kwargs"] == {
+        "columns": ["time_s", "displacement_m"],
+        "length_unit": "arbitrary",
+    }
+    assert params["seed"] == 7 and params["max_steps"] == 500
+    assert params["figure_dir"] == str((tmp_path / "figs").resolve())
+    assert kwargs["hide_code"] is True and Path(kwargs["html"]) == html
+    # the parameters are the notebook's, and the reading options are read_run's
+    inject_parameters(read_notebook("single_run"), params)
+    run = read_run(params["run_path"], **params["read_kwargs"])
+    assert run.length_unit == "arbitrary" and run.velocity is None
+    assert str(html.resolve()) in capsys.readouterr().out
+
+
 @pytest.mark.skipif(not RUN.is_file(), reason="the bundled campaign data/ is absent")
-def test_report_of_a_run_file_is_html_with_embedded_figures(tmp_path, capsys):
-    pytest.importorskip("nbconvert")
-    html = tmp_path / "out" / "report.html"
-    figures = tmp_path / "figures"
-    status = main(
-        [
-            "report",
-            str(RUN),
-            "--out",
-            str(html),
-            "--figures",
-            str(figures),
-            "--seed",
-            "3",
-            "--param",
-            "check_model=False",
-            "--param",
-            "grid_points=24",
-            "--hide-code",
-        ]
-    )
-    assert status == 0
-    out = capsys.readouterr().out
-    assert str(html.resolve()) in out
-    text = html.read_text(encoding="utf-8")
-    assert text.count("data:image/png;base64") >= 5  # signals, decay, traces, corner, Π...
-    assert "from bayestribo.fit import fit" not in text  # --hide-code
-    assert "glycerol-N0.31-r1" in text
-    assert "Traceback" not in text
-    assert {"signals.png", "corner.png", "pi_band.png"} <= {p.name for p in figures.glob("*")}
+def test_report_of_a_folder_runs_the_campaign_notebook(tmp_path, captured):
+    assert main(["report", str(RUN.parent.parent), "--out", str(tmp_path / "c.html")]) == 0
+    [(notebook, params, _)] = captured
+    assert notebook == "loads"
+    assert params == {"data_dir": str(RUN.parent.parent.resolve())}  # bundled series
+    inject_parameters(read_notebook("loads"), params)
 
 
 def test_missing_path_is_an_error_naming_it(tmp_path, capsys):
