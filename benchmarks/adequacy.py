@@ -17,8 +17,10 @@ and :func:`bayestribo.adequacy.constancy_test` at α = 0.05:
 * a smaller set with the Bayesian fit on windows of 3 oscillations
   (``--bayes-runs``, default 20 per case: a few seconds per window).
 
-Run: ``python benchmarks/adequacy.py [--runs N] [--bayes-runs M]`` (default 120 per case). Prints a
-table and writes ``benchmarks/results/adequacy.json``.
+Run: ``python benchmarks/adequacy.py [--runs N]`` (least squares, default 120 runs per
+case, writes ``benchmarks/results/adequacy.json``) or ``python benchmarks/adequacy.py
+--part bayes [--bayes-runs M]`` (writes ``benchmarks/results/adequacy_bayes.json``);
+each prints a table.
 """
 
 from __future__ import annotations
@@ -116,13 +118,29 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=120)
     parser.add_argument("--bayes-runs", type=int, default=20)
+    parser.add_argument(
+        "--part",
+        choices=("least_squares", "bayes"),
+        default="least_squares",
+        help="least-squares windows (adequacy.json) or Bayesian windows (adequacy_bayes.json)",
+    )
     args = parser.parse_args()
-    cases = [
-        _case("constant law, resolution noise (false alarm)", args.runs, 1.0, False, 10_000),
-        _case("20 % change of zeta, resolution noise (detection)", args.runs, 1.0, True, 20_000),
-        _case("constant law, 10x noise (false alarm)", args.runs, 10.0, False, 30_000),
-        _case("20 % change of zeta, 10x noise (detection)", args.runs, 10.0, True, 40_000),
-    ]
+    if args.part == "bayes":
+        args.runs = 0
+    else:
+        args.bayes_runs = 0
+    cases = (
+        []
+        if args.runs <= 0
+        else [
+            _case("constant law, resolution noise (false alarm)", args.runs, 1.0, False, 10_000),
+            _case(
+                "20 % change of zeta, resolution noise (detection)", args.runs, 1.0, True, 20_000
+            ),
+            _case("constant law, 10x noise (false alarm)", args.runs, 10.0, False, 30_000),
+            _case("20 % change of zeta, 10x noise (detection)", args.runs, 10.0, True, 40_000),
+        ]
+    )
     if args.bayes_runs > 0:
         cases += [
             _case(
@@ -149,6 +167,9 @@ def main() -> None:
         f"{'95 % interval':>16s} {'peaks in 95 %':>14s} {'s/run':>6s}"
     )
     for c in cases:
+        if c["rate"] is None:
+            print(f"{c['case']:55s} {c['analysed']:5d} (no run analysed: see the errors above)")
+            continue
         lo, hi = c["rate_interval_95"]
         cov = c["predictive_coverage_median"]
         cov_text = "-" if cov is None else f"{cov:.2f}"
@@ -157,10 +178,10 @@ def main() -> None:
             f"{lo:7.3f}-{hi:<8.3f} {cov_text:>14s} {c['seconds_per_run']:6.2f}"
         )
     path = write_results(
-        "adequacy",
+        "adequacy" if args.part == "least_squares" else "adequacy_bayes",
         {
             "alpha": 0.05,
-            "window_oscillations": 2,
+            "window_oscillations": 2 if args.part == "least_squares" else 3,
             "zeta": ZETA,
             "mu_k": 0.0294,
             "dependent_law": "zeta(a) = zeta_end (1 + 0.2 a / x0), zeta_end = 0.0236/1.1",
