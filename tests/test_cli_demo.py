@@ -67,3 +67,44 @@ def test_quick_and_full_exclude_each_other(capsys):
     with pytest.raises(SystemExit):
         main(["demo", "--quick", "--full"])
     assert "not allowed with" in capsys.readouterr().err
+
+
+def _single(converged=True):
+    interval = {"mean": 0.0242507, "ci95": [0.0242501, 0.0242513]}
+    return {
+        "name": "glycerol-N0.31-r1",
+        "fit": {
+            "parameters": {"zeta": interval, "mu_k": {"mean": 0.02854, "ci95": [0.0285, 0.0286]}},
+            "diagnostics": {"converged": converged},
+        },
+        "true": {"zeta": 0.0242508, "mu_k": 0.0285408},
+    }
+
+
+def _campaign(converged=True):
+    summary = {"mean": 0.0238, "interval": [0.0230, 0.0247]}
+    return {
+        "runs": {"glycerol-N0.07-r1": {"diagnostics": {"converged": converged}}},
+        "failed": {},
+        "population": {
+            "pooled": {
+                "n_runs": 5,
+                "parameters": {p: {"mean": summary, "sigma": summary} for p in ("zeta", "mu_k")},
+            }
+        },
+    }
+
+
+def test_summary_shows_enough_digits_for_a_narrow_interval_and_the_truth():
+    text = "\n".join(demo.summary_lines(_single(), _campaign()))
+    # an interval 1.2e-6 wide needs seven decimals to be seen at all
+    assert "0.0242507 [0.0242501, 0.0242513]" in text
+    assert "true value (simulated run)" in text and "0.0242508" in text
+    assert "campaign, 5 runs across loads" in text
+    assert "NOT CONVERGED" not in text and "left out" not in text
+
+
+def test_summary_never_shows_an_unconverged_fit_as_if_it_had_converged():
+    text = "\n".join(demo.summary_lines(_single(converged=False), _campaign(converged=False)))
+    assert "SAMPLER NOT CONVERGED" in text
+    assert "not converged ['glycerol-N0.07-r1']" in text

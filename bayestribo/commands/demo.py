@@ -108,7 +108,11 @@ def summary_lines(single: dict[str, Any], campaign: dict[str, Any]) -> list[str]
     fit = single["fit"]["parameters"]
     w = 34
     lines = [f"{'':34}{'ζ':<{w}}{'μ_k':<{w}}"]
-    lines.append(f"run {single['name']}: posterior mean [95 % credible interval]")
+    converged = single["fit"]["diagnostics"].get("converged", False)
+    lines.append(
+        f"run {single['name']}: posterior mean [95 % credible interval]"
+        + ("" if converged else "  (SAMPLER NOT CONVERGED: do not use)")
+    )
     lines.append(
         f"{'  Bayesian fit':34}"
         + "".join(f"{_interval(fit[p]) if p in fit else '-':<{w}}" for p in PAPER)
@@ -119,7 +123,14 @@ def summary_lines(single: dict[str, Any], campaign: dict[str, Any]) -> list[str]
             f"{'  true value (simulated run)':34}"
             + "".join(f"{true[p] if p in true else '-':<{w}.6g}" for p in PAPER)
         )
+    runs = campaign.get("runs") or {}
+    stuck = sorted(n for n, r in runs.items() if not r["diagnostics"].get("converged", False))
+    failed = sorted(campaign.get("failed") or {})
     pooled = (campaign.get("population") or {}).get("pooled")
+    if stuck or failed:
+        lines.append(
+            f"campaign: left out of the population: not converged {stuck}, failed {failed}"
+        )
     if pooled:
         params = pooled["parameters"]
         lines.append(
