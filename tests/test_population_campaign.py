@@ -69,7 +69,10 @@ def test_runs_are_split_into_contact_groups_and_zeta0(analysis):
     # water_mass_fraction is in no run: left out of the grouping keys.
     assert analysis.by == ("lubricant", "load_N")
     assert list(analysis.contact.groups) == [("glycerol", 0.12), ("glycerol", 0.46)]
-    assert analysis.contact.pooled.runs == tuple(
+    # Pooled over the loads of the series, not over every run with contact.
+    assert analysis.contact.pooled is None
+    assert list(analysis.series.groups) == ["glycerol"]
+    assert analysis.series.groups["glycerol"].runs == tuple(
         f"g-N{n}-r{r}" for n in (0.12, 0.46) for r in range(3)
     )
     assert analysis.zeta0.parameters == ("zeta",)
@@ -78,7 +81,8 @@ def test_runs_are_split_into_contact_groups_and_zeta0(analysis):
     assert np.quantile(z0, 0.025) < 0.0033 < np.quantile(z0, 0.975)
     assert list(analysis.trends) == ["lubricant=glycerol"]
     assert {r["parameter"] for r in analysis.trend_rows()} == {"zeta", "mu_k"}
-    assert len(analysis.group_rows()) == 2 * 3 + 1  # 2 groups + pooled, 2 params; ζ₀
+    kinds = [r["kind"] for r in analysis.group_rows()]
+    assert kinds == ["contact"] * 4 + ["pooled over loads"] * 2 + ["no contact"]
     assert [r["run_id"] for r in analysis.runs][-1] == "air-r2"
     assert "mu_k" not in analysis.runs[-1]
 

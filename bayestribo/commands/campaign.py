@@ -93,7 +93,8 @@ def _run_rows(runs: list[dict[str, Any]]) -> list[dict[str, Any]]:
 def _text(analysis: Any, failures: list[dict[str, str]]) -> str:
     lines = [f"{'group':48s} {'n':>2s} {'param':5s} {'mean [interval]':>30s} {'σ [interval]':>30s}"]
     for r in analysis.group_rows():
-        group = r["group"] if r["kind"] == "contact" else f"no contact (ζ₀): {r['group']}"
+        prefix = {"contact": "", "pooled over loads": "pooled over loads: "}
+        group = prefix.get(r["kind"], "no contact (ζ₀): ") + str(r["group"])
         mean = f"{r['mean_median']:.5f} [{r['mean_low']:.5f}, {r['mean_high']:.5f}]"
         sig = f"{r['sigma_median']:.5f} [{r['sigma_low']:.5f}, {r['sigma_high']:.5f}]"
         lines.append(f"{group:48s} {r['n_runs']:2d} {r['parameter']:5s} {mean:>30s} {sig:>30s}")

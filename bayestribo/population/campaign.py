@@ -72,9 +72,13 @@ class CampaignAnalysis:
     runs : list of dict
         Per-run summaries (metadata keys, ζ and μ_k medians and intervals).
     contact : Population or None
-        Populations of ζ and μ_k per group, and pooled.
+        Populations of ζ and μ_k per group (pooled over all runs with contact only
+        when the load is the sole grouping key).
     zeta0 : Population or None
         Pooled population of ζ over the runs without contact.
+    series : Population or None
+        Populations pooled over the loads of each series (the grouping keys other
+        than the load), when there are such keys.
     trends : dict
         Series label -> :class:`Trend` against ``covariate``.
     derived : list of dict
@@ -87,6 +91,7 @@ class CampaignAnalysis:
     runs: list[dict[str, Any]]
     contact: Population | None
     zeta0: Population | None
+    series: Population | None = None
     trends: dict[str, Trend] = field(default_factory=dict)
     derived: list[dict[str, Any]] = field(default_factory=list)
 
@@ -100,6 +105,7 @@ class CampaignAnalysis:
             "runs": self.runs,
             "contact": None if self.contact is None else self.contact.to_dict(p),
             "zeta0": None if self.zeta0 is None else self.zeta0.to_dict(p),
+            "series": None if self.series is None else self.series.to_dict(p),
             "trends": {k: t.to_dict(p) for k, t in self.trends.items()},
             "derived": self.derived,
         }
@@ -107,7 +113,11 @@ class CampaignAnalysis:
     def group_rows(self) -> list[dict[str, Any]]:
         """One row per group and parameter (CSV table)."""
         rows = []
-        pops = [("contact", self.contact), ("no contact", self.zeta0)]
+        pops = [
+            ("contact", self.contact),
+            ("pooled over loads", self.series),
+            ("no contact", self.zeta0),
+        ]
         for kind, pop in pops:
             if pop is None:
                 continue
@@ -225,8 +235,8 @@ def analyse_campaign(
     covariate: str = "load_N",
     prob: float = 0.95,
     seed: int = 0,
-    max_samples: int | None = 1000,
-    n_steps: int = 2500,
+    max_samples: int | None = 300,
+    n_steps: int = 2000,
     sigma_prior: Mapping[str, Any] | None = None,
 ) -> CampaignAnalysis:
     """Populations, ζ₀, ζ_k, d_k and load trends of a campaign's fits.
@@ -242,7 +252,10 @@ def analyse_campaign(
     prob : float
         Credible-interval probability of the summaries.
     seed, max_samples, n_steps, sigma_prior
-        As in :func:`bayestribo.population.population`.
+        As in :func:`bayestribo.population.population`. Single-run posteriors of a
+        tribometer record are far narrower than the spread between repeats, so 300
+        samples per run carry the population likelihood (the importance-sampling
+        effective sample size is checked and warned about if not).
     """
     results = list(results)
     if not results:
@@ -251,15 +264,21 @@ def analyse_campaign(
     free_runs = [r for r in results if not _has_friction(r)]
     kw = {"seed": seed, "n_steps": n_steps, "sigma_prior": sigma_prior}
     keys = tuple(k for k in by if any(r.metadata.get(k) is not None for r in contact_runs))
-    contact = zeta0 = None
+    contact = zeta0 = series_pop = None
     trends: dict[str, Trend] = {}
     if contact_runs:
         samples = [
             run_samples(r, ("zeta", "mu_k"), max_samples=max_samples, seed=seed)
             for r in contact_runs
         ]
-        contact = population(samples, ("zeta", "mu_k"), by=keys or None, **kw)
         series_keys = tuple(k for k in keys if k != covariate)
+        # Pooled over all runs with contact only if nothing but the load tells them
+        # apart; otherwise pooled over the loads of each series.
+        contact = population(
+            samples, ("zeta", "mu_k"), by=keys or None, pooled=not series_keys, **kw
+        )
+        if series_keys and covariate in keys:
+            series_pop = population(samples, ("zeta", "mu_k"), by=series_keys, pooled=False, **kw)
         series: dict[tuple[Any, ...], list[RunSamples]] = {}
         for s in samples:
             series.setdefault(tuple(s.metadata.get(k) for k in series_keys), []).append(s)
@@ -284,6 +303,7 @@ def analyse_campaign(
         runs=[_run_summary(r, prob) for r in results],
         contact=contact,
         zeta0=zeta0,
+        series=series_pop,
         trends=trends,
         derived=derived,
     )
