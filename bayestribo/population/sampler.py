@@ -143,7 +143,8 @@ def sample_hyperparameters(
 
     chain = sampler.get_chain(discard=burn)  # (steps, walkers, ndim)
     flat = chain.reshape(-1, ndim)
-    tau = sampler.get_autocorr_time(discard=burn, tol=0, quiet=True)
+    with np.errstate(invalid="ignore", divide="ignore"):  # a stuck chain: τ is nan
+        tau = sampler.get_autocorr_time(discard=burn, tol=0, quiet=True)
     tau_max = float(np.max(tau)) if np.all(np.isfinite(tau)) else math.inf
     kept = n_steps - burn
     converged = kept >= MIN_AUTOCORR_TIMES * tau_max
