@@ -7,7 +7,8 @@
 * Every ``check_every`` steps the integrated autocorrelation time τ of each parameter
   is estimated per ensemble (:func:`emcee.autocorr.integrated_time`); burn-in is 2τ;
   the run stops once every ensemble has at least ``autocorr_multiple`` × τ steps after
-  burn-in and τ has settled (changed by less than 10 % since the last check), or at
+  burn-in, τ has settled (changed by less than 10 % since the last check) and the
+  between-ensemble R-hat is below ``rhat_max`` for every parameter, or at
   ``max_steps``.
 * Samples are thinned by ⌈τ/2⌉; the effective sample size of a parameter is
   (steps after burn-in × walkers × ensembles)/τ.
@@ -184,7 +185,14 @@ def run_ensembles(
                 need = int(burn + settings.autocorr_multiple * np.max(tau))
                 bar.set_postfix(tau=f"{np.max(tau):.0f}", need=need)
             if enough and settled:
-                break
+                # Independent ensembles must also agree; otherwise keep sampling.
+                burn_now = min(burn, steps - 1)
+                thin_now = max(1, math.ceil(np.max(tau) / 2))
+                current = np.stack(
+                    [s.get_chain(discard=burn_now, thin=thin_now, flat=True) for s in samplers]
+                )
+                if np.all(_rhat(current) < settings.rhat_max):
+                    break
     finally:
         if bar is not None:
             bar.close()
