@@ -101,7 +101,7 @@ def _text(analysis: Any, failures: list[dict[str, str]]) -> str:
     for r in analysis.trend_rows():
         lines.append(
             f"trend {r['series']} {r['parameter']}: slope {r['slope_median']:.4g} "
-            f"[{r['slope_low']:.4g}, {r['slope_high']:.4g}] /N, "
+            f"[{r['slope_low']:.4g}, {r['slope_high']:.4g}] per unit of {r['covariate']}, "
             f"P(slope > 0) = {r['prob_positive']:.3f}"
         )
     for f in failures:

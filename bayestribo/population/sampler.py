@@ -128,11 +128,11 @@ def sample_hyperparameters(
 
     rng = np.random.default_rng(seed)
     beta0, sigma0 = _initial(like)
-    n = like.design.shape[0]
     start = np.empty((n_walkers, ndim))
-    start[:, : p * k] = beta0.ravel() + rng.normal(size=(n_walkers, p * k)) * np.tile(
-        sigma0 / math.sqrt(n), p
-    )
+    # Spread of each coefficient as least squares gives it: σ² (XᵀX)⁻¹, per parameter
+    # (a slope against a covariate in large units is known far more tightly than a mean).
+    coef_sd = np.sqrt(np.diag(np.linalg.pinv(like.design.T @ like.design)))[:, None] * sigma0
+    start[:, : p * k] = beta0.ravel() + rng.normal(size=(n_walkers, p * k)) * coef_sd.ravel()
     start[:, p * k :] = np.log(sigma0) + 0.1 * rng.normal(size=(n_walkers, k))
     # Differential-evolution moves: about half the autocorrelation time of the default
     # stretch move on these posteriors (long tail in log σ, correlated means).
