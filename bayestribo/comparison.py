@@ -51,6 +51,7 @@ class _Pinned:
         self.names = [n for n in base.names if n not in self.pinned]
         self.likelihood = base.likelihood
         self.priors = base.priors
+        self.friction = bool(getattr(base, "friction", "mu_k" in self.names))
 
     def _full(self, theta: NDArray) -> NDArray:
         theta = np.atleast_2d(np.asarray(theta, dtype=float))

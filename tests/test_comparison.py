@@ -49,11 +49,12 @@ class _Base:
     names: list
     likelihood: object = None
     priors: object = None
+    friction: bool = True
 
 
 def test_pinned_coordinates_are_inserted_in_place():
     pinned = _Pinned(_Base(["zeta", "mu_k", "mu_s_ratio", "y0"]), {"zeta": 0.0})
-    assert pinned.names == ["mu_k", "mu_s_ratio", "y0"]
+    assert pinned.names == ["mu_k", "mu_s_ratio", "y0"] and pinned.friction
     full = pinned._full(np.array([[0.1, 1.2, 3.0], [0.2, 1.5, 4.0]]))
     np.testing.assert_array_equal(full, [[0.0, 0.1, 1.2, 3.0], [0.0, 0.2, 1.5, 4.0]])
 
