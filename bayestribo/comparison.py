@@ -297,7 +297,10 @@ def compare_dissipation_laws(
         best_row = np.unravel_index(np.argmax(sampler.log_prob), sampler.log_prob.shape)
         optima[law] = dict(zip(posterior.names, sampler.chains[best_row], strict=True))
         idatas[law] = _idata(posterior, sampler)
-        loo = az.loo(idatas[law], pointwise=True)
+        with warnings.catch_warnings():  # a high Pareto k is reported in ``warnings``
+            warnings.simplefilter("ignore", UserWarning)
+            warnings.simplefilter("ignore", RuntimeWarning)
+            loo = az.loo(idatas[law], pointwise=True)
         k_max = float(np.max(np.asarray(loo.pareto_k)))
         medians = {
             n: float(np.median(sampler.chains[..., i])) for i, n in enumerate(posterior.names)
