@@ -172,7 +172,7 @@ def plot(levels: dict[str, Any], path: Path) -> None:
             width = (N_DRAWS + 1) / N_BINS
             edges = np.arange(N_BINS) * width
             ax.bar(edges, p["histogram"], width=width, align="edge", color="0.6", edgecolor="k")
-            ax.axhspan(lo, hi, color="C0", alpha=0.2, label="99 % band (uniform)")
+            ax.axhspan(lo, hi, color="C0", alpha=0.2, zorder=0, label="99 % band (uniform)")
             ax.axhline(n / N_BINS, color="C0")
             ax.set_title(
                 f"{labels[name]}, noise {entry['noise_factor']:g}× resolution\n"
@@ -256,7 +256,8 @@ def main(argv: list[str] | None = None) -> int:
             "bins": N_BINS,
             "seed": args.seed,
             "workers": args.workers,
-            "elapsed_s": elapsed,
+            "elapsed_s": None if args.report_only else elapsed,
+            "sum_fit_seconds": float(sum(r.get("seconds", 0.0) for r in records)),
             "levels": levels,
             "figure": png.name,
         },
