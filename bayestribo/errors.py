@@ -12,6 +12,7 @@ __all__ = [
     "AcquisitionError",
     "BayestriboError",
     "ConvergenceWarning",
+    "MisfitWarning",
     "RecordingError",
     "RunFormatError",
 ]
@@ -47,3 +48,7 @@ class AcquisitionError(BayestriboError, OSError):
 
 class ConvergenceWarning(UserWarning):
     """A sampler run did not meet its convergence criteria."""
+
+
+class MisfitWarning(UserWarning):
+    """The model does not reproduce the data within their noise (intervals too narrow)."""

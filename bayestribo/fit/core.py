@@ -24,11 +24,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import scipy.stats
 from numpy.typing import NDArray
 
 from bayestribo import __version__
 from bayestribo.decay import EnergyDecay, energy_decay
-from bayestribo.errors import ConvergenceWarning
+from bayestribo.errors import ConvergenceWarning, MisfitWarning
 from bayestribo.fit.data import PiData, pi_data
 from bayestribo.fit.likelihood import MODELS, PiLikelihood
 from bayestribo.fit.noise import NoiseModel, noise_model
@@ -283,6 +284,34 @@ def fit(
         posterior, walkers, settings, seed=int(rng.integers(2**31)), progress=progress
     )
 
+    # Goodness of fit at the optimum: χ² of the standardized increment residuals. With
+    # the model and noise right it is χ²(m); far above, the intervals are too narrow
+    # unless the discrepancy term is on.
+    resid = posterior.standardized_residuals(theta[None])[0]
+    chi2 = float(np.sum(resid * resid))
+    misfit_p = float(scipy.stats.chi2.sf(chi2, resid.size))
+    if misfit_p < 1e-3 and not discrepancy:
+        warnings.warn(
+            f"the model misfits {name or 'the run'} beyond its noise (χ² = {chi2:.0f} for "
+            f"{resid.size} increments, p = {misfit_p:.1e}): its intervals are too narrow; "
+            "fit with discrepancy=True (--discrepancy) to widen them by the misfit",
+            MisfitWarning,
+            stacklevel=2,
+        )
+    # Goodness of fit at the optimum: χ² of the standardized increment residuals. With
+    # the model and noise right it is χ²(m); far above, the intervals are too narrow
+    # unless the discrepancy term is on.
+    resid = posterior.standardized_residuals(theta[None])[0]
+    chi2 = float(np.sum(resid * resid))
+    misfit_p = float(scipy.stats.chi2.sf(chi2, resid.size))
+    if misfit_p < 1e-3 and not discrepancy:
+        warnings.warn(
+            f"the model misfits {name or 'the run'} beyond its noise (χ² = {chi2:.0f} for "
+            f"{resid.size} increments, p = {misfit_p:.1e}): its intervals are too narrow; "
+            "fit with discrepancy=True (--discrepancy) to widen them by the misfit",
+            MisfitWarning,
+            stacklevel=2,
+        )
     flat = sampler.chains.reshape(-1, sampler.chains.shape[-1])
     derived = _derived(posterior, flat, decay, metadata, rng)
     if not decay.scaling.friction_defined and "mu_k" in derived:
@@ -303,6 +332,9 @@ def fit(
         "rhat_max": float(np.max(sampler.rhat)),
         "acceptance_fraction": sampler.acceptance_fraction,
         "map": dict(zip(posterior.names, theta.tolist(), strict=True)),
+        "chi2_map": chi2,
+        "n_increments": int(resid.size),
+        "misfit_p": misfit_p,
     }
     noise_info = {**noise_used.to_dict(), "description": noise_used.describe()}
     attrs = {

@@ -10,7 +10,7 @@
   burn-in, τ has settled (changed by less than 10 % since the last check) and the
   between-ensemble R-hat is below ``rhat_max`` for every parameter, or at
   ``max_steps``.
-* Samples are thinned by ⌈τ/2⌉; the effective sample size of a parameter is
+* Samples are thinned by ⌈τ⌉; the effective sample size of a parameter is
   (steps after burn-in × walkers × ensembles)/τ.
 * A run that does not meet the criteria is reported as not converged, never silently.
 
@@ -187,7 +187,7 @@ def run_ensembles(
             if enough and settled:
                 # Independent ensembles must also agree; otherwise keep sampling.
                 burn_now = min(burn, steps - 1)
-                thin_now = max(1, math.ceil(np.max(tau) / 2))
+                thin_now = max(1, math.ceil(np.max(tau)))
                 current = np.stack(
                     [s.get_chain(discard=burn_now, thin=thin_now, flat=True) for s in samplers]
                 )
@@ -198,7 +198,7 @@ def run_ensembles(
             bar.close()
 
     burn = min(math.ceil(2 * np.max(tau)), steps - 1)
-    thin = max(1, math.ceil(np.max(tau) / 2))
+    thin = max(1, math.ceil(np.max(tau)))
     chains = np.stack([s.get_chain(discard=burn, thin=thin, flat=True) for s in samplers])
     lps = np.stack([s.get_log_prob(discard=burn, thin=thin, flat=True) for s in samplers])
     acceptance = float(np.mean([s.acceptance_fraction for s in samplers]))

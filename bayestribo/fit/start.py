@@ -4,8 +4,9 @@
    analysed window (falling back to ζ = 0.01 and a friction of 1 % of the amplitude),
    and the same decay rate put all into viscous damping or all into friction; the
    best optimum of the three is kept.
-2. For the exact model, μ_s/μ_k is scanned over its prior range: it decides at which
-   turning point the model sticks, which the data pin down sharply.
+2. For the exact model, μ_s/μ_k is scanned over its prior's range: it decides at
+   which turning point the model sticks, which the data pin down sharply. Guesses
+   outside a (user-narrowed) prior's support are moved inside it.
 3. Gauss-Newton least squares (:func:`scipy.optimize.least_squares`) of the
    standardized residuals over the continuous parameters, from which the Laplace
    covariance (JᵀJ)⁻¹ follows.
@@ -28,9 +29,6 @@ from bayestribo.fit.posterior import Posterior
 from bayestribo.fit.priors import Normal
 
 __all__ = ["initial_walkers", "maximum_a_posteriori"]
-
-_RATIO_GRID = np.linspace(1.0, 3.0, 81)
-
 
 def _first_guesses(decay: EnergyDecay, posterior: Posterior) -> list[dict[str, float]]:
     """Starting points: the Feeny-Liang estimate and its pure viscous / pure Coulomb ends.
@@ -67,11 +65,35 @@ def _vector(posterior: Posterior, values: dict[str, float]) -> NDArray:
     return np.array([values[n] for n in posterior.names], dtype=float)
 
 
-def _scan_ratio(posterior: Posterior, theta: NDArray) -> tuple[NDArray, NDArray]:
+def _support(prior: object) -> tuple[float, float]:
+    """Bounds of a prior's support (infinite for unbounded priors)."""
+    return float(getattr(prior, "low", -np.inf)), float(getattr(prior, "high", np.inf))
+
+
+def _into_support(posterior: Posterior, values: dict[str, float]) -> dict[str, float]:
+    """Move guesses inside their priors' support (a user may have narrowed a prior)."""
+    out = dict(values)
+    for name in posterior.names:
+        low, high = _support(posterior.priors[name])
+        if np.isfinite(low) and np.isfinite(high):
+            margin = 1e-3 * (high - low)
+            out[name] = float(np.clip(out[name], low + margin, high - margin))
+    return out
+
+
+def _ratio_grid(posterior: Posterior) -> NDArray:
+    low, high = _support(posterior.priors["mu_s_ratio"])
+    low = 1.0 if not np.isfinite(low) else max(low, 1.0)
+    high = 3.0 if not np.isfinite(high) else high
+    return np.linspace(low, high, 81)
+
+
+def _scan_ratio(posterior: Posterior, theta: NDArray) -> tuple[NDArray, NDArray, NDArray]:
     i = posterior.names.index("mu_s_ratio")
-    rows = np.repeat(theta[None, :], _RATIO_GRID.size, axis=0)
-    rows[:, i] = _RATIO_GRID
-    return rows, posterior(rows)
+    grid = _ratio_grid(posterior)
+    rows = np.repeat(theta[None, :], grid.size, axis=0)
+    rows[:, i] = grid
+    return rows, posterior(rows), grid
 
 
 def _optimise(posterior: Posterior, guess: dict[str, float]) -> tuple[NDArray, NDArray]:
@@ -79,9 +101,9 @@ def _optimise(posterior: Posterior, guess: dict[str, float]) -> tuple[NDArray, N
     names = posterior.names
     values = {"zeta": 0.0, "y0": posterior.likelihood.data.y0, "mu_s_ratio": 1.2,
               "log10_discrepancy": -5.0, **guess}
-    theta = _vector(posterior, {n: values[n] for n in names})
+    theta = _vector(posterior, _into_support(posterior, {n: values[n] for n in names}))
     if "mu_s_ratio" in names:
-        rows, lp = _scan_ratio(posterior, theta)
+        rows, lp, _ = _scan_ratio(posterior, theta)
         if np.any(np.isfinite(lp)):
             theta = rows[int(np.argmax(lp))]
 
@@ -135,13 +157,13 @@ def maximum_a_posteriori(
 
     ratio_range = None
     if "mu_s_ratio" in names:
-        rows, lp = _scan_ratio(posterior, theta)
+        rows, lp, grid = _scan_ratio(posterior, theta)
         top = np.max(lp)
         if np.isfinite(top):
-            good = _RATIO_GRID[lp >= top - 0.5]
+            good = grid[lp >= top - 0.5]
             theta = rows[int(np.argmax(lp))]
-            step = _RATIO_GRID[1] - _RATIO_GRID[0]
-            ratio_range = (max(1.0, good.min() - step), min(3.0, good.max() + step))
+            step = grid[1] - grid[0]
+            ratio_range = (max(grid[0], good.min() - step), min(grid[-1], good.max() + step))
     return theta, cov, ratio_range
 
 
