@@ -162,9 +162,11 @@ def _trajectory(
     def amp(n: NDArray) -> NDArray:
         return _amplitude(n, a0, mk, x)
 
-    down = ok & (n_moving - 1.0 >= n_min) & (amp(n_moving - 1.0) <= delta)
-    n_moving = n_moving - down
-    up = ok & (amp(n_moving) > delta)
+    # n* can be infinite (friction below double precision): those rows keep it.
+    with np.errstate(invalid="ignore"):
+        down = ok & (n_moving - 1.0 >= n_min) & (amp(n_moving - 1.0) <= delta)
+        n_moving = n_moving - down
+        up = ok & (amp(n_moving) > delta)
     n_moving = np.where(never, np.inf, n_moving + up)
 
     last = np.where(np.isfinite(n_moving), np.maximum(n_moving - 1.0, 0.0), 0.0)
