@@ -123,50 +123,10 @@ class LawComparison:
 
 
 def _variant(law: str, data: Any, model: str, discrepancy: bool) -> Any:
-    from bayestribo.fit.likelihood import PiLikelihood
-    from bayestribo.fit.posterior import Posterior
-    from bayestribo.fit.priors import default_priors
+    from bayestribo.fit.core import build_posterior
 
-    likelihood = PiLikelihood(
-        data,
-        model=model,  # type: ignore[arg-type]
-        offset_sd=max(1e-2 * abs(data.y0), 1e-12),
-        drift_sd=max(1e-2 * abs(data.y0) / data.tau_end, 1e-15),
-    )
-    friction = law != "viscous"
-    base = Posterior(
-        default_priors(data.y0, friction=friction, discrepancy=discrepancy), likelihood
-    )
+    base = build_posterior(data, model=model, friction=law != "viscous", discrepancy=discrepancy)
     return _Pinned(base, {"zeta": 0.0}) if law == "coulomb" else base
-
-
-def _refine(posterior: Any, theta: NDArray) -> tuple[NDArray, NDArray]:
-    """Least-squares optimum of the continuous coordinates from ``theta``, and its
-    Laplace covariance (μ_s/μ_k held, as in :func:`bayestribo.fit.start`)."""
-    from scipy.optimize import least_squares
-
-    names = posterior.names
-    free = [i for i, n in enumerate(names) if n not in ("mu_s_ratio", "log10_discrepancy")]
-    scale = np.array([max(abs(theta[i]), 1e-3) for i in free]) * 1e-3
-    size = posterior.likelihood.data.increments.size
-
-    def residuals(u: NDArray) -> NDArray:
-        th = theta.copy()
-        th[free] = theta[free] + u * scale
-        if not np.isfinite(posterior(th[None])[0]):
-            return np.full(size, 1e6)
-        return posterior.standardized_residuals(th[None])[0]
-
-    sol = least_squares(residuals, np.zeros(len(free)), x_scale="jac", method="trf")
-    out = theta.copy()
-    out[free] = theta[free] + sol.x * scale
-    jac = sol.jac / scale[None, :]
-    cov = np.zeros((len(names), len(names)))
-    try:
-        cov[np.ix_(free, free)] = np.linalg.inv(jac.T @ jac)
-    except np.linalg.LinAlgError:
-        cov[np.ix_(free, free)] = np.diag((1e-3 * np.maximum(np.abs(out[free]), 1e-6)) ** 2)
-    return out, cov
 
 
 def _sample(
@@ -179,13 +139,13 @@ def _sample(
     """MAP, starting walkers and ensembles; ``nested_start`` is a second starting point
     (the optimum of a nested law, e.g. viscous inside both), kept if it is better."""
     from bayestribo.fit.sampling import run_ensembles
-    from bayestribo.fit.start import initial_walkers, maximum_a_posteriori
+    from bayestribo.fit.start import initial_walkers, maximum_a_posteriori, refine
 
     theta, cov, ratio_range = maximum_a_posteriori(posterior, decay)
     if nested_start is not None:
         start = np.array([nested_start[n] for n in posterior.names], dtype=float)
         if np.isfinite(posterior(start[None])[0]):
-            alt, alt_cov = _refine(posterior, start)
+            alt, alt_cov = refine(posterior, start)
             if posterior(alt[None])[0] > posterior(theta[None])[0]:
                 theta, cov = alt, alt_cov
     walkers = initial_walkers(

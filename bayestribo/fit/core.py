@@ -39,7 +39,7 @@ from bayestribo.fit.result import FitResult, _plain
 from bayestribo.fit.sampling import SamplerRun, SamplerSettings, run_ensembles
 from bayestribo.fit.start import initial_walkers, maximum_a_posteriori
 
-__all__ = ["fit", "prior_sensitivity"]
+__all__ = ["build_posterior", "fit", "prior_sensitivity"]
 
 _PREDICTIVE_DRAWS = 400
 
@@ -82,6 +82,45 @@ def prior_sensitivity(
         contraction = 1.0 - (sd[i] / prior_sd) ** 2 if prior_sd > 0 else float("nan")
         out[name] = {"mean_shift_sd": float(shift[i]), "contraction": float(contraction)}
     return out
+
+
+def build_posterior(
+    data: PiData,
+    *,
+    model: str = "exact",
+    friction: bool = True,
+    discrepancy: bool = False,
+    priors: Mapping[str, Prior] | None = None,
+) -> Posterior:
+    """The fit's posterior for observed Π increments: default priors and likelihood.
+
+    The equilibrium nuisance gets prior standard deviations of 1 % of the initial
+    amplitude (δ₀) and 1 % of it over the analysed window (δ₁), hundreds of times
+    the errors of the equilibrium estimate.
+
+    Parameters
+    ----------
+    data : PiData
+        Observed increments (:func:`bayestribo.fit.data.pi_data`).
+    model : {"exact", "averaged"}
+        Forward model.
+    friction : bool
+        Fit μ_k and μ_s/μ_k (False: viscous damping only).
+    discrepancy : bool
+        Add the model-discrepancy term.
+    priors : mapping, optional
+        Replacement priors by parameter name.
+    """
+    prior_set = default_priors(data.y0, friction=friction, discrepancy=discrepancy)
+    if priors:
+        prior_set = prior_set.replace(**dict(priors))
+    likelihood = PiLikelihood(
+        data,
+        model=model,  # type: ignore[arg-type]
+        offset_sd=max(1e-2 * abs(data.y0), 1e-12),
+        drift_sd=max(1e-2 * abs(data.y0) / data.tau_end, 1e-15),
+    )
+    return Posterior(prior_set, likelihood)
 
 
 def _read(run: Any, read_kwargs: Mapping[str, Any]) -> tuple[Any, str]:
@@ -267,16 +306,10 @@ def fit(
     data = pi_data(decay, noise_used, grid_points=grid_points, seed=int(rng.integers(2**31)))
 
     contact = not (metadata.get("load_N") == 0)
-    prior_set = default_priors(data.y0, friction=contact, discrepancy=discrepancy)
-    if priors:
-        prior_set = prior_set.replace(**dict(priors))
-    likelihood = PiLikelihood(
-        data,
-        model=model,  # type: ignore[arg-type]
-        offset_sd=max(1e-2 * abs(data.y0), 1e-12),
-        drift_sd=max(1e-2 * abs(data.y0) / data.tau_end, 1e-15),
+    posterior = build_posterior(
+        data, model=model, friction=contact, discrepancy=discrepancy, priors=priors
     )
-    posterior = Posterior(prior_set, likelihood)
+    prior_set = posterior.priors
     theta, cov, ratio_range = maximum_a_posteriori(posterior, decay)
     settings = SamplerSettings(n_walkers=n_walkers, n_ensembles=n_ensembles, max_steps=max_steps)
     walkers = initial_walkers(posterior, theta, cov, ratio_range, n_ensembles, n_walkers, rng)

@@ -28,7 +28,8 @@ from bayestribo.errors import BayestriboError
 from bayestribo.fit.posterior import Posterior
 from bayestribo.fit.priors import Normal
 
-__all__ = ["initial_walkers", "maximum_a_posteriori"]
+__all__ = ["initial_walkers", "maximum_a_posteriori", "refine"]
+
 
 def _first_guesses(decay: EnergyDecay, posterior: Posterior) -> list[dict[str, float]]:
     """Starting points: the Feeny-Liang estimate and its pure viscous / pure Coulomb ends.
@@ -56,8 +57,9 @@ def _first_guesses(decay: EnergyDecay, posterior: Posterior) -> list[dict[str, f
     guesses = [{"zeta": zeta, "mu_k": mu_k}]
     if posterior.friction:
         guesses.append({"zeta": min(total, 0.29), "mu_k": 1e-4 * mu_k})
-        guesses.append({"zeta": 1e-4 * zeta, "mu_k": min(0.5 * math.pi * total * 0.5 * amp,
-                                                          0.24 * amp)})
+        guesses.append(
+            {"zeta": 1e-4 * zeta, "mu_k": min(0.5 * math.pi * total * 0.5 * amp, 0.24 * amp)}
+        )
     return guesses
 
 
@@ -97,23 +99,54 @@ def _scan_ratio(posterior: Posterior, theta: NDArray) -> tuple[NDArray, NDArray,
 
 
 def _optimise(posterior: Posterior, guess: dict[str, float]) -> tuple[NDArray, NDArray]:
-    """Gauss-Newton optimum from one guess, and the Laplace covariance there."""
+    """Optimum from one guess (μ_s/μ_k scanned first), and the Laplace covariance there."""
     names = posterior.names
-    values = {"zeta": 0.0, "y0": posterior.likelihood.data.y0, "mu_s_ratio": 1.2,
-              "log10_discrepancy": -5.0, **guess}
+    values = {
+        "zeta": 0.0,
+        "y0": posterior.likelihood.data.y0,
+        "mu_s_ratio": 1.2,
+        "log10_discrepancy": -5.0,
+        **guess,
+    }
     theta = _vector(posterior, _into_support(posterior, {n: values[n] for n in names}))
     if "mu_s_ratio" in names:
         rows, lp, _ = _scan_ratio(posterior, theta)
         if np.any(np.isfinite(lp)):
             theta = rows[int(np.argmax(lp))]
+    return refine(posterior, theta)
 
+
+def refine(posterior: Posterior, theta: NDArray) -> tuple[NDArray, NDArray]:
+    """Gauss-Newton MAP of the continuous coordinates from ``theta``, and its Laplace
+    covariance (μ_s/μ_k and the discrepancy held at their values in ``theta``).
+
+    Parameters
+    ----------
+    posterior : Posterior
+        Any object with ``names``, ``priors``, ``likelihood``, a vectorised
+        ``__call__`` and ``standardized_residuals`` (e.g. a posterior with some
+        coordinates pinned).
+    theta : ndarray
+        Starting point in sampling coordinates, with a finite posterior density.
+
+    Returns
+    -------
+    theta : ndarray
+        The optimum.
+    cov : ndarray
+        Laplace covariance (zero rows and columns for the held coordinates).
+    """
+    names = posterior.names
+    theta = np.array(theta, dtype=float)
     free = [i for i, n in enumerate(names) if n not in ("mu_s_ratio", "log10_discrepancy")]
     scale = np.array([max(abs(theta[i]), 1e-3) for i in free]) * 1e-3
     size = posterior.likelihood.data.increments.size
-
     # Gaussian priors enter the least squares as residuals (θ - μ)/σ: a MAP, not an MLE.
-    gaussian = [(j, posterior.priors[names[i]]) for j, i in enumerate(free)
-                if isinstance(posterior.priors[names[i]], Normal)]
+    gaussian = [
+        (j, posterior.priors[names[i]])
+        for j, i in enumerate(free)
+        if isinstance(posterior.priors[names[i]], Normal)
+    ]
 
     def residuals(u: NDArray) -> NDArray:
         th = theta.copy()
