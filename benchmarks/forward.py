@@ -16,9 +16,9 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from _machine import write_results
 from scipy.integrate import cumulative_trapezoid
 
-from _machine import write_results
 from bayestribo.model import averaged_pi, exact_pi, stop_time
 from bayestribo.model._kernel import exact_pi_grid
 from bayestribo.model.reference import ode_solve
@@ -70,8 +70,12 @@ def main() -> None:
     t_ode_64 = t_ode_1 * walkers  # one ODE solution per parameter set
     # Check that the two ways agree (relative to Π(0)) before trusting the timings.
     agreement = float(
-        np.max(np.abs(ode_pi_on_grid(tau, 7.5, 0.0236, 0.0294, 0.035)
-                      - exact_pi(tau, 7.5, 0.0236, 0.0294, 0.035)))
+        np.max(
+            np.abs(
+                ode_pi_on_grid(tau, 7.5, 0.0236, 0.0294, 0.035)
+                - exact_pi(tau, 7.5, 0.0236, 0.0294, 0.035)
+            )
+        )
         / exact_pi(0.0, 7.5, 0.0236, 0.0294, 0.035)
     )
     for name, one, many in (
@@ -85,8 +89,10 @@ def main() -> None:
     print(f"Π on a {GRID}-point τ grid over the whole decay (τ_end = {end:.1f})")
     print(f"{'model':<28}{'1 set [ms]':>12}{'64 sets [ms]':>14}{'per set [µs]':>14}")
     for r in rows:
-        print(f"{r['model']:<28}{1e3 * r['seconds_1']:12.3f}{1e3 * r['seconds_64']:14.3f}"
-              f"{1e6 * r['seconds_64'] / walkers:14.1f}")
+        print(
+            f"{r['model']:<28}{1e3 * r['seconds_1']:12.3f}{1e3 * r['seconds_64']:14.3f}"
+            f"{1e6 * r['seconds_64'] / walkers:14.1f}"
+        )
     ratios = {
         "ode_over_exact_1": t_ode_1 / t_exact_1,
         "ode_over_exact_64": t_ode_64 / t_exact_64,
@@ -94,17 +100,27 @@ def main() -> None:
         "ode_over_kernel_1": t_ode_1 / t_kernel_1,
         "ode_over_kernel_64": t_ode_64 / t_kernel_64,
     }
-    print(f"solve_ivp / exact: {ratios['ode_over_exact_1']:.0f}x (1 set), "
-          f"{ratios['ode_over_exact_64']:.0f}x (64 sets)")
-    print(f"solve_ivp / kernel: {ratios['ode_over_kernel_1']:.0f}x (1 set), "
-          f"{ratios['ode_over_kernel_64']:.0f}x (64 sets)")
+    print(
+        f"solve_ivp / exact: {ratios['ode_over_exact_1']:.0f}x (1 set), "
+        f"{ratios['ode_over_exact_64']:.0f}x (64 sets)"
+    )
+    print(
+        f"solve_ivp / kernel: {ratios['ode_over_kernel_1']:.0f}x (1 set), "
+        f"{ratios['ode_over_kernel_64']:.0f}x (64 sets)"
+    )
     print(f"exact / averaged (64 sets): {ratios['exact_over_averaged_64']:.2f}")
     print(f"max |Π_ode - Π_exact| / Π(0) = {agreement:.1e}")
-    path = write_results("forward", {
-        "grid_points": GRID, "walkers": walkers, "rows": rows, "ratios": ratios,
-        "ode_vs_exact_max_relative_difference": agreement,
-        "note": "solve_ivp time for 64 sets is 64 x the single-set time (one solution each)",
-    })
+    path = write_results(
+        "forward",
+        {
+            "grid_points": GRID,
+            "walkers": walkers,
+            "rows": rows,
+            "ratios": ratios,
+            "ode_vs_exact_max_relative_difference": agreement,
+            "note": "solve_ivp time for 64 sets is 64 x the single-set time (one solution each)",
+        },
+    )
     print(f"wrote {path}")
 
 

@@ -208,8 +208,14 @@ def test_unconverged_warning_filter_does_not_leak():
 
 
 def test_narrowed_prior_moves_the_start_inside_it():
-    run = simulate(seed=5, zeta=0.03798, mu_k=0.04962, displacement_noise_m=4.5e-6,
-                   velocity_noise_m_per_s=4.5e-7, sample_rate_Hz=2000.0)
+    run = simulate(
+        seed=5,
+        zeta=0.03798,
+        mu_k=0.04962,
+        displacement_noise_m=4.5e-6,
+        velocity_noise_m_per_s=4.5e-7,
+        sample_rate_Hz=2000.0,
+    )
     from bayestribo.fit import Uniform
 
     result = fit(run, seed=1, priors={"mu_k": Uniform(0.01, 0.05)})
@@ -221,9 +227,14 @@ def test_misfit_is_flagged():
     """Damping that grows with amplitude is not the linear law: χ² says so."""
     from bayestribo.errors import MisfitWarning
 
-    run = simulate(seed=9, zeta=lambda a: 0.01 + 20.0 * a, mu_k=0.0294,
-                   sample_rate_Hz=2000.0, displacement_noise_m=1.5e-6,
-                   velocity_noise_m_per_s=1.5e-7)
+    run = simulate(
+        seed=9,
+        zeta=lambda a: 0.01 + 20.0 * a,
+        mu_k=0.0294,
+        sample_rate_Hz=2000.0,
+        displacement_noise_m=1.5e-6,
+        velocity_noise_m_per_s=1.5e-7,
+    )
     with pytest.warns(MisfitWarning, match="discrepancy"):
         result = fit(run, seed=2)
     assert result.diagnostics["misfit_p"] < 1e-3

@@ -110,8 +110,9 @@ def test_derived_velocity_noise_against_the_whole_pipeline():
         idx = np.searchsorted(d.t, decay.t[edges[:9]])
         if idx[0] >= d.t.size or not np.array_equal(d.t[idx], decay.t[edges[:9]]):
             continue
-        draws.append([w @ d.energy[i : i + w.size] for i, w in zip(idx[:8], weights[:8],
-                                                                   strict=True)])
+        draws.append(
+            [w @ d.energy[i : i + w.size] for i, w in zip(idx[:8], weights[:8], strict=True)]
+        )
     draws = np.asarray(draws)
     assert len(draws) >= 30
     # The pipeline also re-estimates the equilibrium and the frequency, which the

@@ -112,5 +112,5 @@ def test_posterior_skips_impossible_priors_and_refuses_nan(setup):
             return np.full(np.shape(args[0])[0], np.nan)
 
     broken = Posterior(default_priors(data.y0), NaNLikelihood(data))
-    with pytest.raises(FloatingPointError, match="zeta=0.0236"):
+    with pytest.raises(FloatingPointError, match=r"zeta=0\.0236"):
         broken(rows[:1])
