@@ -331,20 +331,6 @@ def fit(
             MisfitWarning,
             stacklevel=2,
         )
-    # Goodness of fit at the optimum: χ² of the standardized increment residuals. With
-    # the model and noise right it is χ²(m); far above, the intervals are too narrow
-    # unless the discrepancy term is on.
-    resid = posterior.standardized_residuals(theta[None])[0]
-    chi2 = float(np.sum(resid * resid))
-    misfit_p = float(scipy.stats.chi2.sf(chi2, resid.size))
-    if misfit_p < 1e-3 and not discrepancy:
-        warnings.warn(
-            f"the model misfits {name or 'the run'} beyond its noise (χ² = {chi2:.0f} for "
-            f"{resid.size} increments, p = {misfit_p:.1e}): its intervals are too narrow; "
-            "fit with discrepancy=True (--discrepancy) to widen them by the misfit",
-            MisfitWarning,
-            stacklevel=2,
-        )
     flat = sampler.chains.reshape(-1, sampler.chains.shape[-1])
     derived = _derived(posterior, flat, decay, metadata, rng)
     if not decay.scaling.friction_defined and "mu_k" in derived:
