@@ -5,7 +5,13 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-__all__ = ["COLUMN_ALIASES", "add_run_arguments", "read_run_from_args"]
+__all__ = [
+    "COLUMN_ALIASES",
+    "add_reading_options",
+    "add_run_arguments",
+    "read_run_from_args",
+    "reading_kwargs",
+]
 
 #: Short names accepted by ``--columns``.
 COLUMN_ALIASES = {"t": "time_s", "x": "displacement_m", "v": "velocity_m_per_s", "-": "ignore"}
@@ -14,6 +20,11 @@ COLUMN_ALIASES = {"t": "time_s", "x": "displacement_m", "v": "velocity_m_per_s",
 def add_run_arguments(parser: argparse.ArgumentParser) -> None:
     """Add RUN and the options that describe a file without a canonical header."""
     parser.add_argument("run", metavar="RUN", help="run file (canonical CSV, text, UFF, TDMS)")
+    add_reading_options(parser)
+
+
+def add_reading_options(parser: argparse.ArgumentParser) -> None:
+    """Add the options that describe a run file without a canonical header."""
     parser.add_argument(
         "--columns",
         nargs="+",
@@ -39,11 +50,12 @@ def columns_from_args(values: list[str] | None) -> list[str] | None:
     return [COLUMN_ALIASES.get(c, c) for c in names]
 
 
-def read_run_from_args(args: argparse.Namespace) -> Any:
-    """Read the run named by :func:`add_run_arguments` options."""
-    from bayestribo.io import read_run
-
-    meta: dict[str, Any] = {}
+def reading_kwargs(args: argparse.Namespace) -> dict[str, Any]:
+    """Keyword arguments of :func:`bayestribo.read_run` from :func:`add_reading_options`."""
+    kwargs: dict[str, Any] = {}
+    columns = columns_from_args(args.columns)
+    if columns is not None:
+        kwargs["columns"] = columns
     for key, value in (
         ("length_unit", args.length_unit),
         ("natural_frequency_Hz", args.frequency),
@@ -51,5 +63,12 @@ def read_run_from_args(args: argparse.Namespace) -> Any:
         ("mass_kg", args.mass),
     ):
         if value is not None:
-            meta[key] = value
-    return read_run(args.run, columns=columns_from_args(args.columns), **meta)
+            kwargs[key] = value
+    return kwargs
+
+
+def read_run_from_args(args: argparse.Namespace) -> Any:
+    """Read the run named by :func:`add_run_arguments` options."""
+    from bayestribo.io import read_run
+
+    return read_run(args.run, **reading_kwargs(args))

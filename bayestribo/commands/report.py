@@ -24,7 +24,7 @@ __all__ = ["campaign_selection", "notebook_for", "parse_params", "register"]
 
 def register(subparsers: Any) -> None:
     """Add the ``report`` sub-command."""
-    from bayestribo.commands._common import COLUMN_ALIASES
+    from bayestribo.commands._common import add_reading_options
 
     p = subparsers.add_parser(
         "report",
@@ -41,21 +41,7 @@ def register(subparsers: Any) -> None:
     )
     p.add_argument("path", metavar="PATH", help="run file, or campaign folder")
     p.add_argument("--out", type=Path, help="HTML file to write (default: <PATH stem>-report.html)")
-    p.add_argument(
-        "--columns",
-        nargs="+",
-        metavar="NAME",
-        help="run file without a canonical header: the role of each column "
-        f"(time_s, displacement_m, velocity_m_per_s, ignore; short: {', '.join(COLUMN_ALIASES)})",
-    )
-    p.add_argument(
-        "--length-unit",
-        choices=("m", "arbitrary"),
-        help="length unit of the signals (arbitrary: friction as a displacement only)",
-    )
-    p.add_argument("--frequency", type=float, help="nominal natural frequency f [Hz]")
-    p.add_argument("--load", type=float, help="normal load N [N]")
-    p.add_argument("--mass", type=float, help="oscillating mass m [kg]")
+    add_reading_options(p)
     p.add_argument("--seed", type=int, help="seed of the fits (the notebook's default otherwise)")
     p.add_argument(
         "--param",
@@ -146,25 +132,14 @@ def campaign_selection(folder: Path) -> dict[str, Any]:
 
 def run(args: argparse.Namespace) -> int:
     """Choose the notebook, inject the parameters, execute, write the HTML."""
-    from bayestribo.commands._common import columns_from_args
+    from bayestribo.commands._common import reading_kwargs
     from bayestribo.report import ReportError, run_report
 
     path = Path(args.path).resolve()
     notebook = notebook_for(path)
     params: dict[str, Any] = {}
     if notebook == "single_run":
-        read_kwargs: dict[str, Any] = {}
-        columns = columns_from_args(args.columns)
-        if columns is not None:
-            read_kwargs["columns"] = columns
-        for key, value in (
-            ("length_unit", args.length_unit),
-            ("natural_frequency_Hz", args.frequency),
-            ("load_N", args.load),
-            ("mass_kg", args.mass),
-        ):
-            if value is not None:
-                read_kwargs[key] = value
+        read_kwargs = reading_kwargs(args)
         params.update({"run_path": str(path), "read_kwargs": read_kwargs})
         if args.seed is not None:
             params["seed"] = args.seed
