@@ -38,6 +38,14 @@ def machine() -> dict[str, Any]:
     }
 
 
+def niced_worker() -> None:
+    """Process-pool initialiser: lower the worker's priority on a shared machine."""
+    try:
+        os.nice(10)
+    except OSError:
+        pass
+
+
 def write_results(name: str, results: dict[str, Any]) -> Path:
     """Write ``results`` with the machine description to ``results/<name>.json``."""
     RESULTS.mkdir(parents=True, exist_ok=True)

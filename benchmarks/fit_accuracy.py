@@ -42,7 +42,7 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _fitsetup import likelihood_of  # noqa: E402
-from _machine import RESULTS, write_results  # noqa: E402
+from _machine import RESULTS, niced_worker, write_results  # noqa: E402
 
 __all__ = ["baseline_run", "crb_run", "fisher_bound"]
 
@@ -171,13 +171,6 @@ def _baseline_table(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return rows
 
 
-def _init_worker() -> None:
-    try:
-        os.nice(10)
-    except OSError:
-        pass
-
-
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--crb-runs", type=int, default=5, help="runs per noise level")
@@ -185,7 +178,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args(argv)
     start = time.perf_counter()
-    with ProcessPoolExecutor(max_workers=args.workers, initializer=_init_worker) as pool:
+    with ProcessPoolExecutor(max_workers=args.workers, initializer=niced_worker) as pool:
         crb_f = [
             pool.submit(crb_run, level, i) for i in range(args.crb_runs) for level in CRB_LEVELS
         ]

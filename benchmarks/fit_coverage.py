@@ -48,7 +48,7 @@ import numpy as np  # noqa: E402
 from scipy import stats  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _machine import RESULTS, write_results  # noqa: E402
+from _machine import RESULTS, niced_worker, write_results  # noqa: E402
 
 __all__ = ["one_run", "summarise"]
 
@@ -160,13 +160,6 @@ def summarise(records: list[dict[str, Any]]) -> dict[str, Any]:
     return summary
 
 
-def _init_worker() -> None:
-    try:
-        os.nice(10)
-    except OSError:
-        pass
-
-
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=100)
@@ -189,7 +182,7 @@ def main(argv: list[str] | None = None) -> int:
         args.raw.parent.mkdir(parents=True, exist_ok=True)
         with (
             open(args.raw, "a" if args.resume else "w") as raw,
-            ProcessPoolExecutor(max_workers=args.workers, initializer=_init_worker) as pool,
+            ProcessPoolExecutor(max_workers=args.workers, initializer=niced_worker) as pool,
         ):
             futures = [pool.submit(one_run, i, args.seed) for i in todo]
             for k, future in enumerate(as_completed(futures), 1):

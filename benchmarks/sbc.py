@@ -51,7 +51,7 @@ import numpy as np  # noqa: E402
 from scipy import stats  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _machine import RESULTS, write_results  # noqa: E402
+from _machine import RESULTS, niced_worker, write_results  # noqa: E402
 
 __all__ = ["replicate", "summarise"]
 
@@ -187,13 +187,6 @@ def plot(levels: dict[str, Any], path: Path) -> None:
     plt.close(fig)
 
 
-def _init_worker() -> None:
-    try:
-        os.nice(10)
-    except OSError:
-        pass
-
-
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--replications", type=int, default=500, help="per noise level")
@@ -218,7 +211,7 @@ def main(argv: list[str] | None = None) -> int:
         mode = "a" if args.resume else "w"
         with (
             open(args.raw, mode) as raw,
-            ProcessPoolExecutor(max_workers=args.workers, initializer=_init_worker) as pool,
+            ProcessPoolExecutor(max_workers=args.workers, initializer=niced_worker) as pool,
         ):
             futures = [pool.submit(replicate, level, i, args.seed) for level, i in todo]
             for k, future in enumerate(as_completed(futures), 1):

@@ -8,20 +8,13 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from test_estimators_signals import F_HZ, exact_signal, exact_turning_points, sampled
+from test_estimators_signals import F_HZ, exact_peaks, exact_signal, sampled
 
 from bayestribo.errors import RecordingError
 from bayestribo.estimators import feeny_liang
 from bayestribo.estimators._common import velocity_peak_factor
 from bayestribo.peaks import Peaks, find_peaks
 from bayestribo.scaling import Rig
-
-
-def _exact_peaks(y0, zeta, mu):
-    tn, yn, stops = exact_turning_points(y0, zeta, mu, max_count=400)
-    if stops:  # the stop point is where the motion ends, not a free turning point
-        tn, yn = tn[:-1], yn[:-1]
-    return Peaks(t=tn, value=yn)
 
 
 @settings(max_examples=60, deadline=None)
@@ -32,7 +25,7 @@ def _exact_peaks(y0, zeta, mu):
     sign=st.sampled_from([-1.0, 1.0]),
 )
 def test_exact_turning_points_give_exact_parameters(zeta, mu, y0, sign):
-    pk = _exact_peaks(sign * y0, zeta, mu)
+    pk = exact_peaks(sign * y0, zeta, mu)
     if len(pk) < 4:
         return
     est = feeny_liang(pk)
@@ -44,7 +37,7 @@ def test_exact_turning_points_give_exact_parameters(zeta, mu, y0, sign):
 
 
 def test_printed_eq21_sign_is_a_misprint():
-    pk = _exact_peaks(10.0, 0.02, 0.03)
+    pk = exact_peaks(10.0, 0.02, 0.03)
     y = pk.value
     # as printed: ln((-Y_2p - Y_2p+1)/(Y_0 + Y_1)) has a negative argument
     assert (-y[2] - y[3]) / (y[0] + y[1]) < 0
@@ -94,7 +87,7 @@ def test_rig_gives_mu_k_from_friction_displacement():
     # ℓ = N/k: with x in metres, μ_k = x_c k / N
     rig = Rig(natural_frequency_Hz=F_HZ, mass_kg=0.035, load_N=0.31)
     ell = rig.scaling().length_scale
-    pk0 = _exact_peaks(10.0, 0.0236, 0.0294)
+    pk0 = exact_peaks(10.0, 0.0236, 0.0294)
     pk = Peaks(t=pk0.t / rig.omega, value=pk0.value * ell)
     est = feeny_liang(pk, rig)
     assert est.mu_k == pytest.approx(0.0294, rel=1e-7)
@@ -103,7 +96,7 @@ def test_rig_gives_mu_k_from_friction_displacement():
 
 def test_noisy_standard_errors_are_statistically_consistent():
     # 200 noisy copies of exact peaks: the spread of ζ matches the reported SE
-    pk0 = _exact_peaks(10.0, 0.01, 0.02)
+    pk0 = exact_peaks(10.0, 0.01, 0.02)
     rng = np.random.default_rng(11)
     sigma = 0.005
     zs, ses = [], []
@@ -120,7 +113,7 @@ def test_noisy_standard_errors_are_statistically_consistent():
 
 
 def test_errors():
-    pk = _exact_peaks(10.0, 0.02, 0.03)
+    pk = exact_peaks(10.0, 0.02, 0.03)
     with pytest.raises(RecordingError, match="at least 4 peaks"):
         feeny_liang(Peaks(t=pk.t[:3], value=pk.value[:3]))
     with pytest.raises(RecordingError, match="p must be an integer"):

@@ -8,19 +8,12 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from test_estimators_signals import exact_turning_points, sampled
+from test_estimators_signals import exact_peaks, sampled
 
 from bayestribo.errors import RecordingError
 from bayestribo.estimators import nonsuccessive_peaks
 from bayestribo.estimators.nonsuccessive import default_pq, eq24_friction
 from bayestribo.peaks import Peaks, find_peaks
-
-
-def _exact_peaks(y0, zeta, mu):
-    tn, yn, stops = exact_turning_points(y0, zeta, mu, max_count=400)
-    if stops:
-        tn, yn = tn[:-1], yn[:-1]
-    return Peaks(t=tn, value=yn)
 
 
 @settings(max_examples=60, deadline=None)
@@ -31,7 +24,7 @@ def _exact_peaks(y0, zeta, mu):
     sign=st.sampled_from([-1.0, 1.0]),
 )
 def test_exact_turning_points_give_exact_parameters(zeta, mu, y0, sign):
-    pk = _exact_peaks(sign * y0, zeta, mu)
+    pk = exact_peaks(sign * y0, zeta, mu)
     if len(pk) < 5:
         return
     est = nonsuccessive_peaks(pk)
@@ -42,7 +35,7 @@ def test_exact_turning_points_give_exact_parameters(zeta, mu, y0, sign):
 
 def test_eq23_as_printed_is_wrong_for_p_above_1():
     zeta, mu = 0.02, 0.03
-    pk = _exact_peaks(10.0, zeta, mu)
+    pk = exact_peaks(10.0, zeta, mu)
     beta = zeta / math.sqrt(1 - zeta**2)
     y = pk.value
     for p in (1, 2, 5):
@@ -62,7 +55,7 @@ def test_eq23_as_printed_is_wrong_for_p_above_1():
 
 @pytest.mark.parametrize(("p", "q"), [(1, 2), (3, 10), (10, 4)])
 def test_any_p_q_pair(p, q):
-    pk = _exact_peaks(10.0, 0.0236, 0.0294)
+    pk = exact_peaks(10.0, 0.0236, 0.0294)
     est = nonsuccessive_peaks(pk, p=p, q=q)
     assert est.zeta == pytest.approx(0.0236, rel=1e-6)
     assert est.details["p"] == min(p, q) and est.details["q"] == max(p, q)
@@ -92,7 +85,7 @@ def test_no_root_is_reported_clearly():
 
 
 def test_standard_errors_are_statistically_consistent():
-    pk0 = _exact_peaks(10.0, 0.01, 0.02)
+    pk0 = exact_peaks(10.0, 0.01, 0.02)
     sigma = 0.003
     rng = np.random.default_rng(7)
     zs, ses, ms, mses = [], [], [], []
@@ -115,7 +108,7 @@ def test_standard_errors_are_statistically_consistent():
 
 
 def test_bad_arguments():
-    pk = _exact_peaks(10.0, 0.02, 0.03)
+    pk = exact_peaks(10.0, 0.02, 0.03)
     with pytest.raises(RecordingError, match="p and q must differ"):
         nonsuccessive_peaks(pk, p=2, q=2)
     with pytest.raises(RecordingError, match="integer >= 1"):

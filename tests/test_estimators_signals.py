@@ -14,6 +14,8 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+from bayestribo.peaks import Peaks
+
 __all__ = ["exact_signal", "exact_turning_points"]
 
 
@@ -34,6 +36,14 @@ def exact_turning_points(
         ys.append(mu_k * s - (yn - mu_k * s) * r)  # Eq. 16 at ω(τ - τ_n) = π
         taus.append(taus[-1] + half)
     return np.array(taus), np.array(ys), False
+
+
+def exact_peaks(y0: float, zeta: float, mu: float) -> Peaks:
+    """Free turning points of the exact solution as Peaks (the stop point left out)."""
+    tn, yn, stops = exact_turning_points(y0, zeta, mu, max_count=400)
+    if stops:  # the stop point is where the motion ends, not a free turning point
+        tn, yn = tn[:-1], yn[:-1]
+    return Peaks(t=tn, value=yn)
 
 
 def exact_signal(

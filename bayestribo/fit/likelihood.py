@@ -136,6 +136,10 @@ class PiLikelihood:
     def _log_prior_det(self) -> float:
         return 2.0 * math.log(self.offset_sd) + 2.0 * math.log(self.drift_sd)
 
+    def _residuals(self, zeta: NDArray, mu_k: NDArray, mu_s: NDArray, y0: NDArray) -> NDArray:
+        """Observed minus model increments, D_j - M_j, shape (n, m)."""
+        return self.data.increments - self.model_increments(zeta, mu_k, mu_s, y0)
+
     def offset(
         self,
         zeta: NDArray,
@@ -145,7 +149,7 @@ class PiLikelihood:
         discrepancy: NDArray | None = None,
     ) -> NDArray:
         """Conditional mean of (δ₀, δ₁) given the parameters, shape (n, 2)."""
-        resid = self.data.increments - self.model_increments(zeta, mu_k, mu_s, y0)
+        resid = self._residuals(zeta, mu_k, mu_s, y0)
         return self._solve(resid, self.variance(discrepancy))[0]
 
     # -- densities ----------------------------------------------------------------
@@ -158,7 +162,7 @@ class PiLikelihood:
         discrepancy: NDArray | None = None,
     ) -> NDArray:
         """Log-likelihood with the offset nuisance marginalised, shape (n,)."""
-        resid = self.data.increments - self.model_increments(zeta, mu_k, mu_s, y0)
+        resid = self._residuals(zeta, mu_k, mu_s, y0)
         var = self.variance(discrepancy)
         _, explained, logdet_a = self._solve(resid, var)
         chi2 = np.sum(resid * resid / var, axis=-1) - explained
@@ -174,7 +178,7 @@ class PiLikelihood:
         discrepancy: NDArray | None = None,
     ) -> NDArray:
         """D_j - M_j with the conditional-mean offset removed, shape (n, m)."""
-        resid = self.data.increments - self.model_increments(zeta, mu_k, mu_s, y0)
+        resid = self._residuals(zeta, mu_k, mu_s, y0)
         delta = self._solve(resid, self.variance(discrepancy))[0]
         return resid - delta @ self.data.offset_design.T
 
