@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -197,14 +196,6 @@ def test_non_convergence_is_reported_never_hidden(short_run):
 def test_bad_model_name():
     with pytest.raises(ValueError, match="model"):
         fit(DATA / "air-r1.csv", model="quadratic")
-
-
-def test_unconverged_warning_filter_does_not_leak():
-    # The module-level filter only silences ArviZ's FutureWarning.
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        warnings.warn("x", ConvergenceWarning, stacklevel=1)
-    assert caught and caught[0].category is ConvergenceWarning
 
 
 def test_narrowed_prior_moves_the_start_inside_it():
