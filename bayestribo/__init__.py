@@ -24,22 +24,22 @@ __version__ = "0.1.0"
 # Public names re-exported lazily: module imports stay cheap for the command line,
 # and each capability keeps its own module.
 _LAZY: dict[str, str] = {
-    "Rig": "bayestribo.scaling",
-    "Scaling": "bayestribo.scaling",
-    "energy_decay": "bayestribo.decay",
-    "EnergyDecay": "bayestribo.decay",
+    "Rig": "bayestribo.model.scaling",
+    "Scaling": "bayestribo.model.scaling",
+    "energy_decay": "bayestribo.signal.decay",
+    "EnergyDecay": "bayestribo.signal.decay",
     "estimate_all": "bayestribo.estimators",
     "Estimate": "bayestribo.estimators",
-    "Run": "bayestribo.run",
+    "Run": "bayestribo.io.run",
     "read_run": "bayestribo.io",
     "write_run": "bayestribo.io",
-    "simulate": "bayestribo.simulation",
-    "fit_many": "bayestribo.many",
-    "compare_dissipation_laws": "bayestribo.comparison",
+    "simulate": "bayestribo.synthetic.recording",
+    "fit_many": "bayestribo.campaign.fitting",
+    "compare_dissipation_laws": "bayestribo.inference.comparison",
     "acquire_run": "bayestribo.acquisition",
     "recover_run": "bayestribo.acquisition",
     "check_adequacy": "bayestribo.adequacy",
-    "run_report": "bayestribo.report",
+    "run_report": "bayestribo.reports.notebooks",
 }
 
 __all__ = ["__version__", *sorted(_LAZY)]

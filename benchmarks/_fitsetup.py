@@ -1,6 +1,6 @@
-"""The likelihood of a run as :func:`bayestribo.fit.fit` builds it (for benchmarks).
+"""The likelihood of a run as :func:`bayestribo.inference.fit` builds it (for benchmarks).
 
-:func:`bayestribo.fit.fit` does not return its internal objects; the benchmarks
+:func:`bayestribo.inference.fit` does not return its internal objects; the benchmarks
 that need the same likelihood (an ODE forward model in its place, the Fisher
 information) rebuild it here with the fit's steps and defaults: energy decay with
 one skipped oscillation, the recording's noise model, 64 Π increments, equilibrium
@@ -11,16 +11,16 @@ from __future__ import annotations
 
 from typing import Any
 
-from bayestribo.decay import energy_decay
-from bayestribo.fit.data import pi_data
-from bayestribo.fit.likelihood import PiLikelihood
-from bayestribo.fit.noise import noise_model
+from bayestribo.inference.likelihood import PiLikelihood
+from bayestribo.signal.decay import energy_decay
+from bayestribo.signal.increments import pi_data
+from bayestribo.signal.noise import noise_model
 
 __all__ = ["likelihood_of"]
 
 
 def likelihood_of(run: Any, cls: type = PiLikelihood, grid_points: int = 64) -> Any:
-    """The fit's likelihood of ``run`` (a :class:`bayestribo.run.Run`), as ``cls``."""
+    """The fit's likelihood of ``run`` (a :class:`bayestribo.io.run.Run`), as ``cls``."""
     decay = energy_decay(
         run.time, run.displacement, run.velocity, rig=run.rig(), skip_oscillations=1
     )

@@ -1,6 +1,6 @@
 """Constancy test calibration: false-alarm and detection rates on simulated runs.
 
-Simulated tribometer runs (:func:`bayestribo.simulation.simulate`, the paper's rig:
+Simulated tribometer runs (:func:`bayestribo.synthetic.recording.simulate`, the paper's rig:
 m = 0.035 kg, f = 32.6 Hz, N = 0.31 N, ζ = 0.0236, μ_k = 0.0294, x₀ = 1.5 mm, 10 kHz,
 noise at the vibrometer's resolution), analysed by
 :func:`bayestribo.adequacy.windowed_fits` (windows of 2 oscillations, least squares)
@@ -42,7 +42,7 @@ from bayestribo.adequacy.draws import draws_from_least_squares
 from bayestribo.adequacy.predictive import predictive_check
 from bayestribo.adequacy.segments import whole_decay_fit
 from bayestribo.adequacy.windows import analysed_decay, windowed_fits
-from bayestribo.simulation import simulate
+from bayestribo.synthetic.recording import simulate
 
 ZETA = 0.0236
 X0 = 1.5e-3

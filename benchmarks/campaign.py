@@ -1,7 +1,7 @@
 """Campaign benchmark: the bundled campaign fitted with 1 and 2 processes and on Dask.
 
 Fits every run of ``data/runs`` (or an evenly spaced subset, ``--runs N``) with
-:func:`bayestribo.many.fit_many` and the default single-run fit, side by side in one
+:func:`bayestribo.campaign.fitting.fit_many` and the default single-run fit, side by side in one
 session:
 
 * a process pool with 1 worker, then with 2 workers (speed-up = ratio of wall times);
@@ -39,9 +39,9 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _machine import write_results
 
+from bayestribo.campaign.analysis import analyse_campaign
+from bayestribo.campaign.fitting import fit_many
 from bayestribo.errors import ConvergenceWarning
-from bayestribo.many import fit_many
-from bayestribo.population.campaign import analyse_campaign
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 

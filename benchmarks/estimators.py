@@ -1,6 +1,6 @@
 """Classical estimators benchmark: bias, RMSE and time per run at three noise levels.
 
-Simulated tribometer runs (:func:`bayestribo.simulation.simulate`: the paper's rig,
+Simulated tribometer runs (:func:`bayestribo.synthetic.recording.simulate`: the paper's rig,
 m = 0.035 kg, f = 32.6 Hz, N = 0.31 N, ζ = 0.0236, μ_k = 0.0294, x₀ = 1.5 mm, a
 magnet that fades over a quarter period, 10 kHz) with white noise on both channels
 at the vibrometer's resolution (0.15 µm, 0.015 µm/s), 10x and 100x it. Each run is
@@ -32,7 +32,7 @@ import scipy
 
 from bayestribo import __version__
 from bayestribo.estimators.all import METHODS, estimate_all
-from bayestribo.simulation import (
+from bayestribo.synthetic.recording import (
     DISPLACEMENT_RESOLUTION_M,
     VELOCITY_RESOLUTION_M_PER_S,
     simulate,

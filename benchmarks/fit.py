@@ -1,6 +1,6 @@
 """Speed of the single-run fit, and the same sampling with a solve_ivp forward model.
 
-1. Wall time of :func:`bayestribo.fit.fit` on the bundled run
+1. Wall time of :func:`bayestribo.inference.fit` on the bundled run
    ``data/runs/glycerol-N0.31-r1.csv`` (10 kHz, about 0.5 s of motion), exact model,
    defaults, in one process after a warm-up fit (imports and compilation are timed
    separately as the first call): the median over ``--repeats`` seeds, whether each
@@ -36,9 +36,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _fitsetup import likelihood_of
 from _machine import write_results
 
-from bayestribo.fit import fit
-from bayestribo.fit.likelihood import PiLikelihood
-from bayestribo.fit.posterior import Posterior
+from bayestribo.inference import fit
+from bayestribo.inference.likelihood import PiLikelihood
+from bayestribo.inference.posterior import Posterior
 from bayestribo.io import read_run
 from bayestribo.model.reference import ode_solve
 

@@ -79,7 +79,7 @@ def fisher_bound(lik: Any, mean: dict[str, float], sd: dict[str, float]) -> dict
 
 
 def _fit(run: Any, seed: int) -> Any:
-    from bayestribo.fit import fit
+    from bayestribo.inference import fit
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -88,7 +88,7 @@ def _fit(run: Any, seed: int) -> Any:
 
 def crb_run(level: float, index: int) -> dict[str, Any]:
     """Fit one simulated run; posterior sd against the Cramér-Rao bound."""
-    from bayestribo.simulation import (
+    from bayestribo.synthetic.recording import (
         DISPLACEMENT_RESOLUTION_M,
         VELOCITY_RESOLUTION_M_PER_S,
         simulate,
@@ -121,7 +121,7 @@ def crb_run(level: float, index: int) -> dict[str, Any]:
 def baseline_run(level: int, index: int) -> dict[str, Any]:
     """One of the estimator benchmark's runs: the fit and every classical estimator."""
     from bayestribo.estimators.all import estimate_all
-    from bayestribo.simulation import (
+    from bayestribo.synthetic.recording import (
         DISPLACEMENT_RESOLUTION_M,
         VELOCITY_RESOLUTION_M_PER_S,
         simulate,

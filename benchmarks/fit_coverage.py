@@ -12,7 +12,7 @@ the resolution, and sample rates of 2, 5, 10 and 20 kHz (in turn). The parameter
 are drawn from ζ ~ Uniform(0.01, 0.05), μ_k ~ Uniform(0.01, 0.05),
 μ_s/μ_k ~ Uniform(1, 3), x₀ ~ Uniform(1, 2) mm, on the paper's rig (m = 0.035 kg,
 f = 32.6 Hz, N = 0.31 N). Every run is fitted with the defaults
-(:func:`bayestribo.fit.fit`, exact model) and the equal-tailed 95 % intervals of ζ
+(:func:`bayestribo.inference.fit`, exact model) and the equal-tailed 95 % intervals of ζ
 and μ_k are checked against the truth.
 
 Reported: runs, converged runs, the coverage rate of each parameter (and of both at
@@ -60,8 +60,8 @@ RAW = RESULTS / "fit_coverage_runs.jsonl"
 
 def one_run(index: int, seed: int) -> dict[str, Any]:
     """Simulate one realistic run, fit it, record whether the 95 % intervals cover."""
-    from bayestribo.fit import fit
-    from bayestribo.simulation import (
+    from bayestribo.inference import fit
+    from bayestribo.synthetic.recording import (
         DISPLACEMENT_RESOLUTION_M,
         VELOCITY_RESOLUTION_M_PER_S,
         simulate,

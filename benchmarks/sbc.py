@@ -7,7 +7,7 @@ For each replication, the parameters are drawn from the documented prior-like bo
 a run is simulated with :func:`bayestribo.simulate` (the paper's rig: m = 0.035 kg,
 f = 32.6 Hz, N = 0.31 N, x₀ = 1.5 mm, 10 kHz, an ideal release, white noise on both
 channels at a given multiple of the vibrometer resolution 0.15 µm, 0.015 µm/s) and
-fitted by :func:`bayestribo.fit.fit` with its default priors. μ_s/μ_k is drawn from
+fitted by :func:`bayestribo.inference.fit` with its default priors. μ_s/μ_k is drawn from
 exactly its default prior. The default priors of ζ and μ_k (uniform on [0, 0.3] and
 [0, y0/4]) are flat over the box and far wider; the posteriors are narrower than the
 box by a factor of 1000 or more, so the posterior under the box-restricted prior (the
@@ -65,8 +65,8 @@ RAW = RESULTS / "sbc_replications.jsonl"
 
 def replicate(level: float, index: int, seed: int) -> dict[str, Any]:
     """Draw, simulate and fit one replication; rank the truth among posterior draws."""
-    from bayestribo.fit import fit
-    from bayestribo.simulation import (
+    from bayestribo.inference import fit
+    from bayestribo.synthetic.recording import (
         DISPLACEMENT_RESOLUTION_M,
         VELOCITY_RESOLUTION_M_PER_S,
         simulate,

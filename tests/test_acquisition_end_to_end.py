@@ -9,7 +9,7 @@ import pytest
 from bayestribo.acquisition import OperatorInputs, acquire_run
 from bayestribo.acquisition.instrument import SimulatedInstrument, SimulationConfig
 from bayestribo.estimators import estimate_all
-from bayestribo.fit import fit
+from bayestribo.inference import fit
 from bayestribo.io import read_run
 
 pytestmark = [

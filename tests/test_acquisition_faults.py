@@ -31,7 +31,7 @@ from bayestribo.acquisition import (
 )
 from bayestribo.acquisition.instrument import FaultPlan, SimulatedInstrument, SimulationConfig
 from bayestribo.acquisition.port import open_port
-from bayestribo.catalog import find_run
+from bayestribo.campaign.catalog import find_run
 from bayestribo.errors import AcquisitionError, RecordingError
 from bayestribo.io import read_run
 
@@ -52,7 +52,7 @@ INPUTS = OperatorInputs(
 
 ACQUIRE_ONLY_CLI = """
 import argparse, sys
-from bayestribo.commands import acquire
+from bayestribo.cli import acquire
 from bayestribo.errors import BayestriboError
 parser = argparse.ArgumentParser(prog="bayestribo")
 acquire.register(parser.add_subparsers(dest="command"))

@@ -23,7 +23,7 @@ pytestmark = pytest.mark.skipif(os.name != "posix", reason="pseudo-terminals and
 
 ACQUIRE_ONLY_CLI = """
 import argparse, sys
-from bayestribo.commands import acquire
+from bayestribo.cli import acquire
 from bayestribo.errors import BayestriboError
 parser = argparse.ArgumentParser(prog="bayestribo")
 acquire.register(parser.add_subparsers(dest="command"))
@@ -54,7 +54,7 @@ def cli_main(argv: list[str]) -> int:
 
         build_parser()
     except ImportError:
-        from bayestribo.commands import acquire
+        from bayestribo.cli import acquire
 
         parser = argparse.ArgumentParser(prog="bayestribo")
         acquire.register(parser.add_subparsers(dest="command"))

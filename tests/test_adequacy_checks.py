@@ -23,7 +23,7 @@ from bayestribo.adequacy.segments import whole_decay_fit
 from bayestribo.adequacy.windows import analysed_decay
 from bayestribo.errors import BayestriboError
 from bayestribo.model import exact_response, turning_points
-from bayestribo.simulation import simulate
+from bayestribo.synthetic.recording import simulate
 
 
 @pytest.fixture(scope="module")

@@ -8,7 +8,7 @@ import pytest
 from bayestribo.adequacy.constancy import constancy_test
 from bayestribo.adequacy.windows import WindowedAnalysis, WindowEstimate, windowed_fits
 from bayestribo.errors import RecordingError
-from bayestribo.simulation import simulate
+from bayestribo.synthetic.recording import simulate
 
 
 def _synthetic(rng, n=6, slope=0.0, sd=(1e-4, 2e-4), rho=-0.8, fixed=False):

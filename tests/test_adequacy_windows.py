@@ -10,7 +10,7 @@ import pytest
 from bayestribo.adequacy.segments import _simpson, fit_segment, peak_positions, whole_decay_fit
 from bayestribo.adequacy.windows import analysed_decay, window_bounds, windowed_fits
 from bayestribo.errors import BayestriboError, RecordingError
-from bayestribo.simulation import simulate
+from bayestribo.synthetic.recording import simulate
 
 ZETA, MU = 0.0236, 0.0294
 

@@ -13,15 +13,15 @@ import numpy as np
 import pytest
 
 from bayestribo import read_run
-from bayestribo.campaign_data import (
+from bayestribo.cli import simulate as simulate_command
+from bayestribo.model.viscosity import glycerol_water_viscosity
+from bayestribo.synthetic.campaign import (
     CAMPAIGN_SEED,
     LOADS_N,
     MANIFEST_COLUMNS,
     WATER_FRACTIONS,
     campaign_plan,
 )
-from bayestribo.commands import simulate as simulate_command
-from bayestribo.viscosity import glycerol_water_viscosity
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 

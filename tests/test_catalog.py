@@ -7,7 +7,7 @@ import threading
 
 import pytest
 
-from bayestribo.catalog import (
+from bayestribo.campaign.catalog import (
     SCHEMA_VERSION,
     CatalogError,
     connect,

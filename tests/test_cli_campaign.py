@@ -96,7 +96,7 @@ def test_a_folder_without_runs_is_a_package_error(tmp_path, capsys):
 def test_law_rows_flatten_the_comparison_for_the_csv_table():
     # The PSIS-LOO comparison itself is tested in tests/test_comparison.py; running it
     # through the command (three fits per run) is too slow for the default suite.
-    from bayestribo.commands.campaign import _law_row
+    from bayestribo.cli.campaign import _law_row
 
     entry = {
         "run": "air-r1",

@@ -8,7 +8,7 @@ import pytest
 
 from bayestribo.cli import main
 from bayestribo.io import write_run
-from bayestribo.simulation import simulate
+from bayestribo.synthetic.recording import simulate
 
 
 @pytest.fixture(scope="module")

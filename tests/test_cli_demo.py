@@ -7,8 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from bayestribo.cli import main
-from bayestribo.commands import demo
+from bayestribo.cli import demo, main
 
 pytest.importorskip("nbclient")
 
@@ -47,7 +46,7 @@ def test_campaign_is_simulated_into_the_cache_when_data_is_absent(tmp_path, monk
         return Path(folder) / "manifest.csv"
 
     monkeypatch.setenv("BAYESTRIBO_DATA", str(tmp_path / "no-data-here"))
-    monkeypatch.setattr("bayestribo.campaign_data.write_campaign", fake_write_campaign)
+    monkeypatch.setattr("bayestribo.synthetic.campaign.write_campaign", fake_write_campaign)
     folder, origin = demo.campaign_folder(cache=tmp_path / "cache")
     assert origin == "simulated now" and calls == [folder]
     assert folder.parent == tmp_path / "cache"

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from bayestribo.commands import estimate
+from bayestribo.cli import estimate
 from bayestribo.errors import BayestriboError
 from bayestribo.estimators.all import METHODS
 
@@ -28,7 +28,7 @@ def _cli(argv: list[str]) -> int:
 @pytest.fixture(scope="module")
 def run_file(tmp_path_factory) -> Path:
     from bayestribo.io import write_run
-    from bayestribo.simulation import simulate
+    from bayestribo.synthetic.recording import simulate
 
     path = tmp_path_factory.mktemp("runs") / "glycerol.csv"
     write_run(simulate(load_N=0.31, seed=5), path)

@@ -12,7 +12,7 @@ import pytest
 
 from bayestribo.cli import build_parser, main
 from bayestribo.errors import BayestriboError
-from bayestribo.fit import FitResult
+from bayestribo.inference import FitResult
 
 DIAGNOSTICS = {
     "converged",
@@ -28,7 +28,7 @@ SUMMARY = {"mean", "sd", "median", "ci95"}
 @pytest.fixture(scope="module")
 def run_file(tmp_path_factory) -> Path:
     from bayestribo.io import write_run
-    from bayestribo.simulation import simulate
+    from bayestribo.synthetic.recording import simulate
 
     # 2 kHz: a converged fit in a few seconds
     path = tmp_path_factory.mktemp("runs") / "glycerol-2k.csv"
@@ -104,7 +104,7 @@ def test_missing_file_is_a_package_error(tmp_path: Path, capsys) -> None:
 
 
 def test_out_that_is_a_file_is_a_package_error(tmp_path: Path) -> None:
-    from bayestribo.commands.fit import write_outputs
+    from bayestribo.cli.fit import write_outputs
 
     blocker = tmp_path / "file"
     blocker.write_text("")
@@ -113,7 +113,7 @@ def test_out_that_is_a_file_is_a_package_error(tmp_path: Path) -> None:
 
 
 def test_options_reach_the_fit(json_run, run_file: Path, monkeypatch, capsys) -> None:
-    import bayestribo.fit
+    import bayestribo.inference
 
     _, _, out_dir, _ = json_run
     saved = FitResult.load(out_dir / f"{run_file.stem}.nc")
@@ -123,7 +123,7 @@ def test_options_reach_the_fit(json_run, run_file: Path, monkeypatch, capsys) ->
         seen.update(kwargs, run=run)
         return saved
 
-    monkeypatch.setattr(bayestribo.fit, "fit", fake_fit)
+    monkeypatch.setattr(bayestribo.inference, "fit", fake_fit)
     argv = [
         "fit",
         str(run_file),

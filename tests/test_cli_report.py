@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from bayestribo.cli import main
-from bayestribo.commands.report import campaign_selection, notebook_for, parse_params
+from bayestribo.cli.report import campaign_selection, notebook_for, parse_params
 from bayestribo.io import read_run
-from bayestribo.report import ReportError, inject_parameters, read_notebook
+from bayestribo.reports.notebooks import ReportError, inject_parameters, read_notebook
 
 pytest.importorskip("nbclient")
 
@@ -31,7 +31,7 @@ def captured(monkeypatch):
         calls.append((notebook, dict(parameters), kwargs))
         Path(kwargs["html"]).write_text("<html></html>")
 
-    monkeypatch.setattr("bayestribo.report.run_report", fake_run_report)
+    monkeypatch.setattr("bayestribo.reports.notebooks.run_report", fake_run_report)
     return calls
 
 

@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bayestribo.comparison import LAWS, _Pinned, compare_dissipation_laws
 from bayestribo.errors import BayestriboError
+from bayestribo.inference.comparison import LAWS, _Pinned, compare_dissipation_laws
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "runs"
 needs_data = pytest.mark.skipif(not DATA.is_dir(), reason="bundled data/ folder not present")

@@ -7,11 +7,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bayestribo.decay import energy_decay, retrograde_integral
 from bayestribo.errors import RecordingError
 from bayestribo.model import exact_pi
-from bayestribo.scaling import Rig
-from bayestribo.simulation import simulate
+from bayestribo.model.scaling import Rig
+from bayestribo.signal.decay import energy_decay, retrograde_integral
+from bayestribo.synthetic.recording import simulate
 
 EXTERNAL = Path(__file__).resolve().parents[2] / "shared" / "external-data"
 HARMOSC = EXTERNAL / "appstat2020-harmonic-oscillator"

@@ -14,8 +14,8 @@ from bayestribo import Estimate, estimate_all
 from bayestribo.errors import RecordingError
 from bayestribo.estimators import friction_fraction
 from bayestribo.estimators.all import METHODS
-from bayestribo.run import Run
-from bayestribo.scaling import Rig
+from bayestribo.io.run import Run
+from bayestribo.model.scaling import Rig
 
 REPO = Path(__file__).resolve().parents[1]
 HARMOSC = REPO.parent / "shared" / "external-data" / "appstat2020-harmonic-oscillator"
@@ -77,7 +77,7 @@ def test_failed_method_is_a_row_with_the_reason():
 
 
 def test_run_object_and_rig_from_metadata():
-    from bayestribo.simulation import simulate
+    from bayestribo.synthetic.recording import simulate
 
     run = simulate(load_N=0.31, seed=3)
     table = estimate_all(run, skip=2, methods=["feeny_liang", "energy_ls_exact"])

@@ -10,7 +10,7 @@ from test_estimators_signals import exact_turning_points, sampled
 
 from bayestribo.errors import RecordingError
 from bayestribo.estimators import exponential_envelope, log_decrement
-from bayestribo.peaks import Peaks, find_peaks
+from bayestribo.signal.peaks import Peaks, find_peaks
 
 
 def _exact_peaks(y0, zeta, mu, count=60):

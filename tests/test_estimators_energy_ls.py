@@ -10,7 +10,7 @@ from test_estimators_signals import F_HZ, sampled
 
 from bayestribo.errors import RecordingError
 from bayestribo.estimators import energy_data, energy_least_squares
-from bayestribo.scaling import Rig
+from bayestribo.model.scaling import Rig
 
 RIG = Rig(natural_frequency_Hz=F_HZ)  # Ω known, ℓ = 1 signal unit
 

@@ -13,8 +13,8 @@ from test_estimators_signals import F_HZ, exact_peaks, exact_signal, sampled
 from bayestribo.errors import RecordingError
 from bayestribo.estimators import feeny_liang
 from bayestribo.estimators._common import velocity_peak_factor
-from bayestribo.peaks import Peaks, find_peaks
-from bayestribo.scaling import Rig
+from bayestribo.model.scaling import Rig
+from bayestribo.signal.peaks import Peaks, find_peaks
 
 
 @settings(max_examples=60, deadline=None)

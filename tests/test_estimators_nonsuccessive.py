@@ -13,7 +13,7 @@ from test_estimators_signals import exact_peaks, sampled
 from bayestribo.errors import RecordingError
 from bayestribo.estimators import nonsuccessive_peaks
 from bayestribo.estimators.nonsuccessive import default_pq, eq24_friction
-from bayestribo.peaks import Peaks, find_peaks
+from bayestribo.signal.peaks import Peaks, find_peaks
 
 
 @settings(max_examples=60, deadline=None)

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from bayestribo.peaks import Peaks
+from bayestribo.signal.peaks import Peaks
 
 __all__ = ["exact_signal", "exact_turning_points"]
 

@@ -21,8 +21,8 @@ import warnings
 import numpy as np
 from scipy import stats
 
-from bayestribo.fit import fit
-from bayestribo.simulation import (
+from bayestribo.inference import fit
+from bayestribo.synthetic.recording import (
     DISPLACEMENT_RESOLUTION_M,
     VELOCITY_RESOLUTION_M_PER_S,
     simulate,

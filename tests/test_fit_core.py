@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 
 from bayestribo.errors import ConvergenceWarning
-from bayestribo.fit import FitResult, fit
-from bayestribo.fit.data import pi_data
-from bayestribo.fit.noise import noise_model
+from bayestribo.inference import FitResult, fit
 from bayestribo.io import read_run
-from bayestribo.simulation import simulate
+from bayestribo.signal.increments import pi_data
+from bayestribo.signal.noise import noise_model
+from bayestribo.synthetic.recording import simulate
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "runs"
 pytestmark = pytest.mark.filterwarnings("ignore::FutureWarning")
@@ -31,7 +31,7 @@ def test_bundled_run_converges_and_covers_the_truth(bundled):
     d = result.diagnostics
     assert result.converged, d["reasons"]
     assert d["ess_min"] >= 1000 and d["rhat_max"] < 1.01
-    assert d["n_steps"] - d["burn_in"] >= 50 * d["autocorr_time_max"]
+    assert d["n_steps"] - d["burn"] >= 50 * d["autocorr_time_max"]
     for name in ("zeta", "mu_k"):
         s = result.samples(name)
         # One run: the truth within 4.5 posterior sd (a 1-in-150 000 event if calibrated);
@@ -98,7 +98,7 @@ def _fisher_sd(data, theta, independent_pi=False):
     ``independent_pi``: the mistaken model treating Π's grid values as independent,
     each with its marginal variance.
     """
-    from bayestribo.fit.likelihood import PiLikelihood
+    from bayestribo.inference.likelihood import PiLikelihood
 
     lik = PiLikelihood(data)
     steps = np.array([1e-7, 1e-7, 1e-6])
@@ -132,7 +132,7 @@ def test_denser_pi_grid_adds_only_the_information_of_finer_increments(short_run)
     the increments predicts; the posterior follows that prediction. Treating the 4×
     more Π values as independent would shrink the width by a further factor ~2.
     """
-    from bayestribo.decay import energy_decay
+    from bayestribo.signal.decay import energy_decay
 
     half_cycles = 24  # in the analysed window of this run
     coarse = fit(short_run, seed=1, grid_points=half_cycles // 4)
@@ -207,7 +207,7 @@ def test_narrowed_prior_moves_the_start_inside_it():
         velocity_noise_m_per_s=4.5e-7,
         sample_rate_Hz=2000.0,
     )
-    from bayestribo.fit import Uniform
+    from bayestribo.inference import Uniform
 
     result = fit(run, seed=1, priors={"mu_k": Uniform(0.01, 0.05)})
     mu = result.samples("mu_k")

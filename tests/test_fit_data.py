@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from scipy.stats import multivariate_normal
 
-from bayestribo.decay import energy_decay
-from bayestribo.fit.data import _simpson_weights, increment_weights, pi_data
-from bayestribo.fit.noise import noise_model, resolution_for_range
-from bayestribo.simulation import simulate
+from bayestribo.signal.decay import energy_decay
+from bayestribo.signal.increments import _simpson_weights, increment_weights, pi_data
+from bayestribo.signal.noise import noise_model, resolution_for_range
+from bayestribo.synthetic.recording import simulate
 
 
 @pytest.mark.parametrize("n", [1, 2, 3, 4, 5, 8, 11])

@@ -6,13 +6,13 @@ import numpy as np
 import pytest
 from scipy.special import logsumexp
 
-from bayestribo.decay import energy_decay
-from bayestribo.fit.data import pi_data
-from bayestribo.fit.likelihood import PiLikelihood
-from bayestribo.fit.noise import noise_model
-from bayestribo.fit.posterior import Posterior
-from bayestribo.fit.priors import default_priors
-from bayestribo.simulation import simulate
+from bayestribo.inference.likelihood import PiLikelihood
+from bayestribo.inference.posterior import Posterior
+from bayestribo.inference.priors import default_priors
+from bayestribo.signal.decay import energy_decay
+from bayestribo.signal.increments import pi_data
+from bayestribo.signal.noise import noise_model
+from bayestribo.synthetic.recording import simulate
 
 TRUE = {"zeta": 0.0236, "mu_k": 0.0294}
 

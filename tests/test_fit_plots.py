@@ -11,9 +11,9 @@ import pytest
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
-from bayestribo.fit import FitResult, fit
-from bayestribo.fit.plots import corner_plot, pi_plot, plotted_names, trace_plot
-from bayestribo.simulation import simulate
+from bayestribo.inference import FitResult, fit
+from bayestribo.inference.plots import corner_plot, pi_plot, plotted_names, trace_plot
+from bayestribo.synthetic.recording import simulate
 
 
 @pytest.fixture(scope="module")

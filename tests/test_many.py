@@ -15,8 +15,8 @@ from typing import Any
 import numpy as np
 import pytest
 
+from bayestribo.campaign.fitting import RunOutcome, fit_many, run_identity, run_seed
 from bayestribo.errors import BayestriboError, RecordingError
-from bayestribo.many import RunOutcome, fit_many, run_identity, run_seed
 
 
 @dataclass(frozen=True)
@@ -169,8 +169,8 @@ def _write_run_files(folder: Path, names: list[str]) -> list[Path]:
 
 
 def test_fit_catalogued_records_fits_and_skips_them_on_a_rerun(tmp_path):
-    from bayestribo.catalog import find_fit, list_fits, list_runs
-    from bayestribo.many import fit_catalogued
+    from bayestribo.campaign.catalog import find_fit, list_fits, list_runs
+    from bayestribo.campaign.fitting import fit_catalogued
 
     paths = _write_run_files(tmp_path, ["a-r1", "a-r2", "bad-r3"])
     db, out = tmp_path / "cat.sqlite", tmp_path / "fits"
@@ -208,7 +208,7 @@ def test_fit_catalogued_records_fits_and_skips_them_on_a_rerun(tmp_path):
 
 
 def test_fit_records_are_refused_for_unknown_runs_and_non_json(tmp_path):
-    from bayestribo.catalog import CatalogError, record_fit, register_run
+    from bayestribo.campaign.catalog import CatalogError, record_fit, register_run
 
     db = tmp_path / "c.sqlite"
     with pytest.raises(CatalogError, match="not registered"):

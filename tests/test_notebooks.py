@@ -18,7 +18,7 @@ import pytest
 nbformat = pytest.importorskip("nbformat")
 pytest.importorskip("nbclient")
 
-from bayestribo.report import (  # noqa: E402
+from bayestribo.reports.notebooks import (  # noqa: E402
     NOTEBOOKS,
     PARAMETERS_TAG,
     ReportError,
@@ -37,11 +37,11 @@ EXTERNAL = REPO.parent / "shared" / "external-data" / "appstat2020-harmonic-osci
 
 #: Modules each notebook imports beyond the core (skip with a reason when absent).
 REQUIRES = {
-    "single_run": ["bayestribo.fit.plots", "bayestribo.adequacy", "corner"],
-    "loads": ["bayestribo.many", "bayestribo.population"],
-    "viscosity": ["bayestribo.many", "bayestribo.population"],
+    "single_run": ["bayestribo.inference.plots", "bayestribo.adequacy", "corner"],
+    "loads": ["bayestribo.campaign.fitting", "bayestribo.population"],
+    "viscosity": ["bayestribo.campaign.fitting", "bayestribo.population"],
     "real_data": ["bayestribo.adequacy"],
-    "acquisition": ["bayestribo.acquisition", "bayestribo.fit.plots"],
+    "acquisition": ["bayestribo.acquisition", "bayestribo.inference.plots"],
 }
 
 

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from test_estimators_signals import F_HZ, exact_turning_points, sampled
 
 from bayestribo.errors import RecordingError
-from bayestribo.peaks import Peaks, estimate_noise, estimate_offset, find_peaks
+from bayestribo.signal.peaks import Peaks, estimate_noise, estimate_offset, find_peaks
 
 OMEGA = 2 * math.pi * F_HZ
 

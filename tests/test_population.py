@@ -292,7 +292,7 @@ def test_groups_differences_and_pooled():
 
 @dataclass
 class _Fit:
-    """Stand-in for bayestribo.fit.FitResult: samples, prior_logpdf, metadata."""
+    """Stand-in for bayestribo.inference.FitResult: samples, prior_logpdf, metadata."""
 
     draws: dict[str, np.ndarray]
     metadata: dict[str, Any] = field(default_factory=dict)

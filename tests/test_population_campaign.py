@@ -13,15 +13,15 @@ from typing import Any
 import numpy as np
 import pytest
 
+from bayestribo.campaign.analysis import analyse_campaign
 from bayestribo.errors import BayestriboError
-from bayestribo.population.campaign import analyse_campaign
 
 pytestmark = pytest.mark.filterwarnings("ignore::bayestribo.errors.ConvergenceWarning")
 
 
 @dataclass
 class _Fit:
-    """Stand-in for bayestribo.fit.FitResult with exact normal posteriors."""
+    """Stand-in for bayestribo.inference.FitResult with exact normal posteriors."""
 
     draws: dict[str, np.ndarray]
     metadata: dict[str, Any] = field(default_factory=dict)
@@ -115,8 +115,8 @@ def test_no_runs_is_an_error():
 
 
 def test_glycerol_water_series_get_a_trend_against_viscosity():
-    from bayestribo.population.campaign import VISCOSITY_KEY
-    from bayestribo.viscosity import glycerol_water_viscosity
+    from bayestribo.campaign.analysis import VISCOSITY_KEY
+    from bayestribo.model.viscosity import glycerol_water_viscosity
 
     rng = np.random.default_rng(4)
     fits = []

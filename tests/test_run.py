@@ -9,7 +9,7 @@ import pytest
 
 from bayestribo import Run
 from bayestribo.errors import RecordingError, RunFormatError
-from bayestribo.run import METADATA_KEYS, check_metadata
+from bayestribo.io.run import METADATA_KEYS, check_metadata
 
 T = np.arange(100) / 1000.0
 X = 1e-3 * np.cos(2 * np.pi * 32.6 * T)

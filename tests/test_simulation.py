@@ -13,7 +13,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from bayestribo import read_run, simulate
-from bayestribo.commands import simulate as simulate_command
+from bayestribo.cli import simulate as simulate_command
 from bayestribo.errors import BayestriboError
 
 M, F = 0.035, 32.6

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from bayestribo.viscosity import (
+from bayestribo.model.viscosity import (
     NU_GLYCEROL_MM2_PER_S,
     NU_WATER_MM2_PER_S,
     glycerol_water_viscosity,

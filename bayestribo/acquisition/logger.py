@@ -351,7 +351,7 @@ def _write_canonical(
     refuses unless ``validate=False``) and are listed in the sidecar, never filled.
     """
     from bayestribo.io import write_run
-    from bayestribo.run import Run
+    from bayestribo.io.run import Run
 
     csv_path = write_run(
         Run(run.time_s, run.displacement_m, run.velocity_m_per_s, metadata),

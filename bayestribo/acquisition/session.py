@@ -426,7 +426,7 @@ def finish_run(
     files = write_run_files(out_dir, run_id, run, metadata, raw_log)
     catalog_id = None
     if catalog is not None:
-        from bayestribo.catalog import register_run
+        from bayestribo.campaign.catalog import register_run
 
         catalog_id = register_run(
             catalog,

@@ -25,6 +25,7 @@ plots
     Figures of the windowed estimates, the extinction time and the peak residuals.
 """
 
+from bayestribo.adequacy.check import AdequacyReport, check_adequacy, default_window
 from bayestribo.adequacy.constancy import ConstancyTest, Trend, constancy_test
 from bayestribo.adequacy.draws import (
     ParameterDraws,
@@ -33,7 +34,6 @@ from bayestribo.adequacy.draws import (
 )
 from bayestribo.adequacy.extinction import ExtinctionCheck, extinction_check
 from bayestribo.adequacy.predictive import PeakResiduals, PredictiveCheck, predictive_check
-from bayestribo.adequacy.report import AdequacyReport, check_adequacy, default_window
 from bayestribo.adequacy.windows import WindowedAnalysis, WindowEstimate, windowed_fits
 
 __all__ = [

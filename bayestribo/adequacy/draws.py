@@ -16,8 +16,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.adequacy.segments import SegmentFit
-from bayestribo.decay import EnergyDecay
 from bayestribo.errors import BayestriboError
+from bayestribo.signal.decay import EnergyDecay
 
 __all__ = ["ParameterDraws", "draws_from_least_squares", "draws_from_posterior"]
 

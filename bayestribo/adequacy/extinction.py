@@ -6,7 +6,7 @@ duration ``T_f = ln(1 + πζa_0/(2μ_k))/ζ`` (Eq. 38,
 point, the first one inside the static-friction band (Eq. 8,
 :func:`bayestribo.model.stop_time`). Both are evaluated for every parameter draw
 (posterior, or the labelled Gaussian stand-in) and compared with the end of motion
-that :func:`bayestribo.decay.energy_decay` detected (start of the rest tail, known
+that :func:`bayestribo.signal.decay.energy_decay` detected (start of the rest tail, known
 to about two sample periods, which widen the predicted interval). Times
 are in seconds after the start of the analysed decay (its first turning point).
 """
@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.adequacy.draws import ParameterDraws
-from bayestribo.decay import EnergyDecay
+from bayestribo.signal.decay import EnergyDecay
 
 __all__ = ["ExtinctionCheck", "extinction_check"]
 

@@ -13,7 +13,7 @@ that turns a velocity into y').
 * Velocity peaks: the largest |y'| of each half cycle, ``(|Y_n| - μ_k)·e^{-ζ s*}``
   with ``tan(ω s*) = ω/ζ`` (the extremum of Eq. 17's velocity), against the
   recorded extremum (a least-squares parabola over ±1/12 period around the largest
-  sample, as :func:`bayestribo.peaks.find_peaks` refines displacement peaks).
+  sample, as :func:`bayestribo.signal.peaks.find_peaks` refines displacement peaks).
 
 A peak the model does not reach (the motion has stopped before it in that draw)
 counts as 0 for that draw. The summary numbers are the fraction of recorded peaks
@@ -33,9 +33,9 @@ from numpy.typing import NDArray
 
 from bayestribo.adequacy.draws import ParameterDraws
 from bayestribo.adequacy.segments import peak_positions
-from bayestribo.decay import EnergyDecay
 from bayestribo.errors import BayestriboError
-from bayestribo.peaks import estimate_noise
+from bayestribo.signal.decay import EnergyDecay
+from bayestribo.signal.peaks import estimate_noise
 
 __all__ = ["PeakResiduals", "PredictiveCheck", "predictive_check"]
 

@@ -1,6 +1,6 @@
 r"""Stretches of an analysed decay and the least-squares fit of one stretch.
 
-A *segment* is a stretch of an :class:`bayestribo.decay.EnergyDecay` that starts at a
+A *segment* is a stretch of an :class:`bayestribo.signal.decay.EnergyDecay` that starts at a
 displacement turning point (y' = 0, the initial state of Eq. 15) and ends at a later
 turning point, or at the end of the analysed decay. The same fit serves the whole
 decay (one segment) and each window of the windowed analysis (section 3.1 of the
@@ -18,7 +18,7 @@ signal units) and Y_0.
 Noise. With both channels recorded the per-sample energy noise is white with
 variance ``y²σ_y² + y'²σ_y'²``; E is corrected for its mean ``½(σ_y² + σ_y'²)``. When
 the velocity was derived from the displacement (Savitzky-Golay derivative, as in
-:func:`bayestribo.decay.energy_decay`) its noise is correlated with the displacement's:
+:func:`bayestribo.signal.decay.energy_decay`) its noise is correlated with the displacement's:
 the increment variances and the bias are then propagated by Monte Carlo through the
 same derivative filter (seeded, linearised in the noise). A derived displacement
 (integrated velocity) is treated as noise-free: its error is a slow drift absorbed
@@ -43,8 +43,8 @@ import scipy.optimize
 import scipy.signal
 from numpy.typing import NDArray
 
-from bayestribo.decay import EnergyDecay
 from bayestribo.errors import RecordingError
+from bayestribo.signal.decay import EnergyDecay
 
 __all__ = [
     "PARAMETERS",

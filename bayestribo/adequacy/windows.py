@@ -3,7 +3,7 @@
 The paper checks that the friction law holds along the whole decay by moving an
 observation window of fixed length along the time axis and finding the same (ζ, μ_k)
 in every window (Rigaud et al. 2010, section 3.1, after Wu et al. 2007). Here the
-analysed decay (:func:`bayestribo.decay.energy_decay`) is cut at its displacement
+analysed decay (:func:`bayestribo.signal.decay.energy_decay`) is cut at its displacement
 turning points into consecutive, non-overlapping windows of ``window`` oscillations
 (2·``window`` half cycles); what is left after the last whole window (less than
 ``window`` oscillations, up to the end of motion) joins the last window, so no
@@ -15,7 +15,7 @@ squares on the window's Π increments with the exact model, i.e. the maximum of 
 likelihood the Bayesian fit samples, with Gaussian intervals from its curvature
 (``method="least_squares"``). With ``method="bayes"`` each window is cut out of the
 run as a run of its own, from a quarter period before its first turning point, and
-passed to the Bayesian fit (:func:`bayestribo.fit.fit` with
+passed to the Bayesian fit (:func:`bayestribo.inference.fit` with
 ``skip_oscillations=0``, or any function given as ``fitter``); the intervals are
 posterior quantiles.
 
@@ -42,8 +42,8 @@ from bayestribo.adequacy.segments import (
     segment_noise,
     whole_decay_fit,
 )
-from bayestribo.decay import EnergyDecay, energy_decay
 from bayestribo.errors import BayestriboError, RecordingError
+from bayestribo.signal.decay import EnergyDecay, energy_decay
 
 __all__ = [
     "WindowEstimate",
@@ -62,7 +62,7 @@ _Z95 = 1.959963984540054
 
 
 def analysed_decay(run: Any, *, skip_oscillations: int = 1) -> EnergyDecay:
-    """The energy decay of a run (a :class:`bayestribo.run.Run`, a path, or a decay).
+    """The energy decay of a run (a :class:`bayestribo.io.run.Run`, a path, or a decay).
 
     Raises
     ------
@@ -306,7 +306,7 @@ def _from_fit(fit: SegmentFit, mu_scale: float) -> tuple[float, float, NDArray, 
 
 
 def _sub_run(run: Any, t_from: float, t_to: float) -> Any:
-    from bayestribo.run import Run
+    from bayestribo.io.run import Run
 
     sel = (run.time >= t_from) & (run.time <= t_to)
     return Run(
@@ -366,7 +366,7 @@ def windowed_fits(
         Oscillations after the release left out (as :func:`energy_decay`).
     fitter : callable, optional
         ``fitter(run) -> result`` with ``result.samples(name)`` for ``method="bayes"``;
-        default :func:`bayestribo.fit.fit`.
+        default :func:`bayestribo.inference.fit`.
     seed : int
         Seed of the noise propagation (least squares) or base seed of the sampler.
     friction : {"auto", "fit", "fixed"}
@@ -408,7 +408,7 @@ def windowed_fits(
     mode = ("fit" if resolved else "fixed") if friction == "auto" else friction
     fixed_mu = whole.mu if mode == "fixed" else None
     if method == "bayes":
-        from bayestribo.decay import MIN_OSCILLATIONS
+        from bayestribo.signal.decay import MIN_OSCILLATIONS
 
         if window < MIN_OSCILLATIONS:
             raise RecordingError(
@@ -423,10 +423,10 @@ def windowed_fits(
             run = read_run(run)
         if fitter is None:
             try:
-                from bayestribo.fit import fit as bayes_fit
+                from bayestribo.inference import fit as bayes_fit
             except ImportError as exc:
                 raise BayestriboError(
-                    "method='bayes' needs bayestribo.fit, which is not available"
+                    "method='bayes' needs bayestribo.inference, which is not available"
                 ) from exc
 
             def fitter(sub: Any) -> Any:

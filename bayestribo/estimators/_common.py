@@ -11,8 +11,8 @@ from numpy.typing import NDArray
 
 from bayestribo.errors import RecordingError
 from bayestribo.estimators.result import Estimate, friction_fraction
-from bayestribo.peaks import Peaks
-from bayestribo.scaling import Rig
+from bayestribo.model.scaling import Rig
+from bayestribo.signal.peaks import Peaks
 
 __all__: list[str] = []
 
@@ -29,7 +29,9 @@ def dzeta_dbeta(beta: float) -> float:
 
 def check_peaks(peaks: Peaks, needed: int, method: str) -> None:
     if not isinstance(peaks, Peaks):
-        raise RecordingError(f"{method}: peaks must be a bayestribo.peaks.Peaks, got {type(peaks)}")
+        raise RecordingError(
+            f"{method}: peaks must be a bayestribo.signal.peaks.Peaks, got {type(peaks)}"
+        )
     if len(peaks) < needed:
         raise RecordingError(f"{method}: needs at least {needed} peaks, got {len(peaks)}")
 

@@ -13,8 +13,8 @@ from bayestribo.estimators.energy_ls import energy_data, energy_least_squares
 from bayestribo.estimators.feeny_liang import feeny_liang
 from bayestribo.estimators.nonsuccessive import nonsuccessive_peaks
 from bayestribo.estimators.result import Estimate, EstimateTable
-from bayestribo.peaks import Peaks, find_peaks
-from bayestribo.scaling import Rig
+from bayestribo.model.scaling import Rig
+from bayestribo.signal.peaks import Peaks, find_peaks
 
 __all__ = ["METHODS", "estimate_all"]
 
@@ -56,7 +56,7 @@ def estimate_all(
     Parameters
     ----------
     run : Run or array_like
-        A :class:`bayestribo.run.Run` (its time, displacement, velocity, rig and
+        A :class:`bayestribo.io.run.Run` (its time, displacement, velocity, rig and
         source are used), or the sample times t [s] with ``x`` and/or ``v``.
     x, v : array_like, optional
         Displacement and velocity when ``run`` is an array of times.
@@ -66,7 +66,7 @@ def estimate_all(
     skip : int
         Leading extrema to skip (2 = the first oscillation).
     offset : float, "auto", "constant" or None
-        Equilibrium of the displacement (see :func:`bayestribo.peaks.find_peaks`).
+        Equilibrium of the displacement (see :func:`bayestribo.signal.peaks.find_peaks`).
     methods : sequence of str, optional
         Subset of :data:`METHODS` (default all). The peak methods run on the
         displacement peaks and, when a velocity is recorded, on the velocity peaks.

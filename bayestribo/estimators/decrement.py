@@ -17,8 +17,8 @@ import scipy.optimize
 from bayestribo.errors import RecordingError
 from bayestribo.estimators._common import check_peaks, describe, make_estimate, omega
 from bayestribo.estimators.result import Estimate
-from bayestribo.peaks import Peaks
-from bayestribo.scaling import Rig
+from bayestribo.model.scaling import Rig
+from bayestribo.signal.peaks import Peaks
 
 __all__ = ["exponential_envelope", "log_decrement"]
 

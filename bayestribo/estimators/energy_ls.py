@@ -36,12 +36,12 @@ import scipy.optimize
 import scipy.signal
 from numpy.typing import ArrayLike, NDArray
 
-from bayestribo.decay import derive_velocity
 from bayestribo.errors import RecordingError
 from bayestribo.estimators.feeny_liang import feeny_liang
 from bayestribo.estimators.result import Estimate, friction_fraction
-from bayestribo.peaks import Peaks, find_peaks, prepare_signal
-from bayestribo.scaling import Rig
+from bayestribo.model.scaling import Rig
+from bayestribo.signal.decay import derive_velocity
+from bayestribo.signal.peaks import Peaks, find_peaks, prepare_signal
 
 __all__ = ["EnergyData", "energy_data", "energy_least_squares"]
 
@@ -101,7 +101,7 @@ def _uniform_dt(t: NDArray) -> float:
 
 
 def _derivative(t: NDArray, x: NDArray, period: float, sigma: float) -> tuple[NDArray, float]:
-    """Velocity from the displacement (:func:`bayestribo.decay.derive_velocity`) and its noise."""
+    """Velocity from the displacement (:func:`bayestribo.signal.decay.derive_velocity`) and its noise."""
     _uniform_dt(t)
     v, gain = derive_velocity(t, x, period)
     return v, sigma * gain
@@ -134,7 +134,7 @@ def energy_data(
     skip : int
         Leading extrema to skip (the first oscillation is disturbed by the release).
     offset : float, "auto", "constant" or None
-        Equilibrium of the displacement (see :func:`bayestribo.peaks.find_peaks`).
+        Equilibrium of the displacement (see :func:`bayestribo.signal.peaks.find_peaks`).
     zeta_guess : float, optional
         ζ used in Ω = π/(T_half√(1-ζ²)) when there is no rig.
     """

@@ -40,8 +40,8 @@ from bayestribo.estimators._common import (
     zeta_from_beta,
 )
 from bayestribo.estimators.result import Estimate
-from bayestribo.peaks import Peaks
-from bayestribo.scaling import Rig
+from bayestribo.model.scaling import Rig
+from bayestribo.signal.peaks import Peaks
 
 __all__ = ["feeny_liang", "friction_from_beta"]
 

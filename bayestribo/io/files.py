@@ -2,7 +2,7 @@
 
 ``read_run(path, **metadata)`` picks the reader from the file suffix (or
 ``file_format=``), reads the JSON sidecar beside the file when there is one, lets
-keyword metadata fill or override it, builds a :class:`~bayestribo.run.Run` and
+keyword metadata fill or override it, builds a :class:`~bayestribo.io.run.Run` and
 checks it with :func:`~bayestribo.io.validation.validate_run`. ``write_run`` writes
 the canonical CSV and its sidecar, which read back identically.
 """
@@ -14,12 +14,12 @@ from pathlib import Path
 from typing import Any
 
 from bayestribo.errors import RunFormatError
+from bayestribo.io.run import DISPLACEMENT, TIME, VELOCITY, Run
 from bayestribo.io.sidecar import read_sidecar, sidecar_path, write_sidecar
 from bayestribo.io.tdms import read_tdms
 from bayestribo.io.text import read_text, write_csv
 from bayestribo.io.uff import read_uff
 from bayestribo.io.validation import validate_run
-from bayestribo.run import DISPLACEMENT, TIME, VELOCITY, Run
 
 __all__ = ["FORMATS", "read_run", "write_run"]
 

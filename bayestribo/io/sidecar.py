@@ -1,6 +1,6 @@
 """The JSON sidecar of a run file: ``run.csv`` -> ``run.json`` (same stem).
 
-The sidecar is one JSON object of metadata (see :data:`bayestribo.run.METADATA_KEYS`).
+The sidecar is one JSON object of metadata (see :data:`bayestribo.io.run.METADATA_KEYS`).
 Numbers are written with Python's shortest round-trip representation, so reading
 a written sidecar gives back exactly the same values.
 """
@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from bayestribo.errors import RunFormatError
-from bayestribo.run import METADATA_KEYS, check_metadata
+from bayestribo.io.run import METADATA_KEYS, check_metadata
 
 __all__ = ["read_sidecar", "sidecar_path", "write_sidecar"]
 
@@ -47,7 +47,7 @@ def read_sidecar(path: str | Path) -> dict:
     Returns
     -------
     dict
-        Checked metadata (see :func:`bayestribo.run.check_metadata`).
+        Checked metadata (see :func:`bayestribo.io.run.check_metadata`).
 
     Raises
     ------
@@ -78,7 +78,7 @@ def write_sidecar(metadata: Mapping[str, Any], path: str | Path) -> Path:
     Parameters
     ----------
     metadata : mapping
-        Checked metadata (a :class:`~bayestribo.run.Run`'s ``metadata``).
+        Checked metadata (a :class:`~bayestribo.io.run.Run`'s ``metadata``).
     path : str or Path
         The ``.json`` file to write.
 

@@ -20,9 +20,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.errors import RunFormatError
+from bayestribo.io.run import COLUMNS, DISPLACEMENT, TIME, VELOCITY
 from bayestribo.io.text import check_scale
 from bayestribo.io.uff import LENGTH_UNIT_FACTORS
-from bayestribo.run import COLUMNS, DISPLACEMENT, TIME, VELOCITY
 
 __all__ = ["read_tdms"]
 

@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.errors import RunFormatError
-from bayestribo.run import COLUMNS, DISPLACEMENT, TIME, VELOCITY
+from bayestribo.io.run import COLUMNS, DISPLACEMENT, TIME, VELOCITY
 
 __all__ = ["IGNORE", "check_scale", "read_text", "write_csv"]
 

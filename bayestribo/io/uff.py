@@ -18,8 +18,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.errors import RunFormatError
+from bayestribo.io.run import COLUMNS, DISPLACEMENT, TIME, VELOCITY
 from bayestribo.io.text import check_scale
-from bayestribo.run import COLUMNS, DISPLACEMENT, TIME, VELOCITY
 
 __all__ = ["LENGTH_UNIT_FACTORS", "read_uff"]
 

@@ -33,7 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.errors import RecordingError
-from bayestribo.run import DISPLACEMENT, TIME, VELOCITY, Run
+from bayestribo.io.run import DISPLACEMENT, TIME, VELOCITY, Run
 
 __all__ = [
     "CLIP_SAMPLES",

@@ -20,16 +20,10 @@ groups
     :func:`population`: per-group and pooled means and σ, group differences.
 trend
     :func:`trend`: slope of the population mean against a covariate (load).
-campaign
-    :func:`analyse_campaign`: a campaign's fits → populations per group, ζ₀, ζ_k,
-    d_k, trends against load and viscosity.
-figures
-    Figures of a campaign analysis.
 """
 
 from __future__ import annotations
 
-from bayestribo.population.campaign import CampaignAnalysis, analyse_campaign
 from bayestribo.population.groups import POOLED, GroupPosterior, Population, difference, population
 from bayestribo.population.hyperpriors import (
     DEFAULT_SIGMA_SCALES,
@@ -45,7 +39,6 @@ from bayestribo.population.trend import Trend, slope_probabilities, trend
 __all__ = [
     "DEFAULT_SIGMA_SCALES",
     "POOLED",
-    "CampaignAnalysis",
     "GroupPosterior",
     "HalfCauchy",
     "HalfNormal",
@@ -53,7 +46,6 @@ __all__ = [
     "Population",
     "RunSamples",
     "Trend",
-    "analyse_campaign",
     "as_run_samples",
     "difference",
     "population",

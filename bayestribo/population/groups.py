@@ -207,7 +207,7 @@ def population(
     ----------
     runs : iterable of RunSamples or fit results
         Per-run posteriors (fit results need ``samples``, ``prior_logpdf`` and
-        ``metadata``, as :class:`bayestribo.fit.FitResult` has).
+        ``metadata``, as :class:`bayestribo.inference.FitResult` has).
     parameters : sequence of str
         Parameters modelled jointly, default ζ and μ_k (dimensionless).
     by : str or sequence of str, optional

@@ -5,7 +5,7 @@ every sample, the density of the prior the run was fitted with, which is divided
 (see :mod:`bayestribo.population.likelihood`). :class:`RunSamples` holds both, and
 :func:`run_samples` builds it from a single-run fit result (any object with
 ``samples(name)``, ``prior_logpdf(name, values)`` and ``metadata``, such as
-:class:`bayestribo.fit.FitResult`).
+:class:`bayestribo.inference.FitResult`).
 """
 
 from __future__ import annotations

@@ -1,0 +1,309 @@
+"""Campaign analysis: per-run fits → populations per group, ζ₀, ζ_k, d_k and load trends.
+
+The runs of a campaign are split into tests without contact (``load_N`` = 0, or no
+μ_k in the fit), whose pooled population gives ζ₀, and tests with contact, whose ζ
+and μ_k populations are inferred per group of the ``by`` keys (default lubricant,
+water fraction and load). For every series (the ``by`` keys other than the load)
+with runs at two or more loads, the trend against load is inferred; for glycerol-water
+series with two or more water fractions, the trend against the kinematic viscosity of
+Eq. 43 (labels ``viscosity:...``; the paper's ζ rises with ν, Fig. 10a). Derived per
+group (section 2.5 of the paper):
+
+* ζ_k = ζ̄ − ζ₀ (group mean minus the pooled ζ₀, independent posteriors);
+* d_k = 2 ζ_k √(k m) / N = 2 ζ_k m Ω / N [N·s/m], with m and Ω = 2πf from the runs'
+  metadata, taken as exact (the metadata gives no uncertainty for them) and N the
+  group's load.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from bayestribo.errors import BayestriboError
+from bayestribo.population.groups import Population, population
+from bayestribo.population.samples import FitLike, RunSamples, run_samples
+from bayestribo.population.summary import summarize
+from bayestribo.population.trend import Trend, trend
+
+__all__ = ["DEFAULT_BY", "VISCOSITY_KEY", "CampaignAnalysis", "analyse_campaign"]
+
+#: Metadata key of the kinematic viscosity computed with Eq. 43 [mm²/s].
+VISCOSITY_KEY = "kinematic_viscosity_mm2_per_s"
+
+#: Default grouping keys of a campaign.
+DEFAULT_BY: tuple[str, ...] = ("lubricant", "water_mass_fraction", "load_N")
+
+
+def _has_friction(result: Any) -> bool:
+    names = getattr(result, "parameter_names", None)
+    if names is not None and "mu_k" not in names:
+        return False
+    return getattr(result, "metadata", {}).get("load_N") != 0
+
+
+def _run_summary(result: Any, prob: float) -> dict[str, Any]:
+    md = dict(getattr(result, "metadata", {}) or {})
+    out: dict[str, Any] = {"run_id": md.get("run_id") or getattr(result, "run_name", None)}
+    for key in ("series", "lubricant", "water_mass_fraction", "load_N", "repeat"):
+        out[key] = md.get(key)
+    for p in ("zeta", "mu_k"):
+        try:
+            s = summarize(result.samples(p), prob)
+        except (KeyError, ValueError):
+            continue
+        out[p] = {"median": s["median"], "interval": s["interval"]}
+    out["converged"] = bool(getattr(result, "converged", True))
+    return out
+
+
+@dataclass(frozen=True)
+class CampaignAnalysis:
+    """Everything the campaign reports across runs.
+
+    Attributes
+    ----------
+    by : tuple of str
+        Grouping keys of the runs with contact.
+    runs : list of dict
+        Per-run summaries (metadata keys, ζ and μ_k medians and intervals).
+    contact : Population or None
+        Populations of ζ and μ_k per group (pooled over all runs with contact only
+        when the load is the sole grouping key).
+    zeta0 : Population or None
+        Pooled population of ζ over the runs without contact.
+    series : Population or None
+        Populations pooled over the loads of each series (the grouping keys other
+        than the load), when there are such keys.
+    trends : dict
+        Series label -> :class:`Trend` against ``covariate``.
+    derived : list of dict
+        Per contact group: ζ_k and d_k summaries.
+    """
+
+    by: tuple[str, ...]
+    covariate: str
+    prob: float
+    runs: list[dict[str, Any]]
+    contact: Population | None
+    zeta0: Population | None
+    series: Population | None = None
+    trends: dict[str, Trend] = field(default_factory=dict)
+    derived: list[dict[str, Any]] = field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready report."""
+        p = self.prob
+        return {
+            "by": list(self.by),
+            "covariate": self.covariate,
+            "prob": p,
+            "runs": self.runs,
+            "contact": None if self.contact is None else self.contact.to_dict(p),
+            "zeta0": None if self.zeta0 is None else self.zeta0.to_dict(p),
+            "series": None if self.series is None else self.series.to_dict(p),
+            "trends": {k: t.to_dict(p) for k, t in self.trends.items()},
+            "derived": self.derived,
+        }
+
+    def group_rows(self) -> list[dict[str, Any]]:
+        """One row per group and parameter (CSV table)."""
+        rows = []
+        pops = [
+            ("contact", self.contact),
+            ("pooled over loads", self.series),
+            ("no contact", self.zeta0),
+        ]
+        for kind, pop in pops:
+            if pop is None:
+                continue
+            groups = list(pop.groups.values()) + ([pop.pooled] if pop.pooled else [])
+            for g in groups:
+                for name in g.parameters:
+                    m, s = summarize(g.mean[name], self.prob), summarize(g.sigma[name], self.prob)
+                    rows.append(
+                        {
+                            "kind": kind,
+                            "group": g.label,
+                            "n_runs": len(g.runs),
+                            "parameter": name,
+                            "mean_median": m["median"],
+                            "mean_low": m["interval"][0],
+                            "mean_high": m["interval"][1],
+                            "sigma_median": s["median"],
+                            "sigma_low": s["interval"][0],
+                            "sigma_high": s["interval"][1],
+                            "sigma_prior": g.sigma_prior[name],
+                            "converged": g.diagnostics.get("converged"),
+                        }
+                    )
+        return rows
+
+    def trend_rows(self) -> list[dict[str, Any]]:
+        """One row per series and parameter (CSV table)."""
+        rows = []
+        for label, t in self.trends.items():
+            for name in t.parameters:
+                s = t.slope_summary(name, self.prob)
+                rows.append(
+                    {
+                        "series": label,
+                        "covariate": t.covariate,
+                        "parameter": name,
+                        "slope_median": s["median"],
+                        "slope_low": s["interval"][0],
+                        "slope_high": s["interval"][1],
+                        "prob_positive": s["prob_positive"],
+                        "prob_sign": s["prob_sign"],
+                        "n_runs": len(t.runs),
+                    }
+                )
+        return rows
+
+
+def _paired_difference(a: np.ndarray, b: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    n = min(len(a), len(b))
+    return rng.permutation(a)[:n] - rng.permutation(b)[:n]
+
+
+def _derived(contact: Population, zeta0: Population, runs: Sequence[Any], seed: int, prob: float):
+    assert zeta0.pooled is not None
+    rng = np.random.default_rng(seed)
+    by_name = {str(r.metadata.get("run_id") or getattr(r, "run_name", None)): r for r in runs}
+    out = []
+    for g in contact.groups.values():
+        zeta_k = _paired_difference(g.mean["zeta"], zeta0.pooled.mean["zeta"], rng)
+        row: dict[str, Any] = {"group": g.label, "zeta_k": summarize(zeta_k, prob)}
+        md = by_name[g.runs[0]].metadata if g.runs[0] in by_name else {}
+        load, mass, freq = md.get("load_N"), md.get("mass_kg"), md.get("natural_frequency_Hz")
+        if load and mass and freq:
+            d_k = 2.0 * zeta_k * mass * 2.0 * math.pi * freq / load
+            row["d_k_N_s_per_m"] = summarize(d_k, prob)
+            row["load_N"] = load
+        out.append(row)
+    return out
+
+
+def _viscosity_trends(
+    samples: list[RunSamples], keys: tuple[str, ...], kw: Mapping[str, Any]
+) -> dict[str, Trend]:
+    """Trends against the kinematic viscosity of Eq. 43 for glycerol-water series.
+
+    A series is a value of the grouping keys other than the water fraction, whose
+    lubricant name contains "glycerol", with runs at two or more water fractions.
+    """
+    from bayestribo.model.viscosity import glycerol_water_viscosity
+
+    if "water_mass_fraction" not in keys:
+        return {}
+    other = tuple(k for k in keys if k != "water_mass_fraction")
+    series: dict[tuple[Any, ...], list[RunSamples]] = {}
+    for s in samples:
+        if "glycerol" in str(s.metadata.get("lubricant", "")):
+            series.setdefault(tuple(s.metadata.get(k) for k in other), []).append(s)
+    out = {}
+    for value, members in series.items():
+        if len({m.metadata["water_mass_fraction"] for m in members}) < 2:
+            continue
+        with_nu = [
+            RunSamples(
+                m.name,
+                m.values,
+                m.log_prior,
+                {
+                    **m.metadata,
+                    VISCOSITY_KEY: float(
+                        glycerol_water_viscosity(m.metadata["water_mass_fraction"])
+                    ),
+                },
+            )
+            for m in members
+        ]
+        label = ",".join(f"{k}={v}" for k, v in zip(other, value, strict=True))
+        out[f"viscosity:{label}"] = trend(with_nu, VISCOSITY_KEY, ("zeta", "mu_k"), **kw)
+    return out
+
+
+def analyse_campaign(
+    results: Sequence[FitLike],
+    by: Sequence[str] = DEFAULT_BY,
+    *,
+    covariate: str = "load_N",
+    prob: float = 0.95,
+    seed: int = 0,
+    max_samples: int | None = 300,
+    n_steps: int = 2000,
+    sigma_prior: Mapping[str, Any] | None = None,
+) -> CampaignAnalysis:
+    """Populations, ζ₀, ζ_k, d_k and load trends of a campaign's fits.
+
+    Parameters
+    ----------
+    results : sequence of fit results
+        One per run (``samples``, ``prior_logpdf``, ``metadata``, ``parameter_names``).
+    by : sequence of str
+        Grouping keys of the runs with contact; keys that no such run has are left out.
+    covariate : str
+        Metadata key of the trends (a numeric key, default the load [N]).
+    prob : float
+        Credible-interval probability of the summaries.
+    seed, max_samples, n_steps, sigma_prior
+        As in :func:`bayestribo.population.population`. Single-run posteriors of a
+        tribometer record are far narrower than the spread between repeats, so 300
+        samples per run carry the population likelihood (the importance-sampling
+        effective sample size is checked and warned about if not).
+    """
+    results = list(results)
+    if not results:
+        raise BayestriboError("results: no fitted runs to analyse")
+    contact_runs = [r for r in results if _has_friction(r)]
+    free_runs = [r for r in results if not _has_friction(r)]
+    kw = {"seed": seed, "n_steps": n_steps, "sigma_prior": sigma_prior}
+    keys = tuple(k for k in by if any(r.metadata.get(k) is not None for r in contact_runs))
+    contact = zeta0 = series_pop = None
+    trends: dict[str, Trend] = {}
+    if contact_runs:
+        samples = [
+            run_samples(r, ("zeta", "mu_k"), max_samples=max_samples, seed=seed)
+            for r in contact_runs
+        ]
+        series_keys = tuple(k for k in keys if k != covariate)
+        # Pooled over all runs with contact only if nothing but the load tells them
+        # apart; otherwise pooled over the loads of each series.
+        contact = population(
+            samples, ("zeta", "mu_k"), by=keys or None, pooled=not series_keys, **kw
+        )
+        if series_keys and covariate in keys:
+            series_pop = population(samples, ("zeta", "mu_k"), by=series_keys, pooled=False, **kw)
+        series: dict[tuple[Any, ...], list[RunSamples]] = {}
+        for s in samples:
+            series.setdefault(tuple(s.metadata.get(k) for k in series_keys), []).append(s)
+        for value, members in series.items():
+            xs = {m.metadata.get(covariate) for m in members}
+            if len(xs) >= 2 and all(isinstance(x, int | float) for x in xs):
+                label = ",".join(f"{k}={v}" for k, v in zip(series_keys, value, strict=True))
+                trends[label or "all"] = trend(members, covariate, ("zeta", "mu_k"), **kw)
+        trends.update(_viscosity_trends(samples, keys, kw))
+    if free_runs:
+        zs = [run_samples(r, ("zeta",), max_samples=max_samples, seed=seed) for r in free_runs]
+        zeta0 = population(zs, ("zeta",), **kw)
+    derived = (
+        _derived(contact, zeta0, contact_runs, seed, prob)
+        if contact is not None and zeta0 is not None and contact.groups
+        else []
+    )
+    return CampaignAnalysis(
+        by=keys,
+        covariate=covariate,
+        prob=prob,
+        runs=[_run_summary(r, prob) for r in results],
+        contact=contact,
+        zeta0=zeta0,
+        series=series_pop,
+        trends=trends,
+        derived=derived,
+    )

@@ -1,0 +1,464 @@
+"""Fit many runs on any executor, with per-run seeds from a campaign seed.
+
+:func:`fit_many` submits one task per run to a :class:`concurrent.futures.Executor`
+(a process pool with one worker per core by default; a Dask cluster through
+``Client.get_executor()``, see :func:`dask_executor`). Each run's seed is derived from
+the campaign seed and the run's *identity* (its ``run_id`` or file stem) with
+:class:`numpy.random.SeedSequence`, never from the order of submission or of
+completion, so the results do not depend on the executor or on the number of workers.
+A failed run is reported with its error and traceback; the others go on.
+
+:func:`fit_catalogued` does the same for run files and records every fit in the
+results catalog (:mod:`bayestribo.campaign.catalog`), so that a re-run skips the runs already
+fitted with the same data and settings.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import multiprocessing
+import os
+import sys
+import time
+import traceback
+from collections.abc import Callable, Iterable, Iterator, Mapping
+from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import IO, Any
+
+import numpy as np
+
+from bayestribo.errors import BayestriboError
+
+__all__ = [
+    "RunOutcome",
+    "dask_executor",
+    "fit_catalogued",
+    "fit_many",
+    "run_identity",
+    "run_seed",
+]
+
+
+@dataclass(frozen=True)
+class RunOutcome:
+    """The outcome of one run's fit.
+
+    Attributes
+    ----------
+    name : str
+        The run's identity (:func:`run_identity`).
+    seed : int
+        The seed the run was fitted with (:func:`run_seed`).
+    result : object or None
+        What the fit function returned (a :class:`bayestribo.inference.FitResult` by
+        default); None if it failed.
+    error : str or None
+        ``"ExceptionType: message"`` if the fit failed.
+    traceback : str or None
+        The formatted traceback of a failure (from the worker).
+    elapsed_s : float
+        Wall time of the fit in the worker [s] (nan when the worker did not report).
+    cached : bool
+        True when the result was read back from an earlier fit (:func:`fit_catalogued`).
+    """
+
+    name: str
+    seed: int
+    result: Any = None
+    error: str | None = None
+    traceback: str | None = None
+    elapsed_s: float = float("nan")
+    cached: bool = False
+
+    @property
+    def ok(self) -> bool:
+        """True if the fit returned a result."""
+        return self.error is None
+
+
+def run_identity(run: Any) -> str:
+    """The identity of a run: the file stem of a path, else its metadata ``run_id``.
+
+    Raises
+    ------
+    BayestriboError
+        If a run object carries no ``run_id`` (its seed could not be derived from
+        what it is).
+    """
+    if isinstance(run, str | os.PathLike):
+        return Path(run).stem
+    metadata = getattr(run, "metadata", None)
+    run_id = metadata.get("run_id") if isinstance(metadata, Mapping) else None
+    if not isinstance(run_id, str) or not run_id:
+        raise BayestriboError(
+            f"runs: a {type(run).__name__} without metadata 'run_id'; give each run a "
+            "run_id (or pass file paths) so that its seed follows from its identity"
+        )
+    return run_id
+
+
+def run_seed(campaign_seed: int, identity: str) -> int:
+    """The seed of one run: SeedSequence(campaign seed, SHA-256 of its identity).
+
+    Returns a 63-bit non-negative integer, the same on every machine and executor.
+    """
+    if not isinstance(campaign_seed, int | np.integer) or campaign_seed < 0:
+        raise BayestriboError(
+            f"campaign_seed: expected a non-negative integer, got {campaign_seed!r}"
+        )
+    digest = hashlib.sha256(identity.encode("utf-8")).digest()
+    words = np.frombuffer(digest, dtype="<u4").tolist()
+    state = np.random.SeedSequence([int(campaign_seed), *words]).generate_state(2, np.uint32)
+    return (int(state[0]) << 31) ^ int(state[1])
+
+
+def _default_fit(run: Any, *, seed: int, **kwargs: Any) -> Any:
+    from bayestribo.inference import fit  # lazily: the fit pulls in the sampler stack
+
+    return fit(run, seed=seed, **kwargs)
+
+
+def _call(
+    function: Callable[..., Any], run: Any, seed: int, kwargs: Mapping[str, Any]
+) -> tuple[Any, str | None, str | None, float]:
+    """Worker side: run one fit, catching its error so that it travels as text."""
+    start = time.perf_counter()
+    try:
+        result = function(run, seed=seed, **kwargs)
+    except Exception as exc:  # reported per run; the campaign goes on
+        return (
+            None,
+            f"{type(exc).__name__}: {exc}",
+            traceback.format_exc(),
+            time.perf_counter() - start,
+        )
+    return result, None, None, time.perf_counter() - start
+
+
+class _Progress:
+    """A minimal progress line on a stream: done/total, failures, elapsed, remaining."""
+
+    def __init__(self, total: int, stream: IO[str] | None, enabled: bool) -> None:
+        self.total, self.done, self.failed = total, 0, 0
+        self.stream = stream if stream is not None else sys.stderr
+        self.enabled = enabled
+        self.start = time.perf_counter()
+        self._draw()
+
+    def update(self, ok: bool) -> None:
+        self.done += 1
+        self.failed += not ok
+        self._draw()
+
+    def _draw(self) -> None:
+        if not self.enabled:
+            return
+        width = 30
+        filled = width * self.done // max(self.total, 1)
+        elapsed = time.perf_counter() - self.start
+        left = f"{elapsed / self.done * (self.total - self.done):.0f}s" if self.done else "?"
+        failed = f", {self.failed} failed" if self.failed else ""
+        self.stream.write(
+            f"\rfit runs [{'#' * filled}{'.' * (width - filled)}] {self.done}/{self.total}"
+            f"{failed} {elapsed:.0f}s elapsed, {left} left "
+        )
+        if self.done == self.total:
+            self.stream.write("\n")
+        self.stream.flush()
+
+
+def fit_many(
+    runs: Iterable[Any],
+    executor: Executor | None = None,
+    *,
+    campaign_seed: int = 0,
+    function: Callable[..., Any] | None = None,
+    max_workers: int | None = None,
+    progress: bool = True,
+    progress_stream: IO[str] | None = None,
+    callback: Callable[[RunOutcome], None] | None = None,
+    **fit_kwargs: Any,
+) -> list[RunOutcome]:
+    """Fit every run, in parallel, each with its own seed from the campaign seed.
+
+    Parameters
+    ----------
+    runs : iterable
+        Runs (:class:`bayestribo.io.run.Run` with a ``run_id``) or paths of run files.
+    executor : concurrent.futures.Executor, optional
+        Where to fit: any executor (a thread or process pool, a Dask
+        ``Client.get_executor()``). Default: a process pool with ``max_workers``
+        workers, created and shut down here.
+    campaign_seed : int
+        Seed of the campaign; run i is fitted with ``seed=run_seed(campaign_seed,
+        run_identity(run))``.
+    function : callable, optional
+        ``function(run, seed=..., **fit_kwargs)`` fitting one run; default
+        :func:`bayestribo.inference.fit` (imported in the worker). It must be picklable
+        (a module-level function) for a process pool or a cluster.
+    max_workers : int, optional
+        Workers of the default process pool; default one per core. The pool starts
+        its workers with the ``forkserver`` method (safe with threads), so a script
+        that calls :func:`fit_many` must guard its top level with
+        ``if __name__ == "__main__":``.
+    progress : bool
+        Show a progress line on ``progress_stream`` (default standard error).
+    callback : callable, optional
+        Called in the calling process with each :class:`RunOutcome` as it completes
+        (e.g. to record it in a catalog).
+    **fit_kwargs
+        Passed to ``function`` for every run.
+
+    Returns
+    -------
+    list of RunOutcome
+        One per run, in the order of ``runs``. Failed runs have ``error`` set.
+
+    Raises
+    ------
+    BayestriboError
+        If two runs have the same identity, a run has none, or ``campaign_seed`` is
+        not a non-negative integer.
+    """
+    runs = list(runs)
+    names = [run_identity(run) for run in runs]
+    duplicates = sorted({n for n in names if names.count(n) > 1})
+    if duplicates:
+        raise BayestriboError(f"runs: duplicate run identities {duplicates}")
+    seeds = [run_seed(campaign_seed, name) for name in names]
+    if function is None:
+        function = _default_fit
+    own = executor is None
+    if own:
+        workers = max_workers or os.cpu_count() or 1
+        # forkserver: workers start from a clean process, safe when the caller runs
+        # threads (progress bars, a Dask client, a GUI).
+        context = multiprocessing.get_context(
+            "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() else None
+        )
+        executor = ProcessPoolExecutor(max_workers=workers, mp_context=context)
+    assert executor is not None
+    outcomes: list[RunOutcome | None] = [None] * len(runs)
+    bar = _Progress(len(runs), progress_stream, progress)
+    futures: dict[Future[Any], int] = {}
+    try:
+        for i, run in enumerate(runs):
+            futures[executor.submit(_call, function, run, seeds[i], dict(fit_kwargs))] = i
+        for future in as_completed(futures):
+            i = futures[future]
+            try:
+                result, error, tb, elapsed = future.result()
+            except Exception as exc:  # the executor lost the task (worker died, ...)
+                result, error, tb = None, f"{type(exc).__name__}: {exc}", traceback.format_exc()
+                elapsed = float("nan")
+            outcome = RunOutcome(names[i], seeds[i], result, error, tb, elapsed)
+            outcomes[i] = outcome
+            bar.update(outcome.ok)
+            if callback is not None:
+                callback(outcome)
+    except BaseException:
+        for future in futures:
+            future.cancel()
+        raise
+    finally:
+        if own:
+            executor.shutdown(wait=True, cancel_futures=True)
+    return [o for o in outcomes if o is not None]
+
+
+@contextmanager
+def dask_executor(address: str | None = None, **cluster_kwargs: Any) -> Iterator[Executor]:
+    """A Dask executor: on the scheduler at ``address``, or on a new local cluster.
+
+    Parameters
+    ----------
+    address : str, optional
+        Scheduler address (``tcp://host:8786``); None starts a
+        ``dask.distributed.LocalCluster(**cluster_kwargs)`` for the duration.
+
+    Raises
+    ------
+    BayestriboError
+        If ``dask.distributed`` is not installed.
+    """
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError:
+        raise BayestriboError(
+            "dask_executor: dask.distributed is not installed (pip install 'dask[distributed]')"
+        ) from None
+    if address is None:
+        with LocalCluster(**cluster_kwargs) as cluster, Client(cluster) as client:
+            yield client.get_executor()
+    else:
+        with Client(address) as client:
+            yield client.get_executor()
+
+
+def _sha256(path: Path) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def _function_name(function: Callable[..., Any] | None) -> str:
+    if function is None:
+        return "bayestribo.inference.fit"
+    return f"{getattr(function, '__module__', '?')}.{getattr(function, '__qualname__', '?')}"
+
+
+def _load_fit(path: str) -> Any:
+    from bayestribo.inference import FitResult
+
+    return FitResult.load(path)
+
+
+def fit_catalogued(
+    paths: Iterable[str | os.PathLike[str]],
+    catalog: str | os.PathLike[str],
+    out_dir: str | os.PathLike[str],
+    executor: Executor | None = None,
+    *,
+    campaign_seed: int = 0,
+    function: Callable[..., Any] | None = None,
+    loader: Callable[[str], Any] | None = None,
+    refit: bool = False,
+    max_workers: int | None = None,
+    progress: bool = True,
+    progress_stream: IO[str] | None = None,
+    **fit_kwargs: Any,
+) -> list[RunOutcome]:
+    """Fit run files with :func:`fit_many`, recording each fit in a results catalog.
+
+    Each run file is registered in the catalog (SHA-256 and sidecar metadata). A run
+    with a recorded fit of the same data, sidecar, settings (fit keyword arguments,
+    seed, fit function) and package version whose result file still exists is not
+    fitted again: its result is read back (``cached`` True). New fits are saved as
+    ``<out_dir>/<run_id>.nc`` and recorded as they complete, each in its own
+    transaction, so an interrupted campaign keeps the fits it finished.
+
+    Parameters
+    ----------
+    paths : iterable of path-like
+        Run files (each with its ``.json`` sidecar).
+    catalog : path-like
+        SQLite results catalog (:mod:`bayestribo.campaign.catalog`), created if absent.
+    out_dir : path-like
+        Folder of the per-run result files (created if absent).
+    executor, campaign_seed, function, max_workers, progress, progress_stream, **fit_kwargs
+        As in :func:`fit_many`. The results must have ``save(path)``, ``summary()``,
+        ``converged`` and ``diagnostics`` (as :class:`bayestribo.inference.FitResult`).
+    loader : callable, optional
+        Reads a saved result back; default :meth:`bayestribo.inference.FitResult.load`.
+    refit : bool
+        Fit every run even if a matching fit is recorded.
+
+    Returns
+    -------
+    list of RunOutcome
+        One per path, in order.
+
+    Raises
+    ------
+    BayestriboError
+        If a sidecar's ``run_id`` differs from its file's stem, or the catalog
+        refuses a run (another file registered under the same run id).
+    """
+    from bayestribo import __version__
+    from bayestribo.campaign.catalog import find_fit, record_fit, register_run
+    from bayestribo.io.sidecar import read_sidecar, sidecar_path
+
+    paths = [Path(p) for p in paths]
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    loader = loader or _load_fit
+    names = [run_identity(p) for p in paths]
+    settings: list[dict[str, Any]] = []
+    rows: list[int] = []
+    for path, name in zip(paths, names, strict=True):
+        side = sidecar_path(path)
+        metadata = read_sidecar(side) if side.exists() else {}
+        if metadata.get("run_id", name) != name:
+            raise BayestriboError(
+                f"{side}: run_id {metadata['run_id']!r} differs from the file name {name!r}"
+            )
+        metadata = {**metadata, "run_id": name}
+        rows.append(register_run(catalog, path=path, sha256=_sha256(path), metadata=metadata))
+        settings.append(
+            {
+                "fit_kwargs": fit_kwargs,
+                "function": _function_name(function),
+                "campaign_seed": int(campaign_seed),
+                "seed": run_seed(campaign_seed, name),
+                "sidecar_sha256": _sha256(side) if side.exists() else None,
+            }
+        )
+    outcomes: dict[str, RunOutcome] = {}
+    todo: list[int] = []
+    for i, name in enumerate(names):
+        record = (
+            None
+            if refit
+            else find_fit(catalog, run=rows[i], settings=settings[i], package_version=__version__)
+        )
+        result_path = None if record is None else record.summary.get("result_path")
+        if result_path and Path(result_path).exists():
+            seed = settings[i]["seed"]
+            outcomes[name] = RunOutcome(name, seed, loader(result_path), cached=True)
+        else:
+            todo.append(i)
+
+    unrecorded: dict[str, str] = {}
+
+    def record(outcome: RunOutcome) -> None:
+        if not outcome.ok:
+            return
+        try:
+            save_and_record(outcome)
+        except Exception as exc:  # the fit stands; the run is reported as not recorded
+            unrecorded[outcome.name] = f"{type(exc).__name__}: {exc}"
+
+    def save_and_record(outcome: RunOutcome) -> None:
+        i = names.index(outcome.name)
+        target = out / f"{outcome.name}.nc"
+        outcome.result.save(target)
+        record_fit(
+            catalog,
+            run=rows[i],
+            settings=settings[i],
+            summary={
+                "result_path": str(target.resolve()),
+                "converged": bool(outcome.result.converged),
+                "posterior": outcome.result.summary(),
+                "elapsed_s": outcome.elapsed_s,
+            },
+            diagnostics=outcome.result.diagnostics,
+            package_version=__version__,
+        )
+
+    fitted = (
+        fit_many(
+            [paths[i] for i in todo],
+            executor,
+            campaign_seed=campaign_seed,
+            function=function,
+            max_workers=max_workers,
+            progress=progress,
+            progress_stream=progress_stream,
+            callback=record,
+            **fit_kwargs,
+        )
+        if todo
+        else []
+    )
+    for o in fitted:
+        if o.name in unrecorded:
+            error = f"fitted but not saved or recorded: {unrecorded[o.name]}"
+            o = RunOutcome(o.name, o.seed, o.result, error, None, o.elapsed_s)
+        outcomes[o.name] = o
+    return [outcomes[name] for name in names]

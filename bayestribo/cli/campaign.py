@@ -1,0 +1,212 @@
+"""``bayestribo campaign``: fit every run of a folder and report across runs.
+
+Examples::
+
+    bayestribo campaign data/ --out results/
+    bayestribo campaign data/runs --by load_N --json
+    bayestribo campaign data/ --dask-scheduler tcp://10.0.0.5:8786
+    bayestribo campaign data/ --compare-laws
+
+Fits each run (skipping runs the catalog holds a fit of, with the same data and
+settings), writes each run's NetCDF, the populations per group with the between-run σ,
+ζ₀ from the runs without contact, ζ_k and d_k, the load trends (JSON and CSV tables)
+and figures; with ``--compare-laws``, which dissipation law each run supports
+(``laws.csv``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import sys
+from contextlib import nullcontext
+from pathlib import Path
+from typing import Any
+
+__all__ = ["register"]
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``campaign`` sub-command."""
+    p = subparsers.add_parser(
+        "campaign",
+        help="fit every run of a folder; populations, load trends, ζ₀, figures",
+        description=(
+            "Fit every run (CSV with its JSON sidecar) under DIR in parallel, record the "
+            "fits in an SQLite catalog (re-runs skip runs fitted with the same data and "
+            "settings), infer the population of repeats per group (mean and between-run "
+            "σ of ζ and μ_k), ζ₀ from the runs without contact, ζ_k = ζ - ζ₀, d_k and the "
+            "trends against load, and write JSON, CSV and figures to OUTDIR."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    p.add_argument("dir", metavar="DIR", help="folder searched recursively for run files")
+    p.add_argument(
+        "--by",
+        default="lubricant,water_mass_fraction,load_N",
+        help="comma-separated metadata keys grouping the runs with contact "
+        "(keys no run has are left out)",
+    )
+    p.add_argument("--out", default="bayestribo-campaign", metavar="OUTDIR")
+    p.add_argument("--catalog", help="results catalog (default OUTDIR/catalog.sqlite)")
+    p.add_argument("--json", action="store_true", help="print the report as JSON")
+    p.add_argument("--seed", type=int, default=0, help="campaign seed")
+    p.add_argument("--workers", type=int, help="processes (default: one per core)")
+    p.add_argument("--dask-scheduler", metavar="ADDRESS", help="fit on this Dask scheduler instead")
+    p.add_argument("--refit", action="store_true", help="fit runs already in the catalog")
+    p.add_argument("--model", choices=("exact", "averaged"), help="forward model of the fit")
+    p.add_argument("--max-steps", type=int, help="sampler step ceiling per run")
+    p.add_argument("--grid-points", type=int, help="Π increments per run")
+    p.add_argument("--population-steps", type=int, default=2500, help="population sampler steps")
+    p.add_argument("--prob", type=float, default=0.95, help="credible-interval probability")
+    p.add_argument(
+        "--compare-laws",
+        action="store_true",
+        help="also compare viscous, Coulomb and both per run by PSIS-LOO (three fits a run)",
+    )
+    p.add_argument("--no-figures", action="store_true", help="skip the figures")
+    p.add_argument("--quiet", action="store_true", help="no progress line")
+    p.set_defaults(handler=run)
+
+
+def _write_csv(path: Path, rows: list[dict[str, Any]]) -> None:
+    with open(path, "w", newline="") as f:
+        if not rows:
+            return
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+
+
+def _run_rows(runs: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    rows = []
+    for r in runs:
+        row = {k: v for k, v in r.items() if not isinstance(v, dict)}
+        for p in ("zeta", "mu_k"):
+            s = r.get(p, {"median": None, "interval": [None, None]})
+            row[f"{p}_median"], (row[f"{p}_low"], row[f"{p}_high"]) = s["median"], s["interval"]
+        rows.append(row)
+    return rows
+
+
+def _text(analysis: Any, failures: list[dict[str, str]]) -> str:
+    lines = [f"{'group':48s} {'n':>2s} {'param':5s} {'mean [interval]':>30s} {'σ [interval]':>30s}"]
+    for r in analysis.group_rows():
+        prefix = {"contact": "", "pooled over loads": "pooled over loads: "}
+        group = prefix.get(r["kind"], "no contact (ζ₀): ") + str(r["group"])
+        mean = f"{r['mean_median']:.5f} [{r['mean_low']:.5f}, {r['mean_high']:.5f}]"
+        sig = f"{r['sigma_median']:.5f} [{r['sigma_low']:.5f}, {r['sigma_high']:.5f}]"
+        lines.append(f"{group:48s} {r['n_runs']:2d} {r['parameter']:5s} {mean:>30s} {sig:>30s}")
+    for r in analysis.trend_rows():
+        lines.append(
+            f"trend {r['series']} {r['parameter']}: slope {r['slope_median']:.4g} "
+            f"[{r['slope_low']:.4g}, {r['slope_high']:.4g}] per unit of {r['covariate']}, "
+            f"P(slope > 0) = {r['prob_positive']:.3f}"
+        )
+    for f in failures:
+        lines.append(f"FAILED {f['run']}: {f['error']}")
+    return "\n".join(lines)
+
+
+def _compare_laws(
+    paths: list[Path], executor: Any, args: argparse.Namespace, fit_kwargs: dict[str, Any]
+) -> list[dict[str, Any]]:
+    from bayestribo.campaign.fitting import fit_many
+    from bayestribo.inference.comparison import compare_dissipation_laws
+
+    outcomes = fit_many(
+        paths,
+        executor,
+        campaign_seed=args.seed,
+        function=compare_dissipation_laws,
+        max_workers=args.workers,
+        progress=not args.quiet,
+        **fit_kwargs,
+    )
+    return [
+        {"run": o.name, **o.result.to_dict()} if o.ok else {"run": o.name, "error": o.error}
+        for o in outcomes
+    ]
+
+
+def _law_row(entry: dict[str, Any]) -> dict[str, Any]:
+    row: dict[str, Any] = {"run": entry["run"], "verdict": entry.get("verdict")}
+    row["best"] = entry.get("best")
+    for law in ("viscous", "coulomb", "both"):
+        stats = entry.get("table", {}).get(law, {})
+        row[f"{law}_elpd_loo"] = stats.get("elpd_loo")
+        row[f"{law}_elpd_diff"] = stats.get("elpd_diff")
+    row["error"] = entry.get("error")
+    return row
+
+
+def run(args: argparse.Namespace) -> int:
+    """Find the runs, fit them, analyse, write the outputs."""
+    from bayestribo.campaign.analysis import analyse_campaign
+    from bayestribo.campaign.fitting import dask_executor, fit_catalogued
+    from bayestribo.errors import BayestriboError
+
+    folder = Path(args.dir)
+    if not folder.is_dir():
+        raise BayestriboError(f"DIR: {folder} is not a folder")
+    paths = sorted(p for p in folder.rglob("*.csv") if p.with_suffix(".json").exists())
+    if not paths:
+        raise BayestriboError(f"DIR: no run files (CSV with a JSON sidecar) under {folder}")
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    catalog = Path(args.catalog) if args.catalog else out / "catalog.sqlite"
+    fit_kwargs = {
+        key: value
+        for key, value in (
+            ("model", args.model),
+            ("max_steps", args.max_steps),
+            ("grid_points", args.grid_points),
+        )
+        if value is not None
+    }
+    context = dask_executor(args.dask_scheduler) if args.dask_scheduler else nullcontext(None)
+    with context as executor:
+        outcomes = fit_catalogued(
+            paths,
+            catalog,
+            out / "fits",
+            executor,
+            campaign_seed=args.seed,
+            refit=args.refit,
+            max_workers=args.workers,
+            progress=not args.quiet,
+            **fit_kwargs,
+        )
+        laws = _compare_laws(paths, executor, args, fit_kwargs) if args.compare_laws else None
+    failures = [{"run": o.name, "error": str(o.error)} for o in outcomes if not o.ok]
+    fitted = [o.result for o in outcomes if o.ok]
+    by = tuple(k for k in args.by.split(",") if k)
+    analysis = analyse_campaign(
+        fitted, by, prob=args.prob, seed=args.seed, n_steps=args.population_steps
+    )
+    report = {
+        **analysis.to_dict(),
+        "failures": failures,
+        "n_runs": len(paths),
+        "n_cached": sum(o.cached for o in outcomes),
+        "catalog": str(catalog),
+        "settings": {"seed": args.seed, "fit": fit_kwargs},
+    }
+    if laws is not None:
+        report["laws"] = laws
+        _write_csv(out / "laws.csv", [_law_row(r) for r in laws])
+    (out / "population.json").write_text(json.dumps(report, indent=2, default=str) + "\n")
+    _write_csv(out / "groups.csv", analysis.group_rows())
+    _write_csv(out / "trends.csv", analysis.trend_rows())
+    _write_csv(out / "runs.csv", _run_rows(analysis.runs))
+    if not args.no_figures:
+        from bayestribo.campaign.figures import save_figures
+
+        save_figures(analysis, out / "figures")
+    if args.json:
+        json.dump(report, sys.stdout, indent=2, default=str)
+        sys.stdout.write("\n")
+    else:
+        print(_text(analysis, failures))
+    return 1 if failures else 0

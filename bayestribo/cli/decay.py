@@ -1,0 +1,110 @@
+"""``bayestribo decay``: the energy decay curve Π(τ) of one run.
+
+Examples::
+
+    bayestribo decay data/runs/glycerol-N0.31-r1.csv
+    bayestribo decay HarmOsc3.txt --columns t x --length-unit arbitrary --json
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from typing import Any
+
+from bayestribo.cli._common import add_run_arguments, read_run_from_args
+
+__all__ = ["register"]
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``decay`` sub-command."""
+    p = subparsers.add_parser(
+        "decay",
+        help="energy decay E(τ) and its retrograde integral Π(τ) of a run",
+        description=(
+            "Detect the release, skip the first oscillation, estimate the equilibrium, "
+            "find the end of motion, measure the noise at rest and the natural frequency, "
+            "and print a summary of E(τ) and Π(τ) (Rigaud et al. 2010, Eq. 26, 39)."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    add_run_arguments(p)
+    p.add_argument("--skip", type=int, default=1, help="oscillations to skip after the release")
+    p.add_argument("--points", type=int, default=12, help="rows of Π(τ) to print")
+    p.add_argument("--json", action="store_true", help="print JSON instead of text")
+    p.set_defaults(handler=run)
+
+
+def summary(decay: Any, run_name: str) -> dict[str, Any]:
+    """A JSON-ready summary of an :class:`~bayestribo.signal.decay.EnergyDecay`."""
+    return {
+        "run": run_name,
+        "start_time_s": decay.start_time,
+        "end_time_s": decay.end_time,
+        "motion_ended": decay.motion_ended,
+        "release_time_s": decay.release_time,
+        "tau_end": decay.tau_end,
+        "y0": decay.y0,
+        "pi0": float(decay.pi[0]),
+        "length_scale": decay.scaling.length_scale,
+        "friction_defined": decay.scaling.friction_defined,
+        "equilibrium": decay.equilibrium,
+        "natural_frequency_Hz": decay.natural_frequency_Hz,
+        "nominal_frequency_Hz": decay.nominal_frequency_Hz,
+        "frequency_difference_Hz": decay.frequency_difference_Hz,
+        "noise": {
+            "displacement": decay.noise.displacement,
+            "velocity": decay.noise.velocity,
+            "source": decay.noise.source,
+            "n_samples": decay.noise.n_samples,
+        },
+        "derived_channel": decay.derived_channel,
+        "n_samples": int(decay.tau.size),
+    }
+
+
+def run(args: argparse.Namespace) -> int:
+    """Read the run, compute its energy decay, print it."""
+    import numpy as np
+
+    from bayestribo.signal.decay import energy_decay
+
+    recording = read_run_from_args(args)
+    decay = energy_decay(
+        recording.time,
+        recording.displacement,
+        recording.velocity,
+        rig=recording.rig(),
+        skip_oscillations=args.skip,
+    )
+    info = summary(decay, args.run)
+    rows = np.linspace(0, decay.tau.size - 1, max(args.points, 2)).astype(int)
+    if args.json:
+        info["tau"] = decay.tau[rows].tolist()
+        info["pi"] = decay.pi[rows].tolist()
+        print(json.dumps(info, indent=2))
+        return 0
+    unit = "μ_k (y = kx/N)" if decay.scaling.friction_defined else "friction displacement"
+    print(f"run            {args.run}")
+    print(
+        f"analysed       {decay.start_time:.6g} s to {decay.end_time:.6g} s "
+        f"({'motion ended' if decay.motion_ended else 'record ends first'})"
+    )
+    nominal = decay.nominal_frequency_Hz
+    diff = (
+        ""
+        if nominal is None
+        else f" (nominal {nominal:.4g} Hz, {decay.frequency_difference_Hz:+.3g} Hz)"
+    )
+    print(f"frequency      {decay.natural_frequency_Hz:.6g} Hz measured{diff}")
+    print(
+        f"noise          displacement {decay.noise.displacement}, velocity "
+        f"{decay.noise.velocity} ({decay.noise.source})"
+    )
+    print(f"friction unit  {unit}; length scale {decay.scaling.length_scale:.6g}")
+    print(f"y0             {decay.y0:.6g}")
+    print(f"{'τ':>12} {'E(τ)':>14} {'Π(τ)':>14}")
+    for i in rows:
+        print(f"{decay.tau[i]:12.4f} {decay.energy[i]:14.6g} {decay.pi[i]:14.6g}")
+    return 0

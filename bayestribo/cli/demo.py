@@ -1,0 +1,209 @@
+"""``bayestribo demo``: the quick start. Fit a bundled run and the bundled campaign.
+
+Fits the bundled (simulated) glycerol run ``glycerol-N0.31-r1`` and a reduced bundled
+campaign across the five loads (one repeat per load and one run in air; ``--full`` for
+all of them), prints the credible intervals of ζ and μ_k next to the paper's values,
+and writes two HTML reports, their figures (PNG) and results (JSON) into an output
+folder.
+
+The bundled campaign is ``data/`` of a source checkout; without it the campaign is
+simulated again (:func:`bayestribo.synthetic.campaign.write_campaign`, the same fixed seed,
+identical files) into a cache folder.
+
+Examples::
+
+    bayestribo demo
+    bayestribo demo --out demo-output --full
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+from pathlib import Path
+from typing import Any
+
+__all__ = ["DEMO_RUN", "PAPER", "campaign_folder", "register", "summary_lines"]
+
+#: The bundled run of the single-run report.
+DEMO_RUN = "glycerol-N0.31-r1"
+#: The paper's glycerol values (section 3.1): mean and standard deviation of repeats.
+PAPER = {"zeta": (0.0236, 0.0012), "mu_k": (0.0294, 0.0036)}
+_SYMBOL = {"zeta": "ζ", "mu_k": "μ_k"}
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``demo`` sub-command."""
+    p = subparsers.add_parser(
+        "demo",
+        help="fit a bundled run and the bundled campaign; reports, figures, intervals",
+        description=(
+            "Fit the bundled simulated run glycerol-N0.31-r1 and the bundled glycerol "
+            "campaign across loads (one repeat per load and one run in air, or all runs "
+            "with --full), print the 95 % credible intervals of ζ and μ_k next to the "
+            "paper's values, and write HTML reports, figures and JSON results to --out."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    p.add_argument("--out", type=Path, default=Path("bayestribo-demo"), help="output folder")
+    size = p.add_mutually_exclusive_group()
+    size.add_argument(
+        "--quick",
+        action="store_true",
+        help="a fast check: two loads, no run in air, no adequacy checks, short samplers",
+    )
+    size.add_argument(
+        "--full", action="store_true", help="every glycerol run (3 repeats × 5 loads) and air run"
+    )
+    p.add_argument("--hide-code", action="store_true", help="leave the code out of the reports")
+    p.set_defaults(handler=run)
+
+
+def _cache_dir() -> Path:
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "bayestribo"
+
+
+def campaign_folder(cache: Path | None = None) -> tuple[Path, str]:
+    """The bundled campaign folder, simulating it into ``cache`` when ``data/`` is absent.
+
+    Returns
+    -------
+    (Path, str)
+        The folder (with ``manifest.csv``) and where it came from.
+    """
+    from bayestribo.reports.notebooks import bundled_data_dir
+    from bayestribo.synthetic.campaign import CAMPAIGN_SEED, write_campaign
+
+    bundled = bundled_data_dir()
+    if bundled is not None:
+        return bundled, "bundled"
+    folder = (cache or _cache_dir()) / f"campaign-{CAMPAIGN_SEED}"
+    if not (folder / "manifest.csv").is_file():
+        print(f"simulating the bundled campaign into {folder} ...", file=sys.stderr)
+        write_campaign(folder)
+        return folder, "simulated now"
+    return folder, "simulated earlier (cache)"
+
+
+def _interval(summary: dict[str, Any], significant: bool = False) -> str:
+    """``mean [low, high]`` with enough decimals to show the interval's width.
+
+    With ``significant``, two significant digits each (for a σ whose interval starts
+    near zero).
+    """
+    lo, hi = summary.get("ci95") or summary.get("interval")
+    if significant:
+        return f"{summary['mean']:.2g} [{lo:.2g}, {hi:.2g}]"
+    width = hi - lo
+    decimals = 5 if width <= 0 else min(max(1 - math.floor(math.log10(width)), 4), 9)
+    return f"{summary['mean']:.{decimals}f} [{lo:.{decimals}f}, {hi:.{decimals}f}]"
+
+
+def summary_lines(single: dict[str, Any], campaign: dict[str, Any]) -> list[str]:
+    """The printed comparison: the run, the campaign's population and the paper."""
+    fit = single["fit"]["parameters"]
+    w = 34
+    lines = [f"{'':34}{'ζ':<{w}}{'μ_k':<{w}}"]
+    converged = single["fit"]["diagnostics"].get("converged", False)
+    lines.append(
+        f"run {single['name']}: posterior mean [95 % credible interval]"
+        + ("" if converged else "  (SAMPLER NOT CONVERGED: do not use)")
+    )
+    lines.append(
+        f"{'  Bayesian fit':34}"
+        + "".join(f"{_interval(fit[p]) if p in fit else '-':<{w}}" for p in PAPER)
+    )
+    true = single.get("true") or {}
+    if true:
+        lines.append(
+            f"{'  true value (simulated run)':34}"
+            + "".join(f"{true[p] if p in true else '-':<{w}.6g}" for p in PAPER)
+        )
+    runs = campaign.get("runs") or {}
+    stuck = sorted(n for n, r in runs.items() if not r["diagnostics"].get("converged", False))
+    failed = sorted(campaign.get("failed") or {})
+    pooled = (campaign.get("population") or {}).get("pooled")
+    if stuck or failed:
+        lines.append(
+            f"campaign: left out of the population: not converged {stuck}, failed {failed}"
+        )
+    if pooled:
+        params = pooled["parameters"]
+        lines.append(
+            f"campaign, {pooled['n_runs']} runs across loads: population (95 % credible interval)"
+        )
+        lines.append(
+            f"{'  mean':34}" + "".join(f"{_interval(params[p]['mean']):<{w}}" for p in PAPER)
+        )
+        lines.append(
+            f"{'  between-run σ':34}"
+            + "".join(f"{_interval(params[p]['sigma'], significant=True):<{w}}" for p in PAPER)
+        )
+    lines.append(
+        f"{'paper, glycerol (mean, σ)':34}"
+        + "".join(f"{f'{m} (σ {s})':<{w}}" for m, s in PAPER.values())
+    )
+    return lines
+
+
+def run(args: argparse.Namespace) -> int:
+    """Fit, report, print where everything is."""
+    from bayestribo.reports.notebooks import run_report
+
+    data, origin = campaign_folder()
+    out = args.out.resolve()
+    out.mkdir(parents=True, exist_ok=True)
+    figures = out / "figures"
+    single_params: dict[str, Any] = {
+        "run_path": str(data / "runs" / f"{DEMO_RUN}.csv"),
+        "figure_dir": str(figures / "single-run"),
+        "summary_path": str(out / "single-run.json"),
+    }
+    campaign_params: dict[str, Any] = {
+        "data_dir": str(data),
+        "repeats": None if args.full else [1],
+        "air_repeats": None if args.full else [1],
+        "figure_dir": str(figures / "campaign"),
+        "summary_path": str(out / "campaign.json"),
+    }
+    if args.quick:
+        single_params.update({"check_model": False, "grid_points": 32})
+        campaign_params.update(
+            {
+                "loads": [0.31, 0.59],
+                "fit_air": False,
+                "population_steps": 600,
+                "fit_kwargs": {"grid_points": 32},
+            }
+        )
+    print(f"campaign data: {data} ({origin}; simulated runs, see its README.md)", file=sys.stderr)
+    print(f"fitting {DEMO_RUN} ...", file=sys.stderr)
+    run_report(
+        "single_run",
+        single_params,
+        html=out / "single-run-report.html",
+        hide_code=args.hide_code,
+    )
+    print("fitting the campaign across loads ...", file=sys.stderr)
+    run_report(
+        "loads",
+        campaign_params,
+        html=out / "campaign-report.html",
+        hide_code=args.hide_code,
+    )
+    single = json.loads((out / "single-run.json").read_text(encoding="utf-8"))
+    campaign = json.loads((out / "campaign.json").read_text(encoding="utf-8"))
+    print("\n".join(summary_lines(single, campaign)))
+    n_single = len(list((figures / "single-run").glob("*.png")))
+    n_campaign = len(list((figures / "campaign").glob("*.png")))
+    print()
+    print(f"reports:  {out / 'single-run-report.html'}")
+    print(f"          {out / 'campaign-report.html'}")
+    print(f"figures:  {figures / 'single-run'} ({n_single} PNG)")
+    print(f"          {figures / 'campaign'} ({n_campaign} PNG)")
+    print(f"results:  {out / 'single-run.json'}, {out / 'campaign.json'}")
+    return 0

@@ -1,0 +1,182 @@
+"""``bayestribo fit``: the Bayesian fit of one run, as a table or one JSON object.
+
+Examples::
+
+    bayestribo fit data/runs/glycerol-N0.31-r1.csv --seed 1
+    bayestribo fit data/runs/glycerol-N0.31-r1.csv --seed 1 --json --out fits/
+    bayestribo fit HarmOsc3.txt --columns t x --length-unit arbitrary --frequency 1.1
+
+The exit status is 0 for a converged fit, 1 when the sampler did not converge (the
+result is still printed, marked as not converged), 2 for bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import warnings
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from bayestribo.cli._common import add_run_arguments, read_run_from_args
+
+__all__ = ["json_record", "register", "write_outputs"]
+
+#: Keys of the diagnostics in the JSON record (the issue's shape), in order.
+DIAGNOSTICS = (
+    "converged",
+    "n_walkers",
+    "n_steps",
+    "autocorr_time_max",
+    "ess_min",
+    "acceptance_fraction",
+)
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``fit`` sub-command."""
+    p = subparsers.add_parser(
+        "fit",
+        help="Bayesian fit of ζ and μ_k of one run (posterior, intervals, diagnostics)",
+        description=(
+            "Fit the exact (or averaged) model of the retrograde energy integral Π(τ) "
+            "to one run with emcee and print the posterior mean, standard deviation, "
+            "median and 95 %% interval of ζ, μ_k, μ_s and the friction displacement, "
+            "with the sampler's diagnostics. Exit status 1 when the sampler did not "
+            "converge. Without load and mass, friction is reported as a friction "
+            "displacement in the signal's unit."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    add_run_arguments(p)
+    p.add_argument(
+        "--model", choices=("exact", "averaged"), default="exact", help="forward model of Π"
+    )
+    p.add_argument("--seed", type=int, help="seed of the sampler (reproducible results)")
+    p.add_argument(
+        "--out",
+        type=Path,
+        metavar="DIR",
+        help="write DIR/<run>.nc (NetCDF) and the corner, trace and Π figures (PNG)",
+    )
+    p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
+    p.add_argument(
+        "--discrepancy", action="store_true", help="add the model-discrepancy error term"
+    )
+    p.add_argument("--progress", action="store_true", help="show a progress bar (stderr)")
+    p.add_argument("--skip", type=int, default=1, help="oscillations to skip after the release")
+    p.add_argument(
+        "--max-steps", type=int, default=20_000, help="ceiling on the steps per ensemble"
+    )
+    p.set_defaults(handler=run)
+
+
+def json_record(result: Any) -> dict[str, Any]:
+    """The JSON object printed by ``--json``.
+
+    ``{"run", "model", "seed", "noise", "parameters": {NAME: {"mean", "sd", "median",
+    "ci95"}}, "diagnostics": {"converged", "n_walkers", "n_steps", "autocorr_time_max",
+    "ess_min", "acceptance_fraction", ...}, "seconds"}``; the diagnostics keep the
+    fit's further entries (R-hat, ESS and τ per parameter, reasons when not
+    converged) after the six of the record.
+    """
+    full = result.to_dict()
+    diagnostics = full["diagnostics"]
+    ordered = {key: diagnostics.get(key) for key in DIAGNOSTICS}
+    ordered.update({k: v for k, v in diagnostics.items() if k not in ordered})
+    return {
+        "run": full["run"],
+        "model": full["model"],
+        "seed": full["seed"],
+        "noise": full["noise"],
+        "parameters": full["parameters"],
+        "diagnostics": ordered,
+        "prior_sensitivity": full.get("prior_sensitivity"),
+        "seconds": full["seconds"],
+    }
+
+
+def write_outputs(result: Any, out_dir: Path, stem: str) -> list[Path]:
+    """Write ``<stem>.nc`` and the corner, trace and Π figures (PNG) into ``out_dir``.
+
+    Raises
+    ------
+    BayestriboError
+        If ``out_dir`` exists and is not a directory, or cannot be created.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from bayestribo.errors import BayestriboError
+    from bayestribo.inference.plots import corner_plot, pi_plot, plotted_names, trace_plot
+
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+    except (FileExistsError, NotADirectoryError, PermissionError) as exc:
+        raise BayestriboError(f"--out: cannot use {out_dir} as an output directory: {exc}") from exc
+    paths = [result.save(out_dir / f"{stem}.nc")]
+
+    names = plotted_names(result)
+    fig = plt.figure(figsize=(2.2 * len(names) + 1, 2.2 * len(names) + 1))
+    corner_plot(result, fig)
+    paths.append(out_dir / f"{stem}_corner.png")
+    fig.savefig(paths[-1], dpi=100)
+    plt.close(fig)
+
+    fig, axes = plt.subplots(len(names), 1, figsize=(8, 1.6 * len(names) + 0.6), sharex=True)
+    trace_plot(result, np.atleast_1d(axes))
+    fig.tight_layout()
+    paths.append(out_dir / f"{stem}_trace.png")
+    fig.savefig(paths[-1], dpi=100)
+    plt.close(fig)
+
+    fig, axes = plt.subplots(
+        2, 1, figsize=(8, 6), sharex=True, gridspec_kw={"height_ratios": [3, 1]}
+    )
+    pi_plot(result, axes)
+    fig.tight_layout()
+    paths.append(out_dir / f"{stem}_pi.png")
+    fig.savefig(paths[-1], dpi=100)
+    plt.close(fig)
+    return paths
+
+
+def run(args: argparse.Namespace) -> int:
+    """Read the run, fit, print; exit status 1 when the sampler did not converge."""
+    from bayestribo.errors import ConvergenceWarning
+    from bayestribo.inference import fit
+
+    recording = read_run_from_args(args)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ConvergenceWarning)
+        result = fit(
+            recording,
+            model=args.model,
+            seed=args.seed,
+            discrepancy=args.discrepancy,
+            progress=args.progress,
+            skip_oscillations=args.skip,
+            max_steps=args.max_steps,
+        )
+    # the run is named by the path the user gave
+    result.idata.posterior.attrs["run_name"] = str(args.run)
+    for w in caught:
+        if issubclass(w.category, ConvergenceWarning):
+            print(f"bayestribo fit: warning: {w.message}", file=sys.stderr)
+        else:
+            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    if args.out is not None:
+        paths = write_outputs(result, args.out, Path(args.run).stem)
+        if not args.json:
+            print("wrote " + ", ".join(str(p) for p in paths), file=sys.stderr)
+    if args.json:
+        print(json.dumps(json_record(result), allow_nan=False))
+    else:
+        print(result.to_text())
+    sys.stdout.flush()
+    return 0 if result.converged else 1

@@ -1,1 +1,0 @@
-"""Sub-commands of the ``bayestribo`` command line, one module each."""

@@ -1,0 +1,246 @@
+"""The result of a single-run fit: an ArviZ InferenceData and what a report needs.
+
+:class:`FitResult` holds an :class:`arviz.InferenceData` with the groups
+
+* ``posterior``: the sampled parameters (``zeta``; with friction ``mu_k`` or, without a
+  load, ``friction_displacement``, ``mu_s_ratio``; ``y0``; optionally
+  ``log10_discrepancy``) and the derived quantities (``mu_s``,
+  ``friction_displacement`` in the displacement's unit, ``zeta_k`` = ζ - ζ₀ when the
+  run's metadata give ``zeta0``, ``d_k`` [s/m] when they also give the load and the
+  mass); dims ``(chain, draw)``, a chain being one independent ensemble;
+* ``log_likelihood``: ``pi``, the pointwise log-likelihood of each Π increment
+  (dim ``increment``), so that :func:`arviz.loo` works;
+* ``posterior_predictive``: ``pi``, replicated Π on the grid (dim ``grid``);
+* ``observed_data``: ``pi``, the observed Π on the grid, with coordinate ``tau``;
+
+and, in its attributes, the run's metadata, the seed, the model, the noise model, the
+priors, the sampler settings and the diagnostics (JSON strings), so that a saved
+NetCDF file is a complete record of the fit.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from bayestribo.inference.priors import PriorSet
+
+__all__ = ["FitResult"]
+
+#: Quantities reported by :meth:`FitResult.summary` and the command line, in order.
+REPORTED = (
+    "zeta",
+    "mu_k",
+    "mu_s",
+    "friction_displacement",
+    "zeta_k",
+    "d_k",
+    "y0",
+    "log10_discrepancy",
+)
+
+
+def _plain(value: Any) -> Any:
+    """JSON-compatible copy (numpy scalars and arrays to Python)."""
+    if isinstance(value, Mapping):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _plain(value.tolist())
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+@dataclass
+class FitResult:
+    """Posterior of one run, with diagnostics and provenance.
+
+    Attributes
+    ----------
+    idata : arviz.InferenceData
+        The posterior and its companions (see the module notes).
+    """
+
+    idata: Any
+
+    # -- provenance (from the attributes) -----------------------------------------
+    def _attr(self, key: str, default: Any = None) -> Any:
+        value = self.idata.posterior.attrs.get(key, default)
+        if isinstance(value, str) and key.endswith("_json"):
+            return json.loads(value)
+        return value
+
+    @property
+    def run_name(self) -> str:
+        """Name (path or id) of the fitted run."""
+        return str(self._attr("run_name", ""))
+
+    @property
+    def metadata(self) -> dict[str, Any]:
+        """The run's metadata."""
+        return self._attr("metadata_json", {})
+
+    @property
+    def model(self) -> str:
+        """Forward model: ``"exact"`` or ``"averaged"``."""
+        return str(self._attr("model"))
+
+    @property
+    def seed(self) -> int | None:
+        """Seed of the sampler (``None`` if the run was not seeded)."""
+        seed = self._attr("seed")
+        return None if seed is None or seed == -1 else int(seed)
+
+    @property
+    def noise(self) -> dict[str, Any]:
+        """The noise model used (see :class:`bayestribo.signal.noise.NoiseModel`)."""
+        return self._attr("noise_json", {})
+
+    @property
+    def diagnostics(self) -> dict[str, Any]:
+        """Convergence diagnostics: converged, n_walkers, n_steps, autocorr_time_max,
+        ess_min, acceptance_fraction, rhat_max, and the reasons when not converged."""
+        return self._attr("diagnostics_json", {})
+
+    @property
+    def converged(self) -> bool:
+        """True when the sampler met every convergence criterion."""
+        return bool(self.diagnostics.get("converged", False))
+
+    @property
+    def priors(self) -> PriorSet:
+        """The priors of the sampled parameters."""
+        return PriorSet.from_spec(self._attr("priors_json", {}))
+
+    @property
+    def prior_sensitivity(self) -> dict[str, Any]:
+        """Power-scaling prior sensitivity per parameter (see :func:`prior_sensitivity`)."""
+        return self._attr("prior_sensitivity_json", {})
+
+    @property
+    def seconds(self) -> float:
+        """Wall time of the fit [s]."""
+        return float(self._attr("seconds", float("nan")))
+
+    # -- draws ----------------------------------------------------------------------
+    @property
+    def parameter_names(self) -> list[str]:
+        """Every quantity in the posterior group (sampled and derived)."""
+        return list(self.idata.posterior.data_vars)
+
+    def samples(self, name: str) -> NDArray:
+        """All posterior draws of ``name``, chains concatenated (1-D)."""
+        if name not in self.idata.posterior:
+            raise KeyError(
+                f"{name!r} is not in this fit's posterior; it has {self.parameter_names}"
+            )
+        return np.asarray(self.idata.posterior[name]).reshape(-1)
+
+    def prior_logpdf(self, name: str, values: ArrayLike) -> NDArray:
+        """Log density of the prior of one sampled parameter at ``values``.
+
+        ``friction_displacement`` is accepted for a run fitted without a load (it is
+        the sampled friction parameter there).
+        """
+        priors = self.priors
+        key = name
+        sampled_as_mu_k = "mu_k" in priors.names and not self._friction_defined
+        if name == "friction_displacement" and sampled_as_mu_k:
+            key = "mu_k"
+        if key not in priors.names:
+            raise KeyError(f"{name!r} has no prior of its own; sampled: {priors.names}")
+        return priors[key].logpdf(values)
+
+    @property
+    def _friction_defined(self) -> bool:
+        return bool(self._attr("friction_defined", 0))
+
+    def interval(self, name: str, prob: float = 0.95) -> tuple[float, float]:
+        """Equal-tailed credible interval of ``name`` with probability ``prob``."""
+        if not 0.0 < prob < 1.0:
+            raise ValueError(f"prob must be in (0, 1), got {prob!r}")
+        lo, hi = np.quantile(self.samples(name), [(1 - prob) / 2, (1 + prob) / 2])
+        return float(lo), float(hi)
+
+    def summary(self) -> dict[str, dict[str, Any]]:
+        """Mean, standard deviation, median and 95 % interval of each reported quantity."""
+        out = {}
+        for name in REPORTED:
+            if name in self.idata.posterior:
+                s = self.samples(name)
+                out[name] = {
+                    "mean": float(np.mean(s)),
+                    "sd": float(np.std(s, ddof=1)),
+                    "median": float(np.median(s)),
+                    "ci95": list(self.interval(name)),
+                }
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready record: run, model, noise, parameters, diagnostics, seconds."""
+        return _plain(
+            {
+                "run": self.run_name,
+                "model": self.model,
+                "seed": self.seed,
+                "noise": self.noise,
+                "parameters": self.summary(),
+                "diagnostics": self.diagnostics,
+                "prior_sensitivity": self.prior_sensitivity,
+                "seconds": self.seconds,
+            }
+        )
+
+    def to_text(self) -> str:
+        """Human-readable table of the posterior."""
+        lines = [
+            f"run       {self.run_name}",
+            f"model     {self.model}  (seed {self.seed})",
+            f"noise     {self.noise.get('description', '')}",
+        ]
+        d = self.diagnostics
+        status = (
+            "converged"
+            if d.get("converged")
+            else "NOT CONVERGED: " + "; ".join(d.get("reasons", []))
+        )
+        lines.append(
+            f"sampler   {status}; {d.get('n_walkers')} walkers × {d.get('n_ensembles')} "
+            f"ensembles × {d.get('n_steps')} steps, τ_max {d.get('autocorr_time_max', 0):.1f}, "
+            f"ESS_min {d.get('ess_min', 0):.0f}, R-hat_max {d.get('rhat_max', 0):.4f}"
+        )
+        lines.append(f"{'':24}{'mean':>14}{'sd':>12}{'95 % interval':>32}")
+        for name, s in self.summary().items():
+            lo, hi = s["ci95"]
+            lines.append(f"{name:24}{s['mean']:14.6g}{s['sd']:12.3g}   [{lo:.6g}, {hi:.6g}]")
+        return "\n".join(lines)
+
+    # -- files ----------------------------------------------------------------------
+    def save(self, path: str | Path) -> Path:
+        """Write the InferenceData to NetCDF (``.nc``)."""
+        path = Path(path)
+        self.idata.to_netcdf(str(path))
+        return path
+
+    @classmethod
+    def load(cls, path: str | Path) -> FitResult:
+        """Read a fit written by :meth:`save`."""
+        import arviz as az
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", FutureWarning)
+            idata = az.from_netcdf(str(path))
+        idata.load()
+        return cls(idata)

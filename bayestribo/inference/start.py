@@ -1,0 +1,250 @@
+"""Starting point of the sampler: maximum a posteriori and a Laplace approximation.
+
+1. First guesses of ζ and μ_k: the Feeny-Liang peak decrement (Eq. 20-21) of the
+   analysed window (falling back to ζ = 0.01 and a friction of 1 % of the amplitude),
+   and the same decay rate put all into viscous damping or all into friction; the
+   best optimum of the three is kept.
+2. For the exact model, μ_s/μ_k is scanned over its prior's range: it decides at
+   which turning point the model sticks, which the data pin down sharply. Guesses
+   outside a (user-narrowed) prior's support are moved inside it.
+3. Gauss-Newton least squares (:func:`scipy.optimize.least_squares`) of the
+   standardized residuals over the continuous parameters, from which the Laplace
+   covariance (JᵀJ)⁻¹ follows.
+4. Walkers are drawn from that Gaussian (μ_s/μ_k uniformly over the ratios within
+   0.5 of the best log density), each kept only if its log density is within
+   ``d + 10`` of the best, so that every ensemble starts in the typical set.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import least_squares
+
+from bayestribo.errors import BayestriboError
+from bayestribo.inference.posterior import Posterior
+from bayestribo.inference.priors import Normal
+from bayestribo.signal.decay import EnergyDecay
+
+__all__ = ["initial_walkers", "maximum_a_posteriori", "refine"]
+
+
+def _first_guesses(decay: EnergyDecay, posterior: Posterior) -> list[dict[str, float]]:
+    """Starting points: the Feeny-Liang estimate and its pure viscous / pure Coulomb ends.
+
+    On long, lightly damped decays ζ and μ_k trade off almost perfectly (correlation
+    beyond 0.999), and a local optimiser started at one end of that ridge can stop
+    there; starting from both ends and from the peak estimate finds the right end.
+    """
+    amp = abs(posterior.likelihood.data.y0)
+    zeta, mu_k = 0.01, 0.01 * amp
+    try:
+        from bayestribo.estimators.feeny_liang import feeny_liang
+
+        est = feeny_liang(decay.peaks)
+        if est.zeta is not None and 0.0 <= est.zeta < 0.3:
+            zeta = float(est.zeta)
+        friction = est.friction_displacement
+        if friction is not None and friction > 0:
+            mu_k = float(friction) / decay.scaling.length_scale
+    except (BayestriboError, ValueError, ArithmeticError):
+        pass
+    # The same decay per half cycle, all viscous (Eq. 34: a' = -ζa - 2μ_k/π) or all
+    # Coulomb, evaluated at the mean amplitude.
+    total = zeta + 2.0 * mu_k / (math.pi * max(0.5 * amp, 1e-300))
+    guesses = [{"zeta": zeta, "mu_k": mu_k}]
+    if posterior.friction:
+        guesses.append({"zeta": min(total, 0.29), "mu_k": 1e-4 * mu_k})
+        guesses.append(
+            {"zeta": 1e-4 * zeta, "mu_k": min(0.5 * math.pi * total * 0.5 * amp, 0.24 * amp)}
+        )
+    return guesses
+
+
+def _vector(posterior: Posterior, values: dict[str, float]) -> NDArray:
+    return np.array([values[n] for n in posterior.names], dtype=float)
+
+
+def _support(prior: object) -> tuple[float, float]:
+    """Bounds of a prior's support (infinite for unbounded priors)."""
+    return float(getattr(prior, "low", -np.inf)), float(getattr(prior, "high", np.inf))
+
+
+def _into_support(posterior: Posterior, values: dict[str, float]) -> dict[str, float]:
+    """Move guesses inside their priors' support (a user may have narrowed a prior)."""
+    out = dict(values)
+    for name in posterior.names:
+        low, high = _support(posterior.priors[name])
+        if np.isfinite(low) and np.isfinite(high):
+            margin = 1e-3 * (high - low)
+            out[name] = float(np.clip(out[name], low + margin, high - margin))
+    return out
+
+
+def _ratio_grid(posterior: Posterior) -> NDArray:
+    low, high = _support(posterior.priors["mu_s_ratio"])
+    low = 1.0 if not np.isfinite(low) else max(low, 1.0)
+    high = 3.0 if not np.isfinite(high) else high
+    return np.linspace(low, high, 81)
+
+
+def _scan_ratio(posterior: Posterior, theta: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    i = posterior.names.index("mu_s_ratio")
+    grid = _ratio_grid(posterior)
+    rows = np.repeat(theta[None, :], grid.size, axis=0)
+    rows[:, i] = grid
+    return rows, posterior(rows), grid
+
+
+def _optimise(posterior: Posterior, guess: dict[str, float]) -> tuple[NDArray, NDArray]:
+    """Optimum from one guess (μ_s/μ_k scanned first), and the Laplace covariance there."""
+    names = posterior.names
+    values = {
+        "zeta": 0.0,
+        "y0": posterior.likelihood.data.y0,
+        "mu_s_ratio": 1.2,
+        "log10_discrepancy": -5.0,
+        **guess,
+    }
+    theta = _vector(posterior, _into_support(posterior, {n: values[n] for n in names}))
+    if "mu_s_ratio" in names:
+        rows, lp, _ = _scan_ratio(posterior, theta)
+        if np.any(np.isfinite(lp)):
+            theta = rows[int(np.argmax(lp))]
+    return refine(posterior, theta)
+
+
+def refine(posterior: Posterior, theta: NDArray) -> tuple[NDArray, NDArray]:
+    """Gauss-Newton MAP of the continuous coordinates from ``theta``, and its Laplace
+    covariance (μ_s/μ_k and the discrepancy held at their values in ``theta``).
+
+    Parameters
+    ----------
+    posterior : Posterior
+        Any object with ``names``, ``priors``, ``likelihood``, a vectorised
+        ``__call__`` and ``standardized_residuals`` (e.g. a posterior with some
+        coordinates pinned).
+    theta : ndarray
+        Starting point in sampling coordinates, with a finite posterior density.
+
+    Returns
+    -------
+    theta : ndarray
+        The optimum.
+    cov : ndarray
+        Laplace covariance (zero rows and columns for the held coordinates).
+    """
+    names = posterior.names
+    theta = np.array(theta, dtype=float)
+    free = [i for i, n in enumerate(names) if n not in ("mu_s_ratio", "log10_discrepancy")]
+    scale = np.array([max(abs(theta[i]), 1e-3) for i in free]) * 1e-3
+    size = posterior.likelihood.data.increments.size
+    # Gaussian priors enter the least squares as residuals (θ - μ)/σ: a MAP, not an MLE.
+    gaussian = [
+        (j, posterior.priors[names[i]])
+        for j, i in enumerate(free)
+        if isinstance(posterior.priors[names[i]], Normal)
+    ]
+
+    def residuals(u: NDArray) -> NDArray:
+        th = theta.copy()
+        th[free] = theta[free] + u * scale
+        if not np.isfinite(posterior(th[None])[0]):
+            return np.full(size + len(gaussian), 1e6)
+        prior_resid = [(th[free[j]] - p.mu) / p.sigma for j, p in gaussian]
+        return np.concatenate([posterior.standardized_residuals(th[None])[0], prior_resid])
+
+    sol = least_squares(residuals, np.zeros(len(free)), x_scale="jac", method="trf")
+    theta[free] = theta[free] + sol.x * scale
+    jac = sol.jac / scale[None, :]  # includes the Gaussian priors' rows
+    try:
+        cov_free = np.linalg.inv(jac.T @ jac)
+    except np.linalg.LinAlgError:
+        cov_free = np.diag((1e-3 * np.maximum(np.abs(theta[free]), 1e-6)) ** 2)
+    cov = np.zeros((len(names), len(names)))
+    cov[np.ix_(free, free)] = cov_free
+    return theta, cov
+
+
+def maximum_a_posteriori(
+    posterior: Posterior, decay: EnergyDecay
+) -> tuple[NDArray, NDArray, tuple[float, float] | None]:
+    """Maximum a posteriori, Laplace covariance and the plausible μ_s/μ_k interval.
+
+    Returns
+    -------
+    theta : ndarray
+        The MAP in sampling coordinates.
+    cov : ndarray
+        Laplace covariance of the continuous coordinates (ratio excluded: its row and
+        column are zero).
+    ratio_range : tuple or None
+        Range of μ_s/μ_k within 0.5 of the best log density (exact model with friction).
+    """
+    names = posterior.names
+    optima = [_optimise(posterior, guess) for guess in _first_guesses(decay, posterior)]
+    scores = [float(posterior(theta[None])[0]) for theta, _ in optima]
+    theta, cov = optima[int(np.argmax(scores))]
+
+    ratio_range = None
+    if "mu_s_ratio" in names:
+        rows, lp, grid = _scan_ratio(posterior, theta)
+        top = np.max(lp)
+        if np.isfinite(top):
+            good = grid[lp >= top - 0.5]
+            theta = rows[int(np.argmax(lp))]
+            step = grid[1] - grid[0]
+            ratio_range = (max(grid[0], good.min() - step), min(grid[-1], good.max() + step))
+    return theta, cov, ratio_range
+
+
+def initial_walkers(
+    posterior: Posterior,
+    theta: NDArray,
+    cov: NDArray,
+    ratio_range: tuple[float, float] | None,
+    n_ensembles: int,
+    n_walkers: int,
+    rng: np.random.Generator,
+    max_tries: int = 200,
+) -> NDArray:
+    """Starting positions (n_ensembles, n_walkers, d) in the typical set.
+
+    Raises
+    ------
+    BayestriboError
+        If no starting point with a finite posterior density is found (the data and
+        the model disagree everywhere near the optimum).
+    """
+    names = posterior.names
+    d = len(names)
+    best = posterior(theta[None])[0]
+    if not np.isfinite(best):
+        raise BayestriboError(
+            "the posterior density is zero at the optimum: the model cannot reproduce "
+            "this record with the given priors"
+        )
+    need = n_ensembles * n_walkers
+    kept: list[NDArray] = []
+    jitter = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    for _ in range(max_tries):
+        draws = rng.multivariate_normal(theta, cov, size=2 * need, method="eigh")
+        for i, name in enumerate(names):
+            if name == "mu_s_ratio" and ratio_range is not None:
+                draws[:, i] = rng.uniform(*ratio_range, size=draws.shape[0])
+            elif name == "log10_discrepancy":
+                draws[:, i] = theta[i] + rng.normal(0.0, 0.5, size=draws.shape[0])
+            elif jitter[i] == 0.0:
+                draws[:, i] = theta[i] * (1.0 + 1e-6 * rng.standard_normal(draws.shape[0]))
+        lp = posterior(draws)
+        kept.extend(draws[np.isfinite(lp) & (lp >= best - (d + 10.0))])
+        if len(kept) >= need:
+            break
+    if len(kept) < need:
+        raise BayestriboError(
+            f"found only {len(kept)} of {need} starting points near the optimum; the "
+            "posterior may be multimodal or the priors too narrow"
+        )
+    return np.asarray(kept[:need]).reshape(n_ensembles, n_walkers, d)

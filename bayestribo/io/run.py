@@ -1,0 +1,407 @@
+"""One free-decay recording and what is known about it: the :class:`Run`.
+
+A run holds the sampled time [s], displacement [m] and velocity [m/s] of the
+oscillating pin (either signal may be absent) and a metadata mapping. The known
+metadata keys (:data:`METADATA_KEYS`) are typed and checked; any further key is
+kept as it is, so it can be carried into results, as long as its value is plain
+data that JSON can store (text, numbers, booleans, ``None``, lists, mappings).
+
+Units. The column names carry SI units. When the length unit of a recording is
+not known (a file from another rig), the metadata key ``length_unit`` is set to
+``"arbitrary"``: the displacement is then in some unknown length unit and the
+velocity in that unit per second. :meth:`Run.rig` then leaves out the load and
+the mass, so the scaling uses one signal unit as length scale and friction can only
+be reported as a friction displacement in the signal's unit.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from bayestribo.errors import RecordingError, RunFormatError
+from bayestribo.model.scaling import Rig, Scaling
+
+__all__ = [
+    "COLUMNS",
+    "DISPLACEMENT",
+    "LENGTH_UNITS",
+    "METADATA_KEYS",
+    "TIME",
+    "VELOCITY",
+    "Run",
+    "check_metadata",
+]
+
+#: Canonical column names: time [s], displacement [m], velocity [m/s].
+TIME = "time_s"
+DISPLACEMENT = "displacement_m"
+VELOCITY = "velocity_m_per_s"
+COLUMNS: tuple[str, str, str] = (TIME, DISPLACEMENT, VELOCITY)
+
+#: Values of the ``length_unit`` metadata key.
+LENGTH_UNITS: tuple[str, str] = ("m", "arbitrary")
+
+
+@dataclass(frozen=True)
+class _Key:
+    kind: str  # "float", "int" or "str"
+    description: str
+    low: float | None = None  # inclusive lower bound
+    low_open: bool = False  # True: the bound is exclusive
+    high: float | None = None  # inclusive upper bound
+    choices: tuple[str, ...] | None = None
+
+    def expected(self) -> str:
+        if self.choices is not None:
+            return "one of " + ", ".join(repr(c) for c in self.choices)
+        text = {"float": "a finite number", "int": "an integer", "str": "a text string"}[self.kind]
+        if self.low is not None:
+            text += f" {'>' if self.low_open else '>='} {self.low:g}"
+        if self.high is not None:
+            text += f" and <= {self.high:g}"
+        return text
+
+
+#: The typed metadata keys of a run: name -> (type, meaning). ``None`` means unknown.
+METADATA_KEYS: Mapping[str, _Key] = MappingProxyType(
+    {
+        "load_N": _Key("float", "normal load N [N]; 0 for a test without contact", 0.0),
+        "mass_kg": _Key("float", "oscillating mass m [kg]", 0.0, low_open=True),
+        "natural_frequency_Hz": _Key(
+            "float", "undamped natural frequency f [Hz]", 0.0, low_open=True
+        ),
+        "displacement_resolution_m": _Key(
+            "float", "displacement resolution of the sensor [m]", 0.0, low_open=True
+        ),
+        "velocity_resolution_m_per_s": _Key(
+            "float", "velocity resolution of the sensor [m/s]", 0.0, low_open=True
+        ),
+        "displacement_range_m": _Key(
+            "float", "largest |displacement| the sensor can record [m]", 0.0, low_open=True
+        ),
+        "velocity_range_m_per_s": _Key(
+            "float", "largest |velocity| the sensor can record [m/s]", 0.0, low_open=True
+        ),
+        "sample_rate_Hz": _Key("float", "sample rate [Hz]", 0.0, low_open=True),
+        "lubricant": _Key("str", "lubricant name"),
+        "water_mass_fraction": _Key(
+            "float", "mass fraction of water in the lubricant [-]", 0.0, high=1.0
+        ),
+        "repeat": _Key("int", "repeat number of the test", 0.0),
+        "temperature_C": _Key("float", "temperature [°C]", -273.15, low_open=True),
+        "run_id": _Key("str", "identifier of the run"),
+        "length_unit": _Key(
+            "str", "'m', or 'arbitrary' when the length unit is unknown", choices=LENGTH_UNITS
+        ),
+    }
+)
+
+
+def _plain(value: Any, key: str, where: str | None) -> Any:
+    """Check that an extra metadata value is plain JSON data; return a normalised copy."""
+    if value is None or isinstance(value, bool | str):
+        return value
+    if isinstance(value, np.bool_):
+        return bool(value)
+    if isinstance(value, int | np.integer):
+        return int(value)
+    if isinstance(value, float | np.floating):
+        if not math.isfinite(float(value)):
+            raise RunFormatError(
+                f"metadata {key!r}: expected a finite number, got {value!r}", where
+            )
+        return float(value)
+    if isinstance(value, list | tuple):
+        return [_plain(v, f"{key}[{i}]", where) for i, v in enumerate(value)]
+    if isinstance(value, Mapping):
+        out = {}
+        for k, v in value.items():
+            if not isinstance(k, str):
+                raise RunFormatError(
+                    f"metadata {key!r}: mapping keys must be text strings, got {k!r}", where
+                )
+            out[k] = _plain(v, f"{key}.{k}", where)
+        return out
+    raise RunFormatError(
+        f"metadata {key!r}: unknown value type {type(value).__name__}; expected text, a "
+        "number, a boolean, null, a list or a mapping (plain JSON data)",
+        where,
+    )
+
+
+def _typed(key: str, spec: _Key, value: Any, where: str | None) -> Any:
+    """Check and normalise the value of a known metadata key."""
+    if value is None:
+        return None
+    bad = RunFormatError(
+        f"metadata {key!r} ({spec.description}): expected {spec.expected()}, "
+        f"got {type(value).__name__} {value!r}",
+        where,
+    )
+    if spec.kind == "str":
+        if not isinstance(value, str):
+            raise bad
+        if spec.choices is not None and value not in spec.choices:
+            raise bad
+        return value
+    if isinstance(value, bool | np.bool_):
+        raise bad
+    if spec.kind == "int":
+        if not isinstance(value, int | np.integer):
+            raise bad
+        value = int(value)
+    else:
+        if not isinstance(value, int | float | np.integer | np.floating):
+            raise bad
+        value = float(value)
+        if not math.isfinite(value):
+            raise bad
+    if spec.low is not None and (value < spec.low or (spec.low_open and value == spec.low)):
+        raise bad
+    if spec.high is not None and value > spec.high:
+        raise bad
+    return value
+
+
+def check_metadata(metadata: Mapping[str, Any] | None, where: str | None = None) -> dict:
+    """Check a run's metadata and return a normalised copy.
+
+    Known keys (:data:`METADATA_KEYS`) must have their type and range (numbers become
+    ``float``, ``repeat`` stays ``int``; ``None`` means unknown). Any other key is kept
+    if its value is plain JSON data (tuples become lists, NumPy scalars become Python
+    numbers).
+
+    Parameters
+    ----------
+    metadata : mapping or None
+        Metadata with text keys.
+    where : str, optional
+        The file or origin named in error messages.
+
+    Raises
+    ------
+    RunFormatError
+        Naming the key, its meaning and the expected type, for a value of the wrong
+        type or range, a non-text key or a value JSON cannot store.
+    """
+    if metadata is None:
+        return {}
+    if not isinstance(metadata, Mapping):
+        raise RunFormatError(
+            f"metadata: expected a mapping of names to values, got {type(metadata).__name__}",
+            where,
+        )
+    out: dict[str, Any] = {}
+    for key, value in metadata.items():
+        if not isinstance(key, str):
+            raise RunFormatError(f"metadata keys must be text strings, got {key!r}", where)
+        spec = METADATA_KEYS.get(key)
+        out[key] = _typed(key, spec, value, where) if spec else _plain(value, key, where)
+    return out
+
+
+def _signal(name: str, values: ArrayLike | None, where: str | None) -> NDArray | None:
+    if values is None:
+        return None
+    try:
+        array = np.array(values, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise RunFormatError(f"field {name!r}: expected numbers, got {exc}", where) from None
+    if array.ndim != 1:
+        raise RunFormatError(
+            f"field {name!r}: expected a 1-D array of samples, got shape {array.shape}", where
+        )
+    array.setflags(write=False)
+    return array
+
+
+@dataclass(frozen=True, eq=False)
+class Run:
+    """One free-decay recording: sampled signals and metadata.
+
+    The constructor checks the structure (1-D arrays of equal length, at least one
+    signal, typed metadata); the data checks (finite samples, regular time stamps,
+    clipping, units...) are :func:`bayestribo.io.validation.validate_run`, which
+    :func:`bayestribo.read_run` applies to every file it reads. The arrays are
+    copied and made read-only.
+
+    Parameters
+    ----------
+    time : array_like
+        Sample times t [s], 1-D.
+    displacement : array_like, optional
+        Displacement x [m] (or arbitrary length unit, see ``length_unit``).
+    velocity : array_like, optional
+        Velocity v [m/s] (or arbitrary length unit per second).
+    metadata : mapping, optional
+        Known keys (:data:`METADATA_KEYS`) and any further plain-data keys.
+    source : str, optional
+        Where the run came from (a file path), named in error messages; not part of
+        the run's value (ignored by ``==``).
+
+    Raises
+    ------
+    RunFormatError
+        For arrays of the wrong shape or length, no signal at all, or bad metadata.
+
+    Examples
+    --------
+    >>> run = Run([0.0, 0.001, 0.002], displacement=[1e-3, 0.9e-3, 0.7e-3],
+    ...           metadata={"load_N": 0.31, "natural_frequency_Hz": 32.6})
+    >>> run.n_samples, run.metadata["load_N"]
+    (3, 0.31)
+    """
+
+    time: NDArray
+    displacement: NDArray | None = None
+    velocity: NDArray | None = None
+    metadata: Mapping[str, Any] = field(default_factory=dict)
+    source: str | None = None
+
+    def __post_init__(self) -> None:
+        where = self.source
+        time = _signal(TIME, self.time, where)
+        disp = _signal(DISPLACEMENT, self.displacement, where)
+        vel = _signal(VELOCITY, self.velocity, where)
+        if disp is None and vel is None:
+            raise RunFormatError(
+                f"a run needs a {DISPLACEMENT!r} or a {VELOCITY!r} signal; got neither", where
+            )
+        for name, array in ((DISPLACEMENT, disp), (VELOCITY, vel)):
+            if array is not None and array.shape != time.shape:
+                raise RunFormatError(
+                    f"field {name!r} has {array.size} samples but {TIME!r} has {time.size}; "
+                    "expected one value per time stamp",
+                    where,
+                )
+        meta = MappingProxyType(check_metadata(self.metadata, where))
+        object.__setattr__(self, "time", time)
+        object.__setattr__(self, "displacement", disp)
+        object.__setattr__(self, "velocity", vel)
+        object.__setattr__(self, "metadata", meta)
+
+    # -- value semantics ----------------------------------------------------------
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Run):
+            return NotImplemented
+
+        def same(a: NDArray | None, b: NDArray | None) -> bool:
+            if a is None or b is None:
+                return a is None and b is None
+            return a.shape == b.shape and bool(np.array_equal(a, b, equal_nan=True))
+
+        return (
+            same(self.time, other.time)
+            and same(self.displacement, other.displacement)
+            and same(self.velocity, other.velocity)
+            and dict(self.metadata) == dict(other.metadata)
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+    # -- derived quantities -------------------------------------------------------
+    @property
+    def n_samples(self) -> int:
+        """Number of samples."""
+        return int(self.time.size)
+
+    @property
+    def signals(self) -> dict[str, NDArray]:
+        """The present signals by canonical column name, time first."""
+        out = {TIME: self.time}
+        if self.displacement is not None:
+            out[DISPLACEMENT] = self.displacement
+        if self.velocity is not None:
+            out[VELOCITY] = self.velocity
+        return out
+
+    @property
+    def length_unit(self) -> str:
+        """``"m"`` (the default) or ``"arbitrary"`` when the length unit is unknown."""
+        return self.metadata.get("length_unit") or "m"
+
+    @property
+    def sample_rate_Hz(self) -> float:
+        """Sample rate from the time stamps, 1/median(Δt) [Hz].
+
+        Raises
+        ------
+        RecordingError
+            With fewer than two samples or a non-positive median step.
+        """
+        if self.time.size < 2:
+            raise RecordingError(f"{TIME!r}: a sample rate needs at least two samples", self.source)
+        step = float(np.median(np.diff(self.time)))
+        if not step > 0.0:
+            raise RecordingError(
+                f"{TIME!r}: the median time step is {step!r}; expected a positive step",
+                self.source,
+            )
+        return 1.0 / step
+
+    def with_metadata(self, **updates: Any) -> Run:
+        """A copy of the run with metadata keys added or replaced (checked again)."""
+        return Run(
+            self.time,
+            self.displacement,
+            self.velocity,
+            {**self.metadata, **updates},
+            source=self.source,
+        )
+
+    def rig(self, natural_frequency_Hz: float | None = None) -> Rig | None:
+        """The rig of this run, or ``None`` when the natural frequency is unknown.
+
+        Parameters
+        ----------
+        natural_frequency_Hz : float, optional
+            Natural frequency f [Hz] to use instead of the metadata's (for instance
+            one measured from the recording).
+
+        Returns
+        -------
+        Rig or None
+            ``Rig(f, mass_kg, load_N)`` from the metadata. With
+            ``length_unit="arbitrary"`` the mass and load are left out, so that the
+            rig's scaling uses one signal unit as length scale (N/k in metres would
+            not match a signal in another unit).
+        """
+        f = natural_frequency_Hz
+        if f is None:
+            f = self.metadata.get("natural_frequency_Hz")
+        if f is None:
+            return None
+        try:
+            if self.length_unit == "arbitrary":
+                return Rig(natural_frequency_Hz=f)
+            return Rig(
+                natural_frequency_Hz=f,
+                mass_kg=self.metadata.get("mass_kg"),
+                load_N=self.metadata.get("load_N"),
+            )
+        except ValueError as exc:
+            raise RecordingError(str(exc), self.source) from None
+
+    def scaling(self, natural_frequency_Hz: float | None = None) -> Scaling:
+        """The dimensionless scaling of this run (see :meth:`Rig.scaling`).
+
+        Raises
+        ------
+        RecordingError
+            If the natural frequency is neither in the metadata nor given.
+        """
+        rig = self.rig(natural_frequency_Hz)
+        if rig is None:
+            raise RecordingError(
+                "metadata 'natural_frequency_Hz' is unknown; the scaling needs it "
+                "(give it, or measure it from the recording)",
+                self.source,
+            )
+        return rig.scaling()

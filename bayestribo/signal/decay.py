@@ -1,0 +1,567 @@
+"""Energy decay curve E(τ) and its retrograde integral Π(τ) from a recording.
+
+Rigaud et al. (2010), Eq. 26 and 39: ``E = (y² + y'²)/2`` from the simultaneously
+measured displacement and velocity, and ``Π(τ) = ∫_τ^{T} E dθ`` integrated backwards
+from the end of motion T. A real recording needs some care first, and
+:func:`energy_decay` takes it:
+
+* **Time stamps** must be strictly increasing and regular (the error names the first
+  sample that is not).
+* **Turning points** come from :func:`bayestribo.signal.peaks.find_peaks` on the
+  displacement (sub-sample parabola fits; the rest tail after the motion stops
+  is recognised as a stretch flat within the noise).
+* **Release and first oscillation**: when the record starts with the pin held at
+  rest, the release is where the displacement leaves that rest (beyond ±4σ); for a
+  record that starts in motion, its first turning point stands for it. The first
+  ``skip_oscillations`` oscillations after it are disturbed by the magnet and
+  skipped (default one, as in the paper, section 2.1); the analysis starts at the
+  sample nearest to the next displacement turning point.
+* **Equilibrium**: the displacement zero of a vibrometer is arbitrary and, with dry
+  friction, the pin comes to rest off-centre, so neither the rest before release nor
+  the tail is the equilibrium. It is estimated from the turning points themselves
+  (:func:`bayestribo.signal.peaks.estimate_offset`, which uses Eq. 20), with a linear
+  drift when there are enough of them.
+* **End of motion**: the start of the flat rest tail, on the velocity when it was
+  recorded (it resolves the last swings far better than the displacement). When
+  the record ends before the motion does (a test in air decays for many seconds), Π runs to the last
+  sample and :attr:`EnergyDecay.tau_end` gives the τ at which model curves must be
+  truncated (``exact_pi(..., tau_end=decay.tau_end)``).
+* **Noise** is measured in the quiescent segments, the rest before release and the
+  rest after the stop (standard deviation about the segment's mean, excluding a
+  quarter period next to the motion). Without such a segment it comes from
+  4th-order differences of the signal and the result says so.
+* **Natural frequency** is measured from the turning-point times (the damped
+  half-period π/ω_d, Eq. 13) corrected by √(1+β²) with β from the peak decrement
+  (Eq. 14, 20). By default τ = Ωt uses the measured frequency; a nominal one from
+  the rig is reported beside it.
+* **One channel only**: a missing velocity is the Savitzky-Golay derivative of the
+  displacement (5th-order polynomial over about 1/8 of a period; the bias on a
+  sinusoid is below 1e-5 and white noise is filtered above about 4 times the
+  oscillation frequency). A missing displacement is the trapezoidal integral of the
+  velocity, after removing the velocity's zero offset measured at rest (when a rest
+  segment exists); the integration constant is the equilibrium estimate above, and
+  a residual velocity offset shows as the fitted drift.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.signal
+from numpy.typing import ArrayLike, NDArray
+from scipy.integrate import cumulative_trapezoid
+
+from bayestribo.errors import RecordingError
+from bayestribo.model.scaling import Rig, Scaling
+from bayestribo.signal.peaks import Peaks, estimate_noise, find_peaks
+
+__all__ = [
+    "EnergyDecay",
+    "NoiseLevels",
+    "derive_velocity",
+    "energy_decay",
+    "retrograde_integral",
+    "savgol_window",
+]
+
+#: Largest accepted relative deviation of a time step from the median step.
+TIME_STEP_TOLERANCE = 1e-3
+#: Fewest oscillations needed after the skipped ones.
+MIN_OSCILLATIONS = 3
+#: Fewest samples for a quiescent segment to give a noise estimate.
+MIN_QUIET_SAMPLES = 20
+
+
+@dataclass(frozen=True)
+class NoiseLevels:
+    """Measurement noise of each channel, in the signal's units.
+
+    Parameters
+    ----------
+    displacement : float or None
+        Standard deviation of the displacement noise per sample [length unit].
+    velocity : float or None
+        Standard deviation of the velocity noise per sample [length unit/s]; for a
+        derived channel, the noise of the derived samples.
+    source : str
+        Where the figures come from: ``"rest before release"``, ``"rest after stop"``,
+        both joined by ``" and "``, or ``"signal differences"`` when the record has no
+        quiescent segment.
+    n_samples : int
+        Number of quiescent samples used (0 for ``"signal differences"``).
+    """
+
+    displacement: float | None
+    velocity: float | None
+    source: str
+    n_samples: int
+
+
+@dataclass(frozen=True)
+class EnergyDecay:
+    """Dimensionless signals, energy and retrograde energy integral of one recording.
+
+    All arrays cover the analysed window, from the start turning point to the end of
+    motion (or of the record).
+
+    Attributes
+    ----------
+    t : ndarray
+        Time stamps of the analysed samples [s], as recorded.
+    tau : ndarray
+        τ = Ω(t - start_time), 0 at the first analysed sample (Eq. 6).
+    y, yp : ndarray
+        y = (x - equilibrium)/ℓ and y' = v/(ℓΩ) (Eq. 6), ℓ = ``scaling.length_scale``.
+    energy : ndarray
+        E = (y² + y'²)/2 (Eq. 26).
+    pi : ndarray
+        Π(τ) = ∫_τ^{τ_end} E (Eq. 39), trapezoidal rule, 0 at the last sample.
+    scaling : Scaling
+        The scaling used (Ω and ℓ).
+    start_time, end_time : float
+        First and last analysed time stamps [s].
+    motion_ended : bool
+        True when the motion stopped inside the record (a rest tail follows).
+    release_time : float
+        Time of the release [s]: the last sample of the rest the record starts in, or,
+        for a record that starts in motion, its first turning point.
+    equilibrium : float
+        Displacement of the equilibrium at ``start_time`` [length unit].
+    equilibrium_drift : float
+        Drift of the equilibrium [length unit/s].
+    velocity_offset : float
+        Velocity zero removed [length unit/s] (0 unless measured at rest).
+    natural_frequency_Hz : float
+        Natural frequency measured from the recording [Hz].
+    nominal_frequency_Hz : float or None
+        Nominal natural frequency of the rig [Hz], if one was given.
+    damped_frequency_Hz : float
+        Damped frequency of the turning points, f√(1-ζ²) [Hz].
+    noise : NoiseLevels
+        Noise measured in the record, in signal units.
+    derived_channel : str or None
+        ``"velocity"`` or ``"displacement"`` when that channel was derived.
+    savgol_window : int or None
+        Samples in the Savitzky-Golay window of a derived velocity.
+    peaks : Peaks
+        Displacement turning points of the analysed window (about the equilibrium).
+    """
+
+    t: NDArray
+    tau: NDArray
+    y: NDArray
+    yp: NDArray
+    energy: NDArray
+    pi: NDArray
+    scaling: Scaling
+    start_time: float
+    end_time: float
+    motion_ended: bool
+    release_time: float
+    equilibrium: float
+    equilibrium_drift: float
+    velocity_offset: float
+    natural_frequency_Hz: float
+    nominal_frequency_Hz: float | None
+    damped_frequency_Hz: float
+    noise: NoiseLevels
+    derived_channel: str | None
+    savgol_window: int | None
+    peaks: Peaks
+
+    @property
+    def tau_end(self) -> float:
+        """τ of the last analysed sample: where model Π must be truncated."""
+        return float(self.tau[-1])
+
+    @property
+    def frequency_difference_Hz(self) -> float | None:
+        """Measured minus nominal natural frequency [Hz], or ``None`` without a nominal."""
+        if self.nominal_frequency_Hz is None:
+            return None
+        return self.natural_frequency_Hz - self.nominal_frequency_Hz
+
+    @property
+    def y0(self) -> float:
+        """Dimensionless displacement at the start of the analysed window."""
+        return float(self.y[0])
+
+    @property
+    def noise_y(self) -> float | None:
+        """Displacement noise in units of y."""
+        d = self.noise.displacement
+        return None if d is None else d / self.scaling.length_scale
+
+    @property
+    def noise_yp(self) -> float | None:
+        """Velocity noise in units of y'."""
+        v = self.noise.velocity
+        return None if v is None else v / (self.scaling.length_scale * self.scaling.omega)
+
+
+def retrograde_integral(tau: ArrayLike, energy: ArrayLike) -> NDArray:
+    """Π_i = ∫_{τ_i}^{τ_last} E dτ by the trapezoidal rule, integrating backwards (Eq. 39)."""
+    tau = np.asarray(tau, dtype=float)
+    energy = np.asarray(energy, dtype=float)
+    backwards = cumulative_trapezoid(energy[::-1], -tau[::-1], initial=0.0)
+    return backwards[::-1]
+
+
+def _check_time(t: ArrayLike) -> NDArray:
+    t = np.asarray(t, dtype=float)
+    if t.ndim != 1:
+        raise RecordingError(f"t must be a 1-D array of times [s], got shape {t.shape}")
+    if t.size < 16:
+        raise RecordingError(f"t has {t.size} samples; a free decay needs many more")
+    bad = np.flatnonzero(~np.isfinite(t))
+    if bad.size:
+        raise RecordingError(f"t is not finite at sample {bad[0]}")
+    dt = np.diff(t)
+    back = np.flatnonzero(dt <= 0.0)
+    if back.size:
+        i = int(back[0]) + 1
+        raise RecordingError(
+            f"time stamps must increase strictly: t[{i}] = {t[i]!r} follows t[{i - 1}] = "
+            f"{t[i - 1]!r}"
+        )
+    step = float(np.median(dt))
+    off = np.flatnonzero(np.abs(dt - step) > TIME_STEP_TOLERANCE * step)
+    if off.size:
+        i = int(off[0]) + 1
+        raise RecordingError(
+            f"time stamps must be regular: the step before sample {i} is {dt[i - 1]!r} s, "
+            f"the median step is {step!r} s (tolerance {TIME_STEP_TOLERANCE:g} relative); "
+            "a gap or a resampled segment cannot be analysed as one free decay"
+        )
+    return t
+
+
+def _check_signal(name: str, values: ArrayLike | None, n: int) -> NDArray | None:
+    if values is None:
+        return None
+    s = np.asarray(values, dtype=float)
+    if s.shape != (n,):
+        raise RecordingError(f"{name} must have one value per time stamp ({n}), got {s.shape}")
+    bad = np.flatnonzero(~np.isfinite(s))
+    if bad.size:
+        raise RecordingError(f"{name} is not finite at sample {bad[0]}")
+    return s
+
+
+def savgol_window(t: NDArray, period: float) -> int:
+    """Odd Savitzky-Golay window of about 1/8 of a period, at least 7 samples."""
+    return max(7, round(period / float(np.median(np.diff(t))) / 8.0) | 1)
+
+
+def derive_velocity(t: ArrayLike, x: ArrayLike, period: float) -> tuple[NDArray, float]:
+    """Velocity of a displacement record by a Savitzky-Golay derivative.
+
+    A 5th-order polynomial over about 1/8 of a ``period`` [s] (bias below 1e-5 on a
+    sinusoid; white noise filtered above about 4 times the oscillation frequency).
+
+    Returns
+    -------
+    v : ndarray
+        The derivative [length unit/s].
+    gain : float
+        Standard deviation of v per unit standard deviation of white noise on x [1/s].
+    """
+    t = np.asarray(t, dtype=float)
+    x = np.asarray(x, dtype=float)
+    dt = float(np.median(np.diff(t)))
+    window = savgol_window(t, period)
+    if window > x.size:
+        raise RecordingError(
+            f"the displacement has {x.size} samples, fewer than the {window} needed to "
+            "differentiate it over 1/8 of a period"
+        )
+    v = scipy.signal.savgol_filter(x, window, 5, deriv=1, delta=dt, mode="interp")
+    gain = float(np.linalg.norm(scipy.signal.savgol_coeffs(window, 5, deriv=1, delta=dt)))
+    return v, gain
+
+
+def _release_index(signal: NDArray, first_extremum: int) -> int | None:
+    """Index where a signal leaves the rest the record starts in, or None.
+
+    The record starts at rest when its first ``MIN_QUIET_SAMPLES`` samples scatter
+    by less than 1/300 of the signal's range (6σ < 2 % of it, σ from their median
+    absolute deviation): the release is then the sample before the first one more
+    than 6σ from their median, provided it comes after those samples and before the
+    first extremum found by the peak finder.
+    """
+    if first_extremum < 2 * MIN_QUIET_SAMPLES:
+        return None
+    head = signal[: first_extremum + 1]
+    first = head[:MIN_QUIET_SAMPLES]
+    level = float(np.median(first))
+    sigma = 1.4826 * float(np.median(np.abs(first - level)))
+    span = float(np.ptp(signal))
+    if 6.0 * sigma > 0.02 * span:
+        return None  # the first samples move on the scale of the oscillation
+    band = max(6.0 * sigma, 1e-9 * span)
+    outside = np.flatnonzero(np.abs(head - level) > band)
+    if outside.size == 0 or outside[0] < MIN_QUIET_SAMPLES:
+        return None
+    return int(outside[0]) - 1
+
+
+def _turning_times(t: NDArray, v: NDArray, peaks: Peaks, period: float) -> NDArray:
+    """Turning times from the velocity's zero crossings next to each displacement peak.
+
+    The velocity crosses zero exactly at a turning point, with a slope Ω²|x| that
+    makes linear interpolation between the two bracketing samples accurate; peak
+    times from parabola fits are biased by friction (the arcs on either side of a
+    turning point have different centres). Where no crossing is found within 1/8
+    period of a peak, the peak time is kept.
+    """
+    dt = float(np.median(np.diff(t)))
+    reach = max(2, int(period / dt / 8.0))
+    times = peaks.t.copy()
+    change = np.flatnonzero(np.signbit(v[:-1]) != np.signbit(v[1:]))
+    if change.size == 0:
+        return times
+    for j, i in enumerate(peaks.index.tolist()):
+        k = int(np.searchsorted(change, i))
+        near = [c for c in change[max(k - 1, 0) : k + 1] if abs(c - i) <= reach]
+        if not near:
+            continue
+        c = min(near, key=lambda c: abs(c - i))
+        v0, v1 = v[c], v[c + 1]
+        times[j] = t[c] + (t[c + 1] - t[c]) * v0 / (v0 - v1)
+    return times
+
+
+def _quiet_segments(
+    t: NDArray, rest_until: float | None, stop: float | None, margin: float
+) -> NDArray:
+    """Boolean mask of samples at rest: before release and after the stop, with a margin."""
+    quiet = np.zeros(t.shape, bool) if rest_until is None else t < rest_until - margin
+    if stop is not None:
+        quiet |= t > stop + margin
+    return quiet
+
+
+def _noise(
+    t: NDArray,
+    x: NDArray,
+    v: NDArray,
+    rest_until: float | None,
+    stop: float | None,
+    period: float,
+    derived: str | None,
+) -> NoiseLevels:
+    """Noise of each channel in the quiescent segments (see the module notes).
+
+    ``rest_until`` is the release time of a record that starts at rest (``None`` for
+    a record that starts in motion), ``stop`` the start of the rest tail.
+    """
+    margin = 0.25 * period
+    before = np.zeros(t.shape, bool) if rest_until is None else t < rest_until - margin
+    after = np.zeros(t.shape, bool) if stop is None else t > stop + margin
+    parts, names = [], []
+    for mask, name in ((before, "rest before release"), (after, "rest after stop")):
+        if np.count_nonzero(mask) >= MIN_QUIET_SAMPLES:
+            parts.append(mask)
+            names.append(name)
+    if not parts:
+        return NoiseLevels(
+            displacement=estimate_noise(x) if derived != "displacement" else None,
+            velocity=estimate_noise(v) if derived != "velocity" else None,
+            source="signal differences",
+            n_samples=0,
+        )
+
+    def pooled(s: NDArray) -> float:
+        # Deviations about each segment's own mean (the rest positions differ).
+        dev = np.concatenate([s[m] - np.mean(s[m]) for m in parts])
+        return float(np.sqrt(np.mean(dev * dev)))
+
+    return NoiseLevels(
+        displacement=pooled(x),
+        velocity=pooled(v),
+        source=" and ".join(names),
+        n_samples=int(sum(np.count_nonzero(m) for m in parts)),
+    )
+
+
+def _end_of_motion(t: NDArray, v: NDArray, peaks: Peaks, derived: str | None) -> float | None:
+    """Start of the rest tail [s], or None when the motion lasts to the end of the record.
+
+    A measured velocity shows the last small swings long after the displacement has
+    sunk into its noise (the vibrometer resolves 0.015 µm/s against 0.15 µm, i.e.
+    Ω·0.15 µm ≈ 30 µm/s at 32.6 Hz), so the rest tail is found on the velocity when
+    it was recorded, and on the displacement otherwise.
+    """
+    if derived == "velocity":
+        return peaks.stop_time
+    try:
+        vel = find_peaks(t, v, kind="velocity", min_peaks=1)
+    except RecordingError:
+        return peaks.stop_time
+    return vel.stop_time
+
+
+def _frequencies(times: NDArray, values: NDArray) -> tuple[float, float]:
+    """Damped and natural frequency [Hz] from turning times and peak values.
+
+    The damped half-period π/ω_d is the least-squares slope of the turning times
+    against their index (weighted by peak size, as small peaks are timed worse); the
+    natural frequency is f_d√(1+β²) = f_d/√(1-ζ²) with β from the decrement of the
+    peak-to-peak heights, h_{n+1} = e^{-βπ} h_n - const (Eq. 13, 14, 20).
+    """
+    n = np.arange(times.size, dtype=float)
+    weights = np.abs(values) if np.any(values != 0) else None
+    half_period = float(np.polyfit(n, times, 1, w=weights)[0])
+    damped = 0.5 / half_period
+    heights = np.abs(np.diff(values))
+    beta = 0.0
+    if heights.size >= 3:
+        r = float(np.polyfit(heights[:-1], heights[1:], 1)[0])
+        if 0.0 < r < 1.0:
+            beta = -math.log(r) / math.pi
+    return damped, damped * math.sqrt(1.0 + beta * beta)
+
+
+def energy_decay(
+    t: ArrayLike,
+    displacement: ArrayLike | None = None,
+    velocity: ArrayLike | None = None,
+    *,
+    rig: Rig | None = None,
+    skip_oscillations: int = 1,
+    use_nominal_frequency: bool = False,
+) -> EnergyDecay:
+    """Energy decay curve and Π(τ) of a free-decay recording (Eq. 6, 26, 39).
+
+    Parameters
+    ----------
+    t : array_like
+        Time stamps [s], strictly increasing and regular, any origin.
+    displacement : array_like, optional
+        Displacement x [m, or any length unit when ``rig`` has no load], any zero.
+    velocity : array_like, optional
+        Velocity v [m/s, or the same length unit per second].
+    rig : Rig, optional
+        Mass, nominal natural frequency and load. With a load and a mass, y = kx/N
+        (friction as μ_k); otherwise y is the displacement in signal units (friction
+        as a friction displacement).
+    skip_oscillations : int
+        Oscillations after the first turning point (the release) left out of the
+        analysis, default 1 (paper, section 2.1).
+    use_nominal_frequency : bool
+        Scale time with the rig's nominal frequency instead of the measured one.
+
+    Returns
+    -------
+    EnergyDecay
+
+    Raises
+    ------
+    RecordingError
+        No signal, bad time stamps or samples, no oscillation, or fewer than three
+        oscillations after the skipped ones.
+    """
+    t = _check_time(t)
+    x = _check_signal("displacement", displacement, t.size)
+    v = _check_signal("velocity", velocity, t.size)
+    if x is None and v is None:
+        raise RecordingError("give a displacement or a velocity signal (or both)")
+    if isinstance(skip_oscillations, bool) or not isinstance(skip_oscillations, int | np.integer):
+        raise RecordingError(
+            f"skip_oscillations must be an integer >= 0, got {skip_oscillations!r}"
+        )
+    if skip_oscillations < 0:
+        raise RecordingError(f"skip_oscillations must be >= 0, got {skip_oscillations}")
+    if use_nominal_frequency and rig is None:
+        raise RecordingError("use_nominal_frequency needs a rig with a natural frequency")
+
+    derived: str | None = None
+    velocity_offset = 0.0
+    if x is None:
+        derived = "displacement"
+        x = cumulative_trapezoid(v, t, initial=0.0)
+        first = find_peaks(t, x, kind="displacement", min_peaks=2)
+        released_at = _release_index(v, int(first.index[0]))
+        rest_until = None if released_at is None else float(t[released_at])
+        quiet = _quiet_segments(t, rest_until, first.stop_time, 0.0)
+        if np.count_nonzero(quiet) >= MIN_QUIET_SAMPLES:
+            velocity_offset = float(np.median(v[quiet]))
+            v = v - velocity_offset
+            x = cumulative_trapezoid(v, t, initial=0.0)
+    peaks = find_peaks(t, x, kind="displacement", min_peaks=2)
+    period = 2.0 * peaks.half_period
+    if v is None:
+        derived = "velocity"
+        v, _ = derive_velocity(t, x, period)
+
+    released_at = _release_index(x if derived == "velocity" else v, int(peaks.index[0]))
+    if released_at is None:
+        # The record starts in motion: count oscillations from its first extremum.
+        release = float(peaks.t[0])
+        skip = 2 * int(skip_oscillations)
+    else:
+        # The held position is the release's turning point; the first extremum found
+        # is half an oscillation later.
+        release = float(t[released_at])
+        skip = max(2 * int(skip_oscillations) - 1, 0)
+    needed = skip + 2 * MIN_OSCILLATIONS
+    if len(peaks) < needed:
+        raise RecordingError(
+            f"the recording holds {len(peaks)} turning points after the release; "
+            f"{needed} are needed ({MIN_OSCILLATIONS} oscillations after skipping "
+            f"{skip_oscillations})"
+        )
+    window = peaks.skip(skip)
+    times = window.t if derived == "velocity" else _turning_times(t, v, window, period)
+    damped_hz, natural_hz = _frequencies(times, window.value)
+    nominal_hz = None if rig is None else rig.natural_frequency_Hz
+    omega = 2.0 * math.pi * (nominal_hz if use_nominal_frequency else natural_hz)
+
+    if rig is not None and rig.has_contact and rig.mass_kg is not None:
+        scaling = Scaling(omega, rig.load_N / (rig.mass_kg * omega**2), friction_defined=True)
+    else:
+        scaling = Scaling(omega, 1.0, friction_defined=False)
+
+    rest_until = None if released_at is None else release
+    stop_time = _end_of_motion(t, v, peaks, derived)
+    noise = _noise(t, x, v, rest_until, stop_time, period, derived)
+    if derived is None:
+        quiet = _quiet_segments(t, rest_until, stop_time, 0.25 * period)
+        if np.count_nonzero(quiet) >= MIN_QUIET_SAMPLES:
+            velocity_offset = float(np.median(v[quiet]))
+            v = v - velocity_offset
+
+    start = int(window.index[0])
+    stop = t.size if stop_time is None else int(np.searchsorted(t, stop_time)) + 1
+    stop = min(stop, t.size)
+    sl = slice(start, stop)
+    equilibrium = peaks.offset + peaks.drift * t[sl]
+    y = scaling.y(x[sl] - equilibrium)
+    yp = scaling.yp(v[sl])
+    tau = scaling.tau(t[sl] - t[start])
+    energy = 0.5 * (y * y + yp * yp)
+    return EnergyDecay(
+        t=t[sl].copy(),
+        tau=tau,
+        y=y,
+        yp=yp,
+        energy=energy,
+        pi=retrograde_integral(tau, energy),
+        scaling=scaling,
+        start_time=float(t[start]),
+        end_time=float(t[stop - 1]),
+        motion_ended=stop_time is not None,
+        release_time=release,
+        equilibrium=peaks.offset + peaks.drift * float(t[start]),
+        equilibrium_drift=peaks.drift,
+        velocity_offset=velocity_offset,
+        natural_frequency_Hz=natural_hz,
+        nominal_frequency_Hz=nominal_hz,
+        damped_frequency_Hz=damped_hz,
+        noise=noise,
+        derived_channel=derived,
+        savgol_window=savgol_window(t, period) if derived == "velocity" else None,
+        peaks=window,
+    )

@@ -1,0 +1,172 @@
+"""Measurement noise of a recording: nominal resolution, measured levels, the one used.
+
+The vibrometer's data sheet gives a resolution per measurement range (paper,
+section 2.3: 0.15 µm for the 10 mm peak-to-peak displacement range and 0.015 µm/s for
+the 1 m/s velocity range). A posterior built on that figure alone is as narrow as the
+instrument is fine, and a real recording usually carries more noise (electronics,
+vibration of the floor, the flat's own motion). So the noise model starts from the
+nominal resolution, measures the noise actually present at rest in the recording
+(:class:`bayestribo.signal.decay.NoiseLevels`), and uses, channel by channel, the larger of
+the two, saying which it used.
+
+The resolution is taken as a standard deviation. For pure quantisation at step q the
+standard deviation would be q/√12; using q is the conservative choice.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass
+from typing import Any
+
+from bayestribo.errors import RecordingError
+from bayestribo.signal.decay import EnergyDecay
+
+__all__ = ["RANGE_RESOLUTION", "NoiseModel", "noise_model"]
+
+#: Resolution of the laser vibrometer per measurement range (paper, section 2.3):
+#: ``{"displacement": {range peak-to-peak [m]: resolution [m]}, "velocity":
+#: {range peak-to-peak [m/s]: resolution [m/s]}}``. The resolution scales with the
+#: range (a fixed number of counts); other ranges are scaled from these.
+RANGE_RESOLUTION: dict[str, dict[float, float]] = {
+    "displacement": {10e-3: 0.15e-6},
+    "velocity": {1.0: 0.015e-6},
+}
+
+
+def resolution_for_range(channel: str, range_pp: float) -> float:
+    """Nominal resolution of ``channel`` at a peak-to-peak range (scaled from the table)."""
+    if channel not in RANGE_RESOLUTION:
+        raise ValueError(f"channel must be 'displacement' or 'velocity', got {channel!r}")
+    if not (math.isfinite(range_pp) and range_pp > 0):
+        raise ValueError(f"range_pp must be a positive number, got {range_pp!r}")
+    (ref_range, ref_res), *_ = RANGE_RESOLUTION[channel].items()
+    return ref_res * range_pp / ref_range
+
+
+@dataclass(frozen=True)
+class NoiseModel:
+    """Per-channel noise standard deviations used by the likelihood, in signal units.
+
+    Attributes
+    ----------
+    displacement, velocity : float
+        Standard deviation used for each channel [length unit], [length unit/s].
+    nominal_displacement, nominal_velocity : float or None
+        The instrument's resolution, when known.
+    measured_displacement, measured_velocity : float or None
+        The noise measured at rest in the recording, when there was rest to measure.
+    source_displacement, source_velocity : str
+        ``"nominal"`` or ``"measured"``: which figure is used.
+    measured_in : str
+        Where the measured figures come from (quiescent segments or signal differences).
+    derived_channel : str or None
+        A channel computed from the other (its noise is propagated, not assumed).
+    """
+
+    displacement: float
+    velocity: float
+    nominal_displacement: float | None
+    nominal_velocity: float | None
+    measured_displacement: float | None
+    measured_velocity: float | None
+    source_displacement: str
+    source_velocity: str
+    measured_in: str
+    derived_channel: str | None
+
+    @property
+    def exceeds_nominal(self) -> bool:
+        """True when the recording is noisier than the instrument's resolution."""
+        return "measured" in (self.source_displacement, self.source_velocity)
+
+    def describe(self) -> str:
+        """One sentence for reports."""
+        parts = []
+        for ch in ("displacement", "velocity"):
+            if ch == self.derived_channel:
+                parts.append(f"{ch} derived from the other channel")
+                continue
+            used = getattr(self, ch)
+            src = getattr(self, f"source_{ch}")
+            nominal = getattr(self, f"nominal_{ch}")
+            text = f"{ch} σ = {used:.3g} ({src}"
+            if src == "measured" and nominal is not None:
+                text += f", {used / nominal:.3g}× the resolution {nominal:.3g}"
+            parts.append(text + ")")
+        return "; ".join(parts) + f"; measured in {self.measured_in}"
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-data form (JSON, NetCDF attributes)."""
+        return asdict(self)
+
+
+def _choose(nominal: float | None, measured: float | None, channel: str) -> tuple[float, str]:
+    if nominal is None and measured is None:
+        raise RecordingError(
+            f"no noise level for the {channel}: give its resolution (sidecar key "
+            f"'{channel}_resolution_...') or record a quiescent segment"
+        )
+    if measured is None or (nominal is not None and nominal >= measured):
+        value, source = float(nominal), "nominal"  # type: ignore[arg-type]
+    else:
+        value, source = float(measured), "measured"
+    if not value > 0:
+        raise RecordingError(
+            f"the {channel} noise is {value!r}: a likelihood needs a positive noise level; "
+            f"give the {channel} resolution in the metadata"
+        )
+    return value, source
+
+
+def noise_model(
+    decay: EnergyDecay,
+    metadata: Mapping[str, Any] | None = None,
+    *,
+    displacement_resolution: float | None = None,
+    velocity_resolution: float | None = None,
+) -> NoiseModel:
+    """The noise model of a recording: nominal resolution, checked against the record.
+
+    Parameters
+    ----------
+    decay : EnergyDecay
+        The recording's energy decay, which carries the measured noise.
+    metadata : mapping, optional
+        Run metadata; ``displacement_resolution_m`` and ``velocity_resolution_m_per_s``
+        give the nominal resolution.
+    displacement_resolution, velocity_resolution : float, optional
+        Override the metadata's resolutions [length unit], [length unit/s].
+
+    Returns
+    -------
+    NoiseModel
+        With, per channel, the larger of the nominal and the measured noise.
+    """
+    meta = dict(metadata or {})
+    nom_x = displacement_resolution or meta.get("displacement_resolution_m")
+    nom_v = velocity_resolution or meta.get("velocity_resolution_m_per_s")
+    meas = decay.noise
+    derived = decay.derived_channel
+    if derived == "displacement":
+        sigma_v, src_v = _choose(nom_v, meas.velocity, "velocity")
+        sigma_x, src_x = 0.0, "derived"
+    elif derived == "velocity":
+        sigma_x, src_x = _choose(nom_x, meas.displacement, "displacement")
+        sigma_v, src_v = 0.0, "derived"
+    else:
+        sigma_x, src_x = _choose(nom_x, meas.displacement, "displacement")
+        sigma_v, src_v = _choose(nom_v, meas.velocity, "velocity")
+    return NoiseModel(
+        displacement=sigma_x,
+        velocity=sigma_v,
+        nominal_displacement=None if nom_x is None else float(nom_x),
+        nominal_velocity=None if nom_v is None else float(nom_v),
+        measured_displacement=meas.displacement,
+        measured_velocity=meas.velocity,
+        source_displacement=src_x,
+        source_velocity=src_v,
+        measured_in=meas.source,
+        derived_channel=derived,
+    )

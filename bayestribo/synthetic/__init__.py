@@ -1,0 +1,15 @@
+"""Synthetic recordings: a realistic simulator of the rig and the bundled campaign.
+
+Modules
+-------
+recording
+    :func:`simulate`: one free-decay recording on the exact model, with the sensor's
+    noise and the rig's imperfections.
+campaign
+    The paper's test programme (air, glycerol at five loads, glycerol-water) as a
+    simulated campaign, with its manifest of true values.
+"""
+
+from bayestribo.synthetic.recording import simulate
+
+__all__ = ["simulate"]
