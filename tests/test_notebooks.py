@@ -236,7 +236,7 @@ def test_html_can_leave_the_code_out(tmp_path):
 
 @pytest.mark.skipif(os.name != "posix", reason="environment variable handling is POSIX here")
 def test_notebooks_folder_from_the_environment(tmp_path, monkeypatch):
-    from bayestribo import report
+    from bayestribo.reports import notebooks as report
 
     monkeypatch.setenv("BAYESTRIBO_NOTEBOOKS", str(tmp_path / "missing"))
     with pytest.raises(ReportError, match="BAYESTRIBO_NOTEBOOKS"):
