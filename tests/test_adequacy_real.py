@@ -30,7 +30,9 @@ pytestmark = pytest.mark.skipif(not DATA.exists(), reason=f"real recording not f
 def report():
     from bayestribo.io import read_run
 
-    run = read_run(DATA, columns=["time_s", "displacement_m"], length_unit="arbitrary")
+    run = read_run(
+        DATA, columns=["time_s", "displacement_m"], metadata={"length_unit": "arbitrary"}
+    )
     return check_adequacy(run)
 
 

@@ -51,7 +51,7 @@ def test_report_of_a_text_file_passes_the_reading_options_to_the_notebook(
     assert params["run_path"] == str(text.resolve())
     assert params["read_kwargs"] == {
         "columns": ["time_s", "displacement_m"],
-        "length_unit": "arbitrary",
+        "metadata": {"length_unit": "arbitrary"},
     }
     assert params["seed"] == 7 and params["max_steps"] == 500
     assert params["figure_dir"] == str((tmp_path / "figs").resolve())

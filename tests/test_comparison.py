@@ -8,14 +8,15 @@ Coulomb only must lose clearly).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from bayestribo import simulate
 from bayestribo.errors import BayestriboError
-from bayestribo.inference.comparison import LAWS, _Pinned, compare_dissipation_laws
+from bayestribo.inference import build_posterior, prepare
+from bayestribo.inference.comparison import LAWS, compare_dissipation_laws
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "runs"
 needs_data = pytest.mark.skipif(not DATA.is_dir(), reason="bundled data/ folder not present")
@@ -44,19 +45,30 @@ def test_a_glycerol_run_needs_both_mechanisms():
     assert not any(w.startswith("both") for w in c.warnings)
 
 
-@dataclass
-class _Base:
-    names: list
-    likelihood: object = None
-    priors: object = None
-    friction: bool = True
-
-
-def test_pinned_coordinates_are_inserted_in_place():
-    pinned = _Pinned(_Base(["zeta", "mu_k", "mu_s_ratio", "y0"]), {"zeta": 0.0})
+def test_a_fixed_parameter_is_the_full_posterior_at_that_value_without_its_prior():
+    # Coulomb-only is "both" with ζ fixed at 0: the same likelihood, and the prior
+    # of the free coordinates only.
+    run = simulate(seed=5)
+    prepared = prepare(run, seed=1)
+    full = build_posterior(prepared.data)
+    pinned = build_posterior(prepared.data, fixed={"zeta": 0.0})
     assert pinned.names == ["mu_k", "mu_s_ratio", "y0"] and pinned.friction
-    full = pinned._full(np.array([[0.1, 1.2, 3.0], [0.2, 1.5, 4.0]]))
-    np.testing.assert_array_equal(full, [[0.0, 0.1, 1.2, 3.0], [0.0, 0.2, 1.5, 4.0]])
+    rng = np.random.default_rng(2)
+    free = np.column_stack(
+        [
+            rng.uniform(0.0, 0.2, 8) * abs(prepared.data.y0) / 4.0,
+            rng.uniform(1.0, 3.0, 8),
+            prepared.data.y0 * (1.0 + 1e-3 * rng.standard_normal(8)),
+        ]
+    )
+    whole = np.column_stack([np.zeros(8), free])
+    zeta_prior = full.priors["zeta"].logpdf(np.zeros(8))
+    np.testing.assert_allclose(pinned(free), full(whole) - zeta_prior, rtol=1e-12, atol=1e-9)
+    np.testing.assert_array_equal(pinned.pointwise(free), full.pointwise(whole))
+    with pytest.raises(BayestriboError, match="priors and fixed both name"):
+        build_posterior(prepared.data, fixed={"zeta": 0.0}, priors={"zeta": full.priors["zeta"]})
+    with pytest.raises(BayestriboError, match="fixed: unknown parameter 'eta'"):
+        build_posterior(prepared.data, fixed={"eta": 0.0})
 
 
 def test_unknown_or_single_laws_are_refused():

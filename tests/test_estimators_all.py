@@ -120,7 +120,9 @@ def _harmosc(name):
     path = HARMOSC / f"{name}.txt"
     if not path.is_file():
         pytest.skip(f"real recording {path} not available")
-    return read_run(path, columns=["time_s", "displacement_m"], length_unit="arbitrary")
+    return read_run(
+        path, columns=["time_s", "displacement_m"], metadata={"length_unit": "arbitrary"}
+    )
 
 
 def test_real_recordings_viscous_versus_friction():

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bayestribo.errors import ConvergenceWarning
+from bayestribo.errors import BayestriboError, ConvergenceWarning
 from bayestribo.inference import FitResult, fit
 from bayestribo.io import read_run
 from bayestribo.signal.increments import pi_data
@@ -194,7 +194,7 @@ def test_non_convergence_is_reported_never_hidden(short_run):
 
 
 def test_bad_model_name():
-    with pytest.raises(ValueError, match="model"):
+    with pytest.raises(BayestriboError, match="model: expected one of"):
         fit(DATA / "air-r1.csv", model="quadratic")
 
 

@@ -12,7 +12,8 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from bayestribo import Run, read_run, simulate, write_run
-from bayestribo.errors import RunFormatError
+from bayestribo.errors import BayestriboError, RunFormatError
+from bayestribo.io import as_run
 
 
 def _run(**meta: object) -> Run:
@@ -81,13 +82,13 @@ def test_simulated_run_round_trips(tmp_path: Path) -> None:
 def test_missing_sidecar_is_allowed_and_keywords_fill_or_override(tmp_path: Path) -> None:
     run = _run(load_N=0.31, repeat=1)
     path = write_run(run, tmp_path / "r.csv")
-    assert read_run(path, load_N=0.46).metadata["load_N"] == 0.46
-    assert read_run(path, temperature_C=21.5).metadata["repeat"] == 1
+    assert read_run(path, metadata={"load_N": 0.46}).metadata["load_N"] == 0.46
+    assert read_run(path, metadata={"temperature_C": 21.5}).metadata["repeat"] == 1
     (tmp_path / "r.json").unlink()
     bare = read_run(path)
     assert dict(bare.metadata) == {}
     assert bare.rig() is None
-    assert read_run(path, natural_frequency_Hz=32.6).rig().load_N is None
+    assert read_run(path, metadata={"natural_frequency_Hz": 32.6}).rig().load_N is None
 
 
 def test_sidecar_can_be_skipped_or_given(tmp_path: Path) -> None:
@@ -140,3 +141,23 @@ def test_option_for_another_format_is_refused(tmp_path: Path) -> None:
     path = write_run(_run(), tmp_path / "r.csv")
     with pytest.raises(RunFormatError, match="option 'group' applies to tdms"):
         read_run(path, group="Vibrometer")
+
+
+def test_a_misspelt_reading_option_is_an_error_with_a_suggestion(tmp_path):
+    path = write_run(simulate(seed=1), tmp_path / "sim.csv")
+    with pytest.raises(BayestriboError, match=r"'delimeter' \(did you mean 'delimiter'\?\)"):
+        read_run(path, delimeter=",")
+    with pytest.raises(BayestriboError, match=r"metadata=\{'load_N'"):
+        read_run(path, load_N=0.31)
+
+
+def test_as_run_passes_a_run_through_and_reads_a_path(tmp_path):
+    run = simulate(seed=1)
+    path = write_run(run, tmp_path / "sim.csv")
+    assert as_run(run) is run
+    assert as_run(path) == run and as_run(str(path)) == run
+    assert as_run(path, metadata={"load_N": 0.46}).metadata["load_N"] == 0.46
+    with pytest.raises(BayestriboError, match="already a Run"):
+        as_run(run, delimiter=",")
+    with pytest.raises(BayestriboError, match="run: expected a bayestribo Run or the path"):
+        as_run(42)

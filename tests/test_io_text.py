@@ -32,7 +32,9 @@ def test_real_recordings_read_with_one_documented_call(
     path = EXTERNAL / name
     if not path.is_file():
         pytest.skip(f"external data not present at {path}")
-    run = read_run(path, columns=["time_s", "displacement_m"], length_unit="arbitrary")
+    run = read_run(
+        path, columns=["time_s", "displacement_m"], metadata={"length_unit": "arbitrary"}
+    )
     assert run.n_samples == rows
     assert run.time[0] == first
     assert run.sample_rate_Hz == pytest.approx(1.0 / step, rel=1e-9)

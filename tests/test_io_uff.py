@@ -49,7 +49,7 @@ def test_displacement_and_velocity_records_with_units(tmp_path: Path, binary: in
         tmp_path / "vib.uff",
         [_record(1e3 * X, 8, "mm", binary), _record(V, 11, "m/s", binary)],
     )
-    run = read_run(path, natural_frequency_Hz=32.6)
+    run = read_run(path, metadata={"natural_frequency_Hz": 32.6})
     # pyuff writes the abscissa start and step with 6 significant digits (%13.5e),
     # exact here; ASCII data with 12 significant digits (%20.11e), binary exactly.
     np.testing.assert_allclose(run.time, T, rtol=0, atol=1e-12)

@@ -124,10 +124,12 @@ def test_inject_parameters_replaces_the_tagged_cell_and_keeps_the_other_defaults
     nb = read_notebook("single_run")
     defaults = notebook_parameters(nb)
     others = [c.source for c in nb.cells if PARAMETERS_TAG not in c.metadata.get("tags", [])]
-    inject_parameters(nb, {"max_steps": 123, "read_kwargs": {"length_unit": "arbitrary"}})
+    inject_parameters(
+        nb, {"max_steps": 123, "read_kwargs": {"metadata": {"length_unit": "arbitrary"}}}
+    )
     values = notebook_parameters(nb)
     assert values["max_steps"] == 123
-    assert values["read_kwargs"] == {"length_unit": "arbitrary"}
+    assert values["read_kwargs"] == {"metadata": {"length_unit": "arbitrary"}}
     assert {k: v for k, v in values.items() if k not in ("max_steps", "read_kwargs")} == {
         k: v for k, v in defaults.items() if k not in ("max_steps", "read_kwargs")
     }

@@ -174,7 +174,7 @@ def test_unknown_sidecar_value_type_names_file_key_and_expectation(
     ):
         read_run(path)
     with pytest.raises(RunFormatError, match=r"metadata 'operator': unknown value type"):
-        read_run(write_run(good, tmp_path / "s.csv"), operator=object())
+        read_run(write_run(good, tmp_path / "s.csv"), metadata={"operator": object()})
 
 
 def test_good_simulated_run_passes_unchanged(good: Run) -> None:
@@ -202,7 +202,7 @@ def test_real_recordings_pass_validation(name: str) -> None:
     path = EXTERNAL / name
     if not path.is_file():
         pytest.skip(f"external data not present at {path}")
-    read_run(path, columns=["time_s", "displacement_m"], length_unit="arbitrary")
+    read_run(path, columns=["time_s", "displacement_m"], metadata={"length_unit": "arbitrary"})
 
 
 def _decaying(rate: float) -> tuple[np.ndarray, np.ndarray]:

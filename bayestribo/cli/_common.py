@@ -56,19 +56,23 @@ def reading_kwargs(args: argparse.Namespace) -> dict[str, Any]:
     columns = columns_from_args(args.columns)
     if columns is not None:
         kwargs["columns"] = columns
-    for key, value in (
-        ("length_unit", args.length_unit),
-        ("natural_frequency_Hz", args.frequency),
-        ("load_N", args.load),
-        ("mass_kg", args.mass),
-    ):
-        if value is not None:
-            kwargs[key] = value
+    metadata = {
+        key: value
+        for key, value in (
+            ("length_unit", args.length_unit),
+            ("natural_frequency_Hz", args.frequency),
+            ("load_N", args.load),
+            ("mass_kg", args.mass),
+        )
+        if value is not None
+    }
+    if metadata:
+        kwargs["metadata"] = metadata
     return kwargs
 
 
 def read_run_from_args(args: argparse.Namespace) -> Any:
     """Read the run named by :func:`add_run_arguments` options."""
-    from bayestribo.io import read_run
+    from bayestribo.io import as_run
 
-    return read_run(args.run, **reading_kwargs(args))
+    return as_run(args.run, **reading_kwargs(args))

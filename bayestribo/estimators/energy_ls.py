@@ -101,7 +101,10 @@ def _uniform_dt(t: NDArray) -> float:
 
 
 def _derivative(t: NDArray, x: NDArray, period: float, sigma: float) -> tuple[NDArray, float]:
-    """Velocity from the displacement (:func:`bayestribo.signal.decay.derive_velocity`) and its noise."""
+    """Velocity from the displacement and its noise.
+
+    See :func:`bayestribo.signal.decay.derive_velocity`.
+    """
     _uniform_dt(t)
     v, gain = derive_velocity(t, x, period)
     return v, sigma * gain

@@ -3,21 +3,33 @@
 The sampled vector holds, in order, the names of the :class:`PriorSet`: ``zeta``,
 and with friction ``mu_k`` and ``mu_s_ratio`` (μ_s = μ_k × ratio keeps μ_s >= μ_k
 without a constraint between coordinates), ``y0``, and optionally
-``log10_discrepancy``.
-The likelihood is evaluated only for walkers whose prior density is positive.
+``log10_discrepancy``. A parameter may instead be *fixed* at a value (for example
+``zeta = 0`` for a Coulomb-only law): it is then not sampled, has no prior, and enters
+the likelihood at that value.
+
+One rule for invalid densities: a point outside the prior's support has density 0
+(log density −inf) and the likelihood is not evaluated there; a NaN log-likelihood
+inside the support is a bug or a broken input, and raises an error that names the
+parameters, never a silent −inf.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
 
+from bayestribo.errors import BayestriboError
 from bayestribo.inference.likelihood import PiLikelihood
 from bayestribo.inference.priors import PriorSet
 
-__all__ = ["Posterior"]
+__all__ = ["PARAMETERS", "Posterior"]
+
+#: Every parameter the single-run posterior knows, in sampling order.
+PARAMETERS = ("zeta", "mu_k", "mu_s_ratio", "y0", "log10_discrepancy")
 
 
 @dataclass(frozen=True)
@@ -27,13 +39,35 @@ class Posterior:
     Parameters
     ----------
     priors : PriorSet
-        Independent priors; their names define the sampled vector.
+        Independent priors of the sampled parameters; their names define the sampled
+        vector.
     likelihood : PiLikelihood
         Likelihood of the Π increments.
+    fixed : mapping of str to float, optional
+        Parameters held at a value instead of sampled (names from :data:`PARAMETERS`,
+        not also in ``priors``).
     """
 
     priors: PriorSet
     likelihood: PiLikelihood
+    fixed: Mapping[str, float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        fixed = {str(k): float(v) for k, v in dict(self.fixed).items()}
+        for name, value in fixed.items():
+            if name not in PARAMETERS:
+                raise BayestriboError(f"fixed: unknown parameter {name!r}; expected {PARAMETERS}")
+            if name in self.priors.names:
+                raise BayestriboError(f"fixed: {name!r} is also sampled (it has a prior)")
+            if not math.isfinite(value):
+                raise BayestriboError(f"fixed: {name} must be a finite number, got {value!r}")
+        unknown = [n for n in self.priors.names if n not in PARAMETERS]
+        if unknown:
+            raise BayestriboError(f"priors: unknown parameter(s) {unknown}; expected {PARAMETERS}")
+        for required in ("zeta", "y0"):
+            if required not in self.priors.names and required not in fixed:
+                raise BayestriboError(f"priors: {required!r} must be sampled or fixed")
+        object.__setattr__(self, "fixed", fixed)
 
     @property
     def names(self) -> list[str]:
@@ -42,39 +76,53 @@ class Posterior:
 
     @property
     def friction(self) -> bool:
-        """True when μ_k and μ_s are fitted."""
-        return "mu_k" in self.priors.names
+        """True when the model has friction (μ_k sampled, or fixed above 0)."""
+        return "mu_k" in self.names or self.fixed.get("mu_k", 0.0) > 0.0
+
+    def values(self, theta: NDArray) -> dict[str, NDArray]:
+        """Sampled and fixed coordinates of rows ``theta`` (n, d) by name, each (n,)."""
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        out = {name: np.full(theta.shape[0], value) for name, value in self.fixed.items()}
+        out.update({name: theta[:, i] for i, name in enumerate(self.names)})
+        return out
 
     def physical(self, theta: NDArray) -> dict[str, NDArray]:
-        """Model parameters from sampled rows ``theta`` (n, d): each of shape (n, 1)."""
-        theta = np.atleast_2d(np.asarray(theta, dtype=float))
-        col = {name: theta[:, i : i + 1] for i, name in enumerate(self.names)}
+        """Model parameters ζ, μ_k, μ_s, y0 (each (n, 1)) and the discrepancy scale
+        (``None`` without one) from sampled rows ``theta`` (n, d)."""
+        col = {name: v[:, None] for name, v in self.values(theta).items()}
         zero = np.zeros_like(col["zeta"])
         mu_k = col.get("mu_k", zero)
-        mu_s = mu_k * col["mu_s_ratio"] if "mu_s_ratio" in col else zero
+        mu_s = mu_k * col["mu_s_ratio"] if "mu_s_ratio" in col else mu_k
         out = {"zeta": col["zeta"], "mu_k": mu_k, "mu_s": mu_s, "y0": col["y0"]}
         log_s = col.get("log10_discrepancy")
         out["discrepancy"] = None if log_s is None else 10.0**log_s
         return out
 
-    def _args(self, theta: NDArray) -> tuple:
+    def _likelihood_args(self, theta: NDArray) -> tuple:
         p = self.physical(theta)
         return p["zeta"], p["mu_k"], p["mu_s"], p["y0"], p["discrepancy"]
 
     def log_likelihood(self, theta: NDArray) -> NDArray:
         """Log-likelihood of each row (nuisance offset marginalised), shape (n,)."""
-        return self.likelihood.log_likelihood(*self._args(theta))
+        return self.likelihood.log_likelihood(*self._likelihood_args(theta))
 
     def pointwise(self, theta: NDArray) -> NDArray:
         """Conditional log-likelihood of each increment for each row, shape (n, m)."""
-        return self.likelihood.pointwise(*self._args(theta))
+        return self.likelihood.pointwise(*self._likelihood_args(theta))
 
     def standardized_residuals(self, theta: NDArray) -> NDArray:
         """Standardized conditional residuals of each increment, shape (n, m)."""
-        return self.likelihood.standardized_residuals(*self._args(theta))
+        return self.likelihood.standardized_residuals(*self._likelihood_args(theta))
 
     def __call__(self, theta: NDArray) -> NDArray:
-        """Log posterior density (up to a constant) of each row, shape (n,)."""
+        """Log posterior density (up to a constant) of each row, shape (n,).
+
+        Raises
+        ------
+        FloatingPointError
+            If the log-likelihood is NaN inside the prior's support (the message
+            names the parameters).
+        """
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         lp = self.priors.logpdf(theta)
         ok = np.isfinite(lp)

@@ -33,7 +33,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from bayestribo.inference.priors import PriorSet
 
-__all__ = ["FitResult"]
+__all__ = ["FitResult", "plain_data"]
 
 #: Quantities reported by :meth:`FitResult.summary` and the command line, in order.
 REPORTED = (
@@ -48,14 +48,14 @@ REPORTED = (
 )
 
 
-def _plain(value: Any) -> Any:
+def plain_data(value: Any) -> Any:
     """JSON-compatible copy (numpy scalars and arrays to Python)."""
     if isinstance(value, Mapping):
-        return {str(k): _plain(v) for k, v in value.items()}
+        return {str(k): plain_data(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
-        return [_plain(v) for v in value]
+        return [plain_data(v) for v in value]
     if isinstance(value, np.ndarray):
-        return _plain(value.tolist())
+        return plain_data(value.tolist())
     if isinstance(value, np.generic):
         return value.item()
     if isinstance(value, float) and not math.isfinite(value):
@@ -190,7 +190,7 @@ class FitResult:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready record: run, model, noise, parameters, diagnostics, seconds."""
-        return _plain(
+        return plain_data(
             {
                 "run": self.run_name,
                 "model": self.model,

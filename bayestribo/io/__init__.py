@@ -3,7 +3,7 @@
 See ``docs/run-format.md`` for the canonical format.
 """
 
-from bayestribo.io.files import FORMATS, read_run, write_run
+from bayestribo.io.files import FORMATS, READ_OPTIONS, as_run, read_run, write_run
 from bayestribo.io.validation import validate_run
 
-__all__ = ["FORMATS", "read_run", "validate_run", "write_run"]
+__all__ = ["FORMATS", "READ_OPTIONS", "as_run", "read_run", "validate_run", "write_run"]

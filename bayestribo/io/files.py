@@ -1,19 +1,22 @@
 """One entry to read a run from any supported file, and one to write it.
 
-``read_run(path, **metadata)`` picks the reader from the file suffix (or
+``read_run(path, metadata={...})`` picks the reader from the file suffix (or
 ``file_format=``), reads the JSON sidecar beside the file when there is one, lets
-keyword metadata fill or override it, builds a :class:`~bayestribo.io.run.Run` and
+the given metadata fill or override it, builds a :class:`~bayestribo.io.run.Run` and
 checks it with :func:`~bayestribo.io.validation.validate_run`. ``write_run`` writes
-the canonical CSV and its sidecar, which read back identically.
+the canonical CSV and its sidecar, which read back identically. ``as_run`` is the one
+place where "a run or a file" becomes a :class:`~bayestribo.io.run.Run`.
 """
 
 from __future__ import annotations
 
+import difflib
+import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from bayestribo.errors import RunFormatError
+from bayestribo.errors import BayestriboError, RunFormatError
 from bayestribo.io.run import DISPLACEMENT, TIME, VELOCITY, Run
 from bayestribo.io.sidecar import read_sidecar, sidecar_path, write_sidecar
 from bayestribo.io.tdms import read_tdms
@@ -21,7 +24,7 @@ from bayestribo.io.text import read_text, write_csv
 from bayestribo.io.uff import read_uff
 from bayestribo.io.validation import validate_run
 
-__all__ = ["FORMATS", "read_run", "write_run"]
+__all__ = ["FORMATS", "READ_OPTIONS", "as_run", "read_run", "write_run"]
 
 #: File formats and their suffixes.
 FORMATS: Mapping[str, tuple[str, ...]] = {
@@ -71,7 +74,8 @@ def read_run(
     file_format: str | None = None,
     sidecar: bool | str | Path = True,
     validate: bool = True,
-    **metadata: Any,
+    metadata: Mapping[str, Any] | None = None,
+    **unexpected: Any,
 ) -> Run:
     """Read one run from a file.
 
@@ -101,9 +105,9 @@ def read_run(
         (``False``), or read this sidecar file (which must exist).
     validate : bool
         Run the data checks of :func:`~bayestribo.io.validation.validate_run`.
-    **metadata
-        Metadata keys that fill or override the sidecar's, e.g. ``load_N=0.31``,
-        ``length_unit="arbitrary"``.
+    metadata : mapping, optional
+        Metadata that fill or override the sidecar's, e.g.
+        ``{"load_N": 0.31, "length_unit": "arbitrary"}``.
 
     Returns
     -------
@@ -115,6 +119,9 @@ def read_run(
     RunFormatError
         For a file or sidecar that cannot be read as its format, naming the file, line
         or field and what was expected.
+    BayestriboError
+        For a keyword argument that is not an option (a misspelt ``delimeter=``, or a
+        metadata key given as a keyword instead of in ``metadata=``).
     RecordingError
         For data that fail the checks (NaN, irregular time, clipping, units...).
         A missing file or sidecar is a ``RunFormatError`` too, so that one ``except``
@@ -125,8 +132,10 @@ def read_run(
     A two-column text file of time [s] and position in an unknown unit:
 
     >>> run = read_run("HarmOsc1.txt", columns=["time_s", "displacement_m"],
-    ...                length_unit="arbitrary")  # doctest: +SKIP
+    ...                metadata={"length_unit": "arbitrary"})  # doctest: +SKIP
     """
+    if unexpected:
+        raise _unexpected_options(unexpected)
     path = Path(path)
     where = str(path)
     if not path.is_file():
@@ -171,7 +180,7 @@ def read_run(
         if not side.is_file():
             raise RunFormatError("no such sidecar file; expected an existing file", str(side))
         meta.update(read_sidecar(side))
-    meta.update(metadata)
+    meta.update(metadata or {})
     run = Run(
         signals[TIME],
         signals.get(DISPLACEMENT),
@@ -182,6 +191,74 @@ def read_run(
     if validate:
         validate_run(run)
     return run
+
+
+#: Keyword options of :func:`read_run` (and of :func:`as_run` given a path).
+READ_OPTIONS = (
+    "columns",
+    "scale",
+    "delimiter",
+    "decimal",
+    "skip_rows",
+    "group",
+    "channels",
+    "file_format",
+    "sidecar",
+    "validate",
+    "metadata",
+)
+
+
+def _unexpected_options(unexpected: Mapping[str, Any]) -> BayestriboError:
+    """The error for keyword arguments that are not reading options."""
+    from bayestribo.io.run import METADATA_KEYS
+
+    parts = []
+    for name in sorted(unexpected):
+        close = difflib.get_close_matches(name, READ_OPTIONS, n=1)
+        if close:
+            parts.append(f"{name!r} (did you mean {close[0]!r}?)")
+        elif name in METADATA_KEYS:
+            parts.append(f"{name!r} (a metadata key: pass metadata={{{name!r}: ...}})")
+        else:
+            parts.append(f"{name!r}")
+    return BayestriboError(
+        f"unknown reading option(s) {', '.join(parts)}; the options are {', '.join(READ_OPTIONS)}"
+    )
+
+
+def as_run(run: Run | str | os.PathLike[str], **read_options: Any) -> Run:
+    """The one conversion of "a run or a file" into a :class:`~bayestribo.io.run.Run`.
+
+    Parameters
+    ----------
+    run : Run, str or path-like
+        A run, returned as it is, or a file read with :func:`read_run`.
+    **read_options
+        Options of :func:`read_run` (:data:`READ_OPTIONS`), for a file only.
+
+    Returns
+    -------
+    Run
+
+    Raises
+    ------
+    BayestriboError
+        If ``run`` is neither a Run nor a path, if reading options are given with a
+        Run (they would be ignored), or if an option is unknown.
+    """
+    if isinstance(run, Run):
+        if read_options:
+            raise BayestriboError(
+                f"reading options {sorted(read_options)} apply to a file, but run is "
+                "already a Run; read the file with these options, or drop them"
+            )
+        return run
+    if isinstance(run, str | os.PathLike):
+        return read_run(run, **read_options)
+    raise BayestriboError(
+        f"run: expected a bayestribo Run or the path of a run file, got {type(run).__name__}"
+    )
 
 
 def write_run(run: Run, path: str | Path) -> Path:

@@ -1,0 +1,200 @@
+"""From chains to reported quantities: derived parameters and the InferenceData.
+
+* :func:`derived_quantities`: ζ, μ_k, μ_s, the friction displacement, ζ_k and d_k from
+  the sampled (and fixed) coordinates, with the calibration nuisances (load, mass,
+  ζ₀) drawn from their stated uncertainties;
+* :func:`pointwise_log_likelihood`: the log-likelihood of each Π increment for each
+  draw (for PSIS-LOO);
+* :func:`inference_data`: the ArviZ container of a fit (posterior, pointwise
+  log-likelihood, posterior predictive Π, observed Π).
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bayestribo.inference.posterior import Posterior
+from bayestribo.model.scaling import Scaling
+from bayestribo.signal.increments import PiData
+
+__all__ = ["derived_quantities", "inference_data", "pointwise_log_likelihood"]
+
+#: Draws of the posterior predictive Π kept in a fit's InferenceData.
+PREDICTIVE_DRAWS = 400
+
+
+def derived_quantities(
+    posterior: Posterior,
+    draws: NDArray,
+    scaling: Scaling,
+    metadata: Mapping[str, Any],
+    rng: np.random.Generator,
+) -> dict[str, NDArray]:
+    """Sampled and derived quantities by name, from flat draws.
+
+    Parameters
+    ----------
+    posterior : Posterior
+        The posterior the draws come from (it names the coordinates and the fixed
+        values).
+    draws : ndarray
+        Flat draws of the sampled coordinates, shape (n, d).
+    scaling : Scaling
+        Dimensionless scaling of the run (length scale ℓ = N/k [m], Ω [rad/s]).
+    metadata : mapping
+        The run's metadata: ``load_N``, ``mass_kg`` and their uncertainties
+        (``load_uncertainty_N``, ``mass_uncertainty_kg``), ``zeta0`` and ``zeta0_sd``.
+    rng : numpy.random.Generator
+        Source of the calibration nuisance draws.
+
+    Returns
+    -------
+    dict
+        ``zeta``; with friction ``mu_s_ratio``, ``friction_displacement`` [m or the
+        run's length unit], ``mu_s`` and, when the load is known, ``mu_k``; ``y0``;
+        ``log10_discrepancy`` when sampled; ``zeta_k`` when ζ₀ is given; ``d_k``
+        [s/m] (= 2ζ_k √(km)/N, Eq. 42) when ζ₀, the load and the mass are known.
+    """
+    col = posterior.values(draws)
+    size = np.atleast_2d(draws).shape[0]
+    out: dict[str, NDArray] = {"zeta": col["zeta"]}
+    n_draw = m_draw = None
+    if posterior.friction:
+        mu_k = col["mu_k"]
+        ratio = col.get("mu_s_ratio", np.ones(size))
+        out["mu_s_ratio"] = ratio
+        friction_disp = mu_k * scaling.length_scale
+        if scaling.friction_defined:
+            # Calibration nuisances: μ_k = x_c k/N with N and m drawn from their
+            # stated uncertainties (the data fix x_c, not N or k).
+            load = float(metadata["load_N"])
+            mass = float(metadata["mass_kg"])
+            n_draw = _positive_draws(rng, load, metadata.get("load_uncertainty_N"), size)
+            m_draw = _positive_draws(rng, mass, metadata.get("mass_uncertainty_kg"), size)
+            out["mu_k"] = mu_k * (load / n_draw) * (m_draw / mass)
+            out["mu_s"] = out["mu_k"] * ratio
+        else:
+            out["mu_s"] = friction_disp * ratio
+        out["friction_displacement"] = friction_disp
+    out["y0"] = col["y0"]
+    if "log10_discrepancy" in col:
+        out["log10_discrepancy"] = col["log10_discrepancy"]
+
+    zeta0 = metadata.get("zeta0")
+    if zeta0 is not None and posterior.friction:
+        z0 = _positive_draws(rng, float(zeta0), metadata.get("zeta0_sd"), size)
+        out["zeta_k"] = col["zeta"] - z0
+        if n_draw is not None and m_draw is not None:
+            k_draw = m_draw * scaling.omega**2
+            out["d_k"] = 2.0 * out["zeta_k"] * np.sqrt(k_draw * m_draw) / n_draw
+    return out
+
+
+def _positive_draws(rng: np.random.Generator, value: float, sd: float | None, size: int) -> NDArray:
+    """Draws of a normal truncated to positive values (``value`` itself without ``sd``)."""
+    if sd is None or sd == 0:
+        return np.full(size, value)
+    draws = rng.normal(value, float(sd), size)
+    while np.any(draws <= 0):
+        bad = draws <= 0
+        draws[bad] = rng.normal(value, float(sd), int(bad.sum()))
+    return draws
+
+
+def pointwise_log_likelihood(posterior: Posterior, chains: NDArray) -> NDArray:
+    """Log-likelihood of each Π increment for each draw.
+
+    Parameters
+    ----------
+    posterior : Posterior
+    chains : ndarray
+        Draws of shape (chains, draws, d).
+
+    Returns
+    -------
+    ndarray
+        Shape (chains, draws, m) for m increments, evaluated in blocks of about 256
+        draws to bound memory.
+    """
+    n_chain, n_draw, d = chains.shape
+    flat = chains.reshape(-1, d)
+    blocks = np.array_split(flat, max(1, flat.shape[0] // 256))
+    pointwise = np.concatenate([posterior.pointwise(block) for block in blocks])
+    return pointwise.reshape(n_chain, n_draw, -1)
+
+
+def _predictive_pi(
+    posterior: Posterior, flat: NDArray, data: PiData, rng: np.random.Generator
+) -> NDArray:
+    """Posterior predictive Π: model increments plus noise (and discrepancy), for a
+    subset of the draws, with the conditional equilibrium offset applied."""
+    pick = np.sort(
+        rng.choice(flat.shape[0], size=min(PREDICTIVE_DRAWS, flat.shape[0]), replace=False)
+    )
+    p = posterior.physical(flat[pick])
+    lik = posterior.likelihood
+    model_inc = lik.model_increments(p["zeta"], p["mu_k"], p["mu_s"], p["y0"])
+    delta = lik.offset(p["zeta"], p["mu_k"], p["mu_s"], p["y0"], p["discrepancy"])
+    var = np.broadcast_to(lik.variance(p["discrepancy"]), model_inc.shape)
+    replicated = model_inc + delta @ data.offset_design.T + rng.normal(0.0, np.sqrt(var))
+    return np.cumsum(replicated[:, ::-1], axis=1)[:, ::-1]
+
+
+def inference_data(
+    posterior: Posterior,
+    chains: NDArray,
+    derived: Mapping[str, NDArray],
+    rng: np.random.Generator,
+    attrs: Mapping[str, Any],
+) -> Any:
+    """The ArviZ InferenceData of a fit.
+
+    Parameters
+    ----------
+    posterior : Posterior
+        The posterior that was sampled (its likelihood holds the observed increments).
+    chains : ndarray
+        Draws of the sampled coordinates, shape (chains, draws, d).
+    derived : mapping
+        Flat draws of each reported quantity (:func:`derived_quantities`).
+    rng : numpy.random.Generator
+        Source of the posterior predictive draws.
+    attrs : mapping
+        Attributes of the posterior group (run, settings, diagnostics as JSON).
+
+    Returns
+    -------
+    arviz.InferenceData
+        Groups ``posterior``, ``log_likelihood`` (``pi``, per increment),
+        ``posterior_predictive`` and ``observed_data`` (Π on the grid).
+    """
+    import arviz as az
+
+    data = posterior.likelihood.data
+    n_chain, n_draw, _ = chains.shape
+    pointwise = pointwise_log_likelihood(posterior, chains)
+    pi_rep = _predictive_pi(posterior, chains.reshape(n_chain * n_draw, -1), data, rng)
+
+    def shaped(values: NDArray) -> NDArray:
+        return values.reshape(n_chain, n_draw, *values.shape[1:])
+
+    tau = data.tau_grid[:-1]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", FutureWarning)
+        idata = az.from_dict(
+            posterior={k: shaped(v) for k, v in derived.items()},
+            log_likelihood={"pi": pointwise},
+            posterior_predictive={"pi": pi_rep[None, :, :]},
+            observed_data={"pi": data.pi},
+            coords={"increment": np.arange(data.increments.size), "grid": tau},
+            dims={"pi": ["grid"]},
+            pred_dims={"pi": ["grid"]},
+            log_likelihood_dims={"pi": ["increment"]},
+        )
+    idata.posterior.attrs.update(attrs)
+    return idata

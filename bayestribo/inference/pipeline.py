@@ -1,0 +1,392 @@
+"""The single-run pipeline in four public steps.
+
+1. :func:`prepare`: a run becomes observed Π increments: the energy decay
+   (:func:`bayestribo.signal.energy_decay`), the noise model
+   (:func:`bayestribo.signal.noise_model`) and the increments with their variances
+   (:func:`bayestribo.signal.pi_data`);
+2. :func:`build_posterior`: default priors (or the caller's) × the Π likelihood, with
+   any parameters fixed at a value (``fixed={"zeta": 0.0}`` is the Coulomb-only law);
+3. :func:`sample`: maximum a posteriori, starting walkers, and the sampler
+   (:func:`bayestribo.inference.sampling.run_ensembles`) run to convergence;
+4. :func:`summarise`: derived quantities, the misfit check, diagnostics and the
+   :class:`~bayestribo.inference.result.FitResult`.
+
+:func:`bayestribo.fit` is these four steps in a row. The dissipation-law comparison
+and the Bayesian windows of the adequacy check are built on them too.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import scipy.stats
+from numpy.typing import NDArray
+
+from bayestribo import __version__
+from bayestribo.errors import BayestriboError, ConvergenceWarning, MisfitWarning
+from bayestribo.inference.assemble import derived_quantities, inference_data
+from bayestribo.inference.likelihood import MODELS, PiLikelihood
+from bayestribo.inference.posterior import Posterior
+from bayestribo.inference.priors import Prior, PriorSet, default_priors
+from bayestribo.inference.result import FitResult, plain_data
+from bayestribo.inference.sampling import SamplerRun, SamplerSettings, run_ensembles
+from bayestribo.inference.sensitivity import prior_sensitivity
+from bayestribo.inference.start import initial_walkers, maximum_a_posteriori, refine
+from bayestribo.io.files import as_run
+from bayestribo.io.run import Run
+from bayestribo.signal.decay import EnergyDecay, energy_decay
+from bayestribo.signal.increments import PiData, pi_data
+from bayestribo.signal.noise import NoiseModel, noise_model
+
+__all__ = ["PreparedRun", "Sampled", "build_posterior", "prepare", "sample", "summarise"]
+
+#: Sampler settings of a default fit.
+DEFAULT_SETTINGS = SamplerSettings(n_walkers=16, n_ensembles=2, max_steps=20_000)
+#: χ² p-value of the MAP residuals below which a fit warns of misfit.
+MISFIT_P = 1e-3
+
+
+@dataclass(frozen=True)
+class PreparedRun:
+    """A run ready for inference: what the likelihood observes, and where it came from.
+
+    Attributes
+    ----------
+    run : Run
+        The recording.
+    name : str
+        Its name in messages and results (file or ``run_id``).
+    decay : EnergyDecay
+        The analysed window and its energy decay.
+    noise : NoiseModel
+        Nominal resolution against the noise measured at rest.
+    data : PiData
+        Π increments and their noise variances.
+    grid_points, skip_oscillations : int or None
+        The preparation settings, recorded in the result.
+    """
+
+    run: Run
+    name: str
+    decay: EnergyDecay
+    noise: NoiseModel
+    data: PiData
+    grid_points: int | None = None
+    skip_oscillations: int = 1
+
+    @property
+    def metadata(self) -> dict[str, Any]:
+        """The run's metadata."""
+        return dict(self.run.metadata)
+
+    @property
+    def contact(self) -> bool:
+        """False for a test without contact (``load_N`` of 0): no friction to fit."""
+        return self.run.metadata.get("load_N") != 0
+
+
+@dataclass(frozen=True)
+class Sampled:
+    """The sampled posterior.
+
+    Attributes
+    ----------
+    posterior : Posterior
+    theta_map : ndarray
+        Maximum a posteriori in sampling coordinates.
+    run : SamplerRun
+        Chains and convergence diagnostics.
+    settings : SamplerSettings
+    """
+
+    posterior: Posterior
+    theta_map: NDArray
+    run: SamplerRun
+    settings: SamplerSettings
+
+
+def _run_name(run: Run) -> str:
+    return str(run.source or dict(run.metadata).get("run_id", "") or "")
+
+
+def prepare(
+    run: Run | str | os.PathLike[str],
+    *,
+    skip_oscillations: int = 1,
+    grid_points: int | None = None,
+    noise: NoiseModel | None = None,
+    seed: int | np.random.Generator | None = None,
+    read_options: Mapping[str, Any] | None = None,
+) -> PreparedRun:
+    """Step 1: a run becomes observed Π increments with their noise variances.
+
+    Parameters
+    ----------
+    run : Run or path
+        The recording, or a file read by :func:`bayestribo.io.as_run`.
+    skip_oscillations : int
+        Oscillations skipped after the release.
+    grid_points : int, optional
+        Number of Π increments; default one per half cycle.
+    noise : NoiseModel, optional
+        Use this noise model instead of the recording's.
+    seed : int or Generator, optional
+        Seed of the Monte Carlo propagation of the noise into the increments.
+    read_options : mapping, optional
+        Options of :func:`bayestribo.read_run` when ``run`` is a path.
+
+    Returns
+    -------
+    PreparedRun
+    """
+    recording = as_run(run, **dict(read_options or {}))
+    decay = energy_decay(
+        recording.time,
+        recording.displacement,
+        recording.velocity,
+        rig=recording.rig(),
+        skip_oscillations=skip_oscillations,
+    )
+    noise_used = noise or noise_model(decay, dict(recording.metadata))
+    rng = np.random.default_rng(seed)
+    data = pi_data(decay, noise_used, grid_points=grid_points, seed=int(rng.integers(2**31)))
+    return PreparedRun(
+        recording, _run_name(recording), decay, noise_used, data, grid_points, skip_oscillations
+    )
+
+
+def build_posterior(
+    data: PiData,
+    *,
+    model: str = "exact",
+    friction: bool = True,
+    discrepancy: bool = False,
+    priors: Mapping[str, Prior] | None = None,
+    fixed: Mapping[str, float] | None = None,
+) -> Posterior:
+    """Step 2: the posterior for observed Π increments.
+
+    The equilibrium nuisance gets prior standard deviations of 1 % of the initial
+    amplitude (δ₀) and 1 % of it over the analysed window (δ₁), hundreds of times
+    the errors of the equilibrium estimate.
+
+    Parameters
+    ----------
+    data : PiData
+        Observed increments (:func:`bayestribo.signal.pi_data`).
+    model : {"exact", "averaged"}
+        Forward model.
+    friction : bool
+        Fit μ_k and μ_s/μ_k (False: viscous damping only).
+    discrepancy : bool
+        Add the model-discrepancy term.
+    priors : mapping, optional
+        Replacement priors by parameter name (see
+        :func:`bayestribo.inference.priors.default_priors`).
+    fixed : mapping, optional
+        Parameters held at a value instead of sampled, e.g. ``{"zeta": 0.0}`` for
+        friction alone; their priors are dropped.
+
+    Returns
+    -------
+    Posterior
+
+    Raises
+    ------
+    BayestriboError
+        If a parameter is both given a prior and fixed, or a fixed name is unknown.
+    """
+    if model not in MODELS:
+        raise BayestriboError(f"model: expected one of {MODELS}, got {model!r}")
+    fixed = dict(fixed or {})
+    both = sorted(set(fixed) & set(priors or {}))
+    if both:
+        raise BayestriboError(f"priors and fixed both name {both}: give one or the other")
+    prior_set = default_priors(data.y0, friction=friction, discrepancy=discrepancy)
+    if priors:
+        prior_set = prior_set.replace(**dict(priors))
+    if fixed:
+        prior_set = PriorSet({n: p for n, p in prior_set.priors.items() if n not in fixed})
+    likelihood = PiLikelihood(
+        data,
+        model=model,  # type: ignore[arg-type]
+        offset_sd=max(1e-2 * abs(data.y0), 1e-12),
+        drift_sd=max(1e-2 * abs(data.y0) / data.tau_end, 1e-15),
+    )
+    return Posterior(prior_set, likelihood, fixed)
+
+
+def sample(
+    posterior: Posterior,
+    decay: EnergyDecay,
+    *,
+    settings: SamplerSettings = DEFAULT_SETTINGS,
+    seed: int | np.random.Generator | None = None,
+    also_start_at: Mapping[str, float] | None = None,
+    progress: bool = False,
+) -> Sampled:
+    """Step 3: maximum a posteriori, starting walkers, and sampling to convergence.
+
+    Parameters
+    ----------
+    posterior : Posterior
+        From :func:`build_posterior`.
+    decay : EnergyDecay
+        The run's energy decay (its peaks give the first guesses of the optimiser).
+    settings : SamplerSettings
+        Walkers, ensembles, step ceiling and stopping rule.
+    seed : int or Generator, optional
+        Seed of the walkers and of the sampler's moves.
+    also_start_at : mapping, optional
+        A second starting point of the optimiser (values of the sampled coordinates,
+        e.g. the optimum of a nested law), kept if its optimum is better.
+    progress : bool
+        Show a progress bar.
+
+    Returns
+    -------
+    Sampled
+    """
+    rng = np.random.default_rng(seed)
+    theta, cov, ratio_range = maximum_a_posteriori(posterior, decay)
+    if also_start_at is not None:
+        start = np.array([also_start_at[n] for n in posterior.names], dtype=float)
+        if np.isfinite(posterior(start[None])[0]):
+            alt, alt_cov = refine(posterior, start)
+            if posterior(alt[None])[0] > posterior(theta[None])[0]:
+                theta, cov = alt, alt_cov
+    walkers = initial_walkers(
+        posterior, theta, cov, ratio_range, settings.n_ensembles, settings.n_walkers, rng
+    )
+    run = run_ensembles(
+        posterior, walkers, settings, seed=int(rng.integers(2**31)), progress=progress
+    )
+    return Sampled(posterior, theta, run, settings)
+
+
+def _misfit(posterior: Posterior, theta: NDArray) -> tuple[float, int, float]:
+    """χ², number of increments and p-value of the standardized residuals at θ."""
+    resid = posterior.standardized_residuals(theta[None])[0]
+    chi2 = float(np.sum(resid * resid))
+    return chi2, int(resid.size), float(scipy.stats.chi2.sf(chi2, resid.size))
+
+
+def _diagnostics(sampled: Sampled, misfit: tuple[float, int, float]) -> dict[str, Any]:
+    names, s = sampled.posterior.names, sampled.run
+
+    def by_name(values: NDArray) -> dict[str, float]:
+        return dict(zip(names, np.asarray(values).tolist(), strict=True))
+
+    chi2, m, p = misfit
+    return {
+        "converged": s.converged,
+        "reasons": s.reasons,
+        "n_walkers": sampled.settings.n_walkers,
+        "n_ensembles": sampled.settings.n_ensembles,
+        "n_steps": s.n_steps,
+        "burn": s.burn,
+        "thin": s.thin,
+        "autocorr_time": by_name(s.autocorr_time),
+        "autocorr_time_max": float(np.max(s.autocorr_time)),
+        "ess": by_name(s.ess),
+        "ess_min": float(np.min(s.ess)),
+        "rhat": by_name(s.rhat),
+        "rhat_max": float(np.max(s.rhat)),
+        "acceptance_fraction": s.acceptance_fraction,
+        "map": by_name(sampled.theta_map),
+        "chi2_map": chi2,
+        "n_increments": m,
+        "misfit_p": p,
+    }
+
+
+def summarise(
+    prepared: PreparedRun,
+    sampled: Sampled,
+    *,
+    seed: int | np.random.Generator | None = None,
+    recorded_seed: int | None = None,
+) -> FitResult:
+    """Step 4: derived quantities, diagnostics and checks, as a :class:`FitResult`.
+
+    Parameters
+    ----------
+    prepared : PreparedRun
+        From :func:`prepare`.
+    sampled : Sampled
+        From :func:`sample` on a posterior of ``prepared.data``.
+    seed : int or Generator, optional
+        Seed of the calibration nuisance and posterior predictive draws.
+    recorded_seed : int, optional
+        The seed of the whole fit, recorded in the result (-1 if none).
+
+    Returns
+    -------
+    FitResult
+
+    Warns
+    -----
+    MisfitWarning
+        When the MAP residuals exceed the noise (χ² p-value below 1e-3) and the
+        posterior has no discrepancy term: the intervals are then too narrow.
+    ConvergenceWarning
+        When the sampler did not converge (the result says so too).
+    """
+    rng = np.random.default_rng(seed)
+    posterior, run = sampled.posterior, sampled.run
+    name = prepared.name
+    discrepancy = "log10_discrepancy" in posterior.names or "log10_discrepancy" in posterior.fixed
+    misfit = _misfit(posterior, sampled.theta_map)
+    chi2, m, misfit_p = misfit
+    if misfit_p < MISFIT_P and not discrepancy:
+        warnings.warn(
+            f"the model misfits {name or 'the run'} beyond its noise (χ² = {chi2:.0f} for "
+            f"{m} increments, p = {misfit_p:.1e}): its intervals are too narrow; "
+            "fit with discrepancy=True (--discrepancy) to widen them by the misfit",
+            MisfitWarning,
+            stacklevel=3,
+        )
+    flat = run.chains.reshape(-1, run.chains.shape[-1])
+    metadata = prepared.metadata
+    scaling = prepared.decay.scaling
+    derived = derived_quantities(posterior, flat, scaling, metadata, rng)
+    noise_info = {**prepared.noise.to_dict(), "description": prepared.noise.describe()}
+    attrs = {
+        "run_name": name,
+        "model": posterior.likelihood.model,
+        "seed": -1 if recorded_seed is None else int(recorded_seed),
+        "package_version": __version__,
+        "friction_defined": int(scaling.friction_defined),
+        "length_scale": scaling.length_scale,
+        "omega": scaling.omega,
+        "tau_end": prepared.data.tau_end,
+        "motion_ended": int(prepared.data.motion_ended),
+        "metadata_json": json.dumps(plain_data(metadata)),
+        "noise_json": json.dumps(plain_data(noise_info)),
+        "priors_json": json.dumps(posterior.priors.to_spec()),
+        "fixed_json": json.dumps(plain_data(posterior.fixed)),
+        "settings_json": json.dumps(
+            {
+                "grid_points": prepared.grid_points,
+                "skip_oscillations": prepared.skip_oscillations,
+                "discrepancy": discrepancy,
+                "max_steps": sampled.settings.max_steps,
+            }
+        ),
+        "diagnostics_json": json.dumps(plain_data(_diagnostics(sampled, misfit))),
+        "prior_sensitivity_json": json.dumps(plain_data(prior_sensitivity(flat, posterior.priors))),
+    }
+    result = FitResult(inference_data(posterior, run.chains, derived, rng, attrs))
+    if not run.converged:
+        warnings.warn(
+            f"the sampler did not converge on {name or 'the run'}: " + "; ".join(run.reasons),
+            ConvergenceWarning,
+            stacklevel=3,
+        )
+    return result
