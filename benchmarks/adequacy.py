@@ -41,7 +41,12 @@ from bayestribo.adequacy.constancy import constancy_test
 from bayestribo.adequacy.draws import draws_from_least_squares
 from bayestribo.adequacy.predictive import predictive_check
 from bayestribo.adequacy.segments import whole_decay_fit
-from bayestribo.adequacy.windows import analysed_decay, windowed_fits
+from bayestribo.adequacy.windows import (
+    BayesianWindows,
+    LeastSquaresWindows,
+    analysed_decay,
+    windowed_fits,
+)
 from bayestribo.synthetic.recording import simulate
 
 ZETA = 0.0236
@@ -82,7 +87,8 @@ def _case(
             seed=seed0 + i,
         )
         try:
-            test = constancy_test(windowed_fits(run, window=window, method=method, seed=i))
+            fitter = BayesianWindows() if method == "bayes" else LeastSquaresWindows()
+            test = constancy_test(windowed_fits(run, window=window, fitter=fitter, seed=i))
             if method == "least_squares":
                 decay = analysed_decay(run)
                 draws = draws_from_least_squares(whole_decay_fit(decay), 200, seed=i)

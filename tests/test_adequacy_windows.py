@@ -8,7 +8,13 @@ import numpy as np
 import pytest
 
 from bayestribo.adequacy.segments import _simpson, fit_segment, peak_positions, whole_decay_fit
-from bayestribo.adequacy.windows import analysed_decay, window_bounds, windowed_fits
+from bayestribo.adequacy.windows import (
+    BayesianWindows,
+    WindowFit,
+    analysed_decay,
+    window_bounds,
+    windowed_fits,
+)
 from bayestribo.errors import BayestriboError, RecordingError
 from bayestribo.synthetic.recording import simulate
 
@@ -128,17 +134,17 @@ def test_bayes_method_cuts_each_window_as_a_run():
         seen.append((sub.time[0], sub.time[-1]))
         return _StandIn(ZETA, MU)
 
-    w = windowed_fits(run, window=3, method="bayes", fitter=fitter)
+    w = windowed_fits(run, window=3, fitter=BayesianWindows(fitter))
     assert len(seen) == len(w) >= 3
     for (t0, t1), x in zip(seen, w.windows, strict=True):
         assert t0 < x.t_start and t1 == pytest.approx(x.t_end)  # a quarter period before
         assert x.zeta_interval[0] < ZETA < x.zeta_interval[1]
     assert w.interval_kind.startswith("posterior")
     with pytest.raises(BayestriboError, match="EnergyDecay"):
-        windowed_fits(analysed_decay(run), window=3, method="bayes", fitter=fitter)
+        windowed_fits(analysed_decay(run), window=3, fitter=BayesianWindows(fitter))
     # a window run must be analysable on its own: at least 3 oscillations
     with pytest.raises(RecordingError, match="at least 3 oscillations"):
-        windowed_fits(run, window=2, method="bayes", fitter=fitter)
+        windowed_fits(run, window=2, fitter=BayesianWindows(fitter))
 
 
 def test_not_a_run_is_refused():
@@ -161,3 +167,29 @@ def test_position_only_window_intervals_are_calibrated():
             assert x.chi2_reduced < 4.0  # the propagated noise describes the increments
     assert total >= 20
     assert inside >= 0.8 * total
+
+
+def test_a_users_own_window_fitter_is_used_as_it_is():
+    # Any object with the fitter attributes and methods: here one that reports the
+    # window's own index as ζ and holds no friction.
+    class IndexFitter:
+        method = "index"
+        interval_kind = "none"
+        holds_friction = False
+
+        def check(self, context, window):
+            assert context.run is not None and window == 2
+
+        def fit_window(self, context, index, bounds, fixed_mu):
+            assert fixed_mu is None and bounds[0] < bounds[1]
+            return WindowFit(
+                zeta=float(index),
+                mu=0.5,
+                covariance=np.eye(2),
+                zeta_interval=(index - 1.0, index + 1.0),
+                mu_interval=(0.0, 1.0),
+            )
+
+    w = windowed_fits(simulate(seed=5), window=2, fitter=IndexFitter())
+    assert w.method == "index" and w.to_dict()["friction_mode"] == "fit"
+    np.testing.assert_array_equal(w.column("zeta"), np.arange(len(w)))

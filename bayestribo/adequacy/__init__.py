@@ -34,12 +34,20 @@ from bayestribo.adequacy.draws import (
 )
 from bayestribo.adequacy.extinction import ExtinctionCheck, extinction_check
 from bayestribo.adequacy.predictive import PeakResiduals, PredictiveCheck, predictive_check
-from bayestribo.adequacy.windows import WindowedAnalysis, WindowEstimate, windowed_fits
+from bayestribo.adequacy.windows import (
+    BayesianWindows,
+    LeastSquaresWindows,
+    WindowedAnalysis,
+    WindowEstimate,
+    windowed_fits,
+)
 
 __all__ = [
     "AdequacyReport",
+    "BayesianWindows",
     "ConstancyTest",
     "ExtinctionCheck",
+    "LeastSquaresWindows",
     "ParameterDraws",
     "PeakResiduals",
     "PredictiveCheck",

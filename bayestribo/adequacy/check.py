@@ -19,7 +19,12 @@ from bayestribo.adequacy.draws import (
 from bayestribo.adequacy.extinction import ExtinctionCheck, extinction_check
 from bayestribo.adequacy.predictive import PredictiveCheck, predictive_check
 from bayestribo.adequacy.segments import peak_positions, whole_decay_fit
-from bayestribo.adequacy.windows import WindowedAnalysis, analysed_decay, windowed_fits
+from bayestribo.adequacy.windows import (
+    BayesianWindows,
+    WindowedAnalysis,
+    analysed_decay,
+    windowed_fits,
+)
 from bayestribo.errors import RecordingError
 from bayestribo.signal.decay import EnergyDecay
 
@@ -165,7 +170,11 @@ def check_adequacy(
             window = max(window, MIN_OSCILLATIONS)
     if bayes:
         windows = windowed_fits(
-            run, window=window, method="bayes", seed=seed, skip_oscillations=skip_oscillations
+            run,
+            window=window,
+            fitter=BayesianWindows(),
+            seed=seed,
+            skip_oscillations=skip_oscillations,
         )
         if fit_result is None:
             from bayestribo.inference import fit

@@ -10,14 +10,21 @@ turning points into consecutive, non-overlapping windows of ``window`` oscillati
 sample is left out. Non-overlapping windows keep the window estimates independent,
 which the constancy test (:mod:`bayestribo.adequacy.constancy`) relies on.
 
-Each window is fitted by :func:`bayestribo.adequacy.segments.fit_segment`: least
-squares on the window's Π increments with the exact model, i.e. the maximum of the
-likelihood the Bayesian fit samples, with Gaussian intervals from its curvature
-(``method="least_squares"``). With ``method="bayes"`` each window is cut out of the
-run as a run of its own, from a quarter period before its first turning point, and
-passed to the Bayesian fit (:func:`bayestribo.inference.fit` with
-``skip_oscillations=0``, or any function given as ``fitter``); the intervals are
-posterior quantiles.
+Each window is fitted by a *window fitter*, an object with a ``fit_window`` method
+(:class:`WindowFitter`). Two are provided:
+
+* :class:`LeastSquaresWindows` (the default): :func:`bayestribo.adequacy.segments.fit_segment`,
+  least squares on the window's Π increments with the exact model, i.e. the maximum
+  of the likelihood the Bayesian fit samples, with Gaussian intervals from its
+  curvature;
+* :class:`BayesianWindows`: each window is cut out of the run as a run of its own,
+  from a quarter period before its first turning point, and passed to the Bayesian
+  fit (:func:`bayestribo.inference.fit` with ``skip_oscillations=0``, or any function
+  given to it); the intervals are posterior quantiles.
+
+A user's own fitter (another estimator, another law) is any object with the same
+``method``, ``interval_kind``, ``holds_friction`` attributes and ``check`` and
+``fit_window`` methods.
 
 Each window reports its amplitude range (the |Y_n| of its turning points) and its
 peak-velocity range (the largest |v| of each of its half cycles), in signal units.
@@ -27,16 +34,15 @@ from __future__ import annotations
 
 import itertools
 import math
+import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from pathlib import Path
-from typing import Any, Literal
+from typing import Any, ClassVar, Literal, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.adequacy.segments import (
-    SegmentFit,
     fit_segment,
     peak_positions,
     segment_noise,
@@ -46,14 +52,18 @@ from bayestribo.errors import BayestriboError, RecordingError
 from bayestribo.signal.decay import EnergyDecay, energy_decay
 
 __all__ = [
+    "BayesianWindows",
+    "LeastSquaresWindows",
+    "WindowContext",
     "WindowEstimate",
+    "WindowFit",
+    "WindowFitter",
     "WindowedAnalysis",
     "analysed_decay",
     "window_bounds",
     "windowed_fits",
 ]
 
-Method = Literal["least_squares", "bayes"]
 Friction = Literal["auto", "fit", "fixed"]
 
 #: Two-sided probability of the reported intervals.
@@ -71,17 +81,9 @@ def analysed_decay(run: Any, *, skip_oscillations: int = 1) -> EnergyDecay:
     """
     if isinstance(run, EnergyDecay):
         return run
-    if isinstance(run, str | Path):
-        from bayestribo.io import read_run
-
-        run = read_run(run)
-    if not (hasattr(run, "time") and hasattr(run, "displacement")):
-        raise RecordingError(
-            f"run must be a bayestribo Run, a run file path or an EnergyDecay, got {type(run)}"
-        )
-    rig = run.rig() if hasattr(run, "rig") else None
+    run = _as_run(run)
     return energy_decay(
-        run.time, run.displacement, run.velocity, rig=rig, skip_oscillations=skip_oscillations
+        run.time, run.displacement, run.velocity, rig=run.rig(), skip_oscillations=skip_oscillations
     )
 
 
@@ -293,16 +295,156 @@ def _window_ranges(
     )
 
 
-def _from_fit(fit: SegmentFit, mu_scale: float) -> tuple[float, float, NDArray, str]:
-    cov = fit.covariance[:2, :2].copy()
-    cov[1, :] *= mu_scale
-    cov[:, 1] *= mu_scale
-    notes = []
-    if fit.at_bound:
-        notes.append("at a bound: " + ", ".join(fit.at_bound))
-    if fit.notes:
-        notes.append(fit.notes)
-    return fit.zeta, fit.mu * mu_scale, cov, "; ".join(notes)
+@dataclass(frozen=True)
+class WindowContext:
+    """What a window fitter is given about the decay it works on.
+
+    Attributes
+    ----------
+    decay : EnergyDecay
+        The analysed decay.
+    run : Run or None
+        The recording itself (None when only a decay was given).
+    mu_scale : float
+        Factor from the dimensionless friction μ_k to the reported one: 1 with a
+        loaded rig (μ_k), ℓ [signal length unit] otherwise (a friction displacement).
+    seed : int
+        Base seed; window ``k`` uses ``seed + k`` or ``seed``.
+    """
+
+    decay: EnergyDecay
+    run: Any
+    mu_scale: float
+    seed: int
+
+    @property
+    def length_scale(self) -> float:
+        """ℓ of the decay's scaling [length unit]."""
+        return self.decay.scaling.length_scale
+
+
+@dataclass(frozen=True)
+class WindowFit:
+    """ζ and the friction fitted in one window, in the reported units.
+
+    Attributes
+    ----------
+    zeta, mu : float
+        Estimates of ζ [-] and of the friction (μ_k [-] or x_c [signal length unit]).
+    covariance : ndarray
+        2×2 covariance of (ζ, μ).
+    zeta_interval, mu_interval : tuple of float
+        95 % intervals.
+    chi2_reduced : float or None
+        Reduced χ² of a least-squares fit.
+    notes : str
+        Bounds reached, convergence.
+    at_bound : tuple of str
+        Parameters whose estimate sits on a bound.
+    """
+
+    zeta: float
+    mu: float
+    covariance: NDArray
+    zeta_interval: tuple[float, float]
+    mu_interval: tuple[float, float]
+    chi2_reduced: float | None = None
+    notes: str = ""
+    at_bound: tuple[str, ...] = ()
+
+
+class WindowFitter(Protocol):
+    """How one window is fitted (see :class:`LeastSquaresWindows`, :class:`BayesianWindows`).
+
+    Attributes
+    ----------
+    method : str
+        Name in the results (``"least_squares"``, ``"bayes"``...).
+    interval_kind : str
+        How the intervals are obtained, in words.
+    holds_friction : bool
+        True when the fitter can hold μ at a given value (the ``friction`` modes of
+        :func:`windowed_fits`); False when it always fits it.
+    """
+
+    method: str
+    interval_kind: str
+    holds_friction: bool
+
+    def check(self, context: WindowContext, window: int) -> None:
+        """Raise if the fitter cannot work on these windows."""
+
+    def fit_window(
+        self,
+        context: WindowContext,
+        index: int,
+        bounds: tuple[int, int, int, int],
+        fixed_mu: float | None,
+    ) -> WindowFit:
+        """Fit window ``index`` with sample range and turning points ``bounds``
+        (:func:`window_bounds`), μ held at ``fixed_mu`` (dimensionless) if given."""
+        ...
+
+
+def _gaussian_interval(value: float, sd: float) -> tuple[float, float]:
+    return (value - _Z95 * sd, value + _Z95 * sd)
+
+
+@dataclass(frozen=True)
+class LeastSquaresWindows:
+    """Least squares on each window's Π increments (Gaussian intervals from the
+    curvature, scaled by the reduced χ² when above 1)."""
+
+    method: ClassVar[str] = "least_squares"
+    interval_kind: ClassVar[str] = (
+        "Gaussian 95 % interval from the least-squares curvature (scaled by the reduced χ² "
+        "when above 1)"
+    )
+    holds_friction: ClassVar[bool] = True
+
+    def check(self, context: WindowContext, window: int) -> None:
+        """Any decay of at least one window can be fitted."""
+
+    def fit_window(
+        self,
+        context: WindowContext,
+        index: int,
+        bounds: tuple[int, int, int, int],
+        fixed_mu: float | None,
+    ) -> WindowFit:
+        """Least-squares fit of one window (:func:`~bayestribo.adequacy.segments.fit_segment`)."""
+        decay, scale = context.decay, context.mu_scale
+        start, stop, first, last = bounds
+        peaks_abs = np.abs(decay.peaks.value) / context.length_scale
+        fit = fit_segment(
+            decay,
+            start,
+            stop,
+            peaks_abs[first : last + 1],
+            noise=segment_noise(decay),
+            seed=context.seed + index,
+            fixed_mu=fixed_mu,
+        )
+        cov = fit.covariance[:2, :2].copy()
+        cov[1, :] *= scale
+        cov[:, 1] *= scale
+        notes = []
+        if fit.at_bound:
+            notes.append("at a bound: " + ", ".join(fit.at_bound))
+        if fit.notes:
+            notes.append(fit.notes)
+        se = np.sqrt(np.maximum(np.diag(cov), 0.0))
+        mu = fit.mu * scale
+        return WindowFit(
+            zeta=fit.zeta,
+            mu=mu,
+            covariance=cov,
+            zeta_interval=_gaussian_interval(fit.zeta, float(se[0])),
+            mu_interval=_gaussian_interval(mu, float(se[1])),
+            chi2_reduced=fit.chi2_reduced,
+            notes="; ".join(notes),
+            at_bound=fit.at_bound,
+        )
 
 
 def _sub_run(run: Any, t_from: float, t_to: float) -> Any:
@@ -335,19 +477,114 @@ def _posterior_samples(result: Any, mu_factor: float) -> tuple[NDArray, NDArray]
     return zeta, mu
 
 
-def _posterior_window(zeta: NDArray, mu: NDArray, result: Any) -> tuple[float, float, NDArray, str]:
-    cov = np.cov(np.vstack([zeta, mu]))
-    notes = "" if getattr(result, "converged", True) else "sampler not converged"
-    return float(np.median(zeta)), float(np.median(mu)), cov, notes
+@dataclass(frozen=True)
+class BayesianWindows:
+    """The Bayesian fit on each window cut out as a run (posterior intervals).
+
+    Parameters
+    ----------
+    fit : callable, optional
+        ``fit(run) -> result`` with ``result.samples(name)`` (and optionally
+        ``converged``); default :func:`bayestribo.inference.fit` with the exact model,
+        ``skip_oscillations=0`` and the windows' seed.
+    """
+
+    fit: Callable[[Any], Any] | None = None
+    method: ClassVar[str] = "bayes"
+    interval_kind: ClassVar[str] = "posterior 2.5-97.5 % quantiles"
+    holds_friction: ClassVar[bool] = False
+
+    def check(self, context: WindowContext, window: int) -> None:
+        """A window must be a run of its own: the run itself, at least 3 oscillations.
+
+        Raises
+        ------
+        RecordingError
+            For windows shorter than :data:`bayestribo.signal.decay.MIN_OSCILLATIONS`.
+        BayestriboError
+            When only an EnergyDecay was given.
+        """
+        from bayestribo.signal.decay import MIN_OSCILLATIONS
+
+        if window < MIN_OSCILLATIONS:
+            raise RecordingError(
+                f"window must be at least {MIN_OSCILLATIONS} oscillations with Bayesian "
+                f"windows (a run shorter than that cannot be analysed on its own), got {window}"
+            )
+        if context.run is None:
+            raise BayestriboError("Bayesian windows need the run itself, not an EnergyDecay")
+
+    def _fit(self, sub: Any, seed: int) -> Any:
+        if self.fit is not None:
+            return self.fit(sub)
+        from bayestribo.inference import fit
+
+        return fit(sub, model="exact", seed=seed, skip_oscillations=0)
+
+    def fit_window(
+        self,
+        context: WindowContext,
+        index: int,
+        bounds: tuple[int, int, int, int],
+        fixed_mu: float | None,
+    ) -> WindowFit:
+        """Bayesian fit of one window cut out as a run (``fixed_mu`` is not used)."""
+        decay = context.decay
+        start, stop, _, _ = bounds
+        period = 2.0 * decay.peaks.half_period
+        # The sub-run starts one oscillation early: the fit skips it as the release.
+        t_from = float(decay.t[start]) - period - 0.25 * period
+        result = self._fit(_sub_run(context.run, t_from, float(decay.t[stop - 1])), context.seed)
+        zs, ms = _posterior_samples(result, context.mu_scale / context.length_scale)
+        zi = np.quantile(zs, [0.025, 0.975])
+        mi = np.quantile(ms, [0.025, 0.975])
+        return WindowFit(
+            zeta=float(np.median(zs)),
+            mu=float(np.median(ms)),
+            covariance=np.cov(np.vstack([zs, ms])),
+            zeta_interval=(float(zi[0]), float(zi[1])),
+            mu_interval=(float(mi[0]), float(mi[1])),
+            notes="" if getattr(result, "converged", True) else "sampler not converged",
+        )
+
+
+def _estimate(
+    context: WindowContext,
+    fitter: WindowFitter,
+    index: int,
+    bounds: tuple[int, int, int, int],
+    fixed_mu: float | None,
+) -> WindowEstimate:
+    start, stop, first, last = bounds
+    decay = context.decay
+    amp, amp_range, vel_range = _window_ranges(decay, start, stop, first, last)
+    fit = fitter.fit_window(context, index, bounds, fixed_mu)
+    return WindowEstimate(
+        index=index,
+        t_start=float(decay.t[start]),
+        t_end=float(decay.t[stop - 1]),
+        n_oscillations=(last - first) / 2.0,
+        amplitude=amp,
+        amplitude_range=amp_range,
+        velocity_range=vel_range,
+        zeta=float(fit.zeta),
+        mu=float(fit.mu),
+        zeta_interval=(float(fit.zeta_interval[0]), float(fit.zeta_interval[1])),
+        mu_interval=(float(fit.mu_interval[0]), float(fit.mu_interval[1])),
+        covariance=np.asarray(fit.covariance, dtype=float),
+        method=fitter.method,
+        chi2_reduced=fit.chi2_reduced,
+        notes=fit.notes,
+        at_bound=tuple(fit.at_bound),
+    )
 
 
 def windowed_fits(
     run: Any,
     *,
     window: int = 2,
-    method: Method = "least_squares",
+    fitter: WindowFitter | None = None,
     skip_oscillations: int = 1,
-    fitter: Callable[[Any], Any] | None = None,
     seed: int = 0,
     friction: Friction = "auto",
 ) -> WindowedAnalysis:
@@ -356,27 +593,25 @@ def windowed_fits(
     Parameters
     ----------
     run : Run, path or EnergyDecay
-        The recording (an EnergyDecay only with ``method="least_squares"``).
+        The recording (an EnergyDecay only with a fitter that does not need the run).
     window : int
         Window length [oscillations], default 2.
-    method : {"least_squares", "bayes"}
-        Least squares on the window's Π increments (Gaussian intervals), or the
-        Bayesian fit on each window cut out as a run (posterior intervals).
+    fitter : WindowFitter, optional
+        How each window is fitted: :class:`LeastSquaresWindows` (default),
+        :class:`BayesianWindows`, or a user's own object with the same methods.
     skip_oscillations : int
         Oscillations after the release left out (as :func:`energy_decay`).
-    fitter : callable, optional
-        ``fitter(run) -> result`` with ``result.samples(name)`` for ``method="bayes"``;
-        default :func:`bayestribo.inference.fit`.
     seed : int
-        Seed of the noise propagation (least squares) or base seed of the sampler.
+        Seed of the whole-decay fit and base seed of the window fits.
     friction : {"auto", "fit", "fixed"}
-        Least squares only. ``"fit"``: ζ and μ in every window. ``"fixed"``: μ held
-        at the whole-decay estimate and ζ fitted per window, i.e. the *equivalent*
-        damping of each window (what a viscous-like law that changes with amplitude
-        shows). ``"auto"``: ``"fit"`` when the whole-decay fit resolves the friction
-        (μ above three standard errors) and most windows then give estimates inside
-        the parameter bounds, else ``"fixed"`` (in a window of a few oscillations ζ
-        and μ cannot be told apart when the friction is weak or the noise high).
+        For fitters that can hold the friction (``holds_friction``). ``"fit"``: ζ and
+        μ in every window. ``"fixed"``: μ held at the whole-decay estimate and ζ
+        fitted per window, i.e. the *equivalent* damping of each window (what a
+        viscous-like law that changes with amplitude shows). ``"auto"``: ``"fit"``
+        when the whole-decay fit resolves the friction (μ above three standard
+        errors) and most windows then give estimates inside the parameter bounds,
+        else ``"fixed"`` (in a window of a few oscillations ζ and μ cannot be told
+        apart when the friction is weak or the noise high).
 
     Returns
     -------
@@ -385,142 +620,74 @@ def windowed_fits(
     Raises
     ------
     RecordingError
-        Bad window, a decay shorter than one window, or a recording that cannot be
-        analysed.
+        Bad window or friction mode, a decay shorter than one window, or a recording
+        that cannot be analysed.
     BayestriboError
-        ``method="bayes"`` without the Bayesian fit available, or on an EnergyDecay.
+        A fitter that cannot work on what was given (e.g. Bayesian windows on an
+        EnergyDecay).
     """
-    if method not in ("least_squares", "bayes"):
-        raise RecordingError(f"method must be 'least_squares' or 'bayes', got {method!r}")
     window = _check_window(window)
-    decay = analysed_decay(run, skip_oscillations=skip_oscillations)
-    bounds = window_bounds(decay, window)
-    ell = decay.scaling.length_scale
-    friction_name = "mu_k" if decay.scaling.friction_defined else "friction_displacement"
-    mu_scale = 1.0 if decay.scaling.friction_defined else ell
-    length_unit = "m" if decay.scaling.friction_defined else "signal unit"
-    peaks_abs = np.abs(decay.peaks.value) / ell
-    noise = segment_noise(decay)
     if friction not in ("auto", "fit", "fixed"):
         raise RecordingError(f"friction must be 'auto', 'fit' or 'fixed', got {friction!r}")
+    fitter = LeastSquaresWindows() if fitter is None else fitter
+    recording = None if isinstance(run, EnergyDecay) else _as_run(run)
+    decay = analysed_decay(recording or run, skip_oscillations=skip_oscillations)
+    bounds = window_bounds(decay, window)
+    ell = decay.scaling.length_scale
+    loaded = decay.scaling.friction_defined
+    context = WindowContext(
+        decay=decay,
+        run=recording,
+        mu_scale=1.0 if loaded else ell,
+        seed=seed,
+    )
+    fitter.check(context, window)
     whole = whole_decay_fit(decay, seed=seed)
     resolved = "mu" not in whole.at_bound and whole.mu > 3.0 * whole.se("mu")
     mode = ("fit" if resolved else "fixed") if friction == "auto" else friction
+    if not fitter.holds_friction:
+        mode = "fit"
     fixed_mu = whole.mu if mode == "fixed" else None
-    if method == "bayes":
-        from bayestribo.signal.decay import MIN_OSCILLATIONS
-
-        if window < MIN_OSCILLATIONS:
-            raise RecordingError(
-                f"window must be at least {MIN_OSCILLATIONS} oscillations with method='bayes' "
-                f"(a run shorter than that cannot be analysed on its own), got {window}"
-            )
-        if isinstance(run, EnergyDecay):
-            raise BayestriboError("method='bayes' needs the run itself, not an EnergyDecay")
-        if isinstance(run, str | Path):
-            from bayestribo.io import read_run
-
-            run = read_run(run)
-        if fitter is None:
-            try:
-                from bayestribo.inference import fit as bayes_fit
-            except ImportError as exc:
-                raise BayestriboError(
-                    "method='bayes' needs bayestribo.inference, which is not available"
-                ) from exc
-
-            def fitter(sub: Any) -> Any:
-                return bayes_fit(sub, model="exact", seed=seed, skip_oscillations=0)
-
-    period = 2.0 * decay.peaks.half_period
 
     def run_windows(fixed_mu: float | None) -> list[WindowEstimate]:
-        out: list[WindowEstimate] = []
-        for k, (start, stop, first, last) in enumerate(bounds):
-            amp, amp_range, vel_range = _window_ranges(decay, start, stop, first, last)
-            if method == "least_squares":
-                fit = fit_segment(
-                    decay,
-                    start,
-                    stop,
-                    peaks_abs[first : last + 1],
-                    noise=noise,
-                    seed=seed + k,
-                    fixed_mu=fixed_mu,
-                )
-                zeta, mu, cov, notes = _from_fit(fit, mu_scale)
-                se = np.sqrt(np.maximum(np.diag(cov), 0.0))
-                zi = (zeta - _Z95 * se[0], zeta + _Z95 * se[0])
-                mi = (mu - _Z95 * se[1], mu + _Z95 * se[1])
-                red: float | None = fit.chi2_reduced
-                bound = fit.at_bound
-            else:
-                # The sub-run starts one oscillation early: the fit skips it as the release.
-                t_from = float(decay.t[start]) - period - 0.25 * period
-                sub = _sub_run(run, t_from, float(decay.t[stop - 1]))
-                result = fitter(sub)
-                zs, ms = _posterior_samples(result, mu_scale / ell)
-                zeta, mu, cov, notes = _posterior_window(zs, ms, result)
-                zi = tuple(float(v) for v in np.quantile(zs, [0.025, 0.975]))
-                mi = tuple(float(v) for v in np.quantile(ms, [0.025, 0.975]))
-                red = None
-                bound = ()
-            out.append(
-                WindowEstimate(
-                    index=k,
-                    t_start=float(decay.t[start]),
-                    t_end=float(decay.t[stop - 1]),
-                    n_oscillations=(last - first) / 2.0,
-                    amplitude=amp,
-                    amplitude_range=amp_range,
-                    velocity_range=vel_range,
-                    zeta=zeta,
-                    mu=mu,
-                    zeta_interval=(float(zi[0]), float(zi[1])),
-                    mu_interval=(float(mi[0]), float(mi[1])),
-                    covariance=np.asarray(cov, dtype=float),
-                    method=method,
-                    chi2_reduced=red,
-                    notes=notes,
-                    at_bound=bound,
-                )
-            )
-        return out
+        return [_estimate(context, fitter, k, b, fixed_mu) for k, b in enumerate(bounds)]
 
     out = run_windows(fixed_mu)
     irregular = sum(not w.regular for w in out)
-    if (
-        method == "least_squares"
-        and friction == "auto"
-        and mode == "fit"
-        and 2 * irregular > len(out)
-    ):
+    if fitter.holds_friction and friction == "auto" and mode == "fit" and 2 * irregular > len(out):
         # ζ and μ cannot be told apart in most windows: equivalent damping instead.
         mode, fixed_mu = "fixed", whole.mu
         out = run_windows(fixed_mu)
-    kind = (
-        "Gaussian 95 % interval from the least-squares curvature (scaled by the reduced χ² "
-        "when above 1)"
-        if method == "least_squares"
-        else "posterior 2.5-97.5 % quantiles"
-    )
+    scale = context.mu_scale
     return WindowedAnalysis(
         windows=out,
         window_oscillations=window,
-        method=method,
-        friction_name=friction_name,
-        length_unit=length_unit,
+        method=fitter.method,
+        friction_name="mu_k" if loaded else "friction_displacement",
+        length_unit="m" if loaded else "signal unit",
         length_scale=ell,
-        interval_kind=kind,
+        interval_kind=fitter.interval_kind,
         extra={
-            "friction_mode": mode if method == "least_squares" else "fit",
-            "fixed_friction": None if fixed_mu is None else fixed_mu * mu_scale,
+            "friction_mode": mode,
+            "fixed_friction": None if fixed_mu is None else fixed_mu * scale,
             "whole_decay": {
                 "zeta": whole.zeta,
                 "zeta_se": whole.se("zeta"),
-                "mu": whole.mu * mu_scale,
-                "mu_se": whole.se("mu") * mu_scale,
+                "mu": whole.mu * scale,
+                "mu_se": whole.se("mu") * scale,
                 "chi2_reduced": whole.chi2_reduced,
             },
         },
     )
+
+
+def _as_run(run: Any) -> Any:
+    """A Run from a Run or a path (read by :func:`bayestribo.io.as_run`)."""
+    from bayestribo.io import as_run
+    from bayestribo.io.run import Run
+
+    if not isinstance(run, Run | str | os.PathLike):
+        raise RecordingError(
+            f"run must be a bayestribo Run, a run file path or an EnergyDecay, got {type(run)}"
+        )
+    return as_run(run)
