@@ -91,7 +91,7 @@ def slope_only(args: argparse.Namespace) -> int:
     """False-positive rate and coverage of the load slope when there is no trend."""
     warnings.simplefilter("ignore", ConvergenceWarning)
     rng = np.random.default_rng(args.seed + 1)
-    kw = {"n_steps": args.steps, "burn": args.steps // 5, "max_samples": None}
+    kw = {"max_steps": args.steps, "max_samples": None}
     hits = {p: 0 for p in PARAMS}
     n_unconverged = 0
     t0 = time.perf_counter()
@@ -122,7 +122,7 @@ def slope_only(args: argparse.Namespace) -> int:
         {
             "campaigns": n,
             "seed": args.seed + 1,
-            "n_steps": args.steps,
+            "max_steps": args.steps,
             "elapsed_s": elapsed,
             "unconverged_samplings": n_unconverged,
             "rows": rows,
@@ -136,7 +136,9 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n", 1)[0])
     parser.add_argument("--campaigns", type=int, default=40)
     parser.add_argument("--seed", type=int, default=20100320)
-    parser.add_argument("--steps", type=int, default=2000)
+    parser.add_argument(
+        "--steps", type=int, default=10_000, help="ceiling on the population sampler's steps"
+    )
     parser.add_argument(
         "--slope-only",
         action="store_true",
@@ -151,7 +153,7 @@ def main() -> int:
     counts: dict[str, int] = {}
     n_unconverged = 0
     t0 = time.perf_counter()
-    kw = {"n_steps": args.steps, "burn": args.steps // 5, "max_samples": None}
+    kw = {"max_steps": args.steps, "max_samples": None}
 
     def tally(key: str, hit: bool) -> None:
         counts[key] = counts.get(key, 0) + int(hit)
@@ -210,7 +212,7 @@ def main() -> int:
                 "run_corr": RUN_CORR,
                 "slope_per_N": SLOPE.tolist(),
                 "samples_per_run": N_SAMPLES,
-                "n_steps": args.steps,
+                "max_steps": args.steps,
                 "sigma_prior": "half-Cauchy(scale=0.01)",
             },
             "elapsed_s": elapsed,

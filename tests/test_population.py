@@ -93,7 +93,7 @@ def normal_case():
 def test_sample_reuse_agrees_with_the_exact_joint_posterior(normal_case):
     y, s, runs = normal_case
     prior = HalfCauchy(0.01)
-    pop = population(runs, ("zeta",), seed=5, n_steps=2500, burn=500)
+    pop = population(runs, ("zeta",), seed=5)
     g = pop.pooled
     assert g.diagnostics["converged"]
     mus, pm, sigs, ps = _grid_posterior(y, s, prior)
@@ -108,7 +108,7 @@ def test_not_dividing_out_the_prior_is_rejected_by_the_same_tolerance(normal_cas
     # informative per-run prior: the test's tolerance must see the difference.
     y, s, runs = normal_case
     wrong = [RunSamples(r.name, r.values, np.zeros(r.n_samples), r.metadata) for r in runs]
-    g = population(wrong, ("zeta",), seed=5, n_steps=1000, burn=200).pooled
+    g = population(wrong, ("zeta",), seed=5).pooled
     mus, pm, _, _ = _grid_posterior(y, s, HalfCauchy(0.01))
     exact = _grid_quantiles(mus, pm, QS)
     assert np.abs(np.median(g.mean["zeta"]) - exact[1]) > 3 * TOL_SD * _sd(mus, pm)
@@ -140,7 +140,7 @@ def test_correlated_parameters_agree_with_a_joint_fit():
             x[:, 1], p_mean[1], p_sd[1]
         )
         runs.append(RunSamples(f"r{i}", {"zeta": x[:, 0], "mu_k": x[:, 1]}, lp))
-    g = population(runs, ("zeta", "mu_k"), seed=2, n_steps=2500, burn=500).pooled
+    g = population(runs, ("zeta", "mu_k"), seed=2).pooled
     assert g.diagnostics["converged"]
 
     prior = HalfCauchy(0.01)
@@ -182,7 +182,7 @@ def test_three_repeats_say_little_about_sigma_many_repeats_pin_it_down():
     def fit(n):
         y = rng.normal(rng.normal(mu, sigma, n), s_run)
         runs = _normal_runs(y, np.full(n, s_run), 0.03, 0.02, rng, n_samples=400)
-        return population(runs, ("zeta",), seed=1, n_steps=2000, burn=400).pooled
+        return population(runs, ("zeta",), seed=1).pooled
 
     few, many = fit(3), fit(30)
     lo3, hi3 = np.quantile(few.sigma["zeta"], [0.025, 0.975])
@@ -228,7 +228,7 @@ def test_trend_slope_agrees_with_the_exact_posterior():
     y = rng.normal(0.022 + 0.004 * loads + rng.normal(0, 0.001, len(loads)), s)
     meta = [{"load_N": float(v)} for v in loads]
     runs = _normal_runs(y, s, 0.03, 0.02, rng, n_samples=1000, meta=meta)
-    tr = trend(runs, "load_N", ("zeta",), seed=4, n_steps=2000, burn=400)
+    tr = trend(runs, "load_N", ("zeta",), seed=4)
     assert tr.diagnostics["converged"]
     w, means, sds = _trend_exact(loads, y, s, HalfCauchy(0.01), np.linspace(1e-6, 0.05, 3000))
     grid = np.linspace(means.min() - 8 * sds.max(), means.max() + 8 * sds.max(), 4000)
@@ -253,9 +253,9 @@ def test_trend_finds_a_simulated_slope_and_none_without_one():
     for slope in (0.0, 0.01):
         y = rng.normal(0.0236 + slope * loads + rng.normal(0, 0.0012, len(loads)), s)
         runs = _normal_runs(y, s, 0.03, 0.02, rng, n_samples=300, meta=meta)
-        out[slope] = trend(
-            runs, "load_N", ("zeta",), seed=1, n_steps=1200, burn=300, rope={"zeta": 0.001}
-        ).slope_summary("zeta")
+        out[slope] = trend(runs, "load_N", ("zeta",), seed=1, rope={"zeta": 0.001}).slope_summary(
+            "zeta"
+        )
     assert out[0.01]["prob_positive"] > 0.99 and out[0.01]["interval"][0] > 0
     assert out[0.01]["prob_outside_rope"] > 0.95
     assert out[0.0]["interval"][0] < 0 < out[0.0]["interval"][1]
@@ -270,7 +270,9 @@ def test_groups_differences_and_pooled():
         y = rng.normal(rng.normal(mean, 0.001, 3), s)
         for r in _normal_runs(y, s, 0.03, 0.02, rng, n_samples=300):
             runs.append(RunSamples(f"{load}-{r.name}", r.values, r.log_prior, {"load_N": load}))
-    pop = population(runs, ("zeta",), by="load_N", seed=3, n_steps=1200, burn=300)
+    pop = population(runs, ("zeta",), by="load_N", seed=3)
+    for group in (*pop.groups.values(), pop.pooled):
+        assert group.diagnostics["converged"], group.diagnostics["reasons"]
     assert list(pop.groups) == [0.12, 0.46]
     assert pop.groups[0.12].runs == ("0.12-r0", "0.12-r1", "0.12-r2")
     assert pop.pooled is not None and len(pop.pooled.runs) == 6
@@ -282,9 +284,7 @@ def test_groups_differences_and_pooled():
     assert summary["groups"][0]["parameters"]["zeta"]["sigma_prior"] == "half-Cauchy(scale=0.01)"
     assert summary["pooled"]["n_runs"] == 6
     # Reproducible, and independent of the order of the runs.
-    again = population(
-        runs[::-1], ("zeta",), by="load_N", pooled=False, seed=3, n_steps=1200, burn=300
-    )
+    again = population(runs[::-1], ("zeta",), by="load_N", pooled=False, seed=3)
     np.testing.assert_array_equal(again.groups[0.46].sigma["zeta"], pop.groups[0.46].sigma["zeta"])
     with pytest.raises(BayestriboError, match="not among the groups"):
         pop.difference("zeta", 0.12, 0.99)
@@ -369,5 +369,5 @@ def test_likelihood_matches_direct_evaluation():
 def test_short_runs_warn():
     rng = np.random.default_rng(1)
     runs = _normal_runs(rng.normal(0.02, 0.001, 3), np.full(3, 0.001), 0.03, 0.02, rng, 100)
-    with pytest.warns(ConvergenceWarning, match="autocorrelation times"):
-        population(runs, ("zeta",), n_steps=60, burn=10)
+    with pytest.warns(ConvergenceWarning, match="not converged: only .* steps after burn-in"):
+        population(runs, ("zeta",), max_steps=200)

@@ -62,7 +62,7 @@ def _campaign(rng):
 
 @pytest.fixture(scope="module")
 def analysis():
-    return analyse_campaign(_campaign(np.random.default_rng(2)), seed=1, n_steps=600)
+    return analyse_campaign(_campaign(np.random.default_rng(2)), seed=1, max_steps=2000)
 
 
 def test_runs_are_split_into_contact_groups_and_zeta0(analysis):
@@ -133,7 +133,7 @@ def test_glycerol_water_series_get_a_trend_against_viscosity():
             zeta = 0.004 + 2e-5 * nu  # rises with ν
             draws = {"zeta": rng.normal(zeta, 2e-5, 300), "mu_k": rng.normal(0.03, 5e-5, 300)}
             fits.append(_Fit(draws, meta))
-    a = analyse_campaign(fits, seed=2, n_steps=600)
+    a = analyse_campaign(fits, seed=2, max_steps=1000)  # the labels, not convergence
     label = "viscosity:lubricant=glycerol-water,load_N=0.12"
     assert label in a.trends and a.trends[label].covariate == VISCOSITY_KEY
     # Centre of the covariate = mean ν of the runs, computed with Eq. 43.

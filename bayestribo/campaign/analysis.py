@@ -236,7 +236,7 @@ def analyse_campaign(
     prob: float = 0.95,
     seed: int = 0,
     max_samples: int | None = 300,
-    n_steps: int = 2000,
+    max_steps: int = 10_000,
     sigma_prior: Mapping[str, Any] | None = None,
 ) -> CampaignAnalysis:
     """Populations, ζ₀, ζ_k, d_k and load trends of a campaign's fits.
@@ -251,7 +251,7 @@ def analyse_campaign(
         Metadata key of the trends (a numeric key, default the load [N]).
     prob : float
         Credible-interval probability of the summaries.
-    seed, max_samples, n_steps, sigma_prior
+    seed, max_samples, max_steps, sigma_prior
         As in :func:`bayestribo.population.population`. Single-run posteriors of a
         tribometer record are far narrower than the spread between repeats, so 300
         samples per run carry the population likelihood (the importance-sampling
@@ -262,7 +262,7 @@ def analyse_campaign(
         raise BayestriboError("results: no fitted runs to analyse")
     contact_runs = [r for r in results if _has_friction(r)]
     free_runs = [r for r in results if not _has_friction(r)]
-    kw = {"seed": seed, "n_steps": n_steps, "sigma_prior": sigma_prior}
+    kw = {"seed": seed, "max_steps": max_steps, "sigma_prior": sigma_prior}
     keys = tuple(k for k in by if any(r.metadata.get(k) is not None for r in contact_runs))
     contact = zeta0 = series_pop = None
     trends: dict[str, Trend] = {}

@@ -58,7 +58,12 @@ def register(subparsers: Any) -> None:
     p.add_argument("--model", choices=("exact", "averaged"), help="forward model of the fit")
     p.add_argument("--max-steps", type=int, help="sampler step ceiling per run")
     p.add_argument("--grid-points", type=int, help="Π increments per run")
-    p.add_argument("--population-steps", type=int, default=2500, help="population sampler steps")
+    p.add_argument(
+        "--population-steps",
+        type=int,
+        default=10_000,
+        help="ceiling on the population sampler's steps (it stops earlier once converged)",
+    )
     p.add_argument("--prob", type=float, default=0.95, help="credible-interval probability")
     p.add_argument(
         "--compare-laws",
@@ -183,7 +188,7 @@ def run(args: argparse.Namespace) -> int:
     fitted = [o.result for o in outcomes if o.ok]
     by = tuple(k for k in args.by.split(",") if k)
     analysis = analyse_campaign(
-        fitted, by, prob=args.prob, seed=args.seed, n_steps=args.population_steps
+        fitted, by, prob=args.prob, seed=args.seed, max_steps=args.population_steps
     )
     report = {
         **analysis.to_dict(),

@@ -14,22 +14,43 @@
   (steps after burn-in × walkers × ensembles)/τ.
 * A run that does not meet the criteria is reported as not converged, never silently.
 
-Moves: a mixture of differential-evolution moves (emcee's ``DEMove`` 80 %,
-``DESnookerMove`` 20 %), which mix faster than the default stretch move on the
-narrow, correlated posteriors of this problem.
+* A NaN log-probability is an error naming the parameters (a broken model or input),
+  never a silent −inf; −inf stays what it means: outside the support.
+
+Moves (:func:`default_moves`): a mixture of differential-evolution moves (emcee's
+``DEMove`` 80 %, ``DESnookerMove`` 20 %), which mix faster than the default stretch
+move on the narrow, correlated posteriors of this problem (the single-run fit and
+the population hyperparameters alike).
+
+This module knows nothing of the models: :func:`run_ensembles` samples any vectorised
+log-probability; the single-run fit and the population both use it.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import emcee
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["SamplerRun", "SamplerSettings", "run_ensembles"]
+from bayestribo.errors import BayestriboError
+
+__all__ = [
+    "SamplerRun",
+    "SamplerSettings",
+    "autocorr_time",
+    "default_moves",
+    "rhat",
+    "run_ensembles",
+]
+
+
+def default_moves() -> list[tuple[emcee.moves.Move, float]]:
+    """The move mix of every sampler in the package: DE 80 %, DE snooker 20 %."""
+    return [(emcee.moves.DEMove(), 0.8), (emcee.moves.DESnookerMove(), 0.2)]
 
 
 @dataclass(frozen=True)
@@ -61,9 +82,14 @@ class SamplerSettings:
 
     def __post_init__(self) -> None:
         if self.n_ensembles < 2:
-            raise ValueError(f"n_ensembles must be >= 2 for R-hat, got {self.n_ensembles}")
-        if self.check_every < 10 or self.max_steps < self.check_every:
-            raise ValueError("check_every must be >= 10 and max_steps >= check_every")
+            raise BayestriboError(f"n_ensembles: expected >= 2 for R-hat, got {self.n_ensembles}")
+        if self.check_every < 10:
+            raise BayestriboError(f"check_every: expected >= 10 steps, got {self.check_every}")
+        if self.max_steps < self.check_every:
+            raise BayestriboError(
+                f"max_steps: expected at least check_every = {self.check_every} steps, "
+                f"got {self.max_steps}"
+            )
 
 
 @dataclass
@@ -106,13 +132,50 @@ class SamplerRun:
     reasons: list[str] = field(default_factory=list)
 
 
-def _autocorr(chain: NDArray) -> NDArray:
-    """τ per parameter of one ensemble's chain (steps, walkers, params), no tolerance check."""
-    return emcee.autocorr.integrated_time(chain, tol=0, quiet=True)
+def _nan_checked(
+    log_prob: Callable[[NDArray], NDArray], names: Sequence[str]
+) -> Callable[[NDArray], NDArray]:
+    """``log_prob`` that raises on NaN (the one rule of every sampler in the package)."""
+
+    def checked(theta: NDArray) -> NDArray:
+        lp = np.asarray(log_prob(theta), dtype=float)
+        bad = np.isnan(lp)
+        if np.any(bad):
+            row = np.atleast_2d(theta)[int(np.argmax(bad))]
+            named = ", ".join(f"{n}={float(v)!r}" for n, v in zip(names, row, strict=True))
+            raise FloatingPointError(f"the log-probability is NaN at {named}")
+        return lp
+
+    return checked
 
 
-def _rhat(chains: NDArray) -> NDArray:
-    """Rank-normalised split R-hat per parameter over the ensembles (ArviZ)."""
+def autocorr_time(chain: NDArray) -> NDArray:
+    """Integrated autocorrelation time τ per parameter [steps].
+
+    Parameters
+    ----------
+    chain : ndarray
+        One ensemble's chain, shape (steps, walkers, params): τ is estimated from the
+        walkers' mean autocorrelation (:func:`emcee.autocorr.integrated_time`, with
+        Sokal's automatic window and no check of the chain length).
+
+    Returns
+    -------
+    ndarray
+        τ per parameter (NaN for a chain that does not move).
+    """
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return emcee.autocorr.integrated_time(chain, tol=0, quiet=True)
+
+
+def rhat(chains: NDArray) -> NDArray:
+    """Rank-normalised split R-hat per parameter over independent chains (ArviZ).
+
+    Parameters
+    ----------
+    chains : ndarray
+        Shape (chains, draws, params).
+    """
     import arviz as az
 
     return np.array(
@@ -126,6 +189,7 @@ def run_ensembles(
     settings: SamplerSettings,
     seed: int | None,
     progress: bool = False,
+    names: Sequence[str] | None = None,
 ) -> SamplerRun:
     """Run ``settings.n_ensembles`` independent emcee ensembles to convergence.
 
@@ -140,14 +204,40 @@ def run_ensembles(
         Seed of the whole run.
     progress : bool
         Show a progress bar (tqdm).
+    names : sequence of str, optional
+        Parameter names, for messages (default ``names`` of ``log_prob`` if it has
+        them, else ``theta[i]``).
+
+    Returns
+    -------
+    SamplerRun
+        Not converged (with reasons) when the criteria are not met by ``max_steps``.
+
+    Raises
+    ------
+    FloatingPointError
+        If ``log_prob`` returns NaN; the message names the parameter values.
+    BayestriboError
+        If ``initial`` is not of shape (n_ensembles, n_walkers, d) as ``settings`` say.
     """
+    initial = np.asarray(initial, dtype=float)
+    if initial.ndim != 3 or initial.shape[:2] != (settings.n_ensembles, settings.n_walkers):
+        raise BayestriboError(
+            f"initial: expected shape ({settings.n_ensembles}, {settings.n_walkers}, d), "
+            f"got {initial.shape}"
+        )
     n_ens, n_walkers, ndim = initial.shape
+    labels = list(names if names is not None else getattr(log_prob, "names", []))
+    if len(labels) != ndim:
+        labels = [f"theta[{i}]" for i in range(ndim)]
+    checked = _nan_checked(log_prob, labels)
     children = np.random.SeedSequence(seed).spawn(n_ens)
-    moves = [(emcee.moves.DEMove(), 0.8), (emcee.moves.DESnookerMove(), 0.2)]
     samplers = []
     states = []
     for e in range(n_ens):
-        sampler = emcee.EnsembleSampler(n_walkers, ndim, log_prob, moves=moves, vectorize=True)
+        sampler = emcee.EnsembleSampler(
+            n_walkers, ndim, checked, moves=default_moves(), vectorize=True
+        )
         sampler.random_state = np.random.RandomState(children[e].generate_state(1)[0]).get_state()
         samplers.append(sampler)
         states.append(initial[e])
@@ -175,8 +265,12 @@ def run_ensembles(
                 burn = min(
                     int(2 * np.max(tau)) if np.all(np.isfinite(tau)) else steps // 3, steps // 2
                 )
-                taus.append(_autocorr(chain[burn:]))
+                taus.append(autocorr_time(chain[burn:]))
             tau = np.max(taus, axis=0)
+            if not np.all(np.isfinite(tau)):
+                # A stuck chain (no move accepted): τ is undefined; keep sampling.
+                previous_tau, enough = None, False
+                continue
             burn = math.ceil(2 * np.max(tau))
             settled = previous_tau is not None and np.all(np.abs(tau - previous_tau) < 0.1 * tau)
             previous_tau = tau
@@ -191,29 +285,32 @@ def run_ensembles(
                 current = np.stack(
                     [s.get_chain(discard=burn_now, thin=thin_now, flat=True) for s in samplers]
                 )
-                if np.all(_rhat(current) < settings.rhat_max):
+                if np.all(rhat(current) < settings.rhat_max):
                     break
     finally:
         if bar is not None:
             bar.close()
 
-    burn = min(math.ceil(2 * np.max(tau)), steps - 1)
-    thin = max(1, math.ceil(np.max(tau)))
+    defined = bool(np.all(np.isfinite(tau)))
+    burn = min(math.ceil(2 * np.max(tau)), steps - 1) if defined else steps // 2
+    thin = max(1, math.ceil(np.max(tau))) if defined else 1
     chains = np.stack([s.get_chain(discard=burn, thin=thin, flat=True) for s in samplers])
     lps = np.stack([s.get_log_prob(discard=burn, thin=thin, flat=True) for s in samplers])
     acceptance = float(np.mean([s.acceptance_fraction for s in samplers]))
     ess = (steps - burn) * n_walkers * n_ens / tau
-    rhat = _rhat(chains)
+    r_hat = rhat(chains)
 
     reasons = []
-    if not enough:
+    if not defined:
+        reasons.append("the autocorrelation time is undefined (a chain did not move)")
+    elif not enough:
         reasons.append(
             f"only {steps - burn} steps after burn-in, fewer than "
             f"{settings.autocorr_multiple:g} autocorrelation times ({np.max(tau):.1f})"
         )
-    if not np.all(rhat < settings.rhat_max):
-        worst = int(np.argmax(rhat))
-        reasons.append(f"R-hat {rhat[worst]:.4f} >= {settings.rhat_max} for parameter {worst}")
+    if not np.all(r_hat < settings.rhat_max):
+        worst = int(np.argmax(r_hat))
+        reasons.append(f"R-hat {r_hat[worst]:.4f} >= {settings.rhat_max} for {labels[worst]}")
     if not 0.05 < acceptance < 0.95:
         reasons.append(f"acceptance fraction {acceptance:.3f} outside (0.05, 0.95)")
     return SamplerRun(
@@ -225,7 +322,7 @@ def run_ensembles(
         thin=thin,
         acceptance_fraction=acceptance,
         ess=ess,
-        rhat=rhat,
+        rhat=r_hat,
         converged=not reasons,
         reasons=reasons,
     )

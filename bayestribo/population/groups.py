@@ -195,9 +195,8 @@ def population(
     sigma_prior: Mapping[str, SigmaPrior | float] | None = None,
     seed: int = 0,
     max_samples: int | None = 1000,
-    n_walkers: int = 32,
-    n_steps: int = 2500,
-    burn: int | None = None,
+    n_walkers: int = 16,
+    max_steps: int = 10_000,
     prob: float = 0.95,
     progress: bool = False,
 ) -> Population:
@@ -223,8 +222,9 @@ def population(
         Campaign seed; each group's sampler seed derives from it and the group label.
     max_samples : int, optional
         Per-run samples kept (a seeded random subset).
-    n_walkers, n_steps, burn : int
-        emcee settings per group.
+    n_walkers, max_steps : int
+        Walkers per ensemble and step ceiling of each group's sampler
+        (:func:`bayestribo.population.sampler.sample_hyperparameters`).
     prob : float
         Only checked here; intervals are chosen when summarising.
     progress : bool
@@ -247,7 +247,7 @@ def population(
         raise BayestriboError("by, pooled: nothing to infer (no grouping key and pooled=False)")
     samples = as_run_samples(runs, parameters, max_samples=max_samples, seed=seed)
     priors = sigma_priors(parameters, sigma_prior)
-    kwargs = {"n_walkers": n_walkers, "n_steps": n_steps, "burn": burn, "progress": progress}
+    kwargs = {"n_walkers": n_walkers, "max_steps": max_steps, "progress": progress}
     groups: dict[Any, GroupPosterior] = {}
     if by is not None:
         keys = (by,) if isinstance(by, str) else tuple(by)

@@ -1,8 +1,11 @@
-"""Sampling the population hyperparameters (β, σ) with emcee, seeded.
+"""Sampling the population hyperparameters (β, σ), seeded.
 
 The sampled vector is (β flattened, log σ): the population-mean coefficients have an
 improper flat prior, and each σ_k its prior from :mod:`bayestribo.population.hyperpriors`
-(with the Jacobian of σ = exp(log σ)).
+(with the Jacobian of σ = exp(log σ)). Sampling is the package's one driver,
+:func:`bayestribo.inference.sampling.run_ensembles`: independent ensembles run until
+50 autocorrelation times and R-hat say so, with the same moves and NaN rule as the
+single-run fit.
 """
 
 from __future__ import annotations
@@ -13,18 +16,16 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-import emcee
 import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.errors import BayestriboError, ConvergenceWarning
+from bayestribo.inference.sampling import SamplerSettings, run_ensembles
 from bayestribo.population.hyperpriors import SigmaPrior
 from bayestribo.population.likelihood import MarginalLikelihood
 
 __all__ = ["HyperSamples", "sample_hyperparameters"]
 
-#: Minimum run length in autocorrelation times before a ConvergenceWarning.
-MIN_AUTOCORR_TIMES = 50
 #: Bound on |log σ| of the sampled hyperparameters.
 _LOG_SIGMA_LIMIT = 100.0
 #: Median importance-sampling effective sample size below which a run is flagged.
@@ -42,9 +43,11 @@ class HyperSamples:
     sigma : ndarray of shape (n_draws, K)
         Between-run standard deviations.
     diagnostics : dict
-        ``n_walkers``, ``n_steps``, ``burn``, ``autocorr_time_max``,
-        ``acceptance_fraction``, ``converged``, ``is_ess_median_min`` (smallest over
-        runs of the median importance-sampling effective sample size).
+        ``n_walkers`` (per ensemble), ``n_ensembles``, ``n_steps``, ``burn``,
+        ``thin``, ``autocorr_time_max``, ``ess_min``, ``rhat_max``,
+        ``acceptance_fraction``, ``converged``, ``reasons``, ``is_ess_median_min``
+        (smallest over runs of the median importance-sampling effective sample size),
+        ``seed``.
     """
 
     beta: NDArray[np.float64]
@@ -71,12 +74,12 @@ def sample_hyperparameters(
     priors: Sequence[SigmaPrior],
     *,
     seed: int,
-    n_walkers: int = 32,
-    n_steps: int = 2500,
-    burn: int | None = None,
+    n_walkers: int = 16,
+    n_ensembles: int = 2,
+    max_steps: int = 10_000,
     progress: bool = False,
 ) -> HyperSamples:
-    """Sample p(β, σ | data) ∝ p(data | β, σ) Π_k p(σ_k).
+    """Sample p(β, σ | data) ∝ p(data | β, σ) Π_k p(σ_k) to convergence.
 
     Parameters
     ----------
@@ -86,17 +89,19 @@ def sample_hyperparameters(
         Prior on each σ_k, in the order of ``like.parameters``.
     seed : int
         Seed of the walkers' start and of the sampler.
-    n_walkers, n_steps : int
-        Ensemble size and steps per walker.
-    burn : int, optional
-        Steps discarded at the start; default a fifth of ``n_steps``.
+    n_walkers, n_ensembles : int
+        Walkers per ensemble (at least twice the number of hyperparameters) and
+        independent ensembles.
+    max_steps : int
+        Ceiling on the steps per ensemble; sampling stops earlier once converged
+        (:func:`bayestribo.inference.sampling.run_ensembles`).
     progress : bool
-        Show emcee's progress bar.
+        Show a progress bar.
 
     Warns
     -----
     ConvergenceWarning
-        If the kept steps are fewer than 50 autocorrelation times, or some run's
+        If the run is not converged by ``max_steps`` (with the reasons), or some run's
         importance weights rest on fewer than 10 effective samples (median over draws).
     """
     p, k = like.n_coefficients, len(like.parameters)
@@ -105,12 +110,7 @@ def sample_hyperparameters(
     ndim = p * k + k
     if not (isinstance(n_walkers, int) and n_walkers >= 2 * ndim):
         raise BayestriboError(f"n_walkers: expected an integer >= {2 * ndim}, got {n_walkers!r}")
-    if burn is None:
-        burn = n_steps // 5
-    if not (isinstance(n_steps, int) and 0 <= burn < n_steps):
-        raise BayestriboError(
-            f"n_steps, burn: expected integers with 0 <= burn < n_steps, got {n_steps}, {burn}"
-        )
+    settings = SamplerSettings(n_walkers=n_walkers, n_ensembles=n_ensembles, max_steps=max_steps)
 
     def log_prob(x: NDArray[np.float64]) -> NDArray[np.float64]:
         beta = x[:, : p * k].reshape(-1, p, k)
@@ -124,49 +124,54 @@ def sample_hyperparameters(
         for j, prior in enumerate(priors):
             lp = lp + prior.logpdf(np.exp(log_sigma[ok, j]))
         out[ok] = lp + like(beta[ok], log_sigma[ok])
-        return np.where(np.isfinite(out), out, -np.inf)
+        return out
 
     rng = np.random.default_rng(seed)
     beta0, sigma0 = _initial(like)
-    start = np.empty((n_walkers, ndim))
+    n_start = n_ensembles * n_walkers
+    start = np.empty((n_start, ndim))
     # Spread of each coefficient as least squares gives it: σ² (XᵀX)⁻¹, per parameter
     # (a slope against a covariate in large units is known far more tightly than a mean).
     coef_sd = np.sqrt(np.diag(np.linalg.pinv(like.design.T @ like.design)))[:, None] * sigma0
-    start[:, : p * k] = beta0.ravel() + rng.normal(size=(n_walkers, p * k)) * coef_sd.ravel()
-    start[:, p * k :] = np.log(sigma0) + 0.1 * rng.normal(size=(n_walkers, k))
-    # Differential-evolution moves: about half the autocorrelation time of the default
-    # stretch move on these posteriors (long tail in log σ, correlated means).
-    moves = [(emcee.moves.DEMove(), 0.8), (emcee.moves.DESnookerMove(), 0.2)]
-    sampler = emcee.EnsembleSampler(n_walkers, ndim, log_prob, moves=moves, vectorize=True)
-    sampler.random_state = np.random.RandomState(rng.integers(2**32 - 1)).get_state()
-    sampler.run_mcmc(start, n_steps, progress=progress)
+    start[:, : p * k] = beta0.ravel() + rng.normal(size=(n_start, p * k)) * coef_sd.ravel()
+    start[:, p * k :] = np.log(sigma0) + 0.1 * rng.normal(size=(n_start, k))
+    names = [f"beta[{i},{name}]" for i in range(p) for name in like.parameters]
+    names += [f"log_sigma[{name}]" for name in like.parameters]
+    sampled = run_ensembles(
+        log_prob,
+        start.reshape(n_ensembles, n_walkers, ndim),
+        settings,
+        seed=int(rng.integers(2**31)),
+        progress=progress,
+        names=names,
+    )
 
-    chain = sampler.get_chain(discard=burn)  # (steps, walkers, ndim)
-    flat = chain.reshape(-1, ndim)
-    with np.errstate(invalid="ignore", divide="ignore"):  # a stuck chain: τ is nan
-        tau = sampler.get_autocorr_time(discard=burn, tol=0, quiet=True)
-    tau_max = float(np.max(tau)) if np.all(np.isfinite(tau)) else math.inf
-    kept = n_steps - burn
-    converged = kept >= MIN_AUTOCORR_TIMES * tau_max
+    flat = sampled.chains.reshape(-1, ndim)
     beta = flat[:, : p * k].reshape(-1, p, k)
     log_sigma = flat[:, p * k :]
     pick = rng.choice(len(flat), size=min(200, len(flat)), replace=False)
     ess = like.effective_sample_size(beta[pick], log_sigma[pick])
     ess_median_min = float(np.min(np.nanmedian(ess, axis=0)))
+    tau = sampled.autocorr_time
     diagnostics = {
         "n_walkers": n_walkers,
-        "n_steps": n_steps,
-        "burn": burn,
-        "autocorr_time_max": tau_max,
-        "acceptance_fraction": float(np.mean(sampler.acceptance_fraction)),
-        "converged": bool(converged),
+        "n_ensembles": n_ensembles,
+        "n_steps": sampled.n_steps,
+        "burn": sampled.burn,
+        "thin": sampled.thin,
+        "autocorr_time_max": float(np.max(tau)) if np.all(np.isfinite(tau)) else math.inf,
+        "ess_min": float(np.min(sampled.ess)),
+        "rhat_max": float(np.max(sampled.rhat)),
+        "acceptance_fraction": sampled.acceptance_fraction,
+        "converged": bool(sampled.converged),
+        "reasons": list(sampled.reasons),
         "is_ess_median_min": ess_median_min,
         "seed": seed,
     }
-    if not converged:
+    if not sampled.converged:
         warnings.warn(
-            f"population sampler: {kept} kept steps are fewer than {MIN_AUTOCORR_TIMES} "
-            f"autocorrelation times ({tau_max:.1f}); increase n_steps",
+            "population sampler not converged: " + "; ".join(sampled.reasons) + "; increase "
+            "max_steps",
             ConvergenceWarning,
             stacklevel=3,
         )

@@ -131,9 +131,8 @@ def trend(
     sigma_prior: Mapping[str, SigmaPrior | float] | None = None,
     seed: int = 0,
     max_samples: int | None = 1000,
-    n_walkers: int = 32,
-    n_steps: int = 2500,
-    burn: int | None = None,
+    n_walkers: int = 16,
+    max_steps: int = 10_000,
     progress: bool = False,
 ) -> Trend:
     """Infer the linear trend of the population of runs against a numeric covariate.
@@ -148,7 +147,7 @@ def trend(
         Parameters modelled jointly.
     rope : mapping, optional
         Per parameter, the half-width of a region of practical equivalence of the slope.
-    sigma_prior, seed, max_samples, n_walkers, n_steps, burn, progress
+    sigma_prior, seed, max_samples, n_walkers, max_steps, progress
         As in :func:`bayestribo.population.population`.
 
     Raises
@@ -190,8 +189,7 @@ def trend(
         [priors[p] for p in parameters],
         seed=group_seed,
         n_walkers=n_walkers,
-        n_steps=n_steps,
-        burn=burn,
+        max_steps=max_steps,
         progress=progress,
     )
     slope = {p: hyper.beta[:, 1, j] for j, p in enumerate(parameters)}
