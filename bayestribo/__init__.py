@@ -4,14 +4,23 @@ The package identifies the equivalent viscous damping ζ and the velocity-indepe
 kinetic friction μ_k from the free decay of a single-degree-of-freedom oscillator
 (Rigaud et al., *Tribology International* 43 (2010) 320-329).
 
-Sub-modules
------------
-scaling
-    Rig parameters and the dimensionless scaling (Eq. 6, 9-11).
+The one call most users need is :func:`fit` (a run or a file in, a
+:class:`FitResult` out); ``docs/architecture.md`` maps the sub-packages:
+
 model
-    Exact piecewise response and averaged closed forms of E(τ) and Π(τ).
-decay
-    Energy decay curve of a recording.
+    Physics: exact piecewise response and averaged closed forms of E(τ) and Π(τ).
+io
+    Files in and out: :class:`Run`, :func:`read_run`, :func:`write_run`, :func:`as_run`.
+signal
+    A recording becomes an energy decay, a noise model and Π increments.
+inference
+    One run's posterior in four steps (prepare, build_posterior, sample, summarise).
+estimators
+    Classical baselines (peak decrements, Feeny-Liang, the paper's least squares).
+adequacy, population, campaign
+    Model checks, the hierarchical model of repeats, many runs at once.
+synthetic, acquisition, reports, cli
+    Simulated recordings, the hardware link, notebook reports, the command line.
 """
 
 from __future__ import annotations
@@ -24,6 +33,11 @@ __version__ = "0.1.0"
 # Public names re-exported lazily: module imports stay cheap for the command line,
 # and each capability keeps its own module.
 _LAZY: dict[str, str] = {
+    "fit": "bayestribo.inference.fitting",
+    "FitResult": "bayestribo.inference.result",
+    "ParameterSummary": "bayestribo.inference.summary",
+    "as_run": "bayestribo.io",
+    "estimate_signals": "bayestribo.estimators",
     "Rig": "bayestribo.model.scaling",
     "Scaling": "bayestribo.model.scaling",
     "energy_decay": "bayestribo.signal.decay",

@@ -69,11 +69,14 @@ def test_quick_and_full_exclude_each_other(capsys):
 
 
 def _single(converged=True):
-    interval = {"mean": 0.0242507, "ci95": [0.0242501, 0.0242513]}
+    interval = {"mean": 0.0242507, "interval": [0.0242501, 0.0242513]}
     return {
         "name": "glycerol-N0.31-r1",
         "fit": {
-            "parameters": {"zeta": interval, "mu_k": {"mean": 0.02854, "ci95": [0.0285, 0.0286]}},
+            "parameters": {
+                "zeta": interval,
+                "mu_k": {"mean": 0.02854, "interval": [0.0285, 0.0286]},
+            },
             "diagnostics": {"converged": converged},
         },
         "true": {"zeta": 0.0242508, "mu_k": 0.0285408},

@@ -22,7 +22,7 @@ DIAGNOSTICS = {
     "ess_min",
     "acceptance_fraction",
 }
-SUMMARY = {"mean", "sd", "median", "ci95"}
+SUMMARY = {"mean", "sd", "median", "interval", "prob", "kind"}
 
 
 @pytest.fixture(scope="module")
@@ -63,12 +63,12 @@ def test_json_is_one_object_with_the_issue_shape(json_run, run_file: Path) -> No
     assert {"zeta", "mu_k", "mu_s", "friction_displacement"} <= set(record["parameters"])
     for name, s in record["parameters"].items():
         assert set(s) == SUMMARY, name
-        lo, hi = s["ci95"]
-        assert lo <= s["median"] <= hi and s["sd"] > 0
+        lo, hi = s["interval"]
+        assert lo <= s["median"] <= hi and s["prob"] == 0.95 and s["sd"] > 0
     # the simulated truth (ζ = 0.0236, μ_k = 0.0294) inside the 95 % intervals; the
     # seed is fixed, so this is one draw of a calibrated interval, checked once
     for name, truth in (("zeta", 0.0236), ("mu_k", 0.0294)):
-        lo, hi = record["parameters"][name]["ci95"]
+        lo, hi = record["parameters"][name]["interval"]
         assert lo < truth < hi, (name, lo, hi)
     assert "displacement" in record["noise"] and "description" in record["noise"]
 
@@ -82,7 +82,7 @@ def test_out_writes_netcdf_and_figures(json_run, run_file: Path) -> None:
     saved = FitResult.load(out_dir / f"{stem}.nc")
     assert saved.run_name == str(run_file) and saved.seed == 4
     np.testing.assert_allclose(
-        saved.summary()["zeta"]["mean"], record["parameters"]["zeta"]["mean"], rtol=1e-12
+        saved.summary()["zeta"].mean, record["parameters"]["zeta"]["mean"], rtol=1e-12
     )
 
 

@@ -11,8 +11,8 @@ import pytest
 from test_estimators_signals import F_HZ, sampled
 
 from bayestribo import Estimate, estimate_all
-from bayestribo.errors import RecordingError
-from bayestribo.estimators import friction_fraction
+from bayestribo.errors import BayestriboError, RecordingError
+from bayestribo.estimators import estimate_signals, friction_fraction
 from bayestribo.estimators.all import METHODS
 from bayestribo.io.run import Run
 from bayestribo.model.scaling import Rig
@@ -35,7 +35,7 @@ FRICTION_AWARE = ("feeny_liang", "nonsuccessive", "energy_ls_exact", "energy_ls_
 )
 def test_methods_agree_with_truth_and_each_other(zeta, mu, y0):
     t, x, v = sampled(zeta, mu, y0, noise_x=1e-4 * y0, noise_v=1e-4 * y0 * 2 * math.pi * F_HZ)
-    table = estimate_all(t, x, v, rig=Rig(F_HZ))
+    table = estimate_signals(t, x, v, rig=Rig(F_HZ))
     z_scale = zeta + 2 * mu / (math.pi * y0)
     m_scale = mu + math.pi * zeta * y0 / 2
     got = [e for e in table if e.method in FRICTION_AWARE]
@@ -53,7 +53,7 @@ def test_methods_agree_with_truth_and_each_other(zeta, mu, y0):
 
 def test_table_json_has_nulls_and_every_method():
     t, x, _ = sampled(0.0236, 0.0294, 10.0)
-    table = estimate_all(t, x, name="sim")
+    table = estimate_signals(t, x, name="sim")
     d = json.loads(table.to_json())
     assert d["run"] == "sim"
     assert [e["method"] for e in d["estimates"]] == list(METHODS)
@@ -70,7 +70,7 @@ def test_failed_method_is_a_row_with_the_reason():
     # 6 turning points: the first is the release (on the edge), so 4 peaks: too few
     # for the non-successive method (needs Y_0, Y_2p, Y_2q)
     t, x, _ = sampled(0.01, 0.1, 1.0)
-    table = estimate_all(t, x)
+    table = estimate_signals(t, x)
     row = table["nonsuccessive"]
     assert not row.ok and "no estimate" in row.notes and "5" in row.notes
     assert row.to_dict()["zeta"] is None
@@ -91,12 +91,13 @@ def test_run_object_and_rig_from_metadata():
 def test_bad_arguments():
     t, x, _ = sampled(0.0236, 0.0294, 10.0)
     with pytest.raises(RecordingError, match="unknown method"):
-        estimate_all(t, x, methods=["magic"])
+        estimate_signals(t, x, methods=["magic"])
     with pytest.raises(RecordingError, match="displacement x or a velocity v"):
+        estimate_signals(t)
+    with pytest.raises(BayestriboError, match="run: expected a bayestribo Run or the path"):
         estimate_all(t)
-    run = Run(t, displacement=x)
-    with pytest.raises(RecordingError, match="not both"):
-        estimate_all(run, x)
+    with pytest.raises(TypeError):
+        estimate_all(Run(t, displacement=x), x)  # arrays go to estimate_signals
 
 
 def test_friction_fraction_limits_and_closed_form():
@@ -156,3 +157,14 @@ def test_real_recordings_viscous_versus_friction():
     periods = (crossings.size - 1) / 2
     f_cross = periods / (run.time[crossings[-1]] - run.time[crossings[0]])
     assert w_air / (2 * math.pi) == pytest.approx(f_cross, rel=0.02)
+
+
+def test_an_estimate_summarises_with_its_standard_errors():
+    t, x, v = sampled(0.0236, 0.0294, 10.0)
+    [est] = estimate_signals(t, x, v, rig=Rig(F_HZ), methods=["energy_ls_exact"])
+    s90, s99 = est.summary(0.9)["zeta"], est.summary(0.99)["zeta"]
+    assert s90.kind == "normal" and s90.prob == 0.9 and s90.sd == est.zeta_se
+    assert s90.mean == est.zeta and s90.low < est.zeta < s90.high
+    assert s99.high - s99.low > s90.high - s90.low
+    # ±1.645 sd for 90 %
+    assert (s90.high - s90.low) / (2 * est.zeta_se) == pytest.approx(1.6448536, rel=1e-6)

@@ -211,7 +211,7 @@ def test_notebook_executes_with_test_parameters(name, tmp_path):
         # resolution ζ and μ_k are known to about 1e-5 relative; a wrong scaling or a
         # wrong run would miss the truth by orders of magnitude more than the interval.
         for p in ("zeta", "mu_k"):
-            lo, hi = record["fit"]["parameters"][p]["ci95"]
+            lo, hi = record["fit"]["parameters"][p]["interval"]
             assert lo <= record["true"][p] <= hi, p
     if name in ("loads", "viscosity"):
         record = json.loads(summary.read_text())

@@ -26,7 +26,7 @@ plots
 """
 
 from bayestribo.adequacy.check import AdequacyReport, check_adequacy, default_window
-from bayestribo.adequacy.constancy import ConstancyTest, Trend, constancy_test
+from bayestribo.adequacy.constancy import AmplitudeTrend, ConstancyTest, constancy_test
 from bayestribo.adequacy.draws import (
     ParameterDraws,
     draws_from_least_squares,
@@ -44,6 +44,7 @@ from bayestribo.adequacy.windows import (
 
 __all__ = [
     "AdequacyReport",
+    "AmplitudeTrend",
     "BayesianWindows",
     "ConstancyTest",
     "ExtinctionCheck",
@@ -51,7 +52,6 @@ __all__ = [
     "ParameterDraws",
     "PeakResiduals",
     "PredictiveCheck",
-    "Trend",
     "WindowEstimate",
     "WindowedAnalysis",
     "check_adequacy",

@@ -41,15 +41,16 @@ from numpy.typing import NDArray
 
 from bayestribo.adequacy.windows import WindowedAnalysis
 from bayestribo.errors import RecordingError
+from bayestribo.inference.summary import ParameterSummary
 
-__all__ = ["ConstancyTest", "Trend", "constancy_test"]
+__all__ = ["AmplitudeTrend", "ConstancyTest", "constancy_test"]
 
 #: Fewest windows for the test (two parameters per window, four in the model).
 MIN_WINDOWS = 3
 
 
 @dataclass(frozen=True)
-class Trend:
+class AmplitudeTrend:
     """Linear trend of one parameter with amplitude across windows.
 
     Attributes
@@ -75,6 +76,15 @@ class Trend:
     change: float
     change_interval: tuple[float, float]
     relative_change: float | None
+
+    def summary(self, prob: float = 0.95) -> dict[str, ParameterSummary]:
+        """Normal summaries of the ``slope`` (per unit amplitude) and of the ``change``
+        from the smallest to the largest window amplitude."""
+        ratio = self.change / self.slope if self.slope != 0 else 0.0
+        return {
+            "slope": ParameterSummary.from_normal(self.slope, self.slope_se, prob),
+            "change": ParameterSummary.from_normal(self.change, abs(ratio) * self.slope_se, prob),
+        }
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready mapping."""
@@ -103,7 +113,7 @@ class ConstancyTest:
         Of the joint trend ``b_ζ = b_μ = 0`` and of the scatter about the line.
     alpha : float
         Nominal false-alarm rate.
-    zeta, mu : Trend
+    zeta, mu : AmplitudeTrend
         The trends.
     scale : float
         s² = χ²/dof of the windows about the line (1 when the covariances were
@@ -124,8 +134,8 @@ class ConstancyTest:
     p_trend: float
     p_scatter: float
     alpha: float
-    zeta: Trend
-    mu: Trend
+    zeta: AmplitudeTrend
+    mu: AmplitudeTrend
     scale: float
     chi2: float
     dof: int
@@ -184,15 +194,17 @@ def _gls1(a: NDArray, obs: NDArray, var: NDArray) -> tuple[NDArray, NDArray, flo
     return coef, cov, float(np.sum(w * r * r))
 
 
-def _trend(name: str, mean: float, slope: float, var: float, span: float, crit: float) -> Trend:
+def _trend(
+    name: str, mean: float, slope: float, var: float, span: float, crit: float
+) -> AmplitudeTrend:
     se = math.sqrt(max(var, 0.0))
     change = slope * span
     half = crit * se * span
     rel = change / mean if mean > 0.0 else None
-    return Trend(name, mean, slope, se, change, (change - half, change + half), rel)
+    return AmplitudeTrend(name, mean, slope, se, change, (change - half, change + half), rel)
 
 
-def _describe(name: str, t: Trend) -> str:
+def _describe(name: str, t: AmplitudeTrend) -> str:
     if t.relative_change is None:
         lo, hi = t.change_interval
         return f"{name} changes by {t.change:.3g} (95 % interval {lo:.3g} to {hi:.3g})"

@@ -49,6 +49,7 @@ from bayestribo.adequacy.segments import (
     whole_decay_fit,
 )
 from bayestribo.errors import BayestriboError, RecordingError
+from bayestribo.inference.summary import ParameterSummary
 from bayestribo.signal.decay import EnergyDecay, energy_decay
 
 __all__ = [
@@ -184,6 +185,13 @@ class WindowEstimate:
     def regular(self) -> bool:
         """False when the estimate sits on a parameter bound (not a Gaussian summary)."""
         return not self.at_bound
+
+    def summary(self, prob: float = 0.95) -> dict[str, ParameterSummary]:
+        """Normal summaries (estimate, covariance) of ``zeta`` and ``mu`` in this window."""
+        return {
+            "zeta": ParameterSummary.from_normal(self.zeta, self.zeta_se, prob),
+            "mu": ParameterSummary.from_normal(self.mu, self.mu_se, prob),
+        }
 
     @property
     def zeta_se(self) -> float:

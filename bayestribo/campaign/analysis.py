@@ -25,9 +25,9 @@ from typing import Any
 import numpy as np
 
 from bayestribo.errors import BayestriboError
+from bayestribo.inference.summary import summarize
 from bayestribo.population.groups import Population, population
 from bayestribo.population.samples import FitLike, RunSamples, run_samples
-from bayestribo.population.summary import summarize
 from bayestribo.population.trend import Trend, trend
 
 __all__ = ["DEFAULT_BY", "VISCOSITY_KEY", "CampaignAnalysis", "analyse_campaign"]

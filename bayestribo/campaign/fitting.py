@@ -121,6 +121,28 @@ def _default_fit(run: Any, *, seed: int, **kwargs: Any) -> Any:
     return fit(run, seed=seed, **kwargs)
 
 
+def _check_keywords(function: Callable[..., Any], kwargs: Mapping[str, Any]) -> None:
+    """Refuse keyword arguments ``function`` does not take, before any run is fitted."""
+    import difflib
+    import inspect
+
+    params = inspect.signature(function).parameters
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values()):
+        return
+    known = [n for n, p in params.items() if p.kind is not inspect.Parameter.POSITIONAL_ONLY]
+    unknown = sorted(set(kwargs) - set(known))
+    if unknown:
+        hints = [
+            f"{name!r}"
+            + "".join(f" (did you mean {c!r}?)" for c in difflib.get_close_matches(name, known, 1))
+            for name in unknown
+        ]
+        raise BayestriboError(
+            f"fit options: unknown {', '.join(hints)}; "
+            f"{function.__name__} takes {', '.join(known[1:])}"
+        )
+
+
 def _call(
     function: Callable[..., Any], run: Any, seed: int, kwargs: Mapping[str, Any]
 ) -> tuple[Any, str | None, str | None, float]:
@@ -230,6 +252,9 @@ def fit_many(
         raise BayestriboError(f"runs: duplicate run identities {duplicates}")
     seeds = [run_seed(campaign_seed, name) for name in names]
     if function is None:
+        from bayestribo.inference import fit
+
+        _check_keywords(fit, fit_kwargs)
         function = _default_fit
     own = executor is None
     if own:
@@ -434,7 +459,7 @@ def fit_catalogued(
             summary={
                 "result_path": str(target.resolve()),
                 "converged": bool(outcome.result.converged),
-                "posterior": outcome.result.summary(),
+                "posterior": {k: v.to_dict() for k, v in outcome.result.summary().items()},
                 "elapsed_s": outcome.elapsed_s,
             },
             diagnostics=outcome.result.diagnostics,

@@ -95,7 +95,7 @@ def _interval(summary: dict[str, Any], significant: bool = False) -> str:
     With ``significant``, two significant digits each (for a σ whose interval starts
     near zero).
     """
-    lo, hi = summary.get("ci95") or summary.get("interval")
+    lo, hi = summary["interval"]
     if significant:
         return f"{summary['mean']:.2g} [{lo:.2g}, {hi:.2g}]"
     width = hi - lo

@@ -71,19 +71,25 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "--max-steps", type=int, default=20_000, help="ceiling on the steps per ensemble"
     )
+    p.add_argument(
+        "--prob",
+        type=float,
+        default=0.95,
+        help="probability of the reported credible intervals (default 0.95)",
+    )
     p.set_defaults(handler=run)
 
 
-def json_record(result: Any) -> dict[str, Any]:
+def json_record(result: Any, prob: float = 0.95) -> dict[str, Any]:
     """The JSON object printed by ``--json``.
 
     ``{"run", "model", "seed", "noise", "parameters": {NAME: {"mean", "sd", "median",
-    "ci95"}}, "diagnostics": {"converged", "n_walkers", "n_steps", "autocorr_time_max",
-    "ess_min", "acceptance_fraction", ...}, "seconds"}``; the diagnostics keep the
-    fit's further entries (R-hat, ESS and τ per parameter, reasons when not
+    "interval", "prob", "kind"}}, "diagnostics": {"converged", "n_walkers", "n_steps",
+    "autocorr_time_max", "ess_min", "acceptance_fraction", ...}, "seconds"}``; the
+    diagnostics keep the fit's further entries (R-hat, ESS and τ per parameter, reasons when not
     converged) after the six of the record.
     """
-    full = result.to_dict()
+    full = result.to_dict(prob)
     diagnostics = full["diagnostics"]
     ordered = {key: diagnostics.get(key) for key in DIAGNOSTICS}
     ordered.update({k: v for k, v in diagnostics.items() if k not in ordered})
@@ -150,7 +156,9 @@ def run(args: argparse.Namespace) -> int:
     """Read the run, fit, print; exit status 1 when the sampler did not converge."""
     from bayestribo.errors import ConvergenceWarning
     from bayestribo.inference import fit
+    from bayestribo.inference.summary import check_prob
 
+    check_prob(args.prob)  # before the fit, not after it
     recording = read_run_from_args(args)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ConvergenceWarning)
@@ -175,8 +183,8 @@ def run(args: argparse.Namespace) -> int:
         if not args.json:
             print("wrote " + ", ".join(str(p) for p in paths), file=sys.stderr)
     if args.json:
-        print(json.dumps(json_record(result), allow_nan=False))
+        print(json.dumps(json_record(result, args.prob), allow_nan=False))
     else:
-        print(result.to_text())
+        print(result.to_text(args.prob))
     sys.stdout.flush()
     return 0 if result.converged else 1

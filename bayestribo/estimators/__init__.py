@@ -16,10 +16,11 @@ nonsuccessive
 energy_ls
     Least squares on Π(τ) with the averaged or the exact model (Eq. 40-42).
 all
-    :func:`estimate_all`: every applicable method on one recording.
+    :func:`estimate_all`: every applicable method on one run;
+    :func:`estimate_signals`: the same on bare arrays t, x, v.
 """
 
-from bayestribo.estimators.all import estimate_all
+from bayestribo.estimators.all import estimate_all, estimate_signals
 from bayestribo.estimators.decrement import exponential_envelope, log_decrement
 from bayestribo.estimators.energy_ls import energy_data, energy_least_squares
 from bayestribo.estimators.feeny_liang import feeny_liang
@@ -32,6 +33,7 @@ __all__ = [
     "energy_data",
     "energy_least_squares",
     "estimate_all",
+    "estimate_signals",
     "exponential_envelope",
     "feeny_liang",
     "friction_fraction",

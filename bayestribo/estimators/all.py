@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable, Sequence
-from typing import Any, Literal
+from typing import Literal
 
 from numpy.typing import ArrayLike
 
@@ -13,10 +14,11 @@ from bayestribo.estimators.energy_ls import energy_data, energy_least_squares
 from bayestribo.estimators.feeny_liang import feeny_liang
 from bayestribo.estimators.nonsuccessive import nonsuccessive_peaks
 from bayestribo.estimators.result import Estimate, EstimateTable
+from bayestribo.io.run import Run
 from bayestribo.model.scaling import Rig
 from bayestribo.signal.peaks import Peaks, find_peaks
 
-__all__ = ["METHODS", "estimate_all"]
+__all__ = ["METHODS", "estimate_all", "estimate_signals"]
 
 #: Method names, in the order of the table.
 METHODS: tuple[str, ...] = (
@@ -41,7 +43,49 @@ def _failed(method: str, data: str, exc: BaseException) -> Estimate:
 
 
 def estimate_all(
-    run: Any,
+    run: Run | str | os.PathLike[str],
+    *,
+    rig: Rig | None = None,
+    skip: int = 0,
+    offset: float | Literal["auto", "constant"] | None = "auto",
+    methods: Sequence[str] | None = None,
+    name: str | None = None,
+) -> EstimateTable:
+    """Every applicable classical estimator on one run, as a table.
+
+    Parameters
+    ----------
+    run : Run or path
+        The recording (its time, displacement, velocity, rig and source are used), or
+        a run file read by :func:`bayestribo.io.as_run`. For bare arrays use
+        :func:`estimate_signals`.
+    rig : Rig, optional
+        Overrides the run's rig. Without any rig Ω comes from the recording and
+        friction is reported as a friction displacement in the signal's unit.
+    skip, offset, methods, name
+        As in :func:`estimate_signals` (``name`` defaults to the run's source).
+
+    Returns
+    -------
+    EstimateTable
+    """
+    from bayestribo.io import as_run
+
+    recording = as_run(run)
+    return estimate_signals(
+        recording.time,
+        recording.displacement,
+        recording.velocity,
+        rig=recording.rig() if rig is None else rig,
+        skip=skip,
+        offset=offset,
+        methods=methods,
+        name=name if name is not None else recording.source,
+    )
+
+
+def estimate_signals(
+    t: ArrayLike,
     x: ArrayLike | None = None,
     v: ArrayLike | None = None,
     *,
@@ -51,18 +95,17 @@ def estimate_all(
     methods: Sequence[str] | None = None,
     name: str | None = None,
 ) -> EstimateTable:
-    """Every applicable classical estimator on one recording, as a table.
+    """Every applicable classical estimator on sampled signals, as a table.
 
     Parameters
     ----------
-    run : Run or array_like
-        A :class:`bayestribo.io.run.Run` (its time, displacement, velocity, rig and
-        source are used), or the sample times t [s] with ``x`` and/or ``v``.
+    t : array_like
+        Sample times [s].
     x, v : array_like, optional
-        Displacement and velocity when ``run`` is an array of times.
+        Displacement and velocity (at least one).
     rig : Rig, optional
-        Overrides the run's rig. Without any rig Ω comes from the recording and
-        friction is reported as a friction displacement in the signal's unit.
+        Without a rig Ω comes from the recording and friction is reported as a
+        friction displacement in the signal's unit.
     skip : int
         Leading extrema to skip (2 = the first oscillation).
     offset : float, "auto", "constant" or None
@@ -71,7 +114,7 @@ def estimate_all(
         Subset of :data:`METHODS` (default all). The peak methods run on the
         displacement peaks and, when a velocity is recorded, on the velocity peaks.
     name : str, optional
-        Name of the run in the table (default: the run's source).
+        Name of the recording in the table.
 
     Returns
     -------
@@ -84,18 +127,8 @@ def estimate_all(
     RecordingError
         No usable signal, or an unknown method name.
     """
-    if hasattr(run, "time") and hasattr(run, "displacement"):
-        if x is not None or v is not None:
-            raise RecordingError("give either a Run or arrays t, x, v, not both")
-        t = run.time
-        x, v = run.displacement, run.velocity
-        if rig is None and hasattr(run, "rig"):
-            rig = run.rig()
-        name = name if name is not None else getattr(run, "source", None)
-    else:
-        t = run
     if x is None and v is None:
-        raise RecordingError("estimate_all needs a displacement x or a velocity v")
+        raise RecordingError("x, v: expected a displacement x or a velocity v (or both)")
     chosen = list(METHODS if methods is None else methods)
     unknown = [m for m in chosen if m not in METHODS]
     if unknown:

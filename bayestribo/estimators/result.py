@@ -11,6 +11,8 @@ from typing import Any
 import numpy as np
 import scipy.integrate
 
+from bayestribo.inference.summary import ParameterSummary, check_prob
+
 __all__ = ["Estimate", "EstimateTable", "friction_fraction"]
 
 
@@ -80,6 +82,21 @@ class Estimate:
     def ok(self) -> bool:
         """True when the method produced a damping value."""
         return self.zeta is not None
+
+    def summary(self, prob: float = 0.95) -> dict[str, ParameterSummary]:
+        """Normal-approximation summaries (estimate ± z·SE) of each quantity with a
+        standard error: ``zeta``, ``mu_k``, ``friction_displacement``.
+
+        Quantities without a value or without a standard error are left out (a point
+        value alone has no interval).
+        """
+        check_prob(prob)
+        out = {}
+        for name in ("zeta", "mu_k", "friction_displacement"):
+            value, se = getattr(self, name), getattr(self, f"{name}_se")
+            if _num(value) is not None and _num(se) is not None:
+                out[name] = ParameterSummary.from_normal(float(value), float(se), prob)
+        return out
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready mapping: numbers or None (null)."""

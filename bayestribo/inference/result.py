@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bayestribo.inference.priors import PriorSet
+from bayestribo.inference.summary import ParameterSummary, check_prob
 
 __all__ = ["FitResult", "plain_data"]
 
@@ -169,42 +170,35 @@ class FitResult:
 
     def interval(self, name: str, prob: float = 0.95) -> tuple[float, float]:
         """Equal-tailed credible interval of ``name`` with probability ``prob``."""
-        if not 0.0 < prob < 1.0:
-            raise ValueError(f"prob must be in (0, 1), got {prob!r}")
-        lo, hi = np.quantile(self.samples(name), [(1 - prob) / 2, (1 + prob) / 2])
-        return float(lo), float(hi)
+        return ParameterSummary.from_samples(self.samples(name), prob).interval
 
-    def summary(self) -> dict[str, dict[str, Any]]:
-        """Mean, standard deviation, median and 95 % interval of each reported quantity."""
-        out = {}
-        for name in REPORTED:
-            if name in self.idata.posterior:
-                s = self.samples(name)
-                out[name] = {
-                    "mean": float(np.mean(s)),
-                    "sd": float(np.std(s, ddof=1)),
-                    "median": float(np.median(s)),
-                    "ci95": list(self.interval(name)),
-                }
-        return out
+    def summary(self, prob: float = 0.95) -> dict[str, ParameterSummary]:
+        """Posterior summary (mean, sd, median, equal-tailed ``prob`` interval) of each
+        reported quantity, by name."""
+        return {
+            name: ParameterSummary.from_samples(self.samples(name), prob)
+            for name in REPORTED
+            if name in self.idata.posterior
+        }
 
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready record: run, model, noise, parameters, diagnostics, seconds."""
+    def to_dict(self, prob: float = 0.95) -> dict[str, Any]:
+        """JSON-ready record: run, model, noise, parameters (summaries with ``prob``
+        intervals), diagnostics, seconds."""
         return plain_data(
             {
                 "run": self.run_name,
                 "model": self.model,
                 "seed": self.seed,
                 "noise": self.noise,
-                "parameters": self.summary(),
+                "parameters": {k: v.to_dict() for k, v in self.summary(prob).items()},
                 "diagnostics": self.diagnostics,
                 "prior_sensitivity": self.prior_sensitivity,
                 "seconds": self.seconds,
             }
         )
 
-    def to_text(self) -> str:
-        """Human-readable table of the posterior."""
+    def to_text(self, prob: float = 0.95) -> str:
+        """Human-readable table of the posterior, with ``prob`` intervals."""
         lines = [
             f"run       {self.run_name}",
             f"model     {self.model}  (seed {self.seed})",
@@ -221,10 +215,11 @@ class FitResult:
             f"ensembles × {d.get('n_steps')} steps, τ_max {d.get('autocorr_time_max', 0):.1f}, "
             f"ESS_min {d.get('ess_min', 0):.0f}, R-hat_max {d.get('rhat_max', 0):.4f}"
         )
-        lines.append(f"{'':24}{'mean':>14}{'sd':>12}{'95 % interval':>32}")
-        for name, s in self.summary().items():
-            lo, hi = s["ci95"]
-            lines.append(f"{name:24}{s['mean']:14.6g}{s['sd']:12.3g}   [{lo:.6g}, {hi:.6g}]")
+        header = f"{100 * check_prob(prob):g} % interval"
+        lines.append(f"{'':24}{'mean':>14}{'sd':>12}{header:>32}")
+        for name, s in self.summary(prob).items():
+            lo, hi = s.interval
+            lines.append(f"{name:24}{s.mean:14.6g}{s.sd:12.3g}   [{lo:.6g}, {hi:.6g}]")
         return "\n".join(lines)
 
     # -- files ----------------------------------------------------------------------

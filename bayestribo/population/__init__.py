@@ -24,6 +24,7 @@ trend
 
 from __future__ import annotations
 
+from bayestribo.inference.summary import summarize
 from bayestribo.population.groups import POOLED, GroupPosterior, Population, difference, population
 from bayestribo.population.hyperpriors import (
     DEFAULT_SIGMA_SCALES,
@@ -33,7 +34,6 @@ from bayestribo.population.hyperpriors import (
 )
 from bayestribo.population.likelihood import MarginalLikelihood
 from bayestribo.population.samples import RunSamples, as_run_samples, run_samples
-from bayestribo.population.summary import summarize
 from bayestribo.population.trend import Trend, slope_probabilities, trend
 
 __all__ = [

@@ -19,11 +19,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.errors import BayestriboError
+from bayestribo.inference.summary import ParameterSummary, check_prob, summarize
 from bayestribo.population.hyperpriors import SigmaPrior, sigma_priors
 from bayestribo.population.likelihood import MarginalLikelihood
 from bayestribo.population.sampler import sample_hyperparameters
 from bayestribo.population.samples import FitLike, RunSamples, as_run_samples
-from bayestribo.population.summary import check_prob, summarize
 
 __all__ = ["POOLED", "GroupPosterior", "Population", "difference", "population"]
 
@@ -62,7 +62,17 @@ class GroupPosterior:
     sigma_prior: dict[str, str]
     diagnostics: dict[str, Any] = field(default_factory=dict)
 
-    def summary(self, prob: float = 0.95) -> dict[str, Any]:
+    def summary(self, prob: float = 0.95) -> dict[str, dict[str, ParameterSummary]]:
+        """Per parameter, posterior summaries of the population mean and of σ."""
+        return {
+            name: {
+                "mean": ParameterSummary.from_samples(self.mean[name], prob),
+                "sigma": ParameterSummary.from_samples(self.sigma[name], prob),
+            }
+            for name in self.parameters
+        }
+
+    def to_dict(self, prob: float = 0.95) -> dict[str, Any]:
         """JSON-ready summary: per parameter the mean's and σ's posterior summaries."""
         return {
             "label": self.label,
@@ -87,7 +97,7 @@ def difference(
     """Posterior of mean_a − mean_b for one parameter (independent groups).
 
     The two groups' posteriors are independent, so draws are paired after a seeded
-    shuffle of each. Returns :func:`~bayestribo.population.summary.summarize` of the
+    shuffle of each. Returns :func:`~bayestribo.inference.summary.summarize` of the
     difference plus ``prob_positive`` = P(mean_a > mean_b | data).
     """
     if parameter not in a.mean or parameter not in b.mean:
@@ -144,8 +154,8 @@ class Population:
         return {
             "by": self.by,
             "parameters": list(self.parameters),
-            "groups": [g.summary(prob) for g in self.groups.values()],
-            "pooled": None if self.pooled is None else self.pooled.summary(prob),
+            "groups": [g.to_dict(prob) for g in self.groups.values()],
+            "pooled": None if self.pooled is None else self.pooled.to_dict(prob),
             "differences": {name: self.differences(name, prob) for name in self.parameters},
         }
 

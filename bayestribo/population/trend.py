@@ -27,11 +27,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.errors import BayestriboError
+from bayestribo.inference.summary import ParameterSummary, summarize
 from bayestribo.population.hyperpriors import SigmaPrior, sigma_priors
 from bayestribo.population.likelihood import MarginalLikelihood
 from bayestribo.population.sampler import sample_hyperparameters
 from bayestribo.population.samples import FitLike, RunSamples, as_run_samples
-from bayestribo.population.summary import summarize
 
 __all__ = ["Trend", "slope_probabilities", "trend"]
 
@@ -103,6 +103,17 @@ class Trend:
         out = summarize(self.slope[parameter], prob)
         out.update(slope_probabilities(self.slope[parameter], self.rope.get(parameter)))
         return out
+
+    def summary(self, prob: float = 0.95) -> dict[str, dict[str, ParameterSummary]]:
+        """Per parameter, posterior summaries of the slope, the intercept and σ."""
+        return {
+            p: {
+                "slope": ParameterSummary.from_samples(self.slope[p], prob),
+                "intercept": ParameterSummary.from_samples(self.intercept[p], prob),
+                "sigma": ParameterSummary.from_samples(self.sigma[p], prob),
+            }
+            for p in self.parameters
+        }
 
     def to_dict(self, prob: float = 0.95) -> dict[str, Any]:
         """JSON-ready summary."""
