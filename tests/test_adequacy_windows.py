@@ -7,7 +7,7 @@ import itertools
 import numpy as np
 import pytest
 
-from bayestribo.adequacy.segments import _simpson, fit_segment, peak_positions, whole_decay_fit
+from bayestribo.adequacy.segments import fit_segment, peak_positions, whole_decay_fit
 from bayestribo.adequacy.windows import (
     BayesianWindows,
     WindowFit,
@@ -24,17 +24,6 @@ ZETA, MU = 0.0236, 0.0294
 @pytest.fixture(scope="module")
 def decay():
     return analysed_decay(simulate(seed=11))
-
-
-def test_simpson_weights_integrate_cubics_exactly():
-    # Independent check of the quadrature: Simpson is exact for cubics (even count),
-    # and the odd-count variant (trapezoid on the last step) for linear functions.
-    x = np.linspace(0.0, 2.0, 11)
-    w = _simpson(10, np.diff(x))
-    assert w @ (x**3 - x + 1) == pytest.approx(2.0**4 / 4 - 2.0 + 2.0, rel=1e-13)
-    x = np.linspace(0.0, 1.0, 8)
-    w = _simpson(7, np.diff(x))
-    assert w @ (3 * x + 1) == pytest.approx(2.5, rel=1e-13)
 
 
 def test_windows_cover_the_decay_without_gaps(decay):

@@ -7,7 +7,7 @@ import pytest
 from scipy.stats import multivariate_normal
 
 from bayestribo.signal.decay import energy_decay
-from bayestribo.signal.increments import _simpson_weights, increment_weights, pi_data
+from bayestribo.signal.increments import increment_weights, pi_data, simpson_weights
 from bayestribo.signal.noise import noise_model, resolution_for_range
 from bayestribo.synthetic.recording import simulate
 
@@ -15,7 +15,7 @@ from bayestribo.synthetic.recording import simulate
 @pytest.mark.parametrize("n", [1, 2, 3, 4, 5, 8, 11])
 def test_quadrature_weights_are_exact_for_cubics(n):
     h = 0.1
-    w = _simpson_weights(n, h)
+    w = simpson_weights(n, h)
     x = np.linspace(0.0, n * h, n + 1)
     degree = 1 if n == 1 else 3  # the trapezoidal rule is exact for lines only
     for k in range(degree + 1):
@@ -138,3 +138,52 @@ def test_resolution_table_scales_with_range():
     assert resolution_for_range("velocity", 0.5) == pytest.approx(0.0075e-6)
     with pytest.raises(ValueError, match="channel"):
         resolution_for_range("force", 1.0)
+
+
+@pytest.mark.parametrize("n", range(1, 10))
+def test_simpson_weights_integrate_polynomials_exactly(n):
+    # Simpson and the 3/8 rule are exact for cubics; the lone trapezoid (n = 1) for lines.
+    from bayestribo.signal.increments import simpson_weights
+
+    h = 0.37
+    x = 1.3 + h * np.arange(n + 1)
+    w = simpson_weights(n, h)
+    degree = 1 if n == 1 else 3
+    for k in range(degree + 1):
+        exact = (x[-1] ** (k + 1) - x[0] ** (k + 1)) / (k + 1)
+        assert w @ x**k == pytest.approx(exact, rel=1e-12)
+
+
+def test_derived_channel_noise_agrees_with_the_linearised_propagation():
+    # Velocity recorded, displacement integrated from it: the change of each
+    # increment is, to first order, a_j·η with a_j = Cᵀ(w_j y) + w_j y' (C the
+    # cumulative-trapezoid matrix), so its variance is σ²|a_j|², computed here by
+    # linear algebra independently of the Monte Carlo in increment_noise.
+    from bayestribo.signal.increments import increment_noise, increment_weights
+
+    n = 201
+    tau = np.linspace(0.0, 4 * np.pi, n)
+    y, yp = np.cos(tau) * np.exp(-0.05 * tau), -np.sin(tau) * np.exp(-0.05 * tau)
+    edges, weights = increment_weights(n, float(tau[1] - tau[0]), 8)
+    sigma = 1e-4
+    bias, var = increment_noise(
+        tau, y, yp, edges, weights, 0.0, sigma, derived="displacement", n_replicates=4000, seed=3
+    )
+    h = tau[1] - tau[0]
+    cum = np.zeros((n, n))  # δy_i = Σ_k C_ik η_k, trapezoid from sample 0
+    for i in range(1, n):
+        cum[i, : i + 1] = h
+        cum[i, 0] = cum[i, i] = h / 2
+    expected, expected_bias = [], []
+    dy2 = sigma**2 * np.sum(cum * cum, axis=1)  # Var δy_i
+    for a, b, w in zip(edges[:-1], edges[1:], weights, strict=True):
+        wy, wyp = np.zeros(n), np.zeros(n)
+        wy[a : b + 1], wyp[a : b + 1] = w * y[a : b + 1], w * yp[a : b + 1]
+        expected.append(sigma**2 * np.sum((cum.T @ wy + wyp) ** 2))
+        # the mean change is second order: ½ Σ w (Var δy + σ²)
+        expected_bias.append(0.5 * w @ (dy2[a : b + 1] + sigma**2))
+    expected = np.asarray(expected)
+    # 4000 replicates: relative sd of a variance estimate √(2/4000) ≈ 2.2 %.
+    np.testing.assert_allclose(var, expected, rtol=0.1)
+    # the mean's Monte Carlo error is √(var/4000): 5 of them
+    assert np.all(np.abs(bias - expected_bias) < 5 * np.sqrt(expected / 4000))

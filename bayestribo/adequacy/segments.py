@@ -8,21 +8,18 @@ paper, after Wu et al. 2007).
 
 The fit maximises the likelihood the Bayesian fit uses: the retrograde integral
 Π (Eq. 39) restricted to the segment, observed on a grid as independent increments
-``D_j = ∫_{τ_j}^{τ_{j+1}} E dτ`` (composite Simpson rule on the samples), each with
-the variance its measurement noise gives it, against the same increments of the
-exact model's Π (:func:`bayestribo.model.exact_pi`, started at the segment's first
-turning point with amplitude Y_0 fitted, μ_s = μ_k). The free parameters are ζ, the
+``D_j = ∫_{τ_j}^{τ_{j+1}} E dτ``, each with the variance its measurement noise gives
+it: the quadrature weights, the noise bias and the increment variances are those of
+:mod:`bayestribo.signal.increments`, on a finer grid
+(:data:`INCREMENTS_PER_HALF_CYCLE`), against the same increments of the exact
+model's Π (:func:`bayestribo.model.exact_pi`, started at the segment's first turning
+point with amplitude Y_0 fitted, μ_s = μ_k). The free parameters are ζ, the
 dimensionless friction μ (μ_k with a loaded rig, else the friction displacement in
 signal units) and Y_0.
 
-Noise. With both channels recorded the per-sample energy noise is white with
-variance ``y²σ_y² + y'²σ_y'²``; E is corrected for its mean ``½(σ_y² + σ_y'²)``. When
-the velocity was derived from the displacement (Savitzky-Golay derivative, as in
-:func:`bayestribo.signal.decay.energy_decay`) its noise is correlated with the displacement's:
-the increment variances and the bias are then propagated by Monte Carlo through the
-same derivative filter (seeded, linearised in the noise). A derived displacement
-(integrated velocity) is treated as noise-free: its error is a slow drift absorbed
-by the equilibrium fit.
+Noise: :func:`bayestribo.signal.increments.increment_noise`, white per channel when
+both are recorded, propagated by Monte Carlo through the derivation of a derived
+channel.
 
 Uncertainty. The covariance is the inverse Fisher information of the increments,
 ``(JᵀWJ)⁻¹``, multiplied by the reduced χ² of the fit when that exceeds one (a
@@ -33,18 +30,21 @@ labelled as such.
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import scipy.optimize
-import scipy.signal
 from numpy.typing import NDArray
 
 from bayestribo.errors import RecordingError
 from bayestribo.signal.decay import EnergyDecay
+from bayestribo.signal.increments import (
+    increment_noise,
+    increment_weights,
+    integrate_increments,
+)
 
 __all__ = [
     "PARAMETERS",
@@ -128,101 +128,45 @@ class _Noise:
     sigma_y: float
     sigma_yp: float
     derived: str | None
-    filter_window: int
-    dt: float
-    omega: float
+    savgol_window: int | None
 
 
 def segment_noise(decay: EnergyDecay) -> _Noise:
     """Noise levels of a decay in units of y and y', with how the channels were made."""
     sy = decay.noise_y
     syp = decay.noise_yp
-    dt = float(np.median(np.diff(decay.t)))
-    period = 2.0 * decay.peaks.half_period
-    window = max(7, round(period / dt / 8.0) | 1)  # as energy_decay's derivative
     if sy is None and syp is None:
         raise RecordingError("the decay has no noise level on either channel")
     return _Noise(
         sigma_y=0.0 if sy is None else float(sy),
         sigma_yp=0.0 if syp is None else float(syp),
         derived=decay.derived_channel,
-        filter_window=int(window),
-        dt=dt,
-        omega=float(decay.scaling.omega),
+        savgol_window=decay.savgol_window,
     )
 
 
-def _simpson(n_intervals: int, h: NDArray) -> NDArray:
-    """Composite Simpson weights over samples with local steps ``h`` (n_intervals even)."""
-    w = np.zeros(n_intervals + 1)
-    if n_intervals == 1:
-        w[:] = 0.5 * h[0]
-        return w
-    if n_intervals % 2:
-        # Simpson on all but the last interval, trapezoid on the last one.
-        w[:-1] = _simpson(n_intervals - 1, h[:-1])
-        w[-2:] += 0.5 * h[-1]
-        return w
-    hh = float(np.mean(h))
-    w[0:-1:2] += hh / 3.0
-    w[1::2] += 4.0 * hh / 3.0
-    w[2::2] += hh / 3.0
-    return w
-
-
-def _grid(n_samples: int, samples_per_half: float) -> NDArray:
-    """Grid edges (sample indices) with an even number of samples per increment."""
-    step = max(2, 2 * round(samples_per_half / INCREMENTS_PER_HALF_CYCLE / 2.0))
-    edges = np.arange(0, n_samples, step)
-    if edges[-1] != n_samples - 1:
-        if n_samples - 1 - edges[-1] < step // 2 and edges.size > 1:
-            edges[-1] = n_samples - 1
-        else:
-            edges = np.append(edges, n_samples - 1)
-    return edges
-
-
-def _increment_matrix(tau: NDArray, edges: NDArray) -> list[tuple[int, int, NDArray]]:
-    out = []
-    for a, b in itertools.pairwise(edges):
-        out.append((int(a), int(b), _simpson(int(b - a), np.diff(tau[a : b + 1]))))
-    return out
-
-
 def _observed(
-    tau: NDArray, y: NDArray, yp: NDArray, noise: _Noise, edges: NDArray, seed: int
-) -> tuple[NDArray, NDArray]:
-    """Observed increments (bias-corrected) and their noise variances."""
-    parts = _increment_matrix(tau, edges)
-    energy = 0.5 * (y * y + yp * yp)
-    if noise.derived == "velocity" and noise.sigma_y > 0.0:
-        rng = np.random.default_rng(seed)
-        eps = noise.sigma_y * rng.standard_normal((NOISE_REPLICATES, y.size))
-        eta = (
-            scipy.signal.savgol_filter(
-                eps,
-                min(noise.filter_window, y.size - (1 - y.size % 2)),
-                5,
-                deriv=1,
-                delta=noise.dt,
-                mode="interp",
-                axis=1,
-            )
-            / noise.omega
-        )
-        bias = 0.5 * (noise.sigma_y**2 + float(np.mean(eta * eta)))
-        d_energy = y * eps + yp * eta  # linearised noise of E
-        var = np.array([np.var(d_energy[:, a : b + 1] @ w) for a, b, w in parts])
-    else:
-        sy2 = noise.sigma_y**2 if noise.derived != "displacement" else 0.0
-        syp2 = noise.sigma_yp**2
-        bias = 0.5 * (sy2 + syp2)
-        ve = y * y * sy2 + yp * yp * syp2 + 0.5 * (sy2 * sy2 + syp2 * syp2)
-        var = np.array([float(ve[a : b + 1] @ (w * w)) for a, b, w in parts])
-    e = energy - bias
-    obs = np.array([float(e[a : b + 1] @ w) for a, b, w in parts])
+    tau: NDArray, y: NDArray, yp: NDArray, noise: _Noise, n_increments: int, seed: int
+) -> tuple[NDArray, NDArray, NDArray]:
+    """Grid edges, observed increments (bias-corrected) and their noise variances."""
+    h = float(tau[1] - tau[0])
+    edges, weights = increment_weights(tau.size, h, n_increments)
+    bias, var = increment_noise(
+        tau,
+        y,
+        yp,
+        edges,
+        weights,
+        noise.sigma_y,
+        noise.sigma_yp,
+        derived=noise.derived,
+        savgol_window=noise.savgol_window,
+        n_replicates=NOISE_REPLICATES,
+        seed=seed,
+    )
+    obs = integrate_increments(0.5 * (y * y + yp * yp), edges, weights) - bias
     floor = 1e-12 * max(float(np.max(var)), 1e-300)
-    return obs, np.maximum(var, floor)
+    return edges, obs, np.maximum(var, floor)
 
 
 def _start_values(peaks_abs: NDArray) -> tuple[float, float]:
@@ -287,13 +231,12 @@ def fit_segment(
             f"a segment of {tau.size} samples and {peaks_abs.size} turning points is too "
             "short to fit; use a longer window"
         )
-    samples_per_half = (tau.size - 1) / max(peaks_abs.size - 1, 1)
-    edges = _grid(tau.size, samples_per_half)
+    n_increments = INCREMENTS_PER_HALF_CYCLE * max(peaks_abs.size - 1, 1)
+    edges, obs, var = _observed(tau, y, yp, noise, n_increments, seed)
     if edges.size < 9:
         raise RecordingError(
             f"a segment with {edges.size - 1} Π increments is too short to fit; use a longer window"
         )
-    obs, var = _observed(tau, y, yp, noise, edges, seed)
     sd = np.sqrt(var)
     tau_e = tau[edges]
     tau_end = float(tau[-1])

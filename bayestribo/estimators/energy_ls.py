@@ -40,7 +40,8 @@ from bayestribo.errors import RecordingError
 from bayestribo.estimators.feeny_liang import feeny_liang
 from bayestribo.estimators.result import Estimate, friction_fraction
 from bayestribo.model.scaling import Rig
-from bayestribo.signal.decay import derive_velocity
+from bayestribo.signal.decay import check_time, derive_velocity, retrograde_integral
+from bayestribo.signal.increments import white_noise_bias
 from bayestribo.signal.peaks import Peaks, find_peaks, prepare_signal
 
 __all__ = ["EnergyData", "energy_data", "energy_least_squares"]
@@ -89,23 +90,12 @@ class EnergyData:
     source: str
 
 
-def _uniform_dt(t: NDArray) -> float:
-    dt = np.diff(t)
-    med = float(np.median(dt))
-    if np.max(np.abs(dt - med)) > 0.01 * med:
-        raise RecordingError(
-            "t must be uniformly sampled (within 1 %) to differentiate or integrate the "
-            f"signal; sample intervals range from {dt.min():.6g} to {dt.max():.6g} s"
-        )
-    return med
-
-
 def _derivative(t: NDArray, x: NDArray, period: float, sigma: float) -> tuple[NDArray, float]:
     """Velocity from the displacement and its noise.
 
     See :func:`bayestribo.signal.decay.derive_velocity`.
     """
-    _uniform_dt(t)
+    check_time(t)
     v, gain = derive_velocity(t, x, period)
     return v, sigma * gain
 
@@ -155,8 +145,8 @@ def energy_data(
         v = v - vpk.offset
         v_noise = vpk.noise
     if x is None:
-        dt = _uniform_dt(t)
-        x = scipy.integrate.cumulative_trapezoid(v, dx=dt, initial=0.0)
+        t = check_time(t)
+        x = scipy.integrate.cumulative_trapezoid(v, t, initial=0.0)
         sources.append("x integrated from v")
     else:
         sources.append("x measured")
@@ -191,10 +181,8 @@ def energy_data(
     tau = omega * (ts - t0)
     y = xs / ell
     yp = vs / (ell * omega)
-    noise_energy = 0.5 * ((x_noise / ell) ** 2 + (v_noise / (ell * omega)) ** 2)
-    energy = 0.5 * (y * y + yp * yp) - noise_energy
-    cum = scipy.integrate.cumulative_trapezoid(energy, tau, initial=0.0)
-    pi = cum[-1] - cum
+    energy = 0.5 * (y * y + yp * yp) - white_noise_bias(x_noise / ell, v_noise / (ell * omega))
+    pi = retrograde_integral(tau, energy)
     return EnergyData(
         tau=tau,
         y=y,

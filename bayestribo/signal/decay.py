@@ -60,6 +60,7 @@ from bayestribo.signal.peaks import Peaks, estimate_noise, find_peaks
 __all__ = [
     "EnergyDecay",
     "NoiseLevels",
+    "check_time",
     "derive_velocity",
     "energy_decay",
     "retrograde_integral",
@@ -209,7 +210,24 @@ def retrograde_integral(tau: ArrayLike, energy: ArrayLike) -> NDArray:
     return backwards[::-1]
 
 
-def _check_time(t: ArrayLike) -> NDArray:
+def check_time(t: ArrayLike) -> NDArray:
+    """Time stamps as a 1-D float array, checked: finite, strictly increasing, regular.
+
+    Parameters
+    ----------
+    t : array_like
+        Sample times [s].
+
+    Returns
+    -------
+    ndarray
+
+    Raises
+    ------
+    RecordingError
+        Naming the first bad sample: too few samples, not finite, not increasing, or a
+        step off the median by more than :data:`TIME_STEP_TOLERANCE` (relative).
+    """
     t = np.asarray(t, dtype=float)
     if t.ndim != 1:
         raise RecordingError(f"t must be a 1-D array of times [s], got shape {t.shape}")
@@ -463,7 +481,7 @@ def energy_decay(
         No signal, bad time stamps or samples, no oscillation, or fewer than three
         oscillations after the skipped ones.
     """
-    t = _check_time(t)
+    t = check_time(t)
     x = _check_signal("displacement", displacement, t.size)
     v = _check_signal("velocity", velocity, t.size)
     if x is None and v is None:

@@ -51,16 +51,43 @@ from scipy.integrate import cumulative_trapezoid
 from bayestribo.signal.decay import EnergyDecay
 from bayestribo.signal.noise import NoiseModel
 
-__all__ = ["PiData", "increment_weights", "pi_data"]
+__all__ = [
+    "PiData",
+    "increment_noise",
+    "increment_weights",
+    "integrate_increments",
+    "pi_data",
+    "simpson_weights",
+    "white_noise_bias",
+]
+
+#: Monte Carlo replicates drawn at once when the noise is propagated through the
+#: derivation of a channel (memory: block × samples floats).
+_BLOCK = 25
 
 
-def _simpson_weights(n_intervals: int, h: float) -> NDArray:
+def simpson_weights(n_intervals: int, h: float) -> NDArray:
     """Weights of a composite rule over ``n_intervals`` equal steps of ``h``.
 
     Simpson's rule h/3·[1, 4, 2, 4, ..., 4, 1] for an even count; for an odd count
     Simpson on all but the last three intervals and the 3/8 rule
-    3h/8·[1, 3, 3, 1] on those; the trapezoidal rule for a single interval.
+    3h/8·[1, 3, 3, 1] on those (both exact for cubics, error O(h⁴)); the trapezoidal
+    rule for a single interval.
+
+    Parameters
+    ----------
+    n_intervals : int
+        Number of intervals (samples - 1), >= 1.
+    h : float
+        The step.
+
+    Returns
+    -------
+    ndarray
+        ``n_intervals + 1`` weights; ``weights @ f`` approximates the integral of f.
     """
+    if n_intervals < 1:
+        raise ValueError(f"n_intervals must be >= 1, got {n_intervals}")
     w = np.zeros(n_intervals + 1)
     if n_intervals == 1:
         w[:] = 0.5 * h
@@ -104,7 +131,7 @@ def increment_weights(n_samples: int, h: float, n_increments: int) -> tuple[NDAr
         edges.pop()  # merge a one-interval remainder into the previous increment
     edges.append(intervals)
     edges_arr = np.asarray(edges, dtype=int)
-    weights = [_simpson_weights(int(b - a), h) for a, b in itertools.pairwise(edges_arr)]
+    weights = [simpson_weights(int(b - a), h) for a, b in itertools.pairwise(edges_arr)]
     return edges_arr, weights
 
 
@@ -162,26 +189,125 @@ class PiData:
         return np.cumsum(self.variance[::-1])[::-1]
 
 
-def _increments(energy: NDArray, edges: NDArray, weights: list[NDArray]) -> NDArray:
-    return np.array(
-        [w @ energy[a : b + 1] for a, b, w in zip(edges[:-1], edges[1:], weights, strict=True)]
+def integrate_increments(values: NDArray, edges: NDArray, weights: list[NDArray]) -> NDArray:
+    """∫ values over each increment (``values`` of shape (..., samples))."""
+    return np.stack(
+        [
+            values[..., a : b + 1] @ w
+            for a, b, w in zip(edges[:-1], edges[1:], weights, strict=True)
+        ],
+        axis=-1,
     )
 
 
 def _rederive(
-    decay: EnergyDecay, y_noisy: NDArray | None, yp_noisy: NDArray | None
+    tau: NDArray,
+    y_noisy: NDArray,
+    yp_noisy: NDArray,
+    y: NDArray,
+    yp: NDArray,
+    derived: str,
+    savgol_window: int | None,
 ) -> tuple[NDArray, NDArray]:
-    """Repeat the derivation of the missing channel on a perturbed recorded channel."""
-    tau = decay.tau
+    """Repeat the derivation of the missing channel on perturbed recorded channels
+    (rows of replicates)."""
     h = float(tau[1] - tau[0])
-    if decay.derived_channel == "velocity":
-        window = decay.savgol_window
-        yp = scipy.signal.savgol_filter(y_noisy, window, 5, deriv=1, delta=h, mode="interp")
-        return y_noisy, yp
+    if derived == "velocity":
+        window = min(int(savgol_window or 7), tau.size - (1 - tau.size % 2))
+        yp_new = scipy.signal.savgol_filter(
+            y_noisy, window, 5, deriv=1, delta=h, mode="interp", axis=-1
+        )
+        return y_noisy, yp_new
     # displacement integrated from the velocity: the integration constant (the
     # equilibrium) is re-estimated from the data, so only the noise's integral remains
-    y = decay.y + cumulative_trapezoid(yp_noisy - decay.yp, tau, initial=0.0)
-    return y, yp_noisy
+    y_new = y + cumulative_trapezoid(yp_noisy - yp, tau, initial=0.0, axis=-1)
+    return y_new, yp_noisy
+
+
+def white_noise_bias(sigma_y: float, sigma_yp: float) -> float:
+    """Mean that white noise adds to E = (y² + y'²)/2 per sample: ½(σ_y² + σ_y'²).
+
+    Parameters
+    ----------
+    sigma_y, sigma_yp : float
+        Noise standard deviations of y and y' (dimensionless, as y and y').
+    """
+    return 0.5 * (sigma_y**2 + sigma_yp**2)
+
+
+def increment_noise(
+    tau: NDArray,
+    y: NDArray,
+    yp: NDArray,
+    edges: NDArray,
+    weights: list[NDArray],
+    sigma_y: float,
+    sigma_yp: float,
+    *,
+    derived: str | None = None,
+    savgol_window: int | None = None,
+    n_replicates: int = 300,
+    seed: int = 0,
+) -> tuple[NDArray, NDArray]:
+    """Noise bias and noise variance of each increment of E = (y² + y'²)/2.
+
+    With both channels recorded (``derived`` None) the noise is white and
+    independent per channel: per sample E has the bias ½(σ_y² + σ_y'²) and the
+    variance y²σ_y² + y'²σ_y'² + ½(σ_y⁴ + σ_y'⁴), summed over each increment with the
+    squared quadrature weights. When one channel was derived from the other, its
+    noise is the derivation of the recorded channel's: white noise is drawn on the
+    recorded channel (``n_replicates`` seeded replicates), the derivation is repeated
+    (Savitzky-Golay derivative with ``savgol_window``, or the cumulative trapezoid)
+    and the bias and variance are the mean and variance of the increments' change.
+
+    Parameters
+    ----------
+    tau, y, yp : ndarray
+        Dimensionless time (regular) and the channels about the equilibrium.
+    edges, weights
+        The grid (:func:`increment_weights`).
+    sigma_y, sigma_yp : float
+        Noise standard deviations of the recorded channels in units of y and y'.
+    derived : {None, "velocity", "displacement"}
+        The channel derived from the other.
+    savgol_window : int, optional
+        Window of the derivative filter (``derived="velocity"``).
+    n_replicates, seed : int
+        Monte Carlo replicates and their seed (derived channel only).
+
+    Returns
+    -------
+    bias, variance : ndarray
+        Per increment.
+    """
+    if derived is None:
+        bias_per_sample = white_noise_bias(sigma_y, sigma_yp)
+        var_e = y**2 * sigma_y**2 + yp**2 * sigma_yp**2 + 0.5 * (sigma_y**4 + sigma_yp**4)
+        bias = bias_per_sample * np.array([w.sum() for w in weights])
+        variance = np.array(
+            [
+                w**2 @ var_e[a : b + 1]
+                for a, b, w in zip(edges[:-1], edges[1:], weights, strict=True)
+            ]
+        )
+        return bias, variance
+    if derived not in ("velocity", "displacement"):
+        raise ValueError(f"derived must be None, 'velocity' or 'displacement', got {derived!r}")
+    rng = np.random.default_rng(seed)
+    reference = integrate_increments(0.5 * (y * y + yp * yp), edges, weights)
+    draws = np.empty((n_replicates, edges.size - 1))
+    for first in range(0, n_replicates, _BLOCK):
+        count = min(_BLOCK, n_replicates - first)
+        # one (count, samples) draw is the same stream as ``count`` draws of a row
+        if derived == "velocity":
+            noisy = y + rng.normal(0.0, sigma_y, (count, tau.size))
+            yn, ypn = _rederive(tau, noisy, yp, y, yp, derived, savgol_window)
+        else:
+            noisy = yp + rng.normal(0.0, sigma_yp, (count, tau.size))
+            yn, ypn = _rederive(tau, y, noisy, y, yp, derived, savgol_window)
+        energy = 0.5 * (yn * yn + ypn * ypn)
+        draws[first : first + count] = integrate_increments(energy, edges, weights) - reference
+    return draws.mean(axis=0), draws.var(axis=0, ddof=1)
 
 
 def pi_data(
@@ -221,32 +347,21 @@ def pi_data(
     sc = decay.scaling
     sig_y = noise.displacement / sc.length_scale
     sig_yp = noise.velocity / (sc.length_scale * sc.omega)
-    e2 = _increments(decay.energy**2, edges, weights)
-
-    if decay.derived_channel is None:
-        bias_per_sample = 0.5 * (sig_y**2 + sig_yp**2)
-        var_e = decay.y**2 * sig_y**2 + decay.yp**2 * sig_yp**2 + 0.5 * (sig_y**4 + sig_yp**4)
-        bias = bias_per_sample * np.array([w.sum() for w in weights])
-        variance = np.array(
-            [
-                w**2 @ var_e[a : b + 1]
-                for a, b, w in zip(edges[:-1], edges[1:], weights, strict=True)
-            ]
-        )
-    else:
-        rng = np.random.default_rng(seed)
-        reference = _increments(decay.energy, edges, weights)
-        draws = np.empty((n_replicates, edges.size - 1))
-        for r in range(n_replicates):
-            if decay.derived_channel == "velocity":
-                y, yp = _rederive(decay, decay.y + rng.normal(0.0, sig_y, tau.size), None)
-            else:
-                y, yp = _rederive(decay, None, decay.yp + rng.normal(0.0, sig_yp, tau.size))
-            draws[r] = _increments(0.5 * (y * y + yp * yp), edges, weights) - reference
-        bias = draws.mean(axis=0)
-        variance = draws.var(axis=0, ddof=1)
-
-    observed = _increments(decay.energy, edges, weights) - bias
+    e2 = integrate_increments(decay.energy**2, edges, weights)
+    bias, variance = increment_noise(
+        tau,
+        decay.y,
+        decay.yp,
+        edges,
+        weights,
+        sig_y,
+        sig_yp,
+        derived=decay.derived_channel,
+        savgol_window=decay.savgol_window,
+        n_replicates=n_replicates,
+        seed=seed,
+    )
+    observed = integrate_increments(decay.energy, edges, weights) - bias
     if decay.motion_ended:
         # The end of motion is located within about a sample: allow for the energy of
         # ±2 samples at the end in the last increment.
@@ -262,6 +377,9 @@ def pi_data(
         yp0=float(decay.yp[0]),
         noise_bias=bias,
         offset_design=np.column_stack(
-            [_increments(decay.y, edges, weights), _increments(tau * decay.y, edges, weights)]
+            [
+                integrate_increments(decay.y, edges, weights),
+                integrate_increments(tau * decay.y, edges, weights),
+            ]
         ),
     )
