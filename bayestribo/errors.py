@@ -13,6 +13,7 @@ __all__ = [
     "BayestriboError",
     "ConvergenceWarning",
     "MisfitWarning",
+    "MissingDependencyError",
     "RecordingError",
     "RunFormatError",
 ]
@@ -44,6 +45,11 @@ class RunFormatError(RecordingError):
 
 class AcquisitionError(BayestriboError, OSError):
     """The acquisition link failed (timeout, disconnect, bad frame, busy port)."""
+
+
+class MissingDependencyError(BayestriboError, ImportError):
+    """A feature needs an optional package that is not installed (the message names
+    the extra to install)."""
 
 
 class ConvergenceWarning(UserWarning):

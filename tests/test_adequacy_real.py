@@ -8,20 +8,13 @@ and the linear law (constant ζ and friction) must be found inadequate.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
+from _paths import APPSTAT
 
 from bayestribo.adequacy import check_adequacy
 
-DATA = (
-    Path(__file__).resolve().parents[2]
-    / "shared"
-    / "external-data"
-    / "appstat2020-harmonic-oscillator"
-    / "HarmOsc2.txt"
-)
+DATA = APPSTAT / "HarmOsc2.txt"
 
 pytestmark = pytest.mark.skipif(not DATA.exists(), reason=f"real recording not found: {DATA}")
 

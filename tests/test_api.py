@@ -5,17 +5,17 @@ from __future__ import annotations
 
 import re
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
+from _paths import APPSTAT, REPO
 
 import bayestribo
 from bayestribo import ParameterSummary, as_run, simulate
 from bayestribo.errors import BayestriboError
 
-ROOT = Path(__file__).resolve().parents[1]
-EXTERNAL = ROOT.parent / "shared" / "external-data" / "appstat2020-harmonic-oscillator"
+ROOT = REPO
+EXTERNAL = APPSTAT
 
 
 @pytest.mark.parametrize("name", bayestribo.__all__)

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _paths import DATA
 
 from bayestribo import read_run
 from bayestribo.cli import simulate as simulate_command
@@ -22,8 +23,6 @@ from bayestribo.synthetic.campaign import (
     WATER_FRACTIONS,
     campaign_plan,
 )
-
-DATA = Path(__file__).resolve().parents[1] / "data"
 
 
 @pytest.fixture(scope="module")

@@ -9,13 +9,13 @@ from __future__ import annotations
 
 import json
 import os
-from pathlib import Path
 
 import pytest
+from _paths import RUNS
 
 from bayestribo.cli import main
 
-DATA = Path(__file__).resolve().parents[1] / "data" / "runs"
+DATA = RUNS
 RUNS = ("glycerol-N0.07-r1", "glycerol-N0.59-r1", "air-r1")
 FAST = ["--max-steps", "400", "--population-steps", "400", "--quiet", "--json"]
 

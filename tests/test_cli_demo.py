@@ -6,12 +6,11 @@ import re
 from pathlib import Path
 
 import pytest
+from _paths import REPO
 
 from bayestribo.cli import demo, main
 
 pytest.importorskip("nbclient")
-
-REPO = Path(__file__).resolve().parents[1]
 
 
 @pytest.mark.skipif(not (REPO / "data").is_dir(), reason="the bundled campaign data/ is absent")

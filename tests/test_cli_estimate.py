@@ -12,9 +12,6 @@ from bayestribo.cli import estimate
 from bayestribo.errors import BayestriboError
 from bayestribo.estimators.all import METHODS
 
-REPO = Path(__file__).resolve().parents[1]
-HARMOSC3 = REPO.parent / "shared" / "external-data" / "appstat2020-harmonic-oscillator"
-
 
 def _cli(argv: list[str]) -> int:
     # the command's own parser, as the dispatcher in bayestribo.cli builds it
@@ -54,10 +51,8 @@ def test_table_output_and_method_subset(run_file: Path, capsys) -> None:
     assert "feeny_liang" in out and "energy_ls_exact" not in out
 
 
-def test_text_file_with_columns_and_arbitrary_unit(capsys) -> None:
-    path = HARMOSC3 / "HarmOsc3.txt"
-    if not path.is_file():
-        pytest.skip(f"real recording {path} not available")
+def test_text_file_with_columns_and_arbitrary_unit(appstat_file, capsys) -> None:
+    path = appstat_file("HarmOsc3.txt")
     code = _cli(["estimate", str(path), "--columns", "t,x", "--length-unit", "arbitrary", "--json"])
     assert code == 0
     out = json.loads(capsys.readouterr().out)

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _paths import REPO
 
 from bayestribo.cli import main
 from bayestribo.cli.report import campaign_selection, notebook_for, parse_params
@@ -14,7 +15,6 @@ from bayestribo.reports.notebooks import ReportError, inject_parameters, read_no
 
 pytest.importorskip("nbclient")
 
-REPO = Path(__file__).resolve().parents[1]
 RUN = REPO / "data" / "runs" / "glycerol-N0.31-r1.csv"
 
 

@@ -8,17 +8,16 @@ Coulomb only must lose clearly).
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
+from _paths import RUNS
 
 from bayestribo import simulate
 from bayestribo.errors import BayestriboError
 from bayestribo.inference import build_posterior, prepare
 from bayestribo.inference.comparison import LAWS, compare_dissipation_laws
 
-DATA = Path(__file__).resolve().parents[1] / "data" / "runs"
+DATA = RUNS
 needs_data = pytest.mark.skipif(not DATA.is_dir(), reason="bundled data/ folder not present")
 
 

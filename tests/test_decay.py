@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
+from _paths import APPSTAT
 
 from bayestribo.errors import RecordingError
 from bayestribo.model import exact_pi
@@ -13,8 +12,7 @@ from bayestribo.model.scaling import Rig
 from bayestribo.signal.decay import energy_decay, retrograde_integral
 from bayestribo.synthetic.recording import simulate
 
-EXTERNAL = Path(__file__).resolve().parents[2] / "shared" / "external-data"
-HARMOSC = EXTERNAL / "appstat2020-harmonic-oscillator"
+HARMOSC = APPSTAT
 
 ZETA, MU_K = 0.0236, 0.0294
 OFFSET = 3.1e-4  # displacement zero 0.31 mm away from the equilibrium

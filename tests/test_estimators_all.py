@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
+from _paths import APPSTAT
 from test_estimators_signals import F_HZ, sampled
 
 from bayestribo import Estimate, estimate_all
@@ -17,8 +17,7 @@ from bayestribo.estimators.all import METHODS
 from bayestribo.io.run import Run
 from bayestribo.model.scaling import Rig
 
-REPO = Path(__file__).resolve().parents[1]
-HARMOSC = REPO.parent / "shared" / "external-data" / "appstat2020-harmonic-oscillator"
+HARMOSC = APPSTAT
 
 FRICTION_AWARE = ("feeny_liang", "nonsuccessive", "energy_ls_exact", "energy_ls_averaged")
 

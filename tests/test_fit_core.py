@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
+from _paths import RUNS
 
 from bayestribo.errors import BayestriboError, ConvergenceWarning
 from bayestribo.inference import FitResult, fit
@@ -15,7 +15,7 @@ from bayestribo.signal.increments import pi_data
 from bayestribo.signal.noise import noise_model
 from bayestribo.synthetic.recording import simulate
 
-DATA = Path(__file__).resolve().parents[1] / "data" / "runs"
+DATA = RUNS
 pytestmark = pytest.mark.filterwarnings("ignore::FutureWarning")
 
 

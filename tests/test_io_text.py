@@ -6,16 +6,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _paths import APPSTAT
 
 from bayestribo import read_run
 from bayestribo.errors import RunFormatError
 
-EXTERNAL = (
-    Path(__file__).resolve().parents[2]
-    / "shared"
-    / "external-data"
-    / "appstat2020-harmonic-oscillator"
-)
+EXTERNAL = APPSTAT
 
 # From the data set's README: rows, sample step and first time stamp of each file.
 APPSTAT = [

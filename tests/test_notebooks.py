@@ -14,6 +14,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from _paths import APPSTAT, REPO
 
 nbformat = pytest.importorskip("nbformat")
 pytest.importorskip("nbclient")
@@ -32,8 +33,7 @@ from bayestribo.reports.notebooks import (  # noqa: E402
     to_html,
 )
 
-REPO = Path(__file__).resolve().parents[1]
-EXTERNAL = REPO.parent / "shared" / "external-data" / "appstat2020-harmonic-oscillator"
+EXTERNAL = APPSTAT
 
 #: Modules each notebook imports beyond the core (skip with a reason when absent).
 REQUIRES = {

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _paths import APPSTAT
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -15,12 +16,7 @@ from bayestribo import Run, read_run, simulate, write_run
 from bayestribo.errors import BayestriboError, RecordingError, RunFormatError
 from bayestribo.io import validate_run
 
-EXTERNAL = (
-    Path(__file__).resolve().parents[2]
-    / "shared"
-    / "external-data"
-    / "appstat2020-harmonic-oscillator"
-)
+EXTERNAL = APPSTAT
 
 
 @pytest.fixture(scope="module")

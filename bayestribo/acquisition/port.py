@@ -8,9 +8,10 @@ live elsewhere (:mod:`bayestribo.acquisition.protocol`); this module only moves 
 from __future__ import annotations
 
 import errno
+from types import ModuleType
+from typing import TYPE_CHECKING
 
-import serial
-
+from bayestribo._optional import require
 from bayestribo.acquisition.faults import (
     AcquisitionTimeout,
     DisconnectedError,
@@ -19,6 +20,9 @@ from bayestribo.acquisition.faults import (
 )
 from bayestribo.errors import AcquisitionError
 
+if TYPE_CHECKING:
+    import serial
+
 __all__ = ["DEFAULT_BAUDRATE", "Link", "open_port"]
 
 #: Default baud rate [bit/s]; USB CDC devices ignore it, UART bridges need ≥ 921600.
@@ -26,6 +30,11 @@ DEFAULT_BAUDRATE = 921_600
 
 _NOT_FOUND = {errno.ENOENT, errno.ENODEV, errno.ENXIO, errno.ECONNREFUSED, errno.EHOSTUNREACH}
 _BUSY = {errno.EBUSY, errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK}
+
+
+def _serial() -> ModuleType:
+    """pyserial, imported when a link is used (the ``acquire`` extra)."""
+    return require("serial", "the acquisition link")
 
 
 class Link:
@@ -54,7 +63,7 @@ class Link:
         try:
             waiting = self.port.in_waiting
             return bytes(self.port.read(min(max(waiting, 1), max_bytes)))
-        except (serial.SerialException, OSError) as exc:
+        except (_serial().SerialException, OSError) as exc:
             raise DisconnectedError(f"{self.url}: device disconnected ({exc})") from None
 
     def write_line(self, command: str) -> None:
@@ -70,9 +79,9 @@ class Link:
         try:
             self.port.write(command.encode("ascii") + b"\n")
             self.port.flush()
-        except serial.SerialTimeoutException:
+        except _serial().SerialTimeoutException:
             raise AcquisitionTimeout(f"{self.url}: timed out sending {command!r}") from None
-        except (serial.SerialException, OSError) as exc:
+        except (_serial().SerialException, OSError) as exc:
             raise DisconnectedError(
                 f"{self.url}: device disconnected while sending {command!r} ({exc})"
             ) from None
@@ -81,7 +90,7 @@ class Link:
         """Close the port, ignoring errors of a port that is already gone."""
         try:
             self.port.close()
-        except (serial.SerialException, OSError):
+        except (_serial().SerialException, OSError):
             pass
 
     def __enter__(self) -> Link:
@@ -127,14 +136,14 @@ def open_port(
     if not isinstance(url, str) or not url:
         raise PortNotFoundError(f"port: expected a device path or URL, got {url!r}")
     try:
-        port = serial.serial_for_url(
+        port = _serial().serial_for_url(
             url,
             baudrate=baudrate,
             timeout=read_timeout_s,
             write_timeout=write_timeout_s,
             exclusive=True,
         )
-    except (serial.SerialException, OSError, ValueError) as exc:
+    except (_serial().SerialException, OSError, ValueError) as exc:
         code = getattr(exc, "errno", None)
         text = str(exc)
         if code in _BUSY or "exclusively lock" in text or "busy" in text.lower():

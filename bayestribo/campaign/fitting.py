@@ -30,6 +30,7 @@ from typing import IO, Any
 
 import numpy as np
 
+from bayestribo._optional import require
 from bayestribo.errors import BayestriboError
 
 __all__ = [
@@ -306,15 +307,11 @@ def dask_executor(address: str | None = None, **cluster_kwargs: Any) -> Iterator
 
     Raises
     ------
-    BayestriboError
-        If ``dask.distributed`` is not installed.
+    MissingDependencyError
+        If ``dask.distributed`` is not installed (the ``dask`` extra).
     """
-    try:
-        from dask.distributed import Client, LocalCluster
-    except ImportError:
-        raise BayestriboError(
-            "dask_executor: dask.distributed is not installed (pip install 'dask[distributed]')"
-        ) from None
+    distributed = require("dask.distributed", "fitting on Dask")
+    Client, LocalCluster = distributed.Client, distributed.LocalCluster
     if address is None:
         with LocalCluster(**cluster_kwargs) as cluster, Client(cluster) as client:
             yield client.get_executor()

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from bayestribo._optional import require
 from bayestribo.errors import RunFormatError
 from bayestribo.io.run import COLUMNS, DISPLACEMENT, TIME, VELOCITY
 from bayestribo.io.text import check_scale
@@ -80,7 +81,7 @@ def read_tdms(
         those in the file), channels of different lengths or time steps, no time
         information, or an unknown unit without a scale factor.
     """
-    from nptdms import TdmsFile
+    TdmsFile = require("nptdms", "reading TDMS files").TdmsFile
 
     path = Path(path)
     where = str(path)

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from bayestribo._optional import require
 from bayestribo.errors import RunFormatError
 from bayestribo.io.run import COLUMNS, DISPLACEMENT, TIME, VELOCITY
 from bayestribo.io.text import check_scale
@@ -90,7 +91,7 @@ def read_uff(
         For a file pyuff cannot read, no or ambiguous records, an unknown unit label
         without a scale factor, or records with different time axes.
     """
-    import pyuff
+    pyuff = require("pyuff", "reading UFF files")
 
     path = Path(path)
     where = str(path)

@@ -27,6 +27,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from bayestribo._optional import require
 from bayestribo.errors import BayestriboError
 
 __all__ = [
@@ -66,14 +67,7 @@ class ReportError(BayestriboError):
 
 def _require(module: str) -> Any:
     """Import a Jupyter package the reports need, or say how to install it."""
-    import importlib
-
-    try:
-        return importlib.import_module(module)
-    except ImportError:
-        raise ReportError(
-            f"reports need {module}: pip install nbformat nbclient ipykernel nbconvert"
-        ) from None
+    return require(module, "making reports")
 
 
 def notebooks_dir() -> Path:
