@@ -35,7 +35,7 @@ __version__ = "0.1.0"
 _LAZY: dict[str, str] = {
     "fit": "bayestribo.inference.fitting",
     "FitResult": "bayestribo.inference.result",
-    "ParameterSummary": "bayestribo.inference.summary",
+    "ParameterSummary": "bayestribo.summary",
     "as_run": "bayestribo.io",
     "estimate_signals": "bayestribo.estimators",
     "Rig": "bayestribo.model.scaling",

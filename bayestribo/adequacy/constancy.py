@@ -41,7 +41,7 @@ from numpy.typing import NDArray
 
 from bayestribo.adequacy.windows import WindowedAnalysis
 from bayestribo.errors import RecordingError
-from bayestribo.inference.summary import ParameterSummary
+from bayestribo.summary import ParameterSummary
 
 __all__ = ["AmplitudeTrend", "ConstancyTest", "constancy_test"]
 

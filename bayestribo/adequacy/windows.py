@@ -49,8 +49,8 @@ from bayestribo.adequacy.segments import (
     whole_decay_fit,
 )
 from bayestribo.errors import BayestriboError, RecordingError
-from bayestribo.inference.summary import ParameterSummary
 from bayestribo.signal.decay import EnergyDecay, energy_decay
+from bayestribo.summary import ParameterSummary
 
 __all__ = [
     "BayesianWindows",

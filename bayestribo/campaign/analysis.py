@@ -25,10 +25,10 @@ from typing import Any
 import numpy as np
 
 from bayestribo.errors import BayestriboError
-from bayestribo.inference.summary import summarize
 from bayestribo.population.groups import Population, population
 from bayestribo.population.samples import FitLike, RunSamples, run_samples
 from bayestribo.population.trend import Trend, trend
+from bayestribo.summary import summarize
 
 __all__ = ["DEFAULT_BY", "VISCOSITY_KEY", "CampaignAnalysis", "analyse_campaign"]
 

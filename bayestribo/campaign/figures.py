@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from bayestribo.campaign.analysis import CampaignAnalysis
-from bayestribo.inference.summary import summarize
+from bayestribo.summary import summarize
 
 __all__ = ["PAPER_VALUES", "plot_against_load", "plot_derived", "plot_forest", "save_figures"]
 

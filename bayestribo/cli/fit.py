@@ -156,7 +156,7 @@ def run(args: argparse.Namespace) -> int:
     """Read the run, fit, print; exit status 1 when the sampler did not converge."""
     from bayestribo.errors import ConvergenceWarning
     from bayestribo.inference import fit
-    from bayestribo.inference.summary import check_prob
+    from bayestribo.summary import check_prob
 
     check_prob(args.prob)  # before the fit, not after it
     recording = read_run_from_args(args)

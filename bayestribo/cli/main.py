@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 from collections.abc import Sequence
 
@@ -61,6 +62,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BayestriboError as exc:
         print(f"bayestribo {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:
+        # The reader of standard output went away (``| head``): no traceback. Point
+        # stdout at devnull so that the interpreter's final flush does not fail too
+        # (the recipe of the Python documentation, "Note on SIGPIPE").
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 1
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 import scipy.integrate
 
-from bayestribo.inference.summary import ParameterSummary, check_prob
+from bayestribo.summary import ParameterSummary, check_prob
 
 __all__ = ["Estimate", "EstimateTable", "friction_fraction"]
 

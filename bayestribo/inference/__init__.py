@@ -23,7 +23,7 @@ from bayestribo.inference.priors import LogUniform, Normal, PriorSet, Uniform, d
 from bayestribo.inference.result import FitResult
 from bayestribo.inference.sampling import SamplerRun, SamplerSettings, run_ensembles
 from bayestribo.inference.sensitivity import prior_sensitivity
-from bayestribo.inference.summary import ParameterSummary
+from bayestribo.summary import ParameterSummary
 
 __all__ = [
     "FitResult",

@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bayestribo.inference.priors import PriorSet
-from bayestribo.inference.summary import ParameterSummary, check_prob
+from bayestribo.summary import ParameterSummary, check_prob
 
 __all__ = ["FitResult", "plain_data"]
 

@@ -24,7 +24,6 @@ trend
 
 from __future__ import annotations
 
-from bayestribo.inference.summary import summarize
 from bayestribo.population.groups import POOLED, GroupPosterior, Population, difference, population
 from bayestribo.population.hyperpriors import (
     DEFAULT_SIGMA_SCALES,
@@ -35,6 +34,7 @@ from bayestribo.population.hyperpriors import (
 from bayestribo.population.likelihood import MarginalLikelihood
 from bayestribo.population.samples import RunSamples, as_run_samples, run_samples
 from bayestribo.population.trend import Trend, slope_probabilities, trend
+from bayestribo.summary import summarize
 
 __all__ = [
     "DEFAULT_SIGMA_SCALES",

@@ -19,11 +19,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.errors import BayestriboError
-from bayestribo.inference.summary import ParameterSummary, check_prob, summarize
 from bayestribo.population.hyperpriors import SigmaPrior, sigma_priors
 from bayestribo.population.likelihood import MarginalLikelihood
 from bayestribo.population.sampler import sample_hyperparameters
 from bayestribo.population.samples import FitLike, RunSamples, as_run_samples
+from bayestribo.summary import ParameterSummary, check_prob, summarize
 
 __all__ = ["POOLED", "GroupPosterior", "Population", "difference", "population"]
 
@@ -97,7 +97,7 @@ def difference(
     """Posterior of mean_a − mean_b for one parameter (independent groups).
 
     The two groups' posteriors are independent, so draws are paired after a seeded
-    shuffle of each. Returns :func:`~bayestribo.inference.summary.summarize` of the
+    shuffle of each. Returns :func:`~bayestribo.summary.summarize` of the
     difference plus ``prob_positive`` = P(mean_a > mean_b | data).
     """
     if parameter not in a.mean or parameter not in b.mean:

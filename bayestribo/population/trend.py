@@ -27,11 +27,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.errors import BayestriboError
-from bayestribo.inference.summary import ParameterSummary, summarize
 from bayestribo.population.hyperpriors import SigmaPrior, sigma_priors
 from bayestribo.population.likelihood import MarginalLikelihood
 from bayestribo.population.sampler import sample_hyperparameters
 from bayestribo.population.samples import FitLike, RunSamples, as_run_samples
+from bayestribo.summary import ParameterSummary, summarize
 
 __all__ = ["Trend", "slope_probabilities", "trend"]
 
