@@ -2,7 +2,7 @@
 
 The fits use a low step ceiling (they need not converge: the test checks the pipeline,
 the catalog's skipping and that a Dask cluster gives the same fits as the process
-pool, not the posteriors; tests/test_population.py checks those).
+pool, not the posteriors; tests/test_population_groups.py checks those).
 """
 
 from __future__ import annotations
@@ -94,7 +94,7 @@ def test_a_folder_without_runs_is_a_package_error(tmp_path, capsys):
 
 
 def test_law_rows_flatten_the_comparison_for_the_csv_table():
-    # The PSIS-LOO comparison itself is tested in tests/test_comparison.py; running it
+    # The PSIS-LOO comparison itself is tested in tests/test_inference_comparison.py; running it
     # through the command (three fits per run) is too slow for the default suite.
     from bayestribo.cli.campaign import _law_row
 

@@ -22,7 +22,7 @@ RUN = REPO / "data" / "runs" / "glycerol-N0.31-r1.csv"
 def captured(monkeypatch):
     """Replace the notebook run by a recorder: the command's own work is the parameters.
 
-    The notebooks themselves are executed and rendered in tests/test_notebooks.py and,
+    The notebooks themselves are executed and rendered in tests/test_reports_notebooks.py and,
     through the same ``run_report``, end to end by the demo test.
     """
     calls = []

@@ -69,7 +69,7 @@ def test_sampled_noise_free_signals(zeta, mu, y0, kind):
     t, x, v = sampled(zeta, mu, y0)
     pk = find_peaks(t, x if kind == "displacement" else v, kind=kind)
     est = nonsuccessive_peaks(pk)
-    # three peaks only: their sub-sample bias (see test_peaks) enters without
+    # three peaks only: their sub-sample bias (see test_signal_peaks) enters without
     # averaging; bound 2e-3 ζ + 2e-4 on ζ and 5e-3 μ + 2e-5 Y_0 on x_c
     assert abs(est.zeta - zeta) <= 2e-3 * zeta + 2e-4
     assert abs(est.friction_displacement - mu) <= 5e-3 * mu + 2e-5 * y0

@@ -456,7 +456,10 @@ def fit_catalogued(
             summary={
                 "result_path": str(target.resolve()),
                 "converged": bool(outcome.result.converged),
-                "posterior": {k: v.to_dict() for k, v in outcome.result.summary().items()},
+                "posterior": {
+                    k: v.to_dict() if hasattr(v, "to_dict") else v
+                    for k, v in outcome.result.summary().items()
+                },
                 "elapsed_s": outcome.elapsed_s,
             },
             diagnostics=outcome.result.diagnostics,

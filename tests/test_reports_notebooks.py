@@ -19,6 +19,7 @@ from _paths import APPSTAT, REPO
 nbformat = pytest.importorskip("nbformat")
 pytest.importorskip("nbclient")
 
+from bayestribo.errors import MissingDependencyError  # noqa: E402
 from bayestribo.reports.notebooks import (  # noqa: E402
     NOTEBOOKS,
     PARAMETERS_TAG,
@@ -245,7 +246,7 @@ def test_notebooks_folder_from_the_environment(tmp_path, monkeypatch):
         report.notebooks_dir()
 
 
-def test_a_missing_jupyter_package_is_a_report_error_saying_what_to_install(monkeypatch):
+def test_a_missing_jupyter_package_is_an_error_saying_what_to_install(monkeypatch):
     monkeypatch.setitem(sys.modules, "nbconvert", None)  # import fails as if not installed
-    with pytest.raises(ReportError, match="reports need nbconvert: pip install"):
+    with pytest.raises(MissingDependencyError, match=r"needs nbconvert: .*bayestribo\[report\]"):
         to_html(nbformat.v4.new_notebook())

@@ -35,7 +35,7 @@ def test_bundled_run_converges_and_covers_the_truth(bundled):
     for name in ("zeta", "mu_k"):
         s = result.samples(name)
         # One run: the truth within 4.5 posterior sd (a 1-in-150 000 event if calibrated);
-        # calibration over many runs is in tests/test_fit_calibration.py and benchmarks/.
+        # calibration over many runs is in tests/test_inference_calibration.py and benchmarks/.
         assert abs(np.mean(s) - sim[name]) < 4.5 * np.std(s), name
     # Friction displacement x_c = μ_k N/k in metres.
     k = 0.035 * (2 * np.pi * result.idata.posterior.attrs["omega"] / (2 * np.pi)) ** 2

@@ -1,7 +1,7 @@
 """Campaign analysis on stand-in fit results: partition, groups, ζ₀, ζ_k, d_k, trends.
 
 Short population samplings (600 steps): these tests check the bookkeeping and exact
-relations, not the sampler (tests/test_population.py does).
+relations, not the sampler (tests/test_population_groups.py does).
 """
 
 from __future__ import annotations
