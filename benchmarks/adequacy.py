@@ -47,6 +47,7 @@ from bayestribo.adequacy.windows import (
     analysed_decay,
     windowed_fits,
 )
+from bayestribo.synthetic import DissipationLaw, Sensor
 from bayestribo.synthetic.recording import simulate
 
 ZETA = 0.0236
@@ -81,9 +82,11 @@ def _case(
 
     for i in range(runs):
         run = simulate(
-            zeta=law if dependent else ZETA,
-            displacement_noise_m=0.15e-6 * noise_factor,
-            velocity_noise_m_per_s=0.015e-6 * noise_factor,
+            DissipationLaw(zeta=law if dependent else ZETA),
+            sensor=Sensor(
+                displacement_noise_m=0.15e-6 * noise_factor,
+                velocity_noise_m_per_s=0.015e-6 * noise_factor,
+            ),
             seed=seed0 + i,
         )
         try:

@@ -32,6 +32,7 @@ import scipy
 
 from bayestribo import __version__
 from bayestribo.estimators.all import METHODS, estimate_all
+from bayestribo.synthetic import PAPER_RIG, DissipationLaw, Sensor
 from bayestribo.synthetic.recording import (
     DISPLACEMENT_RESOLUTION_M,
     VELOCITY_RESOLUTION_M_PER_S,
@@ -64,11 +65,12 @@ def run_level(factor: int, runs: int, seed0: int) -> list[dict[str, object]]:
     failures: dict[tuple[str, str], int] = defaultdict(int)
     for i in range(runs):
         run = simulate(
-            zeta=TRUE_ZETA,
-            mu_k=TRUE_MU,
-            load_N=0.31,
-            displacement_noise_m=factor * DISPLACEMENT_RESOLUTION_M,
-            velocity_noise_m_per_s=factor * VELOCITY_RESOLUTION_M_PER_S,
+            DissipationLaw(zeta=TRUE_ZETA, mu_k=TRUE_MU),
+            rig=PAPER_RIG,
+            sensor=Sensor(
+                displacement_noise_m=factor * DISPLACEMENT_RESOLUTION_M,
+                velocity_noise_m_per_s=factor * VELOCITY_RESOLUTION_M_PER_S,
+            ),
             seed=seed0 + i,
         )
         start = time.perf_counter()

@@ -91,16 +91,19 @@ def crb_run(level: float, index: int) -> dict[str, Any]:
     from bayestribo.synthetic.recording import (
         DISPLACEMENT_RESOLUTION_M,
         VELOCITY_RESOLUTION_M_PER_S,
+        DissipationLaw,
+        Release,
+        Sensor,
         simulate,
     )
 
     run = simulate(
-        zeta=TRUE_ZETA,
-        mu_k=TRUE_MU,
-        mu_s=1.2 * TRUE_MU,
-        magnet_fade_s=0.0,
-        displacement_noise_m=level * DISPLACEMENT_RESOLUTION_M,
-        velocity_noise_m_per_s=level * VELOCITY_RESOLUTION_M_PER_S,
+        DissipationLaw(zeta=TRUE_ZETA, mu_k=TRUE_MU, mu_s=1.2 * TRUE_MU),
+        release=Release(magnet_fade_s=0.0),
+        sensor=Sensor(
+            displacement_noise_m=level * DISPLACEMENT_RESOLUTION_M,
+            velocity_noise_m_per_s=level * VELOCITY_RESOLUTION_M_PER_S,
+        ),
         seed=7000 + index + int(level),
     )
     result = _fit(run, seed=index)
@@ -121,19 +124,23 @@ def crb_run(level: float, index: int) -> dict[str, Any]:
 def baseline_run(level: int, index: int) -> dict[str, Any]:
     """One of the estimator benchmark's runs: the fit and every classical estimator."""
     from bayestribo.estimators.all import estimate_all
+    from bayestribo.synthetic import PAPER_RIG
     from bayestribo.synthetic.recording import (
         DISPLACEMENT_RESOLUTION_M,
         VELOCITY_RESOLUTION_M_PER_S,
+        DissipationLaw,
+        Sensor,
         simulate,
     )
 
     seed0 = 1000 * (BASELINE_LEVELS.index(level) + 1)  # benchmarks/estimators.py seeds
     run = simulate(
-        zeta=TRUE_ZETA,
-        mu_k=TRUE_MU,
-        load_N=0.31,
-        displacement_noise_m=level * DISPLACEMENT_RESOLUTION_M,
-        velocity_noise_m_per_s=level * VELOCITY_RESOLUTION_M_PER_S,
+        DissipationLaw(zeta=TRUE_ZETA, mu_k=TRUE_MU),
+        rig=PAPER_RIG,
+        sensor=Sensor(
+            displacement_noise_m=level * DISPLACEMENT_RESOLUTION_M,
+            velocity_noise_m_per_s=level * VELOCITY_RESOLUTION_M_PER_S,
+        ),
         seed=seed0 + index,
     )
     out: dict[str, Any] = {"level": level, "index": index, "estimates": {}}

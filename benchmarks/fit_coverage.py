@@ -64,6 +64,9 @@ def one_run(index: int, seed: int) -> dict[str, Any]:
     from bayestribo.synthetic.recording import (
         DISPLACEMENT_RESOLUTION_M,
         VELOCITY_RESOLUTION_M_PER_S,
+        DissipationLaw,
+        Release,
+        Sensor,
         simulate,
     )
 
@@ -84,15 +87,18 @@ def one_run(index: int, seed: int) -> dict[str, Any]:
     start = time.perf_counter()
     try:
         run = simulate(
-            zeta=truth["zeta"],
-            mu_k=truth["mu_k"],
-            mu_s=truth["mu_k"] * truth["mu_s_ratio"],
-            initial_displacement_m=setup["initial_displacement_m"],
-            offset_m=setup["offset_m"],
-            sample_rate_Hz=setup["sample_rate_Hz"],
-            displacement_noise_m=noise * DISPLACEMENT_RESOLUTION_M,
-            velocity_noise_m_per_s=noise * VELOCITY_RESOLUTION_M_PER_S,
-            quantise=True,
+            DissipationLaw(
+                zeta=truth["zeta"], mu_k=truth["mu_k"], mu_s=truth["mu_k"] * truth["mu_s_ratio"]
+            ),
+            release=Release(
+                initial_displacement_m=setup["initial_displacement_m"], offset_m=setup["offset_m"]
+            ),
+            sensor=Sensor(
+                sample_rate_Hz=setup["sample_rate_Hz"],
+                displacement_noise_m=noise * DISPLACEMENT_RESOLUTION_M,
+                velocity_noise_m_per_s=noise * VELOCITY_RESOLUTION_M_PER_S,
+                quantise=True,
+            ),
             seed=int(rng.integers(2**31)),
         )
         with warnings.catch_warnings():

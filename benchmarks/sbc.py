@@ -69,6 +69,9 @@ def replicate(level: float, index: int, seed: int) -> dict[str, Any]:
     from bayestribo.synthetic.recording import (
         DISPLACEMENT_RESOLUTION_M,
         VELOCITY_RESOLUTION_M_PER_S,
+        DissipationLaw,
+        Release,
+        Sensor,
         simulate,
     )
 
@@ -78,12 +81,14 @@ def replicate(level: float, index: int, seed: int) -> dict[str, Any]:
     start = time.perf_counter()
     try:
         run = simulate(
-            zeta=truth["zeta"],
-            mu_k=truth["mu_k"],
-            mu_s=truth["mu_k"] * truth["mu_s_ratio"],
-            magnet_fade_s=0.0,
-            displacement_noise_m=level * DISPLACEMENT_RESOLUTION_M,
-            velocity_noise_m_per_s=level * VELOCITY_RESOLUTION_M_PER_S,
+            DissipationLaw(
+                zeta=truth["zeta"], mu_k=truth["mu_k"], mu_s=truth["mu_k"] * truth["mu_s_ratio"]
+            ),
+            release=Release(magnet_fade_s=0.0),
+            sensor=Sensor(
+                displacement_noise_m=level * DISPLACEMENT_RESOLUTION_M,
+                velocity_noise_m_per_s=level * VELOCITY_RESOLUTION_M_PER_S,
+            ),
             seed=int(rng.integers(2**31)),
         )
         with warnings.catch_warnings():

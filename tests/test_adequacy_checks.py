@@ -23,6 +23,7 @@ from bayestribo.adequacy.segments import whole_decay_fit
 from bayestribo.adequacy.windows import analysed_decay
 from bayestribo.errors import BayestriboError
 from bayestribo.model import exact_response, turning_points
+from bayestribo.synthetic import Release
 from bayestribo.synthetic.recording import simulate
 
 
@@ -65,7 +66,7 @@ def test_extinction_matches_the_model_and_the_recording(report):
 def test_predictive_peaks_of_the_true_parameters():
     # Draws all equal to the simulated values: predicted peaks are the model's
     # turning points and the recorded peaks must match them within their intervals.
-    run = simulate(seed=22, magnet_fade_s=0.0)
+    run = simulate(release=Release(magnet_fade_s=0.0), seed=22)
     decay = analysed_decay(run)
     ell = decay.scaling.length_scale
     y0 = abs(decay.peaks.value[0]) / ell

@@ -8,6 +8,7 @@ import pytest
 from bayestribo.adequacy.constancy import constancy_test
 from bayestribo.adequacy.windows import WindowedAnalysis, WindowEstimate, windowed_fits
 from bayestribo.errors import RecordingError
+from bayestribo.synthetic import DissipationLaw
 from bayestribo.synthetic.recording import simulate
 
 
@@ -90,7 +91,9 @@ def test_amplitude_dependent_damping_is_detected():
     # this noise, so every seeded run must be flagged.
     x0 = 1.5e-3
     for seed in range(3):
-        run = simulate(zeta=lambda a: 0.0236 / 1.1 * (1 + 0.2 * a / x0), seed=300 + seed)
+        run = simulate(
+            DissipationLaw(zeta=lambda a: 0.0236 / 1.1 * (1 + 0.2 * a / x0)), seed=300 + seed
+        )
         t = constancy_test(windowed_fits(run, window=2))
         assert not t.constant
         assert t.zeta.change > 0  # larger damping at larger amplitude

@@ -16,6 +16,7 @@ from bayestribo.adequacy.windows import (
     windowed_fits,
 )
 from bayestribo.errors import BayestriboError, RecordingError
+from bayestribo.synthetic import Sensor
 from bayestribo.synthetic.recording import simulate
 
 ZETA, MU = 0.0236, 0.0294
@@ -148,7 +149,9 @@ def test_position_only_window_intervals_are_calibrated():
     # P(fewer than 19 inside | 95 %) < 0.5 %.
     inside = total = 0
     for seed in range(4):
-        run = simulate(seed=500 + seed, channels=("displacement",), displacement_noise_m=1.5e-6)
+        run = simulate(
+            sensor=Sensor(channels=("displacement",), displacement_noise_m=1.5e-6), seed=500 + seed
+        )
         w = windowed_fits(run, window=2, seed=seed)
         for x in w.windows:
             inside += x.zeta_interval[0] <= ZETA <= x.zeta_interval[1]

@@ -11,6 +11,7 @@ import pytest
 from bayestribo.cli import estimate
 from bayestribo.errors import BayestriboError
 from bayestribo.estimators.all import METHODS
+from bayestribo.synthetic import PAPER_RIG
 
 
 def _cli(argv: list[str]) -> int:
@@ -28,7 +29,7 @@ def run_file(tmp_path_factory) -> Path:
     from bayestribo.synthetic.recording import simulate
 
     path = tmp_path_factory.mktemp("runs") / "glycerol.csv"
-    write_run(simulate(load_N=0.31, seed=5), path)
+    write_run(simulate(rig=PAPER_RIG, seed=5), path)
     return path
 
 

@@ -13,6 +13,7 @@ import pytest
 from bayestribo.cli import build_parser, main
 from bayestribo.errors import BayestriboError
 from bayestribo.inference import FitResult
+from bayestribo.synthetic import PAPER_RIG, Sensor
 
 DIAGNOSTICS = {
     "converged",
@@ -32,7 +33,14 @@ def run_file(tmp_path_factory) -> Path:
 
     # 2 kHz: a converged fit in a few seconds
     path = tmp_path_factory.mktemp("runs") / "glycerol-2k.csv"
-    write_run(simulate(load_N=0.31, sample_rate_Hz=2000.0, seed=21), path)
+    write_run(
+        simulate(
+            rig=PAPER_RIG,
+            sensor=Sensor(sample_rate_Hz=2000.0),
+            seed=21,
+        ),
+        path,
+    )
     return path
 
 

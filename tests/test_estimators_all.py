@@ -16,6 +16,7 @@ from bayestribo.estimators import estimate_signals, friction_fraction
 from bayestribo.estimators.all import METHODS
 from bayestribo.io.run import Run
 from bayestribo.model.scaling import Rig
+from bayestribo.synthetic import PAPER_RIG
 
 HARMOSC = APPSTAT
 
@@ -78,7 +79,7 @@ def test_failed_method_is_a_row_with_the_reason():
 def test_run_object_and_rig_from_metadata():
     from bayestribo.synthetic.recording import simulate
 
-    run = simulate(load_N=0.31, seed=3)
+    run = simulate(rig=PAPER_RIG, seed=3)
     table = estimate_all(run, skip=2, methods=["feeny_liang", "energy_ls_exact"])
     for e in table:
         # μ_k needs the run's load and mass (ℓ = N/k); resolution noise and a magnet

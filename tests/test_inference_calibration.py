@@ -22,6 +22,7 @@ import numpy as np
 from scipy import stats
 
 from bayestribo.inference import fit
+from bayestribo.synthetic import DissipationLaw, Release, Sensor
 from bayestribo.synthetic.recording import (
     DISPLACEMENT_RESOLUTION_M,
     VELOCITY_RESOLUTION_M_PER_S,
@@ -36,13 +37,13 @@ def _distance(level: float, seed: int) -> tuple[float, bool]:
     zeta, mu_k = rng.uniform(0.015, 0.04, 2)
     ratio = rng.uniform(1.0, 3.0)
     run = simulate(
-        zeta=zeta,
-        mu_k=mu_k,
-        mu_s=mu_k * ratio,
-        magnet_fade_s=0.0,
-        sample_rate_Hz=2000.0,
-        displacement_noise_m=level * DISPLACEMENT_RESOLUTION_M,
-        velocity_noise_m_per_s=level * VELOCITY_RESOLUTION_M_PER_S,
+        DissipationLaw(zeta=zeta, mu_k=mu_k, mu_s=mu_k * ratio),
+        release=Release(magnet_fade_s=0.0),
+        sensor=Sensor(
+            sample_rate_Hz=2000.0,
+            displacement_noise_m=level * DISPLACEMENT_RESOLUTION_M,
+            velocity_noise_m_per_s=level * VELOCITY_RESOLUTION_M_PER_S,
+        ),
         seed=seed,
     )
     with warnings.catch_warnings():

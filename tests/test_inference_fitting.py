@@ -13,6 +13,7 @@ from bayestribo.inference import FitResult, fit
 from bayestribo.io import read_run
 from bayestribo.signal.increments import pi_data
 from bayestribo.signal.noise import noise_model
+from bayestribo.synthetic import DissipationLaw, Release, Sensor
 from bayestribo.synthetic.recording import simulate
 
 DATA = RUNS
@@ -78,11 +79,11 @@ def test_prior_sensitivity_is_reported(bundled):
 @pytest.fixture(scope="module")
 def short_run():
     return simulate(
+        release=Release(initial_displacement_m=1e-3),
+        sensor=Sensor(
+            sample_rate_Hz=3000.0, displacement_noise_m=1.5e-6, velocity_noise_m_per_s=1.5e-7
+        ),
         seed=21,
-        sample_rate_Hz=3000.0,
-        displacement_noise_m=1.5e-6,
-        velocity_noise_m_per_s=1.5e-7,
-        initial_displacement_m=1e-3,
     )
 
 
@@ -200,12 +201,11 @@ def test_bad_model_name():
 
 def test_narrowed_prior_moves_the_start_inside_it():
     run = simulate(
+        DissipationLaw(zeta=0.03798, mu_k=0.04962),
+        sensor=Sensor(
+            displacement_noise_m=4.5e-6, velocity_noise_m_per_s=4.5e-7, sample_rate_Hz=2000.0
+        ),
         seed=5,
-        zeta=0.03798,
-        mu_k=0.04962,
-        displacement_noise_m=4.5e-6,
-        velocity_noise_m_per_s=4.5e-7,
-        sample_rate_Hz=2000.0,
     )
     from bayestribo.inference import Uniform
 
@@ -219,12 +219,11 @@ def test_misfit_is_flagged():
     from bayestribo.errors import MisfitWarning
 
     run = simulate(
+        DissipationLaw(zeta=lambda a: 0.01 + 20.0 * a, mu_k=0.0294),
+        sensor=Sensor(
+            sample_rate_Hz=2000.0, displacement_noise_m=1.5e-6, velocity_noise_m_per_s=1.5e-7
+        ),
         seed=9,
-        zeta=lambda a: 0.01 + 20.0 * a,
-        mu_k=0.0294,
-        sample_rate_Hz=2000.0,
-        displacement_noise_m=1.5e-6,
-        velocity_noise_m_per_s=1.5e-7,
     )
     with pytest.warns(MisfitWarning, match="discrepancy"):
         result = fit(run, seed=2)

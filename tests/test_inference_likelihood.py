@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _sim import simulate_flat
 from scipy.special import logsumexp
 
 from bayestribo.inference.likelihood import PiLikelihood
@@ -12,14 +13,13 @@ from bayestribo.inference.priors import default_priors
 from bayestribo.signal.decay import energy_decay
 from bayestribo.signal.increments import pi_data
 from bayestribo.signal.noise import noise_model
-from bayestribo.synthetic.recording import simulate
 
 TRUE = {"zeta": 0.0236, "mu_k": 0.0294}
 
 
 @pytest.fixture(scope="module")
 def setup():
-    run = simulate(
+    run = simulate_flat(
         seed=12,
         displacement_noise_m=1.5e-6,
         velocity_noise_m_per_s=1.5e-7,

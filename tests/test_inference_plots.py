@@ -13,6 +13,7 @@ import matplotlib.pyplot as plt
 
 from bayestribo.inference import FitResult, fit
 from bayestribo.inference.plots import corner_plot, pi_plot, plotted_names, trace_plot
+from bayestribo.synthetic import Sensor
 from bayestribo.synthetic.recording import simulate
 
 
@@ -20,7 +21,7 @@ from bayestribo.synthetic.recording import simulate
 def result(tmp_path_factory) -> FitResult:
     # a short 2 kHz run: a converged fit in a few seconds; the plots are drawn from
     # the NetCDF copy, as the command line and a later session see it
-    run = simulate(sample_rate_Hz=2000.0, seed=11)
+    run = simulate(sensor=Sensor(sample_rate_Hz=2000.0), seed=11)
     path = tmp_path_factory.mktemp("fit") / "run.nc"
     fit(run, seed=3).save(path)
     return FitResult.load(path)

@@ -14,6 +14,8 @@ from hypothesis.extra import numpy as hnp
 from bayestribo import Run, read_run, simulate, write_run
 from bayestribo.errors import BayestriboError, RunFormatError
 from bayestribo.io import as_run
+from bayestribo.model.scaling import Rig
+from bayestribo.synthetic import Release, Sensor
 
 
 def _run(**meta: object) -> Run:
@@ -75,7 +77,12 @@ def test_any_finite_floats_round_trip_bit_exactly(tmp_path_factory, data, signal
 
 
 def test_simulated_run_round_trips(tmp_path: Path) -> None:
-    run = simulate(load_N=0.46, seed=11, quantise=True, time_origin_s=3.1415)
+    run = simulate(
+        rig=Rig(natural_frequency_Hz=32.6, mass_kg=0.035, load_N=0.46),
+        release=Release(time_origin_s=3.1415),
+        sensor=Sensor(quantise=True),
+        seed=11,
+    )
     assert read_run(write_run(run, tmp_path / "sim.csv")) == run
 
 

@@ -15,6 +15,8 @@ from hypothesis import strategies as st
 from bayestribo import Run, read_run, simulate, write_run
 from bayestribo.errors import BayestriboError, RecordingError, RunFormatError
 from bayestribo.io import validate_run
+from bayestribo.model.scaling import Rig
+from bayestribo.synthetic import PAPER_RIG, Sensor
 
 EXTERNAL = APPSTAT
 
@@ -22,7 +24,11 @@ EXTERNAL = APPSTAT
 @pytest.fixture(scope="module")
 def good() -> Run:
     """A realistic simulated run (noise and quantisation at the vibrometer's resolution)."""
-    return simulate(load_N=0.31, sample_rate_Hz=5000.0, quantise=True, seed=7)
+    return simulate(
+        rig=PAPER_RIG,
+        sensor=Sensor(sample_rate_Hz=5000.0, quantise=True),
+        seed=7,
+    )
 
 
 def _replace(run: Run, **changes: object) -> Run:
@@ -183,11 +189,13 @@ def test_no_false_alarm_on_noise_free_or_coarse_quantised_runs(seed: int) -> Non
     # touches the start of the record, so it is not a flat top.
     rng = np.random.default_rng(seed)
     run = simulate(
-        load_N=float(rng.uniform(0.07, 0.6)),
-        displacement_noise_m=0.0,
-        velocity_noise_m_per_s=0.0,
-        quantise=True,
-        sample_rate_Hz=float(rng.choice([1000.0, 2000.0, 10_000.0])),
+        rig=Rig(natural_frequency_Hz=32.6, mass_kg=0.035, load_N=float(rng.uniform(0.07, 0.6))),
+        sensor=Sensor(
+            displacement_noise_m=0.0,
+            velocity_noise_m_per_s=0.0,
+            quantise=True,
+            sample_rate_Hz=float(rng.choice([1000.0, 2000.0, 10_000.0])),
+        ),
         seed=seed,
     )
     validate_run(run)

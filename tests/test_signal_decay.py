@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from _paths import APPSTAT
+from _sim import simulate_flat
 
 from bayestribo.errors import RecordingError
 from bayestribo.model import exact_pi
 from bayestribo.model.scaling import Rig
 from bayestribo.signal.decay import energy_decay, retrograde_integral
-from bayestribo.synthetic.recording import simulate
 
 HARMOSC = APPSTAT
 
@@ -21,13 +21,13 @@ COMMON = dict(zeta=ZETA, mu_k=MU_K, offset_m=OFFSET, time_origin_s=12.3, sample_
 
 def _pair(noise_factor: float, seed: int = 3, **kw):
     """A noisy run and the same run without noise (same release, same trajectory)."""
-    noisy = simulate(
+    noisy = simulate_flat(
         seed=seed,
         displacement_noise_m=1.5e-7 * noise_factor,
         velocity_noise_m_per_s=1.5e-8 * noise_factor,
         **{**COMMON, **kw},
     )
-    clean = simulate(
+    clean = simulate_flat(
         seed=seed, displacement_noise_m=0.0, velocity_noise_m_per_s=0.0, **{**COMMON, **kw}
     )
     return noisy, clean
@@ -179,7 +179,7 @@ def test_real_position_only_recordings(name, ends):
 
 
 def _good():
-    run = simulate(
+    run = simulate_flat(
         seed=2, sample_rate_Hz=2000.0, **{k: v for k, v in COMMON.items() if k != "sample_rate_Hz"}
     )
     return run.time.copy(), run.displacement.copy(), run.velocity.copy()

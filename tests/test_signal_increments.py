@@ -9,6 +9,7 @@ from scipy.stats import multivariate_normal
 from bayestribo.signal.decay import energy_decay
 from bayestribo.signal.increments import increment_weights, pi_data, simpson_weights
 from bayestribo.signal.noise import noise_model, resolution_for_range
+from bayestribo.synthetic import Sensor
 from bayestribo.synthetic.recording import simulate
 
 
@@ -32,7 +33,8 @@ def test_grid_covers_every_sample_once():
 @pytest.fixture(scope="module")
 def clean_decay():
     run = simulate(
-        seed=4, displacement_noise_m=0.0, velocity_noise_m_per_s=0.0, sample_rate_Hz=5000.0
+        sensor=Sensor(displacement_noise_m=0.0, velocity_noise_m_per_s=0.0, sample_rate_Hz=5000.0),
+        seed=4,
     )
     return run, energy_decay(run.time, run.displacement, run.velocity, rig=run.rig())
 
@@ -91,11 +93,13 @@ def test_derived_velocity_noise_against_the_whole_pipeline():
     """Monte Carlo propagation through the derivative against re-running energy_decay."""
     sigma = 2e-6
     base = simulate(
+        sensor=Sensor(
+            displacement_noise_m=0.0,
+            velocity_noise_m_per_s=0.0,
+            sample_rate_Hz=4000.0,
+            channels=("displacement",),
+        ),
         seed=8,
-        displacement_noise_m=0.0,
-        velocity_noise_m_per_s=0.0,
-        sample_rate_Hz=4000.0,
-        channels=("displacement",),
     )
     decay = energy_decay(base.time, base.displacement, rig=base.rig())
     noise = noise_model(decay, displacement_resolution=sigma)
@@ -123,7 +127,9 @@ def test_derived_velocity_noise_against_the_whole_pipeline():
 
 
 def test_noise_model_uses_the_larger_figure_and_says_so():
-    run = simulate(seed=3, displacement_noise_m=30 * 1.5e-7, velocity_noise_m_per_s=1.5e-8)
+    run = simulate(
+        sensor=Sensor(displacement_noise_m=30 * 1.5e-7, velocity_noise_m_per_s=1.5e-8), seed=3
+    )
     decay = energy_decay(run.time, run.displacement, run.velocity, rig=run.rig())
     noise = noise_model(decay, run.metadata)
     assert noise.source_displacement == "measured" and noise.exceeds_nominal

@@ -42,21 +42,21 @@ def test_programme_of_the_paper(plan) -> None:
     assert series.count("glycerol") == 15
     assert series.count("glycerol-water") == 6 * 2 * 3
     assert len({p.run_id for p in plan}) == len(plan)
-    glycerol = [p.simulate_kwargs for p in plan if p.series == "glycerol"]
-    assert sorted({k["load_N"] for k in glycerol}) == list(LOADS_N)
-    water = [p.simulate_kwargs for p in plan if p.series == "glycerol-water"]
-    fractions = sorted({k["metadata"]["water_mass_fraction"] for k in water})
+    glycerol = [p for p in plan if p.series == "glycerol"]
+    assert sorted({p.rig.load_N for p in glycerol}) == list(LOADS_N)
+    water = [p for p in plan if p.series == "glycerol-water"]
+    fractions = sorted({p.metadata["water_mass_fraction"] for p in water})
     assert fractions == list(WATER_FRACTIONS)
-    for k in water:
-        assert k["metadata"]["repeat"] in (1, 2, 3)
-    air = [p.simulate_kwargs for p in plan if p.series == "air"]
-    assert all(k["load_N"] == 0.0 and k["mu_k"] == 0.0 for k in air)
+    for p in water:
+        assert p.metadata["repeat"] in (1, 2, 3)
+    air = [p for p in plan if p.series == "air"]
+    assert all(p.rig.load_N == 0.0 and p.law.mu_k == 0.0 for p in air)
 
 
 def test_glycerol_scatter_is_the_papers(plan) -> None:
-    kw = [p.simulate_kwargs for p in plan if p.series == "glycerol"]
-    zeta = np.array([k["zeta"] for k in kw])
-    mu = np.array([k["mu_k"] for k in kw])
+    laws = [p.law for p in plan if p.series == "glycerol"]
+    zeta = np.array([law.zeta for law in laws])
+    mu = np.array([law.mu_k for law in laws])
     n = zeta.size
     # Means of 15 draws: standard error σ/sqrt(15); 4 standard errors.
     assert abs(zeta.mean() - 0.0236) < 4 * 0.0012 / math.sqrt(n)
@@ -69,12 +69,12 @@ def test_glycerol_scatter_is_the_papers(plan) -> None:
 
 
 def test_zeta_rises_with_viscosity_and_mu_k_jumps_above_six_percent_water(plan) -> None:
-    kw = [p.simulate_kwargs for p in plan if p.series == "glycerol-water"]
-    by_water: dict[float, list[dict]] = {}
-    for k in kw:
-        by_water.setdefault(k["metadata"]["water_mass_fraction"], []).append(k)
-    zeta = [np.mean([k["zeta"] for k in by_water[w]]) for w in WATER_FRACTIONS]
-    mu = {w: np.mean([k["mu_k"] for k in by_water[w]]) for w in WATER_FRACTIONS}
+    by_water: dict[float, list] = {}
+    for p in plan:
+        if p.series == "glycerol-water":
+            by_water.setdefault(p.metadata["water_mass_fraction"], []).append(p.law)
+    zeta = [np.mean([law.zeta for law in by_water[w]]) for w in WATER_FRACTIONS]
+    mu = {w: np.mean([law.mu_k for law in by_water[w]]) for w in WATER_FRACTIONS}
     nu = glycerol_water_viscosity(list(WATER_FRACTIONS))
     # ζ ordered like viscosity (decreasing with water).
     assert np.all(np.diff(zeta) < 0) and np.all(np.diff(nu) < 0)
@@ -87,10 +87,9 @@ def test_manifest_lists_every_run_with_its_true_parameters(plan, manifest) -> No
     assert list(manifest[0]) == list(MANIFEST_COLUMNS)
     assert [row["run_id"] for row in manifest] == [p.run_id for p in plan]
     for row, planned in zip(manifest, plan, strict=True):
-        kw = planned.simulate_kwargs
-        assert float(row["zeta"]) == kw["zeta"]
-        assert float(row["mu_k"]) == kw["mu_k"]
-        assert float(row["load_N"]) == kw["load_N"]
+        assert float(row["zeta"]) == planned.law.zeta
+        assert float(row["mu_k"]) == planned.law.mu_k
+        assert float(row["load_N"]) == planned.rig.load_N
         assert (DATA / row["file"]).is_file()
 
 

@@ -9,12 +9,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _sim import simulate_flat
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from bayestribo import read_run, simulate
 from bayestribo.cli import simulate as simulate_command
 from bayestribo.errors import BayestriboError
+from bayestribo.model.scaling import Rig
+from bayestribo.synthetic import PAPER_RIG, DissipationLaw, Release, Sensor
 
 M, F = 0.035, 32.6
 K = M * (2 * math.pi * F) ** 2
@@ -97,7 +100,7 @@ CASES = [
 
 @pytest.mark.parametrize("case", CASES, ids=["N0.07", "N0.59", "air"])
 def test_noise_free_run_matches_independent_integration(case: dict) -> None:
-    run = simulate(
+    run = simulate_flat(
         **case,
         initial_displacement_m=1.5e-3,
         sample_rate_Hz=5000.0,
@@ -132,14 +135,10 @@ def test_amplitude_dependent_damping_matches_independent_integration() -> None:
         return 0.03 - 5.0 * amplitude_m
 
     run = simulate(
-        zeta=zeta,
-        mu_k=mu_k,
-        mu_s=0.035,
-        load_N=0.31,
-        initial_displacement_m=1.5e-3,
-        sample_rate_Hz=5000.0,
-        displacement_noise_m=0.0,
-        velocity_noise_m_per_s=0.0,
+        DissipationLaw(zeta=zeta, mu_k=mu_k, mu_s=0.035),
+        rig=PAPER_RIG,
+        release=Release(initial_displacement_m=1.5e-3),
+        sensor=Sensor(sample_rate_Hz=5000.0, displacement_noise_m=0.0, velocity_noise_m_per_s=0.0),
     )
     truth = run.metadata["simulation"]
     assert truth["amplitude_dependent"] and truth["zeta"] is None
@@ -155,12 +154,15 @@ def test_amplitude_dependent_damping_matches_independent_integration() -> None:
     )
     np.testing.assert_allclose(run.displacement, x, rtol=0, atol=1e-9)
     np.testing.assert_allclose(run.velocity, v, rtol=0, atol=1e-7)
-    constant = simulate(zeta=zeta(1.5e-3), mu_k=mu_k(1.5e-3), mu_s=0.035, load_N=0.31)
+    constant = simulate(
+        DissipationLaw(zeta=zeta(1.5e-3), mu_k=mu_k(1.5e-3), mu_s=0.035),
+        rig=PAPER_RIG,
+    )
     assert run.n_samples != constant.n_samples  # the law changes the decay
 
 
 def _quiet(**kw: object):
-    return simulate(displacement_noise_m=0.0, velocity_noise_m_per_s=0.0, **kw)
+    return simulate_flat(displacement_noise_m=0.0, velocity_noise_m_per_s=0.0, **kw)
 
 
 def test_rest_before_release_offset_and_time_origin() -> None:
@@ -213,7 +215,7 @@ def test_rest_tail_after_the_stop_is_inside_the_static_band() -> None:
 
 def test_default_noise_is_the_resolution_and_independent_per_channel() -> None:
     kw = {"load_N": 0.31, "sample_rate_Hz": 10_000.0}
-    noisy, clean = simulate(seed=3, **kw), _quiet(**kw)
+    noisy, clean = simulate_flat(seed=3, **kw), _quiet(**kw)
     ex = noisy.displacement - clean.displacement
     ev = noisy.velocity - clean.velocity
     n = ex.size
@@ -233,7 +235,11 @@ def test_seeded_and_reproducible() -> None:
 
 
 def test_quantisation_to_the_resolution_gives_short_decimals() -> None:
-    run = simulate(load_N=0.31, quantise=True, seed=1, sample_rate_Hz=2000.0)
+    run = simulate(
+        rig=PAPER_RIG,
+        sensor=Sensor(quantise=True, sample_rate_Hz=2000.0),
+        seed=1,
+    )
     k = run.displacement / 0.15e-6
     np.testing.assert_allclose(k, np.round(k), rtol=0, atol=1e-6)
     kv = run.velocity / 0.015e-6
@@ -243,7 +249,9 @@ def test_quantisation_to_the_resolution_gives_short_decimals() -> None:
 
 
 def test_channels_and_metadata() -> None:
-    run = simulate(channels=("velocity",), seed=1, metadata={"repeat": 2, "operator": "X"})
+    run = simulate(
+        sensor=Sensor(channels=("velocity",)), seed=1, metadata={"repeat": 2, "operator": "X"}
+    )
     assert run.displacement is None and run.velocity is not None
     meta = run.metadata
     assert meta["repeat"] == 2 and meta["operator"] == "X"
@@ -256,7 +264,11 @@ def test_channels_and_metadata() -> None:
 def test_sensor_range_saturates_and_the_run_is_then_rejected(tmp_path: Path) -> None:
     from bayestribo import write_run
 
-    run = simulate(load_N=0.31, velocity_range_m_per_s=0.2, seed=2)
+    run = simulate(
+        rig=PAPER_RIG,
+        sensor=Sensor(velocity_range_m_per_s=0.2),
+        seed=2,
+    )
     assert np.abs(run.velocity).max() == 0.2
     path = write_run(run, tmp_path / "clipped.csv")
     with pytest.raises(BayestriboError, match="velocity_m_per_s' is clipped"):
@@ -282,7 +294,7 @@ def test_sensor_range_saturates_and_the_run_is_then_rejected(tmp_path: Path) -> 
 )
 def test_bad_arguments_raise_value_errors_naming_them(kwargs: dict, match: str) -> None:
     with pytest.raises(ValueError, match=match):
-        simulate(**kwargs)
+        simulate_flat(**kwargs)
 
 
 def _cli(argv: list[str]) -> int:
@@ -301,7 +313,10 @@ def test_simulate_command_writes_a_run_that_reads_back_identically(
     assert _cli([*argv, "--sample-rate", "2000", "--time-origin", "3.5"]) == 0
     assert "cli.csv" in capsys.readouterr().out
     expected = simulate(
-        load_N=0.46, seed=5, quantise=True, sample_rate_Hz=2000.0, time_origin_s=3.5
+        rig=Rig(natural_frequency_Hz=32.6, mass_kg=0.035, load_N=0.46),
+        release=Release(time_origin_s=3.5),
+        sensor=Sensor(quantise=True, sample_rate_Hz=2000.0),
+        seed=5,
     )
     assert read_run(out) == expected
 
@@ -311,3 +326,27 @@ def test_simulate_command_errors_are_package_errors(tmp_path: Path) -> None:
         _cli(["simulate"])
     with pytest.raises(BayestriboError, match="zeta must satisfy"):
         _cli(["simulate", str(tmp_path / "x.csv"), "--zeta", "2"])
+
+
+def test_the_simulators_objects_check_their_fields_and_keep_the_defaults() -> None:
+    from bayestribo.synthetic import PAPER_RIG, DissipationLaw, Release, Sensor
+
+    with pytest.raises(ValueError, match="zeta must satisfy"):
+        DissipationLaw(zeta=1.0)
+    with pytest.raises(ValueError, match="initial_displacement_m must be a finite number > 0"):
+        Release(initial_displacement_m=0.0)
+    with pytest.raises(ValueError, match="channels must be some of"):
+        Sensor(channels=())
+    with pytest.raises(ValueError, match="rig must give mass_kg and load_N"):
+        simulate(rig=Rig(natural_frequency_Hz=32.6))
+    # Every default spelled out gives the same run as the defaults.
+    explicit = simulate(
+        DissipationLaw(zeta=0.0236, mu_k=0.0294),
+        rig=PAPER_RIG,
+        release=Release(initial_displacement_m=1.5e-3, rest_before_s=0.05, rest_after_s=0.1),
+        sensor=Sensor(sample_rate_Hz=10_000.0, quantise=False),
+        seed=8,
+    )
+    assert explicit == simulate(seed=8)
+    assert Sensor().noise == (0.15e-6, 0.015e-6)
+    assert Release().fade_s(PAPER_RIG) == pytest.approx(0.25 / 32.6, rel=1e-15)

@@ -12,6 +12,8 @@ import argparse
 from typing import Any
 
 from bayestribo.errors import BayestriboError
+from bayestribo.model.scaling import Rig
+from bayestribo.synthetic import DissipationLaw, Release, Sensor
 
 __all__ = ["register"]
 
@@ -76,23 +78,23 @@ def run(args: argparse.Namespace) -> int:
 
     try:
         sim = simulate(
-            zeta=args.zeta,
-            mu_k=args.mu_k,
-            mu_s=args.mu_s,
-            load_N=args.load,
-            mass_kg=args.mass,
-            natural_frequency_Hz=args.frequency,
-            initial_displacement_m=args.x0,
-            sample_rate_Hz=args.sample_rate,
-            rest_before_s=args.rest_before,
-            motion_duration_s=args.motion_duration,
-            rest_after_s=args.rest_after,
-            magnet_fade_s=args.magnet_fade,
-            offset_m=args.offset,
-            time_origin_s=args.time_origin,
-            displacement_noise_m=args.displacement_noise,
-            velocity_noise_m_per_s=args.velocity_noise,
-            quantise=args.quantise,
+            DissipationLaw(zeta=args.zeta, mu_k=args.mu_k, mu_s=args.mu_s),
+            rig=Rig(natural_frequency_Hz=args.frequency, mass_kg=args.mass, load_N=args.load),
+            release=Release(
+                initial_displacement_m=args.x0,
+                rest_before_s=args.rest_before,
+                motion_duration_s=args.motion_duration,
+                rest_after_s=args.rest_after,
+                magnet_fade_s=args.magnet_fade,
+                offset_m=args.offset,
+                time_origin_s=args.time_origin,
+            ),
+            sensor=Sensor(
+                sample_rate_Hz=args.sample_rate,
+                displacement_noise_m=args.displacement_noise,
+                velocity_noise_m_per_s=args.velocity_noise,
+                quantise=args.quantise,
+            ),
             seed=args.seed,
         )
     except ValueError as exc:

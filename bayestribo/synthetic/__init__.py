@@ -2,6 +2,9 @@
 
 Modules
 -------
+setup
+    What a simulated test is made of: :class:`DissipationLaw`, :class:`Release`,
+    :class:`Sensor` (with the rig, :class:`bayestribo.model.scaling.Rig`).
 recording
     :func:`simulate`: one free-decay recording on the exact model, with the sensor's
     noise and the rig's imperfections.
@@ -11,5 +14,6 @@ campaign
 """
 
 from bayestribo.synthetic.recording import simulate
+from bayestribo.synthetic.setup import PAPER_RIG, DissipationLaw, Release, Sensor
 
-__all__ = ["simulate"]
+__all__ = ["PAPER_RIG", "DissipationLaw", "Release", "Sensor", "simulate"]

@@ -46,8 +46,10 @@ from typing import Any
 import numpy as np
 
 from bayestribo.io.run import Run
+from bayestribo.model.scaling import Rig
 from bayestribo.model.viscosity import glycerol_water_viscosity
 from bayestribo.synthetic.recording import simulate
+from bayestribo.synthetic.setup import DissipationLaw, Release, Sensor
 
 __all__ = [
     "CAMPAIGN_SEED",
@@ -98,15 +100,27 @@ MANIFEST_COLUMNS = (
 
 @dataclass(frozen=True)
 class PlannedRun:
-    """One run of the campaign: its identity and the arguments of :func:`simulate`."""
+    """One run of the campaign: its identity and what :func:`simulate` is given."""
 
     run_id: str
     series: str
-    simulate_kwargs: Mapping[str, Any] = field(default_factory=dict)
+    law: DissipationLaw
+    rig: Rig
+    release: Release
+    sensor: Sensor
+    seed: int
+    metadata: Mapping[str, Any] = field(default_factory=dict)
 
     def simulate(self) -> Run:
-        """Simulate the run (deterministic: the noise seed is in the arguments)."""
-        return simulate(**self.simulate_kwargs)
+        """Simulate the run (deterministic: the noise seed is part of the plan)."""
+        return simulate(
+            self.law,
+            rig=self.rig,
+            release=self.release,
+            sensor=self.sensor,
+            seed=self.seed,
+            metadata=self.metadata,
+        )
 
 
 def _zeta_mean(water: float) -> float:
@@ -135,39 +149,46 @@ def campaign_plan(seed: int = CAMPAIGN_SEED) -> list[PlannedRun]:
     noise_seeds = np.random.SeedSequence(seed).generate_state(200, dtype=np.uint32)
     plan: list[PlannedRun] = []
 
-    def add(run_id: str, series: str, **kwargs: Any) -> None:
+    def add(
+        run_id: str,
+        series: str,
+        law: DissipationLaw,
+        load_N: float,
+        sample_rate_Hz: float,
+        metadata: Mapping[str, Any],
+        motion_duration_s: float | None = None,
+        rest_after_s: float = 0.1,
+    ) -> None:
         index = len(plan)
         x0 = round(2.0e-3 + rng.uniform(-1e-4, 1e-4), 6)
         offset = round(rng.uniform(-3e-4, 3e-4), 6)
         t0 = round(rng.uniform(0.0, 100.0), 3)
-        common: dict[str, Any] = {
-            "mass_kg": MASS_KG,
-            "natural_frequency_Hz": FREQUENCY_HZ,
-            "initial_displacement_m": x0,
-            "offset_m": offset,
-            "time_origin_s": t0,
-            "rest_before_s": 0.05,
-            "rest_after_s": 0.1,
-            "quantise": True,
-            "displacement_range_m": DISPLACEMENT_RANGE_M,
-            "velocity_range_m_per_s": VELOCITY_RANGE_M_PER_S,
-            "seed": int(noise_seeds[index]),
-        }
-        common.update(kwargs)
-        meta = dict(common.pop("metadata", {}))
-        meta["run_id"] = run_id
-        meta["series"] = series
-        meta["temperature_C"] = 20.0
-        common["metadata"] = meta
-        plan.append(PlannedRun(run_id, series, common))
+        release = Release(
+            initial_displacement_m=x0,
+            rest_before_s=0.05,
+            motion_duration_s=motion_duration_s,
+            rest_after_s=rest_after_s,
+            offset_m=offset,
+            time_origin_s=t0,
+        )
+        sensor = Sensor(
+            sample_rate_Hz=sample_rate_Hz,
+            quantise=True,
+            displacement_range_m=DISPLACEMENT_RANGE_M,
+            velocity_range_m_per_s=VELOCITY_RANGE_M_PER_S,
+        )
+        rig = Rig(natural_frequency_Hz=FREQUENCY_HZ, mass_kg=MASS_KG, load_N=load_N)
+        meta = {**metadata, "run_id": run_id, "series": series, "temperature_C": 20.0}
+        plan.append(
+            PlannedRun(run_id, series, law, rig, release, sensor, int(noise_seeds[index]), meta)
+        )
 
     for r in range(1, REPEATS + 1):
         zeta = float(rng.normal(ZETA0, 1e-4))
         add(
             f"air-r{r}",
             "air",
-            zeta=zeta,
-            mu_k=0.0,
+            DissipationLaw(zeta=zeta, mu_k=0.0),
             load_N=0.0,
             sample_rate_Hz=2000.0,
             motion_duration_s=3.0,
@@ -181,9 +202,7 @@ def campaign_plan(seed: int = CAMPAIGN_SEED) -> list[PlannedRun]:
             add(
                 f"glycerol-N{load:.2f}-r{r}",
                 "glycerol",
-                zeta=zeta,
-                mu_k=mu_k,
-                mu_s=1.2 * mu_k,
+                DissipationLaw(zeta=zeta, mu_k=mu_k, mu_s=1.2 * mu_k),
                 load_N=load,
                 sample_rate_Hz=10_000.0,
                 metadata={
@@ -201,9 +220,7 @@ def campaign_plan(seed: int = CAMPAIGN_SEED) -> list[PlannedRun]:
                 add(
                     f"water{100 * water:.2f}pc-N{load:.2f}-r{r}",
                     "glycerol-water",
-                    zeta=zeta,
-                    mu_k=mu_k,
-                    mu_s=1.2 * mu_k,
+                    DissipationLaw(zeta=zeta, mu_k=mu_k, mu_s=1.2 * mu_k),
                     load_N=load,
                     sample_rate_Hz=2000.0,
                     metadata={

@@ -36,32 +36,29 @@ from numpy.typing import NDArray
 
 from bayestribo.io.run import Run
 from bayestribo.model.scaling import Rig
+from bayestribo.synthetic.setup import (
+    DISPLACEMENT_RESOLUTION_M,
+    PAPER_RIG,
+    VELOCITY_RESOLUTION_M_PER_S,
+    AmplitudeLaw,
+    DissipationLaw,
+    Release,
+    Sensor,
+)
 
 __all__ = [
     "DISPLACEMENT_RESOLUTION_M",
+    "PAPER_RIG",
     "VELOCITY_RESOLUTION_M_PER_S",
     "AmplitudeLaw",
+    "DissipationLaw",
+    "Release",
+    "Sensor",
     "simulate",
 ]
 
-#: Displacement resolution of the laser vibrometer of the paper, 0.15 µm (section 2.3).
-DISPLACEMENT_RESOLUTION_M = 0.15e-6
-#: Velocity resolution of the laser vibrometer of the paper, 0.015 µm/s (section 2.3).
-VELOCITY_RESOLUTION_M_PER_S = 0.015e-6
-
 #: Cap on the half cycles simulated one by one with amplitude-dependent parameters.
 _MAX_HALF_CYCLES = 10_000
-
-#: A parameter that depends on the oscillation amplitude: ``law(amplitude_m) -> value``.
-AmplitudeLaw = Callable[[float], float]
-
-
-def _positive(name: str, value: float, allow_zero: bool = False) -> float:
-    value = float(value)
-    if not math.isfinite(value) or value < 0.0 or (value == 0.0 and not allow_zero):
-        bound = ">= 0" if allow_zero else "> 0"
-        raise ValueError(f"{name} must be a finite number {bound}, got {value!r}")
-    return value
 
 
 def _decimals(step: float) -> int | None:
@@ -220,30 +217,176 @@ def _magnet_phase(
     return _MagnetPhase(t_break, tau_fade, sol.sol)
 
 
+def _checked_rig(rig: Rig) -> tuple[Rig, float, float]:
+    """The rig with its mass and load (both needed to simulate friction), as floats."""
+    if not isinstance(rig, Rig):
+        raise ValueError(f"rig must be a bayestribo Rig, got {type(rig).__name__}")
+    if rig.mass_kg is None or rig.load_N is None:
+        raise ValueError(
+            "rig must give mass_kg and load_N to simulate (load_N = 0 for a test without "
+            f"contact), got {rig!r}"
+        )
+    return rig, float(rig.mass_kg), float(rig.load_N)
+
+
+def _friction_law(law: DissipationLaw, friction: bool, load_N: float) -> DissipationLaw:
+    """The law with its default μ_k for this rig, checked against the contact."""
+    mu_k = law.mu_k
+    if mu_k is None:
+        mu_k = 0.0294 if friction else 0.0
+    if not friction and (callable(mu_k) or float(mu_k) != 0.0):
+        raise ValueError(
+            f"mu_k must be 0 without contact (load_N = {load_N!r}); friction needs a load"
+        )
+    return DissipationLaw(law.zeta, mu_k, law.mu_s)
+
+
+@dataclass(frozen=True)
+class _Motion:
+    """The noise-free dimensionless motion sampled on the record's time grid."""
+
+    t_rel: NDArray  # time since the first sample [s]
+    y: NDArray
+    yp: NDArray
+    mu_s0: float  # μ_s at the initial amplitude
+    fade_s: float
+    motion_s: float
+
+
+def _motion(law: DissipationLaw, rig: Rig, release: Release, sample_rate_Hz: float) -> _Motion:
+    """Magnet phase, then exact free motion (piecewise for an amplitude law), sampled."""
+    from bayestribo.model import exact_response, stop_time
+
+    scaling = rig.scaling()
+    friction = rig.has_contact
+    zeta, mu_k, mu_s = law.zeta, law.mu_k, law.mu_s
+    assert mu_k is not None  # set by _friction_law
+    x0 = float(release.initial_displacement_m)
+    ell, omega = scaling.length_scale, scaling.omega
+    y0 = x0 / ell
+    z0 = float(zeta(x0)) if callable(zeta) else float(zeta)
+    m0 = (float(mu_k(x0)) if callable(mu_k) else float(mu_k)) if friction else 0.0
+    s0 = m0 if mu_s is None else float(mu_s)
+    if y0 <= s0:
+        raise ValueError(
+            f"initial_displacement_m = {x0!r} m is inside the static-friction band "
+            f"±μ_s N/k = ±{s0 * ell!r} m: the pin would not move"
+        )
+    fade_s = release.fade_s(rig)
+    tau_fade = omega * fade_s
+    magnet = _magnet_phase(y0, z0, m0, s0, tau_fade) if tau_fade > 0.0 else None
+    y_f, yp_f = magnet.end_state if magnet is not None else (y0, 0.0)
+    duration = release.motion_duration_s
+    if duration is None and not friction:
+        raise ValueError(
+            "the motion never stops (no friction without contact): give motion_duration_s, "
+            "the time to record after the release"
+        )
+    tau_limit = math.inf if duration is None else omega * duration
+    segments = _free_segments(
+        tau_fade, y_f, yp_f, zeta, mu_k, mu_s, ell, friction, x0, max(tau_limit, tau_fade)
+    )
+    last = segments[-1]
+    tau_stop = last.start + float(stop_time(last.y, last.zeta, last.mu_k, last.mu_s, last.yp))
+    if duration is None:
+        if not math.isfinite(tau_stop):
+            raise ValueError(
+                "the motion never stops (no friction): give motion_duration_s, the time to "
+                "record after the release"
+            )
+        motion_s = tau_stop / omega
+    else:
+        motion_s = duration
+
+    fs = sample_rate_Hz
+    n = math.floor((release.rest_before_s + motion_s + release.rest_after_s) * fs + 1e-9) + 1
+    t_rel = np.arange(n, dtype=np.float64) / fs
+    tau = omega * (t_rel - release.rest_before_s)
+    y = np.full(n, y0)
+    yp = np.zeros(n)
+    if magnet is not None:
+        magnet.fill(tau, y, yp)
+    for seg in segments:
+        sel = (tau >= seg.start) & (tau < seg.end)
+        if sel.any():
+            ys, yps = exact_response(
+                tau[sel] - seg.start, seg.y, seg.zeta, seg.mu_k, seg.mu_s, seg.yp
+            )
+            y[sel], yp[sel] = ys, yps
+    return _Motion(t_rel, y, yp, s0, fade_s, motion_s)
+
+
+def _record(
+    motion: _Motion, rig: Rig, release: Release, sensor: Sensor, rng: np.random.Generator
+) -> tuple[NDArray, NDArray]:
+    """What the sensor records: signal units, offset, noise, quantisation, saturation."""
+    scaling = rig.scaling()
+    ell, omega = scaling.length_scale, scaling.omega
+    sigma_x, sigma_v = sensor.noise
+    n = motion.t_rel.size
+    x = ell * motion.y + release.offset_m + sigma_x * rng.standard_normal(n)
+    v = ell * omega * motion.yp + sigma_v * rng.standard_normal(n)
+    if sensor.quantise:
+        x = _quantise(x, sensor.displacement_resolution_m)
+        v = _quantise(v, sensor.velocity_resolution_m_per_s)
+    if sensor.displacement_range_m is not None:
+        limit = float(sensor.displacement_range_m)
+        x = np.clip(x, -limit, limit)
+    if sensor.velocity_range_m_per_s is not None:
+        limit = float(sensor.velocity_range_m_per_s)
+        v = np.clip(v, -limit, limit)
+    return x, v
+
+
+def _metadata(
+    law: DissipationLaw,
+    rig: Rig,
+    release: Release,
+    sensor: Sensor,
+    motion: _Motion,
+    seed: int | np.random.Generator | None,
+) -> dict[str, Any]:
+    """The run's metadata: the rig, the sensor, and the true parameters."""
+    friction = rig.has_contact
+    zeta, mu_k, mu_s = law.zeta, law.mu_k, law.mu_s
+    sigma_x, sigma_v = sensor.noise
+    truth: dict[str, Any] = {
+        "zeta": None if callable(zeta) else float(zeta),
+        "mu_k": None if callable(mu_k) else float(mu_k) if friction else 0.0,  # type: ignore[arg-type]
+        "mu_s": motion.mu_s0 if mu_s is not None or not callable(mu_k) else None,
+        "amplitude_dependent": law.amplitude_dependent,
+        "initial_displacement_m": float(release.initial_displacement_m),
+        "offset_m": float(release.offset_m),
+        "release_time_s": float(release.time_origin_s + release.rest_before_s),
+        "magnet_fade_s": motion.fade_s,
+        "motion_duration_s": motion.motion_s,
+        "displacement_noise_m": sigma_x,
+        "velocity_noise_m_per_s": sigma_v,
+        "quantised": bool(sensor.quantise),
+        "seed": seed if isinstance(seed, int) else None,
+    }
+    meta: dict[str, Any] = {
+        "load_N": float(rig.load_N),  # type: ignore[arg-type]
+        "mass_kg": float(rig.mass_kg),  # type: ignore[arg-type]
+        "natural_frequency_Hz": float(rig.natural_frequency_Hz),
+        "displacement_resolution_m": float(sensor.displacement_resolution_m),
+        "velocity_resolution_m_per_s": float(sensor.velocity_resolution_m_per_s),
+        "sample_rate_Hz": float(sensor.sample_rate_Hz),
+    }
+    if sensor.displacement_range_m is not None:
+        meta["displacement_range_m"] = float(sensor.displacement_range_m)
+    if sensor.velocity_range_m_per_s is not None:
+        meta["velocity_range_m_per_s"] = float(sensor.velocity_range_m_per_s)
+    meta["simulation"] = truth
+    return meta
+
+
 def simulate(
+    law: DissipationLaw | None = None,
     *,
-    zeta: float | AmplitudeLaw = 0.0236,
-    mu_k: float | AmplitudeLaw | None = None,
-    mu_s: float | None = None,
-    load_N: float = 0.31,
-    mass_kg: float = 0.035,
-    natural_frequency_Hz: float = 32.6,
-    initial_displacement_m: float = 1.5e-3,
-    sample_rate_Hz: float = 10_000.0,
-    rest_before_s: float = 0.05,
-    motion_duration_s: float | None = None,
-    rest_after_s: float = 0.1,
-    magnet_fade_s: float | None = None,
-    offset_m: float = 0.0,
-    time_origin_s: float = 0.0,
-    displacement_noise_m: float | None = None,
-    velocity_noise_m_per_s: float | None = None,
-    displacement_resolution_m: float = DISPLACEMENT_RESOLUTION_M,
-    velocity_resolution_m_per_s: float = VELOCITY_RESOLUTION_M_PER_S,
-    quantise: bool = False,
-    displacement_range_m: float | None = None,
-    velocity_range_m_per_s: float | None = None,
-    channels: tuple[str, ...] = ("displacement", "velocity"),
+    rig: Rig = PAPER_RIG,
+    release: Release | None = None,
+    sensor: Sensor | None = None,
     seed: int | np.random.Generator | None = None,
     metadata: Mapping[str, Any] | None = None,
 ) -> Run:
@@ -251,50 +394,18 @@ def simulate(
 
     Parameters
     ----------
-    zeta : float or callable
-        Equivalent viscous damping ζ [-] (Eq. 6), or ``zeta(amplitude_m)``.
-    mu_k : float or callable, optional
-        Kinetic friction coefficient μ_k [-] (Eq. 3), or ``mu_k(amplitude_m)``.
-        Default 0.0294 with contact (``load_N > 0``), 0 without.
-    mu_s : float, optional
-        Static friction coefficient μ_s >= μ_k [-] (Eq. 2, 5); default μ_k.
-    load_N : float
-        Normal load N [N]; 0 for a test without contact (no friction).
-    mass_kg : float
-        Oscillating mass m [kg].
-    natural_frequency_Hz : float
-        Natural frequency f [Hz]; k = m(2πf)² (Eq. 6).
-    initial_displacement_m : float
-        Initial displacement x₀ > 0 where the magnet holds the pin [m].
-    sample_rate_Hz : float
-        Sample rate [Hz].
-    rest_before_s : float
-        Time at rest before the release [s].
-    motion_duration_s : float, optional
-        Time recorded after the release before the rest tail [s]; default until the
-        motion stops (required when it never stops, e.g. without contact).
-    rest_after_s : float
-        Time recorded after the motion [s] (the pin at rest).
-    magnet_fade_s : float, optional
-        Duration over which the magnet pull fades after the release [s]; default a
-        quarter of the natural period; 0 for an ideal release.
-    offset_m : float
-        Constant added to the displacement [m] (the sensor's zero is arbitrary).
-    time_origin_s : float
-        Time stamp of the first sample [s].
-    displacement_noise_m, velocity_noise_m_per_s : float, optional
-        Standard deviation of the white noise on each channel [m], [m/s]; default the
-        sensor resolution; 0 for none.
-    displacement_resolution_m, velocity_resolution_m_per_s : float
-        Sensor resolution [m], [m/s] (default: the paper's vibrometer), recorded in the
-        metadata and used for quantisation.
-    quantise : bool
-        Round each channel to multiples of its resolution.
-    displacement_range_m, velocity_range_m_per_s : float, optional
-        Sensor range [m], [m/s]: samples beyond are saturated at ±range (a clipped,
-        invalid recording), and the range is recorded in the metadata.
-    channels : tuple of str
-        Which of ``"displacement"`` and ``"velocity"`` to record.
+    law : DissipationLaw, optional
+        ζ, μ_k and μ_s (constants or amplitude laws); default ζ = 0.0236 and, with
+        contact, μ_k = μ_s = 0.0294.
+    rig : Rig
+        Natural frequency [Hz], mass [kg] and load [N] (0 without contact); default
+        the paper's rig, :data:`~bayestribo.synthetic.setup.PAPER_RIG`.
+    release : Release, optional
+        Initial displacement, rests before and after, recorded duration, magnet fade,
+        offset and time origin (default :class:`Release`).
+    sensor : Sensor, optional
+        Sample rate, noise, resolution, quantisation, ranges and channels (default
+        :class:`Sensor`: the paper's vibrometer at 10 kHz, noise at its resolution).
     seed : int or numpy.random.Generator, optional
         Seed of the noise; the same seed gives the same run.
     metadata : mapping, optional
@@ -312,156 +423,30 @@ def simulate(
     Raises
     ------
     ValueError
-        Naming the argument, for values out of range, friction without a load, motion
+        Naming the field, for values out of range, friction without a load, motion
         that never stops without ``motion_duration_s``, or an initial displacement
         inside the static-friction band.
 
     Examples
     --------
-    >>> run = simulate(load_N=0.31, seed=1)
+    >>> from dataclasses import replace
+    >>> run = simulate(DissipationLaw(zeta=0.02), rig=replace(PAPER_RIG, load_N=0.46), seed=1)
     >>> run.metadata["load_N"], run.velocity is not None
-    (0.31, True)
+    (0.46, True)
     """
-    from bayestribo.model import exact_response, stop_time
-
-    rig = Rig(natural_frequency_Hz=natural_frequency_Hz, mass_kg=mass_kg, load_N=load_N)
-    scaling = rig.scaling()
-    friction = rig.has_contact
-    if mu_k is None:
-        mu_k = 0.0294 if friction else 0.0
-    if not friction and (callable(mu_k) or float(mu_k) != 0.0):
-        raise ValueError(
-            f"mu_k must be 0 without contact (load_N = {load_N!r}); friction needs a load"
-        )
-    if not callable(zeta) and not 0.0 <= float(zeta) < 1.0:
-        raise ValueError(f"zeta must satisfy 0 <= zeta < 1, got {zeta!r}")
-    if not callable(mu_k):
-        _positive("mu_k", mu_k, allow_zero=True)
-    if mu_s is not None:
-        _positive("mu_s", mu_s, allow_zero=True)
-        if not callable(mu_k) and mu_s < float(mu_k):
-            raise ValueError(f"mu_s must be >= mu_k, got mu_s={mu_s!r} < mu_k={mu_k!r}")
-    x0 = _positive("initial_displacement_m", initial_displacement_m)
-    fs = _positive("sample_rate_Hz", sample_rate_Hz)
-    rest_before_s = _positive("rest_before_s", rest_before_s, allow_zero=True)
-    rest_after_s = _positive("rest_after_s", rest_after_s, allow_zero=True)
-    if motion_duration_s is not None:
-        motion_duration_s = _positive("motion_duration_s", motion_duration_s)
-    period = 1.0 / natural_frequency_Hz
-    fade_s = 0.25 * period if magnet_fade_s is None else magnet_fade_s
-    fade_s = _positive("magnet_fade_s", fade_s, allow_zero=True)
-    for name, value in (("offset_m", offset_m), ("time_origin_s", time_origin_s)):
-        if not math.isfinite(float(value)):
-            raise ValueError(f"{name} must be finite, got {value!r}")
-    sigma_x = displacement_resolution_m if displacement_noise_m is None else displacement_noise_m
-    sigma_v = (
-        velocity_resolution_m_per_s if velocity_noise_m_per_s is None else velocity_noise_m_per_s
-    )
-    sigma_x = _positive("displacement_noise_m", sigma_x, allow_zero=True)
-    sigma_v = _positive("velocity_noise_m_per_s", sigma_v, allow_zero=True)
-    _positive("displacement_resolution_m", displacement_resolution_m)
-    _positive("velocity_resolution_m_per_s", velocity_resolution_m_per_s)
-    unknown = set(channels) - {"displacement", "velocity"}
-    if unknown or not channels:
-        raise ValueError(f"channels must be some of ('displacement', 'velocity'), got {channels!r}")
-
-    # Dimensionless initial state and parameters at the initial amplitude.
-    ell, omega = scaling.length_scale, scaling.omega
-    y0 = x0 / ell
-    z0 = float(zeta(x0)) if callable(zeta) else float(zeta)
-    m0 = (float(mu_k(x0)) if callable(mu_k) else float(mu_k)) if friction else 0.0
-    s0 = m0 if mu_s is None else float(mu_s)
-    if y0 <= s0:
-        raise ValueError(
-            f"initial_displacement_m = {x0!r} m is inside the static-friction band "
-            f"±μ_s N/k = ±{s0 * ell!r} m: the pin would not move"
-        )
-
-    tau_fade = omega * fade_s
-    magnet = _magnet_phase(y0, z0, m0, s0, tau_fade) if tau_fade > 0.0 else None
-    y_f, yp_f = magnet.end_state if magnet is not None else (y0, 0.0)
-    if motion_duration_s is None and not friction:
-        raise ValueError(
-            "the motion never stops (no friction without contact): give motion_duration_s, "
-            "the time to record after the release"
-        )
-    tau_limit = math.inf if motion_duration_s is None else omega * motion_duration_s
-    segments = _free_segments(
-        tau_fade, y_f, yp_f, zeta, mu_k, mu_s, ell, friction, x0, max(tau_limit, tau_fade)
-    )
-    last = segments[-1]
-    tau_stop = last.start + float(stop_time(last.y, last.zeta, last.mu_k, last.mu_s, last.yp))
-    if motion_duration_s is None:
-        if not math.isfinite(tau_stop):
-            raise ValueError(
-                "the motion never stops (no friction): give motion_duration_s, the time to "
-                "record after the release"
-            )
-        motion_s = tau_stop / omega
-    else:
-        motion_s = motion_duration_s
-
-    n = math.floor((rest_before_s + motion_s + rest_after_s) * fs + 1e-9) + 1
-    t_rel = np.arange(n, dtype=np.float64) / fs
-    tau = omega * (t_rel - rest_before_s)
-    y = np.full(n, y0)
-    yp = np.zeros(n)
-    if magnet is not None:
-        magnet.fill(tau, y, yp)
-    for seg in segments:
-        sel = (tau >= seg.start) & (tau < seg.end)
-        if sel.any():
-            ys, yps = exact_response(
-                tau[sel] - seg.start, seg.y, seg.zeta, seg.mu_k, seg.mu_s, seg.yp
-            )
-            y[sel], yp[sel] = ys, yps
-
+    rig, _, load_N = _checked_rig(rig)
+    law = _friction_law(law or DissipationLaw(), rig.has_contact, load_N)
+    release = release or Release()
+    sensor = sensor or Sensor()
+    motion = _motion(law, rig, release, float(sensor.sample_rate_Hz))
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
-    x = ell * y + offset_m + sigma_x * rng.standard_normal(n)
-    v = ell * omega * yp + sigma_v * rng.standard_normal(n)
-    if quantise:
-        x = _quantise(x, displacement_resolution_m)
-        v = _quantise(v, velocity_resolution_m_per_s)
-    if displacement_range_m is not None:
-        limit = _positive("displacement_range_m", displacement_range_m)
-        x = np.clip(x, -limit, limit)
-    if velocity_range_m_per_s is not None:
-        limit = _positive("velocity_range_m_per_s", velocity_range_m_per_s)
-        v = np.clip(v, -limit, limit)
-    time = np.round(time_origin_s + t_rel, 9)
-
-    truth: dict[str, Any] = {
-        "zeta": None if callable(zeta) else float(zeta),
-        "mu_k": None if callable(mu_k) else float(mu_k) if friction else 0.0,
-        "mu_s": s0 if mu_s is not None or not callable(mu_k) else None,
-        "amplitude_dependent": callable(zeta) or callable(mu_k),
-        "initial_displacement_m": x0,
-        "offset_m": float(offset_m),
-        "release_time_s": float(time_origin_s + rest_before_s),
-        "magnet_fade_s": fade_s,
-        "motion_duration_s": motion_s,
-        "displacement_noise_m": sigma_x,
-        "velocity_noise_m_per_s": sigma_v,
-        "quantised": bool(quantise),
-        "seed": seed if isinstance(seed, int) else None,
-    }
-    meta: dict[str, Any] = {
-        "load_N": float(load_N),
-        "mass_kg": float(mass_kg),
-        "natural_frequency_Hz": float(natural_frequency_Hz),
-        "displacement_resolution_m": float(displacement_resolution_m),
-        "velocity_resolution_m_per_s": float(velocity_resolution_m_per_s),
-        "sample_rate_Hz": fs,
-    }
-    if displacement_range_m is not None:
-        meta["displacement_range_m"] = float(displacement_range_m)
-    if velocity_range_m_per_s is not None:
-        meta["velocity_range_m_per_s"] = float(velocity_range_m_per_s)
-    meta["simulation"] = truth
+    x, v = _record(motion, rig, release, sensor, rng)
+    time = np.round(release.time_origin_s + motion.t_rel, 9)
+    meta = _metadata(law, rig, release, sensor, motion, seed)
     meta.update(metadata or {})
     return Run(
         time,
-        x if "displacement" in channels else None,
-        v if "velocity" in channels else None,
+        x if "displacement" in sensor.channels else None,
+        v if "velocity" in sensor.channels else None,
         meta,
     )
