@@ -32,10 +32,12 @@ import scipy
 
 from bayestribo import __version__
 from bayestribo.estimators.all import METHODS, estimate_all
-from bayestribo.synthetic import PAPER_RIG, DissipationLaw, Sensor
-from bayestribo.synthetic.recording import (
+from bayestribo.synthetic import (
     DISPLACEMENT_RESOLUTION_M,
+    PAPER_RIG,
     VELOCITY_RESOLUTION_M_PER_S,
+    DissipationLaw,
+    Sensor,
     simulate,
 )
 

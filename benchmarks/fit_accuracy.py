@@ -88,7 +88,7 @@ def _fit(run: Any, seed: int) -> Any:
 
 def crb_run(level: float, index: int) -> dict[str, Any]:
     """Fit one simulated run; posterior sd against the Cramér-Rao bound."""
-    from bayestribo.synthetic.recording import (
+    from bayestribo.synthetic import (
         DISPLACEMENT_RESOLUTION_M,
         VELOCITY_RESOLUTION_M_PER_S,
         DissipationLaw,
@@ -124,9 +124,9 @@ def crb_run(level: float, index: int) -> dict[str, Any]:
 def baseline_run(level: int, index: int) -> dict[str, Any]:
     """One of the estimator benchmark's runs: the fit and every classical estimator."""
     from bayestribo.estimators.all import estimate_all
-    from bayestribo.synthetic import PAPER_RIG
-    from bayestribo.synthetic.recording import (
+    from bayestribo.synthetic import (
         DISPLACEMENT_RESOLUTION_M,
+        PAPER_RIG,
         VELOCITY_RESOLUTION_M_PER_S,
         DissipationLaw,
         Sensor,

@@ -61,7 +61,7 @@ RAW = RESULTS / "fit_coverage_runs.jsonl"
 def one_run(index: int, seed: int) -> dict[str, Any]:
     """Simulate one realistic run, fit it, record whether the 95 % intervals cover."""
     from bayestribo.inference import fit
-    from bayestribo.synthetic.recording import (
+    from bayestribo.synthetic import (
         DISPLACEMENT_RESOLUTION_M,
         VELOCITY_RESOLUTION_M_PER_S,
         DissipationLaw,

@@ -66,7 +66,7 @@ RAW = RESULTS / "sbc_replications.jsonl"
 def replicate(level: float, index: int, seed: int) -> dict[str, Any]:
     """Draw, simulate and fit one replication; rank the truth among posterior draws."""
     from bayestribo.inference import fit
-    from bayestribo.synthetic.recording import (
+    from bayestribo.synthetic import (
         DISPLACEMENT_RESOLUTION_M,
         VELOCITY_RESOLUTION_M_PER_S,
         DissipationLaw,

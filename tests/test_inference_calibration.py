@@ -22,10 +22,12 @@ import numpy as np
 from scipy import stats
 
 from bayestribo.inference import fit
-from bayestribo.synthetic import DissipationLaw, Release, Sensor
-from bayestribo.synthetic.recording import (
+from bayestribo.synthetic import (
     DISPLACEMENT_RESOLUTION_M,
     VELOCITY_RESOLUTION_M_PER_S,
+    DissipationLaw,
+    Release,
+    Sensor,
     simulate,
 )
 

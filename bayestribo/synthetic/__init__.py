@@ -14,6 +14,23 @@ campaign
 """
 
 from bayestribo.synthetic.recording import simulate
-from bayestribo.synthetic.setup import PAPER_RIG, DissipationLaw, Release, Sensor
+from bayestribo.synthetic.setup import (
+    DISPLACEMENT_RESOLUTION_M,
+    PAPER_RIG,
+    VELOCITY_RESOLUTION_M_PER_S,
+    AmplitudeLaw,
+    DissipationLaw,
+    Release,
+    Sensor,
+)
 
-__all__ = ["PAPER_RIG", "DissipationLaw", "Release", "Sensor", "simulate"]
+__all__ = [
+    "DISPLACEMENT_RESOLUTION_M",
+    "PAPER_RIG",
+    "VELOCITY_RESOLUTION_M_PER_S",
+    "AmplitudeLaw",
+    "DissipationLaw",
+    "Release",
+    "Sensor",
+    "simulate",
+]

@@ -37,25 +37,14 @@ from numpy.typing import NDArray
 from bayestribo.io.run import Run
 from bayestribo.model.scaling import Rig
 from bayestribo.synthetic.setup import (
-    DISPLACEMENT_RESOLUTION_M,
     PAPER_RIG,
-    VELOCITY_RESOLUTION_M_PER_S,
     AmplitudeLaw,
     DissipationLaw,
     Release,
     Sensor,
 )
 
-__all__ = [
-    "DISPLACEMENT_RESOLUTION_M",
-    "PAPER_RIG",
-    "VELOCITY_RESOLUTION_M_PER_S",
-    "AmplitudeLaw",
-    "DissipationLaw",
-    "Release",
-    "Sensor",
-    "simulate",
-]
+__all__ = ["simulate"]
 
 #: Cap on the half cycles simulated one by one with amplitude-dependent parameters.
 _MAX_HALF_CYCLES = 10_000
