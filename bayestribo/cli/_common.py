@@ -5,10 +5,19 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from bayestribo.errors import BayestriboError
+
+
+class CommandLineError(BayestriboError):
+    """A command's input is wrong; the message gives the fix as command-line options."""
+
+
 __all__ = [
     "COLUMN_ALIASES",
+    "CommandLineError",
     "add_reading_options",
     "add_run_arguments",
+    "cli_message",
     "read_run_from_args",
     "reading_kwargs",
 ]
@@ -30,12 +39,43 @@ def add_reading_options(parser: argparse.ArgumentParser) -> None:
         nargs="+",
         metavar="NAME",
         help="text files: the role of each column in file order, comma or space separated: "
-        "time_s, displacement_m, velocity_m_per_s or ignore (short: t, x, v, -)",
+        "time_s, displacement_m, velocity_m_per_s or ignore (short: t, x, v, -), or a "
+        "quantity with its unit (time_ms, displacement_um, velocity_mm_per_s, ...)",
     )
     parser.add_argument(
         "--length-unit",
         choices=("m", "arbitrary"),
         help="length unit of the signals (arbitrary: friction as a displacement only)",
+    )
+    parser.add_argument(
+        "--skip-rows",
+        type=int,
+        default=0,
+        metavar="N",
+        help="text files: lines to skip at the top (an instrument's preamble)",
+    )
+    parser.add_argument(
+        "--delimiter",
+        metavar="D",
+        help="text files: column separator (',', ';', 'tab' or 'space'; default: guessed)",
+    )
+    parser.add_argument(
+        "--decimal",
+        choices=(".", ","),
+        default=".",
+        help="text files: decimal mark (',' for European exports)",
+    )
+    parser.add_argument(
+        "--scale",
+        action="append",
+        metavar="NAME=FACTOR",
+        help="multiply a column by FACTOR to convert it to s, m or m/s, e.g. x=1e-3 for "
+        "millimetres (repeatable; NAME as in --columns)",
+    )
+    parser.add_argument(
+        "--format",
+        choices=("text", "uff", "tdms"),
+        help="file format, when the suffix does not say it",
     )
     parser.add_argument("--frequency", type=float, help="nominal natural frequency f [Hz]")
     parser.add_argument("--load", type=float, help="normal load N [N]")
@@ -50,12 +90,45 @@ def columns_from_args(values: list[str] | None) -> list[str] | None:
     return [COLUMN_ALIASES.get(c, c) for c in names]
 
 
+_DELIMITER_NAMES = {"tab": "\t", "\\t": "\t", "space": None, "whitespace": None}
+
+
+def _scale_from_args(values: list[str] | None) -> dict[str, float] | None:
+    """``--scale NAME=FACTOR`` options as a mapping of canonical names to factors."""
+    if not values:
+        return None
+    out: dict[str, float] = {}
+    for item in values:
+        name, sep, factor = item.partition("=")
+        try:
+            value = float(factor)
+        except ValueError:
+            value = None
+        if not sep or not name or value is None:
+            raise CommandLineError(
+                f"--scale: expected NAME=FACTOR (e.g. x=1e-3 for millimetres), got {item!r}"
+            )
+        out[COLUMN_ALIASES.get(name, name)] = value
+    return out
+
+
 def reading_kwargs(args: argparse.Namespace) -> dict[str, Any]:
     """Keyword arguments of :func:`bayestribo.read_run` from :func:`add_reading_options`."""
     kwargs: dict[str, Any] = {}
     columns = columns_from_args(args.columns)
     if columns is not None:
         kwargs["columns"] = columns
+    if args.skip_rows:
+        kwargs["skip_rows"] = args.skip_rows
+    if args.delimiter is not None:
+        kwargs["delimiter"] = _DELIMITER_NAMES.get(args.delimiter, args.delimiter)
+    if args.decimal != ".":
+        kwargs["decimal"] = args.decimal
+    scale = _scale_from_args(args.scale)
+    if scale is not None:
+        kwargs["scale"] = scale
+    if args.format is not None:
+        kwargs["file_format"] = args.format
     metadata = {
         key: value
         for key, value in (
@@ -71,8 +144,38 @@ def reading_kwargs(args: argparse.Namespace) -> dict[str, Any]:
     return kwargs
 
 
+#: Python spellings in reading errors and the command-line options that do the same.
+_CLI_SPELLINGS = (
+    ("read_run(path, columns=['time_s', 'displacement_m'])", "--columns t x"),
+    ("columns=[...]", "--columns"),
+    ("columns=", "--columns "),
+    ("give file_format=", "give --format"),
+    ("scale={...}", "--scale NAME=FACTOR"),
+    ("scale=", "--scale "),
+    ("skip_rows", "--skip-rows"),
+)
+
+
+def cli_message(message: str) -> str:
+    """A reading error's message with its fixes spelled as command-line options."""
+    for python, option in _CLI_SPELLINGS:
+        message = message.replace(python, option)
+    return message
+
+
 def read_run_from_args(args: argparse.Namespace) -> Any:
-    """Read the run named by :func:`add_run_arguments` options."""
+    """Read the run named by :func:`add_run_arguments` options.
+
+    Raises
+    ------
+    CommandLineError
+        For a file that cannot be read as described, with the fix spelled as
+        command-line options.
+    """
+    from bayestribo.errors import BayestriboError
     from bayestribo.io import as_run
 
-    return as_run(args.run, **reading_kwargs(args))
+    try:
+        return as_run(args.run, **reading_kwargs(args))
+    except BayestriboError as exc:
+        raise CommandLineError(cli_message(str(exc))) from None

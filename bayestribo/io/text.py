@@ -1,7 +1,9 @@
 """Delimited text files: the canonical CSV and any other column layout.
 
 The canonical file has a header row naming its columns with the canonical names
-``time_s``, ``displacement_m`` and ``velocity_m_per_s``. Any other text file of
+``time_s``, ``displacement_m`` and ``velocity_m_per_s``; a header may instead give
+other units in the names (``time_ms``, ``displacement_um``, ``velocity [mm/s]``, see
+:mod:`bayestribo.io.columns`), which are converted. Any other text file of
 numbers in columns (comma, semicolon, tab or white-space separated, with or without
 a header, ``#`` comment lines allowed) reads with ``columns=[...]``: one canonical
 name or ``"ignore"`` per column, in file order, and optionally a scale factor per
@@ -19,6 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.errors import RunFormatError
+from bayestribo.io.columns import parse_column
 from bayestribo.io.run import COLUMNS, DISPLACEMENT, TIME, VELOCITY
 
 __all__ = ["IGNORE", "check_scale", "read_text", "write_csv"]
@@ -74,32 +77,50 @@ def _as_float(text: str) -> float | None:
         return None
 
 
-def _check_columns(columns: Sequence[str], where: str) -> list[str]:
+def _canonical(name: str, where: str, what: str) -> tuple[str, float]:
+    """Canonical name and unit factor of one column name (canonical, with a unit, or
+    ``ignore``)."""
+    if name in (*COLUMNS, IGNORE):
+        return name, 1.0
+    try:
+        parsed = parse_column(name)
+    except ValueError as exc:
+        raise RunFormatError(f"{what}: {exc}", where) from None
+    if parsed is None:
+        raise RunFormatError(
+            f"{what}: unknown column {name!r}; expected per column one of "
+            f"{[*COLUMNS, IGNORE]} or a quantity with its unit (time_ms, displacement_um, "
+            "velocity_mm_per_s, ...); columns=[...] names the columns in file order",
+            where,
+        )
+    return parsed
+
+
+def _check_columns(
+    columns: Sequence[str], where: str, what: str = "columns"
+) -> tuple[list[str], dict[str, float]]:
+    """Canonical names of the columns in file order and the unit factor of each."""
     if isinstance(columns, str) or not isinstance(columns, Sequence):
         raise RunFormatError(
             "columns: expected a list with one name per column of the file, for instance "
             f"['time_s', 'displacement_m']; got {columns!r}",
             where,
         )
-    names = list(columns)
-    for name in names:
-        if name not in (*COLUMNS, IGNORE):
-            raise RunFormatError(
-                f"columns: unknown column name {name!r}; expected one of "
-                f"{[*COLUMNS, IGNORE]} per column of the file",
-                where,
-            )
+    parsed = [_canonical(str(name), where, what) for name in columns]
+    names = [n for n, _ in parsed]
+    factors = {n: f for n, f in parsed if n != IGNORE and f != 1.0}
     used = [n for n in names if n != IGNORE]
     for name in set(used):
         if used.count(name) > 1:
-            raise RunFormatError(f"columns: {name!r} is given {used.count(name)} times", where)
+            raise RunFormatError(f"{what}: {name!r} is given {used.count(name)} times", where)
     if TIME not in used:
-        raise RunFormatError(f"columns: a {TIME!r} column is needed; got {names}", where)
+        raise RunFormatError(f"{what}: a {TIME!r} column is needed; got {list(columns)}", where)
     if DISPLACEMENT not in used and VELOCITY not in used:
         raise RunFormatError(
-            f"columns: a {DISPLACEMENT!r} or {VELOCITY!r} column is needed; got {names}", where
+            f"{what}: a {DISPLACEMENT!r} or {VELOCITY!r} column is needed; got {list(columns)}",
+            where,
         )
-    return names
+    return names, factors
 
 
 def read_text(
@@ -118,9 +139,10 @@ def read_text(
     path : str or Path
         The text file (UTF-8).
     columns : list of str, optional
-        One canonical name or ``"ignore"`` per column, in file order. Without it the
-        file must start with a header row of canonical names (the canonical CSV).
-        With it, a header row (a first line that is not all numbers) is skipped.
+        One name per column, in file order: a canonical name, a quantity with its unit
+        (``time_ms``, ``displacement_um``, ...) or ``"ignore"``. Without it the file
+        must start with a header row of such names. With it, a header row (a first
+        line that is not all numbers) is skipped.
     scale : mapping, optional
         Factor per canonical column converting the file's unit into the canonical
         unit (s, m, m/s), e.g. ``{"time_s": 1e-3, "displacement_m": 1e-6}``.
@@ -152,8 +174,9 @@ def read_text(
         raise RunFormatError("delimiter and decimal mark cannot both be ','", where)
     if not isinstance(skip_rows, int) or isinstance(skip_rows, bool) or skip_rows < 0:
         raise RunFormatError(f"skip_rows: expected an integer >= 0, got {skip_rows!r}", where)
+    units: dict[str, float] = {}
     if columns is not None:
-        columns = _check_columns(columns, where)
+        columns, units = _check_columns(columns, where)
     try:
         text = path.read_bytes().decode("utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -181,16 +204,8 @@ def read_text(
                 "read_run(path, columns=['time_s', 'displacement_m'])",
                 where,
             )
-        names = [f.strip().strip('"').strip("'") for f in _split(lines[0][1], delimiter)]
-        for name in names:
-            if name not in COLUMNS:
-                raise RunFormatError(
-                    f"header (line {lines[0][0]}): unknown column {name!r}; expected the "
-                    f"canonical names {list(COLUMNS)}, or pass columns=[...] with one of "
-                    f"{[*COLUMNS, IGNORE]} per column",
-                    where,
-                )
-        names = _check_columns(names, where)
+        header = [f.strip().strip('"').strip("'") for f in _split(lines[0][1], delimiter)]
+        names, units = _check_columns(header, where, f"header (line {lines[0][0]})")
     else:
         names = columns
         if has_header and len(first_fields) != len(names):
@@ -227,6 +242,8 @@ def read_text(
     out: dict[str, NDArray] = {}
     for c, (_, name) in enumerate(keep):
         column = data[:, c].copy()
+        if name in units:
+            column *= units[name]
         if name in factors:
             column *= factors[name]
         out[name] = column

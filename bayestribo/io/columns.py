@@ -1,0 +1,97 @@
+"""Column names with units: ``time_ms``, ``displacement_um``, ``velocity_mm_per_s``, …
+
+A text file's header may name its columns by quantity and unit instead of the
+canonical names (``time_s``, ``displacement_m``, ``velocity_m_per_s``). A name is a
+quantity word and a unit, joined by ``_`` or written ``quantity [unit]`` or
+``quantity (unit)``; the unit gives the factor to the canonical SI unit. A name
+without a unit is refused with a message asking for one: a displacement in µm read
+as metres is a wrong answer by 10⁶, not an error, so it is never guessed.
+"""
+
+from __future__ import annotations
+
+import re
+
+from bayestribo.io.run import DISPLACEMENT, TIME, VELOCITY
+
+__all__ = ["QUANTITIES", "UNITS", "parse_column"]
+
+#: Words naming each canonical quantity (lower case).
+QUANTITIES: dict[str, tuple[str, ...]] = {
+    TIME: ("time", "t"),
+    DISPLACEMENT: ("displacement", "position", "x"),
+    VELOCITY: ("velocity", "speed", "v"),
+}
+
+#: Units of each quantity and their factor to the canonical unit.
+UNITS: dict[str, dict[str, float]] = {
+    TIME: {"s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6},
+    DISPLACEMENT: {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "nm": 1e-9},
+    VELOCITY: {
+        "m_per_s": 1.0,
+        "m/s": 1.0,
+        "mm_per_s": 1e-3,
+        "mm/s": 1e-3,
+        "um_per_s": 1e-6,
+        "um/s": 1e-6,
+        "µm/s": 1e-6,
+        "µm_per_s": 1e-6,
+    },
+}
+
+_BRACKETED = re.compile(r"^\s*(?P<word>[^\[\(]+?)\s*[\[\(]\s*(?P<unit>[^\]\)]+?)\s*[\]\)]\s*$")
+
+
+def _split(name: str) -> tuple[str, str | None]:
+    """(quantity word, unit or None) of a header name."""
+    m = _BRACKETED.match(name)
+    if m:
+        return m.group("word").strip().lower(), m.group("unit").strip().replace(" ", "")
+    text = name.strip()
+    low = text.lower()
+    for words in QUANTITIES.values():
+        for word in words:
+            if low == word:
+                return word, None
+            if low.startswith(word + "_"):
+                return word, text[len(word) + 1 :]
+    return low, None
+
+
+def parse_column(name: str) -> tuple[str, float] | None:
+    """The canonical column and the factor to its unit, for a header name.
+
+    Parameters
+    ----------
+    name : str
+        A header field, e.g. ``"time_ms"``, ``"displacement [µm]"``, ``"velocity_m_per_s"``.
+
+    Returns
+    -------
+    (canonical name, factor) or None
+        None when the name is no known quantity.
+
+    Raises
+    ------
+    ValueError
+        For a known quantity without a unit, or with a unit that is not known; the
+        message lists the units accepted.
+    """
+    word, unit = _split(name)
+    for canonical, words in QUANTITIES.items():
+        if word not in words:
+            continue
+        units = UNITS[canonical]
+        if unit is None:
+            raise ValueError(
+                f"column {name!r} has no unit; name it with one, e.g. "
+                f"{word}_{next(iter(units))}, or one of {sorted(units)}"
+            )
+        key = unit if unit in units else unit.lower()
+        if key not in units:
+            raise ValueError(
+                f"column {name!r}: unknown unit {unit!r} for {canonical}; expected one of "
+                f"{sorted(units)}"
+            )
+        return canonical, units[key]
+    return None

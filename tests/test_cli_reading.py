@@ -1,0 +1,91 @@
+"""Every reading option on the command line, the same for each command that reads a
+run, and errors that give the fix as an option."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from bayestribo.cli import main
+from bayestribo.synthetic import simulate
+
+F_HZ = 32.6
+
+
+@pytest.fixture(scope="module")
+def run():
+    return simulate(seed=4)
+
+
+def _decay(argv: list[str], capsys) -> dict:
+    assert main(["decay", *argv, "--json"]) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def _write(path: Path, header: str, rows: list[str], preamble: tuple[str, ...] = ()) -> Path:
+    path.write_text("\n".join([*preamble, header, *rows]) + "\n", encoding="utf-8")
+    return path
+
+
+def test_units_in_column_names_are_converted(tmp_path, run, capsys):
+    rows = [
+        f"{1e3 * t:.12g},{1e6 * x:.12g}" for t, x in zip(run.time, run.displacement, strict=True)
+    ]
+    path = _write(tmp_path / "ms_um.csv", "time_ms,displacement_um", rows)
+    reference = _write(
+        tmp_path / "s_m.csv",
+        "time_s,displacement_m",
+        [f"{t:.12g},{x:.12g}" for t, x in zip(run.time, run.displacement, strict=True)],
+    )
+    options = ["--length-unit", "arbitrary"]
+    got = _decay([str(path), *options], capsys)
+    want = _decay([str(reference), *options], capsys)
+    # read in s and m: the measured frequency is the rig's, not 1000 times lower
+    assert got["natural_frequency_Hz"] == pytest.approx(F_HZ, rel=1e-3)
+    assert got["natural_frequency_Hz"] == pytest.approx(want["natural_frequency_Hz"], rel=1e-9)
+    assert got["equilibrium"] == pytest.approx(want["equilibrium"], rel=1e-9, abs=1e-15)
+
+
+def test_a_european_export_with_a_preamble_reads_with_options(tmp_path, run, capsys):
+    def european(v: float) -> str:
+        return f"{v:.9e}".replace(".", ",")
+
+    rows = [
+        f"{european(t)};{european(1e3 * x)}"
+        for t, x in zip(run.time, run.displacement, strict=True)
+    ]
+    preamble = ("Model;Scope 1000", "Sample Interval;1,0e-04")
+    path = _write(tmp_path / "eu.csv", "t;x", rows, preamble)
+    got = _decay(
+        [
+            str(path),
+            *("--skip-rows", "2", "--delimiter", ";", "--decimal", ","),
+            *("--columns", "t", "x", "--scale", "x=1e-3", "--length-unit", "arbitrary"),
+        ],
+        capsys,
+    )
+    assert got["natural_frequency_Hz"] == pytest.approx(F_HZ, rel=1e-3)
+
+
+def test_reading_errors_give_the_fix_as_options(tmp_path, run, capsys):
+    rows = [f"{t:.12g},{x:.12g}" for t, x in zip(run.time, run.displacement, strict=True)]
+    path = _write(tmp_path / "odd.csv", "Model,Amplitude", rows)
+    assert main(["decay", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "--columns" in err and "columns=[" not in err and "\n" not in err.strip()
+    no_header = _write(tmp_path / "bare.csv", rows[0], rows[1:])
+    assert main(["estimate", str(no_header)]) == 2
+    assert "--columns t x" in capsys.readouterr().err
+    assert main(["decay", str(path), "--scale", "x:1e-3"]) == 2
+    assert "--scale: expected NAME=FACTOR" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command", ["fit", "estimate", "decay", "check", "report"])
+def test_every_reading_command_has_the_same_reading_options(command, capsys):
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    text = capsys.readouterr().out
+    for option in ("--columns", "--skip-rows", "--delimiter", "--decimal", "--scale", "--format"):
+        assert option in text, (command, option)
