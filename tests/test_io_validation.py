@@ -277,3 +277,34 @@ def test_random_bytes_raise_only_package_errors(tmp_path_factory, data, suffix, 
         read_run(path, channels=channels)
     except BayestriboError:
         pass
+
+
+@pytest.mark.parametrize("offset_m", [0.0, 3e-4])
+def test_swapped_channels_are_refused_naming_both(offset_m):
+    # An offset of the displacement integrates to a ramp that hid the swap before.
+    from bayestribo.synthetic import Release
+
+    good = simulate(release=Release(offset_m=offset_m), seed=3)
+    swapped = Run(good.time, good.velocity, good.displacement, good.metadata)
+    with pytest.raises(
+        RecordingError, match="'displacement_m' and 'velocity_m_per_s' look swapped"
+    ):
+        validate_run(swapped)
+
+
+def test_channels_of_different_motions_are_refused():
+    from bayestribo.synthetic import DissipationLaw
+
+    a = simulate(seed=3)
+    other = simulate(DissipationLaw(zeta=0.1), seed=4)
+    n = min(a.n_samples, other.n_samples)
+    mixed = Run(a.time[:n], a.displacement[:n], other.velocity[:n][::-1], a.metadata)
+    with pytest.raises(RecordingError, match="do not describe one motion"):
+        validate_run(mixed)
+
+
+def test_a_velocity_of_opposite_sign_is_named_as_such():
+    good = simulate(seed=3)
+    flipped = Run(good.time, good.displacement, -good.velocity, good.metadata)
+    with pytest.raises(RecordingError, match="opposite sign"):
+        validate_run(flipped)

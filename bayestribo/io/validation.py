@@ -62,9 +62,12 @@ CLIP_SAMPLES = 5
 #: channels may disagree by some per cent; a unit mistake is a factor of 1000.
 UNIT_GAIN_TOLERANCE = 2.0
 
-#: The unit check runs only when displacement and the integral of velocity are
-#: clearly related (correlation above this); otherwise there is no motion to compare.
+#: Least correlation of the displacement's changes with the velocity's integral over the
+#: same short windows: below it the two columns do not describe one motion.
 _UNIT_MIN_CORRELATION = 0.9
+#: Anticorrelation beyond which, with a large negative gain, the columns look swapped
+#: (rests at the initial displacement and after the stop weaken it below 1).
+_SWAP_MIN_ANTICORRELATION = 0.3
 
 
 def _fail(message: str, where: str | None) -> RecordingError:
@@ -199,24 +202,64 @@ def _unit_hint(gain: float) -> str:
     return "the two signals are not in consistent units"
 
 
+def _dominant_period(t: NDArray, values: NDArray) -> float:
+    """Period [s] of the strongest spectral line of ``values`` (regular sampling)."""
+    spectrum = np.abs(np.fft.rfft(values - values.mean()))
+    if spectrum.size < 3:
+        return float(t[-1] - t[0])
+    k = 1 + int(np.argmax(spectrum[1:]))
+    return float(t[-1] - t[0]) * len(values) / (len(values) - 1) / k
+
+
 def _check_units(run: Run, where: str | None) -> None:
+    """The displacement must follow the time integral of the velocity, in phase and gain.
+
+    Over short windows (a fortieth of the dominant period) the change of the
+    displacement is compared with the integral of the velocity over the same window:
+    offsets of either channel cancel, and noise averages out. A displacement and a
+    velocity of one motion correlate near +1 with a gain near 1. Swapped columns
+    correlate near -1 with a gain near -Ω² (the change of a velocity is an
+    acceleration, in antiphase with the displacement); channels of different
+    motions do not correlate.
+    """
     x, v, t = run.displacement, run.velocity, run.time
     if x is None or v is None:
         return
-    # Time integral of the velocity (trapezoid rule), compared with x up to an offset.
     integral = np.concatenate(([0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))))
-    xc = x - x.mean()
-    ic = integral - integral.mean()
+    step = float(np.median(np.diff(t)))
+    lag = max(1, round(_dominant_period(t, v) / (40.0 * step)))
+    if 2 * lag >= x.size:
+        return
+    xc = x[lag:] - x[:-lag]
+    ic = integral[lag:] - integral[:-lag]
+    xc = xc - xc.mean()
+    ic = ic - ic.mean()
     sxx, sii = float(xc @ xc), float(ic @ ic)
     if sxx == 0.0 or sii == 0.0:
         return
     correlation = float(xc @ ic) / math.sqrt(sxx * sii)
-    if abs(correlation) < _UNIT_MIN_CORRELATION:
-        return
     gain = float(xc @ ic) / sii
+    both = f"fields {DISPLACEMENT!r} and {VELOCITY!r}"
+    if correlation < -_SWAP_MIN_ANTICORRELATION and -gain > UNIT_GAIN_TOLERANCE:
+        raise _fail(
+            f"{both} look swapped: the changes of the displacement column follow "
+            f"{gain:.4g} times the integral of the velocity column (correlation "
+            f"{correlation:.3f}), as an acceleration against a displacement does; expected "
+            "the displacement to follow the integral of the velocity; check the order of "
+            "the columns (columns=[...])",
+            where,
+        )
+    if abs(correlation) < _UNIT_MIN_CORRELATION:
+        raise _fail(
+            f"{both} do not describe one motion: the changes of the displacement and the "
+            f"integral of the velocity correlate at {correlation:.3f}; expected close to 1 (above "
+            f"{_UNIT_MIN_CORRELATION:g}); check which column holds which signal "
+            "(columns=[...])",
+            where,
+        )
     if not 1.0 / UNIT_GAIN_TOLERANCE <= gain <= UNIT_GAIN_TOLERANCE:
         raise _fail(
-            f"fields {DISPLACEMENT!r} and {VELOCITY!r} disagree: the displacement is "
+            f"{both} disagree: the displacement is "
             f"{gain:.4g} times the time integral of the velocity; expected 1 (within a factor "
             f"of {UNIT_GAIN_TOLERANCE:g}): {_unit_hint(gain)}; give a scale factor for the "
             "column when reading (scale={...})",
