@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import warnings
 
 import numpy as np
 import pytest
@@ -228,3 +229,20 @@ def test_misfit_is_flagged():
     with pytest.warns(MisfitWarning, match="discrepancy"):
         result = fit(run, seed=2)
     assert result.diagnostics["misfit_p"] < 1e-3
+
+
+def test_without_load_no_quantity_is_labelled_as_a_coefficient():
+    # Friction as a displacement: the static one is a displacement too, never "mu_s".
+    run = simulate(seed=6).with_metadata(length_unit="arbitrary")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = fit(run, seed=1, max_steps=600)
+    names = set(result.summary())
+    assert {"friction_displacement", "static_friction_displacement"} <= names
+    assert not names & {"mu_k", "mu_s"}
+    ratio = result.samples("mu_s_ratio")
+    np.testing.assert_allclose(
+        result.samples("static_friction_displacement"),
+        result.samples("friction_displacement") * ratio,
+        rtol=1e-12,
+    )

@@ -149,3 +149,14 @@ def test_arbitrary_length_unit_drops_load_and_mass_from_the_rig() -> None:
 def test_scaling_without_frequency_raises_recording_error() -> None:
     with pytest.raises(RecordingError, match="natural_frequency_Hz"):
         Run(T, X, source="r.csv").scaling()
+
+
+def test_a_load_without_a_frequency_is_refused_not_dropped():
+    from bayestribo.errors import RunFormatError
+
+    run = Run(T, X, metadata={"load_N": 0.31, "mass_kg": 0.035})
+    with pytest.raises(RunFormatError, match=r"natural_frequency_Hz is not.*--frequency"):
+        run.rig()
+    assert Run(T, X, metadata={"load_N": 0.0}).rig() is None  # no contact: nothing lost
+    arbitrary = Run(T, X, metadata={"load_N": 0.31, "length_unit": "arbitrary"})
+    assert arbitrary.rig() is None

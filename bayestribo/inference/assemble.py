@@ -55,8 +55,9 @@ def derived_quantities(
     Returns
     -------
     dict
-        ``zeta``; with friction ``mu_s_ratio``, ``friction_displacement`` [m or the
-        run's length unit], ``mu_s`` and, when the load is known, ``mu_k``; ``y0``;
+        ``zeta``; with friction ``mu_s_ratio`` and ``friction_displacement`` [m or the
+        run's length unit], and either ``mu_k`` and ``mu_s`` (load and mass known) or
+        ``static_friction_displacement`` [same unit] (not known); ``y0``;
         ``log10_discrepancy`` when sampled; ``zeta_k`` when ζ₀ is given; ``d_k``
         [s/m] (= 2ζ_k √(km)/N, Eq. 42) when ζ₀, the load and the mass are known.
     """
@@ -79,7 +80,9 @@ def derived_quantities(
             out["mu_k"] = mu_k * (load / n_draw) * (m_draw / mass)
             out["mu_s"] = out["mu_k"] * ratio
         else:
-            out["mu_s"] = friction_disp * ratio
+            # Without the load and stiffness the static friction is a displacement
+            # too: it is not μ_s and is not labelled so.
+            out["static_friction_displacement"] = friction_disp * ratio
         out["friction_displacement"] = friction_disp
     out["y0"] = col["y0"]
     if "log10_discrepancy" in col:

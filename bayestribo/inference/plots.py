@@ -27,6 +27,7 @@ LABELS: dict[str, str] = {
     "mu_s": "μ_s [-]",
     "mu_s_ratio": "μ_s/μ_k [-]",
     "friction_displacement": "x_c [displacement unit]",
+    "static_friction_displacement": "x_s = μ_s N/k [displacement unit]",
     "y0": "y₀ (start of window) [-]",
     "zeta_k": "ζ_k = ζ − ζ₀ [-]",
     "d_k": "d_k [s/m]",
@@ -37,9 +38,10 @@ _DEFAULT = ("zeta", "mu_k", "friction_displacement", "mu_s_ratio", "y0", "log10_
 
 
 def _label(result: FitResult, name: str) -> str:
-    if name == "friction_displacement":
+    if name in ("friction_displacement", "static_friction_displacement"):
         unit = "m" if result.metadata.get("length_unit", "m") == "m" else "signal unit"
-        return f"x_c [{unit}]"
+        symbol = "x_c" if name == "friction_displacement" else "x_s"
+        return f"{symbol} [{unit}]"
     if name == "y0":
         return "y₀ (start of window) [-]"
     return LABELS.get(name, name)

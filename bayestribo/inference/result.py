@@ -42,6 +42,7 @@ REPORTED = (
     "mu_k",
     "mu_s",
     "friction_displacement",
+    "static_friction_displacement",
     "zeta_k",
     "d_k",
     "y0",

@@ -377,6 +377,17 @@ class Run:
         if f is None:
             f = self.metadata.get("natural_frequency_Hz")
         if f is None:
+            load = self.metadata.get("load_N")
+            if load is not None and load > 0 and self.length_unit != "arbitrary":
+                # Without f the stiffness k = m(2πf)² is unknown, so μ_k = x_c k/N
+                # cannot be formed: refuse rather than drop the load unannounced.
+                raise RunFormatError(
+                    f"load_N = {load!r} is given but natural_frequency_Hz is not: friction "
+                    "as μ_k needs the stiffness k = m(2πf)²; give natural_frequency_Hz "
+                    "(--frequency), or length_unit='arbitrary' for friction as a "
+                    "displacement",
+                    self.source,
+                )
             return None
         try:
             if self.length_unit == "arbitrary":
