@@ -91,10 +91,10 @@ def test_derived_d_k_is_2_zeta_k_m_omega_over_load(analysis):
     for row in analysis.derived:
         factor = 2 * RIG["mass_kg"] * 2 * math.pi * RIG["natural_frequency_Hz"] / row["load_N"]
         # A positive linear map: medians and interval ends map exactly.
-        assert row["d_k_N_s_per_m"]["median"] == pytest.approx(
+        assert row["d_k_s_per_m"]["median"] == pytest.approx(
             factor * row["zeta_k"]["median"], rel=1e-9
         )
-        assert row["d_k_N_s_per_m"]["interval"] == pytest.approx(
+        assert row["d_k_s_per_m"]["interval"] == pytest.approx(
             [factor * v for v in row["zeta_k"]["interval"]], rel=1e-9
         )
         # ζ_k ≈ 0.0236 − 0.0033 within its interval.

@@ -10,8 +10,8 @@ Eq. 43 (labels ``viscosity:...``; the paper's ζ rises with ν, Fig. 10a). Deriv
 group (section 2.5 of the paper):
 
 * ζ_k = ζ̄ − ζ₀ (group mean minus the pooled ζ₀, independent posteriors);
-* d_k = 2 ζ_k √(k m) / N = 2 ζ_k m Ω / N [N·s/m], with m and Ω = 2πf from the runs'
-  metadata, taken as exact (the metadata gives no uncertainty for them) and N the
+* d_k = 2 ζ_k √(k m) / N = 2 ζ_k m Ω / N [s/m] (√(km) is in N·s/m, divided by N),
+  with m and Ω = 2πf from the runs' metadata, taken as exact (the metadata gives no uncertainty for them) and N the
   group's load.
 """
 
@@ -182,7 +182,7 @@ def _derived(contact: Population, zeta0: Population, runs: Sequence[Any], seed: 
         load, mass, freq = md.get("load_N"), md.get("mass_kg"), md.get("natural_frequency_Hz")
         if load and mass and freq:
             d_k = 2.0 * zeta_k * mass * 2.0 * math.pi * freq / load
-            row["d_k_N_s_per_m"] = summarize(d_k, prob)
+            row["d_k_s_per_m"] = summarize(d_k, prob)
             row["load_N"] = load
         out.append(row)
     return out

@@ -100,7 +100,7 @@ def plot_derived(analysis: CampaignAnalysis) -> Any:
     rows = [r for r in analysis.derived if "load_N" in r]
     for ax, key, label in (
         (axes[0], "zeta_k", "ζ_k = ζ − ζ₀ [-]"),
-        (axes[1], "d_k_N_s_per_m", "d_k [N·s/m]"),
+        (axes[1], "d_k_s_per_m", "d_k [s/m]"),
     ):
         if rows:
             x = np.array([r["load_N"] for r in rows])
