@@ -11,8 +11,8 @@ group (section 2.5 of the paper):
 
 * ζ_k = ζ̄ − ζ₀ (group mean minus the pooled ζ₀, independent posteriors);
 * d_k = 2 ζ_k √(k m) / N = 2 ζ_k m Ω / N [s/m] (√(km) is in N·s/m, divided by N),
-  with m and Ω = 2πf from the runs' metadata, taken as exact (the metadata gives no uncertainty for them) and N the
-  group's load.
+  with m and Ω = 2πf from the runs' metadata, taken as exact (the metadata gives no
+  uncertainty for them) and N the group's load.
 """
 
 from __future__ import annotations
