@@ -16,7 +16,12 @@ __all__ = [
     "HeaderError",
     "PortBusyError",
     "PortNotFoundError",
+    "RunInUseError",
 ]
+
+
+class RunInUseError(AcquisitionError):
+    """Another logger holds this run (its raw log exists): two loggers never share one."""
 
 
 class PortNotFoundError(AcquisitionError):

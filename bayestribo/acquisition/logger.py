@@ -29,13 +29,17 @@ from typing import Any
 
 from bayestribo import __version__
 from bayestribo.acquisition.assembly import AssembledRun
+from bayestribo.acquisition.faults import RunInUseError
 from bayestribo.errors import AcquisitionError
 
 __all__ = [
+    "RUN_ID_PATTERN",
     "SYNC_INTERVAL_S",
     "OperatorInputs",
     "RawLog",
     "RunFiles",
+    "check_run_id",
+    "claim_raw_log",
     "make_run_id",
     "run_metadata",
     "sha256_file",
@@ -215,15 +219,21 @@ class OperatorInputs(dict[str, Any]):
         def check(name: str, value: float | None, lo: float, hi: float) -> float | None:
             if value is None:
                 return None
-            value = float(value)
+            try:
+                value = float(value)
+            except (TypeError, ValueError, OverflowError):
+                raise AcquisitionError(
+                    f"{name}: expected a number in [{lo}, {hi}], got {type(value).__name__}"
+                ) from None
             if not (lo <= value <= hi):
                 raise AcquisitionError(f"{name}: {value!r} outside the range [{lo}, {hi}]")
             return value
 
         if not isinstance(lubricant, str) or not lubricant.strip():
             raise AcquisitionError(f"lubricant: expected a non-empty name, got {lubricant!r}")
-        if int(repeat) != repeat or repeat < 1:
-            raise AcquisitionError(f"repeat: expected an integer >= 1, got {repeat!r}")
+        if isinstance(repeat, bool) or not isinstance(repeat, int) or repeat < 1:
+            shown = repr(repeat) if isinstance(repeat, int | float | str) else type(repeat)
+            raise AcquisitionError(f"repeat: expected an integer >= 1, got {str(shown)[:40]}")
         super().__init__(
             load_N=check("load_N", load_N, 0.0, 1e4),
             lubricant=lubricant.strip(),
@@ -244,6 +254,83 @@ def make_run_id(inputs: Mapping[str, Any], when: datetime | None = None) -> str:
     when = when or datetime.now(UTC)
     lubricant = re.sub(r"[^A-Za-z0-9.-]+", "-", str(inputs["lubricant"])).strip("-") or "x"
     return f"{when:%Y%m%dT%H%M%SZ}_{lubricant}_N{inputs['load_N']:g}_r{inputs['repeat']}"
+
+
+#: What a run id may hold: the characters :func:`make_run_id` writes, at most 128 of
+#: them, starting with a letter or digit (a run id names files: no separators, no "..").
+RUN_ID_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._+-]{0,127}$")
+
+#: Suffixes tried when a generated run id is taken (``<id>_2`` … ``<id>_99``).
+_MAX_SUFFIX = 99
+
+
+def check_run_id(run_id: object, where: str = "run_id") -> str:
+    """A run id that is safe as a file name, or an :class:`AcquisitionError`.
+
+    Parameters
+    ----------
+    run_id : object
+        The run id (from the command line or read from a session file).
+    where : str
+        What to name in the message (the option or the file).
+    """
+    if not isinstance(run_id, str) or not RUN_ID_PATTERN.match(run_id) or ".." in run_id:
+        raise AcquisitionError(
+            f"{where}: {run_id!r} is not a run id; expected 1 to 128 letters, digits, "
+            "'.', '_', '+' or '-', starting with a letter or digit (no path separators)"
+        )
+    return run_id
+
+
+def claim_raw_log(
+    out_dir: str | os.PathLike[str], run_id: str, *, suffix_if_taken: bool
+) -> tuple[str, Path]:
+    """Create ``<out_dir>/<run_id>.raw`` exclusively: the run belongs to this logger.
+
+    The file is created with ``O_CREAT | O_EXCL``, atomic on a local file system, so
+    two loggers started on one folder never append to one raw log.
+
+    Parameters
+    ----------
+    out_dir : path-like
+        The run folder (must exist).
+    run_id : str
+        The wanted run id.
+    suffix_if_taken : bool
+        When the run id is taken, try ``<run_id>_2``, ``<run_id>_3``, … (for run ids
+        the logger made up from the time, which two loggers may make in the same
+        second); otherwise refuse.
+
+    Returns
+    -------
+    run_id, path
+        The run id claimed and its (empty) raw log.
+
+    Raises
+    ------
+    RunInUseError
+        If the run id is taken (and may not be suffixed), or all suffixes are.
+    AcquisitionError
+        If the file cannot be created for another reason.
+    """
+    out = Path(out_dir)
+    for k in range(1, _MAX_SUFFIX + 1):
+        candidate = run_id if k == 1 else f"{run_id}_{k}"
+        path = out / f"{candidate}.raw"
+        try:
+            fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+        except FileExistsError:
+            if not suffix_if_taken:
+                raise RunInUseError(
+                    f"{path}: run {candidate!r} exists already (another logger may be "
+                    "recording it); give another --run-id"
+                ) from None
+            continue
+        except OSError as exc:
+            raise AcquisitionError(f"{path}: cannot create the raw log ({exc})") from None
+        os.close(fd)
+        return candidate, path
+    raise RunInUseError(f"{out}: runs {run_id!r} to {run_id}_{_MAX_SUFFIX} exist already")
 
 
 def write_json_atomic(path: str | os.PathLike[str], data: Mapping[str, Any]) -> None:

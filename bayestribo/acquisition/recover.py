@@ -8,6 +8,7 @@ would have written from the bytes it had received.
 
 from __future__ import annotations
 
+import inspect
 import json
 import os
 from collections.abc import Mapping
@@ -15,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from bayestribo.acquisition.assembly import assemble_bytes
-from bayestribo.acquisition.logger import OperatorInputs
+from bayestribo.acquisition.logger import OperatorInputs, check_run_id
 from bayestribo.acquisition.session import AcquisitionResult, finish_run
 from bayestribo.errors import AcquisitionError
 
@@ -35,9 +36,13 @@ def read_session(raw_log: str | os.PathLike[str]) -> dict[str, Any] | None:
     if not path.exists():
         return None
     try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        raise AcquisitionError(f"{path}: session file does not parse ({exc})") from None
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError, RecursionError) as exc:
+        reason = "nested too deeply" if isinstance(exc, RecursionError) else str(exc)
+        raise AcquisitionError(f"{path}: session file does not parse ({reason})") from None
+    if not isinstance(data, dict) or not isinstance(data.get("operator_inputs", {}), dict):
+        raise AcquisitionError(f"{path}: expected one JSON object with a mapping 'operator_inputs'")
+    return data
 
 
 def recover_run(
@@ -86,9 +91,16 @@ def recover_run(
         raise AcquisitionError(
             f"{raw}: no session file with the operator's inputs; give load, lubricant and repeat"
         )
+    known = set(inspect.signature(OperatorInputs).parameters)
+    unknown = sorted(set(merged) - known)
+    if unknown:
+        raise AcquisitionError(
+            f"{raw}: unknown operator inputs {unknown} in the session file; expected some "
+            f"of {sorted(known)}"
+        )
     operator = OperatorInputs(**merged)
     out = Path(out_dir) if out_dir is not None else raw.parent
-    run_id = str(session.get("run_id") or raw.stem)
+    run_id = check_run_id(session.get("run_id") or raw.stem, f"{raw}: run_id")
     if (out / f"{run_id}.csv").exists() and not overwrite:
         raise AcquisitionError(
             f"{out / (run_id + '.csv')}: run files exist already (recover into another "

@@ -13,6 +13,7 @@ when it ends, completely or not:
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import threading
@@ -29,6 +30,8 @@ from bayestribo.acquisition.logger import (
     OperatorInputs,
     RawLog,
     RunFiles,
+    check_run_id,
+    claim_raw_log,
     make_run_id,
     run_metadata,
     utc_now,
@@ -228,6 +231,12 @@ def acquire_run(
 
     Raises
     ------
+    RunInUseError
+        If ``run_id`` is given and its raw log exists (another logger's run). A run id
+        made up from the time is suffixed (``_2``, ``_3``, …) instead, so two loggers
+        started in the same second into one folder both record.
+    AcquisitionError
+        If ``run_id`` is not a valid run id or the folder cannot be created.
     PortNotFoundError, PortBusyError
         If the port cannot be opened.
     AcquisitionTimeout
@@ -241,11 +250,23 @@ def acquire_run(
     """
     out = Path(out_dir)
     started = utc_now()
-    run_id = run_id or make_run_id(inputs)
-    raw_path = out / f"{run_id}.raw"
-    if raw_path.exists():
-        raise AcquisitionError(f"{raw_path}: a raw log of this run id exists already")
-    link = open_port(port, baudrate=baudrate)
+    generated = run_id is None
+    run_id = make_run_id(inputs) if run_id is None else check_run_id(run_id, "--run-id")
+    created = not out.exists()
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise AcquisitionError(f"{out}: cannot create the output directory ({exc})") from None
+    run_id, raw_path = claim_raw_log(out, run_id, suffix_if_taken=generated)
+    try:
+        link = open_port(port, baudrate=baudrate)
+    except BaseException:
+        # Nothing was received: give the run id back and leave no trace.
+        raw_path.unlink(missing_ok=True)
+        if created:
+            with contextlib.suppress(OSError):
+                out.rmdir()
+        raise
     with _DeferredInterrupt() as interrupt:
         return _acquire(
             link,

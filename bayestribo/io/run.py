@@ -136,13 +136,22 @@ def _plain(value: Any, key: str, where: str | None) -> Any:
     )
 
 
+def _shown(value: Any) -> str:
+    """A value for a message, shortened (a sidecar may hold a number of 400 digits)."""
+    try:
+        text = repr(value)
+    except ValueError:  # an integer beyond Python's string conversion limit
+        return "a number too long to show"
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
 def _typed(key: str, spec: _Key, value: Any, where: str | None) -> Any:
     """Check and normalise the value of a known metadata key."""
     if value is None:
         return None
     bad = RunFormatError(
         f"metadata {key!r} ({spec.description}): expected {spec.expected()}, "
-        f"got {type(value).__name__} {value!r}",
+        f"got {type(value).__name__} {_shown(value)}",
         where,
     )
     if spec.kind == "str":
@@ -160,7 +169,10 @@ def _typed(key: str, spec: _Key, value: Any, where: str | None) -> Any:
     else:
         if not isinstance(value, int | float | np.integer | np.floating):
             raise bad
-        value = float(value)
+        try:
+            value = float(value)
+        except OverflowError:
+            raise bad from None
         if not math.isfinite(value):
             raise bad
     if spec.low is not None and (value < spec.low or (spec.low_open and value == spec.low)):

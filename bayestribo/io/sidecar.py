@@ -65,11 +65,20 @@ def read_sidecar(path: str | Path) -> dict:
         data = json.loads(text, parse_constant=_no_constant, object_pairs_hook=_no_duplicates)
     except ValueError as exc:  # json.JSONDecodeError is a ValueError
         raise RunFormatError(f"sidecar is not valid JSON: {exc}", where) from None
+    except RecursionError:
+        raise RunFormatError(
+            "sidecar is nested too deeply to read; expected one object of metadata", where
+        ) from None
     if not isinstance(data, dict):
         raise RunFormatError(
             f"sidecar must hold one JSON object of metadata; got {type(data).__name__}", where
         )
-    return check_metadata(data, where)
+    try:
+        return check_metadata(data, where)
+    except RecursionError:
+        raise RunFormatError(
+            "sidecar is nested too deeply to read; expected plain metadata values", where
+        ) from None
 
 
 def write_sidecar(metadata: Mapping[str, Any], path: str | Path) -> Path:
