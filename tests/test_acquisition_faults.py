@@ -362,3 +362,77 @@ def test_simulate_option_of_the_command_runs_the_whole_chain(tmp_path):
     assert "gap: samples 384..511" in proc.stderr
     (csv,) = tmp_path.glob("*_water_N0.31_r3.csv")
     assert find_run(tmp_path / "catalog.sqlite", run_id=csv.stem) is not None
+
+
+@pytest.fixture
+def full_after_4k(monkeypatch):
+    """The raw log's writes fail with ENOSPC once 4 kB are on disk (only the raw log's:
+    the simulated device writes to its terminal through the same os.write)."""
+    import errno
+
+    from bayestribo.acquisition import logger as logger_module
+
+    real_write, real_init = os.write, logger_module.RawLog.__init__
+    raw_fds: set[int] = set()
+    written = {"n": 0}
+
+    def init(self, *args, **kwargs):
+        real_init(self, *args, **kwargs)
+        raw_fds.add(self._fd)
+
+    def write(fd, data):
+        if fd not in raw_fds:  # the simulated device's own writes go through
+            return real_write(fd, data)
+        if written["n"] >= 4096:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        n = real_write(fd, data)
+        written["n"] += n
+        return n
+
+    monkeypatch.setattr(logger_module.RawLog, "__init__", init)
+    monkeypatch.setattr(logger_module.os, "write", write)
+    return written
+
+
+def test_disk_full_while_streaming_stops_the_device_and_keeps_the_raw_log(tmp_path, full_after_4k):
+    from bayestribo.acquisition.faults import StorageError
+
+    written = full_after_4k
+    with simulated() as (sim, path):
+        with pytest.raises(StorageError, match=r"No space left.*--recover .*\.raw") as caught:
+            acquire_run(path, tmp_path, INPUTS, catalog=None)
+        sent = bytes(sim.sent)
+    assert "\n" not in str(caught.value)
+    [raw] = list(tmp_path.glob("*.raw"))
+    kept = raw.read_bytes()
+    assert len(kept) == written["n"] >= 4096 and sent.startswith(kept)
+    assert not list(tmp_path.glob("*.csv"))  # no run files on a full disk
+    assert "STOP" in sim.commands
+
+
+def test_disk_full_while_writing_the_run_files_names_the_recovery(tmp_path, monkeypatch):
+    import errno
+
+    from bayestribo.acquisition import session as session_module
+    from bayestribo.acquisition.faults import StorageError
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(session_module, "write_run_files", full)
+    with simulated() as (_, path):
+        with pytest.raises(StorageError, match=r"cannot write the run files.*--recover"):
+            acquire_run(path, tmp_path, INPUTS, catalog=None)
+    [raw] = list(tmp_path.glob("*.raw"))
+    assert raw.stat().st_size > 0
+
+
+def test_the_command_exits_3_on_a_full_disk_with_one_line(tmp_path, full_after_4k, capsys):
+    from bayestribo.cli import main
+
+    argv = ["acquire", "--simulate", "--load", "0.31", "--lubricant", "glycerol"]
+    assert main([*argv, "--out", str(tmp_path), "--no-catalog", "--quiet"]) == 3
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert lines[0].startswith("simulated instrument on")
+    assert len(lines) == 2 and "Traceback" not in lines[1]
+    assert lines[1].startswith("bayestribo acquire: storage error:") and "--recover" in lines[1]

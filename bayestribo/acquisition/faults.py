@@ -17,7 +17,16 @@ __all__ = [
     "PortBusyError",
     "PortNotFoundError",
     "RunInUseError",
+    "StorageError",
 ]
+
+
+class StorageError(AcquisitionError):
+    """The raw log or the run files cannot be written (disk full, I/O error).
+
+    The message names the cause and the ``bayestribo acquire --recover`` command that
+    rebuilds the run from the raw log once the disk has room again.
+    """
 
 
 class RunInUseError(AcquisitionError):

@@ -29,7 +29,7 @@ from typing import Any
 
 from bayestribo import __version__
 from bayestribo.acquisition.assembly import AssembledRun
-from bayestribo.acquisition.faults import RunInUseError
+from bayestribo.acquisition.faults import RunInUseError, StorageError
 from bayestribo.errors import AcquisitionError
 
 __all__ = [
@@ -125,9 +125,11 @@ class RawLog:
                 self.bytes_written += written
                 view = view[written:]
         except OSError as exc:
-            raise AcquisitionError(
-                f"{self.path}: cannot append to the raw log ({exc}); "
-                f"{len(view)} bytes just received are not logged"
+            raise StorageError(
+                f"{self.path}: cannot append to the raw log ({exc.strerror or exc}); "
+                f"{len(view)} bytes just received are not logged, the "
+                f"{self.bytes_written} before them are; free space, then "
+                f"`bayestribo acquire --recover {self.path}`"
             ) from None
         if data:
             with self._lock:

@@ -25,7 +25,7 @@ from typing import Any, NamedTuple
 
 from bayestribo import __version__
 from bayestribo.acquisition.assembly import AssembledRun, RunAssembler, assemble_bytes
-from bayestribo.acquisition.faults import AcquisitionTimeout, DeviceError
+from bayestribo.acquisition.faults import AcquisitionTimeout, DeviceError, StorageError
 from bayestribo.acquisition.logger import (
     OperatorInputs,
     RawLog,
@@ -344,6 +344,11 @@ def _acquire(
         except AcquisitionTimeout as exc:
             fault = str(exc)
             _stop_quietly(talk)  # a stalled device may come back: end its run
+        except StorageError:
+            # The disk cannot take more: end the device's run, keep the raw log as it
+            # is (every byte that could be written), and write no run files there.
+            _stop_quietly(talk)
+            raise
         except AcquisitionError as exc:
             fault = str(exc)
         except KeyboardInterrupt:
@@ -444,7 +449,14 @@ def finish_run(
         ended_utc=utc_now(),
         recovered=recovered,
     )
-    files = write_run_files(out_dir, run_id, run, metadata, raw_log)
+    try:
+        files = write_run_files(out_dir, run_id, run, metadata, raw_log)
+    except OSError as exc:
+        raise StorageError(
+            f"{out_dir}: cannot write the run files of {run_id} ({exc.strerror or exc}); "
+            f"the raw log {raw_log} holds every byte received: free space, then "
+            f"`bayestribo acquire --recover {raw_log}`"
+        ) from None
     catalog_id = None
     if catalog is not None:
         from bayestribo.campaign.catalog import register_run

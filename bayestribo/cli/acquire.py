@@ -20,6 +20,8 @@ from bayestribo.errors import AcquisitionError
 __all__ = ["register"]
 
 _EXIT_INCOMPLETE = 1
+#: The disk could not take the run (raw log or run files); the raw log is kept.
+_EXIT_STORAGE = 3
 _EXIT_INTERRUPTED = 130
 
 
@@ -156,7 +158,9 @@ def _report(result: Any) -> int:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Acquire, simulate or recover one run; return 0 if complete, 1 if not, 130 on Ctrl-C."""
+    """Acquire, simulate or recover one run; return 0 if complete, 1 if not, 3 if the disk
+    could not take it (raw log kept), 130 on Ctrl-C."""
+    from bayestribo.acquisition.faults import StorageError
     from bayestribo.acquisition.recover import recover_run
     from bayestribo.acquisition.session import acquire_run
 
@@ -172,9 +176,13 @@ def run(args: argparse.Namespace) -> int:
             "mass_kg": args.mass,
             "natural_frequency_Hz": args.frequency,
         }
-        result = recover_run(
-            raw, out_dir=out, inputs=given, catalog=catalog, overwrite=args.overwrite
-        )
+        try:
+            result = recover_run(
+                raw, out_dir=out, inputs=given, catalog=catalog, overwrite=args.overwrite
+            )
+        except StorageError as exc:
+            print(f"bayestribo acquire: storage error: {exc}", file=sys.stderr)
+            return _EXIT_STORAGE
         return _report(result)
 
     inputs = _inputs(args, simulate=args.simulate)
@@ -230,6 +238,10 @@ def run(args: argparse.Namespace) -> int:
     except KeyboardInterrupt:
         print("\ninterrupted before the run started; raw log kept", file=sys.stderr)
         return _EXIT_INTERRUPTED
+    except StorageError as exc:
+        end_of_progress = "" if args.quiet else "\n"
+        print(f"{end_of_progress}bayestribo acquire: storage error: {exc}", file=sys.stderr)
+        return _EXIT_STORAGE
     finally:
         if instrument is not None:
             instrument.stop()
