@@ -8,6 +8,7 @@ at their own sample indices and the gaps are listed.
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -59,6 +60,11 @@ class AssembledRun:
         return bool(self.report["complete"])
 
 
+def _digest(kind: int, payload: bytes) -> bytes:
+    """16-byte digest of a frame's type and payload (to tell a retransmission apart)."""
+    return hashlib.blake2b(bytes([kind]) + bytes(payload), digest_size=16).digest()
+
+
 @dataclass
 class RunAssembler:
     """Collect the frames of one run (HEADER, DATA, RELEASE, END) as they arrive."""
@@ -73,6 +79,11 @@ class RunAssembler:
     anomalies: list[str] = field(default_factory=list)
     malformed_frames: int = 0
     duplicate_frames: int = 0
+    #: Frames whose sequence number (or first sample) was received before with other
+    #: content: the device contradicts itself, so the run is not complete.
+    conflicting_frames: int = 0
+    #: A digest of each accepted frame's type and payload, by sequence number.
+    _content: dict[int, bytes] = field(default_factory=dict, init=False, repr=False)
     frames_after_end: int = 0
     samples_received: int = 0
     anomalies_not_listed: int = 0
@@ -112,6 +123,7 @@ class RunAssembler:
                 return
             self.header = header
             self.seqs.add(frame.seq)
+            self._content[frame.seq] = _digest(kind, frame.payload)
             return
         if self.header is None:
             self._note(
@@ -123,15 +135,29 @@ class RunAssembler:
             self._note(f"{FRAME_TYPES[kind]} frame after END at byte {frame.offset}")
             return
         if frame.seq in self.seqs:
-            self.duplicate_frames += 1
-            self._note(f"duplicate sequence number {frame.seq} at byte {frame.offset}")
+            if self._content.get(frame.seq) == _digest(kind, frame.payload):
+                self.duplicate_frames += 1
+                self._note(f"retransmitted frame {frame.seq} at byte {frame.offset} ignored")
+            else:
+                self.conflicting_frames += 1
+                self._note(
+                    f"sequence number {frame.seq} repeated with different content at byte "
+                    f"{frame.offset}; the first one is kept"
+                )
             return
         try:
             if kind == FrameType.DATA:
                 first, counts = decode_data(frame.payload)
                 if first in self.data:
-                    self.duplicate_frames += 1
-                    self._note(f"duplicate DATA for sample {first} ignored")
+                    if np.array_equal(self.data[first], counts):
+                        self.duplicate_frames += 1
+                        self._note(f"duplicate DATA for sample {first} ignored")
+                    else:
+                        self.conflicting_frames += 1
+                        self._note(
+                            f"DATA for sample {first} repeated with different samples; the "
+                            "first one is kept"
+                        )
                     return
                 self.data[first] = counts
                 self.samples_received += len(counts)
@@ -144,6 +170,7 @@ class RunAssembler:
             self._note(f"{exc} (seq {frame.seq}, byte {frame.offset})")
             return
         self.seqs.add(frame.seq)
+        self._content[frame.seq] = _digest(kind, frame.payload)
 
     def build(self, parser: FrameParser | None = None, *, fault: str | None = None) -> AssembledRun:
         """Assemble the samples received so far.
@@ -208,6 +235,7 @@ class RunAssembler:
             and not gaps
             and not missing_seqs
             and self.malformed_frames == 0
+            and self.conflicting_frames == 0
             and len(index) == self.end.sample_count
         )
         release_time = None if self.release_index is None else self.release_index / rate
@@ -231,6 +259,7 @@ class RunAssembler:
             "gaps": gaps,
             "malformed_frames": self.malformed_frames,
             "duplicate_frames": self.duplicate_frames,
+            "conflicting_frames": self.conflicting_frames,
             "overlapping_frames": overlaps,
             "anomalies": list(self.anomalies),
             "anomalies_not_listed": self.anomalies_not_listed,

@@ -37,6 +37,8 @@ __all__ = [
     "COMMANDS",
     "CRC_SIZE",
     "FRAME_TYPES",
+    "HEADER_LIMITS",
+    "MAX_LABEL_BYTES",
     "MAX_PAYLOAD",
     "PREFIX_SIZE",
     "PROTOCOL_VERSION",
@@ -62,6 +64,17 @@ SYNC = b"\xa5\x5a"
 PROTOCOL_VERSION = 1
 #: Largest payload a frame may carry [bytes] (1024 sample pairs plus the index).
 MAX_PAYLOAD = 4100
+#: Longest range label of a run header [bytes of UTF-8].
+MAX_LABEL_BYTES = 256
+#: Plausible bounds of the run header's numbers: beyond them the header is refused,
+#: so that no run file is written that the package's own reader would reject.
+HEADER_LIMITS: dict[str, tuple[float, float]] = {
+    "sample_rate_Hz": (1.0, 1e7),
+    "displacement_scale_m": (1e-15, 1e-2),
+    "velocity_scale_m_per_s": (1e-15, 1e1),
+    "displacement_range_m": (1e-9, 10.0),
+    "velocity_range_m_per_s": (1e-9, 1e3),
+}
 #: Bytes before the payload: sync, type, length, sequence number.
 PREFIX_SIZE = 9
 #: Bytes of the trailing checksum.
@@ -337,10 +350,19 @@ class RunHeader:
             ("displacement_range_m", drange),
             ("velocity_range_m_per_s", vrange),
         ):
-            if not (math.isfinite(value) and value > 0.0):
-                raise HeaderError(f"run header: {name} = {value!r}, expected positive finite")
+            low, high = HEADER_LIMITS[name]
+            if not (math.isfinite(value) and low <= value <= high):
+                raise HeaderError(
+                    f"run header: {name} = {value!r}, expected a finite value in "
+                    f"[{low:g}, {high:g}]"
+                )
+        raw_label = payload[_HEADER.size :]
+        if len(raw_label) > MAX_LABEL_BYTES:
+            raise HeaderError(
+                f"run header: range label of {len(raw_label)} bytes, at most {MAX_LABEL_BYTES}"
+            )
         try:
-            label = payload[_HEADER.size :].decode("utf-8")
+            label = raw_label.decode("utf-8")
         except UnicodeDecodeError as exc:
             raise HeaderError(f"run header: range label is not UTF-8 ({exc})") from None
         return cls(rate, dscale, vscale, drange, vrange, spf, label, channels, version)
