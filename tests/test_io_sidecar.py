@@ -9,6 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from bayestribo.errors import RunFormatError
+from bayestribo.io.run import METADATA_KEYS
 from bayestribo.io.sidecar import read_sidecar
 
 
@@ -47,3 +48,57 @@ def test_any_json_object_is_read_or_refused_with_the_packages_error(tmp_path_fac
         read_sidecar(path)
     except RunFormatError:
         pass
+
+
+@pytest.mark.parametrize(
+    "run_id",
+    ["../escaped/evil", "/etc/passwd", "a/b", "a\\b", "..", ".hidden", "a..b", "", "x" * 129],
+)
+def test_a_run_id_that_could_name_another_path_is_refused(tmp_path, run_id):
+    path = tmp_path / "r.json"
+    path.write_text(json.dumps({"run_id": run_id}))
+    with pytest.raises(RunFormatError, match=r"metadata 'run_id': .* is not a run id"):
+        read_sidecar(path)
+
+
+@pytest.mark.parametrize("run_id", ["r1", "water9.00pc-N0.46-r3", "20261122T061500Z_g_N1e+20_r2_2"])
+def test_the_run_ids_the_package_makes_are_read(tmp_path, run_id):
+    path = tmp_path / "r.json"
+    path.write_text(json.dumps({"run_id": run_id}))
+    assert read_sidecar(path)["run_id"] == run_id
+
+
+# Any JSON text: huge integers, deep nesting, every type at the top level and at the
+# known keys. Reading gives metadata or the package's error, never another exception.
+ANY_JSON = st.recursive(
+    st.none()
+    | st.booleans()
+    | st.integers(min_value=-(10**500), max_value=10**500)
+    | st.floats(allow_nan=False, allow_infinity=False)
+    | st.text(max_size=200),
+    lambda inner: (
+        st.lists(inner, max_size=4)
+        | st.dictionaries(
+            st.sampled_from([*METADATA_KEYS, "x", "acquisition"]) | st.text(max_size=8),
+            inner,
+            max_size=4,
+        )
+    ),
+    max_leaves=30,
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(value=ANY_JSON, depth=st.integers(min_value=0, max_value=3000))
+def test_any_json_value_is_read_or_refused_with_the_packages_error(tmp_path_factory, value, depth):
+    text = "[" * depth + json.dumps(value) + "]" * depth
+    if depth % 2:  # under a known key, as deep as it goes
+        text = '{"notes": ' + text + "}"
+    path = tmp_path_factory.mktemp("s") / "r.json"
+    path.write_text(text)
+    try:
+        metadata = read_sidecar(path)
+    except RunFormatError as exc:
+        assert str(exc)  # a message, one of the package's
+    else:
+        assert isinstance(metadata, dict)

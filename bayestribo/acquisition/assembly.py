@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 from bayestribo.acquisition.faults import FrameError
 from bayestribo.acquisition.protocol import (
     FRAME_TYPES,
+    MAX_FRAME_LENGTH,
     Frame,
     FrameParser,
     FrameType,
@@ -297,7 +298,9 @@ def assemble_bytes(data: bytes, *, fault: str | None = None) -> AssembledRun:
     FrameError
         If no run header is found.
     """
-    parser = FrameParser()
+    # All bytes are at hand: a long candidate delays nothing, so a run header of any
+    # length is found (and one with an oversized label refused with its reason).
+    parser = FrameParser(max_header_payload=MAX_FRAME_LENGTH)
     assembler = RunAssembler()
     for frame in parser.feed(data) + parser.finish():
         assembler.add(frame)

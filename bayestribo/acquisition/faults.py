@@ -12,6 +12,7 @@ __all__ = [
     "AcquisitionTimeout",
     "DeviceError",
     "DisconnectedError",
+    "DuplicateRunError",
     "FrameError",
     "HeaderError",
     "PortBusyError",
@@ -31,6 +32,16 @@ class StorageError(AcquisitionError):
 
 class RunInUseError(AcquisitionError):
     """Another logger holds this run (its raw log exists): two loggers never share one."""
+
+
+class DuplicateRunError(AcquisitionError):
+    """A run's samples are those of a run in the catalog already, or its run id is
+    catalogued with other samples: its run files are not written (the raw log is kept).
+
+    The catalog identifies a run by the SHA-256 of its run file, so a second recording
+    with the very same samples cannot be catalogued beside the first; it is refused
+    before any run file is written rather than written and then left out.
+    """
 
 
 class PortNotFoundError(AcquisitionError):

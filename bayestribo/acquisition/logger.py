@@ -21,7 +21,7 @@ import re
 import tempfile
 import threading
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -31,6 +31,7 @@ from bayestribo import __version__
 from bayestribo.acquisition.assembly import AssembledRun
 from bayestribo.acquisition.faults import RunInUseError, StorageError
 from bayestribo.errors import AcquisitionError
+from bayestribo.io.sidecar import RUN_ID_PATTERN, is_run_id
 
 __all__ = [
     "RUN_ID_PATTERN",
@@ -104,6 +105,10 @@ class RawLog:
         self.sync_interval_s = sync_interval_s
         self.bytes_written = 0
         self.syncs = 0
+        #: The first storage failure (disk full, I/O error), raised by every later
+        #: :meth:`write`: a failure of the background sync is not lost.
+        self.error: StorageError | None = None
+        self._error_raised = False  # raised to the caller (not only seen by the thread)
         self._dirty_since: float | None = None
         self._lock = threading.Lock()
         self._closing = threading.Event()
@@ -118,6 +123,7 @@ class RawLog:
         """Append bytes (written to the OS immediately; synced per the interval)."""
         if self._fd is None:
             raise AcquisitionError(f"{self.path}: raw log already closed")
+        failed_before = self.error  # a failed sync: keep what still can be written
         view = memoryview(data)
         try:
             while view:
@@ -125,12 +131,17 @@ class RawLog:
                 self.bytes_written += written
                 view = view[written:]
         except OSError as exc:
-            raise StorageError(
+            self.error = failed_before or StorageError(
                 f"{self.path}: cannot append to the raw log ({exc.strerror or exc}); "
                 f"{len(view)} bytes just received are not logged, the "
                 f"{self.bytes_written} before them are; free space, then "
                 f"`bayestribo acquire --recover {self.path}`"
-            ) from None
+            )
+            self._error_raised = True
+            raise self.error from None
+        if failed_before is not None:
+            self._error_raised = True
+            raise failed_before
         if data:
             with self._lock:
                 if self._dirty_since is None:
@@ -155,26 +166,54 @@ class RawLog:
             try:
                 os.fsync(fd)
             except OSError as exc:
-                if exc.errno != errno.EINVAL:  # EINVAL: a device or pipe, nothing to sync
-                    raise
+                if exc.errno == errno.EINVAL:  # a device or pipe, nothing to sync
+                    return
+                self.error = self.error or StorageError(
+                    f"{self.path}: cannot sync the raw log to disk ({exc.strerror or exc}); "
+                    f"the {self.bytes_written} bytes received may not all be on disk; "
+                    f"check the disk, then `bayestribo acquire --recover {self.path}`"
+                )
+                if threading.current_thread() is not self._thread:
+                    self._error_raised = True
+                raise self.error from None
             self.syncs += 1
 
     def _sync_loop(self) -> None:
-        # Wake at a quarter of the interval: a byte waits at most 1.25 intervals.
+        # Wake at a quarter of the interval: a byte waits at most 1.25 intervals. A
+        # failed sync is kept in self.error and raised by the next write (the reading
+        # loop's thread), never printed from this one.
         while not self._closing.wait(self.sync_interval_s / 4):
-            self.tick()
+            try:
+                self.tick()
+            except StorageError:
+                return
 
     def close(self) -> None:
-        """Sync and close (idempotent)."""
+        """Sync and close (idempotent).
+
+        Raises
+        ------
+        StorageError
+            If the final sync fails and no storage failure was raised before.
+        """
         self._closing.set()
         if self._thread is not None:
             self._thread.join()
             self._thread = None
-        if self._fd is not None:
+        if self._fd is None:
+            return
+        raised_before = self._error_raised
+        try:
             self.sync()
+        except StorageError:
+            pass  # kept in self.error
+        finally:
             with self._lock:
                 os.close(self._fd)
                 self._fd = None
+        if self.error is not None and not raised_before:
+            self._error_raised = True
+            raise self.error
 
     def __enter__(self) -> RawLog:
         return self
@@ -248,19 +287,21 @@ class OperatorInputs(dict[str, Any]):
         )
 
 
+#: Longest lubricant part of a run id made by :func:`make_run_id` [characters]: the
+#: whole id stays within the 128 characters of :data:`RUN_ID_PATTERN`.
+_MAX_LUBRICANT_CHARS = 64
+
+
 def make_run_id(inputs: Mapping[str, Any], when: datetime | None = None) -> str:
     """A file-name-safe run id: UTC time, lubricant, load and repeat.
 
     Example: ``20261122T061500Z_glycerol_N0.31_r2``.
     """
     when = when or datetime.now(UTC)
-    lubricant = re.sub(r"[^A-Za-z0-9.-]+", "-", str(inputs["lubricant"])).strip("-") or "x"
+    lubricant = re.sub(r"[^A-Za-z0-9.-]+", "-", str(inputs["lubricant"])).strip("-")
+    lubricant = re.sub(r"\.{2,}", ".", lubricant)[:_MAX_LUBRICANT_CHARS].strip("-.") or "x"
     return f"{when:%Y%m%dT%H%M%SZ}_{lubricant}_N{inputs['load_N']:g}_r{inputs['repeat']}"
 
-
-#: What a run id may hold: the characters :func:`make_run_id` writes, at most 128 of
-#: them, starting with a letter or digit (a run id names files: no separators, no "..").
-RUN_ID_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._+-]{0,127}$")
 
 #: Suffixes tried when a generated run id is taken (``<id>_2`` … ``<id>_99``).
 _MAX_SUFFIX = 99
@@ -276,7 +317,7 @@ def check_run_id(run_id: object, where: str = "run_id") -> str:
     where : str
         What to name in the message (the option or the file).
     """
-    if not isinstance(run_id, str) or not RUN_ID_PATTERN.match(run_id) or ".." in run_id:
+    if not is_run_id(run_id):
         raise AcquisitionError(
             f"{where}: {run_id!r} is not a run id; expected 1 to 128 letters, digits, "
             "'.', '_', '+' or '-', starting with a letter or digit (no path separators)"
@@ -455,6 +496,8 @@ def write_run_files(
     run: AssembledRun,
     metadata: Mapping[str, Any],
     raw_log: Path,
+    *,
+    before_move: Callable[[dict[str, str]], None] | None = None,
 ) -> RunFiles:
     """Write a run atomically: temporary directory in ``out_dir``, fsync, :func:`os.replace`.
 
@@ -470,11 +513,21 @@ def write_run_files(
         The sidecar content (:func:`run_metadata`).
     raw_log : Path
         The raw log, listed in the ``.sha256`` manifest.
+    before_move : callable, optional
+        Called with the SHA-256 of each file (by file name) once they are written in
+        the temporary directory, before any is moved into place; if it raises, no run
+        file is written (e.g. a run the catalog would refuse).
 
     Returns
     -------
     RunFiles
         Paths of the CSV, JSON, raw log and manifest, and their digests.
+
+    Raises
+    ------
+    OSError
+        If a file cannot be written (disk full, I/O error); no run file is moved into
+        place then.
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -489,6 +542,8 @@ def write_run_files(
         for path in (csv_tmp, json_tmp, manifest_tmp):
             with open(path, "rb") as fh:
                 os.fsync(fh.fileno())
+        if before_move is not None:
+            before_move(dict(digests))
         for path in (csv_tmp, json_tmp, manifest_tmp):
             os.replace(path, out / path.name)
     _fsync_dir(out)

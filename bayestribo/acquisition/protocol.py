@@ -38,6 +38,7 @@ __all__ = [
     "CRC_SIZE",
     "FRAME_TYPES",
     "HEADER_LIMITS",
+    "MAX_FRAME_LENGTH",
     "MAX_LABEL_BYTES",
     "MAX_PAYLOAD",
     "PREFIX_SIZE",
@@ -64,6 +65,8 @@ SYNC = b"\xa5\x5a"
 PROTOCOL_VERSION = 1
 #: Largest payload a frame may carry [bytes] (1024 sample pairs plus the index).
 MAX_PAYLOAD = 4100
+#: Largest payload length a frame's 16-bit length field can state [bytes].
+MAX_FRAME_LENGTH = 0xFFFF
 #: Longest range label of a run header [bytes of UTF-8].
 MAX_LABEL_BYTES = 256
 #: Plausible bounds of the run header's numbers: beyond them the header is refused,
@@ -192,9 +195,23 @@ class FrameParser:
     false candidate that overlaps it passes CRC-32, a chance of 2⁻³² per candidate.
     A false candidate can delay the frames it overlaps until enough bytes arrive to
     check it (or until :meth:`finish`), never drop them.
+
+    Parameters
+    ----------
+    max_header_payload : int
+        Longest HEADER payload taken as a candidate [bytes]. The default,
+        :data:`MAX_PAYLOAD`, bounds the delay a false candidate can cause while
+        streaming; a parser of a whole raw log takes :data:`MAX_FRAME_LENGTH`, so a run
+        header with an oversized label is found and refused with its reason.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, *, max_header_payload: int = MAX_PAYLOAD) -> None:
+        if not MAX_PAYLOAD <= max_header_payload <= MAX_FRAME_LENGTH:
+            raise FrameError(
+                f"max_header_payload: expected {MAX_PAYLOAD} to {MAX_FRAME_LENGTH} bytes, "
+                f"got {max_header_payload!r}"
+            )
+        self.max_header_payload = max_header_payload
         self._buf = bytearray()
         self._base = 0  # stream offset of self._buf[0]
         self.discarded_bytes = 0
@@ -241,7 +258,8 @@ class FrameParser:
                     continue
                 break
             _, ftype, length, seq = _PREFIX.unpack_from(buf, i)
-            if ftype not in FRAME_TYPES or length > MAX_PAYLOAD:
+            limit = self.max_header_payload if ftype == FrameType.HEADER else MAX_PAYLOAD
+            if ftype not in FRAME_TYPES or length > limit:
                 self.discarded_bytes += 1
                 pos = i + 1
                 continue

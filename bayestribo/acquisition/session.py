@@ -25,7 +25,13 @@ from typing import Any, NamedTuple
 
 from bayestribo import __version__
 from bayestribo.acquisition.assembly import AssembledRun, RunAssembler, assemble_bytes
-from bayestribo.acquisition.faults import AcquisitionTimeout, DeviceError, StorageError
+from bayestribo.acquisition.faults import (
+    AcquisitionTimeout,
+    DeviceError,
+    DuplicateRunError,
+    HeaderError,
+    StorageError,
+)
 from bayestribo.acquisition.logger import (
     OperatorInputs,
     RawLog,
@@ -39,7 +45,7 @@ from bayestribo.acquisition.logger import (
     write_run_files,
 )
 from bayestribo.acquisition.port import DEFAULT_BAUDRATE, Link, open_port
-from bayestribo.acquisition.protocol import FrameParser
+from bayestribo.acquisition.protocol import MAX_FRAME_LENGTH, FrameParser, FrameType
 from bayestribo.errors import AcquisitionError
 
 __all__ = ["AcquisitionResult", "Progress", "acquire_run", "finish_run"]
@@ -251,7 +257,10 @@ def acquire_run(
     out = Path(out_dir)
     started = utc_now()
     generated = run_id is None
-    run_id = make_run_id(inputs) if run_id is None else check_run_id(run_id, "--run-id")
+    run_id = check_run_id(
+        make_run_id(inputs) if generated else run_id,
+        "run id made from the inputs" if generated else "--run-id",
+    )
     created = not out.exists()
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -311,16 +320,25 @@ def _acquire(
             out.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise AcquisitionError(f"{out}: cannot create the output directory ({exc})") from None
-        write_json_atomic(
-            _session_path(raw_path),
-            {
-                "run_id": run_id,
-                "port": port,
-                "host_time_start_utc": started,
-                "package_version": __version__,
-                "operator_inputs": dict(inputs),
-            },
-        )
+        try:
+            write_json_atomic(
+                _session_path(raw_path),
+                {
+                    "run_id": run_id,
+                    "port": port,
+                    "host_time_start_utc": started,
+                    "package_version": __version__,
+                    "operator_inputs": dict(inputs),
+                },
+            )
+        except OSError as exc:
+            raw_path.unlink(missing_ok=True)  # nothing was received: leave no trace
+            raise StorageError(
+                f"{_session_path(raw_path)}: cannot write the session file "
+                f"({exc.strerror or exc}); nothing was received, so there is nothing "
+                "for `bayestribo acquire --recover` to rebuild: free space and start the "
+                "run again"
+            ) from None
         raw = RawLog(raw_path, background=True)
         talk = _Conversation(link, raw, timeout_s, interrupt)
         try:
@@ -334,7 +352,9 @@ def _acquire(
         except BaseException as exc:
             _stop_quietly(talk)
             raw.close()
-            if isinstance(exc, AcquisitionError):
+            if isinstance(exc, AcquisitionTimeout) and not talk.assembler.started:
+                _refused_header(raw_path)  # a header too long for the live parser?
+            if isinstance(exc, AcquisitionError) and not isinstance(exc, StorageError):
                 exc.args = (f"{exc}; raw log kept in {raw_path}",)
             raise
         fault: str | None = None
@@ -374,6 +394,28 @@ def _acquire(
         fault=fault,
         interrupted=interrupted,
     )
+
+
+def _refused_header(raw_path: Path) -> None:
+    """Raise the :class:`HeaderError` of a run header the live parser could not see.
+
+    The live parser bounds every frame by
+    :data:`~bayestribo.acquisition.protocol.MAX_PAYLOAD`, so that a false candidate never
+    holds back the stream for long; a run header with a range label of more than 4056
+    bytes is longer and never reaches it. The raw log is parsed again without that
+    bound: a run header found there is refused with its own reason (its label's size).
+    """
+    parser = FrameParser(max_header_payload=MAX_FRAME_LENGTH)
+    assembler = RunAssembler()
+    try:
+        for frame in parser.feed(raw_path.read_bytes()) + parser.finish():
+            if frame.type == FrameType.HEADER:
+                assembler.add(frame)
+    except HeaderError as exc:  # before OSError: the package's errors are OSErrors too
+        exc.args = (f"{exc}; raw log kept in {raw_path}",)
+        raise exc from None
+    except OSError:
+        return
 
 
 def _stream(
@@ -424,6 +466,35 @@ def _stop_quietly(talk: _Conversation) -> None:
         pass
 
 
+def _check_catalog(
+    catalog: str | os.PathLike[str], run_id: str, sha256: str, raw_log: Path
+) -> None:
+    """Refuse a run the catalog would refuse, before any of its run files is written.
+
+    Raises
+    ------
+    DuplicateRunError
+        If the catalog holds a run with the same samples under another run id, or
+        this run id with other samples.
+    """
+    from bayestribo.campaign.catalog import find_run
+
+    same_id = find_run(catalog, run_id=run_id)
+    if same_id is not None and same_id.sha256 != sha256:
+        raise DuplicateRunError(
+            f"{catalog}: run id {run_id!r} is catalogued already (id {same_id.id}) with "
+            f"other samples; run files not written, raw log kept in {raw_log}"
+        )
+    same_samples = find_run(catalog, sha256=sha256)
+    if same_samples is not None and same_samples.run_id != run_id:
+        raise DuplicateRunError(
+            f"{catalog}: the samples of run {run_id!r} are exactly those of run "
+            f"{same_samples.run_id!r} (catalog id {same_samples.id}): a repeat is a new "
+            f"recording, not the same one again; run files not written, raw log kept in "
+            f"{raw_log}"
+        )
+
+
 def finish_run(
     run: AssembledRun,
     inputs: Mapping[str, Any],
@@ -438,7 +509,17 @@ def finish_run(
     interrupted: bool = False,
     recovered: bool = False,
 ) -> AcquisitionResult:
-    """Write an assembled run atomically and register it in the catalog."""
+    """Write an assembled run atomically and register it in the catalog.
+
+    Raises
+    ------
+    DuplicateRunError
+        If the catalog holds the same samples under another run id (or this run id
+        with other samples): no run file is written, the raw log is kept.
+    StorageError
+        If the run files cannot be written, or the catalog cannot be updated (disk
+        full, I/O error); the message names the ``--recover`` command.
+    """
     metadata = run_metadata(
         run,
         inputs,
@@ -449,8 +530,16 @@ def finish_run(
         ended_utc=utc_now(),
         recovered=recovered,
     )
+    csv_name = f"{run_id}.csv"
+
+    def check_catalog(digests: dict[str, str]) -> None:
+        if catalog is not None:
+            _check_catalog(catalog, run_id, digests[csv_name], raw_log)
+
     try:
-        files = write_run_files(out_dir, run_id, run, metadata, raw_log)
+        files = write_run_files(out_dir, run_id, run, metadata, raw_log, before_move=check_catalog)
+    except AcquisitionError:  # an OSError too: the catalog's refusal, not the disk's
+        raise
     except OSError as exc:
         raise StorageError(
             f"{out_dir}: cannot write the run files of {run_id} ({exc.strerror or exc}); "
@@ -459,14 +548,23 @@ def finish_run(
         ) from None
     catalog_id = None
     if catalog is not None:
+        import sqlite3
+
         from bayestribo.campaign.catalog import register_run
 
-        catalog_id = register_run(
-            catalog,
-            path=files.csv,
-            sha256=files.digests[files.csv.name],
-            metadata={**metadata, "files_sha256": files.digests},
-        )
+        try:
+            catalog_id = register_run(
+                catalog,
+                path=files.csv,
+                sha256=files.digests[files.csv.name],
+                metadata={**metadata, "files_sha256": files.digests},
+            )
+        except sqlite3.Error as exc:
+            raise StorageError(
+                f"{catalog}: cannot register run {run_id} ({exc}); its run files are "
+                f"written: free space, then `bayestribo acquire --recover {raw_log} "
+                "--overwrite` registers it"
+            ) from None
     return AcquisitionResult(
         run_id=run_id,
         files=files,

@@ -147,7 +147,13 @@ def _report(result: Any) -> int:
     if result.complete:
         print("  complete: every frame and sample received")
         return 0
-    print(f"  INCOMPLETE: {result.fault or 'frames or samples missing'}", file=sys.stderr)
+    conflicting = meta["acquisition"].get("conflicting_frames", 0)
+    reason = result.fault or (
+        f"{conflicting} frame(s) repeated with different content (see 'anomalies')"
+        if conflicting and not meta["gaps"]
+        else "frames or samples missing"
+    )
+    print(f"  INCOMPLETE: {reason}", file=sys.stderr)
     for gap in meta["gaps"]:
         print(
             f"  gap: samples {gap['start_sample']}..{gap['stop_sample'] - 1} "
@@ -159,7 +165,12 @@ def _report(result: Any) -> int:
 
 def run(args: argparse.Namespace) -> int:
     """Acquire, simulate or recover one run; return 0 if complete, 1 if not, 3 if the disk
-    could not take it (raw log kept), 130 on Ctrl-C."""
+    could not take it (raw log kept), 130 on Ctrl-C.
+
+    Other failures (no port, no answer, a refused header, a run id in use, a run with
+    the samples of a catalogued run) raise the package's error: exit status 2 from
+    :func:`bayestribo.cli.main.main`, with nothing but the raw log written.
+    """
     from bayestribo.acquisition.faults import StorageError
     from bayestribo.acquisition.recover import recover_run
     from bayestribo.acquisition.session import acquire_run

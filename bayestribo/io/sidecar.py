@@ -8,6 +8,7 @@ a written sidecar gives back exactly the same values.
 from __future__ import annotations
 
 import json
+import re
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -15,7 +16,19 @@ from typing import Any
 from bayestribo.errors import RunFormatError
 from bayestribo.io.run import METADATA_KEYS, check_metadata
 
-__all__ = ["read_sidecar", "sidecar_path", "write_sidecar"]
+__all__ = ["RUN_ID_PATTERN", "is_run_id", "read_sidecar", "sidecar_path", "write_sidecar"]
+
+#: What a run id may hold: the characters the package writes in the run ids it makes
+#: (acquisition, synthetic campaigns), at most 128 of them, starting with a letter or
+#: digit. A run id names files, so no path separator and no ``..`` either.
+RUN_ID_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9._+-]{0,127}")
+
+
+def is_run_id(value: object) -> bool:
+    """True if ``value`` is a run id that is safe as a file name (:data:`RUN_ID_PATTERN`)."""
+    return (
+        isinstance(value, str) and RUN_ID_PATTERN.fullmatch(value) is not None and ".." not in value
+    )
 
 
 def sidecar_path(path: str | Path) -> Path:
@@ -53,7 +66,8 @@ def read_sidecar(path: str | Path) -> dict:
     ------
     RunFormatError
         If the file is not UTF-8 JSON holding one object, repeats a key, holds NaN
-        or infinity, or has a value of the wrong type.
+        or infinity, has a value of the wrong type, or a ``run_id`` that is not a
+        run id (:data:`RUN_ID_PATTERN`: it could name a path outside the folder).
     """
     path = Path(path)
     where = str(path)
@@ -74,11 +88,20 @@ def read_sidecar(path: str | Path) -> dict:
             f"sidecar must hold one JSON object of metadata; got {type(data).__name__}", where
         )
     try:
-        return check_metadata(data, where)
+        metadata = check_metadata(data, where)
     except RecursionError:
         raise RunFormatError(
             "sidecar is nested too deeply to read; expected plain metadata values", where
         ) from None
+    run_id = metadata.get("run_id")
+    if run_id is not None and not is_run_id(run_id):
+        raise RunFormatError(
+            f"metadata 'run_id': {run_id[:60]!r} is not a run id; expected 1 to 128 letters, "
+            "digits, '.', '_', '+' or '-', starting with a letter or digit (no path "
+            "separators, no '..')",
+            where,
+        )
+    return metadata
 
 
 def write_sidecar(metadata: Mapping[str, Any], path: str | Path) -> Path:
