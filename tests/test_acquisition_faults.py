@@ -7,6 +7,7 @@ the missing ones reported, never filled.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import itertools
 import json
@@ -31,7 +32,7 @@ from bayestribo.acquisition import (
 )
 from bayestribo.acquisition.instrument import FaultPlan, SimulatedInstrument, SimulationConfig
 from bayestribo.acquisition.port import open_port
-from bayestribo.campaign.catalog import find_run
+from bayestribo.campaign.catalog import find_run, list_runs
 from bayestribo.errors import AcquisitionError, RecordingError
 from bayestribo.io import read_run
 
@@ -436,3 +437,128 @@ def test_the_command_exits_3_on_a_full_disk_with_one_line(tmp_path, full_after_4
     assert lines[0].startswith("simulated instrument on")
     assert len(lines) == 2 and "Traceback" not in lines[1]
     assert lines[1].startswith("bayestribo acquire: storage error:") and "--recover" in lines[1]
+
+
+def test_a_failed_sync_of_the_raw_log_stops_the_run_with_the_packages_error(tmp_path, monkeypatch):
+    # fsync fails (EIO) in the background thread: the failure reaches the reading loop
+    # as a StorageError, never as a traceback printed by the thread.
+    import errno
+    import threading
+
+    from bayestribo.acquisition import logger as logger_module
+    from bayestribo.acquisition.faults import StorageError
+
+    real_fsync, real_init = os.fsync, logger_module.RawLog.__init__
+    raw_fds: set[int] = set()
+    hooked: list[object] = []
+
+    def init(self, *args, **kwargs):
+        real_init(self, *args, **kwargs)
+        raw_fds.add(self._fd)
+
+    def fsync(fd):
+        if fd in raw_fds:
+            raise OSError(errno.EIO, "Input/output error")
+        return real_fsync(fd)
+
+    monkeypatch.setattr(logger_module.RawLog, "__init__", init)
+    monkeypatch.setattr(logger_module.os, "fsync", fsync)
+    monkeypatch.setattr(threading, "excepthook", hooked.append)
+    # In real time, so that the first sync (within 0.625 s) falls in the middle of the run.
+    with simulated(realtime=True, config=dataclasses.replace(SMALL, duration_s=2.0)) as (
+        sim,
+        path,
+    ):
+        with pytest.raises(StorageError, match=r"cannot sync the raw log.*--recover .*\.raw"):
+            acquire_run(path, tmp_path, INPUTS, catalog=None)
+    assert hooked == []
+    assert "STOP" in sim.commands
+    [raw] = list(tmp_path.glob("*.raw"))
+    assert bytes(sim.sent).startswith(raw.read_bytes()) and raw.stat().st_size > 0
+    assert not list(tmp_path.glob("*.csv"))
+
+
+def test_a_session_file_that_cannot_be_written_is_a_storage_error(tmp_path, monkeypatch):
+    import errno
+
+    from bayestribo.acquisition import session as session_module
+    from bayestribo.acquisition.faults import StorageError
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(session_module, "write_json_atomic", full)
+    with simulated() as (sim, path):
+        with pytest.raises(StorageError, match=r"cannot write the session file.*No space left"):
+            acquire_run(path, tmp_path, INPUTS, catalog=None, run_id="r1")
+    assert sim.commands == []  # nothing asked of the device, nothing received
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_catalog_on_a_full_disk_is_a_storage_error_naming_the_recovery(tmp_path, monkeypatch):
+    import sqlite3
+
+    from bayestribo.acquisition.faults import StorageError
+    from bayestribo.campaign import catalog as catalog_module
+
+    def full(*args, **kwargs):
+        raise sqlite3.OperationalError("database or disk is full")
+
+    monkeypatch.setattr(catalog_module, "register_run", full)
+    with simulated() as (_, path):
+        with pytest.raises(StorageError, match=r"disk is full.*--recover .*\.raw --overwrite"):
+            acquire_run(path, tmp_path, INPUTS, catalog=tmp_path / "c.sqlite", run_id="r1")
+    assert (tmp_path / "r1.csv").exists() and (tmp_path / "r1.raw").stat().st_size > 0
+
+
+@pytest.fixture
+def tiny_tmpfs(tmp_path):
+    """A 64 KiB tmpfs, where root may mount one; skipped otherwise."""
+    if not hasattr(os, "geteuid") or os.geteuid() != 0:
+        pytest.skip("mounting a tmpfs needs root")
+    mountpoint = tmp_path / "tiny"
+    mountpoint.mkdir()
+    mounted = subprocess.run(
+        ["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(mountpoint)],
+        capture_output=True,
+    )
+    if mounted.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here: {mounted.stderr.decode().strip()}")
+    try:
+        yield mountpoint
+    finally:
+        subprocess.run(["umount", str(mountpoint)], capture_output=True)
+
+
+def test_a_real_full_disk_keeps_the_raw_log_and_recover_rebuilds_it(tmp_path, tiny_tmpfs):
+    from bayestribo.acquisition.faults import StorageError
+    from bayestribo.acquisition.recover import recover_run
+
+    big = dataclasses.replace(SMALL, sample_rate_Hz=20_000.0, duration_s=1.0, samples_per_frame=128)
+    with simulated(config=big) as (sim, path):
+        with pytest.raises(StorageError, match=r"No space left.*--recover"):
+            acquire_run(path, tiny_tmpfs, INPUTS, catalog=None, run_id="full")
+        sent = bytes(sim.sent)
+    assert "STOP" in sim.commands
+    kept = (tiny_tmpfs / "full.raw").read_bytes()
+    assert 0 < len(kept) < len(sent) and sent.startswith(kept)
+    assert not list(tiny_tmpfs.glob("*.csv"))
+    result = recover_run(tiny_tmpfs / "full.raw", out_dir=tmp_path / "out")
+    assert not result.complete  # what the disk held, with the rest listed as missing
+    assert result.run.report["samples_received"] > 0
+
+
+def test_the_same_run_recorded_twice_is_refused_before_any_run_file(tmp_path, capsys):
+    # The simulated rig gives the very same samples twice: the second run is refused
+    # with one line before its run files are written, not written and then left out.
+    from bayestribo.cli import main
+
+    argv = ["acquire", "--simulate", "--load", "0.31", "--lubricant", "glycerol", "--quiet"]
+    assert main([*argv, "--out", str(tmp_path)]) == 0
+    capsys.readouterr()
+    assert main([*argv, "--out", str(tmp_path)]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 2 and "Traceback" not in lines[1]
+    assert "are exactly those of run" in lines[1] and "run files not written" in lines[1]
+    assert len(list(tmp_path.glob("*.csv"))) == 1 and len(list(tmp_path.glob("*.raw"))) == 2
+    assert len(list_runs(tmp_path / "catalog.sqlite")) == 1
