@@ -366,9 +366,10 @@ def test_simulate_option_of_the_command_runs_the_whole_chain(tmp_path):
 
 
 @pytest.fixture
-def full_after_4k(monkeypatch):
-    """The raw log's writes fail with ENOSPC once 4 kB are on disk (only the raw log's:
-    the simulated device writes to its terminal through the same os.write)."""
+def full_after_1k(monkeypatch):
+    """The raw log's writes fail with ENOSPC once 1 kB is on disk (a run of the small
+    simulated board is about 5.5 kB); only the raw log's: the simulated device writes
+    to its terminal through the same os.write."""
     import errno
 
     from bayestribo.acquisition import logger as logger_module
@@ -384,7 +385,7 @@ def full_after_4k(monkeypatch):
     def write(fd, data):
         if fd not in raw_fds:  # the simulated device's own writes go through
             return real_write(fd, data)
-        if written["n"] >= 4096:
+        if written["n"] >= 1024:
             raise OSError(errno.ENOSPC, "No space left on device")
         n = real_write(fd, data)
         written["n"] += n
@@ -395,10 +396,10 @@ def full_after_4k(monkeypatch):
     return written
 
 
-def test_disk_full_while_streaming_stops_the_device_and_keeps_the_raw_log(tmp_path, full_after_4k):
+def test_disk_full_while_streaming_stops_the_device_and_keeps_the_raw_log(tmp_path, full_after_1k):
     from bayestribo.acquisition.faults import StorageError
 
-    written = full_after_4k
+    written = full_after_1k
     with simulated() as (sim, path):
         with pytest.raises(StorageError, match=r"No space left.*--recover .*\.raw") as caught:
             acquire_run(path, tmp_path, INPUTS, catalog=None)
@@ -406,7 +407,7 @@ def test_disk_full_while_streaming_stops_the_device_and_keeps_the_raw_log(tmp_pa
     assert "\n" not in str(caught.value)
     [raw] = list(tmp_path.glob("*.raw"))
     kept = raw.read_bytes()
-    assert len(kept) == written["n"] >= 4096 and sent.startswith(kept)
+    assert len(kept) == written["n"] >= 1024 and sent.startswith(kept)
     assert not list(tmp_path.glob("*.csv"))  # no run files on a full disk
     assert "STOP" in sim.commands
 
@@ -428,7 +429,7 @@ def test_disk_full_while_writing_the_run_files_names_the_recovery(tmp_path, monk
     assert raw.stat().st_size > 0
 
 
-def test_the_command_exits_3_on_a_full_disk_with_one_line(tmp_path, full_after_4k, capsys):
+def test_the_command_exits_3_on_a_full_disk_with_one_line(tmp_path, full_after_1k, capsys):
     from bayestribo.cli import main
 
     argv = ["acquire", "--simulate", "--load", "0.31", "--lubricant", "glycerol"]
