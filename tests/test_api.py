@@ -51,11 +51,89 @@ def test_summaries_share_one_type_and_honour_prob():
         result.summary(prob=95)
 
 
+def _leaves(summaries):
+    """Every ParameterSummary in a (nested) summary dict."""
+    for value in summaries.values():
+        if isinstance(value, dict):
+            yield from _leaves(value)
+        else:
+            yield value
+
+
+def _result_types():
+    """One instance of every result type that is not a single-run fit (built directly)."""
+    from bayestribo.adequacy import AmplitudeTrend, ConstancyTest
+    from bayestribo.adequacy.extinction import ExtinctionCheck
+    from bayestribo.adequacy.windows import WindowEstimate
+    from bayestribo.estimators import Estimate
+    from bayestribo.estimators.result import EstimateTable
+    from bayestribo.population import GroupPosterior, Population, Trend
+
+    rng = np.random.default_rng(0)
+
+    def draws(loc, scale):
+        return rng.normal(loc, scale, 4000)
+
+    estimate = Estimate("energy_ls_exact", zeta=0.01, zeta_se=1e-3, mu_k=0.05, mu_k_se=4e-3)
+    group = GroupPosterior(
+        "load_N=0.31", 0.31, ("a", "b"), ("zeta",), {"zeta": draws(0.01, 1e-3)},
+        {"zeta": np.abs(draws(2e-3, 5e-4))}, {"zeta": "half-normal"},
+    )  # fmt: skip
+    pooled = GroupPosterior(
+        "all", None, ("a", "b"), ("zeta",), {"zeta": draws(0.01, 1e-3)},
+        {"zeta": np.abs(draws(2e-3, 5e-4))}, {"zeta": "half-normal"},
+    )  # fmt: skip
+    trend = Trend(
+        "load_N", 0.3, ("a", "b", "c"), ("zeta",), {"zeta": draws(0.01, 1e-3)},
+        {"zeta": draws(0.0, 1e-3)}, {"zeta": np.abs(draws(2e-3, 5e-4))},
+    )  # fmt: skip
+    amplitude = AmplitudeTrend("zeta", 0.01, 1e-3, 2e-4, 1e-3, (6e-4, 1.4e-3), 0.1, 0.8)
+    constancy = ConstancyTest(
+        True, 0.5, 0.5, 0.5, 0.05, amplitude,
+        AmplitudeTrend("mu_k", 0.05, 0.0, 1e-3, 0.0, (-2e-3, 2e-3), 0.0, 0.8),
+        1.0, 4.0, 8, (0.2, 1.0), 6, 0, "",
+    )  # fmt: skip
+    window = WindowEstimate(
+        0, 0.0, 1.0, 2.0, 0.5, (0.4, 0.6), (1.0, 2.0), 0.01, 0.05, (0.008, 0.012),
+        (0.04, 0.06), np.diag([1e-6, 2.5e-5]), "least_squares",
+    )  # fmt: skip
+    extinction = ExtinctionCheck(9.5, 12.0, draws(9.0, 0.5), draws(9.4, 0.4), "posterior")
+    return {
+        "Estimate": estimate,
+        "EstimateTable": EstimateTable([estimate]),
+        "GroupPosterior": group,
+        "Population": Population("load_N", ("zeta",), {0.31: group}, pooled),
+        "Trend": trend,
+        "AmplitudeTrend": amplitude,
+        "ConstancyTest": constancy,
+        "WindowEstimate": window,
+        "ExtinctionCheck": extinction,
+    }
+
+
+@pytest.mark.parametrize("kind", sorted(_result_types()))
+def test_every_result_type_summarises_with_the_asked_probability(kind):
+    result = _result_types()[kind]
+    narrow, wide = list(_leaves(result.summary(prob=0.9))), list(_leaves(result.summary(0.99)))
+    assert narrow and len(narrow) == len(wide)
+    for n, w in zip(narrow, wide, strict=True):
+        assert isinstance(n, ParameterSummary) and n.prob == 0.9 and w.prob == 0.99
+        assert w.low < n.low < n.high < w.high
+    with pytest.raises(BayestriboError, match="prob"):
+        result.summary(prob=1.5)
+
+
 def test_as_run_is_the_one_conversion(tmp_path):
     run = simulate(seed=3)
     assert as_run(run) is run
+    path = bayestribo.write_run(run, tmp_path / "r.csv")
+    assert as_run(path) == run and as_run(str(path)) == run
+    with pytest.raises(BayestriboError, match="run is already a Run"):
+        as_run(run, skip_rows=1)
     with pytest.raises(BayestriboError, match="run: expected"):
         as_run(3.0)
+    with pytest.raises(BayestriboError, match=r"'delimeter' \(did you mean 'delimiter'\?\)"):
+        bayestribo.read_run(path, delimeter=",")
 
 
 def _readme_blocks() -> list[str]:

@@ -67,6 +67,8 @@ class AmplitudeTrend:
         95 % interval of ``change``.
     relative_change : float or None
         ``change / mean`` (None when the mean is not positive).
+    span : float
+        Δa, the largest minus the smallest window amplitude [signal length unit].
     """
 
     name: str
@@ -76,14 +78,25 @@ class AmplitudeTrend:
     change: float
     change_interval: tuple[float, float]
     relative_change: float | None
+    span: float
 
     def summary(self, prob: float = 0.95) -> dict[str, ParameterSummary]:
-        """Normal summaries of the ``slope`` (per unit amplitude) and of the ``change``
-        from the smallest to the largest window amplitude."""
-        ratio = self.change / self.slope if self.slope != 0 else 0.0
+        """Normal summaries of the trend.
+
+        Parameters
+        ----------
+        prob : float
+            Probability of the normal-approximation intervals, in (0, 1).
+
+        Returns
+        -------
+        dict of str to ParameterSummary
+            ``"slope"`` (per unit amplitude, sd ``slope_se``) and ``"change"`` from the
+            smallest to the largest window amplitude (sd ``slope_se·Δa``).
+        """
         return {
             "slope": ParameterSummary.from_normal(self.slope, self.slope_se, prob),
-            "change": ParameterSummary.from_normal(self.change, abs(ratio) * self.slope_se, prob),
+            "change": ParameterSummary.from_normal(self.change, self.slope_se * self.span, prob),
         }
 
     def to_dict(self) -> dict[str, Any]:
@@ -144,6 +157,21 @@ class ConstancyTest:
     n_left_out: int
     statement: str
 
+    def summary(self, prob: float = 0.95) -> dict[str, dict[str, ParameterSummary]]:
+        """:meth:`AmplitudeTrend.summary` of both trends, by parameter name.
+
+        Parameters
+        ----------
+        prob : float
+            Probability of the normal-approximation intervals, in (0, 1).
+
+        Returns
+        -------
+        dict
+            ``{self.zeta.name: {"slope": ..., "change": ...}, self.mu.name: {...}}``.
+        """
+        return {t.name: t.summary(prob) for t in (self.zeta, self.mu)}
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready mapping."""
         return {
@@ -201,7 +229,9 @@ def _trend(
     change = slope * span
     half = crit * se * span
     rel = change / mean if mean > 0.0 else None
-    return AmplitudeTrend(name, mean, slope, se, change, (change - half, change + half), rel)
+    return AmplitudeTrend(
+        name, mean, slope, se, change, (change - half, change + half), rel, float(span)
+    )
 
 
 def _describe(name: str, t: AmplitudeTrend) -> str:

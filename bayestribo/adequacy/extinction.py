@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 
 from bayestribo.adequacy.draws import ParameterDraws
 from bayestribo.signal.decay import EnergyDecay
+from bayestribo.summary import ParameterSummary, check_prob
 
 __all__ = ["ExtinctionCheck", "extinction_check"]
 
@@ -105,6 +106,30 @@ class ExtinctionCheck:
             )
         verdict = "inside" if self.consistent() else "outside"
         return f"{pred}; measured {self.measured:.4g} s, {verdict} the exact model's 95 % interval"
+
+    def summary(self, prob: float = 0.95) -> dict[str, ParameterSummary]:
+        """Summaries of the predicted durations [s] over the draws that stop.
+
+        Parameters
+        ----------
+        prob : float
+            Probability of the equal-tailed intervals, in (0, 1).
+
+        Returns
+        -------
+        dict of str to ParameterSummary
+            ``"exact"`` (the exact model's last turning point, Eq. 8) and
+            ``"averaged"`` (Eq. 38), each over its finite durations; a model none of
+            whose draws stops is left out (``to_dict()`` gives the finite fraction).
+            The measured end is :attr:`measured`.
+        """
+        check_prob(prob)
+        out = {}
+        for name, values in (("exact", self.exact), ("averaged", self.averaged)):
+            finite = values[np.isfinite(values)]
+            if finite.size:
+                out[name] = ParameterSummary.from_samples(finite, prob)
+        return out
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready mapping."""

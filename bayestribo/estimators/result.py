@@ -157,6 +157,23 @@ class EstimateTable:
             raise KeyError(f"no estimate from method {key!r}")
         return self.estimates[key]
 
+    def summary(self, prob: float = 0.95) -> dict[str, dict[str, ParameterSummary]]:
+        """:meth:`Estimate.summary` of each method, by method name.
+
+        Parameters
+        ----------
+        prob : float
+            Probability of the normal-approximation intervals, in (0, 1).
+
+        Returns
+        -------
+        dict of str to dict of str to ParameterSummary
+            ``{method: {"zeta": ..., "mu_k": ..., "friction_displacement": ...}}``; a
+            method without any value with a standard error maps to an empty dict.
+        """
+        check_prob(prob)
+        return {e.method: e.summary(prob) for e in self.estimates}
+
     def to_dict(self) -> dict[str, Any]:
         """``{"run": ..., "estimates": [Estimate.to_dict(), ...]}``."""
         return {"run": self.run, "estimates": [e.to_dict() for e in self.estimates]}

@@ -149,6 +149,25 @@ class Population:
             for a, b in itertools.combinations(self.groups, 2)
         ]
 
+    def summary(self, prob: float = 0.95) -> dict[str, dict[str, dict[str, ParameterSummary]]]:
+        """:meth:`GroupPosterior.summary` of every group and of the pooled population.
+
+        Parameters
+        ----------
+        prob : float
+            Probability of the equal-tailed credible intervals, in (0, 1).
+
+        Returns
+        -------
+        dict
+            ``{group label: {parameter: {"mean": ParameterSummary, "sigma": ...}}}``,
+            the groups in their order, then the pooled population under its label
+            (:data:`POOLED`) when there is one.
+        """
+        check_prob(prob)
+        members = [*self.groups.values(), *([] if self.pooled is None else [self.pooled])]
+        return {g.label: g.summary(prob) for g in members}
+
     def to_dict(self, prob: float = 0.95) -> dict[str, Any]:
         """JSON-ready summary of every group, the pooled population and the differences."""
         return {
