@@ -6,9 +6,10 @@ normal and is sampled exactly; the joint posterior of (μ, σ) follows from
 y_i ~ N(μ, σ² + s_i²) by numerical integration on a grid. The sample-reuse route
 (per-run samples, per-run priors divided out) must agree with it.
 
-Tolerances. The population sampler keeps ~2000 steps × 32 walkers with autocorrelation
-times of ~30-50 steps: an effective sample size of about 1500, so a quantile's Monte
-Carlo standard error is about 0.04 posterior sd; the importance-sampling estimate with
+Tolerances. The population sampler runs its 2 ensembles × 16 walkers until 50
+autocorrelation times after burn (τ ≈ 12-15 steps, about 800 steps here): an effective
+sample size of about 1700, so a quantile's Monte Carlo standard error is about 0.04
+posterior sd; the importance-sampling estimate with
 S = 1000 samples per run adds a similar error. Quantiles must agree to 0.2 posterior sd
 (about 4 combined standard errors), which the tests also show is tight enough to reject
 the answer obtained without dividing out the per-run priors.
@@ -24,6 +25,7 @@ import numpy as np
 import pytest
 
 from bayestribo.errors import BayestriboError, ConvergenceWarning
+from bayestribo.inference.sampling import NaNLogProbabilityError
 from bayestribo.population import (
     HalfCauchy,
     HalfNormal,
@@ -35,6 +37,7 @@ from bayestribo.population import (
     slope_probabilities,
     trend,
 )
+from bayestribo.population.sampler import sample_hyperparameters
 
 QS = np.array([0.1, 0.5, 0.9])
 TOL_SD = 0.2  # in posterior standard deviations; see the module docstring
@@ -272,7 +275,14 @@ def test_groups_differences_and_pooled():
             runs.append(RunSamples(f"{load}-{r.name}", r.values, r.log_prior, {"load_N": load}))
     pop = population(runs, ("zeta",), by="load_N", seed=3)
     for group in (*pop.groups.values(), pop.pooled):
-        assert group.diagnostics["converged"], group.diagnostics["reasons"]
+        diag = group.diagnostics
+        assert diag["converged"], diag["reasons"]
+        # Converged by the one stopping rule: 50 autocorrelation times after burn, and
+        # R-hat and ESS by sampled hyperparameter, as the single-run fit reports them.
+        assert diag["n_steps"] - diag["burn"] >= 50 * diag["autocorr_time_max"]
+        assert set(diag["rhat"]) == {"beta[0,zeta]", "log_sigma[zeta]"} == set(diag["ess"])
+        assert max(diag["rhat"].values()) == diag["rhat_max"] < 1.01
+        assert min(diag["ess"].values()) == diag["ess_min"] > 1000
     assert list(pop.groups) == [0.12, 0.46]
     assert pop.groups[0.12].runs == ("0.12-r0", "0.12-r1", "0.12-r2")
     assert pop.pooled is not None and len(pop.pooled.runs) == 6
@@ -364,6 +374,21 @@ def test_likelihood_matches_direct_evaluation():
         direct += math.log(terms.mean())
     got = like(np.array([[[m]]]), np.array([[math.log(sg)]]))
     assert got[0] == pytest.approx(direct, rel=1e-12)
+
+
+def test_a_nan_log_posterior_is_an_error_naming_the_hyperparameters():
+    # The rule of the single-run fit: NaN is a broken input, never a silent -inf.
+    rng = np.random.default_rng(3)
+    runs = _normal_runs(rng.normal(0.02, 0.001, 3), np.full(3, 0.001), 0.03, 0.02, rng, 100)
+
+    class Broken(MarginalLikelihood):
+        def __call__(self, beta, log_sigma):
+            return np.full(len(beta), np.nan)
+
+    with pytest.raises(
+        NaNLogProbabilityError, match=r"NaN at beta\[0,zeta\]=.*, log_sigma\[zeta\]="
+    ):
+        sample_hyperparameters(Broken(runs, ("zeta",)), [HalfCauchy(0.01)], seed=0)
 
 
 def test_short_runs_warn():

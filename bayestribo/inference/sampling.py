@@ -15,7 +15,9 @@
 * A run that does not meet the criteria is reported as not converged, never silently.
 
 * A NaN log-probability is an error naming the parameters (a broken model or input),
-  never a silent −inf; −inf stays what it means: outside the support.
+  never a silent −inf (:class:`NaNLogProbabilityError`, a
+  :class:`~bayestribo.errors.BayestriboError` and a ``FloatingPointError`` like the
+  single-run posterior's own NaN error); −inf stays what it means: outside the support.
 
 Moves (:func:`default_moves`): a mixture of differential-evolution moves (emcee's
 ``DEMove`` 80 %, ``DESnookerMove`` 20 %), which mix faster than the default stretch
@@ -37,15 +39,23 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.errors import BayestriboError
+from bayestribo.summary import ParameterSummary
 
 __all__ = [
+    "NaNLogProbabilityError",
     "SamplerRun",
     "SamplerSettings",
     "autocorr_time",
     "default_moves",
+    "effective_sample_size",
     "rhat",
     "run_ensembles",
 ]
+
+
+class NaNLogProbabilityError(BayestriboError, FloatingPointError):
+    """The sampled log-probability is NaN (a broken model or input); the message names
+    the parameter values."""
 
 
 def default_moves() -> list[tuple[emcee.moves.Move, float]]:
@@ -117,6 +127,8 @@ class SamplerRun:
         All criteria met.
     reasons : list of str
         Why the run is not converged (empty if it is).
+    names : tuple of str
+        Parameter names, in the order of the last axis of ``chains``.
     """
 
     chains: NDArray
@@ -130,6 +142,33 @@ class SamplerRun:
     rhat: NDArray
     converged: bool
     reasons: list[str] = field(default_factory=list)
+    names: tuple[str, ...] = ()
+
+    def summary(self, prob: float = 0.95) -> dict[str, ParameterSummary]:
+        """Posterior summary of each parameter over all ensembles' thinned draws.
+
+        Parameters
+        ----------
+        prob : float
+            Probability of the equal-tailed credible interval, in (0, 1).
+
+        Returns
+        -------
+        dict of str to ParameterSummary
+            By parameter name (``theta[i]`` when the run was given no names), in the
+            sampled parameter's own unit.
+        """
+        labels = _labels(self.names, self.chains.shape[-1])
+        return {
+            name: ParameterSummary.from_samples(self.chains[..., i], prob)
+            for i, name in enumerate(labels)
+        }
+
+
+def _labels(names: Sequence[str], ndim: int) -> list[str]:
+    """``names`` if there is one per parameter, else ``theta[0]``, ``theta[1]``, ..."""
+    names = list(names)
+    return names if len(names) == ndim else [f"theta[{i}]" for i in range(ndim)]
 
 
 def _nan_checked(
@@ -143,7 +182,7 @@ def _nan_checked(
         if np.any(bad):
             row = np.atleast_2d(theta)[int(np.argmax(bad))]
             named = ", ".join(f"{n}={float(v)!r}" for n, v in zip(names, row, strict=True))
-            raise FloatingPointError(f"the log-probability is NaN at {named}")
+            raise NaNLogProbabilityError(f"the log-probability is NaN at {named}")
         return lp
 
     return checked
@@ -166,6 +205,33 @@ def autocorr_time(chain: NDArray) -> NDArray:
     """
     with np.errstate(invalid="ignore", divide="ignore"):
         return emcee.autocorr.integrated_time(chain, tol=0, quiet=True)
+
+
+def effective_sample_size(chain: NDArray) -> NDArray:
+    """Effective sample size per parameter of one ensemble's chain.
+
+    ESS = steps × walkers / τ, with τ from :func:`autocorr_time` (the number of
+    independent draws worth as much as the chain for estimating a mean).
+
+    Parameters
+    ----------
+    chain : ndarray
+        Shape (steps, walkers, params).
+
+    Returns
+    -------
+    ndarray
+        ESS per parameter (NaN for a chain that does not move).
+
+    Raises
+    ------
+    BayestriboError
+        If ``chain`` is not three-dimensional.
+    """
+    chain = np.asarray(chain, dtype=float)
+    if chain.ndim != 3:
+        raise BayestriboError(f"chain: expected shape (steps, walkers, params), got {chain.shape}")
+    return chain.shape[0] * chain.shape[1] / autocorr_time(chain)
 
 
 def rhat(chains: NDArray) -> NDArray:
@@ -215,8 +281,9 @@ def run_ensembles(
 
     Raises
     ------
-    FloatingPointError
-        If ``log_prob`` returns NaN; the message names the parameter values.
+    NaNLogProbabilityError
+        If ``log_prob`` returns NaN; the message names the parameter values (a
+        ``FloatingPointError`` too).
     BayestriboError
         If ``initial`` is not of shape (n_ensembles, n_walkers, d) as ``settings`` say.
     """
@@ -227,9 +294,7 @@ def run_ensembles(
             f"got {initial.shape}"
         )
     n_ens, n_walkers, ndim = initial.shape
-    labels = list(names if names is not None else getattr(log_prob, "names", []))
-    if len(labels) != ndim:
-        labels = [f"theta[{i}]" for i in range(ndim)]
+    labels = _labels(names if names is not None else getattr(log_prob, "names", []), ndim)
     checked = _nan_checked(log_prob, labels)
     children = np.random.SeedSequence(seed).spawn(n_ens)
     samplers = []
@@ -250,7 +315,7 @@ def run_ensembles(
     previous_tau = None
     tau = np.full(ndim, np.inf)
     steps = 0
-    enough = False
+    enough = settled = False
     try:
         while steps < settings.max_steps:
             chunk = min(settings.check_every, settings.max_steps - steps)
@@ -269,7 +334,7 @@ def run_ensembles(
             tau = np.max(taus, axis=0)
             if not np.all(np.isfinite(tau)):
                 # A stuck chain (no move accepted): τ is undefined; keep sampling.
-                previous_tau, enough = None, False
+                previous_tau, enough, settled = None, False, False
                 continue
             burn = math.ceil(2 * np.max(tau))
             settled = previous_tau is not None and np.all(np.abs(tau - previous_tau) < 0.1 * tau)
@@ -308,6 +373,10 @@ def run_ensembles(
             f"only {steps - burn} steps after burn-in, fewer than "
             f"{settings.autocorr_multiple:g} autocorrelation times ({np.max(tau):.1f})"
         )
+    elif not settled:
+        reasons.append(
+            "the autocorrelation time has not settled (changed by 10 % or more at the last check)"
+        )
     if not np.all(r_hat < settings.rhat_max):
         worst = int(np.argmax(r_hat))
         reasons.append(f"R-hat {r_hat[worst]:.4f} >= {settings.rhat_max} for {labels[worst]}")
@@ -325,4 +394,5 @@ def run_ensembles(
         rhat=r_hat,
         converged=not reasons,
         reasons=reasons,
+        names=tuple(labels),
     )

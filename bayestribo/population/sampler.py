@@ -43,11 +43,13 @@ class HyperSamples:
     sigma : ndarray of shape (n_draws, K)
         Between-run standard deviations.
     diagnostics : dict
-        ``n_walkers`` (per ensemble), ``n_ensembles``, ``n_steps``, ``burn``,
-        ``thin``, ``autocorr_time_max``, ``ess_min``, ``rhat_max``,
-        ``acceptance_fraction``, ``converged``, ``reasons``, ``is_ess_median_min``
-        (smallest over runs of the median importance-sampling effective sample size),
-        ``seed``.
+        As the single-run fit's: ``converged``, ``reasons``, ``n_walkers`` (per
+        ensemble), ``n_ensembles``, ``n_steps``, ``burn``, ``thin``,
+        ``autocorr_time`` [steps], ``ess`` and ``rhat`` (dicts by sampled
+        hyperparameter, ``beta[i,name]`` and ``log_sigma[name]``), their extremes
+        ``autocorr_time_max``, ``ess_min``, ``rhat_max``, ``acceptance_fraction``;
+        then ``is_ess_median_min`` (smallest over runs of the median
+        importance-sampling effective sample size) and ``seed``.
     """
 
     beta: NDArray[np.float64]
@@ -97,6 +99,14 @@ def sample_hyperparameters(
         (:func:`bayestribo.inference.sampling.run_ensembles`).
     progress : bool
         Show a progress bar.
+
+    Raises
+    ------
+    BayestriboError
+        If ``priors`` or ``n_walkers`` do not fit the likelihood.
+    bayestribo.inference.sampling.NaNLogProbabilityError
+        If the log posterior is NaN somewhere (e.g. a NaN per-run sample); the message
+        names the hyperparameter values, as the single-run fit's NaN error does.
 
     Warns
     -----
@@ -153,18 +163,25 @@ def sample_hyperparameters(
     ess = like.effective_sample_size(beta[pick], log_sigma[pick])
     ess_median_min = float(np.min(np.nanmedian(ess, axis=0)))
     tau = sampled.autocorr_time
+
+    def by_name(values: NDArray[np.float64]) -> dict[str, float]:
+        return dict(zip(sampled.names, np.asarray(values, dtype=float).tolist(), strict=True))
+
     diagnostics = {
+        "converged": bool(sampled.converged),
+        "reasons": list(sampled.reasons),
         "n_walkers": n_walkers,
         "n_ensembles": n_ensembles,
         "n_steps": sampled.n_steps,
         "burn": sampled.burn,
         "thin": sampled.thin,
+        "autocorr_time": by_name(tau),
         "autocorr_time_max": float(np.max(tau)) if np.all(np.isfinite(tau)) else math.inf,
+        "ess": by_name(sampled.ess),
         "ess_min": float(np.min(sampled.ess)),
+        "rhat": by_name(sampled.rhat),
         "rhat_max": float(np.max(sampled.rhat)),
         "acceptance_fraction": sampled.acceptance_fraction,
-        "converged": bool(sampled.converged),
-        "reasons": list(sampled.reasons),
         "is_ess_median_min": ess_median_min,
         "seed": seed,
     }
