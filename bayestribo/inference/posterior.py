@@ -25,6 +25,7 @@ from numpy.typing import NDArray
 from bayestribo.errors import BayestriboError
 from bayestribo.inference.likelihood import PiLikelihood
 from bayestribo.inference.priors import PriorSet
+from bayestribo.inference.sampling import NaNLogProbabilityError
 
 __all__ = ["PARAMETERS", "Posterior"]
 
@@ -119,7 +120,7 @@ class Posterior:
 
         Raises
         ------
-        FloatingPointError
+        NaNLogProbabilityError
             If the log-likelihood is NaN inside the prior's support (the message
             names the parameters).
         """
@@ -132,6 +133,6 @@ class Posterior:
             if np.any(bad):
                 row = theta[ok][bad][0]
                 named = ", ".join(f"{n}={float(v)!r}" for n, v in zip(self.names, row, strict=True))
-                raise FloatingPointError(f"the log-likelihood is NaN at {named}")
+                raise NaNLogProbabilityError(f"the log-likelihood is NaN at {named}")
             lp[ok] = lp[ok] + ll
         return lp
