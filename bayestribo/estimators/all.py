@@ -156,12 +156,7 @@ def estimate_signals(
     energy_models = [m for m in chosen if m.startswith("energy_ls_")]
     if energy_models:
         try:
-            first = energy_data(t, x, v, rig=rig, skip=skip, offset=offset)
-            try:
-                guess = feeny_liang(first.peaks, rig).zeta
-            except BayestriboError:
-                guess = None
-            data = energy_data(t, x, v, rig=rig, skip=skip, offset=offset, zeta_guess=guess)
+            data = energy_data(t, x, v, rig=rig, skip=skip, offset=offset)
         except BayestriboError as exc:
             out += [_failed(m, "energy", exc) for m in energy_models]
         else:

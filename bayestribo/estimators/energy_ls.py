@@ -12,10 +12,13 @@ minimising Δ_Π = √(mean (Π_exp - Π_num)²) (Eq. 42), with either
   form, :func:`bayestribo.model.exact_pi`, with μ_s = μ_k unless given (the pin
   sticks at the first turning point where it cannot restart).
 
-Both Π are integrated to the same end T (the detected end of motion, or the last
-turning point of a record that ends while still moving), so the record length does
-not bias the fit. The analysis starts at a turning point (y' = 0, the initial state
-of Eq. 15) after ``skip`` extrema.
+The recording becomes E(τ) in :func:`bayestribo.signal.decay.energy_decay`, the
+one path the Bayesian fit uses too (:func:`energy_data`). Both Π are integrated to
+the same end T (the detected end of motion, or the last sample of a record that ends
+while still moving; the model is truncated there), so the record length does not
+bias the fit. The analysis starts at the sample nearest a turning point (y' ≈ 0,
+the initial state of Eq. 15) after ``skip`` extrema; the exact model starts from
+that sample's velocity.
 
 The covariance is the usual Gauss-Newton one, s²(JᵀJ)⁻¹ with s² = RSS/(n - 3). The
 residuals of Π are strongly correlated (Π is a running integral), so these standard
@@ -31,20 +34,18 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-import scipy.integrate
 import scipy.optimize
-import scipy.signal
 from numpy.typing import ArrayLike, NDArray
 
 from bayestribo.errors import RecordingError
 from bayestribo.estimators.feeny_liang import feeny_liang
 from bayestribo.estimators.result import Estimate, friction_fraction
 from bayestribo.model.scaling import Rig
-from bayestribo.signal.decay import check_time, derive_velocity, retrograde_integral
-from bayestribo.signal.increments import white_noise_bias
-from bayestribo.signal.peaks import Peaks, find_peaks, prepare_signal
+from bayestribo.signal.decay import energy_decay, retrograde_integral
+from bayestribo.signal.increments import sample_noise_bias
+from bayestribo.signal.peaks import Peaks
 
-__all__ = ["EnergyData", "energy_data", "energy_least_squares"]
+__all__ = ["MIN_TURNING_POINTS", "EnergyData", "energy_data", "energy_least_squares"]
 
 Model = Literal["averaged", "exact"]
 
@@ -60,11 +61,12 @@ class EnergyData:
     y, yp : ndarray
         Dimensionless displacement and velocity about the equilibrium (Eq. 6).
     energy : ndarray
-        E = (y² + y'²)/2 minus the mean noise energy (Eq. 26).
+        E = (y² + y'²)/2 minus the mean noise energy per sample (Eq. 26,
+        :func:`bayestribo.signal.increments.sample_noise_bias`).
     pi : ndarray
         Π(τ) = ∫_τ^{τ_end} E dθ by the trapezoidal rule (Eq. 39).
     tau_end : float
-        End of the integration (end of motion, or last turning point).
+        End of the integration (end of motion, or last sample).
     omega : float
         Ω used [rad/s].
     length_scale : float
@@ -90,14 +92,14 @@ class EnergyData:
     source: str
 
 
-def _derivative(t: NDArray, x: NDArray, period: float, sigma: float) -> tuple[NDArray, float]:
-    """Velocity from the displacement and its noise.
+#: Fewest turning points the Π least squares needs after the skipped ones.
+MIN_TURNING_POINTS = 3
 
-    See :func:`bayestribo.signal.decay.derive_velocity`.
-    """
-    check_time(t)
-    v, gain = derive_velocity(t, x, period)
-    return v, sigma * gain
+_SOURCES = {
+    None: "x measured, v measured",
+    "velocity": "x measured, v derived from x",
+    "displacement": "x integrated from v, v measured",
+}
 
 
 def energy_data(
@@ -108,97 +110,87 @@ def energy_data(
     rig: Rig | None = None,
     skip: int = 0,
     offset: float | Literal["auto", "constant"] | None = "auto",
-    zeta_guess: float | None = None,
 ) -> EnergyData:
-    """Prepare E(τ) and Π(τ) of a recording (Eq. 26, 39).
+    """Prepare E(τ) and Π(τ) of a recording for the Π least squares (Eq. 26, 39).
+
+    The recording becomes an energy decay in :func:`bayestribo.signal.decay.energy_decay`,
+    as for the Bayesian fit (time check, release, equilibrium, end of motion, derived
+    channel); here the mean noise energy of each sample
+    (:func:`bayestribo.signal.increments.sample_noise_bias`) is removed from E before
+    Π is integrated.
 
     Parameters
     ----------
     t : array_like
-        Sample times [s], uniformly sampled when a signal must be derived.
+        Sample times [s], strictly increasing and regular.
     x : array_like, optional
         Displacement [m with a loaded rig, else any length unit].
     v : array_like, optional
         Velocity [same length unit/s]. At least one of ``x`` and ``v``; a missing
         one is derived (Savitzky-Golay derivative of x, or trapezoidal integral of v).
     rig : Rig, optional
-        Ω and, with mass and load, ℓ = N/k. Without it Ω comes from the turning
-        points and ℓ = 1 signal unit.
+        Ω (the rig's nominal natural frequency) and, with mass and load, ℓ = N/k.
+        Without it Ω is measured from the turning points (Eq. 13-14) and ℓ = 1
+        signal unit.
     skip : int
-        Leading extrema to skip (the first oscillation is disturbed by the release).
+        Leading turning points (extrema) to skip, counted among those found in the
+        record like every peak-based estimator of :mod:`bayestribo.estimators`
+        (2 = the first oscillation of a record that starts in motion), so that the
+        estimators of one table start at the same turning point. (The Bayesian fit
+        counts ``skip_oscillations`` from the release instead.) The analysis starts
+        at the sample nearest the next turning point and needs
+        :data:`MIN_TURNING_POINTS` after the skipped ones.
     offset : float, "auto", "constant" or None
         Equilibrium of the displacement (see :func:`bayestribo.signal.peaks.find_peaks`).
-    zeta_guess : float, optional
-        ζ used in Ω = π/(T_half√(1-ζ²)) when there is no rig.
+
+    Returns
+    -------
+    EnergyData
+
+    Raises
+    ------
+    RecordingError
+        No signal, bad samples or time stamps, a bad ``skip``, or too few turning
+        points.
     """
     if x is None and v is None:
         raise RecordingError("give a displacement x or a velocity v (or both)")
-    tx = t
-    if x is not None:
-        t, x = prepare_signal(tx, x, "x")
-    if v is not None:
-        t, v = prepare_signal(tx, v, "v")
-    sources = []
-    v_noise = 0.0
-    if v is not None:
-        vpk = find_peaks(t, v, kind="velocity", offset="auto")
-        v = v - vpk.offset
-        v_noise = vpk.noise
-    if x is None:
-        t = check_time(t)
-        x = scipy.integrate.cumulative_trapezoid(v, t, initial=0.0)
-        sources.append("x integrated from v")
-    else:
-        sources.append("x measured")
-    pk = find_peaks(t, x, kind="displacement", skip=skip, offset=offset)
-    x_noise = pk.noise
-    x = x - (pk.offset + pk.drift * t)
-    if len(pk) < 3:
-        raise RecordingError(f"the energy fit needs 3 turning points, found {len(pk)}")
-    half = pk.half_period
-    if v is None:
-        v, v_noise = _derivative(t, x, 2.0 * half, pk.noise)
-        sources.append("v derived from x")
-    else:
-        sources.append("v measured")
-    if rig is not None:
-        omega = rig.omega
-        scaling = rig.scaling()
-        ell = scaling.length_scale
-    else:
-        z = 0.0 if zeta_guess is None else min(abs(float(zeta_guess)), 0.9)
-        omega = math.pi / (half * math.sqrt(1.0 - z * z))
-        ell = 1.0
-    t0 = float(pk.t[0])
-    stopped = pk.stop_time is not None
-    t_end = float(pk.stop_time) if stopped else float(pk.t[-1])
-    if not t_end > t0:
-        raise RecordingError("the analysed window (first turning point to end) is empty")
-    sel = (t >= t0) & (t <= t_end)
-    ts = np.concatenate([[t0], t[sel], [t_end]])
-    xs = np.interp(ts, t, x)
-    vs = np.interp(ts, t, v)
-    tau = omega * (ts - t0)
-    y = xs / ell
-    yp = vs / (ell * omega)
-    energy = 0.5 * (y * y + yp * yp) - white_noise_bias(x_noise / ell, v_noise / (ell * omega))
-    pi = retrograde_integral(tau, energy)
+    decay = energy_decay(
+        t,
+        x,
+        v,
+        rig=rig,
+        use_nominal_frequency=rig is not None,
+        skip_turning_points=skip,
+        min_turning_points=MIN_TURNING_POINTS,
+        offset=offset,
+    )
+    energy = decay.energy - sample_noise_bias(decay)
     return EnergyData(
-        tau=tau,
-        y=y,
-        yp=yp,
+        tau=decay.tau,
+        y=decay.y,
+        yp=decay.yp,
         energy=energy,
-        pi=pi,
-        tau_end=float(tau[-1]),
-        omega=omega,
-        length_scale=ell,
-        peaks=pk,
-        stopped=stopped,
-        source=", ".join(sources),
+        pi=retrograde_integral(decay.tau, energy),
+        tau_end=decay.tau_end,
+        omega=decay.scaling.omega,
+        length_scale=decay.scaling.length_scale,
+        peaks=decay.peaks,
+        stopped=decay.motion_ended,
+        source=_SOURCES[decay.derived_channel],
     )
 
 
-def _model_pi(model: Model, mu_s: float | None) -> Callable[..., NDArray]:
+def _model_pi(
+    model: Model, mu_s: float | None, y_start: float, yp_start: float
+) -> Callable[..., NDArray]:
+    """Π of ``model`` from the first analysed sample.
+
+    The analysis starts at the sample nearest a turning point, where the velocity
+    ``yp_start`` is small but not zero: the exact model starts from it, on the side
+    of ``y_start``; the averaged law describes the envelope only and starts from the
+    amplitude.
+    """
     from bayestribo.model import averaged_pi, exact_pi
 
     if model == "averaged":
@@ -207,10 +199,11 @@ def _model_pi(model: Model, mu_s: float | None) -> Callable[..., NDArray]:
             return averaged_pi(tau, y0, zeta, mu, tau_end=tau_end)
 
     else:
+        sign = 1.0 if y_start >= 0.0 else -1.0
 
         def f(tau: NDArray, y0: float, zeta: float, mu: float, tau_end: float) -> NDArray:
             ms = mu if mu_s is None else max(mu_s, mu)
-            return exact_pi(tau, y0, zeta, mu, ms, tau_end=tau_end)
+            return exact_pi(tau, sign * y0, zeta, mu, ms, yp_start, tau_end=tau_end)
 
     return f
 
@@ -263,10 +256,7 @@ def energy_least_squares(
     if isinstance(max_points, bool) or not isinstance(max_points, int) or max_points < 10:
         raise ValueError(f"max_points must be an integer >= 10, got {max_points!r}")
     if data is None:
-        first = energy_data(t, x, v, rig=rig, skip=skip, offset=offset)
-        guess = feeny_liang(first.peaks, rig) if len(first.peaks) >= 4 else None
-        zg = guess.zeta if guess is not None and guess.zeta is not None else None
-        data = energy_data(t, x, v, rig=rig, skip=skip, offset=offset, zeta_guess=zg)
+        data = energy_data(t, x, v, rig=rig, skip=skip, offset=offset)
     pk = data.peaks
     ell = data.length_scale
     n = data.tau.size
@@ -284,7 +274,7 @@ def energy_least_squares(
     m0 = fl.friction_displacement / ell if fl is not None else 0.0
     z0 = min(max(z0, 1e-4), 0.5)
     m0 = min(max(m0, 1e-4 * y0), 0.5 * y0)
-    f = _model_pi(model, mu_s)
+    f = _model_pi(model, mu_s, float(data.y[0]), float(data.yp[0]))
 
     def resid(p: NDArray) -> NDArray:
         return f(tau, p[2], p[0], p[1], data.tau_end) - pi_exp

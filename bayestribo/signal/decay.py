@@ -47,6 +47,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 import scipy.signal
@@ -61,6 +62,7 @@ __all__ = [
     "EnergyDecay",
     "NoiseLevels",
     "check_time",
+    "derivative_gain",
     "derive_velocity",
     "energy_decay",
     "retrograde_integral",
@@ -69,7 +71,7 @@ __all__ = [
 
 #: Largest accepted relative deviation of a time step from the median step.
 TIME_STEP_TOLERANCE = 1e-3
-#: Fewest oscillations needed after the skipped ones.
+#: Fewest oscillations needed after the skipped ones (the Bayesian fit's need).
 MIN_OSCILLATIONS = 3
 #: Fewest samples for a quiescent segment to give a noise estimate.
 MIN_QUIET_SAMPLES = 20
@@ -242,7 +244,7 @@ def check_time(t: ArrayLike) -> NDArray:
         i = int(back[0]) + 1
         raise RecordingError(
             f"time stamps must increase strictly: t[{i}] = {t[i]!r} follows t[{i - 1}] = "
-            f"{t[i - 1]!r}"
+            f"{t[i - 1]!r} (t is not increasing at sample {i})"
         )
     step = float(np.median(dt))
     off = np.flatnonzero(np.abs(dt - step) > TIME_STEP_TOLERANCE * step)
@@ -266,6 +268,12 @@ def _check_signal(name: str, values: ArrayLike | None, n: int) -> NDArray | None
     if bad.size:
         raise RecordingError(f"{name} is not finite at sample {bad[0]}")
     return s
+
+
+def _check_count(name: str, value: object, least: int) -> None:
+    """Refuse a count argument that is not an integer >= ``least``, naming it."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < least:
+        raise RecordingError(f"{name} must be an integer >= {least}, got {value!r}")
 
 
 def savgol_window(t: NDArray, period: float) -> int:
@@ -296,8 +304,28 @@ def derive_velocity(t: ArrayLike, x: ArrayLike, period: float) -> tuple[NDArray,
             "differentiate it over 1/8 of a period"
         )
     v = scipy.signal.savgol_filter(x, window, 5, deriv=1, delta=dt, mode="interp")
-    gain = float(np.linalg.norm(scipy.signal.savgol_coeffs(window, 5, deriv=1, delta=dt)))
-    return v, gain
+    return v, derivative_gain(window, dt)
+
+
+def derivative_gain(window: int, step: float) -> float:
+    """Noise gain of the Savitzky-Golay derivative of :func:`derive_velocity`.
+
+    Parameters
+    ----------
+    window : int
+        Samples in the filter window (odd, >= 7).
+    step : float
+        Sample spacing, in the unit of the derivative's variable ([s] for v, [-] in τ
+        for y').
+
+    Returns
+    -------
+    float
+        Standard deviation of the derivative per unit standard deviation of white
+        noise on the differentiated samples [1/step]: the norm of the filter's
+        coefficients.
+    """
+    return float(np.linalg.norm(scipy.signal.savgol_coeffs(window, 5, deriv=1, delta=step)))
 
 
 def _release_index(signal: NDArray, first_extremum: int) -> int | None:
@@ -450,6 +478,9 @@ def energy_decay(
     rig: Rig | None = None,
     skip_oscillations: int = 1,
     use_nominal_frequency: bool = False,
+    skip_turning_points: int | None = None,
+    min_turning_points: int = 2 * MIN_OSCILLATIONS,
+    offset: float | Literal["auto", "constant"] | None = "auto",
 ) -> EnergyDecay:
     """Energy decay curve and Π(τ) of a free-decay recording (Eq. 6, 26, 39).
 
@@ -470,6 +501,19 @@ def energy_decay(
         analysis, default 1 (paper, section 2.1).
     use_nominal_frequency : bool
         Scale time with the rig's nominal frequency instead of the measured one.
+    skip_turning_points : int, optional
+        Skip this many of the turning points found in the record instead, whether or
+        not the record starts at rest: the convention of the peak-based estimators
+        (:mod:`bayestribo.estimators`, 2 = the first oscillation of a record that
+        starts in motion). Given, ``skip_oscillations`` is not used.
+    min_turning_points : int
+        Fewest turning points needed after the skipped ones, default
+        2 × :data:`MIN_OSCILLATIONS` (the Bayesian fit's three oscillations).
+    offset : float, "auto", "constant" or None
+        How the equilibrium of the displacement is found, as in
+        :func:`bayestribo.signal.peaks.find_peaks`: "auto" from the turning points
+        with a linear drift when there are enough of them, "constant" without the
+        drift, a number [length unit] when it is known, ``None`` for 0.
 
     Returns
     -------
@@ -478,20 +522,19 @@ def energy_decay(
     Raises
     ------
     RecordingError
-        No signal, bad time stamps or samples, no oscillation, or fewer than three
-        oscillations after the skipped ones.
+        No signal, bad time stamps or samples, no oscillation, a skip that is not an
+        integer >= 0, or fewer than ``min_turning_points`` turning points after the
+        skipped ones.
     """
     t = check_time(t)
     x = _check_signal("displacement", displacement, t.size)
     v = _check_signal("velocity", velocity, t.size)
     if x is None and v is None:
         raise RecordingError("give a displacement or a velocity signal (or both)")
-    if isinstance(skip_oscillations, bool) or not isinstance(skip_oscillations, int | np.integer):
-        raise RecordingError(
-            f"skip_oscillations must be an integer >= 0, got {skip_oscillations!r}"
-        )
-    if skip_oscillations < 0:
-        raise RecordingError(f"skip_oscillations must be >= 0, got {skip_oscillations}")
+    _check_count("skip_oscillations", skip_oscillations, 0)
+    if skip_turning_points is not None:
+        _check_count("skip_turning_points", skip_turning_points, 0)
+    _check_count("min_turning_points", min_turning_points, 2)
     if use_nominal_frequency and rig is None:
         raise RecordingError("use_nominal_frequency needs a rig with a natural frequency")
 
@@ -508,14 +551,18 @@ def energy_decay(
             velocity_offset = float(np.median(v[quiet]))
             v = v - velocity_offset
             x = cumulative_trapezoid(v, t, initial=0.0)
-    peaks = find_peaks(t, x, kind="displacement", min_peaks=2)
+    peaks = find_peaks(t, x, kind="displacement", min_peaks=2, offset=offset)
     period = 2.0 * peaks.half_period
     if v is None:
         derived = "velocity"
         v, _ = derive_velocity(t, x, period)
 
     released_at = _release_index(x if derived == "velocity" else v, int(peaks.index[0]))
-    if released_at is None:
+    if skip_turning_points is not None:
+        release = float(peaks.t[0]) if released_at is None else float(t[released_at])
+        skip = int(skip_turning_points)
+        skipped = f"{skip} turning points"
+    elif released_at is None:
         # The record starts in motion: count oscillations from its first extremum.
         release = float(peaks.t[0])
         skip = 2 * int(skip_oscillations)
@@ -524,12 +571,14 @@ def energy_decay(
         # is half an oscillation later.
         release = float(t[released_at])
         skip = max(2 * int(skip_oscillations) - 1, 0)
-    needed = skip + 2 * MIN_OSCILLATIONS
+    if skip_turning_points is None:
+        skipped = f"{skip_oscillations} oscillations"
+    needed = skip + int(min_turning_points)
     if len(peaks) < needed:
         raise RecordingError(
             f"the recording holds {len(peaks)} turning points after the release; "
-            f"{needed} are needed ({MIN_OSCILLATIONS} oscillations after skipping "
-            f"{skip_oscillations})"
+            f"{needed} are needed ({min_turning_points} turning points after skipping "
+            f"{skipped})"
         )
     window = peaks.skip(skip)
     times = window.t if derived == "velocity" else _turning_times(t, v, window, period)

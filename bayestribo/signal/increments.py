@@ -48,7 +48,7 @@ import scipy.signal
 from numpy.typing import NDArray
 from scipy.integrate import cumulative_trapezoid
 
-from bayestribo.signal.decay import EnergyDecay
+from bayestribo.signal.decay import EnergyDecay, derivative_gain
 from bayestribo.signal.noise import NoiseModel
 
 __all__ = [
@@ -57,6 +57,7 @@ __all__ = [
     "increment_weights",
     "integrate_increments",
     "pi_data",
+    "sample_noise_bias",
     "simpson_weights",
     "white_noise_bias",
 ]
@@ -233,6 +234,36 @@ def white_noise_bias(sigma_y: float, sigma_yp: float) -> float:
         Noise standard deviations of y and y' (dimensionless, as y and y').
     """
     return 0.5 * (sigma_y**2 + sigma_yp**2)
+
+
+def sample_noise_bias(decay: EnergyDecay) -> float:
+    """Mean that the measurement noise adds to each sample of a decay's E [-].
+
+    ``½(σ_y² + σ_y'²)`` (:func:`white_noise_bias`, Eq. 26) with the noise levels the
+    decay measured (:attr:`EnergyDecay.noise_y`, :attr:`EnergyDecay.noise_yp`; a
+    channel without one counts 0). The noise of a derived velocity is the recorded
+    displacement's through the derivative filter, ``σ_y' = g σ_y`` with the filter's
+    gain g in τ (:func:`bayestribo.signal.decay.derivative_gain`): the mean square of
+    correlated noise is still its variance. A derived displacement's integrated noise
+    wanders along the record; only its level measured at rest counts here, and
+    :func:`increment_noise` follows it increment by increment.
+
+    Parameters
+    ----------
+    decay : EnergyDecay
+        The recording's energy decay.
+
+    Returns
+    -------
+    float
+        The bias per sample, in units of E.
+    """
+    sigma_y = decay.noise_y or 0.0
+    sigma_yp = decay.noise_yp or 0.0
+    if decay.derived_channel == "velocity" and decay.savgol_window is not None:
+        step = float(decay.tau[1] - decay.tau[0])
+        sigma_yp = sigma_y * derivative_gain(decay.savgol_window, step)
+    return white_noise_bias(sigma_y, sigma_yp)
 
 
 def increment_noise(
