@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import re
 from typing import Any
 
 from bayestribo.errors import BayestriboError
@@ -28,7 +29,12 @@ COLUMN_ALIASES = {"t": "time_s", "x": "displacement_m", "v": "velocity_m_per_s",
 
 def add_run_arguments(parser: argparse.ArgumentParser) -> None:
     """Add RUN and the options that describe a file without a canonical header."""
-    parser.add_argument("run", metavar="RUN", help="run file (canonical CSV, text, UFF, TDMS)")
+    parser.add_argument(
+        "run",
+        metavar="RUN",
+        help="run file: canonical CSV, other text, an oscilloscope or DAQ export (Tektronix, "
+        "Keysight/Agilent, Rigol, PicoScope CSV, LabVIEW .lvm), UFF, TDMS, .mat or HDF5",
+    )
     add_reading_options(parser)
 
 
@@ -73,8 +79,21 @@ def add_reading_options(parser: argparse.ArgumentParser) -> None:
         "millimetres (repeatable; NAME as in --columns)",
     )
     parser.add_argument(
+        "--channel",
+        action="append",
+        metavar="NAME=SOURCE",
+        help="TDMS, MATLAB and HDF5 files: the channel, variable or dataset holding a "
+        "column, e.g. x=Disp or displacement_um=data.x (repeatable; NAME as in --columns); "
+        "UFF: the record index",
+    )
+    parser.add_argument(
+        "--group",
+        metavar="GROUP",
+        help="TDMS and HDF5 files: the group holding the channels",
+    )
+    parser.add_argument(
         "--format",
-        choices=("text", "uff", "tdms"),
+        choices=("text", "uff", "tdms", "mat", "hdf5"),
         help="file format, when the suffix does not say it",
     )
     parser.add_argument("--frequency", type=float, help="nominal natural frequency f [Hz]")
@@ -112,6 +131,20 @@ def _scale_from_args(values: list[str] | None) -> dict[str, float] | None:
     return out
 
 
+def _channels_from_args(values: list[str] | None) -> dict[str, Any] | None:
+    """``--channel NAME=SOURCE`` options as a mapping of column names to sources."""
+    if not values:
+        return None
+    out: dict[str, Any] = {}
+    for item in values:
+        name, sep, source = item.partition("=")
+        if not sep or not name or not source:
+            raise CommandLineError(f"--channel: expected NAME=SOURCE (e.g. x=Disp), got {item!r}")
+        name = COLUMN_ALIASES.get(name, name)
+        out[name] = int(source) if source.isdigit() else source
+    return out
+
+
 def reading_kwargs(args: argparse.Namespace) -> dict[str, Any]:
     """Keyword arguments of :func:`bayestribo.read_run` from :func:`add_reading_options`."""
     kwargs: dict[str, Any] = {}
@@ -127,6 +160,11 @@ def reading_kwargs(args: argparse.Namespace) -> dict[str, Any]:
     scale = _scale_from_args(args.scale)
     if scale is not None:
         kwargs["scale"] = scale
+    channels = _channels_from_args(getattr(args, "channel", None))
+    if channels is not None:
+        kwargs["channels"] = channels
+    if getattr(args, "group", None) is not None:
+        kwargs["group"] = args.group
     if args.format is not None:
         kwargs["file_format"] = args.format
     metadata = {
@@ -152,15 +190,25 @@ _CLI_SPELLINGS = (
     ("give file_format=", "give --format"),
     ("scale={...}", "--scale NAME=FACTOR"),
     ("scale=", "--scale "),
+    ("channels={'time_s': 't', 'displacement_m': 'x'}", "--channel t=t --channel x=x"),
+    ("channels={...}", "--channel NAME=SOURCE"),
+    ("channels=", "--channel "),
+    ("group=...", "--group GROUP"),
+    ("group=", "--group "),
     ("skip_rows", "--skip-rows"),
 )
 
 
 def cli_message(message: str) -> str:
     """A reading error's message with its fixes spelled as command-line options."""
+    message = _ONE_CHANNEL.sub(lambda m: f"--channel {m[1]}={m[2].strip()}", message)
     for python, option in _CLI_SPELLINGS:
         message = message.replace(python, option)
     return message
+
+
+#: ``channels={'name': source}`` with one entry, spelled as a ``--channel`` option.
+_ONE_CHANNEL = re.compile(r"channels=\{'(\w+)': '?([^,}']+)'?\}")
 
 
 def read_run_from_args(args: argparse.Namespace) -> Any:

@@ -10,11 +10,17 @@ as metres is a wrong answer by 10⁶, not an error, so it is never guessed.
 
 from __future__ import annotations
 
+import math
 import re
+from collections.abc import Mapping, Sequence
 
+from bayestribo.errors import RunFormatError
 from bayestribo.io.run import DISPLACEMENT, TIME, VELOCITY
 
-__all__ = ["QUANTITIES", "UNITS", "parse_column"]
+__all__ = ["IGNORE", "QUANTITIES", "UNITS", "check_scale", "parse_column"]
+
+#: Column name that skips a column of a text file.
+IGNORE = "ignore"
 
 #: Words naming each canonical quantity (lower case).
 QUANTITIES: dict[str, tuple[str, ...]] = {
@@ -95,3 +101,35 @@ def parse_column(name: str) -> tuple[str, float] | None:
             )
         return canonical, units[key]
     return None
+
+
+def check_scale(
+    scale: Mapping[str, float] | None, present: Sequence[str], where: str
+) -> dict[str, float]:
+    """Check per-column scale factors: canonical names of present columns -> finite, non-zero."""
+    if scale is None:
+        return {}
+    if not isinstance(scale, Mapping):
+        raise RunFormatError(
+            "scale: expected a mapping of canonical column name to factor, for instance "
+            f"{{'displacement_m': 1e-3}}; got {type(scale).__name__}",
+            where,
+        )
+    out = {}
+    for name, factor in scale.items():
+        if name not in present:
+            raise RunFormatError(
+                f"scale: column {name!r} is not read from this file; the columns read are "
+                f"{list(present)}",
+                where,
+            )
+        try:
+            value = float(factor)
+        except (TypeError, ValueError):
+            value = math.nan
+        if not math.isfinite(value) or value == 0.0 or isinstance(factor, bool):
+            raise RunFormatError(
+                f"scale[{name!r}]: expected a finite non-zero number, got {factor!r}", where
+            )
+        out[name] = value
+    return out

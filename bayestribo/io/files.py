@@ -17,6 +17,8 @@ from pathlib import Path
 from typing import Any
 
 from bayestribo.errors import BayestriboError, RunFormatError
+from bayestribo.io.hdf5 import read_hdf5
+from bayestribo.io.matlab import read_mat
 from bayestribo.io.run import DISPLACEMENT, TIME, VELOCITY, Run
 from bayestribo.io.sidecar import read_sidecar, sidecar_path, write_sidecar
 from bayestribo.io.tdms import read_tdms
@@ -28,9 +30,11 @@ __all__ = ["FORMATS", "READ_OPTIONS", "as_run", "read_run", "write_run"]
 
 #: File formats and their suffixes.
 FORMATS: Mapping[str, tuple[str, ...]] = {
-    "text": (".csv", ".txt", ".dat", ".tsv", ".asc", ".prn"),
+    "text": (".csv", ".txt", ".dat", ".tsv", ".asc", ".prn", ".lvm"),
     "uff": (".uff", ".unv", ".uf", ".58"),
     "tdms": (".tdms",),
+    "mat": (".mat",),
+    "hdf5": (".h5", ".hdf5", ".hdf", ".he5"),
 }
 
 _OPTIONS = {
@@ -38,8 +42,8 @@ _OPTIONS = {
     "delimiter": ("text",),
     "decimal": ("text",),
     "skip_rows": ("text",),
-    "group": ("tdms",),
-    "channels": ("uff", "tdms"),
+    "group": ("tdms", "hdf5"),
+    "channels": ("uff", "tdms", "mat", "hdf5"),
 }
 
 
@@ -82,8 +86,12 @@ def read_run(
     Parameters
     ----------
     path : str or Path
-        Canonical CSV, other delimited text (``.csv .txt .dat .tsv .asc .prn``), UFF
-        58/58b (``.uff .unv .uf .58``) or TDMS (``.tdms``).
+        Canonical CSV, other delimited text (``.csv .txt .dat .tsv .asc .prn``), the
+        text exports of oscilloscopes and DAQ software recognised by their preamble
+        (Tektronix, Keysight/Agilent, Rigol, PicoScope CSV and LabVIEW ``.lvm``, see
+        :mod:`bayestribo.io.instruments`), UFF 58/58b (``.uff .unv .uf .58``), TDMS
+        (``.tdms``), MATLAB (``.mat``, v4 to v7.3) or HDF5 (``.h5 .hdf5``, the
+        ``hdf5`` extra).
     columns : list of str, optional
         Text files: one canonical name (``time_s``, ``displacement_m``,
         ``velocity_m_per_s``) or ``"ignore"`` per column, in file order. Needed when
@@ -94,11 +102,13 @@ def read_run(
     delimiter, decimal, skip_rows
         Text files: column separator (default: guessed), decimal mark, lines to skip.
     group : str, optional
-        TDMS: the group holding the channels.
+        TDMS, HDF5: the group holding the channels.
     channels : mapping, optional
         TDMS: channel name per canonical name (required). UFF: record index per
-        canonical name (when the records' types are ambiguous).
-    file_format : {"text", "uff", "tdms"}, optional
+        canonical name (when the records' types are ambiguous). MATLAB, HDF5:
+        variable or dataset name per column name (a key may carry a unit,
+        ``"displacement_um"``), when the names are not canonical.
+    file_format : {"text", "uff", "tdms", "mat", "hdf5"}, optional
         Overrides the choice by suffix.
     sidecar : bool or path
         Read the JSON sidecar with the file's stem if it exists (``True``), do not
@@ -167,6 +177,10 @@ def read_run(
         )
     elif kind == "uff":
         signals = read_uff(path, channels=channels, scale=scale)
+    elif kind == "mat":
+        signals = read_mat(path, channels=channels, scale=scale)
+    elif kind == "hdf5":
+        signals = read_hdf5(path, channels=channels, group=group, scale=scale)
     else:
         signals = read_tdms(path, channels=channels, group=group, scale=scale)
 

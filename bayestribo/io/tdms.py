@@ -106,7 +106,7 @@ def read_tdms(
     available = {c.name: c for c in groups[group].channels()}
     if not channels:
         raise RunFormatError(
-            f"name the channels, e.g. channels={{'displacement_m': ..., 'velocity_m_per_s': ...}}; "
+            "name the channels, e.g. channels={'displacement_m': 'Disp'}; "
             f"group {group!r} has channels {sorted(available)}",
             where,
         )

@@ -13,7 +13,6 @@ column converting the file's unit to the canonical one (for instance
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -21,47 +20,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.errors import RunFormatError
-from bayestribo.io.columns import parse_column
+from bayestribo.io.columns import IGNORE, check_scale, parse_column
+from bayestribo.io.instruments import PREAMBLE_LINES, detect_export, read_export
 from bayestribo.io.run import COLUMNS, DISPLACEMENT, TIME, VELOCITY
 
 __all__ = ["IGNORE", "check_scale", "read_text", "write_csv"]
 
-#: Column name that skips a column of a text file.
-IGNORE = "ignore"
-
 _DELIMITERS = (",", ";", "\t")
-
-
-def check_scale(
-    scale: Mapping[str, float] | None, present: Sequence[str], where: str
-) -> dict[str, float]:
-    """Check per-column scale factors: canonical names of present columns -> finite, non-zero."""
-    if scale is None:
-        return {}
-    if not isinstance(scale, Mapping):
-        raise RunFormatError(
-            "scale: expected a mapping of canonical column name to factor, for instance "
-            f"{{'displacement_m': 1e-3}}; got {type(scale).__name__}",
-            where,
-        )
-    out = {}
-    for name, factor in scale.items():
-        if name not in present:
-            raise RunFormatError(
-                f"scale: column {name!r} is not read from this file; the columns read are "
-                f"{list(present)}",
-                where,
-            )
-        try:
-            value = float(factor)
-        except (TypeError, ValueError):
-            value = math.nan
-        if not math.isfinite(value) or value == 0.0 or isinstance(factor, bool):
-            raise RunFormatError(
-                f"scale[{name!r}]: expected a finite non-zero number, got {factor!r}", where
-            )
-        out[name] = value
-    return out
 
 
 def _split(line: str, delimiter: str | None) -> list[str]:
@@ -174,16 +139,29 @@ def read_text(
         raise RunFormatError("delimiter and decimal mark cannot both be ','", where)
     if not isinstance(skip_rows, int) or isinstance(skip_rows, bool) or skip_rows < 0:
         raise RunFormatError(f"skip_rows: expected an integer >= 0, got {skip_rows!r}", where)
-    units: dict[str, float] = {}
-    if columns is not None:
-        columns, units = _check_columns(columns, where)
     try:
         text = path.read_bytes().decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise RunFormatError(f"the file is not UTF-8 text ({exc.reason})", where) from None
+    all_lines = text.splitlines()
+    if skip_rows == 0:
+        export = detect_export(all_lines[:PREAMBLE_LINES], where)
+        if export is not None:
+            return read_export(
+                all_lines,
+                export,
+                columns=columns,
+                scale=scale,
+                delimiter=delimiter,
+                decimal=None if decimal == "." else decimal,
+                where=where,
+            )
+    units: dict[str, float] = {}
+    if columns is not None:
+        columns, units = _check_columns(columns, where)
     lines = [
         (number, line)
-        for number, line in enumerate(text.splitlines()[skip_rows:], start=skip_rows + 1)
+        for number, line in enumerate(all_lines[skip_rows:], start=skip_rows + 1)
         if line.strip() and not line.lstrip().startswith("#")
     ]
     if not lines:

@@ -1,0 +1,83 @@
+"""MATLAB ``.mat`` files: version 4 to 7 through :func:`scipy.io.loadmat`, version 7.3
+(HDF5) through h5py.
+
+Variables are found by name, also inside structures (``data.t``, ``data.x``); see
+:mod:`bayestribo.io.arrays` for how the signals are picked and their units.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import scipy.io
+from numpy.typing import NDArray
+
+from bayestribo.errors import RunFormatError
+from bayestribo.io.arrays import NamedArray, signals_from_arrays
+from bayestribo.io.hdf5 import hdf5_arrays
+
+__all__ = ["read_mat"]
+
+
+def _flatten(prefix: str, value: Any, out: list[NamedArray], depth: int = 0) -> None:
+    if isinstance(value, Mapping):
+        if depth > 8:
+            return
+        for key, item in value.items():
+            _flatten(f"{prefix}.{key}" if prefix else str(key), item, out, depth + 1)
+    elif isinstance(value, np.ndarray) and value.dtype.kind in "iuf":
+        out.append(NamedArray(prefix, value))
+    elif isinstance(value, int | float) and not isinstance(value, bool):
+        out.append(NamedArray(prefix, np.asarray(value)))
+
+
+def read_mat(
+    path: str | Path,
+    *,
+    channels: Mapping[str, str] | None = None,
+    scale: Mapping[str, float] | None = None,
+) -> dict[str, NDArray]:
+    """Read the signals of a run from a MATLAB file.
+
+    Parameters
+    ----------
+    path : str or Path
+        The ``.mat`` file.
+    channels : mapping, optional
+        Column name -> variable name (``"data.x"`` inside a structure), e.g.
+        ``{"time_s": "t", "displacement_um": "x"}``. Without it, variables named
+        ``time_s``, ``displacement_m``, ``velocity_m_per_s`` or with a unit
+        (``displacement_um``) are used.
+    scale : mapping, optional
+        Extra factor per canonical column.
+
+    Returns
+    -------
+    dict
+        Arrays by canonical column name, in s, m and m/s.
+
+    Raises
+    ------
+    RunFormatError
+        For a file that is not a MATLAB file, or signals that cannot be picked.
+    """
+    path = Path(path)
+    where = str(path)
+    try:
+        content = scipy.io.loadmat(path, simplify_cells=True)
+    except NotImplementedError:
+        # Version 7.3 files are HDF5 files; MATLAB stores vectors as 1 x n or n x 1.
+        arrays = hdf5_arrays(path, group=None, where=where)
+        return signals_from_arrays(arrays, channels=channels, scale=scale, where=where)
+    except (ValueError, TypeError, OSError, IndexError, KeyError) as exc:
+        # scipy raises MatReadError (a ValueError) for most bad files, IndexError for
+        # some short ones.
+        raise RunFormatError(f"not a readable MATLAB .mat file ({exc})", where) from None
+    arrays: list[NamedArray] = []
+    for key, value in content.items():
+        if not key.startswith("__"):
+            _flatten(key, value, arrays)
+    return signals_from_arrays(arrays, channels=channels, scale=scale, where=where)
