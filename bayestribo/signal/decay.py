@@ -46,7 +46,7 @@ from the end of motion T. A real recording needs some care first, and
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal
 
 import numpy as np
@@ -56,7 +56,9 @@ from scipy.integrate import cumulative_trapezoid
 
 from bayestribo.errors import RecordingError
 from bayestribo.model.scaling import Rig, Scaling
-from bayestribo.signal.peaks import Peaks, estimate_noise, find_peaks
+from bayestribo.signal.motion import THRESHOLD, block_noise, check_turning_points, motion_span
+from bayestribo.signal.peaks import Peaks, _dominant_period, estimate_noise, find_peaks
+from bayestribo.signal.spectrum import NoiseSpectrum, RestNoise, noise_spectrum, notch_filter
 
 __all__ = [
     "EnergyDecay",
@@ -150,6 +152,17 @@ class EnergyDecay:
         Samples in the Savitzky-Golay window of a derived velocity.
     peaks : Peaks
         Displacement turning points of the analysed window (about the equilibrium).
+    rest_noise : RestNoise or None
+        Noise spectra of the recorded channels at rest (Welch; mains lines, colour),
+        ``None`` without a rest segment (:mod:`bayestribo.signal.spectrum`).
+    notch_Hz : tuple of float
+        Mains line(s) removed by the zero-phase notch before the analysis [Hz]; empty
+        when none was (``notch=None``, or "auto" found no line).
+    stop_time : float or None
+        End of motion [s]: the velocity's last crossing of its rest level, linearly
+        interpolated between samples (:func:`bayestribo.signal.motion.motion_span`);
+        ``end_time`` is the first sample at or after it. ``None`` when the motion lasts
+        to the end of the record.
     """
 
     t: NDArray
@@ -173,6 +186,9 @@ class EnergyDecay:
     derived_channel: str | None
     savgol_window: int | None
     peaks: Peaks
+    rest_noise: RestNoise | None = None
+    notch_Hz: tuple[float, ...] = ()
+    stop_time: float | None = None
 
     @property
     def tau_end(self) -> float:
@@ -328,31 +344,6 @@ def derivative_gain(window: int, step: float) -> float:
     return float(np.linalg.norm(scipy.signal.savgol_coeffs(window, 5, deriv=1, delta=step)))
 
 
-def _release_index(signal: NDArray, first_extremum: int) -> int | None:
-    """Index where a signal leaves the rest the record starts in, or None.
-
-    The record starts at rest when its first ``MIN_QUIET_SAMPLES`` samples scatter
-    by less than 1/300 of the signal's range (6σ < 2 % of it, σ from their median
-    absolute deviation): the release is then the sample before the first one more
-    than 6σ from their median, provided it comes after those samples and before the
-    first extremum found by the peak finder.
-    """
-    if first_extremum < 2 * MIN_QUIET_SAMPLES:
-        return None
-    head = signal[: first_extremum + 1]
-    first = head[:MIN_QUIET_SAMPLES]
-    level = float(np.median(first))
-    sigma = 1.4826 * float(np.median(np.abs(first - level)))
-    span = float(np.ptp(signal))
-    if 6.0 * sigma > 0.02 * span:
-        return None  # the first samples move on the scale of the oscillation
-    band = max(6.0 * sigma, 1e-9 * span)
-    outside = np.flatnonzero(np.abs(head - level) > band)
-    if outside.size == 0 or outside[0] < MIN_QUIET_SAMPLES:
-        return None
-    return int(outside[0]) - 1
-
-
 def _turning_times(t: NDArray, v: NDArray, peaks: Peaks, period: float) -> NDArray:
     """Turning times from the velocity's zero crossings next to each displacement peak.
 
@@ -432,23 +423,6 @@ def _noise(
     )
 
 
-def _end_of_motion(t: NDArray, v: NDArray, peaks: Peaks, derived: str | None) -> float | None:
-    """Start of the rest tail [s], or None when the motion lasts to the end of the record.
-
-    A measured velocity shows the last small swings long after the displacement has
-    sunk into its noise (the vibrometer resolves 0.015 µm/s against 0.15 µm, i.e.
-    Ω·0.15 µm ≈ 30 µm/s at 32.6 Hz), so the rest tail is found on the velocity when
-    it was recorded, and on the displacement otherwise.
-    """
-    if derived == "velocity":
-        return peaks.stop_time
-    try:
-        vel = find_peaks(t, v, kind="velocity", min_peaks=1)
-    except RecordingError:
-        return peaks.stop_time
-    return vel.stop_time
-
-
 def _frequencies(times: NDArray, values: NDArray) -> tuple[float, float]:
     """Damped and natural frequency [Hz] from turning times and peak values.
 
@@ -470,6 +444,68 @@ def _frequencies(times: NDArray, values: NDArray) -> tuple[float, float]:
     return damped, damped * math.sqrt(1.0 + beta * beta)
 
 
+def _notched(
+    t: NDArray,
+    x: NDArray | None,
+    v: NDArray | None,
+    notch_Hz: float,
+    quality: float,
+    oscillation_Hz: float,
+) -> tuple[NDArray | None, NDArray | None]:
+    """Both channels through the same zero-phase notch (:func:`notch_filter`)."""
+    fs = 1.0 / float(np.median(np.diff(t)))
+    out = [
+        None
+        if s is None
+        else notch_filter(s, notch_Hz, fs, quality=quality, oscillation_Hz=oscillation_Hz)
+        for s in (x, v)
+    ]
+    return out[0], out[1]
+
+
+def _rest_noise(
+    t: NDArray,
+    x: NDArray,
+    v: NDArray,
+    rest_until: float | None,
+    stop: float | None,
+    period: float,
+    derived: str | None,
+) -> RestNoise | None:
+    """Noise spectra of the recorded channels on the rest segments (as :func:`_noise`)."""
+    margin = 0.25 * period
+    before = np.zeros(t.shape, bool) if rest_until is None else t < rest_until - margin
+    after = np.zeros(t.shape, bool) if stop is None else t > stop + margin
+    masks, names = [], []
+    for mask, name in ((before, "rest before release"), (after, "rest after stop")):
+        if np.count_nonzero(mask) >= MIN_QUIET_SAMPLES:
+            masks.append(mask)
+            names.append(name)
+    if not masks:
+        return None
+    fs = 1.0 / float(np.median(np.diff(t)))
+
+    def spectrum(s: NDArray) -> NoiseSpectrum:
+        return noise_spectrum([s[m] for m in masks], fs, period_s=period)
+
+    return RestNoise(
+        displacement=None if derived == "displacement" else spectrum(x),
+        velocity=None if derived == "velocity" else spectrum(v),
+        source=" and ".join(names),
+    )
+
+
+def _check_notch(notch: object, quality: float) -> None:
+    if notch is None or notch == "auto":
+        pass
+    elif isinstance(notch, bool) or not isinstance(notch, int | float | np.floating | np.integer):
+        raise RecordingError(f"notch must be a frequency [Hz], 'auto' or None, got {notch!r}")
+    elif not (math.isfinite(float(notch)) and float(notch) > 0):
+        raise RecordingError(f"notch must be a positive frequency [Hz], got {notch!r}")
+    if not (isinstance(quality, int | float) and math.isfinite(quality) and quality > 0):
+        raise RecordingError(f"notch_quality must be a positive number, got {quality!r}")
+
+
 def energy_decay(
     t: ArrayLike,
     displacement: ArrayLike | None = None,
@@ -481,6 +517,9 @@ def energy_decay(
     skip_turning_points: int | None = None,
     min_turning_points: int = 2 * MIN_OSCILLATIONS,
     offset: float | Literal["auto", "constant"] | None = "auto",
+    notch: float | Literal["auto"] | None = None,
+    notch_quality: float = 30.0,
+    motion_threshold: float = THRESHOLD,
 ) -> EnergyDecay:
     """Energy decay curve and Π(τ) of a free-decay recording (Eq. 6, 26, 39).
 
@@ -514,6 +553,20 @@ def energy_decay(
         :func:`bayestribo.signal.peaks.find_peaks`: "auto" from the turning points
         with a linear drift when there are enough of them, "constant" without the
         drift, a number [length unit] when it is known, ``None`` for 0.
+    notch : float, "auto" or None
+        Remove a mains line from both channels before the analysis: a frequency [Hz],
+        or "auto" to look for a 50 or 60 Hz line in the spectrum of the noise at rest
+        and remove it when there is one (:attr:`EnergyDecay.notch_Hz` says which was
+        removed, empty when none). The notch is zero-phase
+        (:func:`bayestribo.signal.spectrum.notch_filter`, forwards and backwards):
+        it adds no delay, and its gain at the oscillation frequency is divided out.
+        Default ``None``: no notch.
+    notch_quality : float
+        Quality factor of the notch (its -3 dB width is ``notch / notch_quality``).
+    motion_threshold : float
+        Excursion of the velocity from its rest level, in rest noise standard
+        deviations, that marks the motion when the release and the end of motion
+        are located (:func:`bayestribo.signal.motion.motion_span`).
 
     Returns
     -------
@@ -522,9 +575,11 @@ def energy_decay(
     Raises
     ------
     RecordingError
-        No signal, bad time stamps or samples, no oscillation, a skip that is not an
-        integer >= 0, or fewer than ``min_turning_points`` turning points after the
-        skipped ones.
+        No signal, bad time stamps or samples, a skip that is not an integer >= 0;
+        and, naming the part of the analysis: "release: no motion found" (no
+        oscillation above the noise), "turning points: ..." (too few after the
+        skipped ones, or not half a period apart), "energy decay: the oscillation
+        does not decay".
     """
     t = check_time(t)
     x = _check_signal("displacement", displacement, t.size)
@@ -537,27 +592,109 @@ def energy_decay(
     _check_count("min_turning_points", min_turning_points, 2)
     if use_nominal_frequency and rig is None:
         raise RecordingError("use_nominal_frequency needs a rig with a natural frequency")
+    _check_notch(notch, notch_quality)
+    if not (math.isfinite(motion_threshold) and motion_threshold > 0):
+        raise RecordingError(
+            f"motion_threshold must be a positive number, got {motion_threshold!r}"
+        )
+    for name, s in (("displacement", x), ("velocity", v)):
+        if s is not None and float(np.ptp(s)) == 0.0:
+            raise RecordingError(f"release: no motion found: the {name} signal is constant")
 
+    options = dict(
+        rig=rig,
+        skip_oscillations=skip_oscillations,
+        use_nominal_frequency=use_nominal_frequency,
+        skip_turning_points=skip_turning_points,
+        min_turning_points=min_turning_points,
+        offset=offset,
+        motion_threshold=motion_threshold,
+    )
+    if notch is None:
+        return _analyse(t, x, v, notch_Hz=(), **options)
+    reference = x if x is not None else v
+    try:
+        oscillation_Hz = 1.0 / _dominant_period(t, reference)
+    except RecordingError as e:
+        raise RecordingError(f"release: no motion found: {e}") from e
+    if notch == "auto":
+        first = _analyse(t, x, v, notch_Hz=(), **options)
+        mains = None if first.rest_noise is None else first.rest_noise.mains_Hz()
+        if mains is None:
+            return first
+        notch_Hz = float(mains)
+    else:
+        notch_Hz = float(notch)
+    xn, vn = _notched(t, x, v, notch_Hz, notch_quality, oscillation_Hz)
+    return _analyse(t, xn, vn, notch_Hz=(notch_Hz,), **options)
+
+
+def _analyse(
+    t: NDArray,
+    x: NDArray | None,
+    v: NDArray | None,
+    *,
+    rig: Rig | None,
+    skip_oscillations: int,
+    use_nominal_frequency: bool,
+    skip_turning_points: int | None,
+    min_turning_points: int,
+    offset: float | Literal["auto", "constant"] | None,
+    motion_threshold: float,
+    notch_Hz: tuple[float, ...],
+) -> EnergyDecay:
+    """:func:`energy_decay` on checked (and notched) signals."""
     derived: str | None = None
     velocity_offset = 0.0
+    reference = x if x is not None else v
+    try:
+        period0 = _dominant_period(t, reference)
+    except RecordingError as e:
+        raise RecordingError(f"release: no motion found: {e}") from e
+    if x is not None and period0 / float(np.median(np.diff(t))) < 6:
+        raise RecordingError(
+            f"turning points: the displacement has {period0 / float(np.median(np.diff(t))):.1f} "
+            "samples per period; at least 6 are needed to locate extrema"
+        )
+    v_span = v if v is not None else derive_velocity(t, x, period0)[0]
+    span = motion_span(
+        t, v_span, period0, threshold=motion_threshold, displacement=x if v is None else None
+    )
+    released_at = span.release_index
+    rest_until = None if released_at is None else float(t[released_at])
+    stop_time = span.stop_time
+
     if x is None:
         derived = "displacement"
-        x = cumulative_trapezoid(v, t, initial=0.0)
-        first = find_peaks(t, x, kind="displacement", min_peaks=2)
-        released_at = _release_index(v, int(first.index[0]))
-        rest_until = None if released_at is None else float(t[released_at])
-        quiet = _quiet_segments(t, rest_until, first.stop_time, 0.0)
+        quiet = _quiet_segments(t, rest_until, stop_time, 0.0)
         if np.count_nonzero(quiet) >= MIN_QUIET_SAMPLES:
             velocity_offset = float(np.median(v[quiet]))
             v = v - velocity_offset
-            x = cumulative_trapezoid(v, t, initial=0.0)
-    peaks = find_peaks(t, x, kind="displacement", min_peaks=2, offset=offset)
+        x = cumulative_trapezoid(v, t, initial=0.0)
+        sigma_x = None
+    else:
+        quiet = _quiet_segments(t, rest_until, stop_time, 0.25 * period0)
+        sigma_x = block_noise(t, x, quiet, span.block)
+
+    # Turning points inside the motion only: the rest holds none (a wiggle of the
+    # noise there is not one), and the noise threshold is the one measured at rest.
+    lo = 0 if released_at is None else int(released_at)
+    hi = t.size
+    if span.stop_index is not None:
+        hi = min(t.size, int(span.stop_index) + 2 + span.block // 8)
+    try:
+        found = find_peaks(
+            t[lo:hi], x[lo:hi], kind="displacement", min_peaks=2, offset=offset, noise=sigma_x
+        )
+    except RecordingError as e:
+        raise RecordingError(f"turning points: {e}") from e
+    peaks = replace(found, index=found.index + lo, stop_time=stop_time)
+    check_turning_points(peaks.t, peaks.half_period)
     period = 2.0 * peaks.half_period
     if v is None:
         derived = "velocity"
         v, _ = derive_velocity(t, x, period)
 
-    released_at = _release_index(x if derived == "velocity" else v, int(peaks.index[0]))
     if skip_turning_points is not None:
         release = float(peaks.t[0]) if released_at is None else float(t[released_at])
         skip = int(skip_turning_points)
@@ -576,11 +713,20 @@ def energy_decay(
     needed = skip + int(min_turning_points)
     if len(peaks) < needed:
         raise RecordingError(
-            f"the recording holds {len(peaks)} turning points after the release; "
-            f"{needed} are needed ({min_turning_points} turning points after skipping "
-            f"{skipped})"
+            f"turning points: the recording holds {len(peaks)} turning points after the "
+            f"release; {needed} are needed ({min_turning_points} turning points after "
+            f"skipping {skipped})"
         )
     window = peaks.skip(skip)
+    if stop_time is None:
+        amp = np.abs(window.value)
+        if amp.size >= 6 and np.mean(amp[-3:]) >= 0.99 * np.mean(amp[:3]):
+            raise RecordingError(
+                "energy decay: the oscillation does not decay: its last turning points are "
+                f"{100 * np.mean(amp[-3:]) / np.mean(amp[:3]):.1f} % of its first over "
+                f"{window.t[-1] - window.t[0]:.3g} s and it does not stop; a free decay must "
+                "lose amplitude (is the rig driven, or the record not of a free decay?)"
+            )
     times = window.t if derived == "velocity" else _turning_times(t, v, window, period)
     damped_hz, natural_hz = _frequencies(times, window.value)
     nominal_hz = None if rig is None else rig.natural_frequency_Hz
@@ -592,8 +738,8 @@ def energy_decay(
         scaling = Scaling(omega, 1.0, friction_defined=False)
 
     rest_until = None if released_at is None else release
-    stop_time = _end_of_motion(t, v, peaks, derived)
     noise = _noise(t, x, v, rest_until, stop_time, period, derived)
+    rest_noise = _rest_noise(t, x, v, rest_until, stop_time, period, derived)
     if derived is None:
         quiet = _quiet_segments(t, rest_until, stop_time, 0.25 * period)
         if np.count_nonzero(quiet) >= MIN_QUIET_SAMPLES:
@@ -631,4 +777,7 @@ def energy_decay(
         derived_channel=derived,
         savgol_window=savgol_window(t, period) if derived == "velocity" else None,
         peaks=window,
+        rest_noise=rest_noise,
+        notch_Hz=notch_Hz,
+        stop_time=stop_time,
     )

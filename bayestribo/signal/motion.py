@@ -1,0 +1,339 @@
+"""Where the motion is in a record: release, end of motion, and the rest around them.
+
+A free-decay record holds rest (the pin held before the release, stuck after the
+stop), the decaying oscillation between them, and noise everywhere. Whether a stretch
+is rest cannot be judged from its level alone (a filtered, humming or 1/f noise can
+wander far beyond a white-noise band, and the longer the rest the further), so
+:func:`motion_span` judges it by the physics: **motion is a coherent oscillation at
+the rig's frequency**.
+
+* The velocity (recorded, or derived from the displacement) is cut into blocks of two
+  periods, overlapping by half. In each block a constant, a line and a sinusoid at the
+  oscillation frequency are fitted by least squares; the block is *moving* when the
+  sinusoid explains more than half of what the line leaves (amplitude above about 1.4
+  times the noise per sample), *quiet* otherwise. Noise of any colour puts only a
+  fraction of its power at the oscillation frequency (1/f noise about 15 %, a 50 Hz
+  line almost none over two periods of 32.6 Hz), so rest is quiet however long.
+* The motion runs from the first to the last moving block. The rest noise σ is the
+  median, over the quiet blocks, of the standard deviation about each block's line:
+  a figure that does not grow with the length of the rest.
+* The **end of motion** is refined in the last moving block and the block after it
+  only (so the length of the rest cannot move it): the velocity's last excursion
+  beyond ``threshold`` σ from its level at rest, then its next crossing of that
+  level, linearly interpolated; with dry friction this is the last turning point,
+  where the pin sticks (the velocity reaches zero with a slope Ω²|x - x_c| > 0, so
+  the crossing is sharp). The **release** is found the same way from the front: the
+  last crossing of the rest level before the first excursion beyond the threshold.
+
+:func:`check_turning_points` applies the other piece of physics: consecutive turning
+points of the motion are half a damped period apart.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from bayestribo.errors import RecordingError
+
+__all__ = ["MotionSpan", "block_noise", "check_turning_points", "motion_span"]
+
+#: Fraction of a block's variance the oscillation must explain for it to be moving.
+COHERENCE = 0.5
+#: Excursion of a displacement from its rest level, in rest noise standard deviations,
+#: that ends the motion when the velocity was derived (Gaussian tail 6e-7 per sample).
+DISPLACEMENT_THRESHOLD = 5.0
+#: Default excursion threshold, in rest noise standard deviations, that marks motion
+#: when the release and the end of motion are refined (a Gaussian sample exceeds 8σ
+#: with probability 1e-15).
+THRESHOLD = 8.0
+
+
+@dataclass(frozen=True)
+class MotionSpan:
+    """The motion inside a record and the rest around it.
+
+    Attributes
+    ----------
+    release_index : int or None
+        Last sample of the rest the record starts in, ``None`` for a record that
+        starts in motion.
+    release_time : float or None
+        Time of the release [s] (linearly interpolated crossing), or ``None``.
+    stop_index : int or None
+        Last sample at or before the end of motion, ``None`` when the motion lasts to
+        the end of the record.
+    stop_time : float or None
+        End of motion [s] (interpolated crossing of the rest level), or ``None``.
+    quiet : ndarray of bool
+        Samples of the quiet head (before the release) and tail (after the stop).
+    noise : float
+        Rest noise standard deviation of the velocity channel used [unit/s].
+    threshold : float
+        Excursion threshold used [unit/s] (``THRESHOLD`` times ``noise``).
+    block : int
+        Samples per block (two periods).
+    """
+
+    release_index: int | None
+    release_time: float | None
+    stop_index: int | None
+    stop_time: float | None
+    quiet: NDArray
+    noise: float
+    threshold: float
+    block: int
+
+    @property
+    def motion_ended(self) -> bool:
+        """True when the record holds the end of motion."""
+        return self.stop_time is not None
+
+
+def _block_fits(t: NDArray, s: NDArray, starts: NDArray, size: int, omega: float):
+    """Per block: variance left by a line, variance left by line + sinusoid."""
+    tt = t[:size] - t[0]
+    tt = tt - tt.mean()
+    basis1 = np.column_stack([np.ones(size), tt])
+    basis2 = np.column_stack([basis1, np.cos(omega * tt), np.sin(omega * tt)])
+    rows = s[starts[:, None] + np.arange(size)[None, :]]
+    res1 = rows - (rows @ np.linalg.pinv(basis1).T) @ basis1.T
+    res2 = rows - (rows @ np.linalg.pinv(basis2).T) @ basis2.T
+    return np.mean(res1 * res1, axis=1), np.mean(res2 * res2, axis=1)
+
+
+def block_noise(t: NDArray, s: NDArray, mask: NDArray, size: int) -> float | None:
+    """Median standard deviation of ``s`` about a line over blocks inside ``mask``.
+
+    The noise of a channel at rest on the scale of ``size`` samples (two periods),
+    insensitive to a slow wander of the rest level and to the length of the rest.
+    Returns ``None`` when ``mask`` holds no whole block.
+    """
+    values: list[float] = []
+    m = np.asarray(mask, bool)
+    edges = np.flatnonzero(np.diff(np.r_[0, m.astype(np.int8), 0]))
+    size = max(8, int(size))
+    for a, b in zip(edges[::2], edges[1::2], strict=True):
+        if b - a < size:
+            continue
+        starts = np.arange(a, b - size + 1, size)
+        var1, _ = _block_fits(t, s, starts, size, 0.0)
+        values.extend(var1.tolist())
+    if not values:
+        return None
+    return float(math.sqrt(np.median(values)))
+
+
+def _root(t: NDArray, s: NDArray, level: float, lo: int, hi: int, near: int) -> float | None:
+    """Where a cubic fitted to s[lo:hi] reaches ``level``: the real root nearest t[near].
+
+    The velocity reaches its rest level at a turning point with a non-zero slope
+    (Ω²|x - x_c|), and stays there once stuck; the crossing is extrapolated from the
+    moving side, where the signal stands out of the noise, not looked for among the
+    noise at rest.
+    """
+    if hi - lo < 6:
+        return None
+    origin = float(t[near])
+    scale = float(t[hi - 1] - t[lo]) or 1.0
+    u = (t[lo:hi] - origin) / scale
+    coef = np.polyfit(u, s[lo:hi] - level, 3)
+    roots = np.roots(coef)
+    real = roots[np.abs(roots.imag) < 1e-9].real
+    if real.size == 0:
+        return None
+    r = float(real[np.argmin(np.abs(real))])
+    return origin + r * scale
+
+
+def motion_span(
+    t: ArrayLike,
+    velocity: ArrayLike,
+    period: float,
+    *,
+    threshold: float = THRESHOLD,
+    displacement: ArrayLike | None = None,
+) -> MotionSpan:
+    """Release, end of motion and rest of a free-decay record (see the module notes).
+
+    Parameters
+    ----------
+    t : array_like
+        Time stamps [s], regular.
+    velocity : array_like
+        Velocity [unit/s], recorded or derived from the displacement.
+    period : float
+        Period of the oscillation [s] (about; it sets the blocks and the fitted
+        sinusoid's frequency).
+    threshold : float
+        Excursion from the rest level, in rest noise standard deviations, that marks
+        motion when the release and the end are refined.
+    displacement : array_like, optional
+        The recorded displacement [unit], when ``velocity`` was derived from it: a
+        derivative's noise buries the last small swings, so the end of motion is then
+        the last excursion of the displacement beyond :data:`DISPLACEMENT_THRESHOLD`
+        of its rest noise from its rest level (within the same local window; the
+        sticking turning point itself, approached quadratically, is not resolved).
+
+    Returns
+    -------
+    MotionSpan
+
+    Raises
+    ------
+    RecordingError
+        "release: no motion found" when no block holds an oscillation at the given
+        period standing out of the noise; a bad ``period`` or ``threshold``.
+    """
+    t = np.asarray(t, dtype=float)
+    v = np.asarray(velocity, dtype=float)
+    if not (math.isfinite(period) and period > 0):
+        raise RecordingError(f"period must be a positive number of seconds, got {period!r}")
+    if not (math.isfinite(threshold) and threshold > 0):
+        raise RecordingError(f"threshold must be a positive number, got {threshold!r}")
+    n = v.size
+    dt = float(np.median(np.diff(t)))
+    size = max(8, round(2.0 * period / dt))
+    if n < size:
+        raise RecordingError(
+            f"release: the record holds {n} samples, fewer than two periods ({size}); "
+            "no free decay can be found in it"
+        )
+    hop = max(1, size // 2)
+    starts = np.arange(0, n - size + 1, hop)
+    if starts[-1] != n - size:
+        starts = np.r_[starts, n - size]
+    var1, var2 = _block_fits(t, v, starts, size, 2.0 * math.pi / period)
+    explained = np.where(var1 > 0, 1.0 - var2 / np.where(var1 > 0, var1, 1.0), 0.0)
+    moving = explained > COHERENCE
+    if not moving.any():
+        raise RecordingError(
+            f"release: no motion found: no stretch of two periods ({2 * period:.4g} s) "
+            "holds an oscillation at the record's dominant frequency above its noise"
+        )
+    # The motion is one run of moving blocks: the one holding the largest oscillation
+    # (the release); a block of rest that happens to look coherent is not part of it.
+    peak = int(np.argmax(np.where(moving, var1 - var2, -np.inf)))
+    first = peak
+    while first > 0 and moving[first - 1]:
+        first -= 1
+    last = peak
+    while last < moving.size - 1 and moving[last + 1]:
+        last += 1
+    moving = np.zeros_like(moving)
+    moving[first : last + 1] = True
+    quiet = np.zeros(n, bool)
+    head_end = int(starts[first])  # samples before the first moving block
+    tail_start = int(starts[last]) + size  # samples after the last moving block
+    quiet_blocks = np.r_[var1[:first], var1[last + 1 :]]
+    quiet_blocks = quiet_blocks[
+        np.r_[starts[:first] + size <= head_end, starts[last + 1 :] >= tail_start]
+    ]
+    if quiet_blocks.size == 0:
+        quiet_blocks = var1[~moving]
+    sigma = float(math.sqrt(np.median(quiet_blocks))) if quiet_blocks.size else 0.0
+    # a noise-free record: excursions are measured against rounding
+    sigma = max(sigma, 1e-8 * float(np.max(np.abs(v - np.median(v)))))
+    level_cut = threshold * sigma
+
+    # End of motion: refined near the last moving block only, so that the length of
+    # the rest after it cannot move it.
+    fit_len = max(9, round(period / dt / 8.0))
+    skip = fit_len // 3  # samples next to the crossing, where a filter rounds the corner
+    stop_index = stop_time = None
+    if tail_start + size // 2 <= n and not moving[-1]:
+        lo = max(0, int(starts[last]) - size)
+        hi = min(n, tail_start + size)
+        rest = v[tail_start : min(n, tail_start + size)]
+        level = float(np.median(rest))
+        out = np.flatnonzero(np.abs(v[lo:hi] - level) > level_cut)
+        if displacement is not None:
+            x = np.asarray(displacement, dtype=float)
+            rest_x = x[tail_start : min(n, tail_start + size)]
+            sigma_x = (
+                block_noise(
+                    t, x, np.r_[np.zeros(tail_start, bool), np.ones(n - tail_start, bool)], size
+                )
+                or 0.0
+            )
+            sigma_x = max(sigma_x, 1e-8 * float(np.ptp(x)))
+            out_x = np.flatnonzero(
+                np.abs(x[lo:hi] - np.median(rest_x)) > DISPLACEMENT_THRESHOLD * sigma_x
+            )
+            if out_x.size:
+                i = lo + int(out_x[-1])
+                stop_time = float(t[min(n - 1, i + 1)])
+                stop_index = int(np.searchsorted(t, stop_time, side="right")) - 1
+                out = out[:0]
+        if out.size:
+            i = lo + int(out[-1])
+            stop_time = _root(t, v, level, max(0, i + 1 - fit_len), i + 1 - skip, i)
+            if stop_time is None or not t[max(0, i - skip)] <= stop_time <= t[min(n - 1, i + skip)]:
+                stop_time = float(t[i])  # within a sample of the last excursion
+            stop_index = int(np.searchsorted(t, stop_time, side="right")) - 1
+        if stop_index is not None:
+            quiet[stop_index + 1 + max(1, size // 8) :] = True
+    # Release: refined near the first moving block only.
+    release_index = release_time = None
+    if head_end >= size // 2 and not moving[0]:
+        lo = max(0, head_end - size)
+        hi = min(n, int(starts[first]) + 2 * size)
+        level = float(np.median(v[lo:head_end]))
+        out = np.flatnonzero(np.abs(v[head_end:hi] - level) > level_cut)
+        if out.size:
+            i = head_end + int(out[0])
+            release_time = _root(t, v, level, i + skip, min(n, i + fit_len), i)
+            if (
+                release_time is None
+                or not t[max(0, i - skip)] <= release_time <= t[min(n - 1, i + skip)]
+            ):
+                release_time = float(t[max(0, i - 1)])
+            release_index = int(np.searchsorted(t, release_time, side="right")) - 1
+            quiet[: max(0, release_index - max(1, size // 8))] = True
+    return MotionSpan(
+        release_index=release_index,
+        release_time=release_time,
+        stop_index=stop_index,
+        stop_time=stop_time,
+        quiet=quiet,
+        noise=sigma,
+        threshold=level_cut,
+        block=size,
+    )
+
+
+def check_turning_points(times: ArrayLike, half_period: float, *, tolerance: float = 0.3) -> None:
+    """Refuse turning points that are not half a period apart.
+
+    Consecutive turning points of a free decay are π/ω_d apart (Eq. 13) whatever the
+    friction (the Coulomb force only shifts the centre of each half cycle); a wiggle of
+    the noise counted as a turning point, or a missed one, breaks that.
+
+    Parameters
+    ----------
+    times : array_like
+        Turning-point times [s], increasing.
+    half_period : float
+        The damped half-period [s].
+    tolerance : float
+        Largest accepted relative deviation of an interval from ``half_period``.
+
+    Raises
+    ------
+    RecordingError
+        "turning points: ..." naming the first interval off and by how much.
+    """
+    tt = np.asarray(times, dtype=float)
+    gaps = np.diff(tt)
+    off = np.flatnonzero(np.abs(gaps - half_period) > tolerance * half_period)
+    if off.size:
+        k = int(off[0])
+        raise RecordingError(
+            f"turning points: turning points {k} and {k + 1} (t = {tt[k]:.6g} s and "
+            f"{tt[k + 1]:.6g} s) are {gaps[k]:.4g} s apart, not about half a period "
+            f"({half_period:.4g} s ± {100 * tolerance:.0f} %): a wiggle of the noise taken "
+            "for a turning point, or a turning point missed"
+        )
