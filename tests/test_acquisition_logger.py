@@ -119,9 +119,8 @@ def test_crash_while_writing_leaves_no_partial_run(tmp_path, monkeypatch):
     def crash(*args, **kwargs):
         raise OSError("disk full")
 
-    import bayestribo.io
-
-    monkeypatch.setattr(bayestribo.io, "write_run", crash)
+    # The CSV is written, then the sidecar fails.
+    monkeypatch.setattr(logger_module, "write_sidecar", crash)
     with pytest.raises(OSError, match="disk full"):
         write_run_files(out, "r", run, meta, raw)
     assert list(out.iterdir()) == []  # neither a half CSV nor a temporary directory

@@ -3,9 +3,12 @@
 Every byte received is appended to the raw log as it arrives (written straight to
 the operating system, so it survives the death of the process, and synced to disk
 at least every :data:`SYNC_INTERVAL_S`). When the run ends, for whatever reason, the
-parsed run is written in the canonical format (CSV ``time_s, displacement_m,
-velocity_m_per_s`` and a JSON sidecar of the same stem) into a temporary directory
-and moved into place with :func:`os.replace`, so a reader never sees half a run.
+run is written in the canonical format (CSV ``time_s, displacement_m,
+velocity_m_per_s`` and a JSON sidecar of the same stem) into a staging directory in
+the run folder and moved into place with :func:`os.replace`, so a reader never sees
+half a run. The live logger writes the CSV there while the run streams
+(:class:`~bayestribo.acquisition.csvstream.StagedRun`), so little is left to do at the
+end of a long run; otherwise it is written from the raw log a chunk at a time.
 A ``<stem>.sha256`` manifest (``sha256sum -c`` format) lists the raw log and the run
 files.
 """
@@ -29,9 +32,11 @@ from typing import Any
 
 from bayestribo import __version__
 from bayestribo.acquisition.assembly import AssembledRun
+from bayestribo.acquisition.csvstream import StagedRun
 from bayestribo.acquisition.faults import RunInUseError, StorageError
 from bayestribo.errors import AcquisitionError
-from bayestribo.io.sidecar import RUN_ID_PATTERN, is_run_id
+from bayestribo.io.run import check_metadata
+from bayestribo.io.sidecar import RUN_ID_PATTERN, is_run_id, write_sidecar
 
 __all__ = [
     "RUN_ID_PATTERN",
@@ -44,6 +49,7 @@ __all__ = [
     "make_run_id",
     "run_metadata",
     "sha256_file",
+    "stage_run",
     "utc_now",
     "write_json_atomic",
     "write_run_files",
@@ -104,6 +110,7 @@ class RawLog:
             raise AcquisitionError(f"{self.path}: cannot open the raw log ({exc})") from None
         self.sync_interval_s = sync_interval_s
         self.bytes_written = 0
+        self._sha = hashlib.sha256()  # of the bytes written, as they are written
         self.syncs = 0
         #: The first storage failure (disk full, I/O error), raised by every later
         #: :meth:`write`: a failure of the background sync is not lost.
@@ -129,6 +136,7 @@ class RawLog:
             while view:
                 written = os.write(self._fd, view)
                 self.bytes_written += written
+                self._sha.update(view[:written])
                 view = view[written:]
         except OSError as exc:
             self.error = failed_before or StorageError(
@@ -148,6 +156,18 @@ class RawLog:
                     self._dirty_since = time.monotonic()
         if self._thread is None:
             self.tick()
+
+    def sha256(self) -> str | None:
+        """SHA-256 of the log's bytes (hexadecimal), if this logger wrote all of them.
+
+        Computed as the bytes are written, so finishing a long run does not read the
+        log again; None when the file holds more or fewer bytes than were written here.
+        """
+        try:
+            size = self.path.stat().st_size
+        except OSError:
+            return None
+        return self._sha.hexdigest() if size == self.bytes_written else None
 
     def tick(self) -> None:
         """Sync to disk if bytes have waited for the sync interval."""
@@ -402,6 +422,7 @@ def run_metadata(
     started_utc: str | None,
     ended_utc: str | None,
     recovered: bool = False,
+    raw_sha256: str | None = None,
 ) -> dict[str, Any]:
     """The sidecar metadata of a run: canonical keys, operator inputs, device header, host.
 
@@ -419,6 +440,8 @@ def run_metadata(
         Port URL and host times of the acquisition.
     recovered : bool
         True when rebuilt from a raw log after a crash.
+    raw_sha256 : str, optional
+        SHA-256 of the raw log if known (:meth:`RawLog.sha256`); computed otherwise.
     """
     header = run.report["device_header"]
     assert isinstance(header, dict)
@@ -453,7 +476,7 @@ def run_metadata(
             "package_version": __version__,
             "raw_log": raw_log.name,
             "raw_log_bytes": raw_log.stat().st_size,
-            "raw_log_sha256": sha256_file(raw_log),
+            "raw_log_sha256": raw_sha256 or sha256_file(raw_log),
             "recovered_from_raw_log": recovered,
         },
     }
@@ -470,24 +493,28 @@ class RunFiles:
     digests: dict[str, str]
 
 
-def _write_canonical(
-    directory: Path, stem: str, run: AssembledRun, metadata: Mapping[str, Any]
-) -> tuple[Path, Path]:
-    """Write the canonical CSV and JSON sidecar of a run into ``directory``.
+def stage_run(out_dir: Path, stem: str, run: AssembledRun) -> StagedRun:
+    """Write the canonical CSV of a run, a chunk at a time, into a new staging directory.
 
-    The one place that knows the file format (:func:`bayestribo.io.write_run`); the
-    caller moves the files into place. Rows are the received samples only, at their
-    own times: gaps show as jumps in ``time_s`` (which :func:`bayestribo.io.read_run`
-    refuses unless ``validate=False``) and are listed in the sidecar, never filled.
+    Rows are the received samples only, at their own times: gaps show as jumps in
+    ``time_s`` (which :func:`bayestribo.io.read_run` refuses unless ``validate=False``)
+    and are listed in the sidecar, never filled.
+
+    Raises
+    ------
+    OSError
+        If the CSV cannot be written; no staging directory is left then.
     """
-    from bayestribo.io import write_run
-    from bayestribo.io.run import Run
-
-    csv_path = write_run(
-        Run(run.time_s, run.displacement_m, run.velocity_m_per_s, metadata),
-        directory / f"{stem}.csv",
-    )
-    return csv_path, csv_path.with_suffix(".json")
+    staged = StagedRun(out_dir, stem, run.header)
+    try:
+        for first, counts in run.chunks():
+            staged.csv.append(first, counts)
+            if staged.csv.error is not None:
+                raise staged.csv.error
+    except BaseException:
+        staged.discard()
+        raise
+    return staged
 
 
 def write_run_files(
@@ -498,13 +525,15 @@ def write_run_files(
     raw_log: Path,
     *,
     before_move: Callable[[dict[str, str]], None] | None = None,
+    staged: StagedRun | None = None,
+    raw_sha256: str | None = None,
 ) -> RunFiles:
-    """Write a run atomically: temporary directory in ``out_dir``, fsync, :func:`os.replace`.
+    """Write a run atomically: staging directory in ``out_dir``, fsync, :func:`os.replace`.
 
     Parameters
     ----------
     out_dir : path-like
-        Directory of the run files (same file system as the temporary directory).
+        Directory of the run files (same file system as the staging directory).
     stem : str
         File stem (the run id).
     run : AssembledRun
@@ -515,8 +544,14 @@ def write_run_files(
         The raw log, listed in the ``.sha256`` manifest.
     before_move : callable, optional
         Called with the SHA-256 of each file (by file name) once they are written in
-        the temporary directory, before any is moved into place; if it raises, no run
+        the staging directory, before any is moved into place; if it raises, no run
         file is written (e.g. a run the catalog would refuse).
+    staged : StagedRun, optional
+        The run's CSV written while streaming (:class:`~.csvstream.StagedRun`), used
+        when it holds exactly the run's samples; otherwise (or if not given) the CSV is
+        written from ``run``, a chunk at a time. Removed in every case.
+    raw_sha256 : str, optional
+        SHA-256 of the raw log if known; computed otherwise.
 
     Returns
     -------
@@ -530,22 +565,38 @@ def write_run_files(
         place then.
     """
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(prefix=f".{stem}.", dir=out) as tmp:
-        csv_tmp, json_tmp = _write_canonical(Path(tmp), stem, run, metadata)
-        digests = {p.name: sha256_file(p) for p in (csv_tmp, json_tmp)}
-        digests[raw_log.name] = sha256_file(raw_log)
-        manifest_tmp = Path(tmp) / f"{stem}.sha256"
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        whole = staged is not None and staged.csv.rows == run.n_samples
+        if staged is not None and (staged.csv.error is not None or not whole):
+            staged.discard()
+            staged = None
+        if staged is None:
+            staged = stage_run(out, stem, run)
+    except BaseException:
+        if staged is not None:
+            staged.discard()
+        raise
+    tmp = staged.directory
+    try:
+        csv_tmp = staged.csv.path
+        digests = {csv_tmp.name: staged.csv.close()}
+        json_tmp = write_sidecar(check_metadata(metadata), tmp / f"{stem}.json")
+        digests[json_tmp.name] = sha256_file(json_tmp)
+        digests[raw_log.name] = raw_sha256 or sha256_file(raw_log)
+        manifest_tmp = tmp / f"{stem}.sha256"
         manifest_tmp.write_text(
             "".join(f"{digest}  {name}\n" for name, digest in digests.items()), encoding="utf-8"
         )
-        for path in (csv_tmp, json_tmp, manifest_tmp):
+        for path in (json_tmp, manifest_tmp):
             with open(path, "rb") as fh:
                 os.fsync(fh.fileno())
         if before_move is not None:
             before_move(dict(digests))
         for path in (csv_tmp, json_tmp, manifest_tmp):
             os.replace(path, out / path.name)
+    finally:
+        staged.discard()
     _fsync_dir(out)
     return RunFiles(
         csv=out / csv_tmp.name,

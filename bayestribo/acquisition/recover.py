@@ -3,7 +3,10 @@
 The raw log holds every byte the device sent, and the session file written before
 the run (``<stem>.session.json``) holds the operator's inputs. The run is parsed by
 the same parser and assembler as the live acquisition, so it is what the logger
-would have written from the bytes it had received.
+would have written from the bytes it had received. The log is read a megabyte at a
+time and the CSV written a chunk at a time, so a log of any size is recovered in
+bounded memory; the half-written CSV a crashed logger left in its staging directory
+(``.<run_id>.*``) is removed.
 """
 
 from __future__ import annotations
@@ -11,11 +14,12 @@ from __future__ import annotations
 import inspect
 import json
 import os
+import shutil
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from bayestribo.acquisition.assembly import assemble_bytes
+from bayestribo.acquisition.assembly import assemble_file
 from bayestribo.acquisition.logger import OperatorInputs, check_run_id
 from bayestribo.acquisition.session import AcquisitionResult, finish_run
 from bayestribo.errors import AcquisitionError
@@ -43,6 +47,13 @@ def read_session(raw_log: str | os.PathLike[str]) -> dict[str, Any] | None:
     if not isinstance(data, dict) or not isinstance(data.get("operator_inputs", {}), dict):
         raise AcquisitionError(f"{path}: expected one JSON object with a mapping 'operator_inputs'")
     return data
+
+
+def _remove_staging(folder: Path, run_id: str) -> None:
+    """Remove the staging directories a crashed logger left for ``run_id`` (half a CSV)."""
+    for path in folder.glob(f".{run_id}.*"):
+        if path.is_dir() and not path.is_symlink():
+            shutil.rmtree(path, ignore_errors=True)
 
 
 def recover_run(
@@ -106,7 +117,11 @@ def recover_run(
             f"{out / (run_id + '.csv')}: run files exist already (recover into another "
             "directory, or overwrite)"
         )
-    run = assemble_bytes(raw.read_bytes())
+    _remove_staging(raw.parent, run_id)
+    if out != raw.parent:
+        _remove_staging(out, run_id)
+    # A megabyte at a time: memory does not grow with the raw log.
+    run, _ = assemble_file(raw)
     return finish_run(
         run,
         operator,

@@ -24,7 +24,8 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 from bayestribo import __version__
-from bayestribo.acquisition.assembly import AssembledRun, RunAssembler, assemble_bytes
+from bayestribo.acquisition.assembly import AssembledRun, RunAssembler
+from bayestribo.acquisition.csvstream import StagedRun
 from bayestribo.acquisition.faults import (
     AcquisitionTimeout,
     DeviceError,
@@ -32,6 +33,7 @@ from bayestribo.acquisition.faults import (
     HeaderError,
     StorageError,
 )
+from bayestribo.acquisition.frameindex import BytesSource, FileSource
 from bayestribo.acquisition.logger import (
     OperatorInputs,
     RawLog,
@@ -45,7 +47,7 @@ from bayestribo.acquisition.logger import (
     write_run_files,
 )
 from bayestribo.acquisition.port import DEFAULT_BAUDRATE, Link, open_port
-from bayestribo.acquisition.protocol import MAX_FRAME_LENGTH, FrameParser, FrameType
+from bayestribo.acquisition.protocol import MAX_FRAME_LENGTH, FrameParser, FrameType, RunHeader
 from bayestribo.errors import AcquisitionError
 
 __all__ = ["AcquisitionResult", "Progress", "acquire_run", "finish_run"]
@@ -132,18 +134,47 @@ class _DeferredInterrupt:
 
 
 class _Conversation:
-    """Pump bytes from the link into the raw log, the parser and the assembler."""
+    """Pump bytes from the link into the raw log, the parser and the assembler.
+
+    When the run header arrives, the run's CSV is started in a staging directory of
+    ``out`` and every DATA frame that extends the run in order is written to it as it
+    is accepted: at the END frame only the last rows and the sidecar are left to write.
+    """
 
     def __init__(
-        self, link: Link, raw: RawLog, timeout_s: float, interrupt: _DeferredInterrupt
+        self,
+        link: Link,
+        raw: RawLog,
+        timeout_s: float,
+        interrupt: _DeferredInterrupt,
+        *,
+        out: Path,
+        run_id: str,
     ) -> None:
         self.link = link
         self.raw = raw
         self.timeout_s = timeout_s
         self.interrupt = interrupt
+        self.out = out
+        self.run_id = run_id
+        self.staged: StagedRun | None = None
         self.parser = FrameParser()
-        self.assembler = RunAssembler()
+        self.assembler = RunAssembler(FileSource(raw.path), sink=None)
+        self.assembler.on_header = self._start_csv
         self.last_byte = time.monotonic()
+
+    def _start_csv(self, header: RunHeader) -> None:
+        try:
+            self.staged = StagedRun(self.out, self.run_id, header)
+        except OSError:
+            return  # the CSV is written from the raw log at the end (or the disk fails)
+        self.assembler.sink = self.staged.csv.append
+
+    def discard_staged(self) -> None:
+        """Remove the CSV being written (no run files are written after all)."""
+        if self.staged is not None:
+            self.staged.discard()
+            self.staged = None
 
     def pump_once(self) -> int:
         self.interrupt.check()
@@ -340,7 +371,7 @@ def _acquire(
                 "run again"
             ) from None
         raw = RawLog(raw_path, background=True)
-        talk = _Conversation(link, raw, timeout_s, interrupt)
+        talk = _Conversation(link, raw, timeout_s, interrupt, out=out, run_id=run_id)
         try:
             talk.link.write_line("ID?")
             talk.wait_for(lambda: talk.assembler.ident is not None, "answer to 'ID?'")
@@ -351,6 +382,7 @@ def _acquire(
             talk.wait_for(lambda: talk.assembler.started, "run header after 'ARM'")
         except BaseException as exc:
             _stop_quietly(talk)
+            talk.discard_staged()
             raw.close()
             if isinstance(exc, AcquisitionTimeout) and not talk.assembler.started:
                 _refused_header(raw_path)  # a header too long for the live parser?
@@ -368,6 +400,7 @@ def _acquire(
             # The disk cannot take more: end the device's run, keep the raw log as it
             # is (every byte that could be written), and write no run files there.
             _stop_quietly(talk)
+            talk.discard_staged()
             raise
         except AcquisitionError as exc:
             fault = str(exc)
@@ -375,13 +408,27 @@ def _acquire(
             interrupted = True
             fault = "interrupted by the operator (Ctrl-C)"
             _stop_quietly(talk)
+        except BaseException:
+            talk.discard_staged()
+            raise
         finally:
             raw.close()
     finally:
         link.close()
-    # The run is assembled from the raw log itself, the record of every byte received:
-    # the same bytes give the same run here and in a recovery.
-    run = assemble_bytes(raw_path.read_bytes(), fault=fault)
+    # Every byte received went to the raw log, then to the parser: the run is what a
+    # recovery from the raw log gives, and its samples are read back from there.
+    try:
+        for frame in talk.parser.finish():
+            talk.assembler.add(frame)
+        if fault is None and not talk.assembler.ended:
+            fault = "stream ended without an END frame"
+        run = talk.assembler.build(talk.parser, fault=fault)
+    except BaseException:
+        talk.discard_staged()
+        raise
+    staged = talk.staged if talk.assembler.in_order else None
+    if staged is None:
+        talk.discard_staged()  # a frame came out of order: the CSV is made from the raw log
     return finish_run(
         run,
         inputs,
@@ -393,6 +440,8 @@ def _acquire(
         catalog=catalog,
         fault=fault,
         interrupted=interrupted,
+        staged=staged,
+        raw_sha256=raw.sha256(),
     )
 
 
@@ -406,9 +455,10 @@ def _refused_header(raw_path: Path) -> None:
     bound: a run header found there is refused with its own reason (its label's size).
     """
     parser = FrameParser(max_header_payload=MAX_FRAME_LENGTH)
-    assembler = RunAssembler()
+    data = raw_path.read_bytes()  # before the run header: a few bytes
+    assembler = RunAssembler(BytesSource(data))
     try:
-        for frame in parser.feed(raw_path.read_bytes()) + parser.finish():
+        for frame in parser.feed(data) + parser.finish():
             if frame.type == FrameType.HEADER:
                 assembler.add(frame)
     except HeaderError as exc:  # before OSError: the package's errors are OSErrors too
@@ -446,7 +496,7 @@ def _stream(
             progress(
                 Progress(
                     samples=talk.assembler.samples_received,
-                    frames=len(talk.assembler.seqs),
+                    frames=talk.assembler.frames_received,
                     bytes_received=talk.raw.bytes_written,
                     discarded_bytes=talk.parser.discarded_bytes,
                     elapsed_s=now - start,
@@ -508,8 +558,14 @@ def finish_run(
     fault: str | None,
     interrupted: bool = False,
     recovered: bool = False,
+    staged: StagedRun | None = None,
+    raw_sha256: str | None = None,
 ) -> AcquisitionResult:
     """Write an assembled run atomically and register it in the catalog.
+
+    ``staged`` is the run's CSV written while streaming, if any (see
+    :func:`~bayestribo.acquisition.logger.write_run_files`); ``raw_sha256`` the raw
+    log's digest if known.
 
     Raises
     ------
@@ -520,16 +576,22 @@ def finish_run(
         If the run files cannot be written, or the catalog cannot be updated (disk
         full, I/O error); the message names the ``--recover`` command.
     """
-    metadata = run_metadata(
-        run,
-        inputs,
-        run_id=run_id,
-        raw_log=raw_log,
-        port=port,
-        started_utc=started_utc,
-        ended_utc=utc_now(),
-        recovered=recovered,
-    )
+    try:
+        metadata = run_metadata(
+            run,
+            inputs,
+            run_id=run_id,
+            raw_log=raw_log,
+            port=port,
+            started_utc=started_utc,
+            ended_utc=utc_now(),
+            recovered=recovered,
+            raw_sha256=raw_sha256,
+        )
+    except BaseException:
+        if staged is not None:
+            staged.discard()
+        raise
     csv_name = f"{run_id}.csv"
 
     def check_catalog(digests: dict[str, str]) -> None:
@@ -537,7 +599,16 @@ def finish_run(
             _check_catalog(catalog, run_id, digests[csv_name], raw_log)
 
     try:
-        files = write_run_files(out_dir, run_id, run, metadata, raw_log, before_move=check_catalog)
+        files = write_run_files(
+            out_dir,
+            run_id,
+            run,
+            metadata,
+            raw_log,
+            before_move=check_catalog,
+            staged=staged,
+            raw_sha256=raw_sha256,
+        )
     except AcquisitionError:  # an OSError too: the catalog's refusal, not the disk's
         raise
     except OSError as exc:
