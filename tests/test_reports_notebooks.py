@@ -227,14 +227,16 @@ def test_notebook_executes_with_test_parameters(name, tmp_path):
         assert verdict == {"HarmOsc3": "friction"}
 
 
-def test_html_can_leave_the_code_out(tmp_path):
+def test_html_leaves_the_code_out_unless_asked(tmp_path):
     cell = nbformat.v4.new_code_cell("print('visible output')\nsecret_variable_name = 1")
     cell.outputs = [nbformat.v4.new_output("stream", name="stdout", text="visible output\n")]
     nb = nbformat.v4.new_notebook(cells=[cell])
     pytest.importorskip("nbconvert")
-    assert "secret_variable_name" in to_html(nb)
-    hidden = to_html(nb, hide_code=True)
+    hidden = to_html(nb)
     assert "secret_variable_name" not in hidden and "visible output" in hidden
+    assert "secret_variable_name" in to_html(nb, show_code=True)
+    # the former option still leaves the code out
+    assert "secret_variable_name" not in to_html(nb, show_code=True, hide_code=True)
 
 
 @pytest.mark.skipif(os.name != "posix", reason="environment variable handling is POSIX here")

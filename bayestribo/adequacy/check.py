@@ -55,8 +55,9 @@ class AdequacyReport:
     predictive : PredictiveCheck
     draws : ParameterDraws
     adequate : bool
-        The linear law is adequate: constancy not rejected and the peak coverage
-        not far below 95 % (at least 80 %).
+        The linear law is adequate: constancy not rejected, the measured end of
+        motion inside the exact model's 95 % interval, and the peak coverage not
+        far below 95 % (at least 80 %). Computed once, from :attr:`checks`.
     """
 
     run_name: str | None
@@ -70,11 +71,20 @@ class AdequacyReport:
     adequate: bool
 
     @property
+    def checks(self) -> list[dict[str, Any]]:
+        """Each check with its outcome: ``name``, ``passed`` (True, False, or None if not
+        made) and its one-sentence ``statement``; :attr:`adequate` is their conjunction."""
+        return _checks(self.constancy, self.constancy_note, self.extinction, self.predictive)
+
+    @property
     def verdict(self) -> str:
-        """The plain conclusion."""
+        """The plain conclusion, naming the checks that failed."""
         if self.adequate:
             return "the linear law (constant ζ and friction) is adequate for this recording"
-        return "the linear law (constant ζ and friction) is not adequate for this recording"
+        failed = [c["name"] for c in self.checks if c["passed"] is False]
+        return "the linear law (constant ζ and friction) is not adequate for this recording" + (
+            f" (failed: {', '.join(failed)})" if failed else ""
+        )
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready mapping."""
@@ -82,6 +92,7 @@ class AdequacyReport:
             "run": self.run_name,
             "adequate": self.adequate,
             "verdict": self.verdict,
+            "checks": [{k: c[k] for k in ("name", "passed", "statement")} for c in self.checks],
             "windows": self.windows.to_dict(),
             "constancy": None if self.constancy is None else self.constancy.to_dict(),
             "constancy_note": self.constancy_note,
@@ -109,14 +120,45 @@ class AdequacyReport:
                 f"{x.zeta:10.4g} ± {x.zeta_se:<9.2g}  {x.mu:11.4g} ± {x.mu_se:<9.2g}{flag}"
             )
         lines.append("")
-        lines.append(
-            "constancy: " + (self.constancy.statement if self.constancy else self.constancy_note)
-        )
-        lines.append("extinction: " + self.extinction.statement)
-        lines.append("peaks: " + self.predictive.statement)
+        for check in self.checks:
+            mark = {True: "pass", False: "FAIL", None: "not made"}[check["passed"]]
+            lines.append(f"{check['key']}: [{mark}] {check['statement']}")
         lines.append("")
         lines.append("verdict: " + self.verdict)
         return "\n".join(lines)
+
+
+#: Lowest fraction of recorded peaks inside their 95 % predictive intervals that passes.
+MIN_PEAK_COVERAGE = 0.8
+
+
+def _checks(
+    constancy: ConstancyTest | None,
+    constancy_note: str,
+    extinction: ExtinctionCheck,
+    predictive: PredictiveCheck,
+) -> list[dict[str, Any]]:
+    """The three checks with their outcomes; the one place the verdict is decided."""
+    return [
+        {
+            "key": "constancy",
+            "name": "constant ζ and friction along the decay",
+            "passed": None if constancy is None else bool(constancy.constant),
+            "statement": constancy.statement if constancy is not None else constancy_note,
+        },
+        {
+            "key": "extinction",
+            "name": "end of motion",
+            "passed": extinction.consistent("exact"),
+            "statement": extinction.statement,
+        },
+        {
+            "key": "peaks",
+            "name": "peak-by-peak predictive check",
+            "passed": bool(predictive.coverage >= MIN_PEAK_COVERAGE),
+            "statement": predictive.statement,
+        },
+    ]
 
 
 def check_adequacy(
@@ -193,7 +235,9 @@ def check_adequacy(
         draws = draws_from_least_squares(whole_decay_fit(decay, seed=seed), n_draws, seed=seed)
     extinction = extinction_check(decay, draws)
     predictive = predictive_check(decay, draws, seed=seed)
-    adequate = (constancy is None or constancy.constant) and predictive.coverage >= 0.8
+    adequate = all(
+        c["passed"] is not False for c in _checks(constancy, note, extinction, predictive)
+    )
     name = getattr(run, "source", None) if not isinstance(run, EnergyDecay) else None
     if name is None and isinstance(run, str):
         name = run

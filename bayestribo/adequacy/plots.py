@@ -97,27 +97,63 @@ def plot_windows(
 
 
 def plot_extinction(check: ExtinctionCheck, ax: Any = None) -> Any:
-    """Histograms of the predicted end of motion (exact and Eq. 38) and the measured end.
+    """Predicted end of motion (exact model and Eq. 38) against the measured one.
+
+    Each model's predictions over the draws are shown as their median and central
+    95 % interval, on the scale of the difference from the measured end (or from the
+    record's end when the motion outlasts the record) in milliseconds, so that
+    intervals far narrower than the time since the release stay visible; the measured
+    end's resolution (two sample periods) is the grey band around zero. A model whose
+    draws never stop is said so on its row.
+
+    Parameters
+    ----------
+    check : ExtinctionCheck
+    ax : matplotlib Axes, optional
+        Drawn on (a new figure's axes if None).
 
     Returns
     -------
     matplotlib Axes
     """
+    from matplotlib.ticker import MaxNLocator
+
     if ax is None:
         import matplotlib.pyplot as plt
 
-        _, ax = plt.subplots(figsize=(6.4, 3.2))
-    for values, label in ((check.exact, "exact model"), (check.averaged, "averaged, Eq. 38")):
-        finite = values[np.isfinite(values)]
-        if finite.size:
-            ax.hist(finite, bins=40, density=True, alpha=0.5, label=label)
-    if check.measured is not None:
-        ax.axvline(check.measured, color="k", label="measured end")
-    else:
-        ax.axvline(check.record_end, color="k", ls=":", label="record ends (still moving)")
-    ax.set_xlabel("end of motion after the analysis start [s]")
-    ax.set_ylabel("density [1/s]")
-    ax.legend(fontsize="small")
+        _, ax = plt.subplots(figsize=(6.4, 2.4))
+    ref = check.measured if check.measured is not None else check.record_end
+    ms = 1e3
+    rows = (("exact model", check.exact, "C0"), ("averaged, Eq. 38", check.averaged, "C1"))
+    spans = [0.0, check.resolution * ms, -check.resolution * ms]
+    for y, (label, values, color) in zip((1, 0), rows, strict=True):
+        finite = (values[np.isfinite(values)] - ref) * ms
+        if finite.size == 0:
+            ax.text(0.0, y, f"{label}: never stops", ha="center", va="center", fontsize=9)
+            continue
+        lo, med, hi = np.quantile(finite, [0.025, 0.5, 0.975])
+        ax.plot([lo, hi], [y, y], color=color, lw=3, solid_capstyle="butt")
+        ax.plot([med], [y], "o", color=color, ms=6, label=f"{label}: median, 95 %")
+        spans += [lo, hi]
+    if check.resolution > 0:
+        ax.axvspan(
+            -check.resolution * ms,
+            check.resolution * ms,
+            color="0.85",
+            zorder=0,
+            label="measured end ± resolution" if check.measured is not None else None,
+        )
+    ax.axvline(0.0, color="k", lw=1)
+    lo, hi = min(spans), max(spans)
+    pad = 0.15 * (hi - lo) if hi > lo else 1.0
+    ax.set_xlim(lo - pad, hi + pad)
+    ax.set_ylim(-0.7, 1.7)
+    ax.set_yticks([1, 0], [r[0] for r in rows])
+    ax.xaxis.set_major_locator(MaxNLocator(6))
+    what = "measured end" if check.measured is not None else "end of the record (still moving)"
+    ax.set_xlabel(f"predicted end of motion − {what} [ms]")
+    ax.grid(alpha=0.3, axis="x")
+    ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
     return ax
 
 

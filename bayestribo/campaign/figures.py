@@ -3,12 +3,18 @@
 * :func:`plot_against_load`: group means of ζ and μ_k against load with their
   credible intervals, one series per colour, beside the paper's values (section 3.1:
   ζ = 0.0236, σ 0.0012; μ_k = 0.0294, σ 0.0036) as a band of ± one σ;
-* :func:`plot_forest`: each run's ζ and μ_k with its credible interval;
+* :func:`plot_forest`: each run's ζ and μ_k with its credible interval, and a panel
+  of the intervals' relative widths on a log scale (a run's interval is often 10⁻⁴ of
+  the spread between runs: invisible beside its dot, readable in that panel);
 * :func:`plot_derived`: ζ_k and d_k per group against load.
+
+Each function draws on the figure it is given (a new one if None) and returns it;
+:func:`save_figures` is the one that writes files.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -22,6 +28,22 @@ __all__ = ["PAPER_VALUES", "plot_against_load", "plot_derived", "plot_forest", "
 #: Paper values of the glycerol series (mean, repeat sd), section 3.1.
 PAPER_VALUES = {"zeta": (0.0236, 0.0012), "mu_k": (0.0294, 0.0036)}
 _LABELS = {"zeta": "ζ", "mu_k": "μ_k"}
+
+
+def _decades(ax: Any) -> None:
+    """A log x axis spanning whole decades, labelled at the decades only.
+
+    Labels at minor ticks (3×10⁻⁵, 4×10⁻⁵, ...) run together; whole decades give at
+    least two labelled ticks.
+    """
+    from matplotlib.ticker import LogLocator, NullFormatter
+
+    ax.set_xscale("log")
+    lo, hi = ax.dataLim.intervalx
+    if np.isfinite(lo) and np.isfinite(hi) and lo > 0:
+        ax.set_xlim(10.0 ** np.floor(np.log10(lo)), 10.0 ** np.ceil(np.log10(hi) + 1e-12))
+    ax.xaxis.set_major_locator(LogLocator(base=10.0, numticks=6))
+    ax.xaxis.set_minor_formatter(NullFormatter())
 
 
 def _pyplot() -> Any:
@@ -40,10 +62,38 @@ def _series_label(analysis: CampaignAnalysis, value: Any) -> str:
     return ", ".join(pairs) or "all"
 
 
-def plot_against_load(analysis: CampaignAnalysis) -> Any:
-    """ζ and μ_k group means against load, with intervals and the paper's values."""
-    plt = _pyplot()
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
+def _ticks(ax: Any, axis: str = "x") -> None:
+    """At most four plain tick labels: values of 0.0236 and 0.0237 never run together."""
+    from matplotlib.ticker import MaxNLocator, ScalarFormatter
+
+    target = ax.xaxis if axis == "x" else ax.yaxis
+    target.set_major_locator(MaxNLocator(4))
+    formatter = ScalarFormatter(useOffset=False)
+    formatter.set_powerlimits((-3, 4))
+    target.set_major_formatter(formatter)
+
+
+def _new_figure(fig: Any, size: tuple[float, float]) -> Any:
+    if fig is None:
+        fig = _pyplot().figure(figsize=size, layout="constrained")
+    return fig
+
+
+def plot_against_load(analysis: CampaignAnalysis, fig: Any = None) -> Any:
+    """ζ and μ_k group means against load, with intervals and the paper's values.
+
+    Parameters
+    ----------
+    analysis : CampaignAnalysis
+    fig : matplotlib Figure, optional
+        Empty figure to draw on (two axes are added); a new one if None.
+
+    Returns
+    -------
+    matplotlib Figure
+    """
+    fig = _new_figure(fig, (10, 4))
+    axes = fig.subplots(1, 2)
     pop = analysis.contact
     if pop is not None and analysis.covariate in analysis.by:
         i_load = analysis.by.index(analysis.covariate)
@@ -68,35 +118,98 @@ def plot_against_load(analysis: CampaignAnalysis) -> Any:
         ax.axhline(mean, color="0.5", lw=1, zorder=0)
         ax.set_xlabel("load N [N]")
         ax.set_ylabel(f"population mean of {_LABELS[name]} [-]")
+        ax.grid(alpha=0.3)
+        _ticks(ax, "y")
     axes[0].legend(fontsize="small")
     fig.suptitle(f"Group means with {100 * analysis.prob:.0f} % credible intervals")
     return fig
 
 
-def plot_forest(analysis: CampaignAnalysis) -> Any:
-    """Each run's ζ and μ_k with its credible interval."""
-    plt = _pyplot()
+def plot_forest(
+    analysis: CampaignAnalysis,
+    fig: Any = None,
+    truth: Mapping[str, Mapping[str, float]] | None = None,
+) -> Any:
+    """Each run's ζ and μ_k with its credible interval, and the intervals' widths.
+
+    One row per run, coloured by load. The third panel gives each interval's width
+    relative to the run's median on a log scale, so intervals far narrower than the
+    spread between runs (invisible beside their dots) can still be read and compared.
+
+    Parameters
+    ----------
+    analysis : CampaignAnalysis
+    fig : matplotlib Figure, optional
+        Empty figure to draw on (three axes are added); a new one if None.
+    truth : mapping, optional
+        Run id -> {"zeta": ..., "mu_k": ...}: true values of simulated runs (crosses).
+
+    Returns
+    -------
+    matplotlib Figure
+    """
     runs = analysis.runs
-    fig, axes = plt.subplots(
-        1, 2, figsize=(10, max(3.0, 0.18 * len(runs) + 1)), sharey=True, constrained_layout=True
-    )
+    fig = _new_figure(fig, (11, max(3.0, 0.22 * len(runs) + 1.4)))
+    axes = fig.subplots(1, 3, sharey=True, gridspec_kw={"width_ratios": [1.2, 1.2, 1]})
     y = np.arange(len(runs))[::-1]
-    for ax, name in zip(axes, ("zeta", "mu_k"), strict=True):
+    loads = sorted({r.get(analysis.covariate) for r in runs}, key=lambda v: (v is None, v))
+    colour = {v: f"C{i % 10}" for i, v in enumerate(loads)}
+    for k, (ax, name) in enumerate(zip(axes[:2], ("zeta", "mu_k"), strict=True)):
         for yi, run in zip(y, runs, strict=True):
-            if name in run:
-                lo, hi = run[name]["interval"]
-                ax.plot([lo, hi], [yi, yi], color="C0", lw=2)
-                ax.plot(run[name]["median"], yi, "o", color="C0", ms=3)
+            if name not in run:
+                continue
+            c = colour[run.get(analysis.covariate)]
+            lo, hi = run[name]["interval"]
+            med = run[name]["median"]
+            ax.plot([lo, hi], [yi, yi], color=c, lw=2)
+            ax.plot(med, yi, "o", color=c, ms=3)
+            if hi > lo and med:
+                axes[2].plot(
+                    (hi - lo) / abs(med),
+                    yi,
+                    "o^"[k],
+                    color=c,
+                    ms=4,
+                    mfc="none" if k else c,
+                )
+            true = (truth or {}).get(str(run.get("run_id")), {}).get(name)
+            if true is not None:
+                ax.plot(true, yi, "kx", ms=5)
         ax.set_xlabel(f"{_LABELS[name]} [-]")
+        ax.grid(alpha=0.3)
+        _ticks(ax)
+    _decades(axes[2])
+    axes[2].set_xlabel("interval width / median [-]\n(o: ζ, △: μ_k)")
+    axes[2].grid(alpha=0.3)
     axes[0].set_yticks(y, [str(r["run_id"]) for r in runs], fontsize="x-small")
+    handles = [
+        axes[0].plot([], [], "o-", color=colour[v], label=f"{analysis.covariate} = {v}")[0]
+        for v in loads
+    ]
+    if truth:
+        handles.append(axes[0].plot([], [], "kx", label="true value")[0])
+    fig.legend(
+        handles=handles, loc="outside lower center", ncols=min(6, len(handles)), fontsize="small"
+    )
     fig.suptitle(f"Runs: medians and {100 * analysis.prob:.0f} % credible intervals")
     return fig
 
 
-def plot_derived(analysis: CampaignAnalysis) -> Any:
-    """ζ_k = ζ − ζ₀ and d_k per contact group against load."""
-    plt = _pyplot()
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
+def plot_derived(analysis: CampaignAnalysis, fig: Any = None) -> Any:
+    """ζ_k = ζ − ζ₀ and d_k per contact group against load.
+
+    Parameters
+    ----------
+    analysis : CampaignAnalysis
+    fig : matplotlib Figure, optional
+        Empty figure to draw on (two axes are added); a new one if None.
+
+    Returns
+    -------
+    matplotlib Figure
+    """
+    fig = _new_figure(fig, (10, 4))
+    axes = fig.subplots(1, 2)
     rows = [r for r in analysis.derived if "load_N" in r]
     for ax, key, label in (
         (axes[0], "zeta_k", "ζ_k = ζ − ζ₀ [-]"),
@@ -110,6 +223,9 @@ def plot_derived(analysis: CampaignAnalysis) -> Any:
             ax.errorbar(x, med, yerr=[med - lo, hi - med], fmt="o", capsize=3)
         ax.set_xlabel("load N [N]")
         ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+        _ticks(ax, "y")
+    fig.suptitle(f"Contact damping per group: median and {100 * analysis.prob:.0f} % interval")
     return fig
 
 

@@ -1,5 +1,6 @@
-"""Reports: the notebooks under ``notebooks/`` run with parameters and rendered as HTML."""
+"""Reports: the packaged notebooks run with parameters and rendered as offline HTML."""
 
-from bayestribo.reports.notebooks import NOTEBOOKS, ReportError, run_report
+from bayestribo.reports._errors import ReportError
+from bayestribo.reports.notebooks import NOTEBOOKS, notebooks_dir, run_report
 
-__all__ = ["NOTEBOOKS", "ReportError", "run_report"]
+__all__ = ["NOTEBOOKS", "ReportError", "notebooks_dir", "run_report"]

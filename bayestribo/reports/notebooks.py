@@ -1,34 +1,44 @@
 """Reports from notebooks: run a notebook with parameters, render it as one HTML file.
 
-The notebooks in ``notebooks/`` are the package's reports and its users' templates.
-Each has one cell tagged ``parameters`` holding plain assignments (data path, chain
-length, fit settings). :func:`inject_parameters` replaces that cell's source with new
-assignments (the role papermill plays, without papermill), :func:`execute_notebook`
-runs the notebook with :mod:`nbclient`, and :func:`to_html` renders it with
-nbconvert's ``HTMLExporter``, figures embedded as base64 PNG so the HTML file is
-self-contained and can be sent by mail.
+The report notebooks ship inside the package (``bayestribo/reports/ipynb/``, read with
+:mod:`importlib.resources`), so ``pip install .`` can make reports; the ``notebooks/``
+folder of a source checkout holds identical copies to open in Jupyter (a test keeps
+them identical). Each has one cell tagged ``parameters`` holding annotated assignments
+(``max_steps: int = 20000``, see :mod:`bayestribo.reports.parameters`).
+:func:`inject_parameters` checks new values against those types and replaces that
+cell's source (the role papermill plays, without papermill), :func:`execute_notebook`
+runs the notebook with :mod:`nbclient`, and :func:`to_html`
+(:mod:`bayestribo.reports.html`) renders it as one self-contained page: figures
+embedded, equations as SVG, no code unless asked for, nothing loaded from a network.
 
 :func:`run_report` chains the three; ``bayestribo report`` and ``bayestribo demo``
 call it.
 
 Where the files are
 -------------------
-The notebooks and the bundled campaign ``data/`` live next to the package in a
-source checkout (an editable install). :func:`notebooks_dir` and
-:func:`bundled_data_dir` find them there, or in the folders named by the environment
-variables ``BAYESTRIBO_NOTEBOOKS`` and ``BAYESTRIBO_DATA``.
+:func:`notebooks_dir` is the packaged folder, or the folder named by
+``$BAYESTRIBO_NOTEBOOKS``. The bundled campaign ``data/`` lives next to the package in
+a source checkout; :func:`bundled_data_dir` finds it there or in ``$BAYESTRIBO_DATA``.
 """
 
 from __future__ import annotations
 
 import ast
 import os
+import tempfile
 from collections.abc import Mapping
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
 from bayestribo._optional import require
-from bayestribo.errors import BayestriboError
+from bayestribo.reports import html as _html
+from bayestribo.reports._errors import ReportError
+from bayestribo.reports.parameters import (
+    ParameterSpec,
+    check_values,
+    parameter_specs,
+)
 
 __all__ = [
     "NOTEBOOKS",
@@ -38,6 +48,7 @@ __all__ = [
     "execute_notebook",
     "has_outputs",
     "inject_parameters",
+    "notebook_parameter_specs",
     "notebook_parameters",
     "notebook_path",
     "notebooks_dir",
@@ -60,9 +71,9 @@ NOTEBOOKS: dict[str, str] = {
 
 _REPO_ROOT = Path(__file__).resolve().parents[2]
 
-
-class ReportError(BayestriboError):
-    """A report notebook is missing, malformed, or failed while running."""
+#: What the kernel prints on its stderr at every start and that is not the reader's
+#: concern (the kernel and this process talk over the loopback interface).
+_KERNEL_NOISE = ("Kernel is running over TCP",)
 
 
 def _require(module: str) -> Any:
@@ -73,8 +84,8 @@ def _require(module: str) -> Any:
 def notebooks_dir() -> Path:
     """The folder of the report notebooks.
 
-    ``$BAYESTRIBO_NOTEBOOKS`` if set, else ``notebooks/`` next to the package (a
-    source checkout).
+    ``$BAYESTRIBO_NOTEBOOKS`` if set, else the notebooks shipped in the package
+    (``bayestribo/reports/ipynb``).
 
     Raises
     ------
@@ -82,11 +93,11 @@ def notebooks_dir() -> Path:
         If the folder does not exist.
     """
     env = os.environ.get("BAYESTRIBO_NOTEBOOKS")
-    folder = Path(env) if env else _REPO_ROOT / "notebooks"
+    folder = Path(env) if env else Path(str(resources.files("bayestribo.reports") / "ipynb"))
     if not folder.is_dir():
         raise ReportError(
-            f"notebooks folder {folder} not found: reports need the notebooks of a source "
-            "checkout (pip install -e .) or BAYESTRIBO_NOTEBOOKS naming their folder"
+            f"notebooks folder {folder} not found: set BAYESTRIBO_NOTEBOOKS to a folder of "
+            "report notebooks, or unset it to use the ones shipped with bayestribo"
         )
     return folder
 
@@ -94,7 +105,7 @@ def notebooks_dir() -> Path:
 def bundled_data_dir() -> Path | None:
     """The bundled campaign folder (with ``manifest.csv``), or None if absent.
 
-    ``$BAYESTRIBO_DATA`` if set, else ``data/`` next to the package.
+    ``$BAYESTRIBO_DATA`` if set, else ``data/`` next to the package (a source checkout).
     """
     env = os.environ.get("BAYESTRIBO_DATA")
     folder = Path(env) if env else _REPO_ROOT / "data"
@@ -140,6 +151,19 @@ def _parameters_cell(nb: Any) -> Any:
     return cells[0]
 
 
+def notebook_parameter_specs(nb: Any) -> dict[str, ParameterSpec]:
+    """Name, type, default and meaning of every parameter of a notebook.
+
+    Raises
+    ------
+    ReportError
+        If the parameters cell is missing, repeated, or holds anything but
+        (annotated) assignments of literals
+        (:func:`bayestribo.reports.parameters.parameter_specs`).
+    """
+    return parameter_specs(_parameters_cell(nb).source)
+
+
 def notebook_parameters(nb: Any) -> dict[str, Any]:
     """The default parameters of a notebook: the literal assignments of its parameters cell.
 
@@ -148,45 +172,27 @@ def notebook_parameters(nb: Any) -> dict[str, Any]:
     ReportError
         If the cell is missing, repeated, or assigns something that is not a literal.
     """
-    source = _parameters_cell(nb).source
-    out: dict[str, Any] = {}
-    for node in ast.parse(source).body:
-        if not (isinstance(node, ast.Assign) and len(node.targets) == 1):
-            raise ReportError("notebook: the parameters cell must hold plain assignments only")
-        target = node.targets[0]
-        if not isinstance(target, ast.Name):
-            raise ReportError("notebook: the parameters cell must assign plain names")
-        try:
-            out[target.id] = ast.literal_eval(node.value)
-        except ValueError:
-            raise ReportError(
-                f"notebook: parameter {target.id!r} is not a literal (number, string, list, "
-                "dict, None...)"
-            ) from None
-    return out
+    return {name: spec.default for name, spec in notebook_parameter_specs(nb).items()}
 
 
 def inject_parameters(nb: Any, parameters: Mapping[str, Any]) -> Any:
     """Replace the parameters cell's source with the defaults updated by ``parameters``.
 
-    The notebook is modified in place and returned. Every value must be a Python
-    literal (its ``repr`` is written to the cell), and every name must be one of the
-    notebook's parameters: a misspelt name would otherwise be silently ignored.
+    The notebook is modified in place and returned. Every name must be one of the
+    notebook's parameters (a misspelt name would otherwise be silently ignored) and
+    every value of the parameter's type; both are checked before anything runs.
 
     Raises
     ------
     ReportError
-        For an unknown parameter name or a value whose ``repr`` is not a literal.
+        For an unknown parameter name, a value of the wrong type (the message names
+        the parameter and the type expected) or a value whose ``repr`` is not a literal.
     """
-    defaults = notebook_parameters(nb)
-    unknown = sorted(set(parameters) - set(defaults))
-    if unknown:
-        raise ReportError(
-            f"parameters {unknown} are not parameters of this notebook; it has {sorted(defaults)}"
-        )
-    values = {**defaults, **parameters}
+    specs = notebook_parameter_specs(nb)
+    check_values(specs, parameters)
     lines = ["# Parameters (injected)"]
-    for key, value in values.items():
+    for key, spec in specs.items():
+        value = parameters.get(key, spec.default)
         text = repr(value)
         try:
             ast.literal_eval(text)
@@ -194,7 +200,8 @@ def inject_parameters(nb: Any, parameters: Mapping[str, Any]) -> Any:
             raise ReportError(
                 f"parameter {key!r}: {value!r} cannot be written as a Python literal"
             ) from None
-        lines.append(f"{key} = {text}")
+        annotation = "" if spec.annotation is None else f": {spec.type}"
+        lines.append(f"{key}{annotation} = {text}")
     _parameters_cell(nb).source = "\n".join(lines) + "\n"
     return nb
 
@@ -207,6 +214,16 @@ def has_outputs(nb: Any) -> bool:
     )
 
 
+def _kernel_messages(path: Path) -> list[str]:
+    """What the kernel wrote on its stderr, without its start-up noise."""
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        return []
+    lines = [line for line in text.splitlines() if line.strip()]
+    return [line for line in lines if not any(n in line for n in _KERNEL_NOISE)]
+
+
 def execute_notebook(
     nb: Any,
     *,
@@ -216,12 +233,15 @@ def execute_notebook(
 ) -> Any:
     """Execute every cell of ``nb`` (in place) with :class:`nbclient.NotebookClient`.
 
+    The kernel's own stderr (its start-up messages) is kept off the terminal; what it
+    says there besides its transport notice is added to the error if a cell fails.
+
     Parameters
     ----------
     nb : nbformat.NotebookNode
     cwd : path, optional
         Working directory of the kernel (relative paths in the notebook start there);
-        default the notebooks folder.
+        default the current directory.
     timeout : float or None
         Longest time a single cell may run [s].
     kernel_name : str
@@ -241,51 +261,57 @@ def execute_notebook(
     NotebookClient = _require("nbclient").NotebookClient
     CellExecutionError = _require("nbclient.exceptions").CellExecutionError
 
-    folder = Path(cwd) if cwd is not None else notebooks_dir()
+    folder = Path(cwd) if cwd is not None else Path.cwd()
     client = NotebookClient(
         nb,
         timeout=timeout,
         kernel_name=kernel_name,
         resources={"metadata": {"path": str(folder)}},
     )
-    try:
-        client.execute()
-    except CellExecutionError as exc:
-        failed = next(
-            (
-                i
-                for i, c in enumerate(nb.cells)
-                if c.cell_type == "code"
-                and any(o.get("output_type") == "error" for o in c.get("outputs", []))
-            ),
-            None,
-        )
-        where = f"cell {failed}" if failed is not None else "a cell"
-        error = ReportError(f"the notebook failed in {where}: {exc.ename}: {exc.evalue}")
-        error.notebook = nb  # type: ignore[attr-defined]
-        raise error from None
+    with tempfile.TemporaryDirectory(prefix="bayestribo-kernel-") as tmp:
+        log = Path(tmp) / "kernel-stderr.txt"
+        try:
+            with open(log, "w", encoding="utf-8") as stderr:
+                client.execute(stderr=stderr)
+        except CellExecutionError as exc:
+            failed = next(
+                (
+                    i
+                    for i, c in enumerate(nb.cells)
+                    if c.cell_type == "code"
+                    and any(o.get("output_type") == "error" for o in c.get("outputs", []))
+                ),
+                None,
+            )
+            where = f"cell {failed}" if failed is not None else "a cell"
+            error = ReportError(f"the notebook failed in {where}: {exc.ename}: {exc.evalue}")
+            error.notebook = nb  # type: ignore[attr-defined]
+            raise error from None
+        except Exception as exc:  # the kernel died or could not start
+            said = "; ".join(_kernel_messages(log)[-5:])
+            raise ReportError(
+                f"the notebook's kernel failed: {type(exc).__name__}: {exc}"
+                + (f" (kernel said: {said})" if said else "")
+            ) from None
     return nb
 
 
-def to_html(nb: Any, *, hide_code: bool = False) -> str:
+def to_html(nb: Any, *, show_code: bool = False, hide_code: bool | None = None) -> str:
     """Render an executed notebook as one self-contained HTML page.
 
-    Figures (``image/png`` outputs) are embedded as base64 data, so the file needs
-    nothing beside it.
+    See :func:`bayestribo.reports.html.to_html`: figures embedded, equations as SVG,
+    warnings as notes, a table of contents, nothing fetched from a network.
 
     Parameters
     ----------
     nb : nbformat.NotebookNode
-    hide_code : bool
-        Leave out the input cells (a report for readers who do not want the code).
+    show_code : bool
+        Include the code cells (default: a report without code).
+    hide_code : bool, optional
+        Former option (the code is now left out by default): ``True`` leaves the code
+        out whatever ``show_code`` says; ``False`` changes nothing.
     """
-    HTMLExporter = _require("nbconvert").HTMLExporter
-
-    exporter = HTMLExporter(
-        exclude_input=hide_code, exclude_input_prompt=hide_code, exclude_output_prompt=hide_code
-    )
-    body, _ = exporter.from_notebook_node(nb)
-    return body
+    return _html.to_html(nb, show_code=show_code and not hide_code)
 
 
 def run_report(
@@ -294,7 +320,8 @@ def run_report(
     *,
     html: str | Path | None = None,
     executed: str | Path | None = None,
-    hide_code: bool = False,
+    show_code: bool = False,
+    hide_code: bool | None = None,
     cwd: str | Path | None = None,
     timeout: float | None = 1800.0,
 ) -> Any:
@@ -305,16 +332,19 @@ def run_report(
     notebook : str or Path
         Short name (:data:`NOTEBOOKS`) or ``.ipynb`` path.
     parameters : mapping, optional
-        Values replacing the notebook's defaults (:func:`inject_parameters`). Paths
-        in them are best absolute: the kernel runs in ``cwd``.
+        Values replacing the notebook's defaults (:func:`inject_parameters`), checked
+        against the parameters' types before anything runs. Paths in them are best
+        absolute: the kernel runs in ``cwd``.
     html : path, optional
         Where to write the HTML report (its folder is created).
     executed : path, optional
-        Where to write the executed notebook (``.ipynb``, with outputs).
-    hide_code : bool
-        Leave the code cells out of the HTML.
+        Where to write the executed notebook (``.ipynb``, with outputs and code).
+    show_code : bool
+        Include the code cells in the HTML (default: a report without code).
+    hide_code : bool, optional
+        Former option, see :func:`to_html`.
     cwd : path, optional
-        Working directory of the kernel (default the notebooks folder).
+        Working directory of the kernel (default the current directory).
     timeout : float or None
         Longest time a single cell may run [s].
 
@@ -326,7 +356,8 @@ def run_report(
     Raises
     ------
     ReportError
-        For a missing notebook, a bad parameter, or a cell that fails.
+        For a missing notebook, a bad parameter (before any cell runs), or a cell
+        that fails.
     """
     nbformat = _require("nbformat")
     nb = read_notebook(notebook)
@@ -338,5 +369,5 @@ def run_report(
     if html is not None:
         out = Path(html)
         out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(to_html(nb, hide_code=hide_code), encoding="utf-8")
+        out.write_text(to_html(nb, show_code=show_code, hide_code=hide_code), encoding="utf-8")
     return nb

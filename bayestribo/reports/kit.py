@@ -1,0 +1,178 @@
+"""What every report notebook does the same way: figures, notes, the report's header.
+
+Called from the notebooks' first code cell::
+
+    from bayestribo.reports import kit
+
+    save = kit.setup(figure_dir, figure_format)
+
+:func:`setup` sets the figures' look, turns warnings into short notes in the text
+(not red stderr boxes) and returns the function that writes a figure to
+``figure_dir`` in ``figure_format`` (PNG, or PDF/SVG as vector graphics for a paper).
+:func:`note` writes a remark; :func:`about` the table of what a report is about (the
+run's metadata, the file's SHA-256, the bayestribo version, when it was made).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import html
+import platform
+import warnings
+from collections.abc import Callable, Mapping
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+from bayestribo.reports._errors import ReportError
+from bayestribo.reports.html import NOTE_CLASS
+
+__all__ = [
+    "FIGURE_FORMATS",
+    "about",
+    "file_sha256",
+    "note",
+    "setup",
+    "show_warnings_as_notes",
+    "verdict",
+]
+
+#: Formats a report's figures can be written in (``--figure-format``).
+FIGURE_FORMATS = ("png", "pdf", "svg")
+
+#: The figures' look in every report.
+RC = {
+    "figure.dpi": 100,
+    "savefig.dpi": 150,
+    "font.size": 10,
+    "axes.grid": True,
+    "grid.alpha": 0.3,
+    "pdf.fonttype": 42,  # TrueType in PDF: text stays text for a journal
+    "svg.fonttype": "path",
+}
+
+
+def _display(obj: Any) -> None:
+    from IPython.display import display
+
+    display(obj)
+
+
+def note(text: str) -> None:
+    """Show ``text`` as a short note in the report (a remark, a warning)."""
+    from IPython.display import HTML
+
+    _display(HTML(f'<div class="{NOTE_CLASS}"><b>Note.</b> {html.escape(str(text))}</div>'))
+
+
+def verdict(text: str) -> None:
+    """Show a conclusion as a sentence of its own, in bold."""
+    from IPython.display import HTML
+
+    _display(HTML(f'<p class="bt-verdict">{html.escape(str(text))}</p>'))
+
+
+def _warning_as_note(message, category, filename, lineno, file=None, line=None) -> None:
+    text = str(message).strip().splitlines()[0] if str(message).strip() else category.__name__
+    if not category.__module__.startswith("bayestribo"):
+        text = f"{category.__name__}: {text}"
+    note(text)
+
+
+def show_warnings_as_notes() -> None:
+    """Every warning from now on is shown once as a note in the output, not on stderr."""
+    warnings.showwarning = _warning_as_note
+    warnings.simplefilter("default")  # each distinct warning once per location
+    warnings.filterwarnings("ignore", category=FutureWarning)  # libraries' announcements
+    warnings.filterwarnings("ignore", category=DeprecationWarning)
+
+
+def setup(figure_dir: str | None, figure_format: str = "png") -> Callable[[Any, str], Path | None]:
+    """Figures' look, warnings as notes; the function that writes a figure.
+
+    Parameters
+    ----------
+    figure_dir : str or None
+        Folder the figures are written to (created); None writes none.
+    figure_format : {"png", "pdf", "svg"}
+        File format of the written figures (the report itself embeds PNG).
+
+    Returns
+    -------
+    callable
+        ``save(fig, name)``: writes ``<figure_dir>/<name>.<figure_format>`` (nothing
+        without ``figure_dir``); it returns None, so a cell ending with it shows only
+        the figure.
+
+    Raises
+    ------
+    ReportError
+        If ``figure_format`` is not one of :data:`FIGURE_FORMATS`.
+    """
+    import matplotlib.pyplot as plt
+
+    if figure_format not in FIGURE_FORMATS:
+        raise ReportError(f"figure_format: expected one of {FIGURE_FORMATS}, got {figure_format!r}")
+    plt.rcParams.update(RC)
+    show_warnings_as_notes()
+    try:
+        import pandas as pd
+
+        pd.set_option("display.float_format", lambda v: f"{v:.5g}")
+    except ImportError:  # pragma: no cover - pandas comes with the report extra
+        pass
+    folder = Path(figure_dir) if figure_dir else None
+    if folder is not None:
+        folder.mkdir(parents=True, exist_ok=True)
+
+    def save(fig: Any, name: str) -> None:
+        """Write ``fig`` as ``<name>.<format>`` in the figure folder (if any)."""
+        if folder is not None:
+            fig.savefig(folder / f"{name}.{figure_format}", bbox_inches="tight")
+
+    return save
+
+
+def file_sha256(path: str | Path) -> str:
+    """SHA-256 of a file, hexadecimal."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def _cell(value: Any) -> str:
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    if isinstance(value, Mapping):
+        return ", ".join(f"{k}: {_cell(v)}" for k, v in value.items())
+    return str(value)
+
+
+def about(items: Mapping[str, Any], *, title: str = "About this report") -> None:
+    """Show what the report is about as a two-column table, with the bayestribo version.
+
+    Parameters
+    ----------
+    items : mapping
+        Label -> value (the run's file and metadata, the campaign's settings...);
+        None values are left out.
+    title : str
+        Caption of the table.
+    """
+    from IPython.display import HTML
+
+    from bayestribo import __version__
+
+    rows = {
+        **{k: v for k, v in items.items() if v is not None},
+        "bayestribo version": __version__,
+        "Python": platform.python_version(),
+        "report made": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
+    }
+    body = "".join(
+        f"<tr><th>{html.escape(str(k))}</th><td>{html.escape(_cell(v))}</td></tr>"
+        for k, v in rows.items()
+    )
+    _display(HTML(f'<table class="bt-about"><caption>{html.escape(title)}</caption>{body}</table>'))
