@@ -30,6 +30,11 @@ from typing import Any
 
 __version__ = "0.1.0"
 
+#: Seed of every random step when none is given: the sampler of a fit, the law
+#: comparison, the adequacy check, a campaign and a report. Results record the seed
+#: they used, so a number can be reproduced from the result alone.
+DEFAULT_SEED: int = 0
+
 # Public names re-exported lazily: module imports stay cheap for the command line,
 # and each capability keeps its own module.
 _LAZY: dict[str, str] = {
@@ -59,7 +64,7 @@ _LAZY: dict[str, str] = {
     "run_report": "bayestribo.reports.notebooks",
 }
 
-__all__ = ["__version__", *sorted(_LAZY)]
+__all__ = ["DEFAULT_SEED", "__version__", *sorted(_LAZY)]
 
 
 def __getattr__(name: str) -> Any:

@@ -58,3 +58,8 @@ class ConvergenceWarning(UserWarning):
 
 class MisfitWarning(UserWarning):
     """The model does not reproduce the data within their noise (intervals too narrow)."""
+
+
+class MetadataWarning(UserWarning):
+    """A metadata value was missing and the package took it from the recording (the
+    message says which value, and how to give it instead)."""

@@ -151,12 +151,22 @@ def test_scaling_without_frequency_raises_recording_error() -> None:
         Run(T, X, source="r.csv").scaling()
 
 
-def test_a_load_without_a_frequency_is_refused_not_dropped():
-    from bayestribo.errors import RunFormatError
+def test_a_load_without_a_frequency_uses_the_measured_frequency_and_says_so():
+    from bayestribo.errors import MetadataWarning, RunFormatError
+    from bayestribo.synthetic import simulate
 
-    run = Run(T, X, metadata={"load_N": 0.31, "mass_kg": 0.035})
+    recording = simulate(seed=5)
+    meta = {k: v for k, v in recording.metadata.items() if k != "natural_frequency_Hz"}
+    run = Run(recording.time, recording.displacement, recording.velocity, meta)
+    with pytest.warns(MetadataWarning, match=r"measured from the recording, f = 32\.59"):
+        rig = run.rig()
+    # The damped frequency of the simulation (ζ = 0.0236), to 1e-5.
+    assert rig.natural_frequency_Hz == pytest.approx(32.6 * (1 - 0.0236**2) ** 0.5, rel=1e-5)
+    assert rig.load_N == 0.31 and rig.mass_kg == 0.035
+    # No motion to measure: refused with the option to give, the load is not dropped.
+    still = Run(T, 0.0 * X, metadata={"load_N": 0.31, "mass_kg": 0.035})
     with pytest.raises(RunFormatError, match=r"natural_frequency_Hz is not.*--frequency"):
-        run.rig()
+        still.rig()
     assert Run(T, X, metadata={"load_N": 0.0}).rig() is None  # no contact: nothing lost
     arbitrary = Run(T, X, metadata={"load_N": 0.31, "length_unit": "arbitrary"})
     assert arbitrary.rig() is None

@@ -24,6 +24,8 @@ from contextlib import nullcontext
 from pathlib import Path
 from typing import Any
 
+from bayestribo import DEFAULT_SEED
+
 __all__ = ["register"]
 
 
@@ -51,7 +53,7 @@ def register(subparsers: Any) -> None:
     p.add_argument("--out", default="bayestribo-campaign", metavar="OUTDIR")
     p.add_argument("--catalog", help="results catalog (default OUTDIR/catalog.sqlite)")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
-    p.add_argument("--seed", type=int, default=0, help="campaign seed")
+    p.add_argument("--seed", type=int, default=DEFAULT_SEED, help="campaign seed")
     p.add_argument("--workers", type=int, help="processes (default: one per core)")
     p.add_argument("--dask-scheduler", metavar="ADDRESS", help="fit on this Dask scheduler instead")
     p.add_argument("--refit", action="store_true", help="fit runs already in the catalog")

@@ -16,6 +16,7 @@ import json
 import sys
 from typing import Any
 
+from bayestribo import DEFAULT_SEED
 from bayestribo.cli._common import add_run_arguments, read_run_from_args
 
 __all__ = ["register"]
@@ -41,7 +42,7 @@ def register(subparsers: Any) -> None:
     )
     p.add_argument("--alpha", type=float, default=0.05, help="false-alarm rate of the test")
     p.add_argument("--draws", type=int, default=400, help="parameter draws for the checks")
-    p.add_argument("--seed", type=int, default=0, help="seed of the draws")
+    p.add_argument("--seed", type=int, default=DEFAULT_SEED, help="seed of the draws")
     p.add_argument(
         "--bayes",
         action="store_true",

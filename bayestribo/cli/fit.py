@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from bayestribo import DEFAULT_SEED
 from bayestribo.cli._common import add_run_arguments, read_run_from_args
 
 __all__ = ["json_record", "register", "write_outputs"]
@@ -55,7 +56,12 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "--model", choices=("exact", "averaged"), default="exact", help="forward model of Π"
     )
-    p.add_argument("--seed", type=int, help="seed of the sampler (reproducible results)")
+    p.add_argument(
+        "--seed",
+        type=int,
+        default=DEFAULT_SEED,
+        help="seed of the sampler, recorded in the result",
+    )
     p.add_argument(
         "--out",
         type=Path,

@@ -12,7 +12,9 @@ import argparse
 import importlib
 import os
 import sys
-from collections.abc import Sequence
+import warnings
+from collections.abc import Callable, Sequence
+from typing import TextIO
 
 from bayestribo import __version__
 from bayestribo.errors import BayestriboError
@@ -48,6 +50,31 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _one_line_warning(command: str) -> Callable[..., None]:
+    """A ``warnings.showwarning`` that prints one line per warning, without the source
+    file and line: ``bayestribo fit: warning: …`` (a package warning) or
+    ``bayestribo fit: warning (RuntimeWarning): …`` (another library's)."""
+
+    def show(
+        message: Warning | str,
+        category: type[Warning],
+        filename: str,
+        lineno: int,
+        file: TextIO | None = None,
+        line: str | None = None,
+    ) -> None:
+        text = " ".join(str(message).split())
+        own = category.__module__.split(".")[0] == "bayestribo"
+        kind = "warning" if own else f"warning ({category.__name__})"
+        stream = sys.stderr if file is None else file
+        try:
+            print(f"bayestribo {command}: {kind}: {text}", file=stream)
+        except OSError:
+            pass  # as warnings.showwarning: a closed stream loses the warning only
+
+    return show
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return the process exit status.
 
@@ -58,7 +85,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return int(args.handler(args) or 0)
+        with warnings.catch_warnings():
+            warnings.showwarning = _one_line_warning(args.command)
+            return int(args.handler(args) or 0)
     except BayestriboError as exc:
         print(f"bayestribo {args.command}: error: {exc}", file=sys.stderr)
         return 2

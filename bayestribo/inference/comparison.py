@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from bayestribo import DEFAULT_SEED
 from bayestribo.errors import BayestriboError
 from bayestribo.inference.assemble import pointwise_log_likelihood
 from bayestribo.inference.pipeline import PreparedRun, Sampled, build_posterior, prepare, sample
@@ -157,7 +158,7 @@ def compare_dissipation_laws(
     run: Run | str | os.PathLike[str],
     *,
     laws: Sequence[str] = ("viscous", "coulomb", "both"),
-    seed: int | None = None,
+    seed: int | None = DEFAULT_SEED,
     model: str = "exact",
     n_walkers: int = 16,
     n_ensembles: int = 2,
@@ -174,8 +175,9 @@ def compare_dissipation_laws(
         The recording, as for :func:`bayestribo.inference.fit`.
     laws : sequence of str
         Laws to compare, among :data:`LAWS` (at least two).
-    seed : int, optional
-        Seed of all three fits (each law gets its own stream from it).
+    seed : int or None
+        Seed of all three fits (each law gets its own stream from it); default
+        :data:`bayestribo.DEFAULT_SEED`.
     model, n_walkers, n_ensembles, max_steps, grid_points, skip_oscillations, discrepancy
         As in :func:`bayestribo.inference.fit`.
 

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from bayestribo import DEFAULT_SEED
 from bayestribo.errors import BayestriboError
 from bayestribo.inference.likelihood import MODELS
 from bayestribo.inference.pipeline import build_posterior, prepare, sample, summarise
@@ -29,7 +30,7 @@ def fit(
     run: Run | str | os.PathLike[str],
     *,
     model: str = "exact",
-    seed: int | None = None,
+    seed: int | None = DEFAULT_SEED,
     n_walkers: int = 16,
     n_ensembles: int = 2,
     max_steps: int = 20_000,
@@ -52,8 +53,10 @@ def fit(
     model : {"exact", "averaged"}
         Forward model of Π (the exact one by default; the averaged one is biased by
         about 2ζ² of Π, far more than the noise of a good record).
-    seed : int, optional
-        Seed of everything random in the fit (walkers, moves, predictive draws).
+    seed : int or None
+        Seed of everything random in the fit (walkers, moves, predictive draws);
+        default :data:`bayestribo.DEFAULT_SEED`, so that a fit is reproducible and
+        records its seed. None draws fresh entropy (recorded as -1).
     n_walkers, n_ensembles, max_steps : int
         Sampler size: walkers per ensemble, independent ensembles, step ceiling.
     discrepancy : bool

@@ -17,6 +17,7 @@ be reported as a friction displacement in the signal's unit.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -25,7 +26,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from bayestribo.errors import RecordingError, RunFormatError
+from bayestribo.errors import MetadataWarning, RecordingError, RunFormatError
+from bayestribo.io.frequency import oscillation_frequency
 from bayestribo.model.scaling import Rig, Scaling
 
 __all__ = [
@@ -380,7 +382,10 @@ class Run:
         Returns
         -------
         Rig or None
-            ``Rig(f, mass_kg, load_N)`` from the metadata. With
+            ``Rig(f, mass_kg, load_N)`` from the metadata. When the load is given
+            but the frequency is not, f is measured from the recording
+            (:func:`bayestribo.io.frequency.oscillation_frequency`) with a
+            :class:`~bayestribo.errors.MetadataWarning`. With
             ``length_unit="arbitrary"`` the mass and load are left out, so that the
             rig's scaling uses one signal unit as length scale (N/k in metres would
             not match a signal in another unit).
@@ -390,17 +395,25 @@ class Run:
             f = self.metadata.get("natural_frequency_Hz")
         if f is None:
             load = self.metadata.get("load_N")
-            if load is not None and load > 0 and self.length_unit != "arbitrary":
-                # Without f the stiffness k = m(2πf)² is unknown, so μ_k = x_c k/N
-                # cannot be formed: refuse rather than drop the load unannounced.
+            if load is None or not load > 0 or self.length_unit == "arbitrary":
+                return None
+            # Without f the stiffness k = m(2πf)² is unknown, so μ_k = x_c k/N could
+            # not be formed: take f from the recording and say so, never drop the load.
+            f = oscillation_frequency(self.time, self.displacement, self.velocity)
+            if f is None:
                 raise RunFormatError(
-                    f"load_N = {load!r} is given but natural_frequency_Hz is not: friction "
-                    "as μ_k needs the stiffness k = m(2πf)²; give natural_frequency_Hz "
-                    "(--frequency), or length_unit='arbitrary' for friction as a "
-                    "displacement",
+                    f"load_N = {float(load):g} is given but natural_frequency_Hz is not, and "
+                    "no two full cycles were found to measure it: friction as μ_k needs the "
+                    "stiffness k = m(2πf)²; give natural_frequency_Hz (--frequency)",
                     self.source,
                 )
-            return None
+            warnings.warn(
+                f"natural_frequency_Hz is not given: the stiffness k = m(2πf)² uses the "
+                f"frequency measured from the recording, f = {f:.6g} Hz (give "
+                "natural_frequency_Hz, --frequency, to use a nominal value)",
+                MetadataWarning,
+                stacklevel=2,
+            )
         try:
             if self.length_unit == "arbitrary":
                 return Rig(natural_frequency_Hz=f)

@@ -1,0 +1,69 @@
+"""The frequency measured from zero crossings, against an independent ODE solution."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from bayestribo.io.frequency import crossing_frequency, oscillation_frequency
+
+F_HZ, ZETA, XC = 32.6, 0.0236, 6.2e-6  # natural frequency, damping, Coulomb offset [m]
+
+
+def _decay(rate_hz: float, rest_s: float = 0.3) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """x, v of m x'' + c x' + k x + F sign(x') = 0 by solve_ivp, half cycle by half
+    cycle (the friction sign is constant between velocity zeros), then at rest."""
+    w = 2 * np.pi * F_HZ
+    t_all, x_all, v_all = [], [], []
+    t0, y = 0.0, np.array([2e-3, 0.0])
+    direction = -1.0
+    while abs(y[0]) > XC:  # a turning point outside ±x_c: the pin moves on
+
+        def rhs(t, s, d=direction):
+            return [s[1], -2 * ZETA * w * s[1] - w * w * (s[0] + d * XC)]
+
+        def stop(t, s, d=direction):
+            return s[1] if t > 0 else d
+
+        stop.terminal, stop.direction = True, -direction
+        sol = solve_ivp(
+            rhs, (t0, t0 + 1.0), y, events=stop, rtol=1e-11, atol=1e-14, dense_output=True
+        )
+        t1 = sol.t_events[0][0]
+        grid = np.arange(np.ceil(t0 * rate_hz), np.floor(t1 * rate_hz) + 1) / rate_hz
+        grid = grid[(grid >= t0) & (grid < t1)]
+        states = sol.sol(grid)
+        t_all.append(grid), x_all.append(states[0]), v_all.append(states[1])
+        t0, y = t1, sol.y_events[0][0]
+        direction = -direction
+    rest = np.arange(np.ceil(t0 * rate_hz), np.floor((t0 + rest_s) * rate_hz)) / rate_hz
+    t_all.append(rest), x_all.append(np.full(rest.size, y[0])), v_all.append(0.0 * rest)
+    return np.concatenate(t_all), np.concatenate(x_all), np.concatenate(v_all)
+
+
+DAMPED_HZ = F_HZ * np.sqrt(1 - ZETA**2)
+
+
+@pytest.mark.parametrize("rate_hz", [2_000.0, 10_000.0, 50_000.0])
+def test_velocity_crossings_give_the_damped_frequency(rate_hz):
+    t, x, v = _decay(rate_hz)
+    rng = np.random.default_rng(1)
+    noisy_v = v + rng.normal(0.0, 1.5e-5, v.size)  # 1000 × the vibrometer resolution
+    # Linear interpolation between samples errs by O((ω dt)²) per crossing at worst.
+    assert oscillation_frequency(t, x, noisy_v) == pytest.approx(DAMPED_HZ, rel=2e-5)
+
+
+def test_displacement_alone_is_differentiated_not_crossed():
+    t, x, _ = _decay(10_000.0)
+    noisy = x + np.random.default_rng(2).normal(0.0, 1.5e-7, x.size)
+    assert oscillation_frequency(t, noisy, None) == pytest.approx(DAMPED_HZ, rel=2e-4)
+    # The displacement's own crossings drift with the Coulomb offset: the reason the
+    # velocity (or the derivative) is used.
+    assert abs(crossing_frequency(t, x) / DAMPED_HZ - 1) > 5e-4
+
+
+def test_no_oscillation_gives_none():
+    t = np.arange(1000) / 1e4
+    assert crossing_frequency(t, np.zeros_like(t)) is None
+    assert oscillation_frequency(t, np.exp(-t), None) is None
