@@ -23,7 +23,6 @@ from bayestribo.acquisition.protocol import (
     encode_data,
     encode_end,
     encode_frame,
-    encode_release,
 )
 from bayestribo.io import read_run
 from bayestribo.io.text import write_csv
@@ -99,7 +98,7 @@ def test_a_late_retransmission_fills_its_gap_in_order():
     arrived = frames[:3] + frames[4:] + [late]  # frame 3 comes again at the end
     run = assemble_bytes(stream(arrived, (11, 40)))
     assert run.complete and len(run.pieces) == 3
-    index, counts = reference(arrived)
+    _, counts = reference(arrived)
     assert np.array_equal(run.sample_index, np.arange(40))
     assert np.array_equal(run.counts, counts)
 
@@ -130,9 +129,7 @@ def test_any_arrival_order_gives_the_reference_samples(order, repeats, drops, sh
     base = frames_of(12, seed=len(order))
     shifted = dict(shifts)
     frames = [
-        (s, max(0, f + shifted.get(k, 0)), c)
-        for k, (s, f, c) in enumerate(base)
-        if k not in drops
+        (s, max(0, f + shifted.get(k, 0)), c) for k, (s, f, c) in enumerate(base) if k not in drops
     ]
     arrived = [frames[k] for k in order if k < len(frames)]
     arrived += [frames[k] for k in repeats if k < len(frames)]

@@ -45,6 +45,10 @@ __all__ = ["FaultPlan", "SentFrame", "SimulatedInstrument", "SimulationConfig"]
 
 #: Longest time the simulated device streams before FIRE before it ends the run [s].
 MAX_PRETRIGGER_S = 10.0
+#: Longest command line, without its line ending [characters].
+MAX_LINE = 32
+#: Configuration commands (refused during a run).
+_CONFIGURE = ("RATE", "SPF", "DUR")
 
 
 @dataclass(frozen=True)
@@ -427,16 +431,23 @@ class SimulatedInstrument:
                     raw, _, rest = line.partition(b"\n")
                     line = bytearray(rest)
                     command = raw.decode("ascii", errors="replace").strip()
+                    if not command:
+                        continue  # an empty line is ignored
                     self.commands.append(command)
                     if self.faults.silent:
                         continue
-                    if command == "ID?":
+                    name = command.split(" ")[0]
+                    if len(raw.rstrip(b"\r")) > MAX_LINE:
+                        self._error("line too long")
+                    elif command == "ID?":
                         self._send(encode_frame(FrameType.IDENT, 0, self.ident.encode()))
+                    elif streaming and (command in ("CFG?", "ARM") or name in _CONFIGURE):
+                        self._error("busy: a run is in progress")
                     elif command == "CFG?":
                         self._send(encode_frame(FrameType.HEADER, 0, cfg.header.to_payload()))
-                    elif command.split(" ")[0] in ("RATE", "SPF", "DUR") and not streaming:
+                    elif name in _CONFIGURE and " " in command:
                         cfg = self._configure(command, cfg)
-                    elif command == "ARM" and not streaming:
+                    elif command == "ARM":
                         payload = cfg.header.to_payload()
                         if self.faults.bad_header:
                             payload = payload[:20]
@@ -446,18 +457,24 @@ class SimulatedInstrument:
                         self._send(frame)
                         seq, number, index, release = 1, 0, 0, None
                         streaming, t0 = True, time.monotonic()
-                    elif command == "FIRE" and streaming and release is None:
-                        release = index
-                        self.release_index = index
-                        self._send(encode_frame(FrameType.RELEASE, seq, encode_release(index)))
-                        seq += 1
-                    elif command == "STOP" and streaming:
-                        self._send(encode_frame(FrameType.END, seq, encode_end(seq, index)))
-                        streaming = False
+                    elif command == "FIRE":
+                        if not streaming:
+                            self._error("no run: ARM first")
+                        elif release is not None:
+                            self._error("released already")
+                        else:
+                            release = index
+                            self.release_index = index
+                            self._send(encode_frame(FrameType.RELEASE, seq, encode_release(index)))
+                            seq += 1
+                    elif command == "STOP":
+                        if not streaming:
+                            self._error("no run")
+                        else:
+                            self._send(encode_frame(FrameType.END, seq, encode_end(seq, index)))
+                            streaming = False
                     else:
-                        self._send(
-                            encode_frame(FrameType.ERROR, 0, f"unknown command {command}".encode())
-                        )
+                        self._error("unknown command")
                 continue
             if not streaming:
                 continue
@@ -511,16 +528,22 @@ class SimulatedInstrument:
             if name == "RATE":
                 new = replace(cfg, sample_rate_Hz=number)
             elif name == "SPF":
+                if number != int(number):
+                    raise ValueError(f"samples_per_frame must be a whole number, got {value}")
                 new = replace(cfg, samples_per_frame=int(number))
             else:
                 new = replace(cfg, duration_s=number)
             self._decay = new.decay_counts()
-        except ValueError as exc:
+        except (ValueError, OverflowError) as exc:
             self._send(encode_frame(FrameType.ERROR, 0, f"{command}: {exc}".encode()))
             return cfg
         self.config = new
         self._send(encode_frame(FrameType.ACK, 0, command.encode()))
         return new
+
+    def _error(self, text: str) -> None:
+        """Send an ERROR frame (sequence number 0, outside the run's numbering)."""
+        self._send(encode_frame(FrameType.ERROR, 0, text.encode()))
 
     def _garbage(self) -> bytes:
         junk = bytearray(self._rng.integers(0, 256, self.faults.garbage_bytes, dtype=np.uint8))

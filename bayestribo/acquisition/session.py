@@ -287,6 +287,9 @@ def acquire_run(
     """
     out = Path(out_dir)
     started = utc_now()
+    if catalog is not None:
+        # Imported now, not at the END frame: the package behind it takes a second.
+        import bayestribo.campaign.catalog  # noqa: F401
     generated = run_id is None
     run_id = check_run_id(
         make_run_id(inputs) if generated else run_id,

@@ -74,6 +74,11 @@ def register(subparsers: Any) -> None:
         "--out",
         help="directory of the run files [default: runs, or the raw log's directory]",
     )
+    io.add_argument(
+        "--run-id",
+        help="run id and file stem [default: UTC time, lubricant, load and repeat]; "
+        "refused if a run of that id exists",
+    )
     io.add_argument("--catalog", help="results catalog (SQLite) [default: OUT/catalog.sqlite]")
     io.add_argument("--no-catalog", action="store_true", help="do not register the run")
     io.add_argument("--overwrite", action="store_true", help="with --recover: replace files")
@@ -243,6 +248,7 @@ def run(args: argparse.Namespace) -> int:
             sample_rate_Hz=args.rate,
             samples_per_frame=args.samples_per_frame,
             duration_s=args.duration,
+            run_id=args.run_id,
             progress=None if args.quiet else _progress,
             catalog=catalog,
         )
