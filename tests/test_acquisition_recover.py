@@ -111,6 +111,9 @@ def test_sigkill_mid_run_then_recover_gives_what_was_received(tmp_path):
     finally:
         sim.stop()
     assert not list(tmp_path.glob("*.csv")), "the killed logger cannot have written a run"
+    # The CSV it was writing while streaming is in its staging directory, never in place.
+    [staging] = [p for p in tmp_path.iterdir() if p.name.startswith(f".{raw.stem}.")]
+    assert [p.name for p in staging.iterdir()] == [f"{raw.stem}.csv"]
     received = raw.read_bytes()
     # Every byte the logger received is in its raw log, byte for byte and in order.
     assert len(received) > 4000
@@ -123,6 +126,7 @@ def test_sigkill_mid_run_then_recover_gives_what_was_received(tmp_path):
     status = cli_main(["acquire", "--recover", str(raw), "--out", str(tmp_path)])
     assert status == 1  # incomplete: no END frame
 
+    assert not staging.exists()  # the recovery removed it
     csv = raw.with_suffix(".csv")
     run = read_run(csv)  # nothing missing before the kill: a regular run
     header = config.header

@@ -225,3 +225,29 @@ def test_a_crashed_loggers_staging_directory_is_removed_by_the_recovery(tmp_path
     assert recovered.complete and not staging.exists()
     csv = result.files.csv.name
     assert recovered.files.digests[csv] == result.files.digests[csv]
+
+
+def test_a_csv_that_cannot_be_written_is_a_storage_error_and_recover_rebuilds_it(
+    tmp_path, monkeypatch
+):
+    # The disk takes the raw log but not the CSV (written while streaming, then again
+    # from the raw log at the end): the package's storage error names --recover, no
+    # run file and no staging directory are left, and the raw log holds the whole run.
+    import errno
+
+    from bayestribo.acquisition import csvstream
+    from bayestribo.acquisition.faults import StorageError
+
+    def full(self) -> None:
+        self._pending.clear()
+        self.error = self.error or OSError(errno.ENOSPC, "No space left on device")
+
+    with monkeypatch.context() as patch:
+        patch.setattr(csvstream.CsvStream, "flush", full)
+        with pytest.raises(StorageError, match=r"No space left.*--recover"):
+            _acquire(tmp_path)
+    [raw] = tmp_path.glob("*.raw")
+    names = sorted(p.name for p in tmp_path.iterdir())
+    assert names == [raw.name, f"{raw.stem}.session.json"]
+    recovered = recover_run(raw)
+    assert recovered.complete and recovered.run.n_samples > 0
