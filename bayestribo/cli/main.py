@@ -23,6 +23,7 @@ __all__ = ["build_parser", "main"]
 
 #: Sub-command modules under ``bayestribo.cli``, in the order of ``--help``.
 COMMANDS: tuple[str, ...] = (
+    "inspect",
     "decay",
     "acquire",
     "estimate",

@@ -26,7 +26,7 @@ from bayestribo.io.text import read_text, write_csv
 from bayestribo.io.uff import read_uff
 from bayestribo.io.validation import validate_run
 
-__all__ = ["FORMATS", "READ_OPTIONS", "as_run", "read_run", "write_run"]
+__all__ = ["FORMATS", "READ_OPTIONS", "as_run", "format_of", "read_run", "write_run"]
 
 #: File formats and their suffixes.
 FORMATS: Mapping[str, tuple[str, ...]] = {
@@ -47,7 +47,15 @@ _OPTIONS = {
 }
 
 
-def _format_of(path: Path, file_format: str | None) -> str:
+def format_of(path: str | Path, file_format: str | None = None) -> str:
+    """The format a file is read as: ``file_format`` if given, else from its suffix.
+
+    Raises
+    ------
+    RunFormatError
+        For an unknown format or suffix, listing the known ones.
+    """
+    path = Path(path)
     if file_format is not None:
         if file_format not in FORMATS:
             raise RunFormatError(
@@ -150,7 +158,7 @@ def read_run(
     where = str(path)
     if not path.is_file():
         raise RunFormatError("no such run file; expected an existing file", where)
-    kind = _format_of(path, file_format)
+    kind = format_of(path, file_format)
     given = {
         "columns": columns,
         "delimiter": delimiter,

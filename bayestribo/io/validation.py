@@ -28,6 +28,7 @@ Nothing is repaired, clipped or dropped: a run either passes unchanged or fails.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
@@ -40,6 +41,8 @@ __all__ = [
     "MIN_SAMPLES",
     "TIME_RTOL",
     "UNIT_GAIN_TOLERANCE",
+    "ChannelConsistency",
+    "channel_consistency",
     "validate_run",
 ]
 
@@ -211,34 +214,103 @@ def _dominant_period(t: NDArray, values: NDArray) -> float:
     return float(t[-1] - t[0]) * len(values) / (len(values) - 1) / k
 
 
-def _check_units(run: Run, where: str | None) -> None:
-    """The displacement must follow the time integral of the velocity, in phase and gain.
+@dataclass(frozen=True)
+class ChannelConsistency:
+    """How the displacement and velocity channels of a run agree (v = dx/dt).
+
+    Attributes
+    ----------
+    correlation : float
+        Correlation of the displacement's changes with the velocity's integral over
+        windows of about a fortieth of a period [-]; +1 for one motion.
+    gain : float
+        Displacement change per unit of the velocity's integral [-]; 1 for
+        consistent channels, -Ω² for swapped ones.
+    delay_s : float
+        Delay of the displacement channel behind the velocity channel [s], from the
+        part of the displacement's changes that follows the velocity's changes.
+    window_s : float
+        Length of the comparison windows [s].
+    """
+
+    correlation: float
+    gain: float
+    delay_s: float
+    window_s: float
+
+    @property
+    def velocity_gain(self) -> float:
+        """The velocity channel's reading per unit of dx/dt [-] (1/gain)."""
+        return 1.0 / self.gain if self.gain != 0.0 else math.inf
+
+    def to_dict(self) -> dict[str, float]:
+        """JSON-ready values."""
+        return {
+            "correlation": self.correlation,
+            "gain": self.gain,
+            "velocity_gain": self.velocity_gain,
+            "delay_s": self.delay_s,
+            "window_s": self.window_s,
+        }
+
+
+def channel_consistency(run: Run) -> ChannelConsistency | None:
+    """Compare the displacement with the time integral of the velocity, in gain and time.
 
     Over short windows (a fortieth of the dominant period) the change of the
-    displacement is compared with the integral of the velocity over the same window:
-    offsets of either channel cancel, and noise averages out. A displacement and a
-    velocity of one motion correlate near +1 with a gain near 1. Swapped columns
-    correlate near -1 with a gain near -Ω² (the change of a velocity is an
-    acceleration, in antiphase with the displacement); channels of different
-    motions do not correlate.
+    displacement Δx is regressed on the integral of the velocity over the same window
+    ΔI and on the change of the velocity Δv: Δx ≈ g ΔI − g δ Δv for a displacement
+    channel of gain g delayed by δ (a first-order expansion of g I(t − δ)). Offsets of
+    either channel cancel, and noise averages out. A displacement and a velocity of
+    one motion correlate near +1 with a gain near 1. Swapped columns correlate near
+    -1 with a gain near -Ω² (the change of a velocity is an acceleration, in
+    antiphase with the displacement); channels of different motions do not correlate.
+
+    Parameters
+    ----------
+    run : Run
+        A run with both signals.
+
+    Returns
+    -------
+    ChannelConsistency or None
+        None when the run lacks a signal, is too short, or a signal is constant.
     """
     x, v, t = run.displacement, run.velocity, run.time
     if x is None or v is None:
-        return
+        return None
     integral = np.concatenate(([0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))))
     step = float(np.median(np.diff(t)))
     lag = max(1, round(_dominant_period(t, v) / (40.0 * step)))
     if 2 * lag >= x.size:
-        return
+        return None
     xc = x[lag:] - x[:-lag]
     ic = integral[lag:] - integral[:-lag]
+    vc = v[lag:] - v[:-lag]
     xc = xc - xc.mean()
     ic = ic - ic.mean()
+    vc = vc - vc.mean()
     sxx, sii = float(xc @ xc), float(ic @ ic)
     if sxx == 0.0 or sii == 0.0:
-        return
+        return None
     correlation = float(xc @ ic) / math.sqrt(sxx * sii)
     gain = float(xc @ ic) / sii
+    delay = 0.0
+    design = np.column_stack((ic, vc))
+    if float(vc @ vc) > 0.0:
+        (a, b), *_ = np.linalg.lstsq(design, xc, rcond=None)
+        if a != 0.0:
+            delay = float(-b / a)
+    return ChannelConsistency(correlation, gain, delay, lag * step)
+
+
+def _check_units(run: Run, where: str | None) -> None:
+    """The displacement must follow the time integral of the velocity, in phase and
+    gain (:func:`channel_consistency`)."""
+    found = channel_consistency(run)
+    if found is None:
+        return
+    correlation, gain = found.correlation, found.gain
     both = f"fields {DISPLACEMENT!r} and {VELOCITY!r}"
     if correlation < -_SWAP_MIN_ANTICORRELATION and -gain > UNIT_GAIN_TOLERANCE:
         raise _fail(

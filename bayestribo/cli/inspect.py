@@ -1,0 +1,198 @@
+"""``bayestribo inspect``: how a file is read and what is found in it, before any fit.
+
+Examples::
+
+    bayestribo inspect data/runs/glycerol-N0.31-r1.csv
+    bayestribo inspect scope.csv --columns t x v --scale x=2e-4 --scale v=5e-3 --json
+
+Exit status: 0 when the file reads and its energy decay is found, 2 when it cannot be
+read or analysed (the report says which part failed and why).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from typing import Any
+
+from bayestribo.cli._common import (
+    CommandLineError,
+    add_run_arguments,
+    cli_message,
+    read_run_from_args,
+)
+
+__all__ = ["inspection", "register"]
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``inspect`` sub-command."""
+    p = subparsers.add_parser(
+        "inspect",
+        help="how a run file is read and what is found in it, before any fit",
+        description=(
+            "Show how a file is read (format, instrument export, columns and units, "
+            "sidecar), the samples (rate, duration, ranges), the metadata, the agreement "
+            "of the displacement and velocity channels (gain, delay), and what the "
+            "analysis finds: release, analysed window, end of motion, measured frequency "
+            "and noise at rest. Nothing is fitted."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    add_run_arguments(p)
+    p.add_argument(
+        "--skip",
+        type=int,
+        default=1,
+        help="oscillations to skip after the release, as for decay and fit",
+    )
+    p.add_argument("--json", action="store_true", help="print JSON instead of text")
+    p.set_defaults(handler=run)
+
+
+def _finite(value: float | None) -> float | None:
+    return None if value is None or not math.isfinite(value) else float(value)
+
+
+def _signal(values: Any) -> dict[str, float] | None:
+    if values is None:
+        return None
+    return {
+        "min": float(values.min()),
+        "max": float(values.max()),
+        "peak_to_peak": float(values.max() - values.min()),
+    }
+
+
+def inspection(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
+    """What ``inspect`` reports, as JSON-ready data, and whether the run is usable."""
+    import numpy as np
+
+    from bayestribo import __version__
+    from bayestribo.cli.decay import summary
+    from bayestribo.errors import BayestriboError
+    from bayestribo.io.frequency import oscillation_frequency
+    from bayestribo.io.layout import describe_file
+    from bayestribo.io.validation import channel_consistency
+    from bayestribo.signal.decay import energy_decay
+
+    try:
+        layout = describe_file(args.run, file_format=args.format, skip_rows=args.skip_rows)
+    except BayestriboError as exc:
+        raise CommandLineError(cli_message(str(exc))) from None
+    recording = read_run_from_args(args)
+    t = recording.time
+    steps = np.diff(t)
+    units = "arbitrary length unit" if recording.length_unit == "arbitrary" else "SI"
+    report: dict[str, Any] = {
+        "bayestribo_version": __version__,
+        "file": str(args.run),
+        "reading": {**layout, "signals": list(recording.signals), "units": units},
+        "samples": {
+            "n": int(t.size),
+            "sample_rate_Hz": float(1.0 / np.median(steps)),
+            "start_s": float(t[0]),
+            "duration_s": float(t[-1] - t[0]),
+        },
+        "displacement": _signal(recording.displacement),
+        "velocity": _signal(recording.velocity),
+        "metadata": dict(recording.metadata),
+    }
+    consistency = channel_consistency(recording)
+    report["channels"] = None if consistency is None else consistency.to_dict()
+    report["oscillation_frequency_Hz"] = _finite(
+        oscillation_frequency(t, recording.displacement, recording.velocity)
+    )
+    try:
+        decay = energy_decay(
+            t,
+            recording.displacement,
+            recording.velocity,
+            rig=recording.rig(),
+            skip_oscillations=args.skip,
+        )
+    except BayestriboError as exc:
+        report["decay"] = {"error": cli_message(str(exc))}
+        return report, False
+    report["decay"] = summary(decay, str(args.run))
+    report["decay"]["friction_reported_as"] = (
+        "mu_k" if decay.scaling.friction_defined else "friction displacement"
+    )
+    return report, True
+
+
+def _number(value: float | None, digits: int = 6) -> str:
+    return "—" if value is None else f"{value:.{digits}g}"
+
+
+def _text(report: dict[str, Any]) -> str:
+    reading = report["reading"]
+    lines = [f"file           {report['file']}"]
+    lines.append(f"read as        {reading['reader']} ({reading['format']})")
+    if reading["columns"]:
+        cols = ", ".join(
+            f"{c['label']} [{c['unit']}]" if c["unit"] else c["label"] for c in reading["columns"]
+        )
+        lines.append(f"file columns   {cols}")
+    lines.append(f"signals        {', '.join(reading['signals'])} ({reading['units']})")
+    lines.append(f"sidecar        {reading['sidecar'] or 'none'}")
+    s = report["samples"]
+    lines.append(
+        f"samples        {s['n']} at {_number(s['sample_rate_Hz'])} Hz, "
+        f"{_number(s['duration_s'])} s from t = {_number(s['start_s'])} s"
+    )
+    si = reading["units"] == "SI"
+    for name, unit in (("displacement", "m"), ("velocity", "m/s")):
+        sig = report[name]
+        if sig is not None:
+            unit = unit if si else unit.replace("m", "length unit")
+            lines.append(
+                f"{name:14s} {_number(sig['min'])} to {_number(sig['max'])} {unit} "
+                f"(peak to peak {_number(sig['peak_to_peak'])})"
+            )
+    meta = ", ".join(
+        f"{k} {v}" for k, v in report["metadata"].items() if not isinstance(v, dict | list)
+    )
+    lines.append(f"metadata       {meta or 'none'}")
+    ch = report["channels"]
+    if ch is not None:
+        lines.append(
+            f"channels       velocity reads {ch['velocity_gain']:.5f} × dx/dt, displacement "
+            f"delayed {1e6 * ch['delay_s']:.3g} µs, correlation {ch['correlation']:.6f}"
+        )
+    lines.append(
+        f"oscillation    {_number(report['oscillation_frequency_Hz'])} Hz (zero crossings)"
+    )
+    decay = report["decay"]
+    if "error" in decay:
+        lines.append(f"analysis       not possible: {decay['error']}")
+        return "\n".join(lines)
+    lines.append(f"release        t = {_number(decay['release_time_s'])} s")
+    ended = "motion ended" if decay["motion_ended"] else "record ends before the motion"
+    lines.append(
+        f"analysed       {_number(decay['start_time_s'])} s to {_number(decay['end_time_s'])} s "
+        f"({ended})"
+    )
+    nominal = decay["nominal_frequency_Hz"]
+    extra = "" if nominal is None else f" (nominal {_number(nominal, 5)} Hz)"
+    lines.append(f"frequency      {_number(decay['natural_frequency_Hz'])} Hz measured{extra}")
+    noise = decay["noise"]
+    lines.append(
+        f"noise at rest  displacement {_number(noise['displacement'], 3)}, velocity "
+        f"{_number(noise['velocity'], 3)} ({noise['source']}, {noise['n_samples']} samples)"
+    )
+    if decay["derived_channel"]:
+        lines.append(f"derived        {decay['derived_channel']} (from the other channel)")
+    lines.append(f"friction as    {decay['friction_reported_as']}")
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Inspect the file; exit 2 when the decay cannot be analysed."""
+    report, usable = inspection(args)
+    if args.json:
+        print(json.dumps(report, indent=2, allow_nan=False, default=str))
+    else:
+        print(_text(report))
+    return 0 if usable else 2

@@ -1,0 +1,91 @@
+"""``bayestribo inspect``: how a file is read and what is in it, before any fit."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from bayestribo.cli import main
+from bayestribo.io import write_run
+from bayestribo.io.run import Run
+from bayestribo.synthetic import simulate
+
+
+@pytest.fixture(scope="module")
+def run():
+    return simulate(seed=21)
+
+
+def _inspect(argv, capsys, status=0):
+    assert main(["inspect", *argv, "--json"]) == status
+    return json.loads(capsys.readouterr().out)
+
+
+def test_a_canonical_run_is_described_in_text_and_json(tmp_path, run, capsys):
+    path = write_run(run, tmp_path / "r.csv")
+    got = _inspect([str(path)], capsys)
+    assert got["reading"]["reader"] == "canonical CSV"
+    assert got["reading"]["sidecar"].endswith("r.json")
+    assert got["samples"]["n"] == run.n_samples
+    assert got["samples"]["sample_rate_Hz"] == pytest.approx(1e4, rel=1e-9)
+    sim = run.metadata["simulation"]
+    assert got["decay"]["release_time_s"] == pytest.approx(sim["release_time_s"], abs=2e-3)
+    assert got["decay"]["motion_ended"] is True
+    assert got["decay"]["friction_reported_as"] == "mu_k"
+    assert got["channels"]["velocity_gain"] == pytest.approx(1.0, abs=1e-3)
+    damped = 32.6 * np.sqrt(1 - sim["zeta"] ** 2)
+    assert got["oscillation_frequency_Hz"] == pytest.approx(damped, rel=1e-4)
+    assert main(["inspect", str(path)]) == 0
+    text = capsys.readouterr().out
+    for label in ("read as", "samples", "channels", "release", "analysed", "noise at rest"):
+        assert label in text
+
+
+def test_a_velocity_gain_and_a_delay_are_measured(tmp_path, run, capsys):
+    t = run.time
+    late = np.interp(t - 1e-4, t, run.displacement)  # displacement 100 µs late
+    other = Run(t, late, 1.01 * run.velocity, dict(run.metadata))
+    got = _inspect([str(write_run(other, tmp_path / "g.csv"))], capsys)
+    assert got["channels"]["velocity_gain"] == pytest.approx(1.01, rel=1e-3)
+    assert got["channels"]["delay_s"] == pytest.approx(1e-4, rel=0.05)
+
+
+def test_an_instrument_export_is_named_with_its_columns(tmp_path, run, capsys):
+    rows = [
+        f"{t:.12e},{x / 2e-4:.12e},{v / 5e-3:.12e}"
+        for t, x, v in zip(run.time, run.displacement, run.velocity, strict=True)
+    ]
+    path = tmp_path / "scope.csv"
+    path.write_text("\n".join(["x-axis,1,2", "second,Volt,Volt", *rows]) + "\n", encoding="utf-8")
+    argv = [str(path), "--columns", "t", "x", "v", "--scale", "x=2e-4", "--scale", "v=5e-3"]
+    argv += ["--frequency", "32.6", "--load", "0.31", "--mass", "0.035"]
+    got = _inspect(argv, capsys)
+    assert got["reading"]["reader"] == "Keysight/Agilent CSV export"
+    assert [c["unit"] for c in got["reading"]["columns"]] == ["second", "Volt", "Volt"]
+    assert got["displacement"]["max"] == pytest.approx(run.displacement.max(), rel=1e-9)
+
+
+def test_a_record_without_motion_says_which_part_failed(tmp_path, capsys):
+    t = np.arange(5000) / 1e4
+    noise = np.random.default_rng(0).normal(0.0, 1e-7, t.size)
+    still = Run(t, noise, None, {"natural_frequency_Hz": 32.6, "length_unit": "arbitrary"})
+    got = _inspect([str(write_run(still, tmp_path / "still.csv"))], capsys, status=2)
+    assert "error" in got["decay"] and got["decay"]["error"]
+    assert main(["inspect", str(tmp_path / "still.csv")]) == 2
+    assert "analysis       not possible:" in capsys.readouterr().out
+
+
+def test_swapped_channels_are_refused_naming_both(tmp_path, run, capsys):
+    swapped = tmp_path / "swapped.csv"
+    rows = [
+        f"{t:.17g},{v:.17g},{x:.17g}"
+        for t, x, v in zip(run.time, run.displacement, run.velocity, strict=True)
+    ]
+    swapped.write_text(
+        "time_s,displacement_m,velocity_m_per_s\n" + "\n".join(rows) + "\n", encoding="utf-8"
+    )
+    assert main(["inspect", str(swapped)]) == 2
+    err = capsys.readouterr().err
+    assert "'displacement_m' and 'velocity_m_per_s'" in err and "swapped" in err
