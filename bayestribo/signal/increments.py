@@ -50,9 +50,11 @@ from scipy.integrate import cumulative_trapezoid
 
 from bayestribo.signal.decay import EnergyDecay, derivative_gain
 from bayestribo.signal.noise import NoiseModel
+from bayestribo.signal.spectrum import NoiseSpectrum, colored_noise
 
 __all__ = [
     "PiData",
+    "correlated_sum_variance",
     "increment_noise",
     "increment_weights",
     "integrate_increments",
@@ -266,6 +268,33 @@ def sample_noise_bias(decay: EnergyDecay) -> float:
     return white_noise_bias(sigma_y, sigma_yp)
 
 
+def correlated_sum_variance(weights: NDArray, autocovariance: NDArray) -> float:
+    """Variance ``wᵀ C w`` of ``Σ w_i ε_i`` for stationary noise ε of autocovariance c.
+
+    ``C[i, j] = c[|i - j|]`` (Toeplitz), with c taken as 0 beyond its length; for white
+    noise (``c = [σ²]``) this is ``σ² Σ w_i²``. Evaluated as ``c[0] r[0] + 2 Σ_m c[m]
+    r[m]`` with r the autocorrelation of w (FFT, O(n log n)).
+
+    Parameters
+    ----------
+    weights : ndarray
+        The weights w (any units).
+    autocovariance : ndarray
+        c[0], c[1], ... at lags of 0, 1, ... samples [unit²].
+
+    Returns
+    -------
+    float
+    """
+    w = np.asarray(weights, dtype=float)
+    c = np.asarray(autocovariance, dtype=float)
+    m = min(w.size, c.size)
+    if m <= 1:
+        return float(c[0] * (w @ w))
+    r = scipy.signal.correlate(w, w, mode="full")[w.size - 1 : w.size - 1 + m]
+    return float(c[0] * r[0] + 2.0 * (c[1:m] @ r[1:m]))
+
+
 def increment_noise(
     tau: NDArray,
     y: NDArray,
@@ -279,6 +308,10 @@ def increment_noise(
     savgol_window: int | None = None,
     n_replicates: int = 300,
     seed: int = 0,
+    autocov_y: NDArray | None = None,
+    autocov_yp: NDArray | None = None,
+    spectrum: NoiseSpectrum | None = None,
+    spectrum_scale: float = 1.0,
 ) -> tuple[NDArray, NDArray]:
     """Noise bias and noise variance of each increment of E = (y² + y'²)/2.
 
@@ -305,12 +338,43 @@ def increment_noise(
         Window of the derivative filter (``derived="velocity"``).
     n_replicates, seed : int
         Monte Carlo replicates and their seed (derived channel only).
+    autocov_y, autocov_yp : ndarray, optional
+        Autocovariance of each channel's noise at lags of 0, 1, ... samples, in units
+        of y², y'² (both channels recorded): coloured noise (filtered, 1/f, a line) is
+        correlated across samples. With ε, η Gaussian, stationary and independent of
+        each other, the increment ``Σ w_i E_i`` changes by ``Σ w_i (y_i ε_i + y'_i
+        η_i) + ½ Σ w_i (ε_i² + η_i²)``, whose variance is ``(w∘y)ᵀ C_ε (w∘y) +
+        (w∘y')ᵀ C_η (w∘y') + ½ wᵀ (C_ε∘C_ε + C_η∘C_η) w`` (the two parts are
+        uncorrelated, odd moments of a Gaussian being 0), and whose mean is
+        ``½(c_ε[0] + c_η[0]) Σ w``. A channel without one is white at its sigma, and
+        then this is exactly the white formula above.
+    spectrum : NoiseSpectrum, optional
+        The recorded channel's noise spectrum (derived channel only): the Monte Carlo
+        draws noise with this spectrum (:func:`bayestribo.signal.spectrum.colored_noise`)
+        times ``spectrum_scale`` (the conversion to y or y' units) instead of white
+        noise of ``sigma_y`` or ``sigma_yp``.
+    spectrum_scale : float
+        Factor from the spectrum's units to y (or y') units.
 
     Returns
     -------
     bias, variance : ndarray
         Per increment.
     """
+    if derived is None and (autocov_y is not None or autocov_yp is not None):
+        c_y = np.array([sigma_y**2]) if autocov_y is None else np.asarray(autocov_y, float)
+        c_yp = np.array([sigma_yp**2]) if autocov_yp is None else np.asarray(autocov_yp, float)
+        bias = 0.5 * (c_y[0] + c_yp[0]) * np.array([w.sum() for w in weights])
+        variance = np.array(
+            [
+                correlated_sum_variance(w * y[a : b + 1], c_y)
+                + correlated_sum_variance(w * yp[a : b + 1], c_yp)
+                + 0.5 * correlated_sum_variance(w, c_y * c_y)
+                + 0.5 * correlated_sum_variance(w, c_yp * c_yp)
+                for a, b, w in zip(edges[:-1], edges[1:], weights, strict=True)
+            ]
+        )
+        return bias, variance
     if derived is None:
         bias_per_sample = white_noise_bias(sigma_y, sigma_yp)
         var_e = y**2 * sigma_y**2 + yp**2 * sigma_yp**2 + 0.5 * (sigma_y**4 + sigma_yp**4)
@@ -330,15 +394,46 @@ def increment_noise(
     for first in range(0, n_replicates, _BLOCK):
         count = min(_BLOCK, n_replicates - first)
         # one (count, samples) draw is the same stream as ``count`` draws of a row
-        if derived == "velocity":
-            noisy = y + rng.normal(0.0, sigma_y, (count, tau.size))
-            yn, ypn = _rederive(tau, noisy, yp, y, yp, derived, savgol_window)
+        if spectrum is not None:
+            draw = spectrum_scale * colored_noise(spectrum, tau.size, rng, count)
         else:
-            noisy = yp + rng.normal(0.0, sigma_yp, (count, tau.size))
-            yn, ypn = _rederive(tau, y, noisy, y, yp, derived, savgol_window)
+            sigma = sigma_y if derived == "velocity" else sigma_yp
+            draw = rng.normal(0.0, sigma, (count, tau.size))
+        if derived == "velocity":
+            yn, ypn = _rederive(tau, y + draw, yp, y, yp, derived, savgol_window)
+        else:
+            yn, ypn = _rederive(tau, y, yp + draw, y, yp, derived, savgol_window)
         energy = 0.5 * (yn * yn + ypn * ypn)
         draws[first : first + count] = integrate_increments(energy, edges, weights) - reference
     return draws.mean(axis=0), draws.var(axis=0, ddof=1)
+
+
+def _spectral_options(decay: EnergyDecay, noise: NoiseModel, n_lags: int) -> dict:
+    """Keywords of :func:`increment_noise` for the coloured noise measured at rest
+    (empty when the rest noise is white or was not measured)."""
+    rest = decay.rest_noise
+    if rest is None or not rest.coloured:
+        return {}
+    sc = decay.scaling
+    to_y = 1.0 / sc.length_scale
+    to_yp = 1.0 / (sc.length_scale * sc.omega)
+    # a channel's spectrum counts where the noise model uses the measured noise (not
+    # where the instrument's nominal resolution is the larger figure)
+    use_x = rest.displacement is not None and rest.displacement.coloured
+    use_x = use_x and noise.source_displacement == "measured"
+    use_v = rest.velocity is not None and rest.velocity.coloured
+    use_v = use_v and noise.source_velocity == "measured"
+    derived = decay.derived_channel
+    if derived == "velocity":
+        return {"spectrum": rest.displacement, "spectrum_scale": to_y} if use_x else {}
+    if derived == "displacement":
+        return {"spectrum": rest.velocity, "spectrum_scale": to_yp} if use_v else {}
+    options = {}
+    if use_x:
+        options["autocov_y"] = rest.displacement.autocovariance(n_lags) * to_y**2
+    if use_v:
+        options["autocov_yp"] = rest.velocity.autocovariance(n_lags) * to_yp**2
+    return options
 
 
 def pi_data(
@@ -348,6 +443,7 @@ def pi_data(
     grid_points: int | None = None,
     n_replicates: int = 300,
     seed: int = 0,
+    spectral: bool = True,
 ) -> PiData:
     """Build the likelihood's observation from a recording's energy decay.
 
@@ -365,6 +461,15 @@ def pi_data(
         about √(2/n)).
     seed : int
         Seed of those replicates.
+    spectral : bool
+        When the noise measured at rest is coloured (:attr:`EnergyDecay.rest_noise`,
+        a :class:`~bayestribo.signal.spectrum.RestNoise` with ``coloured`` true:
+        filtered, 1/f, or with a mains line), compute the increment variances from its
+        autocovariance (``wᵀ C w``, :func:`increment_noise`) and, for a derived
+        channel, draw the Monte Carlo noise with its spectrum; each variance is at
+        least the white one at the nominal resolution, when known. White noise at rest
+        (or ``spectral=False``, or no rest) gives the white formula with the noise
+        model's levels, as before.
 
     Returns
     -------
@@ -379,6 +484,7 @@ def pi_data(
     sig_y = noise.displacement / sc.length_scale
     sig_yp = noise.velocity / (sc.length_scale * sc.omega)
     e2 = integrate_increments(decay.energy**2, edges, weights)
+    options = _spectral_options(decay, noise, int(np.max(np.diff(edges))) + 1) if spectral else {}
     bias, variance = increment_noise(
         tau,
         decay.y,
@@ -391,7 +497,17 @@ def pi_data(
         savgol_window=decay.savgol_window,
         n_replicates=n_replicates,
         seed=seed,
+        **options,
     )
+    if options:
+        # never below the white noise at the instrument's nominal resolution
+        nominal_y = (noise.nominal_displacement or 0.0) / sc.length_scale
+        nominal_yp = (noise.nominal_velocity or 0.0) / (sc.length_scale * sc.omega)
+        if decay.derived_channel is None and (nominal_y > 0 or nominal_yp > 0):
+            _, floor = increment_noise(
+                tau, decay.y, decay.yp, edges, weights, nominal_y, nominal_yp
+            )
+            variance = np.maximum(variance, floor)
     observed = integrate_increments(decay.energy, edges, weights) - bias
     if decay.motion_ended:
         # The end of motion is located within about a sample: allow for the energy of

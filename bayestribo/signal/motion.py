@@ -305,7 +305,13 @@ def motion_span(
     )
 
 
-def check_turning_points(times: ArrayLike, half_period: float, *, tolerance: float = 0.3) -> None:
+def check_turning_points(
+    times: ArrayLike,
+    half_period: float,
+    *,
+    tolerance: float = 0.3,
+    timing_sd: ArrayLike | None = None,
+) -> None:
     """Refuse turning points that are not half a period apart.
 
     Consecutive turning points of a free decay are π/ω_d apart (Eq. 13) whatever the
@@ -320,6 +326,10 @@ def check_turning_points(times: ArrayLike, half_period: float, *, tolerance: flo
         The damped half-period [s].
     tolerance : float
         Largest accepted relative deviation of an interval from ``half_period``.
+    timing_sd : array_like, optional
+        Standard deviation of each turning-point time from the noise [s]: an interval
+        may also be off by 6 times the sum of its ends' (a turning point barely out of
+        the noise is timed poorly, not wrongly).
 
     Raises
     ------
@@ -328,12 +338,16 @@ def check_turning_points(times: ArrayLike, half_period: float, *, tolerance: flo
     """
     tt = np.asarray(times, dtype=float)
     gaps = np.diff(tt)
-    off = np.flatnonzero(np.abs(gaps - half_period) > tolerance * half_period)
+    allowed = np.full(gaps.shape, tolerance * half_period)
+    if timing_sd is not None:
+        sd = np.asarray(timing_sd, dtype=float)
+        allowed = allowed + 6.0 * (sd[:-1] + sd[1:])
+    off = np.flatnonzero(np.abs(gaps - half_period) > allowed)
     if off.size:
         k = int(off[0])
         raise RecordingError(
             f"turning points: turning points {k} and {k + 1} (t = {tt[k]:.6g} s and "
             f"{tt[k + 1]:.6g} s) are {gaps[k]:.4g} s apart, not about half a period "
-            f"({half_period:.4g} s ± {100 * tolerance:.0f} %): a wiggle of the noise taken "
+            f"({half_period:.4g} s ± {allowed[k]:.3g} s): a wiggle of the noise taken "
             "for a turning point, or a turning point missed"
         )

@@ -39,6 +39,7 @@ __all__ = [
     "NoiseSpectrum",
     "RestNoise",
     "colored_noise",
+    "fit_line",
     "noise_spectrum",
     "notch_filter",
     "notch_gain",
@@ -247,8 +248,10 @@ def noise_spectrum(
     weight = 0.0
     averages = 0.0
     freq = np.fft.rfftfreq(nfft, 1.0 / fs)
+    resolution = 0.0
     for s in segs:
         nper = min(nfft, s.size)
+        resolution = max(resolution, fs / nper)
         _, p = scipy.signal.welch(s, fs, window="hann", nperseg=nper, nfft=nfft, detrend="constant")
         total += s.size * p
         weight += s.size
@@ -272,17 +275,20 @@ def noise_spectrum(
             if f0 + reach >= nyquist:
                 continue
             near = np.flatnonzero(np.abs(freq - f0) <= reach)
-            hood = (np.abs(freq - f0) <= max(0.5 * f0, 8 * df)) & (np.abs(freq - f0) > 3 * df)
+            hood = np.abs(freq - f0) <= max(0.5 * f0, 8 * resolution)
+            hood &= np.abs(freq - f0) > 3 * resolution
             hood[0] = False
             if near.size == 0 or np.count_nonzero(hood) < 4:
                 continue
             k = int(near[np.argmax(psd[near])])
             if min(candidates, key=lambda c: abs(c - freq[k])) != f0 or line_bins[k]:
                 continue  # the peak belongs to another candidate line
+            if psd[k] < np.max(psd[np.abs(freq - freq[k]) <= 2.0 * resolution]):
+                continue  # the shoulder of a stronger peak (window leakage), not a line
             background = float(np.median(psd[hood]))
             if not psd[k] > LINE_RATIO * background:
                 continue
-            wide = np.abs(freq - freq[k]) <= 3 * df
+            wide = np.abs(freq - freq[k]) <= 2.0 * resolution
             power = float(np.sum(psd[wide] - background) * df)
             f_peak = float(freq[k])
             if 0 < k < psd.size - 1:
@@ -305,7 +311,7 @@ def noise_spectrum(
     band_level = float(np.mean(psd[in_band]))
     rel_se = 1.0 / math.sqrt(max(averages, 1.0) * np.count_nonzero(in_band))
     off = abs(math.log(band_level / white)) if band_level > 0 and white > 0 else math.inf
-    coloured = bool(lines) or off > max(math.log(COLOUR_FACTOR), 4.0 * rel_se)
+    coloured = variance > 0 and (bool(lines) or off > max(math.log(COLOUR_FACTOR), 4.0 * rel_se))
     return NoiseSpectrum(
         frequency=freq,
         psd=psd,
@@ -335,6 +341,101 @@ def notch_gain(
     return float(np.abs(h[0]) ** 2)
 
 
+def _pad(s: NDArray, length: int, period: float, rest: int) -> NDArray:
+    """``length`` samples to put before ``s``: whole line periods of its first ``rest``
+    samples repeated, or, with less than one period of rest, its odd reflection."""
+    periods = int(rest // period) if period > 0 else 0
+    if periods >= 1:
+        # the whole number of periods whose length in samples is nearest an integer
+        k = min(range(1, periods + 1), key=lambda j: abs(j * period - round(j * period)))
+        block = s[: round(k * period)]
+        reps = -(-length // block.size)
+        return np.tile(block, reps)[-length:]
+    m = min(length, s.size - 1)
+    return 2.0 * s[0] - s[m:0:-1]
+
+
+def _line_residual(t: NDArray, s: NDArray, labels: NDArray, n_groups: int, f: float):
+    """Least squares of s on a constant per segment and a sinusoid at f."""
+    w = 2.0 * math.pi * f
+    cols = [np.cos(w * t), np.sin(w * t)]
+    cols += [(labels == g).astype(float) for g in range(n_groups)]
+    a = np.column_stack(cols)
+    coef, *_ = np.linalg.lstsq(a, s, rcond=None)
+    r = s - a @ coef
+    return float(r @ r), coef
+
+
+def fit_line(
+    t: ArrayLike,
+    signal: ArrayLike,
+    rest: ArrayLike,
+    frequency_Hz: float,
+    *,
+    search_Hz: float = 0.5,
+) -> tuple[float, float, float]:
+    """A mains line measured at rest: frequency, amplitude and phase of a sinusoid.
+
+    Least squares on the samples at rest (``rest`` mask, any number of segments, each
+    with its own constant level) of ``A cos(2πf t + φ)``, with f refined within
+    ``frequency_Hz ± search_Hz`` (mains frequency drifts by a few hundredths of a Hz).
+
+    Parameters
+    ----------
+    t : array_like
+        Time stamps [s].
+    signal : array_like
+        One channel [unit].
+    rest : array_like of bool
+        Samples at rest.
+    frequency_Hz : float
+        Nominal frequency of the line [Hz].
+    search_Hz : float
+        Half-width of the frequency search [Hz].
+
+    Returns
+    -------
+    frequency_Hz, amplitude, phase : float
+        f [Hz], A [unit] and φ [rad] of ``A cos(2πf t + φ)``.
+
+    Raises
+    ------
+    RecordingError
+        Fewer than two periods of the line at rest.
+    """
+    from scipy.optimize import minimize_scalar
+
+    t = np.asarray(t, dtype=float)
+    s = np.asarray(signal, dtype=float)
+    m = np.asarray(rest, bool)
+    if np.count_nonzero(m) * float(np.median(np.diff(t))) * frequency_Hz < 2.0:
+        raise RecordingError(
+            f"notch: fewer than two periods of the {frequency_Hz:g} Hz line at rest to measure it"
+        )
+    edges = np.flatnonzero(np.diff(np.r_[0, m.astype(np.int8), 0]))
+    labels = np.zeros(t.size, int)
+    for g, (a, b) in enumerate(zip(edges[::2], edges[1::2], strict=True)):
+        labels[a:b] = g
+    tt, ss, ll = t[m] - t[0], s[m], labels[m]
+    groups = int(edges.size // 2)
+    # a grid first (the residual is multimodal on the scale of 1/T), then refine
+    grid = np.linspace(frequency_Hz - search_Hz, frequency_Hz + search_Hz, 41)
+    res = [_line_residual(tt, ss, ll, groups, f)[0] for f in grid]
+    k = int(np.argmin(res))
+    lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, grid.size - 1)]
+    best = minimize_scalar(
+        lambda f: _line_residual(tt, ss, ll, groups, f)[0],
+        bounds=(lo, hi),
+        method="bounded",
+        options={"xatol": 1e-6},
+    )
+    f = float(best.x)
+    _, coef = _line_residual(tt, ss, ll, groups, f)
+    amplitude = float(math.hypot(coef[0], coef[1]))
+    phase = float(math.atan2(-coef[1], coef[0]) - 2.0 * math.pi * f * t[0])
+    return f, amplitude, phase
+
+
 def notch_filter(
     signal: ArrayLike,
     notch_Hz: float,
@@ -342,13 +443,20 @@ def notch_filter(
     *,
     quality: float = 30.0,
     oscillation_Hz: float | None = None,
+    rest_head: int = 0,
+    rest_tail: int = 0,
 ) -> NDArray:
     """Remove a mains line from a channel with a zero-phase notch.
 
     A second-order IIR notch (``scipy.signal.iirnotch``, -3 dB width
     ``notch_Hz / quality``) run forwards and backwards (``scipy.signal.filtfilt``,
-    Gustafsson's edge handling): **zero phase, so it adds no delay**, and applied to
-    both channels alike it leaves E = ½(y² + y'²) consistent sample by sample. Its
+    padded at both ends): **zero phase, so it adds no delay**, and applied to both
+    channels alike it leaves E = ½(y² + y'²) consistent sample by sample. A notch rings
+    for about ``quality / (π notch_Hz)`` seconds (0.2 s at 50 Hz, quality 30), so the
+    record is padded with six times that: where the record is known to be at rest
+    (``rest_head``, ``rest_tail`` samples) by repeating a whole number of the line's
+    periods of that rest (the line runs on without a jump, and the rest is notched to its
+    edges); elsewhere by an odd reflection (as ``filtfilt`` does). Its
     gain at the oscillation frequency, ``|H(f)|²`` (1 - 2.9e-3 for a 50 Hz notch of
     quality 30 at 32.6 Hz), is divided out when ``oscillation_Hz`` is given, so E is
     not scaled (the gain varies by less than 1e-5 across the ζf-wide spectrum of the
@@ -366,6 +474,9 @@ def notch_filter(
         Quality factor of the notch (width ``notch_Hz / quality``).
     oscillation_Hz : float, optional
         Frequency of the oscillation [Hz] at which to restore unit gain.
+    rest_head, rest_tail : int
+        Samples at the start and at the end of the record known to be at rest (noise
+        and the line only), used for the padding.
 
     Returns
     -------
@@ -391,7 +502,12 @@ def notch_filter(
     b, a = scipy.signal.iirnotch(f0, quality, fs=fs)
     if s.size < 16:
         raise RecordingError(f"notch: {s.size} samples are too few to filter")
-    out = scipy.signal.filtfilt(b, a, s, method="gust")
+    pad = max(1, math.ceil(6.0 * quality / (math.pi * f0) * fs))
+    period = fs / f0
+    head = _pad(s, pad, period, int(rest_head))
+    tail = _pad(s[::-1], pad, period, int(rest_tail))[::-1]
+    padded = np.concatenate([head, s, tail])
+    out = scipy.signal.filtfilt(b, a, padded, padlen=0)[head.size : head.size + s.size]
     if oscillation_Hz is not None:
         out = out / notch_gain(oscillation_Hz, f0, fs, quality)
     return out
