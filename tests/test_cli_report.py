@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -11,6 +12,7 @@ from _paths import REPO
 from bayestribo.cli import main
 from bayestribo.cli.report import campaign_selection, notebook_for, parse_params
 from bayestribo.io import read_run
+from bayestribo.reports.campaign import DEFAULT_SEED
 from bayestribo.reports.notebooks import ReportError, inject_parameters, read_notebook
 
 pytest.importorskip("nbclient")
@@ -28,6 +30,7 @@ def captured(monkeypatch):
     calls = []
 
     def fake_run_report(notebook, parameters, **kwargs):
+        inject_parameters(read_notebook(notebook), parameters)  # names and types valid
         calls.append((notebook, dict(parameters), kwargs))
         Path(kwargs["html"]).write_text("<html></html>")
 
@@ -44,7 +47,7 @@ def test_report_of_a_text_file_passes_the_reading_options_to_the_notebook(
     html = tmp_path / "out.html"
     argv = ["report", str(text), "--out", str(html), "--columns", "t", "x"]
     argv += ["--length-unit", "arbitrary", "--seed", "7", "--param", "max_steps=500"]
-    argv += ["--figures", str(tmp_path / "figs"), "--hide-code"]
+    argv += ["--figures", str(tmp_path / "figs"), "--figure-format", "svg"]
     assert main(argv) == 0
     [(notebook, params, kwargs)] = captured
     assert notebook == "single_run"
@@ -55,7 +58,8 @@ def test_report_of_a_text_file_passes_the_reading_options_to_the_notebook(
     }
     assert params["seed"] == 7 and params["max_steps"] == 500
     assert params["figure_dir"] == str((tmp_path / "figs").resolve())
-    assert kwargs["hide_code"] is True and Path(kwargs["html"]) == html
+    assert params["figure_format"] == "svg"
+    assert kwargs["show_code"] is False and Path(kwargs["html"]) == html
     # the parameters are the notebook's, and the reading options are read_run's
     inject_parameters(read_notebook("single_run"), params)
     run = read_run(params["run_path"], **params["read_kwargs"])
@@ -63,13 +67,86 @@ def test_report_of_a_text_file_passes_the_reading_options_to_the_notebook(
     assert str(html.resolve()) in capsys.readouterr().out
 
 
+def test_by_default_the_figures_are_pdf_next_to_the_report_and_the_code_is_left_out(
+    tmp_path, captured
+):
+    if not RUN.is_file():
+        pytest.skip("the bundled campaign data/ is absent")
+    assert main(["report", str(RUN), "--out", str(tmp_path / "r.html")]) == 0
+    [(_, params, kwargs)] = captured
+    assert params["figure_dir"] == str((tmp_path / "r-figures").resolve())
+    assert params["figure_format"] == "pdf" and kwargs["show_code"] is False
+    assert "seed" not in params  # the notebook's default: the package's default seed
+    assert main(["report", str(RUN), "--out", str(tmp_path / "r.html"), "--show-code"]) == 0
+    assert captured[-1][2]["show_code"] is True
+
+
 @pytest.mark.skipif(not RUN.is_file(), reason="the bundled campaign data/ is absent")
-def test_report_of_a_folder_runs_the_campaign_notebook(tmp_path, captured):
+def test_report_of_a_folder_without_campaign_results_fits_with_the_default_seed(
+    tmp_path, captured, monkeypatch, capsys
+):
+    monkeypatch.chdir(tmp_path)  # no ./bayestribo-campaign here
     assert main(["report", str(RUN.parent.parent), "--out", str(tmp_path / "c.html")]) == 0
     [(notebook, params, _)] = captured
     assert notebook == "loads"
-    assert params == {"data_dir": str(RUN.parent.parent.resolve())}  # bundled series
-    inject_parameters(read_notebook("loads"), params)
+    assert params == {
+        "data_dir": str(RUN.parent.parent.resolve()),  # bundled series: the defaults
+        "campaign_seed": DEFAULT_SEED,
+        "figure_dir": str((tmp_path / "c-figures").resolve()),
+        "figure_format": "pdf",
+    }
+    assert "no campaign results found" in capsys.readouterr().err
+
+
+def _campaign_results(folder: Path, data: Path, seed: int = 3) -> Path:
+    """A minimal `bayestribo campaign` results folder for runs under ``data``."""
+    from bayestribo.campaign.catalog import register_run
+
+    folder.mkdir(parents=True)
+    catalog = folder / "catalog.sqlite"
+    run = data / "r1.csv"
+    run.write_text("time_s,displacement_m\n0,0\n")
+    register_run(catalog, path=run, sha256="0" * 64, metadata={"run_id": "r1", "series": "oil"})
+    report = {"settings": {"seed": seed, "fit": {}}, "by": ["load_N"], "catalog": str(catalog)}
+    (folder / "population.json").write_text(json.dumps(report))
+    return folder
+
+
+def test_report_of_a_campaign_reuses_its_results(tmp_path, captured, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    data = tmp_path / "data"
+    data.mkdir()
+    (data / "manifest.csv").write_text("run_id,file,series\nr1,r1.csv,oil\n")
+    results = _campaign_results(tmp_path / "bayestribo-campaign", data)
+    # the results folder itself, the data folder (found in ./bayestribo-campaign), --campaign
+    for argv in (
+        ["report", str(results)],
+        ["report", str(data)],
+        ["report", str(data), "--campaign", str(results)],
+    ):
+        assert main([*argv, "--out", str(tmp_path / "c.html")]) == 0
+        params = captured[-1][1]
+        assert params["campaign_dir"] == str(results.resolve())
+        assert params["series"] is None and params["air_series"] is None  # no such series
+        assert "campaign_seed" not in params  # the campaign's own seed
+        assert "reusing the fits of the campaign" in capsys.readouterr().err
+    # --refit fits for the report instead
+    assert main(["report", str(data), "--refit", "--out", str(tmp_path / "c.html")]) == 0
+    assert "campaign_dir" not in captured[-1][1]
+    # a seed other than the campaign's is refused rather than silently ignored
+    n = len(captured)
+    assert main(["report", str(results), "--seed", "5", "--out", str(tmp_path / "c.html")]) == 2
+    assert "fitted with seed 3" in capsys.readouterr().err and len(captured) == n
+
+
+def test_a_parameter_of_the_wrong_type_fails_at_once_naming_it(tmp_path, captured, capsys):
+    if not RUN.is_file():
+        pytest.skip("the bundled campaign data/ is absent")
+    argv = ["report", str(RUN), "--out", str(tmp_path / "r.html"), "--param", "max_steps=5k"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "parameter 'max_steps': expected int, got '5k'" in err
+    assert not captured and not (tmp_path / "r.html").exists()
 
 
 def test_missing_path_is_an_error_naming_it(tmp_path, capsys):
@@ -83,7 +160,8 @@ def test_missing_path_is_an_error_naming_it(tmp_path, capsys):
 def test_folder_without_runs_is_an_error(tmp_path, capsys):
     (tmp_path / "notes.txt").write_text("no runs here")
     assert main(["report", str(tmp_path)]) == 2
-    assert "manifest.csv or run files" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "manifest.csv or run files" in err and "results of `bayestribo campaign`" in err
 
 
 def test_run_options_are_refused_for_a_folder(tmp_path, capsys):

@@ -1,8 +1,11 @@
-"""The report notebooks: committed clean, parameters injected, every notebook executed.
+"""The report notebooks: shipped in the package, committed clean, typed parameters
+checked before running, every notebook executed.
 
 Each notebook runs with nbclient (kernel python3) on short test parameters (a few fits
 at most) and must finish without an error output; its HTML rendering must embed its
-figures. A notebook whose data or modules are absent is skipped with the reason.
+figures, show no code, load nothing from a network, and its figure files must be in
+the format asked for. A notebook whose data or modules are absent is skipped with the
+reason.
 """
 
 from __future__ import annotations
@@ -10,6 +13,7 @@ from __future__ import annotations
 import importlib.util
 import json
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -20,6 +24,7 @@ nbformat = pytest.importorskip("nbformat")
 pytest.importorskip("nbclient")
 
 from bayestribo.errors import MissingDependencyError  # noqa: E402
+from bayestribo.reports.html import external_references  # noqa: E402
 from bayestribo.reports.notebooks import (  # noqa: E402
     NOTEBOOKS,
     PARAMETERS_TAG,
@@ -27,8 +32,10 @@ from bayestribo.reports.notebooks import (  # noqa: E402
     execute_notebook,
     has_outputs,
     inject_parameters,
+    notebook_parameter_specs,
     notebook_parameters,
     notebook_path,
+    notebooks_dir,
     read_notebook,
     run_report,
     to_html,
@@ -46,9 +53,13 @@ REQUIRES = {
 }
 
 
+#: Format of the figure files each notebook writes in its test (every format is tried).
+FORMATS = {"single_run": "pdf", "loads": "svg"}
+
+
 def _test_parameters(name: str, tmp: Path) -> dict:
     """Short runs: one to three fits per notebook, small samplers where it matters."""
-    common = {"figure_dir": str(tmp / "figures")}
+    common = {"figure_dir": str(tmp / "figures"), "figure_format": FORMATS.get(name, "png")}
     if name == "single_run":
         return {**common, "grid_points": 32, "summary_path": str(tmp / "summary.json")}
     if name == "loads":
@@ -114,8 +125,35 @@ def test_notebook_is_committed_without_outputs_and_has_one_parameters_cell(name)
 
 
 def test_every_notebook_file_is_listed():
-    on_disk = {p.name for p in (REPO / "notebooks").glob("*.ipynb")}
-    assert on_disk == set(NOTEBOOKS.values())
+    shipped = {p.name for p in notebooks_dir().glob("*.ipynb")}
+    assert shipped == set(NOTEBOOKS.values())
+
+
+def test_the_notebooks_are_shipped_in_the_package():
+    # read through importlib.resources: what `pip install .` installs, not the checkout
+    assert notebooks_dir() == REPO / "bayestribo" / "reports" / "ipynb"
+    pyproject = (REPO / "pyproject.toml").read_text(encoding="utf-8")
+    assert '"reports/ipynb/*.ipynb"' in pyproject and '"reports/template/*/*"' in pyproject
+
+
+@pytest.mark.parametrize("name", sorted(NOTEBOOKS))
+def test_the_notebooks_folder_holds_the_shipped_notebooks(name):
+    copy = REPO / "notebooks" / NOTEBOOKS[name]
+    if not copy.parent.is_dir():
+        pytest.skip("no notebooks/ folder (not a source checkout)")
+    shipped = notebooks_dir() / NOTEBOOKS[name]
+    assert copy.read_bytes() == shipped.read_bytes(), (
+        f"notebooks/{copy.name} differs from the shipped one: copy the edited one over the other"
+    )
+
+
+@pytest.mark.parametrize("name", sorted(NOTEBOOKS))
+def test_every_parameter_has_a_type_and_a_meaning(name):
+    specs = notebook_parameter_specs(read_notebook(name))
+    untyped = [k for k, s in specs.items() if s.annotation is None]
+    unexplained = [k for k, s in specs.items() if not s.comment]
+    assert not untyped and not unexplained
+    assert specs["figure_format"].default == "png"
 
 
 # -- parameter injection ----------------------------------------------------------------
@@ -145,10 +183,42 @@ def test_inject_parameters_refuses_an_unknown_name():
         inject_parameters(nb, {"max_stepz": 10})
 
 
+@pytest.mark.parametrize(
+    ("value", "expected"),
+    [("5k", "expected int"), (True, "expected int"), (2.5, "expected int")],
+)
+def test_a_value_of_the_wrong_type_is_refused_naming_the_parameter_and_the_type(value, expected):
+    nb = read_notebook("single_run")
+    with pytest.raises(ReportError, match=f"parameter 'max_steps': {expected}"):
+        inject_parameters(nb, {"max_steps": value})
+
+
+def test_typed_values_are_accepted():
+    nb = read_notebook("loads")
+    inject_parameters(nb, {"loads": [0.12, 1], "repeats": None, "fit_kwargs": {"max_steps": 9}})
+    assert notebook_parameters(nb)["loads"] == [0.12, 1]
+    with pytest.raises(ReportError, match=r"parameter 'loads': expected list\[float\] \| None"):
+        inject_parameters(read_notebook("loads"), {"loads": ["heavy"]})
+
+
+def test_a_wrong_type_fails_before_any_cell_runs(tmp_path):
+    cell = nbformat.v4.new_code_cell("steps: int = 10  # steps")
+    cell.metadata["tags"] = [PARAMETERS_TAG]
+    marker = tmp_path / "ran"
+    nb = nbformat.v4.new_notebook(
+        cells=[cell, nbformat.v4.new_code_cell(f"open({str(marker)!r}, 'w').close()")]
+    )
+    path = tmp_path / "nb.ipynb"
+    nbformat.write(nb, str(path))
+    with pytest.raises(ReportError, match="parameter 'steps': expected int"):
+        run_report(str(path), {"steps": "5k"}, cwd=tmp_path)
+    assert not marker.exists()
+
+
 def test_inject_parameters_refuses_a_value_that_is_not_a_literal():
     nb = read_notebook("single_run")
-    with pytest.raises(ReportError, match="seed"):
-        inject_parameters(nb, {"seed": object()})
+    with pytest.raises(ReportError, match="read_kwargs"):
+        inject_parameters(nb, {"read_kwargs": {"x": object()}})
 
 
 def test_a_notebook_without_a_parameters_cell_is_refused():
@@ -197,12 +267,23 @@ def test_notebook_executes_with_test_parameters(name, tmp_path):
         for o in c.outputs
         if "image/png" in o.get("data", {})
     ]
-    pngs = sorted((tmp_path / "figures").glob("*.png"))
-    assert images and pngs, f"{name}: no figure produced"
+    fmt = params["figure_format"]
+    files = sorted((tmp_path / "figures").glob(f"*.{fmt}"))
+    assert images and files, f"{name}: no figure produced"
+    assert len(files) == len(list((tmp_path / "figures").iterdir()))  # all in that format
+    if fmt == "pdf":
+        assert all(f.read_bytes().startswith(b"%PDF") for f in files)
+    if fmt == "svg":
+        assert all(b"<svg" in f.read_bytes()[:2000] for f in files)
     if html is not None:
         text = html.read_text(encoding="utf-8")
         assert text.count("data:image/png;base64") >= len(images)  # figures embedded
         assert "Traceback" not in text
+        assert external_references(text) == []  # readable offline
+        assert "$$" not in text  # equations rendered, not left as TeX
+        assert not re.search(r'class="[^"]*jp-InputArea-editor', text)  # no code
+        assert 'data-mime-type="application/vnd.jupyter.stderr"' not in text
+        assert 'class="bt-toc"' in text and "bayestribo version" in text
 
     summary = tmp_path / "summary.json"
     if name == "single_run":
@@ -214,12 +295,18 @@ def test_notebook_executes_with_test_parameters(name, tmp_path):
         for p in ("zeta", "mu_k"):
             lo, hi = record["fit"]["parameters"][p]["interval"]
             assert lo <= record["true"][p] <= hi, p
+        # one verdict, decided from the checks it lists, and the same in the text
+        adequacy = record["adequacy"]
+        assert adequacy["adequate"] == all(c["passed"] is not False for c in adequacy["checks"])
+        assert f"Verdict: {adequacy['verdict']}." in text
     if name in ("loads", "viscosity"):
         record = json.loads(summary.read_text())
         assert not record["failed"]
         assert len(record["runs"]) == {"loads": 4, "viscosity": 2}[name]
     if name == "loads":
-        assert record["trend"] is not None and record["contact_damping"]
+        assert record["trends"] and record["contact_damping"]
+        assert record["campaign_dir"] is None and record["seed"] == 0  # fitted here
+        assert "No campaign results were given" in text
     if name == "real_data":
         record = json.loads(summary.read_text())
         verdict = {r["recording"]: r["dominated by"] for r in record["verdict"]}

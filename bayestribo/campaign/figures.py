@@ -120,6 +120,7 @@ def plot_against_load(analysis: CampaignAnalysis, fig: Any = None) -> Any:
         ax.set_ylabel(f"population mean of {_LABELS[name]} [-]")
         ax.grid(alpha=0.3)
         _ticks(ax, "y")
+        _ticks(ax, "x")
     axes[0].legend(fontsize="small")
     fig.suptitle(f"Group means with {100 * analysis.prob:.0f} % credible intervals")
     return fig
@@ -225,6 +226,7 @@ def plot_derived(analysis: CampaignAnalysis, fig: Any = None) -> Any:
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
         _ticks(ax, "y")
+        _ticks(ax, "x")
     fig.suptitle(f"Contact damping per group: median and {100 * analysis.prob:.0f} % interval")
     return fig
 

@@ -1,14 +1,22 @@
-"""``bayestribo report``: a run or a campaign folder as one self-contained HTML report.
+"""``bayestribo report``: a run or a campaign as one self-contained HTML report.
 
 Runs the single-run notebook (for a run file) or the campaign notebook across loads (for
-a folder) on the user's data, and renders it as HTML with the figures embedded, so a
-report can be sent without opening Jupyter.
+a folder) and renders it as one HTML page a reader can open offline: no code (unless
+``--show-code``), figures embedded, equations rendered, a table of contents. The figures
+are also written next to the HTML (``--figure-format pdf`` by default: vector graphics
+for a paper).
+
+A folder is reported with the fits of ``bayestribo campaign`` when there are any: PATH
+itself may be the campaign's ``--out`` folder, or ``--campaign OUTDIR`` names it, or it
+is found in ``PATH/bayestribo-campaign`` or ``./bayestribo-campaign``; without one every
+run is fitted with the campaign's default seed, and the report says so.
 
 Examples::
 
     bayestribo report data/runs/glycerol-N0.31-r1.csv --out report.html
     bayestribo report HarmOsc3.txt --columns t x --length-unit arbitrary --out osc3.html
-    bayestribo report data/ --out campaign.html --param repeats=[1] --hide-code
+    bayestribo campaign data/ --out results/ && bayestribo report results/ --out campaign.html
+    bayestribo report data/ --out campaign.html --param repeats=[1] --figure-format svg
 """
 
 from __future__ import annotations
@@ -21,6 +29,9 @@ from typing import Any
 
 __all__ = ["campaign_selection", "notebook_for", "parse_params", "register"]
 
+#: File formats of the figures written next to the report.
+FIGURE_FORMATS = ("png", "pdf", "svg")
+
 
 def register(subparsers: Any) -> None:
     """Add the ``report`` sub-command."""
@@ -28,39 +39,79 @@ def register(subparsers: Any) -> None:
 
     p = subparsers.add_parser(
         "report",
-        help="HTML report of a run (single-run notebook) or a campaign folder (loads notebook)",
+        help="HTML report of a run or a campaign folder, readable offline, figures as PDF",
         description=(
-            "Run the report notebook on PATH and write it as one HTML file with the figures "
-            "embedded. A run file gets the single-run report (signals, energy decay, "
-            "classical estimates, Bayesian fit, diagnostics, corner plot, Π with its "
-            "predictive band, comparison table, adequacy checks); a folder gets the "
-            "campaign report across loads (per-run fits, forest plot, population of "
-            "repeats, ζ and μ_k against load, ζ_k and d_k)."
+            "Run the report notebook on PATH and write it as one HTML file a reader can open "
+            "offline (figures embedded, equations rendered, no code unless --show-code), "
+            "with the figures also written next to it. A run file gets the single-run report "
+            "(signals, energy decay, classical estimates, Bayesian fit, diagnostics, corner "
+            "plot, Π with its predictive band, comparison of estimates, adequacy verdict); a "
+            "folder gets the campaign report (per-run fits, forest plot, populations of "
+            "repeats, ζ and μ_k against load, ζ_k and d_k), from the fits of `bayestribo "
+            "campaign` when its results are found (PATH itself, --campaign, "
+            "PATH/bayestribo-campaign or ./bayestribo-campaign)."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    p.add_argument("path", metavar="PATH", help="run file, or campaign folder")
+    p.add_argument(
+        "path", metavar="PATH", help="run file, folder of runs, or a campaign's results folder"
+    )
     p.add_argument("--out", type=Path, help="HTML file to write (default: <PATH stem>-report.html)")
     add_reading_options(p)
-    p.add_argument("--seed", type=int, help="seed of the fits (the notebook's default otherwise)")
+    p.add_argument(
+        "--seed",
+        type=int,
+        help="seed of the fits (default: the notebook's; a reused campaign keeps its own)",
+    )
     p.add_argument(
         "--param",
         action="append",
         default=[],
         metavar="KEY=VALUE",
         help="set a notebook parameter (VALUE a Python literal, e.g. max_steps=5000, "
-        "repeats=[1]); repeatable",
+        "repeats=[1]); checked against the parameter's type before anything runs; repeatable",
     )
-    p.add_argument("--figures", type=Path, metavar="DIR", help="also write the figures (PNG)")
+    p.add_argument(
+        "--figures",
+        type=Path,
+        metavar="DIR",
+        help="folder of the figure files (default: <report stem>-figures next to the HTML)",
+    )
+    p.add_argument(
+        "--figure-format",
+        choices=FIGURE_FORMATS,
+        default="pdf",
+        help="file format of the figures written next to the report (pdf, svg: vector)",
+    )
+    p.add_argument(
+        "--campaign",
+        type=Path,
+        metavar="OUTDIR",
+        help="results of `bayestribo campaign` whose fits a folder's report reuses",
+    )
+    p.add_argument(
+        "--refit",
+        action="store_true",
+        help="fit a folder's runs for the report even where campaign results exist",
+    )
     p.add_argument(
         "--executed", type=Path, metavar="NOTEBOOK", help="also write the executed notebook"
     )
-    p.add_argument("--hide-code", action="store_true", help="leave the code cells out")
+    p.add_argument("--show-code", action="store_true", help="include the notebook's code")
+    p.add_argument("--hide-code", action="store_true", help=argparse.SUPPRESS)  # the default now
     p.set_defaults(handler=run)
 
 
-def parse_params(items: list[str]) -> dict[str, Any]:
+def parse_params(items: list[str], specs: dict[str, Any] | None = None) -> dict[str, Any]:
     """``KEY=VALUE`` strings to a dict; VALUE a Python literal, else kept as a string.
+
+    Parameters
+    ----------
+    items : list of str
+        The ``--param`` values.
+    specs : dict, optional
+        The notebook's parameters (:func:`bayestribo.reports.notebooks.notebook_parameter_specs`):
+        a VALUE for a ``str`` parameter is kept as written even if it reads as a number.
 
     Raises
     ------
@@ -76,33 +127,40 @@ def parse_params(items: list[str]) -> dict[str, Any]:
         if not sep or not key.isidentifier():
             raise ReportError(f"--param {item!r}: expected KEY=VALUE with KEY a parameter name")
         try:
-            out[key] = ast.literal_eval(text)
+            value = ast.literal_eval(text)
         except (ValueError, SyntaxError):
-            out[key] = text
+            value = text
+        spec = (specs or {}).get(key)
+        if spec is not None and not isinstance(value, str) and spec.type in ("str", "str | None"):
+            value = text
+        out[key] = value
     return out
 
 
 def notebook_for(path: Path) -> str:
-    """``"single_run"`` for a file, ``"loads"`` for a folder holding runs.
+    """``"single_run"`` for a file, ``"loads"`` for a folder holding runs or campaign results.
 
     Raises
     ------
     ReportError
-        If the path does not exist, or a folder holds neither a ``manifest.csv`` nor a
-        run file with a sidecar.
+        If the path does not exist, or a folder holds neither a ``manifest.csv``, nor a
+        run file with a sidecar, nor the results of ``bayestribo campaign``.
     """
+    from bayestribo.reports.campaign import is_campaign_folder
     from bayestribo.reports.notebooks import ReportError
 
     if path.is_file():
         return "single_run"
     if path.is_dir():
-        has_runs = (path / "manifest.csv").is_file() or any(
-            f.with_suffix(".json").is_file() for f in path.rglob("*.csv")
+        has_runs = (
+            (path / "manifest.csv").is_file()
+            or any(f.with_suffix(".json").is_file() for f in path.rglob("*.csv"))
+            or is_campaign_folder(path)
         )
         if not has_runs:
             raise ReportError(
                 f"{path}: a campaign folder needs a manifest.csv or run files (.csv) with "
-                "their sidecars (.json)"
+                "their sidecars (.json), or the results of `bayestribo campaign`"
             )
         return "loads"
     raise ReportError(f"{path}: no such run file or folder")
@@ -130,17 +188,67 @@ def campaign_selection(folder: Path) -> dict[str, Any]:
     return out
 
 
+def _campaign_params(path: Path, args: argparse.Namespace) -> tuple[dict[str, Any], str]:
+    """Parameters of the campaign notebook, and a line saying where the fits come from."""
+    from bayestribo.reports.campaign import (
+        DEFAULT_SEED,
+        find_campaign,
+        is_campaign_folder,
+        load_campaign,
+    )
+    from bayestribo.reports.notebooks import ReportError
+
+    found = None
+    if args.campaign is not None:
+        if not is_campaign_folder(args.campaign):
+            raise ReportError(
+                f"--campaign {args.campaign}: no campaign results there (population.json and "
+                "catalog.sqlite, as written by `bayestribo campaign DIR --out OUTDIR`)"
+            )
+        found = args.campaign.resolve()
+    elif not args.refit:
+        found = find_campaign(path)
+    params: dict[str, Any] = {}
+    if found is not None and not args.refit:
+        campaign = load_campaign(found)
+        if args.seed is not None and args.seed != campaign.seed:
+            raise ReportError(
+                f"--seed {args.seed}: the campaign in {found} was fitted with seed "
+                f"{campaign.seed}; leave --seed out to report its fits, or add --refit"
+            )
+        params["campaign_dir"] = str(found)
+        if found != path:
+            params["data_dir"] = str(path)
+        series = {m.get("series") for m in campaign.metadata.values()}
+        params.update({"series": None} if "glycerol" not in series else {})
+        params.update({"air_series": None} if "air" not in series else {})
+        return params, f"reusing the fits of the campaign in {found}"
+    params["data_dir"] = str(path)
+    params["campaign_seed"] = DEFAULT_SEED if args.seed is None else args.seed
+    params.update(campaign_selection(path))
+    return params, (
+        f"no campaign results found: fitting every run with seed {params['campaign_seed']}"
+        + (" (the default of `bayestribo campaign`)" if args.seed is None else "")
+    )
+
+
 def run(args: argparse.Namespace) -> int:
-    """Choose the notebook, inject the parameters, execute, write the HTML."""
+    """Choose the notebook, check the parameters, execute, write the HTML and figures."""
     from bayestribo.cli._common import reading_kwargs
-    from bayestribo.reports.notebooks import ReportError, run_report
+    from bayestribo.reports.notebooks import (
+        ReportError,
+        inject_parameters,
+        notebook_parameter_specs,
+        read_notebook,
+        run_report,
+    )
 
     path = Path(args.path).resolve()
     notebook = notebook_for(path)
     params: dict[str, Any] = {}
+    where = ""
     if notebook == "single_run":
-        read_kwargs = reading_kwargs(args)
-        params.update({"run_path": str(path), "read_kwargs": read_kwargs})
+        params.update({"run_path": str(path), "read_kwargs": reading_kwargs(args)})
         if args.seed is not None:
             params["seed"] = args.seed
     else:
@@ -149,17 +257,25 @@ def run(args: argparse.Namespace) -> int:
                 "--columns, --length-unit, --frequency, --load and --mass describe one run "
                 "file; a campaign folder's runs need sidecars"
             )
-        params["data_dir"] = str(path)
-        params.update(campaign_selection(path))
-        if args.seed is not None:
-            params["campaign_seed"] = args.seed
-    if args.figures is not None:
-        params["figure_dir"] = str(args.figures.resolve())
-    params.update(parse_params(args.param))
+        campaign_params, where = _campaign_params(path, args)
+        params.update(campaign_params)
     out = args.out or Path(f"{path.stem or path.name}-report.html")
+    figures = args.figures or out.with_name(f"{out.stem}-figures")
+    params["figure_dir"] = str(figures.resolve())
+    params["figure_format"] = args.figure_format
+    nb = read_notebook(notebook)
+    params.update(parse_params(args.param, notebook_parameter_specs(nb)))
+    inject_parameters(nb, params)  # every name and type checked before anything runs
     print(f"running the {notebook} report on {path} ...", file=sys.stderr)
-    run_report(notebook, params, html=out, executed=args.executed, hide_code=args.hide_code)
+    if where:
+        print(where, file=sys.stderr)
+    run_report(
+        notebook,
+        params,
+        html=out,
+        executed=args.executed,
+        show_code=args.show_code,
+    )
     print(f"report written to {out.resolve()}")
-    if args.figures is not None:
-        print(f"figures in {args.figures.resolve()}")
+    print(f"figures ({args.figure_format}) in {figures.resolve()}")
     return 0

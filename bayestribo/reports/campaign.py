@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import bayestribo
 from bayestribo.reports._errors import ReportError
 
 __all__ = [
@@ -34,9 +35,9 @@ __all__ = [
     "load_campaign",
 ]
 
-#: Seed of a campaign that nothing else names: the default of ``bayestribo campaign
-#: --seed`` (a test keeps the two equal).
-DEFAULT_SEED = 0
+#: Seed of a campaign that nothing else names: the package's default seed, that of
+#: ``bayestribo campaign --seed`` (a test keeps the two equal).
+DEFAULT_SEED: int = int(getattr(bayestribo, "DEFAULT_SEED", 0))
 
 #: Default output folder of ``bayestribo campaign`` (relative to where it ran).
 CAMPAIGN_OUT = "bayestribo-campaign"

@@ -68,8 +68,9 @@ def math_to_svg(tex: str, *, fontsize: float = 12.0, display: bool = False) -> s
     Returns
     -------
     str
-        ``<img class="bt-math" ...>`` with the TeX as ``alt`` text, its size in pt and,
-        inline, the baseline aligned with the text (``vertical-align`` by the depth).
+        ``<img class="bt-math" ...>`` with the TeX as ``alt`` text, its size in em of
+        the surrounding text and, inline, the baseline aligned with the text
+        (``vertical-align`` by the depth).
     """
     from matplotlib import mathtext
     from matplotlib.font_manager import FontProperties
@@ -84,9 +85,14 @@ def math_to_svg(tex: str, *, fontsize: float = 12.0, display: bool = False) -> s
     data = base64.b64encode(svg.encode("utf-8")).decode("ascii")
     alt = html_lib.escape(tex.strip(), quote=True)
     kind = "bt-math bt-math-display" if display else "bt-math"
-    style = f"width:{width}pt;height:{height}pt"
+    # sizes in em of the text around (rendered at ``fontsize``): an equation in a
+    # heading grows with the heading
+    em = float(fontsize)
+    style = ""
+    if width and height:
+        style = f"width:{float(width) / em:.3f}em;height:{float(height) / em:.3f}em"
     if not display:
-        style += f";vertical-align:-{float(depth):.1f}pt"
+        style += f";vertical-align:-{float(depth) / em:.3f}em"
     src = f"data:image/svg+xml;base64,{data}"
     return f'<img class="{kind}" alt="{alt}" style="{style}" src="{src}">'
 

@@ -34,6 +34,7 @@ __all__ = [
     "note",
     "setup",
     "show_warnings_as_notes",
+    "table",
     "verdict",
 ]
 
@@ -70,6 +71,14 @@ def verdict(text: str) -> None:
     from IPython.display import HTML
 
     _display(HTML(f'<p class="bt-verdict">{html.escape(str(text))}</p>'))
+
+
+def table(frame: Any, *, digits: int = 5) -> None:
+    """Show a pandas DataFrame as a table: numbers to ``digits`` significant digits,
+    missing values as a dash (not NaN)."""
+    from IPython.display import HTML
+
+    _display(HTML(frame.to_html(na_rep="–", float_format=lambda v: f"{v:.{digits}g}", border=0)))
 
 
 def _warning_as_note(message, category, filename, lineno, file=None, line=None) -> None:

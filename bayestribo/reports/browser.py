@@ -1,0 +1,282 @@
+"""A report as a reader's browser shows it: headless Chromium, offline.
+
+:func:`inspect_report` opens a copy of the HTML report in headless Chromium with the
+network switched off, lets it load, and reads back from the live page what a reader
+gets: how many images there are, how many loaded with a non-zero natural size, how
+many equations (SVG images with their TeX as ``alt``), whether any raw ``$$`` or
+``\\(`` TeX is left in the visible text, whether code cells are shown. The probe is a
+small script added to the copy only (the report itself has no script), which writes
+its findings as JSON into the page before Chromium dumps the DOM.
+
+:func:`screenshot` writes a PNG of the page as Chromium renders it. From the command
+line::
+
+    python -m bayestribo.reports.browser report.html --screenshot docs/report.png
+
+prints the inspection and writes the screenshot.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import shutil
+import subprocess
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from bayestribo.reports._errors import ReportError
+
+__all__ = ["PageInspection", "find_chromium", "inspect_report", "main", "screenshot"]
+
+#: Names of the Chromium executable, tried in order.
+CHROMIUM_NAMES = ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable")
+
+#: Flags of every run: headless, no sandbox (containers run as root), no GPU, no network.
+_FLAGS = (
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--hide-scrollbars",
+    "--no-first-run",
+    "--disable-extensions",
+    "--proxy-server=http://127.0.0.1:9",  # offline: any network request fails
+    "--proxy-bypass-list=<-loopback>",
+)
+
+_PROBE = """
+<script>
+window.addEventListener("load", function () {
+  var imgs = Array.prototype.slice.call(document.images);
+  var text = document.body.innerText;
+  var result = {
+    images: imgs.length,
+    loaded: imgs.filter(function (i) { return i.complete && i.naturalWidth > 0; }).length,
+    broken: imgs.filter(function (i) { return !(i.complete && i.naturalWidth > 0); })
+                .map(function (i) { return (i.getAttribute("src") || "").slice(0, 80); }),
+    equations: imgs.filter(function (i) { return i.classList.contains("bt-math"); }).length,
+    figures: imgs.filter(function (i) {
+      return (i.getAttribute("src") || "").indexOf("data:image/png") === 0; }).length,
+    raw_tex: text.indexOf("$$") >= 0 || text.indexOf("\\\\(") >= 0,
+    code_cells: document.querySelectorAll(".jp-CodeCell .jp-InputArea").length,
+    toc_links: document.querySelectorAll(".bt-toc a").length,
+    notes: document.querySelectorAll(".bt-note").length,
+    stderr_boxes: document.querySelectorAll(
+      "[data-mime-type='application/vnd.jupyter.stderr']").length,
+    text_length: text.length
+  };
+  var out = document.createElement("pre");
+  out.id = "bt-probe";
+  out.textContent = JSON.stringify(result);
+  document.body.appendChild(out);
+});
+</script>
+"""
+
+
+@dataclass(frozen=True)
+class PageInspection:
+    """What headless Chromium found in a report.
+
+    Attributes
+    ----------
+    images, loaded : int
+        Images on the page, and those that loaded with a non-zero natural width.
+    broken : list of str
+        The start of the ``src`` of each image that did not load.
+    equations : int
+        Equation images (SVG rendered from TeX).
+    figures : int
+        Figures (PNG data).
+    raw_tex : bool
+        Raw TeX (``$$`` or ``\\(``) left in the visible text.
+    code_cells : int
+        Code cells shown.
+    toc_links : int
+        Links of the table of contents.
+    notes : int
+        Notes (warnings and remarks) in the text.
+    stderr_boxes : int
+        stderr outputs shown as such.
+    text_length : int
+        Characters of visible text.
+    """
+
+    images: int
+    loaded: int
+    broken: list[str]
+    equations: int
+    figures: int
+    raw_tex: bool
+    code_cells: int
+    toc_links: int
+    notes: int
+    stderr_boxes: int
+    text_length: int
+
+    @property
+    def all_images_loaded(self) -> bool:
+        """Every image loaded with a non-zero size."""
+        return self.images == self.loaded
+
+
+def find_chromium() -> str | None:
+    """Path of a Chromium (or Chrome) executable on PATH, or None."""
+    for name in CHROMIUM_NAMES:
+        found = shutil.which(name)
+        if found:
+            return found
+    return None
+
+
+def _chromium(executable: str | None) -> str:
+    exe = executable or find_chromium()
+    if exe is None:
+        raise ReportError(
+            f"no Chromium found on PATH (looked for {', '.join(CHROMIUM_NAMES)}); install "
+            "it, e.g. `apt-get install chromium`"
+        )
+    return exe
+
+
+def _run(args: list[str], timeout: float) -> subprocess.CompletedProcess[str]:
+    try:
+        return subprocess.run(args, capture_output=True, text=True, timeout=timeout, check=False)
+    except subprocess.TimeoutExpired:
+        raise ReportError(f"Chromium did not finish within {timeout:.0f} s") from None
+
+
+def inspect_report(
+    html: str | Path, *, executable: str | None = None, timeout: float = 120.0
+) -> PageInspection:
+    """Open a report in headless Chromium, offline, and read what the page shows.
+
+    Parameters
+    ----------
+    html : path
+        The HTML report (not modified: a copy beside it in a temporary folder is opened,
+        with any relative files it names reachable).
+    executable : str, optional
+        Chromium to use (default :func:`find_chromium`).
+    timeout : float
+        Longest time Chromium may take [s].
+
+    Returns
+    -------
+    PageInspection
+
+    Raises
+    ------
+    ReportError
+        Without Chromium, or if it does not produce the page's findings.
+    """
+    exe = _chromium(executable)
+    source = Path(html).resolve()
+    page = source.read_text(encoding="utf-8")
+    probed = page.replace("</body>", _PROBE + "</body>", 1)
+    with tempfile.NamedTemporaryFile(
+        "w", suffix=".html", prefix=".probe-", dir=source.parent, delete=False, encoding="utf-8"
+    ) as fh:
+        fh.write(probed)
+        copy = Path(fh.name)
+    try:
+        with tempfile.TemporaryDirectory(prefix="bayestribo-chromium-") as profile:
+            proc = _run(
+                [
+                    exe,
+                    *_FLAGS,
+                    f"--user-data-dir={profile}",
+                    "--virtual-time-budget=10000",
+                    "--dump-dom",
+                    copy.as_uri(),
+                ],
+                timeout,
+            )
+    finally:
+        copy.unlink(missing_ok=True)
+    found = re.search(r'<pre id="bt-probe">(.*?)</pre>', proc.stdout, re.DOTALL)
+    if found is None:
+        raise ReportError(
+            f"Chromium gave no findings for {source} (exit {proc.returncode}): "
+            + proc.stderr.strip()[-300:]
+        )
+    text = found.group(1).replace("&quot;", '"').replace("&amp;", "&")
+    text = text.replace("&lt;", "<").replace("&gt;", ">")
+    data: dict[str, Any] = json.loads(text)
+    return PageInspection(**data)
+
+
+def screenshot(
+    html: str | Path,
+    png: str | Path,
+    *,
+    width: int = 1100,
+    height: int = 2400,
+    executable: str | None = None,
+    timeout: float = 120.0,
+) -> Path:
+    """Write a PNG of the top of a report as headless Chromium renders it, offline.
+
+    Parameters
+    ----------
+    html : path
+        The HTML report.
+    png : path
+        The PNG to write (its folder is created).
+    width, height : int
+        Window size [CSS pixels].
+    executable : str, optional
+        Chromium to use.
+    timeout : float
+        Longest time Chromium may take [s].
+
+    Returns
+    -------
+    Path
+        ``png``.
+    """
+    exe = _chromium(executable)
+    out = Path(png).resolve()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="bayestribo-chromium-") as profile:
+        proc = _run(
+            [
+                exe,
+                *_FLAGS,
+                f"--user-data-dir={profile}",
+                f"--window-size={width},{height}",
+                f"--screenshot={out}",
+                Path(html).resolve().as_uri(),
+            ],
+            timeout,
+        )
+    if not out.is_file():
+        raise ReportError(f"Chromium wrote no screenshot (exit {proc.returncode})")
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m bayestribo.reports.browser REPORT [--screenshot PNG]``."""
+    parser = argparse.ArgumentParser(
+        prog="python -m bayestribo.reports.browser",
+        description="Open a report in headless Chromium, offline: print what loaded, and "
+        "optionally write a screenshot.",
+    )
+    parser.add_argument("html", type=Path, help="the HTML report")
+    parser.add_argument("--screenshot", type=Path, metavar="PNG", help="also write a PNG")
+    parser.add_argument("--width", type=int, default=1100, help="window width [px]")
+    parser.add_argument("--height", type=int, default=2400, help="window height [px]")
+    args = parser.parse_args(argv)
+    found = inspect_report(args.html)
+    print(json.dumps(found.__dict__, indent=2))
+    if args.screenshot:
+        shot = screenshot(args.html, args.screenshot, width=args.width, height=args.height)
+        print(f"screenshot: {shot}")
+    return 0 if found.all_images_loaded and not found.raw_tex else 1
+
+
+if __name__ == "__main__":  # pragma: no cover
+    raise SystemExit(main())
