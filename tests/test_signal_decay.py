@@ -211,3 +211,31 @@ def test_bad_skip_argument():
     t, x, v = _good()
     with pytest.raises(RecordingError, match="skip_oscillations"):
         energy_decay(t, x, v, skip_oscillations=-1)
+
+
+@pytest.mark.parametrize("rest_after", [0.1, 2.0, 10.0])
+def test_end_of_motion_does_not_depend_on_the_rest_recorded_after_it(rest_after):
+    # The package's simulator with 0.1 to 10 s of rest after the stop (clean otherwise):
+    # the end of motion is the same within a sample (it used to move with the longest
+    # noise excursion of the rest tail).
+    run = simulate_flat(
+        seed=7,
+        displacement_noise_m=1.5e-6,
+        velocity_noise_m_per_s=1.5e-7,
+        rest_after_s=rest_after,
+        **COMMON,
+    )
+    decay = energy_decay(run.time, run.displacement, run.velocity, rig=run.rig())
+    sim = run.metadata["simulation"]
+    stop = sim["release_time_s"] + sim["motion_duration_s"]
+    assert decay.motion_ended
+    assert decay.stop_time == pytest.approx(stop, abs=1.0 / 10_000.0)
+
+
+def test_errors_name_the_part_of_the_analysis():
+    t, x, v = _good()
+    rng = np.random.default_rng(0)
+    with pytest.raises(RecordingError, match="release: no motion found"):
+        energy_decay(t, 1e-6 * rng.standard_normal(t.size), 1e-7 * rng.standard_normal(t.size))
+    with pytest.raises(RecordingError, match="turning points: "):
+        energy_decay(t[:300], x[:300], v[:300])

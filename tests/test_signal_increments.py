@@ -193,3 +193,18 @@ def test_derived_channel_noise_agrees_with_the_linearised_propagation():
     np.testing.assert_allclose(var, expected, rtol=0.1)
     # the mean's Monte Carlo error is √(var/4000): 5 of them
     assert np.all(np.abs(bias - expected_bias) < 5 * np.sqrt(expected / 4000))
+
+
+def test_white_noise_at_rest_keeps_the_white_variances():
+    # A simulated record with white noise: the rest spectrum is not flagged coloured
+    # and the increments' variances are exactly the white formula's.
+    run = simulate(
+        sensor=Sensor(displacement_noise_m=20 * 1.5e-7, velocity_noise_m_per_s=20 * 1.5e-8),
+        seed=12,
+    )
+    decay = energy_decay(run.time, run.displacement, run.velocity, rig=run.rig())
+    assert decay.rest_noise is not None and not decay.rest_noise.coloured
+    noise = noise_model(decay, run.metadata)
+    np.testing.assert_array_equal(
+        pi_data(decay, noise).variance, pi_data(decay, noise, spectral=False).variance
+    )

@@ -7,29 +7,45 @@ from the end of motion T. A real recording needs some care first, and
 
 * **Time stamps** must be strictly increasing and regular (the error names the first
   sample that is not).
+* **Release and end of motion** come first, from
+  :func:`bayestribo.signal.motion.motion_span` on the velocity (recorded, or derived
+  from the displacement): the motion is the run of two-period blocks holding a
+  coherent oscillation at the record's frequency, whatever the colour of the noise;
+  the release is where the velocity leaves its rest level and the end of motion where
+  it reaches it for good (the sticking turning point), both extrapolated from the
+  moving side and located near the motion only, so neither moves with the length of
+  the rest (0.1 s to 30 s give the same end within a sample). When the record ends
+  before the motion does (a test in air decays for many seconds), Π runs to the last
+  sample and :attr:`EnergyDecay.tau_end` gives the τ at which model curves must be
+  truncated (``exact_pi(..., tau_end=decay.tau_end)``).
 * **Turning points** come from :func:`bayestribo.signal.peaks.find_peaks` on the
-  displacement (sub-sample parabola fits; the rest tail after the motion stops
-  is recognised as a stretch flat within the noise).
-* **Release and first oscillation**: when the record starts with the pin held at
-  rest, the release is where the displacement leaves that rest (beyond ±4σ); for a
-  record that starts in motion, its first turning point stands for it. The first
-  ``skip_oscillations`` oscillations after it are disturbed by the magnet and
-  skipped (default one, as in the paper, section 2.1); the analysis starts at the
-  sample nearest to the next displacement turning point.
+  displacement between the release and the end of motion only (sub-sample parabola
+  fits), with the noise threshold measured at rest (a wiggle of filtered, humming
+  or 1/f noise at rest is not a turning point), and are checked to be half a period
+  apart (:func:`bayestribo.signal.motion.check_turning_points`).
+* **First oscillation**: the first ``skip_oscillations`` oscillations after the
+  release are disturbed by the magnet and skipped (default one, as in the paper,
+  section 2.1); the analysis starts at the sample nearest to the next displacement
+  turning point. For a record that starts in motion, its first turning point stands
+  for the release.
 * **Equilibrium**: the displacement zero of a vibrometer is arbitrary and, with dry
   friction, the pin comes to rest off-centre, so neither the rest before release nor
   the tail is the equilibrium. It is estimated from the turning points themselves
   (:func:`bayestribo.signal.peaks.estimate_offset`, which uses Eq. 20), with a linear
   drift when there are enough of them.
-* **End of motion**: the start of the flat rest tail, on the velocity when it was
-  recorded (it resolves the last swings far better than the displacement). When
-  the record ends before the motion does (a test in air decays for many seconds), Π runs to the last
-  sample and :attr:`EnergyDecay.tau_end` gives the τ at which model curves must be
-  truncated (``exact_pi(..., tau_end=decay.tau_end)``).
 * **Noise** is measured in the quiescent segments, the rest before release and the
   rest after the stop (standard deviation about the segment's mean, excluding a
-  quarter period next to the motion). Without such a segment it comes from
+  quarter period next to the motion), and as a spectrum there
+  (:attr:`EnergyDecay.rest_noise`: Welch PSD, mains lines, colour; see
+  :mod:`bayestribo.signal.spectrum`), from which the increments' variances are
+  computed when the noise is not white. Without such a segment it comes from
   4th-order differences of the signal and the result says so.
+* **Mains hum** can be removed first (``notch=50.0`` or ``"auto"``): measured at
+  rest and subtracted (zero phase, no delay).
+* **Filters of the signal chain**: a causal anti-alias filter on both channels delays
+  displacement and velocity alike (v = dx/dt commutes with it), so E from one sample
+  is the true E one group delay earlier; all times (release, turning points, end of
+  motion) carry the same delay and Π is unbiased.
 * **Natural frequency** is measured from the turning-point times (the damped
   half-period π/ω_d, Eq. 13) corrected by √(1+β²) with β from the peak decrement
   (Eq. 14, 20). By default τ = Ωt uses the measured frequency; a nominal one from

@@ -21,6 +21,16 @@ integral), its noise is correlated with the recorded channel's and across sample
 the increment variances and the bias are then obtained by propagating simulated noise
 through the same processing (Monte Carlo, ``n_replicates`` seeded draws).
 
+**Coloured noise.** A real signal chain filters the noise (anti-alias filter), adds
+mains lines and 1/f noise: the samples' errors are then correlated, and the variance
+of a weighted sum of them is ``wᵀ C w`` with C the noise's autocovariance, not
+``σ² ‖w‖²`` (for a 2 kHz anti-alias filter at 10 kHz the latter underestimates the
+increments' variance 2.5-fold, at 100 kHz 25-fold). :func:`pi_data` takes C from the
+spectrum measured at rest (:class:`bayestribo.signal.spectrum.NoiseSpectrum`) when it
+is flagged coloured; white noise at rest keeps the white formula exactly. The
+correlation *between* increments (C reaching across an increment boundary: a few
+samples for a filter, longer for 1/f noise) is neglected.
+
 **Grid.** Finer increments carry more information, not the same information
 counted twice: within a half cycle the noise of E varies from y²σ_y² at a turning
 point to y'²σ_y'² at a zero crossing, where the vibrometer's velocity channel makes
