@@ -350,6 +350,8 @@ def test_spectral_increment_variance_matches_monte_carlo(name):
     nm = noise_model(decay, displacement_resolution=0.15e-6, velocity_resolution=0.015e-6)
     data = pi_data(decay, nm)
     white = pi_data(decay, nm, spectral=False)
+    assert data.spectral and not white.spectral
+    assert nm.coloured and "coloured noise at rest" in nm.describe()
     # Monte Carlo: fresh noise of the same process on the decay's own y, y' (the variance
     # formula is evaluated at the observed signals, as in the white case's test)
     sc = decay.scaling
@@ -417,6 +419,7 @@ def test_white_rest_noise_keeps_todays_increment_variances():
     assert not decay.rest_noise.coloured
     nm = noise_model(decay)
     spectral, white = pi_data(decay, nm), pi_data(decay, nm, spectral=False)
+    assert not spectral.spectral and not nm.coloured
     np.testing.assert_array_equal(spectral.variance, white.variance)
     np.testing.assert_array_equal(spectral.increments, white.increments)
 

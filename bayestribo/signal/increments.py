@@ -174,6 +174,9 @@ class PiData:
         the equilibrium changes the observed increments by -δ₀∫y - δ₁∫τy to first
         order (the second-order ½∫(δ₀ + δ₁τ)² is below 1e-6 per unit τ for
         equilibrium errors below 1e-3 of the length scale, and is neglected).
+    spectral : bool
+        True when the variances come from the coloured noise spectrum measured at
+        rest, False for the white formula.
     """
 
     tau_grid: NDArray
@@ -185,6 +188,7 @@ class PiData:
     yp0: float
     noise_bias: NDArray
     offset_design: NDArray
+    spectral: bool = False
 
     @property
     def tau_end(self) -> float:
@@ -533,6 +537,7 @@ def pi_data(
         y0=float(decay.y[0]),
         yp0=float(decay.yp[0]),
         noise_bias=bias,
+        spectral=bool(options),
         offset_design=np.column_stack(
             [
                 integrate_increments(decay.y, edges, weights),

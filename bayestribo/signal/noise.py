@@ -63,6 +63,12 @@ class NoiseModel:
         Where the measured figures come from (quiescent segments or signal differences).
     derived_channel : str or None
         A channel computed from the other (its noise is propagated, not assumed).
+    coloured : bool
+        The noise measured at rest is not white (filtered, 1/f, or a mains line; see
+        :class:`bayestribo.signal.spectrum.RestNoise`): :func:`bayestribo.signal.pi_data`
+        then takes the increments' variances from its spectrum.
+    lines_Hz : tuple of float
+        Mains lines found in the noise at rest [Hz].
     """
 
     displacement: float
@@ -75,6 +81,8 @@ class NoiseModel:
     source_velocity: str
     measured_in: str
     derived_channel: str | None
+    coloured: bool = False
+    lines_Hz: tuple[float, ...] = ()
 
     @property
     def exceeds_nominal(self) -> bool:
@@ -95,7 +103,12 @@ class NoiseModel:
             if src == "measured" and nominal is not None:
                 text += f", {used / nominal:.3g}× the resolution {nominal:.3g}"
             parts.append(text + ")")
-        return "; ".join(parts) + f"; measured in {self.measured_in}"
+        text = "; ".join(parts) + f"; measured in {self.measured_in}"
+        if self.coloured:
+            text += "; coloured noise at rest (increment variances from its spectrum)"
+        if self.lines_Hz:
+            text += "; mains line(s) at " + ", ".join(f"{f:.2f}" for f in self.lines_Hz) + " Hz"
+        return text
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form (JSON, NetCDF attributes)."""
@@ -148,6 +161,7 @@ def noise_model(
     nom_x = displacement_resolution or meta.get("displacement_resolution_m")
     nom_v = velocity_resolution or meta.get("velocity_resolution_m_per_s")
     meas = decay.noise
+    rest = getattr(decay, "rest_noise", None)
     derived = decay.derived_channel
     if derived == "displacement":
         sigma_v, src_v = _choose(nom_v, meas.velocity, "velocity")
@@ -169,4 +183,6 @@ def noise_model(
         source_velocity=src_v,
         measured_in=meas.source,
         derived_channel=derived,
+        coloured=bool(rest is not None and rest.coloured),
+        lines_Hz=() if rest is None else tuple(float(f) for f in rest.lines_Hz),
     )
