@@ -71,6 +71,7 @@ __all__ = [
     "pi_data",
     "sample_noise_bias",
     "simpson_weights",
+    "spectral_options",
     "white_noise_bias",
 ]
 
@@ -422,9 +423,28 @@ def increment_noise(
     return draws.mean(axis=0), draws.var(axis=0, ddof=1)
 
 
-def _spectral_options(decay: EnergyDecay, noise: NoiseModel, n_lags: int) -> dict:
-    """Keywords of :func:`increment_noise` for the coloured noise measured at rest
-    (empty when the rest noise is white or was not measured)."""
+def spectral_options(decay: EnergyDecay, noise: NoiseModel, n_lags: int) -> dict:
+    """Keywords of :func:`increment_noise` for the coloured noise measured at rest.
+
+    ``autocov_y``/``autocov_yp`` (in units of y², y'², ``n_lags`` lags) for recorded
+    channels, or ``spectrum``/``spectrum_scale`` for the Monte Carlo of a derived
+    channel, for each channel whose rest noise is coloured and is the figure the noise
+    model uses (measured above the nominal resolution). Empty when the rest noise is
+    white or was not measured: :func:`increment_noise` then keeps the white formula.
+
+    Parameters
+    ----------
+    decay : EnergyDecay
+        The recording's energy decay (its :attr:`EnergyDecay.rest_noise`).
+    noise : NoiseModel
+        The noise model used.
+    n_lags : int
+        Lags needed: at least the samples of the longest increment.
+
+    Returns
+    -------
+    dict
+    """
     rest = decay.rest_noise
     if rest is None or not rest.coloured:
         return {}
@@ -498,7 +518,7 @@ def pi_data(
     sig_y = noise.displacement / sc.length_scale
     sig_yp = noise.velocity / (sc.length_scale * sc.omega)
     e2 = integrate_increments(decay.energy**2, edges, weights)
-    options = _spectral_options(decay, noise, int(np.max(np.diff(edges))) + 1) if spectral else {}
+    options = spectral_options(decay, noise, int(np.max(np.diff(edges))) + 1) if spectral else {}
     bias, variance = increment_noise(
         tau,
         decay.y,

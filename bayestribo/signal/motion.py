@@ -24,6 +24,13 @@ the rig's frequency**.
   where the pin sticks (the velocity reaches zero with a slope Ω²|x - x_c| > 0, so
   the crossing is sharp). The **release** is found the same way from the front: the
   last crossing of the rest level before the first excursion beyond the threshold.
+  This is a hysteresis: motion is entered only beyond ``threshold`` σ and left only at
+  the rest level itself, reached by extrapolating a cubic through the samples of the
+  last (first) eighth of a period on the moving side, a third of it away from the
+  crossing (where an anti-alias filter rounds the corner), not by waiting for the
+  noise to cross it.
+* The blocks' sinusoid is at the frequency measured from the record's own spectrum
+  (the dominant period of its first difference, :mod:`bayestribo.signal.peaks`).
 
 :func:`check_turning_points` applies the other piece of physics: consecutive turning
 points of the motion are half a damped period apart.
