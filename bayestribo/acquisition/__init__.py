@@ -6,6 +6,10 @@ protocol
     Frames of the open wire protocol (``docs/protocol.md``) and the streaming parser.
 assembly
     Frames of one run to samples, with gaps reported and never filled.
+frameindex
+    Where each DATA frame lies in the raw log: memory bounded for any run length.
+csvstream
+    The canonical CSV written a chunk at a time, while the run streams.
 port
     Open any port by URL (device path, ``socket://``, ``loop://``).
 logger
