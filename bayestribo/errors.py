@@ -63,3 +63,8 @@ class MisfitWarning(UserWarning):
 class MetadataWarning(UserWarning):
     """A metadata value was missing and the package took it from the recording (the
     message says which value, and how to give it instead)."""
+
+
+class PriorBoundWarning(UserWarning):
+    """A posterior piles on a physical bound of its prior: no measurement (the message
+    names the parameter and what to check)."""

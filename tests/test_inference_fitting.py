@@ -246,3 +246,26 @@ def test_without_load_no_quantity_is_labelled_as_a_coefficient():
         result.samples("friction_displacement") * ratio,
         rtol=1e-12,
     )
+
+
+def test_a_posterior_piled_on_a_prior_bound_is_no_measurement():
+    from bayestribo.errors import PriorBoundWarning
+    from bayestribo.inference import Uniform
+
+    run = simulate(
+        DissipationLaw(zeta=0.0236, mu_k=0.0294),
+        sensor=Sensor(
+            displacement_noise_m=4.5e-6, velocity_noise_m_per_s=4.5e-7, sample_rate_Hz=2000.0
+        ),
+        seed=5,
+    )
+    # μ_k = 0.0294 cannot fit under a bound of 0.02: the posterior piles on it.
+    with pytest.warns(PriorBoundWarning, match=r"mu_k piles on the upper bound"):
+        result = fit(run, seed=1, priors={"mu_k": Uniform(0.0, 0.02)}, max_steps=3000)
+    assert [b["parameter"] for b in result.at_prior_bound] == ["mu_k"]
+    assert not result.usable
+    assert "NOT A MEASUREMENT: mu_k" in result.to_text()
+    # The same run under the default priors is a measurement.
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PriorBoundWarning)
+        assert fit(run, seed=1, max_steps=3000).at_prior_bound == []

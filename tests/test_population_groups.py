@@ -396,3 +396,23 @@ def test_short_runs_warn():
     runs = _normal_runs(rng.normal(0.02, 0.001, 3), np.full(3, 0.001), 0.03, 0.02, rng, 100)
     with pytest.warns(ConvergenceWarning, match="not converged: only .* steps after burn-in"):
         population(runs, ("zeta",), max_steps=200)
+
+
+def test_the_mean_of_a_non_negative_parameter_stays_non_negative():
+    # Damping in air (ζ₀ = 0.0033) measured by three runs each uncertain by 0.004: each
+    # run's posterior is cut at 0 by its prior, and so is the population mean; with a
+    # flat prior on the whole line about a fifth of the mean's draws would be negative.
+    rng = np.random.default_rng(3)
+    runs = []
+    for i in range(3):
+        x = rng.normal(0.002, 0.004, 4000)
+        x = x[x >= 0.0][:1000]
+        runs.append(RunSamples(f"air{i}", {"zeta": x}, np.full(x.size, -math.log(0.3)), {}))
+    g = population(runs, ("zeta",), seed=2).pooled
+    assert g.mean["zeta"].min() >= 0.0
+    # The bound cuts, it does not move the mass: the median stays near the runs' level.
+    assert 0.0005 < np.median(g.mean["zeta"]) < 0.006
+    # A parameter without the bound (a slope, a friction displacement) is unbounded.
+    free = [RunSamples(r.name, {"x_c": r.values["zeta"] - 0.002}, r.log_prior, {}) for r in runs]
+    unbounded = population(free, ("x_c",), sigma_prior={"x_c": 0.01}, seed=2).pooled
+    assert unbounded.mean["x_c"].min() < 0.0

@@ -83,6 +83,10 @@ class CampaignAnalysis:
         Series label -> :class:`Trend` against ``covariate``.
     derived : list of dict
         Per contact group: ζ_k and d_k summaries.
+    excluded : list of dict
+        Runs left out of the populations, ``{"run", "reason"}``: a fit that piles on
+        a prior bound (no measurement), or a run without a grouping key the other
+        runs have.
     """
 
     by: tuple[str, ...]
@@ -94,6 +98,14 @@ class CampaignAnalysis:
     series: Population | None = None
     trends: dict[str, Trend] = field(default_factory=dict)
     derived: list[dict[str, Any]] = field(default_factory=list)
+    excluded: list[dict[str, str]] = field(default_factory=list)
+
+    @property
+    def converged(self) -> bool:
+        """Whether every run's sampler and every population and trend sampler converged."""
+        pops = [self.contact, self.zeta0, self.series, *self.trends.values()]
+        runs = all(r.get("converged", True) for r in self.runs)
+        return runs and all(_population_converged(pop) for pop in pops if pop is not None)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready report."""
@@ -108,6 +120,8 @@ class CampaignAnalysis:
             "series": None if self.series is None else self.series.to_dict(p),
             "trends": {k: t.to_dict(p) for k, t in self.trends.items()},
             "derived": self.derived,
+            "excluded": self.excluded,
+            "converged": self.converged,
         }
 
     def group_rows(self) -> list[dict[str, Any]]:
@@ -228,6 +242,32 @@ def _viscosity_trends(
     return out
 
 
+def _name(result: Any) -> str:
+    metadata = getattr(result, "metadata", {}) or {}
+    return str(metadata.get("run_id") or getattr(result, "run_name", None) or "?")
+
+
+def _unusable(result: Any) -> str | None:
+    """Why a fit cannot enter a population, or None. A fit whose sampler did not
+    converge still enters (its status and the exit status say so): a short campaign
+    is a legitimate first look."""
+    bound = list(getattr(result, "at_prior_bound", []) or [])
+    if bound:
+        names = ", ".join(str(b["parameter"]) for b in bound)
+        return f"posterior piles on its prior's upper bound ({names}): no measurement"
+    return None
+
+
+def _population_converged(pop: Any) -> bool:
+    groups = list(getattr(pop, "groups", {}).values())
+    for extra in (getattr(pop, "pooled", None),):
+        if extra is not None:
+            groups.append(extra)
+    if not groups:  # a trend: its own diagnostics
+        return bool(getattr(pop, "diagnostics", {}).get("converged", True))
+    return all(bool(g.diagnostics.get("converged", True)) for g in groups)
+
+
 def analyse_campaign(
     results: Sequence[FitLike],
     by: Sequence[str] = DEFAULT_BY,
@@ -260,10 +300,35 @@ def analyse_campaign(
     results = list(results)
     if not results:
         raise BayestriboError("results: no fitted runs to analyse")
-    contact_runs = [r for r in results if _has_friction(r)]
-    free_runs = [r for r in results if not _has_friction(r)]
+    excluded: list[dict[str, str]] = []
+    usable = []
+    for r in results:
+        reason = _unusable(r)
+        if reason is None:
+            usable.append(r)
+        else:
+            excluded.append({"run": _name(r), "reason": reason})
+    contact_runs = [r for r in usable if _has_friction(r)]
+    free_runs = [r for r in usable if not _has_friction(r)]
     kw = {"seed": seed, "max_steps": max_steps, "sigma_prior": sigma_prior}
     keys = tuple(k for k in by if any(r.metadata.get(k) is not None for r in contact_runs))
+    complete = []
+    for r in contact_runs:
+        missing = [k for k in keys if r.metadata.get(k) is None]
+        if missing:
+            excluded.append(
+                {
+                    "run": _name(r),
+                    "reason": f"metadata has no {', '.join(map(repr, missing))} to group by "
+                    "(the other runs have it); add it to the run's sidecar",
+                }
+            )
+        else:
+            complete.append(r)
+    contact_runs = complete
+    if not contact_runs and not free_runs:
+        reasons = "; ".join(f"{e['run']}: {e['reason']}" for e in excluded)
+        raise BayestriboError(f"results: no usable fitted run to analyse ({reasons})")
     contact = zeta0 = series_pop = None
     trends: dict[str, Trend] = {}
     if contact_runs:
@@ -296,14 +361,27 @@ def analyse_campaign(
         if contact is not None and zeta0 is not None and contact.groups
         else []
     )
+    reasons = {e["run"]: e["reason"] for e in excluded}
+    runs = []
+    for r in results:
+        row = _run_summary(r, prob)
+        reason = reasons.get(_name(r))
+        if reason is not None:
+            row["status"] = f"excluded: {reason}"
+        elif not row["converged"]:
+            row["status"] = "used, sampler not converged"
+        else:
+            row["status"] = "used"
+        runs.append(row)
     return CampaignAnalysis(
         by=keys,
         covariate=covariate,
         prob=prob,
-        runs=[_run_summary(r, prob) for r in results],
+        runs=runs,
         contact=contact,
         zeta0=zeta0,
         series=series_pop,
         trends=trends,
         derived=derived,
+        excluded=excluded,
     )

@@ -385,11 +385,9 @@ def fit_catalogued(
     list of RunOutcome
         One per path, in order.
 
-    Raises
-    ------
-    BayestriboError
-        If a sidecar's ``run_id`` differs from its file's stem, or the catalog
-        refuses a run (another file registered under the same run id).
+    A run whose sidecar cannot be read, whose ``run_id`` differs from its file's
+    stem, or that the catalog refuses (another file registered under the same run
+    id) is not fitted: its outcome carries the reason as ``error``.
     """
     from bayestribo import __version__
     from bayestribo.campaign.catalog import find_fit, record_fit, register_run
@@ -402,15 +400,23 @@ def fit_catalogued(
     names = [run_identity(p) for p in paths]
     settings: list[dict[str, Any]] = []
     rows: list[int] = []
+    outcomes: dict[str, RunOutcome] = {}
     for path, name in zip(paths, names, strict=True):
         side = sidecar_path(path)
-        metadata = read_sidecar(side) if side.exists() else {}
-        if metadata.get("run_id", name) != name:
-            raise BayestriboError(
-                f"{side}: run_id {metadata['run_id']!r} differs from the file name {name!r}"
-            )
-        metadata = {**metadata, "run_id": name}
-        rows.append(register_run(catalog, path=path, sha256=_sha256(path), metadata=metadata))
+        try:
+            metadata = read_sidecar(side) if side.exists() else {}
+            if metadata.get("run_id", name) != name:
+                raise BayestriboError(
+                    f"{side}: run_id {metadata['run_id']!r} differs from the file name {name!r}"
+                )
+            metadata = {**metadata, "run_id": name}
+            row = register_run(catalog, path=path, sha256=_sha256(path), metadata=metadata)
+        except (BayestriboError, OSError) as exc:
+            # This run is listed with its reason and left out; the others go on.
+            seed = run_seed(campaign_seed, name)
+            outcomes[name] = RunOutcome(name, seed, None, f"{type(exc).__name__}: {exc}")
+            row = -1
+        rows.append(row)
         settings.append(
             {
                 "fit_kwargs": fit_kwargs,
@@ -420,9 +426,10 @@ def fit_catalogued(
                 "sidecar_sha256": _sha256(side) if side.exists() else None,
             }
         )
-    outcomes: dict[str, RunOutcome] = {}
     todo: list[int] = []
     for i, name in enumerate(names):
+        if name in outcomes:
+            continue
         record = (
             None
             if refit

@@ -113,6 +113,17 @@ def _text(analysis: Any, failures: list[dict[str, str]]) -> str:
         )
     for f in failures:
         lines.append(f"FAILED {f['run']}: {f['error']}")
+    for e in analysis.excluded:
+        lines.append(f"EXCLUDED {e['run']}: {e['reason']}")
+    unconverged = [r["run_id"] for r in analysis.runs if not r.get("converged", True)]
+    if unconverged:
+        lines.append(
+            f"NOT CONVERGED: the fits of {', '.join(map(str, unconverged))}; raise --max-steps"
+        )
+    elif not analysis.converged:
+        lines.append(
+            "NOT CONVERGED: a population sampler did not converge; raise --population-steps"
+        )
     return "\n".join(lines)
 
 
@@ -188,6 +199,9 @@ def run(args: argparse.Namespace) -> int:
         laws = _compare_laws(paths, executor, args, fit_kwargs) if args.compare_laws else None
     failures = [{"run": o.name, "error": str(o.error)} for o in outcomes if not o.ok]
     fitted = [o.result for o in outcomes if o.ok]
+    if not fitted:
+        listing = "; ".join(f"{f['run']}: {f['error']}" for f in failures)
+        raise BayestriboError(f"no run of {folder} could be fitted ({listing})")
     by = tuple(k for k in args.by.split(",") if k)
     analysis = analyse_campaign(
         fitted, by, prob=args.prob, seed=args.seed, max_steps=args.population_steps
@@ -206,7 +220,8 @@ def run(args: argparse.Namespace) -> int:
     (out / "population.json").write_text(json.dumps(report, indent=2, default=str) + "\n")
     _write_csv(out / "groups.csv", analysis.group_rows())
     _write_csv(out / "trends.csv", analysis.trend_rows())
-    _write_csv(out / "runs.csv", _run_rows(analysis.runs))
+    failed_rows = [{"run_id": f["run"], "status": f"failed: {f['error']}"} for f in failures]
+    _write_csv(out / "runs.csv", _run_rows(analysis.runs) + failed_rows)
     if not args.no_figures:
         from bayestribo.campaign.figures import save_figures
 
@@ -216,4 +231,7 @@ def run(args: argparse.Namespace) -> int:
         sys.stdout.write("\n")
     else:
         print(_text(analysis, failures))
-    return 1 if failures else 0
+    # The exit status rule of every command (README): 0 all good, 1 something
+    # unconverged, failed or excluded, 2 nothing usable (raised above).
+    clean = not failures and not analysis.excluded and analysis.converged
+    return 0 if clean else 1

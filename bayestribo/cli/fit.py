@@ -6,8 +6,9 @@ Examples::
     bayestribo fit data/runs/glycerol-N0.31-r1.csv --seed 1 --json --out fits/
     bayestribo fit HarmOsc3.txt --columns t x --length-unit arbitrary --frequency 1.1
 
-The exit status is 0 for a converged fit, 1 when the sampler did not converge (the
-result is still printed, marked as not converged), 2 for bad input.
+The exit status is 0 for a converged fit, 1 when the sampler did not converge or a
+posterior piles on a physical bound of its prior (the result is still printed, marked
+as not converged or as no measurement), 2 for bad input.
 """
 
 from __future__ import annotations
@@ -180,10 +181,7 @@ def run(args: argparse.Namespace) -> int:
     # the run is named by the path the user gave
     result.idata.posterior.attrs["run_name"] = str(args.run)
     for w in caught:
-        if issubclass(w.category, ConvergenceWarning):
-            print(f"bayestribo fit: warning: {w.message}", file=sys.stderr)
-        else:
-            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+        warnings.showwarning(w.message, w.category, w.filename, w.lineno)
     if args.out is not None:
         paths = write_outputs(result, args.out, Path(args.run).stem)
         if not args.json:
@@ -193,4 +191,4 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(result.to_text(args.prob))
     sys.stdout.flush()
-    return 0 if result.converged else 1
+    return 0 if result.usable else 1

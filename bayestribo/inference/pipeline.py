@@ -29,11 +29,16 @@ import scipy.stats
 from numpy.typing import NDArray
 
 from bayestribo import __version__
-from bayestribo.errors import BayestriboError, ConvergenceWarning, MisfitWarning
+from bayestribo.errors import (
+    BayestriboError,
+    ConvergenceWarning,
+    MisfitWarning,
+    PriorBoundWarning,
+)
 from bayestribo.inference.assemble import derived_quantities, inference_data
 from bayestribo.inference.likelihood import MODELS, PiLikelihood
 from bayestribo.inference.posterior import Posterior
-from bayestribo.inference.priors import Prior, PriorSet, default_priors
+from bayestribo.inference.priors import Prior, PriorSet, default_priors, piled_on_bounds
 from bayestribo.inference.result import FitResult, plain_data
 from bayestribo.inference.sampling import SamplerRun, SamplerSettings, run_ensembles
 from bayestribo.inference.sensitivity import prior_sensitivity
@@ -337,6 +342,10 @@ def summarise(
         posterior has no discrepancy term: the intervals are then too narrow.
     ConvergenceWarning
         When the sampler did not converge (the result says so too).
+    PriorBoundWarning
+        When a posterior piles on a physical upper bound of its prior
+        (:func:`~bayestribo.inference.priors.piled_on_bounds`); the result records it in
+        ``diagnostics["at_prior_bound"]`` and is not :attr:`~FitResult.usable`.
     """
     rng = np.random.default_rng(seed)
     posterior, run = sampled.posterior, sampled.run
@@ -353,6 +362,19 @@ def summarise(
             stacklevel=3,
         )
     flat = run.chains.reshape(-1, run.chains.shape[-1])
+    at_bound = piled_on_bounds(flat, posterior.priors)
+    for entry in at_bound:
+        warnings.warn(
+            f"{entry['parameter']} piles on the upper bound of its prior "
+            f"({entry['bound']:.4g}; {100 * entry['fraction']:.0f} % of the draws within 1 % "
+            f"of the range below it) for {name or 'the run'}: the prior, not the data, "
+            "ends the interval, so this is no measurement. The default bounds are physical "
+            "(the data then ask for a value the motion cannot have): check the units and "
+            "the channels (bayestribo inspect) and that the record is a free decay; a "
+            "narrowed prior: widen it",
+            PriorBoundWarning,
+            stacklevel=3,
+        )
     metadata = prepared.metadata
     scaling = prepared.decay.scaling
     derived = derived_quantities(posterior, flat, scaling, metadata, rng)
@@ -379,7 +401,9 @@ def summarise(
                 "max_steps": sampled.settings.max_steps,
             }
         ),
-        "diagnostics_json": json.dumps(plain_data(_diagnostics(sampled, misfit))),
+        "diagnostics_json": json.dumps(
+            plain_data({**_diagnostics(sampled, misfit), "at_prior_bound": at_bound})
+        ),
         "prior_sensitivity_json": json.dumps(plain_data(prior_sensitivity(flat, posterior.priors))),
     }
     result = FitResult(inference_data(posterior, run.chains, derived, rng, attrs))

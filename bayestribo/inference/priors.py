@@ -32,13 +32,22 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
+    "BOUND_FRACTION",
+    "BOUND_WIDTH",
     "LogUniform",
     "Normal",
     "Prior",
     "PriorSet",
     "Uniform",
     "default_priors",
+    "piled_on_bounds",
 ]
+
+#: Width of the band below an upper prior bound, as a fraction of the prior range.
+BOUND_WIDTH = 0.01
+#: Share of posterior draws in that band above which the posterior piles on the bound
+#: (a posterior that ignores the bound puts about BOUND_WIDTH there).
+BOUND_FRACTION = 0.10
 
 
 class Prior:
@@ -213,3 +222,40 @@ def default_priors(y0: float, *, friction: bool = True, discrepancy: bool = Fals
     if discrepancy:
         priors["log10_discrepancy"] = Uniform(-7.0, 0.0)
     return PriorSet(priors)
+
+
+def piled_on_bounds(draws: NDArray, priors: PriorSet) -> list[dict[str, float | str]]:
+    """Parameters whose posterior piles on the upper bound of a uniform prior.
+
+    The upper bounds of the default priors are physical limits, not beliefs: a
+    friction of a quarter of the initial amplitude stops the motion within two half
+    cycles, and ζ = 0.3 leaves no decay of several cycles to analyse. A posterior
+    held against such a bound is no measurement: the data ask for a value the motion
+    cannot have (a unit or a channel wrong, or a recording that is not a free decay).
+    A parameter piles on its bound when more than :data:`BOUND_FRACTION` of the draws
+    lie within :data:`BOUND_WIDTH` of the prior range below it. Lower bounds (ζ = 0,
+    μ_k = 0, μ_s = μ_k) are physical values a posterior may legitimately reach.
+
+    Parameters
+    ----------
+    draws : ndarray of shape (n, d)
+        Posterior draws of the sampled parameters, in ``priors`` order.
+    priors : PriorSet
+        Their priors.
+
+    Returns
+    -------
+    list of dict
+        One ``{"parameter", "bound", "fraction"}`` per parameter on its bound.
+    """
+    draws = np.asarray(draws, dtype=float)
+    out: list[dict[str, float | str]] = []
+    for i, name in enumerate(priors.names):
+        prior = priors[name]
+        if not isinstance(prior, Uniform | LogUniform):
+            continue
+        edge = prior.high - BOUND_WIDTH * (prior.high - prior.low)
+        fraction = float(np.mean(draws[:, i] >= edge))
+        if fraction > BOUND_FRACTION:
+            out.append({"parameter": name, "bound": float(prior.high), "fraction": fraction})
+    return out

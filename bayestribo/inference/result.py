@@ -122,6 +122,16 @@ class FitResult:
         return bool(self.diagnostics.get("converged", False))
 
     @property
+    def at_prior_bound(self) -> list[dict[str, Any]]:
+        """Parameters whose posterior piles on a physical bound of their prior."""
+        return list(self.diagnostics.get("at_prior_bound", []))
+
+    @property
+    def usable(self) -> bool:
+        """Converged, and no posterior piled on a prior bound: a measurement."""
+        return self.converged and not self.at_prior_bound
+
+    @property
     def priors(self) -> PriorSet:
         """The priors of the sampled parameters."""
         return PriorSet.from_spec(self._attr("priors_json", {}))
@@ -216,6 +226,11 @@ class FitResult:
             f"ensembles × {d.get('n_steps')} steps, τ_max {d.get('autocorr_time_max', 0):.1f}, "
             f"ESS_min {d.get('ess_min', 0):.0f}, R-hat_max {d.get('rhat_max', 0):.4f}"
         )
+        for entry in self.at_prior_bound:
+            lines.append(
+                f"NOT A MEASUREMENT: {entry['parameter']} piles on its prior's upper bound "
+                f"{entry['bound']:.4g}; check units and channels (bayestribo inspect)"
+            )
         header = f"{100 * check_prob(prob):g} % interval"
         lines.append(f"{'':24}{'mean':>14}{'sd':>12}{header:>32}")
         for name, s in self.summary(prob).items():

@@ -1,9 +1,12 @@
 """Sampling the population hyperparameters (β, σ), seeded.
 
 The sampled vector is (β flattened, log σ): the population-mean coefficients have an
-improper flat prior, and each σ_k its prior from :mod:`bayestribo.population.hyperpriors`
-(with the Jacobian of σ = exp(log σ)). Sampling is the package's one driver,
-:func:`bayestribo.inference.sampling.run_ensembles`: independent ensembles run until
+improper flat prior, bounded below by zero for the intercept (the mean at the centre
+of the covariates) of a parameter that cannot be negative (:data:`NON_NEGATIVE`:
+viscous damping ζ, ζ₀ in air, and friction μ_k), and each σ_k its prior from
+:mod:`bayestribo.population.hyperpriors` (with the Jacobian of σ = exp(log σ)).
+Sampling is the package's one driver, :func:`bayestribo.inference.sampling.run_ensembles`:
+independent ensembles run until
 50 autocorrelation times and R-hat say so, with the same moves and NaN rule as the
 single-run fit.
 """
@@ -24,7 +27,10 @@ from bayestribo.inference.sampling import SamplerSettings, run_ensembles
 from bayestribo.population.hyperpriors import SigmaPrior
 from bayestribo.population.likelihood import MarginalLikelihood
 
-__all__ = ["HyperSamples", "sample_hyperparameters"]
+__all__ = ["NON_NEGATIVE", "HyperSamples", "sample_hyperparameters"]
+
+#: Parameters whose population mean (the intercept at the covariates' centre) is >= 0.
+NON_NEGATIVE = frozenset({"zeta", "mu_k"})
 
 #: Bound on |log σ| of the sampled hyperparameters.
 _LOG_SIGMA_LIMIT = 100.0
@@ -121,6 +127,7 @@ def sample_hyperparameters(
     if not (isinstance(n_walkers, int) and n_walkers >= 2 * ndim):
         raise BayestriboError(f"n_walkers: expected an integer >= {2 * ndim}, got {n_walkers!r}")
     settings = SamplerSettings(n_walkers=n_walkers, n_ensembles=n_ensembles, max_steps=max_steps)
+    bounded = [j for j, name in enumerate(like.parameters) if name in NON_NEGATIVE]
 
     def log_prob(x: NDArray[np.float64]) -> NDArray[np.float64]:
         beta = x[:, : p * k].reshape(-1, p, k)
@@ -128,6 +135,8 @@ def sample_hyperparameters(
         out = np.full(len(x), -np.inf)
         # σ outside e^±100 has no prior mass worth a float: refused before exp overflows.
         ok = np.all(np.abs(log_sigma) < _LOG_SIGMA_LIMIT, axis=1)
+        if bounded:
+            ok &= np.all(beta[:, 0, bounded] >= 0.0, axis=1)
         if not ok.any():
             return out
         lp = log_sigma[ok].sum(axis=1)  # Jacobian of σ = exp(log σ)
@@ -144,6 +153,10 @@ def sample_hyperparameters(
     # (a slope against a covariate in large units is known far more tightly than a mean).
     coef_sd = np.sqrt(np.diag(np.linalg.pinv(like.design.T @ like.design)))[:, None] * sigma0
     start[:, : p * k] = beta0.ravel() + rng.normal(size=(n_start, p * k)) * coef_sd.ravel()
+    if bounded:
+        # Walkers start inside the support: a negative intercept is reflected.
+        view = start[:, : p * k].reshape(n_start, p, k)
+        view[:, 0, bounded] = np.abs(view[:, 0, bounded])
     start[:, p * k :] = np.log(sigma0) + 0.1 * rng.normal(size=(n_start, k))
     names = [f"beta[{i},{name}]" for i in range(p) for name in like.parameters]
     names += [f"log_sigma[{name}]" for name in like.parameters]
