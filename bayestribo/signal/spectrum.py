@@ -35,7 +35,9 @@ from bayestribo.errors import RecordingError
 
 __all__ = [
     "LINE_RATIO",
+    "LJUNG_BOX_LAGS",
     "MAINS_HZ",
+    "WHITE_P",
     "NoiseSpectrum",
     "RestNoise",
     "colored_noise",
@@ -50,8 +52,13 @@ MAINS_HZ: tuple[float, ...] = (50.0, 60.0)
 #: A line is a peak of the PSD this many times the median of its neighbourhood (for a
 #: single periodogram the chance of a noise bin this high is e^-10 ≈ 5e-5).
 LINE_RATIO = 10.0
+#: Lags of the Ljung-Box test of whiteness, and the p-value below which it calls the
+#: noise coloured (one white record in a thousand is then treated as coloured: its
+#: increment variances come from its spectrum, still unbiased).
+LJUNG_BOX_LAGS = 10
+WHITE_P = 1e-3
 #: Noise is called coloured when the PSD in the signal band differs from the flat level
-#: of white noise of the same variance by more than this factor (and by more than four
+#: of white noise of the same variance by more than this factor (and by more than six
 #: standard errors of its estimate).
 COLOUR_FACTOR = 1.25
 
@@ -82,15 +89,23 @@ class NoiseSpectrum:
     line_rms : tuple of float
         Root-mean-square amplitude of each line [unit].
     coloured : bool
-        True when the noise is not white in the signal band (``band_level`` off
-        ``white_level`` by more than :data:`COLOUR_FACTOR` and four standard errors)
-        or carries a line: its samples are then correlated and the increments'
-        variances need the autocovariance, not the variance alone.
+        True when the noise is not white: in the signal band (``band_level`` off
+        ``white_level`` by more than :data:`COLOUR_FACTOR` and six nominal standard
+        errors, the bins being correlated by the window),
+        by the Ljung-Box test (``white_p``), or because it carries a line: its
+        samples are then correlated and the increments' variances need the
+        autocovariance, not the variance alone.
     n_samples : int
         Samples at rest used.
     n_averages : float
         Equivalent number of independent periodograms averaged (sets the estimate's
         relative standard error, about 1/√(n_averages · bins averaged)).
+    white_p : float
+        p-value of the Ljung-Box test of whiteness on the first
+        :data:`LJUNG_BOX_LAGS` autocorrelations of the rest samples (each segment
+        about its mean): below :data:`WHITE_P` the noise is called coloured too. It
+        sees a filter or 1/f noise (lag-1 autocorrelation 0.7 for a 2 kHz filter at
+        10 kHz) in far fewer samples than the band level does.
     """
 
     frequency: NDArray
@@ -105,6 +120,7 @@ class NoiseSpectrum:
     coloured: bool
     n_samples: int
     n_averages: float
+    white_p: float = 1.0
 
     @property
     def sigma(self) -> float:
@@ -197,6 +213,27 @@ def _fft_length(n_longest: int, samples_per_period: float | None) -> int:
     want = 64 if samples_per_period is None else 8.0 * samples_per_period
     cap = 1 << max(6, math.ceil(math.log2(max(n_longest, 2))))
     return min(max(64, 1 << math.ceil(math.log2(want))), cap)
+
+
+def _ljung_box(segments: Sequence[NDArray], lags: int) -> float:
+    """p-value of the Ljung-Box statistic n(n+2) Σ ρ_k²/(n-k) over pooled segments.
+
+    G. M. Ljung and G. E. P. Box (1978), Biometrika 65(2), 297-303.
+    """
+    from scipy.stats import chi2
+
+    dev = [s - np.mean(s) for s in segments if s.size > lags + 2]
+    n = sum(d.size for d in dev)
+    if n <= lags + 2:
+        return 1.0
+    c0 = sum(float(d @ d) for d in dev)
+    if c0 == 0.0:
+        return 1.0
+    q = 0.0
+    for k in range(1, lags + 1):
+        rho = sum(float(d[:-k] @ d[k:]) for d in dev) / c0
+        q += rho * rho / (n - k)
+    return float(chi2.sf(n * (n + 2.0) * q, lags))
 
 
 def noise_spectrum(
@@ -311,7 +348,10 @@ def noise_spectrum(
     band_level = float(np.mean(psd[in_band]))
     rel_se = 1.0 / math.sqrt(max(averages, 1.0) * np.count_nonzero(in_band))
     off = abs(math.log(band_level / white)) if band_level > 0 and white > 0 else math.inf
-    coloured = variance > 0 and (bool(lines) or off > max(math.log(COLOUR_FACTOR), 4.0 * rel_se))
+    p_white = _ljung_box(segs, LJUNG_BOX_LAGS)
+    coloured = variance > 0 and (
+        bool(lines) or off > max(math.log(COLOUR_FACTOR), 6.0 * rel_se) or p_white < WHITE_P
+    )
     return NoiseSpectrum(
         frequency=freq,
         psd=psd,
@@ -325,6 +365,7 @@ def noise_spectrum(
         coloured=coloured,
         n_samples=int(sum(s.size for s in segs)),
         n_averages=float(averages),
+        white_p=float(p_white),
     )
 
 
