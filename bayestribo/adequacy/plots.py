@@ -84,8 +84,10 @@ def plot_windows(
             ax.plot(a, trend.mean + trend.slope * (a - mean_amp), "k--", label="trend")
         ax.grid(alpha=0.3)
     ax_z.set_ylabel("ζ [-]")
-    unit = "" if windows.friction_name == "mu_k" else f" [{windows.length_unit}]"
-    ax_m.set_ylabel(f"{windows.friction_name}{unit}")
+    if windows.friction_name == "mu_k":
+        ax_m.set_ylabel("μ_k [-]")
+    else:
+        ax_m.set_ylabel(f"{windows.friction_name} [{windows.length_unit}]")
     ax_m.set_xlabel(f"window amplitude [{windows.length_unit}]")
     ax_z.legend(fontsize="small")
     if constancy is not None:

@@ -55,10 +55,18 @@ def _pyplot() -> Any:
     return plt
 
 
+#: How a grouping key reads in a legend ("glycerol, water 0.0055").
+_KEY_PREFIX = {"lubricant": "", "water_mass_fraction": "water ", "load_N": "N = "}
+
+
 def _series_label(analysis: CampaignAnalysis, value: Any) -> str:
     keys = [k for k in analysis.by if k != analysis.covariate]
     values = value if isinstance(value, tuple) else (value,)
-    pairs = [f"{k}={v}" for k, v in zip(analysis.by, values, strict=False) if k in keys]
+    pairs = [
+        f"{_KEY_PREFIX[k]}{v}" if k in _KEY_PREFIX else f"{k}={v}"
+        for k, v in zip(analysis.by, values, strict=False)
+        if k in keys
+    ]
     return ", ".join(pairs) or "all"
 
 
@@ -121,7 +129,8 @@ def plot_against_load(analysis: CampaignAnalysis, fig: Any = None) -> Any:
         ax.grid(alpha=0.3)
         _ticks(ax, "y")
         _ticks(ax, "x")
-    axes[0].legend(fontsize="small")
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=3, fontsize="small")
     fig.suptitle(f"Group means with {100 * analysis.prob:.0f} % credible intervals")
     return fig
 
@@ -174,8 +183,8 @@ def plot_forest(
                     mfc="none" if k else c,
                 )
             true = (truth or {}).get(str(run.get("run_id")), {}).get(name)
-            if true is not None:
-                ax.plot(true, yi, "kx", ms=5)
+            if true is not None:  # a tick, not hiding the run's coloured dot
+                ax.plot(true, yi, "k|", ms=9, mew=1.2)
         ax.set_xlabel(f"{_LABELS[name]} [-]")
         ax.grid(alpha=0.3)
         _ticks(ax)
@@ -188,7 +197,7 @@ def plot_forest(
         for v in loads
     ]
     if truth:
-        handles.append(axes[0].plot([], [], "kx", label="true value")[0])
+        handles.append(axes[0].plot([], [], "k|", ms=9, mew=1.2, label="true value")[0])
     fig.legend(
         handles=handles, loc="outside lower center", ncols=min(6, len(handles)), fontsize="small"
     )
