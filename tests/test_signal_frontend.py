@@ -366,7 +366,9 @@ def test_spectral_increment_variance_matches_monte_carlo(name):
         e = 0.5 * ((y + ex) ** 2 + (yp + ev) ** 2)
         draws[first : first + block] = integrate_increments(e, edges, weights) - clean
     mc = draws.var(axis=0, ddof=1)[:-1]  # the last increment carries the end allowance
-    log_ratio = np.log(data.variance[:-1] / mc)
+    plus = np.maximum(data.neighbour_covariance, 0.0)
+    own = data.variance - np.r_[0.0, plus] - np.r_[plus, 0.0]  # each increment's own
+    log_ratio = np.log(own[:-1] / mc)
     # Tolerances: a variance from 400 draws has a relative sd of √(2/399) = 7 %; the
     # spectrum measured on 6 s of rest is off by a few % for all increments alike (its
     # variance alone: √(2/n_eff) ≈ 2-4 %). Each log ratio: sd ≈ 0.08, bound 0.3 (3.5 sd);
@@ -375,6 +377,15 @@ def test_spectral_increment_variance_matches_monte_carlo(name):
     assert abs(np.mean(log_ratio)) < 0.12
     # The white formula (σ²‖w‖² with σ² the rest variance) is far off: the test can fail.
     assert abs(np.mean(np.log(white.variance[:-1] / mc))) > 0.5
+    # Neighbours' covariance against the draws': the sd of a sample covariance is about
+    # √(v_j v_{j+1}/400) (5 of them, plus the spectrum's few % of the covariance).
+    mc_cov = np.array([np.cov(draws[:, j], draws[:, j + 1])[0, 1] for j in range(mc.size - 1)])
+    se_cov = np.sqrt(mc[:-1] * mc[1:] / reps)
+    cov = data.neighbour_covariance[: mc.size - 1]
+    assert np.all(np.abs(cov - mc_cov) < 5 * se_cov + 0.1 * np.abs(mc_cov))
+    # and the variance of the sum of all increments (but the last) is not understated
+    total = draws[:, :-1].sum(axis=1).var(ddof=1)
+    assert data.variance[:-1].sum() >= total * math.exp(-3 * math.sqrt(2 / reps) - 0.1)
     # the mean shift of each increment is the bias ½(c_ε[0] + c_η[0])∫1 (5 standard errors)
     se = np.sqrt(mc / reps)
     assert np.all(np.abs(draws.mean(axis=0)[:-1] - data.noise_bias[:-1]) < 5 * se)
