@@ -76,11 +76,11 @@ def run_level(factor: int, runs: int, seed0: int) -> list[dict[str, object]]:
             seed=seed0 + i,
         )
         start = time.perf_counter()
-        estimate_all(run, skip=2)
+        estimate_all(run, skip_oscillations=1)
         times["all"].append(time.perf_counter() - start)
         for method in METHODS:
             start = time.perf_counter()
-            table = estimate_all(run, skip=2, methods=[method])
+            table = estimate_all(run, skip_oscillations=1, methods=[method])
             times[method].append(time.perf_counter() - start)
             for e in table:
                 signal = e.data.split(" ")[0] if "peaks" in e.data else "x and v"

@@ -150,7 +150,7 @@ def baseline_run(level: int, index: int) -> dict[str, Any]:
         "mu_k": float(np.mean(result.samples("mu_k"))),
         "converged": result.converged,
     }
-    for e in estimate_all(run, skip=2):
+    for e in estimate_all(run, skip_oscillations=1):
         signal = e.data.split(" ")[0] if "peaks" in e.data else "x and v"
         out["estimates"][f"{e.method} ({signal})"] = {"zeta": e.zeta, "mu_k": e.mu_k}
     return out

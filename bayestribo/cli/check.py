@@ -40,6 +40,12 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "--window", type=int, help="window length in oscillations (default: about 1/8 of the decay)"
     )
+    p.add_argument(
+        "--skip",
+        type=int,
+        default=1,
+        help="oscillations to skip after the release, as for fit, decay and estimate",
+    )
     p.add_argument("--alpha", type=float, default=0.05, help="false-alarm rate of the test")
     p.add_argument("--draws", type=int, default=400, help="parameter draws for the checks")
     p.add_argument("--seed", type=int, default=DEFAULT_SEED, help="seed of the draws")
@@ -68,6 +74,7 @@ def run(args: argparse.Namespace) -> int:
         n_draws=args.draws,
         seed=args.seed,
         bayes=args.bayes,
+        skip_oscillations=args.skip,
     )
     if args.json:
         print(json.dumps(report.to_dict(), indent=2, ensure_ascii=False))

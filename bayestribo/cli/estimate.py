@@ -36,7 +36,11 @@ def register(subparsers: Any) -> None:
     add_run_arguments(p)
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     p.add_argument(
-        "--skip", type=int, default=0, help="leading extrema to skip (2 = first oscillation)"
+        "--skip",
+        type=int,
+        default=1,
+        help="oscillations to skip after the release, as for fit and decay (the estimators "
+        "analyse the fit's window)",
     )
     p.add_argument(
         "--methods", nargs="+", choices=METHODS, metavar="METHOD", help="subset of methods"
@@ -49,7 +53,9 @@ def run(args: argparse.Namespace) -> int:
     from bayestribo.estimators.all import estimate_all
 
     recording = read_run_from_args(args)
-    table = estimate_all(recording, skip=args.skip, methods=args.methods, name=args.run)
+    table = estimate_all(
+        recording, skip_oscillations=args.skip, methods=args.methods, name=args.run
+    )
     if args.json:
         print(table.to_json())
     else:

@@ -6,6 +6,7 @@ import os
 from collections.abc import Callable, Sequence
 from typing import Literal
 
+import numpy as np
 from numpy.typing import ArrayLike
 
 from bayestribo.errors import BayestriboError, RecordingError
@@ -16,6 +17,7 @@ from bayestribo.estimators.nonsuccessive import nonsuccessive_peaks
 from bayestribo.estimators.result import Estimate, EstimateTable
 from bayestribo.io.run import Run
 from bayestribo.model.scaling import Rig
+from bayestribo.signal.decay import energy_decay
 from bayestribo.signal.peaks import Peaks, find_peaks
 
 __all__ = ["METHODS", "estimate_all", "estimate_signals"]
@@ -42,11 +44,26 @@ def _failed(method: str, data: str, exc: BaseException) -> Estimate:
     return Estimate(method=method, data=data, notes=f"no estimate: {exc}")
 
 
+def _window_start(
+    t: ArrayLike, x: ArrayLike | None, v: ArrayLike | None, rig: Rig | None, skip: int
+) -> float | None:
+    """Start [s] of the fit's analysed window, less three quarters of a sample step;
+    None when the recording has no energy decay to find."""
+    try:
+        decay = energy_decay(t, x, v, rig=rig, skip_oscillations=skip)
+    except BayestriboError:
+        return None
+    step = float(np.median(np.diff(np.asarray(t, dtype=float))))
+    # The window starts at the sample nearest a turning point; the turning point's
+    # sub-sample time may lie up to half a step before it.
+    return float(decay.start_time - 0.75 * step)
+
+
 def estimate_all(
     run: Run | str | os.PathLike[str],
     *,
     rig: Rig | None = None,
-    skip: int = 0,
+    skip_oscillations: int = 1,
     offset: float | Literal["auto", "constant"] | None = "auto",
     methods: Sequence[str] | None = None,
     name: str | None = None,
@@ -62,7 +79,7 @@ def estimate_all(
     rig : Rig, optional
         Overrides the run's rig. Without any rig Ω comes from the recording and
         friction is reported as a friction displacement in the signal's unit.
-    skip, offset, methods, name
+    skip_oscillations, offset, methods, name
         As in :func:`estimate_signals` (``name`` defaults to the run's source).
 
     Returns
@@ -77,7 +94,7 @@ def estimate_all(
         recording.displacement,
         recording.velocity,
         rig=recording.rig() if rig is None else rig,
-        skip=skip,
+        skip_oscillations=skip_oscillations,
         offset=offset,
         methods=methods,
         name=name if name is not None else recording.source,
@@ -90,7 +107,7 @@ def estimate_signals(
     v: ArrayLike | None = None,
     *,
     rig: Rig | None = None,
-    skip: int = 0,
+    skip_oscillations: int = 1,
     offset: float | Literal["auto", "constant"] | None = "auto",
     methods: Sequence[str] | None = None,
     name: str | None = None,
@@ -106,8 +123,12 @@ def estimate_signals(
     rig : Rig, optional
         Without a rig Ω comes from the recording and friction is reported as a
         friction displacement in the signal's unit.
-    skip : int
-        Leading extrema to skip (2 = the first oscillation).
+    skip_oscillations : int
+        Oscillations after the release left out, default 1, counted as the Bayesian
+        fit counts them (:func:`bayestribo.signal.decay.energy_decay`): every method
+        analyses the fit's window, the peak methods from the first turning point at
+        or after its start. When no energy decay can be found in the recording, the
+        peak methods skip ``2 × skip_oscillations`` extrema from the first one found.
     offset : float, "auto", "constant" or None
         Equilibrium of the displacement (see :func:`bayestribo.signal.peaks.find_peaks`).
     methods : sequence of str, optional
@@ -137,13 +158,17 @@ def estimate_signals(
     out: list[Estimate] = []
     signals = [(kind, s) for kind, s in (("displacement", x), ("velocity", v)) if s is not None]
     peak_methods = [m for m in chosen if m in _PEAK_METHODS]
+    start = _window_start(t, x, v, rig, skip_oscillations) if peak_methods else None
     for kind, s in signals:
         if not peak_methods:
             break
         try:
-            pk = find_peaks(
-                t, s, kind=kind, skip=skip, offset=offset if kind == "displacement" else "auto"
-            )
+            level = offset if kind == "displacement" else "auto"
+            skip = 2 * skip_oscillations
+            if start is not None:
+                found = find_peaks(t, s, kind=kind, offset=level)
+                skip = int(np.count_nonzero(found.t < start))
+            pk = find_peaks(t, s, kind=kind, skip=skip, offset=level)
         except BayestriboError as exc:
             out += [_failed(m, f"{kind} peaks", exc) for m in peak_methods]
             continue
@@ -156,7 +181,7 @@ def estimate_signals(
     energy_models = [m for m in chosen if m.startswith("energy_ls_")]
     if energy_models:
         try:
-            data = energy_data(t, x, v, rig=rig, skip=skip, offset=offset)
+            data = energy_data(t, x, v, rig=rig, skip_oscillations=skip_oscillations, offset=offset)
         except BayestriboError as exc:
             out += [_failed(m, "energy", exc) for m in energy_models]
         else:

@@ -17,7 +17,8 @@ one path the Bayesian fit uses too (:func:`energy_data`). Both Π are integrated
 the same end T (the detected end of motion, or the last sample of a record that ends
 while still moving; the model is truncated there), so the record length does not
 bias the fit. The analysis starts at the sample nearest a turning point (y' ≈ 0,
-the initial state of Eq. 15) after ``skip`` extrema; the exact model starts from
+the initial state of Eq. 15) after ``skip_oscillations`` oscillations counted from
+the release, as in the Bayesian fit; the exact model starts from
 that sample's velocity.
 
 The covariance is the usual Gauss-Newton one, s²(JᵀJ)⁻¹ with s² = RSS/(n - 3). The
@@ -108,7 +109,7 @@ def energy_data(
     v: ArrayLike | None = None,
     *,
     rig: Rig | None = None,
-    skip: int = 0,
+    skip_oscillations: int = 1,
     offset: float | Literal["auto", "constant"] | None = "auto",
 ) -> EnergyData:
     """Prepare E(τ) and Π(τ) of a recording for the Π least squares (Eq. 26, 39).
@@ -132,14 +133,11 @@ def energy_data(
         Ω (the rig's nominal natural frequency) and, with mass and load, ℓ = N/k.
         Without it Ω is measured from the turning points (Eq. 13-14) and ℓ = 1
         signal unit.
-    skip : int
-        Leading turning points (extrema) to skip, counted among those found in the
-        record like every peak-based estimator of :mod:`bayestribo.estimators`
-        (2 = the first oscillation of a record that starts in motion), so that the
-        estimators of one table start at the same turning point. (The Bayesian fit
-        counts ``skip_oscillations`` from the release instead.) The analysis starts
-        at the sample nearest the next turning point and needs
-        :data:`MIN_TURNING_POINTS` after the skipped ones.
+    skip_oscillations : int
+        Oscillations after the release left out of the analysis, default 1, as for the
+        Bayesian fit (:func:`bayestribo.signal.decay.energy_decay`): the estimators
+        and the fit analyse the same window. The analysis needs
+        :data:`MIN_TURNING_POINTS` turning points after the skipped ones.
     offset : float, "auto", "constant" or None
         Equilibrium of the displacement (see :func:`bayestribo.signal.peaks.find_peaks`).
 
@@ -150,8 +148,8 @@ def energy_data(
     Raises
     ------
     RecordingError
-        No signal, bad samples or time stamps, a bad ``skip``, or too few turning
-        points.
+        No signal, bad samples or time stamps, a bad ``skip_oscillations``, or too
+        few turning points.
     """
     if x is None and v is None:
         raise RecordingError("give a displacement x or a velocity v (or both)")
@@ -161,7 +159,7 @@ def energy_data(
         v,
         rig=rig,
         use_nominal_frequency=rig is not None,
-        skip_turning_points=skip,
+        skip_oscillations=skip_oscillations,
         min_turning_points=MIN_TURNING_POINTS,
         offset=offset,
     )
@@ -215,7 +213,7 @@ def energy_least_squares(
     *,
     rig: Rig | None = None,
     model: Model = "averaged",
-    skip: int = 0,
+    skip_oscillations: int = 1,
     offset: float | Literal["auto", "constant"] | None = "auto",
     mu_s: float | None = None,
     max_points: int = 2000,
@@ -225,7 +223,7 @@ def energy_least_squares(
 
     Parameters
     ----------
-    t, x, v, rig, skip, offset
+    t, x, v, rig, skip_oscillations, offset
         The recording, as in :func:`energy_data`.
     model : {"averaged", "exact"}
         Π_app of Eq. 40-41 or the exact Π of the piecewise solution.
@@ -235,7 +233,8 @@ def energy_least_squares(
     max_points : int
         Π is smooth: at most this many evenly spaced samples enter the fit.
     data : EnergyData, optional
-        Pre-computed :func:`energy_data` (then t, x, v, skip and offset are ignored).
+        Pre-computed :func:`energy_data` (then t, x, v, skip_oscillations and offset
+        are ignored).
 
     Returns
     -------
@@ -256,7 +255,7 @@ def energy_least_squares(
     if isinstance(max_points, bool) or not isinstance(max_points, int) or max_points < 10:
         raise ValueError(f"max_points must be an integer >= 10, got {max_points!r}")
     if data is None:
-        data = energy_data(t, x, v, rig=rig, skip=skip, offset=offset)
+        data = energy_data(t, x, v, rig=rig, skip_oscillations=skip_oscillations, offset=offset)
     pk = data.peaks
     ell = data.length_scale
     n = data.tau.size
