@@ -13,7 +13,8 @@ line::
 
     python -m bayestribo.reports.browser report.html --screenshot docs/report.png
 
-prints the inspection and writes the screenshot.
+prints the inspection and writes the screenshot (``--top`` and ``--height`` choose the
+part of the page).
 """
 
 from __future__ import annotations
@@ -215,10 +216,11 @@ def screenshot(
     *,
     width: int = 1100,
     height: int = 2400,
+    top: int = 0,
     executable: str | None = None,
     timeout: float = 120.0,
 ) -> Path:
-    """Write a PNG of the top of a report as headless Chromium renders it, offline.
+    """Write a PNG of a report as headless Chromium renders it, offline.
 
     Parameters
     ----------
@@ -227,7 +229,10 @@ def screenshot(
     png : path
         The PNG to write (its folder is created).
     width, height : int
-        Window size [CSS pixels].
+        Size of the picture [CSS pixels].
+    top : int
+        Where the picture starts below the top of the page [CSS pixels] (the page is
+        rendered down to ``top + height`` and the part above ``top`` cut off).
     executable : str, optional
         Chromium to use.
     timeout : float
@@ -247,7 +252,7 @@ def screenshot(
                 exe,
                 *_FLAGS,
                 f"--user-data-dir={profile}",
-                f"--window-size={width},{height}",
+                f"--window-size={width},{top + height}",
                 f"--screenshot={out}",
                 Path(html).resolve().as_uri(),
             ],
@@ -255,6 +260,12 @@ def screenshot(
         )
     if not out.is_file():
         raise ReportError(f"Chromium wrote no screenshot (exit {proc.returncode})")
+    if top > 0:
+        from PIL import Image  # pillow comes with matplotlib
+
+        with Image.open(out) as image:
+            cropped = image.crop((0, top, image.width, image.height))
+        cropped.save(out)
     return out
 
 
@@ -268,12 +279,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("html", type=Path, help="the HTML report")
     parser.add_argument("--screenshot", type=Path, metavar="PNG", help="also write a PNG")
     parser.add_argument("--width", type=int, default=1100, help="window width [px]")
-    parser.add_argument("--height", type=int, default=2400, help="window height [px]")
+    parser.add_argument("--height", type=int, default=2400, help="picture height [px]")
+    parser.add_argument(
+        "--top", type=int, default=0, help="where the picture starts below the page top [px]"
+    )
     args = parser.parse_args(argv)
     found = inspect_report(args.html)
     print(json.dumps(found.__dict__, indent=2))
     if args.screenshot:
-        shot = screenshot(args.html, args.screenshot, width=args.width, height=args.height)
+        shot = screenshot(
+            args.html, args.screenshot, width=args.width, height=args.height, top=args.top
+        )
         print(f"screenshot: {shot}")
     return 0 if found.all_images_loaded and not found.raw_tex else 1
 
