@@ -23,7 +23,7 @@ DIAGNOSTICS = {
     "ess_min",
     "acceptance_fraction",
 }
-SUMMARY = {"mean", "sd", "median", "interval", "prob", "kind"}
+SUMMARY = {"mean", "sd", "median", "interval", "prob", "kind", "unit"}
 
 
 @pytest.fixture(scope="module")
@@ -68,6 +68,14 @@ def test_json_is_one_object_with_the_issue_shape(json_run, run_file: Path) -> No
     assert DIAGNOSTICS <= set(record["diagnostics"])
     assert record["diagnostics"]["converged"] is True
     assert isinstance(record["seconds"], float) and record["seconds"] > 0
+    # Units, the run's metadata and the package version travel with the numbers.
+    import bayestribo
+
+    assert record["bayestribo_version"] == bayestribo.__version__
+    assert record["metadata"]["load_N"] == 0.31
+    units = {name: p["unit"] for name, p in record["parameters"].items()}
+    assert (units["zeta"], units["mu_k"], units["friction_displacement"]) == ("1", "1", "m")
+    assert units.get("d_k", "s/m") == "s/m"
     assert {"zeta", "mu_k", "mu_s", "friction_displacement"} <= set(record["parameters"])
     for name, s in record["parameters"].items():
         assert set(s) == SUMMARY, name

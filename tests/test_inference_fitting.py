@@ -269,3 +269,13 @@ def test_a_posterior_piled_on_a_prior_bound_is_no_measurement():
     with warnings.catch_warnings():
         warnings.simplefilter("error", PriorBoundWarning)
         assert fit(run, seed=1, max_steps=3000).at_prior_bound == []
+
+
+def test_result_repr_and_html_show_the_numbers_with_units(bundled):
+    _, result = bundled
+    text = repr(result)
+    assert text.startswith("<FitResult ") and "zeta=0.02" in text and "converged" in text
+    html = result._repr_html_()
+    assert html.startswith("<table>") and "<td>zeta</td><td>1</td>" in html
+    assert "<td>d_k</td><td>s/m</td>" in html or "d_k" not in result.summary()
+    assert any(line.split()[:2] == ["unit", "mean"] for line in result.to_text().splitlines())

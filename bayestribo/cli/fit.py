@@ -90,9 +90,10 @@ def register(subparsers: Any) -> None:
 def json_record(result: Any, prob: float = 0.95) -> dict[str, Any]:
     """The JSON object printed by ``--json``.
 
-    ``{"run", "model", "seed", "noise", "parameters": {NAME: {"mean", "sd", "median",
-    "interval", "prob", "kind"}}, "diagnostics": {"converged", "n_walkers", "n_steps",
-    "autocorr_time_max", "ess_min", "acceptance_fraction", ...}, "seconds"}``; the
+    ``{"run", "model", "seed", "bayestribo_version", "metadata", "noise", "parameters":
+    {NAME: {"mean", "sd", "median", "interval", "prob", "kind", "unit"}}, "diagnostics":
+    {"converged", "n_walkers", "n_steps", "autocorr_time_max", "ess_min",
+    "acceptance_fraction", ...}, "seconds"}``; the
     diagnostics keep the fit's further entries (R-hat, ESS and τ per parameter, reasons when not
     converged) after the six of the record.
     """
@@ -104,6 +105,8 @@ def json_record(result: Any, prob: float = 0.95) -> dict[str, Any]:
         "run": full["run"],
         "model": full["model"],
         "seed": full["seed"],
+        "bayestribo_version": full["bayestribo_version"],
+        "metadata": full["metadata"],
         "noise": full["noise"],
         "parameters": full["parameters"],
         "diagnostics": ordered,

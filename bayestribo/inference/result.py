@@ -34,7 +34,7 @@ from numpy.typing import ArrayLike, NDArray
 from bayestribo.inference.priors import PriorSet
 from bayestribo.summary import ParameterSummary, check_prob
 
-__all__ = ["FitResult", "plain_data"]
+__all__ = ["UNITS", "FitResult", "plain_data"]
 
 #: Quantities reported by :meth:`FitResult.summary` and the command line, in order.
 REPORTED = (
@@ -48,6 +48,21 @@ REPORTED = (
     "y0",
     "log10_discrepancy",
 )
+
+
+#: Unit of each reported quantity; "length" is the displacement's unit (m, or the
+#: signal's unit for a run with ``length_unit="arbitrary"``).
+UNITS: dict[str, str] = {
+    "zeta": "1",
+    "mu_k": "1",
+    "mu_s": "1",
+    "friction_displacement": "length",
+    "static_friction_displacement": "length",
+    "zeta_k": "1",
+    "d_k": "s/m",
+    "y0": "1",
+    "log10_discrepancy": "1",
+}
 
 
 def plain_data(value: Any) -> Any:
@@ -192,16 +207,35 @@ class FitResult:
             if name in self.idata.posterior
         }
 
+    @property
+    def package_version(self) -> str:
+        """The bayestribo version that made the fit."""
+        return str(self._attr("package_version", "unknown"))
+
+    def units(self) -> dict[str, str]:
+        """Unit of each reported quantity ("1" for a dimensionless one)."""
+        length = "m" if self.metadata.get("length_unit", "m") == "m" else "signal length unit"
+        return {
+            name: length if UNITS.get(name) == "length" else UNITS.get(name, "")
+            for name in self.summary()
+        }
+
     def to_dict(self, prob: float = 0.95) -> dict[str, Any]:
-        """JSON-ready record: run, model, noise, parameters (summaries with ``prob``
-        intervals), diagnostics, seconds."""
+        """JSON-ready record: run, model, seed, package version, run metadata, noise,
+        parameters (summaries with ``prob`` intervals and units), diagnostics, seconds."""
+        units = self.units()
         return plain_data(
             {
                 "run": self.run_name,
                 "model": self.model,
                 "seed": self.seed,
+                "bayestribo_version": self.package_version,
+                "metadata": self.metadata,
                 "noise": self.noise,
-                "parameters": {k: v.to_dict() for k, v in self.summary(prob).items()},
+                "parameters": {
+                    k: {**v.to_dict(), "unit": units.get(k, "")}
+                    for k, v in self.summary(prob).items()
+                },
                 "diagnostics": self.diagnostics,
                 "prior_sensitivity": self.prior_sensitivity,
                 "seconds": self.seconds,
@@ -232,11 +266,49 @@ class FitResult:
                 f"{entry['bound']:.4g}; check units and channels (bayestribo inspect)"
             )
         header = f"{100 * check_prob(prob):g} % interval"
-        lines.append(f"{'':24}{'mean':>14}{'sd':>12}{header:>32}")
+        units = self.units()
+        lines.append(f"{'':24}{'unit':>8}{'mean':>14}{'sd':>12}{header:>36}")
         for name, s in self.summary(prob).items():
             lo, hi = s.interval
-            lines.append(f"{name:24}{s.mean:14.6g}{s.sd:12.3g}   [{lo:.6g}, {hi:.6g}]")
+            unit = {"1": "-", "signal length unit": "signal"}.get(units[name], units[name])
+            lines.append(f"{name:24}{unit:>8}{s.mean:14.6g}{s.sd:12.3g}   [{lo:.6g}, {hi:.6g}]")
         return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        summary = self.summary()
+        parts = ", ".join(
+            f"{name}={s.mean:.4g}±{s.sd:.2g}"
+            for name, s in summary.items()
+            if name in ("zeta", "mu_k", "friction_displacement")
+        )
+        state = "converged" if self.converged else "NOT converged"
+        if self.at_prior_bound:
+            state += ", NOT A MEASUREMENT (prior bound)"
+        return f"<FitResult {self.run_name!s}: {parts} ({state}, seed {self.seed})>"
+
+    def _repr_html_(self) -> str:
+        """The summary table for Jupyter."""
+        import html
+
+        units = self.units()
+        rows = "".join(
+            f"<tr><td>{html.escape(name)}</td><td>{html.escape(units[name])}</td>"
+            f"<td>{s.mean:.6g}</td><td>{s.sd:.3g}</td>"
+            f"<td>[{s.interval[0]:.6g}, {s.interval[1]:.6g}]</td></tr>"
+            for name, s in self.summary().items()
+        )
+        state = "converged" if self.converged else "NOT converged"
+        if self.at_prior_bound:
+            state += "; NOT A MEASUREMENT: a posterior piles on its prior's bound"
+        caption = (
+            f"{html.escape(str(self.run_name))}: {html.escape(self.model)} model, "
+            f"seed {self.seed}, {html.escape(state)}"
+        )
+        return (
+            f"<table><caption>{caption}</caption><thead><tr><th></th><th>unit</th>"
+            "<th>mean</th><th>sd</th><th>95 % interval</th></tr></thead>"
+            f"<tbody>{rows}</tbody></table>"
+        )
 
     # -- files ----------------------------------------------------------------------
     def save(self, path: str | Path) -> Path:
