@@ -140,3 +140,29 @@ def test_glycerol_water_series_get_a_trend_against_viscosity():
     expected = np.mean([glycerol_water_viscosity(w) for w in (0.0055, 0.0055, 0.09, 0.09)])
     assert a.trends[label].center == pytest.approx(expected, rel=1e-12)
     assert a.trends[label].slope_summary("zeta")["prob_positive"] > 0.9
+
+
+def test_progress_names_each_population_and_trend_before_sampling_it():
+    messages: list[str] = []
+    fits = _campaign(np.random.default_rng(2))
+    got = analyse_campaign(fits, seed=1, max_steps=2000, progress=messages.append)
+    assert messages[0] == "population of 6 runs with contact, by lubricant, load_N"
+    assert "trend against load_N: lubricant=glycerol" in messages
+    assert messages[-1] == "ζ₀ from 3 runs without contact"
+    assert got.excluded == [] and all(r["status"] == "used" for r in got.runs)
+
+
+def test_a_run_without_a_grouping_key_is_excluded_with_the_reason():
+    fits = _campaign(np.random.default_rng(2))
+    del fits[0].metadata["lubricant"]
+    got = analyse_campaign(fits, seed=1, max_steps=2000)
+    assert got.excluded == [
+        {
+            "run": "g-N0.12-r0",
+            "reason": "metadata has no 'lubricant' to group by (the other runs have it); add "
+            "it to the run's sidecar",
+        }
+    ]
+    status = {r["run_id"]: r["status"] for r in got.runs}
+    assert status["g-N0.12-r0"].startswith("excluded: metadata has no 'lubricant'")
+    assert sum(g["n_runs"] for g in got.group_rows() if g["kind"] == "contact") // 2 == 5

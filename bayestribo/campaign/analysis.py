@@ -18,7 +18,7 @@ group (section 2.5 of the paper):
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -278,6 +278,7 @@ def analyse_campaign(
     max_samples: int | None = 300,
     max_steps: int = 10_000,
     sigma_prior: Mapping[str, Any] | None = None,
+    progress: Callable[[str], None] | None = None,
 ) -> CampaignAnalysis:
     """Populations, ζ₀, ζ_k, d_k and load trends of a campaign's fits.
 
@@ -296,7 +297,11 @@ def analyse_campaign(
         tribometer record are far narrower than the spread between repeats, so 300
         samples per run carry the population likelihood (the importance-sampling
         effective sample size is checked and warned about if not).
+    progress : callable, optional
+        Called with a one-line message before each population or trend is sampled
+        (the command line prints it).
     """
+    say = progress if progress is not None else (lambda message: None)
     results = list(results)
     if not results:
         raise BayestriboError("results: no fitted runs to analyse")
@@ -339,10 +344,12 @@ def analyse_campaign(
         series_keys = tuple(k for k in keys if k != covariate)
         # Pooled over all runs with contact only if nothing but the load tells them
         # apart; otherwise pooled over the loads of each series.
+        say(f"population of {len(samples)} runs with contact, by {', '.join(keys) or 'none'}")
         contact = population(
             samples, ("zeta", "mu_k"), by=keys or None, pooled=not series_keys, **kw
         )
         if series_keys and covariate in keys:
+            say(f"populations pooled over {covariate}, by {', '.join(series_keys)}")
             series_pop = population(samples, ("zeta", "mu_k"), by=series_keys, pooled=False, **kw)
         series: dict[tuple[Any, ...], list[RunSamples]] = {}
         for s in samples:
@@ -351,10 +358,12 @@ def analyse_campaign(
             xs = {m.metadata.get(covariate) for m in members}
             if len(xs) >= 2 and all(isinstance(x, int | float) for x in xs):
                 label = ",".join(f"{k}={v}" for k, v in zip(series_keys, value, strict=True))
+                say(f"trend against {covariate}: {label or 'all runs'}")
                 trends[label or "all"] = trend(members, covariate, ("zeta", "mu_k"), **kw)
         trends.update(_viscosity_trends(samples, keys, kw))
     if free_runs:
         zs = [run_samples(r, ("zeta",), max_samples=max_samples, seed=seed) for r in free_runs]
+        say(f"ζ₀ from {len(zs)} runs without contact")
         zeta0 = population(zs, ("zeta",), **kw)
     derived = (
         _derived(contact, zeta0, contact_runs, seed, prob)

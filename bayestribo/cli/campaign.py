@@ -20,6 +20,7 @@ import argparse
 import csv
 import json
 import sys
+import time
 from contextlib import nullcontext
 from pathlib import Path
 from typing import Any
@@ -50,7 +51,12 @@ def register(subparsers: Any) -> None:
         help="comma-separated metadata keys grouping the runs with contact "
         "(keys no run has are left out)",
     )
-    p.add_argument("--out", default="bayestribo-campaign", metavar="OUTDIR")
+    p.add_argument(
+        "--out",
+        default="bayestribo-campaign",
+        metavar="OUTDIR",
+        help="folder of the results: fits/, catalog, JSON and CSV tables, figures/",
+    )
     p.add_argument("--catalog", help="results catalog (default OUTDIR/catalog.sqlite)")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     p.add_argument("--seed", type=int, default=DEFAULT_SEED, help="campaign seed")
@@ -203,8 +209,20 @@ def run(args: argparse.Namespace) -> int:
         listing = "; ".join(f"{f['run']}: {f['error']}" for f in failures)
         raise BayestriboError(f"no run of {folder} could be fitted ({listing})")
     by = tuple(k for k in args.by.split(",") if k)
+    start = time.perf_counter()
+
+    def say(message: str) -> None:
+        if not args.quiet:
+            elapsed = time.perf_counter() - start
+            print(f"bayestribo campaign: [{elapsed:5.0f} s] {message}", file=sys.stderr)
+
     analysis = analyse_campaign(
-        fitted, by, prob=args.prob, seed=args.seed, max_steps=args.population_steps
+        fitted,
+        by,
+        prob=args.prob,
+        seed=args.seed,
+        max_steps=args.population_steps,
+        progress=say,
     )
     report = {
         **analysis.to_dict(),
