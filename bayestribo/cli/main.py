@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import re
 import sys
 import warnings
 from collections.abc import Callable, Sequence
@@ -19,7 +20,7 @@ from typing import TextIO
 from bayestribo import __version__
 from bayestribo.errors import BayestriboError
 
-__all__ = ["build_parser", "main"]
+__all__ = ["build_parser", "main", "plain_numbers"]
 
 #: Sub-command modules under ``bayestribo.cli``, in the order of ``--help``.
 COMMANDS: tuple[str, ...] = (
@@ -51,6 +52,15 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: ``np.float64(0.5)``, ``np.int64(3)``: numpy scalar reprs inside a message.
+_NUMPY_REPR = re.compile(r"np\.(?:float|int|uint|bool_?|complex)\d*\(([^()]*)\)")
+
+
+def plain_numbers(text: str) -> str:
+    """A message with numpy scalar reprs (``np.float64(0.5)``) written as numbers (0.5)."""
+    return _NUMPY_REPR.sub(r"\1", text)
+
+
 def _one_line_warning(command: str) -> Callable[..., None]:
     """A ``warnings.showwarning`` that prints one line per warning, without the source
     file and line: ``bayestribo fit: warning: …`` (a package warning) or
@@ -64,7 +74,7 @@ def _one_line_warning(command: str) -> Callable[..., None]:
         file: TextIO | None = None,
         line: str | None = None,
     ) -> None:
-        text = " ".join(str(message).split())
+        text = plain_numbers(" ".join(str(message).split()))
         own = category.__module__.split(".")[0] == "bayestribo"
         kind = "warning" if own else f"warning ({category.__name__})"
         stream = sys.stderr if file is None else file
@@ -90,7 +100,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             warnings.showwarning = _one_line_warning(args.command)
             return int(args.handler(args) or 0)
     except BayestriboError as exc:
-        print(f"bayestribo {args.command}: error: {exc}", file=sys.stderr)
+        print(f"bayestribo {args.command}: error: {plain_numbers(str(exc))}", file=sys.stderr)
         return 2
     except BrokenPipeError:
         # The reader of standard output went away (``| head``): no traceback. Point
