@@ -101,11 +101,34 @@ def register(subparsers: Any) -> None:
     sim.add_argument("--sim-seed", type=int, default=0, help="seed of noise and garbage")
     sim.add_argument("--sim-socket", action="store_true", help="serve on a localhost socket")
     sim.add_argument("--drop", type=int, nargs="+", default=[], metavar="N", help="drop frames")
-    sim.add_argument("--corrupt", type=int, nargs="+", default=[], metavar="N")
-    sim.add_argument("--garbage", type=int, nargs="+", default=[], metavar="N")
-    sim.add_argument("--stall", type=_stall, nargs="+", default=[], metavar="N:S")
-    sim.add_argument("--disconnect-after", type=int, metavar="N")
-    sim.add_argument("--bad-header", action="store_true")
+    sim.add_argument(
+        "--corrupt",
+        type=int,
+        nargs="+",
+        default=[],
+        metavar="N",
+        help="flip a payload byte of these frames (checksum fails)",
+    )
+    sim.add_argument(
+        "--garbage",
+        type=int,
+        nargs="+",
+        default=[],
+        metavar="N",
+        help="send random bytes before these frames",
+    )
+    sim.add_argument(
+        "--stall",
+        type=_stall,
+        nargs="+",
+        default=[],
+        metavar="N:S",
+        help="pause S seconds before frame N",
+    )
+    sim.add_argument("--disconnect-after", type=int, metavar="N", help="disconnect after frame N")
+    sim.add_argument(
+        "--bad-header", action="store_true", help="send a run header that does not parse"
+    )
     sim.add_argument("--silent", action="store_true", help="simulated device never answers")
     p.set_defaults(handler=run)
 
