@@ -350,3 +350,14 @@ def test_the_simulators_objects_check_their_fields_and_keep_the_defaults() -> No
     assert explicit == simulate(seed=8)
     assert Sensor().noise == (0.15e-6, 0.015e-6)
     assert Release().fade_s(PAPER_RIG) == pytest.approx(0.25 / 32.6, rel=1e-15)
+
+
+def test_a_run_simulated_without_a_seed_records_the_seed_that_remakes_it():
+    import numpy as np
+
+    from bayestribo.synthetic import simulate
+
+    first = simulate()
+    seed = first.metadata["simulation"]["seed"]
+    assert isinstance(seed, int)
+    np.testing.assert_array_equal(simulate(seed=seed).displacement, first.displacement)

@@ -396,7 +396,8 @@ def simulate(
         Sample rate, noise, resolution, quantisation, ranges and channels (default
         :class:`Sensor`: the paper's vibrometer at 10 kHz, noise at its resolution).
     seed : int or numpy.random.Generator, optional
-        Seed of the noise; the same seed gives the same run.
+        Seed of the noise; the same seed gives the same run. Without one a seed is
+        drawn from fresh entropy and recorded in ``metadata["simulation"]["seed"]``.
     metadata : mapping, optional
         Further metadata (e.g. ``lubricant``, ``repeat``, ``run_id``); it may override
         the keys written by the simulator.
@@ -428,6 +429,9 @@ def simulate(
     release = release or Release()
     sensor = sensor or Sensor()
     motion = _motion(law, rig, release, float(sensor.sample_rate_Hz))
+    if seed is None:
+        # Fresh entropy, but recorded: the run's metadata give the seed that remakes it.
+        seed = int(np.random.SeedSequence().generate_state(1)[0])
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
     x, v = _record(motion, rig, release, sensor, rng)
     time = np.round(release.time_origin_s + motion.t_rel, 9)
