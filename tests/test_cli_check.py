@@ -43,3 +43,19 @@ def test_bad_window_is_a_package_error(run_file, capsys):
 def test_missing_file(tmp_path, capsys):
     assert main(["check", str(tmp_path / "none.csv")]) == 2
     assert "error" in capsys.readouterr().err
+
+
+def test_an_inadequate_law_exits_1(tmp_path, capsys):
+    from bayestribo.synthetic import DissipationLaw, Sensor
+
+    # Damping that grows with amplitude: not the constant law.
+    run = simulate(
+        DissipationLaw(zeta=lambda a: 0.01 + 20.0 * a, mu_k=0.0294),
+        sensor=Sensor(
+            sample_rate_Hz=2000.0, displacement_noise_m=1.5e-6, velocity_noise_m_per_s=1.5e-7
+        ),
+        seed=9,
+    )
+    path = write_run(run, tmp_path / "quadratic.csv")
+    assert main(["check", str(path), "--json"]) == 1
+    assert json.loads(capsys.readouterr().out)["adequate"] is False

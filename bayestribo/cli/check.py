@@ -7,6 +7,9 @@ Examples::
 
     bayestribo check runs/glycerol_N0.31_r2.csv
     bayestribo check HarmOsc2.txt --columns t x --length-unit arbitrary --window 6 --json
+
+Exit status: 0 when the law is adequate, 1 when a check rejects it (the report says
+which and by how much), 2 for bad input.
 """
 
 from __future__ import annotations
@@ -81,4 +84,5 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(report.to_text())
     sys.stdout.flush()
-    return 0
+    # The exit status rule (README): 1 when the result says something is not right.
+    return 0 if report.adequate else 1
