@@ -185,3 +185,14 @@ def test_a_users_own_window_fitter_is_used_as_it_is():
     w = windowed_fits(simulate(seed=5), window=2, fitter=IndexFitter())
     assert w.method == "index" and w.to_dict()["friction_mode"] == "fit"
     np.testing.assert_array_equal(w.column("zeta"), np.arange(len(w)))
+
+
+def test_progress_names_each_window_before_it_is_fitted():
+    messages: list[str] = []
+    w = windowed_fits(simulate(seed=101), window=2, progress=messages.append)
+    n = len(w.windows)
+    # The last n messages name the windows of the result (a re-run with the friction
+    # held would come after a first pass, and say so).
+    held = ", friction held" if w.extra["friction_mode"] == "fixed" else ""
+    expected = [f"window {k}/{n} (least_squares{held})" for k in range(1, n + 1)]
+    assert messages[-n:] == expected

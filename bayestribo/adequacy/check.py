@@ -7,6 +7,7 @@ Eq. 7) adequate for this recording?
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -171,6 +172,7 @@ def check_adequacy(
     seed: int = 0,
     skip_oscillations: int = 1,
     bayes: bool = False,
+    progress: Callable[[str], None] | None = None,
 ) -> AdequacyReport:
     """Windowed fits, constancy test, extinction time and predictive check of one run.
 
@@ -198,6 +200,8 @@ def check_adequacy(
         intervals) and, unless ``fit_result`` is given, on the whole run for the
         draws. Needs the run itself (not an EnergyDecay) and windows of at least 3
         oscillations (the default window is raised to 3); takes seconds per window.
+    progress : callable, optional
+        Called with a one-line message before each window fit and the whole-run fit.
 
     Returns
     -------
@@ -217,10 +221,13 @@ def check_adequacy(
             fitter=BayesianWindows(),
             seed=seed,
             skip_oscillations=skip_oscillations,
+            progress=progress,
         )
         if fit_result is None:
             from bayestribo.inference import fit
 
+            if progress is not None:
+                progress("whole run (Bayesian fit)")
             fit_result = fit(run, seed=seed, skip_oscillations=skip_oscillations)
     else:
         windows = windowed_fits(decay, window=window, seed=seed)

@@ -595,6 +595,7 @@ def windowed_fits(
     skip_oscillations: int = 1,
     seed: int = 0,
     friction: Friction = "auto",
+    progress: Callable[[str], None] | None = None,
 ) -> WindowedAnalysis:
     """Fit ζ and μ_k in consecutive windows of ``window`` oscillations along a decay.
 
@@ -620,6 +621,8 @@ def windowed_fits(
         errors) and most windows then give estimates inside the parameter bounds,
         else ``"fixed"`` (in a window of a few oscillations ζ and μ cannot be told
         apart when the friction is weak or the noise high).
+    progress : callable, optional
+        Called with a one-line message before each window is fitted.
 
     Returns
     -------
@@ -658,7 +661,13 @@ def windowed_fits(
     fixed_mu = whole.mu if mode == "fixed" else None
 
     def run_windows(fixed_mu: float | None) -> list[WindowEstimate]:
-        return [_estimate(context, fitter, k, b, fixed_mu) for k, b in enumerate(bounds)]
+        out = []
+        for k, b in enumerate(bounds):
+            if progress is not None:
+                held = "" if fixed_mu is None else ", friction held"
+                progress(f"window {k + 1}/{len(bounds)} ({fitter.method}{held})")
+            out.append(_estimate(context, fitter, k, b, fixed_mu))
+        return out
 
     out = run_windows(fixed_mu)
     irregular = sum(not w.regular for w in out)

@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import time
 from typing import Any
 
 from bayestribo import DEFAULT_SEED
@@ -58,6 +59,7 @@ def register(subparsers: Any) -> None:
         help="Bayesian fit on each window and on the whole run (posterior draws; slower)",
     )
     p.add_argument("--json", action="store_true", help="print JSON instead of a report")
+    p.add_argument("--quiet", action="store_true", help="no progress lines (--bayes)")
     p.set_defaults(handler=run)
 
 
@@ -70,6 +72,12 @@ def run(args: argparse.Namespace) -> int:
     except FileNotFoundError as exc:
         print(f"bayestribo check: error: {exc}", file=sys.stderr)
         return 2
+    start = time.perf_counter()
+
+    def say(message: str) -> None:
+        elapsed = time.perf_counter() - start
+        print(f"bayestribo check: [{elapsed:5.0f} s] {message}", file=sys.stderr)
+
     report = check_adequacy(
         recording,
         window=args.window,
@@ -78,6 +86,7 @@ def run(args: argparse.Namespace) -> int:
         seed=args.seed,
         bayes=args.bayes,
         skip_oscillations=args.skip,
+        progress=None if args.quiet or not args.bayes else say,
     )
     if args.json:
         print(json.dumps(report.to_dict(), indent=2, ensure_ascii=False))
