@@ -284,6 +284,7 @@ def test_notebook_executes_with_test_parameters(name, tmp_path):
         assert not re.search(r'class="[^"]*jp-InputArea-editor', text)  # no code
         assert 'data-mime-type="application/vnd.jupyter.stderr"' not in text
         assert 'class="bt-toc"' in text and "bayestribo version" in text
+        assert "tick labels overlap" not in text  # every figure legible (kit.save checks)
 
     summary = tmp_path / "summary.json"
     if name == "single_run":

@@ -21,6 +21,7 @@ import platform
 import warnings
 from collections.abc import Callable, Mapping
 from datetime import UTC, datetime
+from itertools import pairwise
 from pathlib import Path
 from typing import Any
 
@@ -32,6 +33,7 @@ __all__ = [
     "about",
     "file_sha256",
     "note",
+    "overlapping_labels",
     "setup",
     "show_warnings_as_notes",
     "table",
@@ -135,11 +137,54 @@ def setup(figure_dir: str | None, figure_format: str = "png") -> Callable[[Any, 
         folder.mkdir(parents=True, exist_ok=True)
 
     def save(fig: Any, name: str) -> None:
-        """Write ``fig`` as ``<name>.<format>`` in the figure folder (if any)."""
+        """Write ``fig`` as ``<name>.<format>`` in the figure folder (if any).
+
+        Tick labels that overlap are said in a note (the report's tests require none).
+        """
+        overlaps = overlapping_labels(fig)
+        if overlaps:
+            note(f"figure {name}: tick labels overlap: {'; '.join(overlaps[:3])}")
         if folder is not None:
             fig.savefig(folder / f"{name}.{figure_format}", bbox_inches="tight")
 
     return save
+
+
+def overlapping_labels(fig: Any) -> list[str]:
+    """Tick labels of ``fig`` that overlap a neighbour on the same axis, as drawn.
+
+    Each axis's visible, non-empty tick labels are compared with the next one along
+    the axis (their rendered boxes, shrunk by a pixel so that labels merely touching
+    pass).
+
+    Returns
+    -------
+    list of str
+        ``"'a' and 'b' (x axis of 'title')"`` for each overlapping pair; empty if none.
+    """
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    found = []
+    for ax in fig.axes:
+        if not ax.get_visible():
+            continue
+        for name, axis in (("x", ax.xaxis), ("y", ax.yaxis)):
+            labels = [t for t in axis.get_ticklabels() if t.get_visible() and t.get_text().strip()]
+            boxes = [(t, t.get_window_extent(renderer).expanded(1.0, 1.0)) for t in labels]
+            key = 0 if name == "x" else 1
+            boxes.sort(key=lambda tb: (tb[1].x0, tb[1].y0)[key])
+            for (a, ba), (b, bb) in pairwise(boxes):
+                if (
+                    ba.x1 - 1 > bb.x0 + 1
+                    and bb.x1 - 1 > ba.x0 + 1
+                    and ba.y1 - 1 > bb.y0 + 1
+                    and bb.y1 - 1 > ba.y0 + 1
+                ):
+                    where = ax.get_title() or ax.get_xlabel() or ax.get_ylabel()
+                    found.append(
+                        f"{a.get_text()!r} and {b.get_text()!r} ({name} axis of {where!r})"
+                    )
+    return found
 
 
 def file_sha256(path: str | Path) -> str:
