@@ -68,3 +68,9 @@ class MetadataWarning(UserWarning):
 class PriorBoundWarning(UserWarning):
     """A posterior piles on a physical bound of its prior: no measurement (the message
     names the parameter and what to check)."""
+
+
+class ChannelCalibrationWarning(UserWarning):
+    """The displacement and velocity channels disagree (v ≠ dx/dt) in gain or delay by
+    more than the recording's own uncertainty (the message gives both, and what was
+    done)."""

@@ -108,6 +108,7 @@ def json_record(result: Any, prob: float = 0.95) -> dict[str, Any]:
         "bayestribo_version": full["bayestribo_version"],
         "metadata": full["metadata"],
         "noise": full["noise"],
+        "channel_calibration": full["channel_calibration"],
         "parameters": full["parameters"],
         "diagnostics": ordered,
         "prior_sensitivity": full.get("prior_sensitivity"),

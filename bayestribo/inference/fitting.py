@@ -42,6 +42,7 @@ def fit(
     progress: bool = False,
     read_options: Mapping[str, Any] | None = None,
     noise: NoiseModel | None = None,
+    correct_channels: bool = True,
 ) -> FitResult:
     """Posterior of ζ and μ_k (or ζ₀, or the friction displacement) for one run.
 
@@ -77,6 +78,11 @@ def fit(
         Options of :func:`bayestribo.read_run` when ``run`` is a path.
     noise : NoiseModel, optional
         Use this noise model instead of the recording's.
+    correct_channels : bool
+        Correct the velocity channel to the displacement when their gain ratio or
+        delay is off by more than the recording's own uncertainty
+        (:func:`bayestribo.inference.calibration.calibrate_channels`); the result's
+        ``channel_calibration`` records what was measured and done.
 
     Returns
     -------
@@ -102,6 +108,7 @@ def fit(
         noise=noise,
         seed=rng,
         read_options=read_options,
+        correct_channels=correct_channels,
     )
     posterior = build_posterior(
         prepared.data,

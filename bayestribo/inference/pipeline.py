@@ -36,6 +36,7 @@ from bayestribo.errors import (
     PriorBoundWarning,
 )
 from bayestribo.inference.assemble import derived_quantities, inference_data
+from bayestribo.inference.calibration import calibrate_channels
 from bayestribo.inference.likelihood import MODELS, PiLikelihood
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.priors import Prior, PriorSet, default_priors, piled_on_bounds
@@ -75,6 +76,9 @@ class PreparedRun:
         Π increments and their noise variances.
     grid_points, skip_oscillations : int or None
         The preparation settings, recorded in the result.
+    channels : dict or None
+        The channel calibration (:func:`bayestribo.inference.calibration.calibrate_channels`),
+        None for a run with one signal.
     """
 
     run: Run
@@ -84,6 +88,7 @@ class PreparedRun:
     data: PiData
     grid_points: int | None = None
     skip_oscillations: int = 1
+    channels: dict[str, Any] | None = None
 
     @property
     def metadata(self) -> dict[str, Any]:
@@ -128,6 +133,7 @@ def prepare(
     noise: NoiseModel | None = None,
     seed: int | np.random.Generator | None = None,
     read_options: Mapping[str, Any] | None = None,
+    correct_channels: bool = True,
 ) -> PreparedRun:
     """Step 1: a run becomes observed Π increments with their noise variances.
 
@@ -145,12 +151,18 @@ def prepare(
         Seed of the Monte Carlo propagation of the noise into the increments.
     read_options : mapping, optional
         Options of :func:`bayestribo.read_run` when ``run`` is a path.
+    correct_channels : bool
+        Correct the velocity to the displacement when their gain ratio or delay is
+        off (:func:`bayestribo.inference.calibration.calibrate_channels`; a
+        :class:`~bayestribo.errors.ChannelCalibrationWarning` either way).
 
     Returns
     -------
     PreparedRun
     """
-    recording = as_run(run, **dict(read_options or {}))
+    recording, channels = calibrate_channels(
+        as_run(run, **dict(read_options or {})), correct=correct_channels
+    )
     decay = energy_decay(
         recording.time,
         recording.displacement,
@@ -162,7 +174,14 @@ def prepare(
     rng = np.random.default_rng(seed)
     data = pi_data(decay, noise_used, grid_points=grid_points, seed=int(rng.integers(2**31)))
     return PreparedRun(
-        recording, _run_name(recording), decay, noise_used, data, grid_points, skip_oscillations
+        recording,
+        _run_name(recording),
+        decay,
+        noise_used,
+        data,
+        grid_points,
+        skip_oscillations,
+        channels,
     )
 
 
@@ -391,6 +410,7 @@ def summarise(
         "motion_ended": int(prepared.data.motion_ended),
         "metadata_json": json.dumps(plain_data(metadata)),
         "noise_json": json.dumps(plain_data(noise_info)),
+        "channels_json": json.dumps(plain_data(prepared.channels)),
         "priors_json": json.dumps(posterior.priors.to_spec()),
         "fixed_json": json.dumps(plain_data(posterior.fixed)),
         "settings_json": json.dumps(

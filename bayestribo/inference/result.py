@@ -208,6 +208,12 @@ class FitResult:
         }
 
     @property
+    def channel_calibration(self) -> dict[str, Any] | None:
+        """The channels' gain ratio and delay measured from the motion, and whether
+        the velocity was corrected (None for a run with one signal)."""
+        return self._attr("channels_json", None)
+
+    @property
     def package_version(self) -> str:
         """The bayestribo version that made the fit."""
         return str(self._attr("package_version", "unknown"))
@@ -232,6 +238,7 @@ class FitResult:
                 "bayestribo_version": self.package_version,
                 "metadata": self.metadata,
                 "noise": self.noise,
+                "channel_calibration": self.channel_calibration,
                 "parameters": {
                     k: {**v.to_dict(), "unit": units.get(k, "")}
                     for k, v in self.summary(prob).items()
