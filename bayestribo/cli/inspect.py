@@ -157,9 +157,13 @@ def _text(report: dict[str, Any]) -> str:
     lines.append(f"metadata       {meta or 'none'}")
     ch = report["channels"]
     if ch is not None:
+        gain_se = None if ch["gain_se"] is None else ch["gain_se"] / ch["gain"] ** 2
+        delay_se = None if ch["delay_se_s"] is None else 1e6 * ch["delay_se_s"]
         lines.append(
-            f"channels       velocity reads {ch['velocity_gain']:.5f} × dx/dt, displacement "
-            f"delayed {1e6 * ch['delay_s']:.3g} µs, correlation {ch['correlation']:.6f}"
+            f"channels       velocity reads {ch['velocity_gain']:.5f} "
+            f"(± {_number(gain_se, 2)}) × dx/dt, displacement delayed "
+            f"{1e6 * ch['delay_s']:.3g} µs (± {_number(delay_se, 2)}), correlation "
+            f"{ch['correlation']:.6f}"
         )
     lines.append(
         f"oscillation    {_number(report['oscillation_frequency_Hz'])} Hz (zero crossings)"

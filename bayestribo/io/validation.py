@@ -253,9 +253,9 @@ class ChannelConsistency:
         """The velocity channel's reading per unit of dx/dt [-] (1/gain)."""
         return 1.0 / self.gain if self.gain != 0.0 else math.inf
 
-    def to_dict(self) -> dict[str, float]:
-        """JSON-ready values."""
-        return {
+    def to_dict(self) -> dict[str, float | None]:
+        """JSON-ready values (None for a standard error that could not be estimated)."""
+        values = {
             "correlation": self.correlation,
             "gain": self.gain,
             "gain_se": self.gain_se,
@@ -265,6 +265,7 @@ class ChannelConsistency:
             "window_s": self.window_s,
             "n_blocks": self.n_blocks,
         }
+        return {k: None if isinstance(v, float) and math.isnan(v) else v for k, v in values.items()}
 
 
 def _regress(xc: NDArray, ic: NDArray, vc: NDArray) -> tuple[float, float] | None:
