@@ -1,9 +1,9 @@
 """Figures of the reports that are not a library result's own (matplotlib).
 
 :func:`plot_estimates` draws estimates of several quantities with their intervals, one
-row per estimate, beside a panel of the intervals' relative widths on a log scale:
-an interval 10⁻⁴ of the axis is invisible in the value panels but reads at once in
-the width panel. Functions draw on the axes they are given and return them; none
+row per estimate, beside a panel of the intervals' widths as fractions of their value
+axis, on a log scale: an interval 10⁻⁴ of the axis is invisible in the value panels but
+reads at once in the width panel. Functions draw on the axes they are given and return them; none
 shows or saves a figure.
 """
 
@@ -43,7 +43,7 @@ def plot_estimates(
     truth: Mapping[str, float | None] | None = None,
     highlight: int | None = None,
 ) -> Sequence[Any]:
-    """Estimates with intervals per quantity, and the intervals' relative widths.
+    """Estimates with intervals per quantity, and the intervals' widths on a log scale.
 
     Parameters
     ----------
@@ -63,7 +63,9 @@ def plot_estimates(
     Returns
     -------
     sequence of matplotlib Axes
-        ``axes``. The width panel shows (high − low)/|value| on a log scale [-].
+        ``axes``. The width panel shows each interval's width as a fraction of its value
+        panel's span, on a log scale [-] (an estimate near zero has no meaningful
+        relative width; the fraction of the axis is what decides whether it is seen).
     """
     from matplotlib.ticker import MaxNLocator
 
@@ -94,7 +96,8 @@ def plot_estimates(
         ax.set_xlabel(name)
         ax.xaxis.set_major_locator(MaxNLocator(4))
         ax.ticklabel_format(axis="x", useOffset=False)
-        rel = (hi - lo) / np.abs(val)
+        left, right = ax.get_xlim()
+        rel = (hi - lo) / (right - left)  # the fraction of the value panel it spans
         ok = np.isfinite(rel) & (rel > 0)
         width_ax.plot(
             rel[ok],
@@ -106,7 +109,7 @@ def plot_estimates(
             label=name.split(" [")[0],
         )
     _decades(width_ax)
-    width_ax.set_xlabel("interval width / |value| [-]")
+    width_ax.set_xlabel("interval width / span of the value axis [-]")
     width_ax.legend(fontsize="small", loc="best")
     value_axes[0].set_yticks(y, labels)
     return axes
