@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from _paths import REPO
 
+from bayestribo.campaign.results import DEFAULT_SEED
 from bayestribo.cli import main
 from bayestribo.cli.report import campaign_selection, notebook_for, parse_params
 from bayestribo.io import read_run
-from bayestribo.reports.campaign import DEFAULT_SEED
 from bayestribo.reports.notebooks import ReportError, inject_parameters, read_notebook
 
 pytest.importorskip("nbclient")

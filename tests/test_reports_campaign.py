@@ -7,16 +7,15 @@ import json
 
 import pytest
 
-from bayestribo.campaign.catalog import record_fit, register_run
-from bayestribo.cli.main import build_parser
-from bayestribo.reports import ReportError
-from bayestribo.reports.campaign import (
+from bayestribo.campaign.catalog import CatalogError, record_fit, register_run
+from bayestribo.campaign.results import (
     DEFAULT_SEED,
     compare_populations,
     find_campaign,
     is_campaign_folder,
     load_campaign,
 )
+from bayestribo.cli.main import build_parser
 
 SETTINGS = {"seed": 7, "fit": {"grid_points": 32}}
 
@@ -96,7 +95,7 @@ def test_a_campaign_is_found_for_its_data_folder(campaign, tmp_path, monkeypatch
 
 
 def test_a_folder_without_results_is_refused(tmp_path):
-    with pytest.raises(ReportError, match=r"campaign_dir: .* holds no campaign results"):
+    with pytest.raises(CatalogError, match=r"campaign_dir: .* holds no campaign results"):
         load_campaign(tmp_path)
 
 

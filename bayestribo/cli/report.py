@@ -146,7 +146,7 @@ def notebook_for(path: Path) -> str:
         If the path does not exist, or a folder holds neither a ``manifest.csv``, nor a
         run file with a sidecar, nor the results of ``bayestribo campaign``.
     """
-    from bayestribo.reports.campaign import is_campaign_folder
+    from bayestribo.campaign.results import is_campaign_folder
     from bayestribo.reports.notebooks import ReportError
 
     if path.is_file():
@@ -190,7 +190,7 @@ def campaign_selection(folder: Path) -> dict[str, Any]:
 
 def _campaign_params(path: Path, args: argparse.Namespace) -> tuple[dict[str, Any], str]:
     """Parameters of the campaign notebook, and a line saying where the fits come from."""
-    from bayestribo.reports.campaign import (
+    from bayestribo.campaign.results import (
         DEFAULT_SEED,
         find_campaign,
         is_campaign_folder,

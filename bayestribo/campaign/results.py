@@ -1,4 +1,4 @@
-"""The results of ``bayestribo campaign``, read back for the campaign report.
+"""The results of ``bayestribo campaign``, read back (for the campaign report).
 
 ``bayestribo campaign DIR --out OUTDIR`` fits every run under ``DIR``, records each fit
 in the SQLite catalog ``OUTDIR/catalog.sqlite`` (:mod:`bayestribo.campaign.catalog`,
@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 import bayestribo
-from bayestribo.reports._errors import ReportError
+from bayestribo.campaign.catalog import CatalogError
 
 __all__ = [
     "CAMPAIGN_OUT",
@@ -168,7 +168,7 @@ def load_campaign(folder: str | Path) -> CampaignResults:
 
     Raises
     ------
-    ReportError
+    CatalogError
         If ``folder`` is not a campaign's results folder.
     """
     from bayestribo.campaign.catalog import list_fits, list_runs
@@ -177,7 +177,7 @@ def load_campaign(folder: str | Path) -> CampaignResults:
     folder = Path(folder)
     report = _read_report(folder)
     if report is None or not _catalog_path(folder, report).is_file():
-        raise ReportError(
+        raise CatalogError(
             f"campaign_dir: {folder} holds no campaign results (population.json and "
             "catalog.sqlite, as written by `bayestribo campaign DIR --out OUTDIR`)"
         )
