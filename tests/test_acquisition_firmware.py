@@ -199,7 +199,7 @@ class Conversation:
                     self.data.append(frame)
                 else:
                     return frame
-            self.pending += self.parser.feed(self.port.read(4096))
+            self.pending += self.parser.feed(self.port.read(self.port.in_waiting or 1))
         raise AssertionError(f"no answer to {line!r} within {timeout_s} s")
 
     def close(self) -> None:
@@ -281,3 +281,75 @@ def test_the_command_rules_of_the_protocol(kind, maybe_host_sim):
             np.cumsum([0] + [len(c) for _, c in firsts[:-1]])
         )
         assert 0 < decode_release(release.payload) <= samples
+
+
+@needs_cc
+def test_the_firmware_refuses_what_its_link_or_its_sample_index_cannot_carry(host_sim):
+    # On a 921 600 bit/s UART, 20 kS/s needs 128 pairs a frame (827 kbit/s, within
+    # 90 %); 64 pairs (853 kbit/s) are refused. (10 s + DUR) × RATE must fit the
+    # 32-bit sample index.
+    with firmware(host_sim, "--link-bps", "921600") as port:
+        talk = Conversation(port)
+        try:
+            expect(talk.answer("RATE 20000"), FrameType.ACK, "RATE 20000")
+            refused = talk.answer("SPF 64")
+            expect(refused, FrameType.ERROR)
+            assert "90 %" in decode_text(refused)
+            expect(talk.answer("SPF 256"), FrameType.ACK, "SPF 256")
+            expect(talk.answer("RATE 1e+06"), FrameType.ERROR, "RATE out of range")
+            expect(talk.answer("RATE 100"), FrameType.ACK, "RATE 100")
+            config = RunHeader.from_payload(talk.answer("CFG?").payload)
+            assert (config.sample_rate_Hz, config.samples_per_frame) == (100.0, 256)
+        finally:
+            talk.close()
+    with firmware(host_sim) as port:  # USB: no link limit
+        talk = Conversation(port)
+        try:
+            expect(talk.answer("RATE 100000"), FrameType.ACK, "RATE 100000")
+            refused = talk.answer("DUR 86400")  # 8.6e9 samples
+            expect(refused, FrameType.ERROR, "DUR x RATE exceeds the 32-bit sample index")
+            expect(talk.answer("DUR 40000"), FrameType.ACK, "DUR 40000")  # 4.0e9: fits
+        finally:
+            talk.close()
+
+
+@needs_cc
+def test_any_command_line_gets_one_answer_and_leaves_the_board_working(host_sim):
+    # Lines of random printable characters, and commands with random arguments: every
+    # non-empty line is answered by exactly one frame, and the board still identifies.
+    rng = np.random.default_rng(7)
+    alphabet = np.array(list("ABCDEFIMOPRSTUXY?0123456789 .-+e\t\r"))
+    lines = []
+    for _ in range(150):
+        if rng.random() < 0.5:
+            lines.append("".join(rng.choice(alphabet, rng.integers(0, 45))))
+        else:
+            word = rng.choice(["RATE", "SPF", "DUR", "ID?", "CFG?", "FIRE", "STOP"])
+            value = rng.random() * 10.0 ** int(rng.integers(-3, 9))
+            lines.append(f"{word} {rng.choice(['', '-'])}{value:g}")
+    lines = [line for line in lines if line.strip(" \t\r") != "ARM"]  # no run
+    with firmware(host_sim) as port:
+        talk = Conversation(port)
+        try:
+            for line in lines:
+                body = line[:-1] if line.endswith("\r") else line  # one '\r' is ignored
+                command = body.strip(" \t")
+                if len(body) <= 32 and not command:
+                    talk.send(line)
+                    continue
+                answer = talk.answer(line)
+                assert answer.seq == 0
+                if len(body) > 32:
+                    expect(answer, FrameType.ERROR, "line too long")
+                elif command == "ID?":
+                    expect(answer, FrameType.IDENT)
+                elif command == "CFG?":
+                    expect(answer, FrameType.HEADER)
+                elif answer.type == FrameType.ACK:  # the line it answers, as executed
+                    assert decode_text(answer) == command
+                else:
+                    expect(answer, FrameType.ERROR)
+            expect(talk.answer("ID?"), FrameType.IDENT)
+            assert not talk.data and not talk.pending
+        finally:
+            talk.close()
