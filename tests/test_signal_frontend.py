@@ -573,3 +573,20 @@ def test_bad_notch_argument_is_refused():
     for bad in ("fifty", -50.0, True):
         with pytest.raises(RecordingError, match="notch"):
             energy_decay(t, x, v, notch=bad)
+
+
+def test_band_level_standard_error_matches_its_scatter():
+    # 40 short rests (2 × 0.09 s at 10 kHz) of filtered noise: the scatter of the band
+    # level agrees with the stated standard error (the sd of a sd from 40 draws is 11 %:
+    # a factor 1.4 is 3 of them).
+    fs = 10_000.0
+    rng = np.random.default_rng(12)
+    sos = scipy.signal.butter(4, CUTOFF_HZ, fs=fs, output="sos")
+    levels, stated = [], []
+    for _ in range(40):
+        e = scipy.signal.sosfilt(sos, rng.standard_normal(2300))[500:]
+        spec = noise_spectrum([e[:900], e[900:]], fs, period_s=1 / F_HZ)
+        levels.append(spec.band_level)
+        stated.append(spec.band_rel_se)
+    observed = np.std(levels, ddof=1) / np.mean(levels)
+    assert 1 / 1.4 < observed / np.mean(stated) < 1.4

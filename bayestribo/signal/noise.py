@@ -69,6 +69,10 @@ class NoiseModel:
         then takes the increments' variances from its spectrum.
     lines_Hz : tuple of float
         Mains lines found in the noise at rest [Hz].
+    spectrum_rel_se : float or None
+        For coloured noise, the relative standard error of its level in the signal
+        band as measured at rest (:attr:`~bayestribo.signal.spectrum.NoiseSpectrum.band_rel_se`,
+        the larger of the channels'): how well the increments' variances are known.
     """
 
     displacement: float
@@ -83,6 +87,7 @@ class NoiseModel:
     derived_channel: str | None
     coloured: bool = False
     lines_Hz: tuple[float, ...] = ()
+    spectrum_rel_se: float | None = None
 
     @property
     def exceeds_nominal(self) -> bool:
@@ -105,7 +110,10 @@ class NoiseModel:
             parts.append(text + ")")
         text = "; ".join(parts) + f"; measured in {self.measured_in}"
         if self.coloured:
-            text += "; coloured noise at rest (increment variances from its spectrum)"
+            text += "; coloured noise at rest (increment variances from its spectrum"
+            if self.spectrum_rel_se is not None:
+                text += f", known to ±{100 * self.spectrum_rel_se:.0f} %"
+            text += ")"
         if self.lines_Hz:
             text += "; mains line(s) at " + ", ".join(f"{f:.2f}" for f in self.lines_Hz) + " Hz"
         return text
@@ -185,4 +193,15 @@ def noise_model(
         derived_channel=derived,
         coloured=bool(rest is not None and rest.coloured),
         lines_Hz=() if rest is None else tuple(float(f) for f in rest.lines_Hz),
+        spectrum_rel_se=_spectrum_rel_se(rest),
     )
+
+
+def _spectrum_rel_se(rest: Any) -> float | None:
+    """The larger band-level standard error of the coloured channels, or None."""
+    if rest is None or not rest.coloured:
+        return None
+    ses = [
+        s.band_rel_se for s in (rest.displacement, rest.velocity) if s is not None and s.coloured
+    ]
+    return max(ses) if ses else None
