@@ -202,6 +202,16 @@ class Conversation:
             self.pending += self.parser.feed(self.port.read(self.port.in_waiting or 1))
         raise AssertionError(f"no answer to {line!r} within {timeout_s} s")
 
+    def wait_data(self, n: int, timeout_s: float = 3.0) -> None:
+        """Read until ``n`` DATA frames have arrived (answers are kept for later)."""
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            for frame in self.parser.feed(self.port.read(self.port.in_waiting or 1)):
+                (self.data if frame.type == FrameType.DATA else self.pending).append(frame)
+            if len(self.data) >= n:
+                return
+        raise AssertionError(f"{len(self.data)} DATA frames within {timeout_s} s, expected {n}")
+
     def close(self) -> None:
         self.port.close()
 
@@ -265,6 +275,7 @@ def test_the_command_rules_of_the_protocol(kind, maybe_host_sim):
         # During a run: no second ARM, no configuration; the run goes on.
         for busy in ("ARM", "CFG?", "RATE 1000"):
             expect(talk.answer(busy), FrameType.ERROR, "busy: a run is in progress")
+        talk.wait_data(2)  # the run streams before the release
         release = talk.answer("FIRE")
         expect(release, FrameType.RELEASE, seq=None)
         expect(talk.answer("FIRE"), FrameType.ERROR, "released already")
@@ -277,9 +288,8 @@ def test_the_command_rules_of_the_protocol(kind, maybe_host_sim):
         assert seqs == list(range(1, end.seq)) and frames == end.seq
         firsts = [decode_data(f.payload) for f in talk.data]
         assert samples == sum(len(c) for _, c in firsts)
-        assert [first for first, _ in firsts] == list(
-            np.cumsum([0] + [len(c) for _, c in firsts[:-1]])
-        )
+        lengths = [len(c) for _, c in firsts]
+        assert [first for first, _ in firsts] == list(np.cumsum([0, *lengths])[:-1])
         assert 0 < decode_release(release.payload) <= samples
 
 
