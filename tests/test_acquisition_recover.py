@@ -112,7 +112,7 @@ def test_sigkill_mid_run_then_recover_gives_what_was_received(tmp_path):
         sim.stop()
     assert not list(tmp_path.glob("*.csv")), "the killed logger cannot have written a run"
     # The CSV it was writing while streaming is in its staging directory, never in place.
-    [staging] = [p for p in tmp_path.iterdir() if p.name.startswith(f".{raw.stem}.")]
+    [staging] = [p for p in tmp_path.iterdir() if p.name.startswith(f".{raw.stem}.staging-")]
     assert [p.name for p in staging.iterdir()] == [f"{raw.stem}.csv"]
     received = raw.read_bytes()
     # Every byte the logger received is in its raw log, byte for byte and in order.

@@ -218,11 +218,14 @@ def test_a_crashed_loggers_staging_directory_is_removed_by_the_recovery(tmp_path
     result = _acquire(tmp_path)
     for path in (result.files.csv, result.files.json, result.files.manifest):
         path.unlink()
-    staging = tmp_path / f".{result.run_id}.abc123"
+    staging = tmp_path / f".{result.run_id}.staging-abc12_yz"
     staging.mkdir()
     (staging / f"{result.run_id}.csv").write_text("time_s,displacement_m\n0.0,")
+    # The staging of another run whose id starts with this one's is left alone.
+    other = tmp_path / f".{result.run_id}.2.staging-abc12_yz"
+    other.mkdir()
     recovered = recover_run(result.files.raw)
-    assert recovered.complete and not staging.exists()
+    assert recovered.complete and not staging.exists() and other.is_dir()
     csv = result.files.csv.name
     assert recovered.files.digests[csv] == result.files.digests[csv]
 

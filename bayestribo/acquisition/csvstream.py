@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 import shutil
 import tempfile
 from pathlib import Path
@@ -25,8 +26,10 @@ from numpy.typing import NDArray
 from bayestribo.acquisition.protocol import RunHeader
 from bayestribo.io.run import COLUMNS
 
-__all__ = ["CsvStream", "StagedRun"]
+__all__ = ["CsvStream", "StagedRun", "is_staging_of"]
 
+#: What follows ``.<run_id>`` in the name of a staging directory, before the random part.
+STAGING_MARK = ".staging-"
 #: Bytes of rows gathered before they are written to the file.
 BUFFER_BYTES = 1 << 20
 _OFFSET = 32768  # count -32768 is row 0 of the text tables
@@ -191,7 +194,8 @@ class StagedRun:
     """
 
     def __init__(self, out_dir: str | os.PathLike[str], stem: str, header: RunHeader) -> None:
-        self.directory = Path(tempfile.mkdtemp(prefix=f".{stem}.", dir=out_dir))
+        prefix = f".{stem}{STAGING_MARK}"
+        self.directory = Path(tempfile.mkdtemp(prefix=prefix, dir=out_dir))
         try:
             self.csv = CsvStream(self.directory / f"{stem}.csv", header)
         except BaseException:
@@ -202,3 +206,13 @@ class StagedRun:
         """Close the CSV and remove the directory with everything in it."""
         self.csv.abort()
         shutil.rmtree(self.directory, ignore_errors=True)
+
+
+def is_staging_of(path: Path, run_id: str) -> bool:
+    """True if ``path`` is a staging directory of ``run_id`` (not of another run id).
+
+    Its name is ``.<run_id>.staging-`` and the eight random characters of
+    :func:`tempfile.mkdtemp`, so the run ``r`` never claims the staging of ``r.2``.
+    """
+    pattern = re.escape(f".{run_id}{STAGING_MARK}") + r"[a-z0-9_]{8}"
+    return re.fullmatch(pattern, path.name) is not None and path.is_dir()

@@ -6,11 +6,12 @@ the same parser and assembler as the live acquisition, so it is what the logger
 would have written from the bytes it had received. The log is read a megabyte at a
 time and the CSV written a chunk at a time, so a log of any size is recovered in
 bounded memory; the half-written CSV a crashed logger left in its staging directory
-(``.<run_id>.*``) is removed.
+(``.<run_id>.staging-XXXXXXXX``) is removed.
 """
 
 from __future__ import annotations
 
+import glob
 import inspect
 import json
 import os
@@ -20,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from bayestribo.acquisition.assembly import assemble_file
+from bayestribo.acquisition.csvstream import is_staging_of
 from bayestribo.acquisition.logger import OperatorInputs, check_run_id
 from bayestribo.acquisition.session import AcquisitionResult, finish_run
 from bayestribo.errors import AcquisitionError
@@ -51,8 +53,8 @@ def read_session(raw_log: str | os.PathLike[str]) -> dict[str, Any] | None:
 
 def _remove_staging(folder: Path, run_id: str) -> None:
     """Remove the staging directories a crashed logger left for ``run_id`` (half a CSV)."""
-    for path in folder.glob(f".{run_id}.*"):
-        if path.is_dir() and not path.is_symlink():
+    for path in folder.glob(f".{glob.escape(run_id)}.*"):
+        if is_staging_of(path, run_id) and not path.is_symlink():
             shutil.rmtree(path, ignore_errors=True)
 
 
