@@ -125,6 +125,9 @@ class CampaignResults:
         Grouping keys of its populations.
     prob : float
         Probability of its intervals.
+    population_steps : int
+        Step ceiling of its population samplers (10 000 for campaigns that did not
+        record it).
     report : dict
         ``population.json`` as written by the campaign.
     fits : dict
@@ -148,6 +151,7 @@ class CampaignResults:
     prob: float
     report: dict[str, Any]
     fits: dict[str, Any] = field(default_factory=dict)
+    population_steps: int = 10_000
     paths: dict[str, Path] = field(default_factory=dict)
     metadata: dict[str, dict[str, Any]] = field(default_factory=dict)
     missing: dict[str, str] = field(default_factory=dict)
@@ -224,6 +228,7 @@ def load_campaign(folder: str | Path) -> CampaignResults:
         metadata=metadata,
         missing=missing,
         package_versions=sorted(versions),
+        population_steps=int(settings.get("population_steps", 10_000)),
     )
 
 

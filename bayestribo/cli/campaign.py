@@ -230,7 +230,11 @@ def run(args: argparse.Namespace) -> int:
         "n_runs": len(paths),
         "n_cached": sum(o.cached for o in outcomes),
         "catalog": str(catalog),
-        "settings": {"seed": args.seed, "fit": fit_kwargs},
+        "settings": {
+            "seed": args.seed,
+            "fit": fit_kwargs,
+            "population_steps": args.population_steps,
+        },
     }
     if laws is not None:
         report["laws"] = laws

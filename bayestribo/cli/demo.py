@@ -58,7 +58,9 @@ def register(subparsers: Any) -> None:
     size.add_argument(
         "--full", action="store_true", help="every glycerol run (3 repeats × 5 loads) and air run"
     )
-    p.add_argument("--hide-code", action="store_true", help="leave the code out of the reports")
+    p.add_argument(
+        "--show-code", action="store_true", help="include the notebooks' code in the reports"
+    )
     p.set_defaults(handler=run)
 
 
@@ -186,14 +188,14 @@ def run(args: argparse.Namespace) -> int:
         "single_run",
         single_params,
         html=out / "single-run-report.html",
-        hide_code=args.hide_code,
+        show_code=args.show_code,
     )
     print("fitting the campaign across loads ...", file=sys.stderr)
     run_report(
         "loads",
         campaign_params,
         html=out / "campaign-report.html",
-        hide_code=args.hide_code,
+        show_code=args.show_code,
     )
     single = json.loads((out / "single-run.json").read_text(encoding="utf-8"))
     campaign = json.loads((out / "campaign.json").read_text(encoding="utf-8"))
