@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import re
 from typing import Any
 
@@ -16,6 +17,7 @@ class CommandLineError(BayestriboError):
 __all__ = [
     "COLUMN_ALIASES",
     "CommandLineError",
+    "add_notch_option",
     "add_reading_options",
     "add_run_arguments",
     "cli_message",
@@ -99,6 +101,32 @@ def add_reading_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--frequency", type=float, help="nominal natural frequency f [Hz]")
     parser.add_argument("--load", type=float, help="normal load N [N]")
     parser.add_argument("--mass", type=float, help="oscillating mass m [kg]")
+
+
+def notch_value(text: str) -> float | str:
+    """``--notch`` value: a frequency [Hz] or ``auto``."""
+    if text == "auto":
+        return text
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value) or value <= 0.0:
+        raise argparse.ArgumentTypeError(
+            f"expected a frequency in Hz (50, 60) or auto, got {text!r}"
+        )
+    return value
+
+
+def add_notch_option(parser: argparse.ArgumentParser) -> None:
+    """Add ``--notch``: remove a mains line measured at rest before the analysis."""
+    parser.add_argument(
+        "--notch",
+        type=notch_value,
+        metavar="HZ|auto",
+        help="subtract the mains line (50, 60) measured at rest from both channels, or the "
+        "line found in the rest spectrum (auto); zero-phase, no delay",
+    )
 
 
 def columns_from_args(values: list[str] | None) -> list[str] | None:

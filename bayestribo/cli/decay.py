@@ -12,7 +12,7 @@ import argparse
 import json
 from typing import Any
 
-from bayestribo.cli._common import add_run_arguments, read_run_from_args
+from bayestribo.cli._common import add_notch_option, add_run_arguments, read_run_from_args
 
 __all__ = ["register"]
 
@@ -30,6 +30,7 @@ def register(subparsers: Any) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     add_run_arguments(p)
+    add_notch_option(p)
     p.add_argument("--skip", type=int, default=1, help="oscillations to skip after the release")
     p.add_argument("--points", type=int, default=12, help="rows of Π(τ) to print")
     p.add_argument("--json", action="store_true", help="print JSON instead of text")
@@ -61,7 +62,21 @@ def summary(decay: Any, run_name: str) -> dict[str, Any]:
         },
         "derived_channel": decay.derived_channel,
         "n_samples": int(decay.tau.size),
+        "notch_Hz": list(decay.notch_Hz),
+        "mains_lines_Hz": [] if decay.rest_noise is None else list(decay.rest_noise.lines_Hz),
+        "noise_coloured": None if decay.rest_noise is None else bool(decay.rest_noise.coloured),
     }
+
+
+def mains_note(info: dict[str, Any]) -> str | None:
+    """One line on a mains line: removed, or found at rest with the option to remove it."""
+    if info["notch_Hz"]:
+        lines = ", ".join(f"{f:.2f}" for f in info["notch_Hz"])
+        return f"mains line at {lines} Hz measured at rest and subtracted from both channels"
+    if info["mains_lines_Hz"]:
+        lines = ", ".join(f"{f:.2f}" for f in info["mains_lines_Hz"])
+        return f"a mains line at {lines} Hz is in the rest noise; --notch auto subtracts it"
+    return None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -77,6 +92,7 @@ def run(args: argparse.Namespace) -> int:
         recording.velocity,
         rig=recording.rig(),
         skip_oscillations=args.skip,
+        notch=args.notch,
     )
     info = summary(decay, args.run)
     rows = np.linspace(0, decay.tau.size - 1, max(args.points, 2)).astype(int)
@@ -103,6 +119,9 @@ def run(args: argparse.Namespace) -> int:
         f"{decay.noise.velocity} ({decay.noise.source})"
     )
     print(f"friction unit  {unit}; length scale {decay.scaling.length_scale:.6g}")
+    note = mains_note(info)
+    if note is not None:
+        print(f"mains          {note}")
     print(f"y0             {decay.y0:.6g}")
     print(f"{'τ':>12} {'E(τ)':>14} {'Π(τ)':>14}")
     for i in rows:

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from bayestribo import DEFAULT_SEED
-from bayestribo.cli._common import add_run_arguments, read_run_from_args
+from bayestribo.cli._common import add_notch_option, add_run_arguments, read_run_from_args
 
 __all__ = ["json_record", "register", "write_outputs"]
 
@@ -54,6 +54,7 @@ def register(subparsers: Any) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     add_run_arguments(p)
+    add_notch_option(p)
     p.add_argument(
         "--model", choices=("exact", "averaged"), default="exact", help="forward model of Π"
     )
@@ -180,12 +181,28 @@ def run(args: argparse.Namespace) -> int:
             discrepancy=args.discrepancy,
             progress=args.progress,
             skip_oscillations=args.skip,
+            notch=args.notch,
             max_steps=args.max_steps,
         )
     # the run is named by the path the user gave
     result.idata.posterior.attrs["run_name"] = str(args.run)
     for w in caught:
         warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    notched = result.settings.get("notch_Hz") or []
+    lines = result.noise.get("lines_Hz") or []
+    if notched:
+        found = ", ".join(f"{f:.2f}" for f in notched)
+        print(
+            f"bayestribo fit: mains line at {found} Hz measured at rest and subtracted",
+            file=sys.stderr,
+        )
+    elif lines:
+        found = ", ".join(f"{f:.2f}" for f in lines)
+        print(
+            f"bayestribo fit: a mains line at {found} Hz is in the rest noise; --notch auto "
+            "subtracts it",
+            file=sys.stderr,
+        )
     if args.out is not None:
         paths = write_outputs(result, args.out, Path(args.run).stem)
         if not args.json:

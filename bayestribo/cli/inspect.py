@@ -18,6 +18,7 @@ from typing import Any
 
 from bayestribo.cli._common import (
     CommandLineError,
+    add_notch_option,
     add_run_arguments,
     cli_message,
     read_run_from_args,
@@ -41,6 +42,7 @@ def register(subparsers: Any) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     add_run_arguments(p)
+    add_notch_option(p)
     p.add_argument(
         "--skip",
         type=int,
@@ -111,6 +113,7 @@ def inspection(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
             recording.velocity,
             rig=recording.rig(),
             skip_oscillations=args.skip,
+            notch=args.notch,
         )
     except BayestriboError as exc:
         report["decay"] = {"error": cli_message(str(exc))}
@@ -127,6 +130,8 @@ def _number(value: float | None, digits: int = 6) -> str:
 
 
 def _text(report: dict[str, Any]) -> str:
+    from bayestribo.cli.decay import mains_note
+
     reading = report["reading"]
     lines = [f"file           {report['file']}"]
     lines.append(f"read as        {reading['reader']} ({reading['format']})")
@@ -189,6 +194,9 @@ def _text(report: dict[str, Any]) -> str:
     if decay["derived_channel"]:
         lines.append(f"derived        {decay['derived_channel']} (from the other channel)")
     lines.append(f"friction as    {decay['friction_reported_as']}")
+    note = mains_note(decay)
+    if note is not None:
+        lines.append(f"mains          {note}")
     return "\n".join(lines)
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -43,6 +43,7 @@ def fit(
     read_options: Mapping[str, Any] | None = None,
     noise: NoiseModel | None = None,
     correct_channels: bool = True,
+    notch: float | Literal["auto"] | None = None,
 ) -> FitResult:
     """Posterior of ζ and μ_k (or ζ₀, or the friction displacement) for one run.
 
@@ -83,6 +84,8 @@ def fit(
         delay is off by more than the recording's own uncertainty
         (:func:`bayestribo.inference.calibration.calibrate_channels`); the result's
         ``channel_calibration`` records what was measured and done.
+    notch : float, "auto" or None
+        Mains line to subtract, measured at rest (:func:`bayestribo.inference.prepare`).
 
     Returns
     -------
@@ -109,6 +112,7 @@ def fit(
         seed=rng,
         read_options=read_options,
         correct_channels=correct_channels,
+        notch=notch,
     )
     posterior = build_posterior(
         prepared.data,

@@ -22,7 +22,7 @@ import os
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import scipy.stats
@@ -134,6 +134,7 @@ def prepare(
     seed: int | np.random.Generator | None = None,
     read_options: Mapping[str, Any] | None = None,
     correct_channels: bool = True,
+    notch: float | Literal["auto"] | None = None,
 ) -> PreparedRun:
     """Step 1: a run becomes observed Π increments with their noise variances.
 
@@ -155,6 +156,11 @@ def prepare(
         Correct the velocity to the displacement when their gain ratio or delay is
         off (:func:`bayestribo.inference.calibration.calibrate_channels`; a
         :class:`~bayestribo.errors.ChannelCalibrationWarning` either way).
+    notch : float, "auto" or None
+        Subtract the mains line measured at rest at this frequency [Hz], or the one
+        found in the rest spectrum (``"auto"``), from both channels before the
+        analysis (:func:`bayestribo.signal.decay.energy_decay`); the result records
+        the line removed.
 
     Returns
     -------
@@ -169,6 +175,7 @@ def prepare(
         recording.velocity,
         rig=recording.rig(),
         skip_oscillations=skip_oscillations,
+        notch=notch,
     )
     noise_used = noise or noise_model(decay, dict(recording.metadata))
     rng = np.random.default_rng(seed)
@@ -418,6 +425,7 @@ def summarise(
                 "grid_points": prepared.grid_points,
                 "skip_oscillations": prepared.skip_oscillations,
                 "discrepancy": discrepancy,
+                "notch_Hz": list(prepared.decay.notch_Hz),
                 "max_steps": sampled.settings.max_steps,
             }
         ),

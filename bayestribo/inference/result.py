@@ -208,6 +208,12 @@ class FitResult:
         }
 
     @property
+    def settings(self) -> dict[str, Any]:
+        """The fit's settings: grid points, skipped oscillations, discrepancy, step
+        ceiling and the mains line subtracted (``notch_Hz``)."""
+        return dict(self._attr("settings_json", {}) or {})
+
+    @property
     def channel_calibration(self) -> dict[str, Any] | None:
         """The channels' gain ratio and delay measured from the motion, and whether
         the velocity was corrected (None for a run with one signal)."""
