@@ -199,3 +199,14 @@ def test_campaign_selection_follows_the_manifest(tmp_path):
     (tmp_path / "manifest.csv").write_text("run_id,file,series\nr1,runs/r1.csv,oil\n")
     assert campaign_selection(tmp_path) == {"series": None, "air_series": None}
     assert campaign_selection(tmp_path / "no-manifest") == {"series": None, "air_series": None}
+
+
+@pytest.mark.skipif(not RUN.is_file(), reason="the bundled campaign data/ is absent")
+def test_out_may_name_a_folder_as_for_every_other_command(tmp_path, captured):
+    folder = tmp_path / "reports"
+    assert main(["report", str(RUN), "--out", str(folder)]) == 0
+    html = Path(captured[-1][2]["html"])
+    assert html == folder / "glycerol-N0.31-r1-report.html" and html.is_file()
+    assert captured[-1][1]["figure_dir"] == str(
+        (folder / "glycerol-N0.31-r1-report-figures").resolve()
+    )

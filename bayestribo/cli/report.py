@@ -56,7 +56,13 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "path", metavar="PATH", help="run file, folder of runs, or a campaign's results folder"
     )
-    p.add_argument("--out", type=Path, help="HTML file to write (default: <PATH stem>-report.html)")
+    p.add_argument(
+        "--out",
+        type=Path,
+        metavar="FILE.html|DIR",
+        help="the report's HTML file, or a folder to write <PATH stem>-report.html into "
+        "(default: <PATH stem>-report.html here); figures go beside it",
+    )
     add_reading_options(p)
     p.add_argument(
         "--seed",
@@ -259,7 +265,12 @@ def run(args: argparse.Namespace) -> int:
             )
         campaign_params, where = _campaign_params(path, args)
         params.update(campaign_params)
-    out = args.out or Path(f"{path.stem or path.name}-report.html")
+    default_name = f"{path.stem or path.name}-report.html"
+    out = args.out or Path(default_name)
+    if out.is_dir() or (args.out is not None and out.suffix.lower() not in (".html", ".htm")):
+        # --out names a folder, as for every other command
+        out = out / default_name
+    out.parent.mkdir(parents=True, exist_ok=True)
     figures = args.figures or out.with_name(f"{out.stem}-figures")
     params["figure_dir"] = str(figures.resolve())
     params["figure_format"] = args.figure_format
