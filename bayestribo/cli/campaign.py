@@ -108,8 +108,9 @@ def _text(analysis: Any, failures: list[dict[str, str]]) -> str:
     for r in analysis.group_rows():
         prefix = {"contact": "", "pooled over loads": "pooled over loads: "}
         group = prefix.get(r["kind"], "no contact (ζ₀): ") + str(r["group"])
-        mean = f"{r['mean_median']:.5f} [{r['mean_low']:.5f}, {r['mean_high']:.5f}]"
-        sig = f"{r['sigma_median']:.5f} [{r['sigma_low']:.5f}, {r['sigma_high']:.5f}]"
+        # significant digits, not decimals: a ζ of 1e-6 must not print as 0.00000
+        mean = f"{r['mean_median']:.4g} [{r['mean_low']:.4g}, {r['mean_high']:.4g}]"
+        sig = f"{r['sigma_median']:.3g} [{r['sigma_low']:.3g}, {r['sigma_high']:.3g}]"
         lines.append(f"{group:48s} {r['n_runs']:2d} {r['parameter']:5s} {mean:>30s} {sig:>30s}")
     for r in analysis.trend_rows():
         lines.append(
