@@ -248,6 +248,7 @@ def test_without_load_no_quantity_is_labelled_as_a_coefficient():
     )
 
 
+@pytest.mark.filterwarnings("ignore::bayestribo.errors.MisfitWarning")  # a bound that misfits
 def test_a_posterior_piled_on_a_prior_bound_is_no_measurement():
     from bayestribo.errors import PriorBoundWarning
     from bayestribo.inference import Uniform
