@@ -10,9 +10,33 @@ analysis
     :func:`analyse_campaign`: fits → populations per group, ζ₀, ζ_k, d_k, trends.
 figures
     Figures of a campaign analysis.
+results
+    :func:`load_campaign`: a campaign's results folder read back.
+
+The public names are imported on first use: the acquisition logger registers runs in
+the catalog (plain SQLite) without loading the inference stack (numba, emcee, ArviZ:
+about 130 MB of memory).
 """
 
-from bayestribo.campaign.analysis import CampaignAnalysis, analyse_campaign
-from bayestribo.campaign.fitting import fit_many
+from __future__ import annotations
+
+import importlib
+from typing import Any
 
 __all__ = ["CampaignAnalysis", "analyse_campaign", "fit_many"]
+
+_LAZY = {
+    "CampaignAnalysis": "bayestribo.campaign.analysis",
+    "analyse_campaign": "bayestribo.campaign.analysis",
+    "fit_many": "bayestribo.campaign.fitting",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'bayestribo.campaign' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_LAZY])

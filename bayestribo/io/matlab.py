@@ -12,7 +12,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import scipy.io
 from numpy.typing import NDArray
 
 from bayestribo.errors import RunFormatError
@@ -64,6 +63,8 @@ def read_mat(
     RunFormatError
         For a file that is not a MATLAB file, or signals that cannot be picked.
     """
+    import scipy.io  # on first use: the acquisition logger reads no MATLAB files
+
     path = Path(path)
     where = str(path)
     try:
