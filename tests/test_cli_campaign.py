@@ -120,6 +120,29 @@ def test_a_campaign_lists_and_excludes_bad_runs_and_analyses_the_rest(tmp_path, 
     assert status_by_run["air-r1"].startswith("failed: RunFormatError")
 
 
+def test_reading_options_apply_to_every_run_of_a_campaign(tmp_path, capsys):
+    from bayestribo.io import read_run
+
+    folder = tmp_path / "eu"
+    folder.mkdir()
+    name = "glycerol-N0.07-r1"
+    run = read_run(DATA / f"{name}.csv")
+    rows = [
+        f"{t:.12g};{x:.12g};{v:.12g}".replace(".", ",")
+        for t, x, v in zip(run.time, run.displacement, run.velocity, strict=True)
+    ]
+    (folder / f"{name}.csv").write_text("\n".join(["t;x;v", *rows]) + "\n", encoding="utf-8")
+    os.symlink(DATA / f"{name}.json", folder / f"{name}.json")
+    reading = ["--delimiter", ";", "--decimal", ",", "--columns", "t", "x", "v"]
+    status, report = _run(capsys, folder, "--out", tmp_path / "o", "--no-figures", *reading, *FAST)
+    assert report["failures"] == [] and [r["run_id"] for r in report["runs"]] == [name]
+    assert status == (0 if report["converged"] else 1)
+    assert report["settings"]["fit"]["read_options"]["decimal"] == ","
+    # Without the options the run cannot be read, and the campaign says why.
+    assert main(["campaign", str(folder), "--out", str(tmp_path / "p"), "--quiet"]) == 2
+    assert "could be fitted" in capsys.readouterr().err
+
+
 def test_a_folder_without_runs_is_a_package_error(tmp_path, capsys):
     assert main(["campaign", str(tmp_path), "--out", str(tmp_path / "o")]) == 2
     assert "no run files" in capsys.readouterr().err

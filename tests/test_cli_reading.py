@@ -82,7 +82,9 @@ def test_reading_errors_give_the_fix_as_options(tmp_path, run, capsys):
     assert "--scale: expected NAME=FACTOR" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("command", ["fit", "estimate", "decay", "check", "report"])
+@pytest.mark.parametrize(
+    "command", ["fit", "estimate", "decay", "check", "report", "inspect", "campaign"]
+)
 def test_every_reading_command_has_the_same_reading_options(command, capsys):
     with pytest.raises(SystemExit):
         main([command, "--help"])

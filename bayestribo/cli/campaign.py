@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from bayestribo import DEFAULT_SEED
+from bayestribo.cli._common import add_reading_options, reading_kwargs
 
 __all__ = ["register"]
 
@@ -79,6 +80,7 @@ def register(subparsers: Any) -> None:
         help="also compare viscous, Coulomb and both per run by PSIS-LOO (three fits a run)",
     )
     p.add_argument("--no-figures", action="store_true", help="skip the figures")
+    add_reading_options(p)
     p.add_argument("--quiet", action="store_true", help="no progress line")
     p.set_defaults(handler=run)
 
@@ -190,6 +192,10 @@ def run(args: argparse.Namespace) -> int:
         )
         if value is not None
     }
+    read_options = reading_kwargs(args)
+    if read_options:
+        # The same reading options for every run file (recorded with the fits).
+        fit_kwargs["read_options"] = read_options
     context = dask_executor(args.dask_scheduler) if args.dask_scheduler else nullcontext(None)
     with context as executor:
         outcomes = fit_catalogued(

@@ -166,6 +166,7 @@ def compare_dissipation_laws(
     grid_points: int | None = None,
     skip_oscillations: int = 1,
     discrepancy: bool = False,
+    read_options: Mapping[str, Any] | None = None,
 ) -> LawComparison:
     """Fit a run under each dissipation law and compare them by PSIS-LOO.
 
@@ -180,6 +181,8 @@ def compare_dissipation_laws(
         :data:`bayestribo.DEFAULT_SEED`.
     model, n_walkers, n_ensembles, max_steps, grid_points, skip_oscillations, discrepancy
         As in :func:`bayestribo.inference.fit`.
+    read_options : mapping, optional
+        Options of :func:`bayestribo.read_run` when ``run`` is a path.
 
     Returns
     -------
@@ -203,6 +206,7 @@ def compare_dissipation_laws(
         skip_oscillations=skip_oscillations,
         grid_points=grid_points,
         seed=np.random.default_rng(data_seed),
+        read_options=read_options,
     )
     settings = SamplerSettings(n_walkers=n_walkers, n_ensembles=n_ensembles, max_steps=max_steps)
     idatas, table, notes = {}, {}, []
