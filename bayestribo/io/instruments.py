@@ -528,6 +528,82 @@ def _auto_roles(export: InstrumentExport, where: str, fix: str) -> list[str]:
     return roles
 
 
+def _check_stated(
+    export: InstrumentExport, i: int, stated: float | None, factor: float, name: str, where: str
+) -> None:
+    """A unit in a ``columns`` name must agree with the unit the export states."""
+    if stated is not None and abs(stated - factor) > 1e-12 * factor:
+        raise RunFormatError(
+            f"columns: {export.labels[i]} is exported in {export.units[i]}; the unit in its "
+            f"name contradicts it; name it {name!r} and it is converted from "
+            f"{export.units[i]}",
+            where,
+        )
+
+
+def _column_factor(
+    export: InstrumentExport,
+    i: int,
+    role: str,
+    stated: float | None,
+    factors: Mapping[str, float],
+    where: str,
+) -> float:
+    """Factor from column ``i`` as exported to the canonical unit of ``role``.
+
+    Time converts from its unit (a sample index is converted later); a channel in a
+    length or velocity unit converts from it (a scale factor on top is refused); a
+    channel in volts or without a unit needs its sensitivity in ``factors``.
+    """
+    unit = export.units[i]
+    label = f"{export.labels[i]} [{unit}]" if unit else export.labels[i]
+    if role == TIME:
+        if unit == "index":
+            return 1.0
+        factor = TIME_UNITS.get(unit.strip().lower())
+        if factor is None:
+            raise RunFormatError(
+                f"{export.vendor} export: time column {label} has no known time unit; "
+                f"expected one of {sorted(TIME_UNITS)}",
+                where,
+            )
+        _check_stated(export, i, stated, factor, TIME, where)
+        return factor
+    physical = _physical_factor(role, unit) if unit else None
+    volts = VOLT_UNITS.get(unit.strip().lower())
+    if physical is not None:
+        if role in factors:
+            raise RunFormatError(
+                f"scale: {export.labels[i]} is exported in {unit}, which is converted to "
+                "SI units already; a scale factor would convert it twice",
+                where,
+            )
+        _check_stated(export, i, stated, physical, role, where)
+        return physical
+    other = VELOCITY if role == DISPLACEMENT else DISPLACEMENT
+    if unit and volts is None and _physical_factor(other, unit) is not None:
+        raise RunFormatError(
+            f"columns: {label} is exported as a {other.split('_')[0]} but is named "
+            f"{role!r}; check the order of the columns",
+            where,
+        )
+    if stated is not None:
+        raise RunFormatError(
+            f"columns: {label} is exported in {unit or 'an unknown unit'}, not in the unit "
+            f"its name states; name it {role!r} and give its sensitivity with scale={{...}}",
+            where,
+        )
+    if role not in factors:
+        what = "volts" if volts is not None else "an unknown unit"
+        per = "m/V" if role == DISPLACEMENT else "(m/s)/V"
+        raise RunFormatError(
+            f"{export.vendor} export: {label} ({role}) is in {what}; give the sensor's "
+            f"sensitivity in {per} with scale={{...}}, e.g. {role}=1e-3",
+            where,
+        )
+    return (volts if volts is not None else 1.0) * factors[role]
+
+
 def read_export(
     lines: Sequence[str],
     export: InstrumentExport,
@@ -618,70 +694,11 @@ def read_export(
             where,
         )
     factors = check_scale(scale, [r for r in used if r != TIME], where)
-    conversion: dict[int, float] = {}
-    for i, role in enumerate(roles):
-        if role == IGNORE:
-            continue
-        unit = export.units[i]
-        label = f"{export.labels[i]} [{unit}]" if unit else export.labels[i]
-        if role == TIME:
-            if unit == "index":
-                conversion[i] = 1.0
-                continue
-            factor = TIME_UNITS.get(unit.strip().lower())
-            if factor is None:
-                raise RunFormatError(
-                    f"{export.vendor} export: time column {label} has no known time unit; "
-                    f"expected one of {sorted(TIME_UNITS)}",
-                    where,
-                )
-            if stated[i] is not None and abs(stated[i] - factor) > 1e-12 * factor:
-                raise RunFormatError(
-                    f"columns: {export.labels[i]} is exported in {unit}; the unit in its name "
-                    f"contradicts it; name it {TIME!r} and it is converted from {unit}",
-                    where,
-                )
-            conversion[i] = factor
-            continue
-        physical = _physical_factor(role, unit) if unit else None
-        volts = VOLT_UNITS.get(unit.strip().lower())
-        if physical is not None:
-            if role in factors:
-                raise RunFormatError(
-                    f"scale: {export.labels[i]} is exported in {unit}, which is converted to "
-                    "SI units already; a scale factor would convert it twice",
-                    where,
-                )
-            if stated[i] is not None and abs(stated[i] - physical) > 1e-12 * physical:
-                raise RunFormatError(
-                    f"columns: {export.labels[i]} is exported in {unit}; the unit in its name "
-                    f"contradicts it; name it {role!r}",
-                    where,
-                )
-            conversion[i] = physical
-            continue
-        other = VELOCITY if role == DISPLACEMENT else DISPLACEMENT
-        if unit and volts is None and _physical_factor(other, unit) is not None:
-            raise RunFormatError(
-                f"columns: {label} is exported as a {other.split('_')[0]} but is named "
-                f"{role!r}; check the order of the columns",
-                where,
-            )
-        if stated[i] is not None:
-            raise RunFormatError(
-                f"columns: {label} is exported in {unit or 'an unknown unit'}, not in the unit "
-                f"its name states; name it {role!r} and give its sensitivity with scale={{...}}",
-                where,
-            )
-        if role not in factors:
-            what = "volts" if volts is not None else "an unknown unit"
-            per = "m/V" if role == DISPLACEMENT else "(m/s)/V"
-            raise RunFormatError(
-                f"{export.vendor} export: {label} ({role}) is in {what}; give the sensor's "
-                f"sensitivity in {per} with scale={{...}}, e.g. {role}=1e-3",
-                where,
-            )
-        conversion[i] = (volts if volts is not None else 1.0) * factors[role]
+    conversion = {
+        i: _column_factor(export, i, role, stated[i], factors, where)
+        for i, role in enumerate(roles)
+        if role != IGNORE
+    }
 
     keep = [i for i, r in enumerate(roles) if r != IGNORE]
     width = len(export.labels)
