@@ -280,3 +280,33 @@ def test_result_repr_and_html_show_the_numbers_with_units(bundled):
     assert html.startswith("<table>") and "<td>zeta</td><td>1</td>" in html
     assert "<td>d_k</td><td>s/m</td>" in html or "d_k" not in result.summary()
     assert any(line.split()[:2] == ["unit", "mean"] for line in result.to_text().splitlines())
+
+
+def test_a_frequency_that_changes_with_amplitude_is_reported():
+    from test_io_frequency import _decay
+
+    from bayestribo.errors import MisfitWarning
+    from bayestribo.io.run import Run
+
+    t, x, v = _decay(10_000.0, k3_over_k=667.0)  # a cubic spring: +0.1 % at 2 mm
+    rng = np.random.default_rng(5)
+    run = Run(
+        t,
+        x + rng.normal(0.0, 1.5e-6, t.size),
+        v + rng.normal(0.0, 1.5e-7, t.size),
+        {"natural_frequency_Hz": 32.6, "mass_kg": 0.035, "load_N": 0.31},
+    )
+    with pytest.warns(MisfitWarning, match="half period changes by -0.0"):
+        result = fit(run, seed=1, max_steps=3000)
+    assert result.frequency_trend["z"] < -4
+    # A linear oscillator: recorded, no warning.
+    t, x, v = _decay(10_000.0)
+    plain = Run(
+        t,
+        x + rng.normal(0.0, 1.5e-6, t.size),
+        v + rng.normal(0.0, 1.5e-7, t.size),
+        {"natural_frequency_Hz": 32.6, "mass_kg": 0.035, "load_N": 0.31},
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", MisfitWarning)
+        assert abs(fit(plain, seed=1, max_steps=3000).frequency_trend["z"]) < 4

@@ -208,6 +208,12 @@ class FitResult:
         }
 
     @property
+    def frequency_trend(self) -> dict[str, Any] | None:
+        """The half period's change with amplitude along the decay (``change``, ``z``):
+        zero for the linear law (see :func:`bayestribo.io.frequency.frequency_trend`)."""
+        return self._attr("frequency_trend_json", None)
+
+    @property
     def settings(self) -> dict[str, Any]:
         """The fit's settings: grid points, skipped oscillations, discrepancy, step
         ceiling and the mains line subtracted (``notch_Hz``)."""
@@ -245,6 +251,7 @@ class FitResult:
                 "metadata": self.metadata,
                 "noise": self.noise,
                 "channel_calibration": self.channel_calibration,
+                "frequency_trend": self.frequency_trend,
                 "parameters": {
                     k: {**v.to_dict(), "unit": units.get(k, "")}
                     for k, v in self.summary(prob).items()
