@@ -11,6 +11,13 @@ One rule for invalid densities: a point outside the prior's support has density 
 (log density −inf) and the likelihood is not evaluated there; a NaN log-likelihood
 inside the support is a bug or a broken input, and raises an error that names the
 parameters, never a silent −inf.
+
+Two implementations of the same density: :meth:`Posterior.__call__` evaluates all
+rows in one compiled call (:class:`~bayestribo.inference.fused.FusedLogPosterior`)
+whenever the priors and the likelihood are of the kinds it compiles, and
+:meth:`Posterior.reference` with numpy (priors' ``logpdf`` and
+:meth:`PiLikelihood.log_likelihood`), the reference the tests hold the compiled one
+to (1e-10 of max(1, |log p|)). ``compiled=False`` makes ``__call__`` the reference.
 """
 
 from __future__ import annotations
@@ -23,6 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.errors import BayestriboError
+from bayestribo.inference.fused import FusedLogPosterior
 from bayestribo.inference.likelihood import PiLikelihood
 from bayestribo.inference.priors import PriorSet
 from bayestribo.inference.sampling import NaNLogProbabilityError
@@ -47,11 +55,15 @@ class Posterior:
     fixed : mapping of str to float, optional
         Parameters held at a value instead of sampled (names from :data:`PARAMETERS`,
         not also in ``priors``).
+    compiled : bool
+        Evaluate ``__call__`` with the compiled log density where it applies (the
+        default); False: always with the numpy reference.
     """
 
     priors: PriorSet
     likelihood: PiLikelihood
     fixed: Mapping[str, float] = field(default_factory=dict)
+    compiled: bool = True
 
     def __post_init__(self) -> None:
         fixed = {str(k): float(v) for k, v in dict(self.fixed).items()}
@@ -69,6 +81,15 @@ class Posterior:
             if required not in self.priors.names and required not in fixed:
                 raise BayestriboError(f"priors: {required!r} must be sampled or fixed")
         object.__setattr__(self, "fixed", fixed)
+        fused = (
+            FusedLogPosterior.build(self.priors, self.likelihood, fixed) if self.compiled else None
+        )
+        object.__setattr__(self, "_fused", fused)
+
+    @property
+    def uses_compiled(self) -> bool:
+        """True when ``__call__`` evaluates the compiled log density."""
+        return self._fused is not None
 
     @property
     def names(self) -> list[str]:
@@ -117,6 +138,36 @@ class Posterior:
 
     def __call__(self, theta: NDArray) -> NDArray:
         """Log posterior density (up to a constant) of each row, shape (n,).
+
+        The compiled density where it applies (:attr:`uses_compiled`), else
+        :meth:`reference`; both give −inf outside the priors' support.
+
+        Raises
+        ------
+        NaNLogProbabilityError
+            If the log-likelihood is NaN inside the prior's support (the message
+            names the parameters).
+        BayestriboError
+            If ``theta`` does not have one column per sampled parameter.
+        """
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        if theta.ndim != 2 or theta.shape[1] != len(self.names):
+            raise BayestriboError(
+                f"theta: expected rows of {len(self.names)} values ({', '.join(self.names)}), "
+                f"got shape {theta.shape}"
+            )
+        fused: FusedLogPosterior | None = self._fused
+        if fused is None:
+            return self.reference(theta)
+        lp, outside = fused(theta)
+        if np.any(outside) or np.any(np.isnan(lp)):
+            # Outside the averaged model's domain, or NaN: the reference raises the
+            # error that names the cause (or gives the NaN of a NaN prior density).
+            return self.reference(theta)
+        return lp
+
+    def reference(self, theta: NDArray) -> NDArray:
+        """Log posterior density of each row with numpy (the reference), shape (n,).
 
         Raises
         ------

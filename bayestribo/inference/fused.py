@@ -1,0 +1,341 @@
+r"""The single-run log posterior of every walker in one compiled call (numba).
+
+:class:`~bayestribo.inference.posterior.Posterior` evaluates priors × likelihood with
+numpy over a few walkers at a time, where each of the hundred-odd array operations
+costs a few microseconds of interpreter and dispatch time and the arithmetic almost
+nothing. :class:`FusedLogPosterior` computes the same density in one numba function
+that loops over the walkers:
+
+1. the priors (:class:`~bayestribo.inference.priors.Uniform`,
+   :class:`~bayestribo.inference.priors.Normal`,
+   :class:`~bayestribo.inference.priors.LogUniform`), summed in sampling order; a
+   walker outside their support gets −inf and its likelihood is not evaluated;
+2. the model parameters from the sampled and fixed coordinates: μ_s = μ_k × (μ_s/μ_k),
+   the discrepancy scale s = 10^log10_discrepancy;
+3. the model Π on the grid, exact (the compiled kernel of
+   :mod:`bayestribo.model._kernel`, with sticking) or averaged (Eq. 34 and 40 with the
+   corrected Eq. 41, :mod:`bayestribo.model.averaged`), and its increments M_j;
+4. the increment variances V_j (+ s² ∫_j E² with the discrepancy term) and the
+   Gaussian log-likelihood with the equilibrium nuisance (δ₀, δ₁) marginalised
+   analytically (the 2 × 2 system of :mod:`bayestribo.inference.likelihood`):
+
+.. math::
+
+    \log p = \sum_i \log π_i(θ_i) - \tfrac12\left[r^\top W r - b^\top A^{-1} b\right]
+             - \tfrac12 \sum_j \log 2πV_j - \tfrac12 \log|A| - \tfrac12 \log|P|.
+
+The log posterior has no other nuisance: the calibration nuisances of the load, the
+mass and ζ₀ enter only the derived quantities, drawn after sampling
+(:func:`bayestribo.inference.assemble.derived_quantities`).
+
+The numpy implementation (:meth:`Posterior.reference`) stays the reference; the
+tests require the two to agree to 1e-10 of max(1, |log p|) over random parameter
+sets, −inf and NaN at the same points. :meth:`FusedLogPosterior.build` returns None
+for what it does not compile (a prior of another kind, a likelihood subclass that
+overrides the model): the posterior then evaluates the reference.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from bayestribo.inference.likelihood import PiLikelihood
+from bayestribo.inference.priors import LogUniform, Normal, PriorSet, Uniform
+from bayestribo.model._kernel import _one
+
+__all__ = ["FusedLogPosterior"]
+
+#: Parameters in the order of the ``columns`` table (as posterior.PARAMETERS).
+_ORDER = ("zeta", "mu_k", "mu_s_ratio", "y0", "log10_discrepancy")
+_SAMPLED_FROM_FIXED = -1  # the parameter is fixed at a value
+_ABSENT = -2  # the parameter is neither sampled nor fixed
+_UNIFORM, _NORMAL, _LOGUNIFORM = 0, 1, 2
+_EXACT, _AVERAGED = 0, 1
+_LOG_2PI = math.log(2.0 * math.pi)
+_TINY = 1e-100
+_PSI_SERIES = 1e-2
+
+
+@numba.njit(cache=True)
+def _log_prior(row: NDArray, prior: NDArray) -> float:
+    """Σ log π_i(θ_i) in sampling order; −inf outside the support (NaN for a NaN
+    argument of an unbounded prior, as the numpy priors give)."""
+    total = 0.0
+    for i in range(row.size):
+        x = row[i]
+        kind = prior[i, 0]
+        a = prior[i, 1]
+        b = prior[i, 2]
+        if kind == _UNIFORM:
+            total += -math.log(b - a) if (x >= a and x <= b) else -math.inf
+        elif kind == _NORMAL:
+            z = (x - a) / b
+            total += -0.5 * z * z - math.log(b * math.sqrt(2.0 * math.pi))
+        else:
+            if x >= a and x <= b:
+                total += -math.log(x) - math.log(math.log(b / a))
+            else:
+                total += -math.inf
+    return total
+
+
+@numba.njit(cache=True)
+def _value(row: NDArray, columns: NDArray, fixed: NDArray, k: int, default: float) -> float:
+    c = columns[k]
+    if c >= 0:
+        return row[c]
+    if c == _SAMPLED_FROM_FIXED:
+        return fixed[k]
+    return default
+
+
+@numba.njit(cache=True)
+def _expm1_ratio(a: float, length: float) -> float:
+    if abs(a) < _TINY:
+        return length
+    return -math.expm1(-a * length) / a
+
+
+@numba.njit(cache=True)
+def _averaged_amplitude(t: float, a0: float, z: float, mk: float) -> float:
+    """a(τ) of Eq. 34, zero after the end of motion (averaged.py, ``_amplitude``)."""
+    a = a0 * math.exp(-z * t) - (2.0 * mk / math.pi) * _expm1_ratio(z, t)
+    return max(a, 0.0)
+
+
+@numba.njit(cache=True)
+def _pi_of_amplitude(a: float, z: float, mk: float) -> float:
+    """∫_0^a (α²/2)/(ζα + 2μ_k/π) dα (averaged.py, ``_pi_of_amplitude``)."""
+    c = 2.0 * mk / math.pi
+    if z == 0.0 and c == 0.0:
+        return math.inf if a > 0.0 else 0.0
+    w = z * a / c if c > 0.0 else math.inf
+    if w <= 1.0:
+        if w < _PSI_SERIES:
+            psi = 0.0
+            for k in range(8, -1, -1):
+                psi = 1.0 / (k + 3.0) - w * psi
+        else:
+            psi = (math.log1p(w) - w + 0.5 * w * w) / (w**3 if w > 0.0 else 1.0)
+        return a**3 * psi / (2.0 * (c if c > 0.0 else 1.0))
+    wl = w if w > 1.0 else 2.0  # a NaN w takes the numpy reference's placeholder
+    finite = math.isfinite(wl)
+    inv = 1.0 / wl if finite else 0.0
+    chi = 0.5 - inv + (math.log1p(wl) * inv * inv if finite else 0.0)
+    return a * a * chi / (2.0 * (z if z > 0.0 else 1.0))
+
+
+@numba.njit(cache=True)
+def _averaged_grid(
+    tau: NDArray, amp: float, z: float, mk: float, tau_end: float, out: NDArray
+) -> None:
+    """Π_app on the grid (Eq. 40), truncated at ``tau_end`` when it is finite."""
+    pi_end = 0.0
+    if math.isfinite(tau_end):
+        pi_end = _pi_of_amplitude(_averaged_amplitude(tau_end, amp, z, mk), z, mk)
+    for i in range(tau.size):
+        pi = _pi_of_amplitude(_averaged_amplitude(tau[i], amp, z, mk), z, mk)
+        if math.isfinite(tau_end):
+            out[i] = pi - pi_end if tau[i] < tau_end else 0.0
+        else:
+            out[i] = pi
+
+
+@numba.njit(cache=True)
+def _log_posterior(
+    theta: NDArray,
+    prior: NDArray,
+    columns: NDArray,
+    fixed: NDArray,
+    data: NDArray,
+    scalars: NDArray,
+    out: NDArray,
+    domain: NDArray,
+) -> None:
+    """Log posterior of each row of ``theta`` into ``out`` (see the module notes).
+
+    ``data`` rows: τ_j, D_j, V_j, ∫_j E², ∫_j y, ∫_j τy (j < m). ``scalars``: y'0, the
+    end of the model's Π (inf when the record holds the end of motion), the prior
+    precisions of δ₀ and δ₁, log|P|, the model code. ``domain[i]`` is set where the
+    averaged model's parameters are outside its domain (the caller then lets the
+    reference raise its error).
+    """
+    tau = data[0]
+    inc = data[1]
+    var0 = data[2]
+    e2 = data[3]
+    x0 = data[4]
+    x1 = data[5]
+    m = tau.size
+    yp0 = scalars[0]
+    end = scalars[1]
+    prec0 = scalars[2]
+    prec1 = scalars[3]
+    log_prior_det = scalars[4]
+    model = scalars[5]
+    pi = np.empty(m)
+    var = np.empty(m)
+    for n in range(theta.shape[0]):
+        row = theta[n]
+        lp = _log_prior(row, prior)
+        domain[n] = False
+        if not math.isfinite(lp):
+            out[n] = lp
+            continue
+        zeta = _value(row, columns, fixed, 0, 0.0)
+        mu_k = _value(row, columns, fixed, 1, 0.0)
+        mu_s = mu_k * _value(row, columns, fixed, 2, 1.0) if columns[2] != _ABSENT else mu_k
+        y0 = _value(row, columns, fixed, 3, 0.0)
+        if model == _EXACT:
+            _one(tau, y0, zeta, mu_k, mu_s, yp0, end, pi)
+        else:
+            if not (zeta >= 0.0 and zeta < 1.0 and mu_k >= 0.0 and math.isfinite(mu_k)):
+                domain[n] = True
+                out[n] = math.nan
+                continue
+            _averaged_grid(tau, math.hypot(y0, yp0), zeta, mu_k, end, pi)
+        if columns[4] != _ABSENT:
+            s = 10.0 ** _value(row, columns, fixed, 4, 0.0)
+            s2 = s * s
+            for j in range(m):
+                var[j] = var0[j] + s2 * e2[j]
+        else:
+            for j in range(m):
+                var[j] = var0[j]
+        a00 = 0.0
+        a01 = 0.0
+        a11 = 0.0
+        b0 = 0.0
+        b1 = 0.0
+        rr = 0.0
+        norm = 0.0
+        for j in range(m):
+            model_inc = pi[j] - pi[j + 1] if j < m - 1 else pi[j]
+            r = inc[j] - model_inc
+            w = 1.0 / var[j]
+            a00 += w * x0[j] * x0[j]
+            a01 += w * x0[j] * x1[j]
+            a11 += w * x1[j] * x1[j]
+            rw = r * w
+            b0 += rw * x0[j]
+            b1 += rw * x1[j]
+            rr += r * r / var[j]
+            norm += math.log(var[j]) + _LOG_2PI
+        a00 += prec0
+        a11 += prec1
+        det = a00 * a11 - a01 * a01
+        d0 = (a11 * b0 - a01 * b1) / det
+        d1 = (a00 * b1 - a01 * b0) / det
+        chi2 = rr - (b0 * d0 + b1 * d1)
+        out[n] = lp + -0.5 * (chi2 + norm + math.log(det) + log_prior_det)
+
+
+@dataclass(frozen=True)
+class FusedLogPosterior:
+    """The tables of one posterior for the compiled log density.
+
+    Attributes
+    ----------
+    prior : ndarray
+        Shape (d, 3): kind (0 uniform, 1 normal, 2 log-uniform) and its two
+        parameters (low, high or μ, σ) per sampled coordinate.
+    columns : ndarray
+        Shape (5,): for ζ, μ_k, μ_s/μ_k, y0, log10_discrepancy, the column of θ, -1
+        when fixed, -2 when absent.
+    fixed : ndarray
+        Shape (5,): the fixed values (where ``columns`` is -1).
+    data : ndarray
+        Shape (6, m): τ_j, D_j, V_j, ∫_j E², ∫_j y, ∫_j τy.
+    scalars : ndarray
+        y'0, the end of Π, the prior precisions of δ₀ and δ₁, log|P|, the model code.
+    """
+
+    prior: NDArray
+    columns: NDArray
+    fixed: NDArray
+    data: NDArray
+    scalars: NDArray
+
+    @classmethod
+    def build(
+        cls, priors: PriorSet, likelihood: PiLikelihood, fixed: dict[str, float]
+    ) -> FusedLogPosterior | None:
+        """Tables for ``priors`` × ``likelihood`` with ``fixed`` values, or None when
+        a prior is not one of the three kinds or the likelihood is a subclass (its
+        methods may differ from what is compiled here)."""
+        if type(likelihood) is not PiLikelihood:
+            return None
+        table = np.empty((len(priors), 3))
+        for i, name in enumerate(priors.names):
+            p: Any = priors[name]
+            if type(p) is Uniform:
+                table[i] = (_UNIFORM, p.low, p.high)
+            elif type(p) is Normal:
+                table[i] = (_NORMAL, p.mu, p.sigma)
+            elif type(p) is LogUniform:
+                table[i] = (_LOGUNIFORM, p.low, p.high)
+            else:
+                return None
+        columns = np.full(len(_ORDER), _ABSENT, dtype=np.int64)
+        values = np.zeros(len(_ORDER))
+        for k, name in enumerate(_ORDER):
+            if name in priors.names:
+                columns[k] = priors.names.index(name)
+            elif name in fixed:
+                columns[k] = _SAMPLED_FROM_FIXED
+                values[k] = float(fixed[name])
+        d = likelihood.data
+        data = np.ascontiguousarray(
+            np.vstack(
+                [
+                    d.tau_grid[:-1],
+                    d.increments,
+                    d.variance,
+                    d.energy_squared,
+                    d.offset_design[:, 0],
+                    d.offset_design[:, 1],
+                ]
+            ),
+            dtype=np.float64,
+        )
+        scalars = np.array(
+            [
+                float(d.yp0),
+                math.inf if d.motion_ended else d.tau_end,
+                likelihood.offset_sd**-2,
+                likelihood.drift_sd**-2,
+                likelihood._log_prior_det,
+                _EXACT if likelihood.model == "exact" else _AVERAGED,
+            ]
+        )
+        return cls(table, columns, values, data, scalars)
+
+    def __call__(self, theta: NDArray) -> tuple[NDArray, NDArray]:
+        """Log posterior of each row of ``theta`` (n, d), and where the averaged
+        model's domain was left (the caller evaluates those rows with the reference).
+
+        Parameters
+        ----------
+        theta : ndarray
+            Sampled coordinates, shape (n, d).
+
+        Returns
+        -------
+        log_p : ndarray
+            Shape (n,): −inf outside the priors' support, NaN where the likelihood is.
+        outside : ndarray of bool
+            Shape (n,).
+        """
+        theta = np.ascontiguousarray(theta, dtype=np.float64)
+        out = np.empty(theta.shape[0])
+        outside = np.empty(theta.shape[0], dtype=np.bool_)
+        _log_posterior(
+            theta, self.prior, self.columns, self.fixed, self.data, self.scalars, out, outside
+        )
+        return out, outside

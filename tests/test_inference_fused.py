@@ -1,0 +1,193 @@
+"""The compiled log posterior against the numpy reference (Posterior.reference).
+
+Random parameter sets in a box wider than the priors' support (so that some rows are
+outside it), for every variant: exact and averaged model, with and without the
+discrepancy term, with fixed parameters, without friction, with replaced priors of
+each kind, with a record that ends before the motion and a start in motion. The two
+must agree to 1e-10 of max(1, |log p|) and give −inf at the same rows.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from _sim import simulate_flat
+
+from bayestribo.errors import BayestriboError
+from bayestribo.inference import build_posterior
+from bayestribo.inference.likelihood import PiLikelihood
+from bayestribo.inference.posterior import Posterior
+from bayestribo.inference.priors import LogUniform, Normal, Uniform
+from bayestribo.inference.sampling import NaNLogProbabilityError
+from bayestribo.signal.decay import energy_decay
+from bayestribo.signal.increments import pi_data
+from bayestribo.signal.noise import noise_model
+
+#: Agreement required: the same formulas in a different order of floating-point
+#: operations (sums over ~40 increments of terms up to ~1e3 in log p).
+RTOL = 1e-10
+
+
+@pytest.fixture(scope="module")
+def data():
+    run = simulate_flat(
+        seed=21,
+        zeta=0.0236,
+        mu_k=0.0294,
+        displacement_noise_m=1.5e-6,
+        velocity_noise_m_per_s=1.5e-7,
+        sample_rate_Hz=5000.0,
+        offset_m=1e-4,
+    )
+    decay = energy_decay(run.time, run.displacement, run.velocity, rig=run.rig())
+    return pi_data(decay, noise_model(decay, run.metadata), grid_points=40, seed=0)
+
+
+def _box(post: Posterior, y0: float) -> tuple[np.ndarray, np.ndarray]:
+    """A box around the priors' support, 10 % wider on each side (and ±5 σ for y0)."""
+    low, high = [], []
+    for name in post.names:
+        p = post.priors[name]
+        if isinstance(p, Normal):
+            low.append(p.mu - 5 * p.sigma)
+            high.append(p.mu + 5 * p.sigma)
+        else:
+            width = p.high - p.low
+            low.append(p.low - 0.1 * width)
+            high.append(p.high + 0.1 * width)
+    return np.array(low), np.array(high)
+
+
+def _rows(post: Posterior, y0: float, n: int, seed: int) -> np.ndarray:
+    low, high = _box(post, y0)
+    rows = np.random.default_rng(seed).uniform(low, high, (n, low.size))
+    # Points on the support's edges: the lower and upper bounds of the uniform priors
+    # (ζ = 0 and μ_k = 0 alone, never both: ζ = μ_k = 0 never stops, see below).
+    for i, name in enumerate(post.names):
+        p = post.priors[name]
+        if isinstance(p, Uniform | LogUniform) and name not in ("zeta", "mu_k"):
+            rows[:5, i] = p.low
+            rows[5:10, i] = p.high
+        elif isinstance(p, Uniform):
+            rows[10:15, i] = p.high
+    if "zeta" in post.names and post.friction:
+        rows[15:20, post.names.index("zeta")] = 0.0
+    if "mu_k" in post.names and "zeta" in post.names:
+        rows[20:25, post.names.index("mu_k")] = 0.0
+    return rows
+
+
+def _assert_agree(post: Posterior, rows: np.ndarray) -> None:
+    assert post.uses_compiled
+    fast = post(rows)
+    ref = post.reference(rows)
+    np.testing.assert_array_equal(np.isneginf(fast), np.isneginf(ref))
+    assert np.all(np.isfinite(ref) | np.isneginf(ref))
+    finite = np.isfinite(ref)
+    # Enough rows on both sides of the support's edge for the test to mean something.
+    assert 0.2 * rows.shape[0] < finite.sum() < rows.shape[0]
+    err = np.abs(fast[finite] - ref[finite]) / np.maximum(1.0, np.abs(ref[finite]))
+    assert np.max(err) <= RTOL, np.max(err)
+
+
+VARIANTS = {
+    "default": {},
+    "discrepancy": {"discrepancy": True},
+    "viscous only": {"friction": False},
+    "viscous only, discrepancy": {"friction": False, "discrepancy": True},
+    "zeta fixed": {"fixed": {"zeta": 0.0}},
+    "friction fixed": {"fixed": {"mu_k": 0.03, "mu_s_ratio": 1.5}},
+    "discrepancy fixed": {"fixed": {"log10_discrepancy": -2.0}},
+    "other priors": {
+        "discrepancy": True,
+        "priors": {
+            "zeta": Uniform(0.005, 0.1),
+            "mu_s_ratio": LogUniform(1.0, 2.5),
+            "log10_discrepancy": Normal(-3.0, 1.0),
+        },
+    },
+}
+
+
+@pytest.mark.parametrize("model", ["exact", "averaged"])
+@pytest.mark.parametrize("variant", list(VARIANTS))
+def test_compiled_log_posterior_agrees_with_the_reference(data, model, variant):
+    post = build_posterior(data, model=model, **VARIANTS[variant])
+    _assert_agree(post, _rows(post, data.y0, 600, seed=len(variant)))
+
+
+@pytest.mark.parametrize("model", ["exact", "averaged"])
+@pytest.mark.parametrize(
+    "change",
+    [
+        {"motion_ended": False},  # Π truncated at the end of the record
+        {"yp0": 0.4},  # the analysed window starts in motion
+        {"yp0": -0.3, "motion_ended": False},
+    ],
+)
+def test_compiled_log_posterior_agrees_for_other_records(data, model, change):
+    other = dataclasses.replace(data, **change)
+    assert other.motion_ended == change.get("motion_ended", data.motion_ended)
+    post = build_posterior(other, model=model, discrepancy=True)
+    _assert_agree(post, _rows(post, data.y0, 400, seed=7))
+
+
+def test_nan_and_nonstopping_points_are_treated_as_the_reference_treats_them(data):
+    post = build_posterior(data)
+    good = np.array([0.0236, 0.0294 * 0.5, 1.2, data.y0])
+    # NaN in a uniform prior's coordinate: outside the support, −inf, no likelihood.
+    row = good.copy()
+    row[1] = np.nan
+    assert post(row[None])[0] == -np.inf == post.reference(row[None])[0]
+    # NaN in y0 (a normal prior): a NaN density, as the numpy priors give.
+    row = good.copy()
+    row[3] = np.nan
+    assert np.isnan(post(row[None])[0]) and np.isnan(post.reference(row[None])[0])
+    # ζ = μ_k = 0 is in the support but never stops: NaN likelihood, an error naming
+    # the parameters on both paths.
+    row = good.copy()
+    row[:2] = 0.0
+    for f in (post, post.reference):
+        with pytest.raises(NaNLogProbabilityError, match=r"zeta=0\.0, mu_k=0\.0"):
+            f(np.vstack([good, row]))
+
+
+def test_the_averaged_model_outside_its_domain_raises_the_reference_error(data):
+    post = build_posterior(data, model="averaged", priors={"zeta": Uniform(-0.1, 0.3)})
+    row = np.array([[-0.05, 0.01, 1.2, data.y0]])
+    with pytest.raises(ValueError, match="zeta must satisfy"):
+        post.reference(row)
+    with pytest.raises(ValueError, match="zeta must satisfy"):
+        post(row)
+
+
+def test_what_is_not_compiled_uses_the_reference(data):
+    class Wider(Uniform):
+        pass
+
+    rows = _rows(build_posterior(data), data.y0, 50, seed=3)
+    custom_prior = build_posterior(data, priors={"mu_s_ratio": Wider(1.0, 3.0)})
+
+    class Shifted(PiLikelihood):
+        def log_likelihood(self, *args, **kwargs):
+            return super().log_likelihood(*args, **kwargs) + 1.0
+
+    plain = build_posterior(data)
+    lik = plain.likelihood
+    subclass = Posterior(plain.priors, Shifted(data, "exact", lik.offset_sd, lik.drift_sd), {})
+    off = Posterior(plain.priors, plain.likelihood, {}, compiled=False)
+    for post in (custom_prior, subclass, off):
+        assert not post.uses_compiled
+        np.testing.assert_array_equal(post(rows), post.reference(rows))
+    # The subclass's own likelihood is the one evaluated (+1 where finite).
+    ref = plain.reference(rows)
+    ok = np.isfinite(ref)
+    np.testing.assert_allclose(subclass(rows)[ok] - 1.0, ref[ok], rtol=1e-12)
+
+
+def test_rows_of_the_wrong_length_are_refused(data):
+    post = build_posterior(data)
+    with pytest.raises(BayestriboError, match=r"theta: expected rows of 4 values"):
+        post(np.zeros((3, 5)))
