@@ -38,6 +38,7 @@ from bayestribo.errors import (
 from bayestribo.inference.assemble import derived_quantities, inference_data
 from bayestribo.inference.calibration import calibrate_channels
 from bayestribo.inference.likelihood import MODELS, PiLikelihood
+from bayestribo.inference.modes import mode_check, run_or_failure
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.priors import Prior, PriorSet, default_priors, piled_on_bounds
 from bayestribo.inference.result import FitResult, plain_data
@@ -295,9 +296,16 @@ def sample(
     walkers = initial_walkers(
         posterior, theta, cov, ratio_range, settings.n_ensembles, settings.n_walkers, rng
     )
-    run = run_ensembles(
-        posterior, walkers, settings, seed=int(rng.integers(2**31)), progress=progress
+    # -- a failure inside sampling is a reported non-convergence (inference/modes.py) --
+    run = run_or_failure(
+        run_ensembles,
+        posterior,
+        walkers,
+        settings,
+        seed=int(rng.integers(2**31)),
+        progress=progress,
     )
+    # -- end of the failure guard --
     return Sampled(posterior, theta, run, settings)
 
 
@@ -374,6 +382,9 @@ def summarise(
         ``diagnostics["at_prior_bound"]`` and is not :attr:`~FitResult.usable`.
     """
     rng = np.random.default_rng(seed)
+    # -- separated modes: not converged when a minor one matters (inference/modes.py) --
+    sampled, modes = mode_check(sampled)
+    # -- end of the mode check --
     posterior, run = sampled.posterior, sampled.run
     name = prepared.name
     discrepancy = "log10_discrepancy" in posterior.names or "log10_discrepancy" in posterior.fixed
@@ -430,7 +441,13 @@ def summarise(
             }
         ),
         "diagnostics_json": json.dumps(
-            plain_data({**_diagnostics(sampled, misfit), "at_prior_bound": at_bound})
+            plain_data(
+                {
+                    **_diagnostics(sampled, misfit),
+                    "at_prior_bound": at_bound,
+                    "modes": modes.to_dict(),  # the mode check (inference/modes.py)
+                }
+            )
         ),
         "prior_sensitivity_json": json.dumps(plain_data(prior_sensitivity(flat, posterior.priors))),
     }
