@@ -62,7 +62,7 @@ _TINY = 1e-100
 _PSI_SERIES = 1e-2
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _log_prior(row: NDArray, prior: NDArray) -> float:
     """Σ log π_i(θ_i) in sampling order; −inf outside the support (NaN for a NaN
     argument of an unbounded prior, as the numpy priors give)."""
@@ -85,7 +85,7 @@ def _log_prior(row: NDArray, prior: NDArray) -> float:
     return total
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _value(row: NDArray, columns: NDArray, fixed: NDArray, k: int, default: float) -> float:
     c = columns[k]
     if c >= 0:
@@ -95,21 +95,21 @@ def _value(row: NDArray, columns: NDArray, fixed: NDArray, k: int, default: floa
     return default
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _expm1_ratio(a: float, length: float) -> float:
     if abs(a) < _TINY:
         return length
     return -math.expm1(-a * length) / a
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _averaged_amplitude(t: float, a0: float, z: float, mk: float) -> float:
     """a(τ) of Eq. 34, zero after the end of motion (averaged.py, ``_amplitude``)."""
     a = a0 * math.exp(-z * t) - (2.0 * mk / math.pi) * _expm1_ratio(z, t)
     return max(a, 0.0)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _pi_of_amplitude(a: float, z: float, mk: float) -> float:
     """∫_0^a (α²/2)/(ζα + 2μ_k/π) dα (averaged.py, ``_pi_of_amplitude``)."""
     c = 2.0 * mk / math.pi
@@ -131,7 +131,7 @@ def _pi_of_amplitude(a: float, z: float, mk: float) -> float:
     return a * a * chi / (2.0 * (z if z > 0.0 else 1.0))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _averaged_grid(
     tau: NDArray, amp: float, z: float, mk: float, tau_end: float, out: NDArray
 ) -> None:
@@ -147,7 +147,7 @@ def _averaged_grid(
             out[i] = pi
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _log_posterior(
     theta: NDArray,
     prior: NDArray,
@@ -156,15 +156,14 @@ def _log_posterior(
     data: NDArray,
     scalars: NDArray,
     out: NDArray,
-    domain: NDArray,
-) -> None:
+) -> int:
     """Log posterior of each row of ``theta`` into ``out`` (see the module notes).
 
     ``data`` rows: τ_j, D_j, V_j, ∫_j E², ∫_j y, ∫_j τy (j < m). ``scalars``: y'0, the
     end of the model's Π (inf when the record holds the end of motion), the prior
-    precisions of δ₀ and δ₁, log|P|, the model code. ``domain[i]`` is set where the
-    averaged model's parameters are outside its domain (the caller then lets the
-    reference raise its error).
+    precisions of δ₀ and δ₁, log|P|, the model code. Returns the number of rows
+    whose log posterior is NaN or whose parameters are outside the averaged model's
+    domain (NaN in ``out``): the caller then lets the reference raise its error.
     """
     tau = data[0]
     inc = data[1]
@@ -181,11 +180,27 @@ def _log_posterior(
     model = scalars[5]
     pi = np.empty(m)
     var = np.empty(m)
+    discrepancy = columns[4] != _ABSENT
+    # Without the discrepancy term the variances, hence A's data part and Σ log 2πV,
+    # are the same for every walker.
+    c00 = 0.0
+    c01 = 0.0
+    c11 = 0.0
+    norm0 = 0.0
+    if not discrepancy:
+        for j in range(m):
+            var[j] = var0[j]
+            w = 1.0 / var[j]
+            c00 += w * x0[j] * x0[j]
+            c01 += w * x0[j] * x1[j]
+            c11 += w * x1[j] * x1[j]
+            norm0 += math.log(var[j]) + _LOG_2PI
+    flagged = 0
     for n in range(theta.shape[0]):
         row = theta[n]
         lp = _log_prior(row, prior)
-        domain[n] = False
         if not math.isfinite(lp):
+            flagged += math.isnan(lp)
             out[n] = lp
             continue
         zeta = _value(row, columns, fixed, 0, 0.0)
@@ -196,37 +211,34 @@ def _log_posterior(
             _one(tau, y0, zeta, mu_k, mu_s, yp0, end, pi)
         else:
             if not (zeta >= 0.0 and zeta < 1.0 and mu_k >= 0.0 and math.isfinite(mu_k)):
-                domain[n] = True
+                flagged += 1
                 out[n] = math.nan
                 continue
             _averaged_grid(tau, math.hypot(y0, yp0), zeta, mu_k, end, pi)
-        if columns[4] != _ABSENT:
+        a00 = c00
+        a01 = c01
+        a11 = c11
+        norm = norm0
+        if discrepancy:
             s = 10.0 ** _value(row, columns, fixed, 4, 0.0)
             s2 = s * s
             for j in range(m):
                 var[j] = var0[j] + s2 * e2[j]
-        else:
-            for j in range(m):
-                var[j] = var0[j]
-        a00 = 0.0
-        a01 = 0.0
-        a11 = 0.0
+                w = 1.0 / var[j]
+                a00 += w * x0[j] * x0[j]
+                a01 += w * x0[j] * x1[j]
+                a11 += w * x1[j] * x1[j]
+                norm += math.log(var[j]) + _LOG_2PI
         b0 = 0.0
         b1 = 0.0
         rr = 0.0
-        norm = 0.0
         for j in range(m):
             model_inc = pi[j] - pi[j + 1] if j < m - 1 else pi[j]
             r = inc[j] - model_inc
-            w = 1.0 / var[j]
-            a00 += w * x0[j] * x0[j]
-            a01 += w * x0[j] * x1[j]
-            a11 += w * x1[j] * x1[j]
-            rw = r * w
+            rw = r / var[j]
             b0 += rw * x0[j]
             b1 += rw * x1[j]
-            rr += r * r / var[j]
-            norm += math.log(var[j]) + _LOG_2PI
+            rr += r * rw
         a00 += prec0
         a11 += prec1
         det = a00 * a11 - a01 * a01
@@ -234,6 +246,8 @@ def _log_posterior(
         d1 = (a00 * b1 - a01 * b0) / det
         chi2 = rr - (b0 * d0 + b1 * d1)
         out[n] = lp + -0.5 * (chi2 + norm + math.log(det) + log_prior_det)
+        flagged += math.isnan(out[n])
+    return flagged
 
 
 @dataclass(frozen=True)
@@ -316,9 +330,10 @@ class FusedLogPosterior:
         )
         return cls(table, columns, values, data, scalars)
 
-    def __call__(self, theta: NDArray) -> tuple[NDArray, NDArray]:
-        """Log posterior of each row of ``theta`` (n, d), and where the averaged
-        model's domain was left (the caller evaluates those rows with the reference).
+    def __call__(self, theta: NDArray) -> tuple[NDArray, int]:
+        """Log posterior of each row of ``theta`` (n, d), and how many rows are NaN or
+        outside the averaged model's domain (the caller evaluates those with the
+        reference, which raises the error that names the cause).
 
         Parameters
         ----------
@@ -328,14 +343,13 @@ class FusedLogPosterior:
         Returns
         -------
         log_p : ndarray
-            Shape (n,): −inf outside the priors' support, NaN where the likelihood is.
-        outside : ndarray of bool
-            Shape (n,).
+            Shape (n,): −inf outside the priors' support.
+        flagged : int
+            Rows whose value is NaN.
         """
         theta = np.ascontiguousarray(theta, dtype=np.float64)
         out = np.empty(theta.shape[0])
-        outside = np.empty(theta.shape[0], dtype=np.bool_)
-        _log_posterior(
-            theta, self.prior, self.columns, self.fixed, self.data, self.scalars, out, outside
+        flagged = _log_posterior(
+            theta, self.prior, self.columns, self.fixed, self.data, self.scalars, out
         )
-        return out, outside
+        return out, flagged

@@ -19,8 +19,10 @@ update each ensemble only from its own walkers:
   z, z₁, z₂, and proposes ``q = x + γ_s u (u·z₁ − u·z₂)`` with ``u = (x − z)/√|x − z|``
   and γ_s = 1.7, accepted with the extra factor ``((d − 1)/2) log(|q − z|/|x − z|)``.
 
-The proposals and Metropolis decisions of all ensembles are drawn with numpy at once
-and the log-probability is evaluated for all their walkers in one vectorised call.
+The random numbers of all ensembles' proposals and Metropolis decisions are drawn at
+once from the sampler's random state, the proposals computed by a compiled loop
+(numba), and the log-probability evaluated for all their walkers in one vectorised
+call.
 The distribution of every proposal is emcee's (the tests compare them with emcee's
 own ``get_proposal`` and sample known targets with both); the ensembles share the
 sampler's random stream but never each other's walkers, so they are independent
@@ -31,7 +33,10 @@ emcee's own moves, one sampler per ensemble, stay available as the reference
 
 from __future__ import annotations
 
+import math
+
 import emcee
+import numba
 import numpy as np
 from emcee.state import State
 from numpy.typing import NDArray
@@ -124,17 +129,13 @@ class GroupedDEMove(_GroupedRedBlueMove):
     ) -> tuple[NDArray, NDArray]:
         """DE proposals: ``x + γ (x_b − x_a)``, (a, b) a uniform ordered pair of
         distinct walkers of the other half of the same ensemble."""
-        comp = np.concatenate(c, axis=1)  # (G, k, d)
+        comp = np.ascontiguousarray(np.concatenate(c, axis=1))  # (G, k, d)
         g, ns, ndim = s.shape
-        k = comp.shape[1]
-        a = random.randint(k, size=(g, ns))
-        b = random.randint(k - 1, size=(g, ns))
-        b = b + (b >= a)  # uniform over the others: (a, b) uniform over ordered pairs
-        rows = np.arange(g)[:, None]
-        diffs = comp[rows, b] - comp[rows, a]
         g0 = 2.38 / np.sqrt(2 * ndim) if self.gamma0 is None else self.gamma0
-        gamma = g0 * (1 + self.sigma * random.randn(g, ns, 1))
-        return s + gamma * diffs, np.zeros((g, ns))
+        uniform = random.rand(g, ns, 2)
+        gamma = g0 * (1 + self.sigma * random.randn(g, ns))
+        q = _de_proposals(np.ascontiguousarray(s), comp, uniform, gamma)
+        return q, np.zeros((g, ns))
 
 
 class GroupedDESnookerMove(_GroupedRedBlueMove):
@@ -159,18 +160,71 @@ class GroupedDESnookerMove(_GroupedRedBlueMove):
         """Snooker proposals along x − z, one walker from each other split in random
         order as z, z₁, z₂; log factor ((d − 1)/2) log(|q − z|/|x − z|)."""
         g, ns, ndim = s.shape
-        rows = np.arange(g)[:, None]
-        picks = np.stack([cj[rows, random.randint(cj.shape[1], size=(g, ns))] for cj in c])
-        perm = np.argsort(random.rand(g, ns, 3), axis=-1)  # a uniform order of the three
-        w = np.take_along_axis(np.moveaxis(picks, 0, 2), perm[..., None], axis=2)
-        z, z1, z2 = w[:, :, 0], w[:, :, 1], w[:, :, 2]
-        delta = s - z
-        norm = np.linalg.norm(delta, axis=-1)
-        u = delta / np.sqrt(norm)[..., None]
-        proj = np.sum(u * z1, axis=-1) - np.sum(u * z2, axis=-1)
-        q = s + u * self.gammas * proj[..., None]
-        metropolis = np.log(np.linalg.norm(q - z, axis=-1)) - np.log(norm)
+        comp = np.ascontiguousarray(np.stack(c))  # (3, G, k, d)
+        q, metropolis = _snooker_proposals(
+            np.ascontiguousarray(s), comp, random.rand(g, ns, 4), self.gammas
+        )
         return q, 0.5 * (ndim - 1.0) * metropolis
+
+
+#: The six orders of three walkers (z, z₁, z₂), drawn uniformly.
+_ORDERS = np.array([[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1, 0]])
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _de_proposals(s: NDArray, comp: NDArray, uniform: NDArray, gamma: NDArray) -> NDArray:
+    """x + γ (c_b − c_a), (a, b) = a uniform ordered pair of distinct walkers of the
+    complement of the same ensemble, from two uniform numbers per walker."""
+    g, ns, ndim = s.shape
+    k = comp.shape[1]
+    q = np.empty_like(s)
+    for e in range(g):
+        for i in range(ns):
+            a = min(int(uniform[e, i, 0] * k), k - 1)
+            b = min(int(uniform[e, i, 1] * (k - 1)), k - 2)
+            if b >= a:
+                b += 1
+            for j in range(ndim):
+                q[e, i, j] = s[e, i, j] + gamma[e, i] * (comp[e, b, j] - comp[e, a, j])
+    return q
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _snooker_proposals(
+    s: NDArray, comp: NDArray, uniform: NDArray, gammas: float
+) -> tuple[NDArray, NDArray]:
+    """Snooker proposals (emcee's formula) and log(|q − z|/|x − z|), with one walker
+    of each of the three other splits in a uniformly random order as z, z₁, z₂."""
+    g, ns, ndim = s.shape
+    k = comp.shape[2]
+    q = np.empty_like(s)
+    metropolis = np.empty((g, ns))
+    picked = np.empty((3, ndim))
+    for e in range(g):
+        for i in range(ns):
+            order = _ORDERS[min(int(uniform[e, i, 3] * 6), 5)]
+            for split in range(3):
+                w = min(int(uniform[e, i, split] * k), k - 1)
+                picked[order[split]] = comp[split, e, w]
+            z = picked[0]
+            z1 = picked[1]
+            z2 = picked[2]
+            norm = 0.0
+            for j in range(ndim):
+                norm += (s[e, i, j] - z[j]) ** 2
+            norm = math.sqrt(norm)
+            root = math.sqrt(norm)
+            proj = 0.0
+            for j in range(ndim):
+                u = (s[e, i, j] - z[j]) / root
+                proj += u * z1[j] - u * z2[j]
+            dist = 0.0
+            for j in range(ndim):
+                u = (s[e, i, j] - z[j]) / root
+                q[e, i, j] = s[e, i, j] + u * gammas * proj
+                dist += (q[e, i, j] - z[j]) ** 2
+            metropolis[e, i] = math.log(math.sqrt(dist)) - math.log(norm)
+    return q, metropolis
 
 
 def grouped_moves(n_groups: int) -> list[tuple[emcee.moves.Move, float]]:

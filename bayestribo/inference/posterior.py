@@ -150,7 +150,9 @@ class Posterior:
         BayestriboError
             If ``theta`` does not have one column per sampled parameter.
         """
-        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        theta = np.asarray(theta, dtype=float)
+        if theta.ndim == 1:
+            theta = theta[None]
         if theta.ndim != 2 or theta.shape[1] != len(self.names):
             raise BayestriboError(
                 f"theta: expected rows of {len(self.names)} values ({', '.join(self.names)}), "
@@ -159,8 +161,8 @@ class Posterior:
         fused: FusedLogPosterior | None = self._fused
         if fused is None:
             return self.reference(theta)
-        lp, outside = fused(theta)
-        if np.any(outside) or np.any(np.isnan(lp)):
+        lp, flagged = fused(theta)
+        if flagged:
             # Outside the averaged model's domain, or NaN: the reference raises the
             # error that names the cause (or gives the NaN of a NaN prior density).
             return self.reference(theta)

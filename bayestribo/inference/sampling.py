@@ -70,6 +70,8 @@ __all__ = [
 ]
 
 
+#: Checks are skipped while the steps are below this fraction of (2 + autocorr_multiple) τ.
+_EARLY = 0.9
 #: Ways to run the ensembles (:class:`SamplerSettings` ``moves``).
 MOVES = ("grouped", "emcee")
 
@@ -359,6 +361,7 @@ def run_ensembles(
 
         bar = tqdm(total=settings.max_steps, desc="sampling", unit="step", leave=False)
     history: list[tuple[int, NDArray]] = []  # (steps, τ) of the checks since τ was defined
+    last_rhat: tuple[int, int, int, NDArray] | None = None  # steps, burn, thin, R-hat
     tau = np.full(ndim, np.inf)
     steps = 0
     enough = settled = False
@@ -369,6 +372,14 @@ def run_ensembles(
             steps += chunk
             if bar is not None:
                 bar.update(chunk)
+            if (
+                np.all(np.isfinite(tau))
+                and steps < settings.max_steps
+                and steps < _EARLY * (2.0 + settings.autocorr_multiple) * np.max(tau)
+            ):
+                # The rule cannot be met this early with the last τ (which short chains
+                # underestimate): skip the check, which costs as much as 30 steps.
+                continue
             taus = []
             for e in range(n_ens):
                 burn = min(
@@ -392,7 +403,8 @@ def run_ensembles(
                 # Independent ensembles must also agree; otherwise keep sampling.
                 burn_now = min(burn, steps - 1)
                 thin_now = max(1, math.ceil(np.max(tau)))
-                if np.all(rhat(ensembles.flat(burn_now, thin_now)[0]) < settings.rhat_max):
+                last_rhat = (steps, burn_now, thin_now, rhat(ensembles.flat(burn_now, thin_now)[0]))
+                if np.all(last_rhat[3] < settings.rhat_max):
                     break
     finally:
         if bar is not None:
@@ -404,7 +416,8 @@ def run_ensembles(
     chains, lps = ensembles.flat(burn, thin)
     acceptance = ensembles.acceptance()
     ess = (steps - burn) * n_walkers * n_ens / tau
-    r_hat = rhat(chains)
+    reuse = last_rhat is not None and last_rhat[:3] == (steps, burn, thin)
+    r_hat = last_rhat[3] if reuse else rhat(chains)
 
     reasons = []
     if not defined:
