@@ -227,9 +227,9 @@ def test_harmosc1_transient_is_found_and_the_fit_not_converged(appstat_file):
     )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        # 4000 steps (seconds, not the default 20 000): the walkers, started at the
-        # optimiser's ζ ≈ 0 optimum, leave it after burn-in began, as in a default fit.
-        result = fit(run, seed=1, max_steps=4000)
+        # A default fit. Every seed tried (0-5) shows the transient with 1.9-2 % of the
+        # draws; seed 4 is one of the quickest to run.
+        result = fit(run, seed=4)
     modes = result.diagnostics["modes"]
     assert modes["n_modes"] == 2 and modes["matters"]
     main, minor = modes["modes"]
