@@ -163,3 +163,22 @@ def test_options_reach_the_fit(json_run, run_file: Path, monkeypatch, capsys) ->
     # --load and --mass override the sidecar, as for the other commands
     assert seen["run"].metadata["load_N"] == 0.5 and seen["run"].metadata["mass_kg"] == 0.04
     assert "zeta" in capsys.readouterr().out
+
+
+def test_a_misfit_exits_1_with_its_warning(tmp_path, capsys) -> None:
+    from bayestribo.io import write_run
+    from bayestribo.synthetic import DissipationLaw
+    from bayestribo.synthetic.recording import simulate
+
+    # Damping that grows with amplitude: the linear law misfits it.
+    run = simulate(
+        DissipationLaw(zeta=lambda a: 0.01 + 20.0 * a, mu_k=0.0294),
+        sensor=Sensor(
+            sample_rate_Hz=2000.0, displacement_noise_m=1.5e-6, velocity_noise_m_per_s=1.5e-7
+        ),
+        seed=9,
+    )
+    path = write_run(run, tmp_path / "drag.csv")
+    assert main(["fit", str(path), "--max-steps", "3000"]) == 1
+    err = capsys.readouterr().err
+    assert "bayestribo fit: warning: the model misfits" in err

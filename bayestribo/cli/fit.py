@@ -6,9 +6,10 @@ Examples::
     bayestribo fit data/runs/glycerol-N0.31-r1.csv --seed 1 --json --out fits/
     bayestribo fit HarmOsc3.txt --columns t x --length-unit arbitrary --frequency 1.1
 
-The exit status is 0 for a converged fit, 1 when the sampler did not converge or a
-posterior piles on a physical bound of its prior (the result is still printed, marked
-as not converged or as no measurement), 2 for bad input.
+The exit status is 0 for a converged fit, 1 when the sampler did not converge, a
+posterior piles on a physical bound of its prior, or the model misfits the run beyond
+what its intervals carry (the result is still printed, with the reason), 2 for bad
+input.
 """
 
 from __future__ import annotations
@@ -166,14 +167,14 @@ def write_outputs(result: Any, out_dir: Path, stem: str) -> list[Path]:
 
 def run(args: argparse.Namespace) -> int:
     """Read the run, fit, print; exit status 1 when the sampler did not converge."""
-    from bayestribo.errors import ConvergenceWarning
+    from bayestribo.errors import MisfitWarning
     from bayestribo.inference import fit
     from bayestribo.summary import check_prob
 
     check_prob(args.prob)  # before the fit, not after it
     recording = read_run_from_args(args)
     with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", ConvergenceWarning)
+        warnings.simplefilter("always")  # every warning of this fit, none deduplicated
         result = fit(
             recording,
             model=args.model,
@@ -212,4 +213,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(result.to_text(args.prob))
     sys.stdout.flush()
-    return 0 if result.usable else 1
+    # 1 when something is not right: not converged, a posterior on a prior bound, or a
+    # misfit the intervals do not carry (the README's exit-status rule).
+    misfit = any(issubclass(w.category, MisfitWarning) for w in caught)
+    return 0 if result.usable and not misfit else 1

@@ -287,11 +287,11 @@ class FitResult:
             )
         header = f"{100 * check_prob(prob):g} % interval"
         units = self.units()
-        lines.append(f"{'':24}{'unit':>8}{'mean':>14}{'sd':>12}{header:>36}")
+        lines.append(f"{'':30}{'unit':>8}{'mean':>14}{'sd':>12}{header:>36}")
         for name, s in self.summary(prob).items():
             lo, hi = s.interval
             unit = {"1": "-", "signal length unit": "signal"}.get(units[name], units[name])
-            lines.append(f"{name:24}{unit:>8}{s.mean:14.6g}{s.sd:12.3g}   [{lo:.6g}, {hi:.6g}]")
+            lines.append(f"{name:30}{unit:>8}{s.mean:14.6g}{s.sd:12.3g}   [{lo:.6g}, {hi:.6g}]")
         return "\n".join(lines)
 
     def __repr__(self) -> str:
