@@ -41,6 +41,7 @@ def test_constant_law_run_passes_the_checks(report):
     assert report.predictive.coverage >= 0.9
     assert "not a posterior" in report.predictive.statement  # stand-in draws labelled
     assert report.constancy is not None
+    assert report.halves is not None and report.halves.consistent
     assert report.adequate == report.constancy.constant
     text = report.to_text()
     assert f"verdict: {report.verdict}" in text

@@ -1,8 +1,9 @@
 """All adequacy checks of one run: :func:`check_adequacy`.
 
-Windowed fits and the constancy test, the extinction time and the peak-by-peak
-predictive check, with one plain verdict: is the linear law (constant ζ and μ_k,
-Eq. 7) adequate for this recording?
+Windowed fits and the constancy test, the extinction time, the peak-by-peak
+predictive check and the split-half consistency of the first and second halves of
+the motion (:mod:`bayestribo.adequacy.halves`), with one plain verdict: is the linear
+law (constant ζ and μ_k, Eq. 7) adequate for this recording?
 """
 
 from __future__ import annotations
@@ -18,10 +19,12 @@ from bayestribo.adequacy.draws import (
     draws_from_posterior,
 )
 from bayestribo.adequacy.extinction import ExtinctionCheck, extinction_check
+from bayestribo.adequacy.halves import SplitHalves, split_halves
 from bayestribo.adequacy.predictive import PredictiveCheck, predictive_check
 from bayestribo.adequacy.segments import peak_positions, whole_decay_fit
 from bayestribo.adequacy.windows import (
     BayesianWindows,
+    LeastSquaresWindows,
     WindowedAnalysis,
     analysed_decay,
     windowed_fits,
@@ -57,8 +60,13 @@ class AdequacyReport:
     draws : ParameterDraws
     adequate : bool
         The linear law is adequate: constancy not rejected, the measured end of
-        motion inside the exact model's 95 % interval, and the peak coverage not
-        far below 95 % (at least 80 %). Computed once, from :attr:`checks`.
+        motion inside the exact model's 95 % interval, the peak coverage not
+        far below 95 % (at least 80 %), and the two halves of the motion in
+        agreement. Computed once, from :attr:`checks`.
+    halves : SplitHalves or None
+        The split-half check (None when the decay is too short for it:
+        ``halves_note`` says why).
+    halves_note : str
     """
 
     run_name: str | None
@@ -70,12 +78,21 @@ class AdequacyReport:
     predictive: PredictiveCheck
     draws: ParameterDraws
     adequate: bool
+    halves: SplitHalves | None = None
+    halves_note: str = ""
 
     @property
     def checks(self) -> list[dict[str, Any]]:
         """Each check with its outcome: ``name``, ``passed`` (True, False, or None if not
         made) and its one-sentence ``statement``; :attr:`adequate` is their conjunction."""
-        return _checks(self.constancy, self.constancy_note, self.extinction, self.predictive)
+        return _checks(
+            self.constancy,
+            self.constancy_note,
+            self.extinction,
+            self.predictive,
+            self.halves,
+            self.halves_note,
+        )
 
     @property
     def verdict(self) -> str:
@@ -99,6 +116,8 @@ class AdequacyReport:
             "constancy_note": self.constancy_note,
             "extinction": self.extinction.to_dict(),
             "predictive": self.predictive.to_dict(),
+            "halves": None if self.halves is None else self.halves.to_dict(),
+            "halves_note": self.halves_note,
         }
 
     def to_text(self) -> str:
@@ -120,6 +139,17 @@ class AdequacyReport:
                 f"{x.amplitude_range[0]:10.4g}-{x.amplitude_range[1]:<10.4g}  "
                 f"{x.zeta:10.4g} ± {x.zeta_se:<9.2g}  {x.mu:11.4g} ± {x.mu_se:<9.2g}{flag}"
             )
+        if self.halves is not None:
+            h = self.halves
+            held = ", friction held" if h.friction_mode == "fixed" else ""
+            lines.append("")
+            lines.append(f"split halves ({h.method}{held}); {h.interval_kind}")
+            for label, x in (("1st", h.first), ("2nd", h.second)):
+                lines.append(
+                    f"{label:>3}  {x.t_start:7.3f}-{x.t_end:7.3f}  "
+                    f"{x.amplitude_range[0]:10.4g}-{x.amplitude_range[1]:<10.4g}  "
+                    f"{x.zeta:10.4g} ± {x.zeta_se:<9.2g}  {x.mu:11.4g} ± {x.mu_se:<9.2g}"
+                )
         lines.append("")
         for check in self.checks:
             mark = {True: "pass", False: "FAIL", None: "not made"}[check["passed"]]
@@ -138,8 +168,10 @@ def _checks(
     constancy_note: str,
     extinction: ExtinctionCheck,
     predictive: PredictiveCheck,
+    halves: SplitHalves | None = None,
+    halves_note: str = "",
 ) -> list[dict[str, Any]]:
-    """The three checks with their outcomes; the one place the verdict is decided."""
+    """The four checks with their outcomes; the one place the verdict is decided."""
     return [
         {
             "key": "constancy",
@@ -158,6 +190,12 @@ def _checks(
             "name": "peak-by-peak predictive check",
             "passed": bool(predictive.coverage >= MIN_PEAK_COVERAGE),
             "statement": predictive.statement,
+        },
+        {
+            "key": "halves",
+            "name": "first and second halves agree",
+            "passed": None if halves is None else halves.consistent,
+            "statement": halves.statement if halves is not None else halves_note,
         },
     ]
 
@@ -184,7 +222,7 @@ def check_adequacy(
         Window length [oscillations]; default about an eighth of the decay, at
         least 2 (:func:`default_window`).
     alpha : float
-        False-alarm rate of the constancy test.
+        False-alarm rate of the constancy test and of the split-half check.
     n_draws : int
         Parameter draws for the extinction and predictive checks.
     fit_result : optional
@@ -196,12 +234,14 @@ def check_adequacy(
     skip_oscillations : int
         Oscillations after the release left out.
     bayes : bool
-        Use the Bayesian fit (:func:`bayestribo.inference.fit`): on each window (posterior
-        intervals) and, unless ``fit_result`` is given, on the whole run for the
-        draws. Needs the run itself (not an EnergyDecay) and windows of at least 3
-        oscillations (the default window is raised to 3); takes seconds per window.
+        Use the Bayesian fit (:func:`bayestribo.inference.fit`): on each window and
+        each half of the motion (posterior intervals) and, unless ``fit_result`` is
+        given, on the whole run for the draws. Needs the run itself (not an
+        EnergyDecay) and windows of at least 3 oscillations (the default window is
+        raised to 3); takes seconds per window.
     progress : callable, optional
-        Called with a one-line message before each window fit and the whole-run fit.
+        Called with a one-line message before each window fit, each half's fit and
+        the whole-run fit.
 
     Returns
     -------
@@ -242,8 +282,21 @@ def check_adequacy(
         draws = draws_from_least_squares(whole_decay_fit(decay, seed=seed), n_draws, seed=seed)
     extinction = extinction_check(decay, draws)
     predictive = predictive_check(decay, draws, seed=seed)
+    try:
+        halves: SplitHalves | None = split_halves(
+            run if bayes else decay,
+            fitter=BayesianWindows() if bayes else LeastSquaresWindows(),
+            alpha=alpha,
+            skip_oscillations=skip_oscillations,
+            seed=seed,
+            progress=progress,
+        )
+        halves_note = ""
+    except RecordingError as exc:
+        halves, halves_note = None, f"not tested: {exc}"
     adequate = all(
-        c["passed"] is not False for c in _checks(constancy, note, extinction, predictive)
+        c["passed"] is not False
+        for c in _checks(constancy, note, extinction, predictive, halves, halves_note)
     )
     name = getattr(run, "source", None) if not isinstance(run, EnergyDecay) else None
     if name is None and isinstance(run, str):
@@ -258,4 +311,6 @@ def check_adequacy(
         predictive=predictive,
         draws=draws,
         adequate=adequate,
+        halves=halves,
+        halves_note=halves_note,
     )
