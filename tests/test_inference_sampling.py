@@ -212,7 +212,7 @@ def test_grouped_de_proposals_are_emcees():
     # pairs of 4 complementary walkers; the frequencies of the outcomes must match
     # emcee's DEMove.
     rng = np.random.default_rng(10)
-    s = rng.standard_normal((1, 3, 2))
+    s = rng.standard_normal((1, 4, 2))
     c = rng.standard_normal((1, 4, 2))
     random = np.random.RandomState(1)
     ours = GroupedDEMove(1, sigma=0.0)
@@ -222,7 +222,7 @@ def test_grouped_de_proposals_are_emcees():
     for _ in range(3000):
         mine += _outcomes(ours.get_proposal(s, [c], random)[0])
         ref += _outcomes(theirs.get_proposal(s[0], [c[0]], random)[0])
-    assert len(set(mine)) == 3 * 12
+    assert len(set(mine)) == 4 * 12
     _same_distribution(mine, ref)
 
 

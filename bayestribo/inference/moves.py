@@ -71,12 +71,25 @@ class _GroupedRedBlueMove(emcee.moves.Move):
             )
         return per
 
+    def _split_proposal(
+        self, coords: NDArray, order: NDArray, split: int, random: np.random.RandomState
+    ) -> tuple[NDArray, NDArray]:  # pragma: no cover - interface
+        """Proposals (G·size, d) and log factors (G·size,) for split ``split`` of the
+        walkers ``order`` (G, nsplits·size) of ``coords`` (one row per walker)."""
+        raise NotImplementedError
+
     def get_proposal(
         self, s: NDArray, c: list[NDArray], random: np.random.RandomState
-    ) -> tuple[NDArray, NDArray]:  # pragma: no cover - interface
-        """Proposals for walkers ``s`` (G, n, d) from complements ``c`` (each (G, k, d)),
-        and the log Metropolis-Hastings factors (G, n)."""
-        raise NotImplementedError
+    ) -> tuple[NDArray, NDArray]:
+        """Proposals for walkers ``s`` (G, n, d) from the other splits ``c`` (each
+        (G, n, d)), and the log Metropolis-Hastings factors (G, n): emcee's
+        ``get_proposal`` for G ensembles at once (the same computation as
+        :meth:`propose`)."""
+        g, ns, ndim = s.shape
+        coords = np.concatenate([s, *c], axis=1).reshape(-1, ndim)
+        order = np.arange(coords.shape[0]).reshape(g, -1)
+        q, factors = self._split_proposal(coords, order, 0, random)
+        return q.reshape(g, ns, ndim), factors.reshape(g, ns)
 
     def propose(self, model, state: State) -> tuple[State, NDArray]:
         """One update of every walker of every ensemble (emcee's ``Move`` interface)."""
@@ -88,21 +101,19 @@ class _GroupedRedBlueMove(emcee.moves.Move):
         # shuffled), as a uniformly random permutation of each ensemble's walkers.
         order = np.argsort(random.rand(g, per), axis=1) + (per * np.arange(g))[:, None]
         size = per // self.nsplits
-        parts = [order[:, j * size : (j + 1) * size] for j in range(self.nsplits)]
+        coords = np.ascontiguousarray(state.coords, dtype=np.float64)
+        log_prob = state.log_prob
         accepted = np.zeros(nwalkers, dtype=bool)
         for split in range(self.nsplits):
-            who = parts[split]  # (G, size) walker indices
-            s = state.coords[who]
-            c = [state.coords[parts[j]] for j in range(self.nsplits) if j != split]
-            q, factors = self.get_proposal(s, c, random)
-            flat = who.ravel()
-            new_log_prob, _ = model.compute_log_prob_fn(q.reshape(-1, ndim))
-            diff = factors.ravel() + new_log_prob - state.log_prob[flat]
-            take = diff > np.log(random.rand(flat.size))
+            flat = order[:, split * size : (split + 1) * size].ravel()
+            q, factors = self._split_proposal(coords, order, split, random)
+            new_log_prob, _ = model.compute_log_prob_fn(q)
+            take = factors + new_log_prob - log_prob[flat] > np.log(random.rand(flat.size))
             idx = flat[take]
-            state.coords[idx] = q.reshape(-1, ndim)[take]
-            state.log_prob[idx] = new_log_prob[take]
+            coords[idx] = q[take]
+            log_prob[idx] = new_log_prob[take]
             accepted[idx] = True
+        state.coords = coords
         return state, accepted
 
 
@@ -124,18 +135,19 @@ class GroupedDEMove(_GroupedRedBlueMove):
         self.sigma = sigma
         self.gamma0 = gamma0
 
-    def get_proposal(
-        self, s: NDArray, c: list[NDArray], random: np.random.RandomState
+    def _split_proposal(
+        self, coords: NDArray, order: NDArray, split: int, random: np.random.RandomState
     ) -> tuple[NDArray, NDArray]:
         """DE proposals: ``x + γ (x_b − x_a)``, (a, b) a uniform ordered pair of
         distinct walkers of the other half of the same ensemble."""
-        comp = np.ascontiguousarray(np.concatenate(c, axis=1))  # (G, k, d)
-        g, ns, ndim = s.shape
+        g, per = order.shape
+        size = per // 2
+        ndim = coords.shape[1]
         g0 = 2.38 / np.sqrt(2 * ndim) if self.gamma0 is None else self.gamma0
-        uniform = random.rand(g, ns, 2)
-        gamma = g0 * (1 + self.sigma * random.randn(g, ns))
-        q = _de_proposals(np.ascontiguousarray(s), comp, uniform, gamma)
-        return q, np.zeros((g, ns))
+        uniform = random.rand(g, size, 2)
+        gamma = g0 * (1 + self.sigma * random.randn(g, size))
+        q = _de_proposals(coords, order, split, uniform, gamma)
+        return q, np.zeros(g * size)
 
 
 class GroupedDESnookerMove(_GroupedRedBlueMove):
@@ -154,15 +166,16 @@ class GroupedDESnookerMove(_GroupedRedBlueMove):
         super().__init__(n_groups, nsplits=4)
         self.gammas = gammas
 
-    def get_proposal(
-        self, s: NDArray, c: list[NDArray], random: np.random.RandomState
+    def _split_proposal(
+        self, coords: NDArray, order: NDArray, split: int, random: np.random.RandomState
     ) -> tuple[NDArray, NDArray]:
         """Snooker proposals along x − z, one walker from each other split in random
         order as z, z₁, z₂; log factor ((d − 1)/2) log(|q − z|/|x − z|)."""
-        g, ns, ndim = s.shape
-        comp = np.ascontiguousarray(np.stack(c))  # (3, G, k, d)
+        g, per = order.shape
+        size = per // 4
+        ndim = coords.shape[1]
         q, metropolis = _snooker_proposals(
-            np.ascontiguousarray(s), comp, random.rand(g, ns, 4), self.gammas
+            coords, order, split, random.rand(g, size, 4), self.gammas
         )
         return q, 0.5 * (ndim - 1.0) * metropolis
 
@@ -172,58 +185,73 @@ _ORDERS = np.array([[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _de_proposals(s: NDArray, comp: NDArray, uniform: NDArray, gamma: NDArray) -> NDArray:
+def _de_proposals(
+    coords: NDArray, order: NDArray, split: int, uniform: NDArray, gamma: NDArray
+) -> NDArray:
     """x + γ (c_b − c_a), (a, b) = a uniform ordered pair of distinct walkers of the
-    complement of the same ensemble, from two uniform numbers per walker."""
-    g, ns, ndim = s.shape
-    k = comp.shape[1]
-    q = np.empty_like(s)
+    other half of the same ensemble, from two uniform numbers per walker."""
+    g, per = order.shape
+    size = per // 2
+    ndim = coords.shape[1]
+    own = split * size
+    other = (1 - split) * size
+    q = np.empty((g * size, ndim))
     for e in range(g):
-        for i in range(ns):
-            a = min(int(uniform[e, i, 0] * k), k - 1)
-            b = min(int(uniform[e, i, 1] * (k - 1)), k - 2)
+        for i in range(size):
+            a = min(int(uniform[e, i, 0] * size), size - 1)
+            b = min(int(uniform[e, i, 1] * (size - 1)), size - 2)
             if b >= a:
                 b += 1
+            x = order[e, own + i]
+            ca = order[e, other + a]
+            cb = order[e, other + b]
             for j in range(ndim):
-                q[e, i, j] = s[e, i, j] + gamma[e, i] * (comp[e, b, j] - comp[e, a, j])
+                q[e * size + i, j] = coords[x, j] + gamma[e, i] * (coords[cb, j] - coords[ca, j])
     return q
 
 
 @numba.njit(cache=True, error_model="numpy")
 def _snooker_proposals(
-    s: NDArray, comp: NDArray, uniform: NDArray, gammas: float
+    coords: NDArray, order: NDArray, split: int, uniform: NDArray, gammas: float
 ) -> tuple[NDArray, NDArray]:
     """Snooker proposals (emcee's formula) and log(|q − z|/|x − z|), with one walker
     of each of the three other splits in a uniformly random order as z, z₁, z₂."""
-    g, ns, ndim = s.shape
-    k = comp.shape[2]
-    q = np.empty_like(s)
-    metropolis = np.empty((g, ns))
-    picked = np.empty((3, ndim))
+    g, per = order.shape
+    size = per // 4
+    ndim = coords.shape[1]
+    q = np.empty((g * size, ndim))
+    metropolis = np.empty(g * size)
+    picked = np.empty(3, dtype=np.int64)
     for e in range(g):
-        for i in range(ns):
-            order = _ORDERS[min(int(uniform[e, i, 3] * 6), 5)]
-            for split in range(3):
-                w = min(int(uniform[e, i, split] * k), k - 1)
-                picked[order[split]] = comp[split, e, w]
-            z = picked[0]
-            z1 = picked[1]
-            z2 = picked[2]
+        for i in range(size):
+            x = order[e, split * size + i]
+            rank = _ORDERS[min(int(uniform[e, i, 3] * 6), 5)]
+            slot = 0
+            for other in range(4):
+                if other == split:
+                    continue
+                w = min(int(uniform[e, i, slot] * size), size - 1)
+                picked[rank[slot]] = order[e, other * size + w]
+                slot += 1
+            z = coords[picked[0]]
+            z1 = coords[picked[1]]
+            z2 = coords[picked[2]]
             norm = 0.0
             for j in range(ndim):
-                norm += (s[e, i, j] - z[j]) ** 2
+                norm += (coords[x, j] - z[j]) ** 2
             norm = math.sqrt(norm)
             root = math.sqrt(norm)
             proj = 0.0
             for j in range(ndim):
-                u = (s[e, i, j] - z[j]) / root
+                u = (coords[x, j] - z[j]) / root
                 proj += u * z1[j] - u * z2[j]
             dist = 0.0
+            row = e * size + i
             for j in range(ndim):
-                u = (s[e, i, j] - z[j]) / root
-                q[e, i, j] = s[e, i, j] + u * gammas * proj
-                dist += (q[e, i, j] - z[j]) ** 2
-            metropolis[e, i] = math.log(math.sqrt(dist)) - math.log(norm)
+                u = (coords[x, j] - z[j]) / root
+                q[row, j] = coords[x, j] + u * gammas * proj
+                dist += (q[row, j] - z[j]) ** 2
+            metropolis[row] = math.log(math.sqrt(dist)) - math.log(norm)
     return q, metropolis
 
 
