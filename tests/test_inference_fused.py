@@ -1,4 +1,5 @@
-"""The compiled log posterior against the numpy reference (Posterior.reference).
+"""The compiled log posterior against the numpy reference (Posterior.reference), and
+the compiled standardized residuals against PiLikelihood.standardized_residuals.
 
 Random parameter sets in a box wider than the priors' support (so that some rows are
 outside it), for every variant: exact and averaged model, with and without the
@@ -90,6 +91,13 @@ def _assert_agree(post: Posterior, rows: np.ndarray) -> None:
     assert 0.2 * rows.shape[0] < finite.sum() < rows.shape[0]
     err = np.abs(fast[finite] - ref[finite]) / np.maximum(1.0, np.abs(ref[finite]))
     assert np.max(err) <= RTOL, np.max(err)
+    # The standardized conditional residuals (the optimiser's), to 1e-10 of each
+    # row's largest residual.
+    inside = rows[finite]
+    fast_r = post.standardized_residuals(inside)
+    ref_r = post.likelihood.standardized_residuals(*post._likelihood_args(inside))
+    scale = np.maximum(1.0, np.max(np.abs(ref_r), axis=1, keepdims=True))
+    assert np.max(np.abs(fast_r - ref_r) / scale) <= RTOL
 
 
 VARIANTS = {

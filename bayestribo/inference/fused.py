@@ -148,6 +148,89 @@ def _averaged_grid(
 
 
 @numba.njit(cache=True, error_model="numpy")
+def _model_pi(
+    row: NDArray,
+    columns: NDArray,
+    fixed: NDArray,
+    tau: NDArray,
+    yp0: float,
+    end: float,
+    model: float,
+    pi: NDArray,
+) -> bool:
+    """Model Π on the grid into ``pi``; False (and ``pi`` untouched) where the averaged
+    model's parameters are outside its domain."""
+    zeta = _value(row, columns, fixed, 0, 0.0)
+    mu_k = _value(row, columns, fixed, 1, 0.0)
+    mu_s = mu_k * _value(row, columns, fixed, 2, 1.0) if columns[2] != _ABSENT else mu_k
+    y0 = _value(row, columns, fixed, 3, 0.0)
+    if model == _EXACT:
+        _one(tau, y0, zeta, mu_k, mu_s, yp0, end, pi)
+        return True
+    if not (zeta >= 0.0 and zeta < 1.0 and mu_k >= 0.0 and math.isfinite(mu_k)):
+        return False
+    _averaged_grid(tau, math.hypot(y0, yp0), zeta, mu_k, end, pi)
+    return True
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _standardized(
+    theta: NDArray,
+    columns: NDArray,
+    fixed: NDArray,
+    data: NDArray,
+    scalars: NDArray,
+    out: NDArray,
+) -> int:
+    """Conditional residuals over √V_j of each row into ``out`` (n, m), as
+    :meth:`PiLikelihood.standardized_residuals`; returns the number of rows outside
+    the averaged model's domain (left unset: the caller uses the reference)."""
+    tau = data[0]
+    inc = data[1]
+    var0 = data[2]
+    e2 = data[3]
+    x0 = data[4]
+    x1 = data[5]
+    m = tau.size
+    pi = np.empty(m)
+    var = np.empty(m)
+    flagged = 0
+    for n in range(theta.shape[0]):
+        row = theta[n]
+        if not _model_pi(row, columns, fixed, tau, scalars[0], scalars[1], scalars[5], pi):
+            flagged += 1
+            continue
+        s2 = 0.0
+        if columns[4] != _ABSENT:
+            s = 10.0 ** _value(row, columns, fixed, 4, 0.0)
+            s2 = s * s
+        a00 = 0.0
+        a01 = 0.0
+        a11 = 0.0
+        b0 = 0.0
+        b1 = 0.0
+        for j in range(m):
+            var[j] = var0[j] + s2 * e2[j] if columns[4] != _ABSENT else var0[j]
+            w = 1.0 / var[j]
+            model_inc = pi[j] - pi[j + 1] if j < m - 1 else pi[j]
+            r = inc[j] - model_inc
+            out[n, j] = r
+            a00 += w * x0[j] * x0[j]
+            a01 += w * x0[j] * x1[j]
+            a11 += w * x1[j] * x1[j]
+            b0 += r * w * x0[j]
+            b1 += r * w * x1[j]
+        a00 += scalars[2]
+        a11 += scalars[3]
+        det = a00 * a11 - a01 * a01
+        d0 = (a11 * b0 - a01 * b1) / det
+        d1 = (a00 * b1 - a01 * b0) / det
+        for j in range(m):
+            out[n, j] = (out[n, j] - (d0 * x0[j] + d1 * x1[j])) / math.sqrt(var[j])
+    return flagged
+
+
+@numba.njit(cache=True, error_model="numpy")
 def _log_posterior(
     theta: NDArray,
     prior: NDArray,
@@ -203,18 +286,10 @@ def _log_posterior(
             flagged += math.isnan(lp)
             out[n] = lp
             continue
-        zeta = _value(row, columns, fixed, 0, 0.0)
-        mu_k = _value(row, columns, fixed, 1, 0.0)
-        mu_s = mu_k * _value(row, columns, fixed, 2, 1.0) if columns[2] != _ABSENT else mu_k
-        y0 = _value(row, columns, fixed, 3, 0.0)
-        if model == _EXACT:
-            _one(tau, y0, zeta, mu_k, mu_s, yp0, end, pi)
-        else:
-            if not (zeta >= 0.0 and zeta < 1.0 and mu_k >= 0.0 and math.isfinite(mu_k)):
-                flagged += 1
-                out[n] = math.nan
-                continue
-            _averaged_grid(tau, math.hypot(y0, yp0), zeta, mu_k, end, pi)
+        if not _model_pi(row, columns, fixed, tau, yp0, end, model, pi):
+            flagged += 1
+            out[n] = math.nan
+            continue
         a00 = c00
         a01 = c01
         a11 = c11
@@ -352,4 +427,14 @@ class FusedLogPosterior:
         flagged = _log_posterior(
             theta, self.prior, self.columns, self.fixed, self.data, self.scalars, out
         )
+        return out, flagged
+
+    def standardized_residuals(self, theta: NDArray) -> tuple[NDArray, int]:
+        """Conditional residuals over √V_j of each row of ``theta`` (n, d), shape
+        (n, m) (:meth:`PiLikelihood.standardized_residuals`), and how many rows are
+        outside the averaged model's domain (the caller evaluates those with the
+        reference)."""
+        theta = np.ascontiguousarray(theta, dtype=np.float64)
+        out = np.empty((theta.shape[0], self.data.shape[1]))
+        flagged = _standardized(theta, self.columns, self.fixed, self.data, self.scalars, out)
         return out, flagged

@@ -133,7 +133,18 @@ class Posterior:
         return self.likelihood.pointwise(*self._likelihood_args(theta))
 
     def standardized_residuals(self, theta: NDArray) -> NDArray:
-        """Standardized conditional residuals of each increment, shape (n, m)."""
+        """Standardized conditional residuals of each increment, shape (n, m).
+
+        Compiled where :attr:`uses_compiled` (the optimiser of the starting point
+        calls it hundreds of times), else
+        :meth:`PiLikelihood.standardized_residuals`, the reference.
+        """
+        fused: FusedLogPosterior | None = self._fused
+        theta = np.asarray(theta, dtype=float)
+        if fused is not None and theta.ndim == 2 and theta.shape[1] == len(self.names):
+            out, flagged = fused.standardized_residuals(theta)
+            if not flagged:
+                return out
         return self.likelihood.standardized_residuals(*self._likelihood_args(theta))
 
     def __call__(self, theta: NDArray) -> NDArray:
