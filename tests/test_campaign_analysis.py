@@ -147,7 +147,7 @@ def test_progress_names_each_population_and_trend_before_sampling_it():
     fits = _campaign(np.random.default_rng(2))
     got = analyse_campaign(fits, seed=1, max_steps=2000, progress=messages.append)
     assert messages[0] == "population of 6 runs with contact, by lubricant, load_N"
-    assert "trend against load_N: lubricant=glycerol" in messages
+    assert "trends against load_N: lubricant=glycerol" in messages
     assert messages[-1] == "ζ₀ from 3 runs without contact"
     assert got.excluded == [] and all(r["status"] == "used" for r in got.runs)
 
@@ -166,3 +166,14 @@ def test_a_run_without_a_grouping_key_is_excluded_with_the_reason():
     status = {r["run_id"]: r["status"] for r in got.runs}
     assert status["g-N0.12-r0"].startswith("excluded: metadata has no 'lubricant'")
     assert sum(g["n_runs"] for g in got.group_rows() if g["kind"] == "contact") // 2 == 5
+
+
+def test_an_executor_gives_the_serial_analysis(analysis):
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(max_workers=2) as pool:
+        parallel = analyse_campaign(
+            _campaign(np.random.default_rng(2)), seed=1, max_steps=2000, executor=pool
+        )
+    assert parallel.group_rows() == analysis.group_rows()
+    assert parallel.trend_rows() == analysis.trend_rows()

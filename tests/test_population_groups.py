@@ -416,3 +416,23 @@ def test_the_mean_of_a_non_negative_parameter_stays_non_negative():
     free = [RunSamples(r.name, {"x_c": r.values["zeta"] - 0.002}, r.log_prior, {}) for r in runs]
     unbounded = population(free, ("x_c",), sigma_prior={"x_c": 0.01}, seed=2).pooled
     assert unbounded.mean["x_c"].min() < 0.0
+
+
+def test_groups_on_an_executor_give_the_same_population_and_its_warnings():
+    from concurrent.futures import ProcessPoolExecutor
+
+    rng = np.random.default_rng(7)
+    runs = []
+    for i, load in enumerate((0.12, 0.12, 0.12, 0.46, 0.46, 0.46)):
+        x = rng.normal(0.02 + 0.01 * load, 0.001, 400)
+        runs.append(
+            RunSamples(f"r{i}", {"zeta": x}, np.full(x.size, -math.log(0.3)), {"load_N": load})
+        )
+    kw = {"by": "load_N", "seed": 4, "max_steps": 600}
+    with pytest.warns(ConvergenceWarning):  # 600 steps: not converged, and said so
+        serial = population(runs, ("zeta",), **kw)
+    with ProcessPoolExecutor(max_workers=2) as pool, pytest.warns(ConvergenceWarning):
+        parallel = population(runs, ("zeta",), executor=pool, **kw)
+    for value, group in serial.groups.items():
+        np.testing.assert_array_equal(parallel.groups[value].mean["zeta"], group.mean["zeta"])
+    np.testing.assert_array_equal(parallel.pooled.sigma["zeta"], serial.pooled.sigma["zeta"])

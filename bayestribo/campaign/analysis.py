@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import Executor
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -26,6 +27,7 @@ import numpy as np
 
 from bayestribo.errors import BayestriboError
 from bayestribo.population.groups import Population, population
+from bayestribo.population.jobs import run_jobs
 from bayestribo.population.samples import FitLike, RunSamples, run_samples
 from bayestribo.population.trend import Trend, trend
 from bayestribo.summary import summarize
@@ -242,6 +244,11 @@ def _viscosity_trends(
     return out
 
 
+def _trend_job(members: list[RunSamples], covariate: str, kw: dict[str, Any]) -> Trend:
+    """One series' trend (a module-level function, for a process pool)."""
+    return trend(members, covariate, ("zeta", "mu_k"), **kw)
+
+
 def _name(result: Any) -> str:
     metadata = getattr(result, "metadata", {}) or {}
     return str(metadata.get("run_id") or getattr(result, "run_name", None) or "?")
@@ -279,6 +286,7 @@ def analyse_campaign(
     max_steps: int = 10_000,
     sigma_prior: Mapping[str, Any] | None = None,
     progress: Callable[[str], None] | None = None,
+    executor: Executor | None = None,
 ) -> CampaignAnalysis:
     """Populations, ζ₀, ζ_k, d_k and load trends of a campaign's fits.
 
@@ -300,6 +308,9 @@ def analyse_campaign(
     progress : callable, optional
         Called with a one-line message before each population or trend is sampled
         (the command line prints it).
+    executor : concurrent.futures.Executor, optional
+        Sample the groups of each population and the trends side by side on it (the
+        campaign's process pool or Dask); the results are those of a serial run.
     """
     say = progress if progress is not None else (lambda message: None)
     results = list(results)
@@ -346,25 +357,36 @@ def analyse_campaign(
         # apart; otherwise pooled over the loads of each series.
         say(f"population of {len(samples)} runs with contact, by {', '.join(keys) or 'none'}")
         contact = population(
-            samples, ("zeta", "mu_k"), by=keys or None, pooled=not series_keys, **kw
+            samples,
+            ("zeta", "mu_k"),
+            by=keys or None,
+            pooled=not series_keys,
+            executor=executor,
+            **kw,
         )
         if series_keys and covariate in keys:
             say(f"populations pooled over {covariate}, by {', '.join(series_keys)}")
-            series_pop = population(samples, ("zeta", "mu_k"), by=series_keys, pooled=False, **kw)
+            series_pop = population(
+                samples, ("zeta", "mu_k"), by=series_keys, pooled=False, executor=executor, **kw
+            )
         series: dict[tuple[Any, ...], list[RunSamples]] = {}
         for s in samples:
             series.setdefault(tuple(s.metadata.get(k) for k in series_keys), []).append(s)
+        labels, jobs = [], []
         for value, members in series.items():
             xs = {m.metadata.get(covariate) for m in members}
             if len(xs) >= 2 and all(isinstance(x, int | float) for x in xs):
                 label = ",".join(f"{k}={v}" for k, v in zip(series_keys, value, strict=True))
-                say(f"trend against {covariate}: {label or 'all runs'}")
-                trends[label or "all"] = trend(members, covariate, ("zeta", "mu_k"), **kw)
+                labels.append(label or "all")
+                jobs.append((members, covariate, kw))
+        if jobs:
+            say(f"trends against {covariate}: {', '.join(labels)}")
+            trends.update(zip(labels, run_jobs(_trend_job, jobs, executor), strict=True))
         trends.update(_viscosity_trends(samples, keys, kw))
     if free_runs:
         zs = [run_samples(r, ("zeta",), max_samples=max_samples, seed=seed) for r in free_runs]
         say(f"ζ₀ from {len(zs)} runs without contact")
-        zeta0 = population(zs, ("zeta",), **kw)
+        zeta0 = population(zs, ("zeta",), executor=executor, **kw)
     derived = (
         _derived(contact, zeta0, contact_runs, seed, prob)
         if contact is not None and zeta0 is not None and contact.groups

@@ -19,8 +19,10 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import os
 import sys
 import time
+from concurrent.futures import ProcessPoolExecutor
 from contextlib import nullcontext
 from pathlib import Path
 from typing import Any
@@ -223,14 +225,18 @@ def run(args: argparse.Namespace) -> int:
             elapsed = time.perf_counter() - start
             print(f"bayestribo campaign: [{elapsed:5.0f} s] {message}", file=sys.stderr)
 
-    analysis = analyse_campaign(
-        fitted,
-        by,
-        prob=args.prob,
-        seed=args.seed,
-        max_steps=args.population_steps,
-        progress=say,
-    )
+    workers = args.workers or os.cpu_count() or 1
+    pool = ProcessPoolExecutor(max_workers=workers) if workers > 1 else nullcontext(None)
+    with pool as executor:  # the populations' groups and the trends side by side
+        analysis = analyse_campaign(
+            fitted,
+            by,
+            prob=args.prob,
+            seed=args.seed,
+            max_steps=args.population_steps,
+            progress=say,
+            executor=executor,
+        )
     report = {
         **analysis.to_dict(),
         "failures": failures,

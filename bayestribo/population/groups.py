@@ -12,6 +12,7 @@ from __future__ import annotations
 import itertools
 import zlib
 from collections.abc import Iterable, Mapping, Sequence
+from concurrent.futures import Executor
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -20,6 +21,7 @@ from numpy.typing import NDArray
 
 from bayestribo.errors import BayestriboError
 from bayestribo.population.hyperpriors import SigmaPrior, sigma_priors
+from bayestribo.population.jobs import run_jobs
 from bayestribo.population.likelihood import MarginalLikelihood
 from bayestribo.population.sampler import sample_hyperparameters
 from bayestribo.population.samples import FitLike, RunSamples, as_run_samples
@@ -228,6 +230,7 @@ def population(
     max_steps: int = 10_000,
     prob: float = 0.95,
     progress: bool = False,
+    executor: Executor | None = None,
 ) -> Population:
     """Infer the population of repeats from per-run posterior samples.
 
@@ -258,6 +261,10 @@ def population(
         Only checked here; intervals are chosen when summarising.
     progress : bool
         Show emcee's progress bars.
+    executor : concurrent.futures.Executor, optional
+        Sample the groups on it, side by side (a process pool, a Dask client's
+        executor); each group's seed follows from its label, so the result is the same
+        as in series. Warnings of the groups are given again here.
 
     Returns
     -------
@@ -277,7 +284,7 @@ def population(
     samples = as_run_samples(runs, parameters, max_samples=max_samples, seed=seed)
     priors = sigma_priors(parameters, sigma_prior)
     kwargs = {"n_walkers": n_walkers, "max_steps": max_steps, "progress": progress}
-    groups: dict[Any, GroupPosterior] = {}
+    jobs: list[tuple[Any, ...]] = []
     if by is not None:
         keys = (by,) if isinstance(by, str) else tuple(by)
         if not keys:
@@ -294,10 +301,12 @@ def population(
         for value in sorted(members, key=_sort_key):
             values = (value,) if len(keys) == 1 else value
             label = ",".join(f"{k}={v}" for k, v in zip(keys, values, strict=True))
-            groups[value] = _fit_group(
-                label, value, members[value], parameters, priors, seed, kwargs
-            )
+            jobs.append((label, value, members[value], parameters, priors, seed, kwargs))
     samples.sort(key=lambda r: r.name)
-    whole = _fit_group(POOLED, None, samples, parameters, priors, seed, kwargs) if pooled else None
+    if pooled:
+        jobs.append((POOLED, None, samples, parameters, priors, seed, kwargs))
+    fitted = run_jobs(_fit_group, jobs, executor)
+    whole = fitted.pop() if pooled else None
+    groups = {g.value: g for g in fitted}
     by_keys = by if by is None or isinstance(by, str) else tuple(by)
     return Population(by_keys, parameters, groups, whole)
