@@ -240,3 +240,18 @@ def test_harmosc1_transient_is_found_and_the_fit_not_converged(appstat_file):
     assert main["log_prob"] - minor["log_prob"] > 50
     assert not result.converged
     assert any("transient" in r for r in result.diagnostics["reasons"])
+
+
+def test_a_walker_stuck_far_below_is_named_stuck_not_a_mode():
+    # one of 16 walkers sits 30 sd away for the whole run; the others never go there
+    rng = np.random.default_rng(8)
+    steps, walkers = 300, 16
+    x = rng.standard_normal((steps, walkers, 2))
+    x[:, 5] = 30.0 + 0.1 * rng.standard_normal((steps, 2))
+    lp = -0.5 * np.sum(x**2, axis=2)
+    report = find_modes(x.reshape(1, -1, 2), lp.reshape(1, -1), ["a", "b"], walkers)
+    assert report.n_modes == 2 and report.matters
+    stuck = report.modes[1]
+    assert stuck.kind == "stuck" and stuck.walkers == 1 and stuck.stuck_walkers == 1
+    assert stuck.weight == pytest.approx(1 / 16)
+    assert "1 walker(s) stay" in report.reason

@@ -19,6 +19,8 @@ extinction
     :func:`extinction_check`: predicted against detected end of motion.
 predictive
     :func:`predictive_check`: recorded peaks against their predictive intervals.
+halves
+    :func:`split_halves`: the first and second halves of the motion fitted apart.
 report
     :func:`check_adequacy`: all of the above for one run.
 plots
@@ -33,6 +35,7 @@ from bayestribo.adequacy.draws import (
     draws_from_posterior,
 )
 from bayestribo.adequacy.extinction import ExtinctionCheck, extinction_check
+from bayestribo.adequacy.halves import SplitHalves, split_halves
 from bayestribo.adequacy.predictive import PeakResiduals, PredictiveCheck, predictive_check
 from bayestribo.adequacy.windows import (
     BayesianWindows,
@@ -52,6 +55,7 @@ __all__ = [
     "ParameterDraws",
     "PeakResiduals",
     "PredictiveCheck",
+    "SplitHalves",
     "WindowEstimate",
     "WindowedAnalysis",
     "check_adequacy",
@@ -61,5 +65,6 @@ __all__ = [
     "draws_from_posterior",
     "extinction_check",
     "predictive_check",
+    "split_halves",
     "windowed_fits",
 ]

@@ -33,11 +33,16 @@ The rule (documented, tested on known targets in ``tests/test_inference_modes.py
    shifts the mean of any parameter by at least :data:`MIN_SHIFT` (0.1) of the main
    mode's sd (weight × distance / sd: a small, far mode). A fit whose draws hold a
    minor mode that matters is not converged, with a reason naming the modes.
-6. **Transient or mode.** A minor mode visited only in the first half of the kept
-   steps and never after is a *transient*: the walkers started there and left it
-   (burn-in too short), so its draws are not from the posterior at all; the reason
-   says so. Otherwise it is a *mode* the walkers visit throughout; its weight is
-   the sampler's estimate (trustworthy only if the walkers cross between modes).
+6. **Transient, stuck walkers or mode.** A minor mode visited only in the first half
+   of the kept steps and never after is a *transient*: the walkers started there and
+   left it (burn-in too short), so its draws are not from the posterior at all. A
+   minor mode whose draws (90 % or more) come from walkers that spend 90 % or more
+   of the run in it, or that at most a tenth of the walkers ever visit, holds
+   *stuck walkers*: they do not mix with the others, and its weight is their
+   number and how long they stayed, not a posterior probability. Otherwise it is a *mode*
+   the walkers cross to and from; its weight is the sampler's estimate. The reason
+   says which, with the mode's mean log-posterior against the main mode's (a region
+   hundreds below holds no posterior mass).
 
 A failed sampler. :func:`run_or_failure` runs the sampler and turns an error inside
 it (a NaN log-probability, a NaN turned into an integer: :data:`SAMPLER_FAILURES`)
@@ -91,6 +96,12 @@ VALLEY_RATIO = 0.25
 BINS_PER_SD = 5
 #: A minor mode whose last visit is before this fraction of the kept steps is a transient.
 TRANSIENT_BEFORE = 0.5
+#: A walker spending at least this fraction of its kept steps in a minor mode is stuck
+#: there; a mode whose draws come this much from stuck walkers holds stuck walkers.
+STUCK_FRACTION = 0.9
+#: A minor mode visited by at most this fraction of the walkers (at least one) holds
+#: stuck walkers too: the others never go there.
+FEW_WALKERS = 0.1
 
 
 @dataclass(frozen=True)
@@ -113,8 +124,13 @@ class Mode:
         First and last kept step it holds a draw at, as fractions of the kept steps
         (0 the first, 1 the last).
     kind : str
-        ``"main"`` (the heaviest), ``"mode"`` (visited throughout) or
-        ``"transient"`` (visited only at the start and left: burn-in too short).
+        ``"main"`` (the heaviest), ``"mode"`` (the walkers cross to and from it),
+        ``"transient"`` (visited only at the start and left: burn-in too short) or
+        ``"stuck"`` (a few walkers that stay in it, the others never go there).
+    walkers : int
+        Walkers (over all ensembles) with a draw in it.
+    stuck_walkers : int
+        Walkers that spend at least :data:`STUCK_FRACTION` of the run in it.
     """
 
     weight: float
@@ -124,6 +140,8 @@ class Mode:
     n_draws: int
     steps: tuple[float, float]
     kind: str
+    walkers: int = 0
+    stuck_walkers: int = 0
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready mapping."""
@@ -135,6 +153,8 @@ class Mode:
             "n_draws": self.n_draws,
             "steps": list(self.steps),
             "kind": self.kind,
+            "walkers": self.walkers,
+            "stuck_walkers": self.stuck_walkers,
         }
 
 
@@ -314,7 +334,12 @@ def find_modes(
     names = tuple(names) if len(names) == ndim else tuple(f"theta[{i}]" for i in range(ndim))
     flat = chains.reshape(-1, ndim)
     lp = np.asarray(log_prob, dtype=float).reshape(-1)
-    steps = np.tile(np.arange(n_draws) // max(int(n_walkers), 1), n_ens)
+    per_step = max(int(n_walkers), 1)
+    steps = np.tile(np.arange(n_draws) // per_step, n_ens)
+    walker = np.repeat(np.arange(n_ens), n_draws) * per_step + np.tile(
+        np.arange(n_draws) % per_step, n_ens
+    )
+    draws_per_walker = np.bincount(walker, minlength=n_ens * per_step)
     last_step = max(int(steps.max()), 1) if steps.size else 1
     finite = np.all(np.isfinite(flat), axis=1)
     groups = _groups(flat[finite]) if np.count_nonzero(finite) >= 2 * MIN_DRAWS else []
@@ -325,7 +350,20 @@ def find_modes(
     modes = []
     for k, g in enumerate(groups):
         first, last = steps[g].min() / last_step, steps[g].max() / last_step
-        kind = "main" if k == 0 else ("transient" if last < TRANSIENT_BEFORE else "mode")
+        occupancy = np.bincount(walker[g], minlength=draws_per_walker.size)
+        share = occupancy / np.maximum(draws_per_walker, 1)
+        stuck = share >= STUCK_FRACTION
+        from_stuck = occupancy[stuck].sum() / max(g.size, 1)
+        if k == 0:
+            kind = "main"
+        elif last < TRANSIENT_BEFORE:
+            kind = "transient"
+        elif from_stuck >= STUCK_FRACTION or np.count_nonzero(occupancy) <= max(
+            1, FEW_WALKERS * draws_per_walker.size
+        ):
+            kind = "stuck"
+        else:
+            kind = "mode"
         modes.append(
             Mode(
                 weight=g.size / total,
@@ -335,6 +373,8 @@ def find_modes(
                 n_draws=int(g.size),
                 steps=(float(first), float(last)),
                 kind=kind,
+                walkers=int(np.count_nonzero(occupancy)),
+                stuck_walkers=int(np.count_nonzero(stuck)),
             )
         )
     main = modes[0]
@@ -361,13 +401,14 @@ def _reason(minor: list[Mode], main: Mode) -> str:
     for m in minor:
         at = ", ".join(f"{n}={v:.4g}" for n, v in m.mean.items())
         dlp = main.log_prob - m.log_prob
-        what = (
-            "a transient the walkers left by "
+        what = {
+            "transient": "a transient the walkers left by "
             f"{100 * m.steps[1]:.0f} % of the kept steps (burn-in too short; not draws "
-            "of the posterior)"
-            if m.kind == "transient"
-            else "a separate mode visited throughout the run"
-        )
+            "of the posterior)",
+            "stuck": f"a region where {m.walkers} walker(s) stay (until "
+            f"{100 * m.steps[1]:.0f} % of the kept steps) while the others never go there "
+            "(its weight is not a probability)",
+        }.get(m.kind, "a separate mode the walkers cross to and from")
         parts.append(
             f"{100 * m.weight:.2g} % of the draws are in {what}, at {at}, log-posterior "
             f"{dlp:.3g} below the main mode"
