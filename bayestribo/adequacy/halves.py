@@ -143,6 +143,9 @@ class SplitHalves:
                     f"; the {label} half's {', '.join(half.at_bound)} on a bound (a one-sided "
                     "interval: the test is approximate)"
                 )
+            notes = [n for n in half.notes.split("; ") if n and not n.startswith("at a bound")]
+            if notes:  # e.g. a Bayesian half whose sampler did not converge
+                held += f"; the {label} half: {', '.join(notes)}"
         test = (
             f"χ² = {self.chi2:.3g} for {self.dof} dof, p = {self.p_value:.2g} "
             f"{'≥' if self.consistent else '<'} α = {self.alpha:g}"
