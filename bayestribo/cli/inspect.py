@@ -178,7 +178,7 @@ def _text(report: dict[str, Any]) -> str:
         lines.append(f"analysis       not possible: {decay['error']}")
         return "\n".join(lines)
     lines.append(f"release        t = {_number(decay['release_time_s'])} s")
-    ended = "motion ended" if decay["motion_ended"] else "record ends before the motion"
+    ended = "motion ended" if decay["motion_ended"] else "the record ends while the pin still moves"
     lines.append(
         f"analysed       {_number(decay['start_time_s'])} s to {_number(decay['end_time_s'])} s "
         f"({ended})"
