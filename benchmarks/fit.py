@@ -1,5 +1,17 @@
-"""Speed of the single-run fit, and the same sampling with a solve_ivp forward model.
+"""Speed of the single-run fit, side by side with an older commit, and with solve_ivp.
 
+0. Side by side with an older version (``--baseline``, a git worktree of that commit,
+   e.g. ``git worktree add /tmp/bt-5cfd060 5cfd060``): the current tree and the old
+   one each fit in their own process (``_fit_worker.py`` with ``PYTHONPATH`` on the
+   tree), one fit at a time and alternating between them, so that the load of a
+   shared machine falls on both alike: the bundled run for seeds 1..``--repeats``
+   (after a warm-up fit of seed 0 each) and ``--realistic`` simulated runs like the
+   coverage benchmark's (2 and 10 kHz, 10× and 50× the vibrometer resolution, the
+   magnet pull, an offset and rest segments; written to CSV once and read by both)
+   for ``--realistic-seeds`` seeds each. Reported per version: median wall time,
+   ESS_min and ESS per second, convergence; the ratio of the medians; posterior means
+   of ζ, μ_k, μ_s/μ_k and y0 against each other in units of the posterior sd (mean
+   over seeds); the load average (1 min) before each fit.
 1. Wall time of :func:`bayestribo.inference.fit` on the bundled run
    ``data/runs/glycerol-N0.31-r1.csv`` (10 kHz, about 0.5 s of motion), exact model,
    defaults, in one process after a warm-up fit (imports and compilation are timed
@@ -17,17 +29,25 @@
    one evaluation per draw; the time per evaluation times the count of step 2 is the
    time the same sampling would take; its ratio to the fit's wall time is reported.
    The ODE log-likelihood is checked against the closed form's on the same draws.
+4. ``--sweep``: walkers per ensemble × ensembles on the bundled run (current tree,
+   in this process): median wall time, ESS_min and ESS per second.
 
-Run: ``nice -n 10 python benchmarks/fit.py``; writes ``benchmarks/results/fit.json``.
+Run: ``python benchmarks/fit.py --baseline /tmp/bt-5cfd060``; writes
+``benchmarks/results/fit.json``.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import os
+import subprocess
 import sys
+import tempfile
 import time
 import warnings
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from scipy.integrate import simpson
@@ -42,7 +62,246 @@ from bayestribo.inference.posterior import Posterior
 from bayestribo.io import read_run
 from bayestribo.model.reference import ode_solve
 
-RUN = Path(__file__).resolve().parents[1] / "data" / "runs" / "glycerol-N0.31-r1.csv"
+ROOT = Path(__file__).resolve().parents[1]
+RUN = ROOT / "data" / "runs" / "glycerol-N0.31-r1.csv"
+WORKER = Path(__file__).resolve().parent / "_fit_worker.py"
+#: (sample rate [Hz], noise in units of the vibrometer resolution) of the realistic runs.
+REALISTIC = ((2000.0, 10.0), (2000.0, 50.0), (10000.0, 10.0), (10000.0, 50.0))
+COMPARED = ("zeta", "mu_k", "mu_s_ratio", "y0")
+
+
+class Worker:
+    """A fitting process of one tree (``_fit_worker.py``), driven line by line."""
+
+    def __init__(self, tree: Path) -> None:
+        env = {**os.environ, "PYTHONPATH": str(tree)}
+        for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+            env[var] = "1"
+        self.proc = subprocess.Popen(
+            [sys.executable, str(WORKER)],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+            env=env,
+            cwd=tempfile.gettempdir(),
+        )
+        self.module = json.loads(self._line())["module"]
+        if not self.module.startswith(str(tree)):
+            raise RuntimeError(f"the worker for {tree} imported {self.module}")
+
+    def _line(self) -> str:
+        assert self.proc.stdout is not None
+        line = self.proc.stdout.readline()
+        if not line:
+            raise RuntimeError(f"worker exited with {self.proc.wait()}")
+        return line
+
+    def fit(self, path: Path, seed: int) -> dict[str, Any]:
+        assert self.proc.stdin is not None
+        self.proc.stdin.write(json.dumps({"path": str(path), "seed": seed}) + "\n")
+        self.proc.stdin.flush()
+        return json.loads(self._line())
+
+    def close(self) -> None:
+        assert self.proc.stdin is not None
+        self.proc.stdin.close()
+        self.proc.wait()
+
+
+def realistic_runs(folder: Path, seed: int = 2024) -> list[dict[str, Any]]:
+    """Simulate the realistic runs (as the coverage benchmark's) into ``folder``."""
+    from bayestribo.io import write_run
+    from bayestribo.synthetic import (
+        DISPLACEMENT_RESOLUTION_M,
+        VELOCITY_RESOLUTION_M_PER_S,
+        DissipationLaw,
+        Release,
+        Sensor,
+        simulate,
+    )
+
+    out = []
+    rng = np.random.default_rng(seed)
+    for i, (rate, noise) in enumerate(REALISTIC):
+        truth = {
+            "zeta": float(rng.uniform(0.01, 0.05)),
+            "mu_k": float(rng.uniform(0.01, 0.05)),
+            "mu_s_ratio": float(rng.uniform(1.0, 3.0)),
+        }
+        run = simulate(
+            DissipationLaw(
+                zeta=truth["zeta"], mu_k=truth["mu_k"], mu_s=truth["mu_k"] * truth["mu_s_ratio"]
+            ),
+            release=Release(
+                initial_displacement_m=float(rng.uniform(1e-3, 2e-3)),
+                offset_m=float(rng.uniform(0.0, 5e-4)),
+            ),
+            sensor=Sensor(
+                sample_rate_Hz=rate,
+                displacement_noise_m=noise * DISPLACEMENT_RESOLUTION_M,
+                velocity_noise_m_per_s=noise * VELOCITY_RESOLUTION_M_PER_S,
+                quantise=True,
+            ),
+            seed=int(rng.integers(2**31)),
+        )
+        path = write_run(run, folder / f"realistic-{i}-{rate / 1000:g}kHz-{noise:g}x.csv")
+        out.append({"path": path, "sample_rate_Hz": rate, "noise_factor": noise, "truth": truth})
+    return out
+
+
+def _commit(tree: Path) -> str:
+    """The commit checked out in ``tree`` (with "+changes" when files are modified)."""
+    try:
+        head = subprocess.run(
+            ["git", "-C", str(tree), "rev-parse", "--short", "HEAD"],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
+        dirty = subprocess.run(
+            ["git", "-C", str(tree), "status", "--porcelain", "--untracked-files=no"],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+    return head + ("+changes" if dirty else "")
+
+
+def _summary(fits: list[dict[str, Any]]) -> dict[str, Any]:
+    seconds = [f["seconds"] for f in fits]
+    return {
+        "median_seconds": float(np.median(seconds)),
+        "min_seconds": float(np.min(seconds)),
+        "max_seconds": float(np.max(seconds)),
+        "median_ess_min": float(np.median([f["ess_min"] for f in fits])),
+        "smallest_ess_min": float(np.min([f["ess_min"] for f in fits])),
+        "median_ess_per_second": float(np.median([f["ess_per_second"] for f in fits])),
+        "median_steps": float(np.median([f["n_steps"] for f in fits])),
+        "all_converged": all(f["converged"] for f in fits),
+        "median_load_1min": float(np.median([f["load_before"][0] for f in fits])),
+    }
+
+
+def _agreement(old: list[dict[str, Any]], new: list[dict[str, Any]]) -> dict[str, float]:
+    """|mean over seeds of the new posterior means − the old| in old posterior sds."""
+    out = {}
+    for p in COMPARED:
+        sd = float(np.mean([f["sd"][p] for f in old]))
+        diff = np.mean([f["mean"][p] for f in new]) - np.mean([f["mean"][p] for f in old])
+        out[p] = float(abs(diff) / sd)
+    return out
+
+
+def side_by_side(baseline: Path, repeats: int, realistic: int, seeds: int) -> dict[str, Any]:
+    """Section 0 of the module notes."""
+    trees = {"baseline": baseline, "current": ROOT}
+    workers = {name: Worker(tree) for name, tree in trees.items()}
+    fits: dict[str, dict[str, list[dict[str, Any]]]] = {"bundled": {}, "realistic": {}}
+    try:
+        first = {name: w.fit(RUN, 0) for name, w in workers.items()}
+
+        def both(path: Path, seed: int, key: str, turn: int) -> None:
+            order = list(workers) if turn % 2 else list(workers)[::-1]
+            for name in order:
+                fit = workers[name].fit(path, seed)
+                fits[key].setdefault(name, []).append({**fit, "path": Path(path).name})
+                print(
+                    f"  {key:9s} {Path(path).name[:28]:28s} seed {seed} {name:8s} "
+                    f"{fit['seconds']:6.2f} s ESS {fit['ess_min']:5.0f} "
+                    f"steps {fit['n_steps']:5d} load {fit['load_before'][0]:.2f}",
+                    flush=True,
+                )
+
+        for seed in range(1, repeats + 1):
+            both(RUN, seed, "bundled", seed)
+        with tempfile.TemporaryDirectory() as tmp:
+            runs = realistic_runs(Path(tmp))[:realistic]
+            turn = 0
+            for run in runs:
+                for seed in range(1, seeds + 1):
+                    turn += 1
+                    both(run["path"], seed, "realistic", turn)
+            for run in runs:
+                run["path"] = Path(run["path"]).name
+    finally:
+        for w in workers.values():
+            w.close()
+
+    out: dict[str, Any] = {
+        "baseline_tree": str(baseline),
+        "commits": {name: _commit(tree) for name, tree in trees.items()},
+        "modules": {name: w.module for name, w in workers.items()},
+        "first_call_seconds": {name: f["seconds"] for name, f in first.items()},
+    }
+    for key in ("bundled", "realistic"):
+        per = {name: _summary(f) for name, f in fits[key].items()}
+        ratio = per["baseline"]["median_seconds"] / per["current"]["median_seconds"]
+        out[key] = {
+            "fits": fits[key],
+            "summary": per,
+            "speedup_of_medians": ratio,
+            "ess_per_second_ratio": per["current"]["median_ess_per_second"]
+            / per["baseline"]["median_ess_per_second"],
+        }
+    out["bundled"]["posterior_mean_difference_in_sd"] = _agreement(
+        fits["bundled"]["baseline"], fits["bundled"]["current"]
+    )
+    by_run: dict[str, Any] = {}
+    for run in runs:
+        name = run["path"]
+        old = [f for f in fits["realistic"]["baseline"] if f["path"] == name]
+        new = [f for f in fits["realistic"]["current"] if f["path"] == name]
+        by_run[name] = {
+            **run,
+            "baseline_median_seconds": float(np.median([f["seconds"] for f in old])),
+            "current_median_seconds": float(np.median([f["seconds"] for f in new])),
+            "posterior_mean_difference_in_sd": _agreement(old, new),
+        }
+    out["realistic"]["runs"] = by_run
+    # Per-run ratios of the medians: the runs differ far more than the versions.
+    out["realistic"]["median_of_per_run_speedups"] = float(
+        np.median(
+            [r["baseline_median_seconds"] / r["current_median_seconds"] for r in by_run.values()]
+        )
+    )
+    return out
+
+
+def walker_sweep(seeds: int) -> list[dict[str, Any]]:
+    """Section 4 of the module notes."""
+    rows = []
+    for walkers, ensembles in ((8, 2), (16, 2), (8, 4), (24, 2), (32, 2), (16, 4)):
+        fits = []
+        for seed in range(1, seeds + 1):
+            start = time.perf_counter()
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                result = fit(RUN, seed=seed, n_walkers=walkers, n_ensembles=ensembles)
+            wall = time.perf_counter() - start
+            d = result.diagnostics
+            fits.append((wall, d["ess_min"], d["n_steps"], result.converged))
+        a = np.array(fits, dtype=float)
+        row = {
+            "n_walkers": walkers,
+            "n_ensembles": ensembles,
+            "median_seconds": float(np.median(a[:, 0])),
+            "median_ess_min": float(np.median(a[:, 1])),
+            "median_ess_per_second": float(np.median(a[:, 1] / a[:, 0])),
+            "median_steps": float(np.median(a[:, 2])),
+            "converged": int(a[:, 3].sum()),
+            "fits": seeds,
+            "load_1min": os.getloadavg()[0],
+        }
+        print(
+            f"  {walkers:3d} walkers × {ensembles} ensembles: {row['median_seconds']:.3f} s, "
+            f"ESS {row['median_ess_min']:.0f}, {row['median_ess_per_second']:.0f} ESS/s, "
+            f"{row['converged']}/{seeds} converged",
+            flush=True,
+        )
+        rows.append(row)
+    return rows
 
 
 class OdePiLikelihood(PiLikelihood):
@@ -109,9 +368,18 @@ def count_evaluations(seed: int) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=3, help="timed fits (seeds 1..n)")
+    parser.add_argument("--repeats", type=int, default=7, help="timed fits (seeds 1..n)")
     parser.add_argument("--ode-evals", type=int, default=200, help="ODE likelihood evaluations")
+    parser.add_argument("--baseline", type=Path, help="worktree of the commit to compare with")
+    parser.add_argument("--realistic", type=int, default=4, help="realistic runs (at most 4)")
+    parser.add_argument("--realistic-seeds", type=int, default=3, help="fits per realistic run")
+    parser.add_argument("--sweep", type=int, default=0, help="seeds per walker setting (0: none)")
     args = parser.parse_args(argv)
+    load_start = os.getloadavg()
+    compared = None
+    if args.baseline is not None:
+        print(f"side by side with {args.baseline}")
+        compared = side_by_side(args.baseline, args.repeats, args.realistic, args.realistic_seeds)
 
     start = time.perf_counter()
     first = fit(RUN, seed=0)
@@ -152,9 +420,14 @@ def main(argv: list[str] | None = None) -> int:
     ll_closed = closed_lik.log_likelihood(*rows)
     ode_fit_seconds = ode_per_eval * evaluations
 
+    sweep = walker_sweep(args.sweep) if args.sweep else None
     results = {
         "benchmark": "fit",
         "description": __doc__.split("\n\n")[1],
+        "load_average_at_start": list(load_start),
+        "load_average_at_end": list(os.getloadavg()),
+        "side_by_side": compared,
+        "walker_sweep": sweep,
         "run": str(RUN.relative_to(RUN.parents[2])),
         "first_call_seconds": first_seconds,
         "fits": fits,
@@ -168,8 +441,40 @@ def main(argv: list[str] | None = None) -> int:
         "ode_fit_seconds_estimate": ode_fit_seconds,
         "ode_over_fit_ratio": ode_fit_seconds / median_seconds,
         "ode_vs_closed_loglik_max_abs_diff": float(np.max(np.abs(ll_ode - ll_closed))),
-        "notes": "CPU shared with other jobs; the machine was not idle. Times are wall times.",
+        "notes": (
+            "CPU shared with other engineers running tests at the same time: the machine "
+            "was not idle (load averages recorded per fit and at start and end), so "
+            "medians are reported. Times are wall times. Side by side, the two versions "
+            "fit alternately, one at a time, in separate processes."
+        ),
     }
+    if compared is not None:
+        for key in ("bundled", "realistic"):
+            c = compared[key]
+            for name, v in c["summary"].items():
+                print(
+                    f"{key:9s} {name:8s} median {v['median_seconds']:6.3f} s, ESS_min median "
+                    f"{v['median_ess_min']:.0f} (smallest {v['smallest_ess_min']:.0f}), "
+                    f"{v['median_ess_per_second']:.0f} ESS/s, converged {v['all_converged']}, "
+                    f"load {v['median_load_1min']:.2f}"
+                )
+            print(
+                f"{key:9s} speedup of medians {c['speedup_of_medians']:.2f}x, "
+                f"ESS/s ratio {c['ess_per_second_ratio']:.2f}x"
+            )
+        print(
+            "posterior means, |new - old| in sd:",
+            {
+                k: round(v, 3)
+                for k, v in compared["bundled"]["posterior_mean_difference_in_sd"].items()
+            },
+        )
+        for name, r in compared["realistic"]["runs"].items():
+            print(
+                f"  {name}: {r['baseline_median_seconds']:.2f} s -> "
+                f"{r['current_median_seconds']:.2f} s, means in sd "
+                f"{ {k: round(v, 3) for k, v in r['posterior_mean_difference_in_sd'].items()} }"
+            )
     print(f"fit of {results['run']} (exact model, defaults)")
     print(f"  first call (imports, compilation): {first_seconds:8.2f} s")
     for f in fits:

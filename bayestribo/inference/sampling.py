@@ -239,7 +239,8 @@ def autocorr_time(chain: NDArray, c: float = 5.0) -> NDArray:
     Parameters
     ----------
     chain : ndarray
-        One ensemble's chain, shape (steps, walkers, params).
+        One ensemble's chain, shape (steps, walkers, params) (or (steps, walkers) and
+        (steps,) for one parameter, as emcee takes them).
     c : float
         Window constant of Sokal's rule.
 
@@ -249,6 +250,7 @@ def autocorr_time(chain: NDArray, c: float = 5.0) -> NDArray:
         τ per parameter (NaN for a chain that does not move).
     """
     x = np.asarray(chain, dtype=float)
+    x = x.reshape(x.shape + (1,) * (3 - x.ndim))
     n_t = x.shape[0]
     size = 1 << max(0, int(n_t - 1).bit_length())  # emcee's next power of two
     with np.errstate(invalid="ignore", divide="ignore"):
