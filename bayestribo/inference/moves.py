@@ -46,8 +46,34 @@ from bayestribo.errors import BayestriboError
 __all__ = ["GroupedDEMove", "GroupedDESnookerMove", "grouped_moves"]
 
 
+def _log_prob(model, q: NDArray) -> NDArray:
+    """Log-probability of proposals ``q`` (n, d) by the sampler's vectorised function.
+
+    emcee's ``compute_log_prob`` without its per-walker handling of blobs (a Python
+    loop over the walkers): the grouped moves need a sampler made with
+    ``vectorize=True`` whose function returns one value per row and no blobs. emcee's
+    checks are kept: non-finite coordinates and a NaN log-probability raise
+    ``ValueError``.
+    """
+    if not np.isfinite(q).all():
+        raise ValueError("At least one parameter value was infinite or NaN")
+    log_prob = np.asarray(model.log_prob_fn(q), dtype=float)
+    if log_prob.shape != (q.shape[0],):
+        raise BayestriboError(
+            "the grouped moves need a vectorised log-probability (vectorize=True) that "
+            f"returns one value per walker and no blobs; got shape {log_prob.shape} for "
+            f"{q.shape[0]} walkers"
+        )
+    if np.isnan(log_prob).any():
+        raise ValueError("Probability function returned NaN")
+    return log_prob
+
+
 class _GroupedRedBlueMove(emcee.moves.Move):
     """Red-blue update of ``n_groups`` independent ensembles stacked in one sampler.
+
+    The sampler must be made with ``vectorize=True`` and a log-probability that
+    returns one value per walker and no blobs (see :func:`_log_prob`).
 
     Parameters
     ----------
@@ -107,7 +133,7 @@ class _GroupedRedBlueMove(emcee.moves.Move):
         for split in range(self.nsplits):
             flat = order[:, split * size : (split + 1) * size].ravel()
             q, factors = self._split_proposal(coords, order, split, random)
-            new_log_prob, _ = model.compute_log_prob_fn(q)
+            new_log_prob = _log_prob(model, q)
             take = factors + new_log_prob - log_prob[flat] > np.log(random.rand(flat.size))
             idx = flat[take]
             coords[idx] = q[take]
