@@ -22,9 +22,11 @@ The rule (documented, tested on known targets in ``tests/test_inference_modes.py
    ten draws a bin), summed over three neighbouring bins. The groups are
    *separated modes* when the lowest count between the two groups' highest counts
    (the valley) is at most a quarter of the smaller of those two peaks **and** the
-   dip is beyond counting noise (peak − valley ≥ 3 √peak). Along any line a
-   unimodal density has no valley between two of its points, so k-means halves of
-   one mode (which always split it) do not pass; a heavy tail has no dip either.
+   dip is beyond counting noise (peak − valley ≥ 3 √peak). Along a line, a
+   log-concave density (a Gaussian, most posteriors near their mode) has no valley
+   between two of its points, so the k-means halves of one mode (k-means always
+   splits) do not pass; a heavy tail has no dip either (no false mode in 1800
+   samples of six unimodal laws, ``benchmarks/modes.py``).
 4. **Recursion.** Each mode found is split again the same way (at most
    :data:`MAX_MODES` modes); a group of fewer than :data:`MIN_DRAWS` draws is not
    split off.
@@ -39,8 +41,8 @@ The rule (documented, tested on known targets in ``tests/test_inference_modes.py
    minor mode whose draws (90 % or more) come from walkers that spend 90 % or more
    of the run in it, or that at most a tenth of the walkers ever visit, holds
    *stuck walkers*: they do not mix with the others, and its weight is their
-   number and how long they stayed, not a posterior probability. Otherwise it is a *mode*
-   the walkers cross to and from; its weight is the sampler's estimate. The reason
+   number and how long they stayed, not a posterior probability. Otherwise it is a
+   *mode* the walkers cross to and from; its weight is the sampler's estimate. The reason
    says which, with the mode's mean log-posterior against the main mode's (a region
    hundreds below holds no posterior mass).
 
@@ -48,8 +50,8 @@ A failed sampler. :func:`run_or_failure` runs the sampler and turns an error ins
 it (a NaN log-probability, a NaN turned into an integer: :data:`SAMPLER_FAILURES`)
 into a run reported not converged, with the error named in its reasons, so that a
 fit (``--discrepancy`` included) returns and says so instead of crashing.
-:func:`bayestribo.inference.pipeline.sample` and :func:`~bayestribo.inference.pipeline.summarise`
-call :func:`run_or_failure` and :func:`mode_check`.
+:func:`bayestribo.inference.pipeline.sample` calls :func:`run_or_failure`, and
+:func:`bayestribo.inference.pipeline.summarise` calls :func:`mode_check`.
 
 References
 ----------
