@@ -282,3 +282,15 @@ def test_a_bounded_skewed_target_is_sampled(moves):
     flat = run.chains.reshape(-1, 2)
     assert scipy.stats.kstest(flat[:, 0], "gamma", args=(2.0,)).pvalue > 1e-4
     assert abs(flat[:, 0].mean() - 2.0) < 5 * np.sqrt(2.0 / run.ess[0])
+
+
+def test_grouped_moves_refuse_a_log_probability_that_is_not_one_value_per_walker():
+    from bayestribo.inference.moves import grouped_moves
+
+    def column(theta):  # shape (n, 1): not one value per walker
+        return _gaussian(theta)[:, None]
+
+    sampler = emcee.EnsembleSampler(16, 3, column, moves=grouped_moves(2), vectorize=True)
+    start = MEAN + 0.1 * np.random.default_rng(15).standard_normal((16, 3))
+    with pytest.raises(BayestriboError, match="one value per walker"):
+        sampler.run_mcmc(start, 5, skip_initial_state_check=True)
