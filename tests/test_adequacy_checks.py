@@ -157,7 +157,10 @@ def test_posterior_draws_are_used_and_labelled():
 
 
 def test_plots_render(report, tmp_path):
-    fig = plot_windows(report.windows, report.constancy)
+    fig = plot_windows(report.windows, report.constancy, halves=report.halves)
+    legend = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert "first half" in legend and "second half" in legend
+    assert "halves agree" in fig.axes[0].get_title()
     fig.savefig(tmp_path / "windows.png")
     ax = plot_extinction(report.extinction)
     ax.figure.savefig(tmp_path / "extinction.png")

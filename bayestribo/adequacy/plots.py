@@ -12,6 +12,7 @@ import numpy as np
 
 from bayestribo.adequacy.constancy import ConstancyTest
 from bayestribo.adequacy.extinction import ExtinctionCheck
+from bayestribo.adequacy.halves import SplitHalves
 from bayestribo.adequacy.predictive import PredictiveCheck
 from bayestribo.adequacy.windows import WindowedAnalysis
 
@@ -29,14 +30,19 @@ def _figure(fig: Any, nrows: int) -> Any:
 
 
 def plot_windows(
-    windows: WindowedAnalysis, constancy: ConstancyTest | None = None, fig: Any = None
+    windows: WindowedAnalysis,
+    constancy: ConstancyTest | None = None,
+    fig: Any = None,
+    halves: SplitHalves | None = None,
 ) -> Any:
     """ζ and μ per window against the window amplitude, with 95 % intervals.
 
     Horizontal bars span each window's amplitude range; the constancy test's line
     (if given) is drawn over the windows it used. Windows whose estimate sits on a
     parameter bound are drawn as crosses, and the vertical scale is set by the
-    other windows (a bound estimate's interval is meaningless and huge).
+    other windows (a bound estimate's interval is meaningless and huge). The two
+    halves of the split-half check (if given) are shaded boxes: each spans its
+    half's amplitude range and its 95 % interval.
 
     Parameters
     ----------
@@ -44,6 +50,8 @@ def plot_windows(
     constancy : ConstancyTest, optional
     fig : matplotlib Figure, optional
         With two axes, or empty (two are added).
+    halves : SplitHalves, optional
+        The split-half check (:func:`bayestribo.adequacy.halves.split_halves`).
 
     Returns
     -------
@@ -73,9 +81,25 @@ def plot_windows(
                     capsize=2,
                     label="on a bound" if style == "x" else f"{windows.method} per window",
                 )
+        if halves is not None and name in halves.parameters:
+            for k, (half, colour) in enumerate(((halves.first, "C1"), (halves.second, "C2"))):
+                lo_h, hi_h = getattr(half, f"{name}_interval")
+                ax.fill_between(
+                    list(half.amplitude_range),
+                    [lo_h, lo_h],
+                    [hi_h, hi_h],
+                    color=colour,
+                    alpha=0.25,
+                    label=f"{('first', 'second')[k]} half" if name == "zeta" else None,
+                )
         if np.any(regular):
             # scale on the regular windows: estimates on a bound have huge intervals
             lo, hi = float(np.min(iv[regular, 0])), float(np.max(iv[regular, 1]))
+            if halves is not None and name in halves.parameters:
+                for half in (halves.first, halves.second):
+                    if half.regular:
+                        lo = min(lo, getattr(half, f"{name}_interval")[0])
+                        hi = max(hi, getattr(half, f"{name}_interval")[1])
             pad = 0.15 * (hi - lo) if hi > lo else 0.05 * max(abs(hi), 1e-12)
             ax.set_ylim(lo - pad, hi + pad)
         if trend is not None:
@@ -90,11 +114,19 @@ def plot_windows(
         ax_m.set_ylabel(f"{windows.friction_name} [{windows.length_unit}]")
     ax_m.set_xlabel(f"window amplitude [{windows.length_unit}]")
     ax_z.legend(fontsize="small")
+    titles = []
     if constancy is not None:
-        ax_z.set_title(
+        titles.append(
             ("constant" if constancy.constant else "not constant")
             + f" (p = {constancy.p_value:.2g})"
         )
+    if halves is not None:
+        titles.append(
+            ("halves agree" if halves.consistent else "halves disagree")
+            + f" (p = {halves.p_value:.2g})"
+        )
+    if titles:
+        ax_z.set_title("; ".join(titles))
     return fig
 
 
