@@ -294,3 +294,22 @@ def test_grouped_moves_refuse_a_log_probability_that_is_not_one_value_per_walker
     start = MEAN + 0.1 * np.random.default_rng(15).standard_normal((16, 3))
     with pytest.raises(BayestriboError, match="one value per walker"):
         sampler.run_mcmc(start, 5, skip_initial_state_check=True)
+
+
+def test_the_grouped_sampler_gives_the_chains_of_emcees_own_sampler():
+    # run_ensembles's sampler skips emcee's copy of the generator state in every step;
+    # resumed chunk by chunk, its chains must be emcee's to the bit.
+    from bayestribo.inference import sampling
+
+    start = MEAN + 0.1 * np.random.default_rng(16).standard_normal((2, 8, 3))
+    runs = []
+    for cls in (sampling._ResumingSampler, emcee.EnsembleSampler):
+        grouped = sampling._Grouped.__new__(sampling._Grouped)
+        grouped.sampler_class = cls
+        grouped.__init__(_gaussian, start, seed=17)
+        for _ in range(3):
+            grouped.run(100)
+        runs.append(grouped.sampler.get_chain())
+    assert isinstance(sampling._Grouped(_gaussian, start, 1).sampler, sampling._ResumingSampler)
+    np.testing.assert_array_equal(runs[0], runs[1])
+    assert runs[0].shape == (300, 16, 3) and np.unique(runs[0][:, 0, 0]).size > 10
