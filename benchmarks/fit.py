@@ -374,6 +374,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--realistic", type=int, default=4, help="realistic runs (at most 4)")
     parser.add_argument("--realistic-seeds", type=int, default=3, help="fits per realistic run")
     parser.add_argument("--sweep", type=int, default=0, help="seeds per walker setting (0: none)")
+    parser.add_argument("--output", default="fit", help="results/<output>.json (default fit)")
     args = parser.parse_args(argv)
     load_start = os.getloadavg()
     compared = None
@@ -494,7 +495,7 @@ def main(argv: list[str] | None = None) -> int:
         f"  same sampling with solve_ivp      {ode_fit_seconds:8.0f} s "
         f"= {results['ode_over_fit_ratio']:.0f}x the fit"
     )
-    path = write_results("fit", results)
+    path = write_results(args.output, results)
     print(f"wrote {path}")
     return 0
 
