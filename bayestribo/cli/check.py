@@ -35,7 +35,8 @@ def register(subparsers: Any) -> None:
             "Fit ζ and μ_k in windows of a few oscillations along the decay and test whether "
             "they change with amplitude; compare the predicted end of motion (Eq. 38 and the "
             "exact model) with the recorded one; compare the recorded peaks with their "
-            "predictive intervals. Without a Bayesian fit the parameter draws come from the "
+            "predictive intervals; fit the first and second halves of the motion and test "
+            "whether they agree. Without a Bayesian fit the parameter draws come from the "
             "Gaussian approximation of the least-squares fit, and the report says so."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
