@@ -212,6 +212,8 @@ def test_over_range_marks_are_reported_as_clipping(tmp_path, run):
 def test_a_plain_header_starting_with_model_is_not_an_export():
     assert detect_export(["Model,Amplitude", "0,1", "1,2"]) is None
     assert detect_export(["time_s,displacement_m", "0,1"]) is None
+    assert detect_export(["X,V", "0.1,0.2"]) is None  # not a Rigol export
+    assert detect_export(["x-axis,y", "1,2"]) is None  # not a Keysight export
 
 
 def test_the_command_line_reads_an_export_and_names_the_options(tmp_path, run, capsys):

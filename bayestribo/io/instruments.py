@@ -242,6 +242,8 @@ def _keysight(lines: Sequence[str], where: str) -> InstrumentExport | None:
     if not labels or labels[0].lower() != "x-axis" or len(labels) < 2:
         return None
     units = _trim(_fields(lines[1]))
+    if not units or units[0].lower() not in ("second", "s"):
+        return None  # a header that merely starts with x-axis
     if len(units) != len(labels):
         raise RunFormatError(
             f"Keysight/Agilent CSV export: line 2 gives {len(units)} unit(s) for "
@@ -267,6 +269,8 @@ def _rigol(lines: Sequence[str], where: str) -> InstrumentExport | None:
     if not labels or labels[0] != "X" or len(labels) < 2:
         return None
     units = _trim(_fields(lines[1]))
+    if not units or units[0].lower() not in ("sequence", "second", "s"):
+        return None  # a header that merely starts with X, not a Rigol export
     if labels[-2:] == ["Start", "Increment"]:
         labels = labels[:-2]
         try:
