@@ -11,7 +11,7 @@ from numpy.typing import ArrayLike
 
 from bayestribo.errors import BayestriboError, RecordingError
 from bayestribo.estimators.decrement import exponential_envelope, log_decrement
-from bayestribo.estimators.energy_ls import energy_data, energy_least_squares
+from bayestribo.estimators.energy_ls import EnergyData, energy_data, energy_least_squares
 from bayestribo.estimators.feeny_liang import feeny_liang
 from bayestribo.estimators.nonsuccessive import nonsuccessive_peaks
 from bayestribo.estimators.result import Estimate, EstimateTable
@@ -158,7 +158,20 @@ def estimate_signals(
     out: list[Estimate] = []
     signals = [(kind, s) for kind, s in (("displacement", x), ("velocity", v)) if s is not None]
     peak_methods = [m for m in chosen if m in _PEAK_METHODS]
-    start = _window_start(t, x, v, rig, skip_oscillations) if peak_methods else None
+    energy_models = [m for m in chosen if m.startswith("energy_ls_")]
+    data: EnergyData | None = None
+    failure: BayestriboError | None = None
+    if energy_models:
+        try:
+            data = energy_data(t, x, v, rig=rig, skip_oscillations=skip_oscillations, offset=offset)
+        except BayestriboError as exc:
+            failure = exc
+    start = None
+    if peak_methods and data is not None:
+        # The peak methods start where the energy decay does: the fit's window.
+        start = data.start_time - 0.75 * float(np.median(np.diff(np.asarray(t, dtype=float))))
+    elif peak_methods:
+        start = _window_start(t, x, v, rig, skip_oscillations)
     for kind, s in signals:
         if not peak_methods:
             break
@@ -178,20 +191,12 @@ def estimate_signals(
             except BayestriboError as exc:
                 out.append(_failed(m, f"{kind} peaks (n={len(pk)})", exc))
 
-    energy_models = [m for m in chosen if m.startswith("energy_ls_")]
-    if energy_models:
+    if failure is not None:
+        out += [_failed(m, "energy", failure) for m in energy_models]
+    for m in energy_models if data is not None else []:
         try:
-            data = energy_data(t, x, v, rig=rig, skip_oscillations=skip_oscillations, offset=offset)
+            model = m.removeprefix("energy_ls_")
+            out.append(energy_least_squares(t, model=model, rig=rig, data=data))
         except BayestriboError as exc:
-            out += [_failed(m, "energy", exc) for m in energy_models]
-        else:
-            for m in energy_models:
-                try:
-                    out.append(
-                        energy_least_squares(
-                            t, model=m.removeprefix("energy_ls_"), rig=rig, data=data
-                        )
-                    )
-                except BayestriboError as exc:
-                    out.append(_failed(m, "energy", exc))
+            out.append(_failed(m, "energy", exc))
     return EstimateTable(out, run=None if name is None else str(name))

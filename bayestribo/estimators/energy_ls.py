@@ -78,6 +78,9 @@ class EnergyData:
         True when the record shows the motion stopping (rest tail).
     source : str
         Which signals were measured and which derived.
+    start_time : float
+        Time of the first analysed sample [s] (a turning point after the skipped
+        oscillations).
     """
 
     tau: NDArray
@@ -91,6 +94,7 @@ class EnergyData:
     peaks: Peaks
     stopped: bool
     source: str
+    start_time: float = float("nan")
 
 
 #: Fewest turning points the Π least squares needs after the skipped ones.
@@ -176,6 +180,7 @@ def energy_data(
         peaks=decay.peaks,
         stopped=decay.motion_ended,
         source=_SOURCES[decay.derived_channel],
+        start_time=decay.start_time,
     )
 
 

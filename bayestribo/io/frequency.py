@@ -116,6 +116,16 @@ def oscillation_frequency(
     if displacement is None or t.size < 8:
         return None
     x = np.asarray(displacement, dtype=np.float64)
+    derived = _central_difference(t, x)
+    if derived is None:
+        return None
+    return crossing_frequency(derived[0], derived[1])
+
+
+def _central_difference(t: NDArray, x: NDArray) -> tuple[NDArray, NDArray, NDArray] | None:
+    """(times, dx/dt, x at those times): a central difference of the displacement over
+    about a fortieth of a period (symmetric, so it shifts no crossing); None without
+    two full cycles."""
     rough = crossing_frequency(t, x)
     if rough is None:
         return None
@@ -124,7 +134,7 @@ def oscillation_frequency(
     if 2 * lag >= x.size:
         return None
     derivative = (x[2 * lag :] - x[: -2 * lag]) / (t[2 * lag :] - t[: -2 * lag])
-    return crossing_frequency(t[lag:-lag], derivative)
+    return t[lag:-lag], derivative, x[lag:-lag]
 
 
 @dataclass(frozen=True)
@@ -184,15 +194,10 @@ def frequency_trend(
     if velocity is not None:
         v, tv, xv = np.asarray(velocity, dtype=np.float64), t, x
     else:
-        rough = crossing_frequency(t, x)
-        if rough is None:
+        derived = _central_difference(t, x)
+        if derived is None:
             return None
-        step = float(np.median(np.diff(t)))
-        lag = max(1, round(1.0 / (40.0 * rough * step)))
-        if 2 * lag >= x.size:
-            return None
-        v = (x[2 * lag :] - x[: -2 * lag]) / (t[2 * lag :] - t[: -2 * lag])
-        tv, xv = t[lag:-lag], x[lag:-lag]
+        tv, v, xv = derived
     found = _crossings(tv, v)
     if found is None:
         return None
