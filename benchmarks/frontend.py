@@ -1,16 +1,17 @@
 """The fit on real signal chains: refused, covered, warned, per effect of the chain.
 
-Each run comes from the independent simulator of ``tests/test_signal_frontend.py``
+Each run comes from the independent simulator of ``benchmarks/_chain.py``
 (``scipy.integrate.solve_ivp`` of m x'' + c x' + k x + μ_k N sign(x') = 0 with sticking
 when |k x| <= μ_s N; the paper's rig, m = 0.035 kg, f = 32.6 Hz, N = 0.31 N, ζ = 0.0236,
-μ_k = 0.0294, μ_s = 0.04, x₀ = 2 mm) with white noise of 10 times the vibrometer's
-resolution on both channels and one effect of a real signal chain:
+μ_k = 0.0294, μ_s = 0.04, x₀ = 2 mm; the same motion and, for the same seed, the same
+noise as ``tests/test_signal_frontend.py``) with white noise of 10 times the
+vibrometer's resolution on both channels and one effect of a real signal chain:
 
 =========  ==============================================================================
 clean      0.1 s of rest before and after the motion, 10 kHz
 filter     a causal 4th-order Butterworth anti-alias filter at 2 kHz on both channels
 hum        50 Hz mains hum of 5 times the white noise's rms (random phase)
-hum-notch  the same, removed with ``energy_decay(..., notch="auto")`` (see below)
+hum-notch  the same, fitted with ``bayestribo.fit(..., notch="auto")``
 pink       1/f noise of 5 times the white noise's rms
 rest-2s    2 s of rest after the stop
 rest-30s   30 s of rest after the stop
@@ -18,14 +19,14 @@ rest-30s   30 s of rest after the stop
 100kHz     sampled at 100 kHz, through the anti-alias filter
 =========  ==============================================================================
 
+The same effects at 10x and 30x the resolution, with the laws and channels that are not
+the model and the "silently wrong" count, are in ``benchmarks/misspecification.py``,
+the one benchmark of "never silently wrong"; this script is the 10x chain alone.
+
 Every run is fitted with :func:`bayestribo.fit` (exact model, small sampler settings:
-16 walkers × 2 ensembles, at most ``--max-steps`` steps). ``hum-notch`` cannot pass
-``notch`` through :func:`bayestribo.fit` until the pipeline is wired; it fits the run
-whose line was subtracted with the same measurement
-(:func:`bayestribo.signal.spectrum.fit_line` on the rest that ``energy_decay`` finds).
-Reported per effect: runs refused (an exception, recorded with its message), covered
-(the 95 % interval contains the truth, for ζ and for μ_k), warned (a
-:class:`~bayestribo.errors.MisfitWarning` or a
+16 walkers × 2 ensembles, at most ``--max-steps`` steps). Reported per effect: runs
+refused (an exception, recorded with its message), covered (the 95 % interval contains
+the truth, for ζ and for μ_k), warned (a :class:`~bayestribo.errors.MisfitWarning` or a
 :class:`~bayestribo.errors.ConvergenceWarning`), and the standardised errors
 (mean - truth)/sd.
 
@@ -33,13 +34,13 @@ Run (by hand, on a quiet machine)::
 
     nice -n 10 python benchmarks/frontend.py --runs 20 --workers 2
 
-Writes ``benchmarks/results/frontend.json`` with the machine description.
+Writes ``benchmarks/results/frontend.json`` (``--output NAME``: ``NAME.json``) with the
+machine description.
 """
 
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import sys
 import time
@@ -52,98 +53,57 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 import numpy as np  # noqa: E402
-from scipy import stats  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-sys.path.insert(0, str(HERE.parent / "tests"))
+from _chain import (  # noqa: E402
+    CHAIN_EFFECTS,
+    MU_K,
+    ZETA,
+    apply_chain,
+    clopper_pearson,
+    metadata,
+    record,
+)
 from _machine import niced_worker, write_results  # noqa: E402
 
 __all__ = ["EFFECTS", "one_run", "summarise"]
 
 #: effect -> (sample rate [Hz], rest after the stop [s], chain options, notch)
-EFFECTS: dict[str, tuple[float, float, dict[str, Any], bool]] = {
-    "clean": (10_000.0, 0.1, {}, False),
-    "filter": (10_000.0, 0.1, {"filt": True}, False),
-    "hum": (10_000.0, 0.1, {"hum": 5.0}, False),
-    "hum-notch": (10_000.0, 0.1, {"hum": 5.0}, True),
-    "pink": (10_000.0, 0.1, {"pink": 5.0}, False),
-    "rest-2s": (10_000.0, 2.0, {}, False),
-    "rest-30s": (10_000.0, 30.0, {}, False),
-    "1kHz": (1_000.0, 0.1, {}, False),
-    "100kHz": (100_000.0, 0.1, {"filt": True}, False),
-}
+EFFECTS = CHAIN_EFFECTS
 PARAMS = ("zeta", "mu_k")
-
-
-def _run_of(t, x, v):
-    from test_signal_frontend import F_HZ, LOAD, MASS
-
-    from bayestribo.io.run import Run
-
-    return Run(
-        time=t,
-        displacement=x,
-        velocity=v,
-        metadata={
-            "natural_frequency_Hz": F_HZ,
-            "mass_kg": MASS,
-            "load_N": LOAD,
-            "displacement_resolution_m": 0.15e-6,
-            "velocity_resolution_m_per_s": 0.015e-6,
-        },
-    )
-
-
-def _subtract_hum(t, x, v):
-    """The line measured at rest and subtracted, as ``energy_decay(notch="auto")`` does."""
-    from test_signal_frontend import RIG
-
-    from bayestribo.signal.decay import _rest_mask, energy_decay
-    from bayestribo.signal.spectrum import fit_line
-
-    first = energy_decay(t, x, v, rig=RIG)
-    mains = first.rest_noise.mains_Hz() if first.rest_noise is not None else None
-    if mains is None:
-        return x, v, None
-    rest = _rest_mask(t, first)
-    out = []
-    for s in (x, v):
-        f, a, phase = fit_line(t, s, rest, mains)
-        out.append(s - a * np.cos(2 * math.pi * f * (t - t[0]) + phase))
-    return out[0], out[1], mains
 
 
 def one_run(effect: str, index: int, seed: int, max_steps: int) -> dict[str, Any]:
     """Simulate one run with ``effect``, fit it, record refusal, coverage and warnings."""
-    from test_signal_frontend import MU_K, ZETA, add_effects, record
-
     from bayestribo.errors import ConvergenceWarning, MisfitWarning
     from bayestribo.inference import fit
+    from bayestribo.io.run import Run
 
     fs, rest_after, chain, notch = EFFECTS[effect]
     truth = {"zeta": ZETA, "mu_k": MU_K}
     out: dict[str, Any] = {"effect": effect, "index": index}
     start = time.perf_counter()
     try:
-        t, x, v, _, _ = record(fs, 0.1, rest_after)
-        xs, vs = add_effects(t, x, v, fs, seed=seed * 1000 + index, **chain)
-        if notch:
-            xs, vs, out["notch_Hz"] = _subtract_hum(t, xs, vs)
+        t, x, v = record(fs, 0.1, rest_after)
+        xs, vs = apply_chain(t, x, v, fs, seed=seed * 1000 + index, noise=10.0, **chain)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             result = fit(
-                _run_of(t, xs, vs),
+                Run(time=t, displacement=xs, velocity=vs, metadata=metadata()),
                 seed=seed * 1000 + index,
                 n_walkers=16,
                 n_ensembles=2,
                 max_steps=max_steps,
+                notch=notch,
             )
     except Exception as exc:  # recorded and reported, never silently dropped
         out["refused"] = f"{type(exc).__name__}: {exc}"
         return out
     out["seconds"] = time.perf_counter() - start
     out["converged"] = bool(result.converged)
+    if notch:
+        out["notch_Hz"] = result.settings.get("notch_Hz")
     out["warnings"] = sorted(
         {
             w.category.__name__
@@ -161,19 +121,13 @@ def one_run(effect: str, index: int, seed: int, max_steps: int) -> dict[str, Any
     return out
 
 
-def _clopper_pearson(k: int, n: int) -> list[float]:
-    if n == 0:
-        return [math.nan, math.nan]
-    lo = stats.beta.ppf(0.025, k, n - k + 1) if k > 0 else 0.0
-    hi = stats.beta.ppf(0.975, k + 1, n - k) if k < n else 1.0
-    return [float(lo), float(hi)]
-
-
 def summarise(records: list[dict[str, Any]]) -> dict[str, Any]:
     """Per effect: refused, covered (ζ, μ_k, both, with 95 % intervals), warned, z."""
     table: dict[str, Any] = {}
     for effect in EFFECTS:
         rows = [r for r in records if r["effect"] == effect]
+        if not rows:
+            continue
         fitted = [r for r in rows if "covered" in r]
         row: dict[str, Any] = {
             "runs": len(rows),
@@ -185,7 +139,7 @@ def summarise(records: list[dict[str, Any]]) -> dict[str, Any]:
         for n in PARAMS:
             k = sum(r["covered"][n] for r in fitted)
             row[f"covered_{n}"] = k
-            row[f"covered_{n}_ci95"] = _clopper_pearson(k, len(fitted))
+            row[f"covered_{n}_ci95"] = clopper_pearson(k, len(fitted))
             z = np.array([r["z"][n] for r in fitted])
             row[f"z_{n}"] = (
                 {"mean": float(z.mean()), "sd": float(z.std(ddof=1))} if z.size > 1 else None
@@ -228,6 +182,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=13)
     parser.add_argument("--max-steps", type=int, default=6000)
     parser.add_argument("--effects", nargs="*", default=list(EFFECTS), choices=list(EFFECTS))
+    parser.add_argument("--output", default="frontend", help="results/NAME.json")
     args = parser.parse_args(argv)
     start = time.perf_counter()
     records: list[dict[str, Any]] = []
@@ -241,7 +196,7 @@ def main(argv: list[str] | None = None) -> int:
     table = summarise(records)
     _print_table(table)
     path = write_results(
-        "frontend",
+        args.output,
         {
             "settings": {
                 "runs_per_effect": args.runs,
