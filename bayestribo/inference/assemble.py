@@ -58,7 +58,7 @@ def derived_quantities(
         ``zeta``; with friction ``mu_s_ratio`` and ``friction_displacement`` [m or the
         run's length unit], and either ``mu_k`` and ``mu_s`` (load and mass known) or
         ``static_friction_displacement`` [same unit] (not known); ``y0``;
-        ``log10_discrepancy`` when sampled; ``zeta_k`` when ζ₀ is given; ``d_k``
+        ``log10_discrepancy`` and ``log10_shape`` when sampled; ``zeta_k`` when ζ₀ is given; ``d_k``
         [s/m] (= 2ζ_k √(km)/N, Eq. 42) when ζ₀, the load and the mass are known.
     """
     col = posterior.values(draws)
@@ -85,8 +85,9 @@ def derived_quantities(
             out["static_friction_displacement"] = friction_disp * ratio
         out["friction_displacement"] = friction_disp
     out["y0"] = col["y0"]
-    if "log10_discrepancy" in col:
-        out["log10_discrepancy"] = col["log10_discrepancy"]
+    for name in ("log10_discrepancy", "log10_shape"):
+        if name in col:
+            out[name] = col[name]
 
     zeta0 = metadata.get("zeta0")
     if zeta0 is not None and posterior.friction:
@@ -142,9 +143,11 @@ def _predictive_pi(
     p = posterior.physical(flat[pick])
     lik = posterior.likelihood
     model_inc = lik.model_increments(p["zeta"], p["mu_k"], p["mu_s"], p["y0"])
-    delta = lik.offset(p["zeta"], p["mu_k"], p["mu_s"], p["y0"], p["discrepancy"])
+    nuisance = lik.nuisance_mean(
+        p["zeta"], p["mu_k"], p["mu_s"], p["y0"], p["discrepancy"], p["shape"]
+    )
     var = np.broadcast_to(lik.variance(p["discrepancy"]), model_inc.shape)
-    replicated = model_inc + delta @ data.offset_design.T + rng.normal(0.0, np.sqrt(var))
+    replicated = model_inc + nuisance + rng.normal(0.0, np.sqrt(var))
     return np.cumsum(replicated[:, ::-1], axis=1)[:, ::-1]
 
 

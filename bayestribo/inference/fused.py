@@ -11,13 +11,15 @@ that loops over the walkers:
    :class:`~bayestribo.inference.priors.LogUniform`), summed in sampling order; a
    walker outside their support gets −inf and its likelihood is not evaluated;
 2. the model parameters from the sampled and fixed coordinates: μ_s = μ_k × (μ_s/μ_k),
-   the discrepancy scale s = 10^log10_discrepancy;
+   the discrepancy scales s = 10^log10_discrepancy and s_c = 10^log10_shape;
 3. the model Π on the grid, exact (the compiled kernel of
    :mod:`bayestribo.model._kernel`, with sticking) or averaged (Eq. 34 and 40 with the
    corrected Eq. 41, :mod:`bayestribo.model.averaged`), and its increments M_j;
 4. the increment variances V_j (+ s² ∫_j E² with the discrepancy term) and the
-   Gaussian log-likelihood with the equilibrium nuisance (δ₀, δ₁) marginalised
-   analytically (the 2 × 2 system of :mod:`bayestribo.inference.likelihood`):
+   Gaussian log-likelihood with the linear nuisances marginalised analytically: the
+   equilibrium (δ₀, δ₁) and, with the shape discrepancy, its coefficients c_k (a
+   q × q system, q = 2 + the shape terms, solved by Cholesky; see
+   :mod:`bayestribo.inference.likelihood`):
 
 .. math::
 
@@ -52,7 +54,7 @@ from bayestribo.model._kernel import _one
 __all__ = ["FusedLogPosterior"]
 
 #: Parameters in the order of the ``columns`` table (as posterior.PARAMETERS).
-_ORDER = ("zeta", "mu_k", "mu_s_ratio", "y0", "log10_discrepancy")
+_ORDER = ("zeta", "mu_k", "mu_s_ratio", "y0", "log10_discrepancy", "log10_shape")
 _SAMPLED_FROM_FIXED = -1  # the parameter is fixed at a value
 _ABSENT = -2  # the parameter is neither sampled nor fixed
 _UNIFORM, _NORMAL, _LOGUNIFORM = 0, 1, 2
@@ -174,6 +176,66 @@ def _model_pi(
 
 
 @numba.njit(cache=True, error_model="numpy")
+def _cholesky_solve(a: NDArray, b: NDArray, q: int, x: NDArray) -> float:
+    """Solve A x = b for the symmetric positive definite q × q ``a`` (overwritten by
+    its Cholesky factor); returns log|A|, NaN when A is not positive definite."""
+    logdet = 0.0
+    for i in range(q):
+        for j in range(i + 1):
+            acc = a[i, j]
+            for k in range(j):
+                acc -= a[i, k] * a[j, k]
+            if i == j:
+                if not acc > 0.0:
+                    return math.nan
+                a[i, i] = math.sqrt(acc)
+                logdet += 2.0 * math.log(a[i, i])
+            else:
+                a[i, j] = acc / a[j, j]
+    for i in range(q):
+        acc = b[i]
+        for k in range(i):
+            acc -= a[i, k] * x[k]
+        x[i] = acc / a[i, i]
+    for i in range(q - 1, -1, -1):
+        acc = x[i]
+        for k in range(i + 1, q):
+            acc -= a[k, i] * x[k]
+        x[i] = acc / a[i, i]
+    return logdet
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _normal_matrix(design: NDArray, var: NDArray, q: int, out: NDArray) -> None:
+    """XᵀWX (q × q) of the nuisances' design rows ``design`` (q, m), W = diag(1/V)."""
+    m = var.size
+    for k in range(q):
+        for i in range(k + 1):
+            acc = 0.0
+            for j in range(m):
+                acc += design[k, j] * design[i, j] / var[j]
+            out[k, i] = acc
+            out[i, k] = acc
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _precisions(
+    row: NDArray, columns: NDArray, fixed: NDArray, scalars: NDArray, q: int, out: NDArray
+) -> float:
+    """Prior precisions of the q nuisances into ``out``; returns log|P|."""
+    out[0] = scalars[2]
+    out[1] = scalars[3]
+    log_p = scalars[4]
+    if q > 2:
+        log_c = _value(row, columns, fixed, 5, 0.0)
+        sc = 10.0**log_c
+        for k in range(2, q):
+            out[k] = 1.0 / (sc * sc)
+        log_p += 2.0 * (q - 2) * math.log(10.0) * log_c
+    return log_p
+
+
+@numba.njit(cache=True, error_model="numpy")
 def _standardized(
     theta: NDArray,
     columns: NDArray,
@@ -184,16 +246,21 @@ def _standardized(
 ) -> int:
     """Conditional residuals over √V_j of each row into ``out`` (n, m), as
     :meth:`PiLikelihood.standardized_residuals`; returns the number of rows outside
-    the averaged model's domain (left unset: the caller uses the reference)."""
+    the averaged model's domain or with a singular nuisance system (left unset: the
+    caller uses the reference)."""
     tau = data[0]
     inc = data[1]
     var0 = data[2]
     e2 = data[3]
-    x0 = data[4]
-    x1 = data[5]
     m = tau.size
+    q = 2 + int(scalars[6])
+    design = data[4 : 4 + q]
     pi = np.empty(m)
     var = np.empty(m)
+    a = np.empty((q, q))
+    b = np.empty(q)
+    x = np.empty(q)
+    prec = np.empty(q)
     flagged = 0
     for n in range(theta.shape[0]):
         row = theta[n]
@@ -204,29 +271,27 @@ def _standardized(
         if columns[4] != _ABSENT:
             s = 10.0 ** _value(row, columns, fixed, 4, 0.0)
             s2 = s * s
-        a00 = 0.0
-        a01 = 0.0
-        a11 = 0.0
-        b0 = 0.0
-        b1 = 0.0
+        for k in range(q):
+            b[k] = 0.0
         for j in range(m):
             var[j] = var0[j] + s2 * e2[j] if columns[4] != _ABSENT else var0[j]
-            w = 1.0 / var[j]
             model_inc = pi[j] - pi[j + 1] if j < m - 1 else pi[j]
             r = inc[j] - model_inc
             out[n, j] = r
-            a00 += w * x0[j] * x0[j]
-            a01 += w * x0[j] * x1[j]
-            a11 += w * x1[j] * x1[j]
-            b0 += r * w * x0[j]
-            b1 += r * w * x1[j]
-        a00 += scalars[2]
-        a11 += scalars[3]
-        det = a00 * a11 - a01 * a01
-        d0 = (a11 * b0 - a01 * b1) / det
-        d1 = (a00 * b1 - a01 * b0) / det
+            for k in range(q):
+                b[k] += r * design[k, j] / var[j]
+        _normal_matrix(design, var, q, a)
+        _precisions(row, columns, fixed, scalars, q, prec)
+        for k in range(q):
+            a[k, k] += prec[k]
+        if not math.isfinite(_cholesky_solve(a, b, q, x)):
+            flagged += 1
+            continue
         for j in range(m):
-            out[n, j] = (out[n, j] - (d0 * x0[j] + d1 * x1[j])) / math.sqrt(var[j])
+            fitted = 0.0
+            for k in range(q):
+                fitted += x[k] * design[k, j]
+            out[n, j] = (out[n, j] - fitted) / math.sqrt(var[j])
     return flagged
 
 
@@ -242,42 +307,40 @@ def _log_posterior(
 ) -> int:
     """Log posterior of each row of ``theta`` into ``out`` (see the module notes).
 
-    ``data`` rows: τ_j, D_j, V_j, ∫_j E², ∫_j y, ∫_j τy (j < m). ``scalars``: y'0, the
-    end of the model's Π (inf when the record holds the end of motion), the prior
-    precisions of δ₀ and δ₁, log|P|, the model code. Returns the number of rows
-    whose log posterior is NaN or whose parameters are outside the averaged model's
-    domain (NaN in ``out``): the caller then lets the reference raise its error.
+    ``data`` rows: τ_j, D_j, V_j, ∫_j E², then the nuisances' design: ∫_j y, ∫_j τy
+    and the shape columns D_j P_k(u_j) (j < m). ``scalars``: y'0, the end of the
+    model's Π (inf when the record holds the end of motion), the prior precisions of
+    δ₀ and δ₁, their log|P|, the model code, the number of shape terms. Returns the
+    number of rows whose log posterior is NaN or whose parameters are outside the
+    averaged model's domain (NaN in ``out``): the caller then lets the reference
+    raise its error.
     """
     tau = data[0]
     inc = data[1]
     var0 = data[2]
     e2 = data[3]
-    x0 = data[4]
-    x1 = data[5]
     m = tau.size
+    q = 2 + int(scalars[6])
+    design = data[4 : 4 + q]
     yp0 = scalars[0]
     end = scalars[1]
-    prec0 = scalars[2]
-    prec1 = scalars[3]
-    log_prior_det = scalars[4]
     model = scalars[5]
     pi = np.empty(m)
     var = np.empty(m)
+    a = np.empty((q, q))
+    b = np.empty(q)
+    x = np.empty(q)
+    prec = np.empty(q)
     discrepancy = columns[4] != _ABSENT
-    # Without the discrepancy term the variances, hence A's data part and Σ log 2πV,
+    # Without the white discrepancy the variances, hence A's data part and Σ log 2πV,
     # are the same for every walker.
-    c00 = 0.0
-    c01 = 0.0
-    c11 = 0.0
+    c = np.zeros((q, q))
     norm0 = 0.0
     if not discrepancy:
         for j in range(m):
             var[j] = var0[j]
-            w = 1.0 / var[j]
-            c00 += w * x0[j] * x0[j]
-            c01 += w * x0[j] * x1[j]
-            c11 += w * x1[j] * x1[j]
             norm0 += math.log(var[j]) + _LOG_2PI
+        _normal_matrix(design, var, q, c)
     flagged = 0
     for n in range(theta.shape[0]):
         row = theta[n]
@@ -290,37 +353,37 @@ def _log_posterior(
             flagged += 1
             out[n] = math.nan
             continue
-        a00 = c00
-        a01 = c01
-        a11 = c11
         norm = norm0
         if discrepancy:
             s = 10.0 ** _value(row, columns, fixed, 4, 0.0)
             s2 = s * s
             for j in range(m):
                 var[j] = var0[j] + s2 * e2[j]
-                w = 1.0 / var[j]
-                a00 += w * x0[j] * x0[j]
-                a01 += w * x0[j] * x1[j]
-                a11 += w * x1[j] * x1[j]
                 norm += math.log(var[j]) + _LOG_2PI
-        b0 = 0.0
-        b1 = 0.0
+            _normal_matrix(design, var, q, a)
+        else:
+            for k in range(q):
+                for i in range(q):
+                    a[k, i] = c[k, i]
+        for k in range(q):
+            b[k] = 0.0
         rr = 0.0
         for j in range(m):
             model_inc = pi[j] - pi[j + 1] if j < m - 1 else pi[j]
             r = inc[j] - model_inc
             rw = r / var[j]
-            b0 += rw * x0[j]
-            b1 += rw * x1[j]
+            for k in range(q):
+                b[k] += rw * design[k, j]
             rr += r * rw
-        a00 += prec0
-        a11 += prec1
-        det = a00 * a11 - a01 * a01
-        d0 = (a11 * b0 - a01 * b1) / det
-        d1 = (a00 * b1 - a01 * b0) / det
-        chi2 = rr - (b0 * d0 + b1 * d1)
-        out[n] = lp + -0.5 * (chi2 + norm + math.log(det) + log_prior_det)
+        log_prior_det = _precisions(row, columns, fixed, scalars, q, prec)
+        for k in range(q):
+            a[k, k] += prec[k]
+        logdet = _cholesky_solve(a, b, q, x)
+        explained = 0.0
+        for k in range(q):
+            explained += b[k] * x[k]
+        chi2 = rr - explained
+        out[n] = lp + -0.5 * (chi2 + norm + logdet + log_prior_det)
         flagged += math.isnan(out[n])
     return flagged
 
@@ -335,14 +398,16 @@ class FusedLogPosterior:
         Shape (d, 3): kind (0 uniform, 1 normal, 2 log-uniform) and its two
         parameters (low, high or μ, σ) per sampled coordinate.
     columns : ndarray
-        Shape (5,): for ζ, μ_k, μ_s/μ_k, y0, log10_discrepancy, the column of θ, -1
-        when fixed, -2 when absent.
+        Shape (6,): for ζ, μ_k, μ_s/μ_k, y0, log10_discrepancy, log10_shape, the
+        column of θ, -1 when fixed, -2 when absent.
     fixed : ndarray
-        Shape (5,): the fixed values (where ``columns`` is -1).
+        Shape (6,): the fixed values (where ``columns`` is -1).
     data : ndarray
-        Shape (6, m): τ_j, D_j, V_j, ∫_j E², ∫_j y, ∫_j τy.
+        Shape (4 + q, m): τ_j, D_j, V_j, ∫_j E², then the q nuisance columns ∫_j y,
+        ∫_j τy (and the shape columns D_j P_k(u_j) with the shape discrepancy).
     scalars : ndarray
-        y'0, the end of Π, the prior precisions of δ₀ and δ₁, log|P|, the model code.
+        y'0, the end of Π, the prior precisions of δ₀ and δ₁, their log|P|, the model
+        code, the number of shape terms.
     """
 
     prior: NDArray
@@ -380,17 +445,10 @@ class FusedLogPosterior:
                 columns[k] = _SAMPLED_FROM_FIXED
                 values[k] = float(fixed[name])
         d = likelihood.data
+        shape = columns[5] != _ABSENT
+        design = likelihood.design(shape)
         data = np.ascontiguousarray(
-            np.vstack(
-                [
-                    d.tau_grid[:-1],
-                    d.increments,
-                    d.variance,
-                    d.energy_squared,
-                    d.offset_design[:, 0],
-                    d.offset_design[:, 1],
-                ]
-            ),
+            np.vstack([d.tau_grid[:-1], d.increments, d.variance, d.energy_squared, design.T]),
             dtype=np.float64,
         )
         scalars = np.array(
@@ -399,8 +457,9 @@ class FusedLogPosterior:
                 math.inf if d.motion_ended else d.tau_end,
                 likelihood.offset_sd**-2,
                 likelihood.drift_sd**-2,
-                likelihood._log_prior_det,
+                likelihood._log_prior_det(),
                 _EXACT if likelihood.model == "exact" else _AVERAGED,
+                design.shape[1] - 2,
             ]
         )
         return cls(table, columns, values, data, scalars)

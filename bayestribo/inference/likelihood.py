@@ -26,29 +26,53 @@ with ``r = D - M``, ``W = diag(1/V)``, design ``X`` (∫y, ∫τy per increment)
 log-likelihood (for PSIS-LOO) is the conditional one at the conditional mean
 ``δ̂ = A⁻¹b``.
 
-**Model discrepancy** (optional): a relative, white error on E of intensity s² per
-unit τ, for what the physics leaves out, adds ``s² ∫_j E² dτ`` to the variance of
-increment j; like the noise, it does not depend on how finely Π is gridded.
+**Model discrepancy** (optional), for what the physics leaves out, in two parts:
+
+* a relative, white error on E of intensity s² per unit τ adds ``s² ∫_j E² dτ`` to the
+  variance of increment j; like the noise, it does not depend on how finely Π is
+  gridded;
+* a **shape** discrepancy correlated along the decay, for a law whose decay has another
+  shape (drag that grows with amplitude, friction that varies along the track, a
+  stiffness that depends on amplitude): a smooth relative departure of the increments,
+  ``D_j g(u_j)`` with ``g(u) = Σ_k c_k P_k(u)`` (Legendre polynomials of degree
+  < :data:`SHAPE_TERMS` in the position u ∈ [-1, 1] of the increment along the
+  record), coefficients ``c_k ~ N(0, s_c²)``. Equivalently a Gaussian process over
+  the increments with the low-rank covariance ``s_c² (D∘P)(D∘P)ᵀ``. The coefficients
+  enter the residuals linearly and are marginalised with the equilibrium nuisance
+  (the design gains the columns ``D_j P_k(u_j)``, the prior covariance ``s_c² I``).
+  Its low-order terms overlap with the law's own parameters (a constant with y0, a
+  slope with ζ): that is the point. A departure of the decay that a change of ζ could
+  also explain widens ζ's interval by as much as the data cannot tell them apart.
+  The observed increments stand in for the model's in the design (they differ by the
+  noise, a relative 1e-3 or less, times a coefficient of at most s_c).
+
+:meth:`PiLikelihood.shape_departure` tests the residuals at one parameter set for a
+smooth departure of this form (χ² of the coefficients' least squares against their
+noise covariance) and says by how much the decay departs from the law.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Literal
 
 import numpy as np
+import scipy.stats
 from numpy.typing import NDArray
 
 from bayestribo.model import averaged_pi
 from bayestribo.model._kernel import exact_pi_grid
 from bayestribo.signal.increments import PiData
 
-__all__ = ["MODELS", "PiLikelihood"]
+__all__ = ["MODELS", "SHAPE_TERMS", "PiLikelihood", "ShapeDeparture"]
 
 MODELS = ("exact", "averaged")
 ModelName = Literal["exact", "averaged"]
 _LOG_2PI = math.log(2.0 * math.pi)
+#: Legendre terms (degrees 0 .. SHAPE_TERMS - 1) of the shape discrepancy.
+SHAPE_TERMS = 4
 
 
 @dataclass(frozen=True)
@@ -102,6 +126,29 @@ class PiLikelihood:
         inc[..., -1] = pi[..., -1]
         return inc
 
+    @cached_property
+    def shape_basis(self) -> NDArray:
+        """Legendre polynomials P_k(u_j) of the increments' positions, shape (m, K).
+
+        u runs linearly from -1 at the first increment's middle to +1 at the last's.
+        """
+        grid = self.data.tau_grid
+        mid = 0.5 * (grid[:-1] + grid[1:])
+        span = float(mid[-1] - mid[0]) if mid.size > 1 else 1.0
+        u = 2.0 * (mid - mid[0]) / span - 1.0
+        return np.polynomial.legendre.legvander(u, SHAPE_TERMS - 1)
+
+    @cached_property
+    def shape_design(self) -> NDArray:
+        """Columns D_j P_k(u_j) of the shape discrepancy, shape (m, K)."""
+        return self.data.increments[:, None] * self.shape_basis
+
+    def design(self, shape: bool = False) -> NDArray:
+        """Design of the linear nuisances: ∫y, ∫τy (and the shape columns), (m, q)."""
+        if not shape:
+            return self.data.offset_design
+        return np.hstack([self.data.offset_design, self.shape_design])
+
     def variance(self, discrepancy: NDArray | None = None) -> NDArray:
         """Variance of each increment (noise, plus the discrepancy term if given)."""
         if discrepancy is None:
@@ -109,32 +156,40 @@ class PiLikelihood:
         return self.data.variance + np.asarray(discrepancy) ** 2 * self.data.energy_squared
 
     # -- nuisance -----------------------------------------------------------------
-    def _solve(self, resid: NDArray, var: NDArray) -> tuple[NDArray, NDArray, NDArray]:
-        """Conditional mean δ̂ of the offset nuisance, b·δ̂ and log|A| per row.
+    def _solve(
+        self, resid: NDArray, var: NDArray, shape: NDArray | None = None
+    ) -> tuple[NDArray, NDArray, NDArray]:
+        """Conditional mean of the linear nuisances, b·A⁻¹b and log|A| per row.
 
-        A = XᵀWX + P⁻¹ is 2 × 2: solved in closed form (Cramer's rule), which is
-        several times faster than batched ``numpy.linalg`` on a few walkers.
+        The nuisances are the equilibrium offset and drift (δ₀, δ₁) and, with a shape
+        scale ``shape`` (s_c, shape (n, 1)), the shape coefficients c_k; A = XᵀWX +
+        P⁻¹ with X = :meth:`design`. Returns δ̂ (n, q), b·δ̂ (n,), log|A| (n,).
         """
-        x = self.data.offset_design  # (m, 2)
+        x = self.design(shape is not None)  # (m, q)
         w = 1.0 / var  # (m,) or (n, m)
-        x0, x1 = x[:, 0], x[:, 1]
-        a00 = w @ (x0 * x0) if w.ndim == 1 else (w * x0 * x0).sum(-1)
-        a01 = w @ (x0 * x1) if w.ndim == 1 else (w * x0 * x1).sum(-1)
-        a11 = w @ (x1 * x1) if w.ndim == 1 else (w * x1 * x1).sum(-1)
-        a00 = a00 + self.offset_sd**-2
-        a11 = a11 + self.drift_sd**-2
-        rw = resid * w
-        b0 = rw @ x0
-        b1 = rw @ x1
-        det = a00 * a11 - a01 * a01
-        d0 = (a11 * b0 - a01 * b1) / det
-        d1 = (a00 * b1 - a01 * b0) / det
-        delta = np.stack([d0, d1], axis=-1)
-        return delta, b0 * d0 + b1 * d1, np.log(det) * np.ones_like(b0)
+        resid = np.atleast_2d(resid)
+        n, q = resid.shape[0], x.shape[1]
+        if w.ndim == 1:
+            a = np.broadcast_to((x.T * w) @ x, (n, q, q)).copy()
+        else:
+            a = np.einsum("nj,jk,jl->nkl", w, x, x)
+        precision = np.empty((n, q))
+        precision[:, 0] = self.offset_sd**-2
+        precision[:, 1] = self.drift_sd**-2
+        if shape is not None:
+            precision[:, 2:] = np.reshape(np.asarray(shape, dtype=float), (-1, 1)) ** -2
+        a[:, np.arange(q), np.arange(q)] += precision
+        b = (resid * w) @ x
+        delta = np.linalg.solve(a, b[..., None])[..., 0]
+        logdet = np.linalg.slogdet(a)[1]
+        return delta, np.sum(b * delta, axis=-1), logdet
 
-    @property
-    def _log_prior_det(self) -> float:
-        return 2.0 * math.log(self.offset_sd) + 2.0 * math.log(self.drift_sd)
+    def _log_prior_det(self, shape: NDArray | None = None) -> NDArray | float:
+        """log|P| of the nuisances' prior covariance (per row with a shape scale)."""
+        base = 2.0 * math.log(self.offset_sd) + 2.0 * math.log(self.drift_sd)
+        if shape is None:
+            return base
+        return base + 2.0 * SHAPE_TERMS * np.log(np.reshape(np.asarray(shape, float), -1))
 
     def _residuals(self, zeta: NDArray, mu_k: NDArray, mu_s: NDArray, y0: NDArray) -> NDArray:
         """Observed minus model increments, D_j - M_j, shape (n, m)."""
@@ -147,10 +202,26 @@ class PiLikelihood:
         mu_s: NDArray,
         y0: NDArray,
         discrepancy: NDArray | None = None,
+        shape: NDArray | None = None,
     ) -> NDArray:
         """Conditional mean of (δ₀, δ₁) given the parameters, shape (n, 2)."""
         resid = self._residuals(zeta, mu_k, mu_s, y0)
-        return self._solve(resid, self.variance(discrepancy))[0]
+        return self._solve(resid, self.variance(discrepancy), shape)[0][:, :2]
+
+    def nuisance_mean(
+        self,
+        zeta: NDArray,
+        mu_k: NDArray,
+        mu_s: NDArray,
+        y0: NDArray,
+        discrepancy: NDArray | None = None,
+        shape: NDArray | None = None,
+    ) -> NDArray:
+        """Conditional mean of the linear nuisances' part of each increment (equilibrium
+        and, with ``shape``, the shape discrepancy), shape (n, m)."""
+        resid = self._residuals(zeta, mu_k, mu_s, y0)
+        delta = self._solve(resid, self.variance(discrepancy), shape)[0]
+        return delta @ self.design(shape is not None).T
 
     # -- densities ----------------------------------------------------------------
     def log_likelihood(
@@ -160,14 +231,19 @@ class PiLikelihood:
         mu_s: NDArray,
         y0: NDArray,
         discrepancy: NDArray | None = None,
+        shape: NDArray | None = None,
     ) -> NDArray:
-        """Log-likelihood with the offset nuisance marginalised, shape (n,)."""
+        """Log-likelihood with the linear nuisances marginalised, shape (n,).
+
+        ``discrepancy`` is the white discrepancy's scale s and ``shape`` the shape
+        discrepancy's s_c (each (n, 1), or None without that term).
+        """
         resid = self._residuals(zeta, mu_k, mu_s, y0)
         var = self.variance(discrepancy)
-        _, explained, logdet_a = self._solve(resid, var)
+        _, explained, logdet_a = self._solve(resid, var, shape)
         chi2 = np.sum(resid * resid / var, axis=-1) - explained
         norm = np.sum(np.log(var) + _LOG_2PI, axis=-1)
-        return -0.5 * (chi2 + norm + logdet_a + self._log_prior_det)
+        return -0.5 * (chi2 + norm + logdet_a + self._log_prior_det(shape))
 
     def conditional_residuals(
         self,
@@ -176,11 +252,12 @@ class PiLikelihood:
         mu_s: NDArray,
         y0: NDArray,
         discrepancy: NDArray | None = None,
+        shape: NDArray | None = None,
     ) -> NDArray:
-        """D_j - M_j with the conditional-mean offset removed, shape (n, m)."""
+        """D_j - M_j with the nuisances' conditional mean removed, shape (n, m)."""
         resid = self._residuals(zeta, mu_k, mu_s, y0)
-        delta = self._solve(resid, self.variance(discrepancy))[0]
-        return resid - delta @ self.data.offset_design.T
+        delta = self._solve(resid, self.variance(discrepancy), shape)[0]
+        return resid - delta @ self.design(shape is not None).T
 
     def pointwise(
         self,
@@ -189,9 +266,10 @@ class PiLikelihood:
         mu_s: NDArray,
         y0: NDArray,
         discrepancy: NDArray | None = None,
+        shape: NDArray | None = None,
     ) -> NDArray:
         """Conditional log-likelihood of each increment, shape (n, m) (for PSIS-LOO)."""
-        resid = self.conditional_residuals(zeta, mu_k, mu_s, y0, discrepancy)
+        resid = self.conditional_residuals(zeta, mu_k, mu_s, y0, discrepancy, shape)
         var = self.variance(discrepancy)
         return -0.5 * (resid * resid / var + np.log(var) + _LOG_2PI)
 
@@ -202,7 +280,118 @@ class PiLikelihood:
         mu_s: NDArray,
         y0: NDArray,
         discrepancy: NDArray | None = None,
+        shape: NDArray | None = None,
     ) -> NDArray:
         """Conditional residuals over √V_j: standard normals if the model is right."""
-        resid = self.conditional_residuals(zeta, mu_k, mu_s, y0, discrepancy)
+        resid = self.conditional_residuals(zeta, mu_k, mu_s, y0, discrepancy, shape)
         return resid / np.sqrt(self.variance(discrepancy))
+
+    # -- how far the decay departs from the law -----------------------------------
+    def shape_departure(self, zeta: float, mu_k: float, mu_s: float, y0: float) -> ShapeDeparture:
+        """Test the residuals at one parameter set for a smooth departure along the decay.
+
+        The relative departure ``g(u) = Σ_k c_k P_k(u)`` (see the module notes) is fitted
+        to the residuals by weighted least squares with the equilibrium nuisance, under
+        the noise variances alone; its χ² is ``ĉᵀ Cov(ĉ)⁻¹ ĉ`` with
+        :data:`SHAPE_TERMS` degrees of freedom (conservative at a fitted parameter set,
+        whose own directions the residuals no longer hold).
+
+        Parameters
+        ----------
+        zeta, mu_k, mu_s, y0 : float
+            The parameter set (usually the maximum a posteriori).
+
+        Returns
+        -------
+        ShapeDeparture
+        """
+        args = [np.array([[float(v)]]) for v in (zeta, mu_k, mu_s, y0)]
+        resid = self._residuals(*args)[0]
+        w = 1.0 / self.data.variance
+        x = self.design(True)
+        a = (x.T * w) @ x
+        a[0, 0] += self.offset_sd**-2
+        a[1, 1] += self.drift_sd**-2
+        b = (resid * w) @ x
+        try:
+            cov = np.linalg.inv(a)
+        except np.linalg.LinAlgError:
+            return ShapeDeparture.undetermined(resid.size)
+        coef = cov @ b
+        c, cov_c = coef[2:], cov[2:, 2:]
+        try:
+            chi2 = float(c @ np.linalg.solve(cov_c, c))
+        except np.linalg.LinAlgError:
+            return ShapeDeparture.undetermined(resid.size)
+        basis = self.shape_basis
+        g = basis @ c
+        sd_g = np.sqrt(np.maximum(np.einsum("jk,kl,jl->j", basis, cov_c, basis), 0.0))
+        worst = int(np.argmax(np.abs(g)))
+        return ShapeDeparture(
+            chi2=chi2,
+            dof=SHAPE_TERMS,
+            p_value=float(scipy.stats.chi2.sf(chi2, SHAPE_TERMS)),
+            max_relative=float(g[worst]),
+            max_relative_sd=float(sd_g[worst]),
+            at_increment=worst,
+            relative=g,
+        )
+
+
+@dataclass(frozen=True)
+class ShapeDeparture:
+    """A smooth departure of the decay from the law (:meth:`PiLikelihood.shape_departure`).
+
+    Attributes
+    ----------
+    chi2 : float
+        χ² of the fitted shape coefficients against their noise covariance.
+    dof : int
+        Its degrees of freedom (:data:`SHAPE_TERMS`).
+    p_value : float
+        Probability of a χ² this large if the law holds and the noise model is right.
+    max_relative : float
+        The fitted relative departure g at the increment where it is largest in
+        magnitude (a fraction of that increment; signed: + the record holds more
+        energy than the law).
+    max_relative_sd : float
+        Its standard error from the noise.
+    at_increment : int
+        Index of that increment.
+    relative : ndarray
+        The fitted relative departure at every increment, shape (m,).
+    """
+
+    chi2: float
+    dof: int
+    p_value: float
+    max_relative: float
+    max_relative_sd: float
+    at_increment: int
+    relative: NDArray
+
+    @classmethod
+    def undetermined(cls, m: int) -> ShapeDeparture:
+        """No test possible (a singular system: too few increments)."""
+        return cls(math.nan, SHAPE_TERMS, math.nan, math.nan, math.nan, -1, np.full(m, math.nan))
+
+    def describe(self) -> str:
+        """One sentence: by how much the decay departs from the law."""
+        if not math.isfinite(self.chi2):
+            return "the shape of the decay could not be tested (too few increments)"
+        return (
+            f"the increments depart from the law smoothly along the decay by up to "
+            f"{100 * self.max_relative:+.3g} % (± {100 * self.max_relative_sd:.2g} %; "
+            f"χ² = {self.chi2:.1f} for {self.dof} shape terms, p = {self.p_value:.1e})"
+        )
+
+    def to_dict(self) -> dict[str, float | int]:
+        """Plain data (without the per-increment curve)."""
+        return {
+            "chi2": self.chi2,
+            "dof": self.dof,
+            "p_value": self.p_value,
+            "max_relative": self.max_relative,
+            "max_relative_sd": self.max_relative_sd,
+            "at_increment": self.at_increment,
+        }

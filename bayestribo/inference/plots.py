@@ -32,9 +32,18 @@ LABELS: dict[str, str] = {
     "zeta_k": "ζ_k = ζ − ζ₀ [-]",
     "d_k": "d_k [s/m]",
     "log10_discrepancy": "log₁₀ s (discrepancy) [-]",
+    "log10_shape": "log₁₀ s_c (shape discrepancy) [-]",
 }
 
-_DEFAULT = ("zeta", "mu_k", "friction_displacement", "mu_s_ratio", "y0", "log10_discrepancy")
+_DEFAULT = (
+    "zeta",
+    "mu_k",
+    "friction_displacement",
+    "mu_s_ratio",
+    "y0",
+    "log10_discrepancy",
+    "log10_shape",
+)
 
 
 def _label(result: FitResult, name: str) -> str:

@@ -3,7 +3,8 @@
 The sampled vector holds, in order, the names of the :class:`PriorSet`: ``zeta``,
 and with friction ``mu_k`` and ``mu_s_ratio`` (μ_s = μ_k × ratio keeps μ_s >= μ_k
 without a constraint between coordinates), ``y0``, and optionally
-``log10_discrepancy``. A parameter may instead be *fixed* at a value (for example
+``log10_discrepancy`` and ``log10_shape`` (the white and the shape discrepancy's scales,
+:mod:`bayestribo.inference.likelihood`). A parameter may instead be *fixed* at a value (for example
 ``zeta = 0`` for a Coulomb-only law): it is then not sampled, has no prior, and enters
 the likelihood at that value.
 
@@ -38,7 +39,7 @@ from bayestribo.inference.sampling import NaNLogProbabilityError
 __all__ = ["PARAMETERS", "Posterior"]
 
 #: Every parameter the single-run posterior knows, in sampling order.
-PARAMETERS = ("zeta", "mu_k", "mu_s_ratio", "y0", "log10_discrepancy")
+PARAMETERS = ("zeta", "mu_k", "mu_s_ratio", "y0", "log10_discrepancy", "log10_shape")
 
 
 @dataclass(frozen=True)
@@ -109,8 +110,9 @@ class Posterior:
         return out
 
     def physical(self, theta: NDArray) -> dict[str, NDArray]:
-        """Model parameters ζ, μ_k, μ_s, y0 (each (n, 1)) and the discrepancy scale
-        (``None`` without one) from sampled rows ``theta`` (n, d)."""
+        """Model parameters ζ, μ_k, μ_s, y0 (each (n, 1)) and the discrepancy scales
+        ``discrepancy`` (white) and ``shape`` (``None`` without that term) from sampled
+        rows ``theta`` (n, d)."""
         col = {name: v[:, None] for name, v in self.values(theta).items()}
         zero = np.zeros_like(col["zeta"])
         mu_k = col.get("mu_k", zero)
@@ -118,11 +120,13 @@ class Posterior:
         out = {"zeta": col["zeta"], "mu_k": mu_k, "mu_s": mu_s, "y0": col["y0"]}
         log_s = col.get("log10_discrepancy")
         out["discrepancy"] = None if log_s is None else 10.0**log_s
+        log_c = col.get("log10_shape")
+        out["shape"] = None if log_c is None else 10.0**log_c
         return out
 
     def _likelihood_args(self, theta: NDArray) -> tuple:
         p = self.physical(theta)
-        return p["zeta"], p["mu_k"], p["mu_s"], p["y0"], p["discrepancy"]
+        return p["zeta"], p["mu_k"], p["mu_s"], p["y0"], p["discrepancy"], p["shape"]
 
     def log_likelihood(self, theta: NDArray) -> NDArray:
         """Log-likelihood of each row (nuisance offset marginalised), shape (n,)."""

@@ -20,6 +20,9 @@ Defaults (dimensionless, Rigaud et al. 2010 notation):
   deviation of 1 % of it, which is hundreds of times the noise of one sample.
 * ``log10_discrepancy`` (optional): base-10 logarithm of the relative model
   discrepancy per unit √τ, uniform on [-7, 0] (a log-uniform scale).
+* ``log10_shape`` (optional, with the discrepancy): base-10 logarithm of the standard
+  deviation s_c of the shape discrepancy's coefficients (a relative departure of the
+  increments, smooth along the decay), uniform on [-7, 0].
 """
 
 from __future__ import annotations
@@ -209,7 +212,7 @@ def default_priors(y0: float, *, friction: bool = True, discrepancy: bool = Fals
     friction : bool
         False for a test without contact: only ζ (= ζ₀) and y0 are fitted.
     discrepancy : bool
-        Add the model-discrepancy scale.
+        Add the model-discrepancy scales: the white one and the shape one.
     """
     amp = abs(float(y0))
     if not amp > 0:
@@ -221,6 +224,7 @@ def default_priors(y0: float, *, friction: bool = True, discrepancy: bool = Fals
     priors["y0"] = Normal(float(y0), 0.01 * amp)
     if discrepancy:
         priors["log10_discrepancy"] = Uniform(-7.0, 0.0)
+        priors["log10_shape"] = Uniform(-7.0, 0.0)
     return PriorSet(priors)
 
 

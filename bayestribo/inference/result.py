@@ -47,6 +47,7 @@ REPORTED = (
     "d_k",
     "y0",
     "log10_discrepancy",
+    "log10_shape",
 )
 
 
@@ -62,6 +63,7 @@ UNITS: dict[str, str] = {
     "d_k": "s/m",
     "y0": "1",
     "log10_discrepancy": "1",
+    "log10_shape": "1",
 }
 
 

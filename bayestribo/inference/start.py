@@ -106,6 +106,7 @@ def _optimise(posterior: Posterior, guess: dict[str, float]) -> tuple[NDArray, N
         "y0": posterior.likelihood.data.y0,
         "mu_s_ratio": 1.2,
         "log10_discrepancy": -5.0,
+        "log10_shape": -5.0,
         **guess,
     }
     theta = _vector(posterior, _into_support(posterior, {n: values[n] for n in names}))
@@ -138,7 +139,8 @@ def refine(posterior: Posterior, theta: NDArray) -> tuple[NDArray, NDArray]:
     """
     names = posterior.names
     theta = np.array(theta, dtype=float)
-    free = [i for i, n in enumerate(names) if n not in ("mu_s_ratio", "log10_discrepancy")]
+    held = ("mu_s_ratio", "log10_discrepancy", "log10_shape")
+    free = [i for i, n in enumerate(names) if n not in held]
     scale = np.array([max(abs(theta[i]), 1e-3) for i in free]) * 1e-3
     size = posterior.likelihood.data.increments.size
     # Gaussian priors enter the least squares as residuals (θ - μ)/σ: a MAP, not an MLE.
@@ -234,7 +236,7 @@ def initial_walkers(
         for i, name in enumerate(names):
             if name == "mu_s_ratio" and ratio_range is not None:
                 draws[:, i] = rng.uniform(*ratio_range, size=draws.shape[0])
-            elif name == "log10_discrepancy":
+            elif name in ("log10_discrepancy", "log10_shape"):
                 draws[:, i] = theta[i] + rng.normal(0.0, 0.5, size=draws.shape[0])
             elif jitter[i] == 0.0:
                 draws[:, i] = theta[i] * (1.0 + 1e-6 * rng.standard_normal(draws.shape[0]))
