@@ -108,6 +108,8 @@ VARIANTS = {
     "zeta fixed": {"fixed": {"zeta": 0.0}},
     "friction fixed": {"fixed": {"mu_k": 0.03, "mu_s_ratio": 1.5}},
     "discrepancy fixed": {"fixed": {"log10_discrepancy": -2.0}},
+    "shape only, fixed": {"fixed": {"log10_shape": -2.5}},
+    "white and fixed shape": {"discrepancy": True, "fixed": {"log10_shape": -3.0}},
     "other priors": {
         "discrepancy": True,
         "priors": {

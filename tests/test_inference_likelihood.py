@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from _sim import simulate_flat
 from scipy.special import logsumexp
+from scipy.stats import chi2 as chi2_dist
+from scipy.stats import kstest, multivariate_normal
 
-from bayestribo.inference.likelihood import PiLikelihood
+from bayestribo.inference.likelihood import SHAPE_TERMS, PiLikelihood
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.priors import default_priors
 from bayestribo.signal.decay import energy_decay
@@ -114,3 +118,54 @@ def test_posterior_skips_impossible_priors_and_refuses_nan(setup):
     broken = Posterior(default_priors(data.y0), NaNLikelihood(data))
     with pytest.raises(FloatingPointError, match=r"zeta=0\.0236"):
         broken(rows[:1])
+
+
+def test_shape_discrepancy_marginal_is_the_gaussian_with_its_covariance(setup):
+    """Marginalising the equilibrium and shape coefficients analytically equals the
+    multivariate normal of the residuals with covariance diag(V + s²∫E²) + X P Xᵀ."""
+    _, _, data = setup
+    lik = PiLikelihood(data, offset_sd=2e-3, drift_sd=2e-5)
+    args = (_col(0.02361), _col(0.02938), _col(0.0353), _col(data.y0))
+    resid = data.increments - lik.model_increments(*args)[0]
+    for s, sc in [(None, 1e-3), (1e-4, 1e-2), (3e-3, 1e-5)]:
+        disc = None if s is None else _col(s)
+        analytic = lik.log_likelihood(*args, disc, _col(sc))[0]
+        var = data.variance + (0.0 if s is None else s * s * data.energy_squared)
+        # the shape columns D_j P_k(u_j), built here from the definition
+        mid = 0.5 * (data.tau_grid[:-1] + data.tau_grid[1:])
+        u = 2 * (mid - mid[0]) / (mid[-1] - mid[0]) - 1
+        legendre = np.stack(
+            [np.polynomial.legendre.Legendre.basis(k)(u) for k in range(SHAPE_TERMS)], axis=1
+        )
+        x = np.hstack([data.offset_design, data.increments[:, None] * legendre])
+        prior = np.diag([2e-3**2, 2e-5**2] + [sc**2] * SHAPE_TERMS)
+        cov = np.diag(var) + x @ prior @ x.T
+        direct = multivariate_normal(np.zeros(resid.size), cov).logpdf(resid)
+        assert analytic == pytest.approx(direct, abs=1e-6 * max(1.0, abs(direct)))
+
+
+def test_shape_departure_is_chi2_under_the_law_and_finds_an_injected_departure(setup):
+    """Increments drawn from the law with the stated variances give the test's χ² its
+    χ²(K) distribution; a smooth relative departure added to them is found, with its
+    size at the increment where it is largest."""
+    _, _, data = setup
+    lik = PiLikelihood(data)
+    truth = (0.02361, 0.02938, 0.0353, data.y0)
+    model = lik.model_increments(*[_col(v) for v in truth])[0]
+    rng = np.random.default_rng(3)
+    chi2 = []
+    for _ in range(300):
+        noisy = model + rng.normal(0.0, np.sqrt(data.variance))
+        other = PiLikelihood(dataclasses.replace(data, increments=noisy))
+        chi2.append(other.shape_departure(*truth).chi2)
+    assert kstest(chi2, chi2_dist(SHAPE_TERMS).cdf).pvalue > 0.01
+    # a departure of +0.5 % at the start to -0.5 % at the end, curving in between
+    u = 2 * np.arange(model.size) / (model.size - 1) - 1
+    g = 5e-3 * np.polynomial.legendre.Legendre([0.0, -0.6, 0.0, -0.4])(u)
+    noisy = model * (1 + g) + rng.normal(0.0, np.sqrt(data.variance))
+    found = PiLikelihood(dataclasses.replace(data, increments=noisy)).shape_departure(*truth)
+    assert found.p_value < 1e-6
+    worst = found.at_increment
+    assert abs(found.max_relative - g[worst]) < 4 * found.max_relative_sd
+    assert abs(found.max_relative) > 0.8 * np.max(np.abs(g))
+    assert "depart from the law" in found.describe()

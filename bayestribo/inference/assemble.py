@@ -34,8 +34,19 @@ def derived_quantities(
     scaling: Scaling,
     metadata: Mapping[str, Any],
     rng: np.random.Generator,
+    frequency_sd: float = 0.0,
 ) -> dict[str, NDArray]:
     """Sampled and derived quantities by name, from flat draws.
+
+    **Frequency nuisance.** The fit's time τ = Ω̂t and stiffness k = mΩ̂² use the
+    frequency Ω̂ measured from the turning points. If the oscillator's own Ω differs
+    by a factor 1 + ε (Ω̂ = Ω(1 + ε)), ζ, a rate per radian, is fitted as ζ/(1 + ε)
+    and μ_k = x_c k/N as μ_k (1 + ε)²; a frequency that changes with amplitude (a
+    cubic spring: :func:`bayestribo.io.frequency.frequency_trend`) leaves no single Ω
+    to use, and the equivalent constant one is known only to within that change.
+    ε is drawn per draw from N(0, ``frequency_sd``²) and ζ → ζ(1 + ε), μ_k, μ_s →
+    μ/(1 + ε)², k → k/(1 + ε)² in ζ_k and d_k; the friction displacement x_c is
+    measured directly and does not change.
 
     Parameters
     ----------
@@ -51,6 +62,8 @@ def derived_quantities(
         (``load_uncertainty_N``, ``mass_uncertainty_kg``), ``zeta0`` and ``zeta0_sd``.
     rng : numpy.random.Generator
         Source of the calibration nuisance draws.
+    frequency_sd : float
+        Relative standard deviation of the frequency nuisance ε [-] (0: none).
 
     Returns
     -------
@@ -63,7 +76,12 @@ def derived_quantities(
     """
     col = posterior.values(draws)
     size = np.atleast_2d(draws).shape[0]
-    out: dict[str, NDArray] = {"zeta": col["zeta"]}
+    if not (np.isfinite(frequency_sd) and frequency_sd >= 0.0):
+        raise ValueError(f"frequency_sd must be a number >= 0, got {frequency_sd!r}")
+    ratio_w = np.ones(size)  # (1 + ε): the measured over the oscillator's frequency
+    if frequency_sd > 0.0:
+        ratio_w = 1.0 + rng.normal(0.0, frequency_sd, size)
+    out: dict[str, NDArray] = {"zeta": col["zeta"] * ratio_w}
     n_draw = m_draw = None
     if posterior.friction:
         mu_k = col["mu_k"]
@@ -77,7 +95,7 @@ def derived_quantities(
             mass = float(metadata["mass_kg"])
             n_draw = _positive_draws(rng, load, metadata.get("load_uncertainty_N"), size)
             m_draw = _positive_draws(rng, mass, metadata.get("mass_uncertainty_kg"), size)
-            out["mu_k"] = mu_k * (load / n_draw) * (m_draw / mass)
+            out["mu_k"] = mu_k * (load / n_draw) * (m_draw / mass) / ratio_w**2
             out["mu_s"] = out["mu_k"] * ratio
         else:
             # Without the load and stiffness the static friction is a displacement
@@ -92,9 +110,9 @@ def derived_quantities(
     zeta0 = metadata.get("zeta0")
     if zeta0 is not None and posterior.friction:
         z0 = _positive_draws(rng, float(zeta0), metadata.get("zeta0_sd"), size)
-        out["zeta_k"] = col["zeta"] - z0
+        out["zeta_k"] = out["zeta"] - z0
         if n_draw is not None and m_draw is not None:
-            k_draw = m_draw * scaling.omega**2
+            k_draw = m_draw * (scaling.omega / ratio_w) ** 2
             out["d_k"] = 2.0 * out["zeta_k"] * np.sqrt(k_draw * m_draw) / n_draw
     return out
 

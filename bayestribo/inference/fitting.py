@@ -6,20 +6,17 @@ prepare the data, build the posterior, sample, summarise.
 
 from __future__ import annotations
 
-import json
 import os
 import time
-import warnings
 from collections.abc import Mapping
 from typing import Any, Literal
 
 import numpy as np
 
 from bayestribo import DEFAULT_SEED
-from bayestribo.errors import BayestriboError, MisfitWarning
+from bayestribo.errors import BayestriboError
 from bayestribo.inference.likelihood import MODELS
 from bayestribo.inference.pipeline import (
-    PreparedRun,
     build_posterior,
     prepare,
     sample,
@@ -28,7 +25,6 @@ from bayestribo.inference.pipeline import (
 from bayestribo.inference.priors import Prior
 from bayestribo.inference.result import FitResult
 from bayestribo.inference.sampling import SamplerSettings
-from bayestribo.io.frequency import frequency_trend
 from bayestribo.io.run import Run
 from bayestribo.signal.noise import NoiseModel
 
@@ -133,31 +129,5 @@ def fit(
     )
     sampled = sample(posterior, prepared.decay, settings=settings, seed=rng, progress=progress)
     result = summarise(prepared, sampled, seed=rng, recorded_seed=seed)
-    _check_frequency_trend(prepared, result)
     result.idata.posterior.attrs["seconds"] = time.perf_counter() - start
     return result
-
-
-#: A half period changing along the decay by more than this fraction, and by more than
-#: FREQUENCY_TREND_Z standard errors, is reported: the linear law's Ω is constant.
-FREQUENCY_TREND_CHANGE = 2e-4
-FREQUENCY_TREND_Z = 4.0
-
-
-def _check_frequency_trend(prepared: PreparedRun, result: FitResult) -> None:
-    """Record the half period's trend with amplitude; warn when the frequency is not
-    constant (:func:`bayestribo.io.frequency.frequency_trend`)."""
-    trend = frequency_trend(prepared.run.time, prepared.run.displacement, prepared.run.velocity)
-    attrs = result.idata.posterior.attrs
-    attrs["frequency_trend_json"] = json.dumps(None if trend is None else trend.to_dict())
-    if trend is None:
-        return
-    if abs(trend.change) > FREQUENCY_TREND_CHANGE and abs(trend.z) > FREQUENCY_TREND_Z:
-        warnings.warn(
-            f"the oscillation's half period changes by {100 * trend.change:+.3f} % from the "
-            f"largest swing to the smallest of {prepared.name or 'the run'} ({trend.z:+.0f} "
-            "standard errors): the stiffness depends on amplitude, which the linear law "
-            "(a constant Ω) does not hold, and ζ is biased by it",
-            MisfitWarning,
-            stacklevel=3,
-        )

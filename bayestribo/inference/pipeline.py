@@ -18,6 +18,7 @@ and the Bayesian windows of the adequacy check are built on them too.
 from __future__ import annotations
 
 import json
+import math
 import os
 import warnings
 from collections.abc import Mapping
@@ -46,6 +47,7 @@ from bayestribo.inference.sampling import SamplerRun, SamplerSettings, run_ensem
 from bayestribo.inference.sensitivity import prior_sensitivity
 from bayestribo.inference.start import initial_walkers, maximum_a_posteriori, refine
 from bayestribo.io.files import as_run
+from bayestribo.io.frequency import FrequencyTrend, frequency_trend
 from bayestribo.io.run import Run
 from bayestribo.signal.decay import EnergyDecay, energy_decay
 from bayestribo.signal.increments import PiData, pi_data
@@ -324,6 +326,55 @@ def _shape_departure(posterior: Posterior, theta: NDArray) -> ShapeDeparture:
     )
 
 
+#: A half period changing along the decay by more than this fraction, and by more than
+#: FREQUENCY_TREND_Z standard errors, is reported: the linear law's Ω is constant.
+FREQUENCY_TREND_CHANGE = 2e-4
+FREQUENCY_TREND_Z = 4.0
+
+
+def frequency_nuisance_sd(trend: FrequencyTrend | None) -> float:
+    """Relative standard deviation of the frequency nuisance ε from the frequency trend.
+
+    The equivalent constant frequency of a decay whose half period changes by a
+    fraction Δ (± its standard error σ_Δ) from the largest swing to the smallest lies
+    anywhere in that span: ε gets the standard deviation ½√(Δ² + σ_Δ²), so that its
+    95 % interval reaches both ends of the span about the measured frequency (which
+    lies inside it). A linear oscillator's Δ is noise, of order σ_Δ, and ε is then
+    small beside ζ's own uncertainty (see
+    :func:`bayestribo.inference.assemble.derived_quantities`).
+
+    Parameters
+    ----------
+    trend : FrequencyTrend or None
+        From :func:`bayestribo.io.frequency.frequency_trend` (None: too few half cycles
+        to measure a trend, and no nuisance).
+
+    Returns
+    -------
+    float
+    """
+    if trend is None or not math.isfinite(trend.change):
+        return 0.0
+    se = abs(trend.change / trend.z) if trend.z and math.isfinite(trend.z) else 0.0
+    return 0.5 * math.hypot(trend.change, se)
+
+
+def _warn_frequency_trend(name: str | None, trend: FrequencyTrend | None) -> None:
+    """Warn when the frequency is not constant along the decay."""
+    if trend is None:
+        return
+    if abs(trend.change) > FREQUENCY_TREND_CHANGE and abs(trend.z) > FREQUENCY_TREND_Z:
+        warnings.warn(
+            f"the oscillation's half period changes by {100 * trend.change:+.3f} % from the "
+            f"largest swing to the smallest of {name or 'the run'} ({trend.z:+.0f} "
+            "standard errors): the stiffness depends on amplitude, which the linear law "
+            "(a constant Ω) does not hold; ζ and μ_k carry a frequency nuisance of "
+            f"± {100 * frequency_nuisance_sd(trend):.2g} % for it",
+            MisfitWarning,
+            stacklevel=4,
+        )
+
+
 def _warn_misfit(
     name: str | None,
     misfit: tuple[float, int, float],
@@ -423,6 +474,11 @@ def summarise(
         the message says by how much (the largest relative departure of the increments
         and its standard error). The result records the test in
         ``diagnostics["shape_departure"]``.
+        Also when the half period changes with amplitude
+        (:func:`~bayestribo.io.frequency.frequency_trend`: by more than 2e-4 at 4
+        standard errors): the reported ζ, μ_k, μ_s, ζ_k and d_k carry a frequency
+        nuisance for it in any case (:func:`frequency_nuisance_sd`, recorded in the
+        result's ``frequency_nuisance_sd`` attribute).
     ConvergenceWarning
         When the sampler did not converge (the result says so too).
     PriorBoundWarning
@@ -456,9 +512,12 @@ def summarise(
             PriorBoundWarning,
             stacklevel=3,
         )
+    trend = frequency_trend(prepared.run.time, prepared.run.displacement, prepared.run.velocity)
+    _warn_frequency_trend(name, trend)
+    frequency_sd = frequency_nuisance_sd(trend)
     metadata = prepared.metadata
     scaling = prepared.decay.scaling
-    derived = derived_quantities(posterior, flat, scaling, metadata, rng)
+    derived = derived_quantities(posterior, flat, scaling, metadata, rng, frequency_sd)
     noise_info = {**prepared.noise.to_dict(), "description": prepared.noise.describe()}
     attrs = {
         "run_name": name,
@@ -494,6 +553,8 @@ def summarise(
                 }
             )
         ),
+        "frequency_trend_json": json.dumps(None if trend is None else trend.to_dict()),
+        "frequency_nuisance_sd": frequency_sd,
         "prior_sensitivity_json": json.dumps(plain_data(prior_sensitivity(flat, posterior.priors))),
     }
     result = FitResult(inference_data(posterior, run.chains, derived, rng, attrs))
