@@ -73,7 +73,11 @@ def register(subparsers: Any) -> None:
     )
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     p.add_argument(
-        "--discrepancy", action="store_true", help="add the model-discrepancy error term"
+        "--discrepancy",
+        action="store_true",
+        help="add the model-discrepancy terms: a white relative error on E and a departure "
+        "of the decay's shape, smooth along the decay (for a law that is not exactly "
+        "viscous + Coulomb)",
     )
     p.add_argument("--progress", action="store_true", help="show a progress bar (stderr)")
     p.add_argument("--skip", type=int, default=1, help="oscillations to skip after the release")

@@ -67,7 +67,10 @@ def fit(
     n_walkers, n_ensembles, max_steps : int
         Sampler size: walkers per ensemble, independent ensembles, step ceiling.
     discrepancy : bool
-        Add the model-discrepancy term (a relative error on E with its own prior).
+        Add the model-discrepancy terms (:mod:`bayestribo.inference.likelihood`): a
+        white relative error on E and a relative departure of the increments smooth
+        along the decay, each with its scale sampled (``log10_discrepancy``,
+        ``log10_shape``).
     priors : mapping, optional
         Replacement priors by parameter name (see
         :func:`bayestribo.inference.priors.default_priors`).

@@ -219,7 +219,8 @@ def build_posterior(
     friction : bool
         Fit μ_k and μ_s/μ_k (False: viscous damping only).
     discrepancy : bool
-        Add the model-discrepancy term.
+        Add the model-discrepancy terms: white (``log10_discrepancy``) and shape
+        (``log10_shape``).
     priors : mapping, optional
         Replacement priors by parameter name (see
         :func:`bayestribo.inference.priors.default_priors`).

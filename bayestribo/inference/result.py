@@ -282,6 +282,20 @@ class FitResult:
             f"ensembles × {d.get('n_steps')} steps, τ_max {d.get('autocorr_time_max', 0):.1f}, "
             f"ESS_min {d.get('ess_min', 0):.0f}, R-hat_max {d.get('rhat_max', 0):.4f}"
         )
+        shape = d.get("shape_departure") or {}
+        if shape.get("p_value") is not None and shape["p_value"] < 1e-3:
+            lines.append(
+                "NOT ADEQUATE: the decay departs from the constant law by up to "
+                f"{100 * shape['max_relative']:+.3g} % (± {100 * shape['max_relative_sd']:.2g} %) "
+                f"along the decay (χ² = {shape['chi2']:.1f} for {shape['dof']} shape terms)"
+            )
+        sd_eps = float(self.idata.posterior.attrs.get("frequency_nuisance_sd", 0.0))
+        trend = self.frequency_trend
+        if trend and sd_eps > 0:
+            lines.append(
+                f"frequency half period changes by {100 * trend['change']:+.3g} % along the "
+                f"decay ({trend['z']:+.1f} SE); ζ and μ_k carry ± {100 * sd_eps:.2g} % for it"
+            )
         for entry in self.at_prior_bound:
             lines.append(
                 f"NOT A MEASUREMENT: {entry['parameter']} piles on its prior's upper bound "
