@@ -370,8 +370,12 @@ def _print_halves(rows: list[dict[str, Any]], seconds: float) -> None:
 
 
 def _source_state() -> dict[str, Any]:
-    """The commit the package was run from and its files changed in the working tree."""
+    """Where the package was imported from: the repository's commit and the package's
+    files changed in its working tree, or another directory (e.g. a snapshot of a commit
+    put first on PYTHONPATH while the working tree is being edited)."""
     import subprocess
+
+    import bayestribo
 
     def git(*a: str) -> str:
         try:
@@ -381,8 +385,18 @@ def _source_state() -> dict[str, Any]:
         except (OSError, subprocess.CalledProcessError):
             return ""
 
-    changed = git("status", "--porcelain", "--", "bayestribo").splitlines()
-    return {"commit": git("rev-parse", "HEAD"), "package_files_changed": changed}
+    package = Path(bayestribo.__file__).resolve().parent
+    in_tree = package == (HERE.parent / "bayestribo").resolve()
+    return {
+        "commit": git("rev-parse", "HEAD"),
+        "package_path": str(package),
+        "package_version": bayestribo.__version__,
+        "package_files_changed": (
+            git("status", "--porcelain", "--", "bayestribo").splitlines()
+            if in_tree
+            else "not used: the package was imported from package_path"
+        ),
+    }
 
 
 def main(argv: list[str] | None = None) -> int:
