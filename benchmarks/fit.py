@@ -236,6 +236,8 @@ def side_by_side(baseline: Path, repeats: int, realistic: int, seeds: int) -> di
         "first_call_seconds": {name: f["seconds"] for name, f in first.items()},
     }
     for key in ("bundled", "realistic"):
+        if not fits[key]:
+            continue  # --realistic 0
         per = {name: _summary(f) for name, f in fits[key].items()}
         ratio = per["baseline"]["median_seconds"] / per["current"]["median_seconds"]
         out[key] = {
@@ -248,6 +250,8 @@ def side_by_side(baseline: Path, repeats: int, realistic: int, seeds: int) -> di
     out["bundled"]["posterior_mean_difference_in_sd"] = _agreement(
         fits["bundled"]["baseline"], fits["bundled"]["current"]
     )
+    if not runs:
+        return out
     by_run: dict[str, Any] = {}
     for run in runs:
         name = run["path"]
