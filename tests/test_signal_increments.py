@@ -72,6 +72,53 @@ def test_increment_variance_matches_monte_carlo(clean_decay):
     assert np.all(np.abs(draws.mean(axis=0) - clean - data.noise_bias) < 5 * se)
 
 
+def test_white_noise_neighbours_share_their_boundary_sample():
+    """At 1 kHz (31 samples per period, the independent solve_ivp simulator) the sample
+    two increments share correlates them by up to 1e-2; pi_data's covariances against
+    the dense covariance matrix of the increments and against 20000 noisy copies."""
+    from test_signal_frontend import RIG, record
+
+    t, x, v, _, _ = record(1000.0, 0.1, 0.1)
+    decay = energy_decay(t, x, v, rig=RIG)
+    sigma_x, sigma_v = 1.5e-6, 1.5e-7  # 10x the resolution
+    noise = noise_model(decay, displacement_resolution=sigma_x, velocity_resolution=sigma_v)
+    m = 31
+    data = pi_data(decay, noise, grid_points=m)
+    edges, weights = increment_weights(decay.tau.size, decay.tau[1] - decay.tau[0], m)
+    np.testing.assert_array_equal(data.tau_grid, decay.tau[edges])
+    sc = decay.scaling
+    sy, syp = sigma_x / sc.length_scale, sc.yp(sigma_v)
+    # dense: Σ = W diag(Var E_i) Wᵀ, W the (m, samples) matrix of quadrature weights
+    dense_w = np.zeros((m, decay.tau.size))
+    for j, (a, b, w) in enumerate(zip(edges[:-1], edges[1:], weights, strict=True)):
+        dense_w[j, a : b + 1] = w
+    var_e = decay.y**2 * sy**2 + decay.yp**2 * syp**2 + 0.5 * (sy**4 + syp**4)
+    cov = (dense_w * var_e) @ dense_w.T
+    np.testing.assert_allclose(data.neighbour_covariance, np.diag(cov, 1), rtol=1e-10)
+    assert np.count_nonzero(np.triu(cov, 2)) == 0  # only neighbours share a sample
+    corr = np.diag(cov, 1) / np.sqrt(np.diag(cov)[:-1] * np.diag(cov)[1:])
+    assert corr.max() > 5e-3  # material at 1 kHz (about 1e-3 at 10 kHz)
+    # each increment gets both neighbours' covariance: a run of increments is not
+    # understated (the last increment carries the end-of-motion allowance besides)
+    own = np.diag(cov) + np.r_[0.0, np.diag(cov, 1)] + np.r_[np.diag(cov, 1), 0.0]
+    np.testing.assert_allclose(data.variance[:-1], own[:-1], rtol=1e-10)
+    assert data.variance[:-1].sum() >= cov[:-1, :-1].sum() * (1 - 1e-12)
+    # Monte Carlo: the mean neighbour correlation of 20000 copies (standard error
+    # about 1/√(20000·30) = 1.3e-3, the correlations about 8e-3)
+    rng = np.random.default_rng(7)
+    draws = []
+    for _ in range(20):
+        y = decay.y + rng.normal(0.0, sy, (1000, decay.y.size))
+        yp = decay.yp + rng.normal(0.0, syp, (1000, decay.y.size))
+        draws.append(0.5 * (y * y + yp * yp) @ dense_w.T)
+    draws = np.concatenate(draws)
+    mc = np.corrcoef(draws[:, :-1], rowvar=False)
+    mc_corr = np.diag(mc, 1)
+    se = 1.0 / np.sqrt(draws.shape[0] * mc_corr.size)
+    assert abs(mc_corr.mean() - corr[:-1].mean()) < 4 * se
+    assert mc_corr.mean() > 4 * se
+
+
 def test_correlated_pi_likelihood_equals_increment_likelihood():
     """Π with covariance V(max(k, l)) is a backward random walk of independent increments."""
     rng = np.random.default_rng(6)
