@@ -22,7 +22,7 @@ import pytest
 import scipy.stats
 
 from bayestribo.errors import BayestriboError
-from bayestribo.inference.moves import GroupedDEMove, GroupedDESnookerMove
+from bayestribo.inference.moves import DESnookerMove, GroupedDEMove, GroupedDESnookerMove
 from bayestribo.inference.sampling import (
     NaNLogProbabilityError,
     SamplerSettings,
@@ -226,15 +226,16 @@ def test_grouped_de_proposals_are_emcees():
     _same_distribution(mine, ref)
 
 
-def test_grouped_snooker_proposals_are_emcees():
+def test_grouped_snooker_proposals_are_the_snooker_moves():
     # Two walkers in each of the three other splits: 8 choices of (z, z1, z2) in 6
-    # orders; proposals and their Metropolis factors against emcee's DESnookerMove.
+    # orders; proposals and their Metropolis factors against the one-ensemble
+    # DESnookerMove (ter Braak & Vrugt's; emcee 3.1.6's own is not a valid move).
     rng = np.random.default_rng(11)
     s = rng.standard_normal((1, 2, 3))
     c = [rng.standard_normal((1, 2, 3)) for _ in range(3)]
     random = np.random.RandomState(2)
     ours = GroupedDESnookerMove(1)
-    theirs = emcee.moves.DESnookerMove()
+    theirs = DESnookerMove()
     mine, ref = [], []
     for _ in range(3000):
         q, f = ours.get_proposal(s, c, random)
@@ -242,6 +243,83 @@ def test_grouped_snooker_proposals_are_emcees():
         q, f = theirs.get_proposal(s[0], [cj[0] for cj in c], random)
         ref += _outcomes(q, f)
     _same_distribution(mine, ref)
+
+
+class _Ordered:
+    """A stand-in random state for DESnookerMove.get_proposal: the first walker of each
+    split, and (z, z1, z2) in a given order."""
+
+    def __init__(self, order):
+        self.order = order
+
+    def randint(self, n):
+        return 0
+
+    def shuffle(self, w):
+        w[:] = w[list(self.order)]
+
+
+def test_the_snooker_move_is_undone_by_swapping_z1_and_z2():
+    # ter Braak & Vrugt's snooker move is x → x + γ e (e·(z1 − z2)) along the line
+    # through z (e the unit vector of x − z): with z1 and z2 swapped it moves back, and
+    # its log factor (d − 1) log(|q − z|/|x − z|) changes sign: detailed balance.
+    # emcee 3.1.6's (u = (x − z)/√|x − z|, half the factor) fails both: its step is a
+    # stretch about z by 1 + γ e·(z1 − z2), a number with the parameters' units.
+    rng = np.random.default_rng(18)
+    x = rng.standard_normal((1, 4)) * [1e-5, 4e-5, 0.5, 1e-3]
+    c = [rng.standard_normal((1, 4)) * [1e-5, 4e-5, 0.5, 1e-3] for _ in range(3)]
+    move = DESnookerMove()
+    q, f = move.get_proposal(x, c, _Ordered((0, 1, 2)))
+    back, f_back = move.get_proposal(q, c, _Ordered((0, 2, 1)))
+    assert not np.allclose(q, x)
+    np.testing.assert_allclose(back, x, rtol=1e-12, atol=1e-15)
+    assert f[0] == pytest.approx(-f_back[0], rel=1e-9)
+    q, f = emcee.moves.DESnookerMove().get_proposal(x, c, _Ordered((0, 1, 2)))
+    back, _ = emcee.moves.DESnookerMove().get_proposal(q, c, _Ordered((0, 2, 1)))
+    if emcee.__version__ == "3.1.6":  # fixed upstream after it (dfm/emcee#531)
+        assert not np.allclose(back, x, rtol=1e-6, atol=0.0)
+
+
+@pytest.mark.parametrize("moves", ["grouped", "emcee"])
+def test_scales_far_apart_are_sampled_with_their_spread(moves):
+    # The single-run posterior's shape: ζ and μ_k correlated at -0.9 with sds 1e-5 and
+    # 4e-5, μ_s/μ_k uniform on [1, 3], y0 with sd 1e-3. emcee 3.1.6's snooker move in
+    # the DE mix gave the three narrow ones sds 4-5.5 % too small here (0.944-0.964,
+    # ESS 8000 each); the corrected move gives them within the Monte Carlo error
+    # (relative sd of an sd about 1/√(2·ESS) = 0.8 % each, their mean 0.5 %).
+    sds = np.array([1e-5, 4e-5, 1e-3])
+    prec = np.linalg.inv(np.array([[1.0, -0.9], [-0.9, 1.0]]) * np.outer(sds[:2], sds[:2]))
+
+    def target(theta):
+        t = np.atleast_2d(theta)
+        lp = -0.5 * np.einsum("ni,ij,nj->n", t[:, :2], prec, t[:, :2])
+        lp = lp - 0.5 * ((t[:, 3] - 8.0) / sds[2]) ** 2
+        return np.where((t[:, 2] < 1.0) | (t[:, 2] > 3.0), -np.inf, lp)
+
+    rng = np.random.default_rng(19)
+    start = np.stack(
+        [
+            np.column_stack(
+                [
+                    sds[0] * rng.standard_normal(16),
+                    sds[1] * rng.standard_normal(16),
+                    rng.uniform(1.0, 3.0, 16),
+                    8.0 + sds[2] * rng.standard_normal(16),
+                ]
+            )
+            for _ in range(2)
+        ]
+    )
+    settings = SamplerSettings(
+        n_walkers=16, n_ensembles=2, autocorr_multiple=250, max_steps=100_000, moves=moves
+    )
+    run = run_ensembles(target, start, settings, seed=20, names=["zeta", "mu_k", "r", "y0"])
+    assert run.converged, run.reasons
+    flat = run.chains.reshape(-1, 4)
+    ratio = flat[:, [0, 1, 3]].std(axis=0) / sds
+    se = 1.0 / np.sqrt(2.0 * run.ess[[0, 1, 3]])
+    assert np.all(np.abs(ratio - 1.0) < 3.5 * se), ratio
+    assert abs(ratio.mean() - 1.0) < 3.5 * np.sqrt(np.mean(se**2) / 3), ratio
 
 
 @pytest.mark.parametrize("move", [GroupedDEMove(2), GroupedDESnookerMove(2)])

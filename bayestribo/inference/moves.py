@@ -13,18 +13,34 @@ update each ensemble only from its own walkers:
   each walker of one half proposes ``q = x + γ (x_b − x_a)`` for an ordered pair
   a ≠ b drawn uniformly from the other half of the *same* ensemble, with
   ``γ = γ₀ (1 + σ n)``, n standard normal, γ₀ = 2.38/√(2d), σ = 1e-5;
-* :class:`GroupedDESnookerMove` is emcee's :class:`~emcee.moves.DESnookerMove`
-  (ter Braak & Vrugt 2008) per ensemble: four splits; each walker x of one split
-  draws one walker from each of the three others (same ensemble), in random order
-  z, z₁, z₂, and proposes ``q = x + γ_s u (u·z₁ − u·z₂)`` with ``u = (x − z)/√|x − z|``
-  and γ_s = 1.7, accepted with the extra factor ``((d − 1)/2) log(|q − z|/|x − z|)``.
+* :class:`GroupedDESnookerMove` is the snooker move of ter Braak & Vrugt (2008)
+  (:class:`DESnookerMove`, emcee's :class:`~emcee.moves.DESnookerMove` corrected, see
+  below) per ensemble: four splits; each walker x of one split draws one walker from
+  each of the three others (same ensemble), in random order z, z₁, z₂, and proposes
+  ``q = x + γ_s u (u·z₁ − u·z₂)`` with the unit vector ``u = (x − z)/|x − z|`` and
+  γ_s = 1.7, accepted with the extra log factor ``(d − 1) log(|q − z|/|x − z|)``.
+
+**emcee's snooker move is not a valid Metropolis-Hastings move** (emcee 3.1.6, fixed
+upstream after that release, dfm/emcee#531): it takes ``u = (x − z)/√|x − z|``, so the
+step along the line through z is ``r·γ_s (e·(z₁ − z₂))`` at a distance r from z (e the
+unit vector), a stretch by ``1 + γ_s e·(z₁ − z₂)``, a number with the parameters'
+units, which swapping z₁ and z₂ does not undo, and it accepts with half the Jacobian,
+``((d − 1)/2) log(|q − z|/|x − z|)``. Its stationary distribution is not the target:
+on a 4-D target of a correlated Gaussian pair (sd 1e-5, 4e-5: ζ and μ_k), a uniform
+on [1, 3] (μ_s/μ_k) and a narrow Gaussian (y0), the mix with DE (80/20) gave standard
+deviations 4.5-5 % too small; on the paper's rig the single-run fit's sd of ζ and μ_k
+were 4-5 % below the Fisher information's (with μ_s/μ_k fixed, or with the stretch
+move, they agree within 1 %). The corrected move, with the unit vector and the full
+Jacobian (d − 1), is ter Braak & Vrugt's: it moves x along the line through z by
+``γ_s e·(z₁ − z₂)`` and is undone by swapping z₁ and z₂ (the tests check both).
 
 The random numbers of all ensembles' proposals and Metropolis decisions are drawn at
 once from the sampler's random state, the proposals computed by a compiled loop
 (numba), and the log-probability evaluated for all their walkers in one vectorised
 call.
-The distribution of every proposal is emcee's (the tests compare them with emcee's
-own ``get_proposal`` and sample known targets with both); the ensembles share the
+The distribution of every proposal is that of the corresponding one-ensemble move,
+emcee's ``DEMove`` and :class:`DESnookerMove` (the tests compare them with those
+moves' own ``get_proposal`` and sample known targets with both); the ensembles share the
 sampler's random stream but never each other's walkers, so they are independent
 chains. emcee runs the chain (its sampler, state, backend and random state);
 emcee's own moves, one sampler per ensemble, stay available as the reference
@@ -43,7 +59,7 @@ from numpy.typing import NDArray
 
 from bayestribo.errors import BayestriboError
 
-__all__ = ["GroupedDEMove", "GroupedDESnookerMove", "grouped_moves"]
+__all__ = ["DESnookerMove", "GroupedDEMove", "GroupedDESnookerMove", "grouped_moves"]
 
 
 def _log_prob(model, q: NDArray) -> NDArray:
@@ -67,6 +83,42 @@ def _log_prob(model, q: NDArray) -> NDArray:
     if np.isnan(log_prob).any():
         raise ValueError("Probability function returned NaN")
     return log_prob
+
+
+class DESnookerMove(emcee.moves.DESnookerMove):
+    """emcee's ``DESnookerMove`` with ter Braak & Vrugt's (2008) proposal and Jacobian.
+
+    ``q = x + γ_s u (u·z₁ − u·z₂)``, ``u = (x − z)/|x − z|``, accepted with the extra
+    log factor ``(d − 1) log(|q − z|/|x − z|)`` (emcee 3.1.6 divides by √|x − z| and
+    takes half the factor: see the module notes). The one-ensemble reference of
+    :class:`GroupedDESnookerMove`, used by ``SamplerSettings(moves="emcee")``.
+
+    Parameters
+    ----------
+    gammas : float
+        Mean stretch of the snooker update (default 1.7, ter Braak & Vrugt 2008).
+    """
+
+    def get_proposal(
+        self, s: NDArray, c: list[NDArray], random: np.random.RandomState
+    ) -> tuple[NDArray, NDArray]:
+        """Proposals for walkers ``s`` (n, d) from the three other splits ``c``, and
+        their log Metropolis-Hastings factors (emcee's random draws, in its order)."""
+        ns = len(s)
+        nc = list(map(len, c))
+        ndim = s.shape[1]
+        q = np.empty_like(s)
+        metropolis = np.empty(ns, dtype=np.float64)
+        for i in range(ns):
+            w = np.array([c[j][random.randint(nc[j])] for j in range(3)])
+            random.shuffle(w)
+            z, z1, z2 = w
+            delta = s[i] - z
+            norm = np.linalg.norm(delta)
+            u = delta / norm
+            q[i] = s[i] + u * self.gammas * (np.dot(u, z1) - np.dot(u, z2))
+            metropolis[i] = np.log(np.linalg.norm(q[i] - z)) - np.log(norm)
+        return q, (ndim - 1.0) * metropolis
 
 
 class _GroupedRedBlueMove(emcee.moves.Move):
@@ -177,7 +229,7 @@ class GroupedDEMove(_GroupedRedBlueMove):
 
 
 class GroupedDESnookerMove(_GroupedRedBlueMove):
-    """emcee's ``DESnookerMove`` applied to each of ``n_groups`` independent ensembles.
+    """:class:`DESnookerMove` applied to each of ``n_groups`` independent ensembles.
 
     Parameters
     ----------
@@ -196,14 +248,14 @@ class GroupedDESnookerMove(_GroupedRedBlueMove):
         self, coords: NDArray, order: NDArray, split: int, random: np.random.RandomState
     ) -> tuple[NDArray, NDArray]:
         """Snooker proposals along x − z, one walker from each other split in random
-        order as z, z₁, z₂; log factor ((d − 1)/2) log(|q − z|/|x − z|)."""
+        order as z, z₁, z₂; log factor (d − 1) log(|q − z|/|x − z|)."""
         g, per = order.shape
         size = per // 4
         ndim = coords.shape[1]
         q, metropolis = _snooker_proposals(
             coords, order, split, random.rand(g, size, 4), self.gammas
         )
-        return q, 0.5 * (ndim - 1.0) * metropolis
+        return q, (ndim - 1.0) * metropolis
 
 
 #: The six orders of three walkers (z, z₁, z₂), drawn uniformly.
@@ -240,8 +292,9 @@ def _de_proposals(
 def _snooker_proposals(
     coords: NDArray, order: NDArray, split: int, uniform: NDArray, gammas: float
 ) -> tuple[NDArray, NDArray]:
-    """Snooker proposals (emcee's formula) and log(|q − z|/|x − z|), with one walker
-    of each of the three other splits in a uniformly random order as z, z₁, z₂."""
+    """Snooker proposals (ter Braak & Vrugt's, :class:`DESnookerMove`) and
+    log(|q − z|/|x − z|), with one walker of each of the three other splits in a
+    uniformly random order as z, z₁, z₂."""
     g, per = order.shape
     size = per // 4
     ndim = coords.shape[1]
@@ -266,15 +319,14 @@ def _snooker_proposals(
             for j in range(ndim):
                 norm += (coords[x, j] - z[j]) ** 2
             norm = math.sqrt(norm)
-            root = math.sqrt(norm)
             proj = 0.0
             for j in range(ndim):
-                u = (coords[x, j] - z[j]) / root
+                u = (coords[x, j] - z[j]) / norm
                 proj += u * z1[j] - u * z2[j]
             dist = 0.0
             row = e * size + i
             for j in range(ndim):
-                u = (coords[x, j] - z[j]) / root
+                u = (coords[x, j] - z[j]) / norm
                 q[row, j] = coords[x, j] + u * gammas * proj
                 dist += (q[row, j] - z[j]) ** 2
             metropolis[row] = math.log(math.sqrt(dist)) - math.log(norm)

@@ -22,7 +22,9 @@
   single-run posterior's own NaN error); −inf stays what it means: outside the support.
 
 Moves (:func:`default_moves`): a mixture of differential-evolution moves (emcee's
-``DEMove`` 80 %, ``DESnookerMove`` 20 %), which mix faster than the default stretch
+``DEMove`` 80 %, the snooker move 20 %: ter Braak & Vrugt's, as
+:class:`~bayestribo.inference.moves.DESnookerMove`, since emcee 3.1.6's is not a valid
+Metropolis-Hastings move), which mix faster than the default stretch
 move on the narrow, correlated posteriors of this problem (the single-run fit and
 the population hyperparameters alike).
 
@@ -55,7 +57,7 @@ import scipy.fft
 from numpy.typing import NDArray
 
 from bayestribo.errors import BayestriboError
-from bayestribo.inference.moves import grouped_moves
+from bayestribo.inference.moves import DESnookerMove, grouped_moves
 from bayestribo.summary import ParameterSummary
 
 __all__ = [
@@ -83,8 +85,10 @@ class NaNLogProbabilityError(BayestriboError, FloatingPointError):
 
 
 def default_moves() -> list[tuple[emcee.moves.Move, float]]:
-    """The move mix of every sampler in the package: DE 80 %, DE snooker 20 %."""
-    return [(emcee.moves.DEMove(), 0.8), (emcee.moves.DESnookerMove(), 0.2)]
+    """The move mix of every sampler in the package: DE 80 %, DE snooker 20 % (ter Braak
+    & Vrugt's snooker, :class:`~bayestribo.inference.moves.DESnookerMove`: emcee 3.1.6's
+    own does not sample the target)."""
+    return [(emcee.moves.DEMove(), 0.8), (DESnookerMove(), 0.2)]
 
 
 @dataclass(frozen=True)
