@@ -5,11 +5,17 @@
    and the same decay rate put all into viscous damping or all into friction; the
    best optimum of the three is kept.
 2. For the exact model, μ_s/μ_k is scanned over its prior's range: it decides at
-   which turning point the model sticks, which the data pin down sharply. Guesses
-   outside a (user-narrowed) prior's support are moved inside it.
+   which turning point the model sticks, which the data pin down sharply, so the log
+   density is a staircase in it. The ratio is set to the middle of the highest step
+   (a plateau that often reaches the prior's upper bound), never to its edge: at the
+   edge a small change of ζ or μ_k moves the stick to another turning point, and the
+   optimiser stops there far below the maximum. Guesses outside a (user-narrowed)
+   prior's support are moved inside it.
 3. Gauss-Newton least squares (:func:`scipy.optimize.least_squares`) of the
    standardized residuals over the continuous parameters, from which the Laplace
-   covariance (JᵀJ)⁻¹ follows.
+   covariance (JᵀJ)⁻¹ follows. Scan and least squares alternate until the log density
+   stops rising, from each guess with the ratio at the middle of the highest step
+   and at the middle of the ratio's range; the best optimum by log density is kept.
 4. Walkers are drawn from that Gaussian (μ_s/μ_k uniformly over the ratios within
    0.5 of the best log density), each kept only if its log density is within
    ``d + 10`` of the best, so that every ensemble starts in the typical set.
@@ -98,23 +104,82 @@ def _scan_ratio(posterior: Posterior, theta: NDArray) -> tuple[NDArray, NDArray,
     return rows, posterior(rows), grid
 
 
-def _optimise(posterior: Posterior, guess: dict[str, float]) -> tuple[NDArray, NDArray]:
-    """Optimum from one guess (μ_s/μ_k scanned first), and the Laplace covariance there."""
+def _plateau_middle(posterior: Posterior, theta: NDArray) -> NDArray:
+    """``theta`` with μ_s/μ_k at the middle of the highest step of its scan.
+
+    The log density is piecewise constant in the ratio (it decides only at which
+    turning point the model sticks); the middle of the contiguous run of grid ratios
+    at the maximum is the point farthest from a change of the stick.
+    """
+    rows, lp, _ = _scan_ratio(posterior, theta)
+    if not np.any(np.isfinite(lp)):
+        return theta
+    k = int(np.argmax(lp))
+    top = lp >= lp[k] - 1e-6 * max(1.0, abs(float(lp[k])))
+    low, high = k, k
+    while low > 0 and top[low - 1]:
+        low -= 1
+    while high < lp.size - 1 and top[high + 1]:
+        high += 1
+    return rows[(low + high) // 2]
+
+
+#: Rounds of ratio scan and least squares from one starting point.
+_MAX_ROUNDS = 4
+
+
+def _optimise(
+    posterior: Posterior, guess: dict[str, float], ratio: float | None = None
+) -> tuple[NDArray, NDArray, float]:
+    """Optimum from one guess and its Laplace covariance and log density.
+
+    Parameters
+    ----------
+    posterior : Posterior
+        The posterior to maximise.
+    guess : dict
+        Values of ζ and μ_k (and any other sampled coordinates) to start from.
+    ratio : float, optional
+        Start with μ_s/μ_k here; default: the middle of the highest step of its scan
+        at the guess.
+
+    Returns
+    -------
+    theta : ndarray
+        The optimum (μ_s/μ_k at the middle of its highest step there).
+    cov : ndarray
+        Laplace covariance (see :func:`refine`).
+    log_density : float
+        Log posterior density at ``theta``.
+    """
     names = posterior.names
     values = {
         "zeta": 0.0,
         "y0": posterior.likelihood.data.y0,
-        "mu_s_ratio": 1.2,
+        "mu_s_ratio": 1.2 if ratio is None else ratio,
         "log10_discrepancy": -5.0,
         "log10_shape": -5.0,
         **guess,
     }
     theta = _vector(posterior, _into_support(posterior, {n: values[n] for n in names}))
-    if "mu_s_ratio" in names:
-        rows, lp, _ = _scan_ratio(posterior, theta)
-        if np.any(np.isfinite(lp)):
-            theta = rows[int(np.argmax(lp))]
-    return refine(posterior, theta)
+    has_ratio = "mu_s_ratio" in names
+    if has_ratio and ratio is None:
+        theta = _plateau_middle(posterior, theta)
+    best: tuple[NDArray, NDArray, float] | None = None
+    for _ in range(_MAX_ROUNDS if has_ratio else 1):
+        if not np.isfinite(posterior(theta[None])[0]):
+            break
+        opt, cov = refine(posterior, theta)
+        if has_ratio:
+            opt = _plateau_middle(posterior, opt)
+        lp = float(posterior(opt[None])[0])
+        if best is not None and not lp > best[2] + 1e-3:
+            break
+        best = (opt, cov, lp)
+        theta = opt
+    if best is None:
+        return theta, np.zeros((len(names), len(names))), -np.inf
+    return best
 
 
 def refine(posterior: Posterior, theta: NDArray) -> tuple[NDArray, NDArray]:
@@ -175,10 +240,19 @@ def maximum_a_posteriori(
 ) -> tuple[NDArray, NDArray, tuple[float, float] | None]:
     """Maximum a posteriori, Laplace covariance and the plausible μ_s/μ_k interval.
 
+    Parameters
+    ----------
+    posterior : Posterior
+        The posterior to maximise.
+    decay : EnergyDecay
+        The run's energy decay (its peaks give the first guesses).
+
     Returns
     -------
     theta : ndarray
-        The MAP in sampling coordinates.
+        The MAP in sampling coordinates, μ_s/μ_k at the middle of the highest step of
+        its scan (the best of the optima from each first guess, with the ratio
+        started at that step's middle and at the middle of the ratio's range).
     cov : ndarray
         Laplace covariance of the continuous coordinates (ratio excluded: its row and
         column are zero).
@@ -186,17 +260,21 @@ def maximum_a_posteriori(
         Range of μ_s/μ_k within 0.5 of the best log density (exact model with friction).
     """
     names = posterior.names
-    optima = [_optimise(posterior, guess) for guess in _first_guesses(decay, posterior)]
-    scores = [float(posterior(theta[None])[0]) for theta, _ in optima]
-    theta, cov = optima[int(np.argmax(scores))]
+    guesses = _first_guesses(decay, posterior)
+    optima = [_optimise(posterior, guess) for guess in guesses]
+    if "mu_s_ratio" in names:
+        # the same guesses with the ratio at the middle of its range: a scan at a poor
+        # guess can put the ratio where the optimiser cannot leave the wrong stick
+        middle = float(np.median(_ratio_grid(posterior)))
+        optima += [_optimise(posterior, guess, ratio=middle) for guess in guesses]
+    theta, cov, _ = optima[int(np.argmax([lp for _, _, lp in optima]))]
 
     ratio_range = None
     if "mu_s_ratio" in names:
-        rows, lp, grid = _scan_ratio(posterior, theta)
+        _, lp, grid = _scan_ratio(posterior, theta)
         top = np.max(lp)
         if np.isfinite(top):
             good = grid[lp >= top - 0.5]
-            theta = rows[int(np.argmax(lp))]
             step = grid[1] - grid[0]
             ratio_range = (max(grid[0], good.min() - step), min(grid[-1], good.max() + step))
     return theta, cov, ratio_range
