@@ -47,7 +47,7 @@ from bayestribo.inference.sampling import SamplerRun, SamplerSettings, run_ensem
 from bayestribo.inference.sensitivity import prior_sensitivity
 from bayestribo.inference.start import initial_walkers, maximum_a_posteriori, refine
 from bayestribo.io.files import as_run
-from bayestribo.io.frequency import FrequencyTrend, frequency_trend
+from bayestribo.io.frequency import FrequencyTrend, frequency_trend, turning_point_trend
 from bayestribo.io.run import Run
 from bayestribo.signal.decay import EnergyDecay, energy_decay
 from bayestribo.signal.increments import PiData, pi_data
@@ -476,7 +476,8 @@ def summarise(
         and its standard error). The result records the test in
         ``diagnostics["shape_departure"]``.
         Also when the half period changes with amplitude
-        (:func:`~bayestribo.io.frequency.frequency_trend`: by more than 2e-4 at 4
+        (:func:`~bayestribo.io.frequency.turning_point_trend` of the decay's turning
+        times: by more than 2e-4 at 4
         standard errors): the reported ζ, μ_k, μ_s, ζ_k and d_k carry a frequency
         nuisance for it in any case (:func:`frequency_nuisance_sd`, recorded in the
         result's ``frequency_nuisance_sd`` attribute).
@@ -513,7 +514,11 @@ def summarise(
             PriorBoundWarning,
             stacklevel=3,
         )
-    trend = frequency_trend(prepared.run.time, prepared.run.displacement, prepared.run.velocity)
+    decay = prepared.decay
+    if decay.turning_times is not None:
+        trend = turning_point_trend(decay.turning_times, decay.peaks.value)
+    else:
+        trend = frequency_trend(prepared.run.time, prepared.run.displacement, prepared.run.velocity)
     _warn_frequency_trend(name, trend)
     frequency_sd = frequency_nuisance_sd(trend)
     metadata = prepared.metadata

@@ -179,6 +179,11 @@ class EnergyDecay:
         interpolated between samples (:func:`bayestribo.signal.motion.motion_span`);
         ``end_time`` is the first sample at or after it. ``None`` when the motion lasts
         to the end of the record.
+    turning_times : ndarray or None
+        Time [s] of each turning point of ``peaks``: the velocity's zero from each
+        side's damped arc (:func:`_turning_times`), or the peak times when the
+        velocity was derived; the damped frequency is fitted to them. ``None`` for a
+        decay built without them.
     """
 
     t: NDArray
@@ -205,6 +210,7 @@ class EnergyDecay:
     rest_noise: RestNoise | None = None
     notch_Hz: tuple[float, ...] = ()
     stop_time: float | None = None
+    turning_times: NDArray | None = None
 
     @property
     def tau_end(self) -> float:
@@ -911,4 +917,5 @@ def _analyse(
         rest_noise=rest_noise,
         notch_Hz=notch_Hz,
         stop_time=stop_time,
+        turning_times=np.asarray(times, dtype=float).copy(),
     )
