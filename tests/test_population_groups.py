@@ -444,3 +444,80 @@ def test_groups_on_an_executor_give_the_same_population_and_its_warnings():
     for value, group in serial.groups.items():
         np.testing.assert_array_equal(parallel.groups[value].mean["zeta"], group.mean["zeta"])
     np.testing.assert_array_equal(parallel.pooled.sigma["zeta"], serial.pooled.sigma["zeta"])
+
+
+def test_compiled_likelihood_agrees_with_the_numpy_reference():
+    # Two parameters, a load trend (two design columns), runs of different lengths
+    # (padded samples), walkers near and far from the runs (weights over many decades).
+    rng = np.random.default_rng(5)
+    runs = []
+    for i, n in enumerate((300, 317, 40, 300)):
+        values = {"zeta": rng.normal(0.02, 0.001, n), "mu_k": rng.normal(0.03, 0.004, n)}
+        runs.append(RunSamples(f"r{i}", values, rng.normal(0.0, 2.0, n), {}))
+    design = np.column_stack([np.ones(4), np.array([0.12, 0.3, 0.46, 0.6]) - 0.37])
+    like = MarginalLikelihood(runs, ("zeta", "mu_k"), design)
+    w = 64
+    beta = rng.normal([[0.02, 0.03], [0.0, 0.0]], [[0.003, 0.01], [0.01, 0.02]], size=(w, 2, 2))
+    log_sigma = np.log(rng.uniform(1e-5, 0.05, size=(w, 2)))
+    got, want = like(beta, log_sigma), like.reference(beta, log_sigma)
+    assert np.all(np.isfinite(want)) and np.ptp(want) > 1e3  # far walkers included
+    np.testing.assert_allclose(got, want, rtol=1e-10, atol=1e-10)
+
+
+def test_compiled_likelihood_names_a_wrong_shape():
+    rng = np.random.default_rng(6)
+    runs = [RunSamples("r0", {"zeta": rng.normal(0.02, 0.001, 10)}, np.zeros(10), {})]
+    like = MarginalLikelihood(runs, ("zeta",))
+    with pytest.raises(BayestriboError, match=r"beta: expected shape \(W, 1, 1\)"):
+        like(np.zeros((3, 2, 1)), np.zeros((3, 1)))
+    with pytest.raises(BayestriboError, match=r"log_sigma: expected shape \(3, 1\)"):
+        like(np.zeros((3, 1, 1)), np.zeros((2, 1)))
+
+
+def _scaled(x, factor):
+    """A job for the shared queue (module level, so a process pool can run it)."""
+    if x < 0:
+        import warnings
+
+        warnings.warn(f"negative {x}", UserWarning, stacklevel=1)
+    return x * factor
+
+
+def test_the_shared_queue_returns_results_and_warnings_in_call_order():
+    from concurrent.futures import ProcessPoolExecutor
+
+    from bayestribo.population.jobs import run_calls
+
+    calls = [(_scaled, (x, 2)) for x in (3, -1, 5, -2)] + [(max, (1, 7))]
+    costs = [1.0, 5.0, 0.5, 9.0, 2.0]  # submitted as 4, 2, 5, 1, 3: results still in order
+    with ProcessPoolExecutor(max_workers=2) as pool, pytest.warns(UserWarning) as caught:
+        got = run_calls(calls, pool, costs)
+    assert got == [6, -2, 10, -4, 7]
+    assert [str(w.message) for w in caught if "negative" in str(w.message)] == [
+        "negative -1",
+        "negative -2",
+    ]
+    with pytest.raises(ValueError, match="costs: expected 5 values"):
+        run_calls(calls, pool, costs[:2])
+
+
+def test_population_jobs_assemble_to_the_population():
+    from bayestribo.population.groups import fit_group, population_jobs
+
+    rng = np.random.default_rng(8)
+    runs = []
+    for i, load in enumerate((0.12, 0.12, 0.46, 0.46)):
+        x = rng.normal(0.02 + 0.01 * load, 0.001, 200)
+        runs.append(
+            RunSamples(f"r{i}", {"zeta": x}, np.full(x.size, -math.log(0.3)), {"load_N": load})
+        )
+    kw = {"by": "load_N", "seed": 1, "max_steps": 3000}
+    jobs, assemble = population_jobs(runs, ("zeta",), **kw)
+    assert [job[0] for job in jobs] == ["load_N=0.12", "load_N=0.46", "all"]
+    queued = assemble([fit_group(*job) for job in jobs])
+    direct = population(runs, ("zeta",), **kw)
+    for value, group in direct.groups.items():
+        np.testing.assert_array_equal(queued.groups[value].mean["zeta"], group.mean["zeta"])
+    np.testing.assert_array_equal(queued.pooled.sigma["zeta"], direct.pooled.sigma["zeta"])
+    with pytest.raises(BayestriboError, match="fitted: expected 3 groups, got 2"):
+        assemble([fit_group(*job) for job in jobs[:2]])

@@ -26,8 +26,8 @@ from typing import Any
 import numpy as np
 
 from bayestribo.errors import BayestriboError
-from bayestribo.population.groups import Population, population
-from bayestribo.population.jobs import run_jobs
+from bayestribo.population.groups import Population, fit_group, population_jobs
+from bayestribo.population.jobs import run_calls
 from bayestribo.population.samples import FitLike, RunSamples, run_samples
 from bayestribo.population.trend import Trend, trend
 from bayestribo.summary import summarize
@@ -204,24 +204,25 @@ def _derived(contact: Population, zeta0: Population, runs: Sequence[Any], seed: 
     return out
 
 
-def _viscosity_trends(
-    samples: list[RunSamples], keys: tuple[str, ...], kw: Mapping[str, Any]
-) -> dict[str, Trend]:
-    """Trends against the kinematic viscosity of Eq. 43 for glycerol-water series.
+def _viscosity_series(
+    samples: list[RunSamples], keys: tuple[str, ...]
+) -> list[tuple[str, list[RunSamples]]]:
+    """Series of trends against the kinematic viscosity of Eq. 43 (glycerol-water).
 
     A series is a value of the grouping keys other than the water fraction, whose
     lubricant name contains "glycerol", with runs at two or more water fractions.
+    Returns (label, runs with the viscosity [mm²/s] in their metadata) per series.
     """
     from bayestribo.model.viscosity import glycerol_water_viscosity
 
     if "water_mass_fraction" not in keys:
-        return {}
+        return []
     other = tuple(k for k in keys if k != "water_mass_fraction")
     series: dict[tuple[Any, ...], list[RunSamples]] = {}
     for s in samples:
         if "glycerol" in str(s.metadata.get("lubricant", "")):
             series.setdefault(tuple(s.metadata.get(k) for k in other), []).append(s)
-    out = {}
+    out = []
     for value, members in series.items():
         if len({m.metadata["water_mass_fraction"] for m in members}) < 2:
             continue
@@ -240,7 +241,7 @@ def _viscosity_trends(
             for m in members
         ]
         label = ",".join(f"{k}={v}" for k, v in zip(other, value, strict=True))
-        out[f"viscosity:{label}"] = trend(with_nu, VISCOSITY_KEY, ("zeta", "mu_k"), **kw)
+        out.append((f"viscosity:{label}", with_nu))
     return out
 
 
@@ -345,8 +346,35 @@ def analyse_campaign(
     if not contact_runs and not free_runs:
         reasons = "; ".join(f"{e['run']}: {e['reason']}" for e in excluded)
         raise BayestriboError(f"results: no usable fitted run to analyse ({reasons})")
-    contact = zeta0 = series_pop = None
+    # Every population, pooled population and trend is an independent posterior: all
+    # go on one queue (costliest first), so no worker idles at the end of a phase.
+    calls: list[tuple[Callable[..., Any], tuple[Any, ...]]] = []
+    costs: list[float] = []
+    finish: list[Callable[[list[Any]], None]] = []
+    found: dict[str, Any] = {"contact": None, "zeta0": None, "series": None}
     trends: dict[str, Trend] = {}
+
+    def add_population(key: str, runs: list[RunSamples], names: tuple[str, ...], **options):
+        jobs, assemble = population_jobs(runs, names, **options, **kw)
+        start = len(calls)
+        calls.extend((fit_group, job) for job in jobs)
+        costs.extend(len(job[2]) * len(names) for job in jobs)
+
+        def done(results: list[Any]) -> None:
+            found[key] = assemble(results[start : start + len(jobs)])
+
+        finish.append(done)
+
+    def add_trend(label: str, members: list[RunSamples], on: str) -> None:
+        at = len(calls)
+        calls.append((_trend_job, (members, on, kw)))
+        costs.append(2.0 * len(members) * 2)
+
+        def done(results: list[Any]) -> None:
+            trends[label] = results[at]
+
+        finish.append(done)
+
     if contact_runs:
         samples = [
             run_samples(r, ("zeta", "mu_k"), max_samples=max_samples, seed=seed)
@@ -356,37 +384,37 @@ def analyse_campaign(
         # Pooled over all runs with contact only if nothing but the load tells them
         # apart; otherwise pooled over the loads of each series.
         say(f"population of {len(samples)} runs with contact, by {', '.join(keys) or 'none'}")
-        contact = population(
-            samples,
-            ("zeta", "mu_k"),
-            by=keys or None,
-            pooled=not series_keys,
-            executor=executor,
-            **kw,
+        add_population(
+            "contact", samples, ("zeta", "mu_k"), by=keys or None, pooled=not series_keys
         )
         if series_keys and covariate in keys:
             say(f"populations pooled over {covariate}, by {', '.join(series_keys)}")
-            series_pop = population(
-                samples, ("zeta", "mu_k"), by=series_keys, pooled=False, executor=executor, **kw
-            )
+            add_population("series", samples, ("zeta", "mu_k"), by=series_keys, pooled=False)
         series: dict[tuple[Any, ...], list[RunSamples]] = {}
         for s in samples:
             series.setdefault(tuple(s.metadata.get(k) for k in series_keys), []).append(s)
-        labels, jobs = [], []
+        labels = []
         for value, members in series.items():
             xs = {m.metadata.get(covariate) for m in members}
             if len(xs) >= 2 and all(isinstance(x, int | float) for x in xs):
                 label = ",".join(f"{k}={v}" for k, v in zip(series_keys, value, strict=True))
                 labels.append(label or "all")
-                jobs.append((members, covariate, kw))
-        if jobs:
+                add_trend(label or "all", members, covariate)
+        if labels:
             say(f"trends against {covariate}: {', '.join(labels)}")
-            trends.update(zip(labels, run_jobs(_trend_job, jobs, executor), strict=True))
-        trends.update(_viscosity_trends(samples, keys, kw))
+        viscosity = _viscosity_series(samples, keys)
+        if viscosity:
+            say(f"trends against {VISCOSITY_KEY}: {', '.join(lab for lab, _ in viscosity)}")
+        for label, members in viscosity:
+            add_trend(label, members, VISCOSITY_KEY)
     if free_runs:
         zs = [run_samples(r, ("zeta",), max_samples=max_samples, seed=seed) for r in free_runs]
         say(f"ζ₀ from {len(zs)} runs without contact")
-        zeta0 = population(zs, ("zeta",), executor=executor, **kw)
+        add_population("zeta0", zs, ("zeta",))
+    results_of_calls = run_calls(calls, executor, costs)
+    for done in finish:
+        done(results_of_calls)
+    contact, zeta0, series_pop = found["contact"], found["zeta0"], found["series"]
     derived = (
         _derived(contact, zeta0, contact_runs, seed, prob)
         if contact is not None and zeta0 is not None and contact.groups

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import itertools
 import zlib
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from concurrent.futures import Executor
 from dataclasses import dataclass, field
 from typing import Any
@@ -27,7 +27,15 @@ from bayestribo.population.sampler import sample_hyperparameters
 from bayestribo.population.samples import FitLike, RunSamples, as_run_samples
 from bayestribo.summary import ParameterSummary, check_prob, summarize
 
-__all__ = ["POOLED", "GroupPosterior", "Population", "difference", "population"]
+__all__ = [
+    "POOLED",
+    "GroupPosterior",
+    "Population",
+    "difference",
+    "fit_group",
+    "population",
+    "population_jobs",
+]
 
 #: Label of the population pooled over all groups.
 POOLED = "all"
@@ -186,7 +194,7 @@ def _group_seed(seed: int, label: str) -> int:
     return int(np.random.SeedSequence([seed, zlib.crc32(label.encode())]).generate_state(1)[0])
 
 
-def _fit_group(
+def fit_group(
     label: str,
     value: Any,
     runs: Sequence[RunSamples],
@@ -195,6 +203,26 @@ def _fit_group(
     seed: int,
     sampler_kwargs: Mapping[str, Any],
 ) -> GroupPosterior:
+    """Sample one group's population (a job of :func:`population_jobs`).
+
+    Parameters
+    ----------
+    label : str
+        The group's label; with ``seed`` it sets the sampler's seed.
+    value : object
+        The group's value of the grouping key (None when pooled).
+    runs : sequence of RunSamples
+        The group's runs.
+    parameters : tuple of str
+        Parameter names.
+    priors : mapping of str to SigmaPrior
+        Prior on the between-run σ of each parameter.
+    seed : int
+        Campaign seed.
+    sampler_kwargs : mapping
+        ``n_walkers``, ``max_steps``, ``progress`` of
+        :func:`bayestribo.population.sampler.sample_hyperparameters`.
+    """
     like = MarginalLikelihood(runs, parameters)
     hyper = sample_hyperparameters(
         like, [priors[p] for p in parameters], seed=_group_seed(seed, label), **sampler_kwargs
@@ -275,6 +303,43 @@ def population(
     BayestriboError
         If a run lacks the grouping key or a parameter, or nothing is asked for.
     """
+    jobs, assemble = population_jobs(
+        runs,
+        parameters,
+        by=by,
+        pooled=pooled,
+        sigma_prior=sigma_prior,
+        seed=seed,
+        max_samples=max_samples,
+        n_walkers=n_walkers,
+        max_steps=max_steps,
+        prob=prob,
+        progress=progress,
+    )
+    return assemble(run_jobs(fit_group, jobs, executor))
+
+
+def population_jobs(
+    runs: Iterable[RunSamples | FitLike],
+    parameters: Sequence[str] = ("zeta", "mu_k"),
+    *,
+    by: str | Sequence[str] | None = None,
+    pooled: bool = True,
+    sigma_prior: Mapping[str, SigmaPrior | float] | None = None,
+    seed: int = 0,
+    max_samples: int | None = 1000,
+    n_walkers: int = 16,
+    max_steps: int = 10_000,
+    prob: float = 0.95,
+    progress: bool = False,
+) -> tuple[list[tuple[Any, ...]], Callable[[Sequence[GroupPosterior]], Population]]:
+    """The independent samplers of :func:`population`, to run on a shared queue.
+
+    Parameters are those of :func:`population`. Returns the arguments of one
+    :func:`fit_group` call per group (the pooled population last) and the function
+    that assembles their results, in that order, into the :class:`Population`; so
+    ``assemble([fit_group(*job) for job in jobs])`` is ``population(...)``.
+    """
     check_prob(prob)
     parameters = tuple(parameters)
     if not parameters:
@@ -305,8 +370,13 @@ def population(
     samples.sort(key=lambda r: r.name)
     if pooled:
         jobs.append((POOLED, None, samples, parameters, priors, seed, kwargs))
-    fitted = run_jobs(_fit_group, jobs, executor)
-    whole = fitted.pop() if pooled else None
-    groups = {g.value: g for g in fitted}
     by_keys = by if by is None or isinstance(by, str) else tuple(by)
-    return Population(by_keys, parameters, groups, whole)
+
+    def assemble(fitted: Sequence[GroupPosterior]) -> Population:
+        fitted = list(fitted)
+        if len(fitted) != len(jobs):
+            raise BayestriboError(f"fitted: expected {len(jobs)} groups, got {len(fitted)}")
+        whole = fitted.pop() if pooled else None
+        return Population(by_keys, parameters, {g.value: g for g in fitted}, whole)
+
+    return jobs, assemble

@@ -15,7 +15,7 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import Executor
 from typing import Any, TypeVar
 
-__all__ = ["run_jobs"]
+__all__ = ["run_calls", "run_jobs"]
 
 T = TypeVar("T")
 
@@ -49,12 +49,48 @@ def run_jobs(
     list
         The results, in the order of ``jobs``.
     """
-    if executor is None or len(jobs) < 2:
-        return [function(*job) for job in jobs]
-    futures = [executor.submit(_recorded, function, tuple(job)) for job in jobs]
+    return run_calls([(function, tuple(job)) for job in jobs], executor)
+
+
+def run_calls(
+    calls: Sequence[tuple[Callable[..., Any], tuple[Any, ...]]],
+    executor: Executor | None = None,
+    costs: Sequence[float] | None = None,
+) -> list[Any]:
+    """``[function(*args) for function, args in calls]``, on ``executor`` when one is given.
+
+    Unlike :func:`run_jobs` the calls may be of different functions, so that every
+    independent posterior of a campaign (groups, pooled populations, trends) shares one
+    queue and no worker waits for the last job of a phase.
+
+    Parameters
+    ----------
+    calls : sequence of (callable, tuple)
+        Module-level functions (picklable for a process pool) and their positional
+        arguments.
+    executor : Executor, optional
+        Where to run the calls; None runs them here, in order.
+    costs : sequence of float, optional
+        Relative cost of each call; on an executor the costliest are submitted first
+        (longest first keeps the workers busy to the end). The results and the order
+        of the warnings given again do not depend on it.
+
+    Returns
+    -------
+    list
+        The results, in the order of ``calls``.
+    """
+    if costs is not None and len(costs) != len(calls):
+        raise ValueError(f"costs: expected {len(calls)} values, one per call, got {len(costs)}")
+    if executor is None or len(calls) < 2:
+        return [function(*args) for function, args in calls]
+    order = (
+        range(len(calls)) if costs is None else sorted(range(len(calls)), key=lambda i: -costs[i])
+    )
+    futures = {i: executor.submit(_recorded, calls[i][0], tuple(calls[i][1])) for i in order}
     out = []
-    for future in futures:
-        result, caught = future.result()
+    for i in range(len(calls)):
+        result, caught = futures[i].result()
         for message, category in caught:
             warnings.warn(message, category, stacklevel=2)
         out.append(result)

@@ -129,20 +129,25 @@ def sample_hyperparameters(
     settings = SamplerSettings(n_walkers=n_walkers, n_ensembles=n_ensembles, max_steps=max_steps)
     bounded = [j for j, name in enumerate(like.parameters) if name in NON_NEGATIVE]
 
+    def inside(beta: NDArray[np.float64], log_sigma: NDArray[np.float64]) -> NDArray[np.float64]:
+        lp = log_sigma.sum(axis=1)  # Jacobian of σ = exp(log σ)
+        sigma = np.exp(log_sigma)
+        for j, prior in enumerate(priors):
+            lp += prior.logpdf(sigma[:, j])
+        return lp + like(beta, log_sigma)
+
     def log_prob(x: NDArray[np.float64]) -> NDArray[np.float64]:
         beta = x[:, : p * k].reshape(-1, p, k)
         log_sigma = x[:, p * k :]
-        out = np.full(len(x), -np.inf)
         # σ outside e^±100 has no prior mass worth a float: refused before exp overflows.
         ok = np.all(np.abs(log_sigma) < _LOG_SIGMA_LIMIT, axis=1)
         if bounded:
             ok &= np.all(beta[:, 0, bounded] >= 0.0, axis=1)
-        if not ok.any():
-            return out
-        lp = log_sigma[ok].sum(axis=1)  # Jacobian of σ = exp(log σ)
-        for j, prior in enumerate(priors):
-            lp = lp + prior.logpdf(np.exp(log_sigma[ok, j]))
-        out[ok] = lp + like(beta[ok], log_sigma[ok])
+        if ok.all():
+            return inside(beta, log_sigma)
+        out = np.full(len(x), -np.inf)
+        if ok.any():
+            out[ok] = inside(beta[ok], log_sigma[ok])
         return out
 
     rng = np.random.default_rng(seed)
