@@ -18,6 +18,7 @@ cycles. It is the damped frequency Ω√(1-ζ²), 0.03 % below the natural frequ
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -149,7 +150,7 @@ class FrequencyTrend:
         from the largest to the smallest swing [-]; 0 for a linear oscillator
         (viscous damping and Coulomb friction leave the period unchanged).
     z : float
-        The slope over its standard error (residual scatter of the half periods).
+        ``change`` over its standard error (residual scatter of the turning times).
     n_half_cycles : int
         Half cycles used.
     """
@@ -281,6 +282,11 @@ def turning_point_trend(times: ArrayLike, values: ArrayLike) -> FrequencyTrend |
     cov = s2 * np.linalg.inv(scaled.T @ scaled)
     coef, se = coef / norm, float(np.sqrt(cov[2, 2])) / norm[2]
     span = float(swing.max() - swing.min())
-    change = float(coef[2] / coef[1] * span)
-    z = float(coef[2] / se) if se > 0 else (0.0 if coef[2] == 0 else float("inf"))
+    # The half period is T + s(A - Ā): from the largest swing to the smallest it
+    # changes by -s·span (a hardening spring, s < 0, gives a positive change).
+    change = float(-coef[2] / coef[1] * span)
+    if se > 0:
+        z = float(-coef[2] / se)
+    else:
+        z = 0.0 if coef[2] == 0 else math.copysign(math.inf, change)
     return FrequencyTrend(change, z, int(swing.size))
