@@ -73,6 +73,10 @@ def test_result_contents_and_round_trip(bundled, tmp_path):
     other = az.from_netcdf(str(path), engine="h5netcdf")
     np.testing.assert_array_equal(other.posterior["zeta"].values, idata.posterior["zeta"].values)
     assert other.posterior.attrs["model"] == "exact"
+    # Fit files written by earlier versions (h5netcdf) still load.
+    older = tmp_path / "older.nc"
+    idata.to_netcdf(str(older), engine="h5netcdf")
+    assert FitResult.load(older).summary() == result.summary()
 
     loo = az.loo(result.idata)
     assert np.isfinite(loo.elpd_loo)

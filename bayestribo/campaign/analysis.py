@@ -245,6 +245,12 @@ def _viscosity_series(
     return out
 
 
+def _cost(n_runs: int, n_parameters: int, n_coefficients: int) -> float:
+    """Relative cost of one population sampler: its likelihood's work per step (runs ×
+    parameters × coefficients of the mean; a trend has two, a group one)."""
+    return float(n_runs * n_parameters * n_coefficients)
+
+
 def _trend_job(members: list[RunSamples], covariate: str, kw: dict[str, Any]) -> Trend:
     """One series' trend (a module-level function, for a process pool)."""
     return trend(members, covariate, ("zeta", "mu_k"), **kw)
@@ -358,7 +364,7 @@ def analyse_campaign(
         jobs, assemble = population_jobs(runs, names, **options, **kw)
         start = len(calls)
         calls.extend((fit_group, job) for job in jobs)
-        costs.extend(len(job[2]) * len(names) for job in jobs)
+        costs.extend(_cost(len(job[2]), len(names), 1) for job in jobs)
 
         def done(results: list[Any]) -> None:
             found[key] = assemble(results[start : start + len(jobs)])
@@ -368,7 +374,7 @@ def analyse_campaign(
     def add_trend(label: str, members: list[RunSamples], on: str) -> None:
         at = len(calls)
         calls.append((_trend_job, (members, on, kw)))
-        costs.append(2.0 * len(members) * 2)
+        costs.append(_cost(len(members), 2, 2))
 
         def done(results: list[Any]) -> None:
             trends[label] = results[at]
