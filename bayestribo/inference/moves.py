@@ -38,6 +38,19 @@ The random numbers of all ensembles' proposals and Metropolis decisions are draw
 once from the sampler's random state, the proposals computed by a compiled loop
 (numba), and the log-probability evaluated for all their walkers in one vectorised
 call.
+
+**Compiled step.** A log-probability may offer the whole update compiled: an
+attribute ``grouped_step(kind, coords, log_prob, order, uniform, gamma, log_u,
+accepted) -> int`` that runs the splits of move ``kind`` (:data:`DE` or
+:data:`SNOOKER`) in order, with the numbers this module drew (``uniform`` and
+``gamma`` per split as the move's ``_draw`` gives them, ``log_u`` the log Metropolis
+uniforms), the same proposal loops and the same acceptance rule, updating ``coords``,
+``log_prob`` and ``accepted`` in place, and returns the number of splits it completed.
+It stops before a split whose proposals are not finite or whose log-probability it
+cannot give (NaN, or a point its compiled form does not cover); that split and the
+rest then run here, where the errors are raised. Chains are bit-identical with and
+without it (tests); :meth:`bayestribo.inference.posterior.Posterior.grouped_step` is
+the single-run fit's (:mod:`bayestribo.inference.fused_step`).
 The distribution of every proposal is that of the corresponding one-ensemble move,
 emcee's ``DEMove`` and :class:`DESnookerMove` (the tests compare them with those
 moves' own ``get_proposal`` and sample known targets with both); the ensembles share the
@@ -59,7 +72,24 @@ from numpy.typing import NDArray
 
 from bayestribo.errors import BayestriboError
 
-__all__ = ["DESnookerMove", "GroupedDEMove", "GroupedDESnookerMove", "grouped_moves"]
+__all__ = [
+    "DE",
+    "SNOOKER",
+    "DESnookerMove",
+    "GroupedDEMove",
+    "GroupedDESnookerMove",
+    "grouped_moves",
+]
+
+#: Move codes passed to a compiled step (see the module notes).
+DE, SNOOKER = 0, 1
+
+
+def _compiled_step(model):
+    """The compiled step the sampler's log-probability offers (its ``grouped_step``
+    attribute, see the module notes), or None."""
+    function = getattr(model.log_prob_fn, "f", model.log_prob_fn)  # emcee's wrapper
+    return getattr(function, "grouped_step", None)
 
 
 def _log_prob(model, q: NDArray) -> NDArray:
@@ -149,11 +179,24 @@ class _GroupedRedBlueMove(emcee.moves.Move):
             )
         return per
 
+    #: Move code of the compiled step (:data:`DE` or :data:`SNOOKER`).
+    kind: int
+    #: Uniform numbers per proposal (``_draw``).
+    n_uniform: int
+
+    def _draw(
+        self, random: np.random.RandomState, g: int, size: int, ndim: int
+    ) -> tuple[NDArray, NDArray]:  # pragma: no cover - interface
+        """The random numbers of one split's proposals: ``uniform`` (g, size, k) and
+        the stretches ``gamma`` (g, size), drawn from ``random`` in emcee's order."""
+        raise NotImplementedError
+
     def _split_proposal(
-        self, coords: NDArray, order: NDArray, split: int, random: np.random.RandomState
+        self, coords: NDArray, order: NDArray, split: int, uniform: NDArray, gamma: NDArray
     ) -> tuple[NDArray, NDArray]:  # pragma: no cover - interface
         """Proposals (G·size, d) and log factors (G·size,) for split ``split`` of the
-        walkers ``order`` (G, nsplits·size) of ``coords`` (one row per walker)."""
+        walkers ``order`` (G, nsplits·size) of ``coords`` (one row per walker), from
+        the numbers ``_draw`` gave."""
         raise NotImplementedError
 
     def get_proposal(
@@ -166,11 +209,18 @@ class _GroupedRedBlueMove(emcee.moves.Move):
         g, ns, ndim = s.shape
         coords = np.concatenate([s, *c], axis=1).reshape(-1, ndim)
         order = np.arange(coords.shape[0]).reshape(g, -1)
-        q, factors = self._split_proposal(coords, order, 0, random)
+        uniform, gamma = self._draw(random, g, ns, ndim)
+        q, factors = self._split_proposal(coords, order, 0, uniform, gamma)
         return q.reshape(g, ns, ndim), factors.reshape(g, ns)
 
     def propose(self, model, state: State) -> tuple[State, NDArray]:
-        """One update of every walker of every ensemble (emcee's ``Move`` interface)."""
+        """One update of every walker of every ensemble (emcee's ``Move`` interface).
+
+        Every random number of the step is drawn first, in the order of the splits
+        (each split's proposal numbers, then its Metropolis uniforms); the splits then
+        run in the log-probability's compiled step if it offers one (see the module
+        notes), else, or from the split where that step stops, here.
+        """
         nwalkers, ndim = state.coords.shape
         per = self._shape(nwalkers, ndim)
         random = model.random
@@ -179,19 +229,31 @@ class _GroupedRedBlueMove(emcee.moves.Move):
         # shuffled), as a uniformly random permutation of each ensemble's walkers.
         order = np.argsort(random.rand(g, per), axis=1) + (per * np.arange(g))[:, None]
         size = per // self.nsplits
-        coords = np.ascontiguousarray(state.coords, dtype=np.float64)
-        log_prob = state.log_prob
-        accepted = np.zeros(nwalkers, dtype=bool)
+        uniforms = np.empty((self.nsplits, g, size, self.n_uniform))
+        gammas = np.empty((self.nsplits, g, size))
+        log_u = np.empty((self.nsplits, g * size))
         for split in range(self.nsplits):
+            uniforms[split], gammas[split] = self._draw(random, g, size, ndim)
+            log_u[split] = random.rand(g * size)
+        np.log(log_u, out=log_u)
+        coords = np.ascontiguousarray(state.coords, dtype=np.float64)
+        log_prob = np.ascontiguousarray(state.log_prob, dtype=np.float64)
+        accepted = np.zeros(nwalkers, dtype=bool)
+        step = _compiled_step(model)
+        done = 0
+        if step is not None:
+            done = step(self.kind, coords, log_prob, order, uniforms, gammas, log_u, accepted)
+        for split in range(done, self.nsplits):
             flat = order[:, split * size : (split + 1) * size].ravel()
-            q, factors = self._split_proposal(coords, order, split, random)
+            q, factors = self._split_proposal(coords, order, split, uniforms[split], gammas[split])
             new_log_prob = _log_prob(model, q)
-            take = factors + new_log_prob - log_prob[flat] > np.log(random.rand(flat.size))
+            take = factors + new_log_prob - log_prob[flat] > log_u[split]
             idx = flat[take]
             coords[idx] = q[take]
             log_prob[idx] = new_log_prob[take]
             accepted[idx] = True
         state.coords = coords
+        state.log_prob = log_prob
         return state, accepted
 
 
@@ -213,19 +275,24 @@ class GroupedDEMove(_GroupedRedBlueMove):
         self.sigma = sigma
         self.gamma0 = gamma0
 
+    kind = DE
+    n_uniform = 2
+
+    def _draw(
+        self, random: np.random.RandomState, g: int, size: int, ndim: int
+    ) -> tuple[NDArray, NDArray]:
+        """Two uniform numbers per walker (the pair) and its stretch γ."""
+        g0 = 2.38 / np.sqrt(2 * ndim) if self.gamma0 is None else self.gamma0
+        uniform = random.rand(g, size, 2)
+        return uniform, g0 * (1 + self.sigma * random.randn(g, size))
+
     def _split_proposal(
-        self, coords: NDArray, order: NDArray, split: int, random: np.random.RandomState
+        self, coords: NDArray, order: NDArray, split: int, uniform: NDArray, gamma: NDArray
     ) -> tuple[NDArray, NDArray]:
         """DE proposals: ``x + γ (x_b − x_a)``, (a, b) a uniform ordered pair of
         distinct walkers of the other half of the same ensemble."""
-        g, per = order.shape
-        size = per // 2
-        ndim = coords.shape[1]
-        g0 = 2.38 / np.sqrt(2 * ndim) if self.gamma0 is None else self.gamma0
-        uniform = random.rand(g, size, 2)
-        gamma = g0 * (1 + self.sigma * random.randn(g, size))
         q = _de_proposals(coords, order, split, uniform, gamma)
-        return q, np.zeros(g * size)
+        return q, np.zeros(q.shape[0])
 
 
 class GroupedDESnookerMove(_GroupedRedBlueMove):
@@ -244,18 +311,23 @@ class GroupedDESnookerMove(_GroupedRedBlueMove):
         super().__init__(n_groups, nsplits=4)
         self.gammas = gammas
 
+    kind = SNOOKER
+    n_uniform = 4
+
+    def _draw(
+        self, random: np.random.RandomState, g: int, size: int, ndim: int
+    ) -> tuple[NDArray, NDArray]:
+        """Four uniform numbers per walker (three walkers and their order); the
+        stretch is the constant ``gammas``."""
+        return random.rand(g, size, 4), np.full((g, size), self.gammas)
+
     def _split_proposal(
-        self, coords: NDArray, order: NDArray, split: int, random: np.random.RandomState
+        self, coords: NDArray, order: NDArray, split: int, uniform: NDArray, gamma: NDArray
     ) -> tuple[NDArray, NDArray]:
         """Snooker proposals along x − z, one walker from each other split in random
         order as z, z₁, z₂; log factor (d − 1) log(|q − z|/|x − z|)."""
-        g, per = order.shape
-        size = per // 4
-        ndim = coords.shape[1]
-        q, metropolis = _snooker_proposals(
-            coords, order, split, random.rand(g, size, 4), self.gammas
-        )
-        return q, (ndim - 1.0) * metropolis
+        q, metropolis = _snooker_proposals(coords, order, split, uniform, self.gammas)
+        return q, (coords.shape[1] - 1.0) * metropolis
 
 
 #: The six orders of three walkers (z, z₁, z₂), drawn uniformly.

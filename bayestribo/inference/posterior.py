@@ -24,14 +24,16 @@ to (1e-10 of max(1, |log p|)). ``compiled=False`` makes ``__call__`` the referen
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.errors import BayestriboError
 from bayestribo.inference.fused import FusedLogPosterior
+from bayestribo.inference.fused_step import grouped_step
 from bayestribo.inference.likelihood import PiLikelihood
 from bayestribo.inference.priors import PriorSet
 from bayestribo.inference.sampling import NaNLogProbabilityError
@@ -91,6 +93,15 @@ class Posterior:
     def uses_compiled(self) -> bool:
         """True when ``__call__`` evaluates the compiled log density."""
         return self._fused is not None
+
+    @property
+    def grouped_step(self) -> Callable[..., int] | None:
+        """A whole step of the sampler's grouped moves with the compiled density
+        (:func:`bayestribo.inference.fused_step.grouped_step`; the protocol is in
+        :mod:`bayestribo.inference.moves`), or None where :attr:`uses_compiled` is
+        False."""
+        fused: FusedLogPosterior | None = self._fused
+        return None if fused is None else partial(grouped_step, fused)
 
     @property
     def names(self) -> list[str]:

@@ -229,6 +229,9 @@ def _nan_checked(
             raise NaNLogProbabilityError(f"the log-probability is NaN at {named}")
         return lp
 
+    # A compiled step of the grouped moves stops before any split with a NaN and
+    # leaves it to this function (bayestribo.inference.moves).
+    checked.grouped_step = getattr(log_prob, "grouped_step", None)  # type: ignore[attr-defined]
     return checked
 
 
