@@ -455,7 +455,9 @@ def main(argv: list[str] | None = None) -> int:
     }
     if compared is not None:
         for key in ("bundled", "realistic"):
-            c = compared[key]
+            c = compared.get(key)
+            if c is None:  # --realistic 0
+                continue
             for name, v in c["summary"].items():
                 print(
                     f"{key:9s} {name:8s} median {v['median_seconds']:6.3f} s, ESS_min median "
@@ -474,7 +476,7 @@ def main(argv: list[str] | None = None) -> int:
                 for k, v in compared["bundled"]["posterior_mean_difference_in_sd"].items()
             },
         )
-        for name, r in compared["realistic"]["runs"].items():
+        for name, r in compared.get("realistic", {}).get("runs", {}).items():
             print(
                 f"  {name}: {r['baseline_median_seconds']:.2f} s -> "
                 f"{r['current_median_seconds']:.2f} s, means in sd "

@@ -155,3 +155,39 @@ def test_not_utf8_raises(tmp_path: Path) -> None:
     path.write_bytes(b"time_s,displacement_m\n\xff\xfe,1\n")
     with pytest.raises(RunFormatError, match=r"bin\.csv.*not UTF-8"):
         read_run(path)
+
+
+def test_numpys_reader_and_the_row_by_row_reader_give_the_same_numbers(tmp_path: Path) -> None:
+    # read_text parses a block with numpy's C reader and falls back to Python's float
+    # row by row; both must give the same float64 for every way of writing a number,
+    # and the fallback must take over wherever numpy's reader does not apply.
+    from bayestribo.io.text import _parse_block, _parse_rows, read_text
+
+    rng = np.random.default_rng(4)
+    values = rng.standard_normal((200, 3)) * 10.0 ** rng.integers(-12, 12, (200, 3))
+    values[:3] = [[0.0, -0.0, 1.0], [5e-324, 1.7976931348623157e308, -2.5], [0.5, 5.0, 1e-5]]
+    styles = ("{!r}", "{:.17e}", "{:.6g}", " {!r} ", "{:+.17E}")
+    lines = [
+        ",".join(styles[(r + c) % len(styles)].format(float(v)) for c, v in enumerate(row))
+        for r, row in enumerate(values)
+    ]
+    rows = list(enumerate(lines, start=2))
+    keep = [(0, "time_s"), (1, "displacement_m"), (2, "velocity_m_per_s")]
+    fast = _parse_block(rows, ",", 3, [0, 1, 2])
+    slow = _parse_rows(rows, ",", ".", [n for _, n in keep], keep, "f")
+    assert fast is not None
+    np.testing.assert_array_equal(fast, slow)
+    assert np.array_equal(np.signbit(fast), np.signbit(slow))
+    # Python's float reads these, numpy's reader does not: the rows are read anyway.
+    path = tmp_path / "odd.csv"
+    path.write_text("time_s,displacement_m\n0.0,1_0\n0.001,\u0661.5\n")
+    out = read_text(path)
+    np.testing.assert_array_equal(out["displacement_m"], [10.0, 1.5])
+    # A text column that is ignored (the first row is data, not a header), and a short
+    # row that is an error naming its line.
+    path.write_text("0.0,a,1.0\n0.001,b,2.0\n")
+    out = read_text(path, columns=["time_s", "ignore", "displacement_m"])
+    np.testing.assert_array_equal(out["displacement_m"], [1.0, 2.0])
+    path.write_text("time_s,displacement_m\n0.0,1.0\n0.001\n")
+    with pytest.raises(RunFormatError, match="line 3: expected 2 field"):
+        read_text(path)

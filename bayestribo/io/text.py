@@ -13,6 +13,7 @@ column converting the file's unit to the canonical one (for instance
 
 from __future__ import annotations
 
+import io
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -40,6 +41,56 @@ def _as_float(text: str) -> float | None:
         return float(text)
     except ValueError:
         return None
+
+
+def _parse_block(
+    rows: list[tuple[int, str]], delimiter: str | None, width: int, keep: list[int]
+) -> NDArray | None:
+    """The kept columns of rows of ``width`` numbers each, parsed by numpy's C reader
+    (:func:`numpy.loadtxt`, which reads every number as Python's ``float`` does), or
+    None for anything else (a field that is not a number, a row of another width),
+    which :func:`_parse_rows` then reads or names."""
+    text = "\n".join(line for _, line in rows)
+    try:
+        block = np.loadtxt(
+            io.StringIO(text), delimiter=delimiter, comments=None, ndmin=2, dtype=np.float64
+        )
+    except ValueError:
+        return None
+    if block.shape != (len(rows), width):
+        return None
+    return np.ascontiguousarray(block[:, keep])
+
+
+def _parse_rows(
+    rows: list[tuple[int, str]],
+    delimiter: str | None,
+    decimal: str,
+    names: list[str],
+    keep: list[tuple[int, str]],
+    where: str,
+) -> NDArray:
+    """The kept columns, row by row with Python's ``float``; the first row of another
+    width or field that is not a number is an error naming its line and column."""
+    data = np.empty((len(rows), len(keep)), dtype=np.float64)
+    width = len(names)
+    for r, (number, line) in enumerate(rows):
+        fields = _split(line, delimiter)
+        if len(fields) != width:
+            raise RunFormatError(
+                f"line {number}: expected {width} field(s) ({', '.join(names)}), got "
+                f"{len(fields)}: {line[:80]!r}",
+                where,
+            )
+        for c, (i, name) in enumerate(keep):
+            field = fields[i].replace(",", ".") if decimal == "," else fields[i]
+            value = _as_float(field)
+            if value is None:
+                raise RunFormatError(
+                    f"line {number}, column {name!r}: {fields[i][:40]!r} is not a number", where
+                )
+            data[r, c] = value
+    return data
 
 
 def _canonical(name: str, where: str, what: str) -> tuple[str, float]:
@@ -107,7 +158,7 @@ def read_text(
         One name per column, in file order: a canonical name, a quantity with its unit
         (``time_ms``, ``displacement_um``, ...) or ``"ignore"``. Without it the file
         must start with a header row of such names. With it, a header row (a first
-        line that is not all numbers) is skipped.
+        line whose columns other than ``"ignore"`` are not all numbers) is skipped.
     scale : mapping, optional
         Factor per canonical column converting the file's unit into the canonical
         unit (s, m, m/s), e.g. ``{"time_s": 1e-3, "displacement_m": 1e-6}``.
@@ -186,6 +237,14 @@ def read_text(
         names, units = _check_columns(header, where, f"header (line {lines[0][0]})")
     else:
         names = columns
+        if len(first_fields) == len(names):
+            # Only the kept columns decide: a text column that is ignored (a clock
+            # time, a label) does not make the first data row a header.
+            has_header = any(
+                _as_float(f) is None
+                for f, name in zip(first_fields, names, strict=True)
+                if name != IGNORE
+            )
         if has_header and len(first_fields) != len(names):
             raise RunFormatError(
                 f"header (line {lines[0][0]}) has {len(first_fields)} column(s) but columns= "
@@ -197,24 +256,10 @@ def read_text(
         raise RunFormatError("the file holds a header but no data rows", where)
 
     keep = [(i, n) for i, n in enumerate(names) if n != IGNORE]
-    data = np.empty((len(rows), len(keep)), dtype=np.float64)
     width = len(names)
-    for r, (number, line) in enumerate(rows):
-        fields = _split(line, delimiter)
-        if len(fields) != width:
-            raise RunFormatError(
-                f"line {number}: expected {width} field(s) ({', '.join(names)}), got "
-                f"{len(fields)}: {line[:80]!r}",
-                where,
-            )
-        for c, (i, name) in enumerate(keep):
-            field = fields[i].replace(",", ".") if decimal == "," else fields[i]
-            value = _as_float(field)
-            if value is None:
-                raise RunFormatError(
-                    f"line {number}, column {name!r}: {fields[i][:40]!r} is not a number", where
-                )
-            data[r, c] = value
+    data = _parse_block(rows, delimiter, width, [i for i, _ in keep]) if decimal == "." else None
+    if data is None:
+        data = _parse_rows(rows, delimiter, decimal, names, keep, where)
 
     factors = check_scale(scale, [n for _, n in keep], where)
     out: dict[str, NDArray] = {}
