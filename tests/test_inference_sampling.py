@@ -190,6 +190,20 @@ def test_autocorrelation_time_is_emcees_estimator():
     assert np.isnan(tau[0]) and np.isfinite(tau[1])
 
 
+def test_the_ensembles_autocorrelation_times_in_one_transform_are_each_ensembles():
+    # run_ensembles transforms all ensembles' chains at once; each ensemble's τ must
+    # be what autocorr_time gives for its chain alone (one with a longer memory).
+    from bayestribo.inference.sampling import _autocorr_times
+
+    rng = np.random.default_rng(10)
+    x = rng.standard_normal((3, 500, 8, 4))
+    x[1] += 0.3 * np.cumsum(rng.standard_normal((500, 8, 4)), axis=0)
+    batched = _autocorr_times(x)
+    for e in range(3):
+        np.testing.assert_array_equal(batched[e], autocorr_time(x[e]))
+    assert np.all(batched[1] > 2 * batched[0])
+
+
 def _outcomes(proposals, factors=None):
     """Keys of discrete proposal outcomes (rounded coordinates, and factors)."""
     q = np.round(proposals.reshape(-1, proposals.shape[-1]), 9)

@@ -259,21 +259,28 @@ def autocorr_time(chain: NDArray, c: float = 5.0) -> NDArray:
     """
     x = np.asarray(chain, dtype=float)
     x = x.reshape(x.shape + (1,) * (3 - x.ndim))
-    n_t = x.shape[0]
+    return _autocorr_times(x[None], c)[0]
+
+
+def _autocorr_times(chains: NDArray, c: float = 5.0) -> NDArray:
+    """:func:`autocorr_time` of each ensemble's chain, (ensembles, steps, walkers,
+    params) -> (ensembles, params), in one batched transform."""
+    n_t = chains.shape[1]
     # Zero padding to any length >= 2n - 1 gives the linear (not circular)
     # autocorrelation exactly; emcee pads to twice the next power of two, a fast
     # length is up to twice as quick, and so are transforms along contiguous rows.
     size = scipy.fft.next_fast_len(max(2 * n_t - 1, 1), real=True)
-    rows = np.ascontiguousarray(np.transpose(x, (2, 1, 0)))  # (params, walkers, steps)
+    # (ensembles, params, walkers, steps)
+    rows = np.ascontiguousarray(np.transpose(chains, (0, 3, 2, 1)))
     with np.errstate(invalid="ignore", divide="ignore"):
         spectrum = scipy.fft.rfft(rows - rows.mean(axis=-1, keepdims=True), n=size, axis=-1)
         power = spectrum.real**2 + spectrum.imag**2
         acf = scipy.fft.irfft(power, n=size, axis=-1)[..., :n_t]
         acf = acf / acf[..., :1]
-        taus = 2.0 * np.cumsum(acf.mean(axis=1), axis=-1) - 1.0  # (params, steps)
-        inside = np.arange(n_t)[None, :] < c * taus
-    window = np.where(inside.any(axis=1), np.argmin(inside, axis=1), n_t - 1)
-    return taus[np.arange(taus.shape[0]), window]
+        taus = 2.0 * np.cumsum(acf.mean(axis=2), axis=-1) - 1.0  # (ensembles, params, steps)
+        inside = np.arange(n_t) < c * taus
+    window = np.where(inside.any(axis=-1), np.argmin(inside, axis=-1), n_t - 1)
+    return np.take_along_axis(taus, window[..., None], axis=-1)[..., 0]
 
 
 def effective_sample_size(chain: NDArray) -> NDArray:
@@ -395,13 +402,8 @@ def run_ensembles(
                 # The rule cannot be met this early with the last τ (which short chains
                 # underestimate): skip the check, which costs as much as 30 steps.
                 continue
-            taus = []
-            for e in range(n_ens):
-                burn = min(
-                    int(2 * np.max(tau)) if np.all(np.isfinite(tau)) else steps // 3, steps // 2
-                )
-                taus.append(autocorr_time(ensembles.chain(e, burn)))
-            tau = np.max(taus, axis=0)
+            burn = min(int(2 * np.max(tau)) if np.all(np.isfinite(tau)) else steps // 3, steps // 2)
+            tau = np.max(_autocorr_times(ensembles.chains(burn)), axis=0)
             if not np.all(np.isfinite(tau)):
                 # A stuck chain (no move accepted): τ is undefined; keep sampling.
                 history, enough, settled = [], False, False
@@ -474,8 +476,8 @@ class _Ensembles:
     def run(self, steps: int) -> None:  # pragma: no cover - interface
         raise NotImplementedError
 
-    def chain(self, e: int, discard: int) -> NDArray:  # pragma: no cover - interface
-        """Ensemble ``e``'s chain after ``discard`` steps, shape (steps, walkers, d)."""
+    def chains(self, discard: int) -> NDArray:  # pragma: no cover - interface
+        """Every ensemble's chain after ``discard`` steps, (ensembles, steps, walkers, d)."""
         raise NotImplementedError
 
     def flat(self, discard: int, thin: int) -> tuple[NDArray, NDArray]:
@@ -506,8 +508,8 @@ class _Separate(_Ensembles):
         for e, sampler in enumerate(self.samplers):
             self.states[e] = sampler.run_mcmc(self.states[e], steps, progress=False)
 
-    def chain(self, e: int, discard: int) -> NDArray:
-        return self.samplers[e].get_chain(discard=discard)
+    def chains(self, discard: int) -> NDArray:
+        return np.stack([s.get_chain(discard=discard) for s in self.samplers])
 
     def flat(self, discard: int, thin: int) -> tuple[NDArray, NDArray]:
         chains = np.stack(
@@ -569,8 +571,8 @@ class _Grouped(_Ensembles):
     def run(self, steps: int) -> None:
         self.state = self.sampler.run_mcmc(self.state, steps, progress=False)
 
-    def chain(self, e: int, discard: int) -> NDArray:
-        return self._split(self.sampler.get_chain(discard=discard))[e]
+    def chains(self, discard: int) -> NDArray:
+        return self._split(self.sampler.get_chain(discard=discard))
 
     def flat(self, discard: int, thin: int) -> tuple[NDArray, NDArray]:
         chains = self._split(self.sampler.get_chain(discard=discard, thin=thin))
