@@ -276,7 +276,7 @@ def side_by_side(baseline: Path, repeats: int, realistic: int, seeds: int) -> di
 def walker_sweep(seeds: int) -> list[dict[str, Any]]:
     """Section 4 of the module notes."""
     rows = []
-    for walkers, ensembles in ((8, 2), (16, 2), (8, 4), (24, 2), (32, 2), (16, 4)):
+    for walkers, ensembles in ((8, 2), (12, 2), (16, 2), (8, 4), (24, 2), (32, 2), (16, 4)):
         fits = []
         for seed in range(1, seeds + 1):
             start = time.perf_counter()
