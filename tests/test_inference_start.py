@@ -68,3 +68,31 @@ def test_the_optimum_is_not_left_at_the_edge_of_the_ratio_plateau(seed):
             other = theta.copy()
             other[i] = shifted
             assert float(posterior(other[None])[0]) == pytest.approx(lp, abs=1e-6)
+
+
+@pytest.mark.parametrize("seed", [0, 2])
+def test_a_viscous_decay_whose_peak_estimate_has_negative_friction_starts_at_the_optimum(seed):
+    # A decay without friction: the peak-decrement estimate's friction is noise about
+    # zero, here negative. A first guess at a friction that stops the motion early
+    # (the old fallback, 1 % of the amplitude) left every optimum on the ζ = 0 bound,
+    # some 10⁸ below the maximum, and the sampler to find its way from there.
+    from _sim import simulate_flat
+
+    from bayestribo.estimators.feeny_liang import feeny_liang
+
+    run = simulate_flat(
+        seed=seed,
+        zeta=0.002,
+        mu_k=0.0,
+        displacement_noise_m=1.5e-6,
+        velocity_noise_m_per_s=1.5e-7,
+        sample_rate_Hz=5000.0,
+        motion_duration_s=2.0,
+    )
+    prep = prepare(run, seed=np.random.default_rng(0))
+    assert feeny_liang(prep.decay.peaks).friction_displacement < 0
+    post = build_posterior(prep.data)
+    theta, _, _ = maximum_a_posteriori(post, prep.decay)
+    values = dict(zip(post.names, theta, strict=True))
+    assert values["zeta"] == pytest.approx(0.002, rel=0.01)
+    assert values["mu_k"] < 1e-4  # against 0.03 in the paper: none to speak of

@@ -56,6 +56,10 @@ def _first_guesses(decay: EnergyDecay, posterior: Posterior) -> list[dict[str, f
         friction = est.friction_displacement
         if friction is not None and friction > 0:
             mu_k = float(friction) / decay.scaling.length_scale
+        elif friction is not None:
+            # A decay faster than exponential at small amplitude (no friction to see):
+            # start near the viscous end, not at a friction that stops the motion early.
+            mu_k = 1e-6 * amp
     except (BayestriboError, ValueError, ArithmeticError):
         pass
     # The same decay per half cycle, all viscous (Eq. 34: a' = -ζa - 2μ_k/π) or all
