@@ -51,6 +51,7 @@ cannot give (NaN, or a point its compiled form does not cover); that split and t
 rest then run here, where the errors are raised. Chains are bit-identical with and
 without it (tests); :meth:`bayestribo.inference.posterior.Posterior.grouped_step` is
 the single-run fit's (:mod:`bayestribo.inference.fused_step`).
+
 The distribution of every proposal is that of the corresponding one-ensemble move,
 emcee's ``DEMove`` and :class:`DESnookerMove` (the tests compare them with those
 moves' own ``get_proposal`` and sample known targets with both); the ensembles share the
