@@ -1,0 +1,93 @@
+"""Coulomb friction μ_k N sgn(v), sticking at μ_s (Rigaud et al. 2010, Eq. 5, 7-8).
+
+ΔE(A) = 4μ_k A in the dimensionless form (4 μ_k N A in joules). Without the load
+and stiffness μ_k is the friction displacement x_c in the signal's unit.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numba
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from bayestribo.model.laws.base import Parameter, PhysicalScale, Term, register_term
+
+__all__ = ["COULOMB"]
+
+
+@numba.njit(cache=True, inline="always")
+def _force(a: float, c: NDArray) -> float:
+    return c[0]
+
+
+def _mu_k_prior(amplitude: float):  # noqa: ANN202 - a Prior
+    from bayestribo.inference.priors import Uniform
+
+    # A friction above a quarter of the amplitude stops the motion within two half
+    # cycles: such a record has no decay to analyse.
+    return Uniform(0.0, amplitude / 4.0)
+
+
+def _ratio_prior(amplitude: float):  # noqa: ANN202 - a Prior
+    from bayestribo.inference.priors import Uniform
+
+    return Uniform(1.0, 3.0)
+
+
+def _coefficients(values: Mapping[str, NDArray], reference: float) -> list[NDArray]:
+    return [np.asarray(values["mu_k"], dtype=float)]
+
+
+def _dissipation(amplitude: ArrayLike, values: Mapping[str, NDArray], reference: float) -> NDArray:
+    return 4.0 * np.asarray(values["mu_k"], dtype=float) * np.asarray(amplitude, dtype=float)
+
+
+def _physical(
+    values: Mapping[str, NDArray], reference: float, scale: PhysicalScale
+) -> dict[str, tuple]:
+    mu_k = np.asarray(values["mu_k"], dtype=float)
+    return {
+        "friction_displacement": (
+            mu_k * scale.length_scale,
+            scale.length_unit,
+            "x_c",
+            "friction displacement μ_k N/k",
+        )
+    }
+
+
+COULOMB = register_term(
+    Term(
+        name="coulomb",
+        kind="friction",
+        parameters=(
+            Parameter(
+                "mu_k",
+                "μ_k",
+                "y",
+                0.0,
+                float("inf"),
+                "kinetic friction coefficient (x_c k/N)",
+                _mu_k_prior,
+            ),
+            Parameter(
+                "mu_s_ratio",
+                "μ_s/μ_k",
+                "-",
+                1.0,
+                float("inf"),
+                "static to kinetic friction",
+                _ratio_prior,
+            ),
+        ),
+        n_coefficients=1,
+        force=_force,
+        coefficients=_coefficients,
+        dissipation=_dissipation,
+        physical=_physical,
+        description="Coulomb friction μ_k N sgn v, sticking at μ_s, ΔE = 4μ_kNA",
+        sticks=True,
+    )
+)

@@ -1,0 +1,73 @@
+r"""Friction that grows with amplitude: η |Y_n| sgn v within each half cycle.
+
+With :mod:`coulomb` it makes a friction that varies with amplitude,
+``μ(A) = μ_k + ηA`` (A the turning point the half cycle started from, in units of ℓ);
+alone it is the classical hysteretic (structural) damping, whose loss per cycle
+grows as the square of the amplitude like a viscous one but does not depend on
+frequency. ΔE(A) = 4ηA² (loss factor 4η/π).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numba
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from bayestribo.model.laws.base import Parameter, PhysicalScale, Term, register_term
+
+__all__ = ["HYSTERETIC"]
+
+
+@numba.njit(cache=True, inline="always")
+def _force(a: float, c: NDArray) -> float:
+    return c[0] * a
+
+
+def _prior(amplitude: float):  # noqa: ANN202 - a Prior
+    from bayestribo.inference.priors import Uniform
+
+    # Up to about the dissipation of ζ = 0.3 (4η = 0.6π).
+    return Uniform(0.0, 0.45)
+
+
+def _coefficients(values: Mapping[str, NDArray], reference: float) -> list[NDArray]:
+    return [np.asarray(values["eta"], dtype=float)]
+
+
+def _dissipation(amplitude: ArrayLike, values: Mapping[str, NDArray], reference: float) -> NDArray:
+    a = np.asarray(amplitude, dtype=float)
+    return 4.0 * np.asarray(values["eta"], dtype=float) * a * a
+
+
+def _physical(
+    values: Mapping[str, NDArray], reference: float, scale: PhysicalScale
+) -> dict[str, tuple]:
+    eta = np.asarray(values["eta"], dtype=float)
+    return {"loss_factor": (4.0 * eta / np.pi, "-", "η_loss", "hysteretic loss factor 4η/π")}
+
+
+HYSTERETIC = register_term(
+    Term(
+        name="hysteretic",
+        kind="friction",
+        parameters=(
+            Parameter(
+                "eta",
+                "η",
+                "-",
+                0.0,
+                1.0,
+                "friction per unit amplitude (μ(A) = μ_k + ηA)",
+                _prior,
+            ),
+        ),
+        n_coefficients=1,
+        force=_force,
+        coefficients=_coefficients,
+        dissipation=_dissipation,
+        physical=_physical,
+        description="friction proportional to amplitude η|Y| sgn v (with coulomb: μ_k + ηA)",
+    )
+)

@@ -1,0 +1,326 @@
+r"""A dissipation law: a sum of registered terms, named by its terms joined with ``+``.
+
+``Law.from_name("viscous+coulomb")`` is the law of Rigaud et al. (2010), Eq. 7, the
+package's default; ``"viscous+quadratic+coulomb"`` adds air or fluid drag, and so on
+for every term registered in :mod:`bayestribo.model.laws.base`. The order of the
+terms in a name does not matter: a law is printed with its terms in registration
+order.
+
+Π on a grid comes from one compiled numeric core: the closed forms of
+:mod:`bayestribo.model._kernel` for the laws they cover (viscous damping, Coulomb
+friction and both), the half-cycle integrator of
+:mod:`bayestribo.model.laws.integrator` for every other law. The two agree to 1e-10
+of Π(0) on the laws the closed form covers (tests).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from bayestribo.model.laws.base import TERMS, Parameter, PhysicalScale, Term, get_term
+from bayestribo.model.laws.integrator import DEFAULT_STEPS, make_integrator
+
+__all__ = ["DEFAULT_LAW", "Law", "get_law"]
+
+#: The law of a default fit (Rigaud et al. 2010, Eq. 7).
+DEFAULT_LAW = "viscous+coulomb"
+#: The terms the closed form of the exact solution covers.
+_CLOSED_FORM = frozenset({"viscous", "coulomb"})
+
+
+@dataclass(frozen=True)
+class Law:
+    """A dissipation law: the sum of its terms' forces.
+
+    Parameters
+    ----------
+    terms : sequence of Term
+        Distinct terms (see :func:`bayestribo.model.laws.base.register_term`); a
+        term need not be registered to be used here, which is how a law defined
+        outside the package is fitted.
+    """
+
+    terms: tuple[Term, ...]
+
+    def __post_init__(self) -> None:
+        terms = tuple(self.terms)
+        if not terms:
+            raise ValueError("a law needs at least one term")
+        names = [t.name for t in terms]
+        if len(set(names)) != len(names):
+            raise ValueError(f"a law names each term once, got {'+'.join(names)!r}")
+        params = [p.name for t in terms for p in t.parameters]
+        if len(set(params)) != len(params):
+            raise ValueError(f"the terms of {'+'.join(names)!r} share a parameter name")
+        order = {name: i for i, name in enumerate(TERMS)}
+        terms = tuple(sorted(terms, key=lambda t: order.get(t.name, len(order))))
+        object.__setattr__(self, "terms", terms)
+
+    # -- names --------------------------------------------------------------------
+    @classmethod
+    def from_name(cls, name: str) -> Law:
+        """The law named by registered terms joined with ``+`` (``"viscous+coulomb"``).
+
+        Raises
+        ------
+        ValueError
+            For an empty name, a repeated term or a term that is not registered (the
+            message lists the registered terms).
+        """
+        if isinstance(name, Law):
+            return name
+        if not isinstance(name, str) or not name.strip():
+            raise ValueError(
+                f"law: expected terms joined with '+' (registered terms: "
+                f"{', '.join(TERMS)}), got {name!r}"
+            )
+        parts = [p.strip().lower() for p in name.split("+")]
+        if any(not p for p in parts):
+            raise ValueError(f"law {name!r}: an empty term between '+' signs")
+        return cls(tuple(get_term(p) for p in parts))
+
+    @property
+    def name(self) -> str:
+        """The terms joined with ``+``, in registration order."""
+        return "+".join(t.name for t in self.terms)
+
+    def __str__(self) -> str:
+        return self.name
+
+    @property
+    def term_names(self) -> list[str]:
+        """Names of the terms."""
+        return [t.name for t in self.terms]
+
+    # -- parameters ---------------------------------------------------------------
+    @property
+    def parameters(self) -> tuple[Parameter, ...]:
+        """Sampled parameters of every term, in order."""
+        return tuple(p for t in self.terms for p in t.parameters)
+
+    @property
+    def parameter_names(self) -> list[str]:
+        """Names of the sampled parameters."""
+        return [p.name for p in self.parameters]
+
+    def parameter(self, name: str) -> Parameter:
+        """The parameter ``name`` (ValueError naming the law's parameters otherwise)."""
+        for p in self.parameters:
+            if p.name == name:
+                return p
+        raise ValueError(
+            f"law {self.name} has no parameter {name!r}; it has {self.parameter_names}"
+        )
+
+    @property
+    def friction(self) -> bool:
+        """True when the law has a friction term (the motion can stop)."""
+        return any(t.kind == "friction" for t in self.terms)
+
+    @property
+    def sticks(self) -> bool:
+        """True when a term carries static friction (μ_s/μ_k is a parameter)."""
+        return any(t.sticks for t in self.terms)
+
+    @property
+    def closed_form(self) -> bool:
+        """True when Π has a closed form (viscous damping, Coulomb friction or both)."""
+        return {t.name for t in self.terms} <= _CLOSED_FORM and all(
+            t is TERMS.get(t.name) for t in self.terms
+        )
+
+    def default_priors(self, amplitude: float) -> dict[str, Any]:
+        """Each parameter's default prior given the observed initial amplitude |y0|."""
+        amp = abs(float(amplitude))
+        if not (math.isfinite(amp) and amp > 0.0):
+            raise ValueError(f"amplitude must be a positive number, got {amplitude!r}")
+        return {p.name: p.prior(amp) for p in self.parameters}
+
+    def nests(self, other: Law) -> bool:
+        """True when this law contains every term of ``other`` (and so can reproduce
+        it with its extra terms at zero)."""
+        return set(other.term_names) <= set(self.term_names)
+
+    # -- the compiled core --------------------------------------------------------
+    @cached_property
+    def _layout(self) -> tuple[tuple, tuple]:
+        drags = [t for t in self.terms if t.kind == "drag"]
+        frictions = [t for t in self.terms if t.kind == "friction"]
+        offsets, o = [], 0
+        for t in (*drags, *frictions):
+            offsets.append(o)
+            o += t.n_coefficients
+        nd = len(drags)
+        return (
+            (
+                tuple(t.force for t in drags),
+                tuple(offsets[:nd]),
+                tuple(t.n_coefficients for t in drags),
+                tuple(t.force for t in frictions),
+                tuple(offsets[nd:]),
+                tuple(t.n_coefficients for t in frictions),
+            ),
+            (*drags, *frictions),
+        )
+
+    @property
+    def smooth(self) -> bool:
+        """True when every drag is smooth at zero speed."""
+        return all(t.smooth for t in self.terms)
+
+    def coefficients(self, values: Mapping[str, ArrayLike], reference: float) -> NDArray:
+        """Coefficient rows of the compiled forces, shape (P, K), from parameter values
+        by name (each of shape (P,)) and the reference amplitude."""
+        vals = {n: np.atleast_1d(np.asarray(values[n], dtype=float)) for n in self.parameter_names}
+        cols = []
+        for term in self._layout[1]:
+            cols.extend(
+                np.broadcast_to(c, np.shape(vals[self.parameter_names[0]]))
+                for c in term.coefficients(vals, float(reference))
+            )
+        return np.ascontiguousarray(np.column_stack(cols), dtype=np.float64)
+
+    def static_ratio(self, values: Mapping[str, ArrayLike], size: int) -> NDArray:
+        """μ_s/μ_k of each row (1 where the law has no static friction parameter)."""
+        if "mu_s_ratio" in self.parameter_names:
+            return np.ascontiguousarray(
+                np.broadcast_to(np.asarray(values["mu_s_ratio"], dtype=float), (size,))
+            )
+        return np.ones(size)
+
+    def pi_grid(
+        self,
+        tau: ArrayLike,
+        values: Mapping[str, ArrayLike],
+        y0: ArrayLike,
+        yp0: float = 0.0,
+        tau_end: float | None = None,
+        *,
+        reference: float | None = None,
+        method: str = "auto",
+        steps: int = DEFAULT_STEPS,
+    ) -> NDArray:
+        """Π(τ) = ∫_τ^T E on sorted ``tau`` for P parameter sets, shape (P, T).
+
+        Parameters
+        ----------
+        tau : array_like
+            Sorted dimensionless times, ``>= 0``.
+        values : mapping
+            Each parameter of the law by name, arrays of shape (P,) (or scalars).
+        y0 : array_like
+            Initial displacement of each set, shape (P,).
+        yp0 : float
+            Initial velocity y'(0), shared by every set.
+        tau_end : float, optional
+            End of the record: Π is truncated there (``None``: to the end of motion).
+        reference : float, optional
+            The reference amplitude of terms parametrised at it (default |y0| of the
+            first set).
+        method : {"auto", "closed", "integrate"}
+            The closed form where the law has one (``"auto"``), or the integrator.
+        steps : int
+            Runge-Kutta steps per half cycle of the integrator.
+
+        Returns
+        -------
+        ndarray
+            Π, shape (P, T); a row is NaN where the drag is too strong for the
+            motion to turn (an overdamped arc, outside the law's domain).
+        """
+        t = np.ascontiguousarray(np.atleast_1d(np.asarray(tau, dtype=float)))
+        y = np.ascontiguousarray(np.atleast_1d(np.asarray(y0, dtype=float)).ravel())
+        size = y.size
+        vals = {
+            n: np.broadcast_to(np.asarray(values[n], dtype=float).ravel(), (size,))
+            for n in self.parameter_names
+        }
+        end = math.inf if tau_end is None else float(tau_end)
+        if method not in ("auto", "closed", "integrate"):
+            raise ValueError(f"method must be 'auto', 'closed' or 'integrate', got {method!r}")
+        if method == "closed" and not self.closed_form:
+            raise ValueError(f"law {self.name} has no closed form")
+        if method != "integrate" and self.closed_form:
+            from bayestribo.model._kernel import exact_pi_grid
+
+            zero = np.zeros(size)
+            zeta = vals.get("zeta", zero)
+            mu_k = vals.get("mu_k", zero)
+            mu_s = mu_k * vals.get("mu_s_ratio", np.ones(size))
+            return exact_pi_grid(t, y, zeta, mu_k, mu_s, float(yp0), tau_end)
+        ref = abs(float(y[0])) if reference is None else float(reference)
+        coef = self.coefficients(vals, ref)
+        grid = make_integrator(*self._layout[0])
+        pi, _ = grid(t, y, coef, self.static_ratio(vals, size), float(yp0), end, int(steps))
+        return pi
+
+    # -- what the law dissipates ---------------------------------------------------
+    def dissipation(
+        self,
+        amplitude: ArrayLike,
+        values: Mapping[str, ArrayLike],
+        reference: float,
+        *,
+        by_term: bool = False,
+    ) -> NDArray | dict[str, NDArray]:
+        """Energy dissipated over one cycle of ``y = A cos τ``, ΔE(A) = ∮F(y')y' dτ.
+
+        Parameters
+        ----------
+        amplitude : array_like
+            Amplitudes A (dimensionless), shape (n_A,).
+        values : mapping
+            Parameter values by name, each of shape (P,) (or scalars).
+        reference : float
+            The reference amplitude of terms parametrised at it.
+        by_term : bool
+            Return each term's share by term name instead of the sum.
+
+        Returns
+        -------
+        ndarray of shape (P, n_A), or dict of them
+            In dimensionless energy units (y²); multiply by kℓ² for joules
+            (:attr:`PhysicalScale.energy_factor`).
+        """
+        a = np.atleast_1d(np.asarray(amplitude, dtype=float))[None, :]
+        vals = {
+            n: np.atleast_1d(np.asarray(values[n], dtype=float))[:, None]
+            for n in self.parameter_names
+        }
+        parts = {t.name: np.asarray(t.dissipation(a, vals, float(reference))) for t in self.terms}
+        if by_term:
+            return parts
+        return sum(parts.values())
+
+    def physical(
+        self, values: Mapping[str, ArrayLike], reference: float, scale: PhysicalScale
+    ) -> dict[str, tuple]:
+        """Derived quantities in physical units by name: ``(values, unit, symbol, label)``."""
+        out: dict[str, tuple] = {}
+        for t in self.terms:
+            out.update(t.physical(values, float(reference), scale))
+        return out
+
+
+def get_law(law: str | Law | Sequence[Term] | None = None) -> Law:
+    """A :class:`Law` from a name, a law, or a sequence of terms (``None``: the default).
+
+    Raises
+    ------
+    ValueError
+        Naming the registered terms when the name holds an unknown one.
+    """
+    if law is None:
+        return Law.from_name(DEFAULT_LAW)
+    if isinstance(law, Law):
+        return law
+    if isinstance(law, str):
+        return Law.from_name(law)
+    return Law(tuple(law))
