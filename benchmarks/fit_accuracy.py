@@ -58,8 +58,8 @@ def fisher_bound(lik: Any, mean: dict[str, float], sd: dict[str, float]) -> dict
     ratio = mean["mu_s_ratio"]
 
     def increments(theta: np.ndarray) -> np.ndarray:
-        z, m, y = (np.array([[v]]) for v in theta)
-        return lik.model_increments(z, m, m * ratio, y)[0]
+        z, m, y = (np.array([v]) for v in theta)
+        return lik.model_increments({"zeta": z, "mu_k": m, "mu_s_ratio": ratio, "y0": y})[0]
 
     theta0 = np.array([mean[n] for n in THETA])
     cols = []

@@ -119,8 +119,8 @@ def _fisher_sd(data, theta, independent_pi=False):
     steps = np.array([1e-7, 1e-7, 1e-6])
 
     def inc(th):
-        col = [np.array([[v]]) for v in (th[0], th[1], th[1] * 1.2, th[2])]
-        return lik.model_increments(*col)[0]
+        col = {"zeta": th[0], "mu_k": th[1], "mu_s_ratio": 1.2, "y0": th[2]}
+        return lik.model_increments({k: np.array([v]) for k, v in col.items()})[0]
 
     jac = np.column_stack(
         [

@@ -40,14 +40,21 @@ def _col(v):
     return np.array([[v]])
 
 
+def _params(zeta, mu_k, mu_s, y0):
+    """The likelihood's parameter mapping from ζ, μ_k, μ_s and y0 (each (1, 1))."""
+    mu_k, mu_s = np.asarray(mu_k, dtype=float), np.asarray(mu_s, dtype=float)
+    ratio = np.divide(mu_s, mu_k, out=np.ones_like(mu_k), where=mu_k > 0)
+    return {"zeta": zeta, "mu_k": mu_k, "mu_s_ratio": ratio, "y0": y0}
+
+
 def test_marginal_equals_numerical_integral_over_the_offset(setup):
     """Analytic marginalisation of (δ₀, δ₁) against a brute-force 2-D quadrature."""
     _, _, data = setup
     lik = PiLikelihood(data, offset_sd=2e-3, drift_sd=2e-5)
-    args = (_col(0.02361), _col(0.02938), _col(0.0353), _col(data.y0))
-    analytic = lik.log_likelihood(*args)[0]
-    model = lik.model_increments(*args)[0]
-    delta_hat = lik.offset(*args)[0]
+    args = _params(_col(0.02361), _col(0.02938), _col(0.0353), _col(data.y0))
+    analytic = lik.log_likelihood(args)[0]
+    model = lik.model_increments(args)[0]
+    delta_hat = lik.offset(args)[0]
     # The conditional density is Gaussian in δ: integrate on a grid ±10 widths wide.
     x = data.offset_design
     w = 1.0 / data.variance
@@ -70,7 +77,9 @@ def test_equilibrium_error_is_recovered(setup):
     run, decay, data = setup
     lik = PiLikelihood(data)
     sim = run.metadata["simulation"]
-    delta = lik.offset(_col(sim["zeta"]), _col(sim["mu_k"]), _col(sim["mu_s"]), _col(data.y0))
+    delta = lik.offset(
+        _params(_col(sim["zeta"]), _col(sim["mu_k"]), _col(sim["mu_s"]), _col(data.y0))
+    )
     error = (decay.equilibrium - sim["offset_m"]) / decay.scaling.length_scale
     # δ₀ is the offset at τ = 0 of the error, in units of y; the estimate's own
     # uncertainty is about σ_y/√(samples) ≈ 1e-4 here.
@@ -83,9 +92,9 @@ def test_averaged_model_bias_shows_at_vibrometer_precision(setup):
     sim = run.metadata["simulation"]
     lik_exact = PiLikelihood(data, model="exact")
     lik_avg = PiLikelihood(data, model="averaged")
-    args = (_col(sim["zeta"]), _col(sim["mu_k"]), _col(sim["mu_s"]), _col(data.y0))
-    r_exact = lik_exact.standardized_residuals(*args)
-    r_avg = lik_avg.standardized_residuals(*args)
+    args = _params(_col(sim["zeta"]), _col(sim["mu_k"]), _col(sim["mu_s"]), _col(data.y0))
+    r_exact = lik_exact.standardized_residuals(args)
+    r_avg = lik_avg.standardized_residuals(args)
     # y0 is the noisy observed value (off by ~σ_y): allow a loose χ² for the exact one.
     assert np.sum(r_exact**2) < 20 * data.increments.size
     assert np.sum(r_avg**2) > 20 * np.sum(r_exact**2)
@@ -113,7 +122,7 @@ def test_posterior_skips_impossible_priors_and_refuses_nan(setup):
 
     class NaNLikelihood(PiLikelihood):
         def log_likelihood(self, *args, **kwargs):
-            return np.full(np.shape(args[0])[0], np.nan)
+            return np.full(np.size(args[0]["y0"]), np.nan)
 
     broken = Posterior(default_priors(data.y0), NaNLikelihood(data))
     with pytest.raises(FloatingPointError, match=r"zeta=0\.0236"):
@@ -125,11 +134,11 @@ def test_shape_discrepancy_marginal_is_the_gaussian_with_its_covariance(setup):
     multivariate normal of the residuals with covariance diag(V + s²∫E²) + X P Xᵀ."""
     _, _, data = setup
     lik = PiLikelihood(data, offset_sd=2e-3, drift_sd=2e-5)
-    args = (_col(0.02361), _col(0.02938), _col(0.0353), _col(data.y0))
-    resid = data.increments - lik.model_increments(*args)[0]
+    args = _params(_col(0.02361), _col(0.02938), _col(0.0353), _col(data.y0))
+    resid = data.increments - lik.model_increments(args)[0]
     for s, sc in [(None, 1e-3), (1e-4, 1e-2), (3e-3, 1e-5)]:
         disc = None if s is None else _col(s)
-        analytic = lik.log_likelihood(*args, disc, _col(sc))[0]
+        analytic = lik.log_likelihood(args, disc, _col(sc))[0]
         var = data.variance + (0.0 if s is None else s * s * data.energy_squared)
         # the shape columns D_j P_k(u_j), built here from the definition
         mid = 0.5 * (data.tau_grid[:-1] + data.tau_grid[1:])
@@ -150,20 +159,20 @@ def test_shape_departure_is_chi2_under_the_law_and_finds_an_injected_departure(s
     size at the increment where it is largest."""
     _, _, data = setup
     lik = PiLikelihood(data)
-    truth = (0.02361, 0.02938, 0.0353, data.y0)
-    model = lik.model_increments(*[_col(v) for v in truth])[0]
+    truth = {"zeta": 0.02361, "mu_k": 0.02938, "mu_s_ratio": 0.0353 / 0.02938, "y0": data.y0}
+    model = lik.model_increments({k: _col(v) for k, v in truth.items()})[0]
     rng = np.random.default_rng(3)
     chi2 = []
     for _ in range(300):
         noisy = model + rng.normal(0.0, np.sqrt(data.variance))
         other = PiLikelihood(dataclasses.replace(data, increments=noisy))
-        chi2.append(other.shape_departure(*truth).chi2)
+        chi2.append(other.shape_departure(truth).chi2)
     assert kstest(chi2, chi2_dist(SHAPE_TERMS).cdf).pvalue > 0.01
     # a departure of +0.5 % at the start to -0.5 % at the end, curving in between
     u = 2 * np.arange(model.size) / (model.size - 1) - 1
     g = 5e-3 * np.polynomial.legendre.Legendre([0.0, -0.6, 0.0, -0.4])(u)
     noisy = model * (1 + g) + rng.normal(0.0, np.sqrt(data.variance))
-    found = PiLikelihood(dataclasses.replace(data, increments=noisy)).shape_departure(*truth)
+    found = PiLikelihood(dataclasses.replace(data, increments=noisy)).shape_departure(truth)
     assert found.p_value < 1e-6
     worst = found.at_increment
     assert abs(found.max_relative - g[worst]) < 4 * found.max_relative_sd

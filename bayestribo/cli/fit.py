@@ -25,6 +25,7 @@ import numpy as np
 
 from bayestribo import DEFAULT_SEED
 from bayestribo.cli._common import add_notch_option, add_run_arguments, read_run_from_args
+from bayestribo.cli.laws import add_law_option
 
 __all__ = ["json_record", "register", "write_outputs"]
 
@@ -56,6 +57,7 @@ def register(subparsers: Any) -> None:
     )
     add_run_arguments(p)
     add_notch_option(p)
+    add_law_option(p)
     p.add_argument(
         "--model", choices=("exact", "averaged"), default="exact", help="forward model of Π"
     )
@@ -96,8 +98,9 @@ def register(subparsers: Any) -> None:
 def json_record(result: Any, prob: float = 0.95) -> dict[str, Any]:
     """The JSON object printed by ``--json``.
 
-    ``{"run", "model", "seed", "bayestribo_version", "metadata", "noise", "parameters":
-    {NAME: {"mean", "sd", "median", "interval", "prob", "kind", "unit"}}, "diagnostics":
+    ``{"run", "model", "law", "seed", "bayestribo_version", "metadata", "noise",
+    "parameters": {NAME: {"mean", "sd", "median", "interval", "prob", "kind", "unit"}},
+    "dissipation": {"amplitude", "mean", "sd", "interval", "prob", "unit", ...}, "diagnostics":
     {"converged", "n_walkers", "n_steps", "autocorr_time_max", "ess_min",
     "acceptance_fraction", ...}, "seconds"}``; the
     diagnostics keep the fit's further entries (R-hat, ESS and τ per parameter, reasons when not
@@ -110,12 +113,14 @@ def json_record(result: Any, prob: float = 0.95) -> dict[str, Any]:
     return {
         "run": full["run"],
         "model": full["model"],
+        "law": full["law"],
         "seed": full["seed"],
         "bayestribo_version": full["bayestribo_version"],
         "metadata": full["metadata"],
         "noise": full["noise"],
         "channel_calibration": full["channel_calibration"],
         "parameters": full["parameters"],
+        "dissipation": full["dissipation"],
         "diagnostics": ordered,
         "prior_sensitivity": full.get("prior_sensitivity"),
         "seconds": full["seconds"],
@@ -188,6 +193,7 @@ def run(args: argparse.Namespace) -> int:
             skip_oscillations=args.skip,
             notch=args.notch,
             max_steps=args.max_steps,
+            law=args.law,
         )
     # the run is named by the path the user gave
     result.idata.posterior.attrs["run_name"] = str(args.run)

@@ -29,6 +29,7 @@ COMMANDS: tuple[str, ...] = (
     "acquire",
     "estimate",
     "fit",
+    "laws",
     "simulate",
     "check",
     "campaign",

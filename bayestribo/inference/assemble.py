@@ -81,7 +81,9 @@ def derived_quantities(
     ratio_w = np.ones(size)  # (1 + ε): the measured over the oscillator's frequency
     if frequency_sd > 0.0:
         ratio_w = 1.0 + rng.normal(0.0, frequency_sd, size)
-    out: dict[str, NDArray] = {"zeta": col["zeta"] * ratio_w}
+    out: dict[str, NDArray] = {}
+    if "zeta" in col:
+        out["zeta"] = col["zeta"] * ratio_w
     n_draw = m_draw = None
     if posterior.friction:
         mu_k = col["mu_k"]
@@ -108,7 +110,7 @@ def derived_quantities(
             out[name] = col[name]
 
     zeta0 = metadata.get("zeta0")
-    if zeta0 is not None and posterior.friction:
+    if zeta0 is not None and posterior.friction and "zeta" in out:
         z0 = _positive_draws(rng, float(zeta0), metadata.get("zeta0_sd"), size)
         out["zeta_k"] = out["zeta"] - z0
         if n_draw is not None and m_draw is not None:
@@ -160,10 +162,8 @@ def _predictive_pi(
     )
     p = posterior.physical(flat[pick])
     lik = posterior.likelihood
-    model_inc = lik.model_increments(p["zeta"], p["mu_k"], p["mu_s"], p["y0"])
-    nuisance = lik.nuisance_mean(
-        p["zeta"], p["mu_k"], p["mu_s"], p["y0"], p["discrepancy"], p["shape"]
-    )
+    model_inc = lik.model_increments(p["params"])
+    nuisance = lik.nuisance_mean(p["params"], p["discrepancy"], p["shape"])
     var = np.broadcast_to(lik.variance(p["discrepancy"]), model_inc.shape)
     replicated = model_inc + nuisance + rng.normal(0.0, np.sqrt(var))
     return np.cumsum(replicated[:, ::-1], axis=1)[:, ::-1]

@@ -26,6 +26,7 @@ from bayestribo.inference.priors import Prior
 from bayestribo.inference.result import FitResult
 from bayestribo.inference.sampling import SamplerSettings
 from bayestribo.io.run import Run
+from bayestribo.model.laws import Law, get_law
 from bayestribo.signal.noise import NoiseModel
 
 __all__ = ["fit"]
@@ -49,8 +50,11 @@ def fit(
     noise: NoiseModel | None = None,
     correct_channels: bool = True,
     notch: float | Literal["auto"] | None = None,
+    law: str | Law | None = None,
 ) -> FitResult:
-    """Posterior of ζ and μ_k (or ζ₀, or the friction displacement) for one run.
+    """Posterior of ζ and μ_k (or ζ₀, or the friction displacement) for one run, or
+    of the parameters of another dissipation law, with the energy dissipated per
+    cycle ΔE(A).
 
     Parameters
     ----------
@@ -94,6 +98,11 @@ def fit(
         ``channel_calibration`` records what was measured and done.
     notch : float, "auto" or None
         Mains line to subtract, measured at rest (:func:`bayestribo.inference.prepare`).
+    law : str or Law, optional
+        The dissipation law: terms of :mod:`bayestribo.model.laws` joined with ``+``
+        (``"viscous+coulomb"``, the default; ``"viscous+quadratic"``,
+        ``"viscous+coulomb+hysteretic"``, ...) or a :class:`~bayestribo.model.laws.Law`.
+        A run without contact (``load_N`` of 0) drops the law's friction terms.
 
     Returns
     -------
@@ -110,6 +119,10 @@ def fit(
     start = time.perf_counter()
     if model not in MODELS:  # before the run is read and prepared
         raise BayestriboError(f"model: expected one of {MODELS}, got {model!r}")
+    try:
+        the_law = get_law(law)
+    except ValueError as exc:
+        raise BayestriboError(str(exc)) from None
     settings = SamplerSettings(n_walkers=n_walkers, n_ensembles=n_ensembles, max_steps=max_steps)
     rng = np.random.default_rng(seed)
     prepared = prepare(
@@ -129,6 +142,7 @@ def fit(
         discrepancy=discrepancy,
         priors=priors,
         fixed=fixed,
+        law=the_law,
     )
     sampled = sample(posterior, prepared.decay, settings=settings, seed=rng, progress=progress)
     result = summarise(prepared, sampled, seed=rng, recorded_seed=seed)

@@ -423,7 +423,7 @@ class FusedLogPosterior:
         """Tables for ``priors`` × ``likelihood`` with ``fixed`` values, or None when
         a prior is not one of the three kinds or the likelihood is a subclass (its
         methods may differ from what is compiled here)."""
-        if type(likelihood) is not PiLikelihood:
+        if type(likelihood) is not PiLikelihood or not likelihood.law.closed_form:
             return None
         table = np.empty((len(priors), 3))
         for i, name in enumerate(priors.names):

@@ -54,7 +54,8 @@ noise covariance) and says by how much the decay departs from the law.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Literal
 
@@ -63,10 +64,15 @@ import scipy.stats
 from numpy.typing import NDArray
 
 from bayestribo.model import averaged_pi
-from bayestribo.model._kernel import exact_pi_grid
+from bayestribo.model.laws import Law, get_law
 from bayestribo.signal.increments import PiData
 
-__all__ = ["MODELS", "SHAPE_TERMS", "PiLikelihood", "ShapeDeparture"]
+__all__ = ["MODELS", "SHAPE_TERMS", "Params", "PiLikelihood", "ShapeDeparture"]
+
+#: Parameter values by name: the law's parameters and ``y0``, arrays of shape (n,) or
+#: (n, 1) (a parameter of the law that is missing takes its null value, the lower end
+#: of its support: no force, or μ_s = μ_k).
+Params = Mapping[str, NDArray]
 
 MODELS = ("exact", "averaged")
 ModelName = Literal["exact", "averaged"]
@@ -85,42 +91,79 @@ class PiLikelihood:
         Observed increments and their noise variances.
     model : {"exact", "averaged"}
         Forward model: the exact piecewise solution with sticking (default), or the
-        averaged closed form (Eq. 40-41; no static friction, amplitude √(y0² + y'0²)).
+        averaged closed form (Eq. 40-41; no static friction, amplitude √(y0² + y'0²);
+        only for laws of viscous damping and Coulomb friction).
     offset_sd : float
         Prior standard deviation of the equilibrium error δ₀ [units of y].
     drift_sd : float
         Prior standard deviation of its drift δ₁ [units of y per unit τ].
+    law : Law
+        The dissipation law (:mod:`bayestribo.model.laws`; default viscous damping
+        and Coulomb friction).
     """
 
     data: PiData
     model: ModelName = "exact"
     offset_sd: float = 1e-2
     drift_sd: float = 1e-4
+    law: Law = field(default_factory=get_law)
 
     def __post_init__(self) -> None:
         if self.model not in MODELS:
             raise ValueError(f"model must be one of {MODELS}, got {self.model!r}")
+        object.__setattr__(self, "law", get_law(self.law))
+        if self.model == "averaged" and not self.law.closed_form:
+            raise ValueError(
+                f"model='averaged' has no closed form for the law {self.law.name}; use "
+                "model='exact'"
+            )
         for name in ("offset_sd", "drift_sd"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a positive number, got {value!r}")
 
     # -- model --------------------------------------------------------------------
-    def model_pi(self, zeta: NDArray, mu_k: NDArray, mu_s: NDArray, y0: NDArray) -> NDArray:
-        """Model Π at the grid points τ_0 .. τ_{m-1}; parameters of shape (n, 1)."""
+    @property
+    def reference_amplitude(self) -> float:
+        """The amplitude at which laws parametrised at a reference are (the observed
+        |y0| of the analysed window)."""
+        return abs(float(self.data.y0))
+
+    def law_values(self, params: Params) -> tuple[dict[str, NDArray], NDArray]:
+        """The law's parameter values (each (n,)) and y0 (n,) from ``params``."""
+        y0 = np.ravel(np.asarray(params["y0"], dtype=float))
+        values = {}
+        for p in self.law.parameters:
+            v = params.get(p.name)
+            values[p.name] = (
+                np.full(y0.shape, p.low) if v is None else np.ravel(np.asarray(v, dtype=float))
+            )
+        return values, y0
+
+    def model_pi(self, params: Params) -> NDArray:
+        """Model Π at the grid points τ_0 .. τ_{m-1}, shape (n, m).
+
+        ``params``: the law's parameters and ``y0`` by name (:data:`Params`). A row is
+        NaN where the law cannot move (an overdamped arc of a strong drag).
+        """
         tau = self.data.tau_grid[:-1]
         end = None if self.data.motion_ended else self.data.tau_end
+        values, y0 = self.law_values(params)
         if self.model == "exact":
-            # The priors keep the parameters in the model's range; a sampler evaluates
-            # a few walkers per call, where the compiled kernel is 5-10x faster than
-            # the numpy implementation (they agree to 1e-12, see the tests).
-            return exact_pi_grid(tau, y0, zeta, mu_k, mu_s, self.data.yp0, end)
-        amplitude = np.hypot(y0, self.data.yp0)
+            # The law's one compiled core: the closed form where it has one (5-10x
+            # faster than the numpy implementation, to which it agrees to 1e-12), the
+            # half-cycle integrator otherwise.
+            return self.law.pi_grid(
+                tau, values, y0, self.data.yp0, end, reference=self.reference_amplitude
+            )
+        amplitude = np.hypot(y0, self.data.yp0)[:, None]
+        zeta = values.get("zeta", np.zeros_like(y0))[:, None]
+        mu_k = values.get("mu_k", np.zeros_like(y0))[:, None]
         return averaged_pi(tau, amplitude, zeta, mu_k, tau_end=end)
 
-    def model_increments(self, zeta: NDArray, mu_k: NDArray, mu_s: NDArray, y0: NDArray) -> NDArray:
+    def model_increments(self, params: Params) -> NDArray:
         """Model increments M_j, shape (n, m)."""
-        pi = self.model_pi(zeta, mu_k, mu_s, y0)
+        pi = self.model_pi(params)
         inc = np.empty_like(pi)
         inc[..., :-1] = pi[..., :-1] - pi[..., 1:]
         inc[..., -1] = pi[..., -1]
@@ -191,103 +234,96 @@ class PiLikelihood:
             return base
         return base + 2.0 * SHAPE_TERMS * np.log(np.reshape(np.asarray(shape, float), -1))
 
-    def _residuals(self, zeta: NDArray, mu_k: NDArray, mu_s: NDArray, y0: NDArray) -> NDArray:
+    def _residuals(self, params: Params) -> NDArray:
         """Observed minus model increments, D_j - M_j, shape (n, m)."""
-        return self.data.increments - self.model_increments(zeta, mu_k, mu_s, y0)
+        return self.data.increments - self.model_increments(params)
 
     def offset(
         self,
-        zeta: NDArray,
-        mu_k: NDArray,
-        mu_s: NDArray,
-        y0: NDArray,
+        params: Params,
         discrepancy: NDArray | None = None,
         shape: NDArray | None = None,
     ) -> NDArray:
         """Conditional mean of (δ₀, δ₁) given the parameters, shape (n, 2)."""
-        resid = self._residuals(zeta, mu_k, mu_s, y0)
+        resid = self._residuals(params)
         return self._solve(resid, self.variance(discrepancy), shape)[0][:, :2]
 
     def nuisance_mean(
         self,
-        zeta: NDArray,
-        mu_k: NDArray,
-        mu_s: NDArray,
-        y0: NDArray,
+        params: Params,
         discrepancy: NDArray | None = None,
         shape: NDArray | None = None,
     ) -> NDArray:
         """Conditional mean of the linear nuisances' part of each increment (equilibrium
         and, with ``shape``, the shape discrepancy), shape (n, m)."""
-        resid = self._residuals(zeta, mu_k, mu_s, y0)
+        resid = self._residuals(params)
         delta = self._solve(resid, self.variance(discrepancy), shape)[0]
         return delta @ self.design(shape is not None).T
 
     # -- densities ----------------------------------------------------------------
     def log_likelihood(
         self,
-        zeta: NDArray,
-        mu_k: NDArray,
-        mu_s: NDArray,
-        y0: NDArray,
+        params: Params,
         discrepancy: NDArray | None = None,
         shape: NDArray | None = None,
     ) -> NDArray:
         """Log-likelihood with the linear nuisances marginalised, shape (n,).
 
         ``discrepancy`` is the white discrepancy's scale s and ``shape`` the shape
-        discrepancy's s_c (each (n, 1), or None without that term).
+        discrepancy's s_c (each (n, 1), or None without that term). A row where a law
+        without a closed form cannot move (an overdamped arc: its Π is NaN) is outside
+        the law's domain and has log-likelihood −inf; with the closed forms a NaN
+        stays NaN (a bug or a broken input, which the posterior reports).
         """
-        resid = self._residuals(zeta, mu_k, mu_s, y0)
+        resid = self._residuals(params)
+        outside = None
+        if not self.law.closed_form:
+            outside = ~np.all(np.isfinite(resid), axis=-1)
+            if np.any(outside):
+                resid = np.where(outside[:, None], 0.0, resid)
         var = self.variance(discrepancy)
         _, explained, logdet_a = self._solve(resid, var, shape)
         chi2 = np.sum(resid * resid / var, axis=-1) - explained
         norm = np.sum(np.log(var) + _LOG_2PI, axis=-1)
-        return -0.5 * (chi2 + norm + logdet_a + self._log_prior_det(shape))
+        out = -0.5 * (chi2 + norm + logdet_a + self._log_prior_det(shape))
+        if outside is not None and np.any(outside):
+            out = np.where(outside, -np.inf, out)
+        return out
 
     def conditional_residuals(
         self,
-        zeta: NDArray,
-        mu_k: NDArray,
-        mu_s: NDArray,
-        y0: NDArray,
+        params: Params,
         discrepancy: NDArray | None = None,
         shape: NDArray | None = None,
     ) -> NDArray:
         """D_j - M_j with the nuisances' conditional mean removed, shape (n, m)."""
-        resid = self._residuals(zeta, mu_k, mu_s, y0)
+        resid = self._residuals(params)
         delta = self._solve(resid, self.variance(discrepancy), shape)[0]
         return resid - delta @ self.design(shape is not None).T
 
     def pointwise(
         self,
-        zeta: NDArray,
-        mu_k: NDArray,
-        mu_s: NDArray,
-        y0: NDArray,
+        params: Params,
         discrepancy: NDArray | None = None,
         shape: NDArray | None = None,
     ) -> NDArray:
         """Conditional log-likelihood of each increment, shape (n, m) (for PSIS-LOO)."""
-        resid = self.conditional_residuals(zeta, mu_k, mu_s, y0, discrepancy, shape)
+        resid = self.conditional_residuals(params, discrepancy, shape)
         var = self.variance(discrepancy)
         return -0.5 * (resid * resid / var + np.log(var) + _LOG_2PI)
 
     def standardized_residuals(
         self,
-        zeta: NDArray,
-        mu_k: NDArray,
-        mu_s: NDArray,
-        y0: NDArray,
+        params: Params,
         discrepancy: NDArray | None = None,
         shape: NDArray | None = None,
     ) -> NDArray:
         """Conditional residuals over √V_j: standard normals if the model is right."""
-        resid = self.conditional_residuals(zeta, mu_k, mu_s, y0, discrepancy, shape)
+        resid = self.conditional_residuals(params, discrepancy, shape)
         return resid / np.sqrt(self.variance(discrepancy))
 
     # -- how far the decay departs from the law -----------------------------------
-    def shape_departure(self, zeta: float, mu_k: float, mu_s: float, y0: float) -> ShapeDeparture:
+    def shape_departure(self, params: Mapping[str, float]) -> ShapeDeparture:
         """Test the residuals at one parameter set for a smooth departure along the decay.
 
         The relative departure ``g(u) = Σ_k c_k P_k(u)`` (see the module notes) is fitted
@@ -298,15 +334,15 @@ class PiLikelihood:
 
         Parameters
         ----------
-        zeta, mu_k, mu_s, y0 : float
-            The parameter set (usually the maximum a posteriori).
+        params : mapping of str to float
+            The parameter set by name, the law's parameters and ``y0`` (usually the
+            maximum a posteriori).
 
         Returns
         -------
         ShapeDeparture
         """
-        args = [np.array([[float(v)]]) for v in (zeta, mu_k, mu_s, y0)]
-        resid = self._residuals(*args)[0]
+        resid = self._residuals({k: np.array([float(v)]) for k, v in params.items()})[0]
         w = 1.0 / self.data.variance
         x = self.design(True)
         a = (x.T * w) @ x

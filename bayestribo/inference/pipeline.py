@@ -38,6 +38,12 @@ from bayestribo.errors import (
 )
 from bayestribo.inference.assemble import derived_quantities, inference_data
 from bayestribo.inference.calibration import calibrate_channels
+from bayestribo.inference.dissipation import (
+    dissipation_amplitudes,
+    dissipation_band,
+    law_quantities,
+    physical_scale,
+)
 from bayestribo.inference.likelihood import MODELS, PiLikelihood, ShapeDeparture
 from bayestribo.inference.modes import mode_check, run_or_failure
 from bayestribo.inference.posterior import Posterior
@@ -49,6 +55,7 @@ from bayestribo.inference.start import initial_walkers, maximum_a_posteriori, re
 from bayestribo.io.files import as_run
 from bayestribo.io.frequency import FrequencyTrend, frequency_trend, turning_point_trend
 from bayestribo.io.run import Run
+from bayestribo.model.laws import Law, get_law
 from bayestribo.signal.decay import EnergyDecay, energy_decay
 from bayestribo.signal.increments import PiData, pi_data
 from bayestribo.signal.noise import NoiseModel, noise_model
@@ -203,6 +210,7 @@ def build_posterior(
     discrepancy: bool = False,
     priors: Mapping[str, Prior] | None = None,
     fixed: Mapping[str, float] | None = None,
+    law: str | Law | None = None,
 ) -> Posterior:
     """Step 2: the posterior for observed Π increments.
 
@@ -227,6 +235,11 @@ def build_posterior(
     fixed : mapping, optional
         Parameters held at a value instead of sampled, e.g. ``{"zeta": 0.0}`` for
         friction alone; their priors are dropped.
+    law : str or Law, optional
+        The dissipation law (:mod:`bayestribo.model.laws`): a name such as
+        ``"viscous+quadratic+coulomb"``, or a :class:`~bayestribo.model.laws.Law`
+        (one of terms defined outside the package too); default
+        ``"viscous+coulomb"``.
 
     Returns
     -------
@@ -235,17 +248,29 @@ def build_posterior(
     Raises
     ------
     BayestriboError
-        If a parameter is both given a prior and fixed, or a fixed name is unknown.
+        If a parameter is both given a prior and fixed, a fixed name is unknown, the
+        law is unknown, or a prior names a parameter the law does not have.
     """
     if model not in MODELS:
         raise BayestriboError(f"model: expected one of {MODELS}, got {model!r}")
+    try:
+        the_law = get_law(law)
+    except ValueError as exc:
+        raise BayestriboError(str(exc)) from None
+    if model == "averaged" and not the_law.closed_form:
+        raise BayestriboError(
+            f"model='averaged' has no closed form for the law {the_law.name}: use model='exact'"
+        )
     fixed = dict(fixed or {})
     both = sorted(set(fixed) & set(priors or {}))
     if both:
         raise BayestriboError(f"priors and fixed both name {both}: give one or the other")
-    prior_set = default_priors(data.y0, friction=friction, discrepancy=discrepancy)
+    prior_set = default_priors(data.y0, friction=friction, discrepancy=discrepancy, law=the_law)
     if priors:
-        prior_set = prior_set.replace(**dict(priors))
+        try:
+            prior_set = prior_set.replace(**dict(priors))
+        except ValueError as exc:
+            raise BayestriboError(f"priors: {exc} (law {the_law.name})") from None
     if fixed:
         prior_set = PriorSet({n: p for n, p in prior_set.priors.items() if n not in fixed})
     likelihood = PiLikelihood(
@@ -253,6 +278,7 @@ def build_posterior(
         model=model,  # type: ignore[arg-type]
         offset_sd=max(1e-2 * abs(data.y0), 1e-12),
         drift_sd=max(1e-2 * abs(data.y0) / data.tau_end, 1e-15),
+        law=the_law,
     )
     return Posterior(prior_set, likelihood, fixed)
 
@@ -321,10 +347,8 @@ def _misfit(posterior: Posterior, theta: NDArray) -> tuple[float, int, float]:
 
 def _shape_departure(posterior: Posterior, theta: NDArray) -> ShapeDeparture:
     """The smooth departure of the decay from the law at θ (noise variances alone)."""
-    p = posterior.physical(theta[None])
-    return posterior.likelihood.shape_departure(
-        float(p["zeta"][0, 0]), float(p["mu_k"][0, 0]), float(p["mu_s"][0, 0]), float(p["y0"][0, 0])
-    )
+    params = posterior.physical(theta[None])["params"]
+    return posterior.likelihood.shape_departure({k: float(v[0]) for k, v in params.items()})
 
 
 #: A half period changing along the decay by more than this fraction, and by more than
@@ -524,10 +548,22 @@ def summarise(
     metadata = prepared.metadata
     scaling = prepared.decay.scaling
     derived = derived_quantities(posterior, flat, scaling, metadata, rng, frequency_sd)
+    scale = physical_scale(scaling, metadata)
+    own, own_units = law_quantities(posterior, flat, scale)
+    derived = {**derived, **{k: v for k, v in own.items() if k not in derived}}
+    dissipation = dissipation_band(
+        posterior,
+        flat,
+        dissipation_amplitudes(decay.peaks.value / scaling.length_scale),
+        scale,
+    )
     noise_info = {**prepared.noise.to_dict(), "description": prepared.noise.describe()}
     attrs = {
         "run_name": name,
         "model": posterior.likelihood.model,
+        "law": posterior.law.name,
+        "dissipation_json": json.dumps(plain_data(dissipation)),
+        "units_json": json.dumps(own_units),
         "seed": -1 if recorded_seed is None else int(recorded_seed),
         "package_version": __version__,
         "friction_defined": int(scaling.friction_defined),

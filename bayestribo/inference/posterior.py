@@ -1,8 +1,9 @@
 """Posterior = priors × likelihood, vectorised over walkers.
 
-The sampled vector holds, in order, the names of the :class:`PriorSet`: ``zeta``,
-and with friction ``mu_k`` and ``mu_s_ratio`` (μ_s = μ_k × ratio keeps μ_s >= μ_k
-without a constraint between coordinates), ``y0``, and optionally
+The sampled vector holds, in order, the names of the :class:`PriorSet`: the
+parameters of the likelihood's dissipation law (:mod:`bayestribo.model.laws`; for the
+default law ``zeta``, and with friction ``mu_k`` and ``mu_s_ratio``: μ_s = μ_k × ratio
+keeps μ_s >= μ_k without a constraint between coordinates), ``y0``, and optionally
 ``log10_discrepancy`` and ``log10_shape`` (the white and the shape discrepancy's scales,
 :mod:`bayestribo.inference.likelihood`). A parameter may instead be *fixed* at a value (for example
 ``zeta = 0`` for a Coulomb-only law): it is then not sampled, has no prior, and enters
@@ -27,6 +28,7 @@ import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from functools import partial
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -37,11 +39,14 @@ from bayestribo.inference.fused_step import grouped_step
 from bayestribo.inference.likelihood import PiLikelihood
 from bayestribo.inference.priors import PriorSet
 from bayestribo.inference.sampling import NaNLogProbabilityError
+from bayestribo.model.laws import Law
 
 __all__ = ["PARAMETERS", "Posterior"]
 
-#: Every parameter the single-run posterior knows, in sampling order.
+#: Every parameter the single-run posterior of the default law knows, in sampling order.
 PARAMETERS = ("zeta", "mu_k", "mu_s_ratio", "y0", "log10_discrepancy", "log10_shape")
+#: The parameters of every law besides the law's own.
+_COMMON = ("y0", "log10_discrepancy", "log10_shape")
 
 
 @dataclass(frozen=True)
@@ -56,8 +61,9 @@ class Posterior:
     likelihood : PiLikelihood
         Likelihood of the Π increments.
     fixed : mapping of str to float, optional
-        Parameters held at a value instead of sampled (names from :data:`PARAMETERS`,
-        not also in ``priors``).
+        Parameters held at a value instead of sampled (the law's parameters, ``y0``
+        or a discrepancy scale, not also in ``priors``). A parameter of the law that
+        is neither sampled nor fixed takes its null value (no force; μ_s = μ_k).
     compiled : bool
         Evaluate ``__call__`` with the compiled log density where it applies (the
         default); False: always with the numpy reference.
@@ -70,24 +76,35 @@ class Posterior:
 
     def __post_init__(self) -> None:
         fixed = {str(k): float(v) for k, v in dict(self.fixed).items()}
+        known = self.parameters
         for name, value in fixed.items():
-            if name not in PARAMETERS:
-                raise BayestriboError(f"fixed: unknown parameter {name!r}; expected {PARAMETERS}")
+            if name not in known:
+                raise BayestriboError(f"fixed: unknown parameter {name!r}; expected {known}")
             if name in self.priors.names:
                 raise BayestriboError(f"fixed: {name!r} is also sampled (it has a prior)")
             if not math.isfinite(value):
                 raise BayestriboError(f"fixed: {name} must be a finite number, got {value!r}")
-        unknown = [n for n in self.priors.names if n not in PARAMETERS]
+        unknown = [n for n in self.priors.names if n not in known]
         if unknown:
-            raise BayestriboError(f"priors: unknown parameter(s) {unknown}; expected {PARAMETERS}")
-        for required in ("zeta", "y0"):
-            if required not in self.priors.names and required not in fixed:
-                raise BayestriboError(f"priors: {required!r} must be sampled or fixed")
+            raise BayestriboError(f"priors: unknown parameter(s) {unknown}; expected {known}")
+        if "y0" not in self.priors.names and "y0" not in fixed:
+            raise BayestriboError("priors: 'y0' must be sampled or fixed")
         object.__setattr__(self, "fixed", fixed)
         fused = (
             FusedLogPosterior.build(self.priors, self.likelihood, fixed) if self.compiled else None
         )
         object.__setattr__(self, "_fused", fused)
+
+    @property
+    def law(self) -> Law:
+        """The dissipation law of the likelihood."""
+        return self.likelihood.law
+
+    @property
+    def parameters(self) -> tuple[str, ...]:
+        """Every parameter this posterior knows: the law's, ``y0`` and the discrepancy
+        scales."""
+        return (*self.law.parameter_names, *_COMMON)
 
     @property
     def uses_compiled(self) -> bool:
@@ -110,8 +127,18 @@ class Posterior:
 
     @property
     def friction(self) -> bool:
-        """True when the model has friction (μ_k sampled, or fixed above 0)."""
+        """True when the model has Coulomb friction (μ_k sampled, or fixed above 0)."""
         return "mu_k" in self.names or self.fixed.get("mu_k", 0.0) > 0.0
+
+    def law_draws(self, theta: NDArray) -> dict[str, NDArray]:
+        """Every parameter of the law for rows ``theta`` (n, d), each (n,): sampled,
+        fixed, or at its null value (no force; μ_s/μ_k = 1)."""
+        values = self.values(theta)
+        n = np.atleast_2d(theta).shape[0]
+        return {
+            p.name: values[p.name] if p.name in values else np.full(n, p.low)
+            for p in self.law.parameters
+        }
 
     def values(self, theta: NDArray) -> dict[str, NDArray]:
         """Sampled and fixed coordinates of rows ``theta`` (n, d) by name, each (n,)."""
@@ -120,24 +147,30 @@ class Posterior:
         out.update({name: theta[:, i] for i, name in enumerate(self.names)})
         return out
 
-    def physical(self, theta: NDArray) -> dict[str, NDArray]:
-        """Model parameters ζ, μ_k, μ_s, y0 (each (n, 1)) and the discrepancy scales
-        ``discrepancy`` (white) and ``shape`` (``None`` without that term) from sampled
-        rows ``theta`` (n, d)."""
-        col = {name: v[:, None] for name, v in self.values(theta).items()}
-        zero = np.zeros_like(col["zeta"])
-        mu_k = col.get("mu_k", zero)
-        mu_s = mu_k * col["mu_s_ratio"] if "mu_s_ratio" in col else mu_k
-        out = {"zeta": col["zeta"], "mu_k": mu_k, "mu_s": mu_s, "y0": col["y0"]}
+    def physical(self, theta: NDArray) -> dict[str, Any]:
+        """The likelihood's arguments from sampled rows ``theta`` (n, d).
+
+        Returns
+        -------
+        dict
+            ``params``: the law's parameters and ``y0`` by name, each (n,);
+            ``discrepancy`` (white) and ``shape``: the discrepancy scales, each (n, 1),
+            or ``None`` without that term.
+        """
+        col = self.values(theta)
+        params = self.law_draws(theta)
+        params["y0"] = col["y0"]
         log_s = col.get("log10_discrepancy")
-        out["discrepancy"] = None if log_s is None else 10.0**log_s
         log_c = col.get("log10_shape")
-        out["shape"] = None if log_c is None else 10.0**log_c
-        return out
+        return {
+            "params": params,
+            "discrepancy": None if log_s is None else 10.0 ** log_s[:, None],
+            "shape": None if log_c is None else 10.0 ** log_c[:, None],
+        }
 
     def _likelihood_args(self, theta: NDArray) -> tuple:
         p = self.physical(theta)
-        return p["zeta"], p["mu_k"], p["mu_s"], p["y0"], p["discrepancy"], p["shape"]
+        return p["params"], p["discrepancy"], p["shape"]
 
     def log_likelihood(self, theta: NDArray) -> NDArray:
         """Log-likelihood of each row (nuisance offset marginalised), shape (n,)."""

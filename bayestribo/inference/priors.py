@@ -5,7 +5,8 @@ outside its support), a ``sample`` for starting walkers and prior predictive dra
 and a ``describe`` for reports. :class:`PriorSet` holds one per parameter; the
 default set is built by :func:`default_priors` and any entry can be replaced.
 
-Defaults (dimensionless, Rigaud et al. 2010 notation):
+Defaults (dimensionless, Rigaud et al. 2010 notation), for the default law; every other
+term of :mod:`bayestribo.model.laws` declares its own:
 
 * ``zeta`` (ζ): uniform on [0, 0.3]. Underdamped oscillators that ring for several
   cycles have ζ well below 0.3; the rig's ζ₀ = 0.0033 in air and ζ ≈ 0.024 with
@@ -33,6 +34,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+from bayestribo.model.laws import Law, get_law
 
 __all__ = [
     "BOUND_FRACTION",
@@ -202,7 +205,13 @@ class PriorSet:
         return cls({name: Prior.from_spec(s) for name, s in spec.items()})
 
 
-def default_priors(y0: float, *, friction: bool = True, discrepancy: bool = False) -> PriorSet:
+def default_priors(
+    y0: float,
+    *,
+    friction: bool = True,
+    discrepancy: bool = False,
+    law: str | Law | None = None,
+) -> PriorSet:
     """The documented default priors (see the module notes).
 
     Parameters
@@ -210,17 +219,25 @@ def default_priors(y0: float, *, friction: bool = True, discrepancy: bool = Fals
     y0 : float
         Observed dimensionless displacement at the start of the analysed window.
     friction : bool
-        False for a test without contact: only ζ (= ζ₀) and y0 are fitted.
+        False for a test without contact: the law's friction terms are dropped (for
+        the default law only ζ (= ζ₀) and y0 are fitted).
     discrepancy : bool
         Add the model-discrepancy scales: the white one and the shape one.
+    law : str or Law, optional
+        The dissipation law whose parameters get their default priors (each term's
+        :class:`~bayestribo.model.laws.Parameter` gives its own); default
+        ``"viscous+coulomb"``.
     """
     amp = abs(float(y0))
     if not amp > 0:
         raise ValueError(f"y0 must be non-zero to set the default priors, got {y0!r}")
-    priors: dict[str, Prior] = {"zeta": Uniform(0.0, 0.3)}
-    if friction:
-        priors["mu_k"] = Uniform(0.0, amp / 4.0)
-        priors["mu_s_ratio"] = Uniform(1.0, 3.0)
+    the_law = get_law(law)
+    priors: dict[str, Prior] = {}
+    for term in the_law.terms:
+        if term.kind == "friction" and not friction:
+            continue
+        for p in term.parameters:
+            priors[p.name] = Prior.from_spec(p.prior(amp))
     priors["y0"] = Normal(float(y0), 0.01 * amp)
     if discrepancy:
         priors["log10_discrepancy"] = Uniform(-7.0, 0.0)

@@ -120,6 +120,20 @@ class FitResult:
         return str(self._attr("model"))
 
     @property
+    def law(self) -> str:
+        """The dissipation law fitted (terms joined with ``+``; fits saved before laws
+        were plug-ins are ``"viscous+coulomb"``)."""
+        return str(self._attr("law", "viscous+coulomb"))
+
+    @property
+    def dissipation(self) -> dict[str, Any] | None:
+        """Energy dissipated per cycle of harmonic motion, ΔE(A), over the amplitudes of
+        the analysed motion (:func:`bayestribo.inference.dissipation.dissipation_band`):
+        ``amplitude``, ``mean``, ``sd``, ``interval``, ``prob``, ``unit``, ``by_term``;
+        None for fits saved before it was recorded."""
+        return self._attr("dissipation_json", None)
+
+    @property
     def seed(self) -> int | None:
         """Seed of the sampler (``None`` if the run was not seeded)."""
         seed = self._attr("seed")
@@ -205,12 +219,14 @@ class FitResult:
 
     def summary(self, prob: float = 0.95) -> dict[str, ParameterSummary]:
         """Posterior summary (mean, sd, median, equal-tailed ``prob`` interval) of each
-        reported quantity, by name."""
-        return {
-            name: ParameterSummary.from_samples(self.samples(name), prob)
-            for name in REPORTED
-            if name in self.idata.posterior
-        }
+        reported quantity, by name: those of the default law first, then the other
+        laws' parameters and physical quantities."""
+        names = [n for n in REPORTED if n in self.idata.posterior]
+        own = [n for n in self._attr("units_json", {}) if n in self.idata.posterior]
+        if own:
+            at = names.index("y0") if "y0" in names else len(names)
+            names[at:at] = own
+        return {name: ParameterSummary.from_samples(self.samples(name), prob) for name in names}
 
     @property
     def frequency_trend(self) -> dict[str, Any] | None:
@@ -238,8 +254,9 @@ class FitResult:
     def units(self) -> dict[str, str]:
         """Unit of each reported quantity ("1" for a dimensionless one)."""
         length = "m" if self.metadata.get("length_unit", "m") == "m" else "signal length unit"
+        own = self._attr("units_json", {}) or {}
         return {
-            name: length if UNITS.get(name) == "length" else UNITS.get(name, "")
+            name: length if UNITS.get(name) == "length" else UNITS.get(name, own.get(name, ""))
             for name in self.summary()
         }
 
@@ -251,6 +268,7 @@ class FitResult:
             {
                 "run": self.run_name,
                 "model": self.model,
+                "law": self.law,
                 "seed": self.seed,
                 "bayestribo_version": self.package_version,
                 "metadata": self.metadata,
@@ -261,6 +279,7 @@ class FitResult:
                     k: {**v.to_dict(), "unit": units.get(k, "")}
                     for k, v in self.summary(prob).items()
                 },
+                "dissipation": self.dissipation,
                 "diagnostics": self.diagnostics,
                 "prior_sensitivity": self.prior_sensitivity,
                 "seconds": self.seconds,
@@ -271,7 +290,7 @@ class FitResult:
         """Human-readable table of the posterior, with ``prob`` intervals."""
         lines = [
             f"run       {self.run_name}",
-            f"model     {self.model}  (seed {self.seed})",
+            f"law       {self.law}  (model {self.model}, seed {self.seed})",
             f"noise     {self.noise.get('description', '')}",
         ]
         d = self.diagnostics
@@ -311,7 +330,29 @@ class FitResult:
             lo, hi = s.interval
             unit = {"1": "-", "signal length unit": "signal"}.get(units[name], units[name])
             lines.append(f"{name:30}{unit:>8}{s.mean:14.6g}{s.sd:12.3g}   [{lo:.6g}, {hi:.6g}]")
+        lines.extend(self._dissipation_lines())
         return "\n".join(lines)
+
+    def _dissipation_lines(self) -> list[str]:
+        """ΔE(A) at the largest, middle and smallest amplitude of the analysed motion."""
+        d = self.dissipation
+        if not d or not d.get("amplitude"):
+            return []
+        amp, mean, (lo, hi) = d["amplitude"], d["mean"], d["interval"]
+        unit = d["unit"].replace("^2", "²")
+        head = (
+            f"energy dissipated per cycle ΔE(A) [{unit}], "
+            f"{100 * float(d['prob']):g} % interval"
+            + ("" if d["unit"] == "J" else " (ΔE/k: the stiffness is not known)")
+        )
+        out = [head]
+        picks = sorted({len(amp) - 1, len(amp) // 2, 0}, reverse=True)
+        for i in picks:
+            out.append(
+                f"  A = {amp[i]:.4g} {d['amplitude_unit']:<6}{mean[i]:14.6g}   "
+                f"[{lo[i]:.6g}, {hi[i]:.6g}]"
+            )
+        return out
 
     def __repr__(self) -> str:
         summary = self.summary()

@@ -71,6 +71,55 @@ def _first_guesses(decay: EnergyDecay, posterior: Posterior) -> list[dict[str, f
         guesses.append(
             {"zeta": 1e-4 * zeta, "mu_k": min(0.5 * math.pi * total * 0.5 * amp, 0.24 * amp)}
         )
+    if posterior.law.closed_form:
+        return guesses
+    return _law_guesses(posterior, total, amp)
+
+
+def _law_guesses(posterior: Posterior, zeta_total: float, amp: float) -> list[dict[str, float]]:
+    """First guesses of a law without a closed form: the whole decay in each sampled
+    term in turn, and shared equally among them.
+
+    The decay is the peak estimate's, as an equivalent damping ratio ζ at the mean
+    amplitude A = |y0|/2: a dissipation per cycle ΔE(A) = 2πζA². Each term's first
+    parameter scales its dissipation (every built-in term's ΔE is proportional to it),
+    so the value that puts a share of ΔE(A) in that term follows from ΔE at 1; its
+    other parameters start at the middle of their priors.
+    """
+    law = posterior.law
+    lik = posterior.likelihood
+    a_mid = 0.5 * amp
+    target = 2.0 * math.pi * zeta_total * a_mid**2
+    sampled = [t for t in law.terms if t.parameters and t.parameters[0].name in posterior.names]
+    if not sampled:
+        return [{}]
+    base: dict[str, float] = {}
+    for t in law.terms:
+        for p in t.parameters[1:]:
+            if p.name in posterior.names:
+                low, high = _support(posterior.priors[p.name])
+                base[p.name] = 0.5 * (low + high) if np.isfinite(high) else low + 1.0
+    for t in sampled:
+        low, high = _support(posterior.priors[t.parameters[0].name])
+        base[t.parameters[0].name] = low + 1e-4 * (high - low) if np.isfinite(high) else low
+
+    def scaled(term_share: dict[str, float]) -> dict[str, float]:
+        out = dict(base)
+        for t, share in term_share.items():
+            term = next(x for x in law.terms if x.name == t)
+            first = term.parameters[0].name
+            unit = dict(out, **{first: 1.0})
+            values = {k: np.array([v]) for k, v in unit.items()}
+            for p in term.parameters:
+                values.setdefault(p.name, np.array([p.low]))
+            per_unit = float(term.dissipation(a_mid, values, lik.reference_amplitude)[0])
+            if per_unit > 0 and np.isfinite(per_unit):
+                out[first] = share * target / per_unit
+        return out
+
+    guesses = [scaled({t.name: 1.0}) for t in sampled]
+    if len(sampled) > 1:
+        guesses.append(scaled({t.name: 1.0 / len(sampled) for t in sampled}))
     return guesses
 
 
@@ -159,6 +208,7 @@ def _optimise(
     """
     names = posterior.names
     values = {
+        **{p.name: p.low for p in posterior.law.parameters},
         "zeta": 0.0,
         "y0": posterior.likelihood.data.y0,
         "mu_s_ratio": 1.2 if ratio is None else ratio,

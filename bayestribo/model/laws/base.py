@@ -115,8 +115,10 @@ class Parameter:
     label : str
         A short phrase for reports (``"equivalent viscous damping ratio"``).
     prior : callable
-        ``prior(amplitude) -> Prior``: the default prior given the observed initial
-        amplitude |y0| (dimensionless); priors are physical limits, see
+        ``prior(amplitude) -> dict``: the default prior given the observed initial
+        amplitude |y0| (dimensionless), as the plain-data spec of
+        :meth:`bayestribo.inference.priors.Prior.from_spec` (``{"type": "Uniform",
+        "low": 0, "high": 0.3}``); priors are physical limits, see
         :mod:`bayestribo.inference.priors`.
     """
 
@@ -126,7 +128,7 @@ class Parameter:
     low: float
     high: float
     label: str
-    prior: Callable[[float], Any]
+    prior: Callable[[float], Mapping[str, float | str]]
 
     def __post_init__(self) -> None:
         if not self.name.isidentifier():

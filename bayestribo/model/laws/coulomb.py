@@ -22,18 +22,14 @@ def _force(a: float, c: NDArray) -> float:
     return c[0]
 
 
-def _mu_k_prior(amplitude: float):  # noqa: ANN202 - a Prior
-    from bayestribo.inference.priors import Uniform
-
+def _mu_k_prior(amplitude: float) -> dict[str, float | str]:
     # A friction above a quarter of the amplitude stops the motion within two half
     # cycles: such a record has no decay to analyse.
-    return Uniform(0.0, amplitude / 4.0)
+    return {"type": "Uniform", "low": 0.0, "high": amplitude / 4.0}
 
 
-def _ratio_prior(amplitude: float):  # noqa: ANN202 - a Prior
-    from bayestribo.inference.priors import Uniform
-
-    return Uniform(1.0, 3.0)
+def _ratio_prior(amplitude: float) -> dict[str, float | str]:
+    return {"type": "Uniform", "low": 1.0, "high": 3.0}
 
 
 def _coefficients(values: Mapping[str, NDArray], reference: float) -> list[NDArray]:

@@ -25,11 +25,9 @@ def _force(a: float, c: NDArray) -> float:
     return c[0] * a
 
 
-def _prior(amplitude: float):  # noqa: ANN202 - a Prior
-    from bayestribo.inference.priors import Uniform
-
+def _prior(amplitude: float) -> dict[str, float | str]:
     # Up to about the dissipation of ζ = 0.3 (4η = 0.6π).
-    return Uniform(0.0, 0.45)
+    return {"type": "Uniform", "low": 0.0, "high": 0.45}
 
 
 def _coefficients(values: Mapping[str, NDArray], reference: float) -> list[NDArray]:

@@ -19,7 +19,6 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -136,8 +135,9 @@ class Law:
             t is TERMS.get(t.name) for t in self.terms
         )
 
-    def default_priors(self, amplitude: float) -> dict[str, Any]:
-        """Each parameter's default prior given the observed initial amplitude |y0|."""
+    def default_priors(self, amplitude: float) -> dict[str, Mapping[str, float | str]]:
+        """Each parameter's default prior (a plain-data spec) given the observed initial
+        amplitude |y0|."""
         amp = abs(float(amplitude))
         if not (math.isfinite(amp) and amp > 0.0):
             raise ValueError(f"amplitude must be a positive number, got {amplitude!r}")

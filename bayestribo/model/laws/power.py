@@ -35,16 +35,12 @@ def _force(w: float, c: NDArray) -> float:
     return c[0] * w ** c[1]
 
 
-def _zeta_prior(amplitude: float):  # noqa: ANN202 - a Prior
-    from bayestribo.inference.priors import Uniform
-
-    return Uniform(0.0, 0.3)
+def _zeta_prior(amplitude: float) -> dict[str, float | str]:
+    return {"type": "Uniform", "low": 0.0, "high": 0.3}
 
 
-def _alpha_prior(amplitude: float):  # noqa: ANN202 - a Prior
-    from bayestribo.inference.priors import Uniform
-
-    return Uniform(0.0, 3.0)
+def _alpha_prior(amplitude: float) -> dict[str, float | str]:
+    return {"type": "Uniform", "low": 0.0, "high": 3.0}
 
 
 def _coefficients(values: Mapping[str, NDArray], reference: float) -> list[NDArray]:

@@ -22,11 +22,9 @@ def _force(w: float, c: NDArray) -> float:
     return c[0] * w * w
 
 
-def _prior(amplitude: float):  # noqa: ANN202 - a Prior
-    from bayestribo.inference.priors import Uniform
-
+def _prior(amplitude: float) -> dict[str, float | str]:
     # Up to the dissipation of ζ = 0.3 at the initial amplitude, (8/3)γA³ = 0.6πA².
-    return Uniform(0.0, 0.225 * 3.141592653589793 / amplitude)
+    return {"type": "Uniform", "low": 0.0, "high": 0.225 * 3.141592653589793 / amplitude}
 
 
 def _coefficients(values: Mapping[str, NDArray], reference: float) -> list[NDArray]:
