@@ -1,0 +1,249 @@
+"""Dissipation laws as plug-ins (bayestribo/model/laws): names, registry, ΔE(A), and
+the compiled half-cycle integrator against the closed form and quadrature."""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+from bayestribo.model.laws import (
+    TERMS,
+    Law,
+    Parameter,
+    PhysicalScale,
+    Term,
+    available_terms,
+    get_law,
+    get_term,
+)
+from bayestribo.model.laws.base import harmonic_power_integral
+
+# -- names ---------------------------------------------------------------------------
+
+
+def test_the_built_in_terms_are_registered_in_order():
+    assert available_terms()[:5] == ["viscous", "coulomb", "quadratic", "power", "hysteretic"]
+
+
+def test_a_law_is_its_terms_in_registration_order_whatever_the_order_written():
+    law = Law.from_name(" Coulomb + viscous")
+    assert law.name == "viscous+coulomb"
+    assert law.parameter_names == ["zeta", "mu_k", "mu_s_ratio"]
+    assert get_law(None).name == "viscous+coulomb"
+    assert get_law("quadratic+viscous+coulomb").parameter_names == [
+        "zeta",
+        "mu_k",
+        "mu_s_ratio",
+        "c2",
+    ]
+
+
+@pytest.mark.parametrize(
+    ("name", "message"),
+    [
+        ("viscous+drag", "unknown dissipation term 'drag'; registered terms: viscous, coulomb"),
+        ("viscous+viscous", "names each term once"),
+        ("viscous++coulomb", "an empty term"),
+        ("", "expected terms joined with '+'"),
+    ],
+)
+def test_a_bad_law_name_is_refused_with_the_registered_terms(name, message):
+    with pytest.raises(ValueError, match=message.replace("+", r"\+").replace("(", r"\(")):
+        Law.from_name(name)
+
+
+def test_a_term_whose_parameter_another_term_has_is_refused():
+    viscous = get_term("viscous")
+    clash = Term(
+        name="clash",
+        kind="drag",
+        parameters=viscous.parameters,
+        n_coefficients=1,
+        force=viscous.force,
+        coefficients=viscous.coefficients,
+        dissipation=viscous.dissipation,
+        physical=viscous.physical,
+        description="",
+    )
+    with pytest.raises(ValueError, match="'zeta' is already a parameter of term 'viscous'"):
+        TERMS.add(clash)
+    assert "clash" not in TERMS
+
+
+def test_only_the_viscous_and_coulomb_laws_have_the_closed_form():
+    assert get_law("viscous+coulomb").closed_form
+    assert get_law("viscous").closed_form and get_law("coulomb").closed_form
+    assert not get_law("viscous+quadratic").closed_form
+    with pytest.raises(ValueError, match="has no closed form"):
+        get_law("quadratic").pi_grid([0.0], {"c2": 0.01}, [1.0], method="closed")
+
+
+# -- ΔE(A) -----------------------------------------------------------------------------
+
+VALUES = {
+    "zeta": 0.013,
+    "mu_k": 0.021,
+    "mu_s_ratio": 1.4,
+    "c2": 0.037,
+    "zeta_alpha": 0.008,
+    "alpha": 0.6,
+    "eta": 0.011,
+}
+
+
+def _force(term: Term, values: dict, reference: float):
+    """The term's force F(v, A) as plain Python: (drag magnitude, friction magnitude)."""
+    coef = np.concatenate(
+        [
+            np.atleast_1d(c)
+            for c in term.coefficients({k: np.array([v]) for k, v in values.items()}, reference)
+        ]
+    )
+    return lambda speed, amp: float(term.force(speed if term.kind == "drag" else amp, coef))
+
+
+@pytest.mark.parametrize("name", ["viscous", "coulomb", "quadratic", "power", "hysteretic"])
+@pytest.mark.parametrize("amplitude", [0.3, 2.0, 7.5])
+def test_each_terms_dissipation_is_the_integral_of_its_force_over_a_cycle(name, amplitude):
+    """ΔE(A) = ∮ F(y') y' dτ over y = A cos τ by quadrature of the compiled force."""
+    term = get_term(name)
+    reference = 4.0
+    force = _force(term, VALUES, reference)
+
+    def power(tau: float) -> float:
+        v = -amplitude * math.sin(tau)
+        return force(abs(v), amplitude) * abs(v)
+
+    numeric = quad(power, 0.0, math.pi, epsabs=0, epsrel=1e-13, limit=200)[0] * 2.0
+    vals = {k: np.array([v]) for k, v in VALUES.items()}
+    closed = float(term.dissipation(np.array([amplitude]), vals, reference)[0])
+    assert closed == pytest.approx(numeric, rel=1e-10)
+
+
+def test_power_law_at_exponent_one_is_viscous_damping_at_the_same_zeta():
+    law_p, law_v = get_law("power"), get_law("viscous")
+    amps = np.array([0.5, 1.0, 3.0])
+    p = law_p.dissipation(amps, {"zeta_alpha": 0.02, "alpha": 1.0}, 2.0)
+    v = law_v.dissipation(amps, {"zeta": 0.02}, 2.0)
+    np.testing.assert_allclose(p, v, rtol=1e-12)
+
+
+def test_harmonic_power_integral_matches_known_values():
+    np.testing.assert_allclose(harmonic_power_integral([1.0, 2.0, 3.0]), [4.0, math.pi, 8 / 3])
+
+
+def test_a_laws_dissipation_is_the_sum_of_its_terms_and_scales_to_joules():
+    law = get_law("viscous+coulomb+quadratic")
+    vals = {k: VALUES[k] for k in law.parameter_names}
+    parts = law.dissipation([1.0, 2.0], vals, 1.0, by_term=True)
+    total = law.dissipation([1.0, 2.0], vals, 1.0)
+    np.testing.assert_allclose(total, sum(parts.values()))
+    np.testing.assert_allclose(parts["coulomb"], [[4 * 0.021 * 1.0, 4 * 0.021 * 2.0]], rtol=1e-14)
+    scale = PhysicalScale(length_scale=2e-4, omega=200.0, stiffness=1400.0)
+    assert scale.energy_factor == pytest.approx(1400.0 * 4e-8)
+    assert scale.energy_unit == "J"
+    assert PhysicalScale(length_unit="mm").energy_unit == "mm^2"
+
+
+# -- the integrator against the closed form --------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("law", "values"),
+    [
+        ("viscous+coulomb", {"zeta": 0.01, "mu_k": 0.02, "mu_s_ratio": 1.5}),
+        ("viscous+coulomb", {"zeta": 0.05, "mu_k": 0.001, "mu_s_ratio": 2.5}),
+        ("viscous+coulomb", {"zeta": 1e-4, "mu_k": 0.03, "mu_s_ratio": 1.0}),
+        ("viscous", {"zeta": 0.003}),
+        ("coulomb", {"mu_k": 0.01, "mu_s_ratio": 1.2}),
+    ],
+)
+@pytest.mark.parametrize(("yp0", "tau_end"), [(0.0, None), (0.37, None), (-0.5, 150.0)])
+def test_the_integrator_agrees_with_the_closed_form(law, values, yp0, tau_end):
+    """Π within 1e-8 of Π(0) at points inside half cycles, through sticking, a start
+    inside a half cycle and a record that ends in the motion (the target of the
+    laws without a closed form)."""
+    the_law = get_law(law)
+    tau = np.sort(np.append(np.random.default_rng(4).uniform(0.0, 400.0, 60), 0.0))
+    closed = the_law.pi_grid(tau, values, [1.2], yp0=yp0, tau_end=tau_end)
+    integrated = the_law.pi_grid(tau, values, [1.2], yp0=yp0, tau_end=tau_end, method="integrate")
+    assert np.max(np.abs(integrated - closed)) < 1e-8 * closed[0, 0]
+    # and it converges: a quarter of the steps is far off, twice the steps closer still
+    coarse, fine = (
+        the_law.pi_grid(tau, values, [1.2], yp0=yp0, tau_end=tau_end, method="integrate", steps=n)
+        for n in (12, 96)
+    )
+    assert np.max(np.abs(coarse - closed)) > 1e-8 * closed[0, 0]
+    assert np.max(np.abs(fine - closed)) < 2e-9 * closed[0, 0]
+
+
+def test_the_integrator_handles_many_parameter_sets_at_once():
+    law = get_law("viscous+coulomb")
+    tau = np.linspace(0.0, 200.0, 30)
+    values = {"zeta": [0.01, 0.02, 0.0], "mu_k": [0.02, 0.0, 0.01], "mu_s_ratio": [1.5, 1.0, 2.0]}
+    closed = law.pi_grid(tau, values, [1.0, 2.0, 0.53], tau_end=250.0)
+    integrated = law.pi_grid(tau, values, [1.0, 2.0, 0.53], tau_end=250.0, method="integrate")
+    assert integrated.shape == (3, 30)
+    err = np.max(np.abs(integrated - closed), axis=1)
+    assert np.all(err < 1e-8 * closed[:, 0])
+
+
+def test_a_drag_too_strong_to_turn_is_outside_the_laws_domain():
+    """An overdamped arc (the drag stops the motion before it turns) gives a NaN row."""
+    law = get_law("quadratic")
+    pi = law.pi_grid(np.linspace(0, 10, 5), {"c2": [0.01, 50.0]}, [1.0, 1.0])
+    assert np.all(np.isfinite(pi[0])) and np.all(np.isnan(pi[1]))
+
+
+# -- a term defined outside the package ------------------------------------------------
+
+
+@numba.njit
+def _cubic_force(w, c):
+    return c[0] * w * w * w
+
+
+def _cubic_dissipation(amplitude, values, reference):
+    a = np.asarray(amplitude, dtype=float)
+    return (3.0 * math.pi / 4.0) * np.asarray(values["c3"], dtype=float) * a**4
+
+
+CUBIC = Term(
+    name="cubic",
+    kind="drag",
+    parameters=(
+        Parameter(
+            "c3",
+            "c₃",
+            "1/y²",
+            0.0,
+            math.inf,
+            "cubic drag",
+            lambda amplitude: {"type": "Uniform", "low": 0.0, "high": 1.0 / amplitude**2},
+        ),
+    ),
+    n_coefficients=1,
+    force=_cubic_force,
+    coefficients=lambda values, reference: [np.asarray(values["c3"], dtype=float)],
+    dissipation=_cubic_dissipation,
+    physical=lambda values, reference, scale: {},
+    description="cubic drag c₃ v³",
+)
+
+
+def test_a_law_with_a_term_of_its_own_integrates_without_registering_it():
+    law = Law((get_term("viscous"), CUBIC))
+    assert law.name == "viscous+cubic" and not law.closed_form
+    tau = np.linspace(0.0, 60.0, 20)
+    with_cubic = law.pi_grid(tau, {"zeta": 0.01, "c3": 0.02}, [1.0], tau_end=80.0)
+    without = law.pi_grid(tau, {"zeta": 0.01, "c3": 0.0}, [1.0], tau_end=80.0)
+    viscous = get_law("viscous").pi_grid(tau, {"zeta": 0.01}, [1.0], tau_end=80.0)
+    np.testing.assert_allclose(without, viscous, rtol=0, atol=1e-8 * viscous[0, 0])
+    assert np.all(with_cubic[0, :-1] < without[0, :-1])
+    # the cubic term's ΔE is its force's integral over a cycle
+    numeric = 2 * quad(lambda t: 0.02 * abs(1.5 * math.sin(t)) ** 4, 0, math.pi)[0]
+    assert law.dissipation([1.5], {"zeta": 0.0, "c3": 0.02}, 1.0)[0, 0] == pytest.approx(numeric)
