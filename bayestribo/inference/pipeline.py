@@ -384,6 +384,48 @@ def frequency_nuisance_sd(trend: FrequencyTrend | None) -> float:
     return 0.5 * math.hypot(trend.change, se)
 
 
+def _beyond_the_law(
+    posterior: Posterior, theta: NDArray, trend: FrequencyTrend | None
+) -> tuple[FrequencyTrend | None, float]:
+    """The measured frequency trend less the one the law itself makes.
+
+    Viscous damping and Coulomb friction leave the half period constant (Eq. 15);
+    a nonlinear drag does not: its equivalent damping, and with it the damped half
+    period, changes with amplitude. The law's own trend at the MAP (its turning
+    points from the compiled integrator, fitted like the record's) is subtracted, so
+    that only a trend the law does not explain (a stiffness that depends on
+    amplitude) is reported and put into the frequency nuisance.
+
+    Returns
+    -------
+    trend : FrequencyTrend or None
+        The part of the trend beyond the law, with its z against the measured
+        trend's standard error.
+    law_change : float
+        The law's own change of the half period (0 for the closed-form laws).
+    """
+    law = posterior.law
+    if trend is None or law.closed_form or not math.isfinite(trend.change):
+        return trend, 0.0
+    data = posterior.likelihood.data
+    params = posterior.physical(theta[None])["params"]
+    values = {k: float(v[0]) for k, v in params.items() if k != "y0"}
+    times, turns = law.turning_points(
+        values,
+        float(params["y0"][0]),
+        float(data.yp0),
+        tau_max=float(data.tau_end),
+        reference=posterior.likelihood.reference_amplitude,
+    )
+    model = turning_point_trend(times, turns)
+    if model is None or not math.isfinite(model.change):
+        return trend, 0.0
+    se = abs(trend.change / trend.z) if trend.z and math.isfinite(trend.z) else math.inf
+    change = trend.change - model.change
+    z = change / se if se > 0 else math.inf
+    return FrequencyTrend(change, z, trend.n_half_cycles), float(model.change)
+
+
 def _warn_frequency_trend(name: str | None, trend: FrequencyTrend | None) -> None:
     """Warn when the frequency is not constant along the decay."""
     if trend is None:
@@ -543,6 +585,7 @@ def summarise(
         trend = turning_point_trend(decay.turning_times, decay.peaks.value)
     else:
         trend = frequency_trend(prepared.run.time, prepared.run.displacement, prepared.run.velocity)
+    trend, law_change = _beyond_the_law(posterior, sampled.theta_map, trend)
     _warn_frequency_trend(name, trend)
     frequency_sd = frequency_nuisance_sd(trend)
     metadata = prepared.metadata
@@ -597,6 +640,7 @@ def summarise(
         ),
         "frequency_trend_json": json.dumps(None if trend is None else trend.to_dict()),
         "frequency_nuisance_sd": frequency_sd,
+        "law_frequency_change": law_change,
         "prior_sensitivity_json": json.dumps(plain_data(prior_sensitivity(flat, posterior.priors))),
     }
     result = FitResult(inference_data(posterior, run.chains, derived, rng, attrs))

@@ -113,12 +113,15 @@ def make_integrator(
 
     Returns
     -------
-    callable
+    grid : callable
         ``grid(tau, y0, coef, ratio, yp0, tau_end, steps) -> (Π, status)``: ``tau``
         sorted (T,), ``y0`` (P,), ``coef`` (P, K), ``ratio`` (P,) the static to kinetic
         friction ratio; Π of shape (P, T); status (P,) 0 when the motion could be
         integrated, 1 when the drag stops a half cycle before it turns (an overdamped
         arc: that row of Π is NaN).
+    turns : callable
+        ``turns(y0, coef_row, ratio, yp0, tau_max, max_count) -> (τ_n, Y_n)``: the
+        turning points of one trajectory.
     """
     drag = _compose(drags, drag_offsets, drag_sizes)
     friction = _compose(frictions, friction_offsets, friction_sizes)
@@ -415,4 +418,68 @@ def make_integrator(
             )
         return out, status
 
-    return grid
+    @numba.njit
+    def turns(
+        y0: float, c: NDArray, ratio: float, yp0: float, tau_max: float, max_count: int
+    ) -> tuple[NDArray, NDArray]:
+        """Turning times τ_n and positions Y_n of one trajectory (the initial state
+        first when y'₀ = 0), until the motion stops, τ passes ``tau_max`` or
+        ``max_count`` turning points; the last one is where the pin sticks, if it does."""
+        tables, offsets = ladder_tables()
+        size = LADDER[-1] + 1
+        tau_at = np.empty(size)
+        c_at = np.empty(size)
+        e_at = np.empty((2, size))
+        times = np.empty(max_count)
+        where = np.empty(max_count)
+        n = 0
+        if yp0 == 0.0:
+            sign = 1.0 if y0 >= 0.0 else -1.0
+            a = abs(y0)
+            mu = friction(a, c) if has_friction else 0.0
+            theta0 = 0.0
+            r = a - mu
+            times[0] = 0.0
+            where[0] = y0
+            n = 1
+            if a <= ratio * mu or r <= 0.0:
+                return times[:n], where[:n]
+        else:
+            sign = -1.0 if yp0 > 0.0 else 1.0
+            ym = sign * y0
+            vm = -abs(yp0)
+            mu = friction(math.hypot(y0, yp0), c) if has_friction else 0.0
+            for _ in range(_START_ITERATIONS):
+                if not has_friction:
+                    break
+                mu = friction(math.hypot(ym - mu, vm) + mu, c)
+            r = math.hypot(ym - mu, vm)
+            theta0 = math.atan2(-vm, ym - mu)
+        t = 0.0
+        while n < max_count and t <= tau_max:
+            k = choose_steps(r, c)
+            steps = LADDER[k]
+            if theta0 == 0.0:
+                table = tables[:, offsets[k] : offsets[k] + 2 * steps + 1]
+            else:
+                table = nodes(theta0, steps)
+            r_end = half_cycle(table, r, mu, c, steps, tau_at, c_at, e_at)
+            if not math.isfinite(r_end):
+                break
+            t += tau_at[steps]
+            y_turn = mu - r_end
+            times[n] = t
+            where[n] = sign * y_turn
+            n += 1
+            if y_turn >= 0.0:
+                break
+            a = -y_turn
+            sign = -sign
+            mu = friction(a, c) if has_friction else 0.0
+            if a <= ratio * mu or a - mu <= 0.0:
+                break
+            r = a - mu
+            theta0 = 0.0
+        return times[:n], where[:n]
+
+    return grid, turns

@@ -257,9 +257,48 @@ class Law:
             return exact_pi_grid(t, y, zeta, mu_k, mu_s, float(yp0), tau_end)
         ref = abs(float(y[0])) if reference is None else float(reference)
         coef = self.coefficients(vals, ref)
-        grid = make_integrator(*self._layout[0])
+        grid, _ = make_integrator(*self._layout[0])
         pi, _ = grid(t, y, coef, self.static_ratio(vals, size), float(yp0), end, int(steps))
         return pi
+
+    def turning_points(
+        self,
+        values: Mapping[str, float],
+        y0: float,
+        yp0: float = 0.0,
+        *,
+        tau_max: float = math.inf,
+        max_count: int = 100_000,
+        reference: float | None = None,
+    ) -> tuple[NDArray, NDArray]:
+        """Turning times τ_n and positions Y_n of one trajectory (Eq. 20 for the
+        closed-form laws), from the compiled integrator.
+
+        Parameters
+        ----------
+        values : mapping
+            The law's parameters by name (scalars).
+        y0, yp0 : float
+            Initial state; with ``yp0 == 0`` the initial state is the first turning
+            point.
+        tau_max : float
+            Stop after this time.
+        max_count : int
+            At most this many turning points.
+        reference : float, optional
+            Reference amplitude (default |y0|).
+
+        Returns
+        -------
+        tau_n, Y_n : ndarray
+            The last one is where the motion stops, when it does before the limits.
+        """
+        ref = abs(float(y0)) if reference is None else float(reference)
+        vals = {n: np.atleast_1d(np.asarray(values[n], dtype=float)) for n in self.parameter_names}
+        coef = self.coefficients(vals, ref)[0]
+        ratio = float(self.static_ratio(vals, 1)[0])
+        _, turns = make_integrator(*self._layout[0])
+        return turns(float(y0), coef, ratio, float(yp0), float(tau_max), int(max_count))
 
     # -- what the law dissipates ---------------------------------------------------
     def dissipation(

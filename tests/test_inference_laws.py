@@ -1,0 +1,130 @@
+"""Fits of dissipation laws other than viscous + Coulomb, on independent simulations
+(tests/_law_recording.py: solve_ivp with the effect added), and a law defined outside
+the package."""
+
+from __future__ import annotations
+
+import json
+import math
+import warnings
+
+import numpy as np
+import pytest
+from _law_recording import law_recording
+from test_model_laws import CUBIC
+
+from bayestribo import fit
+from bayestribo.cli import main
+from bayestribo.errors import BayestriboError, MisfitWarning
+from bayestribo.model.laws import Law, get_law, get_term
+
+OMEGA = 2 * math.pi * 32.6
+MASS, LOAD = 0.035, 0.31
+ELL = LOAD / (MASS * OMEGA**2)  # length scale N/k [m]
+TRUTH = {"zeta": 0.005, "c2": 0.01, "mu_k": 0.02}
+
+
+@pytest.fixture(scope="module")
+def drag_run():
+    """Viscous damping, quadratic drag and Coulomb friction (dimensionless γ = c₂ℓ/m)."""
+    z, g, mu = TRUTH["zeta"], TRUTH["c2"], TRUTH["mu_k"]
+    return law_recording(
+        lambda v: 2 * z * OMEGA * v + (g / ELL) * v * abs(v), friction=mu * LOAD / MASS, seed=1
+    )
+
+
+@pytest.fixture(scope="module")
+def drag_fit(drag_run):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = fit(drag_run, seed=3, law="viscous+quadratic+coulomb")
+    return result, caught
+
+
+def test_the_law_with_drag_covers_the_truth_and_says_nothing_is_wrong(drag_fit):
+    result, caught = drag_fit
+    assert result.law == "viscous+coulomb+quadratic"
+    assert result.converged
+    for name, truth in TRUTH.items():
+        lo, hi = result.interval(name, 0.99)
+        assert lo < truth < hi, (name, lo, hi)
+    assert not [w for w in caught if issubclass(w.category, MisfitWarning)]
+    # the physical drag coefficient c₂ = γ m/ℓ [kg/m]
+    c2 = result.summary()["c2_SI"]
+    assert c2.interval[0] < TRUTH["c2"] * MASS / ELL < c2.interval[1]
+    assert result.units()["c2_SI"] == "kg/m"
+
+
+def test_the_default_law_misfits_the_drag_and_its_dissipation_differs(drag_run, drag_fit):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        default = fit(drag_run, seed=3)
+    assert any(issubclass(w.category, MisfitWarning) for w in caught)
+    # ΔE(A) from the right law against the truth over the analysed amplitudes [J]
+    d = drag_fit[0].dissipation
+    assert d["unit"] == "J" and d["law"] == "viscous+coulomb+quadratic"
+    amp = np.asarray(d["amplitude"]) / ELL
+    k = MASS * OMEGA**2
+    truth = (
+        get_law("viscous+coulomb+quadratic").dissipation(amp, {**TRUTH, "mu_s_ratio": 1.5}, 1.0)[0]
+        * k
+        * ELL**2
+    )
+    lo, hi = (np.asarray(x) for x in d["interval"])
+    assert np.all((lo * 0.999 < truth) & (truth < hi * 1.001))
+    assert np.asarray(d["amplitude"])[0] < np.asarray(d["amplitude"])[-1]
+    assert default.dissipation["law"] == "viscous+coulomb"
+
+
+def test_the_same_law_by_name_or_object_gives_the_same_default_fit(bundled_run):
+    a = fit(bundled_run, seed=5)
+    b = fit(bundled_run, seed=5, law=Law((get_term("coulomb"), get_term("viscous"))))
+    np.testing.assert_array_equal(a.samples("zeta"), b.samples("zeta"))
+    assert a.law == b.law == "viscous+coulomb"
+    assert a.dissipation == b.dissipation
+
+
+def test_a_law_defined_outside_the_package_fits_and_reports(drag_run):
+    """A cubic drag term (tests/test_model_laws.py) that is not registered: the fit
+    samples its parameter with the term's own default prior and reports ΔE(A)."""
+    law = Law((get_term("viscous"), CUBIC, get_term("coulomb")))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MisfitWarning)
+        result = fit(drag_run, seed=2, law=law, max_steps=3000)
+    assert result.law == "viscous+coulomb+cubic"
+    assert "c3" in result.summary()
+    assert result.dissipation["by_term"].keys() == {"viscous", "coulomb", "cubic"}
+
+
+def test_bad_laws_and_priors_are_refused_by_name(bundled_run):
+    with pytest.raises(BayestriboError, match="unknown dissipation term 'drag'"):
+        fit(bundled_run, law="viscous+drag")
+    from bayestribo.inference.priors import Uniform
+
+    with pytest.raises(BayestriboError, match=r"unknown parameter\(s\) \['c2'\]"):
+        fit(bundled_run, priors={"c2": Uniform(0, 1)})
+
+
+def test_fit_command_takes_the_law_and_prints_it_with_the_dissipation(bundled_runs, capsys):
+    path = str(bundled_runs / "glycerol-N0.31-r1.csv")
+    assert main(["fit", path, "--seed", "1", "--json", "--law", "coulomb+viscous"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["law"] == "viscous+coulomb"
+    assert record["dissipation"]["unit"] == "J"
+    assert len(record["dissipation"]["amplitude"]) == len(record["dissipation"]["mean"])
+    with pytest.raises(SystemExit) as exc:
+        main(["fit", path, "--law", "viscous+drag"])
+    assert exc.value.code == 2
+    assert "registered terms: viscous, coulomb" in capsys.readouterr().err
+
+
+def test_laws_command_lists_every_registered_term(capsys):
+    assert main(["laws", "--json"]) == 0
+    table = json.loads(capsys.readouterr().out)
+    assert [t["term"] for t in table][:5] == [
+        "viscous",
+        "coulomb",
+        "quadratic",
+        "power",
+        "hysteretic",
+    ]
