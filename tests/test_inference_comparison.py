@@ -71,8 +71,8 @@ def test_a_fixed_parameter_is_the_full_posterior_at_that_value_without_its_prior
 
 
 def test_unknown_or_single_laws_are_refused():
-    assert set(LAWS) == {"viscous", "coulomb", "both"}
-    with pytest.raises(BayestriboError, match="laws"):
+    assert LAWS == {"viscous": "viscous", "coulomb": "coulomb", "both": "viscous+coulomb"}
+    with pytest.raises(BayestriboError, match="unknown dissipation term 'dry'"):
         compare_dissipation_laws("x.csv", laws=("viscous", "dry"))
     with pytest.raises(BayestriboError, match="two or more"):
         compare_dissipation_laws("x.csv", laws=("both",))

@@ -21,14 +21,17 @@ __all__ = ["add_law_option", "law_table", "register"]
 #: registry is imported only when a law is given).
 LAW_HELP = (
     "dissipation law: registered terms joined with '+' (default viscous+coulomb; "
-    "'bayestribo laws' lists the terms, their parameters and ΔE(A))"
+    "'bayestribo laws' lists the terms, their parameters and ΔE(A)), or 'auto': the "
+    "simplest adequate law as good as the best of several, by PSIS-LOO"
 )
 
 
 def law_name(text: str) -> str:
-    """argparse type of ``--law``: a known law, written canonically."""
+    """argparse type of ``--law``: a known law, written canonically, or ``auto``."""
     from bayestribo.model.laws import get_law
 
+    if text.strip().lower() == "auto":
+        return "auto"
     try:
         return get_law(text).name
     except ValueError as exc:

@@ -1,29 +1,40 @@
-"""Which dissipation law does a run support: viscous only, Coulomb only, or both?
+"""Which dissipation law does a run support? Fits under several laws, compared.
 
-Each run is fitted three times with the single-run model of :mod:`bayestribo.inference`
-(the same Π increments, noise model, likelihood and sampler):
+Each run is fitted under every law asked for with the single-run model of
+:mod:`bayestribo.inference` (the same Π increments, noise model, likelihood and
+sampler). A law is a name of :mod:`bayestribo.model.laws` (terms joined with ``+``);
+the original three-way comparison's names stay valid:
 
 * ``"viscous"``: ζ free, no friction (μ_k = μ_s = 0);
 * ``"coulomb"``: friction free (μ_k, μ_s/μ_k), ζ = 0;
-* ``"both"``: ζ and friction free (the default fit of a run with contact).
+* ``"both"``: ζ and friction free (``viscous+coulomb``, the default fit of a run with
+  contact).
+
+``fit(..., law="auto")`` compares :data:`AUTO_LAWS`.
 
 The laws are compared by their expected log pointwise predictive density estimated
 with Pareto-smoothed importance-sampling leave-one-out cross-validation (PSIS-LOO,
 Vehtari, Gelman & Gabry 2017) over the Π increments, through
-:func:`arviz.compare`.
+:func:`arviz.compare`, and each is checked for misfit at its optimum (the χ² of the
+residuals and the test for a smooth departure along the decay,
+:func:`bayestribo.inference.pipeline.summarise`): a law is *adequate* when neither
+has a p-value below 1e-3.
 
 Verdict. The law with the highest ``elpd_loo`` is the best. A law is *as good* as
 the best when its difference is below 4 or below two standard errors of the
 difference (Sivula, Magnusson & Vehtari 2020: smaller differences are not reliably
-resolved). Among the laws as good as the best, the verdict is the simplest (one
-mechanism before two); a Pareto k above 0.7 is reported, since the estimate is then
-unreliable for that law.
+resolved). The verdict is the simplest adequate law among those as good as the best
+(fewest terms, then fewest parameters). When none of them is adequate, the verdict
+is the best law, and the comparison says that no law compared holds: its ΔE(A), not
+its parameters, is then the answer. A Pareto k above 0.7 is reported, since the
+estimate is then unreliable for that law.
 """
 
 from __future__ import annotations
 
 import os
 import warnings
+import zlib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -33,16 +44,40 @@ import numpy as np
 from bayestribo import DEFAULT_SEED
 from bayestribo.errors import BayestriboError
 from bayestribo.inference.assemble import pointwise_log_likelihood
-from bayestribo.inference.pipeline import PreparedRun, Sampled, build_posterior, prepare, sample
+from bayestribo.inference.pipeline import (
+    MISFIT_P,
+    PreparedRun,
+    Sampled,
+    _misfit,
+    _shape_departure,
+    build_posterior,
+    prepare,
+    sample,
+)
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.sampling import SamplerSettings
 from bayestribo.io.run import Run
+from bayestribo.model.laws import Law, get_law
 from bayestribo.signal.increments import PiData
 
-__all__ = ["LAWS", "LawComparison", "compare_dissipation_laws"]
+__all__ = ["AUTO_LAWS", "LAWS", "LawComparison", "compare_dissipation_laws", "compare_prepared"]
 
-#: Dissipation laws and the number of mechanisms each has.
-LAWS: Mapping[str, int] = {"viscous": 1, "coulomb": 1, "both": 2}
+#: The original comparison's names and the laws they stand for.
+LAWS: Mapping[str, str] = {"viscous": "viscous", "coulomb": "coulomb", "both": "viscous+coulomb"}
+#: The laws ``law="auto"`` compares: the paper's law and its parts, drag that grows as
+#: the square of the speed (air, fluid), a power law of the speed with its exponent free,
+#: and a friction that grows with amplitude. Laws that trade one term for another of
+#: nearly the same ΔE(A) (viscous with power, viscous with hysteretic) are left out:
+#: their ridge makes them slow to sample and they add nothing the others cannot say.
+AUTO_LAWS: tuple[str, ...] = (
+    "viscous",
+    "coulomb",
+    "viscous+coulomb",
+    "viscous+quadratic",
+    "viscous+coulomb+quadratic",
+    "coulomb+hysteretic",
+    "coulomb+power",
+)
 #: elpd difference below which two laws are not told apart.
 SMALL_ELPD_DIFFERENCE = 4.0
 #: Pareto k above which PSIS-LOO is unreliable.
@@ -63,11 +98,14 @@ class LawComparison:
     best : str
         Law with the highest elpd_loo.
     verdict : str
-        Simplest law as good as the best (see the module notes).
+        Simplest adequate law as good as the best (see the module notes).
     as_good : list of str
         Laws as good as the best (the best included).
     warnings : list of str
         Unreliable estimates (Pareto k) and unconverged fits.
+    adequate : bool
+        True when the verdict is adequate (no misfit at its optimum); False when no
+        law compared holds, and the verdict is only the best of them.
     """
 
     run_name: str
@@ -76,6 +114,23 @@ class LawComparison:
     verdict: str
     as_good: list[str]
     warnings: list[str] = field(default_factory=list)
+    adequate: bool = True
+
+    def describe(self) -> str:
+        """One sentence: the law chosen and why."""
+        n = len(self.table)
+        if not self.adequate:
+            return (
+                f"no law of the {n} compared holds (each misfits the decay); "
+                f"{self.verdict} is the best by PSIS-LOO: its ΔE(A) is the answer, its "
+                "parameters are not a measurement"
+            )
+        others = [law for law in self.as_good if law != self.verdict]
+        tie = f", as good as {', '.join(others)}" if others else ""
+        return (
+            f"{self.verdict} chosen from {n} laws: the simplest adequate law as good as "
+            f"the best by PSIS-LOO (best {self.best}{tie})"
+        )
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary."""
@@ -84,20 +139,25 @@ class LawComparison:
             "best": self.best,
             "verdict": self.verdict,
             "as_good": list(self.as_good),
+            "adequate": self.adequate,
             "table": self.table,
             "warnings": list(self.warnings),
         }
 
 
-def _posterior(law: str, data: PiData, model: str, discrepancy: bool) -> Posterior:
-    """The posterior of one law: viscous has no friction, Coulomb has ζ fixed at 0."""
-    return build_posterior(
-        data,
-        model=model,
-        friction=law != "viscous",
-        discrepancy=discrepancy,
-        fixed={"zeta": 0.0} if law == "coulomb" else None,
-    )
+def _law(name: str | Law) -> Law:
+    """The law of a comparison entry (the original names included)."""
+    if isinstance(name, str) and name in LAWS:
+        return get_law(LAWS[name])
+    try:
+        return get_law(name)
+    except ValueError as exc:
+        raise BayestriboError(f"laws: {exc}") from None
+
+
+def _posterior(law: str | Law, data: PiData, model: str, discrepancy: bool) -> Posterior:
+    """The posterior of one law."""
+    return build_posterior(data, model=model, discrepancy=discrepancy, law=_law(law))
 
 
 def _loo(idata: Any) -> float:
@@ -123,6 +183,8 @@ def _fit_law(
     """Sample one law's posterior; its InferenceData holds the pointwise log-likelihood."""
     import arviz as az
 
+    # friction terms are fitted without contact too (as a friction displacement): the
+    # data, not the metadata, decide whether there is friction to see
     posterior = _posterior(law, prepared.data, model, discrepancy)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
@@ -139,10 +201,17 @@ def _fit_law(
     return sampled, idata
 
 
+def _complexity(law: str) -> tuple[int, int]:
+    """Fewest terms first, then fewest parameters."""
+    the_law = _law(law)
+    return len(the_law.terms), len(the_law.parameters)
+
+
 def _verdict(
     laws: Sequence[str], table: dict[str, dict[str, Any]], frame: Any
-) -> tuple[str, list[str], str]:
-    """Best law, the laws as good as the best, and the simplest of those."""
+) -> tuple[str, list[str], str, bool]:
+    """Best law, the laws as good as the best, the simplest adequate of those, and
+    whether it is adequate."""
     best = str(frame.index[0])
     as_good = [
         law
@@ -150,8 +219,145 @@ def _verdict(
         if law == best
         or table[law]["elpd_diff"] < max(SMALL_ELPD_DIFFERENCE, 2.0 * table[law]["dse"])
     ]
-    verdict = min(as_good, key=lambda law: (LAWS[law], table[law]["rank"]))
-    return best, as_good, verdict
+    adequate = [law for law in as_good if table[law]["adequate"] and table[law]["converged"]]
+    if not adequate:
+        return best, as_good, best, False
+    verdict = min(adequate, key=lambda law: (*_complexity(law), table[law]["rank"]))
+    return best, as_good, verdict, True
+
+
+def _law_seed(root: np.random.SeedSequence, law: str) -> np.random.SeedSequence:
+    """Each law's stream from the seed and the law's name alone (not from which other
+    laws are compared); the original three keep the streams they had."""
+    legacy = list(LAWS)
+    if law in legacy:
+        # as the original comparison spawned them (a fresh sequence: spawn counts calls)
+        return np.random.SeedSequence(root.entropy).spawn(1 + len(legacy))[1 + legacy.index(law)]
+    return np.random.SeedSequence(root.entropy, spawn_key=(1000 + zlib.crc32(law.encode()),))
+
+
+def _nested_start(
+    law: str, prepared: PreparedRun, optima: Mapping[str, dict[str, float]]
+) -> dict[str, float] | None:
+    """The optimum of the largest law already fitted that this one nests, with the extra
+    parameters at small values: a weak extra term is otherwise hard to find."""
+    the_law = _law(law)
+    nested = [
+        other
+        for other in optima
+        if other != law and the_law.nests(_law(other)) and len(_law(other).terms) > 0
+    ]
+    if not nested:
+        return None
+    other = max(nested, key=lambda o: len(_law(o).parameters))
+    amp = abs(prepared.data.y0)
+    start = dict(optima[other])
+    for p in the_law.parameters:
+        if p.name not in start:
+            if p.name == "mu_s_ratio":
+                start[p.name] = 1.2
+            elif p.name == "mu_k":
+                start[p.name] = 1e-6 * amp
+            elif p.name == "alpha":
+                start[p.name] = 1.0
+            else:
+                start[p.name] = p.low + 1e-6 * (1.0 if p.high == np.inf else p.high - p.low)
+    return start
+
+
+def compare_prepared(
+    prepared: PreparedRun,
+    laws: Sequence[str],
+    *,
+    seed: int | None = DEFAULT_SEED,
+    model: str = "exact",
+    settings: SamplerSettings | None = None,
+    discrepancy: bool = False,
+) -> tuple[LawComparison, dict[str, Sampled]]:
+    """Compare laws on a prepared run; also return each law's sampled posterior.
+
+    Parameters
+    ----------
+    prepared : PreparedRun
+        From :func:`bayestribo.inference.prepare`.
+    laws : sequence of str
+        Two or more laws (names of :mod:`bayestribo.model.laws`, or the original
+        ``"viscous"``, ``"coulomb"``, ``"both"``).
+    seed : int or None
+        Seed; each law's stream depends on it and on the law's name alone.
+    model, settings, discrepancy
+        As in :func:`bayestribo.inference.fit`.
+
+    Returns
+    -------
+    LawComparison, dict of Sampled
+    """
+    import arviz as az
+
+    laws = list(dict.fromkeys(laws))
+    if len(laws) < 2:
+        raise BayestriboError(f"laws: expected two or more laws to compare, got {laws}")
+    for law in laws:
+        _law(law)
+    settings = settings or SamplerSettings()
+    root = np.random.SeedSequence(seed)
+    idatas, table, notes, runs = {}, {}, [], {}
+    optima: dict[str, dict[str, float]] = {}
+    # smallest laws first: their optima are starting points of the laws that nest them
+    for law in sorted(laws, key=_complexity):
+        rng = np.random.default_rng(_law_seed(root, law))
+        nested = _nested_start(law, prepared, optima)
+        try:
+            sampled, idatas[law] = _fit_law(
+                law, prepared, settings, rng, model, discrepancy, nested
+            )
+        except BayestriboError as exc:
+            # a law that cannot be fitted here is reported and left out of the
+            # comparison, not a failure of the others
+            table[law] = {"law": _law(law).name, "error": str(exc), "converged": False}
+            notes.append(f"{law}: not fitted ({exc})")
+            continue
+        runs[law] = sampled
+        s = sampled.run
+        names = sampled.posterior.names
+        best_row = np.unravel_index(np.argmax(s.log_prob), s.log_prob.shape)
+        optima[law] = dict(zip(names, s.chains[best_row], strict=True))
+        k_max = _loo(idatas[law])
+        chi2, m, misfit_p = _misfit(sampled.posterior, sampled.theta_map)
+        shape = _shape_departure(sampled.posterior, sampled.theta_map)
+        adequate = bool(misfit_p >= MISFIT_P and not shape.p_value < MISFIT_P)
+        table[law] = {
+            "law": _law(law).name,
+            "pareto_k_max": k_max,
+            "converged": bool(s.converged),
+            "adequate": adequate,
+            "chi2_map": chi2,
+            "n_increments": m,
+            "misfit_p": misfit_p,
+            "shape_p": shape.p_value,
+            "median": {n: float(np.median(s.chains[..., i])) for i, n in enumerate(names)},
+        }
+        if k_max > PARETO_K_LIMIT:
+            notes.append(f"{law}: Pareto k up to {k_max:.2f}; its PSIS-LOO is unreliable")
+        if not s.converged:
+            notes.append(f"{law}: sampler not converged ({'; '.join(s.reasons)})")
+    if len(idatas) < 2:
+        raise BayestriboError(
+            f"laws: fewer than two of {laws} could be fitted: " + "; ".join(notes)
+        )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        frame = az.compare(idatas, ic="loo")
+    for law, row in frame.iterrows():
+        table[str(law)].update(
+            {
+                key: float(row[key])
+                for key in ("rank", "elpd_loo", "p_loo", "elpd_diff", "weight", "se", "dse")
+            }
+        )
+    best, as_good, verdict, adequate = _verdict(list(idatas), table, frame)
+    comparison = LawComparison(prepared.name, table, best, verdict, as_good, notes, adequate)
+    return comparison, runs
 
 
 def compare_dissipation_laws(
@@ -175,9 +381,11 @@ def compare_dissipation_laws(
     run : Run or path
         The recording, as for :func:`bayestribo.inference.fit`.
     laws : sequence of str
-        Laws to compare, among :data:`LAWS` (at least two).
+        Laws to compare (at least two): names of :mod:`bayestribo.model.laws` or the
+        original ``"viscous"``, ``"coulomb"``, ``"both"``; :data:`AUTO_LAWS` is the
+        set ``fit(..., law="auto")`` compares.
     seed : int or None
-        Seed of all three fits (each law gets its own stream from it); default
+        Seed of every fit (each law gets its own stream from it and its name); default
         :data:`bayestribo.DEFAULT_SEED`.
     model, n_walkers, n_ensembles, max_steps, grid_points, skip_oscillations, discrepancy
         As in :func:`bayestribo.inference.fit`.
@@ -193,14 +401,14 @@ def compare_dissipation_laws(
     BayestriboError
         If a law is unknown or fewer than two are given.
     """
-    import arviz as az
-
-    laws = list(dict.fromkeys(laws))
-    unknown = [law for law in laws if law not in LAWS]
-    if unknown or len(laws) < 2:
-        raise BayestriboError(f"laws: expected two or more of {list(LAWS)}, got {list(laws)}")
+    settings = SamplerSettings(n_walkers=n_walkers, n_ensembles=n_ensembles, max_steps=max_steps)
     root = np.random.SeedSequence(seed)
-    data_seed, *law_seeds = root.spawn(1 + len(LAWS))
+    data_seed = root.spawn(1 + len(LAWS))[0]
+    laws = list(dict.fromkeys(laws))
+    if len(laws) < 2:
+        raise BayestriboError(f"laws: expected two or more laws to compare, got {laws}")
+    for law in laws:
+        _law(law)
     prepared = prepare(
         run,
         skip_oscillations=skip_oscillations,
@@ -208,42 +416,7 @@ def compare_dissipation_laws(
         seed=np.random.default_rng(data_seed),
         read_options=read_options,
     )
-    settings = SamplerSettings(n_walkers=n_walkers, n_ensembles=n_ensembles, max_steps=max_steps)
-    idatas, table, notes = {}, {}, []
-    optima: dict[str, dict[str, float]] = {}
-    # Viscous first: its optimum is a starting point of "both".
-    for law in sorted(laws, key=lambda law: law != "viscous"):
-        # Each law's stream depends on the law, not on which others are compared.
-        rng = np.random.default_rng(law_seeds[list(LAWS).index(law)])
-        nested = None
-        if law == "both" and "viscous" in optima:
-            # Viscous is "both" with no friction: start there too (a weak friction
-            # is otherwise hard to find from the friction-first default start).
-            nested = {**optima["viscous"], "mu_k": 1e-6 * abs(prepared.data.y0), "mu_s_ratio": 1.2}
-        sampled, idatas[law] = _fit_law(law, prepared, settings, rng, model, discrepancy, nested)
-        s = sampled.run
-        names = sampled.posterior.names
-        best_row = np.unravel_index(np.argmax(s.log_prob), s.log_prob.shape)
-        optima[law] = dict(zip(names, s.chains[best_row], strict=True))
-        k_max = _loo(idatas[law])
-        table[law] = {
-            "pareto_k_max": k_max,
-            "converged": bool(s.converged),
-            "median": {n: float(np.median(s.chains[..., i])) for i, n in enumerate(names)},
-        }
-        if k_max > PARETO_K_LIMIT:
-            notes.append(f"{law}: Pareto k up to {k_max:.2f}; its PSIS-LOO is unreliable")
-        if not s.converged:
-            notes.append(f"{law}: sampler not converged ({'; '.join(s.reasons)})")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        frame = az.compare(idatas, ic="loo")
-    for law, row in frame.iterrows():
-        table[str(law)].update(
-            {
-                key: float(row[key])
-                for key in ("rank", "elpd_loo", "p_loo", "elpd_diff", "weight", "se", "dse")
-            }
-        )
-    best, as_good, verdict = _verdict(laws, table, frame)
-    return LawComparison(prepared.name, table, best, verdict, as_good, notes)
+    comparison, _ = compare_prepared(
+        prepared, laws, seed=seed, model=model, settings=settings, discrepancy=discrepancy
+    )
+    return comparison

@@ -6,6 +6,7 @@ prepare the data, build the posterior, sample, summarise.
 
 from __future__ import annotations
 
+import json
 import os
 import time
 from collections.abc import Mapping
@@ -23,7 +24,7 @@ from bayestribo.inference.pipeline import (
     summarise,
 )
 from bayestribo.inference.priors import Prior
-from bayestribo.inference.result import FitResult
+from bayestribo.inference.result import FitResult, plain_data
 from bayestribo.inference.sampling import SamplerSettings
 from bayestribo.io.run import Run
 from bayestribo.model.laws import Law, get_law
@@ -101,8 +102,12 @@ def fit(
     law : str or Law, optional
         The dissipation law: terms of :mod:`bayestribo.model.laws` joined with ``+``
         (``"viscous+coulomb"``, the default; ``"viscous+quadratic"``,
-        ``"viscous+coulomb+hysteretic"``, ...) or a :class:`~bayestribo.model.laws.Law`.
-        A run without contact (``load_N`` of 0) drops the law's friction terms.
+        ``"coulomb+hysteretic"``, ...) or a :class:`~bayestribo.model.laws.Law`. A run
+        without contact (``load_N`` of 0) drops the law's friction terms. ``"auto"``
+        fits every law of :data:`bayestribo.inference.comparison.AUTO_LAWS` and keeps
+        the simplest adequate one as good as the best by PSIS-LOO
+        (:mod:`bayestribo.inference.comparison`; the result's ``law_comparison`` says
+        which and why).
 
     Returns
     -------
@@ -119,8 +124,14 @@ def fit(
     start = time.perf_counter()
     if model not in MODELS:  # before the run is read and prepared
         raise BayestriboError(f"model: expected one of {MODELS}, got {model!r}")
+    auto = isinstance(law, str) and law.strip().lower() == "auto"
+    if auto and (priors or fixed):
+        raise BayestriboError(
+            "priors and fixed name the parameters of one law: give law=NAME with them, "
+            "not law='auto'"
+        )
     try:
-        the_law = get_law(law)
+        the_law = None if auto else get_law(law)
     except ValueError as exc:
         raise BayestriboError(str(exc)) from None
     settings = SamplerSettings(n_walkers=n_walkers, n_ensembles=n_ensembles, max_steps=max_steps)
@@ -135,16 +146,34 @@ def fit(
         correct_channels=correct_channels,
         notch=notch,
     )
-    posterior = build_posterior(
-        prepared.data,
-        model=model,
-        friction=prepared.contact,
-        discrepancy=discrepancy,
-        priors=priors,
-        fixed=fixed,
-        law=the_law,
-    )
-    sampled = sample(posterior, prepared.decay, settings=settings, seed=rng, progress=progress)
+    comparison = None
+    if auto:
+        from bayestribo.inference.comparison import AUTO_LAWS, compare_prepared
+
+        comparison, runs = compare_prepared(
+            prepared,
+            AUTO_LAWS,
+            seed=int(rng.integers(2**31)),
+            model=model,
+            settings=settings,
+            discrepancy=discrepancy,
+        )
+        sampled = runs[comparison.verdict]
+    else:
+        posterior = build_posterior(
+            prepared.data,
+            model=model,
+            friction=prepared.contact,
+            discrepancy=discrepancy,
+            priors=priors,
+            fixed=fixed,
+            law=the_law,
+        )
+        sampled = sample(posterior, prepared.decay, settings=settings, seed=rng, progress=progress)
     result = summarise(prepared, sampled, seed=rng, recorded_seed=seed)
+    if comparison is not None:
+        result.idata.posterior.attrs["law_comparison_json"] = json.dumps(
+            plain_data(comparison.to_dict())
+        )
     result.idata.posterior.attrs["seconds"] = time.perf_counter() - start
     return result

@@ -134,6 +134,13 @@ class FitResult:
         return self._attr("dissipation_json", None)
 
     @property
+    def law_comparison(self) -> dict[str, Any] | None:
+        """How ``law="auto"`` chose the law (:class:`~bayestribo.inference.comparison.
+        LawComparison` as plain data: ``verdict``, ``best``, ``as_good``, ``adequate``,
+        ``table``), None for a fit of a named law."""
+        return self._attr("law_comparison_json", None)
+
+    @property
     def seed(self) -> int | None:
         """Seed of the sampler (``None`` if the run was not seeded)."""
         seed = self._attr("seed")
@@ -269,6 +276,7 @@ class FitResult:
                 "run": self.run_name,
                 "model": self.model,
                 "law": self.law,
+                "law_comparison": self.law_comparison,
                 "seed": self.seed,
                 "bayestribo_version": self.package_version,
                 "metadata": self.metadata,
@@ -291,6 +299,7 @@ class FitResult:
         lines = [
             f"run       {self.run_name}",
             f"law       {self.law}  (model {self.model}, seed {self.seed})",
+            *self._comparison_lines(),
             f"noise     {self.noise.get('description', '')}",
         ]
         d = self.diagnostics
@@ -332,6 +341,17 @@ class FitResult:
             lines.append(f"{name:30}{unit:>8}{s.mean:14.6g}{s.sd:12.3g}   [{lo:.6g}, {hi:.6g}]")
         lines.extend(self._dissipation_lines())
         return "\n".join(lines)
+
+    def _comparison_lines(self) -> list[str]:
+        """How the law was chosen (``law="auto"``)."""
+        c = self.law_comparison
+        if not c:
+            return []
+        from bayestribo.inference.comparison import LawComparison
+
+        fields = {k: c[k] for k in ("best", "verdict", "as_good", "table", "warnings")}
+        text = LawComparison(c.get("run_name", ""), **fields, adequate=c["adequate"])
+        return [f"          {text.describe()}"]
 
     def _dissipation_lines(self) -> list[str]:
         """ΔE(A) at the largest, middle and smallest amplitude of the analysed motion."""

@@ -375,7 +375,13 @@ def initial_walkers(
     need = n_ensembles * n_walkers
     kept: list[NDArray] = []
     jitter = np.sqrt(np.maximum(np.diag(cov), 0.0))
-    for _ in range(max_tries):
+    for attempt in range(max_tries):
+        if attempt and attempt % 20 == 0 and len(kept) < need:
+            # The Laplace covariance overstates the spread where the law misfits the
+            # record (the log density is far steeper than its quadratic approximation
+            # suggests, beyond a few widths): draw closer to the optimum.
+            cov = 0.25 * cov
+            jitter = 0.5 * jitter
         draws = rng.multivariate_normal(theta, cov, size=2 * need, method="eigh")
         for i, name in enumerate(names):
             if name == "mu_s_ratio" and ratio_range is not None:
