@@ -68,6 +68,9 @@ _STEP_SCALE = 440.0
 _TAIL_TOLERANCE = 1e-14
 # At most this many half cycles are integrated for one parameter set.
 _MAX_HALF_CYCLES = 200_000
+# Floating-point contraction (fused multiply-add) and reciprocals only: no assumption
+# of finite values, which the overdamped-arc and end-of-record checks rely on.
+_FAST = {"contract", "arcp"}
 # Fixed-point iterations for the friction of a start inside a half cycle.
 _START_ITERATIONS = 6
 
@@ -75,7 +78,7 @@ _START_ITERATIONS = 6
 def _compose(funcs: tuple, offsets: tuple[int, ...], sizes: tuple[int, ...]) -> Callable:
     """One compiled function summing ``f_i(x, c[o_i:o_i+n_i])`` over the terms."""
 
-    @numba.njit(inline="always")
+    @numba.njit(inline="always", error_model="numpy", fastmath=_FAST)
     def zero(x: float, c: NDArray) -> float:
         return 0.0
 
@@ -86,7 +89,7 @@ def _compose(funcs: tuple, offsets: tuple[int, ...], sizes: tuple[int, ...]) -> 
 
 
 def _add(acc: Callable, f: Callable, o: int, n: int) -> Callable:
-    @numba.njit(inline="always")
+    @numba.njit(inline="always", error_model="numpy", fastmath=_FAST)
     def summed(x: float, c: NDArray) -> float:
         return acc(x, c) + f(x, c[o : o + n])
 
@@ -119,6 +122,10 @@ def make_integrator(
         friction ratio; Π of shape (P, T); status (P,) 0 when the motion could be
         integrated, 1 when the drag stops a half cycle before it turns (an overdamped
         arc: that row of Π is NaN).
+    grid_threads : callable
+        The same, its parameter sets shared among numba's threads (compiled on first
+        use; call it from the main thread only: numba's simplest threading layer
+        allows one parallel region at a time).
     turns : callable
         ``turns(y0, coef_row, ratio, yp0, tau_max, max_count) -> (τ_n, Y_n)``: the
         turning points of one trajectory.
@@ -127,14 +134,14 @@ def make_integrator(
     friction = _compose(frictions, friction_offsets, friction_sizes)
     has_friction = len(frictions) > 0
 
-    @numba.njit(inline="always")
+    @numba.njit(inline="always", error_model="numpy", fastmath=_FAST)
     def rates(s: float, co: float, r: float, mu: float, c: NDArray) -> tuple[float, float, float]:
         g = drag(r * s, c)
         inv = 1.0 / (1.0 - co * g / r)
         energy = 0.5 * (mu * mu + 2.0 * mu * r * co + r * r)
         return -s * g * inv, inv, energy * inv
 
-    @numba.njit(inline="always")
+    @numba.njit(inline="always", error_model="numpy", fastmath=_FAST)
     def energy_and_rate(
         s: float, co: float, r: float, mu: float, c: NDArray, e_at: NDArray, k: int
     ) -> None:
@@ -143,7 +150,7 @@ def make_integrator(
         e_at[0, k] = 0.5 * (mu * mu + 2.0 * mu * r * co + r * r)
         e_at[1, k] = -w * (drag(w, c) + mu)
 
-    @numba.njit
+    @numba.njit(error_model="numpy", fastmath=_FAST)
     def ladder_tables() -> tuple[NDArray, NDArray]:
         """The node tables of every step count of :data:`LADDER`, side by side, and
         where each starts."""
@@ -157,7 +164,7 @@ def make_integrator(
             out[:, offsets[i] : offsets[i] + 2 * LADDER[i] + 1] = nodes(0.0, LADDER[i])
         return out, offsets
 
-    @numba.njit(inline="always")
+    @numba.njit(inline="always", error_model="numpy", fastmath=_FAST)
     def choose_steps(r: float, c: NDArray) -> int:
         """Index in LADDER of the steps for a half cycle of amplitude r about its centre:
         from the drag's equivalent damping at the peak speed, ζ_e = g(r)/(2r)."""
@@ -168,7 +175,7 @@ def make_integrator(
                 return i
         return LADDER.size - 1
 
-    @numba.njit
+    @numba.njit(error_model="numpy", fastmath=_FAST)
     def nodes(theta0: float, steps: int) -> NDArray:
         """sin θ, cos θ and dθ/dψ at ψ = i/(2 steps), i = 0 .. 2 steps, shape (3, 2 steps + 1)."""
         span = math.pi - theta0
@@ -182,7 +189,7 @@ def make_integrator(
             out[2, i] = span * (1.0 - math.cos(two_pi * psi))
         return out
 
-    @numba.njit
+    @numba.njit(error_model="numpy", fastmath=_FAST)
     def half_cycle(
         table: NDArray,
         r0: float,
@@ -242,7 +249,7 @@ def make_integrator(
             energy_and_rate(table[0, i0 + 2], table[1, i0 + 2], r, mu, c, e_at, k + 1)
         return r
 
-    @numba.njit(inline="always")
+    @numba.njit(inline="always", error_model="numpy", fastmath=_FAST)
     def hermite(t: float, k: int, tau_at: NDArray, c_at: NDArray, e_at: NDArray) -> float:
         """C at τ = t inside step k: the quintic Hermite polynomial of C, C' = E and
         C'' = E' at the step's ends (error O(h⁶))."""
@@ -264,7 +271,7 @@ def make_integrator(
             + (0.5 * s3 - s4 + 0.5 * s5) * h * h * e_at[1, k + 1]
         )
 
-    @numba.njit
+    @numba.njit(error_model="numpy", fastmath=_FAST)
     def one(
         tau: NDArray,
         y0: float,
@@ -395,7 +402,7 @@ def make_integrator(
                 out[i] = 0.0  # at or after the end of motion
         return 0
 
-    @numba.njit
+    @numba.njit(error_model="numpy", fastmath=_FAST)
     def grid(
         tau: NDArray,
         y0: NDArray,
@@ -418,7 +425,30 @@ def make_integrator(
             )
         return out, status
 
-    @numba.njit
+    @numba.njit(error_model="numpy", fastmath=_FAST, parallel=True)
+    def grid_threads(
+        tau: NDArray,
+        y0: NDArray,
+        coef: NDArray,
+        ratio: NDArray,
+        yp0: float,
+        tau_end: float,
+        steps: int,
+    ) -> tuple[NDArray, NDArray]:
+        out = np.empty((y0.size, tau.size))
+        status = np.zeros(y0.size, dtype=np.int64)
+        if steps > 0:
+            tables = nodes(0.0, steps)
+            offsets = np.zeros(1, dtype=np.int64)
+        else:
+            tables, offsets = ladder_tables()
+        for p in numba.prange(y0.size):
+            status[p] = one(
+                tau, y0[p], coef[p], ratio[p], yp0, tau_end, steps, tables, offsets, out[p]
+            )
+        return out, status
+
+    @numba.njit(error_model="numpy", fastmath=_FAST)
     def turns(
         y0: float, c: NDArray, ratio: float, yp0: float, tau_max: float, max_count: int
     ) -> tuple[NDArray, NDArray]:
@@ -482,4 +512,4 @@ def make_integrator(
             theta0 = 0.0
         return times[:n], where[:n]
 
-    return grid, turns
+    return grid, grid_threads, turns
