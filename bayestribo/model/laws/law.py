@@ -259,7 +259,7 @@ class Law:
         ref = abs(float(y[0])) if reference is None else float(reference)
         coef = self.coefficients(vals, ref)
         grid, grid_threads, _ = make_integrator(*self._layout[0])
-        if size > 1 and threading.current_thread() is threading.main_thread():
+        if threading.current_thread() is threading.main_thread():
             # the parameter sets on numba's threads (a sampler's walkers: about 1.9x on
             # two cores); not from other threads, where two parallel regions could meet
             grid = grid_threads
