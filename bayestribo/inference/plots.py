@@ -53,11 +53,21 @@ def _label(result: FitResult, name: str) -> str:
         return f"{symbol} [{unit}]"
     if name == "y0":
         return "y₀ (start of window) [-]"
-    return LABELS.get(name, name)
+    if name in LABELS:
+        return LABELS[name]
+    from bayestribo.model.laws import TERMS
+
+    for term in TERMS.values():
+        for p in term.parameters:
+            if p.name == name:
+                return f"{p.symbol} [{p.unit}]"
+    unit = (result._attr("units_json", {}) or {}).get(name)
+    return f"{name} [{unit}]" if unit else name
 
 
 def plotted_names(result: FitResult, names: Sequence[str] | None = None) -> list[str]:
-    """The quantities drawn by default: ζ, μ_k (or x_c without a load), μ_s/μ_k, y₀.
+    """The quantities drawn by default: ζ, μ_k (or x_c without a load), μ_s/μ_k, the
+    other sampled parameters of the law, y₀.
 
     Parameters
     ----------
@@ -77,6 +87,10 @@ def plotted_names(result: FitResult, names: Sequence[str] | None = None) -> list
             raise KeyError(f"{missing} not in this fit's posterior; it has {available}")
         return list(names)
     chosen = [n for n in _DEFAULT if n in available]
+    # the sampled parameters of a law's other terms (γ, α, η, ...), before y₀
+    own = [n for n in result.priors.names if n not in _DEFAULT and n in available]
+    at = chosen.index("y0") if "y0" in chosen else len(chosen)
+    chosen[at:at] = own
     if "mu_k" in chosen and "friction_displacement" in chosen:
         chosen.remove("friction_displacement")  # x_c = μ_k ℓ: the same information
     return chosen
