@@ -69,25 +69,27 @@ def test_turning_points_and_stop_match_ode(zeta, mu_k, mu_s, y0, yp0):
     assert np.all(np.abs(y_n[:-1][tau_n[:-1] > 0]) > mu_s)  # ... and not before
 
 
+@pytest.mark.parametrize("backend", ["compiled", "numpy"])
 @pytest.mark.parametrize(("zeta", "mu_k", "mu_s", "y0", "yp0"), CASES)
-def test_pi_matches_quadrature_of_ode_energy(zeta, mu_k, mu_s, y0, yp0):
+def test_pi_matches_quadrature_of_ode_energy(zeta, mu_k, mu_s, y0, yp0, backend):
     sol = ode_solve(y0, zeta, mu_k, mu_s, yp0)
     tau = np.linspace(0.0, sol.stop_time, 9)[:-1]
-    pi = exact_pi(tau, y0, zeta, mu_k, mu_s, yp0)
+    pi = exact_pi(tau, y0, zeta, mu_k, mu_s, yp0, backend=backend)
     ref = ode_pi(sol, tau)
     # Quadrature to rtol 1e-12 per half cycle on an ODE solution good to ~1e-10.
     np.testing.assert_allclose(pi, ref, rtol=0, atol=1e-8 * ref[0])
-    assert exact_pi(sol.stop_time + 1.0, y0, zeta, mu_k, mu_s, yp0) == 0.0
+    assert exact_pi(sol.stop_time + 1.0, y0, zeta, mu_k, mu_s, yp0, backend=backend) == 0.0
 
 
+@pytest.mark.parametrize("backend", ["compiled", "numpy"])
 @pytest.mark.parametrize(("zeta", "mu_k", "mu_s", "y0", "yp0"), CASES[:5])
-def test_truncated_pi_is_difference_of_untruncated(zeta, mu_k, mu_s, y0, yp0):
+def test_truncated_pi_is_difference_of_untruncated(zeta, mu_k, mu_s, y0, yp0, backend):
     end = stop_time(y0, zeta, mu_k, mu_s, yp0)
     tau = np.linspace(0.0, end, 50)
     for tau_end in (0.37 * end, 0.5 * end + 0.1, 2.0 * end):
-        truncated = exact_pi(tau, y0, zeta, mu_k, mu_s, yp0, tau_end=tau_end)
-        full = exact_pi(tau, y0, zeta, mu_k, mu_s, yp0)
-        full_end = exact_pi(min(tau_end, end), y0, zeta, mu_k, mu_s, yp0)
+        truncated = exact_pi(tau, y0, zeta, mu_k, mu_s, yp0, tau_end=tau_end, backend=backend)
+        full = exact_pi(tau, y0, zeta, mu_k, mu_s, yp0, backend=backend)
+        full_end = exact_pi(min(tau_end, end), y0, zeta, mu_k, mu_s, yp0, backend=backend)
         expected = np.where(tau < tau_end, full - full_end, 0.0)
         np.testing.assert_allclose(truncated, expected, rtol=1e-10, atol=1e-10 * full[0])
 

@@ -27,7 +27,14 @@ def test_kernel_agrees_with_numpy_model(yp0, tau_end):
     tau = np.linspace(0.0, 300.0, 97)
     fast = exact_pi_grid(tau, y0, zeta, mu_k, mu_s, yp0, tau_end)
     ref = exact_pi(
-        tau, y0[:, None], zeta[:, None], mu_k[:, None], mu_s[:, None], yp0, tau_end=tau_end
+        tau,
+        y0[:, None],
+        zeta[:, None],
+        mu_k[:, None],
+        mu_s[:, None],
+        yp0,
+        tau_end=tau_end,
+        backend="numpy",
     )
     finite = np.isfinite(ref)
     np.testing.assert_array_equal(np.isfinite(fast), finite)
@@ -59,5 +66,37 @@ def test_kernel_property(zeta, mu_k, extra, y0, yp0, tau_end):
         yp0,
         tau_end,
     )[0]
-    ref = exact_pi(tau, y0, zeta, mu_k, mu_k + extra, yp0, tau_end=tau_end)
+    ref = exact_pi(tau, y0, zeta, mu_k, mu_k + extra, yp0, tau_end=tau_end, backend="numpy")
     np.testing.assert_allclose(fast, ref, rtol=1e-11, atol=1e-11 * max(1.0, abs(ref[0])))
+
+
+@pytest.mark.parametrize(
+    "shapes",
+    [
+        # (tau, y0, zeta, mu_k, mu_s, yp0, tau_end)
+        ((7,), (5, 1), (5, 1), (5, 1), (5, 1), (), ()),  # walkers against times
+        ((7,), (), (), (), (), (), ()),  # one trajectory
+        ((), (5,), (5,), (5,), (5,), (), ()),  # one time, many trajectories
+        ((5, 7), (5, 1), (1,), (5, 1), (5, 1), (5, 1), (5, 1)),  # a time grid per row
+        ((2, 1, 7), (3, 1), (2, 1, 1), (3, 1), (3, 1), (), (3, 7)),  # any broadcast
+    ],
+)
+def test_public_exact_pi_is_the_compiled_kernel_for_any_broadcast(shapes):
+    """``exact_pi`` evaluates the compiled kernel by default (one trajectory per row,
+    or per element where the parameters vary along the last axis); it agrees with the
+    numpy implementation for every broadcast of its arguments."""
+    rng = np.random.default_rng(3)
+    tau = rng.uniform(0.0, 200.0, shapes[0])
+    y0 = rng.uniform(1.0, 8.0, shapes[1])
+    zeta = rng.uniform(0.0, 0.05, shapes[2])
+    mu_k = rng.uniform(0.0, 0.05, shapes[3])
+    mu_s = mu_k * rng.uniform(1.0, 2.0, shapes[4])
+    yp0 = rng.uniform(-1.0, 1.0, shapes[5])
+    tau_end = rng.uniform(50.0, 300.0, shapes[6])
+    args = (tau, y0, zeta, mu_k, mu_s, yp0, tau_end)
+    fast = exact_pi(*args)
+    ref = exact_pi(*args, backend="numpy")
+    assert fast.shape == ref.shape == np.broadcast_shapes(*shapes)
+    np.testing.assert_allclose(fast, ref, rtol=1e-12, atol=1e-12 * np.max(ref))
+    with pytest.raises(ValueError, match="backend must be"):
+        exact_pi(*args, backend="jax")

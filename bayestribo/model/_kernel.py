@@ -18,7 +18,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["exact_pi_grid"]
+__all__ = ["exact_pi_grid", "exact_pi_rows"]
 
 _TINY = 1e-100
 _SERIES_XL = 1e-6
@@ -217,3 +217,47 @@ def exact_pi_grid(
     flat = [np.ascontiguousarray(np.ravel(a), dtype=np.float64) for a in (y0, zeta, mu_k, mu_s)]
     end = math.inf if tau_end is None else float(tau_end)
     return _grid(np.ascontiguousarray(tau, dtype=np.float64), *flat, float(yp0), end)
+
+
+@numba.njit(cache=True)
+def _rows(
+    tau: NDArray, y0: NDArray, z: NDArray, mk: NDArray, ms: NDArray, yp0: NDArray, end: NDArray
+) -> NDArray:
+    out = np.empty(tau.shape)
+    for p in range(y0.size):
+        _one(tau[p], y0[p], z[p], mk[p], ms[p], yp0[p], end[p], out[p])
+    return out
+
+
+def exact_pi_rows(
+    tau: NDArray,
+    y0: NDArray,
+    zeta: NDArray,
+    mu_k: NDArray,
+    mu_s: NDArray,
+    yp0: NDArray,
+    tau_end: NDArray,
+) -> NDArray:
+    """Exact Π of any broadcast of its arguments, in the compiled kernel.
+
+    Every argument is broadcast to one shape; where the parameters are constant along
+    its last axis (the usual ``(P, 1)`` parameters against ``(T,)`` times), each row
+    is one trajectory evaluated at its T times, otherwise every element is its own
+    trajectory. ``tau_end`` is ``inf`` for "to the end of motion". No argument checks
+    (see the module notes).
+    """
+    arrays = np.broadcast_arrays(
+        *(np.asarray(a, dtype=np.float64) for a in (tau, y0, zeta, mu_k, mu_s, yp0, tau_end))
+    )
+    shape = arrays[0].shape
+    params = arrays[1:]
+    if len(shape) >= 1 and all(a.strides[-1] == 0 for a in params):
+        # copies: numba reads a broadcast view's writeable flag with a FutureWarning
+        rows = [np.array(a[..., 0], order="C").reshape(-1) for a in params]
+        times = np.array(arrays[0], order="C").reshape(-1, shape[-1] if shape[-1] else 1)
+    else:
+        rows = [np.array(a, order="C").reshape(-1) for a in params]
+        times = np.array(arrays[0], order="C").reshape(-1, 1)
+    if times.size == 0:
+        return np.zeros(shape)
+    return _rows(times, *rows).reshape(shape)
