@@ -127,6 +127,12 @@ class LawComparison:
             )
         others = [law for law in self.as_good if law != self.verdict]
         tie = f", as good as {', '.join(others)}" if others else ""
+        if self.verdict == "free":
+            return (
+                f"no law of the {n - 1} compared holds; the law-free fit (ΔE(A) any "
+                "increasing polynomial of degree 1-4) describes the decay: its ΔE(A) is "
+                "the answer, its parameters are not a measurement of any mechanism"
+            )
         return (
             f"{self.verdict} chosen from {n} laws: the simplest adequate law as good as "
             f"the best by PSIS-LOO (best {self.best}{tie})"
@@ -273,6 +279,7 @@ def compare_prepared(
     model: str = "exact",
     settings: SamplerSettings | None = None,
     discrepancy: bool = False,
+    law_free: bool = False,
 ) -> tuple[LawComparison, dict[str, Sampled]]:
     """Compare laws on a prepared run; also return each law's sampled posterior.
 
@@ -287,6 +294,10 @@ def compare_prepared(
         Seed; each law's stream depends on it and on the law's name alone.
     model, settings, discrepancy
         As in :func:`bayestribo.inference.fit`.
+    law_free : bool
+        When no law compared is adequate, also fit the law-free ``"free"`` law
+        (:data:`bayestribo.model.laws.law.ALIASES`), a dissipation per cycle that is
+        any increasing polynomial of the amplitude of degree 1 to 4.
 
     Returns
     -------
@@ -303,8 +314,8 @@ def compare_prepared(
     root = np.random.SeedSequence(seed)
     idatas, table, notes, runs = {}, {}, [], {}
     optima: dict[str, dict[str, float]] = {}
-    # smallest laws first: their optima are starting points of the laws that nest them
-    for law in sorted(laws, key=_complexity):
+
+    def fit_one(law: str) -> None:
         rng = np.random.default_rng(_law_seed(root, law))
         nested = _nested_start(law, prepared, optima)
         try:
@@ -316,7 +327,7 @@ def compare_prepared(
             # comparison, not a failure of the others
             table[law] = {"law": _law(law).name, "error": str(exc), "converged": False}
             notes.append(f"{law}: not fitted ({exc})")
-            continue
+            return
         runs[law] = sampled
         s = sampled.run
         names = sampled.posterior.names
@@ -341,6 +352,17 @@ def compare_prepared(
             notes.append(f"{law}: Pareto k up to {k_max:.2f}; its PSIS-LOO is unreliable")
         if not s.converged:
             notes.append(f"{law}: sampler not converged ({'; '.join(s.reasons)})")
+
+    # smallest laws first: their optima are starting points of the laws that nest them
+    for law in sorted(laws, key=_complexity):
+        fit_one(law)
+    if law_free and not any(row.get("adequate") and row.get("converged") for row in table.values()):
+        # no law compared holds: the law-free fit, whose ΔE(A) is any increasing
+        # polynomial of degree 1-4, says how much energy the decay loses
+        free = get_law("free").name
+        if free not in {_law(law).name for law in laws}:
+            laws = [*laws, "free"]
+            fit_one("free")
     if len(idatas) < 2:
         raise BayestriboError(
             f"laws: fewer than two of {laws} could be fitted: " + "; ".join(notes)

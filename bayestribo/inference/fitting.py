@@ -107,7 +107,8 @@ def fit(
         fits every law of :data:`bayestribo.inference.comparison.AUTO_LAWS` and keeps
         the simplest adequate one as good as the best by PSIS-LOO
         (:mod:`bayestribo.inference.comparison`; the result's ``law_comparison`` says
-        which and why).
+        which and why); when none of them is adequate, the law-free ``"free"`` law
+        (ΔE(A) any increasing polynomial of degree 1-4) is fitted too.
 
     Returns
     -------
@@ -157,6 +158,7 @@ def fit(
             model=model,
             settings=settings,
             discrepancy=discrepancy,
+            law_free=True,
         )
         sampled = runs[comparison.verdict]
     else:

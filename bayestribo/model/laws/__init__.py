@@ -10,7 +10,9 @@ registers the built-in terms, in this order:
 * ``quadratic``: c₂ v|v|, air and fluid drag;
 * ``power``: c_α |v|^α sgn v, α free;
 * ``hysteretic``: a friction proportional to amplitude (with ``coulomb``, a friction
-  μ_k + ηA that varies with amplitude).
+  μ_k + ηA that varies with amplitude);
+* ``cubic``: c₃ v³, which with the others makes ΔE(A) any polynomial of degree 1-4
+  with non-negative coefficients (the law-free fit).
 """
 
 # One import line per built-in term: importing the module registers it.
@@ -19,6 +21,7 @@ from bayestribo.model.laws import coulomb  # noqa: F401  isort: skip
 from bayestribo.model.laws import quadratic  # noqa: F401  isort: skip
 from bayestribo.model.laws import power  # noqa: F401  isort: skip
 from bayestribo.model.laws import hysteretic  # noqa: F401  isort: skip
+from bayestribo.model.laws import cubic  # noqa: F401  isort: skip
 from bayestribo.model.laws.base import (
     TERMS,
     Parameter,

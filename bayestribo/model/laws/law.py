@@ -27,10 +27,15 @@ from numpy.typing import ArrayLike, NDArray
 from bayestribo.model.laws.base import TERMS, Parameter, PhysicalScale, Term, get_term
 from bayestribo.model.laws.integrator import DEFAULT_STEPS, make_integrator
 
-__all__ = ["DEFAULT_LAW", "Law", "get_law"]
+__all__ = ["ALIASES", "DEFAULT_LAW", "Law", "get_law"]
 
 #: The law of a default fit (Rigaud et al. 2010, Eq. 7).
 DEFAULT_LAW = "viscous+coulomb"
+#: Names that stand for a law. ``free``: the law-free fit, a dissipation per cycle
+#: ΔE(A) = 4μ_kA + 2πζA² + (8/3)γA³ + (3π/4)c₃A⁴ with every coefficient >= 0, a
+#: smooth increasing function of the amplitude; its parameters are not a measurement
+#: of any mechanism, its ΔE(A) is.
+ALIASES: dict[str, str] = {"free": "viscous+coulomb+quadratic+cubic"}
 #: The terms the closed form of the exact solution covers.
 _CLOSED_FORM = frozenset({"viscous", "coulomb"})
 
@@ -81,6 +86,7 @@ class Law:
                 f"law: expected terms joined with '+' (registered terms: "
                 f"{', '.join(TERMS)}), got {name!r}"
             )
+        name = ALIASES.get(name.strip().lower(), name)
         parts = [p.strip().lower() for p in name.split("+")]
         if any(not p for p in parts):
             raise ValueError(f"law {name!r}: an empty term between '+' signs")
