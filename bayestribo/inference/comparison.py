@@ -424,8 +424,6 @@ def compare_dissipation_laws(
         If a law is unknown or fewer than two are given.
     """
     settings = SamplerSettings(n_walkers=n_walkers, n_ensembles=n_ensembles, max_steps=max_steps)
-    root = np.random.SeedSequence(seed)
-    data_seed = root.spawn(1 + len(LAWS))[0]
     laws = list(dict.fromkeys(laws))
     if len(laws) < 2:
         raise BayestriboError(f"laws: expected two or more laws to compare, got {laws}")
@@ -435,7 +433,6 @@ def compare_dissipation_laws(
         run,
         skip_oscillations=skip_oscillations,
         grid_points=grid_points,
-        seed=np.random.default_rng(data_seed),
         read_options=read_options,
     )
     comparison, _ = compare_prepared(

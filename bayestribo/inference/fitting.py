@@ -142,7 +142,6 @@ def fit(
         skip_oscillations=skip_oscillations,
         grid_points=grid_points,
         noise=noise,
-        seed=rng,
         read_options=read_options,
         correct_channels=correct_channels,
         notch=notch,

@@ -21,6 +21,7 @@ import json
 import math
 import os
 import warnings
+import zlib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, Literal
@@ -135,6 +136,12 @@ def _run_name(run: Run) -> str:
     return str(run.source or dict(run.metadata).get("run_id", "") or "")
 
 
+def _data_seed(decay: EnergyDecay) -> int:
+    """A seed that is a function of the analysed signals alone (CRC-32 of their bytes)."""
+    crc = zlib.crc32(np.ascontiguousarray(decay.y).tobytes())
+    return zlib.crc32(np.ascontiguousarray(decay.yp).tobytes(), crc)
+
+
 def prepare(
     run: Run | str | os.PathLike[str],
     *,
@@ -159,7 +166,12 @@ def prepare(
     noise : NoiseModel, optional
         Use this noise model instead of the recording's.
     seed : int or Generator, optional
-        Seed of the Monte Carlo propagation of the noise into the increments.
+        Seed of the Monte Carlo propagation of the noise into the increments of a
+        derived channel. Default: a seed computed from the recording itself, so that
+        the observation, and every answer drawn from it, is a function of the data and
+        not of the fit's seed (the increments' variances carry the Monte Carlo's
+        relative error of about 8 %; where the law misfits a record, a fit seeded
+        anew with each draw moved by more than one posterior sd).
     read_options : mapping, optional
         Options of :func:`bayestribo.read_run` when ``run`` is a path.
     correct_channels : bool
@@ -188,8 +200,11 @@ def prepare(
         notch=notch,
     )
     noise_used = noise or noise_model(decay, dict(recording.metadata))
-    rng = np.random.default_rng(seed)
-    data = pi_data(decay, noise_used, grid_points=grid_points, seed=int(rng.integers(2**31)))
+    if seed is None:
+        mc_seed = _data_seed(decay)
+    else:
+        mc_seed = int(np.random.default_rng(seed).integers(2**31))
+    data = pi_data(decay, noise_used, grid_points=grid_points, seed=mc_seed)
     return PreparedRun(
         recording,
         _run_name(recording),
