@@ -319,10 +319,14 @@ class OdePiLikelihood(PiLikelihood):
 
     STEP = 0.02
 
-    def model_pi(self, zeta, mu_k, mu_s, y0):  # type: ignore[override]
+    def model_pi(self, params):  # type: ignore[override]
         grid = self.data.tau_grid
         ended = self.data.motion_ended
-        rows = np.broadcast_arrays(*(np.ravel(a) for a in (zeta, mu_k, mu_s, y0)))
+        mu_k = np.ravel(params["mu_k"])
+        mu_s = mu_k * np.ravel(params["mu_s_ratio"])
+        rows = np.broadcast_arrays(
+            *(np.ravel(a) for a in (params["zeta"], mu_k, mu_s, params["y0"]))
+        )
         out = np.empty((rows[0].size, grid.size - 1))
         for i, (z, m, s, y) in enumerate(zip(*rows, strict=True)):
             sol = ode_solve(
@@ -419,16 +423,19 @@ def main(argv: list[str] | None = None) -> int:
     run = read_run(RUN)
     ode_lik = likelihood_of(run, cls=OdePiLikelihood)
     closed_lik = likelihood_of(run)
-    names = ["zeta", "mu_k", "mu_s", "y0"]
+    names = ["zeta", "mu_k", "mu_s_ratio", "y0"]
     draws = {n: first.samples(n) for n in names}
     pick = np.linspace(0, draws["zeta"].size - 1, args.ode_evals).round().astype(int)
-    rows = [draws[n][pick][:, None] for n in names]
+    rows = {n: draws[n][pick] for n in names}
     start = time.perf_counter()
     ll_ode = np.concatenate(
-        [ode_lik.log_likelihood(*(r[i : i + 1] for r in rows)) for i in range(pick.size)]
+        [
+            ode_lik.log_likelihood({n: v[i : i + 1] for n, v in rows.items()})
+            for i in range(pick.size)
+        ]
     )
     ode_per_eval = (time.perf_counter() - start) / pick.size
-    ll_closed = closed_lik.log_likelihood(*rows)
+    ll_closed = closed_lik.log_likelihood(rows)
     ode_fit_seconds = ode_per_eval * evaluations
 
     sweep = walker_sweep(args.sweep) if args.sweep else None

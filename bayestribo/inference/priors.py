@@ -15,8 +15,9 @@ term of :mod:`bayestribo.model.laws` declares its own:
   load): uniform on [0, y0/4]. A friction larger than a quarter of the initial
   amplitude stops the motion within two half cycles: such a record has no decay to
   analyse.
-* ``mu_s_ratio`` (μ_s/μ_k): uniform on [1, 3]. Static friction is at least kinetic
-  friction; the ratio mostly decides at which turning point the pin sticks.
+* ``mu_s_ratio`` (μ_s/μ_k): uniform on [1, 10]. Static friction is at least kinetic
+  friction, and dry contacts reach several times it; the ratio mostly decides at
+  which turning point the pin sticks.
 * ``y0`` (initial amplitude): normal, centred on the observed y(0) with a standard
   deviation of 1 % of it, which is hundreds of times the noise of one sample.
 * ``log10_discrepancy`` (optional): base-10 logarithm of the relative model

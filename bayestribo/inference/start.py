@@ -146,7 +146,7 @@ def _into_support(posterior: Posterior, values: dict[str, float]) -> dict[str, f
 def _ratio_grid(posterior: Posterior) -> NDArray:
     low, high = _support(posterior.priors["mu_s_ratio"])
     low = 1.0 if not np.isfinite(low) else max(low, 1.0)
-    high = 3.0 if not np.isfinite(high) else high
+    high = 10.0 if not np.isfinite(high) else high
     return np.linspace(low, high, 81)
 
 
