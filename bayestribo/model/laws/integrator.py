@@ -122,10 +122,6 @@ def make_integrator(
         friction ratio; Π of shape (P, T); status (P,) 0 when the motion could be
         integrated, 1 when the drag stops a half cycle before it turns (an overdamped
         arc: that row of Π is NaN).
-    grid_threads : callable
-        The same, its parameter sets shared among numba's threads (compiled on first
-        use; call it from the main thread only: numba's simplest threading layer
-        allows one parallel region at a time).
     turns : callable
         ``turns(y0, coef_row, ratio, yp0, tau_max, max_count) -> (τ_n, Y_n)``: the
         turning points of one trajectory.
@@ -425,29 +421,6 @@ def make_integrator(
             )
         return out, status
 
-    @numba.njit(error_model="numpy", fastmath=_FAST, parallel=True)
-    def grid_threads(
-        tau: NDArray,
-        y0: NDArray,
-        coef: NDArray,
-        ratio: NDArray,
-        yp0: float,
-        tau_end: float,
-        steps: int,
-    ) -> tuple[NDArray, NDArray]:
-        out = np.empty((y0.size, tau.size))
-        status = np.zeros(y0.size, dtype=np.int64)
-        if steps > 0:
-            tables = nodes(0.0, steps)
-            offsets = np.zeros(1, dtype=np.int64)
-        else:
-            tables, offsets = ladder_tables()
-        for p in numba.prange(y0.size):
-            status[p] = one(
-                tau, y0[p], coef[p], ratio[p], yp0, tau_end, steps, tables, offsets, out[p]
-            )
-        return out, status
-
     @numba.njit(error_model="numpy", fastmath=_FAST)
     def turns(
         y0: float, c: NDArray, ratio: float, yp0: float, tau_max: float, max_count: int
@@ -512,4 +485,4 @@ def make_integrator(
             theta0 = 0.0
         return times[:n], where[:n]
 
-    return grid, grid_threads, turns
+    return grid, turns

@@ -16,7 +16,6 @@ of Π(0) on the laws the closed form covers (tests).
 from __future__ import annotations
 
 import math
-import threading
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
@@ -264,11 +263,9 @@ class Law:
             return exact_pi_grid(t, y, zeta, mu_k, mu_s, float(yp0), tau_end)
         ref = abs(float(y[0])) if reference is None else float(reference)
         coef = self.coefficients(vals, ref)
-        grid, grid_threads, _ = make_integrator(*self._layout[0])
-        if threading.current_thread() is threading.main_thread():
-            # the parameter sets on numba's threads (a sampler's walkers: about 1.9x on
-            # two cores); not from other threads, where two parallel regions could meet
-            grid = grid_threads
+        # serial: numba's threads (1.9x on an idle two-core machine) spun against the
+        # other processes of a loaded one, 10x slower (tests on two workers, campaigns)
+        grid, _ = make_integrator(*self._layout[0])
         pi, _ = grid(t, y, coef, self.static_ratio(vals, size), float(yp0), end, int(steps))
         return pi
 
@@ -308,7 +305,7 @@ class Law:
         vals = {n: np.atleast_1d(np.asarray(values[n], dtype=float)) for n in self.parameter_names}
         coef = self.coefficients(vals, ref)[0]
         ratio = float(self.static_ratio(vals, 1)[0])
-        *_, turns = make_integrator(*self._layout[0])
+        _, turns = make_integrator(*self._layout[0])
         return turns(float(y0), coef, ratio, float(yp0), float(tau_max), int(max_count))
 
     # -- what the law dissipates ---------------------------------------------------
