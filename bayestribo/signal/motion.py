@@ -30,7 +30,9 @@ the rig's frequency**.
   crossing (where an anti-alias filter rounds the corner), not by waiting for the
   noise to cross it.
 * The blocks' sinusoid is at the frequency measured from the record's own spectrum
-  (the dominant period of its first difference, :mod:`bayestribo.signal.peaks`).
+  (a peak of the spectrum of its first difference: the one whose oscillation is the
+  strongest in the signal itself, so that a line of the noise that the difference
+  gains is not taken for it; :func:`bayestribo.signal.peaks._dominant_period`).
 
 :func:`check_turning_points` applies the other piece of physics: consecutive turning
 points of the motion are half a damped period apart.
