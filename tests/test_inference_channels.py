@@ -85,3 +85,13 @@ def test_the_fit_of_miscalibrated_channels_covers_the_truth_again(clean):
         raw = fit(bad, seed=2, max_steps=4000, correct_channels=False)
     lo, hi = np.quantile(raw.samples("mu_k"), [0.025, 0.975])
     assert not lo < MU_K < hi
+
+
+def test_swapped_channels_of_a_run_built_in_memory_are_refused_not_corrected(clean):
+    """read_run refuses a file with swapped columns; a Run made in Python is refused by
+    the fit the same way (it was rescaled by about -1/Ω² with only a warning)."""
+    from bayestribo.errors import RecordingError
+
+    swapped = Run(clean.time, clean.velocity, clean.displacement, dict(clean.metadata))
+    with pytest.raises(RecordingError, match="look swapped"):
+        fit(swapped, seed=1, max_steps=500)

@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 
 from bayestribo.errors import ChannelCalibrationWarning
 from bayestribo.io.run import Run
-from bayestribo.io.validation import channel_consistency
+from bayestribo.io.validation import channel_consistency, check_channels
 
 __all__ = ["CALIBRATION_Z", "MIN_RIPPLE", "calibrate_channels", "fractional_delay"]
 
@@ -98,7 +98,16 @@ def calibrate_channels(run: Run, *, correct: bool = True) -> tuple[Run, dict[str
     -----
     ChannelCalibrationWarning
         When the gain ratio or the delay is off, with the values and what was done.
+
+    Raises
+    ------
+    RecordingError
+        When the channels are swapped, unrelated or their gains a factor of 2 or more
+        apart (:func:`bayestribo.io.validation.check_channels`).
     """
+    # A run built in memory has not been through read_run's checks: swapped or
+    # unrelated channels are refused here too, never "corrected" by a gain of -1/Ω².
+    check_channels(run, run.source)
     found = channel_consistency(run)
     if found is None or not (math.isfinite(found.gain_se) and math.isfinite(found.delay_se_s)):
         return run, None

@@ -43,6 +43,7 @@ __all__ = [
     "UNIT_GAIN_TOLERANCE",
     "ChannelConsistency",
     "channel_consistency",
+    "check_channels",
     "validate_run",
 ]
 
@@ -392,6 +393,20 @@ def channel_consistency(run: Run) -> ChannelConsistency | None:
         gain_se = math.sqrt(spread * float(np.sum((np.asarray(gains) - np.mean(gains)) ** 2)))
         delay_se = math.sqrt(spread * float(np.sum((np.asarray(delays) - np.mean(delays)) ** 2)))
     return ChannelConsistency(correlation, gain, delay, lag * step, gain_se, delay_se, k)
+
+
+def check_channels(run: Run, where: str | None = None) -> None:
+    """Refuse channels that do not describe one motion: swapped, unrelated, or with
+    gains a factor of :data:`UNIT_GAIN_TOLERANCE` or more apart (the check
+    :func:`validate_run` applies to every file read; a run built in memory gets it
+    before its fit).
+
+    Raises
+    ------
+    RecordingError
+        Naming the fields and what was found.
+    """
+    _check_units(run, where)
 
 
 def _check_units(run: Run, where: str | None) -> None:
