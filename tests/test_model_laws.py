@@ -247,3 +247,61 @@ def test_a_law_with_a_term_of_its_own_integrates_without_registering_it():
     # the cubic term's ΔE is its force's integral over a cycle
     numeric = 2 * quad(lambda t: 0.02 * abs(1.5 * math.sin(t)) ** 4, 0, math.pi)[0]
     assert law.dissipation([1.5], {"zeta": 0.0, "c3": 0.02}, 1.0)[0, 0] == pytest.approx(numeric)
+
+
+# -- the compiled laws are cached across processes -------------------------------------
+
+_CACHE_SCRIPT = """
+import numpy as np
+from bayestribo.model.laws import get_law
+from bayestribo.model.laws.integrator import make_integrator
+law = get_law("viscous+coulomb+quadratic")
+pi = law.pi_grid(np.linspace(0, 20, 7), {"zeta": 0.01, "mu_k": 0.01, "mu_s_ratio": 1.5,
+                                         "c2": 0.02}, [1.0])
+grid, _ = make_integrator(*law._layout[0])
+print(repr(pi.tolist()), grid.stats.cache_hits and sum(grid.stats.cache_hits.values()),
+      sum(grid.stats.cache_misses.values()))
+"""
+
+
+def test_a_laws_integrator_is_compiled_once_and_loaded_by_later_processes(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "BAYESTRIBO_CACHE_DIR": str(tmp_path)}
+    runs = [
+        subprocess.run(
+            [sys.executable, "-c", _CACHE_SCRIPT], env=env, capture_output=True, text=True
+        )
+        for _ in range(2)
+    ]
+    for r in runs:
+        assert r.returncode == 0, r.stderr
+    first, second = (r.stdout.split() for r in runs)
+    assert first[0] == second[0]  # the same Π
+    assert first[-1] != "0"  # compiled the first time ...
+    assert second[-2] != "0" and second[-1] == "0"  # ... loaded from the cache after
+    assert list(tmp_path.glob("bayestribo_law_*.py"))
+
+
+def test_a_term_that_cannot_be_imported_by_name_is_compiled_in_each_process():
+    @numba.njit
+    def local_drag(w, c):
+        return c[0] * w
+
+    term = Term(
+        name="local",
+        kind="drag",
+        parameters=(Parameter("c_local", "c", "-", 0.0, 1.0, "", lambda a: {"type": "Uniform"}),),
+        n_coefficients=1,
+        force=local_drag,
+        coefficients=lambda values, reference: [2.0 * np.asarray(values["c_local"])],
+        dissipation=lambda a, values, reference: 0.0,
+        physical=lambda values, reference, scale: {},
+        description="",
+    )
+    tau = np.linspace(0.0, 30.0, 9)
+    local = Law((term,)).pi_grid(tau, {"c_local": 0.01}, [1.0], tau_end=40.0)
+    viscous = get_law("viscous").pi_grid(tau, {"zeta": 0.01}, [1.0], tau_end=40.0)
+    np.testing.assert_allclose(local, viscous, rtol=0, atol=1e-8 * viscous[0, 0])
