@@ -29,6 +29,7 @@ from typing import Any
 
 from bayestribo import DEFAULT_SEED
 from bayestribo.cli._common import add_reading_options, reading_kwargs
+from bayestribo.cli.laws import add_law_option
 
 __all__ = ["register"]
 
@@ -67,6 +68,7 @@ def register(subparsers: Any) -> None:
     p.add_argument("--dask-scheduler", metavar="ADDRESS", help="fit on this Dask scheduler instead")
     p.add_argument("--refit", action="store_true", help="fit runs already in the catalog")
     p.add_argument("--model", choices=("exact", "averaged"), help="forward model of the fit")
+    add_law_option(p)
     p.add_argument("--max-steps", type=int, help="sampler step ceiling per run")
     p.add_argument("--grid-points", type=int, help="Π increments per run")
     p.add_argument(
@@ -189,6 +191,7 @@ def run(args: argparse.Namespace) -> int:
         key: value
         for key, value in (
             ("model", args.model),
+            ("law", args.law),
             ("max_steps", args.max_steps),
             ("grid_points", args.grid_points),
         )
