@@ -128,3 +128,23 @@ def test_laws_command_lists_every_registered_term(capsys):
         "power",
         "hysteretic",
     ]
+
+
+def test_the_comparison_keeps_the_simplest_adequate_law_as_good_as_the_best(drag_run):
+    """On the drag recording: the paper's law misfits, the law with drag is adequate
+    and chosen; a larger law nesting it is not preferred over it."""
+    from bayestribo.inference import prepare
+    from bayestribo.inference.comparison import compare_prepared
+
+    prepared = prepare(drag_run)
+    comparison, runs = compare_prepared(
+        prepared, ["viscous+coulomb", "viscous+coulomb+quadratic", "free"], seed=4
+    )
+    table = comparison.table
+    assert not table["viscous+coulomb"]["adequate"]
+    assert table["viscous+coulomb+quadratic"]["adequate"]
+    assert comparison.verdict == "viscous+coulomb+quadratic" and comparison.adequate
+    assert "viscous+coulomb+quadratic" in comparison.as_good
+    assert table["viscous+coulomb"]["elpd_diff"] > 1000
+    assert "chosen from 3 laws" in comparison.describe()
+    assert set(runs) == set(table)
