@@ -25,6 +25,7 @@ def law_recording(
     drag: Callable[[float], float],
     *,
     friction: float = 0.0,
+    friction_slope: float = 0.0,
     static_ratio: float = 1.5,
     x0: float = 1.0e-3,
     frequency_Hz: float = 32.6,
@@ -45,6 +46,10 @@ def law_recording(
         Drag acceleration a_d(v) [m/s²] at velocity v [m/s], odd in v.
     friction : float
         Coulomb friction acceleration μ_k N/m [m/s²].
+    friction_slope : float
+        Its change per metre of the turning point |X_n| each half cycle starts from
+        [1/s²]: the friction acceleration of that half cycle is
+        ``friction + friction_slope |X_n|`` (a friction that varies with amplitude).
     static_ratio : float
         μ_s/μ_k.
     x0 : float
@@ -66,16 +71,17 @@ def law_recording(
     segments = []
     rest = None
     while t < duration_s:
+        here = friction + friction_slope * abs(state[0])
         if state[1] == 0.0:
-            if omega**2 * abs(state[0]) <= static_ratio * friction:
+            if omega**2 * abs(state[0]) <= static_ratio * here:
                 rest = (t, state[0])
                 break
             direction = -math.copysign(1.0, state[0])
         else:
             direction = math.copysign(1.0, state[1])
 
-        def rhs(_t: float, s: np.ndarray, d: float = direction) -> list[float]:
-            return [s[1], -(omega**2) * s[0] - drag(s[1]) - friction * d]
+        def rhs(_t: float, s: np.ndarray, d: float = direction, f: float = here) -> list[float]:
+            return [s[1], -(omega**2) * s[0] - drag(s[1]) - f * d]
 
         def turning(_t: float, s: np.ndarray) -> float:
             return s[1]

@@ -148,3 +148,37 @@ def test_the_comparison_keeps_the_simplest_adequate_law_as_good_as_the_best(drag
     assert table["viscous+coulomb"]["elpd_diff"] > 1000
     assert "chosen from 3 laws" in comparison.describe()
     assert set(runs) == set(table)
+
+
+def test_a_friction_that_falls_with_amplitude_is_measured():
+    """Coulomb friction μ(A) = μ_k + ηA with η < 0 (an independent solve_ivp recording:
+    the friction of each half cycle set by the turning point it starts from): the
+    law coulomb+hysteretic covers μ_k and η, and the paper's law misfits."""
+    mu_k, eta = 0.025, -0.002  # dimensionless: μ(A) 38 % lower at y0 ≈ 4.7
+    run = law_recording(
+        lambda v: 0.0 * v,
+        friction=mu_k * LOAD / MASS,
+        friction_slope=eta * OMEGA**2,  # η ℓ k/m per ℓ of amplitude
+        seed=5,
+    )
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = fit(run, seed=1, law="coulomb+hysteretic")
+    assert not [w for w in caught if issubclass(w.category, MisfitWarning)]
+    for name, truth in (("mu_k", mu_k), ("eta", eta)):
+        lo, hi = result.interval(name, 0.99)
+        assert lo < truth < hi, (name, lo, hi)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        fit(run, seed=1)
+    assert any(issubclass(w.category, MisfitWarning) for w in caught)
+
+
+def test_a_friction_below_zero_at_some_amplitude_is_outside_the_law():
+    law = get_law("coulomb+hysteretic")
+    pi = law.pi_grid(
+        np.linspace(0.0, 20.0, 5),
+        {"mu_k": [0.02, 0.02], "mu_s_ratio": [1.5, 1.5], "eta": [-0.002, -0.05]},
+        [1.0, 1.0],
+    )
+    assert np.all(np.isfinite(pi[0])) and np.all(np.isnan(pi[1]))

@@ -267,7 +267,7 @@ def _nested_start(
             elif p.name == "alpha":
                 start[p.name] = 1.0
             else:
-                start[p.name] = p.low + 1e-6 * (1.0 if p.high == np.inf else p.high - p.low)
+                start[p.name] = p.null + 1e-6 * (1.0 if p.high == np.inf else p.high - p.null)
     return start
 
 

@@ -70,8 +70,8 @@ from bayestribo.signal.increments import PiData
 __all__ = ["MODELS", "SHAPE_TERMS", "Params", "PiLikelihood", "ShapeDeparture"]
 
 #: Parameter values by name: the law's parameters and ``y0``, arrays of shape (n,) or
-#: (n, 1) (a parameter of the law that is missing takes its null value, the lower end
-#: of its support: no force, or μ_s = μ_k).
+#: (n, 1) (a parameter of the law that is missing takes its null value,
+#: :attr:`~bayestribo.model.laws.Parameter.null`: no force, or μ_s = μ_k).
 Params = Mapping[str, NDArray]
 
 MODELS = ("exact", "averaged")
@@ -136,7 +136,7 @@ class PiLikelihood:
         for p in self.law.parameters:
             v = params.get(p.name)
             values[p.name] = (
-                np.full(y0.shape, p.low) if v is None else np.ravel(np.asarray(v, dtype=float))
+                np.full(y0.shape, p.null) if v is None else np.ravel(np.asarray(v, dtype=float))
             )
         return values, y0
 

@@ -136,7 +136,7 @@ class Posterior:
         values = self.values(theta)
         n = np.atleast_2d(theta).shape[0]
         return {
-            p.name: values[p.name] if p.name in values else np.full(n, p.low)
+            p.name: values[p.name] if p.name in values else np.full(n, p.null)
             for p in self.law.parameters
         }
 

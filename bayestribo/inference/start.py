@@ -101,7 +101,8 @@ def _law_guesses(posterior: Posterior, zeta_total: float, amp: float) -> list[di
                 base[p.name] = 0.5 * (low + high) if np.isfinite(high) else low + 1.0
     for t in sampled:
         low, high = _support(posterior.priors[t.parameters[0].name])
-        base[t.parameters[0].name] = low + 1e-4 * (high - low) if np.isfinite(high) else low
+        start = max(low, t.parameters[0].null)  # no force: η of a friction that varies
+        base[t.parameters[0].name] = start + 1e-4 * (high - start) if np.isfinite(high) else start
 
     def scaled(term_share: dict[str, float]) -> dict[str, float]:
         out = dict(base)
@@ -111,7 +112,7 @@ def _law_guesses(posterior: Posterior, zeta_total: float, amp: float) -> list[di
             unit = dict(out, **{first: 1.0})
             values = {k: np.array([v]) for k, v in unit.items()}
             for p in term.parameters:
-                values.setdefault(p.name, np.array([p.low]))
+                values.setdefault(p.name, np.array([p.null]))
             per_unit = float(term.dissipation(a_mid, values, lik.reference_amplitude)[0])
             if per_unit > 0 and np.isfinite(per_unit):
                 out[first] = share * target / per_unit
@@ -208,7 +209,7 @@ def _optimise(
     """
     names = posterior.names
     values = {
-        **{p.name: p.low for p in posterior.law.parameters},
+        **{p.name: p.null for p in posterior.law.parameters},
         "zeta": 0.0,
         "y0": posterior.likelihood.data.y0,
         "mu_s_ratio": 1.2 if ratio is None else ratio,

@@ -239,6 +239,11 @@ def one(
     before = 0.0
     n_half = 0
     while not stopped:
+        if mu < 0.0:
+            # a friction that falls with amplitude below zero: outside the law's domain
+            for i in range(n_t):
+                out[i] = math.nan
+            return 1
         if fixed_steps > 0:
             steps = fixed_steps
             table = tables if theta0 == 0.0 else nodes(theta0, steps)
@@ -383,7 +388,7 @@ def turns(
         r = math.hypot(ym - mu, vm)
         theta0 = math.atan2(-vm, ym - mu)
     t = 0.0
-    while n < max_count and t <= tau_max:
+    while n < max_count and t <= tau_max and mu >= 0.0:
         k = choose_steps(r, c)
         steps = LADDER[k]
         if theta0 == 0.0:

@@ -114,6 +114,10 @@ class Parameter:
         Support of the parameter (``high`` may be ``inf``).
     label : str
         A short phrase for reports (``"equivalent viscous damping ratio"``).
+    null : float, optional
+        The value at which the term exerts no force (or, for μ_s/μ_k, no static
+        friction beyond the kinetic): what a parameter neither sampled nor fixed takes.
+        Default ``low``.
     prior : callable
         ``prior(amplitude) -> dict``: the default prior given the observed initial
         amplitude |y0| (dimensionless), as the plain-data spec of
@@ -129,12 +133,17 @@ class Parameter:
     high: float
     label: str
     prior: Callable[[float], Mapping[str, float | str]]
+    null: float | None = None
 
     def __post_init__(self) -> None:
         if not self.name.isidentifier():
             raise ValueError(f"Parameter name must be an identifier, got {self.name!r}")
         if not (self.low < self.high):
             raise ValueError(f"Parameter {self.name}: low must be below high")
+        if self.null is None:
+            object.__setattr__(self, "null", float(self.low))
+        elif not self.low <= self.null <= self.high:
+            raise ValueError(f"Parameter {self.name}: null must lie in [low, high]")
 
 
 @dataclass(frozen=True)

@@ -1,10 +1,14 @@
-r"""Friction that grows with amplitude: η |Y_n| sgn v within each half cycle.
+r"""Friction that varies with amplitude: η |Y_n| sgn v within each half cycle.
 
 With :mod:`coulomb` it makes a friction that varies with amplitude,
-``μ(A) = μ_k + ηA`` (A the turning point the half cycle started from, in units of ℓ);
-alone it is the classical hysteretic (structural) damping, whose loss per cycle
-grows as the square of the amplitude like a viscous one but does not depend on
-frequency. ΔE(A) = 4ηA² (loss factor 4η/π).
+``μ(A) = μ_k + ηA`` (A the turning point the half cycle started from, in units of ℓ):
+η > 0 grows with amplitude, η < 0 falls with it (as a velocity-weakening contact's
+does: a larger swing is a faster one). HarmOsc3, a weight sliding on a metal plate,
+has η = -0.0027 ± 0.00003 (μ(A) 15 % lower at its largest swing), which cut its χ²
+from 8332 to 1275. Alone (η > 0) it is the classical hysteretic (structural) damping,
+whose loss per cycle grows as the square of the amplitude like a viscous one but does
+not depend on frequency. ΔE(A) = 4ηA² (loss factor 4η/π). A friction below zero at
+some amplitude of the motion is outside the law's domain (no likelihood there).
 """
 
 from __future__ import annotations
@@ -26,8 +30,9 @@ def _force(a: float, c: NDArray) -> float:
 
 
 def _prior(amplitude: float) -> dict[str, float | str]:
-    # Up to about the dissipation of ζ = 0.3 (4η = 0.6π).
-    return {"type": "Uniform", "low": 0.0, "high": 0.45}
+    # Up to about the dissipation of ζ = 0.3 (4η = 0.6π), either way: with coulomb, a
+    # friction that grows or falls with amplitude (the motion keeps μ(A) >= 0).
+    return {"type": "Uniform", "low": -0.45, "high": 0.45}
 
 
 def _coefficients(values: Mapping[str, NDArray], reference: float) -> list[NDArray]:
@@ -55,10 +60,11 @@ HYSTERETIC = register_term(
                 "eta",
                 "η",
                 "-",
-                0.0,
+                -1.0,
                 1.0,
                 "friction per unit amplitude (μ(A) = μ_k + ηA)",
                 _prior,
+                null=0.0,
             ),
         ),
         n_coefficients=1,
