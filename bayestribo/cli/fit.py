@@ -98,7 +98,8 @@ def register(subparsers: Any) -> None:
 def json_record(result: Any, prob: float = 0.95) -> dict[str, Any]:
     """The JSON object printed by ``--json``.
 
-    ``{"run", "model", "law", "law_comparison" (with ``--law auto``), "seed", "bayestribo_version", "metadata", "noise",
+    ``{"run", "model", "law", "law_comparison" (with ``--law auto``), "seed",
+    "bayestribo_version", "metadata", "noise",
     "parameters": {NAME: {"mean", "sd", "median", "interval", "prob", "kind", "unit"}},
     "dissipation": {"amplitude", "mean", "sd", "interval", "prob", "unit", ...}, "diagnostics":
     {"converged", "n_walkers", "n_steps", "autocorr_time_max", "ess_min",
