@@ -396,6 +396,15 @@ def initial_walkers(
         if len(kept) >= need:
             break
     if len(kept) < need:
+        # No Gaussian about the optimum holds enough of the typical set (the optimum of
+        # a law that misfits, on a corner of the support or a step of μ_s/μ_k): the
+        # rest start in a tiny ball about the optimum itself, and the burn-in spreads
+        # them (the sampler's checks say whether it did).
+        ball = theta * (1.0 + 1e-8 * rng.standard_normal((4 * need, d)))
+        ball = np.where(theta == 0.0, 0.0, ball)
+        lp = posterior(ball)
+        kept.extend(ball[np.isfinite(lp)][: need - len(kept)])
+    if len(kept) < need:
         raise BayestriboError(
             f"found only {len(kept)} of {need} starting points near the optimum; the "
             "posterior may be multimodal or the priors too narrow"
