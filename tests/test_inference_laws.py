@@ -90,7 +90,7 @@ def test_a_law_defined_outside_the_package_fits_and_reports(drag_run):
     law = Law((get_term("viscous"), CUBIC, get_term("coulomb")))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MisfitWarning)
-        result = fit(drag_run, seed=2, law=law, max_steps=3000)
+        result = fit(drag_run, seed=2, law=law, max_steps=1500)
     assert result.law == "viscous+coulomb+cubic"
     assert "c3" in result.summary()
     assert result.dissipation["by_term"].keys() == {"viscous", "coulomb", "cubic"}
@@ -131,20 +131,20 @@ def test_laws_command_lists_every_registered_term(capsys):
 
 
 def test_the_comparison_keeps_the_simplest_adequate_law_as_good_as_the_best(drag_run):
-    """On the drag recording: the paper's law misfits, the law with drag is adequate
-    and chosen; a larger law nesting it is not preferred over it."""
+    """On the drag recording: the paper's law and viscous damping alone misfit, the law
+    with drag is adequate and chosen."""
     from bayestribo.inference import prepare
     from bayestribo.inference.comparison import compare_prepared
 
     prepared = prepare(drag_run)
     comparison, runs = compare_prepared(
-        prepared, ["viscous+coulomb", "viscous+coulomb+quadratic", "free"], seed=4
+        prepared, ["viscous", "viscous+coulomb", "viscous+coulomb+quadratic"], seed=4
     )
     table = comparison.table
-    assert not table["viscous+coulomb"]["adequate"]
+    assert not table["viscous"]["adequate"] and not table["viscous+coulomb"]["adequate"]
     assert table["viscous+coulomb+quadratic"]["adequate"]
     assert comparison.verdict == "viscous+coulomb+quadratic" and comparison.adequate
-    assert "viscous+coulomb+quadratic" in comparison.as_good
+    assert comparison.as_good == ["viscous+coulomb+quadratic"]
     assert table["viscous+coulomb"]["elpd_diff"] > 1000
     assert "chosen from 3 laws" in comparison.describe()
     assert set(runs) == set(table)
