@@ -1,0 +1,714 @@
+"""Real recordings made by others: the law ``law="auto"`` keeps, its ΔE(A), across seeds and halves.
+
+Every recording in ``../shared/external-data`` (read from there, never copied):
+
+* ``appstat2020-harmonic-oscillator/HarmOsc1-3.txt``: two whitespace columns, t [s] and
+  position in an unknown unit; read with :func:`bayestribo.read_run` as the tests read
+  them (``columns=["time_s", "displacement_m"]``, ``length_unit="arbitrary"``): no
+  load, no mass, so ΔE(A) is ΔE/k in the signal's unit squared;
+* ``smorzamento-spring-disc/*.csv``: ``time;position;velocity;acceleration`` in s, m,
+  m/s, m/s², read with numpy; rows with an empty position are dropped, and, when the
+  velocity is used, rows with an empty velocity (the last one). The velocity is used
+  when the package accepts it (:func:`bayestribo.io.validation.check_channels`; its
+  :func:`~bayestribo.io.validation.channel_consistency` is recorded); ``mass_kg`` from
+  the file name (``..._<stiffness N/m>_<mass kg>_<n>.csv``), so ΔE(A) is in joules with
+  k = mΩ² at the frequency the package measures (the stated stiffness and the
+  frequency k/m would give are recorded beside it: the spring's own mass makes the
+  measured period longer). No load: friction is a friction displacement.
+
+Each recording is fitted whole and as two halves, cut at the turning point in the
+middle of the analysed decay's half cycles (of :func:`bayestribo.inference.prepare` on
+the whole; the first half ends there, the second starts there, each is then analysed
+as the package analyses any recording, its first oscillation skipped). Each of the
+three is fitted with ``law="auto"`` and with the default law for ``--seeds`` seeds
+(16 walkers x 2 ensembles, at most ``--max-steps`` steps). Recorded per fit: the law
+chosen, the comparison's verdict and whether it is adequate, its notes, the bayestribo
+warnings, convergence, seconds, the law's own parameters, and ΔE(A) (mean, sd, 95 %
+interval) at the fit's 12 reported amplitudes and at three amplitudes of the segment:
+its largest swing, its median swing and its smallest swing. ΔE(A) at amplitudes other
+than the reported ones is computed from the posterior draws with the chosen law's
+``dissipation`` (the draws reproduce the reported band at the reported amplitudes: the
+largest relative difference of the means is recorded).
+
+Across seeds: the spread of the means, (max - min)/mean posterior sd, of ΔE at the
+three amplitudes and of each parameter of the default law (goal: < 0.2), and whether
+every seed chose the same law.
+
+Halves: whether the law fitted to one half predicts the other half's ΔE(A). The
+halves' amplitude ranges abut (the first ends at the cut, the second skips one
+oscillation after it), so they share no amplitude: each half's law is compared with
+the other half's band (a) at the cut, i.e. at the first half's smallest reported
+amplitude and the second half's largest (each law extrapolated by at most one
+oscillation), and (b) over the other half's 12 reported amplitudes (the law
+extrapolated over the other half). At each amplitude z = (m₁ - m₂)/√(s₁² + s₂²) and
+whether the predicted mean lies in the other half's 95 % interval. ``agree`` means
+|z| <= 1.96 at every amplitude compared.
+
+A recording or segment the package refuses is recorded with its error message (a
+finding, not a failure of the benchmark).
+
+Run (by hand)::
+
+    timeout 5400 nice -n 10 python benchmarks/real.py --seeds 5 --workers 2
+
+Writes ``benchmarks/results/real.json`` (``--output NAME``: ``NAME.json``, or a path
+ending in .json) after every fit (``"complete": false`` until the end; ``--resume``
+keeps the fits of an interrupted file with the same settings).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import time
+import traceback
+import warnings
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+from _machine import RESULTS, machine, niced_worker  # noqa: E402
+
+__all__ = ["load", "one_fit", "recordings"]
+
+EXTERNAL = HERE.parent.parent / "shared" / "external-data"
+APPSTAT = EXTERNAL / "appstat2020-harmonic-oscillator"
+SMORZAMENTO = EXTERNAL / "smorzamento-spring-disc"
+SEGMENTS = ("whole", "first half", "second half")
+FITS = ("auto", "default")
+FLAGS = ("MisfitWarning", "ChannelCalibrationWarning", "ConvergenceWarning", "PriorBoundWarning")
+Z_AGREE = 1.959964
+SPREAD_GOAL = 0.2
+
+
+def recordings() -> dict[str, Path]:
+    """Every recording of the external data, by a short name."""
+    out = {p.stem: p for p in sorted(APPSTAT.glob("HarmOsc*.txt"))}
+    for p in sorted(SMORZAMENTO.glob("*.csv")):
+        out["smorzamento-" + p.stem.rsplit("_", 1)[-1]] = p
+    return out
+
+
+def _tail(exc: BaseException) -> str:
+    text = "".join(traceback.format_exception(exc)).strip().splitlines()
+    return "\n".join(text[-6:])
+
+
+def load(name: str) -> tuple[Any, dict[str, Any]]:
+    """The recording ``name`` as a Run, and how it was read."""
+    from bayestribo import Run, read_run
+    from bayestribo.io.validation import channel_consistency, check_channels
+
+    path = recordings()[name]
+    info: dict[str, Any] = {"path": str(path.relative_to(EXTERNAL.parent.parent))}
+    if path.suffix == ".txt":
+        run = read_run(
+            path, columns=["time_s", "displacement_m"], metadata={"length_unit": "arbitrary"}
+        )
+        info["read"] = (
+            'read_run(path, columns=["time_s", "displacement_m"], '
+            'metadata={"length_unit": "arbitrary"})'
+        )
+        info["velocity"] = "none in the file"
+        return run, info
+    # smorzamento: time;position;velocity;acceleration, the last rows without velocity
+    table = np.genfromtxt(path, delimiter=";", names=True)
+    stiffness, mass = (float(v) for v in path.stem.split("_")[-3:-1])
+    meta = {"mass_kg": mass}
+    info.update(
+        rows=int(table.size),
+        rows_without_position=int(np.sum(~np.isfinite(table["position"]))),
+        rows_without_velocity=int(np.sum(~np.isfinite(table["velocity"]))),
+        stated_stiffness_N_per_m=stiffness,
+        mass_kg=mass,
+        frequency_from_stated_k_and_m_Hz=math.sqrt(stiffness / mass) / (2 * math.pi),
+        metadata=meta,
+    )
+    table = table[np.isfinite(table["position"])]
+    with_v = table[np.isfinite(table["velocity"])]
+    try:
+        run = Run(
+            time=with_v["time"],
+            displacement=with_v["position"],
+            velocity=with_v["velocity"],
+            metadata=meta,
+        )
+        consistency = channel_consistency(run)
+        info["channel_consistency"] = None if consistency is None else asdict(consistency)
+        check_channels(run)
+        info["velocity"] = "used (rows without it dropped)"
+        info["rows_used"] = int(with_v.size)
+        return run, info
+    except Exception as exc:  # the package refuses the velocity: position only
+        info["velocity"] = f"refused by the package ({type(exc).__name__}: {exc}); position only"
+    run = Run(time=table["time"], displacement=table["position"], metadata=meta)
+    info["rows_used"] = int(table.size)
+    return run, info
+
+
+def segment(run: Any, which: str, cut_s: float | None) -> Any:
+    """The whole run, or the half before or after ``cut_s`` (the cut sample in both)."""
+    from bayestribo import Run
+
+    if which == "whole":
+        return run
+    t = run.time
+    k = int(np.argmin(np.abs(t - cut_s)))
+    keep = slice(0, k + 1) if which == "first half" else slice(k, t.size)
+    return Run(
+        time=t[keep],
+        displacement=None if run.displacement is None else run.displacement[keep],
+        velocity=None if run.velocity is None else run.velocity[keep],
+        metadata=dict(run.metadata),
+    )
+
+
+def _prepared(run: Any) -> dict[str, Any]:
+    """What the package makes of a segment before any fit: its reported amplitudes,
+    three amplitudes, reference amplitude, turning points; or its refusal."""
+    from bayestribo.inference import prepare
+    from bayestribo.inference.dissipation import dissipation_amplitudes
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            p = prepare(run)
+        except Exception as exc:
+            return {"error": f"{type(exc).__name__}: {exc}", "traceback": _tail(exc)}
+    d = p.decay
+    ell = float(d.scaling.length_scale)
+    swings = np.abs(np.asarray(d.peaks.value, dtype=float))
+    reported = dissipation_amplitudes(swings / ell) * ell
+    return {
+        "length_scale": ell,
+        "reference_amplitude": abs(float(p.data.y0)),
+        "reported_amplitudes": reported.tolist(),
+        "three_amplitudes": {
+            "largest": float(swings.max()),
+            "median": float(np.median(swings)),
+            "smallest": float(swings.min()),
+        },
+        "turning_times": np.asarray(d.turning_times, dtype=float).tolist(),
+        "n_turning_points": int(swings.size),
+        "motion_ended": bool(d.motion_ended),
+        "release_time_s": float(d.release_time),
+        "natural_frequency_Hz": float(d.natural_frequency_Hz),
+        "derived_channel": d.derived_channel,
+        "prepare_warnings": sorted({f"{w.category.__name__}: {w.message}"[:300] for w in caught}),
+    }
+
+
+def _law_band(result: Any, amplitudes: list[float], reference: float) -> dict[str, Any]:
+    """ΔE(A) of the fitted law at any amplitudes (same unit as the reported band),
+    from its posterior draws."""
+    from bayestribo.model.laws import get_law
+
+    law = get_law(result.law)
+    attrs = result.idata.posterior.attrs
+    ell = float(attrs["length_scale"])
+    omega = float(attrs["omega"])
+    meta = result.metadata
+    mass = meta.get("mass_kg")
+    k = mass * omega**2 if mass and meta.get("length_unit", "m") == "m" else 1.0
+    values = {}
+    for name in law.parameter_names:
+        if name in result.idata.posterior:
+            values[name] = result.samples(name)
+        elif name == "mu_k" and "friction_displacement" in result.idata.posterior:
+            values[name] = result.samples("friction_displacement") / ell
+        else:
+            values[name] = np.full(result.samples("y0").size, law.parameter(name).null)
+    amps = np.asarray(amplitudes, dtype=float)
+    draws = np.asarray(law.dissipation(amps / ell, values, reference)) * k * ell**2
+    lo, hi = np.quantile(draws, [0.025, 0.975], axis=0)
+    return {
+        "amplitude": amps.tolist(),
+        "mean": draws.mean(axis=0).tolist(),
+        "sd": draws.std(axis=0, ddof=1).tolist(),
+        "interval": [lo.tolist(), hi.tolist()],
+    }
+
+
+def one_fit(
+    name: str, which: str, cut_s: float | None, seed: int, probes: list[float], max_steps: int
+) -> dict[str, Any]:
+    """Fit one segment of one recording with law="auto" and the default law."""
+    from bayestribo import fit
+
+    out: dict[str, Any] = {"recording": name, "segment": which, "seed": seed}
+    run = segment(load(name)[0], which, cut_s)
+    reference = None
+    for kind in FITS:
+        rec: dict[str, Any] = {}
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            start = time.perf_counter()
+            try:
+                result = fit(
+                    run, law="auto" if kind == "auto" else None, seed=seed, max_steps=max_steps
+                )
+            except Exception as exc:  # recorded: a refusal is a finding
+                rec["seconds"] = time.perf_counter() - start
+                rec["error"] = f"{type(exc).__name__}: {exc}"
+                rec["traceback"] = _tail(exc)
+                out[kind] = rec
+                continue
+            rec["seconds"] = time.perf_counter() - start
+        ours = [w for w in caught if w.category.__module__.startswith("bayestribo")]
+        rec["warnings"] = sorted(
+            {w.category.__name__ for w in ours if w.category.__name__ in FLAGS}
+        )
+        messages: dict[str, str] = {}
+        for w in ours:
+            messages.setdefault(w.category.__name__, str(w.message)[:400])
+        rec["warning_messages"] = messages
+        rec["law"] = result.law
+        rec["converged"] = bool(result.converged)
+        diag = result.diagnostics
+        rec["diagnostics"] = {
+            k: diag.get(k) for k in ("n_steps", "rhat_max", "ess_min", "misfit_p", "reasons")
+        }
+        rec["at_prior_bound"] = result.at_prior_bound
+        comparison = result.law_comparison
+        if comparison is not None:
+            rec["verdict"] = comparison["verdict"]
+            rec["best"] = comparison["best"]
+            rec["as_good"] = comparison["as_good"]
+            rec["adequate"] = bool(comparison["adequate"])
+            rec["comparison_notes"] = comparison.get("warnings", [])
+            rec["comparison_table"] = {
+                law: {
+                    k: row.get(k)
+                    for k in ("elpd_diff", "dse", "adequate", "converged", "misfit_p", "error")
+                    if k in row
+                }
+                for law, row in comparison["table"].items()
+            }
+        else:
+            rec["adequate"] = "MisfitWarning" not in rec["warnings"]
+        rec["parameters"] = {
+            n: {"mean": s.mean, "sd": s.sd, "interval": list(s.interval)}
+            for n, s in result.summary().items()
+        }
+        band = result.dissipation
+        rec["dissipation"] = {
+            k: band[k] for k in ("amplitude", "mean", "sd", "interval", "unit", "by_term")
+        }
+        if reference is None:
+            from bayestribo.inference import prepare
+
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                reference = abs(float(prepare(run).data.y0))
+        own = _law_band(result, band["amplitude"], reference)
+        rec["draws_reproduce_band"] = float(
+            np.max(
+                np.abs(np.array(own["mean"]) - np.array(band["mean"]))
+                / np.maximum(np.abs(band["mean"]), 1e-300)
+            )
+        )
+        rec["probes"] = _law_band(result, probes, reference)
+        out[kind] = rec
+    return out
+
+
+# -- analysis --------------------------------------------------------------------------
+def _at(probes: dict[str, Any], amplitude: float) -> tuple[float, float, float, float]:
+    i = int(np.argmin(np.abs(np.asarray(probes["amplitude"]) - amplitude)))
+    return (
+        probes["mean"][i],
+        probes["sd"][i],
+        probes["interval"][0][i],
+        probes["interval"][1][i],
+    )
+
+
+def _compare(pred: dict[str, Any], other: dict[str, Any], amplitudes: list[float]) -> dict:
+    """The law of one half (its probes) against the other half's own band at
+    ``amplitudes`` (amplitudes of the other half's band)."""
+    rows = []
+    for a in amplitudes:
+        m1, s1, _, _ = _at(pred, a)
+        m2, s2, lo2, hi2 = _at(other, a)
+        z = (m1 - m2) / math.hypot(s1, s2) if (s1 or s2) else math.inf
+        rows.append({"amplitude": a, "z": z, "in_interval": bool(lo2 <= m1 <= hi2)})
+    zs = [abs(r["z"]) for r in rows]
+    return {
+        "max_abs_z": max(zs) if zs else None,
+        "agree": all(z <= Z_AGREE for z in zs),
+        "in_interval": sum(r["in_interval"] for r in rows),
+        "of": len(rows),
+        "rows": rows,
+    }
+
+
+def _spread(means: list[float], sds: list[float]) -> float | None:
+    if len(means) < 2 or not np.all(np.isfinite(means)):
+        return None
+    sd = float(np.mean(sds))
+    return (max(means) - min(means)) / sd if sd > 0 else math.inf
+
+
+def summarise(records: list[dict[str, Any]], prepared: dict[str, Any]) -> dict[str, Any]:
+    """Per recording and segment: laws, adequacy, ΔE at three amplitudes, seed spread;
+    per recording: the halves' cross-predictions."""
+    table: dict[str, Any] = {}
+    for name, prep in prepared.items():
+        entry: dict[str, Any] = {"recording": name, "segments": {}, "halves": {}}
+        for which in SEGMENTS:
+            seg = prep["segments"].get(which, {})
+            if "error" in seg:
+                entry["segments"][which] = {"refused": seg["error"]}
+                continue
+            rows = sorted(
+                (r for r in records if r["recording"] == name and r["segment"] == which),
+                key=lambda r: r["seed"],
+            )
+            out: dict[str, Any] = {"seeds": [r["seed"] for r in rows]}
+            three = seg.get("three_amplitudes", {})
+            for kind in FITS:
+                fits = [r[kind] for r in rows if kind in r]
+                ok = [f for f in fits if "error" not in f]
+                s: dict[str, Any] = {
+                    "errors": sorted({f["error"] for f in fits if "error" in f}),
+                    "laws": [f["law"] for f in ok],
+                    "same_law": len({f["law"] for f in ok}) <= 1,
+                    "adequate": [f["adequate"] for f in ok],
+                    "converged": [f["converged"] for f in ok],
+                    "warnings": sorted({w for f in ok for w in f["warnings"]}),
+                    "median_seconds": float(np.median([f["seconds"] for f in ok])) if ok else None,
+                    "unit": ok[0]["dissipation"]["unit"] if ok else None,
+                }
+                de: dict[str, Any] = {}
+                worst = 0.0
+                for label, a in three.items():
+                    vals = [_at(f["probes"], a) for f in ok]
+                    spread = _spread([v[0] for v in vals], [v[1] for v in vals])
+                    de[label] = {
+                        "amplitude": a,
+                        "mean": [v[0] for v in vals],
+                        "sd": [v[1] for v in vals],
+                        "interval": [[v[2], v[3]] for v in vals],
+                        "seed_spread_in_sd": spread,
+                    }
+                    if spread is not None:
+                        worst = max(worst, spread)
+                s["dissipation"] = de
+                s["max_seed_spread_dissipation"] = worst if len(ok) > 1 else None
+                if s["same_law"] and len(ok) > 1:
+                    spreads = {}
+                    for p in ok[0]["parameters"]:
+                        ms = [f["parameters"][p]["mean"] for f in ok if p in f["parameters"]]
+                        sds = [f["parameters"][p]["sd"] for f in ok if p in f["parameters"]]
+                        spreads[p] = _spread(ms, sds)
+                    s["seed_spread_parameters_in_sd"] = spreads
+                out[kind] = s
+            entry["segments"][which] = out
+        # halves: each half's law against the other half's band
+        firsts = {
+            r["seed"]: r for r in records if r["recording"] == name and r["segment"] == "first half"
+        }
+        seconds = {
+            r["seed"]: r
+            for r in records
+            if r["recording"] == name and r["segment"] == "second half"
+        }
+        s1 = prep["segments"].get("first half", {})
+        s2 = prep["segments"].get("second half", {})
+        if "reported_amplitudes" in s1 and "reported_amplitudes" in s2:
+            a1, a2 = s1["reported_amplitudes"], s2["reported_amplitudes"]
+            cut = [min(a1), max(a2)]
+            shared = [a for a in a2 if min(a1) <= a <= max(a1)] + [
+                a for a in a1 if min(a2) <= a <= max(a2)
+            ]
+            for kind in FITS:
+                per_seed = []
+                for seed in sorted(set(firsts) & set(seconds)):
+                    f1, f2 = firsts[seed].get(kind, {}), seconds[seed].get(kind, {})
+                    if "probes" not in f1 or "probes" not in f2:
+                        continue
+                    per_seed.append(
+                        {
+                            "seed": seed,
+                            "laws": [f1["law"], f2["law"]],
+                            "at_cut": _compare(f1["probes"], f2["probes"], cut),
+                            "first_predicts_second": _compare(f1["probes"], f2["probes"], a2),
+                            "second_predicts_first": _compare(f2["probes"], f1["probes"], a1),
+                            "shared_amplitudes": (
+                                _compare(f1["probes"], f2["probes"], shared) if shared else None
+                            ),
+                        }
+                    )
+                entry["halves"][kind] = {
+                    "cut_amplitudes": cut,
+                    "shared_amplitudes": shared,
+                    "per_seed": per_seed,
+                    "agree_at_cut": sum(p["at_cut"]["agree"] for p in per_seed),
+                    "first_predicts_second": sum(
+                        p["first_predicts_second"]["agree"] for p in per_seed
+                    ),
+                    "second_predicts_first": sum(
+                        p["second_predicts_first"]["agree"] for p in per_seed
+                    ),
+                    "seeds": len(per_seed),
+                }
+        table[name] = entry
+    return table
+
+
+def _fmt(x: float | None, spec: str = ".3g") -> str:
+    return "-" if x is None else format(x, spec)
+
+
+def _laws_text(laws: list[str]) -> str:
+    counts: dict[str, int] = {}
+    for law in laws:
+        counts[law] = counts.get(law, 0) + 1
+    return ", ".join(f"{k}×{v}" for k, v in counts.items()) or "-"
+
+
+def _print_table(table: dict[str, Any], prepared: dict[str, Any]) -> None:
+    print(
+        "\nPer recording and segment: the laws chosen (auto) and the default law; adequate "
+        "and converged seeds; ΔE(A) at the largest, median and smallest swing (mean over "
+        "seeds); seed spread = (max - min of the means)/posterior sd (goal < 0.2)"
+    )
+    for name, entry in table.items():
+        info = prepared[name]
+        if "error" in info:
+            print(f"\n{name}: REFUSED {info['error']}")
+            continue
+        print(f"\n{name}  ({info['read_info'].get('velocity')})")
+        for which, s in entry["segments"].items():
+            if "refused" in s:
+                print(f"  {which:12s} REFUSED: {s['refused'][:200]}")
+                continue
+            for kind in FITS:
+                k = s.get(kind)
+                if not k:
+                    continue
+                if k["errors"] and not k["laws"]:
+                    print(f"  {which:12s} {kind:7s} ERROR: {k['errors'][0][:200]}")
+                    continue
+                de = k["dissipation"]
+                cells = " ".join(
+                    f"{lab[0]}:{_fmt(float(np.mean(d['mean'])) if d['mean'] else None)}"
+                    for lab, d in de.items()
+                )
+                spread = k["max_seed_spread_dissipation"]
+                flag = "" if spread is None or spread < SPREAD_GOAL else " (>0.2)"
+                print(
+                    f"  {which:12s} {kind:7s} {_laws_text(k['laws']):42s} "
+                    f"adeq {sum(map(bool, k['adequate']))}/{len(k['adequate'])} "
+                    f"conv {sum(k['converged'])}/{len(k['converged'])}  ΔE [{k['unit']}] {cells}"
+                    f"  spread {_fmt(spread, '.2f')}{flag}  "
+                    f"{_fmt(k['median_seconds'], '.0f')} s"
+                    + (
+                        f"  warn {','.join(w.removesuffix('Warning') for w in k['warnings'])}"
+                        if k["warnings"]
+                        else ""
+                    )
+                    + (f"  errors {len(k['errors'])}" if k["errors"] else "")
+                )
+    print(
+        "\nHalves: seeds whose law of one half agrees with the other half's ΔE(A) band "
+        "(|z| <= 1.96 at every amplitude): at the cut, and over the other half's amplitudes"
+    )
+    print(f"{'recording':16s} {'fit':7s} {'at cut':>7s} {'1st→2nd':>8s} {'2nd→1st':>8s}  max|z|")
+    for name, entry in table.items():
+        for kind, h in entry["halves"].items():
+            n = h["seeds"]
+            zs = [
+                (
+                    p["at_cut"]["max_abs_z"],
+                    p["first_predicts_second"]["max_abs_z"],
+                    p["second_predicts_first"]["max_abs_z"],
+                )
+                for p in h["per_seed"]
+            ]
+            worst = " / ".join(_fmt(max(z[i] for z in zs), ".1f") for i in range(3)) if zs else "-"
+            print(
+                f"{name:16s} {kind:7s} {h['agree_at_cut']:3d}/{n:<3d} "
+                f"{h['first_predicts_second']:4d}/{n:<3d} {h['second_predicts_first']:4d}/{n:<3d}"
+                f"  {worst}"
+            )
+
+
+def _commit() -> str:
+    import subprocess
+
+    try:
+        return subprocess.run(
+            ["git", "rev-parse", "HEAD"],
+            cwd=HERE.parent,
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return ""
+
+
+def output_path(name: str) -> Path:
+    """``results/NAME.json``, or ``name`` itself when it is a path ending in .json."""
+    return Path(name) if name.endswith(".json") else RESULTS / f"{name}.json"
+
+
+def write_json(path: Path, results: dict[str, Any]) -> Path:
+    """Write ``results`` with the machine description (atomically)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps({"machine": machine(), **results}, indent=2) + "\n")
+    tmp.replace(path)
+    return path
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    names = list(recordings())
+    parser.add_argument("--seeds", type=int, default=5, help="seeds per segment (1, 2, ...)")
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--max-steps", type=int, default=20_000)
+    parser.add_argument("--recordings", nargs="*", default=names, choices=names)
+    parser.add_argument("--segments", nargs="*", default=list(SEGMENTS), choices=list(SEGMENTS))
+    parser.add_argument(
+        "--output", default="real", help="results/NAME.json, or a path ending in .json"
+    )
+    parser.add_argument(
+        "--resume", action="store_true", help="keep the fits of an interrupted output file"
+    )
+    args = parser.parse_args(argv)
+    import bayestribo
+
+    start = time.perf_counter()
+    load_start = os.getloadavg()
+    source = {"commit": _commit(), "package_version": bayestribo.__version__}
+    seeds = list(range(1, args.seeds + 1))
+    settings = {
+        "seeds": seeds,
+        "max_steps": args.max_steps,
+        "workers": args.workers,
+        "n_walkers": 16,
+        "n_ensembles": 2,
+        "segments": args.segments,
+        "recordings": {
+            n: str(recordings()[n].relative_to(EXTERNAL.parent.parent)) for n in args.recordings
+        },
+        "halves": "cut at the middle turning point of the whole's analysed decay",
+        "agree": "|z| <= 1.96 at every amplitude compared",
+        "spread_goal_sd": SPREAD_GOAL,
+    }
+    # -- what the package makes of each recording and segment, before any fit --
+    prepared: dict[str, Any] = {}
+    jobs = []
+    for name in args.recordings:
+        try:
+            run, info = load(name)
+        except Exception as exc:
+            prepared[name] = {"error": f"{type(exc).__name__}: {exc}", "traceback": _tail(exc)}
+            continue
+        whole = _prepared(run)
+        entry = {"read_info": info, "segments": {"whole": whole}, "cut_s": None}
+        if "error" not in whole:
+            times = whole["turning_times"]
+            entry["cut_s"] = float(times[(len(times) - 1) // 2])
+            for which in SEGMENTS[1:]:
+                entry["segments"][which] = _prepared(segment(run, which, entry["cut_s"]))
+        probes = sorted(
+            {
+                a
+                for seg in entry["segments"].values()
+                if "error" not in seg
+                for a in [*seg["reported_amplitudes"], *seg["three_amplitudes"].values()]
+            }
+        )
+        entry["probe_amplitudes"] = probes
+        prepared[name] = entry
+        for which in args.segments:
+            if "error" in entry["segments"].get(which, {"error": "not prepared"}):
+                continue
+            for seed in seeds:
+                jobs.append((name, which, entry["cut_s"], seed, probes))
+        seg_text = ", ".join(
+            f"{w}: {'REFUSED' if 'error' in s else str(s['n_turning_points']) + ' swings'}"
+            for w, s in entry["segments"].items()
+        )
+        print(f"{name}: {info.get('velocity')}; {seg_text}", flush=True)
+    output = output_path(args.output)
+    records: list[dict[str, Any]] = []
+    if args.resume and output.is_file():
+        old = json.loads(output.read_text())
+        if old.get("settings", {}).get("max_steps") == args.max_steps:
+            wanted = {(j[0], j[1], j[3]) for j in jobs}
+            records = [
+                r
+                for r in old.get("fits", [])
+                if (r["recording"], r["segment"], r["seed"]) in wanted
+            ]
+            done = {(r["recording"], r["segment"], r["seed"]) for r in records}
+            jobs = [j for j in jobs if (j[0], j[1], j[3]) not in done]
+            print(f"resumed {len(records)} fits from {output}", flush=True)
+    # seeds in turn, so that an interrupted file holds every recording; long ones first
+    jobs.sort(key=lambda j: (j[3], -len(prepared[j[0]]["segments"]["whole"]["turning_times"])))
+    print(
+        f"{len(jobs)} segment fits (auto and default) on {args.workers} workers, "
+        f"load average {load_start[0]:.2f}",
+        flush=True,
+    )
+
+    def write(complete: bool) -> Path:
+        records.sort(key=lambda r: (r["recording"], SEGMENTS.index(r["segment"]), r["seed"]))
+        return write_json(
+            output,
+            {
+                "complete": complete,
+                "settings": settings,
+                "source": source,
+                "wall_seconds": time.perf_counter() - start,
+                "load_average_start": list(load_start),
+                "load_average_now": list(os.getloadavg()),
+                "prepared": prepared,
+                "table": summarise(records, prepared),
+                "fits": records,
+            },
+        )
+
+    with ProcessPoolExecutor(max_workers=args.workers, initializer=niced_worker) as pool:
+        futures = {
+            pool.submit(one_fit, n, w, c, s, p, args.max_steps): (n, w, s) for n, w, c, s, p in jobs
+        }
+        for k, future in enumerate(as_completed(futures), 1):
+            n, w, s = futures[future]
+            try:
+                rec = future.result()
+            except Exception as exc:  # a worker that died: recorded, the others go on
+                err = {"error": f"worker died: {_tail(exc)}"}
+                rec = {"recording": n, "segment": w, "seed": s, "auto": err, "default": err}
+            records.append(rec)
+            a = rec.get("auto", {})
+            print(
+                f"{k}/{len(jobs)} {n} {w} seed {s}: auto {a.get('law', a.get('error', '?'))[:80]}"
+                f" ({a.get('seconds', 0):.0f} s), {time.perf_counter() - start:.0f} s, "
+                f"load {os.getloadavg()[0]:.2f}",
+                flush=True,
+            )
+            write(False)
+    path = write(True)
+    _print_table(summarise(records, prepared), prepared)
+    print(f"\nwall {time.perf_counter() - start:.0f} s; wrote {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
