@@ -31,7 +31,7 @@ def _mu_k_prior(amplitude: float) -> dict[str, float | str]:
 def _ratio_prior(amplitude: float) -> dict[str, float | str]:
     # Static friction is at least kinetic friction; dry contacts reach several times it
     # (HarmOsc3, a weight sliding on a metal plate: about 5.8, which a bound at 3 held
-    # back, moving its friction displacement by 12 posterior sd).
+    # back, moving its friction displacement by 13 posterior sd).
     return {"type": "Uniform", "low": 1.0, "high": 10.0}
 
 
