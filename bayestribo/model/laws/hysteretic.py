@@ -4,7 +4,7 @@ With :mod:`coulomb` it makes a friction that varies with amplitude,
 ``μ(A) = μ_k + ηA`` (A the turning point the half cycle started from, in units of ℓ):
 η > 0 grows with amplitude, η < 0 falls with it (as a velocity-weakening contact's
 does: a larger swing is a faster one). HarmOsc3, a weight sliding on a metal plate,
-has η = -0.0027 ± 0.00003 (μ(A) 15 % lower at its largest swing), which cut its χ²
+has η = -0.0027 ± 0.00003 (μ(A) 16 % lower at its largest swing), which cut its χ²
 from 8332 to 1275. Alone (η > 0) it is the classical hysteretic (structural) damping,
 whose loss per cycle grows as the square of the amplitude like a viscous one but does
 not depend on frequency. ΔE(A) = 4ηA² (loss factor 4η/π). A friction below zero at
