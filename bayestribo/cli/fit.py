@@ -48,7 +48,7 @@ def register(subparsers: Any) -> None:
         description=(
             "Fit the exact (or averaged) model of the retrograde energy integral Π(τ) "
             "to one run with emcee and print the posterior mean, standard deviation, "
-            "median and 95 %% interval of ζ, μ_k, μ_s and the friction displacement (or "
+            "median and 95 % interval of ζ, μ_k, μ_s and the friction displacement (or "
             "of the parameters of another dissipation law, --law), the energy dissipated "
             "per cycle ΔE(A) with its band, and the sampler's diagnostics. Exit status 1 "
             "when the sampler did not converge or the law misfits the run. Without load "
