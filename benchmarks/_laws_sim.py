@@ -40,11 +40,13 @@ __all__ = [
     "RESOLUTION_X",
     "STIFFNESS",
     "Truth",
+    "half_cycle_end",
     "harmonic_power_integral",
     "metadata",
     "motion",
     "simulate",
     "true_dissipation",
+    "true_harmonic_dissipation",
 ]
 
 MASS, F_HZ, LOAD = 0.035, 32.6, 0.31
@@ -145,8 +147,8 @@ class Truth:
         return out
 
 
-def true_dissipation(truth: Truth, amplitude_m: np.ndarray) -> np.ndarray:
-    """ΔE(A) [J] of one cycle of x = A cos Ωt under the true law, by quadrature of
+def true_harmonic_dissipation(truth: Truth, amplitude_m: np.ndarray) -> np.ndarray:
+    """ΔE_h(A) [J] of one cycle of x = A cos Ωt under the true law, by quadrature of
     ∮ m (a_d(ẋ) + a_f sgn ẋ) ẋ dt (a_f at the turning amplitude A)."""
     from scipy.integrate import quad
 
@@ -160,6 +162,51 @@ def true_dissipation(truth: Truth, amplitude_m: np.ndarray) -> np.ndarray:
         # energy over a half cycle: ∫ F v dt = ∫ F v dθ/Ω; a cycle is twice that
         half, _ = quad(power, 0.0, math.pi, limit=200, epsabs=0.0, epsrel=1e-11)
         out.append(2.0 * half / OMEGA)
+    return np.array(out)
+
+
+def half_cycle_end(truth: Truth, a: float) -> float:
+    """|x| [m] at the turning point that ends the half cycle from rest at x = a > 0
+    (the kinetic law: no sticking)."""
+    turning = abs(a)
+
+    def rhs(_t: float, u: np.ndarray) -> list[float]:
+        w = max(-u[1], 0.0)
+        return [u[1], -(OMEGA**2) * u[0] - truth.drag(u[1]) + truth.friction(w, turning)]
+
+    def turned(_t: float, u: np.ndarray) -> float:
+        return u[1]
+
+    turned.terminal, turned.direction = True, 1.0
+    sol = solve_ivp(
+        rhs,
+        (0.0, 2.0 * math.pi / OMEGA),
+        [a, 0.0],
+        method="DOP853",
+        events=turned,
+        rtol=1e-12,
+        atol=1e-16 * a,
+    )
+    if sol.t_events[0].size == 0:
+        raise RuntimeError(f"no turning point within a period from a = {a:g} m")
+    return -float(sol.y_events[0][0][0])
+
+
+def true_dissipation(truth: Truth, amplitude_m: np.ndarray) -> np.ndarray:
+    """ΔE(A) [J] at each swing A as the package defines it: k(a_s² - a_e²) over the
+    half cycle of the true motion from rest at a_s to the turning point a_e with
+    (a_s + a_e)/2 = A (solve_ivp through the half cycle, a_s by Brent's method)."""
+    from scipy.optimize import brentq
+
+    out = []
+    for amp in np.atleast_1d(np.asarray(amplitude_m, dtype=float)):
+        a_s = brentq(
+            lambda a, amp=amp: 0.5 * (a + half_cycle_end(truth, a)) - amp,
+            amp,
+            2.0 * amp,
+            xtol=1e-15 * amp,
+        )
+        out.append(STIFFNESS * (a_s**2 - half_cycle_end(truth, a_s) ** 2))
     return np.array(out)
 
 

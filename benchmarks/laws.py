@@ -96,7 +96,6 @@ from _laws_sim import (  # noqa: E402
     OMEGA,
     RESOLUTION_V,
     RESOLUTION_X,
-    STIFFNESS,
     Truth,
     harmonic_power_integral,
     metadata,
@@ -291,23 +290,11 @@ def _fit(run: Any, law: str, seed: int, max_steps: int) -> tuple[Any, dict[str, 
 
 
 def _truth_function(case: str, reference_m: float) -> Any:
-    """True ΔE(A) [J] at amplitudes in metres: the package's law of the true
-    parameters (kℓ² times its dimensionless ΔE, in the true frame), or the quadrature
-    of the true force for a law that is not registered."""
-    law, truth, _x0, _kind = CASES[case]
-    if law is None:
-        return lambda amps: true_dissipation(truth, amps)
-    from bayestribo.model.laws import get_law
-
-    the_law = get_law(law)
-    values = truth.dimensionless(reference_m)
-    values = {n: values[n] for n in the_law.parameter_names}
-
-    def fn(amps: np.ndarray) -> np.ndarray:
-        d = the_law.dissipation(np.asarray(amps) / ELL, values, reference_m / ELL)
-        return np.asarray(d)[0] * STIFFNESS * ELL**2
-
-    return fn
+    """True ΔE(A) [J] at swings in metres, from the independent simulator: the energy
+    the true motion loses per cycle at each swing (solve_ivp through the half cycle,
+    :func:`_laws_sim.true_dissipation`), for registered laws and others alike."""
+    _law, truth, _x0, _kind = CASES[case]
+    return lambda amps: true_dissipation(truth, amps)
 
 
 def one_run(case: str, noise: float, index: int, seed: int, max_steps: int) -> dict[str, Any]:

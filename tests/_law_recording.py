@@ -18,7 +18,7 @@ from scipy.integrate import solve_ivp
 
 from bayestribo.io.run import Run
 
-__all__ = ["law_recording"]
+__all__ = ["law_recording", "swing_dissipation"]
 
 
 def law_recording(
@@ -125,3 +125,47 @@ def law_recording(
         velocity=v + rng.normal(0.0, noise_v, v.shape),
         metadata=metadata,
     )
+
+
+def swing_dissipation(
+    drag: Callable[[float], float],
+    amplitudes: np.ndarray,
+    *,
+    friction: float = 0.0,
+    friction_slope: float = 0.0,
+    frequency_Hz: float = 32.6,
+    mass_kg: float = 0.035,
+) -> np.ndarray:
+    """Energy dissipated per cycle at each swing A [J]: ``k (a_s² - a_e²)``, twice the
+    energy lost over the half cycle from rest at a_s to the turning point a_e with
+    ``(a_s + a_e)/2 = A`` (solve_ivp through the half cycle, a_s by Brent's method)."""
+    from scipy.optimize import brentq
+
+    omega = 2.0 * math.pi * frequency_Hz
+
+    def end(a: float) -> float:
+        f = friction + friction_slope * a
+
+        def rhs(_t: float, s: np.ndarray) -> list[float]:
+            return [s[1], -(omega**2) * s[0] - drag(s[1]) + f]
+
+        def turning(_t: float, s: np.ndarray) -> float:
+            return s[1]
+
+        turning.terminal, turning.direction = True, 1.0
+        sol = solve_ivp(
+            rhs,
+            (0.0, 2.0 * math.pi / omega),
+            [a, 0.0],
+            method="DOP853",
+            rtol=1e-12,
+            atol=1e-16 * a,
+            events=turning,
+        )
+        return -float(sol.y_events[0][0][0])
+
+    out = []
+    for amp in np.atleast_1d(np.asarray(amplitudes, dtype=float)):
+        a_s = brentq(lambda a, amp=amp: 0.5 * (a + end(a)) - amp, amp, 2.0 * amp, xtol=1e-15 * amp)
+        out.append(mass_kg * omega**2 * (a_s**2 - end(a_s) ** 2))
+    return np.array(out)

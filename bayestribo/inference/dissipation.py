@@ -1,20 +1,30 @@
 r"""The law-free answer of a fit: energy dissipated per cycle, ΔE(A), with its band.
 
 Whatever the law, a fit answers "how much energy does the contact dissipate at each
-amplitude": over one cycle of the harmonic motion ``x = A cos Ωt``,
+amplitude". Over one cycle of the harmonic motion ``x = A cos Ωt`` a law dissipates
 
 .. math::
 
-    ΔE(A) = \oint F(\dot x)\,\dot x\,dt,
+    ΔE_h(A) = \oint F(\dot x)\,\dot x\,dt,
 
-which is ``π c Ω A²`` for viscous damping, ``4 μ_k N A`` for Coulomb friction,
+``π c Ω A²`` for viscous damping, ``4 μ_k N A`` for Coulomb friction,
 ``(8/3) c₂ Ω² A³`` for quadratic drag, ... (each term's
-:meth:`~bayestribo.model.laws.Term.dissipation`). Laws that describe the same decay
-give nearly the same ΔE(A) over the amplitudes the record holds, even where their
-parameters differ, which makes ΔE(A) the quantity to compare across laws, rigs and
-lubricants. It is given in joules where the stiffness is known (``k = mΩ²``: the
-run's mass and frequency), otherwise as ΔE/k in the signal's unit squared, at
-amplitudes spanning the analysed motion (its largest and smallest swing included).
+:meth:`~bayestribo.model.laws.Term.dissipation`). That integral is a first-order
+quantity: laws that describe the same decay can differ in it by a relative O(ζ)
+(viscous damping and a friction proportional to the amplitude, with the same decay:
+1.5 % at ζ = 0.01, about 450 posterior standard deviations at ten times the
+vibrometer's resolution in ``benchmarks/laws.py``). The reported ΔE(A) is therefore
+the energy the law's own motion dissipates per cycle at the swing A
+(:meth:`~bayestribo.model.laws.Law.swing_dissipation`): twice the energy lost over the
+half cycle whose turning points ``a_s``, ``a_e`` have ``(a_s + a_e)/2 = A``,
+``2A(a_s - a_e)``. It depends on the half-cycle map alone, which the decay measures,
+so laws that describe the same decay give the same ΔE(A); it equals ``ΔE_h`` to first
+order (exactly for Coulomb friction). ``ΔE_h`` is reported beside it
+(``harmonic_mean``) and splits ΔE(A) between the law's terms (``by_term``).
+
+ΔE(A) is given in joules where the stiffness is known (``k = mΩ²``: the run's mass and
+frequency), otherwise as ΔE/k in the signal's unit squared, at swings spanning the
+analysed motion (its largest and smallest half cycle included).
 """
 
 from __future__ import annotations
@@ -41,8 +51,10 @@ __all__ = [
 #: Number of amplitudes at which ΔE(A) is reported.
 DISSIPATION_AMPLITUDES = 12
 #: At most this many posterior draws enter the band (the rest add Monte Carlo
-#: precision far below the band's width).
+#: precision far below the band's width); fewer for a law without a closed form, whose
+#: ΔE(A) is integrated half cycle by half cycle (0.4 ms per draw for 12 swings).
 _BAND_DRAWS = 4000
+_BAND_DRAWS_INTEGRATED = 1000
 
 
 def physical_scale(scaling: Scaling, metadata: Mapping[str, Any]) -> PhysicalScale:
@@ -79,24 +91,27 @@ def physical_scale(scaling: Scaling, metadata: Mapping[str, Any]) -> PhysicalSca
 
 
 def dissipation_amplitudes(turning_points: NDArray, n: int = DISSIPATION_AMPLITUDES) -> NDArray:
-    """Amplitudes spanning the analysed motion: from its smallest swing to its largest.
+    """Swings spanning the analysed motion: from its smallest half cycle to its largest.
 
     Parameters
     ----------
     turning_points : ndarray
-        Turning points of the analysed window (any unit; signs ignored).
+        Turning points of the analysed window, in order, about the equilibrium (any
+        unit; signs ignored).
     n : int
-        Number of amplitudes, log-spaced, both ends included.
+        Number of swings, log-spaced, both ends included.
 
     Returns
     -------
     ndarray
-        Amplitudes in the unit of ``turning_points``.
+        Swings ``(|Y_n| + |Y_n+1|)/2`` in the unit of ``turning_points`` (the turning
+        point itself with only one).
     """
-    a = np.abs(np.asarray(turning_points, dtype=float))
-    a = a[np.isfinite(a) & (a > 0)]
-    if a.size == 0:
+    y = np.abs(np.asarray(turning_points, dtype=float))
+    y = y[np.isfinite(y) & (y > 0)]
+    if y.size == 0:
         raise ValueError("turning_points: no finite non-zero turning point")
+    a = 0.5 * (y[1:] + y[:-1]) if y.size > 1 else y
     low, high = float(a.min()), float(a.max())
     if high <= low * (1 + 1e-12):
         return np.array([high])
@@ -111,7 +126,8 @@ def dissipation_band(
     *,
     prob: float = 0.95,
 ) -> dict[str, Any]:
-    """ΔE(A) over posterior draws: mean and equal-tailed interval at each amplitude.
+    """ΔE(A) over posterior draws: mean and equal-tailed interval at each swing
+    (:meth:`~bayestribo.model.laws.Law.swing_dissipation`, see the module notes).
 
     Parameters
     ----------
@@ -129,23 +145,42 @@ def dissipation_band(
     Returns
     -------
     dict
-        ``law``; ``amplitude`` [``amplitude_unit``]; ``mean``, ``interval`` (lower,
-        upper lists), ``sd`` [``unit``]; ``prob``; ``by_term``: each term's mean
-        share; ``unit`` ("J" or the length unit squared, energy over stiffness).
+        ``law``; ``amplitude`` [``amplitude_unit``], the swings; ``mean``,
+        ``interval`` (lower, upper lists), ``sd`` [``unit``]; ``prob``;
+        ``harmonic_mean``: the integral over the harmonic motion, ΔE_h(A);
+        ``by_term``: each term's mean share of ΔE(A), in proportion to its share of
+        ΔE_h; ``unit`` ("J" or the length unit squared, energy over stiffness);
+        ``definition``.
     """
     prob = check_prob(prob)
     draws = np.atleast_2d(np.asarray(draws, dtype=float))
-    if draws.shape[0] > _BAND_DRAWS:
+    most = _BAND_DRAWS if posterior.law.closed_form else _BAND_DRAWS_INTEGRATED
+    if draws.shape[0] > most:
         # evenly spaced over every chain (no random numbers: the fit's stream is kept)
-        draws = draws[np.linspace(0, draws.shape[0] - 1, _BAND_DRAWS).astype(int)]
+        draws = draws[np.linspace(0, draws.shape[0] - 1, most).astype(int)]
     values = posterior.law_draws(draws)
     ref = posterior.likelihood.reference_amplitude
     amps = np.asarray(amplitudes, dtype=float)
     parts = posterior.law.dissipation(amps, values, ref, by_term=True)
+    harmonic = sum(parts.values())
     factor = scale.energy_factor
-    total = sum(parts.values()) * factor
+    exact = posterior.law.swing_dissipation(amps, values, ref)
+    parts = {k: np.broadcast_to(v, exact.shape) for k, v in parts.items()}
+    harmonic = np.broadcast_to(harmonic, exact.shape)
+    # a draw has no half cycle of a given swing when its friction would hold a motion
+    # that small or its drag stop it: such draws are left out, and counted
+    keep = np.all(np.isfinite(exact), axis=1)
+    definition = "per cycle of the law's own motion at the swing A: 2A(a_s - a_e)"
+    if not keep.any():
+        exact, keep = harmonic, np.ones(keep.shape, bool)
+        definition = "over one cycle of the harmonic motion (no draw has these swings)"
+    exact, harmonic = exact[keep], harmonic[keep]
+    parts = {k: v[keep] for k, v in parts.items()}
+    total = exact * factor
     tail = 0.5 * (1.0 - prob)
     lower, upper = np.quantile(total, [tail, 1.0 - tail], axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        share = {k: np.where(harmonic != 0, v / harmonic, 0.0) for k, v in parts.items()}
     return {
         "law": posterior.law.name,
         "amplitude": (amps * scale.length_scale).tolist(),
@@ -155,7 +190,10 @@ def dissipation_band(
         "interval": [lower.tolist(), upper.tolist()],
         "prob": prob,
         "unit": scale.energy_unit,
-        "by_term": {name: (np.mean(v, axis=0) * factor).tolist() for name, v in parts.items()},
+        "harmonic_mean": (np.mean(harmonic, axis=0) * factor).tolist(),
+        "by_term": {name: np.mean(share[name] * total, axis=0).tolist() for name in parts},
+        "definition": definition,
+        "draws_left_out": int(keep.size - keep.sum()),
     }
 
 

@@ -18,14 +18,18 @@ from bayestribo import DEFAULT_SEED
 from bayestribo.errors import BayestriboError
 from bayestribo.inference.likelihood import MODELS
 from bayestribo.inference.pipeline import (
+    PreparedRun,
     build_posterior,
+    law_frequency,
     prepare,
+    reframe,
     sample,
     summarise,
 )
 from bayestribo.inference.priors import Prior
 from bayestribo.inference.result import FitResult, plain_data
 from bayestribo.inference.sampling import SamplerSettings
+from bayestribo.inference.start import maximum_a_posteriori
 from bayestribo.io.run import Run
 from bayestribo.model.laws import Law, get_law
 from bayestribo.signal.noise import NoiseModel
@@ -160,6 +164,19 @@ def fit(
             law_free=True,
         )
         sampled = runs[comparison.verdict]
+        if not sampled.posterior.law.closed_form:
+            # the verdict again, in the frame of its own turning times
+            framed = _in_law_frame(prepared, sampled.posterior, sampled.theta_map)
+            if framed is not None:
+                prepared = framed
+                posterior = _posterior_like(sampled.posterior, prepared, model, discrepancy)
+                sampled = sample(
+                    posterior,
+                    prepared.decay,
+                    settings=settings,
+                    seed=rng,
+                    also_start_at=dict(zip(posterior.names, sampled.theta_map, strict=True)),
+                )
     else:
         posterior = build_posterior(
             prepared.data,
@@ -170,7 +187,30 @@ def fit(
             fixed=fixed,
             law=the_law,
         )
-        sampled = sample(posterior, prepared.decay, settings=settings, seed=rng, progress=progress)
+        also = None
+        if not posterior.law.closed_form:
+            theta = maximum_a_posteriori(posterior, prepared.decay)[0]
+            framed = _in_law_frame(prepared, posterior, theta)
+            if framed is not None:
+                prepared = framed
+                posterior = build_posterior(
+                    prepared.data,
+                    model=model,
+                    friction=prepared.contact,
+                    discrepancy=discrepancy,
+                    priors=priors,
+                    fixed=fixed,
+                    law=the_law,
+                )
+                also = dict(zip(posterior.names, theta, strict=True))
+        sampled = sample(
+            posterior,
+            prepared.decay,
+            settings=settings,
+            seed=rng,
+            progress=progress,
+            also_start_at=also,
+        )
     result = summarise(prepared, sampled, seed=rng, recorded_seed=seed)
     if comparison is not None:
         result.idata.posterior.attrs["law_comparison_json"] = json.dumps(
@@ -178,3 +218,32 @@ def fit(
         )
     result.idata.posterior.attrs["seconds"] = time.perf_counter() - start
     return result
+
+
+#: A law's frequency closer than this to the record's leaves the frame as it is.
+_FRAME_TOLERANCE = 1e-9
+
+
+def _in_law_frame(prepared: PreparedRun, posterior: Any, theta: Any) -> PreparedRun | None:
+    """The run prepared again in the frequency at which a nonlinear law's turning
+    times keep step with the record's (:func:`bayestribo.inference.pipeline.
+    law_frequency`), or None when that is the record's own frequency or is not found."""
+    f = law_frequency(posterior, theta, prepared.decay)
+    if f is None:
+        return None
+    f0 = prepared.decay.scaling.omega / (2.0 * np.pi)
+    if abs(f / f0 - 1.0) <= _FRAME_TOLERANCE:
+        return None
+    return reframe(prepared, f)
+
+
+def _posterior_like(posterior: Any, prepared: PreparedRun, model: str, discrepancy: bool) -> Any:
+    """A posterior of the same law, priors and fixed values on another preparation."""
+    return build_posterior(
+        prepared.data,
+        model=model,
+        friction=prepared.contact,
+        discrepancy=discrepancy,
+        fixed=dict(posterior.fixed) or None,
+        law=posterior.law,
+    )

@@ -630,6 +630,7 @@ def energy_decay(
     offset: float | Literal["auto", "constant"] | None = "auto",
     notch: float | Literal["auto"] | None = None,
     motion_threshold: float = THRESHOLD,
+    frequency_Hz: float | None = None,
 ) -> EnergyDecay:
     """Energy decay curve and Π(τ) of a free-decay recording (Eq. 6, 26, 39).
 
@@ -681,6 +682,11 @@ def energy_decay(
         Excursion of the velocity from its rest level, in rest noise standard
         deviations, that marks the motion when the release and the end of motion
         are located (:func:`bayestribo.signal.motion.motion_span`).
+    frequency_Hz : float, optional
+        Scale time with this natural frequency [Hz] instead of the measured one (the
+        frequency that makes a nonlinear law's turning times match the record's,
+        :func:`bayestribo.inference.pipeline.law_frequency`); the measured one is still
+        reported in ``natural_frequency_Hz``.
 
     Returns
     -------
@@ -706,6 +712,10 @@ def energy_decay(
     _check_count("min_turning_points", min_turning_points, 2)
     if use_nominal_frequency and rig is None:
         raise RecordingError("use_nominal_frequency needs a rig with a natural frequency")
+    if frequency_Hz is not None and not (math.isfinite(frequency_Hz) and frequency_Hz > 0):
+        raise RecordingError(f"frequency_Hz must be a positive number [Hz], got {frequency_Hz!r}")
+    if frequency_Hz is not None and use_nominal_frequency:
+        raise RecordingError("give frequency_Hz or use_nominal_frequency, not both")
     _check_notch(notch)
     if not (math.isfinite(motion_threshold) and motion_threshold > 0):
         raise RecordingError(
@@ -719,6 +729,7 @@ def energy_decay(
         rig=rig,
         skip_oscillations=skip_oscillations,
         use_nominal_frequency=use_nominal_frequency,
+        frequency_Hz=frequency_Hz,
         skip_turning_points=skip_turning_points,
         min_turning_points=min_turning_points,
         offset=offset,
@@ -772,6 +783,7 @@ def _analyse(
     rig: Rig | None,
     skip_oscillations: int,
     use_nominal_frequency: bool,
+    frequency_Hz: float | None,
     skip_turning_points: int | None,
     min_turning_points: int,
     offset: float | Literal["auto", "constant"] | None,
@@ -868,6 +880,8 @@ def _analyse(
     damped_hz, natural_hz = _frequencies(times, window.value)
     nominal_hz = None if rig is None else rig.natural_frequency_Hz
     omega = 2.0 * math.pi * (nominal_hz if use_nominal_frequency else natural_hz)
+    if frequency_Hz is not None:
+        omega = 2.0 * math.pi * float(frequency_Hz)
 
     if rig is not None and rig.has_contact and rig.mass_kg is not None:
         scaling = Scaling(omega, rig.load_N / (rig.mass_kg * omega**2), friction_defined=True)

@@ -413,3 +413,64 @@ def turns(
         r = a - mu
         theta0 = 0.0
     return times[:n], where[:n]
+
+
+@numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
+def half_cycle_end(a: float, c: NDArray, tables: NDArray, offsets: NDArray, work: NDArray) -> float:
+    """|Y| at the end of the half cycle that starts at rest at the turning point
+    ``a`` > 0, ignoring static friction (NaN when the motion cannot leave ``a`` or
+    the drag stops it before it turns)."""
+    mu = friction(a, c) if HAS_FRICTION else 0.0
+    r = a - mu
+    if not (r > 0.0) or mu < 0.0:
+        return math.nan
+    k = choose_steps(r, c)
+    steps = LADDER[k]
+    table = tables[:, offsets[k] : offsets[k] + 2 * steps + 1]
+    r_end = half_cycle(table, r, mu, c, steps, work[0], work[1], work[2:4])
+    if not math.isfinite(r_end):
+        return math.nan
+    return r_end - mu
+
+
+@numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
+def swing_drops(coef: NDArray, swing: NDArray) -> NDArray:
+    """The drop a_s - a_e of the half cycle whose swing ½(a_s + a_e) is each of
+    ``swing`` (S,), for each coefficient row of ``coef`` (P, K): shape (P, S).
+
+    a_s is found by the secant method on ½(a_s + a_e(a_s)) = A from the fixed point
+    a_s = A + ½ drop(A); NaN where no such half cycle exists."""
+    tables, offsets = ladder_tables()
+    size = LADDER[-1] + 1
+    work = np.empty((4, size))
+    out = np.empty((coef.shape[0], swing.size))
+    for p in range(coef.shape[0]):
+        c = coef[p]
+        for j in range(swing.size):
+            target = swing[j]
+            e0 = half_cycle_end(target, c, tables, offsets, work)
+            if not math.isfinite(e0):
+                # the swing's own start does not move: start above it
+                x0 = 2.0 * target
+            else:
+                x0 = target + 0.5 * (target - e0)
+            f0 = 0.5 * (x0 + half_cycle_end(x0, c, tables, offsets, work)) - target
+            x1 = x0 - f0
+            value = math.nan
+            for _ in range(40):
+                end = half_cycle_end(x1, c, tables, offsets, work)
+                if not math.isfinite(end):
+                    break
+                f1 = 0.5 * (x1 + end) - target
+                if abs(f1) <= 1e-14 * target:
+                    value = x1 - end
+                    break
+                if f1 == f0 or not math.isfinite(f0):
+                    x0, f0 = x1, f1
+                    x1 = x1 - f1
+                    continue
+                x2 = x1 - f1 * (x1 - x0) / (f1 - f0)
+                x0, f0 = x1, f1
+                x1 = x2
+            out[p, j] = value
+    return out

@@ -167,8 +167,8 @@ def make_integrator(
     frictions: tuple,
     friction_offsets: tuple,
     friction_sizes: tuple,
-) -> tuple[Callable, Callable]:
-    """The compiled Π-grid and turning-point functions of one law.
+) -> tuple[Callable, Callable, Callable]:
+    """The compiled Π-grid, turning-point and swing functions of one law.
 
     The template :mod:`bayestribo.model.laws._core` is written with the law's forces to
     a file of the law cache (:func:`law_cache_dir`) and imported, so that numba compiles
@@ -194,7 +194,11 @@ def make_integrator(
     turns : callable
         ``turns(y0, coef_row, ratio, yp0, tau_max, max_count) -> (τ_n, Y_n)``: the
         turning points of one trajectory.
+    swing_drops : callable
+        ``swing_drops(coef, swing) -> drop``: for each row of ``coef`` (P, K) and each
+        swing A (S,), the drop a_s - a_e of the half cycle from rest at a_s to the
+        turning point a_e with ½(a_s + a_e) = A (static friction ignored), (P, S).
     """
     layout = (drags, drag_offsets, drag_sizes, frictions, friction_offsets, friction_sizes)
     module = _load(*_law_source(layout))
-    return module.grid, module.turns
+    return module.grid, module.turns, module.swing_drops
