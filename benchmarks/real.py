@@ -25,9 +25,10 @@ three is fitted with ``law="auto"`` and with the default law for ``--seeds`` see
 chosen, the comparison's verdict and whether it is adequate, its notes, the bayestribo
 warnings, convergence, seconds, the law's own parameters, and ΔE(A) (mean, sd, 95 %
 interval) at the fit's 12 reported amplitudes and at three amplitudes of the segment:
-its largest swing, its median swing and its smallest swing. ΔE(A) at amplitudes other
-than the reported ones is computed from the posterior draws with the chosen law's
-``dissipation`` (the draws reproduce the reported band at the reported amplitudes: the
+its largest swing, its median swing and its smallest swing (a swing is a half cycle's
+mean turning-point distance). ΔE(A) at amplitudes other than the reported ones is
+computed from the posterior draws with the chosen law's ``swing_dissipation`` (the
+draws reproduce the reported band at the reported amplitudes: the
 largest relative difference of the means is recorded).
 
 Across seeds: the spread of the means, (max - min)/mean posterior sd, of ΔE at the
@@ -188,8 +189,9 @@ def _prepared(run: Any) -> dict[str, Any]:
             return {"error": f"{type(exc).__name__}: {exc}", "traceback": _tail(exc)}
     d = p.decay
     ell = float(d.scaling.length_scale)
-    swings = np.abs(np.asarray(d.peaks.value, dtype=float))
-    reported = dissipation_amplitudes(swings / ell) * ell
+    turning = np.abs(np.asarray(d.peaks.value, dtype=float))
+    swings = 0.5 * (turning[1:] + turning[:-1])  # each half cycle's swing
+    reported = dissipation_amplitudes(turning / ell) * ell
     return {
         "length_scale": ell,
         "reference_amplitude": abs(float(p.data.y0)),
@@ -200,7 +202,7 @@ def _prepared(run: Any) -> dict[str, Any]:
             "smallest": float(swings.min()),
         },
         "turning_times": np.asarray(d.turning_times, dtype=float).tolist(),
-        "n_turning_points": int(swings.size),
+        "n_turning_points": int(turning.size),
         "motion_ended": bool(d.motion_ended),
         "release_time_s": float(d.release_time),
         "natural_frequency_Hz": float(d.natural_frequency_Hz),
@@ -210,8 +212,9 @@ def _prepared(run: Any) -> dict[str, Any]:
 
 
 def _law_band(result: Any, amplitudes: list[float], reference: float) -> dict[str, Any]:
-    """ΔE(A) of the fitted law at any amplitudes (same unit as the reported band),
-    from its posterior draws."""
+    """ΔE(A) of the fitted law at any swings (same unit and definition as the reported
+    band, :meth:`~bayestribo.model.laws.Law.swing_dissipation`), from 1000 of its
+    posterior draws, evenly spaced."""
     from bayestribo.model.laws import get_law
 
     law = get_law(result.law)
@@ -230,7 +233,11 @@ def _law_band(result: Any, amplitudes: list[float], reference: float) -> dict[st
         else:
             values[name] = np.full(result.samples("y0").size, law.parameter(name).null)
     amps = np.asarray(amplitudes, dtype=float)
-    draws = np.asarray(law.dissipation(amps / ell, values, reference)) * k * ell**2
+    size = next(iter(values.values())).size
+    pick = np.linspace(0, size - 1, min(size, 1000)).astype(int)
+    values = {n: np.asarray(v)[pick] for n, v in values.items()}
+    draws = np.asarray(law.swing_dissipation(amps / ell, values, reference)) * k * ell**2
+    draws = draws[np.all(np.isfinite(draws), axis=1)]
     lo, hi = np.quantile(draws, [0.025, 0.975], axis=0)
     return {
         "amplitude": amps.tolist(),
