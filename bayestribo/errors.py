@@ -12,6 +12,7 @@ __all__ = [
     "AcquisitionError",
     "BayestriboError",
     "ConvergenceWarning",
+    "FrequencyTrendWarning",
     "MisfitWarning",
     "MissingDependencyError",
     "RecordingError",
@@ -58,6 +59,12 @@ class ConvergenceWarning(UserWarning):
 
 class MisfitWarning(UserWarning):
     """The model does not reproduce the data within their noise (intervals too narrow)."""
+
+
+class FrequencyTrendWarning(UserWarning):
+    """The half period changes along the decay beyond what the law makes (a stiffness
+    that depends on amplitude): the reported quantities carry it as a frequency
+    nuisance, so the intervals hold it (the message gives the change and the nuisance)."""
 
 
 class MetadataWarning(UserWarning):

@@ -33,6 +33,7 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
+import scipy.stats
 from numpy.typing import NDArray
 
 from bayestribo.inference.posterior import Posterior
@@ -125,6 +126,7 @@ def dissipation_band(
     scale: PhysicalScale,
     *,
     prob: float = 0.95,
+    frequency_sd: float = 0.0,
 ) -> dict[str, Any]:
     """ΔE(A) over posterior draws: mean and equal-tailed interval at each swing
     (:meth:`~bayestribo.model.laws.Law.swing_dissipation`, see the module notes).
@@ -141,6 +143,11 @@ def dissipation_band(
         Converts amplitudes and energies to physical units.
     prob : float
         Probability of the intervals.
+    frequency_sd : float
+        Relative standard deviation of the frequency nuisance
+        (:func:`bayestribo.inference.pipeline.frequency_nuisance_sd`): the energies
+        scale with k = mΩ², so ΔE(A) gets a relative error of twice it, added in
+        quadrature to the band's sd and to each side of its interval.
 
     Returns
     -------
@@ -179,14 +186,22 @@ def dissipation_band(
     total = exact * factor
     tail = 0.5 * (1.0 - prob)
     lower, upper = np.quantile(total, [tail, 1.0 - tail], axis=0)
+    mean = np.mean(total, axis=0)
+    sd = np.std(total, axis=0, ddof=1) if total.shape[0] > 1 else np.zeros(amps.size)
+    if frequency_sd > 0:
+        extra = 2.0 * float(frequency_sd) * np.abs(mean)
+        z = float(scipy.stats.norm.ppf(1.0 - tail))
+        lower = mean - np.hypot(mean - lower, z * extra)
+        upper = mean + np.hypot(upper - mean, z * extra)
+        sd = np.hypot(sd, extra)
     with np.errstate(invalid="ignore", divide="ignore"):
         share = {k: np.where(harmonic != 0, v / harmonic, 0.0) for k, v in parts.items()}
     return {
         "law": posterior.law.name,
         "amplitude": (amps * scale.length_scale).tolist(),
         "amplitude_unit": scale.length_unit,
-        "mean": np.mean(total, axis=0).tolist(),
-        "sd": np.std(total, axis=0, ddof=1).tolist() if total.shape[0] > 1 else [0.0] * amps.size,
+        "mean": mean.tolist(),
+        "sd": sd.tolist(),
         "interval": [lower.tolist(), upper.tolist()],
         "prob": prob,
         "unit": scale.energy_unit,
@@ -194,6 +209,7 @@ def dissipation_band(
         "by_term": {name: np.mean(share[name] * total, axis=0).tolist() for name in parts},
         "definition": definition,
         "draws_left_out": int(keep.size - keep.sum()),
+        "frequency_nuisance_sd": float(frequency_sd),
     }
 
 

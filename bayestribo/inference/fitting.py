@@ -211,7 +211,9 @@ def fit(
             progress=progress,
             also_start_at=also,
         )
-    result = summarise(prepared, sampled, seed=rng, recorded_seed=seed)
+    result = summarise(
+        prepared, sampled, seed=rng, recorded_seed=seed, compared=comparison is not None
+    )
     if comparison is not None:
         result.idata.posterior.attrs["law_comparison_json"] = json.dumps(
             plain_data(comparison.to_dict())

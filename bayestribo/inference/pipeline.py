@@ -35,6 +35,7 @@ from bayestribo import __version__
 from bayestribo.errors import (
     BayestriboError,
     ConvergenceWarning,
+    FrequencyTrendWarning,
     MisfitWarning,
     PriorBoundWarning,
 )
@@ -558,18 +559,21 @@ def _beyond_the_law(
     return beyond, law_change
 
 
-def _warn_frequency_trend(name: str | None, trend: FrequencyTrend | None) -> None:
-    """Warn when the frequency is not constant along the decay."""
+def _warn_frequency_trend(name: str | None, trend: FrequencyTrend | None, law: str) -> None:
+    """Say when the frequency is not constant along the decay beyond the law's own
+    change (the nuisance that carries it is in the intervals)."""
     if trend is None:
         return
     if abs(trend.change) > FREQUENCY_TREND_CHANGE and abs(trend.z) > FREQUENCY_TREND_Z:
         warnings.warn(
             f"the oscillation's half period changes by {100 * trend.change:+.3f} % from the "
             f"largest swing to the smallest of {name or 'the run'} ({trend.z:+.0f} "
-            "standard errors): the stiffness depends on amplitude, which the linear law "
-            "(a constant Ω) does not hold; ζ and μ_k carry a frequency nuisance of "
+            f"standard errors) beyond what the law {law} makes: a stiffness that depends "
+            "on amplitude, or a dissipation that changes the period otherwise than the law "
+            "does; the constant Ω of the fit is then an average, and the reported "
+            "parameters and ΔE(A) carry a frequency nuisance of "
             f"± {100 * frequency_nuisance_sd(trend):.2g} % for it",
-            MisfitWarning,
+            FrequencyTrendWarning,
             stacklevel=4,
         )
 
@@ -579,8 +583,11 @@ def _warn_misfit(
     misfit: tuple[float, int, float],
     shape: ShapeDeparture,
     discrepancy: bool,
+    law: str,
+    compared: bool = False,
 ) -> None:
-    """Say, with numbers, that the law misfits the run (see :func:`summarise`)."""
+    """Say, with numbers, that the law misfits the run, and what to do (see
+    :func:`summarise`)."""
     chi2, m, misfit_p = misfit
     shaped = bool(shape.p_value < MISFIT_P)
     if not (misfit_p < MISFIT_P or shaped):
@@ -593,17 +600,29 @@ def _warn_misfit(
         if not shaped:
             return  # white misfit only: the discrepancy's white term carries it
         warnings.warn(
-            f"the constant law is not adequate for {run}: {how}. The discrepancy terms "
-            "carry the departure into the intervals, so ζ and μ_k are the law's best "
+            f"the law {law} is not adequate for {run}: {how}. The discrepancy terms "
+            "carry the departure into the intervals, so its parameters are the law's best "
             "constant values over this decay, not those of a law that holds at every "
             "amplitude (bayestribo check shows how they change along the decay)",
             MisfitWarning,
             stacklevel=4,
         )
         return
+    if compared:
+        warnings.warn(
+            f"no law compared holds for {run}: the best, {law}, misfits it beyond its "
+            f"noise ({how}). Its ΔE(A), the energy dissipated per cycle, is the answer; "
+            "its parameters are not a measurement of any mechanism, and its intervals are "
+            "too narrow",
+            MisfitWarning,
+            stacklevel=4,
+        )
+        return
     warnings.warn(
-        f"the model misfits {run} beyond its noise ({how}): its intervals are too "
-        "narrow; fit with discrepancy=True (--discrepancy) to widen them by the misfit",
+        f"the law {law} misfits {run} beyond its noise ({how}): its parameters are not "
+        "a measurement and its intervals are too narrow. Fit with law='auto' "
+        "(--law auto): it compares the registered laws, keeps one that holds, and gives "
+        "the law-free ΔE(A) when none does",
         MisfitWarning,
         stacklevel=4,
     )
@@ -644,6 +663,7 @@ def summarise(
     *,
     seed: int | np.random.Generator | None = None,
     recorded_seed: int | None = None,
+    compared: bool = False,
 ) -> FitResult:
     """Step 4: derived quantities, diagnostics and checks, as a :class:`FitResult`.
 
@@ -657,6 +677,9 @@ def summarise(
         Seed of the calibration nuisance and posterior predictive draws.
     recorded_seed : int, optional
         The seed of the whole fit, recorded in the result (-1 if none).
+    compared : bool
+        The law is the verdict of a comparison of laws (``law="auto"``): a misfit then
+        says that no law compared holds, instead of advising the comparison.
 
     Returns
     -------
@@ -672,13 +695,15 @@ def summarise(
         1e-3), with or without the discrepancy: the constant law is not adequate, and
         the message says by how much (the largest relative departure of the increments
         and its standard error). The result records the test in
-        ``diagnostics["shape_departure"]``.
-        Also when the half period changes with amplitude
+        ``diagnostics["shape_departure"]``. A law chosen by a comparison
+        (``compared``) that misfits says that no law compared holds.
+    FrequencyTrendWarning
+        When the half period changes with amplitude beyond the law's own change
         (:func:`~bayestribo.io.frequency.turning_point_trend` of the decay's turning
-        times: by more than 2e-4 at 4
-        standard errors): the reported ζ, μ_k, μ_s, ζ_k and d_k carry a frequency
-        nuisance for it in any case (:func:`frequency_nuisance_sd`, recorded in the
-        result's ``frequency_nuisance_sd`` attribute).
+        times, :func:`_beyond_the_law`: by more than 2e-4 at 4 standard errors): the
+        reported ζ, μ_k, μ_s, ζ_k, d_k and ΔE(A) carry a frequency nuisance for it in
+        any case (:func:`frequency_nuisance_sd`, recorded in the result's
+        ``frequency_nuisance_sd`` attribute), so the intervals hold it.
     ConvergenceWarning
         When the sampler did not converge (the result says so too).
     PriorBoundWarning
@@ -697,7 +722,7 @@ def summarise(
     )
     misfit = _misfit(posterior, sampled.theta_map)
     shape = _shape_departure(posterior, sampled.theta_map)
-    _warn_misfit(name, misfit, shape, discrepancy)
+    _warn_misfit(name, misfit, shape, discrepancy, posterior.law.name, compared)
     flat = run.chains.reshape(-1, run.chains.shape[-1])
     at_bound = piled_on_bounds(flat, posterior.priors)
     for entry in at_bound:
@@ -718,7 +743,7 @@ def summarise(
     else:
         trend = frequency_trend(prepared.run.time, prepared.run.displacement, prepared.run.velocity)
     trend, law_change = _beyond_the_law(posterior, sampled.theta_map, trend, decay)
-    _warn_frequency_trend(name, trend)
+    _warn_frequency_trend(name, trend, posterior.law.name)
     frequency_sd = frequency_nuisance_sd(trend)
     metadata = prepared.metadata
     scaling = prepared.decay.scaling
@@ -731,6 +756,7 @@ def summarise(
         flat,
         dissipation_amplitudes(decay.peaks.value / scaling.length_scale),
         scale,
+        frequency_sd=frequency_sd,
     )
     noise_info = {**prepared.noise.to_dict(), "description": prepared.noise.describe()}
     attrs = {
