@@ -15,6 +15,7 @@ __all__ = [
     "FrequencyTrendWarning",
     "MisfitWarning",
     "MissingDependencyError",
+    "ReadingWarning",
     "RecordingError",
     "RunFormatError",
 ]
@@ -65,6 +66,11 @@ class FrequencyTrendWarning(UserWarning):
     """The half period changes along the decay beyond what the law makes (a stiffness
     that depends on amplitude): the reported quantities carry it as a frequency
     nuisance, so the intervals hold it (the message gives the change and the nuisance)."""
+
+
+class ReadingWarning(UserWarning):
+    """A file was read with rows left out (empty cells at its start or end): the
+    message names the lines and the columns."""
 
 
 class MetadataWarning(UserWarning):

@@ -19,3 +19,5 @@ RUNS = DATA / "runs"
 EXTERNAL = REPO.parent / "shared" / "external-data"
 #: The AppStat2020 harmonic-oscillator recordings (HarmOsc1-3.txt).
 APPSTAT = EXTERNAL / "appstat2020-harmonic-oscillator"
+#: The spring, mass and disc in air recordings (semicolon text, 100 Hz).
+SPRING_DISC = EXTERNAL / "smorzamento-spring-disc"

@@ -191,3 +191,50 @@ def test_numpys_reader_and_the_row_by_row_reader_give_the_same_numbers(tmp_path:
     path.write_text("time_s,displacement_m\n0.0,1.0\n0.001\n")
     with pytest.raises(RunFormatError, match="line 3: expected 2 field"):
         read_text(path)
+
+
+def test_empty_cells_at_the_end_of_a_channel_leave_those_rows_out_and_say_so(
+    tmp_path: Path,
+) -> None:
+    """A motion sensor's software leaves the derivative's last cells empty (the spring
+    and disc recordings): those rows are left out with a warning naming them; an empty
+    cell between values is an error naming its line and column."""
+    from bayestribo.errors import ReadingWarning
+
+    t, x = _sine(100)
+    w = 2 * np.pi * 32.6
+    v = [repr(float(1e-3 * w * np.cos(w * a + 0.3))) for a in t]
+    v[-2:] = ["", ""]
+    body = "".join(f"{a!r};{b!r};{c}\n" for a, b, c in zip(t, x, v, strict=True))
+    path = tmp_path / "sensor.csv"
+    path.write_text("time;position;velocity\n" + body)
+    columns = ["time_s", "displacement_m", "velocity_m_per_s"]
+    with pytest.warns(ReadingWarning, match=r"2 row\(s\).*lines 100-101.*velocity_m_per_s"):
+        run = read_run(path, columns=columns)
+    assert run.n_samples == 98
+    np.testing.assert_array_equal(run.displacement, x[:98])
+    # without the velocity nothing is left out
+    run = read_run(path, columns=["time_s", "displacement_m", "ignore"])
+    assert run.n_samples == 100
+    v[10] = ""
+    body = "".join(f"{a!r};{b!r};{c}\n" for a, b, c in zip(t, x, v, strict=True))
+    path.write_text("time;position;velocity\n" + body)
+    with pytest.raises(RunFormatError, match="line 12, column 'velocity_m_per_s': an empty cell"):
+        read_run(path, columns=columns)
+
+
+def test_the_spring_and_disc_recordings_read_with_their_velocity() -> None:
+    from _paths import SPRING_DISC
+
+    from bayestribo.errors import ReadingWarning
+
+    paths = sorted(SPRING_DISC.glob("*.csv"))
+    if not paths:
+        pytest.skip(f"external data not present at {SPRING_DISC}")
+    for path in paths:
+        with pytest.warns(ReadingWarning, match="velocity_m_per_s"):
+            run = read_run(path, columns=["time_s", "displacement_m", "velocity_m_per_s", "ignore"])
+        rows = np.genfromtxt(path, delimiter=";", skip_header=1)
+        full = ~np.isnan(rows[:, 2])
+        np.testing.assert_array_equal(run.velocity, rows[full, 2])
+        np.testing.assert_array_equal(run.displacement, rows[full, 1])

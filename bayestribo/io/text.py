@@ -14,13 +14,14 @@ column converting the file's unit to the canonical one (for instance
 from __future__ import annotations
 
 import io
+import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
-from bayestribo.errors import RunFormatError
+from bayestribo.errors import ReadingWarning, RunFormatError
 from bayestribo.io.columns import IGNORE, check_scale, parse_column
 from bayestribo.io.instruments import PREAMBLE_LINES, detect_export, read_export
 from bayestribo.io.run import COLUMNS, DISPLACEMENT, TIME, VELOCITY
@@ -84,6 +85,9 @@ def _parse_rows(
             )
         for c, (i, name) in enumerate(keep):
             field = fields[i].replace(",", ".") if decimal == "," else fields[i]
+            if field == "" and name != TIME:
+                data[r, c] = np.nan  # an empty cell: kept as missing, see _trim_missing
+                continue
             value = _as_float(field)
             if value is None:
                 raise RunFormatError(
@@ -91,6 +95,42 @@ def _parse_rows(
                 )
             data[r, c] = value
     return data
+
+
+def _trim_missing(
+    data: NDArray, rows: list[tuple[int, str]], keep: list[tuple[int, str]], where: str
+) -> NDArray:
+    """The rows without empty cells: a channel may lack values at the start or the end
+    of the file (an instrument's derivative is not defined there), and those rows are
+    left out, with a :class:`~bayestribo.errors.ReadingWarning` that names them; an
+    empty cell between values is an error naming its line and column."""
+    missing = np.isnan(data)
+    if not missing.any():
+        return data
+    for c, (_, name) in enumerate(keep):
+        present = np.flatnonzero(~missing[:, c])
+        if present.size == 0:
+            raise RunFormatError(f"column {name!r} has no value in any row", where)
+        gap = np.flatnonzero(missing[present[0] : present[-1] + 1, c])
+        if gap.size:
+            line = rows[present[0] + int(gap[0])][0]
+            raise RunFormatError(
+                f"line {line}, column {name!r}: an empty cell between values; a channel may "
+                "lack values only at the start or the end of the file",
+                where,
+            )
+    good = ~missing.any(axis=1)
+    lines = [rows[i][0] for i in np.flatnonzero(~good)]
+    span = f"line {lines[0]}" if len(lines) == 1 else f"lines {lines[0]}-{lines[-1]}"
+    empty = [name for c, (_, name) in enumerate(keep) if missing[:, c].any()]
+    warnings.warn(
+        f"{where}: {len(lines)} row(s) at the start or end of the file ({span}) have no "
+        f"value for {', '.join(empty)}; they are left out of the run (give "
+        "columns=[...] with 'ignore' for a channel not to use)",
+        ReadingWarning,
+        stacklevel=4,
+    )
+    return np.ascontiguousarray(data[good])
 
 
 def _canonical(name: str, where: str, what: str) -> tuple[str, float]:
@@ -260,6 +300,7 @@ def read_text(
     data = _parse_block(rows, delimiter, width, [i for i, _ in keep]) if decimal == "." else None
     if data is None:
         data = _parse_rows(rows, delimiter, decimal, names, keep, where)
+        data = _trim_missing(data, rows, keep, where)
 
     factors = check_scale(scale, [n for _, n in keep], where)
     out: dict[str, NDArray] = {}
