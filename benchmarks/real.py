@@ -108,7 +108,7 @@ def _tail(exc: BaseException) -> str:
 
 def load(name: str) -> tuple[Any, dict[str, Any]]:
     """The recording ``name`` as a Run, and how it was read."""
-    from bayestribo import Run, read_run
+    from bayestribo import read_run
     from bayestribo.io.validation import channel_consistency, check_channels
 
     path = recordings()[name]
@@ -124,37 +124,33 @@ def load(name: str) -> tuple[Any, dict[str, Any]]:
         info["velocity"] = "none in the file"
         return run, info
     # smorzamento: time;position;velocity;acceleration, the last rows without velocity
-    table = np.genfromtxt(path, delimiter=";", names=True)
     stiffness, mass = (float(v) for v in path.stem.split("_")[-3:-1])
     meta = {"mass_kg": mass}
+    columns = ["time_s", "displacement_m", "velocity_m_per_s", "ignore"]
     info.update(
-        rows=int(table.size),
-        rows_without_position=int(np.sum(~np.isfinite(table["position"]))),
-        rows_without_velocity=int(np.sum(~np.isfinite(table["velocity"]))),
         stated_stiffness_N_per_m=stiffness,
         mass_kg=mass,
         frequency_from_stated_k_and_m_Hz=math.sqrt(stiffness / mass) / (2 * math.pi),
         metadata=meta,
     )
-    table = table[np.isfinite(table["position"])]
-    with_v = table[np.isfinite(table["velocity"])]
-    try:
-        run = Run(
-            time=with_v["time"],
-            displacement=with_v["position"],
-            velocity=with_v["velocity"],
-            metadata=meta,
-        )
-        consistency = channel_consistency(run)
-        info["channel_consistency"] = None if consistency is None else asdict(consistency)
-        check_channels(run)
-        info["velocity"] = "used (rows without it dropped)"
-        info["rows_used"] = int(with_v.size)
-        return run, info
-    except Exception as exc:  # the package refuses the velocity: position only
-        info["velocity"] = f"refused by the package ({type(exc).__name__}: {exc}); position only"
-    run = Run(time=table["time"], displacement=table["position"], metadata=meta)
-    info["rows_used"] = int(table.size)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            run = read_run(path, columns=columns, metadata=meta)
+            consistency = channel_consistency(run)
+            info["channel_consistency"] = None if consistency is None else asdict(consistency)
+            check_channels(run)
+            info["read"] = f"read_run(path, columns={columns}, metadata={meta})"
+            info["velocity"] = "used"
+        except Exception as exc:  # the package refuses the velocity: position only
+            info["velocity"] = (
+                f"refused by the package ({type(exc).__name__}: {exc}); position only"
+            )
+            columns = ["time_s", "displacement_m", "ignore", "ignore"]
+            run = read_run(path, columns=columns, metadata=meta)
+            info["read"] = f"read_run(path, columns={columns}, metadata={meta})"
+    info["reading_warnings"] = sorted({str(w.message)[:300] for w in caught})
+    info["rows_used"] = int(run.time.size)
     return run, info
 
 
