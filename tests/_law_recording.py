@@ -147,7 +147,9 @@ def swing_dissipation(
         f = friction + friction_slope * a
 
         def rhs(_t: float, s: np.ndarray) -> list[float]:
-            return [s[1], -(omega**2) * s[0] - drag(s[1]) + f]
+            # moving towards -x the whole half cycle: a force discontinuous at v = 0
+            # (friction) keeps its sign up to the turning point, where the event is
+            return [s[1], -(omega**2) * s[0] - drag(min(s[1], -1e-300)) + f]
 
         def turning(_t: float, s: np.ndarray) -> float:
             return s[1]
@@ -162,10 +164,15 @@ def swing_dissipation(
             atol=1e-16 * a,
             events=turning,
         )
+        if sol.y_events[0].size == 0:
+            return math.nan  # the friction holds the pin at a: no half cycle starts
         return -float(sol.y_events[0][0][0])
 
     out = []
     for amp in np.atleast_1d(np.asarray(amplitudes, dtype=float)):
-        a_s = brentq(lambda a, amp=amp: 0.5 * (a + end(a)) - amp, amp, 2.0 * amp, xtol=1e-15 * amp)
+        low = amp
+        while not math.isfinite(end(low)):  # the smallest start that moves
+            low *= 1.001
+        a_s = brentq(lambda a, amp=amp: 0.5 * (a + end(a)) - amp, low, 2.0 * amp, xtol=1e-15 * amp)
         out.append(mass_kg * omega**2 * (a_s**2 - end(a_s) ** 2))
     return np.array(out)

@@ -207,3 +207,27 @@ def test_a_nonlinear_law_is_fitted_in_the_frame_of_its_own_turning_times():
     truth = swing_dissipation(drag, np.asarray(d["amplitude"]))
     z = (np.asarray(d["mean"]) - truth) / np.asarray(d["sd"])
     assert np.all(np.abs(z) < 3.29), z
+
+
+def test_an_unregistered_friction_law_is_flagged_and_the_turning_points_give_its_dissipation():
+    """Friction that weakens with speed (Stribeck, μ_s = 0.03 falling to μ_k = 0.02
+    over 0.05 m/s; no registered law has it; solve_ivp): the default fit says it
+    misfits, and the ΔE(A) measured from the turning points covers the truth that the
+    law's band misses."""
+    mu_k, mu_s, v_s = 0.02, 0.03, 0.05
+    weakening = (mu_s - mu_k) * LOAD / MASS
+
+    def drag(v: float) -> float:  # the speed-dependent part of the friction, odd in v
+        return 2 * 0.005 * OMEGA * v + math.copysign(weakening * math.exp(-abs(v) / v_s), v)
+
+    run = law_recording(drag, friction=mu_k * LOAD / MASS, static_ratio=1.5, x0=2e-3, seed=7)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = fit(run, seed=1)
+    assert [w for w in caught if issubclass(w.category, MisfitWarning)]
+    measured = result.turning_point_dissipation
+    truth = swing_dissipation(drag, np.asarray(measured["amplitude"]), friction=mu_k * LOAD / MASS)
+    lo, hi = (np.asarray(x) for x in measured["interval"])
+    assert np.all((lo < truth) & (truth < hi)), (lo / truth - 1, hi / truth - 1)
+    law_z = (np.asarray(result.dissipation["mean"]) - truth) / np.asarray(result.dissipation["sd"])
+    assert np.max(np.abs(law_z)) > 10

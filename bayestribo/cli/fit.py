@@ -103,7 +103,8 @@ def json_record(result: Any, prob: float = 0.95) -> dict[str, Any]:
     ``{"run", "model", "law", "law_comparison" (with ``--law auto``), "seed",
     "bayestribo_version", "metadata", "noise",
     "parameters": {NAME: {"mean", "sd", "median", "interval", "prob", "kind", "unit"}},
-    "dissipation": {"amplitude", "mean", "sd", "interval", "prob", "unit", ...}, "diagnostics":
+    "dissipation": {"amplitude", "mean", "sd", "interval", "prob", "unit", ...},
+    "turning_point_dissipation": (the same, measured from the turning points), "diagnostics":
     {"converged", "n_walkers", "n_steps", "autocorr_time_max", "ess_min",
     "acceptance_fraction", ...}, "seconds"}``; the
     diagnostics keep the fit's further entries (R-hat, ESS and τ per parameter, reasons when not
@@ -125,6 +126,7 @@ def json_record(result: Any, prob: float = 0.95) -> dict[str, Any]:
         "channel_calibration": full["channel_calibration"],
         "parameters": full["parameters"],
         "dissipation": full["dissipation"],
+        "turning_point_dissipation": full["turning_point_dissipation"],
         "diagnostics": ordered,
         "prior_sensitivity": full.get("prior_sensitivity"),
         "seconds": full["seconds"],

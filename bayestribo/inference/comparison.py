@@ -129,8 +129,9 @@ class LawComparison:
         if not self.adequate:
             return (
                 f"no law of the {n} compared holds (each misfits the decay); "
-                f"{self.verdict} is the best by PSIS-LOO: its ΔE(A) is the answer, its "
-                "parameters are not a measurement"
+                f"{self.verdict} is the best by PSIS-LOO, but its parameters are not a "
+                "measurement: the answer is ΔE(A) measured from the turning points "
+                "(law-free)"
             )
         others = [law for law in self.as_good if law != self.verdict]
         tie = f", as good as {', '.join(others)}" if others else ""

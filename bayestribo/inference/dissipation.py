@@ -29,6 +29,7 @@ analysed motion (its largest and smallest half cycle included).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import Any
 
@@ -47,6 +48,7 @@ __all__ = [
     "dissipation_band",
     "law_quantities",
     "physical_scale",
+    "turning_point_dissipation",
 ]
 
 #: Number of amplitudes at which ΔE(A) is reported.
@@ -251,3 +253,102 @@ def law_quantities(
                 out[name] = np.array(arr)
                 units[name] = unit
     return out, units
+
+
+#: Fewest half cycles a local fit of :func:`turning_point_dissipation` uses.
+_MIN_LOCAL_CYCLES = 8
+
+
+def turning_point_dissipation(
+    turning_points: NDArray,
+    amplitudes: NDArray,
+    scale: PhysicalScale,
+    *,
+    prob: float = 0.95,
+) -> dict[str, Any] | None:
+    """ΔE(A) from the turning points alone: the law-free answer.
+
+    Each half cycle from the turning point ``Y_n`` to ``Y_{n+1}`` loses
+    ``(Y_n² - Y_{n+1}²)/2`` (times kℓ²) at its swing ``(|Y_n| + |Y_{n+1}|)/2``:
+    whatever dissipates the energy, this is what the motion lost, and twice it is ΔE(A)
+    as :meth:`~bayestribo.model.laws.Law.swing_dissipation` defines it for a law. An
+    error δ of the equilibrium moves each half cycle's loss by ±2δA, alternately, which
+    the local fit averages out. At each reported swing the ratio ΔE/A of the half
+    cycles within a quarter decade of it (at least eight) is fitted as a parabola in A
+    by least squares (a straight line leaves up to 8 standard errors of curvature bias
+    under quadratic drag, whose ratio grows as A²), and the interval is the Student-t
+    interval from the residual scatter: the noise is the recording's as it is, not a
+    model of it (neighbouring half cycles share a turning point, whose error enters
+    them with opposite signs: the scatter then overstates the error of their mean).
+    Much wider than a law's band (every half cycle is its own measurement), it holds
+    whatever the law.
+
+    Parameters
+    ----------
+    turning_points : ndarray
+        Turning points of the analysed window in order, about the equilibrium,
+        dimensionless (units of ℓ).
+    amplitudes : ndarray
+        Swings at which to report ΔE(A) [dimensionless].
+    scale : PhysicalScale
+        Converts amplitudes and energies to physical units.
+    prob : float
+        Probability of the intervals.
+
+    Returns
+    -------
+    dict or None
+        ``amplitude`` [``amplitude_unit``]; ``mean``, ``sd``, ``interval``
+        [``unit``]; ``prob``; ``cycles`` (half cycles in each local fit); ``unit``;
+        ``definition``. None with fewer than eight half cycles.
+    """
+    from scipy.stats import t as student
+
+    prob = check_prob(prob)
+    y = np.asarray(turning_points, dtype=float)
+    a = np.abs(y)
+    n = a.size - 1
+    if n < _MIN_LOCAL_CYCLES:
+        return None
+    loss = 2.0 * 0.5 * (y[:-1] ** 2 - y[1:] ** 2)  # per cycle: twice the half cycle's
+    swing = 0.5 * (a[:-1] + a[1:])
+    ratio = loss / swing
+    log_swing = np.log(swing)
+    amps = np.asarray(amplitudes, dtype=float)
+    mean = np.full(amps.size, np.nan)
+    sd = np.full(amps.size, np.nan)
+    lower = np.full(amps.size, np.nan)
+    upper = np.full(amps.size, np.nan)
+    used = np.zeros(amps.size, dtype=int)
+    for j, amp in enumerate(amps):
+        distance = np.abs(log_swing - math.log(amp))
+        near = distance <= 0.25 * math.log(10.0)
+        if near.sum() < _MIN_LOCAL_CYCLES:
+            near = np.zeros(n, bool)
+            near[np.argsort(distance)[:_MIN_LOCAL_CYCLES]] = True
+        x = (swing[near] - amp) / amp
+        design = np.column_stack([np.ones(x.size), x, x * x])
+        coef, *_ = np.linalg.lstsq(design, ratio[near], rcond=None)
+        dof = x.size - 3
+        resid = ratio[near] - design @ coef
+        s2 = float(resid @ resid) / dof
+        cov = s2 * np.linalg.inv(design.T @ design)
+        se = math.sqrt(max(cov[0, 0], 0.0))
+        q = float(student.ppf(0.5 * (1.0 + prob), dof))
+        mean[j] = amp * coef[0]
+        sd[j] = amp * se
+        lower[j] = amp * (coef[0] - q * se)
+        upper[j] = amp * (coef[0] + q * se)
+        used[j] = int(near.sum())
+    factor = scale.energy_factor
+    return {
+        "amplitude": (amps * scale.length_scale).tolist(),
+        "amplitude_unit": scale.length_unit,
+        "mean": (mean * factor).tolist(),
+        "sd": (sd * factor).tolist(),
+        "interval": [(lower * factor).tolist(), (upper * factor).tolist()],
+        "prob": prob,
+        "cycles": used.tolist(),
+        "unit": scale.energy_unit,
+        "definition": "from the turning points: Y_n^2 - Y_n+1^2 per half cycle, local fit",
+    }

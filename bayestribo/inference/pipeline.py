@@ -46,6 +46,7 @@ from bayestribo.inference.dissipation import (
     dissipation_band,
     law_quantities,
     physical_scale,
+    turning_point_dissipation,
 )
 from bayestribo.inference.likelihood import MODELS, PiLikelihood, ShapeDeparture
 from bayestribo.inference.modes import mode_check, run_or_failure
@@ -63,7 +64,16 @@ from bayestribo.signal.decay import EnergyDecay, energy_decay
 from bayestribo.signal.increments import PiData, pi_data
 from bayestribo.signal.noise import NoiseModel, noise_model
 
-__all__ = ["PreparedRun", "Sampled", "build_posterior", "prepare", "sample", "summarise"]
+__all__ = [
+    "PreparedRun",
+    "Sampled",
+    "build_posterior",
+    "law_frequency",
+    "prepare",
+    "reframe",
+    "sample",
+    "summarise",
+]
 
 #: Sampler settings of a default fit.
 DEFAULT_SETTINGS = SamplerSettings(n_walkers=16, n_ensembles=2, max_steps=20_000)
@@ -611,9 +621,10 @@ def _warn_misfit(
     if compared:
         warnings.warn(
             f"no law compared holds for {run}: the best, {law}, misfits it beyond its "
-            f"noise ({how}). Its ΔE(A), the energy dissipated per cycle, is the answer; "
-            "its parameters are not a measurement of any mechanism, and its intervals are "
-            "too narrow",
+            f"noise ({how}); its parameters are not a measurement of any mechanism and its "
+            "intervals are too narrow. The answer is the energy dissipated per cycle "
+            "measured from the turning points, whatever the law "
+            "(result.turning_point_dissipation, printed as 'turning points (law-free)')",
             MisfitWarning,
             stacklevel=4,
         )
@@ -621,8 +632,9 @@ def _warn_misfit(
     warnings.warn(
         f"the law {law} misfits {run} beyond its noise ({how}): its parameters are not "
         "a measurement and its intervals are too narrow. Fit with law='auto' "
-        "(--law auto): it compares the registered laws, keeps one that holds, and gives "
-        "the law-free ΔE(A) when none does",
+        "(--law auto): it compares the registered laws and keeps one that holds; the "
+        "energy dissipated per cycle measured from the turning points (printed as "
+        "'turning points (law-free)') holds whatever the law",
         MisfitWarning,
         stacklevel=4,
     )
@@ -751,19 +763,16 @@ def summarise(
     scale = physical_scale(scaling, metadata)
     own, own_units = law_quantities(posterior, flat, scale)
     derived = {**derived, **{k: v for k, v in own.items() if k not in derived}}
-    dissipation = dissipation_band(
-        posterior,
-        flat,
-        dissipation_amplitudes(decay.peaks.value / scaling.length_scale),
-        scale,
-        frequency_sd=frequency_sd,
-    )
+    swings = dissipation_amplitudes(decay.peaks.value / scaling.length_scale)
+    dissipation = dissipation_band(posterior, flat, swings, scale, frequency_sd=frequency_sd)
+    measured = turning_point_dissipation(decay.peaks.value / scaling.length_scale, swings, scale)
     noise_info = {**prepared.noise.to_dict(), "description": prepared.noise.describe()}
     attrs = {
         "run_name": name,
         "model": posterior.likelihood.model,
         "law": posterior.law.name,
         "dissipation_json": json.dumps(plain_data(dissipation)),
+        "turning_point_dissipation_json": json.dumps(plain_data(measured)),
         "units_json": json.dumps(own_units),
         "seed": -1 if recorded_seed is None else int(recorded_seed),
         "package_version": __version__,

@@ -127,11 +127,19 @@ class FitResult:
 
     @property
     def dissipation(self) -> dict[str, Any] | None:
-        """Energy dissipated per cycle of harmonic motion, ΔE(A), over the amplitudes of
-        the analysed motion (:func:`bayestribo.inference.dissipation.dissipation_band`):
-        ``amplitude``, ``mean``, ``sd``, ``interval``, ``prob``, ``unit``, ``by_term``;
-        None for fits saved before it was recorded."""
+        """Energy the law dissipates per cycle, ΔE(A), at the swings of the analysed
+        motion (:func:`bayestribo.inference.dissipation.dissipation_band`):
+        ``amplitude``, ``mean``, ``sd``, ``interval``, ``prob``, ``unit``, ``by_term``,
+        ``harmonic_mean``; None for fits saved before it was recorded."""
         return self._attr("dissipation_json", None)
+
+    @property
+    def turning_point_dissipation(self) -> dict[str, Any] | None:
+        """ΔE(A) measured from the turning points alone, whatever the law, at the same
+        swings (:func:`bayestribo.inference.dissipation.turning_point_dissipation`):
+        the law-free answer when no law holds; None with too few cycles or for fits
+        saved before it was recorded."""
+        return self._attr("turning_point_dissipation_json", None)
 
     @property
     def law_comparison(self) -> dict[str, Any] | None:
@@ -288,6 +296,7 @@ class FitResult:
                     for k, v in self.summary(prob).items()
                 },
                 "dissipation": self.dissipation,
+                "turning_point_dissipation": self.turning_point_dissipation,
                 "diagnostics": self.diagnostics,
                 "prior_sensitivity": self.prior_sensitivity,
                 "seconds": self.seconds,
@@ -354,11 +363,11 @@ class FitResult:
         return [f"          {text.describe()}"]
 
     def _dissipation_lines(self) -> list[str]:
-        """ΔE(A) at the largest, middle and smallest amplitude of the analysed motion."""
+        """ΔE(A) at the largest, middle and smallest swing of the analysed motion: the
+        law's, and the one measured from the turning points."""
         d = self.dissipation
         if not d or not d.get("amplitude"):
             return []
-        amp, mean, (lo, hi) = d["amplitude"], d["mean"], d["interval"]
         unit = d["unit"].replace("^2", "²")
         head = (
             f"energy dissipated per cycle ΔE(A) [{unit}], "
@@ -366,12 +375,22 @@ class FitResult:
             + ("" if d["unit"] == "J" else " (ΔE/k: the stiffness is not known)")
         )
         out = [head]
+        measured = self.turning_point_dissipation
+        rows = [(f"law {self.law}", d)]
+        if measured and measured.get("amplitude"):
+            rows.append(("turning points (law-free)", measured))
+        amp = d["amplitude"]
         picks = sorted({len(amp) - 1, len(amp) // 2, 0}, reverse=True)
-        for i in picks:
-            out.append(
-                f"  A = {amp[i]:.4g} {d['amplitude_unit']:<6}{mean[i]:14.6g}   "
-                f"[{lo[i]:.6g}, {hi[i]:.6g}]"
-            )
+        for label, band in rows:
+            out.append(f"  {label}")
+            mean, (lo, hi) = band["mean"], band["interval"]
+            for i in picks:
+                if mean[i] is None or lo[i] is None or hi[i] is None:
+                    continue
+                out.append(
+                    f"    A = {amp[i]:.4g} {d['amplitude_unit']:<6}{mean[i]:14.6g}   "
+                    f"[{lo[i]:.6g}, {hi[i]:.6g}]"
+                )
         return out
 
     def __repr__(self) -> str:
