@@ -197,8 +197,12 @@ true-law fit: coverage of each sampled parameter's 95 % interval and of the 95 %
   band (pooled over the 12 reported amplitudes and the runs) [Clopper-Pearson 95 %];
   sd(z) ± se (1 if calibrated); stribeck has no true law: its row is the default law
 auto: right = the true law, or a law nesting it whose extra terms' 95 % HDI hold 0;
-  ΔE cov = the chosen law's band against the true ΔE(A); SILENT = band misses the truth
-  at some amplitude while adequate, converged and no warning (CONF: |z| > 3.29 there)"""
+  ΔE cov = the chosen law's band against the true ΔE(A) (the energy the true motion
+  loses per cycle at each swing, solve_ivp); TP cov = the ΔE(A) measured from the
+  turning points; eqv = not right, but the true law (or one nesting it) is among the
+  laws as good as the verdict (the data do not tell them apart); SILENT = band misses
+  the truth at some amplitude while adequate, converged and no warning (CONF: |z| >
+  3.29 there)"""
 
 
 def _entropy(case: str, noise: float, index: int, seed: int) -> list[int]:
@@ -248,7 +252,23 @@ def _dissipation_check(result: Any, truth_fn: Any) -> dict[str, Any]:
     sd = np.asarray(d["sd"], dtype=float)
     lo, hi = (np.asarray(b, dtype=float) for b in d["interval"])
     z = (mean - true) / sd
+    measured = getattr(result, "turning_point_dissipation", None)
+    tp = None
+    if measured:
+        m_mean = np.array([np.nan if v is None else v for v in measured["mean"]], dtype=float)
+        m_sd = np.array([np.nan if v is None else v for v in measured["sd"]], dtype=float)
+        m_lo, m_hi = (
+            np.array([np.nan if v is None else v for v in b], dtype=float)
+            for b in measured["interval"]
+        )
+        tp = {
+            "mean": m_mean.tolist(),
+            "sd": m_sd.tolist(),
+            "covered": [bool(a <= t <= b) for a, t, b in zip(m_lo, true, m_hi, strict=True)],
+            "z": ((m_mean - true) / m_sd).tolist(),
+        }
     return {
+        "turning_points": tp,
         "unit": d["unit"],
         "amplitude_m": amps.tolist(),
         "truth": true.tolist(),
@@ -405,6 +425,11 @@ def one_run(case: str, noise: float, index: int, seed: int, max_steps: int) -> d
                 rec["right"], rec["how"] = False, "nesting, an extra term away from 0"
             else:
                 rec["right"], rec["how"] = False, "does not nest the truth"
+            # the true law (or one nesting it) among the laws as good as the verdict:
+            # the data do not tell them apart, and the verdict named it
+            rec["true_law_as_good"] = any(
+                get_law(g).nests(true_law) for g in (rec["as_good"] or []) if g != "free"
+            )
         d = rec["dissipation"]
         quiet = rec["adequate"] and rec["converged"] and not rec["warnings"]
         rec["silently_wrong"] = bool(quiet and not all(d["covered"]))
@@ -444,7 +469,13 @@ def _band_stats(recs: list[dict[str, Any]]) -> dict[str, Any]:
     z = [v for d in fitted for v in d["z"]]
     n_amp = min(len(d["covered"]) for d in fitted)
     by_amp = [_rate(sum(d["covered"][i] for d in fitted), len(fitted)) for i in range(n_amp)]
+    tps = [d["turning_points"] for d in fitted if d.get("turning_points")]
+    tp_cov = [c for d in tps for c in d["covered"]]
     return {
+        "turning_points": {
+            "coverage": _rate(sum(tp_cov), len(tp_cov)),
+            "z": _z_stats([v for d in tps for v in d["z"]]),
+        },
         "coverage": _rate(sum(cov), len(cov)),
         "all_amplitudes_covered": sum(all(d["covered"]) for d in fitted),
         "runs": len(fitted),
@@ -511,6 +542,9 @@ def summarise(records: list[dict[str, Any]]) -> dict[str, Any]:
                 "chosen": chosen,
                 "right": sum(bool(a.get("right")) for a in aok) if CASES[case][0] else None,
                 "right_as_nesting": sum(a.get("how") == "nesting, extra terms hold 0" for a in aok),
+                "wrong_but_true_law_as_good": sum(
+                    (not a.get("right")) and bool(a.get("true_law_as_good")) for a in aok
+                ),
                 "adequate": sum(a["adequate"] for a in aok),
                 "not_converged": sum(not a["converged"] for a in aok),
                 "warned": {
@@ -593,7 +627,8 @@ def _print_table(table: dict[str, Any], conf: dict[str, Any]) -> None:
     print("\nlaw='auto'")
     print(
         f"{'case@noise':32s} {'runs':>4s} {'right':>5s} {'nest':>4s} {'adeq':>4s} "
-        f"{'unconv':>6s} {'SILENT':>6s} {'CONF':>4s} {'ΔE cov %':>15s} {'s/fit':>6s}  chosen"
+        f"{'unconv':>6s} {'SILENT':>6s} {'CONF':>4s} {'ΔE cov %':>15s} {'TP cov %':>15s} "
+        f"{'eqv':>3s} {'s/fit':>6s}  chosen"
     )
     for key, r in table.items():
         a = r["auto"]
@@ -606,6 +641,8 @@ def _print_table(table: dict[str, Any], conf: dict[str, Any]) -> None:
             f"{key:32s} {r['runs']:4d} {right:>5s} {a['right_as_nesting']:4d} "
             f"{a['adequate']:4d} {a['not_converged']:6d} {a['silently_wrong']:6d} "
             f"{a['confidently_silently_wrong']:4d} {_cell(a['dissipation'].get('coverage')):>15s} "
+            f"{_cell(a['dissipation'].get('turning_points', {}).get('coverage')):>15s} "
+            f"{a.get('wrong_but_true_law_as_good', 0):3d} "
             f"{'-' if sec is None else f'{sec:6.1f}':>6s}  {chosen}"
         )
     print("\nConfusion matrix (rows: true law; columns: law chosen by auto; all noise levels)")
