@@ -88,7 +88,13 @@ APPSTAT = EXTERNAL / "appstat2020-harmonic-oscillator"
 SMORZAMENTO = EXTERNAL / "smorzamento-spring-disc"
 SEGMENTS = ("whole", "first half", "second half")
 FITS = ("auto", "default")
-FLAGS = ("MisfitWarning", "ChannelCalibrationWarning", "ConvergenceWarning", "PriorBoundWarning")
+FLAGS = (
+    "MisfitWarning",
+    "ChannelCalibrationWarning",
+    "ConvergenceWarning",
+    "PriorBoundWarning",
+    "FrequencyTrendWarning",
+)
 Z_AGREE = 1.959964
 SPREAD_GOAL = 0.2
 
@@ -244,15 +250,22 @@ def _law_band(result: Any, amplitudes: list[float], reference: float) -> dict[st
 
 
 def one_fit(
-    name: str, which: str, cut_s: float | None, seed: int, probes: list[float], max_steps: int
+    name: str,
+    which: str,
+    cut_s: float | None,
+    seed: int,
+    probes: list[float],
+    max_steps: int,
+    kinds: tuple[str, ...] = FITS,
 ) -> dict[str, Any]:
-    """Fit one segment of one recording with law="auto" and the default law."""
+    """Fit one segment of one recording with law="auto" and the default law (those of
+    ``kinds``)."""
     from bayestribo import fit
 
     out: dict[str, Any] = {"recording": name, "segment": which, "seed": seed}
     run = segment(load(name)[0], which, cut_s)
     reference = None
-    for kind in FITS:
+    for kind in kinds:
         rec: dict[str, Any] = {}
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
@@ -308,6 +321,7 @@ def one_fit(
         rec["dissipation"] = {
             k: band[k] for k in ("amplitude", "mean", "sd", "interval", "unit", "by_term")
         }
+        rec["turning_point_dissipation"] = result.turning_point_dissipation
         if reference is None:
             from bayestribo.inference import prepare
 
@@ -585,6 +599,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--max-steps", type=int, default=20_000)
     parser.add_argument("--recordings", nargs="*", default=names, choices=names)
     parser.add_argument("--segments", nargs="*", default=list(SEGMENTS), choices=list(SEGMENTS))
+    parser.add_argument("--fits", nargs="*", default=list(FITS), choices=list(FITS))
     parser.add_argument(
         "--output", default="real", help="results/NAME.json, or a path ending in .json"
     )
@@ -605,6 +620,7 @@ def main(argv: list[str] | None = None) -> int:
         "n_walkers": 16,
         "n_ensembles": 2,
         "segments": args.segments,
+        "fits": args.fits,
         "recordings": {
             n: str(recordings()[n].relative_to(EXTERNAL.parent.parent)) for n in args.recordings
         },
@@ -689,7 +705,8 @@ def main(argv: list[str] | None = None) -> int:
 
     with ProcessPoolExecutor(max_workers=args.workers, initializer=niced_worker) as pool:
         futures = {
-            pool.submit(one_fit, n, w, c, s, p, args.max_steps): (n, w, s) for n, w, c, s, p in jobs
+            pool.submit(one_fit, n, w, c, s, p, args.max_steps, tuple(args.fits)): (n, w, s)
+            for n, w, c, s, p in jobs
         }
         for k, future in enumerate(as_completed(futures), 1):
             n, w, s = futures[future]
