@@ -8,8 +8,8 @@ Examples::
 
 The exit status is 0 for a converged fit, 1 when the sampler did not converge, a
 posterior piles on a physical bound of its prior, or the model misfits the run beyond
-what its intervals carry (the result is still printed, with the reason), 2 for bad
-input.
+what its intervals carry (the result is still printed, with the reason; a frequency
+trend is carried into the intervals and leaves it 0), 2 for bad input.
 """
 
 from __future__ import annotations
