@@ -177,3 +177,17 @@ def test_an_executor_gives_the_serial_analysis(analysis):
         )
     assert parallel.group_rows() == analysis.group_rows()
     assert parallel.trend_rows() == analysis.trend_rows()
+
+
+def test_a_run_without_a_load_is_not_taken_for_a_run_in_air():
+    """A sidecar whose load is missing (a typo the reader did not catch, or left out):
+    the fit has a friction displacement, not μ_k; the run is excluded for want of a
+    load, and ζ₀ is the air runs' alone."""
+    fits = _campaign(np.random.default_rng(2))
+    meta = {"run_id": "g-typo", "lubricant": "glycerol", **RIG}
+    draws = {"zeta": np.full(400, 0.0242), "friction_displacement": np.full(400, 6e-6)}
+    fits.append(_Fit(draws, meta))
+    result = analyse_campaign(fits, seed=1, max_steps=2000)
+    assert result.zeta0.pooled.runs == ("air-r0", "air-r1", "air-r2")
+    reasons = {e["run"]: e["reason"] for e in result.excluded}
+    assert "'load_N'" in reasons["g-typo"]

@@ -22,8 +22,19 @@ from bayestribo.io.sidecar import read_sidecar
         ("[" * 100_000 + "]" * 100_000, "nested too deeply"),
         ('{"load_N": "heavy"}', "metadata 'load_N'"),
         ("[1, 2]", "one JSON object"),
+        ('{"laod_N": 0.59}', "'laod_N' is not a known key; did you mean 'load_N'"),
+        ('{"Mass_kg": 0.035}', "did you mean 'mass_kg'"),
     ],
-    ids=["400 digits", "5000 digits", "deep value", "deep array", "text load", "array"],
+    ids=[
+        "400 digits",
+        "5000 digits",
+        "deep value",
+        "deep array",
+        "text load",
+        "array",
+        "typo",
+        "case",
+    ],
 )
 def test_absurd_sidecars_are_refused_naming_what_is_wrong(tmp_path, text, match):
     path = tmp_path / "r.json"

@@ -42,10 +42,16 @@ DEFAULT_BY: tuple[str, ...] = ("lubricant", "water_mass_fraction", "load_N")
 
 
 def _has_friction(result: Any) -> bool:
-    names = getattr(result, "parameter_names", None)
-    if names is not None and "mu_k" not in names:
+    """A run with contact: a load that is not an explicit 0, and a friction fitted (as
+    μ_k with a load, or as a friction displacement without one). A run whose load is
+    missing is never taken for a run in air: it has a friction displacement, and is
+    excluded for want of a load to group by."""
+    if getattr(result, "metadata", {}).get("load_N") == 0:
         return False
-    return getattr(result, "metadata", {}).get("load_N") != 0
+    names = getattr(result, "parameter_names", None)
+    if names is not None and not {"mu_k", "friction_displacement"} & set(names):
+        return False
+    return True
 
 
 def _run_summary(result: Any, prob: float) -> dict[str, Any]:

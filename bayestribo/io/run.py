@@ -217,8 +217,29 @@ def check_metadata(metadata: Mapping[str, Any] | None, where: str | None = None)
         if not isinstance(key, str):
             raise RunFormatError(f"metadata keys must be text strings, got {key!r}", where)
         spec = METADATA_KEYS.get(key)
+        if spec is None:
+            _check_not_a_typo(key, where)
         out[key] = _typed(key, spec, value, where) if spec else _plain(value, key, where)
     return out
+
+
+def _check_not_a_typo(key: str, where: str | None) -> None:
+    """Refuse a key that is a known key misspelt (``laod_N``, ``Load_N``, ``load``):
+    kept as free metadata it would leave the known key missing, and a missing load
+    would make a run with contact look like one without."""
+    import difflib
+
+    folded = {k.lower(): k for k in METADATA_KEYS}
+    close = folded.get(key.lower()) or next(
+        iter(difflib.get_close_matches(key, list(METADATA_KEYS), n=1, cutoff=0.8)), None
+    )
+    if close is not None and close != key:
+        raise RunFormatError(
+            f"metadata key {key!r} is not a known key; did you mean {close!r} "
+            f"({METADATA_KEYS[close].description})? Rename it (a key of your own must not "
+            "be this close to a known one)",
+            where,
+        )
 
 
 def _signal(name: str, values: ArrayLike | None, where: str | None) -> NDArray | None:
