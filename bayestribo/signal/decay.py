@@ -74,6 +74,7 @@ from bayestribo.errors import RecordingError
 from bayestribo.model.scaling import Rig, Scaling
 from bayestribo.signal.motion import THRESHOLD, block_noise, check_turning_points, motion_span
 from bayestribo.signal.peaks import Peaks, _dominant_period, estimate_noise, find_peaks
+from bayestribo.signal.quantisation import QUANTISATION_NOISE_FACTOR, quantisation_step
 from bayestribo.signal.spectrum import NoiseSpectrum, RestNoise, fit_line, noise_spectrum
 
 __all__ = [
@@ -112,12 +113,18 @@ class NoiseLevels:
         quiescent segment.
     n_samples : int
         Number of quiescent samples used (0 for ``"signal differences"``).
+    displacement_step, velocity_step : float or None
+        The step a channel is quantised in (:func:`bayestribo.signal.quantisation.
+        quantisation_step`), None when it is not; the channel's noise is then at least
+        step/√12 (the rounding error, which a channel flat at rest does not show).
     """
 
     displacement: float | None
     velocity: float | None
     source: str
     n_samples: int
+    displacement_step: float | None = None
+    velocity_step: float | None = None
 
 
 @dataclass(frozen=True)
@@ -506,12 +513,27 @@ def _noise(
         if np.count_nonzero(mask) >= MIN_QUIET_SAMPLES:
             parts.append(mask)
             names.append(name)
+    steps = {
+        name: None if s is None or derived == name else quantisation_step(s)
+        for name, s in (("displacement", x), ("velocity", v))
+    }
+
+    def floored(name: str, level: float | None) -> float | None:
+        step = steps[name]
+        if level is None or step is None:
+            return level
+        return max(level, step * QUANTISATION_NOISE_FACTOR)
+
     if not parts:
         return NoiseLevels(
-            displacement=estimate_noise(x) if derived != "displacement" else None,
-            velocity=estimate_noise(v) if derived != "velocity" else None,
+            displacement=floored(
+                "displacement", estimate_noise(x) if derived != "displacement" else None
+            ),
+            velocity=floored("velocity", estimate_noise(v) if derived != "velocity" else None),
             source="signal differences",
             n_samples=0,
+            displacement_step=steps["displacement"],
+            velocity_step=steps["velocity"],
         )
 
     def pooled(s: NDArray) -> float:
@@ -520,10 +542,12 @@ def _noise(
         return float(np.sqrt(np.mean(dev * dev)))
 
     return NoiseLevels(
-        displacement=pooled(x),
-        velocity=pooled(v),
+        displacement=floored("displacement", pooled(x)),
+        velocity=floored("velocity", pooled(v)),
         source=" and ".join(names),
         n_samples=int(sum(np.count_nonzero(m) for m in parts)),
+        displacement_step=steps["displacement"],
+        velocity_step=steps["velocity"],
     )
 
 

@@ -69,6 +69,10 @@ class NoiseModel:
         then takes the increments' variances from its spectrum.
     lines_Hz : tuple of float
         Mains lines found in the noise at rest [Hz].
+    quantisation_steps : tuple
+        The step of the displacement and of the velocity when quantised (None when
+        not): the measured noise is at least step/√12
+        (:mod:`bayestribo.signal.quantisation`).
     spectrum_rel_se : float or None
         For coloured noise, the relative standard error of its level in the signal
         band as measured at rest (:attr:`~bayestribo.signal.spectrum.NoiseSpectrum.band_rel_se`,
@@ -88,6 +92,7 @@ class NoiseModel:
     coloured: bool = False
     lines_Hz: tuple[float, ...] = ()
     spectrum_rel_se: float | None = None
+    quantisation_steps: tuple[float | None, float | None] = (None, None)
 
     @property
     def exceeds_nominal(self) -> bool:
@@ -116,6 +121,9 @@ class NoiseModel:
             text += ")"
         if self.lines_Hz:
             text += "; mains line(s) at " + ", ".join(f"{f:.2f}" for f in self.lines_Hz) + " Hz"
+        for ch, step in zip(("displacement", "velocity"), self.quantisation_steps, strict=True):
+            if step is not None:
+                text += f"; {ch} quantised in steps of {step:.3g} (σ >= step/√12)"
         return text
 
     def to_dict(self) -> dict[str, Any]:
@@ -194,6 +202,10 @@ def noise_model(
         coloured=bool(rest is not None and rest.coloured),
         lines_Hz=() if rest is None else tuple(float(f) for f in rest.lines_Hz),
         spectrum_rel_se=_spectrum_rel_se(rest),
+        quantisation_steps=(
+            getattr(meas, "displacement_step", None),
+            getattr(meas, "velocity_step", None),
+        ),
     )
 
 

@@ -1,0 +1,82 @@
+"""The digitiser's step: a channel recorded (or written) in multiples of a step q.
+
+A channel quantised in steps q carries a rounding error spread uniformly over one
+step, of standard deviation q/√12, on every sample: a noise the rest segments may not
+show (a signal at rest sits on one level, and its measured noise is then 0) and the
+data sheet's resolution may not state (a 12-bit digitiser, or a file written with few
+decimals: the AppStat2020 recordings hold three). The noise model
+(:mod:`bayestribo.signal.noise`) therefore uses at least q/√12 for a quantised
+channel.
+
+The step is found from the sample-to-sample changes: the smallest non-zero change, or
+a whole fraction of it (down to a tenth), is the candidate, and the channel is
+quantised when nearly all changes are whole multiples of it. A channel of continuous
+values (any real noise above the printing precision) fails the test: its changes are
+not multiples of the smallest one.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+__all__ = ["QUANTISATION_NOISE_FACTOR", "quantisation_step"]
+
+#: Standard deviation of the rounding error per step: 1/√12.
+QUANTISATION_NOISE_FACTOR = 1.0 / math.sqrt(12.0)
+#: Changes needed to call a step.
+_MIN_CHANGES = 20
+#: Fraction of the changes that must be whole multiples of the step.
+_WHOLE_FRACTION = 0.99
+#: How far from a whole multiple a change may be (rounding of the decimal text).
+_TOLERANCE = 1e-3
+#: The smallest change may be up to this many steps.
+_MAX_DIVISOR = 10
+
+
+def quantisation_step(values: ArrayLike) -> float | None:
+    """The step a channel's values are multiples of, or None when they are not quantised.
+
+    Parameters
+    ----------
+    values : array_like
+        The channel's samples (finite).
+
+    Returns
+    -------
+    float or None
+        The step q [signal unit], when at least 99 % of the non-zero sample-to-sample
+        changes (at least 20 of them) are within 1e-3 of whole multiples of the smallest
+        one or of a whole fraction of it (1/2 ... 1/10, the largest that holds); None
+        otherwise.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> quantisation_step(np.round(np.sin(np.arange(100) / 5.0), 3))
+    0.001
+    >>> quantisation_step(np.sin(np.arange(100) / 5.0)) is None
+    True
+    """
+    x = np.asarray(values, dtype=float)
+    x = x[np.isfinite(x)]
+    if x.size < 2:
+        return None
+    change = np.abs(np.diff(x))
+    change = change[change > 0]
+    if change.size < _MIN_CHANGES:
+        return None
+    smallest = float(change.min())
+    # the smallest change may be several steps (no sample moved by one): try its
+    # whole fractions, largest step first
+    for k in range(1, _MAX_DIVISOR + 1):
+        step = smallest / k
+        ratio = change / step
+        whole = np.abs(ratio - np.round(ratio)) <= _TOLERANCE
+        if np.mean(whole) >= _WHOLE_FRACTION:
+            # refined from every change (the smallest carries the decimal text's rounding)
+            n = np.round(ratio)
+            return float(round(float(np.sum(change) / np.sum(n)), 15))
+    return None

@@ -1,0 +1,49 @@
+"""A quantised channel: its step is found, and the noise model uses at least step/√12."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from bayestribo.io.run import Run
+from bayestribo.signal.decay import energy_decay
+from bayestribo.signal.noise import noise_model
+from bayestribo.signal.quantisation import QUANTISATION_NOISE_FACTOR, quantisation_step
+from bayestribo.synthetic import simulate
+from bayestribo.synthetic.setup import Sensor
+
+
+@pytest.mark.parametrize("step", [1e-3, 2.5e-6, 0.1])
+def test_the_step_of_rounded_values_is_found(step):
+    rng = np.random.default_rng(1)
+    x = np.round(np.cumsum(rng.normal(0, 3 * step, 500)) / step) * step
+    assert quantisation_step(x) == pytest.approx(step, rel=1e-9)
+
+
+def test_continuous_values_have_no_step():
+    rng = np.random.default_rng(2)
+    assert quantisation_step(rng.normal(0, 1e-6, 1000)) is None
+    # a noise-free motion at rest is flat but moves in continuous steps
+    assert quantisation_step(np.r_[np.zeros(100), np.sin(np.arange(300) / 7.0)]) is None
+    assert quantisation_step([1.0, 1.0, 1.0]) is None
+
+
+def test_a_digitiser_coarser_than_the_stated_resolution_sets_the_noise():
+    """A displacement rounded to 2 µm (an 8-bit digitiser on a 0.5 mm range), flat at
+    rest, and a data sheet resolution of 0.15 µm: the noise used is the rounding
+    error, 2 µm/√12, not 0 (the rest) and not 0.15 µm."""
+    step = 2e-6
+    run = simulate(sensor=Sensor(displacement_noise_m=0.0, velocity_noise_m_per_s=1.5e-8), seed=3)
+    rounded = Run(
+        run.time,
+        np.round(run.displacement / step) * step,
+        run.velocity,
+        dict(run.metadata),
+    )
+    decay = energy_decay(rounded.time, rounded.displacement, rounded.velocity, rig=rounded.rig())
+    assert decay.noise.displacement_step == pytest.approx(step, rel=1e-9)
+    assert decay.noise.velocity_step is None
+    model = noise_model(decay, dict(rounded.metadata))
+    assert model.displacement == pytest.approx(step * QUANTISATION_NOISE_FACTOR, rel=1e-6)
+    assert model.displacement > 3 * model.nominal_displacement
+    assert "quantised in steps of 2e-06" in model.describe()
