@@ -76,6 +76,7 @@ from bayestribo.signal.motion import THRESHOLD, block_noise, check_turning_point
 from bayestribo.signal.peaks import Peaks, _dominant_period, estimate_noise, find_peaks
 from bayestribo.signal.quantisation import QUANTISATION_NOISE_FACTOR, quantisation_step
 from bayestribo.signal.spectrum import NoiseSpectrum, RestNoise, fit_line, noise_spectrum
+from bayestribo.signal.timing import clock
 
 __all__ = [
     "EnergyDecay",
@@ -117,6 +118,10 @@ class NoiseLevels:
         The step a channel is quantised in (:func:`bayestribo.signal.quantisation.
         quantisation_step`), None when it is not; the channel's noise is then at least
         step/√12 (the rounding error, which a channel flat at rest does not show).
+    timing_jitter_s : float
+        Standard deviation of the time stamps about a regular grid [s]
+        (:mod:`bayestribo.signal.timing`), recorded: it adds no noise to the energy
+        to first order (see there).
     """
 
     displacement: float | None
@@ -125,6 +130,7 @@ class NoiseLevels:
     n_samples: int
     displacement_step: float | None = None
     velocity_step: float | None = None
+    timing_jitter_s: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -268,12 +274,16 @@ def check_time(t: ArrayLike) -> NDArray:
     Returns
     -------
     ndarray
+        The time stamps; for stamps jittered about a regular grid (within a quarter
+        step, :mod:`bayestribo.signal.timing`), that grid.
 
     Raises
     ------
     RecordingError
         Naming the first bad sample: too few samples, not finite, not increasing, or a
-        step off the median by more than :data:`TIME_STEP_TOLERANCE` (relative).
+        step off the median by more than :data:`TIME_STEP_TOLERANCE` (relative) where
+        the stamps leave the regular grid by more than a quarter step (a gap; stamps
+        jittered about the grid pass, :mod:`bayestribo.signal.timing`).
     """
     t = np.asarray(t, dtype=float)
     if t.ndim != 1:
@@ -294,6 +304,9 @@ def check_time(t: ArrayLike) -> NDArray:
     step = float(np.median(dt))
     off = np.flatnonzero(np.abs(dt - step) > TIME_STEP_TOLERANCE * step)
     if off.size:
+        stamps = clock(t)
+        if stamps.regular:  # jittered about a regular grid: the grid is the clock
+            return stamps.grid(t.size)
         i = int(off[0]) + 1
         raise RecordingError(
             f"time stamps must be regular: the step before sample {i} is {dt[i - 1]!r} s, "
@@ -499,6 +512,7 @@ def _noise(
     stop: float | None,
     period: float,
     derived: str | None,
+    jitter: float = 0.0,
 ) -> NoiseLevels:
     """Noise of each channel in the quiescent segments (see the module notes).
 
@@ -534,6 +548,7 @@ def _noise(
             n_samples=0,
             displacement_step=steps["displacement"],
             velocity_step=steps["velocity"],
+            timing_jitter_s=jitter,
         )
 
     def pooled(s: NDArray) -> float:
@@ -548,6 +563,7 @@ def _noise(
         n_samples=int(sum(np.count_nonzero(m) for m in parts)),
         displacement_step=steps["displacement"],
         velocity_step=steps["velocity"],
+        timing_jitter_s=jitter,
     )
 
 
@@ -725,7 +741,10 @@ def energy_decay(
         skipped ones, or not half a period apart), "energy decay: the oscillation
         does not decay".
     """
-    t = check_time(t)
+    stamps = np.asarray(t, dtype=float)
+    t = check_time(stamps)
+    # stamps jittered about a regular grid are replaced by it (bayestribo.signal.timing)
+    jitter = 0.0 if t is stamps else clock(stamps).jitter
     x = _check_signal("displacement", displacement, t.size)
     v = _check_signal("velocity", velocity, t.size)
     if x is None and v is None:
@@ -750,6 +769,7 @@ def energy_decay(
             raise RecordingError(f"release: no motion found: the {name} signal is constant")
 
     options = dict(
+        jitter=jitter,
         rig=rig,
         skip_oscillations=skip_oscillations,
         use_nominal_frequency=use_nominal_frequency,
@@ -808,6 +828,7 @@ def _analyse(
     skip_oscillations: int,
     use_nominal_frequency: bool,
     frequency_Hz: float | None,
+    jitter: float,
     skip_turning_points: int | None,
     min_turning_points: int,
     offset: float | Literal["auto", "constant"] | None,
@@ -913,7 +934,7 @@ def _analyse(
         scaling = Scaling(omega, 1.0, friction_defined=False)
 
     rest_until = None if released_at is None else release
-    noise = _noise(t, x, v, rest_until, stop_time, period, derived)
+    noise = _noise(t, x, v, rest_until, stop_time, period, derived, jitter)
     rest_noise = _rest_noise(t, x, v, rest_until, stop_time, period, derived)
     if derived is None:
         quiet = _quiet_segments(t, rest_until, stop_time, 0.25 * period)

@@ -1,4 +1,5 @@
-"""A quantised channel: its step is found, and the noise model uses at least step/√12."""
+"""The digitiser in the record: a quantised channel (its step found, the noise at least
+step/√12), and time stamps jittered about a regular clock (read on the clock)."""
 
 from __future__ import annotations
 
@@ -47,3 +48,26 @@ def test_a_digitiser_coarser_than_the_stated_resolution_sets_the_noise():
     assert model.displacement == pytest.approx(step * QUANTISATION_NOISE_FACTOR, rel=1e-6)
     assert model.displacement > 3 * model.nominal_displacement
     assert "quantised in steps of 2e-06" in model.describe()
+
+
+def test_jittered_time_stamps_are_the_regular_clock_and_a_gap_is_refused():
+    """±2 µs of jitter on a 10 kHz time column (a logger's software stamps): read, the
+    samples taken on the regular grid the stamps scatter about, and the fit is the
+    fit of the record without jitter. A missing sample is still refused."""
+    from bayestribo import fit
+    from bayestribo.errors import BayestriboError
+
+    run = simulate(seed=4)
+    rng = np.random.default_rng(1)
+    stamps = run.time + rng.uniform(-2e-6, 2e-6, run.time.size)
+    jittered = Run(stamps, run.displacement, run.velocity, dict(run.metadata))
+    decay = energy_decay(stamps, run.displacement, run.velocity, rig=run.rig())
+    assert 1e-6 < decay.noise.timing_jitter_s < 1.3e-6  # uniform ±2 µs: 2/√3 µs
+    np.testing.assert_allclose(np.diff(decay.t), 1e-4, rtol=1e-6)
+    a, b = fit(run, seed=1), fit(jittered, seed=1)
+    for name in ("zeta", "mu_k"):
+        sa, sb = a.summary()[name], b.summary()[name]
+        assert abs(sa.mean - sb.mean) < 0.1 * sa.sd, name
+    gap = np.delete(np.arange(run.time.size), 3000)
+    with pytest.raises(BayestriboError, match="regular"):
+        fit(Run(run.time[gap], run.displacement[gap], run.velocity[gap], dict(run.metadata)))
