@@ -181,4 +181,5 @@ def test_a_misfit_exits_1_with_its_warning(tmp_path, capsys) -> None:
     path = write_run(run, tmp_path / "drag.csv")
     assert main(["fit", str(path), "--max-steps", "3000"]) == 1
     err = capsys.readouterr().err
-    assert "bayestribo fit: warning: the model misfits" in err
+    assert "bayestribo fit: warning: the law viscous+coulomb misfits" in err
+    assert "--law auto" in err
