@@ -191,3 +191,19 @@ def test_a_run_without_a_load_is_not_taken_for_a_run_in_air():
     assert result.zeta0.pooled.runs == ("air-r0", "air-r1", "air-r2")
     reasons = {e["run"]: e["reason"] for e in result.excluded}
     assert "'load_N'" in reasons["g-typo"]
+
+
+def test_names_with_dollar_signs_are_drawn_as_written(tmp_path):
+    """A lubricant named like mathematics (``glycerol $\\alpha_$``) draws as written in
+    the campaign figures instead of failing inside matplotlib."""
+    pytest.importorskip("matplotlib")
+    from bayestribo.campaign.figures import save_figures
+
+    fits = _campaign(np.random.default_rng(2))
+    for f in fits:
+        if f.metadata["lubricant"] == "glycerol":
+            f.metadata["lubricant"] = "glycerol $\\alpha_$"
+            f.metadata["run_id"] = "$" + f.metadata["run_id"]
+    result = analyse_campaign(fits, seed=1, max_steps=2000)
+    paths = save_figures(result, tmp_path)
+    assert len(paths) == 3 and all(p.stat().st_size > 0 for p in paths)

@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from bayestribo._text import literal
 from bayestribo.campaign.analysis import CampaignAnalysis
 from bayestribo.summary import summarize
 
@@ -67,7 +68,7 @@ def _series_label(analysis: CampaignAnalysis, value: Any) -> str:
         for k, v in zip(analysis.by, values, strict=False)
         if k in keys
     ]
-    return ", ".join(pairs) or "all"
+    return literal(", ".join(pairs) or "all")
 
 
 def _ticks(ax: Any, axis: str = "x") -> None:
@@ -191,9 +192,9 @@ def plot_forest(
     _decades(axes[2])
     axes[2].set_xlabel("interval width / median [-]\n(o: ζ, △: μ_k)")
     axes[2].grid(alpha=0.3)
-    axes[0].set_yticks(y, [str(r["run_id"]) for r in runs], fontsize="x-small")
+    axes[0].set_yticks(y, [literal(r["run_id"]) for r in runs], fontsize="x-small")
     handles = [
-        axes[0].plot([], [], "o-", color=colour[v], label=f"{analysis.covariate} = {v}")[0]
+        axes[0].plot([], [], "o-", color=colour[v], label=literal(f"{analysis.covariate} = {v}"))[0]
         for v in loads
     ]
     if truth:

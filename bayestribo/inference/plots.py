@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from bayestribo._text import literal
 from bayestribo.inference.result import FitResult
 
 __all__ = ["LABELS", "corner_plot", "pi_plot", "plotted_names", "trace_plot"]
@@ -225,7 +226,7 @@ def pi_plot(result: FitResult, axes: Sequence[Any], prob: float = 0.95) -> Any:
     ax_pi.set_yscale("log")
     ax_pi.set_ylabel("Π(τ) = ∫_τ E dτ' [-]")
     ax_pi.legend(fontsize=8)
-    ax_pi.set_title(f"{result.run_name} ({result.model} model)", fontsize=9)
+    ax_pi.set_title(literal(f"{result.run_name} ({result.model} model)"), fontsize=9)
 
     inc_rep = _increments(rep)
     sd = np.std(inc_rep, axis=0, ddof=1)

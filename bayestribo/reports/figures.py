@@ -14,6 +14,8 @@ from typing import Any
 
 import numpy as np
 
+from bayestribo._text import literal
+
 __all__ = ["plot_estimates"]
 
 _MARKERS = ("o", "^", "s", "D")
@@ -111,5 +113,5 @@ def plot_estimates(
     _decades(width_ax)
     width_ax.set_xlabel("interval width / span of the value axis [-]")
     width_ax.legend(fontsize="small", loc="best")
-    value_axes[0].set_yticks(y, labels)
+    value_axes[0].set_yticks(y, [literal(label) for label in labels])
     return axes
