@@ -19,7 +19,7 @@ __all__ = ["register"]
 
 def register(subparsers: Any) -> None:
     """Add the ``estimate`` sub-command."""
-    from bayestribo.estimators.all import METHODS
+    from bayestribo.estimators.methods import METHODS
 
     p = subparsers.add_parser(
         "estimate",

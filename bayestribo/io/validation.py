@@ -35,7 +35,6 @@ from numpy.typing import NDArray
 
 from bayestribo.errors import RecordingError
 from bayestribo.io.run import DISPLACEMENT, TIME, VELOCITY, Run
-from bayestribo.signal.timing import clock
 
 __all__ = [
     "CLIP_SAMPLES",
@@ -95,6 +94,13 @@ def _check_finite(run: Run, where: str | None) -> None:
             )
 
 
+def _jittered(t: NDArray) -> bool:
+    """Stamps that scatter about a regular grid (:mod:`bayestribo.signal.timing`)."""
+    from bayestribo.signal.timing import clock
+
+    return clock(t).regular
+
+
 def _check_time(run: Run, where: str | None, time_rtol: float) -> float:
     t = run.time
     step = np.diff(t)
@@ -109,7 +115,7 @@ def _check_time(run: Run, where: str | None, time_rtol: float) -> float:
     median = float(np.median(step))
     deviation = np.abs(step - median) / median
     worst = int(np.argmax(deviation))
-    if deviation[worst] > time_rtol and not clock(t).regular:  # jitter about a grid passes
+    if deviation[worst] > time_rtol and not _jittered(t):  # jitter about a grid passes
         raise _fail(
             f"field {TIME!r} is irregular: the step from sample {worst} to {worst + 1} is "
             f"{step[worst]!r} s but the median step is {median!r} s; expected regular "

@@ -1,0 +1,30 @@
+"""The command line starts without loading what only a job needs."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+HEAVY = ("scipy.stats", "scipy.optimize", "arviz", "numba", "emcee", "matplotlib")
+
+
+def test_help_loads_none_of_the_heavy_modules():
+    """``bayestribo --help`` (and each command's ``--help``) lists the commands and
+    their choices (the estimators' names, the laws') without SciPy's statistics and
+    optimisers, ArviZ, numba, emcee or matplotlib."""
+    code = (
+        "import json, sys, contextlib, io\n"
+        "from bayestribo.cli import main\n"
+        "for argv in (['--help'], ['estimate', '--help'], ['fit', '--help']):\n"
+        "    with contextlib.redirect_stdout(io.StringIO()):\n"
+        "        try:\n"
+        "            main(argv)\n"
+        "        except SystemExit:\n"
+        "            pass\n"
+        f"print(json.dumps([m for m in {HEAVY!r} if m in sys.modules]))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
+    )
+    assert json.loads(out.stdout.strip().splitlines()[-1]) == []
