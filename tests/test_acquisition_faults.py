@@ -564,3 +564,21 @@ def test_the_same_run_recorded_twice_is_refused_before_any_run_file(tmp_path, ca
     assert "are exactly those of run" in lines[1] and "run files not written" in lines[1]
     assert len(list(tmp_path.glob("*.csv"))) == 1 and len(list(tmp_path.glob("*.raw"))) == 2
     assert len(list_runs(tmp_path / "catalog.sqlite")) == 1
+
+
+def test_a_board_that_sends_only_garbage_times_out_from_its_last_valid_frame(tmp_path):
+    """Bytes keep arriving but none is a frame: the run stops after the silence timeout
+    counted from the last valid frame (not from the last byte), keeping what came."""
+    with simulated(FaultPlan(babble_after=5, garbage_bytes=40)) as (sim, path):
+        result = acquire_run(path, tmp_path, INPUTS, timeout_s=0.3)
+        sim.stop()
+        # every byte received is in the raw log (the board babbles on after the host
+        # stopped reading: those bytes were never received)
+        raw = result.files.raw.read_bytes()
+        assert len(raw) > sum(f.size for f in sim.frames) and bytes(sim.sent).startswith(raw)
+        index, counts = sim.intact_samples()
+        assert np.array_equal(result.run.sample_index, index)
+        assert np.array_equal(result.run.counts, counts)
+    assert "no valid frame for 0.3 s" in result.fault
+    assert not result.complete
+    assert result.run.report["samples_received"] == 5 * 32

@@ -194,6 +194,9 @@ class FaultPlan:
         Never answer anything.
     garbage_bytes : int
         Length of each garbage burst.
+    babble_after : int or None
+        After this many DATA frames send nothing but garbage bursts, every 10 ms, until
+        stopped (a board whose firmware went astray).
     """
 
     drop: frozenset[int] = frozenset()
@@ -205,6 +208,7 @@ class FaultPlan:
     corrupt_header: bool = False
     silent: bool = False
     garbage_bytes: int = 64
+    babble_after: int | None = None
 
 
 class SentFrame(NamedTuple):
@@ -488,6 +492,10 @@ class SimulatedInstrument:
                 continue
             n = min(spf, remaining)
             counts = self._samples(index, n, release)
+            if self.faults.babble_after is not None and number >= self.faults.babble_after:
+                while not self._stop.wait(0.01):
+                    self._send(self._garbage())
+                return
             if number in self.faults.stall:
                 if self._stop.wait(self.faults.stall[number]):
                     return

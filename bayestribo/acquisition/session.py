@@ -162,6 +162,8 @@ class _Conversation:
         self.assembler = RunAssembler(FileSource(raw.path), sink=None)
         self.assembler.on_header = self._start_csv
         self.last_byte = time.monotonic()
+        self.last_frame = self.last_byte
+        self.bytes_at_last_frame = 0
 
     def _start_csv(self, header: RunHeader) -> None:
         try:
@@ -183,8 +185,13 @@ class _Conversation:
         if data:
             self.raw.write(data)
             self.last_byte = time.monotonic()
+            frames = 0
             for frame in self.parser.feed(data):
                 self.assembler.add(frame)
+                frames += 1
+            if frames:
+                self.last_frame = self.last_byte
+                self.bytes_at_last_frame = self.raw.bytes_written
         return len(data)
 
     def wait_for(self, done: Callable[[], bool], what: str, timeout_s: float | None = None) -> None:
@@ -493,6 +500,15 @@ def _stream(
             raise AcquisitionTimeout(
                 f"{talk.link.url}: device stopped sending for {talk.timeout_s:g} s "
                 f"in the middle of the run"
+            )
+        if now - talk.last_frame > talk.timeout_s:
+            # bytes arrive but none makes a frame: the silence timeout counts from the
+            # last valid frame, not the last byte
+            noise = talk.raw.bytes_written - talk.bytes_at_last_frame
+            raise AcquisitionTimeout(
+                f"{talk.link.url}: no valid frame for {talk.timeout_s:g} s in the middle of "
+                f"the run ({noise} bytes since the last one, none of them a frame: check the "
+                "baud rate and the device's firmware)"
             )
         if progress is not None and now >= next_report:
             next_report = now + interval_s
