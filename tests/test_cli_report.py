@@ -210,3 +210,15 @@ def test_out_may_name_a_folder_as_for_every_other_command(tmp_path, captured):
     assert captured[-1][1]["figure_dir"] == str(
         (folder / "glycerol-N0.31-r1-report-figures").resolve()
     )
+
+
+def test_a_run_report_takes_the_fit_options_of_the_fit_command(tmp_path, captured):
+    """--law, --notch and --discrepancy reach the notebook's fit (one answer per
+    question); a campaign folder's report refuses them, naming where they go."""
+    if not RUN.is_file():
+        pytest.skip("the bundled campaign data/ is absent")
+    argv = ["report", str(RUN), "--out", str(tmp_path / "r.html"), "--law", "auto"]
+    assert main([*argv, "--notch", "50", "--discrepancy"]) == 0
+    [(_, params, _)] = captured
+    assert params["law"] == "auto" and params["notch"] == 50.0 and params["discrepancy"]
+    assert main(["report", str(RUN.parent.parent), "--law", "auto"]) == 2

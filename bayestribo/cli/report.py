@@ -35,7 +35,8 @@ FIGURE_FORMATS = ("png", "pdf", "svg")
 
 def register(subparsers: Any) -> None:
     """Add the ``report`` sub-command."""
-    from bayestribo.cli._common import add_reading_options
+    from bayestribo.cli._common import add_notch_option, add_reading_options
+    from bayestribo.cli.laws import add_law_option
 
     p = subparsers.add_parser(
         "report",
@@ -105,6 +106,13 @@ def register(subparsers: Any) -> None:
     )
     p.add_argument("--show-code", action="store_true", help="include the notebook's code")
     p.add_argument("--hide-code", action="store_true", help=argparse.SUPPRESS)  # the default now
+    add_law_option(p)
+    add_notch_option(p)
+    p.add_argument(
+        "--discrepancy",
+        action="store_true",
+        help="a single run's fit with the model-discrepancy terms, as `fit --discrepancy`",
+    )
     p.set_defaults(handler=run)
 
 
@@ -257,11 +265,22 @@ def run(args: argparse.Namespace) -> int:
         params.update({"run_path": str(path), "read_kwargs": reading_kwargs(args)})
         if args.seed is not None:
             params["seed"] = args.seed
+        # the fit's options, as `bayestribo fit` takes them: one answer per question
+        for name in ("law", "notch"):
+            if getattr(args, name) is not None:
+                params[name] = getattr(args, name)
+        if args.discrepancy:
+            params["discrepancy"] = True
     else:
         if args.columns or args.length_unit or args.frequency or args.load or args.mass:
             raise ReportError(
                 "--columns, --length-unit, --frequency, --load and --mass describe one run "
                 "file; a campaign folder's runs need sidecars"
+            )
+        if args.law or args.notch is not None or args.discrepancy:
+            raise ReportError(
+                "--law, --notch and --discrepancy are a single run's fit options; a "
+                "campaign's report reuses `bayestribo campaign`'s fits (give them there)"
             )
         campaign_params, where = _campaign_params(path, args)
         params.update(campaign_params)
