@@ -222,3 +222,34 @@ def test_a_run_report_takes_the_fit_options_of_the_fit_command(tmp_path, capture
     [(_, params, _)] = captured
     assert params["law"] == "auto" and params["notch"] == 50.0 and params["discrepancy"]
     assert main(["report", str(RUN.parent.parent), "--law", "auto"]) == 2
+
+
+def test_the_report_exits_as_fit_would():
+    """1 for a record that is not converged, misfits, piles on a bound or fails the
+    model checks; 0 for a clean one."""
+    from bayestribo.cli.report import fit_reasons
+
+    clean = {
+        "fit": {
+            "law": "viscous+coulomb",
+            "parameters": {"zeta": {}},
+            "diagnostics": {
+                "converged": True,
+                "misfit_p": 0.4,
+                "shape_departure": {"p_value": 0.3},
+                "at_prior_bound": [],
+            },
+        },
+        "adequacy": {"adequate": True, "verdict": "adequate"},
+    }
+    assert fit_reasons(clean) == []
+    misfit = json.loads(json.dumps(clean))
+    misfit["fit"]["diagnostics"]["misfit_p"] = 1e-9
+    assert "misfits" in fit_reasons(misfit)[0]
+    # a white misfit with the discrepancy terms is carried by them
+    misfit["fit"]["parameters"]["log10_discrepancy"] = {}
+    assert fit_reasons(misfit) == []
+    bad = json.loads(json.dumps(clean))
+    bad["fit"]["diagnostics"]["converged"] = False
+    bad["adequacy"] = {"adequate": False, "verdict": "not adequate (failed: windows)"}
+    assert len(fit_reasons(bad)) == 2

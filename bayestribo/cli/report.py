@@ -23,11 +23,13 @@ from __future__ import annotations
 
 import argparse
 import ast
+import json
 import sys
+import tempfile
 from pathlib import Path
 from typing import Any
 
-__all__ = ["campaign_selection", "notebook_for", "parse_params", "register"]
+__all__ = ["campaign_selection", "fit_reasons", "notebook_for", "parse_params", "register"]
 
 #: File formats of the figures written next to the report.
 FIGURE_FORMATS = ("png", "pdf", "svg")
@@ -299,13 +301,50 @@ def run(args: argparse.Namespace) -> int:
     print(f"running the {notebook} report on {path} ...", file=sys.stderr)
     if where:
         print(where, file=sys.stderr)
-    run_report(
-        notebook,
-        params,
-        html=out,
-        executed=args.executed,
-        show_code=args.show_code,
-    )
+    with tempfile.TemporaryDirectory() as tmp:
+        if notebook == "single_run" and not params.get("summary_path"):
+            params["summary_path"] = str(Path(tmp) / "summary.json")
+        run_report(
+            notebook,
+            params,
+            html=out,
+            executed=args.executed,
+            show_code=args.show_code,
+        )
+        reasons = []
+        summary = Path(params.get("summary_path") or tmp) if notebook == "single_run" else None
+        if summary is not None and summary.is_file():
+            reasons = fit_reasons(json.loads(summary.read_text()))
     print(f"report written to {out.resolve()}")
     print(f"figures ({args.figure_format}) in {figures.resolve()}")
-    return 0
+    for reason in reasons:
+        print(f"bayestribo report: {reason}", file=sys.stderr)
+    # the exit status of `bayestribo fit` on the same run (README, Exit status)
+    return 1 if reasons else 0
+
+
+def fit_reasons(record: dict[str, Any]) -> list[str]:
+    """What is not right in a single run's report record (``summary_path``), as
+    `bayestribo fit` would exit 1 for it: not converged, a posterior on a prior bound,
+    a misfit the intervals do not carry, or a model check that finds the law not
+    adequate; empty when all is right."""
+    from bayestribo.inference.pipeline import MISFIT_P
+
+    fit = record.get("fit") or {}
+    diag = fit.get("diagnostics") or {}
+    out = []
+    if not diag.get("converged", False):
+        out.append("the sampler did not converge: " + "; ".join(diag.get("reasons", [])))
+    for entry in diag.get("at_prior_bound") or []:
+        out.append(f"{entry.get('parameter')} piles on its prior's bound: not a measurement")
+    shape = (diag.get("shape_departure") or {}).get("p_value")
+    white = diag.get("misfit_p")
+    discrepancy = bool({"log10_discrepancy", "log10_shape"} & set(fit.get("parameters") or {}))
+    if (shape is not None and shape < MISFIT_P) or (
+        not discrepancy and white is not None and white < MISFIT_P
+    ):
+        out.append(f"the law {fit.get('law')} misfits the run beyond its noise")
+    adequacy = record.get("adequacy")
+    if adequacy is not None and adequacy.get("adequate") is False:
+        out.append(adequacy.get("verdict", "the model checks find the law not adequate"))
+    return out
