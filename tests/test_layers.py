@@ -10,8 +10,9 @@ import bayestribo
 PACKAGE = Path(bayestribo.__file__).resolve().parent
 
 #: What each part of the package may import (besides itself), as drawn in
-#: docs/architecture.md. The shared bottom (errors, summary, _optional) is open to all.
-BOTTOM = {"errors", "summary", "_optional"}
+#: docs/architecture.md. The shared bottom (errors, summary, _optional, _text, _clock) is
+#: open to all.
+BOTTOM = {"errors", "summary", "_optional", "_text", "_clock"}
 ALLOWED = {
     "model": set(),
     "io": {"model"},

@@ -95,8 +95,8 @@ def _check_finite(run: Run, where: str | None) -> None:
 
 
 def _jittered(t: NDArray) -> bool:
-    """Stamps that scatter about a regular grid (:mod:`bayestribo.signal.timing`)."""
-    from bayestribo.signal.timing import clock
+    """Stamps that scatter about a regular grid (:mod:`bayestribo._clock`)."""
+    from bayestribo._clock import clock
 
     return clock(t).regular
 

@@ -70,13 +70,13 @@ import scipy.signal
 from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import cumulative_trapezoid
 
+from bayestribo._clock import clock
 from bayestribo.errors import RecordingError
 from bayestribo.model.scaling import Rig, Scaling
 from bayestribo.signal.motion import THRESHOLD, block_noise, check_turning_points, motion_span
 from bayestribo.signal.peaks import Peaks, _dominant_period, estimate_noise, find_peaks
 from bayestribo.signal.quantisation import QUANTISATION_NOISE_FACTOR, quantisation_step
 from bayestribo.signal.spectrum import NoiseSpectrum, RestNoise, fit_line, noise_spectrum
-from bayestribo.signal.timing import clock
 
 __all__ = [
     "EnergyDecay",
@@ -120,7 +120,7 @@ class NoiseLevels:
         step/√12 (the rounding error, which a channel flat at rest does not show).
     timing_jitter_s : float
         Standard deviation of the time stamps about a regular grid [s]
-        (:mod:`bayestribo.signal.timing`), recorded: it adds no noise to the energy
+        (:mod:`bayestribo._clock`), recorded: it adds no noise to the energy
         to first order (see there).
     """
 
@@ -275,7 +275,7 @@ def check_time(t: ArrayLike) -> NDArray:
     -------
     ndarray
         The time stamps; for stamps jittered about a regular grid (within a quarter
-        step, :mod:`bayestribo.signal.timing`), that grid.
+        step, :mod:`bayestribo._clock`), that grid.
 
     Raises
     ------
@@ -283,7 +283,7 @@ def check_time(t: ArrayLike) -> NDArray:
         Naming the first bad sample: too few samples, not finite, not increasing, or a
         step off the median by more than :data:`TIME_STEP_TOLERANCE` (relative) where
         the stamps leave the regular grid by more than a quarter step (a gap; stamps
-        jittered about the grid pass, :mod:`bayestribo.signal.timing`).
+        jittered about the grid pass, :mod:`bayestribo._clock`).
     """
     t = np.asarray(t, dtype=float)
     if t.ndim != 1:
@@ -743,7 +743,7 @@ def energy_decay(
     """
     stamps = np.asarray(t, dtype=float)
     t = check_time(stamps)
-    # stamps jittered about a regular grid are replaced by it (bayestribo.signal.timing)
+    # stamps jittered about a regular grid are replaced by it (bayestribo._clock)
     jitter = 0.0 if t is stamps else clock(stamps).jitter
     x = _check_signal("displacement", displacement, t.size)
     v = _check_signal("velocity", velocity, t.size)
