@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import io
 import json
 import os
 import sys
@@ -90,12 +91,15 @@ def register(subparsers: Any) -> None:
 
 
 def _write_csv(path: Path, rows: list[dict[str, Any]]) -> None:
-    with open(path, "w", newline="") as f:
-        if not rows:
-            return
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+    """A table, written whole or not at all (a temporary file renamed into place)."""
+    from bayestribo.campaign.lock import write_atomic
+
+    text = io.StringIO(newline="")
+    if rows:
+        writer = csv.DictWriter(text, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)
+    write_atomic(path, text.getvalue())
 
 
 def _run_rows(runs: list[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -173,9 +177,8 @@ def _law_row(entry: dict[str, Any]) -> dict[str, Any]:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Find the runs, fit them, analyse, write the outputs."""
-    from bayestribo.campaign.analysis import analyse_campaign
-    from bayestribo.campaign.fitting import dask_executor, fit_catalogued
+    """Find the runs, fit them, analyse, write the outputs (one writer per --out)."""
+    from bayestribo.campaign.lock import FolderLock
     from bayestribo.errors import BayestriboError
 
     folder = Path(args.dir)
@@ -186,6 +189,23 @@ def run(args: argparse.Namespace) -> int:
         raise BayestriboError(f"DIR: no run files (CSV with a JSON sidecar) under {folder}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    with FolderLock(out) as lock:
+        if lock.took_over is not None and not args.quiet:
+            print(
+                f"bayestribo campaign: {out}: took over the lock of a campaign that no longer "
+                f"runs (process {lock.took_over.get('pid')})",
+                file=sys.stderr,
+            )
+        return _run_locked(args, folder, paths, out)
+
+
+def _run_locked(args: argparse.Namespace, folder: Path, paths: list[Path], out: Path) -> int:
+    """:func:`run` with the output folder locked."""
+    from bayestribo.campaign.analysis import analyse_campaign
+    from bayestribo.campaign.fitting import dask_executor, fit_catalogued
+    from bayestribo.campaign.lock import write_atomic
+    from bayestribo.errors import BayestriboError
+
     catalog = Path(args.catalog) if args.catalog else out / "catalog.sqlite"
     fit_kwargs = {
         key: value
@@ -255,7 +275,7 @@ def run(args: argparse.Namespace) -> int:
     if laws is not None:
         report["laws"] = laws
         _write_csv(out / "laws.csv", [_law_row(r) for r in laws])
-    (out / "population.json").write_text(json.dumps(report, indent=2, default=str) + "\n")
+    write_atomic(out / "population.json", json.dumps(report, indent=2, default=str) + "\n")
     _write_csv(out / "groups.csv", analysis.group_rows())
     _write_csv(out / "trends.csv", analysis.trend_rows())
     failed_rows = [{"run_id": f["run"], "status": f"failed: {f['error']}"} for f in failures]
