@@ -218,3 +218,21 @@ def test_fit_records_are_refused_for_unknown_runs_and_non_json(tmp_path):
         record_fit(db, run="r1", settings={"x": object()}, summary={}, diagnostics={})
     with pytest.raises(CatalogError, match="summary: not JSON"):
         record_fit(db, run=1, settings={}, summary={"x": object()}, diagnostics={})
+
+
+def test_a_saved_fit_that_cannot_be_read_is_fitted_again(tmp_path, capsys):
+    """A truncated result file (a kill, a full disk, another writer) is a cache miss:
+    the run is fitted again and the campaign goes on, saying so."""
+    from bayestribo.campaign.fitting import fit_catalogued
+
+    paths = _write_run_files(tmp_path, ["a-r1", "a-r2"])
+    db, out = tmp_path / "cat.sqlite", tmp_path / "fits"
+    kwargs = {"function": saved_fit, "loader": load_saved, "progress": True}
+    first = fit_catalogued(paths, db, out, None, campaign_seed=4, **kwargs)
+    saved = out / "a-r1.nc"
+    saved.write_text(saved.read_text()[:5])  # truncated
+    again = fit_catalogued(paths, db, out, None, campaign_seed=4, **kwargs)
+    assert [(o.ok, o.cached) for o in again] == [(True, False), (True, True)]
+    assert again[0].result == first[0].result
+    assert "the saved fit of a-r1 cannot be read" in capsys.readouterr().err
+    assert not [p for p in out.iterdir() if p.name.endswith(".tmp")]

@@ -438,7 +438,18 @@ def fit_catalogued(
         result_path = None if record is None else record.summary.get("result_path")
         if result_path and Path(result_path).exists():
             seed = settings[i]["seed"]
-            outcomes[name] = RunOutcome(name, seed, loader(result_path), cached=True)
+            try:
+                cached = loader(result_path)
+            except Exception as exc:  # truncated, corrupt: a cache miss, fitted again
+                if progress:
+                    print(
+                        f"bayestribo campaign: the saved fit of {name} cannot be read "
+                        f"({type(exc).__name__}: {exc}); fitting it again",
+                        file=progress_stream or sys.stderr,
+                    )
+                todo.append(i)
+                continue
+            outcomes[name] = RunOutcome(name, seed, cached, cached=True)
         else:
             todo.append(i)
 
@@ -455,7 +466,14 @@ def fit_catalogued(
     def save_and_record(outcome: RunOutcome) -> None:
         i = names.index(outcome.name)
         target = out / f"{outcome.name}.nc"
-        outcome.result.save(target)
+        # written under a temporary name and renamed: the catalog never records a
+        # file that is not whole, and a kill leaves no half-written fit
+        partial = target.with_name(f".{target.name}.{os.getpid()}.tmp")
+        try:
+            outcome.result.save(partial)
+            os.replace(partial, target)
+        finally:
+            partial.unlink(missing_ok=True)
         record_fit(
             catalog,
             run=rows[i],
