@@ -231,3 +231,44 @@ def test_an_unregistered_friction_law_is_flagged_and_the_turning_points_give_its
     assert np.all((lo < truth) & (truth < hi)), (lo / truth - 1, hi / truth - 1)
     law_z = (np.asarray(result.dissipation["mean"]) - truth) / np.asarray(result.dissipation["sd"])
     assert np.max(np.abs(law_z)) > 10
+
+
+def test_laws_the_decay_cannot_split_give_one_averaged_dissipation():
+    """A friction that grows with amplitude (η > 0, no viscous damping; solve_ivp):
+    viscous + Coulomb describes the decay as well, and the comparison's ΔE(A), the
+    two laws' posteriors mixed, covers the true ΔE(A) of the motion."""
+    from bayestribo.inference import prepare
+    from bayestribo.inference.comparison import compare_prepared
+    from bayestribo.inference.dissipation import (
+        averaged_dissipation,
+        dissipation_amplitudes,
+        physical_scale,
+    )
+
+    mu_k, eta = 0.02, 0.004
+    run = law_recording(
+        lambda v: 0.0 * v,
+        friction=mu_k * LOAD / MASS,
+        friction_slope=eta * OMEGA**2,
+        seed=8,
+    )
+    prepared = prepare(run)
+    comparison, runs = compare_prepared(prepared, ("viscous+coulomb", "coulomb+hysteretic"), seed=2)
+    assert set(comparison.as_good) == {"viscous+coulomb", "coulomb+hysteretic"}
+    assert comparison.verdict == "viscous+coulomb"  # the order compared breaks the tie
+    members = [
+        (law, s.posterior, s.run.chains.reshape(-1, s.run.chains.shape[-1]))
+        for law, s in runs.items()
+    ]
+    scale = physical_scale(prepared.decay.scaling, prepared.metadata)
+    swings = dissipation_amplitudes(prepared.decay.peaks.value / scale.length_scale)
+    band = averaged_dissipation(members, swings, scale)
+    truth = swing_dissipation(
+        lambda v: 0.0 * v,
+        np.asarray(band["amplitude"]),
+        friction=mu_k * LOAD / MASS,
+        friction_slope=eta * OMEGA**2,
+    )
+    lo, hi = (np.asarray(x) for x in band["interval"])
+    assert np.all((lo < truth) & (truth < hi)), (lo / truth - 1, hi / truth - 1)
+    assert band["laws"] == list(runs)

@@ -44,6 +44,7 @@ from bayestribo.summary import check_prob
 
 __all__ = [
     "DISSIPATION_AMPLITUDES",
+    "averaged_dissipation",
     "dissipation_amplitudes",
     "dissipation_band",
     "law_quantities",
@@ -351,4 +352,86 @@ def turning_point_dissipation(
         "cycles": used.tolist(),
         "unit": scale.energy_unit,
         "definition": "from the turning points: Y_n^2 - Y_n+1^2 per half cycle, local fit",
+    }
+
+
+def averaged_dissipation(
+    members: list[tuple[str, Posterior, NDArray]],
+    amplitude: NDArray,
+    scale: PhysicalScale,
+    *,
+    prob: float = 0.95,
+    frequency_sd: float = 0.0,
+) -> dict[str, Any]:
+    """ΔE(A) averaged over laws the data do not tell apart, with equal weights.
+
+    A decay often fits several laws equally well (PSIS-LOO differences within their
+    noise): viscous damping and a friction that grows with the amplitude, or a law and
+    the one that nests it with an extra term near zero. Their ΔE(A) agree to first
+    order, not within the band of any one of them: at ten times the vibrometer's
+    resolution a viscous fit of an amplitude-proportional friction put the true ΔE(A)
+    1.8 to 2.7 of its standard deviations off (``benchmarks/laws.py``). The answer of a
+    comparison therefore mixes their posteriors, the same number of draws from each:
+    the laws as good as the best are one hypothesis the data cannot split.
+
+    Parameters
+    ----------
+    members : list of (name, Posterior, draws)
+        Each law's name, posterior and flat draws (n, d), all on one preparation.
+    amplitude : ndarray
+        Swings A [dimensionless, units of that preparation's ℓ].
+    scale : PhysicalScale
+        That preparation's physical scale.
+    prob, frequency_sd
+        As in :func:`dissipation_band`.
+
+    Returns
+    -------
+    dict
+        As :func:`dissipation_band` (without ``by_term`` and ``harmonic_mean``), with
+        ``law`` the laws joined by " | " and ``laws`` their list.
+    """
+    prob = check_prob(prob)
+    per = max(_BAND_DRAWS_INTEGRATED, _BAND_DRAWS // max(len(members), 1))
+    amps = np.asarray(amplitude, dtype=float)
+    stacks = []
+    for _, posterior, draws in members:
+        draws = np.atleast_2d(np.asarray(draws, dtype=float))
+        pick = draws[np.linspace(0, draws.shape[0] - 1, min(per, draws.shape[0])).astype(int)]
+        values = posterior.law_draws(pick)
+        energy = posterior.law.swing_dissipation(
+            amps, values, posterior.likelihood.reference_amplitude
+        )
+        energy = energy[np.all(np.isfinite(energy), axis=1)]
+        if energy.shape[0]:
+            # the same number of draws from each law: equal weights
+            take = np.linspace(0, energy.shape[0] - 1, per).astype(int)
+            stacks.append(energy[take] * scale.energy_factor)
+    if not stacks:
+        raise ValueError("members: no law has a half cycle at these swings")
+    total = np.concatenate(stacks)
+    tail = 0.5 * (1.0 - prob)
+    lower, upper = np.quantile(total, [tail, 1.0 - tail], axis=0)
+    mean = np.mean(total, axis=0)
+    sd = np.std(total, axis=0, ddof=1)
+    if frequency_sd > 0:
+        extra = 2.0 * float(frequency_sd) * np.abs(mean)
+        z = float(scipy.stats.norm.ppf(1.0 - tail))
+        lower = mean - np.hypot(mean - lower, z * extra)
+        upper = mean + np.hypot(upper - mean, z * extra)
+        sd = np.hypot(sd, extra)
+    names = [name for name, _, _ in members]
+    return {
+        "law": " | ".join(names),
+        "laws": names,
+        "amplitude": (amps * scale.length_scale).tolist(),
+        "amplitude_unit": scale.length_unit,
+        "mean": mean.tolist(),
+        "sd": sd.tolist(),
+        "interval": [lower.tolist(), upper.tolist()],
+        "prob": prob,
+        "unit": scale.energy_unit,
+        "definition": "per cycle of each law's own motion at the swing A, averaged over the "
+        "laws as good as the verdict (equal weights)",
+        "frequency_nuisance_sd": float(frequency_sd),
     }

@@ -163,6 +163,7 @@ def fit(
             discrepancy=discrepancy,
             law_free=True,
         )
+        common = prepared
         sampled = runs[comparison.verdict]
         if not sampled.posterior.law.closed_form:
             # the verdict again, in the frame of its own turning times
@@ -218,8 +219,43 @@ def fit(
         result.idata.posterior.attrs["law_comparison_json"] = json.dumps(
             plain_data(comparison.to_dict())
         )
+        averaged = _averaged_band(common, runs, comparison, result)
+        if averaged is not None:
+            attrs = result.idata.posterior.attrs
+            attrs["verdict_dissipation_json"] = attrs["dissipation_json"]
+            attrs["dissipation_json"] = json.dumps(plain_data(averaged))
     result.idata.posterior.attrs["seconds"] = time.perf_counter() - start
     return result
+
+
+def _averaged_band(
+    common: PreparedRun, runs: Mapping[str, Any], comparison: Any, result: FitResult
+) -> dict[str, Any] | None:
+    """ΔE(A) averaged over the adequate, converged laws as good as the verdict
+    (:func:`bayestribo.inference.dissipation.averaged_dissipation`), on the
+    comparison's common preparation; None when the verdict stands alone."""
+    from bayestribo.inference.dissipation import averaged_dissipation, physical_scale
+
+    if not comparison.adequate:
+        return None
+    members = []
+    for law in comparison.as_good:
+        row = comparison.table.get(law, {})
+        if law in runs and row.get("adequate") and row.get("converged"):
+            s = runs[law]
+            members.append((law, s.posterior, s.run.chains.reshape(-1, s.run.chains.shape[-1])))
+    band = result.dissipation
+    if len(members) < 2 or not band:
+        return None
+    scale = physical_scale(common.decay.scaling, common.metadata)
+    swings = np.asarray(band["amplitude"], dtype=float) / scale.length_scale
+    frequency_sd = float(result.idata.posterior.attrs.get("frequency_nuisance_sd", 0.0))
+    try:
+        return averaged_dissipation(
+            members, swings, scale, prob=float(band["prob"]), frequency_sd=frequency_sd
+        )
+    except ValueError:
+        return None
 
 
 #: A law's frequency closer than this to the record's leaves the frame as it is.

@@ -130,8 +130,18 @@ class FitResult:
         """Energy the law dissipates per cycle, ΔE(A), at the swings of the analysed
         motion (:func:`bayestribo.inference.dissipation.dissipation_band`):
         ``amplitude``, ``mean``, ``sd``, ``interval``, ``prob``, ``unit``, ``by_term``,
-        ``harmonic_mean``; None for fits saved before it was recorded."""
+        ``harmonic_mean``. With ``law="auto"`` and several adequate laws as good as the
+        verdict, their posteriors mixed (``laws`` lists them,
+        :func:`~bayestribo.inference.dissipation.averaged_dissipation`; the verdict's own
+        band is :attr:`verdict_dissipation`). None for fits saved before it was
+        recorded."""
         return self._attr("dissipation_json", None)
+
+    @property
+    def verdict_dissipation(self) -> dict[str, Any] | None:
+        """The verdict law's own ΔE(A) band when :attr:`dissipation` is averaged over
+        several laws, else the same as :attr:`dissipation`."""
+        return self._attr("verdict_dissipation_json", None) or self.dissipation
 
     @property
     def turning_point_dissipation(self) -> dict[str, Any] | None:
