@@ -386,7 +386,11 @@ class FitResult:
         )
         out = [head]
         measured = self.turning_point_dissipation
-        rows = [(f"law {self.law}", d)]
+        laws = d.get("laws")
+        label = (
+            f"laws {', '.join(laws)} (as good as each other: mixed)" if laws else f"law {self.law}"
+        )
+        rows = [(label, d)]
         if measured and measured.get("amplitude"):
             rows.append(("turning points (law-free)", measured))
         amp = d["amplitude"]
