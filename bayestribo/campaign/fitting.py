@@ -22,7 +22,7 @@ import sys
 import time
 import traceback
 from collections.abc import Callable, Iterable, Iterator, Mapping
-from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
+from concurrent.futures import Executor, Future, as_completed
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,6 +31,7 @@ from typing import IO, Any
 import numpy as np
 
 from bayestribo._optional import require
+from bayestribo._workers import process_pool
 from bayestribo.errors import BayestriboError
 
 __all__ = [
@@ -262,10 +263,9 @@ def fit_many(
         workers = max_workers or os.cpu_count() or 1
         # forkserver: workers start from a clean process, safe when the caller runs
         # threads (progress bars, a Dask client, a GUI).
-        context = multiprocessing.get_context(
-            "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() else None
-        )
-        executor = ProcessPoolExecutor(max_workers=workers, mp_context=context)
+        # Workers end with this process, however it ends (bayestribo._workers).
+        method = "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() else None
+        executor = process_pool(workers, method=method)
     assert executor is not None
     outcomes: list[RunOutcome | None] = [None] * len(runs)
     bar = _Progress(len(runs), progress_stream, progress)

@@ -23,7 +23,6 @@ import json
 import os
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor
 from contextlib import nullcontext
 from pathlib import Path
 from typing import Any
@@ -189,7 +188,9 @@ def run(args: argparse.Namespace) -> int:
         raise BayestriboError(f"DIR: no run files (CSV with a JSON sidecar) under {folder}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    with FolderLock(out) as lock:
+    from bayestribo._workers import terminate_as_interrupt
+
+    with terminate_as_interrupt(), FolderLock(out) as lock:
         if lock.took_over is not None and not args.quiet:
             print(
                 f"bayestribo campaign: {out}: took over the lock of a campaign that no longer "
@@ -201,6 +202,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _run_locked(args: argparse.Namespace, folder: Path, paths: list[Path], out: Path) -> int:
     """:func:`run` with the output folder locked."""
+    from bayestribo._workers import process_pool
     from bayestribo.campaign.analysis import analyse_campaign
     from bayestribo.campaign.fitting import dask_executor, fit_catalogued
     from bayestribo.campaign.lock import write_atomic
@@ -249,7 +251,7 @@ def _run_locked(args: argparse.Namespace, folder: Path, paths: list[Path], out: 
             print(f"bayestribo campaign: [{elapsed:5.0f} s] {message}", file=sys.stderr)
 
     workers = args.workers or os.cpu_count() or 1
-    pool = ProcessPoolExecutor(max_workers=workers) if workers > 1 else nullcontext(None)
+    pool = process_pool(workers) if workers > 1 else nullcontext(None)
     with pool as executor:  # the populations' groups and the trends side by side
         analysis = analyse_campaign(
             fitted,

@@ -103,6 +103,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BayestriboError as exc:
         print(f"bayestribo {args.command}: error: {plain_numbers(str(exc))}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        # Ctrl-C, or SIGTERM where a command turns it into this: what was finished is
+        # kept (a campaign's fits are in its catalog), the rest stops
+        print(f"bayestribo {args.command}: interrupted", file=sys.stderr)
+        return 130
     except BrokenPipeError:
         # The reader of standard output went away (``| head``): no traceback. Point
         # stdout at devnull so that the interpreter's final flush does not fail too
