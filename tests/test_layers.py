@@ -11,8 +11,7 @@ PACKAGE = Path(bayestribo.__file__).resolve().parent
 
 #: What each part of the package may import (besides itself), as drawn in
 #: docs/architecture.md. The shared bottom (errors, summary, _optional, _text, _clock,
-#: _workers) is
-#: open to all.
+#: _workers) is open to all.
 BOTTOM = {"errors", "summary", "_optional", "_text", "_clock", "_workers"}
 ALLOWED = {
     "model": set(),
