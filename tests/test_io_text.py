@@ -238,3 +238,14 @@ def test_the_spring_and_disc_recordings_read_with_their_velocity() -> None:
         full = ~np.isnan(rows[:, 2])
         np.testing.assert_array_equal(run.velocity, rows[full, 2])
         np.testing.assert_array_equal(run.displacement, rows[full, 1])
+
+
+@pytest.mark.parametrize("mu", ["\u00b5", "\u03bc"], ids=["micro sign", "Greek mu"])
+def test_micro_units_read_with_either_mu(tmp_path: Path, mu: str) -> None:
+    """``[µm]`` typed with the micro sign or with the Greek letter: the same unit."""
+    t, x = _sine()
+    path = tmp_path / "um.csv"
+    body = "".join(f"{a!r},{b * 1e6!r}\n" for a, b in zip(t, x, strict=True))
+    path.write_text(f"time [s],displacement [{mu}m]\n" + body, encoding="utf-8")
+    run = read_run(path)
+    np.testing.assert_allclose(run.displacement, x, rtol=1e-12)

@@ -83,7 +83,8 @@ def parse_column(name: str) -> tuple[str, float] | None:
         For a known quantity without a unit, or with a unit that is not known; the
         message lists the units accepted.
     """
-    word, unit = _split(name)
+    # the Greek letter mu (U+03BC) and the micro sign (U+00B5) look alike: one unit
+    word, unit = _split(name.replace("\u03bc", "\u00b5"))
     for canonical, words in QUANTITIES.items():
         if word not in words:
             continue
