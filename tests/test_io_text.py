@@ -188,7 +188,7 @@ def test_numpys_reader_and_the_row_by_row_reader_give_the_same_numbers(tmp_path:
     path.write_text("0.0,a,1.0\n0.001,b,2.0\n")
     out = read_text(path, columns=["time_s", "ignore", "displacement_m"])
     np.testing.assert_array_equal(out["displacement_m"], [1.0, 2.0])
-    path.write_text("time_s,displacement_m\n0.0,1.0\n0.001\n")
+    path.write_text("time_s,displacement_m\n0.0,1.0\n0.001\n0.002,3.0\n")
     with pytest.raises(RunFormatError, match="line 3: expected 2 field"):
         read_text(path)
 
@@ -249,3 +249,25 @@ def test_micro_units_read_with_either_mu(tmp_path: Path, mu: str) -> None:
     path.write_text(f"time [s],displacement [{mu}m]\n" + body, encoding="utf-8")
     run = read_run(path)
     np.testing.assert_allclose(run.displacement, x, rtol=1e-12)
+
+
+def test_a_last_line_cut_short_is_left_out_and_said(tmp_path: Path) -> None:
+    """A file copied while it was written: its last line is incomplete. The line is
+    left out with a warning naming it; a bad line elsewhere is still an error."""
+    from bayestribo.errors import ReadingWarning
+
+    t, x = _sine(200)
+    body = "".join(f"{a!r},{b!r}\n" for a, b in zip(t, x, strict=True))
+    path = tmp_path / "cut.csv"
+    path.write_text("time_s,displacement_m\n" + body + "0.1000,1.2e-")
+    with pytest.warns(ReadingWarning, match="the last line .line 202. is incomplete"):
+        run = read_run(path)
+    assert run.n_samples == 200
+    path.write_text("time_s,displacement_m\n" + body + "0.1000")
+    with pytest.warns(ReadingWarning, match="incomplete"):
+        assert read_run(path).n_samples == 200
+    lines = body.splitlines()
+    lines[50] = lines[50][:6]
+    path.write_text("time_s,displacement_m\n" + "\n".join(lines) + "\n")
+    with pytest.raises(RunFormatError, match="line 52"):
+        read_run(path)

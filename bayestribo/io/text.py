@@ -14,6 +14,7 @@ column converting the file's unit to the canonical one (for instance
 from __future__ import annotations
 
 import io
+import re
 import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -75,8 +76,18 @@ def _parse_rows(
     width or field that is not a number is an error naming its line and column."""
     data = np.empty((len(rows), len(keep)), dtype=np.float64)
     width = len(names)
+    last = len(rows) - 1
     for r, (number, line) in enumerate(rows):
         fields = _split(line, delimiter)
+        if r == last and r > 0 and _cut_short(fields, width, keep, decimal):
+            # a last line cut short (the file was copied while it was being written)
+            warnings.warn(
+                f"{where}: the last line (line {number}) is incomplete: "
+                f"{line[:80]!r}; it is left out of the run",
+                ReadingWarning,
+                stacklevel=4,
+            )
+            return data[:last]
         if len(fields) != width:
             raise RunFormatError(
                 f"line {number}: expected {width} field(s) ({', '.join(names)}), got "
@@ -95,6 +106,30 @@ def _parse_rows(
                 )
             data[r, c] = value
     return data
+
+
+#: What a number cut short can look like: a prefix of a decimal number.
+_NUMBER_PREFIX = re.compile(r"[+-]?\d*[.,]?\d*(?:[eE][+-]?\d*)?")
+
+
+def _cut_short(fields: list[str], width: int, keep: list[tuple[int, str]], decimal: str) -> bool:
+    """True when a row is a complete row cut short: no more fields than the header,
+    every field before the last one a number where one is kept, and the last a prefix
+    of a number (a bad field, ``abc``, is no truncation but an error)."""
+    if not fields or len(fields) > width:
+        return False
+    kept = {i for i, _ in keep}
+    for i, field in enumerate(fields[:-1]):
+        value = field.replace(",", ".") if decimal == "," else field
+        if i in kept and _as_float(value) is None:
+            return False
+    if len(fields) == width and (
+        fields[-1] == ""  # an empty cell, not a cut: see _trim_missing
+        or len(fields) - 1 not in kept
+        or _as_float(fields[-1].replace(",", ".")) is not None
+    ):
+        return False
+    return _NUMBER_PREFIX.fullmatch(fields[-1]) is not None
 
 
 def _trim_missing(
