@@ -28,3 +28,10 @@ def test_help_loads_none_of_the_heavy_modules():
         [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
     )
     assert json.loads(out.stdout.strip().splitlines()[-1]) == []
+
+
+def test_the_command_line_lists_every_estimator():
+    from bayestribo.cli.estimate import METHOD_NAMES
+    from bayestribo.estimators.all import METHODS
+
+    assert METHOD_NAMES == METHODS

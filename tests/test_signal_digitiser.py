@@ -71,3 +71,19 @@ def test_jittered_time_stamps_are_the_regular_clock_and_a_gap_is_refused():
     gap = np.delete(np.arange(run.time.size), 3000)
     with pytest.raises(BayestriboError, match="regular"):
         fit(Run(run.time[gap], run.displacement[gap], run.velocity[gap], dict(run.metadata)))
+
+
+def test_a_swing_no_rig_makes_is_refused_with_the_factor_that_fixes_it():
+    """Millimetres read as metres on both channels (they then agree with each other):
+    a 1.2 m swing at 32.6 Hz, thousands of g. Refused, naming mm and the option; the
+    same record with the factor applied fits."""
+    from bayestribo import fit
+    from bayestribo.errors import RecordingError
+
+    run = simulate(seed=2)
+    wrong = Run(run.time, run.displacement * 1e3, run.velocity * 1e3, dict(run.metadata))
+    with pytest.raises(RecordingError, match=r"likely in mm .*--scale x=0.001 --scale v=0.001"):
+        fit(wrong, seed=1)
+    micro = Run(run.time, run.displacement * 1e6, run.velocity * 1e6, dict(run.metadata))
+    with pytest.raises(RecordingError, match="likely in µm"):
+        fit(micro, seed=1)

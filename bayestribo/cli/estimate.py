@@ -14,13 +14,22 @@ from typing import Any
 
 from bayestribo.cli._common import add_run_arguments, read_run_from_args
 
-__all__ = ["register"]
+__all__ = ["METHOD_NAMES", "register"]
+
+#: The estimators' names, as :data:`bayestribo.estimators.all.METHODS` (a test keeps
+#: them equal): listed here so that ``--help`` does not import the estimators.
+METHOD_NAMES: tuple[str, ...] = (
+    "log_decrement",
+    "exponential_envelope",
+    "feeny_liang",
+    "nonsuccessive",
+    "energy_ls_averaged",
+    "energy_ls_exact",
+)
 
 
 def register(subparsers: Any) -> None:
     """Add the ``estimate`` sub-command."""
-    from bayestribo.estimators.methods import METHODS
-
     p = subparsers.add_parser(
         "estimate",
         help="classical estimates of ζ and μ_k (peak decrements, energy least squares)",
@@ -43,7 +52,7 @@ def register(subparsers: Any) -> None:
         "analyse the fit's window)",
     )
     p.add_argument(
-        "--methods", nargs="+", choices=METHODS, metavar="METHOD", help="subset of methods"
+        "--methods", nargs="+", choices=METHOD_NAMES, metavar="METHOD", help="subset of methods"
     )
     p.set_defaults(handler=run)
 

@@ -20,34 +20,12 @@ all
     :func:`estimate_signals`: the same on bare arrays t, x, v.
 """
 
-from __future__ import annotations
-
-import importlib
-from typing import Any
-
-# Loaded on first use (PEP 562): the command line lists the methods
-# (bayestribo.estimators.methods) without importing SciPy's optimisers and statistics.
-_WHERE = {
-    "estimate_all": "all",
-    "estimate_signals": "all",
-    "exponential_envelope": "decrement",
-    "log_decrement": "decrement",
-    "energy_data": "energy_ls",
-    "energy_least_squares": "energy_ls",
-    "feeny_liang": "feeny_liang",
-    "nonsuccessive_peaks": "nonsuccessive",
-    "Estimate": "result",
-    "EstimateTable": "result",
-    "friction_fraction": "result",
-}
-
-
-def __getattr__(name: str) -> Any:
-    if name in _WHERE:
-        module = importlib.import_module(f"bayestribo.estimators.{_WHERE[name]}")
-        return getattr(module, name)
-    raise AttributeError(f"module 'bayestribo.estimators' has no attribute {name!r}")
-
+from bayestribo.estimators.all import estimate_all, estimate_signals
+from bayestribo.estimators.decrement import exponential_envelope, log_decrement
+from bayestribo.estimators.energy_ls import energy_data, energy_least_squares
+from bayestribo.estimators.feeny_liang import feeny_liang
+from bayestribo.estimators.nonsuccessive import nonsuccessive_peaks
+from bayestribo.estimators.result import Estimate, EstimateTable, friction_fraction
 
 __all__ = [
     "Estimate",

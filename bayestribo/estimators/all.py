@@ -13,7 +13,6 @@ from bayestribo.errors import BayestriboError, RecordingError
 from bayestribo.estimators.decrement import exponential_envelope, log_decrement
 from bayestribo.estimators.energy_ls import EnergyData, energy_data, energy_least_squares
 from bayestribo.estimators.feeny_liang import feeny_liang
-from bayestribo.estimators.methods import METHODS
 from bayestribo.estimators.nonsuccessive import nonsuccessive_peaks
 from bayestribo.estimators.result import Estimate, EstimateTable
 from bayestribo.io.run import Run
@@ -22,6 +21,17 @@ from bayestribo.signal.decay import energy_decay
 from bayestribo.signal.peaks import Peaks, find_peaks
 
 __all__ = ["METHODS", "estimate_all", "estimate_signals"]
+
+#: Method names, in the order of the table (the command line lists them without
+#: importing this module: bayestribo.cli.estimate.METHOD_NAMES, tested equal).
+METHODS: tuple[str, ...] = (
+    "log_decrement",
+    "exponential_envelope",
+    "feeny_liang",
+    "nonsuccessive",
+    "energy_ls_averaged",
+    "energy_ls_exact",
+)
 
 
 _PEAK_METHODS: dict[str, Callable[[Peaks, Rig | None], Estimate]] = {
