@@ -322,8 +322,12 @@ def constancy_test(
     tm = _trend(windows.friction_name, float(coef[2]), float(coef[3]), float(cb[1, 1]), span, crit)
     constant = p >= alpha
     unit = windows.length_unit
+    # in prose, the symbol: μ_k (x_c for a friction displacement), not the field name
+    symbol = {"mu_k": "μ_k", "friction_displacement": "x_c"}.get(
+        windows.friction_name, windows.friction_name
+    )
     head = (
-        f"ζ and {windows.friction_name} are constant within the data's precision "
+        f"ζ and {symbol} are constant within the data's precision "
         f"(p = {p:.2g} for a trend with amplitude, {n} windows from {np.min(amp):.3g} to "
         f"{np.max(amp):.3g} {unit})"
         if constant
@@ -331,8 +335,8 @@ def constancy_test(
         f"{np.min(amp):.3g} to {np.max(amp):.3g} {unit}): the linear law is not adequate"
     )
     if fixed:
-        friction = f"{windows.friction_name} held at the whole-decay value {tm.mean:.3g}"
-        head = head.replace(f"ζ and {windows.friction_name} are", "the equivalent ζ is")
+        friction = f"{symbol} held at the whole-decay value {tm.mean:.3g}"
+        head = head.replace(f"ζ and {symbol} are", "the equivalent ζ is")
         head = head.replace(
             "the damping law is not constant", "the equivalent ζ changes with amplitude"
         )

@@ -34,6 +34,7 @@ __all__ = [
     "file_sha256",
     "note",
     "overlapping_labels",
+    "sentence",
     "setup",
     "show_warnings_as_notes",
     "table",
@@ -53,6 +54,24 @@ RC = {
     "pdf.fonttype": 42,  # TrueType in PDF: text stays text for a journal
     "svg.fonttype": "path",
 }
+
+
+def sentence(text: str) -> str:
+    """``text`` as a sentence: a capital first letter where the first letter is Latin
+    (a Greek symbol stays as it is: "ζ and μ_k are constant", not "Ζ and ..."), and one
+    full stop at the end.
+
+    Examples
+    --------
+    >>> sentence("ζ and μ_k are constant.")
+    'ζ and μ_k are constant.'
+    >>> sentence("the end of motion agrees")
+    'The end of motion agrees.'
+    """
+    text = text.strip().rstrip(".")
+    if text[:1].isascii():
+        text = text[:1].upper() + text[1:]
+    return text + "."
 
 
 def _display(obj: Any) -> None:
