@@ -32,6 +32,7 @@ __all__ = [
     "FIGURE_FORMATS",
     "about",
     "file_sha256",
+    "interval_text",
     "note",
     "overlapping_labels",
     "sentence",
@@ -54,6 +55,34 @@ RC = {
     "pdf.fonttype": 42,  # TrueType in PDF: text stays text for a journal
     "svg.fonttype": "path",
 }
+
+
+def interval_text(mean: float, low: float, high: float) -> str:
+    """``mean [low, high]`` with the digits the interval supports: two significant
+    digits of its half width, so that the ends never collapse onto each other at the
+    precision shown ("0.024251 [0.02425, 0.024251]"); an interval that reaches zero
+    from a positive support says so.
+
+    Examples
+    --------
+    >>> interval_text(0.0236012, 0.0236003, 0.0236021)
+    '0.02360120 [0.02360030, 0.02360210]'
+    >>> interval_text(1.2e-30, 0.0, 3e-29)
+    '< 3e-29 (at zero)'
+    """
+    import math
+
+    mean, low, high = float(mean), float(low), float(high)
+    half = 0.5 * (high - low)
+    if low <= 0.0 <= high and low >= -1e-300 and abs(mean) < half:
+        return f"< {high:.2g} (at zero)"
+    if not (half > 0 and math.isfinite(half)):
+        return f"{mean:.6g} [{low:.6g}, {high:.6g}]"
+    decimals = max(0, 1 - math.floor(math.log10(half)))
+    if abs(mean) >= 1e5 or (abs(mean) < 1e-4 and mean != 0):
+        digits = max(2, math.floor(math.log10(abs(mean))) - math.floor(math.log10(half)) + 2)
+        return f"{mean:.{digits}g} [{low:.{digits}g}, {high:.{digits}g}]"
+    return f"{mean:.{decimals}f} [{low:.{decimals}f}, {high:.{decimals}f}]"
 
 
 def sentence(text: str) -> str:
