@@ -35,3 +35,18 @@ def test_the_command_line_lists_every_estimator():
     from bayestribo.estimators.all import METHODS
 
     assert METHOD_NAMES == METHODS
+
+
+def test_a_full_disk_is_one_line_naming_what_to_do(monkeypatch, capsys):
+    import errno
+
+    from bayestribo.cli import main
+
+    def full():
+        raise OSError(errno.ENOSPC, "No space left on device", "out/population.json")
+
+    monkeypatch.setattr("bayestribo.cli.laws.law_table", full)
+    assert main(["laws"]) == 2
+    err = capsys.readouterr().err
+    assert "no space left on the device writing out/population.json" in err
+    assert "Traceback" not in err

@@ -9,6 +9,7 @@ work is done by library functions the command modules call.
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
 import os
 import re
@@ -102,6 +103,19 @@ def main(argv: Sequence[str] | None = None) -> int:
             return int(args.handler(args) or 0)
     except BayestriboError as exc:
         print(f"bayestribo {args.command}: error: {plain_numbers(str(exc))}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        if exc.errno not in (errno.ENOSPC, errno.EDQUOT):
+            raise
+        # a full disk: one line, what was kept, how to go on (no traceback)
+        where = f" writing {exc.filename}" if exc.filename else ""
+        print(
+            f"bayestribo {args.command}: error: no space left on the device{where}; the "
+            "files written before are kept whole (each is written to a temporary name and "
+            "renamed); free some space and run the command again (a campaign reuses the "
+            "fits it finished)",
+            file=sys.stderr,
+        )
         return 2
     except KeyboardInterrupt:
         # Ctrl-C, or SIGTERM where a command turns it into this: what was finished is
