@@ -582,3 +582,19 @@ def test_a_board_that_sends_only_garbage_times_out_from_its_last_valid_frame(tmp
     assert "no valid frame for 0.3 s" in result.fault
     assert not result.complete
     assert result.run.report["samples_received"] == 5 * 32
+
+
+def test_the_simulated_magnet_makes_the_recording_independent_of_the_hosts_timing(tmp_path):
+    """With a hold time the simulated rig releases at the same sample whenever FIRE
+    comes before it (here after 0.01 s and after 0.2 s): the same recording, so a test
+    of duplicate runs does not depend on the machine's load."""
+    held = dataclasses.replace(SMALL, hold_s=0.3)
+    samples = []
+    for k, pretrigger in enumerate((0.01, 0.2)):
+        with simulated(config=held) as (sim, path):
+            result = acquire_run(path, tmp_path / f"r{k}", INPUTS, pretrigger_s=pretrigger)
+        assert result.complete
+        samples.append((result.run.sample_index, result.run.counts, sim.release_index))
+    assert samples[0][2] == samples[1][2] == 608  # 0.3 s at 2 kHz, at a frame of 32
+    assert np.array_equal(samples[0][0], samples[1][0])
+    assert np.array_equal(samples[0][1], samples[1][1])

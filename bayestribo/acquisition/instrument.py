@@ -78,6 +78,11 @@ class SimulationConfig:
         Standard deviation of Gaussian noise added before quantisation [counts].
     seed : int
         Seed of the noise and of injected garbage.
+    hold_s : float
+        Least time the magnet holds the pin after ARM [s]: a FIRE that comes earlier
+        releases it at the first frame from that time on, so that the recording does
+        not depend on when the host's FIRE arrives (0: at the frame after FIRE, as a
+        board does).
     """
 
     zeta: float = 0.0236
@@ -94,6 +99,7 @@ class SimulationConfig:
     velocity_range_m_per_s: float = 0.5
     noise_counts: float = 0.0
     seed: int = 0
+    hold_s: float = 0.0
 
     def __post_init__(self) -> None:
         for name in (
@@ -109,6 +115,8 @@ class SimulationConfig:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be positive and finite, got {value!r}")
+        if not (math.isfinite(self.hold_s) and 0.0 <= self.hold_s < MAX_PRETRIGGER_S):
+            raise ValueError(f"hold_s must be in [0, {MAX_PRETRIGGER_S:g}) s, got {self.hold_s!r}")
         if not 1 <= self.samples_per_frame <= 1024:
             raise ValueError(f"samples_per_frame must be in 1..1024, got {self.samples_per_frame}")
         if self.x0_m > self.displacement_range_m:
@@ -416,6 +424,7 @@ class SimulatedInstrument:
         number = 0  # DATA frames produced
         index = 0  # next sample index
         release: int | None = None
+        fire_pending = False
         t0 = 0.0
         while not self._stop.is_set():
             rate = cfg.sample_rate_Hz
@@ -460,17 +469,16 @@ class SimulatedInstrument:
                             frame = frame[:12] + bytes([frame[12] ^ 0xFF]) + frame[13:]
                         self._send(frame)
                         seq, number, index, release = 1, 0, 0, None
+                        fire_pending = False
                         streaming, t0 = True, time.monotonic()
                     elif command == "FIRE":
                         if not streaming:
                             self._error("no run: ARM first")
-                        elif release is not None:
+                        elif release is not None or fire_pending:
                             self._error("released already")
                         else:
-                            release = index
-                            self.release_index = index
-                            self._send(encode_frame(FrameType.RELEASE, seq, encode_release(index)))
-                            seq += 1
+                            fire_pending = True  # released at the next frame, see below
+
                     elif command == "STOP":
                         if not streaming:
                             self._error("no run")
@@ -482,6 +490,12 @@ class SimulatedInstrument:
                 continue
             if not streaming:
                 continue
+            if fire_pending and index >= math.ceil(cfg.hold_s * rate):
+                fire_pending = False
+                release = index
+                self.release_index = index
+                self._send(encode_frame(FrameType.RELEASE, seq, encode_release(index)))
+                seq += 1
             if release is not None:
                 remaining = release + len(self._decay) - index
             else:

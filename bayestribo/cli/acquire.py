@@ -245,6 +245,9 @@ def run(args: argparse.Namespace) -> int:
                 natural_frequency_Hz=inputs["natural_frequency_Hz"],
                 noise_counts=args.sim_noise,
                 seed=args.sim_seed,
+                # the simulated magnet holds the pin long after the host's FIRE is due:
+                # the same settings give the same recording whatever the machine's load
+                hold_s=max(0.5, 10.0 * args.pretrigger),
             )
             faults = FaultPlan(
                 drop=frozenset(args.drop),
