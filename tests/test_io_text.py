@@ -150,11 +150,14 @@ def test_bad_text_raises_naming_file_and_what_was_expected(
     assert str(path) in str(info.value)
 
 
-def test_not_utf8_raises(tmp_path: Path) -> None:
+def test_bytes_that_are_no_numbers_are_refused_naming_the_line(tmp_path: Path) -> None:
+    from bayestribo.errors import ReadingWarning
+
     path = tmp_path / "bin.csv"
-    path.write_bytes(b"time_s,displacement_m\n\xff\xfe,1\n")
-    with pytest.raises(RunFormatError, match=r"bin\.csv.*not UTF-8"):
-        read_run(path)
+    path.write_bytes(b"time_s,displacement_m\n\xff\xfe,1\n0.1,2\n")
+    with pytest.warns(ReadingWarning, match="not UTF-8"):
+        with pytest.raises(RunFormatError, match=r"bin\.csv.*line 2, column 'time_s'"):
+            read_run(path)
 
 
 def test_numpys_reader_and_the_row_by_row_reader_give_the_same_numbers(tmp_path: Path) -> None:
@@ -271,3 +274,25 @@ def test_a_last_line_cut_short_is_left_out_and_said(tmp_path: Path) -> None:
     path.write_text("time_s,displacement_m\n" + "\n".join(lines) + "\n")
     with pytest.raises(RunFormatError, match="line 52"):
         read_run(path)
+
+
+def test_an_8_bit_file_is_read_as_windows_1252_and_said(tmp_path: Path) -> None:
+    """A Polytec-style export written in Windows-1252 (µ as the byte 0xB5): read, the
+    unit understood, with a warning naming the encoding used; --encoding reads it
+    without one; a wrong encoding given is an error naming it."""
+    from bayestribo.errors import ReadingWarning
+
+    t, x = _sine()
+    body = "".join(f"{a!r};{b * 1e6!r}\n" for a, b in zip(t, x, strict=True))
+    path = tmp_path / "polytec.txt"
+    path.write_bytes(("time [s];displacement [µm]\n" + body).encode("cp1252"))
+    with pytest.warns(ReadingWarning, match="not UTF-8 .byte 0xb5.*Windows-1252.*'µ'"):
+        run = read_run(path)
+    np.testing.assert_allclose(run.displacement, x, rtol=1e-12)
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ReadingWarning)
+        assert read_run(path, encoding="cp1252").n_samples == len(t)
+    with pytest.raises(RunFormatError, match="unknown text encoding 'klingon'"):
+        read_run(path, encoding="klingon")

@@ -74,6 +74,12 @@ def add_reading_options(parser: argparse.ArgumentParser) -> None:
         help="text files: decimal mark (',' for European exports)",
     )
     parser.add_argument(
+        "--encoding",
+        metavar="NAME",
+        help="text files: the text encoding (cp1252, latin-1, ...); default UTF-8, and "
+        "Windows-1252, said, for a file that is not UTF-8",
+    )
+    parser.add_argument(
         "--scale",
         action="append",
         metavar="NAME=FACTOR",
@@ -185,6 +191,8 @@ def reading_kwargs(args: argparse.Namespace) -> dict[str, Any]:
         kwargs["delimiter"] = _DELIMITER_NAMES.get(args.delimiter, args.delimiter)
     if args.decimal != ".":
         kwargs["decimal"] = args.decimal
+    if getattr(args, "encoding", None):
+        kwargs["encoding"] = args.encoding
     scale = _scale_from_args(args.scale)
     if scale is not None:
         kwargs["scale"] = scale

@@ -42,6 +42,7 @@ _OPTIONS = {
     "delimiter": ("text",),
     "decimal": ("text",),
     "skip_rows": ("text",),
+    "encoding": ("text",),
     "group": ("tdms", "hdf5"),
     "channels": ("uff", "tdms", "mat", "hdf5"),
 }
@@ -81,6 +82,7 @@ def read_run(
     delimiter: str | None = None,
     decimal: str = ".",
     skip_rows: int = 0,
+    encoding: str | None = None,
     group: str | None = None,
     channels: Mapping[str, Any] | None = None,
     file_format: str | None = None,
@@ -109,6 +111,11 @@ def read_run(
         ``{"displacement_m": 1e-3}`` for millimetres.
     delimiter, decimal, skip_rows
         Text files: column separator (default: guessed), decimal mark, lines to skip.
+    encoding : str, optional
+        Text files: the text encoding (``"cp1252"``, ``"latin-1"``, ...). Default UTF-8,
+        and a file that is not UTF-8 is read as Windows-1252 (µ as the byte 0xB5, the
+        8-bit encoding of most lab software) with a
+        :class:`~bayestribo.errors.ReadingWarning` saying so.
     group : str, optional
         TDMS, HDF5: the group holding the channels.
     channels : mapping, optional
@@ -164,6 +171,7 @@ def read_run(
         "delimiter": delimiter,
         "decimal": None if decimal == "." else decimal,
         "skip_rows": skip_rows or None,
+        "encoding": encoding,
         "group": group,
         "channels": channels,
     }
@@ -182,6 +190,7 @@ def read_run(
             delimiter=delimiter,
             decimal=decimal,
             skip_rows=skip_rows,
+            encoding=encoding,
         )
     elif kind == "uff":
         signals = read_uff(path, channels=channels, scale=scale)
@@ -222,6 +231,7 @@ READ_OPTIONS = (
     "delimiter",
     "decimal",
     "skip_rows",
+    "encoding",
     "group",
     "channels",
     "file_format",

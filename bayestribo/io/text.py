@@ -108,6 +108,36 @@ def _parse_rows(
     return data
 
 
+def _decode(data: bytes, encoding: str | None, where: str) -> str:
+    """The file's text: in ``encoding`` when given, else UTF-8, else Windows-1252 (the
+    8-bit encoding lab software writes; a byte it leaves undefined falls back to
+    Latin-1), said with a warning."""
+    if encoding is not None:
+        try:
+            return data.decode(encoding)
+        except LookupError:
+            raise RunFormatError(f"encoding: unknown text encoding {encoding!r}", where) from None
+        except UnicodeDecodeError as exc:
+            raise RunFormatError(
+                f"the file is not {encoding} text ({exc.reason} at byte {exc.start})", where
+            ) from None
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        first = exc.start
+    try:
+        text, used = data.decode("cp1252"), "Windows-1252"
+    except UnicodeDecodeError:
+        text, used = data.decode("latin-1"), "Latin-1"
+    warnings.warn(
+        f"{where}: not UTF-8 (byte {data[first]:#04x} at {first}): read as {used}, where it "
+        f"is {text[first]!r}; give encoding= (--encoding) if the header reads wrong",
+        ReadingWarning,
+        stacklevel=4,
+    )
+    return text
+
+
 #: What a number cut short can look like: a prefix of a decimal number.
 _NUMBER_PREFIX = re.compile(r"[+-]?\d*[.,]?\d*(?:[eE][+-]?\d*)?")
 
@@ -222,6 +252,7 @@ def read_text(
     delimiter: str | None = None,
     decimal: str = ".",
     skip_rows: int = 0,
+    encoding: str | None = None,
 ) -> dict[str, NDArray]:
     """Read a delimited text file of samples.
 
@@ -244,6 +275,9 @@ def read_text(
         Decimal mark, ``"."`` or ``","``.
     skip_rows : int
         Lines to skip at the top before the header or data (an instrument preamble).
+    encoding : str, optional
+        The text encoding; default UTF-8, and Windows-1252 (said with a
+        :class:`~bayestribo.errors.ReadingWarning`) for a file that is not UTF-8.
 
     Returns
     -------
@@ -265,10 +299,7 @@ def read_text(
         raise RunFormatError("delimiter and decimal mark cannot both be ','", where)
     if not isinstance(skip_rows, int) or isinstance(skip_rows, bool) or skip_rows < 0:
         raise RunFormatError(f"skip_rows: expected an integer >= 0, got {skip_rows!r}", where)
-    try:
-        text = path.read_bytes().decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise RunFormatError(f"the file is not UTF-8 text ({exc.reason})", where) from None
+    text = _decode(path.read_bytes(), encoding, where)
     all_lines = text.splitlines()
     if skip_rows == 0:
         export = detect_export(all_lines[:PREAMBLE_LINES], where)
