@@ -113,3 +113,21 @@ def test_any_json_value_is_read_or_refused_with_the_packages_error(tmp_path_fact
         assert str(exc)  # a message, one of the package's
     else:
         assert isinstance(metadata, dict)
+
+
+@pytest.mark.parametrize(
+    ("key", "value"),
+    [
+        ("mass_kg", 1e308),
+        ("mass_kg", 1e-320),
+        ("natural_frequency_Hz", 1e-320),
+        ("load_N", 1e300),
+        ("sample_rate_Hz", 1e300),
+        ("displacement_resolution_m", 5.0),
+    ],
+)
+def test_a_number_no_rig_has_is_refused_naming_its_range(tmp_path, key, value):
+    path = tmp_path / "r.json"
+    path.write_text(json.dumps({key: value}))
+    with pytest.raises(RunFormatError, match=rf"metadata '{key}'.*expected a finite number >="):
+        read_sidecar(path)

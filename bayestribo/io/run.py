@@ -74,30 +74,31 @@ class _Key:
 #: The typed metadata keys of a run: name -> (type, meaning). ``None`` means unknown.
 METADATA_KEYS: Mapping[str, _Key] = MappingProxyType(
     {
-        "load_N": _Key("float", "normal load N [N]; 0 for a test without contact", 0.0),
-        "mass_kg": _Key("float", "oscillating mass m [kg]", 0.0, low_open=True),
-        "natural_frequency_Hz": _Key(
-            "float", "undamped natural frequency f [Hz]", 0.0, low_open=True
-        ),
+        # Every number has a range: a value outside no rig has (a mass of 1e308 kg, a
+        # frequency of 1e-320 Hz) is a typo or a unit slip, refused before it reaches a
+        # computation that would overflow.
+        "load_N": _Key("float", "normal load N [N]; 0 for a test without contact", 0.0, high=1e6),
+        "mass_kg": _Key("float", "oscillating mass m [kg]", 1e-9, high=1e4),
+        "natural_frequency_Hz": _Key("float", "undamped natural frequency f [Hz]", 1e-4, high=1e6),
         "displacement_resolution_m": _Key(
-            "float", "displacement resolution of the sensor [m]", 0.0, low_open=True
+            "float", "displacement resolution of the sensor [m]", 1e-15, high=1.0
         ),
         "velocity_resolution_m_per_s": _Key(
-            "float", "velocity resolution of the sensor [m/s]", 0.0, low_open=True
+            "float", "velocity resolution of the sensor [m/s]", 1e-15, high=1e3
         ),
         "displacement_range_m": _Key(
-            "float", "largest |displacement| the sensor can record [m]", 0.0, low_open=True
+            "float", "largest |displacement| the sensor can record [m]", 1e-12, high=1e3
         ),
         "velocity_range_m_per_s": _Key(
-            "float", "largest |velocity| the sensor can record [m/s]", 0.0, low_open=True
+            "float", "largest |velocity| the sensor can record [m/s]", 1e-12, high=1e4
         ),
-        "sample_rate_Hz": _Key("float", "sample rate [Hz]", 0.0, low_open=True),
+        "sample_rate_Hz": _Key("float", "sample rate [Hz]", 1e-3, high=1e10),
         "lubricant": _Key("str", "lubricant name"),
         "water_mass_fraction": _Key(
             "float", "mass fraction of water in the lubricant [-]", 0.0, high=1.0
         ),
         "repeat": _Key("int", "repeat number of the test", 0.0),
-        "temperature_C": _Key("float", "temperature [°C]", -273.15, low_open=True),
+        "temperature_C": _Key("float", "temperature [°C]", -273.15, low_open=True, high=1e4),
         "run_id": _Key("str", "identifier of the run"),
         "length_unit": _Key(
             "str", "'m', or 'arbitrary' when the length unit is unknown", choices=LENGTH_UNITS
