@@ -122,6 +122,25 @@ def dissipation_amplitudes(turning_points: NDArray, n: int = DISSIPATION_AMPLITU
     return np.geomspace(low, high, n)
 
 
+def _band(
+    total: NDArray, prob: float, frequency_sd: float
+) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    """Mean, sd and equal-tailed interval of ΔE draws (n, n_A), with the frequency
+    nuisance: the energies scale with k = mΩ², a relative error of twice it, added in
+    quadrature to the sd and to each side of the interval."""
+    tail = 0.5 * (1.0 - prob)
+    lower, upper = np.quantile(total, [tail, 1.0 - tail], axis=0)
+    mean = np.mean(total, axis=0)
+    sd = np.std(total, axis=0, ddof=1) if total.shape[0] > 1 else np.zeros(total.shape[1])
+    if frequency_sd > 0:
+        extra = 2.0 * float(frequency_sd) * np.abs(mean)
+        z = float(scipy.stats.norm.ppf(1.0 - tail))
+        lower = mean - np.hypot(mean - lower, z * extra)
+        upper = mean + np.hypot(upper - mean, z * extra)
+        sd = np.hypot(sd, extra)
+    return mean, sd, lower, upper
+
+
 def dissipation_band(
     posterior: Posterior,
     draws: NDArray,
@@ -187,16 +206,7 @@ def dissipation_band(
     exact, harmonic = exact[keep], harmonic[keep]
     parts = {k: v[keep] for k, v in parts.items()}
     total = exact * factor
-    tail = 0.5 * (1.0 - prob)
-    lower, upper = np.quantile(total, [tail, 1.0 - tail], axis=0)
-    mean = np.mean(total, axis=0)
-    sd = np.std(total, axis=0, ddof=1) if total.shape[0] > 1 else np.zeros(amps.size)
-    if frequency_sd > 0:
-        extra = 2.0 * float(frequency_sd) * np.abs(mean)
-        z = float(scipy.stats.norm.ppf(1.0 - tail))
-        lower = mean - np.hypot(mean - lower, z * extra)
-        upper = mean + np.hypot(upper - mean, z * extra)
-        sd = np.hypot(sd, extra)
+    mean, sd, lower, upper = _band(total, prob, frequency_sd)
     with np.errstate(invalid="ignore", divide="ignore"):
         share = {k: np.where(harmonic != 0, v / harmonic, 0.0) for k, v in parts.items()}
     return {
@@ -409,17 +419,7 @@ def averaged_dissipation(
             stacks.append(energy[take] * scale.energy_factor)
     if not stacks:
         raise ValueError("members: no law has a half cycle at these swings")
-    total = np.concatenate(stacks)
-    tail = 0.5 * (1.0 - prob)
-    lower, upper = np.quantile(total, [tail, 1.0 - tail], axis=0)
-    mean = np.mean(total, axis=0)
-    sd = np.std(total, axis=0, ddof=1)
-    if frequency_sd > 0:
-        extra = 2.0 * float(frequency_sd) * np.abs(mean)
-        z = float(scipy.stats.norm.ppf(1.0 - tail))
-        lower = mean - np.hypot(mean - lower, z * extra)
-        upper = mean + np.hypot(upper - mean, z * extra)
-        sd = np.hypot(sd, extra)
+    mean, sd, lower, upper = _band(np.concatenate(stacks), prob, frequency_sd)
     names = [name for name, _, _ in members]
     return {
         "law": " | ".join(names),

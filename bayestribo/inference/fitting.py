@@ -179,30 +179,26 @@ def fit(
                     also_start_at=dict(zip(posterior.names, sampled.theta_map, strict=True)),
                 )
     else:
-        posterior = build_posterior(
-            prepared.data,
-            model=model,
-            friction=prepared.contact,
-            discrepancy=discrepancy,
-            priors=priors,
-            fixed=fixed,
-            law=the_law,
-        )
+
+        def posterior_on(prep: PreparedRun) -> Any:
+            return build_posterior(
+                prep.data,
+                model=model,
+                friction=prep.contact,
+                discrepancy=discrepancy,
+                priors=priors,
+                fixed=fixed,
+                law=the_law,
+            )
+
+        posterior = posterior_on(prepared)
         also = None
         if not posterior.law.closed_form:
             theta = maximum_a_posteriori(posterior, prepared.decay)[0]
             framed = _in_law_frame(prepared, posterior, theta)
             if framed is not None:
                 prepared = framed
-                posterior = build_posterior(
-                    prepared.data,
-                    model=model,
-                    friction=prepared.contact,
-                    discrepancy=discrepancy,
-                    priors=priors,
-                    fixed=fixed,
-                    law=the_law,
-                )
+                posterior = posterior_on(prepared)
                 also = dict(zip(posterior.names, theta, strict=True))
         sampled = sample(
             posterior,
