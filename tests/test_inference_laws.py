@@ -256,13 +256,13 @@ def test_laws_the_decay_cannot_split_give_one_averaged_dissipation():
     comparison, runs = compare_prepared(prepared, ("viscous+coulomb", "coulomb+hysteretic"), seed=2)
     assert set(comparison.as_good) == {"viscous+coulomb", "coulomb+hysteretic"}
     assert comparison.verdict == "viscous+coulomb"  # the order compared breaks the tie
+    scale = physical_scale(prepared.decay.scaling, prepared.metadata)
     members = [
-        (law, s.posterior, s.run.chains.reshape(-1, s.run.chains.shape[-1]))
+        (law, s.posterior, s.run.chains.reshape(-1, s.run.chains.shape[-1]), scale)
         for law, s in runs.items()
     ]
-    scale = physical_scale(prepared.decay.scaling, prepared.metadata)
     swings = dissipation_amplitudes(prepared.decay.peaks.value / scale.length_scale)
-    band = averaged_dissipation(members, swings, scale)
+    band = averaged_dissipation(members, swings * scale.length_scale)
     truth = swing_dissipation(
         lambda v: 0.0 * v,
         np.asarray(band["amplitude"]),
@@ -272,3 +272,13 @@ def test_laws_the_decay_cannot_split_give_one_averaged_dissipation():
     lo, hi = (np.asarray(x) for x in band["interval"])
     assert np.all((lo < truth) & (truth < hi)), (lo / truth - 1, hi / truth - 1)
     assert band["laws"] == list(runs)
+    # as fit(law="auto") assembles it: the verdict's final posterior and the others'
+    from bayestribo.inference.fitting import _averaged_band
+    from bayestribo.inference.pipeline import summarise
+
+    verdict = runs[comparison.verdict]
+    result = summarise(prepared, verdict, seed=1)
+    wired = _averaged_band(prepared, runs, comparison, result, (prepared, verdict))
+    assert wired["laws"] == comparison.as_good and wired["left_out"] == []
+    assert wired["amplitude"] == result.dissipation["amplitude"]
+    np.testing.assert_allclose(wired["mean"], band["mean"], rtol=1e-6)

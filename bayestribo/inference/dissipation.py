@@ -366,9 +366,8 @@ def turning_point_dissipation(
 
 
 def averaged_dissipation(
-    members: list[tuple[str, Posterior, NDArray]],
+    members: list[tuple[str, Posterior, NDArray, PhysicalScale]],
     amplitude: NDArray,
-    scale: PhysicalScale,
     *,
     prob: float = 0.95,
     frequency_sd: float = 0.0,
@@ -386,12 +385,11 @@ def averaged_dissipation(
 
     Parameters
     ----------
-    members : list of (name, Posterior, draws)
-        Each law's name, posterior and flat draws (n, d), all on one preparation.
+    members : list of (name, Posterior, draws, PhysicalScale)
+        Each law's name, posterior, flat draws (n, d) and the physical scale of the
+        preparation it was fitted on.
     amplitude : ndarray
-        Swings A [dimensionless, units of that preparation's ℓ].
-    scale : PhysicalScale
-        That preparation's physical scale.
+        Swings A in the physical length unit of the scales.
     prob, frequency_sd
         As in :func:`dissipation_band`.
 
@@ -405,12 +403,12 @@ def averaged_dissipation(
     per = max(_BAND_DRAWS_INTEGRATED, _BAND_DRAWS // max(len(members), 1))
     amps = np.asarray(amplitude, dtype=float)
     stacks = []
-    for _, posterior, draws in members:
+    for _, posterior, draws, scale in members:
         draws = np.atleast_2d(np.asarray(draws, dtype=float))
         pick = draws[np.linspace(0, draws.shape[0] - 1, min(per, draws.shape[0])).astype(int)]
         values = posterior.law_draws(pick)
         energy = posterior.law.swing_dissipation(
-            amps, values, posterior.likelihood.reference_amplitude
+            amps / scale.length_scale, values, posterior.likelihood.reference_amplitude
         )
         energy = energy[np.all(np.isfinite(energy), axis=1)]
         if energy.shape[0]:
@@ -420,11 +418,12 @@ def averaged_dissipation(
     if not stacks:
         raise ValueError("members: no law has a half cycle at these swings")
     mean, sd, lower, upper = _band(np.concatenate(stacks), prob, frequency_sd)
-    names = [name for name, _, _ in members]
+    names = [member[0] for member in members]
+    scale = members[0][3]
     return {
         "law": " | ".join(names),
         "laws": names,
-        "amplitude": (amps * scale.length_scale).tolist(),
+        "amplitude": amps.tolist(),
         "amplitude_unit": scale.length_unit,
         "mean": mean.tolist(),
         "sd": sd.tolist(),

@@ -215,7 +215,7 @@ def fit(
         result.idata.posterior.attrs["law_comparison_json"] = json.dumps(
             plain_data(comparison.to_dict())
         )
-        averaged = _averaged_band(common, runs, comparison, result)
+        averaged = _averaged_band(common, runs, comparison, result, (prepared, sampled))
         if averaged is not None:
             attrs = result.idata.posterior.attrs
             attrs["verdict_dissipation_json"] = attrs["dissipation_json"]
@@ -225,33 +225,67 @@ def fit(
 
 
 def _averaged_band(
-    common: PreparedRun, runs: Mapping[str, Any], comparison: Any, result: FitResult
+    common: PreparedRun,
+    runs: Mapping[str, Any],
+    comparison: Any,
+    result: FitResult,
+    final: tuple[PreparedRun, Any],
 ) -> dict[str, Any] | None:
     """ΔE(A) averaged over the adequate, converged laws as good as the verdict
-    (:func:`bayestribo.inference.dissipation.averaged_dissipation`), on the
-    comparison's common preparation; None when the verdict stands alone."""
+    (:func:`bayestribo.inference.dissipation.averaged_dissipation`); None when the
+    verdict stands alone.
+
+    The verdict enters with its final posterior (in its own frame, ``final``), the
+    others with the comparison's, on the common preparation. A law without a closed
+    form whose turning times ask for another frame than the common one by more than a
+    quarter of the band's relative sd (a nonlinear drag, whose frame the decrement
+    misjudges by up to 1e-4, two standard deviations of ΔE at ten times the
+    resolution) is left out of the average rather than let in biased, and named in
+    ``left_out``."""
     from bayestribo.inference.dissipation import averaged_dissipation, physical_scale
+    from bayestribo.inference.pipeline import law_frequency
 
     if not comparison.adequate:
         return None
-    members = []
+    band = result.dissipation
+    if not band:
+        return None
+    common_scale = physical_scale(common.decay.scaling, common.metadata)
+    f0 = common.decay.scaling.omega / (2.0 * np.pi)
+    # a frame error ε moves ΔE(A) by about ε relative: a quarter of the band's sd
+    mean, sd = np.asarray(band["mean"], dtype=float), np.asarray(band["sd"], dtype=float)
+    limit = 0.25 * float(np.median(np.abs(sd / mean)))
+    members, left_out = [], []
     for law in comparison.as_good:
         row = comparison.table.get(law, {})
-        if law in runs and row.get("adequate") and row.get("converged"):
-            s = runs[law]
-            members.append((law, s.posterior, s.run.chains.reshape(-1, s.run.chains.shape[-1])))
-    band = result.dissipation
-    if len(members) < 2 or not band:
+        if law not in runs or not (row.get("adequate") and row.get("converged")):
+            continue
+        if law == comparison.verdict:
+            prepared, sampled = final
+            scale = physical_scale(prepared.decay.scaling, prepared.metadata)
+        else:
+            sampled, scale = runs[law], common_scale
+            if not sampled.posterior.law.closed_form:
+                f = law_frequency(sampled.posterior, sampled.theta_map, common.decay)
+                if f is None or abs(f / f0 - 1.0) > limit:
+                    left_out.append(law)
+                    continue
+        chains = sampled.run.chains
+        members.append((law, sampled.posterior, chains.reshape(-1, chains.shape[-1]), scale))
+    if len(members) < 2:
         return None
-    scale = physical_scale(common.decay.scaling, common.metadata)
-    swings = np.asarray(band["amplitude"], dtype=float) / scale.length_scale
     frequency_sd = float(result.idata.posterior.attrs.get("frequency_nuisance_sd", 0.0))
     try:
-        return averaged_dissipation(
-            members, swings, scale, prob=float(band["prob"]), frequency_sd=frequency_sd
+        out = averaged_dissipation(
+            members,
+            np.asarray(band["amplitude"], dtype=float),
+            prob=float(band["prob"]),
+            frequency_sd=frequency_sd,
         )
     except ValueError:
         return None
+    out["left_out"] = left_out
+    return out
 
 
 #: A law's frequency closer than this to the record's leaves the frame as it is.
