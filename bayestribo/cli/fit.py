@@ -80,8 +80,8 @@ def register(subparsers: Any) -> None:
         "--discrepancy",
         action="store_true",
         help="add the model-discrepancy terms: a white relative error on E and a departure "
-        "of the decay's shape, smooth along the decay (for a law that is not exactly "
-        "viscous + Coulomb)",
+        "of the decay's shape, smooth along the decay (for a small misfit; for a law that "
+        "does not hold, --law auto)",
     )
     p.add_argument("--progress", action="store_true", help="show a progress bar (stderr)")
     p.add_argument("--skip", type=int, default=1, help="oscillations to skip after the release")
