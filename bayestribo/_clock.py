@@ -6,8 +6,8 @@ few microseconds of jitter) are such a clock: each stamp is off by a small, boun
 amount and the grid goes on. A missing sample, a restart of the clock or a resampled
 segment is not: the stamps leave the grid by a whole step or more. The two are told
 apart by the residuals of the stamps from the best regular grid ``t0 + i h`` (least
-squares): jitter keeps every residual within a quarter of a step, a gap moves the
-residuals after it by a whole step.
+squares): jitter keeps every residual within a quarter of a step, a gap puts the
+residuals on either side of it a whole step apart (about half a step each).
 
 The samples of a jittered record are taken as the regular grid's
 (:func:`bayestribo.signal.decay.check_time` returns it). Where the clock is regular
