@@ -75,8 +75,8 @@ def test_jittered_time_stamps_are_the_regular_clock_and_a_gap_is_refused():
 
 def test_a_swing_no_rig_makes_is_refused_with_the_factor_that_fixes_it():
     """Millimetres read as metres on both channels (they then agree with each other):
-    a 1.2 m swing at 32.6 Hz, thousands of g. Refused, naming mm and the option; the
-    same record with the factor applied fits."""
+    a 1.2 m swing at 32.6 Hz, 250 m/s. Refused, naming mm and the option. A stiff rig,
+    a 0.3 mm swing at 1 kHz (1200 g, 1.9 m/s), is not refused."""
     from bayestribo import fit
     from bayestribo.errors import RecordingError
 
@@ -87,3 +87,6 @@ def test_a_swing_no_rig_makes_is_refused_with_the_factor_that_fixes_it():
     micro = Run(run.time, run.displacement * 1e6, run.velocity * 1e6, dict(run.metadata))
     with pytest.raises(RecordingError, match="likely in µm"):
         fit(micro, seed=1)
+    from bayestribo.signal.decay import _check_plausible
+
+    _check_plausible(np.array([3e-4, -2.9e-4]), 1000.0, None)  # no error
