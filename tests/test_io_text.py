@@ -296,3 +296,5 @@ def test_an_8_bit_file_is_read_as_windows_1252_and_said(tmp_path: Path) -> None:
         assert read_run(path, encoding="cp1252").n_samples == len(t)
     with pytest.raises(RunFormatError, match="unknown text encoding 'klingon'"):
         read_run(path, encoding="klingon")
+    with pytest.raises(RunFormatError, match="encoding: expected the name"):
+        read_run(path, encoding=1252)

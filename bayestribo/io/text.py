@@ -113,6 +113,10 @@ def _decode(data: bytes, encoding: str | None, where: str) -> str:
     8-bit encoding lab software writes; a byte it leaves undefined falls back to
     Latin-1), said with a warning."""
     if encoding is not None:
+        if not isinstance(encoding, str):
+            raise RunFormatError(
+                f"encoding: expected the name of a text encoding, got {encoding!r}", where
+            )
         try:
             return data.decode(encoding)
         except LookupError:
