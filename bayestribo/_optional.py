@@ -19,6 +19,7 @@ __all__ = ["EXTRAS", "require"]
 EXTRAS: dict[str, str] = {
     "pyuff": "formats",
     "nptdms": "formats",
+    "openpyxl": "formats",
     "h5py": "hdf5",
     "serial": "acquire",
     "nbformat": "report",

@@ -23,32 +23,47 @@ __all__ = [
     "cli_message",
     "read_run_from_args",
     "reading_kwargs",
+    "reading_options",
 ]
 
 #: Short names accepted by ``--columns``.
 COLUMN_ALIASES = {"t": "time_s", "x": "displacement_m", "v": "velocity_m_per_s", "-": "ignore"}
 
 
-def add_run_arguments(parser: argparse.ArgumentParser) -> None:
-    """Add RUN and the options that describe a file without a canonical header."""
+def add_run_arguments(parser: argparse.ArgumentParser, *, optional: bool = False) -> None:
+    """Add RUN (optional if ``optional``) and the options that describe a file."""
     parser.add_argument(
         "run",
         metavar="RUN",
+        nargs="?" if optional else None,
         help="run file: canonical CSV, other text, an oscilloscope or DAQ export (Tektronix, "
-        "Keysight/Agilent, Rigol, PicoScope CSV, LabVIEW .lvm), UFF, TDMS, .mat or HDF5",
+        "Keysight/Agilent, Rigol, PicoScope CSV, LabVIEW .lvm), Excel .xlsx, UFF, TDMS, .mat "
+        "or HDF5 (bayestribo inspect --formats lists them)",
     )
     add_reading_options(parser)
 
 
 def add_reading_options(parser: argparse.ArgumentParser) -> None:
-    """Add the options that describe a run file without a canonical header."""
+    """Add the options that describe a run file, each said to apply to the registered
+    formats that take it (:mod:`bayestribo.io.registry`)."""
+    from bayestribo.io.registry import registered_formats
+
+    formats = registered_formats()
+
+    def only(option: str, text: str) -> str:
+        takes = [f.name for f in formats.values() if option in f.options]
+        return f"{', '.join(takes)} files: {text}"
+
     parser.add_argument(
         "--columns",
         nargs="+",
         metavar="NAME",
-        help="text files: the role of each column in file order, comma or space separated: "
-        "time_s, displacement_m, velocity_m_per_s or ignore (short: t, x, v, -), or a "
-        "quantity with its unit (time_ms, displacement_um, velocity_mm_per_s, ...)",
+        help=only(
+            "columns",
+            "the role of each column in file order, comma or space separated: "
+            "time_s, displacement_m, velocity_m_per_s or ignore (short: t, x, v, -), or a "
+            "quantity with its unit (time_ms, displacement_um, velocity_mm_per_s, ...)",
+        ),
     )
     parser.add_argument(
         "--length-unit",
@@ -60,24 +75,27 @@ def add_reading_options(parser: argparse.ArgumentParser) -> None:
         type=int,
         default=0,
         metavar="N",
-        help="text files: lines to skip at the top (an instrument's preamble)",
+        help=only("skip_rows", "lines (rows) to skip at the top (an instrument's preamble)"),
     )
     parser.add_argument(
         "--delimiter",
         metavar="D",
-        help="text files: column separator (',', ';', 'tab' or 'space'; default: guessed)",
+        help=only("delimiter", "column separator (',', ';', 'tab' or 'space'; default: guessed)"),
     )
     parser.add_argument(
         "--decimal",
         choices=(".", ","),
         default=".",
-        help="text files: decimal mark (',' for European exports)",
+        help=only("decimal", "decimal mark (',' for European exports)"),
     )
     parser.add_argument(
         "--encoding",
         metavar="NAME",
-        help="text files: the text encoding (cp1252, latin-1, ...); default UTF-8, and "
-        "Windows-1252, said, for a file that is not UTF-8",
+        help=only(
+            "encoding",
+            "the text encoding (cp1252, latin-1, ...); default UTF-8, and Windows-1252, "
+            "said, for a file that is not UTF-8",
+        ),
     )
     parser.add_argument(
         "--scale",
@@ -90,19 +108,31 @@ def add_reading_options(parser: argparse.ArgumentParser) -> None:
         "--channel",
         action="append",
         metavar="NAME=SOURCE",
-        help="TDMS, MATLAB and HDF5 files: the channel, variable or dataset holding a "
-        "column, e.g. x=Disp or displacement_um=data.x (repeatable; NAME as in --columns); "
-        "UFF: the record index",
+        help=only(
+            "channels",
+            "the channel, variable or dataset holding a column, e.g. x=Disp or "
+            "displacement_um=data.x (repeatable; NAME as in --columns); UFF: the record index",
+        ),
     )
     parser.add_argument(
         "--group",
         metavar="GROUP",
-        help="TDMS and HDF5 files: the group holding the channels",
+        help=only("group", "the group holding the channels"),
+    )
+    parser.add_argument(
+        "--sheet",
+        metavar="NAME|N",
+        help=only(
+            "sheet",
+            "the worksheet holding the run, by name or position from 0 (needed when "
+            "several hold numbers)",
+        ),
     )
     parser.add_argument(
         "--format",
-        choices=("text", "uff", "tdms", "mat", "hdf5"),
-        help="file format, when the suffix does not say it",
+        choices=tuple(formats),
+        help="file format, when the suffix does not say it: "
+        + "; ".join(f"{f.name}: {f.hint or f.title}" for f in formats.values()),
     )
     parser.add_argument("--frequency", type=float, help="nominal natural frequency f [Hz]")
     parser.add_argument("--load", type=float, help="normal load N [N]")
@@ -179,8 +209,16 @@ def _channels_from_args(values: list[str] | None) -> dict[str, Any] | None:
     return out
 
 
-def reading_kwargs(args: argparse.Namespace) -> dict[str, Any]:
-    """Keyword arguments of :func:`bayestribo.read_run` from :func:`add_reading_options`."""
+def reading_options(args: argparse.Namespace) -> Any:
+    """The :class:`~bayestribo.io.options.ReadOptions` of :func:`add_reading_options`.
+
+    Raises
+    ------
+    CommandLineError
+        For an option value that is not valid, naming the option.
+    """
+    from bayestribo.io.options import ReadOptions
+
     kwargs: dict[str, Any] = {}
     columns = columns_from_args(args.columns)
     if columns is not None:
@@ -201,6 +239,9 @@ def reading_kwargs(args: argparse.Namespace) -> dict[str, Any]:
         kwargs["channels"] = channels
     if getattr(args, "group", None) is not None:
         kwargs["group"] = args.group
+    sheet = getattr(args, "sheet", None)
+    if sheet is not None:
+        kwargs["sheet"] = int(sheet) if sheet.isdigit() else sheet
     if args.format is not None:
         kwargs["file_format"] = args.format
     metadata = {
@@ -215,7 +256,12 @@ def reading_kwargs(args: argparse.Namespace) -> dict[str, Any]:
     }
     if metadata:
         kwargs["metadata"] = metadata
-    return kwargs
+    return ReadOptions(**kwargs)
+
+
+def reading_kwargs(args: argparse.Namespace) -> dict[str, Any]:
+    """The options of :func:`reading_options` as keyword arguments (JSON-ready)."""
+    return reading_options(args).as_kwargs()
 
 
 #: Python spellings in reading errors and the command-line options that do the same.
@@ -224,6 +270,7 @@ _CLI_SPELLINGS = (
     ("columns=[...]", "--columns"),
     ("columns=", "--columns "),
     ("give file_format=", "give --format"),
+    ("give sheet= (--sheet)", "give --sheet"),
     ("scale={...}", "--scale NAME=FACTOR"),
     ("scale=", "--scale "),
     ("channels={'time_s': 't', 'displacement_m': 'x'}", "--channel t=t --channel x=x"),
@@ -260,6 +307,6 @@ def read_run_from_args(args: argparse.Namespace) -> Any:
     from bayestribo.io import as_run
 
     try:
-        return as_run(args.run, **reading_kwargs(args))
+        return as_run(args.run, reading_options(args))
     except BayestriboError as exc:
         raise CommandLineError(cli_message(str(exc))) from None

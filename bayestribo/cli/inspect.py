@@ -22,6 +22,7 @@ from bayestribo.cli._common import (
     add_run_arguments,
     cli_message,
     read_run_from_args,
+    reading_options,
 )
 
 __all__ = ["inspection", "register"]
@@ -41,8 +42,13 @@ def register(subparsers: Any) -> None:
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    add_run_arguments(p)
+    add_run_arguments(p, optional=True)
     add_notch_option(p)
+    p.add_argument(
+        "--formats",
+        action="store_true",
+        help="list the file formats read (suffixes, options, extra to install) and exit",
+    )
     p.add_argument(
         "--skip",
         type=int,
@@ -80,7 +86,7 @@ def inspection(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
     from bayestribo.signal.decay import energy_decay
 
     try:
-        layout = describe_file(args.run, file_format=args.format, skip_rows=args.skip_rows)
+        layout = describe_file(args.run, reading_options(args))
     except BayestriboError as exc:
         raise CommandLineError(cli_message(str(exc))) from None
     recording = read_run_from_args(args)
@@ -200,8 +206,55 @@ def _text(report: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def formats_table() -> tuple[str, list[dict[str, Any]]]:
+    """The registered file formats, as text and as JSON-ready rows."""
+    import importlib.util
+
+    from bayestribo._optional import EXTRAS
+    from bayestribo.io.registry import registered_formats
+
+    rows = []
+    for fmt in registered_formats().values():
+        needs = [m for m, extra in EXTRAS.items() if extra == fmt.extra] if fmt.extra else []
+        missing = [m for m in needs if importlib.util.find_spec(m) is None]
+        rows.append(
+            {
+                "name": fmt.name,
+                "title": fmt.title,
+                "suffixes": list(fmt.suffixes),
+                "options": list(fmt.options),
+                "extra": fmt.extra,
+                "installed": not missing,
+            }
+        )
+    table = [
+        (
+            r["name"],
+            " ".join(r["suffixes"]),
+            ", ".join(r["options"]) or "-",
+            "yes" if r["installed"] else f"no: pip install 'bayestribo[{r['extra']}]'",
+            r["title"],
+        )
+        for r in rows
+    ]
+    head = ("format", "suffixes", "options", "installed", "what")
+    widths = [max(len(row[i]) for row in [head, *table]) for i in range(4)]
+    lines = [
+        "  ".join(f"{cell:{w}s}" for cell, w in zip(row[:4], widths, strict=True)) + "  " + row[4]
+        for row in [head, *table]
+    ]
+    lines.append("every format also takes --scale, the sidecar and the metadata options")
+    return "\n".join(lines), rows
+
+
 def run(args: argparse.Namespace) -> int:
     """Inspect the file; exit 2 when the decay cannot be analysed."""
+    if args.formats:
+        text, rows = formats_table()
+        print(json.dumps(rows, indent=2) if args.json else text)
+        return 0
+    if args.run is None:
+        raise CommandLineError("inspect: give a RUN file to inspect, or --formats")
     report, usable = inspection(args)
     if args.json:
         print(json.dumps(report, indent=2, allow_nan=False, default=str))

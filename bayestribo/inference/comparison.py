@@ -64,6 +64,7 @@ from bayestribo.inference.pipeline import (
 )
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.sampling import SamplerSettings
+from bayestribo.io.options import ReadOptions
 from bayestribo.io.run import Run
 from bayestribo.model.laws import Law, get_law
 from bayestribo.signal.increments import PiData
@@ -411,7 +412,7 @@ def compare_dissipation_laws(
     grid_points: int | None = None,
     skip_oscillations: int = 1,
     discrepancy: bool = False,
-    read_options: Mapping[str, Any] | None = None,
+    read_options: ReadOptions | Mapping[str, Any] | None = None,
 ) -> LawComparison:
     """Fit a run under each dissipation law and compare them by PSIS-LOO.
 
@@ -428,8 +429,9 @@ def compare_dissipation_laws(
         :data:`bayestribo.DEFAULT_SEED`.
     model, n_walkers, n_ensembles, max_steps, grid_points, skip_oscillations, discrepancy
         As in :func:`bayestribo.inference.fit`.
-    read_options : mapping, optional
-        Options of :func:`bayestribo.read_run` when ``run`` is a path.
+    read_options : ReadOptions or mapping, optional
+        How to read ``run`` when it is a path (:class:`~bayestribo.io.options.ReadOptions`,
+        or a mapping of the options of :func:`bayestribo.read_run`).
 
     Returns
     -------

@@ -30,6 +30,7 @@ from bayestribo.inference.priors import Prior
 from bayestribo.inference.result import FitResult, plain_data
 from bayestribo.inference.sampling import SamplerSettings
 from bayestribo.inference.start import maximum_a_posteriori
+from bayestribo.io.options import ReadOptions
 from bayestribo.io.run import Run
 from bayestribo.model.laws import Law, get_law
 from bayestribo.signal.noise import NoiseModel
@@ -51,7 +52,7 @@ def fit(
     grid_points: int | None = None,
     skip_oscillations: int = 1,
     progress: bool = False,
-    read_options: Mapping[str, Any] | None = None,
+    read_options: ReadOptions | Mapping[str, Any] | None = None,
     noise: NoiseModel | None = None,
     correct_channels: bool = True,
     notch: float | Literal["auto"] | None = None,
@@ -92,8 +93,9 @@ def fit(
         Oscillations skipped after the release.
     progress : bool
         Show a progress bar.
-    read_options : mapping, optional
-        Options of :func:`bayestribo.read_run` when ``run`` is a path.
+    read_options : ReadOptions or mapping, optional
+        How to read ``run`` when it is a path (:class:`~bayestribo.io.options.ReadOptions`,
+        or a mapping of the options of :func:`bayestribo.read_run`).
     noise : NoiseModel, optional
         Use this noise model instead of the recording's.
     correct_channels : bool

@@ -58,6 +58,7 @@ from bayestribo.inference.sensitivity import prior_sensitivity
 from bayestribo.inference.start import initial_walkers, maximum_a_posteriori, refine
 from bayestribo.io.files import as_run
 from bayestribo.io.frequency import FrequencyTrend, frequency_trend, turning_point_trend
+from bayestribo.io.options import ReadOptions
 from bayestribo.io.run import Run
 from bayestribo.model.laws import Law, get_law
 from bayestribo.signal.decay import EnergyDecay, energy_decay
@@ -164,7 +165,7 @@ def prepare(
     grid_points: int | None = None,
     noise: NoiseModel | None = None,
     seed: int | np.random.Generator | None = None,
-    read_options: Mapping[str, Any] | None = None,
+    read_options: ReadOptions | Mapping[str, Any] | None = None,
     correct_channels: bool = True,
     notch: float | Literal["auto"] | None = None,
 ) -> PreparedRun:
@@ -187,8 +188,9 @@ def prepare(
         not of the fit's seed (the increments' variances carry the Monte Carlo's
         relative error of about 8 %; where the law misfits a record, a fit seeded
         anew with each draw moved by more than one posterior sd).
-    read_options : mapping, optional
-        Options of :func:`bayestribo.read_run` when ``run`` is a path.
+    read_options : ReadOptions or mapping, optional
+        How to read ``run`` when it is a path (:class:`~bayestribo.io.options.ReadOptions`,
+        or a mapping of the options of :func:`bayestribo.read_run`).
     correct_channels : bool
         Correct the velocity to the displacement when their gain ratio or delay is
         off (:func:`bayestribo.inference.calibration.calibrate_channels`; a
@@ -203,9 +205,7 @@ def prepare(
     -------
     PreparedRun
     """
-    recording, channels = calibrate_channels(
-        as_run(run, **dict(read_options or {})), correct=correct_channels
-    )
+    recording, channels = calibrate_channels(as_run(run, read_options), correct=correct_channels)
     decay = energy_decay(
         recording.time,
         recording.displacement,

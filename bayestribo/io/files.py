@@ -10,68 +10,31 @@ place where "a run or a file" becomes a :class:`~bayestribo.io.run.Run`.
 
 from __future__ import annotations
 
-import difflib
 import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from bayestribo.errors import BayestriboError, RunFormatError
-from bayestribo.io.hdf5 import read_hdf5
-from bayestribo.io.matlab import read_mat
+from bayestribo.io.options import READ_OPTIONS, ReadOptions, unknown_options
+from bayestribo.io.registry import format_for, registered_formats
 from bayestribo.io.run import DISPLACEMENT, TIME, VELOCITY, Run
 from bayestribo.io.sidecar import read_sidecar, sidecar_path, write_sidecar
-from bayestribo.io.tdms import read_tdms
-from bayestribo.io.text import read_text, write_csv
-from bayestribo.io.uff import read_uff
+from bayestribo.io.text import write_csv
 from bayestribo.io.validation import validate_run
 
-__all__ = ["FORMATS", "READ_OPTIONS", "as_run", "format_of", "read_run", "write_run"]
-
-#: File formats and their suffixes.
-FORMATS: Mapping[str, tuple[str, ...]] = {
-    "text": (".csv", ".txt", ".dat", ".tsv", ".asc", ".prn", ".lvm"),
-    "uff": (".uff", ".unv", ".uf", ".58"),
-    "tdms": (".tdms",),
-    "mat": (".mat",),
-    "hdf5": (".h5", ".hdf5", ".hdf", ".he5"),
-}
-
-_OPTIONS = {
-    "columns": ("text",),
-    "delimiter": ("text",),
-    "decimal": ("text",),
-    "skip_rows": ("text",),
-    "encoding": ("text",),
-    "group": ("tdms", "hdf5"),
-    "channels": ("uff", "tdms", "mat", "hdf5"),
-}
+__all__ = ["READ_OPTIONS", "ReadOptions", "as_run", "format_of", "read_run", "write_run"]
 
 
 def format_of(path: str | Path, file_format: str | None = None) -> str:
-    """The format a file is read as: ``file_format`` if given, else from its suffix.
+    """The name of the format a file is read as: ``file_format`` if given, else by suffix.
 
     Raises
     ------
     RunFormatError
         For an unknown format or suffix, listing the known ones.
     """
-    path = Path(path)
-    if file_format is not None:
-        if file_format not in FORMATS:
-            raise RunFormatError(
-                f"file_format: expected one of {sorted(FORMATS)}, got {file_format!r}", str(path)
-            )
-        return file_format
-    suffix = path.suffix.lower()
-    for name, suffixes in FORMATS.items():
-        if suffix in suffixes:
-            return name
-    raise RunFormatError(
-        f"unknown file type {suffix!r}; expected one of "
-        f"{sorted(s for v in FORMATS.values() for s in v)}, or give file_format=",
-        str(path),
-    )
+    return format_for(path, file_format).name
 
 
 def read_run(
@@ -85,10 +48,12 @@ def read_run(
     encoding: str | None = None,
     group: str | None = None,
     channels: Mapping[str, Any] | None = None,
+    sheet: str | int | None = None,
     file_format: str | None = None,
     sidecar: bool | str | Path = True,
     validate: bool = True,
     metadata: Mapping[str, Any] | None = None,
+    options: ReadOptions | None = None,
     **unexpected: Any,
 ) -> Run:
     """Read one run from a file.
@@ -96,14 +61,15 @@ def read_run(
     Parameters
     ----------
     path : str or Path
-        Canonical CSV, other delimited text (``.csv .txt .dat .tsv .asc .prn``), the
-        text exports of oscilloscopes and DAQ software recognised by their preamble
-        (Tektronix, Keysight/Agilent, Rigol, PicoScope CSV and LabVIEW ``.lvm``, see
-        :mod:`bayestribo.io.instruments`), UFF 58/58b (``.uff .unv .uf .58``), TDMS
-        (``.tdms``), MATLAB (``.mat``, v4 to v7.3) or HDF5 (``.h5 .hdf5``, the
-        ``hdf5`` extra).
+        A file of a registered format (:func:`bayestribo.io.registry.registered_formats`,
+        ``bayestribo inspect --formats``): canonical CSV, other delimited text (``.csv
+        .txt .dat .tsv .asc .prn``), the text exports of oscilloscopes and DAQ software
+        recognised by their preamble (Tektronix, Keysight/Agilent, Rigol, PicoScope CSV
+        and LabVIEW ``.lvm``, see :mod:`bayestribo.io.instruments`), Excel (``.xlsx``),
+        UFF 58/58b (``.uff .unv .uf .58``), TDMS (``.tdms``), MATLAB (``.mat``, v4 to
+        v7.3) or HDF5 (``.h5 .hdf5``, the ``hdf5`` extra).
     columns : list of str, optional
-        Text files: one canonical name (``time_s``, ``displacement_m``,
+        Text files and spreadsheets: one canonical name (``time_s``, ``displacement_m``,
         ``velocity_m_per_s``) or ``"ignore"`` per column, in file order. Needed when
         the file has no canonical header row.
     scale : mapping, optional
@@ -123,8 +89,13 @@ def read_run(
         canonical name (when the records' types are ambiguous). MATLAB, HDF5:
         variable or dataset name per column name (a key may carry a unit,
         ``"displacement_um"``), when the names are not canonical.
-    file_format : {"text", "uff", "tdms", "mat", "hdf5"}, optional
-        Overrides the choice by suffix.
+    sheet : str or int, optional
+        Spreadsheets: the worksheet, by name or position from 0 (needed when several
+        hold numbers).
+    file_format : str, optional
+        A registered format (``"text"``, ``"xlsx"``, ``"uff"``, ``"tdms"``, ``"mat"``,
+        ``"hdf5"``, or one added with :func:`~bayestribo.io.registry.register_format`);
+        overrides the choice by suffix.
     sidecar : bool or path
         Read the JSON sidecar with the file's stem if it exists (``True``), do not
         (``False``), or read this sidecar file (which must exist).
@@ -133,6 +104,10 @@ def read_run(
     metadata : mapping, optional
         Metadata that fill or override the sidecar's, e.g.
         ``{"load_N": 0.31, "length_unit": "arbitrary"}``.
+    options : ReadOptions, optional
+        All of the above as one object (:class:`~bayestribo.io.options.ReadOptions`),
+        as the command line and the fitting functions pass them; options given as
+        keywords too override its.
 
     Returns
     -------
@@ -160,47 +135,43 @@ def read_run(
     ...                metadata={"length_unit": "arbitrary"})  # doctest: +SKIP
     """
     if unexpected:
-        raise _unexpected_options(unexpected)
-    path = Path(path)
-    where = str(path)
-    if not path.is_file():
-        raise RunFormatError("no such run file; expected an existing file", where)
-    kind = format_of(path, file_format)
+        raise unknown_options(unexpected)
     given = {
         "columns": columns,
+        "scale": scale,
         "delimiter": delimiter,
         "decimal": None if decimal == "." else decimal,
         "skip_rows": skip_rows or None,
         "encoding": encoding,
         "group": group,
         "channels": channels,
+        "sheet": sheet,
+        "file_format": file_format,
+        "sidecar": None if sidecar is True else sidecar,
+        "validate": None if validate else validate,
+        "metadata": metadata,
     }
-    for option, value in given.items():
-        if value is not None and kind not in _OPTIONS[option]:
+    opts = ReadOptions.of(options, **{k: v for k, v in given.items() if v is not None})
+    return _read(Path(path), opts)
+
+
+def _read(path: Path, opts: ReadOptions) -> Run:
+    where = str(path)
+    if not path.is_file():
+        raise RunFormatError("no such run file; expected an existing file", where)
+    fmt = format_for(path, opts.file_format)
+    for option in opts.format_options():
+        if option not in fmt.options:
+            takes = [f.name for f in registered_formats().values() if option in f.options]
             raise RunFormatError(
-                f"option {option!r} applies to {' and '.join(_OPTIONS[option])} files, not to "
-                f"a {kind} file",
+                f"option {option!r} applies to {' and '.join(takes)} files, not to a "
+                f"{fmt.name} file",
                 where,
             )
-    if kind == "text":
-        signals = read_text(
-            path,
-            columns=columns,
-            scale=scale,
-            delimiter=delimiter,
-            decimal=decimal,
-            skip_rows=skip_rows,
-            encoding=encoding,
-        )
-    elif kind == "uff":
-        signals = read_uff(path, channels=channels, scale=scale)
-    elif kind == "mat":
-        signals = read_mat(path, channels=channels, scale=scale)
-    elif kind == "hdf5":
-        signals = read_hdf5(path, channels=channels, group=group, scale=scale)
-    else:
-        signals = read_tdms(path, channels=channels, group=group, scale=scale)
-
+    signals = fmt.read(path, opts)
+    sidecar = opts.sidecar
+    metadata = opts.metadata
+    validate = opts.validate
     meta: dict[str, Any] = {}
     if sidecar is True:
         side = sidecar_path(path)
@@ -224,50 +195,22 @@ def read_run(
     return run
 
 
-#: Keyword options of :func:`read_run` (and of :func:`as_run` given a path).
-READ_OPTIONS = (
-    "columns",
-    "scale",
-    "delimiter",
-    "decimal",
-    "skip_rows",
-    "encoding",
-    "group",
-    "channels",
-    "file_format",
-    "sidecar",
-    "validate",
-    "metadata",
-)
-
-
-def _unexpected_options(unexpected: Mapping[str, Any]) -> BayestriboError:
-    """The error for keyword arguments that are not reading options."""
-    from bayestribo.io.run import METADATA_KEYS
-
-    parts = []
-    for name in sorted(unexpected):
-        close = difflib.get_close_matches(name, READ_OPTIONS, n=1)
-        if close:
-            parts.append(f"{name!r} (did you mean {close[0]!r}?)")
-        elif name in METADATA_KEYS:
-            parts.append(f"{name!r} (a metadata key: pass metadata={{{name!r}: ...}})")
-        else:
-            parts.append(f"{name!r}")
-    return BayestriboError(
-        f"unknown reading option(s) {', '.join(parts)}; the options are {', '.join(READ_OPTIONS)}"
-    )
-
-
-def as_run(run: Run | str | os.PathLike[str], **read_options: Any) -> Run:
+def as_run(
+    run: Run | str | os.PathLike[str],
+    options: ReadOptions | Mapping[str, Any] | None = None,
+    **read_options: Any,
+) -> Run:
     """The one conversion of "a run or a file" into a :class:`~bayestribo.io.run.Run`.
 
     Parameters
     ----------
     run : Run, str or path-like
         A run, returned as it is, or a file read with :func:`read_run`.
+    options : ReadOptions or mapping, optional
+        How to read a file (:class:`~bayestribo.io.options.ReadOptions`, or a mapping of
+        its option names).
     **read_options
-        Options of :func:`read_run` (:data:`READ_OPTIONS`), for a file only.
+        Options of :func:`read_run` (:data:`READ_OPTIONS`) overriding ``options``.
 
     Returns
     -------
@@ -279,15 +222,17 @@ def as_run(run: Run | str | os.PathLike[str], **read_options: Any) -> Run:
         If ``run`` is neither a Run nor a path, if reading options are given with a
         Run (they would be ignored), or if an option is unknown.
     """
+    opts = ReadOptions.of(options, **read_options)
     if isinstance(run, Run):
-        if read_options:
+        given = opts.as_kwargs()
+        if given:
             raise BayestriboError(
-                f"reading options {sorted(read_options)} apply to a file, but run is "
+                f"reading options {sorted(given)} apply to a file, but run is "
                 "already a Run; read the file with these options, or drop them"
             )
         return run
     if isinstance(run, str | os.PathLike):
-        return read_run(run, **read_options)
+        return _read(Path(run), opts)
     raise BayestriboError(
         f"run: expected a bayestribo Run or the path of a run file, got {type(run).__name__}"
     )

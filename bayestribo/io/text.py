@@ -15,19 +15,19 @@ from __future__ import annotations
 
 import io
 import re
-import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
+from bayestribo._warnings import warn
 from bayestribo.errors import ReadingWarning, RunFormatError
 from bayestribo.io.columns import IGNORE, check_scale, parse_column
 from bayestribo.io.instruments import PREAMBLE_LINES, detect_export, read_export
 from bayestribo.io.run import COLUMNS, DISPLACEMENT, TIME, VELOCITY
 
-__all__ = ["IGNORE", "check_scale", "read_text", "write_csv"]
+__all__ = ["IGNORE", "check_scale", "decode", "parse_lines", "read_text", "write_csv"]
 
 _DELIMITERS = (",", ";", "\t")
 
@@ -81,11 +81,10 @@ def _parse_rows(
         fields = _split(line, delimiter)
         if r == last and r > 0 and _cut_short(fields, width, keep, decimal):
             # a last line cut short (the file was copied while it was being written)
-            warnings.warn(
+            warn(
                 f"{where}: the last line (line {number}) is incomplete: "
                 f"{line[:80]!r}; it is left out of the run",
                 ReadingWarning,
-                stacklevel=4,
             )
             return data[:last]
         if len(fields) != width:
@@ -108,10 +107,17 @@ def _parse_rows(
     return data
 
 
-def _decode(data: bytes, encoding: str | None, where: str) -> str:
+def decode(data: bytes, encoding: str | None, where: str, *, say: bool = True) -> str:
     """The file's text: in ``encoding`` when given, else UTF-8, else Windows-1252 (the
     8-bit encoding lab software writes; a byte it leaves undefined falls back to
-    Latin-1), said with a warning."""
+    Latin-1), said with a :class:`~bayestribo.errors.ReadingWarning` unless ``say`` is
+    false.
+
+    Raises
+    ------
+    RunFormatError
+        For an unknown encoding, or text that is not in the given one.
+    """
     if encoding is not None:
         if not isinstance(encoding, str):
             raise RunFormatError(
@@ -133,11 +139,12 @@ def _decode(data: bytes, encoding: str | None, where: str) -> str:
         text, used = data.decode("cp1252"), "Windows-1252"
     except UnicodeDecodeError:
         text, used = data.decode("latin-1"), "Latin-1"
-    warnings.warn(
+    if not say:
+        return text
+    warn(
         f"{where}: not UTF-8 (byte {data[first]:#04x} at {first}): read as {used}, where it "
         f"is {text[first]!r}; give encoding= (--encoding) if the header reads wrong",
         ReadingWarning,
-        stacklevel=4,
     )
     return text
 
@@ -192,12 +199,11 @@ def _trim_missing(
     lines = [rows[i][0] for i in np.flatnonzero(~good)]
     span = f"line {lines[0]}" if len(lines) == 1 else f"lines {lines[0]}-{lines[-1]}"
     empty = [name for c, (_, name) in enumerate(keep) if missing[:, c].any()]
-    warnings.warn(
+    warn(
         f"{where}: {len(lines)} row(s) at the start or end of the file ({span}) have no "
         f"value for {', '.join(empty)}; they are left out of the run (give "
         "columns=[...] with 'ignore' for a channel not to use)",
         ReadingWarning,
-        stacklevel=4,
     )
     return np.ascontiguousarray(data[good])
 
@@ -297,14 +303,60 @@ def read_text(
     """
     path = Path(path)
     where = str(path)
+    _check_options(decimal, delimiter, skip_rows, where)
+    text = decode(path.read_bytes(), encoding, where)
+    return parse_lines(
+        text.splitlines(),
+        where,
+        columns=columns,
+        scale=scale,
+        delimiter=delimiter,
+        decimal=decimal,
+        skip_rows=skip_rows,
+    )
+
+
+def _check_options(decimal: str, delimiter: str | None, skip_rows: int, where: str) -> None:
     if decimal not in (".", ","):
         raise RunFormatError(f"decimal: expected '.' or ',', got {decimal!r}", where)
     if decimal == "," and delimiter == ",":
         raise RunFormatError("delimiter and decimal mark cannot both be ','", where)
     if not isinstance(skip_rows, int) or isinstance(skip_rows, bool) or skip_rows < 0:
         raise RunFormatError(f"skip_rows: expected an integer >= 0, got {skip_rows!r}", where)
-    text = _decode(path.read_bytes(), encoding, where)
-    all_lines = text.splitlines()
+
+
+def parse_lines(
+    all_lines: Sequence[str],
+    where: str,
+    *,
+    columns: Sequence[str] | None = None,
+    scale: Mapping[str, float] | None = None,
+    delimiter: str | None = None,
+    decimal: str = ".",
+    skip_rows: int = 0,
+) -> dict[str, NDArray]:
+    """Samples from the lines of a delimited text (the body of :func:`read_text`).
+
+    Parameters
+    ----------
+    all_lines : sequence of str
+        The file's lines, without line ends.
+    where : str
+        The file, for messages.
+    columns, scale, delimiter, decimal, skip_rows
+        As for :func:`read_text`.
+
+    Returns
+    -------
+    dict
+        Arrays by canonical column name (time first).
+
+    Raises
+    ------
+    RunFormatError
+        As :func:`read_text`.
+    """
+    _check_options(decimal, delimiter, skip_rows, where)
     if skip_rows == 0:
         export = detect_export(all_lines[:PREAMBLE_LINES], where)
         if export is not None:

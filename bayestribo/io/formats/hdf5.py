@@ -1,0 +1,28 @@
+"""HDF5 files of named datasets."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from numpy.typing import NDArray
+
+from bayestribo.io.hdf5 import read_hdf5
+from bayestribo.io.options import ReadOptions
+from bayestribo.io.registry import FileFormat
+
+__all__ = ["FORMAT"]
+
+
+def _read(path: Path, options: ReadOptions) -> dict[str, NDArray]:
+    return read_hdf5(path, channels=options.channels, group=options.group, scale=options.scale)
+
+
+FORMAT = FileFormat(
+    name="hdf5",
+    title="HDF5",
+    suffixes=(".h5", ".hdf5", ".hdf", ".he5"),
+    read=_read,
+    options=("group", "channels"),
+    extra="hdf5",
+    hint="HDF5 datasets, one per signal",
+)
