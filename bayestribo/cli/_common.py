@@ -286,8 +286,21 @@ def cli_message(message: str) -> str:
     """A reading error's message with its fixes spelled as command-line options."""
     message = _ONE_CHANNEL.sub(lambda m: f"--channel {m[1]}={m[2].strip()}", message)
     for python, option in _CLI_SPELLINGS:
+        if python == "columns=[...]":
+            # a list of column names given in full: the option with its values
+            message = _COLUMN_LIST.sub(_columns_option, message)
         message = message.replace(python, option)
     return message
+
+
+#: ``columns=['time_s', 'ignore', ...]``, spelled as a ``--columns`` option.
+_COLUMN_LIST = re.compile(r"columns=\[('[^'\]]*'(?:, '[^'\]]*')*)\]")
+_SHORT = {name: short for short, name in COLUMN_ALIASES.items()}
+
+
+def _columns_option(match: re.Match[str]) -> str:
+    names = re.findall(r"'([^']*)'", match[1])
+    return "--columns " + " ".join(_SHORT.get(n, n) for n in names)
 
 
 #: ``channels={'name': source}`` with one entry, spelled as a ``--channel`` option.

@@ -17,7 +17,17 @@ from collections.abc import Mapping, Sequence
 from bayestribo.errors import RunFormatError
 from bayestribo.io.run import DISPLACEMENT, TIME, VELOCITY
 
-__all__ = ["IGNORE", "QUANTITIES", "UNITS", "check_scale", "parse_column"]
+__all__ = [
+    "IGNORE",
+    "OTHER_QUANTITIES",
+    "QUANTITIES",
+    "UNITS",
+    "check_scale",
+    "combine_units_row",
+    "other_quantity",
+    "parse_column",
+    "split_run_tag",
+]
 
 #: Column name that skips a column of a text file.
 IGNORE = "ignore"
@@ -25,17 +35,19 @@ IGNORE = "ignore"
 #: Words naming each canonical quantity (lower case).
 QUANTITIES: dict[str, tuple[str, ...]] = {
     TIME: ("time", "t"),
-    DISPLACEMENT: ("displacement", "position", "x"),
+    DISPLACEMENT: ("displacement", "position", "distance", "x"),
     VELOCITY: ("velocity", "speed", "v"),
 }
 
 #: Units of each quantity and their factor to the canonical unit.
 UNITS: dict[str, dict[str, float]] = {
     TIME: {"s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6},
-    DISPLACEMENT: {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "nm": 1e-9},
+    DISPLACEMENT: {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "nm": 1e-9},
     VELOCITY: {
         "m_per_s": 1.0,
         "m/s": 1.0,
+        "cm_per_s": 1e-2,
+        "cm/s": 1e-2,
         "mm_per_s": 1e-3,
         "mm/s": 1e-3,
         "um_per_s": 1e-6,
@@ -44,6 +56,72 @@ UNITS: dict[str, dict[str, float]] = {
         "µm_per_s": 1e-6,
     },
 }
+
+#: Quantities that sensor software exports beside position and velocity; a header
+#: column naming one of these is not read (and said), any other unknown name is an error.
+OTHER_QUANTITIES: tuple[str, ...] = (
+    "acceleration",
+    "accel",
+    "a",
+    "force",
+    "voltage",
+    "potential",
+    "current",
+    "temperature",
+    "angle",
+    "angular velocity",
+    "angular acceleration",
+    "energy",
+    "kinetic energy",
+    "potential energy",
+    "pressure",
+    "strain",
+    "sound level",
+    "light intensity",
+)
+
+#: Run labels sensor software adds to column names: ``Time (s) Run #1`` (PASCO),
+#: ``Run 1: Position (m)`` and ``Latest: Time (s)`` (Vernier), ``Data Set 2: ...``.
+_TAG_SUFFIX = re.compile(r"^(?P<label>.*?\S)\s+(?P<tag>Run\s*#?\s*\d+)\s*$", re.IGNORECASE)
+_TAG_PREFIX = re.compile(
+    r"^\s*(?P<tag>Run\s*#?\s*\d+|Latest|Data\s*Set\s*\d*)\s*:\s*(?P<label>\S.*)$",
+    re.IGNORECASE,
+)
+
+
+def split_run_tag(name: str) -> tuple[str, str | None]:
+    """A header name without the run label sensor software adds, and that label.
+
+    ``"Position (m) Run #2"`` gives ``("Position (m)", "Run #2")``; ``"Latest: Time (s)"``
+    gives ``("Time (s)", "Latest")``; a name without a label is returned with None.
+    """
+    for pattern in (_TAG_SUFFIX, _TAG_PREFIX):
+        m = pattern.match(name)
+        if m:
+            return m.group("label").strip(), " ".join(m.group("tag").split())
+    return name, None
+
+
+def other_quantity(name: str) -> bool:
+    """True for a header name of a quantity that is not read (acceleration, force, ...)."""
+    word, _ = _split(name.replace("\u03bc", "\u00b5"))
+    return word in OTHER_QUANTITIES
+
+
+def combine_units_row(names: Sequence[str], units: Sequence[str]) -> list[str] | None:
+    """A header of names and a row of units below it (``Time``/``s``), as ``Time (s)``.
+
+    Returns None when the second row is not a row of units for these names: a different
+    length, or a name that carries its unit already.
+    """
+    if len(names) != len(units) or not any(u.strip() for u in units):
+        return None
+    if any(_split(n)[1] is not None for n in names):
+        return None
+    if any(len(u.strip()) > 12 or " " in u.strip() for u in units):
+        return None
+    return [f"{n} ({u.strip()})" if u.strip() else n for n, u in zip(names, units, strict=True)]
+
 
 _BRACKETED = re.compile(r"^\s*(?P<word>[^\[\(]+?)\s*[\[\(]\s*(?P<unit>[^\]\)]+?)\s*[\]\)]\s*$")
 

@@ -23,7 +23,14 @@ from numpy.typing import NDArray
 
 from bayestribo._warnings import warn
 from bayestribo.errors import ReadingWarning, RunFormatError
-from bayestribo.io.columns import IGNORE, check_scale, parse_column
+from bayestribo.io.columns import (
+    IGNORE,
+    check_scale,
+    combine_units_row,
+    other_quantity,
+    parse_column,
+    split_run_tag,
+)
 from bayestribo.io.instruments import PREAMBLE_LINES, detect_export, read_export
 from bayestribo.io.run import COLUMNS, DISPLACEMENT, TIME, VELOCITY
 
@@ -95,7 +102,7 @@ def _parse_rows(
             )
         for c, (i, name) in enumerate(keep):
             field = fields[i].replace(",", ".") if decimal == "," else fields[i]
-            if field == "" and name != TIME:
+            if field == "":
                 data[r, c] = np.nan  # an empty cell: kept as missing, see _trim_missing
                 continue
             value = _as_float(field)
@@ -183,6 +190,14 @@ def _trim_missing(
     missing = np.isnan(data)
     if not missing.any():
         return data
+    names = [name for _, name in keep]
+    if TIME in names:
+        # A time cell may be empty only in a row with no value at all (the end of a
+        # shorter run beside a longer one in the same file).
+        lone = missing[:, names.index(TIME)] & ~missing.all(axis=1)
+        if lone.any():
+            line = rows[int(np.flatnonzero(lone)[0])][0]
+            raise RunFormatError(f"line {line}, column {TIME!r}: '' is not a number", where)
     for c, (_, name) in enumerate(keep):
         present = np.flatnonzero(~missing[:, c])
         if present.size == 0:
@@ -252,6 +267,79 @@ def _check_columns(
             where,
         )
     return names, factors
+
+
+def _fields_of(line: str, delimiter: str | None) -> list[str]:
+    return [f.strip().strip('"').strip("'").strip() for f in _split(line, delimiter)]
+
+
+def _header(
+    lines: Sequence[tuple[int, str]], delimiter: str | None, where: str
+) -> tuple[list[str], dict[str, float], int]:
+    """Column names, unit factors and the number of header lines of a file's header.
+
+    The header is one row of names with units (``Time (s)``), or a row of names and a
+    row of units below it (``Time`` / ``s``). Run labels of sensor software (``Run #1``,
+    ``Latest:``) are taken off; columns of another quantity (acceleration, force, ...)
+    are not read, and said. Several runs side by side are refused with the
+    ``columns=`` that reads each.
+    """
+    number = lines[0][0]
+    header = _fields_of(lines[0][1], delimiter)
+    count = 1
+    if len(lines) > 1:
+        second = _fields_of(lines[1][1], delimiter)
+        if all(_as_float(f) is None for f in second if f):
+            combined = combine_units_row(header, second)
+            if combined is not None:
+                header, count = combined, 2
+    what = f"header (line {number})" if count == 1 else f"header (lines {number}-{number + 1})"
+    labels, tags = zip(*(split_run_tag(f) for f in header), strict=True)
+    runs = list(dict.fromkeys(t for t in tags if t is not None))
+    if len(runs) > 1:
+        raise RunFormatError(f"{what}: {_side_by_side(labels, tags, runs)}", where)
+    kept = []
+    other = []
+    for label in labels:
+        if label in (*COLUMNS, IGNORE) or not other_quantity(label):
+            kept.append(label)
+        else:
+            kept.append(IGNORE)
+            other.append(label)
+    names, units = _check_columns(kept, where, what)
+    if other:
+        warn(
+            f"{where}: {what}: column(s) {other} not read (another quantity); the run is "
+            f"read from {[n for n in names if n != IGNORE]}",
+            ReadingWarning,
+        )
+    return names, units, count
+
+
+def _side_by_side(labels: Sequence[str], tags: Sequence[str | None], runs: list[str]) -> str:
+    """The message for several runs in one file, with the columns= that reads each."""
+    choices = []
+    for run in runs:
+        names = []
+        for label, tag in zip(labels, tags, strict=True):
+            try:
+                parsed = None if tag != run else parse_column(label)
+            except ValueError:
+                parsed = None
+            names.append(IGNORE if parsed is None else _with_unit(label, parsed[0]))
+        choices.append(f"{run}: columns={names}")
+    return (
+        f"the file holds {len(runs)} runs side by side ({', '.join(runs)}); read one at a "
+        f"time, {'; '.join(choices)}"
+    )
+
+
+def _with_unit(label: str, canonical: str) -> str:
+    """``Position (mm)`` as the column name ``displacement_mm``."""
+    m = re.search(r"[\[\(]\s*([^\]\)]+?)\s*[\]\)]", label)
+    unit = "" if m is None else m.group(1).replace(" ", "").replace("/", "_per_")
+    quantity = canonical.split("_")[0]
+    return f"{quantity}_{unit}" if unit else canonical
 
 
 def read_text(
@@ -395,8 +483,7 @@ def parse_lines(
                 "read_run(path, columns=['time_s', 'displacement_m'])",
                 where,
             )
-        header = [f.strip().strip('"').strip("'") for f in _split(lines[0][1], delimiter)]
-        names, units = _check_columns(header, where, f"header (line {lines[0][0]})")
+        names, units, header_lines = _header(lines, delimiter, where)
     else:
         names = columns
         if len(first_fields) == len(names):
@@ -413,7 +500,8 @@ def parse_lines(
                 f"names {len(names)}; expected one name per column",
                 where,
             )
-    rows = lines[1:] if has_header else lines
+        header_lines = 1 if has_header else 0
+    rows = lines[header_lines:]
     if not rows:
         raise RunFormatError("the file holds a header but no data rows", where)
 
