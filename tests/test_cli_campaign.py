@@ -165,3 +165,31 @@ def test_law_rows_flatten_the_comparison_for_the_csv_table():
     assert list(row)[:3] == ["run", "verdict", "best"]
     assert row["viscous_elpd_diff"] == 0.2 and row["coulomb_elpd_loo"] is None
     assert _law_row({"run": "x", "error": "RecordingError: bad"})["error"].startswith("Rec")
+
+
+def test_equal_names_in_sub_folders_are_two_runs_and_twin_files_are_named(tmp_path, capsys):
+    """Runs are identified by their path in the campaign folder: a/run and b/run are two
+    runs (own seeds, fit files and rows); two files of one identity are both left out,
+    each with the reason, and the campaign goes on."""
+    root = tmp_path / "campaign"
+    sources = {"a/run": "glycerol-N0.07-r1", "b/run": "glycerol-N0.59-r1", "c/twin": "air-r1"}
+    for identity, source in sources.items():
+        target = root / f"{identity}.csv"
+        target.parent.mkdir(parents=True, exist_ok=True)
+        os.symlink(DATA / f"{source}.csv", target)
+        metadata = json.loads((DATA / f"{source}.json").read_text())
+        metadata["run_id"] = target.stem
+        target.with_suffix(".json").write_text(json.dumps(metadata))
+    os.symlink(DATA / "air-r1.csv", root / "c" / "twin.txt")
+    out = tmp_path / "out"
+    status, report = _run(capsys, root, "--out", out, "--workers", 2, *FAST)
+    assert status == 1
+    assert sorted(r["run_id"] for r in report["runs"]) == ["a/run", "b/run"]
+    assert sorted(f["run"] for f in report["failures"]) == ["c/twin", "c/twin"]
+    assert all("one run identity 'c/twin'" in f["error"] for f in report["failures"])
+    assert sorted(p.relative_to(out / "fits").as_posix() for p in out.rglob("*.nc")) == [
+        "a/run.nc",
+        "b/run.nc",
+    ]
+    zeta = {r["run_id"]: r["zeta"]["median"] for r in report["runs"]}
+    assert zeta["a/run"] != zeta["b/run"]

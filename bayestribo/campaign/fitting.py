@@ -21,7 +21,7 @@ import os
 import sys
 import time
 import traceback
-from collections.abc import Callable, Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from concurrent.futures import Executor, Future, as_completed
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -81,17 +81,35 @@ class RunOutcome:
         return self.error is None
 
 
-def run_identity(run: Any) -> str:
-    """The identity of a run: the file stem of a path, else its metadata ``run_id``.
+def run_identity(run: Any, root: str | os.PathLike[str] | None = None) -> str:
+    """The identity of a run: its path without suffix, else its metadata ``run_id``.
+
+    Parameters
+    ----------
+    run : path or run
+        A run file, or a run object with a ``run_id`` in its metadata.
+    root : path-like, optional
+        The campaign folder: a file's identity is its path relative to it, without
+        the suffix (``glycerol/N0.31-r1``), so that equal file names in two
+        sub-folders are two runs; a file directly in the folder keeps its stem. Without
+        ``root``, the file stem.
 
     Raises
     ------
     BayestriboError
         If a run object carries no ``run_id`` (its seed could not be derived from
-        what it is).
+        what it is), or a file is not under ``root``.
     """
     if isinstance(run, str | os.PathLike):
-        return Path(run).stem
+        path = Path(run)
+        if root is None:
+            return path.stem
+        try:
+            # absolute, not resolved: a run file may be a link to a file elsewhere
+            relative = Path(os.path.abspath(path)).relative_to(os.path.abspath(root))
+        except ValueError:
+            raise BayestriboError(f"runs: {path} is not in the campaign folder {root}") from None
+        return relative.with_suffix("").as_posix()
     metadata = getattr(run, "metadata", None)
     run_id = metadata.get("run_id") if isinstance(metadata, Mapping) else None
     if not isinstance(run_id, str) or not run_id:
@@ -204,6 +222,8 @@ def fit_many(
     progress: bool = True,
     progress_stream: IO[str] | None = None,
     callback: Callable[[RunOutcome], None] | None = None,
+    root: str | os.PathLike[str] | None = None,
+    run_kwargs: Sequence[Mapping[str, Any]] | None = None,
     **fit_kwargs: Any,
 ) -> list[RunOutcome]:
     """Fit every run, in parallel, each with its own seed from the campaign seed.
@@ -233,6 +253,12 @@ def fit_many(
     callback : callable, optional
         Called in the calling process with each :class:`RunOutcome` as it completes
         (e.g. to record it in a catalog).
+    root : path-like, optional
+        The campaign folder the run files' identities are relative to
+        (:func:`run_identity`).
+    run_kwargs : sequence of mappings, optional
+        Keyword arguments of ``function`` for each run (one mapping per run, in the
+        order of ``runs``), over ``fit_kwargs``.
     **fit_kwargs
         Passed to ``function`` for every run.
 
@@ -248,7 +274,11 @@ def fit_many(
         not a non-negative integer.
     """
     runs = list(runs)
-    names = [run_identity(run) for run in runs]
+    names = [run_identity(run, root) for run in runs]
+    if run_kwargs is not None and len(run_kwargs) != len(runs):
+        raise BayestriboError(
+            f"run_kwargs: expected one mapping per run ({len(runs)}), got {len(run_kwargs)}"
+        )
     duplicates = sorted({n for n in names if names.count(n) > 1})
     if duplicates:
         raise BayestriboError(f"runs: duplicate run identities {duplicates}")
@@ -272,7 +302,8 @@ def fit_many(
     futures: dict[Future[Any], int] = {}
     try:
         for i, run in enumerate(runs):
-            futures[executor.submit(_call, function, run, seeds[i], dict(fit_kwargs))] = i
+            kwargs = {**fit_kwargs, **(run_kwargs[i] if run_kwargs is not None else {})}
+            futures[executor.submit(_call, function, run, seeds[i], kwargs)] = i
         for future in as_completed(futures):
             i = futures[future]
             try:
@@ -353,6 +384,7 @@ def fit_catalogued(
     max_workers: int | None = None,
     progress: bool = True,
     progress_stream: IO[str] | None = None,
+    root: str | os.PathLike[str] | None = None,
     **fit_kwargs: Any,
 ) -> list[RunOutcome]:
     """Fit run files with :func:`fit_many`, recording each fit in a results catalog.
@@ -361,8 +393,14 @@ def fit_catalogued(
     with a recorded fit of the same data, sidecar, settings (fit keyword arguments,
     seed, fit function) and package version whose result file still exists is not
     fitted again: its result is read back (``cached`` True). New fits are saved as
-    ``<out_dir>/<run_id>.nc`` and recorded as they complete, each in its own
+    ``<out_dir>/<identity>.nc`` and recorded as they complete, each in its own
     transaction, so an interrupted campaign keeps the fits it finished.
+
+    A run's identity is its path relative to ``root`` without the suffix
+    (:func:`run_identity`): ``a/run1.csv`` and ``b/run1.csv`` are two runs, ``a/run1``
+    and ``b/run1``, with their own seeds, catalog entries and fit files, and their fits
+    carry that identity as ``run_id``. Two files with one identity (``run1.csv`` and
+    ``run1.tdms`` side by side) are both left out, each with the reason.
 
     Parameters
     ----------
@@ -372,7 +410,7 @@ def fit_catalogued(
         SQLite results catalog (:mod:`bayestribo.campaign.catalog`), created if absent.
     out_dir : path-like
         Folder of the per-run result files (created if absent).
-    executor, campaign_seed, function, max_workers, progress, progress_stream, **fit_kwargs
+    executor, campaign_seed, function, max_workers, progress, progress_stream, root, **fit_kwargs
         As in :func:`fit_many`. The results must have ``save(path)``, ``summary()``,
         ``converged`` and ``diagnostics`` (as :class:`bayestribo.inference.FitResult`).
     loader : callable, optional
@@ -397,29 +435,38 @@ def fit_catalogued(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     loader = loader or _load_fit
-    names = [run_identity(p) for p in paths]
+    names = [run_identity(p, root) for p in paths]
+    run_kwargs = [
+        _identity_kwargs(path, name, fit_kwargs) for path, name in zip(paths, names, strict=True)
+    ]
     settings: list[dict[str, Any]] = []
     rows: list[int] = []
-    outcomes: dict[str, RunOutcome] = {}
-    for path, name in zip(paths, names, strict=True):
+    outcomes: dict[int, RunOutcome] = {}
+    for i, (path, name) in enumerate(zip(paths, names, strict=True)):
         side = sidecar_path(path)
         try:
-            metadata = read_sidecar(side) if side.exists() else {}
-            if metadata.get("run_id", name) != name:
+            twins = [str(p) for p, n in zip(paths, names, strict=True) if n == name]
+            if len(twins) > 1:
                 raise BayestriboError(
-                    f"{side}: run_id {metadata['run_id']!r} differs from the file name {name!r}"
+                    f"files {twins} have one run identity {name!r}; rename one of them"
+                )
+            metadata = read_sidecar(side) if side.exists() else {}
+            if metadata.get("run_id", path.stem) != path.stem:
+                raise BayestriboError(
+                    f"{side}: run_id {metadata['run_id']!r} differs from the file name "
+                    f"{path.stem!r}"
                 )
             metadata = {**metadata, "run_id": name}
             row = register_run(catalog, path=path, sha256=_sha256(path), metadata=metadata)
         except (BayestriboError, OSError) as exc:
             # This run is listed with its reason and left out; the others go on.
             seed = run_seed(campaign_seed, name)
-            outcomes[name] = RunOutcome(name, seed, None, f"{type(exc).__name__}: {exc}")
+            outcomes[i] = RunOutcome(name, seed, None, f"{type(exc).__name__}: {exc}")
             row = -1
         rows.append(row)
         settings.append(
             {
-                "fit_kwargs": fit_kwargs,
+                "fit_kwargs": {**fit_kwargs, **run_kwargs[i]},
                 "function": _function_name(function),
                 "campaign_seed": int(campaign_seed),
                 "seed": run_seed(campaign_seed, name),
@@ -428,7 +475,7 @@ def fit_catalogued(
         )
     todo: list[int] = []
     for i, name in enumerate(names):
-        if name in outcomes:
+        if i in outcomes:
             continue
         record = (
             None
@@ -449,7 +496,7 @@ def fit_catalogued(
                     )
                 todo.append(i)
                 continue
-            outcomes[name] = RunOutcome(name, seed, cached, cached=True)
+            outcomes[i] = RunOutcome(name, seed, cached, cached=True)
         else:
             todo.append(i)
 
@@ -466,6 +513,7 @@ def fit_catalogued(
     def save_and_record(outcome: RunOutcome) -> None:
         i = names.index(outcome.name)
         target = out / f"{outcome.name}.nc"
+        target.parent.mkdir(parents=True, exist_ok=True)
         # written under a temporary name and renamed: the catalog never records a
         # file that is not whole, and a kill leaves no half-written fit
         partial = target.with_name(f".{target.name}.{os.getpid()}.tmp")
@@ -501,14 +549,28 @@ def fit_catalogued(
             progress=progress,
             progress_stream=progress_stream,
             callback=record,
+            root=root,
+            run_kwargs=[run_kwargs[i] for i in todo],
             **fit_kwargs,
         )
         if todo
         else []
     )
-    for o in fitted:
+    for i, o in zip(todo, fitted, strict=True):
         if o.name in unrecorded:
             error = f"fitted but not saved or recorded: {unrecorded[o.name]}"
             o = RunOutcome(o.name, o.seed, o.result, error, None, o.elapsed_s)
-        outcomes[o.name] = o
-    return [outcomes[name] for name in names]
+        outcomes[i] = o
+    return [outcomes[i] for i in range(len(paths))]
+
+
+def _identity_kwargs(path: Path, name: str, fit_kwargs: Mapping[str, Any]) -> dict[str, Any]:
+    """The reading options that give a run in a sub-folder its identity as ``run_id``
+    (none for a run directly in the campaign folder, whose identity is its stem)."""
+    if name == path.stem:
+        return {}
+    from bayestribo.io.options import ReadOptions
+
+    options = ReadOptions.of(fit_kwargs.get("read_options"))
+    metadata = {**(options.metadata or {}), "run_id": name}
+    return {"read_options": options.replace(metadata=metadata).as_kwargs()}

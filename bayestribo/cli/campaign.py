@@ -40,7 +40,8 @@ def register(subparsers: Any) -> None:
         "campaign",
         help="fit every run of a folder; populations, load trends, ζ₀, figures",
         description=(
-            "Fit every run (CSV with its JSON sidecar) under DIR in parallel, record the "
+            "Fit every run (a file of any format read, with its JSON sidecar) under DIR and "
+            "its sub-folders in parallel, record the "
             "fits in an SQLite catalog (re-runs skip runs fitted with the same data and "
             "settings), infer the population of repeats per group (mean and between-run "
             "σ of ζ and μ_k), ζ₀ from the runs without contact, ζ_k = ζ - ζ₀, d_k and the "
@@ -156,6 +157,7 @@ def _compare_laws(
         function=compare_dissipation_laws,
         max_workers=args.workers,
         progress=not args.quiet,
+        root=args.dir,
         **fit_kwargs,
     )
     return [
@@ -175,6 +177,27 @@ def _law_row(entry: dict[str, Any]) -> dict[str, Any]:
     return row
 
 
+def run_files(
+    folder: Path, file_format: str | None = None, exclude: Path | None = None
+) -> list[Path]:
+    """The run files under ``folder`` and its sub-folders: files of a registered format
+    (of ``file_format`` only, when given) with a JSON sidecar beside them, outside
+    ``exclude`` (the campaign's own output folder)."""
+    from bayestribo.io.registry import get_format, registered_formats
+
+    formats = [get_format(file_format)] if file_format else registered_formats().values()
+    suffixes = {s for f in formats for s in f.suffixes}
+    skip = None if exclude is None else Path(os.path.abspath(exclude))
+    return sorted(
+        p
+        for p in folder.rglob("*")
+        if p.is_file()
+        and p.suffix.lower() in suffixes
+        and p.with_suffix(".json").is_file()
+        and (skip is None or not Path(os.path.abspath(p)).is_relative_to(skip))
+    )
+
+
 def run(args: argparse.Namespace) -> int:
     """Find the runs, fit them, analyse, write the outputs (one writer per --out)."""
     from bayestribo.campaign.lock import FolderLock
@@ -183,9 +206,11 @@ def run(args: argparse.Namespace) -> int:
     folder = Path(args.dir)
     if not folder.is_dir():
         raise BayestriboError(f"DIR: {folder} is not a folder")
-    paths = sorted(p for p in folder.rglob("*.csv") if p.with_suffix(".json").exists())
+    paths = run_files(folder, getattr(args, "format", None), exclude=Path(args.out))
     if not paths:
-        raise BayestriboError(f"DIR: no run files (CSV with a JSON sidecar) under {folder}")
+        raise BayestriboError(
+            f"DIR: no run files (a file of a format read, with its JSON sidecar) under {folder}"
+        )
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     from bayestribo._workers import terminate_as_interrupt
@@ -234,6 +259,7 @@ def _run_locked(args: argparse.Namespace, folder: Path, paths: list[Path], out: 
             refit=args.refit,
             max_workers=args.workers,
             progress=not args.quiet,
+            root=folder,
             **fit_kwargs,
         )
         laws = _compare_laws(paths, executor, args, fit_kwargs) if args.compare_laws else None
