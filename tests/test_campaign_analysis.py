@@ -207,3 +207,23 @@ def test_names_with_dollar_signs_are_drawn_as_written(tmp_path):
     result = analyse_campaign(fits, seed=1, max_steps=2000)
     paths = save_figures(result, tmp_path)
     assert len(paths) == 3 and all(p.stat().st_size > 0 for p in paths)
+
+
+def test_digests_give_the_analysis_of_the_fits(analysis):
+    """A campaign keeps digests, not fits: the same runs, groups, trends and ζ₀."""
+    from bayestribo.campaign.digest import FitDigest, digest_fit
+
+    fits = _campaign(np.random.default_rng(2))
+    digests = [digest_fit(f, prob=0.95, max_samples=300, seed=1) for f in fits]
+    assert all(isinstance(d, FitDigest) for d in digests)
+    # 400 draws per run, 300 kept: the digest holds less than the fit.
+    assert all(d.draws["zeta"].size == 300 for d in digests)
+    again = analyse_campaign(digests, seed=1, max_steps=2000)
+    assert again.runs == analysis.runs
+    assert again.group_rows() == analysis.group_rows()
+    assert again.trend_rows() == analysis.trend_rows()
+    assert again.to_dict() == analysis.to_dict()
+    with pytest.raises(BayestriboError, match="summarises at 0.95, not at 0.9"):
+        analyse_campaign(digests, seed=1, max_steps=2000, prob=0.9)
+    with pytest.raises(ValueError, match="at its own draws only"):
+        digests[0].prior_logpdf("zeta", [0.02])

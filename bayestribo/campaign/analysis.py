@@ -59,11 +59,17 @@ def _run_summary(result: Any, prob: float) -> dict[str, Any]:
     out: dict[str, Any] = {"run_id": md.get("run_id") or getattr(result, "run_name", None)}
     for key in ("series", "lubricant", "water_mass_fraction", "load_N", "repeat"):
         out[key] = md.get(key)
+    kept = result.summary_at(prob) if hasattr(result, "summary_at") else None  # a FitDigest
     for p in ("zeta", "mu_k"):
-        try:
-            s = summarize(result.samples(p), prob)
-        except (KeyError, ValueError):
-            continue
+        if kept is not None:
+            if p not in kept:
+                continue
+            s = kept[p]
+        else:
+            try:
+                s = summarize(result.samples(p), prob)
+            except (KeyError, ValueError):
+                continue
         out[p] = {"median": s["median"], "interval": s["interval"]}
     out["converged"] = bool(getattr(result, "converged", True))
     return out
@@ -306,7 +312,10 @@ def analyse_campaign(
     Parameters
     ----------
     results : sequence of fit results
-        One per run (``samples``, ``prior_logpdf``, ``metadata``, ``parameter_names``).
+        One per run (``samples``, ``prior_logpdf``, ``metadata``, ``parameter_names``),
+        or their digests (:func:`bayestribo.campaign.digest.digest_fit`, made with this
+        ``prob``, ``max_samples`` and ``seed``), which give the same analysis and keep
+        a campaign's memory flat in the number of runs.
     by : sequence of str
         Grouping keys of the runs with contact; keys that no such run has are left out.
     covariate : str

@@ -15,6 +15,7 @@ fitted with the same data and settings.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import multiprocessing
 import os
@@ -224,6 +225,7 @@ def fit_many(
     callback: Callable[[RunOutcome], None] | None = None,
     root: str | os.PathLike[str] | None = None,
     run_kwargs: Sequence[Mapping[str, Any]] | None = None,
+    keep: Callable[[Any], Any] | None = None,
     **fit_kwargs: Any,
 ) -> list[RunOutcome]:
     """Fit every run, in parallel, each with its own seed from the campaign seed.
@@ -259,6 +261,11 @@ def fit_many(
     run_kwargs : sequence of mappings, optional
         Keyword arguments of ``function`` for each run (one mapping per run, in the
         order of ``runs``), over ``fit_kwargs``.
+    keep : callable, optional
+        What the outcomes hold of each result: ``keep(result)``, applied in the calling
+        process after ``callback`` saw the whole result (e.g.
+        :func:`bayestribo.campaign.digest.digest_fit`, so that memory does not grow
+        with the number of runs). Default: the result itself.
     **fit_kwargs
         Passed to ``function`` for every run.
 
@@ -312,10 +319,13 @@ def fit_many(
                 result, error, tb = None, f"{type(exc).__name__}: {exc}", traceback.format_exc()
                 elapsed = float("nan")
             outcome = RunOutcome(names[i], seeds[i], result, error, tb, elapsed)
-            outcomes[i] = outcome
             bar.update(outcome.ok)
             if callback is not None:
                 callback(outcome)
+            if keep is not None and outcome.ok:
+                outcome = dataclasses.replace(outcome, result=keep(outcome.result))
+            outcomes[i] = outcome
+            del result, outcome
     except BaseException:
         for future in futures:
             future.cancel()
@@ -385,6 +395,7 @@ def fit_catalogued(
     progress: bool = True,
     progress_stream: IO[str] | None = None,
     root: str | os.PathLike[str] | None = None,
+    keep: Callable[[Any], Any] | None = None,
     **fit_kwargs: Any,
 ) -> list[RunOutcome]:
     """Fit run files with :func:`fit_many`, recording each fit in a results catalog.
@@ -410,7 +421,9 @@ def fit_catalogued(
         SQLite results catalog (:mod:`bayestribo.campaign.catalog`), created if absent.
     out_dir : path-like
         Folder of the per-run result files (created if absent).
-    executor, campaign_seed, function, max_workers, progress, progress_stream, root, **fit_kwargs
+    executor, campaign_seed, function, max_workers, progress, progress_stream, root, keep
+        As in :func:`fit_many` (``keep`` applies to results read back too).
+    **fit_kwargs
         As in :func:`fit_many`. The results must have ``save(path)``, ``summary()``,
         ``converged`` and ``diagnostics`` (as :class:`bayestribo.inference.FitResult`).
     loader : callable, optional
@@ -496,7 +509,10 @@ def fit_catalogued(
                     )
                 todo.append(i)
                 continue
-            outcomes[i] = RunOutcome(name, seed, cached, cached=True)
+            outcomes[i] = RunOutcome(
+                name, seed, cached if keep is None else keep(cached), cached=True
+            )
+            del cached
         else:
             todo.append(i)
 
@@ -551,6 +567,7 @@ def fit_catalogued(
             callback=record,
             root=root,
             run_kwargs=[run_kwargs[i] for i in todo],
+            keep=keep,
             **fit_kwargs,
         )
         if todo

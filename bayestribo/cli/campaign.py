@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import functools
 import io
 import json
 import os
@@ -229,6 +230,7 @@ def _run_locked(args: argparse.Namespace, folder: Path, paths: list[Path], out: 
     """:func:`run` with the output folder locked."""
     from bayestribo._workers import process_pool
     from bayestribo.campaign.analysis import analyse_campaign
+    from bayestribo.campaign.digest import digest_fit
     from bayestribo.campaign.fitting import dask_executor, fit_catalogued
     from bayestribo.campaign.lock import write_atomic
     from bayestribo.errors import BayestriboError
@@ -260,6 +262,8 @@ def _run_locked(args: argparse.Namespace, folder: Path, paths: list[Path], out: 
             max_workers=args.workers,
             progress=not args.quiet,
             root=folder,
+            # the analysis needs a digest of each fit; the fits stay on disk
+            keep=functools.partial(digest_fit, prob=args.prob, seed=args.seed),
             **fit_kwargs,
         )
         laws = _compare_laws(paths, executor, args, fit_kwargs) if args.compare_laws else None

@@ -1,0 +1,161 @@
+"""What a campaign keeps of a fit: a digest, so that memory does not grow with the runs.
+
+A campaign's analysis needs of each fit its metadata, convergence, the parameters at a
+prior bound, the posterior summaries of ζ and μ_k, and a seeded subset of their draws
+with the log prior density there (the population likelihood uses at most a few hundred
+draws per run). :func:`digest_fit` takes exactly that from a fit result; the campaign
+keeps the digest and lets the fit go (it is on disk, in the catalog). The digest gives
+the same analysis as the fit: its subset is the one
+:func:`~bayestribo.population.samples.run_samples` draws from the fit with the same seed
+and run name, and its summaries are those of all the draws.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from bayestribo.errors import BayestriboError
+from bayestribo.population.samples import run_samples
+from bayestribo.summary import summarize
+
+__all__ = ["FitDigest", "digest_fit"]
+
+#: The parameters a campaign analyses.
+PARAMETERS: tuple[str, ...] = ("zeta", "mu_k")
+
+
+@dataclass(frozen=True)
+class FitDigest:
+    """What a campaign's analysis uses of one fit (a fit-like object, far smaller).
+
+    Attributes
+    ----------
+    run_name : str
+        The run's identity.
+    metadata : dict
+        The run's metadata.
+    parameter_names : tuple of str
+        The fit's sampled parameters.
+    converged : bool
+        Whether the fit's sampler converged.
+    at_prior_bound : list
+        The fit's posteriors piled on a prior bound.
+    prob : float
+        Probability of the summaries' intervals.
+    summaries : dict of str to dict
+        Summaries of ζ and μ_k over all the fit's draws (:func:`bayestribo.summary.summarize`).
+    draws : dict of str to ndarray
+        The seeded subset of draws of ζ and μ_k.
+    log_prior : dict of str to ndarray
+        Each parameter's log prior density at its subset of draws.
+    """
+
+    run_name: str
+    metadata: dict[str, Any]
+    parameter_names: tuple[str, ...]
+    converged: bool
+    at_prior_bound: list[Any]
+    prob: float
+    summaries: dict[str, dict[str, Any]]
+    draws: dict[str, NDArray[np.float64]] = field(repr=False)
+    log_prior: dict[str, NDArray[np.float64]] = field(repr=False)
+
+    def samples(self, name: str) -> NDArray[np.float64]:
+        """The subset of draws of ``name``."""
+        if name not in self.draws:
+            raise KeyError(f"{name!r} is not kept in this digest; it has {sorted(self.draws)}")
+        return self.draws[name]
+
+    def prior_logpdf(self, name: str, values: ArrayLike) -> NDArray[np.float64]:
+        """The log prior density of ``name`` at its own draws (the only values kept).
+
+        Raises
+        ------
+        ValueError
+            For other values: the digest does not keep the prior itself.
+        """
+        if name not in self.draws:
+            raise KeyError(f"{name!r} is not kept in this digest; it has {sorted(self.draws)}")
+        if not np.array_equal(np.asarray(values, dtype=float), self.draws[name]):
+            raise ValueError(f"a fit digest gives the log prior of {name!r} at its own draws only")
+        return self.log_prior[name]
+
+    def summary_at(self, prob: float) -> dict[str, dict[str, Any]]:
+        """The summaries, which hold for :attr:`prob` only.
+
+        Raises
+        ------
+        BayestriboError
+            For another probability.
+        """
+        if prob != self.prob:
+            raise BayestriboError(
+                f"prob: this digest summarises at {self.prob}, not at {prob}; digest the "
+                "fits with the analysis' probability"
+            )
+        return self.summaries
+
+
+def digest_fit(
+    result: Any,
+    *,
+    prob: float = 0.95,
+    max_samples: int | None = 300,
+    seed: int = 0,
+    name: str | None = None,
+    parameters: Sequence[str] = PARAMETERS,
+) -> FitDigest:
+    """The digest of a fit result that a campaign analysis needs.
+
+    Parameters
+    ----------
+    result : fit result
+        With ``samples``, ``prior_logpdf``, ``metadata`` (as
+        :class:`bayestribo.inference.FitResult`); a :class:`FitDigest` is returned as it
+        is.
+    prob : float
+        Probability of the summaries' intervals (the analysis' ``prob``).
+    max_samples, seed
+        The subset of draws kept, as the analysis draws it
+        (:func:`bayestribo.campaign.analysis.analyse_campaign`).
+    name : str, optional
+        The run's identity; default its metadata ``run_id``.
+    parameters : sequence of str
+        The parameters kept, those of them the fit has.
+    """
+    if isinstance(result, FitDigest):
+        return result
+    metadata = dict(getattr(result, "metadata", {}) or {})
+    name = name or str(metadata.get("run_id") or getattr(result, "run_name", None) or "run")
+    names = tuple(getattr(result, "parameter_names", ()) or ())
+    draws: dict[str, NDArray[np.float64]] = {}
+    log_prior: dict[str, NDArray[np.float64]] = {}
+    summaries: dict[str, dict[str, Any]] = {}
+    for key in parameters:
+        try:
+            everything = result.samples(key)
+        except (KeyError, ValueError):
+            continue
+        summaries[key] = summarize(everything, prob)
+        try:
+            kept = run_samples(result, (key,), max_samples=max_samples, seed=seed, name=name)
+        except BayestriboError:
+            continue  # no prior of its own: summarised, not kept for a population
+        draws[key] = kept.values[key]
+        log_prior[key] = kept.log_prior
+    return FitDigest(
+        run_name=name,
+        metadata=metadata,
+        parameter_names=names,
+        converged=bool(getattr(result, "converged", True)),
+        at_prior_bound=list(getattr(result, "at_prior_bound", []) or []),
+        prob=prob,
+        summaries=summaries,
+        draws=draws,
+        log_prior=log_prior,
+    )
