@@ -148,7 +148,13 @@ def test_progress_names_each_population_and_trend_before_sampling_it():
     got = analyse_campaign(fits, seed=1, max_steps=2000, progress=messages.append)
     assert messages[0] == "population of 6 runs with contact, by lubricant, load_N"
     assert "trends against load_N: lubricant=glycerol" in messages
-    assert messages[-1] == "ζ₀ from 3 runs without contact"
+    assert "ζ₀ from 3 runs without contact" in messages
+    # then the queue of posteriors (3 groups of contact + pooled, ζ₀ groups + pooled, a
+    # trend), with its progress: the last message says all are done
+    queued = messages.index("ζ₀ from 3 runs without contact") + 1
+    total = int(messages[queued].split()[1])
+    assert messages[queued] == f"sampling {total} population and trend posteriors"
+    assert messages[-1] == f"sampled {total} of {total} posteriors"
     assert got.excluded == [] and all(r["status"] == "used" for r in got.runs)
 
 
@@ -223,7 +229,25 @@ def test_digests_give_the_analysis_of_the_fits(analysis):
     assert again.group_rows() == analysis.group_rows()
     assert again.trend_rows() == analysis.trend_rows()
     assert again.to_dict() == analysis.to_dict()
-    with pytest.raises(BayestriboError, match="summarises at 0.95, not at 0.9"):
+    with pytest.raises(BayestriboError, match=r"summarises at 0\.95, not at 0\.9"):
         analyse_campaign(digests, seed=1, max_steps=2000, prob=0.9)
     with pytest.raises(ValueError, match="at its own draws only"):
         digests[0].prior_logpdf("zeta", [0.02])
+
+
+def test_the_terminal_text_fits_100_columns_aligned_with_its_probability(analysis):
+    from bayestribo.cli.campaign import _text
+
+    failures = [{"run": "bad-r9", "error": "RunFormatError: no such run file"}]
+    text = _text(analysis, failures)
+    lines = text.splitlines()
+    assert max(len(line) for line in lines) <= 100, max(lines, key=len)
+    assert "95 % credible interval" in text and "P(slope > 0) = " in text
+    # words, not identifiers: no key=value labels, no Python names
+    assert "load_N" not in text and "=" not in text.replace("P(slope > 0) =", "")
+    assert "glycerol · 0.12 N, 3 runs" in text and "Trends against load: slope per N" in text
+    # the σ column starts at the same place in every parameter line
+    columns = {line.index(" σ ") for line in lines if line.startswith("    ") and " σ " in line}
+    assert len(columns) == 1
+    assert "FAILED bad-r9: RunFormatError: no such run file" in lines
+    assert "no contact (ζ₀), 3 runs" in lines

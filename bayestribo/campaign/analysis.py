@@ -432,7 +432,14 @@ def analyse_campaign(
         zs = [run_samples(r, ("zeta",), max_samples=max_samples, seed=seed) for r in free_runs]
         say(f"ζ₀ from {len(zs)} runs without contact")
         add_population("zeta0", zs, ("zeta",))
-    results_of_calls = run_calls(calls, executor, costs)
+    say(f"sampling {len(calls)} population and trend posteriors")
+    step = max(1, len(calls) // 10)
+
+    def sampled(finished: int, total: int) -> None:
+        if finished == total or finished % step == 0:
+            say(f"sampled {finished} of {total} posteriors")
+
+    results_of_calls = run_calls(calls, executor, costs, done=sampled)
     for done in finish:
         done(results_of_calls)
     contact, zeta0, series_pop = found["contact"], found["zeta0"], found["series"]

@@ -312,7 +312,8 @@ def fit_many(
             kwargs = {**fit_kwargs, **(run_kwargs[i] if run_kwargs is not None else {})}
             futures[executor.submit(_call, function, run, seeds[i], kwargs)] = i
         for future in as_completed(futures):
-            i = futures[future]
+            # dropped as it is handled: a done future holds its whole result
+            i = futures.pop(future)
             try:
                 result, error, tb, elapsed = future.result()
             except Exception as exc:  # the executor lost the task (worker died, ...)
@@ -325,7 +326,7 @@ def fit_many(
             if keep is not None and outcome.ok:
                 outcome = dataclasses.replace(outcome, result=keep(outcome.result))
             outcomes[i] = outcome
-            del result, outcome
+            del result, outcome, future
     except BaseException:
         for future in futures:
             future.cancel()

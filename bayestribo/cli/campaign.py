@@ -114,26 +114,93 @@ def _run_rows(runs: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return rows
 
 
+#: How grouping keys read on the terminal: a value alone, or with its unit.
+_KEY_WORDS = {
+    "lubricant": "{}",
+    "series": "{}",
+    "water_mass_fraction": "water {:g} (mass fraction)",
+    "load_N": "{:g} N",
+    "kinematic_viscosity_mm2_per_s": "{:g} mm²/s",
+}
+_SYMBOLS = {"zeta": "ζ", "mu_k": "μ_k", "friction_displacement": "x_c"}
+_COVARIATES = {"load_N": ("load", "N"), "kinematic_viscosity_mm2_per_s": ("viscosity", "mm²/s")}
+
+
+def _words(label: Any) -> str:
+    """A group label (``lubricant=glycerol,load_N=0.07``) as ``glycerol · 0.07 N``."""
+    text = str(label)
+    if text in ("all", "pooled", ""):
+        return text or "all"
+    parts = []
+    for item in text.split(","):
+        key, sep, value = item.partition("=")
+        if not sep:
+            parts.append(item)
+            continue
+        form = _KEY_WORDS.get(key, f"{key} {{}}")
+        try:
+            parts.append(form.format(float(value)) if "g}" in form else form.format(value))
+        except ValueError:
+            parts.append(f"{key} {value}")
+    return " · ".join(parts)
+
+
+def _interval(median: float, low: float, high: float) -> str:
+    # significant digits, not decimals: a ζ of 1e-6 must not print as 0.00000
+    return f"{median:.4g} [{low:.4g}, {high:.4g}]"
+
+
 def _text(analysis: Any, failures: list[dict[str, str]]) -> str:
-    lines = [f"{'group':48s} {'n':>2s} {'param':5s} {'mean [interval]':>30s} {'σ [interval]':>30s}"]
+    """The campaign's answer on the terminal, in at most 100 columns."""
+    percent = f"{100 * analysis.prob:g} %"
+    lines = [
+        f"Populations of repeats: the mean and σ (the spread between repeats) of each "
+        f"group,\nas posterior median [{percent} credible interval]."
+    ]
+    titles = {"pooled over loads": " (pooled over loads)"}
+    current = None
     for r in analysis.group_rows():
-        prefix = {"contact": "", "pooled over loads": "pooled over loads: "}
-        group = prefix.get(r["kind"], "no contact (ζ₀): ") + str(r["group"])
-        # significant digits, not decimals: a ζ of 1e-6 must not print as 0.00000
-        mean = f"{r['mean_median']:.4g} [{r['mean_low']:.4g}, {r['mean_high']:.4g}]"
-        sig = f"{r['sigma_median']:.3g} [{r['sigma_low']:.3g}, {r['sigma_high']:.3g}]"
-        lines.append(f"{group:48s} {r['n_runs']:2d} {r['parameter']:5s} {mean:>30s} {sig:>30s}")
-    for r in analysis.trend_rows():
+        words = _words(r["group"])
+        if r["kind"] == "no contact":
+            group = "no contact (ζ₀)" + ("" if words == "all" else f": {words}")
+        else:
+            group = f"{words}{titles.get(r['kind'], '')}"
+        group += f", {r['n_runs']} runs"
+        if group != current:
+            lines.append("")
+            lines.append(group)
+            current = group
+        symbol = _SYMBOLS.get(r["parameter"], r["parameter"])
+        mean = _interval(r["mean_median"], r["mean_low"], r["mean_high"])
+        sigma = _interval(r["sigma_median"], r["sigma_low"], r["sigma_high"])
+        lines.append(f"    {symbol:4s} mean {mean:34s} σ {sigma}")
+    trends = analysis.trend_rows()
+    covariates = list(dict.fromkeys(r["covariate"] for r in trends))
+    for covariate in covariates:
+        name, unit = _COVARIATES.get(covariate, (covariate, "unit"))
+        lines.append("")
         lines.append(
-            f"trend {r['series']} {r['parameter']}: slope {r['slope_median']:.4g} "
-            f"[{r['slope_low']:.4g}, {r['slope_high']:.4g}] per unit of {r['covariate']}, "
-            f"P(slope > 0) = {r['prob_positive']:.3f}"
+            f"Trends against {name}: slope per {unit}, median [{percent} interval], and "
+            "the probability that it is positive."
         )
+        current = None
+        for r in trends:
+            if r["covariate"] != covariate:
+                continue
+            series = _words(str(r["series"]).split(":", 1)[-1])
+            if series != current:
+                lines.append(series)
+                current = series
+            symbol = _SYMBOLS.get(r["parameter"], r["parameter"])
+            slope = _interval(r["slope_median"], r["slope_low"], r["slope_high"])
+            lines.append(f"    {symbol:4s} {slope:40s} P(slope > 0) = {r['prob_positive']:.3f}")
+    unconverged = [r["run_id"] for r in analysis.runs if not r.get("converged", True)]
+    if failures or analysis.excluded or unconverged or not analysis.converged:
+        lines.append("")
     for f in failures:
         lines.append(f"FAILED {f['run']}: {f['error']}")
     for e in analysis.excluded:
         lines.append(f"EXCLUDED {e['run']}: {e['reason']}")
-    unconverged = [r["run_id"] for r in analysis.runs if not r.get("converged", True)]
     if unconverged:
         lines.append(
             f"NOT CONVERGED: the fits of {', '.join(map(str, unconverged))}; raise --max-steps"

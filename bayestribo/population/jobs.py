@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Callable, Sequence
-from concurrent.futures import Executor
+from concurrent.futures import Executor, as_completed
 from typing import Any, TypeVar
 
 __all__ = ["run_calls", "run_jobs"]
@@ -56,6 +56,7 @@ def run_calls(
     calls: Sequence[tuple[Callable[..., Any], tuple[Any, ...]]],
     executor: Executor | None = None,
     costs: Sequence[float] | None = None,
+    done: Callable[[int, int], None] | None = None,
 ) -> list[Any]:
     """``[function(*args) for function, args in calls]``, on ``executor`` when one is given.
 
@@ -74,6 +75,8 @@ def run_calls(
         Relative cost of each call; on an executor the costliest are submitted first
         (longest first keeps the workers busy to the end). The results and the order
         of the warnings given again do not depend on it.
+    done : callable, optional
+        ``done(finished, total)`` after each call completes (progress of a long queue).
 
     Returns
     -------
@@ -82,12 +85,19 @@ def run_calls(
     """
     if costs is not None and len(costs) != len(calls):
         raise ValueError(f"costs: expected {len(calls)} values, one per call, got {len(costs)}")
-    if executor is None or len(calls) < 2:
-        return [function(*args) for function, args in calls]
-    order = (
-        range(len(calls)) if costs is None else sorted(range(len(calls)), key=lambda i: -costs[i])
-    )
+    total = len(calls)
+    if executor is None or total < 2:
+        results = []
+        for k, (function, args) in enumerate(calls, start=1):
+            results.append(function(*args))
+            if done is not None:
+                done(k, total)
+        return results
+    order = range(total) if costs is None else sorted(range(total), key=lambda i: -costs[i])
     futures = {i: executor.submit(_recorded, calls[i][0], tuple(calls[i][1])) for i in order}
+    if done is not None:
+        for k, _ in enumerate(as_completed(futures.values()), start=1):
+            done(k, total)
     out = []
     for i in range(len(calls)):
         result, caught = futures[i].result()
