@@ -236,3 +236,44 @@ def test_a_saved_fit_that_cannot_be_read_is_fitted_again(tmp_path, capsys):
     assert again[0].result == first[0].result
     assert "the saved fit of a-r1 cannot be read" in capsys.readouterr().err
     assert not [p for p in out.iterdir() if p.name.endswith(".tmp")]
+
+
+class _Whole:
+    """A stand-in fit result that can be watched with a weak reference."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+
+
+def test_fit_many_holds_only_what_keep_returns_while_it_runs():
+    """A campaign's memory does not grow with its runs: once a result has been seen by
+    the callback and digested, nothing in fit_many holds it any more."""
+    import gc
+    import weakref
+
+    refs: dict[str, weakref.ref] = {}
+    handled: list[str] = []
+    alive_at_callbacks: list[list[str]] = []
+
+    def whole_fit(run: Any, *, seed: int) -> _Whole:
+        result = _Whole(run_identity(run))
+        refs[result.name] = weakref.ref(result)
+        return result
+
+    def callback(outcome: RunOutcome) -> None:
+        gc.collect()
+        alive_at_callbacks.append([name for name in handled if refs[name]() is not None])
+        handled.append(outcome.name)
+
+    with ThreadPoolExecutor(1) as pool:
+        outcomes = fit_many(
+            RUNS,
+            pool,
+            function=whole_fit,
+            progress=False,
+            callback=callback,
+            keep=lambda result: f"digest of {result.name}",
+        )
+    assert [o.result for o in outcomes] == [f"digest of {run_identity(r)}" for r in RUNS]
+    # no result handled before is alive when the next one arrives
+    assert alive_at_callbacks == [[]] * len(RUNS), alive_at_callbacks
