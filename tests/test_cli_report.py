@@ -253,3 +253,43 @@ def test_the_report_exits_as_fit_would():
     bad["fit"]["diagnostics"]["converged"] = False
     bad["adequacy"] = {"adequate": False, "verdict": "not adequate (failed: windows)"}
     assert len(fit_reasons(bad)) == 2
+
+
+def test_every_shipped_notebook_is_reached_by_report(tmp_path, captured, capsys):
+    """``--notebook`` runs each report shipped; each gets parameters of its own."""
+    from bayestribo.cli.report import NOTEBOOKS
+    from bayestribo.reports import notebooks
+
+    shipped = {p.stem for p in (Path(notebooks.__file__).parent / "ipynb").glob("*.ipynb")}
+    assert set(NOTEBOOKS) == set(notebooks.NOTEBOOKS) == shipped
+    data = REPO / "data"
+    appstat = REPO.parent / "shared" / "external-data" / "appstat2020-harmonic-oscillator"
+    recordings = tmp_path / "recordings"
+    recordings.mkdir()
+    for name in ("HarmOsc1.txt", "HarmOsc2.txt"):
+        (recordings / name).write_bytes(
+            (appstat / name).read_bytes() if appstat.is_dir() else b"0 1\n"
+        )
+    (recordings / "notes.md").write_text("not a recording")
+    cases = {
+        "single_run": [str(RUN)],
+        "loads": [str(data)],
+        "viscosity": [str(data), "--seed", "3"],
+        "real_data": [str(recordings)],
+        "acquisition": [],
+    }
+    for notebook, argv in cases.items():
+        out = tmp_path / f"{notebook}.html"
+        assert main(["report", *argv, "--notebook", notebook, "--out", str(out)]) == 0
+        name, params, _ = captured[-1]
+        assert name == notebook and out.is_file()
+    params = {name: p for name, p, _ in captured}
+    assert "--notebook viscosity`" in capsys.readouterr().err  # the loads report names it
+    assert params["viscosity"]["data_dir"] == str(data.resolve())
+    assert params["viscosity"]["campaign_seed"] == 3
+    assert params["real_data"]["files"] == ["HarmOsc1.txt", "HarmOsc2.txt"]
+    # a notebook asked of the wrong kind of path, or without one, is refused in one line
+    assert main(["report", str(RUN), "--notebook", "loads"]) == 2
+    assert "--notebook loads reports on a folder" in capsys.readouterr().err
+    assert main(["report", "--notebook", "viscosity"]) == 2
+    assert "PATH: give a run file or a campaign folder" in capsys.readouterr().err

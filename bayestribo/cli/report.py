@@ -31,6 +31,9 @@ from typing import Any
 
 __all__ = ["campaign_selection", "fit_reasons", "notebook_for", "parse_params", "register"]
 
+#: The notebooks shipped, each reachable with ``--notebook``.
+NOTEBOOKS = ("single_run", "loads", "viscosity", "real_data", "acquisition")
+
 #: File formats of the figures written next to the report.
 FIGURE_FORMATS = ("png", "pdf", "svg")
 
@@ -57,7 +60,19 @@ def register(subparsers: Any) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     p.add_argument(
-        "path", metavar="PATH", help="run file, folder of runs, or a campaign's results folder"
+        "path",
+        metavar="PATH",
+        nargs="?",
+        help="run file, folder of runs, or a campaign's results folder (not needed by the "
+        "acquisition notebook)",
+    )
+    p.add_argument(
+        "--notebook",
+        choices=NOTEBOOKS,
+        help="the report to run: single_run (a run file), loads (a campaign across loads), "
+        "viscosity (glycerol-water series against viscosity), real_data (a folder of "
+        "recordings of another rig), acquisition (a simulated instrument, no PATH); "
+        "default: single_run for a file, loads for a folder",
     )
     p.add_argument(
         "--out",
@@ -259,11 +274,29 @@ def run(args: argparse.Namespace) -> int:
         run_report,
     )
 
-    path = Path(args.path).resolve()
-    notebook = notebook_for(path)
+    notebook = args.notebook
+    if args.path is None:
+        if notebook != "acquisition":
+            raise ReportError(
+                "PATH: give a run file or a campaign folder (only --notebook acquisition "
+                "runs without one)"
+            )
+        path = Path("acquisition")
+    else:
+        path = Path(args.path).resolve()
+        if notebook in (None, "single_run", "loads"):
+            found = notebook_for(path)
+            notebook = notebook or found
+            if (notebook == "single_run") != (found == "single_run"):
+                wanted = "a run file" if notebook == "single_run" else "a folder"
+                raise ReportError(f"--notebook {notebook} reports on {wanted}; {path} is not one")
+        elif not path.is_dir():
+            raise ReportError(f"--notebook {notebook} reports on a folder; {path} is not one")
     params: dict[str, Any] = {}
     where = ""
-    if notebook == "single_run":
+    if notebook in ("viscosity", "real_data", "acquisition"):
+        params.update(_other_params(notebook, path, args))
+    elif notebook == "single_run":
         params.update({"run_path": str(path), "read_kwargs": reading_kwargs(args)})
         if args.seed is not None:
             params["seed"] = args.seed
@@ -286,6 +319,11 @@ def run(args: argparse.Namespace) -> int:
             )
         campaign_params, where = _campaign_params(path, args)
         params.update(campaign_params)
+        if _has_water_series(path):
+            where += (
+                f"\nthe campaign also holds glycerol-water runs: their report against "
+                f"viscosity is `bayestribo report {args.path} --notebook viscosity`"
+            )
     default_name = f"{path.stem or path.name}-report.html"
     out = args.out or Path(default_name)
     if out.is_dir() or (args.out is not None and out.suffix.lower() not in (".html", ".htm")):
@@ -321,6 +359,51 @@ def run(args: argparse.Namespace) -> int:
         print(f"bayestribo report: {reason}", file=sys.stderr)
     # the exit status of `bayestribo fit` on the same run (README, Exit status)
     return 1 if reasons else 0
+
+
+def _has_water_series(folder: Path) -> bool:
+    """Whether a campaign folder's manifest lists runs with a water fraction."""
+    import csv
+
+    manifest = folder / "manifest.csv"
+    if not manifest.is_file():
+        return False
+    with manifest.open(newline="", encoding="utf-8") as fh:
+        return any(row.get("series") == "glycerol-water" for row in csv.DictReader(fh))
+
+
+def _other_params(notebook: str, path: Path, args: argparse.Namespace) -> dict[str, Any]:
+    """Parameters of the viscosity, real-data and acquisition notebooks from the options."""
+    from bayestribo.reports.notebooks import ReportError
+
+    single = ("columns", "length_unit", "frequency", "load", "mass", "law", "notch")
+    given = [f"--{name.replace('_', '-')}" for name in single if getattr(args, name, None)]
+    if given or args.discrepancy or args.campaign is not None:
+        raise ReportError(
+            f"{', '.join(given) or '--discrepancy/--campaign'}: not options of the "
+            f"{notebook} report; give its parameters with --param KEY=VALUE"
+        )
+    params: dict[str, Any] = {}
+    if notebook == "viscosity":
+        params["data_dir"] = str(path)
+        if args.seed is not None:
+            params["campaign_seed"] = args.seed
+    elif notebook == "real_data":
+        from bayestribo.io.registry import registered_formats
+
+        suffixes = {s for f in registered_formats().values() for s in f.suffixes}
+        files = [
+            p.name for p in sorted(path.iterdir()) if p.is_file() and p.suffix.lower() in suffixes
+        ]
+        if not files:
+            raise ReportError(f"{path}: no recordings of a format read in this folder")
+        params.update({"data_dir": str(path), "files": files, "fit_files": files})
+        params["check_files"] = files[:1]
+        if args.seed is not None:
+            params["seed"] = args.seed
+    elif args.seed is not None:
+        params["seed"] = args.seed
+    return params
 
 
 def fit_reasons(record: dict[str, Any]) -> list[str]:
