@@ -77,3 +77,28 @@ def test_a_closed_pipe_is_no_traceback(run_file):
     )
     assert proc.stdout.startswith("file")
     assert "Traceback" not in proc.stderr and "BrokenPipe" not in proc.stderr
+
+
+def test_a_reader_gone_at_the_first_write_is_exit_1_without_traceback(
+    run_file, monkeypatch, tmp_path
+):
+    """Deterministic form of ``| head``: the first write to standard output fails with
+    BrokenPipeError (a kind of OSError, which must not take it for a disk error)."""
+
+    sink = (tmp_path / "sink").open("w")
+
+    class GoneReader:
+        def write(self, text):
+            raise BrokenPipeError(32, "Broken pipe")
+
+        def flush(self):
+            pass
+
+        def fileno(self):
+            return sink.fileno()
+
+    monkeypatch.setattr(sys, "stdout", GoneReader())
+    try:
+        assert main(["inspect", str(run_file)]) == 1
+    finally:
+        sink.close()

@@ -130,17 +130,18 @@ BAD: list[tuple[str, Callable[[Run], Run], str]] = [
     (
         "displacement-in-millimetres",
         lambda r: _replace(r, displacement=1e3 * r.displacement),
-        r"displacement is 1000 times the time integral.*millimetres in a column that says metres",
+        r"displacement is 1000 times the time integral.*likely displacement in mm: "
+        r"scale=\{'displacement_m': 0\.001\}",
     ),
     (
         "displacement-in-micrometres",
         lambda r: _replace(r, displacement=1e6 * r.displacement),
-        r"micrometres in a column that says metres",
+        r"likely displacement in µm: scale=\{'displacement_m': 1e-06\}",
     ),
     (
         "velocity-in-mm-per-s",
         lambda r: _replace(r, velocity=1e3 * r.velocity),
-        r"0\.001 times the time integral.*velocity looks like mm/s",
+        r"0\.001 times the time integral.*likely velocity in mm/s",
     ),
     (
         "velocity-wrong-sign",
@@ -308,3 +309,51 @@ def test_a_velocity_of_opposite_sign_is_named_as_such():
     flipped = Run(good.time, good.displacement, -good.velocity, good.metadata)
     with pytest.raises(RecordingError, match="opposite sign"):
         validate_run(flipped)
+
+
+def _units_file(tmp_path, t_factor, x_factor, v_factor):
+    """The bundled paper-rig simulation written as a headerless file in other units."""
+    from bayestribo.synthetic import simulate
+
+    run = simulate(seed=4)
+    path = tmp_path / "units.txt"
+    np.savetxt(
+        path,
+        np.column_stack(
+            [run.time / t_factor, run.displacement / x_factor, run.velocity / v_factor]
+        ),
+    )
+    return run, path
+
+
+def test_a_time_column_in_ms_is_named_with_the_signals_units_and_the_fix_works(tmp_path):
+    """ms and mm read as s and m: the velocity alone "in mm/s" would make the channels
+    agree at 0.03 Hz; the advice names the time unit too, and following it reads the run."""
+    import re
+
+    run, path = _units_file(tmp_path, 1e-3, 1e-3, 1e-3)
+    columns = ["time_s", "displacement_m", "velocity_m_per_s"]
+    with pytest.raises(RecordingError, match="likely time in ms and displacement in mm") as info:
+        read_run(path, columns=columns)
+    assert "velocity in mm/s (then f = 32." in str(info.value)
+    scale = eval(re.search(r"scale=(\{[^}]*\})", str(info.value))[1])  # the advice as given
+    fixed = read_run(path, columns=columns, scale=scale, metadata=dict(run.metadata))
+    np.testing.assert_allclose(fixed.time, run.time, rtol=1e-12)
+    np.testing.assert_allclose(fixed.displacement, run.displacement, rtol=1e-12)
+
+
+def test_a_velocity_in_mm_per_s_alone_is_named_alone(tmp_path):
+    _, path = _units_file(tmp_path, 1.0, 1.0, 1e-3)
+    with pytest.raises(RecordingError) as info:
+        read_run(path, columns=["time_s", "displacement_m", "velocity_m_per_s"])
+    assert "likely velocity in mm/s: scale={'velocity_m_per_s': 0.001}" in str(info.value)
+
+
+def test_a_stated_frequency_the_sampling_cannot_resolve_names_the_time_unit(tmp_path):
+    _, path = _units_file(tmp_path, 1e-3, 1.0, 1e-3)
+    with pytest.raises(RecordingError, match=r"a time column in ms read as seconds gives this"):
+        read_run(
+            path,
+            columns=["time_s", "displacement_m", "velocity_m_per_s"],
+            metadata={"natural_frequency_Hz": 32.6},
+        )

@@ -289,6 +289,8 @@ def cli_message(message: str) -> str:
         if python == "columns=[...]":
             # a list of column names given in full: the option with its values
             message = _COLUMN_LIST.sub(_columns_option, message)
+        if python == "scale={...}":
+            message = _SCALE_MAP.sub(_scale_options, message)
         message = message.replace(python, option)
     return message
 
@@ -301,6 +303,15 @@ _SHORT = {name: short for short, name in COLUMN_ALIASES.items()}
 def _columns_option(match: re.Match[str]) -> str:
     names = re.findall(r"'([^']*)'", match[1])
     return "--columns " + " ".join(_SHORT.get(n, n) for n in names)
+
+
+#: ``scale={'time_s': 0.001, ...}``, spelled as ``--scale`` options.
+_SCALE_MAP = re.compile(r"scale=\{('\w+': [-+.\deE]+(?:, '\w+': [-+.\deE]+)*)\}")
+
+
+def _scale_options(match: re.Match[str]) -> str:
+    pairs = re.findall(r"'(\w+)': ([-+.\deE]+)", match[1])
+    return " ".join(f"--scale {_SHORT.get(name, name)}={value}" for name, value in pairs)
 
 
 #: ``channels={'name': source}`` with one entry, spelled as a ``--channel`` option.

@@ -104,6 +104,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BayestriboError as exc:
         print(f"bayestribo {args.command}: error: {plain_numbers(str(exc))}", file=sys.stderr)
         return 2
+    except BrokenPipeError:
+        # The reader of standard output went away (``| head``): no traceback. Point
+        # stdout at devnull so that the interpreter's final flush does not fail too
+        # (the recipe of the Python documentation, "Note on SIGPIPE"). Before OSError,
+        # of which it is a kind.
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 1
     except OSError as exc:
         if exc.errno not in (errno.ENOSPC, errno.EDQUOT):
             raise
@@ -122,13 +130,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         # kept (a campaign's fits are in its catalog), the rest stops
         print(f"bayestribo {args.command}: interrupted", file=sys.stderr)
         return 130
-    except BrokenPipeError:
-        # The reader of standard output went away (``| head``): no traceback. Point
-        # stdout at devnull so that the interpreter's final flush does not fail too
-        # (the recipe of the Python documentation, "Note on SIGPIPE").
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
-        return 1
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -19,7 +19,7 @@ expected at the first problem found:
    cut this way: declare the sensor range to have it checked);
 5. with both signals, the displacement matches the time integral of the velocity
    (gain within a factor of two of 1): this catches a displacement in millimetres
-   or micrometres in a column that says metres, a velocity in mm/s, or a velocity
+   or micrometres read as metres, a velocity in mm/s, a time in ms, or a velocity
    of the wrong sign.
 
 Nothing is repaired, clipped or dropped: a run either passes unchanged or fails.
@@ -136,10 +136,21 @@ def _check_time(run: Run, where: str | None, time_rtol: float) -> float:
         raise _fail(
             f"field {TIME!r}: sample rate {rate:.6g} Hz does not resolve the natural frequency "
             f"{f!r} Hz (metadata 'natural_frequency_Hz'); expected more than {2.0 * f:.6g} Hz "
-            "(two samples per period)",
+            "(two samples per period)" + _time_unit_hint(rate, f),
             where,
         )
     return rate
+
+
+def _time_unit_hint(rate: float, frequency: float) -> str:
+    """For a sample rate too low for the stated frequency: the time unit that fixes it."""
+    for factor, unit in ((1e-3, "ms"), (1e-6, "µs")):
+        if 2.0 * frequency < rate / factor <= 1e9:
+            return (
+                f"; a time column in {unit} read as seconds gives this: "
+                f"scale={{'time_s': {factor:g}}} (or name it time_{unit.replace('µ', 'u')})"
+            )
+    return ""
 
 
 def _flat_top(values: NDArray, level: float, length: int) -> tuple[int, int] | None:
@@ -202,18 +213,72 @@ def _check_clipping(run: Run, where: str | None, clip_samples: int) -> None:
                 )
 
 
-def _unit_hint(gain: float) -> str:
+#: Factors a column in a common unit needs to reach s, m or m/s (ms, µs; mm, µm; ...).
+_FACTORS = (1.0, 1e-3, 1e-6)
+_UNIT_WORDS = {
+    TIME: {1e-3: "time in ms", 1e-6: "time in µs"},
+    DISPLACEMENT: {1e-3: "displacement in mm", 1e-6: "displacement in µm"},
+    VELOCITY: {1e-3: "velocity in mm/s", 1e-6: "velocity in µm/s"},
+}
+
+
+def _unit_hint(gain: float, frequency_Hz: float | None = None, swing: float | None = None) -> str:
+    """The likely units of an inconsistent run, and the scale factors that fix them.
+
+    The displacement is ``gain`` times the time integral of the velocity. Every choice
+    of ms/µs for the time and mm/µm (mm/s, µm/s) for the signals that brings the gain
+    to 1 is tried; those that also make a motion a rig makes
+    (:func:`bayestribo.model.plausible.is_plausible` at the measured frequency and
+    swing) are named, the fewest columns changed first. A time column in ms with both
+    signals in mm reads as a 0.03 Hz oscillation whose channels disagree by 1000: the
+    velocity alone "in mm/s" would make them agree and leave the frequency wrong.
+    """
+    from bayestribo.model.plausible import is_plausible
+
     if gain < 0:
         return "the velocity has the opposite sign of the rate of change of the displacement"
-    for factor, hint in (
-        (1e3, "the displacement looks like millimetres in a column that says metres"),
-        (1e6, "the displacement looks like micrometres in a column that says metres"),
-        (1e-3, "the velocity looks like mm/s in a column that says m/s"),
-        (1e-6, "the velocity looks like µm/s in a column that says m/s"),
-    ):
-        if factor / 2 <= gain <= factor * 2:
-            return hint
-    return "the two signals are not in consistent units"
+    fixes = []
+    for a_t in _FACTORS:
+        for a_x in _FACTORS:
+            for a_v in _FACTORS:
+                after = gain * a_x / (a_t * a_v)
+                if not 0.5 <= after <= 2.0:
+                    continue
+                if frequency_Hz is not None and swing is not None:
+                    if not is_plausible(frequency_Hz / a_t, swing * a_x):
+                        continue
+                factors = {TIME: a_t, DISPLACEMENT: a_x, VELOCITY: a_v}
+                fixes.append({k: v for k, v in factors.items() if v != 1.0})
+    fixes.sort(key=len)
+    fixes = [f for f in fixes if f and len(f) == len(fixes[0])] if fixes else []
+    if not fixes:
+        return "the signals are not in units a rig's motion has; give each column its unit"
+    described = []
+    for fix in fixes:
+        words = " and ".join(_UNIT_WORDS[k][v] for k, v in fix.items())
+        scale = "{" + ", ".join(f"{k!r}: {v:g}" for k, v in fix.items()) + "}"
+        after = ""
+        if TIME in fix and frequency_Hz is not None:
+            after = f" (then f = {frequency_Hz / fix[TIME]:.4g} Hz)"
+        described.append(f"{words}{after}: scale={scale}")
+    return "likely " + "; or ".join(described)
+
+
+def _motion(run: Run) -> tuple[float | None, float | None]:
+    """Frequency [Hz] and amplitude (half the peak-to-peak, in the file's length unit)
+    of a run's motion as read, for :func:`_unit_hint`."""
+    signal = run.displacement if run.displacement is not None else run.velocity
+    if signal is None or run.length_unit != "m":
+        return None, None
+    period = _dominant_period(run.time, signal)
+    if not period > 0:
+        return None, None
+    frequency = 1.0 / period
+    if run.displacement is not None:
+        swing = 0.5 * float(np.ptp(run.displacement))
+    else:
+        swing = 0.5 * float(np.ptp(run.velocity)) / (2.0 * math.pi * frequency)
+    return frequency, swing
 
 
 def _dominant_period(t: NDArray, values: NDArray) -> float:
@@ -445,8 +510,8 @@ def _check_units(run: Run, where: str | None) -> None:
         raise _fail(
             f"{both} disagree: the displacement is "
             f"{gain:.4g} times the time integral of the velocity; expected 1 (within a factor "
-            f"of {UNIT_GAIN_TOLERANCE:g}): {_unit_hint(gain)}; give a scale factor for the "
-            "column when reading (scale={...})",
+            f"of {UNIT_GAIN_TOLERANCE:g}): {_unit_hint(gain, *_motion(run))} (or name the "
+            "units in the column names, e.g. time_ms, displacement_mm)",
             where,
         )
 

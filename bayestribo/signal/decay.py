@@ -72,6 +72,7 @@ from scipy.integrate import cumulative_trapezoid
 
 from bayestribo._clock import clock
 from bayestribo.errors import RecordingError
+from bayestribo.model.plausible import MAX_SPEED
 from bayestribo.model.scaling import Rig, Scaling
 from bayestribo.signal.motion import THRESHOLD, block_noise, check_turning_points, motion_span
 from bayestribo.signal.peaks import Peaks, _dominant_period, estimate_noise, find_peaks
@@ -809,12 +810,6 @@ def energy_decay(
         fitted.append(f)
         out.append(sig - amplitude * np.cos(2.0 * math.pi * f * (t - t[0]) + phase))
     return _analyse(t, out[0], out[1], notch_Hz=(float(np.mean(fitted)),), **options)
-
-
-#: Largest peak speed of a free-decay rig [m/s]: laser vibrometers stop near 10-30 m/s,
-#: and a swing of millimetres at a kilohertz is a few m/s. Beyond it the displacement
-#: is not in metres.
-MAX_SPEED = 20.0
 
 
 def _check_plausible(peaks: NDArray, natural_hz: float, derived: str | None) -> None:
