@@ -136,6 +136,15 @@ def plot_against_load(analysis: CampaignAnalysis, fig: Any = None) -> Any:
     return fig
 
 
+def _value_label(key: str, value: Any) -> str:
+    """A legend entry for a metadata value: ``load 0.07 N``, not ``load_N = 0.07``."""
+    if value is None:
+        return f"no {key}"
+    if key == "load_N":
+        return f"load {value:g} N"
+    return literal(f"{key} = {value}")
+
+
 def plot_forest(
     analysis: CampaignAnalysis,
     fig: Any = None,
@@ -192,9 +201,10 @@ def plot_forest(
     _decades(axes[2])
     axes[2].set_xlabel("interval width / median [-]\n(o: ζ, △: μ_k)")
     axes[2].grid(alpha=0.3)
-    axes[0].set_yticks(y, [literal(r["run_id"]) for r in runs], fontsize="x-small")
+    # 8 pt: the smallest a journal prints; a row is 0.22 in (16 pt) high
+    axes[0].set_yticks(y, [literal(r["run_id"]) for r in runs], fontsize=8)
     handles = [
-        axes[0].plot([], [], "o-", color=colour[v], label=literal(f"{analysis.covariate} = {v}"))[0]
+        axes[0].plot([], [], "o-", color=colour[v], label=_value_label(analysis.covariate, v))[0]
         for v in loads
     ]
     if truth:

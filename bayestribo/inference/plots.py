@@ -161,7 +161,7 @@ def trace_plot(result: FitResult, axes: Sequence[Any], names: Sequence[str] | No
             ax.plot(draws[c], lw=0.5, alpha=0.8, label=f"ensemble {c + 1}")
         ax.set_ylabel(_label(result, name), fontsize=8)
     axes_list[-1].set_xlabel("thinned draw (walkers of one step, then the next step)")
-    axes_list[0].legend(fontsize=7, loc="upper right")
+    axes_list[0].legend(fontsize=8, loc="upper right")
     return axes
 
 

@@ -173,6 +173,12 @@ def setup(figure_dir: str | None, figure_format: str = "png") -> Callable[[Any, 
     if figure_format not in FIGURE_FORMATS:
         raise ReportError(f"figure_format: expected one of {FIGURE_FORMATS}, got {figure_format!r}")
     plt.rcParams.update(RC)
+    try:  # the figures in the HTML at twice the screen's resolution (200 dpi)
+        from matplotlib_inline.backend_inline import set_matplotlib_formats
+
+        set_matplotlib_formats("retina")
+    except ImportError:  # pragma: no cover - comes with ipykernel (the report extra)
+        pass
     show_warnings_as_notes()
     try:
         import pandas as pd
