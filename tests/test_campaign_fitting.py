@@ -277,3 +277,24 @@ def test_fit_many_holds_only_what_keep_returns_while_it_runs():
     assert [o.result for o in outcomes] == [f"digest of {run_identity(r)}" for r in RUNS]
     # no result handled before is alive when the next one arrives
     assert alive_at_callbacks == [[]] * len(RUNS), alive_at_callbacks
+
+
+def test_run_identities_are_stems_unless_they_clash(tmp_path):
+    from bayestribo.campaign.fitting import run_identities
+
+    paths = [
+        tmp_path / "runs" / "glycerol-N0.31-r1.csv",
+        tmp_path / "a" / "run1.csv",
+        tmp_path / "b" / "run1.tdms",
+        tmp_path / "c" / "twin.csv",
+        tmp_path / "c" / "twin.txt",
+    ]
+    assert run_identities(paths, tmp_path) == [
+        "glycerol-N0.31-r1",  # unique: the stem, whatever the sub-folder
+        "a/run1",
+        "b/run1",
+        "c/twin",  # one path, two suffixes: one identity (both left out by a campaign)
+        "c/twin",
+    ]
+    with pytest.raises(BayestriboError, match="is not in the campaign folder"):
+        run_identities([tmp_path / "x.csv", Path("/elsewhere/x.csv")], tmp_path)

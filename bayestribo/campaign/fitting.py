@@ -40,6 +40,7 @@ __all__ = [
     "dask_executor",
     "fit_catalogued",
     "fit_many",
+    "run_identities",
     "run_identity",
     "run_seed",
 ]
@@ -82,35 +83,17 @@ class RunOutcome:
         return self.error is None
 
 
-def run_identity(run: Any, root: str | os.PathLike[str] | None = None) -> str:
-    """The identity of a run: its path without suffix, else its metadata ``run_id``.
-
-    Parameters
-    ----------
-    run : path or run
-        A run file, or a run object with a ``run_id`` in its metadata.
-    root : path-like, optional
-        The campaign folder: a file's identity is its path relative to it, without
-        the suffix (``glycerol/N0.31-r1``), so that equal file names in two
-        sub-folders are two runs; a file directly in the folder keeps its stem. Without
-        ``root``, the file stem.
+def run_identity(run: Any) -> str:
+    """The identity of a run: the file stem of a path, else its metadata ``run_id``.
 
     Raises
     ------
     BayestriboError
         If a run object carries no ``run_id`` (its seed could not be derived from
-        what it is), or a file is not under ``root``.
+        what it is).
     """
     if isinstance(run, str | os.PathLike):
-        path = Path(run)
-        if root is None:
-            return path.stem
-        try:
-            # absolute, not resolved: a run file may be a link to a file elsewhere
-            relative = Path(os.path.abspath(path)).relative_to(os.path.abspath(root))
-        except ValueError:
-            raise BayestriboError(f"runs: {path} is not in the campaign folder {root}") from None
-        return relative.with_suffix("").as_posix()
+        return Path(run).stem
     metadata = getattr(run, "metadata", None)
     run_id = metadata.get("run_id") if isinstance(metadata, Mapping) else None
     if not isinstance(run_id, str) or not run_id:
@@ -119,6 +102,38 @@ def run_identity(run: Any, root: str | os.PathLike[str] | None = None) -> str:
             "run_id (or pass file paths) so that its seed follows from its identity"
         )
     return run_id
+
+
+def run_identities(
+    paths: Sequence[str | os.PathLike[str]], root: str | os.PathLike[str]
+) -> list[str]:
+    """The identities of a campaign's run files: each file's stem, or, for files whose
+    stems clash, their paths in the campaign folder without the suffix.
+
+    ``a/run1.csv`` and ``b/run1.csv`` are two runs, ``a/run1`` and ``b/run1``, with their
+    own seeds; a file whose stem is unique keeps it (the bundled campaign's
+    ``runs/glycerol-N0.31-r1.csv`` is ``glycerol-N0.31-r1``), so its seed and cached fit do
+    not depend on the folder's layout. Two files with one path but another suffix
+    (``run1.csv``, ``run1.txt``) keep one identity: :func:`fit_catalogued` leaves both out.
+
+    Raises
+    ------
+    BayestriboError
+        For a file that is not under ``root``.
+    """
+    stems = [Path(p).stem for p in paths]
+    out = []
+    for path, stem in zip(paths, stems, strict=True):
+        if stems.count(stem) == 1:
+            out.append(stem)
+            continue
+        try:
+            # absolute, not resolved: a run file may be a link to a file elsewhere
+            relative = Path(os.path.abspath(path)).relative_to(os.path.abspath(root))
+        except ValueError:
+            raise BayestriboError(f"runs: {path} is not in the campaign folder {root}") from None
+        out.append(relative.with_suffix("").as_posix())
+    return out
 
 
 def run_seed(campaign_seed: int, identity: str) -> int:
@@ -223,7 +238,7 @@ def fit_many(
     progress: bool = True,
     progress_stream: IO[str] | None = None,
     callback: Callable[[RunOutcome], None] | None = None,
-    root: str | os.PathLike[str] | None = None,
+    names: Sequence[str] | None = None,
     run_kwargs: Sequence[Mapping[str, Any]] | None = None,
     keep: Callable[[Any], Any] | None = None,
     **fit_kwargs: Any,
@@ -255,9 +270,9 @@ def fit_many(
     callback : callable, optional
         Called in the calling process with each :class:`RunOutcome` as it completes
         (e.g. to record it in a catalog).
-    root : path-like, optional
-        The campaign folder the run files' identities are relative to
-        (:func:`run_identity`).
+    names : sequence of str, optional
+        The runs' identities (one per run, e.g. :func:`run_identities` of a campaign's
+        files); default :func:`run_identity` of each.
     run_kwargs : sequence of mappings, optional
         Keyword arguments of ``function`` for each run (one mapping per run, in the
         order of ``runs``), over ``fit_kwargs``.
@@ -281,7 +296,11 @@ def fit_many(
         not a non-negative integer.
     """
     runs = list(runs)
-    names = [run_identity(run, root) for run in runs]
+    if names is None:
+        names = [run_identity(run) for run in runs]
+    elif len(names) != len(runs):
+        raise BayestriboError(f"names: expected one per run ({len(runs)}), got {len(names)}")
+    names = list(names)
     if run_kwargs is not None and len(run_kwargs) != len(runs):
         raise BayestriboError(
             f"run_kwargs: expected one mapping per run ({len(runs)}), got {len(run_kwargs)}"
@@ -408,11 +427,12 @@ def fit_catalogued(
     ``<out_dir>/<identity>.nc`` and recorded as they complete, each in its own
     transaction, so an interrupted campaign keeps the fits it finished.
 
-    A run's identity is its path relative to ``root`` without the suffix
-    (:func:`run_identity`): ``a/run1.csv`` and ``b/run1.csv`` are two runs, ``a/run1``
-    and ``b/run1``, with their own seeds, catalog entries and fit files, and their fits
-    carry that identity as ``run_id``. Two files with one identity (``run1.csv`` and
-    ``run1.tdms`` side by side) are both left out, each with the reason.
+    A run's identity is its stem, or its path relative to ``root`` without the suffix
+    where stems clash (:func:`run_identities`): ``a/run1.csv`` and ``b/run1.csv`` are two
+    runs, ``a/run1`` and ``b/run1``, with their own seeds, catalog entries and fit files,
+    and their fits carry that identity as ``run_id``. Two files with one identity
+    (``run1.csv`` and ``run1.tdms`` side by side) are both left out, each with the
+    reason.
 
     Parameters
     ----------
@@ -422,8 +442,11 @@ def fit_catalogued(
         SQLite results catalog (:mod:`bayestribo.campaign.catalog`), created if absent.
     out_dir : path-like
         Folder of the per-run result files (created if absent).
-    executor, campaign_seed, function, max_workers, progress, progress_stream, root, keep
+    executor, campaign_seed, function, max_workers, progress, progress_stream, keep
         As in :func:`fit_many` (``keep`` applies to results read back too).
+    root : path-like, optional
+        The campaign folder (default: the files' common folder), for the identities of
+        files whose stems clash.
     **fit_kwargs
         As in :func:`fit_many`. The results must have ``save(path)``, ``summary()``,
         ``converged`` and ``diagnostics`` (as :class:`bayestribo.inference.FitResult`).
@@ -449,7 +472,9 @@ def fit_catalogued(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     loader = loader or _load_fit
-    names = [run_identity(p, root) for p in paths]
+    if root is None:
+        root = os.path.commonpath([os.path.abspath(p.parent) for p in paths]) if paths else "."
+    names = run_identities(paths, root)
     run_kwargs = [
         _identity_kwargs(path, name, fit_kwargs) for path, name in zip(paths, names, strict=True)
     ]
@@ -566,7 +591,7 @@ def fit_catalogued(
             progress=progress,
             progress_stream=progress_stream,
             callback=record,
-            root=root,
+            names=[names[i] for i in todo],
             run_kwargs=[run_kwargs[i] for i in todo],
             keep=keep,
             **fit_kwargs,

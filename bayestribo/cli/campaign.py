@@ -118,7 +118,7 @@ def _run_rows(runs: list[dict[str, Any]]) -> list[dict[str, Any]]:
 _KEY_WORDS = {
     "lubricant": "{}",
     "series": "{}",
-    "water_mass_fraction": "water {:g} (mass fraction)",
+    "water_mass_fraction": "water {:.3g} %",
     "load_N": "{:g} N",
     "kinematic_viscosity_mm2_per_s": "{:g} mm²/s",
 }
@@ -139,7 +139,11 @@ def _words(label: Any) -> str:
             continue
         form = _KEY_WORDS.get(key, f"{key} {{}}")
         try:
-            parts.append(form.format(float(value)) if "g}" in form else form.format(value))
+            if "g}" in form:  # a number, water as a percentage
+                number = float(value) * (100.0 if key == "water_mass_fraction" else 1.0)
+                parts.append(form.format(number))
+            else:
+                parts.append(form.format(value))
         except ValueError:
             parts.append(f"{key} {value}")
     return " · ".join(parts)
@@ -215,7 +219,7 @@ def _text(analysis: Any, failures: list[dict[str, str]]) -> str:
 def _compare_laws(
     paths: list[Path], executor: Any, args: argparse.Namespace, fit_kwargs: dict[str, Any]
 ) -> list[dict[str, Any]]:
-    from bayestribo.campaign.fitting import fit_many
+    from bayestribo.campaign.fitting import fit_many, run_identities
     from bayestribo.inference.comparison import compare_dissipation_laws
 
     outcomes = fit_many(
@@ -225,7 +229,7 @@ def _compare_laws(
         function=compare_dissipation_laws,
         max_workers=args.workers,
         progress=not args.quiet,
-        root=args.dir,
+        names=run_identities(paths, args.dir),
         **fit_kwargs,
     )
     return [
