@@ -80,3 +80,56 @@ def test_a_bad_parameter_fails_before_the_kernel_starts(tmp_path, capfd):
     assert main(["report", str(RUN), "--out", str(tmp_path / "r.html"), "--param", "seed=x"]) == 2
     err = capfd.readouterr().err
     assert "parameter 'seed'" in err and "Kernel is running over TCP" not in err
+
+
+def _clean(page) -> None:
+    """What a reader must not see: Python reprs, code names in prose, numbers split."""
+    assert page.reprs == [], page.reprs
+    assert page.identifiers == [], page.identifiers
+    assert page.broken_numbers == [], page.broken_numbers
+
+
+def test_the_single_run_report_reads_as_text_for_people(single_run_report):
+    _clean(inspect_report(single_run_report))
+
+
+def test_the_campaign_report_reads_as_text_for_people(tmp_path):
+    if not RUN.is_file():
+        pytest.skip("the bundled campaign data/ is absent")
+    out = tmp_path / "campaign.html"
+    argv = ["report", str(REPO / "data"), "--out", str(out), "--refit"]
+    argv += ["--param", "loads=[0.07, 0.59]", "--param", "repeats=[1, 2]"]
+    argv += ["--param", "air_repeats=[1, 2]", "--param", "population_steps=2000"]
+    main(argv)  # exit 1 is allowed: short population samplers may not converge
+    page = inspect_report(out)
+    assert page.all_images_loaded and page.figures >= 3
+    _clean(page)
+
+
+def test_the_report_of_another_rigs_recordings_reads_as_text_for_people(tmp_path):
+    from _paths import APPSTAT
+
+    if not APPSTAT.is_dir():
+        pytest.skip("the real recordings in ../shared/external-data are absent")
+    out = tmp_path / "real.html"
+    argv = ["report", str(APPSTAT), "--notebook", "real_data", "--out", str(out)]
+    argv += ["--param", "fit_files=[]", "--param", "check_files=[]"]
+    main(argv)
+    page = inspect_report(out)
+    assert page.all_images_loaded and page.figures >= 2
+    _clean(page)
+
+
+def test_the_probe_finds_what_a_reader_must_not_see(tmp_path):
+    """The checks above can fail: a number split by a narrow cell, a code name in prose,
+    a Python repr."""
+    page = tmp_path / "page.html"
+    page.write_text(
+        '<html><body><div class="jp-RenderedHTMLCommon"><p>the load_N is np.float64(0.3)</p>'
+        '<table><tr><td style="width:1px;word-break:break-all">-0.0006399123</td></tr></table>'
+        "</div></body></html>"
+    )
+    found = inspect_report(page)
+    assert found.identifiers == ["load_N"]
+    assert any("np.float64(" in r for r in found.reprs)
+    assert found.broken_numbers == ["-0.0006399123"]

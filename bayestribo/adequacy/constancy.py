@@ -341,7 +341,7 @@ def constancy_test(
             "the damping law is not constant", "the equivalent ζ changes with amplitude"
         )
     else:
-        friction = _describe(windows.friction_name, tm)
+        friction = _describe(symbol, tm)
     statement = f"{head}; {_describe('ζ', tz)}; {friction}."
     if left_out:
         statement += (

@@ -129,7 +129,11 @@ class SplitHalves:
         return max(abs(v) for v in self.z.values())
 
     def _label(self, name: str) -> str:
-        return "ζ" if name == "zeta" else self.friction_name
+        if name == "zeta":
+            return "ζ"
+        return {"mu_k": "μ_k", "friction_displacement": "x_c"}.get(
+            self.friction_name, self.friction_name
+        )
 
     @property
     def statement(self) -> str:

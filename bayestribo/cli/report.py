@@ -374,9 +374,13 @@ def _has_water_series(folder: Path) -> bool:
 
 def _other_params(notebook: str, path: Path, args: argparse.Namespace) -> dict[str, Any]:
     """Parameters of the viscosity, real-data and acquisition notebooks from the options."""
+    from bayestribo.cli._common import reading_kwargs
     from bayestribo.reports.notebooks import ReportError
 
-    single = ("columns", "length_unit", "frequency", "load", "mass", "law", "notch")
+    reading = reading_kwargs(args)
+    single = ("law", "notch")
+    if notebook != "real_data":
+        single += ("columns", "length_unit", "frequency", "load", "mass")
     given = [f"--{name.replace('_', '-')}" for name in single if getattr(args, name, None)]
     if given or args.discrepancy or args.campaign is not None:
         raise ReportError(
@@ -398,6 +402,8 @@ def _other_params(notebook: str, path: Path, args: argparse.Namespace) -> dict[s
         if not files:
             raise ReportError(f"{path}: no recordings of a format read in this folder")
         params.update({"data_dir": str(path), "files": files, "fit_files": files})
+        if reading:  # how this rig's files are read (default: the AppStat text files)
+            params["read_kwargs"] = reading
         params["check_files"] = files[:1]
         if args.seed is not None:
             params["seed"] = args.seed

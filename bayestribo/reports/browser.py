@@ -48,7 +48,7 @@ _FLAGS = (
     "--proxy-bypass-list=<-loopback>",
 )
 
-_PROBE = """
+_PROBE = r"""
 <script>
 window.addEventListener("load", function () {
   var imgs = Array.prototype.slice.call(document.images);
@@ -61,14 +61,57 @@ window.addEventListener("load", function () {
     equations: imgs.filter(function (i) { return i.classList.contains("bt-math"); }).length,
     figures: imgs.filter(function (i) {
       return (i.getAttribute("src") || "").indexOf("data:image/png") === 0; }).length,
-    raw_tex: text.indexOf("$$") >= 0 || text.indexOf("\\\\(") >= 0,
+    raw_tex: text.indexOf("$$") >= 0 || text.indexOf("\\(") >= 0,
     code_cells: document.querySelectorAll(".jp-CodeCell .jp-InputArea").length,
     toc_links: document.querySelectorAll(".bt-toc a").length,
     notes: document.querySelectorAll(".bt-note").length,
     stderr_boxes: document.querySelectorAll(
       "[data-mime-type='application/vnd.jupyter.stderr']").length,
-    text_length: text.length
+    text_length: text.length,
+    reprs: (text.match(/.{0,30}(np\.\w+\(|array\(|\{'|\['|\bNone\b|\bnan\b).{0,30}/g) || [])
+      .slice(0, 20),
+    identifiers: prose(),
+    broken_numbers: brokenNumbers()
   };
+  function prose() {
+    // snake_case names in the text of paragraphs and list items, code left out
+    var found = [];
+    document.querySelectorAll(".jp-RenderedMarkdown p, .jp-RenderedMarkdown li, " +
+                              ".jp-RenderedHTMLCommon > p").forEach(function (el) {
+      var copy = el.cloneNode(true);
+      copy.querySelectorAll("code, pre, img").forEach(function (c) { c.remove(); });
+      (copy.textContent.match(/\b[a-z][a-z0-9]+_[A-Za-z0-9_]+\b/g) || []).forEach(
+        function (w) { if (found.indexOf(w) < 0) { found.push(w); } });
+    });
+    return found.slice(0, 20);
+  }
+  function brokenNumbers() {
+    // numbers (1.5158e-07, -0.0006399) that the layout splits over two lines
+    var found = [];
+    var walker = document.createTreeWalker(document.body, NodeFilter.SHOW_TEXT);
+    var number = /[-+\u2212]?\d[\d.]*(?:e[-+\u2212]?\d+)?/g;
+    var node;
+    while ((node = walker.nextNode())) {
+      if (node.parentElement && node.parentElement.closest("pre, script, style")) {
+        continue;
+      }
+      var m;
+      number.lastIndex = 0;
+      while ((m = number.exec(node.data)) !== null) {
+        if (m[0].length < 2) { continue; }
+        var range = document.createRange();
+        range.setStart(node, m.index);
+        range.setEnd(node, m.index + m[0].length);
+        var tops = [];
+        Array.prototype.forEach.call(range.getClientRects(), function (r) {
+          var top = Math.round(r.top);
+          if (r.width > 0 && tops.indexOf(top) < 0) { tops.push(top); }
+        });
+        if (tops.length > 1) { found.push(m[0]); }
+      }
+    }
+    return found.slice(0, 20);
+  }
   var out = document.createElement("pre");
   out.id = "bt-probe";
   out.textContent = JSON.stringify(result);
@@ -104,6 +147,13 @@ class PageInspection:
         stderr outputs shown as such.
     text_length : int
         Characters of visible text.
+    reprs : list of str
+        Python representations in the visible text (``np.float64(``, ``{'``, ``['``,
+        ``None``, ``nan``), with their context.
+    identifiers : list of str
+        Code identifiers (``snake_case`` names) in the prose, code spans left out.
+    broken_numbers : list of str
+        Table cells with digits that the layout breaks across lines.
     """
 
     images: int
@@ -117,6 +167,9 @@ class PageInspection:
     notes: int
     stderr_boxes: int
     text_length: int
+    reprs: list[str]
+    identifiers: list[str]
+    broken_numbers: list[str]
 
     @property
     def all_images_loaded(self) -> bool:
