@@ -286,7 +286,7 @@ def test_notebook_executes_with_test_parameters(name, tmp_path):
         assert not re.search(r'class="[^"]*jp-InputArea-editor', text)  # no code
         assert 'data-mime-type="application/vnd.jupyter.stderr"' not in text
         assert 'class="bt-toc"' in text and "bayestribo version" in text
-        assert "tick labels overlap" not in text  # every figure legible (kit.save checks)
+        assert "labels overlap" not in text  # every figure legible (kit.save checks)
         # nbconvert's "word-break: break-all" is overridden: numbers stay whole
         assert "word-break: normal" in text
 

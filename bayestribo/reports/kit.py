@@ -21,7 +21,6 @@ import platform
 import warnings
 from collections.abc import Callable, Mapping
 from datetime import UTC, datetime
-from itertools import pairwise
 from pathlib import Path
 from typing import Any
 
@@ -193,51 +192,72 @@ def setup(figure_dir: str | None, figure_format: str = "png") -> Callable[[Any, 
     def save(fig: Any, name: str) -> None:
         """Write ``fig`` as ``<name>.<format>`` in the figure folder (if any).
 
-        Tick labels that overlap are said in a note (the report's tests require none).
+        Texts that overlap are said in a note (the report's tests require none).
         """
         overlaps = overlapping_labels(fig)
         if overlaps:
-            note(f"figure {name}: tick labels overlap: {'; '.join(overlaps[:3])}")
+            note(f"figure {name}: labels overlap: {'; '.join(overlaps[:3])}")
         if folder is not None:
             fig.savefig(folder / f"{name}.{figure_format}", bbox_inches="tight")
 
     return save
 
 
-def overlapping_labels(fig: Any) -> list[str]:
-    """Tick labels of ``fig`` that overlap a neighbour on the same axis, as drawn.
+def _texts(fig: Any) -> list[tuple[str, Any]]:
+    """Every visible, non-empty text of ``fig`` with a description of where it is."""
+    out = []
+    suptitle = getattr(fig, "_suptitle", None)
+    if suptitle is not None:
+        out.append(("the figure's title", suptitle))
+    for ax in fig.axes:
+        if not ax.get_visible():
+            continue
+        where = ax.get_title() or ax.get_xlabel() or ax.get_ylabel() or "an axes"
+        for name, axis in (("x", ax.xaxis), ("y", ax.yaxis)):
+            # the ticks drawn: those within the view (labels of ticks outside it are
+            # laid out but not drawn)
+            low, high = sorted(axis.get_view_interval())
+            span = 1e-9 * (abs(low) + abs(high))
+            out += [
+                (f"{name} tick of {where!r}", tick.label1)
+                for tick, loc in zip(axis.get_major_ticks(), axis.get_majorticklocs(), strict=False)
+                if low - span <= loc <= high + span
+            ]
+            out.append((f"{name} label of {where!r}", axis.label))
+            out.append((f"{name} offset of {where!r}", axis.get_offset_text()))
+        for title in (ax.title, ax._left_title, ax._right_title):
+            out.append((f"title of {where!r}", title))
+        out += [(f"text in {where!r}", t) for t in ax.texts]
+    return [(w, t) for w, t in out if t.get_visible() and t.get_text().strip()]
 
-    Each axis's visible, non-empty tick labels are compared with the next one along
-    the axis (their rendered boxes, shrunk by a pixel so that labels merely touching
-    pass).
+
+def overlapping_labels(fig: Any) -> list[str]:
+    """Texts of ``fig`` that overlap each other, as drawn: tick labels, axis labels and
+    offsets, titles, the figure's title and texts placed in the axes.
+
+    Every pair is compared by its rendered box, shrunk by a pixel so that texts merely
+    touching pass (a corner plot's title running into the panel above, a y label over
+    the tick labels of its neighbour, two crowded tick labels).
 
     Returns
     -------
     list of str
-        ``"'a' and 'b' (x axis of 'title')"`` for each overlapping pair; empty if none.
+        ``"'a' (x tick of 'title') and 'b' (y label of ...)"`` for each overlapping
+        pair; empty if none.
     """
     fig.canvas.draw()
     renderer = fig.canvas.get_renderer()
+    boxes = [(w, t, t.get_window_extent(renderer)) for w, t in _texts(fig)]
     found = []
-    for ax in fig.axes:
-        if not ax.get_visible():
-            continue
-        for name, axis in (("x", ax.xaxis), ("y", ax.yaxis)):
-            labels = [t for t in axis.get_ticklabels() if t.get_visible() and t.get_text().strip()]
-            boxes = [(t, t.get_window_extent(renderer).expanded(1.0, 1.0)) for t in labels]
-            key = 0 if name == "x" else 1
-            boxes.sort(key=lambda tb: (tb[1].x0, tb[1].y0)[key])
-            for (a, ba), (b, bb) in pairwise(boxes):
-                if (
-                    ba.x1 - 1 > bb.x0 + 1
-                    and bb.x1 - 1 > ba.x0 + 1
-                    and ba.y1 - 1 > bb.y0 + 1
-                    and bb.y1 - 1 > ba.y0 + 1
-                ):
-                    where = ax.get_title() or ax.get_xlabel() or ax.get_ylabel()
-                    found.append(
-                        f"{a.get_text()!r} and {b.get_text()!r} ({name} axis of {where!r})"
-                    )
+    for i, (wa, a, ba) in enumerate(boxes):
+        for wb, b, bb in boxes[i + 1 :]:
+            if (
+                ba.x1 - 1 > bb.x0 + 1
+                and bb.x1 - 1 > ba.x0 + 1
+                and ba.y1 - 1 > bb.y0 + 1
+                and bb.y1 - 1 > ba.y0 + 1
+            ):
+                found.append(f"{a.get_text()!r} ({wa}) and {b.get_text()!r} ({wb})")
     return found
 
 
