@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike
 
 from bayestribo.errors import BayestriboError
 
-__all__ = ["ParameterSummary", "check_prob", "summarize"]
+__all__ = ["ParameterSummary", "check_prob", "interval_text", "summarize"]
 
 
 def check_prob(prob: float) -> float:
@@ -132,3 +132,38 @@ def summarize(samples: ArrayLike, prob: float = 0.95) -> dict[str, Any]:
         ``{"mean", "sd", "median", "interval": [low, high], "prob", "kind"}``.
     """
     return ParameterSummary.from_samples(samples, prob).to_dict()
+
+
+def interval_text(center: float, low: float, high: float) -> str:
+    """``center [low, high]`` with the digits the interval supports: two significant
+    digits of its half width, so that the ends never collapse onto each other at the
+    precision shown ("0.024251 [0.02425, 0.024251]"); an interval that reaches zero
+    from a positive support says so.
+
+    Parameters
+    ----------
+    center, low, high : float
+        A point value (mean or median) and the ends of its interval, in one unit.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> interval_text(0.0236012, 0.0236003, 0.0236021)
+    '0.02360120 [0.02360030, 0.02360210]'
+    >>> interval_text(1.2e-30, 0.0, 3e-29)
+    '< 3e-29 (at zero)'
+    """
+    center, low, high = float(center), float(low), float(high)
+    half = 0.5 * (high - low)
+    if low <= 0.0 <= high and low >= -1e-300 and abs(center) < half:
+        return f"< {high:.2g} (at zero)"
+    if not (half > 0 and math.isfinite(half)):
+        return f"{center:.6g} [{low:.6g}, {high:.6g}]"
+    decimals = max(0, 1 - math.floor(math.log10(half)))
+    if abs(center) >= 1e5 or (abs(center) < 1e-4 and center != 0):
+        digits = max(2, math.floor(math.log10(abs(center))) - math.floor(math.log10(half)) + 2)
+        return f"{center:.{digits}g} [{low:.{digits}g}, {high:.{digits}g}]"
+    return f"{center:.{decimals}f} [{low:.{decimals}f}, {high:.{decimals}f}]"

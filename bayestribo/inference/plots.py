@@ -115,19 +115,26 @@ def corner_plot(result: FitResult, fig: Any, names: Sequence[str] | None = None)
     """
     import corner
 
+    from bayestribo.summary import interval_text
+
     chosen = plotted_names(result, names)
     data = np.column_stack([result.samples(n) for n in chosen])
-    return corner.corner(
+    labels = [_label(result, n) for n in chosen]
+    fig = corner.corner(
         data,
         fig=fig,
-        labels=[_label(result, n) for n in chosen],
+        labels=labels,
         quantiles=[0.025, 0.5, 0.975],
-        show_titles=True,
-        title_fmt=".3g",
-        title_kwargs={"fontsize": 8},
         label_kwargs={"fontsize": 9},
         max_n_ticks=3,
     )
+    # Titles with the digits the interval supports (corner's own format rounds a ζ of
+    # 0.0242506 ± 4e-7 to 0.0243), on two lines: the quantity, then median [95 %].
+    diagonal = np.asarray(fig.axes).reshape(len(chosen), len(chosen)).diagonal()
+    for ax, label, column in zip(diagonal, labels, data.T, strict=True):
+        low, median, high = np.quantile(column, [0.025, 0.5, 0.975])
+        ax.set_title(f"{label}\n{interval_text(median, low, high)}", fontsize=8)
+    return fig
 
 
 def trace_plot(result: FitResult, axes: Sequence[Any], names: Sequence[str] | None = None) -> Any:

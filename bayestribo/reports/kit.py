@@ -57,10 +57,8 @@ RC = {
 
 
 def interval_text(mean: float, low: float, high: float) -> str:
-    """``mean [low, high]`` with the digits the interval supports: two significant
-    digits of its half width, so that the ends never collapse onto each other at the
-    precision shown ("0.024251 [0.02425, 0.024251]"); an interval that reaches zero
-    from a positive support says so.
+    """``mean [low, high]`` with the digits the interval supports
+    (:func:`bayestribo.summary.interval_text`, shared with the figures' titles).
 
     Examples
     --------
@@ -69,19 +67,9 @@ def interval_text(mean: float, low: float, high: float) -> str:
     >>> interval_text(1.2e-30, 0.0, 3e-29)
     '< 3e-29 (at zero)'
     """
-    import math
+    from bayestribo.summary import interval_text as shared
 
-    mean, low, high = float(mean), float(low), float(high)
-    half = 0.5 * (high - low)
-    if low <= 0.0 <= high and low >= -1e-300 and abs(mean) < half:
-        return f"< {high:.2g} (at zero)"
-    if not (half > 0 and math.isfinite(half)):
-        return f"{mean:.6g} [{low:.6g}, {high:.6g}]"
-    decimals = max(0, 1 - math.floor(math.log10(half)))
-    if abs(mean) >= 1e5 or (abs(mean) < 1e-4 and mean != 0):
-        digits = max(2, math.floor(math.log10(abs(mean))) - math.floor(math.log10(half)) + 2)
-        return f"{mean:.{digits}g} [{low:.{digits}g}, {high:.{digits}g}]"
-    return f"{mean:.{decimals}f} [{low:.{decimals}f}, {high:.{decimals}f}]"
+    return shared(mean, low, high)
 
 
 def sentence(text: str) -> str:
