@@ -110,8 +110,8 @@ def plot_windows(
     ax_z.set_ylabel("ζ [-]")
     if windows.friction_name == "mu_k":
         ax_m.set_ylabel("μ_k [-]")
-    else:
-        ax_m.set_ylabel(f"{windows.friction_name} [{windows.length_unit}]")
+    else:  # the friction displacement x_c, in the signal's unit
+        ax_m.set_ylabel(f"x_c [{windows.length_unit}]")
     ax_m.set_xlabel(f"window amplitude [{windows.length_unit}]")
     ax_z.legend(fontsize="small")
     titles = []
