@@ -251,3 +251,37 @@ def test_the_terminal_text_fits_100_columns_aligned_with_its_probability(analysi
     assert len(columns) == 1
     assert "FAILED bad-r9: RunFormatError: no such run file" in lines
     assert "no contact (ζ₀), 3 runs" in lines
+
+
+def test_the_contact_damping_figure_has_a_colour_and_a_legend_entry_per_series():
+    """ζ_k and d_k of two series (glycerol, glycerol-water) at the same loads: one
+    colour per series, named in a legend, not all groups in one colour."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from bayestribo.campaign.figures import plot_derived
+
+    rng = np.random.default_rng(5)
+    fits = _campaign(rng)
+    for load in (0.12, 0.46):
+        for r in range(3):
+            meta = {
+                "run_id": f"gw-N{load}-r{r}",
+                "lubricant": "glycerol-water",
+                "water_mass_fraction": 0.03,
+                "load_N": load,
+                **RIG,
+            }
+            draws = {"zeta": rng.normal(0.018, 2e-5, 400), "mu_k": rng.normal(0.03, 5e-5, 400)}
+            fits.append(_Fit(draws, meta))
+    for f in fits:
+        f.metadata.setdefault("water_mass_fraction", 0.0055)
+    analysis = analyse_campaign(fits, seed=1, max_steps=1500)
+    fig = plot_derived(analysis)
+    [legend] = fig.legends
+    assert sorted(t.get_text() for t in legend.get_texts()) == [
+        "glycerol, water 0.0055",
+        "glycerol-water, water 0.03",
+    ]
+    colours = {c.lines[0].get_color() for c in fig.axes[0].containers}
+    assert len(colours) == 2

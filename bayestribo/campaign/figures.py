@@ -232,23 +232,42 @@ def plot_derived(analysis: CampaignAnalysis, fig: Any = None) -> Any:
     fig = _new_figure(fig, (10, 4))
     axes = fig.subplots(1, 2)
     rows = [r for r in analysis.derived if "load_N" in r]
-    for ax, key, label in (
-        (axes[0], "zeta_k", "ζ_k = ζ − ζ₀ [-]"),
-        (axes[1], "d_k_s_per_m", "d_k [s/m]"),
-    ):
-        if rows:
-            x = np.array([r["load_N"] for r in rows])
-            med = np.array([r[key]["median"] for r in rows])
-            lo = np.array([r[key]["interval"][0] for r in rows])
-            hi = np.array([r[key]["interval"][1] for r in rows])
-            ax.errorbar(x, med, yerr=[med - lo, hi - med], fmt="o", capsize=3)
+    # one colour and legend entry per series (the group without its load), placed side
+    # by side at each load, as in plot_against_load
+    series: dict[str, list[dict[str, Any]]] = {}
+    for r in rows:
+        series.setdefault(_series_of(str(r["group"])), []).append(r)
+    for k, (name, members) in enumerate(sorted(series.items())):
+        shift = 0.004 * (k - (len(series) - 1) / 2)
+        for ax, key in ((axes[0], "zeta_k"), (axes[1], "d_k_s_per_m")):
+            x = np.array([r["load_N"] for r in members], dtype=float) + shift
+            med = np.array([r[key]["median"] for r in members])
+            lo = np.array([r[key]["interval"][0] for r in members])
+            hi = np.array([r[key]["interval"][1] for r in members])
+            ax.errorbar(x, med, yerr=[med - lo, hi - med], fmt="o", capsize=3, label=name)
+    for ax, label in ((axes[0], "ζ_k = ζ − ζ₀ [-]"), (axes[1], "d_k [s/m]")):
         ax.set_xlabel("load N [N]")
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
         _ticks(ax, "y")
         _ticks(ax, "x")
+    if len(series) > 1:
+        handles, labels = axes[0].get_legend_handles_labels()
+        fig.legend(handles, labels, loc="outside lower center", ncols=3, fontsize="small")
     fig.suptitle(f"Contact damping per group: median and {100 * analysis.prob:.0f} % interval")
     return fig
+
+
+def _series_of(group: str) -> str:
+    """A contact group's label without its load, as the legend shows it: ``glycerol,
+    water 0.0055`` for ``lubricant=glycerol,water_mass_fraction=0.0055,load_N=0.12``."""
+    parts = []
+    for item in group.split(","):
+        key, sep, value = item.partition("=")
+        if key == "load_N":
+            continue
+        parts.append(f"{_KEY_PREFIX[key]}{value}" if sep and key in _KEY_PREFIX else item)
+    return literal(", ".join(parts) or "all")
 
 
 def save_figures(analysis: CampaignAnalysis, folder: str | Path) -> list[Path]:
