@@ -293,3 +293,12 @@ def test_every_shipped_notebook_is_reached_by_report(tmp_path, captured, capsys)
     assert "--notebook loads reports on a folder" in capsys.readouterr().err
     assert main(["report", "--notebook", "viscosity"]) == 2
     assert "PATH: give a run file or a campaign folder" in capsys.readouterr().err
+
+
+def test_none_for_an_optional_text_parameter_is_none():
+    from bayestribo.reports.notebooks import notebook_parameter_specs
+
+    specs = notebook_parameter_specs(read_notebook("loads"))
+    got = parse_params(["series=None", "air_series=air", "lubricant_tag=0.0055"], specs)
+    assert got["series"] is None and got["air_series"] == "air"
+    assert got["lubricant_tag"] == 0.0055  # not a parameter of the notebook: a literal

@@ -142,7 +142,8 @@ def parse_params(items: list[str], specs: dict[str, Any] | None = None) -> dict[
         The ``--param`` values.
     specs : dict, optional
         The notebook's parameters (:func:`bayestribo.reports.notebooks.notebook_parameter_specs`):
-        a VALUE for a ``str`` parameter is kept as written even if it reads as a number.
+        a VALUE for a ``str`` parameter is kept as written even if it reads as a number
+        (``None`` for a ``str | None`` parameter is None).
 
     Raises
     ------
@@ -162,8 +163,10 @@ def parse_params(items: list[str], specs: dict[str, Any] | None = None) -> dict[
         except (ValueError, SyntaxError):
             value = text
         spec = (specs or {}).get(key)
+        keep_none = value is None and spec is not None and spec.type == "str | None"
         if spec is not None and not isinstance(value, str) and spec.type in ("str", "str | None"):
-            value = text
+            # a number for a text parameter stays text ("0.0055"); None stays None
+            value = None if keep_none else text
         out[key] = value
     return out
 
