@@ -28,6 +28,7 @@ Nothing is repaired, clipped or dropped: a run either passes unchanged or fails.
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -282,12 +283,23 @@ def _motion(run: Run) -> tuple[float | None, float | None]:
 
 
 def _dominant_period(t: NDArray, values: NDArray) -> float:
-    """Period [s] of the strongest spectral line of ``values`` (regular sampling)."""
-    spectrum = np.abs(np.fft.rfft(values - values.mean()))
-    if spectrum.size < 3:
+    """Period [s] of the strongest spectral line of ``values`` (regular sampling).
+
+    The transform is taken at a fast length (zero padding up to
+    :func:`scipy.fft.next_fast_len`): 1,000,001 samples, a prime's multiple, took 29
+    times as long as the next fast length. Bin k of a transform of length m is the
+    frequency k / (m dt).
+    """
+    import scipy.fft
+
+    n = len(values)
+    if n < 4:
         return float(t[-1] - t[0])
+    m = scipy.fft.next_fast_len(n, real=True)
+    spectrum = np.abs(scipy.fft.rfft(values - values.mean(), n=m))
     k = 1 + int(np.argmax(spectrum[1:]))
-    return float(t[-1] - t[0]) * len(values) / (len(values) - 1) / k
+    step = float(t[-1] - t[0]) / (n - 1)
+    return m * step / k
 
 
 @dataclass(frozen=True)
@@ -380,6 +392,12 @@ def _moving_correlation(xc: NDArray, ic: NDArray) -> float:
     return float(xm @ im) / math.sqrt(sxx * sii)
 
 
+#: Results of :func:`channel_consistency` by run (its id, while it lives): a run's arrays
+#: are read-only, so the check that read_run, the fit's calibration and ``inspect`` each
+#: ask for is made once.
+_CONSISTENCY: dict[int, tuple[weakref.ref[Run], ChannelConsistency | None]] = {}
+
+
 def channel_consistency(run: Run) -> ChannelConsistency | None:
     """Compare the displacement with the time integral of the velocity, in gain and time.
 
@@ -407,6 +425,16 @@ def channel_consistency(run: Run) -> ChannelConsistency | None:
     ChannelConsistency or None
         None when the run lacks a signal, is too short, or a signal is constant.
     """
+    key = id(run)
+    cached = _CONSISTENCY.get(key)
+    if cached is not None and cached[0]() is run:
+        return cached[1]
+    found = _channel_consistency(run)
+    _CONSISTENCY[key] = (weakref.ref(run, lambda _, key=key: _CONSISTENCY.pop(key, None)), found)
+    return found
+
+
+def _channel_consistency(run: Run) -> ChannelConsistency | None:
     x, v, t = run.displacement, run.velocity, run.time
     if x is None or v is None:
         return None
