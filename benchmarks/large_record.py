@@ -36,6 +36,7 @@ TREE = Path(__file__).resolve().parent.parent
 WORKER = """
 import json, resource, sys, time
 t0 = time.perf_counter()
+import bayestribo
 from bayestribo.io import read_run
 from bayestribo.inference.pipeline import prepare
 t1 = time.perf_counter()
@@ -46,6 +47,7 @@ t3 = time.perf_counter()
 print(json.dumps({
     "import_s": t1 - t0, "read_s": t2 - t1, "prepare_s": t3 - t2,
     "peak_MB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+    "module": bayestribo.__file__,
     "samples": int(run.time.size), "increments": int(len(prepared.data.dpi))
     if hasattr(prepared, "data") and hasattr(prepared.data, "dpi") else None,
 }))
@@ -54,12 +56,21 @@ print(json.dumps({
 
 def measure(tree: Path, path: Path) -> dict:
     env = {**os.environ, "PYTHONPATH": str(tree)}
+    # run from the record's folder: "python -c" puts the working directory first on
+    # sys.path, which would import the tree the command was started in
     proc = subprocess.run(
-        [sys.executable, "-c", WORKER, str(path)], env=env, capture_output=True, text=True
+        [sys.executable, "-c", WORKER, str(path)],
+        env=env,
+        capture_output=True,
+        text=True,
+        cwd=path.parent,
     )
     if proc.returncode != 0:
         raise RuntimeError(f"{tree}: {proc.stderr[-2000:]}")
-    return json.loads(proc.stdout.strip().splitlines()[-1])
+    result = json.loads(proc.stdout.strip().splitlines()[-1])
+    if not Path(result["module"]).resolve().is_relative_to(tree.resolve()):
+        raise RuntimeError(f"{tree}: the worker imported {result['module']}")
+    return result
 
 
 def main() -> None:
