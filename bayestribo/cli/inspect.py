@@ -168,13 +168,15 @@ def _text(report: dict[str, Any]) -> str:
     lines.append(f"metadata       {meta or 'none'}")
     ch = report["channels"]
     if ch is not None:
-        gain_se = None if ch["gain_se"] is None else ch["gain_se"] / ch["gain"] ** 2
+        gain = ch["gain"]
+        gain_se = None if ch["gain_se"] is None or not gain else ch["gain_se"] / gain**2
         delay_se = None if ch["delay_se_s"] is None else 1e6 * ch["delay_se_s"]
+        delay = None if ch["delay_s"] is None else 1e6 * ch["delay_s"]
         lines.append(
-            f"channels       velocity reads {ch['velocity_gain']:.5f} "
+            f"channels       velocity reads {_number(ch['velocity_gain'], 6)} "
             f"(± {_number(gain_se, 2)}) × dx/dt, displacement delayed "
-            f"{1e6 * ch['delay_s']:.3g} µs (± {_number(delay_se, 2)}), correlation "
-            f"{ch['correlation']:.6f}"
+            f"{_number(delay, 3)} µs (± {_number(delay_se, 2)}), correlation "
+            f"{_number(ch['correlation'], 7)}"
         )
     lines.append(
         f"oscillation    {_number(report['oscillation_frequency_Hz'])} Hz (zero crossings)"

@@ -17,7 +17,7 @@ from typing import Any
 
 from bayestribo.errors import BayestriboError, RunFormatError
 from bayestribo.io.options import READ_OPTIONS, ReadOptions, unknown_options
-from bayestribo.io.registry import format_for, registered_formats
+from bayestribo.io.registry import FileFormat, format_for, registered_formats
 from bayestribo.io.run import DISPLACEMENT, TIME, VELOCITY, Run
 from bayestribo.io.sidecar import read_sidecar, sidecar_path, write_sidecar
 from bayestribo.io.text import write_csv
@@ -168,7 +168,7 @@ def _read(path: Path, opts: ReadOptions) -> Run:
                 f"{fmt.name} file",
                 where,
             )
-    signals = fmt.read(path, opts)
+    signals = _call_reader(fmt, path, opts)
     sidecar = opts.sidecar
     metadata = opts.metadata
     validate = opts.validate
@@ -193,6 +193,37 @@ def _read(path: Path, opts: ReadOptions) -> Run:
     if validate:
         validate_run(run)
     return run
+
+
+def _call_reader(fmt: FileFormat, path: Path, opts: ReadOptions) -> Mapping[str, Any]:
+    """``fmt.read``, with any failure of a library it uses made the package's error.
+
+    A reader names what is wrong where it can (a line, a channel, a unit); what a
+    third-party library raises on a damaged file (h5py's ``RuntimeError``, scipy's
+    ``MatReadError``, an XML parser's error) becomes a
+    :class:`~bayestribo.errors.RunFormatError` naming the file, the format and the
+    library's message, the original exception chained for a bug report. A claim of
+    more memory than there is (a header with a huge size) is refused the same way.
+    """
+    try:
+        return fmt.read(path, opts)
+    except BayestriboError:
+        raise
+    except MemoryError:
+        raise RunFormatError(
+            f"the file is not a readable {fmt.title} file: it claims more data than fits in memory",
+            str(path),
+        ) from None
+    except RecursionError:
+        raise RunFormatError(
+            f"the file is not a readable {fmt.title} file: its structure nests too deep",
+            str(path),
+        ) from None
+    except Exception as exc:  # the reader's libraries on a damaged file
+        raise RunFormatError(
+            f"the file is not a readable {fmt.title} file ({type(exc).__name__}: {str(exc)[:200]})",
+            str(path),
+        ) from exc
 
 
 def as_run(

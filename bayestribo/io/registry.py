@@ -121,7 +121,16 @@ class FileFormat:
         """``{"format", "reader", "columns"}`` for ``inspect``."""
         out: dict[str, Any] = {"format": self.name, "reader": self.title, "columns": []}
         if self.describe is not None:
-            out.update(self.describe(path, options))
+            try:
+                out.update(self.describe(path, options))
+            except BayestriboError:
+                raise
+            except Exception as exc:  # a damaged file, as for read (io/files.py)
+                raise RunFormatError(
+                    f"the file is not a readable {self.title} file ({type(exc).__name__}: "
+                    f"{str(exc)[:200]})",
+                    str(path),
+                ) from exc
         return out
 
 
