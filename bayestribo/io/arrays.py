@@ -21,7 +21,13 @@ from bayestribo.errors import RunFormatError
 from bayestribo.io.columns import check_scale, parse_column
 from bayestribo.io.run import COLUMNS, DISPLACEMENT, TIME, VELOCITY
 
-__all__ = ["NamedArray", "signals_from_arrays"]
+__all__ = ["MAX_SAMPLES", "NamedArray", "signals_from_arrays"]
+
+#: Most samples a channel of a binary file may claim [-] (20 million: 20 s at 1 MHz,
+#: 160 MB as float64). Checked from the file's own description (a dataset's shape, a
+#: MATLAB variable's header) before any data is read, so that a damaged header that
+#: claims billions of samples is refused in bounded memory.
+MAX_SAMPLES = 20_000_000
 
 
 @dataclass(frozen=True)

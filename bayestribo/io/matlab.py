@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.errors import RunFormatError
-from bayestribo.io.arrays import NamedArray, signals_from_arrays
+from bayestribo.io.arrays import MAX_SAMPLES, NamedArray, signals_from_arrays
 from bayestribo.io.hdf5 import hdf5_arrays
 
 __all__ = ["read_mat"]
@@ -31,6 +31,27 @@ def _flatten(prefix: str, value: Any, out: list[NamedArray], depth: int = 0) -> 
         out.append(NamedArray(prefix, value))
     elif isinstance(value, int | float) and not isinstance(value, bool):
         out.append(NamedArray(prefix, np.asarray(value)))
+
+
+def _check_sizes(path: Path, where: str) -> None:
+    """Refuse a variable whose header claims more than :data:`MAX_SAMPLES` values, from
+    the headers alone (:func:`scipy.io.whosmat`) before any data is read. A file whose
+    headers cannot be read is left to ``loadmat``, which names what is wrong."""
+    import scipy.io
+
+    try:
+        variables = scipy.io.whosmat(path)
+    except Exception:  # not a v4-v7 file (v7.3 is HDF5), or damaged: loadmat says which
+        return
+    for name, shape, kind in variables:
+        count = int(np.prod(shape, dtype=np.float64)) if len(shape) else 1
+        if count > MAX_SAMPLES:
+            raise RunFormatError(
+                f"variable {name!r} ({kind}) claims {count} values (shape {tuple(shape)}); "
+                f"expected at most {MAX_SAMPLES} samples per channel (a damaged header, or "
+                "a record to cut into runs)",
+                where,
+            )
 
 
 def read_mat(
@@ -67,6 +88,7 @@ def read_mat(
 
     path = Path(path)
     where = str(path)
+    _check_sizes(path, where)
     try:
         content = scipy.io.loadmat(path, simplify_cells=True)
     except NotImplementedError:

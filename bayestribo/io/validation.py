@@ -362,7 +362,10 @@ def _regress(xc: NDArray, ic: NDArray, vc: NDArray) -> tuple[float, float] | Non
     design = np.column_stack((ic, vc))
     if float(ic @ ic) == 0.0 or float(vc @ vc) == 0.0:
         return None
-    (a, b), *_ = np.linalg.lstsq(design, xc, rcond=None)
+    try:
+        (a, b), *_ = np.linalg.lstsq(design, xc, rcond=None)
+    except np.linalg.LinAlgError:  # values so large that their products overflow
+        return None
     if a == 0.0:
         return None
     return float(a), float(-b / a)
@@ -517,6 +520,14 @@ def _check_units(run: Run, where: str | None) -> None:
         return
     correlation, gain = found.correlation, found.gain
     both = f"fields {DISPLACEMENT!r} and {VELOCITY!r}"
+    if not (math.isfinite(correlation) and math.isfinite(gain)):
+        largest = max(float(np.max(np.abs(run.displacement))), float(np.max(np.abs(run.velocity))))
+        raise _fail(
+            f"{both} cannot be compared: their values (up to {largest:.3g}) overflow the "
+            "arithmetic of the check; expected the magnitudes of a motion in the stated "
+            "units",
+            where,
+        )
     if correlation < -_SWAP_MIN_ANTICORRELATION and -gain > UNIT_GAIN_TOLERANCE:
         raise _fail(
             f"{both} look swapped: the changes of the displacement column follow "

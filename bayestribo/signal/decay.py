@@ -336,8 +336,20 @@ def _check_count(name: str, value: object, least: int) -> None:
 
 
 def savgol_window(t: NDArray, period: float) -> int:
-    """Odd Savitzky-Golay window of about 1/8 of a period, at least 7 samples."""
-    return max(7, round(period / float(np.median(np.diff(t))) / 8.0) | 1)
+    """Odd Savitzky-Golay window of about 1/8 of a period, at least 7 samples.
+
+    Raises
+    ------
+    RecordingError
+        When no period could be measured (not a finite positive number).
+    """
+    step = float(np.median(np.diff(t)))
+    if not (math.isfinite(period) and period > 0 and step > 0):
+        raise RecordingError(
+            f"no oscillation period found in the record (got {period!r} s): the signal "
+            "does not oscillate, or is not sampled regularly"
+        )
+    return max(7, round(period / step / 8.0) | 1)
 
 
 def derive_velocity(t: ArrayLike, x: ArrayLike, period: float) -> tuple[NDArray, float]:

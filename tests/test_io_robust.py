@@ -1,0 +1,180 @@
+"""Damaged files of every kind give the package's error, naming the file, in bounded memory.
+
+Each case is a class of failure the fuzz benchmark (``benchmarks/fuzz.py``) found or
+the readers must refuse before reading: a library's own exception on a damaged file,
+a header claiming more samples than a record has, data kept in other files.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from bayestribo import read_run
+from bayestribo.errors import RunFormatError
+from bayestribo.io import FileFormat, ReadOptions, register_format
+from bayestribo.io.arrays import MAX_SAMPLES
+from bayestribo.io.layout import describe_file
+from bayestribo.synthetic import Sensor, simulate
+
+h5py = pytest.importorskip("h5py", reason="HDF5 files need the hdf5 extra (h5py)")
+
+
+@pytest.fixture(scope="module")
+def run():
+    return simulate(seed=3, sensor=Sensor(sample_rate_Hz=2000.0))
+
+
+def test_an_empty_or_truncated_mat_file_is_refused(tmp_path: Path, run) -> None:
+    import scipy.io
+
+    empty = tmp_path / "empty.mat"
+    empty.write_bytes(b"")
+    with pytest.raises(RunFormatError, match=r"empty\.mat.*MATLAB"):
+        read_run(empty)
+    whole = tmp_path / "whole.mat"
+    scipy.io.savemat(whole, {"time_s": run.time, "displacement_m": run.displacement})
+    cut = tmp_path / "cut.mat"
+    cut.write_bytes(whole.read_bytes()[:300])
+    with pytest.raises(RunFormatError, match=r"cut\.mat"):
+        read_run(cut)
+
+
+def test_a_damaged_hdf5_file_is_refused_with_the_librarys_reason(tmp_path: Path, run) -> None:
+    path = tmp_path / "run.h5"
+    with h5py.File(path, "w") as handle:
+        handle["time_s"] = run.time
+        handle["displacement_m"] = run.displacement
+    data = bytearray(path.read_bytes())
+    # damage the object headers and the symbol table, past the superblock
+    for i in range(900, 1400, 7):
+        data[i] ^= 0xFF
+    bad = tmp_path / "bad.h5"
+    bad.write_bytes(bytes(data))
+    with pytest.raises(RunFormatError, match=r"bad\.h5.*HDF5"):
+        read_run(bad)
+
+
+def test_an_hdf5_dataset_claiming_too_many_samples_is_refused_before_reading(
+    tmp_path: Path,
+) -> None:
+    path = tmp_path / "huge.h5"
+    with h5py.File(path, "w") as handle:
+        # no storage is written for an unfilled dataset: a 10 KB file that claims 8 GB
+        handle.create_dataset("time_s", shape=(MAX_SAMPLES + 1,), dtype="f8")
+        handle.create_dataset("displacement_m", shape=(MAX_SAMPLES + 1,), dtype="f8")
+    assert path.stat().st_size < 100_000
+    with pytest.raises(RunFormatError, match=rf"claims {MAX_SAMPLES + 1} values"):
+        read_run(path)
+
+
+def test_an_external_hdf5_dataset_is_not_followed(tmp_path: Path, run) -> None:
+    raw = tmp_path / "elsewhere.bin"
+    raw.write_bytes(np.asarray(run.displacement, dtype="<f8").tobytes())
+    path = tmp_path / "links.h5"
+    with h5py.File(path, "w") as handle:
+        handle["time_s"] = run.time
+        handle.create_dataset(
+            "displacement_m",
+            shape=run.displacement.shape,
+            dtype="<f8",
+            external=[(str(raw), 0, raw.stat().st_size)],
+        )
+    with pytest.raises(RunFormatError, match="keeps its data in other files"):
+        read_run(path)
+
+
+def test_a_mat_variable_claiming_too_many_samples_is_refused_from_its_header(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, run
+) -> None:
+    import scipy.io
+
+    path = tmp_path / "big.mat"
+    scipy.io.savemat(path, {"time_s": run.time, "displacement_m": run.displacement})
+    monkeypatch.setattr("bayestribo.io.matlab.MAX_SAMPLES", run.time.size - 1)
+    with pytest.raises(RunFormatError, match=r"claims .* values .* expected at most"):
+        read_run(path)
+
+
+def test_a_broken_workbook_is_refused(tmp_path: Path, run) -> None:
+    openpyxl = pytest.importorskip("openpyxl")
+    import zipfile
+
+    book = openpyxl.Workbook()
+    sheet = book.active
+    sheet.append(["Time (s)", "Position (m)"])
+    for t, x in zip(run.time[:200], run.displacement[:200], strict=True):
+        sheet.append([float(t), float(x)])
+    good = tmp_path / "good.xlsx"
+    book.save(good)
+    bad = tmp_path / "bad.xlsx"
+    with zipfile.ZipFile(good) as src, zipfile.ZipFile(bad, "w") as dst:
+        for item in src.infolist():
+            data = src.read(item.filename)
+            if item.filename.endswith("sheet1.xml"):
+                data = data.replace(b"<c r=", b'<c r=""', 3)  # damaged cell references
+            dst.writestr(item, data)
+    with pytest.raises(RunFormatError, match=r"bad\.xlsx.*Excel"):
+        read_run(bad)
+
+
+def test_any_readers_library_error_becomes_the_packages_error(tmp_path: Path) -> None:
+    """A registered reader whose library raises on a damaged file: read_run and
+    describe_file say which file and which format, the library's message kept."""
+
+    def read(path: Path, options: ReadOptions) -> dict:
+        raise KeyError("b'\\x00\\x01' is not a known record")
+
+    fmt = FileFormat(
+        "brokenlib", "a lab's binary log", (".blog",), read, describe=lambda p, o: read(p, o)
+    )
+    register_format(fmt)
+    try:
+        path = tmp_path / "run.blog"
+        path.write_bytes(b"\x00\x01")
+        with pytest.raises(RunFormatError, match=r"run\.blog.*a lab's binary log file \(KeyError"):
+            read_run(path)
+        with pytest.raises(RunFormatError, match=r"not a readable a lab's binary log"):
+            describe_file(path)
+    finally:
+        from bayestribo.io import registry
+
+        registry._REGISTRY.pop("brokenlib")
+
+
+@pytest.mark.parametrize("mass", [1e308, 1e-320, -1.0])
+def test_absurd_sidecar_numbers_are_refused_naming_the_field(tmp_path: Path, run, mass) -> None:
+    import json
+
+    from bayestribo.cli import main
+    from bayestribo.io import write_run
+
+    path = write_run(run, tmp_path / "run.csv")
+    meta = json.loads(path.with_suffix(".json").read_text())
+    meta["mass_kg"] = mass
+    path.with_suffix(".json").write_text(json.dumps(meta))
+    with pytest.raises(RunFormatError, match="mass_kg"):
+        read_run(path)
+    assert main(["inspect", str(path)]) == 2
+
+
+def test_the_hdf5_library_reads_under_a_bound_on_new_memory() -> None:
+    """libhdf5 trusts the sizes a damaged file states (a global heap made it fill 4 GB):
+    while it reads, the process may not grow beyond the bound, and after it may again."""
+    import resource
+    import sys
+
+    if not sys.platform.startswith("linux"):
+        pytest.skip("the address-space limit is Linux's")
+    from bayestribo.io.hdf5 import _bounded_address_space
+
+    before = resource.getrlimit(resource.RLIMIT_AS)
+    with _bounded_address_space(64 << 20):
+        with pytest.raises(MemoryError):
+            np.ones(512 << 20, dtype=np.uint8)  # 512 MB past a 64 MB bound
+        small = np.ones(8 << 20, dtype=np.uint8)  # within it
+    assert resource.getrlimit(resource.RLIMIT_AS) == before
+    assert np.ones(512 << 20, dtype=np.uint8).sum() == 512 << 20
+    del small
