@@ -357,3 +357,35 @@ def test_a_stated_frequency_the_sampling_cannot_resolve_names_the_time_unit(tmp_
             columns=["time_s", "displacement_m", "velocity_m_per_s"],
             metadata={"natural_frequency_Hz": 32.6},
         )
+
+
+def test_millimetres_read_as_metres_are_refused_without_a_mass(tmp_path):
+    """Both channels in mm read as m agree with each other; no mass or load in the
+    sidecar: the swing of a metre at 32.6 Hz is still refused at reading, with the
+    scale factors that fix it, and following them reads the run."""
+    import re
+
+    from bayestribo.synthetic import simulate
+
+    run = simulate(seed=5)
+    path = tmp_path / "mm.txt"
+    np.savetxt(path, np.column_stack([run.time, 1e3 * run.displacement, 1e3 * run.velocity]))
+    columns = ["time_s", "displacement_m", "velocity_m_per_s"]
+    with pytest.raises(RecordingError, match=r"plausibility: a swing of .* m at 32") as info:
+        read_run(path, columns=columns)
+    assert "likely displacement in mm and velocity in mm/s" in str(info.value)
+    scale = eval(re.search(r"scale=(\{[^}]*\})", str(info.value))[1])
+    fixed = read_run(path, columns=columns, scale=scale)
+    np.testing.assert_allclose(fixed.displacement, run.displacement, rtol=1e-12)
+
+
+def test_a_time_in_ms_with_only_a_displacement_is_refused_naming_the_time_unit(tmp_path):
+    from bayestribo.synthetic import simulate
+
+    run = simulate(seed=5)
+    path = tmp_path / "ms.txt"
+    np.savetxt(path, np.column_stack([1e3 * run.time, 1e3 * run.displacement]))
+    with pytest.raises(RecordingError, match=r"likely time in ms and displacement in mm"):
+        read_run(path, columns=["time_s", "displacement_m"])
+    # declared arbitrary, the unit is not checked
+    read_run(path, columns=["time_s", "displacement_m"], metadata={"length_unit": "arbitrary"})

@@ -143,6 +143,48 @@ def _check_time(run: Run, where: str | None, time_rtol: float) -> float:
     return rate
 
 
+def _check_plausible_motion(run: Run, where: str | None) -> None:
+    """Refuse a run in metres whose motion no rig makes (a frequency outside
+    :data:`~bayestribo.model.plausible.FREQUENCY_RANGE_HZ` or a peak speed above
+    :data:`~bayestribo.model.plausible.MAX_SPEED`), naming the units that would make
+    it one and the scale factors that apply them.
+
+    Both channels in mm read as m agree with each other and still give a swing of a
+    metre at 32.6 Hz (235 m/s); a time column in ms read as s gives a 0.03 Hz
+    oscillation. Only runs in metres are checked (``length_unit: arbitrary`` states
+    that the unit is not known).
+    """
+    from bayestribo.model.plausible import FREQUENCY_RANGE_HZ, MAX_SPEED, is_plausible
+
+    frequency, swing = _motion(run)
+    if frequency is None or swing is None or not swing > 0:
+        return
+    if is_plausible(frequency, swing):
+        return
+    speed = 2.0 * math.pi * frequency * swing
+    low, high = FREQUENCY_RANGE_HZ
+    fixes = []
+    for a_t in _FACTORS:
+        for a_x in _FACTORS:
+            if (a_t, a_x) != (1.0, 1.0) and is_plausible(frequency / a_t, swing * a_x):
+                fixes.append({TIME: a_t, DISPLACEMENT: a_x, VELOCITY: a_x / a_t})
+    present = [n for n in (DISPLACEMENT, VELOCITY) if run.signals.get(n) is not None]
+    advice = []
+    for fix in sorted(fixes, key=lambda f: sum(v != 1.0 for v in f.values()))[:2]:
+        factors = {k: v for k, v in fix.items() if v != 1.0 and (k == TIME or k in present)}
+        words = " and ".join(_UNIT_WORDS[k].get(v, f"{k} × {v:g}") for k, v in factors.items())
+        scale = "{" + ", ".join(f"{k!r}: {v:g}" for k, v in factors.items()) + "}"
+        advice.append(f"{words}: scale={scale}")
+    said = "; or ".join(advice) if advice else "give each column its unit"
+    raise _fail(
+        f"plausibility: a swing of {swing:.3g} m at {frequency:.4g} Hz (peak speed "
+        f"{speed:.3g} m/s) is no free-decay rig's motion (frequencies {low:g} to {high:g} "
+        f"Hz, speeds up to {MAX_SPEED:g} m/s): likely {said}; or length_unit 'arbitrary' "
+        "when the unit is not known",
+        where,
+    )
+
+
 def _time_unit_hint(rate: float, frequency: float) -> str:
     """For a sample rate too low for the stated frequency: the time unit that fixes it."""
     for factor, unit in ((1e-3, "ms"), (1e-6, "µs")):
@@ -601,4 +643,5 @@ def validate_run(
     _check_time(run, where, time_rtol)
     _check_clipping(run, where, clip_samples)
     _check_units(run, where)
+    _check_plausible_motion(run, where)
     return run
