@@ -285,3 +285,23 @@ def test_the_contact_damping_figure_has_a_colour_and_a_legend_entry_per_series()
     ]
     colours = {c.lines[0].get_color() for c in fig.axes[0].containers}
     assert len(colours) == 2
+
+
+def test_the_load_figure_draws_each_run_and_the_paper_only_beside_glycerol(analysis):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from bayestribo.campaign.figures import plot_against_load
+
+    fig = plot_against_load(analysis)
+    labels = {t.get_text() for t in fig.legends[0].get_texts()}
+    assert {"a run (median)", "paper, glycerol"} <= labels
+    dots = [line for line in fig.axes[0].lines if line.get_label() == "a run (median)"]
+    assert len(dots[0].get_xdata()) == 6  # the six runs with contact
+    # a campaign of another lubricant gets no glycerol reference
+    fits = _campaign(np.random.default_rng(4))
+    for f in fits:
+        f.metadata["lubricant"] = "oil" if f.metadata["load_N"] else "none"
+    other = analyse_campaign(fits, seed=1, max_steps=1500)
+    labels = {t.get_text() for t in plot_against_load(other).legends[0].get_texts()}
+    assert "paper, glycerol" not in labels

@@ -89,7 +89,8 @@ def _new_figure(fig: Any, size: tuple[float, float]) -> Any:
 
 
 def plot_against_load(analysis: CampaignAnalysis, fig: Any = None) -> Any:
-    """ζ and μ_k group means against load, with intervals and the paper's values.
+    """ζ and μ_k group means against load, with intervals, each run's median beside its
+    group, and the paper's values where the series is glycerol.
 
     Parameters
     ----------
@@ -110,9 +111,17 @@ def plot_against_load(analysis: CampaignAnalysis, fig: Any = None) -> Any:
         for value, g in pop.groups.items():
             values = value if isinstance(value, tuple) else (value,)
             series.setdefault(_series_label(analysis, value), []).append((values[i_load], g))
+        # each run's median as a small dot beside its group's mean, in the series' colour
+        repeats: dict[str, list[dict[str, Any]]] = {}
+        for r in analysis.runs:
+            if r.get(analysis.covariate) is None or "mu_k" not in r:
+                continue
+            value = tuple(r.get(k) for k in analysis.by)
+            repeats.setdefault(_series_label(analysis, value), []).append(r)
         for k, (label, members) in enumerate(sorted(series.items())):
             members.sort(key=lambda m: m[0])
             shift = 0.004 * (k - (len(series) - 1) / 2)
+            colour = f"C{k % 10}"
             for ax, name in zip(axes, ("zeta", "mu_k"), strict=True):
                 x = np.array([m[0] for m in members], dtype=float) + shift
                 s = [summarize(m[1].mean[name], analysis.prob) for m in members]
@@ -120,11 +129,28 @@ def plot_against_load(analysis: CampaignAnalysis, fig: Any = None) -> Any:
                 err = np.array(
                     [[v["median"] - v["interval"][0], v["interval"][1] - v["median"]] for v in s]
                 ).T
-                ax.errorbar(x, med, yerr=err, fmt="o", capsize=3, label=label)
+                ax.errorbar(x, med, yerr=err, fmt="o", capsize=3, color=colour, label=label)
+                runs = [r for r in repeats.get(label, []) if name in r]
+                if runs:
+                    ax.plot(
+                        np.array([r[analysis.covariate] for r in runs], dtype=float)
+                        + shift
+                        + 0.002,
+                        [r[name]["median"] for r in runs],
+                        ".",
+                        ms=4,
+                        alpha=0.6,
+                        color=colour,
+                        label="a run (median)" if k == 0 else None,
+                    )
+    glycerol = pop is not None and any(
+        "glycerol" in str(v) and "glycerol-water" not in str(v) for v in pop.groups
+    )
     for ax, name in zip(axes, ("zeta", "mu_k"), strict=True):
-        mean, sd = PAPER_VALUES[name]
-        ax.axhspan(mean - sd, mean + sd, color="0.85", zorder=0, label="paper: mean ± σ")
-        ax.axhline(mean, color="0.5", lw=1, zorder=0)
+        if glycerol:  # the paper's values are those of glycerol
+            mean, sd = PAPER_VALUES[name]
+            ax.axhspan(mean - sd, mean + sd, color="0.85", zorder=0, label="paper, glycerol")
+            ax.axhline(mean, color="0.5", lw=1, zorder=0)
         ax.set_xlabel("load N [N]")
         ax.set_ylabel(f"population mean of {_LABELS[name]} [-]")
         ax.grid(alpha=0.3)
