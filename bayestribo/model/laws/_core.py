@@ -226,6 +226,11 @@ def hermite(t: float, k: int, tau_at: NDArray, c_at: NDArray, e_at: NDArray) -> 
     )
 
 
+# The node tables of the ladder depend on no parameter: computed once, at import, and
+# frozen into the compiled functions that read them.
+_TABLES, _OFFSETS = ladder_tables()
+
+
 @numba.njit(cache=True, inline="always", error_model="numpy", fastmath=_FAST)
 def interpolate(t: float, steps: int, tau_at: NDArray, c_at: NDArray, e_at: NDArray) -> float:
     """C at τ = t inside a half cycle of ``steps`` steps: the step holding t by
@@ -395,7 +400,7 @@ def grid(
         tables = nodes(0.0, steps)
         offsets = np.zeros(1, dtype=np.int64)
     else:
-        tables, offsets = ladder_tables()
+        tables, offsets = _TABLES, _OFFSETS
     for p in range(y0.size):
         status[p] = one(tau, y0[p], coef[p], ratio[p], yp0, tau_end, steps, tables, offsets, out[p])
     return out, status
@@ -408,7 +413,7 @@ def turns(
     """Turning times τ_n and positions Y_n of one trajectory (the initial state
     first when y'₀ = 0), until the motion stops, τ passes ``tau_max`` or
     ``max_count`` turning points; the last one is where the pin sticks, if it does."""
-    tables, offsets = ladder_tables()
+    tables, offsets = _TABLES, _OFFSETS
     size = LADDER[-1] + 1
     tau_at = np.empty(size)
     c_at = np.empty(size)
@@ -497,7 +502,7 @@ def swing_drops(coef: NDArray, swing: NDArray) -> NDArray:
 
     a_s is found by the secant method on ½(a_s + a_e(a_s)) = A from the fixed point
     a_s = A + ½ drop(A); NaN where no such half cycle exists."""
-    tables, offsets = ladder_tables()
+    tables, offsets = _TABLES, _OFFSETS
     size = LADDER[-1] + 1
     work = np.empty((4, size))
     out = np.empty((coef.shape[0], swing.size))
