@@ -18,7 +18,7 @@ with seed 0 first (imports, compilation and numba's cache are timed apart), then
 Reported per fit: wall time of :func:`bayestribo.inference.fit`; ESS_min and ESS per
 second; the number of log-posterior evaluations (rows with a positive prior density
 through :class:`~bayestribo.inference.posterior.Posterior`, its standardized residuals,
-and the walkers of each compiled sampler step) and the time per evaluation (time in
+and the walkers of each split of the compiled sampler step) and the time per evaluation (time in
 those calls over their count); the time in the MAP (``maximum_a_posteriori`` and
 ``refine``, both frames of a reframed fit), in drawing the starting walkers, in
 sampling, and in the law's Π (``Law.pi_grid``: the closed form or the compiled
@@ -135,11 +135,12 @@ def _instrument(meter: _Meter) -> None:
 
     def stepped(fused: Any, kind: int, coords: Any, *args: Any) -> Any:
         begin = time.perf_counter()
-        try:
-            return step(fused, kind, coords, *args)
-        finally:
-            meter.rows += int(coords.shape[0])
-            meter.eval_seconds += time.perf_counter() - begin
+        done = step(fused, kind, coords, *args)
+        # the splits it completed (the rest go through __call__): walkers of each
+        uniform = args[2]
+        meter.rows += int(done) * int(uniform.shape[1]) * int(uniform.shape[2])
+        meter.eval_seconds += time.perf_counter() - begin
+        return done
 
     posterior_module.grouped_step = stepped
 
