@@ -161,6 +161,43 @@ def test_compiled_log_posterior_agrees_for_other_records(data, model, change):
     _assert_agree(post, _rows(post, data.y0, 400, seed=7))
 
 
+#: Laws without a closed form: Π from the law's integrator, the rest compiled.
+LAWS = ("viscous+quadratic", "viscous+coulomb+quadratic", "coulomb+hysteretic", "coulomb+power")
+
+
+@pytest.mark.parametrize("law", LAWS)
+@pytest.mark.parametrize("variant", ["default", "discrepancy", "fixed"])
+def test_a_law_without_closed_form_agrees_with_the_reference(data, law, variant):
+    """Rows where the drag is too strong for the motion to turn are −inf on both."""
+    kwargs: dict = {"law": law}
+    if variant == "discrepancy":
+        kwargs["discrepancy"] = True
+    elif variant == "fixed":
+        kwargs["fixed"] = {"mu_s_ratio": 1.5} if "coulomb" in law else {"zeta": 0.01}
+    post = build_posterior(data, **kwargs)
+    _assert_agree(post, _law_rows(post, data.y0, seed=len(law) + len(variant)))
+
+
+def _law_rows(post: Posterior, y0: float, seed: int) -> np.ndarray:
+    """:func:`_rows`, but a friction law's μ_k = 0 rows at a small positive μ_k: with
+    no friction the law's motion never stops, and its integrator sums the 200 000 half
+    cycles it allows (seconds a row) on both paths alike."""
+    rows = _rows(post, y0, 150, seed=seed)
+    if "mu_k" in post.names:
+        i = post.names.index("mu_k")
+        rows[rows[:, i] == 0.0, i] = 1e-3 * post.priors["mu_k"].high
+    return rows
+
+
+@pytest.mark.parametrize(
+    "change", [{"motion_ended": False}, {"yp0": 0.4}, {"yp0": -0.3, "motion_ended": False}]
+)
+def test_a_law_without_closed_form_agrees_for_other_records(data, change):
+    other = dataclasses.replace(data, **change)
+    post = build_posterior(other, law="viscous+coulomb+quadratic", discrepancy=True)
+    _assert_agree(post, _law_rows(post, data.y0, seed=11))
+
+
 def test_nan_and_nonstopping_points_are_treated_as_the_reference_treats_them(data):
     post = build_posterior(data)
     good = np.array([0.0236, 0.0294 * 0.5, 1.2, data.y0])

@@ -170,3 +170,34 @@ def test_a_run_that_reaches_an_unevaluable_point_fails_as_without_the_step(data)
             run_ensembles(log_prob, start, settings, seed=2)
         messages.append(str(err.value))
     assert messages[0] == messages[1]
+
+
+def test_a_law_without_closed_form_leaves_every_split_to_python(data):
+    """Its Π comes from the law's own integrator: the step does no split, the moves
+    run them all, with the compiled density's values."""
+    post = build_posterior(data, law="viscous+coulomb+quadratic")
+    assert post.uses_compiled and post.grouped_step is not None
+    centre = {"zeta": 0.0236, "mu_k": 0.0147, "mu_s_ratio": 1.2, "c2": 1e-4}
+    x = np.array([centre.get(n, post.likelihood.data.y0) for n in post.names])
+    start = x * (1 + 1e-3 * np.random.default_rng(3).standard_normal((2, 16, x.size)))
+    coords = np.ascontiguousarray(start.reshape(-1, x.size))
+    log_prob = post(coords)
+    assert np.all(np.isfinite(log_prob))
+    n = coords.shape[0]
+    rng = np.random.default_rng(0)
+    args = (
+        np.arange(n).reshape(2, -1),
+        rng.random((2, 2, n // 4, 2)),
+        np.full((2, 2, n // 4), 0.5),
+        np.log(rng.random((2, n // 2))),
+        np.zeros(n, dtype=bool),
+    )
+    new, new_lp = coords.copy(), log_prob.copy()
+    assert post.grouped_step(DE, new, new_lp, *args) == 0
+    np.testing.assert_array_equal(new, coords)
+    np.testing.assert_array_equal(new_lp, log_prob)
+    chain, lp = _grouped_chain(post, start, 20)
+    ref_chain, ref_lp = _grouped_chain(_Python(post), start, 20)
+    np.testing.assert_array_equal(chain, ref_chain)
+    np.testing.assert_array_equal(lp, ref_lp)
+    assert np.unique(chain[:, 0, 0]).size > 3

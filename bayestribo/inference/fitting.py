@@ -29,7 +29,7 @@ from bayestribo.inference.pipeline import (
 from bayestribo.inference.priors import Prior
 from bayestribo.inference.result import FitResult, plain_data
 from bayestribo.inference.sampling import SamplerSettings
-from bayestribo.inference.start import maximum_a_posteriori
+from bayestribo.inference.start import maximum_a_posteriori, maximum_from
 from bayestribo.io.options import ReadOptions
 from bayestribo.io.run import Run
 from bayestribo.model.laws import Law, get_law
@@ -178,7 +178,7 @@ def fit(
                     prepared.decay,
                     settings=settings,
                     seed=rng,
-                    also_start_at=dict(zip(posterior.names, sampled.theta_map, strict=True)),
+                    optimum=maximum_from(posterior, sampled.theta_map, prepared.decay),
                 )
     else:
 
@@ -194,21 +194,23 @@ def fit(
             )
 
         posterior = posterior_on(prepared)
-        also = None
+        optimum = None
         if not posterior.law.closed_form:
-            theta = maximum_a_posteriori(posterior, prepared.decay)[0]
-            framed = _in_law_frame(prepared, posterior, theta)
+            # the optimum in the record's frame gives the law's frame; the optimiser
+            # then starts from it in that frame (one search from the first guesses)
+            optimum = maximum_a_posteriori(posterior, prepared.decay)
+            framed = _in_law_frame(prepared, posterior, optimum[0])
             if framed is not None:
                 prepared = framed
                 posterior = posterior_on(prepared)
-                also = dict(zip(posterior.names, theta, strict=True))
+                optimum = maximum_from(posterior, optimum[0], prepared.decay)
         sampled = sample(
             posterior,
             prepared.decay,
             settings=settings,
             seed=rng,
             progress=progress,
-            also_start_at=also,
+            optimum=optimum,
         )
     result = summarise(
         prepared, sampled, seed=rng, recorded_seed=seed, compared=comparison is not None

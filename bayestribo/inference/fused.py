@@ -30,6 +30,13 @@ The log posterior has no other nuisance: the calibration nuisances of the load, 
 mass and ζ₀ enter only the derived quantities, drawn after sampling
 (:func:`bayestribo.inference.assemble.derived_quantities`).
 
+A law without a closed form (:mod:`bayestribo.model.laws`) has its Π from its own
+compiled integrator (:meth:`~bayestribo.model.laws.Law.pi_grid`, called once for the
+walkers inside the priors' support, :class:`LawSource`) and the rest, priors and
+likelihood, compiled here; a row whose Π is not finite (an overdamped arc) has
+log p = −inf, as in the reference. The compiled sampler step
+(:mod:`bayestribo.inference.fused_step`) does not serve such a law.
+
 The numpy implementation (:meth:`Posterior.reference`) stays the reference; the
 tests require the two to agree to 1e-10 of max(1, |log p|) over random parameter
 sets, −inf and NaN at the same points. :meth:`FusedLogPosterior.build` returns None
@@ -249,12 +256,8 @@ def _standardized(
     the averaged model's domain or with a singular nuisance system (left unset: the
     caller uses the reference)."""
     tau = data[0]
-    inc = data[1]
-    var0 = data[2]
-    e2 = data[3]
     m = tau.size
     q = 2 + int(scalars[6])
-    design = data[4 : 4 + q]
     pi = np.empty(m)
     var = np.empty(m)
     a = np.empty((q, q))
@@ -267,31 +270,92 @@ def _standardized(
         if not _model_pi(row, columns, fixed, tau, scalars[0], scalars[1], scalars[5], pi):
             flagged += 1
             continue
-        s2 = 0.0
-        if columns[4] != _ABSENT:
-            s = 10.0 ** _value(row, columns, fixed, 4, 0.0)
-            s2 = s * s
-        for k in range(q):
-            b[k] = 0.0
-        for j in range(m):
-            var[j] = var0[j] + s2 * e2[j] if columns[4] != _ABSENT else var0[j]
-            model_inc = pi[j] - pi[j + 1] if j < m - 1 else pi[j]
-            r = inc[j] - model_inc
-            out[n, j] = r
-            for k in range(q):
-                b[k] += r * design[k, j] / var[j]
-        _normal_matrix(design, var, q, a)
-        _precisions(row, columns, fixed, scalars, q, prec)
-        for k in range(q):
-            a[k, k] += prec[k]
-        if not math.isfinite(_cholesky_solve(a, b, q, x)):
+        if not _standardized_row(
+            row, pi, columns, fixed, data, scalars, var, a, b, x, prec, out[n]
+        ):
             flagged += 1
-            continue
+    return flagged
+
+
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def _standardized_row(
+    row: NDArray,
+    pi: NDArray,
+    columns: NDArray,
+    fixed: NDArray,
+    data: NDArray,
+    scalars: NDArray,
+    var: NDArray,
+    a: NDArray,
+    b: NDArray,
+    x: NDArray,
+    prec: NDArray,
+    out: NDArray,
+) -> bool:
+    """The standardized conditional residuals of one row given its model Π into
+    ``out`` (m,); False where the nuisances' system is singular."""
+    inc = data[1]
+    var0 = data[2]
+    e2 = data[3]
+    m = inc.size
+    q = 2 + int(scalars[6])
+    design = data[4 : 4 + q]
+    s2 = 0.0
+    if columns[4] != _ABSENT:
+        s = 10.0 ** _value(row, columns, fixed, 4, 0.0)
+        s2 = s * s
+    for k in range(q):
+        b[k] = 0.0
+    for j in range(m):
+        var[j] = var0[j] + s2 * e2[j] if columns[4] != _ABSENT else var0[j]
+        model_inc = pi[j] - pi[j + 1] if j < m - 1 else pi[j]
+        r = inc[j] - model_inc
+        out[j] = r
+        for k in range(q):
+            b[k] += r * design[k, j] / var[j]
+    _normal_matrix(design, var, q, a)
+    _precisions(row, columns, fixed, scalars, q, prec)
+    for k in range(q):
+        a[k, k] += prec[k]
+    if not math.isfinite(_cholesky_solve(a, b, q, x)):
+        return False
+    for j in range(m):
+        fitted = 0.0
+        for k in range(q):
+            fitted += x[k] * design[k, j]
+        out[j] = (out[j] - fitted) / math.sqrt(var[j])
+    return True
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _law_standardized(
+    theta: NDArray,
+    pi: NDArray,
+    columns: NDArray,
+    fixed: NDArray,
+    data: NDArray,
+    scalars: NDArray,
+    out: NDArray,
+) -> int:
+    """:func:`_standardized` with the model Π of each row given, ``pi`` (n, m); a row
+    whose Π is not finite is flagged (left unset) like a singular one."""
+    m = data.shape[1]
+    q = 2 + int(scalars[6])
+    var = np.empty(m)
+    a = np.empty((q, q))
+    b = np.empty(q)
+    x = np.empty(q)
+    prec = np.empty(q)
+    flagged = 0
+    for n in range(theta.shape[0]):
+        moves = True
         for j in range(m):
-            fitted = 0.0
-            for k in range(q):
-                fitted += x[k] * design[k, j]
-            out[n, j] = (out[n, j] - fitted) / math.sqrt(var[j])
+            if not math.isfinite(pi[n, j]):
+                moves = False
+        if not moves or not _standardized_row(
+            theta[n], pi[n], columns, fixed, data, scalars, var, a, b, x, prec, out[n]
+        ):
+            flagged += 1
     return flagged
 
 
@@ -316,9 +380,7 @@ def _log_posterior(
     raise its error.
     """
     tau = data[0]
-    inc = data[1]
     var0 = data[2]
-    e2 = data[3]
     m = tau.size
     q = 2 + int(scalars[6])
     design = data[4 : 4 + q]
@@ -353,39 +415,130 @@ def _log_posterior(
             flagged += 1
             out[n] = math.nan
             continue
-        norm = norm0
-        if discrepancy:
-            s = 10.0 ** _value(row, columns, fixed, 4, 0.0)
-            s2 = s * s
-            for j in range(m):
-                var[j] = var0[j] + s2 * e2[j]
-                norm += math.log(var[j]) + _LOG_2PI
-            _normal_matrix(design, var, q, a)
-        else:
-            for k in range(q):
-                for i in range(q):
-                    a[k, i] = c[k, i]
-        for k in range(q):
-            b[k] = 0.0
-        rr = 0.0
-        for j in range(m):
-            model_inc = pi[j] - pi[j + 1] if j < m - 1 else pi[j]
-            r = inc[j] - model_inc
-            rw = r / var[j]
-            for k in range(q):
-                b[k] += rw * design[k, j]
-            rr += r * rw
-        log_prior_det = _precisions(row, columns, fixed, scalars, q, prec)
-        for k in range(q):
-            a[k, k] += prec[k]
-        logdet = _cholesky_solve(a, b, q, x)
-        explained = 0.0
-        for k in range(q):
-            explained += b[k] * x[k]
-        chi2 = rr - explained
-        out[n] = lp + -0.5 * (chi2 + norm + logdet + log_prior_det)
+        out[n] = lp + _log_likelihood(
+            row, pi, columns, fixed, data, scalars, q, var, a, b, x, prec, c, norm0
+        )
         flagged += math.isnan(out[n])
     return flagged
+
+
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def _log_likelihood(
+    row: NDArray,
+    pi: NDArray,
+    columns: NDArray,
+    fixed: NDArray,
+    data: NDArray,
+    scalars: NDArray,
+    q: int,
+    var: NDArray,
+    a: NDArray,
+    b: NDArray,
+    x: NDArray,
+    prec: NDArray,
+    c: NDArray,
+    norm0: float,
+) -> float:
+    """The log-likelihood of one row given its model Π (see the module notes), with
+    the work arrays of :func:`_log_posterior`; without the white discrepancy, ``var``,
+    ``c`` (A's data part) and ``norm0`` (Σ log 2πV) are the same for every row."""
+    inc = data[1]
+    var0 = data[2]
+    e2 = data[3]
+    m = inc.size
+    design = data[4 : 4 + q]
+    norm = norm0
+    if columns[4] != _ABSENT:
+        s = 10.0 ** _value(row, columns, fixed, 4, 0.0)
+        s2 = s * s
+        for j in range(m):
+            var[j] = var0[j] + s2 * e2[j]
+            norm += math.log(var[j]) + _LOG_2PI
+        _normal_matrix(design, var, q, a)
+    else:
+        for k in range(q):
+            for i in range(q):
+                a[k, i] = c[k, i]
+    for k in range(q):
+        b[k] = 0.0
+    rr = 0.0
+    for j in range(m):
+        model_inc = pi[j] - pi[j + 1] if j < m - 1 else pi[j]
+        r = inc[j] - model_inc
+        rw = r / var[j]
+        for k in range(q):
+            b[k] += rw * design[k, j]
+        rr += r * rw
+    log_prior_det = _precisions(row, columns, fixed, scalars, q, prec)
+    for k in range(q):
+        a[k, k] += prec[k]
+    logdet = _cholesky_solve(a, b, q, x)
+    explained = 0.0
+    for k in range(q):
+        explained += b[k] * x[k]
+    chi2 = rr - explained
+    return -0.5 * (chi2 + norm + logdet + log_prior_det)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _law_log_posterior(
+    theta: NDArray,
+    pi: NDArray,
+    prior: NDArray,
+    columns: NDArray,
+    fixed: NDArray,
+    data: NDArray,
+    scalars: NDArray,
+    out: NDArray,
+) -> int:
+    """:func:`_log_posterior` with the model Π of each row given, ``pi`` (n, m), for a
+    law without a closed form (:meth:`FusedLogPosterior.law_pi`; not read where the
+    prior density is zero). A row whose Π is not finite (the law cannot move: an
+    overdamped arc) is outside the law's domain: −inf. Returns the number of NaN rows."""
+    inc = data[1]
+    var0 = data[2]
+    m = inc.size
+    q = 2 + int(scalars[6])
+    design = data[4 : 4 + q]
+    var = np.empty(m)
+    a = np.empty((q, q))
+    b = np.empty(q)
+    x = np.empty(q)
+    prec = np.empty(q)
+    c = np.zeros((q, q))
+    norm0 = 0.0
+    if columns[4] == _ABSENT:
+        for j in range(m):
+            var[j] = var0[j]
+            norm0 += math.log(var[j]) + _LOG_2PI
+        _normal_matrix(design, var, q, c)
+    flagged = 0
+    for n in range(theta.shape[0]):
+        row = theta[n]
+        lp = _log_prior(row, prior)
+        if not math.isfinite(lp):
+            flagged += math.isnan(lp)
+            out[n] = lp
+            continue
+        moves = True
+        for j in range(m):
+            if not math.isfinite(pi[n, j]):
+                moves = False
+        if not moves:
+            out[n] = -math.inf
+            continue
+        out[n] = lp + _log_likelihood(
+            row, pi[n], columns, fixed, data, scalars, q, var, a, b, x, prec, c, norm0
+        )
+        flagged += math.isnan(out[n])
+    return flagged
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _log_priors(theta: NDArray, prior: NDArray, out: NDArray) -> None:
+    """:func:`_log_prior` of each row of ``theta`` into ``out``."""
+    for n in range(theta.shape[0]):
+        out[n] = _log_prior(theta[n], prior)
 
 
 @dataclass(frozen=True)
@@ -408,6 +561,9 @@ class FusedLogPosterior:
     scalars : ndarray
         y'0, the end of Π, the prior precisions of δ₀ and δ₁, their log|P|, the model
         code, the number of shape terms.
+    law : LawSource or None
+        Where Π comes from for a law without a closed form (None: the closed form,
+        compiled here).
     """
 
     prior: NDArray
@@ -415,6 +571,7 @@ class FusedLogPosterior:
     fixed: NDArray
     data: NDArray
     scalars: NDArray
+    law: LawSource | None = None
 
     @classmethod
     def build(
@@ -423,8 +580,13 @@ class FusedLogPosterior:
         """Tables for ``priors`` × ``likelihood`` with ``fixed`` values, or None when
         a prior is not one of the three kinds or the likelihood is a subclass (its
         methods may differ from what is compiled here)."""
-        if type(likelihood) is not PiLikelihood or not likelihood.law.closed_form:
+        if type(likelihood) is not PiLikelihood:
             return None
+        law = None
+        if not likelihood.law.closed_form:
+            if likelihood.model != "exact":
+                return None
+            law = LawSource.build(priors, likelihood, fixed)
         table = np.empty((len(priors), 3))
         for i, name in enumerate(priors.names):
             p: Any = priors[name]
@@ -462,7 +624,7 @@ class FusedLogPosterior:
                 design.shape[1] - 2,
             ]
         )
-        return cls(table, columns, values, data, scalars)
+        return cls(table, columns, values, data, scalars, law)
 
     def __call__(self, theta: NDArray) -> tuple[NDArray, int]:
         """Log posterior of each row of ``theta`` (n, d), and how many rows are NaN or
@@ -483,6 +645,18 @@ class FusedLogPosterior:
         """
         theta = np.ascontiguousarray(theta, dtype=np.float64)
         out = np.empty(theta.shape[0])
+        if self.law is not None:
+            # Π of the rows inside the priors' support from the law's integrator,
+            # the rest compiled as for the closed form
+            _log_priors(theta, self.prior, out)
+            pi = np.zeros((theta.shape[0], self.data.shape[1]))
+            inside = np.isfinite(out)
+            if np.any(inside):
+                pi[inside] = self.law.pi(theta[inside])
+            flagged = _law_log_posterior(
+                theta, pi, self.prior, self.columns, self.fixed, self.data, self.scalars, out
+            )
+            return out, flagged
         flagged = _log_posterior(
             theta, self.prior, self.columns, self.fixed, self.data, self.scalars, out
         )
@@ -495,5 +669,68 @@ class FusedLogPosterior:
         reference)."""
         theta = np.ascontiguousarray(theta, dtype=np.float64)
         out = np.empty((theta.shape[0], self.data.shape[1]))
+        if self.law is not None:
+            pi = self.law.pi(theta)
+            flagged = _law_standardized(
+                theta, pi, self.columns, self.fixed, self.data, self.scalars, out
+            )
+            return out, flagged
         flagged = _standardized(theta, self.columns, self.fixed, self.data, self.scalars, out)
         return out, flagged
+
+
+@dataclass(frozen=True)
+class LawSource:
+    """Where the model Π of a law without a closed form comes from, for
+    :class:`FusedLogPosterior`: the law's compiled integrator
+    (:meth:`bayestribo.model.laws.Law.pi_grid`) on the likelihood's grid, its
+    parameters taken from the sampled coordinates, the fixed values or their null.
+
+    Attributes
+    ----------
+    likelihood : PiLikelihood
+        The likelihood (its law, grid, y'0, end of Π and reference amplitude).
+    sources : tuple
+        ``(name, column, value)`` for each parameter of the law and ``y0``: the column
+        of θ, or -1 and the value (fixed, or the parameter's null).
+    """
+
+    likelihood: PiLikelihood
+    sources: tuple[tuple[str, int, float], ...]
+
+    @classmethod
+    def build(
+        cls, priors: PriorSet, likelihood: PiLikelihood, fixed: dict[str, float]
+    ) -> LawSource:
+        """The sources of ``likelihood``'s law parameters and y0 under ``priors`` and
+        ``fixed``."""
+        names = priors.names
+        sources = []
+        for p in (*likelihood.law.parameters, None):
+            name = "y0" if p is None else p.name
+            if name in names:
+                sources.append((name, names.index(name), math.nan))
+            else:
+                null = math.nan if p is None else p.null
+                sources.append((name, -1, float(fixed.get(name, null))))
+        return cls(likelihood, tuple(sources))
+
+    def pi(self, theta: NDArray) -> NDArray:
+        """Model Π at the grid points for rows ``theta`` (n, d), shape (n, m); a row is
+        NaN where the law cannot move (as :meth:`PiLikelihood.model_pi`)."""
+        lik = self.likelihood
+        n = theta.shape[0]
+        values = {
+            name: theta[:, column] if column >= 0 else np.full(n, value)
+            for name, column, value in self.sources
+        }
+        y0 = values.pop("y0")
+        data = lik.data
+        return lik.law.pi_grid(
+            data.tau_grid[:-1],
+            values,
+            y0,
+            data.yp0,
+            None if data.motion_ended else data.tau_end,
+            reference=lik.reference_amplitude,
+        )

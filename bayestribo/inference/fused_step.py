@@ -124,8 +124,12 @@ def grouped_step(
     Returns
     -------
     int
-        Splits completed (all of them unless one could not be evaluated here).
+        Splits completed (all of them unless one could not be evaluated here; none
+        for a law without a closed form, whose Π comes from its own compiled
+        integrator through Python: the move runs its splits).
     """
+    if fused.law is not None:
+        return 0
     return int(
         _step(
             kind,

@@ -420,6 +420,7 @@ def sample(
     seed: int | np.random.Generator | None = None,
     also_start_at: Mapping[str, float] | None = None,
     progress: bool = False,
+    optimum: tuple[NDArray, NDArray, tuple[float, float] | None] | None = None,
 ) -> Sampled:
     """Step 3: maximum a posteriori, starting walkers, and sampling to convergence.
 
@@ -438,13 +439,21 @@ def sample(
         e.g. the optimum of a nested law), kept if its optimum is better.
     progress : bool
         Show a progress bar.
+    optimum : tuple, optional
+        The maximum a posteriori, its Laplace covariance and the plausible μ_s/μ_k
+        interval when they are known already (:func:`bayestribo.inference.start.
+        maximum_from`, a nonlinear law's fit in the frame of its own turning times):
+        the optimiser does not run again.
 
     Returns
     -------
     Sampled
     """
     rng = np.random.default_rng(seed)
-    theta, cov, ratio_range = maximum_a_posteriori(posterior, decay)
+    if optimum is None:
+        theta, cov, ratio_range = maximum_a_posteriori(posterior, decay)
+    else:
+        theta, cov, ratio_range = optimum
     if also_start_at is not None:
         start = np.array([also_start_at[n] for n in posterior.names], dtype=float)
         if np.isfinite(posterior(start[None])[0]):

@@ -35,7 +35,7 @@ from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.priors import Normal
 from bayestribo.signal.decay import EnergyDecay
 
-__all__ = ["initial_walkers", "maximum_a_posteriori", "refine"]
+__all__ = ["initial_walkers", "maximum_a_posteriori", "maximum_from", "refine"]
 
 
 def _first_guesses(decay: EnergyDecay, posterior: Posterior) -> list[dict[str, float]]:
@@ -278,19 +278,44 @@ def refine(posterior: Posterior, theta: NDArray) -> tuple[NDArray, NDArray]:
         if isinstance(posterior.priors[names[i]], Normal)
     ]
 
+    def residual_rows(u: NDArray) -> NDArray:
+        """Residuals at the rows ``u`` (k, free) in one call of the posterior."""
+        th = np.repeat(theta[None], u.shape[0], axis=0)
+        th[:, free] = theta[free] + u * scale
+        out = np.full((u.shape[0], size + len(gaussian)), 1e6)
+        ok = np.isfinite(posterior(th))
+        if np.any(ok):
+            out[ok, :size] = posterior.standardized_residuals(th[ok])
+            for k, (j, p) in enumerate(gaussian):
+                out[ok, size + k] = (th[ok, free[j]] - p.mu) / p.sigma
+        return out
+
+    last: list[NDArray] = []
+
     def residuals(u: NDArray) -> NDArray:
-        th = theta.copy()
-        th[free] = theta[free] + u * scale
-        if not np.isfinite(posterior(th[None])[0]):
-            return np.full(size + len(gaussian), 1e6)
-        prior_resid = [(th[free[j]] - p.mu) / p.sigma for j, p in gaussian]
-        return np.concatenate([posterior.standardized_residuals(th[None])[0], prior_resid])
+        f = residual_rows(np.asarray(u, dtype=float)[None])[0]
+        last[:] = [np.array(u, dtype=float), f]
+        return f
+
+    def jacobian(u: NDArray) -> NDArray:
+        # forward differences as scipy's "2-point" takes them (step √ε max(1, |u|)),
+        # every shifted point in one call of the posterior
+        u = np.asarray(u, dtype=float)
+        h = np.sqrt(np.finfo(float).eps) * np.where(u >= 0, 1.0, -1.0) * np.maximum(1.0, abs(u))
+        h = (u + h) - u
+        if last and np.array_equal(last[0], u):
+            f0 = last[1]
+            shifted = residual_rows(u[None, :] + np.diag(h))
+        else:
+            both = residual_rows(np.vstack([u[None, :], u[None, :] + np.diag(h)]))
+            f0, shifted = both[0], both[1:]
+        return ((shifted - f0[None, :]) / h[:, None]).T
 
     # Levenberg-Marquardt (MINPACK) needs at least as many residuals as unknowns; it
     # follows the ζ-μ_k ridge in a few iterations where the trust-region method
     # crawls along it (two to four times the time on the bundled run).
     method = "lm" if size + len(gaussian) >= len(free) else "trf"
-    sol = least_squares(residuals, np.zeros(len(free)), x_scale="jac", method=method)
+    sol = least_squares(residuals, np.zeros(len(free)), jac=jacobian, x_scale="jac", method=method)
     theta[free] = theta[free] + sol.x * scale
     jac = sol.jac / scale[None, :]  # includes the Gaussian priors' rows
     try:
@@ -335,16 +360,51 @@ def maximum_a_posteriori(
         middle = float(np.median(_ratio_grid(posterior)))
         optima += [_optimise(posterior, guess, ratio=middle) for guess in guesses]
     theta, cov, _ = optima[int(np.argmax([lp for _, _, lp in optima]))]
+    return theta, cov, _ratio_range(posterior, theta)
 
-    ratio_range = None
-    if "mu_s_ratio" in names:
-        _, lp, grid = _scan_ratio(posterior, theta)
-        top = np.max(lp)
-        if np.isfinite(top):
-            good = grid[lp >= top - 0.5]
-            step = grid[1] - grid[0]
-            ratio_range = (max(grid[0], good.min() - step), min(grid[-1], good.max() + step))
-    return theta, cov, ratio_range
+
+def _ratio_range(posterior: Posterior, theta: NDArray) -> tuple[float, float] | None:
+    """Range of μ_s/μ_k within 0.5 of the best log density of its scan at ``theta``."""
+    if "mu_s_ratio" not in posterior.names:
+        return None
+    _, lp, grid = _scan_ratio(posterior, theta)
+    top = np.max(lp)
+    if not np.isfinite(top):
+        return None
+    good = grid[lp >= top - 0.5]
+    step = grid[1] - grid[0]
+    return (max(grid[0], good.min() - step), min(grid[-1], good.max() + step))
+
+
+def maximum_from(
+    posterior: Posterior, theta: NDArray, decay: EnergyDecay
+) -> tuple[NDArray, NDArray, tuple[float, float] | None]:
+    """Maximum a posteriori from one known starting point, e.g. the optimum of the
+    same law on the run prepared in another frame (a nonlinear law's fit,
+    :func:`bayestribo.inference.fitting.fit`), which moves it by far less than the
+    first guesses of :func:`maximum_a_posteriori` are apart.
+
+    Parameters
+    ----------
+    posterior : Posterior
+        The posterior to maximise.
+    theta : ndarray
+        Starting point in sampling coordinates (μ_s/μ_k kept on its step there).
+    decay : EnergyDecay
+        The run's energy decay: the first guesses of :func:`maximum_a_posteriori`,
+        which this falls back to when the log density at the optimum from ``theta``
+        is not finite.
+
+    Returns
+    -------
+    theta, cov, ratio_range
+        As :func:`maximum_a_posteriori`.
+    """
+    start = dict(zip(posterior.names, np.asarray(theta, dtype=float).tolist(), strict=True))
+    opt, cov, lp = _optimise(posterior, start, ratio=start.get("mu_s_ratio"))
+    if not np.isfinite(lp):
+        return maximum_a_posteriori(posterior, decay)
+    return opt, cov, _ratio_range(posterior, opt)
 
 
 def initial_walkers(

@@ -25,19 +25,33 @@ if TYPE_CHECKING:  # defined for each law after this text (see the module notes)
     def friction(a: float, c: NDArray) -> float: ...
 
     HAS_FRICTION: bool = False
+    HAS_DRAG: bool = True
 
 #: Runge-Kutta steps per half cycle: 0 chooses them per half cycle (see
 #: :func:`make_integrator`); a positive number fixes them (for convergence tests).
 DEFAULT_STEPS = 0
-#: The step counts a half cycle may take.
-LADDER = np.array([24, 32, 48, 64, 96, 128, 192, 256, 384], dtype=np.int64)
+#: The step counts a half cycle may take (at most 25 % apart: the count chosen is never
+#: far above the one the error asks for). Those below :data:`_MIN_STEPS` serve only the
+#: half cycles past the record, whose share of Π(0) is small.
+LADDER = np.array(
+    [8, 12, 16, 20, 24, 28, 32, 40, 48, 56, 64, 80, 96, 112, 128, 160, 192, 224, 256, 320, 384],
+    dtype=np.int64,
+)
 # Steps ≈ _STEP_SCALE √ζ_e keep Π within ~2e-9 of Π(0): the error of the scheme measured
 # against the closed form grows as ζ² h⁴ (1.4e-9 at ζ = 0.01 and 48 steps; 2.7e-8 at
 # ζ = 0.2 and 96 steps), so h ∝ ζ^(-1/2) holds it constant.
 _STEP_SCALE = 440.0
+# The fewest steps of a half cycle inside the record: with little damping the motion
+# lasts many half cycles, each one's error in r carried into the next ones.
+_MIN_STEPS = 32
 # A run of half cycles past the record whose energy falls below this fraction of the
 # total ends the sum (the rest is extrapolated geometrically).
-_TAIL_TOLERANCE = 1e-14
+_TAIL_TOLERANCE = 1e-12
+# Past the record (a law without friction, summed to the end of motion) the half cycles
+# that halve the energy may together be off by this fraction of the scheme's error
+# inside the record (each by (1 - ρ) of it, ρ the ratio of successive half cycles' Π):
+# a half cycle's steps follow from the error ∝ h⁴ relative to its own share of Π(0).
+_TAIL_SHARE = 1e-2
 # At most this many half cycles are integrated for one parameter set.
 _MAX_HALF_CYCLES = 200_000
 # Floating-point contraction (fused multiply-add) and reciprocals only: no assumption
@@ -48,21 +62,33 @@ _START_ITERATIONS = 6
 
 
 @numba.njit(cache=True, inline="always", error_model="numpy", fastmath=_FAST)
-def rates(s: float, co: float, r: float, mu: float, c: NDArray) -> tuple[float, float, float]:
-    g = drag(r * s, c)
+def rates_at(s: float, co: float, r: float, mu: float, g: float) -> tuple[float, float, float]:
+    """dr/dθ, dτ/dθ and dI/dθ at a node where the drag is ``g`` = g(r sin θ)."""
     inv = 1.0 / (1.0 - co * g / r)
     energy = 0.5 * (mu * mu + 2.0 * mu * r * co + r * r)
     return -s * g * inv, inv, energy * inv
 
 
 @numba.njit(cache=True, inline="always", error_model="numpy", fastmath=_FAST)
+def rates(s: float, co: float, r: float, mu: float, c: NDArray) -> tuple[float, float, float]:
+    return rates_at(s, co, r, mu, drag(r * s, c))
+
+
+@numba.njit(cache=True, inline="always", error_model="numpy", fastmath=_FAST)
 def energy_and_rate(
-    s: float, co: float, r: float, mu: float, c: NDArray, e_at: NDArray, k: int
+    s: float, co: float, r: float, mu: float, g: float, e_at: NDArray, k: int
 ) -> None:
-    """E and its rate E' = -|y'| (g(|y'|) + μ) at a node, into ``e_at[:, k]``."""
+    """E and its rate E' = -|y'| (g(|y'|) + μ) at a node where the drag is ``g``, into
+    ``e_at[:, k]``."""
     w = r * s
     e_at[0, k] = 0.5 * (mu * mu + 2.0 * mu * r * co + r * r)
-    e_at[1, k] = -w * (drag(w, c) + mu)
+    e_at[1, k] = -w * (g + mu)
+
+
+@numba.njit(cache=True, inline="always", error_model="numpy", fastmath=_FAST)
+def arc_integral(t: float, r: float, mu: float, theta0: float) -> float:
+    """∫₀ᵗ E dτ along a half cycle without drag (θ = θ₀ + τ, r constant)."""
+    return 0.5 * (mu * mu + r * r) * t + mu * r * (math.sin(theta0 + t) - math.sin(theta0))
 
 
 @numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
@@ -81,11 +107,17 @@ def ladder_tables() -> tuple[NDArray, NDArray]:
 
 
 @numba.njit(cache=True, inline="always", error_model="numpy", fastmath=_FAST)
-def choose_steps(r: float, c: NDArray) -> int:
+def choose_steps(r: float, c: NDArray, weight: float) -> int:
     """Index in LADDER of the steps for a half cycle of amplitude r about its centre:
-    from the drag's equivalent damping at the peak speed, ζ_e = g(r)/(2r)."""
+    from the drag's equivalent damping at the peak speed, ζ_e = g(r)/(2r). ``weight``
+    >= 1 is how many times the scheme's usual relative error the half cycle may have
+    (past the record), which divides the steps by its fourth root."""
     zeta_e = drag(r, c) / (2.0 * r) if r > 0.0 else 0.0
     want = _STEP_SCALE * math.sqrt(max(zeta_e, 0.0))
+    if weight > 1.0:
+        want /= math.sqrt(math.sqrt(weight))
+    else:
+        want = max(want, _MIN_STEPS)
     for i in range(LADDER.size):
         if LADDER[i] >= want:
             return i
@@ -127,10 +159,12 @@ def half_cycle(
     cum = 0.0
     tau_at[0] = 0.0
     c_at[0] = 0.0
-    energy_and_rate(table[0, 0], table[1, 0], r, mu, c, e_at, 0)
+    # the drag at a node, shared by its energy rate and the next step's first stage
+    g = drag(r * table[0, 0], c)
+    energy_and_rate(table[0, 0], table[1, 0], r, mu, g, e_at, 0)
     for k in range(steps):
         i0 = 2 * k
-        a1, b1, e1 = rates(table[0, i0], table[1, i0], r, mu, c)
+        a1, b1, e1 = rates_at(table[0, i0], table[1, i0], r, mu, g)
         d = table[2, i0]
         a1 *= d
         b1 *= d
@@ -164,7 +198,8 @@ def half_cycle(
         cum += h * (e1 + 2.0 * e2 + 2.0 * e3 + e4) / 6.0
         tau_at[k + 1] = tau
         c_at[k + 1] = cum
-        energy_and_rate(table[0, i0 + 2], table[1, i0 + 2], r, mu, c, e_at, k + 1)
+        g = drag(r * table[0, i0 + 2], c)
+        energy_and_rate(table[0, i0 + 2], table[1, i0 + 2], r, mu, g, e_at, k + 1)
     return r
 
 
@@ -189,6 +224,26 @@ def hermite(t: float, k: int, tau_at: NDArray, c_at: NDArray, e_at: NDArray) -> 
         + (-4.0 * s3 + 7.0 * s4 - 3.0 * s5) * h * e_at[0, k + 1]
         + (0.5 * s3 - s4 + 0.5 * s5) * h * h * e_at[1, k + 1]
     )
+
+
+# The node tables of the ladder depend on no parameter: computed once, at import, and
+# frozen into the compiled functions that read them.
+_TABLES, _OFFSETS = ladder_tables()
+
+
+@numba.njit(cache=True, inline="always", error_model="numpy", fastmath=_FAST)
+def interpolate(t: float, steps: int, tau_at: NDArray, c_at: NDArray, e_at: NDArray) -> float:
+    """C at τ = t inside a half cycle of ``steps`` steps: the step holding t by
+    bisection, then :func:`hermite`."""
+    lo = 0
+    hi = steps
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if tau_at[mid] <= t:
+            lo = mid
+        else:
+            hi = mid
+    return hermite(t, lo, tau_at, c_at, e_at)
 
 
 @numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
@@ -244,52 +299,53 @@ def one(
             for i in range(n_t):
                 out[i] = math.nan
             return 1
-        if fixed_steps > 0:
-            steps = fixed_steps
-            table = tables if theta0 == 0.0 else nodes(theta0, steps)
+        exact = not HAS_DRAG and fixed_steps <= 0
+        if exact:
+            # no drag: an arc of the undamped motion about the centre, in closed form
+            r_end = r
+            t_half = math.pi - theta0
+            c_half = arc_integral(t_half, r, mu, theta0)
         else:
-            k = choose_steps(r, c)
-            steps = LADDER[k]
-            if theta0 == 0.0:
-                table = tables[:, offsets[k] : offsets[k] + 2 * steps + 1]
+            if fixed_steps > 0:
+                steps = fixed_steps
+                table = tables if theta0 == 0.0 else nodes(theta0, steps)
             else:
-                table = nodes(theta0, steps)
-        r_end = half_cycle(table, r, mu, c, steps, tau_at, c_at, e_at)
-        if not math.isfinite(r_end):
-            for i in range(n_t):
-                out[i] = math.nan
-            return 1
-        t_next = t_start + tau_at[steps]
+                weight = 1.0
+                if j >= n_t and math.isinf(tau_end) and not HAS_FRICTION and 0.0 < last < before:
+                    # past the record only the sum counts: each half cycle may be off by
+                    # its share of it, over the ~1/(1 - ρ) half cycles that remain
+                    weight = _TAIL_SHARE * (1.0 - last / before) * c_start / last
+                k = choose_steps(r, c, weight)
+                steps = LADDER[k]
+                if theta0 == 0.0:
+                    table = tables[:, offsets[k] : offsets[k] + 2 * steps + 1]
+                else:
+                    table = nodes(theta0, steps)
+            r_end = half_cycle(table, r, mu, c, steps, tau_at, c_at, e_at)
+            if not math.isfinite(r_end):
+                for i in range(n_t):
+                    out[i] = math.nan
+                return 1
+            t_half = tau_at[steps]
+            c_half = c_at[steps]
+        t_next = t_start + t_half
         # grid points inside this half cycle
         while j < n_t and tau[j] < t_next:
-            k = 0
-            # bisection for the step holding tau[j]
-            lo = 0
-            hi = steps
             t_rel = tau[j] - t_start
-            while hi - lo > 1:
-                mid = (lo + hi) // 2
-                if tau_at[mid] <= t_rel:
-                    lo = mid
-                else:
-                    hi = mid
-            k = lo
-            out[j] = c_start + hermite(t_rel, k, tau_at, c_at, e_at)
+            if exact:
+                out[j] = c_start + arc_integral(t_rel, r, mu, theta0)
+            else:
+                out[j] = c_start + interpolate(t_rel, steps, tau_at, c_at, e_at)
             j += 1
         if tau_end < t_next and math.isnan(c_end):
             t_rel = tau_end - t_start
-            lo = 0
-            hi = steps
-            while hi - lo > 1:
-                mid = (lo + hi) // 2
-                if tau_at[mid] <= t_rel:
-                    lo = mid
-                else:
-                    hi = mid
-            c_end = c_start + hermite(t_rel, lo, tau_at, c_at, e_at)
+            if exact:
+                c_end = c_start + arc_integral(t_rel, r, mu, theta0)
+            else:
+                c_end = c_start + interpolate(t_rel, steps, tau_at, c_at, e_at)
         before = last
-        last = c_at[steps]
-        c_start += c_at[steps]
+        last = c_half
+        c_start += c_half
         t_start = t_next
         n_half += 1
         # -- the next turning point
@@ -344,7 +400,7 @@ def grid(
         tables = nodes(0.0, steps)
         offsets = np.zeros(1, dtype=np.int64)
     else:
-        tables, offsets = ladder_tables()
+        tables, offsets = _TABLES, _OFFSETS
     for p in range(y0.size):
         status[p] = one(tau, y0[p], coef[p], ratio[p], yp0, tau_end, steps, tables, offsets, out[p])
     return out, status
@@ -357,7 +413,7 @@ def turns(
     """Turning times τ_n and positions Y_n of one trajectory (the initial state
     first when y'₀ = 0), until the motion stops, τ passes ``tau_max`` or
     ``max_count`` turning points; the last one is where the pin sticks, if it does."""
-    tables, offsets = ladder_tables()
+    tables, offsets = _TABLES, _OFFSETS
     size = LADDER[-1] + 1
     tau_at = np.empty(size)
     c_at = np.empty(size)
@@ -389,16 +445,20 @@ def turns(
         theta0 = math.atan2(-vm, ym - mu)
     t = 0.0
     while n < max_count and t <= tau_max and mu >= 0.0:
-        k = choose_steps(r, c)
-        steps = LADDER[k]
-        if theta0 == 0.0:
-            table = tables[:, offsets[k] : offsets[k] + 2 * steps + 1]
+        if HAS_DRAG:
+            k = choose_steps(r, c, 1.0)
+            steps = LADDER[k]
+            if theta0 == 0.0:
+                table = tables[:, offsets[k] : offsets[k] + 2 * steps + 1]
+            else:
+                table = nodes(theta0, steps)
+            r_end = half_cycle(table, r, mu, c, steps, tau_at, c_at, e_at)
+            if not math.isfinite(r_end):
+                break
+            t += tau_at[steps]
         else:
-            table = nodes(theta0, steps)
-        r_end = half_cycle(table, r, mu, c, steps, tau_at, c_at, e_at)
-        if not math.isfinite(r_end):
-            break
-        t += tau_at[steps]
+            r_end = r  # an arc of the undamped motion
+            t += math.pi - theta0
         y_turn = mu - r_end
         times[n] = t
         where[n] = sign * y_turn
@@ -424,7 +484,9 @@ def half_cycle_end(a: float, c: NDArray, tables: NDArray, offsets: NDArray, work
     r = a - mu
     if not (r > 0.0) or mu < 0.0:
         return math.nan
-    k = choose_steps(r, c)
+    if not HAS_DRAG:
+        return r - mu  # an arc of the undamped motion
+    k = choose_steps(r, c, 1.0)
     steps = LADDER[k]
     table = tables[:, offsets[k] : offsets[k] + 2 * steps + 1]
     r_end = half_cycle(table, r, mu, c, steps, work[0], work[1], work[2:4])
@@ -440,7 +502,7 @@ def swing_drops(coef: NDArray, swing: NDArray) -> NDArray:
 
     a_s is found by the secant method on ½(a_s + a_e(a_s)) = A from the fixed point
     a_s = A + ½ drop(A); NaN where no such half cycle exists."""
-    tables, offsets = ladder_tables()
+    tables, offsets = _TABLES, _OFFSETS
     size = LADDER[-1] + 1
     work = np.empty((4, size))
     out = np.empty((coef.shape[0], swing.size))

@@ -123,6 +123,7 @@ def _law_source(layout: tuple) -> tuple[str, list, bool]:
     lines.append(_sum_source("drag", drags, d_off, d_size, 0))
     lines.append(_sum_source("friction", frictions, f_off, f_size, len(drags)))
     lines.append(f"HAS_FRICTION = {bool(frictions)}")
+    lines.append(f"HAS_DRAG = {bool(drags)}")
     text = inspect.getsource(_core) + "\n".join(lines) + "\n"
     if cacheable:
         # a change of a term's force (its source) is a new file, never a stale cache

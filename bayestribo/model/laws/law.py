@@ -185,20 +185,19 @@ class Law:
         """Coefficient rows of the compiled forces, shape (P, K), from parameter values
         by name (each of shape (P,)) and the reference amplitude."""
         vals = {n: np.atleast_1d(np.asarray(values[n], dtype=float)) for n in self.parameter_names}
-        cols = []
-        for term in self._layout[1]:
-            cols.extend(
-                np.broadcast_to(c, np.shape(vals[self.parameter_names[0]]))
-                for c in term.coefficients(vals, float(reference))
-            )
-        return np.ascontiguousarray(np.column_stack(cols), dtype=np.float64)
+        size = vals[self.parameter_names[0]].shape[0]
+        cols = [c for term in self._layout[1] for c in term.coefficients(vals, float(reference))]
+        out = np.empty((size, len(cols)))
+        for k, c in enumerate(cols):
+            out[:, k] = c  # each column broadcast to the rows
+        return out
 
     def static_ratio(self, values: Mapping[str, ArrayLike], size: int) -> NDArray:
         """μ_s/μ_k of each row (1 where the law has no static friction parameter)."""
         if "mu_s_ratio" in self.parameter_names:
-            return np.ascontiguousarray(
-                np.broadcast_to(np.asarray(values["mu_s_ratio"], dtype=float), (size,))
-            )
+            out = np.empty(size)
+            out[:] = np.asarray(values["mu_s_ratio"], dtype=float)
+            return out
         return np.ones(size)
 
     def pi_grid(
