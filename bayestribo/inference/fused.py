@@ -56,6 +56,7 @@ from numpy.typing import NDArray
 
 from bayestribo.inference.likelihood import PiLikelihood
 from bayestribo.inference.priors import LogUniform, Normal, PriorSet, Uniform
+from bayestribo.inference.surrogate import SurrogateLikelihood
 from bayestribo.model._kernel import _one
 
 __all__ = ["FusedLogPosterior"]
@@ -65,7 +66,7 @@ _ORDER = ("zeta", "mu_k", "mu_s_ratio", "y0", "log10_discrepancy", "log10_shape"
 _SAMPLED_FROM_FIXED = -1  # the parameter is fixed at a value
 _ABSENT = -2  # the parameter is neither sampled nor fixed
 _UNIFORM, _NORMAL, _LOGUNIFORM = 0, 1, 2
-_EXACT, _AVERAGED = 0, 1
+_EXACT, _AVERAGED, _SURROGATE = 0, 1, 2
 _LOG_2PI = math.log(2.0 * math.pi)
 _TINY = 1e-100
 _PSI_SERIES = 1e-2
@@ -157,18 +158,49 @@ def _averaged_grid(
 
 
 @numba.njit(cache=True, error_model="numpy")
+def _surrogate_pi(row: NDArray, data: NDArray, scalars: NDArray, pi: NDArray) -> None:
+    """The quadratic surrogate's Π (:class:`~bayestribo.inference.surrogate.QuadraticPi`)
+    into ``pi``: its table rows follow the nuisances' design in ``data``, its p
+    coordinates' columns, centres and scales follow the seven scalars."""
+    m = pi.size
+    p = int(scalars[7])
+    start = 4 + 2 + int(scalars[6])
+    u = np.empty(p)
+    for a in range(p):
+        u[a] = (row[int(scalars[8 + a])] - scalars[8 + p + a]) / scalars[8 + 2 * p + a]
+    for j in range(m):
+        pi[j] = data[start, j]
+    k = start + 1
+    for a in range(p):
+        for j in range(m):
+            pi[j] += data[k, j] * u[a]
+        k += 1
+    for a in range(p):
+        for b in range(a, p):
+            w = u[a] * u[b]
+            for j in range(m):
+                pi[j] += data[k, j] * w
+            k += 1
+
+
+@numba.njit(cache=True, error_model="numpy")
 def _model_pi(
     row: NDArray,
     columns: NDArray,
     fixed: NDArray,
-    tau: NDArray,
-    yp0: float,
-    end: float,
-    model: float,
+    data: NDArray,
+    scalars: NDArray,
     pi: NDArray,
 ) -> bool:
     """Model Π on the grid into ``pi``; False (and ``pi`` untouched) where the averaged
     model's parameters are outside its domain."""
+    tau = data[0]
+    yp0 = scalars[0]
+    end = scalars[1]
+    model = scalars[5]
+    if model == _SURROGATE:
+        _surrogate_pi(row, data, scalars, pi)
+        return True
     zeta = _value(row, columns, fixed, 0, 0.0)
     mu_k = _value(row, columns, fixed, 1, 0.0)
     mu_s = mu_k * _value(row, columns, fixed, 2, 1.0) if columns[2] != _ABSENT else mu_k
@@ -267,7 +299,7 @@ def _standardized(
     flagged = 0
     for n in range(theta.shape[0]):
         row = theta[n]
-        if not _model_pi(row, columns, fixed, tau, scalars[0], scalars[1], scalars[5], pi):
+        if not _model_pi(row, columns, fixed, data, scalars, pi):
             flagged += 1
             continue
         if not _standardized_row(
@@ -374,7 +406,9 @@ def _log_posterior(
     ``data`` rows: τ_j, D_j, V_j, ∫_j E², then the nuisances' design: ∫_j y, ∫_j τy
     and the shape columns D_j P_k(u_j) (j < m). ``scalars``: y'0, the end of the
     model's Π (inf when the record holds the end of motion), the prior precisions of
-    δ₀ and δ₁, their log|P|, the model code, the number of shape terms. Returns the
+    δ₀ and δ₁, their log|P|, the model code, the number of shape terms (and for the
+    quadratic surrogate of Π, whose table rows follow the design in ``data``: its
+    number of coordinates p, their columns, centres and scales). Returns the
     number of rows whose log posterior is NaN or whose parameters are outside the
     averaged model's domain (NaN in ``out``): the caller then lets the reference
     raise its error.
@@ -384,9 +418,6 @@ def _log_posterior(
     m = tau.size
     q = 2 + int(scalars[6])
     design = data[4 : 4 + q]
-    yp0 = scalars[0]
-    end = scalars[1]
-    model = scalars[5]
     pi = np.empty(m)
     var = np.empty(m)
     a = np.empty((q, q))
@@ -411,7 +442,7 @@ def _log_posterior(
             flagged += math.isnan(lp)
             out[n] = lp
             continue
-        if not _model_pi(row, columns, fixed, tau, yp0, end, model, pi):
+        if not _model_pi(row, columns, fixed, data, scalars, pi):
             flagged += 1
             out[n] = math.nan
             continue
@@ -580,10 +611,15 @@ class FusedLogPosterior:
         """Tables for ``priors`` × ``likelihood`` with ``fixed`` values, or None when
         a prior is not one of the three kinds or the likelihood is a subclass (its
         methods may differ from what is compiled here)."""
-        if type(likelihood) is not PiLikelihood:
+        surrogate = None
+        if type(likelihood) is SurrogateLikelihood:
+            surrogate = likelihood.surrogate
+            if any(name not in priors.names for name in surrogate.names):
+                return None
+        elif type(likelihood) is not PiLikelihood:
             return None
         law = None
-        if not likelihood.law.closed_form:
+        if surrogate is None and not likelihood.law.closed_form:
             if likelihood.model != "exact":
                 return None
             law = LawSource.build(priors, likelihood, fixed)
@@ -609,10 +645,10 @@ class FusedLogPosterior:
         d = likelihood.data
         shape = columns[5] != _ABSENT
         design = likelihood.design(shape)
-        data = np.ascontiguousarray(
-            np.vstack([d.tau_grid[:-1], d.increments, d.variance, d.energy_squared, design.T]),
-            dtype=np.float64,
-        )
+        rows = [d.tau_grid[:-1], d.increments, d.variance, d.energy_squared, design.T]
+        if surrogate is not None:
+            rows.append(surrogate.table)
+        data = np.ascontiguousarray(np.vstack(rows), dtype=np.float64)
         scalars = np.array(
             [
                 float(d.yp0),
@@ -624,6 +660,12 @@ class FusedLogPosterior:
                 design.shape[1] - 2,
             ]
         )
+        if surrogate is not None:
+            scalars[5] = _SURROGATE
+            index = [priors.names.index(name) for name in surrogate.names]
+            scalars = np.concatenate(
+                [scalars, [len(index)], index, surrogate.centre, surrogate.scale]
+            )
         return cls(table, columns, values, data, scalars, law)
 
     def __call__(self, theta: NDArray) -> tuple[NDArray, int]:

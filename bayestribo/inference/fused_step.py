@@ -126,7 +126,9 @@ def grouped_step(
     int
         Splits completed (all of them unless one could not be evaluated here; none
         for a law without a closed form, whose Π comes from its own compiled
-        integrator through Python: the move runs its splits).
+        integrator through Python: the move runs its splits; all of them for the
+        quadratic surrogate of such a law's Π, :mod:`bayestribo.inference.surrogate`,
+        which is compiled with the closed forms).
     """
     if fused.law is not None:
         return 0

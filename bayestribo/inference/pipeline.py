@@ -56,6 +56,13 @@ from bayestribo.inference.result import FitResult, plain_data
 from bayestribo.inference.sampling import SamplerRun, SamplerSettings, run_ensembles
 from bayestribo.inference.sensitivity import prior_sensitivity
 from bayestribo.inference.start import initial_walkers, maximum_a_posteriori, refine
+from bayestribo.inference.surrogate import (
+    ATTEMPTS,
+    NODE_SCALE,
+    SurrogateCheck,
+    check,
+    surrogate_posterior,
+)
 from bayestribo.io.files import as_run
 from bayestribo.io.frequency import FrequencyTrend, frequency_trend, turning_point_trend
 from bayestribo.io.options import ReadOptions
@@ -140,12 +147,28 @@ class Sampled:
     run : SamplerRun
         Chains and convergence diagnostics.
     settings : SamplerSettings
+    surrogate : SurrogateCheck or None
+        For a law without a closed form, the check of the quadratic surrogate of Π
+        (:mod:`bayestribo.inference.surrogate`): passed when the chains are the
+        surrogate posterior's, failed when they are the exact posterior's after it;
+        None when no surrogate was tried.
+    surrogate_posterior : Posterior or None
+        The surrogate posterior the chains sampled (None: the exact one).
     """
 
     posterior: Posterior
     theta_map: NDArray
     run: SamplerRun
     settings: SamplerSettings
+    surrogate: SurrogateCheck | None = None
+    surrogate_posterior: Posterior | None = None
+
+    @property
+    def draws_posterior(self) -> Posterior:
+        """The posterior whose density the chains sampled: the surrogate's where its
+        check passed (it then stands for the exact one within
+        :data:`~bayestribo.inference.surrogate.MAX_WEIGHT_CV`), else the exact."""
+        return self.surrogate_posterior if self.surrogate_posterior is not None else self.posterior
 
 
 def _run_name(run: Run) -> str:
@@ -421,6 +444,7 @@ def sample(
     also_start_at: Mapping[str, float] | None = None,
     progress: bool = False,
     optimum: tuple[NDArray, NDArray, tuple[float, float] | None] | None = None,
+    surrogate: bool = True,
 ) -> Sampled:
     """Step 3: maximum a posteriori, starting walkers, and sampling to convergence.
 
@@ -444,6 +468,10 @@ def sample(
         interval when they are known already (:func:`bayestribo.inference.start.
         maximum_from`, a nonlinear law's fit in the frame of its own turning times):
         the optimiser does not run again.
+    surrogate : bool
+        For a law without a closed form, sample a quadratic surrogate of its Π and keep
+        it where the exact posterior confirms it (:mod:`bayestribo.inference.surrogate`;
+        the default); False: sample the exact posterior throughout.
 
     Returns
     -------
@@ -463,25 +491,69 @@ def sample(
     walkers = initial_walkers(
         posterior, theta, cov, ratio_range, settings.n_ensembles, settings.n_walkers, rng
     )
-    # -- a failure inside sampling is a reported non-convergence (inference/modes.py) --
-    run = run_or_failure(
-        run_ensembles,
-        posterior,
-        walkers,
-        settings,
-        seed=int(rng.integers(2**31)),
-        progress=progress,
-    )
-    # -- end of the failure guard --
+    seed_of_run = int(rng.integers(2**31))
+    checked: SurrogateCheck | None = None
+    target: Posterior | None = None
+    run: SamplerRun | None = None
+    if surrogate and not posterior.law.closed_form and posterior.likelihood.model == "exact":
+        run, checked, target = _sample_surrogate(
+            posterior, theta, cov, walkers, settings, seed_of_run, progress
+        )
+    if run is None:
+        # -- a failure inside sampling is a reported non-convergence (inference/modes.py) --
+        run = run_or_failure(
+            run_ensembles, posterior, walkers, settings, seed=seed_of_run, progress=progress
+        )
+        # -- end of the failure guard --
     # The optimiser can stop short of the optimum on the ridge of a law that misfits
     # (HarmOsc3 under viscous+coulomb+quadratic: χ² 228590 at its optimum, 8332 where
     # the walkers went); the best point the walkers visited then stands for the MAP
     # in the misfit checks.
     if run.log_prob.size and np.isfinite(run.log_prob).any():
         best = np.unravel_index(np.nanargmax(run.log_prob), run.log_prob.shape)
-        if run.log_prob[best] > posterior(theta[None])[0]:
-            theta = np.array(run.chains[best], dtype=float)
-    return Sampled(posterior, theta, run, settings)
+        point = np.array(run.chains[best], dtype=float)
+        if posterior(point[None])[0] > posterior(theta[None])[0]:
+            theta = point
+    return Sampled(posterior, theta, run, settings, checked, target)
+
+
+def _sample_surrogate(
+    posterior: Posterior,
+    theta: NDArray,
+    cov: NDArray,
+    walkers: NDArray,
+    settings: SamplerSettings,
+    seed: int,
+    progress: bool,
+) -> tuple[SamplerRun | None, SurrogateCheck | None, Posterior | None]:
+    """Sample the quadratic surrogate posterior of a law without a closed form and
+    check it against the exact one (:mod:`bayestribo.inference.surrogate`).
+
+    The surrogate is built about the maximum a posteriori with the Laplace scales; if
+    its check fails, again about the best draw checked with the surrogate posterior's
+    spread (up to :data:`~bayestribo.inference.surrogate.ATTEMPTS` surrogates).
+    Returns the run, the last check and the surrogate posterior when a check passed;
+    ``(None, check, None)`` when none did (the caller samples the exact posterior).
+    """
+    rng = np.random.default_rng(seed)
+    sd = np.sqrt(np.clip(np.diag(np.atleast_2d(cov)), 0.0, None))
+    centre, scale = theta, NODE_SCALE * sd
+    checked: SurrogateCheck | None = None
+    for attempt in range(1, ATTEMPTS + 1):
+        target = surrogate_posterior(posterior, centre, scale)
+        if target is None or not target.uses_compiled:
+            return None, checked, None
+        run = run_or_failure(run_ensembles, target, walkers, settings, seed=seed, progress=progress)
+        flat = run.chains.reshape(-1, run.chains.shape[-1])
+        if not run.converged or flat.shape[0] < 2:
+            return None, checked, None
+        checked = check(posterior, target, flat, rng, attempt=attempt)
+        if checked.passed:
+            return run, checked, target
+        if checked.best is None:
+            break
+        centre, scale = checked.best, NODE_SCALE * flat.std(axis=0)
+    return None, checked, None
 
 
 def _misfit(posterior: Posterior, theta: NDArray) -> tuple[float, int, float]:
@@ -811,6 +883,7 @@ def summarise(
                     "shape_departure": shape.to_dict(),
                     "at_prior_bound": at_bound,
                     "modes": modes.to_dict(),  # the mode check (inference/modes.py)
+                    "surrogate": None if sampled.surrogate is None else sampled.surrogate.to_dict(),
                 }
             )
         ),
@@ -819,7 +892,9 @@ def summarise(
         "law_frequency_change": law_change,
         "prior_sensitivity_json": json.dumps(plain_data(prior_sensitivity(flat, posterior.priors))),
     }
-    result = FitResult(inference_data(posterior, run.chains, derived, rng, attrs))
+    # the pointwise log-likelihood (PSIS-LOO) of the density the chains sampled: the
+    # surrogate's where its check passed (inference/surrogate.py)
+    result = FitResult(inference_data(sampled.draws_posterior, run.chains, derived, rng, attrs))
     if not run.converged:
         warnings.warn(
             f"the sampler did not converge on {name or 'the run'}: " + "; ".join(run.reasons),

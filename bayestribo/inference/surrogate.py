@@ -1,0 +1,398 @@
+r"""A quadratic surrogate of the model Π for laws without a closed form, checked.
+
+The posterior of a law without a closed form needs its compiled half-cycle integrator
+(:mod:`bayestribo.model.laws.integrator`) for every walker at every step: some 100 µs a
+parameter set against 1.6 µs for the closed form, and the sampler asks for tens of
+thousands. The data pin the parameters down to a small region, though (relative
+widths of 1e-4 to 1e-2), over which Π is a smooth function of them. Inside it
+
+.. math::
+
+    Π(θ) ≈ Π_c + \sum_a g_a u_a + \sum_{a \le b} h_{ab} u_a u_b,
+    \qquad u_a = (θ_a - c_a) / s_a,
+
+with ``c`` the centre (the maximum a posteriori), ``s`` the scales (twice the Laplace
+standard deviations) and one (m,) coefficient row per monomial, interpolated from
+``1 + 2p + p(p-1)/2`` evaluations of the exact Π (p the coordinates Π depends on: the
+law's sampled parameters and y0). The error of this interpolation is of third order
+in ``u``: a few posterior widths away it is far below the noise of the increments.
+
+The surrogate is never trusted on this argument alone. :func:`check` evaluates the
+exact log posterior at a seeded sample of the surrogate posterior's draws and
+computes the importance weights w = p(θ)/p̃(θ): by Cauchy-Schwarz, any posterior mean
+under the exact posterior differs from the surrogate's by at most
+``cv(w) × sd`` (cv the coefficient of variation of the weights, sd the posterior
+standard deviation of the quantity). The fit keeps the surrogate's draws only when
+cv(w) is below :data:`MAX_WEIGHT_CV`; otherwise it builds the surrogate again about
+the checked draw of highest exact density with the surrogate posterior's spread (the
+optimiser can stop short of the optimum of a law that misfits), up to
+:data:`ATTEMPTS` times, and then samples the exact posterior
+(:func:`bayestribo.inference.pipeline.sample`).
+
+Where the posterior depends on Π discontinuously (a law with static friction whose
+motion ends inside the record: one turning point more or less before the pin sticks),
+the quadratic cannot follow, the check fails and the exact posterior is sampled.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bayestribo.inference.likelihood import Params, PiLikelihood
+
+if TYPE_CHECKING:
+    from bayestribo.inference.posterior import Posterior
+
+__all__ = [
+    "ATTEMPTS",
+    "MAX_WEIGHT_CV",
+    "QuadraticPi",
+    "SurrogateCheck",
+    "SurrogateLikelihood",
+    "check",
+    "quadratic_pi",
+    "surrogate_posterior",
+]
+
+#: Largest coefficient of variation of the importance weights at which the surrogate
+#: posterior's draws are kept: posterior means within 0.05 posterior sd of the exact.
+MAX_WEIGHT_CV = 0.05
+#: Draws of the surrogate posterior at which the exact log posterior is evaluated.
+CHECK_DRAWS = 128
+#: Surrogates built and checked before the exact posterior is sampled instead.
+ATTEMPTS = 3
+#: Scales of the interpolation nodes, in Laplace standard deviations.
+NODE_SCALE = 2.0
+#: Smallest relative change of Π at a node (see :func:`quadratic_pi`).
+MIN_CHANGE = 1e-7
+#: Node distances tried per coordinate, in factors of 4 from the given scale.
+_PROBES = 16
+#: Coordinates of the sampled vector that never enter Π.
+_NOT_IN_PI = ("log10_discrepancy", "log10_shape")
+
+
+@dataclass(frozen=True)
+class QuadraticPi:
+    """Π on the likelihood's grid as a quadratic in the coordinates it depends on.
+
+    Attributes
+    ----------
+    names : tuple of str
+        The coordinates (the law's sampled parameters and ``y0``), p of them.
+    centre, scale : ndarray
+        Shape (p,): the expansion point ``c`` and the unit ``s`` of ``u = (θ - c)/s``.
+    table : ndarray
+        Shape (1 + p + p(p+1)/2, m): Π_c, the linear rows g_a, then the quadratic
+        rows h_ab for a <= b in row-major order.
+    """
+
+    names: tuple[str, ...]
+    centre: NDArray
+    scale: NDArray
+    table: NDArray
+
+    @property
+    def n_coordinates(self) -> int:
+        """p, the number of coordinates."""
+        return len(self.names)
+
+    def monomials(self, u: NDArray) -> NDArray:
+        """The monomials 1, u_a, u_a u_b (a <= b) of rows ``u`` (n, p), shape (n, K)."""
+        u = np.atleast_2d(u)
+        p = u.shape[1]
+        cols = [np.ones(u.shape[0]), *(u[:, a] for a in range(p))]
+        cols += [u[:, a] * u[:, b] for a in range(p) for b in range(a, p)]
+        return np.column_stack(cols)
+
+    def __call__(self, params: Params) -> NDArray:
+        """Surrogate Π at the grid points for ``params`` (by name, each (n,)), (n, m)."""
+        u = np.column_stack(
+            [
+                (np.ravel(np.asarray(params[name], dtype=float)) - c) / s
+                for name, c, s in zip(self.names, self.centre, self.scale, strict=True)
+            ]
+        )
+        return self.monomials(u) @ self.table
+
+
+def _nodes(p: int, sides: NDArray) -> NDArray:
+    """Interpolation nodes in u: the centre, two per coordinate on its allowed side
+    (±1, or 1 and 2 on one side), one per pair at both coordinates' first node."""
+    rows = [np.zeros(p)]
+    first = np.where(sides == 0, 1.0, sides)
+    for a in range(p):
+        for value in (-1.0, 1.0) if sides[a] == 0 else (sides[a], 2.0 * sides[a]):
+            row = np.zeros(p)
+            row[a] = value
+            rows.append(row)
+    for a in range(p):
+        for b in range(a + 1, p):
+            row = np.zeros(p)
+            row[a], row[b] = first[a], first[b]
+            rows.append(row)
+    return np.array(rows)
+
+
+def _evaluate(
+    likelihood: PiLikelihood,
+    names: tuple[str, ...],
+    theta: NDArray,
+    fixed_params: Mapping[str, float],
+) -> NDArray:
+    """Exact Π at rows ``theta`` (n, p) of the coordinates ``names``, (n, m)."""
+    n = theta.shape[0]
+    params: dict[str, NDArray] = {k: np.full(n, float(v)) for k, v in fixed_params.items()}
+    params.update({name: theta[:, a] for a, name in enumerate(names)})
+    return PiLikelihood.model_pi(likelihood, params)
+
+
+def _node_distances(
+    likelihood: PiLikelihood,
+    names: tuple[str, ...],
+    c: NDArray,
+    scale: NDArray,
+    fixed_params: Mapping[str, float],
+    inside: callable,  # type: ignore[valid-type]
+) -> NDArray:
+    """Each coordinate's node distance: ``scale``, raised where Π changes there by less
+    than :data:`MIN_CHANGE` of Π(0) to the first of ``scale × 4^k`` where it does (the
+    interpolation's differences then stand well above rounding: a Laplace scale of a
+    parameter piled at a bound can be 1e-6 of its posterior width)."""
+    p = len(names)
+    base = np.where(np.isfinite(scale) & (scale > 0), scale, 1e-12 * np.maximum(np.abs(c), 1e-3))
+    steps = base[:, None] * 4.0 ** np.arange(_PROBES)[None, :]
+    rows, where = [], []
+    for a in range(p):
+        for k in range(_PROBES):
+            for sign in (1.0, -1.0):
+                row = c.copy()
+                row[a] += sign * 2.0 * steps[a, k]
+                if inside(dict(zip(names, row, strict=True))):
+                    rows.append(row)
+                    where.append((a, k))
+                    break
+    if not rows:
+        return base
+    pi = _evaluate(likelihood, names, np.array(rows), fixed_params)
+    pi0 = _evaluate(likelihood, names, c[None], fixed_params)[0]
+    reference = max(float(np.max(np.abs(pi0))), 1e-300)
+    change = np.max(np.abs(pi - pi0), axis=1) / reference
+    out = base.copy()
+    for a in range(p):
+        ks = [k for (b, k), ch in zip(where, change, strict=True) if b == a and ch >= MIN_CHANGE]
+        if ks:
+            out[a] = steps[a, min(ks)]
+    return out
+
+
+def quadratic_pi(
+    likelihood: PiLikelihood,
+    names: tuple[str, ...],
+    centre: Mapping[str, float],
+    scale: NDArray,
+    fixed_params: Mapping[str, float],
+    inside: callable,  # type: ignore[valid-type]
+) -> QuadraticPi | None:
+    """Interpolate the exact Π of ``likelihood`` by a quadratic about ``centre``.
+
+    Parameters
+    ----------
+    likelihood : PiLikelihood
+        The exact likelihood (its law's compiled integrator gives Π).
+    names : tuple of str
+        The coordinates of the expansion (sampled, entering Π).
+    centre : mapping
+        Their values at the expansion point.
+    scale : ndarray
+        Shape (p,): their units (positive).
+    fixed_params : mapping
+        The law's other parameters and their values (fixed or null).
+    inside : callable
+        ``inside(values) -> bool`` for a mapping of the coordinates' values: whether a
+        node is inside the priors' support; a coordinate whose node on one side is
+        outside takes both nodes on the other side.
+
+    Returns
+    -------
+    QuadraticPi or None
+        None when a node's Π is not finite on either side (the law cannot move there).
+    """
+    p = len(names)
+    c = np.array([float(centre[n]) for n in names])
+    s = _node_distances(likelihood, names, c, np.asarray(scale, dtype=float), fixed_params, inside)
+    sides = np.zeros(p)
+    for a in range(p):
+        ok = []
+        for sign in (-1.0, 1.0):
+            values = dict(zip(names, c, strict=True))
+            values[names[a]] = c[a] + sign * 2.0 * s[a]
+            ok.append(bool(inside(values)))
+        if ok[0] and ok[1]:
+            continue
+        if not (ok[0] or ok[1]):
+            return None
+        sides[a] = 1.0 if ok[1] else -1.0
+    u = _nodes(p, sides)
+    pi = _evaluate(likelihood, names, c + u * s, fixed_params)
+    if not np.all(np.isfinite(pi)):
+        return None
+    shell = QuadraticPi(tuple(names), c, s, np.zeros((0, pi.shape[1])))
+    table = np.linalg.solve(shell.monomials(u), pi)
+    return QuadraticPi(tuple(names), c, s, table)
+
+
+@dataclass(frozen=True)
+class SurrogateLikelihood(PiLikelihood):
+    """:class:`~bayestribo.inference.likelihood.PiLikelihood` whose model Π is a
+    :class:`QuadraticPi` (the compiled log posterior evaluates the same quadratic,
+    :mod:`bayestribo.inference.fused`)."""
+
+    surrogate: QuadraticPi | None = field(default=None)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.surrogate is None:
+            raise ValueError("surrogate: a QuadraticPi is required")
+
+    def model_pi(self, params: Params) -> NDArray:
+        """Surrogate Π at the grid points, shape (n, m)."""
+        return self.surrogate(params)  # type: ignore[misc]
+
+
+@dataclass(frozen=True)
+class SurrogateCheck:
+    """The exact posterior against the surrogate's at the surrogate's draws.
+
+    Attributes
+    ----------
+    draws : int
+        Draws at which the exact log posterior was evaluated.
+    weight_cv : float
+        Coefficient of variation of the importance weights exact/surrogate (inf when
+        a draw has zero exact density, NaN when nothing was checked).
+    log_weight_sd : float
+        Standard deviation of the log weights.
+    attempt : int
+        1 for the surrogate about the maximum a posteriori, 2 and more for those built
+        again about the best draw checked.
+    best : ndarray or None
+        The checked draw of highest exact log posterior (the next centre when the
+        check fails).
+    """
+
+    draws: int
+    weight_cv: float
+    log_weight_sd: float
+    attempt: int
+    best: NDArray | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def passed(self) -> bool:
+        """True when the surrogate's draws stand for the exact posterior's."""
+        return bool(self.weight_cv <= MAX_WEIGHT_CV)
+
+    def to_dict(self) -> dict[str, float | int | bool]:
+        """Plain values for the fit's JSON."""
+        return {
+            "draws_checked": self.draws,
+            "weight_cv": self.weight_cv,
+            "log_weight_sd": self.log_weight_sd,
+            "attempt": self.attempt,
+            "passed": self.passed,
+            "max_weight_cv": MAX_WEIGHT_CV,
+        }
+
+
+def check(
+    exact: callable,  # type: ignore[valid-type]
+    surrogate: callable,  # type: ignore[valid-type]
+    draws: NDArray,
+    rng: np.random.Generator,
+    attempt: int = 1,
+    n: int = CHECK_DRAWS,
+) -> SurrogateCheck:
+    """Importance weights of the exact log posterior over the surrogate's.
+
+    Parameters
+    ----------
+    exact, surrogate : callable
+        Log posterior densities of rows (k, d), each (k,).
+    draws : ndarray
+        Draws of the surrogate posterior, (N, d).
+    rng : Generator
+        Picks the ``n`` draws checked (all when N <= n).
+    attempt : int
+        Recorded in the result.
+
+    Returns
+    -------
+    SurrogateCheck
+    """
+    draws = np.atleast_2d(draws)
+    pick = draws if draws.shape[0] <= n else draws[rng.choice(draws.shape[0], n, replace=False)]
+    if pick.shape[0] < 2:
+        return SurrogateCheck(int(pick.shape[0]), math.nan, math.nan, attempt)
+    lp = np.asarray(exact(pick), dtype=float)
+    best = pick[int(np.argmax(lp))].copy() if np.isfinite(lp).any() else None
+    log_w = lp - np.asarray(surrogate(pick), dtype=float)
+    if not np.all(np.isfinite(log_w)):
+        return SurrogateCheck(int(pick.shape[0]), math.inf, math.inf, attempt, best)
+    w = np.exp(log_w - log_w.max())
+    cv = float(np.std(w) / np.mean(w))
+    return SurrogateCheck(int(pick.shape[0]), cv, float(np.std(log_w)), attempt, best)
+
+
+def surrogate_posterior(posterior: Posterior, centre: NDArray, scale: NDArray) -> Posterior | None:
+    """The posterior of ``posterior``'s priors with a :class:`QuadraticPi` of its Π.
+
+    Parameters
+    ----------
+    posterior : Posterior
+        The exact posterior (a law without a closed form).
+    centre : ndarray
+        Shape (d,): the expansion point in sampling coordinates.
+    scale : ndarray
+        Shape (d,): the node distances in sampling coordinates (only those of the
+        coordinates Π depends on are used; a zero or non-finite one is replaced by
+        1e-6 of the centre's magnitude, or 1e-12).
+
+    Returns
+    -------
+    Posterior or None
+        None when the quadratic cannot be built (the law cannot move at a node on
+        either side of the centre, or the centre is outside the priors' support).
+    """
+    centre = np.asarray(centre, dtype=float)
+    scale = np.asarray(scale, dtype=float)
+    names = tuple(n for n in posterior.names if n not in _NOT_IN_PI)
+    index = [posterior.names.index(n) for n in names]
+    s = scale[index].copy()
+    c = centre[index]
+    bad = ~(np.isfinite(s) & (s > 0))
+    s[bad] = np.maximum(1e-6 * np.abs(c[bad]), 1e-12)
+    if not np.isfinite(posterior.priors.logpdf(centre[None])[0]):
+        return None
+
+    def inside(values: Mapping[str, float]) -> bool:
+        row = centre.copy()
+        for name, value in values.items():
+            row[posterior.names.index(name)] = value
+        return bool(np.isfinite(posterior.priors.logpdf(row[None])[0]))
+
+    law_values = posterior.law_draws(centre[None])
+    others = {k: float(v[0]) for k, v in law_values.items() if k not in names}
+    if "y0" not in names:
+        others["y0"] = float(posterior.values(centre[None])["y0"][0])
+    exact = posterior.likelihood
+    quadratic = quadratic_pi(exact, names, dict(zip(names, c, strict=True)), s, others, inside)
+    if quadratic is None:
+        return None
+    fields = {f: getattr(exact, f) for f in ("data", "model", "offset_sd", "drift_sd", "law")}
+    likelihood = SurrogateLikelihood(**fields, surrogate=quadratic)
+    return replace(posterior, likelihood=likelihood)
