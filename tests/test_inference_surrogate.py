@@ -1,0 +1,151 @@
+"""The quadratic surrogate of Π for laws without a closed form (inference/surrogate.py):
+against the exact integrator, the compiled density against its numpy reference, the
+surrogate posterior against the exact one, and a surrogate that is wrong is caught."""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from _law_recording import law_recording
+
+from bayestribo import fit
+from bayestribo.inference import pipeline, surrogate
+from bayestribo.inference.sampling import SamplerSettings
+from bayestribo.inference.start import maximum_a_posteriori
+from bayestribo.inference.surrogate import (
+    MAX_WEIGHT_CV,
+    QuadraticPi,
+    SurrogateLikelihood,
+    check,
+    surrogate_posterior,
+)
+
+OMEGA = 2 * math.pi * 32.6
+MASS, LOAD = 0.035, 0.31
+ELL = LOAD / (MASS * OMEGA**2)
+LAW = "viscous+quadratic"
+
+
+@pytest.fixture(scope="module")
+def drag_run():
+    """Viscous damping and quadratic drag from an independent solve_ivp simulation."""
+    zeta, gamma = 0.01, 0.004
+    return law_recording(
+        lambda v: 2 * zeta * OMEGA * v + (gamma / ELL) * v * abs(v),
+        x0=1.5e-3,
+        duration_s=1.5,
+        sample_rate_Hz=2000.0,
+        seed=4,
+    )
+
+
+@pytest.fixture(scope="module")
+def exact_posterior(drag_run):
+    prepared = pipeline.prepare(drag_run, seed=1)
+    posterior = pipeline.build_posterior(prepared.data, law=LAW)
+    theta, cov, _ = maximum_a_posteriori(posterior, prepared.decay)
+    return prepared, posterior, theta, cov
+
+
+def _around(theta, cov, width, n, seed):
+    """Rows from the Laplace approximation with its covariance times ``width``²."""
+    rng = np.random.default_rng(seed)
+    rows = rng.multivariate_normal(theta, width**2 * cov, size=n)
+    rows[:, 1] = np.abs(rows[:, 1])  # c2 >= 0
+    return rows
+
+
+def test_the_quadratic_follows_the_integrator_across_the_posterior(exact_posterior):
+    _, posterior, theta, cov = exact_posterior
+    sur = surrogate_posterior(posterior, theta, 2.0 * np.sqrt(np.diag(cov)))
+    assert isinstance(sur.likelihood, SurrogateLikelihood)
+    rows = _around(theta, cov, 3.0, 40, seed=0)
+    exact = posterior.likelihood.model_pi(posterior.physical(rows)["params"])
+    approx = sur.likelihood.model_pi(sur.physical(rows)["params"])
+    # Π within 1e-8 of Π(0) at three times the Laplace spread: the integrator's own
+    # accuracy against solve_ivp (model/laws/integrator.py), whose step counts change
+    # with the parameters
+    assert np.max(np.abs(exact - approx)) < 1e-8 * np.max(np.abs(exact))
+    # and the log posterior within 1e-3 (a weight 1 ± 1e-3)
+    assert np.max(np.abs(posterior(rows) - sur(rows))) < 1e-3
+
+
+def test_the_compiled_surrogate_density_is_its_numpy_reference(exact_posterior):
+    _, posterior, theta, cov = exact_posterior
+    sur = surrogate_posterior(posterior, theta, 2.0 * np.sqrt(np.diag(cov)))
+    assert sur.uses_compiled and sur.grouped_step is not None
+    rows = _around(theta, cov, 10.0, 64, seed=1)
+    rows[0, 1] = -1e-3  # outside the prior's support
+    compiled, reference = sur(rows), sur.reference(rows)
+    assert compiled[0] == reference[0] == -np.inf
+    scale = np.maximum(1.0, np.abs(reference[1:]))
+    assert np.max(np.abs(compiled[1:] - reference[1:]) / scale) < 1e-10
+    residuals = sur.standardized_residuals(rows[1:5])
+    expected = sur.likelihood.standardized_residuals(sur.physical(rows[1:5])["params"])
+    np.testing.assert_allclose(residuals, expected, rtol=1e-9, atol=1e-9)
+
+
+def test_the_surrogate_posterior_is_the_exact_posterior(exact_posterior):
+    prepared, posterior, _, _ = exact_posterior
+    settings = SamplerSettings(n_walkers=16, n_ensembles=2, max_steps=20_000)
+    fast = pipeline.sample(posterior, prepared.decay, settings=settings, seed=5)
+    slow = pipeline.sample(posterior, prepared.decay, settings=settings, seed=6, surrogate=False)
+    assert fast.surrogate is not None and fast.surrogate.passed
+    assert fast.surrogate.weight_cv < MAX_WEIGHT_CV
+    assert fast.surrogate_posterior is not None and slow.surrogate is None
+    assert fast.run.converged and slow.run.converged
+    a = fast.run.chains.reshape(-1, fast.run.chains.shape[-1])
+    b = slow.run.chains.reshape(-1, slow.run.chains.shape[-1])
+    sd = b.std(axis=0)
+    # two independent chains of the same posterior: means within Monte Carlo error
+    # (ESS >= 1000 each: 0.045 sd apart at one standard error), spreads within 10 %
+    assert np.all(np.abs(a.mean(axis=0) - b.mean(axis=0)) < 0.25 * sd)
+    assert np.all(np.abs(a.std(axis=0) / sd - 1.0) < 0.1)
+
+
+def test_a_wrong_surrogate_fails_its_check_and_the_exact_posterior_is_sampled(
+    exact_posterior, monkeypatch
+):
+    prepared, posterior, theta, cov = exact_posterior
+    sur = surrogate_posterior(posterior, theta, 2.0 * np.sqrt(np.diag(cov)))
+    q = sur.likelihood.surrogate
+    table = q.table.copy()
+    table[0] += 0.5 * table[1]  # the surrogate posterior one sd off in ζ
+    wrong = replace(sur, likelihood=replace(sur.likelihood, surrogate=replace(q, table=table)))
+    rows = _around(theta, cov, 1.0, 200, seed=2)
+    verdict = check(posterior, wrong, rows, np.random.default_rng(0))
+    assert not verdict.passed and verdict.weight_cv > MAX_WEIGHT_CV
+    assert check(posterior, sur, rows, np.random.default_rng(0)).passed
+
+    real = surrogate.quadratic_pi
+
+    def skewed(*args, **kwargs):
+        good = real(*args, **kwargs)
+        table = good.table.copy()
+        table[0] += 0.5 * table[1]
+        return QuadraticPi(good.names, good.centre, good.scale, table)
+
+    monkeypatch.setattr(surrogate, "quadratic_pi", skewed)
+    settings = SamplerSettings(n_walkers=16, n_ensembles=2, max_steps=4_000)
+    sampled = pipeline.sample(posterior, prepared.decay, settings=settings, seed=5)
+    assert sampled.surrogate is not None and not sampled.surrogate.passed
+    assert sampled.surrogate.attempt == surrogate.ATTEMPTS
+    assert sampled.surrogate_posterior is None
+    assert sampled.draws_posterior is posterior
+
+
+def test_the_fit_records_the_check(drag_run):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = fit(drag_run, seed=2, law=LAW)
+    record = result.diagnostics["surrogate"]
+    assert record["passed"] and record["weight_cv"] < MAX_WEIGHT_CV
+    assert record["draws_checked"] == surrogate.CHECK_DRAWS
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the default law misfits the drag
+        default = fit(drag_run, seed=2)
+    assert default.diagnostics["surrogate"] is None
