@@ -160,17 +160,25 @@ def _averaged_grid(
 @numba.njit(cache=True, error_model="numpy")
 def _surrogate_pi(row: NDArray, data: NDArray, scalars: NDArray, pi: NDArray) -> None:
     """The quadratic surrogate's Π (:class:`~bayestribo.inference.surrogate.QuadraticPi`)
-    into ``pi``: its table rows follow the nuisances' design in ``data``, its p
-    coordinates' columns, centres and scales follow the seven scalars."""
+    into ``pi``: its tables follow the nuisances' design in ``data``; after the seven
+    scalars come its p coordinates' columns, centres and scales, the column of μ_s/μ_k
+    (-1 without pieces), the number of pieces K and the K - 1 thresholds."""
     m = pi.size
     p = int(scalars[7])
-    start = 4 + 2 + int(scalars[6])
     u = np.empty(p)
     for a in range(p):
         u[a] = (row[int(scalars[8 + a])] - scalars[8 + p + a]) / scalars[8 + 2 * p + a]
+    ratio_column = int(scalars[8 + 3 * p])
+    pieces = int(scalars[9 + 3 * p])
+    piece = 0
+    if ratio_column >= 0:
+        ratio = row[ratio_column]
+        while piece < pieces - 1 and ratio >= scalars[10 + 3 * p + piece]:
+            piece += 1
+    k = 4 + 2 + int(scalars[6]) + piece * (1 + p + p * (p + 1) // 2)
     for j in range(m):
-        pi[j] = data[start, j]
-    k = start + 1
+        pi[j] = data[k, j]
+    k += 1
     for a in range(p):
         for j in range(m):
             pi[j] += data[k, j] * u[a]
@@ -614,7 +622,8 @@ class FusedLogPosterior:
         surrogate = None
         if type(likelihood) is SurrogateLikelihood:
             surrogate = likelihood.surrogate
-            if any(name not in priors.names for name in surrogate.names):
+            needed = [*surrogate.names, *([surrogate.ratio] if surrogate.ratio else [])]
+            if any(name not in priors.names for name in needed):
                 return None
         elif type(likelihood) is not PiLikelihood:
             return None
@@ -663,8 +672,17 @@ class FusedLogPosterior:
         if surrogate is not None:
             scalars[5] = _SURROGATE
             index = [priors.names.index(name) for name in surrogate.names]
+            ratio = -1 if surrogate.ratio is None else priors.names.index(surrogate.ratio)
             scalars = np.concatenate(
-                [scalars, [len(index)], index, surrogate.centre, surrogate.scale]
+                [
+                    scalars,
+                    [len(index)],
+                    index,
+                    surrogate.centre,
+                    surrogate.scale,
+                    [ratio, surrogate.n_pieces],
+                    surrogate.thresholds,
+                ]
             )
         return cls(table, columns, values, data, scalars, law)
 

@@ -73,42 +73,75 @@ NODE_SCALE = 2.0
 MIN_CHANGE = 1e-7
 #: Node distances tried per coordinate, in factors of 4 from the given scale.
 _PROBES = 16
+#: Points of the scan of μ_s/μ_k for the pieces, rounds and points of the search of
+#: each piece's edge.
+_RATIO_SCAN, _RATIO_ROUNDS, _RATIO_SPLIT = 65, 4, 30
 #: Coordinates of the sampled vector that never enter Π.
 _NOT_IN_PI = ("log10_discrepancy", "log10_shape")
+#: The static to kinetic friction ratio, on which Π depends piecewise.
+_RATIO = "mu_s_ratio"
 
 
 @dataclass(frozen=True)
 class QuadraticPi:
-    """Π on the likelihood's grid as a quadratic in the coordinates it depends on.
+    """Π on the likelihood's grid as a quadratic in the coordinates it depends on,
+    piecewise in μ_s/μ_k.
+
+    Π depends on μ_s/μ_k only through the turning point at which the motion stops (the
+    first whose spring force the static friction holds): it is constant between the
+    ratios at which one more or one fewer half cycle is made, and jumps there. Each
+    such piece has its own quadratic in the other coordinates.
 
     Attributes
     ----------
     names : tuple of str
-        The coordinates (the law's sampled parameters and ``y0``), p of them.
+        The coordinates (the law's sampled parameters but μ_s/μ_k, and ``y0``), p.
     centre, scale : ndarray
         Shape (p,): the expansion point ``c`` and the unit ``s`` of ``u = (θ - c)/s``.
     table : ndarray
-        Shape (1 + p + p(p+1)/2, m): Π_c, the linear rows g_a, then the quadratic
-        rows h_ab for a <= b in row-major order.
+        Shape (K R, m), R = 1 + p + p(p+1)/2: for each of the K pieces, Π_c, the linear
+        rows g_a, then the quadratic rows h_ab for a <= b in row-major order.
+    ratio : str or None
+        The name of μ_s/μ_k when it is sampled (None: one piece).
+    thresholds : ndarray
+        Shape (K - 1,), increasing: the ratios where the pieces meet (piece k for
+        ``thresholds[k-1] <= ratio < thresholds[k]``).
     """
 
     names: tuple[str, ...]
     centre: NDArray
     scale: NDArray
     table: NDArray
+    ratio: str | None = None
+    thresholds: NDArray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def n_coordinates(self) -> int:
         """p, the number of coordinates."""
         return len(self.names)
 
+    @property
+    def n_pieces(self) -> int:
+        """K, the number of pieces in μ_s/μ_k."""
+        return int(self.thresholds.size) + 1
+
+    @property
+    def rows_per_piece(self) -> int:
+        """R, the monomials of one piece."""
+        p = self.n_coordinates
+        return 1 + p + p * (p + 1) // 2
+
     def monomials(self, u: NDArray) -> NDArray:
-        """The monomials 1, u_a, u_a u_b (a <= b) of rows ``u`` (n, p), shape (n, K)."""
+        """The monomials 1, u_a, u_a u_b (a <= b) of rows ``u`` (n, p), shape (n, R)."""
         u = np.atleast_2d(u)
         p = u.shape[1]
         cols = [np.ones(u.shape[0]), *(u[:, a] for a in range(p))]
         cols += [u[:, a] * u[:, b] for a in range(p) for b in range(a, p)]
         return np.column_stack(cols)
+
+    def piece(self, ratio: NDArray) -> NDArray:
+        """The piece of each value of μ_s/μ_k, (n,) int."""
+        return np.searchsorted(self.thresholds, np.ravel(ratio), side="right")
 
     def __call__(self, params: Params) -> NDArray:
         """Surrogate Π at the grid points for ``params`` (by name, each (n,)), (n, m)."""
@@ -118,7 +151,16 @@ class QuadraticPi:
                 for name, c, s in zip(self.names, self.centre, self.scale, strict=True)
             ]
         )
-        return self.monomials(u) @ self.table
+        basis = self.monomials(u)
+        r = self.rows_per_piece
+        if self.ratio is None:
+            return basis @ self.table[:r]
+        pieces = self.piece(np.asarray(params[self.ratio], dtype=float))
+        out = np.empty((basis.shape[0], self.table.shape[1]))
+        for k in np.unique(pieces):
+            rows = pieces == k
+            out[rows] = basis[rows] @ self.table[k * r : (k + 1) * r]
+        return out
 
 
 def _nodes(p: int, sides: NDArray) -> NDArray:
@@ -191,6 +233,48 @@ def _node_distances(
     return out
 
 
+def _same(a: NDArray, b: NDArray) -> bool:
+    """Two rows of Π equal to rounding."""
+    return bool(np.max(np.abs(a - b)) <= 1e-12 * max(float(np.max(np.abs(a))), 1e-300))
+
+
+def _ratio_thresholds(
+    likelihood: PiLikelihood,
+    names: tuple[str, ...],
+    c: NDArray,
+    fixed_params: Mapping[str, float],
+    ratio: str,
+    low: float,
+    high: float,
+) -> NDArray:
+    """The values of μ_s/μ_k in [low, high] where Π at ``c`` jumps (one half cycle more
+    or fewer before the motion stops), located to 1e-6 of the scan's step."""
+
+    def pi_at(values: NDArray) -> NDArray:
+        n = values.size
+        full: dict[str, NDArray] = {k: np.full(n, float(v)) for k, v in fixed_params.items()}
+        full.update({name: np.full(n, c[a]) for a, name in enumerate(names)})
+        full[ratio] = values
+        return PiLikelihood.model_pi(likelihood, full)
+
+    grid = np.linspace(low, high, _RATIO_SCAN)
+    pi = pi_at(grid)
+    out = []
+    for i in range(grid.size - 1):
+        if _same(pi[i], pi[i + 1]):
+            continue
+        a, b, pa = grid[i], grid[i + 1], pi[i]
+        for _ in range(_RATIO_ROUNDS):
+            inner = np.linspace(a, b, _RATIO_SPLIT + 2)[1:-1]
+            values = pi_at(inner)
+            same = [_same(pa, row) for row in values]
+            k = same.index(False) if False in same else len(same)
+            a = inner[k - 1] if k > 0 else a
+            b = inner[k] if k < len(inner) else b
+        out.append(0.5 * (a + b))
+    return np.array(out)
+
+
 def quadratic_pi(
     likelihood: PiLikelihood,
     names: tuple[str, ...],
@@ -198,6 +282,8 @@ def quadratic_pi(
     scale: NDArray,
     fixed_params: Mapping[str, float],
     inside: callable,  # type: ignore[valid-type]
+    ratio: str | None = None,
+    ratio_bounds: tuple[float, float] | None = None,
 ) -> QuadraticPi | None:
     """Interpolate the exact Π of ``likelihood`` by a quadratic about ``centre``.
 
@@ -206,17 +292,23 @@ def quadratic_pi(
     likelihood : PiLikelihood
         The exact likelihood (its law's compiled integrator gives Π).
     names : tuple of str
-        The coordinates of the expansion (sampled, entering Π).
+        The coordinates of the expansion (sampled, entering Π smoothly).
     centre : mapping
         Their values at the expansion point.
     scale : ndarray
         Shape (p,): their units (positive).
     fixed_params : mapping
-        The law's other parameters and their values (fixed or null).
+        The law's other parameters and their values (fixed, null, or for ``ratio`` its
+        value at the expansion point).
     inside : callable
         ``inside(values) -> bool`` for a mapping of the coordinates' values: whether a
         node is inside the priors' support; a coordinate whose node on one side is
         outside takes both nodes on the other side.
+    ratio : str, optional
+        The name of a sampled μ_s/μ_k: Π is interpolated piecewise in it (see
+        :class:`QuadraticPi`), its pieces found in ``ratio_bounds`` at the centre.
+    ratio_bounds : tuple of float, optional
+        The support of μ_s/μ_k's prior.
 
     Returns
     -------
@@ -239,12 +331,23 @@ def quadratic_pi(
             return None
         sides[a] = 1.0 if ok[1] else -1.0
     u = _nodes(p, sides)
-    pi = _evaluate(likelihood, names, c + u * s, fixed_params)
-    if not np.all(np.isfinite(pi)):
-        return None
-    shell = QuadraticPi(tuple(names), c, s, np.zeros((0, pi.shape[1])))
-    table = np.linalg.solve(shell.monomials(u), pi)
-    return QuadraticPi(tuple(names), c, s, table)
+    thresholds = np.zeros(0)
+    values = [None]
+    if ratio is not None and ratio_bounds is not None:
+        low, high = ratio_bounds
+        thresholds = _ratio_thresholds(likelihood, names, c, fixed_params, ratio, low, high)
+        edges = np.concatenate([[low], thresholds, [high]])
+        values = list(0.5 * (edges[:-1] + edges[1:]))
+    shell = QuadraticPi(tuple(names), c, s, np.zeros((0, 1)))
+    basis = shell.monomials(u)
+    tables = []
+    for value in values:
+        params = dict(fixed_params) if value is None else {**fixed_params, ratio: value}
+        pi = _evaluate(likelihood, names, c + u * s, params)
+        if not np.all(np.isfinite(pi)):
+            return None
+        tables.append(np.linalg.solve(basis, pi))
+    return QuadraticPi(tuple(names), c, s, np.vstack(tables), ratio, thresholds)
 
 
 @dataclass(frozen=True)
@@ -370,7 +473,8 @@ def surrogate_posterior(posterior: Posterior, centre: NDArray, scale: NDArray) -
     """
     centre = np.asarray(centre, dtype=float)
     scale = np.asarray(scale, dtype=float)
-    names = tuple(n for n in posterior.names if n not in _NOT_IN_PI)
+    ratio = _RATIO if _RATIO in posterior.names else None
+    names = tuple(n for n in posterior.names if n not in _NOT_IN_PI and n != ratio)
     index = [posterior.names.index(n) for n in names]
     s = scale[index].copy()
     c = centre[index]
@@ -390,7 +494,15 @@ def surrogate_posterior(posterior: Posterior, centre: NDArray, scale: NDArray) -
     if "y0" not in names:
         others["y0"] = float(posterior.values(centre[None])["y0"][0])
     exact = posterior.likelihood
-    quadratic = quadratic_pi(exact, names, dict(zip(names, c, strict=True)), s, others, inside)
+    bounds = None
+    if ratio is not None:
+        prior = posterior.priors[ratio]
+        bounds = (float(getattr(prior, "low", math.nan)), float(getattr(prior, "high", math.nan)))
+        if not all(math.isfinite(b) for b in bounds):
+            return None  # a prior without bounds: its pieces cannot be listed
+    quadratic = quadratic_pi(
+        exact, names, dict(zip(names, c, strict=True)), s, others, inside, ratio, bounds
+    )
     if quadratic is None:
         return None
     fields = {f: getattr(exact, f) for f in ("data", "model", "offset_sd", "drift_sd", "law")}
