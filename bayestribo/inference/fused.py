@@ -70,6 +70,11 @@ _EXACT, _AVERAGED, _SURROGATE = 0, 1, 2
 _LOG_2PI = math.log(2.0 * math.pi)
 _TINY = 1e-100
 _PSI_SERIES = 1e-2
+#: The files whose compiled functions those of this file call, and a digest of each
+#: (SHA-256, 16 hex digits). numba's cache of a function is invalidated by a change of
+#: its own file only: when one of these changes, its digest here must be updated (a
+#: test says so), and this file's change discards the stale machine code.
+DEPENDS_ON = {"bayestribo/model/_kernel.py": "7ce85002e033cced"}
 
 
 @numba.njit(cache=True, error_model="numpy")

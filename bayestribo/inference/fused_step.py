@@ -31,6 +31,13 @@ from bayestribo.inference.moves import DE, _de_proposals, _snooker_proposals
 
 __all__ = ["grouped_step"]
 
+#: The files whose compiled functions :func:`_step` calls, and a digest of each
+#: (see :data:`bayestribo.inference.fused.DEPENDS_ON`).
+DEPENDS_ON = {
+    "bayestribo/inference/fused.py": "7abd626ebfa914b6",
+    "bayestribo/inference/moves.py": "a26a7dcb7538888f",
+}
+
 
 @numba.njit(cache=True, error_model="numpy")
 def _step(
