@@ -149,3 +149,27 @@ def test_the_fit_records_the_check(drag_run):
         warnings.simplefilter("ignore")  # the default law misfits the drag
         default = fit(drag_run, seed=2)
     assert default.diagnostics["surrogate"] is None
+
+
+def test_the_surrogate_of_a_friction_law_follows_the_stop_of_the_motion(bundled_run):
+    """Π depends on μ_s/μ_k only through the turning point where the pin sticks: one
+    quadratic per piece, the pieces' edges moving with the turning points."""
+    prepared = pipeline.prepare(bundled_run, seed=1)
+    posterior = pipeline.build_posterior(prepared.data, law="viscous+coulomb+quadratic")
+    assert prepared.data.motion_ended
+    theta, cov, _ = maximum_a_posteriori(posterior, prepared.decay)
+    sur = surrogate_posterior(posterior, theta, 2.0 * np.sqrt(np.diag(cov)))
+    q = sur.likelihood.surrogate
+    assert q.ratio == "mu_s_ratio" and q.n_pieces >= 2
+    i = posterior.names.index("mu_s_ratio")
+    rng = np.random.default_rng(3)
+    rows = rng.multivariate_normal(theta, cov, size=200)
+    rows[:, posterior.names.index("c2")] = np.abs(rows[:, posterior.names.index("c2")])
+    rows[:, i] = rng.uniform(1.0, 10.0, size=200)
+    exact = posterior.likelihood.model_pi(posterior.physical(rows)["params"])
+    approx = sur.likelihood.model_pi(sur.physical(rows)["params"])
+    error = np.max(np.abs(exact - approx), axis=1) / np.max(np.abs(exact))
+    # every row but those within rounding of a piece's edge
+    assert np.mean(error < 1e-8) >= 0.99
+    # and the compiled density picks the same pieces as the numpy one
+    np.testing.assert_allclose(sur(rows), sur.reference(rows), rtol=1e-10, atol=1e-8)

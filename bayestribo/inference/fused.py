@@ -167,33 +167,39 @@ def _surrogate_pi(row: NDArray, data: NDArray, scalars: NDArray, pi: NDArray) ->
     """The quadratic surrogate's Π (:class:`~bayestribo.inference.surrogate.QuadraticPi`)
     into ``pi``: its tables follow the nuisances' design in ``data``; after the seven
     scalars come its p coordinates' columns, centres and scales, the column of μ_s/μ_k
-    (-1 without pieces), the number of pieces K and the K - 1 thresholds."""
+    (-1 without pieces), the number of pieces K and the K - 1 thresholds' rows of
+    coefficients of the R monomials."""
     m = pi.size
     p = int(scalars[7])
-    u = np.empty(p)
+    r = 1 + p + p * (p + 1) // 2
+    basis = np.empty(r)
+    basis[0] = 1.0
     for a in range(p):
-        u[a] = (row[int(scalars[8 + a])] - scalars[8 + p + a]) / scalars[8 + 2 * p + a]
+        basis[1 + a] = (row[int(scalars[8 + a])] - scalars[8 + p + a]) / scalars[8 + 2 * p + a]
+    k = 1 + p
+    for a in range(p):
+        for b in range(a, p):
+            basis[k] = basis[1 + a] * basis[1 + b]
+            k += 1
     ratio_column = int(scalars[8 + 3 * p])
     pieces = int(scalars[9 + 3 * p])
     piece = 0
     if ratio_column >= 0:
         ratio = row[ratio_column]
-        while piece < pieces - 1 and ratio >= scalars[10 + 3 * p + piece]:
-            piece += 1
-    k = 4 + 2 + int(scalars[6]) + piece * (1 + p + p * (p + 1) // 2)
+        start = 10 + 3 * p
+        for edge in range(pieces - 1):
+            threshold = 0.0
+            for i in range(r):
+                threshold += scalars[start + edge * r + i] * basis[i]
+            if threshold <= ratio:
+                piece += 1
+    first = 4 + 2 + int(scalars[6]) + piece * r
     for j in range(m):
-        pi[j] = data[k, j]
-    k += 1
-    for a in range(p):
+        pi[j] = 0.0
+    for i in range(r):
+        w = basis[i]
         for j in range(m):
-            pi[j] += data[k, j] * u[a]
-        k += 1
-    for a in range(p):
-        for b in range(a, p):
-            w = u[a] * u[b]
-            for j in range(m):
-                pi[j] += data[k, j] * w
-            k += 1
+            pi[j] += data[first + i, j] * w
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -686,7 +692,7 @@ class FusedLogPosterior:
                     surrogate.centre,
                     surrogate.scale,
                     [ratio, surrogate.n_pieces],
-                    surrogate.thresholds,
+                    np.ravel(surrogate.thresholds),
                 ]
             )
         return cls(table, columns, values, data, scalars, law)

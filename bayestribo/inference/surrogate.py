@@ -76,6 +76,9 @@ _PROBES = 16
 #: Points of the scan of μ_s/μ_k for the pieces, rounds and points of the search of
 #: each piece's edge.
 _RATIO_SCAN, _RATIO_ROUNDS, _RATIO_SPLIT = 65, 4, 30
+#: A turning point's |Y_n|/μ stands for a threshold found at the centre when they agree
+#: to this fraction (the search's resolution is far finer).
+_THRESHOLD_MATCH = 1e-3
 #: Coordinates of the sampled vector that never enter Π.
 _NOT_IN_PI = ("log10_discrepancy", "log10_shape")
 #: The static to kinetic friction ratio, on which Π depends piecewise.
@@ -104,8 +107,11 @@ class QuadraticPi:
     ratio : str or None
         The name of μ_s/μ_k when it is sampled (None: one piece).
     thresholds : ndarray
-        Shape (K - 1,), increasing: the ratios where the pieces meet (piece k for
-        ``thresholds[k-1] <= ratio < thresholds[k]``).
+        Shape (K - 1, R): the ratios where the pieces meet, each a quadratic in ``u``
+        (the same monomials; its first column is the value at the centre), increasing
+        along the first axis: piece k where ``thresholds[k-1](u) <= ratio <
+        thresholds[k](u)``. A threshold is ``|Y_n|/μ(|Y_n|)`` for a turning point Y_n
+        of the motion, which moves with the other parameters.
     """
 
     names: tuple[str, ...]
@@ -113,7 +119,7 @@ class QuadraticPi:
     scale: NDArray
     table: NDArray
     ratio: str | None = None
-    thresholds: NDArray = field(default_factory=lambda: np.zeros(0))
+    thresholds: NDArray = field(default_factory=lambda: np.zeros((0, 1)))
 
     @property
     def n_coordinates(self) -> int:
@@ -123,7 +129,7 @@ class QuadraticPi:
     @property
     def n_pieces(self) -> int:
         """K, the number of pieces in μ_s/μ_k."""
-        return int(self.thresholds.size) + 1
+        return int(self.thresholds.shape[0]) + 1
 
     @property
     def rows_per_piece(self) -> int:
@@ -139,9 +145,11 @@ class QuadraticPi:
         cols += [u[:, a] * u[:, b] for a in range(p) for b in range(a, p)]
         return np.column_stack(cols)
 
-    def piece(self, ratio: NDArray) -> NDArray:
-        """The piece of each value of μ_s/μ_k, (n,) int."""
-        return np.searchsorted(self.thresholds, np.ravel(ratio), side="right")
+    def piece(self, ratio: NDArray, basis: NDArray) -> NDArray:
+        """The piece of each value of μ_s/μ_k, (n,) int, given the monomials of the
+        other coordinates (n, R)."""
+        edges = basis @ self.thresholds.T  # (n, K - 1)
+        return np.sum(edges <= np.ravel(ratio)[:, None], axis=1)
 
     def __call__(self, params: Params) -> NDArray:
         """Surrogate Π at the grid points for ``params`` (by name, each (n,)), (n, m)."""
@@ -155,7 +163,7 @@ class QuadraticPi:
         r = self.rows_per_piece
         if self.ratio is None:
             return basis @ self.table[:r]
-        pieces = self.piece(np.asarray(params[self.ratio], dtype=float))
+        pieces = self.piece(np.asarray(params[self.ratio], dtype=float), basis)
         out = np.empty((basis.shape[0], self.table.shape[1]))
         for k in np.unique(pieces):
             rows = pieces == k
@@ -275,6 +283,41 @@ def _ratio_thresholds(
     return np.array(out)
 
 
+def _moving_thresholds(
+    likelihood: PiLikelihood,
+    names: tuple[str, ...],
+    nodes: NDArray,
+    fixed_params: Mapping[str, float],
+    ratio: str,
+) -> NDArray | None:
+    """``|Y_n|/μ(|Y_n|)`` of the turning points Y_n of the motion at each node (rows of
+    ``nodes``, the first the centre), (nodes, n) over the turning points all nodes
+    reach; None when the law's friction cannot be evaluated here."""
+    law = likelihood.law
+    frictions = law._layout[0][3:]
+    data = likelihood.data
+    reference = likelihood.reference_amplitude
+    rows = []
+    for node in nodes:
+        values = {**fixed_params, **dict(zip(names, node, strict=True)), ratio: 1.0}
+        y0 = float(values.pop("y0"))
+        law_values = {n: float(values[n]) for n in law.parameter_names}
+        _, turns = law.turning_points(
+            law_values, y0, float(data.yp0), tau_max=float(data.tau_end), reference=reference
+        )
+        a = np.abs(np.asarray(turns, dtype=float))
+        coef = law.coefficients({n: np.array([v]) for n, v in law_values.items()}, reference)[0]
+        mu = np.zeros(a.size)
+        for force, offset, size in zip(*frictions, strict=True):
+            mu += np.array([force(float(x), coef[offset : offset + size]) for x in a])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rows.append(np.where(mu > 0, a / mu, np.inf))
+    count = min(r.size for r in rows)
+    if count == 0:
+        return None
+    return np.array([r[:count] for r in rows])
+
+
 def quadratic_pi(
     likelihood: PiLikelihood,
     names: tuple[str, ...],
@@ -331,15 +374,27 @@ def quadratic_pi(
             return None
         sides[a] = 1.0 if ok[1] else -1.0
     u = _nodes(p, sides)
-    thresholds = np.zeros(0)
+    shell = QuadraticPi(tuple(names), c, s, np.zeros((0, 1)))
+    basis = shell.monomials(u)
+    thresholds = np.zeros((0, basis.shape[1]))
     values = [None]
     if ratio is not None and ratio_bounds is not None:
         low, high = ratio_bounds
-        thresholds = _ratio_thresholds(likelihood, names, c, fixed_params, ratio, low, high)
-        edges = np.concatenate([[low], thresholds, [high]])
+        at_centre = _ratio_thresholds(likelihood, names, c, fixed_params, ratio, low, high)
+        edges = np.concatenate([[low], at_centre, [high]])
         values = list(0.5 * (edges[:-1] + edges[1:]))
-    shell = QuadraticPi(tuple(names), c, s, np.zeros((0, 1)))
-    basis = shell.monomials(u)
+        if at_centre.size:
+            moving = _moving_thresholds(likelihood, names, c + u * s, fixed_params, ratio)
+            thresholds = np.zeros((at_centre.size, basis.shape[1]))
+            thresholds[:, 0] = at_centre
+            if moving is not None:
+                # each threshold follows the turning point whose |Y_n|/μ it is at the
+                # centre, interpolated over the nodes as Π is
+                for k, t in enumerate(at_centre):
+                    n = int(np.argmin(np.abs(moving[0] - t)))
+                    if abs(moving[0, n] - t) <= _THRESHOLD_MATCH * t:
+                        thresholds[k] = np.linalg.solve(basis, moving[:, n])
+                        thresholds[k, 0] += t - moving[0, n]
     tables = []
     for value in values:
         params = dict(fixed_params) if value is None else {**fixed_params, ratio: value}
