@@ -173,3 +173,18 @@ def test_the_surrogate_of_a_friction_law_follows_the_stop_of_the_motion(bundled_
     assert np.mean(error < 1e-8) >= 0.99
     # and the compiled density picks the same pieces as the numpy one
     np.testing.assert_allclose(sur(rows), sur.reference(rows), rtol=1e-10, atol=1e-8)
+
+
+def test_the_ratio_scan_of_a_law_without_closed_form_evaluates_once_per_stick(bundled_run):
+    """The scan of μ_s/μ_k (start.py) gives the density of every grid point from one
+    evaluation per stick, equal to evaluating each."""
+    from bayestribo.inference import start
+
+    prepared = pipeline.prepare(bundled_run, seed=1)
+    posterior = pipeline.build_posterior(prepared.data, law="coulomb+power")
+    theta, cov, _ = maximum_a_posteriori(posterior, prepared.decay)
+    rng = np.random.default_rng(5)
+    for row in [theta, *rng.multivariate_normal(theta, 4.0 * cov, size=3)]:
+        rows, lp, grid = start._scan_ratio(posterior, row)
+        np.testing.assert_array_equal(lp, posterior(rows))
+        assert np.unique(lp).size < grid.size // 4  # a few sticks, not 81 evaluations

@@ -33,6 +33,7 @@ from scipy.optimize import least_squares
 from bayestribo.errors import BayestriboError
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.priors import Normal
+from bayestribo.inference.surrogate import stop_ratios
 from bayestribo.signal.decay import EnergyDecay
 
 __all__ = ["initial_walkers", "maximum_a_posteriori", "maximum_from", "refine"]
@@ -152,11 +153,31 @@ def _ratio_grid(posterior: Posterior) -> NDArray:
 
 
 def _scan_ratio(posterior: Posterior, theta: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    """The log density at ``theta`` over the grid of μ_s/μ_k.
+
+    For a law without a closed form (each evaluation integrates the motion) the
+    likelihood is evaluated once per stick: Π changes with the ratio only where it
+    crosses a turning point's |Y_n|/μ (:func:`bayestribo.inference.surrogate.
+    stop_ratios`), and the prior's density of the ratio is added at each grid point.
+    """
     i = posterior.names.index("mu_s_ratio")
     grid = _ratio_grid(posterior)
     rows = np.repeat(theta[None, :], grid.size, axis=0)
     rows[:, i] = grid
-    return rows, posterior(rows), grid
+    likelihood = posterior.likelihood
+    if likelihood.law.closed_form or likelihood.model != "exact":
+        return rows, posterior(rows), grid
+    params = posterior.physical(theta[None])["params"]
+    edges = np.sort(stop_ratios(likelihood, {k: float(v[0]) for k, v in params.items()}))
+    stick = np.searchsorted(edges, grid, side="right")
+    first = np.unique(stick, return_index=True)[1]
+    prior = posterior.priors["mu_s_ratio"]
+    lp_first = posterior(rows[first])
+    lp = np.empty(grid.size)
+    for value, j, k in zip(lp_first, first, stick[first], strict=True):
+        at = stick == k
+        lp[at] = value - prior.logpdf(grid[j]) + prior.logpdf(grid[at])
+    return rows, lp, grid
 
 
 def _plateau_middle(posterior: Posterior, theta: NDArray) -> NDArray:
@@ -283,9 +304,15 @@ def refine(posterior: Posterior, theta: NDArray) -> tuple[NDArray, NDArray]:
         th = np.repeat(theta[None], u.shape[0], axis=0)
         th[:, free] = theta[free] + u * scale
         out = np.full((u.shape[0], size + len(gaussian)), 1e6)
-        ok = np.isfinite(posterior(th))
+        # inside the priors' support, a row whose residuals are not all finite is
+        # outside the law's domain (the model cannot move there): both get 1e6. The
+        # model is evaluated once per row (the law's integrator where it has no
+        # closed form), not once for the density and again for the residuals.
+        ok = np.isfinite(posterior.priors.logpdf(th))
         if np.any(ok):
-            out[ok, :size] = posterior.standardized_residuals(th[ok])
+            resid = posterior.standardized_residuals(th[ok])
+            ok[ok] = np.all(np.isfinite(resid), axis=1)
+            out[ok, :size] = resid[np.all(np.isfinite(resid), axis=1)]
             for k, (j, p) in enumerate(gaussian):
                 out[ok, size + k] = (th[ok, free[j]] - p.mu) / p.sigma
         return out

@@ -57,6 +57,7 @@ __all__ = [
     "SurrogateLikelihood",
     "check",
     "quadratic_pi",
+    "stop_ratios",
     "surrogate_posterior",
 ]
 
@@ -283,35 +284,57 @@ def _ratio_thresholds(
     return np.array(out)
 
 
+def stop_ratios(likelihood: PiLikelihood, values: Mapping[str, float]) -> NDArray:
+    """``|Y_n|/μ(|Y_n|)`` at each turning point Y_n of one motion (with μ_s = μ_k, so
+    that it runs longest): the motion stops at Y_n when μ_s/μ_k is at least this, and
+    Π changes with μ_s/μ_k only where it crosses one of them.
+
+    Parameters
+    ----------
+    likelihood : PiLikelihood
+        The likelihood (its law, initial velocity, record end and reference amplitude).
+    values : mapping
+        The law's parameters and ``y0`` by name (scalars).
+
+    Returns
+    -------
+    ndarray
+        One value per turning point, in their order (inf where the friction is zero).
+    """
+    law = likelihood.law
+    data = likelihood.data
+    reference = likelihood.reference_amplitude
+    law_values = {n: float(values[n]) for n in law.parameter_names}
+    if "mu_s_ratio" in law_values:
+        law_values["mu_s_ratio"] = 1.0
+    _, turns = law.turning_points(
+        law_values,
+        float(values["y0"]),
+        float(data.yp0),
+        tau_max=float(data.tau_end),
+        reference=reference,
+    )
+    a = np.abs(np.asarray(turns, dtype=float))
+    coef = law.coefficients({n: np.array([v]) for n, v in law_values.items()}, reference)[0]
+    mu = np.zeros(a.size)
+    for force, offset, size in zip(*law._layout[0][3:], strict=True):
+        mu += np.array([force(float(x), coef[offset : offset + size]) for x in a])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(mu > 0, a / mu, np.inf)
+
+
 def _moving_thresholds(
     likelihood: PiLikelihood,
     names: tuple[str, ...],
     nodes: NDArray,
     fixed_params: Mapping[str, float],
-    ratio: str,
 ) -> NDArray | None:
-    """``|Y_n|/μ(|Y_n|)`` of the turning points Y_n of the motion at each node (rows of
-    ``nodes``, the first the centre), (nodes, n) over the turning points all nodes
-    reach; None when the law's friction cannot be evaluated here."""
-    law = likelihood.law
-    frictions = law._layout[0][3:]
-    data = likelihood.data
-    reference = likelihood.reference_amplitude
-    rows = []
-    for node in nodes:
-        values = {**fixed_params, **dict(zip(names, node, strict=True)), ratio: 1.0}
-        y0 = float(values.pop("y0"))
-        law_values = {n: float(values[n]) for n in law.parameter_names}
-        _, turns = law.turning_points(
-            law_values, y0, float(data.yp0), tau_max=float(data.tau_end), reference=reference
-        )
-        a = np.abs(np.asarray(turns, dtype=float))
-        coef = law.coefficients({n: np.array([v]) for n, v in law_values.items()}, reference)[0]
-        mu = np.zeros(a.size)
-        for force, offset, size in zip(*frictions, strict=True):
-            mu += np.array([force(float(x), coef[offset : offset + size]) for x in a])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            rows.append(np.where(mu > 0, a / mu, np.inf))
+    """:func:`stop_ratios` at each node (rows of ``nodes``, the first the centre),
+    (nodes, n) over the turning points every node reaches; None when there are none."""
+    rows = [
+        stop_ratios(likelihood, {**fixed_params, **dict(zip(names, node, strict=True))})
+        for node in nodes
+    ]
     count = min(r.size for r in rows)
     if count == 0:
         return None
@@ -384,7 +407,7 @@ def quadratic_pi(
         edges = np.concatenate([[low], at_centre, [high]])
         values = list(0.5 * (edges[:-1] + edges[1:]))
         if at_centre.size:
-            moving = _moving_thresholds(likelihood, names, c + u * s, fixed_params, ratio)
+            moving = _moving_thresholds(likelihood, names, c + u * s, fixed_params)
             thresholds = np.zeros((at_centre.size, basis.shape[1]))
             thresholds[:, 0] = at_centre
             if moving is not None:
