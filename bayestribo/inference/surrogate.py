@@ -307,11 +307,13 @@ def stop_ratios(likelihood: PiLikelihood, values: Mapping[str, float]) -> NDArra
     law_values = {n: float(values[n]) for n in law.parameter_names}
     if "mu_s_ratio" in law_values:
         law_values["mu_s_ratio"] = 1.0
+    # the model's Π runs to the end of motion when the record holds it (past the
+    # record's end, if the model moves longer), else to the record's end
     _, turns = law.turning_points(
         law_values,
         float(values["y0"]),
         float(data.yp0),
-        tau_max=float(data.tau_end),
+        tau_max=math.inf if data.motion_ended else float(data.tau_end),
         reference=reference,
     )
     a = np.abs(np.asarray(turns, dtype=float))
