@@ -190,3 +190,32 @@ def test_the_ratio_scan_of_a_law_without_closed_form_evaluates_once_per_stick(bu
         rows, lp, grid = start._scan_ratio(posterior, row)
         np.testing.assert_array_equal(lp, posterior(rows))
         assert np.unique(lp).size < grid.size // 4  # a few sticks, not 81 evaluations
+
+
+def test_the_interpolated_dissipation_is_the_integrated_one(exact_posterior, monkeypatch):
+    """ΔE(A) of a law without a closed form is interpolated over the draws and checked
+    against the integrator (inference/dissipation.py)."""
+    from bayestribo.inference import dissipation
+
+    _, posterior, theta, cov = exact_posterior
+    draws = _around(theta, cov, 1.0, 600, seed=7)
+    values = posterior.law_draws(draws)
+    law, ref = posterior.law, posterior.likelihood.reference_amplitude
+    swings = np.linspace(0.3, 1.0, 12) * ref
+    exact = law.swing_dissipation(swings, values, ref)
+    fast = dissipation._swing_dissipation(law, swings, values, ref)
+    sd = exact.std(axis=0)
+    assert np.max(np.abs(fast - exact) / sd) < 1e-2
+    # a check that cannot be met integrates every draw
+    monkeypatch.setattr(dissipation, "_SWING_TOLERANCE", 0.0)
+    calls = []
+    real = law.swing_dissipation
+
+    def counted(a, v, r):
+        calls.append(np.atleast_1d(next(iter(v.values()))).size)
+        return real(a, v, r)
+
+    monkeypatch.setattr(type(law), "swing_dissipation", lambda self, a, v, r: counted(a, v, r))
+    again = dissipation._swing_dissipation(law, swings, values, ref)
+    np.testing.assert_array_equal(again, exact)
+    assert calls[-1] == draws.shape[0]
