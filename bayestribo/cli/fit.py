@@ -202,7 +202,7 @@ def run(args: argparse.Namespace) -> int:
             law=args.law,
         )
     # the run is named by the path the user gave
-    result.idata.posterior.attrs["run_name"] = str(args.run)
+    result.attrs["run_name"] = str(args.run)
     for w in caught:
         warnings.showwarning(w.message, w.category, w.filename, w.lineno)
     notched = result.settings.get("notch_Hz") or []

@@ -39,7 +39,7 @@ from bayestribo.errors import (
     MisfitWarning,
     PriorBoundWarning,
 )
-from bayestribo.inference.assemble import derived_quantities, inference_data
+from bayestribo.inference.assemble import derived_quantities, fit_draws
 from bayestribo.inference.calibration import calibrate_channels
 from bayestribo.inference.dissipation import (
     dissipation_amplitudes,
@@ -810,7 +810,7 @@ def summarise(
         "law_frequency_change": law_change,
         "prior_sensitivity_json": json.dumps(plain_data(prior_sensitivity(flat, posterior.priors))),
     }
-    result = FitResult(inference_data(posterior, run.chains, derived, rng, attrs))
+    result = FitResult(draws=fit_draws(posterior, run.chains, derived, rng, attrs))
     if not run.converged:
         warnings.warn(
             f"the sampler did not converge on {name or 'the run'}: " + "; ".join(run.reasons),
