@@ -214,9 +214,7 @@ def fit(
         prepared, sampled, seed=rng, recorded_seed=seed, compared=comparison is not None
     )
     if comparison is not None:
-        result.attrs["law_comparison_json"] = json.dumps(
-            plain_data(comparison.to_dict())
-        )
+        result.attrs["law_comparison_json"] = json.dumps(plain_data(comparison.to_dict()))
         averaged = _averaged_band(common, runs, comparison, result, (prepared, sampled))
         if averaged is not None:
             attrs = result.attrs
