@@ -183,11 +183,14 @@ def write_outputs(result: Any, out_dir: Path, stem: str) -> list[Path]:
 def run(args: argparse.Namespace) -> int:
     """Read the run, fit, print; exit status 1 when the sampler did not converge."""
     from bayestribo.errors import MisfitWarning
-    from bayestribo.inference import fit
     from bayestribo.summary import check_prob
 
     check_prob(args.prob)  # before the fit, not after it
     recording = read_run_from_args(args)
+    # the fitting machinery (numba, emcee, scipy) only once the input is good: a bad
+    # option or file is told at once
+    from bayestribo.inference import fit
+
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")  # every warning of this fit, none deduplicated
         result = fit(
