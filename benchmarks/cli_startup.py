@@ -1,7 +1,7 @@
 """Start-up of the command line: ``bayestribo fit RUN`` and ``--help`` in fresh processes.
 
-Measured side by side, in rounds: each round runs, one after the other and each in a
-fresh interpreter,
+Measured side by side, in rounds: each round runs, in a new random order each round
+and each in a fresh interpreter,
 
 * ``bayestribo --help``;
 * ``python -c "import numpy"``, the yardstick of ``--help``;
@@ -10,9 +10,9 @@ fresh interpreter,
 * ``python -c "import numpy, numba, scipy.optimize, scipy.signal, emcee"``: the
   third-party libraries the fit needs (its floor, whatever the package does);
 
-and asks a long-lived worker process for one in-process warm fit of the same run
-(:func:`bayestribo.fit` on the file, the command's defaults, after a warm-up fit):
-the yardstick of ``fit``. With ``--baseline TREE`` (a git worktree of an older commit,
+and asks a long-lived worker process (in the same shuffled order) for one in-process
+warm fit of the same run (:func:`bayestribo.fit` on the file, the command's defaults,
+after a warm-up fit): the yardstick of ``fit``. With ``--baseline TREE`` (a git worktree of an older commit,
 e.g. ``git worktree add /tmp/startup-base d6ceef0``) every command also runs on that
 tree within the same round, so that the load of a shared machine falls on both alike.
 
@@ -22,8 +22,9 @@ repository (a ``python -c`` worker started inside it would import the tree it st
 in). Before the rounds each tree's byte code is compiled (as ``pip install`` does:
 this machine may set ``PYTHONDONTWRITEBYTECODE``) and each command runs once, so that
 numba's caches are warm. Reported: the median over ``--repeats`` rounds of each
-command, the ratios fit / warm fit and help / import numpy (the goal: at most 3), and
-whether the two trees print the same fit.
+command, the ratios fit / warm fit and help / import numpy (the goal: at most 3; also
+as the median of the ratios within each round), and whether the two trees print the
+same fit.
 
 Run: ``python benchmarks/cli_startup.py --baseline /tmp/startup-base``; writes
 ``benchmarks/results/cli_startup.json``.
@@ -34,6 +35,7 @@ from __future__ import annotations
 import argparse
 import compileall
 import os
+import random
 import statistics
 import subprocess
 import sys
@@ -147,14 +149,19 @@ def main() -> None:
         workers = {name: WarmFit(tree, run, cwd) for name, tree in trees.items()}
         load = []
         try:
+            order = random.Random(0)
             for _ in range(args.repeats):
                 load.append(os.getloadavg()[0])
-                for cmd_name, cmd in cmds.items():
-                    for name, tree in trees.items():
-                        seconds, _ = _timed(cmd, tree, cwd)
+                # every command of every tree once, in a new random order each round:
+                # no command always runs first, after the fits, or next to another
+                jobs = [(c, t) for c in [*cmds, "warm_fit"] for t in trees]
+                order.shuffle(jobs)
+                for cmd_name, name in jobs:
+                    if cmd_name == "warm_fit":
+                        warm_times[name].append(workers[name].once())
+                    else:
+                        seconds, _ = _timed(cmds[cmd_name], trees[name], cwd)
                         times[name][cmd_name].append(seconds)
-                for name in trees:
-                    warm_times[name].append(workers[name].once())
         finally:
             for worker in workers.values():
                 worker.close()
@@ -182,6 +189,11 @@ def main() -> None:
         warm = statistics.median(warm_times[name])
         help_ratio = med["help"] / med["import_numpy"]
         fit_ratio = med["fit"] / warm
+        # the same ratios round by round (each round's runs close in time)
+        per_round_help = [
+            h / n for h, n in zip(times[name]["help"], times[name]["import_numpy"], strict=True)
+        ]
+        per_round_fit = [f / w for f, w in zip(times[name]["fit"], warm_times[name], strict=True)]
         results["trees"][name] = {
             "path": str(tree),
             "commit": subprocess.run(
@@ -193,6 +205,8 @@ def main() -> None:
             "samples_s": {**times[name], "warm_fit": warm_times[name]},
             "help_over_import_numpy": help_ratio,
             "fit_over_warm_fit": fit_ratio,
+            "help_over_import_numpy_median_of_rounds": statistics.median(per_round_help),
+            "fit_over_warm_fit_median_of_rounds": statistics.median(per_round_fit),
             "goal_help_within_3x": help_ratio <= 3.0,
             "goal_fit_within_3x": fit_ratio <= 3.0,
         }
