@@ -12,9 +12,10 @@ and each in a fresh interpreter,
 
 and asks a long-lived worker process (in the same shuffled order) for one in-process
 warm fit of the same run (:func:`bayestribo.fit` on the file, the command's defaults,
-after a warm-up fit): the yardstick of ``fit``. With ``--baseline TREE`` (a git worktree of an older commit,
-e.g. ``git worktree add /tmp/startup-base d6ceef0``) every command also runs on that
-tree within the same round, so that the load of a shared machine falls on both alike.
+after a warm-up fit): the yardstick of ``fit``. With ``--baseline TREE`` (a git
+worktree of an older commit, e.g. ``git worktree add /tmp/startup-base d6ceef0``)
+every command also runs on that tree within the same round, so that the load of a
+shared machine falls on both alike.
 
 ``bayestribo`` is run as its console script runs it (``from bayestribo.cli import
 main``), with ``PYTHONPATH`` on the tree and the working directory outside the
