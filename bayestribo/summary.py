@@ -15,7 +15,6 @@ from dataclasses import asdict, dataclass
 from typing import Any, Literal
 
 import numpy as np
-import scipy.stats
 from numpy.typing import ArrayLike
 
 from bayestribo.errors import BayestriboError
@@ -92,6 +91,8 @@ class ParameterSummary:
         mean, sd = float(mean), float(sd)
         if not math.isnan(sd) and sd < 0:
             raise BayestriboError(f"sd: expected a non-negative standard error, got {sd!r}")
+        import scipy.stats  # on first use: scipy.stats takes longer to import than a fit
+
         half = float(scipy.stats.norm.ppf(0.5 + prob / 2)) * sd
         return cls(mean, sd, mean, (mean - half, mean + half), prob, "normal")
 

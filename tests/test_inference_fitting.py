@@ -348,3 +348,37 @@ def test_a_frequency_that_changes_with_amplitude_is_reported():
         warnings.simplefilter("error", MisfitWarning)
         warnings.simplefilter("error", FrequencyTrendWarning)
         assert abs(fit(plain, seed=1, max_steps=3000).frequency_trend["z"]) < 4
+
+
+def test_a_fresh_result_makes_its_inference_data_on_first_use():
+    # A fit holds numpy arrays (FitDraws) and builds the ArviZ InferenceData only when
+    # asked: the summaries are the same before and after, and attributes set before
+    # (the command line's run name) are in the InferenceData and its file.
+    from bayestribo.inference.assemble import FitDraws
+
+    rng = np.random.default_rng(5)
+    draws = FitDraws(
+        posterior={
+            "zeta": 0.02 + 1e-4 * rng.standard_normal((2, 50)),
+            "mu_k": 0.03 + 1e-4 * rng.standard_normal((2, 50)),
+        },
+        attrs={"run_name": "a", "model": "exact", "seed": 7, "metadata_json": "{}"},
+        log_likelihood=rng.standard_normal((2, 50, 6)),
+        posterior_predictive=rng.standard_normal((1, 20, 4)),
+        observed=rng.standard_normal(4),
+        grid=np.linspace(0.0, 3.0, 4),
+    )
+    result = FitResult(draws=draws)
+    before = result.summary(0.9)
+    assert result.parameter_names == ["zeta", "mu_k"] and result.seed == 7
+    result.attrs["run_name"] = "runs/a.csv"
+    idata = result.idata  # built here
+    assert result.idata is idata and idata.posterior.attrs["run_name"] == "runs/a.csv"
+    assert result.summary(0.9) == before and result.run_name == "runs/a.csv"
+    np.testing.assert_array_equal(idata.posterior["zeta"].values, draws.posterior["zeta"])
+    np.testing.assert_array_equal(idata.log_likelihood["pi"].values, draws.log_likelihood)
+    np.testing.assert_array_equal(idata.observed_data["grid"].values, draws.grid)
+    result.attrs["seconds"] = 1.5  # now in the InferenceData itself
+    assert idata.posterior.attrs["seconds"] == 1.5 and result.seconds == 1.5
+    with pytest.raises(TypeError, match="either idata or draws"):
+        FitResult()

@@ -115,6 +115,38 @@ def test_rhat_tells_separated_chains_from_identical_ones():
     assert rhat(apart)[0] > 1.1
 
 
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # constant chains: 0/0, as ArviZ
+def test_rhat_is_arvizs_rank_normalised_split_rhat():
+    # The numpy R-hat (a fit imports no ArviZ) against ArviZ's on chains of many
+    # shapes and scales, with ties, offsets between chains, constant chains, a NaN
+    # draw and too few chains or draws: the same values (the variance sums are taken
+    # in order as ArviZ's compiled ones).
+    az = pytest.importorskip("arviz")
+    rng = np.random.default_rng(11)
+    cases = []
+    for trial in range(120):
+        n_chain, n_draw, n_par = rng.integers(2, 6), rng.integers(4, 300), rng.integers(1, 4)
+        x = rng.standard_normal((n_chain, n_draw, n_par)) * 10 ** rng.uniform(-8, 3)
+        x += rng.standard_normal() * 10 ** rng.uniform(-3, 3)
+        if trial % 3 == 0:
+            x = np.round(x, 1)  # ties
+        if trial % 5 == 0:
+            x[1] += 0.5
+        if trial % 17 == 0:
+            x[...] = 1.0
+        cases.append(x)
+    with_nan = rng.standard_normal((3, 50, 2))
+    with_nan[0, 7, 1] = np.nan
+    cases += [with_nan, rng.standard_normal((1, 50, 2)), rng.standard_normal((2, 3, 2))]
+    for x in cases:
+        ours = rhat(x)
+        theirs = np.array(
+            [float(az.rhat(np.ascontiguousarray(x[..., i]))) for i in range(x.shape[-1])]
+        )
+        np.testing.assert_allclose(ours, theirs, rtol=1e-10, atol=0, equal_nan=True)
+    assert np.isnan(rhat(with_nan)[1]) and np.isfinite(rhat(with_nan)[0])
+
+
 def test_a_run_too_short_to_converge_is_reported_with_its_reason():
     # 200 steps cannot hold a burn plus 50 autocorrelation times (τ is over 4 steps
     # even for a well-mixed 3-D Gaussian).

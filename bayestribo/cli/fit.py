@@ -183,11 +183,14 @@ def write_outputs(result: Any, out_dir: Path, stem: str) -> list[Path]:
 def run(args: argparse.Namespace) -> int:
     """Read the run, fit, print; exit status 1 when the sampler did not converge."""
     from bayestribo.errors import MisfitWarning
-    from bayestribo.inference import fit
     from bayestribo.summary import check_prob
 
     check_prob(args.prob)  # before the fit, not after it
     recording = read_run_from_args(args)
+    # the fitting machinery (numba, emcee, scipy) only once the input is good: a bad
+    # option or file is told at once
+    from bayestribo.inference import fit
+
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")  # every warning of this fit, none deduplicated
         result = fit(
@@ -202,7 +205,7 @@ def run(args: argparse.Namespace) -> int:
             law=args.law,
         )
     # the run is named by the path the user gave
-    result.idata.posterior.attrs["run_name"] = str(args.run)
+    result.attrs["run_name"] = str(args.run)
     for w in caught:
         warnings.showwarning(w.message, w.category, w.filename, w.lineno)
     notched = result.settings.get("notch_Hz") or []

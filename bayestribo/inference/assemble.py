@@ -5,14 +5,18 @@
   ζ₀) drawn from their stated uncertainties;
 * :func:`pointwise_log_likelihood`: the log-likelihood of each Π increment for each
   draw (for PSIS-LOO);
-* :func:`inference_data`: the ArviZ container of a fit (posterior, pointwise
-  log-likelihood, posterior predictive Π, observed Π).
+* :func:`fit_draws`: the groups of a fit (posterior, pointwise log-likelihood,
+  posterior predictive Π, observed Π) as numpy arrays, a :class:`FitDraws`;
+* :func:`inference_data`: the same as an ArviZ InferenceData
+  (:meth:`FitDraws.to_inference_data`), built only when asked for: ArviZ, xarray and
+  pandas take longer to import than a fit takes to run.
 """
 
 from __future__ import annotations
 
 import warnings
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -22,7 +26,13 @@ from bayestribo.inference.posterior import Posterior
 from bayestribo.model.scaling import Scaling
 from bayestribo.signal.increments import PiData
 
-__all__ = ["derived_quantities", "inference_data", "pointwise_log_likelihood"]
+__all__ = [
+    "FitDraws",
+    "derived_quantities",
+    "fit_draws",
+    "inference_data",
+    "pointwise_log_likelihood",
+]
 
 #: Draws of the posterior predictive Π kept in a fit's InferenceData.
 PREDICTIVE_DRAWS = 400
@@ -169,6 +179,110 @@ def _predictive_pi(
     return np.cumsum(replicated[:, ::-1], axis=1)[:, ::-1]
 
 
+@dataclass
+class FitDraws:
+    """The groups of a fit's InferenceData as numpy arrays, before ArviZ is imported.
+
+    Attributes
+    ----------
+    posterior : dict of str to ndarray
+        Draws of each reported quantity, shape (chain, draw), in the order of the
+        posterior group.
+    attrs : dict
+        Attributes of the posterior group (run, settings, diagnostics as JSON).
+    log_likelihood : ndarray
+        Pointwise log-likelihood of each Π increment, shape (chain, draw, increment).
+    posterior_predictive : ndarray
+        Replicated Π on the grid, shape (1, draw, grid).
+    observed : ndarray
+        Observed Π on the grid.
+    grid : ndarray
+        τ of the grid points (the coordinate ``grid``).
+    """
+
+    posterior: dict[str, NDArray]
+    attrs: dict[str, Any]
+    log_likelihood: NDArray
+    posterior_predictive: NDArray
+    observed: NDArray
+    grid: NDArray
+
+    def to_inference_data(self) -> Any:
+        """The ArviZ InferenceData of these groups (imports ArviZ).
+
+        Returns
+        -------
+        arviz.InferenceData
+            Groups ``posterior`` (with :attr:`attrs`), ``log_likelihood`` (``pi``, per
+            increment), ``posterior_predictive`` and ``observed_data`` (Π on the grid).
+        """
+        import arviz as az
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", FutureWarning)
+            idata = az.from_dict(
+                posterior=dict(self.posterior),
+                log_likelihood={"pi": self.log_likelihood},
+                posterior_predictive={"pi": self.posterior_predictive},
+                observed_data={"pi": self.observed},
+                coords={
+                    "increment": np.arange(self.log_likelihood.shape[-1]),
+                    "grid": self.grid,
+                },
+                dims={"pi": ["grid"]},
+                pred_dims={"pi": ["grid"]},
+                log_likelihood_dims={"pi": ["increment"]},
+            )
+        idata.posterior.attrs.update(self.attrs)
+        return idata
+
+
+def fit_draws(
+    posterior: Posterior,
+    chains: NDArray,
+    derived: Mapping[str, NDArray],
+    rng: np.random.Generator,
+    attrs: Mapping[str, Any],
+) -> FitDraws:
+    """The groups of a fit's InferenceData, as numpy arrays.
+
+    Parameters
+    ----------
+    posterior : Posterior
+        The posterior that was sampled (its likelihood holds the observed increments).
+    chains : ndarray
+        Draws of the sampled coordinates, shape (chains, draws, d).
+    derived : mapping
+        Flat draws of each reported quantity (:func:`derived_quantities`).
+    rng : numpy.random.Generator
+        Source of the posterior predictive draws.
+    attrs : mapping
+        Attributes of the posterior group (run, settings, diagnostics as JSON).
+
+    Returns
+    -------
+    FitDraws
+        The posterior draws shaped (chain, draw), the pointwise log-likelihood, the
+        posterior predictive and the observed Π.
+    """
+    data = posterior.likelihood.data
+    n_chain, n_draw, _ = chains.shape
+    pointwise = pointwise_log_likelihood(posterior, chains)
+    pi_rep = _predictive_pi(posterior, chains.reshape(n_chain * n_draw, -1), data, rng)
+
+    def shaped(values: NDArray) -> NDArray:
+        return values.reshape(n_chain, n_draw, *values.shape[1:])
+
+    return FitDraws(
+        posterior={k: shaped(v) for k, v in derived.items()},
+        attrs=dict(attrs),
+        log_likelihood=pointwise,
+        posterior_predictive=pi_rep[None, :, :],
+        observed=data.pi,
+        grid=data.tau_grid[:-1],
+    )
+
+
 def inference_data(
     posterior: Posterior,
     chains: NDArray,
@@ -176,7 +290,7 @@ def inference_data(
     rng: np.random.Generator,
     attrs: Mapping[str, Any],
 ) -> Any:
-    """The ArviZ InferenceData of a fit.
+    """The ArviZ InferenceData of a fit (:func:`fit_draws`, then ArviZ).
 
     Parameters
     ----------
@@ -197,28 +311,4 @@ def inference_data(
         Groups ``posterior``, ``log_likelihood`` (``pi``, per increment),
         ``posterior_predictive`` and ``observed_data`` (Π on the grid).
     """
-    import arviz as az
-
-    data = posterior.likelihood.data
-    n_chain, n_draw, _ = chains.shape
-    pointwise = pointwise_log_likelihood(posterior, chains)
-    pi_rep = _predictive_pi(posterior, chains.reshape(n_chain * n_draw, -1), data, rng)
-
-    def shaped(values: NDArray) -> NDArray:
-        return values.reshape(n_chain, n_draw, *values.shape[1:])
-
-    tau = data.tau_grid[:-1]
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", FutureWarning)
-        idata = az.from_dict(
-            posterior={k: shaped(v) for k, v in derived.items()},
-            log_likelihood={"pi": pointwise},
-            posterior_predictive={"pi": pi_rep[None, :, :]},
-            observed_data={"pi": data.pi},
-            coords={"increment": np.arange(data.increments.size), "grid": tau},
-            dims={"pi": ["grid"]},
-            pred_dims={"pi": ["grid"]},
-            log_likelihood_dims={"pi": ["increment"]},
-        )
-    idata.posterior.attrs.update(attrs)
-    return idata
+    return fit_draws(posterior, chains, derived, rng, attrs).to_inference_data()

@@ -216,15 +216,13 @@ def fit(
         prepared, sampled, seed=rng, recorded_seed=seed, compared=comparison is not None
     )
     if comparison is not None:
-        result.idata.posterior.attrs["law_comparison_json"] = json.dumps(
-            plain_data(comparison.to_dict())
-        )
+        result.attrs["law_comparison_json"] = json.dumps(plain_data(comparison.to_dict()))
         averaged = _averaged_band(common, runs, comparison, result, (prepared, sampled))
         if averaged is not None:
-            attrs = result.idata.posterior.attrs
+            attrs = result.attrs
             attrs["verdict_dissipation_json"] = attrs["dissipation_json"]
             attrs["dissipation_json"] = json.dumps(plain_data(averaged))
-    result.idata.posterior.attrs["seconds"] = time.perf_counter() - start
+    result.attrs["seconds"] = time.perf_counter() - start
     return result
 
 
@@ -278,7 +276,7 @@ def _averaged_band(
         members.append((law, sampled.posterior, chains.reshape(-1, chains.shape[-1]), scale))
     if len(members) < 2:
         return None
-    frequency_sd = float(result.idata.posterior.attrs.get("frequency_nuisance_sd", 0.0))
+    frequency_sd = float(result.attrs.get("frequency_nuisance_sd", 0.0))
     try:
         out = averaged_dissipation(
             members,

@@ -39,7 +39,7 @@ from bayestribo.errors import (
     MisfitWarning,
     PriorBoundWarning,
 )
-from bayestribo.inference.assemble import derived_quantities, inference_data
+from bayestribo.inference.assemble import derived_quantities, fit_draws
 from bayestribo.inference.calibration import calibrate_channels
 from bayestribo.inference.dissipation import (
     dissipation_amplitudes,
@@ -894,7 +894,7 @@ def summarise(
     }
     # the pointwise log-likelihood (PSIS-LOO) of the density the chains sampled: the
     # surrogate's where its check passed (inference/surrogate.py)
-    result = FitResult(inference_data(sampled.draws_posterior, run.chains, derived, rng, attrs))
+    result = FitResult(draws=fit_draws(sampled.draws_posterior, run.chains, derived, rng, attrs))
     if not run.converged:
         warnings.warn(
             f"the sampler did not converge on {name or 'the run'}: " + "; ".join(run.reasons),

@@ -1,6 +1,7 @@
 """The result of a single-run fit: an ArviZ InferenceData and what a report needs.
 
-:class:`FitResult` holds an :class:`arviz.InferenceData` with the groups
+:class:`FitResult` holds, or makes on first use of :attr:`FitResult.idata`, an
+:class:`arviz.InferenceData` with the groups
 
 * ``posterior``: the sampled parameters (``zeta``; with friction ``mu_k`` or, without a
   load, ``friction_displacement``, ``mu_s_ratio``; ``y0``; optionally
@@ -16,6 +17,12 @@
 and, in its attributes, the run's metadata, the seed, the model, the noise model, the
 priors, the sampler settings and the diagnostics (JSON strings), so that a saved
 NetCDF file is a complete record of the fit.
+
+A fresh fit holds these groups as numpy arrays
+(:class:`~bayestribo.inference.assemble.FitDraws`) and imports ArviZ only when the
+InferenceData itself is asked for (saving it, plotting, PSIS-LOO): its summaries,
+diagnostics, text and JSON need numpy alone, so ``bayestribo fit`` does not pay for
+importing ArviZ, xarray and pandas.
 """
 
 from __future__ import annotations
@@ -24,15 +31,17 @@ import json
 import math
 import warnings
 from collections.abc import Mapping
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bayestribo.inference.priors import PriorSet
 from bayestribo.summary import ParameterSummary, check_prob
+
+if TYPE_CHECKING:
+    from bayestribo.inference.assemble import FitDraws
 
 __all__ = ["UNITS", "FitResult", "plain_data"]
 
@@ -85,21 +94,66 @@ def plain_data(value: Any) -> Any:
     return value
 
 
-@dataclass
 class FitResult:
     """Posterior of one run, with diagnostics and provenance.
 
-    Attributes
+    Parameters
     ----------
-    idata : arviz.InferenceData
+    idata : arviz.InferenceData, optional
         The posterior and its companions (see the module notes).
+    draws : FitDraws, optional
+        The same groups as numpy arrays (what a fit makes); the InferenceData is
+        then built from them on first use of :attr:`idata`. Give one of the two.
+
+    Raises
+    ------
+    TypeError
+        If neither or both of ``idata`` and ``draws`` are given.
     """
 
-    idata: Any
+    def __init__(self, idata: Any = None, *, draws: FitDraws | None = None) -> None:
+        if (idata is None) == (draws is None):
+            raise TypeError("FitResult: give either idata or draws")
+        self._idata = idata
+        self._draws = draws
+
+    @property
+    def idata(self) -> Any:
+        """The :class:`arviz.InferenceData` of the fit (see the module notes); for a
+        fresh fit, built from its draws on first use (this imports ArviZ)."""
+        if self._idata is None:
+            assert self._draws is not None
+            self._idata = self._draws.to_inference_data()
+            self._draws = None  # from now on the InferenceData is the one record
+        return self._idata
+
+    @property
+    def attrs(self) -> dict[str, Any]:
+        """The attributes of the posterior group (run, settings, diagnostics as JSON
+        strings), the record :meth:`save` writes; changes are kept (whether or not
+        the InferenceData was built yet)."""
+        if self._draws is not None:
+            return self._draws.attrs
+        return self._idata.posterior.attrs
+
+    def _posterior_names(self) -> list[str]:
+        if self._draws is not None:
+            return list(self._draws.posterior)
+        return list(self._idata.posterior.data_vars)
+
+    def _has(self, name: str) -> bool:
+        if self._draws is not None:
+            return name in self._draws.posterior
+        return name in self._idata.posterior
+
+    def _chains(self, name: str) -> NDArray:
+        if self._draws is not None:
+            return np.asarray(self._draws.posterior[name])
+        return np.asarray(self._idata.posterior[name])
 
     # -- provenance (from the attributes) -----------------------------------------
     def _attr(self, key: str, default: Any = None) -> Any:
-        value = self.idata.posterior.attrs.get(key, default)
+        value = self.attrs.get(key, default)
         if isinstance(value, str) and key.endswith("_json"):
             return json.loads(value)
         return value
@@ -209,15 +263,15 @@ class FitResult:
     @property
     def parameter_names(self) -> list[str]:
         """Every quantity in the posterior group (sampled and derived)."""
-        return list(self.idata.posterior.data_vars)
+        return self._posterior_names()
 
     def samples(self, name: str) -> NDArray:
         """All posterior draws of ``name``, chains concatenated (1-D)."""
-        if name not in self.idata.posterior:
+        if not self._has(name):
             raise KeyError(
                 f"{name!r} is not in this fit's posterior; it has {self.parameter_names}"
             )
-        return np.asarray(self.idata.posterior[name]).reshape(-1)
+        return self._chains(name).reshape(-1)
 
     def prior_logpdf(self, name: str, values: ArrayLike) -> NDArray:
         """Log density of the prior of one sampled parameter at ``values``.
@@ -246,8 +300,8 @@ class FitResult:
         """Posterior summary (mean, sd, median, equal-tailed ``prob`` interval) of each
         reported quantity, by name: those of the default law first, then the other
         laws' parameters and physical quantities."""
-        names = [n for n in REPORTED if n in self.idata.posterior]
-        own = [n for n in self._attr("units_json", {}) if n in self.idata.posterior]
+        names = [n for n in REPORTED if self._has(n)]
+        own = [n for n in self._attr("units_json", {}) if self._has(n)]
         if own:
             at = names.index("y0") if "y0" in names else len(names)
             names[at:at] = own
@@ -339,7 +393,7 @@ class FitResult:
                 f"{100 * shape['max_relative']:+.3g} % (± {100 * shape['max_relative_sd']:.2g} %) "
                 f"along the decay (χ² = {shape['chi2']:.1f} for {shape['dof']} shape terms)"
             )
-        sd_eps = float(self.idata.posterior.attrs.get("frequency_nuisance_sd", 0.0))
+        sd_eps = float(self.attrs.get("frequency_nuisance_sd", 0.0))
         trend = self.frequency_trend
         if trend and sd_eps > 0:
             lines.append(

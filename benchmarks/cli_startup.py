@@ -1,0 +1,233 @@
+"""Start-up of the command line: ``bayestribo fit RUN`` and ``--help`` in fresh processes.
+
+Measured side by side, in rounds: each round runs, in a new random order each round
+and each in a fresh interpreter,
+
+* ``bayestribo --help``;
+* ``python -c "import numpy"``, the yardstick of ``--help``;
+* ``bayestribo fit RUN``, the README's command (a table on standard output), on the
+  bundled run ``data/runs/glycerol-N0.31-r1.csv`` by default;
+* ``python -c "import numpy, numba, scipy.optimize, scipy.signal, emcee"``: the
+  third-party libraries the fit needs (its floor, whatever the package does);
+
+and asks a long-lived worker process (in the same shuffled order) for one in-process
+warm fit of the same run (:func:`bayestribo.fit` on the file, the command's defaults,
+after a warm-up fit): the yardstick of ``fit``. With ``--baseline TREE`` (a git
+worktree of an older commit, e.g. ``git worktree add /tmp/startup-base d6ceef0``)
+every command also runs on that tree within the same round, so that the load of a
+shared machine falls on both alike.
+
+``bayestribo`` is run as its console script runs it (``from bayestribo.cli import
+main``), with ``PYTHONPATH`` on the tree and the working directory outside the
+repository (a ``python -c`` worker started inside it would import the tree it stands
+in). Before the rounds each tree's byte code is compiled (as ``pip install`` does:
+this machine may set ``PYTHONDONTWRITEBYTECODE``) and each command runs once, so that
+numba's caches are warm. Reported: the median over ``--repeats`` rounds of each
+command, the ratios fit / warm fit and help / import numpy (the goal: at most 3; also
+as the median of the ratios within each round), and whether the two trees print the
+same fit.
+
+Run: ``python benchmarks/cli_startup.py --baseline /tmp/startup-base``; writes
+``benchmarks/results/cli_startup.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import compileall
+import os
+import random
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _machine import write_results
+
+REPO = Path(__file__).resolve().parents[1]
+RUN = REPO / "data" / "runs" / "glycerol-N0.31-r1.csv"
+
+#: The console script's body (``[project.scripts]``): ``bayestribo ARGS``.
+CONSOLE = (
+    "import sys; from bayestribo.cli import main; sys.argv[0] = 'bayestribo'; sys.exit(main())"
+)
+#: The third-party imports of a fit: its floor.
+FLOOR = "import numpy, numba, scipy.optimize, scipy.signal, emcee"
+
+#: A long-lived worker: one warm fit of the run per line read, its wall time printed.
+WORKER = """
+import sys, time, warnings
+warnings.simplefilter("ignore")
+import bayestribo
+run = sys.argv[1]
+bayestribo.fit(run)  # warm-up: imports, numba caches, first-call work
+print("ready", flush=True)
+for line in sys.stdin:
+    start = time.perf_counter()
+    bayestribo.fit(run)
+    print(time.perf_counter() - start, flush=True)
+"""
+
+
+def _env(tree: Path) -> dict[str, str]:
+    return {**os.environ, "PYTHONPATH": str(tree)}
+
+
+def _timed(argv: list[str], tree: Path, cwd: str) -> tuple[float, subprocess.CompletedProcess]:
+    """Wall time of one fresh process (start to exit) and what it printed."""
+    start = time.perf_counter()
+    done = subprocess.run(argv, capture_output=True, text=True, cwd=cwd, env=_env(tree))
+    return time.perf_counter() - start, done
+
+
+class WarmFit:
+    """A worker process on ``tree`` that fits ``run`` in process on request."""
+
+    def __init__(self, tree: Path, run: Path, cwd: str) -> None:
+        self.proc = subprocess.Popen(
+            [sys.executable, "-c", WORKER, str(run)],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+            cwd=cwd,
+            env=_env(tree),
+        )
+        assert self.proc.stdout is not None and self.proc.stdout.readline().strip() == "ready"
+
+    def once(self) -> float:
+        """Wall time of one warm fit [s]."""
+        assert self.proc.stdin is not None and self.proc.stdout is not None
+        self.proc.stdin.write("fit\n")
+        self.proc.stdin.flush()
+        return float(self.proc.stdout.readline())
+
+    def close(self) -> None:
+        assert self.proc.stdin is not None
+        self.proc.stdin.close()
+        self.proc.wait()
+
+
+def commands(run: Path) -> dict[str, list[str]]:
+    """The fresh-process commands of a round, by name."""
+    py = sys.executable
+    return {
+        "help": [py, "-c", CONSOLE, "--help"],
+        "import_numpy": [py, "-c", "import numpy"],
+        "fit": [py, "-c", CONSOLE, "fit", str(run)],
+        "import_fit_libraries": [py, "-c", FLOOR],
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=9, help="rounds (median over them)")
+    parser.add_argument("--run", type=Path, default=RUN, help="the run to fit")
+    parser.add_argument("--baseline", type=Path, help="a worktree of an older commit")
+    parser.add_argument("--output", default="cli_startup", help="results/<OUTPUT>.json")
+    args = parser.parse_args()
+
+    trees = {"current": REPO}
+    if args.baseline is not None:
+        trees["baseline"] = args.baseline.resolve()
+    run = args.run.resolve()
+    cmds = commands(run)
+    times: dict[str, dict[str, list[float]]] = {t: {c: [] for c in cmds} for t in trees}
+    warm_times: dict[str, list[float]] = {t: [] for t in trees}
+    outputs: dict[str, str] = {}
+    with tempfile.TemporaryDirectory() as cwd:
+        for name, tree in trees.items():
+            compileall.compile_dir(str(tree / "bayestribo"), quiet=1)
+            for cmd in cmds.values():  # warm numba's caches, check the commands work
+                _, done = _timed(cmd, tree, cwd)
+                if done.returncode not in (0, 1):
+                    raise SystemExit(f"{name}: {cmd[3:]} failed:\n{done.stderr}")
+            _, done = _timed(cmds["fit"], tree, cwd)
+            outputs[name] = done.stdout
+        workers = {name: WarmFit(tree, run, cwd) for name, tree in trees.items()}
+        load = []
+        try:
+            order = random.Random(0)
+            for _ in range(args.repeats):
+                load.append(os.getloadavg()[0])
+                # every command of every tree once, in a new random order each round:
+                # no command always runs first, after the fits, or next to another
+                jobs = [(c, t) for c in [*cmds, "warm_fit"] for t in trees]
+                order.shuffle(jobs)
+                for cmd_name, name in jobs:
+                    if cmd_name == "warm_fit":
+                        warm_times[name].append(workers[name].once())
+                    else:
+                        seconds, _ = _timed(cmds[cmd_name], trees[name], cwd)
+                        times[name][cmd_name].append(seconds)
+        finally:
+            for worker in workers.values():
+                worker.close()
+
+    results: dict[str, Any] = {
+        "run": str(run.relative_to(REPO)) if run.is_relative_to(REPO) else str(run),
+        "repeats": args.repeats,
+        "commands": {
+            "help": "bayestribo --help",
+            "import_numpy": 'python -c "import numpy"',
+            "fit": f"bayestribo fit {run.name}",
+            "import_fit_libraries": f'python -c "{FLOOR}"',
+            "warm_fit": "bayestribo.fit(RUN) in a process that fitted it before",
+        },
+        "bytecode": "compiled before the rounds (compileall); PYTHONDONTWRITEBYTECODE="
+        + os.environ.get("PYTHONDONTWRITEBYTECODE", ""),
+        "load_average_1min": {"min": min(load), "max": max(load)},
+        "trees": {},
+    }
+    print(f"median of {args.repeats} rounds [s]; run {run.name}")
+    header = f"{'':10}{'--help':>9}{'numpy':>9}{'ratio':>7}{'fit':>9}{'warm fit':>10}{'ratio':>7}"
+    print(header + f"{'fit libs':>10}")
+    for name, tree in trees.items():
+        med = {c: statistics.median(v) for c, v in times[name].items()}
+        warm = statistics.median(warm_times[name])
+        help_ratio = med["help"] / med["import_numpy"]
+        fit_ratio = med["fit"] / warm
+        # the same ratios round by round (each round's runs close in time)
+        per_round_help = [
+            h / n for h, n in zip(times[name]["help"], times[name]["import_numpy"], strict=True)
+        ]
+        per_round_fit = [f / w for f, w in zip(times[name]["fit"], warm_times[name], strict=True)]
+        results["trees"][name] = {
+            "path": str(tree),
+            "commit": subprocess.run(
+                ["git", "-C", str(tree), "rev-parse", "--short", "HEAD"],
+                capture_output=True,
+                text=True,
+            ).stdout.strip(),
+            "median_s": {**med, "warm_fit": warm},
+            "samples_s": {**times[name], "warm_fit": warm_times[name]},
+            "help_over_import_numpy": help_ratio,
+            "fit_over_warm_fit": fit_ratio,
+            "help_over_import_numpy_median_of_rounds": statistics.median(per_round_help),
+            "fit_over_warm_fit_median_of_rounds": statistics.median(per_round_fit),
+            "goal_help_within_3x": help_ratio <= 3.0,
+            "goal_fit_within_3x": fit_ratio <= 3.0,
+        }
+        print(
+            f"{name:10}{med['help']:9.3f}{med['import_numpy']:9.3f}{help_ratio:7.2f}"
+            f"{med['fit']:9.3f}{warm:10.3f}{fit_ratio:7.2f}{med['import_fit_libraries']:10.3f}"
+        )
+    if "baseline" in trees:
+        cur, base = results["trees"]["current"], results["trees"]["baseline"]
+        results["baseline_over_current"] = {
+            c: base["median_s"][c] / cur["median_s"][c] for c in cur["median_s"]
+        }
+        results["same_fit_output"] = outputs["current"] == outputs["baseline"]
+        print(
+            f"fit: baseline / current {results['baseline_over_current']['fit']:.2f}×; "
+            f"same output: {results['same_fit_output']}"
+        )
+    path = write_results(args.output, results)
+    print(f"wrote {path}")
+
+
+if __name__ == "__main__":
+    main()
