@@ -72,6 +72,8 @@ ATTEMPTS = 3
 NODE_SCALE = 2.0
 #: Smallest relative change of Π at a node (see :func:`quadratic_pi`).
 MIN_CHANGE = 1e-7
+#: Halvings of a node distance whose nodes fall outside the support on both sides.
+_NARROWINGS = 20
 #: Node distances tried per coordinate, in factors of 4 from the given scale.
 _PROBES = 16
 #: Points of the scan of μ_s/μ_k for the pieces, rounds and points of the search of
@@ -398,11 +400,17 @@ def quadratic_pi(
     s = _node_distances(likelihood, names, c, np.asarray(scale, dtype=float), fixed_params, inside)
     sides = np.zeros(p)
     for a in range(p):
-        ok = []
-        for sign in (-1.0, 1.0):
-            values = dict(zip(names, c, strict=True))
-            values[names[a]] = c[a] + sign * 2.0 * s[a]
-            ok.append(bool(inside(values)))
+        # a spread wider than the prior's support (a parameter the data leave free)
+        # is narrowed until the nodes on one side fit in it
+        for _ in range(_NARROWINGS):
+            ok = []
+            for sign in (-1.0, 1.0):
+                values = dict(zip(names, c, strict=True))
+                values[names[a]] = c[a] + sign * 2.0 * s[a]
+                ok.append(bool(inside(values)))
+            if ok[0] or ok[1]:
+                break
+            s[a] *= 0.5
         if ok[0] and ok[1]:
             continue
         if not (ok[0] or ok[1]):
