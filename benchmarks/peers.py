@@ -565,7 +565,7 @@ class UserChain:
             "start_calls": self.start_calls,
             "start": self.start_info,
             "acceptance_fraction": float(np.mean(self.sampler.acceptance_fraction)),
-            "seconds_per_call": self.seconds / self.logp.calls,
+            "seconds_per_call": self.seconds / self.logp.inside,
         }
 
 
@@ -592,13 +592,13 @@ def user_run(
     out.update(
         {
             "seconds": seconds,
-            "seconds_per_call": seconds / chain.logp.calls,
+            "seconds_per_call": seconds / chain.logp.inside,
             "burn": burn,
             "autocorr_time": dict(zip(NAMES, tau.tolist(), strict=True)),
             "ess": dict(zip(NAMES, ess.tolist(), strict=True)),
             "ess_min": float(np.min(ess)),
             "ess_per_second": float(np.min(ess)) / seconds,
-            "calls_per_effective_sample": chain.logp.calls / float(np.min(ess)),
+            "calls_per_effective_sample": chain.logp.inside / float(np.min(ess)),
             "reached_target": bool(np.min(ess) >= target_ess),
             "load_before": load,
             "draws": chain.sampler.get_chain(discard=burn, flat=True),
@@ -710,7 +710,7 @@ def _summary(rows: list[dict[str, Any]], calls: float | None = None) -> dict[str
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=7, help="package fits and (b) runs each")
+    parser.add_argument("--repeats", type=int, default=9, help="package fits and (b) runs each")
     parser.add_argument("--ivp-steps", type=int, default=8, help="(c) emcee steps per round")
     parser.add_argument("--output", default="peers", help="results/<output>.json")
     args = parser.parse_args(argv)
