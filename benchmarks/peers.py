@@ -36,10 +36,11 @@ The observation (Π increments, their variances, the nuisance design) is the pac
 :func:`bayestribo.inference.prepare` in all three: what is compared is the forward model,
 the likelihood evaluation and the sampler.
 
-Effective sample size, the same way for all: emcee's integrated autocorrelation time
+Effective sample size, the same way for all: emcee's integrated autocorrelation time τ
 (``emcee.autocorr.integrated_time``, tol 0; the package re-implements it and agrees to
-rounding), τ the largest over the parameters (and the package's two ensembles), burn-in
-2τ, ESS = steps after burn-in × walkers / τ per parameter, the smallest reported. Log-
+rounding, and takes the larger of its two ensembles'), burn-in twice the largest τ over
+the parameters, ESS = steps after burn-in × walkers / τ per parameter, the smallest
+reported (the package's from its diagnostics, computed that way). Log-
 posterior calls: evaluations at a parameter set inside the prior's support (the
 package's counted in a separate fit with its compiled sampler step off, as in
 ``benchmarks/fit.py``; the users' counted as they happen, all calls also reported).
