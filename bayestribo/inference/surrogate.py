@@ -37,7 +37,7 @@ the quadratic cannot follow, the check fails and the exact posterior is sampled.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
@@ -61,6 +61,8 @@ __all__ = [
     "surrogate_posterior",
 ]
 
+#: Whether the coordinates' values (by name) are inside the priors' support.
+Inside = Callable[[Mapping[str, float]], bool]
 #: Largest coefficient of variation of the importance weights at which the surrogate
 #: posterior's draws are kept: posterior means within 0.05 posterior sd of the exact.
 MAX_WEIGHT_CV = 0.05
@@ -211,7 +213,7 @@ def _node_distances(
     c: NDArray,
     scale: NDArray,
     fixed_params: Mapping[str, float],
-    inside: callable,  # type: ignore[valid-type]
+    inside: Inside,
 ) -> NDArray:
     """Each coordinate's node distance: ``scale``, raised where Π changes there by less
     than :data:`MIN_CHANGE` of Π(0) to the first of ``scale × 4^k`` where it does (the
@@ -361,7 +363,7 @@ def quadratic_pi(
     centre: Mapping[str, float],
     scale: NDArray,
     fixed_params: Mapping[str, float],
-    inside: callable,  # type: ignore[valid-type]
+    inside: Inside,
     ratio: str | None = None,
     ratio_bounds: tuple[float, float] | None = None,
 ) -> QuadraticPi | None:
@@ -511,8 +513,8 @@ class SurrogateCheck:
 
 
 def check(
-    exact: callable,  # type: ignore[valid-type]
-    surrogate: callable,  # type: ignore[valid-type]
+    exact: Callable[[NDArray], NDArray],
+    surrogate: Callable[[NDArray], NDArray],
     draws: NDArray,
     rng: np.random.Generator,
     attempt: int = 1,
