@@ -103,6 +103,7 @@ from _laws_sim import (  # noqa: E402
     true_dissipation,
 )
 from _machine import RESULTS, machine, niced_worker  # noqa: E402
+from _tree import require_this_tree  # noqa: E402
 
 __all__ = ["CASES", "one_run", "summarise"]
 
@@ -755,6 +756,7 @@ def main(argv: list[str] | None = None) -> int:
     import bayestribo
 
     source["package_version"] = bayestribo.__version__
+    source["module"] = require_this_tree()
     jobs = [(c, n, i) for c in args.cases for n in args.levels for i in range(args.runs)]
     records: list[dict[str, Any]] = []
     output = output_path(args.output)

@@ -80,6 +80,7 @@ import numpy as np  # noqa: E402
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 from _machine import RESULTS, machine, niced_worker  # noqa: E402
+from _tree import require_this_tree  # noqa: E402
 
 __all__ = ["load", "one_fit", "recordings"]
 
@@ -611,7 +612,11 @@ def main(argv: list[str] | None = None) -> int:
 
     start = time.perf_counter()
     load_start = os.getloadavg()
-    source = {"commit": _commit(), "package_version": bayestribo.__version__}
+    source = {
+        "commit": _commit(),
+        "package_version": bayestribo.__version__,
+        "module": require_this_tree(),
+    }
     seeds = list(range(1, args.seeds + 1))
     settings = {
         "seeds": seeds,
