@@ -320,7 +320,9 @@ def one_fit(
         }
         band = result.dissipation
         rec["dissipation"] = {
-            k: band[k] for k in ("amplitude", "mean", "sd", "interval", "unit", "by_term")
+            # a verdict that mixes laws has no split by term
+            k: band.get(k)
+            for k in ("amplitude", "mean", "sd", "interval", "unit", "by_term")
         }
         rec["turning_point_dissipation"] = result.turning_point_dissipation
         if reference is None:

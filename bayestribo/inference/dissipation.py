@@ -488,8 +488,11 @@ def averaged_dissipation(
         draws = np.atleast_2d(np.asarray(draws, dtype=float))
         pick = draws[np.linspace(0, draws.shape[0] - 1, min(per, draws.shape[0])).astype(int)]
         values = posterior.law_draws(pick)
-        energy = posterior.law.swing_dissipation(
-            amps / scale.length_scale, values, posterior.likelihood.reference_amplitude
+        energy = _swing_dissipation(
+            posterior.law,
+            amps / scale.length_scale,
+            values,
+            posterior.likelihood.reference_amplitude,
         )
         energy = energy[np.all(np.isfinite(energy), axis=1)]
         if energy.shape[0]:
