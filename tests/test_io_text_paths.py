@@ -9,7 +9,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bayestribo.errors import RunFormatError
 from bayestribo.io import text as text_module
 from bayestribo.io.text import read_text
 
@@ -98,58 +97,16 @@ def _read(path: Path, options: dict, fast: bool, monkeypatch) -> tuple[dict, lis
     return out, [str(w.message) for w in caught]
 
 
-@pytest.mark.parametrize("parser", ["numpy", "pandas"])
 @pytest.mark.parametrize("name", list(FILES))
 def test_the_streamed_and_line_by_line_readers_give_identical_arrays_and_warnings(
-    name: str, parser: str, tmp_path: Path, monkeypatch
+    name: str, tmp_path: Path, monkeypatch
 ) -> None:
     content, options, _ = FILES[name]
     path = tmp_path / "run.csv"
     path.write_bytes(content.encode("utf-8"))
-    if parser == "pandas":  # pandas' C reader for files of any size
-        pytest.importorskip("pandas")
-        monkeypatch.setattr(text_module, "_PANDAS_BYTES", 0)
     fast, fast_warnings = _read(path, options, True, monkeypatch)
     slow, slow_warnings = _read(path, options, False, monkeypatch)
     assert list(fast) == list(slow)
     for key in fast:
         assert fast[key].tobytes() == slow[key].tobytes(), key
     assert fast_warnings == slow_warnings
-
-
-@pytest.mark.parametrize("delimiter", [",", ";", "\t", " "])
-def test_a_large_plain_file_is_parsed_by_pandas_with_numpys_numbers(
-    delimiter: str, tmp_path: Path, monkeypatch
-) -> None:
-    pytest.importorskip("pandas")
-    rng = np.random.default_rng(1)
-    rows = rng.standard_normal((5000, 3)) * [1.0, 1e-3, 1e-2]
-    rows[:, 0] = np.arange(5000) / 5e3
-    path = tmp_path / "run.csv"
-    body = "\n".join(delimiter.join(f"{v:.17g}" for v in row) for row in rows)
-    names = delimiter.join(["time_s", "displacement_m", "velocity_m_per_s"])
-    path.write_text(names + "\n" + body + "\n", encoding="utf-8")
-    expected = read_text(path)  # numpy's reader (a small file)
-    monkeypatch.setattr(text_module, "_PANDAS_BYTES", 0)
-
-    def no_numpy(*args, **kwargs):
-        raise AssertionError("numpy's reader was used")
-
-    monkeypatch.setattr(text_module.np, "loadtxt", no_numpy)
-    got = read_text(path)
-    for key in expected:
-        assert got[key].tobytes() == expected[key].tobytes(), key
-
-
-def test_a_row_cut_short_in_a_large_file_is_named_by_the_line_by_line_reader(
-    tmp_path: Path, monkeypatch
-) -> None:
-    pytest.importorskip("pandas")
-    monkeypatch.setattr(text_module, "_PANDAS_BYTES", 0)
-    lines = ["time_s,displacement_m,velocity_m_per_s"]
-    lines += [f"{k / 1e3},{np.sin(k / 30) * 1e-3},{np.cos(k / 30) * 1e-2}" for k in range(3000)]
-    lines[1500] = "1.499,0.0001"  # a row cut short in the middle
-    path = tmp_path / "run.csv"
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    with pytest.raises(RunFormatError, match="1501"):
-        read_text(path)
