@@ -545,8 +545,11 @@ def _sample_surrogate(
             return None, checked, None
         run = run_or_failure(run_ensembles, target, walkers, settings, seed=seed, progress=progress)
         flat = run.chains.reshape(-1, run.chains.shape[-1])
-        if not run.converged or flat.shape[0] < 2:
+        if flat.shape[0] < 2 or not np.all(np.isfinite(flat)):
             return None, checked, None
+        # a run that did not converge is checked too, and kept when the check passes:
+        # the fit reports its non-convergence as an exact run would, at a fraction of
+        # the cost of sampling the exact posterior to the step ceiling
         checked = check(posterior, target, flat, rng, attempt=attempt)
         if checked.passed:
             return run, checked, target
