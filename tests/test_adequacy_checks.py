@@ -175,6 +175,27 @@ def test_plots_render(report, tmp_path):
     plt.close("all")
 
 
+def test_the_friction_panel_is_left_out_where_it_has_nothing_to_show(report):
+    """Windows that hold the friction at the whole decay's value (a decay without
+    measurable friction): only ζ is drawn, and no panel is empty."""
+    import dataclasses
+
+    from bayestribo.reports.kit import empty_panels
+
+    held = [
+        dataclasses.replace(w, mu=1e-17, mu_interval=(1e-17, 1e-17)) for w in report.windows.windows
+    ]
+    windows = dataclasses.replace(
+        report.windows, windows=held, extra={**report.windows.extra, "friction_mode": "fixed"}
+    )
+    fig = plot_windows(windows, None, fig=plt.figure(), halves=None)
+    assert len(fig.axes) == 1 and empty_panels(fig) == []
+    assert "held at the whole decay's value" in fig.axes[0].get_title()
+    full = plot_windows(report.windows, report.constancy, halves=report.halves)
+    assert len(full.axes) == 2 and empty_panels(full) == []
+    plt.close("all")
+
+
 def test_bad_relative_error_is_refused(report):
     with pytest.raises(BayestriboError, match="relative_error"):
         predictive_check(report.decay, report.draws, relative_error=-0.1)

@@ -83,10 +83,12 @@ def test_a_bad_parameter_fails_before_the_kernel_starts(tmp_path, capfd):
 
 
 def _clean(page) -> None:
-    """What a reader must not see: Python reprs, code names in prose, numbers split."""
+    """What a reader must not see: Python reprs, code names in prose, numbers split,
+    figures with overlapping texts or panels with nothing to show."""
     assert page.reprs == [], page.reprs
     assert page.identifiers == [], page.identifiers
     assert page.broken_numbers == [], page.broken_numbers
+    assert page.figure_problems == [], page.figure_problems
 
 
 def test_the_single_run_report_reads_as_text_for_people(single_run_report):
@@ -133,3 +135,30 @@ def test_the_probe_finds_what_a_reader_must_not_see(tmp_path):
     assert found.identifiers == ["load_N"]
     assert any("np.float64(" in r for r in found.reprs)
     assert found.broken_numbers == ["-0.0006399123"]
+
+
+def test_the_probe_finds_a_figure_with_an_empty_panel(tmp_path, monkeypatch):
+    """A figure with an empty panel, saved as a report saves it, makes the page fail."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from bayestribo.reports import kit
+
+    fig, (a, b) = plt.subplots(2, 1, layout="constrained")
+    a.plot([0, 1], [0.02, 0.03])
+    b.plot([0, 1], [0.0, 1e-14])
+    b.set_ylabel("μ_k [-]")
+    notes = []
+    monkeypatch.setattr(kit, "note", notes.append)  # what the report would show
+    kit.setup(None)(fig, "windows")
+    plt.close(fig)
+    assert len(notes) == 1
+    page = tmp_path / "page.html"
+    body = "".join(f'<div class="bt-note"><b>Note.</b> {n}</div>' for n in notes)
+    page.write_text(f"<html><body><p>A report.</p>{body}</body></html>")
+    found = inspect_report(page)
+    assert found.figure_problems == [
+        "figure windows: empty panel: 'μ_k [-]': every y value is zero"
+    ]

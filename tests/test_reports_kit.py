@@ -66,3 +66,39 @@ def test_a_y_label_over_tick_labels_is_found():
     found = overlapping_labels(fig)
     assert any("ζ from the windows" in f and "y tick" in f for f in found), found
     plt.close(fig)
+
+
+def test_a_panel_with_nothing_to_show_is_found_and_said(tmp_path, monkeypatch):
+    """An axes without data, and a friction panel on a 1e-14 axis where every value is
+    zero: both are found, and ``save`` says so in a note the tests and the browser's
+    probe look for."""
+    from bayestribo.reports import kit
+
+    fig, (a, b, c) = plt.subplots(3, 1, figsize=(5, 6), layout="constrained")
+    a.plot([0.1, 0.2], [0.0236, 0.0237])
+    a.set_title("ζ")
+    b.set_title("nothing")
+    c.plot([0.1, 0.2], [3e-15, -2e-14])
+    c.set_ylabel("x_c [m]")
+    assert kit.empty_panels(fig) == ["'nothing': no data", "'x_c [m]': every y value is zero"]
+    said = []
+    monkeypatch.setattr(kit, "note", said.append)
+    kit.setup(None)(fig, "windows")
+    assert said and said[0].startswith(f"figure windows: {kit.FIGURE_PROBLEMS[1]}: ")
+    plt.close(fig)
+
+
+def test_panels_that_are_not_drawn_as_panels_are_not_empty():
+    """A log axis of small values, a blank corner-plot cell (no frame), an axes holding
+    only a legend (axis off) and a hidden one are not empty panels."""
+    from bayestribo.reports.kit import empty_panels
+
+    fig, axes = plt.subplots(2, 2, figsize=(6, 5), layout="constrained")
+    axes[0, 0].semilogy([0.1, 0.2], [1e-15, 3e-14])
+    axes[0, 1].set_frame_on(False)
+    axes[0, 1].set_xticks([])
+    axes[1, 0].axis("off")
+    axes[1, 0].legend(*axes[0, 0].get_legend_handles_labels())
+    axes[1, 1].set_visible(False)
+    assert empty_panels(fig) == []
+    plt.close(fig)

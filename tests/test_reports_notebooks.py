@@ -27,6 +27,7 @@ pytest.importorskip("nbclient")
 
 from bayestribo.errors import MissingDependencyError  # noqa: E402
 from bayestribo.reports.html import external_references  # noqa: E402
+from bayestribo.reports.kit import FIGURE_PROBLEMS  # noqa: E402
 from bayestribo.reports.notebooks import (  # noqa: E402
     NOTEBOOKS,
     PARAMETERS_TAG,
@@ -286,7 +287,8 @@ def test_notebook_executes_with_test_parameters(name, tmp_path):
         assert not re.search(r'class="[^"]*jp-InputArea-editor', text)  # no code
         assert 'data-mime-type="application/vnd.jupyter.stderr"' not in text
         assert 'class="bt-toc"' in text and "bayestribo version" in text
-        assert "labels overlap" not in text  # every figure legible (kit.save checks)
+        for problem in FIGURE_PROBLEMS:  # every figure legible, no empty panel (kit.save)
+            assert f": {problem}: " not in text, problem
         # nbconvert's "word-break: break-all" is overridden: numbers stay whole
         assert "word-break: normal" in text
 

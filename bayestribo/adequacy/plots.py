@@ -37,7 +37,10 @@ def plot_windows(
 ) -> Any:
     """ζ and μ per window against the window amplitude, with 95 % intervals.
 
-    Horizontal bars span each window's amplitude range; the constancy test's line
+    The friction's panel is left out when the windows do not fit the friction (it is
+    held at the whole decay's value, as for a decay without measurable friction) or
+    when it is zero in every window: such a panel has nothing to show. Horizontal bars
+    span each window's amplitude range; the constancy test's line
     (if given) is drawn over the windows it used. Windows whose estimate sits on a
     parameter bound are drawn as crosses, and the vertical scale is set by the
     other windows (a bound estimate's interval is meaningless and huge). The two
@@ -49,7 +52,8 @@ def plot_windows(
     windows : WindowedAnalysis
     constancy : ConstancyTest, optional
     fig : matplotlib Figure, optional
-        With two axes, or empty (two are added).
+        With two axes, or empty (two are added, or one without the friction's panel;
+        of two given axes the second is removed then).
     halves : SplitHalves, optional
         The split-half check (:func:`bayestribo.adequacy.halves.split_halves`).
 
@@ -57,16 +61,24 @@ def plot_windows(
     -------
     matplotlib Figure
     """
-    fig = _figure(fig, 2)
-    ax_z, ax_m = fig.axes[:2]
+    friction = windows.column("mu")
+    friction_iv = np.array([w.mu_interval for w in windows.windows], dtype=float)
+    shown = windows.extra.get("friction_mode", "fit") != "fixed" and bool(
+        np.nanmax(np.abs(np.concatenate([friction, friction_iv.ravel()])), initial=0.0) > 1e-12
+    )
+    fig = _figure(fig, 2 if shown else 1)
+    if not shown and len(fig.axes) > 1:
+        fig.delaxes(fig.axes[1])
+    ax_z = fig.axes[0]
+    ax_m = fig.axes[1] if shown else None
     amp = windows.column("amplitude")
     lo_a = amp - np.array([w.amplitude_range[0] for w in windows.windows])
     hi_a = np.array([w.amplitude_range[1] for w in windows.windows]) - amp
     regular = np.array([w.regular for w in windows.windows])
-    for ax, name, trend in (
-        (ax_z, "zeta", None if constancy is None else constancy.zeta),
-        (ax_m, "mu", None if constancy is None else constancy.mu),
-    ):
+    panels = [(ax_z, "zeta", None if constancy is None else constancy.zeta)]
+    if shown:
+        panels.append((ax_m, "mu", None if constancy is None else constancy.mu))
+    for ax, name, trend in panels:
         val = windows.column(name)
         iv = np.array([getattr(w, f"{name}_interval") for w in windows.windows])
         err = np.vstack([val - iv[:, 0], iv[:, 1] - val])
@@ -79,7 +91,9 @@ def plot_windows(
                     xerr=np.vstack([lo_a, hi_a])[:, mask],
                     fmt=style,
                     capsize=2,
-                    label="on a bound" if style == "x" else f"{windows.method} per window",
+                    label="on a bound"
+                    if style == "x"
+                    else f"{windows.method.replace('_', ' ')} per window",
                 )
         if halves is not None and name in halves.parameters:
             for k, (half, colour) in enumerate(((halves.first, "C1"), (halves.second, "C2"))):
@@ -108,13 +122,20 @@ def plot_windows(
             ax.plot(a, trend.mean + trend.slope * (a - mean_amp), "k--", label="trend")
         ax.grid(alpha=0.3)
     ax_z.set_ylabel("ζ [-]")
-    if windows.friction_name == "mu_k":
+    symbol = "μ_k" if windows.friction_name == "mu_k" else "x_c"
+    if ax_m is None:
+        ax_z.set_xlabel(f"window amplitude [{windows.length_unit}]")
+    elif windows.friction_name == "mu_k":
         ax_m.set_ylabel("μ_k [-]")
     else:  # the friction displacement x_c, in the signal's unit
         ax_m.set_ylabel(f"x_c [{windows.length_unit}]")
-    ax_m.set_xlabel(f"window amplitude [{windows.length_unit}]")
+    if ax_m is not None:
+        ax_m.set_xlabel(f"window amplitude [{windows.length_unit}]")
     ax_z.legend(fontsize="small")
     titles = []
+    if ax_m is None:
+        held = windows.extra.get("friction_mode", "fit") == "fixed"
+        titles.append(f"{symbol} held at the whole decay's value" if held else f"{symbol} = 0")
     if constancy is not None:
         titles.append(
             ("constant" if constancy.constant else "not constant")

@@ -71,8 +71,22 @@ window.addEventListener("load", function () {
     reprs: (text.match(/.{0,30}(np\.\w+\(|array\(|\{'|\['|\bNone\b|\bnan\b).{0,30}/g) || [])
       .slice(0, 20),
     identifiers: prose(),
-    broken_numbers: brokenNumbers()
+    broken_numbers: brokenNumbers(),
+    figure_problems: figureProblems()
   };
+  function figureProblems() {
+    // notes by which the report says a figure is not legible (labels overlap, a panel
+    // with nothing to show): the report's figures are checked as they are drawn
+    var kinds = __FIGURE_PROBLEMS__;
+    var found = [];
+    document.querySelectorAll(".bt-note").forEach(function (el) {
+      var text = el.textContent.replace(/^\s*Note\.\s*/, "");
+      if (kinds.some(function (k) { return text.indexOf(": " + k + ": ") >= 0; })) {
+        found.push(text.slice(0, 200));
+      }
+    });
+    return found.slice(0, 20);
+  }
   function prose() {
     // snake_case names in the text of paragraphs and list items, code left out
     var found = [];
@@ -154,6 +168,9 @@ class PageInspection:
         Code identifiers (``snake_case`` names) in the prose, code spans left out.
     broken_numbers : list of str
         Table cells with digits that the layout breaks across lines.
+    figure_problems : list of str
+        Notes saying a figure is not legible: texts that overlap, a panel with nothing
+        to show (:data:`bayestribo.reports.kit.FIGURE_PROBLEMS`).
     """
 
     images: int
@@ -170,6 +187,7 @@ class PageInspection:
     reprs: list[str]
     identifiers: list[str]
     broken_numbers: list[str]
+    figure_problems: list[str]
 
     @property
     def all_images_loaded(self) -> bool:
@@ -230,7 +248,10 @@ def inspect_report(
     exe = _chromium(executable)
     source = Path(html).resolve()
     page = source.read_text(encoding="utf-8")
-    probed = page.replace("</body>", _PROBE + "</body>", 1)
+    from bayestribo.reports.kit import FIGURE_PROBLEMS
+
+    probe = _PROBE.replace("__FIGURE_PROBLEMS__", json.dumps(list(FIGURE_PROBLEMS)))
+    probed = page.replace("</body>", probe + "</body>", 1)
     with tempfile.NamedTemporaryFile(
         "w", suffix=".html", prefix=".probe-", dir=source.parent, delete=False, encoding="utf-8"
     ) as fh:
@@ -344,7 +365,8 @@ def main(argv: list[str] | None = None) -> int:
             args.html, args.screenshot, width=args.width, height=args.height, top=args.top
         )
         print(f"screenshot: {shot}")
-    return 0 if found.all_images_loaded and not found.raw_tex else 1
+    legible = not found.raw_tex and not found.figure_problems
+    return 0 if found.all_images_loaded and legible else 1
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -29,7 +29,11 @@ from bayestribo.reports.html import NOTE_CLASS
 
 __all__ = [
     "FIGURE_FORMATS",
+    "FIGURE_PROBLEMS",
     "about",
+    "checks",
+    "empty_panels",
+    "facts",
     "file_sha256",
     "interval_text",
     "note",
@@ -43,6 +47,14 @@ __all__ = [
 
 #: Formats a report's figures can be written in (``--figure-format``).
 FIGURE_FORMATS = ("png", "pdf", "svg")
+
+#: What :func:`setup`'s ``save`` says in a note about a figure that is not legible, one
+#: phrase per kind of problem (the browser's probe looks for them in the notes).
+FIGURE_PROBLEMS = ("labels overlap", "empty panel")
+
+#: Largest |value| of an axis on which every value counts as zero: a panel whose data all
+#: lie within it shows nothing (a friction of 1e-14 where the law has no friction).
+ZERO = 1e-12
 
 #: The figures' look in every report.
 RC = {
@@ -112,9 +124,12 @@ def verdict(text: str) -> None:
 
 def table(frame: Any, *, digits: int = 5) -> None:
     """Show a pandas DataFrame as a table: numbers to ``digits`` significant digits,
-    missing values as a dash (not NaN)."""
+    missing values as a dash (not NaN), the index's name in the header's corner (not on
+    a header row of its own)."""
     from IPython.display import HTML
 
+    if frame.index.name is not None and frame.columns.name is None and frame.columns.nlevels == 1:
+        frame = frame.rename_axis(index=None, columns=frame.index.name)
     _display(HTML(frame.to_html(na_rep="–", float_format=lambda v: f"{v:.{digits}g}", border=0)))
 
 
@@ -180,15 +195,70 @@ def setup(figure_dir: str | None, figure_format: str = "png") -> Callable[[Any, 
     def save(fig: Any, name: str) -> None:
         """Write ``fig`` as ``<name>.<format>`` in the figure folder (if any).
 
-        Texts that overlap are said in a note (the report's tests require none).
+        Texts that overlap and panels with nothing to show are said in a note (the
+        report's tests and the browser's probe require none).
         """
         overlaps = overlapping_labels(fig)
         if overlaps:
-            note(f"figure {name}: labels overlap: {'; '.join(overlaps[:3])}")
+            note(f"figure {name}: {FIGURE_PROBLEMS[0]}: {'; '.join(overlaps[:3])}")
+        empty = empty_panels(fig)
+        if empty:
+            note(f"figure {name}: {FIGURE_PROBLEMS[1]}: {'; '.join(empty[:3])}")
         if folder is not None:
             fig.savefig(folder / f"{name}.{figure_format}", bbox_inches="tight")
 
     return save
+
+
+def _where(ax: Any) -> str:
+    """A panel's name for a message: its title or an axis label."""
+    return ax.get_title() or ax.get_xlabel() or ax.get_ylabel() or "an axes"
+
+
+def _panels(fig: Any) -> list[Any]:
+    """The axes of ``fig`` drawn as panels: visible, with their axes and frame on (a
+    corner plot's blank upper triangle and an axes holding only a legend are not)."""
+    return [ax for ax in fig.axes if ax.get_visible() and ax.axison and ax.get_frame_on()]
+
+
+def empty_panels(fig: Any) -> list[str]:
+    """Panels of ``fig`` with nothing to show: no data artist (line, marker, patch,
+    collection, image), no finite data, or every value of an axis zero (within
+    :data:`ZERO` on a linear axis: a friction panel at 1e-14 where the law has none).
+
+    Returns
+    -------
+    list of str
+        ``"'title': no data"`` or ``"'title': every y value is zero"`` for each empty
+        panel; empty if none.
+
+    Examples
+    --------
+    >>> import matplotlib.pyplot as plt
+    >>> fig, (a, b) = plt.subplots(1, 2)
+    >>> _ = a.plot([0, 1], [0, 1]); _ = b.set_title("friction")
+    >>> empty_panels(fig)
+    ["'friction': no data"]
+    >>> plt.close(fig)
+    """
+    import math
+
+    found = []
+    for ax in _panels(fig):
+        where = _where(ax)
+        if not ax.has_data():
+            found.append(f"{where!r}: no data")
+            continue
+        limits = {"x": ax.dataLim.intervalx, "y": ax.dataLim.intervaly}
+        finite = {k: all(math.isfinite(v) for v in lim) for k, lim in limits.items()}
+        if not any(finite.values()):
+            found.append(f"{where!r}: no finite data")
+            continue
+        scales = {"x": ax.get_xscale(), "y": ax.get_yscale()}
+        for name, lim in limits.items():
+            if finite[name] and scales[name] == "linear" and max(map(abs, lim)) <= ZERO:
+                found.append(f"{where!r}: every {name} value is zero")
+    return found
 
 
 def _texts(fig: Any) -> list[tuple[str, Any]]:
@@ -200,7 +270,7 @@ def _texts(fig: Any) -> list[tuple[str, Any]]:
     for ax in fig.axes:
         if not ax.get_visible():
             continue
-        where = ax.get_title() or ax.get_xlabel() or ax.get_ylabel() or "an axes"
+        where = _where(ax)
         for name, axis in (("x", ax.xaxis), ("y", ax.yaxis)):
             # the ticks drawn: those within the view (labels of ticks outside it are
             # laid out but not drawn)
@@ -266,6 +336,35 @@ def _cell(value: Any) -> str:
     return str(value)
 
 
+def facts(items: Mapping[str, Any], *, title: str) -> None:
+    """Show label -> value as a two-column table with a caption; None values left out."""
+    from IPython.display import HTML
+
+    body = "".join(
+        f"<tr><th>{html.escape(str(k))}</th><td>{html.escape(_cell(v))}</td></tr>"
+        for k, v in items.items()
+        if v is not None
+    )
+    _display(HTML(f'<table class="bt-about"><caption>{html.escape(title)}</caption>{body}</table>'))
+
+
+def checks(adequacy: Any) -> None:
+    """Show an adequacy check's checks, each passed or failed with its statement, then
+    its verdict in a sentence of its own (``Verdict: ... .``)."""
+    from IPython.display import Markdown
+
+    mark = {True: "passed", False: "**failed**", None: "not made"}
+    _display(
+        Markdown(
+            "\n".join(
+                f"* **{sentence(c['name'])[:-1]}**: {mark[c['passed']]}. {sentence(c['statement'])}"
+                for c in adequacy.checks
+            )
+        )
+    )
+    verdict("Verdict: " + adequacy.verdict + ".")
+
+
 def about(items: Mapping[str, Any], *, title: str = "About this report") -> None:
     """Show what the report is about as a two-column table, with the bayestribo version.
 
@@ -277,18 +376,12 @@ def about(items: Mapping[str, Any], *, title: str = "About this report") -> None
     title : str
         Caption of the table.
     """
-    from IPython.display import HTML
-
     from bayestribo import __version__
 
     rows = {
-        **{k: v for k, v in items.items() if v is not None},
+        **items,
         "bayestribo version": __version__,
         "Python": platform.python_version(),
         "report made": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
     }
-    body = "".join(
-        f"<tr><th>{html.escape(str(k))}</th><td>{html.escape(_cell(v))}</td></tr>"
-        for k, v in rows.items()
-    )
-    _display(HTML(f'<table class="bt-about"><caption>{html.escape(title)}</caption>{body}</table>'))
+    facts(rows, title=title)

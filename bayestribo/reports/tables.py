@@ -1,0 +1,364 @@
+"""Results as tables for people: symbols and units, intervals in the digits they support.
+
+The reports show a fit, a table of classical estimates or an adequacy check as HTML
+tables (pandas DataFrames shown by :func:`bayestribo.reports.kit.table`), not as the
+terminal's fixed-width text: a quantity is named by its symbol (ζ, μ_k, x_c) with its
+unit, a value with its 95 % interval in one cell (:func:`bayestribo.summary.interval_text`),
+a method by its name in words. Every function here returns plain data (a DataFrame, a
+dict of texts) and shows nothing.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+from bayestribo.summary import interval_text
+
+__all__ = [
+    "METHOD_NAMES",
+    "SYMBOLS",
+    "estimates_frame",
+    "fit_facts",
+    "fit_frame",
+    "law_text",
+    "normal_interval",
+    "share_text",
+    "unit_text",
+    "windows_frame",
+]
+
+#: Symbols of the quantities a fit reports that are not a law's own parameter.
+SYMBOLS = {
+    "zeta": "ζ",
+    "mu_k": "μ_k",
+    "mu_s": "μ_s",
+    "mu_s_ratio": "μ_s/μ_k",
+    "friction_displacement": "x_c",
+    "static_friction_displacement": "x_s",
+    "zeta_k": "ζ_k",
+    "d_k": "d_k",
+    "y0": "y₀",
+}
+
+#: The classical estimators by name in words.
+METHOD_NAMES = {
+    "log_decrement": "logarithmic decrement",
+    "exponential_envelope": "exponential envelope",
+    "feeny_liang": "Feeny–Liang",
+    "nonsuccessive": "non-successive peaks",
+    "energy_ls_averaged": "least squares on Π, averaged model",
+    "energy_ls_exact": "least squares on Π, exact model",
+}
+
+#: The terms of a dissipation law in words.
+_TERMS = {
+    "viscous": "viscous",
+    "coulomb": "Coulomb friction",
+    "quadratic": "quadratic drag",
+    "power": "power-law drag",
+    "cubic": "cubic drag",
+    "hysteretic": "hysteretic damping",
+}
+
+#: Quantities of a fit not shown among the results (nuisances, sampled scales).
+_HIDDEN = ("y0", "mu_s_ratio")
+
+#: Quantiles of a 95 % normal interval, in standard errors.
+_Z95 = 1.959963984540054
+
+
+def law_text(law: str) -> str:
+    """A dissipation law in words: ``"viscous+coulomb"`` -> ``"viscous + Coulomb friction"``.
+
+    Examples
+    --------
+    >>> law_text("viscous+coulomb")
+    'viscous + Coulomb friction'
+    """
+    return " + ".join(_TERMS.get(t, t) for t in str(law).split("+"))
+
+
+def unit_text(unit: str | None) -> str:
+    """A unit as a reader writes it: ``"-"`` for a dimensionless quantity, ``"signal
+    unit"`` for a length in a recording's unstated unit, superscript squares.
+
+    Examples
+    --------
+    >>> unit_text("1"), unit_text("signal length unit^2"), unit_text("J")
+    ('-', 'signal unit²', 'J')
+    """
+    if unit in (None, "", "1", "-"):
+        return "-"
+    return str(unit).replace("signal length unit", "signal unit").replace("^2", "²")
+
+
+def _symbols(law: str | None) -> dict[str, str]:
+    """Symbols of a law's own parameters, then the common ones."""
+    own: dict[str, str] = {}
+    if law:
+        try:
+            from bayestribo.model.laws import get_law
+
+            own = {p.name: p.symbol for p in get_law(law).parameters}
+        except (ImportError, ValueError):  # a law this version does not register
+            own = {}
+    return {**own, **SYMBOLS}
+
+
+def normal_interval(value: float | None, se: float | None, *, positive: bool = False) -> str:
+    """``value [low, high]`` of a classical estimate: ±1.96 standard errors, in the digits
+    the interval supports; a positive quantity whose interval reaches below zero is shown
+    as an upper bound (``< 8.2e-05 (at zero)``). A dash without a value; the value alone
+    (3 digits) without a standard error.
+
+    Examples
+    --------
+    >>> normal_interval(0.0236, 0.0001)
+    '0.02360 [0.02340, 0.02380]'
+    >>> normal_interval(3.97e-19, 4.2e-05, positive=True)
+    '< 8.2e-05 (at zero)'
+    """
+    if value is None or not math.isfinite(value):
+        return "–"
+    if se is None or not math.isfinite(se) or se <= 0:
+        return f"{value:.3g}"
+    low, high = value - _Z95 * se, value + _Z95 * se
+    if positive and low < 0.0 < high:
+        return interval_text(max(value, 0.0), 0.0, high)
+    return interval_text(value, low, high)
+
+
+def share_text(share: float | None) -> str:
+    """A share between 0 and 1 in three digits, ``< 0.001`` and ``> 0.999`` at its ends
+    (a least-squares share of 4e-16 is zero at the precision of any estimate).
+
+    Examples
+    --------
+    >>> share_text(3.8e-16), share_text(0.01845), share_text(0.99999)
+    ('< 0.001', '0.0185', '> 0.999')
+    """
+    if share is None or not math.isfinite(share):
+        return "–"
+    if share < 1e-3:
+        return "< 0.001"
+    if share > 0.999:
+        return "> 0.999"
+    return f"{share:.3g}"
+
+
+def _swings(band: Mapping[str, Any]) -> list[int]:
+    """Indices of the largest, middle and smallest swing of a ΔE(A) band."""
+    n = len(band.get("amplitude") or [])
+    return sorted({n - 1, n // 2, 0}, reverse=True) if n else []
+
+
+def _band_text(band: Mapping[str, Any], i: int) -> str:
+    mean, (low, high) = band["mean"][i], (band["interval"][0][i], band["interval"][1][i])
+    if mean is None or low is None or high is None:
+        return "–"
+    return interval_text(mean, low, high)
+
+
+def fit_frame(result: Any, *, prob: float = 0.95, hidden: tuple[str, ...] = _HIDDEN) -> Any:
+    """A Bayesian fit's results: its quantities by symbol with their interval and unit,
+    then the energy dissipated per cycle ΔE(A) at the largest, middle and smallest swing
+    of the analysed motion, the law's and the one measured from the turning points.
+
+    Parameters
+    ----------
+    result : FitResult
+    prob : float
+        Probability of the intervals.
+    hidden : tuple of str
+        Quantities left out (the amplitude at the window's start and the static to
+        kinetic friction ratio by default; sampled scales ``log10_*`` always).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Index ``quantity``; columns ``value [95 % interval]`` and ``unit``.
+    """
+    import pandas as pd
+
+    symbols = _symbols(result.law)
+    units = result.units()
+    column = f"value [{100 * prob:g} % interval]"
+    rows = []
+    for name, s in result.summary(prob).items():
+        if name in hidden or name.startswith("log10_"):
+            continue
+        rows.append(
+            {
+                "quantity": symbols.get(name, name),
+                column: interval_text(s.mean, *s.interval),
+                "unit": unit_text(units.get(name)),
+            }
+        )
+    band = result.dissipation or {}
+    measured = result.turning_point_dissipation or {}
+    for i in _swings(band):
+        amp = f"{band['amplitude'][i]:.3g} {unit_text(band['amplitude_unit'])}"
+        sources = [("law", band)]
+        if measured.get("amplitude"):
+            sources.append(("turning points", measured))
+        for source, b in sources:
+            rows.append(
+                {
+                    "quantity": f"ΔE(A = {amp}), {source}",
+                    column: _band_text(b, i),
+                    "unit": unit_text(band.get("unit")),
+                }
+            )
+    return pd.DataFrame(rows, columns=["quantity", column, "unit"]).set_index("quantity")
+
+
+def fit_facts(result: Any) -> dict[str, str]:
+    """How a Bayesian fit was made and how it went, as label -> sentence: the law, the
+    model, the noise, the sampler's convergence, the shape of the decay against the law,
+    the frequency's change along the decay, any posterior piled on a prior bound, and
+    the time the fit took."""
+    d = result.diagnostics
+    facts = {"law": law_text(result.law)}
+    comparison = result.law_comparison
+    if comparison:
+        facts["law"] += f" (chosen among the registered laws; best: {law_text(comparison['best'])})"
+    facts["model"] = f"{result.model}, seed {result.seed}"
+    noise = (result.noise or {}).get("description")
+    if noise:
+        facts["noise"] = noise
+    runs = (
+        f"{d.get('n_walkers')} walkers × {d.get('n_ensembles')} ensembles × "
+        f"{d.get('n_steps')} steps"
+    )
+    stats = (
+        f"autocorrelation time ≤ {d.get('autocorr_time_max', 0):.1f} steps, effective sample "
+        f"size ≥ {d.get('ess_min', 0):.0f}, R-hat ≤ {d.get('rhat_max', 0):.4f}"
+    )
+    if d.get("converged"):
+        facts["sampler"] = f"converged: {runs}; {stats}"
+    else:
+        facts["sampler"] = "not converged (" + "; ".join(d.get("reasons", [])) + f"): {runs}"
+    shape = d.get("shape_departure") or {}
+    if shape.get("p_value") is not None:
+        from bayestribo.inference.pipeline import MISFIT_P
+
+        if shape["p_value"] < MISFIT_P:
+            facts["shape of the decay"] = (
+                f"departs from the law by up to {100 * shape['max_relative']:+.3g} % "
+                f"(± {100 * shape['max_relative_sd']:.2g} %) along the decay: the law does "
+                "not hold, and its parameters are not a measurement"
+            )
+        else:
+            facts["shape of the decay"] = f"follows the law (p = {shape['p_value']:.2g})"
+    trend = result.frequency_trend
+    if trend:
+        facts["frequency"] = (
+            f"the half period changes by {100 * trend['change']:+.3g} % along the decay "
+            f"({trend['z']:+.1f} standard errors)"
+        )
+    for entry in result.at_prior_bound:
+        symbol = _symbols(result.law).get(entry["parameter"], entry["parameter"])
+        facts[f"{symbol} at its prior's bound"] = (
+            f"piles on {entry['bound']:.4g}: not a measurement; check units and channels"
+        )
+    facts["fit time"] = f"{result.seconds:.1f} s"
+    return facts
+
+
+def _method(estimate: Any) -> str:
+    """A classical estimate's method in words, with the signal it used."""
+    name = METHOD_NAMES.get(estimate.method, estimate.method)
+    if estimate.data.startswith("displacement"):
+        return f"{name} (x)"
+    if estimate.data.startswith("velocity"):
+        return f"{name} (v)"
+    return name
+
+
+def _caveat(notes: str) -> str:
+    """What a reader must know before using an estimate: from the method's own notes."""
+    said = []
+    if "assumes no friction" in notes:
+        said.append("viscous only")
+    if "too small" in notes:
+        said.append("interval too narrow")
+    if "peak noise only" in notes and not said:
+        said.append("peak noise only")
+    return "; ".join(said) or "–"
+
+
+def estimates_frame(table: Any, *, unit: str = "m") -> Any:
+    """Classical estimates of one recording: per method (x: displacement peaks, v:
+    velocity peaks), ζ and the friction (μ_k where load and mass are known, else the
+    friction displacement x_c in ``unit``) with ±1.96 standard errors, the share of the
+    energy lost to friction, and a caveat from the method's notes in two or three words:
+    *viscous only* (the method assumes no friction: ζ too high where there is some),
+    *interval too narrow* (correlated residuals), *peak noise only* (the interval holds
+    the peaks' noise and nothing else).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Index ``method``; columns ``ζ [95 %]``, ``μ_k [95 %]`` or ``x_c [unit] [95 %]``,
+        ``friction share``, ``caveat``.
+    """
+    import pandas as pd
+
+    estimates = list(table)
+    has_mu = any(e.mu_k is not None for e in estimates)
+    friction = "mu_k" if has_mu else "friction_displacement"
+    label = "μ_k [95 %]" if has_mu else f"x_c [{unit_text(unit)}] [95 %]"
+    rows = []
+    for e in estimates:
+        value = getattr(e, friction)
+        rows.append(
+            {
+                "method": _method(e),
+                "ζ [95 %]": normal_interval(e.zeta, e.zeta_se, positive=True),
+                label: "–"
+                if value is None
+                else normal_interval(value, getattr(e, f"{friction}_se"), positive=True),
+                "friction share": share_text(e.friction_fraction),
+                "caveat": _caveat(e.notes or ""),
+            }
+        )
+    return pd.DataFrame(rows).set_index("method")
+
+
+def windows_frame(adequacy: Any) -> Any:
+    """The windowed fits of an adequacy check, then its two halves (if made): time span,
+    amplitude range, ζ and the friction with their 95 % intervals (the friction left out
+    where the windows hold it at the whole decay's value), and whether an estimate sits
+    on a parameter's bound.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Index ``window`` (1, 2, ..., "first half", "second half").
+    """
+    import pandas as pd
+
+    w = adequacy.windows
+    unit = unit_text(w.length_unit)
+    friction = "μ_k" if w.friction_name == "mu_k" else f"x_c [{unit}]"
+    held = w.extra.get("friction_mode", "fit") == "fixed"
+
+    def row(label: Any, x: Any) -> dict[str, Any]:
+        out = {
+            "window": label,
+            "t [s]": f"{x.t_start:.3f} to {x.t_end:.3f}",
+            f"amplitude [{unit}]": f"{x.amplitude_range[0]:.3g} to {x.amplitude_range[1]:.3g}",
+            "ζ [95 %]": interval_text(x.zeta, *x.zeta_interval),
+        }
+        if not held:
+            out[f"{friction} [95 %]"] = interval_text(x.mu, *x.mu_interval)
+        out["on a bound"] = "–" if getattr(x, "regular", True) else "yes"
+        return out
+
+    rows = [row(x.index + 1, x) for x in w.windows]
+    if adequacy.halves is not None:
+        h = adequacy.halves
+        rows += [row("first half", h.first), row("second half", h.second)]
+    return pd.DataFrame(rows).set_index("window")
