@@ -326,6 +326,27 @@ class FitResult:
         return self._attr("channels_json", None)
 
     @property
+    def symbols(self) -> dict[str, str]:
+        """The symbol of each of the law's parameters (``{"zeta": "ζ", ...}``); empty
+        for a law this version does not register."""
+        from bayestribo.model.laws import get_law
+
+        try:
+            return {p.name: p.symbol for p in get_law(self.law).parameters}
+        except ValueError:
+            return {}
+
+    @property
+    def law_departs(self) -> bool:
+        """True when the decay departs from the law smoothly beyond its noise (the shape
+        test of :meth:`~bayestribo.inference.likelihood.PiLikelihood.shape_departure`,
+        p below the misfit threshold of :mod:`bayestribo.inference.pipeline`)."""
+        from bayestribo.inference.pipeline import MISFIT_P
+
+        p = (self.diagnostics.get("shape_departure") or {}).get("p_value")
+        return p is not None and p < MISFIT_P
+
+    @property
     def package_version(self) -> str:
         """The bayestribo version that made the fit."""
         return str(self._attr("package_version", "unknown"))

@@ -94,16 +94,9 @@ def unit_text(unit: str | None) -> str:
     return str(unit).replace("signal length unit", "signal unit").replace("^2", "²")
 
 
-def _symbols(law: str | None) -> dict[str, str]:
-    """Symbols of a law's own parameters, then the common ones."""
-    own: dict[str, str] = {}
-    if law:
-        try:
-            from bayestribo.model.laws import get_law
-
-            own = {p.name: p.symbol for p in get_law(law).parameters}
-        except (ImportError, ValueError):  # a law this version does not register
-            own = {}
+def _symbols(result: Any) -> dict[str, str]:
+    """Symbols of a fit's own law parameters, then the common ones."""
+    own = dict(getattr(result, "symbols", {}) or {})
     return {**own, **SYMBOLS}
 
 
@@ -182,7 +175,7 @@ def fit_frame(result: Any, *, prob: float = 0.95, hidden: tuple[str, ...] = _HID
     """
     import pandas as pd
 
-    symbols = _symbols(result.law)
+    symbols = _symbols(result)
     units = result.units()
     column = f"value [{100 * prob:g} % interval]"
     rows = []
@@ -242,9 +235,7 @@ def fit_facts(result: Any) -> dict[str, str]:
         facts["sampler"] = "not converged (" + "; ".join(d.get("reasons", [])) + f"): {runs}"
     shape = d.get("shape_departure") or {}
     if shape.get("p_value") is not None:
-        from bayestribo.inference.pipeline import MISFIT_P
-
-        if shape["p_value"] < MISFIT_P:
+        if getattr(result, "law_departs", False):
             facts["shape of the decay"] = (
                 f"departs from the law by up to {100 * shape['max_relative']:+.3g} % "
                 f"(± {100 * shape['max_relative_sd']:.2g} %) along the decay: the law does "
@@ -259,7 +250,7 @@ def fit_facts(result: Any) -> dict[str, str]:
             f"({trend['z']:+.1f} standard errors)"
         )
     for entry in result.at_prior_bound:
-        symbol = _symbols(result.law).get(entry["parameter"], entry["parameter"])
+        symbol = _symbols(result).get(entry["parameter"], entry["parameter"])
         facts[f"{symbol} at its prior's bound"] = (
             f"piles on {entry['bound']:.4g}: not a measurement; check units and channels"
         )
