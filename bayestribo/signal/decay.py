@@ -75,7 +75,8 @@ from bayestribo.errors import RecordingError
 from bayestribo.model.plausible import MAX_SPEED
 from bayestribo.model.scaling import Rig, Scaling
 from bayestribo.signal.motion import THRESHOLD, block_noise, check_turning_points, motion_span
-from bayestribo.signal.peaks import Peaks, _dominant_period, estimate_noise, find_peaks
+from bayestribo.signal.peaks import Peaks, estimate_noise, find_peaks
+from bayestribo.signal.period import dominant_period
 from bayestribo.signal.quantisation import QUANTISATION_NOISE_FACTOR, quantisation_step
 from bayestribo.signal.spectrum import NoiseSpectrum, RestNoise, fit_line, noise_spectrum
 
@@ -883,7 +884,7 @@ def _analyse(
     velocity_offset = 0.0
     reference = x if x is not None else v
     try:
-        period0 = _dominant_period(t, reference)
+        period0 = dominant_period(t, reference)
     except RecordingError as e:
         raise RecordingError(f"release: no motion found: {e}") from e
     per_samples = period0 / float(np.median(np.diff(t)))
