@@ -208,16 +208,16 @@ class ChannelConsistency:
         return {k: None if isinstance(v, float) and math.isnan(v) else v for k, v in values.items()}
 
 
-def _regress(xc: NDArray, ic: NDArray, vc: NDArray) -> tuple[float, float] | None:
-    """(gain, delay) of Δx ≈ g ΔI − g δ Δv, or None when degenerate."""
-    design = np.column_stack((ic, vc))
-    if float(ic @ ic) == 0.0 or float(vc @ vc) == 0.0:
+def _solve(gram: NDArray, moment: NDArray) -> tuple[float, float] | None:
+    """(gain, delay) of Δx ≈ g ΔI − g δ Δv from its normal equations (ΔI and Δv are
+    nearly orthogonal: in quadrature over a cycle), or None when degenerate."""
+    if gram[0, 0] == 0.0 or gram[1, 1] == 0.0 or not np.all(np.isfinite(gram)):
         return None
     try:
-        (a, b), *_ = np.linalg.lstsq(design, xc, rcond=None)
-    except np.linalg.LinAlgError:  # values so large that their products overflow
+        a, b = np.linalg.solve(gram, moment)
+    except np.linalg.LinAlgError:
         return None
-    if a == 0.0:
+    if a == 0.0 or not (math.isfinite(a) and math.isfinite(b)):
         return None
     return float(a), float(-b / a)
 
@@ -303,46 +303,45 @@ def _channel_consistency(run: Recording) -> ChannelConsistency | None:
         return None
     xc = x[lag:] - x[:-lag]
     ic = integral[lag:] - integral[:-lag]
+    del integral
     vc = v[lag:] - v[:-lag]
-    xc = xc - xc.mean()
-    ic = ic - ic.mean()
-    vc = vc - vc.mean()
+    xc -= xc.mean()
+    ic -= ic.mean()
+    vc -= vc.mean()
     sxx, sii = float(xc @ xc), float(ic @ ic)
     if sxx == 0.0 or sii == 0.0:
         return None
     correlation = _moving_correlation(xc, ic)
     half = math.pi * step / period  # ω dt / 2
     trapezoid = half / math.tan(half) if 0.0 < half < 1.0 else 1.0
-    fitted = _regress(xc, ic, vc)
+    # Δx ≈ g ΔI − g δ Δv by least squares, from the normal equations summed over
+    # blocks of one period, which the delete-one-block jackknife then reuses: residual
+    # errors correlated within a cycle (the model's first-order expansion, a filter's
+    # ringing) are counted once per block.
+    width = max(2, round(period / step))
+    blocks = []
+    for first in range(0, xc.size, width):
+        part = slice(first, first + width)
+        i_p, v_p, x_p = ic[part], vc[part], xc[part]
+        ii, iv, vv = float(i_p @ i_p), float(i_p @ v_p), float(v_p @ v_p)
+        blocks.append((np.array([[ii, iv], [iv, vv]]), np.array([i_p @ x_p, v_p @ x_p]), ii))
+    total_a = sum(b[0] for b in blocks)
+    total_b = sum(b[1] for b in blocks)
+    fitted = _solve(total_a, total_b)
     if fitted is None:
         gain, delay = float(xc @ ic) / sii, 0.0
     else:
         gain, delay = fitted
     gain *= trapezoid
-    # Delete-one-block jackknife over blocks of one period: residual errors correlated
-    # within a cycle (the model's first-order expansion, a filter's ringing) are
-    # counted once per block.
-    width = max(2, round(period / step))
-    design = np.column_stack((ic, vc))
-    blocks = []
-    for first in range(0, xc.size, width):
-        part = slice(first, first + width)
-        a, y = design[part], xc[part]
-        blocks.append((a.T @ a, a.T @ y, float(ic[part] @ ic[part])))
-    total_a = sum(b[0] for b in blocks)
-    total_b = sum(b[1] for b in blocks)
     largest = max(b[2] for b in blocks)
     gains, delays = [], []
     for a_i, b_i, energy in blocks:
         if energy <= 1e-3 * largest:
             continue  # at rest: deleting it changes nothing
-        try:
-            coef = np.linalg.solve(total_a - a_i, total_b - b_i)
-        except np.linalg.LinAlgError:
-            continue
-        if coef[0] != 0.0:
-            gains.append(coef[0] * trapezoid)
-            delays.append(-coef[1] / coef[0])
+        found = _solve(total_a - a_i, total_b - b_i)
+        if found is not None:
+            gains.append(found[0] * trapezoid)
+            delays.append(found[1])
     gain_se = delay_se = math.nan
     k = len(gains)
     if k >= 4:
