@@ -29,6 +29,8 @@ Nothing is repaired, clipped or dropped: a run either passes unchanged or fails.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -140,7 +142,17 @@ def _time_unit_hint(rate: float, frequency: float) -> str:
     return ""
 
 
-def _flat_top(values: NDArray, level: float, length: int) -> tuple[int, int] | None:
+def _quantum(values: NDArray) -> float | None:
+    """The smallest non-zero step of a signal (its quantisation step), or None."""
+    steps = np.abs(np.diff(values))
+    steps[steps == 0] = np.inf
+    smallest = float(steps.min()) if steps.size else math.inf
+    return None if math.isinf(smallest) else smallest
+
+
+def _flat_top(
+    values: NDArray, level: float, length: int, quantum: float | None = None
+) -> tuple[int, int] | None:
     """First flat top at ``level``: (start, length), or None.
 
     A flat top is a run of >= ``length`` samples equal to ``level`` that touches neither
@@ -149,11 +161,10 @@ def _flat_top(values: NDArray, level: float, length: int) -> tuple[int, int] | N
     coarsely quantised signal also repeats its extreme, but it is entered and left by
     single quantisation steps; a signal cut flat arrives at the cut with its slope.
     """
-    steps = np.abs(np.diff(values))
-    nonzero = steps[steps > 0]
-    if nonzero.size == 0:
+    if quantum is None:
+        quantum = _quantum(values)
+    if quantum is None:
         return None
-    quantum = float(nonzero.min())
     hit = np.concatenate(([0], (values == level).astype(np.int8), [0]))
     edges = np.flatnonzero(np.diff(hit))
     starts, stops = edges[::2], edges[1::2]
@@ -187,8 +198,9 @@ def _check_clipping(run: Run, where: str | None, clip_samples: int) -> None:
                     "the vibrometer or a smaller initial displacement)",
                     where,
                 )
+        quantum = _quantum(values)
         for kind, level in (("maximum", values.max()), ("minimum", values.min())):
-            found = _flat_top(values, level, clip_samples)
+            found = _flat_top(values, level, clip_samples, quantum)
             if found is not None:
                 start, length = found
                 raise _fail(
