@@ -9,8 +9,8 @@ Every recording in ``../shared/external-data`` (read from there, never copied):
 * ``smorzamento-spring-disc/*.csv``: ``time;position;velocity;acceleration`` in s, m,
   m/s, m/s², read with numpy; rows with an empty position are dropped, and, when the
   velocity is used, rows with an empty velocity (the last one). The velocity is used
-  when the package accepts it (:func:`bayestribo.io.validation.check_channels`; its
-  :func:`~bayestribo.io.validation.channel_consistency` is recorded); ``mass_kg`` from
+  when the package accepts it (:func:`bayestribo.signal.channels.check_channels`; its
+  :func:`~bayestribo.signal.channels.channel_consistency` is recorded); ``mass_kg`` from
   the file name (``..._<stiffness N/m>_<mass kg>_<n>.csv``), so ΔE(A) is in joules with
   k = mΩ² at the frequency the package measures (the stated stiffness and the
   frequency k/m would give are recorded beside it: the spring's own mass makes the
@@ -116,7 +116,7 @@ def _tail(exc: BaseException) -> str:
 def load(name: str) -> tuple[Any, dict[str, Any]]:
     """The recording ``name`` as a Run, and how it was read."""
     from bayestribo import read_run
-    from bayestribo.io.validation import channel_consistency, check_channels
+    from bayestribo.signal.channels import channel_consistency, check_channels
 
     path = recordings()[name]
     info: dict[str, Any] = {"path": str(path.relative_to(EXTERNAL.parent.parent))}

@@ -306,7 +306,7 @@ def test_result_repr_and_html_show_the_numbers_with_units(bundled):
 
 
 def test_a_frequency_that_changes_with_amplitude_is_reported():
-    from test_io_frequency import _decay
+    from test_signal_frequency import _decay
 
     from bayestribo.errors import FrequencyTrendWarning, MisfitWarning
     from bayestribo.io.run import Run

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from bayestribo.errors import RunFormatError
 from bayestribo.io import text as text_module
 from bayestribo.io.text import read_text
 
@@ -110,3 +111,120 @@ def test_the_streamed_and_line_by_line_readers_give_identical_arrays_and_warning
     for key in fast:
         assert fast[key].tobytes() == slow[key].tobytes(), key
     assert fast_warnings == slow_warnings
+
+
+#: Layouts only the large-file path meets (pandas' C parser): beyond the 13 above.
+LARGE_FILES = {
+    **FILES,
+    "all lone carriage returns": (
+        "time_s,displacement_m,velocity_m_per_s\r" + _body(",", "\r") + "\r",
+        {},
+        True,
+    ),
+    "a nan among the rows": (
+        "time_s,displacement_m,velocity_m_per_s\n" + _body(",").replace("\n", "\n0.1,nan,0\n", 1),
+        {},
+        False,
+    ),
+    "a quoted number": (
+        "time_s,displacement_m,velocity_m_per_s\n" + _body(",").replace("\n", '\n0.1,"2",0\n', 1),
+        {},
+        False,
+    ),
+    "a row of four fields": (
+        "time_s,displacement_m,velocity_m_per_s\n" + _body(",").replace("\n", "\n0.1,2,0,4\n", 1),
+        {},
+        False,
+    ),
+    "a row of two fields": (
+        "time_s,displacement_m,velocity_m_per_s\n" + _body(",").replace("\n", "\n0.1,2\n", 1),
+        {},
+        False,
+    ),
+    "NA in a cell": (
+        "time_s,displacement_m,velocity_m_per_s\n" + _body(",").replace("\n", "\n0.1,NA,0\n", 1),
+        {},
+        False,
+    ),
+    "numbers of many digits and extremes": (
+        "time_s,displacement_m,velocity_m_per_s\n"
+        + _body(",")
+        + "\n0.06,0.1000000000000000055511151231257827021181583404541015625,4.9e-324"
+        + "\n0.07,1e-400,-0.0\n0.08,0.00000000000001953,2.2250738585072011e-308\n",
+        {},
+        True,
+    ),
+    "white space with an ignored column": (
+        "t x v\n" + _body("  "),
+        {"columns": ["time_s", "ignore", "velocity_m_per_s"]},
+        True,
+    ),
+}
+
+
+@pytest.mark.parametrize("name", list(LARGE_FILES))
+def test_the_large_file_path_gives_numpys_arrays_warnings_and_errors(
+    name: str, tmp_path: Path, monkeypatch
+) -> None:
+    """pandas' C parser reads a large plain file (here: any file longer than a head of
+    512 bytes) with the arrays, warnings and errors of numpy's reader (which the test
+    above holds to the line-by-line reader's), or leaves the file to it."""
+    pytest.importorskip("pandas")
+    content, options, _ = LARGE_FILES[name]
+    path = tmp_path / "run.csv"
+    path.write_bytes(content.encode("utf-8"))
+    taken = []
+    read_large = text_module._read_large
+
+    def spy(*args, **kwargs):
+        out = read_large(*args, **kwargs)
+        taken.append(out is not None)
+        return out
+
+    monkeypatch.setattr(text_module, "_HEAD_BYTES", 512)
+    monkeypatch.setattr(text_module, "_LARGE_BYTES", 0)
+
+    def read(large) -> tuple:
+        with monkeypatch.context() as patch:
+            patch.setattr(text_module, "_read_large", large)
+            try:
+                return _read(path, options, True, monkeypatch)
+            except RunFormatError as refused:  # the line-by-line reader names the line
+                return str(refused), []
+
+    with_pandas = read(spy)
+    with_numpy = read(lambda *a, **k: None)
+    if isinstance(with_numpy[0], str):
+        assert with_pandas == with_numpy
+    else:
+        fast, fast_warnings = with_pandas
+        slow, slow_warnings = with_numpy
+        assert list(fast) == list(slow)
+        for key in fast:
+            assert fast[key].tobytes() == slow[key].tobytes(), key
+        assert fast_warnings == slow_warnings
+    if name in PANDAS_READS:
+        assert taken == [True]  # these went through pandas
+    if name in REFUSED_BY_PANDAS:
+        assert True not in taken
+
+
+#: Layouts pandas reads (the plain ones of more than three lines in the head).
+PANDAS_READS = (
+    "canonical",
+    "no final newline",
+    "crlf",
+    "numbers of many digits and extremes",
+    "white space with an ignored column",
+    "white space, no header",
+)
+#: Layouts pandas must leave to numpy's reader or the line-by-line one.
+REFUSED_BY_PANDAS = (
+    "a nan among the rows",  # numpy reads it as NaN (validate_run names the sample)
+    "a quoted number",
+    "a row of four fields",
+    "a row of two fields",
+    "NA in a cell",
+    "empty cells at the start",
+    "cut-short last line",
+)

@@ -15,7 +15,7 @@ PACKAGE = Path(bayestribo.__file__).resolve().parent
 BOTTOM = {"errors", "summary", "_optional", "_text", "_clock", "_workers", "_warnings"}
 ALLOWED = {
     "model": set(),
-    "io": {"model"},
+    "io": {"model", "signal"},
     "synthetic": {"model", "io"},
     "signal": {"model"},
     "estimators": {"model", "io", "signal"},

@@ -6,11 +6,11 @@ record's period, multiplies the spectrum by the frequency: in the second half of
 AppStat2020 HarmOsc3 recording (1.47 Hz at 1 kHz) a 150 Hz mains harmonic then
 outweighed the oscillation and the front end refused the record ("found 0 usable
 extrema"); in the second half of HarmOsc2 (100 Hz) the noise at Nyquist did.
-:func:`bayestribo.signal.peaks._dominant_period` now takes the spectral peak whose
+:func:`bayestribo.signal.period.dominant_period` now takes the spectral peak whose
 oscillation is strongest in the signal itself. Reading such a record from a file,
 the check of its two channels against each other took their correlation over the
 rest as well, where it is noise alone; it is now taken over the motion
-(:func:`bayestribo.io.validation.channel_consistency`). These tests check that such
+(:func:`bayestribo.signal.channels.channel_consistency`). These tests check that such
 records are analysed from their first turning points and fitted, on the real
 recordings and on an independent simulation, and that a record that is not a free
 decay, or whose channels are swapped, is still refused.
@@ -30,9 +30,10 @@ import bayestribo
 from bayestribo.errors import MisfitWarning, RecordingError
 from bayestribo.io import read_run, write_run
 from bayestribo.io.run import Run
-from bayestribo.io.validation import channel_consistency, validate_run
+from bayestribo.io.validation import validate_run
 from bayestribo.signal import energy_decay
-from bayestribo.signal.peaks import _dominant_period
+from bayestribo.signal.channels import channel_consistency
+from bayestribo.signal.period import dominant_period
 
 # ---------------------------------------------------------------------------------------
 # The AppStat2020 recordings, cut in two
@@ -211,7 +212,7 @@ def test_period_of_a_record_in_motion_is_not_a_line_of_the_noise():
         2 * math.pi * 150.0 * t
     )
     x += 0.004 * rng.standard_normal(t.size)
-    assert 1.0 / _dominant_period(t, x) == pytest.approx(1.5, rel=0.02)
+    assert 1.0 / dominant_period(t, x) == pytest.approx(1.5, rel=0.02)
 
 
 def test_a_line_without_a_decay_is_still_refused():

@@ -80,10 +80,10 @@ def inspection(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
     from bayestribo import __version__
     from bayestribo.cli.decay import summary
     from bayestribo.errors import BayestriboError
-    from bayestribo.io.frequency import oscillation_frequency
     from bayestribo.io.layout import describe_file
-    from bayestribo.io.validation import channel_consistency
+    from bayestribo.signal.channels import channel_consistency
     from bayestribo.signal.decay import energy_decay
+    from bayestribo.signal.frequency import oscillation_frequency
 
     try:
         layout = describe_file(args.run, reading_options(args))

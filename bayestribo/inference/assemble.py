@@ -52,7 +52,7 @@ def derived_quantities(
     frequency Ω̂ measured from the turning points. If the oscillator's own Ω differs
     by a factor 1 + ε (Ω̂ = Ω(1 + ε)), ζ, a rate per radian, is fitted as ζ/(1 + ε)
     and μ_k = x_c k/N as μ_k (1 + ε)²; a frequency that changes with amplitude (a
-    cubic spring: :func:`bayestribo.io.frequency.frequency_trend`) leaves no single Ω
+    cubic spring: :func:`bayestribo.signal.frequency.frequency_trend`) leaves no single Ω
     to use, and the equivalent constant one is known only to within that change.
     ε is drawn per draw from N(0, ``frequency_sd``²) and ζ → ζ(1 + ε), μ_k, μ_s →
     μ/(1 + ε)², k → k/(1 + ε)² in ζ_k and d_k; the friction displacement x_c is

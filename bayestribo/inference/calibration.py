@@ -5,7 +5,7 @@ separately; their gains can differ by a percent and a filter can delay one again
 other. E = ½kx² + ½mv² then ripples within each cycle, and the fit reads the ripple as
 damping (a 1 % velocity gain moved μ_k by 0.5 %, twelve posterior standard deviations,
 with no warning). :func:`calibrate_channels` measures the gain ratio and the relative
-delay from the motion (:func:`bayestribo.io.validation.channel_consistency`, with
+delay from the motion (:func:`bayestribo.signal.channels.channel_consistency`, with
 jackknife standard errors over the cycles), reports them, and where they differ from
 1 and 0 by more than :data:`CALIBRATION_Z` standard errors (and by more than
 :data:`MIN_RIPPLE` of E), warns with a
@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 
 from bayestribo.errors import ChannelCalibrationWarning
 from bayestribo.io.run import Run
-from bayestribo.io.validation import channel_consistency, check_channels
+from bayestribo.signal.channels import channel_consistency, check_channels
 
 __all__ = ["CALIBRATION_Z", "MIN_RIPPLE", "calibrate_channels", "fractional_delay"]
 
@@ -90,7 +90,7 @@ def calibrate_channels(run: Run, *, correct: bool = True) -> tuple[Run, dict[str
     -------
     (Run, dict or None)
         The run (corrected or not) and the calibration: the values of
-        :class:`~bayestribo.io.validation.ChannelConsistency` with ``gain_off``,
+        :class:`~bayestribo.signal.channels.ChannelConsistency` with ``gain_off``,
         ``delay_off`` and ``corrected``; None without both signals or without enough
         cycles to estimate the standard errors.
 
@@ -103,7 +103,7 @@ def calibrate_channels(run: Run, *, correct: bool = True) -> tuple[Run, dict[str
     ------
     RecordingError
         When the channels are swapped, unrelated or their gains a factor of 2 or more
-        apart (:func:`bayestribo.io.validation.check_channels`).
+        apart (:func:`bayestribo.signal.channels.check_channels`).
     """
     # A run built in memory has not been through read_run's checks: swapped or
     # unrelated channels are refused here too, never "corrected" by a gain of -1/Ω².

@@ -64,11 +64,11 @@ from bayestribo.inference.surrogate import (
     surrogate_posterior,
 )
 from bayestribo.io.files import as_run
-from bayestribo.io.frequency import FrequencyTrend, frequency_trend, turning_point_trend
 from bayestribo.io.options import ReadOptions
 from bayestribo.io.run import Run
 from bayestribo.model.laws import Law, get_law
 from bayestribo.signal.decay import EnergyDecay, energy_decay
+from bayestribo.signal.frequency import FrequencyTrend, frequency_trend, turning_point_trend
 from bayestribo.signal.increments import PiData, pi_data
 from bayestribo.signal.noise import NoiseModel, noise_model
 
@@ -592,7 +592,7 @@ def frequency_nuisance_sd(trend: FrequencyTrend | None) -> float:
     Parameters
     ----------
     trend : FrequencyTrend or None
-        From :func:`bayestribo.io.frequency.frequency_trend` (None: too few half cycles
+        From :func:`bayestribo.signal.frequency.frequency_trend` (None: too few half cycles
         to measure a trend, and no nuisance).
 
     Returns
@@ -616,7 +616,7 @@ def _beyond_the_law(
     half period shortens by 3e-4 over the decay). The law's turning times at the MAP
     (the compiled integrator) are matched to the record's; their departure from
     even spacing is taken off the record's turning times before the trend is fitted
-    (:func:`~bayestribo.io.frequency.turning_point_trend`), so that only a trend the
+    (:func:`~bayestribo.signal.frequency.turning_point_trend`), so that only a trend the
     law does not make (a stiffness that depends on amplitude) is reported and put into
     the frequency nuisance. (Fitting the law's own turning points with the trend model
     and subtracting the two trends does not work: the model's 1/|Y_n| terms, meant for
@@ -795,7 +795,7 @@ def summarise(
         (``compared``) that misfits says that no law compared holds.
     FrequencyTrendWarning
         When the half period changes with amplitude beyond the law's own change
-        (:func:`~bayestribo.io.frequency.turning_point_trend` of the decay's turning
+        (:func:`~bayestribo.signal.frequency.turning_point_trend` of the decay's turning
         times, :func:`_beyond_the_law`: by more than 2e-4 at 4 standard errors): the
         reported ζ, μ_k, μ_s, ζ_k, d_k and ΔE(A) carry a frequency nuisance for it in
         any case (:func:`frequency_nuisance_sd`, recorded in the result's

@@ -310,7 +310,7 @@ class FitResult:
     @property
     def frequency_trend(self) -> dict[str, Any] | None:
         """The half period's change with amplitude along the decay (``change``, ``z``):
-        zero for the linear law (see :func:`bayestribo.io.frequency.frequency_trend`)."""
+        zero for the linear law (see :func:`bayestribo.signal.frequency.frequency_trend`)."""
         return self._attr("frequency_trend_json", None)
 
     @property

@@ -27,8 +27,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bayestribo.errors import MetadataWarning, RecordingError, RunFormatError
-from bayestribo.io.frequency import oscillation_frequency
 from bayestribo.model.scaling import Rig, Scaling
+from bayestribo.signal.frequency import oscillation_frequency
 
 __all__ = [
     "COLUMNS",
@@ -406,7 +406,7 @@ class Run:
         Rig or None
             ``Rig(f, mass_kg, load_N)`` from the metadata. When the load is given
             but the frequency is not, f is measured from the recording
-            (:func:`bayestribo.io.frequency.oscillation_frequency`) with a
+            (:func:`bayestribo.signal.frequency.oscillation_frequency`) with a
             :class:`~bayestribo.errors.MetadataWarning`. With
             ``length_unit="arbitrary"`` the mass and load are left out, so that the
             rig's scaling uses one signal unit as length scale (N/k in metres would

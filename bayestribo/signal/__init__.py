@@ -2,6 +2,14 @@
 
 Modules
 -------
+period
+    :func:`~bayestribo.signal.period.dominant_period`: the record's period, the one
+    estimator of the package (readers' checks, derivatives, search windows).
+frequency
+    The damped frequency from zero crossings, and its trend with the amplitude.
+channels
+    Displacement against the integral of the velocity (gain, delay), and the checks
+    of channels and units every file read gets.
 peaks
     Turning points (peaks) of a recorded free decay.
 motion
@@ -21,23 +29,39 @@ increments
     weights, the noise bias of E and the increment variances.
 """
 
-from bayestribo.signal.decay import EnergyDecay, energy_decay
-from bayestribo.signal.increments import PiData, pi_data
-from bayestribo.signal.motion import MotionSpan, motion_span
-from bayestribo.signal.noise import NoiseModel, noise_model
-from bayestribo.signal.spectrum import NoiseSpectrum, RestNoise, noise_spectrum, notch_filter
+from __future__ import annotations
 
-__all__ = [
-    "EnergyDecay",
-    "MotionSpan",
-    "NoiseModel",
-    "NoiseSpectrum",
-    "PiData",
-    "RestNoise",
-    "energy_decay",
-    "motion_span",
-    "noise_model",
-    "noise_spectrum",
-    "notch_filter",
-    "pi_data",
-]
+import importlib
+from typing import Any
+
+# Re-exported lazily: the readers use the light modules (period, frequency, channels)
+# without loading scipy.signal and the decay analysis.
+_LAZY: dict[str, str] = {
+    "EnergyDecay": "bayestribo.signal.decay",
+    "energy_decay": "bayestribo.signal.decay",
+    "PiData": "bayestribo.signal.increments",
+    "pi_data": "bayestribo.signal.increments",
+    "MotionSpan": "bayestribo.signal.motion",
+    "motion_span": "bayestribo.signal.motion",
+    "NoiseModel": "bayestribo.signal.noise",
+    "noise_model": "bayestribo.signal.noise",
+    "NoiseSpectrum": "bayestribo.signal.spectrum",
+    "RestNoise": "bayestribo.signal.spectrum",
+    "noise_spectrum": "bayestribo.signal.spectrum",
+    "notch_filter": "bayestribo.signal.spectrum",
+    "dominant_period": "bayestribo.signal.period",
+}
+
+__all__ = sorted(_LAZY, key=lambda name: (name[0].islower(), name))
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _LAZY:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(_LAZY[name]), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))

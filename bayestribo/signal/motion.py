@@ -32,7 +32,7 @@ the rig's frequency**.
 * The blocks' sinusoid is at the frequency measured from the record's own spectrum
   (a peak of the spectrum of its first difference: the one whose oscillation is the
   strongest in the signal itself, so that a line of the noise that the difference
-  gains is not taken for it; :func:`bayestribo.signal.peaks._dominant_period`).
+  gains is not taken for it; :func:`bayestribo.signal.period.dominant_period`).
 
 :func:`check_turning_points` applies the other piece of physics: consecutive turning
 points of the motion are half a damped period apart.

@@ -10,8 +10,8 @@ noise only. :func:`find_peaks` handles these:
 * the dominant period comes from the spectrum of the signal's first difference:
   among its strongest peaks, the one whose oscillation is the strongest in the signal
   itself (a mains line or the noise at Nyquist, gained by the difference, is not the
-  oscillation; see :func:`_dominant_period`); candidate extrema must be at least 0.6
-  period apart (same kind) and stand out of the noise (prominence);
+  oscillation; see :func:`~bayestribo.signal.period.dominant_period`); candidate
+  extrema must be at least 0.6 period apart (same kind) and stand out of the noise (prominence);
 * maxima and minima are forced to alternate (of two same-kind neighbours the more
   extreme one is kept);
 * each extremum is refined to sub-sample precision by a least-squares parabola over
@@ -38,6 +38,7 @@ import scipy.signal
 from numpy.typing import ArrayLike, NDArray
 
 from bayestribo.errors import RecordingError
+from bayestribo.signal.period import dominant_period
 
 __all__ = ["Peaks", "estimate_noise", "estimate_offset", "find_peaks", "prepare_signal"]
 
@@ -197,121 +198,6 @@ def estimate_noise(signal: ArrayLike) -> float:
         return 0.0
     mad = float(np.median(np.abs(d4 - np.median(d4))))
     return 1.4826 * mad / math.sqrt(70.0)
-
-
-#: Spectral peaks of each ranking examined as the oscillation by :func:`_dominant_period`.
-CANDIDATES = 6
-#: A candidate replaces the strongest peak of the difference's spectrum only when its
-#: oscillation in the signal itself has at least this many times the power (10: the
-#: amplitude 3.2 times larger; a mains line or the noise at Nyquist is 1e-3 to 1e-5
-#: of a free decay's power, a sidelobe of the decay's own peak a fraction of it).
-POWER_RATIO = 10.0
-#: Fewest periods a candidate of :func:`_dominant_period` must fit in the record.
-CANDIDATE_PERIODS = 3.0
-
-
-def _oscillation_power(s: NDArray, period: float, dt: float) -> float:
-    """Largest power [signal unit²] of a sinusoid at ``period`` [s] in ``s``, over blocks.
-
-    ``s`` is sampled every ``dt`` [s]. Blocks of two periods (at least 16 samples, at
-    most the record; the last one ends with the record), each detrended by a line: the
-    variance the sinusoid explains beyond the line, about half its squared amplitude.
-    A level that differs between the rest and the motion, or a drift, is a line in a
-    block and is not counted; a line of the noise is counted at its (small) amplitude
-    in the signal, not amplified by a difference.
-    """
-    size = min(s.size, max(16, round(2.0 * period / dt)))
-    u = (np.arange(size) - 0.5 * (size - 1)) * dt  # centred: 1 and u are orthogonal
-    line = np.column_stack([np.full(size, 1.0 / math.sqrt(size)), u / math.sqrt(u @ u)])
-    wave = np.column_stack([np.cos(2.0 * math.pi * u / period), np.sin(2.0 * math.pi * u / period)])
-    wave -= line @ (line.T @ wave)
-    # the explained variance of coefficients c = W⁺b is bᵀW (WᵀW)⁺ Wᵀb; at Nyquist
-    # one column of W vanishes and the pseudo-inverse drops it
-    gram_inv = np.linalg.pinv(wave.T @ wave, rcond=1e-9)
-    m = s.size // size
-    projected = [s[: m * size].reshape(m, size) @ wave]
-    if m * size < s.size:
-        projected.append(s[-size:][None, :] @ wave)
-    best = 0.0
-    for p in projected:
-        best = max(best, float(np.max(np.einsum("ij,jk,ik->i", p, gram_inv, p))))
-    return best / size
-
-
-def _dominant_period(t: NDArray, s: NDArray) -> float:
-    """Period [s] of the record's oscillation: a spectral peak of the signal's first
-    difference, the one carrying the most power in the signal itself.
-
-    The difference turns a step (rest before the release, a drift) into a spike with a
-    flat spectrum, so the oscillation's peak dominates. No taper: a free decay is
-    concentrated at the start of the record, which a taper would suppress. The period
-    only sets search distances and fit windows.
-
-    The difference also multiplies the spectrum by the frequency, so a record sampled
-    far faster than it oscillates can have a higher peak elsewhere. Measured on the
-    AppStat2020 HarmOsc3 recording (1.47 Hz at 1 kHz), a 150 Hz mains harmonic of
-    about 3e-3 signal units gained a hundredfold: in the whole record the oscillation
-    peak still stood out, but in the half after t = 5.75 s (amplitude 0.5 to 0.06)
-    the line did, the analysis ran at a 6.7 ms period, and the turning points were
-    refused ("found 0 usable extrema"); in the second half of HarmOsc2 (100 Hz) the
-    white noise at Nyquist did ("dominant period is 2.0 samples"). A record that
-    starts in motion has no rest before it to make up for this: its oscillation is
-    the smaller, the later it starts.
-
-    So the strongest peaks of three rankings are candidates: the difference's spectrum
-    (the velocity), its spectrum divided by the difference's gain ``|2 sin(πf dt)|``
-    (the signal's own spectrum, where a step leaks in at low frequency) and by the
-    gain's square root; each candidate is scored by the power of its oscillation in the
-    signal itself (:func:`_oscillation_power`, blocks of two periods each detrended by
-    a line, so neither a step nor a drift counts). The strongest peak of the
-    difference stands, as before, unless a candidate has :data:`POWER_RATIO` times its
-    power; then the strongest peak of the difference among the candidates within
-    that ratio of the best power is taken (a sidelobe of the oscillation's own peak
-    scores nearly as high but is weaker in the spectrum).
-    """
-    dt = float(np.median(np.diff(t)))
-    x = np.diff(s)
-    x = x - np.mean(x)
-    n = 1 << math.ceil(math.log2(4 * s.size))
-    spec = np.abs(np.fft.rfft(x, n))
-    spec[0] = 0.0
-    k = int(np.argmax(spec))
-    if k == 0 or spec[k] == 0.0:
-        raise RecordingError("the signal does not oscillate (flat spectrum)")
-    k = _strongest_oscillation(t, s, spec, k, n, dt)
-    kf = float(k)
-    if 0 < k < spec.size - 1:
-        a, b, c = np.log(spec[k - 1 : k + 2] + 1e-300)
-        den = a - 2 * b + c
-        kf = k + (0.5 * (a - c) / den if den != 0 else 0.0)
-    return float(n * dt / kf)
-
-
-def _strongest_oscillation(t: NDArray, s: NDArray, spec: NDArray, k: int, n: int, dt: float) -> int:
-    """Bin of the candidate peak of ``spec`` (the difference's spectrum, padded to
-    ``n``) whose oscillation is strongest in ``s`` (see :func:`_dominant_period`);
-    ``k`` is the spectrum's highest bin."""
-    inner = spec[1:-1]
-    local = np.flatnonzero((inner >= spec[:-2]) & (inner > spec[2:])) + 1
-    # only periods of which the record holds three, the fewest oscillations a fit
-    # needs (in the signal's own spectrum a step leaks in below them)
-    short = local[n * dt / local <= float(t[-1] - t[0]) / CANDIDATE_PERIODS]
-    gain = np.abs(2.0 * np.sin(math.pi * short / n))  # of the difference, at each bin
-    candidates = {k}
-    for ranked, pool in (
-        (spec[short], short),
-        (spec[short] / np.sqrt(gain), short),
-        (spec[short] / gain, short),
-    ):
-        if pool.size > CANDIDATES:
-            pool = pool[np.argpartition(ranked, -CANDIDATES)[-CANDIDATES:]]
-        candidates.update(pool.tolist())
-    power = {c: _oscillation_power(s, n * dt / c, dt) for c in candidates}
-    strongest = max(power.values())
-    if strongest <= POWER_RATIO * power[k]:
-        return k
-    kept = [c for c in candidates if POWER_RATIO * power[c] >= strongest]
-    return int(max(kept, key=lambda c: spec[c]))
 
 
 def _refine(t: NDArray, s: NDArray, i: int, half_width: int) -> tuple[float, float]:
@@ -508,7 +394,7 @@ def find_peaks(
     floor = max(threshold * sigma, 1e-4 * span)
 
     dt = float(np.median(np.diff(t)))
-    period = _dominant_period(t, s)
+    period = dominant_period(t, s)
     per_samples = period / dt
     if per_samples < 6:
         raise RecordingError(

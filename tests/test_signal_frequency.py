@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from bayestribo.io.frequency import (
+from bayestribo.signal.frequency import (
     crossing_frequency,
     frequency_trend,
     oscillation_frequency,
