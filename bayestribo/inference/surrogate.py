@@ -78,12 +78,6 @@ MIN_CHANGE = 1e-7
 _NARROWINGS = 20
 #: Node distances tried per coordinate, in factors of 4 from the given scale.
 _PROBES = 16
-#: Points of the scan of μ_s/μ_k for the pieces, rounds and points of the search of
-#: each piece's edge.
-_RATIO_SCAN, _RATIO_ROUNDS, _RATIO_SPLIT = 65, 4, 30
-#: A turning point's |Y_n|/μ stands for a threshold found at the centre when they agree
-#: to this fraction (the search's resolution is far finer).
-_THRESHOLD_MATCH = 1e-3
 #: Coordinates of the sampled vector that never enter Π.
 _NOT_IN_PI = ("log10_discrepancy", "log10_shape")
 #: The static to kinetic friction ratio, on which Π depends piecewise.
@@ -256,48 +250,6 @@ def _node_distances(
     return out
 
 
-def _same(a: NDArray, b: NDArray) -> bool:
-    """Two rows of Π equal to rounding."""
-    return bool(np.max(np.abs(a - b)) <= 1e-12 * max(float(np.max(np.abs(a))), 1e-300))
-
-
-def _ratio_thresholds(
-    likelihood: PiLikelihood,
-    names: tuple[str, ...],
-    c: NDArray,
-    fixed_params: Mapping[str, float],
-    ratio: str,
-    low: float,
-    high: float,
-) -> NDArray:
-    """The values of μ_s/μ_k in [low, high] where Π at ``c`` jumps (one half cycle more
-    or fewer before the motion stops), located to 1e-6 of the scan's step."""
-
-    def pi_at(values: NDArray) -> NDArray:
-        n = values.size
-        full: dict[str, NDArray] = {k: np.full(n, float(v)) for k, v in fixed_params.items()}
-        full.update({name: np.full(n, c[a]) for a, name in enumerate(names)})
-        full[ratio] = values
-        return PiLikelihood.model_pi(likelihood, full)
-
-    grid = np.linspace(low, high, _RATIO_SCAN)
-    pi = pi_at(grid)
-    out = []
-    for i in range(grid.size - 1):
-        if _same(pi[i], pi[i + 1]):
-            continue
-        a, b, pa = grid[i], grid[i + 1], pi[i]
-        for _ in range(_RATIO_ROUNDS):
-            inner = np.linspace(a, b, _RATIO_SPLIT + 2)[1:-1]
-            values = pi_at(inner)
-            same = [_same(pa, row) for row in values]
-            k = same.index(False) if False in same else len(same)
-            a = inner[k - 1] if k > 0 else a
-            b = inner[k] if k < len(inner) else b
-        out.append(0.5 * (a + b))
-    return np.array(out)
-
-
 def stop_ratios(likelihood: PiLikelihood, values: Mapping[str, float]) -> NDArray:
     """``|Y_n|/μ(|Y_n|)`` at each turning point Y_n of one motion (with μ_s = μ_k, so
     that it runs longest): the motion stops at Y_n when μ_s/μ_k is at least this, and
@@ -339,22 +291,17 @@ def stop_ratios(likelihood: PiLikelihood, values: Mapping[str, float]) -> NDArra
         return np.where(mu > 0, a / mu, np.inf)
 
 
-def _moving_thresholds(
+def _stop_ratios_at(
     likelihood: PiLikelihood,
     names: tuple[str, ...],
     nodes: NDArray,
     fixed_params: Mapping[str, float],
-) -> NDArray | None:
-    """:func:`stop_ratios` at each node (rows of ``nodes``, the first the centre),
-    (nodes, n) over the turning points every node reaches; None when there are none."""
-    rows = [
+) -> list[NDArray]:
+    """:func:`stop_ratios` at each node (rows of ``nodes``, the first the centre)."""
+    return [
         stop_ratios(likelihood, {**fixed_params, **dict(zip(names, node, strict=True))})
         for node in nodes
     ]
-    count = min(r.size for r in rows)
-    if count == 0:
-        return None
-    return np.array([r[:count] for r in rows])
 
 
 def quadratic_pi(
@@ -425,21 +372,25 @@ def quadratic_pi(
     values = [None]
     if ratio is not None and ratio_bounds is not None:
         low, high = ratio_bounds
-        at_centre = _ratio_thresholds(likelihood, names, c, fixed_params, ratio, low, high)
+        # the ratios where the stick moves to another turning point: each turning
+        # point's |Y_n|/μ inside the prior's support, at the centre, and interpolated
+        # over the nodes as Π is where every node reaches that turning point
+        ratios = _stop_ratios_at(likelihood, names, c + u * s, fixed_params)
+        centre_ratios = ratios[0]
+        inside_support = np.flatnonzero(
+            np.isfinite(centre_ratios) & (centre_ratios > low) & (centre_ratios < high)
+        )
+        order = inside_support[np.argsort(centre_ratios[inside_support])]
+        at_centre = centre_ratios[order]
         edges = np.concatenate([[low], at_centre, [high]])
         values = list(0.5 * (edges[:-1] + edges[1:]))
-        if at_centre.size:
-            moving = _moving_thresholds(likelihood, names, c + u * s, fixed_params)
-            thresholds = np.zeros((at_centre.size, basis.shape[1]))
-            thresholds[:, 0] = at_centre
-            if moving is not None:
-                # each threshold follows the turning point whose |Y_n|/μ it is at the
-                # centre, interpolated over the nodes as Π is
-                for k, t in enumerate(at_centre):
-                    n = int(np.argmin(np.abs(moving[0] - t)))
-                    if abs(moving[0, n] - t) <= _THRESHOLD_MATCH * t:
-                        thresholds[k] = np.linalg.solve(basis, moving[:, n])
-                        thresholds[k, 0] += t - moving[0, n]
+        thresholds = np.zeros((at_centre.size, basis.shape[1]))
+        thresholds[:, 0] = at_centre
+        reached = min(r.size for r in ratios)
+        for k, n in enumerate(order):
+            at_nodes = np.array([r[n] for r in ratios]) if n < reached else None
+            if at_nodes is not None and np.all(np.isfinite(at_nodes)):
+                thresholds[k] = np.linalg.solve(basis, at_nodes)
     tables = []
     for value in values:
         params = dict(fixed_params) if value is None else {**fixed_params, ratio: value}
