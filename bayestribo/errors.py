@@ -87,3 +87,9 @@ class ChannelCalibrationWarning(UserWarning):
     """The displacement and velocity channels disagree (v ≠ dx/dt) in gain or delay by
     more than the recording's own uncertainty (the message gives both, and what was
     done)."""
+
+
+class ClippingWarning(UserWarning):
+    """The largest swings of a recording are flattened at their peaks (a sensor that
+    saturates softly, or a spring that softens): their cycles were left out of the
+    analysis (the message says how many, at which swing and by how much)."""

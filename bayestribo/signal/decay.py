@@ -71,9 +71,11 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import cumulative_trapezoid
 
 from bayestribo._clock import clock
-from bayestribo.errors import RecordingError
+from bayestribo._warnings import warn
+from bayestribo.errors import ClippingWarning, RecordingError
 from bayestribo.model.plausible import MAX_SPEED
 from bayestribo.model.scaling import Rig, Scaling
+from bayestribo.signal.clipping import flattened_turning_points
 from bayestribo.signal.motion import THRESHOLD, block_noise, check_turning_points, motion_span
 from bayestribo.signal.peaks import Peaks, estimate_noise, find_peaks
 from bayestribo.signal.period import dominant_period
@@ -199,6 +201,10 @@ class EnergyDecay:
         side's damped arc (:func:`_turning_times`), or the peak times when the
         velocity was derived; the damped frequency is fitted to them. ``None`` for a
         decay built without them.
+    flattened_turning_points : int
+        Leading turning points left out because their peaks are flattened (soft
+        clipping of the displacement sensor,
+        :func:`~bayestribo.signal.clipping.flattened_turning_points`); 0 when none was.
     """
 
     t: NDArray
@@ -226,6 +232,7 @@ class EnergyDecay:
     notch_Hz: tuple[float, ...] = ()
     stop_time: float | None = None
     turning_times: NDArray | None = None
+    flattened_turning_points: int = 0
 
     @property
     def tau_end(self) -> float:
@@ -948,6 +955,34 @@ def _analyse(
         skip = max(2 * int(skip_oscillations) - 1, 0)
     if skip_turning_points is None:
         skipped = f"{skip_oscillations} oscillations"
+    flattened = 0
+    if derived is None:  # a recorded displacement: are its largest swings flattened?
+        step = period0 / per_samples
+        found = flattened_turning_points(
+            t, x, peaks.index, peaks.value, max(1, round(period / step / 12.0))
+        )
+        if found is not None and found.count > skip:
+            flattened = found.count
+            said = (
+                f"soft clipping: the first {flattened} turning points (swings of "
+                f"{found.level:.4g} and more) bend up to "
+                f"{float(np.max(found.deficit[:flattened])):.1%} less at their peaks than "
+                "the smaller swings say a linear oscillator does: the displacement sensor "
+                "saturates (or the spring softens)"
+            )
+            if len(peaks) < flattened + int(min_turning_points):
+                raise RecordingError(
+                    f"{said}; {len(peaks) - flattened} turning points remain after them, "
+                    f"{min_turning_points} are needed: record with a smaller initial "
+                    "displacement or a larger sensor range"
+                )
+            warn(
+                f"{said}; they are left out: the analysis starts at turning point "
+                f"{flattened} (instead of after {skipped}); record with a smaller initial "
+                "displacement or a larger sensor range to keep them",
+                ClippingWarning,
+            )
+            skip = flattened
     needed = skip + int(min_turning_points)
     if len(peaks) < needed:
         raise RecordingError(
@@ -1023,4 +1058,5 @@ def _analyse(
         notch_Hz=notch_Hz,
         stop_time=stop_time,
         turning_times=np.asarray(times, dtype=float).copy(),
+        flattened_turning_points=flattened,
     )

@@ -1,0 +1,135 @@
+"""Peaks flattened at the largest swings: a sensor that saturates (soft clipping).
+
+A sensor driven beyond its linear range does not always cut the signal flat (which
+:func:`bayestribo.io.validation.validate_run` refuses when a file is read): an
+amplifier or a vibrometer that saturates softly reads ``L tanh(x/L)``, a smooth signal
+whose largest swings are compressed. The energy decay then starts low and the fit
+reads the compression as damping.
+
+At a turning point the displacement of a linear oscillator bends with the curvature
+|x''| = ω²|Y| (Coulomb friction moves the centre of each half cycle by ±x_c, which a
+fit symmetric about the turning point averages out; what remains of it, and the
+fitting window's own bias, make the relation a line K = b|Y| - d). A saturated
+reading bends less at its largest swings: ``L tanh(x/L)`` has the curvature
+``sech²(A/L)`` times the true one at a true swing A, a deficit of 3 % against the line
+at A = 0.22 L, where the swing itself reads 1.5 % low.
+
+:func:`flattened_turning_points` fits that line to the turning points of the smaller
+half of the swings and counts the leading turning points (the largest swings, at the
+start of a free decay) whose curvature falls short of it by more than
+:data:`MAX_DEFICIT` of it and by more than :data:`MIN_Z` times the scatter of the
+reference turning points about it.
+:func:`bayestribo.signal.decay.energy_decay` leaves them out of the analysis with a
+:class:`~bayestribo.errors.ClippingWarning`, or refuses the record when too few
+turning points remain. A spring that softens with the swing bends less at large swings
+too: the message names both causes.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["MAX_DEFICIT", "MIN_TURNING_POINTS", "MIN_Z", "Flattening", "flattened_turning_points"]
+
+#: Relative curvature deficit [-] beyond which a turning point is flattened.
+MAX_DEFICIT = 0.03
+#: ... and beyond this many standard deviations of the reference turning points'
+#: curvatures about the line (1.4826 times their median absolute deviation).
+MIN_Z = 6.0
+#: Fewest turning points the check needs (a line and its scatter from the smaller half).
+MIN_TURNING_POINTS = 8
+
+
+@dataclass(frozen=True)
+class Flattening:
+    """The curvature of a signal's turning points against a linear oscillator's.
+
+    Attributes
+    ----------
+    count : int
+        Leading turning points whose curvature falls short (the largest swings).
+    deficit : ndarray
+        Relative curvature deficit of each turning point [-]: 1 - K/(b|Y| - d); 0.03
+        for a curvature 3 % below the line.
+    scatter : float
+        Robust standard deviation of the reference turning points' curvatures about
+        the line [signal unit/s²].
+    level : float
+        Smallest swing |Y| among the flattened turning points [signal unit]; nan when
+        none is.
+    """
+
+    count: int
+    deficit: NDArray
+    scatter: float
+    level: float
+
+
+def _curvatures(t: NDArray, s: NDArray, index: NDArray, half_width: int) -> NDArray:
+    """|s''| at each sample in ``index`` [signal unit/s²]: a least-squares parabola over
+    the samples ``index ± half_width`` (as the turning points are refined)."""
+    out = np.full(index.size, np.nan)
+    for j, i in enumerate(index.tolist()):
+        w = min(half_width, i, s.size - 1 - i)
+        if w < 1:
+            continue
+        tt = t[i - w : i + w + 1] - t[i]
+        c2 = np.polyfit(tt, s[i - w : i + w + 1], 2)[0]
+        out[j] = abs(2.0 * c2)
+    return out
+
+
+def flattened_turning_points(
+    t: NDArray, s: NDArray, index: NDArray, value: NDArray, half_width: int
+) -> Flattening | None:
+    """Count the leading turning points of ``s`` flattened at their peaks.
+
+    Parameters
+    ----------
+    t : ndarray
+        Sample times [s].
+    s : ndarray
+        The signal (displacement, any length unit).
+    index : ndarray of int
+        Sample index of each turning point, in time order.
+    value : ndarray
+        Each turning point's value about the equilibrium [signal unit], alternating in
+        sign.
+    half_width : int
+        Samples on each side of a turning point its curvature is fitted over (the
+        peak refinement's: about 1/12 of a period).
+
+    Returns
+    -------
+    Flattening or None
+        None with fewer than :data:`MIN_TURNING_POINTS` turning points or a line that
+        cannot be fitted.
+    """
+    index = np.asarray(index, dtype=int)
+    swing = np.abs(np.asarray(value, dtype=float))
+    if index.size < MIN_TURNING_POINTS or index.size != swing.size:
+        return None
+    curvature = _curvatures(t, s, index, max(1, int(half_width)))
+    usable = np.isfinite(curvature) & (swing > 0)
+    reference = usable & (swing <= np.median(swing[usable])) if usable.any() else usable
+    if np.count_nonzero(reference) < MIN_TURNING_POINTS // 2:
+        return None
+    b, d = np.polyfit(swing[reference], curvature[reference], 1)
+    if not (b > 0 and math.isfinite(d)):
+        return None
+    line = b * swing - d
+    with np.errstate(divide="ignore", invalid="ignore"):
+        deficit = np.where(usable & (line > 0), 1.0 - curvature / line, 0.0)
+    # the curvature's noise (from the signal's noise over the fitting window) does not
+    # grow with the swing: the scatter is taken in curvature, not relative to it
+    short = np.where(usable, line - curvature, 0.0)
+    spread = short[reference]
+    scatter = 1.4826 * float(np.median(np.abs(spread - np.median(spread))))
+    flattened = (deficit > MAX_DEFICIT) & (short > MIN_Z * scatter)
+    count = int(np.argmin(flattened)) if not flattened.all() else int(flattened.size)
+    level = float(np.min(swing[:count])) if count else math.nan
+    return Flattening(count, deficit, scatter, level)

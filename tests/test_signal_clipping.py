@@ -1,0 +1,104 @@
+"""Soft clipping: the largest swings of a saturated displacement are found and left out."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+from bayestribo.errors import ClippingWarning, RecordingError
+from bayestribo.signal.clipping import MAX_DEFICIT, flattened_turning_points
+from bayestribo.signal.decay import energy_decay
+from bayestribo.synthetic import Sensor, simulate
+
+
+def _record(rate: float = 10_000.0, seed: int = 2):
+    return simulate(seed=seed, sensor=Sensor(sample_rate_Hz=rate))
+
+
+def _saturated(x: np.ndarray, over: float) -> np.ndarray:
+    """``L tanh(x/L)`` with the sensor's range L = largest swing / ``over``."""
+    level = float(np.max(np.abs(x))) / over
+    return level * np.tanh(x / level)
+
+
+def _decay(run, x, **options):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        decay = energy_decay(
+            run.time, displacement=x, velocity=run.velocity, rig=run.rig(), **options
+        )
+    return decay, [w for w in caught if issubclass(w.category, ClippingWarning)]
+
+
+@pytest.mark.parametrize("rate", [2_000.0, 10_000.0, 100_000.0])
+def test_a_softly_saturated_displacement_loses_its_largest_swings_with_a_warning(rate):
+    run = _record(rate)
+    x = _saturated(run.displacement, 2.0)
+    decay, caught = _decay(run, x)
+    assert decay.flattened_turning_points >= 4
+    assert len(caught) == 1
+    message = str(caught[0].message)
+    assert "soft clipping" in message and "saturates" in message
+    assert f"first {decay.flattened_turning_points} turning points" in message
+    # the analysis starts after them: its first swing is below the flattened ones
+    clean, _ = _decay(run, run.displacement)
+    assert decay.start_time > clean.start_time
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+@pytest.mark.parametrize("rate", [1_000.0, 10_000.0, 100_000.0])
+def test_a_linear_sensor_keeps_every_turning_point(rate, seed):
+    run = _record(rate, seed)
+    decay, caught = _decay(run, run.displacement)
+    assert decay.flattened_turning_points == 0
+    assert caught == []
+
+
+def test_a_range_a_quarter_beyond_the_swing_is_within_the_tolerance():
+    """At L = 4 × the swing the curvature falls 2 % short (the swing 1 %): not flagged."""
+    run = _record()
+    decay, caught = _decay(run, _saturated(run.displacement, 0.25))
+    assert decay.flattened_turning_points == 0
+    assert caught == []
+
+
+def test_a_flat_cut_of_the_largest_swings_is_flattening_too():
+    run = _record()
+    x = run.displacement
+    top = 0.4 * float(np.max(np.abs(x)))
+    decay, caught = _decay(run, np.clip(x, -top, top))
+    assert decay.flattened_turning_points >= 2
+    assert len(caught) == 1
+
+
+def test_too_few_turning_points_after_the_flattened_ones_is_refused():
+    run = _record()
+    x = _saturated(run.displacement, 3.0)  # 10 of 29 turning points flattened
+    with pytest.raises(RecordingError, match=r"soft clipping.*turning points remain"):
+        _decay(run, x, min_turning_points=20)
+
+
+def test_the_deficit_of_a_tanh_reading_follows_its_curvature():
+    """L tanh(x/L) bends sech²(A/L) times less at a swing A: the deficit of the largest
+    turning point follows it (less a little: the line is fitted on the smaller swings,
+    which are compressed too)."""
+    run = _record(100_000.0)
+    x = _saturated(run.displacement, 1.0)
+    clean, _ = _decay(run, run.displacement, skip_turning_points=0)
+    index = clean.peaks.index  # a monotonic reading keeps the turning points' places
+    step = float(run.time[1] - run.time[0])
+    half_width = round(2.0 * clean.peaks.half_period / step / 12.0)
+    found = flattened_turning_points(run.time, x, index, x[index], half_width)
+    assert found is not None and found.count >= 8
+    a = np.abs(clean.peaks.value[0]) / float(np.max(np.abs(run.displacement)))
+    expected = 1.0 - a / (np.cosh(a) ** 2 * np.tanh(a))
+    assert 0.6 * expected < found.deficit[0] < expected + 0.01  # measured: 0.30 for 0.37
+    assert np.all(found.deficit[: found.count] > MAX_DEFICIT)
+
+
+def test_too_few_turning_points_are_not_checked():
+    t = np.arange(1000) / 1000.0
+    x = np.cos(2 * np.pi * 5 * t)
+    assert flattened_turning_points(t, x, np.array([0, 100, 200]), np.ones(3), 8) is None
