@@ -102,3 +102,10 @@ def test_too_few_turning_points_are_not_checked():
     t = np.arange(1000) / 1000.0
     x = np.cos(2 * np.pi * 5 * t)
     assert flattened_turning_points(t, x, np.array([0, 100, 200]), np.ones(3), 8) is None
+
+
+def test_swings_that_hardly_decay_are_not_checked():
+    t = np.arange(20_000) / 10_000.0
+    x = 1e-3 * np.cos(2 * np.pi * 32.6 * t)
+    index = np.round(np.arange(1, 40) / (2 * 32.6) * 10_000).astype(int)
+    assert flattened_turning_points(t, x, index, x[index], 26) is None

@@ -33,7 +33,14 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["MAX_DEFICIT", "MIN_TURNING_POINTS", "MIN_Z", "Flattening", "flattened_turning_points"]
+__all__ = [
+    "MAX_DEFICIT",
+    "MIN_SPAN",
+    "MIN_TURNING_POINTS",
+    "MIN_Z",
+    "Flattening",
+    "flattened_turning_points",
+]
 
 #: Relative curvature deficit [-] beyond which a turning point is flattened.
 MAX_DEFICIT = 0.03
@@ -42,6 +49,9 @@ MAX_DEFICIT = 0.03
 MIN_Z = 6.0
 #: Fewest turning points the check needs (a line and its scatter from the smaller half).
 MIN_TURNING_POINTS = 8
+#: Least span of the smaller half's swings, as a fraction of the largest swing, to draw
+#: the line through (a record that hardly decays is not checked).
+MIN_SPAN = 0.2
 
 
 @dataclass(frozen=True)
@@ -106,7 +116,8 @@ def flattened_turning_points(
     Returns
     -------
     Flattening or None
-        None with fewer than :data:`MIN_TURNING_POINTS` turning points or a line that
+        None with fewer than :data:`MIN_TURNING_POINTS` turning points, swings of the
+        smaller half spanning less than :data:`MIN_SPAN` of the largest, or a line that
         cannot be fitted.
     """
     index = np.asarray(index, dtype=int)
@@ -118,6 +129,8 @@ def flattened_turning_points(
     reference = usable & (swing <= np.median(swing[usable])) if usable.any() else usable
     if np.count_nonzero(reference) < MIN_TURNING_POINTS // 2:
         return None
+    if np.ptp(swing[reference]) < MIN_SPAN * float(np.max(swing[usable])):
+        return None  # swings too alike to draw the line through (no decay to speak of)
     b, d = np.polyfit(swing[reference], curvature[reference], 1)
     if not (b > 0 and math.isfinite(d)):
         return None
