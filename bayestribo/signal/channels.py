@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.errors import RecordingError
-from bayestribo.signal.period import dominant_period
+from bayestribo.signal.period import dominant_period, sample_step
 
 __all__ = [
     "MOTION_FRACTION",
@@ -297,7 +297,7 @@ def _channel_consistency(run: Recording) -> ChannelConsistency | None:
     except RecordingError:
         return None
     integral = np.concatenate(([0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))))
-    step = float(np.median(np.diff(t)))
+    step = sample_step(t)
     lag = max(1, round(period / (40.0 * step)))
     if 2 * lag >= x.size:
         return None

@@ -78,7 +78,7 @@ from bayestribo.model.scaling import Rig, Scaling
 from bayestribo.signal.clipping import flattened_turning_points
 from bayestribo.signal.motion import THRESHOLD, block_noise, check_turning_points, motion_span
 from bayestribo.signal.peaks import Peaks, estimate_noise, find_peaks
-from bayestribo.signal.period import dominant_period
+from bayestribo.signal.period import dominant_period, sample_step
 from bayestribo.signal.quantisation import QUANTISATION_NOISE_FACTOR, quantisation_step
 from bayestribo.signal.spectrum import NoiseSpectrum, RestNoise, fit_line, noise_spectrum
 
@@ -351,7 +351,7 @@ def savgol_window(t: NDArray, period: float) -> int:
     RecordingError
         When no period could be measured (not a finite positive number).
     """
-    step = float(np.median(np.diff(t)))
+    step = sample_step(t)
     if not (math.isfinite(period) and period > 0 and step > 0):
         raise RecordingError(
             f"no oscillation period found in the record (got {period!r} s): the signal "
@@ -375,7 +375,7 @@ def derive_velocity(t: ArrayLike, x: ArrayLike, period: float) -> tuple[NDArray,
     """
     t = np.asarray(t, dtype=float)
     x = np.asarray(x, dtype=float)
-    dt = float(np.median(np.diff(t)))
+    dt = sample_step(t)
     window = savgol_window(t, period)
     if window > x.size:
         raise RecordingError(
@@ -435,7 +435,7 @@ def _turning_times(t: NDArray, v: NDArray, peaks: Peaks, period: float) -> NDArr
     noise in amplitude), and the neighbouring turning points' crossings, half a
     period away, go the other way. Where there is none, the peak time is kept.
     """
-    dt = float(np.median(np.diff(t)))
+    dt = sample_step(t)
     reach = max(2.0, 0.25 * period / dt)
     times = peaks.t.copy()
     negative = np.signbit(v)
@@ -629,7 +629,7 @@ def _timing_sd(t: NDArray, peaks: Peaks) -> NDArray:
     sd(c₁) = σ/√(Σu²) (u the samples' offsets [s]) and 2c₂ ≈ -Ω²Y at a turning point
     of value Y (:func:`bayestribo.signal.peaks.find_peaks`, ±1/12 period).
     """
-    dt = float(np.median(np.diff(t)))
+    dt = sample_step(t)
     omega = math.pi / peaks.half_period
     h = max(1, round(2.0 * peaks.half_period / dt / 12.0))
     sum_u2 = dt * dt * h * (h + 1) * (2 * h + 1) / 3.0
@@ -657,7 +657,7 @@ def _rest_noise(
             names.append(name)
     if not masks:
         return None
-    fs = 1.0 / float(np.median(np.diff(t)))
+    fs = 1.0 / sample_step(t)
 
     def spectrum(s: NDArray) -> NoiseSpectrum:
         return noise_spectrum([s[m] for m in masks], fs, period_s=period)
@@ -894,7 +894,7 @@ def _analyse(
         period0 = dominant_period(t, reference)
     except RecordingError as e:
         raise RecordingError(f"release: no motion found: {e}") from e
-    per_samples = period0 / float(np.median(np.diff(t)))
+    per_samples = period0 / sample_step(t)
     if per_samples < 6:
         raise RecordingError(
             f"release: no motion found: the record's dominant period is {per_samples:.1f} "

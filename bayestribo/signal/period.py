@@ -23,7 +23,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from bayestribo.errors import RecordingError
 
-__all__ = ["CANDIDATES", "CANDIDATE_PERIODS", "POWER_RATIO", "dominant_period"]
+__all__ = [
+    "CANDIDATES",
+    "CANDIDATE_PERIODS",
+    "POWER_RATIO",
+    "dominant_period",
+    "sample_step",
+]
 
 #: Spectral peaks of each ranking examined as the oscillation by :func:`dominant_period`.
 CANDIDATES = 6
@@ -136,23 +142,47 @@ def dominant_period(time: ArrayLike, values: ArrayLike) -> float:
             f"the period needs two 1-D arrays of the same length (at least 4 samples), got "
             f"shapes {t.shape} and {s.shape}"
         )
-    if not _frozen(t) or not _frozen(s):
-        return _spectral_period(t, s)
-    key = (id(t), id(s))
-    cached = _PERIODS.get(key)
-    if cached is not None and cached[0]() is t and cached[1]() is s:
-        return cached[2]
-    period = _spectral_period(t, s)
-
-    def forget(_: object, key: tuple[int, int] = key) -> None:
-        _PERIODS.pop(key, None)
-
-    _PERIODS[key] = (weakref.ref(t, forget), weakref.ref(s, forget), period)
-    return period
+    return _remembered("period", (t, s), _spectral_period)
 
 
-#: Periods of read-only arrays, by the ids of (time, values), while both live.
-_PERIODS: dict[tuple[int, int], tuple[weakref.ref, weakref.ref, float]] = {}
+def sample_step(time: ArrayLike) -> float:
+    """Median spacing of sample times [s].
+
+    Parameters
+    ----------
+    time : array_like
+        Sample times [s], at least two.
+
+    Returns
+    -------
+    float
+        ``median(diff(time))`` [s]; remembered for a read-only array that owns its
+        data (a :class:`~bayestribo.io.run.Run`'s time stamps, which the checks of a
+        file and the preparation of a fit ask for a dozen times).
+    """
+    t = np.asarray(time, dtype=np.float64)
+    return _remembered("step", (t,), lambda t: float(np.median(np.diff(t))))
+
+
+#: Values computed from read-only arrays, by what and the arrays' ids, while they live.
+_REMEMBERED: dict[tuple, tuple[tuple[weakref.ref, ...], float]] = {}
+
+
+def _remembered(what: str, arrays: tuple[NDArray, ...], compute) -> float:
+    """``compute(*arrays)``, remembered while the arrays live when all are frozen."""
+    if not all(_frozen(a) for a in arrays):
+        return compute(*arrays)
+    key = (what, *map(id, arrays))
+    cached = _REMEMBERED.get(key)
+    if cached is not None and all(r() is a for r, a in zip(cached[0], arrays, strict=True)):
+        return cached[1]
+    value = compute(*arrays)
+
+    def forget(_: object, key: tuple = key) -> None:
+        _REMEMBERED.pop(key, None)
+
+    _REMEMBERED[key] = (tuple(weakref.ref(a, forget) for a in arrays), value)
+    return value
 
 
 def _frozen(a: NDArray) -> bool:
@@ -191,7 +221,7 @@ def _spectral_period(t: NDArray, s: NDArray) -> float:
     that ratio of the best power is taken (a sidelobe of the oscillation's own peak
     scores nearly as high but is weaker in the spectrum).
     """
-    dt = float(np.median(np.diff(t)))
+    dt = sample_step(t)
     x = np.diff(s)
     x = x - np.mean(x)
     n = 1 << math.ceil(math.log2(4 * s.size))

@@ -32,6 +32,7 @@ import scipy.signal
 from numpy.typing import ArrayLike, NDArray
 
 from bayestribo.errors import RecordingError
+from bayestribo.signal.period import sample_step
 
 __all__ = [
     "LINE_RATIO",
@@ -459,7 +460,7 @@ def fit_line(
     t = np.asarray(t, dtype=float)
     s = np.asarray(signal, dtype=float)
     m = np.asarray(rest, bool)
-    if np.count_nonzero(m) * float(np.median(np.diff(t))) * frequency_Hz < 2.0:
+    if np.count_nonzero(m) * sample_step(t) * frequency_Hz < 2.0:
         raise RecordingError(
             f"notch: fewer than two periods of the {frequency_Hz:g} Hz line at rest to measure it"
         )
