@@ -233,12 +233,14 @@ def _ljung_box(segments: Sequence[NDArray], lags: int) -> float:
     n = sum(d.size for d in dev)
     if n <= lags + 2:
         return 1.0
-    c0 = sum(float(d @ d) for d in dev)
+    # sums by einsum, not a threaded BLAS (:func:`~bayestribo.signal.increments.
+    # integrate_increments`)
+    c0 = sum(float(np.einsum("i,i->", d, d)) for d in dev)
     if c0 == 0.0:
         return 1.0
     q = 0.0
     for k in range(1, lags + 1):
-        rho = sum(float(d[:-k] @ d[k:]) for d in dev) / c0
+        rho = sum(float(np.einsum("i,i->", d[:-k], d[k:])) for d in dev) / c0
         q += rho * rho / (n - k)
     return float(chi2.sf(n * (n + 2.0) * q, lags))
 
