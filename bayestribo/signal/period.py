@@ -10,7 +10,8 @@ peak's interpolation); the precise frequency of a decay comes from its turning t
 
 A run's arrays are read-only: the period of one is computed once and remembered
 while the array lives (reading a file, its checks and the preparation of a fit ask
-for it three times).
+for it three times), and so is the median step of its time stamps
+(:func:`sample_step`, asked for a dozen times).
 """
 
 from __future__ import annotations
