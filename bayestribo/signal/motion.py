@@ -103,34 +103,6 @@ class MotionSpan:
         return self.stop_time is not None
 
 
-def _orthonormal(basis: NDArray) -> NDArray:
-    """Orthonormal columns spanning those of a tall ``basis`` of a few columns:
-    Gram-Schmidt twice over (as accurate as a QR factorisation), by einsum rather than a
-    threaded LAPACK over the tall matrix. A column that the others span to 1e-12 of
-    its length (a sinusoid of zero frequency repeats the constant) is dropped."""
-    kept: list[NDArray] = []
-    for k in range(basis.shape[1]):
-        column = basis[:, k].astype(float, copy=True)
-        length = math.sqrt(float(np.einsum("i,i->", column, column)))
-        for _ in range(2):
-            for q in kept:
-                column -= float(np.einsum("i,i->", q, column)) * q
-        left = math.sqrt(float(np.einsum("i,i->", column, column)))
-        if length > 0.0 and left > 1e-12 * length:
-            kept.append(column / left)
-    return np.column_stack(kept) if kept else np.zeros((basis.shape[0], 0))
-
-
-def _residual(rows: NDArray, basis: NDArray) -> NDArray:
-    """``rows`` less their least-squares fit by the columns of ``basis``."""
-    q = _orthonormal(basis)
-    coef = np.einsum("ij,jk->ik", rows, q)
-    out = rows.copy()
-    for k in range(q.shape[1]):
-        out -= np.multiply.outer(coef[:, k], q[:, k])
-    return out
-
-
 def _block_fits(t: NDArray, s: NDArray, starts: NDArray, size: int, omega: float):
     """Per block: variance left by a line, variance left by line + sinusoid."""
     tt = t[:size] - t[0]
@@ -140,8 +112,12 @@ def _block_fits(t: NDArray, s: NDArray, starts: NDArray, size: int, omega: float
     rows = s[starts[:, None] + np.arange(size)[None, :]]
     # products with the 2 and 4 basis columns by einsum, not a threaded BLAS, which
     # waits for a second core that a shared machine gives late (80 ms instead of 15)
-    res1 = _residual(rows, basis1)
-    res2 = _residual(rows, basis2)
+    res1 = rows - np.einsum(
+        "ik,jk->ij", np.einsum("ij,kj->ik", rows, np.linalg.pinv(basis1)), basis1
+    )
+    res2 = rows - np.einsum(
+        "ik,jk->ij", np.einsum("ij,kj->ik", rows, np.linalg.pinv(basis2)), basis2
+    )
     return np.mean(res1 * res1, axis=1), np.mean(res2 * res2, axis=1)
 
 
