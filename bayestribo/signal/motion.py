@@ -110,14 +110,8 @@ def _block_fits(t: NDArray, s: NDArray, starts: NDArray, size: int, omega: float
     basis1 = np.column_stack([np.ones(size), tt])
     basis2 = np.column_stack([basis1, np.cos(omega * tt), np.sin(omega * tt)])
     rows = s[starts[:, None] + np.arange(size)[None, :]]
-    # products with the 2 and 4 basis columns by einsum, not a threaded BLAS, which
-    # waits for a second core that a shared machine gives late (80 ms instead of 15)
-    res1 = rows - np.einsum(
-        "ik,jk->ij", np.einsum("ij,kj->ik", rows, np.linalg.pinv(basis1)), basis1
-    )
-    res2 = rows - np.einsum(
-        "ik,jk->ij", np.einsum("ij,kj->ik", rows, np.linalg.pinv(basis2)), basis2
-    )
+    res1 = rows - (rows @ np.linalg.pinv(basis1).T) @ basis1.T
+    res2 = rows - (rows @ np.linalg.pinv(basis2).T) @ basis2.T
     return np.mean(res1 * res1, axis=1), np.mean(res2 * res2, axis=1)
 
 
