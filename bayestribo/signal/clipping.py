@@ -19,10 +19,16 @@ half of the swings and counts the leading turning points (the largest swings, at
 start of a free decay) whose curvature falls short of it by more than
 :data:`MAX_DEFICIT` of it and by more than :data:`MIN_Z` times the scatter of the
 reference turning points about it.
-:func:`bayestribo.signal.decay.energy_decay` leaves them out of the analysis with a
-:class:`~bayestribo.errors.ClippingWarning`, or refuses the record when too few
-turning points remain. A spring that softens with the swing bends less at large swings
-too: the message names both causes.
+:func:`bayestribo.signal.decay.energy_decay` applies it to a recorded displacement at
+its turning points and to a recorded velocity at its extremes (one between each two
+turning points, where v'' = -ω²v whatever the friction), leaves the flattened ones out
+of the analysis with a :class:`~bayestribo.errors.ClippingWarning`, or refuses the
+record when too few turning points remain. A spring that softens with the swing bends
+the displacement less at large swings too: the message names both causes.
+
+A saturation so deep that the smaller half of the swings is compressed as much as the
+largest (a range below a quarter of the largest swing) leaves no line to compare
+with, and is not found.
 """
 
 from __future__ import annotations

@@ -61,6 +61,7 @@ from the end of motion T. A real recording needs some care first, and
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, replace
 from typing import Literal
@@ -832,6 +833,42 @@ def energy_decay(
     return _analyse(t, out[0], out[1], notch_Hz=(float(np.mean(fitted)),), **options)
 
 
+def _flattened(
+    t: NDArray, x: NDArray | None, v: NDArray | None, peaks: Peaks, step: float
+) -> tuple[int, str] | None:
+    """Leading turning points to leave out for soft clipping, and what to say of them.
+
+    The recorded displacement ``x`` is checked at its turning points, the recorded
+    velocity ``v`` at its extremes (one between each two turning points; v'' = -ω²v
+    there, friction or not): a flattened velocity extreme between turning points k and
+    k + 1 leaves out turning points up to k + 1. None when neither is flattened.
+    """
+    half_width = max(1, round(2.0 * peaks.half_period / step / 12.0))
+    found = []
+    if x is not None:
+        flat = flattened_turning_points(t, x, peaks.index, peaks.value, half_width)
+        if flat is not None and flat.count:
+            found.append((flat.count, "turning points", "displacement", flat))
+    if v is not None and len(peaks) > 1:
+        index = np.asarray(peaks.index, dtype=int)
+        extremes = np.array(
+            [a + int(np.argmax(np.abs(v[a:b]))) for a, b in itertools.pairwise(index)]
+        )
+        flat = flattened_turning_points(t, v, extremes, v[extremes], half_width)
+        if flat is not None and flat.count:
+            found.append((flat.count + 1, "velocity extremes", "velocity", flat))
+    if not found:
+        return None
+    count, what, channel, flat = max(found, key=lambda f: f[0])
+    said = (
+        f"soft clipping: the first {flat.count} {what} (swings of {flat.level:.4g} and "
+        f"more) bend up to {float(np.max(flat.deficit[: flat.count])):.1%} less at their "
+        f"peaks than the smaller swings say a linear oscillator does: the {channel} sensor "
+        "saturates" + (" (or the spring softens)" if channel == "displacement" else "")
+    )
+    return count, said
+
+
 def _check_plausible(peaks: NDArray, natural_hz: float, derived: str | None) -> None:
     """Refuse a record in metres whose swing and frequency no rig makes.
 
@@ -955,34 +992,23 @@ def _analyse(
         skip = max(2 * int(skip_oscillations) - 1, 0)
     if skip_turning_points is None:
         skipped = f"{skip_oscillations} oscillations"
-    flattened = 0
-    if derived is None:  # a recorded displacement: are its largest swings flattened?
-        step = period0 / per_samples
-        found = flattened_turning_points(
-            t, x, peaks.index, peaks.value, max(1, round(period / step / 12.0))
+    left_out = 0
+    flattened = _flattened(t, x if derived is None else None, v, peaks, period0 / per_samples)
+    if flattened is not None and flattened[0] > skip:
+        count, said = flattened
+        if len(peaks) < count + int(min_turning_points):
+            raise RecordingError(
+                f"{said}; {len(peaks) - count} turning points remain after them, "
+                f"{min_turning_points} are needed: record with a smaller initial "
+                "displacement or a larger sensor range"
+            )
+        warn(
+            f"{said}; they are left out: the analysis starts at turning point {count} "
+            f"(instead of after {skipped}); record with a smaller initial displacement or "
+            "a larger sensor range to keep them",
+            ClippingWarning,
         )
-        if found is not None and found.count > skip:
-            flattened = found.count
-            said = (
-                f"soft clipping: the first {flattened} turning points (swings of "
-                f"{found.level:.4g} and more) bend up to "
-                f"{float(np.max(found.deficit[:flattened])):.1%} less at their peaks than "
-                "the smaller swings say a linear oscillator does: the displacement sensor "
-                "saturates (or the spring softens)"
-            )
-            if len(peaks) < flattened + int(min_turning_points):
-                raise RecordingError(
-                    f"{said}; {len(peaks) - flattened} turning points remain after them, "
-                    f"{min_turning_points} are needed: record with a smaller initial "
-                    "displacement or a larger sensor range"
-                )
-            warn(
-                f"{said}; they are left out: the analysis starts at turning point "
-                f"{flattened} (instead of after {skipped}); record with a smaller initial "
-                "displacement or a larger sensor range to keep them",
-                ClippingWarning,
-            )
-            skip = flattened
+        skip = left_out = count
     needed = skip + int(min_turning_points)
     if len(peaks) < needed:
         raise RecordingError(
@@ -1058,5 +1084,5 @@ def _analyse(
         notch_Hz=notch_Hz,
         stop_time=stop_time,
         turning_times=np.asarray(times, dtype=float).copy(),
-        flattened_turning_points=flattened,
+        flattened_turning_points=left_out,
     )
