@@ -57,7 +57,7 @@ def test_a_linear_sensor_keeps_every_turning_point(rate, seed):
 
 
 def test_a_range_a_quarter_beyond_the_swing_is_within_the_tolerance():
-    """At L = 4 × the swing the curvature falls 2 % short (the swing 1 %): not flagged."""
+    """At L = 4 × the swing the curvature falls 3 % short (the swing 1.5 %): not flagged."""
     run = _record()
     decay, caught = _decay(run, _saturated(run.displacement, 0.25))
     assert decay.flattened_turning_points == 0

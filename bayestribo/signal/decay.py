@@ -993,7 +993,13 @@ def _analyse(
     if skip_turning_points is None:
         skipped = f"{skip_oscillations} oscillations"
     left_out = 0
-    flattened = _flattened(t, x if derived is None else None, v, peaks, period0 / per_samples)
+    flattened = _flattened(
+        t,
+        x if derived != "displacement" else None,  # recorded channels only: a derived
+        v if derived != "velocity" else None,  # one is distorted by its derivation
+        peaks,
+        period0 / per_samples,
+    )
     if flattened is not None and flattened[0] > skip:
         count, said = flattened
         if len(peaks) < count + int(min_turning_points):
