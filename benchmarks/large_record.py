@@ -14,7 +14,10 @@ Goal: read + prepare within 2x the sampling time, peak memory under 400 MB, and 
 least 5x faster than the baseline side by side.
 
 Run: ``python benchmarks/large_record.py --baseline /tmp/bt-base``; prints a table and
-writes ``benchmarks/results/large_record.json``.
+writes ``benchmarks/results/large_record.json``. A threaded BLAS makes the comparison
+depend on the machine's load (a busy second core held the baseline's prepare at 4 s
+instead of 0.8 s); ``OPENBLAS_NUM_THREADS=1 python benchmarks/large_record.py
+--baseline /tmp/bt-base --output large_record_1thread`` measures both on one core.
 """
 
 from __future__ import annotations

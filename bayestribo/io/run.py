@@ -29,6 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 from bayestribo.errors import MetadataWarning, RecordingError, RunFormatError
 from bayestribo.model.scaling import Rig, Scaling
 from bayestribo.signal.frequency import oscillation_frequency
+from bayestribo.signal.period import sample_step
 
 __all__ = [
     "COLUMNS",
@@ -374,7 +375,7 @@ class Run:
         """
         if self.time.size < 2:
             raise RecordingError(f"{TIME!r}: a sample rate needs at least two samples", self.source)
-        step = float(np.median(np.diff(self.time)))
+        step = sample_step(self.time)
         if not step > 0.0:
             raise RecordingError(
                 f"{TIME!r}: the median time step is {step!r}; expected a positive step",

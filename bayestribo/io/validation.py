@@ -38,6 +38,7 @@ from bayestribo._warnings import moved
 from bayestribo.errors import RecordingError
 from bayestribo.io.run import DISPLACEMENT, TIME, VELOCITY, Run
 from bayestribo.signal.channels import check_channels, check_plausible_motion
+from bayestribo.signal.period import sample_step
 
 __all__ = ["CLIP_SAMPLES", "MIN_SAMPLES", "TIME_RTOL", "check_channels", "validate_run"]
 
@@ -101,7 +102,7 @@ def _check_time(run: Run, where: str | None, time_rtol: float) -> float:
             f"t = {t[i - 1]!r} s; expected increasing time stamps",
             where,
         )
-    median = float(np.median(step))
+    median = sample_step(t)  # remembered for the checks and the fit that follow
     deviation = np.abs(step - median) / median
     worst = int(np.argmax(deviation))
     if deviation[worst] > time_rtol and not _jittered(t):  # jitter about a grid passes

@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.errors import RecordingError
-from bayestribo.signal.period import dominant_period
+from bayestribo.signal.period import dominant_period, sample_step
 
 __all__ = [
     "MOTION_FRACTION",
@@ -208,6 +208,12 @@ class ChannelConsistency:
         return {k: None if isinstance(v, float) and math.isnan(v) else v for k, v in values.items()}
 
 
+def _dot(a: NDArray, b: NDArray) -> float:
+    """Σ aᵢbᵢ, by einsum: a threaded BLAS waits for a second core that a shared machine
+    gives late (these sums are bound by memory, one core reads them as fast)."""
+    return float(np.einsum("i,i->", a, b))
+
+
 def _solve(gram: NDArray, moment: NDArray) -> tuple[float, float] | None:
     """(gain, delay) of Δx ≈ g ΔI − g δ Δv from its normal equations (ΔI and Δv are
     nearly orthogonal: in quadrature over a cycle), or None when degenerate."""
@@ -240,10 +246,10 @@ def _moving_correlation(xc: NDArray, ic: NDArray) -> float:
     moving = np.abs(ic) > MOTION_FRACTION * float(np.max(np.abs(ic)))
     xm = xc[moving] - xc[moving].mean()
     im = ic[moving] - ic[moving].mean()
-    sxx, sii = float(xm @ xm), float(im @ im)
+    sxx, sii = _dot(xm, xm), _dot(im, im)
     if sxx == 0.0 or sii == 0.0:
-        return float(xc @ ic) / math.sqrt(float(xc @ xc) * float(ic @ ic))
-    return float(xm @ im) / math.sqrt(sxx * sii)
+        return _dot(xc, ic) / math.sqrt(_dot(xc, xc) * _dot(ic, ic))
+    return _dot(xm, im) / math.sqrt(sxx * sii)
 
 
 #: Results of :func:`channel_consistency` by run (its id, while it lives): a run's arrays
@@ -297,7 +303,7 @@ def _channel_consistency(run: Recording) -> ChannelConsistency | None:
     except RecordingError:
         return None
     integral = np.concatenate(([0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))))
-    step = float(np.median(np.diff(t)))
+    step = sample_step(t)
     lag = max(1, round(period / (40.0 * step)))
     if 2 * lag >= x.size:
         return None
@@ -308,7 +314,7 @@ def _channel_consistency(run: Recording) -> ChannelConsistency | None:
     xc -= xc.mean()
     ic -= ic.mean()
     vc -= vc.mean()
-    sxx, sii = float(xc @ xc), float(ic @ ic)
+    sxx, sii = _dot(xc, xc), _dot(ic, ic)
     if sxx == 0.0 or sii == 0.0:
         return None
     correlation = _moving_correlation(xc, ic)
@@ -323,13 +329,15 @@ def _channel_consistency(run: Recording) -> ChannelConsistency | None:
     for first in range(0, xc.size, width):
         part = slice(first, first + width)
         i_p, v_p, x_p = ic[part], vc[part], xc[part]
-        ii, iv, vv = float(i_p @ i_p), float(i_p @ v_p), float(v_p @ v_p)
-        blocks.append((np.array([[ii, iv], [iv, vv]]), np.array([i_p @ x_p, v_p @ x_p]), ii))
+        ii, iv, vv = _dot(i_p, i_p), _dot(i_p, v_p), _dot(v_p, v_p)
+        blocks.append(
+            (np.array([[ii, iv], [iv, vv]]), np.array([_dot(i_p, x_p), _dot(v_p, x_p)]), ii)
+        )
     total_a = sum(b[0] for b in blocks)
     total_b = sum(b[1] for b in blocks)
     fitted = _solve(total_a, total_b)
     if fitted is None:
-        gain, delay = float(xc @ ic) / sii, 0.0
+        gain, delay = _dot(xc, ic) / sii, 0.0
     else:
         gain, delay = fitted
     gain *= trapezoid

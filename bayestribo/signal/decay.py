@@ -61,6 +61,7 @@ from the end of motion T. A real recording needs some care first, and
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, replace
 from typing import Literal
@@ -78,7 +79,7 @@ from bayestribo.model.scaling import Rig, Scaling
 from bayestribo.signal.clipping import flattened_turning_points
 from bayestribo.signal.motion import THRESHOLD, block_noise, check_turning_points, motion_span
 from bayestribo.signal.peaks import Peaks, estimate_noise, find_peaks
-from bayestribo.signal.period import dominant_period
+from bayestribo.signal.period import dominant_period, sample_step
 from bayestribo.signal.quantisation import QUANTISATION_NOISE_FACTOR, quantisation_step
 from bayestribo.signal.spectrum import NoiseSpectrum, RestNoise, fit_line, noise_spectrum
 
@@ -351,7 +352,7 @@ def savgol_window(t: NDArray, period: float) -> int:
     RecordingError
         When no period could be measured (not a finite positive number).
     """
-    step = float(np.median(np.diff(t)))
+    step = sample_step(t)
     if not (math.isfinite(period) and period > 0 and step > 0):
         raise RecordingError(
             f"no oscillation period found in the record (got {period!r} s): the signal "
@@ -375,7 +376,7 @@ def derive_velocity(t: ArrayLike, x: ArrayLike, period: float) -> tuple[NDArray,
     """
     t = np.asarray(t, dtype=float)
     x = np.asarray(x, dtype=float)
-    dt = float(np.median(np.diff(t)))
+    dt = sample_step(t)
     window = savgol_window(t, period)
     if window > x.size:
         raise RecordingError(
@@ -435,7 +436,7 @@ def _turning_times(t: NDArray, v: NDArray, peaks: Peaks, period: float) -> NDArr
     noise in amplitude), and the neighbouring turning points' crossings, half a
     period away, go the other way. Where there is none, the peak time is kept.
     """
-    dt = float(np.median(np.diff(t)))
+    dt = sample_step(t)
     reach = max(2.0, 0.25 * period / dt)
     times = peaks.t.copy()
     negative = np.signbit(v)
@@ -629,7 +630,7 @@ def _timing_sd(t: NDArray, peaks: Peaks) -> NDArray:
     sd(c₁) = σ/√(Σu²) (u the samples' offsets [s]) and 2c₂ ≈ -Ω²Y at a turning point
     of value Y (:func:`bayestribo.signal.peaks.find_peaks`, ±1/12 period).
     """
-    dt = float(np.median(np.diff(t)))
+    dt = sample_step(t)
     omega = math.pi / peaks.half_period
     h = max(1, round(2.0 * peaks.half_period / dt / 12.0))
     sum_u2 = dt * dt * h * (h + 1) * (2 * h + 1) / 3.0
@@ -657,7 +658,7 @@ def _rest_noise(
             names.append(name)
     if not masks:
         return None
-    fs = 1.0 / float(np.median(np.diff(t)))
+    fs = 1.0 / sample_step(t)
 
     def spectrum(s: NDArray) -> NoiseSpectrum:
         return noise_spectrum([s[m] for m in masks], fs, period_s=period)
@@ -832,6 +833,42 @@ def energy_decay(
     return _analyse(t, out[0], out[1], notch_Hz=(float(np.mean(fitted)),), **options)
 
 
+def _flattened(
+    t: NDArray, x: NDArray | None, v: NDArray | None, peaks: Peaks, step: float
+) -> tuple[int, str] | None:
+    """Leading turning points to leave out for soft clipping, and what to say of them.
+
+    The recorded displacement ``x`` is checked at its turning points, the recorded
+    velocity ``v`` at its extremes (one between each two turning points; v'' = -ω²v
+    there, friction or not): a flattened velocity extreme between turning points k and
+    k + 1 leaves out turning points up to k + 1. None when neither is flattened.
+    """
+    half_width = max(1, round(2.0 * peaks.half_period / step / 12.0))
+    found = []
+    if x is not None:
+        flat = flattened_turning_points(t, x, peaks.index, peaks.value, half_width)
+        if flat is not None and flat.count:
+            found.append((flat.count, "turning points", "displacement", flat))
+    if v is not None and len(peaks) > 1:
+        index = np.asarray(peaks.index, dtype=int)
+        extremes = np.array(
+            [a + int(np.argmax(np.abs(v[a:b]))) for a, b in itertools.pairwise(index)]
+        )
+        flat = flattened_turning_points(t, v, extremes, v[extremes], half_width)
+        if flat is not None and flat.count:
+            found.append((flat.count + 1, "velocity extremes", "velocity", flat))
+    if not found:
+        return None
+    count, what, channel, flat = max(found, key=lambda f: f[0])
+    said = (
+        f"soft clipping: the first {flat.count} {what} (swings of {flat.level:.4g} and "
+        f"more) bend up to {float(np.max(flat.deficit[: flat.count])):.1%} less at their "
+        f"peaks than the smaller swings say a linear oscillator does: the {channel} sensor "
+        "saturates" + (" (or the spring softens)" if channel == "displacement" else "")
+    )
+    return count, said
+
+
 def _check_plausible(peaks: NDArray, natural_hz: float, derived: str | None) -> None:
     """Refuse a record in metres whose swing and frequency no rig makes.
 
@@ -894,7 +931,7 @@ def _analyse(
         period0 = dominant_period(t, reference)
     except RecordingError as e:
         raise RecordingError(f"release: no motion found: {e}") from e
-    per_samples = period0 / float(np.median(np.diff(t)))
+    per_samples = period0 / sample_step(t)
     if per_samples < 6:
         raise RecordingError(
             f"release: no motion found: the record's dominant period is {per_samples:.1f} "
@@ -955,34 +992,29 @@ def _analyse(
         skip = max(2 * int(skip_oscillations) - 1, 0)
     if skip_turning_points is None:
         skipped = f"{skip_oscillations} oscillations"
-    flattened = 0
-    if derived is None:  # a recorded displacement: are its largest swings flattened?
-        step = period0 / per_samples
-        found = flattened_turning_points(
-            t, x, peaks.index, peaks.value, max(1, round(period / step / 12.0))
+    left_out = 0
+    flattened = _flattened(
+        t,
+        x if derived != "displacement" else None,  # recorded channels only: a derived
+        v if derived != "velocity" else None,  # one is distorted by its derivation
+        peaks,
+        period0 / per_samples,
+    )
+    if flattened is not None and flattened[0] > skip:
+        count, said = flattened
+        if len(peaks) < count + int(min_turning_points):
+            raise RecordingError(
+                f"{said}; {len(peaks) - count} turning points remain after them, "
+                f"{min_turning_points} are needed: record with a smaller initial "
+                "displacement or a larger sensor range"
+            )
+        warn(
+            f"{said}; they are left out: the analysis starts at turning point {count} "
+            f"(instead of after {skipped}); record with a smaller initial displacement or "
+            "a larger sensor range to keep them",
+            ClippingWarning,
         )
-        if found is not None and found.count > skip:
-            flattened = found.count
-            said = (
-                f"soft clipping: the first {flattened} turning points (swings of "
-                f"{found.level:.4g} and more) bend up to "
-                f"{float(np.max(found.deficit[:flattened])):.1%} less at their peaks than "
-                "the smaller swings say a linear oscillator does: the displacement sensor "
-                "saturates (or the spring softens)"
-            )
-            if len(peaks) < flattened + int(min_turning_points):
-                raise RecordingError(
-                    f"{said}; {len(peaks) - flattened} turning points remain after them, "
-                    f"{min_turning_points} are needed: record with a smaller initial "
-                    "displacement or a larger sensor range"
-                )
-            warn(
-                f"{said}; they are left out: the analysis starts at turning point "
-                f"{flattened} (instead of after {skipped}); record with a smaller initial "
-                "displacement or a larger sensor range to keep them",
-                ClippingWarning,
-            )
-            skip = flattened
+        skip = left_out = count
     needed = skip + int(min_turning_points)
     if len(peaks) < needed:
         raise RecordingError(
@@ -1058,5 +1090,5 @@ def _analyse(
         notch_Hz=notch_Hz,
         stop_time=stop_time,
         turning_times=np.asarray(times, dtype=float).copy(),
-        flattened_turning_points=flattened,
+        flattened_turning_points=left_out,
     )

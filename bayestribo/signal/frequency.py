@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bayestribo.errors import RecordingError
-from bayestribo.signal.period import dominant_period
+from bayestribo.signal.period import dominant_period, sample_step
 
 __all__ = [
     "HYSTERESIS",
@@ -137,7 +137,7 @@ def _central_difference(t: NDArray, x: NDArray) -> tuple[NDArray, NDArray, NDArr
         period = dominant_period(t, x)
     except RecordingError:
         return None
-    step = float(np.median(np.diff(t)))
+    step = sample_step(t)
     lag = max(1, round(period / (40.0 * step)))
     if 2 * lag >= x.size:
         return None

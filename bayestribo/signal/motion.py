@@ -47,6 +47,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bayestribo.errors import RecordingError
+from bayestribo.signal.period import sample_step
 
 __all__ = ["MotionSpan", "block_noise", "check_turning_points", "motion_span"]
 
@@ -204,7 +205,7 @@ def motion_span(
     if not (math.isfinite(threshold) and threshold > 0):
         raise RecordingError(f"threshold must be a positive number, got {threshold!r}")
     n = v.size
-    dt = float(np.median(np.diff(t)))
+    dt = sample_step(t)
     size = max(8, round(2.0 * period / dt))
     if n < size:
         raise RecordingError(

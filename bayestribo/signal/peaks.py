@@ -38,7 +38,7 @@ import scipy.signal
 from numpy.typing import ArrayLike, NDArray
 
 from bayestribo.errors import RecordingError
-from bayestribo.signal.period import dominant_period
+from bayestribo.signal.period import dominant_period, sample_step
 
 __all__ = ["Peaks", "estimate_noise", "estimate_offset", "find_peaks", "prepare_signal"]
 
@@ -393,7 +393,7 @@ def find_peaks(
         raise RecordingError(f"noise must be a finite number >= 0, got {noise!r}")
     floor = max(threshold * sigma, 1e-4 * span)
 
-    dt = float(np.median(np.diff(t)))
+    dt = sample_step(t)
     period = dominant_period(t, s)
     per_samples = period / dt
     if per_samples < 6:

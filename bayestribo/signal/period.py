@@ -10,7 +10,8 @@ peak's interpolation); the precise frequency of a decay comes from its turning t
 
 A run's arrays are read-only: the period of one is computed once and remembered
 while the array lives (reading a file, its checks and the preparation of a fit ask
-for it three times).
+for it three times), and so is the median step of its time stamps
+(:func:`sample_step`, asked for a dozen times).
 """
 
 from __future__ import annotations
@@ -23,7 +24,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from bayestribo.errors import RecordingError
 
-__all__ = ["CANDIDATES", "CANDIDATE_PERIODS", "POWER_RATIO", "dominant_period"]
+__all__ = [
+    "CANDIDATES",
+    "CANDIDATE_PERIODS",
+    "POWER_RATIO",
+    "dominant_period",
+    "sample_step",
+]
 
 #: Spectral peaks of each ranking examined as the oscillation by :func:`dominant_period`.
 CANDIDATES = 6
@@ -48,24 +55,29 @@ def _oscillation_power(s: NDArray, period: float, dt: float) -> float:
     """
     size = min(s.size, max(16, round(2.0 * period / dt)))
     u = (np.arange(size) - 0.5 * (size - 1)) * dt  # centred: 1 and u are orthogonal
-    phase = 2.0 * math.pi * u / period
     # rows, each detrended by the line (1, u): an (n, 2) @ (2, 2) product took numpy
-    # 60 ms at 250,000 samples, the subtractions below a few
+    # 60 ms at 250,000 samples, the subtractions below a few. cos is even and sin odd
+    # about the centre: half the samples are mirrored, not computed.
     wave = np.empty((2, size))
-    np.cos(phase, out=wave[0])
-    np.sin(phase, out=wave[1])
+    half = size // 2
+    phase = 2.0 * math.pi * u[half:] / period
+    np.cos(phase, out=wave[0, half:])
+    np.sin(phase, out=wave[1, half:])
+    wave[0, :half] = wave[0, size - 1 : size - 1 - half : -1]
+    wave[1, :half] = -wave[1, size - 1 : size - 1 - half : -1]
     wave -= wave.mean(axis=1, keepdims=True)
-    slope = (wave @ u) / float(u @ u)
+    # products of two rows, by einsum rather than BLAS: a threaded BLAS waits for a
+    # second core that a shared machine gives late (20 ms instead of 2 here)
+    slope = np.einsum("ij,j->i", wave, u) / float(np.einsum("i,i->", u, u))
     wave[0] -= slope[0] * u
     wave[1] -= slope[1] * u
     # the explained variance of coefficients c = W⁺b is bᵀW (WᵀW)⁺ Wᵀb; at Nyquist
     # one column of W vanishes and the pseudo-inverse drops it
-    gram_inv = np.linalg.pinv(wave @ wave.T, rcond=1e-9)
+    gram_inv = np.linalg.pinv(np.einsum("ij,kj->ik", wave, wave), rcond=1e-9)
     m = s.size // size
-    # Wᵀ is a Fortran-ordered view: numpy hands the products to BLAS even for one block
-    projected = [s[: m * size].reshape(m, size) @ wave.T]
+    projected = [np.einsum("ij,kj->ik", s[: m * size].reshape(m, size), wave)]
     if m * size < s.size:
-        projected.append(s[-size:][None, :] @ wave.T)
+        projected.append(np.einsum("j,kj->k", s[-size:], wave)[None, :])
     best = 0.0
     for p in projected:
         best = max(best, float(np.max(np.einsum("ij,jk,ik->i", p, gram_inv, p))))
@@ -136,23 +148,47 @@ def dominant_period(time: ArrayLike, values: ArrayLike) -> float:
             f"the period needs two 1-D arrays of the same length (at least 4 samples), got "
             f"shapes {t.shape} and {s.shape}"
         )
-    if not _frozen(t) or not _frozen(s):
-        return _spectral_period(t, s)
-    key = (id(t), id(s))
-    cached = _PERIODS.get(key)
-    if cached is not None and cached[0]() is t and cached[1]() is s:
-        return cached[2]
-    period = _spectral_period(t, s)
-
-    def forget(_: object, key: tuple[int, int] = key) -> None:
-        _PERIODS.pop(key, None)
-
-    _PERIODS[key] = (weakref.ref(t, forget), weakref.ref(s, forget), period)
-    return period
+    return _remembered("period", (t, s), _spectral_period)
 
 
-#: Periods of read-only arrays, by the ids of (time, values), while both live.
-_PERIODS: dict[tuple[int, int], tuple[weakref.ref, weakref.ref, float]] = {}
+def sample_step(time: ArrayLike) -> float:
+    """Median spacing of sample times [s].
+
+    Parameters
+    ----------
+    time : array_like
+        Sample times [s], at least two.
+
+    Returns
+    -------
+    float
+        ``median(diff(time))`` [s]; remembered for a read-only array that owns its
+        data (a :class:`~bayestribo.io.run.Run`'s time stamps, which the checks of a
+        file and the preparation of a fit ask for a dozen times).
+    """
+    t = np.asarray(time, dtype=np.float64)
+    return _remembered("step", (t,), lambda t: float(np.median(np.diff(t))))
+
+
+#: Values computed from read-only arrays, by what and the arrays' ids, while they live.
+_REMEMBERED: dict[tuple, tuple[tuple[weakref.ref, ...], float]] = {}
+
+
+def _remembered(what: str, arrays: tuple[NDArray, ...], compute) -> float:
+    """``compute(*arrays)``, remembered while the arrays live when all are frozen."""
+    if not all(_frozen(a) for a in arrays):
+        return compute(*arrays)
+    key = (what, *map(id, arrays))
+    cached = _REMEMBERED.get(key)
+    if cached is not None and all(r() is a for r, a in zip(cached[0], arrays, strict=True)):
+        return cached[1]
+    value = compute(*arrays)
+
+    def forget(_: object, key: tuple = key) -> None:
+        _REMEMBERED.pop(key, None)
+
+    _REMEMBERED[key] = (tuple(weakref.ref(a, forget) for a in arrays), value)
+    return value
 
 
 def _frozen(a: NDArray) -> bool:
@@ -191,7 +227,7 @@ def _spectral_period(t: NDArray, s: NDArray) -> float:
     that ratio of the best power is taken (a sidelobe of the oscillation's own peak
     scores nearly as high but is weaker in the spectrum).
     """
-    dt = float(np.median(np.diff(t)))
+    dt = sample_step(t)
     x = np.diff(s)
     x = x - np.mean(x)
     n = 1 << math.ceil(math.log2(4 * s.size))

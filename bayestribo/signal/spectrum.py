@@ -32,6 +32,7 @@ import scipy.signal
 from numpy.typing import ArrayLike, NDArray
 
 from bayestribo.errors import RecordingError
+from bayestribo.signal.period import sample_step
 
 __all__ = [
     "LINE_RATIO",
@@ -232,12 +233,14 @@ def _ljung_box(segments: Sequence[NDArray], lags: int) -> float:
     n = sum(d.size for d in dev)
     if n <= lags + 2:
         return 1.0
-    c0 = sum(float(d @ d) for d in dev)
+    # sums by einsum, not a threaded BLAS (:func:`~bayestribo.signal.increments.
+    # integrate_increments`)
+    c0 = sum(float(np.einsum("i,i->", d, d)) for d in dev)
     if c0 == 0.0:
         return 1.0
     q = 0.0
     for k in range(1, lags + 1):
-        rho = sum(float(d[:-k] @ d[k:]) for d in dev) / c0
+        rho = sum(float(np.einsum("i,i->", d[:-k], d[k:])) for d in dev) / c0
         q += rho * rho / (n - k)
     return float(chi2.sf(n * (n + 2.0) * q, lags))
 
@@ -459,7 +462,7 @@ def fit_line(
     t = np.asarray(t, dtype=float)
     s = np.asarray(signal, dtype=float)
     m = np.asarray(rest, bool)
-    if np.count_nonzero(m) * float(np.median(np.diff(t))) * frequency_Hz < 2.0:
+    if np.count_nonzero(m) * sample_step(t) * frequency_Hz < 2.0:
         raise RecordingError(
             f"notch: fewer than two periods of the {frequency_Hz:g} Hz line at rest to measure it"
         )
