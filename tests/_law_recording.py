@@ -26,6 +26,7 @@ def law_recording(
     *,
     friction: float = 0.0,
     friction_slope: float = 0.0,
+    friction_change: tuple[float, float] | None = None,
     static_ratio: float = 1.5,
     x0: float = 1.0e-3,
     frequency_Hz: float = 32.6,
@@ -50,6 +51,10 @@ def law_recording(
         Its change per metre of the turning point |X_n| each half cycle starts from
         [1/s²]: the friction acceleration of that half cycle is
         ``friction + friction_slope |X_n|`` (a friction that varies with amplitude).
+    friction_change : (float, float), optional
+        ``(t, a)``: from the first half cycle that starts at or after the time t [s]
+        after the release, the friction acceleration is a [m/s²] instead of
+        ``friction`` (a contact that changes during the run: a film that thins).
     static_ratio : float
         μ_s/μ_k.
     x0 : float
@@ -71,7 +76,10 @@ def law_recording(
     segments = []
     rest = None
     while t < duration_s:
-        here = friction + friction_slope * abs(state[0])
+        base = friction
+        if friction_change is not None and t >= friction_change[0]:
+            base = friction_change[1]
+        here = base + friction_slope * abs(state[0])
         if state[1] == 0.0:
             if omega**2 * abs(state[0]) <= static_ratio * here:
                 rest = (t, state[0])

@@ -52,6 +52,7 @@ import numpy as np
 from bayestribo import DEFAULT_SEED
 from bayestribo.errors import BayestriboError
 from bayestribo.inference.assemble import pointwise_log_likelihood
+from bayestribo.inference.halves import _p_text
 from bayestribo.inference.pipeline import (
     MISFIT_P,
     PreparedRun,
@@ -113,8 +114,12 @@ class LawComparison:
     warnings : list of str
         Unreliable estimates (Pareto k) and unconverged fits.
     adequate : bool
-        True when the verdict is adequate (no misfit at its optimum); False when no
-        law compared holds, and the verdict is only the best of them.
+        True when the verdict is adequate (no misfit at its optimum, and the halves of
+        the motion agree); False when no law compared holds, and the verdict is only
+        the best of them.
+    halves : dict or None
+        The verdict fitted to each half of the motion
+        (:class:`bayestribo.inference.halves.LawHalves` as plain data), when checked.
     """
 
     run_name: str
@@ -124,10 +129,21 @@ class LawComparison:
     as_good: list[str]
     warnings: list[str] = field(default_factory=list)
     adequate: bool = True
+    halves: dict[str, Any] | None = None
 
     def describe(self) -> str:
         """One sentence: the law chosen and why."""
         n = len(self.table)
+        split = self.halves or {}
+        if not self.adequate and split.get("tested") and not split.get("agree"):
+            return (
+                f"{self.verdict} fits the decay as a whole, but not both halves of it "
+                f"alike: fitted to each half, it measures a ΔE(A) {split['largest_z']:.1f} "
+                f"sd apart ({_p_text(split['p_value'])} over {split['n_swings']} swings). "
+                f"No law of the {n} compared holds along the decay: its parameters are not "
+                "a measurement, and the answer is ΔE(A) measured from the turning points "
+                "(law-free)"
+            )
         if not self.adequate:
             return (
                 f"no law of the {n} compared holds (each misfits the decay); "
@@ -156,6 +172,7 @@ class LawComparison:
             "verdict": self.verdict,
             "as_good": list(self.as_good),
             "adequate": self.adequate,
+            "halves": self.halves,
             "table": self.table,
             "warnings": list(self.warnings),
         }

@@ -9,13 +9,14 @@ from __future__ import annotations
 import json
 import os
 import time
+import warnings
 from collections.abc import Mapping
 from typing import Any, Literal
 
 import numpy as np
 
 from bayestribo import DEFAULT_SEED
-from bayestribo.errors import BayestriboError
+from bayestribo.errors import BayestriboError, MisfitWarning
 from bayestribo.inference.likelihood import MODELS
 from bayestribo.inference.pipeline import (
     PreparedRun,
@@ -35,7 +36,7 @@ from bayestribo.io.run import Run
 from bayestribo.model.laws import Law, get_law
 from bayestribo.signal.noise import NoiseModel
 
-__all__ = ["fit"]
+__all__ = ["fit", "sample_law"]
 
 
 def fit(
@@ -181,36 +182,16 @@ def fit(
                     optimum=maximum_from(posterior, sampled.theta_map, prepared.decay),
                 )
     else:
-
-        def posterior_on(prep: PreparedRun) -> Any:
-            return build_posterior(
-                prep.data,
-                model=model,
-                friction=prep.contact,
-                discrepancy=discrepancy,
-                priors=priors,
-                fixed=fixed,
-                law=the_law,
-            )
-
-        posterior = posterior_on(prepared)
-        optimum = None
-        if not posterior.law.closed_form:
-            # the optimum in the record's frame gives the law's frame; the optimiser
-            # then starts from it in that frame (one search from the first guesses)
-            optimum = maximum_a_posteriori(posterior, prepared.decay)
-            framed = _in_law_frame(prepared, posterior, optimum[0])
-            if framed is not None:
-                prepared = framed
-                posterior = posterior_on(prepared)
-                optimum = maximum_from(posterior, optimum[0], prepared.decay)
-        sampled = sample(
-            posterior,
-            prepared.decay,
+        prepared, sampled = sample_law(
+            prepared,
+            the_law,
+            model=model,
+            discrepancy=discrepancy,
             settings=settings,
             seed=rng,
+            priors=priors,
+            fixed=fixed,
             progress=progress,
-            optimum=optimum,
         )
     result = summarise(
         prepared, sampled, seed=rng, recorded_seed=seed, compared=comparison is not None
@@ -222,8 +203,118 @@ def fit(
             attrs = result.attrs
             attrs["verdict_dissipation_json"] = attrs["dissipation_json"]
             attrs["dissipation_json"] = json.dumps(plain_data(averaged))
+        comparison = _check_halves(comparison, common, rng, settings, model, discrepancy)
+        result.attrs["law_comparison_json"] = json.dumps(plain_data(comparison.to_dict()))
     result.attrs["seconds"] = time.perf_counter() - start
     return result
+
+
+def sample_law(
+    prepared: PreparedRun,
+    law: Law | None,
+    *,
+    model: str = "exact",
+    discrepancy: bool = False,
+    settings: SamplerSettings | None = None,
+    seed: int | np.random.Generator | None = None,
+    priors: Mapping[str, Prior] | None = None,
+    fixed: Mapping[str, float] | None = None,
+    progress: bool = False,
+) -> tuple[PreparedRun, Any]:
+    """Steps 2 and 3 of :func:`fit` for one law: build its posterior and sample it.
+
+    A law without a closed form is sampled in its own frame: the run is prepared
+    again at the frequency at which the law's turning times keep step with the
+    record's, found from the optimum in the record's frame.
+
+    Parameters
+    ----------
+    prepared : PreparedRun
+        From :func:`bayestribo.inference.pipeline.prepare`.
+    law : Law or None
+        The law (None: the default law of the run, with friction when it has contact).
+    model, discrepancy, priors, fixed, progress
+        As in :func:`fit`.
+    settings : SamplerSettings, optional
+        Sampler size; default :class:`~bayestribo.inference.sampling.SamplerSettings`.
+    seed : int, Generator or None
+        Seed of the sampler.
+
+    Returns
+    -------
+    PreparedRun, Sampled
+        The preparation sampled on (the law's frame) and the sampled posterior.
+    """
+    settings = settings or SamplerSettings()
+
+    def posterior_on(prep: PreparedRun) -> Any:
+        return build_posterior(
+            prep.data,
+            model=model,
+            friction=prep.contact,
+            discrepancy=discrepancy,
+            priors=priors,
+            fixed=fixed,
+            law=law,
+        )
+
+    posterior = posterior_on(prepared)
+    optimum = None
+    if not posterior.law.closed_form:
+        # the optimum in the record's frame gives the law's frame; the optimiser
+        # then starts from it in that frame (one search from the first guesses)
+        optimum = maximum_a_posteriori(posterior, prepared.decay)
+        framed = _in_law_frame(prepared, posterior, optimum[0])
+        if framed is not None:
+            prepared = framed
+            posterior = posterior_on(prepared)
+            optimum = maximum_from(posterior, optimum[0], prepared.decay)
+    sampled = sample(
+        posterior,
+        prepared.decay,
+        settings=settings,
+        seed=seed,
+        progress=progress,
+        optimum=optimum,
+    )
+    return prepared, sampled
+
+
+def _check_halves(
+    comparison: Any,
+    prepared: PreparedRun,
+    rng: np.random.Generator,
+    settings: SamplerSettings,
+    model: str,
+    discrepancy: bool,
+) -> Any:
+    """The verdict of an adequate comparison fitted to each half of the motion
+    (:func:`bayestribo.inference.halves.law_halves`); when they disagree the comparison
+    is no longer adequate, and a :class:`~bayestribo.errors.MisfitWarning` says so."""
+    from dataclasses import replace
+
+    from bayestribo.inference.halves import law_halves
+
+    if not comparison.adequate or get_law(comparison.verdict).name == get_law("free").name:
+        return comparison
+    halves = law_halves(
+        prepared,
+        comparison.verdict,
+        seed=int(rng.integers(2**31)),
+        settings=settings,
+        model=model,
+        discrepancy=discrepancy,
+    )
+    if halves.agree:
+        return replace(comparison, halves=halves.to_dict())
+    checked = replace(comparison, adequate=False, halves=halves.to_dict())
+    warnings.warn(
+        f"{prepared.name or 'the run'}: {checked.describe()}. {halves.describe()} "
+        "(result.law_comparison['halves'])",
+        MisfitWarning,
+        stacklevel=3,
+    )
+    return checked
 
 
 def _averaged_band(

@@ -289,6 +289,50 @@ def reframe(prepared: PreparedRun, frequency_Hz: float) -> PreparedRun:
     return dataclasses.replace(prepared, decay=decay, noise=noise_used, data=data)
 
 
+def prepare_part(prepared: PreparedRun, start: int, stop: int) -> PreparedRun:
+    """Samples ``start`` to ``stop`` (excluded) of a prepared run, prepared alike.
+
+    The part of the recording (already checked, and its channels calibrated, by
+    :func:`prepare`) gets the same notch, oscillations skipped, grid and noise model
+    (given: measured on the whole, where the rest is); its channels are not checked
+    again, since a part that decays into the noise correlates less than the whole.
+
+    Parameters
+    ----------
+    prepared : PreparedRun
+        From :func:`prepare`.
+    start, stop : int
+        First and past-the-last sample of the part.
+
+    Returns
+    -------
+    PreparedRun
+    """
+    run = prepared.run
+    if not 0 <= start < stop <= run.time.size:
+        raise BayestriboError(
+            f"start, stop: expected 0 <= start < stop <= {run.time.size}, got {start}, {stop}"
+        )
+    keep = slice(start, stop)
+    part = dataclasses.replace(
+        run,
+        time=run.time[keep],
+        displacement=None if run.displacement is None else run.displacement[keep],
+        velocity=None if run.velocity is None else run.velocity[keep],
+    )
+    old = prepared.decay
+    decay = energy_decay(
+        part.time,
+        part.displacement,
+        part.velocity,
+        rig=part.rig(),
+        skip_oscillations=prepared.skip_oscillations,
+        notch=old.notch_Hz[0] if old.notch_Hz else None,
+    )
+    data = pi_data(decay, prepared.noise, grid_points=prepared.grid_points, seed=_data_seed(decay))
+    return dataclasses.replace(prepared, run=part, decay=decay, data=data, noise_given=True)
+
+
 def _matched_law_times(
     posterior: Posterior, theta: NDArray, decay: EnergyDecay
 ) -> tuple[NDArray, NDArray, NDArray] | None:

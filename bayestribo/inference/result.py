@@ -444,7 +444,9 @@ class FitResult:
         from bayestribo.inference.comparison import LawComparison
 
         fields = {k: c[k] for k in ("best", "verdict", "as_good", "table", "warnings")}
-        text = LawComparison(c.get("run_name", ""), **fields, adequate=c["adequate"])
+        text = LawComparison(
+            c.get("run_name", ""), **fields, adequate=c["adequate"], halves=c.get("halves")
+        )
         return [f"          {text.describe()}"]
 
     def _dissipation_lines(self) -> list[str]:

@@ -1,0 +1,158 @@
+"""The chosen law fitted to each half of the motion (bayestribo.inference.halves).
+
+The recordings come from the independent solve_ivp simulator of ``tests/_law_recording.py``.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+from _law_recording import law_recording
+
+from bayestribo.errors import MisfitWarning
+from bayestribo.inference.comparison import LawComparison
+from bayestribo.inference.fitting import _check_halves
+from bayestribo.inference.halves import HALVES_P, LawHalves, law_halves
+from bayestribo.inference.pipeline import prepare
+from bayestribo.inference.sampling import SamplerSettings
+
+OMEGA = 2 * math.pi * 32.6
+FRICTION = 0.02 * 0.31 / 0.035  # μ_k N/m [m/s²]
+
+
+def _viscous(zeta: float):
+    return lambda v: 2.0 * zeta * OMEGA * v
+
+
+def _prepared(seed: int = 0, **kw):
+    run = law_recording(
+        _viscous(0.005), friction=FRICTION, x0=1e-3, duration_s=2.5, seed=seed, **kw
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return prepare(run)
+
+
+@pytest.fixture(scope="module")
+def constant():
+    return _prepared(seed=3)
+
+
+@pytest.fixture(scope="module")
+def changing():
+    # the friction rises by 30 % a third of the way through the motion
+    return _prepared(seed=4, friction_change=(0.25, 1.3 * FRICTION))
+
+
+def test_a_law_that_holds_gives_halves_that_agree(constant):
+    h = law_halves(constant, "viscous+coulomb", seed=1)
+    assert h.tested and h.agree, h.describe()
+    assert h.p_value >= HALVES_P
+    assert h.n_swings == len(h.amplitude) >= 4
+    # each half's own motion lies on its side of the cut
+    assert h.first["range"][0] >= h.second["range"][1] * (1 - 1e-9)
+    assert h.unit == "m^2"
+
+
+def test_a_friction_that_changes_during_the_run_splits_the_halves(changing):
+    h = law_halves(changing, "viscous+coulomb", seed=1)
+    assert h.tested and not h.agree, h.describe()
+    assert h.p_value < HALVES_P and abs(h.largest_z) > 3.84
+    a, z = h.most_apart()
+    assert a in h.amplitude and abs(z) == pytest.approx(h.largest_z)
+    assert "disagree" in h.describe()
+
+
+def test_the_verdict_does_not_depend_on_the_seed(changing, constant):
+    assert not any(law_halves(changing, "viscous+coulomb", seed=s).agree for s in (2, 3))
+    assert all(law_halves(constant, "viscous+coulomb", seed=s).agree for s in (2, 3))
+
+
+def test_a_run_too_short_to_split_is_not_tested():
+    run = law_recording(_viscous(0.005), friction=4 * FRICTION, x0=3e-4, duration_s=1.0, seed=1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        prepared = prepare(run)
+    h = law_halves(prepared, "viscous+coulomb", seed=1)
+    assert not h.tested and h.agree
+    assert "turning points" in h.note and "halves not compared" in h.describe()
+    assert h.to_dict()["p_value"] is None
+
+
+def _comparison(adequate: bool = True) -> LawComparison:
+    return LawComparison(
+        "run", {}, "viscous+coulomb", "viscous+coulomb", ["viscous+coulomb"], [], adequate
+    )
+
+
+def test_halves_that_disagree_make_the_comparison_inadequate_and_say_so(changing):
+    rng = np.random.default_rng(0)
+    with pytest.warns(MisfitWarning, match="not both halves of it alike") as caught:
+        checked = _check_halves(_comparison(), changing, rng, SamplerSettings(), "exact", False)
+    assert not checked.adequate and checked.halves["agree"] is False
+    text = checked.describe()
+    assert "law-free" in text and "sd apart" in text
+    assert "ΔE/k" in str(caught[0].message)
+    assert checked.to_dict()["halves"] == checked.halves
+
+
+def test_halves_that_agree_leave_the_comparison_adequate(constant):
+    rng = np.random.default_rng(0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", MisfitWarning)
+        checked = _check_halves(_comparison(), constant, rng, SamplerSettings(), "exact", False)
+    assert checked.adequate and checked.halves["tested"] and checked.halves["agree"]
+
+
+def test_an_inadequate_comparison_is_not_checked_again(changing):
+    rng = np.random.default_rng(0)
+    before = _comparison(adequate=False)
+    assert _check_halves(before, changing, rng, SamplerSettings(), "exact", False) is before
+
+
+def test_halves_not_compared_say_why():
+    h = LawHalves("viscous", False, note="the second half was not fitted: too short")
+    assert h.describe() == "halves not compared: the second half was not fitted: too short"
+    assert math.isnan(h.most_apart()[0])
+
+
+def test_a_part_is_prepared_as_the_whole_was(constant):
+    from bayestribo.errors import BayestriboError
+    from bayestribo.inference.pipeline import prepare_part
+
+    n = constant.run.time.size
+    part = prepare_part(constant, n // 3, n)
+    assert part.noise is constant.noise and part.noise_given
+    assert part.run.time[0] == constant.run.time[n // 3] and part.run.time.size == n - n // 3
+    assert part.decay.peaks.value.size < constant.decay.peaks.value.size
+    assert part.data.increments.size > 4
+    for start, stop in ((5, 5), (-1, 10), (0, n + 1)):
+        with pytest.raises(BayestriboError, match="start, stop"):
+            prepare_part(constant, start, stop)
+
+
+def test_a_second_half_that_fades_into_the_noise_is_still_compared():
+    # a viscous decay of 4 s at 20x the vibrometer's resolution: the second half of the
+    # motion, read as a recording of its own, has channels that correlate below the
+    # reading check's 0.9 (it would be refused); as a part of the whole it is compared
+    from bayestribo.io.run import Run
+    from bayestribo.signal.channels import channel_consistency
+
+    run = law_recording(
+        _viscous(0.01), load_N=None, x0=1.5e-3, duration_s=4.0, noise_x=3e-6, seed=2
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        prepared = prepare(run)
+    times = prepared.decay.turning_times
+    k = int(np.argmin(np.abs(run.time - times[times.size // 2])))
+    stop = int(np.searchsorted(run.time, times[-1] + 1 / 32.6))
+    alone = Run(
+        run.time[k:stop], displacement=run.displacement[k:stop], velocity=run.velocity[k:stop]
+    )
+    assert channel_consistency(alone).correlation < 0.9
+    h = law_halves(prepared, "viscous", seed=1)
+    assert h.tested and h.agree, h.describe()
