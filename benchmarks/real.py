@@ -43,7 +43,12 @@ amplitude and the second half's largest (each law extrapolated by at most one
 oscillation), and (b) over the other half's 12 reported amplitudes (the law
 extrapolated over the other half). At each amplitude z = (m₁ - m₂)/√(s₁² + s₂²) and
 whether the predicted mean lies in the other half's 95 % interval. ``agree`` means
-|z| <= 1.96 at every amplitude compared.
+|z| <= 1.96 at every amplitude compared. These halves are each fitted with law="auto",
+so each may choose its own law. The goal's form ("the law fitted to each half predicts
+the other half's ΔE within the intervals, or the fit says that the law does not hold")
+is the package's own check since law="auto" fits its verdict to each half of the
+segment (:mod:`bayestribo.inference.halves`): per auto fit, ``package_halves`` and
+``halves_goal_met`` (the comparison is not adequate, or the verdict's halves agree).
 
 A recording or segment the package refuses is recorded with its error message (a
 finding, not a failure of the benchmark).
@@ -303,6 +308,8 @@ def one_fit(
             rec["best"] = comparison["best"]
             rec["as_good"] = comparison["as_good"]
             rec["adequate"] = bool(comparison["adequate"])
+            # the package's own check: the verdict fitted to each half of this segment
+            rec["halves"] = comparison.get("halves")
             rec["comparison_notes"] = comparison.get("warnings", [])
             rec["comparison_table"] = {
                 law: {
@@ -425,6 +432,23 @@ def summarise(records: list[dict[str, Any]], prepared: dict[str, Any]) -> dict[s
                     if spread is not None:
                         worst = max(worst, spread)
                 s["dissipation"] = de
+                if kind == "auto":
+                    # the goal: the law fitted to each half predicts the other's ΔE(A),
+                    # or the fit says that no law holds (and gives the law-free ΔE(A))
+                    checks = [f.get("halves") or {} for f in ok]
+                    s["package_halves"] = [
+                        {
+                            "tested": h.get("tested"),
+                            "agree": h.get("agree"),
+                            "largest_z": h.get("largest_z"),
+                            "p_value": h.get("p_value"),
+                        }
+                        for h in checks
+                    ]
+                    s["halves_goal_met"] = [
+                        (not f["adequate"]) or bool(h.get("tested") and h.get("agree"))
+                        for f, h in zip(ok, checks, strict=True)
+                    ]
                 s["max_seed_spread_dissipation"] = worst if len(ok) > 1 else None
                 if s["same_law"] and len(ok) > 1:
                     spreads = {}
@@ -528,11 +552,13 @@ def _print_table(table: dict[str, Any], prepared: dict[str, Any]) -> None:
                 )
                 spread = k["max_seed_spread_dissipation"]
                 flag = "" if spread is None or spread < SPREAD_GOAL else " (>0.2)"
+                goal = k.get("halves_goal_met")
+                halves = f"  halves-or-no-law {sum(goal)}/{len(goal)}" if goal is not None else ""
                 print(
                     f"  {which:12s} {kind:7s} {_laws_text(k['laws']):42s} "
                     f"adeq {sum(map(bool, k['adequate']))}/{len(k['adequate'])} "
                     f"conv {sum(k['converged'])}/{len(k['converged'])}  ΔE [{k['unit']}] {cells}"
-                    f"  spread {_fmt(spread, '.2f')}{flag}  "
+                    f"  spread {_fmt(spread, '.2f')}{flag}{halves}  "
                     f"{_fmt(k['median_seconds'], '.0f')} s"
                     + (
                         f"  warn {','.join(w.removesuffix('Warning') for w in k['warnings'])}"
