@@ -253,7 +253,11 @@ def test_laws_the_decay_cannot_split_give_one_averaged_dissipation():
         seed=8,
     )
     prepared = prepare(run)
-    comparison, runs = compare_prepared(prepared, ("viscous+coulomb", "coulomb+hysteretic"), seed=2)
+    # on the half-cycle grid alone (no rivals' rematch on a finer one,
+    # tests/test_inference_rivals.py), the two laws are as good as each other
+    comparison, runs = compare_prepared(
+        prepared, ("viscous+coulomb", "coulomb+hysteretic"), seed=2, rivals=False
+    )
     assert set(comparison.as_good) == {"viscous+coulomb", "coulomb+hysteretic"}
     assert comparison.verdict == "viscous+coulomb"  # the order compared breaks the tie
     scale = physical_scale(prepared.decay.scaling, prepared.metadata)

@@ -289,6 +289,30 @@ def reframe(prepared: PreparedRun, frequency_Hz: float) -> PreparedRun:
     return dataclasses.replace(prepared, decay=decay, noise=noise_used, data=data)
 
 
+def regrid(prepared: PreparedRun, grid_points: int) -> PreparedRun:
+    """The same run observed on another grid of Π increments.
+
+    Parameters
+    ----------
+    prepared : PreparedRun
+        From :func:`prepare`.
+    grid_points : int
+        Number of Π increments (:func:`bayestribo.signal.increments.pi_data`).
+
+    Returns
+    -------
+    PreparedRun
+        The same decay and noise model, with the increments on the new grid.
+    """
+    if isinstance(grid_points, bool) or not isinstance(grid_points, (int, np.integer)):
+        raise BayestriboError(f"grid_points: expected an integer, got {grid_points!r}")
+    if grid_points < 2:
+        raise BayestriboError(f"grid_points: expected at least 2, got {grid_points}")
+    decay = prepared.decay
+    data = pi_data(decay, prepared.noise, grid_points=int(grid_points), seed=_data_seed(decay))
+    return dataclasses.replace(prepared, data=data, grid_points=int(grid_points))
+
+
 def prepare_part(prepared: PreparedRun, start: int, stop: int) -> PreparedRun:
     """Samples ``start`` to ``stop`` (excluded) of a prepared run, prepared alike.
 

@@ -445,7 +445,11 @@ class FitResult:
 
         fields = {k: c[k] for k in ("best", "verdict", "as_good", "table", "warnings")}
         text = LawComparison(
-            c.get("run_name", ""), **fields, adequate=c["adequate"], halves=c.get("halves")
+            c.get("run_name", ""),
+            **fields,
+            adequate=c["adequate"],
+            halves=c.get("halves"),
+            rivals=c.get("rivals"),
         )
         return [f"          {text.describe()}"]
 
