@@ -33,7 +33,9 @@ largest relative difference of the means is recorded).
 
 Across seeds: the spread of the means, (max - min)/mean posterior sd, of ΔE at the
 three amplitudes and of each parameter of the default law (goal: < 0.2), and whether
-every seed chose the same law.
+every seed chose the same law. The answer's spread is that of what each fit gives as
+its answer: its law's ΔE(A) when the law holds, the turning points' ΔE(A) (law-free,
+no random numbers) when the fit says that no law holds.
 
 Halves: whether the law fitted to one half predicts the other half's ΔE(A). The
 halves' amplitude ranges abut (the first ends at the cut, the second skips one
@@ -450,6 +452,21 @@ def summarise(records: list[dict[str, Any]], prepared: dict[str, Any]) -> dict[s
                         for f, h in zip(ok, checks, strict=True)
                     ]
                 s["max_seed_spread_dissipation"] = worst if len(ok) > 1 else None
+                # the answer each fit gives: its law's ΔE(A) when the law holds, the
+                # turning points' (law-free) when it says that no law holds
+                answers = [
+                    f["probes"] if f["adequate"] else f["turning_point_dissipation"] for f in ok
+                ]
+                adequate = [bool(f["adequate"]) for f in ok]
+                s["answer"] = (
+                    "law" if all(adequate) else "turning points" if not any(adequate) else "mixed"
+                )
+                spreads = [
+                    _spread([_at(a, amp)[0] for a in answers], [_at(a, amp)[1] for a in answers])
+                    for amp in three.values()
+                ]
+                spreads = [x for x in spreads if x is not None]
+                s["max_seed_spread_answer"] = max(spreads) if len(ok) > 1 and spreads else None
                 if s["same_law"] and len(ok) > 1:
                     spreads = {}
                     for p in ok[0]["parameters"]:
@@ -552,13 +569,15 @@ def _print_table(table: dict[str, Any], prepared: dict[str, Any]) -> None:
                 )
                 spread = k["max_seed_spread_dissipation"]
                 flag = "" if spread is None or spread < SPREAD_GOAL else " (>0.2)"
+                answer = k.get("max_seed_spread_answer")
+                answer_text = f"  answer ({k.get('answer')}) spread {_fmt(answer, '.2f')}"
                 goal = k.get("halves_goal_met")
                 halves = f"  halves-or-no-law {sum(goal)}/{len(goal)}" if goal is not None else ""
                 print(
                     f"  {which:12s} {kind:7s} {_laws_text(k['laws']):42s} "
                     f"adeq {sum(map(bool, k['adequate']))}/{len(k['adequate'])} "
                     f"conv {sum(k['converged'])}/{len(k['converged'])}  ΔE [{k['unit']}] {cells}"
-                    f"  spread {_fmt(spread, '.2f')}{flag}{halves}  "
+                    f"  spread {_fmt(spread, '.2f')}{flag}{answer_text}{halves}  "
                     f"{_fmt(k['median_seconds'], '.0f')} s"
                     + (
                         f"  warn {','.join(w.removesuffix('Warning') for w in k['warnings'])}"
