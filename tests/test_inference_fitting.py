@@ -251,6 +251,10 @@ def test_misfit_is_flagged():
         followed = fit(run, seed=2, law="auto", max_steps=6000)
     assert followed.law_comparison["adequate"], followed.law_comparison
     assert followed.converged
+    # and the law it keeps holds along the decay: fitted to each half, it agrees
+    halves = followed.law_comparison["halves"]
+    assert halves["tested"] and halves["agree"], halves
+    assert "the halves agree" in followed.to_text()
     assert not [w for w in caught if issubclass(w.category, MisfitWarning)]
 
 

@@ -55,6 +55,8 @@ def test_a_law_that_holds_gives_halves_that_agree(constant):
     # each half's own motion lies on its side of the cut
     assert h.first["range"][0] >= h.second["range"][1] * (1 - 1e-9)
     assert h.unit == "m^2"
+    # the result's JSON gives the same check back (the fit's text prints it)
+    assert LawHalves(**h.to_dict()) == h
 
 
 def test_a_friction_that_changes_during_the_run_splits_the_halves(changing):

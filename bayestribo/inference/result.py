@@ -451,7 +451,13 @@ class FitResult:
             halves=c.get("halves"),
             rivals=c.get("rivals"),
         )
-        return [f"          {text.describe()}"]
+        lines = [f"          {text.describe()}"]
+        halves = c.get("halves")
+        if halves and halves.get("tested") and halves.get("agree"):
+            from bayestribo.inference.halves import LawHalves
+
+            lines.append(f"          {LawHalves(**halves).describe()}")
+        return lines
 
     def _dissipation_lines(self) -> list[str]:
         """ΔE(A) at the largest, middle and smallest swing of the analysed motion: the
