@@ -1,5 +1,6 @@
-"""The streamed path of the text reader (numpy's C reader straight from the file) gives
-the same arrays and warnings as the line-by-line reader on every layout, plain or not."""
+"""The streamed path of the text reader (numpy's C reader straight from the file, or a
+compiled CSV parser for a large file) gives the same arrays and warnings as the
+line-by-line reader on every layout, plain or not."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import numpy as np
 import pytest
 
 from bayestribo.errors import RunFormatError
+from bayestribo.io import bulk_text
 from bayestribo.io import text as text_module
 from bayestribo.io.text import read_text
 
@@ -162,27 +164,27 @@ LARGE_FILES = {
 }
 
 
+@pytest.mark.parametrize("parser", ["pyarrow", "pandas"])
 @pytest.mark.parametrize("name", list(LARGE_FILES))
 def test_the_large_file_path_gives_numpys_arrays_warnings_and_errors(
-    name: str, tmp_path: Path, monkeypatch
+    name: str, parser: str, tmp_path: Path, monkeypatch
 ) -> None:
-    """pandas' C parser reads a large plain file (here: any file longer than a head of
-    512 bytes) with the arrays, warnings and errors of numpy's reader (which the test
-    above holds to the line-by-line reader's), or leaves the file to it."""
-    pytest.importorskip("pandas")
+    """A compiled CSV parser (pyarrow's or pandas') reads a large plain file (here: any
+    file longer than a head of 512 bytes) with the arrays, warnings and errors of
+    numpy's reader (which the test above holds to the line-by-line reader's), or leaves
+    the file to it."""
+    pytest.importorskip(parser)
     content, options, _ = LARGE_FILES[name]
     path = tmp_path / "run.csv"
     path.write_bytes(content.encode("utf-8"))
     taken = []
-    read_large = text_module._read_large
 
-    def spy(*args, **kwargs):
-        out = read_large(*args, **kwargs)
+    def large(path, delimiter, skip, width):
+        out = bulk_text.read_numbers(path, delimiter, skip, width, parser=parser)
         taken.append(out is not None)
         return out
 
     monkeypatch.setattr(text_module, "_HEAD_BYTES", 512)
-    monkeypatch.setattr(text_module, "_LARGE_BYTES", 0)
 
     def read(large) -> tuple:
         with monkeypatch.context() as patch:
@@ -192,35 +194,33 @@ def test_the_large_file_path_gives_numpys_arrays_warnings_and_errors(
             except RunFormatError as refused:  # the line-by-line reader names the line
                 return str(refused), []
 
-    with_pandas = read(spy)
+    with_parser = read(large)
     with_numpy = read(lambda *a, **k: None)
     if isinstance(with_numpy[0], str):
-        assert with_pandas == with_numpy
+        assert with_parser == with_numpy
     else:
-        fast, fast_warnings = with_pandas
+        fast, fast_warnings = with_parser
         slow, slow_warnings = with_numpy
         assert list(fast) == list(slow)
         for key in fast:
             assert fast[key].tobytes() == slow[key].tobytes(), key
         assert fast_warnings == slow_warnings
-    if name in PANDAS_READS:
-        assert taken == [True]  # these went through pandas
-    if name in REFUSED_BY_PANDAS:
+    if name in READS[parser]:
+        assert taken == [True]  # these went through the parser
+    if name in REFUSED[parser]:
         assert True not in taken
 
 
-#: Layouts pandas reads (the plain ones of more than three lines in the head).
-PANDAS_READS = (
+#: Layouts both parsers read (the plain ones of more than three lines in the head).
+_PLAIN = (
     "canonical",
     "no final newline",
     "crlf",
+    "units, semicolons, comments above",
     "numbers of many digits and extremes",
-    "white space with an ignored column",
-    "white space, no header",
 )
-#: Layouts pandas must leave to numpy's reader or the line-by-line one.
-REFUSED_BY_PANDAS = (
-    "a nan among the rows",  # numpy reads it as NaN (validate_run names the sample)
+#: Layouts both parsers must leave to numpy's reader or the line-by-line one.
+_NOT_PLAIN = (
     "a quoted number",
     "a row of four fields",
     "a row of two fields",
@@ -228,3 +228,73 @@ REFUSED_BY_PANDAS = (
     "empty cells at the start",
     "cut-short last line",
 )
+_WHITE_SPACE = ("white space with an ignored column", "white space, no header")
+#: Layouts each parser reads.
+READS = {
+    "pyarrow": (*_PLAIN, "a nan among the rows"),  # NaN, as numpy reads it
+    "pandas": (*_PLAIN, *_WHITE_SPACE),
+}
+#: Layouts each parser leaves to numpy's reader or the line-by-line one.
+REFUSED = {
+    "pyarrow": (*_NOT_PLAIN, *_WHITE_SPACE),  # one character separates its fields
+    "pandas": (*_NOT_PLAIN, "a nan among the rows"),  # numpy reads it as NaN
+}
+
+
+def _large_record(path: Path) -> None:
+    """A file of 300,000 rows (beyond the size from which the compiled parsers read):
+    comments, a header with units, and numbers of every magnitude and digit count."""
+    rng = np.random.default_rng(11)
+    n = 300_000
+    t = np.arange(n) * 1e-3  # ms
+    x = 1e3 * np.exp(-t / 200.0) * np.sin(t / 5.0) + rng.normal(0.0, 1e-3, n)  # µm
+    v = np.gradient(x, t) * 10.0 ** rng.integers(-12, 3, n)  # mm/s, any magnitude
+    body = "\n".join(
+        f"{a!r};{b:.17g};{c!r}" for a, b, c in zip(t.tolist(), x.tolist(), v.tolist(), strict=True)
+    )
+    path.write_text(
+        "# rig 3, 2026-11-27\n# displacement in µm, velocity in mm/s\n\n"
+        "time_ms;displacement_um;velocity_mm_per_s\n" + body + "\n",
+        encoding="utf-8",
+    )
+
+
+@pytest.mark.parametrize("parser", ["pyarrow", "pandas"])
+def test_a_large_file_with_comments_and_units_reads_as_the_row_by_row_reader_reads_it(
+    parser: str, tmp_path: Path, monkeypatch
+) -> None:
+    """The whole fast path (the head laid out, the rows parsed by a compiled parser)
+    against the row-by-row reader alone, on a file of the size the fast path is for:
+    the same arrays bit for bit and the same warnings."""
+    pytest.importorskip(parser)
+    path = tmp_path / "run.csv"
+    _large_record(path)
+    assert path.stat().st_size > text_module._ARROW_BYTES
+    taken = []
+
+    def large(path, delimiter, skip, width):
+        out = bulk_text.read_numbers(path, delimiter, skip, width, parser=parser)
+        taken.append(out is not None)
+        return out
+
+    monkeypatch.setattr(text_module, "_LARGE_BYTES", 0)
+    monkeypatch.setattr(text_module, "_read_large", large)
+    fast, fast_warnings = _read(path, {}, True, monkeypatch)
+    assert taken == [True]
+    slow, slow_warnings = _read(path, {}, False, monkeypatch)
+    assert list(fast) == list(slow) == ["time_s", "displacement_m", "velocity_m_per_s"]
+    for key in fast:
+        assert fast[key].tobytes() == slow[key].tobytes(), key
+        assert fast[key].dtype == np.float64 and fast[key].flags.c_contiguous
+    assert fast_warnings == slow_warnings
+
+
+def test_a_bad_row_of_a_large_file_is_named_by_the_row_by_row_reader(tmp_path: Path) -> None:
+    """The compiled parser refuses the file; the line-by-line reader names the line."""
+    path = tmp_path / "run.csv"
+    _large_record(path)
+    lines = path.read_text(encoding="utf-8").splitlines()
+    lines[200_004] = lines[200_004].replace(";", ";x", 1)
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    with pytest.raises(RunFormatError, match=r"line 200005, column 'displacement_m'"):
+        read_text(path)

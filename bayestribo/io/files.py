@@ -190,6 +190,7 @@ def _read(path: Path, opts: ReadOptions) -> Run:
         meta,
         source=where,
     )
+    del signals  # the reader's arrays: the run holds its own copies
     if validate:
         validate_run(run)
     return run
