@@ -10,6 +10,10 @@ versions so that the load of a shared machine falls on both alike. Reported per
 version: median read and prepare times, their sum against the sampling time, and the
 process's peak resident memory.
 
+Each worker records whether it read with pyarrow (the ``large`` extra; ``--site DIR``
+puts a folder of packages installed apart on both versions' path) and whether it
+imported pandas.
+
 Goal: read + prepare within 2x the sampling time, peak memory under 400 MB, and at
 least 5x faster than the baseline side by side.
 
@@ -51,14 +55,16 @@ print(json.dumps({
     "import_s": t1 - t0, "read_s": t2 - t1, "prepare_s": t3 - t2,
     "peak_MB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
     "module": bayestribo.__file__,
+    "pyarrow": sys.modules["pyarrow"].__version__ if "pyarrow" in sys.modules else None,
+    "pandas": "pandas" in sys.modules,
     "samples": int(run.time.size), "increments": int(len(prepared.data.dpi))
     if hasattr(prepared, "data") and hasattr(prepared.data, "dpi") else None,
 }))
 """
 
 
-def measure(tree: Path, path: Path) -> dict:
-    env = {**os.environ, "PYTHONPATH": str(tree)}
+def measure(tree: Path, path: Path, site: Path | None = None) -> dict:
+    env = {**os.environ, "PYTHONPATH": str(tree) + ("" if site is None else f"{os.pathsep}{site}")}
     # run from the record's folder: "python -c" puts the working directory first on
     # sys.path, which would import the tree the command was started in
     proc = subprocess.run(
@@ -83,6 +89,12 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--baseline", type=Path)
     parser.add_argument("--output", default="large_record")
+    parser.add_argument(
+        "--site",
+        type=Path,
+        help="a folder put on the path of both versions after the tree (packages installed "
+        "apart, e.g. pip install --target DIR pyarrow, the large extra)",
+    )
     args = parser.parse_args()
     from bayestribo.io import write_run
     from bayestribo.synthetic import Release, Sensor, simulate
@@ -106,7 +118,7 @@ def main() -> None:
         rows: dict[str, list[dict]] = {name: [] for name in trees}
         for _ in range(args.repeats):
             for name, tree in trees.items():
-                result = measure(tree, path)
+                result = measure(tree, path, args.site)
                 result["load_average"] = list(os.getloadavg())
                 rows[name].append(result)
     summary = {}

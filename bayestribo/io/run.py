@@ -247,6 +247,16 @@ def _check_not_a_typo(key: str, where: str | None) -> None:
 def _signal(name: str, values: ArrayLike | None, where: str | None) -> NDArray | None:
     if values is None:
         return None
+    if (
+        isinstance(values, np.ndarray)
+        and values.dtype == np.float64
+        and values.ndim == 1
+        and not values.flags.writeable
+        and values.flags.owndata
+    ):
+        # frozen (read-only, owning its data: no view can change it, as a reader's
+        # columns or another run's arrays): shared, not copied (8 MB a channel at 1 MHz)
+        return values
     try:
         array = np.array(values, dtype=np.float64)
     except (TypeError, ValueError) as exc:
@@ -267,7 +277,9 @@ class Run:
     signal, typed metadata); the data checks (finite samples, regular time stamps,
     clipping, units...) are :func:`bayestribo.io.validation.validate_run`, which
     :func:`bayestribo.read_run` applies to every file it reads. The arrays are
-    copied and made read-only.
+    copied and made read-only (a float64 array that is read-only already and owns its
+    data, as a reader's columns or another run's arrays, is shared: nothing can change
+    it).
 
     Parameters
     ----------

@@ -395,21 +395,29 @@ def _layout(
 
 
 def _columns(
-    data: NDArray,
+    data: NDArray | Sequence[NDArray],
     keep: list[tuple[int, str]],
     units: Mapping[str, float],
     scale: Mapping[str, float] | None,
     where: str,
 ) -> dict[str, NDArray]:
-    """The kept columns in canonical units, by canonical name (time first)."""
+    """The kept columns in canonical units, by canonical name (time first).
+
+    ``data`` is a block of rows (its columns are views: the Run copies them) or a list
+    of columns; a column that owns its data is made read-only here and the Run takes
+    it without a copy.
+    """
     factors = check_scale(scale, [n for _, n in keep], where)
+    columns = list(data.T) if isinstance(data, np.ndarray) else list(data)
     out: dict[str, NDArray] = {}
     for c, (_, name) in enumerate(keep):
-        column = data[:, c]  # the Run copies it (a view keeps the block while it lives)
+        column = columns[c]
         if name in units:
             column = column * units[name]
         if name in factors:
             column = column * factors[name]
+        if column.flags.owndata:
+            column.setflags(write=False)
         out[name] = column
     return {name: out[name] for name in COLUMNS if name in out}
 
@@ -490,12 +498,13 @@ def _read_streamed(
             )
         except (ValueError, UnicodeDecodeError):
             return None
-    if data.ndim != 2 or data.shape[1] != len(names) or data.shape[0] < 1:
+    if isinstance(data, np.ndarray):  # numpy's reader: a block of rows
+        if data.ndim != 2 or data.shape[0] < 1:
+            return None
+        data = list(data.T)
+    if len(data) != len(names) or data[0].size < 1:
         return None
-    kept = [i for i, _ in keep]
-    if kept != list(range(len(names))):
-        data = data[:, kept]
-    return _columns(data, keep, units, scale, where)
+    return _columns([data[i] for i, _ in keep], keep, units, scale, where)
 
 
 #: Files at least this large read with pyarrow's CSV reader when it is installed
@@ -508,7 +517,7 @@ _ARROW_BYTES = 4 << 20
 _LARGE_BYTES = 16 << 20
 
 
-def _read_large(path: Path, delimiter: str | None, skip: int, width: int) -> NDArray | None:
+def _read_large(path: Path, delimiter: str | None, skip: int, width: int) -> list[NDArray] | None:
     """The rows of numbers of a large plain file, read by a compiled CSV parser
     (:func:`bayestribo.io.bulk_text.read_numbers`: pyarrow's, else pandas'), or None to
     leave the file to :func:`numpy.loadtxt`: a small file, or any row that is not
