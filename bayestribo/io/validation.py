@@ -103,9 +103,10 @@ def _check_time(run: Run, where: str | None, time_rtol: float) -> float:
             where,
         )
     median = sample_step(t)  # remembered for the checks and the fit that follow
-    deviation = np.abs(step - median) / median
-    worst = int(np.argmax(deviation))
-    if deviation[worst] > time_rtol and not _jittered(t):  # jitter about a grid passes
+    # the largest deviation from the extremes of the steps (no array of deviations)
+    largest = max(float(step.max()) - median, median - float(step.min())) / median
+    if largest > time_rtol and not _jittered(t):  # jitter about a grid passes
+        worst = int(np.argmax(np.abs(step - median)))
         raise _fail(
             f"field {TIME!r} is irregular: the step from sample {worst} to {worst + 1} is "
             f"{step[worst]!r} s but the median step is {median!r} s; expected regular "
@@ -162,16 +163,20 @@ def _flat_top(
     coarsely quantised signal also repeats its extreme, but it is entered and left by
     single quantisation steps; a signal cut flat arrives at the cut with its slope.
     """
-    if quantum is None:
-        quantum = _quantum(values)
-    if quantum is None:
+    # the samples at the level (a handful in a smooth record), then their runs
+    at = np.flatnonzero(values == level)
+    if at.size < length:
         return None
-    hit = np.concatenate(([0], (values == level).astype(np.int8), [0]))
-    edges = np.flatnonzero(np.diff(hit))
-    starts, stops = edges[::2], edges[1::2]
-    for start, stop in zip(starts, stops, strict=True):
+    breaks = np.flatnonzero(np.diff(at) > 1) + 1
+    starts = at[np.r_[0, breaks]]
+    stops = at[np.r_[breaks - 1, at.size - 1]] + 1
+    for start, stop in zip(starts.tolist(), stops.tolist(), strict=True):
         if stop - start < length or start == 0 or stop == values.size:
             continue
+        if quantum is None:
+            quantum = _quantum(values)
+        if quantum is None:
+            return None
         entry = abs(values[start - 1] - level)
         exit_ = abs(values[stop] - level)
         if min(entry, exit_) > 3.0 * quantum:
@@ -199,9 +204,8 @@ def _check_clipping(run: Run, where: str | None, clip_samples: int) -> None:
                     "the vibrometer or a smaller initial displacement)",
                     where,
                 )
-        quantum = _quantum(values)
         for kind, level in (("maximum", values.max()), ("minimum", values.min())):
-            found = _flat_top(values, level, clip_samples, quantum)
+            found = _flat_top(values, level, clip_samples)  # the step only at a flat run
             if found is not None:
                 start, length = found
                 raise _fail(

@@ -212,7 +212,7 @@ def _fine_spectrum(x: NDArray, bins: NDArray, n: int) -> NDArray:
     a row phase e^{-2πi k c R/n} and a column phase e^{-2πi k r/n}: two small tables
     per bin (phases reduced modulo n in integers, so they are exact for any record
     length), and the sum is two real matrix products of the rows with the column
-    table. At 1,000,000 samples and 11 bins: about 30 ms, against 170 ms for the
+    table. At 1,000,000 samples and 5 bins: about 10 ms, against 170 ms for the
     whole padded transform (4,194,304 points) whose bins they are.
     """
     rows = x.size // _ROW
@@ -282,8 +282,13 @@ def _spectral_period(t: NDArray, s: NDArray) -> float:
     # the fine bins around the peak, climbing to a local maximum of the fine grid
     top = n // 2
     fine = PADDING * k
+    if 0 < k < spec.size - 1:  # where the coarse bins' parabola puts the peak
+        a, b, c = np.log(spec[k - 1 : k + 2] + 1e-300)
+        den = a - 2 * b + c
+        fine = round(PADDING * (k + (0.5 * (a - c) / den if den < 0 else 0.0)))
     for _ in range(16):
-        bins = np.arange(max(0, fine - PADDING - 1), min(top, fine + PADDING + 1) + 1)
+        # five bins about it, the window shifted while the maximum is at its edge
+        bins = np.arange(max(0, fine - PADDING // 2), min(top, fine + PADDING // 2) + 1)
         values = _fine_spectrum(x, bins, n)
         values[bins == 0] = 0.0  # as the record's mean, left out
         best = int(np.argmax(values))
