@@ -244,8 +244,10 @@ def _moving_correlation(xc: NDArray, ic: NDArray) -> float:
     still do not correlate, and swapped ones still anticorrelate.
     """
     moving = np.abs(ic) > MOTION_FRACTION * float(np.max(np.abs(ic)))
-    xm = xc[moving] - xc[moving].mean()
-    im = ic[moving] - ic[moving].mean()
+    xm = xc[moving]
+    xm -= xm.mean()
+    im = ic[moving]
+    im -= im.mean()
     sxx, sii = _dot(xm, xm), _dot(im, im)
     if sxx == 0.0 or sii == 0.0:
         return _dot(xc, ic) / math.sqrt(_dot(xc, xc) * _dot(ic, ic))
@@ -302,7 +304,14 @@ def _channel_consistency(run: Recording) -> ChannelConsistency | None:
         period = dominant_period(t, x)  # the run's one period (remembered for its arrays)
     except RecordingError:
         return None
-    integral = np.concatenate(([0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))))
+    # the trapezoids' cumulative sum, in place (six arrays of the record's length before)
+    integral = np.empty(x.size)
+    integral[0] = 0.0
+    area = v[1:] + v[:-1]
+    area *= 0.5
+    area *= np.diff(t)
+    np.cumsum(area, out=integral[1:])
+    del area
     step = sample_step(t)
     lag = max(1, round(period / (40.0 * step)))
     if 2 * lag >= x.size:

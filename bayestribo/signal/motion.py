@@ -103,8 +103,8 @@ class MotionSpan:
         return self.stop_time is not None
 
 
-#: Samples of blocks taken together by :func:`_block_fits` (16 MB of float64 at most).
-_CHUNK = 1 << 21
+#: Samples of blocks taken together by :func:`_block_fits` (4 MB of float64 at most).
+_CHUNK = 1 << 19
 
 
 def _block_fits(
@@ -141,7 +141,7 @@ def _block_fits(
     for first in range(0, starts.size, step):
         rows = windows[starts[first : first + step]]
         rows -= rows.mean(axis=1, keepdims=True)
-        rows -= np.outer(rows @ line, line)
+        rows -= (rows @ line)[:, None] * line
         part = slice(first, first + rows.shape[0])
         var1[part] = np.einsum("ij,ij->i", rows, rows) / size
         if wave is not None and wave.shape[1]:
