@@ -173,7 +173,7 @@ def prepare_signal(
         raise RecordingError(f"{name}: at least 16 samples are needed, got {t.size}")
     if not np.all(np.isfinite(t)):
         raise RecordingError("t contains NaN or infinite values")
-    bad = np.flatnonzero(~np.isfinite(s))
+    bad = np.flatnonzero(~np.isfinite(s)) if not np.isfinite(s).all() else s[:0]
     if bad.size:
         raise RecordingError(
             f"{name} contains {bad.size} NaN or infinite values (first at sample {bad[0]})"

@@ -61,7 +61,8 @@ def quantisation_step(values: ArrayLike) -> float | None:
     True
     """
     x = np.asarray(values, dtype=float)
-    x = x[np.isfinite(x)]
+    if not np.isfinite(x).all():
+        x = x[np.isfinite(x)]
     if x.size < 2:
         return None
     change = np.abs(np.diff(x))
