@@ -141,11 +141,13 @@ def _block_fits(
     for first in range(0, starts.size, step):
         rows = windows[starts[first : first + step]]
         rows -= rows.mean(axis=1, keepdims=True)
-        rows -= (rows @ line)[:, None] * line
+        # products by einsum, not a threaded BLAS: these are bound by memory, and a
+        # BLAS thread waiting for a busy second core took 4 times as long
+        rows -= np.einsum("ij,j->i", rows, line)[:, None] * line
         part = slice(first, first + rows.shape[0])
         var1[part] = np.einsum("ij,ij->i", rows, rows) / size
         if wave is not None and wave.shape[1]:
-            projected = rows @ wave
+            projected = np.einsum("ij,jk->ik", rows, wave)
             explained = np.einsum("ij,ij->i", projected, projected) / size
             var2[part] = np.maximum(var1[part] - explained, 0.0)
         else:

@@ -211,16 +211,19 @@ def _fine_spectrum(x: NDArray, bins: NDArray, n: int) -> NDArray:
     With ``x[j]`` at ``j = c·R + r`` (R = :data:`_ROW`), e^{-2πi k j/n} is the product of
     a row phase e^{-2πi k c R/n} and a column phase e^{-2πi k r/n}: two small tables
     per bin (phases reduced modulo n in integers, so they are exact for any record
-    length), and the sum is two real matrix products of the rows with the column
-    table. At 1,000,000 samples and 5 bins: about 10 ms, against 170 ms for the
-    whole padded transform (4,194,304 points) whose bins they are.
+    length), and the sum is a real matrix product of the rows with the column table.
+    At 1,000,000 samples and 5 bins: about 10 ms, against 170 ms for the whole padded
+    transform (4,194,304 points) whose bins they are.
     """
     rows = x.size // _ROW
     k = bins.astype(np.int64)[:, None]
     column = np.exp((-2j * math.pi / n) * ((k * np.arange(_ROW)) % n))
     row = np.exp((-2j * math.pi / n) * ((k * (_ROW * np.arange(rows + 1))) % n))
     block = x[: rows * _ROW].reshape(rows, _ROW)
-    inner = block @ column.real.T + 1j * (block @ column.imag.T)  # (rows, bins)
+    # one real product with the tables' real and imaginary parts stacked, by einsum:
+    # a threaded BLAS waiting for a busy second core took 3 to 5 times as long
+    parts = np.einsum("ij,kj->ik", block, np.concatenate([column.real, column.imag]))
+    inner = parts[:, : bins.size] + 1j * parts[:, bins.size :]  # (rows, bins)
     total = np.einsum("kc,ck->k", row[:, :rows], inner)
     rest = x[rows * _ROW :]
     if rest.size:
