@@ -94,9 +94,34 @@ class Flattening:
 
 def _curvatures(t: NDArray, s: NDArray, index: NDArray, half_width: int) -> NDArray:
     """|s''| at each sample in ``index`` [signal unit/s²]: a least-squares parabola over
-    the samples ``index ± half_width`` (as the turning points are refined)."""
+    the samples ``index ± half_width`` (as the turning points are refined).
+
+    The windows of full width are fitted together, from the normal equations in the
+    offsets scaled to [-1, 1] (the conditioning of :func:`numpy.polyfit`'s scaled
+    columns; the same curvatures to about 1e-12), by einsum: 58 fits of 5,113 samples
+    at 1 MHz took 25 ms one by one, most of it a threaded BLAS waiting for a busy core.
+    A window cut by an end of the record is fitted alone.
+    """
+    index = np.asarray(index, dtype=int)
     out = np.full(index.size, np.nan)
-    for j, i in enumerate(index.tolist()):
+    full = (index >= half_width) & (index <= s.size - 1 - half_width)
+    if half_width >= 1 and full.any():
+        centre = index[full]
+        offsets = np.arange(-half_width, half_width + 1)
+        tt = t[centre[:, None] + offsets] - t[centre][:, None]
+        scale = np.maximum(np.abs(tt).max(axis=1, keepdims=True), np.finfo(float).tiny)
+        u = tt / scale
+        ss = s[centre[:, None] + offsets]
+        powers = [np.ones_like(u), u, u * u, u * u * u, (u * u) * (u * u)]
+        moments = np.stack([np.einsum("ij->i", p) for p in powers], axis=1)
+        right = np.stack([np.einsum("ij,ij->i", p, ss) for p in powers[:3]], axis=1)
+        gram = np.stack(
+            [moments[:, 0:3], moments[:, 1:4], moments[:, 2:5]], axis=1
+        )  # Σ u^(a+b) for a, b in 0..2
+        c2 = np.linalg.solve(gram, right[..., None])[:, 2, 0] / (scale[:, 0] ** 2)
+        out[np.flatnonzero(full)] = np.abs(2.0 * c2)
+    for j in np.flatnonzero(~full).tolist():
+        i = int(index[j])
         w = min(half_width, i, s.size - 1 - i)
         if w < 1:
             continue
