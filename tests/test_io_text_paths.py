@@ -4,6 +4,7 @@ line-by-line reader on every layout, plain or not."""
 
 from __future__ import annotations
 
+import sys
 import warnings
 from pathlib import Path
 
@@ -298,3 +299,30 @@ def test_a_bad_row_of_a_large_file_is_named_by_the_row_by_row_reader(tmp_path: P
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     with pytest.raises(RunFormatError, match=r"line 200005, column 'displacement_m'"):
         read_text(path)
+
+
+def test_a_pyarrow_that_does_not_import_leaves_the_file_to_pandas(
+    tmp_path: Path, monkeypatch
+) -> None:
+    """A broken pyarrow install (found on the path, failing to import) costs speed, not
+    the reading: pandas' parser reads the file, with the row-by-row reader's numbers."""
+    pytest.importorskip("pandas")
+    path = tmp_path / "run.csv"
+    _large_record(path)
+    used = []
+    read_numbers = bulk_text.read_numbers
+
+    def spy(*args, parser="auto", **kwargs):
+        out = read_numbers(*args, parser=parser, **kwargs)
+        used.append((parser, out is not None))
+        return out
+
+    monkeypatch.setattr(bulk_text, "arrow_available", lambda: True)
+    monkeypatch.setattr(bulk_text, "read_numbers", spy)
+    monkeypatch.setitem(sys.modules, "pyarrow", None)  # import pyarrow raises ImportError
+    monkeypatch.setattr(text_module, "_LARGE_BYTES", 0)
+    fast, _ = _read(path, {}, True, monkeypatch)
+    assert used == [("pyarrow", False), ("pandas", True)]
+    slow, _ = _read(path, {}, False, monkeypatch)
+    for key in fast:
+        assert fast[key].tobytes() == slow[key].tobytes(), key

@@ -526,9 +526,12 @@ def _read_large(path: Path, delimiter: str | None, skip: int, width: int) -> lis
     """
     size = path.stat().st_size
     if delimiter is not None and bulk_text.arrow_available():
-        if "pyarrow" not in sys.modules and size < _ARROW_BYTES:
+        if sys.modules.get("pyarrow") is None and size < _ARROW_BYTES:
             return None
-        return bulk_text.read_numbers(path, delimiter, skip, width, parser="pyarrow")
+        data = bulk_text.read_numbers(path, delimiter, skip, width, parser="pyarrow")
+        if data is not None or sys.modules.get("pyarrow") is not None:
+            return data  # read, or refused by pyarrow (and so by pandas)
+        # pyarrow is there but does not import (a broken install): pandas' parser
     if "pandas" not in sys.modules and size < _LARGE_BYTES:
         return None
     return bulk_text.read_numbers(path, delimiter, skip, width, parser="pandas")
