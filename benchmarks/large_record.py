@@ -7,7 +7,8 @@ commit) then reads it with ``read_run`` and prepares it with
 ``bayestribo.inference.pipeline.prepare`` (everything a fit does before its first
 likelihood evaluation) in a fresh process, ``--repeats`` times, alternating between the
 versions so that the load of a shared machine falls on both alike. Reported per
-version: median read and prepare times, their sum against the sampling time, and the
+version: median read and prepare times (wall clock, and the process's CPU time, which
+a threaded BLAS waiting for a busy core inflates), their sum against the sampling time, and the
 process's peak resident memory (VmHWM: ``ru_maxrss`` keeps the parent's peak across
 fork and exec on Linux, and the benchmark's own process holds the simulated record,
 390 MB, so every worker read at least that).
@@ -60,12 +61,16 @@ import bayestribo
 from bayestribo.io import read_run
 from bayestribo.inference.pipeline import prepare
 t1 = time.perf_counter()
+c1 = time.process_time()
 run = read_run(sys.argv[1])
 t2 = time.perf_counter()
+c2 = time.process_time()
 prepared = prepare(run, seed=0)
 t3 = time.perf_counter()
+c3 = time.process_time()
 print(json.dumps({
     "import_s": t1 - t0, "read_s": t2 - t1, "prepare_s": t3 - t2,
+    "read_cpu_s": c2 - c1, "prepare_cpu_s": c3 - c2,
     "peak_MB": peak_MB(),
     "module": bayestribo.__file__,
     "pyarrow": sys.modules["pyarrow"].__version__ if "pyarrow" in sys.modules else None,
@@ -142,6 +147,9 @@ def main() -> None:
             "read_s": read,
             "prepare_s": prep,
             "read_plus_prepare_s": read + prep,
+            "read_plus_prepare_cpu_s": statistics.median(
+                r["read_cpu_s"] + r["prepare_cpu_s"] for r in results
+            ),
             "over_sampling_time": (read + prep) / sampling_s,
             "peak_MB": max(r["peak_MB"] for r in results),
         }
