@@ -20,6 +20,7 @@ import math
 import weakref
 
 import numpy as np
+import scipy.fft
 from numpy.typing import ArrayLike, NDArray
 
 from bayestribo.errors import RecordingError
@@ -80,8 +81,13 @@ def _oscillation_power(s: NDArray, period: float, dt: float) -> float:
     if m * size < s.size:
         projected.append(np.einsum("j,kj->k", s[-size:], wave)[None, :])
     best = 0.0
+    (g00, g01), (g10, g11) = gram_inv.tolist()
     for p in projected:
-        best = max(best, float(np.max(np.einsum("ij,jk,ik->i", p, gram_inv, p))))
+        # the quadratic form pᵀ G p of each block written out: einsum's three-operand
+        # form took 2.5 ms for the 62,500 blocks of 16 samples of a 1 MHz record, this
+        # 0.3 ms
+        a, b = p[:, 0], p[:, 1]
+        best = max(best, float(np.max(a * (g00 * a + g01 * b) + b * (g10 * a + g11 * b))))
     return best / size
 
 
@@ -263,10 +269,10 @@ def _spectral_period(t: NDArray, s: NDArray) -> float:
     scores nearly as high but is weaker in the spectrum).
 
     The peaks are looked for in the spectrum at the record's own resolution (a
-    transform of a power-of-two length at least the record's); the chosen peak is
-    then located on the grid :data:`PADDING` times finer (the bins of the transform
-    zero-padded to ``PADDING`` times that length, computed only around the peak by
-    :func:`_fine_spectrum`) and interpolated there by a parabola through the
+    transform at a fast length at least the record's); the chosen peak is then
+    located on the grid of the transform zero-padded to :data:`PADDING` times the
+    power of two at least the record's length (its bins computed only around the
+    peak by :func:`_fine_spectrum`) and interpolated there by a parabola through the
     logarithms of three bins. At 1 MHz × 1 s: 40 ms instead of 170 ms for the
     padded transform, and the same period to about 1e-12 whenever the peak chosen
     is the same one.
@@ -274,8 +280,10 @@ def _spectral_period(t: NDArray, s: NDArray) -> float:
     dt = sample_step(t)
     x = np.diff(s)
     x -= np.mean(x)
-    m = 1 << math.ceil(math.log2(s.size))  # at least x.size: no sample is cut
-    n = PADDING * m
+    # the record's own spectrum at a fast transform length (1,000,000 points for a
+    # 1 MHz record: 12 ms, against 19 ms padded to 2^20), the fine grid as before
+    m = scipy.fft.next_fast_len(x.size, real=True)
+    n = PADDING * (1 << math.ceil(math.log2(s.size)))
     spec = np.abs(np.fft.rfft(x, m))
     spec[0] = 0.0
     k = int(np.argmax(spec))
@@ -284,11 +292,12 @@ def _spectral_period(t: NDArray, s: NDArray) -> float:
     k = _strongest_oscillation(t, s, spec, k, m, dt)
     # the fine bins around the peak, climbing to a local maximum of the fine grid
     top = n // 2
-    fine = PADDING * k
+    centre = float(k)
     if 0 < k < spec.size - 1:  # where the coarse bins' parabola puts the peak
         a, b, c = np.log(spec[k - 1 : k + 2] + 1e-300)
         den = a - 2 * b + c
-        fine = round(PADDING * (k + (0.5 * (a - c) / den if den < 0 else 0.0)))
+        centre += 0.5 * (a - c) / den if den < 0 else 0.0
+    fine = min(top, round(centre * n / m))
     for _ in range(16):
         # five bins about it, the window shifted while the maximum is at its edge
         bins = np.arange(max(0, fine - PADDING // 2), min(top, fine + PADDING // 2) + 1)
