@@ -102,7 +102,7 @@ def _check_time(run: Run, where: str | None, time_rtol: float) -> float:
             f"t = {t[i - 1]!r} s; expected increasing time stamps",
             where,
         )
-    median = sample_step(t)  # remembered for the checks and the fit that follow
+    median = sample_step(t, step)  # remembered for the checks and the fit that follow
     # the largest deviation from the extremes of the steps (no array of deviations)
     largest = max(float(step.max()) - median, median - float(step.min())) / median
     if largest > time_rtol and not _jittered(t):  # jitter about a grid passes

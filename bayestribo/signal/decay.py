@@ -310,7 +310,7 @@ def check_time(t: ArrayLike) -> NDArray:
             f"time stamps must increase strictly: t[{i}] = {t[i]!r} follows t[{i - 1}] = "
             f"{t[i - 1]!r} (t is not increasing at sample {i})"
         )
-    step = sample_step(t)  # float(np.median(dt)), remembered for a run's time stamps
+    step = sample_step(t, dt)  # float(np.median(dt)), remembered for a run's time stamps
     # the largest deviation from the extremes of the steps; the steps off only then
     if max(float(dt.max()) - step, step - float(dt.min())) > TIME_STEP_TOLERANCE * step:
         off = np.flatnonzero(np.abs(dt - step) > TIME_STEP_TOLERANCE * step)

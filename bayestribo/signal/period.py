@@ -158,13 +158,15 @@ def dominant_period(time: ArrayLike, values: ArrayLike) -> float:
     return _remembered("period", (t, s), _spectral_period)
 
 
-def sample_step(time: ArrayLike) -> float:
+def sample_step(time: ArrayLike, steps: NDArray | None = None) -> float:
     """Median spacing of sample times [s].
 
     Parameters
     ----------
     time : array_like
         Sample times [s], at least two.
+    steps : ndarray, optional
+        ``np.diff(time)`` when the caller has it already (not computed again).
 
     Returns
     -------
@@ -174,7 +176,11 @@ def sample_step(time: ArrayLike) -> float:
         file and the preparation of a fit ask for a dozen times).
     """
     t = np.asarray(time, dtype=np.float64)
-    return _remembered("step", (t,), lambda t: float(np.median(np.diff(t))))
+    if steps is not None and steps.shape != (max(t.size - 1, 0),):
+        raise RecordingError(f"steps: expected np.diff(time), got shape {steps.shape}")
+    return _remembered(
+        "step", (t,), lambda t: float(np.median(np.diff(t) if steps is None else steps))
+    )
 
 
 #: Values computed from read-only arrays, by what and the arrays' ids, while they live.
