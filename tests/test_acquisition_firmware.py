@@ -152,7 +152,8 @@ def test_a_corrupted_and_a_dropped_frame_leave_the_run_incomplete_losing_nothing
 
 @needs_cc
 def test_an_overrun_of_the_boards_buffers_loses_whole_frames_and_says_which(host_sim, tmp_path):
-    # The link takes nothing for 60 ms after DATA frame 2 while samples keep coming at
+    # The link takes nothing for 60 ms of samples (on the board's sample clock, whatever
+    # the load of the machine) after DATA frame 2 while samples keep coming at
     # 20 kS/s: the board's four buffers fill, later frames are lost whole with their
     # sequence numbers used, and the host lists exactly their samples as missing.
     side = tmp_path / "side.bin"
