@@ -12,7 +12,10 @@ and each in a fresh interpreter,
 * ``python -c "import numpy, numba, scipy.optimize, emcee"``: the same without
   scipy.signal (the floor of a fit that would not use it: emcee imports scipy.stats
   all the same);
-* ``python -c "import bayestribo.inference"``: everything a fit imports, numba's first
+* the same floor imported as the command imports its machinery, the cyclic collector
+  paused and what the imports made frozen (``gc.disable(); import ...; gc.freeze()``,
+  :mod:`bayestribo.cli._imports`): the floor of any command that needs these libraries;
+* ``import bayestribo.inference`` in that way: everything a fit imports, numba's first
   load of the cached integrator included (it runs at import);
 
 and asks a long-lived worker process (in the same shuffled order) for one in-process
@@ -65,8 +68,11 @@ CONSOLE = (
 FLOOR = "import numpy, numba, scipy.optimize, scipy.signal, emcee"
 #: The same without scipy.signal.
 FLOOR_NO_SIGNAL = "import numpy, numba, scipy.optimize, emcee"
-#: Everything a fit imports (numba's first load of a cached kernel runs at import).
-FIT_IMPORTS = "import bayestribo.inference"
+#: The floor imported with the collector paused and its objects frozen after.
+FLOOR_FROZEN = f"import gc; gc.disable(); {FLOOR_NO_SIGNAL}; gc.enable(); gc.freeze()"
+#: Everything a fit imports (numba's first load of a cached kernel runs at import), in
+#: the same way.
+FIT_IMPORTS = "import gc; gc.disable(); import bayestribo.inference; gc.enable(); gc.freeze()"
 
 #: A long-lived worker: one warm fit of the run per line read, its wall time printed.
 WORKER = """
@@ -130,6 +136,7 @@ def commands(run: Path) -> dict[str, list[str]]:
         "fit": [py, "-c", CONSOLE, "fit", str(run)],
         "import_fit_libraries": [py, "-c", FLOOR],
         "import_floor": [py, "-c", FLOOR_NO_SIGNAL],
+        "import_floor_frozen": [py, "-c", FLOOR_FROZEN],
         "import_fit": [py, "-c", FIT_IMPORTS],
     }
 
@@ -188,6 +195,7 @@ def main() -> None:
             "fit": f"bayestribo fit {run.name}",
             "import_fit_libraries": f'python -c "{FLOOR}"',
             "import_floor": f'python -c "{FLOOR_NO_SIGNAL}"',
+            "import_floor_frozen": f'python -c "{FLOOR_FROZEN}"',
             "import_fit": f'python -c "{FIT_IMPORTS}"',
             "warm_fit": "bayestribo.fit(RUN) in a process that fitted it before",
         },
@@ -198,7 +206,7 @@ def main() -> None:
     }
     print(f"median of {args.repeats} rounds [s]; run {run.name}")
     header = f"{'':10}{'--help':>9}{'numpy':>9}{'ratio':>7}{'fit':>9}{'warm fit':>10}{'ratio':>7}"
-    print(header + f"{'fit libs':>10}{'floor':>8}{'fit imp':>9}")
+    print(header + f"{'fit libs':>10}{'floor':>8}{'frozen':>8}{'fit imp':>9}")
     for name, tree in trees.items():
         med = {c: statistics.median(v) for c, v in times[name].items()}
         warm = statistics.median(warm_times[name])
@@ -224,6 +232,7 @@ def main() -> None:
             "fit_over_warm_fit_median_of_rounds": statistics.median(per_round_fit),
             # what no change of the package's start-up can remove, over the warm fit
             "import_floor_over_warm_fit": med["import_floor"] / warm,
+            "import_floor_frozen_over_warm_fit": med["import_floor_frozen"] / warm,
             "import_fit_over_warm_fit": med["import_fit"] / warm,
             "goal_help_within_3x": help_ratio <= 3.0,
             "goal_fit_within_3x": fit_ratio <= 3.0,
@@ -231,7 +240,7 @@ def main() -> None:
         print(
             f"{name:10}{med['help']:9.3f}{med['import_numpy']:9.3f}{help_ratio:7.2f}"
             f"{med['fit']:9.3f}{warm:10.3f}{fit_ratio:7.2f}{med['import_fit_libraries']:10.3f}"
-            f"{med['import_floor']:8.3f}{med['import_fit']:9.3f}"
+            f"{med['import_floor']:8.3f}{med['import_floor_frozen']:8.3f}{med['import_fit']:9.3f}"
         )
     if "baseline" in trees:
         cur, base = results["trees"]["current"], results["trees"]["baseline"]
