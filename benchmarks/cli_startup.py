@@ -9,11 +9,20 @@ and each in a fresh interpreter,
   bundled run ``data/runs/glycerol-N0.31-r1.csv`` by default;
 * ``python -c "import numpy, numba, scipy.optimize, scipy.signal, emcee"``: the
   third-party libraries the fit needs (its floor, whatever the package does);
+* ``python -c "import numpy, numba, scipy.optimize, emcee"``: the same without
+  scipy.signal (the floor of a fit that would not use it: emcee imports scipy.stats
+  all the same);
+* the same floor imported as the command imports its machinery, the cyclic collector
+  paused and what the imports made frozen (``gc.disable(); import ...; gc.freeze()``,
+  :mod:`bayestribo.cli._imports`): the floor of any command that needs these libraries;
+* ``import bayestribo.inference`` in that way: everything a fit imports, numba's first
+  load of the cached integrator included (it runs at import);
 
 and asks a long-lived worker process (in the same shuffled order) for one in-process
 warm fit of the same run (:func:`bayestribo.fit` on the file, the command's defaults,
 after a warm-up fit): the yardstick of ``fit``. With ``--baseline TREE`` (a git
-worktree of an older commit, e.g. ``git worktree add /tmp/startup-base d6ceef0``)
+worktree of an older commit, e.g. ``git -C /work/main worktree add --detach
+/tmp/startup-base 9540bc4``)
 every command also runs on that tree within the same round, so that the load of a
 shared machine falls on both alike.
 
@@ -57,6 +66,13 @@ CONSOLE = (
 )
 #: The third-party imports of a fit: its floor.
 FLOOR = "import numpy, numba, scipy.optimize, scipy.signal, emcee"
+#: The same without scipy.signal.
+FLOOR_NO_SIGNAL = "import numpy, numba, scipy.optimize, emcee"
+#: The floor imported with the collector paused and its objects frozen after.
+FLOOR_FROZEN = f"import gc; gc.disable(); {FLOOR_NO_SIGNAL}; gc.enable(); gc.freeze()"
+#: Everything a fit imports (numba's first load of a cached kernel runs at import), in
+#: the same way.
+FIT_IMPORTS = "import gc; gc.disable(); import bayestribo.inference; gc.enable(); gc.freeze()"
 
 #: A long-lived worker: one warm fit of the run per line read, its wall time printed.
 WORKER = """
@@ -119,6 +135,9 @@ def commands(run: Path) -> dict[str, list[str]]:
         "import_numpy": [py, "-c", "import numpy"],
         "fit": [py, "-c", CONSOLE, "fit", str(run)],
         "import_fit_libraries": [py, "-c", FLOOR],
+        "import_floor": [py, "-c", FLOOR_NO_SIGNAL],
+        "import_floor_frozen": [py, "-c", FLOOR_FROZEN],
+        "import_fit": [py, "-c", FIT_IMPORTS],
     }
 
 
@@ -175,6 +194,9 @@ def main() -> None:
             "import_numpy": 'python -c "import numpy"',
             "fit": f"bayestribo fit {run.name}",
             "import_fit_libraries": f'python -c "{FLOOR}"',
+            "import_floor": f'python -c "{FLOOR_NO_SIGNAL}"',
+            "import_floor_frozen": f'python -c "{FLOOR_FROZEN}"',
+            "import_fit": f'python -c "{FIT_IMPORTS}"',
             "warm_fit": "bayestribo.fit(RUN) in a process that fitted it before",
         },
         "bytecode": "compiled before the rounds (compileall); PYTHONDONTWRITEBYTECODE="
@@ -184,7 +206,7 @@ def main() -> None:
     }
     print(f"median of {args.repeats} rounds [s]; run {run.name}")
     header = f"{'':10}{'--help':>9}{'numpy':>9}{'ratio':>7}{'fit':>9}{'warm fit':>10}{'ratio':>7}"
-    print(header + f"{'fit libs':>10}")
+    print(header + f"{'fit libs':>10}{'floor':>8}{'frozen':>8}{'fit imp':>9}")
     for name, tree in trees.items():
         med = {c: statistics.median(v) for c, v in times[name].items()}
         warm = statistics.median(warm_times[name])
@@ -208,12 +230,17 @@ def main() -> None:
             "fit_over_warm_fit": fit_ratio,
             "help_over_import_numpy_median_of_rounds": statistics.median(per_round_help),
             "fit_over_warm_fit_median_of_rounds": statistics.median(per_round_fit),
+            # what no change of the package's start-up can remove, over the warm fit
+            "import_floor_over_warm_fit": med["import_floor"] / warm,
+            "import_floor_frozen_over_warm_fit": med["import_floor_frozen"] / warm,
+            "import_fit_over_warm_fit": med["import_fit"] / warm,
             "goal_help_within_3x": help_ratio <= 3.0,
             "goal_fit_within_3x": fit_ratio <= 3.0,
         }
         print(
             f"{name:10}{med['help']:9.3f}{med['import_numpy']:9.3f}{help_ratio:7.2f}"
             f"{med['fit']:9.3f}{warm:10.3f}{fit_ratio:7.2f}{med['import_fit_libraries']:10.3f}"
+            f"{med['import_floor']:8.3f}{med['import_floor_frozen']:8.3f}{med['import_fit']:9.3f}"
         )
     if "baseline" in trees:
         cur, base = results["trees"]["current"], results["trees"]["baseline"]

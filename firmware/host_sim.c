@@ -17,7 +17,9 @@
  *   --drop N        do not send DATA frame N of a run (0 = first); repeatable
  *   --corrupt N     send DATA frame N with one payload byte flipped; repeatable
  *   --garbage N     send 64 bytes of garbage, with false sync pairs, before DATA frame N
- *   --stall-link N MS  after DATA frame N the link takes nothing for MS milliseconds:
+ *   --stall-link N MS  after DATA frame N the link takes nothing while the board
+ *                   takes MS milliseconds of samples (counted on its sample clock, so
+ *                   a host_sim descheduled by a loaded machine stalls just as long):
  *                   frames wait in the board's buffers, then are lost whole (overrun)
  *   --once          exit after the first run's END has been read by the host
  *   --selftest      check the CRC and the binary64 encoding, print "selftest ok"
@@ -55,7 +57,9 @@ typedef struct {
     int n_drop, n_corrupt, n_garbage;
     uint32_t lcg;
     long stall_after; /* after this DATA frame, the link takes nothing for stall_s */
-    double stall_s, stall_until;
+    double stall_s;
+    uint32_t stall_until; /* sample index at which the stall ends */
+    const tb_board *board;
     int sampling;
     int ended; /* an END frame was sent */
 } harness;
@@ -133,14 +137,16 @@ static void io_frame_done(void *ctx, uint8_t type, uint32_t seq)
     write_all(h->master, h->frame, h->fill);
     h->fill = 0;
     if (type == TB_DATA && h->data_frames - 1 == h->stall_after)
-        h->stall_until = now_s() + h->stall_s;
+        h->stall_until = h->board->index + (uint32_t)lrint(h->stall_s * h->board->rate_hz);
 }
 
-/* The link's room: none while a stall lasts (the frames wait, then overrun). */
+/* The link's room: none while a stall lasts (the frames wait, then overrun). The stall
+   is measured in samples taken, not in wall time: a burst of samples after a
+   scheduling delay falls inside it as the same samples would when paced. */
 static size_t io_tx_room(void *ctx)
 {
     harness *h = ctx;
-    return now_s() < h->stall_until ? 0 : (size_t)-1;
+    return h->board->index < h->stall_until ? 0 : (size_t)-1;
 }
 
 static void io_sampling(void *ctx, int on)
@@ -304,6 +310,7 @@ int main(int argc, char **argv)
     io.frame_done = io_frame_done;
     io.tx_room = io_tx_room;
     io.sampling = io_sampling;
+    h.board = &board; /* before the library can ask for the link's room */
     tb_init(&board, &io, "bayestribo,host_sim,0001,tribo_board-1");
     strcpy(board.label, "host_sim: displacement +-2 mm, velocity +-0.5 m/s");
     board.link_bps = link_bps;

@@ -16,7 +16,8 @@ import shutil
 import struct
 import subprocess
 import time
-from collections.abc import Iterator
+from collections import deque
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -151,7 +152,8 @@ def test_a_corrupted_and_a_dropped_frame_leave_the_run_incomplete_losing_nothing
 
 @needs_cc
 def test_an_overrun_of_the_boards_buffers_loses_whole_frames_and_says_which(host_sim, tmp_path):
-    # The link takes nothing for 60 ms after DATA frame 2 while samples keep coming at
+    # The link takes nothing for 60 ms of samples (on the board's sample clock, whatever
+    # the load of the machine) after DATA frame 2 while samples keep coming at
     # 20 kS/s: the board's four buffers fill, later frames are lost whole with their
     # sequence numbers used, and the host lists exactly their samples as missing.
     side = tmp_path / "side.bin"
@@ -174,43 +176,50 @@ def test_an_overrun_of_the_boards_buffers_loses_whole_frames_and_says_which(host
 
 
 class Conversation:
-    """Send command lines to a board on a pty and read its frames."""
+    """Send command lines to a board on a pty and read its frames.
+
+    Every frame is filed once, as it comes off the link and in the order it came:
+    DATA frames into :attr:`data`, the others into :attr:`answers`. Both queues
+    therefore keep the board's order whatever the reads happen to return together
+    (a DATA frame that shares a read with an answer is never overtaken by a later one).
+    """
+
+    #: Longest wait for a frame [s]: a guard against a hang, not a measure of speed.
+    PATIENCE_S = 30.0
 
     def __init__(self, port: str) -> None:
         import serial
 
         self.port = serial.Serial(port, timeout=0.05)
         self.parser = FrameParser()
-        self.pending: list[Frame] = []
+        self.answers: deque[Frame] = deque()
         self.data: list[Frame] = []
 
     def send(self, line: str) -> None:
         self.port.write(line.encode() + b"\n")
 
-    def answer(self, line: str | None = None, timeout_s: float = 3.0) -> Frame:
+    def _read(self) -> None:
+        """Read what the link has and file each complete frame in arrival order."""
+        for frame in self.parser.feed(self.port.read(self.port.in_waiting or 1)):
+            (self.data if frame.type == FrameType.DATA else self.answers).append(frame)
+
+    def _read_until(self, done: Callable[[], bool], what: str) -> None:
+        deadline = time.monotonic() + self.PATIENCE_S
+        while not done():
+            if time.monotonic() > deadline:
+                raise AssertionError(f"{what} within {self.PATIENCE_S} s")
+            self._read()
+
+    def answer(self, line: str | None = None) -> Frame:
         """The next frame other than DATA (DATA frames are kept in :attr:`data`)."""
         if line is not None:
             self.send(line)
-        deadline = time.monotonic() + timeout_s
-        while time.monotonic() < deadline:
-            while self.pending:
-                frame = self.pending.pop(0)
-                if frame.type == FrameType.DATA:
-                    self.data.append(frame)
-                else:
-                    return frame
-            self.pending += self.parser.feed(self.port.read(self.port.in_waiting or 1))
-        raise AssertionError(f"no answer to {line!r} within {timeout_s} s")
+        self._read_until(lambda: bool(self.answers), f"no answer to {line!r}")
+        return self.answers.popleft()
 
-    def wait_data(self, n: int, timeout_s: float = 3.0) -> None:
+    def wait_data(self, n: int) -> None:
         """Read until ``n`` DATA frames have arrived (answers are kept for later)."""
-        deadline = time.monotonic() + timeout_s
-        while time.monotonic() < deadline:
-            for frame in self.parser.feed(self.port.read(self.port.in_waiting or 1)):
-                (self.data if frame.type == FrameType.DATA else self.pending).append(frame)
-            if len(self.data) >= n:
-                return
-        raise AssertionError(f"{len(self.data)} DATA frames within {timeout_s} s, expected {n}")
+        self._read_until(lambda: len(self.data) >= n, f"fewer than {n} DATA frames")
 
     def close(self) -> None:
         self.port.close()
@@ -360,6 +369,6 @@ def test_any_command_line_gets_one_answer_and_leaves_the_board_working(host_sim)
                 else:
                     expect(answer, FrameType.ERROR)
             expect(talk.answer("ID?"), FrameType.IDENT)
-            assert not talk.data and not talk.pending
+            assert not talk.data and not talk.answers
         finally:
             talk.close()

@@ -18,18 +18,39 @@ from _paths import REPO, RUNS
 
 #: Libraries that take longer to import than a fit takes to run.
 HEAVY = ("scipy.stats", "arviz", "numba", "emcee", "xarray", "pandas", "matplotlib")
+#: The package's modules that a fit does not need: the classical estimators other than
+#: its starting point's (Feeny-Liang) and the simulator of recordings.
+UNUSED_BY_FIT = (
+    "bayestribo.estimators.all",
+    "bayestribo.estimators.decrement",
+    "bayestribo.estimators.energy_ls",
+    "bayestribo.estimators.nonsuccessive",
+    "bayestribo.synthetic",
+)
 
 #: Runs ``bayestribo.cli.main.main(argv)`` and prints the exit status and the heavy
 #: modules imported, as one JSON line on standard error (stdout is the command's own).
+#: With ``--as-script`` first, ``main()`` is called as the console script calls it (no
+#: arguments, the command line in ``sys.argv``). Also reported: the package's modules
+#: of :data:`UNUSED_BY_FIT` imported, and the collector's state after the command.
 _PROBE = f"""
-import json, sys
+import gc, json, sys
 from bayestribo.cli.main import main
+as_script = sys.argv[1:2] == ["--as-script"]
+argv = sys.argv[2:] if as_script else sys.argv[1:]
 try:
-    rc = main(sys.argv[1:])
+    if as_script:
+        sys.argv[1:] = argv
+        rc = main()
+    else:
+        rc = main(argv)
 except SystemExit as exc:
     rc = exc.code
 heavy = sorted(m for m in {HEAVY!r} if m in sys.modules)
-sys.stderr.write("\\nPROBE " + json.dumps({{"rc": rc, "heavy": heavy}}) + "\\n")
+unused = sorted(m for m in {UNUSED_BY_FIT!r} if m in sys.modules)
+probe = {{"rc": rc, "heavy": heavy, "unused": unused, "gc_enabled": gc.isenabled(),
+          "frozen": gc.get_freeze_count()}}
+sys.stderr.write("\\nPROBE " + json.dumps(probe) + "\\n")
 """
 
 
@@ -72,6 +93,7 @@ def test_help_and_argument_errors_import_no_heavy_library(argv, tmp_path):
     probe, _ = _probe(*argv, cwd=str(tmp_path))
     assert probe["rc"] in (0, 2)
     assert probe["heavy"] == [], f"bayestribo {' '.join(argv)} imported {probe['heavy']}"
+    assert "bayestribo.synthetic" not in probe["unused"]
 
 
 def test_fit_imports_no_arviz_xarray_pandas_or_matplotlib(tmp_path):
@@ -80,3 +102,19 @@ def test_fit_imports_no_arviz_xarray_pandas_or_matplotlib(tmp_path):
     record = json.loads(out)
     assert record["diagnostics"]["converged"] is True and record["seed"] == 2
     assert not {"arviz", "xarray", "pandas", "matplotlib"} & set(probe["heavy"])
+    assert probe["unused"] == [], f"a fit imported {probe['unused']}"
+    # called in a process of its caller: the collector is left as it was, nothing frozen
+    assert probe["gc_enabled"] is True and probe["frozen"] == 0
+
+
+def test_the_fit_command_freezes_its_imports_only_in_a_process_it_owns(tmp_path):
+    # As the console script: the fitting machinery is imported with the collector
+    # paused, which runs again after it, and what the imports made is frozen
+    # (hundreds of thousands of objects no collection of the fit scans again).
+    probe, out = _probe(
+        "--as-script", "fit", str(RUNS / "air-r1.csv"), "--json", "--seed", "2", cwd=str(tmp_path)
+    )
+    assert probe["rc"] == 0 and json.loads(out)["seed"] == 2
+    assert probe["gc_enabled"] is True
+    assert probe["frozen"] > 100_000
+    assert probe["unused"] == []

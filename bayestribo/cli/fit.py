@@ -189,7 +189,9 @@ def run(args: argparse.Namespace) -> int:
     recording = read_run_from_args(args)
     # the fitting machinery (numba, emcee, scipy) only once the input is good: a bad
     # option or file is told at once
-    from bayestribo.inference import fit
+    from bayestribo.cli._imports import import_module
+
+    fit = import_module("bayestribo.inference").fit
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")  # every warning of this fit, none deduplicated

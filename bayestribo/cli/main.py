@@ -19,6 +19,7 @@ from collections.abc import Callable, Sequence
 from typing import TextIO
 
 from bayestribo import __version__
+from bayestribo.cli._imports import own_process
 from bayestribo.errors import BayestriboError
 
 __all__ = ["build_parser", "main", "plain_numbers"]
@@ -93,8 +94,11 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     Errors of the package's own type (bad files, bad arguments) are printed as one
     line on standard error with exit status 2; anything else is a bug and keeps its
-    traceback.
+    traceback. Called without ``argv`` (as the ``bayestribo`` script and ``python -m
+    bayestribo`` call it), the command owns the process: the fitting machinery's
+    objects are frozen out of the collector's way once imported (:mod:`._imports`).
     """
+    own_process(argv is None)
     parser = build_parser()
     args = parser.parse_args(argv)
     try:

@@ -13,7 +13,6 @@ from typing import Any
 
 from bayestribo.errors import BayestriboError
 from bayestribo.model.scaling import Rig
-from bayestribo.synthetic import DissipationLaw, Release, Sensor
 
 __all__ = ["register"]
 
@@ -74,6 +73,7 @@ def run(args: argparse.Namespace) -> int:
         return 0
 
     from bayestribo.io import write_run
+    from bayestribo.synthetic import DissipationLaw, Release, Sensor
     from bayestribo.synthetic.recording import simulate
 
     try:

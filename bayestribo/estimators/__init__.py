@@ -20,23 +20,37 @@ all
     :func:`estimate_signals`: the same on bare arrays t, x, v.
 """
 
-from bayestribo.estimators.all import estimate_all, estimate_signals
-from bayestribo.estimators.decrement import exponential_envelope, log_decrement
-from bayestribo.estimators.energy_ls import energy_data, energy_least_squares
-from bayestribo.estimators.feeny_liang import feeny_liang
-from bayestribo.estimators.nonsuccessive import nonsuccessive_peaks
-from bayestribo.estimators.result import Estimate, EstimateTable, friction_fraction
+from __future__ import annotations
 
-__all__ = [
-    "Estimate",
-    "EstimateTable",
-    "energy_data",
-    "energy_least_squares",
-    "estimate_all",
-    "estimate_signals",
-    "exponential_envelope",
-    "feeny_liang",
-    "friction_fraction",
-    "log_decrement",
-    "nonsuccessive_peaks",
-]
+import importlib
+from typing import Any
+
+# Re-exported lazily: the fit imports only the successive-peak estimate (its starting
+# point), not every method and their SciPy modules.
+_LAZY: dict[str, str] = {
+    "estimate_all": "bayestribo.estimators.all",
+    "estimate_signals": "bayestribo.estimators.all",
+    "exponential_envelope": "bayestribo.estimators.decrement",
+    "log_decrement": "bayestribo.estimators.decrement",
+    "energy_data": "bayestribo.estimators.energy_ls",
+    "energy_least_squares": "bayestribo.estimators.energy_ls",
+    "feeny_liang": "bayestribo.estimators.feeny_liang",
+    "nonsuccessive_peaks": "bayestribo.estimators.nonsuccessive",
+    "Estimate": "bayestribo.estimators.result",
+    "EstimateTable": "bayestribo.estimators.result",
+    "friction_fraction": "bayestribo.estimators.result",
+}
+
+__all__ = sorted(_LAZY, key=lambda name: (name[0].islower(), name))
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _LAZY:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(_LAZY[name]), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
