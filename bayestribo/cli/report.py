@@ -172,13 +172,17 @@ def parse_params(items: list[str], specs: dict[str, Any] | None = None) -> dict[
 
 
 def notebook_for(path: Path) -> str:
-    """``"single_run"`` for a file, ``"loads"`` for a folder holding runs or campaign results.
+    """The report a path asks for: ``"single_run"`` for a file, ``"loads"`` for a folder
+    holding a campaign (a ``manifest.csv``, runs with sidecars, or the results of
+    ``bayestribo campaign``), ``"real_data"`` for a folder of recordings without
+    sidecars (another rig's files, read as ``--columns`` and the other reading options
+    say).
 
     Raises
     ------
     ReportError
-        If the path does not exist, or a folder holds neither a ``manifest.csv``, nor a
-        run file with a sidecar, nor the results of ``bayestribo campaign``.
+        If the path does not exist, or a folder holds neither a campaign nor a file of a
+        format the package reads.
     """
     from bayestribo.campaign.results import is_campaign_folder
     from bayestribo.reports.notebooks import ReportError
@@ -191,13 +195,26 @@ def notebook_for(path: Path) -> str:
             or any(f.with_suffix(".json").is_file() for f in path.rglob("*.csv"))
             or is_campaign_folder(path)
         )
-        if not has_runs:
-            raise ReportError(
-                f"{path}: a campaign folder needs a manifest.csv or run files (.csv) with "
-                "their sidecars (.json), or the results of `bayestribo campaign`"
-            )
-        return "loads"
+        if has_runs:
+            return "loads"
+        if recordings_in(path):
+            return "real_data"
+        raise ReportError(
+            f"{path}: a campaign folder needs a manifest.csv or run files (.csv) with "
+            "their sidecars (.json), or the results of `bayestribo campaign`; a folder of "
+            "another rig's recordings needs files of a format read here"
+        )
     raise ReportError(f"{path}: no such run file or folder")
+
+
+def recordings_in(folder: Path) -> list[str]:
+    """Names of the files in ``folder`` (not below it) of a format the package reads."""
+    from bayestribo.io.registry import registered_formats
+
+    suffixes = {s for f in registered_formats().values() for s in f.suffixes}
+    return [
+        p.name for p in sorted(folder.iterdir()) if p.is_file() and p.suffix.lower() in suffixes
+    ]
 
 
 def campaign_selection(folder: Path) -> dict[str, Any]:
@@ -290,6 +307,11 @@ def run(args: argparse.Namespace) -> int:
         if notebook in (None, "single_run", "loads"):
             found = notebook_for(path)
             notebook = notebook or found
+            if notebook == "loads" and found == "real_data":
+                raise ReportError(
+                    f"--notebook loads reports on a campaign folder; {path} holds recordings "
+                    "without sidecars (their report: --notebook real_data)"
+                )
             if (notebook == "single_run") != (found == "single_run"):
                 wanted = "a run file" if notebook == "single_run" else "a folder"
                 raise ReportError(f"--notebook {notebook} reports on {wanted}; {path} is not one")
@@ -396,14 +418,10 @@ def _other_params(notebook: str, path: Path, args: argparse.Namespace) -> dict[s
         if args.seed is not None:
             params["campaign_seed"] = args.seed
     elif notebook == "real_data":
-        from bayestribo.io.registry import registered_formats
-
-        suffixes = {s for f in registered_formats().values() for s in f.suffixes}
-        files = [
-            p.name for p in sorted(path.iterdir()) if p.is_file() and p.suffix.lower() in suffixes
-        ]
+        files = recordings_in(path)
         if not files:
             raise ReportError(f"{path}: no recordings of a format read in this folder")
+        _check_reading(path / files[0], reading)
         params.update({"data_dir": str(path), "files": files, "fit_files": files})
         if reading:  # how this rig's files are read (default: the AppStat text files)
             params["read_kwargs"] = reading
@@ -413,6 +431,35 @@ def _other_params(notebook: str, path: Path, args: argparse.Namespace) -> dict[s
     elif args.seed is not None:
         params["seed"] = args.seed
     return params
+
+
+def _check_reading(path: Path, reading: dict[str, Any]) -> None:
+    """Read one recording of a folder as the report will, before any kernel starts.
+
+    Raises
+    ------
+    ReportError
+        Naming the file and what the reader said, with the options that tell it how.
+    """
+    import warnings
+
+    from bayestribo.errors import BayestriboError
+    from bayestribo.io import read_run
+    from bayestribo.reports.notebooks import ReportError
+
+    options = reading or {
+        "columns": ["time_s", "displacement_m"],
+        "metadata": {"length_unit": "arbitrary"},
+    }
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the report says them, once per file
+            read_run(path, **options)
+    except BayestriboError as exc:
+        raise ReportError(
+            f"{exc}; say how this rig's files are read with --columns (e.g. --columns t x v "
+            "ignore), --length-unit and the other reading options"
+        ) from None
 
 
 def fit_reasons(record: dict[str, Any]) -> list[str]:

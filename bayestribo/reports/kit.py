@@ -18,6 +18,7 @@ from __future__ import annotations
 import hashlib
 import html
 import platform
+import re
 import warnings
 from collections.abc import Callable, Mapping
 from datetime import UTC, datetime
@@ -36,6 +37,7 @@ __all__ = [
     "facts",
     "file_sha256",
     "interval_text",
+    "keep_together",
     "note",
     "overlapping_labels",
     "sentence",
@@ -77,7 +79,9 @@ def interval_text(mean: float, low: float, high: float) -> str:
     >>> interval_text(0.0236012, 0.0236003, 0.0236021)
     '0.02360120 [0.02360030, 0.02360210]'
     >>> interval_text(1.2e-30, 0.0, 3e-29)
-    '< 3e-29 (at zero)'
+    '< 1e-9'
+    >>> interval_text(1.1e-4, 0.0, 3.1e-4)
+    '0 (at the bound) [0, 0.00031]'
     """
     from bayestribo.summary import interval_text as shared
 
@@ -130,7 +134,29 @@ def table(frame: Any, *, digits: int = 5) -> None:
 
     if frame.index.name is not None and frame.columns.name is None and frame.columns.nlevels == 1:
         frame = frame.rename_axis(index=None, columns=frame.index.name)
+    frame = frame.apply(
+        lambda col: col.map(lambda v: keep_together(v) if isinstance(v, str) else v)
+    )
     _display(HTML(frame.to_html(na_rep="–", float_format=lambda v: f"{v:.{digits}g}", border=0)))
+
+
+#: Characters of a cell that is a number or a value with its interval ("0.0243 [0.0241,
+#: 0.0245]", "< 1e-9", "0.0236 ± 0.0012").
+_NUMERIC = re.compile(r"^[-+0-9.eE−–,;\[\]<>≤±% ]+$")
+
+
+def keep_together(text: str) -> str:
+    """A number with its interval on one line: the spaces of a numeric cell made
+    no-break spaces (a table's words wrap, its intervals do not).
+
+    Examples
+    --------
+    >>> keep_together("0.0243 [0.0241, 0.0245]") == "0.0243\u00a0[0.0241,\u00a00.0245]"
+    True
+    >>> keep_together("ignores friction: ζ too high")
+    'ignores friction: ζ too high'
+    """
+    return text.replace(" ", "\u00a0") if _NUMERIC.match(text) else text
 
 
 def _warning_as_note(message, category, filename, lineno, file=None, line=None) -> None:
