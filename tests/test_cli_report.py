@@ -91,6 +91,7 @@ def test_report_of_a_folder_without_campaign_results_fits_with_the_default_seed(
     assert notebook == "loads"
     assert params == {
         "data_dir": str(RUN.parent.parent.resolve()),  # bundled series: the defaults
+        "data_label": str(RUN.parent.parent),  # as typed, for the commands the text names
         "campaign_seed": DEFAULT_SEED,
         "figure_dir": str((tmp_path / "c-figures").resolve()),
         "figure_format": "pdf",
@@ -177,9 +178,23 @@ def test_unknown_parameter_is_refused_before_running(tmp_path, capsys):
     assert not (tmp_path / "r.html").exists()
 
 
-def test_notebook_choice():
+def test_notebook_choice(tmp_path):
     assert notebook_for(RUN.parent.parent) == "loads"
     assert notebook_for(RUN) == "single_run"
+    # a folder of recordings without sidecars: another rig's, the real-data report
+    (tmp_path / "rec_1.csv").write_text("time;position\n0;1\n")
+    (tmp_path / "README.md").write_text("# A rig")
+    assert notebook_for(tmp_path) == "real_data"
+
+
+def test_a_folder_of_recordings_not_read_as_given_is_refused_before_running(tmp_path, capsys):
+    """The spring-and-disc files have no units in their header: without --columns the
+    report says so at once, naming the file and the options."""
+    (tmp_path / "rec_1.csv").write_text("time;position\n0;1\n0.01;2\n")
+    assert main(["report", str(tmp_path), "--out", str(tmp_path / "r.html")]) == 2
+    err = capsys.readouterr().err
+    assert "rec_1.csv" in err and "--columns" in err
+    assert not (tmp_path / "r.html").exists()
 
 
 def test_parse_params_literals_and_strings():

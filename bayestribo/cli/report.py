@@ -344,6 +344,7 @@ def run(args: argparse.Namespace) -> int:
             )
         campaign_params, where = _campaign_params(path, args)
         params.update(campaign_params)
+        params["data_label"] = str(args.path)  # as typed: the text's commands work as shown
         if _has_water_series(path):
             where += (
                 f"\nthe campaign also holds glycerol-water runs: their report against "
@@ -421,7 +422,7 @@ def _other_params(notebook: str, path: Path, args: argparse.Namespace) -> dict[s
         files = recordings_in(path)
         if not files:
             raise ReportError(f"{path}: no recordings of a format read in this folder")
-        _check_reading(path / files[0], reading)
+        _check_reading(path / files[0], reading, guessed=args.notebook is None)
         params.update({"data_dir": str(path), "files": files, "fit_files": files})
         if reading:  # how this rig's files are read (default: the AppStat text files)
             params["read_kwargs"] = reading
@@ -433,8 +434,9 @@ def _other_params(notebook: str, path: Path, args: argparse.Namespace) -> dict[s
     return params
 
 
-def _check_reading(path: Path, reading: dict[str, Any]) -> None:
-    """Read one recording of a folder as the report will, before any kernel starts.
+def _check_reading(path: Path, reading: dict[str, Any], *, guessed: bool = False) -> None:
+    """Read one recording of a folder as the report will, before any kernel starts;
+    ``guessed``: the folder was taken for recordings because it holds no campaign.
 
     Raises
     ------
@@ -456,9 +458,16 @@ def _check_reading(path: Path, reading: dict[str, Any]) -> None:
             warnings.simplefilter("ignore")  # the report says them, once per file
             read_run(path, **options)
     except BayestriboError as exc:
+        campaign = (
+            f"{path.parent} holds no campaign (a manifest.csv or run files (.csv) with their "
+            "sidecars (.json), or the results of `bayestribo campaign`), and its recordings "
+            "do not read as given: "
+            if guessed
+            else ""
+        )
         raise ReportError(
-            f"{exc}; say how this rig's files are read with --columns (e.g. --columns t x v "
-            "ignore), --length-unit and the other reading options"
+            f"{campaign}{exc}; say how this rig's files are read with --columns (e.g. "
+            "--columns t x v ignore), --length-unit and the other reading options"
         ) from None
 
 
