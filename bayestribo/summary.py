@@ -157,7 +157,8 @@ def interval_text(center: float, low: float, high: float) -> str:
 
     A value indistinguishable from zero says so: an interval that starts at zero from a
     positive support (its lower end is zero at the precision shown) and holds its centre
-    in its lower half is ``0 (at the bound) [0, high]``; such an interval whose upper
+    in its lower half, or whose mean lies beyond it (a long tail), is
+    ``0 (at the bound) [0, high]``; such an interval whose upper
     end is below :data:`NUMERICAL_ZERO` (a numerical zero, "4.83e-30") is ``< 1e-9``.
 
     Parameters
@@ -193,7 +194,7 @@ def interval_text(center: float, low: float, high: float) -> str:
     reaches_zero = -NUMERICAL_ZERO <= low < 0.5 * quantum and high > 0
     if reaches_zero and high < NUMERICAL_ZERO:
         return f"< {NUMERICAL_ZERO:.0e}".replace("e-0", "e-")
-    if reaches_zero and low >= -1e-300 and abs(center) < half:
+    if reaches_zero and low >= -1e-300 and (abs(center) < half or center > high):
         return f"0 (at the bound) [0, {_number(high, max(decimals, 0), high)}]"
     for extra in range(_EXTRA_DIGITS + 1):
         shown = [_number(v, decimals + extra, center) for v in (center, low, high)]

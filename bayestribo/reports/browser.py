@@ -98,7 +98,7 @@ window.addEventListener("load", function () {
     document.querySelectorAll(".jp-RenderedMarkdown p, .jp-RenderedMarkdown li, " +
                               ".jp-RenderedHTMLCommon > p, .jp-OutputArea-output th, " +
                               ".jp-OutputArea-output td, .jp-OutputArea-output caption, " +
-                              ".jp-RenderedMarkdown td, .jp-RenderedMarkdown th"
+                              ".jp-RenderedMarkdown td, .jp-RenderedMarkdown th, .bt-note"
                               ).forEach(function (el) {
       var copy = el.cloneNode(true);
       copy.querySelectorAll("code, pre, img").forEach(function (c) { c.remove(); });

@@ -129,41 +129,50 @@ def verdict(text: str) -> None:
 def table(frame: Any, *, digits: int = 5) -> None:
     """Show a pandas DataFrame as a table: numbers to ``digits`` significant digits,
     missing values as a dash (not NaN), the index's name in the header's corner (not on
-    a header row of its own)."""
+    a header row of its own), and a cell that is a number or a value with its interval
+    kept on one line (:func:`keep_together`): the table's words wrap, its numbers never
+    break ("-3.511e- / 05")."""
     from IPython.display import HTML
 
     if frame.index.name is not None and frame.columns.name is None and frame.columns.nlevels == 1:
         frame = frame.rename_axis(index=None, columns=frame.index.name)
-    frame = frame.apply(
-        lambda col: col.map(lambda v: keep_together(v) if isinstance(v, str) else v)
-    )
-    _display(HTML(frame.to_html(na_rep="–", float_format=lambda v: f"{v:.{digits}g}", border=0)))
+
+    def cell(value: Any) -> Any:
+        if isinstance(value, float):
+            value = f"{value:.{digits}g}"
+        return keep_together(value) if isinstance(value, str) else value
+
+    frame = frame.apply(lambda col: col.map(cell))  # the labels are the report's own text
+    _display(HTML(frame.to_html(na_rep="–", escape=False, border=0)))
 
 
-#: Characters of a cell that is a number or a value with its interval ("0.0243 [0.0241,
-#: 0.0245]", "< 1e-9", "0.0236 ± 0.0012").
-_NUMERIC = re.compile(r"^[-+0-9.eE−–,;\[\]<>≤±% ]+$")
+#: A cell that is a number or a value with its interval ("0.0243 [0.0241, 0.0245]",
+#: "< 1e-9", "0.0236 ± 0.0012", "0 (at the bound) [0, 8.2e-05]").
+_NUMERIC = re.compile(r"^[-+0-9.eE−–,;\[\]<>≤±% ]+$|^0 \(at the bound\) \[")
 
 
 def keep_together(text: str) -> str:
-    """A number with its interval on one line: the spaces of a numeric cell made
-    no-break spaces (a table's words wrap, its intervals do not).
+    """A cell's text as HTML: escaped, and a number or a value with its interval in a
+    span that does not wrap (class ``bt-num``).
 
     Examples
     --------
-    >>> keep_together("0.0243 [0.0241, 0.0245]") == "0.0243\u00a0[0.0241,\u00a00.0245]"
-    True
-    >>> keep_together("ignores friction: ζ too high")
-    'ignores friction: ζ too high'
+    >>> keep_together("-3.58e-05 [-3.65e-05, -3.51e-05]")
+    '<span class="bt-num">-3.58e-05 [-3.65e-05, -3.51e-05]</span>'
+    >>> keep_together("ignores friction: ζ < μ")
+    'ignores friction: ζ &lt; μ'
     """
-    return text.replace(" ", "\u00a0") if _NUMERIC.match(text) else text
+    escaped = html.escape(text, quote=False)
+    return f'<span class="bt-num">{escaped}</span>' if _NUMERIC.match(text) else escaped
 
 
 def _warning_as_note(message, category, filename, lineno, file=None, line=None) -> None:
     text = str(message).strip().splitlines()[0] if str(message).strip() else category.__name__
     if not category.__module__.startswith("bayestribo"):
         text = f"{category.__name__}: {text}"
-    note(text)
+    from bayestribo.reports.tables import prose
+
+    note(prose(text))
 
 
 def show_warnings_as_notes() -> None:

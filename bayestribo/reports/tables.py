@@ -27,6 +27,7 @@ __all__ = [
     "law_text",
     "method_text",
     "normal_interval",
+    "prose",
     "share_text",
     "unit_text",
     "windows_frame",
@@ -83,6 +84,42 @@ def law_text(law: str) -> str:
     'viscous + Coulomb friction'
     """
     return " + ".join(_TERMS.get(t, t) for t in str(law).split("+"))
+
+
+#: Column names of a run file as a reader names the quantity.
+_COLUMNS = {
+    "time_s": "time",
+    "displacement_m": "displacement",
+    "velocity_m_per_s": "velocity",
+}
+
+
+def prose(text: str, *, paths: Mapping[str, str] | None = None) -> str:
+    """A message of the package (a warning, a note) as report text: laws in words
+    ("viscous+coulomb" -> "viscous + Coulomb friction"), run-file column names as the
+    quantity ("velocity_m_per_s" -> "velocity"), ``law='auto'`` as "law = auto", the
+    advice on ``columns=[...]`` left out, and each path in ``paths`` replaced by its short
+    name.
+
+    Examples
+    --------
+    >>> prose("the law viscous+coulomb misfits; fit with law='auto' (--law auto)")
+    'the law viscous + Coulomb friction misfits; fit with law = auto (--law auto)'
+    >>> prose("/d/r.csv: 1 row(s) have no value for velocity_m_per_s; they are left out "
+    ...       "of the run (give columns=[...] with 'ignore' for a channel not to use)",
+    ...       paths={"/d/r.csv": "r"})
+    'r: 1 row(s) have no value for velocity; they are left out of the run'
+    """
+    import re
+
+    for path, short in (paths or {}).items():
+        text = text.replace(path, short)
+    text = re.sub(r" \(give columns=\[\.\.\.\][^)]*\)", "", text)
+    text = text.replace("law='auto'", "law = auto")
+    for name, words in _COLUMNS.items():
+        text = re.sub(rf"\b{name}\b", words, text)
+    terms = "|".join(_TERMS)
+    return re.sub(rf"\b(?:{terms})(?:\+(?:{terms}))*\b", lambda m: law_text(m.group(0)), text)
 
 
 def unit_text(unit: str | None) -> str:
@@ -409,11 +446,18 @@ def estimates_frame(table: Any, *, unit: str = "m") -> Any:
     return pd.DataFrame(rows).set_index("method")
 
 
-def windows_frame(adequacy: Any) -> Any:
+def windows_frame(adequacy: Any, *, unit: str | None = None) -> Any:
     """The windowed fits of an adequacy check, then its two halves (if made): time span,
     amplitude range, ζ and the friction with their 95 % intervals (the friction left out
     where the windows hold it at the whole decay's value), and whether an estimate sits
     on a parameter's bound.
+
+    Parameters
+    ----------
+    adequacy : AdequacyResult
+    unit : str, optional
+        The amplitudes' and friction displacement's unit (default: the check's own,
+        "signal unit" without a load; "m" for a recording in metres).
 
     Returns
     -------
@@ -423,7 +467,7 @@ def windows_frame(adequacy: Any) -> Any:
     import pandas as pd
 
     w = adequacy.windows
-    unit = unit_text(w.length_unit)
+    unit = unit_text(unit or w.length_unit)
     friction = "μ_k" if w.friction_name == "mu_k" else f"x_c [{unit}]"
     held = w.extra.get("friction_mode", "fit") == "fixed"
 
