@@ -299,6 +299,7 @@ def test_every_shipped_notebook_is_reached_by_report(tmp_path, captured, capsys)
         name, params, _ = captured[-1]
         assert name == notebook and out.is_file()
     params = {name: p for name, p, _ in captured}
+    assert "fit_kwargs" not in params["real_data"]  # the defaults of `bayestribo fit`
     assert "--notebook viscosity`" in capsys.readouterr().err  # the loads report names it
     assert params["viscosity"]["data_dir"] == str(data.resolve())
     assert params["viscosity"]["campaign_seed"] == 3
@@ -317,3 +318,17 @@ def test_none_for_an_optional_text_parameter_is_none():
     got = parse_params(["series=None", "air_series=air", "lubricant_tag=0.0055"], specs)
     assert got["series"] is None and got["air_series"] == "air"
     assert got["lubricant_tag"] == 0.0055  # not a parameter of the notebook: a literal
+
+
+def test_a_folder_of_recordings_takes_the_fit_options(tmp_path, captured):
+    """--law, --notch and --discrepancy reach the real-data report's fits, as `fit` takes
+    them; a campaign folder's report still refuses them."""
+    recordings = tmp_path / "rig"
+    recordings.mkdir()
+    t = np.arange(0.0, 5.0, 0.01)
+    np.savetxt(recordings / "a.txt", np.column_stack([t, np.cos(2 * np.pi * t)]))
+    argv = ["report", str(recordings), "--out", str(tmp_path / "r.html"), "--law", "auto"]
+    assert main([*argv, "--notch", "50", "--discrepancy"]) == 0
+    name, params, _ = captured[-1]
+    assert name == "real_data"
+    assert params["fit_kwargs"] == {"law": "auto", "notch": 50.0, "discrepancy": True}

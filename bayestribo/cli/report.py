@@ -128,7 +128,7 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "--discrepancy",
         action="store_true",
-        help="a single run's fit with the model-discrepancy terms, as `fit --discrepancy`",
+        help="fits with the model-discrepancy terms, as `fit --discrepancy`",
     )
     p.set_defaults(handler=run)
 
@@ -404,11 +404,11 @@ def _other_params(notebook: str, path: Path, args: argparse.Namespace) -> dict[s
     from bayestribo.reports.notebooks import ReportError
 
     reading = reading_kwargs(args)
-    single = ("law", "notch")
-    if notebook != "real_data":
-        single += ("columns", "length_unit", "frequency", "load", "mass")
+    # a folder of recordings is read and fitted as `bayestribo fit` reads and fits one
+    real = notebook == "real_data"
+    single = () if real else ("law", "notch", "columns", "length_unit", "frequency", "load", "mass")
     given = [f"--{name.replace('_', '-')}" for name in single if getattr(args, name, None)]
-    if given or args.discrepancy or args.campaign is not None:
+    if given or (args.discrepancy and not real) or args.campaign is not None:
         raise ReportError(
             f"{', '.join(given) or '--discrepancy/--campaign'}: not options of the "
             f"{notebook} report; give its parameters with --param KEY=VALUE"
@@ -427,6 +427,10 @@ def _other_params(notebook: str, path: Path, args: argparse.Namespace) -> dict[s
         if reading:  # how this rig's files are read (default: the AppStat text files)
             params["read_kwargs"] = reading
         params["check_files"] = files[:1]
+        fit_options = {n: getattr(args, n) for n in ("law", "notch") if getattr(args, n)}
+        fit_options.update({"discrepancy": True} if args.discrepancy else {})
+        if fit_options:
+            params["fit_kwargs"] = fit_options
         if args.seed is not None:
             params["seed"] = args.seed
     elif args.seed is not None:
