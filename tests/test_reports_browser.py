@@ -146,7 +146,7 @@ def test_the_report_of_the_spring_and_disc_rig_speaks_of_that_rig(tmp_path):
     _clean(page)
     assert page.text_dumps == 0
     text = out.read_text(encoding="utf-8")
-    assert "spring, mass and a disc in air" in text  # the rig, from the folder's README
+    assert "spring, mass and a disc in air" in text  # the rig, from its README.md
     assert "position [m]" in text and "signal unit" not in text
     for word in ("pin", "blade", "HarmOsc", "AppStat"):
         assert word not in text, word
