@@ -268,6 +268,8 @@ def _campaign_params(path: Path, args: argparse.Namespace) -> tuple[dict[str, An
                 f"{campaign.seed}; leave --seed out to report its fits, or add --refit"
             )
         params["campaign_dir"] = str(found)
+        # the folders as typed: the report shows no path the reader did not give
+        params["campaign_label"] = str(args.campaign or (args.path if found == path else found))
         if found != path:
             params["data_dir"] = str(path)
         series = {m.get("series") for m in campaign.metadata.values()}
