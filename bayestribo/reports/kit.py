@@ -113,10 +113,15 @@ def _display(obj: Any) -> None:
 
 
 def note(text: str) -> None:
-    """Show ``text`` as a short note in the report (a remark, a warning)."""
+    """Show ``text`` as a short note in the report (a remark, a warning), in words
+    (:func:`bayestribo.reports.tables.prose`: laws and column names as a reader names
+    them)."""
     from IPython.display import HTML
 
-    _display(HTML(f'<div class="{NOTE_CLASS}"><b>Note.</b> {html.escape(str(text))}</div>'))
+    from bayestribo.reports.tables import prose
+
+    said = html.escape(prose(str(text)))
+    _display(HTML(f'<div class="{NOTE_CLASS}"><b>Note.</b> {said}</div>'))
 
 
 def verdict(text: str) -> None:
@@ -138,6 +143,8 @@ def table(frame: Any, *, digits: int = 5) -> None:
         frame = frame.rename_axis(index=None, columns=frame.index.name)
 
     def cell(value: Any) -> Any:
+        if isinstance(value, float) and value != value:
+            return value  # NaN: a dash (na_rep)
         if isinstance(value, float):
             value = f"{value:.{digits}g}"
         return keep_together(value) if isinstance(value, str) else value
@@ -170,9 +177,7 @@ def _warning_as_note(message, category, filename, lineno, file=None, line=None) 
     text = str(message).strip().splitlines()[0] if str(message).strip() else category.__name__
     if not category.__module__.startswith("bayestribo"):
         text = f"{category.__name__}: {text}"
-    from bayestribo.reports.tables import prose
-
-    note(prose(text))
+    note(text)
 
 
 def show_warnings_as_notes() -> None:

@@ -105,6 +105,8 @@ def prose(text: str, *, paths: Mapping[str, str] | None = None) -> str:
     --------
     >>> prose("the law viscous+coulomb misfits; fit with law='auto' (--law auto)")
     'the law viscous + Coulomb friction misfits; fit with law = auto (--law auto)'
+    >>> prose("the law quadratic holds; the power of the test")
+    'the law quadratic drag holds; the power of the test'
     >>> prose("/d/r.csv: 1 row(s) have no value for velocity_m_per_s; they are left out "
     ...       "of the run (give columns=[...] with 'ignore' for a channel not to use)",
     ...       paths={"/d/r.csv": "r"})
@@ -116,10 +118,14 @@ def prose(text: str, *, paths: Mapping[str, str] | None = None) -> str:
         text = text.replace(path, short)
     text = re.sub(r" \(give columns=\[\.\.\.\][^)]*\)", "", text)
     text = text.replace("law='auto'", "law = auto")
+    text = re.sub(r"\bmax_steps\b", "maximum number of steps", text)
     for name, words in _COLUMNS.items():
         text = re.sub(rf"\b{name}\b", words, text)
     terms = "|".join(_TERMS)
-    return re.sub(rf"\b(?:{terms})(?:\+(?:{terms}))*\b", lambda m: law_text(m.group(0)), text)
+    # a law's name: terms joined by "+", or one term named as "the law ..." ("power" alone
+    # is a word)
+    law = rf"\b(?:{terms})(?:\+(?:{terms}))+\b|(?<=\blaw )(?:{terms})\b"
+    return re.sub(law, lambda m: law_text(m.group(0)), text)
 
 
 def unit_text(unit: str | None) -> str:
