@@ -130,6 +130,9 @@ def test_report_of_a_campaign_reuses_its_results(tmp_path, captured, monkeypatch
         assert params["campaign_dir"] == str(results.resolve())
         assert params["series"] is None and params["air_series"] is None  # no such series
         assert "campaign_seed" not in params  # the campaign's own seed
+        # where the runs are, as typed (or from here for the results folder: "data")
+        assert (tmp_path / params["data_label"]).resolve() == data.resolve()
+        assert argv[1] != str(results) or params["data_label"] == "data"
         assert "reusing the fits of the campaign" in capsys.readouterr().err
     # --refit fits for the report instead
     assert main(["report", str(data), "--refit", "--out", str(tmp_path / "c.html")]) == 0

@@ -272,6 +272,8 @@ def _campaign_params(path: Path, args: argparse.Namespace) -> tuple[dict[str, An
         params["campaign_label"] = str(args.campaign or (args.path if found == path else found))
         if found != path:
             params["data_dir"] = str(path)
+        else:
+            params["_data_label"] = _runs_folder(list(campaign.paths.values()))
         series = {m.get("series") for m in campaign.metadata.values()}
         params.update({"series": None} if "glycerol" not in series else {})
         params.update({"air_series": None} if "air" not in series else {})
@@ -346,11 +348,13 @@ def run(args: argparse.Namespace) -> int:
             )
         campaign_params, where = _campaign_params(path, args)
         params.update(campaign_params)
-        params["data_label"] = str(args.path)  # as typed: the text's commands work as shown
+        # the data folder as typed (or, for a campaign's results, where its runs are, from
+        # here): the commands the text names work as shown
+        params["data_label"] = params.pop("_data_label", None) or str(args.path)
         if _has_water_series(path):
             where += (
                 f"\nthe campaign also holds glycerol-water runs: their report against "
-                f"viscosity is `bayestribo report {args.path} --notebook viscosity`"
+                f"viscosity is `bayestribo report {params['data_label']} --notebook viscosity`"
             )
     default_name = f"{path.stem or path.name}-report.html"
     out = args.out or Path(default_name)
@@ -387,6 +391,22 @@ def run(args: argparse.Namespace) -> int:
         print(f"bayestribo report: {reason}", file=sys.stderr)
     # the exit status of `bayestribo fit` on the same run (README, Exit status)
     return 1 if reasons else 0
+
+
+def _runs_folder(paths: list[Any]) -> str | None:
+    """The folder of a campaign's runs as a reader types it: the runs' common folder, or
+    the one above it holding the manifest, relative to here when below here."""
+    import os
+
+    if not paths:
+        return None
+    folder = Path(os.path.commonpath([str(Path(p).resolve().parent) for p in paths]))
+    for candidate in (folder, *list(folder.parents)[:2]):
+        if (candidate / "manifest.csv").is_file():
+            folder = candidate
+            break
+    here = Path.cwd().resolve()
+    return str(folder.relative_to(here)) if folder.is_relative_to(here) else str(folder)
 
 
 def _has_water_series(folder: Path) -> bool:

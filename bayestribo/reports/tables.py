@@ -97,7 +97,8 @@ _COLUMNS = {
 def prose(text: str, *, paths: Mapping[str, str] | None = None) -> str:
     """A message of the package (a warning, a note) as report text: laws in words
     ("viscous+coulomb" -> "viscous + Coulomb friction"), run-file column names as the
-    quantity ("velocity_m_per_s" -> "velocity"), ``law='auto'`` as "law = auto", the
+    quantity ("velocity_m_per_s" -> "velocity"), quantities by their symbol ("mu_k" ->
+    "μ_k"), ``law='auto'`` as "law = auto", the
     advice on ``columns=[...]`` left out, and each path in ``paths`` replaced by its short
     name.
 
@@ -119,6 +120,8 @@ def prose(text: str, *, paths: Mapping[str, str] | None = None) -> str:
     text = re.sub(r" \(give columns=\[\.\.\.\][^)]*\)", "", text)
     text = text.replace("law='auto'", "law = auto")
     text = re.sub(r"\bmax_steps\b", "maximum number of steps", text)
+    for name, symbol in SYMBOLS.items():  # quantities by their symbol: mu_k -> μ_k
+        text = re.sub(rf"\b{name}\b", symbol, text)
     for name, words in _COLUMNS.items():
         text = re.sub(rf"\b{name}\b", words, text)
     terms = "|".join(_TERMS)
@@ -324,7 +327,8 @@ def fit_facts(result: Any) -> dict[str, str]:
     if d.get("converged"):
         facts["sampler"] = f"converged: {runs}; {stats}"
     else:
-        facts["sampler"] = "not converged (" + "; ".join(d.get("reasons", [])) + f"): {runs}"
+        reasons = prose("; ".join(d.get("reasons", [])))
+        facts["sampler"] = f"not converged ({reasons}): {runs}"
     shape = d.get("shape_departure") or {}
     if shape.get("p_value") is not None:
         if getattr(result, "law_departs", False):
