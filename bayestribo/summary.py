@@ -156,7 +156,8 @@ def interval_text(center: float, low: float, high: float) -> str:
     other at the precision shown ("0.024251 [0.02425, 0.024251]").
 
     A value indistinguishable from zero says so: an interval that starts at zero from a
-    positive support (its lower end is zero at the precision shown) and holds its centre
+    positive support (its lower end is zero at the precision shown, or below 5 % of its
+    upper end) and holds its centre
     in its lower half, or whose mean lies beyond it (a long tail), is
     ``0 (at the bound) [0, high]``; such an interval whose upper
     end is below :data:`NUMERICAL_ZERO` (a numerical zero, "4.83e-30") is ``< 1e-9``.
@@ -180,8 +181,12 @@ def interval_text(center: float, low: float, high: float) -> str:
     '< 1e-9'
     >>> interval_text(1.1e-4, 2e-9, 3.1e-4)
     '0 (at the bound) [0, 0.00031]'
+    >>> interval_text(2.5e-07, 6.9e-09, 9.0e-07)
+    '0 (at the bound) [0, 9.0e-07]'
     >>> interval_text(1.5158e-07, 1.2e-07, 1.8e-07)
     '1.52e-07 [1.20e-07, 1.80e-07]'
+    >>> interval_text(5.2e-27, -6.9e-04, 6.9e-04)
+    '0 [-0.00069, 0.00069]'
     """
     center, low, high = float(center), float(low), float(high)
     if not all(math.isfinite(v) for v in (center, low, high)):
@@ -191,13 +196,20 @@ def interval_text(center: float, low: float, high: float) -> str:
         return f"{center:.6g} [{low:.6g}, {high:.6g}]"
     decimals = 1 - math.floor(math.log10(half))  # two significant digits of the half width
     quantum = 10.0**-decimals
-    reaches_zero = -NUMERICAL_ZERO <= low < 0.5 * quantum and high > 0
+    # the lower end is zero at the precision shown, or within 5 % of the upper end (a
+    # posterior spread over decades down to zero: ζ = 2.5e-07 [6.9e-09, 9.0e-07])
+    reaches_zero = (
+        -NUMERICAL_ZERO <= low and high > 0 and (low < 0.5 * quantum or low < 0.05 * high)
+    )
     if reaches_zero and high < NUMERICAL_ZERO:
         return f"< {NUMERICAL_ZERO:.0e}".replace("e-0", "e-")
     if reaches_zero and low >= -1e-300 and (abs(center) < half or center > high):
         return f"0 (at the bound) [0, {_number(high, max(decimals, 0), high)}]"
     for extra in range(_EXTRA_DIGITS + 1):
-        shown = [_number(v, decimals + extra, center) for v in (center, low, high)]
+        # one notation for the three, from the largest magnitude: a centre at a numerical
+        # zero in an interval across zero is "0 [-0.00069, 0.00069]", not "5.2e-27 [...]"
+        scale = max(abs(center), abs(low), abs(high))
+        shown = [_number(v, decimals + extra, scale) for v in (center, low, high)]
         if shown[0] not in shown[1:] or low == center or high == center:
             break
     return f"{shown[0]} [{shown[1]}, {shown[2]}]"

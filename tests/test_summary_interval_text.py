@@ -76,8 +76,17 @@ def test_a_numerical_zero_says_so():
 def test_a_value_piled_on_its_bound_at_zero_says_so():
     assert interval_text(1.1e-4, 0.0, 3.1e-4) == "0 (at the bound) [0, 0.00031]"
     assert interval_text(3.97e-19, 0.0, 8.2e-05) == "0 (at the bound) [0, 8.2e-05]"
-    # a lower end above zero but zero at the precision shown is at the bound too
+    # a lower end above zero but zero at the precision shown is at the bound too, and so
+    # is one spread over decades down to zero
     assert interval_text(0.12, 0.0004, 0.31) == "0 (at the bound) [0, 0.31]"
+    assert interval_text(2.5e-07, 6.9e-09, 9.0e-07) == "0 (at the bound) [0, 9.0e-07]"
+
+
+def test_a_numerical_zero_in_an_interval_across_zero_is_zero():
+    """A windowed least-squares ζ on its bound: 5.2e-27 ± 3.5e-4 reads "0", in the
+    interval's notation."""
+    assert interval_text(5.2e-27, -6.9e-04, 6.9e-04) == "0 [-0.00069, 0.00069]"
+    assert interval_text(1.0e-25, -1.5e-04, 1.5e-04) == "0 [-0.00015, 0.00015]"
 
 
 def test_a_value_clear_of_zero_is_not_called_zero():

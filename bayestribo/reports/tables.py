@@ -118,6 +118,7 @@ def prose(text: str, *, paths: Mapping[str, str] | None = None) -> str:
     for path, short in (paths or {}).items():
         text = text.replace(path, short)
     text = re.sub(r" \(give columns=\[\.\.\.\][^)]*\)", "", text)
+    text = re.sub(r" \(printed as '[^']*'\)", "", text)  # the terminal's label
     text = text.replace("law='auto'", "law = auto")
     text = re.sub(r"\bmax_steps\b", "maximum number of steps", text)
     for name, symbol in SYMBOLS.items():  # quantities by their symbol: mu_k -> μ_k
