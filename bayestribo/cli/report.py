@@ -6,7 +6,11 @@ a folder) and renders it as one HTML page a reader can open offline: no code (un
 are also written next to the HTML (``--figure-format pdf`` by default: vector graphics
 for a paper).
 
-A folder is reported with the fits of ``bayestribo campaign`` when there are any: PATH
+A folder of recordings without sidecars (another rig's files, read as ``--columns`` and
+the other reading options say) gets the real-data report: every recording, the rig as
+the folder's ``README.md`` describes it, the fits as ``bayestribo fit`` makes them.
+
+A campaign folder is reported with the fits of ``bayestribo campaign`` when there are any: PATH
 itself may be the campaign's ``--out`` folder, or ``--campaign OUTDIR`` names it, or it
 is found in ``PATH/bayestribo-campaign`` or ``./bayestribo-campaign``; without one every
 run is fitted with the campaign's default seed, and the report says so.
@@ -17,6 +21,7 @@ Examples::
     bayestribo report HarmOsc3.txt --columns t x --length-unit arbitrary --out osc3.html
     bayestribo campaign data/ --out results/ && bayestribo report results/ --out campaign.html
     bayestribo report data/ --out campaign.html --param repeats=[1] --figure-format svg
+    bayestribo report ../shared/external-data/smorzamento-spring-disc --columns t x v ignore
 """
 
 from __future__ import annotations
@@ -55,7 +60,9 @@ def register(subparsers: Any) -> None:
             "folder gets the campaign report (per-run fits, forest plot, populations of "
             "repeats, ζ and μ_k against load, ζ_k and d_k), from the fits of `bayestribo "
             "campaign` when its results are found (PATH itself, --campaign, "
-            "PATH/bayestribo-campaign or ./bayestribo-campaign)."
+            "PATH/bayestribo-campaign or ./bayestribo-campaign); a folder of recordings "
+            "without sidecars gets the real-data report (another rig's files, read as "
+            "--columns and the other reading options say)."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
