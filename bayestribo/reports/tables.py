@@ -282,6 +282,8 @@ def diagnostics_frame(result: Any) -> Any:
 
     d = result.diagnostics
     symbols = _symbols(result)
+    if "mu_k" not in result.summary():  # no load: the sampled friction is x_c in units of ℓ
+        symbols["mu_k"] = "x_c/ℓ"
     sensitivity = result.prior_sensitivity or {}
     rows = []
     for name, tau in (d.get("autocorr_time") or {}).items():
