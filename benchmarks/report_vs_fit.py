@@ -14,7 +14,8 @@ For each quantity of the fit's law (ζ, μ_k, μ_s, x_c, ... as the fit reports 
 the two posteriors agree *to the digit shown* when the report's text of the value and
 its 95 % interval (:func:`bayestribo.summary.interval_text`) is the same for both; the
 largest difference of the posterior means in posterior standard deviations is recorded
-beside it. The goal: agree to the digit everywhere.
+beside it, and whether the two summaries (mean and interval ends) are identical number
+for number. The goal: agree to the digit everywhere.
 
 The real recordings are read as the tests read them: the AppStat2020 text files with
 ``--columns t x --length-unit arbitrary``, the spring-and-disc CSV files with
@@ -41,6 +42,7 @@ from pathlib import Path
 from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # this tree's bayestribo, here and in the commands it runs
 EXTERNAL = ROOT.parent / "shared" / "external-data"
 RESULTS = ROOT / "benchmarks" / "results" / "report_vs_fit.json"
 
@@ -97,6 +99,7 @@ def compare(fit_params: dict[str, Any], report_params: dict[str, Any]) -> dict[s
             "report": shown_report,
             "same_digits": shown_fit == shown_report,
             "mean_shift_sd": abs(f["mean"] - r["mean"]) / sd if sd > 0 else 0.0,
+            "identical": [f["mean"], *f["interval"]] == [r["mean"], *r["interval"]],
         }
     missing = sorted(set(fit_params) - set(report_params))
     if missing:
@@ -132,6 +135,7 @@ def one(name: str, path: Path, reading: list[str], seed: int, timeout: float) ->
     shown = [q for k, q in row["quantities"].items() if not k.startswith("_")]
     row["agree_to_the_digit"] = bool(shown) and all(q["same_digits"] for q in shown)
     row["largest_mean_shift_sd"] = max((q["mean_shift_sd"] for q in shown), default=None)
+    row["identical"] = bool(shown) and all(q["identical"] for q in shown)
     row["same_exit_status"] = row["fit_exit"] == row["report_exit"]
     return row
 
@@ -190,11 +194,15 @@ def main(argv: list[str] | None = None) -> int:
             "of": len(cases()) if args.update else len(todo),
             "agree_to_the_digit": sum(r["agree_to_the_digit"] for r in done),
             "same_exit_status": sum(r["same_exit_status"] for r in done),
+            "identical_posterior_summaries": sum(r["identical"] for r in done),
             "errors": len(rows) - len(done),
             "largest_mean_shift_sd": max(
                 (r["largest_mean_shift_sd"] or 0.0 for r in done), default=None
             ),
             "seconds": round(time.perf_counter() - start),
+            "command_seconds": round(
+                sum(r.get("fit_seconds", 0) + r.get("report_seconds", 0) for r in rows)
+            ),
             "rows": rows,
         }
         RESULTS.write_text(json.dumps(record, indent=1, ensure_ascii=False) + "\n")
