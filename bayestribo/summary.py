@@ -135,11 +135,32 @@ def summarize(samples: ArrayLike, prob: float = 0.95) -> dict[str, Any]:
     return ParameterSummary.from_samples(samples, prob).to_dict()
 
 
+#: Largest |value| of an interval that reaches zero and is still shown as a number: below
+#: it every end is a numerical zero ("4.83e-30"), shown as ``< 1e-9``.
+NUMERICAL_ZERO = 1e-9
+
+#: Digits added at most beyond those of the half width, so that an asymmetric interval's
+#: end does not print as its centre ("0.024251 [0.024251, 0.024300]").
+_EXTRA_DIGITS = 4
+
+
+def _fixed(value: float, decimals: int) -> str:
+    text = f"{value:.{decimals}f}"
+    return "0" if float(text) == 0.0 else text  # no "-0.000", no "0.00000" at a bound
+
+
 def interval_text(center: float, low: float, high: float) -> str:
     """``center [low, high]`` with the digits the interval supports: two significant
-    digits of its half width, so that the ends never collapse onto each other at the
-    precision shown ("0.024251 [0.02425, 0.024251]"); an interval that reaches zero
-    from a positive support says so.
+    digits of its half width, more (at most four) where an end of an asymmetric interval
+    would print as its centre, so that no two of the three numbers collapse onto each
+    other at the precision shown ("0.024251 [0.02425, 0.024251]").
+
+    A value indistinguishable from zero says so: an interval that starts at zero from a
+    positive support (its lower end is zero at the precision shown, or below 5 % of its
+    upper end) and holds its centre
+    in its lower half, or whose mean lies beyond it (a long tail), is
+    ``0 (at the bound) [0, high]``; such an interval whose upper
+    end is below :data:`NUMERICAL_ZERO` (a numerical zero, "4.83e-30") is ``< 1e-9``.
 
     Parameters
     ----------
@@ -154,17 +175,52 @@ def interval_text(center: float, low: float, high: float) -> str:
     --------
     >>> interval_text(0.0236012, 0.0236003, 0.0236021)
     '0.02360120 [0.02360030, 0.02360210]'
+    >>> interval_text(0.024251, 0.0242509, 0.0243)
+    '0.0242510 [0.0242509, 0.0243000]'
     >>> interval_text(1.2e-30, 0.0, 3e-29)
-    '< 3e-29 (at zero)'
+    '< 1e-9'
+    >>> interval_text(1.1e-4, 2e-9, 3.1e-4)
+    '0 (at the bound) [0, 0.00031]'
+    >>> interval_text(2.5e-07, 6.9e-09, 9.0e-07)
+    '0 (at the bound) [0, 9.0e-07]'
+    >>> interval_text(1.5158e-07, 1.2e-07, 1.8e-07)
+    '1.52e-07 [1.20e-07, 1.80e-07]'
+    >>> interval_text(5.2e-27, -6.9e-04, 6.9e-04)
+    '0 [-0.00069, 0.00069]'
     """
     center, low, high = float(center), float(low), float(high)
+    if not all(math.isfinite(v) for v in (center, low, high)):
+        return "–" if not math.isfinite(center) else f"{center:.3g}"
     half = 0.5 * (high - low)
-    if low <= 0.0 <= high and low >= -1e-300 and abs(center) < half:
-        return f"< {high:.2g} (at zero)"
-    if not (half > 0 and math.isfinite(half)):
+    if not half > 0:
         return f"{center:.6g} [{low:.6g}, {high:.6g}]"
-    decimals = max(0, 1 - math.floor(math.log10(half)))
-    if abs(center) >= 1e5 or (abs(center) < 1e-4 and center != 0):
-        digits = max(2, math.floor(math.log10(abs(center))) - math.floor(math.log10(half)) + 2)
-        return f"{center:.{digits}g} [{low:.{digits}g}, {high:.{digits}g}]"
-    return f"{center:.{decimals}f} [{low:.{decimals}f}, {high:.{decimals}f}]"
+    decimals = 1 - math.floor(math.log10(half))  # two significant digits of the half width
+    quantum = 10.0**-decimals
+    # the lower end is zero at the precision shown, or within 5 % of the upper end (a
+    # posterior spread over decades down to zero: ζ = 2.5e-07 [6.9e-09, 9.0e-07])
+    reaches_zero = (
+        -NUMERICAL_ZERO <= low and high > 0 and (low < 0.5 * quantum or low < 0.05 * high)
+    )
+    if reaches_zero and high < NUMERICAL_ZERO:
+        return f"< {NUMERICAL_ZERO:.0e}".replace("e-0", "e-")
+    if reaches_zero and low >= -1e-300 and (abs(center) < half or center > high):
+        return f"0 (at the bound) [0, {_number(high, max(decimals, 0), high)}]"
+    for extra in range(_EXTRA_DIGITS + 1):
+        # one notation for the three, from the largest magnitude: a centre at a numerical
+        # zero in an interval across zero is "0 [-0.00069, 0.00069]", not "5.2e-27 [...]"
+        scale = max(abs(center), abs(low), abs(high))
+        shown = [_number(v, decimals + extra, scale) for v in (center, low, high)]
+        if shown[0] not in shown[1:] or low == center or high == center:
+            break
+    return f"{shown[0]} [{shown[1]}, {shown[2]}]"
+
+
+def _number(value: float, decimals: int, scale: float) -> str:
+    """``value`` to ``decimals`` decimals, in scientific notation (the exponent of
+    ``scale``) for magnitudes of 1e5 and more or below 1e-4."""
+    big = abs(scale) >= 1e5 or (0 < abs(scale) < 1e-4)
+    if not big:
+        return _fixed(value, max(decimals, 0))
+    exponent = math.floor(math.log10(abs(scale)))
+    digits = max(1, exponent + decimals)  # decimals of the mantissa
+    return f"{value:.{digits}e}" if value != 0 else "0"

@@ -91,6 +91,7 @@ def test_report_of_a_folder_without_campaign_results_fits_with_the_default_seed(
     assert notebook == "loads"
     assert params == {
         "data_dir": str(RUN.parent.parent.resolve()),  # bundled series: the defaults
+        "data_label": str(RUN.parent.parent),  # as typed, for the commands the text names
         "campaign_seed": DEFAULT_SEED,
         "figure_dir": str((tmp_path / "c-figures").resolve()),
         "figure_format": "pdf",
@@ -129,6 +130,9 @@ def test_report_of_a_campaign_reuses_its_results(tmp_path, captured, monkeypatch
         assert params["campaign_dir"] == str(results.resolve())
         assert params["series"] is None and params["air_series"] is None  # no such series
         assert "campaign_seed" not in params  # the campaign's own seed
+        # where the runs are, as typed (or from here for the results folder: "data")
+        assert (tmp_path / params["data_label"]).resolve() == data.resolve()
+        assert argv[1] != str(results) or params["data_label"] == "data"
         assert "reusing the fits of the campaign" in capsys.readouterr().err
     # --refit fits for the report instead
     assert main(["report", str(data), "--refit", "--out", str(tmp_path / "c.html")]) == 0
@@ -177,9 +181,23 @@ def test_unknown_parameter_is_refused_before_running(tmp_path, capsys):
     assert not (tmp_path / "r.html").exists()
 
 
-def test_notebook_choice():
+def test_notebook_choice(tmp_path):
     assert notebook_for(RUN.parent.parent) == "loads"
     assert notebook_for(RUN) == "single_run"
+    # a folder of recordings without sidecars: another rig's, the real-data report
+    (tmp_path / "rec_1.csv").write_text("time;position\n0;1\n")
+    (tmp_path / "README.md").write_text("# A rig")
+    assert notebook_for(tmp_path) == "real_data"
+
+
+def test_a_folder_of_recordings_not_read_as_given_is_refused_before_running(tmp_path, capsys):
+    """The spring-and-disc files have no units in their header: without --columns the
+    report says so at once, naming the file and the options."""
+    (tmp_path / "rec_1.csv").write_text("time;position\n0;1\n0.01;2\n")
+    assert main(["report", str(tmp_path), "--out", str(tmp_path / "r.html")]) == 2
+    err = capsys.readouterr().err
+    assert "rec_1.csv" in err and "--columns" in err
+    assert not (tmp_path / "r.html").exists()
 
 
 def test_parse_params_literals_and_strings():
@@ -284,6 +302,7 @@ def test_every_shipped_notebook_is_reached_by_report(tmp_path, captured, capsys)
         name, params, _ = captured[-1]
         assert name == notebook and out.is_file()
     params = {name: p for name, p, _ in captured}
+    assert "fit_kwargs" not in params["real_data"]  # the defaults of `bayestribo fit`
     assert "--notebook viscosity`" in capsys.readouterr().err  # the loads report names it
     assert params["viscosity"]["data_dir"] == str(data.resolve())
     assert params["viscosity"]["campaign_seed"] == 3
@@ -302,3 +321,17 @@ def test_none_for_an_optional_text_parameter_is_none():
     got = parse_params(["series=None", "air_series=air", "lubricant_tag=0.0055"], specs)
     assert got["series"] is None and got["air_series"] == "air"
     assert got["lubricant_tag"] == 0.0055  # not a parameter of the notebook: a literal
+
+
+def test_a_folder_of_recordings_takes_the_fit_options(tmp_path, captured):
+    """--law, --notch and --discrepancy reach the real-data report's fits, as `fit` takes
+    them; a campaign folder's report still refuses them."""
+    recordings = tmp_path / "rig"
+    recordings.mkdir()
+    t = np.arange(0.0, 5.0, 0.01)
+    np.savetxt(recordings / "a.txt", np.column_stack([t, np.cos(2 * np.pi * t)]))
+    argv = ["report", str(recordings), "--out", str(tmp_path / "r.html"), "--law", "auto"]
+    assert main([*argv, "--notch", "50", "--discrepancy"]) == 0
+    name, params, _ = captured[-1]
+    assert name == "real_data"
+    assert params["fit_kwargs"] == {"law": "auto", "notch": 50.0, "discrepancy": True}

@@ -8,6 +8,9 @@ Skipped, with the reason, where Chromium is not installed (``apt-get install chr
 
 from __future__ import annotations
 
+import html
+import re
+
 import pytest
 from _paths import REPO
 
@@ -92,7 +95,13 @@ def _clean(page) -> None:
 
 
 def test_the_single_run_report_reads_as_text_for_people(single_run_report):
-    _clean(inspect_report(single_run_report))
+    page = inspect_report(single_run_report)
+    _clean(page)
+    assert page.text_dumps == 0  # the fit as tables, not a monospace dump
+    text = single_run_report.read_text(encoding="utf-8")
+    assert "load N" in text and "0.31 N" in text  # metadata in words with units
+    assert "viscous + Coulomb friction" in text and "viscous+coulomb" not in text
+    assert "ignores friction" in text  # the logarithmic decrement, labelled
 
 
 def test_the_campaign_report_reads_as_text_for_people(tmp_path):
@@ -122,6 +131,32 @@ def test_the_report_of_another_rigs_recordings_reads_as_text_for_people(tmp_path
     _clean(page)
 
 
+def test_the_report_of_the_spring_and_disc_rig_speaks_of_that_rig(tmp_path):
+    """``bayestribo report FOLDER`` on a folder of another rig's recordings (a spring, a
+    mass and a disc in air, ``time;position;velocity;acceleration``): the real-data
+    report, read as the options say, about that rig and in metres; no word of a pin, a
+    blade or the AppStat recordings."""
+    from _paths import SPRING_DISC
+
+    if not SPRING_DISC.is_dir():
+        pytest.skip("the spring-and-disc recordings in ../shared/external-data are absent")
+    out = tmp_path / "spring.html"
+    argv = ["report", str(SPRING_DISC), "--columns", "t", "x", "v", "ignore", "--out", str(out)]
+    argv += ["--param", "check_files=[]", "--param", "fit_kwargs={'max_steps': 3000}"]
+    main(argv)  # exit 1 is allowed: the law may not hold for air drag on a disc
+    page = inspect_report(out)
+    assert page.all_images_loaded and page.figures >= 2
+    _clean(page)
+    assert page.text_dumps == 0
+    page_source = out.read_text(encoding="utf-8")
+    body = re.sub(r"<style.*?</style>|<script.*?</script>", " ", page_source, flags=re.DOTALL)
+    text = html.unescape(re.sub(r"<[^>]+>", " ", body))
+    assert "spring, mass and a disc in air" in text  # the rig, from its README.md
+    assert "position [m]" in text and "signal unit" not in text
+    for word in ("pin", "blade", "HarmOsc", "AppStat"):
+        assert not re.search(rf"\b{word}", text), word
+
+
 def test_the_probe_finds_what_a_reader_must_not_see(tmp_path):
     """The checks above can fail: a number split by a narrow cell, a code name in prose,
     a Python repr."""
@@ -129,10 +164,13 @@ def test_the_probe_finds_what_a_reader_must_not_see(tmp_path):
     page.write_text(
         '<html><body><div class="jp-RenderedHTMLCommon"><p>the load_N is np.float64(0.3)</p>'
         '<table><tr><td style="width:1px;word-break:break-all">-0.0006399123</td></tr></table>'
-        "</div></body></html>"
+        '</div><div class="jp-OutputArea-output"><table><tr><th>mean_shift_sd</th>'
+        "<td>molla_durissima_14.9_1</td></tr></table><pre>zeta  0.0243</pre></div>"
+        "</body></html>"
     )
     found = inspect_report(page)
-    assert found.identifiers == ["load_N"]
+    assert found.identifiers == ["load_N", "mean_shift_sd"]
+    assert found.text_dumps == 1
     assert any("np.float64(" in r for r in found.reprs)
     assert found.broken_numbers == ["-0.0006399123"]
 

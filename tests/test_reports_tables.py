@@ -38,3 +38,51 @@ def test_units_and_laws_read_as_words():
     assert tables.normal_interval(None, None) == "–"
     assert tables.normal_interval(0.5, None) == "0.5"
     assert tables.share_text(float("nan")) == "–"
+
+
+def test_an_unphysical_estimate_is_flagged_in_words_not_hidden():
+    """A negative friction (Feeny–Liang and the non-successive peaks give one on the
+    spring-and-disc recordings, where air drag grows with speed) is shown as it is and
+    called unphysical; a negative ζ too."""
+    from types import SimpleNamespace
+
+    def estimate(**kw):
+        base = {
+            "method": "feeny_liang",
+            "data": "displacement peaks",
+            "zeta": 0.0066,
+            "zeta_se": 8.5e-4,
+            "mu_k": None,
+            "mu_k_se": None,
+            "friction_displacement": -1.09e-4,
+            "friction_displacement_se": 1.0e-5,
+            "friction_fraction": 1e-5,
+            "notes": "",
+        }
+        return SimpleNamespace(**{**base, **kw})
+
+    frame = tables.estimates_frame([estimate()], unit="m")
+    row = frame.loc["Feeny–Liang (x)"]
+    assert row["x_c [m] [95 %]"].startswith("-0.000109")  # the value, not "0 (at the bound)"
+    assert row["caveat"] == "negative friction: unphysical, not a measurement"
+    assert "negative ζ" in tables.caveat_text(estimate(zeta=-0.001))
+    assert tables.caveat_text(estimate(friction_displacement=2e-4)) == "–"
+
+
+def test_estimators_that_ignore_friction_are_labelled_so():
+    from _paths import RUNS
+
+    from bayestribo import estimate_all
+
+    run = RUNS / "glycerol-N0.31-r1.csv"
+    if not run.is_file():
+        pytest.skip("the bundled campaign data/ is absent")
+    table = estimate_all(run, name="r1")
+    frame = tables.estimates_frame(table)
+    decrement = frame.loc["logarithmic decrement (x)"]
+    # ζ of the logarithmic decrement is twice the truth here: it ignores friction
+    assert decrement["caveat"].startswith("ignores friction")
+    labels = [tables.method_text(e, physics=True) for e in table]
+    assert "logarithmic decrement (x), ignores friction" in labels
+    assert "exponential envelope (x), ignores friction" in labels
+    assert "least squares on Π, exact model" in labels  # it models friction

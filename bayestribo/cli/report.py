@@ -6,7 +6,11 @@ a folder) and renders it as one HTML page a reader can open offline: no code (un
 are also written next to the HTML (``--figure-format pdf`` by default: vector graphics
 for a paper).
 
-A folder is reported with the fits of ``bayestribo campaign`` when there are any: PATH
+A folder of recordings without sidecars (another rig's files, read as ``--columns`` and
+the other reading options say) gets the real-data report: every recording, the rig as
+the folder's ``README.md`` describes it, the fits as ``bayestribo fit`` makes them.
+
+A campaign folder is reported with the fits of ``bayestribo campaign`` when there are any: PATH
 itself may be the campaign's ``--out`` folder, or ``--campaign OUTDIR`` names it, or it
 is found in ``PATH/bayestribo-campaign`` or ``./bayestribo-campaign``; without one every
 run is fitted with the campaign's default seed, and the report says so.
@@ -17,6 +21,7 @@ Examples::
     bayestribo report HarmOsc3.txt --columns t x --length-unit arbitrary --out osc3.html
     bayestribo campaign data/ --out results/ && bayestribo report results/ --out campaign.html
     bayestribo report data/ --out campaign.html --param repeats=[1] --figure-format svg
+    bayestribo report ../shared/external-data/smorzamento-spring-disc --columns t x v ignore
 """
 
 from __future__ import annotations
@@ -55,7 +60,9 @@ def register(subparsers: Any) -> None:
             "folder gets the campaign report (per-run fits, forest plot, populations of "
             "repeats, ζ and μ_k against load, ζ_k and d_k), from the fits of `bayestribo "
             "campaign` when its results are found (PATH itself, --campaign, "
-            "PATH/bayestribo-campaign or ./bayestribo-campaign)."
+            "PATH/bayestribo-campaign or ./bayestribo-campaign); a folder of recordings "
+            "without sidecars gets the real-data report (another rig's files, read as "
+            "--columns and the other reading options say)."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
@@ -128,7 +135,7 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "--discrepancy",
         action="store_true",
-        help="a single run's fit with the model-discrepancy terms, as `fit --discrepancy`",
+        help="fits with the model-discrepancy terms, as `fit --discrepancy`",
     )
     p.set_defaults(handler=run)
 
@@ -172,13 +179,17 @@ def parse_params(items: list[str], specs: dict[str, Any] | None = None) -> dict[
 
 
 def notebook_for(path: Path) -> str:
-    """``"single_run"`` for a file, ``"loads"`` for a folder holding runs or campaign results.
+    """The report a path asks for: ``"single_run"`` for a file, ``"loads"`` for a folder
+    holding a campaign (a ``manifest.csv``, runs with sidecars, or the results of
+    ``bayestribo campaign``), ``"real_data"`` for a folder of recordings without
+    sidecars (another rig's files, read as ``--columns`` and the other reading options
+    say).
 
     Raises
     ------
     ReportError
-        If the path does not exist, or a folder holds neither a ``manifest.csv``, nor a
-        run file with a sidecar, nor the results of ``bayestribo campaign``.
+        If the path does not exist, or a folder holds neither a campaign nor a file of a
+        format the package reads.
     """
     from bayestribo.campaign.results import is_campaign_folder
     from bayestribo.reports.notebooks import ReportError
@@ -191,13 +202,26 @@ def notebook_for(path: Path) -> str:
             or any(f.with_suffix(".json").is_file() for f in path.rglob("*.csv"))
             or is_campaign_folder(path)
         )
-        if not has_runs:
-            raise ReportError(
-                f"{path}: a campaign folder needs a manifest.csv or run files (.csv) with "
-                "their sidecars (.json), or the results of `bayestribo campaign`"
-            )
-        return "loads"
+        if has_runs:
+            return "loads"
+        if recordings_in(path):
+            return "real_data"
+        raise ReportError(
+            f"{path}: a campaign folder needs a manifest.csv or run files (.csv) with "
+            "their sidecars (.json), or the results of `bayestribo campaign`; a folder of "
+            "another rig's recordings needs files of a format read here"
+        )
     raise ReportError(f"{path}: no such run file or folder")
+
+
+def recordings_in(folder: Path) -> list[str]:
+    """Names of the files in ``folder`` (not below it) of a format the package reads."""
+    from bayestribo.io.registry import registered_formats
+
+    suffixes = {s for f in registered_formats().values() for s in f.suffixes}
+    return [
+        p.name for p in sorted(folder.iterdir()) if p.is_file() and p.suffix.lower() in suffixes
+    ]
 
 
 def campaign_selection(folder: Path) -> dict[str, Any]:
@@ -251,8 +275,12 @@ def _campaign_params(path: Path, args: argparse.Namespace) -> tuple[dict[str, An
                 f"{campaign.seed}; leave --seed out to report its fits, or add --refit"
             )
         params["campaign_dir"] = str(found)
+        # the folders as typed: the report shows no path the reader did not give
+        params["campaign_label"] = str(args.campaign or (args.path if found == path else found))
         if found != path:
             params["data_dir"] = str(path)
+        else:
+            params["_data_label"] = _runs_folder(list(campaign.paths.values()))
         series = {m.get("series") for m in campaign.metadata.values()}
         params.update({"series": None} if "glycerol" not in series else {})
         params.update({"air_series": None} if "air" not in series else {})
@@ -290,6 +318,11 @@ def run(args: argparse.Namespace) -> int:
         if notebook in (None, "single_run", "loads"):
             found = notebook_for(path)
             notebook = notebook or found
+            if notebook == "loads" and found == "real_data":
+                raise ReportError(
+                    f"--notebook loads reports on a campaign folder; {path} holds recordings "
+                    "without sidecars (their report: --notebook real_data)"
+                )
             if (notebook == "single_run") != (found == "single_run"):
                 wanted = "a run file" if notebook == "single_run" else "a folder"
                 raise ReportError(f"--notebook {notebook} reports on {wanted}; {path} is not one")
@@ -322,10 +355,13 @@ def run(args: argparse.Namespace) -> int:
             )
         campaign_params, where = _campaign_params(path, args)
         params.update(campaign_params)
+        # the data folder as typed (or, for a campaign's results, where its runs are, from
+        # here): the commands the text names work as shown
+        params["data_label"] = params.pop("_data_label", None) or str(args.path)
         if _has_water_series(path):
             where += (
                 f"\nthe campaign also holds glycerol-water runs: their report against "
-                f"viscosity is `bayestribo report {args.path} --notebook viscosity`"
+                f"viscosity is `bayestribo report {params['data_label']} --notebook viscosity`"
             )
     default_name = f"{path.stem or path.name}-report.html"
     out = args.out or Path(default_name)
@@ -364,6 +400,22 @@ def run(args: argparse.Namespace) -> int:
     return 1 if reasons else 0
 
 
+def _runs_folder(paths: list[Any]) -> str | None:
+    """The folder of a campaign's runs as a reader types it: the runs' common folder, or
+    the one above it holding the manifest, relative to here when below here."""
+    import os
+
+    if not paths:
+        return None
+    folder = Path(os.path.commonpath([str(Path(p).resolve().parent) for p in paths]))
+    for candidate in (folder, *list(folder.parents)[:2]):
+        if (candidate / "manifest.csv").is_file():
+            folder = candidate
+            break
+    here = Path.cwd().resolve()
+    return str(folder.relative_to(here)) if folder.is_relative_to(here) else str(folder)
+
+
 def _has_water_series(folder: Path) -> bool:
     """Whether a campaign folder's manifest lists runs with a water fraction."""
     import csv
@@ -381,11 +433,11 @@ def _other_params(notebook: str, path: Path, args: argparse.Namespace) -> dict[s
     from bayestribo.reports.notebooks import ReportError
 
     reading = reading_kwargs(args)
-    single = ("law", "notch")
-    if notebook != "real_data":
-        single += ("columns", "length_unit", "frequency", "load", "mass")
+    # a folder of recordings is read and fitted as `bayestribo fit` reads and fits one
+    real = notebook == "real_data"
+    single = () if real else ("law", "notch", "columns", "length_unit", "frequency", "load", "mass")
     given = [f"--{name.replace('_', '-')}" for name in single if getattr(args, name, None)]
-    if given or args.discrepancy or args.campaign is not None:
+    if given or (args.discrepancy and not real) or args.campaign is not None:
         raise ReportError(
             f"{', '.join(given) or '--discrepancy/--campaign'}: not options of the "
             f"{notebook} report; give its parameters with --param KEY=VALUE"
@@ -396,23 +448,60 @@ def _other_params(notebook: str, path: Path, args: argparse.Namespace) -> dict[s
         if args.seed is not None:
             params["campaign_seed"] = args.seed
     elif notebook == "real_data":
-        from bayestribo.io.registry import registered_formats
-
-        suffixes = {s for f in registered_formats().values() for s in f.suffixes}
-        files = [
-            p.name for p in sorted(path.iterdir()) if p.is_file() and p.suffix.lower() in suffixes
-        ]
+        files = recordings_in(path)
         if not files:
             raise ReportError(f"{path}: no recordings of a format read in this folder")
+        _check_reading(path / files[0], reading, guessed=args.notebook is None)
         params.update({"data_dir": str(path), "files": files, "fit_files": files})
         if reading:  # how this rig's files are read (default: the AppStat text files)
             params["read_kwargs"] = reading
         params["check_files"] = files[:1]
+        fit_options = {n: getattr(args, n) for n in ("law", "notch") if getattr(args, n)}
+        fit_options.update({"discrepancy": True} if args.discrepancy else {})
+        if fit_options:
+            params["fit_kwargs"] = fit_options
         if args.seed is not None:
             params["seed"] = args.seed
     elif args.seed is not None:
         params["seed"] = args.seed
     return params
+
+
+def _check_reading(path: Path, reading: dict[str, Any], *, guessed: bool = False) -> None:
+    """Read one recording of a folder as the report will, before any kernel starts;
+    ``guessed``: the folder was taken for recordings because it holds no campaign.
+
+    Raises
+    ------
+    ReportError
+        Naming the file and what the reader said, with the options that tell it how.
+    """
+    import warnings
+
+    from bayestribo.errors import BayestriboError
+    from bayestribo.io import read_run
+    from bayestribo.reports.notebooks import ReportError
+
+    options = reading or {
+        "columns": ["time_s", "displacement_m"],
+        "metadata": {"length_unit": "arbitrary"},
+    }
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the report says them, once per file
+            read_run(path, **options)
+    except BayestriboError as exc:
+        campaign = (
+            f"{path.parent} holds no campaign (a manifest.csv or run files (.csv) with their "
+            "sidecars (.json), or the results of `bayestribo campaign`), and its recordings "
+            "do not read as given: "
+            if guessed
+            else ""
+        )
+        raise ReportError(
+            f"{campaign}{exc}; say how this rig's files are read with --columns (e.g. "
+            "--columns t x v ignore), --length-unit and the other reading options"
+        ) from None
 
 
 def fit_reasons(record: dict[str, Any]) -> list[str]:

@@ -68,6 +68,9 @@ window.addEventListener("load", function () {
     stderr_boxes: document.querySelectorAll(
       "[data-mime-type='application/vnd.jupyter.stderr']").length,
     text_length: text.length,
+    text_dumps: Array.prototype.filter.call(
+      document.querySelectorAll(".jp-OutputArea-output pre"),
+      function (el) { return el.textContent.trim().length > 0; }).length,
     reprs: (text.match(/.{0,30}(np\.\w+\(|array\(|\{'|\['|\bNone\b|\bnan\b).{0,30}/g) || [])
       .slice(0, 20),
     identifiers: prose(),
@@ -88,13 +91,18 @@ window.addEventListener("load", function () {
     return found.slice(0, 20);
   }
   function prose() {
-    // snake_case names in the text of paragraphs and list items, code left out
+    // snake_case names (load_N, mu_k, log_decrement) in the text of paragraphs, list
+    // items and tables (headers, cells, captions), code left out; a file name's
+    // numbered parts ("disc_14.9_1") are not names
     var found = [];
     document.querySelectorAll(".jp-RenderedMarkdown p, .jp-RenderedMarkdown li, " +
-                              ".jp-RenderedHTMLCommon > p").forEach(function (el) {
+                              ".jp-RenderedHTMLCommon > p, .jp-OutputArea-output th, " +
+                              ".jp-OutputArea-output td, .jp-OutputArea-output caption, " +
+                              ".jp-RenderedMarkdown td, .jp-RenderedMarkdown th, .bt-note"
+                              ).forEach(function (el) {
       var copy = el.cloneNode(true);
       copy.querySelectorAll("code, pre, img").forEach(function (c) { c.remove(); });
-      (copy.textContent.match(/\b[a-z][a-z0-9]+_[A-Za-z0-9_]+\b/g) || []).forEach(
+      (copy.textContent.match(/\b[a-z][a-z0-9]+(?:_[A-Za-z][A-Za-z0-9]*)+\b/g) || []).forEach(
         function (w) { if (found.indexOf(w) < 0) { found.push(w); } });
     });
     return found.slice(0, 20);
@@ -161,11 +169,15 @@ class PageInspection:
         stderr outputs shown as such.
     text_length : int
         Characters of visible text.
+    text_dumps : int
+        Outputs shown as preformatted (monospace) text: a result printed instead of
+        shown as a table.
     reprs : list of str
         Python representations in the visible text (``np.float64(``, ``{'``, ``['``,
         ``None``, ``nan``), with their context.
     identifiers : list of str
-        Code identifiers (``snake_case`` names) in the prose, code spans left out.
+        Code identifiers (``snake_case`` names) in the prose and the tables, code spans
+        left out.
     broken_numbers : list of str
         Table cells with digits that the layout breaks across lines.
     figure_problems : list of str
@@ -184,6 +196,7 @@ class PageInspection:
     notes: int
     stderr_boxes: int
     text_length: int
+    text_dumps: int
     reprs: list[str]
     identifiers: list[str]
     broken_numbers: list[str]

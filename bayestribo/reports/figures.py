@@ -79,7 +79,10 @@ def plot_estimates(
     ):
         val, lo, hi = (np.asarray(a, dtype=float) for a in (val, lo, hi))
         has = np.isfinite(lo) & np.isfinite(hi)
+        # a point outside its interval (a posterior mean in a long tail) draws the
+        # interval's side it lies beyond as zero, not a negative error bar
         err = np.vstack([np.where(has, val - lo, 0.0), np.where(has, hi - val, 0.0)])
+        err = np.maximum(err, 0.0)
         ax.errorbar(val, y, xerr=err, fmt="o", color="C0", capsize=3, ms=5)
         if highlight is not None and np.isfinite(val[highlight]):
             ax.errorbar(

@@ -18,6 +18,7 @@ from __future__ import annotations
 import hashlib
 import html
 import platform
+import re
 import warnings
 from collections.abc import Callable, Mapping
 from datetime import UTC, datetime
@@ -36,6 +37,7 @@ __all__ = [
     "facts",
     "file_sha256",
     "interval_text",
+    "keep_together",
     "note",
     "overlapping_labels",
     "sentence",
@@ -77,7 +79,9 @@ def interval_text(mean: float, low: float, high: float) -> str:
     >>> interval_text(0.0236012, 0.0236003, 0.0236021)
     '0.02360120 [0.02360030, 0.02360210]'
     >>> interval_text(1.2e-30, 0.0, 3e-29)
-    '< 3e-29 (at zero)'
+    '< 1e-9'
+    >>> interval_text(1.1e-4, 0.0, 3.1e-4)
+    '0 (at the bound) [0, 0.00031]'
     """
     from bayestribo.summary import interval_text as shared
 
@@ -109,10 +113,15 @@ def _display(obj: Any) -> None:
 
 
 def note(text: str) -> None:
-    """Show ``text`` as a short note in the report (a remark, a warning)."""
+    """Show ``text`` as a short note in the report (a remark, a warning), in words
+    (:func:`bayestribo.reports.tables.prose`: laws and column names as a reader names
+    them)."""
     from IPython.display import HTML
 
-    _display(HTML(f'<div class="{NOTE_CLASS}"><b>Note.</b> {html.escape(str(text))}</div>'))
+    from bayestribo.reports.tables import prose
+
+    said = html.escape(prose(str(text)))
+    _display(HTML(f'<div class="{NOTE_CLASS}"><b>Note.</b> {said}</div>'))
 
 
 def verdict(text: str) -> None:
@@ -125,12 +134,43 @@ def verdict(text: str) -> None:
 def table(frame: Any, *, digits: int = 5) -> None:
     """Show a pandas DataFrame as a table: numbers to ``digits`` significant digits,
     missing values as a dash (not NaN), the index's name in the header's corner (not on
-    a header row of its own)."""
+    a header row of its own), and a cell that is a number or a value with its interval
+    kept on one line (:func:`keep_together`): the table's words wrap, its numbers never
+    break ("-3.511e- / 05")."""
     from IPython.display import HTML
 
     if frame.index.name is not None and frame.columns.name is None and frame.columns.nlevels == 1:
         frame = frame.rename_axis(index=None, columns=frame.index.name)
-    _display(HTML(frame.to_html(na_rep="–", float_format=lambda v: f"{v:.{digits}g}", border=0)))
+
+    def cell(value: Any) -> Any:
+        if isinstance(value, float) and value != value:
+            return value  # NaN: a dash (na_rep)
+        if isinstance(value, float):
+            value = f"{value:.{digits}g}"
+        return keep_together(value) if isinstance(value, str) else value
+
+    frame = frame.apply(lambda col: col.map(cell))  # the labels are the report's own text
+    _display(HTML(frame.to_html(na_rep="–", escape=False, border=0)))
+
+
+#: A cell that is a number or a value with its interval ("0.0243 [0.0241, 0.0245]",
+#: "< 1e-9", "0.0236 ± 0.0012", "0 (at the bound) [0, 8.2e-05]").
+_NUMERIC = re.compile(r"^[-+0-9.eE−–,;\[\]<>≤±% ]+$|^0 \(at the bound\) \[")
+
+
+def keep_together(text: str) -> str:
+    """A cell's text as HTML: escaped, and a number or a value with its interval in a
+    span that does not wrap (class ``bt-num``).
+
+    Examples
+    --------
+    >>> keep_together("-3.58e-05 [-3.65e-05, -3.51e-05]")
+    '<span class="bt-num">-3.58e-05 [-3.65e-05, -3.51e-05]</span>'
+    >>> keep_together("ignores friction: ζ < μ")
+    'ignores friction: ζ &lt; μ'
+    """
+    escaped = html.escape(text, quote=False)
+    return f'<span class="bt-num">{escaped}</span>' if _NUMERIC.match(text) else escaped
 
 
 def _warning_as_note(message, category, filename, lineno, file=None, line=None) -> None:

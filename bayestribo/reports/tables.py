@@ -19,11 +19,15 @@ from bayestribo.summary import interval_text
 __all__ = [
     "METHOD_NAMES",
     "SYMBOLS",
+    "caveat_text",
+    "diagnostics_frame",
     "estimates_frame",
     "fit_facts",
     "fit_frame",
     "law_text",
+    "method_text",
     "normal_interval",
+    "prose",
     "share_text",
     "unit_text",
     "windows_frame",
@@ -35,6 +39,8 @@ SYMBOLS = {
     "mu_k": "μ_k",
     "mu_s": "μ_s",
     "mu_s_ratio": "μ_s/μ_k",
+    "log10_discrepancy": "log₁₀ σ_d",
+    "log10_shape": "log₁₀ σ_s",
     "friction_displacement": "x_c",
     "static_friction_displacement": "x_s",
     "zeta_k": "ζ_k",
@@ -80,6 +86,52 @@ def law_text(law: str) -> str:
     return " + ".join(_TERMS.get(t, t) for t in str(law).split("+"))
 
 
+#: Column names of a run file as a reader names the quantity.
+_COLUMNS = {
+    "time_s": "time",
+    "displacement_m": "displacement",
+    "velocity_m_per_s": "velocity",
+}
+
+
+def prose(text: str, *, paths: Mapping[str, str] | None = None) -> str:
+    """A message of the package (a warning, a note) as report text: laws in words
+    ("viscous+coulomb" -> "viscous + Coulomb friction"), run-file column names as the
+    quantity ("velocity_m_per_s" -> "velocity"), quantities by their symbol ("mu_k" ->
+    "μ_k"), ``law='auto'`` as "law = auto", the
+    advice on ``columns=[...]`` left out, and each path in ``paths`` replaced by its short
+    name.
+
+    Examples
+    --------
+    >>> prose("the law viscous+coulomb misfits; fit with law='auto' (--law auto)")
+    'the law viscous + Coulomb friction misfits; fit with law = auto (--law auto)'
+    >>> prose("the law quadratic holds; the power of the test")
+    'the law quadratic drag holds; the power of the test'
+    >>> prose("/d/r.csv: 1 row(s) have no value for velocity_m_per_s; they are left out "
+    ...       "of the run (give columns=[...] with 'ignore' for a channel not to use)",
+    ...       paths={"/d/r.csv": "r"})
+    'r: 1 row(s) have no value for velocity; they are left out of the run'
+    """
+    import re
+
+    for path, short in (paths or {}).items():
+        text = text.replace(path, short)
+    text = re.sub(r" \(give columns=\[\.\.\.\][^)]*\)", "", text)
+    text = re.sub(r" \(printed as '[^']*'\)", "", text)  # the terminal's label
+    text = text.replace("law='auto'", "law = auto")
+    text = re.sub(r"\bmax_steps\b", "maximum number of steps", text)
+    for name, symbol in SYMBOLS.items():  # quantities by their symbol: mu_k -> μ_k
+        text = re.sub(rf"\b{name}\b", symbol, text)
+    for name, words in _COLUMNS.items():
+        text = re.sub(rf"\b{name}\b", words, text)
+    terms = "|".join(_TERMS)
+    # a law's name: terms joined by "+", or one term named as "the law ..." ("power" alone
+    # is a word)
+    law = rf"\b(?:{terms})(?:\+(?:{terms}))+\b|(?<=\blaw )(?:{terms})\b"
+    return re.sub(law, lambda m: law_text(m.group(0)), text)
+
+
 def unit_text(unit: str | None) -> str:
     """A unit as a reader writes it: ``"-"`` for a dimensionless quantity, ``"signal
     unit"`` for a length in a recording's unstated unit, superscript squares.
@@ -103,7 +155,7 @@ def _symbols(result: Any) -> dict[str, str]:
 def normal_interval(value: float | None, se: float | None, *, positive: bool = False) -> str:
     """``value [low, high]`` of a classical estimate: ±1.96 standard errors, in the digits
     the interval supports; a positive quantity whose interval reaches below zero is shown
-    as an upper bound (``< 8.2e-05 (at zero)``). A dash without a value; the value alone
+    at its bound (``0 (at the bound) [0, 8.2e-05]``). A dash without a value; the value alone
     (3 digits) without a standard error.
 
     Examples
@@ -111,7 +163,7 @@ def normal_interval(value: float | None, se: float | None, *, positive: bool = F
     >>> normal_interval(0.0236, 0.0001)
     '0.02360 [0.02340, 0.02380]'
     >>> normal_interval(3.97e-19, 4.2e-05, positive=True)
-    '< 8.2e-05 (at zero)'
+    '0 (at the bound) [0, 8.2e-05]'
     """
     if value is None or not math.isfinite(value):
         return "–"
@@ -154,7 +206,13 @@ def _band_text(band: Mapping[str, Any], i: int) -> str:
     return interval_text(mean, low, high)
 
 
-def fit_frame(result: Any, *, prob: float = 0.95, hidden: tuple[str, ...] = _HIDDEN) -> Any:
+def fit_frame(
+    result: Any,
+    *,
+    prob: float = 0.95,
+    hidden: tuple[str, ...] = _HIDDEN,
+    dissipation: bool = True,
+) -> Any:
     """A Bayesian fit's results: its quantities by symbol with their interval and unit,
     then the energy dissipated per cycle ΔE(A) at the largest, middle and smallest swing
     of the analysed motion, the law's and the one measured from the turning points.
@@ -166,7 +224,10 @@ def fit_frame(result: Any, *, prob: float = 0.95, hidden: tuple[str, ...] = _HID
         Probability of the intervals.
     hidden : tuple of str
         Quantities left out (the amplitude at the window's start and the static to
-        kinetic friction ratio by default; sampled scales ``log10_*`` always).
+        kinetic friction ratio by default; sampled scales ``log10_*`` unless ``hidden``
+        is empty).
+    dissipation : bool
+        Add the rows of ΔE(A).
 
     Returns
     -------
@@ -180,7 +241,7 @@ def fit_frame(result: Any, *, prob: float = 0.95, hidden: tuple[str, ...] = _HID
     column = f"value [{100 * prob:g} % interval]"
     rows = []
     for name, s in result.summary(prob).items():
-        if name in hidden or name.startswith("log10_"):
+        if name in hidden or (hidden and name.startswith("log10_")):
             continue
         rows.append(
             {
@@ -189,7 +250,7 @@ def fit_frame(result: Any, *, prob: float = 0.95, hidden: tuple[str, ...] = _HID
                 "unit": unit_text(units.get(name)),
             }
         )
-    band = result.dissipation or {}
+    band = (result.dissipation or {}) if dissipation else {}
     measured = result.turning_point_dissipation or {}
     for i in _swings(band):
         amp = f"{band['amplitude'][i]:.3g} {unit_text(band['amplitude_unit'])}"
@@ -207,6 +268,43 @@ def fit_frame(result: Any, *, prob: float = 0.95, hidden: tuple[str, ...] = _HID
     return pd.DataFrame(rows, columns=["quantity", column, "unit"]).set_index("quantity")
 
 
+def diagnostics_frame(result: Any) -> Any:
+    """The sampler's diagnostics per sampled quantity, by symbol: autocorrelation time,
+    effective sample size, R-hat between the ensembles, and how far the posterior mean
+    moves when the prior is weakened or strengthened, with the prior's contraction.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Index ``quantity``.
+    """
+    import pandas as pd
+
+    d = result.diagnostics
+    symbols = _symbols(result)
+    if "mu_k" not in result.summary():  # no load: the sampled friction is x_c in units of ℓ
+        symbols["mu_k"] = "x_c/ℓ"
+    sensitivity = result.prior_sensitivity or {}
+    rows = []
+    for name, tau in (d.get("autocorr_time") or {}).items():
+        sens = sensitivity.get(name, {})
+        rows.append(
+            {
+                "quantity": symbols.get(name, name),
+                "autocorrelation time [steps]": f"{tau:.1f}",
+                "effective sample size": f"{d['ess'][name]:.0f}",
+                "R-hat": f"{d['rhat'][name]:.4f}",
+                "mean's shift, prior ×/÷ [posterior sd]": "–"
+                if sens.get("mean_shift_sd") is None
+                else f"{sens['mean_shift_sd']:.2g}",
+                "prior contraction": "–"
+                if sens.get("contraction") is None
+                else f"{sens['contraction']:.3f}",
+            }
+        )
+    return pd.DataFrame(rows).set_index("quantity")
+
+
 def fit_facts(result: Any) -> dict[str, str]:
     """How a Bayesian fit was made and how it went, as label -> sentence: the law, the
     model, the noise, the sampler's convergence, the shape of the decay against the law,
@@ -217,7 +315,7 @@ def fit_facts(result: Any) -> dict[str, str]:
     comparison = result.law_comparison
     if comparison:
         facts["law"] += f" (chosen among the registered laws; best: {law_text(comparison['best'])})"
-    facts["model"] = f"{result.model}, seed {result.seed}"
+    facts["model"] = f"{result.model} model of Π, seed {result.seed}"
     noise = (result.noise or {}).get("description")
     if noise:
         facts["noise"] = noise
@@ -232,7 +330,8 @@ def fit_facts(result: Any) -> dict[str, str]:
     if d.get("converged"):
         facts["sampler"] = f"converged: {runs}; {stats}"
     else:
-        facts["sampler"] = "not converged (" + "; ".join(d.get("reasons", [])) + f"): {runs}"
+        reasons = prose("; ".join(d.get("reasons", [])))
+        facts["sampler"] = f"not converged ({reasons}): {runs}"
     shape = d.get("shape_departure") or {}
     if shape.get("p_value") is not None:
         if getattr(result, "law_departs", False):
@@ -258,36 +357,78 @@ def fit_facts(result: Any) -> dict[str, str]:
     return facts
 
 
-def _method(estimate: Any) -> str:
-    """A classical estimate's method in words, with the signal it used."""
-    name = METHOD_NAMES.get(estimate.method, estimate.method)
+def method_text(estimate: Any, *, physics: bool = False) -> str:
+    """A classical estimate's method in words, with the signal it used (x: displacement
+    peaks, v: velocity peaks); with ``physics``, a method that leaves friction out of its
+    model says so ("logarithmic decrement (x), ignores friction").
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as E
+    >>> e = E(method="log_decrement", data="displacement peaks", notes="assumes no friction")
+    >>> method_text(e), method_text(e, physics=True)
+    ('logarithmic decrement (x)', 'logarithmic decrement (x), ignores friction')
+    """
+    name = METHOD_NAMES.get(estimate.method, estimate.method.replace("_", " "))
     if estimate.data.startswith("displacement"):
-        return f"{name} (x)"
-    if estimate.data.startswith("velocity"):
-        return f"{name} (v)"
+        name += " (x)"
+    elif estimate.data.startswith("velocity"):
+        name += " (v)"
+    if physics and _ignores_friction(estimate.notes or ""):
+        name += ", ignores friction"
     return name
 
 
-def _caveat(notes: str) -> str:
-    """What a reader must know before using an estimate: from the method's own notes."""
+def _ignores_friction(notes: str) -> bool:
+    return "assumes no friction" in notes
+
+
+def caveat_text(estimate: Any) -> str:
+    """What a reader must know before using a classical estimate, in a few words: an
+    unphysical (negative) ζ or friction, a method that ignores friction (its ζ is too
+    high where there is some), an interval too narrow (correlated residuals) or one that
+    holds the peaks' noise only; a dash when there is nothing to say.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as E
+    >>> caveat_text(E(zeta=0.02, mu_k=-0.003, friction_displacement=None, notes=""))
+    'negative friction: unphysical, not a measurement'
+    >>> caveat_text(E(zeta=0.05, mu_k=None, friction_displacement=None,
+    ...               notes="assumes no friction (μ_k = 0)"))
+    'ignores friction: ζ too high where there is some'
+    """
+    notes = estimate.notes or ""
     said = []
-    if "assumes no friction" in notes:
-        said.append("viscous only")
+    if estimate.zeta is not None and estimate.zeta < 0:
+        said.append("negative ζ: unphysical, not a measurement")
+    friction = [getattr(estimate, n, None) for n in ("mu_k", "friction_displacement")]
+    if any(f is not None and f < 0 for f in friction):
+        said.append("negative friction: unphysical, not a measurement")
+    if _ignores_friction(notes):
+        said.append("ignores friction: ζ too high where there is some")
     if "too small" in notes:
-        said.append("interval too narrow")
-    if "peak noise only" in notes and not said:
-        said.append("peak noise only")
+        said.append("interval too narrow (correlated residuals)")
+    if "peak noise only" in notes and not _ignores_friction(notes):
+        said.append("interval from the peak noise only")
     return "; ".join(said) or "–"
+
+
+def _signed_interval(value: float | None, se: float | None) -> str:
+    """A classical estimate's interval: at its bound at zero where it reaches below zero
+    from a positive value, as it is where the value itself is negative (unphysical,
+    said in the caveat)."""
+    return normal_interval(value, se, positive=value is not None and value >= 0)
 
 
 def estimates_frame(table: Any, *, unit: str = "m") -> Any:
     """Classical estimates of one recording: per method (x: displacement peaks, v:
     velocity peaks), ζ and the friction (μ_k where load and mass are known, else the
     friction displacement x_c in ``unit``) with ±1.96 standard errors, the share of the
-    energy lost to friction, and a caveat from the method's notes in two or three words:
-    *viscous only* (the method assumes no friction: ζ too high where there is some),
-    *interval too narrow* (correlated residuals), *peak noise only* (the interval holds
-    the peaks' noise and nothing else).
+    energy lost to friction, and a caveat (:func:`caveat_text`): a negative ζ or friction
+    is unphysical, a method that *ignores friction* gives a ζ too high where there is
+    some, an interval may be *too narrow* (correlated residuals) or hold the peaks' noise
+    only.
 
     Returns
     -------
@@ -306,23 +447,30 @@ def estimates_frame(table: Any, *, unit: str = "m") -> Any:
         value = getattr(e, friction)
         rows.append(
             {
-                "method": _method(e),
-                "ζ [95 %]": normal_interval(e.zeta, e.zeta_se, positive=True),
+                "method": method_text(e),
+                "ζ [95 %]": _signed_interval(e.zeta, e.zeta_se),
                 label: "–"
                 if value is None
-                else normal_interval(value, getattr(e, f"{friction}_se"), positive=True),
+                else _signed_interval(value, getattr(e, f"{friction}_se")),
                 "friction share": share_text(e.friction_fraction),
-                "caveat": _caveat(e.notes or ""),
+                "caveat": caveat_text(e),
             }
         )
     return pd.DataFrame(rows).set_index("method")
 
 
-def windows_frame(adequacy: Any) -> Any:
+def windows_frame(adequacy: Any, *, unit: str | None = None) -> Any:
     """The windowed fits of an adequacy check, then its two halves (if made): time span,
     amplitude range, ζ and the friction with their 95 % intervals (the friction left out
     where the windows hold it at the whole decay's value), and whether an estimate sits
     on a parameter's bound.
+
+    Parameters
+    ----------
+    adequacy : AdequacyResult
+    unit : str, optional
+        The amplitudes' and friction displacement's unit (default: the check's own,
+        "signal unit" without a load; "m" for a recording in metres).
 
     Returns
     -------
@@ -332,7 +480,7 @@ def windows_frame(adequacy: Any) -> Any:
     import pandas as pd
 
     w = adequacy.windows
-    unit = unit_text(w.length_unit)
+    unit = unit_text(unit or w.length_unit)
     friction = "μ_k" if w.friction_name == "mu_k" else f"x_c [{unit}]"
     held = w.extra.get("friction_mode", "fit") == "fixed"
 
