@@ -299,11 +299,25 @@ def refine(posterior: Posterior, theta: NDArray) -> tuple[NDArray, NDArray]:
         if isinstance(posterior.priors[names[i]], Normal)
     ]
 
+    low, high = _free_bounds(posterior, [names[i] for i in free])
+    bounded = np.flatnonzero(np.isfinite(low) | np.isfinite(high))
+
     def residual_rows(u: NDArray) -> NDArray:
         """Residuals at the rows ``u`` (k, free) in one call of the posterior."""
         th = np.repeat(theta[None], u.shape[0], axis=0)
         th[:, free] = theta[free] + u * scale
-        out = np.full((u.shape[0], size + len(gaussian)), 1e6)
+        # A step across a bound of the support is evaluated at the bound (the nearest
+        # point inside), plus a residual for each coordinate beyond it: the optimiser
+        # keeps moving the others along the bound where the optimum sits on it (a drag
+        # piled at zero), instead of stalling at a wall of rejected steps.
+        beyond = np.zeros((u.shape[0], bounded.size))
+        if bounded.size:
+            part = th[:, free]
+            inside = np.clip(part, low, high)
+            beyond = ((part - inside) / scale)[:, bounded]
+            th[:, free] = inside
+        out = np.full((u.shape[0], size + len(gaussian) + bounded.size), 1e6)
+        out[:, size + len(gaussian) :] = beyond
         # inside the priors' support, a row whose residuals are not all finite is
         # outside the law's domain (the model cannot move there): both get 1e6. The
         # model is evaluated once per row (the law's integrator where it has no
@@ -324,11 +338,13 @@ def refine(posterior: Posterior, theta: NDArray) -> tuple[NDArray, NDArray]:
         last[:] = [np.array(u, dtype=float), f]
         return f
 
-    def jacobian(u: NDArray) -> NDArray:
+    def jacobian(u: NDArray, sign: NDArray | None = None) -> NDArray:
         # forward differences as scipy's "2-point" takes them (step √ε max(1, |u|)),
         # every shifted point in one call of the posterior
         u = np.asarray(u, dtype=float)
-        h = np.sqrt(np.finfo(float).eps) * np.where(u >= 0, 1.0, -1.0) * np.maximum(1.0, abs(u))
+        if sign is None:
+            sign = np.where(u >= 0, 1.0, -1.0)
+        h = np.sqrt(np.finfo(float).eps) * sign * np.maximum(1.0, abs(u))
         h = (u + h) - u
         if last and np.array_equal(last[0], u):
             f0 = last[1]
@@ -341,10 +357,19 @@ def refine(posterior: Posterior, theta: NDArray) -> tuple[NDArray, NDArray]:
     # Levenberg-Marquardt (MINPACK) needs at least as many residuals as unknowns; it
     # follows the ζ-μ_k ridge in a few iterations where the trust-region method
     # crawls along it (two to four times the time on the bundled run).
-    method = "lm" if size + len(gaussian) >= len(free) else "trf"
+    method = "lm" if size + len(gaussian) + bounded.size >= len(free) else "trf"
     sol = least_squares(residuals, np.zeros(len(free)), jac=jacobian, x_scale="jac", method=method)
-    theta[free] = theta[free] + sol.x * scale
-    jac = sol.jac / scale[None, :]  # includes the Gaussian priors' rows
+    found = theta[free] + sol.x * scale
+    jac = sol.jac
+    if bounded.size and np.any((found < low) | (found > high)):
+        # stopped beyond a bound: the optimum is on it; its Jacobian is taken there,
+        # with the differences stepping into the support
+        found = np.clip(found, low, high)
+        sign = np.where(found >= high, -1.0, 1.0)
+        jac = jacobian((found - theta[free]) / scale, sign)
+    theta[free] = found
+    # the Laplace covariance from the residuals of the data and the Gaussian priors
+    jac = jac[: size + len(gaussian)] / scale[None, :]
     try:
         cov_free = np.linalg.inv(jac.T @ jac)
     except np.linalg.LinAlgError:
@@ -352,6 +377,14 @@ def refine(posterior: Posterior, theta: NDArray) -> tuple[NDArray, NDArray]:
     cov = np.zeros((len(names), len(names)))
     cov[np.ix_(free, free)] = cov_free
     return theta, cov
+
+
+def _free_bounds(posterior: Posterior, names: list[str]) -> tuple[NDArray, NDArray]:
+    """Lower and upper bounds of the priors' support of ``names`` (infinite where
+    unbounded)."""
+    bounds = np.array([_support(posterior.priors[n]) for n in names], dtype=float)
+    bounds = bounds.reshape(len(names), 2)
+    return bounds[:, 0], bounds[:, 1]
 
 
 def maximum_a_posteriori(
