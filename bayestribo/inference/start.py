@@ -362,24 +362,60 @@ def refine(posterior: Posterior, theta: NDArray) -> tuple[NDArray, NDArray]:
     method = "lm" if size + len(gaussian) + bounded.size >= len(free) else "trf"
     sol = least_squares(residuals, np.zeros(len(free)), jac=jacobian, x_scale="jac", method=method)
     found = theta[free] + sol.x * scale
-    jac = sol.jac
-    if bounded.size and np.any((found <= low) | (found >= high)):
+    jac, fun = sol.jac, sol.fun
+    on_bound = (found <= low) | (found >= high)
+    if np.any(on_bound):
         # stopped on or beyond a bound: the optimum is on it; its Jacobian is taken
         # there, with the differences stepping into the support (the optimiser's last
         # one may be from beyond the bound, where the residuals do not change)
         found = np.clip(found, low, high)
-        sign = np.where(found >= high, -1.0, 1.0)
-        jac = jacobian((found - theta[free]) / scale, sign)
+        u = (found - theta[free]) / scale
+        fun = residual_rows(u[None])[0]
+        jac = jacobian(u, np.where(found >= high, -1.0, 1.0))
     theta[free] = found
     # the Laplace covariance from the residuals of the data and the Gaussian priors
-    jac = jac[: size + len(gaussian)] / scale[None, :]
+    rows = size + len(gaussian)
+    jac, fun = jac[:rows] / scale[None, :], fun[:rows]
     try:
         cov_free = np.linalg.inv(jac.T @ jac)
     except np.linalg.LinAlgError:
         cov_free = np.diag((1e-3 * np.maximum(np.abs(theta[free]), 1e-6)) ** 2)
+    cov_free = _pinned_by_slope(cov_free, jac, fun, on_bound, found >= high)
     cov = np.zeros((len(names), len(names)))
     cov[np.ix_(free, free)] = cov_free
     return theta, cov
+
+
+def _pinned_by_slope(
+    cov: NDArray, jac: NDArray, fun: NDArray, on_bound: NDArray, upper: NDArray
+) -> NDArray:
+    """The Laplace covariance with the coordinates an optimum on a bound is pinned to
+    by the slope of the log density there.
+
+    At a bound the log density need not be flat: where it falls into the support with
+    slope g (``-(Jᵀ f)``, the residuals ``fun`` and their Jacobian ``jac`` at the
+    optimum), the posterior of that coordinate is an exponential of scale 1/|g|, which
+    can be far narrower than the curvature's standard deviation (a drag piled at zero
+    by a law that misfits: 1e-11 against 3e-7). Such a coordinate gets the variance
+    1/g² and no correlation; the others their covariance with it held at the bound.
+    """
+    pinned = np.zeros(on_bound.size, dtype=bool)
+    slope = -(jac.T @ fun)
+    for k in np.flatnonzero(on_bound):
+        inward = -slope[k] if upper[k] else slope[k]
+        if inward < 0 and 1.0 / abs(inward) < math.sqrt(max(cov[k, k], 0.0)):
+            pinned[k] = True
+    if not np.any(pinned):
+        return cov
+    out = np.zeros_like(cov)
+    rest = ~pinned
+    if np.any(rest):
+        try:
+            out[np.ix_(rest, rest)] = np.linalg.inv(jac[:, rest].T @ jac[:, rest])
+        except np.linalg.LinAlgError:
+            out[np.ix_(rest, rest)] = cov[np.ix_(rest, rest)]
+    out[pinned, pinned] = 1.0 / slope[pinned] ** 2
+    return out
 
 
 def _free_bounds(posterior: Posterior, names: list[str]) -> tuple[NDArray, NDArray]:
