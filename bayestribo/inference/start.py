@@ -25,6 +25,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -206,9 +207,41 @@ def _plateau_middle(posterior: Posterior, theta: NDArray) -> NDArray:
 _MAX_ROUNDS = 4
 
 
+Optimum = tuple[NDArray, NDArray, float]
+
+
+class _Joined(Exception):
+    """A start came within reach of an optimum found before (:func:`_optimise`)."""
+
+    def __init__(self, optimum: Optimum) -> None:
+        super().__init__()
+        self.optimum = optimum
+
+
+def _joins(posterior: Posterior, found: list[Optimum]) -> Callable[[NDArray], None] | None:
+    """A check for :func:`refine` that raises :class:`_Joined` at a point within one
+    Laplace sd of an optimum of ``found`` in every continuous coordinate, with μ_s/μ_k
+    equal (the same step): from there the least squares would end at that optimum."""
+    if not found:
+        return None
+    ratio = posterior.names.index("mu_s_ratio") if "mu_s_ratio" in posterior.names else None
+    known = [(t, np.sqrt(np.clip(np.diag(c), 0.0, None)), (t, c, lp)) for t, c, lp in found]
+    known = [k for k in known if np.isfinite(k[2][2])]
+
+    def check(theta: NDArray) -> None:
+        for other, sd, optimum in known:
+            if _same_optimum(theta, other, sd, ratio):
+                raise _Joined(optimum)
+
+    return check
+
+
 def _optimise(
-    posterior: Posterior, guess: dict[str, float], ratio: float | None = None
-) -> tuple[NDArray, NDArray, float]:
+    posterior: Posterior,
+    guess: dict[str, float],
+    ratio: float | None = None,
+    found: list[Optimum] | None = None,
+) -> Optimum:
     """Optimum from one guess and its Laplace covariance and log density.
 
     Parameters
@@ -220,6 +253,10 @@ def _optimise(
     ratio : float, optional
         Start with μ_s/μ_k here; default: the middle of the highest step of its scan
         at the guess.
+    found : list, optional
+        Optima found from other starts: when the least squares come within one
+        Laplace sd of one of them (on the same step of μ_s/μ_k), that optimum is
+        returned at once (the coarse multi-start of :func:`maximum_a_posteriori`).
 
     Returns
     -------
@@ -244,11 +281,28 @@ def _optimise(
     has_ratio = "mu_s_ratio" in names
     if has_ratio and ratio is None:
         theta = _plateau_middle(posterior, theta)
-    best: tuple[NDArray, NDArray, float] | None = None
+    near = _joins(posterior, found or [])
+    try:
+        return _rounds(posterior, theta, has_ratio, near)
+    except _Joined as joined:
+        return joined.optimum
+
+
+def _rounds(
+    posterior: Posterior,
+    theta: NDArray,
+    has_ratio: bool,
+    near: Callable[[NDArray], None] | None,
+) -> Optimum:
+    """Least squares and ratio scans in turn from ``theta`` (see :func:`_optimise`)."""
+    names = posterior.names
+    best: Optimum | None = None
     for _ in range(_MAX_ROUNDS if has_ratio else 1):
         if not np.isfinite(posterior(theta[None])[0]):
             break
-        opt, cov = refine(posterior, theta)
+        if near is not None:
+            near(theta)
+        opt, cov = refine(posterior, theta, near=near)
         lp = float(posterior(opt[None])[0])
         stepped = False
         if has_ratio:
@@ -268,7 +322,12 @@ def _optimise(
     return best
 
 
-def refine(posterior: Posterior, theta: NDArray) -> tuple[NDArray, NDArray]:
+def refine(
+    posterior: Posterior,
+    theta: NDArray,
+    *,
+    near: Callable[[NDArray], None] | None = None,
+) -> tuple[NDArray, NDArray]:
     """Least-squares MAP of the continuous coordinates from ``theta``, and its Laplace
     covariance (μ_s/μ_k and the discrepancy held at their values in ``theta``).
 
@@ -280,6 +339,9 @@ def refine(posterior: Posterior, theta: NDArray) -> tuple[NDArray, NDArray]:
         coordinates pinned).
     theta : ndarray
         Starting point in sampling coordinates, with a finite posterior density.
+    near : callable, optional
+        Called with each point (sampling coordinates) at which the residuals are
+        evaluated; an exception it raises ends the least squares and propagates.
 
     Returns
     -------
@@ -336,6 +398,10 @@ def refine(posterior: Posterior, theta: NDArray) -> tuple[NDArray, NDArray]:
     last: list[NDArray] = []
 
     def residuals(u: NDArray) -> NDArray:
+        if near is not None:
+            at = theta.copy()
+            at[free] = theta[free] + np.asarray(u, dtype=float) * scale
+            near(at)
         f = residual_rows(np.asarray(u, dtype=float)[None])[0]
         last[:] = [np.array(u, dtype=float), f]
         return f
@@ -462,7 +528,10 @@ def maximum_a_posteriori(
     if coarse is None:
         optima = [_optimise(posterior, guess, ratio) for guess, ratio in starts]
     else:
-        rough = [_optimise(coarse, guess, ratio) for guess, ratio in starts]
+        rough: list[Optimum] = []
+        for guess, ratio in starts:
+            # a start that comes within reach of an optimum found before ends there
+            rough.append(_optimise(coarse, guess, ratio, found=rough))
         optima = [_polish(posterior, t) for t in _candidates(posterior, coarse, rough)]
     theta, cov, _ = optima[int(np.argmax([lp for _, _, lp in optima]))]
     return theta, cov, _ratio_range(posterior, theta)
