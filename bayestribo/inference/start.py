@@ -532,7 +532,7 @@ def maximum_a_posteriori(
         for guess, ratio in starts:
             # a start that comes within reach of an optimum found before ends there
             rough.append(_optimise(coarse, guess, ratio, found=rough))
-        optima = [_polish(posterior, t) for t in _candidates(posterior, coarse, rough)]
+        optima = [_polish(posterior, t) for t in _candidates(posterior, rough)]
     theta, cov, _ = optima[int(np.argmax([lp for _, _, lp in optima]))]
     return theta, cov, _ratio_range(posterior, theta)
 
@@ -557,9 +557,7 @@ def _coarse(posterior: Posterior) -> Posterior | None:
     return replace(posterior, likelihood=replace(lik, steps=COARSE_STEPS))
 
 
-def _candidates(
-    posterior: Posterior, coarse: Posterior, rough: list[tuple[NDArray, NDArray, float]]
-) -> list[NDArray]:
+def _candidates(posterior: Posterior, rough: list[Optimum]) -> list[NDArray]:
     """The optima of the coarse multi-start worth polishing with the exact model.
 
     Optima within a Laplace standard deviation of a better one in every continuous
