@@ -16,7 +16,17 @@
    covariance (JᵀJ)⁻¹ follows. Scan and least squares alternate until the log density
    stops rising or the scan leaves the ratio on its step, from each guess with the
    ratio at the middle of the highest step and at the middle of the ratio's range;
-   the best optimum by log density is kept.
+   the best optimum by log density is kept. A step across a bound of a prior's
+   support is evaluated at the bound (with a residual for the excess), so that an
+   optimum on the bound (a drag the data put at zero) is followed along it; where the
+   log density's slope pins a coordinate to its bound, its Laplace variance is the
+   exponential's, 1/g².
+   For a law without a closed form with a drag (each evaluation integrates the
+   motion) the starts run on a coarse model, 8 Runge-Kutta steps per half cycle (Π
+   within ~1e-5 of Π(0), several times cheaper), each ending as soon as it comes
+   within one Laplace sd of an optimum found before; the distinct optima within
+   ``2 d + 10`` of the best coarse log density (``d`` the coarse model's error there)
+   are each polished with the exact integrator, and the best is kept.
 4. Walkers are drawn from that Gaussian (μ_s/μ_k uniformly over the ratios within
    0.5 of the best log density), each kept only if its log density is within
    ``d + 10`` of the best, so that every ensemble starts in the typical set.
