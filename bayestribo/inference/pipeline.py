@@ -556,17 +556,33 @@ def sample(
             alt, alt_cov = refine(posterior, start)
             if posterior(alt[None])[0] > posterior(theta[None])[0]:
                 theta, cov = alt, alt_cov
-    walkers = initial_walkers(
-        posterior, theta, cov, ratio_range, settings.n_ensembles, settings.n_walkers, rng
-    )
-    seed_of_run = int(rng.integers(2**31))
     checked: SurrogateCheck | None = None
     target: Posterior | None = None
     run: SamplerRun | None = None
+    first = None
     if surrogate and not posterior.law.closed_form and posterior.likelihood.model == "exact":
+        first = _first_surrogate(posterior, theta, cov)
+    # the walkers are kept by the surrogate's density where there is one (it stands for
+    # the exact one near the optimum, where they start, at no integration of the law)
+    walkers = initial_walkers(
+        posterior if first is None else first,
+        theta,
+        cov,
+        ratio_range,
+        settings.n_ensembles,
+        settings.n_walkers,
+        rng,
+    )
+    seed_of_run = int(rng.integers(2**31))
+    if first is not None:
         run, checked, target = _sample_surrogate(
-            posterior, theta, cov, walkers, settings, seed_of_run, progress
+            posterior, theta, cov, walkers, settings, seed_of_run, progress, first
         )
+        if run is None:
+            # the exact posterior is sampled: its walkers by its own density
+            walkers = initial_walkers(
+                posterior, theta, cov, ratio_range, settings.n_ensembles, settings.n_walkers, rng
+            )
     if run is None:
         # -- a failure inside sampling is a reported non-convergence (inference/modes.py) --
         run = run_or_failure(
@@ -585,6 +601,19 @@ def sample(
     return Sampled(posterior, theta, run, settings, checked, target)
 
 
+def _first_surrogate(posterior: Posterior, theta: NDArray, cov: NDArray) -> Posterior | None:
+    """The surrogate posterior about the maximum a posteriori with the Laplace scales
+    (:func:`~bayestribo.inference.surrogate.surrogate_posterior`), or None when it
+    cannot be built or has no compiled density (the exact posterior is sampled)."""
+    sd = np.sqrt(np.clip(np.diag(np.atleast_2d(cov)), 0.0, None))
+    target = surrogate_posterior(posterior, theta, NODE_SCALE * sd)
+    if target is None or not target.uses_compiled:
+        return None
+    if not np.isfinite(target(np.asarray(theta, dtype=float)[None])[0]):
+        return None
+    return target
+
+
 def _sample_surrogate(
     posterior: Posterior,
     theta: NDArray,
@@ -593,22 +622,26 @@ def _sample_surrogate(
     settings: SamplerSettings,
     seed: int,
     progress: bool,
+    first: Posterior | None = None,
 ) -> tuple[SamplerRun | None, SurrogateCheck | None, Posterior | None]:
     """Sample the quadratic surrogate posterior of a law without a closed form and
     check it against the exact one (:mod:`bayestribo.inference.surrogate`).
 
-    The surrogate is built about the maximum a posteriori with the Laplace scales; if
-    its check fails, again about the best draw checked with the surrogate posterior's
-    spread (up to :data:`~bayestribo.inference.surrogate.ATTEMPTS` surrogates).
-    Returns the run, the last check and the surrogate posterior when a check passed;
-    ``(None, check, None)`` when none did (the caller samples the exact posterior).
+    The surrogate is built about the maximum a posteriori with the Laplace scales
+    (``first``, when the caller has built it already); if its check fails, again about
+    the best draw checked with the surrogate posterior's spread (up to
+    :data:`~bayestribo.inference.surrogate.ATTEMPTS` surrogates). Returns the run, the
+    last check and the surrogate posterior when a check passed; ``(None, check, None)``
+    when none did (the caller samples the exact posterior).
     """
     rng = np.random.default_rng(seed)
     sd = np.sqrt(np.clip(np.diag(np.atleast_2d(cov)), 0.0, None))
     centre, scale = theta, NODE_SCALE * sd
     checked: SurrogateCheck | None = None
     for attempt in range(1, ATTEMPTS + 1):
-        target = surrogate_posterior(posterior, centre, scale)
+        target = first if attempt == 1 and first is not None else None
+        if target is None:
+            target = surrogate_posterior(posterior, centre, scale)
         if target is None or not target.uses_compiled:
             return None, checked, None
         run = run_or_failure(run_ensembles, target, walkers, settings, seed=seed, progress=progress)
