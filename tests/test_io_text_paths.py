@@ -260,14 +260,17 @@ def _large_record(path: Path) -> None:
     )
 
 
-@pytest.mark.parametrize("parser", ["pyarrow", "pandas"])
+@pytest.mark.parametrize(
+    ("parser", "threads"), [("pyarrow", False), ("pyarrow", True), ("pandas", None)]
+)
 def test_a_large_file_with_comments_and_units_reads_as_the_row_by_row_reader_reads_it(
-    parser: str, tmp_path: Path, monkeypatch
+    parser: str, threads: bool | None, tmp_path: Path, monkeypatch
 ) -> None:
-    """The whole fast path (the head laid out, the rows parsed by a compiled parser)
-    against the row-by-row reader alone, on a file of the size the fast path is for:
-    the same arrays bit for bit and the same warnings."""
+    """The whole fast path (the head laid out, the rows parsed by a compiled parser, on
+    one thread or several) against the row-by-row reader alone, on a file of the size
+    the fast path is for: the same arrays bit for bit and the same warnings."""
     pytest.importorskip(parser)
+    monkeypatch.setattr(bulk_text, "ARROW_THREADS", threads)
     path = tmp_path / "run.csv"
     _large_record(path)
     assert path.stat().st_size > text_module._ARROW_BYTES

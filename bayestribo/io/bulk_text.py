@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import csv
 import importlib.util
+import os
 import re
 import sys
 from pathlib import Path
@@ -32,12 +33,29 @@ from numpy.typing import NDArray
 
 __all__ = ["ARROW_THREADS", "arrow_available", "read_numbers"]
 
-#: Whether pyarrow's reader parses blocks of the file on its thread pool. On a machine
-#: whose cores are busy the threads wait for each other (see the module notes; reading
-#: and checking the 1 MHz record with ``read_run`` took 0.85 to 1.07 s on one thread,
-#: 1.10 to 1.25 s on two, at a load of 12 on two cores), and one thread takes less
-#: memory; two would gain about 0.1 s on an idle machine.
-ARROW_THREADS = False
+#: Whether pyarrow's reader parses blocks of the file on its thread pool: True, False,
+#: or None for "when the machine has a core to spare" (a load average over the last
+#: minute at most the cores this process may run on less one). On a machine whose
+#: cores are busy the threads wait for each other (see the module notes; reading and
+#: checking the 1 MHz record with ``read_run`` took 0.85 to 1.07 s on one thread, 1.10
+#: to 1.25 s on two, at a load of 12 on two cores) and take more memory; on a free
+#: second core they parse blocks side by side.
+ARROW_THREADS: bool | None = None
+
+
+def _arrow_threads() -> bool:
+    """Whether pyarrow's reader runs on its thread pool (:data:`ARROW_THREADS`)."""
+    if ARROW_THREADS is not None:
+        return bool(ARROW_THREADS)
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        cores = os.cpu_count() or 1
+    try:
+        load = os.getloadavg()[0]
+    except (AttributeError, OSError):
+        return False
+    return cores >= 2 and load <= cores - 1
 
 
 def arrow_available() -> bool:
@@ -107,7 +125,7 @@ def _read_arrow(path: Path, delimiter: str | None, skip: int, width: int) -> lis
         table = arrow_csv.read_csv(
             path,
             read_options=arrow_csv.ReadOptions(
-                skip_rows=skip, column_names=names, use_threads=ARROW_THREADS
+                skip_rows=skip, column_names=names, use_threads=_arrow_threads()
             ),
             parse_options=arrow_csv.ParseOptions(
                 delimiter=delimiter, quote_char=False, escape_char=False, newlines_in_values=False
