@@ -335,3 +335,26 @@ def test_a_folder_of_recordings_takes_the_fit_options(tmp_path, captured):
     name, params, _ = captured[-1]
     assert name == "real_data"
     assert params["fit_kwargs"] == {"law": "auto", "notch": 50.0, "discrepancy": True}
+
+
+def test_a_folder_report_exits_as_fit_would_for_each_recording():
+    """The real-data report's record gives the reasons `bayestribo fit` would exit 1 for,
+    recording by recording: not converged, a misfit, a law comparison with no law
+    adequate; none for a recording whose fit is right."""
+    from bayestribo.cli.report import recordings_reasons
+
+    good = {"diagnostics": {"converged": True, "misfit_p": 0.4}, "law_comparison": None}
+    misfit = {"diagnostics": {"converged": True, "misfit_p": 1e-9}, "parameters": {}}
+    stuck = {"diagnostics": {"converged": False, "reasons": ["R-hat 1.2"], "misfit_p": 0.3}}
+    no_law = {
+        "diagnostics": {"converged": True, "misfit_p": 0.3},
+        "law_comparison": {"adequate": False},
+    }
+    assert recordings_reasons({"fits": {"a.csv": good}}) == []
+    reasons = recordings_reasons(
+        {"fits": {"a.csv": good, "b.csv": misfit, "c.csv": stuck, "d.csv": no_law}}
+    )
+    assert [r.split(":")[0] for r in reasons] == ["b.csv", "c.csv", "d.csv"]
+    assert "misfits" in reasons[0] and "R-hat 1.2" in reasons[1] and "no law" in reasons[2]
+    inadequate = {"fits": {"a.csv": good}, "adequacy": {"a.csv": {"adequate": False}}}
+    assert recordings_reasons(inadequate)[0].startswith("a.csv: ")

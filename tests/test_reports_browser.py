@@ -143,7 +143,9 @@ def test_the_report_of_the_spring_and_disc_rig_speaks_of_that_rig(tmp_path):
     out = tmp_path / "spring.html"
     argv = ["report", str(SPRING_DISC), "--columns", "t", "x", "v", "ignore", "--out", str(out)]
     argv += ["--param", "check_files=[]", "--param", "fit_kwargs={'max_steps': 3000}"]
-    main(argv)  # exit 1 is allowed: the law may not hold for air drag on a disc
+    # `bayestribo fit` exits 1 on these recordings (the law misfits air drag on a disc,
+    # benchmarks/results/report_vs_fit.json): so does their report
+    assert main(argv) == 1
     page = inspect_report(out)
     assert page.all_images_loaded and page.figures >= 2
     _clean(page)

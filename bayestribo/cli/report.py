@@ -379,7 +379,7 @@ def run(args: argparse.Namespace) -> int:
     if where:
         print(where, file=sys.stderr)
     with tempfile.TemporaryDirectory() as tmp:
-        if notebook == "single_run" and not params.get("summary_path"):
+        if notebook in ("single_run", "real_data") and not params.get("summary_path"):
             params["summary_path"] = str(Path(tmp) / "summary.json")
         run_report(
             notebook,
@@ -389,9 +389,13 @@ def run(args: argparse.Namespace) -> int:
             show_code=args.show_code,
         )
         reasons = []
-        summary = Path(params.get("summary_path") or tmp) if notebook == "single_run" else None
+        summary = Path(params["summary_path"]) if params.get("summary_path") else None
         if summary is not None and summary.is_file():
-            reasons = fit_reasons(json.loads(summary.read_text()))
+            record = json.loads(summary.read_text())
+            if notebook == "single_run":
+                reasons = fit_reasons(record)
+            elif notebook == "real_data":
+                reasons = recordings_reasons(record)
     print(f"report written to {out.resolve()}")
     print(f"figures ({args.figure_format}) in {figures.resolve()}")
     for reason in reasons:
@@ -502,6 +506,22 @@ def _check_reading(path: Path, reading: dict[str, Any], *, guessed: bool = False
             f"{campaign}{exc}; say how this rig's files are read with --columns (e.g. "
             "--columns t x v ignore), --length-unit and the other reading options"
         ) from None
+
+
+def recordings_reasons(record: dict[str, Any]) -> list[str]:
+    """What is not right in a folder of recordings' report record (``summary_path`` of
+    the real-data report), recording by recording, as `bayestribo fit` would exit 1 for
+    each: :func:`fit_reasons` of each fit, and a law comparison (``--law auto``) that
+    finds no law adequate; empty when all is right."""
+    out = []
+    adequacy = record.get("adequacy") or {}
+    for name, fit in (record.get("fits") or {}).items():
+        reasons = fit_reasons({"fit": fit, "adequacy": adequacy.get(name)})
+        comparison = (fit or {}).get("law_comparison") or {}
+        if comparison.get("adequate") is False:
+            reasons.append("no law compared describes the recording (law_comparison)")
+        out += [f"{name}: {reason}" for reason in reasons]
+    return out
 
 
 def fit_reasons(record: dict[str, Any]) -> list[str]:
