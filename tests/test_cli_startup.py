@@ -118,3 +118,25 @@ def test_the_fit_command_freezes_its_imports_only_in_a_process_it_owns(tmp_path)
     assert probe["gc_enabled"] is True
     assert probe["frozen"] > 100_000
     assert probe["unused"] == []
+
+
+def test_the_estimators_reexports_are_the_functions_whatever_was_imported_first():
+    # Lazily re-exported names, and feeny_liang whose module has its name, after each
+    # method's module was imported directly (a fresh interpreter: nothing imported
+    # before the probe).
+    code = (
+        "import inspect, importlib\n"
+        "for m in ('all', 'decrement', 'energy_ls', 'feeny_liang', 'nonsuccessive', 'result'):\n"
+        "    importlib.import_module('bayestribo.estimators.' + m)\n"
+        "import bayestribo.estimators as e\n"
+        "from bayestribo.estimators import feeny_liang\n"
+        "bad = [n for n in e.__all__ if inspect.ismodule(getattr(e, n))]\n"
+        "assert callable(feeny_liang) and not inspect.ismodule(feeny_liang), feeny_liang\n"
+        "assert not bad, bad\n"
+    )
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]),
+    }
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert done.returncode == 0, done.stderr

@@ -25,8 +25,11 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-# Re-exported lazily: the fit imports only the successive-peak estimate (its starting
-# point), not every method and their SciPy modules.
+# The successive-peak estimate (the fit's starting point) is imported at once: its
+# function has its module's name, which the import of that module would otherwise
+# leave bound here. The other methods, and their SciPy modules, are re-exported lazily.
+from bayestribo.estimators.feeny_liang import feeny_liang as feeny_liang
+
 _LAZY: dict[str, str] = {
     "estimate_all": "bayestribo.estimators.all",
     "estimate_signals": "bayestribo.estimators.all",
@@ -34,14 +37,13 @@ _LAZY: dict[str, str] = {
     "log_decrement": "bayestribo.estimators.decrement",
     "energy_data": "bayestribo.estimators.energy_ls",
     "energy_least_squares": "bayestribo.estimators.energy_ls",
-    "feeny_liang": "bayestribo.estimators.feeny_liang",
     "nonsuccessive_peaks": "bayestribo.estimators.nonsuccessive",
     "Estimate": "bayestribo.estimators.result",
     "EstimateTable": "bayestribo.estimators.result",
     "friction_fraction": "bayestribo.estimators.result",
 }
 
-__all__ = sorted(_LAZY, key=lambda name: (name[0].islower(), name))
+__all__ = sorted([*_LAZY, "feeny_liang"], key=lambda name: (name[0].islower(), name))
 
 
 def __getattr__(name: str) -> Any:
