@@ -459,7 +459,83 @@ def refine(
     cov_free = _pinned_by_slope(cov_free, jac, fun, on_bound, found >= high)
     cov = np.zeros((len(names), len(names)))
     cov[np.ix_(free, free)] = cov_free
-    return theta, cov
+    return _measured_at_bounds(posterior, theta, cov, free, low, high, jac)
+
+
+#: Steps into the support at which the log density is evaluated from a bound, in units
+#: of the Laplace standard deviation: 1 down to 1e-8.
+_LADDER = 10.0 ** -np.arange(0, 9)
+
+
+def _measured_at_bounds(
+    posterior: Posterior,
+    theta: NDArray,
+    cov: NDArray,
+    free: list[int],
+    low: NDArray,
+    high: NDArray,
+    jac: NDArray,
+) -> tuple[NDArray, NDArray]:
+    """The optimum and Laplace covariance with the width of each coordinate whose
+    bound lies within its Laplace reach measured on the log density itself.
+
+    A coordinate within half a unit of log density of a bound of its support (a drag
+    the data put at zero) is not described by the curvature of finite differences: the
+    difference is taken a rounding error from the bound, where an integrated Π's own
+    error (~1e-11 of Π) can swamp the change of a weak coordinate, and the posterior
+    there is an exponential or a half-Gaussian, not a Gaussian. The log density is
+    evaluated along the coordinate from the bound into the support, at
+    :data:`_LADDER` times its Laplace sd, the others held; where it falls by 0.5 from
+    the bound at a step w within that sd, the optimum is put on the bound and the
+    coordinate gets the standard deviation 2w (the exponential's 1/g where the fall is
+    linear, g = 0.5/w; twice a half-Gaussian's scale), uncorrelated with the others,
+    whose covariance becomes their Laplace covariance with it held there (from the
+    residuals' Jacobian ``jac`` in the free coordinates' units, rows × free).
+    Elsewhere nothing changes.
+    """
+    sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    widths: dict[int, float] = {}
+    for j, i in enumerate(free):
+        for bound, inward in ((low[j], 1.0), (high[j], -1.0)):
+            if not np.isfinite(bound) or not sd[i] > 0:
+                continue
+            if abs(theta[i] - bound) > 3.0 * sd[i]:
+                continue
+            rows = np.repeat(theta[None], _LADDER.size + 2, axis=0)
+            rows[1, i] = bound
+            rows[2:, i] = bound + inward * sd[i] * _LADDER
+            lp = posterior(rows)
+            if not np.all(np.isfinite(lp[:2])) or lp[0] > lp[1] + 0.5:
+                continue  # the optimum is inside, half a unit above the bound
+            fall = lp[1] - lp[2:][::-1]  # from the smallest step to the largest
+            steps = (sd[i] * _LADDER)[::-1]
+            if not np.all(np.isfinite(fall)) or np.any(fall < -1e-6) or fall[-1] < 0.5:
+                continue  # rises into the support, or falls by less than 0.5 within sd
+            k = int(np.argmax(fall >= 0.5))
+            if k == 0:
+                width = steps[0]
+            else:
+                # log-linear between the two steps that straddle a fall of 0.5
+                x0, x1 = np.log(steps[k - 1]), np.log(steps[k])
+                f0, f1 = fall[k - 1], fall[k]
+                width = float(np.exp(x0 + (0.5 - f0) / (f1 - f0) * (x1 - x0)))
+            theta = theta.copy()
+            theta[i] = bound
+            widths[j] = width
+            break
+    if not widths:
+        return theta, cov
+    rest = [j for j in range(len(free)) if j not in widths]
+    out = np.zeros_like(cov)
+    if rest:
+        idx = [free[j] for j in rest]
+        try:
+            out[np.ix_(idx, idx)] = np.linalg.inv(jac[:, rest].T @ jac[:, rest])
+        except np.linalg.LinAlgError:
+            out[np.ix_(idx, idx)] = cov[np.ix_(idx, idx)]
+    for j, width in widths.items():
+        out[free[j], free[j]] = (2.0 * width) ** 2
+    return theta, out
 
 
 def _pinned_by_slope(
