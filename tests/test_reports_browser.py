@@ -129,6 +129,8 @@ def test_the_report_of_another_rigs_recordings_reads_as_text_for_people(tmp_path
     page = inspect_report(out)
     assert page.all_images_loaded and page.figures >= 2
     _clean(page)
+    # no folder of the command's own making is named (the results it reads back)
+    assert not re.search(r"tmp[a-z0-9_]{8}", out.read_text(encoding="utf-8"))
 
 
 def test_the_report_of_the_spring_and_disc_rig_speaks_of_that_rig(tmp_path):
