@@ -280,8 +280,8 @@ def test_the_contact_damping_figure_has_a_colour_and_a_legend_entry_per_series()
     fig = plot_derived(analysis)
     [legend] = fig.legends
     assert sorted(t.get_text() for t in legend.get_texts()) == [
-        "glycerol, water 0.0055",
-        "glycerol-water, water 0.03",
+        "glycerol, water 0.55 % by mass",
+        "glycerol-water, water 3 % by mass",
     ]
     colours = {c.lines[0].get_color() for c in fig.axes[0].containers}
     assert len(colours) == 2
@@ -305,3 +305,13 @@ def test_the_load_figure_draws_each_run_and_the_paper_only_beside_glycerol(analy
     other = analyse_campaign(fits, seed=1, max_steps=1500)
     labels = {t.get_text() for t in plot_against_load(other).legends[0].get_texts()}
     assert "paper, glycerol" not in labels
+
+
+def test_group_labels_read_as_words_with_units():
+    from bayestribo.population.groups import POOLED, group_words
+
+    label = "lubricant=glycerol,water_mass_fraction=0.0055,load_N=0.12"
+    assert group_words(label) == "glycerol, water 0.55 % by mass, N = 0.12 N"
+    assert group_words("lubricant=oil,temperature_C=40") == "oil, temperature_C=40"
+    assert group_words("water_mass_fraction=n/a") == "water n/a"
+    assert group_words(POOLED) == "all runs"

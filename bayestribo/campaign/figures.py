@@ -22,6 +22,7 @@ import numpy as np
 
 from bayestribo._text import literal
 from bayestribo.campaign.analysis import CampaignAnalysis
+from bayestribo.population.groups import group_words
 from bayestribo.summary import summarize
 
 __all__ = ["PAPER_VALUES", "plot_against_load", "plot_derived", "plot_forest", "save_figures"]
@@ -56,19 +57,12 @@ def _pyplot() -> Any:
     return plt
 
 
-#: How a grouping key reads in a legend ("glycerol, water 0.0055").
-_KEY_PREFIX = {"lubricant": "", "water_mass_fraction": "water ", "load_N": "N = "}
-
-
 def _series_label(analysis: CampaignAnalysis, value: Any) -> str:
+    """A series' legend label in words ("glycerol, water 0.55 % by mass")."""
     keys = [k for k in analysis.by if k != analysis.covariate]
     values = value if isinstance(value, tuple) else (value,)
-    pairs = [
-        f"{_KEY_PREFIX[k]}{v}" if k in _KEY_PREFIX else f"{k}={v}"
-        for k, v in zip(analysis.by, values, strict=False)
-        if k in keys
-    ]
-    return literal(", ".join(pairs) or "all")
+    pairs = [f"{k}={v}" for k, v in zip(analysis.by, values, strict=False) if k in keys]
+    return literal(group_words(",".join(pairs)) if pairs else "all")
 
 
 def _ticks(ax: Any, axis: str = "x") -> None:
@@ -286,14 +280,9 @@ def plot_derived(analysis: CampaignAnalysis, fig: Any = None) -> Any:
 
 def _series_of(group: str) -> str:
     """A contact group's label without its load, as the legend shows it: ``glycerol,
-    water 0.0055`` for ``lubricant=glycerol,water_mass_fraction=0.0055,load_N=0.12``."""
-    parts = []
-    for item in group.split(","):
-        key, sep, value = item.partition("=")
-        if key == "load_N":
-            continue
-        parts.append(f"{_KEY_PREFIX[key]}{value}" if sep and key in _KEY_PREFIX else item)
-    return literal(", ".join(parts) or "all")
+    water 0.55 % by mass`` for ``lubricant=glycerol,water_mass_fraction=0.0055,load_N=0.12``."""
+    parts = [item for item in group.split(",") if item.partition("=")[0] != "load_N"]
+    return literal(group_words(",".join(parts)) if parts else "all")
 
 
 def save_figures(analysis: CampaignAnalysis, folder: str | Path) -> list[Path]:

@@ -33,12 +33,54 @@ __all__ = [
     "Population",
     "difference",
     "fit_group",
+    "group_words",
     "population",
     "population_jobs",
 ]
 
 #: Label of the population pooled over all groups.
 POOLED = "all"
+
+
+def _water(value: str) -> str:
+    try:
+        return f"water {100.0 * float(value):.3g} % by mass"
+    except ValueError:
+        return f"water {value}"
+
+
+#: How a grouping key's value reads (docs/run-format.md's keys).
+_GROUP_WORDS = {
+    "lubricant": lambda v: v,
+    "water_mass_fraction": _water,
+    "load_N": lambda v: f"N = {v} N",
+}
+
+
+def group_words(label: str) -> str:
+    """A group's label as a reader writes it.
+
+    Parameters
+    ----------
+    label : str
+        A group label as the populations name them, ``key=value`` pairs joined by
+        commas (``lubricant=glycerol,water_mass_fraction=0.0055,load_N=0.12``), or
+        :data:`POOLED`.
+
+    Returns
+    -------
+    str
+        ``"glycerol, water 0.55 % by mass, N = 0.12 N"``: the lubricant by name, the
+        water mass fraction in per cent, the load with its unit; other keys as
+        ``key=value``; ``"all runs"`` for the pooled population.
+    """
+    if label == POOLED:
+        return "all runs"
+    parts = []
+    for item in str(label).split(","):
+        key, sep, value = item.partition("=")
+        parts.append(_GROUP_WORDS[key](value) if sep and key in _GROUP_WORDS else item)
+    return ", ".join(parts)
 
 
 @dataclass(frozen=True)
