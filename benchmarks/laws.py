@@ -786,6 +786,31 @@ def _settings(args: argparse.Namespace) -> dict[str, Any]:
     }
 
 
+def _pool_files(names: list[str], output: Path) -> int:
+    """Pool the runs of result files of distinct seeds: :func:`pooled` over them all."""
+    files = [output_path(n) for n in names]
+    results = [json.loads(f.read_text()) for f in files]
+    seeds = [r["settings"]["seed"] for r in results]
+    if len(set(seeds)) != len(seeds) or not all(r.get("complete") for r in results):
+        raise SystemExit(f"--pool: expected complete files of distinct seeds, got seeds {seeds}")
+    records = [run for r in results for run in r["runs"]]
+    pooled_all = pooled(records)
+    write_json(
+        output,
+        {
+            "pooled_from": {
+                f.name: {"seed": r["settings"]["seed"], "commit": r["source"]["commit"]}
+                for f, r in zip(files, results, strict=True)
+            },
+            "runs": len(records),
+            "pooled": pooled_all,
+        },
+    )
+    print(json.dumps(pooled_all, indent=1))
+    print(f"wrote {output}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=10, help="runs per case and noise level")
@@ -800,7 +825,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--resume", action="store_true", help="keep the runs of an interrupted output file"
     )
+    parser.add_argument(
+        "--pool",
+        nargs="+",
+        metavar="NAME",
+        help="pool the runs of finished result files (results/NAME.json, at different "
+        "--seed) into --output, calibration and auto rates over them all; nothing is fitted",
+    )
     args = parser.parse_args(argv)
+    if args.pool:
+        return _pool_files(args.pool, output_path(args.output))
     settings = _settings(args)
     load_start = os.getloadavg()
     source = {"commit": _commit()}
