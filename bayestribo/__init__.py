@@ -25,8 +25,7 @@ synthetic, acquisition, reports, cli
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from bayestribo._lazy import lazy_exports
 
 __version__ = "0.1.0"
 
@@ -70,13 +69,4 @@ _LAZY: dict[str, str] = {
 __all__ = ["DEFAULT_SEED", "__version__", *sorted(_LAZY)]
 
 
-def __getattr__(name: str) -> Any:
-    try:
-        module = _LAZY[name]
-    except KeyError:
-        raise AttributeError(f"module 'bayestribo' has no attribute {name!r}") from None
-    return getattr(importlib.import_module(module), name)
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY)

@@ -90,6 +90,18 @@ FILES = {
 }
 
 
+def _parsing_with(parser: str, taken: list[bool]):
+    """The large-file path held to ``parser``, noting in ``taken`` whether it read the
+    file (True) or left it to numpy's reader (False)."""
+
+    def large(path, delimiter, skip, width):
+        out = bulk_text.read_numbers(path, delimiter, skip, width, parser=parser)
+        taken.append(out is not None)
+        return out
+
+    return large
+
+
 def _read(path: Path, options: dict, fast: bool, monkeypatch) -> tuple[dict, list[str]]:
     with monkeypatch.context() as patch:
         if not fast:  # the row-by-row reader alone
@@ -178,12 +190,8 @@ def test_the_large_file_path_gives_numpys_arrays_warnings_and_errors(
     content, options, _ = LARGE_FILES[name]
     path = tmp_path / "run.csv"
     path.write_bytes(content.encode("utf-8"))
-    taken = []
-
-    def large(path, delimiter, skip, width):
-        out = bulk_text.read_numbers(path, delimiter, skip, width, parser=parser)
-        taken.append(out is not None)
-        return out
+    taken: list[bool] = []
+    large = _parsing_with(parser, taken)
 
     monkeypatch.setattr(text_module, "_HEAD_BYTES", 512)
 
@@ -274,12 +282,8 @@ def test_a_large_file_with_comments_and_units_reads_as_the_row_by_row_reader_rea
     path = tmp_path / "run.csv"
     _large_record(path)
     assert path.stat().st_size > text_module._ARROW_BYTES
-    taken = []
-
-    def large(path, delimiter, skip, width):
-        out = bulk_text.read_numbers(path, delimiter, skip, width, parser=parser)
-        taken.append(out is not None)
-        return out
+    taken: list[bool] = []
+    large = _parsing_with(parser, taken)
 
     monkeypatch.setattr(text_module, "_LARGE_BYTES", 0)
     monkeypatch.setattr(text_module, "_read_large", large)

@@ -12,7 +12,7 @@ PACKAGE = Path(bayestribo.__file__).resolve().parent
 #: What each part of the package may import (besides itself), as drawn in
 #: docs/architecture.md. The shared bottom (errors, summary, _optional, _text, _clock,
 #: _workers) is open to all.
-BOTTOM = {"errors", "summary", "_optional", "_text", "_clock", "_workers", "_warnings"}
+BOTTOM = {"errors", "summary", "_optional", "_text", "_clock", "_workers", "_warnings", "_lazy"}
 ALLOWED = {
     "model": set(),
     "io": {"model", "signal"},

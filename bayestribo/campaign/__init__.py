@@ -20,8 +20,7 @@ about 130 MB of memory).
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from bayestribo._lazy import lazy_exports
 
 __all__ = ["CampaignAnalysis", "analyse_campaign", "fit_many"]
 
@@ -32,11 +31,4 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    if name in _LAZY:
-        return getattr(importlib.import_module(_LAZY[name]), name)
-    raise AttributeError(f"module 'bayestribo.campaign' has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted([*globals(), *_LAZY])
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY)

@@ -22,8 +22,7 @@ all
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from bayestribo._lazy import lazy_exports
 
 # The successive-peak estimate (the fit's starting point) is imported at once: its
 # function has its module's name, which the import of that module would otherwise
@@ -46,13 +45,4 @@ _LAZY: dict[str, str] = {
 __all__ = sorted([*_LAZY, "feeny_liang"], key=lambda name: (name[0].islower(), name))
 
 
-def __getattr__(name: str) -> Any:
-    if name not in _LAZY:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(_LAZY[name]), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY)

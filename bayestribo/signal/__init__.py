@@ -31,8 +31,7 @@ increments
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from bayestribo._lazy import lazy_exports
 
 # Re-exported lazily: the readers use the light modules (period, frequency, channels)
 # without loading scipy.signal and the decay analysis.
@@ -55,13 +54,4 @@ _LAZY: dict[str, str] = {
 __all__ = sorted(_LAZY, key=lambda name: (name[0].islower(), name))
 
 
-def __getattr__(name: str) -> Any:
-    if name not in _LAZY:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(_LAZY[name]), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY)
