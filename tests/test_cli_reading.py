@@ -77,7 +77,9 @@ def test_reading_errors_give_the_fix_as_options(tmp_path, run, capsys):
     assert "--columns" in err and "columns=[" not in err and "\n" not in err.strip()
     no_header = _write(tmp_path / "bare.csv", rows[0], rows[1:])
     assert main(["estimate", str(no_header)]) == 2
-    assert "--columns t x" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    # the advice names units, and how to say that the length unit is not known
+    assert "--columns time_s displacement_mm" in err and "--length-unit arbitrary" in err
     assert main(["decay", str(path), "--scale", "x:1e-3"]) == 2
     assert "--scale: expected NAME=FACTOR" in capsys.readouterr().err
 
@@ -91,3 +93,25 @@ def test_every_reading_command_has_the_same_reading_options(command, capsys):
     text = capsys.readouterr().out
     for option in ("--columns", "--skip-rows", "--delimiter", "--decimal", "--scale", "--format"):
         assert option in text, (command, option)
+
+
+def test_a_tab_separated_file_without_header_is_described_as_such(tmp_path, run, capsys):
+    rows = [f"{t:.6f}\t{x:.9g}" for t, x in zip(run.time, run.displacement, strict=True)]
+    path = _write(tmp_path / "bare.txt", rows[0], rows[1:])
+    assert main(["inspect", str(path), "--columns", "t", "x"]) == 0
+    out = capsys.readouterr().out
+    assert "without a header row" in out and "file columns" not in out
+
+
+def test_a_header_without_units_is_answered_with_the_columns_that_read_it(tmp_path, run, capsys):
+    rows = [
+        f"{t:.12g};{x:.12g};{v:.12g};0"
+        for t, x, v in zip(run.time, run.displacement, run.velocity, strict=True)
+    ]
+    path = _write(tmp_path / "sensor.csv", "time;position;velocity;acceleration", rows)
+    assert main(["inspect", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "has no unit" in err and "--columns t x v - if the file is in s, m and m/s" in err
+    # the advice, followed, reads the run in the units it names
+    assert main(["inspect", str(path), "--columns", "t", "x", "v", "-"]) == 0
+    assert "time_s, displacement_m, velocity_m_per_s (SI)" in capsys.readouterr().out

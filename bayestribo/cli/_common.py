@@ -266,7 +266,11 @@ def reading_kwargs(args: argparse.Namespace) -> dict[str, Any]:
 
 #: Python spellings in reading errors and the command-line options that do the same.
 _CLI_SPELLINGS = (
-    ("read_run(path, columns=['time_s', 'displacement_m'])", "--columns t x"),
+    (
+        "read_run(path, columns=['time_s', 'displacement_mm'])",
+        "--columns time_s displacement_mm",
+    ),
+    ("length_unit='arbitrary'", "--length-unit arbitrary"),
     ("columns=[...]", "--columns"),
     ("columns=", "--columns "),
     ("give file_format=", "give --format"),

@@ -79,6 +79,10 @@ def _one_line_warning(command: str) -> Callable[..., None]:
     ) -> None:
         text = plain_numbers(" ".join(str(message).split()))
         own = category.__module__.split(".")[0] == "bayestribo"
+        if own and category.__name__ == "ReadingWarning":
+            from bayestribo.cli._common import cli_message
+
+            text = cli_message(text)  # the fixes it names, as command-line options
         kind = "warning" if own else f"warning ({category.__name__})"
         stream = sys.stderr if file is None else file
         try:

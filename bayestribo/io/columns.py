@@ -182,6 +182,36 @@ def parse_column(name: str) -> tuple[str, float] | None:
     return None
 
 
+def si_names(labels: Sequence[str]) -> list[str] | None:
+    """The column names that read a header's columns in SI units, or None.
+
+    Each label of a quantity that is read (``time``, ``Position``) becomes its canonical
+    name (``time_s``, ``displacement_m``), a label of another quantity ``ignore``. None
+    when a label is neither: no suggestion can then be made.
+
+    Parameters
+    ----------
+    labels : sequence of str
+        The header's labels in file order.
+
+    Returns
+    -------
+    list of str or None
+        One name per label, for ``columns=`` when the file's units are SI.
+    """
+    names = []
+    for label in labels:
+        word, _ = _split(label.replace("\u03bc", "\u00b5"))
+        canonical = next((c for c, words in QUANTITIES.items() if word in words), None)
+        if canonical is not None:
+            names.append(canonical)
+        elif word in OTHER_QUANTITIES:
+            names.append(IGNORE)
+        else:
+            return None
+    return names
+
+
 def check_scale(
     scale: Mapping[str, float] | None, present: Sequence[str], where: str
 ) -> dict[str, float]:

@@ -32,6 +32,7 @@ from bayestribo.io.columns import (
     combine_units_row,
     other_quantity,
     parse_column,
+    si_names,
     split_run_tag,
 )
 from bayestribo.io.instruments import PREAMBLE_LINES, detect_export, read_export
@@ -309,7 +310,17 @@ def _header(
         else:
             kept.append(IGNORE)
             other.append(label)
-    names, units = _check_columns(kept, where, what)
+    try:
+        names, units = _check_columns(kept, where, what)
+    except RunFormatError as exc:
+        si = si_names(labels)
+        if "has no unit" not in exc.message or si is None:
+            raise
+        raise RunFormatError(
+            f"{exc.message}; or name every column in file order, for instance "
+            f"columns={si} if the file is in s, m and m/s",
+            where,
+        ) from None
     if other:
         warn(
             f"{where}: {what}: column(s) {other} not read (another quantity); the run is "
@@ -370,8 +381,10 @@ def _layout(
     if columns is None:
         if not has_header:
             raise RunFormatError(
-                "no header row: name the columns in file order, for instance "
-                "read_run(path, columns=['time_s', 'displacement_m'])",
+                "no header row: name the columns in file order with their units, for "
+                "instance read_run(path, columns=['time_s', 'displacement_mm']) (t, x and v "
+                "alone mean s, m and m/s; length_unit='arbitrary' when the file does not say "
+                "its length unit)",
                 where,
             )
         names, units, header_lines = _header(lines, delimiter, where)

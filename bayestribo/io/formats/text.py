@@ -67,7 +67,10 @@ def describe_text(path: Path, options: ReadOptions) -> dict[str, Any]:
         return out
     body = [line for line in lines[skip:] if line.strip() and not line.startswith("#")]
     if body:
-        fields = [f.strip().strip('"') for f in body[0].replace(";", ",").split(",")]
+        first = body[0].strip()
+        # the reader's own choice of delimiter: a tab, a semicolon, a comma, or blanks
+        delimiter = next((d for d in ("\t", ";", ",") if d in first), None)
+        fields = [f.strip().strip('"') for f in first.split(delimiter)]
         header = any(not _is_number(f) for f in fields if f)
         if header and fields[0] == COLUMNS[0] and set(fields) <= set(COLUMNS):
             out["reader"] = "canonical CSV"
