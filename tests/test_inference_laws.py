@@ -55,6 +55,14 @@ def test_the_law_with_drag_covers_the_truth_and_says_nothing_is_wrong(drag_fit):
     assert result.units()["c2_SI"] == "kg/m"
 
 
+def test_the_printed_dissipation_rows_are_aligned(drag_fit):
+    rows = [line for line in drag_fit[0].to_text().splitlines() if line.startswith("    A = ")]
+    assert len(rows) >= 4  # the law's and the turning points', at three swings each
+    # every value starts in the same column, whatever the digits of the amplitude
+    starts = {line.index("[") for line in rows}
+    assert len(starts) == 1
+
+
 def test_the_default_law_misfits_the_drag_and_its_dissipation_differs(drag_run, drag_fit):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

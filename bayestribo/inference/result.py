@@ -482,16 +482,15 @@ class FitResult:
             rows.append(("turning points (law-free)", measured))
         amp = d["amplitude"]
         picks = sorted({len(amp) - 1, len(amp) // 2, 0}, reverse=True)
+        swings = {i: f"A = {amp[i]:.4g} {d['amplitude_unit']}" for i in picks}
+        width = max(len(s) for s in swings.values())
         for label, band in rows:
             out.append(f"  {label}")
             mean, (lo, hi) = band["mean"], band["interval"]
             for i in picks:
                 if mean[i] is None or lo[i] is None or hi[i] is None:
                     continue
-                out.append(
-                    f"    A = {amp[i]:.4g} {d['amplitude_unit']:<6}{mean[i]:14.6g}   "
-                    f"[{lo[i]:.6g}, {hi[i]:.6g}]"
-                )
+                out.append(f"    {swings[i]:<{width}}{mean[i]:14.6g}   [{lo[i]:.6g}, {hi[i]:.6g}]")
         return out
 
     def __repr__(self) -> str:
