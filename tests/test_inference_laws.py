@@ -55,8 +55,16 @@ def test_the_law_with_drag_covers_the_truth_and_says_nothing_is_wrong(drag_fit):
     assert result.units()["c2_SI"] == "kg/m"
 
 
-def test_the_printed_dissipation_rows_are_aligned(drag_fit):
-    rows = [line for line in drag_fit[0].to_text().splitlines() if line.startswith("    A = ")]
+@pytest.mark.parametrize("unit", ["m", "signal unit"])
+def test_the_printed_dissipation_rows_are_aligned(drag_fit, unit, monkeypatch):
+    result = drag_fit[0]
+    band = dict(result.dissipation, amplitude_unit=unit)  # "signal unit": no length unit
+    # swings whose printed digits differ in number, as HarmOsc3's do
+    amplitude = list(band["amplitude"])
+    amplitude[0], amplitude[len(amplitude) // 2], amplitude[-1] = 0.0928, 0.3847, 1.258
+    band["amplitude"] = amplitude
+    monkeypatch.setattr(type(result), "dissipation", property(lambda self: band))
+    rows = [line for line in result.to_text().splitlines() if line.startswith("    A = ")]
     assert len(rows) >= 4  # the law's and the turning points', at three swings each
     # every value starts in the same column, whatever the digits of the amplitude
     starts = {line.index("[") for line in rows}
