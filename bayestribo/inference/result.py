@@ -419,7 +419,8 @@ class FitResult:
         if trend and sd_eps > 0:
             lines.append(
                 f"frequency half period changes by {100 * trend['change']:+.3g} % along the "
-                f"decay ({trend['z']:+.1f} SE); ζ and μ_k carry ± {100 * sd_eps:.2g} % for it"
+                f"decay ({trend['z']:+.1f} SE); the parameters and ΔE(A) carry "
+                f"± {100 * sd_eps:.2g} % for it"
             )
         for entry in self.at_prior_bound:
             lines.append(
