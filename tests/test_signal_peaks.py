@@ -97,6 +97,21 @@ def test_rest_before_release_and_rest_tail():
     assert np.all(pk.t < pk.stop_time)
 
 
+def test_a_given_period_replaces_the_estimate():
+    # the dominant period passed in gives the same peaks as the estimate made inside;
+    # a period twice as long is used: extrema of one kind must then be 1.2 true
+    # periods apart, and half of them are not found
+    from bayestribo.signal.period import dominant_period
+
+    t, x, _ = sampled(0.02, 0.03, 10.0, noise_x=1e-3, seed=4)
+    estimated = find_peaks(t, x)
+    given_period = find_peaks(t, x, period=dominant_period(t, x))
+    np.testing.assert_array_equal(given_period.t, estimated.t)
+    np.testing.assert_array_equal(given_period.value, estimated.value)
+    longer = find_peaks(t, x, period=2.0 * dominant_period(t, x))
+    assert len(longer) < 0.75 * len(estimated)
+
+
 def test_velocity_peaks_follow_minus_y_prime():
     t, _, v = sampled(0.02, 0.03, 10.0)
     pk = find_peaks(t, v, kind="velocity")
@@ -146,6 +161,9 @@ def test_estimate_noise_of_white_noise():
         ({"t": np.arange(20.0), "signal": np.ones(20)}, "constant"),
         ({"t": np.arange(20.0), "signal": np.sin(np.arange(20.0)), "kind": "force"}, "kind"),
         ({"t": np.arange(20.0), "signal": np.sin(np.arange(20.0)), "skip": -1}, "skip"),
+        ({"t": np.arange(20.0), "signal": np.sin(np.arange(20.0)), "period": 0.0}, "period"),
+        ({"t": np.arange(20.0), "signal": np.sin(np.arange(20.0)), "period": np.nan}, "period"),
+        ({"t": np.arange(20.0), "signal": np.sin(np.arange(20.0)), "period": "6"}, "period"),
     ],
 )
 def test_bad_input_raises_recording_error(kwargs, match):

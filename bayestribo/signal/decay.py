@@ -964,8 +964,15 @@ def _analyse(
     if span.stop_index is not None:
         hi = min(t.size, int(span.stop_index) + 2 + span.block // 8)
     try:
+        # the record's period, which set the motion span (not estimated again on it)
         found = find_peaks(
-            t[lo:hi], x[lo:hi], kind="displacement", min_peaks=2, offset=offset, noise=sigma_x
+            t[lo:hi],
+            x[lo:hi],
+            kind="displacement",
+            min_peaks=2,
+            offset=offset,
+            noise=sigma_x,
+            period=period0,
         )
     except RecordingError as e:
         raise RecordingError(f"turning points: {e}") from e

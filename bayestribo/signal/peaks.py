@@ -339,6 +339,7 @@ def find_peaks(
     noise: float | None = None,
     threshold: float = 10.0,
     min_peaks: int = 3,
+    period: float | None = None,
 ) -> Peaks:
     """Find the successive extrema of a free-decay recording.
 
@@ -368,6 +369,13 @@ def find_peaks(
         peak-to-peak height falls below it.
     min_peaks : int
         Fewest extrema accepted after skipping.
+    period : float, optional
+        Period of the oscillation [s] when the caller has it (the energy decay passes
+        the whole record's :func:`~bayestribo.signal.period.dominant_period`, which
+        sets its motion span, instead of a second estimate on the motion alone); by
+        default the dominant period of ``signal``. It sets the least distance between
+        extrema (0.6 period), the parabola's half-width (1/12 period) and the shortest
+        rest tail (one period).
 
     Returns
     -------
@@ -376,7 +384,8 @@ def find_peaks(
     Raises
     ------
     RecordingError
-        Bad arrays, no oscillation, or fewer than ``min_peaks`` extrema.
+        Bad arrays, no oscillation, fewer than ``min_peaks`` extrema, or a ``period``
+        that is not a positive number.
     """
     if kind not in _KINDS:
         raise RecordingError(f"kind must be one of {_KINDS}, got {kind!r}")
@@ -385,6 +394,12 @@ def find_peaks(
         raise RecordingError(f"skip must be an integer >= 0, got {skip!r}")
     if not (threshold > 0):
         raise RecordingError(f"threshold must be > 0, got {threshold!r}")
+    if period is not None and (
+        isinstance(period, bool)
+        or not isinstance(period, int | float | np.integer | np.floating)
+        or not (math.isfinite(period) and period > 0)
+    ):
+        raise RecordingError(f"period must be a positive number of seconds, got {period!r}")
     span = float(np.max(s) - np.min(s))
     if span == 0.0:
         raise RecordingError(f"the {kind} signal is constant: no oscillation to analyse")
@@ -394,8 +409,9 @@ def find_peaks(
     floor = max(threshold * sigma, 1e-4 * span)
 
     dt = sample_step(t)
-    period = dominant_period(t, s)
-    per_samples = period / dt
+    if period is None:
+        period = dominant_period(t, s)
+    per_samples = float(period) / dt
     if per_samples < 6:
         raise RecordingError(
             f"the {kind} signal has {per_samples:.1f} samples per period; at least 6 are "
