@@ -255,7 +255,8 @@ def welch(s: NDArray, fs: float, nper: int, nfft: int) -> NDArray:
     batch = max(1, _WELCH_CHUNK // nper)
     for first in range(0, count, batch):
         part = frames[first : first + batch]
-        part = (part - part.mean(axis=1, keepdims=True)) * window
+        part = part - part.mean(axis=1, keepdims=True)
+        part *= window
         spectrum = np.fft.rfft(part, nfft, axis=1)
         total += np.einsum("ij,ij->j", spectrum.real, spectrum.real)
         total += np.einsum("ij,ij->j", spectrum.imag, spectrum.imag)
