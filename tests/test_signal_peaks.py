@@ -180,3 +180,33 @@ def test_too_few_peaks_is_reported():
 def test_peaks_container_checks_shapes():
     with pytest.raises(RecordingError, match="one length"):
         Peaks(t=np.arange(3.0), value=np.arange(4.0))
+
+
+def test_rest_tail_found_block_by_block_is_the_whole_records():
+    # the tail's start from blocks read backwards equals the one from the running
+    # extremes of the whole record, on decays into noise, pure noise and flat records
+    from bayestribo.signal.peaks import _TAIL_BLOCK, _rest_tail_start
+
+    def whole(s, band, min_len):
+        hi = np.maximum.accumulate(s[::-1])[::-1]
+        lo = np.minimum.accumulate(s[::-1])[::-1]
+        inside = (hi - lo) <= 2.0 * band
+        if not inside[-1]:
+            return None
+        start = int(np.argmax(inside))
+        return None if s.size - start < min_len else start
+
+    rng = np.random.default_rng(8)
+    found = 0
+    for trial in range(300):
+        n = int(rng.integers(16, 12 * _TAIL_BLOCK))
+        tail = int(rng.integers(0, n + 1))
+        decay = 10.0 * np.sin(np.arange(n - tail) / 7.0) * np.exp(-np.arange(n - tail) / 4000.0)
+        s = [np.r_[decay, rng.uniform(-1.0, 1.0, tail)], rng.standard_normal(n), np.ones(n)]
+        s = s[trial % 3]
+        band = float(rng.choice([0.0, 0.5, 1.0, 3.0, np.nan]))
+        min_len = int(rng.integers(1, 2 * _TAIL_BLOCK))
+        expected = whole(s, band, min_len)
+        assert _rest_tail_start(s, band, min_len) == expected
+        found += expected is not None
+    assert found > 50
