@@ -305,6 +305,9 @@ def _channel_consistency(run: Recording) -> ChannelConsistency | None:
     try:
         period = dominant_period(t, x)  # the run's one period (remembered for its arrays)
     except RecordingError:
+        if not (math.isfinite(_dot(x, x)) and math.isfinite(_dot(v, v))):
+            # values whose squares overflow: not comparable, which the check says
+            return ChannelConsistency(math.nan, math.nan, math.nan, math.nan)
         return None
     # the trapezoids' cumulative sum, in place (six arrays of the record's length before);
     # the time steps are taken in the integral's place before it is summed there, and

@@ -325,6 +325,8 @@ def _spectral_period(t: NDArray, s: NDArray) -> float:
     spec = np.abs(np.fft.rfft(x, m))
     spec[0] = 0.0
     k = int(np.argmax(spec))
+    if not math.isfinite(spec[k]):  # the largest bin, or the first NaN
+        raise _overflow(s)
     if k == 0 or spec[k] == 0.0:
         raise RecordingError("the signal does not oscillate (flat spectrum)")
     k = _strongest_oscillation(t, s, spec, k, m, dt)
@@ -346,8 +348,20 @@ def _spectral_period(t: NDArray, s: NDArray) -> float:
         if 0 < best < bins.size - 1 or fine in (0, top):
             break
     kf = float(fine)
-    if 0 < fine < top:
+    if 0 < fine < top and 0 < best < bins.size - 1:
         a, b, c = np.log(values[best - 1 : best + 2] + 1e-300)
         den = a - 2 * b + c
         kf = fine + (0.5 * (a - c) / den if den != 0 else 0.0)
-    return float(n * dt / kf)
+    period = float(n * dt / kf)
+    if not (math.isfinite(period) and period > 0):
+        raise _overflow(s)
+    return period
+
+
+def _overflow(s: NDArray) -> RecordingError:
+    """The error of a signal whose spectrum overflows (values near the largest float)."""
+    largest = float(np.max(np.abs(s)))
+    return RecordingError(
+        f"the signal's values (up to {largest:.3g}) overflow the arithmetic of its spectrum; "
+        "expected the magnitudes of a motion in the stated units"
+    )
