@@ -276,3 +276,32 @@ def test_unknown_suffixes_say_what_to_do(tmp_path: Path) -> None:
     other.write_bytes(b"\x00")
     with pytest.raises(RunFormatError, match="export the data as CSV"):
         read_run(other)
+
+
+def test_a_csv_is_read_without_importing_the_other_readers(tmp_path: Path, run: Any) -> None:
+    # a fresh interpreter: the suffix lookup imports the built-in formats in their order
+    # only until one takes the file, and gives the format the whole registry gives
+    import subprocess
+    import sys
+    import textwrap
+
+    path = tmp_path / "run.csv"
+    write_csv(run.signals, path)
+    code = textwrap.dedent(
+        f"""
+        import json, sys
+        from bayestribo.io import read_run
+        from bayestribo.io.registry import BUILTIN_MODULES, format_for, registered_formats
+        read_run({str(path)!r}, validate=False)
+        loaded = [m for m in BUILTIN_MODULES if m in sys.modules]
+        suffixes = (".csv", ".txt", ".xlsx", ".uff", ".tdms", ".mat", ".h5")
+        lazily = [format_for("x" + s).name for s in suffixes]
+        whole = {{s: f.name for f in registered_formats().values() for s in f.suffixes}}
+        print(json.dumps([loaded, lazily, [whole[s] for s in suffixes]]))
+        """
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    loaded, lazily, whole = json.loads(done.stdout)
+    assert loaded == ["bayestribo.io.formats.text"]
+    assert lazily == whole

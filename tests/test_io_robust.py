@@ -178,3 +178,27 @@ def test_the_hdf5_library_reads_under_a_bound_on_new_memory() -> None:
     assert resource.getrlimit(resource.RLIMIT_AS) == before
     assert np.ones(512 << 20, dtype=np.uint8).sum() == 512 << 20
     del small
+
+
+@pytest.mark.parametrize("huge", [1e308, -1.7e308])
+def test_a_sample_near_the_largest_float_is_refused_by_name(
+    tmp_path: Path, run, huge: float
+) -> None:
+    # the fuzz benchmark's "number" mutation: one displacement sample replaced by a
+    # value whose spectrum overflows; the channel check names it (it crashed on a NaN
+    # period), and without the velocity the decay analysis does
+    from bayestribo.errors import RecordingError
+    from bayestribo.inference.pipeline import prepare
+    from bayestribo.io.text import write_csv
+
+    x = run.displacement.copy()
+    x[x.size // 3] = huge
+    both = write_csv(
+        {"time_s": run.time, "displacement_m": x, "velocity_m_per_s": run.velocity},
+        tmp_path / "both.csv",
+    )
+    with pytest.raises(RecordingError, match=r"both\.csv.*overflow the arithmetic of the check"):
+        read_run(both)
+    alone = write_csv({"time_s": run.time, "displacement_m": x}, tmp_path / "alone.csv")
+    with pytest.raises(RecordingError, match=r"overflow the arithmetic of its spectrum"):
+        prepare(read_run(alone))

@@ -333,3 +333,22 @@ def test_a_pyarrow_that_does_not_import_leaves_the_file_to_pandas(
     slow, _ = _read(path, {}, False, monkeypatch)
     for key in fast:
         assert fast[key].tobytes() == slow[key].tobytes(), key
+
+
+@pytest.mark.parametrize("bad", [False, True])
+def test_pyarrows_pool_keeps_nothing_of_a_read(bad: bool, tmp_path: Path) -> None:
+    """The columns are the reader's own arrays: once a file is read (or refused), no
+    memory of pyarrow's pool is left allocated for the parser's table."""
+    pyarrow = pytest.importorskip("pyarrow")
+    path = tmp_path / "run.csv"
+    _large_record(path)
+    if bad:
+        with path.open("a", encoding="utf-8") as handle:
+            handle.write("1.0;x;2.0\n")
+    pool = pyarrow.system_memory_pool()
+    before = pool.bytes_allocated()
+    out = bulk_text.read_numbers(path, ";", 4, 3, parser="pyarrow")
+    assert (out is None) == bad
+    if out is not None:
+        assert all(column.flags.owndata for column in out)
+    assert pool.bytes_allocated() == before

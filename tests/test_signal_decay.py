@@ -211,6 +211,20 @@ def test_nominal_frequency_difference_is_reported():
     assert nominal.scaling.omega == pytest.approx(2 * np.pi * 33.0)
 
 
+def test_retrograde_integral_is_scipys_trapezoids_to_the_bit():
+    # the in-place sums against scipy's cumulative_trapezoid on the reversed arrays,
+    # on irregular steps and energies of any magnitude
+    from scipy.integrate import cumulative_trapezoid
+
+    rng = np.random.default_rng(3)
+    for n in (1, 2, 3, 1000, 100_001):
+        tau = np.cumsum(rng.uniform(0.0, 2.0, n)) * 10.0 ** rng.integers(-3, 4)
+        energy = rng.standard_normal(n) * 10.0 ** rng.integers(-12, 6, n)
+        got = retrograde_integral(tau, energy)
+        expected = cumulative_trapezoid(energy[::-1], -tau[::-1], initial=0.0)[::-1]
+        assert got.tobytes() == expected.tobytes()
+
+
 def test_retrograde_integral_is_exact_for_piecewise_linear_energy():
     tau = np.linspace(0.0, 3.0, 31)
     energy = 5.0 - tau

@@ -481,6 +481,23 @@ def test_mains_line_is_found_with_its_amplitude():
     assert spec.coloured
 
 
+def test_line_search_window_holds_every_bin_the_whole_grid_would():
+    # the line search tests only the bins about each mains frequency; on a Welch grid
+    # (rfftfreq), at any centre and reach, the window gives what the whole grid gives
+    from bayestribo.signal.spectrum import _around
+
+    rng = np.random.default_rng(11)
+    for _ in range(400):
+        freq = np.fft.rfftfreq(int(rng.integers(64, 1 << 16)), 1.0 / rng.uniform(50.0, 1e6))
+        centre = float(rng.choice([rng.uniform(-10.0, freq[-1] + 10.0), rng.choice(freq)]))
+        reach = float(rng.choice([0.0, rng.uniform(0.0, 2.0), rng.uniform(0.0, freq[-1])]))
+        window = _around(freq, centre, reach)
+        whole = np.abs(freq - centre) <= reach
+        inside = np.zeros(freq.size, bool)
+        inside[window] = np.abs(freq[window] - centre) <= reach
+        np.testing.assert_array_equal(inside, whole)
+
+
 # ---------------------------------------------------------------------------------------
 # Mains hum removed by the zero-phase notch
 # ---------------------------------------------------------------------------------------

@@ -97,6 +97,21 @@ def test_rest_before_release_and_rest_tail():
     assert np.all(pk.t < pk.stop_time)
 
 
+def test_a_given_period_replaces_the_estimate():
+    # the dominant period passed in gives the same peaks as the estimate made inside;
+    # a period twice as long is used: extrema of one kind must then be 1.2 true
+    # periods apart, and half of them are not found
+    from bayestribo.signal.period import dominant_period
+
+    t, x, _ = sampled(0.02, 0.03, 10.0, noise_x=1e-3, seed=4)
+    estimated = find_peaks(t, x)
+    given_period = find_peaks(t, x, period=dominant_period(t, x))
+    np.testing.assert_array_equal(given_period.t, estimated.t)
+    np.testing.assert_array_equal(given_period.value, estimated.value)
+    longer = find_peaks(t, x, period=2.0 * dominant_period(t, x))
+    assert len(longer) < 0.75 * len(estimated)
+
+
 def test_velocity_peaks_follow_minus_y_prime():
     t, _, v = sampled(0.02, 0.03, 10.0)
     pk = find_peaks(t, v, kind="velocity")
@@ -146,6 +161,9 @@ def test_estimate_noise_of_white_noise():
         ({"t": np.arange(20.0), "signal": np.ones(20)}, "constant"),
         ({"t": np.arange(20.0), "signal": np.sin(np.arange(20.0)), "kind": "force"}, "kind"),
         ({"t": np.arange(20.0), "signal": np.sin(np.arange(20.0)), "skip": -1}, "skip"),
+        ({"t": np.arange(20.0), "signal": np.sin(np.arange(20.0)), "period": 0.0}, "period"),
+        ({"t": np.arange(20.0), "signal": np.sin(np.arange(20.0)), "period": np.nan}, "period"),
+        ({"t": np.arange(20.0), "signal": np.sin(np.arange(20.0)), "period": "6"}, "period"),
     ],
 )
 def test_bad_input_raises_recording_error(kwargs, match):
@@ -162,3 +180,33 @@ def test_too_few_peaks_is_reported():
 def test_peaks_container_checks_shapes():
     with pytest.raises(RecordingError, match="one length"):
         Peaks(t=np.arange(3.0), value=np.arange(4.0))
+
+
+def test_rest_tail_found_block_by_block_is_the_whole_records():
+    # the tail's start from blocks read backwards equals the one from the running
+    # extremes of the whole record, on decays into noise, pure noise and flat records
+    from bayestribo.signal.peaks import _TAIL_BLOCK, _rest_tail_start
+
+    def whole(s, band, min_len):
+        hi = np.maximum.accumulate(s[::-1])[::-1]
+        lo = np.minimum.accumulate(s[::-1])[::-1]
+        inside = (hi - lo) <= 2.0 * band
+        if not inside[-1]:
+            return None
+        start = int(np.argmax(inside))
+        return None if s.size - start < min_len else start
+
+    rng = np.random.default_rng(8)
+    found = 0
+    for trial in range(300):
+        n = int(rng.integers(16, 12 * _TAIL_BLOCK))
+        tail = int(rng.integers(0, n + 1))
+        decay = 10.0 * np.sin(np.arange(n - tail) / 7.0) * np.exp(-np.arange(n - tail) / 4000.0)
+        s = [np.r_[decay, rng.uniform(-1.0, 1.0, tail)], rng.standard_normal(n), np.ones(n)]
+        s = s[trial % 3]
+        band = float(rng.choice([0.0, 0.5, 1.0, 3.0, np.nan]))
+        min_len = int(rng.integers(1, 2 * _TAIL_BLOCK))
+        expected = whole(s, band, min_len)
+        assert _rest_tail_start(s, band, min_len) == expected
+        found += expected is not None
+    assert found > 50

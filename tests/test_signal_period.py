@@ -95,3 +95,40 @@ def test_unknown_names_of_a_moved_module_raise_attribute_error():
 
     with pytest.raises(AttributeError):
         old.no_such_name  # noqa: B018
+
+
+def test_candidates_left_uncomputed_change_no_period(monkeypatch):
+    # where the strongest peak's power is beyond any candidate's bound, the candidates
+    # are not scored; the period is the one scoring them all gives, to the bit, on
+    # decays, decays with a rest, a mains line, a drift, a large offset, and noise
+    rng = np.random.default_rng(12)
+    signals = []
+    for trial in range(120):
+        fs = float(rng.choice([1000.0, 2000.0, 10_000.0]))
+        n = int(rng.integers(256, 20_000))
+        t = np.arange(n) / fs
+        rest = int(rng.integers(0, n // 3))
+        u = np.arange(n - rest) / fs
+        decay = np.exp(-rng.uniform(0.0, 5.0) * u) * np.cos(2 * np.pi * rng.uniform(1, fs / 8) * u)
+        s = np.r_[np.full(rest, 1.0), decay]
+        s = [
+            s,
+            s + rng.uniform(0.0, 0.5) * np.sin(2 * np.pi * 50.0 * t),
+            s + np.linspace(0.0, rng.uniform(0.0, 20.0), n),
+            0.01 * s + rng.uniform(-1e4, 1e4) + 1e-3 * rng.standard_normal(n),
+            rng.standard_normal(n),
+        ][trial % 5]
+        signals.append((t, s))
+    shortcut = []
+    decided = period._unbeatable
+
+    def noted(s, power):
+        shortcut.append(decided(s, power))
+        return shortcut[-1]
+
+    monkeypatch.setattr(period, "_unbeatable", noted)
+    fast = [period._spectral_period(t, s) for t, s in signals]
+    monkeypatch.setattr(period, "_unbeatable", lambda s, p: False)
+    every = [period._spectral_period(t, s) for t, s in signals]
+    assert fast == every
+    assert 20 <= sum(shortcut) < len(signals)

@@ -238,6 +238,14 @@ def format_for(path: str | Path, file_format: str | None = None) -> FileFormat:
     if file_format is not None:
         return get_format(file_format, where)
     suffix = path.suffix.lower()
+    if not _LOADED:
+        # nothing registered from outside yet (register_format loads the built-in
+        # formats first): the built-in formats in their order, each imported only until
+        # one takes the suffix, so a CSV imports none of the binary readers
+        for module in BUILTIN_MODULES:
+            fmt = importlib.import_module(module).FORMAT
+            if suffix in fmt.suffixes:
+                return fmt
     formats = registered_formats()
     for fmt in formats.values():
         if suffix in fmt.suffixes:

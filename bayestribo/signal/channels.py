@@ -243,7 +243,9 @@ def _moving_correlation(xc: NDArray, ic: NDArray) -> float:
     The windows are chosen on the velocity alone, so channels of different motions
     still do not correlate, and swapped ones still anticorrelate.
     """
-    moving = np.abs(ic) > MOTION_FRACTION * float(np.max(np.abs(ic)))
+    size = np.abs(ic)
+    moving = size > MOTION_FRACTION * float(np.max(size))
+    del size
     xm = xc[moving]
     xm -= xm.mean()
     im = ic[moving]
@@ -303,22 +305,26 @@ def _channel_consistency(run: Recording) -> ChannelConsistency | None:
     try:
         period = dominant_period(t, x)  # the run's one period (remembered for its arrays)
     except RecordingError:
+        if not (math.isfinite(_dot(x, x)) and math.isfinite(_dot(v, v))):
+            # values whose squares overflow: not comparable, which the check says
+            return ChannelConsistency(math.nan, math.nan, math.nan, math.nan)
         return None
-    # the trapezoids' cumulative sum, in place (six arrays of the record's length before)
+    # the trapezoids' cumulative sum, in place (six arrays of the record's length before);
+    # the time steps are taken in the integral's place before it is summed there, and
+    # the trapezoids' array then holds the windows' integrals
     integral = np.empty(x.size)
     integral[0] = 0.0
     area = v[1:] + v[:-1]
     area *= 0.5
-    area *= np.diff(t)
+    area *= np.subtract(t[1:], t[:-1], out=integral[1:])
     np.cumsum(area, out=integral[1:])
-    del area
     step = sample_step(t)
     lag = max(1, round(period / (40.0 * step)))
     if 2 * lag >= x.size:
         return None
     xc = x[lag:] - x[:-lag]
-    ic = integral[lag:] - integral[:-lag]
-    del integral
+    ic = np.subtract(integral[lag:], integral[:-lag], out=area[: x.size - lag])
+    del integral, area
     vc = v[lag:] - v[:-lag]
     xc -= xc.mean()
     ic -= ic.mean()

@@ -266,10 +266,24 @@ class EnergyDecay:
 
 
 def retrograde_integral(tau: ArrayLike, energy: ArrayLike) -> NDArray:
-    """Π_i = ∫_{τ_i}^{τ_last} E dτ by the trapezoidal rule, integrating backwards (Eq. 39)."""
+    """Π_i = ∫_{τ_i}^{τ_last} E dτ by the trapezoidal rule, integrating backwards (Eq. 39).
+
+    ``scipy.integrate.cumulative_trapezoid(energy[::-1], -tau[::-1], initial=0)[::-1]``
+    to the bit (the same sums in the same order), with one array of the record's length
+    made on the way instead of six.
+    """
     tau = np.asarray(tau, dtype=float)
     energy = np.asarray(energy, dtype=float)
-    backwards = cumulative_trapezoid(energy[::-1], -tau[::-1], initial=0.0)
+    if tau.ndim != 1 or tau.shape != energy.shape or tau.size == 0:
+        return cumulative_trapezoid(energy[::-1], -tau[::-1], initial=0.0)[::-1]
+    y = energy[::-1]
+    # the steps of -τ reversed: (-τ_{i}) - (-τ_{i+1}) is τ_{i+1} - τ_i exactly
+    area = y[1:] + y[:-1]
+    area *= np.diff(tau)[::-1]
+    area /= 2.0
+    backwards = np.empty(tau.size)
+    backwards[0] = 0.0
+    np.cumsum(area, out=backwards[1:])
     return backwards[::-1]
 
 
@@ -515,14 +529,54 @@ def _decrement_beta(values: NDArray) -> float:
     return 0.0
 
 
+def _rest_bounds(
+    t: NDArray, rest_until: float | None, stop: float | None, margin: float
+) -> tuple[int, int]:
+    """The samples at rest, ``t[:head]`` before the release and ``t[tail:]`` after the
+    stop, each a ``margin`` [s] from the motion: ``t < rest_until - margin`` and
+    ``t > stop + margin`` of the increasing time stamps, found by bisection rather
+    than by comparing every sample (``head`` 0 and ``tail`` the record's length when
+    there is no rest on that side)."""
+    head = 0 if rest_until is None else int(np.searchsorted(t, rest_until - margin, "left"))
+    tail = t.size if stop is None else int(np.searchsorted(t, stop + margin, "right"))
+    return head, tail
+
+
 def _quiet_segments(
     t: NDArray, rest_until: float | None, stop: float | None, margin: float
 ) -> NDArray:
     """Boolean mask of samples at rest: before release and after the stop, with a margin."""
-    quiet = np.zeros(t.shape, bool) if rest_until is None else t < rest_until - margin
-    if stop is not None:
-        quiet |= t > stop + margin
+    head, tail = _rest_bounds(t, rest_until, stop, margin)
+    quiet = np.zeros(t.shape, bool)
+    quiet[:head] = True
+    quiet[tail:] = True
     return quiet
+
+
+def _rest_samples(
+    s: NDArray, t: NDArray, rest_until: float | None, stop: float | None, margin: float
+) -> NDArray:
+    """The samples of ``s`` at rest (:func:`_rest_bounds`), in order: ``s`` where
+    :func:`_quiet_segments` is True."""
+    head, tail = _rest_bounds(t, rest_until, stop, margin)
+    return np.concatenate([s[:head], s[max(head, tail) :]])
+
+
+def _rest_parts(
+    t: NDArray, rest_until: float | None, stop: float | None, margin: float
+) -> tuple[list[slice], list[str]]:
+    """The rest segments of :func:`_rest_bounds` of at least :data:`MIN_QUIET_SAMPLES`
+    samples, as slices, with their names."""
+    head, tail = _rest_bounds(t, rest_until, stop, margin)
+    parts, names = [], []
+    for part, name in (
+        (slice(0, head), "rest before release"),
+        (slice(tail, t.size), "rest after stop"),
+    ):
+        if part.stop - part.start >= MIN_QUIET_SAMPLES:
+            parts.append(part)
+            names.append(name)
+    return parts, names
 
 
 def _noise(
@@ -540,14 +594,7 @@ def _noise(
     ``rest_until`` is the release time of a record that starts at rest (``None`` for
     a record that starts in motion), ``stop`` the start of the rest tail.
     """
-    margin = 0.25 * period
-    before = np.zeros(t.shape, bool) if rest_until is None else t < rest_until - margin
-    after = np.zeros(t.shape, bool) if stop is None else t > stop + margin
-    parts, names = [], []
-    for mask, name in ((before, "rest before release"), (after, "rest after stop")):
-        if np.count_nonzero(mask) >= MIN_QUIET_SAMPLES:
-            parts.append(mask)
-            names.append(name)
+    parts, names = _rest_parts(t, rest_until, stop, 0.25 * period)
     steps = {
         name: None if s is None or derived == name else quantisation_step(s)
         for name, s in (("displacement", x), ("velocity", v))
@@ -574,14 +621,15 @@ def _noise(
 
     def pooled(s: NDArray) -> float:
         # Deviations about each segment's own mean (the rest positions differ).
-        dev = np.concatenate([s[m] - np.mean(s[m]) for m in parts])
-        return float(np.sqrt(np.mean(dev * dev)))
+        dev = np.concatenate([s[part] - np.mean(s[part]) for part in parts])
+        dev *= dev
+        return float(np.sqrt(np.mean(dev)))
 
     return NoiseLevels(
         displacement=floored("displacement", pooled(x)),
         velocity=floored("velocity", pooled(v)),
         source=" and ".join(names),
-        n_samples=int(sum(np.count_nonzero(m) for m in parts)),
+        n_samples=int(sum(m.stop - m.start for m in parts)),
         displacement_step=steps["displacement"],
         velocity_step=steps["velocity"],
         timing_jitter_s=jitter,
@@ -647,20 +695,13 @@ def _rest_noise(
     derived: str | None,
 ) -> RestNoise | None:
     """Noise spectra of the recorded channels on the rest segments (as :func:`_noise`)."""
-    margin = 0.25 * period
-    before = np.zeros(t.shape, bool) if rest_until is None else t < rest_until - margin
-    after = np.zeros(t.shape, bool) if stop is None else t > stop + margin
-    masks, names = [], []
-    for mask, name in ((before, "rest before release"), (after, "rest after stop")):
-        if np.count_nonzero(mask) >= MIN_QUIET_SAMPLES:
-            masks.append(mask)
-            names.append(name)
-    if not masks:
+    parts, names = _rest_parts(t, rest_until, stop, 0.25 * period)
+    if not parts:
         return None
     fs = 1.0 / sample_step(t)
 
     def spectrum(s: NDArray) -> NoiseSpectrum:
-        return noise_spectrum([s[m] for m in masks], fs, period_s=period)
+        return noise_spectrum([s[part] for part in parts], fs, period_s=period)
 
     return RestNoise(
         displacement=None if derived == "displacement" else spectrum(x),
@@ -947,9 +988,9 @@ def _analyse(
 
     if x is None:
         derived = "displacement"
-        quiet = _quiet_segments(t, rest_until, stop_time, 0.0)
-        if np.count_nonzero(quiet) >= MIN_QUIET_SAMPLES:
-            velocity_offset = float(np.median(v[quiet]))
+        at_rest = _rest_samples(v, t, rest_until, stop_time, 0.0)
+        if at_rest.size >= MIN_QUIET_SAMPLES:
+            velocity_offset = float(np.median(at_rest))
             v = v - velocity_offset
         x = cumulative_trapezoid(v, t, initial=0.0)
         sigma_x = None
@@ -964,8 +1005,15 @@ def _analyse(
     if span.stop_index is not None:
         hi = min(t.size, int(span.stop_index) + 2 + span.block // 8)
     try:
+        # the record's period, which set the motion span (not estimated again on it)
         found = find_peaks(
-            t[lo:hi], x[lo:hi], kind="displacement", min_peaks=2, offset=offset, noise=sigma_x
+            t[lo:hi],
+            x[lo:hi],
+            kind="displacement",
+            min_peaks=2,
+            offset=offset,
+            noise=sigma_x,
+            period=period0,
         )
     except RecordingError as e:
         raise RecordingError(f"turning points: {e}") from e
@@ -1049,20 +1097,26 @@ def _analyse(
     noise = _noise(t, x, v, rest_until, stop_time, period, derived, jitter)
     rest_noise = _rest_noise(t, x, v, rest_until, stop_time, period, derived)
     if derived is None:
-        quiet = _quiet_segments(t, rest_until, stop_time, 0.25 * period)
-        if np.count_nonzero(quiet) >= MIN_QUIET_SAMPLES:
-            velocity_offset = float(np.median(v[quiet]))
+        at_rest = _rest_samples(v, t, rest_until, stop_time, 0.25 * period)
+        if at_rest.size >= MIN_QUIET_SAMPLES:
+            velocity_offset = float(np.median(at_rest))
             v = v - velocity_offset
 
     start = int(window.index[0])
     stop = t.size if stop_time is None else int(np.searchsorted(t, stop_time)) + 1
     stop = min(stop, t.size)
     sl = slice(start, stop)
-    equilibrium = peaks.offset + peaks.drift * t[sl]
-    y = scaling.y(x[sl] - equilibrium)
+    # the same operations as x[sl] - (offset + drift t) and 0.5 (y² + y'²), in place
+    relative = peaks.drift * t[sl]
+    relative += peaks.offset
+    np.subtract(x[sl], relative, out=relative)
+    y = scaling.y(relative)
+    del relative
     yp = scaling.yp(v[sl])
     tau = scaling.tau(t[sl] - t[start])
-    energy = 0.5 * (y * y + yp * yp)
+    energy = y * y
+    energy += yp * yp
+    energy *= 0.5
     return EnergyDecay(
         t=t[sl].copy(),
         tau=tau,

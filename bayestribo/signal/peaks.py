@@ -163,6 +163,12 @@ def prepare_signal(
     RecordingError
         Naming the argument and what was expected.
     """
+    t, s, _ = _checked(t, signal, name)
+    return t, s
+
+
+def _checked(t: ArrayLike, signal: ArrayLike, name: str) -> tuple[NDArray, NDArray, NDArray]:
+    """:func:`prepare_signal`'s arrays and the steps ``np.diff(t)`` it checked."""
     t = np.asarray(t, dtype=float)
     s = np.asarray(signal, dtype=float)
     if t.ndim != 1:
@@ -182,7 +188,7 @@ def prepare_signal(
     if np.any(dt <= 0):
         i = int(np.flatnonzero(dt <= 0)[0])
         raise RecordingError(f"t must be strictly increasing; it is not at sample {i + 1}")
-    return t, s
+    return t, s, dt
 
 
 def estimate_noise(signal: ArrayLike) -> float:
@@ -238,15 +244,42 @@ def _alternate(idx: NDArray, is_max: NDArray, s: NDArray) -> tuple[NDArray, NDAr
     return np.asarray(keep_i, dtype=int), np.asarray(keep_m, dtype=bool)
 
 
+#: Samples of the first block :func:`_rest_tail_start` examines from the record's end
+#: (each further block twice the last).
+_TAIL_BLOCK = 4096
+
+
 def _rest_tail_start(s: NDArray, band: float, min_len: int) -> int | None:
-    """First sample of the final stretch staying inside ±band of its median, if long enough."""
-    # grow the tail backwards while its range stays within 2*band
-    hi = np.maximum.accumulate(s[::-1])[::-1]
-    lo = np.minimum.accumulate(s[::-1])[::-1]
-    inside = (hi - lo) <= 2.0 * band
-    if not inside[-1]:
-        return None
-    start = int(np.argmax(inside))  # inside is monotone (False...True)
+    """First sample of the final stretch staying inside ±band of its median, if long enough.
+
+    The tail grows backwards while its range (the largest sample from there on less
+    the smallest) stays within 2·band: a range that only grows, so the stretch ends at
+    the last sample outside it. The ranges are taken block by block from the end, each
+    block's running extremes carried into the next, until a block holds that sample:
+    the same extremes, and the same sample, as over the whole record, without reading
+    the motion before the tail.
+    """
+    limit = 2.0 * band
+    end = s.size
+    size = _TAIL_BLOCK
+    carried: tuple[float, float] | None = None
+    start = 0
+    while end > 0:
+        part = s[max(0, end - size) : end][::-1]  # from the end backwards
+        hi = np.maximum.accumulate(part)
+        lo = np.minimum.accumulate(part)
+        if carried is not None:
+            np.maximum(hi, carried[0], out=hi)
+            np.minimum(lo, carried[1], out=lo)
+        inside = (hi - lo) <= limit
+        if carried is None and not inside[0]:
+            return None  # not even the last sample (a band that is not a number)
+        if not inside.all():
+            start = end - int(np.argmin(inside))  # past the last sample outside
+            break
+        carried = (float(hi[-1]), float(lo[-1]))
+        end -= part.size
+        size *= 2
     if s.size - start < min_len:
         return None
     return start
@@ -339,6 +372,7 @@ def find_peaks(
     noise: float | None = None,
     threshold: float = 10.0,
     min_peaks: int = 3,
+    period: float | None = None,
 ) -> Peaks:
     """Find the successive extrema of a free-decay recording.
 
@@ -368,6 +402,13 @@ def find_peaks(
         peak-to-peak height falls below it.
     min_peaks : int
         Fewest extrema accepted after skipping.
+    period : float, optional
+        Period of the oscillation [s] when the caller has it (the energy decay passes
+        the whole record's :func:`~bayestribo.signal.period.dominant_period`, which
+        sets its motion span, instead of a second estimate on the motion alone); by
+        default the dominant period of ``signal``. It sets the least distance between
+        extrema (0.6 period), the parabola's half-width (1/12 period) and the shortest
+        rest tail (one period).
 
     Returns
     -------
@@ -376,15 +417,22 @@ def find_peaks(
     Raises
     ------
     RecordingError
-        Bad arrays, no oscillation, or fewer than ``min_peaks`` extrema.
+        Bad arrays, no oscillation, fewer than ``min_peaks`` extrema, or a ``period``
+        that is not a positive number.
     """
     if kind not in _KINDS:
         raise RecordingError(f"kind must be one of {_KINDS}, got {kind!r}")
-    t, s = prepare_signal(t, signal, name=kind)
+    t, s, steps = _checked(t, signal, kind)
     if isinstance(skip, bool) or not isinstance(skip, int | np.integer) or skip < 0:
         raise RecordingError(f"skip must be an integer >= 0, got {skip!r}")
     if not (threshold > 0):
         raise RecordingError(f"threshold must be > 0, got {threshold!r}")
+    if period is not None and (
+        isinstance(period, bool)
+        or not isinstance(period, int | float | np.integer | np.floating)
+        or not (math.isfinite(period) and period > 0)
+    ):
+        raise RecordingError(f"period must be a positive number of seconds, got {period!r}")
     span = float(np.max(s) - np.min(s))
     if span == 0.0:
         raise RecordingError(f"the {kind} signal is constant: no oscillation to analyse")
@@ -393,9 +441,11 @@ def find_peaks(
         raise RecordingError(f"noise must be a finite number >= 0, got {noise!r}")
     floor = max(threshold * sigma, 1e-4 * span)
 
-    dt = sample_step(t)
-    period = dominant_period(t, s)
-    per_samples = period / dt
+    dt = sample_step(t, steps)
+    del steps
+    if period is None:
+        period = dominant_period(t, s)
+    per_samples = float(period) / dt
     if per_samples < 6:
         raise RecordingError(
             f"the {kind} signal has {per_samples:.1f} samples per period; at least 6 are "

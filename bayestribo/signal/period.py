@@ -91,6 +91,35 @@ def _oscillation_power(s: NDArray, period: float, dt: float) -> float:
     return best / size
 
 
+#: How much of the quarter squared range of a signal :func:`_unbeatable` allows a
+#: candidate's computed power beyond the exact bound (rounding: none measurable).
+_CEILING_MARGIN = 2.0
+#: Largest ratio of a signal's magnitude to its range for which :func:`_unbeatable`
+#: holds (a larger offset would make the rounding of the blocks' sums count).
+_OFFSET_RATIO = 1e3
+
+
+def _unbeatable(s: NDArray, power_k: float) -> bool:
+    """Whether no candidate of :func:`_strongest_oscillation` can have
+    :data:`POWER_RATIO` times the power ``power_k`` of the strongest peak.
+
+    The power of any sinusoid in a block (:func:`_oscillation_power`: the variance its
+    fit explains beyond the block's line) is at most the block's variance about its
+    mid-range, a quarter of its squared range, so at most a quarter of the signal's
+    squared range. When :data:`_CEILING_MARGIN` times that is within the ratio of
+    ``power_k``, the strongest peak stands whatever the candidates' powers are: they
+    are not computed (a free decay's: its largest swing is the record's range).
+    """
+    hi, lo = float(np.max(s)), float(np.min(s))
+    spread = hi - lo
+    ceiling = 0.25 * spread * spread
+    return (
+        math.isfinite(ceiling)
+        and max(abs(hi), abs(lo)) <= _OFFSET_RATIO * spread
+        and _CEILING_MARGIN * ceiling <= POWER_RATIO * power_k
+    )
+
+
 def _strongest_oscillation(t: NDArray, s: NDArray, spec: NDArray, k: int, n: int, dt: float) -> int:
     """Bin of the candidate peak of ``spec`` (the difference's spectrum, padded to
     ``n``) whose oscillation is strongest in ``s`` (see :func:`dominant_period`);
@@ -110,7 +139,10 @@ def _strongest_oscillation(t: NDArray, s: NDArray, spec: NDArray, k: int, n: int
         if pool.size > CANDIDATES:
             pool = pool[np.argpartition(ranked, -CANDIDATES)[-CANDIDATES:]]
         candidates.update(pool.tolist())
-    power = {c: _oscillation_power(s, n * dt / c, dt) for c in candidates}
+    power = {k: _oscillation_power(s, n * dt / k, dt)}
+    if _unbeatable(s, power[k]):
+        return k
+    power.update({c: _oscillation_power(s, n * dt / c, dt) for c in candidates - {k}})
     strongest = max(power.values())
     if strongest <= POWER_RATIO * power[k]:
         return k
@@ -293,6 +325,8 @@ def _spectral_period(t: NDArray, s: NDArray) -> float:
     spec = np.abs(np.fft.rfft(x, m))
     spec[0] = 0.0
     k = int(np.argmax(spec))
+    if not math.isfinite(spec[k]):  # the largest bin, or the first NaN
+        raise _overflow(s)
     if k == 0 or spec[k] == 0.0:
         raise RecordingError("the signal does not oscillate (flat spectrum)")
     k = _strongest_oscillation(t, s, spec, k, m, dt)
@@ -314,8 +348,20 @@ def _spectral_period(t: NDArray, s: NDArray) -> float:
         if 0 < best < bins.size - 1 or fine in (0, top):
             break
     kf = float(fine)
-    if 0 < fine < top:
+    if 0 < fine < top and 0 < best < bins.size - 1:
         a, b, c = np.log(values[best - 1 : best + 2] + 1e-300)
         den = a - 2 * b + c
         kf = fine + (0.5 * (a - c) / den if den != 0 else 0.0)
-    return float(n * dt / kf)
+    period = float(n * dt / kf)
+    if not (math.isfinite(period) and period > 0):
+        raise _overflow(s)
+    return period
+
+
+def _overflow(s: NDArray) -> RecordingError:
+    """The error of a signal whose spectrum overflows (values near the largest float)."""
+    largest = float(np.max(np.abs(s)))
+    return RecordingError(
+        f"the signal's values (up to {largest:.3g}) overflow the arithmetic of its spectrum; "
+        "expected the magnitudes of a motion in the stated units"
+    )

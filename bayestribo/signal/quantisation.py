@@ -65,7 +65,8 @@ def quantisation_step(values: ArrayLike) -> float | None:
         x = x[np.isfinite(x)]
     if x.size < 2:
         return None
-    change = np.abs(np.diff(x))
+    change = np.diff(x)
+    np.abs(change, out=change)
     change = change[change > 0]
     if change.size < _MIN_CHANGES:
         return None

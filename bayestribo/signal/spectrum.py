@@ -214,6 +214,15 @@ def _segments(signal: NDArray, mask: NDArray) -> list[NDArray]:
     return [signal[a:b] for a, b in zip(edges[::2], edges[1::2], strict=True)]
 
 
+def _around(freq: NDArray, centre: float, reach: float) -> slice:
+    """The bins of the increasing grid ``freq`` that can lie within ``reach`` of
+    ``centre``, and one more on each side: a test ``|freq - centre| <= r`` (r at most
+    ``reach``) gives on them what it gives on the whole grid, False elsewhere."""
+    lo = int(np.searchsorted(freq, centre - reach, side="left")) - 1
+    hi = int(np.searchsorted(freq, centre + reach, side="right")) + 1
+    return slice(max(lo, 0), min(hi, freq.size))
+
+
 def _fft_length(n_longest: int, samples_per_period: float | None) -> int:
     """FFT length: a power of two covering 8 periods (when known), at most the longest
     segment rounded up, at least 64."""
@@ -246,7 +255,8 @@ def welch(s: NDArray, fs: float, nper: int, nfft: int) -> NDArray:
     batch = max(1, _WELCH_CHUNK // nper)
     for first in range(0, count, batch):
         part = frames[first : first + batch]
-        part = (part - part.mean(axis=1, keepdims=True)) * window
+        part = part - part.mean(axis=1, keepdims=True)
+        part *= window
         spectrum = np.fft.rfft(part, nfft, axis=1)
         total += np.einsum("ij,ij->j", spectrum.real, spectrum.real)
         total += np.einsum("ij,ij->j", spectrum.imag, spectrum.imag)
@@ -353,22 +363,28 @@ def noise_spectrum(
             f0 = base * harmonic
             if f0 + reach >= nyquist:
                 continue
-            near = np.flatnonzero(np.abs(freq - f0) <= reach)
-            hood = np.abs(freq - f0) <= max(0.5 * f0, 8 * resolution)
-            hood &= np.abs(freq - f0) > 3 * resolution
-            hood[0] = False
+            # the bins about f0 only (a few hundred of the grid's): the same tests
+            outer = max(0.5 * f0, 8 * resolution)
+            around = _around(freq, f0, max(reach, outer))
+            distance = np.abs(freq[around] - f0)
+            near = np.flatnonzero(distance <= reach) + around.start
+            hood = distance <= outer
+            hood &= distance > 3 * resolution
+            if around.start == 0:
+                hood[0] = False
             if near.size == 0 or np.count_nonzero(hood) < 4:
                 continue
             k = int(near[np.argmax(psd[near])])
             if min(candidates, key=lambda c: abs(c - freq[k])) != f0 or line_bins[k]:
                 continue  # the peak belongs to another candidate line
-            if psd[k] < np.max(psd[np.abs(freq - freq[k]) <= 2.0 * resolution]):
+            span = _around(freq, float(freq[k]), 2.0 * resolution)
+            wide = np.abs(freq[span] - freq[k]) <= 2.0 * resolution
+            if psd[k] < np.max(psd[span][wide]):
                 continue  # the shoulder of a stronger peak (window leakage), not a line
-            background = float(np.median(psd[hood]))
+            background = float(np.median(psd[around][hood]))
             if not psd[k] > LINE_RATIO * background:
                 continue
-            wide = np.abs(freq - freq[k]) <= 2.0 * resolution
-            power = float(np.sum(psd[wide] - background) * df)
+            power = float(np.sum(psd[span][wide] - background) * df)
             f_peak = float(freq[k])
             if 0 < k < psd.size - 1:
                 a, b, c = np.log(psd[k - 1 : k + 2])
@@ -377,7 +393,7 @@ def noise_spectrum(
                     f_peak += 0.5 * (a - c) / den * df
             lines.append(f_peak)
             rms.append(math.sqrt(max(power, 0.0)))
-            line_bins |= wide
+            line_bins[span] |= wide
     variance = float(np.sum(psd) * df)
     smooth = psd.copy()
     if line_bins.any():
