@@ -162,18 +162,22 @@ def test_the_report_of_the_spring_and_disc_rig_speaks_of_that_rig(tmp_path):
 
 
 def test_the_probe_finds_what_a_reader_must_not_see(tmp_path):
-    """The checks above can fail: a number split by a narrow cell, a code name in prose,
-    a Python repr."""
+    """The checks above can fail: a number split by a narrow cell, a code name or a
+    symbol without its subscript in prose, a heading or a table, a Python repr."""
     page = tmp_path / "page.html"
     page.write_text(
         '<html><body><div class="jp-RenderedHTMLCommon"><p>the load_N is np.float64(0.3)</p>'
+        "<h2>μ_k against load</h2><p>x_c, then μ<sub>s</sub> and <code>--param max_steps=9</code>"
+        "</p>"
         '<table><tr><td style="width:1px;word-break:break-all">-0.0006399123</td></tr></table>'
         '</div><div class="jp-OutputArea-output"><table><tr><th>mean_shift_sd</th>'
         "<td>molla_durissima_14.9_1</td></tr></table><pre>zeta  0.0243</pre></div>"
         "</body></html>"
     )
     found = inspect_report(page)
-    assert found.identifiers == ["load_N", "mean_shift_sd"]
+    # code names and symbols typed as code (a report sets μ<sub>k</sub>); code spans and a
+    # file name's numbered parts are not flagged
+    assert found.identifiers == ["load_N", "μ_k", "x_c", "mean_shift_sd"]
     assert found.text_dumps == 1
     assert any("np.float64(" in r for r in found.reprs)
     assert found.broken_numbers == ["-0.0006399123"]
