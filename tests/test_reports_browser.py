@@ -208,3 +208,21 @@ def test_the_probe_finds_a_figure_with_an_empty_panel(tmp_path, monkeypatch):
     assert found.figure_problems == [
         "figure windows: empty panel: 'μ_k [-]': every y value is zero"
     ]
+
+
+def test_the_viscosity_report_reads_as_text_for_people(tmp_path):
+    """The glycerol–water series against viscosity (``--notebook viscosity``): its tables
+    name quantities by symbol and unit (no ``load_N`` or ``mu_k low`` columns), and no
+    result is printed as monospace text."""
+    if not RUN.is_file():
+        pytest.skip("the bundled campaign data/ is absent")
+    out = tmp_path / "viscosity.html"
+    argv = ["report", str(REPO / "data"), "--notebook", "viscosity", "--out", str(out)]
+    argv += ["--param", "loads=[0.46]", "--param", "water_fractions=[0.0055, 0.09]"]
+    argv += ["--param", "repeats=[1]", "--param", "population_steps=600"]
+    argv += ["--param", "fit_kwargs={'grid_points': 32}"]
+    main(argv)
+    page = inspect_report(out)
+    assert page.all_images_loaded and page.figures >= 2
+    _clean(page)
+    assert page.text_dumps == 0
