@@ -90,6 +90,7 @@ def _clean(page) -> None:
     figures with overlapping texts or panels with nothing to show."""
     assert page.reprs == [], page.reprs
     assert page.identifiers == [], page.identifiers
+    assert page.low_resolution == 0  # figures at 200 dpi
     assert page.broken_numbers == [], page.broken_numbers
     assert page.figure_problems == [], page.figure_problems
 
@@ -163,10 +164,20 @@ def test_the_report_of_the_spring_and_disc_rig_speaks_of_that_rig(tmp_path):
 
 def test_the_probe_finds_what_a_reader_must_not_see(tmp_path):
     """The checks above can fail: a number split by a narrow cell, a code name or a
-    symbol without its subscript in prose, a heading or a table, a Python repr."""
+    symbol without its subscript in prose, a heading or a table, a Python repr, a figure
+    at screen resolution (one image pixel per pixel shown) beside one at twice that."""
+    import base64
+    import io
+
+    from PIL import Image
+
+    buf = io.BytesIO()
+    Image.new("RGB", (40, 20), "white").save(buf, format="PNG")
+    png = "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode()
     page = tmp_path / "page.html"
     page.write_text(
-        '<html><body><div class="jp-RenderedHTMLCommon"><p>the load_N is np.float64(0.3)</p>'
+        f'<html><body><img src="{png}" width="40"><img src="{png}" width="20">'
+        '<div class="jp-RenderedHTMLCommon"><p>the load_N is np.float64(0.3)</p>'
         "<h2>μ_k against load</h2><p>x_c, then μ<sub>s</sub> and <code>--param max_steps=9</code>"
         "</p>"
         '<table><tr><td style="width:1px;word-break:break-all">-0.0006399123</td></tr></table>'
@@ -181,6 +192,7 @@ def test_the_probe_finds_what_a_reader_must_not_see(tmp_path):
     assert found.text_dumps == 1
     assert any("np.float64(" in r for r in found.reprs)
     assert found.broken_numbers == ["-0.0006399123"]
+    assert found.figures == 2 and found.low_resolution == 1
 
 
 def test_the_probe_finds_a_figure_with_an_empty_panel(tmp_path, monkeypatch):

@@ -61,6 +61,12 @@ window.addEventListener("load", function () {
     equations: imgs.filter(function (i) { return i.classList.contains("bt-math"); }).length,
     figures: imgs.filter(function (i) {
       return (i.getAttribute("src") || "").indexOf("data:image/png") === 0; }).length,
+    // figures with fewer than 2 image pixels per CSS pixel shown (below 200 dpi at the
+    // page's 100 px per inch of a figure): blurred in print and on a high-density screen
+    low_resolution: imgs.filter(function (i) {
+      var shown = i.getBoundingClientRect().width;
+      return (i.getAttribute("src") || "").indexOf("data:image/png") === 0 &&
+             i.naturalWidth > 0 && shown > 0 && i.naturalWidth < 1.9 * shown; }).length,
     raw_tex: text.indexOf("$$") >= 0 || text.indexOf("\\(") >= 0,
     code_cells: document.querySelectorAll(".jp-CodeCell .jp-InputArea").length,
     toc_links: document.querySelectorAll(".bt-toc a").length,
@@ -162,6 +168,8 @@ class PageInspection:
         Equation images (SVG rendered from TeX).
     figures : int
         Figures (PNG data).
+    low_resolution : int
+        Figures shown with fewer than two image pixels per CSS pixel (below 200 dpi).
     raw_tex : bool
         Raw TeX (``$$`` or ``\\(``) left in the visible text.
     code_cells : int
@@ -196,6 +204,7 @@ class PageInspection:
     broken: list[str]
     equations: int
     figures: int
+    low_resolution: int
     raw_tex: bool
     code_cells: int
     toc_links: int
