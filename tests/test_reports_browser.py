@@ -95,6 +95,17 @@ def _clean(page) -> None:
     assert page.figure_problems == [], page.figure_problems
 
 
+def _answer(report) -> str:
+    """The page's first section (between its first two h2 headings), which must be the
+    answer: the result first, how it was reached after it."""
+    page = report.read_text(encoding="utf-8")
+    heads = [m.start() for m in re.finditer(r"<h2\b", page)]
+    assert len(heads) >= 2, "no sections"
+    title = html.unescape(re.sub(r"<[^>]+>", "", page[heads[0] : page.index("</h2>", heads[0])]))
+    assert title.startswith("The answer"), title
+    return page[heads[0] : heads[1]]
+
+
 def test_the_single_run_report_reads_as_text_for_people(single_run_report):
     page = inspect_report(single_run_report)
     _clean(page)
@@ -103,6 +114,12 @@ def test_the_single_run_report_reads_as_text_for_people(single_run_report):
     assert "load N" in text and "0.31 N" in text  # metadata in words with units
     assert "viscous + Coulomb friction" in text and "viscous+coulomb" not in text
     assert "ignores friction" in text  # the logarithmic decrement, labelled
+    assert "Ζ" not in text  # a capital zeta opening a sentence ("Ζ and μ_k are ...")
+    # the answer first: the law's parameters with intervals beside the paper's values,
+    # and the verdict in one line, before section 1
+    answer = _answer(single_run_report)
+    assert "<table" in answer and "ζ" in answer and "μ<sub>k</sub>" in answer
+    assert "paper, glycerol" in answer and 'class="bt-verdict"' in answer
 
 
 def test_the_campaign_report_reads_as_text_for_people(tmp_path):
@@ -116,6 +133,8 @@ def test_the_campaign_report_reads_as_text_for_people(tmp_path):
     page = inspect_report(out)
     assert page.all_images_loaded and page.figures >= 3
     _clean(page)
+    answer = _answer(out)  # the populations beside the paper's values come first
+    assert "<table" in answer and "paper: mean, σ" in answer
 
 
 def test_the_report_of_another_rigs_recordings_reads_as_text_for_people(tmp_path):
@@ -153,6 +172,7 @@ def test_the_report_of_the_spring_and_disc_rig_speaks_of_that_rig(tmp_path):
     assert page.all_images_loaded and page.figures >= 2
     _clean(page)
     assert page.text_dumps == 0
+    assert "<table" in _answer(out)  # each recording's answer first
     page_source = out.read_text(encoding="utf-8")
     body = re.sub(r"<style.*?</style>|<script.*?</script>", " ", page_source, flags=re.DOTALL)
     text = html.unescape(re.sub(r"<[^>]+>", " ", body))
@@ -238,3 +258,4 @@ def test_the_viscosity_report_reads_as_text_for_people(tmp_path):
     assert page.all_images_loaded and page.figures >= 2
     _clean(page)
     assert page.text_dumps == 0
+    assert "<table" in _answer(out)  # the group means against viscosity first

@@ -126,3 +126,14 @@ def test_text_below_8_pt_is_found_and_said(monkeypatch):
     ax.legend(fontsize=8)
     assert kit.small_texts(fig) == []
     plt.close(fig)
+
+
+def test_the_kit_examples_hold():
+    """The kit's examples: a sentence opening with ζ keeps it lower case ("ζ and μ_k are
+    constant.", not "Ζ and ..."), intervals in the digits they support, numbers kept
+    on one line, small texts and empty panels found."""
+    import doctest
+
+    from bayestribo.reports import kit
+
+    assert doctest.testmod(kit).failed == 0
