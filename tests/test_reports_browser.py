@@ -262,3 +262,17 @@ def test_the_viscosity_report_reads_as_text_for_people(tmp_path):
     _clean(page)
     assert page.text_dumps == 0
     assert "<table" in _answer(out)  # the group means against viscosity first
+
+
+def test_the_acquisition_report_reads_as_text_for_people(tmp_path):
+    """The simulated instrument's report (``--notebook acquisition``): what was logged,
+    recovered and fitted as tables in words, no printed lines, dicts or ``mu_k``."""
+    pytest.importorskip("bayestribo.acquisition")
+    out = tmp_path / "acquisition.html"
+    argv = ["report", "--notebook", "acquisition", "--out", str(out)]
+    argv += ["--param", "duration_s=0.6", "--param", f"out_dir={str(tmp_path / 'acq')!r}"]
+    main(argv)
+    page = inspect_report(out)
+    assert page.all_images_loaded and page.figures >= 2
+    _clean(page)
+    assert page.text_dumps == 0
