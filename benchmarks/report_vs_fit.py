@@ -183,7 +183,7 @@ def main(argv: list[str] | None = None) -> int:
         except subprocess.TimeoutExpired:
             rows.append({"run": name, "error": f"a command took over {args.timeout:.0f} s"})
         print(table(rows[-1:]).splitlines()[-1], flush=True)
-        if kept:
+        if args.update:  # the kept rows and the redone ones, in the order of the cases
             rows = sorted([*kept, *rows], key=lambda r: order.get(r["run"], len(order)))
             kept = []
         done = [r for r in rows if "error" not in r]

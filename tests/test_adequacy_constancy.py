@@ -97,3 +97,20 @@ def test_amplitude_dependent_damping_is_detected():
         t = constancy_test(windowed_fits(run, window=2))
         assert not t.constant
         assert t.zeta.change > 0  # larger damping at larger amplitude
+
+
+def test_the_statement_reads_as_text_for_people():
+    """A change of ζ over 100 % reads "+108 %", not "+1.1e+02 %", and a friction held at
+    a whole-decay value that is a numerical zero (1.9e-29 on the spring-and-disc rig)
+    reads as zero, not as a number split across lines in a report."""
+    import doctest
+
+    from bayestribo.adequacy import constancy
+    from bayestribo.adequacy.constancy import AmplitudeTrend, _describe, _held_text
+
+    assert doctest.testmod(constancy).failed == 0
+    t = AmplitudeTrend("zeta", 0.002, 0.0, 0.0, 0.00216, (0.00214, 0.00218), 1.08, 0.05)
+    said = _describe("ζ", t)
+    assert "+108 %" in said and "+107 to +109 %" in said and "e+" not in said
+    assert _held_text(1.9e-29) == "0 (within numerical precision)"
+    assert _held_text(6.0e-6) == "6e-06"

@@ -298,13 +298,15 @@ def test_the_load_figure_draws_each_run_and_the_paper_only_beside_glycerol(analy
     assert {"a run (median)", "paper, glycerol"} <= labels
     dots = [line for line in fig.axes[0].lines if line.get_label() == "a run (median)"]
     assert len(dots[0].get_xdata()) == 6  # the six runs with contact
-    # a campaign of another lubricant gets no glycerol reference
-    fits = _campaign(np.random.default_rng(4))
-    for f in fits:
-        f.metadata["lubricant"] = "oil" if f.metadata["load_N"] else "none"
-    other = analyse_campaign(fits, seed=1, max_steps=1500)
-    labels = {t.get_text() for t in plot_against_load(other).legends[0].get_texts()}
-    assert "paper, glycerol" not in labels
+    # a campaign of another lubricant, or of the glycerol-water solutions, gets no
+    # glycerol reference
+    for lubricant in ("oil", "glycerol-water"):
+        fits = _campaign(np.random.default_rng(4))
+        for f in fits:
+            f.metadata["lubricant"] = lubricant if f.metadata["load_N"] else "none"
+        other = analyse_campaign(fits, seed=1, max_steps=1500)
+        labels = {t.get_text() for t in plot_against_load(other).legends[0].get_texts()}
+        assert "paper, glycerol" not in labels, lubricant
 
 
 def test_group_labels_read_as_words_with_units():
@@ -315,3 +317,41 @@ def test_group_labels_read_as_words_with_units():
     assert group_words("lubricant=oil,temperature_C=40") == "oil, temperature_C=40"
     assert group_words("water_mass_fraction=n/a") == "water n/a"
     assert group_words(POOLED) == "all runs"
+
+
+def test_the_viscosity_figure_draws_each_load_beside_the_paper_and_reads_in_print():
+    """A glycerol–water series at two water fractions and one load: the group means
+    against ν (Eq. 43) in one colour for the load, each run's median, the paper's
+    glycerol values and the 6 % water line; no text below 8 pt, no labels overlapping."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from bayestribo.campaign.figures import plot_against_viscosity
+    from bayestribo.model.viscosity import glycerol_water_viscosity
+    from bayestribo.reports.kit import overlapping_labels, setup, small_texts
+
+    setup(None)  # the reports' look
+    rng = np.random.default_rng(9)
+    fits = []
+    for water, zeta in ((0.0055, 0.0236), (0.09, 0.013)):
+        for r in range(2):
+            meta = {
+                "run_id": f"gw{water}-r{r}",
+                "lubricant": "glycerol-water",
+                "water_mass_fraction": water,
+                "load_N": 0.12,
+                **RIG,
+            }
+            draws = {
+                "zeta": rng.normal(zeta + 1e-4 * r, 2e-5, 400),
+                "mu_k": rng.normal(0.03, 5e-5, 400),
+            }
+            fits.append(_Fit(draws, meta))
+    analysis = analyse_campaign(fits, seed=1, max_steps=1500)
+    fig = plot_against_viscosity(analysis)
+    labels = {t.get_text() for t in fig.legends[0].get_texts()}
+    assert {"N = 0.12 N", "a run (median)", "paper, glycerol (mean ± σ)", "6 % water"} <= labels
+    means = [c for c in fig.axes[0].containers if c.get_label() == "N = 0.12 N"]
+    x = np.sort(means[0].lines[0].get_xdata())
+    np.testing.assert_allclose(x, glycerol_water_viscosity(np.array([0.09, 0.0055])), rtol=0.03)
+    assert small_texts(fig) == [] and overlapping_labels(fig) == []

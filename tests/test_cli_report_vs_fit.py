@@ -12,6 +12,7 @@ every real recording.
 from __future__ import annotations
 
 import json
+import re
 
 import pytest
 
@@ -51,3 +52,12 @@ def test_report_and_fit_give_one_answer_on_a_real_recording(appstat_file, tmp_pa
     # the grid of Π increments and the sampler's run: the same fit, not a near one
     assert reported["diagnostics"]["n_steps"] == fitted["diagnostics"]["n_steps"]
     assert report_exit == fit_exit
+    # the law misfits this recording (dry friction on a plate; the fit exits 1): the
+    # report's answer does not present ζ and x_c as a measurement, and says what to do
+    assert report_exit == 1
+    page = (tmp_path / "r.html").read_text(encoding="utf-8")
+    heads = [m.start() for m in re.finditer(r"<h2\b", page)]
+    answer = page[heads[0] : heads[1]]
+    assert "The answer" in answer and 'class="bt-verdict"' in answer
+    assert "The law holds" not in answer
+    assert "not a measurement" in answer or "Not a result" in answer

@@ -50,6 +50,14 @@ def test_corner_draws_on_the_given_figure(result: FitResult, tmp_path: Path) -> 
     assert len(fig.axes) == d * d
     labels = {ax.get_xlabel() for ax in fig.axes}
     assert {"ζ [-]", "μ_k [-]", "μ_s/μ_k [-]"} <= labels
+    # each title gives the median and 95 % interval in the digits the interval supports
+    # (corner's own format rounds a ζ of 0.0242506 ± 4e-7 to 0.0243)
+    from bayestribo.summary import interval_text
+
+    diagonal = np.asarray(fig.axes).reshape(d, d).diagonal()
+    for ax, name in zip(diagonal, plotted_names(result), strict=True):
+        low, median, high = np.quantile(result.samples(name), [0.025, 0.5, 0.975])
+        assert ax.get_title().splitlines()[1] == interval_text(median, low, high), name
     _png(fig, tmp_path, "corner.png")
 
 

@@ -111,3 +111,28 @@ def test_warnings_in_a_notebook_are_notes_and_the_kernel_stays_quiet(tmp_path, c
     )
     captured = capfd.readouterr()
     assert "Kernel is running over TCP" not in captured.err + captured.out
+
+
+def test_symbols_read_as_symbols_in_the_text_and_code_stays_code():
+    """``μ_k`` and ``x_c`` in a table, a note or a sentence are set with a subscript
+    (μ<sub>k</sub>); code names, file names, attributes and code spans are left alone."""
+    import doctest
+
+    from bayestribo.reports import symbols
+
+    assert doctest.testmod(symbols).failed == 0
+    md = nbformat.v4.new_markdown_cell("# Title\n\nWithout a load, x_c replaces μ_k.")
+    code = nbformat.v4.new_code_cell("")
+    code.outputs = [
+        nbformat.v4.new_output(
+            "display_data",
+            data={
+                "text/html": '<table><tr><th title="mu_k">μ_s/μ_k</th><td>x_c [m]</td></tr>'
+                "</table><code>--param max_steps=5000 mu_k</code><p>file disc_14.9_1</p>"
+            },
+        )
+    ]
+    page = to_html(nbformat.v4.new_notebook(cells=[md, code]))
+    assert "x<sub>c</sub> replaces μ<sub>k</sub>" in page
+    assert '<th title="mu_k">μ<sub>s</sub>/μ<sub>k</sub></th><td>x<sub>c</sub> [m]</td>' in page
+    assert "<code>--param max_steps=5000 mu_k</code>" in page and "disc_14.9_1" in page

@@ -102,3 +102,38 @@ def test_panels_that_are_not_drawn_as_panels_are_not_empty():
     axes[1, 1].set_visible(False)
     assert empty_panels(fig) == []
     plt.close(fig)
+
+
+def test_text_below_8_pt_is_found_and_said(monkeypatch):
+    """Run labels at 6.5 pt and a legend in x-small (6.94 pt at the reports' 10 pt) are
+    below the 8 pt a journal prints; ``save`` says so in a note the tests and the
+    browser's probe look for. The same figure at 8 pt passes."""
+    from bayestribo.reports import kit
+
+    kit.setup(None)  # the reports' look: 10 pt text
+    fig, ax = plt.subplots(figsize=(5, 3), layout="constrained")
+    ax.plot([0, 1], [0, 1], label="a run")
+    ax.set_yticks([0, 1], ["glycerol-N0.07-r1", "air-r1"], fontsize=6.5)
+    ax.legend(fontsize="x-small")
+    ax.set_title("hidden", fontsize=5).set_visible(False)  # not drawn: not counted
+    found = kit.small_texts(fig)
+    assert found == ["'glycerol-N0.07-r1' (6.5 pt)", "'air-r1' (6.5 pt)", "'a run' (6.94 pt)"]
+    said = []
+    monkeypatch.setattr(kit, "note", said.append)
+    kit.setup(None)(fig, "forest")
+    assert said == [f"figure forest: {kit.FIGURE_PROBLEMS[2]}: " + "; ".join(found)]
+    ax.tick_params(labelsize=8)
+    ax.legend(fontsize=8)
+    assert kit.small_texts(fig) == []
+    plt.close(fig)
+
+
+def test_the_kit_examples_hold():
+    """The kit's examples: a sentence opening with ζ keeps it lower case ("ζ and μ_k are
+    constant.", not "Ζ and ..."), intervals in the digits they support, numbers kept
+    on one line, small texts and empty panels found."""
+    import doctest
+
+    from bayestribo.reports import kit
+
+    assert doctest.testmod(kit).failed == 0

@@ -71,6 +71,7 @@ def _test_parameters(name: str, tmp: Path) -> dict:
             "loads": [0.12, 0.31, 0.59],  # three loads: the slope is inferred
             "repeats": [1],
             "air_repeats": [1],
+            "water_fractions": [0.0055, 0.09],  # two fits of glycerol-water (section 6)
             "fit_kwargs": {"grid_points": 32},
             "population_steps": 600,
             "max_workers": 2,
@@ -321,6 +322,12 @@ def test_notebook_executes_with_test_parameters(name, tmp_path):
         assert record["trends"] and record["contact_damping"]
         assert record["campaign_dir"] is None and record["seed"] == 0  # fitted here
         assert "No campaign results were given" in text
+        # the glycerol-water series has its own section: its runs, populations by water
+        # fraction and its trend against viscosity
+        water = record["water_series"]
+        assert water["series"] == "glycerol-water" and len(water["runs"]) == 2
+        assert any(k.startswith("viscosity:") for k in water["analysis"]["trends"])
+        assert "6. The glycerol–water series" in text and "against viscosity" in text
     if name == "real_data":
         record = json.loads(summary.read_text())
         verdict = {r["recording"]: r["dominated by"] for r in record["verdict"]}

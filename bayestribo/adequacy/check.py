@@ -9,7 +9,7 @@ law (constant ζ and μ_k, Eq. 7) adequate for this recording?
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from bayestribo.adequacy.constancy import ConstancyTest, constancy_test
@@ -271,6 +271,9 @@ def check_adequacy(
             fit_result = fit(run, seed=seed, skip_oscillations=skip_oscillations)
     else:
         windows = windowed_fits(decay, window=window, seed=seed)
+        if windows.length_unit != "m" and getattr(run, "length_unit", None) == "m":
+            # fitted on the decay alone: the recording says its position is in metres
+            windows = replace(windows, length_unit="m")
     try:
         constancy: ConstancyTest | None = constancy_test(windows, alpha=alpha)
         note = ""

@@ -234,14 +234,39 @@ def _trend(
     )
 
 
+#: Largest |value| of a friction held fixed that is a numerical zero (a whole-decay fit
+#: whose friction piles on its bound at 0 returns 1e-29, not a measurement).
+_ZERO = 1e-12
+
+
+def _percent(value: float) -> str:
+    """A signed percentage in two significant digits, never in exponent form
+    (``+110``, not ``+1.1e+02``).
+
+    Examples
+    --------
+    >>> _percent(108.2), _percent(5.31), _percent(-0.42)
+    ('+108', '+5.3', '-0.42')
+    """
+    return f"{value:+.0f}" if abs(value) >= 100 else f"{value:+.2g}"
+
+
+def _held_text(value: float) -> str:
+    """A friction held at the whole decay's value: that value, or zero where it is a
+    numerical zero."""
+    return "0 (within numerical precision)" if abs(value) < _ZERO else f"{value:.3g}"
+
+
 def _describe(name: str, t: AmplitudeTrend) -> str:
+    """A trend with amplitude in words: its change from the smallest to the largest
+    window amplitude with its 95 % interval, relative where the mean is positive."""
     if t.relative_change is None:
         lo, hi = t.change_interval
         return f"{name} changes by {t.change:.3g} (95 % interval {lo:.3g} to {hi:.3g})"
     lo, hi = (v / t.mean for v in t.change_interval)
     return (
-        f"{name} changes by {100 * t.relative_change:+.2g} % from the smallest to the largest "
-        f"window amplitude (95 % interval {100 * lo:+.2g} to {100 * hi:+.2g} %)"
+        f"{name} changes by {_percent(100 * t.relative_change)} % from the smallest to the "
+        f"largest window amplitude (95 % interval {_percent(100 * lo)} to {_percent(100 * hi)} %)"
     )
 
 
@@ -335,7 +360,7 @@ def constancy_test(
         f"{np.min(amp):.3g} to {np.max(amp):.3g} {unit}): the linear law is not adequate"
     )
     if fixed:
-        friction = f"{symbol} held at the whole-decay value {tm.mean:.3g}"
+        friction = f"{symbol} held at the whole-decay value {_held_text(tm.mean)}"
         head = head.replace(f"ζ and {symbol} are", "the equivalent ζ is")
         head = head.replace(
             "the damping law is not constant", "the equivalent ζ changes with amplitude"

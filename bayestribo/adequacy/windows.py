@@ -676,12 +676,15 @@ def windowed_fits(
         mode, fixed_mu = "fixed", whole.mu
         out = run_windows(fixed_mu)
     scale = context.mu_scale
+    # metres with a load (ℓ = N/k), or where the recording says so (another rig's position
+    # in metres); otherwise the signal's own unit
+    in_metres = loaded or getattr(recording, "length_unit", None) == "m"
     return WindowedAnalysis(
         windows=out,
         window_oscillations=window,
         method=fitter.method,
         friction_name="mu_k" if loaded else "friction_displacement",
-        length_unit="m" if loaded else "signal unit",
+        length_unit="m" if in_metres else "signal unit",
         length_scale=ell,
         interval_kind=fitter.interval_kind,
         extra={

@@ -6,7 +6,10 @@
 * :func:`plot_forest`: each run's ζ and μ_k with its credible interval, and a panel
   of the intervals' relative widths on a log scale (a run's interval is often 10⁻⁴ of
   the spread between runs: invisible beside its dot, readable in that panel);
-* :func:`plot_derived`: ζ_k and d_k per group against load.
+* :func:`plot_derived`: ζ_k and d_k per group against load;
+* :func:`plot_against_viscosity`: a glycerol–water series' group means of ζ and μ_k
+  against the kinematic viscosity ν of Eq. 43, one colour per load, beside the
+  paper's glycerol values and the 6 % water above which its μ_k rises (Fig. 10).
 
 Each function draws on the figure it is given (a new one if None) and returns it;
 :func:`save_figures` is the one that writes files.
@@ -25,11 +28,22 @@ from bayestribo.campaign.analysis import CampaignAnalysis
 from bayestribo.population.groups import group_words
 from bayestribo.summary import summarize
 
-__all__ = ["PAPER_VALUES", "plot_against_load", "plot_derived", "plot_forest", "save_figures"]
+__all__ = [
+    "PAPER_VALUES",
+    "plot_against_load",
+    "plot_against_viscosity",
+    "plot_derived",
+    "plot_forest",
+    "save_figures",
+]
 
 #: Paper values of the glycerol series (mean, repeat sd), section 3.1.
 PAPER_VALUES = {"zeta": (0.0236, 0.0012), "mu_k": (0.0294, 0.0036)}
 _LABELS = {"zeta": "ζ", "mu_k": "μ_k"}
+
+#: Water mass fraction of the paper's glycerol (measured, section 3.1) and the one up to
+#: which its μ_k keeps the glycerol value (section 3.2, Fig. 10).
+GLYCEROL_WATER, MU_K_CONSTANT_UP_TO = 0.0055, 0.06
 
 
 def _decades(ax: Any) -> None:
@@ -302,3 +316,108 @@ def save_figures(analysis: CampaignAnalysis, folder: str | Path) -> list[Path]:
         plt.close(fig)
         out.append(path)
     return out
+
+
+def plot_against_viscosity(analysis: CampaignAnalysis, fig: Any = None) -> Any:
+    """ζ and μ_k of a glycerol–water series against the lubricant's kinematic viscosity.
+
+    Each group's population mean (a water fraction at one load) with its credible
+    interval, one colour per load, each run's median beside it; the paper's glycerol
+    values (0.55 % water, mean ± the repeats' σ, section 3.1) as a diamond, and a dotted
+    line at 6 % water: the paper's μ_k keeps its glycerol value at higher viscosities
+    and rises below (section 3.2, Fig. 10). ν of each water fraction is Eq. 43's.
+
+    Parameters
+    ----------
+    analysis : CampaignAnalysis
+        Grouped by the water mass fraction (and the load).
+    fig : matplotlib Figure, optional
+        Empty figure to draw on (two axes are added); a new one if None.
+
+    Returns
+    -------
+    matplotlib Figure
+    """
+    from matplotlib.ticker import NullFormatter, ScalarFormatter
+
+    from bayestribo.model.viscosity import glycerol_water_viscosity
+
+    def nu(water: Any) -> float:
+        return float(glycerol_water_viscosity(float(water)))
+
+    fig = _new_figure(fig, (10, 4))
+    axes = fig.subplots(1, 2)
+    pop, by = analysis.contact, analysis.by
+    if pop is not None and "water_mass_fraction" in by:
+        i_w = by.index("water_mass_fraction")
+        i_n = by.index("load_N") if "load_N" in by else None
+        series: dict[Any, list[tuple[float, Any]]] = {}
+        for value, g in pop.groups.items():
+            values = value if isinstance(value, tuple) else (value,)
+            load = values[i_n] if i_n is not None else None
+            series.setdefault(load, []).append((nu(values[i_w]), g))
+        loads = sorted(series, key=lambda v: (v is None, v or 0.0))
+        for k, load in enumerate(loads):
+            members = sorted(series[load], key=lambda m: m[0])
+            factor = 1.0 + 0.02 * (k - (len(loads) - 1) / 2)  # apart on the log axis
+            colour = f"C{k % 10}"
+            where = "all loads" if load is None else f"N = {load:g} N"
+            runs = [
+                r
+                for r in analysis.runs
+                if r.get("water_mass_fraction") is not None
+                and (load is None or r.get("load_N") == load)
+            ]
+            for ax, name in zip(axes, ("zeta", "mu_k"), strict=True):
+                x = np.array([m[0] for m in members]) * factor
+                s = [summarize(m[1].mean[name], analysis.prob) for m in members]
+                med = np.array([v["median"] for v in s])
+                err = np.array(
+                    [[v["median"] - v["interval"][0], v["interval"][1] - v["median"]] for v in s]
+                ).T
+                ax.errorbar(x, med, yerr=err, fmt="s-", ms=4, capsize=3, color=colour, label=where)
+                shown = [r for r in runs if name in r]
+                if shown:
+                    ax.plot(
+                        [nu(r["water_mass_fraction"]) * factor * 1.01 for r in shown],
+                        [r[name]["median"] for r in shown],
+                        ".",
+                        ms=4,
+                        alpha=0.6,
+                        color=colour,
+                        label="a run (median)" if k == 0 else None,
+                    )
+    for ax, name in zip(axes, ("zeta", "mu_k"), strict=True):
+        mean, sd = PAPER_VALUES[name]
+        ax.errorbar(
+            [nu(GLYCEROL_WATER)],
+            [mean],
+            yerr=[sd],
+            fmt="D",
+            ms=7,
+            mfc="none",
+            capsize=3,
+            color="0.3",
+            label="paper, glycerol (mean ± σ)",
+        )
+        ax.axvline(
+            nu(MU_K_CONSTANT_UP_TO),
+            color="0.5",
+            ls=":",
+            lw=1,
+            label=f"{100 * MU_K_CONSTANT_UP_TO:g} % water",
+        )
+        ax.set_xscale("log")
+        ax.set_xticks([200, 300, 500, 700, 1000])
+        ax.xaxis.set_major_formatter(ScalarFormatter())
+        ax.xaxis.set_minor_formatter(NullFormatter())
+        ax.set_xlabel("kinematic viscosity ν [mm²/s]")
+        ax.set_ylabel(f"population mean of {_LABELS[name]} [-]")
+        _ticks(ax, "y")
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=3, fontsize="small")
+    fig.suptitle(
+        f"Glycerol–water: group means with {100 * analysis.prob:.0f} % credible intervals "
+        "against viscosity"
+    )
+    return fig

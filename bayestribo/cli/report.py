@@ -360,8 +360,9 @@ def run(args: argparse.Namespace) -> int:
         params["data_label"] = params.pop("_data_label", None) or str(args.path)
         if _has_water_series(path):
             where += (
-                f"\nthe campaign also holds glycerol-water runs: their report against "
-                f"viscosity is `bayestribo report {params['data_label']} --notebook viscosity`"
+                f"\nthe campaign also holds glycerol-water runs: section 6 reports them; "
+                f"their report of its own against viscosity is "
+                f"`bayestribo report {params['data_label']} --notebook viscosity`"
             )
     default_name = f"{path.stem or path.name}-report.html"
     out = args.out or Path(default_name)

@@ -61,6 +61,12 @@ window.addEventListener("load", function () {
     equations: imgs.filter(function (i) { return i.classList.contains("bt-math"); }).length,
     figures: imgs.filter(function (i) {
       return (i.getAttribute("src") || "").indexOf("data:image/png") === 0; }).length,
+    // figures with fewer than 2 image pixels per CSS pixel shown (below 200 dpi at the
+    // page's 100 px per inch of a figure): blurred in print and on a high-density screen
+    low_resolution: imgs.filter(function (i) {
+      var shown = i.getBoundingClientRect().width;
+      return (i.getAttribute("src") || "").indexOf("data:image/png") === 0 &&
+             i.naturalWidth > 0 && shown > 0 && i.naturalWidth < 1.9 * shown; }).length,
     raw_tex: text.indexOf("$$") >= 0 || text.indexOf("\\(") >= 0,
     code_cells: document.querySelectorAll(".jp-CodeCell .jp-InputArea").length,
     toc_links: document.querySelectorAll(".bt-toc a").length,
@@ -91,20 +97,25 @@ window.addEventListener("load", function () {
     return found.slice(0, 20);
   }
   function prose() {
-    // snake_case names (load_N, mu_k, log_decrement) in the text of paragraphs, list
-    // items and tables (headers, cells, captions), code left out; a file name's
-    // numbered parts ("disc_14.9_1") are not names
+    // names with an underscore in the text a reader sees (paragraphs, lists, headings,
+    // tables, notes, the contents): code names (load_N, log_decrement) and symbols
+    // typed as code (mu_k, μ_k, x_c: a report sets them as μ<sub>k</sub>); code, preformatted
+    // text and images left out. A name is one whose every part starts with a letter: a
+    // file name's numbered parts ("disc_14.9_1") are not names
     var found = [];
-    document.querySelectorAll(".jp-RenderedMarkdown p, .jp-RenderedMarkdown li, " +
-                              ".jp-RenderedHTMLCommon > p, .jp-OutputArea-output th, " +
-                              ".jp-OutputArea-output td, .jp-OutputArea-output caption, " +
-                              ".jp-RenderedMarkdown td, .jp-RenderedMarkdown th, .bt-note"
-                              ).forEach(function (el) {
-      var copy = el.cloneNode(true);
-      copy.querySelectorAll("code, pre, img").forEach(function (c) { c.remove(); });
-      (copy.textContent.match(/\b[a-z][a-z0-9]+(?:_[A-Za-z][A-Za-z0-9]*)+\b/g) || []).forEach(
-        function (w) { if (found.indexOf(w) < 0) { found.push(w); } });
-    });
+    var walker = document.createTreeWalker(document.body, NodeFilter.SHOW_TEXT);
+    var node;
+    while ((node = walker.nextNode())) {
+      if (node.parentElement &&
+          node.parentElement.closest("code, pre, script, style, #bt-probe")) {
+        continue;
+      }
+      (node.data.match(/[\p{L}\p{N}_]+/gu) || []).forEach(function (w) {
+        var parts = w.split("_");
+        var named = parts.length > 1 && parts.every(function (p) { return /^\p{L}/u.test(p); });
+        if (named && found.indexOf(w) < 0) { found.push(w); }
+      });
+    }
     return found.slice(0, 20);
   }
   function brokenNumbers() {
@@ -157,6 +168,8 @@ class PageInspection:
         Equation images (SVG rendered from TeX).
     figures : int
         Figures (PNG data).
+    low_resolution : int
+        Figures shown with fewer than two image pixels per CSS pixel (below 200 dpi).
     raw_tex : bool
         Raw TeX (``$$`` or ``\\(``) left in the visible text.
     code_cells : int
@@ -176,8 +189,9 @@ class PageInspection:
         Python representations in the visible text (``np.float64(``, ``{'``, ``['``,
         ``None``, ``nan``), with their context.
     identifiers : list of str
-        Code identifiers (``snake_case`` names) in the prose and the tables, code spans
-        left out.
+        Names with an underscore in the visible text (code names such as ``load_N``,
+        symbols typed as code such as ``μ_k`` or ``x_c`` where the report should show
+        μ<sub>k</sub>), code spans and preformatted text left out.
     broken_numbers : list of str
         Table cells with digits that the layout breaks across lines.
     figure_problems : list of str
@@ -190,6 +204,7 @@ class PageInspection:
     broken: list[str]
     equations: int
     figures: int
+    low_resolution: int
     raw_tex: bool
     code_cells: int
     toc_links: int

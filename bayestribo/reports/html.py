@@ -14,7 +14,9 @@ CDN; this one loads nothing), the code cells are left out unless asked for, and
 * text written to stderr (a warning that escaped the notebook's notes, a progress
   line) becomes a short note in the text instead of a red box (:func:`stderr_as_notes`);
 * a table of contents of the section headings follows the title, and a footer gives
-  the bayestribo version and when the page was made.
+  the bayestribo version and when the page was made;
+* a symbol's subscript is set as one (``μ_k`` -> μ<sub>k</sub>,
+  :func:`bayestribo.reports.symbols.subscripts_html`), in the text only.
 
 :func:`external_references` lists the ``src``/``href`` addresses of a page that would
 be loaded from the network (the tests require none).
@@ -270,4 +272,6 @@ def to_html(nb: Any, *, show_code: bool = False) -> str:
         exclude_output_prompt=True,
     )
     body, _ = exporter.from_notebook_node(nb)
-    return _footer(table_of_contents(body))
+    from bayestribo.reports.symbols import subscripts_html
+
+    return _footer(subscripts_html(table_of_contents(body)))

@@ -43,6 +43,7 @@ __all__ = [
     "sentence",
     "setup",
     "show_warnings_as_notes",
+    "small_texts",
     "table",
     "verdict",
 ]
@@ -52,7 +53,10 @@ FIGURE_FORMATS = ("png", "pdf", "svg")
 
 #: What :func:`setup`'s ``save`` says in a note about a figure that is not legible, one
 #: phrase per kind of problem (the browser's probe looks for them in the notes).
-FIGURE_PROBLEMS = ("labels overlap", "empty panel")
+FIGURE_PROBLEMS = ("labels overlap", "empty panel", "text below 8 pt")
+
+#: Smallest font size of a figure's texts at the size it is saved (print size) [pt].
+MIN_FONT_PT = 8.0
 
 #: Largest |value| of an axis on which every value counts as zero: a panel whose data all
 #: lie within it shows nothing (a friction of 1e-14 where the law has no friction).
@@ -235,8 +239,9 @@ def setup(figure_dir: str | None, figure_format: str = "png") -> Callable[[Any, 
     def save(fig: Any, name: str) -> None:
         """Write ``fig`` as ``<name>.<format>`` in the figure folder (if any).
 
-        Texts that overlap and panels with nothing to show are said in a note (the
-        report's tests and the browser's probe require none).
+        Texts that overlap, panels with nothing to show and texts smaller than
+        :data:`MIN_FONT_PT` are said in a note (the report's tests and the browser's
+        probe require none).
         """
         overlaps = overlapping_labels(fig)
         if overlaps:
@@ -244,6 +249,9 @@ def setup(figure_dir: str | None, figure_format: str = "png") -> Callable[[Any, 
         empty = empty_panels(fig)
         if empty:
             note(f"figure {name}: {FIGURE_PROBLEMS[1]}: {'; '.join(empty[:3])}")
+        small = small_texts(fig)
+        if small:
+            note(f"figure {name}: {FIGURE_PROBLEMS[2]}: {'; '.join(small[:3])}")
         if folder is not None:
             fig.savefig(folder / f"{name}.{figure_format}", bbox_inches="tight")
 
@@ -298,6 +306,40 @@ def empty_panels(fig: Any) -> list[str]:
         for name, lim in limits.items():
             if finite[name] and scales[name] == "linear" and max(map(abs, lim)) <= ZERO:
                 found.append(f"{where!r}: every {name} value is zero")
+    return found
+
+
+def small_texts(fig: Any, minimum: float = MIN_FONT_PT) -> list[str]:
+    """Texts of ``fig`` drawn smaller than ``minimum`` points at the figure's own size
+    (the size it is saved and printed at): tick and axis labels, titles, legends, texts
+    placed in the axes, a colour bar's labels.
+
+    Returns
+    -------
+    list of str
+        ``"'run-7' (6.5 pt)"`` for each distinct small text; empty if none.
+
+    Examples
+    --------
+    >>> import matplotlib.pyplot as plt
+    >>> fig, ax = plt.subplots()
+    >>> _ = ax.set_yticks([0, 1], ["run-1", "run-2"], fontsize=6.5)
+    >>> small_texts(fig)
+    ["'run-1' (6.5 pt)", "'run-2' (6.5 pt)"]
+    >>> plt.close(fig)
+    """
+    from matplotlib.text import Text
+
+    found = []
+    for t in fig.findobj(Text):
+        if not (t.get_visible() and t.get_text().strip()) or t.figure is None:
+            continue
+        if t.axes is not None and not t.axes.get_visible():
+            continue  # not drawn (a corner plot's blank upper triangle)
+        size = t.get_fontsize()
+        said = f"{t.get_text()!r} ({size:g} pt)"
+        if size < minimum - 1e-9 and said not in found:
+            found.append(said)
     return found
 
 
