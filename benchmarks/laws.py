@@ -88,7 +88,9 @@ import numpy as np  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from _chain import clopper_pearson  # noqa: E402
+from _laws_calibration import calibration, print_calibration  # noqa: E402
+from _laws_calibration import rate as _rate  # noqa: E402
+from _laws_calibration import z_stats as _z_stats  # noqa: E402
 from _laws_sim import (  # noqa: E402
     ELL,
     LOAD,
@@ -195,8 +197,11 @@ CASES: dict[str, tuple[str | None, Truth, float, str]] = {
 
 NOTES = """\
 true-law fit: coverage of each sampled parameter's 95 % interval and of the 95 % ΔE(A)
-  band (pooled over the 12 reported amplitudes and the runs) [Clopper-Pearson 95 %];
-  sd(z) ± se (1 if calibrated); stribeck has no true law: its row is the default law
+  band at the middle of the 12 reported swings [Clopper-Pearson 95 %]; sd(z) ± se (1 if
+  calibrated), one z per run (a run's swings are strongly correlated: an sd over them
+  is no calibration statistic); all-A = runs covered at every swing; the per-law table
+  (calibration) adds the smallest and largest swings; stribeck has no true law: its
+  row is the default law
 auto: right = the true law, or a law nesting it whose extra terms' 95 % HDI hold 0;
   ΔE cov = the chosen law's band against the true ΔE(A) (the energy the true motion
   loses per cycle at each swing, solve_ivp); TP cov = the ΔE(A) measured from the
@@ -318,9 +323,12 @@ def _truth_function(case: str, reference_m: float) -> Any:
     return lambda amps: true_dissipation(truth, amps)
 
 
-def one_run(case: str, noise: float, index: int, seed: int, max_steps: int) -> dict[str, Any]:
+def one_run(
+    case: str, noise: float, index: int, seed: int, max_steps: int, auto: bool = True
+) -> dict[str, Any]:
     """Simulate run ``index`` of ``case`` at ``noise`` x the resolution; fit it with the
-    true law (or the default one) and with law="auto"; check both against the truth."""
+    true law (or the default one) and, unless ``auto`` is False, with law="auto"; check
+    both against the truth."""
     from bayestribo.inference import prepare
     from bayestribo.io.run import Run
     from bayestribo.model.laws import get_law
@@ -359,17 +367,27 @@ def one_run(case: str, noise: float, index: int, seed: int, max_steps: int) -> d
         out["prepare_error"] = f"{type(exc).__name__}: {exc}"
         out["prepare_traceback"] = _tail(exc)
         reference_m = x0
-    # the package's frame: its Ω is the natural frequency it measures, ℓ = N/(mΩ²)
-    out["package_frame"] = {"omega_over_true": omega / OMEGA, "reference_amplitude_m": reference_m}
+    # the record's frame: its Ω is the natural frequency measured from the record,
+    # ℓ = N/(mΩ²); a nonlinear law's fit moves to the frame of the law's own turning
+    # times (bayestribo.inference.pipeline.law_frequency, attrs["omega"]): the package
+    # frame of its parameters is that one, taken from the fit below
+    out["package_frame"] = {
+        "record_omega_over_true": omega / OMEGA,
+        "reference_amplitude_m": reference_m,
+    }
     truth_fn = _truth_function(case, reference_m)
     values = truth.dimensionless(reference_m)
-    in_frame = truth.dimensionless(reference_m, omega)
 
     # -- the true law (the default law for a law that is not registered) --
     asked = law or DEFAULT_LAW
     result, rec = _fit(run, asked, int(fit_seeds[0]), max_steps)
     if result is not None:
         if law is not None:
+            # the frame the reported parameters are in: the fit's final Ω (ℓ = N/(mΩ²)
+            # follows it); the reference amplitude in metres does not depend on it
+            fit_omega = rec["omega"]
+            out["package_frame"]["omega_over_true"] = fit_omega / OMEGA
+            in_frame = truth.dimensionless(reference_m, fit_omega)
             params = {}
             for name in get_law(law).parameter_names:
                 draws = result.samples(name)
@@ -382,14 +400,17 @@ def one_run(case: str, noise: float, index: int, seed: int, max_steps: int) -> d
                     "interval": [float(lo), float(hi)],
                     "covered": bool(lo <= values[name] <= hi),
                     "z": (mean - values[name]) / sd,
-                    # the truth in the package's frame (its measured Ω): what the fit
-                    # would cover if its frequency were exact
+                    # the truth in the package's frame (the Ω its fit ends in): what
+                    # the fit would cover if that frequency were exact
                     "truth_in_package_frame": in_frame[name],
                     "z_in_package_frame": (mean - in_frame[name]) / sd,
                 }
             rec["parameters"] = params
         rec["dissipation"] = _dissipation_check(result, truth_fn)
     out["true_fit" if law is not None else "default_fit"] = rec
+    if not auto:
+        out["seconds"] = time.perf_counter() - start
+        return out
 
     # -- law="auto" --
     result, rec = _fit(run, "auto", int(fit_seeds[1]), max_steps)
@@ -441,33 +462,14 @@ def one_run(case: str, noise: float, index: int, seed: int, max_steps: int) -> d
 
 
 # -- the table -------------------------------------------------------------------------
-def _rate(k: int, n: int) -> dict[str, Any]:
-    return {"covered": k, "of": n, "rate": k / n if n else None, "ci95": clopper_pearson(k, n)}
-
-
-def _z_stats(z: list[float]) -> dict[str, float] | None:
-    a = np.asarray(z, dtype=float)
-    a = a[np.isfinite(a)]
-    n = a.size
-    if n < 2:
-        return None
-    sd = float(a.std(ddof=1))
-    return {
-        "n": n,
-        "mean": float(a.mean()),
-        "mean_se": sd / math.sqrt(n),
-        "sd": sd,
-        "sd_se": sd / math.sqrt(2 * (n - 1)),
-        "max_abs": float(np.abs(a).max()),
-    }
-
-
 def _band_stats(recs: list[dict[str, Any]]) -> dict[str, Any]:
     fitted = [r["dissipation"] for r in recs if "dissipation" in r]
     if not fitted:
         return {}
     cov = [c for d in fitted for c in d["covered"]]
-    z = [v for d in fitted for v in d["z"]]
+    # one z per run, at the middle swing: a run's 12 swings are strongly correlated
+    # (viscous: the same z at every swing), so an sd over them is no calibration
+    middle = [int(np.argsort(d["amplitude_m"])[len(d["z"]) // 2]) for d in fitted]
     n_amp = min(len(d["covered"]) for d in fitted)
     by_amp = [_rate(sum(d["covered"][i] for d in fitted), len(fitted)) for i in range(n_amp)]
     tps = [d["turning_points"] for d in fitted if d.get("turning_points")]
@@ -477,11 +479,14 @@ def _band_stats(recs: list[dict[str, Any]]) -> dict[str, Any]:
             "coverage": _rate(sum(tp_cov), len(tp_cov)),
             "z": _z_stats([v for d in tps for v in d["z"]]),
         },
-        "coverage": _rate(sum(cov), len(cov)),
+        "coverage_over_swings": _rate(sum(cov), len(cov)),
+        "coverage": _rate(
+            sum(d["covered"][i] for d, i in zip(fitted, middle, strict=True)), len(fitted)
+        ),
         "all_amplitudes_covered": sum(all(d["covered"]) for d in fitted),
         "runs": len(fitted),
         "coverage_by_amplitude_index": by_amp,
-        "z": _z_stats(z),
+        "z": _z_stats([d["z"][i] for d, i in zip(fitted, middle, strict=True)]),
     }
 
 
@@ -529,6 +534,9 @@ def summarise(records: list[dict[str, Any]]) -> dict[str, Any]:
                         "z_in_package_frame": _z_stats([p["z_in_package_frame"] for p in ps]),
                     }
                 row[key]["parameters"] = params
+            table[f"{case}@{noise:g}x"] = row
+            if not all("auto_fit" in r for r in rows):  # --true-law-only
+                continue
             autos = [r["auto_fit"] for r in rows]
             aok = [a for a in autos if "error" not in a]
             chosen: dict[str, int] = {}
@@ -566,7 +574,6 @@ def summarise(records: list[dict[str, Any]]) -> dict[str, Any]:
                 "median_seconds": float(np.median([a["seconds"] for a in aok])) if aok else None,
                 "dissipation": _band_stats(aok),
             }
-            table[f"{case}@{noise:g}x"] = row
     return table
 
 
@@ -596,8 +603,8 @@ def pooled(records: list[dict[str, Any]]) -> dict[str, Any]:
                 i = len(d["z"]) // 2
                 z_de.append(d["z"][i])
                 cov_de.append(bool(d["covered"][i]))
-        auto = r.get("auto_fit", {})
-        if law and "error" not in auto:
+        auto = r.get("auto_fit")
+        if law and auto and "error" not in auto:
             runs += 1
             right += bool(auto.get("right"))
             silent += bool(auto.get("silently_wrong"))
@@ -631,12 +638,15 @@ def confusion(records: list[dict[str, Any]]) -> dict[str, Any]:
             continue
         counts: dict[str, int] = {}
         for r in rows:
-            a = r["auto_fit"]
+            a = r.get("auto_fit")
+            if a is None:  # --true-law-only
+                continue
             name = "error" if "error" in a else a["law"]
             counts[name] = counts.get(name, 0) + 1
             if name not in laws:
                 laws.append(name)
-        matrix[case] = counts
+        if counts:
+            matrix[case] = counts
     return {"columns": laws, "rows": matrix}
 
 
@@ -657,7 +667,10 @@ def _seconds(value: float | None) -> str:
 
 def _print_table(table: dict[str, Any], conf: dict[str, Any]) -> None:
     print("\n" + NOTES)
-    print("\nTrue-law fit: coverage % [CP 95 %] and sd(z) per parameter; ΔE(A) band")
+    print(
+        "\nTrue-law fit: coverage % [CP 95 %] and sd(z) per parameter; ΔE(A) band at the "
+        "middle swing (one z per run); all-A: runs whose band covers every swing"
+    )
     for key, r in table.items():
         f = r.get("true_fit") or r.get("default_fit")
         errs = f"  errors {len(f['errors'])}" if f["errors"] else ""
@@ -669,13 +682,32 @@ def _print_table(table: dict[str, Any], conf: dict[str, Any]) -> None:
             for n, p in f.get("parameters", {}).items()
         ]
         print(
-            f"{key:32s} law {f['law']:26s} ΔE {_cell(d.get('coverage'))} "
+            f"{key:32s} law {f['law']:26s} ΔE(A_mid) {_cell(d.get('coverage'))} "
             f"sd(z) {_zcell(d.get('z'))} all-A {d.get('all_amplitudes_covered', 0)}/"
             f"{d.get('runs', 0)}  unconv {f['not_converged']}  "
             f"{_seconds(f['median_seconds'])} s{errs}"
         )
         for c in cells:
             print(f"{'':34s}{c}")
+    if any("auto" in r for r in table.values()):
+        _print_auto(table, conf)
+    errors = [
+        (k, which, e)
+        for k, r in table.items()
+        for which, f in (
+            ("fit", r.get("true_fit") or r.get("default_fit")),
+            ("auto", r.get("auto")),
+        )
+        if f
+        for e in f["errors"]
+    ]
+    if errors:
+        print("\nPackage errors:")
+        for key, which, e in errors:
+            print(f"  {key} {which} run {e['index']}: {e['error'][:300]}")
+
+
+def _print_auto(table: dict[str, Any], conf: dict[str, Any]) -> None:
     print("\nlaw='auto'")
     print(
         f"{'case@noise':32s} {'runs':>4s} {'right':>5s} {'nest':>4s} {'adeq':>4s} "
@@ -683,6 +715,8 @@ def _print_table(table: dict[str, Any], conf: dict[str, Any]) -> None:
         f"{'eqv':>3s} {'s/fit':>6s}  chosen"
     )
     for key, r in table.items():
+        if "auto" not in r:
+            continue
         a = r["auto"]
         right = "-" if a["right"] is None else str(a["right"])
         chosen = ", ".join(f"{k} {v}" for k, v in a["chosen"].items())
@@ -711,16 +745,6 @@ def _print_table(table: dict[str, Any], conf: dict[str, Any]) -> None:
     print(f"{'true law':26s} " + " ".join(f"{short[c]:>8s}" for c in cols))
     for case, counts in conf["rows"].items():
         print(f"{case:26s} " + " ".join(f"{counts.get(c, 0):8d}" for c in cols))
-    errors = [
-        (k, which, e)
-        for k, r in table.items()
-        for which, f in (("fit", r.get("true_fit") or r.get("default_fit")), ("auto", r["auto"]))
-        for e in f["errors"]
-    ]
-    if errors:
-        print("\nPackage errors:")
-        for key, which, e in errors:
-            print(f"  {key} {which} run {e['index']}: {e['error'][:300]}")
 
 
 def output_path(name: str) -> Path:
@@ -759,6 +783,7 @@ def _settings(args: argparse.Namespace) -> dict[str, Any]:
         "seed": args.seed,
         "max_steps": args.max_steps,
         "workers": args.workers,
+        "auto": not args.true_law_only,
         "n_walkers": 16,
         "n_ensembles": 2,
         "noise_levels_x_resolution": args.levels,
@@ -817,10 +842,25 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--seed", type=int, default=2010)
     parser.add_argument("--max-steps", type=int, default=6000)
-    parser.add_argument("--cases", nargs="*", default=list(CASES), choices=list(CASES))
+    parser.add_argument(
+        "--cases",
+        nargs="*",
+        default=None,
+        choices=list(CASES),
+        help="default: every case (with --true-law-only: every case with a registered law)",
+    )
     parser.add_argument("--levels", nargs="*", type=float, default=list(NOISE_LEVELS))
     parser.add_argument(
-        "--output", default="laws", help="results/NAME.json, or a path ending in .json"
+        "--output",
+        default=None,
+        help="results/NAME.json, or a path ending in .json (default: laws, or "
+        "laws_calibration with --true-law-only)",
+    )
+    parser.add_argument(
+        "--true-law-only",
+        action="store_true",
+        help="fit each run with its true law only (no law='auto', which takes minutes a "
+        "run): for the per-law calibration with many runs",
     )
     parser.add_argument(
         "--resume", action="store_true", help="keep the runs of an interrupted output file"
@@ -833,6 +873,10 @@ def main(argv: list[str] | None = None) -> int:
         "--seed) into --output, calibration and auto rates over them all; nothing is fitted",
     )
     args = parser.parse_args(argv)
+    if args.cases is None:
+        args.cases = [c for c in CASES if CASES[c][0] or not args.true_law_only]
+    if args.output is None:
+        args.output = "laws_calibration" if args.true_law_only else "laws"
     if args.pool:
         return _pool_files(args.pool, output_path(args.output))
     settings = _settings(args)
@@ -850,6 +894,7 @@ def main(argv: list[str] | None = None) -> int:
         same = (
             old.get("settings", {}).get("seed") == args.seed
             and old.get("settings", {}).get("max_steps") == args.max_steps
+            and old.get("settings", {}).get("auto", True) == settings["auto"]
         )
         if same:
             wanted = set(jobs)
@@ -862,8 +907,9 @@ def main(argv: list[str] | None = None) -> int:
     # run 0 of every case first, so that an interrupted file holds every case
     jobs.sort(key=lambda j: (j[2], CASES[j[0]][0] in ("viscous", "coulomb", "viscous+coulomb")))
     start = time.perf_counter()
+    what = "a true-law fit" if args.true_law_only else "a true-law fit and an auto fit"
     print(
-        f"{len(jobs)} runs (each a true-law fit and an auto fit) on {args.workers} workers, "
+        f"{len(jobs)} runs (each {what}) on {args.workers} workers, "
         f"load average {load_start[0]:.2f}",
         flush=True,
     )
@@ -883,13 +929,15 @@ def main(argv: list[str] | None = None) -> int:
                 "table": summarise(records),
                 "confusion": confusion(records),
                 "pooled": pooled(records),
+                "calibration": calibration(records, CASES),
                 "runs": records,
             },
         )
 
     with ProcessPoolExecutor(max_workers=args.workers, initializer=niced_worker) as pool:
         futures = {
-            pool.submit(one_run, c, n, i, args.seed, args.max_steps): (c, n, i) for c, n, i in jobs
+            pool.submit(one_run, c, n, i, args.seed, args.max_steps, settings["auto"]): (c, n, i)
+            for c, n, i in jobs
         }
         for k, future in enumerate(as_completed(futures), 1):
             c, n, i = futures[future]
@@ -903,12 +951,14 @@ def main(argv: list[str] | None = None) -> int:
                     "index": i,
                     "worker_error": _tail(exc),
                     key: {"error": "worker died"},
-                    "auto_fit": {"error": "worker died"},
                 }
+                if settings["auto"]:
+                    rec["auto_fit"] = {"error": "worker died"}
             records.append(rec)
             a = rec.get("auto_fit", {})
+            said = f"auto {a.get('law', a.get('error', '?'))[:60]}" if a else "true law"
             print(
-                f"{k}/{len(jobs)} {c}@{n:g}x#{i}: auto {a.get('law', a.get('error', '?'))[:60]} "
+                f"{k}/{len(jobs)} {c}@{n:g}x#{i}: {said} "
                 f"({rec.get('seconds', 0):.0f} s), {time.perf_counter() - start:.0f} s, "
                 f"load {os.getloadavg()[0]:.2f}",
                 flush=True,
@@ -917,6 +967,7 @@ def main(argv: list[str] | None = None) -> int:
     path = write(True)
     table = summarise(records)
     _print_table(table, confusion(records))
+    print_calibration(calibration(records, CASES))
     print("\npooled over the registered laws:", json.dumps(pooled(records), indent=1))
     print(f"\nwall {time.perf_counter() - start:.0f} s; wrote {path}")
     return 0
