@@ -32,9 +32,11 @@ Each run is fitted (16 walkers x 2 ensembles, at most ``--max-steps`` steps):
   fit's reference amplitude, the observed |y0| of ``bayestribo.inference.prepare``),
   z = (mean - truth)/sd. The dimensionless ζ, γ = qℓ, η and ζ_α depend on the frame
   (τ = Ωt, ℓ = N/(mΩ²)): the truth is in the true frame (Ω = 2π 32.6 Hz); the package
-  uses the natural frequency it measures from the record, so coverage and z are also
-  given against the truth in the package's frame (what a fit with an exact frequency
-  would cover); and the 95 % band of ΔE(A) at each of its 12 reported
+  measures the natural frequency from the record, and a nonlinear law's fit moves to
+  the frequency at which the law's own turning times keep step with the record's
+  (``law_frequency``; the record's is 3e-4 off for quadratic drag), so coverage and z
+  are also given against the truth in the frame the fit ends in (its ``omega``: what a
+  fit with an exact frequency would cover); and the 95 % band of ΔE(A) at each of its 12 reported
   amplitudes against the true ΔE(A) = ``get_law(law).dissipation`` of the true
   parameters times kℓ² [J] (for ``stribeck``: the quadrature of the true force over a
   harmonic cycle), z likewise;
@@ -52,6 +54,12 @@ Each run is fitted (16 walkers x 2 ensembles, at most ``--max-steps`` steps):
 Coverage rates carry Clopper-Pearson 95 % intervals; sd(z) its standard error
 sd/√(2(n-1)). Exceptions from bayestribo are recorded with their traceback's last lines.
 
+``--true-law-only`` leaves out the auto fit (minutes a run; the true-law fit takes
+seconds), so that a law gets the tens of runs its calibration needs: the per-law table
+of ``benchmarks/_laws_calibration.py`` has one z per run and quantity (each parameter,
+ΔE at the smallest, middle and largest reported swing), never an sd over a run's
+strongly correlated swings.
+
 The runs are seeded: run ``index`` of ``case`` at ``noise`` draws its noise from
 ``numpy.random.default_rng([seed, crc32(case), 100 noise, index])``;
 ``one_run(case, noise, index, seed, max_steps)`` repeats it.
@@ -59,11 +67,16 @@ The runs are seeded: run ``index`` of ``case`` at ``noise`` draws its noise from
 Run (by hand)::
 
     timeout 5400 nice -n 10 python benchmarks/laws.py --runs 6 --workers 2
+    timeout 5000 nice -n 10 python benchmarks/laws.py --true-law-only --runs 60 \
+        --levels 10 --workers 1 --seed 2012 --resume      # laws_calibration.json
 
 Writes ``benchmarks/results/laws.json`` (``--output NAME``: ``NAME.json``) after every
 run (``"complete": false`` until the end; ``--resume`` keeps the runs of an
-interrupted file with the same settings), with the machine description, the package's
-commit, the settings, the table, the confusion matrix and every run.
+interrupted file with the same settings; with ``--true-law-only``, ``laws_calibration.json``),
+with the machine description, the package's commit, the settings, the table, the
+confusion matrix, the per-law calibration and every run. ``--retable NAME`` rewrites
+a finished file's tables from its runs with this code; ``--pool`` pools files of
+distinct seeds.
 """
 
 from __future__ import annotations
@@ -383,11 +396,6 @@ def one_run(
     result, rec = _fit(run, asked, int(fit_seeds[0]), max_steps)
     if result is not None:
         if law is not None:
-            # the frame the reported parameters are in: the fit's final Ω (ℓ = N/(mΩ²)
-            # follows it); the reference amplitude in metres does not depend on it
-            fit_omega = rec["omega"]
-            out["package_frame"]["omega_over_true"] = fit_omega / OMEGA
-            in_frame = truth.dimensionless(reference_m, fit_omega)
             params = {}
             for name in get_law(law).parameter_names:
                 draws = result.samples(name)
@@ -400,14 +408,13 @@ def one_run(
                     "interval": [float(lo), float(hi)],
                     "covered": bool(lo <= values[name] <= hi),
                     "z": (mean - values[name]) / sd,
-                    # the truth in the package's frame (the Ω its fit ends in): what
-                    # the fit would cover if that frequency were exact
-                    "truth_in_package_frame": in_frame[name],
-                    "z_in_package_frame": (mean - in_frame[name]) / sd,
                 }
             rec["parameters"] = params
         rec["dissipation"] = _dissipation_check(result, truth_fn)
     out["true_fit" if law is not None else "default_fit"] = rec
+    # the truth in the package's frame, the Ω the fit ends in: what the fit would
+    # cover if that frequency were exact
+    in_fit_frame(out)
     if not auto:
         out["seconds"] = time.perf_counter() - start
         return out
@@ -813,7 +820,9 @@ def _settings(args: argparse.Namespace) -> dict[str, Any]:
 
 def in_fit_frame(record: dict[str, Any]) -> dict[str, Any]:
     """``record`` with the truth of its true-law fit's parameters in the package's frame
-    taken from the frame the fit ended in (its ``omega``) rather than the record's.
+    (``truth_in_package_frame``, ``z_in_package_frame``): the frame the fit ended in
+    (its ``omega``, :func:`bayestribo.inference.pipeline.law_frequency` for a nonlinear
+    law; ℓ = N/(mΩ²) follows it), not the record's (``record_omega_over_true``).
 
     Runs written before that fix measured z_in_package_frame against the record's
     frequency, which a nonlinear law's fit leaves for its own (quadratic drag: 3e-4
