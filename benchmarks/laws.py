@@ -32,9 +32,11 @@ Each run is fitted (16 walkers x 2 ensembles, at most ``--max-steps`` steps):
   fit's reference amplitude, the observed |y0| of ``bayestribo.inference.prepare``),
   z = (mean - truth)/sd. The dimensionless ζ, γ = qℓ, η and ζ_α depend on the frame
   (τ = Ωt, ℓ = N/(mΩ²)): the truth is in the true frame (Ω = 2π 32.6 Hz); the package
-  uses the natural frequency it measures from the record, so coverage and z are also
-  given against the truth in the package's frame (what a fit with an exact frequency
-  would cover); and the 95 % band of ΔE(A) at each of its 12 reported
+  measures the natural frequency from the record, and a nonlinear law's fit moves to
+  the frequency at which the law's own turning times keep step with the record's
+  (``law_frequency``; the record's is 3e-4 off for quadratic drag), so coverage and z
+  are also given against the truth in the frame the fit ends in (its ``omega``: what a
+  fit with an exact frequency would cover); and the 95 % band of ΔE(A) at each of its 12 reported
   amplitudes against the true ΔE(A) = ``get_law(law).dissipation`` of the true
   parameters times kℓ² [J] (for ``stribeck``: the quadrature of the true force over a
   harmonic cycle), z likewise;
@@ -52,6 +54,12 @@ Each run is fitted (16 walkers x 2 ensembles, at most ``--max-steps`` steps):
 Coverage rates carry Clopper-Pearson 95 % intervals; sd(z) its standard error
 sd/√(2(n-1)). Exceptions from bayestribo are recorded with their traceback's last lines.
 
+``--true-law-only`` leaves out the auto fit (minutes a run; the true-law fit takes
+seconds), so that a law gets the tens of runs its calibration needs: the per-law table
+of ``benchmarks/_laws_calibration.py`` has one z per run and quantity (each parameter,
+ΔE at the smallest, middle and largest reported swing), never an sd over a run's
+strongly correlated swings.
+
 The runs are seeded: run ``index`` of ``case`` at ``noise`` draws its noise from
 ``numpy.random.default_rng([seed, crc32(case), 100 noise, index])``;
 ``one_run(case, noise, index, seed, max_steps)`` repeats it.
@@ -59,11 +67,16 @@ The runs are seeded: run ``index`` of ``case`` at ``noise`` draws its noise from
 Run (by hand)::
 
     timeout 5400 nice -n 10 python benchmarks/laws.py --runs 6 --workers 2
+    timeout 5000 nice -n 10 python benchmarks/laws.py --true-law-only --runs 60 \
+        --levels 10 --workers 1 --seed 2012 --resume      # laws_calibration.json
 
 Writes ``benchmarks/results/laws.json`` (``--output NAME``: ``NAME.json``) after every
 run (``"complete": false`` until the end; ``--resume`` keeps the runs of an
-interrupted file with the same settings), with the machine description, the package's
-commit, the settings, the table, the confusion matrix and every run.
+interrupted file with the same settings; with ``--true-law-only``, ``laws_calibration.json``),
+with the machine description, the package's commit, the settings, the table, the
+confusion matrix, the per-law calibration and every run. ``--retable NAME`` rewrites
+a finished file's tables from its runs with this code; ``--pool`` pools files of
+distinct seeds.
 """
 
 from __future__ import annotations
@@ -88,7 +101,9 @@ import numpy as np  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from _chain import clopper_pearson  # noqa: E402
+from _laws_calibration import calibration, print_calibration  # noqa: E402
+from _laws_calibration import rate as _rate  # noqa: E402
+from _laws_calibration import z_stats as _z_stats  # noqa: E402
 from _laws_sim import (  # noqa: E402
     ELL,
     LOAD,
@@ -195,8 +210,11 @@ CASES: dict[str, tuple[str | None, Truth, float, str]] = {
 
 NOTES = """\
 true-law fit: coverage of each sampled parameter's 95 % interval and of the 95 % ΔE(A)
-  band (pooled over the 12 reported amplitudes and the runs) [Clopper-Pearson 95 %];
-  sd(z) ± se (1 if calibrated); stribeck has no true law: its row is the default law
+  band at the middle of the 12 reported swings [Clopper-Pearson 95 %]; sd(z) ± se (1 if
+  calibrated), one z per run (a run's swings are strongly correlated: an sd over them
+  is no calibration statistic); all-A = runs covered at every swing; the per-law table
+  (calibration) adds the smallest and largest swings; stribeck has no true law: its
+  row is the default law
 auto: right = the true law, or a law nesting it whose extra terms' 95 % HDI hold 0;
   ΔE cov = the chosen law's band against the true ΔE(A) (the energy the true motion
   loses per cycle at each swing, solve_ivp); TP cov = the ΔE(A) measured from the
@@ -318,9 +336,12 @@ def _truth_function(case: str, reference_m: float) -> Any:
     return lambda amps: true_dissipation(truth, amps)
 
 
-def one_run(case: str, noise: float, index: int, seed: int, max_steps: int) -> dict[str, Any]:
+def one_run(
+    case: str, noise: float, index: int, seed: int, max_steps: int, auto: bool = True
+) -> dict[str, Any]:
     """Simulate run ``index`` of ``case`` at ``noise`` x the resolution; fit it with the
-    true law (or the default one) and with law="auto"; check both against the truth."""
+    true law (or the default one) and, unless ``auto`` is False, with law="auto"; check
+    both against the truth."""
     from bayestribo.inference import prepare
     from bayestribo.io.run import Run
     from bayestribo.model.laws import get_law
@@ -359,11 +380,16 @@ def one_run(case: str, noise: float, index: int, seed: int, max_steps: int) -> d
         out["prepare_error"] = f"{type(exc).__name__}: {exc}"
         out["prepare_traceback"] = _tail(exc)
         reference_m = x0
-    # the package's frame: its Ω is the natural frequency it measures, ℓ = N/(mΩ²)
-    out["package_frame"] = {"omega_over_true": omega / OMEGA, "reference_amplitude_m": reference_m}
+    # the record's frame: its Ω is the natural frequency measured from the record,
+    # ℓ = N/(mΩ²); a nonlinear law's fit moves to the frame of the law's own turning
+    # times (bayestribo.inference.pipeline.law_frequency, attrs["omega"]): the package
+    # frame of its parameters is that one, taken from the fit below
+    out["package_frame"] = {
+        "record_omega_over_true": omega / OMEGA,
+        "reference_amplitude_m": reference_m,
+    }
     truth_fn = _truth_function(case, reference_m)
     values = truth.dimensionless(reference_m)
-    in_frame = truth.dimensionless(reference_m, omega)
 
     # -- the true law (the default law for a law that is not registered) --
     asked = law or DEFAULT_LAW
@@ -382,14 +408,16 @@ def one_run(case: str, noise: float, index: int, seed: int, max_steps: int) -> d
                     "interval": [float(lo), float(hi)],
                     "covered": bool(lo <= values[name] <= hi),
                     "z": (mean - values[name]) / sd,
-                    # the truth in the package's frame (its measured Ω): what the fit
-                    # would cover if its frequency were exact
-                    "truth_in_package_frame": in_frame[name],
-                    "z_in_package_frame": (mean - in_frame[name]) / sd,
                 }
             rec["parameters"] = params
         rec["dissipation"] = _dissipation_check(result, truth_fn)
     out["true_fit" if law is not None else "default_fit"] = rec
+    # the truth in the package's frame, the Ω the fit ends in: what the fit would
+    # cover if that frequency were exact
+    in_fit_frame(out)
+    if not auto:
+        out["seconds"] = time.perf_counter() - start
+        return out
 
     # -- law="auto" --
     result, rec = _fit(run, "auto", int(fit_seeds[1]), max_steps)
@@ -441,33 +469,14 @@ def one_run(case: str, noise: float, index: int, seed: int, max_steps: int) -> d
 
 
 # -- the table -------------------------------------------------------------------------
-def _rate(k: int, n: int) -> dict[str, Any]:
-    return {"covered": k, "of": n, "rate": k / n if n else None, "ci95": clopper_pearson(k, n)}
-
-
-def _z_stats(z: list[float]) -> dict[str, float] | None:
-    a = np.asarray(z, dtype=float)
-    a = a[np.isfinite(a)]
-    n = a.size
-    if n < 2:
-        return None
-    sd = float(a.std(ddof=1))
-    return {
-        "n": n,
-        "mean": float(a.mean()),
-        "mean_se": sd / math.sqrt(n),
-        "sd": sd,
-        "sd_se": sd / math.sqrt(2 * (n - 1)),
-        "max_abs": float(np.abs(a).max()),
-    }
-
-
 def _band_stats(recs: list[dict[str, Any]]) -> dict[str, Any]:
     fitted = [r["dissipation"] for r in recs if "dissipation" in r]
     if not fitted:
         return {}
     cov = [c for d in fitted for c in d["covered"]]
-    z = [v for d in fitted for v in d["z"]]
+    # one z per run, at the middle swing: a run's 12 swings are strongly correlated
+    # (viscous: the same z at every swing), so an sd over them is no calibration
+    middle = [int(np.argsort(d["amplitude_m"])[len(d["z"]) // 2]) for d in fitted]
     n_amp = min(len(d["covered"]) for d in fitted)
     by_amp = [_rate(sum(d["covered"][i] for d in fitted), len(fitted)) for i in range(n_amp)]
     tps = [d["turning_points"] for d in fitted if d.get("turning_points")]
@@ -477,11 +486,14 @@ def _band_stats(recs: list[dict[str, Any]]) -> dict[str, Any]:
             "coverage": _rate(sum(tp_cov), len(tp_cov)),
             "z": _z_stats([v for d in tps for v in d["z"]]),
         },
-        "coverage": _rate(sum(cov), len(cov)),
+        "coverage_over_swings": _rate(sum(cov), len(cov)),
+        "coverage": _rate(
+            sum(d["covered"][i] for d, i in zip(fitted, middle, strict=True)), len(fitted)
+        ),
         "all_amplitudes_covered": sum(all(d["covered"]) for d in fitted),
         "runs": len(fitted),
         "coverage_by_amplitude_index": by_amp,
-        "z": _z_stats(z),
+        "z": _z_stats([d["z"][i] for d, i in zip(fitted, middle, strict=True)]),
     }
 
 
@@ -529,6 +541,9 @@ def summarise(records: list[dict[str, Any]]) -> dict[str, Any]:
                         "z_in_package_frame": _z_stats([p["z_in_package_frame"] for p in ps]),
                     }
                 row[key]["parameters"] = params
+            table[f"{case}@{noise:g}x"] = row
+            if not all("auto_fit" in r for r in rows):  # --true-law-only
+                continue
             autos = [r["auto_fit"] for r in rows]
             aok = [a for a in autos if "error" not in a]
             chosen: dict[str, int] = {}
@@ -566,7 +581,6 @@ def summarise(records: list[dict[str, Any]]) -> dict[str, Any]:
                 "median_seconds": float(np.median([a["seconds"] for a in aok])) if aok else None,
                 "dissipation": _band_stats(aok),
             }
-            table[f"{case}@{noise:g}x"] = row
     return table
 
 
@@ -596,8 +610,8 @@ def pooled(records: list[dict[str, Any]]) -> dict[str, Any]:
                 i = len(d["z"]) // 2
                 z_de.append(d["z"][i])
                 cov_de.append(bool(d["covered"][i]))
-        auto = r.get("auto_fit", {})
-        if law and "error" not in auto:
+        auto = r.get("auto_fit")
+        if law and auto and "error" not in auto:
             runs += 1
             right += bool(auto.get("right"))
             silent += bool(auto.get("silently_wrong"))
@@ -631,12 +645,15 @@ def confusion(records: list[dict[str, Any]]) -> dict[str, Any]:
             continue
         counts: dict[str, int] = {}
         for r in rows:
-            a = r["auto_fit"]
+            a = r.get("auto_fit")
+            if a is None:  # --true-law-only
+                continue
             name = "error" if "error" in a else a["law"]
             counts[name] = counts.get(name, 0) + 1
             if name not in laws:
                 laws.append(name)
-        matrix[case] = counts
+        if counts:
+            matrix[case] = counts
     return {"columns": laws, "rows": matrix}
 
 
@@ -657,7 +674,10 @@ def _seconds(value: float | None) -> str:
 
 def _print_table(table: dict[str, Any], conf: dict[str, Any]) -> None:
     print("\n" + NOTES)
-    print("\nTrue-law fit: coverage % [CP 95 %] and sd(z) per parameter; ΔE(A) band")
+    print(
+        "\nTrue-law fit: coverage % [CP 95 %] and sd(z) per parameter; ΔE(A) band at the "
+        "middle swing (one z per run); all-A: runs whose band covers every swing"
+    )
     for key, r in table.items():
         f = r.get("true_fit") or r.get("default_fit")
         errs = f"  errors {len(f['errors'])}" if f["errors"] else ""
@@ -669,13 +689,32 @@ def _print_table(table: dict[str, Any], conf: dict[str, Any]) -> None:
             for n, p in f.get("parameters", {}).items()
         ]
         print(
-            f"{key:32s} law {f['law']:26s} ΔE {_cell(d.get('coverage'))} "
+            f"{key:32s} law {f['law']:26s} ΔE(A_mid) {_cell(d.get('coverage'))} "
             f"sd(z) {_zcell(d.get('z'))} all-A {d.get('all_amplitudes_covered', 0)}/"
             f"{d.get('runs', 0)}  unconv {f['not_converged']}  "
             f"{_seconds(f['median_seconds'])} s{errs}"
         )
         for c in cells:
             print(f"{'':34s}{c}")
+    if any("auto" in r for r in table.values()):
+        _print_auto(table, conf)
+    errors = [
+        (k, which, e)
+        for k, r in table.items()
+        for which, f in (
+            ("fit", r.get("true_fit") or r.get("default_fit")),
+            ("auto", r.get("auto")),
+        )
+        if f
+        for e in f["errors"]
+    ]
+    if errors:
+        print("\nPackage errors:")
+        for key, which, e in errors:
+            print(f"  {key} {which} run {e['index']}: {e['error'][:300]}")
+
+
+def _print_auto(table: dict[str, Any], conf: dict[str, Any]) -> None:
     print("\nlaw='auto'")
     print(
         f"{'case@noise':32s} {'runs':>4s} {'right':>5s} {'nest':>4s} {'adeq':>4s} "
@@ -683,6 +722,8 @@ def _print_table(table: dict[str, Any], conf: dict[str, Any]) -> None:
         f"{'eqv':>3s} {'s/fit':>6s}  chosen"
     )
     for key, r in table.items():
+        if "auto" not in r:
+            continue
         a = r["auto"]
         right = "-" if a["right"] is None else str(a["right"])
         chosen = ", ".join(f"{k} {v}" for k, v in a["chosen"].items())
@@ -711,16 +752,6 @@ def _print_table(table: dict[str, Any], conf: dict[str, Any]) -> None:
     print(f"{'true law':26s} " + " ".join(f"{short[c]:>8s}" for c in cols))
     for case, counts in conf["rows"].items():
         print(f"{case:26s} " + " ".join(f"{counts.get(c, 0):8d}" for c in cols))
-    errors = [
-        (k, which, e)
-        for k, r in table.items()
-        for which, f in (("fit", r.get("true_fit") or r.get("default_fit")), ("auto", r["auto"]))
-        for e in f["errors"]
-    ]
-    if errors:
-        print("\nPackage errors:")
-        for key, which, e in errors:
-            print(f"  {key} {which} run {e['index']}: {e['error'][:300]}")
 
 
 def output_path(name: str) -> Path:
@@ -759,6 +790,7 @@ def _settings(args: argparse.Namespace) -> dict[str, Any]:
         "seed": args.seed,
         "max_steps": args.max_steps,
         "workers": args.workers,
+        "auto": not args.true_law_only,
         "n_walkers": 16,
         "n_ensembles": 2,
         "noise_levels_x_resolution": args.levels,
@@ -784,6 +816,58 @@ def _settings(args: argparse.Namespace) -> dict[str, Any]:
         },
         "flags": list(FLAGS),
     }
+
+
+def in_fit_frame(record: dict[str, Any]) -> dict[str, Any]:
+    """``record`` with the truth of its true-law fit's parameters in the package's frame
+    (``truth_in_package_frame``, ``z_in_package_frame``): the frame the fit ended in
+    (its ``omega``, :func:`bayestribo.inference.pipeline.law_frequency` for a nonlinear
+    law; ℓ = N/(mΩ²) follows it), not the record's (``record_omega_over_true``).
+
+    Runs written before that fix measured z_in_package_frame against the record's
+    frequency, which a nonlinear law's fit leaves for its own (quadratic drag: 3e-4
+    off, 19 posterior sd of c₂); the fit's frame is in the run, so the correction
+    needs no refit."""
+    fit = record.get("true_fit", {})
+    law, truth, _x0, _kind = CASES[record["case"]]
+    if law is None or "parameters" not in fit or "omega" not in fit:
+        return record
+    frame = record.setdefault("package_frame", {})
+    if "record_omega_over_true" not in frame:
+        frame["record_omega_over_true"] = frame.get("omega_over_true")
+    frame["omega_over_true"] = fit["omega"] / OMEGA
+    in_frame = truth.dimensionless(frame["reference_amplitude_m"], fit["omega"])
+    for name, par in fit["parameters"].items():
+        par["truth_in_package_frame"] = in_frame[name]
+        par["z_in_package_frame"] = (par["mean"] - in_frame[name]) / par["sd"]
+    return record
+
+
+def _retable_files(names: list[str]) -> int:
+    """Rewrite the tables of finished result files from their runs with this summary
+    code (the package-frame truth in the fit's frame, :func:`in_fit_frame`; one z per
+    run); nothing is fitted, the runs' fits are kept."""
+    for name in names:
+        path = output_path(name)
+        old = json.loads(path.read_text())
+        records = [in_fit_frame(r) for r in old["runs"]]
+        old.update(
+            {
+                "retabled": {
+                    "commit": _commit(),
+                    "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+                },
+                "notes": NOTES,
+                "table": summarise(records),
+                "confusion": confusion(records),
+                "pooled": pooled(records),
+                "calibration": calibration(records, CASES),
+                "runs": records,
+            }
+        )
+        write_json(path, old)
+        print(f"rewrote the tables of {path}")
+    return 0
 
 
 def _pool_files(names: list[str], output: Path) -> int:
@@ -817,10 +901,25 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--seed", type=int, default=2010)
     parser.add_argument("--max-steps", type=int, default=6000)
-    parser.add_argument("--cases", nargs="*", default=list(CASES), choices=list(CASES))
+    parser.add_argument(
+        "--cases",
+        nargs="*",
+        default=None,
+        choices=list(CASES),
+        help="default: every case (with --true-law-only: every case with a registered law)",
+    )
     parser.add_argument("--levels", nargs="*", type=float, default=list(NOISE_LEVELS))
     parser.add_argument(
-        "--output", default="laws", help="results/NAME.json, or a path ending in .json"
+        "--output",
+        default=None,
+        help="results/NAME.json, or a path ending in .json (default: laws, or "
+        "laws_calibration with --true-law-only)",
+    )
+    parser.add_argument(
+        "--true-law-only",
+        action="store_true",
+        help="fit each run with its true law only (no law='auto', which takes minutes a "
+        "run): for the per-law calibration with many runs",
     )
     parser.add_argument(
         "--resume", action="store_true", help="keep the runs of an interrupted output file"
@@ -832,7 +931,20 @@ def main(argv: list[str] | None = None) -> int:
         help="pool the runs of finished result files (results/NAME.json, at different "
         "--seed) into --output, calibration and auto rates over them all; nothing is fitted",
     )
+    parser.add_argument(
+        "--retable",
+        nargs="+",
+        metavar="NAME",
+        help="rewrite the tables of finished result files (results/NAME.json) from their "
+        "runs with this summary code; nothing is fitted",
+    )
     args = parser.parse_args(argv)
+    if args.cases is None:
+        args.cases = [c for c in CASES if CASES[c][0] or not args.true_law_only]
+    if args.output is None:
+        args.output = "laws_calibration" if args.true_law_only else "laws"
+    if args.retable:
+        return _retable_files(args.retable)
     if args.pool:
         return _pool_files(args.pool, output_path(args.output))
     settings = _settings(args)
@@ -850,6 +962,7 @@ def main(argv: list[str] | None = None) -> int:
         same = (
             old.get("settings", {}).get("seed") == args.seed
             and old.get("settings", {}).get("max_steps") == args.max_steps
+            and old.get("settings", {}).get("auto", True) == settings["auto"]
         )
         if same:
             wanted = set(jobs)
@@ -862,8 +975,9 @@ def main(argv: list[str] | None = None) -> int:
     # run 0 of every case first, so that an interrupted file holds every case
     jobs.sort(key=lambda j: (j[2], CASES[j[0]][0] in ("viscous", "coulomb", "viscous+coulomb")))
     start = time.perf_counter()
+    what = "a true-law fit" if args.true_law_only else "a true-law fit and an auto fit"
     print(
-        f"{len(jobs)} runs (each a true-law fit and an auto fit) on {args.workers} workers, "
+        f"{len(jobs)} runs (each {what}) on {args.workers} workers, "
         f"load average {load_start[0]:.2f}",
         flush=True,
     )
@@ -883,13 +997,15 @@ def main(argv: list[str] | None = None) -> int:
                 "table": summarise(records),
                 "confusion": confusion(records),
                 "pooled": pooled(records),
+                "calibration": calibration(records, CASES),
                 "runs": records,
             },
         )
 
     with ProcessPoolExecutor(max_workers=args.workers, initializer=niced_worker) as pool:
         futures = {
-            pool.submit(one_run, c, n, i, args.seed, args.max_steps): (c, n, i) for c, n, i in jobs
+            pool.submit(one_run, c, n, i, args.seed, args.max_steps, settings["auto"]): (c, n, i)
+            for c, n, i in jobs
         }
         for k, future in enumerate(as_completed(futures), 1):
             c, n, i = futures[future]
@@ -903,12 +1019,14 @@ def main(argv: list[str] | None = None) -> int:
                     "index": i,
                     "worker_error": _tail(exc),
                     key: {"error": "worker died"},
-                    "auto_fit": {"error": "worker died"},
                 }
+                if settings["auto"]:
+                    rec["auto_fit"] = {"error": "worker died"}
             records.append(rec)
             a = rec.get("auto_fit", {})
+            said = f"auto {a.get('law', a.get('error', '?'))[:60]}" if a else "true law"
             print(
-                f"{k}/{len(jobs)} {c}@{n:g}x#{i}: auto {a.get('law', a.get('error', '?'))[:60]} "
+                f"{k}/{len(jobs)} {c}@{n:g}x#{i}: {said} "
                 f"({rec.get('seconds', 0):.0f} s), {time.perf_counter() - start:.0f} s, "
                 f"load {os.getloadavg()[0]:.2f}",
                 flush=True,
@@ -917,6 +1035,7 @@ def main(argv: list[str] | None = None) -> int:
     path = write(True)
     table = summarise(records)
     _print_table(table, confusion(records))
+    print_calibration(calibration(records, CASES))
     print("\npooled over the registered laws:", json.dumps(pooled(records), indent=1))
     print(f"\nwall {time.perf_counter() - start:.0f} s; wrote {path}")
     return 0

@@ -219,6 +219,11 @@ def test_a_nonlinear_law_is_fitted_in_the_frame_of_its_own_turning_times():
     trend = json.loads(attrs["frequency_trend_json"])
     assert abs(trend["change"]) < 2e-6
     assert -3e-4 < attrs["law_frequency_change"] < -1.5e-4
+    # c₂ is reported in that frame: γ = qℓ with ℓ = N/(mω²), ω = attrs["omega"] (the
+    # record's frequency, about 6e-4 off here, would put the truth 30 sd away)
+    gamma = result.samples("c2")
+    truth_gamma = q * LOAD / (MASS * attrs["omega"] ** 2)
+    assert abs(gamma.mean() - truth_gamma) < 3.29 * gamma.std(ddof=1)
     d = result.dissipation
     truth = swing_dissipation(drag, np.asarray(d["amplitude"]))
     z = (np.asarray(d["mean"]) - truth) / np.asarray(d["sd"])
