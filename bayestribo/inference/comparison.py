@@ -667,18 +667,35 @@ def _compare_rivals(
     except BayestriboError as exc:
         out["error"] = str(exc)
         return out
+    # a law that reduced there to a law as good as the verdict is as good as it too
+    as_good = [
+        law
+        for law in laws
+        if law in comparison.as_good or comparison.equivalent.get(law) in comparison.as_good
+    ]
     out.update(
         verdict=comparison.verdict,
-        as_good=list(comparison.as_good),
+        as_good=as_good,
         adequate=comparison.adequate,
         table={
-            law: {k: row.get(k) for k in ("elpd_diff", "dse", "adequate", "misfit_p", "shape_p")}
+            law: {
+                k: row.get(k)
+                for k in (
+                    "elpd_diff",
+                    "dse",
+                    "adequate",
+                    "misfit_p",
+                    "shape_p",
+                    "reduces_to",
+                    "seconds",
+                )
+            }
             for law, row in comparison.table.items()
         },
     )
     # decided: the finer grid's verdict holds there, and some law as good as the
     # first verdict is not as good there
-    out["decided"] = bool(comparison.adequate and set(comparison.as_good) != set(laws))
+    out["decided"] = bool(comparison.adequate and set(as_good) != set(laws))
     return out
 
 
