@@ -1,5 +1,8 @@
 """Where the time of ``law="auto"`` goes: each law's fit inside the comparison, timed.
 
+The machine is shared: each time is given as wall time and as the process's CPU time
+(``time.process_time``), which the load of other processes hardly changes.
+
 One run of a case of ``benchmarks/laws.py`` (the independent solve_ivp simulator of
 ``benchmarks/_laws_sim.py``, the same seeds as run ``--index`` there) is fitted with
 ``bayestribo.fit(run, law="auto")`` with the seed ``benchmarks/laws.py`` gives its auto
@@ -91,7 +94,7 @@ def timed_auto(case: str, noise: float, index: int, seed: int, max_steps: int) -
     original = comparison._fit_law
 
     def timed(law: str, prepared: Any, *args: Any, **kwargs: Any) -> Any:
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), time.process_time()
         sampled, idata = original(law, prepared, *args, **kwargs)
         s = sampled.run
         fits.append(
@@ -99,6 +102,7 @@ def timed_auto(case: str, noise: float, index: int, seed: int, max_steps: int) -
                 "law": law,
                 "grid_points": int(prepared.data.increments.size),
                 "seconds": time.perf_counter() - start,
+                "cpu_seconds": time.process_time() - cpu,
                 "n_steps": int(s.n_steps),
                 "max_steps": int(sampled.settings.max_steps),
                 "hit_max_steps": bool(s.n_steps >= sampled.settings.max_steps),
@@ -116,9 +120,9 @@ def timed_auto(case: str, noise: float, index: int, seed: int, max_steps: int) -
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            start = time.perf_counter()
+            start, cpu = time.perf_counter(), time.process_time()
             result = fit(run, law="auto", seed=fit_seed, max_steps=max_steps)
-            total = time.perf_counter() - start
+            total, total_cpu = time.perf_counter() - start, time.process_time() - cpu
     finally:
         comparison._fit_law = original
     comparison_out = result.law_comparison or {}
@@ -131,6 +135,9 @@ def timed_auto(case: str, noise: float, index: int, seed: int, max_steps: int) -
             # the sampling alone where the optimum is found before it)
             entry["sampling_seconds"] = entry["seconds"]
             entry["seconds"] = row["seconds"]
+            if "cpu_seconds" in row:
+                entry["sampling_cpu_seconds"] = entry["cpu_seconds"]
+                entry["cpu_seconds"] = row["cpu_seconds"]
     for law, row in table.items():
         if row.get("reduces_to"):
             fits.append(
@@ -138,6 +145,7 @@ def timed_auto(case: str, noise: float, index: int, seed: int, max_steps: int) -
                     "law": law,
                     "grid_points": grid,
                     "seconds": row["seconds"],
+                    "cpu_seconds": row.get("cpu_seconds"),
                     "n_steps": 0,
                     "max_steps": max_steps,
                     "hit_max_steps": False,
@@ -155,7 +163,9 @@ def timed_auto(case: str, noise: float, index: int, seed: int, max_steps: int) -
         "fit_seed": fit_seed,
         "max_steps": max_steps,
         "total_seconds": total,
+        "total_cpu_seconds": total_cpu,
         "laws_seconds": sum(f["seconds"] for f in fits),
+        "laws_cpu_seconds": sum(f.get("cpu_seconds") or 0.0 for f in fits),
         "law": result.law,
         "converged": bool(result.converged),
         "verdict": comparison_out.get("verdict"),
@@ -184,13 +194,14 @@ def main(argv: list[str] | None = None) -> None:
         out = timed_auto(case, args.noise, args.index, args.seed, args.max_steps)
         runs.append(out)
         print(
-            f"{case}: {out['total_seconds']:.0f} s in all, {out['laws_seconds']:.0f} s in the "
-            f"laws' fits; chose {out['law']}",
+            f"{case}: {out['total_seconds']:.0f} s in all ({out['total_cpu_seconds']:.0f} s of "
+            f"CPU), {out['laws_seconds']:.0f} s in the laws' fits; chose {out['law']}",
             flush=True,
         )
         for f in out["fits"]:
             print(
                 f"  {f['law']:<28} {f['grid_points']:>5} pts {f['seconds']:7.1f} s "
+                f"(CPU {f.get('cpu_seconds') or 0.0:7.1f} s) "
                 f"{f['n_steps']:>6} steps converged={f['converged']} "
                 f"{f.get('reduces_to', '')} {'; '.join(f['reasons'])}",
                 flush=True,
