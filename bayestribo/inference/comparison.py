@@ -36,6 +36,25 @@ comparison says that no law compared holds: the ΔE(A) measured from the turning
 is then the answer. A Pareto k above 0.7 is reported, since the estimate is then
 unreliable for that law.
 
+Reduction. A law whose extra terms the data put at zero is the law it nests: at its
+optimum its extra terms' amounts sit on their null (ζ, γ, ζ_α at 0: the lower bound of
+their support, :func:`bayestribo.inference.start.refine`), and the parameters that only
+shape those terms (a power drag's exponent α, μ_s/μ_k without μ_k) are left to their
+prior. Sampling such a posterior judges convergence on parameters the data say nothing
+of, and runs to the step ceiling: ``coulomb+power`` on a record of Coulomb friction
+alone (ζ_α → 0 leaves α free, and α → 0 makes the drag a second Coulomb friction) ran
+all its steps without converging, the most of the 10 to 13 minutes ``law="auto"``
+took there (``benchmarks/auto_speed.py``). The laws are
+fitted smallest first, and a law *reduces* to the largest law it nests that is fitted
+and converged already when its optimum loses at most :data:`REDUCTION_LOSS` (half a
+unit) of log posterior density with the extra terms' amounts put on their null (the
+others where they are, or at the nested law's optimum). It is then not sampled and not
+compared by PSIS-LOO (the nested law, simpler and of the same optimum, stands for it
+in the verdict and in the ΔE(A) averaged over the laws as good as the verdict): its
+table row says ``reduces_to``, ``terms_at_zero``, ``sampled`` False and
+``converged`` None (not "converged"), with the misfit checks at its optimum, and the
+comparison's text names it. The law-free fit never reduces.
+
 Rivals. Simplicity settles a tie between a law and one that nests it; it does not
 settle one between laws of different mechanisms: viscous damping and a friction that
 grows with amplitude (``hysteretic``) make the same turning points, so one increment
@@ -58,6 +77,7 @@ holds.)
 from __future__ import annotations
 
 import os
+import time
 import warnings
 import zlib
 from collections.abc import Mapping, Sequence
@@ -65,6 +85,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from bayestribo import DEFAULT_SEED
 from bayestribo.errors import BayestriboError
@@ -77,6 +98,7 @@ from bayestribo.inference.pipeline import (
     _misfit,
     _shape_departure,
     build_posterior,
+    find_optimum,
     prepare,
     sample,
 )
@@ -114,6 +136,10 @@ TIE_GRID = 4
 SMALL_ELPD_DIFFERENCE = 4.0
 #: Pareto k above which PSIS-LOO is unreliable.
 PARETO_K_LIMIT = 0.7
+#: Log posterior density a law's optimum may lose with its extra terms at zero and
+#: still reduce to the law it nests (module notes): half a unit, the reach of a bound
+#: in :func:`bayestribo.inference.start.refine` and of the μ_s/μ_k interval.
+REDUCTION_LOSS = 0.5
 
 
 @dataclass(frozen=True)
@@ -126,7 +152,9 @@ class LawComparison:
         The run.
     table : dict
         Law -> ``elpd_loo``, ``se``, ``p_loo``, ``elpd_diff``, ``dse``, ``weight``,
-        ``rank``, ``pareto_k_max``, ``converged``, and the posterior medians.
+        ``rank``, ``pareto_k_max``, ``converged``, ``sampled``, the posterior medians,
+        and the time the law took (optimum and sampling: ``seconds`` of wall time,
+        ``cpu_seconds`` of the process's).
     best : str
         Law with the highest elpd_loo.
     verdict : str
@@ -145,6 +173,11 @@ class LawComparison:
     halves : dict or None
         The verdict fitted to each half of the motion
         (:class:`bayestribo.inference.halves.LawHalves` as plain data), when checked.
+    equivalent : dict
+        Law -> the law compared that it reduces to: its extra terms at 0 at its
+        optimum, so that it was neither sampled nor compared by PSIS-LOO (module
+        notes); its table row says ``reduces_to``, ``terms_at_zero`` and
+        ``sampled`` False.
     """
 
     run_name: str
@@ -156,9 +189,17 @@ class LawComparison:
     adequate: bool = True
     halves: dict[str, Any] | None = None
     rivals: dict[str, Any] | None = None
+    equivalent: dict[str, str] = field(default_factory=dict)
 
     def describe(self) -> str:
-        """One sentence: the law chosen and why."""
+        """One sentence: the law chosen and why (and the laws that reduced to others)."""
+        text = self._choice()
+        if self.equivalent:
+            text += "; " + _equivalence_text(self.equivalent, self.table)
+        return text
+
+    def _choice(self) -> str:
+        """The law chosen and why."""
         n = len(self.table)
         split = self.halves or {}
         if not self.adequate and split.get("tested") and not split.get("agree"):
@@ -214,7 +255,19 @@ class LawComparison:
             "rivals": self.rivals,
             "table": self.table,
             "warnings": list(self.warnings),
+            "equivalent": dict(self.equivalent),
         }
+
+
+def _equivalence_text(equivalent: Mapping[str, str], table: Mapping[str, Any]) -> str:
+    """The laws that reduced to a nested law at their optimum, in words: "not sampled,
+    equivalent at the optimum to a nested law compared: coulomb+power to coulomb (power
+    at 0)"."""
+    parts = []
+    for law, nested in equivalent.items():
+        zero = table.get(law, {}).get("terms_at_zero") or []
+        parts.append(f"{law} to {nested} ({', '.join(zero)} at 0)")
+    return "not sampled, equivalent at the optimum to a nested law compared: " + ", ".join(parts)
 
 
 def _law(name: str | Law) -> Law:
@@ -248,21 +301,16 @@ def _fit_law(
     prepared: PreparedRun,
     settings: SamplerSettings,
     rng: np.random.Generator,
-    model: str,
-    discrepancy: bool,
-    nested_start: Mapping[str, float] | None,
+    posterior: Posterior,
+    optimum: tuple[NDArray, NDArray, tuple[float, float] | None],
 ) -> tuple[Sampled, Any]:
-    """Sample one law's posterior; its InferenceData holds the pointwise log-likelihood."""
+    """Sample one law's posterior from its optimum; its InferenceData holds the
+    pointwise log-likelihood."""
     import arviz as az
 
-    # friction terms are fitted without contact too (as a friction displacement): the
-    # data, not the metadata, decide whether there is friction to see
-    posterior = _posterior(law, prepared.data, model, discrepancy)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        sampled = sample(
-            posterior, prepared.decay, settings=settings, seed=rng, also_start_at=nested_start
-        )
+        sampled = sample(posterior, prepared.decay, settings=settings, seed=rng, optimum=optimum)
     chains = sampled.run.chains
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", FutureWarning)
@@ -271,6 +319,73 @@ def _fit_law(
             log_likelihood={"pi": pointwise_log_likelihood(posterior, chains)},
         )
     return sampled, idata
+
+
+def _amount(term: Any, values: Mapping[str, float], reference: float) -> Any:
+    """The parameter of ``term`` whose null on a bound of its support stops the term
+    (its ΔE(A) 0 at every amplitude, the others at ``values``): a drag's coefficient,
+    μ_k; None when there is none (a friction that may take either sign)."""
+    amplitudes = reference * np.array([1e-3, 0.1, 0.5, 1.0])
+    for p in term.parameters:
+        if p.null not in (p.low, p.high):
+            continue
+        at = {q.name: np.array([values[q.name]]) for q in term.parameters}
+        at[p.name] = np.array([p.null])
+        energy = np.asarray(term.dissipation(amplitudes, at, reference), dtype=float)
+        if np.all(energy == 0.0):
+            return p
+    return None
+
+
+def _reduction(
+    law: str,
+    posterior: Posterior,
+    theta: NDArray,
+    fitted: Mapping[str, Sampled],
+    optima: Mapping[str, Mapping[str, float]],
+) -> tuple[str, list[str]] | None:
+    """The law compared that ``law`` reduces to at its optimum ``theta``, and the terms
+    at zero; None when it reduces to none (module notes).
+
+    A law reduces to a law it nests, fitted and converged in this comparison, when its
+    extra terms at zero lose at most :data:`REDUCTION_LOSS` of log posterior density
+    from ``theta``: each extra term's amount (the parameter whose null, a bound of its
+    support, stops the term) put on its null, the other coordinates at ``theta`` or at
+    the nested law's optimum, whichever is higher. The largest such law is the one. The
+    law-free fit never reduces (its answer is its ΔE(A), not a mechanism)."""
+    the_law = posterior.law
+    if the_law.name == _law("free").name:
+        return None
+    names = list(posterior.names)
+    values = dict(zip(names, np.asarray(theta, dtype=float).tolist(), strict=True))
+    reference = float(posterior.likelihood.reference_amplitude)
+    best = float(posterior(np.asarray(theta, dtype=float)[None])[0])
+    nested = [
+        other
+        for other, sampled in fitted.items()
+        if sampled.run.converged
+        and other in optima
+        and _law(other).name != the_law.name
+        and the_law.nests(_law(other))
+    ]
+    for other in sorted(nested, key=_complexity, reverse=True):
+        extra = [t for t in the_law.terms if t.name not in _law(other).term_names]
+        if any(p.name not in names for t in extra for p in t.parameters):
+            continue  # a held parameter: not the optimiser's answer
+        amounts = [_amount(t, values, reference) for t in extra]
+        if any(a is None for a in amounts):
+            continue
+        at_zero = np.array(theta, dtype=float)
+        for a in amounts:
+            at_zero[names.index(a.name)] = a.null
+        embedded = at_zero.copy()
+        for name, value in optima[other].items():
+            if name in names:
+                embedded[names.index(name)] = value
+        lp = posterior(np.vstack([at_zero, embedded]))
+        if np.isfinite(best) and np.max(lp) >= best - REDUCTION_LOSS:
+            return other, [t.name for t in extra]
+    return None
 
 
 def _complexity(law: str) -> tuple[int, int]:
@@ -391,19 +506,49 @@ def compare_prepared(
     root = np.random.SeedSequence(seed)
     idatas, table, notes, runs = {}, {}, [], {}
     optima: dict[str, dict[str, float]] = {}
+    equivalent: dict[str, str] = {}
 
     def fit_one(law: str) -> None:
+        start, cpu = time.perf_counter(), time.process_time()
         rng = np.random.default_rng(_law_seed(root, law))
         nested = _nested_start(law, prepared, optima)
         try:
-            sampled, idatas[law] = _fit_law(
-                law, prepared, settings, rng, model, discrepancy, nested
-            )
+            # friction terms are fitted without contact too (as a friction
+            # displacement): the data, not the metadata, decide whether there is
+            # friction to see
+            posterior = _posterior(law, prepared.data, model, discrepancy)
+            optimum = find_optimum(posterior, prepared.decay, also_start_at=nested)
+            reduced = _reduction(law, posterior, optimum[0], runs, optima)
+            if reduced is None:
+                sampled, idatas[law] = _fit_law(law, prepared, settings, rng, posterior, optimum)
         except BayestriboError as exc:
             # a law that cannot be fitted here is reported and left out of the
             # comparison, not a failure of the others
             table[law] = {"law": _law(law).name, "error": str(exc), "converged": False}
             notes.append(f"{law}: not fitted ({exc})")
+            return
+        if reduced is not None:
+            # its optimum is the nested law's: not sampled, not compared (module notes)
+            theta = optimum[0]
+            optima[law] = dict(zip(posterior.names, theta, strict=True))
+            chi2, m, misfit_p = _misfit(posterior, theta)
+            shape = _shape_departure(posterior, theta)
+            table[law] = {
+                "law": _law(law).name,
+                "reduces_to": reduced[0],
+                "terms_at_zero": reduced[1],
+                "sampled": False,
+                "converged": None,
+                "adequate": bool(misfit_p >= MISFIT_P and not shape.p_value < MISFIT_P),
+                "chi2_map": chi2,
+                "n_increments": m,
+                "misfit_p": misfit_p,
+                "shape_p": shape.p_value,
+                "map": {n: float(v) for n, v in zip(posterior.names, theta, strict=True)},
+                "seconds": time.perf_counter() - start,
+                "cpu_seconds": time.process_time() - cpu,
+            }
+            equivalent[law] = reduced[0]
             return
         runs[law] = sampled
         s = sampled.run
@@ -424,6 +569,9 @@ def compare_prepared(
             "misfit_p": misfit_p,
             "shape_p": shape.p_value,
             "median": {n: float(np.median(s.chains[..., i])) for i, n in enumerate(names)},
+            "sampled": True,
+            "seconds": time.perf_counter() - start,
+            "cpu_seconds": time.process_time() - cpu,
         }
         if k_max > PARETO_K_LIMIT:
             notes.append(f"{law}: Pareto k up to {k_max:.2f}; its PSIS-LOO is unreliable")
@@ -440,7 +588,7 @@ def compare_prepared(
         if free not in {_law(law).name for law in laws}:
             laws = [*laws, "free"]
             fit_one("free")
-    if len(idatas) < 2:
+    if not idatas or len(idatas) + len(equivalent) < 2:
         raise BayestriboError(
             f"laws: fewer than two of {laws} could be fitted: " + "; ".join(notes)
         )
@@ -466,7 +614,15 @@ def compare_prepared(
                 verdict = rematch["verdict"]
                 as_good = [law for law in as_good if law in rematch["as_good"]]
     comparison = LawComparison(
-        prepared.name, table, best, verdict, as_good, notes, adequate, rivals=rematch
+        prepared.name,
+        table,
+        best,
+        verdict,
+        as_good,
+        notes,
+        adequate,
+        rivals=rematch,
+        equivalent=equivalent,
     )
     return comparison, runs
 
@@ -516,18 +672,35 @@ def _compare_rivals(
     except BayestriboError as exc:
         out["error"] = str(exc)
         return out
+    # a law that reduced there to a law as good as the verdict is as good as it too
+    as_good = [
+        law
+        for law in laws
+        if law in comparison.as_good or comparison.equivalent.get(law) in comparison.as_good
+    ]
     out.update(
         verdict=comparison.verdict,
-        as_good=list(comparison.as_good),
+        as_good=as_good,
         adequate=comparison.adequate,
         table={
-            law: {k: row.get(k) for k in ("elpd_diff", "dse", "adequate", "misfit_p", "shape_p")}
+            law: {
+                k: row.get(k)
+                for k in (
+                    "elpd_diff",
+                    "dse",
+                    "adequate",
+                    "misfit_p",
+                    "shape_p",
+                    "reduces_to",
+                    "seconds",
+                )
+            }
             for law, row in comparison.table.items()
         },
     )
     # decided: the finer grid's verdict holds there, and some law as good as the
     # first verdict is not as good there
-    out["decided"] = bool(comparison.adequate and set(comparison.as_good) != set(laws))
+    out["decided"] = bool(comparison.adequate and set(as_good) != set(laws))
     return out
 
 

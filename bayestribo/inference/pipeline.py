@@ -76,6 +76,7 @@ __all__ = [
     "PreparedRun",
     "Sampled",
     "build_posterior",
+    "find_optimum",
     "law_frequency",
     "prepare",
     "reframe",
@@ -503,6 +504,54 @@ def build_posterior(
     return Posterior(prior_set, likelihood, fixed)
 
 
+def find_optimum(
+    posterior: Posterior,
+    decay: EnergyDecay,
+    also_start_at: Mapping[str, float] | None = None,
+) -> tuple[NDArray, NDArray, tuple[float, float] | None]:
+    """The maximum a posteriori of step 3, its Laplace covariance and the plausible
+    μ_s/μ_k interval (:func:`bayestribo.inference.start.maximum_a_posteriori`), with a
+    second starting point of the optimiser kept if its optimum is better.
+
+    Parameters
+    ----------
+    posterior : Posterior
+        From :func:`build_posterior`.
+    decay : EnergyDecay
+        The run's energy decay (its peaks give the first guesses of the optimiser).
+    also_start_at : mapping, optional
+        Values of the sampled coordinates to start the optimiser from as well (e.g.
+        the optimum of a nested law).
+
+    Returns
+    -------
+    theta : ndarray
+        The optimum in sampling coordinates.
+    cov : ndarray
+        Its Laplace covariance.
+    ratio_range : tuple or None
+        The plausible μ_s/μ_k interval (None for a law without static friction).
+    """
+    return _better_optimum(posterior, maximum_a_posteriori(posterior, decay), also_start_at)
+
+
+def _better_optimum(
+    posterior: Posterior,
+    optimum: tuple[NDArray, NDArray, tuple[float, float] | None],
+    also_start_at: Mapping[str, float] | None,
+) -> tuple[NDArray, NDArray, tuple[float, float] | None]:
+    """``optimum``, or the optimum refined from ``also_start_at`` when its posterior
+    density is higher (the μ_s/μ_k interval kept)."""
+    theta, cov, ratio_range = optimum
+    if also_start_at is not None:
+        start = np.array([also_start_at[n] for n in posterior.names], dtype=float)
+        if np.isfinite(posterior(start[None])[0]):
+            alt, alt_cov = refine(posterior, start)
+            if posterior(alt[None])[0] > posterior(theta[None])[0]:
+                theta, cov = alt, alt_cov
+    return theta, cov, ratio_range
+
+
 def sample(
     posterior: Posterior,
     decay: EnergyDecay,
@@ -547,15 +596,8 @@ def sample(
     """
     rng = np.random.default_rng(seed)
     if optimum is None:
-        theta, cov, ratio_range = maximum_a_posteriori(posterior, decay)
-    else:
-        theta, cov, ratio_range = optimum
-    if also_start_at is not None:
-        start = np.array([also_start_at[n] for n in posterior.names], dtype=float)
-        if np.isfinite(posterior(start[None])[0]):
-            alt, alt_cov = refine(posterior, start)
-            if posterior(alt[None])[0] > posterior(theta[None])[0]:
-                theta, cov = alt, alt_cov
+        optimum = find_optimum(posterior, decay)
+    theta, cov, ratio_range = _better_optimum(posterior, optimum, also_start_at)
     checked: SurrogateCheck | None = None
     target: Posterior | None = None
     run: SamplerRun | None = None

@@ -451,6 +451,7 @@ class FitResult:
             adequate=c["adequate"],
             halves=c.get("halves"),
             rivals=c.get("rivals"),
+            equivalent=c.get("equivalent") or {},
         )
         lines = [f"          {text.describe()}"]
         halves = c.get("halves")
