@@ -137,3 +137,18 @@ def test_the_kit_examples_hold():
     from bayestribo.reports import kit
 
     assert doctest.testmod(kit).failed == 0
+
+
+def test_symbols_in_a_saved_figure_are_set_with_their_subscripts(tmp_path):
+    save = setup(str(tmp_path / "figs"), "svg")
+    fig, ax = plt.subplots()
+    ax.plot([0, 1], [0.02, 0.03], label="μ_k of run disc_14.9_1")
+    ax.set_ylabel("μ_k [-]")
+    ax.set_title("x_c against load_N")
+    ax.legend()
+    save(fig, "friction")
+    assert ax.get_ylabel() == "μ$_{k}$ [-]"
+    # a code or file name is not a symbol: left as it is (the browser probe flags those)
+    assert ax.get_title() == "x$_{c}$ against load_N"
+    assert ax.get_legend().get_texts()[0].get_text() == "μ$_{k}$ of run disc_14.9_1"
+    plt.close(fig)

@@ -241,8 +241,12 @@ def setup(figure_dir: str | None, figure_format: str = "png") -> Callable[[Any, 
 
         Texts that overlap, panels with nothing to show and texts smaller than
         :data:`MIN_FONT_PT` are said in a note (the report's tests and the browser's
-        probe require none).
+        probe require none). Symbols' subscripts are set as subscripts first
+        (:func:`bayestribo.reports.symbols.subscripts_figure`: ``μ_k`` as ``μ$_{k}$``).
         """
+        from bayestribo.reports.symbols import subscripts_figure
+
+        subscripts_figure(fig)
         overlaps = overlapping_labels(fig)
         if overlaps:
             note(f"figure {name}: {FIGURE_PROBLEMS[0]}: {'; '.join(overlaps[:3])}")

@@ -5,7 +5,9 @@ The package names its quantities in plain text with an underscore for the subscr
 :data:`bayestribo.reports.tables.SYMBOLS`), which is what a terminal can show. In HTML
 the subscript is set as one: :func:`subscripts_html` rewrites the text of a page (never
 its tags, attributes, code, scripts or styles), so every table, note, verdict and
-sentence of every report reads ``μ<sub>k</sub>`` whatever made it.
+sentence of every report reads ``μ<sub>k</sub>`` whatever made it; in a figure,
+:func:`subscripts_figure` sets it in matplotlib's mathtext (``μ$_{k}$``) in every text of
+the figure (labels, titles, tick labels, legends, annotations).
 
 A symbol is one letter (Latin or Greek, or ℓ) that does not continue a word, an
 underscore and a subscript of one to three letters or digits that ends there
@@ -17,8 +19,9 @@ name (``disc_14.9_1``) is not one and is left as it is (the browser's probe,
 from __future__ import annotations
 
 import re
+from typing import Any
 
-__all__ = ["SYMBOL", "subscripts", "subscripts_html"]
+__all__ = ["SYMBOL", "subscripts", "subscripts_figure", "subscripts_html", "subscripts_mathtext"]
 
 #: One letter that does not continue a word, ``_``, a subscript of 1-3 letters or digits.
 SYMBOL = re.compile(r"(?<![\w])([A-Za-z\u0391-\u03a9\u03b1-\u03c9ℓ])_([^\W_]{1,3})(?![\w])")
@@ -73,3 +76,44 @@ def subscripts_html(page: str) -> str:
         else:
             out.append(part)
     return "".join(out)
+
+
+def subscripts_mathtext(text: str) -> str:
+    """A figure text with each symbol's subscript in matplotlib's mathtext.
+
+    A text that holds mathtext already (a ``$``) is left as it is.
+
+    Examples
+    --------
+    >>> subscripts_mathtext("μ_k [-]; x_c [m]")
+    'μ$_{k}$ [-]; x$_{c}$ [m]'
+    >>> subscripts_mathtext("$x_c$ and load_N")
+    '$x_c$ and load_N'
+    """
+    if "$" in text or "_" not in text:
+        return text
+    return SYMBOL.sub(r"\1$_{\2}$", text)
+
+
+def subscripts_figure(fig: Any) -> int:
+    """Set the subscripts of every text of ``fig`` in mathtext (:func:`subscripts_mathtext`).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+
+    Returns
+    -------
+    int
+        The number of texts rewritten.
+    """
+    from matplotlib.text import Text
+
+    changed = 0
+    for artist in fig.findobj(Text):
+        text = artist.get_text()
+        new = subscripts_mathtext(text)
+        if new != text:
+            artist.set_text(new)
+            changed += 1
+    return changed
