@@ -43,8 +43,8 @@ shape those terms (a power drag's exponent α, μ_s/μ_k without μ_k) are left 
 prior. Sampling such a posterior judges convergence on parameters the data say nothing
 of, and runs to the step ceiling: ``coulomb+power`` on a record of Coulomb friction
 alone (ζ_α → 0 leaves α free, and α → 0 makes the drag a second Coulomb friction) ran
-all its steps without converging, the most of the 10 to 13 minutes ``law="auto"``
-took there (``benchmarks/auto_speed.py``). The laws are
+all its steps without converging: a third of the time ``law="auto"`` took there
+(``benchmarks/auto_speed.py``). The laws are
 fitted smallest first, and a law *reduces* to the largest law it nests that is fitted
 and converged already when its optimum loses at most :data:`REDUCTION_LOSS` (half a
 unit) of log posterior density with the extra terms' amounts put on their null (the
