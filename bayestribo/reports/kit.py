@@ -244,18 +244,16 @@ def setup(figure_dir: str | None, figure_format: str = "png") -> Callable[[Any, 
         probe require none). Symbols' subscripts are set as subscripts first
         (:func:`bayestribo.reports.symbols.subscripts_figure`: ``μ_k`` as ``μ$_{k}$``).
         """
-        from bayestribo.reports.symbols import subscripts_figure
+        from bayestribo.reports.symbols import plain_symbols, subscripts_figure
 
         subscripts_figure(fig)
-        overlaps = overlapping_labels(fig)
-        if overlaps:
-            note(f"figure {name}: {FIGURE_PROBLEMS[0]}: {'; '.join(overlaps[:3])}")
-        empty = empty_panels(fig)
-        if empty:
-            note(f"figure {name}: {FIGURE_PROBLEMS[1]}: {'; '.join(empty[:3])}")
-        small = small_texts(fig)
-        if small:
-            note(f"figure {name}: {FIGURE_PROBLEMS[2]}: {'; '.join(small[:3])}")
+        for problem, found in zip(
+            FIGURE_PROBLEMS,
+            (overlapping_labels(fig), empty_panels(fig), small_texts(fig)),
+            strict=True,
+        ):
+            if found:
+                note(plain_symbols(f"figure {name}: {problem}: {'; '.join(found[:3])}"))
         if folder is not None:
             fig.savefig(folder / f"{name}.{figure_format}", bbox_inches="tight")
 

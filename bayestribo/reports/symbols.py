@@ -21,7 +21,14 @@ from __future__ import annotations
 import re
 from typing import Any
 
-__all__ = ["SYMBOL", "subscripts", "subscripts_figure", "subscripts_html", "subscripts_mathtext"]
+__all__ = [
+    "SYMBOL",
+    "plain_symbols",
+    "subscripts",
+    "subscripts_figure",
+    "subscripts_html",
+    "subscripts_mathtext",
+]
 
 #: One letter that does not continue a word, ``_``, a subscript of 1-3 letters or digits.
 SYMBOL = re.compile(r"(?<![\w])([A-Za-z\u0391-\u03a9\u03b1-\u03c9ℓ])_([^\W_]{1,3})(?![\w])")
@@ -117,3 +124,19 @@ def subscripts_figure(fig: Any) -> int:
             artist.set_text(new)
             changed += 1
     return changed
+
+
+#: A subscript set by :func:`subscripts_mathtext`.
+_MATHTEXT_SUBSCRIPT = re.compile(r"\$_\{([^\W_]{1,3})\}\$")
+
+
+def plain_symbols(text: str) -> str:
+    """A figure text quoted in prose (a note naming a panel) with its mathtext
+    subscripts back in plain text, for the page to set them (:func:`subscripts_html`).
+
+    Examples
+    --------
+    >>> plain_symbols("empty panel: 'μ$_{k}$ [-]'")
+    "empty panel: 'μ_k [-]'"
+    """
+    return _MATHTEXT_SUBSCRIPT.sub(r"_\1", text)
