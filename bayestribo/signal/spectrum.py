@@ -36,6 +36,7 @@ from bayestribo.errors import RecordingError
 from bayestribo.signal.period import sample_step
 
 __all__ = [
+    "COLOUR_FALSE_ALARM",
     "LINE_FALSE_ALARM",
     "LINE_RATIO",
     "LJUNG_BOX_LAGS",
@@ -43,6 +44,7 @@ __all__ = [
     "WHITE_P",
     "NoiseSpectrum",
     "RestNoise",
+    "band_bounds",
     "colored_noise",
     "fit_line",
     "line_threshold",
@@ -67,9 +69,12 @@ LINE_FALSE_ALARM = 1e-4
 LJUNG_BOX_LAGS = 10
 WHITE_P = 1e-3
 #: Noise is called coloured when the PSD in the signal band differs from the flat level
-#: of white noise of the same variance by more than this factor (and by more than four
-#: standard errors of its estimate).
+#: of white noise of the same variance by more than this factor, and by more than white
+#: noise's band level does with chance :data:`COLOUR_FALSE_ALARM` (:func:`band_bounds`).
 COLOUR_FACTOR = 1.25
+#: Two-sided chance that white noise's band level falls outside :func:`band_bounds`:
+#: that of a normal estimate beyond four standard errors, 2Φ(-4).
+COLOUR_FALSE_ALARM = 6.334248366623973e-05
 
 
 @dataclass(frozen=True)
@@ -99,8 +104,9 @@ class NoiseSpectrum:
         Root-mean-square amplitude of each line [unit].
     coloured : bool
         True when the noise is not white: in the signal band (``band_level`` off
-        ``white_level`` by more than :data:`COLOUR_FACTOR` and four standard errors,
-        ``band_rel_se``),
+        ``white_level`` by more than :data:`COLOUR_FACTOR` and outside the range white
+        noise's estimate keeps with chance 1 - :data:`COLOUR_FALSE_ALARM`,
+        :func:`band_bounds` of ``band_rel_se``),
         by the Ljung-Box test (``white_p``), or because it carries a line: its
         samples are then correlated and the increments' variances need the
         autocovariance, not the variance alone.
@@ -339,6 +345,47 @@ def welch(s: NDArray, fs: float, nper: int, nfft: int) -> NDArray:
     return psd
 
 
+def band_bounds(rel_se: float, false_alarm: float = COLOUR_FALSE_ALARM) -> tuple[float, float]:
+    """The range of ``band_level / white_level`` that white noise keeps.
+
+    The band level of white noise averages periodogram bins, each a scaled χ² of two
+    degrees of freedom: with relative standard error ``rel_se`` it is a χ² of
+    ν = 2/rel_se² degrees of freedom over ν, skewed towards low values when ν is small.
+    A symmetric bound of four standard errors in log(level) (the earlier test) called
+    1 in 700 white rests of 0.1 s at 5 kHz coloured (ratio below 0.24, ν ≈ 16), and the
+    increment variances computed from their spectrum were then 3-4 times too small.
+
+    Parameters
+    ----------
+    rel_se : float
+        Relative standard error of the band level (dimensionless, > 0).
+    false_alarm : float
+        Two-sided chance that white noise falls outside the range (in (0, 1)).
+
+    Returns
+    -------
+    lower, upper : float
+        The ratio's quantiles ``false_alarm / 2`` and ``1 - false_alarm / 2``
+        (dimensionless).
+
+    Raises
+    ------
+    ValueError
+        If ``rel_se`` is not positive and finite or ``false_alarm`` not in (0, 1).
+    """
+    from scipy.stats import chi2
+
+    if not (math.isfinite(rel_se) and rel_se > 0):
+        raise ValueError(f"rel_se must be a positive number, got {rel_se!r}")
+    if not 0.0 < false_alarm < 1.0:
+        raise ValueError(f"false_alarm must be in (0, 1), got {false_alarm!r}")
+    nu = 2.0 / rel_se**2
+    return (
+        float(chi2.ppf(0.5 * false_alarm, nu) / nu),
+        float(chi2.isf(0.5 * false_alarm, nu) / nu),
+    )
+
+
 def _ljung_box(segments: Sequence[NDArray], lags: int) -> float:
     """p-value of the Ljung-Box statistic n(n+2) Σ ρ_k²/(n-k) over pooled segments.
 
@@ -498,11 +545,13 @@ def noise_spectrum(
     # correlated (a Hann window's equivalent noise bandwidth is 1.5 resolutions)
     independent = max(1.0, np.count_nonzero(in_band) * df / (1.5 * resolution))
     rel_se = 1.0 / math.sqrt(max(averages, 1.0) * independent)
-    off = abs(math.log(band_level / white)) if band_level > 0 and white > 0 else math.inf
+    ratio = band_level / white if band_level > 0 and white > 0 else math.nan
+    lower, upper = band_bounds(rel_se)
+    off_band = not (
+        min(lower, 1.0 / COLOUR_FACTOR) <= ratio <= max(upper, COLOUR_FACTOR)
+    )  # NaN: off
     p_white = _ljung_box(segs, LJUNG_BOX_LAGS)
-    coloured = variance > 0 and (
-        bool(lines) or off > max(math.log(COLOUR_FACTOR), 4.0 * rel_se) or p_white < WHITE_P
-    )
+    coloured = variance > 0 and (bool(lines) or off_band or p_white < WHITE_P)
     return NoiseSpectrum(
         frequency=freq,
         psd=psd,
