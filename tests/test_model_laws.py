@@ -285,6 +285,34 @@ def test_a_drag_too_strong_to_turn_is_outside_the_laws_domain():
     assert np.all(np.isfinite(pi[0])) and np.all(np.isnan(pi[1]))
 
 
+@pytest.mark.parametrize(("yp0", "tau_end"), [(0.0, None), (0.37, None), (-0.5, 150.0)])
+def test_a_friction_law_at_zero_friction_integrates_as_the_law_without_it(yp0, tau_end):
+    """μ_k = 0 (on its bound): Π of the law without the friction term to the last bit,
+    also summed past the record to the end of motion (which no friction stops: the sum
+    ends as the frictionless law's does, not after the tens of thousands of half cycles
+    the drag takes to bring r to zero), and within 1e-8 of Π(0) of the closed form."""
+    tau = np.sort(np.append(np.random.default_rng(5).uniform(0.0, 400.0, 60), 0.0))
+    drag = {"zeta": [0.013, 0.013], "c2": [0.0, 0.002]}
+    frictionless = get_law("viscous+quadratic").pi_grid(tau, drag, [1.2, 1.2], yp0, tau_end)
+    for law in ("viscous+coulomb+quadratic", "viscous+coulomb+hysteretic+quadratic"):
+        the_law = get_law(law)
+        values = {p.name: [p.null, p.null] for p in the_law.parameters}
+        values.update(drag, mu_k=[0.0, 0.0], mu_s_ratio=[1.5, 1.5])
+        pi = the_law.pi_grid(tau, values, [1.2, 1.2], yp0, tau_end)
+        np.testing.assert_array_equal(pi, frictionless)
+    closed = get_law("viscous").pi_grid(tau, {"zeta": 0.013}, [1.2], yp0, tau_end)
+    integrated = get_law("viscous+coulomb").pi_grid(
+        tau,
+        {"zeta": 0.013, "mu_k": 0.0, "mu_s_ratio": 1.5},
+        [1.2],
+        yp0,
+        tau_end,
+        method="integrate",
+    )
+    assert np.max(np.abs(pi[0] - closed[0])) < 1e-8 * closed[0, 0]
+    assert np.max(np.abs(integrated - closed)) < 1e-8 * closed[0, 0]
+
+
 # -- a term defined outside the package ------------------------------------------------
 
 

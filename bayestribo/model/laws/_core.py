@@ -24,6 +24,8 @@ if TYPE_CHECKING:  # defined for each law after this text (see the module notes)
 
     def friction(a: float, c: NDArray) -> float: ...
 
+    def friction_off(c: NDArray) -> bool: ...
+
     HAS_FRICTION: bool = False
     HAS_DRAG: bool = True
 
@@ -293,6 +295,11 @@ def one(
     last = 0.0
     before = 0.0
     n_half = 0
+    # A friction law whose friction terms are all off (coefficients at zero: μ_k = 0
+    # on its bound) moves as the law without them, which no friction stops: its sum
+    # past the record ends as that law's does (the same tail, within _TAIL_TOLERANCE),
+    # not after the thousands of half cycles the drag takes to bring r to zero.
+    frictionless = not HAS_FRICTION or friction_off(c)
     while not stopped:
         if mu < 0.0:
             # a friction that falls with amplitude below zero: outside the law's domain
@@ -311,7 +318,8 @@ def one(
                 table = tables if theta0 == 0.0 else nodes(theta0, steps)
             else:
                 weight = 1.0
-                if j >= n_t and math.isinf(tau_end) and not HAS_FRICTION and 0.0 < last < before:
+                past = j >= n_t and math.isinf(tau_end)
+                if past and frictionless and mu == 0.0 and 0.0 < last < before:
                     # past the record only the sum counts: each half cycle may be off by
                     # its share of it, over the ~1/(1 - ρ) half cycles that remain
                     weight = _TAIL_SHARE * (1.0 - last / before) * c_start / last
@@ -365,7 +373,7 @@ def one(
             break  # the record ends inside the motion: nothing more to integrate
         if t_start > tau_end and j >= n_t:
             break
-        if math.isinf(tau_end) and j >= n_t and not HAS_FRICTION:
+        if math.isinf(tau_end) and j >= n_t and frictionless and mu == 0.0:
             # endless motion: sum until the half cycles hold nothing, then a tail
             if last < _TAIL_TOLERANCE * c_start:
                 rho = last / before if before > 0.0 else 0.0

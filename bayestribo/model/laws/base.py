@@ -163,7 +163,9 @@ class Term:
     force : numba function
         For ``"drag"``: ``g(w, c) -> float``, the force magnitude at speed ``w >= 0``;
         for ``"friction"``: ``μ(a, c) -> float``, the friction at turning amplitude
-        ``a >= 0``. ``c`` is this term's slice of the coefficient array.
+        ``a >= 0``, zero at every ``a`` when its coefficients are all zero (the
+        integrator then follows the motion as without the term). ``c`` is this
+        term's slice of the coefficient array.
     coefficients : callable
         ``coefficients(values, reference) -> list of arrays``: the force's
         coefficients from parameter values by name (arrays of one shape) and the

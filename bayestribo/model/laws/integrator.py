@@ -97,6 +97,21 @@ def _sum_source(name: str, forces: tuple, offsets: tuple, sizes: tuple, first: i
     )
 
 
+def _off_source(offsets: tuple, sizes: tuple) -> str:
+    """Source of ``friction_off(c)``: every friction term's coefficients are zero (each
+    term's friction then vanishes: a term's force is proportional to its coefficients,
+    as every built-in friction term's is)."""
+    body = "".join(
+        f"    for i in range({o}, {o + n}):\n        if c[i] != 0.0:\n            return False\n"
+        for o, n in zip(offsets, sizes, strict=True)
+    )
+    return (
+        '@numba.njit(cache=True, inline="always", error_model="numpy", fastmath=_FAST)\n'
+        "def friction_off(c: NDArray) -> bool:\n"
+        f"{body}    return True\n"
+    )
+
+
 def _importable(force: object) -> tuple[str, str] | None:
     """Module and name from which a term's compiled force can be imported again."""
     py = getattr(force, "py_func", None)
@@ -122,6 +137,7 @@ def _law_source(layout: tuple) -> tuple[str, list, bool]:
     lines.append("")
     lines.append(_sum_source("drag", drags, d_off, d_size, 0))
     lines.append(_sum_source("friction", frictions, f_off, f_size, len(drags)))
+    lines.append(_off_source(f_off, f_size))
     lines.append(f"HAS_FRICTION = {bool(frictions)}")
     lines.append(f"HAS_DRAG = {bool(drags)}")
     text = inspect.getsource(_core) + "\n".join(lines) + "\n"
