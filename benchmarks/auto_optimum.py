@@ -36,33 +36,20 @@ import numpy as np  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from _laws_sim import metadata, simulate  # noqa: E402
 from _machine import write_results  # noqa: E402
 from _tree import require_this_tree  # noqa: E402
-from auto_speed import _commit  # noqa: E402
-from laws import CASES, DURATION_S, FS, REST_AFTER_S, REST_BEFORE_S, _entropy  # noqa: E402
+from laws import CASES, _commit, _entropy, case_record  # noqa: E402
 
 
 def optima(case: str, noise: float, index: int, seed: int) -> list[dict[str, Any]]:
     """Each auto law's optimum on run ``index`` of ``case``, timed."""
     from bayestribo.inference import comparison
     from bayestribo.inference.pipeline import find_optimum, prepare
-    from bayestribo.io.run import Run
 
-    _law, truth, x0, _kind = CASES[case]
-    t, xs, vs, _facts = simulate(
-        truth,
-        x0=x0,
-        fs=FS,
-        rest_before=REST_BEFORE_S,
-        rest_after=REST_AFTER_S,
-        duration=DURATION_S,
-        noise=noise,
-        seed=_entropy(case, noise, index, seed),
-    )
+    run, _facts = case_record(case, noise, _entropy(case, noise, index, seed))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        prepared = prepare(Run(time=t, displacement=xs, velocity=vs, metadata=metadata()))
+        prepared = prepare(run)
         found: dict[str, dict[str, float]] = {}
         out = []
         for law in sorted(comparison.AUTO_LAWS, key=comparison._complexity):

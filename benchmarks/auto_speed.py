@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import subprocess
 import sys
 import time
 import warnings
@@ -38,22 +37,9 @@ import numpy as np  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from _laws_sim import metadata, simulate  # noqa: E402
 from _machine import write_results  # noqa: E402
 from _tree import require_this_tree  # noqa: E402
-from laws import CASES, DURATION_S, FS, REST_AFTER_S, REST_BEFORE_S, _entropy  # noqa: E402
-
-
-def _commit() -> str:
-    try:
-        return subprocess.run(
-            ["git", "-C", str(HERE.parent), "rev-parse", "--short", "HEAD"],
-            capture_output=True,
-            text=True,
-            check=True,
-        ).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
+from laws import CASES, _commit, _entropy, case_record  # noqa: E402
 
 
 def _describe(comparison: dict[str, Any]) -> str | None:
@@ -74,22 +60,10 @@ def timed_auto(case: str, noise: float, index: int, seed: int, max_steps: int) -
     """Fit run ``index`` of ``case`` with ``law="auto"``; each law's fit timed."""
     from bayestribo import fit
     from bayestribo.inference import comparison
-    from bayestribo.io.run import Run
 
-    _law, truth, x0, _kind = CASES[case]
     entropy = _entropy(case, noise, index, seed)
     fit_seed = int(np.random.default_rng([*entropy, 1]).integers(2**31, size=2)[1])
-    t, xs, vs, _facts = simulate(
-        truth,
-        x0=x0,
-        fs=FS,
-        rest_before=REST_BEFORE_S,
-        rest_after=REST_AFTER_S,
-        duration=DURATION_S,
-        noise=noise,
-        seed=entropy,
-    )
-    run = Run(time=t, displacement=xs, velocity=vs, metadata=metadata())
+    run, _facts = case_record(case, noise, entropy)
     fits: list[dict[str, Any]] = []
     original = comparison._fit_law
 

@@ -237,26 +237,13 @@ class Worker:
 def simulated_runs(folder: Path) -> list[dict[str, Any]]:
     """The simulated runs of :data:`SIMULATED`, written as CSV into ``folder``."""
     sys.path.insert(0, str(HERE))
-    from _laws_sim import metadata, simulate
-    from laws import CASES, DURATION_S, FS, REST_AFTER_S, REST_BEFORE_S
+    from laws import case_record
 
     from bayestribo.io import write_run
-    from bayestribo.io.run import Run
 
     out = []
     for i, case in enumerate(SIMULATED):
-        _law, truth, x0, _kind = CASES[case]
-        t, xs, vs, facts = simulate(
-            truth,
-            x0=x0,
-            fs=FS,
-            rest_before=REST_BEFORE_S,
-            rest_after=REST_AFTER_S,
-            duration=DURATION_S,
-            noise=NOISE,
-            seed=[2024, i],
-        )
-        run = Run(time=t, displacement=xs, velocity=vs, metadata=metadata())
+        run, facts = case_record(case, NOISE, [2024, i])
         path = write_run(run, folder / f"sim-{case.replace('+', '_')}.csv")
         out.append({"name": f"simulated {case}", "path": str(path), "facts": facts})
     return out

@@ -224,6 +224,40 @@ auto: right = the true law, or a law nesting it whose extra terms' 95 % HDI hold
   3.29 there)"""
 
 
+def case_record(case: str, noise: float, seed: Any) -> tuple[Any, dict[str, Any]]:
+    """The run of ``case`` simulated independently (:func:`_laws_sim.simulate` at the
+    benchmark's rate, rests and duration) with ``noise`` times the resolution, and the
+    simulation's facts.
+
+    Parameters
+    ----------
+    case : str
+        A key of :data:`CASES`.
+    noise : float
+        Noise level, in multiples of the vibrometer's resolution.
+    seed : int or sequence of int
+        The simulation's entropy (:func:`_entropy` for the benchmark's runs).
+
+    Returns
+    -------
+    (Run, dict)
+    """
+    from bayestribo.io.run import Run
+
+    _law, truth, x0, _kind = CASES[case]
+    t, xs, vs, facts = simulate(
+        truth,
+        x0=x0,
+        fs=FS,
+        rest_before=REST_BEFORE_S,
+        rest_after=REST_AFTER_S,
+        duration=DURATION_S,
+        noise=noise,
+        seed=seed,
+    )
+    return Run(time=t, displacement=xs, velocity=vs, metadata=metadata()), facts
+
+
 def _entropy(case: str, noise: float, index: int, seed: int) -> list[int]:
     return [seed, zlib.crc32(case.encode()), round(100 * noise), index]
 
@@ -343,7 +377,6 @@ def one_run(
     true law (or the default one) and, unless ``auto`` is False, with law="auto"; check
     both against the truth."""
     from bayestribo.inference import prepare
-    from bayestribo.io.run import Run
     from bayestribo.model.laws import get_law
 
     law, truth, x0, kind = CASES[case]
@@ -357,18 +390,8 @@ def one_run(
         "entropy": entropy,
     }
     start = time.perf_counter()
-    t, xs, vs, facts = simulate(
-        truth,
-        x0=x0,
-        fs=FS,
-        rest_before=REST_BEFORE_S,
-        rest_after=REST_AFTER_S,
-        duration=DURATION_S,
-        noise=noise,
-        seed=entropy,
-    )
+    run, facts = case_record(case, noise, entropy)
     out["simulation"] = {**facts, "seconds": time.perf_counter() - start}
-    run = Run(time=t, displacement=xs, velocity=vs, metadata=metadata())
     omega = OMEGA
     try:
         with warnings.catch_warnings():
