@@ -40,11 +40,10 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import laws
-from _laws_sim import OMEGA, RESOLUTION_V, RESOLUTION_X, metadata, simulate
+from _laws_sim import OMEGA, RESOLUTION_V, RESOLUTION_X
 from _machine import write_results
 
 from bayestribo.inference.pipeline import build_posterior, find_optimum, prepare, reframe
-from bayestribo.io.run import Run
 from bayestribo.signal.increments import increment_noise, increment_weights
 
 CASE, NOISE = "viscous+quadratic", 30.0
@@ -56,21 +55,11 @@ def one_run(
     """z of ζ and c₂ at the MAP with the observed and the noise-free variances (with
     ``exact_noise``, the simulated noise's σ instead of the one measured at rest, which
     sets the noise bias removed from the increments and the variances)."""
-    law, truth, x0, _kind = laws.CASES[CASE]
+    law, truth, _x0, _kind = laws.CASES[CASE]
     entropy = laws._entropy(CASE, NOISE, index, seed)
-    t, xs, vs, _facts = simulate(
-        truth,
-        x0=x0,
-        fs=laws.FS,
-        rest_before=laws.REST_BEFORE_S,
-        rest_after=laws.REST_AFTER_S,
-        duration=laws.DURATION_S,
-        noise=NOISE,
-        seed=entropy,
-    )
+    run, _facts = laws.case_record(CASE, NOISE, entropy)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        run = Run(time=t, displacement=xs, velocity=vs, metadata=metadata())
         noise = None
         if exact_noise:
             measured = prepare(run).noise
@@ -148,17 +137,8 @@ def main(argv: list[str] | None = None) -> int:
         help="the simulated σ instead of the one measured at rest",
     )
     args = parser.parse_args(argv)
-    _law, truth, x0, _kind = laws.CASES[CASE]
-    _t, xc, vc, _f = simulate(
-        truth,
-        x0=x0,
-        fs=laws.FS,
-        rest_before=laws.REST_BEFORE_S,
-        rest_after=laws.REST_AFTER_S,
-        duration=laws.DURATION_S,
-        noise=0.0,
-        seed=0,
-    )
+    clean, _f = laws.case_record(CASE, 0.0, 0)  # the noise-free motion
+    xc, vc = clean.displacement, clean.velocity
     start = time.perf_counter()
     runs = []
     for i in range(args.runs):
