@@ -48,28 +48,35 @@ def _params(zeta, mu_k, mu_s, y0):
 
 
 def test_marginal_equals_numerical_integral_over_the_offset(setup):
-    """Analytic marginalisation of (δ₀, δ₁) against a brute-force 2-D quadrature."""
+    """Analytic marginalisation of (δ₀, δ₁) and the noise level's error against a
+    brute-force 3-D quadrature (a Gaussian sampled at 0.27 widths: the trapezoid rule
+    is then exact to far below the tolerance)."""
     _, _, data = setup
     lik = PiLikelihood(data, offset_sd=2e-3, drift_sd=2e-5)
     args = _params(_col(0.02361), _col(0.02938), _col(0.0353), _col(data.y0))
     analytic = lik.log_likelihood(args)[0]
     model = lik.model_increments(args)[0]
-    delta_hat = lik.offset(args)[0]
-    # The conditional density is Gaussian in δ: integrate on a grid ±10 widths wide.
     x = data.offset_design
+    assert x.shape == (data.increments.size, 3)
+    assert np.all(x[:, 2] > 0)  # the noise bias's standard error, in every increment
     w = 1.0 / data.variance
-    prec = x.T @ (w[:, None] * x) + np.diag([2e-3**-2, 2e-5**-2])
+    prior_sd = np.array([2e-3, 2e-5, 1.0])
+    prec = x.T @ (w[:, None] * x) + np.diag(prior_sd**-2)
+    centre = np.linalg.solve(prec, x.T @ (w * (data.increments - model)))
     width = np.sqrt(np.diag(np.linalg.inv(prec)))
-    g0 = delta_hat[0] + np.linspace(-10, 10, 401) * width[0]
-    g1 = delta_hat[1] + np.linspace(-10, 10, 401) * width[1]
-    d0, d1 = np.meshgrid(g0, g1, indexing="ij")
-    shift = d0[..., None] * x[:, 0] + d1[..., None] * x[:, 1]
-    resid = data.increments - shift - model
+    grids = [c + np.linspace(-8, 8, 61) * s for c, s in zip(centre, width, strict=True)]
+    d = np.stack(np.meshgrid(*grids, indexing="ij"), axis=-1)  # (61, 61, 61, 3)
+    resid = data.increments - d @ x.T - model
     cond = -0.5 * np.sum(resid**2 * w + np.log(2 * np.pi * data.variance), axis=-1)
-    prior = -0.5 * (d0 / 2e-3) ** 2 - 0.5 * (d1 / 2e-5) ** 2 - np.log(2 * np.pi * 2e-3 * 2e-5)
-    cell = (g0[1] - g0[0]) * (g1[1] - g1[0])
+    norm = np.sum(np.log(np.sqrt(2 * np.pi) * prior_sd))
+    prior = -0.5 * np.sum((d / prior_sd) ** 2, axis=-1) - norm
+    cell = np.prod([g[1] - g[0] for g in grids])
     numeric = logsumexp(cond + prior) + np.log(cell)
     assert analytic == pytest.approx(numeric, abs=1e-6)
+    # the conditional mean of (δ₀, δ₁) is the quadrature's
+    weights = np.exp(cond + prior - logsumexp(cond + prior))
+    mean = np.tensordot(weights, d, axes=3)
+    assert lik.offset(args)[0] == pytest.approx(mean[:2], rel=1e-6)
 
 
 def test_equilibrium_error_is_recovered(setup):
@@ -147,7 +154,7 @@ def test_shape_discrepancy_marginal_is_the_gaussian_with_its_covariance(setup):
             [np.polynomial.legendre.Legendre.basis(k)(u) for k in range(SHAPE_TERMS)], axis=1
         )
         x = np.hstack([data.offset_design, data.increments[:, None] * legendre])
-        prior = np.diag([2e-3**2, 2e-5**2] + [sc**2] * SHAPE_TERMS)
+        prior = np.diag([2e-3**2, 2e-5**2, 1.0] + [sc**2] * SHAPE_TERMS)
         cov = np.diag(var) + x @ prior @ x.T
         direct = multivariate_normal(np.zeros(resid.size), cov).logpdf(resid)
         assert analytic == pytest.approx(direct, abs=1e-6 * max(1.0, abs(direct)))

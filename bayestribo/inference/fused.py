@@ -17,8 +17,9 @@ that loops over the walkers:
    corrected Eq. 41, :mod:`bayestribo.model.averaged`), and its increments M_j;
 4. the increment variances V_j (+ s² ∫_j E² with the discrepancy term) and the
    Gaussian log-likelihood with the linear nuisances marginalised analytically: the
-   equilibrium (δ₀, δ₁) and, with the shape discrepancy, its coefficients c_k (a
-   q × q system, q = 2 + the shape terms, solved by Cholesky; see
+   equilibrium (δ₀, δ₁), the noise level's error (a standard normal coefficient)
+   and, with the shape discrepancy, its coefficients c_k (a q × q system, q = 3 +
+   the shape terms, solved by Cholesky; see
    :mod:`bayestribo.inference.likelihood`):
 
 .. math::
@@ -54,10 +55,13 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from bayestribo.inference.likelihood import PiLikelihood
+from bayestribo.inference.likelihood import BASE_NUISANCES, PiLikelihood
 from bayestribo.inference.priors import LogUniform, Normal, PriorSet, Uniform
 from bayestribo.inference.surrogate import SurrogateLikelihood
 from bayestribo.model._kernel import _one
+
+#: The nuisances every likelihood has (a compile-time constant of the kernels).
+_BASE = BASE_NUISANCES
 
 __all__ = ["FusedLogPosterior"]
 
@@ -193,7 +197,7 @@ def _surrogate_pi(row: NDArray, data: NDArray, scalars: NDArray, pi: NDArray) ->
                 threshold += scalars[start + edge * r + i] * basis[i]
             if threshold <= ratio:
                 piece += 1
-    first = 4 + 2 + int(scalars[6]) + piece * r
+    first = 4 + _BASE + int(scalars[6]) + piece * r
     for j in range(m):
         pi[j] = 0.0
     for i in range(r):
@@ -283,13 +287,14 @@ def _precisions(
     """Prior precisions of the q nuisances into ``out``; returns log|P|."""
     out[0] = scalars[2]
     out[1] = scalars[3]
+    out[2] = 1.0  # the noise level's error, standard normal
     log_p = scalars[4]
-    if q > 2:
+    if q > _BASE:
         log_c = _value(row, columns, fixed, 5, 0.0)
         sc = 10.0**log_c
-        for k in range(2, q):
+        for k in range(_BASE, q):
             out[k] = 1.0 / (sc * sc)
-        log_p += 2.0 * (q - 2) * math.log(10.0) * log_c
+        log_p += 2.0 * (q - _BASE) * math.log(10.0) * log_c
     return log_p
 
 
@@ -308,7 +313,7 @@ def _standardized(
     caller uses the reference)."""
     tau = data[0]
     m = tau.size
-    q = 2 + int(scalars[6])
+    q = _BASE + int(scalars[6])
     pi = np.empty(m)
     var = np.empty(m)
     a = np.empty((q, q))
@@ -349,7 +354,7 @@ def _standardized_row(
     var0 = data[2]
     e2 = data[3]
     m = inc.size
-    q = 2 + int(scalars[6])
+    q = _BASE + int(scalars[6])
     design = data[4 : 4 + q]
     s2 = 0.0
     if columns[4] != _ABSENT:
@@ -391,7 +396,7 @@ def _law_standardized(
     """:func:`_standardized` with the model Π of each row given, ``pi`` (n, m); a row
     whose Π is not finite is flagged (left unset) like a singular one."""
     m = data.shape[1]
-    q = 2 + int(scalars[6])
+    q = _BASE + int(scalars[6])
     var = np.empty(m)
     a = np.empty((q, q))
     b = np.empty(q)
@@ -422,12 +427,13 @@ def _log_posterior(
 ) -> int:
     """Log posterior of each row of ``theta`` into ``out`` (see the module notes).
 
-    ``data`` rows: τ_j, D_j, V_j, ∫_j E², then the nuisances' design: ∫_j y, ∫_j τy
-    and the shape columns D_j P_k(u_j) (j < m). ``scalars``: y'0, the end of the
-    model's Π (inf when the record holds the end of motion), the prior precisions of
-    δ₀ and δ₁, their log|P|, the model code, the number of shape terms (and for the
-    quadratic surrogate of Π, whose table rows follow the design in ``data``: its
-    number of coordinates p, their columns, centres and scales). Returns the
+    ``data`` rows: τ_j, D_j, V_j, ∫_j E², then the nuisances' design: ∫_j y, ∫_j τy,
+    the noise bias's standard error and the shape columns D_j P_k(u_j) (j < m).
+    ``scalars``: y'0, the end of the model's Π (inf when the record holds the end of
+    motion), the prior precisions of δ₀ and δ₁, their log|P|, the model code, the
+    number of shape terms (and for the quadratic surrogate of Π, whose table rows
+    follow the design in ``data``: its number of coordinates p, their columns,
+    centres and scales). Returns the
     number of rows whose log posterior is NaN or whose parameters are outside the
     averaged model's domain (NaN in ``out``): the caller then lets the reference
     raise its error.
@@ -435,7 +441,7 @@ def _log_posterior(
     tau = data[0]
     var0 = data[2]
     m = tau.size
-    q = 2 + int(scalars[6])
+    q = _BASE + int(scalars[6])
     design = data[4 : 4 + q]
     pi = np.empty(m)
     var = np.empty(m)
@@ -548,7 +554,7 @@ def _law_log_posterior(
     inc = data[1]
     var0 = data[2]
     m = inc.size
-    q = 2 + int(scalars[6])
+    q = _BASE + int(scalars[6])
     design = data[4 : 4 + q]
     var = np.empty(m)
     a = np.empty((q, q))
@@ -607,7 +613,8 @@ class FusedLogPosterior:
         Shape (6,): the fixed values (where ``columns`` is -1).
     data : ndarray
         Shape (4 + q, m): τ_j, D_j, V_j, ∫_j E², then the q nuisance columns ∫_j y,
-        ∫_j τy (and the shape columns D_j P_k(u_j) with the shape discrepancy).
+        ∫_j τy, the noise bias's standard error (and the shape columns D_j P_k(u_j)
+        with the shape discrepancy).
     scalars : ndarray
         y'0, the end of Π, the prior precisions of δ₀ and δ₁, their log|P|, the model
         code, the number of shape terms.
@@ -677,7 +684,7 @@ class FusedLogPosterior:
                 likelihood.drift_sd**-2,
                 likelihood._log_prior_det(),
                 _EXACT if likelihood.model == "exact" else _AVERAGED,
-                design.shape[1] - 2,
+                design.shape[1] - _BASE,
             ]
         )
         if surrogate is not None:

@@ -26,6 +26,12 @@ with ``r = D - M``, ``W = diag(1/V)``, design ``X`` (∫y, ∫τy per increment)
 log-likelihood (for PSIS-LOO) is the conditional one at the conditional mean
 ``δ̂ = A⁻¹b``.
 
+**Noise-level nuisance.** The noise bias removed from each increment rests on σ²
+measured in the recording, known to a relative √(2/n) or so: a third column of the
+design, the bias's standard error per increment (:attr:`~bayestribo.signal.
+increments.PiData.offset_design`), enters with a standard normal coefficient and is
+marginalised with δ₀ and δ₁ (prior precision 1, so ``log|P|`` is unchanged).
+
 **Model discrepancy** (optional), for what the physics leaves out, in two parts:
 
 * a relative, white error on E of intensity s² per unit τ adds ``s² ∫_j E² dτ`` to the
@@ -67,7 +73,7 @@ from bayestribo.model import averaged_pi
 from bayestribo.model.laws import Law, get_law
 from bayestribo.signal.increments import PiData
 
-__all__ = ["MODELS", "SHAPE_TERMS", "Params", "PiLikelihood", "ShapeDeparture"]
+__all__ = ["BASE_NUISANCES", "MODELS", "SHAPE_TERMS", "Params", "PiLikelihood", "ShapeDeparture"]
 
 #: Parameter values by name: the law's parameters and ``y0``, arrays of shape (n,) or
 #: (n, 1) (a parameter of the law that is missing takes its null value,
@@ -79,6 +85,9 @@ ModelName = Literal["exact", "averaged"]
 _LOG_2PI = math.log(2.0 * math.pi)
 #: Legendre terms (degrees 0 .. SHAPE_TERMS - 1) of the shape discrepancy.
 SHAPE_TERMS = 4
+#: Linear nuisances every likelihood has: the equilibrium's offset δ₀ and drift δ₁,
+#: and the noise level's error (standard normal).
+BASE_NUISANCES = 3
 
 
 @dataclass(frozen=True)
@@ -201,7 +210,8 @@ class PiLikelihood:
         return self.data.increments[:, None] * self.shape_basis
 
     def design(self, shape: bool = False) -> NDArray:
-        """Design of the linear nuisances: ∫y, ∫τy (and the shape columns), (m, q)."""
+        """Design of the linear nuisances: ∫y, ∫τy, the noise bias's standard error
+        (and the shape columns), (m, q)."""
         if not shape:
             return self.data.offset_design
         return np.hstack([self.data.offset_design, self.shape_design])
@@ -218,8 +228,9 @@ class PiLikelihood:
     ) -> tuple[NDArray, NDArray, NDArray]:
         """Conditional mean of the linear nuisances, b·A⁻¹b and log|A| per row.
 
-        The nuisances are the equilibrium offset and drift (δ₀, δ₁) and, with a shape
-        scale ``shape`` (s_c, shape (n, 1)), the shape coefficients c_k; A = XᵀWX +
+        The nuisances are the equilibrium offset and drift (δ₀, δ₁), the noise level's
+        error and, with a shape scale ``shape`` (s_c, shape (n, 1)), the shape
+        coefficients c_k; A = XᵀWX +
         P⁻¹ with X = :meth:`design`. Returns δ̂ (n, q), b·δ̂ (n,), log|A| (n,).
         """
         x = self.design(shape is not None)  # (m, q)
@@ -233,8 +244,11 @@ class PiLikelihood:
         precision = np.empty((n, q))
         precision[:, 0] = self.offset_sd**-2
         precision[:, 1] = self.drift_sd**-2
+        precision[:, 2] = 1.0
         if shape is not None:
-            precision[:, 2:] = np.reshape(np.asarray(shape, dtype=float), (-1, 1)) ** -2
+            precision[:, BASE_NUISANCES:] = (
+                np.reshape(np.asarray(shape, dtype=float), (-1, 1)) ** -2
+            )
         a[:, np.arange(q), np.arange(q)] += precision
         b = (resid * w) @ x
         delta = np.linalg.solve(a, b[..., None])[..., 0]
@@ -362,13 +376,15 @@ class PiLikelihood:
         a = (x.T * w) @ x
         a[0, 0] += self.offset_sd**-2
         a[1, 1] += self.drift_sd**-2
+        a[2, 2] += 1.0
         b = (resid * w) @ x
         try:
             cov = np.linalg.inv(a)
         except np.linalg.LinAlgError:
             return ShapeDeparture.undetermined(resid.size)
         coef = cov @ b
-        c, cov_c = coef[2:], cov[2:, 2:]
+        base = BASE_NUISANCES
+        c, cov_c = coef[base:], cov[base:, base:]
         try:
             chi2 = float(c @ np.linalg.solve(cov_c, c))
         except np.linalg.LinAlgError:
