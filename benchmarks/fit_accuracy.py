@@ -70,10 +70,11 @@ def fisher_bound(lik: Any, mean: dict[str, float], sd: dict[str, float]) -> dict
         down[i] -= h
         cols.append((increments(up) - increments(down)) / (2 * h))
     x = lik.data.offset_design
-    jac = np.column_stack([*cols, -x[:, 0], -x[:, 1]])
+    jac = np.column_stack([*cols, -x[:, 0], -x[:, 1], x[:, 2]])
     info = jac.T @ (jac / lik.variance()[:, None])
     info[3, 3] += lik.offset_sd**-2
     info[4, 4] += lik.drift_sd**-2
+    info[5, 5] += 1.0  # the noise level's error, standard normal
     cov = np.linalg.inv(info)
     return {name: float(np.sqrt(cov[i, i])) for i, name in enumerate(THETA)}
 

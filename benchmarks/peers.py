@@ -100,7 +100,7 @@ class Problem:
     grid: NDArray  # τ_0 .. τ_m
     increments: NDArray  # D_j, (m,)
     variance: NDArray  # V_j, (m,)
-    design: NDArray  # ∫y, ∫τy per increment, (m, 2)
+    design: NDArray  # ∫y, ∫τy, the noise bias's standard error per increment, (m, 3)
     a_inv: NDArray  # (XᵀWX + P⁻¹)⁻¹, (2, 2)
     loglik_const: float
     ended: bool
@@ -125,6 +125,7 @@ def problem() -> Problem:
     a = (x.T / var) @ x
     a[0, 0] += lik.offset_sd**-2
     a[1, 1] += lik.drift_sd**-2
+    a[2, 2] += 1.0  # the noise level's error, standard normal
     const = -0.5 * (
         np.sum(np.log(2.0 * math.pi * var))
         + np.linalg.slogdet(a)[1]
@@ -258,19 +259,21 @@ def rk4_increments(zeta, mu_k, mu_s, y0, yp0, grid, ended, h, cap):
 
 @numba.njit(cache=False)
 def _gaussian_loglik(model, data, var, x, a_inv, const):
-    """The package's likelihood: Gaussian increments, the 2-d nuisance integrated out."""
+    """The package's likelihood: Gaussian increments, the linear nuisances (equilibrium
+    offset and drift, noise level) integrated out."""
+    q = x.shape[1]
     chi2 = 0.0
-    b0 = 0.0
-    b1 = 0.0
+    b = np.zeros(q)
     for j in range(model.size):
         r = data[j] - model[j]
         wr = r / var[j]
         chi2 += r * wr
-        b0 += x[j, 0] * wr
-        b1 += x[j, 1] * wr
-    explained = b0 * (a_inv[0, 0] * b0 + a_inv[0, 1] * b1) + b1 * (
-        a_inv[1, 0] * b0 + a_inv[1, 1] * b1
-    )
+        for k in range(q):
+            b[k] += x[j, k] * wr
+    explained = 0.0
+    for k in range(q):
+        for i in range(q):
+            explained += b[k] * a_inv[k, i] * b[i]
     return const - 0.5 * (chi2 - explained)
 
 
@@ -484,7 +487,7 @@ def _user_start(
         logp.inside += 1
         z, mu, y0, d0, d1 = q
         model = logp.increments(z, mu, mu * ratio, y0)
-        r = (pb.increments - model - pb.design @ np.array([d0, d1])) / sd
+        r = (pb.increments - model - pb.design[:, :2] @ np.array([d0, d1])) / sd
         extra = [d0 / lik.offset_sd, d1 / lik.drift_sd, (y0 - pb.y0_mu) / pb.y0_sigma]
         return np.concatenate([r, extra])
 

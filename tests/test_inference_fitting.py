@@ -129,8 +129,8 @@ def _fisher_sd(data, theta, independent_pi=False):
             for i in range(3)
         ]
     )
-    jac = np.column_stack([jac, data.offset_design])  # the marginalised offset nuisance
-    prior = np.diag([0, 0, 0, lik.offset_sd**-2, lik.drift_sd**-2])
+    jac = np.column_stack([jac, data.offset_design])  # the marginalised linear nuisances
+    prior = np.diag([0, 0, 0, lik.offset_sd**-2, lik.drift_sd**-2, 1.0])
     if independent_pi:
         jac = np.cumsum(jac[::-1], axis=0)[::-1]
         fisher = jac.T @ (jac / data.pi_variance[:, None]) + prior

@@ -12,7 +12,7 @@ from _law_recording import law_recording
 from scipy.integrate import solve_ivp
 
 from bayestribo.inference.pipeline import build_posterior, find_optimum, prepare
-from bayestribo.inference.reweight import law_motion, reweighted
+from bayestribo.inference.reweight import law_motion, reweighted_posterior
 from bayestribo.inference.start import maximum_from
 from bayestribo.model.laws import get_law
 from bayestribo.signal.increments import increment_noise, increment_weights, noise_bias_sd
@@ -133,10 +133,11 @@ def test_second_pass_variances_make_chi2_per_increment_one():
             prepared = prepare(_record(seed))
             posterior = build_posterior(prepared.data, law="viscous", friction=False)
             theta = find_optimum(posterior, prepared.decay)[0]
-            again = reweighted(prepared, posterior, theta)
-            np.testing.assert_array_equal(again.data.increments, prepared.data.increments)
-            posterior2 = build_posterior(again.data, law="viscous", friction=False)
-            theta2 = maximum_from(posterior2, theta, again.decay)[0]
+            posterior2 = reweighted_posterior(posterior, prepared.decay, theta)
+            data2 = posterior2.likelihood.data
+            np.testing.assert_array_equal(data2.increments, prepared.data.increments)
+            assert posterior2.names == posterior.names
+            theta2 = maximum_from(posterior2, theta, prepared.decay)[0]
             for total, (chi2, m) in (
                 (first, _chi2(posterior, theta)),
                 (second, _chi2(posterior2, theta2)),

@@ -103,9 +103,7 @@ from bayestribo.inference.pipeline import (
     sample,
 )
 from bayestribo.inference.posterior import Posterior
-from bayestribo.inference.reweight import reweighted
 from bayestribo.inference.sampling import SamplerSettings
-from bayestribo.inference.start import maximum_from
 from bayestribo.io.options import ReadOptions
 from bayestribo.io.run import Run
 from bayestribo.model.laws import Law, get_law
@@ -318,7 +316,7 @@ def _fit_law(
         warnings.simplefilter("ignore", FutureWarning)
         idata = az.from_dict(
             posterior={name: chains[..., i] for i, name in enumerate(posterior.names)},
-            log_likelihood={"pi": pointwise_log_likelihood(posterior, chains)},
+            log_likelihood={"pi": pointwise_log_likelihood(sampled.posterior, chains)},
         )
     return sampled, idata
 
@@ -522,11 +520,6 @@ def compare_prepared(
             optimum = find_optimum(posterior, prepared.decay, also_start_at=nested)
             reduced = _reduction(law, posterior, optimum[0], runs, optima)
             if reduced is None:
-                # the second pass: the variances from the law's motion at its optimum
-                # (inference/reweight.py)
-                data = reweighted(prepared, posterior, optimum[0]).data
-                posterior = _posterior(law, data, model, discrepancy)
-                optimum = maximum_from(posterior, optimum[0], prepared.decay)
                 sampled, idatas[law] = _fit_law(law, prepared, settings, rng, posterior, optimum)
         except BayestriboError as exc:
             # a law that cannot be fitted here is reported and left out of the

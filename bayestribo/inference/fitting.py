@@ -21,7 +21,6 @@ from bayestribo.inference.likelihood import MODELS
 from bayestribo.inference.pipeline import (
     PreparedRun,
     build_posterior,
-    find_optimum,
     law_frequency,
     prepare,
     reframe,
@@ -30,9 +29,8 @@ from bayestribo.inference.pipeline import (
 )
 from bayestribo.inference.priors import Prior
 from bayestribo.inference.result import FitResult, plain_data
-from bayestribo.inference.reweight import reweighted
 from bayestribo.inference.sampling import SamplerSettings
-from bayestribo.inference.start import maximum_from
+from bayestribo.inference.start import maximum_a_posteriori, maximum_from
 from bayestribo.io.options import ReadOptions
 from bayestribo.io.run import Run
 from bayestribo.model.laws import Law, get_law
@@ -174,11 +172,6 @@ def fit(
             # the verdict again, in the frame of its own turning times
             framed = _in_law_frame(prepared, sampled.posterior, sampled.theta_map)
             if framed is not None:
-                framed = reweighted(
-                    framed,
-                    _posterior_like(sampled.posterior, framed, model, discrepancy),
-                    sampled.theta_map,
-                )
                 prepared = framed
                 posterior = _posterior_like(sampled.posterior, prepared, model, discrepancy)
                 sampled = sample(
@@ -266,19 +259,16 @@ def sample_law(
         )
 
     posterior = posterior_on(prepared)
-    optimum = find_optimum(posterior, prepared.decay)
+    optimum = None
     if not posterior.law.closed_form:
         # the optimum in the record's frame gives the law's frame; the optimiser
         # then starts from it in that frame (one search from the first guesses)
+        optimum = maximum_a_posteriori(posterior, prepared.decay)
         framed = _in_law_frame(prepared, posterior, optimum[0])
         if framed is not None:
             prepared = framed
             posterior = posterior_on(prepared)
-    # the second pass: the variances from the law's motion at the optimum
-    # (inference/reweight.py), and the optimum of that posterior
-    prepared = reweighted(prepared, posterior, optimum[0])
-    posterior = posterior_on(prepared)
-    optimum = maximum_from(posterior, optimum[0], prepared.decay)
+            optimum = maximum_from(posterior, optimum[0], prepared.decay)
     sampled = sample(
         posterior,
         prepared.decay,

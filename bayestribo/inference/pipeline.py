@@ -6,7 +6,9 @@
    (:func:`bayestribo.signal.pi_data`);
 2. :func:`build_posterior`: default priors (or the caller's) × the Π likelihood, with
    any parameters fixed at a value (``fixed={"zeta": 0.0}`` is the Coulomb-only law);
-3. :func:`sample`: maximum a posteriori, starting walkers, and the sampler
+3. :func:`sample`: maximum a posteriori, the increments' variances again from the
+   law's motion there and the optimum of that posterior (the second pass,
+   :mod:`bayestribo.inference.reweight`), starting walkers, and the sampler
    (:func:`bayestribo.inference.sampling.run_ensembles`) run to convergence;
 4. :func:`summarise`: derived quantities, the misfit check, diagnostics and the
    :class:`~bayestribo.inference.result.FitResult`.
@@ -53,9 +55,10 @@ from bayestribo.inference.modes import mode_check, run_or_failure
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.priors import Prior, PriorSet, default_priors, piled_on_bounds
 from bayestribo.inference.result import FitResult, plain_data
+from bayestribo.inference.reweight import reweighted_posterior
 from bayestribo.inference.sampling import SamplerRun, SamplerSettings, run_ensembles
 from bayestribo.inference.sensitivity import prior_sensitivity
-from bayestribo.inference.start import initial_walkers, maximum_a_posteriori, refine
+from bayestribo.inference.start import initial_walkers, maximum_a_posteriori, maximum_from, refine
 from bayestribo.inference.surrogate import (
     ATTEMPTS,
     NODE_SCALE,
@@ -562,6 +565,7 @@ def sample(
     progress: bool = False,
     optimum: tuple[NDArray, NDArray, tuple[float, float] | None] | None = None,
     surrogate: bool = True,
+    reweight: bool = True,
 ) -> Sampled:
     """Step 3: maximum a posteriori, starting walkers, and sampling to convergence.
 
@@ -584,20 +588,32 @@ def sample(
         The maximum a posteriori, its Laplace covariance and the plausible μ_s/μ_k
         interval when they are known already (:func:`bayestribo.inference.start.
         maximum_from`, a nonlinear law's fit in the frame of its own turning times):
-        the optimiser does not run again.
+        the optimiser does not run from the first guesses again.
     surrogate : bool
         For a law without a closed form, sample a quadratic surrogate of its Π and keep
         it where the exact posterior confirms it (:mod:`bayestribo.inference.surrogate`;
         the default); False: sample the exact posterior throughout.
+    reweight : bool
+        The second pass (the default): the increments' variances computed again from
+        the law's motion at the optimum, and the optimum of that posterior, which is
+        sampled (:mod:`bayestribo.inference.reweight`; the observed channels' variances
+        are too large below the noise, and share its sign). False: sample
+        ``posterior`` as it is.
 
     Returns
     -------
     Sampled
+        Its ``posterior`` is the one sampled (the second pass's).
     """
     rng = np.random.default_rng(seed)
     if optimum is None:
         optimum = find_optimum(posterior, decay)
     theta, cov, ratio_range = _better_optimum(posterior, optimum, also_start_at)
+    if reweight:
+        second = reweighted_posterior(posterior, decay, theta)
+        if second is not None:
+            posterior = second
+            theta, cov, ratio_range = maximum_from(posterior, theta, decay)
     checked: SurrogateCheck | None = None
     target: Posterior | None = None
     run: SamplerRun | None = None

@@ -5,7 +5,8 @@ The noise variance of an increment of Π is a sum over its samples of
 with y and y' the channels *without* their noise. A first pass takes the observed
 channels; the fit then finds the optimum, computes the variances again from the law's
 motion there (:func:`law_motion`) and finds the optimum of that posterior, from which
-it samples (:func:`reweighted`; iteratively reweighted least squares stopped after
+it samples (:func:`reweighted_posterior`, run by :func:`bayestribo.inference.sample`;
+iteratively reweighted least squares stopped after
 one step: the optimum moves by a fraction of a posterior sd, and the variances by a
 fraction of that).
 
@@ -36,14 +37,15 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from bayestribo.inference.likelihood import PiLikelihood
 from bayestribo.model.laws import Law
 from bayestribo.signal.increments import pi_data
 
 if TYPE_CHECKING:
-    from bayestribo.inference.pipeline import PreparedRun
     from bayestribo.inference.posterior import Posterior
+    from bayestribo.signal.decay import EnergyDecay
 
-__all__ = ["law_motion", "reweighted"]
+__all__ = ["law_motion", "reweighted_posterior"]
 
 
 def law_motion(
@@ -100,46 +102,48 @@ def law_motion(
     return y, yp
 
 
-def reweighted(prepared: PreparedRun, posterior: Posterior, theta: NDArray) -> PreparedRun:
-    """The run's increments with their variances from the law's motion at ``theta``.
+def reweighted_posterior(
+    posterior: Posterior, decay: EnergyDecay, theta: NDArray
+) -> Posterior | None:
+    """The same posterior with its increments' variances from the law's motion at
+    ``theta``.
 
     Parameters
     ----------
-    prepared : PreparedRun
-        The run (:func:`bayestribo.inference.prepare`), in the frame ``posterior`` was
-        built on or one close to it.
     posterior : Posterior
-        A posterior of the law (its law, fixed values and reference amplitude).
+        A posterior whose data were made by :func:`bayestribo.signal.pi_data` from
+        ``decay`` (their :attr:`~bayestribo.signal.increments.PiData.preparation`).
+    decay : EnergyDecay
+        The run's energy decay.
     theta : ndarray
         The optimum, in sampling coordinates.
 
     Returns
     -------
-    PreparedRun
-        The same decay, noise model and grid; ``data`` with the second pass's
-        variances (the observed increments unchanged). The run as it was when the
-        law cannot move from there (its Π is not finite).
+    Posterior or None
+        Same priors, fixed values, law and observed increments; the variances (and
+        the noise level's column) of the second pass. None when the data do not say
+        how they were made, or the law cannot move from ``theta`` (its motion is not
+        finite).
     """
+    likelihood = posterior.likelihood
+    recipe = likelihood.data.preparation
+    if recipe is None or type(likelihood) is not PiLikelihood:
+        return None
     params = posterior.physical(np.asarray(theta, dtype=float)[None])["params"]
     values = {k: float(v[0]) for k, v in params.items() if k != "y0"}
-    decay = prepared.decay
     y, yp = law_motion(
         posterior.law,
         values,
         float(params["y0"][0]),
-        float(prepared.data.yp0),
+        float(likelihood.data.yp0),
         decay.tau,
-        reference=posterior.likelihood.reference_amplitude,
+        reference=likelihood.reference_amplitude,
     )
     if not (np.all(np.isfinite(y)) and np.all(np.isfinite(yp))):
-        return prepared
-    from bayestribo.inference.pipeline import _data_seed
-
-    data = pi_data(
-        decay,
-        prepared.noise,
-        grid_points=prepared.grid_points,
-        seed=_data_seed(decay),
-        motion=(y, yp),
+        return None
+    data = dataclasses.replace(
+        pi_data(decay, motion=(y, yp), **recipe),
+        law_increments=likelihood.model_increments(params)[0],
     )
-    return dataclasses.replace(prepared, data=data)
+    return dataclasses.replace(posterior, likelihood=dataclasses.replace(likelihood, data=data))

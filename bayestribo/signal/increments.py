@@ -79,7 +79,9 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.signal
@@ -220,6 +222,15 @@ class PiData:
         ``variance`` on both sides (the likelihood takes the increments as
         independent; this gives any run of increments, from which ζ and μ_k are
         measured, at least its variance).
+    preparation : mapping or None
+        The keywords of :func:`pi_data` that made it (``noise``, ``grid_points``,
+        ``n_replicates``, ``seed``, ``spectral``): the second pass computes the
+        variances again with them from the law's motion
+        (:mod:`bayestribo.inference.reweight`).
+    law_increments : ndarray or None
+        The law's increments where the second pass computed the variances, shape
+        (m,): without the noise, they scale the shape discrepancy's columns
+        (:mod:`bayestribo.inference.likelihood`). None on a first pass.
     """
 
     tau_grid: NDArray
@@ -233,6 +244,8 @@ class PiData:
     offset_design: NDArray
     spectral: bool = False
     neighbour_covariance: NDArray | None = None
+    preparation: Mapping[str, Any] | None = None
+    law_increments: NDArray | None = None
 
     @property
     def tau_end(self) -> float:
@@ -805,6 +818,13 @@ def pi_data(
         noise_bias=bias,
         spectral=bool(options),
         neighbour_covariance=neighbours,
+        preparation={
+            "noise": noise,
+            "grid_points": int(grid_points),
+            "n_replicates": n_replicates,
+            "seed": seed,
+            "spectral": spectral,
+        },
         offset_design=np.column_stack(
             [
                 integrate_increments(decay.y, edges, weights),
