@@ -290,7 +290,11 @@ def test_a_posterior_piled_on_a_prior_bound_is_no_measurement():
     # μ_k = 0.0294 cannot fit under a bound of 0.02: the posterior piles on it.
     with pytest.warns(PriorBoundWarning, match=r"mu_k piles on the upper bound"):
         result = fit(run, seed=1, priors={"mu_k": Uniform(0.0, 0.02)}, max_steps=3000)
-    assert [b["parameter"] for b in result.at_prior_bound] == ["mu_k"]
+    piled = {b["parameter"]: b for b in result.at_prior_bound}
+    assert piled["mu_k"]["bound"] == 0.02
+    # μ_s/μ_k may follow μ_k to its bound (a friction held below the decay's stops
+    # the motion later, unless it sticks sooner); nothing else does
+    assert set(piled) <= {"mu_k", "mu_s_ratio"}
     assert not result.usable
     assert "NOT A MEASUREMENT: mu_k" in result.to_text()
     # The same run under the default priors is a measurement.

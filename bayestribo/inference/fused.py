@@ -380,6 +380,11 @@ def _standardized_row(
         for k in range(q):
             fitted += x[k] * design[k, j]
         out[j] = (out[j] - fitted) / math.sqrt(var[j])
+    if out.size >= m + q:
+        # the nuisances' conditional means over their prior sd: with these the sum
+        # of squares is the log-likelihood's χ² part, rᵀWr - bᵀA⁻¹b
+        for k in range(q):
+            out[m + k] = x[k] * math.sqrt(prec[k])
     return True
 
 
@@ -740,13 +745,17 @@ class FusedLogPosterior:
         )
         return out, flagged
 
-    def standardized_residuals(self, theta: NDArray) -> tuple[NDArray, int]:
+    def standardized_residuals(
+        self, theta: NDArray, nuisances: bool = False
+    ) -> tuple[NDArray, int]:
         """Conditional residuals over √V_j of each row of ``theta`` (n, d), shape
-        (n, m) (:meth:`PiLikelihood.standardized_residuals`), and how many rows are
-        outside the averaged model's domain (the caller evaluates those with the
-        reference)."""
+        (n, m) (:meth:`PiLikelihood.standardized_residuals`; with ``nuisances`` the q
+        nuisances' conditional means over their prior sd follow, (n, m + q)), and how
+        many rows are outside the averaged model's domain (the caller evaluates those
+        with the reference)."""
         theta = np.ascontiguousarray(theta, dtype=np.float64)
-        out = np.empty((theta.shape[0], self.data.shape[1]))
+        extra = _BASE + int(self.scalars[6]) if nuisances else 0
+        out = np.empty((theta.shape[0], self.data.shape[1] + extra))
         if self.law is not None:
             pi = self.law.pi(theta)
             flagged = _law_standardized(

@@ -356,10 +356,29 @@ class PiLikelihood:
         params: Params,
         discrepancy: NDArray | None = None,
         shape: NDArray | None = None,
+        nuisances: bool = False,
     ) -> NDArray:
-        """Conditional residuals over √V_j: standard normals if the model is right."""
-        resid = self.conditional_residuals(params, discrepancy, shape)
-        return resid / np.sqrt(self.variance(discrepancy))
+        """Conditional residuals over √V_j: standard normals if the model is right,
+        shape (n, m).
+
+        With ``nuisances`` the q linear nuisances' conditional means over their prior
+        sd follow, shape (n, m + q): the sum of squares of a row is then the χ²
+        part of the log-likelihood, ``rᵀWr - bᵀA⁻¹b`` (what a least squares must
+        minimise where a nuisance is pulled far into its prior's tail).
+        """
+        resid = self._residuals(params)
+        var = self.variance(discrepancy)
+        delta = self._solve(resid, var, shape)[0]
+        out = (resid - delta @ self.design(shape is not None).T) / np.sqrt(var)
+        if not nuisances:
+            return out
+        sd = np.empty(delta.shape)
+        sd[:, 0] = self.offset_sd
+        sd[:, 1] = self.drift_sd
+        sd[:, 2] = 1.0
+        if shape is not None:
+            sd[:, BASE_NUISANCES:] = np.reshape(np.asarray(shape, dtype=float), (-1, 1))
+        return np.hstack([out, delta / sd])
 
     # -- how far the decay departs from the law -----------------------------------
     def shape_departure(self, params: Mapping[str, float]) -> ShapeDeparture:

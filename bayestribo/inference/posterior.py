@@ -180,8 +180,10 @@ class Posterior:
         """Conditional log-likelihood of each increment for each row, shape (n, m)."""
         return self.likelihood.pointwise(*self._likelihood_args(theta))
 
-    def standardized_residuals(self, theta: NDArray) -> NDArray:
-        """Standardized conditional residuals of each increment, shape (n, m).
+    def standardized_residuals(self, theta: NDArray, nuisances: bool = False) -> NDArray:
+        """Standardized conditional residuals of each increment, shape (n, m); with
+        ``nuisances`` the linear nuisances' conditional means over their prior sd
+        follow, (n, m + q) (:meth:`PiLikelihood.standardized_residuals`).
 
         Compiled where :attr:`uses_compiled` (the optimiser of the starting point
         calls it hundreds of times), else
@@ -190,10 +192,12 @@ class Posterior:
         fused: FusedLogPosterior | None = self._fused
         theta = np.asarray(theta, dtype=float)
         if fused is not None and theta.ndim == 2 and theta.shape[1] == len(self.names):
-            out, flagged = fused.standardized_residuals(theta)
+            out, flagged = fused.standardized_residuals(theta, nuisances)
             if not flagged:
                 return out
-        return self.likelihood.standardized_residuals(*self._likelihood_args(theta))
+        return self.likelihood.standardized_residuals(
+            *self._likelihood_args(theta), nuisances=nuisances
+        )
 
     def __call__(self, theta: NDArray) -> NDArray:
         """Log posterior density (up to a constant) of each row, shape (n,).

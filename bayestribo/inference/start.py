@@ -365,7 +365,9 @@ def refine(
     held = ("mu_s_ratio", "log10_discrepancy", "log10_shape")
     free = [i for i, n in enumerate(names) if n not in held]
     scale = np.array([max(abs(theta[i]), 1e-3) for i in free]) * 1e-3
-    size = posterior.likelihood.data.increments.size
+    # the increments' residuals and the linear nuisances' (conditional mean over prior
+    # sd: the likelihood's χ² is their sum of squares, however far a misfit pulls one)
+    size = posterior.standardized_residuals(theta[None], nuisances=True).shape[1]
     # Gaussian priors enter the least squares as residuals (θ - μ)/σ: a MAP, not an MLE.
     gaussian = [
         (j, posterior.priors[names[i]])
@@ -398,7 +400,7 @@ def refine(
         # closed form), not once for the density and again for the residuals.
         ok = np.isfinite(posterior.priors.logpdf(th))
         if np.any(ok):
-            resid = posterior.standardized_residuals(th[ok])
+            resid = posterior.standardized_residuals(th[ok], nuisances=True)
             ok[ok] = np.all(np.isfinite(resid), axis=1)
             out[ok, :size] = resid[np.all(np.isfinite(resid), axis=1)]
             for k, (j, p) in enumerate(gaussian):
