@@ -6,16 +6,18 @@ with y and y' the channels *without* their noise. A first pass takes the observe
 channels; the fit then finds the optimum, computes the variances again from the law's
 motion there (:func:`law_motion`) and finds the optimum of that posterior, from which
 it samples (:func:`reweighted_posterior`, run by :func:`bayestribo.inference.sample`;
-iteratively reweighted least squares stopped after
-one step: the optimum moves by a fraction of a posterior sd, and the variances by a
-fraction of that).
+iteratively reweighted least squares stopped after one step: the optimum moves by a
+fraction of a posterior sd, and the variances by a fraction of that).
 
 Why: below the noise the observed y² has the mean y² + σ_y², so the tail's variances
 were 3 times too large at 30 times the vibrometer's resolution, and each increment's
 variance shared its noise, which leaned the fit to low energies at small amplitude.
 On 40 records of ``viscous+quadratic`` at 30 times the resolution
 (``benchmarks/noise_weights.py``) ζ's mean z was +0.52 ± 0.17 with the observed
-channels, +0.18 ± 0.19 with the noise-free ones.
+channels, +0.18 ± 0.19 with the noise-free ones. With this second pass (and the noise
+level's error marginalised, :func:`bayestribo.signal.increments.noise_bias_sd`) the
+package's own fits of those records give ζ's mean z -0.11 ± 0.15, sd(z) 0.97
+(``benchmarks/results/laws_calibration_30x_vq_reweight.json``).
 
 The motion is rebuilt from the law's turning points (its compiled integrator, every
 law alike): between turning points τ_n, τ_{n+1} at Y_n, Y_{n+1}, a half cosine
