@@ -115,6 +115,22 @@ def _assert_agree(post: Posterior, rows: np.ndarray) -> None:
     ref_r = post.likelihood.standardized_residuals(*post._likelihood_args(inside))
     scale = np.maximum(1.0, np.max(np.abs(ref_r), axis=1, keepdims=True))
     assert np.max(np.abs(fast_r - ref_r) / scale) <= RTOL
+    # With the nuisances' rows (conditional mean over prior sd) the sum of squares is
+    # the log-likelihood's χ² part, rᵀWr - bᵀA⁻¹b, which the least squares minimise.
+    fast_n = post.standardized_residuals(inside, nuisances=True)
+    ref_n = post.likelihood.standardized_residuals(*post._likelihood_args(inside), nuisances=True)
+    assert fast_n.shape == ref_n.shape and fast_n.shape[1] > fast_r.shape[1]
+    np.testing.assert_array_equal(fast_n[:, : fast_r.shape[1]], fast_r)
+    scale_n = np.maximum(1.0, np.max(np.abs(ref_n), axis=1, keepdims=True))
+    assert np.max(np.abs(fast_n - ref_n) / scale_n) <= RTOL
+    lik = post.likelihood
+    params, disc, shape = post._likelihood_args(inside)
+    resid = lik.data.increments - lik.model_increments(params)
+    var = lik.variance(disc)
+    _, explained, _ = lik._solve(resid, var, shape)
+    chi2 = np.sum(resid * resid / var, axis=-1) - explained
+    total = np.sum(resid * resid / var, axis=-1)
+    np.testing.assert_allclose(np.sum(ref_n**2, axis=1), chi2, rtol=0, atol=1e-9 * total.max())
 
 
 VARIANTS = {

@@ -181,3 +181,27 @@ def test_noise_bias_sd_is_that_of_a_variance_measured_on_the_rest():
     assert noise_bias_sd(decay, noise) == pytest.approx(math.sqrt(2.0 / n), rel=0.02)
     col = prepared.data.offset_design[:, 2]
     np.testing.assert_allclose(col, prepared.data.noise_bias * noise_bias_sd(decay, noise))
+
+
+def test_noise_bias_sd_of_a_nominal_level_spans_what_was_measured():
+    """A nominal resolution used above the noise measured at rest: the bias removed
+    could be the measured noise's as well, so its standard error is at least their
+    difference (here the nominal σ is twice the measured: 3/4 of its σ²)."""
+    import dataclasses
+
+    prepared = prepare(_record(0))
+    decay, noise = prepared.decay, prepared.noise
+    measured = noise.measured_displacement
+    nominal = dataclasses.replace(
+        noise,
+        displacement=2.0 * measured,
+        nominal_displacement=2.0 * measured,
+        source_displacement="nominal",
+    )
+    sc = decay.scaling
+    sy2 = (2.0 * measured / sc.length_scale) ** 2
+    syp2 = (noise.velocity / (sc.length_scale * sc.omega)) ** 2
+    rel_v = math.sqrt(2.0 / decay.noise.n_samples)
+    expected = math.hypot(0.75 * sy2, rel_v * syp2) / (sy2 + syp2)
+    assert noise_bias_sd(decay, nominal) == pytest.approx(expected, rel=1e-12)
+    assert noise_bias_sd(decay, nominal) > 0.7
