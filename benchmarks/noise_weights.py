@@ -21,6 +21,12 @@ the simulator (the neighbour covariance kept). z = (MAP - truth) / sd.
 0.1 s rest (σ² known to ±6.7 %): the noise bias ½σ² removed from every sample is then
 exact too.
 
+This measured why the fit needed a second pass: it now computes the variances from
+the law's motion at its first optimum and marginalises σ²'s error
+(:mod:`bayestribo.inference.reweight`; ``laws_calibration_30x_vq_reweight.json``
+holds the package's fits of the same records after it). The "observed" variances
+here are the first pass's.
+
 Run: ``python benchmarks/noise_weights.py [--runs 40] [--exact-noise --output
 noise_weights_30x_exact_sigma]``; writes ``benchmarks/results/noise_weights_30x.json``.
 """
