@@ -114,12 +114,12 @@ def _instrument(meter: _Meter) -> None:
     Law.pi_grid = meter.timed("pi", Law.pi_grid)
 
     def counted(func: Any) -> Any:
-        def wrapper(self: Any, theta: Any) -> Any:
+        def wrapper(self: Any, theta: Any, *args: Any, **kwargs: Any) -> Any:
             rows = np.atleast_2d(np.asarray(theta, dtype=float))
             ok = int(np.sum(np.isfinite(self.priors.logpdf(rows))))
             begin = time.perf_counter()
             try:
-                return func(self, theta)
+                return func(self, theta, *args, **kwargs)
             finally:
                 meter.rows += ok
                 meter.eval_seconds += time.perf_counter() - begin
