@@ -911,9 +911,11 @@ def _pool_files(names: list[str], output: Path) -> int:
             },
             "runs": len(records),
             "pooled": pooled_all,
+            "calibration": calibration(records, CASES),
         },
     )
     print(json.dumps(pooled_all, indent=1))
+    print_calibration(calibration(records, CASES))
     print(f"wrote {output}")
     return 0
 
