@@ -252,19 +252,25 @@ class PiLikelihood:
             a = np.broadcast_to((x.T * w) @ x, (n, q, q)).copy()
         else:
             a = np.einsum("nj,jk,jl->nkl", w, x, x)
-        precision = np.empty((n, q))
-        precision[:, 0] = self.offset_sd**-2
-        precision[:, 1] = self.drift_sd**-2
-        precision[:, 2] = 1.0
-        if shape is not None:
-            precision[:, BASE_NUISANCES:] = (
-                np.reshape(np.asarray(shape, dtype=float), (-1, 1)) ** -2
-            )
+        precision = self._prior_sd(n, shape) ** -2
         a[:, np.arange(q), np.arange(q)] += precision
         b = (resid * w) @ x
         delta = np.linalg.solve(a, b[..., None])[..., 0]
         logdet = np.linalg.slogdet(a)[1]
         return delta, np.sum(b * delta, axis=-1), logdet
+
+    def _prior_sd(self, n: int, shape: NDArray | None = None) -> NDArray:
+        """Prior standard deviations of the q linear nuisances for n rows, (n, q):
+        δ₀, δ₁, the noise level's error (standard normal) and the shape coefficients
+        (s_c of each row)."""
+        q = BASE_NUISANCES + (0 if shape is None else SHAPE_TERMS)
+        sd = np.empty((n, q))
+        sd[:, 0] = self.offset_sd
+        sd[:, 1] = self.drift_sd
+        sd[:, 2] = 1.0
+        if shape is not None:
+            sd[:, BASE_NUISANCES:] = np.reshape(np.asarray(shape, dtype=float), (-1, 1))
+        return sd
 
     def _log_prior_det(self, shape: NDArray | None = None) -> NDArray | float:
         """log|P| of the nuisances' prior covariance (per row with a shape scale)."""
@@ -372,13 +378,7 @@ class PiLikelihood:
         out = (resid - delta @ self.design(shape is not None).T) / np.sqrt(var)
         if not nuisances:
             return out
-        sd = np.empty(delta.shape)
-        sd[:, 0] = self.offset_sd
-        sd[:, 1] = self.drift_sd
-        sd[:, 2] = 1.0
-        if shape is not None:
-            sd[:, BASE_NUISANCES:] = np.reshape(np.asarray(shape, dtype=float), (-1, 1))
-        return np.hstack([out, delta / sd])
+        return np.hstack([out, delta / self._prior_sd(delta.shape[0], shape)])
 
     # -- how far the decay departs from the law -----------------------------------
     def shape_departure(self, params: Mapping[str, float]) -> ShapeDeparture:
@@ -407,9 +407,8 @@ class PiLikelihood:
         # the law's increments at these parameters scale the departure (module notes)
         x = np.hstack([self.data.offset_design, model[:, None] * self.shape_basis])
         a = (x.T * w) @ x
-        a[0, 0] += self.offset_sd**-2
-        a[1, 1] += self.drift_sd**-2
-        a[2, 2] += 1.0
+        base = np.arange(BASE_NUISANCES)
+        a[base, base] += self._prior_sd(1)[0] ** -2  # the shape coefficients: no prior
         b = (resid * w) @ x
         try:
             cov = np.linalg.inv(a)

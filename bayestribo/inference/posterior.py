@@ -180,6 +180,14 @@ class Posterior:
         """Conditional log-likelihood of each increment for each row, shape (n, m)."""
         return self.likelihood.pointwise(*self._likelihood_args(theta))
 
+    @property
+    def residual_size(self) -> int:
+        """Columns of :meth:`standardized_residuals` with ``nuisances``: the increments
+        and the linear nuisances (the shape coefficients where the shape discrepancy is
+        sampled or fixed)."""
+        shape = "log10_shape" in self.names or "log10_shape" in self.fixed
+        return self.likelihood.data.increments.size + self.likelihood.design(shape).shape[1]
+
     def standardized_residuals(self, theta: NDArray, nuisances: bool = False) -> NDArray:
         """Standardized conditional residuals of each increment, shape (n, m); with
         ``nuisances`` the linear nuisances' conditional means over their prior sd

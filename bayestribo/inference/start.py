@@ -367,7 +367,7 @@ def refine(
     scale = np.array([max(abs(theta[i]), 1e-3) for i in free]) * 1e-3
     # the increments' residuals and the linear nuisances' (conditional mean over prior
     # sd: the likelihood's χ² is their sum of squares, however far a misfit pulls one)
-    size = posterior.standardized_residuals(theta[None], nuisances=True).shape[1]
+    size = posterior.residual_size
     # Gaussian priors enter the least squares as residuals (θ - μ)/σ: a MAP, not an MLE.
     gaussian = [
         (j, posterior.priors[names[i]])
