@@ -12,10 +12,20 @@ widths of 1e-4 to 1e-2), over which Π is a smooth function of them. Inside it
     \qquad u_a = (θ_a - c_a) / s_a,
 
 with ``c`` the centre (the maximum a posteriori), ``s`` the scales (twice the Laplace
-standard deviations) and one (m,) coefficient row per monomial, interpolated from
-``1 + 2p + p(p-1)/2`` evaluations of the exact Π (p the coordinates Π depends on: the
-law's sampled parameters and y0). The error of this interpolation is of third order
-in ``u``: a few posterior widths away it is far below the noise of the increments.
+standard deviations) and one (m,) coefficient row per monomial, fitted by least
+squares to the exact Π at the nodes of a central composite design: the centre, each
+coordinate alone at two levels, and every corner of the levels (``1 + 2p + 2^p``
+evaluations, p the coordinates Π depends on: the law's sampled parameters and y0).
+The corners in all four quadrants of each pair keep the cubic terms out of the cross
+terms; the error left is of third order in ``u``.
+
+Where μ_s/μ_k is sampled, Π is piecewise in it (:class:`QuadraticPi`) and the edges of
+the pieces move with the other coordinates: each node's Π of a piece is computed at a
+ratio inside that piece at that node, and each piece's quadratic is fitted to the
+nodes where the piece meets the prior's support (a motion that stops one turning
+point later at one node is another piece's, and mixing the two misfits the quadratic
+by some 0.03 noise sd, which a misfitting law's large residuals turn into
+importance weights far from 1).
 
 The surrogate is never trusted on this argument alone. :func:`check` evaluates the
 exact log posterior at a seeded sample of the surrogate posterior's draws and
@@ -36,6 +46,7 @@ the quadratic cannot follow, the check fails and the exact posterior is sampled.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
@@ -74,6 +85,8 @@ ATTEMPTS = 3
 NODE_SCALE = 2.0
 #: Smallest relative change of Π at a node (see :func:`quadratic_pi`).
 MIN_CHANGE = 1e-7
+#: Coordinates up to which the nodes hold every corner of the design (2^p of them).
+_MAX_FACTORIAL = 6
 #: Halvings of a node distance whose nodes fall outside the support on both sides.
 _NARROWINGS = 20
 #: Node distances tried per coordinate, in factors of 4 from the given scale.
@@ -171,21 +184,41 @@ class QuadraticPi:
 
 
 def _nodes(p: int, sides: NDArray) -> NDArray:
-    """Interpolation nodes in u: the centre, two per coordinate on its allowed side
-    (±1, or 1 and 2 on one side), one per pair at both coordinates' first node."""
+    """Nodes in u of a central composite design: the centre, each coordinate alone at
+    its two levels (±1, or 1 and 2 on its allowed side), and every corner of the
+    levels (a quadratic's cross terms from all four quadrants of each pair, which
+    cancels the cubic terms' share that one corner per pair would leave in them); up
+    to :data:`_MAX_FACTORIAL` coordinates, beyond that one corner per pair."""
+    levels = np.where(
+        sides[:, None] == 0, np.array([-1.0, 1.0]), sides[:, None] * np.array([1.0, 2.0])
+    )
     rows = [np.zeros(p)]
-    first = np.where(sides == 0, 1.0, sides)
     for a in range(p):
-        for value in (-1.0, 1.0) if sides[a] == 0 else (sides[a], 2.0 * sides[a]):
+        for value in levels[a]:
             row = np.zeros(p)
             row[a] = value
             rows.append(row)
-    for a in range(p):
-        for b in range(a + 1, p):
-            row = np.zeros(p)
-            row[a], row[b] = first[a], first[b]
-            rows.append(row)
+    if p <= _MAX_FACTORIAL:
+        rows.extend(np.array(corner) for corner in itertools.product(*levels))
+    else:
+        for a in range(p):
+            for b in range(a + 1, p):
+                row = np.zeros(p)
+                row[a], row[b] = levels[a, 1], levels[b, 1]
+                rows.append(row)
     return np.array(rows)
+
+
+def _fit(basis: NDArray, values: NDArray, valid: NDArray | None = None) -> NDArray | None:
+    """Least-squares coefficients (R, m) of the monomials ``basis`` (n, R) to
+    ``values`` (n, m) over the ``valid`` nodes (all by default); None when those do
+    not determine every coefficient."""
+    rows = np.ones(basis.shape[0], dtype=bool) if valid is None else np.asarray(valid)
+    design = basis[rows]
+    if design.shape[0] < design.shape[1] or np.linalg.matrix_rank(design) < design.shape[1]:
+        return None
+    coef, *_ = np.linalg.lstsq(design, values[rows], rcond=None)
+    return coef
 
 
 def _evaluate(
@@ -304,6 +337,57 @@ def _stop_ratios_at(
     ]
 
 
+def _piece_ratios(
+    ratios: list[NDArray],
+    order: NDArray,
+    k: int,
+    value: float,
+    bounds: tuple[float, float],
+) -> tuple[NDArray, NDArray]:
+    """A value of μ_s/μ_k inside piece ``k`` at every node, ``value`` at the centre,
+    and whether the piece is known there.
+
+    The piece lies between two stop ratios of the centre's motion: those of the
+    turning points ``order[k - 1]`` and ``order[k]`` (``order`` lists the turning
+    points whose stop ratio at the centre is inside ``bounds``, in increasing stop
+    ratio); below the first, between the nearest stop ratio under ``bounds[0]`` (or
+    0) and the first; above the last, from the last up. Each node's value sits at
+    the same fraction of its own edges as ``value`` at the centre's (shifted by the
+    same distance above the last edge). An edge whose turning point a node does not
+    reach keeps its centre value there, and the piece is not known there; nor where
+    it does not meet ``bounds`` (the motion of a ratio outside the prior's support).
+    """
+    centre = ratios[0]
+    low, high = bounds
+    finite = np.flatnonzero(np.isfinite(centre))
+    if k > 0:
+        below: int | None = int(order[k - 1])
+    else:
+        under = finite[centre[finite] <= low]
+        below = int(under[np.argmax(centre[under])]) if under.size else None
+    if k < order.size:
+        above: int | None = int(order[k])
+    else:
+        over = finite[centre[finite] >= high]
+        above = int(over[np.argmin(centre[over])]) if over.size else None
+
+    def edge(index: int | None, default: float) -> tuple[float, NDArray, NDArray]:
+        n = len(ratios)
+        if index is None:
+            return default, np.full(n, default), np.ones(n, dtype=bool)
+        known = np.array([r.size > index and np.isfinite(r[index]) for r in ratios])
+        pairs = zip(ratios, known, strict=True)
+        at = np.array([r[index] if ok else centre[index] for r, ok in pairs])
+        return float(centre[index]), at, known
+
+    lo_c, lo, lo_known = edge(below, 0.0)
+    hi_c, hi, hi_known = edge(above, math.inf)
+    valid = lo_known & hi_known & (lo < hi) & (hi > low) & (lo < high)
+    if math.isfinite(hi_c):
+        return lo + (value - lo_c) / (hi_c - lo_c) * (hi - lo), valid
+    return lo + (value - lo_c), valid
+
+
 def quadratic_pi(
     likelihood: PiLikelihood,
     names: tuple[str, ...],
@@ -386,18 +470,37 @@ def quadratic_pi(
         values = list(0.5 * (edges[:-1] + edges[1:]))
         thresholds = np.zeros((at_centre.size, basis.shape[1]))
         thresholds[:, 0] = at_centre
-        reached = min(r.size for r in ratios)
         for k, n in enumerate(order):
-            at_nodes = np.array([r[n] for r in ratios]) if n < reached else None
-            if at_nodes is not None and np.all(np.isfinite(at_nodes)):
-                thresholds[k] = np.linalg.solve(basis, at_nodes)
+            # over the nodes whose motion reaches the turning point (a smooth function
+            # of the coordinates there); constant where those are too few
+            reached = np.array([r.size > n and np.isfinite(r[n]) for r in ratios])
+            pairs = zip(ratios, reached, strict=True)
+            at_nodes = np.array([r[n] if ok else np.nan for r, ok in pairs])
+            coef = _fit(basis, at_nodes[:, None], reached)
+            if coef is not None:
+                thresholds[k] = coef[:, 0]
     tables = []
-    for value in values:
-        params = dict(fixed_params) if value is None else {**fixed_params, ratio: value}
-        pi = _evaluate(likelihood, names, c + u * s, params)
+    for k, value in enumerate(values):
+        if value is None:
+            pi = _evaluate(likelihood, names, c + u * s, fixed_params)
+        else:
+            # each node's Π of this piece: at a ratio inside the piece at that node,
+            # whose edges move with the other coordinates (a ratio fixed at the
+            # centre's midpoint falls in the next piece at nodes where an edge has
+            # moved past it, and the piece's quadratic then interpolates two motions)
+            at_nodes, valid = _piece_ratios(ratios, order, k, value, (low, high))
+            rows = np.column_stack([c + u * s, at_nodes])
+            pi = _evaluate(likelihood, (*names, ratio), rows, fixed_params)
+            # where the piece leaves the support at a node, or an edge's turning point
+            # is not reached there, its motion is not the piece's: the quadratic is
+            # fitted to the other nodes (it serves only where the piece exists)
+            coef = _fit(basis, pi, valid & np.all(np.isfinite(pi), axis=1))
+            if coef is not None:
+                tables.append(coef)
+                continue
         if not np.all(np.isfinite(pi)):
             return None
-        tables.append(np.linalg.solve(basis, pi))
+        tables.append(_fit(basis, pi))
     return QuadraticPi(tuple(names), c, s, np.vstack(tables), ratio, thresholds)
 
 
