@@ -81,7 +81,7 @@ MAX_WEIGHT_CV = 0.05
 CHECK_DRAWS = 128
 #: Surrogates built and checked before the exact posterior is sampled instead.
 ATTEMPTS = 3
-#: Scales of the interpolation nodes, in Laplace standard deviations.
+#: Scales of the nodes of the fit, in Laplace standard deviations.
 NODE_SCALE = 2.0
 #: Smallest relative change of Π at a node (see :func:`quadratic_pi`).
 MIN_CHANGE = 1e-7
@@ -244,7 +244,7 @@ def _node_distances(
 ) -> NDArray:
     """Each coordinate's node distance: ``scale``, raised where Π changes there by less
     than :data:`MIN_CHANGE` of Π(0) to the first of ``scale × 4^k`` where it does (the
-    interpolation's differences then stand well above rounding: a Laplace scale of a
+    fit's differences then stand well above rounding: a Laplace scale of a
     parameter piled at a bound can be 1e-6 of its posterior width). The given scales
     are tried first, all in one evaluation; only the coordinates they fail are probed
     further."""
@@ -398,7 +398,7 @@ def quadratic_pi(
     ratio: str | None = None,
     ratio_bounds: tuple[float, float] | None = None,
 ) -> QuadraticPi | None:
-    """Interpolate the exact Π of ``likelihood`` by a quadratic about ``centre``.
+    """Fit a quadratic about ``centre`` to the exact Π of ``likelihood``.
 
     Parameters
     ----------
@@ -418,7 +418,7 @@ def quadratic_pi(
         node is inside the priors' support; a coordinate whose node on one side is
         outside takes both nodes on the other side.
     ratio : str, optional
-        The name of a sampled μ_s/μ_k: Π is interpolated piecewise in it (see
+        The name of a sampled μ_s/μ_k: Π is fitted piecewise in it (see
         :class:`QuadraticPi`), its pieces found in ``ratio_bounds`` at the centre.
     ratio_bounds : tuple of float, optional
         The support of μ_s/μ_k's prior.
@@ -426,7 +426,8 @@ def quadratic_pi(
     Returns
     -------
     QuadraticPi or None
-        None when a node's Π is not finite on either side (the law cannot move there).
+        None when the nodes where Π is finite (the law can move) do not determine the
+        quadratic, or a coordinate's nodes fall outside the support on both sides.
     """
     p = len(names)
     c = np.array([float(centre[n]) for n in names])
@@ -457,7 +458,7 @@ def quadratic_pi(
     if ratio is not None and ratio_bounds is not None:
         low, high = ratio_bounds
         # the ratios where the stick moves to another turning point: each turning
-        # point's |Y_n|/μ inside the prior's support, at the centre, and interpolated
+        # point's |Y_n|/μ inside the prior's support, at the centre, and fitted
         # over the nodes as Π is where every node reaches that turning point
         ratios = _stop_ratios_at(likelihood, names, c + u * s, fixed_params)
         centre_ratios = ratios[0]
@@ -487,7 +488,7 @@ def quadratic_pi(
             # each node's Π of this piece: at a ratio inside the piece at that node,
             # whose edges move with the other coordinates (a ratio fixed at the
             # centre's midpoint falls in the next piece at nodes where an edge has
-            # moved past it, and the piece's quadratic then interpolates two motions)
+            # moved past it, and the piece's quadratic then fits two motions)
             at_nodes, valid = _piece_ratios(ratios, order, k, value, (low, high))
             rows = np.column_stack([c + u * s, at_nodes])
             pi = _evaluate(likelihood, (*names, ratio), rows, fixed_params)
@@ -498,9 +499,11 @@ def quadratic_pi(
             if coef is not None:
                 tables.append(coef)
                 continue
-        if not np.all(np.isfinite(pi)):
+        # a node where the law cannot move (an arc too damped to turn) is left out
+        coef = _fit(basis, pi, np.all(np.isfinite(pi), axis=1))
+        if coef is None:
             return None
-        tables.append(_fit(basis, pi))
+        tables.append(coef)
     return QuadraticPi(tuple(names), c, s, np.vstack(tables), ratio, thresholds)
 
 
