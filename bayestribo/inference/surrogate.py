@@ -458,8 +458,8 @@ def quadratic_pi(
     if ratio is not None and ratio_bounds is not None:
         low, high = ratio_bounds
         # the ratios where the stick moves to another turning point: each turning
-        # point's |Y_n|/μ inside the prior's support, at the centre, and fitted
-        # over the nodes as Π is where every node reaches that turning point
+        # point's |Y_n|/μ inside the prior's support at the centre, fitted as Π is
+        # over the nodes whose motion reaches that turning point
         ratios = _stop_ratios_at(likelihood, names, c + u * s, fixed_params)
         centre_ratios = ratios[0]
         inside_support = np.flatnonzero(
