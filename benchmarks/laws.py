@@ -894,13 +894,17 @@ def _retable_files(names: list[str]) -> int:
 
 
 def _pool_files(names: list[str], output: Path) -> int:
-    """Pool the runs of result files of distinct seeds: :func:`pooled` over them all."""
+    """Pool the runs of complete result files, no run twice (a run is its case, noise
+    level and entropy: files of one seed may pool when they hold other cases):
+    :func:`pooled` over them all."""
     files = [output_path(n) for n in names]
     results = [json.loads(f.read_text()) for f in files]
-    seeds = [r["settings"]["seed"] for r in results]
-    if len(set(seeds)) != len(seeds) or not all(r.get("complete") for r in results):
-        raise SystemExit(f"--pool: expected complete files of distinct seeds, got seeds {seeds}")
+    if not all(r.get("complete") for r in results):
+        raise SystemExit(f"--pool: expected complete result files, got {names}")
     records = [run for r in results for run in r["runs"]]
+    keys = [(run["case"], run["noise"], tuple(run["entropy"])) for run in records]
+    if len(set(keys)) != len(keys):
+        raise SystemExit(f"--pool: a run stands in more than one of {names}")
     pooled_all = pooled(records)
     write_json(
         output,
