@@ -256,6 +256,16 @@ def test_misfit_is_flagged():
     assert halves["tested"] and halves["agree"], halves
     assert "the halves agree" in followed.to_text()
     assert not [w for w in caught if issubclass(w.category, MisfitWarning)]
+    # and its answer is that law's own fit, whatever the seed: the same frame (from
+    # the optimiser's optimum, not the comparison's best draw) and the same posterior
+    from bayestribo.model.laws import get_law
+
+    assert not get_law(followed.law).closed_form
+    alone = fit(run, seed=5, law=followed.law, max_steps=6000)
+    assert followed.attrs["omega"] == alone.attrs["omega"]
+    for name in get_law(followed.law).parameter_names:
+        a, b = followed.samples(name), alone.samples(name)
+        assert abs(a.mean() - b.mean()) < 0.2 * a.std(), name
 
 
 def test_without_load_no_quantity_is_labelled_as_a_coefficient():
