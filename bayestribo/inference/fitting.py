@@ -115,7 +115,9 @@ def fit(
         the simplest adequate one as good as the best by PSIS-LOO
         (:mod:`bayestribo.inference.comparison`; the result's ``law_comparison`` says
         which and why); when none of them is adequate, the law-free ``"free"`` law
-        (ΔE(A) any increasing polynomial of degree 1-4) is fitted too.
+        (ΔE(A) any increasing polynomial of degree 1-4) is fitted too. The result is
+        the chosen law's own fit, as ``law=<its name>`` gives it (a law without a
+        closed form is fitted again in its own frame, from the optimiser's optimum).
 
     Returns
     -------
