@@ -400,3 +400,26 @@ def test_a_fresh_result_makes_its_inference_data_on_first_use():
     assert idata.posterior.attrs["seconds"] == 1.5 and result.seconds == 1.5
     with pytest.raises(TypeError, match="either idata or draws"):
         FitResult()
+
+
+def test_the_verdict_refitted_in_its_frame_keeps_every_term_without_contact(bundled_run):
+    """law="auto" fits friction laws on a run without contact too (a friction
+    displacement): the verdict fitted again in its own frame keeps its friction terms
+    rather than dropping them, so that the answer is the law the comparison chose."""
+    from bayestribo.inference.comparison import _posterior
+    from bayestribo.inference.fitting import _posterior_like
+    from bayestribo.inference.pipeline import prepare
+    from bayestribo.io.run import Run
+
+    air = Run(
+        time=bundled_run.time,
+        displacement=bundled_run.displacement,
+        velocity=bundled_run.velocity,
+        metadata={**bundled_run.metadata, "load_N": 0.0},
+    )
+    prepared = prepare(air)
+    assert not prepared.contact
+    compared = _posterior("coulomb+power", prepared.data, "exact", False)
+    again = _posterior_like(compared, prepared, "exact", False)
+    assert again.names == compared.names and "mu_k" in again.names
+    assert again.law.name == compared.law.name

@@ -116,8 +116,9 @@ def fit(
         (:mod:`bayestribo.inference.comparison`; the result's ``law_comparison`` says
         which and why); when none of them is adequate, the law-free ``"free"`` law
         (ΔE(A) any increasing polynomial of degree 1-4) is fitted too. The result is
-        the chosen law's own fit, as ``law=<its name>`` gives it (a law without a
-        closed form is fitted again in its own frame, from the optimiser's optimum).
+        the chosen law's fit with every one of its terms (on a run with contact, what
+        ``law=<its name>`` gives); a law without a closed form is fitted again in its
+        own frame, from the optimiser's optimum.
 
     Returns
     -------
@@ -412,11 +413,13 @@ def _in_law_frame(prepared: PreparedRun, posterior: Any, theta: Any) -> Prepared
 
 
 def _posterior_like(posterior: Any, prepared: PreparedRun, model: str, discrepancy: bool) -> Any:
-    """A posterior of the same law, priors and fixed values on another preparation."""
+    """A posterior of the same law and fixed values on another preparation, with the
+    default priors and every term of the law (as the comparison builds it: friction
+    on a run without contact is fitted as a displacement, not dropped)."""
     return build_posterior(
         prepared.data,
         model=model,
-        friction=prepared.contact,
+        friction=True,
         discrepancy=discrepancy,
         fixed=dict(posterior.fixed) or None,
         law=posterior.law,
