@@ -177,7 +177,7 @@ def test_the_surrogate_of_a_friction_law_follows_the_stop_of_the_motion(bundled_
     np.testing.assert_allclose(sur(rows), sur.reference(rows), rtol=1e-10, atol=1e-8)
 
 
-def test_each_piece_of_a_misfitting_friction_law_is_fitted_where_it_exists(drag_run):
+def test_each_piece_of_a_misfitting_friction_law_is_fitted_where_it_exists():
     """Coulomb friction and a power law fitted to drag (3 s, so that the law's motion
     stops inside the record): the edges of the μ_s/μ_k pieces move across the nodes, so
     one piece's motion at one node is the next piece's at another. Fitted per piece on
