@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 import platform
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -14,6 +15,8 @@ import numpy as np
 import scipy
 
 RESULTS = Path(__file__).resolve().parent / "results"
+#: The repository the benchmarks belong to.
+ROOT = RESULTS.parent.parent
 
 
 def machine() -> dict[str, Any]:
@@ -52,3 +55,20 @@ def write_results(name: str, results: dict[str, Any]) -> Path:
     path = RESULTS / f"{name}.json"
     path.write_text(json.dumps({"machine": machine(), **results}, indent=2) + "\n")
     return path
+
+
+def commit(tree: Path = ROOT, *, short: bool = False, unknown: str = "") -> str:
+    """The commit checked out in ``tree`` (default this repository), with "+changes"
+    when tracked files are modified; ``unknown`` when git cannot say."""
+
+    def git(*args: str) -> str:
+        return subprocess.run(
+            ["git", "-C", str(tree), *args], capture_output=True, text=True, check=True
+        ).stdout.strip()
+
+    try:
+        head = git("rev-parse", *(["--short"] if short else []), "HEAD")
+        dirty = git("status", "--porcelain", "--untracked-files=no")
+    except (OSError, subprocess.CalledProcessError):
+        return unknown
+    return head + ("+changes" if dirty else "")

@@ -36,9 +36,9 @@ import numpy as np  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from _machine import write_results  # noqa: E402
+from _machine import commit, write_results  # noqa: E402
 from _tree import require_this_tree  # noqa: E402
-from laws import CASES, _commit, _entropy, case_record  # noqa: E402
+from laws import CASES, _entropy, case_record  # noqa: E402
 
 
 def optima(case: str, noise: float, index: int, seed: int) -> list[dict[str, Any]]:
@@ -91,7 +91,7 @@ def main(argv: list[str] | None = None) -> None:
     path = write_results(
         args.output,
         {
-            "commit": _commit(),
+            "commit": commit(),
             "module": module,
             "settings": vars(args),
             "load_average_start": load_start,

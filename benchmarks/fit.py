@@ -55,7 +55,7 @@ from scipy.integrate import simpson
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _fitsetup import likelihood_of
-from _machine import write_results
+from _machine import commit, write_results
 
 from bayestribo.inference import fit
 from bayestribo.inference.likelihood import PiLikelihood
@@ -150,26 +150,6 @@ def realistic_runs(folder: Path, seed: int = 2024) -> list[dict[str, Any]]:
     return out
 
 
-def _commit(tree: Path) -> str:
-    """The commit checked out in ``tree`` (with "+changes" when files are modified)."""
-    try:
-        head = subprocess.run(
-            ["git", "-C", str(tree), "rev-parse", "--short", "HEAD"],
-            capture_output=True,
-            text=True,
-            check=True,
-        ).stdout.strip()
-        dirty = subprocess.run(
-            ["git", "-C", str(tree), "status", "--porcelain", "--untracked-files=no"],
-            capture_output=True,
-            text=True,
-            check=True,
-        ).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-    return head + ("+changes" if dirty else "")
-
-
 def _summary(fits: list[dict[str, Any]]) -> dict[str, Any]:
     seconds = [f["seconds"] for f in fits]
     return {
@@ -232,7 +212,9 @@ def side_by_side(baseline: Path, repeats: int, realistic: int, seeds: int) -> di
 
     out: dict[str, Any] = {
         "baseline_tree": str(baseline),
-        "commits": {name: _commit(tree) for name, tree in trees.items()},
+        "commits": {
+            name: commit(tree, short=True, unknown="unknown") for name, tree in trees.items()
+        },
         "modules": {name: w.module for name, w in workers.items()},
         "first_call_seconds": {name: f["seconds"] for name, f in first.items()},
     }

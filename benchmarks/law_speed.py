@@ -314,10 +314,14 @@ def side_by_side(
     finally:
         for w in workers.values():
             w.close()
+    from _machine import commit
+
     out: dict[str, Any] = {
         "trees": {name: str(tree) for name, tree in trees.items()},
         "modules": {name: w.module for name, w in workers.items()},
-        "commits": {name: _commit(tree) for name, tree in trees.items()},
+        "commits": {
+            name: commit(tree, short=True, unknown="unknown") for name, tree in trees.items()
+        },
         "first_call_seconds": first,
         "fits": fits,
         "summary": {},
@@ -346,25 +350,6 @@ def side_by_side(
                 }
         out["current_vs_baseline"] = compare
     return out
-
-
-def _commit(tree: Path) -> str:
-    try:
-        head = subprocess.run(
-            ["git", "-C", str(tree), "rev-parse", "--short", "HEAD"],
-            capture_output=True,
-            text=True,
-            check=True,
-        ).stdout.strip()
-        dirty = subprocess.run(
-            ["git", "-C", str(tree), "status", "--porcelain", "--untracked-files=no"],
-            capture_output=True,
-            text=True,
-            check=True,
-        ).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-    return head + ("+changes" if dirty else "")
 
 
 # -- profiles ---------------------------------------------------------------------------

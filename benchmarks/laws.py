@@ -117,7 +117,7 @@ from _laws_sim import (  # noqa: E402
     simulate,
     true_dissipation,
 )
-from _machine import RESULTS, machine, niced_worker  # noqa: E402
+from _machine import RESULTS, commit, machine, niced_worker  # noqa: E402
 from _tree import require_this_tree  # noqa: E402
 
 __all__ = ["CASES", "one_run", "summarise"]
@@ -792,21 +792,6 @@ def write_json(path: Path, results: dict[str, Any]) -> Path:
     return path
 
 
-def _commit() -> str:
-    import subprocess
-
-    try:
-        return subprocess.run(
-            ["git", "rev-parse", "HEAD"],
-            cwd=HERE.parent,
-            capture_output=True,
-            text=True,
-            check=True,
-        ).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return ""
-
-
 def _settings(args: argparse.Namespace) -> dict[str, Any]:
     return {
         "runs": args.runs,
@@ -877,7 +862,7 @@ def _retable_files(names: list[str]) -> int:
         old.update(
             {
                 "retabled": {
-                    "commit": _commit(),
+                    "commit": commit(),
                     "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
                 },
                 "notes": NOTES,
@@ -978,7 +963,7 @@ def main(argv: list[str] | None = None) -> int:
         return _pool_files(args.pool, output_path(args.output))
     settings = _settings(args)
     load_start = os.getloadavg()
-    source = {"commit": _commit()}
+    source = {"commit": commit()}
     import bayestribo
 
     source["package_version"] = bayestribo.__version__

@@ -47,7 +47,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import laws
 from _laws_sim import OMEGA, RESOLUTION_V, RESOLUTION_X
-from _machine import write_results
+from _machine import commit, write_results
 
 from bayestribo.inference.pipeline import build_posterior, find_optimum, prepare, reframe
 from bayestribo.signal.increments import increment_noise, increment_weights
@@ -159,7 +159,7 @@ def main(argv: list[str] | None = None) -> int:
         "noise_x_resolution": NOISE,
         "seed": args.seed,
         "exact_noise": args.exact_noise,
-        "source": {"commit": laws._commit()},
+        "source": {"commit": commit()},
         "wall_seconds": time.perf_counter() - start,
         "summary": summary(runs),
         "runs": runs,

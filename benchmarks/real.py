@@ -86,7 +86,7 @@ import numpy as np  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from _machine import RESULTS, machine, niced_worker  # noqa: E402
+from _machine import RESULTS, commit, machine, niced_worker  # noqa: E402
 from _tree import require_this_tree  # noqa: E402
 
 __all__ = ["load", "one_fit", "recordings"]
@@ -610,21 +610,6 @@ def _print_table(table: dict[str, Any], prepared: dict[str, Any]) -> None:
             )
 
 
-def _commit() -> str:
-    import subprocess
-
-    try:
-        return subprocess.run(
-            ["git", "rev-parse", "HEAD"],
-            cwd=HERE.parent,
-            capture_output=True,
-            text=True,
-            check=True,
-        ).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return ""
-
-
 def output_path(name: str) -> Path:
     """``results/NAME.json``, or ``name`` itself when it is a path ending in .json."""
     return Path(name) if name.endswith(".json") else RESULTS / f"{name}.json"
@@ -660,7 +645,7 @@ def main(argv: list[str] | None = None) -> int:
     start = time.perf_counter()
     load_start = os.getloadavg()
     source = {
-        "commit": _commit(),
+        "commit": commit(),
         "package_version": bayestribo.__version__,
         "module": require_this_tree(),
     }
