@@ -72,3 +72,17 @@ def commit(tree: Path = ROOT, *, short: bool = False, unknown: str = "") -> str:
     except (OSError, subprocess.CalledProcessError):
         return unknown
     return head + ("+changes" if dirty else "")
+
+
+def provenance(
+    module: str, settings: dict[str, Any], load_start: tuple[float, float, float]
+) -> dict[str, Any]:
+    """What a result file records of its run: the commit, the package module timed,
+    the settings and the load averages at its start and now."""
+    return {
+        "commit": commit(),
+        "module": module,
+        "settings": settings,
+        "load_average_start": load_start,
+        "load_average_end": os.getloadavg(),
+    }

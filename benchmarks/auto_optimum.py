@@ -36,7 +36,7 @@ import numpy as np  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from _machine import commit, write_results  # noqa: E402
+from _machine import provenance, write_results  # noqa: E402
 from _tree import require_this_tree  # noqa: E402
 from laws import CASES, _entropy, case_record  # noqa: E402
 
@@ -91,11 +91,7 @@ def main(argv: list[str] | None = None) -> None:
     path = write_results(
         args.output,
         {
-            "commit": commit(),
-            "module": module,
-            "settings": vars(args),
-            "load_average_start": load_start,
-            "load_average_end": os.getloadavg(),
+            **provenance(module, vars(args), load_start),
             "cpu_seconds": sum(f["cpu_seconds"] for f in laws),
             "laws": laws,
         },
