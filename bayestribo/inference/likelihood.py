@@ -274,7 +274,7 @@ class PiLikelihood:
 
     def _log_prior_det(self, shape: NDArray | None = None) -> NDArray | float:
         """log|P| of the nuisances' prior covariance (per row with a shape scale)."""
-        base = 2.0 * math.log(self.offset_sd) + 2.0 * math.log(self.drift_sd)
+        base = float(2.0 * np.sum(np.log(self._prior_sd(1)[0])))
         if shape is None:
             return base
         return base + 2.0 * SHAPE_TERMS * np.log(np.reshape(np.asarray(shape, float), -1))
