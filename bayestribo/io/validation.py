@@ -10,13 +10,16 @@ expected at the first problem found:
    ``time_rtol`` of the median step); a declared ``sample_rate_Hz`` agrees with
    them, and the sampling resolves a declared natural frequency (Nyquist);
 4. no signal is clipped: none reaches a declared sensor range
-   (``displacement_range_m``, ``velocity_range_m_per_s``), and none has a flat top:
-   its maximum or minimum value held for ``clip_samples`` samples or more, away from
-   the ends of the record, entered and left by steps of more than three quantisation
-   steps (the rest before release and the rest after the stop touch the ends; the
-   peak of a finely sampled, coarsely quantised signal is entered by single steps;
-   a signal that changes by less than a quantisation step per sample cannot show a
-   cut this way: declare the sensor range to have it checked);
+   (``displacement_range_m``, ``velocity_range_m_per_s``), and none is cut flat
+   through the record: a flat top is its maximum or minimum value held for
+   ``clip_samples`` samples or more and for more than twice what a smooth quantised
+   extreme of its swing dwells there, away from the ends of the record, entered and
+   left with the signal's slope (:func:`bayestribo.signal.clipping.hard_clips`: the
+   rest before release and the rest after the stop touch the ends; the extreme of a
+   coarsely quantised sinusoid dwells ``sqrt(2q/A)/π`` of a period and is entered by
+   one step). Flat tops followed by at least :data:`CLIP_FREE_PERIODS` periods of
+   record pass: the energy decay leaves the clipped cycles out and says so (level,
+   cycles, times); otherwise the run is refused naming the level and the cycles;
 5. with both signals, the displacement matches the time integral of the velocity
    (gain within a factor of two of 1): this catches a displacement in millimetres
    or micrometres read as metres, a velocity in mm/s, a time in ms, or a velocity
@@ -29,8 +32,6 @@ Nothing is repaired, clipped or dropped: a run either passes unchanged or fails.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numpy.typing import NDArray
 
@@ -38,9 +39,17 @@ from bayestribo._warnings import moved
 from bayestribo.errors import RecordingError
 from bayestribo.io.run import DISPLACEMENT, TIME, VELOCITY, Run
 from bayestribo.signal.channels import check_channels, check_plausible_motion
-from bayestribo.signal.period import sample_step
+from bayestribo.signal.clipping import HardClip, hard_clips, quantum
+from bayestribo.signal.period import dominant_period, sample_step
 
-__all__ = ["CLIP_SAMPLES", "MIN_SAMPLES", "TIME_RTOL", "check_channels", "validate_run"]
+__all__ = [
+    "CLIP_FREE_PERIODS",
+    "CLIP_SAMPLES",
+    "MIN_SAMPLES",
+    "TIME_RTOL",
+    "check_channels",
+    "validate_run",
+]
 
 #: Moved to :mod:`bayestribo.signal.channels`: still importable from here, with a
 #: DeprecationWarning.
@@ -61,10 +70,17 @@ MIN_SAMPLES = 64
 #: of the step deviate by at most 0.05 %, so 1 % separates the two with margin.
 TIME_RTOL = 0.01
 
-#: A signal holding its extreme value this many consecutive samples is a flat top.
-#: A smooth peak repeats its exact extreme rarely: the real recordings of a spring
-#: oscillator (3 decimals at 100 Hz and 6 decimals at 1 kHz) repeat it at most 3 times.
+#: Fewest consecutive samples at an extreme value for a flat top (and more than twice
+#: what a smooth quantised extreme of the signal's swing dwells there,
+#: :func:`bayestribo.signal.clipping.expected_dwell`). A smooth peak repeats its exact
+#: extreme rarely: the real recordings of a spring oscillator (3 decimals at 100 Hz and
+#: 6 decimals at 1 kHz) repeat it at most 3 times.
 CLIP_SAMPLES = 5
+#: Periods of record after the last clipped cycle for the run to pass: the energy
+#: decay leaves the clipped cycles out with a ClippingWarning
+#: (:func:`bayestribo.signal.decay.energy_decay`) and needs three oscillations after
+#: them.
+CLIP_FREE_PERIODS = 4
 
 
 def _fail(message: str, where: str | None) -> RecordingError:
@@ -146,42 +162,19 @@ def _time_unit_hint(rate: float, frequency: float) -> str:
 
 def _quantum(values: NDArray) -> float | None:
     """The smallest non-zero step of a signal (its quantisation step), or None."""
-    steps = np.abs(np.diff(values))
-    steps[steps == 0] = np.inf
-    smallest = float(steps.min()) if steps.size else math.inf
-    return None if math.isinf(smallest) else smallest
+    step = quantum(values)
+    return step if step > 0 else None
 
 
-def _flat_top(
-    values: NDArray, level: float, length: int, quantum: float | None = None
-) -> tuple[int, int] | None:
-    """First flat top at ``level``: (start, length), or None.
-
-    A flat top is a run of >= ``length`` samples equal to ``level`` that touches neither
-    end of the record and is entered and left by steps larger than three quantisation
-    steps (the smallest non-zero step of the signal). A smooth peak of a finely sampled,
-    coarsely quantised signal also repeats its extreme, but it is entered and left by
-    single quantisation steps; a signal cut flat arrives at the cut with its slope.
-    """
-    # the samples at the level (a handful in a smooth record), then their runs
-    at = np.flatnonzero(values == level)
-    if at.size < length:
-        return None
-    breaks = np.flatnonzero(np.diff(at) > 1) + 1
-    starts = at[np.r_[0, breaks]]
-    stops = at[np.r_[breaks - 1, at.size - 1]] + 1
-    for start, stop in zip(starts.tolist(), stops.tolist(), strict=True):
-        if stop - start < length or start == 0 or stop == values.size:
-            continue
-        if quantum is None:
-            quantum = _quantum(values)
-        if quantum is None:
-            return None
-        entry = abs(values[start - 1] - level)
-        exit_ = abs(values[stop] - level)
-        if min(entry, exit_) > 3.0 * quantum:
-            return int(start), int(stop - start)
-    return None
+def _flat_top(values: NDArray, t: NDArray, length: int) -> list[HardClip]:
+    """The extremes of ``values`` held flat as a cut is, not as a smooth quantised
+    extreme dwells (:func:`bayestribo.signal.clipping.hard_clips`; runs of at least
+    ``length`` samples)."""
+    try:
+        period = dominant_period(t, values)
+    except RecordingError:
+        return []
+    return hard_clips(t, values, period, min_samples=length)
 
 
 def _check_clipping(run: Run, where: str | None, clip_samples: int) -> None:
@@ -189,6 +182,7 @@ def _check_clipping(run: Run, where: str | None, clip_samples: int) -> None:
         DISPLACEMENT: ("displacement_range_m", run.displacement),
         VELOCITY: ("velocity_range_m_per_s", run.velocity),
     }
+    t = run.time
     for name, (key, values) in ranges.items():
         if values is None:
             continue
@@ -204,17 +198,18 @@ def _check_clipping(run: Run, where: str | None, clip_samples: int) -> None:
                     "the vibrometer or a smaller initial displacement)",
                     where,
                 )
-        for kind, level in (("maximum", values.max()), ("minimum", values.min())):
-            found = _flat_top(values, level, clip_samples)  # the step only at a flat run
-            if found is not None:
-                start, length = found
-                raise _fail(
-                    f"field {name!r} looks clipped: it holds its {kind} {level!r} for {length} "
-                    f"consecutive samples from sample {start} (t = {run.time[start]!r} s) in "
-                    f"the middle of the record; expected a smooth peak (fewer than "
-                    f"{clip_samples} repeats), as a signal beyond the sensor range is cut flat",
-                    where,
-                )
+        for clip in _flat_top(values, t, clip_samples):
+            _, last = clip.times(t)
+            period = dominant_period(t, values)
+            if float(t[-1]) - last >= CLIP_FREE_PERIODS * period:
+                continue  # the analysis starts after the clipped cycles and says so
+            raise _fail(
+                f"{clip.describe(name, t)}; fewer than {CLIP_FREE_PERIODS} periods "
+                f"({CLIP_FREE_PERIODS * period:.4g} s) follow the last clipped cycle, so the "
+                "analysis cannot start after them; expected a signal inside the sensor range "
+                "(record with a smaller initial displacement or a larger sensor range)",
+                where,
+            )
 
 
 def validate_run(
@@ -239,7 +234,7 @@ def validate_run(
         Largest relative deviation of a time step from the median step, and of a
         declared ``sample_rate_Hz`` from the measured one [-].
     clip_samples : int
-        Length of a run of repeated extreme values that counts as a flat top.
+        Fewest repeats of an extreme value that can count as a flat top.
 
     Returns
     -------

@@ -76,7 +76,7 @@ from bayestribo._warnings import warn
 from bayestribo.errors import ClippingWarning, RecordingError
 from bayestribo.model.plausible import MAX_SPEED
 from bayestribo.model.scaling import Rig, Scaling
-from bayestribo.signal.clipping import flattened_turning_points
+from bayestribo.signal.clipping import flattened_turning_points, hard_clips
 from bayestribo.signal.motion import THRESHOLD, block_noise, check_turning_points, motion_span
 from bayestribo.signal.peaks import Peaks, estimate_noise, find_peaks
 from bayestribo.signal.period import dominant_period, sample_step
@@ -909,6 +909,27 @@ def _flattened(
     return count, said
 
 
+def _hard_clipped(
+    t: NDArray, x: NDArray | None, v: NDArray | None, peaks: Peaks, period: float
+) -> tuple[int, str] | None:
+    """Turning points to leave out for a signal cut flat (hard clipping), and what to
+    say of them: every turning point before the end of the last clipped run of a
+    recorded channel (:func:`bayestribo.signal.clipping.hard_clips`). None when no
+    channel is clipped."""
+    found = []
+    for name, s in (("displacement", x), ("velocity", v)):
+        if s is None:
+            continue
+        for clip in hard_clips(t, s, period):
+            _, last = clip.times(t)
+            count = int(np.count_nonzero(peaks.t <= last))
+            found.append((count, clip.describe(name, t)))
+    if not found:
+        return None
+    count = max(c for c, _ in found)
+    return count, "hard clipping: " + "; ".join(said for _, said in found)
+
+
 def _check_plausible(peaks: NDArray, natural_hz: float, derived: str | None) -> None:
     """Refuse a record in metres whose swing and frequency no rig makes.
 
@@ -1059,6 +1080,29 @@ def _analyse(
             f"{said}; they are left out: the analysis starts at turning point {count} "
             f"(instead of after {skipped}); record with a smaller initial displacement or "
             "a larger sensor range to keep them",
+            ClippingWarning,
+        )
+        skip = left_out = count
+    clipped = _hard_clipped(
+        t,
+        x if derived != "displacement" else None,
+        v if derived != "velocity" else None,
+        peaks,
+        period0,
+    )
+    if clipped is not None and clipped[0] > skip:
+        count, said = clipped
+        if len(peaks) < count + int(min_turning_points):
+            raise RecordingError(
+                f"{said}; {len(peaks) - count} turning points remain after them, "
+                f"{min_turning_points} are needed: record with a smaller initial "
+                "displacement or a larger sensor range"
+            )
+        warn(
+            f"{said}; the clipped cycles are left out: the analysis starts at turning "
+            f"point {count} (t = {float(peaks.t[count]):.6g} s) instead of after {skipped}; "
+            "record with a smaller initial displacement or a larger sensor range to keep "
+            "them",
             ClippingWarning,
         )
         skip = left_out = count
