@@ -82,6 +82,7 @@ from bayestribo.signal.peaks import Peaks, estimate_noise, find_peaks
 from bayestribo.signal.period import dominant_period, sample_step
 from bayestribo.signal.quantisation import QUANTISATION_NOISE_FACTOR, quantisation_step
 from bayestribo.signal.spectrum import NoiseSpectrum, RestNoise, fit_line, noise_spectrum
+from bayestribo.signal.spikes import SpikeWarning, bridged, describe, find_spikes
 
 __all__ = [
     "EnergyDecay",
@@ -829,6 +830,7 @@ def energy_decay(
     for name, s in (("displacement", x), ("velocity", v)):
         if s is not None and float(np.ptp(s)) == 0.0:
             raise RecordingError(f"release: no motion found: the {name} signal is constant")
+    x, v = _despiked(t, x, v)
 
     options = dict(
         jitter=jitter,
@@ -871,6 +873,32 @@ def energy_decay(
         fitted.append(f)
         out.append(sig - amplitude * np.cos(2.0 * math.pi * f * (t - t[0]) + phase))
     return _analyse(t, out[0], out[1], notch_Hz=(float(np.mean(fitted)),), **options)
+
+
+def _despiked(
+    t: NDArray, x: NDArray | None, v: NDArray | None
+) -> tuple[NDArray | None, NDArray | None]:
+    """The channels with their isolated spikes bridged (:mod:`bayestribo.signal.spikes`),
+    and a :class:`~bayestribo.signal.spikes.SpikeWarning` naming them when there are
+    any; the arrays given are not changed."""
+    out = []
+    said = []
+    for name, s in (("displacement", x), ("velocity", v)):
+        spikes = np.zeros(0, dtype=int) if s is None else find_spikes(s)
+        if s is None or spikes.size == 0:
+            out.append(s)
+            continue
+        said.append(describe(name, t, s, spikes))
+        out.append(bridged(t, s, spikes))
+    if said:
+        warn(
+            "; ".join(said) + ": single samples far off their neighbours (a sensor "
+            "dropout); they are left out of the analysis (each replaced by the line between "
+            "its neighbours, the recording unchanged); if they are not spikes, crop the "
+            "record around them (--window T0:T1)",
+            SpikeWarning,
+        )
+    return out[0], out[1]
 
 
 def _flattened(
