@@ -118,7 +118,11 @@ BAD_TEXT = [
     (_good_rows(), {"columns": ["time_s", "position"]}, "column 'position' has no unit"),
     (_good_rows(), {"columns": ["time_s", "position_ft"]}, "unknown unit 'ft'"),
     (_good_rows(), {"columns": ["time_s", "time_s"]}, "'time_s' is given 2 times"),
-    (_good_rows(), {"columns": ["ignore", "displacement_m"]}, "a 'time_s' column"),
+    (
+        _good_rows(),
+        {"columns": ["ignore", "displacement_m"]},
+        "no time column: give its sample rate, sample_rate_Hz=HZ",
+    ),
     (_good_rows(), {"columns": ["time_s", "ignore"]}, "'displacement_m' or"),
     ("a,b,c\n" + _good_rows(), {"columns": ["time_s", "displacement_m"]}, "header"),
     ("", {}, "no data rows"),

@@ -105,6 +105,13 @@ def add_reading_options(parser: argparse.ArgumentParser) -> None:
         "millimetres (repeatable; NAME as in --columns)",
     )
     parser.add_argument(
+        "--sample-rate",
+        type=_positive_rate,
+        metavar="HZ",
+        help="sample rate [Hz] of a file without a time column (sample i at t = i/HZ); "
+        "with a time column it must agree with the time stamps",
+    )
+    parser.add_argument(
         "--channel",
         action="append",
         metavar="NAME=SOURCE",
@@ -137,6 +144,17 @@ def add_reading_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--frequency", type=float, help="nominal natural frequency f [Hz]")
     parser.add_argument("--load", type=float, help="normal load N [N]")
     parser.add_argument("--mass", type=float, help="oscillating mass m [kg]")
+
+
+def _positive_rate(text: str) -> float:
+    """``--sample-rate`` value: a sample rate [Hz] > 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value) or value <= 0.0:
+        raise argparse.ArgumentTypeError(f"expected a sample rate in Hz > 0, got {text!r}")
+    return value
 
 
 def notch_value(text: str) -> float | str:
@@ -234,6 +252,8 @@ def reading_options(args: argparse.Namespace) -> Any:
     scale = _scale_from_args(args.scale)
     if scale is not None:
         kwargs["scale"] = scale
+    if getattr(args, "sample_rate", None) is not None:
+        kwargs["sample_rate_Hz"] = args.sample_rate
     channels = _channels_from_args(getattr(args, "channel", None))
     if channels is not None:
         kwargs["channels"] = channels
@@ -271,6 +291,7 @@ _CLI_SPELLINGS = (
         "--columns time_s displacement_mm",
     ),
     ("length_unit='arbitrary'", "--length-unit arbitrary"),
+    ("sample_rate_Hz=HZ (--sample-rate HZ)", "--sample-rate HZ"),
     ("columns=[...]", "--columns"),
     ("columns=", "--columns "),
     ("give file_format=", "give --format"),

@@ -78,7 +78,21 @@ OTHER_QUANTITIES: tuple[str, ...] = (
     "strain",
     "sound level",
     "light intensity",
+    "gyroscope",
+    "magnetic field",
+    "rotation",
+    "illuminance",
+    "sound pressure",
+    "frequency",
+    "tilt",
+    "inclination",
 )
+
+#: Words before or after a quantity that name its axis or its kind, not another
+#: quantity (phyphox's ``Acceleration x``, ``Linear Acceleration y``, ``Absolute
+#: acceleration``, ``Acceleration with g z``).
+_AXIS_SUFFIX = re.compile(r"\s+(?:[xyz]|with\s+g(?:\s+[xyz])?)$")
+_KIND_PREFIX = re.compile(r"^(?:absolute|linear|total|resultant|raw)\s+")
 
 #: Run labels sensor software adds to column names: ``Time (s) Run #1`` (PASCO),
 #: ``Run 1: Position (m)`` and ``Latest: Time (s)`` (Vernier), ``Data Set 2: ...``.
@@ -103,8 +117,11 @@ def split_run_tag(name: str) -> tuple[str, str | None]:
 
 
 def other_quantity(name: str) -> bool:
-    """True for a header name of a quantity that is not read (acceleration, force, ...)."""
+    """True for a header name of a quantity that is not read (acceleration, force, ...),
+    with an axis or a kind about it (``Acceleration x (m/s^2)``, ``Absolute
+    acceleration``)."""
     word, _ = _split(name.replace("\u03bc", "\u00b5"))
+    word = _KIND_PREFIX.sub("", _AXIS_SUFFIX.sub("", word))
     return word in OTHER_QUANTITIES
 
 

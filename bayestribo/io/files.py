@@ -10,10 +10,14 @@ place where "a run or a file" becomes a :class:`~bayestribo.io.run.Run`.
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
 
 from bayestribo.errors import BayestriboError, RunFormatError
 from bayestribo.io.options import READ_OPTIONS, ReadOptions, unknown_options
@@ -42,6 +46,7 @@ def read_run(
     *,
     columns: Sequence[str] | None = None,
     scale: Mapping[str, float] | None = None,
+    sample_rate_Hz: float | None = None,
     delimiter: str | None = None,
     decimal: str = ".",
     skip_rows: int = 0,
@@ -75,8 +80,14 @@ def read_run(
     scale : mapping, optional
         Factor per canonical name converting the file's unit to s, m or m/s, e.g.
         ``{"displacement_m": 1e-3}`` for millimetres.
+    sample_rate_Hz : float, optional
+        The sample rate [Hz] of a file without a time column (an encoder's angles one per
+        line, a column of displacements): sample i is at t = i / rate. Without it, the
+        sidecar's ``sample_rate_Hz`` is used. For a file with a time column it is the
+        run's ``sample_rate_Hz``, which must agree with the time stamps.
     delimiter, decimal, skip_rows
-        Text files: column separator (default: guessed), decimal mark, lines to skip.
+        Text files: column separator (default: guessed), decimal mark (default: a point,
+        or a comma found in a file delimited otherwise), lines to skip.
     encoding : str, optional
         Text files: the text encoding (``"cp1252"``, ``"latin-1"``, ...). Default UTF-8,
         and a file that is not UTF-8 is read as Windows-1252 (µ as the byte 0xB5, the
@@ -139,6 +150,7 @@ def read_run(
     given = {
         "columns": columns,
         "scale": scale,
+        "sample_rate_Hz": sample_rate_Hz,
         "delimiter": delimiter,
         "decimal": None if decimal == "." else decimal,
         "skip_rows": skip_rows or None,
@@ -183,8 +195,20 @@ def _read(path: Path, opts: ReadOptions) -> Run:
             raise RunFormatError("no such sidecar file; expected an existing file", str(side))
         meta.update(read_sidecar(side))
     meta.update(metadata or {})
+    if opts.sample_rate_Hz is not None:
+        rate = _rate(opts.sample_rate_Hz, "sample_rate_Hz", where)
+        given = (metadata or {}).get("sample_rate_Hz")
+        if given is not None and given != rate:
+            raise RunFormatError(
+                f"sample_rate_Hz is {rate!r} Hz but metadata gives {given!r} Hz; give one",
+                where,
+            )
+        meta["sample_rate_Hz"] = rate
+    time = signals.get(TIME)
+    if time is None:
+        time = _implicit_time(signals, meta, path)
     run = Run(
-        signals[TIME],
+        time,
         signals.get(DISPLACEMENT),
         signals.get(VELOCITY),
         meta,
@@ -194,6 +218,41 @@ def _read(path: Path, opts: ReadOptions) -> Run:
     if validate:
         validate_run(run)
     return run
+
+
+def _rate(value: Any, name: str, where: str) -> float:
+    """A sample rate [Hz]: a finite number > 0."""
+    try:
+        rate = float(value)
+    except (TypeError, ValueError):
+        rate = math.nan
+    if isinstance(value, bool) or not math.isfinite(rate) or rate <= 0.0:
+        raise RunFormatError(f"{name}: expected a sample rate in Hz > 0, got {value!r}", where)
+    return rate
+
+
+def _implicit_time(signals: Mapping[str, NDArray], meta: Mapping[str, Any], path: Path) -> NDArray:
+    """The time stamps i / rate [s] of a file without a time column, from the sample rate
+    given (``sample_rate_Hz``) or the sidecar's.
+
+    Raises
+    ------
+    RunFormatError
+        When no sample rate is known, saying how to give one.
+    """
+    where = str(path)
+    rate = meta.get("sample_rate_Hz")
+    n = max(np.size(v) for name, v in signals.items() if name != TIME)
+    if rate is None:
+        raise RunFormatError(
+            f"the file has no time column: give its sample rate, sample_rate_Hz=HZ "
+            f'(--sample-rate HZ), or "sample_rate_Hz" in the sidecar '
+            f"{sidecar_path(path).name}; sample i is then at t = i / rate [s] "
+            f"({n} samples read)",
+            where,
+        )
+    rate = _rate(rate, "sample_rate_Hz", where)
+    return np.arange(n, dtype=np.float64) / rate
 
 
 def _call_reader(fmt: FileFormat, path: Path, opts: ReadOptions) -> Mapping[str, Any]:

@@ -33,6 +33,10 @@ class ReadOptions:
         a quantity with its unit such as ``displacement_um``, or ``"ignore"``).
     scale : mapping, optional
         Factor per canonical column name converting the file's unit to s, m or m/s.
+    sample_rate_Hz : float, optional
+        The sample rate [Hz] of a file without a time column (sample i at t = i / rate);
+        for a file with one it is the run's ``sample_rate_Hz``, checked against its time
+        stamps.
     delimiter : str, optional
         Text files: the column separator (default: guessed).
     decimal : {".", ","}
@@ -59,6 +63,7 @@ class ReadOptions:
 
     columns: tuple[str, ...] | None = None
     scale: Mapping[str, float] | None = None
+    sample_rate_Hz: float | None = None
     delimiter: str | None = None
     decimal: str = "."
     skip_rows: int = 0

@@ -3,7 +3,11 @@
 The canonical file has a header row naming its columns with the canonical names
 ``time_s``, ``displacement_m`` and ``velocity_m_per_s``; a header may instead give
 other units in the names (``time_ms``, ``displacement_um``, ``velocity [mm/s]``, see
-:mod:`bayestribo.io.columns`), which are converted. Any other text file of
+:mod:`bayestribo.io.columns`), which are converted. The delimiter and the
+decimal mark (a comma in a semicolon, tab or blank separated file) are found from the
+rows of numbers, a byte-order mark is dropped, and a software's preamble (``Key:
+value`` lines) above the header row is skipped. A file without a time column reads with
+its sample rate (:func:`bayestribo.read_run`). Any other text file of
 numbers in columns (comma, semicolon, tab or white-space separated, with or without
 a header, ``#`` comment lines allowed) reads with ``columns=[...]``: one canonical
 name or ``"ignore"`` per column, in file order, and optionally a scale factor per
@@ -18,6 +22,7 @@ import re
 import sys
 import warnings
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -38,7 +43,16 @@ from bayestribo.io.columns import (
 from bayestribo.io.instruments import PREAMBLE_LINES, detect_export, read_export
 from bayestribo.io.run import COLUMNS, DISPLACEMENT, TIME, VELOCITY
 
-__all__ = ["IGNORE", "check_scale", "decode", "parse_lines", "read_text", "write_csv"]
+__all__ = [
+    "IGNORE",
+    "TextLayout",
+    "check_scale",
+    "decode",
+    "parse_lines",
+    "read_text",
+    "text_layout",
+    "write_csv",
+]
 
 _DELIMITERS = (",", ";", "\t")
 
@@ -57,13 +71,22 @@ def _as_float(text: str) -> float | None:
 
 
 def _parse_block(
-    rows: list[tuple[int, str]], delimiter: str | None, width: int, keep: list[int]
+    rows: list[tuple[int, str]],
+    delimiter: str | None,
+    width: int,
+    keep: list[int],
+    decimal: str = ".",
 ) -> NDArray | None:
     """The kept columns of rows of ``width`` numbers each, parsed by numpy's C reader
     (:func:`numpy.loadtxt`, which reads every number as Python's ``float`` does), or
     None for anything else (a field that is not a number, a row of another width),
-    which :func:`_parse_rows` then reads or names."""
+    which :func:`_parse_rows` then reads or names. A decimal comma is read as a point
+    (the delimiter is then not a comma)."""
     text = "\n".join(line for _, line in rows)
+    if decimal == ",":
+        if "." in text:
+            return None  # a point beside decimal commas: _parse_rows names the cell
+        text = text.replace(",", ".")
     try:
         block = np.loadtxt(
             io.StringIO(text), delimiter=delimiter, comments=None, ndmin=2, dtype=np.float64
@@ -105,7 +128,9 @@ def _parse_rows(
                 where,
             )
         for c, (i, name) in enumerate(keep):
-            field = fields[i].replace(",", ".") if decimal == "," else fields[i]
+            field = fields[i]
+            if decimal == ",":
+                field = "x" if "." in field else field.replace(",", ".")
             if field == "":
                 data[r, c] = np.nan  # an empty cell: kept as missing, see _trim_missing
                 continue
@@ -263,8 +288,6 @@ def _check_columns(
     for name in set(used):
         if used.count(name) > 1:
             raise RunFormatError(f"{what}: {name!r} is given {used.count(name)} times", where)
-    if TIME not in used:
-        raise RunFormatError(f"{what}: a {TIME!r} column is needed; got {list(columns)}", where)
     if DISPLACEMENT not in used and VELOCITY not in used:
         raise RunFormatError(
             f"{what}: a {DISPLACEMENT!r} or {VELOCITY!r} column is needed; got {list(columns)}",
@@ -313,6 +336,13 @@ def _header(
     try:
         names, units = _check_columns(kept, where, what)
     except RunFormatError as exc:
+        if other and "column is needed" in exc.message:
+            raise RunFormatError(
+                f"{what}: no displacement or velocity column; {other} are other quantities, "
+                "which are not read (an acceleration is not integrated into a motion); "
+                "export the position or the velocity, or name the columns with columns=[...]",
+                where,
+            ) from None
         si = si_names(labels)
         if "has no unit" not in exc.message or si is None:
             raise
@@ -356,24 +386,151 @@ def _with_unit(label: str, canonical: str) -> str:
     return f"{quantity}_{unit}" if unit else canonical
 
 
+#: Rows of numbers looked at to tell the delimiter and the decimal mark.
+_PROBE_ROWS = 20
+#: Candidate (delimiter, decimal mark) pairs, in the order they are tried: the decimal
+#: point first, then the decimal comma (never with a comma delimiter).
+_MARKS = tuple(
+    (d, m) for m in (".", ",") for d in (",", ";", "\t", None) if not (d == "," and m == ",")
+)
+
+
+def _number_or_empty(field: str, decimal: str) -> bool | None:
+    """True for a number, None for an empty cell, False for anything else."""
+    if field == "":
+        return None
+    if decimal == ",":
+        if "." in field:
+            return False  # a point beside a decimal comma: a thousands mark, not read
+        field = field.replace(",", ".")
+    return _as_float(field) is not None
+
+
+def _numeric_row(fields: list[str], decimal: str, kept: Sequence[int] | None) -> bool:
+    """A row of numbers (empty cells allowed, at least one number) in the kept columns."""
+    cells = fields if kept is None else [fields[i] for i in kept if i < len(fields)]
+    found = [_number_or_empty(f, decimal) for f in cells]
+    return False not in found and True in found
+
+
+def _table_line(fields: list[str], width: int) -> bool:
+    """A line above a header that may be a row of the table (a row with a bad cell, or a
+    header above one), not a preamble line: as many fields as the table (two or more),
+    none of them a ``Key:`` or a ``key=value``."""
+    return (
+        width >= 2
+        and len(fields) == width
+        and not any(f.endswith(":") or "=" in f for f in fields if f)
+    )
+
+
+#: A line that starts with a number (no header row does).
+_STARTS_WITH_NUMBER = re.compile(r"^[\s\"']*[-+]?\.?\d")
+
+
+def _guess_table(
+    lines: Sequence[tuple[int, str]],
+    columns: Sequence[str] | None,
+    delimiter: str | None,
+    decimal: str | None,
+) -> tuple[str | None, str, int | None] | None:
+    """The delimiter, the decimal mark and the index of the first row of numbers of a
+    text's first lines, or None when no choice reads them as a table.
+
+    Each (delimiter, decimal mark) pair of :data:`_MARKS` (the given ones only) is tried
+    in turn; the first that splits the first :data:`_PROBE_ROWS` rows of numbers into as
+    many numbers (or empty cells) as the header (or ``columns``) names is taken. A
+    decimal comma is so taken only when no number holds a point. The lines above the
+    first row of numbers are the header and a preamble (``Key: value`` lines); the
+    index is None when one of them looks like a row of samples with a bad cell, which
+    the reader then names.
+    """
+    marks = [
+        (d, m)
+        for d, m in _MARKS
+        if (delimiter is None or d == delimiter) and (decimal in (None, ".") or m == decimal)
+    ]
+    if delimiter is not None and delimiter not in (",", ";", "\t"):
+        marks = [(delimiter, m) for m in ((decimal,) if decimal == "," else (".", ","))]
+    kept = None if columns is None else [i for i, n in enumerate(columns) if n != IGNORE]
+    probe = lines[:PREAMBLE_LINES]
+    for d, m in marks:
+        first = None
+        for index, (_, line) in enumerate(probe):
+            fields = _split(line, d)
+            if (columns is None or len(fields) == len(columns)) and _numeric_row(fields, m, kept):
+                first = index
+                break
+        if first is None:
+            continue
+        if columns is not None:
+            width = len(columns)
+        elif first > 0:
+            width = len(_fields_of(probe[first - 1][1], d))
+        else:
+            width = len(_split(probe[first][1], d))
+        # the rows of numbers below, but for the last line read (it may be cut short)
+        rows = probe[first : first + _PROBE_ROWS]
+        if len(rows) > 1 and first + len(rows) == len(probe):
+            rows = rows[:-1]
+        if not all(
+            len(fields) == width and _numeric_row(fields, m, kept)
+            for fields in (_split(line, d) for _, line in rows)
+        ):
+            continue
+        if first >= 2:
+            # a preamble above the header: the header must be one, and the preamble no
+            # row of the table (the reader then names the line that is wrong)
+            header = probe[first - 1][1]
+            if _STARTS_WITH_NUMBER.match(header) or any(
+                _number_or_empty(f, m) for f in _split(header, d)
+            ):
+                continue
+            start = first - 1
+            if first >= 3 and combine_units_row(
+                _fields_of(probe[first - 2][1], d), _fields_of(header, d)
+            ):
+                start = first - 2  # a row of names and a row of units
+            above = [_split(line, d) for _, line in probe[:start]]
+            if any(_table_line(fields, width) for fields in above):
+                return d, m, None
+        return d, m, first
+    return None
+
+
 def _layout(
     lines: Sequence[tuple[int, str]],
     where: str,
     columns: Sequence[str] | None,
     delimiter: str | None,
-    decimal: str,
-) -> tuple[list[str], dict[str, float], int, str | None]:
-    """Column names, unit factors, header lines and delimiter of a text's first lines
+    decimal: str | None,
+) -> tuple[list[str], dict[str, float], int, str | None, str]:
+    """Column names, unit factors, header lines (a preamble and a header above the
+    first row of numbers), delimiter and decimal mark of a text's first lines
     (numbered, blank and comment lines left out)."""
     units: dict[str, float] = {}
     if columns is not None:
         columns, units = _check_columns(columns, where)
     if not lines:
         raise RunFormatError("the file holds no data rows", where)
-    if delimiter is None:
-        first = lines[0][1]
-        candidates = _DELIMITERS[1:] if decimal == "," else _DELIMITERS
-        delimiter = next((d for d in candidates if d in first), None)
+    guess = _guess_table(lines, columns, delimiter, decimal)
+    first: int | None = None
+    if guess is not None:
+        delimiter, decimal, first = guess
+    else:
+        decimal = decimal or "."
+        if delimiter is None:
+            candidates = _DELIMITERS[1:] if decimal == "," else _DELIMITERS
+            delimiter = next((d for d in candidates if d in lines[0][1]), None)
+    if columns is None and first is not None and first > 0:
+        # a header row above the rows of numbers, or a row of names and a row of units
+        start = first - 1
+        if first >= 2:
+            names = _fields_of(lines[first - 2][1], delimiter)
+            if combine_units_row(names, _fields_of(lines[first - 1][1], delimiter)):
+                start = first - 2
+        names, units, count = _header(lines[start:first], delimiter, where)
+        return names, units, start + count, delimiter, decimal
     first_fields = _split(lines[0][1], delimiter)
     if decimal == ",":
         first_fields = [f.replace(",", ".") for f in first_fields]
@@ -384,12 +541,21 @@ def _layout(
                 "no header row: name the columns in file order with their units, for "
                 "instance read_run(path, columns=['time_s', 'displacement_mm']) (t, x and v "
                 "alone mean s, m and m/s; length_unit='arbitrary' when the file does not say "
-                "its length unit)",
+                "its length unit)" + _no_time_hint(len(first_fields)),
                 where,
             )
         names, units, header_lines = _header(lines, delimiter, where)
-        return names, units, header_lines, delimiter
+        return names, units, header_lines, delimiter, decimal
     names = list(columns)
+    if first is not None and first > 0:
+        header = _fields_of(lines[first - 1][1], delimiter)
+        if len(header) != len(names):
+            raise RunFormatError(
+                f"header (line {lines[first - 1][0]}) has {len(header)} column(s) but "
+                f"columns= names {len(names)}; expected one name per column",
+                where,
+            )
+        return names, units, first, delimiter, decimal
     if len(first_fields) == len(names):
         # Only the kept columns decide: a text column that is ignored (a clock
         # time, a label) does not make the first data row a header.
@@ -404,7 +570,97 @@ def _layout(
             f"names {len(names)}; expected one name per column",
             where,
         )
-    return names, units, 1 if has_header else 0, delimiter
+    return names, units, 1 if has_header else 0, delimiter, decimal
+
+
+@dataclass(frozen=True)
+class TextLayout:
+    """How a delimited text is read (``bayestribo inspect``).
+
+    Attributes
+    ----------
+    names : list of str
+        The canonical name of each column in file order (``"ignore"`` for one not read).
+    labels : list of str
+        The header's labels (a unit row joined to its names), empty without a header.
+    preamble : int
+        Lines above the header that are skipped (a software's ``Key: value`` lines).
+    delimiter : str or None
+        The column separator (None: blanks).
+    decimal : str
+        The decimal mark.
+    """
+
+    names: list[str]
+    labels: list[str]
+    preamble: int
+    delimiter: str | None
+    decimal: str
+
+
+def text_layout(
+    all_lines: Sequence[str],
+    where: str,
+    *,
+    columns: Sequence[str] | None = None,
+    delimiter: str | None = None,
+    decimal: str | None = None,
+    skip_rows: int = 0,
+) -> TextLayout:
+    """The layout :func:`parse_lines` reads a text's first lines with (no instrument
+    export).
+
+    Parameters
+    ----------
+    all_lines : sequence of str
+        The file's first lines (:data:`~bayestribo.io.instruments.PREAMBLE_LINES` or
+        more), without line ends.
+    where : str
+        The file, for messages.
+    columns, delimiter, decimal, skip_rows
+        As for :func:`read_text`.
+
+    Returns
+    -------
+    TextLayout
+
+    Raises
+    ------
+    RunFormatError
+        As :func:`read_text` for the header.
+    """
+    lines = [
+        (number, line)
+        for number, line in enumerate(all_lines[skip_rows:], start=skip_rows + 1)
+        if line.strip() and not line.lstrip().startswith("#")
+    ]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ReadingWarning)
+        names, _, header_lines, delimiter, decimal = _layout(
+            lines[:PREAMBLE_LINES], where, columns, delimiter, decimal
+        )
+    labels: list[str] = []
+    preamble = 0
+    if header_lines:
+        start = header_lines - 1
+        header = _fields_of(lines[start][1], delimiter)
+        if start > 0:
+            above = _fields_of(lines[start - 1][1], delimiter)
+            if combine_units_row(above, header):
+                start -= 1
+                header = combine_units_row(above, header) or header
+        labels, preamble = header, start
+    return TextLayout(list(names), labels, preamble, delimiter, decimal)
+
+
+def _no_time_hint(width: int) -> str:
+    """For a headerless file of one or two columns: how to read it without a time column."""
+    if width > 2:
+        return ""
+    return (
+        "; a file without a time column is read with its sample rate, e.g. "
+        "columns=['displacement_mm'] and sample_rate_Hz=HZ (--sample-rate HZ)"
+    )
 
 
 def _columns(
@@ -448,8 +704,10 @@ def _read_streamed(
     scale: Mapping[str, float] | None,
     delimiter: str | None,
     encoding: str | None,
+    decimal: str | None = None,
 ) -> dict[str, NDArray] | None:
-    """A plain file (UTF-8, a header or ``columns``, rows of numbers only) read by
+    """A plain file (UTF-8, a header or ``columns``, rows of numbers with a decimal
+    point only) read by
     numpy's C reader straight from the file: no line of it is held as a Python string,
     so a 1 MHz record reads in a fraction of the time and memory of the line-by-line
     path. Comment lines (``#``) above the first row of numbers are skipped as the
@@ -486,12 +744,12 @@ def _read_streamed(
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # a header that warns goes the line-by-line way
         try:
-            names, units, header_lines, delimiter = _layout(
-                lines[:PREAMBLE_LINES], where, columns, delimiter, "."
+            names, units, header_lines, delimiter, decimal = _layout(
+                lines[:PREAMBLE_LINES], where, columns, delimiter, decimal
             )
         except (RunFormatError, Warning):
             return None
-    if header_lines >= len(lines):
+    if header_lines >= len(lines) or decimal != ".":
         return None
     skip = lines[header_lines][0] - 1  # physical lines before the first row of numbers
     if comments and comments[-1] > skip:
@@ -556,7 +814,7 @@ def read_text(
     columns: Sequence[str] | None = None,
     scale: Mapping[str, float] | None = None,
     delimiter: str | None = None,
-    decimal: str = ".",
+    decimal: str | None = None,
     skip_rows: int = 0,
     encoding: str | None = None,
 ) -> dict[str, NDArray]:
@@ -569,16 +827,21 @@ def read_text(
     columns : list of str, optional
         One name per column, in file order: a canonical name, a quantity with its unit
         (``time_ms``, ``displacement_um``, ...) or ``"ignore"``. Without it the file
-        must start with a header row of such names. With it, a header row (a first
-        line whose columns other than ``"ignore"`` are not all numbers) is skipped.
+        must hold a header row of such names above its rows of numbers; a preamble
+        above the header (``Key: value`` lines of the software that wrote it) is
+        skipped. With it, the lines above the first row of numbers are skipped. Without
+        a ``time_s`` column the run's time comes from its sample rate
+        (:func:`bayestribo.read_run`'s ``sample_rate_Hz``).
     scale : mapping, optional
         Factor per canonical column converting the file's unit into the canonical
         unit (s, m, m/s), e.g. ``{"time_s": 1e-3, "displacement_m": 1e-6}``.
     delimiter : str, optional
-        Column separator; by default the first of ``,``, ``;``, tab found in the first
-        line, else white space.
-    decimal : str
-        Decimal mark, ``"."`` or ``","``.
+        Column separator; by default the first of ``,``, ``;``, tab or white space that
+        splits the rows of numbers into as many numbers as the header names.
+    decimal : {".", ","}, optional
+        Decimal mark: ``","`` reads decimal commas; otherwise a point, or a comma when
+        the rows of numbers, split by a delimiter other than a comma, hold decimal
+        commas and no point (a sensor-software export: ``0,01;0,4123``).
     skip_rows : int
         Lines to skip at the top before the header or data (an instrument preamble).
     encoding : str, optional
@@ -600,8 +863,8 @@ def read_text(
     path = Path(path)
     where = str(path)
     _check_options(decimal, delimiter, skip_rows, where)
-    if skip_rows == 0 and decimal == ".":
-        streamed = _read_streamed(path, where, columns, scale, delimiter, encoding)
+    if skip_rows == 0 and decimal != ",":
+        streamed = _read_streamed(path, where, columns, scale, delimiter, encoding, decimal)
         if streamed is not None:
             return streamed
     text = decode(path.read_bytes(), encoding, where)
@@ -616,8 +879,8 @@ def read_text(
     )
 
 
-def _check_options(decimal: str, delimiter: str | None, skip_rows: int, where: str) -> None:
-    if decimal not in (".", ","):
+def _check_options(decimal: str | None, delimiter: str | None, skip_rows: int, where: str) -> None:
+    if decimal not in (None, ".", ","):
         raise RunFormatError(f"decimal: expected '.' or ',', got {decimal!r}", where)
     if decimal == "," and delimiter == ",":
         raise RunFormatError("delimiter and decimal mark cannot both be ','", where)
@@ -632,7 +895,7 @@ def parse_lines(
     columns: Sequence[str] | None = None,
     scale: Mapping[str, float] | None = None,
     delimiter: str | None = None,
-    decimal: str = ".",
+    decimal: str | None = None,
     skip_rows: int = 0,
 ) -> dict[str, NDArray]:
     """Samples from the lines of a delimited text (the body of :func:`read_text`).
@@ -666,7 +929,7 @@ def parse_lines(
                 columns=columns,
                 scale=scale,
                 delimiter=delimiter,
-                decimal=None if decimal == "." else decimal,
+                decimal=None if decimal in (None, ".") else decimal,
                 where=where,
             )
     lines = [
@@ -674,14 +937,16 @@ def parse_lines(
         for number, line in enumerate(all_lines[skip_rows:], start=skip_rows + 1)
         if line.strip() and not line.lstrip().startswith("#")
     ]
-    names, units, header_lines, delimiter = _layout(lines, where, columns, delimiter, decimal)
+    names, units, header_lines, delimiter, decimal = _layout(
+        lines, where, columns, delimiter, decimal
+    )
     rows = lines[header_lines:]
     if not rows:
         raise RunFormatError("the file holds a header but no data rows", where)
 
     keep = [(i, n) for i, n in enumerate(names) if n != IGNORE]
     width = len(names)
-    data = _parse_block(rows, delimiter, width, [i for i, _ in keep]) if decimal == "." else None
+    data = _parse_block(rows, delimiter, width, [i for i, _ in keep], decimal)
     if data is None:
         data = _parse_rows(rows, delimiter, decimal, names, keep, where)
         data = _trim_missing(data, rows, keep, where)

@@ -7,11 +7,12 @@ from typing import Any
 
 from numpy.typing import NDArray
 
+from bayestribo.errors import RunFormatError
 from bayestribo.io.instruments import PREAMBLE_LINES, detect_export
 from bayestribo.io.options import ReadOptions
 from bayestribo.io.registry import FileFormat
-from bayestribo.io.run import COLUMNS
-from bayestribo.io.text import decode, read_text
+from bayestribo.io.run import COLUMNS, TIME
+from bayestribo.io.text import decode, read_text, text_layout
 
 __all__ = ["FORMAT"]
 
@@ -65,8 +66,35 @@ def describe_text(path: Path, options: ReadOptions) -> dict[str, Any]:
         if export.implicit_time:
             out["columns"].insert(0, {"label": "time (X0, Delta_X)", "unit": "s"})
         return out
+    try:
+        layout = text_layout(
+            lines,
+            str(path),
+            columns=options.columns,
+            delimiter=options.delimiter,
+            decimal=options.decimal,
+            skip_rows=skip,
+        )
+    except RunFormatError:
+        layout = None  # the reader names what is wrong
     body = [line for line in lines[skip:] if line.strip() and not line.startswith("#")]
-    if body:
+    if layout is not None:
+        if layout.labels:
+            canonical = layout.labels[0] == COLUMNS[0] and set(layout.labels) <= set(COLUMNS)
+            out["reader"] = "canonical CSV" if canonical else "delimited text with a header row"
+            out["columns"] = [{"label": f, "unit": ""} for f in layout.labels]
+        else:
+            out["reader"] = "delimited text without a header row"
+        notes = []
+        if layout.preamble:
+            notes.append(f"{layout.preamble} preamble line(s) skipped")
+        if layout.decimal == ",":
+            notes.append("decimal comma")
+        if TIME not in layout.names:
+            notes.append("no time column: t = i / sample rate")
+        if notes:
+            out["reader"] += f" ({', '.join(notes)})"
+    elif body:
         first = body[0].strip()
         # the reader's own choice of delimiter: a tab, a semicolon, a comma, or blanks
         delimiter = next((d for d in ("\t", ";", ",") if d in first), None)
