@@ -189,9 +189,11 @@ def _chosen(
                     where,
                 )
         picked[role] = (item, factor)
-    if TIME not in picked or (DISPLACEMENT not in picked and VELOCITY not in picked):
+    if DISPLACEMENT not in picked and VELOCITY not in picked:
+        # without a time channel the run's time comes from its sample rate (read_run)
         raise RunFormatError(
-            f"channels: expected {TIME!r} and {DISPLACEMENT!r} or {VELOCITY!r}; got "
+            f"channels: expected {DISPLACEMENT!r} or {VELOCITY!r} (and {TIME!r}, or the "
+            "sample rate); got "
             f"{sorted(channels)}",
             where,
         )
@@ -214,7 +216,9 @@ def signals_from_arrays(
         The arrays of the file.
     channels : mapping, optional
         Column name (canonical, or with a unit such as ``displacement_um``) -> array
-        name. Without it the arrays are picked by their own names and units.
+        name. Without it the arrays are picked by their own names and units (a time
+        among them). Given without ``time_s``, the run's time comes from its sample
+        rate (:func:`bayestribo.read_run`'s ``sample_rate_Hz``).
     scale : mapping, optional
         Extra factor per canonical column, applied after the unit conversion.
     where : str

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from bayestribo.errors import BayestriboError, RunFormatError
+from bayestribo.errors import BayestriboError, RecordingError, RunFormatError
 from bayestribo.io.options import READ_OPTIONS, ReadOptions, unknown_options
 from bayestribo.io.registry import FileFormat, format_for, registered_formats
 from bayestribo.io.run import DISPLACEMENT, TIME, VELOCITY, Run
@@ -205,7 +205,8 @@ def _read(path: Path, opts: ReadOptions) -> Run:
             )
         meta["sample_rate_Hz"] = rate
     time = signals.get(TIME)
-    if time is None:
+    implicit = time is None
+    if implicit:
         time = _implicit_time(signals, meta, path)
     run = Run(
         time,
@@ -216,7 +217,18 @@ def _read(path: Path, opts: ReadOptions) -> Run:
     )
     del signals  # the reader's arrays: the run holds its own copies
     if validate:
-        validate_run(run)
+        try:
+            validate_run(run)
+        except RecordingError as exc:
+            if not implicit or "plausibility" not in exc.message:
+                raise
+            rate = meta["sample_rate_Hz"]
+            raise RecordingError(
+                f"{exc.message}; the time stamps here are i / {rate:g} Hz, from the sample "
+                "rate given (sample_rate_Hz, --sample-rate): a rate wrong by a factor gives "
+                "a frequency wrong by the same factor",
+                exc.where,
+            ) from None
     return run
 
 

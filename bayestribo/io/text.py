@@ -388,6 +388,8 @@ def _with_unit(label: str, canonical: str) -> str:
 
 #: Rows of numbers looked at to tell the delimiter and the decimal mark.
 _PROBE_ROWS = 20
+#: Share of those rows that must read as numbers for a choice to be taken.
+_GOOD_ROWS = 0.9
 #: Candidate (delimiter, decimal mark) pairs, in the order they are tried: the decimal
 #: point first, then the decimal comma (never with a comma delimiter).
 _MARKS = tuple(
@@ -438,8 +440,9 @@ def _guess_table(
     text's first lines, or None when no choice reads them as a table.
 
     Each (delimiter, decimal mark) pair of :data:`_MARKS` (the given ones only) is tried
-    in turn; the first that splits the first :data:`_PROBE_ROWS` rows of numbers into as
-    many numbers (or empty cells) as the header (or ``columns``) names is taken. A
+    in turn; the first that splits the first :data:`_PROBE_ROWS` rows of numbers (all but
+    one in ten) into as many numbers (or empty cells) as the header (or ``columns``)
+    names is taken. A
     decimal comma is so taken only when no number holds a point. The lines above the
     first row of numbers are the header and a preamble (``Key: value`` lines); the
     index is None when one of them looks like a row of samples with a bad cell, which
@@ -473,11 +476,12 @@ def _guess_table(
         rows = probe[first : first + _PROBE_ROWS]
         if len(rows) > 1 and first + len(rows) == len(probe):
             rows = rows[:-1]
-        if not all(
+        good = sum(
             len(fields) == width and _numeric_row(fields, m, kept)
             for fields in (_split(line, d) for _, line in rows)
-        ):
-            continue
+        )
+        if good < _GOOD_ROWS * len(rows):
+            continue  # (a bad cell or two is the reader's to name)
         if first >= 2:
             # a preamble above the header: the header must be one, and the preamble no
             # row of the table (the reader then names the line that is wrong)

@@ -61,11 +61,23 @@ def _lines(rows: Iterable[tuple[Any, ...]]) -> list[str]:
     return ["\t".join(row + [""] * (width - len(row))) if row else "" for row in cells]
 
 
+#: Rows of numbers alone that make a worksheet of one column a sheet of samples (a
+#: column of displacements read with its sample rate), not a sheet of notes.
+_COLUMN_ROWS = 10
+
+
 def _has_numbers(sheet: Any) -> bool:
+    """A worksheet of samples: a row of two numbers or more among its first rows, or
+    :data:`_COLUMN_ROWS` rows that hold a number and nothing else."""
+    alone = 0
     for i, row in enumerate(sheet.iter_rows(values_only=True)):
         if i >= _PROBE_ROWS:
             break
-        if sum(isinstance(c, int | float) and not isinstance(c, bool) for c in row) >= 2:
+        numbers = sum(isinstance(c, int | float) and not isinstance(c, bool) for c in row)
+        if numbers >= 2:
+            return True
+        alone += numbers == 1 and sum(c is not None for c in row) == 1
+        if alone >= _COLUMN_ROWS:
             return True
     return False
 
