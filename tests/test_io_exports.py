@@ -301,3 +301,12 @@ def test_a_worksheet_of_one_column_reads_with_its_sample_rate(tmp_path: Path) ->
     run = read_run(path, sample_rate_Hz=RATE, metadata=META)
     np.testing.assert_array_equal(run.time, np.arange(len(X)) / RATE)
     np.testing.assert_allclose(run.displacement, X, rtol=1e-15, atol=0)
+
+
+def test_matlab_channels_named_without_time_read_with_the_sample_rate(tmp_path: Path) -> None:
+    scipy_io = pytest.importorskip("scipy.io")
+    path = tmp_path / "laser.mat"
+    scipy_io.savemat(path, {"pos": 1e3 * np.asarray(X)})
+    run = read_run(path, channels={"displacement_mm": "pos"}, sample_rate_Hz=RATE, metadata=META)
+    np.testing.assert_array_equal(run.time, np.arange(len(X)) / RATE)
+    np.testing.assert_allclose(run.displacement, X, rtol=1e-15, atol=0)
