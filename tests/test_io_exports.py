@@ -182,11 +182,18 @@ PREAMBLE = (
 
 
 @pytest.mark.parametrize(
-    "header",
-    ["Time [ms]\tDisplacement [µm]\tVelocity [mm/s]", "Time\tDisplacement\tVelocity\nms\tµm\tmm/s"],
-    ids=["units in the names", "a row of units"],
+    ("header", "skipped"),
+    [
+        ("Time [ms]\tDisplacement [µm]\tVelocity [mm/s]", 5),
+        ("Time\tDisplacement\tVelocity\nms\tµm\tmm/s", 5),
+        # Vernier Format 2: a run name, then names, short names and units
+        ("Latest\nTime\tDisplacement\tVelocity\nt\tx\tv\nms\tµm\tmm/s", 7),
+    ],
+    ids=["units in the names", "a row of units", "Vernier Format 2"],
 )
-def test_a_vibrometer_preamble_in_windows_1252_is_skipped(tmp_path: Path, header: str) -> None:
+def test_a_vibrometer_preamble_in_windows_1252_is_skipped(
+    tmp_path: Path, header: str, skipped: int
+) -> None:
     rows = [f"{1e3 * t!r}\t{1e6 * x!r}\t{1e3 * v!r}" for t, x, v in zip(T, X, V, strict=True)]
     path = _write(tmp_path / "vib.txt", PREAMBLE + header, rows, encoding="cp1252")
     with pytest.warns(ReadingWarning, match="not UTF-8"):
@@ -197,7 +204,7 @@ def test_a_vibrometer_preamble_in_windows_1252_is_skipped(tmp_path: Path, header
     from bayestribo.io.layout import describe_file
 
     layout = describe_file(path, encoding="cp1252")
-    assert "5 preamble line(s) skipped" in layout["reader"]
+    assert f"{skipped} preamble line(s) skipped" in layout["reader"]
     assert "µm" in layout["columns"][1]["label"]
 
 

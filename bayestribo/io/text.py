@@ -415,14 +415,15 @@ def _numeric_row(fields: list[str], decimal: str, kept: Sequence[int] | None) ->
     return False not in found and True in found
 
 
-def _table_line(fields: list[str], width: int) -> bool:
-    """A line above a header that may be a row of the table (a row with a bad cell, or a
-    header above one), not a preamble line: as many fields as the table (two or more),
-    none of them a ``Key:`` or a ``key=value``."""
+def _table_line(fields: list[str], width: int, decimal: str) -> bool:
+    """A line above a header that may be a row of samples with a bad cell, not a
+    preamble line: as many fields as the table (two or more), a number among them, none
+    of them a ``Key:`` or a ``key=value``."""
     return (
         width >= 2
         and len(fields) == width
         and not any(f.endswith(":") or "=" in f for f in fields if f)
+        and any(_number_or_empty(f, decimal) for f in fields)
     )
 
 
@@ -496,7 +497,7 @@ def _guess_table(
             ):
                 start = first - 2  # a row of names and a row of units
             above = [_split(line, d) for _, line in probe[:start]]
-            if any(_table_line(fields, width) for fields in above):
+            if any(_table_line(fields, width, m) for fields in above):
                 return d, m, None
         return d, m, first
     return None
