@@ -32,17 +32,23 @@ def test_round_trip_is_exact_with_metadata(tmp_path: Path) -> None:
         natural_frequency_Hz=32.6,
         repeat=2,
         lubricant="glycerol",
-        operator="B. Smith",
-        nested={"list": [1, 2.5, None, True], "text": "é"},
+        user={"operator": "B. Smith", "nested": {"list": [1, 2.5, None, True], "text": "é"}},
     )
     path = write_run(run, tmp_path / "run.csv")
     assert (tmp_path / "run.json").is_file()
     back = read_run(path)
     assert back == run
     assert back.source == str(path)
-    assert back.metadata["nested"]["text"] == "é"
+    assert back.metadata["user"]["nested"]["text"] == "é"
     # Bit-identical floats (== on arrays would accept -0.0 for 0.0).
     assert back.velocity.tobytes() == run.velocity.tobytes()
+
+
+def test_keys_of_ones_own_are_written_under_user_and_read_back_there(tmp_path: Path) -> None:
+    run = _run(load_N=0.31, operator="B. Smith", user={"room": 4})
+    back = read_run(write_run(run, tmp_path / "run.csv"))
+    assert back.metadata["user"] == {"room": 4, "operator": "B. Smith"}
+    assert "operator" not in back.metadata and back.metadata["load_N"] == 0.31
 
 
 def test_written_header_and_sidecar_follow_the_format(tmp_path: Path) -> None:

@@ -24,6 +24,17 @@ from bayestribo.io.sidecar import read_sidecar
         ("[1, 2]", "one JSON object"),
         ('{"laod_N": 0.59}', "'laod_N' is not a known key; did you mean 'load_N'"),
         ('{"Mass_kg": 0.035}', "did you mean 'mass_kg'"),
+        ('{"normal_load_N": 0.31}', "'normal_load_N' is not a known key; did you mean 'load_N'"),
+        ('{"mas_kg": 0.035}', "did you mean 'mass_kg'"),
+        (
+            '{"operator": "B. Smith"}',
+            r"'operator' is not a known key; put a key of your own under 'user'",
+        ),
+        ('{"filter": {"kind": "rc", "order": 1, "cutoff_Hz": 300}}', "metadata 'filter': 'kind'"),
+        (
+            '{"gain_uncertainty": 2}',
+            "metadata 'gain_uncertainty'.*expected a finite number >= 0 and <= 0.5",
+        ),
     ],
     ids=[
         "400 digits",
@@ -34,6 +45,11 @@ from bayestribo.io.sidecar import read_sidecar
         "array",
         "typo",
         "case",
+        "another name for a known key",
+        "missing letter",
+        "a key of ones own",
+        "impossible filter",
+        "gain beyond its range",
     ],
 )
 def test_absurd_sidecars_are_refused_naming_what_is_wrong(tmp_path, text, match):
@@ -51,7 +67,7 @@ JSON = st.recursive(
 
 
 @settings(max_examples=200, deadline=None)
-@given(st.dictionaries(st.sampled_from(["load_N", "mass_kg", "repeat", "lubricant", "x"]), JSON))
+@given(st.dictionaries(st.sampled_from(["load_N", "mass_kg", "repeat", "lubricant", "user"]), JSON))
 def test_any_json_object_is_read_or_refused_with_the_packages_error(tmp_path_factory, data):
     path = tmp_path_factory.mktemp("s") / "r.json"
     path.write_text(json.dumps(data))

@@ -16,6 +16,7 @@ be reported as a friction displacement in the signal's unit.
 
 from __future__ import annotations
 
+import json
 import math
 import warnings
 from collections.abc import Mapping
@@ -54,17 +55,24 @@ LENGTH_UNITS: tuple[str, str] = ("m", "arbitrary")
 
 @dataclass(frozen=True)
 class _Key:
-    kind: str  # "float", "int" or "str"
+    kind: str  # "float", "int", "str" or "plain" (any plain JSON data, checked by `check`)
     description: str
     low: float | None = None  # inclusive lower bound
     low_open: bool = False  # True: the bound is exclusive
     high: float | None = None  # inclusive upper bound
     choices: tuple[str, ...] | None = None
+    # for kind "plain": check(value, key, where) -> normalised value, raising RunFormatError
+    check: Any = None
 
     def expected(self) -> str:
         if self.choices is not None:
             return "one of " + ", ".join(repr(c) for c in self.choices)
-        text = {"float": "a finite number", "int": "an integer", "str": "a text string"}[self.kind]
+        text = {
+            "float": "a finite number",
+            "int": "an integer",
+            "str": "a text string",
+            "plain": "plain JSON data",
+        }[self.kind]
         if self.low is not None:
             text += f" {'>' if self.low_open else '>='} {self.low:g}"
         if self.high is not None:
@@ -104,8 +112,64 @@ METADATA_KEYS: Mapping[str, _Key] = MappingProxyType(
         "length_unit": _Key(
             "str", "'m', or 'arbitrary' when the length unit is unknown", choices=LENGTH_UNITS
         ),
+        "load_uncertainty_N": _Key(
+            "float", "standard uncertainty of the normal load [N]", 0.0, high=1e6
+        ),
+        "mass_uncertainty_kg": _Key(
+            "float", "standard uncertainty of the mass [kg]", 0.0, high=1e4
+        ),
+        "gain_uncertainty": _Key(
+            "float",
+            "relative standard uncertainty of the sensor's gain (calibration), both channels "
+            "[-]; default 0.01",
+            0.0,
+            high=0.5,
+        ),
+        "displacement_gain_uncertainty": _Key(
+            "float",
+            "relative standard uncertainty of the displacement channel's gain [-]",
+            0.0,
+            high=0.5,
+        ),
+        "velocity_gain_uncertainty": _Key(
+            "float",
+            "relative standard uncertainty of the velocity channel's gain [-]",
+            0.0,
+            high=0.5,
+        ),
+        "filter": _Key(
+            "plain",
+            "the anti-alias filter both channels went through: {'kind': 'butterworth' or "
+            "'bessel', 'order': 1 to 10, 'cutoff_Hz': > 0}",
+            check=lambda value, key, where: _sensor_filter(value, key, where),
+        ),
+        "zeta0": _Key(
+            "float", "damping ratio of the oscillator without contact ζ₀ [-]", 0.0, high=1.0
+        ),
+        "zeta0_sd": _Key("float", "standard uncertainty of ζ₀ [-]", 0.0, high=1.0),
+        "series": _Key("str", "name of the series of runs the run belongs to"),
+        "notes": _Key("str", "free text about the run"),
+        # Records the package writes itself (simulator, acquisition) and a user's own keys:
+        # any plain data, kept as it is.
+        "user": _Key("plain", "a mapping of keys of your own (kept, not read)"),
+        "simulation": _Key("plain", "the simulator's settings and truth (written by the package)"),
+        "acquisition": _Key("plain", "the acquisition's report (written by the package)"),
+        "complete": _Key("plain", "whether the acquisition received every sample"),
+        "fault": _Key("plain", "the acquisition's fault, if any"),
+        "gaps": _Key("plain", "gaps in the acquisition's samples"),
+        "samples_missing": _Key("plain", "samples the acquisition did not receive"),
     }
 )
+
+
+def _sensor_filter(value: Any, key: str, where: str | None) -> Any:
+    """Check a ``filter`` sidecar value (:func:`bayestribo.signal.sensor.filter_gain`)."""
+    from bayestribo.signal.sensor import check_filter
+
+    try:
+        return check_filter(value)
+    except ValueError as exc:
+        raise RunFormatError(f"metadata {key!r}: {exc}", where) from None
 
 
 def _plain(value: Any, key: str, where: str | None) -> Any:
@@ -158,6 +222,9 @@ def _typed(key: str, spec: _Key, value: Any, where: str | None) -> Any:
         f"got {type(value).__name__} {_shown(value)}",
         where,
     )
+    if spec.kind == "plain":
+        plain = _plain(value, key, where)
+        return plain if spec.check is None else spec.check(plain, key, where)
     if spec.kind == "str":
         if not isinstance(value, str):
             raise bad
@@ -186,7 +253,9 @@ def _typed(key: str, spec: _Key, value: Any, where: str | None) -> Any:
     return value
 
 
-def check_metadata(metadata: Mapping[str, Any] | None, where: str | None = None) -> dict:
+def check_metadata(
+    metadata: Mapping[str, Any] | None, where: str | None = None, *, strict: bool = False
+) -> dict:
     """Check a run's metadata and return a normalised copy.
 
     Known keys (:data:`METADATA_KEYS`) must have their type and range (numbers become
@@ -200,12 +269,19 @@ def check_metadata(metadata: Mapping[str, Any] | None, where: str | None = None)
         Metadata with text keys.
     where : str, optional
         The file or origin named in error messages.
+    strict : bool
+        Refuse every key that is not a known key, naming the nearest known one (a
+        sidecar: ``normal_load_N`` kept as free metadata would leave the load unknown
+        and the friction unreported). A key of one's own goes under ``user``. Without
+        ``strict`` (metadata a program builds), only near misses of a known key
+        (``laod_N``, ``Load_N``) are refused.
 
     Raises
     ------
     RunFormatError
         Naming the key, its meaning and the expected type, for a value of the wrong
-        type or range, a non-text key or a value JSON cannot store.
+        type or range, a non-text key or a value JSON cannot store; and for an unknown
+        key (see ``strict``), with the known key it most resembles.
     """
     if metadata is None:
         return {}
@@ -220,26 +296,54 @@ def check_metadata(metadata: Mapping[str, Any] | None, where: str | None = None)
             raise RunFormatError(f"metadata keys must be text strings, got {key!r}", where)
         spec = METADATA_KEYS.get(key)
         if spec is None:
-            _check_not_a_typo(key, where)
+            _check_unknown_key(key, where, strict)
         out[key] = _typed(key, spec, value, where) if spec else _plain(value, key, where)
     return out
 
 
-def _check_not_a_typo(key: str, where: str | None) -> None:
-    """Refuse a key that is a known key misspelt (``laod_N``, ``Load_N``, ``load``):
-    kept as free metadata it would leave the known key missing, and a missing load
-    would make a run with contact look like one without."""
+def _nearest_key(key: str) -> str | None:
+    """The known key that ``key`` most resembles: shared words (``normal_load_N`` and
+    ``load_N`` share ``load`` and the unit ``N``) first, then spelling; None when no
+    known key shares a word with it or half its spelling (``operator``)."""
+    import difflib
+
+    words = set(key.lower().replace("-", "_").split("_")) - {""}
+
+    def score(known: str) -> tuple[int, float]:
+        shared = len(words & set(known.lower().split("_")))
+        return shared, difflib.SequenceMatcher(None, key.lower(), known.lower()).ratio()
+
+    best = max(METADATA_KEYS, key=score)
+    shared, ratio = score(best)
+    return best if shared or ratio >= 0.6 else None
+
+
+def _check_unknown_key(key: str, where: str | None, strict: bool) -> None:
+    """Refuse a key that is not a known key: always when ``strict``, else when it is a
+    known key misspelt (``laod_N``, ``Load_N``, ``load``): kept as free metadata it
+    would leave the known key missing, and a missing load would make a run with contact
+    look like one without."""
     import difflib
 
     folded = {k.lower(): k for k in METADATA_KEYS}
     close = folded.get(key.lower()) or next(
         iter(difflib.get_close_matches(key, list(METADATA_KEYS), n=1, cutoff=0.8)), None
     )
+    if close is None and strict:
+        close = _nearest_key(key)
+        if close is None:
+            raise RunFormatError(
+                f"metadata key {key!r} is not a known key; put a key of your own under "
+                f"'user' ({{\"user\": {{{json.dumps(key)}: ...}}}}); the known keys are "
+                + ", ".join(METADATA_KEYS),
+                where,
+            )
     if close is not None and close != key:
         raise RunFormatError(
             f"metadata key {key!r} is not a known key; did you mean {close!r} "
-            f"({METADATA_KEYS[close].description})? Rename it (a key of your own must not "
-            "be this close to a known one)",
+            f"({METADATA_KEYS[close].description})? Rename it, or put a key of your own "
+            f"under 'user' ({{\"user\": {{{json.dumps(key)}: ...}}}}); the known keys are "
+            + ", ".join(METADATA_KEYS),
             where,
         )
 

@@ -66,7 +66,8 @@ def read_sidecar(path: str | Path) -> dict:
     ------
     RunFormatError
         If the file is not UTF-8 JSON holding one object, repeats a key, holds NaN
-        or infinity, has a value of the wrong type, or a ``run_id`` that is not a
+        or infinity, holds a key that is not a known key (a key of one's own goes
+        under ``user``), has a value of the wrong type, or a ``run_id`` that is not a
         run id (:data:`RUN_ID_PATTERN`: it could name a path outside the folder).
     """
     path = Path(path)
@@ -88,7 +89,7 @@ def read_sidecar(path: str | Path) -> dict:
             f"sidecar must hold one JSON object of metadata; got {type(data).__name__}", where
         )
     try:
-        metadata = check_metadata(data, where)
+        metadata = check_metadata(data, where, strict=True)
     except RecursionError:
         raise RunFormatError(
             "sidecar is nested too deeply to read; expected plain metadata values", where
@@ -107,6 +108,10 @@ def read_sidecar(path: str | Path) -> dict:
 def write_sidecar(metadata: Mapping[str, Any], path: str | Path) -> Path:
     """Write metadata as a sidecar (known keys first, in their documented order).
 
+    A key that is not a known key (metadata a program built, which may hold any) is
+    written under ``user``, where :func:`read_sidecar` reads it back: a sidecar refuses
+    unknown keys at the top level.
+
     Parameters
     ----------
     metadata : mapping
@@ -121,7 +126,20 @@ def write_sidecar(metadata: Mapping[str, Any], path: str | Path) -> Path:
     """
     path = Path(path)
     ordered = {k: metadata[k] for k in METADATA_KEYS if k in metadata}
-    ordered.update({k: v for k, v in metadata.items() if k not in METADATA_KEYS})
+    own = {k: v for k, v in metadata.items() if k not in METADATA_KEYS}
+    if own:
+        user = ordered.get("user") or {}
+        if not isinstance(user, Mapping):
+            raise ValueError(
+                f"metadata 'user' must be a mapping to hold the keys {sorted(own)}, got "
+                f"{type(user).__name__}"
+            )
+        clash = sorted(set(own) & set(user))
+        if clash:
+            raise ValueError(
+                f"metadata: key(s) {clash} are both top-level and under 'user'; keep one"
+            )
+        ordered["user"] = {**user, **own}
     text = json.dumps(ordered, indent=2, ensure_ascii=False, allow_nan=False)
     path.write_text(text + "\n", encoding="utf-8")
     return path
