@@ -45,6 +45,7 @@ def derived_quantities(
     metadata: Mapping[str, Any],
     rng: np.random.Generator,
     frequency_sd: float = 0.0,
+    gain: NDArray | None = None,
 ) -> dict[str, NDArray]:
     """Sampled and derived quantities by name, from flat draws.
 
@@ -74,6 +75,12 @@ def derived_quantities(
         Source of the calibration nuisance draws.
     frequency_sd : float
         Relative standard deviation of the frequency nuisance ε [-] (0: none).
+    gain : ndarray, optional
+        Draws of the signal chain's gain g at the oscillation frequency, one per draw
+        (:meth:`bayestribo.signal.sensor.SensorCalibration.draws`): the recorded
+        amplitude is g times the motion's, so every length the fit measures (x_c, and
+        μ_k = x_c k/N) is divided by it; ζ, a ratio of amplitudes, does not see it.
+        None: a gain of exactly 1.
 
     Returns
     -------
@@ -100,6 +107,8 @@ def derived_quantities(
         ratio = col.get("mu_s_ratio", np.ones(size))
         out["mu_s_ratio"] = ratio
         friction_disp = mu_k * scaling.length_scale
+        if gain is not None:
+            friction_disp = friction_disp / gain
         if scaling.friction_defined:
             # Calibration nuisances: μ_k = x_c k/N with N and m drawn from their
             # stated uncertainties (the data fix x_c, not N or k).
@@ -107,6 +116,7 @@ def derived_quantities(
             mass = float(metadata["mass_kg"])
             n_draw = _positive_draws(rng, load, metadata.get("load_uncertainty_N"), size)
             m_draw = _positive_draws(rng, mass, metadata.get("mass_uncertainty_kg"), size)
+            mu_k = mu_k if gain is None else mu_k / gain
             out["mu_k"] = mu_k * (load / n_draw) * (m_draw / mass) / ratio_w**2
             out["mu_s"] = out["mu_k"] * ratio
         else:

@@ -29,6 +29,7 @@ analysed motion (its largest and smallest half cycle included).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping
 from typing import Any
@@ -122,8 +123,27 @@ def dissipation_amplitudes(turning_points: NDArray, n: int = DISSIPATION_AMPLITU
     return np.geomspace(low, high, n)
 
 
+def _gain_error(mean: NDArray, amplitudes: NDArray, gain_sd: float) -> NDArray:
+    """Relative error of ΔE at fixed physical swings from a gain error of sd ``gain_sd``.
+
+    With a gain g the recorded swing is gA and the energies g²: at a fixed reported
+    swing, ln ΔE moves by (s - 2) ln g, s = d ln ΔE / d ln A the local log-log slope of
+    the band (0 error for quadratic ΔE(A), viscous damping; σ_g for Coulomb, s = 1).
+    """
+    if gain_sd == 0.0 or mean.size == 0:
+        return np.zeros_like(mean)
+    if mean.size < 2 or not np.all(mean > 0):
+        return np.full_like(mean, 2.0 * gain_sd)  # no slope to read: the energy's own
+    slope = np.gradient(np.log(mean), np.log(np.asarray(amplitudes, dtype=float)))
+    return np.abs(slope - 2.0) * gain_sd
+
+
 def _band(
-    total: NDArray, prob: float, frequency_sd: float
+    total: NDArray,
+    prob: float,
+    frequency_sd: float,
+    amplitudes: NDArray | None = None,
+    gain_sd: float = 0.0,
 ) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     """Mean, sd and equal-tailed interval of ΔE draws (n, n_A), with the frequency
     nuisance: the energies scale with k = mΩ², a relative error of twice it, added in
@@ -132,8 +152,11 @@ def _band(
     lower, upper = np.quantile(total, [tail, 1.0 - tail], axis=0)
     mean = np.mean(total, axis=0)
     sd = np.std(total, axis=0, ddof=1) if total.shape[0] > 1 else np.zeros(total.shape[1])
-    if frequency_sd > 0:
-        extra = 2.0 * float(frequency_sd) * np.abs(mean)
+    relative = 2.0 * float(frequency_sd) * np.ones_like(mean)
+    if gain_sd > 0 and amplitudes is not None:
+        relative = np.hypot(relative, _gain_error(mean, amplitudes, gain_sd))
+    if np.any(relative > 0):
+        extra = relative * np.abs(mean)
         z = float(scipy.stats.norm.ppf(1.0 - tail))
         lower = mean - np.hypot(mean - lower, z * extra)
         upper = mean + np.hypot(upper - mean, z * extra)
@@ -149,6 +172,7 @@ def dissipation_band(
     *,
     prob: float = 0.95,
     frequency_sd: float = 0.0,
+    gain_sd: float = 0.0,
 ) -> dict[str, Any]:
     """ΔE(A) over posterior draws: mean and equal-tailed interval at each swing
     (:meth:`~bayestribo.model.laws.Law.swing_dissipation`, see the module notes).
@@ -170,6 +194,10 @@ def dissipation_band(
         (:func:`bayestribo.inference.pipeline.frequency_nuisance_sd`): the energies
         scale with k = mΩ², so ΔE(A) gets a relative error of twice it, added in
         quadrature to the band's sd and to each side of its interval.
+    gain_sd : float
+        Relative standard uncertainty of the sensor's gain
+        (:mod:`bayestribo.signal.sensor`): at a fixed swing ΔE moves by (s - 2) times
+        it, s the band's log-log slope; added in quadrature as ``frequency_sd`` is.
 
     Returns
     -------
@@ -206,7 +234,7 @@ def dissipation_band(
     exact, harmonic = exact[keep], harmonic[keep]
     parts = {k: v[keep] for k, v in parts.items()}
     total = exact * factor
-    mean, sd, lower, upper = _band(total, prob, frequency_sd)
+    mean, sd, lower, upper = _band(total, prob, frequency_sd, amps * scale.length_scale, gain_sd)
     with np.errstate(invalid="ignore", divide="ignore"):
         share = {k: np.where(harmonic != 0, v / harmonic, 0.0) for k, v in parts.items()}
     return {
@@ -223,6 +251,7 @@ def dissipation_band(
         "definition": definition,
         "draws_left_out": int(keep.size - keep.sum()),
         "frequency_nuisance_sd": float(frequency_sd),
+        "gain_sd": float(gain_sd),
     }
 
 
@@ -308,7 +337,7 @@ def _swing_dissipation(
 
 
 def law_quantities(
-    posterior: Posterior, draws: NDArray, scale: PhysicalScale
+    posterior: Posterior, draws: NDArray, scale: PhysicalScale, gain: NDArray | None = None
 ) -> tuple[dict[str, NDArray], dict[str, str]]:
     """The draws of a law's own parameters and physical quantities, by name, and their
     units, for terms other than viscous damping and Coulomb friction (whose ζ, μ_k,
@@ -320,6 +349,9 @@ def law_quantities(
     draws : ndarray
         Flat draws of the sampled coordinates, shape (n, d).
     scale : PhysicalScale
+    gain : ndarray, optional
+        Draws of the signal chain's gain, one per draw: the length of one unit of y is
+        ℓ/g in each (:mod:`bayestribo.signal.sensor`). None: exactly 1.
 
     Returns
     -------
@@ -327,6 +359,8 @@ def law_quantities(
     units : dict of str
     """
     values = posterior.law_draws(draws)
+    if gain is not None:
+        scale = dataclasses.replace(scale, length_scale=scale.length_scale / np.asarray(gain))
     sampled_or_fixed = set(posterior.names) | set(posterior.fixed)
     out: dict[str, NDArray] = {}
     units: dict[str, str] = {}
@@ -357,6 +391,7 @@ def turning_point_dissipation(
     scale: PhysicalScale,
     *,
     prob: float = 0.95,
+    gain_sd: float = 0.0,
 ) -> dict[str, Any] | None:
     """ΔE(A) from the turning points alone: the law-free answer.
 
@@ -386,6 +421,9 @@ def turning_point_dissipation(
         Converts amplitudes and energies to physical units.
     prob : float
         Probability of the intervals.
+    gain_sd : float
+        Relative standard uncertainty of the sensor's gain, added in quadrature as in
+        :func:`dissipation_band` (the scatter of the turning points does not hold it).
 
     Returns
     -------
@@ -432,6 +470,12 @@ def turning_point_dissipation(
         lower[j] = amp * (coef[0] - q * se)
         upper[j] = amp * (coef[0] + q * se)
         used[j] = int(near.sum())
+    if gain_sd > 0:
+        extra = _gain_error(mean, amps, gain_sd) * np.abs(mean)
+        z = float(scipy.stats.norm.ppf(0.5 * (1.0 + prob)))
+        lower = mean - np.hypot(mean - lower, z * extra)
+        upper = mean + np.hypot(upper - mean, z * extra)
+        sd = np.hypot(sd, extra)
     factor = scale.energy_factor
     return {
         "amplitude": (amps * scale.length_scale).tolist(),

@@ -74,6 +74,7 @@ from bayestribo.signal.decay import EnergyDecay, energy_decay
 from bayestribo.signal.frequency import FrequencyTrend, frequency_trend, turning_point_trend
 from bayestribo.signal.increments import PiData, pi_data
 from bayestribo.signal.noise import NoiseModel, noise_model
+from bayestribo.signal.sensor import sensor_calibration
 
 __all__ = [
     "PreparedRun",
@@ -1002,13 +1003,27 @@ def summarise(
     frequency_sd = frequency_nuisance_sd(trend)
     metadata = prepared.metadata
     scaling = prepared.decay.scaling
-    derived = derived_quantities(posterior, flat, scaling, metadata, rng, frequency_sd)
+    # the sensor's gain (signal/sensor.py): its own stream, so that the draws of the
+    # other nuisances and of the predictive Π do not move with it
+    sensor = sensor_calibration(
+        metadata,
+        scaling.omega / (2.0 * np.pi),
+        displacement=prepared.run.displacement is not None,
+        velocity=prepared.run.velocity is not None,
+    )
+    gain = sensor.draws(rng.spawn(1)[0], flat.shape[0])
+    derived = derived_quantities(posterior, flat, scaling, metadata, rng, frequency_sd, gain)
     scale = physical_scale(scaling, metadata)
-    own, own_units = law_quantities(posterior, flat, scale)
+    own, own_units = law_quantities(posterior, flat, scale, gain)
     derived = {**derived, **{k: v for k, v in own.items() if k not in derived}}
     swings = dissipation_amplitudes(decay.peaks.value / scaling.length_scale)
-    dissipation = dissipation_band(posterior, flat, swings, scale, frequency_sd=frequency_sd)
-    measured = turning_point_dissipation(decay.peaks.value / scaling.length_scale, swings, scale)
+    scale = dataclasses.replace(scale, length_scale=scale.length_scale / sensor.gain)
+    dissipation = dissipation_band(
+        posterior, flat, swings, scale, frequency_sd=frequency_sd, gain_sd=sensor.gain_sd
+    )
+    measured = turning_point_dissipation(
+        decay.peaks.value / scaling.length_scale, swings, scale, gain_sd=sensor.gain_sd
+    )
     noise_info = {**prepared.noise.to_dict(), "description": prepared.noise.describe()}
     attrs = {
         "run_name": name,
@@ -1051,6 +1066,7 @@ def summarise(
         ),
         "frequency_trend_json": json.dumps(None if trend is None else trend.to_dict()),
         "frequency_nuisance_sd": frequency_sd,
+        "sensor_json": json.dumps({**dataclasses.asdict(sensor), "description": sensor.describe()}),
         "law_frequency_change": law_change,
         "prior_sensitivity_json": json.dumps(plain_data(prior_sensitivity(flat, posterior.priors))),
     }

@@ -422,6 +422,9 @@ class FitResult:
                 f"decay ({trend['z']:+.1f} SE); the parameters and ΔE(A) carry "
                 f"± {100 * sd_eps:.2g} % for it"
             )
+        sensor = self._attr("sensor_json", None)
+        if sensor:
+            lines.append(f"sensor    {sensor['description']}")
         for entry in self.at_prior_bound:
             lines.append(
                 f"NOT A MEASUREMENT: {entry['parameter']} piles on its prior's upper bound "

@@ -361,6 +361,8 @@ def _metadata(
         "displacement_resolution_m": float(sensor.displacement_resolution_m),
         "velocity_resolution_m_per_s": float(sensor.velocity_resolution_m_per_s),
         "sample_rate_Hz": float(sensor.sample_rate_Hz),
+        # the simulated sensor's gain is exact (bayestribo.signal.sensor)
+        "gain_uncertainty": 0.0,
     }
     if sensor.displacement_range_m is not None:
         meta["displacement_range_m"] = float(sensor.displacement_range_m)

@@ -1,0 +1,249 @@
+"""The sensor's calibration: an uncertain gain and a known anti-alias filter.
+
+A recording's amplitude is the motion's times the gain of its signal chain: the
+sensor's calibration (a laser vibrometer's or a motion sensor's, rarely known better
+than 1 %) and any low-pass filter before the digitiser. Damping ratios are ratios of
+amplitudes and do not see a constant gain; a friction is a displacement (μ_k N/k) and
+sees it whole: a gain of 0.995 gives a μ_k 0.5 % low. A posterior on the Π increments
+alone is far narrower than that on a good record, so the gain must enter the reported
+intervals:
+
+* the gain's relative standard uncertainty σ_g (the sidecar's ``gain_uncertainty``,
+  per channel ``displacement_gain_uncertainty`` and ``velocity_gain_uncertainty``;
+  :data:`DEFAULT_GAIN_UNCERTAINTY` when not stated, and the output says so) is drawn
+  per posterior draw into every length the fit reports
+  (:func:`bayestribo.inference.assemble.derived_quantities`);
+* a known filter (the sidecar's ``filter``: kind, order, cutoff) multiplies the
+  oscillation at the frequency f by ``|H(2πif)|`` (:func:`filter_gain`); the reported
+  lengths are divided by it. Both channels are taken through the same filter: their
+  common phase lag shifts the record in time and leaves the energy
+  ``(y² + y'²)/2`` unchanged.
+
+The energy ``(y² + y'²)/2`` weighs the displacement and the velocity channel equally
+over a cycle, so with both channels the amplitude's relative uncertainty is
+``√(σ_x² + σ_v²)/2`` (:func:`amplitude_gain_sd`); with one channel (the other derived
+from it) it is that channel's.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "DEFAULT_GAIN_UNCERTAINTY",
+    "FILTER_KINDS",
+    "SensorCalibration",
+    "amplitude_gain_sd",
+    "check_filter",
+    "filter_gain",
+    "sensor_calibration",
+]
+
+#: Relative standard uncertainty of a sensor's gain where the sidecar states none: the
+#: calibration accuracy of laser vibrometers and of teaching-lab motion sensors (1 %).
+DEFAULT_GAIN_UNCERTAINTY = 0.01
+
+#: Filter kinds a sidecar may name (analog prototypes of :mod:`scipy.signal`).
+FILTER_KINDS = ("butterworth", "bessel")
+
+
+def check_filter(spec: Any) -> dict[str, Any]:
+    """Check a filter specification and return it normalised.
+
+    Parameters
+    ----------
+    spec : mapping
+        ``{"kind": "butterworth" | "bessel", "order": 1..10, "cutoff_Hz": > 0}``; a
+        one-pole RC filter is ``{"kind": "butterworth", "order": 1, ...}``.
+
+    Returns
+    -------
+    dict
+        ``kind`` (lower case), ``order`` (int), ``cutoff_Hz`` (float).
+
+    Raises
+    ------
+    ValueError
+        Naming the field and what was expected.
+    """
+    if not isinstance(spec, Mapping):
+        raise ValueError(
+            f"expected a mapping {{'kind': ..., 'order': ..., 'cutoff_Hz': ...}}, got {spec!r}"
+        )
+    unknown = set(spec) - {"kind", "order", "cutoff_Hz"}
+    if unknown:
+        raise ValueError(
+            f"unknown field(s) {sorted(unknown)}; expected 'kind', 'order' and 'cutoff_Hz'"
+        )
+    kind = spec.get("kind")
+    if not isinstance(kind, str) or kind.lower() not in FILTER_KINDS:
+        raise ValueError(f"'kind' must be one of {', '.join(FILTER_KINDS)}, got {kind!r}")
+    order = spec.get("order")
+    if isinstance(order, bool) or not isinstance(order, int) or not 1 <= order <= 10:
+        raise ValueError(f"'order' must be an integer from 1 to 10, got {order!r}")
+    cutoff = spec.get("cutoff_Hz")
+    if (
+        isinstance(cutoff, bool)
+        or not isinstance(cutoff, int | float)
+        or not (math.isfinite(cutoff) and cutoff > 0)
+    ):
+        raise ValueError(f"'cutoff_Hz' must be a positive number [Hz], got {cutoff!r}")
+    return {"kind": kind.lower(), "order": int(order), "cutoff_Hz": float(cutoff)}
+
+
+def filter_gain(spec: Mapping[str, Any], frequency_Hz: float) -> float:
+    """Magnitude of an analog low-pass filter at a frequency, ``|H(2πif)|``.
+
+    Parameters
+    ----------
+    spec : mapping
+        A filter (:func:`check_filter`). Butterworth: ``|H| = (1 + (f/f_c)^(2n))^(-1/2)``;
+        Bessel: :func:`scipy.signal.bessel` normalised to its -3 dB frequency
+        (``norm="mag"``), as filter data sheets state the cutoff.
+    frequency_Hz : float
+        Oscillation frequency f [Hz].
+
+    Returns
+    -------
+    float
+        The gain, in (0, 1].
+
+    Examples
+    --------
+    >>> round(filter_gain({"kind": "butterworth", "order": 1, "cutoff_Hz": 10.0}, 1.0), 6)
+    0.995037
+    """
+    spec = check_filter(spec)
+    ratio = float(frequency_Hz) / spec["cutoff_Hz"]
+    if spec["kind"] == "butterworth":
+        return float((1.0 + ratio ** (2 * spec["order"])) ** -0.5)
+    from scipy.signal import bessel, freqs
+
+    b, a = bessel(spec["order"], 1.0, analog=True, norm="mag")
+    _, h = freqs(b, a, worN=[ratio])
+    return float(abs(h[0]))
+
+
+def amplitude_gain_sd(displacement_sd: float | None, velocity_sd: float | None) -> float:
+    """Relative standard uncertainty of the energy's amplitude from the channels' gains.
+
+    Parameters
+    ----------
+    displacement_sd, velocity_sd : float or None
+        Relative gain uncertainty of each recorded channel; None for a channel not
+        recorded (derived from the other, it shares that one's gain).
+
+    Returns
+    -------
+    float
+        ``√(σ_x² + σ_v²)/2`` with both channels, else the recorded channel's σ.
+    """
+    if displacement_sd is None and velocity_sd is None:
+        raise ValueError("at least one channel's gain uncertainty is needed")
+    if displacement_sd is None or velocity_sd is None:
+        return float(displacement_sd if velocity_sd is None else velocity_sd)
+    return 0.5 * math.hypot(displacement_sd, velocity_sd)
+
+
+@dataclass(frozen=True)
+class SensorCalibration:
+    """The gain of a run's signal chain, as the fit uses it.
+
+    Attributes
+    ----------
+    gain : float
+        Known gain at the oscillation frequency (the filter's ``|H|``; 1 without one):
+        the reported lengths are divided by it.
+    gain_sd : float
+        Relative standard uncertainty of the amplitude's gain [-].
+    stated : bool
+        False where ``gain_sd`` is :data:`DEFAULT_GAIN_UNCERTAINTY` for want of a
+        sidecar value (the output says so).
+    filter : dict or None
+        The filter, as the sidecar gives it.
+    """
+
+    gain: float = 1.0
+    gain_sd: float = 0.0
+    stated: bool = True
+    filter: dict[str, Any] | None = None
+
+    def draws(self, rng: np.random.Generator, size: int) -> np.ndarray:
+        """Draws of the chain's gain: ``gain (1 + ε)``, ε ~ N(0, gain_sd²) truncated to
+        ``1 + ε > 0.1`` (a sensor off by a factor of ten is a unit error, not a spread)."""
+        if self.gain_sd == 0.0:
+            return np.full(size, self.gain)
+        eps = rng.normal(0.0, self.gain_sd, size)
+        bad = eps <= -0.9
+        while np.any(bad):
+            eps[bad] = rng.normal(0.0, self.gain_sd, int(bad.sum()))
+            bad = eps <= -0.9
+        return self.gain * (1.0 + eps)
+
+    def describe(self) -> str:
+        """One line for the output: the gain uncertainty used and where it came from."""
+        text = f"sensor gain uncertainty {self.gain_sd:.2%}"
+        text += (
+            " (stated)"
+            if self.stated
+            else (" (the default: state yours as 'gain_uncertainty' in the sidecar)")
+        )
+        if self.filter is not None:
+            f = self.filter
+            text += (
+                f"; {f['kind']} filter of order {f['order']} at {f['cutoff_Hz']:g} Hz "
+                f"corrected (gain {self.gain:.5f} at the oscillation frequency)"
+            )
+        return text
+
+
+def sensor_calibration(
+    metadata: Mapping[str, Any],
+    frequency_Hz: float,
+    *,
+    displacement: bool = True,
+    velocity: bool = True,
+) -> SensorCalibration:
+    """The signal chain's gain from a run's metadata.
+
+    Parameters
+    ----------
+    metadata : mapping
+        ``gain_uncertainty``, ``displacement_gain_uncertainty``,
+        ``velocity_gain_uncertainty`` [-] and ``filter`` (any may be absent).
+    frequency_Hz : float
+        The oscillation frequency [Hz] at which the filter's gain is taken.
+    displacement, velocity : bool
+        Which channels the run recorded.
+
+    Returns
+    -------
+    SensorCalibration
+    """
+    both = metadata.get("gain_uncertainty")
+    stated = both is not None
+    sds: dict[str, float | None] = {}
+    for channel, recorded in (("displacement", displacement), ("velocity", velocity)):
+        own = metadata.get(f"{channel}_gain_uncertainty")
+        stated = stated or own is not None
+        if not recorded:
+            sds[channel] = None
+        elif own is not None:
+            sds[channel] = float(own)
+        else:
+            sds[channel] = float(both) if both is not None else DEFAULT_GAIN_UNCERTAINTY
+    if not (displacement or velocity):
+        raise ValueError("a run records a displacement, a velocity or both")
+    spec = metadata.get("filter")
+    gain = 1.0 if spec is None else filter_gain(spec, frequency_Hz)
+    return SensorCalibration(
+        gain=gain,
+        gain_sd=amplitude_gain_sd(sds["displacement"], sds["velocity"]),
+        stated=stated,
+        filter=None if spec is None else check_filter(spec),
+    )
