@@ -13,6 +13,7 @@ __all__ = [
     "BayestriboError",
     "ConvergenceWarning",
     "FrequencyTrendWarning",
+    "GapWarning",
     "MisfitWarning",
     "MissingDependencyError",
     "ReadingWarning",
@@ -94,3 +95,9 @@ class ClippingWarning(UserWarning):
     """The largest swings of a recording are flattened at their peaks (a sensor that
     saturates softly, or a spring that softens): their cycles were left out of the
     analysis (the message says how many, at which swing and by how much)."""
+
+
+class GapWarning(UserWarning):
+    """Samples were missing from a recording's clock and the gaps were bridged on the
+    regular grid (the message names each gap: after which sample, how many samples, and
+    the interpolation's error bound against the noise)."""

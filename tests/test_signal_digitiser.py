@@ -50,12 +50,13 @@ def test_a_digitiser_coarser_than_the_stated_resolution_sets_the_noise():
     assert "quantised in steps of 2e-06" in model.describe()
 
 
-def test_jittered_time_stamps_are_the_regular_clock_and_a_gap_is_refused():
+def test_jittered_time_stamps_are_the_regular_clock_and_a_gap_is_bridged():
     """±2 µs of jitter on a 10 kHz time column (a logger's software stamps): read, the
     samples taken on the regular grid the stamps scatter about, and the fit is the
-    fit of the record without jitter. A missing sample is still refused."""
+    fit of the record without jitter. A missing sample is bridged and said; a gap of a
+    third of a period is refused, naming it."""
     from bayestribo import fit
-    from bayestribo.errors import BayestriboError
+    from bayestribo.errors import BayestriboError, GapWarning
 
     run = simulate(seed=4)
     rng = np.random.default_rng(1)
@@ -68,9 +69,19 @@ def test_jittered_time_stamps_are_the_regular_clock_and_a_gap_is_refused():
     for name in ("zeta", "mu_k"):
         sa, sb = a.summary()[name], b.summary()[name]
         assert abs(sa.mean - sb.mean) < 0.1 * sa.sd, name
+    # a missing sample is bridged on the grid (bayestribo._clock), said, and the fit is
+    # the fit of the whole record; a gap of a third of a period is refused, naming it
     gap = np.delete(np.arange(run.time.size), 3000)
-    with pytest.raises(BayestriboError, match="regular"):
-        fit(Run(run.time[gap], run.displacement[gap], run.velocity[gap], dict(run.metadata)))
+    with pytest.warns(GapWarning, match=r"1 sample\(s\) after sample 2999"):
+        c = fit(
+            Run(run.time[gap], run.displacement[gap], run.velocity[gap], dict(run.metadata)), seed=1
+        )
+    for name in ("zeta", "mu_k"):
+        sa, sc = a.summary()[name], c.summary()[name]
+        assert abs(sa.mean - sc.mean) < 0.1 * sa.sd, name
+    long = np.delete(np.arange(run.time.size), np.arange(3000, 3100))
+    with pytest.raises(BayestriboError, match=r"100 samples are missing after sample 2999"):
+        fit(Run(run.time[long], run.displacement[long], run.velocity[long], dict(run.metadata)))
 
 
 def test_a_swing_no_rig_makes_is_refused_with_the_factor_that_fixes_it():

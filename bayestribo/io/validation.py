@@ -7,8 +7,11 @@ expected at the first problem found:
 1. every sample of every field is finite (no NaN, no infinity);
 2. there are at least ``min_samples`` samples;
 3. the time stamps strictly increase and are regular (each step within
-   ``time_rtol`` of the median step); a declared ``sample_rate_Hz`` agrees with
-   them, and the sampling resolves a declared natural frequency (Nyquist);
+   ``time_rtol`` of the median step), jittered about a regular grid, or on a regular
+   grid with samples missing that the analysis can bridge (each gap at most a tenth
+   of a period, :func:`bayestribo._clock.on_grid`; a longer one is named with its
+   samples and times); a declared ``sample_rate_Hz`` agrees with them, and the
+   sampling resolves a declared natural frequency (Nyquist);
 4. no signal is clipped: none reaches a declared sensor range
    (``displacement_range_m``, ``velocity_range_m_per_s``), and none is cut flat
    through the record: a flat top is its maximum or minimum value held for
@@ -107,6 +110,22 @@ def _jittered(t: NDArray) -> bool:
     return clock(t).regular
 
 
+def _bridgeable(run: Run, where: str | None) -> bool:
+    """Stamps on a regular grid with samples missing that the analysis bridges
+    (:func:`bayestribo._clock.on_grid`); a gap it cannot bridge is refused here, naming
+    its samples and times."""
+    from bayestribo._clock import on_grid, timeline
+
+    line = timeline(run.time)
+    if not (line.on_grid and line.gaps):
+        return False
+    try:
+        on_grid(run.time, run.displacement, run.velocity)
+    except RecordingError as exc:
+        raise _fail(f"field {TIME!r}: {exc.message}", where) from None
+    return True
+
+
 def _check_time(run: Run, where: str | None, time_rtol: float) -> float:
     t = run.time
     step = np.diff(t)
@@ -121,7 +140,7 @@ def _check_time(run: Run, where: str | None, time_rtol: float) -> float:
     median = sample_step(t, step)  # remembered for the checks and the fit that follow
     # the largest deviation from the extremes of the steps (no array of deviations)
     largest = max(float(step.max()) - median, median - float(step.min())) / median
-    if largest > time_rtol and not _jittered(t):  # jitter about a grid passes
+    if largest > time_rtol and not _jittered(t) and not _bridgeable(run, where):
         worst = int(np.argmax(np.abs(step - median)))
         raise _fail(
             f"field {TIME!r} is irregular: the step from sample {worst} to {worst + 1} is "

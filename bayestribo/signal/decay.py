@@ -71,9 +71,9 @@ import scipy.signal
 from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import cumulative_trapezoid
 
-from bayestribo._clock import clock
+from bayestribo._clock import clock, on_grid
 from bayestribo._warnings import warn
-from bayestribo.errors import ClippingWarning, RecordingError
+from bayestribo.errors import ClippingWarning, GapWarning, RecordingError
 from bayestribo.model.plausible import MAX_SPEED
 from bayestribo.model.scaling import Rig, Scaling
 from bayestribo.signal.clipping import flattened_turning_points, hard_clips
@@ -806,6 +806,14 @@ def energy_decay(
     """
     stamps = np.asarray(t, dtype=float)
     t = check_time(stamps)
+    # samples missing from a regular clock: bridged on the grid, and said (_clock.py)
+    stamps, displacement, velocity, gaps = on_grid(stamps, displacement, velocity)
+    if gaps:
+        warn(
+            f"{len(gaps)} gap(s) in the time stamps bridged on the regular grid by the "
+            "cubic through their neighbours: " + "; ".join(g.describe() for g in gaps),
+            GapWarning,
+        )
     # stamps jittered about a regular grid are replaced by it (bayestribo._clock)
     jitter = 0.0 if t is stamps else clock(stamps).jitter
     x = _check_signal("displacement", displacement, t.size)
