@@ -719,11 +719,43 @@ def _sample_surrogate(
     return None, checked, None
 
 
+def misfit_p_value(chi2: float, m: int, noise_dof: float | None) -> float:
+    """p-value of a residual χ² for m increments, with the noise variance's own error.
+
+    The residuals are standardised by a noise variance measured at rest from a finite
+    number of samples: the estimate is σ² χ²_ν/ν, ν its degrees of freedom, and
+    ``(χ²/m)`` then follows an F(m, ν) distribution, not χ²_m/m. With 200 samples of
+    rest (±10 % on σ²) and m = 2000 increments, χ² = 2300 is p = 3e-6 as a χ² but
+    p = 0.10 as an F: the rest, not the law, is uncertain by that much.
+
+    Parameters
+    ----------
+    chi2 : float
+        Sum of the squared standardised residuals.
+    m : int
+        Number of increments.
+    noise_dof : float or None
+        ν (:attr:`bayestribo.signal.noise.NoiseModel.measured_dof`); None for a noise
+        taken as exact (the instrument's resolution): the χ² test.
+
+    Returns
+    -------
+    float
+    """
+    if noise_dof is None or not math.isfinite(noise_dof) or noise_dof <= 0:
+        return float(scipy.stats.chi2.sf(chi2, m))
+    return float(scipy.stats.f.sf(chi2 / m, m, noise_dof))
+
+
 def _misfit(posterior: Posterior, theta: NDArray) -> tuple[float, int, float]:
-    """χ², number of increments and p-value of the standardized residuals at θ."""
+    """χ², number of increments and p-value of the standardized residuals at θ
+    (:func:`misfit_p_value`, with the degrees of freedom of the measured noise)."""
     resid = posterior.standardized_residuals(theta[None])[0]
     chi2 = float(np.sum(resid * resid))
-    return chi2, int(resid.size), float(scipy.stats.chi2.sf(chi2, resid.size))
+    preparation = posterior.likelihood.data.preparation or {}
+    noise = preparation.get("noise")
+    dof = getattr(noise, "measured_dof", None)
+    return chi2, int(resid.size), misfit_p_value(chi2, int(resid.size), dof)
 
 
 def _shape_departure(posterior: Posterior, theta: NDArray) -> ShapeDeparture:

@@ -77,6 +77,14 @@ class NoiseModel:
         For coloured noise, the relative standard error of its level in the signal
         band as measured at rest (:attr:`~bayestribo.signal.spectrum.NoiseSpectrum.band_rel_se`,
         the larger of the channels'): how well the increments' variances are known.
+    measured_dof : float or None
+        Degrees of freedom of the measured variance where a measured figure is used
+        (:attr:`exceeds_nominal`): the quiescent samples less one per segment for white
+        noise, ``2/spectrum_rel_se²`` for coloured noise; None where the noise is the
+        instrument's resolution, or measured from signal differences over the whole
+        record. A misfit test compares the residuals' χ² with this estimate's own
+        uncertainty (an F test), so a short rest gives no false alarms
+        (:func:`bayestribo.inference.pipeline.misfit_p_value`).
     """
 
     displacement: float
@@ -93,6 +101,7 @@ class NoiseModel:
     lines_Hz: tuple[float, ...] = ()
     spectrum_rel_se: float | None = None
     quantisation_steps: tuple[float | None, float | None] = (None, None)
+    measured_dof: float | None = None
 
     @property
     def exceeds_nominal(self) -> bool:
@@ -206,7 +215,19 @@ def noise_model(
             getattr(meas, "displacement_step", None),
             getattr(meas, "velocity_step", None),
         ),
+        measured_dof=_measured_dof(meas, rest, "measured" in (src_x, src_v)),
     )
+
+
+def _measured_dof(meas: Any, rest: Any, used: bool) -> float | None:
+    """Degrees of freedom of the measured noise variance (see :class:`NoiseModel`)."""
+    if not used or meas.n_samples <= 0:
+        return None
+    rel_se = _spectrum_rel_se(rest)
+    if rel_se is not None and rel_se > 0:
+        return 2.0 / rel_se**2
+    segments = max(1, str(meas.source).count(" and ") + 1)
+    return float(max(meas.n_samples - segments, 1))
 
 
 def _spectrum_rel_se(rest: Any) -> float | None:
