@@ -38,8 +38,9 @@ steps q dwells on its last level while ``A(1 - cos ωs) < q``, for about
 step of about one quantum. A cut is held for as long as the swing stays beyond it and
 is entered with the signal's slope: a run at the signal's extreme value is a clip only
 when it is longer than twice the expected dwell (and more than two samples) and both
-its entry and its exit step are larger than what a smooth extreme allows there
-(``A(ωh)²/2`` over one sample h, plus two quanta). Each such run is one clipped cycle.
+its entry and its exit over two samples are larger than what a smooth extreme allows
+there (``A(2ωh)²/2``, h the sample spacing, plus two quanta). Each such run is one
+clipped cycle.
 """
 
 from __future__ import annotations
@@ -321,13 +322,14 @@ def hard_clips(
         stops = at[np.r_[breaks - 1, at.size - 1]] + 1
         swing = abs(level - centre)
         expected = expected_dwell(swing, q, period, dt)
-        omega_h = 2.0 * math.pi * dt / period
+        omega_h = 4.0 * math.pi * dt / period  # over two samples
         smooth_step = swing * omega_h * omega_h / 2.0 + 2.0 * q
         keep = []
         for a, b in zip(starts.tolist(), stops.tolist(), strict=True):
-            if a == 0 or b == n or b - a < min_samples or b - a <= 2.0 * expected:
+            if a < 2 or b > n - 2 or b - a < min_samples or b - a <= 2.0 * expected:
                 continue
-            entry, leave = abs(values[a - 1] - level), abs(values[b] - level)
+            # over two samples: a cut may be entered a fraction of its slope's step away
+            entry, leave = abs(values[a - 2] - level), abs(values[b + 1] - level)
             if min(entry, leave) > smooth_step:
                 keep.append((a, b - a))
         if keep:

@@ -77,6 +77,7 @@ from bayestribo.errors import ClippingWarning, GapWarning, RecordingError
 from bayestribo.model.plausible import MAX_SPEED
 from bayestribo.model.scaling import Rig, Scaling
 from bayestribo.signal.clipping import flattened_turning_points, hard_clips
+from bayestribo.signal.coverage import ShortAnalysisWarning, coverage_note
 from bayestribo.signal.motion import THRESHOLD, block_noise, check_turning_points, motion_span
 from bayestribo.signal.peaks import Peaks, estimate_noise, find_peaks
 from bayestribo.signal.period import dominant_period, sample_step
@@ -805,7 +806,6 @@ def energy_decay(
         does not decay".
     """
     stamps = np.asarray(t, dtype=float)
-    t = check_time(stamps)
     # samples missing from a regular clock: bridged on the grid, and said (_clock.py)
     stamps, displacement, velocity, gaps = on_grid(stamps, displacement, velocity)
     if gaps:
@@ -814,6 +814,7 @@ def energy_decay(
             "cubic through their neighbours: " + "; ".join(g.describe() for g in gaps),
             GapWarning,
         )
+    t = check_time(stamps)
     # stamps jittered about a regular grid are replaced by it (bayestribo._clock)
     jitter = 0.0 if t is stamps else clock(stamps).jitter
     x = _check_signal("displacement", displacement, t.size)
@@ -883,6 +884,31 @@ def energy_decay(
     return _analyse(t, out[0], out[1], notch_Hz=(float(np.mean(fitted)),), **options)
 
 
+#: Peak-to-peak height, in quantisation steps, that a quantised displacement's
+#: turning points must stand out by (a rounding error is at most half a step at each).
+PEAK_STEPS = 2.0
+#: Prominence of a turning point, in noise standard deviations (find_peaks' default).
+PEAK_THRESHOLD = 10.0
+
+
+def _peak_noise(sigma: float | None, step: float | None) -> tuple[float | None, float]:
+    """Noise and threshold for the turning points of a displacement.
+
+    Unquantised: the rest noise ``sigma`` and :data:`PEAK_THRESHOLD`. Quantised in
+    ``step``: a rounding error is bounded (at most step/2 at each turning point), so a
+    turning point is one whose swing stands :data:`PEAK_STEPS` steps out beyond ten
+    times the noise other than rounding; the noise is at least step/√12 (a rest on one
+    level shows none).
+    """
+    if step is None:
+        return sigma, PEAK_THRESHOLD
+    rounding = step * QUANTISATION_NOISE_FACTOR
+    level = max(sigma or 0.0, rounding)
+    other = math.sqrt(max(level * level - rounding * rounding, 0.0))
+    floor = max(PEAK_THRESHOLD * other, PEAK_STEPS * step)
+    return level, floor / level
+
+
 def _despiked(
     t: NDArray, x: NDArray | None, v: NDArray | None
 ) -> tuple[NDArray | None, NDArray | None]:
@@ -897,12 +923,12 @@ def _despiked(
             out.append(s)
             continue
         said.append(describe(name, t, s, spikes))
-        out.append(bridged(t, s, spikes))
+        out.append(bridged(s, spikes))
     if said:
         warn(
             "; ".join(said) + ": single samples far off their neighbours (a sensor "
-            "dropout); they are left out of the analysis (each replaced by the line between "
-            "its neighbours, the recording unchanged); if they are not spikes, crop the "
+            "dropout); they are left out of the analysis (each replaced by the median of the five "
+            "samples about it, the recording unchanged); if they are not spikes, crop the "
             "record around them (--window T0:T1)",
             SpikeWarning,
         )
@@ -964,6 +990,38 @@ def _hard_clipped(
         return None
     count = max(c for c, _ in found)
     return count, "hard clipping: " + "; ".join(said for _, said in found)
+
+
+def _check_coverage(
+    t: NDArray,
+    start: int,
+    stop: int,
+    release: float,
+    window: Peaks,
+    left_out: int,
+    stop_time: float | None,
+) -> None:
+    """Warn (:class:`~bayestribo.signal.coverage.ShortAnalysisWarning`) when the
+    analysed samples ``t[start:stop]`` cover less than half of the recorded motion,
+    saying why: the turning points that end before the motion does, or the cycles
+    left out at the start."""
+    motion_end = float(t[-1]) if stop_time is None else float(stop_time)
+    last_turn = float(window.t[-1])
+    if stop_time is None and motion_end - last_turn > 0.5 * (motion_end - release):
+        end, why = (
+            last_turn,
+            (f"its last turning point standing out of the noise is at {last_turn:.6g} s"),
+        )
+    else:
+        end = float(t[stop - 1])
+        why = (
+            f"{left_out} turning points are left out at the start"
+            if left_out
+            else "the oscillations skipped after the release are that long"
+        )
+    note = coverage_note(float(t[start]), end, release, motion_end, why)
+    if note is not None:
+        warn(note, ShortAnalysisWarning)
 
 
 def _check_plausible(peaks: NDArray, natural_hz: float, derived: str | None) -> None:
@@ -1036,8 +1094,14 @@ def _analyse(
             "turning points (is there an oscillation above the noise, sampled fast enough?)"
         )
     v_span = v if v is not None else derive_velocity(t, x, period0)[0]
+    x_step = None if x is None else quantisation_step(x)
     span = motion_span(
-        t, v_span, period0, threshold=motion_threshold, displacement=x if v is None else None
+        t,
+        v_span,
+        period0,
+        threshold=motion_threshold,
+        displacement=x if v is None else None,
+        periodic=x if x_step is not None else None,
     )
     released_at = span.release_index
     rest_until = None if released_at is None else float(t[released_at])
@@ -1061,6 +1125,9 @@ def _analyse(
     hi = t.size
     if span.stop_index is not None:
         hi = min(t.size, int(span.stop_index) + 2 + span.block // 8)
+    if sigma_x is None and x_step is not None:
+        sigma_x = estimate_noise(x[lo:hi])  # as find_peaks would, floored below
+    peak_noise, peak_threshold = _peak_noise(sigma_x, x_step)
     try:
         # the record's period, which set the motion span (not estimated again on it)
         found = find_peaks(
@@ -1069,7 +1136,8 @@ def _analyse(
             kind="displacement",
             min_peaks=2,
             offset=offset,
-            noise=sigma_x,
+            noise=peak_noise,
+            threshold=peak_threshold,
             period=period0,
         )
     except RecordingError as e:
@@ -1185,6 +1253,7 @@ def _analyse(
     start = int(window.index[0])
     stop = t.size if stop_time is None else int(np.searchsorted(t, stop_time)) + 1
     stop = min(stop, t.size)
+    _check_coverage(t, start, stop, release, window, left_out, stop_time)
     sl = slice(start, stop)
     # the same operations as x[sl] - (offset + drift t) and 0.5 (y² + y'²), in place
     relative = peaks.drift * t[sl]

@@ -29,6 +29,13 @@ the rig's frequency**.
   last (first) eighth of a period on the moving side, a third of it away from the
   crossing (where an anti-alias filter rounds the corner), not by waiting for the
   noise to cross it.
+* A **quantised displacement** (given as ``periodic``) is judged the same way, on its
+  own blocks, with the sinusoid's first three harmonics: a swing of a few steps, or
+  below one, toggles the displacement between levels at the oscillation frequency
+  (motion, not rest) long after the velocity derived from it is buried in rounding
+  noise; a rest on one level or toggling at random has no such periodicity. The
+  motion runs on as long as either channel's blocks are coherent, and then ends at
+  the displacement's last change of level (its rest level is the tail's median).
 * The blocks' sinusoid is at the frequency measured from the record's own spectrum
   (a peak of the spectrum of its first difference: the one whose oscillation is the
   strongest in the signal itself, so that a line of the noise that the difference
@@ -155,6 +162,27 @@ def _block_fits(
     return var1, var2
 
 
+def _harmonic_coherence(
+    t: NDArray, s: NDArray, starts: NDArray, size: int, omega: float
+) -> NDArray:
+    """Fraction of each block's variance about its line that sinusoids at ``omega`` and
+    its second and third harmonics [rad/s] explain (0 for a block on one level)."""
+    var1, _ = _block_fits(t, s, starts, size, 0.0)
+    tt = t[:size] - t[0]
+    tt = tt - tt.mean()
+    columns = [np.ones(size), tt]
+    for k in (1, 2, 3):
+        columns += [np.cos(k * omega * tt), np.sin(k * omega * tt)]
+    basis, _ = np.linalg.qr(np.column_stack(columns))
+    wave = basis[:, 2:]
+    windows = np.lib.stride_tricks.sliding_window_view(s, size)[starts]
+    centred = windows - windows.mean(axis=1, keepdims=True)
+    projected = centred @ wave
+    explained = np.einsum("ij,ij->i", projected, projected) / size
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(var1 > 0, np.minimum(explained / var1, 1.0), 0.0)
+
+
 def block_noise(t: NDArray, s: NDArray, mask: NDArray, size: int) -> float | None:
     """Median standard deviation of ``s`` about a line over blocks inside ``mask``.
 
@@ -206,6 +234,7 @@ def motion_span(
     *,
     threshold: float = THRESHOLD,
     displacement: ArrayLike | None = None,
+    periodic: ArrayLike | None = None,
 ) -> MotionSpan:
     """Release, end of motion and rest of a free-decay record (see the module notes).
 
@@ -227,6 +256,9 @@ def motion_span(
         the last excursion of the displacement beyond :data:`DISPLACEMENT_THRESHOLD`
         of its rest noise from its rest level (within the same local window; the
         sticking turning point itself, approached quadratically, is not resolved).
+    periodic : array_like, optional
+        A recorded displacement quantised in steps [unit]: blocks where it toggles
+        periodically at the oscillation frequency are moving too (see the module notes).
 
     Returns
     -------
@@ -259,6 +291,14 @@ def motion_span(
     var1, var2 = _block_fits(t, v, starts, size, 2.0 * math.pi / period)
     explained = np.where(var1 > 0, 1.0 - var2 / np.where(var1 > 0, var1, 1.0), 0.0)
     moving = explained > COHERENCE
+    x_moving = None
+    if periodic is not None:
+        xp = np.asarray(periodic, dtype=float)
+        x_moving = _harmonic_coherence(t, xp, starts, size, 2.0 * math.pi / period) > COHERENCE
+    # a velocity derived from coarse steps may hold no coherent block: the steps do
+    from_steps = x_moving is not None and not moving.any() and bool(x_moving.any())
+    if from_steps:
+        moving = x_moving.copy()
     if not moving.any():
         raise RecordingError(
             f"release: no motion found: no stretch of two periods ({2 * period:.4g} s) "
@@ -266,13 +306,18 @@ def motion_span(
         )
     # The motion is one run of moving blocks: the one holding the largest oscillation
     # (the release); a block of rest that happens to look coherent is not part of it.
-    peak = int(np.argmax(np.where(moving, var1 - var2, -np.inf)))
+    peak = int(np.argmax(moving if from_steps else np.where(moving, var1 - var2, -np.inf)))
     first = peak
     while first > 0 and moving[first - 1]:
         first -= 1
     last = peak
     while last < moving.size - 1 and moving[last + 1]:
         last += 1
+    by_steps = from_steps
+    if x_moving is not None:
+        while last < moving.size - 1 and (moving[last + 1] or x_moving[last + 1]):
+            by_steps = by_steps or not moving[last + 1]
+            last += 1
     moving = np.zeros_like(moving)
     moving[first : last + 1] = True
     quiet = np.zeros(n, bool)
@@ -318,6 +363,15 @@ def motion_span(
                 stop_time = float(t[min(n - 1, i + 1)])
                 stop_index = int(np.searchsorted(t, stop_time, side="right")) - 1
                 out = out[:0]
+        if by_steps:
+            xp = np.asarray(periodic, dtype=float)
+            rest_level = float(np.median(xp[tail_start : min(n, tail_start + size)]))
+            off = np.flatnonzero(xp[lo:hi] != rest_level)
+            if off.size:
+                i = min(n - 1, lo + int(off[-1]) + 1)
+                stop_time = float(t[i])
+                stop_index = i
+            out = out[:0]
         if out.size:
             i = lo + int(out[-1])
             stop_time = _root(t, v, level, max(0, i + 1 - fit_len), i + 1 - skip, i)

@@ -17,7 +17,8 @@ A run of more than :data:`MAX_SPIKE_SAMPLES` flagged samples is not a spike (a s
 or the release) and is kept.
 
 :func:`find_spikes` finds them; :func:`bridged` returns a copy of the signal in which
-each spiked sample is replaced by the straight line between its good neighbours, which
+each spiked sample is replaced by the median of the five samples about it (one of its
+good neighbours' values, so a quantised signal stays on its steps), which
 the energy decay (:func:`bayestribo.signal.decay.energy_decay`) analyses instead of the
 spikes, saying which samples (times and values) with a :class:`SpikeWarning`. The
 recording itself is not changed.
@@ -82,15 +83,13 @@ def find_spikes(values: ArrayLike) -> NDArray:
     return np.concatenate(keep) if keep else np.zeros(0, dtype=int)
 
 
-def bridged(t: NDArray, values: NDArray, index: NDArray) -> NDArray:
-    """A copy of ``values`` with the samples at ``index`` on the straight line between
-    their nearest good neighbours (in time ``t`` [s]); ``values`` unchanged."""
+def bridged(values: NDArray, index: NDArray) -> NDArray:
+    """A copy of ``values`` with each sample at ``index`` replaced by the median of the
+    five samples about it (a value of its good neighbours, on a quantised signal's
+    grid); ``values`` unchanged."""
     out = np.array(values, dtype=float)
-    if index.size == 0:
-        return out
-    good = np.ones(out.size, bool)
-    good[index] = False
-    out[index] = np.interp(t[index], t[good], out[good])
+    if index.size:
+        out[index] = scipy.ndimage.median_filter(out, size=5, mode="nearest")[index]
     return out
 
 
