@@ -50,6 +50,7 @@ __all__ = [
     "dissipation_band",
     "law_quantities",
     "physical_scale",
+    "shape_agreement",
     "turning_point_dissipation",
 ]
 
@@ -561,4 +562,81 @@ def averaged_dissipation(
         "definition": "per cycle of each law's own motion at the swing A, averaged over the "
         "laws as good as the verdict (equal weights)",
         "frequency_nuisance_sd": float(frequency_sd),
+    }
+
+
+#: Largest difference of log-log slopes between a law's ΔE(A) and the turning points'
+#: that still counts as the same shape (A¹ friction against A² drag differ by 1).
+SHAPE_SLOPE_TOLERANCE = 0.5
+
+
+def _log_slope(amplitude: NDArray, mean: NDArray, sd: NDArray | None) -> tuple[float, float]:
+    """Least-squares slope of ln ΔE against ln A over the swings, and its standard
+    error from the sds at the two ends (0 without sds)."""
+    a, e = np.asarray(amplitude, dtype=float), np.asarray(mean, dtype=float)
+    ok = np.isfinite(a) & np.isfinite(e) & (a > 0) & (e > 0)
+    if sd is not None:
+        s = np.asarray(sd, dtype=float)
+        ok &= np.isfinite(s) & (s > 0)
+    if ok.sum() < 2 or np.ptp(np.log(a[ok])) < 1e-9:
+        return math.nan, math.inf
+    x, y = np.log(a[ok]), np.log(e[ok])
+    xm = float(np.mean(x))
+    slope = float(np.sum((x - xm) * y) / np.sum((x - xm) ** 2))
+    if sd is None:
+        return slope, 0.0
+    # neighbouring swings share half cycles (the local fits overlap), so the slope is
+    # known no better than from its two ends: their relative errors over the span
+    rel = np.asarray(sd, dtype=float)[ok] / e[ok]
+    se = float(math.hypot(rel[0], rel[-1]) / (x[-1] - x[0]))
+    return slope, abs(se)
+
+
+def shape_agreement(band: Mapping[str, Any], measured: Mapping[str, Any] | None) -> dict | None:
+    """How close a law's ΔE(A) comes to the turning points' (the law-free answer).
+
+    Parameters
+    ----------
+    band : mapping
+        A law's ΔE(A) (:func:`dissipation_band`).
+    measured : mapping or None
+        The turning points' ΔE(A) at the same swings (:func:`turning_point_dissipation`).
+
+    Returns
+    -------
+    dict or None
+        ``max_percent`` and ``rms_percent``: the law's departure from the turning
+        points' mean over the swings, in percent of it; ``max_z``: the largest
+        departure in the turning points' sd; ``law_slope`` and ``measured_slope``
+        (± ``measured_slope_se``): log-log slopes of ΔE(A) (1 for friction, 2 for
+        viscous damping, 3 for quadratic drag); ``same_shape``: False when the slopes
+        differ by more than :data:`SHAPE_SLOPE_TOLERANCE` and by more than three
+        standard errors. None without a turning-point answer.
+    """
+    if not measured or not measured.get("amplitude") or not band or not band.get("amplitude"):
+        return None
+    amp = np.asarray(band["amplitude"], dtype=float)
+    law = np.asarray(band["mean"], dtype=float)
+    tp = np.asarray(measured["mean"], dtype=float)
+    tp_sd = np.asarray(measured["sd"], dtype=float)
+    if amp.shape != tp.shape or not np.allclose(amp, measured["amplitude"], rtol=1e-9):
+        raise ValueError("band and measured: expected ΔE(A) at the same swings")
+    ok = np.isfinite(law) & np.isfinite(tp) & (tp > 0)
+    if not ok.any():
+        return None
+    rel = (law[ok] - tp[ok]) / tp[ok]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = np.where(tp_sd[ok] > 0, (law[ok] - tp[ok]) / tp_sd[ok], np.nan)
+    law_slope, _ = _log_slope(amp, law, None)
+    tp_slope, tp_se = _log_slope(amp, tp, tp_sd)
+    differ = abs(law_slope - tp_slope)
+    same = not (math.isfinite(differ) and differ > SHAPE_SLOPE_TOLERANCE and differ > 3.0 * tp_se)
+    return {
+        "max_percent": float(100.0 * np.max(np.abs(rel))),
+        "rms_percent": float(100.0 * math.sqrt(float(np.mean(rel * rel)))),
+        "max_z": float(np.nanmax(np.abs(z))) if np.isfinite(z).any() else None,
+        "law_slope": law_slope,
+        "measured_slope": tp_slope,
+        "measured_slope_se": tp_se,
+        "same_shape": bool(same),
     }

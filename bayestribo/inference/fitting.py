@@ -206,7 +206,9 @@ def fit(
             attrs["verdict_dissipation_json"] = attrs["dissipation_json"]
             attrs["dissipation_json"] = json.dumps(plain_data(averaged))
         comparison = _check_halves(comparison, common, rng, settings, model, discrepancy)
-        result.attrs["law_comparison_json"] = json.dumps(plain_data(comparison.to_dict()))
+        record = comparison.to_dict()
+        record["departures"] = _law_departures(common, runs, result)
+        result.attrs["law_comparison_json"] = json.dumps(plain_data(record))
     result.attrs["seconds"] = time.perf_counter() - start
     return result
 
@@ -329,6 +331,47 @@ def _check_halves(
         stacklevel=3,
     )
     return checked
+
+
+#: Draws of each compared law from which its ΔE(A) is set beside the turning points'.
+_DEPARTURE_DRAWS = 200
+
+
+def _law_departures(
+    common: PreparedRun, runs: Mapping[str, Any], result: FitResult
+) -> dict[str, Any]:
+    """How close each compared law's ΔE(A) comes to the turning points' (the law-free
+    answer), by law: :func:`~bayestribo.inference.dissipation.shape_agreement` of its
+    posterior mean at the result's swings, from :data:`_DEPARTURE_DRAWS` draws of the
+    comparison's fit on the common preparation. Empty without a turning-point answer."""
+    import dataclasses
+
+    from bayestribo.inference.dissipation import (
+        dissipation_band,
+        physical_scale,
+        shape_agreement,
+    )
+
+    measured = result.turning_point_dissipation
+    band = result.dissipation
+    if not measured or not band or not band.get("amplitude"):
+        return {}
+    sensor = result._attr("sensor_json", None) or {}
+    scale = physical_scale(common.decay.scaling, common.metadata)
+    scale = dataclasses.replace(
+        scale, length_scale=scale.length_scale / float(sensor.get("gain", 1.0))
+    )
+    swings = np.asarray(band["amplitude"], dtype=float) / scale.length_scale
+    out: dict[str, Any] = {}
+    for law, sampled in runs.items():
+        flat = sampled.run.chains.reshape(-1, sampled.run.chains.shape[-1])
+        pick = flat[np.linspace(0, flat.shape[0] - 1, _DEPARTURE_DRAWS).astype(int)]
+        try:
+            own = dissipation_band(sampled.posterior, pick, swings, scale)
+            out[law] = shape_agreement(own, measured)
+        except ValueError:
+            continue
+    return out
 
 
 def _averaged_band(

@@ -48,6 +48,7 @@ from bayestribo.inference.dissipation import (
     dissipation_band,
     law_quantities,
     physical_scale,
+    shape_agreement,
     turning_point_dissipation,
 )
 from bayestribo.inference.likelihood import MODELS, PiLikelihood, ShapeDeparture
@@ -864,6 +865,47 @@ def _warn_frequency_trend(name: str | None, trend: FrequencyTrend | None, law: s
         )
 
 
+def _flagged(misfit: tuple[float, int, float], shape: ShapeDeparture) -> bool:
+    """True when :func:`_warn_misfit` has said the law misfits (or the discrepancy holds
+    it)."""
+    return bool(misfit[2] < MISFIT_P or shape.p_value < MISFIT_P)
+
+
+def _warn_shape(
+    name: str | None,
+    agreement: dict[str, Any] | None,
+    law: str,
+    compared: bool,
+    flagged: bool,
+) -> None:
+    """Say when the law's ΔE(A) has another shape than the turning points' ΔE(A)
+    (:func:`~bayestribo.inference.dissipation.shape_agreement`): a friction law on a
+    record of drag passes a χ² test when the noise is taken from a segment that still
+    moves, but its ΔE(A) grows as A where the turning points' grows as A²."""
+    if agreement is None or agreement["same_shape"] or flagged:
+        return
+    run = name or "the run"
+    how = (
+        f"its ΔE(A) grows as A^{agreement['law_slope']:.2f}, the turning points' as "
+        f"A^{agreement['measured_slope']:.2f} ± {agreement['measured_slope_se']:.2f} "
+        f"(departing by up to {agreement['max_percent']:.0f} %)"
+    )
+    if compared:
+        text = (
+            f"no law compared has the shape of the energy lost per cycle of {run}: the "
+            f"best, {law}, {how}. The answer is the turning points' ΔE(A), whatever the "
+            "law (printed as 'turning points (law-free)')"
+        )
+    else:
+        text = (
+            f"the law {law} has another shape than the energy lost per cycle of {run}: "
+            f"{how}; its parameters are not a measurement. Fit with law='auto' (--law "
+            "auto); the turning points' ΔE(A) (printed as 'turning points (law-free)') "
+            "holds whatever the law"
+        )
+    warnings.warn(text, MisfitWarning, stacklevel=4)
+
+
 def _warn_misfit(
     name: str | None,
     misfit: tuple[float, int, float],
@@ -1056,6 +1098,8 @@ def summarise(
     measured = turning_point_dissipation(
         decay.peaks.value / scaling.length_scale, swings, scale, gain_sd=sensor.gain_sd
     )
+    agreement = shape_agreement(dissipation, measured)
+    _warn_shape(name, agreement, posterior.law.name, compared, flagged=_flagged(misfit, shape))
     noise_info = {**prepared.noise.to_dict(), "description": prepared.noise.describe()}
     attrs = {
         "run_name": name,
@@ -1063,6 +1107,7 @@ def summarise(
         "law": posterior.law.name,
         "dissipation_json": json.dumps(plain_data(dissipation)),
         "turning_point_dissipation_json": json.dumps(plain_data(measured)),
+        "shape_agreement_json": json.dumps(plain_data(agreement)),
         "units_json": json.dumps(own_units),
         "seed": -1 if recorded_seed is None else int(recorded_seed),
         "package_version": __version__,

@@ -340,11 +340,22 @@ class FitResult:
     def law_departs(self) -> bool:
         """True when the decay departs from the law smoothly beyond its noise (the shape
         test of :meth:`~bayestribo.inference.likelihood.PiLikelihood.shape_departure`,
-        p below the misfit threshold of :mod:`bayestribo.inference.pipeline`)."""
+        p below the misfit threshold of :mod:`bayestribo.inference.pipeline`), or when
+        the law's ΔE(A) has another shape than the turning points' (:attr:`shape_agreement`)."""
         from bayestribo.inference.pipeline import MISFIT_P
 
         p = (self.diagnostics.get("shape_departure") or {}).get("p_value")
-        return p is not None and p < MISFIT_P
+        agreement = self.shape_agreement
+        other_shape = agreement is not None and not agreement.get("same_shape", True)
+        return (p is not None and p < MISFIT_P) or other_shape
+
+    @property
+    def shape_agreement(self) -> dict[str, Any] | None:
+        """How close the law's ΔE(A) comes to the turning points'
+        (:func:`~bayestribo.inference.dissipation.shape_agreement`: departures in
+        percent, log-log slopes, ``same_shape``); None without a turning-point answer or
+        for fits saved before it was recorded."""
+        return self._attr("shape_agreement_json", None)
 
     @property
     def package_version(self) -> str:
@@ -425,6 +436,15 @@ class FitResult:
         sensor = self._attr("sensor_json", None)
         if sensor:
             lines.append(f"sensor    {sensor['description']}")
+        agreement = self._attr("shape_agreement_json", None)
+        if agreement:
+            lines.append(
+                f"shape     ΔE(A) of the law as A^{agreement['law_slope']:.2f}, of the turning "
+                f"points as A^{agreement['measured_slope']:.2f} ± "
+                f"{agreement['measured_slope_se']:.2f}; the law departs from them by up to "
+                f"{agreement['max_percent']:.3g} %"
+                + ("" if agreement["same_shape"] else ": ANOTHER SHAPE")
+            )
         for entry in self.at_prior_bound:
             lines.append(
                 f"NOT A MEASUREMENT: {entry['parameter']} piles on its prior's upper bound "
@@ -462,7 +482,28 @@ class FitResult:
             from bayestribo.inference.halves import LawHalves
 
             lines.append(f"          {LawHalves(**halves).describe()}")
+        lines.extend(self._departure_lines(c.get("departures") or {}))
         return lines
+
+    def _departure_lines(self, departures: Mapping[str, Any]) -> list[str]:
+        """How close each compared law came to the turning points' ΔE(A)."""
+        rows = {law: d for law, d in departures.items() if d}
+        if not rows:
+            return []
+        first = next(iter(rows.values()))
+        out = [
+            "          how close each law came to the turning points' ΔE(A) (largest "
+            "departure over the swings; log-log slope, the turning points' "
+            f"{first['measured_slope']:.2f} ± {first['measured_slope_se']:.2f}):"
+        ]
+        width = max(len(law) for law in rows)
+        for law, d in sorted(rows.items(), key=lambda item: item[1]["max_percent"]):
+            shape = "" if d["same_shape"] else "  another shape"
+            out.append(
+                f"            {law:<{width}}  {d['max_percent']:8.3g} %   slope "
+                f"{d['law_slope']:.2f}{shape}"
+            )
+        return out
 
     def _dissipation_lines(self) -> list[str]:
         """ΔE(A) at the largest, middle and smallest swing of the analysed motion: the
