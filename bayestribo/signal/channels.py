@@ -26,7 +26,7 @@ import math
 import weakref
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Protocol
+from typing import NamedTuple, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -82,75 +82,328 @@ MOTION_FRACTION = 0.01
 _SWAP_MIN_ANTICORRELATION = 0.3
 
 
-#: Factors a column in a common unit needs to reach s, m or m/s (ms, µs; mm, µm; ...).
-_FACTORS = (1.0, 1e-3, 1e-6)
+#: Factors a time column in a common unit needs to reach s (ms, µs).
+_TIME_FACTORS = (1.0, 1e-3, 1e-6)
+#: Factors a length column needs to reach m or m/s: below 1 a column in mm, cm or µm
+#: read as metres; above 1 a column in metres read as mm, cm or µm (a column of metres
+#: labelled mm is scaled by 1e-3 on reading and needs 1000 more); 10 and 0.1 for cm and
+#: mm mistaken for each other. Tried in this order (the common mistakes first).
+_LENGTH_FACTORS = (1.0, 1e-3, 1e-2, 1e-6, 1e3, 1e2, 1e6, 1e-1, 1e1)
 _UNIT_WORDS = {
     TIME: {1e-3: "time in ms", 1e-6: "time in µs"},
-    DISPLACEMENT: {1e-3: "displacement in mm", 1e-6: "displacement in µm"},
-    VELOCITY: {1e-3: "velocity in mm/s", 1e-6: "velocity in µm/s"},
+    DISPLACEMENT: {
+        1e-2: "displacement in cm",
+        1e-3: "displacement in mm",
+        1e-6: "displacement in µm",
+    },
+    VELOCITY: {1e-2: "velocity in cm/s", 1e-3: "velocity in mm/s", 1e-6: "velocity in µm/s"},
+}
+#: The unit a column read too small (factor above 1) or too large (0.1) holds, and the
+#: unit its label wrongly states.
+_MISLABELLED = {
+    1e1: ("cm", "mm"),
+    1e2: ("m", "cm"),
+    1e3: ("m", "mm"),
+    1e6: ("m", "µm"),
+    1e-1: ("mm", "cm"),
+}
+#: Least friction coefficient of a loaded sliding contact [-] (the best-lubricated
+#: ones): a decay whose swing and number of half-cycles under the stated load allow
+#: less friction than this is read in the wrong length unit. Used only to choose
+#: between two readings of channels that disagree, never to refuse a run.
+_MU_FLOOR = 1e-3
+#: Typical swing of a free-decay rig [m]: of several readings a rig could make, the
+#: one whose swing is nearest to it (in ratio) is named first.
+_TYPICAL_SWING = 1e-3
+#: The sidecar keys that decide between readings, per channel.
+_SENSOR_KEYS = {
+    DISPLACEMENT: ("displacement_resolution_m", "displacement_range_m"),
+    VELOCITY: ("velocity_resolution_m_per_s", "velocity_range_m_per_s"),
 }
 
 
-def _unit_hint(gain: float, frequency_Hz: float | None = None, swing: float | None = None) -> str:
-    """The likely units of an inconsistent run, and the scale factors that fix them.
+def _words(name: str, factor: float) -> str:
+    """What a column that needs ``factor`` to reach s, m or m/s holds, in words."""
+    known = _UNIT_WORDS[name].get(factor)
+    if known is not None:
+        return known
+    word = {TIME: "time", DISPLACEMENT: "displacement", VELOCITY: "velocity"}[name]
+    how = f"{factor:.0f} times too small" if factor > 1 else f"{1 / factor:.0f} times too large"
+    held_label = _MISLABELLED.get(factor)
+    if held_label is None or name == TIME:
+        return f"{word} read {how}"
+    held, label = held_label
+    per = "/s" if name == VELOCITY else ""
+    held = "metres" if held == "m" and not per else held + per
+    return f"{word} read {how} ({held} in a column labelled {label}{per})"
 
-    The displacement is ``gain`` times the time integral of the velocity. Every choice
-    of ms/µs for the time and mm/µm (mm/s, µm/s) for the signals that brings the gain
-    to 1 is tried; those that also make a motion a rig makes
-    (:func:`bayestribo.model.plausible.is_plausible` at the measured frequency and
-    swing) are named, the fewest columns changed first. A time column in ms with both
-    signals in mm reads as a 0.03 Hz oscillation whose channels disagree by 1000: the
-    velocity alone "in mm/s" would make them agree and leave the frequency wrong.
+
+class _Motion(NamedTuple):
+    """A run's motion as read (a run in metres), for the unit hints (a tuple whose
+    first two items are the frequency and the swing).
+
+    Attributes
+    ----------
+    frequency_Hz : float
+        Dominant frequency as read [Hz].
+    swing : float
+        Half the peak-to-peak displacement (or of the velocity, over 2πf) [m as read].
+    peak_velocity : float or None
+        Largest |velocity| [m/s as read], None without a velocity.
+    half_cycles : int
+        Half-cycles whose swing is at least a tenth of the largest (:func:`_half_cycles`).
     """
-    from bayestribo.model.plausible import is_plausible
 
-    if gain < 0:
-        return "the velocity has the opposite sign of the rate of change of the displacement"
-    fixes = []
-    for a_t in _FACTORS:
-        for a_x in _FACTORS:
-            for a_v in _FACTORS:
-                after = gain * a_x / (a_t * a_v)
-                if not 0.5 <= after <= 2.0:
-                    continue
-                if frequency_Hz is not None and swing is not None:
-                    if not is_plausible(frequency_Hz / a_t, swing * a_x):
-                        continue
-                factors = {TIME: a_t, DISPLACEMENT: a_x, VELOCITY: a_v}
-                fixes.append({k: v for k, v in factors.items() if v != 1.0})
-    fixes.sort(key=len)
-    fixes = [f for f in fixes if f and len(f) == len(fixes[0])] if fixes else []
-    if not fixes:
-        return "the signals are not in units a rig's motion has; give each column its unit"
-    described = []
-    for fix in fixes:
-        words = " and ".join(_UNIT_WORDS[k][v] for k, v in fix.items())
-        scale = "{" + ", ".join(f"{k!r}: {v:g}" for k, v in fix.items()) + "}"
-        after = ""
-        if TIME in fix and frequency_Hz is not None:
-            after = f" (then f = {frequency_Hz / fix[TIME]:.4g} Hz)"
-        described.append(f"{words}{after}: scale={scale}")
-    return "likely " + "; or ".join(described)
+    frequency_Hz: float
+    swing: float
+    peak_velocity: float | None
+    half_cycles: int
 
 
-def _motion(run: Recording) -> tuple[float | None, float | None]:
-    """Frequency [Hz] and amplitude (half the peak-to-peak, in the file's length unit)
-    of a run's motion as read, for :func:`_unit_hint`."""
+def _half_cycles(signal: NDArray) -> int:
+    """Lobes of ``signal`` beyond ±10 % of its half range about its mid-range: the
+    half-cycles of a decay whose swing is at least a tenth of its largest (noise at rest
+    does not cross the band, so it is not counted)."""
+    low, high = float(np.min(signal)), float(np.max(signal))
+    mid, band = 0.5 * (low + high), 0.05 * (high - low)
+    side = np.zeros(signal.size, dtype=np.int8)
+    side[signal > mid + band] = 1
+    side[signal < mid - band] = -1
+    side = side[side != 0]
+    if not side.size:
+        return 0
+    return int(np.count_nonzero(side[1:] != side[:-1])) + 1
+
+
+def _motion(run: Recording) -> _Motion | None:
+    """Frequency, swing, peak velocity and half-cycles of a run's motion as read, for
+    :func:`_unit_hint` and :func:`check_plausible_motion`; None for a run not in metres
+    or without a period."""
     signal = run.displacement if run.displacement is not None else run.velocity
     if signal is None or run.length_unit != "m":
-        return None, None
+        return None
     try:
         period = dominant_period(run.time, signal)
     except RecordingError:
-        return None, None
+        return None
     if not period > 0:
-        return None, None
+        return None
     frequency = 1.0 / period
     if run.displacement is not None:
         swing = 0.5 * float(np.ptp(run.displacement))
     else:
         swing = 0.5 * float(np.ptp(run.velocity)) / (2.0 * math.pi * frequency)
-    return frequency, swing
+    peak = float(np.max(np.abs(run.velocity))) if run.velocity is not None else None
+    lobes = _half_cycles(run.velocity if run.velocity is not None else run.displacement)
+    return _Motion(frequency, swing, peak, lobes)
+
+
+def _metadata(run: Recording) -> Mapping[str, object]:
+    """The run's metadata (sidecar), or nothing for an object without them."""
+    found = getattr(run, "metadata", None)
+    return found if isinstance(found, Mapping) else {}
+
+
+def _number(metadata: Mapping[str, object], key: str) -> float | None:
+    """A positive finite number of the metadata, or None."""
+    value = metadata.get(key)
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return None
+    value = float(value)
+    return value if math.isfinite(value) and value > 0 else None
+
+
+def _implausible(
+    motion: _Motion,
+    factors: Mapping[str, float],
+    metadata: Mapping[str, object],
+    *,
+    soft: bool = True,
+) -> str | None:
+    """Why the run read with ``factors`` (per canonical name, 1 for a column as read) is
+    no motion the rig makes, or None when it is one.
+
+    In turn: a frequency or peak speed no rig has
+    (:func:`bayestribo.model.plausible.is_plausible`); a swing or speed beyond the
+    sensor's stated range (``displacement_range_m``, ``velocity_range_m_per_s``) or
+    below its stated resolution (``displacement_resolution_m``,
+    ``velocity_resolution_m_per_s``); and, with ``soft`` (choosing between readings,
+    not refusing a run as read), a frequency more than twice from the stated
+    ``natural_frequency_Hz``, or a swing too small for the stated load: a contact of
+    friction coefficient μ under the load N takes at least
+    2μN/k off the amplitude every half-cycle (k = m (2πf)² from ``mass_kg`` and
+    ``natural_frequency_Hz``), so a swing A lasting n half-cycles allows
+    μ ≤ k·2A/(2N·n) (2A bounds the first amplitude about the centre), and one below
+    :data:`_MU_FLOOR` is not a loaded contact's.
+    """
+    from bayestribo.model.plausible import FREQUENCY_RANGE_HZ, MAX_SPEED, is_plausible
+
+    frequency = motion.frequency_Hz / factors.get(TIME, 1.0)
+    swing = motion.swing * factors.get(DISPLACEMENT, 1.0)
+    speed = 2.0 * math.pi * frequency * swing
+    if motion.peak_velocity is not None:
+        speed = motion.peak_velocity * factors.get(VELOCITY, 1.0)
+    if not is_plausible(frequency, swing):
+        low, high = FREQUENCY_RANGE_HZ
+        return (
+            f"a swing of {swing:.3g} m at {frequency:.4g} Hz (peak speed "
+            f"{2.0 * math.pi * frequency * swing:.3g} m/s) is no free-decay rig's motion "
+            f"(frequencies {low:g} to {high:g} Hz, speeds up to {MAX_SPEED:g} m/s)"
+        )
+    limits = (
+        ("displacement_range_m", swing, "a swing of", "m", "beyond"),
+        ("velocity_range_m_per_s", speed, "a peak speed of", "m/s", "beyond"),
+        ("displacement_resolution_m", swing, "a swing of", "m", "below"),
+        ("velocity_resolution_m_per_s", speed, "a peak speed of", "m/s", "below"),
+    )
+    for key, value, what, unit, side in limits:
+        if key.startswith("velocity") and motion.peak_velocity is None:
+            continue
+        limit = _number(metadata, key)
+        if limit is None or (value <= limit if side == "beyond" else value >= limit):
+            continue
+        return f"{what} {value:.3g} {unit} is {side} the sensor's stated {key} = {limit:g} {unit}"
+    if not soft:
+        return None
+    natural = _number(metadata, "natural_frequency_Hz")
+    if natural is not None and not natural / 2.0 <= frequency <= 2.0 * natural:
+        return (
+            f"the frequency {frequency:.4g} Hz is not the stated natural_frequency_Hz = "
+            f"{natural:g} Hz"
+        )
+    load, mass = _number(metadata, "load_N"), _number(metadata, "mass_kg")
+    if load is None or mass is None or motion.half_cycles < 3:
+        return None
+    natural = natural or frequency
+    stiffness = mass * (2.0 * math.pi * natural) ** 2
+    most = stiffness * swing / (load * motion.half_cycles)
+    if most >= _MU_FLOOR:
+        return None
+    return (
+        f"a swing of {swing:.3g} m lasting {motion.half_cycles} half-cycles under the "
+        f"stated load_N = {load:g} N (stiffness {stiffness:.4g} N/m from mass_kg and "
+        f"{'natural_frequency_Hz' if natural != frequency else 'the frequency'}) allows a "
+        f"friction coefficient of at most {most:.2g}, less than any loaded sliding "
+        f"contact's ({_MU_FLOOR:g})"
+    )
+
+
+@dataclass(frozen=True)
+class _Reading:
+    """One way of reading a run: the factors of the columns it changes, why the motion
+    it gives is no rig's (None when it is one) and its rank among the plausible."""
+
+    factors: dict[str, float]
+    reason: str | None
+    rank: float
+
+
+def _reading(
+    motion: _Motion | None,
+    factors: Mapping[str, float],
+    changed: Mapping[str, float],
+    metadata: Mapping[str, object],
+) -> _Reading:
+    """The :class:`_Reading` of the columns ``changed`` (``factors`` holds every column's)."""
+    if motion is None:
+        return _Reading(dict(changed), None, 0.0)
+    reason = _implausible(motion, factors, metadata)
+    swing = motion.swing * factors.get(DISPLACEMENT, 1.0)
+    rank = abs(math.log10(swing / _TYPICAL_SWING)) if swing > 0 else math.inf
+    return _Reading(dict(changed), reason, rank)
+
+
+def _describe(reading: _Reading, frequency_Hz: float | None) -> str:
+    """A reading in words with the ``scale=`` that applies it."""
+    fix = reading.factors
+    words = " and ".join(_words(k, v) for k, v in fix.items())
+    scale = "{" + ", ".join(f"{k!r}: {v:g}" for k, v in fix.items()) + "}"
+    after = ""
+    if TIME in fix and frequency_Hz is not None:
+        after = f" (then f = {frequency_Hz / fix[TIME]:.4g} Hz)"
+    return f"{words}{after}: scale={scale}"
+
+
+def _deciders(metadata: Mapping[str, object], present: list[str]) -> str:
+    """The sidecar keys and checks that would decide between readings."""
+    keys = [k for n in present for k in _SENSOR_KEYS[n] if _number(metadata, k) is None]
+    said = []
+    if keys:
+        said.append("state " + " or ".join(keys) + " in the sidecar")
+    missing = [k for k in ("mass_kg", "load_N") if _number(metadata, k) is None]
+    if missing:
+        said.append(
+            "give " + " and ".join(missing) + " (the friction under the load bounds the swing)"
+        )
+    said.append("check the sensor's output unit and the column labels")
+    return ", or ".join(said) + ", then apply that one scale"
+
+
+def _advice(
+    readings: list[_Reading],
+    motion: _Motion | None,
+    metadata: Mapping[str, object],
+    present: list[str],
+    explain: bool,
+) -> str | None:
+    """The plausible readings changing the fewest columns, by rank ("likely ...");
+    one alone is named alone, with why the others of as few columns are not (all of
+    them with ``explain``, else those the sidecar rules out); several are named all,
+    with what decides. None when no reading is plausible."""
+    plausible = [r for r in readings if r.reason is None]
+    if not plausible:
+        return None
+    fewest = min(len(r.factors) for r in plausible)
+    fixes = sorted((r for r in plausible if len(r.factors) == fewest), key=lambda r: r.rank)
+    frequency = motion.frequency_Hz if motion is not None else None
+    said = "likely " + "; or ".join(_describe(r, frequency) for r in fixes[:3])
+    if len(fixes) > 1:
+        return f"{said}; the record does not tell which: {_deciders(metadata, present)}"
+    ruled_out = [
+        r
+        for r in readings
+        if r.reason is not None and len(r.factors) == fewest and (explain or "stated" in r.reason)
+    ]
+    for r in ruled_out[:2]:
+        words = " and ".join(_words(k, v) for k, v in r.factors.items())
+        said += f"; not {words}: {r.reason}"
+    return said
+
+
+def _unit_hint(gain: float, run: Recording) -> str:
+    """The likely units of an inconsistent run, and the scale factors that fix them.
+
+    The displacement is ``gain`` times the time integral of the velocity. Every choice
+    of ms/µs for the time and of a length factor (:data:`_LENGTH_FACTORS`) for each
+    signal that brings the gain to 1 is a reading of the run; those that also make a
+    motion the rig makes (:func:`_implausible`: the frequency and speed a rig has, the
+    sensor's stated range and resolution, the friction the stated load allows) are
+    named, the fewest columns changed first. Channels a power of ten apart have two
+    readings of one column each, the displacement wrong or the velocity: the one the
+    rig makes is named alone with why the other is not; when both are, both are named
+    with what decides, so that following the advice cannot give a wrong answer. A time
+    column in ms with both signals in mm reads as a 0.03 Hz oscillation whose channels
+    disagree by 1000: the velocity alone "in mm/s" would make them agree and leave the
+    frequency wrong.
+    """
+    if gain < 0:
+        return "the velocity has the opposite sign of the rate of change of the displacement"
+    motion = _motion(run)
+    metadata = _metadata(run)
+    readings = []
+    for a_t in _TIME_FACTORS:
+        for a_x in _LENGTH_FACTORS:
+            for a_v in _LENGTH_FACTORS:
+                if not 0.5 <= gain * a_x / (a_t * a_v) <= 2.0:
+                    continue
+                factors = {TIME: a_t, DISPLACEMENT: a_x, VELOCITY: a_v}
+                changed = {k: v for k, v in factors.items() if v != 1.0}
+                if changed:
+                    readings.append(_reading(motion, factors, changed, metadata))
+    advice = _advice(readings, motion, metadata, [DISPLACEMENT, VELOCITY], explain=True)
+    if advice is None:
+        return "the signals are not in units a rig's motion has; give each column its unit"
+    return advice
 
 
 @dataclass(frozen=True)
@@ -432,7 +685,7 @@ def _check_units(run: Recording, where: str | None) -> None:
         raise RecordingError(
             f"{both} disagree: the displacement is "
             f"{gain:.4g} times the time integral of the velocity; expected 1 (within a factor "
-            f"of {UNIT_GAIN_TOLERANCE:g}): {_unit_hint(gain, *_motion(run))} (or name the "
+            f"of {UNIT_GAIN_TOLERANCE:g}): {_unit_hint(gain, run)} (or name the "
             "units in the column names, e.g. time_ms, displacement_mm)",
             where,
         )
@@ -440,55 +693,56 @@ def _check_units(run: Recording, where: str | None) -> None:
 
 def check_plausible_motion(run: Recording, where: str | None = None) -> None:
     """Refuse a run in metres whose motion no rig makes (a frequency outside
-    :data:`~bayestribo.model.plausible.FREQUENCY_RANGE_HZ` or a peak speed above
-    :data:`~bayestribo.model.plausible.MAX_SPEED`), naming the units that would make
-    it one and the scale factors that apply them.
+    :data:`~bayestribo.model.plausible.FREQUENCY_RANGE_HZ`, a peak speed above
+    :data:`~bayestribo.model.plausible.MAX_SPEED`, or a swing or speed below the
+    sensor's stated resolution or beyond its stated range), naming the units that
+    would make it one and the scale factors that apply them.
 
     Both channels in mm read as m agree with each other and still give a swing of a
     metre at 32.6 Hz (235 m/s); a time column in ms read as s gives a 0.03 Hz
-    oscillation. Only runs in metres are checked (``length_unit: arbitrary`` states
-    that the unit is not known).
+    oscillation; both in metres labelled mm give a swing below a stated
+    ``displacement_resolution_m``. Every factor of :data:`_LENGTH_FACTORS` (cm, mm,
+    µm read as m and m read as them) and of the time is tried; the readings the rig
+    makes (:func:`_implausible`, with the friction the stated load allows) are named,
+    and where several are (a swing in cm or in mm), all of them with what decides.
+    Only runs in metres are checked (``length_unit: arbitrary`` states that the unit
+    is not known).
 
     Parameters
     ----------
     run : Run
         The run (any object with ``time`` [s], ``displacement`` [m], ``velocity``
-        [m/s], ``signals`` and ``length_unit``).
+        [m/s], ``signals``, ``length_unit`` and, optionally, ``metadata``).
     where : str, optional
         File or origin named in the message.
 
     Raises
     ------
     RecordingError
-        Naming the swing [m], the frequency [Hz], the peak speed [m/s] and the units
-        that would make the motion a rig's.
+        Naming the swing [m], the frequency [Hz], the peak speed [m/s] (or the stated
+        range or resolution it violates) and the units that would make the motion a
+        rig's.
     """
-    from bayestribo.model.plausible import FREQUENCY_RANGE_HZ, MAX_SPEED, is_plausible
-
-    frequency, swing = _motion(run)
-    if frequency is None or swing is None or not swing > 0:
+    motion = _motion(run)
+    if motion is None or not motion.swing > 0:
         return
-    if is_plausible(frequency, swing):
+    metadata = _metadata(run)
+    as_read = {TIME: 1.0, DISPLACEMENT: 1.0, VELOCITY: 1.0}
+    reason = _implausible(motion, as_read, metadata, soft=False)
+    if reason is None:
         return
-    speed = 2.0 * math.pi * frequency * swing
-    low, high = FREQUENCY_RANGE_HZ
-    fixes = []
-    for a_t in _FACTORS:
-        for a_x in _FACTORS:
-            if (a_t, a_x) != (1.0, 1.0) and is_plausible(frequency / a_t, swing * a_x):
-                fixes.append({TIME: a_t, DISPLACEMENT: a_x, VELOCITY: a_x / a_t})
     present = [n for n in (DISPLACEMENT, VELOCITY) if run.signals.get(n) is not None]
-    advice = []
-    for fix in sorted(fixes, key=lambda f: sum(v != 1.0 for v in f.values()))[:2]:
-        factors = {k: v for k, v in fix.items() if v != 1.0 and (k == TIME or k in present)}
-        words = " and ".join(_UNIT_WORDS[k].get(v, f"{k} × {v:g}") for k, v in factors.items())
-        scale = "{" + ", ".join(f"{k!r}: {v:g}" for k, v in factors.items()) + "}"
-        advice.append(f"{words}: scale={scale}")
-    said = "; or ".join(advice) if advice else "give each column its unit"
+    readings = []
+    for a_t in _TIME_FACTORS:
+        for a_x in _LENGTH_FACTORS:
+            # both signals in one length unit (their agreement is check_channels')
+            factors = {TIME: a_t, DISPLACEMENT: a_x, VELOCITY: float(f"{a_x / a_t:.12g}")}
+            changed = {k: v for k, v in factors.items() if v != 1.0 and (k == TIME or k in present)}
+            if changed:
+                readings.append(_reading(motion, factors, changed, metadata))
+    advice = _advice(readings, motion, metadata, present, explain=False)
     raise RecordingError(
-        f"plausibility: a swing of {swing:.3g} m at {frequency:.4g} Hz (peak speed "
-        f"{speed:.3g} m/s) is no free-decay rig's motion (frequencies {low:g} to {high:g} "
-        f"Hz, speeds up to {MAX_SPEED:g} m/s): likely {said}; or length_unit 'arbitrary' "
-        "when the unit is not known",
+        f"plausibility: {reason}: {advice or 'give each column its unit'}; or length_unit "
+        "'arbitrary' when the unit is not known",
         where,
     )
