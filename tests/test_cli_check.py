@@ -19,7 +19,7 @@ def run_file(tmp_path_factory):
 
 
 def test_check_prints_a_report(run_file, capsys):
-    assert main(["check", str(run_file), "--window", "3"]) == 0
+    assert main(["check", str(run_file), "--window-length", "3"]) == 0
     out = capsys.readouterr().out
     assert "windows of 3 oscillations" in out
     assert "constancy:" in out and "extinction:" in out and "peaks:" in out
@@ -36,7 +36,7 @@ def test_check_json(run_file, capsys):
 
 
 def test_bad_window_is_a_package_error(run_file, capsys):
-    assert main(["check", str(run_file), "--window", "0"]) == 2
+    assert main(["check", str(run_file), "--window-length", "0"]) == 2
     assert "window must be a whole number" in capsys.readouterr().err
 
 

@@ -112,6 +112,13 @@ def add_reading_options(parser: argparse.ArgumentParser) -> None:
         "with a time column it must agree with the time stamps",
     )
     parser.add_argument(
+        "--window",
+        type=_window,
+        metavar="T0:T1",
+        help="analyse only the samples from T0 to T1 [s] (either may be left out: "
+        "'12:' from 12 s on), e.g. to leave out a disturbance or a second release",
+    )
+    parser.add_argument(
         "--channel",
         action="append",
         metavar="NAME=SOURCE",
@@ -155,6 +162,24 @@ def _positive_rate(text: str) -> float:
     if not math.isfinite(value) or value <= 0.0:
         raise argparse.ArgumentTypeError(f"expected a sample rate in Hz > 0, got {text!r}")
     return value
+
+
+def _window(text: str) -> tuple[float, float]:
+    """``--window`` value ``T0:T1`` [s]; an end left out is open (``12:``, ``:40``)."""
+    start, sep, stop = text.partition(":")
+    try:
+        if not sep:
+            raise ValueError
+        t0 = float(start) if start.strip() else -math.inf
+        t1 = float(stop) if stop.strip() else math.inf
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected T0:T1 in seconds (e.g. 2.5:40, or 12: from 12 s on), got {text!r} "
+            "(the length of bayestribo check's windows is --window-length N)"
+        ) from None
+    if math.isnan(t0) or math.isnan(t1) or not t0 < t1:
+        raise argparse.ArgumentTypeError(f"expected T0 < T1, got {text!r}")
+    return t0, t1
 
 
 def notch_value(text: str) -> float | str:
@@ -254,6 +279,8 @@ def reading_options(args: argparse.Namespace) -> Any:
         kwargs["scale"] = scale
     if getattr(args, "sample_rate", None) is not None:
         kwargs["sample_rate_Hz"] = args.sample_rate
+    if getattr(args, "window", None) is not None:
+        kwargs["window"] = args.window
     channels = _channels_from_args(getattr(args, "channel", None))
     if channels is not None:
         kwargs["channels"] = channels

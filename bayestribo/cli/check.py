@@ -6,7 +6,7 @@ against the recorded one, and the peak-by-peak predictive check, as a report or 
 Examples::
 
     bayestribo check runs/glycerol_N0.31_r2.csv
-    bayestribo check HarmOsc2.txt --columns t x --length-unit arbitrary --window 6 --json
+    bayestribo check HarmOsc2.txt --columns t x --length-unit arbitrary --window-length 6 --json
 
 Exit status: 0 when the law is adequate, 1 when a check rejects it (the report says
 which and by how much), 2 for bad input.
@@ -43,7 +43,10 @@ def register(subparsers: Any) -> None:
     )
     add_run_arguments(p)
     p.add_argument(
-        "--window", type=int, help="window length in oscillations (default: about 1/8 of the decay)"
+        "--window-length",
+        type=int,
+        help="length of the windowed fits in oscillations (default: about 1/8 of the decay); "
+        "--window T0:T1 crops the record",
     )
     p.add_argument(
         "--skip",
@@ -81,7 +84,7 @@ def run(args: argparse.Namespace) -> int:
 
     report = check_adequacy(
         recording,
-        window=args.window,
+        window=args.window_length,
         alpha=args.alpha,
         n_draws=args.draws,
         seed=args.seed,

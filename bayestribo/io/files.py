@@ -58,6 +58,7 @@ def read_run(
     sidecar: bool | str | Path = True,
     validate: bool = True,
     metadata: Mapping[str, Any] | None = None,
+    window: tuple[float, float] | None = None,
     options: ReadOptions | None = None,
     **unexpected: Any,
 ) -> Run:
@@ -115,6 +116,10 @@ def read_run(
     metadata : mapping, optional
         Metadata that fill or override the sidecar's, e.g.
         ``{"load_N": 0.31, "length_unit": "arbitrary"}``.
+    window : (float, float), optional
+        Keep the samples with ``t0 <= t <= t1`` [s] only (``--window T0:T1``): a part
+        of the record holding one free decay. Recorded in the metadata (``window_s``);
+        the checks of ``validate`` apply to the part kept.
     options : ReadOptions, optional
         All of the above as one object (:class:`~bayestribo.io.options.ReadOptions`),
         as the command line and the fitting functions pass them; options given as
@@ -162,6 +167,7 @@ def read_run(
         "sidecar": None if sidecar is True else sidecar,
         "validate": None if validate else validate,
         "metadata": metadata,
+        "window": window,
     }
     opts = ReadOptions.of(options, **{k: v for k, v in given.items() if v is not None})
     return _read(Path(path), opts)
@@ -216,6 +222,8 @@ def _read(path: Path, opts: ReadOptions) -> Run:
         source=where,
     )
     del signals  # the reader's arrays: the run holds its own copies
+    if opts.window is not None:
+        run = _windowed(run, opts.window, where)
     if validate:
         try:
             validate_run(run)
@@ -230,6 +238,27 @@ def _read(path: Path, opts: ReadOptions) -> Run:
                 exc.where,
             ) from None
     return run
+
+
+def _windowed(run: Run, window: tuple[float, float], where: str) -> Run:
+    """The samples of ``run`` with ``t0 <= t <= t1``, the window in its metadata."""
+    keep = (run.time >= window[0]) & (run.time <= window[1])
+    t0, t1 = window
+    if keep.any():  # an open end is the record's own
+        t0, t1 = max(t0, float(run.time[keep][0])), min(t1, float(run.time[keep][-1]))
+    if int(keep.sum()) < 2:
+        raise RunFormatError(
+            f"window ({t0:g} s, {t1:g} s) holds {int(keep.sum())} sample(s); the record "
+            f"spans {run.time[0]:g} s to {run.time[-1]:g} s",
+            where,
+        )
+    return Run(
+        run.time[keep],
+        None if run.displacement is None else run.displacement[keep],
+        None if run.velocity is None else run.velocity[keep],
+        {**run.metadata, "window_s": [t0, t1]},
+        source=run.source,
+    )
 
 
 def _rate(value: Any, name: str, where: str) -> float:

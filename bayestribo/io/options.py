@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -59,6 +60,11 @@ class ReadOptions:
         Run the data checks of :func:`~bayestribo.io.validation.validate_run`.
     metadata : mapping, optional
         Metadata that fill or override the sidecar's.
+    window : (float, float), optional
+        Keep the samples with ``t0 <= t <= t1`` [s] (in the file's time, after
+        scaling): a part of the record the analysis should see (the rest holds a clock
+        restart, a second release, a disturbance). Recorded in the run's metadata
+        (``window_s``).
     """
 
     columns: tuple[str, ...] | None = None
@@ -75,12 +81,15 @@ class ReadOptions:
     sidecar: bool | str | Path = True
     validate: bool = True
     metadata: Mapping[str, Any] | None = field(default=None)
+    window: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
         # A list of columns is kept as a tuple (the options are immutable); every other
         # check is the reader's, which names the file.
         if isinstance(self.columns, list):
             object.__setattr__(self, "columns", tuple(self.columns))
+        if self.window is not None:
+            object.__setattr__(self, "window", check_window(self.window))
 
     @classmethod
     def of(cls, value: ReadOptions | Mapping[str, Any] | None = None, **more: Any) -> ReadOptions:
@@ -150,6 +159,25 @@ class ReadOptions:
         """The format-specific options given (:data:`FORMAT_OPTIONS` not at their default)."""
         given = self.as_kwargs()
         return {name: given[name] for name in FORMAT_OPTIONS if name in given}
+
+
+def check_window(window: Any) -> tuple[float, float]:
+    """A time window ``(t0, t1)`` [s] with ``t0 < t1`` (either end may be infinite: open).
+
+    Raises
+    ------
+    BayestriboError
+        Naming the option and what was expected.
+    """
+    try:
+        t0, t1 = (float(value) for value in window)
+    except (TypeError, ValueError):
+        raise BayestriboError(
+            f"window: expected two times (t0, t1) in seconds, got {window!r}"
+        ) from None
+    if math.isnan(t0) or math.isnan(t1) or not t0 < t1:
+        raise BayestriboError(f"window: expected times t0 < t1 in seconds, got ({t0!r}, {t1!r})")
+    return t0, t1
 
 
 #: Names of every reading option, in the order of :func:`bayestribo.read_run`.

@@ -147,6 +147,11 @@ METADATA_KEYS: Mapping[str, _Key] = MappingProxyType(
             "float", "damping ratio of the oscillator without contact ζ₀ [-]", 0.0, high=1.0
         ),
         "zeta0_sd": _Key("float", "standard uncertainty of ζ₀ [-]", 0.0, high=1.0),
+        "window_s": _Key(
+            "plain",
+            "the part of the record analysed, [t0, t1] in seconds (--window T0:T1)",
+            check=lambda value, key, where: _window(value, key, where),
+        ),
         "series": _Key("str", "name of the series of runs the run belongs to"),
         "notes": _Key("str", "free text about the run"),
         # Records the package writes itself (simulator, acquisition) and a user's own keys:
@@ -160,6 +165,24 @@ METADATA_KEYS: Mapping[str, _Key] = MappingProxyType(
         "samples_missing": _Key("plain", "samples the acquisition did not receive"),
     }
 )
+
+
+def _window(value: Any, key: str, where: str | None) -> list[float]:
+    """Check a ``window_s`` value: two finite times t0 < t1 [s]."""
+    from bayestribo.errors import BayestriboError
+    from bayestribo.io.options import check_window
+
+    if not isinstance(value, list | tuple) or len(value) != 2:
+        raise RunFormatError(
+            f"metadata {key!r}: expected [t0, t1] in seconds, got {value!r}", where
+        )
+    try:
+        t0, t1 = check_window(value)
+        if not (math.isfinite(t0) and math.isfinite(t1)):
+            raise BayestriboError(f"expected finite times, got {value!r}")
+        return [t0, t1]
+    except BayestriboError as exc:
+        raise RunFormatError(f"metadata {key!r}: {exc}", where) from None
 
 
 def _sensor_filter(value: Any, key: str, where: str | None) -> Any:
