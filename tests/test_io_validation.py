@@ -96,14 +96,15 @@ BAD: list[tuple[str, Callable[[Run], Run], str]] = [
         r"field 'time_s' is not strictly increasing: sample 100",
     ),
     (
-        "time-irregular-missing-sample",
+        "time-gap-beyond-a-tenth-of-a-period",
         lambda r: _replace(
             r,
-            time=np.delete(r.time, 300),
-            displacement=np.delete(r.displacement, 300),
-            velocity=np.delete(r.velocity, 300),
+            time=np.delete(r.time, np.arange(300, 320)),
+            displacement=np.delete(r.displacement, np.arange(300, 320)),
+            velocity=np.delete(r.velocity, np.arange(300, 320)),
         ),
-        r"field 'time_s' is irregular: the step from sample 299 to 300.*median step",
+        r"field 'time_s': field 'displacement': 20 samples are missing after sample 299 .* "
+        r"cannot be bridged",
     ),
     (
         "too-few-samples",
@@ -404,3 +405,15 @@ def test_a_time_in_ms_with_only_a_displacement_is_refused_naming_the_time_unit(t
         read_run(path, columns=["time_s", "displacement_m"])
     # declared arbitrary, the unit is not checked
     read_run(path, columns=["time_s", "displacement_m"], metadata={"length_unit": "arbitrary"})
+
+
+def test_values_far_beyond_the_stated_range_are_a_unit_not_a_clip(good):
+    """Millimetres read as metres with the sensor's range stated: the refusal names the
+    unit that fixes it (and the range settles mm against cm), never "a larger range"."""
+    meta = {**good.metadata, "displacement_range_m": 0.01, "velocity_range_m_per_s": 1.0}
+    bad = Run(good.time, good.displacement * 1000, good.velocity * 1000, meta)
+    with pytest.raises(RecordingError) as info:
+        validate_run(bad)
+    message = str(info.value)
+    assert "larger range" not in message
+    assert "scale={'displacement_m': 0.001, 'velocity_m_per_s': 0.001}" in message

@@ -208,6 +208,19 @@ def _check_clipping(run: Run, where: str | None, clip_samples: int) -> None:
         limit = run.metadata.get(key)
         if limit is not None:
             over = np.flatnonzero(np.abs(values) >= limit)
+            largest = float(np.max(np.abs(values)))
+            if over.size and largest >= 10.0 * limit:
+                # far beyond what the sensor can record: a unit, not a clip; the unit
+                # checks name the reading that fixes it
+                check_channels(run, where)
+                check_plausible_motion(run, where)
+                raise _fail(
+                    f"field {name!r} reaches {largest:.6g}, {largest / limit:.3g} times the "
+                    f"sensor range ±{limit!r} (metadata {key!r}): no sensor records beyond "
+                    "its range, so the column's unit or the stated range is wrong; check the "
+                    "unit in the column's name and the range",
+                    where,
+                )
             if over.size:
                 i = int(over[0])
                 raise _fail(
