@@ -19,6 +19,8 @@ __all__ = [
     "ReadingWarning",
     "RecordingError",
     "RunFormatError",
+    "ShortAnalysisWarning",
+    "SpikeWarning",
 ]
 
 
@@ -101,3 +103,13 @@ class GapWarning(UserWarning):
     """Samples were missing from a recording's clock and the gaps were bridged on the
     regular grid (the message names each gap: after which sample, how many samples, and
     the interpolation's error bound against the noise)."""
+
+
+class SpikeWarning(UserWarning):
+    """Isolated samples far off their neighbours were left out of the analysis (the
+    message names the channel, times and values)."""
+
+
+class ShortAnalysisWarning(MisfitWarning):
+    """The analysis covers less than half of the motion the record holds; the message
+    names the analysed span, the motion's span and why."""

@@ -109,3 +109,24 @@ def test_coverage_note_names_both_spans() -> None:
     assert coverage_note(2.0, 60.0, 1.0, 100.0, "why") is None
     note = coverage_note(2.0, 36.0, 1.0, 156.0, "its last turning point is at 36 s")
     assert note is not None and "2 s to 36 s" in note and "1 s to 156 s" in note
+
+
+def test_bayestribo_decay_exits_1_on_a_short_analysis(tmp_path, monkeypatch, capsys) -> None:
+    """As ``bayestribo fit`` does: the warning is said, and the status is 1."""
+    import bayestribo.signal.decay as decay_module
+    from bayestribo.cli import main
+    from bayestribo.errors import ShortAnalysisWarning
+    from bayestribo.io import write_run
+    from bayestribo.synthetic import simulate
+
+    path = write_run(simulate(seed=3), tmp_path / "r.csv")
+    assert main(["decay", str(path)]) == 0
+    real = decay_module.energy_decay
+
+    def short(*args, **kwargs):
+        warnings.warn("analysed 2 s to 36 s of 1 s to 156 s", ShortAnalysisWarning, stacklevel=2)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(decay_module, "energy_decay", short)
+    assert main(["decay", str(path)]) == 1
+    assert "analysed 2 s to 36 s" in capsys.readouterr().err

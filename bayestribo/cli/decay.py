@@ -80,27 +80,37 @@ def mains_note(info: dict[str, Any]) -> str | None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Read the run, compute its energy decay, print it."""
+    """Read the run, compute its energy decay, print it; exit status 1 when the
+    analysis covers less than half of the recorded motion (a ShortAnalysisWarning, said
+    on standard error), as ``bayestribo fit`` does."""
+    import warnings
+
     import numpy as np
 
+    from bayestribo.errors import ShortAnalysisWarning
     from bayestribo.signal.decay import energy_decay
 
     recording = read_run_from_args(args)
-    decay = energy_decay(
-        recording.time,
-        recording.displacement,
-        recording.velocity,
-        rig=recording.rig(),
-        skip_oscillations=args.skip,
-        notch=args.notch,
-    )
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        decay = energy_decay(
+            recording.time,
+            recording.displacement,
+            recording.velocity,
+            rig=recording.rig(),
+            skip_oscillations=args.skip,
+            notch=args.notch,
+        )
+    for w in caught:
+        warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    status = int(any(issubclass(w.category, ShortAnalysisWarning) for w in caught))
     info = summary(decay, args.run)
     rows = np.linspace(0, decay.tau.size - 1, max(args.points, 2)).astype(int)
     if args.json:
         info["tau"] = decay.tau[rows].tolist()
         info["pi"] = decay.pi[rows].tolist()
         print(json.dumps(info, indent=2))
-        return 0
+        return status
     unit = "μ_k (y = kx/N)" if decay.scaling.friction_defined else "friction displacement"
     print(f"run            {args.run}")
     print(
@@ -126,4 +136,4 @@ def run(args: argparse.Namespace) -> int:
     print(f"{'τ':>12} {'E(τ)':>14} {'Π(τ)':>14}")
     for i in rows:
         print(f"{decay.tau[i]:12.4f} {decay.energy[i]:14.6g} {decay.pi[i]:14.6g}")
-    return 0
+    return status

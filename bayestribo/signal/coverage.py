@@ -12,17 +12,12 @@ makes ``bayestribo fit`` exit with status 1 (a
 
 from __future__ import annotations
 
-from bayestribo.errors import MisfitWarning
+from bayestribo.errors import ShortAnalysisWarning
 
 __all__ = ["MIN_COVERAGE", "ShortAnalysisWarning", "coverage_note"]
 
 #: Least fraction of the recorded motion the analysis must cover without a warning.
 MIN_COVERAGE = 0.5
-
-
-class ShortAnalysisWarning(MisfitWarning):
-    """The analysis covers less than half of the motion the record holds; the message
-    names the analysed span, the motion's span and why."""
 
 
 def coverage_note(

@@ -30,6 +30,7 @@ import numpy as np
 import scipy.ndimage
 from numpy.typing import ArrayLike, NDArray
 
+from bayestribo.errors import SpikeWarning
 from bayestribo.signal.clipping import quantum
 
 __all__ = ["MAX_SPIKE_SAMPLES", "SPIKE_FACTOR", "SpikeWarning", "bridged", "find_spikes"]
@@ -39,11 +40,6 @@ __all__ = ["MAX_SPIKE_SAMPLES", "SPIKE_FACTOR", "SpikeWarning", "bridged", "find
 SPIKE_FACTOR = 8.0
 #: Longest run of flagged samples that counts as a spike.
 MAX_SPIKE_SAMPLES = 2
-
-
-class SpikeWarning(UserWarning):
-    """Isolated samples far off their neighbours were left out of the analysis (the
-    message names the channel, times and values)."""
 
 
 def find_spikes(values: ArrayLike) -> NDArray:
