@@ -80,25 +80,35 @@ CHAIN_EFFECTS: dict[str, tuple[float, float, dict[str, Any], str | None]] = {
 
 @functools.lru_cache(maxsize=8)
 def motion(
-    k3: float = 0.0, c2: float = 0.0, track: tuple[float, float] = (0.0, 1.0)
+    k3: float = 0.0,
+    c2: float = 0.0,
+    track: tuple[float, float] = (0.0, 1.0),
+    pendulum: float = 0.0,
 ) -> tuple[tuple, float, float]:
     """Half cycles of the free decay from x₀ at rest at t = 0: (dense solutions per half
     cycle as (t_start, t_end, sol), the stop time [s], the displacement at rest [m]).
 
     ``k3`` [N/m³] cubic stiffness, ``c2`` [N s²/m²] quadratic drag, ``track`` = (a, λ [m])
-    friction varying along the track."""
+    friction varying along the track; ``pendulum`` > 0: the spring force is
+    k L sin(x/L) with L = x₀/pendulum (a pendulum released at ``pendulum`` rad, its
+    small-swing stiffness k) instead of k x."""
     amplitude, wavelength = track
+    length = X0 / pendulum if pendulum else 0.0
 
     def mu(x: float) -> float:
         return MU_K * (1.0 + amplitude * math.sin(2 * math.pi * x / wavelength))
 
+    def spring(x: float) -> float:
+        linear = K * length * math.sin(x / length) if length else K * x
+        return linear + k3 * x**3
+
     arcs, x, t0 = [], X0, 0.0
-    while abs(K * x + k3 * x**3) > MU_S * LOAD:
+    while abs(spring(x)) > MU_S * LOAD:
         s = -math.copysign(1.0, x)  # direction of the coming half cycle
 
         def rhs(_t, u, s=s):
             friction = mu(u[0]) * LOAD * s
-            force = -C * u[1] - c2 * abs(u[1]) * u[1] - K * u[0] - k3 * u[0] ** 3 - friction
+            force = -C * u[1] - c2 * abs(u[1]) * u[1] - spring(u[0]) - friction
             return [u[1], force / MASS]
 
         def turned(_t, u):
@@ -107,7 +117,7 @@ def motion(
         turned.terminal, turned.direction = True, -s
         sol = solve_ivp(
             rhs,
-            (t0, t0 + 1.0 / F_HZ),
+            (t0, t0 + (2.0 if pendulum else 1.0) / F_HZ),
             [x, 0.0],
             method="DOP853",
             events=turned,
@@ -129,10 +139,11 @@ def record(
     k3: float = 0.0,
     c2: float = 0.0,
     track: tuple[float, float] = (0.0, 1.0),
+    pendulum: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Noise-free t [s], x [m], v [m/s] sampled at ``fs`` [Hz], with ``rest_before`` and
     ``rest_after`` [s] of rest around the motion of :func:`motion` (same law options)."""
-    arcs, stop, x_stop = motion(k3, c2, tuple(track))
+    arcs, stop, x_stop = motion(k3, c2, tuple(track), pendulum)
     t = np.arange(round((rest_before + stop + rest_after) * fs) + 1) / fs
     tm = t - rest_before
     x, v = np.full(t.size, X0), np.zeros(t.size)
@@ -166,6 +177,9 @@ def apply_chain(
     pink: float = 0.0,
     velocity_gain: float = 1.0,
     displacement_delay_s: float = 0.0,
+    one_pole_hz: float = 0.0,
+    steps: float = 0.0,
+    spikes: int = 0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The recorded displacement and velocity: the true ``x``, ``v`` through the chain.
 
@@ -173,7 +187,11 @@ def apply_chain(
     ``hum``, ``pink``: 50 Hz line (random phase per channel) and 1/f noise, rms in
     multiples of the white noise's sd; ``filt``: the 2 kHz anti-alias filter after the
     noise; ``velocity_gain`` and ``displacement_delay_s``: channel errors on the true
-    signals. ``seed``: anything :func:`numpy.random.default_rng` takes."""
+    signals; ``one_pole_hz``: a first-order low-pass at that cutoff on both channels
+    (bilinear, steady state at the start); ``steps``: both channels rounded to a digitiser
+    step of 1/``steps`` of their peak-to-peak swing; ``spikes``: that many single
+    samples of the displacement moved by 30 % of x₀ (a sensor's dropouts), at random
+    times in the motion. ``seed``: anything :func:`numpy.random.default_rng` takes."""
     rng = np.random.default_rng(seed)
     sigma_x, sigma_v = noise * RESOLUTION_X, noise * RESOLUTION_V
     n = t.size
@@ -198,6 +216,19 @@ def apply_chain(
         zi = scipy.signal.sosfilt_zi(sos)
         xs = scipy.signal.sosfilt(sos, xs, zi=zi * xs[0])[0]
         vs = scipy.signal.sosfilt(sos, vs, zi=zi * vs[0])[0]
+    if one_pole_hz:
+        b, a = scipy.signal.butter(1, one_pole_hz, fs=fs)
+        zi = scipy.signal.lfilter_zi(b, a)
+        xs = scipy.signal.lfilter(b, a, xs, zi=zi * xs[0])[0]
+        vs = scipy.signal.lfilter(b, a, vs, zi=zi * vs[0])[0]
+    if steps:
+        qx, qv = np.ptp(x) / steps, np.ptp(v) / steps
+        xs, vs = np.round(xs / qx) * qx, np.round(vs / qv) * qv
+    if spikes:
+        moving = np.flatnonzero(np.abs(v) > 0)
+        where = rng.choice(moving[: moving.size // 2], size=spikes, replace=False)
+        xs = xs.copy()
+        xs[where] += 0.3 * X0 * rng.choice([-1.0, 1.0], size=spikes)
     return xs, vs
 
 
@@ -218,4 +249,6 @@ def metadata() -> dict[str, float]:
         "load_N": LOAD,
         "displacement_resolution_m": RESOLUTION_X,
         "velocity_resolution_m_per_s": RESOLUTION_V,
+        # the simulated chain's gain is exact (a case with a filter says otherwise)
+        "gain_uncertainty": 0.0,
     }

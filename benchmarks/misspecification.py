@@ -10,7 +10,7 @@ sticking at the first turning point where the spring force is inside ±μ_s N, o
 paper's rig (m = 0.035 kg, f = 32.6 Hz, N = 0.31 N, ζ = 0.0236, μ_k = 0.0294,
 μ_s = 0.04, x₀ = 2 mm; 10 kHz and 0.1 s of rest before and after unless said), with
 white noise of 10x or 30x the vibrometer's resolution (0.15 µm, 0.015 µm/s) on both
-channels and one effect:
+channels and one effect (the sensor's gain exact, ``gain_uncertainty`` 0, unless said):
 
 ===========  =========================================================================
 clean        the model itself (``--clean-runs`` runs per noise level, default 200)
@@ -30,6 +30,18 @@ delay        displacement channel 50 µs late (a band-limited delay)
 cubic        k₃ shifting the frequency at 2 mm by +0.1 % (k₃/k = 667 m⁻²)
 drag         quadratic damping c₂ carrying 10 % of the viscous loss at 2 mm
 track        μ(x) = μ_k (1 + 0.05 sin(2π x / 0.5 mm)): friction ±5 % along the track
+*another rig (a first recording)*
+jitter-gaps  time stamps jittered by ±0.1 step (uniform), rounded to 1 µs; 2 single
+             samples missing in the motion
+steps-5      both channels rounded to a fifth of their peak-to-peak swing
+spikes       3 single samples of the displacement moved by 30 % of x₀
+velocity-10  the velocity channel alone, sampled at 10 samples a period (326 Hz)
+one-pole-10f a first-order low-pass at 10 f (326 Hz) on both channels, nothing declared
+             (the default 1 % gain uncertainty)
+one-pole-5f- the same at 5 f (163 Hz, -1.9 % at f), declared in the sidecar's
+declared     ``filter``
+duffing-5pc  k₃ shifting the frequency at 2 mm by +5 %
+pendulum-90  the spring force k L sin(x/L), released at x₀ = L π/2: a pendulum at 90°
 ===========  =========================================================================
 
 Every run is fitted with :func:`bayestribo.fit` (exact model, 16 walkers × 2 ensembles,
@@ -132,6 +144,20 @@ CASES: dict[str, dict[str, Any]] = {
     "cubic": {"law": {"k3": K3_OVER_K * K}, "kind": "law"},
     "drag": {"law": {"c2": C2}, "kind": "law"},
     "track": {"law": {"track": (0.05, 0.5e-3)}, "kind": "law"},
+    # a first recording from another rig (the first-contact issue)
+    "jitter-gaps": {"time": {"jitter": 0.1, "drop": 2}, "kind": "rig"},
+    "steps-5": {"chain": {"steps": 5.0}, "kind": "rig"},
+    "spikes": {"chain": {"spikes": 3}, "kind": "rig"},
+    "velocity-10": {"fs": 10 * 32.6, "channels": "velocity", "kind": "rig"},
+    "one-pole-10f": {"chain": {"one_pole_hz": 326.0}, "meta": {"gain_uncertainty": None}}
+    | {"kind": "rig"},
+    "one-pole-5f-declared": {
+        "chain": {"one_pole_hz": 163.0},
+        "meta": {"filter": {"kind": "butterworth", "order": 1, "cutoff_Hz": 163.0}},
+        "kind": "rig",
+    },
+    "duffing-5pc": {"law": {"k3": 50 * K3_OVER_K * K}, "kind": "rig"},
+    "pendulum-90": {"law": {"pendulum": math.pi / 2}, "kind": "rig"},
 }
 for _case in CASES.values():
     for _key, _default in (
@@ -140,6 +166,9 @@ for _case in CASES.values():
         ("law", {}),
         ("chain", {}),
         ("notch", None),
+        ("time", {}),
+        ("channels", "both"),
+        ("meta", {}),
     ):
         _case.setdefault(_key, _default)
 NOISE_LEVELS = (10.0, 30.0)
@@ -166,6 +195,22 @@ def _entropy(case: str, noise: float, index: int, seed: int) -> list[int]:
     return [seed, zlib.crc32(case.encode()), round(100 * noise), index]
 
 
+def _clock(
+    t: np.ndarray, x: np.ndarray, v: np.ndarray, spec: dict[str, Any], entropy: list[int]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A logger's clock: stamps jittered uniformly by ±``jitter`` steps (rounded to a
+    microsecond) and ``drop`` single samples missing in the motion."""
+    if not spec:
+        return t, x, v
+    rng = np.random.default_rng([*entropy, 2])
+    step = t[1] - t[0]
+    stamps = np.round(t + rng.uniform(-1, 1, t.size) * spec.get("jitter", 0.0) * step, 6)
+    drop = int(spec.get("drop", 0))
+    lost = rng.choice(np.arange(t.size // 4, t.size // 2), size=drop, replace=False)
+    keep = np.setdiff1d(np.arange(t.size), lost)
+    return stamps[keep], x[keep], v[keep]
+
+
 def one_run(case: str, noise: float, index: int, seed: int, max_steps: int) -> dict[str, Any]:
     """Simulate run ``index`` of ``case`` at ``noise`` x the resolution, fit it, record
     refusal, intervals, z and warnings."""
@@ -187,7 +232,15 @@ def one_run(case: str, noise: float, index: int, seed: int, max_steps: int) -> d
             warnings.simplefilter("always")
             t, x, v = record(spec["fs"], REST_BEFORE_S, spec["rest_after"], **spec["law"])
             xs, vs = apply_chain(t, x, v, spec["fs"], seed=entropy, noise=noise, **spec["chain"])
-            run = Run(time=t, displacement=xs, velocity=vs, metadata=metadata())
+            t, xs, vs = _clock(t, xs, vs, spec["time"], entropy)
+            meta = {**metadata(), **spec["meta"]}
+            meta = {k: value for k, value in meta.items() if value is not None}
+            run = Run(
+                time=t,
+                displacement=None if spec["channels"] == "velocity" else xs,
+                velocity=vs,
+                metadata=meta,
+            )
             start = time.perf_counter()
             result = fit(run, seed=fit_seed, max_steps=max_steps, notch=spec["notch"])
             out["fit_seconds"] = time.perf_counter() - start
