@@ -33,7 +33,7 @@ track        μ(x) = μ_k (1 + 0.05 sin(2π x / 0.5 mm)): friction ±5 % along t
 *another rig (a first recording)*
 jitter-gaps  time stamps jittered by ±0.1 step (uniform), rounded to 1 µs; 2 single
              samples missing in the motion
-steps-5      both channels rounded to a fifth of their peak-to-peak swing
+steps-10     both channels rounded to a tenth of their peak-to-peak swing
 spikes       3 single samples of the displacement moved by 30 % of x₀
 velocity-10  the velocity channel alone, sampled at 10 samples a period (326 Hz)
 one-pole-10f a first-order low-pass at 10 f (326 Hz) on both channels, nothing declared
@@ -146,7 +146,7 @@ CASES: dict[str, dict[str, Any]] = {
     "track": {"law": {"track": (0.05, 0.5e-3)}, "kind": "law"},
     # a first recording from another rig (the first-contact issue)
     "jitter-gaps": {"time": {"jitter": 0.1, "drop": 2}, "kind": "rig"},
-    "steps-5": {"chain": {"steps": 5.0}, "kind": "rig"},
+    "steps-10": {"chain": {"steps": 10.0}, "kind": "rig"},
     "spikes": {"chain": {"spikes": 3}, "kind": "rig"},
     "velocity-10": {"fs": 10 * 32.6, "channels": "velocity", "kind": "rig"},
     "one-pole-10f": {"chain": {"one_pole_hz": 326.0}, "meta": {"gain_uncertainty": None}}

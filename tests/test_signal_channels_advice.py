@@ -272,3 +272,25 @@ def test_the_truth_passes_and_arbitrary_units_are_not_judged(tmp_path):
     read_run(_write(tmp_path, HEADER_M, 1.0, 1.0, {**RIG, "displacement_resolution_m": 1e-6}))
     # a swing of 1.5 m in arbitrary units is not refused
     read_run(_write(tmp_path, HEADER_M, 1e3, 1e3, {"length_unit": "arbitrary"}))
+
+
+def test_channels_of_one_motion_rounded_to_a_few_steps_are_one_motion() -> None:
+    """Both channels rounded to a fifth of their swing (a coarse digitiser): over a
+    fortieth of a period the displacement moves by one step or none, and its changes
+    correlated with the velocity's integral at 0.46; over windows of four steps they
+    are one motion. Unrelated channels rounded alike are still refused."""
+    from bayestribo.errors import RecordingError
+    from bayestribo.io.run import Run
+    from bayestribo.signal.channels import check_channels
+
+    t = np.arange(0.0, 20.0, 0.005)
+    w = 2 * np.pi * 1.3
+    x = np.exp(-0.05 * t) * np.cos(w * t)
+    v = np.gradient(x, t)
+    qx, qv = np.ptp(x) / 5, np.ptp(v) / 5
+    xs, vs = np.round(x / qx) * qx, np.round(v / qv) * qv
+    meta = {"length_unit": "arbitrary"}
+    check_channels(Run(t, xs, vs, meta))
+    other = np.round(np.exp(-0.05 * t) * np.cos(1.7 * w * t + 1.0) * w / qv) * qv
+    with pytest.raises(RecordingError, match="do not describe one motion"):
+        check_channels(Run(t, xs, other, meta))

@@ -551,6 +551,24 @@ def channel_consistency(run: Recording) -> ChannelConsistency | None:
     return found
 
 
+def _quantised_lag(x: NDArray, v: NDArray, step: float, period: float) -> int:
+    """Samples over which the largest swing moves a coarsely quantised displacement by
+    four of its steps (0 when it is not quantised), at most a quarter period.
+
+    Over a fortieth of a period a displacement rounded to a fifth of its swing changes by
+    one step or none: its changes are the rounding, and they correlate with the
+    velocity's integral at 0.46 where the motion is one (a record of 5 steps across the
+    swing was refused as two motions). Over windows long enough for four steps the
+    rounding is a small part of each change."""
+    from bayestribo.signal.quantisation import quantisation_step
+
+    q = quantisation_step(x)
+    speed = float(np.max(np.abs(v)))
+    if q is None or not speed > 0:
+        return 0
+    return min(round(4.0 * q / (speed * step)), round(period / (4.0 * step)))
+
+
 def _channel_consistency(run: Recording) -> ChannelConsistency | None:
     x, v, t = run.displacement, run.velocity, run.time
     if x is None or v is None:
@@ -572,7 +590,7 @@ def _channel_consistency(run: Recording) -> ChannelConsistency | None:
     area *= np.subtract(t[1:], t[:-1], out=integral[1:])
     np.cumsum(area, out=integral[1:])
     step = sample_step(t)
-    lag = max(1, round(period / (40.0 * step)))
+    lag = max(1, round(period / (40.0 * step)), _quantised_lag(x, v, step, period))
     if 2 * lag >= x.size:
         return None
     xc = x[lag:] - x[:-lag]
