@@ -259,7 +259,10 @@ def _good():
     ("mutate", "message"),
     [
         (lambda t, x, v: (t[::-1].copy(), x, v), "increase strictly"),
-        (lambda t, x, v: (np.where(np.arange(t.size) > 500, t + 1e-3, t), x, v), "regular"),
+        (
+            lambda t, x, v: (np.where(np.arange(t.size) > 500, t + 0.05, t), x, v),
+            r"100 samples are missing after sample 500 .* cannot be bridged",
+        ),
         (
             lambda t, x, v: (t, np.where(np.arange(x.size) == 40, np.nan, x), v),
             "displacement is not finite at sample 40",
