@@ -91,3 +91,23 @@ def test_the_right_law_has_the_turning_points_shape():
         )
     assert right.shape_agreement["same_shape"] and "ANOTHER SHAPE" not in right.to_text()
     assert abs(right.shape_agreement["law_slope"] - 2.0) < 1e-6
+
+
+@pytest.mark.parametrize("half_cycles", [3, 5, 7])
+def test_a_few_half_cycles_still_give_a_wide_law_free_answer(half_cycles):
+    """A torsion pendulum recorded for two seconds, a seismometer's few swings: fewer
+    than eight half cycles, a law-free ΔE(A) with a wide interval that holds the truth
+    (viscous damping: Y_n = Y_0 exp(-πζn), ΔE = 2πζA² per cycle to first order in ζ)."""
+    from bayestribo.inference.dissipation import turning_point_dissipation
+    from bayestribo.model.laws import PhysicalScale
+
+    zeta = 0.01
+    n = np.arange(half_cycles + 1)
+    noise = np.random.default_rng(half_cycles).normal(0, 1e-4, n.size)
+    turning = (1.0 + noise) * np.exp(-math.pi * zeta * n) * (-1.0) ** n
+    swings = np.geomspace(0.9, 0.98, 3)
+    found = turning_point_dissipation(turning, swings, PhysicalScale())
+    truth = 2 * math.pi * zeta * swings**2
+    lo, hi = (np.asarray(side) for side in found["interval"])
+    assert np.all((lo < truth) & (truth < hi)) and np.all(np.isfinite(found["sd"]))
+    assert turning_point_dissipation(turning[:3], swings, PhysicalScale()) is None

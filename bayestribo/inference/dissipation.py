@@ -45,6 +45,7 @@ from bayestribo.summary import check_prob
 
 __all__ = [
     "DISSIPATION_AMPLITUDES",
+    "FEWEST_HALF_CYCLES",
     "averaged_dissipation",
     "dissipation_amplitudes",
     "dissipation_band",
@@ -384,6 +385,9 @@ def law_quantities(
 
 #: Fewest half cycles a local fit of :func:`turning_point_dissipation` uses.
 _MIN_LOCAL_CYCLES = 8
+#: Fewest half cycles that give a law-free ΔE(A) at all (a constant ΔE/A, two degrees of
+#: freedom for its interval).
+FEWEST_HALF_CYCLES = 3
 
 
 def turning_point_dissipation(
@@ -409,7 +413,11 @@ def turning_point_dissipation(
     model of it (neighbouring half cycles share a turning point, whose error enters
     them with opposite signs: the scatter then overstates the error of their mean).
     Much wider than a law's band (every half cycle is its own measurement), it holds
-    whatever the law.
+    whatever the law. A record of fewer than eight half cycles (a seismometer's few
+    swings, a torsion pendulum recorded for two seconds) fits all of them at every swing,
+    with a polynomial of degree ``min(2, n - 3)`` so that two degrees of freedom remain
+    for the interval: wide, but an answer; with fewer than three half cycles there is
+    none.
 
     Parameters
     ----------
@@ -431,7 +439,7 @@ def turning_point_dissipation(
     dict or None
         ``amplitude`` [``amplitude_unit``]; ``mean``, ``sd``, ``interval``
         [``unit``]; ``prob``; ``cycles`` (half cycles in each local fit); ``unit``;
-        ``definition``. None with fewer than eight half cycles.
+        ``definition``. None with fewer than three half cycles.
     """
     from scipy.stats import t as student
 
@@ -439,8 +447,9 @@ def turning_point_dissipation(
     y = np.asarray(turning_points, dtype=float)
     a = np.abs(y)
     n = a.size - 1
-    if n < _MIN_LOCAL_CYCLES:
+    if n < FEWEST_HALF_CYCLES:
         return None
+    degree = min(2, n - 3)  # two degrees of freedom at least for the interval
     loss = 2.0 * 0.5 * (y[:-1] ** 2 - y[1:] ** 2)  # per cycle: twice the half cycle's
     swing = 0.5 * (a[:-1] + a[1:])
     ratio = loss / swing
@@ -458,9 +467,9 @@ def turning_point_dissipation(
             near = np.zeros(n, bool)
             near[np.argsort(distance)[:_MIN_LOCAL_CYCLES]] = True
         x = (swing[near] - amp) / amp
-        design = np.column_stack([np.ones(x.size), x, x * x])
+        design = np.column_stack([x**power for power in range(degree + 1)])
         coef, *_ = np.linalg.lstsq(design, ratio[near], rcond=None)
-        dof = x.size - 3
+        dof = x.size - degree - 1
         resid = ratio[near] - design @ coef
         s2 = float(resid @ resid) / dof
         cov = s2 * np.linalg.inv(design.T @ design)

@@ -913,9 +913,24 @@ def _warn_misfit(
     discrepancy: bool,
     law: str,
     compared: bool = False,
+    half_cycles: int | None = None,
 ) -> None:
     """Say, with numbers, that the law misfits the run, and what to do (see
-    :func:`summarise`)."""
+    :func:`summarise`); ``half_cycles``: how many the analysis holds (the law-free answer
+    needs three, :func:`~bayestribo.inference.dissipation.turning_point_dissipation`)."""
+    from bayestribo.inference.dissipation import FEWEST_HALF_CYCLES
+
+    law_free = (
+        "The answer is the energy dissipated per cycle measured from the turning points, "
+        "whatever the law (result.turning_point_dissipation, printed as 'turning points "
+        "(law-free)')"
+    )
+    if half_cycles is not None and half_cycles < FEWEST_HALF_CYCLES:
+        law_free = (
+            f"The analysis holds {half_cycles} half cycle(s), too few for the energy "
+            "dissipated per cycle measured from the turning points either: the record "
+            "holds no measurement of the dissipation; record more of the decay"
+        )
     chi2, m, misfit_p = misfit
     shaped = bool(shape.p_value < MISFIT_P)
     if not (misfit_p < MISFIT_P or shaped):
@@ -940,19 +955,22 @@ def _warn_misfit(
         warnings.warn(
             f"no law compared holds for {run}: the best, {law}, misfits it beyond its "
             f"noise ({how}); its parameters are not a measurement of any mechanism and its "
-            "intervals are too narrow. The answer is the energy dissipated per cycle "
-            "measured from the turning points, whatever the law "
-            "(result.turning_point_dissipation, printed as 'turning points (law-free)')",
+            f"intervals are too narrow. {law_free}",
             MisfitWarning,
             stacklevel=4,
         )
         return
+    few = half_cycles is not None and half_cycles < FEWEST_HALF_CYCLES
     warnings.warn(
         f"the law {law} misfits {run} beyond its noise ({how}): its parameters are not "
         "a measurement and its intervals are too narrow. Fit with law='auto' "
-        "(--law auto): it compares the registered laws and keeps one that holds; the "
-        "energy dissipated per cycle measured from the turning points (printed as "
-        "'turning points (law-free)') holds whatever the law",
+        "(--law auto): it compares the registered laws and keeps one that holds"
+        + (
+            f". {law_free}"
+            if few
+            else "; the energy dissipated per cycle measured from the turning points "
+            "(printed as 'turning points (law-free)') holds whatever the law"
+        ),
         MisfitWarning,
         stacklevel=4,
     )
@@ -1052,7 +1070,8 @@ def summarise(
     )
     misfit = _misfit(posterior, sampled.theta_map)
     shape = _shape_departure(posterior, sampled.theta_map)
-    _warn_misfit(name, misfit, shape, discrepancy, posterior.law.name, compared)
+    half_cycles = int(prepared.decay.peaks.value.size) - 1
+    _warn_misfit(name, misfit, shape, discrepancy, posterior.law.name, compared, half_cycles)
     flat = run.chains.reshape(-1, run.chains.shape[-1])
     at_bound = piled_on_bounds(flat, posterior.priors)
     for entry in at_bound:

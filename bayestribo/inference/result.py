@@ -483,6 +483,11 @@ class FitResult:
 
             lines.append(f"          {LawHalves(**halves).describe()}")
         lines.extend(self._departure_lines(c.get("departures") or {}))
+        if not c.get("adequate") and not self.turning_point_dissipation:
+            lines.append(
+                "          the analysis holds too few half cycles for the law-free ΔE(A) "
+                "either: the record holds no measurement of the dissipation"
+            )
         return lines
 
     def _departure_lines(self, departures: Mapping[str, Any]) -> list[str]:
