@@ -2,9 +2,10 @@
 
 A run holds the sampled time [s], displacement [m] and velocity [m/s] of the
 oscillating pin (either signal may be absent) and a metadata mapping. The known
-metadata keys (:data:`METADATA_KEYS`) are typed and checked; any further key is
-kept as it is, so it can be carried into results, as long as its value is plain
-data that JSON can store (text, numbers, booleans, ``None``, lists, mappings).
+metadata keys (:data:`METADATA_KEYS`) are typed and checked. A run built in Python may
+hold further keys (plain data that JSON can store: text, numbers, booleans, ``None``,
+lists, mappings), carried into results; a sidecar may not (a key of one's own goes
+under ``user``, see :func:`check_metadata`).
 
 Units. The column names carry SI units. When the length unit of a recording is
 not known (a file from another rig), the metadata key ``length_unit`` is set to
