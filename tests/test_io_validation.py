@@ -103,7 +103,7 @@ BAD: list[tuple[str, Callable[[Run], Run], str]] = [
             displacement=np.delete(r.displacement, np.arange(300, 320)),
             velocity=np.delete(r.velocity, np.arange(300, 320)),
         ),
-        r"field 'time_s': field 'displacement': 20 samples are missing after sample 299 .* "
+        r"field 'displacement': 20 samples are missing after sample 299 .* "
         r"cannot be bridged",
     ),
     (

@@ -122,7 +122,7 @@ def _bridgeable(run: Run, where: str | None) -> bool:
     try:
         on_grid(run.time, run.displacement, run.velocity)
     except RecordingError as exc:
-        raise _fail(f"field {TIME!r}: {exc.message}", where) from None
+        raise _fail(exc.message, where) from None
     return True
 
 
