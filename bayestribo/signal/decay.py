@@ -22,7 +22,13 @@ from the end of motion T. A real recording needs some care first, and
   displacement between the release and the end of motion only (sub-sample parabola
   fits), with the noise threshold measured at rest (a wiggle of filtered, humming
   or 1/f noise at rest is not a turning point), and are checked to be half a period
-  apart (:func:`bayestribo.signal.motion.check_turning_points`).
+  apart (:func:`bayestribo.signal.motion.regular_turning_points`). A record whose
+  first turning points are not (a pendulum's large swings, whose period grows with
+  the amplitude; an oscillator still driven by a hand or a blow for its first cycles)
+  is analysed from where the spacing becomes regular, the turning points before it
+  named in an :class:`~bayestribo.signal.motion.IrregularStartWarning` (and the
+  equilibrium estimated from the regular ones only); an interval off after two
+  regular oscillations is a wiggle of the noise or a missed turning point, refused.
 * **First oscillation**: the first ``skip_oscillations`` oscillations after the
   release are disturbed by the magnet and skipped (default one, as in the paper,
   section 2.1); the analysis starts at the sample nearest to the next displacement
@@ -78,8 +84,15 @@ from bayestribo.model.plausible import MAX_SPEED
 from bayestribo.model.scaling import Rig, Scaling
 from bayestribo.signal.clipping import flattened_turning_points, hard_clips
 from bayestribo.signal.coverage import ShortAnalysisWarning, coverage_note
-from bayestribo.signal.motion import THRESHOLD, block_noise, check_turning_points, motion_span
-from bayestribo.signal.peaks import Peaks, estimate_noise, find_peaks
+from bayestribo.signal.motion import (
+    THRESHOLD,
+    IrregularStartWarning,
+    RegularTurningPoints,
+    block_noise,
+    motion_span,
+    regular_turning_points,
+)
+from bayestribo.signal.peaks import Peaks, estimate_noise, estimate_offset, find_peaks
 from bayestribo.signal.period import dominant_period, sample_step
 from bayestribo.signal.quantisation import QUANTISATION_NOISE_FACTOR, quantisation_step
 from bayestribo.signal.spectrum import NoiseSpectrum, RestNoise, fit_line, noise_spectrum
@@ -87,6 +100,7 @@ from bayestribo.signal.spikes import SpikeWarning, bridged, describe, find_spike
 
 __all__ = [
     "EnergyDecay",
+    "IrregularStartWarning",
     "NoiseLevels",
     "check_time",
     "derivative_gain",
@@ -208,6 +222,11 @@ class EnergyDecay:
         Leading turning points left out because their peaks are flattened (soft
         clipping of the displacement sensor,
         :func:`~bayestribo.signal.clipping.flattened_turning_points`); 0 when none was.
+    irregular_turning_points : int
+        Leading turning points left out because they are not half a period apart (large
+        swings whose period depends on the amplitude, a start still driven:
+        :func:`~bayestribo.signal.motion.regular_turning_points`), beyond the skipped
+        oscillations; 0 when none was.
     """
 
     t: NDArray
@@ -236,6 +255,7 @@ class EnergyDecay:
     stop_time: float | None = None
     turning_times: NDArray | None = None
     flattened_turning_points: int = 0
+    irregular_turning_points: int = 0
 
     @property
     def tau_end(self) -> float:
@@ -638,38 +658,82 @@ def _noise(
     )
 
 
+#: Significance (estimate over standard error) the filter-lag term b/|Y_n| of the
+#: turning times needs to be kept (:func:`_frequencies`).
+LAG_Z = 3.0
+#: Largest change of the filter lag b/|Y_n| over the turning points fitted, in half
+#: periods, for the term to be kept: a filter's, not a period that depends on amplitude.
+LAG_LIMIT = 0.01
+
+
 def _frequencies(times: NDArray, values: NDArray) -> tuple[float, float]:
     """Damped and natural frequency [Hz] from turning times and peak values.
 
     The damped half-period π/ω_d is the least-squares slope of the turning times
     against their index (weighted by peak size, as small peaks are timed worse); the
     natural frequency is f_d√(1+β²) = f_d/√(1-ζ²) with β from the decrement of the
-    peak-to-peak heights, h_{n+1} = e^{-βπ} h_n - const (Eq. 13, 14, 20).
+    peak-to-peak heights, h_{n+1} = e^{-βπ} h_n - const (Eq. 13, 14, 20). Where the
+    period depends on the amplitude (a pendulum's large swings, a spring that stiffens
+    or softens) the slope is the mean half period of the turning points fitted, a
+    frequency inside the range of the record's periods
+    (:func:`bayestribo.signal.frequency.turning_point_trend` measures the change).
 
-    With six turning points or more the times are fitted as ``t_0 + n π/ω_d + b/|Y_n|``
-    (Y_n the peak values): a low-pass filter in the signal chain (an anti-alias
-    filter) smooths the kink friction puts in the velocity at each turning point
-    (:func:`_turning_times`), which moves the filtered velocity's zero by about
-    ``(x_c/|Y_n|)`` times the filter's spread in time, later and later as the
-    amplitude decays. Measured on the paper's rig through a 4th-order Butterworth
-    filter at 2 kHz, the slope alone gives a damped frequency low by 2.7e-6 at
-    100 kHz and 1.6e-6 at 10 kHz (ζ inherits it: 0.07 posterior sd at 10 times the
-    resolution at 100 kHz); with the b/|Y_n| term, below 1e-7. Without a filter b is
-    0 and the term costs nothing measurable (the noise of the damped frequency, about
-    1e-8, is far below that of β in the natural one).
+    A low-pass filter in the signal chain (an anti-alias filter) smooths the kink
+    friction puts in the velocity at each turning point (:func:`_turning_times`),
+    which moves the filtered velocity's zero by about ``(x_c/|Y_n|)`` times the
+    filter's spread in time, later and later as the amplitude decays. Measured on the
+    paper's rig through a 4th-order Butterworth filter at 2 kHz, the slope alone gives
+    a damped frequency low by 1.5e-6 at 10 kHz and 2.7e-6 at 100 kHz (ζ inherits it:
+    0.07 posterior sd at 10 times the resolution at 100 kHz). With six turning points
+    or more the times are therefore also fitted as ``t_0 + n π/ω_d + b/|Y_n|`` (Y_n
+    the peak values), and that half period is taken (the filtered cases then within
+    1e-7) when the term is a filter's lag: b > 0 (a delay), significant (b over its
+    standard error at least :data:`LAG_Z`: 12 and 670 in those cases) and small (its
+    change over the turning points, ``b(1/min|Y| - 1/max|Y|)``, at most
+    :data:`LAG_LIMIT` of a half period: 5e-4 and 9e-4 there; the delay of a filter
+    whose corner is above 5 times the oscillation frequency). Otherwise the slope
+    alone is kept: b, nearly collinear with n, would absorb a half period that changes
+    with the amplitude and move the frequency out of the record's range (a pendulum
+    at 135° of 1.56 Hz measured 1.29 Hz with b = -61 s·unit, a pendulum of periods
+    1.72 to 1.86 s at 0.646 Hz with b > 0 changing by two half periods), and without
+    a filter b is noise (its term is then not significant).
     """
     n = np.arange(times.size, dtype=float)
     weights = np.abs(values) if np.any(values != 0) else None
+    half_period = float(np.polyfit(n, times, 1, w=weights)[0])
     if times.size >= 6 and np.all(values != 0):
-        w = np.abs(values)
-        design = np.column_stack([np.ones_like(n), n, 1.0 / w])
-        coef = np.linalg.lstsq(design * w[:, None], times * w, rcond=None)[0]
-        half_period = float(coef[1])
-    else:
-        half_period = float(np.polyfit(n, times, 1, w=weights)[0])
+        lagged = _lagged_half_period(n, times, np.abs(values))
+        if lagged is not None:
+            half_period = lagged
     damped = 0.5 / half_period
     beta = _decrement_beta(values)
     return damped, damped * math.sqrt(1.0 + beta * beta)
+
+
+def _lagged_half_period(n: NDArray, times: NDArray, size: NDArray) -> float | None:
+    """Half period [s] of the fit ``t_0 + n h + b/|Y_n|`` (weights ``size`` = |Y_n|)
+    when its b is a filter's lag (:func:`_frequencies`: positive, significant, small),
+    else None."""
+    design = np.column_stack([np.ones_like(n), n, 1.0 / size]) * size[:, None]
+    target = times * size
+    coef, _, rank, _ = np.linalg.lstsq(design, target, rcond=None)
+    if rank < 3 or times.size <= 3:
+        return None
+    half, b = float(coef[1]), float(coef[2])
+    if not (b > 0.0 and half > 0.0):
+        return None
+    residual = target - design @ coef
+    s2 = float(residual @ residual) / (times.size - 3)
+    try:
+        var_b = s2 * float(np.linalg.inv(design.T @ design)[2, 2])
+    except np.linalg.LinAlgError:
+        return None
+    if var_b > 0.0 and b < LAG_Z * math.sqrt(var_b):
+        return None
+    change = b * (1.0 / float(size.min()) - 1.0 / float(size.max()))
+    if change > LAG_LIMIT * half:
+        return None
+    return half
 
 
 def _timing_sd(t: NDArray, peaks: Peaks) -> NDArray:
@@ -936,7 +1000,12 @@ def _despiked(
 
 
 def _flattened(
-    t: NDArray, x: NDArray | None, v: NDArray | None, peaks: Peaks, step: float
+    t: NDArray,
+    x: NDArray | None,
+    v: NDArray | None,
+    peaks: Peaks,
+    step: float,
+    half_period: float,
 ) -> tuple[int, str] | None:
     """Leading turning points to leave out for soft clipping, and what to say of them.
 
@@ -944,8 +1013,9 @@ def _flattened(
     velocity ``v`` at its extremes (one between each two turning points; v'' = -ω²v
     there, friction or not): a flattened velocity extreme between turning points k and
     k + 1 leaves out turning points up to k + 1. None when neither is flattened.
+    ``step`` is the sample step [s], ``half_period`` the damped half period [s].
     """
-    half_width = max(1, round(2.0 * peaks.half_period / step / 12.0))
+    half_width = max(1, round(2.0 * half_period / step / 12.0))
     found = []
     if x is not None:
         flat = flattened_turning_points(t, x, peaks.index, peaks.value, half_width)
@@ -969,6 +1039,71 @@ def _flattened(
         "saturates" + (" (or the spring softens)" if channel == "displacement" else "")
     )
     return count, said
+
+
+def _irregular_start(spacing: RegularTurningPoints, peaks: Peaks, skipped: str, least: int) -> int:
+    """Leave out the turning points before the regular run of ``spacing`` (beyond the
+    ``skipped`` oscillations), saying which and why in an
+    :class:`~bayestribo.signal.motion.IrregularStartWarning`; return how many.
+
+    Raises
+    ------
+    RecordingError
+        When fewer than ``least`` turning points remain from the regular run on, naming
+        the intervals off and where the spacing becomes regular.
+    """
+    start = spacing.start
+    off = spacing.off
+    said = spacing.describe(off[off < start])
+    remain = len(peaks) - start
+    if remain < least:
+        raise RecordingError(
+            f"turning points: {said}; the spacing is regular only from turning point "
+            f"{start} (t = {float(peaks.t[start]):.6g} s) on, where {remain} turning points "
+            f"remain; {least} are needed: is the record of a free decay (not driven, the "
+            "swings small enough for one period)?"
+        )
+    times = ", ".join(f"{float(tp):.6g}" for tp in peaks.t[:start])
+    warn(
+        f"irregular start: {said}; the first {start} turning points (0 to {start - 1}, at "
+        f"t = {times} s) are left out: the analysis starts at turning point {start} "
+        f"(t = {float(peaks.t[start]):.6g} s), where the spacing becomes regular, instead "
+        f"of after {skipped} (large swings whose period depends on the amplitude, or a "
+        "start still driven, are not of the free decay at one frequency)",
+        IrregularStartWarning,
+    )
+    return start
+
+
+def _equilibrium_from(
+    peaks: Peaks, start: int, offset: float | Literal["auto", "constant"] | None
+) -> Peaks:
+    """The turning points about the equilibrium estimated from turning point ``start``
+    on, as :func:`~bayestribo.signal.peaks.find_peaks` estimates it from all of them
+    (Eq. 20: the irregular ones before do not follow it); unchanged for an ``offset``
+    given as a number or None, or when fewer than 4 remain."""
+    if not isinstance(offset, str) or len(peaks) - start < 4:
+        return peaks
+    raw = peaks.value + (peaks.offset + peaks.drift * peaks.t)
+    tail = peaks.stop_time
+    rest_raw = (
+        None
+        if peaks.rest_value is None or tail is None
+        else peaks.rest_value + peaks.offset + peaks.drift * tail
+    )
+    if offset == "auto" and len(peaks) - start >= 8:
+        level, slope = estimate_offset(
+            raw[start:], peaks.t[start:], drift=True, noise=peaks.value_noise
+        )
+    else:
+        level, slope = estimate_offset(raw[start:], noise=peaks.value_noise)[0], 0.0
+    return replace(
+        peaks,
+        value=raw - (level + slope * peaks.t),
+        offset=level,
+        drift=slope,
+        rest_value=None if rest_raw is None else rest_raw - level - slope * float(tail),
+    )
 
 
 def _hard_clipped(
@@ -1148,9 +1283,13 @@ def _analyse(
         )
     except RecordingError as e:
         raise RecordingError(f"turning points: {e}") from e
-    peaks = replace(found, index=found.index + lo, stop_time=stop_time)
-    check_turning_points(peaks.t, peaks.half_period, timing_sd=_timing_sd(t, peaks))
-    period = 2.0 * peaks.half_period
+    peaks = replace(found, index=found.index + lo)
+    # the free decay starts where the turning points are half a period apart
+    spacing = regular_turning_points(peaks.t, peaks.value, timing_sd=_timing_sd(t, peaks))
+    if spacing.start:
+        peaks = _equilibrium_from(peaks, spacing.start, offset)
+    peaks = replace(peaks, stop_time=stop_time)
+    period = 2.0 * spacing.half_period
     if v is None:
         derived = "velocity"
         v, _ = derive_velocity(t, x, period)
@@ -1170,6 +1309,10 @@ def _analyse(
         skip = max(2 * int(skip_oscillations) - 1, 0)
     if skip_turning_points is None:
         skipped = f"{skip_oscillations} oscillations"
+    irregular = 0
+    if spacing.start > skip:
+        irregular = _irregular_start(spacing, peaks, skipped, int(min_turning_points))
+        skip = irregular
     left_out = 0
     flattened = _flattened(
         t,
@@ -1177,6 +1320,7 @@ def _analyse(
         v if derived != "velocity" else None,  # one is distorted by its derivation
         peaks,
         period0 / per_samples,
+        spacing.half_period,
     )
     if flattened is not None and flattened[0] > skip:
         count, said = flattened
@@ -1259,7 +1403,7 @@ def _analyse(
     start = int(window.index[0])
     stop = t.size if stop_time is None else int(np.searchsorted(t, stop_time)) + 1
     stop = min(stop, t.size)
-    _check_coverage(t, start, stop, release, window, left_out, stop_time)
+    _check_coverage(t, start, stop, release, window, max(left_out, irregular), stop_time)
     sl = slice(start, stop)
     # the same operations as x[sl] - (offset + drift t) and 0.5 (y² + y'²), in place
     relative = peaks.drift * t[sl]
@@ -1299,4 +1443,5 @@ def _analyse(
         stop_time=stop_time,
         turning_times=np.asarray(times, dtype=float).copy(),
         flattened_turning_points=left_out,
+        irregular_turning_points=irregular,
     )

@@ -42,7 +42,12 @@ the rig's frequency**.
   gains is not taken for it; :func:`bayestribo.signal.period.dominant_period`).
 
 :func:`check_turning_points` applies the other piece of physics: consecutive turning
-points of the motion are half a damped period apart.
+points of the motion are half a damped period apart. :func:`regular_turning_points`
+applies it to a record whose start is not yet the free decay (large swings of a
+pendulum, whose period grows with the amplitude; an oscillator still driven, by a
+hand or a blow, for its first cycles): the analysis starts where the spacing becomes
+regular, and an irregular interval after two regular oscillations is refused as a
+wiggle of the noise or a missed turning point.
 """
 
 from __future__ import annotations
@@ -56,7 +61,15 @@ from numpy.typing import ArrayLike, NDArray
 from bayestribo.errors import RecordingError
 from bayestribo.signal.period import sample_step
 
-__all__ = ["MotionSpan", "block_noise", "check_turning_points", "motion_span"]
+__all__ = [
+    "IrregularStartWarning",
+    "MotionSpan",
+    "RegularTurningPoints",
+    "block_noise",
+    "check_turning_points",
+    "motion_span",
+    "regular_turning_points",
+]
 
 #: Fraction of a block's variance the oscillation must explain for it to be moving.
 COHERENCE = 0.5
@@ -67,6 +80,23 @@ DISPLACEMENT_THRESHOLD = 5.0
 #: when the release and the end of motion are refined (a Gaussian sample exceeds 8σ
 #: with probability 1e-15).
 THRESHOLD = 8.0
+#: Largest accepted relative deviation of a turning-point interval from the half period.
+SPACING_TOLERANCE = 0.3
+#: Regular intervals in a row (two oscillations) after which an irregular interval is
+#: inside the decay (a wiggle of the noise, a missed turning point), not its start.
+REGULAR_RUN = 4
+#: Largest departure, in half periods, of the first turning point of a regular run
+#: after an irregular start from the cubic through the next :data:`SETTLE_POINTS`.
+SETTLE = 0.02
+#: Turning points whose cubic in their index continues the run to its first one.
+SETTLE_POINTS = 8
+
+
+class IrregularStartWarning(UserWarning):
+    """The first turning points of a record are not half a period apart (large swings
+    whose period depends on the amplitude, a start still driven): they were left out of
+    the analysis, which starts where the spacing becomes regular (the message names the
+    turning points left out, their times and their spacing)."""
 
 
 @dataclass(frozen=True)
@@ -455,3 +485,191 @@ def check_turning_points(
             f"({half_period:.4g} s ± {allowed[k]:.3g} s): a wiggle of the noise taken "
             "for a turning point, or a turning point missed"
         )
+
+
+@dataclass(frozen=True)
+class RegularTurningPoints:
+    """Where the turning points of a record become half a period apart.
+
+    Attributes
+    ----------
+    start : int
+        The first turning point of the regular run: every interval from it on is half
+        a period apart within the tolerance; 0 when the whole record is regular.
+    half_period : float
+        The damped half period of the regular run [s] (weighted least-squares slope of
+        its turning times against their index, weights the turning points' values).
+    times : ndarray
+        All the turning times [s].
+    allowed : ndarray
+        The deviation from ``half_period`` accepted for each interval [s].
+    """
+
+    start: int
+    half_period: float
+    times: NDArray
+    allowed: NDArray
+
+    @property
+    def gaps(self) -> NDArray:
+        """Intervals between consecutive turning points [s]."""
+        return np.diff(self.times)
+
+    @property
+    def off(self) -> NDArray:
+        """Indices k of the intervals (turning points k to k + 1) off the half period."""
+        return np.flatnonzero(np.abs(self.gaps - self.half_period) > self.allowed)
+
+    def describe(self, intervals: ArrayLike | None = None) -> str:
+        """The spacing of the intervals ``intervals`` (default: those off), one clause
+        each: "turning points k and k + 1 (t = … s and … s) are … s apart"; then the
+        half period they are held to [s]."""
+        gaps = self.gaps
+        ks = self.off if intervals is None else np.asarray(intervals, dtype=int)
+        half = self.half_period
+        said = [
+            f"turning points {k} and {k + 1} (t = {self.times[k]:.6g} s and "
+            f"{self.times[k + 1]:.6g} s) are {gaps[k]:.4g} s apart ({gaps[k] / half:.2f} "
+            f"half periods, ± {self.allowed[k] / half:.2f} accepted)"
+            for k in ks.tolist()
+        ]
+        if not said:
+            return f"all intervals are half a period ({half:.4g} s) apart"
+        return "; ".join(said) + f", not about half a period ({half:.4g} s)"
+
+
+def _slope(times: NDArray, weights: NDArray) -> float:
+    """Weighted least-squares slope of ``times`` against their index [s]."""
+    n = np.arange(times.size, dtype=float)
+    w = weights if np.any(weights > 0) else np.ones_like(weights)
+    return float(np.polyfit(n, times, 1, w=w)[0])
+
+
+def _held(
+    tt: NDArray, weights: NDArray, sd: NDArray | None, tolerance: float, start: int
+) -> RegularTurningPoints:
+    """The turning times ``tt`` held to the half period of the run from ``start``."""
+    half = _slope(tt[start:], weights[start:])
+    allowed = np.full(tt.size - 1, tolerance * abs(half))
+    if sd is not None:
+        allowed = allowed + 6.0 * (sd[:-1] + sd[1:])
+    return RegularTurningPoints(start, half, tt, allowed)
+
+
+def _settled(
+    found: RegularTurningPoints, weights: NDArray, sd: NDArray | None, tolerance: float
+) -> RegularTurningPoints:
+    """``found`` started past the leading turning points of its run that the run does
+    not continue: the cubic in n through the next :data:`SETTLE_POINTS` turning times
+    (a period that changes smoothly with the amplitude is followed) misses the first
+    by more than :data:`SETTLE` half periods and 6 times its timing noise (the last
+    turning point of a drive, within the tolerance but off by 10 % of a half period,
+    would bias the frequency by 1e-4)."""
+    tt = found.times
+    start = found.start
+    moved = False
+    while tt.size - start > SETTLE_POINTS:
+        n = np.arange(1, SETTLE_POINTS + 1, dtype=float)
+        near = tt[start + 1 : start + 1 + SETTLE_POINTS]
+        cubic = np.polyfit(n, near - tt[start + 1], 3)
+        miss = abs(tt[start] - tt[start + 1] - float(np.polyval(cubic, 0.0)))
+        limit = SETTLE * abs(found.half_period) + (0.0 if sd is None else 6.0 * sd[start])
+        if miss <= limit:
+            break
+        start += 1
+        moved = True
+    return _held(tt, weights, sd, tolerance, start) if moved else found
+
+
+def regular_turning_points(
+    times: ArrayLike,
+    values: ArrayLike,
+    *,
+    tolerance: float = SPACING_TOLERANCE,
+    timing_sd: ArrayLike | None = None,
+) -> RegularTurningPoints:
+    """The run of turning points half a period apart that ends the record.
+
+    Consecutive turning points of a free decay are π/ω_d apart (Eq. 13). A record's
+    first turning points may not be: a pendulum released at 135° swings with a period
+    half as long again as its small swings' (the restoring force sin θ), and an
+    oscillator set going by a hand or a blow is driven for its first cycles. Those are
+    real turning points, not of the free decay at one frequency: the analysis starts
+    after them, where the spacing becomes regular (as it does after clipped cycles).
+
+    The half period is the slope of the turning times against their index (weighted by
+    the values' size, as :attr:`bayestribo.signal.peaks.Peaks.half_period`), first
+    over all the turning points; while an interval is off it by more than
+    ``tolerance`` (and 6 times its ends' timing noise), the start moves past the last
+    interval off and the half period is taken again over the turning points from
+    there, until every interval from the start on is regular.
+
+    Parameters
+    ----------
+    times : array_like
+        Turning-point times [s], increasing.
+    values : array_like
+        The turning points' values about the equilibrium [signal unit] (weights).
+    tolerance : float
+        Largest accepted relative deviation of an interval from the half period.
+    timing_sd : array_like, optional
+        Standard deviation of each turning-point time from the noise [s]: an interval
+        may also be off by 6 times the sum of its ends'.
+
+    Returns
+    -------
+    RegularTurningPoints
+
+    Raises
+    ------
+    RecordingError
+        "turning points: ..." when an interval off the half period follows
+        :data:`REGULAR_RUN` regular intervals (two oscillations): inside the decay,
+        it is a wiggle of the noise taken for a turning point or a turning point
+        missed, as :func:`check_turning_points` says; or when fewer than two turning
+        points are regular.
+    """
+    tt = np.asarray(times, dtype=float)
+    w = np.abs(np.asarray(values, dtype=float))
+    if tt.size < 2:
+        raise RecordingError(
+            f"turning points: {tt.size} found; at least 2 are needed for the half period"
+        )
+    sd = None if timing_sd is None else np.asarray(timing_sd, dtype=float)
+    found = _held(tt, w, sd, tolerance, 0)
+    while True:
+        off = found.off
+        off = off[off >= found.start]
+        if off.size == 0:
+            break
+        start = int(off[-1]) + 1
+        if tt.size - start < 2:
+            raise RecordingError(
+                f"turning points: {found.describe(off)}: no two consecutive turning points "
+                "are half a period apart after them (is the record of a free decay?)"
+            )
+        found = _held(tt, w, sd, tolerance, start)
+    if found.start == 0:
+        return found
+    found = _settled(found, w, sd, tolerance)
+    # the irregular intervals are the record's start only when no two oscillations of
+    # regular ones come before one of them; else one is inside the decay
+    off = found.off
+    regular = np.ones(found.start, dtype=bool)
+    regular[off[off < found.start]] = False
+    run = 0
+    for k in range(found.start):
+        if regular[k]:
+            run += 1
+            continue
+        if run >= REGULAR_RUN:
+            first = k - run
+            raise RecordingError(
+                f"turning points: {found.describe([k])}, after {run} regular intervals "
+                f"from turning point {first} (t = {tt[first]:.6g} s): a wiggle of the "
+                "noise taken for a turning point, or a turning point missed; if the "
+                "motion before it is not the free decay (a start still driven, large "
+                f"swings), skip the {k + 1} turning points up to it"
+            )
+        run = 0
+    return found
