@@ -90,10 +90,17 @@ def test_harmosc3_halves_are_fitted():
 def test_appstat_halves_are_accepted(name, cut_s):
     data = _appstat(name)
     whole = energy_decay(data[:, 0], data[:, 1])
+    halves = []
     for keep in (data[:, 0] < cut_s, data[:, 0] >= cut_s):
         decay = energy_decay(data[keep, 0], data[keep, 1])
-        assert decay.natural_frequency_Hz == pytest.approx(whole.natural_frequency_Hz, rel=2e-3)
+        halves.append(decay.natural_frequency_Hz)
         assert len(decay.peaks) >= 40
+    # the spring's period changes with the swing (HarmOsc2's halves: 1.4287 and
+    # 1.4328 Hz): the whole record's frequency lies between its halves', each within
+    # the record's own change of it
+    f = whole.natural_frequency_Hz
+    assert min(halves) * (1 - 2e-4) <= f <= max(halves) * (1 + 2e-4)
+    assert all(abs(h / f - 1) < 3e-3 for h in halves)
 
 
 # ---------------------------------------------------------------------------------------
