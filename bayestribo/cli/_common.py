@@ -67,8 +67,11 @@ def add_reading_options(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--length-unit",
-        choices=("m", "arbitrary"),
-        help="length unit of the signals (arbitrary: friction as a displacement only)",
+        choices=("m", "arbitrary", "rad"),
+        help="length unit of the signals (arbitrary: friction as a displacement only; rad: "
+        "angles in radians, friction as an angle, and as a torque with the sidecar's "
+        "inertia_kg_m2; columns named angle_deg, angular_velocity_rad_per_s, ... say so "
+        "themselves)",
     )
     parser.add_argument(
         "--skip-rows",

@@ -92,7 +92,9 @@ def inspection(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
     recording = read_run_from_args(args)
     t = recording.time
     steps = np.diff(t)
-    units = "arbitrary length unit" if recording.length_unit == "arbitrary" else "SI"
+    units = {"arbitrary": "arbitrary length unit", "rad": "angles: rad, rad/s"}.get(
+        recording.length_unit, "SI"
+    )
     report: dict[str, Any] = {
         "bayestribo_version": __version__,
         "file": str(args.run),
@@ -154,12 +156,14 @@ def _text(report: dict[str, Any]) -> str:
         f"{_number(s['duration_s'])} s from t = {_number(s['start_s'])} s"
     )
     si = reading["units"] == "SI"
+    angles = reading["units"].startswith("angles")
     for name, unit in (("displacement", "m"), ("velocity", "m/s")):
         sig = report[name]
         if sig is not None:
-            unit = unit if si else unit.replace("m", "length unit")
+            unit = unit if si else unit.replace("m", "rad" if angles else "length unit")
+            label = {"displacement": "angle", "velocity": "ang. velocity"}[name] if angles else name
             lines.append(
-                f"{name:14s} {_number(sig['min'])} to {_number(sig['max'])} {unit} "
+                f"{label:14s} {_number(sig['min'])} to {_number(sig['max'])} {unit} "
                 f"(peak to peak {_number(sig['peak_to_peak'])})"
             )
     meta = ", ".join(

@@ -87,7 +87,9 @@ def derived_quantities(
     dict
         ``zeta``; with friction ``mu_s_ratio`` and ``friction_displacement`` [m or the
         run's length unit], and either ``mu_k`` and ``mu_s`` (load and mass known) or
-        ``static_friction_displacement`` [same unit] (not known); ``y0``;
+        ``static_friction_displacement`` [same unit] (not known); for a rotation
+        (``length_unit`` ``"rad"``, the displacement an angle) with ``inertia_kg_m2``,
+        ``friction_torque`` and ``static_friction_torque`` [N m] (κ θ, κ = IΩ²); ``y0``;
         ``log10_discrepancy`` and ``log10_shape`` when sampled; ``zeta_k`` when ζ₀ is given; ``d_k``
         [s/m] (= 2ζ_k √(km)/N, Eq. 42) when ζ₀, the load and the mass are known.
     """
@@ -124,6 +126,13 @@ def derived_quantities(
             # too: it is not μ_s and is not labelled so.
             out["static_friction_displacement"] = friction_disp * ratio
         out["friction_displacement"] = friction_disp
+        inertia = metadata.get("inertia_kg_m2")
+        if metadata.get("length_unit") == "rad" and inertia is not None:
+            # a rotation: the friction angle θ_c times the torsional stiffness
+            # κ = IΩ² (Ω the oscillator's own, as k in μ_k) is the friction torque
+            kappa = float(inertia) * (scaling.omega / ratio_w) ** 2
+            out["friction_torque"] = friction_disp * kappa
+            out["static_friction_torque"] = friction_disp * ratio * kappa
     out["y0"] = col["y0"]
     for name in ("log10_discrepancy", "log10_shape"):
         if name in col:

@@ -73,7 +73,9 @@ def physical_scale(scaling: Scaling, metadata: Mapping[str, Any]) -> PhysicalSca
         The run's dimensionless scaling (ℓ and Ω).
     metadata : mapping
         The run's metadata: ``mass_kg`` (for k = mΩ² and energies in joules),
-        ``load_N``, ``length_unit``.
+        ``load_N``, ``length_unit``; for a rotation (``length_unit`` ``"rad"``)
+        ``inertia_kg_m2``, for the torsional stiffness κ = IΩ² [N m/rad] and energies
+        in joules.
 
     Returns
     -------
@@ -87,6 +89,10 @@ def physical_scale(scaling: Scaling, metadata: Mapping[str, Any]) -> PhysicalSca
     if unit == "arbitrary":
         unit = "signal unit"
     stiffness = mass * scaling.omega**2 if mass is not None and unit == "m" else None
+    inertia = metadata.get("inertia_kg_m2")
+    if unit == "rad" and inertia is not None and float(inertia) > 0:
+        # a rotation: κ = IΩ² [N m/rad], energies in joules; no load, no mass
+        stiffness, mass, load = float(inertia) * scaling.omega**2, None, None
     return PhysicalScale(
         length_scale=float(scaling.length_scale),
         omega=float(scaling.omega),

@@ -32,6 +32,8 @@ LABELS: dict[str, str] = {
     "y0": "y₀ (start of window) [-]",
     "zeta_k": "ζ_k = ζ − ζ₀ [-]",
     "d_k": "d_k [s/m]",
+    "friction_torque": "T_c = κ θ_c [N m]",
+    "static_friction_torque": "T_s = κ θ_s [N m]",
     "log10_discrepancy": "log₁₀ s (discrepancy) [-]",
     "log10_shape": "log₁₀ s_c (shape discrepancy) [-]",
 }
@@ -49,8 +51,12 @@ _DEFAULT = (
 
 def _label(result: FitResult, name: str) -> str:
     if name in ("friction_displacement", "static_friction_displacement"):
-        unit = "m" if result.metadata.get("length_unit", "m") == "m" else "signal unit"
+        unit = {"m": "m", "rad": "rad"}.get(
+            result.metadata.get("length_unit", "m") or "m", "signal unit"
+        )
         symbol = "x_c" if name == "friction_displacement" else "x_s"
+        if unit == "rad":  # a rotation: friction angles
+            symbol = "θ_c" if name == "friction_displacement" else "θ_s"
         return f"{symbol} [{unit}]"
     if name == "y0":
         return "y₀ (start of window) [-]"

@@ -55,6 +55,8 @@ REPORTED = (
     "mu_s",
     "friction_displacement",
     "static_friction_displacement",
+    "friction_torque",
+    "static_friction_torque",
     "zeta_k",
     "d_k",
     "y0",
@@ -63,14 +65,16 @@ REPORTED = (
 )
 
 
-#: Unit of each reported quantity; "length" is the displacement's unit (m, or the
-#: signal's unit for a run with ``length_unit="arbitrary"``).
+#: Unit of each reported quantity; "length" is the displacement's unit (m, rad for a
+#: rotation, or the signal's unit for a run with ``length_unit="arbitrary"``).
 UNITS: dict[str, str] = {
     "zeta": "1",
     "mu_k": "1",
     "mu_s": "1",
     "friction_displacement": "length",
     "static_friction_displacement": "length",
+    "friction_torque": "N m",
+    "static_friction_torque": "N m",
     "zeta_k": "1",
     "d_k": "s/m",
     "y0": "1",
@@ -364,7 +368,9 @@ class FitResult:
 
     def units(self) -> dict[str, str]:
         """Unit of each reported quantity ("1" for a dimensionless one)."""
-        length = "m" if self.metadata.get("length_unit", "m") == "m" else "signal length unit"
+        length = {"m": "m", "rad": "rad"}.get(
+            self.metadata.get("length_unit", "m") or "m", "signal length unit"
+        )
         own = self._attr("units_json", {}) or {}
         return {
             name: length if UNITS.get(name) == "length" else UNITS.get(name, own.get(name, ""))

@@ -15,7 +15,7 @@ import re
 from collections.abc import Mapping, Sequence
 
 from bayestribo.errors import RunFormatError
-from bayestribo.io.run import DISPLACEMENT, TIME, VELOCITY
+from bayestribo.io.run import ANGLE, ANGULAR_VELOCITY, DISPLACEMENT, TIME, VELOCITY
 
 __all__ = [
     "IGNORE",
@@ -32,12 +32,24 @@ __all__ = [
 #: Column name that skips a column of a text file.
 IGNORE = "ignore"
 
-#: Words naming each canonical quantity (lower case).
+#: Words naming each canonical quantity (lower case). Angular quantities come first:
+#: ``angular_velocity_rad_per_s`` is an angular velocity, not a velocity.
 QUANTITIES: dict[str, tuple[str, ...]] = {
+    ANGULAR_VELOCITY: (
+        "angular_velocity",
+        "angular velocity",
+        "angular speed",
+        "angular rate",
+        "omega",
+        "ω",
+    ),
+    ANGLE: ("angle", "angular position", "angular displacement", "theta", "θ", "phi", "φ"),
     TIME: ("time", "t"),
     DISPLACEMENT: ("displacement", "position", "distance", "x"),
     VELOCITY: ("velocity", "speed", "v"),
 }
+
+_DEGREE = math.pi / 180.0
 
 #: Units of each quantity and their factor to the canonical unit.
 UNITS: dict[str, dict[str, float]] = {
@@ -55,6 +67,22 @@ UNITS: dict[str, dict[str, float]] = {
         "µm/s": 1e-6,
         "µm_per_s": 1e-6,
     },
+    ANGLE: {
+        "rad": 1.0,
+        "mrad": 1e-3,
+        "deg": _DEGREE,
+        "degree": _DEGREE,
+        "degrees": _DEGREE,
+        "°": _DEGREE,
+    },
+    ANGULAR_VELOCITY: {
+        "rad_per_s": 1.0,
+        "rad/s": 1.0,
+        "deg_per_s": _DEGREE,
+        "deg/s": _DEGREE,
+        "°/s": _DEGREE,
+        "rpm": 2.0 * math.pi / 60.0,
+    },
 }
 
 #: Quantities that sensor software exports beside position and velocity; a header
@@ -68,8 +96,6 @@ OTHER_QUANTITIES: tuple[str, ...] = (
     "potential",
     "current",
     "temperature",
-    "angle",
-    "angular velocity",
     "angular acceleration",
     "energy",
     "kinetic energy",

@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 from bayestribo.errors import BayestriboError, RecordingError, RunFormatError
 from bayestribo.io.options import READ_OPTIONS, ReadOptions, unknown_options
 from bayestribo.io.registry import FileFormat, format_for, registered_formats
-from bayestribo.io.run import DISPLACEMENT, TIME, VELOCITY, Run
+from bayestribo.io.run import ANGULAR, DISPLACEMENT, TIME, VELOCITY, Run
 from bayestribo.io.sidecar import read_sidecar, sidecar_path, write_sidecar
 from bayestribo.io.text import write_csv
 from bayestribo.io.validation import validate_run
@@ -187,6 +187,7 @@ def _read(path: Path, opts: ReadOptions) -> Run:
                 where,
             )
     signals = _call_reader(fmt, path, opts)
+    angular = [name for name in ANGULAR if signals.get(name) is not None]
     sidecar = opts.sidecar
     metadata = opts.metadata
     validate = opts.validate
@@ -201,6 +202,8 @@ def _read(path: Path, opts: ReadOptions) -> Run:
             raise RunFormatError("no such sidecar file; expected an existing file", str(side))
         meta.update(read_sidecar(side))
     meta.update(metadata or {})
+    if angular:
+        signals = _as_rotation(signals, angular, meta, where)
     if opts.sample_rate_Hz is not None:
         rate = _rate(opts.sample_rate_Hz, "sample_rate_Hz", where)
         given = (metadata or {}).get("sample_rate_Hz")
@@ -238,6 +241,39 @@ def _read(path: Path, opts: ReadOptions) -> Run:
                 exc.where,
             ) from None
     return run
+
+
+def _as_rotation(
+    signals: Mapping[str, Any], angular: list[str], meta: dict[str, Any], where: str
+) -> dict[str, Any]:
+    """A rotational rig's columns (angle [rad], angular velocity [rad/s]) as the run's
+    displacement and velocity, with ``length_unit`` ``"rad"`` in ``meta``.
+
+    Raises
+    ------
+    RunFormatError
+        When the file holds a linear column beside an angular one, or the metadata
+        state another length unit.
+    """
+    linear = [name for name in (DISPLACEMENT, VELOCITY) if signals.get(name) is not None]
+    if linear:
+        raise RunFormatError(
+            f"columns {angular} are angles and {linear} lengths: one run is a rotation or a "
+            "translation; name the columns of one (columns=[...], 'ignore' for the other)",
+            where,
+        )
+    stated = meta.get("length_unit")
+    if stated not in (None, "rad"):
+        raise RunFormatError(
+            f"the columns {angular} are angles but the metadata give length_unit "
+            f"{stated!r}; expected 'rad' (or none) for a rotation",
+            where,
+        )
+    meta["length_unit"] = "rad"
+    out = {name: value for name, value in signals.items() if name not in ANGULAR}
+    for name in angular:
+        out[ANGULAR[name]] = signals[name]
+    return out
 
 
 def _windowed(run: Run, window: tuple[float, float], where: str) -> Run:

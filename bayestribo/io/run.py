@@ -34,6 +34,9 @@ from bayestribo.signal.frequency import oscillation_frequency
 from bayestribo.signal.period import sample_step
 
 __all__ = [
+    "ANGLE",
+    "ANGULAR",
+    "ANGULAR_VELOCITY",
     "COLUMNS",
     "DISPLACEMENT",
     "LENGTH_UNITS",
@@ -50,8 +53,17 @@ DISPLACEMENT = "displacement_m"
 VELOCITY = "velocity_m_per_s"
 COLUMNS: tuple[str, str, str] = (TIME, DISPLACEMENT, VELOCITY)
 
-#: Values of the ``length_unit`` metadata key.
-LENGTH_UNITS: tuple[str, str] = ("m", "arbitrary")
+#: Canonical column names of a rotational rig: angle [rad], angular velocity [rad/s].
+#: A reader returns them for columns named as angles (``angle_deg``, ``Angle (rad)``);
+#: :func:`bayestribo.read_run` takes them as the run's displacement and velocity with
+#: ``length_unit`` ``"rad"``.
+ANGLE = "angle_rad"
+ANGULAR_VELOCITY = "angular_velocity_rad_per_s"
+ANGULAR: Mapping[str, str] = MappingProxyType({ANGLE: DISPLACEMENT, ANGULAR_VELOCITY: VELOCITY})
+
+#: Values of the ``length_unit`` metadata key: metres, an unknown unit, or radians (the
+#: displacement an angle, the velocity an angular velocity).
+LENGTH_UNITS: tuple[str, ...] = ("m", "arbitrary", "rad")
 
 
 @dataclass(frozen=True)
@@ -111,7 +123,15 @@ METADATA_KEYS: Mapping[str, _Key] = MappingProxyType(
         "temperature_C": _Key("float", "temperature [°C]", -273.15, low_open=True, high=1e4),
         "run_id": _Key("str", "identifier of the run"),
         "length_unit": _Key(
-            "str", "'m', or 'arbitrary' when the length unit is unknown", choices=LENGTH_UNITS
+            "str",
+            "'m'; 'rad' for angles (a rotational rig); 'arbitrary' when the unit is unknown",
+            choices=LENGTH_UNITS,
+        ),
+        "inertia_kg_m2": _Key(
+            "float",
+            "moment of inertia of a rotational oscillator [kg m²]: friction as a torque",
+            1e-15,
+            high=1e6,
         ),
         "load_uncertainty_N": _Key(
             "float", "standard uncertainty of the normal load [N]", 0.0, high=1e6
@@ -501,7 +521,7 @@ class Run:
 
     @property
     def length_unit(self) -> str:
-        """``"m"`` (the default) or ``"arbitrary"`` when the length unit is unknown."""
+        """``"m"`` (the default), ``"rad"`` (angles) or ``"arbitrary"`` (unknown)."""
         return self.metadata.get("length_unit") or "m"
 
     @property
@@ -549,7 +569,7 @@ class Run:
             but the frequency is not, f is measured from the recording
             (:func:`bayestribo.signal.frequency.oscillation_frequency`) with a
             :class:`~bayestribo.errors.MetadataWarning`. With
-            ``length_unit="arbitrary"`` the mass and load are left out, so that the
+            ``length_unit`` ``"arbitrary"`` or ``"rad"`` the mass and load are left out, so that the
             rig's scaling uses one signal unit as length scale (N/k in metres would
             not match a signal in another unit).
         """
@@ -558,7 +578,7 @@ class Run:
             f = self.metadata.get("natural_frequency_Hz")
         if f is None:
             load = self.metadata.get("load_N")
-            if load is None or not load > 0 or self.length_unit == "arbitrary":
+            if load is None or not load > 0 or self.length_unit != "m":
                 return None
             # Without f the stiffness k = m(2πf)² is unknown, so μ_k = x_c k/N could
             # not be formed: take f from the recording and say so, never drop the load.
@@ -578,7 +598,7 @@ class Run:
                 stacklevel=2,
             )
         try:
-            if self.length_unit == "arbitrary":
+            if self.length_unit != "m":  # N/k in metres would not match the signal
                 return Rig(natural_frequency_Hz=f)
             return Rig(
                 natural_frequency_Hz=f,

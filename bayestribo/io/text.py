@@ -41,7 +41,10 @@ from bayestribo.io.columns import (
     split_run_tag,
 )
 from bayestribo.io.instruments import PREAMBLE_LINES, detect_export, read_export
-from bayestribo.io.run import COLUMNS, DISPLACEMENT, TIME, VELOCITY
+from bayestribo.io.run import ANGULAR, COLUMNS, DISPLACEMENT, TIME, VELOCITY
+
+#: Every column name a text file's columns are read as.
+_READ = (*COLUMNS, *ANGULAR)
 
 __all__ = [
     "IGNORE",
@@ -255,7 +258,7 @@ def _trim_missing(
 def _canonical(name: str, where: str, what: str) -> tuple[str, float]:
     """Canonical name and unit factor of one column name (canonical, with a unit, or
     ``ignore``)."""
-    if name in (*COLUMNS, IGNORE):
+    if name in (*_READ, IGNORE):
         return name, 1.0
     try:
         parsed = parse_column(name)
@@ -265,7 +268,8 @@ def _canonical(name: str, where: str, what: str) -> tuple[str, float]:
         raise RunFormatError(
             f"{what}: unknown column {name!r}; expected per column one of "
             f"{[*COLUMNS, IGNORE]} or a quantity with its unit (time_ms, displacement_um, "
-            "velocity_mm_per_s, ...); columns=[...] names the columns in file order",
+            "velocity_mm_per_s, angle_deg, angular_velocity_rad_per_s, ...); columns=[...] "
+            "names the columns in file order",
             where,
         )
     return parsed
@@ -288,9 +292,10 @@ def _check_columns(
     for name in set(used):
         if used.count(name) > 1:
             raise RunFormatError(f"{what}: {name!r} is given {used.count(name)} times", where)
-    if DISPLACEMENT not in used and VELOCITY not in used:
+    if not {DISPLACEMENT, VELOCITY, *ANGULAR} & set(used):
         raise RunFormatError(
-            f"{what}: a {DISPLACEMENT!r} or {VELOCITY!r} column is needed; got {list(columns)}",
+            f"{what}: a {DISPLACEMENT!r} or {VELOCITY!r} column is needed (or an angle, "
+            f"angle_deg, angular_velocity_rad_per_s, ...); got {list(columns)}",
             where,
         )
     return names, factors
@@ -693,7 +698,7 @@ def _columns(
         if column.flags.owndata:
             column.setflags(write=False)
         out[name] = column
-    return {name: out[name] for name in COLUMNS if name in out}
+    return {name: out[name] for name in _READ if name in out}
 
 
 #: Bytes read to lay out a file before streaming its numbers (:func:`_read_streamed`).

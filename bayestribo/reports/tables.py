@@ -43,6 +43,8 @@ SYMBOLS = {
     "log10_shape": "log₁₀ σ_s",
     "friction_displacement": "x_c",
     "static_friction_displacement": "x_s",
+    "friction_torque": "T_c",
+    "static_friction_torque": "T_s",
     "zeta_k": "ζ_k",
     "d_k": "d_k",
     "y0": "y₀",

@@ -47,6 +47,15 @@ def _physical(
     values: Mapping[str, NDArray], reference: float, scale: PhysicalScale
 ) -> dict[str, tuple]:
     mu_k = np.asarray(values["mu_k"], dtype=float)
+    if scale.length_unit == "rad":  # a rotation: a friction angle
+        return {
+            "friction_displacement": (
+                mu_k * scale.length_scale,
+                "rad",
+                "θ_c",
+                "friction angle T_c/κ",
+            )
+        }
     return {
         "friction_displacement": (
             mu_k * scale.length_scale,
