@@ -154,6 +154,15 @@ def add_reading_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--frequency", type=float, help="nominal natural frequency f [Hz]")
     parser.add_argument("--load", type=float, help="normal load N [N]")
     parser.add_argument("--mass", type=float, help="oscillating mass m [kg]")
+    from bayestribo.model.restoring import RESTORING
+
+    parser.add_argument(
+        "--restoring",
+        choices=tuple(RESTORING),
+        help="the oscillator's restoring force (sidecar 'restoring'): "
+        + "; ".join(f"{name}: {force.description}" for name, force in RESTORING.items())
+        + ". The energy lost per cycle from the turning points takes its potential",
+    )
 
 
 def _positive_rate(text: str) -> float:
@@ -301,6 +310,7 @@ def reading_options(args: argparse.Namespace) -> Any:
             ("natural_frequency_Hz", args.frequency),
             ("load_N", args.load),
             ("mass_kg", args.mass),
+            ("restoring", getattr(args, "restoring", None)),
         )
         if value is not None
     }

@@ -403,6 +403,8 @@ def turning_point_dissipation(
     *,
     prob: float = 0.95,
     gain_sd: float = 0.0,
+    restoring: str | None = None,
+    energy_sd: float = 0.0,
 ) -> dict[str, Any] | None:
     """ΔE(A) from the turning points alone: the law-free answer.
 
@@ -439,6 +441,14 @@ def turning_point_dissipation(
     gain_sd : float
         Relative standard uncertainty of the sensor's gain, added in quadrature as in
         :func:`dissipation_band` (the scatter of the turning points does not hold it).
+    restoring : str, optional
+        The oscillator's restoring force (:mod:`bayestribo.model.restoring`): each half
+        cycle loses ``V(Y_n) - V(Y_n+1)`` of its potential V; default linear,
+        ``V = y²/2``. A pendulum's turning points must be angles in radians.
+    energy_sd : float
+        Relative standard uncertainty of the energy unit (a pendulum's κ = Iω₀², whose
+        ω₀ is known from the measured frequency only as well as the swing's effect on
+        the period is), added in quadrature.
 
     Returns
     -------
@@ -456,7 +466,10 @@ def turning_point_dissipation(
     if n < FEWEST_HALF_CYCLES:
         return None
     degree = min(2, n - 3)  # two degrees of freedom at least for the interval
-    loss = 2.0 * 0.5 * (y[:-1] ** 2 - y[1:] ** 2)  # per cycle: twice the half cycle's
+    from bayestribo.model.restoring import get_restoring
+
+    potential = get_restoring(restoring).potential
+    loss = 2.0 * (potential(y[:-1]) - potential(y[1:]))  # per cycle: twice the half cycle's
     swing = 0.5 * (a[:-1] + a[1:])
     ratio = loss / swing
     log_swing = np.log(swing)
@@ -486,8 +499,8 @@ def turning_point_dissipation(
         lower[j] = amp * (coef[0] - q * se)
         upper[j] = amp * (coef[0] + q * se)
         used[j] = int(near.sum())
-    if gain_sd > 0:
-        extra = _gain_error(mean, amps, gain_sd) * np.abs(mean)
+    if gain_sd > 0 or energy_sd > 0:
+        extra = np.hypot(_gain_error(mean, amps, gain_sd), energy_sd) * np.abs(mean)
         z = float(scipy.stats.norm.ppf(0.5 * (1.0 + prob)))
         lower = mean - np.hypot(mean - lower, z * extra)
         upper = mean + np.hypot(upper - mean, z * extra)
@@ -502,7 +515,8 @@ def turning_point_dissipation(
         "prob": prob,
         "cycles": used.tolist(),
         "unit": scale.energy_unit,
-        "definition": "from the turning points: Y_n^2 - Y_n+1^2 per half cycle, local fit",
+        "definition": "from the turning points: twice V(Y_n) - V(Y_n+1) per half cycle "
+        f"({get_restoring(restoring).name} restoring force), local fit",
     }
 
 

@@ -71,6 +71,7 @@ from bayestribo.io.files import as_run
 from bayestribo.io.options import ReadOptions
 from bayestribo.io.run import Run
 from bayestribo.model.laws import Law, get_law
+from bayestribo.model.restoring import get_restoring
 from bayestribo.signal.decay import EnergyDecay, energy_decay
 from bayestribo.signal.frequency import FrequencyTrend, frequency_trend, turning_point_trend
 from bayestribo.signal.increments import PiData, pi_data
@@ -846,12 +847,28 @@ def _beyond_the_law(
     return beyond, law_change
 
 
-def _warn_frequency_trend(name: str | None, trend: FrequencyTrend | None, law: str) -> None:
+def _warn_frequency_trend(
+    name: str | None,
+    trend: FrequencyTrend | None,
+    law: str,
+    pendulum: float | None = None,
+) -> None:
     """Say when the frequency is not constant along the decay beyond the law's own
-    change (the nuisance that carries it is in the intervals)."""
+    change (the nuisance that carries it is in the intervals); ``pendulum``: the change
+    a pendulum's half period makes over the same swings (a run in radians with a linear
+    restoring force), named when the measured change is the pendulum's."""
     if trend is None:
         return
     if abs(trend.change) > FREQUENCY_TREND_CHANGE and abs(trend.z) > FREQUENCY_TREND_Z:
+        like = ""
+        if pendulum is not None:
+            se = abs(trend.change / trend.z)
+            if abs(trend.change - pendulum) <= max(3.0 * se, 0.25 * abs(pendulum)):
+                like = (
+                    f"; it changes as a pendulum's does over these swings ({100 * pendulum:+.3f} "
+                    "%): for a pendulum, --restoring pendulum (sidecar 'restoring': "
+                    "'pendulum') measures the energy lost per cycle with its potential"
+                )
         warnings.warn(
             f"the oscillation's half period changes by {100 * trend.change:+.3f} % from the "
             f"largest swing to the smallest of {name or 'the run'} ({trend.z:+.0f} "
@@ -859,10 +876,63 @@ def _warn_frequency_trend(name: str | None, trend: FrequencyTrend | None, law: s
             "on amplitude, or a dissipation that changes the period otherwise than the law "
             "does; the constant Ω of the fit is then an average, and the reported "
             "parameters and ΔE(A) carry a frequency nuisance of "
-            f"± {100 * frequency_nuisance_sd(trend):.2g} % for it",
+            f"± {100 * frequency_nuisance_sd(trend):.2g} % for it{like}",
             FrequencyTrendWarning,
             stacklevel=4,
         )
+
+
+def _pendulum_change(run: Run, metadata: Mapping[str, Any], turning: NDArray) -> float | None:
+    """The relative change of a pendulum's half period over the analysed turning points
+    [-] (:func:`~bayestribo.signal.frequency.turning_point_trend` of the times a pendulum
+    takes between them), for a run in radians whose restoring force is the default
+    linear one; None otherwise."""
+    if run.length_unit != "rad" or metadata.get("restoring") not in (None, "linear"):
+        return None
+    a = np.abs(np.asarray(turning, dtype=float))
+    if a.size < 2 or not np.all(a < np.pi):
+        return None
+    # the turning times a pendulum would take between these turning points, measured
+    # as the record's are (the trend's own model, linear in the swing, reads a
+    # pendulum's quadratic change otherwise than its end points do)
+    ratio = get_restoring("pendulum").half_period_ratio
+    swing = 0.5 * (a[1:] + a[:-1])
+    times = np.concatenate(([0.0], np.cumsum(ratio(swing))))
+    found = turning_point_trend(times, turning)
+    return None if found is None else float(found.change)
+
+
+def _restoring_scale(restoring: Any, scale: Any, turning_points: NDArray) -> tuple[Any, float]:
+    """The physical scale of the turning points' ΔE(A) under a restoring force, and the
+    relative sd of its energy unit.
+
+    The energy unit is κ = IΩ² with Ω the measured frequency; a pendulum's κ = Iω₀² takes
+    its small-swing ω₀ = Ω T(A)/T₀, with the half period ratio at the median swing of
+    the analysed half cycles; half the span of the ratio over them (twice, for Ω²) is
+    its relative sd. A linear spring's scale is returned as it is."""
+    if restoring.name == "linear" or scale.stiffness is None:
+        return scale, 0.0
+    a = np.abs(np.asarray(turning_points, dtype=float))
+    swing = 0.5 * (a[1:] + a[:-1]) if a.size > 1 else a
+    ratio = restoring.half_period_ratio(swing)
+    middle = float(np.median(ratio))
+    spread = float(np.max(ratio) - np.min(ratio)) / middle
+    return dataclasses.replace(scale, stiffness=scale.stiffness * middle**2), spread
+
+
+def _warn_restoring(name: str | None, restoring: Any, law: str) -> None:
+    """Say that the laws assume a linear restoring force when the run's is another."""
+    if restoring.name == "linear":
+        return
+    warnings.warn(
+        f"the restoring force of {name or 'the run'} is the {restoring.name}'s, and the law "
+        f"{law} assumes a linear one: its parameters are not a measurement. The energy "
+        "dissipated per cycle measured from the turning points with the "
+        f"{restoring.name}'s potential (printed as 'turning points (law-free)') is the "
+        "answer",
+        MisfitWarning,
+        stacklevel=4,
+    )
 
 
 def _flagged(misfit: tuple[float, int, float], shape: ShapeDeparture) -> bool:
@@ -1092,7 +1162,10 @@ def summarise(
     else:
         trend = frequency_trend(prepared.run.time, prepared.run.displacement, prepared.run.velocity)
     trend, law_change = _beyond_the_law(posterior, sampled.theta_map, trend, decay)
-    _warn_frequency_trend(name, trend, posterior.law.name)
+    pendulum = _pendulum_change(
+        prepared.run, prepared.metadata, decay.peaks.value / decay.scaling.length_scale
+    )
+    _warn_frequency_trend(name, trend, posterior.law.name, pendulum)
     frequency_sd = frequency_nuisance_sd(trend)
     metadata = prepared.metadata
     scaling = prepared.decay.scaling
@@ -1114,9 +1187,19 @@ def summarise(
     dissipation = dissipation_band(
         posterior, flat, swings, scale, frequency_sd=frequency_sd, gain_sd=sensor.gain_sd
     )
-    measured = turning_point_dissipation(
-        decay.peaks.value / scaling.length_scale, swings, scale, gain_sd=sensor.gain_sd
+    restoring = get_restoring(metadata.get("restoring"))
+    tp_scale, energy_sd = _restoring_scale(
+        restoring, scale, decay.peaks.value / scaling.length_scale
     )
+    measured = turning_point_dissipation(
+        decay.peaks.value / scaling.length_scale,
+        swings,
+        tp_scale,
+        gain_sd=sensor.gain_sd,
+        restoring=restoring.name,
+        energy_sd=energy_sd,
+    )
+    _warn_restoring(name, restoring, posterior.law.name)
     agreement = shape_agreement(dissipation, measured)
     _warn_shape(name, agreement, posterior.law.name, compared, flagged=_flagged(misfit, shape))
     noise_info = {**prepared.noise.to_dict(), "description": prepared.noise.describe()}

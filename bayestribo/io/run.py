@@ -127,6 +127,12 @@ METADATA_KEYS: Mapping[str, _Key] = MappingProxyType(
             "'m'; 'rad' for angles (a rotational rig); 'arbitrary' when the unit is unknown",
             choices=LENGTH_UNITS,
         ),
+        "restoring": _Key(
+            "plain",
+            "the oscillator's restoring force: 'linear' (default) or 'pendulum' (the angle "
+            "in radians), see bayestribo.model.restoring",
+            check=lambda value, key, where: _restoring(value, key, where),
+        ),
         "inertia_kg_m2": _Key(
             "float",
             "moment of inertia of a rotational oscillator [kg m²]: friction as a torque",
@@ -186,6 +192,18 @@ METADATA_KEYS: Mapping[str, _Key] = MappingProxyType(
         "samples_missing": _Key("plain", "samples the acquisition did not receive"),
     }
 )
+
+
+def _restoring(value: Any, key: str, where: str | None) -> str:
+    """Check a ``restoring`` value: a registered restoring force's name."""
+    from bayestribo.model.restoring import get_restoring
+
+    if not isinstance(value, str):
+        raise RunFormatError(f"metadata {key!r}: expected a name, got {value!r}", where)
+    try:
+        return get_restoring(value).name
+    except ValueError as exc:
+        raise RunFormatError(f"metadata {key!r}: {exc}", where) from None
 
 
 def _window(value: Any, key: str, where: str | None) -> list[float]:

@@ -126,6 +126,21 @@ def _bridgeable(run: Run, where: str | None) -> bool:
     return True
 
 
+def _check_restoring(run: Run, where: str | None) -> None:
+    """A restoring force whose potential takes an angle (a pendulum's) needs the run in
+    radians: its potential at a swing of 2 in another unit means nothing."""
+    from bayestribo.model.restoring import get_restoring
+
+    restoring = get_restoring(run.metadata.get("restoring"))
+    if restoring.angle and run.length_unit != "rad":
+        raise _fail(
+            f"metadata 'restoring' is {restoring.name!r}, whose potential takes the angle in "
+            f"radians, but the run's length unit is {run.length_unit!r}; expected angles "
+            "(columns named angle_deg, angle_rad, ..., or length_unit 'rad')",
+            where,
+        )
+
+
 def _check_time(run: Run, where: str | None, time_rtol: float) -> float:
     t = run.time
     step = np.diff(t)
@@ -288,6 +303,7 @@ def validate_run(
             where,
         )
     _check_time(run, where, time_rtol)
+    _check_restoring(run, where)
     _check_clipping(run, where, clip_samples)
     check_channels(run, where)
     check_plausible_motion(run, where)

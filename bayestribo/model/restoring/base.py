@@ -1,0 +1,107 @@
+"""What a restoring force is, and the one registry of them.
+
+The dissipation laws (:mod:`bayestribo.model.laws`) act on an oscillator whose restoring
+force is linear, ``y'' + y = -F``. A pendulum's is not: ``θ'' + sin θ = -F`` (τ = ω₀t,
+θ in radians), and the energy its motion holds at a turning point Y is the potential
+``V(Y) = 1 - cos Y``, not ``Y²/2`` (19 % less at 90°, 31 % less at 135°). The energy
+lost per cycle measured from the turning points (the law-free answer,
+:func:`bayestribo.inference.dissipation.turning_point_dissipation`) takes the
+potential of the run's restoring force; and the half period grows with the swing as
+``T(A)/T₀`` says, which tells a pendulum from a linear oscillator
+(:func:`bayestribo.inference.pipeline` names it when the period changes so).
+
+A restoring force is a :class:`RestoringForce`: its name, the potential ``V(y)``
+(dimensionless, ``y²/2`` near 0), the ratio of its half period at swing A to the
+small-swing one, and whether y must be an angle in radians. Adding one is one module
+that calls :func:`register_restoring`; the sidecar's ``restoring`` key and the command
+line's ``--restoring`` choices come from the registry.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    "RESTORING",
+    "RestoringForce",
+    "available_restoring",
+    "get_restoring",
+    "register_restoring",
+]
+
+
+@dataclass(frozen=True)
+class RestoringForce:
+    """A restoring force of the oscillator.
+
+    Attributes
+    ----------
+    name : str
+        Its name in the sidecar's ``restoring`` and ``--restoring``.
+    description : str
+        One line for help texts.
+    potential : callable
+        ``V(y) -> array``: the potential energy at displacement y, dimensionless
+        (units of the stiffness times y², ``y²/2`` for a linear spring) [-].
+    half_period_ratio : callable
+        ``T(A)/T₀ -> array``: the half period of the undamped motion of swing A over
+        the small-swing one [-] (1 for a linear spring).
+    angle : bool
+        True when y must be an angle in radians (``length_unit`` ``"rad"``).
+    """
+
+    name: str
+    description: str
+    potential: Callable[[ArrayLike], NDArray]
+    half_period_ratio: Callable[[ArrayLike], NDArray]
+    angle: bool = False
+
+    def __post_init__(self) -> None:
+        if not self.name.isidentifier():
+            raise ValueError(f"restoring force name must be an identifier, got {self.name!r}")
+        small = float(np.asarray(self.potential(1e-3)))
+        if not np.isclose(small, 0.5e-6, rtol=1e-3):
+            raise ValueError(f"restoring force {self.name}: V(y) must be y²/2 near y = 0")
+
+
+#: Every registered restoring force by name, in registration order.
+RESTORING: dict[str, RestoringForce] = {}
+
+
+def register_restoring(force: RestoringForce, *, replace: bool = False) -> RestoringForce:
+    """Register a restoring force so that ``restoring`` can name it.
+
+    Raises
+    ------
+    ValueError
+        When the name is taken (and ``replace`` is False).
+    """
+    if force.name in RESTORING and not replace:
+        raise ValueError(f"a restoring force named {force.name!r} is already registered")
+    RESTORING[force.name] = force
+    return force
+
+
+def available_restoring() -> list[str]:
+    """Names of the registered restoring forces."""
+    return list(RESTORING)
+
+
+def get_restoring(name: str | None) -> RestoringForce:
+    """The restoring force of a name (``None``: linear).
+
+    Raises
+    ------
+    ValueError
+        For a name that is not registered, listing those that are.
+    """
+    key = "linear" if name is None else str(name)
+    if key not in RESTORING:
+        raise ValueError(
+            f"restoring force {name!r} is not known; expected one of {available_restoring()}"
+        )
+    return RESTORING[key]
