@@ -403,7 +403,7 @@ def turning_point_dissipation(
     *,
     prob: float = 0.95,
     gain_sd: float = 0.0,
-    restoring: str | None = None,
+    restoring: Any = None,
     energy_sd: float = 0.0,
 ) -> dict[str, Any] | None:
     """ΔE(A) from the turning points alone: the law-free answer.
@@ -441,7 +441,7 @@ def turning_point_dissipation(
     gain_sd : float
         Relative standard uncertainty of the sensor's gain, added in quadrature as in
         :func:`dissipation_band` (the scatter of the turning points does not hold it).
-    restoring : str, optional
+    restoring : str or RestoringForce, optional
         The oscillator's restoring force (:mod:`bayestribo.model.restoring`): each half
         cycle loses ``V(Y_n) - V(Y_n+1)`` of its potential V; default linear,
         ``V = y²/2``. A pendulum's turning points must be angles in radians.

@@ -860,7 +860,11 @@ def _warn_frequency_trend(
     if trend is None:
         return
     if abs(trend.change) > FREQUENCY_TREND_CHANGE and abs(trend.z) > FREQUENCY_TREND_Z:
-        like = ""
+        like = (
+            "; --restoring duffing (sidecar 'restoring': 'duffing') measures a cubic "
+            "spring's β from the half periods and the energy lost per cycle with its "
+            "potential"
+        )
         if pendulum is not None:
             se = abs(trend.change / trend.z)
             if abs(trend.change - pendulum) <= max(3.0 * se, 0.25 * abs(pendulum)):
@@ -902,22 +906,59 @@ def _pendulum_change(run: Run, metadata: Mapping[str, Any], turning: NDArray) ->
     return None if found is None else float(found.change)
 
 
-def _restoring_scale(restoring: Any, scale: Any, turning_points: NDArray) -> tuple[Any, float]:
+def _measured_restoring(name: str | None, decay: EnergyDecay) -> tuple[Any, dict | None]:
+    """The run's restoring force, its parameters measured from the turning points where
+    it has any (a Duffing spring's β), in the dimensionless unit of the decay, and the
+    record of that measurement (None for a force without parameters).
+
+    Raises
+    ------
+    BayestriboError
+        When the record holds too few turning times to measure them.
+    """
+    restoring = get_restoring(name)
+    if not restoring.fitted or restoring.measure is None:
+        return restoring, None
+    if decay.turning_times is None:
+        raise BayestriboError(
+            f"restoring force {restoring.name!r}: its parameters are measured from the "
+            "turning times, which this record's analysis does not give"
+        )
+    try:
+        measured, record = restoring.measure(
+            decay.turning_times, decay.peaks.value / decay.scaling.length_scale
+        )
+    except ValueError as exc:
+        raise BayestriboError(f"restoring force {restoring.name!r}: {exc}") from None
+    return measured, record
+
+
+def _restoring_scale(
+    restoring: Any, scale: Any, turning_points: NDArray, measured: dict | None = None
+) -> tuple[Any, float]:
     """The physical scale of the turning points' ΔE(A) under a restoring force, and the
     relative sd of its energy unit.
 
     The energy unit is κ = IΩ² with Ω the measured frequency; a pendulum's κ = Iω₀² takes
     its small-swing ω₀ = Ω T(A)/T₀, with the half period ratio at the median swing of
     the analysed half cycles; half the span of the ratio over them (twice, for Ω²) is
-    its relative sd. A linear spring's scale is returned as it is."""
-    if restoring.name == "linear" or scale.stiffness is None:
-        return scale, 0.0
+    its relative sd. A measured parameter's standard error (a Duffing spring's β) adds
+    its effect on the loss at the largest swing, V'(A) = A + βA³: A²δβ/(1 + βA²)
+    relative. A linear spring's scale is returned as it is."""
     a = np.abs(np.asarray(turning_points, dtype=float))
+    energy_sd = 0.0
+    if measured and "beta_se" in measured and a.size:
+        top = float(np.max(a))
+        beta, se = float(measured["beta"]), float(measured["beta_se"])
+        energy_sd = top * top * se / max(1.0 + beta * top * top, 1e-12)
+    if restoring.name == "linear" or scale.stiffness is None:
+        return scale, energy_sd
     swing = 0.5 * (a[1:] + a[:-1]) if a.size > 1 else a
     ratio = restoring.half_period_ratio(swing)
     middle = float(np.median(ratio))
     spread = float(np.max(ratio) - np.min(ratio)) / middle
-    return dataclasses.replace(scale, stiffness=scale.stiffness * middle**2), spread
+    stiffness = scale.stiffness * middle**2
+    return dataclasses.replace(scale, stiffness=stiffness), math.hypot(spread, energy_sd)
 
 
 def _warn_restoring(name: str | None, restoring: Any, law: str) -> None:
@@ -1187,16 +1228,16 @@ def summarise(
     dissipation = dissipation_band(
         posterior, flat, swings, scale, frequency_sd=frequency_sd, gain_sd=sensor.gain_sd
     )
-    restoring = get_restoring(metadata.get("restoring"))
+    restoring, measured_spring = _measured_restoring(metadata.get("restoring"), decay)
     tp_scale, energy_sd = _restoring_scale(
-        restoring, scale, decay.peaks.value / scaling.length_scale
+        restoring, scale, decay.peaks.value / scaling.length_scale, measured_spring
     )
     measured = turning_point_dissipation(
         decay.peaks.value / scaling.length_scale,
         swings,
         tp_scale,
         gain_sd=sensor.gain_sd,
-        restoring=restoring.name,
+        restoring=restoring,
         energy_sd=energy_sd,
     )
     _warn_restoring(name, restoring, posterior.law.name)
@@ -1210,6 +1251,9 @@ def summarise(
         "dissipation_json": json.dumps(plain_data(dissipation)),
         "turning_point_dissipation_json": json.dumps(plain_data(measured)),
         "shape_agreement_json": json.dumps(plain_data(agreement)),
+        "restoring_json": json.dumps(
+            plain_data({"name": restoring.name, **(measured_spring or {})})
+        ),
         "units_json": json.dumps(own_units),
         "seed": -1 if recorded_seed is None else int(recorded_seed),
         "package_version": __version__,

@@ -442,6 +442,14 @@ class FitResult:
         sensor = self._attr("sensor_json", None)
         if sensor:
             lines.append(f"sensor    {sensor['description']}")
+        spring = self._attr("restoring_json", None)
+        if spring and spring.get("name") not in (None, "linear"):
+            text = f"restoring {spring['name']}"
+            if "beta" in spring:
+                text += (
+                    f", β = {spring['beta']:.4g} ± {spring['beta_se']:.2g} (from the half periods)"
+                )
+            lines.append(text + "; the law-free ΔE(A) takes its potential")
         agreement = self._attr("shape_agreement_json", None)
         if agreement:
             lines.append(

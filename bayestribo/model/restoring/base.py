@@ -19,8 +19,8 @@ line's ``--restoring`` choices come from the registry.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -52,6 +52,17 @@ class RestoringForce:
         the small-swing one [-] (1 for a linear spring).
     angle : bool
         True when y must be an angle in radians (``length_unit`` ``"rad"``).
+    fitted : bool
+        True when its parameters are measured from the record (a Duffing spring's β,
+        from how the half period changes with the swing): the registered force is a
+        template, and ``measure`` gives the run's.
+    parameters : mapping
+        Its parameters' values, once measured.
+    measure : callable, optional
+        ``measure(times, values) -> (RestoringForce, dict)``: the force with its
+        parameters measured from the turning times [s] and the turning points about the
+        equilibrium (the run's unit), and a record of the measurement (values,
+        standard errors) for the output.
     """
 
     name: str
@@ -59,6 +70,9 @@ class RestoringForce:
     potential: Callable[[ArrayLike], NDArray]
     half_period_ratio: Callable[[ArrayLike], NDArray]
     angle: bool = False
+    fitted: bool = False
+    parameters: Mapping[str, float] = field(default_factory=dict)
+    measure: Callable[[ArrayLike, ArrayLike], tuple[RestoringForce, dict]] | None = None
 
     def __post_init__(self) -> None:
         if not self.name.isidentifier():
@@ -91,14 +105,16 @@ def available_restoring() -> list[str]:
     return list(RESTORING)
 
 
-def get_restoring(name: str | None) -> RestoringForce:
-    """The restoring force of a name (``None``: linear).
+def get_restoring(name: str | RestoringForce | None) -> RestoringForce:
+    """The restoring force of a name (``None``: linear; a force is returned as it is).
 
     Raises
     ------
     ValueError
         For a name that is not registered, listing those that are.
     """
+    if isinstance(name, RestoringForce):
+        return name
     key = "linear" if name is None else str(name)
     if key not in RESTORING:
         raise ValueError(
