@@ -19,12 +19,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from bayestribo.errors import BayestriboError, RecordingError, RunFormatError
+from bayestribo._warnings import warn
+from bayestribo.errors import BayestriboError, ReadingWarning, RecordingError, RunFormatError
 from bayestribo.io.options import READ_OPTIONS, ReadOptions, unknown_options
 from bayestribo.io.registry import FileFormat, format_for, registered_formats
 from bayestribo.io.run import ANGULAR, DISPLACEMENT, TIME, VELOCITY, Run
 from bayestribo.io.sidecar import read_sidecar, sidecar_path, write_sidecar
-from bayestribo.io.text import write_csv
+from bayestribo.io.text import PREAMBLE_RATE, StatedRate, write_csv
 from bayestribo.io.validation import validate_run
 
 __all__ = ["READ_OPTIONS", "ReadOptions", "as_run", "format_of", "read_run", "write_run"]
@@ -186,7 +187,8 @@ def _read(path: Path, opts: ReadOptions) -> Run:
                 f"{fmt.name} file",
                 where,
             )
-    signals = _call_reader(fmt, path, opts)
+    signals = dict(_call_reader(fmt, path, opts))
+    stated = signals.pop(PREAMBLE_RATE, None)  # the rate a text's preamble states
     angular = [name for name in ANGULAR if signals.get(name) is not None]
     sidecar = opts.sidecar
     metadata = opts.metadata
@@ -215,8 +217,11 @@ def _read(path: Path, opts: ReadOptions) -> Run:
         meta["sample_rate_Hz"] = rate
     time = signals.get(TIME)
     implicit = time is None
+    origin = ""  # where the sample rate of a file without a time column comes from
     if implicit:
-        time = _implicit_time(signals, meta, path)
+        time, origin = _implicit_time(signals, meta, path, stated, _rate_origin(opts, path))
+    elif stated is not None:
+        _check_stated_rate(time, stated, where)
     run = Run(
         time,
         signals.get(DISPLACEMENT),
@@ -235,9 +240,8 @@ def _read(path: Path, opts: ReadOptions) -> Run:
                 raise
             rate = meta["sample_rate_Hz"]
             raise RecordingError(
-                f"{exc.message}; the time stamps here are i / {rate:g} Hz, from the sample "
-                "rate given (sample_rate_Hz, --sample-rate): a rate wrong by a factor gives "
-                "a frequency wrong by the same factor",
+                f"{exc.message}; the time stamps here are i / {rate:g} Hz, from {origin}: "
+                "a rate wrong by a factor gives a frequency wrong by the same factor",
                 exc.where,
             ) from None
     return run
@@ -308,18 +312,81 @@ def _rate(value: Any, name: str, where: str) -> float:
     return rate
 
 
-def _implicit_time(signals: Mapping[str, NDArray], meta: Mapping[str, Any], path: Path) -> NDArray:
-    """The time stamps i / rate [s] of a file without a time column, from the sample rate
-    given (``sample_rate_Hz``) or the sidecar's.
+#: A sample rate given and the one the preamble states agree within this (relative): a
+#: preamble rounds its rate (``Sample rate: 3.333 kHz``), a wrong rate is off by far more.
+_GIVEN_AGREES = 1e-3
+#: A preamble's rate and the time stamps' agree within this (relative).
+_STAMPS_AGREE = 0.01
+
+
+def _rate_origin(opts: ReadOptions, path: Path) -> str:
+    """Where a sample rate given for a file comes from, in words for messages."""
+    if opts.sample_rate_Hz is not None:
+        return "the sample rate given (sample_rate_Hz, --sample-rate)"
+    if (opts.metadata or {}).get("sample_rate_Hz") is not None:
+        return "the metadata's sample_rate_Hz"
+    sidecar = opts.sidecar
+    if sidecar is False:
+        return "the sample_rate_Hz given"
+    side = sidecar_path(path) if sidecar is True else Path(str(sidecar))
+    return f"the sample_rate_Hz of the sidecar {side.name}"
+
+
+def _implicit_time(
+    signals: Mapping[str, NDArray],
+    meta: dict[str, Any],
+    path: Path,
+    stated: StatedRate | None = None,
+    origin: str = "the sample rate given (sample_rate_Hz, --sample-rate)",
+) -> tuple[NDArray, str]:
+    """The time stamps i / rate [s] of a file without a time column, and where the rate
+    comes from (for messages).
+
+    The rate is the one given (``sample_rate_Hz``: the option, the metadata or the
+    sidecar, already in ``meta``), else the one the file's preamble states (``stated``:
+    the :class:`~bayestribo.io.text.StatedRate` a text reader returns under
+    :data:`~bayestribo.io.text.PREAMBLE_RATE`), which is then set in ``meta`` and said
+    with a :class:`~bayestribo.errors.ReadingWarning`.
+
+    Parameters
+    ----------
+    signals : mapping
+        The reader's columns, by canonical name (no time).
+    meta : dict
+        The run's metadata, updated with the preamble's rate when it is the one used.
+    path : Path
+        The file, for messages.
+    stated : StatedRate, optional
+        The sample rate the file's preamble states.
+    origin : str
+        Where a rate in ``meta`` comes from, in words.
+
+    Returns
+    -------
+    time : ndarray
+        i / rate [s].
+    origin : str
+        Where the rate comes from, in words.
 
     Raises
     ------
     RunFormatError
-        When no sample rate is known, saying how to give one.
+        When no sample rate is known, saying how to give one; when the rate given and
+        the preamble's differ by more than 0.1 %, naming both.
     """
     where = str(path)
     rate = meta.get("sample_rate_Hz")
     n = max(np.size(v) for name, v in signals.items() if name != TIME)
+    if rate is None and stated is not None:
+        rate = meta["sample_rate_Hz"] = stated.rate_Hz
+        origin = str(stated)
+        warn(
+            f"{where}: no time column: t = i / {rate:g} Hz, the sample rate from {origin}; "
+            f"if it is not the samples' rate, give theirs with sample_rate_Hz=HZ and leave "
+            f"the preamble's line out with skip_rows={stated.skip}",
+            ReadingWarning,
+        )
+        return np.arange(n, dtype=np.float64) / rate, origin
     if rate is None:
         raise RunFormatError(
             f"the file has no time column: give its sample rate, sample_rate_Hz=HZ "
@@ -329,7 +396,39 @@ def _implicit_time(signals: Mapping[str, NDArray], meta: Mapping[str, Any], path
             where,
         )
     rate = _rate(rate, "sample_rate_Hz", where)
-    return np.arange(n, dtype=np.float64) / rate
+    if stated is not None and abs(rate - stated.rate_Hz) > _GIVEN_AGREES * stated.rate_Hz:
+        raise RunFormatError(
+            f"the file has no time column and {origin} is {rate:g} Hz but {stated} states "
+            f"{stated.rate_Hz:g} Hz; correct the one that is wrong (skip_rows={stated.skip}, "
+            "--skip-rows, leaves the preamble's line out)",
+            where,
+        )
+    return np.arange(n, dtype=np.float64) / rate, origin
+
+
+def _check_stated_rate(time: NDArray, stated: StatedRate, where: str) -> None:
+    """Refuse a time column whose median step disagrees by more than 1 % with the
+    sample rate the preamble states.
+
+    Raises
+    ------
+    RunFormatError
+        Naming the preamble's line and both rates.
+    """
+    steps = np.diff(np.asarray(time, dtype=np.float64))
+    steps = steps[np.isfinite(steps) & (steps > 0.0)]
+    if steps.size == 0:
+        return  # no time step to compare: the run's checks name the time column
+    rate = 1.0 / float(np.median(steps))
+    if abs(rate - stated.rate_Hz) > _STAMPS_AGREE * stated.rate_Hz:
+        raise RunFormatError(
+            f"{stated} states a sample rate of {stated.rate_Hz:g} Hz but the time column's "
+            f"stamps are {rate:g} Hz apart (median step {1.0 / rate:g} s); the time column or "
+            "its unit is wrong, or the preamble: name the columns with columns=[...] "
+            f"(the time column's unit, or 'ignore' to take t = i / rate), or leave the "
+            f"preamble's line out with skip_rows={stated.skip} (--skip-rows)",
+            where,
+        )
 
 
 def _call_reader(fmt: FileFormat, path: Path, opts: ReadOptions) -> Mapping[str, Any]:

@@ -6,8 +6,11 @@ other units in the names (``time_ms``, ``displacement_um``, ``velocity [mm/s]``,
 :mod:`bayestribo.io.columns`), which are converted. The delimiter and the
 decimal mark (a comma in a semicolon, tab or blank separated file) are found from the
 rows of numbers, a byte-order mark is dropped, and a software's preamble (``Key:
-value`` lines) above the header row is skipped. A file without a time column reads with
-its sample rate (:func:`bayestribo.read_run`). Any other text file of
+value`` lines) above the header row is skipped. A header separated by blanks may hold
+names with blanks (``Time (s)    Position (mm)``): it is split into as many names as
+the rows hold numbers, and refused when that split is ambiguous. A file without a time
+column reads with its sample rate (:func:`bayestribo.read_run`), which its preamble may
+state (``Sample rate: 1 kHz``, :func:`stated_rate`). Any other text file of
 numbers in columns (comma, semicolon, tab or white-space separated, with or without
 a header, ``#`` comment lines allowed) reads with ``columns=[...]``: one canonical
 name or ``"ignore"`` per column, in file order, and optionally a scale factor per
@@ -24,6 +27,7 @@ import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -48,11 +52,14 @@ _READ = (*COLUMNS, *ANGULAR)
 
 __all__ = [
     "IGNORE",
+    "PREAMBLE_RATE",
+    "StatedRate",
     "TextLayout",
     "check_scale",
     "decode",
     "parse_lines",
     "read_text",
+    "stated_rate",
     "text_layout",
     "write_csv",
 ]
@@ -301,12 +308,249 @@ def _check_columns(
     return names, factors
 
 
+#: The key under which :func:`read_text` and :func:`parse_lines` return, beside the
+#: columns, the sample rate the file's preamble states (a :class:`StatedRate`), when it
+#: states one; :func:`bayestribo.read_run` takes it out before building the run.
+PREAMBLE_RATE = "preamble_sample_rate"
+
+
+@dataclass(frozen=True)
+class StatedRate:
+    """The sample rate a preamble line states (``Sample rate: 1 kHz``).
+
+    Attributes
+    ----------
+    rate_Hz : float
+        The rate [Hz] (an interval's reciprocal).
+    line : int
+        The line that states it, from 1.
+    text : str
+        That line as the file writes it (stripped).
+    skip : int
+        The ``skip_rows`` that leaves every line stating a rate out of the reading.
+    """
+
+    rate_Hz: float
+    line: int
+    text: str
+    skip: int
+
+    def __str__(self) -> str:
+        return f"the preamble's {self.text!r} (line {self.line})"
+
+
+#: A preamble line stating a rate or an interval: a key (its unit in brackets may
+#: follow), ``:``, ``=``, a tab, ``;`` or ``,``, a number, and a unit (optional).
+_RATE_LINE = re.compile(
+    r"^\s*(?P<key>[^:=\t;,\(\[\d]+?)\s*(?:[\(\[]\s*(?P<key_unit>[^\)\]]*?)\s*[\)\]])?"
+    r"\s*(?:[:=\t;,]\s*)+(?P<value>[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)"
+    r"(?:(?:\s*[\t;,]\s*|\s*)(?P<unit>[^\s\d;,][^\s;,]*))?[\s;,]*$"
+)
+#: Keys of a sample rate, in lower case with single blanks.
+_RATE_KEYS = frozenset(
+    {
+        "sample rate",
+        "sampling rate",
+        "sample frequency",
+        "sampling frequency",
+        "fs",
+        "samples per second",
+        "scan rate",
+    }
+)
+#: Keys of a sample interval.
+_INTERVAL_KEYS = frozenset(
+    {
+        "sample interval",
+        "sampling interval",
+        "sample period",
+        "sampling period",
+        "dt",
+        "δt",
+        "delta t",
+    }
+)
+#: Units of a rate and their factor to Hz ("" for none: a rate is per second). The
+#: case of M and m is kept: mHz is no MHz.
+_RATE_UNITS = {
+    "": 1.0,
+    "Hz": 1.0,
+    "hz": 1.0,
+    "HZ": 1.0,
+    "kHz": 1e3,
+    "KHz": 1e3,
+    "khz": 1e3,
+    "KHZ": 1e3,
+    "MHz": 1e6,
+    "MHZ": 1e6,
+    "S/s": 1.0,
+    "Sa/s": 1.0,
+    "samples/s": 1.0,
+    "kS/s": 1e3,
+    "kSa/s": 1e3,
+    "ksamples/s": 1e3,
+    "MS/s": 1e6,
+    "MSa/s": 1e6,
+    "Msamples/s": 1e6,
+}
+#: Units of an interval and how many of them make a second (none: s or ms is not
+#: guessed); 1 / (10 µs) is then 1e6 / 10, exactly 100 kHz.
+_INTERVAL_UNITS = {
+    "s": 1.0,
+    "sec": 1.0,
+    "ms": 1e3,
+    "msec": 1e3,
+    "us": 1e6,
+    "µs": 1e6,
+    "\u03bcs": 1e6,
+    "usec": 1e6,
+}
+#: Statements of one rate that differ by more than this (relative) contradict.
+_RATES_AGREE = 1e-9
+
+
+def _rate_of(line: str) -> float | None:
+    """The sample rate [Hz] a preamble line states, or None for a line that states
+    none: another key, no number, an unknown unit (never guessed)."""
+    m = _RATE_LINE.match(line.replace('"', ""))
+    if m is None:
+        return None
+    key = " ".join(m.group("key").lower().split())
+    key_unit = (m.group("key_unit") or "").strip()
+    unit = m.group("unit") or ""
+    if key_unit and unit and key_unit != unit:
+        return None
+    unit = unit or key_unit
+    value = float(m.group("value"))
+    if not (np.isfinite(value) and value > 0.0):
+        return None
+    if key in _RATE_KEYS and unit in _RATE_UNITS:
+        rate = value * _RATE_UNITS[unit]
+    elif key in _INTERVAL_KEYS and unit in _INTERVAL_UNITS:
+        rate = _INTERVAL_UNITS[unit] / value
+    else:
+        return None
+    return rate if np.isfinite(rate) else None
+
+
+def stated_rate(lines: Sequence[tuple[int, str]], where: str) -> StatedRate | None:
+    """The sample rate the preamble lines of a file state, or None.
+
+    A line such as ``Sample rate: 1 kHz``, ``Sampling rate = 500 Hz``, ``Fs: 2000``,
+    ``Samples per second: 200``, ``Sample interval: 0.001 s`` or ``dt = 1 ms`` (a ``#``
+    before it, quotes and a unit in brackets after the key, ``Sample rate (Hz): 1000``,
+    allowed) states one. Rates are in Hz, kHz, MHz, S/s, Sa/s or samples/s (a bare
+    number is Hz), intervals in s, ms, µs or us (a bare number is no interval: s and ms
+    are not guessed). A line with another unit or a value that is not a number states
+    nothing: it stays a preamble line.
+
+    Parameters
+    ----------
+    lines : sequence of (int, str)
+        The lines above the header (or above the first row of numbers), numbered from 1.
+    where : str
+        The file, for messages.
+
+    Returns
+    -------
+    StatedRate or None
+
+    Raises
+    ------
+    RunFormatError
+        When two lines state different rates, naming both.
+    """
+    found: StatedRate | None = None
+    for number, line in lines:
+        text = line.strip().lstrip("#").strip()
+        rate = _rate_of(text)
+        if rate is None:
+            continue
+        if found is None:
+            found = StatedRate(rate, number, text, number)
+        elif abs(rate - found.rate_Hz) > _RATES_AGREE * found.rate_Hz:
+            raise RunFormatError(
+                f"{found} states a sample rate of {found.rate_Hz:g} Hz but line {number} "
+                f"{text!r} states {rate:g} Hz; correct the one that is wrong, or leave the "
+                f"preamble out with skip_rows={number}",
+                where,
+            )
+        else:
+            found = StatedRate(found.rate_Hz, found.line, found.text, number)
+    return found
+
+
 def _fields_of(line: str, delimiter: str | None) -> list[str]:
     return [f.strip().strip('"').strip("'").strip() for f in _split(line, delimiter)]
 
 
+#: Where a header of names separated by blanks may split between names that hold
+#: blanks themselves (``Time (s)    Position (mm)``): at a run of two or more blanks or
+#: a tab, after a unit's closing bracket (or a closing quote), or at either.
+_HEADER_GAPS = (
+    re.compile(r"[ \t]{2,}|\t"),
+    re.compile(r"(?<=[\)\]\"])[ \t]+"),
+    re.compile(r"(?<=[\)\]\"])[ \t]+|[ \t]{2,}|\t"),
+)
+
+
+def _header_splits(line: str, delimiter: str | None, width: int | None) -> list[list[str]]:
+    """The ways a header line splits into ``width`` names.
+
+    A line split by a delimiter, or one whose blanks split it into ``width`` names, has
+    one way (its fields, whatever their number). A line of names separated by blanks
+    whose names hold blanks too (``Time (s)    Position (mm)``) is split at runs of two
+    or more blanks or a tab, after a closing ``)``/``]``, or at either: every distinct
+    split into ``width`` names is returned (none when no split gives ``width``, more
+    than one when the line is ambiguous; the caller refuses both).
+    """
+    plain = _fields_of(line, delimiter)
+    if delimiter is not None or width is None or len(plain) == width:
+        return [plain]
+    text = line.strip()
+    splits: list[list[str]] = []
+    for gaps in _HEADER_GAPS:
+        fields = [f.strip().strip('"').strip("'").strip() for f in gaps.split(text)]
+        if len(fields) == width and fields not in splits:
+            splits.append(fields)
+    return splits
+
+
+def _names_of(line: str, delimiter: str | None, width: int | None) -> list[str]:
+    """The names of a header line: its first split into ``width`` names
+    (:func:`_header_splits`), else its plain fields."""
+    return (_header_splits(line, delimiter, width) or [_fields_of(line, delimiter)])[0]
+
+
+def _header_fields(
+    number: int, line: str, delimiter: str | None, width: int | None, where: str
+) -> list[str]:
+    """The names of a header line (:func:`_header_splits`): its plain fields when no
+    split gives ``width`` names (the caller then says the widths differ).
+
+    Raises
+    ------
+    RunFormatError
+        For a blank-separated header that splits into ``width`` names in more than one
+        way, naming the line and the splits: the units would be guessed.
+    """
+    splits = _header_splits(line, delimiter, width)
+    if len(splits) == 1:
+        return splits[0]
+    if not splits:
+        return _fields_of(line, delimiter)
+    ways = " or ".join(repr(s) for s in splits)
+    raise RunFormatError(
+        f"header (line {number}) {line.strip()[:80]!r}: its names are separated by blanks "
+        f"and hold blanks, and it splits into the {width} columns of the rows in more than "
+        f"one way ({ways}); name the columns in file order with columns=[...], one name "
+        "with its unit per column (for instance 'time_s', 'displacement_mm', 'ignore')",
+        where,
+    )
+
+
 def _header(
-    lines: Sequence[tuple[int, str]], delimiter: str | None, where: str
+    lines: Sequence[tuple[int, str]], delimiter: str | None, where: str, width: int | None = None
 ) -> tuple[list[str], dict[str, float], int]:
     """Column names, unit factors and the number of header lines of a file's header.
 
@@ -314,13 +558,15 @@ def _header(
     row of units below it (``Time`` / ``s``). Run labels of sensor software (``Run #1``,
     ``Latest:``) are taken off; columns of another quantity (acceleration, force, ...)
     are not read, and said. Several runs side by side are refused with the
-    ``columns=`` that reads each.
+    ``columns=`` that reads each. ``width`` is the number of fields of the rows of
+    numbers below: a header separated by blanks is split into as many names
+    (:func:`_header_fields`).
     """
     number = lines[0][0]
-    header = _fields_of(lines[0][1], delimiter)
+    header = _header_fields(number, lines[0][1], delimiter, width, where)
     count = 1
     if len(lines) > 1:
-        second = _fields_of(lines[1][1], delimiter)
+        second = (_header_splits(lines[1][1], delimiter, width) or [[]])[0]
         if all(_as_float(f) is None for f in second if f):
             combined = combine_units_row(header, second)
             if combined is not None:
@@ -441,6 +687,7 @@ def _guess_table(
     columns: Sequence[str] | None,
     delimiter: str | None,
     decimal: str | None,
+    where: str = "",
 ) -> tuple[str | None, str, int | None] | None:
     """The delimiter, the decimal mark and the index of the first row of numbers of a
     text's first lines, or None when no choice reads them as a table.
@@ -452,7 +699,10 @@ def _guess_table(
     decimal comma is so taken only when no number holds a point. The lines above the
     first row of numbers are the header and a preamble (``Key: value`` lines); the
     index is None when one of them looks like a row of samples with a bad cell, which
-    the reader then names.
+    the reader then names. A header over rows separated by blanks is split into as many
+    names as the rows hold numbers (:func:`_header_splits`); one that splits so in more
+    than one way is refused (:class:`~bayestribo.errors.RunFormatError`, ``where`` names
+    the file).
     """
     marks = [
         (d, m)
@@ -474,9 +724,11 @@ def _guess_table(
             continue
         if columns is not None:
             width = len(columns)
-        elif first > 0:
+        elif first > 0 and d is not None:
             width = len(_fields_of(probe[first - 1][1], d))
         else:
+            # no header, or one separated by blanks: its names may hold blanks
+            # (``Time (s)  Position (mm)``) and are split as the rows are wide, below
             width = len(_split(probe[first][1], d))
         # the rows of numbers below, but for the last line read (it may be cut short)
         rows = probe[first : first + _PROBE_ROWS]
@@ -488,6 +740,11 @@ def _guess_table(
         )
         if good < _GOOD_ROWS * len(rows):
             continue  # (a bad cell or two is the reader's to name)
+        if columns is None and first > 0 and d is None:
+            number, header = probe[first - 1]
+            if not _header_splits(header, d, width):
+                continue  # no header of this width: another choice, or the reader's error
+            _header_fields(number, header, d, width, where)  # refused when ambiguous
         if first >= 2:
             # a preamble above the header: the header must be one, and the preamble no
             # row of the table (the reader then names the line that is wrong)
@@ -498,7 +755,7 @@ def _guess_table(
                 continue
             start = first - 1
             if first >= 3 and combine_units_row(
-                _fields_of(probe[first - 2][1], d), _fields_of(header, d)
+                _names_of(probe[first - 2][1], d, width), _names_of(header, d, width)
             ):
                 start = first - 2  # a row of names and a row of units
             above = [_split(line, d) for _, line in probe[:start]]
@@ -523,7 +780,7 @@ def _layout(
         columns, units = _check_columns(columns, where)
     if not lines:
         raise RunFormatError("the file holds no data rows", where)
-    guess = _guess_table(lines, columns, delimiter, decimal)
+    guess = _guess_table(lines, columns, delimiter, decimal, where)
     first: int | None = None
     if guess is not None:
         delimiter, decimal, first = guess
@@ -535,11 +792,12 @@ def _layout(
     if columns is None and first is not None and first > 0:
         # a header row above the rows of numbers, or a row of names and a row of units
         start = first - 1
+        width = len(_split(lines[first][1], delimiter)) if first < len(lines) else None
         if first >= 2:
-            names = _fields_of(lines[first - 2][1], delimiter)
-            if combine_units_row(names, _fields_of(lines[first - 1][1], delimiter)):
+            names = _names_of(lines[first - 2][1], delimiter, width)
+            if combine_units_row(names, _names_of(lines[first - 1][1], delimiter, width)):
                 start = first - 2
-        names, units, count = _header(lines[start:first], delimiter, where)
+        names, units, count = _header(lines[start:first], delimiter, where, width)
         return names, units, start + count, delimiter, decimal
     first_fields = _split(lines[0][1], delimiter)
     if decimal == ",":
@@ -558,7 +816,7 @@ def _layout(
         return names, units, header_lines, delimiter, decimal
     names = list(columns)
     if first is not None and first > 0:
-        header = _fields_of(lines[first - 1][1], delimiter)
+        header = _names_of(lines[first - 1][1], delimiter, len(names))
         if len(header) != len(names):
             raise RunFormatError(
                 f"header (line {lines[first - 1][0]}) has {len(header)} column(s) but "
@@ -599,6 +857,9 @@ class TextLayout:
         The column separator (None: blanks).
     decimal : str
         The decimal mark.
+    rate : StatedRate or None
+        The sample rate a line above the rows of numbers states (``Sample rate: 1
+        kHz``), or None.
     """
 
     names: list[str]
@@ -606,6 +867,7 @@ class TextLayout:
     preamble: int
     delimiter: str | None
     decimal: str
+    rate: StatedRate | None = None
 
 
 def text_layout(
@@ -653,14 +915,16 @@ def text_layout(
     preamble = 0
     if header_lines:
         start = header_lines - 1
-        header = _fields_of(lines[start][1], delimiter)
+        header = _names_of(lines[start][1], delimiter, len(names))
         if start > 0:
-            above = _fields_of(lines[start - 1][1], delimiter)
+            above = _names_of(lines[start - 1][1], delimiter, len(names))
             if combine_units_row(above, header):
                 start -= 1
                 header = combine_units_row(above, header) or header
         labels, preamble = header, start
-    return TextLayout(list(names), labels, preamble, delimiter, decimal)
+    end = lines[header_lines][0] - 1 if header_lines < len(lines) else len(all_lines)
+    rate = stated_rate(list(enumerate(all_lines[skip_rows:end], start=skip_rows + 1)), where)
+    return TextLayout(list(names), labels, preamble, delimiter, decimal, rate)
 
 
 def _no_time_hint(width: int) -> str:
@@ -715,7 +979,7 @@ def _read_streamed(
     delimiter: str | None,
     encoding: str | None,
     decimal: str | None = None,
-) -> dict[str, NDArray] | None:
+) -> dict[str, Any] | None:
     """A plain file (UTF-8, a header or ``columns``, rows of numbers with a decimal
     point only) read by
     numpy's C reader straight from the file: no line of it is held as a Python string,
@@ -785,7 +1049,8 @@ def _read_streamed(
         data = list(data.T)
     if len(data) != len(names) or data[0].size < 1:
         return None
-    return _columns([data[i] for i, _ in keep], keep, units, scale, where)
+    out: dict[str, Any] = _columns([data[i] for i, _ in keep], keep, units, scale, where)
+    return _with_stated_rate(out, list(enumerate(head_lines[:skip], start=1)), where)
 
 
 #: Files at least this large read with pyarrow's CSV reader when it is installed
@@ -827,7 +1092,7 @@ def read_text(
     decimal: str | None = None,
     skip_rows: int = 0,
     encoding: str | None = None,
-) -> dict[str, NDArray]:
+) -> dict[str, Any]:
     """Read a delimited text file of samples.
 
     Parameters
@@ -861,14 +1126,20 @@ def read_text(
     Returns
     -------
     dict
-        Arrays by canonical column name (time first).
+        Arrays by canonical column name (time first); and, when a line above the header
+        (or above the first row of numbers) states the sample rate (``Sample rate: 1
+        kHz``, ``dt = 1 ms``, see :func:`stated_rate`), a :class:`StatedRate` under
+        :data:`PREAMBLE_RATE`, which :func:`bayestribo.read_run` takes out: the time of
+        a file without a time column then comes from it, and a time column must agree
+        with it.
 
     Raises
     ------
     RunFormatError
         Naming the file, the line and the column, for text that is not UTF-8, an
-        unknown header name, a row with the wrong number of fields, or a field that is
-        not a number.
+        unknown header name, a row with the wrong number of fields, a field that is not
+        a number, a header separated by blanks that splits into the columns in more
+        than one way, or preamble lines that state different sample rates.
     """
     path = Path(path)
     where = str(path)
@@ -907,7 +1178,7 @@ def parse_lines(
     delimiter: str | None = None,
     decimal: str | None = None,
     skip_rows: int = 0,
-) -> dict[str, NDArray]:
+) -> dict[str, Any]:
     """Samples from the lines of a delimited text (the body of :func:`read_text`).
 
     Parameters
@@ -922,7 +1193,8 @@ def parse_lines(
     Returns
     -------
     dict
-        Arrays by canonical column name (time first).
+        As :func:`read_text`: arrays by canonical column name (time first), and the
+        preamble's :class:`StatedRate` under :data:`PREAMBLE_RATE` when it states one.
 
     Raises
     ------
@@ -961,7 +1233,20 @@ def parse_lines(
         data = _parse_rows(rows, delimiter, decimal, names, keep, where)
         data = _trim_missing(data, rows, keep, where)
 
-    return _columns(data, keep, units, scale, where)
+    out: dict[str, Any] = _columns(data, keep, units, scale, where)
+    above = enumerate(all_lines[skip_rows : rows[0][0] - 1], start=skip_rows + 1)
+    return _with_stated_rate(out, list(above), where)
+
+
+def _with_stated_rate(
+    out: dict[str, Any], above: Sequence[tuple[int, str]], where: str
+) -> dict[str, Any]:
+    """``out`` with the sample rate the lines above the rows of numbers state (a
+    :class:`StatedRate` under :data:`PREAMBLE_RATE`), when they state one."""
+    rate = stated_rate(above, where)
+    if rate is not None:
+        out[PREAMBLE_RATE] = rate
+    return out
 
 
 def write_csv(signals: Mapping[str, NDArray], path: str | Path) -> Path:
