@@ -297,3 +297,21 @@ def test_inspect_says_the_rate_came_from_the_preamble(
     assert report["samples"]["sample_rate_Hz"] == pytest.approx(1000.0, rel=1e-12)
     assert "no time column" in report["reading"]["reader"]
     assert "from the preamble's 'Sample rate: 1 kHz' (line 1)" in out.err
+
+
+def test_a_preamble_rate_wrong_by_a_factor_is_named_by_the_plausibility_check(
+    tmp_path: Path,
+) -> None:
+    """A preamble's rate 1000 times too high: the refusal says where the time came from."""
+    from bayestribo.errors import RecordingError
+
+    head = "Sample rate: 1 MHz\nPosition (mm)"
+    path = _write(tmp_path / "encoder.txt", head, [repr(1e3 * x) for x in X])
+    with (
+        pytest.warns(ReadingWarning, match="1 MHz"),
+        pytest.raises(
+            RecordingError,
+            match=r"plausibility.*i / 1e\+06 Hz, from the preamble's 'Sample rate: 1 MHz'",
+        ),
+    ):
+        read_run(path)
