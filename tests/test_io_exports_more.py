@@ -315,3 +315,24 @@ def test_a_preamble_rate_wrong_by_a_factor_is_named_by_the_plausibility_check(
         ),
     ):
         read_run(path)
+
+
+def test_a_rate_line_above_a_one_column_header_is_a_preamble_not_names(tmp_path) -> None:
+    """``Sample rate: 1 kHz`` over a lone header ``angle_deg``: not a row of names with a
+    row of units below it (they combined into one unknown column before)."""
+    import math
+    import warnings
+
+    import numpy as np
+
+    from bayestribo import read_run
+
+    values = 30 * np.cos(2 * np.pi * 1.5 * np.arange(500) / 1000.0)
+    path = tmp_path / "encoder.txt"
+    body = "\n".join(f"{v:.6f}" for v in values)
+    path.write_text(f"Sample rate: 1 kHz\nangle_deg\n{body}\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        run = read_run(path, validate=False)
+    assert run.length_unit == "rad" and run.metadata["sample_rate_Hz"] == 1000.0
+    assert run.displacement[0] == pytest.approx(math.radians(30.0), rel=1e-6)

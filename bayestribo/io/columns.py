@@ -159,12 +159,17 @@ def combine_units_row(names: Sequence[str], units: Sequence[str]) -> list[str] |
     """
     if len(names) != len(units) or not any(u.strip() for u in units):
         return None
+    if any(_KEY_VALUE.search(n) for n in names):
+        return None  # a preamble's ``Key: value`` line (``Sample rate: 1 kHz``), no names
     if any(_split(n)[1] is not None for n in names):
         return None
     if any(len(u.strip()) > 12 or " " in u.strip() for u in units):
         return None
     return [f"{n} ({u.strip()})" if u.strip() else n for n, u in zip(names, units, strict=True)]
 
+
+#: A ``Key: value`` or ``key = value`` line of a preamble: a separator, then a number.
+_KEY_VALUE = re.compile(r"[:=]\s*[-+]?\.?\d")
 
 _BRACKETED = re.compile(r"^\s*(?P<word>[^\[\(]+?)\s*[\[\(]\s*(?P<unit>[^\]\)]+?)\s*[\]\)]\s*$")
 

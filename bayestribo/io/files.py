@@ -85,7 +85,9 @@ def read_run(
     sample_rate_Hz : float, optional
         The sample rate [Hz] of a file without a time column (an encoder's angles one per
         line, a column of displacements): sample i is at t = i / rate. Without it, the
-        sidecar's ``sample_rate_Hz`` is used. For a file with a time column it is the
+        sidecar's ``sample_rate_Hz`` is used, else a rate the file's preamble states
+        (``Sample rate: 1 kHz``, said with a ``ReadingWarning``); a stated rate that
+        disagrees with the one given is refused naming both. For a file with a time column it is the
         run's ``sample_rate_Hz``, which must agree with the time stamps.
     delimiter, decimal, skip_rows
         Text files: column separator (default: guessed), decimal mark (default: a point,

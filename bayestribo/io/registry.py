@@ -71,8 +71,12 @@ class FileFormat:
     read : callable
         ``read(path, options) -> {canonical column name: array}``: time in s first,
         then displacement in m and/or velocity in m/s (or the file's length unit when
-        the run's metadata say ``length_unit: arbitrary``). Raises
-        :class:`~bayestribo.errors.RunFormatError` naming the file and what is wrong.
+        the run's metadata say ``length_unit: arbitrary``); a rotation's columns as
+        ``angle_rad`` and ``angular_velocity_rad_per_s`` (:data:`bayestribo.io.run.ANGULAR`),
+        and a sample rate the file states as a :class:`~bayestribo.io.text.StatedRate`
+        under :data:`~bayestribo.io.text.PREAMBLE_RATE`, which :func:`bayestribo.read_run`
+        takes out. Raises :class:`~bayestribo.errors.RunFormatError` naming the file and
+        what is wrong.
     options : tuple of str
         The format-specific options it takes, among :data:`FORMAT_OPTIONS` (``scale``,
         ``metadata`` and the sidecar apply to every format).

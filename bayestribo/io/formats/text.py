@@ -91,7 +91,10 @@ def describe_text(path: Path, options: ReadOptions) -> dict[str, Any]:
         if layout.decimal == ",":
             notes.append("decimal comma")
         if TIME not in layout.names:
-            notes.append("no time column: t = i / sample rate")
+            note = "no time column: t = i / sample rate"
+            if getattr(layout, "rate", None) is not None:
+                note += f" from {layout.rate}"  # the preamble's line that states it
+            notes.append(note)
         if notes:
             out["reader"] += f" ({', '.join(notes)})"
     elif body:
