@@ -861,9 +861,9 @@ def _warn_frequency_trend(
         return
     if abs(trend.change) > FREQUENCY_TREND_CHANGE and abs(trend.z) > FREQUENCY_TREND_Z:
         like = (
-            "; --restoring duffing (sidecar 'restoring': 'duffing') measures a cubic "
-            "spring's β from the half periods and the energy lost per cycle with its "
-            "potential"
+            "; if the spring stiffens or softens with the swing (a cubic, Duffing spring), "
+            "--restoring duffing (sidecar 'restoring': 'duffing') measures its β from the "
+            "half periods and the energy lost per cycle with its potential"
         )
         if pendulum is not None:
             se = abs(trend.change / trend.z)
