@@ -336,3 +336,26 @@ def test_a_rate_line_above_a_one_column_header_is_a_preamble_not_names(tmp_path)
         run = read_run(path, validate=False)
     assert run.length_unit == "rad" and run.metadata["sample_rate_Hz"] == 1000.0
     assert run.displacement[0] == pytest.approx(math.radians(30.0), rel=1e-6)
+
+
+def test_a_software_line_with_a_version_number_above_a_blank_separated_header(tmp_path) -> None:
+    """``Logger export 2.1`` above ``time_s displacement_m velocity_m_per_s`` is a
+    preamble line (one number among three fields), read past; ``0.01 overload 0.3`` (two
+    numbers and a bad cell) is a row of the table, refused naming its line."""
+    import numpy as np
+
+    from bayestribo import read_run
+    from bayestribo.errors import RunFormatError
+
+    t = np.arange(400) / 200.0
+    x = 1e-3 * np.exp(-0.1 * t) * np.cos(2 * np.pi * 1.3 * t)
+    v = np.gradient(x, t)
+    rows = "\n".join(f"{a:.17g} {b:.17g} {c:.17g}" for a, b, c in zip(t, x, v, strict=True))
+    header = "time_s displacement_m velocity_m_per_s"
+    path = tmp_path / "logger.txt"
+    path.write_text(f"Logger export 2.1\n{header}\n{rows}\n")
+    run = read_run(path, validate=False)
+    np.testing.assert_array_equal(run.displacement, x)
+    path.write_text(f"0.01 overload 0.3\n{header}\n{rows}\n")
+    with pytest.raises(RunFormatError, match="line 1"):
+        read_run(path, validate=False)

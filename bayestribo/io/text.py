@@ -668,13 +668,17 @@ def _numeric_row(fields: list[str], decimal: str, kept: Sequence[int] | None) ->
 
 def _table_line(fields: list[str], width: int, decimal: str) -> bool:
     """A line above a header that may be a row of samples with a bad cell, not a
-    preamble line: as many fields as the table (two or more), a number among them, none
-    of them a ``Key:`` or a ``key=value``."""
+    preamble line: as many fields as the table (two or more), a number among them (more
+    than half of them in a table of three or more columns: ``Logger export 2.1`` is a
+    software's line, ``0.01 overload 0.3`` a row), none of them a ``Key:`` or a
+    ``key=value``."""
+    numbers = sum(bool(_number_or_empty(f, decimal)) for f in fields)
     return (
         width >= 2
         and len(fields) == width
         and not any(f.endswith(":") or "=" in f for f in fields if f)
-        and any(_number_or_empty(f, decimal) for f in fields)
+        and numbers > 0
+        and (width < 3 or 2 * numbers > width)
     )
 
 
