@@ -111,18 +111,22 @@ def clock(t: ArrayLike) -> Clock:
     False
     """
     t = np.asarray(t, dtype=float)
-    i = np.arange(t.size, dtype=float)
     # least squares: a gap's step then shows as residuals of about half a step on
     # either side of it, beyond the jitter limit
-    slope, intercept = np.polyfit(i, t, 1)
+    return _fitted_grid(np.arange(t.size, dtype=float), t)
+
+
+def _fitted_grid(index: np.ndarray, t: np.ndarray) -> Clock:
+    """The grid ``t0 + i h`` fitted by least squares to stamps ``t`` at grid indices
+    ``index``, and the stamps' residuals from it."""
+    slope, intercept = np.polyfit(index, t, 1)
     h = float(slope)
-    residual = t - (intercept + i * h)
-    worst = float(np.max(np.abs(residual)) / h)
+    residual = t - (intercept + index * h)
     off = np.flatnonzero(np.abs(residual) > JITTER_LIMIT * h)
     return Clock(
         step=h,
         jitter=float(np.std(residual)),
-        worst=worst,
+        worst=float(np.max(np.abs(residual)) / h),
         first_off=int(off[0]) if off.size else -1,
         intercept=float(intercept),
     )
@@ -217,17 +221,7 @@ def timeline(t: ArrayLike) -> Timeline:
     h0 = float(np.median(dt))
     steps = np.maximum(np.rint(dt / h0), 1.0)
     index = np.concatenate([[0], np.cumsum(steps)]).astype(np.int64)
-    slope, intercept = np.polyfit(index.astype(float), t, 1)
-    h = float(slope)
-    residual = t - (intercept + index * h)
-    off = np.flatnonzero(np.abs(residual) > JITTER_LIMIT * h)
-    fitted = Clock(
-        step=h,
-        jitter=float(np.std(residual)),
-        worst=float(np.max(np.abs(residual)) / h),
-        first_off=int(off[0]) if off.size else -1,
-        intercept=float(intercept),
-    )
+    fitted = _fitted_grid(index.astype(float), t)
     jumps = np.flatnonzero(steps > 1)
     gaps = tuple(Gap(int(i), int(steps[i]) - 1, float(t[i])) for i in jumps)
     return Timeline(fitted, index, gaps)

@@ -1106,6 +1106,24 @@ def _equilibrium_from(
     )
 
 
+def _clipped_start(found: tuple[int, str], n_peaks: int, least: int, how: str) -> int:
+    """The turning point the analysis starts at after clipped ones (soft or hard):
+    ``found`` is (their count, what was found); said with a ClippingWarning, or refused
+    when fewer than ``least`` turning points remain after them."""
+    count, said = found
+    if n_peaks < count + least:
+        raise RecordingError(
+            f"{said}; {n_peaks - count} turning points remain after them, {least} are "
+            "needed: record with a smaller initial displacement or a larger sensor range"
+        )
+    warn(
+        f"{said}; {how}; record with a smaller initial displacement or a larger sensor "
+        "range to keep them",
+        ClippingWarning,
+    )
+    return count
+
+
 def _hard_clipped(
     t: NDArray, x: NDArray | None, v: NDArray | None, peaks: Peaks, period: float
 ) -> tuple[int, str] | None:
@@ -1323,20 +1341,13 @@ def _analyse(
         spacing.half_period,
     )
     if flattened is not None and flattened[0] > skip:
-        count, said = flattened
-        if len(peaks) < count + int(min_turning_points):
-            raise RecordingError(
-                f"{said}; {len(peaks) - count} turning points remain after them, "
-                f"{min_turning_points} are needed: record with a smaller initial "
-                "displacement or a larger sensor range"
-            )
-        warn(
-            f"{said}; they are left out: the analysis starts at turning point {count} "
-            f"(instead of after {skipped}); record with a smaller initial displacement or "
-            "a larger sensor range to keep them",
-            ClippingWarning,
+        skip = left_out = _clipped_start(
+            flattened,
+            len(peaks),
+            int(min_turning_points),
+            f"they are left out: the analysis starts at turning point {flattened[0]} "
+            f"(instead of after {skipped})",
         )
-        skip = left_out = count
     clipped = _hard_clipped(
         t,
         x if derived != "displacement" else None,
@@ -1345,21 +1356,15 @@ def _analyse(
         period0,
     )
     if clipped is not None and clipped[0] > skip:
-        count, said = clipped
-        if len(peaks) < count + int(min_turning_points):
-            raise RecordingError(
-                f"{said}; {len(peaks) - count} turning points remain after them, "
-                f"{min_turning_points} are needed: record with a smaller initial "
-                "displacement or a larger sensor range"
-            )
-        warn(
-            f"{said}; the clipped cycles are left out: the analysis starts at turning "
-            f"point {count} (t = {float(peaks.t[count]):.6g} s) instead of after {skipped}; "
-            "record with a smaller initial displacement or a larger sensor range to keep "
-            "them",
-            ClippingWarning,
+        count = clipped[0]
+        start = f"t = {float(peaks.t[count]):.6g} s" if count < len(peaks) else "none"
+        skip = left_out = _clipped_start(
+            clipped,
+            len(peaks),
+            int(min_turning_points),
+            f"the clipped cycles are left out: the analysis starts at turning point {count} "
+            f"({start}) instead of after {skipped}",
         )
-        skip = left_out = count
     needed = skip + int(min_turning_points)
     if len(peaks) < needed:
         raise RecordingError(
