@@ -41,17 +41,80 @@ VISCOSITY_KEY = "kinematic_viscosity_mm2_per_s"
 DEFAULT_BY: tuple[str, ...] = ("lubricant", "water_mass_fraction", "load_N")
 
 
+#: The law of a fit that does not say (a fit-like object of the paper's law).
+_PAPER_LAW = "viscous+coulomb"
+
+
+def _paper_quantity(name: str) -> dict[str, Any] | None:
+    """How ζ or μ_k reads where a fit-like object does not describe it (the registry's
+    words, as :func:`bayestribo.campaign.quantities.campaign_quantities` gives them)."""
+    from bayestribo.model.laws.base import TERMS
+
+    for term in ("viscous", "coulomb"):
+        for p in TERMS[term].parameters:
+            if p.name == name:
+                return {
+                    "name": p.name,
+                    "symbol": p.symbol,
+                    "unit": "1",
+                    "label": p.label,
+                    "term": term,
+                    "non_negative": p.low >= 0.0,
+                }
+    return None
+
+
+def _law(result: Any) -> str:
+    """The run's dissipation law (the paper's where a fit-like object does not say)."""
+    return str(getattr(result, "law", None) or _PAPER_LAW)
+
+
 def _has_friction(result: Any) -> bool:
-    """A run with contact: a load that is not an explicit 0, and a friction fitted (as
-    μ_k with a load, or as a friction displacement without one). A run whose load is
-    missing is never taken for a run in air: it has a friction displacement, and is
-    excluded for want of a load to group by."""
-    if getattr(result, "metadata", {}).get("load_N") == 0:
+    """A run with contact: a load that is not an explicit 0, and, where the load is
+    missing, a friction fitted (as μ_k, or as a friction displacement). A run whose load
+    is missing is never taken for a run in air where it has a friction term: it is
+    excluded for want of a load to group by. A run with a load is a run with contact in
+    every law (a law of drag alone included)."""
+    load = (getattr(result, "metadata", {}) or {}).get("load_N")
+    if load == 0:
         return False
+    if isinstance(load, int | float) and not isinstance(load, bool) and load > 0:
+        return True
     names = getattr(result, "parameter_names", None)
     if names is not None and not {"mu_k", "friction_displacement"} & set(names):
-        return False
+        quantities = getattr(result, "quantities", None) or {}
+        return any(q.get("term") and _is_friction(q["term"]) for q in quantities.values())
     return True
+
+
+def _is_friction(term: str) -> bool:
+    from bayestribo.model.laws.base import get_term
+
+    try:
+        return get_term(term).kind == "friction"
+    except (KeyError, ValueError):
+        return False
+
+
+def _digest(result: Any, prob: float, max_samples: int | None, seed: int) -> Any:
+    """The run's digest: the quantities of its law (a fit result), or ζ and μ_k (a
+    fit-like object without a law, as populations take)."""
+    from bayestribo.campaign.digest import PARAMETERS, FitDigest, digest_fit
+
+    if isinstance(result, FitDigest):
+        return result
+    if hasattr(result, "law") and hasattr(result, "attrs"):
+        return digest_fit(result, prob=prob, max_samples=max_samples, seed=seed)
+    return digest_fit(result, prob=prob, max_samples=max_samples, seed=seed, parameters=PARAMETERS)
+
+
+def _quantities(result: Any) -> dict[str, dict[str, Any]]:
+    """Name -> description of each quantity a run's digest keeps, in its law's order."""
+    described = getattr(result, "quantities", None) or {}
+    out = {}
+    for name in getattr(result, "draws", {}):
+        out[name] = described.get(name) or _paper_quantity(name) or {"name": name}
+    return out
 
 
 def _run_summary(result: Any, prob: float) -> dict[str, Any]:
@@ -59,17 +122,9 @@ def _run_summary(result: Any, prob: float) -> dict[str, Any]:
     out: dict[str, Any] = {"run_id": md.get("run_id") or getattr(result, "run_name", None)}
     for key in ("series", "lubricant", "water_mass_fraction", "load_N", "repeat"):
         out[key] = md.get(key)
-    kept = result.summary_at(prob) if hasattr(result, "summary_at") else None  # a FitDigest
-    for p in ("zeta", "mu_k"):
-        if kept is not None:
-            if p not in kept:
-                continue
-            s = kept[p]
-        else:
-            try:
-                s = summarize(result.samples(p), prob)
-            except (KeyError, ValueError):
-                continue
+    out["law"] = _law(result)
+    kept = result.summary_at(prob)
+    for p, s in kept.items():
         out[p] = {"median": s["median"], "interval": s["interval"]}
     out["converged"] = bool(getattr(result, "converged", True))
     return out
@@ -84,12 +139,16 @@ class CampaignAnalysis:
     by : tuple of str
         Grouping keys of the runs with contact.
     runs : list of dict
-        Per-run summaries (metadata keys, ζ and μ_k medians and intervals).
+        Per-run summaries (metadata keys, the law, and the medians and intervals of
+        the law's quantities).
     contact : Population or None
-        Populations of ζ and μ_k per group (pooled over all runs with contact only
-        when the load is the sole grouping key).
+        Populations of the law's quantities per group (pooled over all runs with
+        contact only when the load is the sole grouping key and one law is fitted).
+        Where the runs were fitted in several laws, the law is the first grouping
+        key (``law=...``): runs of two laws are never one population.
     zeta0 : Population or None
-        Pooled population of ζ over the runs without contact.
+        Population of the drag quantities (ζ₀ in the paper's law) over the runs
+        without contact, pooled (by law where they have several).
     series : Population or None
         Populations pooled over the loads of each series (the grouping keys other
         than the load), when there are such keys.
@@ -101,6 +160,17 @@ class CampaignAnalysis:
         Runs left out of the populations, ``{"run", "reason"}``: a fit that piles on
         a prior bound (no measurement), or a run without a grouping key the other
         runs have.
+    laws : dict of str to list of str
+        Each law fitted, with its runs.
+    quantities : dict of str to dict
+        Each quantity compared: its symbol, unit, label and term
+        (:mod:`bayestribo.campaign.quantities`).
+    left_out : dict of str to str
+        Parameters of the laws not compared across runs, with why.
+    sigma_scales : dict of str to float
+        The half-Cauchy scale of each quantity's between-run σ prior (module notes of
+        :mod:`bayestribo.population.hyperpriors`; a quantity without a default takes
+        half the median over its runs, :func:`sigma_scale`).
     """
 
     by: tuple[str, ...]
@@ -113,6 +183,10 @@ class CampaignAnalysis:
     trends: dict[str, Trend] = field(default_factory=dict)
     derived: list[dict[str, Any]] = field(default_factory=list)
     excluded: list[dict[str, str]] = field(default_factory=list)
+    laws: dict[str, list[str]] = field(default_factory=dict)
+    quantities: dict[str, dict[str, Any]] = field(default_factory=dict)
+    left_out: dict[str, str] = field(default_factory=dict)
+    sigma_scales: dict[str, float] = field(default_factory=dict)
 
     @property
     def converged(self) -> bool:
@@ -136,6 +210,10 @@ class CampaignAnalysis:
             "derived": self.derived,
             "excluded": self.excluded,
             "converged": self.converged,
+            "laws": self.laws,
+            "quantities": self.quantities,
+            "left_out": self.left_out,
+            "sigma_scales": self.sigma_scales,
         }
 
     def group_rows(self) -> list[dict[str, Any]]:
@@ -199,11 +277,16 @@ def _paired_difference(a: np.ndarray, b: np.ndarray, rng: np.random.Generator) -
 
 
 def _derived(contact: Population, zeta0: Population, runs: Sequence[Any], seed: int, prob: float):
-    assert zeta0.pooled is not None
+    """ζ_k and d_k per group (module notes): where ζ is a quantity of both populations
+    and the runs without contact are pooled."""
+    if zeta0.pooled is None or "zeta" not in zeta0.parameters:
+        return []
     rng = np.random.default_rng(seed)
     by_name = {str(r.metadata.get("run_id") or getattr(r, "run_name", None)): r for r in runs}
     out = []
     for g in contact.groups.values():
+        if "zeta" not in g.parameters:
+            continue
         zeta_k = _paired_difference(g.mean["zeta"], zeta0.pooled.mean["zeta"], rng)
         row: dict[str, Any] = {"group": g.label, "zeta_k": summarize(zeta_k, prob)}
         md = by_name[g.runs[0]].metadata if g.runs[0] in by_name else {}
@@ -263,9 +346,55 @@ def _cost(n_runs: int, n_parameters: int, n_coefficients: int) -> float:
     return float(n_runs * n_parameters * n_coefficients)
 
 
-def _trend_job(members: list[RunSamples], covariate: str, kw: dict[str, Any]) -> Trend:
+def _trend_job(
+    members: list[RunSamples], covariate: str, kw: dict[str, Any], names: tuple[str, ...]
+) -> Trend:
     """One series' trend (a module-level function, for a process pool)."""
-    return trend(members, covariate, ("zeta", "mu_k"), **kw)
+    return trend(members, covariate, names, **kw)
+
+
+def sigma_scale(name: str, medians: Sequence[float], widths: Sequence[float]) -> float:
+    """The half-Cauchy scale of a quantity's between-run σ prior.
+
+    ζ and μ_k keep the package's default, 0.01 (:mod:`bayestribo.population.hyperpriors`:
+    about half the paper's values). Any other quantity takes half the median over its
+    runs of |posterior median|, the same proportion; where that is zero (every run at
+    zero), the median width of the runs' intervals, so that the spread the runs can
+    tell apart sits in the prior's flat part.
+
+    Parameters
+    ----------
+    name : str
+        The quantity.
+    medians, widths : sequence of float
+        Each run's posterior median and credible-interval width, in its unit.
+    """
+    from bayestribo.population.hyperpriors import DEFAULT_SIGMA_SCALES
+
+    if name in DEFAULT_SIGMA_SCALES:
+        return float(DEFAULT_SIGMA_SCALES[name])
+    typical = 0.5 * float(np.median(np.abs(np.asarray(medians, dtype=float))))
+    if typical > 0 and math.isfinite(typical):
+        return typical
+    width = float(np.median(np.asarray(widths, dtype=float)))
+    return width if width > 0 and math.isfinite(width) else 1.0
+
+
+def _common(runs: Sequence[Any], drag_only: bool = False) -> tuple[str, ...]:
+    """The quantities every one of ``runs`` keeps, in the first run's order (the drag
+    terms' only, for runs without contact)."""
+    first = _quantities(runs[0])
+    names = [
+        n
+        for n, q in first.items()
+        if all(n in _quantities(r) for r in runs)
+        and not (drag_only and _is_friction(str(q.get("term") or _term_of(n))))
+    ]
+    return tuple(names)
+
+
+def _term_of(name: str) -> str:
+    return str((_paper_quantity(name) or {}).get("term", ""))
 
 
 def _name(result: Any) -> str:
@@ -307,13 +436,20 @@ def analyse_campaign(
     progress: Callable[[str], None] | None = None,
     executor: Executor | None = None,
 ) -> CampaignAnalysis:
-    """Populations, ζ₀, ζ_k, d_k and load trends of a campaign's fits.
+    """Populations, ζ₀, ζ_k, d_k and load trends of a campaign's fits, in any law.
+
+    Each run's quantities are its law's (:mod:`bayestribo.campaign.quantities`: ζ and
+    μ_k in the paper's law, c₂ [kg/m] for quadratic drag, the exponent α of a power
+    law, ...). Runs fitted in different laws are never one population: the law is
+    then the first grouping key. ζ₀, ζ_k and d_k are the paper's (module notes), made
+    where ζ is a quantity of the runs with and without contact.
 
     Parameters
     ----------
     results : sequence of fit results
-        One per run (``samples``, ``prior_logpdf``, ``metadata``, ``parameter_names``),
-        or their digests (:func:`bayestribo.campaign.digest.digest_fit`, made with this
+        One per run (``samples``, ``prior_logpdf``, ``metadata``, ``parameter_names``;
+        a :class:`bayestribo.inference.FitResult` also gives its ``law``), or their
+        digests (:func:`bayestribo.campaign.digest.digest_fit`, made with this
         ``prob``, ``max_samples`` and ``seed``), which give the same analysis and keep
         a campaign's memory flat in the number of runs.
     by : sequence of str
@@ -322,11 +458,14 @@ def analyse_campaign(
         Metadata key of the trends (a numeric key, default the load [N]).
     prob : float
         Credible-interval probability of the summaries.
-    seed, max_samples, max_steps, sigma_prior
+    seed, max_samples, max_steps
         As in :func:`bayestribo.population.population`. Single-run posteriors of a
         tribometer record are far narrower than the spread between repeats, so 300
         samples per run carry the population likelihood (the importance-sampling
         effective sample size is checked and warned about if not).
+    sigma_prior : mapping, optional
+        Per quantity, a prior on its between-run σ or a half-Cauchy scale; the others
+        take :func:`sigma_scale`'s.
     progress : callable, optional
         Called with a one-line message before each population or trend is sampled
         (the command line prints it).
@@ -335,7 +474,7 @@ def analyse_campaign(
         campaign's process pool or Dask); the results are those of a serial run.
     """
     say = progress if progress is not None else (lambda message: None)
-    results = list(results)
+    results = [_digest(r, prob, max_samples, seed) for r in results]
     if not results:
         raise BayestriboError("results: no fitted runs to analyse")
     excluded: list[dict[str, str]] = []
@@ -348,7 +487,7 @@ def analyse_campaign(
             excluded.append({"run": _name(r), "reason": reason})
     contact_runs = [r for r in usable if _has_friction(r)]
     free_runs = [r for r in usable if not _has_friction(r)]
-    kw = {"seed": seed, "max_steps": max_steps, "sigma_prior": sigma_prior}
+    kw = {"seed": seed, "max_steps": max_steps}
     keys = tuple(k for k in by if any(r.metadata.get(k) is not None for r in contact_runs))
     complete = []
     for r in contact_runs:
@@ -367,50 +506,97 @@ def analyse_campaign(
     if not contact_runs and not free_runs:
         reasons = "; ".join(f"{e['run']}: {e['reason']}" for e in excluded)
         raise BayestriboError(f"results: no usable fitted run to analyse ({reasons})")
+    laws: dict[str, list[Any]] = {}
+    for r in contact_runs:
+        laws.setdefault(_law(r), []).append(r)
+    free_laws: dict[str, list[Any]] = {}
+    for r in free_runs:
+        free_laws.setdefault(_law(r), []).append(r)
+    described: dict[str, dict[str, Any]] = {}
+    left_out: dict[str, str] = {}
+    for r in contact_runs + free_runs:
+        for n, q in _quantities(r).items():
+            described.setdefault(n, {k: v for k, v in q.items() if k != "name"})
+        left_out.update(getattr(r, "left_out", None) or {})
+    unknown = sorted(set(sigma_prior or {}) - set(described))
+    if unknown:
+        raise BayestriboError(
+            f"sigma_prior: {unknown} not among the quantities compared {sorted(described)}"
+        )
     # Every population, pooled population and trend is an independent posterior: all
     # go on one queue (costliest first), so no worker idles at the end of a phase.
     calls: list[tuple[Callable[..., Any], tuple[Any, ...]]] = []
     costs: list[float] = []
     finish: list[Callable[[list[Any]], None]] = []
-    found: dict[str, Any] = {"contact": None, "zeta0": None, "series": None}
+    found: dict[str, list[Population]] = {"contact": [], "zeta0": [], "series": []}
     trends: dict[str, Trend] = {}
+    scales: dict[str, float] = {}
 
-    def add_population(key: str, runs: list[RunSamples], names: tuple[str, ...], **options):
-        jobs, assemble = population_jobs(runs, names, **options, **kw)
+    def scales_of(runs: Sequence[Any], names: tuple[str, ...]) -> dict[str, float]:
+        out = {}
+        for n in names:
+            rows = [r.summary_at(prob)[n] for r in runs]
+            medians = [row["median"] for row in rows]
+            widths = [row["interval"][1] - row["interval"][0] for row in rows]
+            out[n] = sigma_scale(n, medians, widths)
+        return out
+
+    def options(runs: Sequence[Any], names: tuple[str, ...]) -> dict[str, Any]:
+        own = scales_of(runs, names)
+        for n, v in own.items():
+            scales.setdefault(n, v)
+        given = {n: v for n, v in (sigma_prior or {}).items() if n in names}
+        non_negative = tuple(n for n in names if described.get(n, {}).get("non_negative"))
+        return {"sigma_prior": {**own, **given}, "non_negative": non_negative}
+
+    def add_population(
+        key: str, runs: list[RunSamples], names: tuple[str, ...], extra: dict, **options
+    ):
+        jobs, assemble = population_jobs(runs, names, **options, **extra, **kw)
         start = len(calls)
         calls.extend((fit_group, job) for job in jobs)
         costs.extend(_cost(len(job[2]), len(names), 1) for job in jobs)
 
         def done(results: list[Any]) -> None:
-            found[key] = assemble(results[start : start + len(jobs)])
+            found[key].append(assemble(results[start : start + len(jobs)]))
 
         finish.append(done)
 
-    def add_trend(label: str, members: list[RunSamples], on: str) -> None:
+    def add_trend(label: str, members: list[RunSamples], on: str, names, extra) -> None:
         at = len(calls)
-        calls.append((_trend_job, (members, on, kw)))
-        costs.append(_cost(len(members), 2, 2))
+        calls.append((_trend_job, (members, on, {**kw, **extra}, names)))
+        costs.append(_cost(len(members), len(names), 2))
 
         def done(results: list[Any]) -> None:
             trends[label] = results[at]
 
         finish.append(done)
 
-    if contact_runs:
+    several = len(laws) > 1
+    for law, law_runs in laws.items():
+        names = _common(law_runs)
+        if not names:
+            for r in law_runs:
+                excluded.append({"run": _name(r), "reason": f"law {law}: no quantity to compare"})
+            continue
+        extra = options(law_runs, names)
         samples = [
-            run_samples(r, ("zeta", "mu_k"), max_samples=max_samples, seed=seed)
-            for r in contact_runs
+            _with_law(run_samples(r, names, max_samples=max_samples, seed=seed), law, several)
+            for r in law_runs
         ]
-        series_keys = tuple(k for k in keys if k != covariate)
+        law_keys = (("law",) if several else ()) + keys
+        series_keys = tuple(k for k in law_keys if k != covariate)
         # Pooled over all runs with contact only if nothing but the load tells them
         # apart; otherwise pooled over the loads of each series.
-        say(f"population of {len(samples)} runs with contact, by {', '.join(keys) or 'none'}")
+        words = ", ".join(law_keys) or "none"
+        fitted_in = f" fitted in {law}" if several else ""
+        say(f"population of {len(samples)} runs with contact{fitted_in}, by {words}")
         add_population(
-            "contact", samples, ("zeta", "mu_k"), by=keys or None, pooled=not series_keys
+            "contact", samples, names, extra, by=law_keys or None, pooled=not series_keys
         )
-        if series_keys and covariate in keys:
+        if series_keys and covariate in law_keys:
             say(f"populations pooled over {covariate}, by {', '.join(series_keys)}")
-            add_population("series", samples, ("zeta", "mu_k"), by=series_keys, pooled=False)
+            add_population("series", samples, names, extra, by=series_keys, pooled=False)
         series: dict[tuple[Any, ...], list[RunSamples]] = {}
         for s in samples:
             series.setdefault(tuple(s.metadata.get(k) for k in series_keys), []).append(s)
@@ -420,18 +606,35 @@ def analyse_campaign(
             if len(xs) >= 2 and all(isinstance(x, int | float) for x in xs):
                 label = ",".join(f"{k}={v}" for k, v in zip(series_keys, value, strict=True))
                 labels.append(label or "all")
-                add_trend(label or "all", members, covariate)
+                add_trend(label or "all", members, covariate, names, extra)
         if labels:
             say(f"trends against {covariate}: {', '.join(labels)}")
-        viscosity = _viscosity_series(samples, keys)
+        viscosity = _viscosity_series(samples, law_keys)
         if viscosity:
             say(f"trends against {VISCOSITY_KEY}: {', '.join(lab for lab, _ in viscosity)}")
         for label, members in viscosity:
-            add_trend(label, members, VISCOSITY_KEY)
-    if free_runs:
-        zs = [run_samples(r, ("zeta",), max_samples=max_samples, seed=seed) for r in free_runs]
-        say(f"ζ₀ from {len(zs)} runs without contact")
-        add_population("zeta0", zs, ("zeta",))
+            add_trend(label, members, VISCOSITY_KEY, names, extra)
+    several_free = len(free_laws) > 1
+    for law, law_runs in free_laws.items():
+        names = _common(law_runs, drag_only=True)
+        if not names:
+            for r in law_runs:
+                reason = f"law {law}: no drag term to compare without contact"
+                excluded.append({"run": _name(r), "reason": reason})
+            continue
+        extra = options(law_runs, names)
+        zs = [
+            _with_law(run_samples(r, names, max_samples=max_samples, seed=seed), law, several_free)
+            for r in law_runs
+        ]
+        symbols = ", ".join(str(described.get(n, {}).get("symbol", n)) for n in names)
+        symbols = "ζ₀" if names == ("zeta",) else f"{symbols} without contact"
+        fitted_in = f" fitted in {law}" if several_free else ""
+        say(f"{symbols} from {len(zs)} runs without contact{fitted_in}")
+        if several_free:
+            add_population("zeta0", zs, names, extra, by=("law",), pooled=False)
+        else:
+            add_population("zeta0", zs, names, extra)
     say(f"sampling {len(calls)} population and trend posteriors")
     step = max(1, len(calls) // 10)
 
@@ -442,7 +645,9 @@ def analyse_campaign(
     results_of_calls = run_calls(calls, executor, costs, done=sampled)
     for done in finish:
         done(results_of_calls)
-    contact, zeta0, series_pop = found["contact"], found["zeta0"], found["series"]
+    contact = _merge(found["contact"])
+    zeta0 = _merge(found["zeta0"])
+    series_pop = _merge(found["series"])
     derived = (
         _derived(contact, zeta0, contact_runs, seed, prob)
         if contact is not None and zeta0 is not None and contact.groups
@@ -471,4 +676,31 @@ def analyse_campaign(
         trends=trends,
         derived=derived,
         excluded=excluded,
+        laws={law: [_name(r) for r in runs] for law, runs in {**laws, **free_laws}.items()},
+        quantities=described,
+        left_out=left_out,
+        sigma_scales=scales,
     )
+
+
+def _with_law(samples: RunSamples, law: str, several: bool) -> RunSamples:
+    """A run's samples with its law in the metadata, where the law groups the runs."""
+    if not several:
+        return samples
+    return RunSamples(
+        samples.name, samples.values, samples.log_prior, {**samples.metadata, "law": law}
+    )
+
+
+def _merge(populations: list[Population]) -> Population | None:
+    """One population of the populations of each law (their groups side by side)."""
+    if not populations:
+        return None
+    if len(populations) == 1:
+        return populations[0]
+    groups: dict[Any, Any] = {}
+    parameters: list[str] = []
+    for pop in populations:
+        groups.update(pop.groups)
+        parameters.extend(p for p in pop.parameters if p not in parameters)
+    return Population(populations[0].by, tuple(parameters), groups, None)

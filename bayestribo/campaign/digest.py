@@ -1,13 +1,14 @@
 """What a campaign keeps of a fit: a digest, so that memory does not grow with the runs.
 
-A campaign's analysis needs of each fit its metadata, convergence, the parameters at a
-prior bound, the posterior summaries of ζ and μ_k, and a seeded subset of their draws
-with the log prior density there (the population likelihood uses at most a few hundred
-draws per run). :func:`digest_fit` takes exactly that from a fit result; the campaign
-keeps the digest and lets the fit go (it is on disk, in the catalog). The digest gives
-the same analysis as the fit: its subset is the one
-:func:`~bayestribo.population.samples.run_samples` draws from the fit with the same seed
-and run name, and its summaries are those of all the draws.
+A campaign's analysis needs of each fit its law, metadata, convergence, the parameters
+at a prior bound, the posterior summaries of the quantities it compares across runs
+(:mod:`bayestribo.campaign.quantities`: ζ and μ_k in the paper's law, each law's own
+otherwise), and a seeded subset of their draws with the log prior density there (the
+population likelihood uses at most a few hundred draws per run). :func:`digest_fit`
+takes exactly that from a fit result; the campaign keeps the digest and lets the fit
+go (it is on disk, in the catalog). The digest gives the same analysis as the fit: its
+subset is the one :func:`~bayestribo.population.samples.run_samples` draws from the
+fit with the same seed and run name, and its summaries are those of all the draws.
 """
 
 from __future__ import annotations
@@ -19,13 +20,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from bayestribo.campaign.quantities import campaign_quantities, quantity_draws
 from bayestribo.errors import BayestriboError
-from bayestribo.population.samples import run_samples
+from bayestribo.population.samples import RunSamples, run_samples
 from bayestribo.summary import summarize
 
 __all__ = ["FitDigest", "digest_fit"]
 
-#: The parameters a campaign analyses.
+#: The parameters of the paper's campaign (Rigaud et al. 2010, section 2.5).
 PARAMETERS: tuple[str, ...] = ("zeta", "mu_k")
 
 
@@ -48,11 +50,19 @@ class FitDigest:
     prob : float
         Probability of the summaries' intervals.
     summaries : dict of str to dict
-        Summaries of ζ and μ_k over all the fit's draws (:func:`bayestribo.summary.summarize`).
+        Summaries of the kept quantities over all the fit's draws
+        (:func:`bayestribo.summary.summarize`).
     draws : dict of str to ndarray
-        The seeded subset of draws of ζ and μ_k.
+        The seeded subset of draws of each kept quantity.
     log_prior : dict of str to ndarray
-        Each parameter's log prior density at its subset of draws.
+        Each quantity's log prior density at its subset of draws.
+    law : str or None
+        The fit's dissipation law.
+    quantities : dict of str to dict
+        Each kept quantity's symbol, unit, label, term and sign
+        (:meth:`bayestribo.campaign.quantities.CampaignQuantity.describe`).
+    left_out : dict of str to str
+        Sampled parameters not compared across runs, with why.
     """
 
     run_name: str
@@ -64,6 +74,9 @@ class FitDigest:
     summaries: dict[str, dict[str, Any]]
     draws: dict[str, NDArray[np.float64]] = field(repr=False)
     log_prior: dict[str, NDArray[np.float64]] = field(repr=False)
+    law: str | None = None
+    quantities: dict[str, dict[str, Any]] = field(default_factory=dict)
+    left_out: dict[str, str] = field(default_factory=dict)
 
     def samples(self, name: str) -> NDArray[np.float64]:
         """The subset of draws of ``name``."""
@@ -108,7 +121,7 @@ def digest_fit(
     max_samples: int | None = 300,
     seed: int = 0,
     name: str | None = None,
-    parameters: Sequence[str] = PARAMETERS,
+    parameters: Sequence[str] | None = None,
 ) -> FitDigest:
     """The digest of a fit result that a campaign analysis needs.
 
@@ -125,8 +138,10 @@ def digest_fit(
         (:func:`bayestribo.campaign.analysis.analyse_campaign`).
     name : str, optional
         The run's identity; default its metadata ``run_id``.
-    parameters : sequence of str
-        The parameters kept, those of them the fit has.
+    parameters : sequence of str, optional
+        Parameters kept as sampled, those of them the fit has; default the
+        quantities of the fit's law that a campaign compares
+        (:func:`bayestribo.campaign.quantities.campaign_quantities`).
     """
     if isinstance(result, FitDigest):
         return result
@@ -136,18 +151,33 @@ def digest_fit(
     draws: dict[str, NDArray[np.float64]] = {}
     log_prior: dict[str, NDArray[np.float64]] = {}
     summaries: dict[str, dict[str, Any]] = {}
-    for key in parameters:
-        try:
-            everything = result.samples(key)
-        except (KeyError, ValueError):
-            continue
-        summaries[key] = summarize(everything, prob)
-        try:
-            kept = run_samples(result, (key,), max_samples=max_samples, seed=seed, name=name)
-        except BayestriboError:
-            continue  # no prior of its own: summarised, not kept for a population
-        draws[key] = kept.values[key]
-        log_prior[key] = kept.log_prior
+    described: dict[str, dict[str, Any]] = {}
+    left_out: dict[str, str] = {}
+    if parameters is None:
+        quantities, left_out = campaign_quantities(result)
+        for q in quantities:
+            try:
+                values, density = quantity_draws(result, q)
+            except (KeyError, ValueError):
+                continue  # no prior of its own: not kept for a population
+            summaries[q.name] = summarize(values, prob)
+            kept = _subset(name, q.name, values, density, metadata, max_samples, seed)
+            draws[q.name] = kept.values[q.name]
+            log_prior[q.name] = kept.log_prior
+            described[q.name] = q.describe()
+    else:
+        for key in parameters:
+            try:
+                everything = result.samples(key)
+            except (KeyError, ValueError):
+                continue
+            summaries[key] = summarize(everything, prob)
+            try:
+                kept = run_samples(result, (key,), max_samples=max_samples, seed=seed, name=name)
+            except BayestriboError:
+                continue  # no prior of its own: summarised, not kept for a population
+            draws[key] = kept.values[key]
+            log_prior[key] = kept.log_prior
     return FitDigest(
         run_name=name,
         metadata=metadata,
@@ -158,4 +188,40 @@ def digest_fit(
         summaries=summaries,
         draws=draws,
         log_prior=log_prior,
+        law=str(getattr(result, "law", None) or "") or None,
+        quantities=described,
+        left_out=left_out,
+    )
+
+
+class _Drawn:
+    """A fit-like view of one quantity's draws, for :func:`run_samples`' seeded subset."""
+
+    def __init__(self, key: str, values: NDArray, density: NDArray, metadata: dict) -> None:
+        self._key, self._values, self._density = key, values, density
+        self.metadata = metadata
+
+    def samples(self, name: str) -> NDArray[np.float64]:
+        return self._values
+
+    def prior_logpdf(self, name: str, values: ArrayLike) -> NDArray[np.float64]:
+        return self._density
+
+
+def _subset(
+    name: str,
+    key: str,
+    values: NDArray,
+    density: NDArray,
+    metadata: dict[str, Any],
+    max_samples: int | None,
+    seed: int,
+) -> RunSamples:
+    """The seeded subset :func:`run_samples` draws, of one quantity's draws."""
+    return run_samples(
+        _Drawn(key, values, density, metadata),
+        (key,),
+        max_samples=max_samples,
+        seed=seed,
+        name=name,
     )

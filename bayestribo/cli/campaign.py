@@ -97,7 +97,9 @@ def _write_csv(path: Path, rows: list[dict[str, Any]]) -> None:
 
     text = io.StringIO(newline="")
     if rows:
-        writer = csv.DictWriter(text, fieldnames=list(rows[0]))
+        # every column of every row (runs fitted in several laws have other quantities)
+        fields = list(dict.fromkeys(key for row in rows for key in row))
+        writer = csv.DictWriter(text, fieldnames=fields)
         writer.writeheader()
         writer.writerows(rows)
     write_atomic(path, text.getvalue())
@@ -107,9 +109,10 @@ def _run_rows(runs: list[dict[str, Any]]) -> list[dict[str, Any]]:
     rows = []
     for r in runs:
         row = {k: v for k, v in r.items() if not isinstance(v, dict)}
-        for p in ("zeta", "mu_k"):
-            s = r.get(p, {"median": None, "interval": [None, None]})
-            row[f"{p}_median"], (row[f"{p}_low"], row[f"{p}_high"]) = s["median"], s["interval"]
+        for p, s in r.items():
+            if isinstance(s, dict) and "median" in s:
+                row[f"{p}_median"] = s["median"]
+                row[f"{p}_low"], row[f"{p}_high"] = s["interval"]
         rows.append(row)
     return rows
 
@@ -122,7 +125,6 @@ _KEY_WORDS = {
     "load_N": "{:g} N",
     "kinematic_viscosity_mm2_per_s": "{:g} mm²/s",
 }
-_SYMBOLS = {"zeta": "ζ", "mu_k": "μ_k", "friction_displacement": "x_c"}
 _COVARIATES = {"load_N": ("load", "N"), "kinematic_viscosity_mm2_per_s": ("viscosity", "mm²/s")}
 
 
@@ -149,6 +151,14 @@ def _words(label: Any) -> str:
     return " · ".join(parts)
 
 
+def _symbol(analysis: Any, name: str) -> str:
+    """A quantity as printed: its symbol, with its unit where it has one."""
+    q = getattr(analysis, "quantities", {}).get(name, {})
+    symbol = str(q.get("symbol") or name)
+    unit = str(q.get("unit") or "1")
+    return symbol if unit in ("1", "-") else f"{symbol} [{unit}]"
+
+
 def _interval(median: float, low: float, high: float) -> str:
     # significant digits, not decimals: a ζ of 1e-6 must not print as 0.00000
     return f"{median:.4g} [{low:.4g}, {high:.4g}]"
@@ -161,6 +171,14 @@ def _text(analysis: Any, failures: list[dict[str, str]]) -> str:
         f"Populations of repeats: the mean and σ (the spread between repeats) of each "
         f"group,\nas posterior median [{percent} credible interval]."
     ]
+    laws = getattr(analysis, "laws", {}) or {}
+    if len(laws) > 1:
+        listing = ", ".join(f"{law} ({len(runs)} runs)" for law, runs in laws.items())
+        lines.append(f"Laws fitted: {listing}; runs of different laws are grouped apart.")
+    elif laws and next(iter(laws)) != "viscous+coulomb":
+        lines.append(f"Law fitted: {next(iter(laws))}.")
+    for name, why in (getattr(analysis, "left_out", {}) or {}).items():
+        lines.append(f"Not compared across runs: {name}: {why}.")
     titles = {"pooled over loads": " (pooled over loads)"}
     current = None
     for r in analysis.group_rows():
@@ -174,7 +192,7 @@ def _text(analysis: Any, failures: list[dict[str, str]]) -> str:
             lines.append("")
             lines.append(group)
             current = group
-        symbol = _SYMBOLS.get(r["parameter"], r["parameter"])
+        symbol = _symbol(analysis, r["parameter"])
         mean = _interval(r["mean_median"], r["mean_low"], r["mean_high"])
         sigma = _interval(r["sigma_median"], r["sigma_low"], r["sigma_high"])
         lines.append(f"    {symbol:4s} mean {mean:34s} σ {sigma}")
@@ -195,7 +213,7 @@ def _text(analysis: Any, failures: list[dict[str, str]]) -> str:
             if series != current:
                 lines.append(series)
                 current = series
-            symbol = _SYMBOLS.get(r["parameter"], r["parameter"])
+            symbol = _symbol(analysis, r["parameter"])
             slope = _interval(r["slope_median"], r["slope_low"], r["slope_high"])
             lines.append(f"    {symbol:4s} {slope:40s} P(slope > 0) = {r['prob_positive']:.3f}")
     unconverged = [r["run_id"] for r in analysis.runs if not r.get("converged", True)]

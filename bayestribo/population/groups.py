@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import itertools
 import zlib
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from concurrent.futures import Executor
 from dataclasses import dataclass, field
 from typing import Any
@@ -262,7 +262,7 @@ def fit_group(
     seed : int
         Campaign seed.
     sampler_kwargs : mapping
-        ``n_walkers``, ``max_steps``, ``progress`` of
+        ``n_walkers``, ``max_steps``, ``progress``, ``non_negative`` of
         :func:`bayestribo.population.sampler.sample_hyperparameters`.
     """
     like = MarginalLikelihood(runs, parameters)
@@ -296,11 +296,12 @@ def population(
     sigma_prior: Mapping[str, SigmaPrior | float] | None = None,
     seed: int = 0,
     max_samples: int | None = 1000,
-    n_walkers: int = 16,
+    n_walkers: int | None = None,
     max_steps: int = 10_000,
     prob: float = 0.95,
     progress: bool = False,
     executor: Executor | None = None,
+    non_negative: Collection[str] | None = None,
 ) -> Population:
     """Infer the population of repeats from per-run posterior samples.
 
@@ -325,7 +326,8 @@ def population(
     max_samples : int, optional
         Per-run samples kept (a seeded random subset).
     n_walkers, max_steps : int
-        Walkers per ensemble and step ceiling of each group's sampler
+        Walkers per ensemble (None: 16, or twice the hyperparameters where that is
+        more) and step ceiling of each group's sampler
         (:func:`bayestribo.population.sampler.sample_hyperparameters`).
     prob : float
         Only checked here; intervals are chosen when summarising.
@@ -335,6 +337,9 @@ def population(
         Sample the groups on it, side by side (a process pool, a Dask client's
         executor); each group's seed follows from its label, so the result is the same
         as in series. Warnings of the groups are given again here.
+    non_negative : collection of str, optional
+        Parameters whose population mean cannot be negative; default
+        :data:`bayestribo.population.sampler.NON_NEGATIVE`.
 
     Returns
     -------
@@ -357,6 +362,7 @@ def population(
         max_steps=max_steps,
         prob=prob,
         progress=progress,
+        non_negative=non_negative,
     )
     return assemble(run_jobs(fit_group, jobs, executor))
 
@@ -370,10 +376,11 @@ def population_jobs(
     sigma_prior: Mapping[str, SigmaPrior | float] | None = None,
     seed: int = 0,
     max_samples: int | None = 1000,
-    n_walkers: int = 16,
+    n_walkers: int | None = None,
     max_steps: int = 10_000,
     prob: float = 0.95,
     progress: bool = False,
+    non_negative: Collection[str] | None = None,
 ) -> tuple[list[tuple[Any, ...]], Callable[[Sequence[GroupPosterior]], Population]]:
     """The independent samplers of :func:`population`, to run on a shared queue.
 
@@ -390,7 +397,12 @@ def population_jobs(
         raise BayestriboError("by, pooled: nothing to infer (no grouping key and pooled=False)")
     samples = as_run_samples(runs, parameters, max_samples=max_samples, seed=seed)
     priors = sigma_priors(parameters, sigma_prior)
-    kwargs = {"n_walkers": n_walkers, "max_steps": max_steps, "progress": progress}
+    kwargs = {
+        "n_walkers": n_walkers,
+        "max_steps": max_steps,
+        "progress": progress,
+        "non_negative": None if non_negative is None else tuple(sorted(non_negative)),
+    }
     jobs: list[tuple[Any, ...]] = []
     if by is not None:
         keys = (by,) if isinstance(by, str) else tuple(by)

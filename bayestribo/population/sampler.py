@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -82,10 +82,11 @@ def sample_hyperparameters(
     priors: Sequence[SigmaPrior],
     *,
     seed: int,
-    n_walkers: int = 16,
+    n_walkers: int | None = 16,
     n_ensembles: int = 2,
     max_steps: int = 10_000,
     progress: bool = False,
+    non_negative: Collection[str] | None = None,
 ) -> HyperSamples:
     """Sample p(β, σ | data) ∝ p(data | β, σ) Π_k p(σ_k) to convergence.
 
@@ -98,13 +99,17 @@ def sample_hyperparameters(
     seed : int
         Seed of the walkers' start and of the sampler.
     n_walkers, n_ensembles : int
-        Walkers per ensemble (at least twice the number of hyperparameters) and
-        independent ensembles.
+        Walkers per ensemble (at least twice the number of hyperparameters; None: 16,
+        or twice the number of hyperparameters where that is more) and independent
+        ensembles.
     max_steps : int
         Ceiling on the steps per ensemble; sampling stops earlier once converged
         (:func:`bayestribo.inference.sampling.run_ensembles`).
     progress : bool
         Show a progress bar.
+    non_negative : collection of str, optional
+        Parameters whose population mean (the intercept at the covariates' centre) is
+        bounded below by zero; default :data:`NON_NEGATIVE`.
 
     Raises
     ------
@@ -124,10 +129,13 @@ def sample_hyperparameters(
     if len(priors) != k:
         raise BayestriboError(f"priors: expected {k} σ priors, got {len(priors)}")
     ndim = p * k + k
+    if n_walkers is None:
+        n_walkers = max(16, 2 * ndim)
     if not (isinstance(n_walkers, int) and n_walkers >= 2 * ndim):
         raise BayestriboError(f"n_walkers: expected an integer >= {2 * ndim}, got {n_walkers!r}")
     settings = SamplerSettings(n_walkers=n_walkers, n_ensembles=n_ensembles, max_steps=max_steps)
-    bounded = [j for j, name in enumerate(like.parameters) if name in NON_NEGATIVE]
+    positive = NON_NEGATIVE if non_negative is None else frozenset(non_negative)
+    bounded = [j for j, name in enumerate(like.parameters) if name in positive]
 
     def inside(beta: NDArray[np.float64], log_sigma: NDArray[np.float64]) -> NDArray[np.float64]:
         lp = log_sigma.sum(axis=1)  # Jacobian of σ = exp(log σ)

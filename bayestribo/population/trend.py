@@ -19,7 +19,7 @@ of the runs for sampling; the reported intercept is at x = 0.
 from __future__ import annotations
 
 import zlib
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -142,9 +142,10 @@ def trend(
     sigma_prior: Mapping[str, SigmaPrior | float] | None = None,
     seed: int = 0,
     max_samples: int | None = 1000,
-    n_walkers: int = 16,
+    n_walkers: int | None = None,
     max_steps: int = 10_000,
     progress: bool = False,
+    non_negative: Collection[str] | None = None,
 ) -> Trend:
     """Infer the linear trend of the population of runs against a numeric covariate.
 
@@ -158,7 +159,7 @@ def trend(
         Parameters modelled jointly.
     rope : mapping, optional
         Per parameter, the half-width of a region of practical equivalence of the slope.
-    sigma_prior, seed, max_samples, n_walkers, max_steps, progress
+    sigma_prior, seed, max_samples, n_walkers, max_steps, progress, non_negative
         As in :func:`bayestribo.population.population`.
 
     Raises
@@ -202,6 +203,7 @@ def trend(
         n_walkers=n_walkers,
         max_steps=max_steps,
         progress=progress,
+        non_negative=non_negative,
     )
     slope = {p: hyper.beta[:, 1, j] for j, p in enumerate(parameters)}
     intercept = {p: hyper.beta[:, 0, j] - slope[p] * center for j, p in enumerate(parameters)}
