@@ -156,6 +156,9 @@ def test_progress_names_each_population_and_trend_before_sampling_it():
     assert messages[queued] == f"sampling {total} population and trend posteriors"
     assert messages[-1] == f"sampled {total} of {total} posteriors"
     assert got.excluded == [] and all(r["status"] == "used" for r in got.runs)
+    # every run, with and without contact, under the one law they were fitted in
+    assert list(got.laws) == ["viscous+coulomb"]
+    assert sorted(got.laws["viscous+coulomb"]) == sorted(r["run_id"] for r in got.runs)
 
 
 def test_a_run_without_a_grouping_key_is_excluded_with_the_reason():

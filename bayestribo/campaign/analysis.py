@@ -676,11 +676,19 @@ def analyse_campaign(
         trends=trends,
         derived=derived,
         excluded=excluded,
-        laws={law: [_name(r) for r in runs] for law, runs in {**laws, **free_laws}.items()},
+        laws=_runs_by_law(contact_runs + free_runs),
         quantities=described,
         left_out=left_out,
         sigma_scales=scales,
     )
+
+
+def _runs_by_law(runs: Sequence[Any]) -> dict[str, list[str]]:
+    """Each law, with the runs fitted in it (with contact first, in the runs' order)."""
+    out: dict[str, list[str]] = {}
+    for r in runs:
+        out.setdefault(_law(r), []).append(_name(r))
+    return out
 
 
 def _with_law(samples: RunSamples, law: str, several: bool) -> RunSamples:
