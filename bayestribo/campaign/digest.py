@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from bayestribo.campaign.laws import comparison_digest
 from bayestribo.campaign.quantities import campaign_quantities, quantity_draws
 from bayestribo.errors import BayestriboError
 from bayestribo.population.samples import RunSamples, run_samples
@@ -63,6 +64,9 @@ class FitDigest:
         (:meth:`bayestribo.campaign.quantities.CampaignQuantity.describe`).
     left_out : dict of str to str
         Sampled parameters not compared across runs, with why.
+    comparison : dict or None
+        What the choice of a group's law needs of the fit's law comparison (a fit with
+        ``law="auto"``; :func:`bayestribo.campaign.laws.comparison_digest`).
     """
 
     run_name: str
@@ -77,6 +81,7 @@ class FitDigest:
     law: str | None = None
     quantities: dict[str, dict[str, Any]] = field(default_factory=dict)
     left_out: dict[str, str] = field(default_factory=dict)
+    comparison: dict[str, Any] | None = None
 
     def samples(self, name: str) -> NDArray[np.float64]:
         """The subset of draws of ``name``."""
@@ -191,6 +196,7 @@ def digest_fit(
         law=str(getattr(result, "law", None) or "") or None,
         quantities=described,
         left_out=left_out,
+        comparison=comparison_digest(getattr(result, "law_comparison", None)),
     )
 
 

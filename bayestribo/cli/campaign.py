@@ -5,13 +5,17 @@ Examples::
     bayestribo campaign data/ --out results/
     bayestribo campaign data/runs --by load_N --json
     bayestribo campaign data/ --dask-scheduler tcp://10.0.0.5:8786
-    bayestribo campaign data/ --compare-laws
+    bayestribo campaign data/ --law viscous+quadratic
+    bayestribo campaign data/ --law auto        # or --compare-laws
 
 Fits each run (skipping runs the catalog holds a fit of, with the same data and
-settings), writes each run's NetCDF, the populations per group with the between-run σ,
-ζ₀ from the runs without contact, ζ_k and d_k, the load trends (JSON and CSV tables)
-and figures; with ``--compare-laws``, which dissipation law each run supports
-(``laws.csv``).
+settings), writes each run's NetCDF, the populations per group with the between-run σ
+of the law's quantities (ζ and μ_k in the paper's law), ζ₀ from the runs without
+contact, ζ_k and d_k, the load trends (JSON and CSV tables) and figures. With
+``--law auto`` (or ``--compare-laws``) every run compares the laws, each group of
+repeats takes one law chosen from all its runs (:mod:`bayestribo.campaign.laws`), the
+runs whose own verdict differs are named and fitted again in their group's law, and
+``laws.csv`` lists each run's verdict and its group's law.
 """
 
 from __future__ import annotations
@@ -83,7 +87,8 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "--compare-laws",
         action="store_true",
-        help="also compare viscous, Coulomb and both per run by PSIS-LOO (three fits a run)",
+        help="choose one law per group of repeats from the runs' law comparisons "
+        "(the same as --law auto; laws.csv)",
     )
     p.add_argument("--no-figures", action="store_true", help="skip the figures")
     add_reading_options(p)
@@ -164,12 +169,34 @@ def _interval(median: float, low: float, high: float) -> str:
     return f"{median:.4g} [{low:.4g}, {high:.4g}]"
 
 
-def _text(analysis: Any, failures: list[dict[str, str]]) -> str:
+def _law_lines(groups: dict[str, Any] | None) -> list[str]:
+    """The law of each group of repeats, and the runs whose own verdict differs."""
+    if not groups:
+        return []
+    lines = ["Law of each group of repeats (chosen from all its runs' law comparisons):"]
+    for label, g in groups.items():
+        law = g["law"] or "none"
+        how = "" if g["decided"] else " (most runs' verdict: no law compared in every run)"
+        holds = "" if g["adequate"] else "; it misfits some runs: see each run's fit"
+        lines.append(f"    {_words(label)}: {law}{how}{holds}")
+        for run in g["disagree"]:
+            lines.append(
+                f"        {run} alone chose {g['verdicts'].get(run) or 'no law'}; "
+                f"fitted again in {law}"
+            )
+    lines.append("")
+    return lines
+
+
+def _text(
+    analysis: Any, failures: list[dict[str, str]], groups: dict[str, Any] | None = None
+) -> str:
     """The campaign's answer on the terminal, in at most 100 columns."""
     percent = f"{100 * analysis.prob:g} %"
     lines = [
+        *_law_lines(groups),
         f"Populations of repeats: the mean and σ (the spread between repeats) of each "
-        f"group,\nas posterior median [{percent} credible interval]."
+        f"group,\nas posterior median [{percent} credible interval].",
     ]
     laws = getattr(analysis, "laws", {}) or {}
     if len(laws) > 1:
@@ -234,37 +261,72 @@ def _text(analysis: Any, failures: list[dict[str, str]]) -> str:
     return "\n".join(lines)
 
 
-def _compare_laws(
-    paths: list[Path], executor: Any, args: argparse.Namespace, fit_kwargs: dict[str, Any]
-) -> list[dict[str, Any]]:
-    from bayestribo.campaign.fitting import fit_many, run_identities
-    from bayestribo.inference.comparison import compare_dissipation_laws
+def _group_laws(
+    args: argparse.Namespace,
+    paths: list[Path],
+    outcomes: list[Any],
+    catalog: Path,
+    out: Path,
+    folder: Path,
+    fit_kwargs: dict[str, Any],
+    executor: Any,
+    keep: Any,
+) -> tuple[list[Any], dict[str, Any]]:
+    """One law per group of repeats (``--law auto``): choose it from the runs' law
+    comparisons, fit again in it the runs whose own verdict differs, and return the
+    outcomes to analyse with the groups' choices."""
+    from bayestribo.campaign.fitting import fit_catalogued
+    from bayestribo.campaign.laws import group_laws
 
-    outcomes = fit_many(
-        paths,
-        executor,
-        campaign_seed=args.seed,
-        function=compare_dissipation_laws,
-        max_workers=args.workers,
-        progress=not args.quiet,
-        names=run_identities(paths, args.dir),
-        **fit_kwargs,
-    )
-    return [
-        {"run": o.name, **o.result.to_dict()} if o.ok else {"run": o.name, "error": o.error}
-        for o in outcomes
-    ]
+    by = tuple(k for k in args.by.split(",") if k)
+    fitted = [o.result for o in outcomes if o.ok]
+    groups, law_of_run = group_laws(fitted, by)
+    index = {o.name: i for i, o in enumerate(outcomes)}
+    again: dict[str, list[int]] = {}
+    for o in outcomes:
+        if o.ok and law_of_run.get(o.name) and law_of_run[o.name] != (o.result.law or ""):
+            again.setdefault(law_of_run[o.name], []).append(index[o.name])
+    outcomes = list(outcomes)
+    for law, rows in again.items():
+        if not args.quiet:
+            names = ", ".join(outcomes[i].name for i in rows)
+            print(f"bayestribo campaign: fitting again in {law}: {names}", file=sys.stderr)
+        refits = fit_catalogued(
+            [paths[i] for i in rows],
+            catalog,
+            out / "fits" / "group-law" / law,
+            executor,
+            campaign_seed=args.seed,
+            refit=args.refit,
+            max_workers=args.workers,
+            progress=not args.quiet,
+            root=folder,
+            keep=keep,
+            **{**fit_kwargs, "law": law},
+        )
+        for i, refit in zip(rows, refits, strict=True):
+            outcomes[i] = refit
+    return outcomes, {label: g.to_dict() for label, g in groups.items()}
 
 
-def _law_row(entry: dict[str, Any]) -> dict[str, Any]:
-    row: dict[str, Any] = {"run": entry["run"], "verdict": entry.get("verdict")}
-    row["best"] = entry.get("best")
-    for law in ("viscous", "coulomb", "both"):
-        stats = entry.get("table", {}).get(law, {})
-        row[f"{law}_elpd_loo"] = stats.get("elpd_loo")
-        row[f"{law}_elpd_diff"] = stats.get("elpd_diff")
-    row["error"] = entry.get("error")
-    return row
+def _law_rows(groups: dict[str, Any]) -> list[dict[str, Any]]:
+    """laws.csv: each run's own verdict and its group's law."""
+    rows = []
+    for label, g in groups.items():
+        for run in g["runs"]:
+            rows.append(
+                {
+                    "run": run,
+                    "group": label,
+                    "verdict": g["verdicts"].get(run),
+                    "group_law": g["law"],
+                    "agrees": g["verdicts"].get(run) == g["law"],
+                    "group_best": g["best"],
+                    "group_law_holds": g["adequate"],
+                    "decided": g["decided"],
+                }
+            )
+    return rows
 
 
 def run_files(
@@ -335,6 +397,14 @@ def _run_locked(args: argparse.Namespace, folder: Path, paths: list[Path], out: 
         )
         if value is not None
     }
+    if args.compare_laws:
+        if fit_kwargs.get("law") not in (None, "auto"):
+            raise BayestriboError(
+                f"--compare-laws chooses the law of each group (it is --law auto); "
+                f"it cannot be given with --law {fit_kwargs['law']}"
+            )
+        fit_kwargs["law"] = "auto"
+    keep = functools.partial(digest_fit, prob=args.prob, seed=args.seed)
     read_options = reading_kwargs(args)
     if read_options:
         # The same reading options for every run file (recorded with the fits).
@@ -352,10 +422,14 @@ def _run_locked(args: argparse.Namespace, folder: Path, paths: list[Path], out: 
             progress=not args.quiet,
             root=folder,
             # the analysis needs a digest of each fit; the fits stay on disk
-            keep=functools.partial(digest_fit, prob=args.prob, seed=args.seed),
+            keep=keep,
             **fit_kwargs,
         )
-        laws = _compare_laws(paths, executor, args, fit_kwargs) if args.compare_laws else None
+        laws = None
+        if fit_kwargs.get("law") == "auto":
+            outcomes, laws = _group_laws(
+                args, paths, outcomes, catalog, out, folder, fit_kwargs, executor, keep
+            )
     failures = [{"run": o.name, "error": str(o.error)} for o in outcomes if not o.ok]
     fitted = [o.result for o in outcomes if o.ok]
     if not fitted:
@@ -394,8 +468,8 @@ def _run_locked(args: argparse.Namespace, folder: Path, paths: list[Path], out: 
         },
     }
     if laws is not None:
-        report["laws"] = laws
-        _write_csv(out / "laws.csv", [_law_row(r) for r in laws])
+        report["group_laws"] = laws
+        _write_csv(out / "laws.csv", _law_rows(laws))
     write_atomic(out / "population.json", json.dumps(report, indent=2, default=str) + "\n")
     _write_csv(out / "groups.csv", analysis.group_rows())
     _write_csv(out / "trends.csv", analysis.trend_rows())
@@ -409,7 +483,7 @@ def _run_locked(args: argparse.Namespace, folder: Path, paths: list[Path], out: 
         json.dump(report, sys.stdout, indent=2, default=str)
         sys.stdout.write("\n")
     else:
-        print(_text(analysis, failures))
+        print(_text(analysis, failures, laws))
     # The exit status rule of every command (README): 0 all good, 1 something
     # unconverged, failed or excluded, 2 nothing usable (raised above).
     clean = not failures and not analysis.excluded and analysis.converged
