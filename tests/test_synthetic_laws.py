@@ -7,6 +7,7 @@ import json
 import math
 import re
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 
 import numba
@@ -50,18 +51,27 @@ def _simulate(path: Path, law: str, *extra: str, seed: int = 1) -> dict:
 
 
 @pytest.fixture(scope="module")
-def simulated(tmp_path_factory: pytest.TempPathFactory) -> dict[str, tuple[Path, dict]]:
+def simulated(
+    tmp_path_factory: pytest.TempPathFactory,
+) -> Callable[[str], tuple[Path, dict]]:
+    """``simulated(law)``: the file of a law of :data:`CASES` and its sidecar, each
+    simulated once, by the command line, when first asked for."""
     folder = tmp_path_factory.mktemp("laws")
-    out = {}
-    for law, (first, second, _) in CASES.items():
-        path = folder / f"{law.replace('+', '_')}.csv"
-        out[law] = (path, _simulate(path, law, *first, *second))
-    return out
+    made: dict[str, tuple[Path, dict]] = {}
+
+    def get(law: str) -> tuple[Path, dict]:
+        if law not in made:
+            first, second, _ = CASES[law]
+            path = folder / f"{law.replace('+', '_')}.csv"
+            made[law] = (path, _simulate(path, law, *first, *second))
+        return made[law]
+
+    return get
 
 
 @pytest.mark.parametrize("law", list(CASES))
 def test_a_fit_of_the_simulated_file_recovers_the_truth(law: str, simulated) -> None:
-    path, sidecar = simulated[law]
+    path, sidecar = simulated(law)
     truth = sidecar["simulation"]
     values = {name: p["value"] for name, p in truth["parameters"].items()}
     values.update({name: p["value"] for name, p in truth["physical"].items()})
@@ -79,7 +89,7 @@ def test_a_fit_of_the_simulated_file_recovers_the_truth(law: str, simulated) -> 
 def test_the_sidecar_says_which_solver_made_the_motion_and_the_law_with_units(
     simulated,
 ) -> None:
-    path, sidecar = simulated["coulomb+power"]
+    path, sidecar = simulated("coulomb+power")
     truth = sidecar["simulation"]
     assert truth["law"] == "coulomb+power"
     assert truth["solver"].startswith("scipy.integrate.solve_ivp")

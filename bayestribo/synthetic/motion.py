@@ -156,10 +156,14 @@ class LawMotion:
         t = np.asarray(tau, dtype=float)
         y = np.full(t.shape, self.y0)
         yp = np.zeros(t.shape)
-        for arc in self.arcs:
-            sel = (t >= arc.start) & (t < arc.end)
-            if sel.any():
-                y[sel], yp[sel] = arc.solution(t[sel])
+        flat = t.ravel()
+        order = np.argsort(flat, kind="stable")
+        ordered = flat[order]
+        for arc in self.arcs:  # each arc's samples by bisection: O(n log n) in all
+            lo, hi = np.searchsorted(ordered, [arc.start, arc.end], side="left")
+            if hi > lo:
+                sel = np.unravel_index(order[lo:hi], t.shape)
+                y[sel], yp[sel] = arc.solution(ordered[lo:hi])
         end = self.turning_times[-1]
         if self.stopped:
             y[t >= end] = self.turning_points[-1]
@@ -220,7 +224,7 @@ def integrate_law(
     reference: float | None = None,
     tau_fade: float = 0.0,
     tau_limit: float = math.inf,
-    max_half_cycles: int = 100_000,
+    max_half_cycles: int = 20_000,
 ) -> LawMotion:
     """Integrate the motion of ``law`` from rest at ``y0`` (see the module notes).
 
@@ -337,6 +341,6 @@ def integrate_law(
         if len(arcs) >= max_half_cycles:
             raise ValueError(
                 f"law {forces.name}: the motion does not stop within {max_half_cycles} half "
-                "cycles: give the duration to record after the release"
+                "cycles: give the duration to record after the release (motion_duration_s)"
             )
     return LawMotion(y0, tau_break, np.array(times), np.array(points), tau_stop, tuple(arcs))
