@@ -107,9 +107,17 @@ def test_the_sidecar_says_which_solver_made_the_motion_and_the_law_with_units(
     assert run.metadata["simulation"] == truth
 
 
-def test_a_default_parameter_takes_its_typical_value() -> None:
+def test_a_default_parameter_takes_its_typical_value(capsys: pytest.CaptureFixture) -> None:
     law = LawParameters("viscous+coulomb", {"zeta": 0.01})
     assert dict(law.values) == {"zeta": 0.01, "mu_k": 0.0294, "mu_s_ratio": 1.0}
+    # which the registry's listing shows (None: none is typical, it must be given)
+    assert main(["laws", "--json"]) == 0
+    typical = {
+        p["name"]: p["typical"]
+        for term in json.loads(capsys.readouterr().out)
+        for p in term["parameters"]
+    }
+    assert typical["zeta"] == 0.0236 and typical["c2"] is None
 
 
 @pytest.mark.parametrize(

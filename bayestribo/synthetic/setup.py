@@ -95,7 +95,7 @@ def _describe(parameter: Any) -> str:
 
 
 #: What the registry's units of a dimensionless parameter mean.
-_UNITS_NOTE = "units: '-' none, 'y' one ℓ = N/k, '1/y' per ℓ, '1/y²' per ℓ²"
+_UNITS_NOTE = "units: '-' none, 'y' one ℓ = N/k (1 m without contact), '1/y' per ℓ, '1/y²' per ℓ²"
 
 
 @dataclass(frozen=True)
