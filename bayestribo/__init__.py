@@ -56,6 +56,7 @@ _LAZY: dict[str, str] = {
     "write_run": "bayestribo.io",
     "simulate": "bayestribo.synthetic.recording",
     "DissipationLaw": "bayestribo.synthetic.setup",
+    "LawParameters": "bayestribo.synthetic.setup",
     "Release": "bayestribo.synthetic.setup",
     "Sensor": "bayestribo.synthetic.setup",
     "fit_many": "bayestribo.campaign.fitting",

@@ -44,7 +44,8 @@ def add_law_option(parser: argparse.ArgumentParser) -> None:
 
 
 def law_table() -> list[dict[str, Any]]:
-    """Every registered term with its kind, description and parameters."""
+    """Every registered term with its kind, description and parameters (with the
+    typical value ``bayestribo simulate`` takes where one is not given, or None)."""
     from bayestribo.model.laws import TERMS
 
     return [
@@ -59,6 +60,7 @@ def law_table() -> list[dict[str, Any]]:
                     "unit": p.unit,
                     "support": [p.low, p.high],
                     "label": p.label,
+                    "typical": p.typical,
                 }
                 for p in term.parameters
             ],
@@ -92,9 +94,14 @@ def run(args: argparse.Namespace) -> int:
         print(f"{entry['term']:<12} ({entry['kind']}) {entry['description']}")
         for p in entry["parameters"]:
             low, high = p["support"]
+            typical = "" if p["typical"] is None else f" (typical {p['typical']:g})"
             print(
                 f"    {p['name']:<12} {p['symbol']:<8} [{low:g}, {high:g}] {p['unit']:<4} "
-                f"{p['label']}"
+                f"{p['label']}{typical}"
             )
     print("A law is terms joined with '+', e.g. --law viscous+quadratic+coulomb.")
+    print(
+        "Simulate one: bayestribo simulate OUT.csv --law NAME --param NAME=VALUE ... "
+        "(a parameter not given takes its typical value)."
+    )
     return 0

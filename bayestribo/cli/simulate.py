@@ -3,7 +3,15 @@
 Examples::
 
     bayestribo simulate run.csv --load 0.31 --zeta 0.0236 --mu-k 0.0294 --seed 1
+    bayestribo simulate run.csv --law viscous+quadratic --param zeta=0.01 --param c2=0.005 \
+        --motion-duration 3 --seed 1
     bayestribo simulate --campaign data/      # regenerates the bundled campaign
+
+Without ``--law`` the law is viscous damping and Coulomb friction (``--zeta``,
+``--mu-k``, ``--mu-s``) on the exact solution. With ``--law NAME`` it is any law of the
+registry (``bayestribo laws``: its parameters, in the registry's dimensionless units,
+are given as ``--param NAME=VALUE``), and the motion is integrated by ``solve_ivp``
+(:mod:`bayestribo.synthetic.motion`), independently of the fit's integrator.
 """
 
 from __future__ import annotations
@@ -29,9 +37,10 @@ def register(subparsers: Any) -> None:
         description=(
             "Simulate one recording of the dynamic tribometer on the exact model (rest, "
             "magnet release, decay with viscous damping and Coulomb friction, rest tail, "
-            "sensor noise) and write it in the canonical format; or, with --campaign, "
-            "regenerate the whole synthetic campaign (runs and manifest.csv) with a fixed "
-            "seed."
+            "sensor noise) and write it in the canonical format; with --law, of any "
+            "registered dissipation law, its motion integrated by solve_ivp (not the fit's "
+            "integrator); or, with --campaign, regenerate the whole synthetic campaign "
+            "(runs and manifest.csv) with a fixed seed."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
@@ -39,7 +48,20 @@ def register(subparsers: Any) -> None:
     p.add_argument("--campaign", metavar="DIR", help="write the whole campaign into DIR")
     p.add_argument("--seed", type=int, help="noise seed (campaign: campaign seed)")
     p.add_argument("--load", type=float, default=0.31, help="normal load N [N] (0: no contact)")
-    p.add_argument("--zeta", type=float, default=0.0236, help="viscous damping ζ [-]")
+    p.add_argument(
+        "--law",
+        metavar="NAME",
+        help="any registered law, terms joined with '+' ('bayestribo laws' lists them), its "
+        "motion by solve_ivp; default: --zeta, --mu-k, --mu-s on the exact solution",
+    )
+    p.add_argument(
+        "--param",
+        action="append",
+        metavar="NAME=VALUE",
+        help="a parameter of --law in the registry's units ('bayestribo laws'), repeated; "
+        "one not given takes its typical value where it has one",
+    )
+    p.add_argument("--zeta", type=float, help="viscous damping ζ [-] (default 0.0236)")
     p.add_argument("--mu-k", type=float, help="kinetic friction μ_k [-] (default 0.0294, 0 in air)")
     p.add_argument("--mu-s", type=float, help="static friction μ_s [-] (default μ_k)")
     p.add_argument("--mass", type=float, default=0.035, help="mass m [kg]")
@@ -73,12 +95,13 @@ def run(args: argparse.Namespace) -> int:
         return 0
 
     from bayestribo.io import write_run
-    from bayestribo.synthetic import DissipationLaw, Release, Sensor
+    from bayestribo.synthetic import Release, Sensor
     from bayestribo.synthetic.recording import simulate
 
+    law = _law(args)
     try:
         sim = simulate(
-            DissipationLaw(zeta=args.zeta, mu_k=args.mu_k, mu_s=args.mu_s),
+            law,
             rig=Rig(natural_frequency_Hz=args.frequency, mass_kg=args.mass, load_N=args.load),
             release=Release(
                 initial_displacement_m=args.x0,
@@ -102,6 +125,74 @@ def run(args: argparse.Namespace) -> int:
             raise
         raise SimulationArgumentError(str(exc)) from None
     path = write_run(sim, args.output)
-    motion = sim.metadata["simulation"]["motion_duration_s"]
-    print(f"wrote {path} ({sim.n_samples} samples, {motion:.3f} s of motion)")
+    truth = sim.metadata["simulation"]
+    motion = truth["motion_duration_s"]
+    if "law" not in truth:
+        print(f"wrote {path} ({sim.n_samples} samples, {motion:.3f} s of motion)")
+        return 0
+    values = ", ".join(
+        f"{name} = {p['value']:g} [{p['unit']}]" for name, p in truth["parameters"].items()
+    )
+    print(
+        f"wrote {path} ({sim.n_samples} samples, {motion:.3f} s of motion): law "
+        f"{truth['law']}, {values}; motion by solve_ivp (not the fit's integrator)"
+    )
     return 0
+
+
+def _law(args: argparse.Namespace) -> Any:
+    """The law to simulate: ``--zeta/--mu-k/--mu-s`` without ``--law``, else the
+    registered law with its ``--param`` values (a SimulationArgumentError naming the
+    argument otherwise)."""
+    from bayestribo.synthetic import DissipationLaw, LawParameters
+
+    if args.law is None:
+        if args.param:
+            raise SimulationArgumentError(
+                f"--param {args.param[0]}: a parameter of a law; give the law with --law NAME"
+            )
+        zeta = 0.0236 if args.zeta is None else args.zeta
+        try:
+            return DissipationLaw(zeta=zeta, mu_k=args.mu_k, mu_s=args.mu_s)
+        except ValueError as exc:
+            raise SimulationArgumentError(str(exc)) from None
+    given = [
+        flag
+        for flag, v in (("--zeta", args.zeta), ("--mu-k", args.mu_k), ("--mu-s", args.mu_s))
+        if v is not None
+    ]
+    if given:
+        raise SimulationArgumentError(
+            f"{given[0]} sets the default law's parameter; with --law give the law's own as "
+            "--param NAME=VALUE (e.g. --param zeta=0.01; 'bayestribo laws' lists them)"
+        )
+    from bayestribo.model.laws import get_law
+
+    if args.law.strip().lower() == "auto":
+        raise SimulationArgumentError(
+            "--law auto: a simulation needs one law; expected registered terms joined with "
+            "'+' ('bayestribo laws' lists them)"
+        )
+    try:
+        law = get_law(args.law)
+    except ValueError as exc:
+        raise SimulationArgumentError(f"--law {args.law}: {exc}") from None
+    values: dict[str, float] = {}
+    for item in args.param or []:
+        name, sep, text = item.partition("=")
+        name = name.strip()
+        if not sep or not name:
+            raise SimulationArgumentError(f"--param {item!r}: expected NAME=VALUE, e.g. zeta=0.01")
+        try:
+            value = float(text)
+        except ValueError:
+            raise SimulationArgumentError(
+                f"--param {item}: expected a number after '=', got {text.strip()!r}"
+            ) from None
+        if name in values:
+            raise SimulationArgumentError(f"--param {name} is given twice")
+        values[name] = value
+    try:
+        return LawParameters(law, values)
+    except ValueError as exc:
+        raise SimulationArgumentError(f"--param: {exc}") from None

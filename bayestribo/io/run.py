@@ -184,7 +184,11 @@ METADATA_KEYS: Mapping[str, _Key] = MappingProxyType(
         # Records the package writes itself (simulator, acquisition) and a user's own keys:
         # any plain data, kept as it is.
         "user": _Key("plain", "a mapping of keys of your own (kept, not read)"),
-        "simulation": _Key("plain", "the simulator's settings and truth (written by the package)"),
+        "simulation": _Key(
+            "plain",
+            "the simulator's settings and truth (written by the package): for a law of the "
+            "registry its name, parameters with their units and the solver of its motion",
+        ),
         "acquisition": _Key("plain", "the acquisition's report (written by the package)"),
         "complete": _Key("plain", "whether the acquisition received every sample"),
         "fault": _Key("plain", "the acquisition's fault, if any"),

@@ -22,6 +22,12 @@ the amplitude [m]: each half cycle, from one turning point to the next, then use
 the values at the |x| of the turning point that starts it (the first, after the
 magnet phase, the value at the initial displacement). Within a half cycle the
 solution stays exact (Eq. 16-17 with that half cycle's constants).
+
+Any other law. With :class:`~bayestribo.synthetic.setup.LawParameters` (any law of
+the registry, :mod:`bayestribo.model.laws`) the motion, the magnet's fade included,
+is integrated by :func:`bayestribo.synthetic.motion.integrate_law` (``solve_ivp`` half
+cycle by half cycle, independent of the fit's integrator), and the metadata say so:
+``simulation["solver"]``, with the law, its parameters and their units.
 """
 
 from __future__ import annotations
@@ -40,6 +46,7 @@ from bayestribo.synthetic.setup import (
     PAPER_RIG,
     AmplitudeLaw,
     DissipationLaw,
+    LawParameters,
     Release,
     Sensor,
 )
@@ -305,6 +312,69 @@ def _motion(law: DissipationLaw, rig: Rig, release: Release, sample_rate_Hz: flo
     return _Motion(t_rel, y, yp, s0, fade_s, motion_s)
 
 
+def _law_motion(
+    law: LawParameters, rig: Rig, release: Release, sample_rate_Hz: float
+) -> tuple[_Motion, dict[str, Any]]:
+    """The motion of any registered law (:func:`~bayestribo.synthetic.motion.integrate_law`)
+    sampled on the record's grid, and its truth for the metadata."""
+    from bayestribo.model.laws import PhysicalScale
+    from bayestribo.synthetic.motion import SOLVER, LawForces, integrate_law
+
+    if law.friction and not rig.has_contact:
+        raise ValueError(
+            f"law {law.name} has friction, which needs a load: load_N must be > 0, got "
+            f"{rig.load_N!r}"
+        )
+    scaling = rig.scaling()
+    ell, omega = scaling.length_scale, scaling.omega
+    x0 = float(release.initial_displacement_m)
+    y0 = x0 / ell
+    forces = LawForces.of(law.law, law.values, y0)
+    if forces.sticks(y0):
+        raise ValueError(
+            f"initial_displacement_m = {x0!r} m is inside the static-friction band "
+            f"±{forces.ratio * forces.friction(y0) * ell!r} m: the pin would not move"
+        )
+    duration = release.motion_duration_s
+    if duration is None and not law.friction:
+        raise ValueError(
+            f"the motion never stops (law {law.name} has no friction): give "
+            "motion_duration_s, the time to record after the release"
+        )
+    fade_s = release.fade_s(rig)
+    # integrated over the whole record: a motion that goes on fills the rest after it
+    tau_limit = math.inf if duration is None else omega * (duration + release.rest_after_s)
+    moved = integrate_law(law.law, law.values, y0, tau_fade=omega * fade_s, tau_limit=tau_limit)
+    motion_s = moved.tau_stop / omega if duration is None else float(duration)
+    fs = sample_rate_Hz
+    n = math.floor((release.rest_before_s + motion_s + release.rest_after_s) * fs + 1e-9) + 1
+    t_rel = np.arange(n, dtype=np.float64) / fs
+    y, yp = moved.sample(omega * (t_rel - release.rest_before_s))
+
+    k = float(rig.mass_kg) * omega**2  # type: ignore[arg-type]
+    scale = PhysicalScale(ell, omega, "m", k, float(rig.mass_kg), rig.load_N or None)  # type: ignore[arg-type]
+    as_arrays = {name: np.array([value]) for name, value in law.values.items()}
+    physical = law.law.physical(as_arrays, y0, scale)
+    truth = {
+        "law": law.name,
+        "solver": SOLVER,
+        "parameters": {
+            p.name: {"value": law.values[p.name], "unit": p.unit, "symbol": p.symbol}
+            for p in law.law.parameters
+        },
+        "length_scale_m": ell,
+        "reference_amplitude_m": x0,
+        "physical": {
+            name: {"value": float(np.ravel(v)[0]), "unit": unit, "symbol": symbol, "label": label}
+            for name, (v, unit, symbol, label) in physical.items()
+        },
+        "stopped": moved.stopped,
+        "half_cycles": moved.half_cycles,
+    }
+    mu_s0 = forces.ratio * forces.friction(y0) if law.friction else 0.0
+    return _Motion(t_rel, y, yp, mu_s0, fade_s, motion_s), truth
+
+
 def _record(
     motion: _Motion, rig: Rig, release: Release, sensor: Sensor, rng: np.random.Generator
 ) -> tuple[NDArray, NDArray]:
@@ -327,23 +397,30 @@ def _record(
     return x, v
 
 
+def _law_truth(law: DissipationLaw, rig: Rig, motion: _Motion) -> dict[str, Any]:
+    """The true ζ, μ_k and μ_s of a :class:`DissipationLaw` (None where they vary)."""
+    zeta, mu_k, mu_s = law.zeta, law.mu_k, law.mu_s
+    return {
+        "zeta": None if callable(zeta) else float(zeta),
+        "mu_k": None if callable(mu_k) else float(mu_k) if rig.has_contact else 0.0,  # type: ignore[arg-type]
+        "mu_s": motion.mu_s0 if mu_s is not None or not callable(mu_k) else None,
+        "amplitude_dependent": law.amplitude_dependent,
+    }
+
+
 def _metadata(
-    law: DissipationLaw,
+    law_truth: Mapping[str, Any],
     rig: Rig,
     release: Release,
     sensor: Sensor,
     motion: _Motion,
     seed: int | np.random.Generator | None,
 ) -> dict[str, Any]:
-    """The run's metadata: the rig, the sensor, and the true parameters."""
-    friction = rig.has_contact
-    zeta, mu_k, mu_s = law.zeta, law.mu_k, law.mu_s
+    """The run's metadata: the rig, the sensor, and the true law (``law_truth``) with
+    the release and the noise."""
     sigma_x, sigma_v = sensor.noise
     truth: dict[str, Any] = {
-        "zeta": None if callable(zeta) else float(zeta),
-        "mu_k": None if callable(mu_k) else float(mu_k) if friction else 0.0,  # type: ignore[arg-type]
-        "mu_s": motion.mu_s0 if mu_s is not None or not callable(mu_k) else None,
-        "amplitude_dependent": law.amplitude_dependent,
+        **law_truth,
         "initial_displacement_m": float(release.initial_displacement_m),
         "offset_m": float(release.offset_m),
         "release_time_s": float(release.time_origin_s + release.rest_before_s),
@@ -373,7 +450,7 @@ def _metadata(
 
 
 def simulate(
-    law: DissipationLaw | None = None,
+    law: DissipationLaw | LawParameters | None = None,
     *,
     rig: Rig = PAPER_RIG,
     release: Release | None = None,
@@ -385,9 +462,11 @@ def simulate(
 
     Parameters
     ----------
-    law : DissipationLaw, optional
-        ζ, μ_k and μ_s (constants or amplitude laws); default ζ = 0.0236 and, with
-        contact, μ_k = μ_s = 0.0294.
+    law : DissipationLaw or LawParameters, optional
+        ζ, μ_k and μ_s (constants or amplitude laws, on the exact solution); default
+        ζ = 0.0236 and, with contact, μ_k = μ_s = 0.0294. Or any registered law with
+        its parameters (:class:`~bayestribo.synthetic.setup.LawParameters`), whose
+        motion :func:`bayestribo.synthetic.motion.integrate_law` integrates.
     rig : Rig
         Natural frequency [Hz], mass [kg] and load [N] (0 without contact); default
         the paper's rig, :data:`~bayestribo.synthetic.setup.PAPER_RIG`.
@@ -409,8 +488,10 @@ def simulate(
     Run
         Time stamps ``time_origin_s + i/sample_rate_Hz`` rounded to 1 ns, signals, and
         metadata: the rig, resolutions, ``sample_rate_Hz``, and a ``"simulation"``
-        mapping with the true parameters (ζ, μ_k, μ_s as numbers when constant), the
-        release time and the noise levels.
+        mapping with the true parameters (ζ, μ_k, μ_s as numbers when constant; for
+        :class:`LawParameters` the law, the solver, each parameter's value with its
+        unit and symbol, and the law's quantities in physical units), the release time
+        and the noise levels.
 
     Raises
     ------
@@ -427,17 +508,21 @@ def simulate(
     (0.46, True)
     """
     rig, _, load_N = _checked_rig(rig)
-    law = _friction_law(law or DissipationLaw(), rig.has_contact, load_N)
     release = release or Release()
     sensor = sensor or Sensor()
-    motion = _motion(law, rig, release, float(sensor.sample_rate_Hz))
+    if isinstance(law, LawParameters):
+        motion, law_truth = _law_motion(law, rig, release, float(sensor.sample_rate_Hz))
+    else:
+        law = _friction_law(law or DissipationLaw(), rig.has_contact, load_N)
+        motion = _motion(law, rig, release, float(sensor.sample_rate_Hz))
+        law_truth = _law_truth(law, rig, motion)
     if seed is None:
         # Fresh entropy, but recorded: the run's metadata give the seed that remakes it.
         seed = int(np.random.SeedSequence().generate_state(1)[0])
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
     x, v = _record(motion, rig, release, sensor, rng)
     time = np.round(release.time_origin_s + motion.t_rel, 9)
-    meta = _metadata(law, rig, release, sensor, motion, seed)
+    meta = _metadata(law_truth, rig, release, sensor, motion, seed)
     meta.update(metadata or {})
     return Run(
         time,

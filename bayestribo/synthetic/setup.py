@@ -3,14 +3,19 @@
 :func:`bayestribo.synthetic.recording.simulate` takes one of each, with the rig
 (:class:`bayestribo.model.scaling.Rig`): each object holds one part of the
 experiment, checks its own fields (naming the field and what was expected), and has
-the defaults of the paper's tribometer.
+the defaults of the paper's tribometer. The law is either :class:`DissipationLaw`
+(viscous damping and Coulomb friction, constants or functions of the amplitude, on
+the exact solution) or :class:`LawParameters` (any law of the registry,
+:mod:`bayestribo.model.laws`, integrated by :mod:`bayestribo.synthetic.motion`).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any
 
 from bayestribo.model.scaling import Rig
 
@@ -20,6 +25,7 @@ __all__ = [
     "VELOCITY_RESOLUTION_M_PER_S",
     "AmplitudeLaw",
     "DissipationLaw",
+    "LawParameters",
     "Release",
     "Sensor",
 ]
@@ -81,6 +87,103 @@ class DissipationLaw:
     def amplitude_dependent(self) -> bool:
         """True when ζ or μ_k depends on the amplitude."""
         return callable(self.zeta) or callable(self.mu_k)
+
+
+def _describe(parameter: Any) -> str:
+    """``name [unit] (symbol, label)`` of a law's parameter."""
+    return f"{parameter.name} [{parameter.unit}] ({parameter.symbol}, {parameter.label})"
+
+
+#: What the registry's units of a dimensionless parameter mean.
+_UNITS_NOTE = "units: '-' none, 'y' one ℓ = N/k (1 m without contact), '1/y' per ℓ, '1/y²' per ℓ²"
+
+
+@dataclass(frozen=True)
+class LawParameters:
+    """Any dissipation law of the registry with the values of its parameters.
+
+    Parameters
+    ----------
+    law : str or Law
+        The law's name, registered terms joined with ``+`` (``"viscous+quadratic"``),
+        or a :class:`~bayestribo.model.laws.Law` (whose terms need not be registered).
+    values : mapping of str to float
+        Parameter values by name, in the registry's units (``bayestribo laws``): the
+        dimensionless ones of Rigaud et al. (2010), Eq. 6-7, where ``y`` is one length
+        scale ℓ = N/k (μ_k [y], quadratic drag γ = c₂ℓ/m [1/y], ...). A parameter
+        not given takes its typical value (:attr:`Parameter.typical
+        <bayestribo.model.laws.Parameter>`: ζ 0.0236, μ_k 0.0294, μ_s/μ_k 1); one
+        without a typical value must be given. Terms parametrised at a reference
+        amplitude (power-law drag's ζ_α) are at the release displacement x₀/ℓ.
+
+    Raises
+    ------
+    ValueError
+        For an unknown law, a name that is not one of the law's parameters, a value
+        outside the parameter's support, or a parameter without a typical value that
+        is not given (each message names the parameter with its unit).
+
+    Examples
+    --------
+    >>> law = LawParameters("viscous+quadratic", {"zeta": 0.01, "c2": 0.005})
+    >>> law.name, law.values["zeta"]
+    ('viscous+quadratic', 0.01)
+    """
+
+    law: Any
+    values: Mapping[str, float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        from bayestribo.model.laws import get_law
+
+        law = get_law(self.law)
+        if not isinstance(self.values, Mapping):
+            raise ValueError(
+                f"values must be a mapping of parameter names to numbers, got {self.values!r}"
+            )
+        known = {p.name: p for p in law.parameters}
+        for name in self.values:
+            if name not in known:
+                raise ValueError(
+                    f"law {law.name} has no parameter {name!r}; its parameters: "
+                    + "; ".join(_describe(p) for p in law.parameters)
+                )
+        values: dict[str, float] = {}
+        for p in law.parameters:
+            if p.name not in self.values:
+                if p.typical is None:
+                    raise ValueError(
+                        f"law {law.name} needs a value of {_describe(p)}, in "
+                        f"[{p.low:g}, {p.high:g}] ({_UNITS_NOTE}); it has no typical value"
+                    )
+                values[p.name] = float(p.typical)
+                continue
+            raw = self.values[p.name]
+            try:
+                value = float(raw)
+            except (TypeError, ValueError):
+                value = math.nan
+            if not (math.isfinite(value) and p.low <= value <= p.high):
+                raise ValueError(
+                    f"parameter {_describe(p)} of law {law.name} must be a finite number in "
+                    f"[{p.low:g}, {p.high:g}], got {raw!r}"
+                )
+            values[p.name] = value
+        object.__setattr__(self, "law", law)
+        object.__setattr__(self, "values", MappingProxyType(values))
+
+    def __repr__(self) -> str:
+        return f"LawParameters({self.name!r}, {dict(self.values)!r})"
+
+    @property
+    def name(self) -> str:
+        """The law's name."""
+        return str(self.law.name)
+
+    @property
+    def friction(self) -> bool:
+        """True when the law has a friction term (it needs a load)."""
+        return bool(self.law.friction)
 
 
 @dataclass(frozen=True)

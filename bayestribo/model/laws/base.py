@@ -124,6 +124,10 @@ class Parameter:
         :meth:`bayestribo.inference.priors.Prior.from_spec` (``{"type": "Uniform",
         "low": 0, "high": 0.3}``); priors are physical limits, see
         :mod:`bayestribo.inference.priors`.
+    typical : float, optional
+        A typical value on the paper's rig, in ``unit``: what ``bayestribo simulate``
+        takes where it is not given. None (the default) where no value is typical
+        (a drag's amount): the simulator then asks for it.
     """
 
     name: str
@@ -134,12 +138,15 @@ class Parameter:
     label: str
     prior: Callable[[float], Mapping[str, float | str]]
     null: float | None = None
+    typical: float | None = None
 
     def __post_init__(self) -> None:
         if not self.name.isidentifier():
             raise ValueError(f"Parameter name must be an identifier, got {self.name!r}")
         if not (self.low < self.high):
             raise ValueError(f"Parameter {self.name}: low must be below high")
+        if self.typical is not None and not self.low <= self.typical <= self.high:
+            raise ValueError(f"Parameter {self.name}: typical must lie in [low, high]")
         if self.null is None:
             object.__setattr__(self, "null", float(self.low))
         elif not self.low <= self.null <= self.high:

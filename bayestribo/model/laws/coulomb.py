@@ -79,6 +79,7 @@ COULOMB = register_term(
                 float("inf"),
                 "kinetic friction coefficient (x_c k/N)",
                 _mu_k_prior,
+                typical=0.0294,  # glycerol (Rigaud et al. 2010, section 3.1)
             ),
             Parameter(
                 "mu_s_ratio",
@@ -88,6 +89,7 @@ COULOMB = register_term(
                 float("inf"),
                 "static to kinetic friction",
                 _ratio_prior,
+                typical=1.0,
             ),
         ),
         n_coefficients=1,

@@ -52,7 +52,16 @@ VISCOUS = register_term(
         name="viscous",
         kind="drag",
         parameters=(
-            Parameter("zeta", "ζ", "-", 0.0, 1.0, "equivalent viscous damping ratio", _prior),
+            Parameter(
+                "zeta",
+                "ζ",
+                "-",
+                0.0,
+                1.0,
+                "equivalent viscous damping ratio",
+                _prior,
+                typical=0.0236,  # glycerol (Rigaud et al. 2010, section 3.1)
+            ),
         ),
         n_coefficients=1,
         force=_force,
