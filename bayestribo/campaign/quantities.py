@@ -14,6 +14,9 @@ so each parameter is taken in a form that means the same in every run:
   without a load as the friction displacement x_c = μ_k ℓ): the factor is found by
   evaluating the term's ``physical`` at two values of the parameter and two
   reference amplitudes, so a term registered by a lab needs nothing here;
+* a parameter defined at the run's own initial amplitude (power-law drag's ζ_α) is
+  compared as sampled and flagged (:attr:`CampaignQuantity.at_own_amplitude`): runs
+  released from other swings compare it at other swings;
 * a parameter with no such quantity is not compared across runs (it is named, with
   why, in the ``left_out`` of :func:`campaign_quantities`).
 
@@ -70,6 +73,10 @@ class CampaignQuantity:
         True when it cannot be negative (the population mean is bounded at zero).
     term : str
         The law term it belongs to.
+    at_own_amplitude : bool
+        True for a parameter defined at each run's own initial amplitude (power-law
+        drag's ζ_α): runs released from other amplitudes compare values at other
+        swings, which differ where the law is not linear in the amplitude (α ≠ 1).
     """
 
     name: str
@@ -80,6 +87,7 @@ class CampaignQuantity:
     factor: float
     non_negative: bool
     term: str
+    at_own_amplitude: bool = False
 
     def describe(self) -> dict[str, Any]:
         """Plain data: name, symbol, unit, label, term, non_negative (no run factor)."""
@@ -143,6 +151,22 @@ def _proportional(term: Term, name: str, scale: PhysicalScale) -> tuple[str, flo
     return None
 
 
+def _at_reference(term: Term, name: str) -> bool:
+    """Is ``name`` a scale of its term's dissipation (ΔE proportional to it) in a term
+    whose dissipation at a given swing depends on the reference amplitude (the run's
+    own initial amplitude)? Power-law drag's ζ_α is; its exponent α is not."""
+    values = {p.name: np.array(max(p.low, 0.0) + 0.5) for p in term.parameters}
+    swings = np.array([0.5, 2.0])
+    try:
+        one = term.dissipation(swings, values, 1.0)
+        two = term.dissipation(swings, values, 2.0)
+        doubled = term.dissipation(swings, {**values, name: 2.0 * values[name]}, 1.0)
+    except (ArithmeticError, ValueError, KeyError):
+        return False
+    scale = np.allclose(doubled, 2.0 * one, rtol=1e-12, atol=0.0)
+    return bool(scale and not np.allclose(one, two, rtol=1e-12, atol=0.0))
+
+
 def campaign_quantities(result: Any) -> tuple[tuple[CampaignQuantity, ...], dict[str, str]]:
     """The quantities of a fit that a campaign compares across runs (module notes).
 
@@ -176,7 +200,15 @@ def campaign_quantities(result: Any) -> tuple[tuple[CampaignQuantity, ...], dict
                 if p.name in names:
                     quantities.append(
                         CampaignQuantity(
-                            p.name, p.symbol, "1", p.label, p.name, 1.0, p.low >= 0.0, term.name
+                            p.name,
+                            p.symbol,
+                            "1",
+                            p.label,
+                            p.name,
+                            1.0,
+                            p.low >= 0.0,
+                            term.name,
+                            _at_reference(term, p.name),
                         )
                     )
                     continue

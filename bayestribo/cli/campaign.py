@@ -206,6 +206,12 @@ def _text(
         lines.append(f"Law fitted: {next(iter(laws))}.")
     for name, why in (getattr(analysis, "left_out", {}) or {}).items():
         lines.append(f"Not compared across runs: {name}: {why}.")
+    for name, q in (getattr(analysis, "quantities", {}) or {}).items():
+        if q.get("at_own_amplitude"):
+            lines.append(
+                f"{q.get('symbol', name)} is at each run's own initial amplitude: runs "
+                "released from other swings compare it at other swings."
+            )
     titles = {"pooled over loads": " (pooled over loads)"}
     current = None
     for r in analysis.group_rows():
