@@ -150,21 +150,40 @@ def test_a_folder_without_runs_is_a_package_error(tmp_path, capsys):
     assert "is not a folder" in capsys.readouterr().err
 
 
-def test_law_rows_flatten_the_comparison_for_the_csv_table():
-    # The PSIS-LOO comparison itself is tested in tests/test_inference_comparison.py; running it
-    # through the command (three fits per run) is too slow for the default suite.
-    from bayestribo.cli.campaign import _law_row
+def test_the_group_laws_are_a_table_and_text_naming_the_runs_that_differ(tmp_path, capsys):
+    # The choice itself is tested in tests/test_campaign_group_laws.py; a campaign with
+    # --law auto (a comparison of laws per run) is too slow for the default suite:
+    # benchmarks/campaign_laws.py runs it.
+    from bayestribo.campaign.laws import choose_group_law
+    from bayestribo.cli.campaign import _law_lines, _law_rows
 
-    entry = {
-        "run": "air-r1",
-        "verdict": "viscous",
-        "best": "both",
-        "table": {"viscous": {"elpd_loo": 10.0, "elpd_diff": 0.2}, "both": {"elpd_loo": 10.2}},
-    }
-    row = _law_row(entry)
-    assert list(row)[:3] == ["run", "verdict", "best"]
-    assert row["viscous_elpd_diff"] == 0.2 and row["coulomb_elpd_loo"] is None
-    assert _law_row({"run": "x", "error": "RecordingError: bad"})["error"].startswith("Rec")
+    def comparison(verdict: str) -> dict:
+        rows = {"viscous": (100.0, 0.0), "viscous+quadratic": (100.5, 0.5)}
+        table = {
+            law: {"elpd_loo": e, "dse": d, "adequate": True, "sampled": True}
+            for law, (e, d) in rows.items()
+        }
+        return {"verdict": verdict, "adequate": True, "table": table}
+
+    group = choose_group_law(
+        "lubricant=oil,load_N=0.3",
+        {"r1": comparison("viscous"), "r2": comparison("viscous+quadratic")},
+    )
+    groups = {group.group: group.to_dict()}
+    rows = _law_rows(groups)
+    assert [(r["run"], r["verdict"], r["group_law"], r["agrees"]) for r in rows] == [
+        ("r1", "viscous", "viscous", True),
+        ("r2", "viscous+quadratic", "viscous", False),
+    ]
+    text = "\n".join(_law_lines(groups))
+    assert "oil · 0.3 N: viscous" in text
+    assert "r2 alone chose viscous+quadratic; fitted again in viscous" in text
+    # --compare-laws is the joint choice, --law auto: with another law it is refused
+    status = main(
+        ["campaign", str(DATA), "--out", str(tmp_path), "--compare-laws", "--law", "viscous"]
+    )
+    assert status == 2
+    assert "--compare-laws chooses the law of each group" in capsys.readouterr().err
 
 
 def test_equal_names_in_sub_folders_are_two_runs_and_twin_files_are_named(tmp_path, capsys):
