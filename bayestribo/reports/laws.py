@@ -31,6 +31,7 @@ from numpy.typing import NDArray
 
 __all__ = [
     "EnergyShare",
+    "adequacy_reason",
     "energy_share",
     "law_holds",
     "law_text",
@@ -340,3 +341,40 @@ def share_rows(result: Any, *, seed: int | None = 0) -> dict[str, EnergyShare]:
     if min(amplitudes) < max(amplitudes):
         out["smallest swing"] = energy_share(result, float(min(amplitudes)), seed=seed)
     return out
+
+
+#: The sampled parameters the adequacy checks' windowed fits model (viscous damping and
+#: Coulomb friction, :mod:`bayestribo.adequacy.windows`), with the static friction.
+_WINDOWED = frozenset({"zeta", "mu_k", "mu_s_ratio"})
+
+
+def adequacy_reason(result: Any) -> str | None:
+    """Why the adequacy checks (windows, end of motion, predictive peaks, halves:
+    :func:`bayestribo.adequacy.check_adequacy`) do not apply to a fit, or None where
+    they do: they model ζ and Coulomb friction (the paper's law), so they test a law
+    whose parameters are those (a friction term among them), and no other.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as R
+    >>> adequacy_reason(R(law="viscous+coulomb")) is None
+    True
+    >>> adequacy_reason(R(law="coulomb+power"))[:40]
+    "the model checks' windowed fits model ζ "
+    """
+    law = _law(result)
+    if law is None:
+        return f"the law {result.law} is not registered: the model checks cannot test it"
+    names = set(law.parameter_names)
+    if names <= _WINDOWED and "zeta" in names and law.friction:
+        return None
+    if names <= _WINDOWED and not law.friction:
+        return (
+            "this fit's law has no friction term (no contact): the model checks test constant "
+            "ζ and friction together, so they are left out"
+        )
+    return (
+        "the model checks' windowed fits model ζ and Coulomb friction (the paper's law); "
+        f"this fit's law is {law_text(law.name)}: it is tested instead by the shape of the "
+        "decay against the law and by its ΔE(A) against the turning points' (the answer)"
+    )

@@ -21,6 +21,7 @@ __all__ = [
     "SYMBOLS",
     "caveat_text",
     "diagnostics_frame",
+    "dissipation_frame",
     "estimates_frame",
     "fit_facts",
     "fit_frame",
@@ -302,6 +303,49 @@ def fit_frame(
                 }
             )
     return pd.DataFrame(rows, columns=["quantity", column, "unit"]).set_index("quantity")
+
+
+def dissipation_frame(result: Any, *, prob: float = 0.95, law: bool = True) -> Any:
+    """The energy dissipated per cycle ΔE(A) at the largest, middle and smallest swing:
+    from the turning points (the law-free answer, whatever the law) and, with ``law``,
+    the fitted law's, side by side.
+
+    Parameters
+    ----------
+    result : FitResult
+    prob : float
+        Probability of the intervals, as the fit recorded them (said in the header).
+    law : bool
+        Add the law's ΔE(A) as a second column.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Index ``swing A [unit]``; columns ``ΔE(A), turning points [unit]`` and, with
+        ``law``, ``ΔE(A), the law's [unit]``; empty without a band.
+    """
+    import pandas as pd
+
+    measured = result.turning_point_dissipation or {}
+    band = result.dissipation or {}
+    base = measured if measured.get("amplitude") else band
+    if not base.get("amplitude"):
+        return pd.DataFrame()
+    unit = unit_text(base.get("unit"))
+    share = f"{100 * base.get('prob', prob):g} %"
+    rows = []
+    for i in _swings(base):
+        row = {
+            f"swing A [{unit_text(base.get('amplitude_unit'))}]": f"{base['amplitude'][i]:.3g}",
+            f"ΔE(A), turning points (law-free) [{unit}] [{share}]": _band_text(measured, i)
+            if measured.get("amplitude")
+            else "– (too few half cycles)",
+        }
+        if law and band.get("amplitude"):
+            row[f"ΔE(A), the law's [{unit}] [{share}]"] = _band_text(band, i)
+        rows.append(row)
+    frame = pd.DataFrame(rows)
+    return frame.set_index(frame.columns[0])
 
 
 def diagnostics_frame(result: Any) -> Any:
