@@ -112,7 +112,7 @@ def test_the_single_run_report_reads_as_text_for_people(single_run_report):
     assert page.text_dumps == 0  # the fit as tables, not a monospace dump
     text = single_run_report.read_text(encoding="utf-8")
     assert "load N" in text and "0.31 N" in text  # metadata in words with units
-    assert "viscous + Coulomb friction" in text and "viscous+coulomb" not in text
+    assert "viscous damping + Coulomb friction" in text and "viscous+coulomb" not in text
     assert "ignores friction" in text  # the logarithmic decrement, labelled
     assert "Ζ" not in text  # a capital zeta opening a sentence ("Ζ and μ_k are ...")
     # the answer first: the law's parameters with intervals beside the paper's values,

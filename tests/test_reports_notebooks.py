@@ -360,3 +360,67 @@ def test_a_missing_jupyter_package_is_an_error_saying_what_to_install(monkeypatc
     monkeypatch.setitem(sys.modules, "nbconvert", None)  # import fails as if not installed
     with pytest.raises(MissingDependencyError, match=r"needs nbconvert: .*bayestribo\[report\]"):
         to_html(nbformat.v4.new_notebook())
+
+
+#: A law other than the paper's, on HarmOsc3 (dry friction on a plate), where it misfits:
+#: its parameters are no ζ, and no law holds (the answer is the turning points' ΔE(A)).
+OTHER_LAW = {"law": "coulomb+power", "grid_points": 24, "max_steps": 3000}
+
+
+def _section(text: str, title: str) -> str:
+    """The HTML of the section whose heading holds ``title``, to the next heading."""
+    heads = [m.start() for m in re.finditer(r"<h2\b", text)]
+    start = next(i for i, h in enumerate(heads) if title in text[h : h + 400])
+    return text[heads[start] : heads[start + 1] if start + 1 < len(heads) else len(text)]
+
+
+@pytest.mark.parametrize("name", ["single_run", "real_data"])
+def test_notebook_renders_every_section_for_another_law_where_no_law_holds(name, tmp_path):
+    if importlib.util.find_spec("nbconvert") is None:
+        pytest.skip("nbconvert (the report extra) is not installed")
+    if not EXTERNAL.is_dir():
+        pytest.skip(f"real recordings not found at {EXTERNAL}")
+    reading = {"columns": ["time_s", "displacement_m"], "metadata": {"length_unit": "arbitrary"}}
+    common = {"figure_dir": str(tmp_path / "figures"), "figure_format": "png"}
+    common["summary_path"] = str(tmp_path / "summary.json")
+    if name == "single_run":
+        params = {**common, "run_path": str(EXTERNAL / "HarmOsc3.txt"), "read_kwargs": reading}
+        params.update(OTHER_LAW)
+    else:
+        params = {**common, "data_dir": str(EXTERNAL), "files": ["HarmOsc3.txt"]}
+        params.update(fit_files=["HarmOsc3.txt"], check_files=["HarmOsc3.txt"])
+        params["fit_kwargs"] = OTHER_LAW
+    html = tmp_path / f"{name}.html"
+    nb = run_report(name, params, html=html)
+    errors = [
+        o for c in nb.cells if c.cell_type == "code" for o in c.outputs if o.output_type == "error"
+    ]
+    assert not errors
+    text = html.read_text(encoding="utf-8")
+    for problem in FIGURE_PROBLEMS:
+        assert f": {problem}: " not in text, problem
+    assert (tmp_path / "figures" / "dissipation.png").is_file()  # the ΔE(A) figure
+    answer = _section(text, "The answer")
+    assert "Coulomb friction + power-law drag" in answer
+    assert "turning points (law-free)" in answer and "friction" in answer
+    assert "The law holds" not in answer and "holds: its parameters" not in answer
+    # the law has no ζ: neither the answer nor the fit's section says one in what they
+    # show (ζ_α is its own; the sections' fixed introductions name ζ "where it has one")
+    for title in ("The answer", "Bayesian fit"):
+        part = _section(text, title)
+        part = part[part.find('<div class="jp-Cell ') :]
+        part = re.sub(
+            r'<div class="jp-Cell jp-MarkdownCell.*?(?=<div class="jp-Cell |\Z)',
+            "",
+            part,
+            flags=re.S,
+        )
+        assert not re.search(r"ζ(?!<sub>|_|α)", part), re.findall(r".{80}ζ(?!<sub>|_|α).{40}", part)
+    record = json.loads((tmp_path / "summary.json").read_text())
+    fit = record["fit"] if name == "single_run" else record["fits"]["HarmOsc3"]
+    assert fit["law"] == "coulomb+power" and "zeta" not in fit["parameters"]
+    if name == "real_data":
+        # dry friction on a plate: friction dominates in any law that has it
+        assert {r["recording"]: r["dominated by"] for r in record["verdict"]} == {
+            "HarmOsc3": "friction"
+        }

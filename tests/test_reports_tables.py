@@ -34,7 +34,7 @@ def test_a_classical_table_names_methods_in_words_and_gives_intervals():
 
 def test_units_and_laws_read_as_words():
     assert tables.unit_text("signal length unit") == "signal unit"
-    assert tables.law_text("viscous+quadratic") == "viscous + quadratic drag"
+    assert tables.law_text("viscous+quadratic") == "viscous damping + quadratic drag"
     assert tables.normal_interval(None, None) == "–"
     assert tables.normal_interval(0.5, None) == "0.5"
     assert tables.share_text(float("nan")) == "–"

@@ -21,12 +21,14 @@ __all__ = [
     "SYMBOLS",
     "caveat_text",
     "diagnostics_frame",
+    "dissipation_frame",
     "estimates_frame",
     "fit_facts",
     "fit_frame",
     "law_text",
     "method_text",
     "normal_interval",
+    "physical_symbols",
     "prose",
     "share_text",
     "unit_text",
@@ -60,16 +62,6 @@ METHOD_NAMES = {
     "energy_ls_exact": "least squares on Π, exact model",
 }
 
-#: The terms of a dissipation law in words.
-_TERMS = {
-    "viscous": "viscous",
-    "coulomb": "Coulomb friction",
-    "quadratic": "quadratic drag",
-    "power": "power-law drag",
-    "cubic": "cubic drag",
-    "hysteretic": "hysteretic damping",
-}
-
 #: Quantities of a fit not shown among the results (nuisances, sampled scales).
 _HIDDEN = ("y0", "mu_s_ratio")
 
@@ -78,14 +70,17 @@ _Z95 = 1.959963984540054
 
 
 def law_text(law: str) -> str:
-    """A dissipation law in words: ``"viscous+coulomb"`` -> ``"viscous + Coulomb friction"``.
+    """A dissipation law in words, each term as its registry entry describes it
+    (:func:`bayestribo.reports.laws.law_text`).
 
     Examples
     --------
     >>> law_text("viscous+coulomb")
-    'viscous + Coulomb friction'
+    'viscous damping + Coulomb friction'
     """
-    return " + ".join(_TERMS.get(t, t) for t in str(law).split("+"))
+    from bayestribo.reports.laws import law_text as words
+
+    return words(law)
 
 
 #: Column names of a run file as a reader names the quantity.
@@ -98,7 +93,7 @@ _COLUMNS = {
 
 def prose(text: str, *, paths: Mapping[str, str] | None = None) -> str:
     """A message of the package (a warning, a note) as report text: laws in words
-    ("viscous+coulomb" -> "viscous + Coulomb friction"), run-file column names as the
+    ("viscous+coulomb" -> "viscous damping + Coulomb friction"), run-file column names as the
     quantity ("velocity_m_per_s" -> "velocity"), quantities by their symbol ("mu_k" ->
     "μ_k"), ``law='auto'`` as "law = auto", the
     advice on ``columns=[...]`` left out, and each path in ``paths`` replaced by its short
@@ -107,7 +102,7 @@ def prose(text: str, *, paths: Mapping[str, str] | None = None) -> str:
     Examples
     --------
     >>> prose("the law viscous+coulomb misfits; fit with law='auto' (--law auto)")
-    'the law viscous + Coulomb friction misfits; fit with law = auto (--law auto)'
+    'the law viscous damping + Coulomb friction misfits; fit with law = auto (--law auto)'
     >>> prose("the law quadratic holds; the power of the test")
     'the law quadratic drag holds; the power of the test'
     >>> prose("/d/r.csv: 1 row(s) have no value for velocity_m_per_s; they are left out "
@@ -123,11 +118,14 @@ def prose(text: str, *, paths: Mapping[str, str] | None = None) -> str:
     text = re.sub(r" \(printed as '[^']*'\)", "", text)  # the terminal's label
     text = text.replace("law='auto'", "law = auto")
     text = re.sub(r"\bmax_steps\b", "maximum number of steps", text)
-    for name, symbol in SYMBOLS.items():  # quantities by their symbol: mu_k -> μ_k
+    from bayestribo.model.laws import TERMS
+
+    own = {p.name: p.symbol for t in TERMS.values() for p in t.parameters}
+    for name, symbol in {**own, **SYMBOLS}.items():  # quantities by symbol: mu_k -> μ_k
         text = re.sub(rf"\b{name}\b", symbol, text)
     for name, words in _COLUMNS.items():
         text = re.sub(rf"\b{name}\b", words, text)
-    terms = "|".join(_TERMS)
+    terms = "|".join(TERMS)
     # a law's name: terms joined by "+", or one term named as "the law ..." ("power" alone
     # is a word)
     law = rf"\b(?:{terms})(?:\+(?:{terms}))+\b|(?<=\blaw )(?:{terms})\b"
@@ -149,9 +147,44 @@ def unit_text(unit: str | None) -> str:
 
 
 def _symbols(result: Any) -> dict[str, str]:
-    """Symbols of a fit's own law parameters, then the common ones."""
+    """Symbols of a fit's own law parameters and of their physical quantities (each
+    term's :meth:`~bayestribo.model.laws.Term.physical`, with and without a known
+    stiffness), then the common ones."""
     own = dict(getattr(result, "symbols", {}) or {})
-    return {**own, **SYMBOLS}
+    return {**physical_symbols(getattr(result, "law", "")), **own, **SYMBOLS}
+
+
+def physical_symbols(law: str) -> dict[str, str]:
+    """The symbol of each physical quantity a law's terms report, by name
+    (``{"c2_SI": "c₂", "c2_per_mass": "c₂/m", ...}``), from the registry; empty for a
+    law that is not registered.
+
+    Examples
+    --------
+    >>> physical_symbols("power")["c_alpha_per_k"]
+    'c_α/k'
+    """
+    import numpy as np
+
+    from bayestribo.model.laws import PhysicalScale, get_law
+
+    try:
+        terms = get_law(law).terms
+    except ValueError:
+        return {}
+    out: dict[str, str] = {}
+    scales = (PhysicalScale(), PhysicalScale(stiffness=1.0, mass=1.0, load=1.0))
+    for term in terms:
+        values = {
+            p.name: np.array([0.5 * (p.low + min(p.high, p.low + 1.0))]) for p in term.parameters
+        }
+        for scale in scales:
+            try:
+                quantities = term.physical(values, 1.0, scale)
+            except (KeyError, ValueError, ZeroDivisionError):  # a term needing more
+                continue
+            out.update({name: q[2] for name, q in quantities.items()})
+    return out
 
 
 def normal_interval(value: float | None, se: float | None, *, positive: bool = False) -> str:
@@ -202,10 +235,12 @@ def _swings(band: Mapping[str, Any]) -> list[int]:
 
 
 def _band_text(band: Mapping[str, Any], i: int) -> str:
+    """ΔE at one swing with its interval, held at zero below (a free decay never gains
+    energy: an interval reaching below zero is at its bound there)."""
     mean, (low, high) = band["mean"][i], (band["interval"][0][i], band["interval"][1][i])
     if mean is None or low is None or high is None:
         return "–"
-    return interval_text(mean, low, high)
+    return interval_text(max(mean, 0.0), max(low, 0.0), high)
 
 
 def fit_frame(
@@ -268,6 +303,49 @@ def fit_frame(
                 }
             )
     return pd.DataFrame(rows, columns=["quantity", column, "unit"]).set_index("quantity")
+
+
+def dissipation_frame(result: Any, *, prob: float = 0.95, law: bool = True) -> Any:
+    """The energy dissipated per cycle ΔE(A) at the largest, middle and smallest swing:
+    from the turning points (the law-free answer, whatever the law) and, with ``law``,
+    the fitted law's, side by side.
+
+    Parameters
+    ----------
+    result : FitResult
+    prob : float
+        Probability of the intervals, as the fit recorded them (said in the header).
+    law : bool
+        Add the law's ΔE(A) as a second column.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Index ``swing A [unit]``; columns ``ΔE(A), turning points [unit]`` and, with
+        ``law``, ``ΔE(A), the law's [unit]``; empty without a band.
+    """
+    import pandas as pd
+
+    measured = result.turning_point_dissipation or {}
+    band = result.dissipation or {}
+    base = measured if measured.get("amplitude") else band
+    if not base.get("amplitude"):
+        return pd.DataFrame()
+    unit = unit_text(base.get("unit"))
+    share = f"{100 * base.get('prob', prob):g} %"
+    rows = []
+    for i in _swings(base):
+        row = {
+            f"swing A [{unit_text(base.get('amplitude_unit'))}]": f"{base['amplitude'][i]:.3g}",
+            f"ΔE(A), turning points (law-free) [{unit}] [{share}]": _band_text(measured, i)
+            if measured.get("amplitude")
+            else "– (too few half cycles)",
+        }
+        if law and band.get("amplitude"):
+            row[f"ΔE(A), the law's [{unit}] [{share}]"] = _band_text(band, i)
+        rows.append(row)
+    frame = pd.DataFrame(rows)
+    return frame.set_index(frame.columns[0])
 
 
 def diagnostics_frame(result: Any) -> Any:
