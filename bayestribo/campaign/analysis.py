@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from bayestribo.campaign.dissipation import common_amplitudes, dissipation_samples, has_band
 from bayestribo.errors import BayestriboError
 from bayestribo.population.groups import Population, fit_group, population_jobs
 from bayestribo.population.jobs import run_calls
@@ -167,6 +168,12 @@ class CampaignAnalysis:
         (:mod:`bayestribo.campaign.quantities`).
     left_out : dict of str to str
         Parameters of the laws not compared across runs, with why.
+    dissipation : Population or None
+        The law-free answer: populations of ΔE at common swings of each series
+        (:mod:`bayestribo.campaign.dissipation`), per group of the grouping keys,
+        whatever law each run was fitted in.
+    dissipation_trends : dict
+        Series label -> :class:`Trend` of ΔE at those swings against ``covariate``.
     sigma_scales : dict of str to float
         The half-Cauchy scale of each quantity's between-run σ prior (module notes of
         :mod:`bayestribo.population.hyperpriors`; a quantity without a default takes
@@ -187,11 +194,14 @@ class CampaignAnalysis:
     quantities: dict[str, dict[str, Any]] = field(default_factory=dict)
     left_out: dict[str, str] = field(default_factory=dict)
     sigma_scales: dict[str, float] = field(default_factory=dict)
+    dissipation: Population | None = None
+    dissipation_trends: dict[str, Trend] = field(default_factory=dict)
 
     @property
     def converged(self) -> bool:
         """Whether every run's sampler and every population and trend sampler converged."""
         pops = [self.contact, self.zeta0, self.series, *self.trends.values()]
+        pops += [self.dissipation, *self.dissipation_trends.values()]
         runs = all(r.get("converged", True) for r in self.runs)
         return runs and all(_population_converged(pop) for pop in pops if pop is not None)
 
@@ -214,6 +224,8 @@ class CampaignAnalysis:
             "quantities": self.quantities,
             "left_out": self.left_out,
             "sigma_scales": self.sigma_scales,
+            "dissipation": None if self.dissipation is None else self.dissipation.to_dict(p),
+            "dissipation_trends": {k: t.to_dict(p) for k, t in self.dissipation_trends.items()},
         }
 
     def group_rows(self) -> list[dict[str, Any]]:
@@ -223,6 +235,7 @@ class CampaignAnalysis:
             ("contact", self.contact),
             ("pooled over loads", self.series),
             ("no contact", self.zeta0),
+            ("ΔE (law-free)", self.dissipation),
         ]
         for kind, pop in pops:
             if pop is None:
@@ -252,7 +265,8 @@ class CampaignAnalysis:
     def trend_rows(self) -> list[dict[str, Any]]:
         """One row per series and parameter (CSV table)."""
         rows = []
-        for label, t in self.trends.items():
+        every = [*self.trends.items(), *self.dissipation_trends.items()]
+        for label, t in every:
             for name in t.parameters:
                 s = t.slope_summary(name, self.prob)
                 rows.append(
@@ -528,7 +542,13 @@ def analyse_campaign(
     calls: list[tuple[Callable[..., Any], tuple[Any, ...]]] = []
     costs: list[float] = []
     finish: list[Callable[[list[Any]], None]] = []
-    found: dict[str, list[Population]] = {"contact": [], "zeta0": [], "series": []}
+    found: dict[str, list[Population]] = {
+        "contact": [],
+        "zeta0": [],
+        "series": [],
+        "dissipation": [],
+    }
+    dissipation_trends: dict[str, Trend] = {}
     trends: dict[str, Trend] = {}
     scales: dict[str, float] = {}
 
@@ -562,13 +582,15 @@ def analyse_campaign(
 
         finish.append(done)
 
-    def add_trend(label: str, members: list[RunSamples], on: str, names, extra) -> None:
+    def add_trend(
+        label: str, members: list[RunSamples], on: str, names, extra, into=trends
+    ) -> None:
         at = len(calls)
         calls.append((_trend_job, (members, on, {**kw, **extra}, names)))
         costs.append(_cost(len(members), len(names), 2))
 
         def done(results: list[Any]) -> None:
-            trends[label] = results[at]
+            into[label] = results[at]
 
         finish.append(done)
 
@@ -614,6 +636,52 @@ def analyse_campaign(
             say(f"trends against {VISCOSITY_KEY}: {', '.join(lab for lab, _ in viscosity)}")
         for label, members in viscosity:
             add_trend(label, members, VISCOSITY_KEY, names, extra)
+    # The law-free answer: ΔE at swings every run of a series reaches, whatever its law.
+    series_keys = tuple(k for k in keys if k != covariate)
+    by_series: dict[tuple[Any, ...], list[Any]] = {}
+    for r in contact_runs:
+        by_series.setdefault(tuple(r.metadata.get(k) for k in series_keys), []).append(r)
+    for value, members in by_series.items():
+        label = ",".join(f"{k}={v}" for k, v in zip(series_keys, value, strict=True)) or "all"
+        if not any(has_band(r) for r in members):
+            continue  # fit-like objects without turning points: nothing law-free to compare
+        amplitudes = common_amplitudes(members)
+        if amplitudes is None:
+            say(f"ΔE (law-free) of {label}: its runs reach no common swing; not compared")
+            continue
+        drawn = [
+            dissipation_samples(r, amplitudes, n_samples=max_samples or 300, seed=seed)
+            for r in members
+        ]
+        names = tuple(drawn[0].values)
+        for n in names:
+            described.setdefault(
+                n,
+                {
+                    "symbol": n,
+                    "unit": str((getattr(members[0], "turning_points", None) or {}).get("unit")),
+                    "label": "energy dissipated per cycle at this swing, from the turning "
+                    "points (law-free)",
+                    "term": None,
+                    "non_negative": True,
+                },
+            )
+        extra = {
+            "sigma_prior": {
+                n: (sigma_prior or {}).get(n)
+                or sigma_scale(n, [float(np.mean(d.values[n])) for d in drawn], [1.0])
+                for n in names
+            },
+            "non_negative": names,
+        }
+        for n in names:
+            scales.setdefault(n, float(extra["sigma_prior"][n]))
+        say(f"ΔE (law-free) of {label} at {len(names)} common swings, {len(drawn)} runs")
+        add_population("dissipation", drawn, names, extra, by=keys or None, pooled=not keys)
+        if len({d.metadata.get(covariate) for d in drawn}) >= 2 and all(
+            isinstance(d.metadata.get(covariate), int | float) for d in drawn
+        ):
+            add_trend(label, drawn, covariate, names, extra, into=dissipation_trends)
     several_free = len(free_laws) > 1
     for law, law_runs in free_laws.items():
         names = _common(law_runs, drag_only=True)
@@ -646,6 +714,7 @@ def analyse_campaign(
     for done in finish:
         done(results_of_calls)
     contact = _merge(found["contact"])
+    dissipation = _merge(found["dissipation"])
     zeta0 = _merge(found["zeta0"])
     series_pop = _merge(found["series"])
     derived = (
@@ -680,6 +749,8 @@ def analyse_campaign(
         quantities=described,
         left_out=left_out,
         sigma_scales=scales,
+        dissipation=dissipation,
+        dissipation_trends=dissipation_trends,
     )
 
 

@@ -67,6 +67,9 @@ class FitDigest:
     comparison : dict or None
         What the choice of a group's law needs of the fit's law comparison (a fit with
         ``law="auto"``; :func:`bayestribo.campaign.laws.comparison_digest`).
+    turning_points : dict or None
+        The law-free ΔE(A) from the run's turning points (``amplitude``, ``mean``,
+        ``sd``, ``unit``, ``amplitude_unit``), for :mod:`bayestribo.campaign.dissipation`.
     """
 
     run_name: str
@@ -82,6 +85,7 @@ class FitDigest:
     quantities: dict[str, dict[str, Any]] = field(default_factory=dict)
     left_out: dict[str, str] = field(default_factory=dict)
     comparison: dict[str, Any] | None = None
+    turning_points: dict[str, Any] | None = None
 
     def samples(self, name: str) -> NDArray[np.float64]:
         """The subset of draws of ``name``."""
@@ -197,7 +201,17 @@ def digest_fit(
         quantities=described,
         left_out=left_out,
         comparison=comparison_digest(getattr(result, "law_comparison", None)),
+        turning_points=_turning_points(result),
     )
+
+
+def _turning_points(result: Any) -> dict[str, Any] | None:
+    """The law-free ΔE(A) band a digest keeps (its mean and sd at each swing)."""
+    band = getattr(result, "turning_point_dissipation", None)
+    if not isinstance(band, dict) or not band.get("amplitude"):
+        return None
+    keys = ("amplitude", "mean", "sd", "unit", "amplitude_unit")
+    return {k: band.get(k) for k in keys}
 
 
 class _Drawn:
