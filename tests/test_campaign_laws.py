@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from _law_recording import law_recording
+from _law_recording import law_recording, swing_dissipation
 
 from bayestribo import fit
 from bayestribo.campaign.analysis import analyse_campaign, sigma_scale
@@ -83,8 +83,20 @@ def test_a_campaign_in_a_drag_law_compares_its_quantities_across_loads(fits):
     # the between-run σ prior of c₂ is half its typical value, as 0.01 is for ζ
     assert analysis.sigma_scales["zeta"] == 0.01
     assert analysis.sigma_scales["c2_SI"] == pytest.approx(C2 / 2, rel=0.2)
+    # the law-free answer: ΔE at three swings every run reaches, per group and against
+    # the load, against the true ΔE(A) of the drag by an independent integration
+    pop = analysis.dissipation
+    assert len(pop.parameters) == 3 and all(n.startswith("ΔE(A=") for n in pop.parameters)
+    swings = [float(n.split("=")[1].split()[0]) for n in pop.parameters]
+    truth = swing_dissipation(_drag, np.array(swings))
+    for group in pop.groups.values():
+        for name, true in zip(pop.parameters, truth, strict=True):
+            lo, hi = np.quantile(group.mean[name], [0.005, 0.995])
+            assert lo < true < hi, (group.label, name, lo, true, hi)
+    flat = analysis.dissipation_trends["lubricant=oil"].slope_summary(pop.parameters[1])
+    assert flat["interval"][0] < 0.0 < flat["interval"][1]
     rows = analysis.group_rows()
-    assert {r["parameter"] for r in rows} == {"zeta", "c2_SI"}
+    assert {r["parameter"] for r in rows} == {"zeta", "c2_SI", *pop.parameters}
     assert all(r["law"] == "viscous+quadratic" for r in analysis.runs)
     assert all("c2_SI" in r and "mu_k" not in r for r in analysis.runs)
 
