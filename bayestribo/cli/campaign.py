@@ -85,6 +85,13 @@ def register(subparsers: Any) -> None:
     )
     p.add_argument("--prob", type=float, default=0.95, help="credible-interval probability")
     p.add_argument(
+        "--against",
+        default="load_N",
+        metavar="KEY",
+        help="numeric sidecar key the trends are inferred against (a series' runs at two "
+        "or more values of it; e.g. temperature_C)",
+    )
+    p.add_argument(
         "--compare-laws",
         action="store_true",
         help="choose one law per group of repeats from the runs' law comparisons "
@@ -455,6 +462,7 @@ def _run_locked(args: argparse.Namespace, folder: Path, paths: list[Path], out: 
         analysis = analyse_campaign(
             fitted,
             by,
+            covariate=args.against,
             prob=args.prob,
             seed=args.seed,
             max_steps=args.population_steps,
@@ -471,6 +479,7 @@ def _run_locked(args: argparse.Namespace, folder: Path, paths: list[Path], out: 
             "seed": args.seed,
             "fit": fit_kwargs,
             "population_steps": args.population_steps,
+            "against": args.against,
         },
     }
     if laws is not None:
