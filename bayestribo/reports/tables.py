@@ -105,6 +105,8 @@ def prose(text: str, *, paths: Mapping[str, str] | None = None) -> str:
     'the law viscous damping + Coulomb friction misfits; fit with law = auto (--law auto)'
     >>> prose("the law quadratic holds; the power of the test")
     'the law quadratic drag holds; the power of the test'
+    >>> prose("raise max_steps (--param max_steps=20000)")
+    'raise maximum number of steps (--param max_steps=20000)'
     >>> prose("/d/r.csv: 1 row(s) have no value for velocity_m_per_s; they are left out "
     ...       "of the run (give columns=[...] with 'ignore' for a channel not to use)",
     ...       paths={"/d/r.csv": "r"})
@@ -117,7 +119,8 @@ def prose(text: str, *, paths: Mapping[str, str] | None = None) -> str:
     text = re.sub(r" \(give columns=\[\.\.\.\][^)]*\)", "", text)
     text = re.sub(r" \(printed as '[^']*'\)", "", text)  # the terminal's label
     text = text.replace("law='auto'", "law = auto")
-    text = re.sub(r"\bmax_steps\b", "maximum number of steps", text)
+    # the setting in words, but not inside the option that sets it (--param max_steps=N)
+    text = re.sub(r"(?<!--param )\bmax_steps\b(?!=)", "maximum number of steps", text)
     from bayestribo.model.laws import TERMS
 
     own = {p.name: p.symbol for t in TERMS.values() for p in t.parameters}
