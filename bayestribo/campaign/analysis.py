@@ -658,7 +658,7 @@ def analyse_campaign(
             described.setdefault(
                 n,
                 {
-                    "symbol": n,
+                    "symbol": n.replace("A=", ""),
                     "unit": str((getattr(members[0], "turning_points", None) or {}).get("unit")),
                     "label": "energy dissipated per cycle at this swing, from the turning "
                     "points (law-free)",

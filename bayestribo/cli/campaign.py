@@ -219,9 +219,12 @@ def _text(
                 f"{q.get('symbol', name)} is at each run's own initial amplitude: runs "
                 "released from other swings compare it at other swings."
             )
-    titles = {"pooled over loads": " (pooled over loads)"}
+    titles = {"pooled over loads": " (pooled over loads)", "ΔE (law-free)": ", law-free ΔE"}
+    rows = analysis.group_rows()
+    trends = analysis.trend_rows()
+    width = max([4, *(len(_symbol(analysis, r["parameter"])) for r in [*rows, *trends])])
     current = None
-    for r in analysis.group_rows():
+    for r in rows:
         words = _words(r["group"])
         if r["kind"] == "no contact":
             group = "no contact (ζ₀)" + ("" if words == "all" else f": {words}")
@@ -235,8 +238,7 @@ def _text(
         symbol = _symbol(analysis, r["parameter"])
         mean = _interval(r["mean_median"], r["mean_low"], r["mean_high"])
         sigma = _interval(r["sigma_median"], r["sigma_low"], r["sigma_high"])
-        lines.append(f"    {symbol:4s} mean {mean:34s} σ {sigma}")
-    trends = analysis.trend_rows()
+        lines.append(f"    {symbol:{width}s} mean {mean:34s} σ {sigma}")
     covariates = list(dict.fromkeys(r["covariate"] for r in trends))
     for covariate in covariates:
         name, unit = _COVARIATES.get(covariate, (covariate, "unit"))
@@ -255,7 +257,8 @@ def _text(
                 current = series
             symbol = _symbol(analysis, r["parameter"])
             slope = _interval(r["slope_median"], r["slope_low"], r["slope_high"])
-            lines.append(f"    {symbol:4s} {slope:40s} P(slope > 0) = {r['prob_positive']:.3f}")
+            positive = f"P(slope > 0) = {r['prob_positive']:.3f}"
+            lines.append(f"    {symbol:{width}s} {slope:40s} {positive}")
     unconverged = [r["run_id"] for r in analysis.runs if not r.get("converged", True)]
     if failures or analysis.excluded or unconverged or not analysis.converged:
         lines.append("")
