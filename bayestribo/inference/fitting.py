@@ -58,6 +58,7 @@ def fit(
     correct_channels: bool = True,
     notch: float | Literal["auto"] | None = None,
     law: str | Law | None = None,
+    law_progress: Callable[[str], None] | None = None,
 ) -> FitResult:
     """Posterior of ζ and μ_k (or ζ₀, or the friction displacement) for one run, or
     of the parameters of another dissipation law, with the energy dissipated per
@@ -111,14 +112,20 @@ def fit(
         (``"viscous+coulomb"``, the default; ``"viscous+quadratic"``,
         ``"coulomb+hysteretic"``, ...) or a :class:`~bayestribo.model.laws.Law`. A run
         without contact (``load_N`` of 0) drops the law's friction terms. ``"auto"``
-        fits every law of :data:`bayestribo.inference.comparison.AUTO_LAWS` and keeps
-        the simplest adequate one as good as the best by PSIS-LOO
+        compares the laws the registry's terms make by the rule of
+        :mod:`bayestribo.model.laws.candidates`
+        (:func:`bayestribo.inference.comparison.auto_laws`): each is taken to its
+        optimum, those too far behind the best there to win are screened out, the rest
+        sampled, and the simplest adequate one as good as the best by PSIS-LOO is kept
         (:mod:`bayestribo.inference.comparison`; the result's ``law_comparison`` says
         which and why); when none of them is adequate, the law-free ``"free"`` law
         (ΔE(A) any increasing polynomial of degree 1-4) is fitted too. The result is
         the chosen law's fit with every one of its terms (on a run with contact, what
         ``law=<its name>`` gives); a law without a closed form is fitted again in its
         own frame, from the optimiser's optimum.
+    law_progress : callable, optional
+        With ``law="auto"``: called with one line of text per law as the comparison
+        goes (its optimum; then its sampling, or why it is not sampled).
 
     Returns
     -------
@@ -158,16 +165,17 @@ def fit(
     )
     comparison = None
     if auto:
-        from bayestribo.inference.comparison import AUTO_LAWS, compare_prepared
+        from bayestribo.inference.comparison import auto_laws, compare_prepared
 
         comparison, runs = compare_prepared(
             prepared,
-            AUTO_LAWS,
+            auto_laws(),
             seed=int(rng.integers(2**31)),
             model=model,
             settings=settings,
             discrepancy=discrepancy,
             law_free=True,
+            progress=law_progress,
         )
         common = prepared
         sampled = runs[comparison.verdict]
