@@ -82,9 +82,7 @@ def _stub_fits(monkeypatch, shifts: dict[str, float]) -> list[str]:
         d = len(posterior.names)
         chains = rng.normal(size=(2, 40, d))
         lpd = _pointwise(shifts[law], 0.01, 2) + 0.001 * rng.normal(size=(2, 40, N))
-        run = SimpleNamespace(
-            chains=chains, log_prob=np.zeros((2, 40)), converged=True, reasons=[]
-        )
+        run = SimpleNamespace(chains=chains, log_prob=np.zeros((2, 40)), converged=True, reasons=[])
         fit = SimpleNamespace(run=run, posterior=posterior, theta_map=np.zeros(d))
         idata = az.from_dict(
             posterior={n: chains[..., i] for i, n in enumerate(posterior.names)},
@@ -97,6 +95,7 @@ def _stub_fits(monkeypatch, shifts: dict[str, float]) -> list[str]:
     monkeypatch.setattr(comparison, "_reduction", lambda *args: None)
     monkeypatch.setattr(comparison, "_loo", lambda idata: 0.1)
     monkeypatch.setattr(comparison, "_checks", lambda posterior, theta: {"adequate": True})
+    monkeypatch.setattr(comparison, "turning_point_screen", lambda prepared, laws: {})
     return sampled
 
 
@@ -115,7 +114,7 @@ def test_only_the_laws_that_can_still_win_are_sampled(monkeypatch):
         assert row["screen"]["elpd_diff"] > row["screen"]["limit"]
     # the verdict among the laws sampled: coulomb is as good and simpler
     assert c.verdict == "coulomb" and set(c.as_good) == {"coulomb", "viscous+coulomb"}
-    assert "too far behind the best at their optimum" in c.describe()
+    assert "too far behind the best to win (screened)" in c.describe()
     assert "viscous, quadratic" in c.describe()
     # a line per law at its optimum, one for the screening, one per law sampled
     assert sum("optimum found" in line for line in lines) == 4
@@ -136,6 +135,19 @@ def test_one_law_left_after_screening_is_the_verdict(monkeypatch):
         SimpleNamespace(name="stub"), list(shifts), seed=1, rivals=False, screening=False
     )
     assert sampled == ["viscous", "viscous+coulomb"]
+
+
+def test_a_law_whose_dissipation_cannot_follow_the_turning_points_is_judged_so():
+    # ΔE(A) of viscous damping and Coulomb friction, known to 0.1 %
+    amp = np.linspace(1.0, 10.0, 12)
+    mean = 4 * 0.03 * amp + 2 * np.pi * 0.02 * amp**2
+    sd = 1e-3 * mean
+    chi2 = {
+        law: comparison.turning_point_misfit(law, amp, mean, sd, 10.0)
+        for law in ("viscous+coulomb", "coulomb+hysteretic", "coulomb+quadratic", "power")
+    }
+    assert chi2["viscous+coulomb"] < 1e-6 and chi2["coulomb+hysteretic"] < 1e-6
+    assert chi2["coulomb+quadratic"] > 1e4 and chi2["power"] > 1e4
 
 
 def _args(**kw) -> argparse.Namespace:

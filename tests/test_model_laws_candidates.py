@@ -90,9 +90,7 @@ def test_overlapping_terms_never_share_a_law():
 def test_a_registered_term_is_a_candidate_with_no_edit_elsewhere(lab_term):
     laws = auto_laws()
     assert "quartic_test" in laws
-    assert {"viscous+quartic_test", "coulomb+quartic_test", "hysteretic+quartic_test"} <= set(
-        laws
-    )
+    assert {"viscous+quartic_test", "coulomb+quartic_test", "hysteretic+quartic_test"} <= set(laws)
     assert "viscous+coulomb+quartic_test" in laws
     # its registration keeps it out of the sums it duplicates
     assert "quadratic+quartic_test" not in laws

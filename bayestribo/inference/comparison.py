@@ -164,6 +164,10 @@ SMALL_ELPD_DIFFERENCE = 4.0
 #: elpd estimated at its optimum must fall behind the best's to be screened out, not
 #: sampled (module notes, Screening).
 SCREEN_FACTOR = 3.0
+#: How many times the best law's χ² against the turning points' ΔE(A) (plus the number
+#: of swings) a law's must exceed for it to be screened out before its optimum is
+#: sought (module notes, Screening).
+TURNING_POINT_FACTOR = 1000.0
 #: Pareto k above which PSIS-LOO is unreliable.
 PARETO_K_LIMIT = 0.7
 #: Log posterior density a law's optimum may lose with its extra terms at zero and
@@ -234,8 +238,8 @@ class LawComparison:
             text += "; " + _equivalence_text(self.equivalent, self.table)
         if self.screened:
             text += (
-                f"; {len(self.screened)} not sampled, too far behind the best at their "
-                f"optimum to win: {', '.join(self.screened)}"
+                f"; {len(self.screened)} not sampled, too far behind the best to win "
+                f"(screened): {', '.join(self.screened)}"
             )
         return text
 
@@ -603,6 +607,114 @@ def screen(
     return out
 
 
+def _shape_grid(p: Any, reference: float, n: int = 25) -> NDArray:
+    """Values of a parameter that shapes a term (not its amount) to scan: its prior's
+    range where that is finite, else its support's."""
+    spec = p.prior(reference)
+    low, high = float(spec.get("low", p.low)), float(spec.get("high", p.high))
+    if not (np.isfinite(low) and np.isfinite(high)):
+        low, high = p.low, p.high
+    return np.linspace(low, high, n) if np.isfinite(high) else np.array([low])
+
+
+def _term_bases(term: Any, swings: NDArray, reference: float) -> list[tuple[NDArray, Any]] | None:
+    """Each shape of a term's ΔE(A) at ``swings`` per unit of its amount (the parameter
+    whose null stops the term and in which ΔE(A) is linear), with that parameter;
+    None when the term has no such parameter (it is then never screened this way)."""
+    for amount in term.parameters:
+        others = [p for p in term.parameters if p is not amount]
+        grids = [_shape_grid(p, reference) for p in others]
+        combos = np.zeros((1, 0))
+        if others:
+            combos = np.array(np.meshgrid(*grids, indexing="ij")).reshape(len(others), -1).T
+        out = []
+        for combo in combos:
+            values = {p.name: np.array([v]) for p, v in zip(others, combo, strict=True)}
+
+            def at(x: float, values: dict = values, name: str = amount.name) -> NDArray:
+                vals = {**values, name: np.array([x])}
+                return np.asarray(term.dissipation(swings, vals, reference), dtype=float).ravel()
+
+            with np.errstate(all="ignore"):
+                zero, one = at(float(amount.null)), at(float(amount.null) + 1.0)
+                two = at(float(amount.null) + 2.0)
+            if not (np.all(zero == 0.0) and np.allclose(two, 2.0 * one, rtol=1e-9)):
+                out = None
+                break
+            out.append((one, amount))
+        if out:
+            # shapes that do not differ (a parameter ΔE(A) does not see) count once
+            unique = {tuple(np.round(b / (np.max(np.abs(b)) or 1.0), 12)): (b, a) for b, a in out}
+            return list(unique.values())
+    return None
+
+
+def turning_point_misfit(
+    law: str, swings: NDArray, mean: NDArray, sd: NDArray, reference: float
+) -> float | None:
+    """The least χ² of a law's ΔE(A) over one cycle of the harmonic motion
+    (:meth:`~bayestribo.model.laws.Law.dissipation`, each term's amount within its
+    support, each shape parameter over its prior) against the turning points' ΔE(A)
+    (:func:`bayestribo.inference.dissipation.turning_point_dissipation`); None when a
+    term's ΔE(A) is not linear in an amount (the law is then not judged this way)."""
+    from itertools import product
+
+    from scipy.optimize import lsq_linear
+
+    per_term = [_term_bases(t, swings, reference) for t in _law(law).terms]
+    if any(b is None for b in per_term):
+        return None
+    best = np.inf
+    for choice in product(*per_term):
+        design = np.column_stack([b / sd for b, _ in choice])
+        low = [a.low - a.null for _, a in choice]
+        high = [a.high - a.null for _, a in choice]
+        fit = lsq_linear(design, mean / sd, bounds=(low, high))
+        best = min(best, float(2.0 * fit.cost))
+    return best
+
+
+def turning_point_screen(
+    prepared: PreparedRun, laws: Sequence[str], factor: float | None = None
+) -> dict[str, dict[str, Any]]:
+    """Laws whose ΔE(A) cannot follow the turning points' (module notes, Screening):
+    law -> ``chi2`` (:func:`turning_point_misfit`), ``limit`` (``factor`` times the
+    best law's χ² plus the number of swings; :data:`TURNING_POINT_FACTOR` by default)
+    and ``screened``. Empty without a turning-point ΔE(A)."""
+    from bayestribo.inference.dissipation import (
+        dissipation_amplitudes,
+        turning_point_dissipation,
+    )
+    from bayestribo.model.laws import PhysicalScale
+
+    factor = TURNING_POINT_FACTOR if factor is None else float(factor)
+    decay = prepared.decay
+    peaks = np.asarray(decay.peaks.value, dtype=float) / decay.scaling.length_scale
+    swings = dissipation_amplitudes(peaks)
+    try:
+        measured = turning_point_dissipation(peaks, swings, PhysicalScale())
+    except ValueError:
+        measured = None
+    if not measured or not measured.get("amplitude"):
+        return {}
+    mean = np.asarray(measured["mean"], dtype=float)
+    sd = np.asarray(measured["sd"], dtype=float)
+    ok = np.isfinite(mean) & np.isfinite(sd) & (sd > 0)
+    if ok.sum() < 3:
+        return {}
+    amp = np.asarray(measured["amplitude"], dtype=float)[ok]
+    reference = float(abs(prepared.data.y0))
+    chi2 = {law: turning_point_misfit(law, amp, mean[ok], sd[ok], reference) for law in laws}
+    known = [v for v in chi2.values() if v is not None and np.isfinite(v)]
+    if not known:
+        return {}
+    limit = factor * (min(known) + int(ok.sum()))
+    return {
+        law: {"chi2": value, "limit": limit, "screened": value is not None and value > limit}
+        for law, value in chi2.items()
+    }
+
+
 def _optimise(
     law: str,
     prepared: PreparedRun,
@@ -810,14 +922,34 @@ def compare_prepared(
 
     # smallest laws first: their optima are starting points of the laws that nest them
     ordered = sorted(laws, key=_complexity)
-    for k, law in enumerate(ordered, 1):
-        optimise(law, k, len(ordered))
+    # laws whose ΔE(A) cannot follow the turning points' are not taken to an optimum
+    early = turning_point_screen(prepared, ordered) if screening else {}
+    for law in ordered:
+        if early.get(law, {}).get("screened"):
+            table[law] = {
+                "law": _law(law).name,
+                "sampled": False,
+                "converged": None,
+                "screened": True,
+                "screen": {"stage": "turning points", **early[law]},
+            }
+    first = [law for law in ordered if law not in table]
+    if len(first) < len(ordered):
+        say(
+            f"{len(ordered) - len(first)} of {len(ordered)} laws cannot follow the turning "
+            "points' ΔE(A) (not fitted): " + ", ".join(law for law in ordered if law not in first)
+        )
+    for k, law in enumerate(first, 1):
+        optimise(law, k, len(first))
     screens: dict[str, dict[str, Any]] = {}
     if screening and len(found) >= 2:
         screens = screen(
             {law: at.pointwise for law, at in found.items()},
             {law: at.n_parameters for law, at in found.items()},
         )
+    for law in ordered:
+        if law in screens:
+            screens[law] = {"stage": "optimum", **screens[law]}
     screened = [law for law in ordered if screens.get(law, {}).get("screened")]
     for law in screened:
         at = found[law]
@@ -838,6 +970,7 @@ def compare_prepared(
             f"{len(screened)} of {len(found)} laws cannot win at their optimum (not sampled): "
             + ", ".join(screened)
         )
+    screened = [law for law in ordered if table.get(law, {}).get("screened")]
     survivors = [law for law in ordered if law in found and law not in screened]
     for k, law in enumerate(survivors, 1):
         sample_one(law, k, len(survivors))
