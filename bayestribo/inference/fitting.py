@@ -215,7 +215,14 @@ def fit(
             attrs["dissipation_json"] = json.dumps(plain_data(averaged))
         comparison = _check_halves(comparison, common, rng, settings, model, discrepancy)
         record = comparison.to_dict()
-        record["departures"] = _law_departures(common, runs, result)
+        screened = {
+            law: row["map"]
+            for law, row in record["table"].items()
+            if row.get("screened") and row.get("map")
+        }
+        record["departures"] = _law_departures(
+            common, runs, result, screened, model=model, discrepancy=discrepancy
+        )
         result.attrs["law_comparison_json"] = json.dumps(plain_data(record))
     result.attrs["seconds"] = time.perf_counter() - start
     return result
@@ -346,12 +353,20 @@ _DEPARTURE_DRAWS = 200
 
 
 def _law_departures(
-    common: PreparedRun, runs: Mapping[str, Any], result: FitResult
+    common: PreparedRun,
+    runs: Mapping[str, Any],
+    result: FitResult,
+    optima: Mapping[str, Mapping[str, float]] | None = None,
+    *,
+    model: str = "exact",
+    discrepancy: bool = False,
 ) -> dict[str, Any]:
     """How close each compared law's ΔE(A) comes to the turning points' (the law-free
     answer), by law: :func:`~bayestribo.inference.dissipation.shape_agreement` of its
     posterior mean at the result's swings, from :data:`_DEPARTURE_DRAWS` draws of the
-    comparison's fit on the common preparation. Empty without a turning-point answer."""
+    comparison's fit on the common preparation; for a law screened out at its optimum
+    (``optima``: its values there by name), of its ΔE(A) at that optimum. Empty
+    without a turning-point answer."""
     import dataclasses
 
     from bayestribo.inference.dissipation import (
@@ -378,6 +393,16 @@ def _law_departures(
             own = dissipation_band(sampled.posterior, pick, swings, scale)
             out[law] = shape_agreement(own, measured)
         except ValueError:
+            continue
+    for law, values in (optima or {}).items():
+        posterior = build_posterior(
+            common.data, model=model, friction=True, discrepancy=discrepancy, law=get_law(law)
+        )
+        try:
+            point = np.array([[values[n] for n in posterior.names]], dtype=float)
+            own = dissipation_band(posterior, point, swings, scale)
+            out[law] = shape_agreement(own, measured)
+        except (KeyError, ValueError):
             continue
     return out
 
