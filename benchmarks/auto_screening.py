@@ -4,9 +4,10 @@ Each recording is fitted with ``fit(..., law="auto")`` by two worker processes
 (``benchmarks/_auto_worker.py``), one importing this tree and one a baseline worktree
 (``--baseline``, e.g. ``git worktree add --detach /tmp/wt-base 2730dd2``), in
 alternation: for each repeat and each recording, the two trees one after the other, the
-first of them alternating between repeats. The machine is shared, so the times compared
-are each process's CPU time of the call (``time.process_time``), with the wall time and
-the load averages beside them.
+first of them alternating between repeats, each worker having fitted the bundled run
+with the default law once before (numba's cached kernels loaded). The machine is
+shared, so the times compared are each process's CPU time of the call
+(``time.process_time``), with the wall time and the load averages beside them.
 
 Recordings: the bundled run ``data/runs/glycerol-N0.31-r1.csv`` and the five real
 recordings of ``../shared/external-data`` (``--external``), read as
@@ -45,7 +46,7 @@ from typing import Any
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from _machine import commit, machine, write_results  # noqa: E402
+from _machine import commit, write_results  # noqa: E402
 
 ROOT = HERE.parent
 BUNDLED = ROOT / "data" / "runs" / "glycerol-N0.31-r1.csv"
@@ -92,6 +93,7 @@ class Worker:
             cwd=str(tree),
         )
         self.module = json.loads(self.proc.stdout.readline())["module"]
+        self.fit({"warm_up": True, "path": str(BUNDLED)})
 
     def fit(self, request: dict[str, Any]) -> dict[str, Any]:
         self.proc.stdin.write(json.dumps(request) + "\n")
@@ -160,7 +162,10 @@ def main(argv: list[str] | None = None) -> int:
             args.output,
             {
                 "complete": complete,
-                "settings": {k: v if isinstance(v, (int, float, list, type(None))) else str(v) for k, v in vars(args).items()},
+                "settings": {
+                    k: v if isinstance(v, (int, float, list, type(None))) else str(v)
+                    for k, v in vars(args).items()
+                },
                 "commits": {name: commit(tree, short=True) for name, tree in trees.items()},
                 "modules": {name: w.module for name, w in workers.items()},
                 "load_average_start": list(load_start),
