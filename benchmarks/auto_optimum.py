@@ -3,7 +3,7 @@
 The run is case ``--case`` of ``benchmarks/laws.py`` (the independent solve_ivp
 simulator of ``benchmarks/_laws_sim.py``, run ``--index``), prepared as
 ``bayestribo.fit`` prepares it. Each law of :data:`bayestribo.inference.comparison.
-AUTO_LAWS` is optimised as the comparison does it, smallest first
+auto_laws()` is optimised as the comparison does it, smallest first
 (:func:`bayestribo.inference.pipeline.find_optimum`, started also at the optimum of the
 largest nested law optimised before, :func:`bayestribo.inference.comparison.
 _nested_start`); unlike the comparison, a nested law's optimum is the optimiser's, not
@@ -52,7 +52,7 @@ def optima(case: str, noise: float, index: int, seed: int) -> list[dict[str, Any
         prepared = prepare(run)
         found: dict[str, dict[str, float]] = {}
         out = []
-        for law in sorted(comparison.AUTO_LAWS, key=comparison._complexity):
+        for law in sorted(comparison.auto_laws(), key=comparison._complexity):
             posterior = comparison._posterior(law, prepared.data, "exact", False)
             nested = comparison._nested_start(law, prepared, found)
             wall, cpu = time.perf_counter(), time.process_time()

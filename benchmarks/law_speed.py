@@ -12,7 +12,7 @@ with seed 0 first (imports, compilation and numba's cache are timed apart), then
   and ``coulomb+power`` of ``benchmarks/laws.py``, 10x the vibrometer's resolution),
   written to CSV once and read by both trees;
 * laws: the default ``viscous+coulomb`` and each law of
-  :data:`bayestribo.inference.comparison.AUTO_LAWS` without a closed form (``--laws``);
+  :func:`bayestribo.inference.comparison.auto_laws` without a closed form (``--laws``);
 * seeds 1..``--seeds`` for each run and law.
 
 Reported per fit: wall time of :func:`bayestribo.inference.fit`; ESS_min and ESS per
@@ -56,7 +56,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 RUN = ROOT / "data" / "runs" / "glycerol-N0.31-r1.csv"
 DEFAULT = "viscous+coulomb"
-#: The laws of AUTO_LAWS without a closed form (as of this benchmark's writing).
+#: The laws of auto_laws() without a closed form (as of this benchmark's writing).
 LAWS = (
     "viscous+quadratic",
     "viscous+coulomb+quadratic",

@@ -69,8 +69,14 @@ def test_a_drag_at_zero_on_a_coulomb_record_reduces_to_coulomb_unsampled(coulomb
 
 @pytest.mark.filterwarnings("ignore::bayestribo.errors.ConvergenceWarning")
 def test_an_extra_term_the_data_need_is_sampled(both_run):
+    # without screening, which would leave coulomb alone unsampled on this record
     c, runs = compare_prepared(
-        both_run, ["coulomb", "viscous+coulomb"], seed=3, settings=SETTINGS, rivals=False
+        both_run,
+        ["coulomb", "viscous+coulomb"],
+        seed=3,
+        settings=SETTINGS,
+        rivals=False,
+        screening=False,
     )
     assert c.equivalent == {}
     assert set(runs) == {"coulomb", "viscous+coulomb"}

@@ -18,6 +18,7 @@ import argparse
 import json
 import sys
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -84,6 +85,11 @@ def register(subparsers: Any) -> None:
         "does not hold, --law auto)",
     )
     p.add_argument("--progress", action="store_true", help="show a progress bar (stderr)")
+    p.add_argument(
+        "--quiet",
+        action="store_true",
+        help="no progress lines (--law auto prints one per law compared on a terminal)",
+    )
     p.add_argument("--skip", type=int, default=1, help="oscillations to skip after the release")
     p.add_argument(
         "--max-steps", type=int, default=20_000, help="ceiling on the steps per ensemble"
@@ -180,6 +186,18 @@ def write_outputs(result: Any, out_dir: Path, stem: str) -> list[Path]:
     return paths
 
 
+def law_progress(args: argparse.Namespace) -> Callable[[str], None] | None:
+    """The progress line of ``--law auto``: one line per law compared on stderr, when
+    stderr is a terminal and neither ``--quiet`` nor ``--json`` is given; else None."""
+    if args.law != "auto" or args.quiet or args.json or not sys.stderr.isatty():
+        return None
+
+    def say(text: str) -> None:
+        print(f"bayestribo fit --law auto: {text}", file=sys.stderr, flush=True)
+
+    return say
+
+
 def run(args: argparse.Namespace) -> int:
     """Read the run, fit, print; exit status 1 when the sampler did not converge."""
     from bayestribo.errors import MisfitWarning
@@ -205,6 +223,7 @@ def run(args: argparse.Namespace) -> int:
             notch=args.notch,
             max_steps=args.max_steps,
             law=args.law,
+            law_progress=law_progress(args),
         )
     # the run is named by the path the user gave
     result.attrs["run_name"] = str(args.run)

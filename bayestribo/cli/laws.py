@@ -6,7 +6,10 @@ Examples::
     bayestribo laws --json
 
 A law is any set of these terms joined with ``+`` (``viscous+coulomb``, the default;
-``viscous+quadratic+coulomb``, ...), the value of ``bayestribo fit --law``.
+``viscous+quadratic+coulomb``, ...), the value of ``bayestribo fit --law``. The text
+ends with the laws ``--law auto`` compares, built from the registry by the rule of
+:mod:`bayestribo.model.laws.candidates` (each term's ``overlaps`` and ``compared`` are
+in the JSON).
 """
 
 from __future__ import annotations
@@ -22,7 +25,8 @@ __all__ = ["add_law_option", "law_table", "register"]
 LAW_HELP = (
     "dissipation law: registered terms joined with '+' (default viscous+coulomb; "
     "'bayestribo laws' lists the terms, their parameters and ΔE(A)), or 'auto': the "
-    "simplest adequate law as good as the best of several, by PSIS-LOO"
+    "simplest adequate law as good as the best, by PSIS-LOO, of the laws the registered "
+    "terms make ('bayestribo laws' ends with them)"
 )
 
 
@@ -53,6 +57,8 @@ def law_table() -> list[dict[str, Any]]:
             "term": term.name,
             "kind": term.kind,
             "description": term.description,
+            "overlaps": list(term.overlaps),
+            "compared": term.compared,
             "parameters": [
                 {
                     "name": p.name,
@@ -77,7 +83,8 @@ def register(subparsers: Any) -> None:
         description=(
             "List the registered dissipation terms: each one's force, its parameters "
             "(symbol, unit of the dimensionless value, support) and the energy it "
-            "dissipates per cycle ΔE(A). A law is any set of terms joined with '+'."
+            "dissipates per cycle ΔE(A). A law is any set of terms joined with '+'; "
+            "the laws --law auto compares follow."
         ),
     )
     p.add_argument("--json", action="store_true", help="print one JSON array instead of text")
@@ -104,4 +111,8 @@ def run(args: argparse.Namespace) -> int:
         "Simulate one: bayestribo simulate OUT.csv --law NAME --param NAME=VALUE ... "
         "(a parameter not given takes its typical value)."
     )
+    from bayestribo.model.laws.candidates import CANDIDATE_RULE, candidate_laws
+
+    print(f"--law auto compares {CANDIDATE_RULE}:")
+    print("    " + ", ".join(candidate_laws()))
     return 0

@@ -10,7 +10,13 @@ the original three-way comparison's names stay valid:
 * ``"both"``: ζ and friction free (``viscous+coulomb``, the default fit of a run with
   contact).
 
-``fit(..., law="auto")`` compares :data:`AUTO_LAWS`.
+Candidates. ``fit(..., law="auto")`` compares :func:`auto_laws`, the laws the rule of
+:mod:`bayestribo.model.laws.candidates` builds from the registry of terms: every term
+alone, every pair of terms and the paper's law with one more term, but no law holding
+a term and one it overlaps (a term's registration says which: power-law drag overlaps
+viscous damping, quadratic drag and the friction proportional to amplitude; that
+friction overlaps viscous damping). A term a lab registers is a candidate with no edit
+here.
 
 The laws are compared by their expected log pointwise predictive density estimated
 with Pareto-smoothed importance-sampling leave-one-out cross-validation (PSIS-LOO,
@@ -55,6 +61,24 @@ table row says ``reduces_to``, ``terms_at_zero``, ``sampled`` False and
 ``converged`` None (not "converged"), with the misfit checks at its optimum, and the
 comparison's text names it. The law-free fit never reduces.
 
+Screening. Every law is first taken to its optimum (smallest first, each starting
+also from the optimum of the largest law it nests), on the posterior it would be
+sampled on (the second pass of :func:`bayestribo.inference.pipeline.sample`), and its
+expected log predictive density estimated there: the log-likelihood of the increments
+at the optimum less one per sampled parameter (:func:`optimum_elpd`, Akaike's
+estimate, which PSIS-LOO's matches for a law whose posterior is near normal). A law
+whose estimate falls behind the best one's by more than :data:`SCREEN_FACTOR` (3)
+times the tie rule's reach, ``max(4, 2 dse)`` with dse the standard error of the
+pointwise difference at the two optima, cannot be as good as the best once sampled:
+it is *screened out*, not sampled and not compared by PSIS-LOO (:func:`screen`); its
+row says ``screened``, ``screen`` (the estimate, its sd and the limit) and the
+misfit checks at its optimum, and the comparison's text names it. The rest are
+sampled as before (a law that reduces to a nested law sampled is not), compared by
+PSIS-LOO, and decide the verdict. Against the sampled comparison of every candidate
+(``benchmarks/auto_screening.py``: the bundled run and the five real recordings of
+``../shared/external-data``, side by side with the comparison before screening) no
+law screened out was as good as the best there, and the verdicts are the same.
+
 Rivals. Simplicity settles a tie between a law and one that nests it; it does not
 settle one between laws of different mechanisms: viscous damping and a friction that
 grows with amplitude (``hysteretic``) make the same turning points, so one increment
@@ -80,7 +104,7 @@ import os
 import time
 import warnings
 import zlib
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -109,31 +133,41 @@ from bayestribo.io.run import Run
 from bayestribo.model.laws import Law, get_law
 from bayestribo.signal.increments import PiData
 
-__all__ = ["AUTO_LAWS", "LAWS", "LawComparison", "compare_dissipation_laws", "compare_prepared"]
+__all__ = [
+    "LAWS",
+    "LawComparison",
+    "LawOptimum",
+    "auto_laws",
+    "compare_dissipation_laws",
+    "compare_prepared",
+    "optimum_elpd",
+    "screen",
+]
 
 #: The original comparison's names and the laws they stand for.
 LAWS: Mapping[str, str] = {"viscous": "viscous", "coulomb": "coulomb", "both": "viscous+coulomb"}
-#: The laws ``law="auto"`` compares: the paper's law and its parts, drag that grows as
-#: the square of the speed (air, fluid), a power law of the speed with its exponent free,
-#: and a friction that grows with amplitude, alone or with Coulomb friction (told from
-#: viscous damping on a finer grid: rivals, module notes). Laws that trade one term for
-#: another of nearly the same ΔE(A) (viscous with power, viscous with hysteretic) are
-#: left out: their ridge makes them slow to sample and they add nothing the others
-#: cannot say.
-AUTO_LAWS: tuple[str, ...] = (
-    "viscous",
-    "coulomb",
-    "hysteretic",
-    "viscous+coulomb",
-    "viscous+quadratic",
-    "viscous+coulomb+quadratic",
-    "coulomb+hysteretic",
-    "coulomb+power",
-)
+
+
+def auto_laws() -> tuple[str, ...]:
+    """The laws ``law="auto"`` compares: :func:`bayestribo.model.laws.candidates.
+    candidate_laws` of the registry as it is now (module notes, Candidates)."""
+    from bayestribo.model.laws.candidates import candidate_laws
+
+    return candidate_laws()
+
+
 #: Increments per half cycle of the grid that compares rivals (module notes).
 TIE_GRID = 4
 #: elpd difference below which two laws are not told apart.
 SMALL_ELPD_DIFFERENCE = 4.0
+#: How many times the tie rule's reach (``max(SMALL_ELPD_DIFFERENCE, 2 dse)``) a law's
+#: elpd estimated at its optimum must fall behind the best's to be screened out, not
+#: sampled (module notes, Screening).
+SCREEN_FACTOR = 3.0
+#: How many times the best law's χ² against the turning points' ΔE(A) (plus the number
+#: of swings) a law's must exceed for it to be screened out before its optimum is
+#: sought (module notes, Screening).
+TURNING_POINT_FACTOR = 1000.0
 #: Pareto k above which PSIS-LOO is unreliable.
 PARETO_K_LIMIT = 0.7
 #: Log posterior density a law's optimum may lose with its extra terms at zero and
@@ -178,6 +212,10 @@ class LawComparison:
         optimum, so that it was neither sampled nor compared by PSIS-LOO (module
         notes); its table row says ``reduces_to``, ``terms_at_zero`` and
         ``sampled`` False.
+    screened : list of str
+        Laws screened out at their optimum: too far behind the best to win (module
+        notes, Screening), not sampled; their rows say ``screened`` and ``screen``
+        (the estimate at the optimum and the limit it passed).
     """
 
     run_name: str
@@ -190,12 +228,19 @@ class LawComparison:
     halves: dict[str, Any] | None = None
     rivals: dict[str, Any] | None = None
     equivalent: dict[str, str] = field(default_factory=dict)
+    screened: list[str] = field(default_factory=list)
 
     def describe(self) -> str:
-        """One sentence: the law chosen and why (and the laws that reduced to others)."""
+        """One sentence: the law chosen and why (the laws that reduced to others, and
+        those screened out at their optimum)."""
         text = self._choice()
         if self.equivalent:
             text += "; " + _equivalence_text(self.equivalent, self.table)
+        if self.screened:
+            text += (
+                f"; {len(self.screened)} not sampled, too far behind the best to win "
+                f"(screened): {', '.join(self.screened)}"
+            )
         return text
 
     def _choice(self) -> str:
@@ -256,6 +301,7 @@ class LawComparison:
             "table": self.table,
             "warnings": list(self.warnings),
             "equivalent": dict(self.equivalent),
+            "screened": list(self.screened),
         }
 
 
@@ -460,6 +506,282 @@ def _nested_start(
     return start
 
 
+@dataclass
+class LawOptimum:
+    """One law at its optimum, before any sampling (the screening's input).
+
+    Attributes
+    ----------
+    law : str
+        The law compared.
+    posterior : Posterior
+        Its posterior on the first pass (variances from the observed channels).
+    optimum : tuple
+        Its maximum a posteriori there, Laplace covariance and μ_s/μ_k interval
+        (:func:`bayestribo.inference.pipeline.find_optimum`).
+    second : Posterior
+        The posterior that is sampled: the second pass's, variances from the law's
+        motion at ``optimum`` (:func:`bayestribo.inference.reweight.reweighted_posterior`),
+        or ``posterior`` where there is none.
+    second_optimum : tuple
+        The maximum a posteriori of ``second``.
+    pointwise : ndarray
+        Log-likelihood of each Π increment at ``second_optimum`` under ``second``.
+    """
+
+    law: str
+    posterior: Posterior
+    optimum: tuple[NDArray, NDArray, tuple[float, float] | None]
+    second: Posterior
+    second_optimum: tuple[NDArray, NDArray, tuple[float, float] | None]
+    pointwise: NDArray
+
+    @property
+    def n_parameters(self) -> int:
+        """Sampled parameters of its posterior."""
+        return len(self.second.names)
+
+
+def optimum_elpd(pointwise: NDArray, n_parameters: int) -> float:
+    """Expected log predictive density estimated at a law's optimum: the sum of the
+    pointwise log-likelihood there less one per sampled parameter (Akaike 1974; what
+    PSIS-LOO's ``p_loo`` is for a law whose posterior is near normal)."""
+    return float(np.sum(pointwise)) - float(n_parameters)
+
+
+def screen(
+    pointwise: Mapping[str, NDArray],
+    n_parameters: Mapping[str, int],
+    *,
+    factor: float | None = None,
+) -> dict[str, dict[str, Any]]:
+    """Which laws can still win, judged at their optima (module notes, Screening).
+
+    Parameters
+    ----------
+    pointwise : mapping of str to ndarray
+        Each law's log-likelihood of every Π increment at its optimum (one shape).
+    n_parameters : mapping of str to int
+        Each law's sampled parameters.
+    factor : float, optional
+        How many times the comparison's own tie rule, ``max(SMALL_ELPD_DIFFERENCE,
+        2 dse)``, a law must fall behind the best to be screened out; default
+        :data:`SCREEN_FACTOR`.
+
+    Returns
+    -------
+    dict
+        Law -> ``elpd_diff`` (the best law's :func:`optimum_elpd` less this one's),
+        ``dse`` (the standard error of that difference over the increments),
+        ``limit`` (the difference beyond which the law is screened out), ``best`` (the
+        law of the highest estimate) and ``screened`` (True: it cannot win). A law whose
+        estimate is not finite is screened out.
+    """
+    factor = SCREEN_FACTOR if factor is None else float(factor)
+    elpd = {
+        law: optimum_elpd(np.asarray(lpd, dtype=float), n_parameters[law])
+        for law, lpd in pointwise.items()
+    }
+    finite = [law for law, value in elpd.items() if np.isfinite(value)]
+    out: dict[str, dict[str, Any]] = {}
+    if not finite:
+        return {law: {"screened": False, "best": None} for law in elpd}
+    best = max(finite, key=elpd.__getitem__)
+    top = np.asarray(pointwise[best], dtype=float)
+    for law, value in elpd.items():
+        if law not in finite:
+            out[law] = {"elpd_diff": None, "dse": None, "limit": None, "best": best}
+            out[law]["screened"] = True
+            continue
+        d = top - np.asarray(pointwise[law], dtype=float)
+        dse = float(np.sqrt(d.size * np.var(d))) if d.size > 1 else 0.0
+        diff = elpd[best] - value
+        limit = factor * max(SMALL_ELPD_DIFFERENCE, 2.0 * dse)
+        out[law] = {
+            "elpd_diff": float(diff),
+            "dse": dse,
+            "limit": float(limit),
+            "best": best,
+            "screened": bool(diff > limit),
+        }
+    return out
+
+
+def _shape_grid(p: Any, reference: float, n: int = 25) -> NDArray:
+    """Values of a parameter that shapes a term (not its amount) to scan: its prior's
+    range where that is finite, else its support's."""
+    spec = p.prior(reference)
+    low, high = float(spec.get("low", p.low)), float(spec.get("high", p.high))
+    if not (np.isfinite(low) and np.isfinite(high)):
+        low, high = p.low, p.high
+    return np.linspace(low, high, n) if np.isfinite(high) else np.array([low])
+
+
+def _term_bases(term: Any, swings: NDArray, reference: float) -> list[tuple[NDArray, Any]] | None:
+    """Each shape of a term's ΔE(A) at ``swings`` per unit of its amount (the parameter
+    whose null stops the term and in which ΔE(A) is linear), with that parameter;
+    None when the term has no such parameter (it is then never screened this way)."""
+    for amount in term.parameters:
+        others = [p for p in term.parameters if p is not amount]
+        grids = [_shape_grid(p, reference) for p in others]
+        combos = np.zeros((1, 0))
+        if others:
+            combos = np.array(np.meshgrid(*grids, indexing="ij")).reshape(len(others), -1).T
+        out = []
+        for combo in combos:
+            values = {p.name: np.array([v]) for p, v in zip(others, combo, strict=True)}
+
+            def at(x: float, values: dict = values, name: str = amount.name) -> NDArray:
+                vals = {**values, name: np.array([x])}
+                return np.asarray(term.dissipation(swings, vals, reference), dtype=float).ravel()
+
+            with np.errstate(all="ignore"):
+                zero, one = at(float(amount.null)), at(float(amount.null) + 1.0)
+                two = at(float(amount.null) + 2.0)
+            if not (np.all(zero == 0.0) and np.allclose(two, 2.0 * one, rtol=1e-9)):
+                out = None
+                break
+            out.append((one, amount))
+        if out:
+            # shapes that do not differ (a parameter ΔE(A) does not see) count once
+            unique = {tuple(np.round(b / (np.max(np.abs(b)) or 1.0), 12)): (b, a) for b, a in out}
+            return list(unique.values())
+    return None
+
+
+def turning_point_misfit(
+    law: str, swings: NDArray, mean: NDArray, sd: NDArray, reference: float
+) -> float | None:
+    """The least χ² of a law's ΔE(A) over one cycle of the harmonic motion
+    (:meth:`~bayestribo.model.laws.Law.dissipation`, each term's amount within its
+    support, each shape parameter over its prior) against the turning points' ΔE(A)
+    (:func:`bayestribo.inference.dissipation.turning_point_dissipation`); None when a
+    term's ΔE(A) is not linear in an amount (the law is then not judged this way)."""
+    from itertools import product
+
+    from scipy.optimize import lsq_linear
+
+    per_term = [_term_bases(t, swings, reference) for t in _law(law).terms]
+    if any(b is None for b in per_term):
+        return None
+    best = np.inf
+    for choice in product(*per_term):
+        design = np.column_stack([b / sd for b, _ in choice])
+        low = [a.low - a.null for _, a in choice]
+        high = [a.high - a.null for _, a in choice]
+        fit = lsq_linear(design, mean / sd, bounds=(low, high))
+        best = min(best, float(2.0 * fit.cost))
+    return best
+
+
+def turning_point_screen(
+    prepared: PreparedRun, laws: Sequence[str], factor: float | None = None
+) -> dict[str, dict[str, Any]]:
+    """Laws whose ΔE(A) cannot follow the turning points' (module notes, Screening):
+    law -> ``chi2`` (:func:`turning_point_misfit`), ``limit`` (``factor`` times the
+    best law's χ² plus the number of swings; :data:`TURNING_POINT_FACTOR` by default)
+    and ``screened``. Empty without a turning-point ΔE(A)."""
+    from bayestribo.inference.dissipation import (
+        dissipation_amplitudes,
+        turning_point_dissipation,
+    )
+    from bayestribo.model.laws import PhysicalScale
+
+    factor = TURNING_POINT_FACTOR if factor is None else float(factor)
+    decay = prepared.decay
+    peaks = np.asarray(decay.peaks.value, dtype=float) / decay.scaling.length_scale
+    swings = dissipation_amplitudes(peaks)
+    try:
+        measured = turning_point_dissipation(peaks, swings, PhysicalScale())
+    except ValueError:
+        measured = None
+    if not measured or not measured.get("amplitude"):
+        return {}
+    mean = np.asarray(measured["mean"], dtype=float)
+    sd = np.asarray(measured["sd"], dtype=float)
+    ok = np.isfinite(mean) & np.isfinite(sd) & (sd > 0)
+    if ok.sum() < 3:
+        return {}
+    amp = np.asarray(measured["amplitude"], dtype=float)[ok]
+    reference = float(abs(prepared.data.y0))
+    chi2 = {law: turning_point_misfit(law, amp, mean[ok], sd[ok], reference) for law in laws}
+    known = [v for v in chi2.values() if v is not None and np.isfinite(v)]
+    if not known:
+        return {}
+    limit = factor * (min(known) + int(ok.sum()))
+    return {
+        law: {"chi2": value, "limit": limit, "screened": value is not None and value > limit}
+        for law, value in chi2.items()
+    }
+
+
+def _optimise(
+    law: str,
+    prepared: PreparedRun,
+    model: str,
+    discrepancy: bool,
+    optima: Mapping[str, dict[str, float]],
+) -> LawOptimum:
+    """A law's optimum on both passes and its pointwise log-likelihood there."""
+    from bayestribo.inference.reweight import reweighted_posterior
+    from bayestribo.inference.start import maximum_from
+
+    # friction terms are fitted without contact too (as a friction displacement): the
+    # data, not the metadata, decide whether there is friction to see
+    posterior = _posterior(law, prepared.data, model, discrepancy)
+    nested = _nested_start(law, prepared, optima)
+    optimum = find_optimum(posterior, prepared.decay, also_start_at=nested)
+    # the second pass, as pipeline.sample makes it, so that the law is judged on the
+    # posterior it would be sampled on
+    second, second_optimum = posterior, optimum
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        reweighted = reweighted_posterior(posterior, prepared.decay, optimum[0])
+        if reweighted is not None:
+            second = reweighted
+            second_optimum = maximum_from(reweighted, optimum[0], prepared.decay)
+        theta = np.asarray(second_optimum[0], dtype=float)
+        pointwise = np.asarray(second.pointwise(theta[None]), dtype=float)[0]
+    return LawOptimum(law, posterior, optimum, second, second_optimum, pointwise)
+
+
+def _checks(posterior: Posterior, theta: NDArray) -> dict[str, Any]:
+    """The misfit checks at a point: χ², its p-value, the shape test and adequacy."""
+    chi2, m, misfit_p = _misfit(posterior, theta)
+    shape = _shape_departure(posterior, theta)
+    return {
+        "adequate": bool(misfit_p >= MISFIT_P and not shape.p_value < MISFIT_P),
+        "chi2_map": chi2,
+        "n_increments": m,
+        "misfit_p": misfit_p,
+        "shape_p": shape.p_value,
+    }
+
+
+def _loo_frame(idatas: Mapping[str, Any]) -> Any:
+    """PSIS-LOO of the laws sampled, compared (:func:`arviz.compare`); one law alone
+    is its own best."""
+    import arviz as az
+    import pandas as pd
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        if len(idatas) >= 2:
+            return az.compare(dict(idatas), ic="loo")
+        ((law, idata),) = idatas.items()
+        loo = az.loo(idata)
+    row = {
+        "rank": 0.0,
+        "elpd_loo": float(loo["elpd_loo"]),
+        "p_loo": float(loo["p_loo"]),
+        "elpd_diff": 0.0,
+        "weight": 1.0,
+        "se": float(loo["se"]),
+        "dse": 0.0,
+    }
+    return pd.DataFrame([row], index=[law])
+
+
 def compare_prepared(
     prepared: PreparedRun,
     laws: Sequence[str],
@@ -470,6 +792,8 @@ def compare_prepared(
     discrepancy: bool = False,
     law_free: bool = False,
     rivals: bool = True,
+    screening: bool = True,
+    progress: Callable[[str], None] | None = None,
 ) -> tuple[LawComparison, dict[str, Sampled]]:
     """Compare laws on a prepared run; also return each law's sampled posterior.
 
@@ -490,65 +814,85 @@ def compare_prepared(
         any increasing polynomial of the amplitude of degree 1 to 4.
     rivals : bool
         Compare the verdict's rivals again on a finer grid (module notes).
+    screening : bool
+        Sample only the laws that can still win, judged at their optima (module
+        notes; :func:`screen`); False samples every law that does not reduce.
+    progress : callable, optional
+        Called with one line of text per law as the comparison goes (its optimum,
+        then its sampling or why it is not sampled).
 
     Returns
     -------
     LawComparison, dict of Sampled
     """
-    import arviz as az
-
     laws = list(dict.fromkeys(laws))
     if len(laws) < 2:
         raise BayestriboError(f"laws: expected two or more laws to compare, got {laws}")
     for law in laws:
         _law(law)
     settings = settings or SamplerSettings()
+    say = progress or (lambda text: None)
     root = np.random.SeedSequence(seed)
     idatas, table, notes, runs = {}, {}, [], {}
     optima: dict[str, dict[str, float]] = {}
     equivalent: dict[str, str] = {}
+    found: dict[str, LawOptimum] = {}
+    spent: dict[str, tuple[float, float]] = {}
 
-    def fit_one(law: str) -> None:
+    def failed(law: str, exc: BayestriboError) -> None:
+        # a law that cannot be fitted here is reported and left out of the comparison,
+        # not a failure of the others
+        table[law] = {"law": _law(law).name, "error": str(exc), "converged": False}
+        notes.append(f"{law}: not fitted ({exc})")
+
+    def optimise(law: str, k: int, n: int) -> None:
+        start, cpu = time.perf_counter(), time.process_time()
+        try:
+            found[law] = _optimise(law, prepared, model, discrepancy, optima)
+        except BayestriboError as exc:
+            failed(law, exc)
+            say(f"law {k}/{n} {law}: not fitted ({exc})")
+            return
+        optima[law] = dict(zip(found[law].posterior.names, found[law].optimum[0], strict=True))
+        spent[law] = (time.perf_counter() - start, time.process_time() - cpu)
+        say(f"law {k}/{n} {law}: optimum found ({spent[law][0]:.1f} s)")
+
+    def elapsed(law: str, start: float, cpu: float) -> dict[str, float]:
+        wall, used = spent.get(law, (0.0, 0.0))
+        return {
+            "seconds": wall + time.perf_counter() - start,
+            "cpu_seconds": used + time.process_time() - cpu,
+        }
+
+    def sample_one(law: str, k: int, n: int) -> None:
         start, cpu = time.perf_counter(), time.process_time()
         rng = np.random.default_rng(_law_seed(root, law))
-        nested = _nested_start(law, prepared, optima)
+        at = found[law]
         try:
-            # friction terms are fitted without contact too (as a friction
-            # displacement): the data, not the metadata, decide whether there is
-            # friction to see
-            posterior = _posterior(law, prepared.data, model, discrepancy)
-            optimum = find_optimum(posterior, prepared.decay, also_start_at=nested)
-            reduced = _reduction(law, posterior, optimum[0], runs, optima)
+            reduced = _reduction(law, at.posterior, at.optimum[0], runs, optima)
             if reduced is None:
-                sampled, idatas[law] = _fit_law(law, prepared, settings, rng, posterior, optimum)
+                say(f"sampling {law} ({k}/{n})")
+                sampled, idatas[law] = _fit_law(
+                    law, prepared, settings, rng, at.second, at.second_optimum
+                )
         except BayestriboError as exc:
-            # a law that cannot be fitted here is reported and left out of the
-            # comparison, not a failure of the others
-            table[law] = {"law": _law(law).name, "error": str(exc), "converged": False}
-            notes.append(f"{law}: not fitted ({exc})")
+            failed(law, exc)
             return
         if reduced is not None:
             # its optimum is the nested law's: not sampled, not compared (module notes)
-            theta = optimum[0]
-            optima[law] = dict(zip(posterior.names, theta, strict=True))
-            chi2, m, misfit_p = _misfit(posterior, theta)
-            shape = _shape_departure(posterior, theta)
+            theta = at.optimum[0]
             table[law] = {
                 "law": _law(law).name,
                 "reduces_to": reduced[0],
                 "terms_at_zero": reduced[1],
                 "sampled": False,
                 "converged": None,
-                "adequate": bool(misfit_p >= MISFIT_P and not shape.p_value < MISFIT_P),
-                "chi2_map": chi2,
-                "n_increments": m,
-                "misfit_p": misfit_p,
-                "shape_p": shape.p_value,
-                "map": {n: float(v) for n, v in zip(posterior.names, theta, strict=True)},
-                "seconds": time.perf_counter() - start,
-                "cpu_seconds": time.process_time() - cpu,
+                **_checks(at.posterior, theta),
+                "map": {n: float(v) for n, v in zip(at.posterior.names, theta, strict=True)},
+                **elapsed(law, start, cpu),
             }
             equivalent[law] = reduced[0]
+            say(f"{law} ({k}/{n}): reduces to {reduced[0]} at its optimum, not sampled")
             return
         runs[law] = sampled
         s = sampled.run
@@ -556,45 +900,94 @@ def compare_prepared(
         best_row = np.unravel_index(np.argmax(s.log_prob), s.log_prob.shape)
         optima[law] = dict(zip(names, s.chains[best_row], strict=True))
         k_max = _loo(idatas[law])
-        chi2, m, misfit_p = _misfit(sampled.posterior, sampled.theta_map)
-        shape = _shape_departure(sampled.posterior, sampled.theta_map)
-        adequate = bool(misfit_p >= MISFIT_P and not shape.p_value < MISFIT_P)
         table[law] = {
             "law": _law(law).name,
             "pareto_k_max": k_max,
             "converged": bool(s.converged),
-            "adequate": adequate,
-            "chi2_map": chi2,
-            "n_increments": m,
-            "misfit_p": misfit_p,
-            "shape_p": shape.p_value,
+            **_checks(sampled.posterior, sampled.theta_map),
             "median": {n: float(np.median(s.chains[..., i])) for i, n in enumerate(names)},
             "sampled": True,
-            "seconds": time.perf_counter() - start,
-            "cpu_seconds": time.process_time() - cpu,
+            **elapsed(law, start, cpu),
         }
+        if screens.get(law):
+            table[law]["screen"] = screens[law]
         if k_max > PARETO_K_LIMIT:
             notes.append(f"{law}: Pareto k up to {k_max:.2f}; its PSIS-LOO is unreliable")
         if not s.converged:
             notes.append(f"{law}: sampler not converged ({'; '.join(s.reasons)})")
+        say(
+            f"{law} ({k}/{n}): sampled in {table[law]['seconds']:.1f} s"
+            + ("" if s.converged else ", not converged")
+        )
 
     # smallest laws first: their optima are starting points of the laws that nest them
-    for law in sorted(laws, key=_complexity):
-        fit_one(law)
+    ordered = sorted(laws, key=_complexity)
+    # laws whose ΔE(A) cannot follow the turning points' are not taken to an optimum
+    early = turning_point_screen(prepared, ordered) if screening else {}
+    for law in ordered:
+        if early.get(law, {}).get("screened"):
+            table[law] = {
+                "law": _law(law).name,
+                "sampled": False,
+                "converged": None,
+                "screened": True,
+                "screen": {"stage": "turning points", **early[law]},
+            }
+    first = [law for law in ordered if law not in table]
+    if len(first) < len(ordered):
+        say(
+            f"{len(ordered) - len(first)} of {len(ordered)} laws cannot follow the turning "
+            "points' ΔE(A) (not fitted): " + ", ".join(law for law in ordered if law not in first)
+        )
+    for k, law in enumerate(first, 1):
+        optimise(law, k, len(first))
+    screens: dict[str, dict[str, Any]] = {}
+    if screening and len(found) >= 2:
+        screens = screen(
+            {law: at.pointwise for law, at in found.items()},
+            {law: at.n_parameters for law, at in found.items()},
+        )
+    for law in ordered:
+        if law in screens:
+            screens[law] = {"stage": "optimum", **screens[law]}
+    screened = [law for law in ordered if screens.get(law, {}).get("screened")]
+    for law in screened:
+        at = found[law]
+        theta = np.asarray(at.second_optimum[0], dtype=float)
+        table[law] = {
+            "law": _law(law).name,
+            "sampled": False,
+            "converged": None,
+            "screened": True,
+            "screen": screens[law],
+            **_checks(at.second, theta),
+            "map": {n: float(v) for n, v in zip(at.second.names, theta, strict=True)},
+            "seconds": spent[law][0],
+            "cpu_seconds": spent[law][1],
+        }
+    if screened:
+        say(
+            f"{len(screened)} of {len(found)} laws cannot win at their optimum (not sampled): "
+            + ", ".join(screened)
+        )
+    screened = [law for law in ordered if table.get(law, {}).get("screened")]
+    survivors = [law for law in ordered if law in found and law not in screened]
+    for k, law in enumerate(survivors, 1):
+        sample_one(law, k, len(survivors))
     if law_free and not any(row.get("adequate") and row.get("converged") for row in table.values()):
         # no law compared holds: the law-free fit, whose ΔE(A) is any increasing
         # polynomial of degree 1-4, says how much energy the decay loses
         free = get_law("free").name
         if free not in {_law(law).name for law in laws}:
             laws = [*laws, "free"]
-            fit_one("free")
-    if not idatas or len(idatas) + len(equivalent) < 2:
+            optimise("free", 1, 1)
+            if "free" in found:
+                sample_one("free", 1, 1)
+    if not idatas or len(idatas) + len(equivalent) + len(screened) < 2:
         raise BayestriboError(
             f"laws: fewer than two of {laws} could be fitted: " + "; ".join(notes)
         )
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        frame = az.compare(idatas, ic="loo")
+    frame = _loo_frame(idatas)
     for law, row in frame.iterrows():
         table[str(law)].update(
             {
@@ -608,7 +1001,13 @@ def compare_prepared(
         contenders = _rivals(verdict, as_good, table)
         if contenders:
             rematch = _compare_rivals(
-                prepared, [verdict, *contenders], seed, model, settings, discrepancy
+                prepared,
+                [verdict, *contenders],
+                seed,
+                model,
+                settings,
+                discrepancy,
+                screening,
             )
             if rematch["decided"]:
                 verdict = rematch["verdict"]
@@ -623,6 +1022,7 @@ def compare_prepared(
         adequate,
         rivals=rematch,
         equivalent=equivalent,
+        screened=screened,
     )
     return comparison, runs
 
@@ -647,6 +1047,7 @@ def _compare_rivals(
     model: str,
     settings: SamplerSettings,
     discrepancy: bool,
+    screening: bool = True,
 ) -> dict[str, Any]:
     """The verdict and its rivals compared on :data:`TIE_GRID` increments per half
     cycle (module notes)."""
@@ -668,6 +1069,7 @@ def _compare_rivals(
             settings=settings,
             discrepancy=discrepancy,
             rivals=False,
+            screening=screening,
         )
     except BayestriboError as exc:
         out["error"] = str(exc)
@@ -692,6 +1094,7 @@ def _compare_rivals(
                     "misfit_p",
                     "shape_p",
                     "reduces_to",
+                    "screened",
                     "seconds",
                 )
             }
@@ -726,7 +1129,7 @@ def compare_dissipation_laws(
         The recording, as for :func:`bayestribo.inference.fit`.
     laws : sequence of str
         Laws to compare (at least two): names of :mod:`bayestribo.model.laws` or the
-        original ``"viscous"``, ``"coulomb"``, ``"both"``; :data:`AUTO_LAWS` is the
+        original ``"viscous"``, ``"coulomb"``, ``"both"``; :func:`auto_laws` is the
         set ``fit(..., law="auto")`` compares.
     seed : int or None
         Seed of every fit (each law gets its own stream from it and its name); default

@@ -58,6 +58,7 @@ def fit(
     correct_channels: bool = True,
     notch: float | Literal["auto"] | None = None,
     law: str | Law | None = None,
+    law_progress: Callable[[str], None] | None = None,
 ) -> FitResult:
     """Posterior of ζ and μ_k (or ζ₀, or the friction displacement) for one run, or
     of the parameters of another dissipation law, with the energy dissipated per
@@ -111,14 +112,20 @@ def fit(
         (``"viscous+coulomb"``, the default; ``"viscous+quadratic"``,
         ``"coulomb+hysteretic"``, ...) or a :class:`~bayestribo.model.laws.Law`. A run
         without contact (``load_N`` of 0) drops the law's friction terms. ``"auto"``
-        fits every law of :data:`bayestribo.inference.comparison.AUTO_LAWS` and keeps
-        the simplest adequate one as good as the best by PSIS-LOO
+        compares the laws the registry's terms make by the rule of
+        :mod:`bayestribo.model.laws.candidates`
+        (:func:`bayestribo.inference.comparison.auto_laws`): each is taken to its
+        optimum, those too far behind the best there to win are screened out, the rest
+        sampled, and the simplest adequate one as good as the best by PSIS-LOO is kept
         (:mod:`bayestribo.inference.comparison`; the result's ``law_comparison`` says
         which and why); when none of them is adequate, the law-free ``"free"`` law
         (ΔE(A) any increasing polynomial of degree 1-4) is fitted too. The result is
         the chosen law's fit with every one of its terms (on a run with contact, what
         ``law=<its name>`` gives); a law without a closed form is fitted again in its
         own frame, from the optimiser's optimum.
+    law_progress : callable, optional
+        With ``law="auto"``: called with one line of text per law as the comparison
+        goes (its optimum; then its sampling, or why it is not sampled).
 
     Returns
     -------
@@ -158,16 +165,17 @@ def fit(
     )
     comparison = None
     if auto:
-        from bayestribo.inference.comparison import AUTO_LAWS, compare_prepared
+        from bayestribo.inference.comparison import auto_laws, compare_prepared
 
         comparison, runs = compare_prepared(
             prepared,
-            AUTO_LAWS,
+            auto_laws(),
             seed=int(rng.integers(2**31)),
             model=model,
             settings=settings,
             discrepancy=discrepancy,
             law_free=True,
+            progress=law_progress,
         )
         common = prepared
         sampled = runs[comparison.verdict]
@@ -207,7 +215,14 @@ def fit(
             attrs["dissipation_json"] = json.dumps(plain_data(averaged))
         comparison = _check_halves(comparison, common, rng, settings, model, discrepancy)
         record = comparison.to_dict()
-        record["departures"] = _law_departures(common, runs, result)
+        screened = {
+            law: row["map"]
+            for law, row in record["table"].items()
+            if row.get("screened") and row.get("map")
+        }
+        record["departures"] = _law_departures(
+            common, runs, result, screened, model=model, discrepancy=discrepancy
+        )
         result.attrs["law_comparison_json"] = json.dumps(plain_data(record))
     result.attrs["seconds"] = time.perf_counter() - start
     return result
@@ -338,12 +353,20 @@ _DEPARTURE_DRAWS = 200
 
 
 def _law_departures(
-    common: PreparedRun, runs: Mapping[str, Any], result: FitResult
+    common: PreparedRun,
+    runs: Mapping[str, Any],
+    result: FitResult,
+    optima: Mapping[str, Mapping[str, float]] | None = None,
+    *,
+    model: str = "exact",
+    discrepancy: bool = False,
 ) -> dict[str, Any]:
     """How close each compared law's ΔE(A) comes to the turning points' (the law-free
     answer), by law: :func:`~bayestribo.inference.dissipation.shape_agreement` of its
     posterior mean at the result's swings, from :data:`_DEPARTURE_DRAWS` draws of the
-    comparison's fit on the common preparation. Empty without a turning-point answer."""
+    comparison's fit on the common preparation; for a law screened out at its optimum
+    (``optima``: its values there by name), of its ΔE(A) at that optimum. Empty
+    without a turning-point answer."""
     import dataclasses
 
     from bayestribo.inference.dissipation import (
@@ -370,6 +393,16 @@ def _law_departures(
             own = dissipation_band(sampled.posterior, pick, swings, scale)
             out[law] = shape_agreement(own, measured)
         except ValueError:
+            continue
+    for law, values in (optima or {}).items():
+        posterior = build_posterior(
+            common.data, model=model, friction=True, discrepancy=discrepancy, law=get_law(law)
+        )
+        try:
+            point = np.array([[values[n] for n in posterior.names]], dtype=float)
+            own = dissipation_band(posterior, point, swings, scale)
+            out[law] = shape_agreement(own, measured)
+        except (KeyError, ValueError):
             continue
     return out
 

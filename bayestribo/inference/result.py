@@ -489,6 +489,7 @@ class FitResult:
             halves=c.get("halves"),
             rivals=c.get("rivals"),
             equivalent=c.get("equivalent") or {},
+            screened=c.get("screened") or [],
         )
         lines = [f"          {text.describe()}"]
         halves = c.get("halves")

@@ -191,6 +191,19 @@ class Term:
         One line for help texts.
     sticks : bool
         True for the term that carries static friction (``mu_s_ratio``).
+    overlaps : tuple of str
+        Terms whose ΔE(A) this term makes too, at a value inside its prior or with
+        the same power of the amplitude (power-law drag is viscous damping at α = 1;
+        a friction proportional to amplitude loses 4ηA² per cycle as viscous damping
+        loses 2πζA²). A law holding both trades one for the other along a ridge of its
+        posterior: slow to sample, and it says nothing either alone does not, so
+        ``law="auto"`` compares no law that holds a term and one it overlaps (either
+        way round; :mod:`bayestribo.model.laws.candidates`). Names of terms not
+        registered are allowed (a term may name one registered later).
+    compared : bool
+        False for a term ``law="auto"`` never compares (a building block of the
+        law-free fit, not a mechanism); default True, so that a registered term is
+        a candidate with no edit elsewhere.
     """
 
     name: str
@@ -205,6 +218,8 @@ class Term:
     smooth: bool = True
     sticks: bool = False
     nests: Mapping[str, float] = field(default_factory=dict)
+    overlaps: tuple[str, ...] = ()
+    compared: bool = True
 
     def __post_init__(self) -> None:
         if not self.name.isidentifier():
@@ -213,6 +228,11 @@ class Term:
             raise ValueError(f"Term {self.name}: kind must be 'drag' or 'friction'")
         if self.n_coefficients < 1:
             raise ValueError(f"Term {self.name}: n_coefficients must be >= 1")
+        if isinstance(self.overlaps, str):
+            raise ValueError(f"Term {self.name}: overlaps must be a tuple of term names")
+        object.__setattr__(self, "overlaps", tuple(self.overlaps))
+        if self.name in self.overlaps:
+            raise ValueError(f"Term {self.name}: a term does not overlap itself")
 
     @property
     def parameter_names(self) -> list[str]:

@@ -73,5 +73,8 @@ HYSTERETIC = register_term(
         dissipation=_dissipation,
         physical=_physical,
         description="friction proportional to amplitude η|Y| sgn v (with coulomb: μ_k + ηA)",
+        # its ΔE(A) = 4ηA² has viscous damping's shape (2πζA²): η and ζ trade along a
+        # ridge, which one increment per half cycle hardly resolves
+        overlaps=("viscous",),
     )
 )

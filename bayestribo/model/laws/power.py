@@ -98,5 +98,11 @@ POWER = register_term(
         physical=_physical,
         description="power-law drag c_α |v|^α sgn v, α free, ΔE ∝ A^(α+1)",
         smooth=False,
+        # α = 1 is viscous damping (ΔE ∝ A², as a friction proportional to amplitude
+        # makes it) and α = 2 quadratic drag, both inside α's prior: with either, ζ_α
+        # trades against the other term along a ridge. α = 0 (a friction without
+        # sticking) is the prior's bound, and with Coulomb friction the law describes
+        # drag of any power beside a friction that sticks
+        overlaps=("viscous", "quadratic", "hysteretic"),
     )
 )

@@ -1,0 +1,223 @@
+"""``law="auto"`` with laws from the registry and screening, side by side with a baseline tree.
+
+Each recording is fitted with ``fit(..., law="auto")`` by two worker processes
+(``benchmarks/_auto_worker.py``), one importing this tree and one a baseline worktree
+(``--baseline``, e.g. ``git worktree add --detach /tmp/wt-base 2730dd2``), in
+alternation: for each repeat and each recording, the two trees one after the other, the
+first of them alternating between repeats, each worker having fitted the bundled run
+with the default law once before (numba's cached kernels loaded). The machine is
+shared, so the times compared are each process's CPU time of the call
+(``time.process_time``), with the wall time and the load averages beside them.
+
+Recordings: the bundled run ``data/runs/glycerol-N0.31-r1.csv`` and the five real
+recordings of ``../shared/external-data`` (``--external``), read as
+``benchmarks/real.py`` reads them (HarmOsc1-3: t and position in an arbitrary unit;
+the spring-and-disc records: position and velocity, the mass from the file name).
+
+Recorded per recording: each tree's law and verdict, the laws as good as it, each
+law's row (elpd difference, its sd, sampled or screened and why); the ratio of CPU
+times (this tree over the baseline, medians over the repeats); whether the same law
+was chosen; and the largest difference of a posterior mean between the trees in units
+of the baseline's posterior sd, over every quantity both summarise. The screening's
+margin is checked against the sampled comparison: for every law this tree screened
+out, its sampled ``elpd_diff`` in the baseline (where the baseline compared it) and
+whether the baseline found it as good as its best.
+
+Run (by hand)::
+
+    PYTHONPATH=. nice -n 5 python benchmarks/auto_screening.py --baseline /tmp/wt-base \
+        --repeats 2
+
+Writes ``benchmarks/results/auto_screening.json`` (``--output NAME``: ``NAME.json``)
+with the machine description, both commits and the load averages.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import statistics
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+from _machine import commit, write_results  # noqa: E402
+
+ROOT = HERE.parent
+BUNDLED = ROOT / "data" / "runs" / "glycerol-N0.31-r1.csv"
+EXTERNAL = ROOT.parent / "shared" / "external-data"
+#: elpd difference below which two laws are not told apart (the comparison's own).
+SMALL = 4.0
+
+
+def recordings(external: Path) -> dict[str, dict[str, Any]]:
+    """Each recording's request (path and reading keywords) by a short name."""
+    out: dict[str, dict[str, Any]] = {"bundled": {"path": str(BUNDLED), "read": None}}
+    appstat = external / "appstat2020-harmonic-oscillator"
+    for p in sorted(appstat.glob("HarmOsc*.txt")):
+        out[p.stem] = {
+            "path": str(p),
+            "read": {
+                "columns": ["time_s", "displacement_m"],
+                "metadata": {"length_unit": "arbitrary"},
+            },
+        }
+    for p in sorted((external / "smorzamento-spring-disc").glob("*.csv")):
+        mass = float(p.stem.split("_")[-2])
+        out["smorzamento-" + p.stem.rsplit("_", 1)[-1]] = {
+            "path": str(p),
+            "read": {
+                "columns": ["time_s", "displacement_m", "velocity_m_per_s", "ignore"],
+                "metadata": {"mass_kg": mass},
+            },
+        }
+    return out
+
+
+class Worker:
+    """A worker process importing one tree's bayestribo."""
+
+    def __init__(self, tree: Path) -> None:
+        env = dict(os.environ, PYTHONPATH=str(tree))
+        self.proc = subprocess.Popen(
+            [sys.executable, str(HERE / "_auto_worker.py")],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+            env=env,
+            cwd=str(tree),
+        )
+        self.module = json.loads(self.proc.stdout.readline())["module"]
+        self.fit({"warm_up": True, "path": str(BUNDLED)})
+
+    def fit(self, request: dict[str, Any]) -> dict[str, Any]:
+        self.proc.stdin.write(json.dumps(request) + "\n")
+        self.proc.stdin.flush()
+        line = self.proc.stdout.readline()
+        if not line:
+            raise RuntimeError(f"the worker of {self.module} ended")
+        return json.loads(line)
+
+    def close(self) -> None:
+        self.proc.stdin.close()
+        self.proc.wait(timeout=60)
+
+
+def mean_shift(new: dict[str, Any], old: dict[str, Any]) -> dict[str, float]:
+    """|mean_new - mean_old| / sd_old of every quantity both fits summarise."""
+    out = {}
+    for k, m in old["mean"].items():
+        if k in new["mean"] and old["sd"].get(k):
+            out[k] = abs(new["mean"][k] - m) / old["sd"][k]
+    return out
+
+
+def screen_check(new: dict[str, Any], old: dict[str, Any]) -> dict[str, Any]:
+    """For every law the new tree screened out: the baseline's sampled elpd difference
+    and whether the baseline found it as good as its best."""
+    out = {}
+    for law, row in new["table"].items():
+        if not row.get("screened"):
+            continue
+        base = old["table"].get(law, {})
+        out[law] = {
+            "screen": row.get("screen"),
+            "baseline_elpd_diff": base.get("elpd_diff"),
+            "baseline_dse": base.get("dse"),
+            "baseline_as_good": law in (old.get("as_good") or []),
+            "baseline_reduces_to": base.get("reduces_to"),
+        }
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command line."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--baseline", type=Path, required=True)
+    parser.add_argument("--repeats", type=int, default=2)
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--external", type=Path, default=EXTERNAL)
+    parser.add_argument("--only", nargs="*", help="recordings to fit (default: all)")
+    parser.add_argument("--trees", nargs="*", default=["baseline", "current"])
+    parser.add_argument("--output", default="auto_screening")
+    args = parser.parse_args(argv)
+    runs = recordings(args.external)
+    if args.only:
+        runs = {k: v for k, v in runs.items() if k in args.only}
+    trees = {"baseline": args.baseline.resolve(), "current": ROOT}
+    trees = {k: v for k, v in trees.items() if k in args.trees}
+    load_start = os.getloadavg()
+    workers = {name: Worker(tree) for name, tree in trees.items()}
+    fits: dict[str, dict[str, list[dict[str, Any]]]] = {
+        name: {tree: [] for tree in trees} for name in runs
+    }
+
+    def record(complete: bool) -> Path:
+        return write_results(
+            args.output,
+            {
+                "complete": complete,
+                "settings": {
+                    k: v if isinstance(v, (int, float, list, type(None))) else str(v)
+                    for k, v in vars(args).items()
+                },
+                "commits": {name: commit(tree, short=True) for name, tree in trees.items()},
+                "modules": {name: w.module for name, w in workers.items()},
+                "load_average_start": list(load_start),
+                "load_average_now": list(os.getloadavg()),
+                "summary": summarise(fits),
+                "fits": fits,
+            },
+        )
+
+    order = list(trees)
+    for repeat in range(args.repeats):
+        for name, request in runs.items():
+            for tree in order if repeat % 2 == 0 else order[::-1]:
+                out = workers[tree].fit({**request, "name": name, "seed": args.seed})
+                fits[name][tree].append(out)
+                print(
+                    f"{name:<14} {tree:<8} {out['cpu_seconds']:7.1f} s CPU "
+                    f"{out['seconds']:7.1f} s wall  {out['law']}",
+                    flush=True,
+                )
+            record(False)
+    for w in workers.values():
+        w.close()
+    path = record(True)
+    for name, row in summarise(fits).items():
+        print(name, json.dumps(row))
+    print(f"wrote {path}")
+    return 0
+
+
+def summarise(fits: dict[str, dict[str, list[dict[str, Any]]]]) -> dict[str, Any]:
+    """Per recording: CPU medians and their ratio, laws chosen, mean shifts, screening."""
+    out: dict[str, Any] = {}
+    for name, by_tree in fits.items():
+        row: dict[str, Any] = {}
+        for tree, runs in by_tree.items():
+            if runs:
+                row[f"{tree}_cpu_median"] = statistics.median(r["cpu_seconds"] for r in runs)
+                row[f"{tree}_laws"] = sorted({r["law"] for r in runs})
+        new, old = by_tree.get("current") or [], by_tree.get("baseline") or []
+        if new and old:
+            row["cpu_ratio"] = row["current_cpu_median"] / row["baseline_cpu_median"]
+            row["same_law"] = row["current_laws"] == row["baseline_laws"]
+            shifts = mean_shift(new[0], old[0])
+            finite = {k: v for k, v in shifts.items() if math.isfinite(v)}
+            if finite:
+                worst = max(finite, key=finite.get)
+                row["largest_mean_shift_sd"] = {worst: finite[worst]}
+            row["screened"] = screen_check(new[0], old[0])
+        out[name] = row
+    return out
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,178 @@
+"""Screening in ``law="auto"``: laws too far behind the best at their optimum are not
+sampled (:func:`bayestribo.inference.comparison.screen`), on stubs of the fits."""
+
+from __future__ import annotations
+
+import argparse
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from bayestribo.inference import comparison
+from bayestribo.inference.comparison import (
+    SCREEN_FACTOR,
+    SMALL_ELPD_DIFFERENCE,
+    LawOptimum,
+    compare_prepared,
+    optimum_elpd,
+    screen,
+)
+
+N = 200
+
+
+def _pointwise(shift: float, spread: float = 0.0, seed: int = 0) -> np.ndarray:
+    """Pointwise log-likelihood of N increments whose sum is ``-shift`` below a law
+    at zero, with a pointwise scatter ``spread`` about it."""
+    rng = np.random.default_rng(seed)
+    noise = rng.normal(0.0, spread, N) if spread else np.zeros(N)
+    return -shift / N + noise - noise.mean()
+
+
+def test_a_law_within_the_margin_is_kept_and_one_beyond_it_is_screened_out():
+    pointwise = {
+        "best": _pointwise(0.0),
+        "close": _pointwise(3.0 * SMALL_ELPD_DIFFERENCE - 1.0),
+        "far": _pointwise(3.0 * SMALL_ELPD_DIFFERENCE + 3.0),
+        "broken": np.full(N, np.nan),
+    }
+    out = screen(pointwise, dict.fromkeys(pointwise, 2))
+    assert out["best"]["elpd_diff"] == 0.0 and not out["best"]["screened"]
+    assert not out["close"]["screened"]
+    assert out["far"]["screened"] and out["far"]["limit"] == SCREEN_FACTOR * SMALL_ELPD_DIFFERENCE
+    assert out["broken"]["screened"]
+    assert {row["best"] for row in out.values()} == {"best"}
+
+
+def test_the_margin_grows_with_the_sd_of_the_difference_and_counts_parameters():
+    # a difference of 30 with pointwise scatter: its dse is about sqrt(N) * 0.5 = 7,
+    # so the limit 3 * 2 * dse = 42 keeps it
+    pointwise = {"a": _pointwise(0.0), "b": _pointwise(30.0, spread=0.5, seed=1)}
+    out = screen(pointwise, {"a": 2, "b": 2})
+    assert out["b"]["dse"] == pytest.approx(np.sqrt(N) * np.std(pointwise["b"]), rel=1e-12)
+    assert not out["b"]["screened"] and out["b"]["limit"] > 30.0
+    # one parameter costs one unit of elpd: equal fits, the simpler is best
+    same = {"simple": _pointwise(0.0), "rich": _pointwise(0.0)}
+    ranked = screen(same, {"simple": 1, "rich": 4})
+    assert ranked["rich"]["best"] == "simple" and ranked["rich"]["elpd_diff"] == 3.0
+    assert optimum_elpd(np.zeros(3), 2) == -2.0
+
+
+class _Posterior:
+    def __init__(self, names):
+        self.names = list(names)
+
+
+def _stub_fits(monkeypatch, shifts: dict[str, float]) -> list[str]:
+    """Stub the optimiser, the sampler and the checks of compare_prepared: each law's
+    pointwise log-likelihood is ``-shift`` in all; returns the laws sampled."""
+    import arviz as az
+
+    sampled: list[str] = []
+
+    def optimise(law, prepared, model, discrepancy, optima):
+        post = _Posterior(comparison._law(law).parameter_names)
+        theta = np.zeros(len(post.names))
+        opt = (theta, np.eye(len(theta)), None)
+        return LawOptimum(law, post, opt, post, opt, _pointwise(shifts[law], 0.01, 2))
+
+    def fit_law(law, prepared, settings, rng, posterior, optimum):
+        sampled.append(law)
+        d = len(posterior.names)
+        chains = rng.normal(size=(2, 40, d))
+        lpd = _pointwise(shifts[law], 0.01, 2) + 0.001 * rng.normal(size=(2, 40, N))
+        run = SimpleNamespace(chains=chains, log_prob=np.zeros((2, 40)), converged=True, reasons=[])
+        fit = SimpleNamespace(run=run, posterior=posterior, theta_map=np.zeros(d))
+        idata = az.from_dict(
+            posterior={n: chains[..., i] for i, n in enumerate(posterior.names)},
+            log_likelihood={"pi": lpd},
+        )
+        return fit, idata
+
+    monkeypatch.setattr(comparison, "_optimise", optimise)
+    monkeypatch.setattr(comparison, "_fit_law", fit_law)
+    monkeypatch.setattr(comparison, "_reduction", lambda *args: None)
+    monkeypatch.setattr(comparison, "_loo", lambda idata: 0.1)
+    monkeypatch.setattr(comparison, "_checks", lambda posterior, theta: {"adequate": True})
+    monkeypatch.setattr(comparison, "turning_point_screen", lambda prepared, laws: {})
+    return sampled
+
+
+@pytest.mark.filterwarnings("ignore")
+def test_only_the_laws_that_can_still_win_are_sampled(monkeypatch):
+    shifts = {"viscous": 5000.0, "coulomb": 2.0, "viscous+coulomb": 0.0, "quadratic": 900.0}
+    sampled = _stub_fits(monkeypatch, shifts)
+    lines: list[str] = []
+    prepared = SimpleNamespace(name="stub")
+    c, runs = compare_prepared(prepared, list(shifts), seed=1, rivals=False, progress=lines.append)
+    assert sorted(sampled) == ["coulomb", "viscous+coulomb"] == sorted(runs)
+    assert c.screened == ["viscous", "quadratic"]
+    for law in c.screened:
+        row = c.table[law]
+        assert row["screened"] and row["sampled"] is False and row["converged"] is None
+        assert row["screen"]["elpd_diff"] > row["screen"]["limit"]
+    # the verdict among the laws sampled: coulomb is as good and simpler
+    assert c.verdict == "coulomb" and set(c.as_good) == {"coulomb", "viscous+coulomb"}
+    assert "too far behind the best to win (screened)" in c.describe()
+    assert "viscous, quadratic" in c.describe()
+    # a line per law at its optimum, one for the screening, one per law sampled
+    assert sum("optimum found" in line for line in lines) == 4
+    assert sum(line.startswith("sampling") for line in lines) == 2
+    assert any("cannot win" in line for line in lines)
+
+
+@pytest.mark.filterwarnings("ignore")
+def test_one_law_left_after_screening_is_the_verdict(monkeypatch):
+    shifts = {"viscous": 5000.0, "viscous+coulomb": 0.0}
+    sampled = _stub_fits(monkeypatch, shifts)
+    c, _ = compare_prepared(SimpleNamespace(name="stub"), list(shifts), seed=1, rivals=False)
+    assert sampled == ["viscous+coulomb"] and c.verdict == "viscous+coulomb"
+    assert c.table["viscous+coulomb"]["elpd_diff"] == 0.0
+    # without screening every law is sampled
+    sampled.clear()
+    compare_prepared(
+        SimpleNamespace(name="stub"), list(shifts), seed=1, rivals=False, screening=False
+    )
+    assert sampled == ["viscous", "viscous+coulomb"]
+
+
+def test_a_law_whose_dissipation_cannot_follow_the_turning_points_is_judged_so():
+    # ΔE(A) of viscous damping and Coulomb friction, known to 0.1 %
+    amp = np.linspace(1.0, 10.0, 12)
+    mean = 4 * 0.03 * amp + 2 * np.pi * 0.02 * amp**2
+    sd = 1e-3 * mean
+    chi2 = {
+        law: comparison.turning_point_misfit(law, amp, mean, sd, 10.0)
+        for law in ("viscous+coulomb", "coulomb+hysteretic", "coulomb+quadratic", "power")
+    }
+    assert chi2["viscous+coulomb"] < 1e-6 and chi2["coulomb+hysteretic"] < 1e-6
+    assert chi2["coulomb+quadratic"] > 1e4 and chi2["power"] > 1e4
+
+
+def _args(**kw) -> argparse.Namespace:
+    return argparse.Namespace(**{"law": "auto", "quiet": False, "json": False, **kw})
+
+
+def test_the_progress_line_is_for_a_terminal_only(monkeypatch, capsys):
+    from bayestribo.cli.fit import law_progress
+
+    monkeypatch.setattr("sys.stderr.isatty", lambda: True)
+    say = law_progress(_args())
+    assert say is not None
+    say("law 1/12 viscous: optimum found (0.1 s)")
+    assert capsys.readouterr().err == (
+        "bayestribo fit --law auto: law 1/12 viscous: optimum found (0.1 s)\n"
+    )
+    assert law_progress(_args(quiet=True)) is None
+    assert law_progress(_args(json=True)) is None
+    assert law_progress(_args(law="viscous+coulomb")) is None
+    monkeypatch.setattr("sys.stderr.isatty", lambda: False)
+    assert law_progress(_args()) is None
+
+
+def test_fit_takes_quiet():
+    from bayestribo.cli.main import build_parser
+
+    args = build_parser().parse_args(["fit", "run.csv", "--law", "auto", "--quiet"])
+    assert args.quiet and args.law == "auto"
