@@ -125,3 +125,111 @@ def test_the_sigma_scale_of_a_quantity_without_a_default():
     assert sigma_scale("c2_SI", [0.4, 0.6, 0.5], [0.1, 0.1, 0.1]) == pytest.approx(0.25)
     # every run at zero: the runs' interval width, the spread they can tell apart
     assert sigma_scale("c2_SI", [0.0, 0.0], [0.02, 0.04]) == pytest.approx(0.03)
+
+
+# -- a term a lab registers in its own module reaches the campaign --------------------
+
+
+def _lab_term():
+    import math
+
+    import numba
+
+    from bayestribo.model.laws import Parameter, Term
+
+    @numba.njit(cache=False)
+    def force(w, c):
+        return c[0] * w * w
+
+    def physical(values, reference, scale):
+        g = np.asarray(values["lab_g"], dtype=float)
+        if scale.mass is None:
+            return {}
+        return {"lab_g_SI": (g / scale.length_scale * scale.mass, "kg/m", "g", "lab drag")}
+
+    return Term(
+        name="lab_quad",
+        kind="drag",
+        parameters=(
+            Parameter(
+                "lab_g",
+                "g",
+                "1/y",
+                0.0,
+                math.inf,
+                "a lab's quadratic drag",
+                lambda amplitude: {"type": "Uniform", "low": 0.0, "high": 1.0 / amplitude},
+            ),
+        ),
+        n_coefficients=1,
+        force=force,
+        coefficients=lambda values, reference: [np.asarray(values["lab_g"], dtype=float)],
+        dissipation=lambda a, values, reference: (
+            (8.0 / 3.0) * np.asarray(values["lab_g"]) * np.asarray(a, dtype=float) ** 3
+        ),
+        physical=physical,
+        description="a lab's quadratic drag",
+    )
+
+
+class _LabFit:
+    """A fit-like result of the law viscous+lab_quad: what a FitResult gives a campaign."""
+
+    law = "viscous+lab_quad"
+
+    def __init__(self, name: str, load: float, g_si: float, rng: np.random.Generator) -> None:
+        k = MASS * OMEGA**2
+        self.attrs = {"length_scale": load / k, "omega": OMEGA, "friction_defined": 1}
+        self.metadata = {
+            "run_id": name,
+            "lubricant": "lab-oil",
+            "load_N": load,
+            "mass_kg": MASS,
+            "natural_frequency_Hz": OMEGA / (2 * np.pi),
+        }
+        factor = MASS / (load / k)  # g [kg/m] = lab_g m/ℓ
+        self.draws = {
+            "zeta": rng.normal(0.004, 1e-5, 400),
+            "lab_g": rng.normal(g_si / factor, 1e-3 * g_si / factor, 400),
+            "y0": rng.normal(5.0, 0.01, 400),
+        }
+        self.converged = True
+        self.at_prior_bound: list = []
+
+    @property
+    def parameter_names(self):
+        return list(self.draws)
+
+    def samples(self, name):
+        return self.draws[name]
+
+    def prior_logpdf(self, name, values):
+        return np.zeros_like(values)
+
+
+@pytest.mark.filterwarnings("ignore::bayestribo.errors.ConvergenceWarning")
+def test_a_term_registered_by_a_lab_reaches_the_campaign_without_edits():
+    from bayestribo.model.laws import TERMS, register_term
+
+    term = register_term(_lab_term())
+    try:
+        rng = np.random.default_rng(5)
+        fits = [
+            _LabFit(f"lab-N{load}-r{r}", load, rng.normal(0.3, 0.01), rng)
+            for load in (0.1, 0.3)
+            for r in (1, 2)
+        ]
+        quantities, _ = campaign_quantities(fits[0])
+        assert [(q.name, q.unit, q.term) for q in quantities] == [
+            ("zeta", "1", "viscous"),
+            ("lab_g_SI", "kg/m", term.name),
+        ]
+        analysis = analyse_campaign(
+            fits, by=("lubricant", "load_N"), seed=1, max_steps=600, max_samples=100
+        )
+        assert analysis.contact.parameters == ("zeta", "lab_g_SI")
+        assert analysis.quantities["lab_g_SI"]["unit"] == "kg/m"
+        for group in analysis.contact.groups.values():
+            assert abs(np.median(group.mean["lab_g_SI"]) - 0.3) < 0.05
+    finally:
+        TERMS.remove("lab_quad")
