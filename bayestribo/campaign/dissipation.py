@@ -32,6 +32,7 @@ __all__ = [
     "dissipation_rows",
     "group_runs",
     "run_bands",
+    "run_metadata",
 ]
 
 
@@ -146,19 +147,24 @@ def at_amplitude(band: Mapping[str, Any], amplitude: float) -> dict[str, float] 
 
 
 def dissipation_rows(
-    analysis: Any, bands: Mapping[str, Mapping[str, Any]], amplitude: float | None = None
+    groups: Mapping[str, Sequence[str]],
+    bands: Mapping[str, Mapping[str, Any]],
+    amplitude: float | None = None,
+    metadata: Mapping[str, Mapping[str, Any]] | None = None,
 ) -> tuple[float | None, list[dict[str, Any]]]:
     """Each run's ΔE at one swing shared by the runs, per group.
 
     Parameters
     ----------
-    analysis : CampaignAnalysis
-        Its groups (:func:`group_runs`) and runs' metadata.
+    groups : mapping of str to sequence of str
+        Group label -> its runs (:func:`group_runs` of a campaign analysis).
     bands : mapping
-        Run id -> ΔE(A) band (:func:`run_bands`).
+        Run id -> ΔE(A) band (:func:`run_bands`); runs without one are left out.
     amplitude : float, optional
         The swing; default :func:`chosen_amplitude` of every band of the groups' runs,
         else (they share no swing) of each group's own.
+    metadata : mapping, optional
+        Run id -> its metadata or summary row (``law``, ``load_N``).
 
     Returns
     -------
@@ -169,14 +175,12 @@ def dissipation_rows(
         ``mean``, ``low``, ``high``, ``unit``, ``prob``; a run whose band does not
         reach the swing has no ``mean`` and says why in ``note``.
     """
-    groups = {
-        label: [r for r in runs if r in bands] for label, runs in group_runs(analysis).items()
-    }
-    every = [bands[r] for runs in groups.values() for r in runs]
+    members = {label: [r for r in runs if r in bands] for label, runs in groups.items()}
+    every = [bands[r] for runs in members.values() for r in runs]
     shared = amplitude if amplitude is not None else chosen_amplitude(every)
-    meta = {str(r.get("run_id")): r for r in analysis.runs}
+    meta = metadata or {}
     rows = []
-    for label, runs in groups.items():
+    for label, runs in members.items():
         at = shared if shared is not None else chosen_amplitude([bands[r] for r in runs])
         for run in runs:
             band = bands[run]
@@ -197,3 +201,8 @@ def dissipation_rows(
                 row.update(value)
             rows.append(row)
     return (shared, rows)
+
+
+def run_metadata(analysis: Any) -> dict[str, dict[str, Any]]:
+    """Run id -> the analysis' summary row of the run (its ``law``, ``load_N``, ...)."""
+    return {str(r.get("run_id")): r for r in analysis.runs}

@@ -478,7 +478,9 @@ def save_figures(
     if analysis.derived:
         makers.append(("zeta_k_d_k", plot_derived))
     if bands:
-        makers.append(("dissipation", lambda a: plot_dissipation(a, bands)))
+        from bayestribo.campaign.dissipation import group_runs
+
+        makers.append(("dissipation", lambda a: plot_dissipation(group_runs(a), bands)))
     out = []
     for name, make in makers:
         fig = make(analysis)
@@ -603,22 +605,24 @@ def _energy_label(unit: str) -> str:
 
 
 def plot_dissipation(
-    analysis: CampaignAnalysis,
+    groups: Mapping[str, Sequence[str]],
     bands: Mapping[str, Mapping[str, Any]],
     fig: Any = None,
     amplitude: float | None = None,
 ) -> Any:
     """ΔE(A) per group: each run's energy loss per cycle with its credible band.
 
-    One panel per group of repeats (with contact, then without), on log-log axes, each
-    run's band (:attr:`bayestribo.inference.FitResult.dissipation`, its law's or the
-    law-free mixture's) in its own colour; a dotted line at the swing where the runs
-    are compared (:func:`bayestribo.campaign.dissipation.dissipation_rows`). Every law
-    has a ΔE(A), so runs of any laws are drawn alike.
+    One panel per group of repeats, on log-log axes, each run's band
+    (:attr:`bayestribo.inference.FitResult.dissipation`, its law's or the law-free
+    mixture's) in its own colour; a dotted line at the swing where the runs are
+    compared (:func:`bayestribo.campaign.dissipation.dissipation_rows`). Every law has
+    a ΔE(A), so runs of any laws are drawn alike.
 
     Parameters
     ----------
-    analysis : CampaignAnalysis
+    groups : mapping of str to sequence of str
+        Group label (``key=value`` pairs, drawn in words) -> its runs;
+        :func:`bayestribo.campaign.dissipation.group_runs` of a campaign analysis.
     bands : mapping
         Run id -> ΔE(A) band (:func:`bayestribo.campaign.dissipation.run_bands`).
     fig : matplotlib Figure, optional
@@ -630,20 +634,20 @@ def plot_dissipation(
     -------
     matplotlib Figure
     """
-    from bayestribo.campaign.dissipation import dissipation_rows, group_runs
+    from bayestribo.campaign.dissipation import dissipation_rows
 
-    groups = {
+    shown = {
         label: [r for r in runs if r in bands]
-        for label, runs in group_runs(analysis).items()
+        for label, runs in groups.items()
         if any(r in bands for r in runs)
     }
-    shared, rows = dissipation_rows(analysis, bands, amplitude)
+    _, rows = dissipation_rows(shown, bands, amplitude)
     at = {row["group"]: row["amplitude"] for row in rows}
-    n = max(len(groups), 1)
+    n = max(len(shown), 1)
     cols = min(n, 3)
     fig = _new_figure(fig, (max(10.0, 3.6 * cols), 3.4 * math.ceil(n / cols) + 0.8))
     axes = _panels(fig, n)
-    for ax, (label, runs) in zip(axes, groups.items(), strict=False):
+    for ax, (label, runs) in zip(axes, shown.items(), strict=False):
         units = {str(bands[r].get("unit")) for r in runs}
         for k, run in enumerate(runs):
             band = bands[run]
@@ -665,11 +669,11 @@ def plot_dissipation(
         ax.set_ylabel(_energy_label(units.pop() if len(units) == 1 else "mixed units"))
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=8, loc="upper left")
-    where = "the dotted line: the swing where the runs are compared" if rows else ""
-    prob = next((b.get("prob") for b in bands.values() if b.get("prob")), analysis.prob)
+    probs = {float(b["prob"]) for b in bands.values() if b.get("prob")}
+    within = f"{100 * probs.pop():.0f} % band" if len(probs) == 1 else "credible band"
     fig.suptitle(
-        f"Energy loss per cycle ΔE(A), each run's mean and {100 * float(prob):.0f} % band"
-        + (f"\n({where})" if where and shared is not None else "")
+        f"Energy loss per cycle ΔE(A), each run's mean and {within}"
+        + ("\n(dotted: the swing where the runs are compared)" if at else "")
     )
     return fig
 
@@ -700,11 +704,13 @@ def plot_dissipation_against_load(
     -------
     matplotlib Figure
     """
-    from bayestribo.campaign.dissipation import dissipation_rows
+    from bayestribo.campaign.dissipation import dissipation_rows, group_runs, run_metadata
 
     fig = _new_figure(fig, (7, 4.2))
     ax = fig.subplots()
-    shared, rows = dissipation_rows(analysis, bands, amplitude)
+    shared, rows = dissipation_rows(
+        group_runs(analysis), bands, amplitude, metadata=run_metadata(analysis)
+    )
     pop = analysis.contact
     series_of: dict[str, str] = {}
     if pop is not None:
