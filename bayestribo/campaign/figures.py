@@ -660,8 +660,8 @@ def plot_dissipation(
             ax.plot(amps[keep], mean[keep], "-", color=colour, lw=1.2, label=literal(run))
         if at.get(label) is not None:
             ax.axvline(at[label], color="0.4", ls=":", lw=1)
-        ax.set_xscale("log")
         ax.set_yscale("log")
+        _decades(ax)  # whole decades: labels at minor ticks run together
         words = "no contact" if label == "no contact" else _words(label.removeprefix("no contact,"))
         ax.set_title(words if len(words) <= 48 else words[:46] + "…", fontsize="medium")
         amplitude_unit = str(bands[runs[0]].get("amplitude_unit") or "-")
@@ -719,9 +719,9 @@ def plot_dissipation_against_load(
             series_of.update({run: label for run in g.runs})
     shown = [r for r in rows if "mean" in r and r.get("load_N") is not None]
     units = {str(r["unit"]) for r in shown}
-    series = sorted({series_of.get(r["run"], "") for r in shown})
+    series = sorted({series_of.get(r["run"], "no contact") for r in shown})
     for k, label in enumerate(series):
-        members = [r for r in shown if series_of.get(r["run"], "") == label]
+        members = [r for r in shown if series_of.get(r["run"], "no contact") == label]
         x = np.array([r["load_N"] for r in members], dtype=float)
         mean = np.array([r["mean"] for r in members])
         err = np.array([[r["mean"] - r["low"], r["high"] - r["mean"]] for r in members]).T
@@ -733,7 +733,7 @@ def plot_dissipation_against_load(
             ms=4,
             capsize=3,
             color=f"C{k % 10}",
-            label=label or "runs",
+            label=label,
         )
     ax.set_xlabel("load N [N]")
     ax.set_ylabel(_energy_label(units.pop() if len(units) == 1 else "mixed units"))
