@@ -207,6 +207,8 @@ def _text(
     for name, why in (getattr(analysis, "left_out", {}) or {}).items():
         lines.append(f"Not compared across runs: {name}: {why}.")
     titles = {"pooled over loads": " (pooled over loads)"}
+    # the symbols' column as wide as the widest ("c₂ [kg/m]"): the numbers line up
+    width = max([4, *(len(_symbol(analysis, n)) for n in getattr(analysis, "quantities", {}))])
     current = None
     for r in analysis.group_rows():
         words = _words(r["group"])
@@ -222,7 +224,7 @@ def _text(
         symbol = _symbol(analysis, r["parameter"])
         mean = _interval(r["mean_median"], r["mean_low"], r["mean_high"])
         sigma = _interval(r["sigma_median"], r["sigma_low"], r["sigma_high"])
-        lines.append(f"    {symbol:4s} mean {mean:34s} σ {sigma}")
+        lines.append(f"    {symbol:{width}s} mean {mean:34s} σ {sigma}")
     trends = analysis.trend_rows()
     covariates = list(dict.fromkeys(r["covariate"] for r in trends))
     for covariate in covariates:
@@ -242,7 +244,9 @@ def _text(
                 current = series
             symbol = _symbol(analysis, r["parameter"])
             slope = _interval(r["slope_median"], r["slope_low"], r["slope_high"])
-            lines.append(f"    {symbol:4s} {slope:40s} P(slope > 0) = {r['prob_positive']:.3f}")
+            lines.append(
+                f"    {symbol:{width}s} {slope:40s} P(slope > 0) = {r['prob_positive']:.3f}"
+            )
     unconverged = [r["run_id"] for r in analysis.runs if not r.get("converged", True)]
     if failures or analysis.excluded or unconverged or not analysis.converged:
         lines.append("")
