@@ -177,7 +177,7 @@ def test_runs_of_two_laws_are_drawn_apart_and_never_read_a_quantity_they_lack(tw
 
 
 def test_the_dissipation_figures_compare_runs_at_a_shared_swing(two_laws, tmp_path):
-    from bayestribo.campaign.dissipation import (
+    from bayestribo.campaign.bands import (
         at_amplitude,
         dissipation_rows,
         group_runs,

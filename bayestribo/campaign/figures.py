@@ -19,7 +19,7 @@ panels of the quantities its law has.
   values and the 6 % water above which its μ_k rises (Fig. 10);
 * :func:`plot_dissipation`, :func:`plot_dissipation_against_load`: ΔE(A), the one
   quantity of every law (and of the law-free answer), per group of repeats and at a
-  swing the runs share against load (:mod:`bayestribo.campaign.dissipation`).
+  swing the runs share against load (:mod:`bayestribo.campaign.bands`).
 
 Each function draws on the figure it is given (a new one if None) and returns it;
 :func:`save_figures` is the one that writes files.
@@ -465,7 +465,7 @@ def save_figures(
 
     The group means against load and the forest plot always; ζ_k and d_k where the
     analysis has them (ζ a quantity of runs with and without contact); ΔE(A) per group
-    where ``bands`` (run id -> ΔE(A) band, :func:`bayestribo.campaign.dissipation.
+    where ``bands`` (run id -> ΔE(A) band, :func:`bayestribo.campaign.bands.
     run_bands`) are given.
     """
     plt = _pyplot()
@@ -478,7 +478,7 @@ def save_figures(
     if analysis.derived:
         makers.append(("zeta_k_d_k", plot_derived))
     if bands:
-        from bayestribo.campaign.dissipation import group_runs
+        from bayestribo.campaign.bands import group_runs
 
         makers.append(("dissipation", lambda a: plot_dissipation(group_runs(a), bands)))
     out = []
@@ -615,16 +615,16 @@ def plot_dissipation(
     One panel per group of repeats, on log-log axes, each run's band
     (:attr:`bayestribo.inference.FitResult.dissipation`, its law's or the law-free
     mixture's) in its own colour; a dotted line at the swing where the runs are
-    compared (:func:`bayestribo.campaign.dissipation.dissipation_rows`). Every law has
+    compared (:func:`bayestribo.campaign.bands.dissipation_rows`). Every law has
     a ΔE(A), so runs of any laws are drawn alike.
 
     Parameters
     ----------
     groups : mapping of str to sequence of str
         Group label (``key=value`` pairs, drawn in words) -> its runs;
-        :func:`bayestribo.campaign.dissipation.group_runs` of a campaign analysis.
+        :func:`bayestribo.campaign.bands.group_runs` of a campaign analysis.
     bands : mapping
-        Run id -> ΔE(A) band (:func:`bayestribo.campaign.dissipation.run_bands`).
+        Run id -> ΔE(A) band (:func:`bayestribo.campaign.bands.run_bands`).
     fig : matplotlib Figure, optional
         Empty figure to draw on (one axes per group is added); a new one if None.
     amplitude : float, optional
@@ -634,7 +634,7 @@ def plot_dissipation(
     -------
     matplotlib Figure
     """
-    from bayestribo.campaign.dissipation import dissipation_rows
+    from bayestribo.campaign.bands import dissipation_rows
 
     shown = {
         label: [r for r in runs if r in bands]
@@ -687,7 +687,7 @@ def plot_dissipation_against_load(
     """Each run's ΔE at one swing against load, with its credible interval.
 
     The runs of a series (the groups' keys but the load) in one colour; the swing is
-    one every run reaches (:func:`bayestribo.campaign.dissipation.dissipation_rows`).
+    one every run reaches (:func:`bayestribo.campaign.bands.dissipation_rows`).
     Each run's own interval, not a population of repeats.
 
     Parameters
@@ -704,7 +704,7 @@ def plot_dissipation_against_load(
     -------
     matplotlib Figure
     """
-    from bayestribo.campaign.dissipation import dissipation_rows, group_runs, run_metadata
+    from bayestribo.campaign.bands import dissipation_rows, group_runs, run_metadata
 
     fig = _new_figure(fig, (7, 4.2))
     ax = fig.subplots()

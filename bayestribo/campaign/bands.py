@@ -1,4 +1,4 @@
-"""ΔE(A) of a campaign's runs, per group of repeats, at amplitudes the runs share.
+"""ΔE(A) bands of a campaign's runs, per group of repeats, at amplitudes the runs share.
 
 Every fit gives its law's energy loss per cycle ΔE(A) with a credible band at the swings
 of its analysed motion (:attr:`bayestribo.inference.FitResult.dissipation`,
