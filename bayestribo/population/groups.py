@@ -51,6 +51,7 @@ def _water(value: str) -> str:
 
 #: How a grouping key's value reads (docs/run-format.md's keys).
 _GROUP_WORDS = {
+    "law": lambda v: f"law {v}",
     "lubricant": lambda v: v,
     "water_mass_fraction": _water,
     "load_N": lambda v: f"N = {v} N",
