@@ -238,6 +238,27 @@ def test_a_saved_fit_that_cannot_be_read_is_fitted_again(tmp_path, capsys):
     assert not [p for p in out.iterdir() if p.name.endswith(".tmp")]
 
 
+def test_a_fit_saved_over_by_other_settings_is_never_read_for_the_first(tmp_path, capsys):
+    """Two campaigns with other settings in one output folder write the same run's file:
+    the catalog's record of the first settings then points at the second's fit. Its
+    checksum tells them apart: the first settings' run is fitted again, never answered
+    with the other fit."""
+    from bayestribo.campaign.fitting import fit_catalogued
+
+    paths = _write_run_files(tmp_path, ["a-r1"])
+    db, out = tmp_path / "cat.sqlite", tmp_path / "fits"
+    kwargs = {"function": saved_fit, "loader": load_saved, "progress": True}
+    one = fit_catalogued(paths, db, out, None, campaign_seed=4, scale=1.0, **kwargs)
+    two = fit_catalogued(paths, db, out, None, campaign_seed=4, scale=2.0, **kwargs)
+    assert one[0].result != two[0].result
+    again = fit_catalogued(paths, db, out, None, campaign_seed=4, scale=1.0, **kwargs)
+    assert not again[0].cached and again[0].result == one[0].result
+    assert "cannot be read as recorded" in capsys.readouterr().err
+    # the same settings twice in a row: a cache hit, as before
+    last = fit_catalogued(paths, db, out, None, campaign_seed=4, scale=1.0, **kwargs)
+    assert last[0].cached and last[0].result == one[0].result
+
+
 class _Whole:
     """A stand-in fit result that can be watched with a weak reference."""
 

@@ -522,6 +522,23 @@ def fit_catalogued(
             else find_fit(catalog, run=rows[i], settings=settings[i], package_version=__version__)
         )
         result_path = None if record is None else record.summary.get("result_path")
+        recorded_sha = None if record is None else record.summary.get("result_sha256")
+        if (
+            result_path
+            and Path(result_path).exists()
+            and recorded_sha not in (None, _sha256(Path(result_path)))
+        ):
+            # the file is not the one recorded (a campaign with other settings wrote the
+            # same run's file since, or it was cut short): a cache miss, fitted again
+            if progress:
+                print(
+                    f"bayestribo campaign: the saved fit of {name} cannot be read as "
+                    "recorded (the file changed since: a fit with other settings in the "
+                    "same folder, or a file cut short); fitting it again",
+                    file=progress_stream or sys.stderr,
+                )
+            todo.append(i)
+            continue
         if result_path and Path(result_path).exists():
             seed = settings[i]["seed"]
             try:
@@ -570,6 +587,7 @@ def fit_catalogued(
             settings=settings[i],
             summary={
                 "result_path": str(target.resolve()),
+                "result_sha256": _sha256(target),
                 "converged": bool(outcome.result.converged),
                 "posterior": {
                     k: v.to_dict() if hasattr(v, "to_dict") else v
