@@ -254,10 +254,11 @@ _BUILTIN = {info.name: info for info in BUILTIN_FORMATS}
 #: The built-in formats' modules, in the order of :data:`BUILTIN_FORMATS`.
 BUILTIN_MODULES: tuple[str, ...] = tuple(str(info.module) for info in BUILTIN_FORMATS)
 
-#: Every registered format by name, in order (the built-in ones first): its
-#: :class:`FileFormat`, or a built-in format's :class:`FormatInfo` until its module is
-#: imported on first use.
-_REGISTRY: dict[str, FileFormat | FormatInfo] = dict(_BUILTIN)
+#: What every registered format is, by name, in order (the built-in ones first).
+_REGISTRY: dict[str, FormatInfo] = dict(_BUILTIN)
+#: The registered formats with their readers at hand: those registered with
+#: :func:`register_format`, and the built-in ones whose module was imported (on first use).
+_READERS: dict[str, FileFormat] = {}
 
 
 def register_format(fmt: FileFormat, *, replace: bool = False) -> FileFormat:
@@ -294,27 +295,22 @@ def register_format(fmt: FileFormat, *, replace: bool = False) -> FileFormat:
                 f"FileFormat {fmt.name!r}: suffix(es) {sorted(clash)} already select the "
                 f"{other.name!r} format"
             )
-    _REGISTRY[fmt.name] = fmt
+    _REGISTRY[fmt.name] = fmt.info
+    _READERS[fmt.name] = fmt
     return fmt
 
 
 def format_table() -> dict[str, FormatInfo]:
     """What every registered format is, by name (the built-in ones first), without
     importing any reader: the command line's ``--format`` choices and help."""
-    return {
-        name: entry if isinstance(entry, FormatInfo) else entry.info
-        for name, entry in _REGISTRY.items()
-    }
+    return dict(_REGISTRY)
 
 
 def _loaded(name: str) -> FileFormat:
     """The registered format ``name``, its built-in module imported on first use."""
-    entry = _REGISTRY[name]
-    if isinstance(entry, FileFormat):
-        return entry
-    fmt = importlib.import_module(str(entry.module)).FORMAT
-    if _REGISTRY.get(name) is entry:  # not replaced while its module was imported
-        _REGISTRY[name] = fmt
+    fmt = _READERS.get(name)
+    if fmt is None:
+        fmt = _READERS[name] = importlib.import_module(str(_REGISTRY[name].module)).FORMAT
     return fmt
 
 
