@@ -1,5 +1,5 @@
-"""What the command line imports: ``--help`` and bad arguments stay light, ``fit`` skips
-ArviZ.
+"""What the command line imports: building any parser imports no numpy or SciPy, ``--help``
+and bad arguments stay light, ``fit`` skips ArviZ.
 
 Each case runs in a fresh interpreter (``python -c``) and reads ``sys.modules`` after
 the command: deterministic, unlike a timing. The speed itself is measured side by side
@@ -16,8 +16,14 @@ import sys
 import pytest
 from _paths import REPO, RUNS
 
+from bayestribo.cli.main import COMMANDS
+
 #: Libraries that take longer to import than a fit takes to run.
 HEAVY = ("scipy.stats", "arviz", "numba", "emcee", "xarray", "pandas", "matplotlib")
+#: What building a parser (``--help`` of every command, an argument error) must not
+#: import: the heavy libraries, and numpy and SciPy, whose import alone would take more
+#: than the start-up a ``--help`` is allowed (1.3× ``import numpy``).
+NOT_FOR_PARSING = ("numpy", "scipy", *HEAVY)
 #: The package's modules that a fit does not need: the classical estimators other than
 #: its starting point's (Feeny-Liang) and the simulator of recordings.
 UNUSED_BY_FIT = (
@@ -47,9 +53,10 @@ try:
 except SystemExit as exc:
     rc = exc.code
 heavy = sorted(m for m in {HEAVY!r} if m in sys.modules)
+parsing = sorted(m for m in {NOT_FOR_PARSING!r} if m in sys.modules)
 unused = sorted(m for m in {UNUSED_BY_FIT!r} if m in sys.modules)
-probe = {{"rc": rc, "heavy": heavy, "unused": unused, "gc_enabled": gc.isenabled(),
-          "frozen": gc.get_freeze_count()}}
+probe = {{"rc": rc, "heavy": heavy, "parsing": parsing, "unused": unused,
+          "gc_enabled": gc.isenabled(), "frozen": gc.get_freeze_count()}}
 sys.stderr.write("\\nPROBE " + json.dumps(probe) + "\\n")
 """
 
@@ -94,6 +101,49 @@ def test_help_and_argument_errors_import_no_heavy_library(argv, tmp_path):
     assert probe["rc"] in (0, 2)
     assert probe["heavy"] == [], f"bayestribo {' '.join(argv)} imported {probe['heavy']}"
     assert "bayestribo.synthetic" not in probe["unused"]
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+@pytest.mark.parametrize("how", ["--help", "--no-such-option"])
+def test_building_every_commands_parser_imports_no_numpy_scipy_or_heavy_library(
+    command, how, tmp_path
+):
+    # bayestribo COMMAND --help prints the help; an unknown option is an argument error:
+    # either way every parser was built (the format, restoring-force and law choices
+    # from their registries' light tables), nothing run
+    probe, out = _probe(command, how, cwd=str(tmp_path))
+    assert probe["rc"] == (0 if how == "--help" else 2)
+    assert probe["parsing"] == [], f"bayestribo {command} {how} imported {probe['parsing']}"
+    if how == "--help":
+        assert f"bayestribo {command}" in out
+
+
+def test_a_format_and_a_restoring_force_registered_at_run_time_are_choices_of_the_parser():
+    # register_format and register_restoring before the parser is built: --format and
+    # --restoring offer them, and still no reader, no force and no numpy is imported
+    code = (
+        "import sys\n"
+        "from bayestribo.cli.main import build_parser\n"
+        "from bayestribo.io.registry import BUILTIN_MODULES, FileFormat, register_format\n"
+        "from bayestribo.model.restoring import RestoringForce, register_restoring\n"
+        "register_format(FileFormat('labrig', 'our rig', ('.rig',), lambda p, o: {}))\n"
+        "register_restoring(RestoringForce('softspring', 'our spring', lambda y: 0.5 * y * y,"
+        " lambda a: 1.0 + 0.0 * a))\n"
+        "parser = build_parser()\n"
+        "sub = parser._subparsers._group_actions[0].choices['fit']\n"
+        "actions = {a.dest: a for a in sub._actions}\n"
+        "assert actions['format'].choices[-1] == 'labrig', actions['format'].choices\n"
+        "assert 'softspring' in actions['restoring'].choices, actions['restoring'].choices\n"
+        "assert 'labrig: our rig' in actions['format'].help\n"
+        "loaded = [m for m in (*BUILTIN_MODULES, 'numpy', 'scipy') if m in sys.modules]\n"
+        "assert not loaded, loaded\n"
+    )
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]),
+    }
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert done.returncode == 0, done.stderr
 
 
 def test_fit_imports_no_arviz_xarray_pandas_or_matplotlib(tmp_path):

@@ -6,6 +6,8 @@ a new reader comes with its round trip.
 
 from __future__ import annotations
 
+import dataclasses
+import importlib
 import json
 from collections.abc import Callable
 from pathlib import Path
@@ -19,7 +21,13 @@ from bayestribo.cli import main
 from bayestribo.errors import BayestriboError, RunFormatError
 from bayestribo.io import ReadOptions, as_run
 from bayestribo.io.layout import describe_file
-from bayestribo.io.registry import FileFormat, format_for, register_format, registered_formats
+from bayestribo.io.registry import (
+    FileFormat,
+    format_for,
+    format_table,
+    register_format,
+    registered_formats,
+)
 from bayestribo.io.sidecar import sidecar_path, write_sidecar
 from bayestribo.io.text import write_csv
 from bayestribo.synthetic import Sensor, simulate
@@ -142,6 +150,17 @@ def test_every_registered_format_has_a_test() -> None:
     assert set(registered_formats()) == set(WRITERS)
 
 
+def test_the_format_table_says_what_each_reader_reads() -> None:
+    # the light table the command line builds --format from, and each module's FORMAT
+    # with its reader: one description, in the same order
+    table = format_table()
+    formats = registered_formats()
+    assert list(table) == list(formats)
+    for name, fmt in formats.items():
+        assert dataclasses.replace(table[name], module=None) == fmt.info
+        assert importlib.import_module(str(table[name].module)).FORMAT is fmt
+
+
 @pytest.fixture(scope="module")
 def reference(run: Any) -> Any:
     return fit(run, seed=3, grid_points=32)
@@ -231,6 +250,7 @@ def test_a_format_defined_outside_the_package_reads_inspects_and_fits(
         from bayestribo.io import registry
 
         registry._REGISTRY.pop("labnpz")
+        registry._READERS.pop("labnpz")
 
 
 @pytest.mark.parametrize(

@@ -143,6 +143,7 @@ def test_any_readers_library_error_becomes_the_packages_error(tmp_path: Path) ->
         from bayestribo.io import registry
 
         registry._REGISTRY.pop("brokenlib")
+        registry._READERS.pop("brokenlib")
 
 
 @pytest.mark.parametrize("mass", [1e308, 1e-320, -1.0])

@@ -45,10 +45,11 @@ def add_run_arguments(parser: argparse.ArgumentParser, *, optional: bool = False
 
 def add_reading_options(parser: argparse.ArgumentParser) -> None:
     """Add the options that describe a run file, each said to apply to the registered
-    formats that take it (:mod:`bayestribo.io.registry`)."""
-    from bayestribo.io.registry import registered_formats
+    formats that take it (:func:`bayestribo.io.registry.format_table`: no reader is
+    imported to build them)."""
+    from bayestribo.io.registry import format_table
 
-    formats = registered_formats()
+    formats = format_table()
 
     def only(option: str, text: str) -> str:
         takes = [f.name for f in formats.values() if option in f.options]
@@ -154,13 +155,14 @@ def add_reading_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--frequency", type=float, help="nominal natural frequency f [Hz]")
     parser.add_argument("--load", type=float, help="normal load N [N]")
     parser.add_argument("--mass", type=float, help="oscillating mass m [kg]")
-    from bayestribo.model.restoring import RESTORING
+    from bayestribo.model.restoring import restoring_table
 
+    restoring = restoring_table()
     parser.add_argument(
         "--restoring",
-        choices=tuple(RESTORING),
+        choices=tuple(restoring),
         help="the oscillator's restoring force (sidecar 'restoring'): "
-        + "; ".join(f"{name}: {force.description}" for name, force in RESTORING.items())
+        + "; ".join(f"{name}: {description}" for name, description in restoring.items())
         + ". The energy lost per cycle from the turning points takes its potential",
     )
 

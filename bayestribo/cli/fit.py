@@ -22,8 +22,6 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from bayestribo import DEFAULT_SEED
 from bayestribo.cli._common import add_notch_option, add_run_arguments, read_run_from_args
 from bayestribo.cli.laws import add_law_option
@@ -151,6 +149,7 @@ def write_outputs(result: Any, out_dir: Path, stem: str) -> list[Path]:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import numpy as np
 
     from bayestribo.errors import BayestriboError
     from bayestribo.inference.plots import corner_plot, pi_plot, plotted_names, trace_plot

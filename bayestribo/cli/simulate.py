@@ -20,7 +20,6 @@ import argparse
 from typing import Any
 
 from bayestribo.errors import BayestriboError
-from bayestribo.model.scaling import Rig
 
 __all__ = ["register"]
 
@@ -95,6 +94,7 @@ def run(args: argparse.Namespace) -> int:
         return 0
 
     from bayestribo.io import write_run
+    from bayestribo.model.scaling import Rig
     from bayestribo.synthetic import Release, Sensor
     from bayestribo.synthetic.recording import simulate
 

@@ -1,21 +1,27 @@
 """Reading and writing runs: canonical CSV + JSON sidecar and every registered file format.
 
 See ``docs/run-format.md`` for the canonical format and :mod:`bayestribo.io.registry`
-for the formats read.
+for the formats read. The names below are re-exported lazily: importing the package (or
+its light modules :mod:`~bayestribo.io.registry` and :mod:`~bayestribo.io.options`, as
+the command line does to build its options) imports no reader, numpy or SciPy.
 """
 
-from bayestribo.io.files import READ_OPTIONS, ReadOptions, as_run, read_run, write_run
-from bayestribo.io.registry import FileFormat, register_format, registered_formats
-from bayestribo.io.validation import validate_run
+from __future__ import annotations
 
-__all__ = [
-    "READ_OPTIONS",
-    "FileFormat",
-    "ReadOptions",
-    "as_run",
-    "read_run",
-    "register_format",
-    "registered_formats",
-    "validate_run",
-    "write_run",
-]
+from bayestribo._lazy import lazy_exports
+
+_LAZY: dict[str, str] = {
+    "READ_OPTIONS": "bayestribo.io.options",
+    "FileFormat": "bayestribo.io.registry",
+    "ReadOptions": "bayestribo.io.options",
+    "as_run": "bayestribo.io.files",
+    "read_run": "bayestribo.io.files",
+    "register_format": "bayestribo.io.registry",
+    "registered_formats": "bayestribo.io.registry",
+    "validate_run": "bayestribo.io.validation",
+    "write_run": "bayestribo.io.files",
+}
+
+__all__ = sorted(_LAZY)
+
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY)

@@ -7,9 +7,16 @@ format-specific reading options it takes, a ``read`` function from a path and
 which option applies to which file, ``inspect``, and the command line's ``--format``
 choices and help all come from here.
 
-A new format is one module defining ``FORMAT = FileFormat(...)`` and one registration:
-its module name in :data:`BUILTIN_MODULES` for a format shipped with the package, or
-:func:`register_format` for one defined elsewhere (a lab's own file layout)::
+What a format is (:class:`FormatInfo`: name, title, suffixes, options, extra, hint) is
+kept apart from the code that reads it. The registry holds the description of every
+registered format and imports a built-in format's module, with its reader and the
+libraries behind it, only when a file is read or described in it: the command line
+builds its options from :func:`format_table` without importing any reader (nor numpy),
+and a suffix lookup imports the one module that takes the suffix.
+
+A new built-in format is one module defining ``FORMAT`` (the reader, built from its
+description with :meth:`FileFormat.builtin`) and one entry in :data:`BUILTIN_FORMATS`;
+one defined elsewhere (a lab's own file layout) is one :func:`register_format` call::
 
     from bayestribo.io.registry import FileFormat, register_format
 
@@ -25,35 +32,76 @@ import importlib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
-
-from numpy.typing import NDArray
+from typing import TYPE_CHECKING, Any
 
 from bayestribo.errors import BayestriboError, RunFormatError
 from bayestribo.io.options import FORMAT_OPTIONS, ReadOptions
 
+if TYPE_CHECKING:
+    from numpy.typing import NDArray
+
 __all__ = [
+    "BUILTIN_FORMATS",
     "BUILTIN_MODULES",
     "FileFormat",
+    "FormatInfo",
     "format_for",
+    "format_table",
     "get_format",
     "register_format",
     "registered_formats",
 ]
 
-#: Modules of the formats shipped with the package, each defining ``FORMAT``; their
-#: order is the order of ``--format`` choices and of the suffix lookup.
-BUILTIN_MODULES: tuple[str, ...] = (
-    "bayestribo.io.formats.text",
-    "bayestribo.io.formats.excel",
-    "bayestribo.io.formats.uff",
-    "bayestribo.io.formats.tdms",
-    "bayestribo.io.formats.matlab",
-    "bayestribo.io.formats.hdf5",
-)
-
-Reader = Callable[[Path, ReadOptions], Mapping[str, NDArray]]
+Reader = Callable[[Path, ReadOptions], Mapping[str, "NDArray"]]
 Describer = Callable[[Path, ReadOptions], Mapping[str, Any]]
+
+
+def _check_description(
+    kind: str, name: str, suffixes: tuple[str, ...], options: tuple[str, ...]
+) -> None:
+    """Refuse a format's name, suffixes or options that the registry cannot take."""
+    if not name or name != name.lower() or not name.isidentifier():
+        raise BayestriboError(f"{kind} name: expected a lower-case identifier, got {name!r}")
+    for suffix in suffixes:
+        if not suffix.startswith(".") or suffix != suffix.lower():
+            raise BayestriboError(
+                f"{kind} {name!r} suffixes: expected lower-case suffixes starting with '.', "
+                f"got {suffix!r}"
+            )
+    bad = [o for o in options if o not in FORMAT_OPTIONS]
+    if bad:
+        raise BayestriboError(
+            f"{kind} {name!r} options: {bad} are not format options; expected some of "
+            f"{', '.join(FORMAT_OPTIONS)}"
+        )
+
+
+@dataclass(frozen=True)
+class FormatInfo:
+    """What a file format is, without its reader: all the command line and the format
+    list need.
+
+    Parameters
+    ----------
+    name, title, suffixes, options, extra, hint
+        As :class:`FileFormat`'s.
+    module : str, optional
+        A built-in format's module, which defines its :class:`FileFormat` as ``FORMAT``
+        and is imported when a file is read or described in the format.
+    """
+
+    name: str
+    title: str
+    suffixes: tuple[str, ...]
+    options: tuple[str, ...] = ()
+    extra: str | None = None
+    hint: str = ""
+    module: str | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "suffixes", tuple(self.suffixes))
+        object.__setattr__(self, "options", tuple(self.options))
+        _check_description("FormatInfo", self.name, self.suffixes, self.options)
 
 
 @dataclass(frozen=True)
@@ -100,26 +148,32 @@ class FileFormat:
     hint: str = ""
 
     def __post_init__(self) -> None:
-        if not self.name or self.name != self.name.lower() or not self.name.isidentifier():
-            raise BayestriboError(
-                f"FileFormat name: expected a lower-case identifier, got {self.name!r}"
-            )
         object.__setattr__(self, "suffixes", tuple(self.suffixes))
         object.__setattr__(self, "options", tuple(self.options))
-        for suffix in self.suffixes:
-            if not suffix.startswith(".") or suffix != suffix.lower():
-                raise BayestriboError(
-                    f"FileFormat {self.name!r} suffixes: expected lower-case suffixes "
-                    f"starting with '.', got {suffix!r}"
-                )
-        bad = [o for o in self.options if o not in FORMAT_OPTIONS]
-        if bad:
-            raise BayestriboError(
-                f"FileFormat {self.name!r} options: {bad} are not format options; "
-                f"expected some of {', '.join(FORMAT_OPTIONS)}"
-            )
+        _check_description("FileFormat", self.name, self.suffixes, self.options)
         if not callable(self.read):
             raise BayestriboError(f"FileFormat {self.name!r} read: expected a callable")
+
+    @classmethod
+    def builtin(cls, name: str, read: Reader, describe: Describer | None = None) -> FileFormat:
+        """The built-in format ``name``: its description in :data:`BUILTIN_FORMATS`, with
+        its reader (for the module that defines its ``FORMAT``)."""
+        info = _BUILTIN[name]
+        return cls(
+            info.name,
+            info.title,
+            info.suffixes,
+            read,
+            options=info.options,
+            describe=describe,
+            extra=info.extra,
+            hint=info.hint,
+        )
+
+    @property
+    def info(self) -> FormatInfo:
+        """What the format is, without its reader."""
+        return FormatInfo(self.name, self.title, self.suffixes, self.options, self.extra, self.hint)
 
     def describe_file(self, path: Path, options: ReadOptions) -> dict[str, Any]:
         """``{"format", "reader", "columns"}`` for ``inspect``."""
@@ -138,27 +192,73 @@ class FileFormat:
         return out
 
 
-_REGISTRY: dict[str, FileFormat] = {}
-_LOADED = False
+#: The formats shipped with the package, each read by the ``FORMAT`` of its module; their
+#: order is the order of ``--format`` choices and of the suffix lookup.
+BUILTIN_FORMATS: tuple[FormatInfo, ...] = (
+    FormatInfo(
+        "text",
+        "delimited text",
+        (".csv", ".txt", ".dat", ".tsv", ".asc", ".prn", ".lvm"),
+        ("columns", "delimiter", "decimal", "skip_rows", "encoding"),
+        hint="canonical CSV, other delimited text, oscilloscope and DAQ exports (Tektronix, "
+        "Keysight/Agilent, Rigol, PicoScope CSV, LabVIEW .lvm)",
+        module="bayestribo.io.formats.text",
+    ),
+    FormatInfo(
+        "xlsx",
+        "Excel workbook",
+        (".xlsx", ".xlsm"),
+        ("columns", "skip_rows", "sheet"),
+        extra="formats",
+        hint="Excel .xlsx workbooks (one worksheet of samples in columns; --sheet)",
+        module="bayestribo.io.formats.excel",
+    ),
+    FormatInfo(
+        "uff",
+        "UFF 58",
+        (".uff", ".unv", ".uf", ".58"),
+        ("channels",),
+        extra="formats",
+        hint="Universal File Format data-set 58/58b (modal-analysis software)",
+        module="bayestribo.io.formats.uff",
+    ),
+    FormatInfo(
+        "tdms",
+        "LabVIEW TDMS",
+        (".tdms",),
+        ("group", "channels"),
+        extra="formats",
+        hint="LabVIEW TDMS (National Instruments DAQ)",
+        module="bayestribo.io.formats.tdms",
+    ),
+    FormatInfo(
+        "mat",
+        "MATLAB .mat",
+        (".mat",),
+        ("channels",),
+        hint="MATLAB .mat, v4 to v7.3 (v7.3 needs the hdf5 extra)",
+        module="bayestribo.io.formats.matlab",
+    ),
+    FormatInfo(
+        "hdf5",
+        "HDF5",
+        (".h5", ".hdf5", ".hdf", ".he5"),
+        ("group", "channels"),
+        extra="hdf5",
+        hint="HDF5 datasets, one per signal",
+        module="bayestribo.io.formats.hdf5",
+    ),
+)
+_BUILTIN = {info.name: info for info in BUILTIN_FORMATS}
 
+#: The built-in formats' modules, in the order of :data:`BUILTIN_FORMATS`.
+BUILTIN_MODULES: tuple[str, ...] = tuple(str(info.module) for info in BUILTIN_FORMATS)
 
-def _load_builtin() -> None:
-    global _LOADED
-    if _LOADED:
-        return
-    _LOADED = True
-    added = []
-    for module in BUILTIN_MODULES:
-        fmt = importlib.import_module(module).FORMAT
-        if fmt.name not in _REGISTRY:
-            added.append(fmt)
-    # Formats registered from outside before the first use keep their place after the
-    # built-in ones.
-    outside = dict(_REGISTRY)
-    _REGISTRY.clear()
-    for fmt in added:
-        _REGISTRY[fmt.name] = fmt
-    _REGISTRY.update(outside)
+#: What every registered format is, by name, in order (the built-in ones first).
+_REGISTRY: dict[str, FormatInfo] = dict(_BUILTIN)
+#: The registered formats with their readers at hand: those registered with
+#: :func:`register_format`, and the built-in ones whose module was imported (on first use).
+_READERS: dict[str, FileFormat] = {}
 
 
 def register_format(fmt: FileFormat, *, replace: bool = False) -> FileFormat:
@@ -184,7 +284,6 @@ def register_format(fmt: FileFormat, *, replace: bool = False) -> FileFormat:
     """
     if not isinstance(fmt, FileFormat):
         raise BayestriboError(f"fmt: expected a FileFormat, got {type(fmt).__name__}")
-    _load_builtin()
     if fmt.name in _REGISTRY and not replace:
         raise BayestriboError(
             f"a file format named {fmt.name!r} is registered already; pass replace=True"
@@ -196,14 +295,31 @@ def register_format(fmt: FileFormat, *, replace: bool = False) -> FileFormat:
                 f"FileFormat {fmt.name!r}: suffix(es) {sorted(clash)} already select the "
                 f"{other.name!r} format"
             )
-    _REGISTRY[fmt.name] = fmt
+    _REGISTRY[fmt.name] = fmt.info
+    _READERS[fmt.name] = fmt
+    return fmt
+
+
+def format_table() -> dict[str, FormatInfo]:
+    """What every registered format is, by name (the built-in ones first), without
+    importing any reader: the command line's ``--format`` choices and help."""
+    return dict(_REGISTRY)
+
+
+def _loaded(name: str) -> FileFormat:
+    """The registered format ``name``, its built-in module imported on first use."""
+    fmt = _READERS.get(name)
+    if fmt is None:
+        fmt = _READERS[name] = importlib.import_module(str(_REGISTRY[name].module)).FORMAT
     return fmt
 
 
 def registered_formats() -> Mapping[str, FileFormat]:
-    """The registered formats by name (the built-in ones first)."""
-    _load_builtin()
-    return dict(_REGISTRY)
+    """The registered formats by name (the built-in ones first), every reader imported.
+
+    :func:`format_table` says the same without importing the readers.
+    """
+    return {name: _loaded(name) for name in list(_REGISTRY)}
 
 
 def get_format(name: str, where: str | None = None) -> FileFormat:
@@ -214,10 +330,11 @@ def get_format(name: str, where: str | None = None) -> FileFormat:
     RunFormatError
         For a name that is not registered, listing the registered ones.
     """
-    formats = registered_formats()
-    if name not in formats:
-        raise RunFormatError(f"file_format: expected one of {sorted(formats)}, got {name!r}", where)
-    return formats[name]
+    if name not in _REGISTRY:
+        raise RunFormatError(
+            f"file_format: expected one of {sorted(_REGISTRY)}, got {name!r}", where
+        )
+    return _loaded(name)
 
 
 #: Suffixes of files the package does not read, with what to do instead.
@@ -242,21 +359,13 @@ def format_for(path: str | Path, file_format: str | None = None) -> FileFormat:
     if file_format is not None:
         return get_format(file_format, where)
     suffix = path.suffix.lower()
-    if not _LOADED:
-        # nothing registered from outside yet (register_format loads the built-in
-        # formats first): the built-in formats in their order, each imported only until
-        # one takes the suffix, so a CSV imports none of the binary readers
-        for module in BUILTIN_MODULES:
-            fmt = importlib.import_module(module).FORMAT
-            if suffix in fmt.suffixes:
-                return fmt
-    formats = registered_formats()
-    for fmt in formats.values():
-        if suffix in fmt.suffixes:
-            return fmt
+    formats = format_table()
+    for info in formats.values():
+        if suffix in info.suffixes:
+            return _loaded(info.name)  # the one reader that takes the suffix
     if suffix in _NOT_READ:
         raise RunFormatError(f"unknown file type {suffix!r}: {_NOT_READ[suffix]}", where)
-    known = sorted(s for fmt in formats.values() for s in fmt.suffixes)
+    known = sorted(s for info in formats.values() for s in info.suffixes)
     raise RunFormatError(
         f"unknown file type {suffix!r}; expected one of {known}; give file_format= for a "
         "file whose suffix does not say its format, or export the data as CSV (time, "

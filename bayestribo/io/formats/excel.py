@@ -227,13 +227,4 @@ def _is_number(text: str) -> bool:
     return True
 
 
-FORMAT = FileFormat(
-    name="xlsx",
-    title="Excel workbook",
-    suffixes=(".xlsx", ".xlsm"),
-    read=_read,
-    options=("columns", "skip_rows", "sheet"),
-    describe=_describe,
-    extra="formats",
-    hint="Excel .xlsx workbooks (one worksheet of samples in columns; --sheet)",
-)
+FORMAT = FileFormat.builtin("xlsx", _read, describe=_describe)

@@ -17,12 +17,4 @@ def _read(path: Path, options: ReadOptions) -> dict[str, NDArray]:
     return read_hdf5(path, channels=options.channels, group=options.group, scale=options.scale)
 
 
-FORMAT = FileFormat(
-    name="hdf5",
-    title="HDF5",
-    suffixes=(".h5", ".hdf5", ".hdf", ".he5"),
-    read=_read,
-    options=("group", "channels"),
-    extra="hdf5",
-    hint="HDF5 datasets, one per signal",
-)
+FORMAT = FileFormat.builtin("hdf5", _read)

@@ -17,11 +17,4 @@ def _read(path: Path, options: ReadOptions) -> dict[str, NDArray]:
     return read_mat(path, channels=options.channels, scale=options.scale)
 
 
-FORMAT = FileFormat(
-    name="mat",
-    title="MATLAB .mat",
-    suffixes=(".mat",),
-    read=_read,
-    options=("channels",),
-    hint="MATLAB .mat, v4 to v7.3 (v7.3 needs the hdf5 extra)",
-)
+FORMAT = FileFormat.builtin("mat", _read)

@@ -17,12 +17,4 @@ def _read(path: Path, options: ReadOptions) -> dict[str, NDArray]:
     return read_tdms(path, channels=options.channels, group=options.group, scale=options.scale)
 
 
-FORMAT = FileFormat(
-    name="tdms",
-    title="LabVIEW TDMS",
-    suffixes=(".tdms",),
-    read=_read,
-    options=("group", "channels"),
-    extra="formats",
-    hint="LabVIEW TDMS (National Instruments DAQ)",
-)
+FORMAT = FileFormat.builtin("tdms", _read)

@@ -116,13 +116,4 @@ def describe_text(path: Path, options: ReadOptions) -> dict[str, Any]:
     return out
 
 
-FORMAT = FileFormat(
-    name="text",
-    title="delimited text",
-    suffixes=(".csv", ".txt", ".dat", ".tsv", ".asc", ".prn", ".lvm"),
-    read=_read,
-    options=("columns", "delimiter", "decimal", "skip_rows", "encoding"),
-    describe=describe_text,
-    hint="canonical CSV, other delimited text, oscilloscope and DAQ exports (Tektronix, "
-    "Keysight/Agilent, Rigol, PicoScope CSV, LabVIEW .lvm)",
-)
+FORMAT = FileFormat.builtin("text", _read, describe=describe_text)

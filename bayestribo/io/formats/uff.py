@@ -17,12 +17,4 @@ def _read(path: Path, options: ReadOptions) -> dict[str, NDArray]:
     return read_uff(path, channels=options.channels, scale=options.scale)
 
 
-FORMAT = FileFormat(
-    name="uff",
-    title="UFF 58",
-    suffixes=(".uff", ".unv", ".uf", ".58"),
-    read=_read,
-    options=("channels",),
-    extra="formats",
-    hint="Universal File Format data-set 58/58b (modal-analysis software)",
-)
+FORMAT = FileFormat.builtin("uff", _read)

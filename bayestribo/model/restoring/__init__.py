@@ -1,30 +1,48 @@
 """Restoring forces as plug-ins: the linear spring and the pendulum, and their registry.
 
 A restoring force is one module that defines a
-:class:`~bayestribo.model.restoring.base.RestoringForce` and registers it; importing
-this package registers the built-in ones, in this order:
+:class:`~bayestribo.model.restoring.base.RestoringForce` and registers it; the built-in
+ones are listed, in this order, in
+:data:`~bayestribo.model.restoring.base.BUILTIN_RESTORING` and each module is imported
+when its force is first asked for (:func:`get_restoring`):
 
 * ``linear``: k x, V = y²/2 (the default, every dissipation law's);
 * ``pendulum``: m g L sin θ, V = 1 - cos θ, θ in radians;
 * ``duffing``: k(x + βx³), V = y²/2 + βy⁴/4, β measured from the half periods.
+
+Importing this package imports no numpy: :func:`restoring_table` names and describes
+every registered force without importing them. ``RESTORING`` (every registered force
+by name) imports the built-in ones first.
 """
 
-# One import line per built-in restoring force: importing the module registers it.
-from bayestribo.model.restoring import linear  # noqa: F401  isort: skip
-from bayestribo.model.restoring import pendulum  # noqa: F401  isort: skip
-from bayestribo.model.restoring import duffing  # noqa: F401  isort: skip
+from __future__ import annotations
+
+from typing import Any
+
 from bayestribo.model.restoring.base import (
-    RESTORING,
+    BUILTIN_RESTORING,
     RestoringForce,
+    RestoringInfo,
     available_restoring,
     get_restoring,
+    load_builtin_restoring,
     register_restoring,
+    restoring_table,
 )
 
 __all__ = [
+    "BUILTIN_RESTORING",
     "RESTORING",
     "RestoringForce",
+    "RestoringInfo",
     "available_restoring",
     "get_restoring",
     "register_restoring",
+    "restoring_table",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    if name == "RESTORING":
+        return load_builtin_restoring()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -13,24 +13,33 @@ potential of the run's restoring force; and the half period grows with the swing
 A restoring force is a :class:`RestoringForce`: its name, the potential ``V(y)``
 (dimensionless, ``y²/2`` near 0), the ratio of its half period at swing A to the
 small-swing one, and whether y must be an angle in radians. Adding one is one module
-that calls :func:`register_restoring`; the sidecar's ``restoring`` key and the command
-line's ``--restoring`` choices come from the registry.
+that calls :func:`register_restoring` (a built-in one is also named, with its
+description, in :data:`BUILTIN_RESTORING`, and its module is imported on first use);
+the sidecar's ``restoring`` key and the command line's ``--restoring`` choices come from
+the registry. This module imports no numpy: the command line builds ``--restoring``
+from :func:`restoring_table` without importing any force.
 """
 
 from __future__ import annotations
 
+import importlib
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, NamedTuple
 
-import numpy as np
-from numpy.typing import ArrayLike, NDArray
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
+    "BUILTIN_RESTORING",
     "RESTORING",
     "RestoringForce",
+    "RestoringInfo",
     "available_restoring",
     "get_restoring",
     "register_restoring",
+    "restoring_table",
 ]
 
 
@@ -77,13 +86,59 @@ class RestoringForce:
     def __post_init__(self) -> None:
         if not self.name.isidentifier():
             raise ValueError(f"restoring force name must be an identifier, got {self.name!r}")
-        small = float(np.asarray(self.potential(1e-3)))
-        if not np.isclose(small, 0.5e-6, rtol=1e-3):
+        small = float(self.potential(1e-3))
+        if not math.isclose(small, 0.5e-6, rel_tol=1e-3):
             raise ValueError(f"restoring force {self.name}: V(y) must be y²/2 near y = 0")
 
 
-#: Every registered restoring force by name, in registration order.
+class RestoringInfo(NamedTuple):
+    """A built-in restoring force before its module is imported."""
+
+    #: Its name (:attr:`RestoringForce.name`).
+    name: str
+    #: One line for help texts (:attr:`RestoringForce.description`).
+    description: str
+    #: The module that defines and registers it.
+    module: str
+
+
+#: The restoring forces shipped with the package, in the order of ``--restoring``; each
+#: module registers its :class:`RestoringForce` (with this description) when imported.
+BUILTIN_RESTORING: tuple[RestoringInfo, ...] = (
+    RestoringInfo(
+        "linear",
+        "a linear spring, k x (Rigaud et al. 2010, Eq. 6): V = y²/2",
+        "bayestribo.model.restoring.linear",
+    ),
+    RestoringInfo(
+        "pendulum",
+        "a pendulum, m g L sin θ (θ in radians): V = 1 - cos θ",
+        "bayestribo.model.restoring.pendulum",
+    ),
+    RestoringInfo(
+        "duffing",
+        "a Duffing spring, k(x + βx³): V = y²/2 + βy⁴/4, β measured from how the half "
+        "period changes with the swing",
+        "bayestribo.model.restoring.duffing",
+    ),
+)
+_BUILTIN = {info.name: info for info in BUILTIN_RESTORING}
+
+#: Every registered restoring force by name: those registered at run time, and the
+#: built-in ones whose module was imported (:func:`get_restoring` imports it on first
+#: use; ``bayestribo.model.restoring.RESTORING`` imports them all first).
 RESTORING: dict[str, RestoringForce] = {}
+
+
+def builtin_description(name: str) -> str:
+    """The description of the built-in restoring force ``name`` (for its module)."""
+    return _BUILTIN[name].description
+
+
+def register_builtin(force: RestoringForce) -> RestoringForce:
+    """Register a built-in restoring force as its module is imported (a force registered
+    under its name before, with ``replace=True``, is kept)."""
+    return RESTORING.setdefault(force.name, force)
 
 
 def register_restoring(force: RestoringForce, *, replace: bool = False) -> RestoringForce:
@@ -92,17 +147,32 @@ def register_restoring(force: RestoringForce, *, replace: bool = False) -> Resto
     Raises
     ------
     ValueError
-        When the name is taken (and ``replace`` is False).
+        When the name is taken, by a built-in force too (and ``replace`` is False).
     """
-    if force.name in RESTORING and not replace:
+    if (force.name in RESTORING or force.name in _BUILTIN) and not replace:
         raise ValueError(f"a restoring force named {force.name!r} is already registered")
     RESTORING[force.name] = force
     return force
 
 
+def restoring_table() -> dict[str, str]:
+    """Every registered restoring force's description by name (the built-in ones first),
+    without importing any of them: the command line's ``--restoring`` choices."""
+    table = {info.name: info.description for info in BUILTIN_RESTORING}
+    table.update((name, force.description) for name, force in RESTORING.items())
+    return table
+
+
 def available_restoring() -> list[str]:
     """Names of the registered restoring forces."""
-    return list(RESTORING)
+    return list(restoring_table())
+
+
+def load_builtin_restoring() -> dict[str, RestoringForce]:
+    """:data:`RESTORING` with every built-in restoring force's module imported."""
+    for info in BUILTIN_RESTORING:
+        importlib.import_module(info.module)  # registers it, unless replaced
+    return RESTORING
 
 
 def get_restoring(name: str | RestoringForce | None) -> RestoringForce:
@@ -116,6 +186,8 @@ def get_restoring(name: str | RestoringForce | None) -> RestoringForce:
     if isinstance(name, RestoringForce):
         return name
     key = "linear" if name is None else str(name)
+    if key not in RESTORING and key in _BUILTIN:
+        importlib.import_module(_BUILTIN[key].module)  # registers it
     if key not in RESTORING:
         raise ValueError(
             f"restoring force {name!r} is not known; expected one of {available_restoring()}"

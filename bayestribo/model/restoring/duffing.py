@@ -19,7 +19,11 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from bayestribo.model.restoring.base import RestoringForce, register_restoring
+from bayestribo.model.restoring.base import (
+    RestoringForce,
+    builtin_description,
+    register_builtin,
+)
 
 __all__ = ["DUFFING", "duffing", "fit_beta", "half_period_ratio"]
 
@@ -127,11 +131,10 @@ def _potential(y: ArrayLike) -> NDArray:
     return 0.5 * y * y
 
 
-DUFFING = register_restoring(
+DUFFING = register_builtin(
     RestoringForce(
         name="duffing",
-        description="a Duffing spring, k(x + βx³): V = y²/2 + βy⁴/4, β measured from how "
-        "the half period changes with the swing",
+        description=builtin_description("duffing"),
         potential=_potential,
         half_period_ratio=lambda a: half_period_ratio(a, 0.0),
         fitted=True,

@@ -5,7 +5,11 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from bayestribo.model.restoring.base import RestoringForce, register_restoring
+from bayestribo.model.restoring.base import (
+    RestoringForce,
+    builtin_description,
+    register_builtin,
+)
 
 __all__ = ["LINEAR"]
 
@@ -19,10 +23,10 @@ def _ratio(a: ArrayLike) -> NDArray:
     return np.ones_like(np.asarray(a, dtype=float))
 
 
-LINEAR = register_restoring(
+LINEAR = register_builtin(
     RestoringForce(
         name="linear",
-        description="a linear spring, k x (Rigaud et al. 2010, Eq. 6): V = y²/2",
+        description=builtin_description("linear"),
         potential=_potential,
         half_period_ratio=_ratio,
     )

@@ -10,7 +10,11 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from bayestribo.model.restoring.base import RestoringForce, register_restoring
+from bayestribo.model.restoring.base import (
+    RestoringForce,
+    builtin_description,
+    register_builtin,
+)
 
 __all__ = ["PENDULUM"]
 
@@ -30,10 +34,10 @@ def _ratio(a: ArrayLike) -> NDArray:
     return 2.0 * scipy.special.ellipk(np.sin(0.5 * a) ** 2) / np.pi
 
 
-PENDULUM = register_restoring(
+PENDULUM = register_builtin(
     RestoringForce(
         name="pendulum",
-        description="a pendulum, m g L sin θ (θ in radians): V = 1 - cos θ",
+        description=builtin_description("pendulum"),
         potential=_potential,
         half_period_ratio=_ratio,
         angle=True,
