@@ -61,6 +61,7 @@ def _paper_quantity(name: str) -> dict[str, Any] | None:
                     "label": p.label,
                     "term": term,
                     "non_negative": p.low >= 0.0,
+                    "at_own_amplitude": False,
                 }
     return None
 
