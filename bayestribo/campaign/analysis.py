@@ -175,6 +175,9 @@ class CampaignAnalysis:
         whatever law each run was fitted in.
     dissipation_trends : dict
         Series label -> :class:`Trend` of ΔE at those swings against ``covariate``.
+    dissipation_quantities : dict of str to dict
+        Each ΔE at a swing compared: its symbol, unit and label (apart from
+        :attr:`quantities`, the laws' own).
     sigma_scales : dict of str to float
         The half-Cauchy scale of each quantity's between-run σ prior (module notes of
         :mod:`bayestribo.population.hyperpriors`; a quantity without a default takes
@@ -197,6 +200,7 @@ class CampaignAnalysis:
     sigma_scales: dict[str, float] = field(default_factory=dict)
     dissipation: Population | None = None
     dissipation_trends: dict[str, Trend] = field(default_factory=dict)
+    dissipation_quantities: dict[str, dict[str, Any]] = field(default_factory=dict)
 
     @property
     def converged(self) -> bool:
@@ -227,6 +231,7 @@ class CampaignAnalysis:
             "sigma_scales": self.sigma_scales,
             "dissipation": None if self.dissipation is None else self.dissipation.to_dict(p),
             "dissipation_trends": {k: t.to_dict(p) for k, t in self.dissipation_trends.items()},
+            "dissipation_quantities": self.dissipation_quantities,
         }
 
     def group_rows(self) -> list[dict[str, Any]]:
@@ -550,6 +555,7 @@ def analyse_campaign(
         "dissipation": [],
     }
     dissipation_trends: dict[str, Trend] = {}
+    laws_free: dict[str, dict[str, Any]] = {}
     trends: dict[str, Trend] = {}
     scales: dict[str, float] = {}
 
@@ -656,7 +662,7 @@ def analyse_campaign(
         ]
         names = tuple(drawn[0].values)
         for n in names:
-            described.setdefault(
+            laws_free.setdefault(
                 n,
                 {
                     "symbol": n.replace("A=", ""),
@@ -752,6 +758,7 @@ def analyse_campaign(
         sigma_scales=scales,
         dissipation=dissipation,
         dissipation_trends=dissipation_trends,
+        dissipation_quantities=laws_free,
     )
 
 

@@ -165,7 +165,9 @@ def _words(label: Any) -> str:
 
 def _symbol(analysis: Any, name: str) -> str:
     """A quantity as printed: its symbol, with its unit where it has one."""
-    q = getattr(analysis, "quantities", {}).get(name, {})
+    q = getattr(analysis, "quantities", {}).get(name) or (
+        getattr(analysis, "dissipation_quantities", {}).get(name, {})
+    )
     symbol = str(q.get("symbol") or name)
     unit = str(q.get("unit") or "1")
     return symbol if unit in ("1", "-") else f"{symbol} [{unit}]"

@@ -107,6 +107,8 @@ def prose(text: str, *, paths: Mapping[str, str] | None = None) -> str:
     'the law quadratic drag holds; the power of the test'
     >>> prose("raise max_steps (--param max_steps=20000)")
     'raise maximum number of steps (--param max_steps=20000)'
+    >>> prose("R-hat 1.02 for log_sigma[mu_k] and beta[0,ΔE(A=1e-04 m)]")
+    'R-hat 1.02 for log σ of μ_k and the mean of ΔE(A=1e-04 m)'
     >>> prose("/d/r.csv: 1 row(s) have no value for velocity_m_per_s; they are left out "
     ...       "of the run (give columns=[...] with 'ignore' for a channel not to use)",
     ...       paths={"/d/r.csv": "r"})
@@ -119,6 +121,10 @@ def prose(text: str, *, paths: Mapping[str, str] | None = None) -> str:
     text = re.sub(r" \(give columns=\[\.\.\.\][^)]*\)", "", text)
     text = re.sub(r" \(printed as '[^']*'\)", "", text)  # the terminal's label
     text = text.replace("law='auto'", "law = auto")
+    # a population sampler's coordinates in words: log_sigma[zeta] -> log σ of zeta
+    text = re.sub(r"\blog_sigma\[([^\]]+)\]", r"log σ of \1", text)
+    text = re.sub(r"\bbeta\[0,([^\]]+)\]", r"the mean of \1", text)
+    text = re.sub(r"\bbeta\[1,([^\]]+)\]", r"the slope of \1", text)
     # the setting in words, but not inside the option that sets it (--param max_steps=N)
     text = re.sub(r"(?<!--param )\bmax_steps\b(?!=)", "maximum number of steps", text)
     from bayestribo.model.laws import TERMS
