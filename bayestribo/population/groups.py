@@ -196,10 +196,12 @@ class Population:
         return difference(self.groups[a], self.groups[b], parameter, prob)
 
     def differences(self, parameter: str, prob: float = 0.95) -> list[dict[str, Any]]:
-        """Differences of every pair of groups (a before b in the group order)."""
+        """Differences of every pair of groups that both model ``parameter`` (a before b
+        in the group order; groups of another law or series may not)."""
         return [
             self.difference(parameter, a, b, prob)
             for a, b in itertools.combinations(self.groups, 2)
+            if parameter in self.groups[a].parameters and parameter in self.groups[b].parameters
         ]
 
     def summary(self, prob: float = 0.95) -> dict[str, dict[str, dict[str, ParameterSummary]]]:
