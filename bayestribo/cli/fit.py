@@ -208,7 +208,7 @@ def run(args: argparse.Namespace) -> int:
     # option or file is told at once
     from bayestribo.cli._imports import import_module
 
-    fit = import_module("bayestribo.inference").fit
+    fit = import_module("bayestribo.inference.fitting").fit
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")  # every warning of this fit, none deduplicated
