@@ -485,7 +485,7 @@ def fit_catalogued(
         root = os.path.commonpath([os.path.abspath(p.parent) for p in paths]) if paths else "."
     names = run_identities(paths, root)
     spec = None
-    if function is None:
+    if function is None or fit_kwargs.get("spec") is not None:
         # the default fit: one specification of every run's fit, recorded with each
         spec, fit_kwargs = _campaign_spec(fit_kwargs)
     run_kwargs = [
