@@ -154,6 +154,11 @@ def run_seed(campaign_seed: int, identity: str) -> int:
 def _default_fit(run: Any, *, seed: int, **kwargs: Any) -> Any:
     from bayestribo.inference import fit  # lazily: the fit pulls in the sampler stack
 
+    if kwargs.get("spec") is not None:
+        # the run's own seed in its specification (recorded with the fit)
+        from bayestribo.inference.spec import FitSpec
+
+        return fit(run, **{**kwargs, "spec": FitSpec.of(kwargs["spec"]).replace(seed=seed)})
     return fit(run, seed=seed, **kwargs)
 
 
@@ -448,7 +453,11 @@ def fit_catalogued(
         The campaign folder (default: the files' common folder), for the identities of
         files whose stems clash.
     **fit_kwargs
-        As in :func:`fit_many`. The results must have ``save(path)``, ``summary()``,
+        As in :func:`fit_many`: with the default fit, a ``spec``
+        (:class:`~bayestribo.inference.spec.FitSpec`) and keywords of
+        :func:`bayestribo.fit` over it make one specification, recorded whole with each
+        fit (a fit under another specification is another catalog entry, never read
+        back for this one). The results must have ``save(path)``, ``summary()``,
         ``converged`` and ``diagnostics`` (as :class:`bayestribo.inference.FitResult`).
     loader : callable, optional
         Reads a saved result back; default :meth:`bayestribo.inference.FitResult.load`.
@@ -475,8 +484,13 @@ def fit_catalogued(
     if root is None:
         root = os.path.commonpath([os.path.abspath(p.parent) for p in paths]) if paths else "."
     names = run_identities(paths, root)
+    spec = None
+    if function is None or fit_kwargs.get("spec") is not None:
+        # the default fit: one specification of every run's fit, recorded with each
+        spec, fit_kwargs = _campaign_spec(fit_kwargs)
     run_kwargs = [
-        _identity_kwargs(path, name, fit_kwargs) for path, name in zip(paths, names, strict=True)
+        _identity_kwargs(path, name, fit_kwargs, spec)
+        for path, name in zip(paths, names, strict=True)
     ]
     settings: list[dict[str, Any]] = []
     rows: list[int] = []
@@ -505,7 +519,11 @@ def fit_catalogued(
         rows.append(row)
         settings.append(
             {
-                "fit_kwargs": {**fit_kwargs, **run_kwargs[i]},
+                # the whole specification: a fit under another one is another entry
+                **({} if spec is None else {"spec": spec.to_dict()}),
+                "fit_kwargs": _plain(
+                    {k: v for k, v in {**fit_kwargs, **run_kwargs[i]}.items() if k != "spec"}
+                ),
                 "function": _function_name(function),
                 "campaign_seed": int(campaign_seed),
                 "seed": run_seed(campaign_seed, name),
@@ -625,13 +643,48 @@ def fit_catalogued(
     return [outcomes[i] for i in range(len(paths))]
 
 
-def _identity_kwargs(path: Path, name: str, fit_kwargs: Mapping[str, Any]) -> dict[str, Any]:
-    """The reading options that give a run in a sub-folder its identity as ``run_id``
-    (none for a run directly in the campaign folder, whose identity is its stem)."""
-    if name == path.stem:
-        return {}
+def _campaign_spec(fit_kwargs: Mapping[str, Any]) -> tuple[Any, dict[str, Any]]:
+    """The :class:`~bayestribo.inference.spec.FitSpec` of ``fit_kwargs`` (its ``spec``,
+    with the keywords of :func:`bayestribo.fit` that are fields of one over it), and the
+    keywords left (``progress``, ``noise``, ...)."""
+    from bayestribo.inference.spec import FitSpec, spec_fields
+
+    keywords = {f.metadata["keyword"] or f.name for f in spec_fields()}
+    rest = {k: v for k, v in fit_kwargs.items() if k != "spec" and k not in keywords}
+    given = {k: v for k, v in fit_kwargs.items() if k in keywords}
+    try:
+        spec = FitSpec.of(fit_kwargs.get("spec"), **given)
+    except ValueError as exc:  # BayestriboError: naming the field
+        raise BayestriboError(f"fit options: {exc}") from None
+    return spec, rest
+
+
+def _plain(value: Any) -> Any:
+    """Keyword arguments as plain data for the catalog's settings (a specification as
+    its dict)."""
+    if hasattr(value, "to_dict") and hasattr(value, "fit_kwargs"):
+        return value.to_dict()
+    if hasattr(value, "as_kwargs"):
+        return value.as_kwargs()
+    if isinstance(value, Mapping):
+        return {k: _plain(v) for k, v in value.items()}
+    return value
+
+
+def _identity_kwargs(
+    path: Path, name: str, fit_kwargs: Mapping[str, Any], spec: Any = None
+) -> dict[str, Any]:
+    """The keywords that give a run in a sub-folder its identity as ``run_id`` (the
+    reading options of ``fit_kwargs``, or the ``spec``'s, with it in their metadata);
+    with a ``spec``, that run's specification (``{"spec": ...}``) in any case."""
     from bayestribo.io.options import ReadOptions
 
-    options = ReadOptions.of(fit_kwargs.get("read_options"))
+    if spec is not None and name == path.stem:
+        return {"spec": spec}
+    if name == path.stem:
+        return {}
+    options = ReadOptions.of(fit_kwargs.get("read_options") if spec is None else spec.read_options)
     metadata = {**(options.metadata or {}), "run_id": name}
+    if spec is not None:
+        return {"spec": spec.replace(read_options=options.replace(metadata=metadata))}
     return {"read_options": options.replace(metadata=metadata).as_kwargs()}

@@ -189,6 +189,8 @@ def load_campaign(folder: str | Path) -> CampaignResults:
     settings = report.get("settings") or {}
     seed = int(settings.get("seed", DEFAULT_SEED))
     fit_kwargs = dict(settings.get("fit") or {})
+    # the campaign's fit specification (recorded since there is one), else its keywords
+    spec = settings.get("spec")
     failed = {f["run"]: f["error"] for f in report.get("failures", [])}
     fits: dict[str, Any] = {}
     paths: dict[str, Path] = {}
@@ -202,7 +204,11 @@ def load_campaign(folder: str | Path) -> CampaignResults:
             f
             for f in list_fits(catalog, run=run.id)
             if f.settings.get("campaign_seed") == seed
-            and f.settings.get("fit_kwargs") == fit_kwargs
+            and (
+                f.settings.get("spec") == spec
+                if spec is not None
+                else f.settings.get("fit_kwargs") == fit_kwargs
+            )
             and f.settings.get("function") == _FIT_FUNCTION
         ]
         if not records:

@@ -385,8 +385,9 @@ def _scale_options(match: re.Match[str]) -> str:
 _ONE_CHANNEL = re.compile(r"channels=\{'(\w+)': '?([^,}']+)'?\}")
 
 
-def read_run_from_args(args: argparse.Namespace) -> Any:
-    """Read the run named by :func:`add_run_arguments` options.
+def read_run_from_args(args: argparse.Namespace, options: Any = None) -> Any:
+    """Read the run named by :func:`add_run_arguments` options (or read as ``options``
+    say, a :class:`~bayestribo.io.options.ReadOptions`: a fit specification's).
 
     Raises
     ------
@@ -398,6 +399,6 @@ def read_run_from_args(args: argparse.Namespace) -> Any:
     from bayestribo.io import as_run
 
     try:
-        return as_run(args.run, reading_options(args))
+        return as_run(args.run, reading_options(args) if options is None else options)
     except BayestriboError as exc:
         raise CommandLineError(cli_message(str(exc))) from None

@@ -32,9 +32,8 @@ from contextlib import nullcontext
 from pathlib import Path
 from typing import Any
 
-from bayestribo import DEFAULT_SEED
-from bayestribo.cli._common import add_reading_options, reading_kwargs
-from bayestribo.cli.laws import add_law_option
+from bayestribo.cli._common import add_reading_options
+from bayestribo.cli._spec import add_spec_options, spec_from_args
 
 __all__ = ["register"]
 
@@ -69,14 +68,9 @@ def register(subparsers: Any) -> None:
     )
     p.add_argument("--catalog", help="results catalog (default OUTDIR/catalog.sqlite)")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
-    p.add_argument("--seed", type=int, default=DEFAULT_SEED, help="campaign seed")
     p.add_argument("--workers", type=int, help="processes (default: one per core)")
     p.add_argument("--dask-scheduler", metavar="ADDRESS", help="fit on this Dask scheduler instead")
     p.add_argument("--refit", action="store_true", help="fit runs already in the catalog")
-    p.add_argument("--model", choices=("exact", "averaged"), help="forward model of the fit")
-    add_law_option(p)
-    p.add_argument("--max-steps", type=int, help="sampler step ceiling per run")
-    p.add_argument("--grid-points", type=int, help="Π increments per run")
     p.add_argument(
         "--population-steps",
         type=int,
@@ -99,6 +93,10 @@ def register(subparsers: Any) -> None:
     )
     p.add_argument("--no-figures", action="store_true", help="skip the figures")
     add_reading_options(p)
+    add_spec_options(
+        p,
+        helps={"seed": "campaign seed: each run's seed derives from it and the run's identity"},
+    )
     p.add_argument("--quiet", action="store_true", help="no progress line")
     p.set_defaults(handler=run)
 
@@ -314,13 +312,13 @@ def _group_laws(
             catalog,
             out / "fits" / "group-law" / law,
             executor,
-            campaign_seed=args.seed,
+            campaign_seed=fit_kwargs["spec"].seed,
             refit=args.refit,
             max_workers=args.workers,
             progress=not args.quiet,
             root=folder,
             keep=keep,
-            **{**fit_kwargs, "law": law},
+            spec=fit_kwargs["spec"].replace(law=law),
         )
         for i, refit in zip(rows, refits, strict=True):
             outcomes[i] = refit
@@ -405,28 +403,18 @@ def _run_locked(args: argparse.Namespace, folder: Path, paths: list[Path], out: 
     from bayestribo.errors import BayestriboError
 
     catalog = Path(args.catalog) if args.catalog else out / "catalog.sqlite"
-    fit_kwargs = {
-        key: value
-        for key, value in (
-            ("model", args.model),
-            ("law", args.law),
-            ("max_steps", args.max_steps),
-            ("grid_points", args.grid_points),
-        )
-        if value is not None
-    }
+    spec = spec_from_args(args, "campaign")
     if args.compare_laws:
-        if fit_kwargs.get("law") not in (None, "auto"):
+        if spec.law not in (None, "auto"):
             raise BayestriboError(
                 f"--compare-laws chooses the law of each group (it is --law auto); "
-                f"it cannot be given with --law {fit_kwargs['law']}"
+                f"it cannot be given with --law {spec.law}"
             )
-        fit_kwargs["law"] = "auto"
-    keep = functools.partial(digest_fit, prob=args.prob, seed=args.seed)
-    read_options = reading_kwargs(args)
-    if read_options:
-        # The same reading options for every run file (recorded with the fits).
-        fit_kwargs["read_options"] = read_options
+        spec = spec.replace(law="auto")
+    # every run fitted as the specification says (recorded with each fit); the run's own
+    # seed derives from the campaign seed, the specification's
+    fit_kwargs: dict[str, Any] = {"spec": spec}
+    keep = functools.partial(digest_fit, prob=args.prob, seed=spec.seed)
     context = dask_executor(args.dask_scheduler) if args.dask_scheduler else nullcontext(None)
     with context as executor:
         outcomes = fit_catalogued(
@@ -434,7 +422,7 @@ def _run_locked(args: argparse.Namespace, folder: Path, paths: list[Path], out: 
             catalog,
             out / "fits",
             executor,
-            campaign_seed=args.seed,
+            campaign_seed=spec.seed,
             refit=args.refit,
             max_workers=args.workers,
             progress=not args.quiet,
@@ -444,7 +432,7 @@ def _run_locked(args: argparse.Namespace, folder: Path, paths: list[Path], out: 
             **fit_kwargs,
         )
         laws = None
-        if fit_kwargs.get("law") == "auto":
+        if spec.law == "auto":
             outcomes, laws = _group_laws(
                 args, paths, outcomes, catalog, out, folder, fit_kwargs, executor, keep
             )
@@ -469,7 +457,7 @@ def _run_locked(args: argparse.Namespace, folder: Path, paths: list[Path], out: 
             by,
             covariate=args.against,
             prob=args.prob,
-            seed=args.seed,
+            seed=spec.seed,
             max_steps=args.population_steps,
             progress=say,
             executor=executor,
@@ -481,8 +469,9 @@ def _run_locked(args: argparse.Namespace, folder: Path, paths: list[Path], out: 
         "n_cached": sum(o.cached for o in outcomes),
         "catalog": str(catalog),
         "settings": {
-            "seed": args.seed,
-            "fit": fit_kwargs,
+            "seed": spec.seed,
+            "fit": spec.changed(),
+            "spec": spec.to_dict(),
             "population_steps": args.population_steps,
             "against": args.against,
         },

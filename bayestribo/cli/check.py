@@ -20,10 +20,15 @@ import sys
 import time
 from typing import Any
 
-from bayestribo import DEFAULT_SEED
 from bayestribo.cli._common import add_run_arguments, read_run_from_args
+from bayestribo.cli._spec import add_spec_options, spec_from_args
 
-__all__ = ["register"]
+__all__ = ["USES", "register"]
+
+#: The fields of the fit specification the check uses: how the run is read and
+#: prepared, and the seed; its windowed fits are least squares, or Bayesian fits with
+#: settings of their own (``--bayes``).
+USES = ("restoring", "read_options", "seed", "skip_oscillations")
 
 
 def register(subparsers: Any) -> None:
@@ -48,15 +53,8 @@ def register(subparsers: Any) -> None:
         help="length of the windowed fits in oscillations (default: about 1/8 of the decay); "
         "--window T0:T1 crops the record",
     )
-    p.add_argument(
-        "--skip",
-        type=int,
-        default=1,
-        help="oscillations to skip after the release, as for fit, decay and estimate",
-    )
     p.add_argument("--alpha", type=float, default=0.05, help="false-alarm rate of the test")
     p.add_argument("--draws", type=int, default=400, help="parameter draws for the checks")
-    p.add_argument("--seed", type=int, default=DEFAULT_SEED, help="seed of the draws")
     p.add_argument(
         "--bayes",
         action="store_true",
@@ -64,6 +62,7 @@ def register(subparsers: Any) -> None:
     )
     p.add_argument("--json", action="store_true", help="print JSON instead of a report")
     p.add_argument("--quiet", action="store_true", help="no progress lines (--bayes)")
+    add_spec_options(p, helps={"seed": "seed of the draws and of the fits"})
     p.set_defaults(handler=run)
 
 
@@ -71,8 +70,15 @@ def run(args: argparse.Namespace) -> int:
     """Read the run, check, print the report."""
     from bayestribo.adequacy.check import check_adequacy
 
+    spec = spec_from_args(
+        args,
+        "check",
+        uses=USES,
+        why="its windowed fits are least squares, or Bayesian fits of their own with "
+        "--bayes; give fit options to `bayestribo fit` or `bayestribo report`",
+    )
     try:
-        recording = read_run_from_args(args)
+        recording = read_run_from_args(args, spec.reading())
     except FileNotFoundError as exc:
         print(f"bayestribo check: error: {exc}", file=sys.stderr)
         return 2
@@ -87,9 +93,9 @@ def run(args: argparse.Namespace) -> int:
         window=args.window_length,
         alpha=args.alpha,
         n_draws=args.draws,
-        seed=args.seed,
+        seed=spec.seed,
         bayes=args.bayes,
-        skip_oscillations=args.skip,
+        skip_oscillations=spec.skip_oscillations,
         progress=None if args.quiet or not args.bayes else say,
     )
     if args.json:

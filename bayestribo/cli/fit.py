@@ -22,9 +22,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from bayestribo import DEFAULT_SEED
-from bayestribo.cli._common import add_notch_option, add_run_arguments, read_run_from_args
-from bayestribo.cli.laws import add_law_option
+from bayestribo.cli._common import add_run_arguments, read_run_from_args
+from bayestribo.cli._spec import add_spec_options, spec_from_args
 
 __all__ = ["json_record", "register", "write_outputs"]
 
@@ -57,17 +56,7 @@ def register(subparsers: Any) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     add_run_arguments(p)
-    add_notch_option(p)
-    add_law_option(p)
-    p.add_argument(
-        "--model", choices=("exact", "averaged"), default="exact", help="forward model of Π"
-    )
-    p.add_argument(
-        "--seed",
-        type=int,
-        default=DEFAULT_SEED,
-        help="seed of the sampler, recorded in the result",
-    )
+    add_spec_options(p)
     p.add_argument(
         "--out",
         type=Path,
@@ -75,22 +64,11 @@ def register(subparsers: Any) -> None:
         help="write DIR/<run>.nc (NetCDF) and the corner, trace and Π figures (PNG)",
     )
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
-    p.add_argument(
-        "--discrepancy",
-        action="store_true",
-        help="add the model-discrepancy terms: a white relative error on E and a departure "
-        "of the decay's shape, smooth along the decay (for a small misfit; for a law that "
-        "does not hold, --law auto)",
-    )
     p.add_argument("--progress", action="store_true", help="show a progress bar (stderr)")
     p.add_argument(
         "--quiet",
         action="store_true",
         help="no progress lines (--law auto prints one per law compared on a terminal)",
-    )
-    p.add_argument("--skip", type=int, default=1, help="oscillations to skip after the release")
-    p.add_argument(
-        "--max-steps", type=int, default=20_000, help="ceiling on the steps per ensemble"
     )
     p.add_argument(
         "--prob",
@@ -185,10 +163,10 @@ def write_outputs(result: Any, out_dir: Path, stem: str) -> list[Path]:
     return paths
 
 
-def law_progress(args: argparse.Namespace) -> Callable[[str], None] | None:
+def law_progress(args: argparse.Namespace, law: str | None = None) -> Callable[[str], None] | None:
     """The progress line of ``--law auto``: one line per law compared on stderr, when
     stderr is a terminal and neither ``--quiet`` nor ``--json`` is given; else None."""
-    if args.law != "auto" or args.quiet or args.json or not sys.stderr.isatty():
+    if (law or args.law) != "auto" or args.quiet or args.json or not sys.stderr.isatty():
         return None
 
     def say(text: str) -> None:
@@ -203,29 +181,28 @@ def run(args: argparse.Namespace) -> int:
     from bayestribo.summary import check_prob
 
     check_prob(args.prob)  # before the fit, not after it
-    recording = read_run_from_args(args)
+    spec = spec_from_args(args, "fit")
+    recording = read_run_from_args(args, spec.reading())
     # the fitting machinery (numba, emcee, scipy) only once the input is good: a bad
     # option or file is told at once
     from bayestribo.cli._imports import import_module
 
-    fit = import_module("bayestribo.inference").fit
+    import_module("bayestribo.inference.fitting")
+    fit = sys.modules["bayestribo.inference"].fit
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")  # every warning of this fit, none deduplicated
         result = fit(
             recording,
-            model=args.model,
-            seed=args.seed,
-            discrepancy=args.discrepancy,
+            # the specification as fit's keywords; the run is read: its reading options
+            # are not given again
+            **spec.replace(read_options=None, restoring=None).fit_kwargs(),
             progress=args.progress,
-            skip_oscillations=args.skip,
-            notch=args.notch,
-            max_steps=args.max_steps,
-            law=args.law,
-            law_progress=law_progress(args),
+            law_progress=law_progress(args, spec.law),
         )
-    # the run is named by the path the user gave
+    # the run is named by the path the user gave, and read as the specification says
     result.attrs["run_name"] = str(args.run)
+    result.attrs["spec_json"] = spec.to_json()
     for w in caught:
         warnings.showwarning(w.message, w.category, w.filename, w.lineno)
     notched = result.settings.get("notch_Hz") or []

@@ -45,8 +45,8 @@ FIGURE_FORMATS = ("png", "pdf", "svg")
 
 def register(subparsers: Any) -> None:
     """Add the ``report`` sub-command."""
-    from bayestribo.cli._common import add_notch_option, add_reading_options
-    from bayestribo.cli.laws import add_law_option
+    from bayestribo.cli._common import add_reading_options
+    from bayestribo.cli._spec import add_spec_options
 
     p = subparsers.add_parser(
         "report",
@@ -89,10 +89,12 @@ def register(subparsers: Any) -> None:
         "(default: <PATH stem>-report.html here); figures go beside it",
     )
     add_reading_options(p)
-    p.add_argument(
-        "--seed",
-        type=int,
-        help="seed of the fits (default: the notebook's; a reused campaign keeps its own)",
+    add_spec_options(
+        p,
+        helps={
+            "seed": "seed of the fits (default: the notebook's; a reused campaign keeps its own)"
+        },
+        defaults={"seed": None},
     )
     p.add_argument(
         "--param",
@@ -130,13 +132,6 @@ def register(subparsers: Any) -> None:
     )
     p.add_argument("--show-code", action="store_true", help="include the notebook's code")
     p.add_argument("--hide-code", action="store_true", help=argparse.SUPPRESS)  # the default now
-    add_law_option(p)
-    add_notch_option(p)
-    p.add_argument(
-        "--discrepancy",
-        action="store_true",
-        help="fits with the model-discrepancy terms, as `fit --discrepancy`",
-    )
     p.set_defaults(handler=run)
 
 
@@ -296,7 +291,7 @@ def _campaign_params(path: Path, args: argparse.Namespace) -> tuple[dict[str, An
 
 def run(args: argparse.Namespace) -> int:
     """Choose the notebook, check the parameters, execute, write the HTML and figures."""
-    from bayestribo.cli._common import reading_kwargs
+    from bayestribo.cli._spec import spec_from_args
     from bayestribo.reports.notebooks import (
         ReportError,
         inject_parameters,
@@ -333,26 +328,32 @@ def run(args: argparse.Namespace) -> int:
     if notebook in ("viscosity", "real_data", "acquisition"):
         params.update(_other_params(notebook, path, args))
     elif notebook == "single_run":
-        params.update({"run_path": str(path), "read_kwargs": reading_kwargs(args)})
+        # the fit's specification, as `bayestribo fit` takes it: one answer per question
+        fit_kwargs = spec_from_args(args, "report").fit_kwargs(changed_only=True)
+        reading = fit_kwargs.pop("read_options", {})
+        params.update({"run_path": str(path), "read_kwargs": reading})
         if args.seed is not None:
             params["seed"] = args.seed
-        # the fit's options, as `bayestribo fit` takes them: one answer per question
-        for name in ("law", "notch"):
-            if getattr(args, name) is not None:
-                params[name] = getattr(args, name)
-        if args.discrepancy:
-            params["discrepancy"] = True
+        fit_kwargs.pop("seed", None)
+        for name in SINGLE_RUN_FIT:
+            if name in fit_kwargs:
+                params[name] = fit_kwargs.pop(name)
+        if fit_kwargs:
+            params["fit_kwargs"] = fit_kwargs
     else:
         if args.columns or args.length_unit or args.frequency or args.load or args.mass:
             raise ReportError(
                 "--columns, --length-unit, --frequency, --load and --mass describe one run "
                 "file; a campaign folder's runs need sidecars"
             )
-        if args.law or args.notch is not None or args.discrepancy:
-            raise ReportError(
-                "--law, --notch and --discrepancy are a single run's fit options; a "
-                "campaign's report reuses `bayestribo campaign`'s fits (give them there)"
-            )
+        # the campaign's fits are `bayestribo campaign`'s, made with its specification
+        spec_from_args(
+            args,
+            "report",
+            uses=("seed",),
+            why="a campaign folder's report reuses or makes the fits of `bayestribo "
+            "campaign`: give fit options there, then report its results",
+        )
         campaign_params, where = _campaign_params(path, args)
         params.update(campaign_params)
         # the data folder as typed (or, for a campaign's results, where its runs are, from
@@ -434,19 +435,22 @@ def _has_water_series(folder: Path) -> bool:
 
 def _other_params(notebook: str, path: Path, args: argparse.Namespace) -> dict[str, Any]:
     """Parameters of the viscosity, real-data and acquisition notebooks from the options."""
-    from bayestribo.cli._common import reading_kwargs
+    from bayestribo.cli._spec import spec_from_args
     from bayestribo.reports.notebooks import ReportError
 
-    reading = reading_kwargs(args)
-    # a folder of recordings is read and fitted as `bayestribo fit` reads and fits one
     real = notebook == "real_data"
-    single = () if real else ("law", "notch", "columns", "length_unit", "frequency", "load", "mass")
-    given = [f"--{name.replace('_', '-')}" for name in single if getattr(args, name, None)]
-    if given or (args.discrepancy and not real) or args.campaign is not None:
+    if args.campaign is not None:
         raise ReportError(
-            f"{', '.join(given) or '--discrepancy/--campaign'}: not options of the "
-            f"{notebook} report; give its parameters with --param KEY=VALUE"
+            f"--campaign: not an option of the {notebook} report; give its parameters with "
+            "--param KEY=VALUE"
         )
+    if real:
+        # a folder of recordings is read and fitted as `bayestribo fit` reads and fits one
+        fit_kwargs = spec_from_args(args, "report").fit_kwargs(changed_only=True)
+        reading = fit_kwargs.pop("read_options", {})
+        fit_kwargs.pop("seed", None)
+    else:
+        fit_kwargs = _folder_fit_kwargs(args, notebook)
     params: dict[str, Any] = {}
     if notebook == "viscosity":
         params["data_dir"] = str(path)
@@ -461,15 +465,43 @@ def _other_params(notebook: str, path: Path, args: argparse.Namespace) -> dict[s
         if reading:  # how this rig's files are read (default: the AppStat text files)
             params["read_kwargs"] = reading
         params["check_files"] = files[:1]
-        fit_options = {n: getattr(args, n) for n in ("law", "notch") if getattr(args, n)}
-        fit_options.update({"discrepancy": True} if args.discrepancy else {})
-        if fit_options:
-            params["fit_kwargs"] = fit_options
         if args.seed is not None:
             params["seed"] = args.seed
     elif args.seed is not None:
         params["seed"] = args.seed
+    if fit_kwargs:
+        params["fit_kwargs"] = fit_kwargs
     return params
+
+
+#: The single-run notebook's parameters that are keywords of ``fit`` (the others of a
+#: specification go in its ``fit_kwargs``).
+SINGLE_RUN_FIT = (
+    "model",
+    "n_walkers",
+    "n_ensembles",
+    "max_steps",
+    "grid_points",
+    "law",
+    "discrepancy",
+    "notch",
+    "skip_oscillations",
+)
+
+
+def _folder_fit_kwargs(args: argparse.Namespace, notebook: str) -> dict[str, Any]:
+    """The fit specification's options given to a report whose runs have sidecars
+    (viscosity, acquisition), as the notebook's ``fit_kwargs`` (the seed is the
+    notebook's own parameter); reading options are refused: the runs' sidecars say how
+    they are read."""
+    from bayestribo.cli._spec import spec_from_args
+    from bayestribo.inference.spec import spec_fields
+
+    uses = [f.name for f in spec_fields() if f.name not in ("read_options", "restoring")]
+    why = f"the {notebook} report's runs are read as their sidecars say"
+    fit_kwargs = spec_from_args(args, "report", uses=uses, why=why).fit_kwargs(changed_only=True)
+    fit_kwargs.pop("seed", None)
+    return fit_kwargs
 
 
 def _check_reading(path: Path, reading: dict[str, Any], *, guessed: bool = False) -> None:

@@ -8,42 +8,34 @@ The main entry is :func:`fit`, which is the four public steps of
 small modules of their own, each usable alone.
 """
 
-from bayestribo.inference.fitting import fit
-from bayestribo.inference.likelihood import PiLikelihood
-from bayestribo.inference.pipeline import (
-    PreparedRun,
-    Sampled,
-    build_posterior,
-    prepare,
-    sample,
-    summarise,
-)
-from bayestribo.inference.posterior import Posterior
-from bayestribo.inference.priors import LogUniform, Normal, PriorSet, Uniform, default_priors
-from bayestribo.inference.result import FitResult
-from bayestribo.inference.sampling import SamplerRun, SamplerSettings, run_ensembles
-from bayestribo.inference.sensitivity import prior_sensitivity
-from bayestribo.summary import ParameterSummary
+from bayestribo._lazy import lazy_exports
 
-__all__ = [
-    "FitResult",
-    "LogUniform",
-    "Normal",
-    "ParameterSummary",
-    "PiLikelihood",
-    "Posterior",
-    "PreparedRun",
-    "PriorSet",
-    "Sampled",
-    "SamplerRun",
-    "SamplerSettings",
-    "Uniform",
-    "build_posterior",
-    "default_priors",
-    "fit",
-    "prepare",
-    "prior_sensitivity",
-    "run_ensembles",
-    "sample",
-    "summarise",
-]
+# Re-exported lazily: importing the package (for its light modules, such as the fit
+# specification the command line builds its options from) imports no numpy.
+_LAZY: dict[str, str] = {
+    "FitResult": "bayestribo.inference.result",
+    "FitSpec": "bayestribo.inference.spec",
+    "LogUniform": "bayestribo.inference.priors",
+    "Normal": "bayestribo.inference.priors",
+    "ParameterSummary": "bayestribo.summary",
+    "PiLikelihood": "bayestribo.inference.likelihood",
+    "Posterior": "bayestribo.inference.posterior",
+    "PreparedRun": "bayestribo.inference.pipeline",
+    "PriorSet": "bayestribo.inference.priors",
+    "Sampled": "bayestribo.inference.pipeline",
+    "SamplerRun": "bayestribo.inference.sampling",
+    "SamplerSettings": "bayestribo.inference.sampling",
+    "Uniform": "bayestribo.inference.priors",
+    "build_posterior": "bayestribo.inference.pipeline",
+    "default_priors": "bayestribo.inference.priors",
+    "fit": "bayestribo.inference.fitting",
+    "prepare": "bayestribo.inference.pipeline",
+    "prior_sensitivity": "bayestribo.inference.sensitivity",
+    "run_ensembles": "bayestribo.inference.sampling",
+    "sample": "bayestribo.inference.pipeline",
+    "summarise": "bayestribo.inference.pipeline",
+}
+
+__all__ = sorted(_LAZY)
+
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY)

@@ -30,6 +30,7 @@ from bayestribo.inference.pipeline import (
 from bayestribo.inference.priors import Prior
 from bayestribo.inference.result import FitResult, plain_data
 from bayestribo.inference.sampling import SamplerSettings
+from bayestribo.inference.spec import FitSpec, spec_fields
 from bayestribo.inference.start import maximum_a_posteriori, maximum_from
 from bayestribo.io.options import ReadOptions
 from bayestribo.io.run import Run
@@ -42,13 +43,14 @@ __all__ = ["fit", "sample_law"]
 def fit(
     run: Run | str | os.PathLike[str],
     *,
+    spec: FitSpec | Mapping[str, Any] | None = None,
     model: str = "exact",
     seed: int | None = DEFAULT_SEED,
     n_walkers: int = 16,
     n_ensembles: int = 2,
     max_steps: int = 20_000,
     discrepancy: bool = False,
-    priors: Mapping[str, Prior] | None = None,
+    priors: Mapping[str, Prior | Mapping[str, Any]] | None = None,
     fixed: Mapping[str, float] | None = None,
     grid_points: int | None = None,
     skip_oscillations: int = 1,
@@ -69,6 +71,12 @@ def fit(
     run : Run or path
         The recording (:class:`bayestribo.io.run.Run`) or a file for
         :func:`bayestribo.read_run` (with ``read_options``).
+    spec : FitSpec or mapping, optional
+        The whole specification of the fit (:class:`~bayestribo.inference.spec.FitSpec`,
+        or a mapping of its fields, :meth:`~bayestribo.inference.spec.FitSpec.to_dict`).
+        The keywords below that are fields of it build one; given with ``spec``, a
+        keyword that differs from its default replaces the spec's field. The result
+        records the specification (``result.spec``).
     model : {"exact", "averaged"}
         Forward model of Π (the exact one by default; the averaged one is biased by
         about 2ζ² of Π, far more than the noise of a good record).
@@ -85,7 +93,9 @@ def fit(
         ``log10_shape``).
     priors : mapping, optional
         Replacement priors by parameter name (see
-        :func:`bayestribo.inference.priors.default_priors`).
+        :func:`bayestribo.inference.priors.default_priors`): a
+        :class:`~bayestribo.inference.priors.Prior`, or its plain data
+        (``{"type": "Uniform", "low": 0, "high": 0.1}``).
     fixed : mapping, optional
         Parameters held at a value instead of sampled, e.g. ``{"zeta": 0.0}``.
     grid_points : int, optional
@@ -140,28 +150,41 @@ def fit(
     >>> result.summary(prob=0.9)["mu_k"].interval  # doctest: +SKIP
     """
     start = time.perf_counter()
-    if model not in MODELS:  # before the run is read and prepared
-        raise BayestriboError(f"model: expected one of {MODELS}, got {model!r}")
-    auto = isinstance(law, str) and law.strip().lower() == "auto"
-    if auto and (priors or fixed):
-        raise BayestriboError(
-            "priors and fixed name the parameters of one law: give law=NAME with them, "
-            "not law='auto'"
-        )
-    try:
-        the_law = None if auto else get_law(law)
-    except ValueError as exc:
-        raise BayestriboError(str(exc)) from None
-    settings = SamplerSettings(n_walkers=n_walkers, n_ensembles=n_ensembles, max_steps=max_steps)
+    keywords = {
+        "model": model,
+        "seed": seed,
+        "n_walkers": n_walkers,
+        "n_ensembles": n_ensembles,
+        "max_steps": max_steps,
+        "discrepancy": discrepancy,
+        "priors": priors,
+        "fixed": fixed,
+        "grid_points": grid_points,
+        "skip_oscillations": skip_oscillations,
+        "read_options": read_options,
+        "correct_channels": correct_channels,
+        "notch": notch,
+        "law": law,
+    }
+    # checked before the run is read and prepared, each error naming its field
+    spec = FitSpec.of(spec, **{k: v for k, v in keywords.items() if v != _KEYWORD_DEFAULTS[k]})
+    if spec.model not in MODELS:
+        raise BayestriboError(f"model: expected one of {MODELS}, got {spec.model!r}")
+    model, seed, discrepancy = spec.model, spec.seed, spec.discrepancy
+    auto = spec.law == "auto"
+    the_law = None if auto else get_law(law if isinstance(law, Law) else spec.law)
+    priors = {k: Prior.from_spec(v) for k, v in spec.priors.items()} or None
+    fixed = dict(spec.fixed) or None
+    settings = spec.sampler_settings()
     rng = np.random.default_rng(seed)
     prepared = prepare(
         run,
-        skip_oscillations=skip_oscillations,
-        grid_points=grid_points,
+        skip_oscillations=spec.skip_oscillations,
+        grid_points=spec.grid_points,
         noise=noise,
-        read_options=read_options,
-        correct_channels=correct_channels,
-        notch=notch,
+        read_options=spec.reading(),
+        correct_channels=spec.correct_channels,
+        notch=spec.notch_Hz,
     )
     comparison = None
     if auto:
@@ -224,8 +247,19 @@ def fit(
             common, runs, result, screened, model=model, discrepancy=discrepancy
         )
         result.attrs["law_comparison_json"] = json.dumps(plain_data(record))
+    result.attrs["spec_json"] = spec.to_json()
     result.attrs["seconds"] = time.perf_counter() - start
     return result
+
+
+#: The defaults of :func:`fit`'s keywords that are fields of :class:`FitSpec` (None for
+#: the mappings and reading options: the spec's empty ones).
+_KEYWORD_DEFAULTS: dict[str, Any] = {
+    **{f.metadata["keyword"] or f.name: f.default for f in spec_fields() if f.name != "restoring"},
+    "priors": None,
+    "fixed": None,
+    "read_options": None,
+}
 
 
 def sample_law(

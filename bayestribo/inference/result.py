@@ -324,6 +324,16 @@ class FitResult:
         return dict(self._attr("settings_json", {}) or {})
 
     @property
+    def spec(self) -> Any:
+        """The :class:`~bayestribo.inference.spec.FitSpec` the fit was made with (None
+        for a fit saved before specifications were recorded, or made by a pipeline of
+        one's own). ``bayestribo.fit(run, spec=result.spec)`` fits it again alike."""
+        from bayestribo.inference.spec import FitSpec
+
+        data = self._attr("spec_json", None)
+        return None if data is None else FitSpec.from_dict(data)
+
+    @property
     def channel_calibration(self) -> dict[str, Any] | None:
         """The channels' gain ratio and delay measured from the motion, and whether
         the velocity was corrected (None for a run with one signal)."""
