@@ -56,6 +56,13 @@ _TAIL_TOLERANCE = 1e-12
 _TAIL_SHARE = 1e-2
 # At most this many half cycles are integrated for one parameter set.
 _MAX_HALF_CYCLES = 200_000
+# At most this many past the record, summing to the end of motion of a record whose
+# motion ended: a law whose motion would go on for longer (a friction far too small
+# to stop it soon) is far from such a record whatever its tail (the Π it gives at the
+# record's end is already the energy of thousands of half cycles, where the record's
+# is zero), so its sum stops there instead of at the end of its motion; the optimiser
+# and the sampler leave it as they would with its whole tail.
+_MAX_PAST_HALF_CYCLES = 20_000
 # Floating-point contraction (fused multiply-add) and reciprocals only: no assumption
 # of finite values, which the overdamped-arc and end-of-record checks rely on.
 _FAST = {"contract", "arcp"}
@@ -295,6 +302,7 @@ def one(
     last = 0.0
     before = 0.0
     n_half = 0
+    n_past = 0  # half cycles integrated past the record
     # A friction law whose friction terms are all off (coefficients at zero: μ_k = 0
     # on its bound) moves as the law without them, which no friction stops: its sum
     # past the record ends as that law's does (the same tail, within _TAIL_TOLERANCE),
@@ -382,6 +390,10 @@ def one(
                 break
         if n_half >= _MAX_HALF_CYCLES:
             break
+        if j >= n_t:
+            n_past += 1
+            if n_past >= _MAX_PAST_HALF_CYCLES:
+                break
     if math.isnan(c_end):
         c_end = c_start
     for i in range(n_t):
