@@ -118,6 +118,10 @@ def test_runs_fitted_in_two_laws_are_never_one_population(fits):
     assert groups["law=viscous,lubricant=oil,load_N=0.1"].parameters == ("zeta",)
     assert len(groups["law=viscous+quadratic,lubricant=oil,load_N=0.1"].runs) == 2
     assert analysis.contact.pooled is None
+    # differences only between groups that both model a quantity: ζ in both laws, c₂ in
+    # one (the JSON report of such a campaign is whole)
+    report = analysis.to_dict()["contact"]["differences"]
+    assert len(report["zeta"]) == 1 and report["c2_SI"] == []
 
 
 def test_the_sigma_scale_of_a_quantity_without_a_default():
