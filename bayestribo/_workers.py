@@ -23,7 +23,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 
-__all__ = ["die_with_parent", "process_pool", "terminate_as_interrupt"]
+__all__ = ["die_with_parent", "process_pool", "stop_workers", "terminate_as_interrupt"]
 
 _PR_SET_PDEATHSIG = 1
 
@@ -92,6 +92,16 @@ def process_pool(
         initializer=_initialise,
         initargs=(os.getpid(), initializer, tuple(initargs)),
     )
+
+
+def stop_workers(executor: Any) -> None:
+    """End the worker processes of a :class:`~concurrent.futures.ProcessPoolExecutor`
+    now (SIGTERM), so that an interrupted command does not wait for the tasks they
+    run: their results would be dropped anyway. Other executors are left alone."""
+    processes = getattr(executor, "_processes", None) or {}
+    for process in list(processes.values()):
+        with contextlib.suppress(OSError, ValueError, AttributeError):
+            process.terminate()
 
 
 @contextlib.contextmanager

@@ -118,7 +118,7 @@ def test_bad_laws_and_priors_are_refused_by_name(bundled_run):
         fit(bundled_run, law="viscous+drag")
     from bayestribo.inference.priors import Uniform
 
-    with pytest.raises(BayestriboError, match=r"unknown parameter\(s\) \['c2'\]"):
+    with pytest.raises(BayestriboError, match=r"priors: 'c2' is not a parameter of the law"):
         fit(bundled_run, priors={"c2": Uniform(0, 1)})
 
 

@@ -354,6 +354,13 @@ def fit_many(
     except BaseException:
         for future in futures:
             future.cancel()
+        if own:
+            # interrupted: the fits still running are dropped, so their workers end
+            # now rather than when those fits finish (minutes for a first fit that
+            # compiles the kernels)
+            from bayestribo._workers import stop_workers
+
+            stop_workers(executor)
         raise
     finally:
         if own:
