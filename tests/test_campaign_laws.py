@@ -67,7 +67,12 @@ def test_the_quantities_of_a_drag_law_are_its_physical_coefficients(fits):
 @pytest.mark.filterwarnings("ignore::bayestribo.errors.ConvergenceWarning")
 def test_a_campaign_in_a_drag_law_compares_its_quantities_across_loads(fits):
     analysis = analyse_campaign(
-        fits, by=("lubricant", "load_N"), seed=3, max_steps=1500, max_samples=100
+        fits,
+        by=("lubricant", "load_N"),
+        seed=3,
+        max_steps=1500,
+        max_samples=100,
+        dissipation=True,
     )
     assert analysis.laws == {"viscous+quadratic": [f.metadata["run_id"] for f in fits]}
     assert analysis.contact.parameters == ("zeta", "c2_SI")
@@ -110,6 +115,7 @@ def test_runs_fitted_in_two_laws_are_never_one_population(fits):
     )
     assert set(analysis.laws) == {"viscous+quadratic", "viscous"}
     assert analysis.contact.by == ("law", "lubricant", "load_N")
+    assert analysis.dissipation is None  # the law-free comparison only when asked for
     groups = {g.label: g for g in analysis.contact.groups.values()}
     assert set(groups) == {
         "law=viscous+quadratic,lubricant=oil,load_N=0.1",

@@ -455,6 +455,7 @@ def analyse_campaign(
     sigma_prior: Mapping[str, Any] | None = None,
     progress: Callable[[str], None] | None = None,
     executor: Executor | None = None,
+    dissipation: bool = False,
 ) -> CampaignAnalysis:
     """Populations, ζ₀, ζ_k, d_k and load trends of a campaign's fits, in any law.
 
@@ -492,6 +493,11 @@ def analyse_campaign(
     executor : concurrent.futures.Executor, optional
         Sample the groups of each population and the trends side by side on it (the
         campaign's process pool or Dask); the results are those of a serial run.
+    dissipation : bool
+        Also infer the law-free answer across runs: populations and trends of ΔE at
+        common swings (:mod:`bayestribo.campaign.dissipation`). Off by default: it
+        doubles the population work of a campaign whose laws hold; ``bayestribo
+        campaign`` turns it on with ``--law auto`` and ``--law-free``.
     """
     say = progress if progress is not None else (lambda message: None)
     results = [_digest(r, prob, max_samples, seed) for r in results]
@@ -646,7 +652,7 @@ def analyse_campaign(
     # The law-free answer: ΔE at swings every run of a series reaches, whatever its law.
     series_keys = tuple(k for k in keys if k != covariate)
     by_series: dict[tuple[Any, ...], list[Any]] = {}
-    for r in contact_runs:
+    for r in contact_runs if dissipation else []:
         by_series.setdefault(tuple(r.metadata.get(k) for k in series_keys), []).append(r)
     for value, members in by_series.items():
         label = ",".join(f"{k}={v}" for k, v in zip(series_keys, value, strict=True)) or "all"

@@ -79,6 +79,12 @@ def register(subparsers: Any) -> None:
     )
     p.add_argument("--prob", type=float, default=0.95, help="credible-interval probability")
     p.add_argument(
+        "--law-free",
+        action="store_true",
+        help="also compare the law-free ΔE at common swings across runs (populations and "
+        "trends; on with --law auto)",
+    )
+    p.add_argument(
         "--against",
         default="load_N",
         metavar="KEY",
@@ -456,6 +462,7 @@ def _run_locked(args: argparse.Namespace, folder: Path, paths: list[Path], out: 
             fitted,
             by,
             covariate=args.against,
+            dissipation=args.law_free or spec.law == "auto",
             prob=args.prob,
             seed=spec.seed,
             max_steps=args.population_steps,
