@@ -13,6 +13,19 @@ PACKAGE = Path(bayestribo.__file__).resolve().parent
 #: docs/architecture.md. The shared bottom (errors, summary, _optional, _text, _clock,
 #: _workers) is open to all.
 BOTTOM = {"errors", "summary", "_optional", "_text", "_clock", "_workers", "_warnings", "_lazy"}
+#: Every part below the top layer (cli/ and reports/).
+_BELOW_THE_TOP = (
+    "model",
+    "io",
+    "synthetic",
+    "signal",
+    "estimators",
+    "inference",
+    "population",
+    "adequacy",
+    "campaign",
+    "acquisition",
+)
 ALLOWED = {
     "model": set(),
     "io": {"model", "signal"},
@@ -26,31 +39,8 @@ ALLOWED = {
     "acquisition": {"model", "io", "campaign"},
     # the top layer, beside cli/: a report's helpers speak of laws and fits as the
     # notebooks that import them do
-    "reports": {
-        "model",
-        "io",
-        "synthetic",
-        "signal",
-        "estimators",
-        "inference",
-        "population",
-        "adequacy",
-        "campaign",
-        "acquisition",
-    },
-    "cli": {
-        "model",
-        "io",
-        "synthetic",
-        "signal",
-        "estimators",
-        "inference",
-        "population",
-        "adequacy",
-        "campaign",
-        "acquisition",
-        "reports",
-    },
+    "reports": set(_BELOW_THE_TOP),
+    "cli": {*_BELOW_THE_TOP, "reports"},
 }
 
 

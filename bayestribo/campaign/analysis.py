@@ -682,7 +682,11 @@ def analyse_campaign(
         extra = {
             "sigma_prior": {
                 n: (sigma_prior or {}).get(n)
-                or sigma_scale(n, [float(np.mean(d.values[n])) for d in drawn], [1.0])
+                or sigma_scale(
+                    n,
+                    [float(np.mean(d.values[n])) for d in drawn],
+                    [4.0 * float(np.std(d.values[n])) for d in drawn],  # ≈ the 95 % width
+                )
                 for n in names
             },
             "non_negative": names,
