@@ -179,7 +179,7 @@ class CampaignAnalysis:
         Each ΔE at a swing compared: its symbol, unit and label (apart from
         :attr:`quantities`, the laws' own).
     sigma_scales : dict of str to float
-        The half-Cauchy scale of each quantity's between-run σ prior (module notes of
+        The scale (typical between-run σ) of each quantity's σ prior (module notes of
         :mod:`bayestribo.population.hyperpriors`; a quantity without a default takes
         half the median over its runs, :func:`sigma_scale`).
     """
@@ -374,13 +374,14 @@ def _trend_job(
 
 
 def sigma_scale(name: str, medians: Sequence[float], widths: Sequence[float]) -> float:
-    """The half-Cauchy scale of a quantity's between-run σ prior.
+    """The scale of a quantity's between-run σ prior (its typical between-run σ).
 
     ζ and μ_k keep the package's default, 0.01 (:mod:`bayestribo.population.hyperpriors`:
     about half the paper's values). Any other quantity takes half the median over its
     runs of |posterior median|, the same proportion; where that is zero (every run at
-    zero), the median width of the runs' intervals, so that the spread the runs can
-    tell apart sits in the prior's flat part.
+    zero), the median width of the runs' intervals. The prior reaches up to 10 × the
+    scale (:class:`bayestribo.population.hyperpriors.ScaleFree`), well above any
+    spread the runs can show.
 
     Parameters
     ----------
@@ -485,7 +486,7 @@ def analyse_campaign(
         samples per run carry the population likelihood (the importance-sampling
         effective sample size is checked and warned about if not).
     sigma_prior : mapping, optional
-        Per quantity, a prior on its between-run σ or a half-Cauchy scale; the others
+        Per quantity, a prior on its between-run σ or a scale; the others
         take :func:`sigma_scale`'s.
     progress : callable, optional
         Called with a one-line message before each population or trend is sampled

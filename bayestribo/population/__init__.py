@@ -11,7 +11,7 @@ Modules
 samples
     :class:`RunSamples`: per-run samples with their prior densities.
 hyperpriors
-    Half-Cauchy (default) and half-normal priors on σ.
+    Scale-free (default), half-Cauchy and half-normal priors on σ.
 likelihood
     The population likelihood from per-run samples.
 sampler
@@ -29,6 +29,8 @@ from bayestribo.population.hyperpriors import (
     DEFAULT_SIGMA_SCALES,
     HalfCauchy,
     HalfNormal,
+    LogUniform,
+    ScaleFree,
     sigma_priors,
 )
 from bayestribo.population.likelihood import MarginalLikelihood
@@ -42,9 +44,11 @@ __all__ = [
     "GroupPosterior",
     "HalfCauchy",
     "HalfNormal",
+    "LogUniform",
     "MarginalLikelihood",
     "Population",
     "RunSamples",
+    "ScaleFree",
     "Trend",
     "as_run_samples",
     "difference",

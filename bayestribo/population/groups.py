@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.errors import BayestriboError
-from bayestribo.population.hyperpriors import SigmaPrior, sigma_priors
+from bayestribo.population.hyperpriors import SigmaPriorSpec, resolve, sigma_priors
 from bayestribo.population.jobs import run_jobs
 from bayestribo.population.likelihood import MarginalLikelihood
 from bayestribo.population.sampler import sample_hyperparameters
@@ -244,7 +244,7 @@ def fit_group(
     value: Any,
     runs: Sequence[RunSamples],
     parameters: tuple[str, ...],
-    priors: Mapping[str, SigmaPrior],
+    priors: Mapping[str, SigmaPriorSpec],
     seed: int,
     sampler_kwargs: Mapping[str, Any],
 ) -> GroupPosterior:
@@ -260,8 +260,9 @@ def fit_group(
         The group's runs.
     parameters : tuple of str
         Parameter names.
-    priors : mapping of str to SigmaPrior
-        Prior on the between-run σ of each parameter.
+    priors : mapping of str to SigmaPriorSpec
+        Prior on the between-run σ of each parameter (the default resolved on the
+        group's runs, :func:`bayestribo.population.hyperpriors.resolve`).
     seed : int
         Campaign seed.
     sampler_kwargs : mapping
@@ -269,8 +270,9 @@ def fit_group(
         :func:`bayestribo.population.sampler.sample_hyperparameters`.
     """
     like = MarginalLikelihood(runs, parameters)
+    resolved = {p: resolve(priors[p], [np.std(r.values[p]) for r in runs]) for p in parameters}
     hyper = sample_hyperparameters(
-        like, [priors[p] for p in parameters], seed=_group_seed(seed, label), **sampler_kwargs
+        like, [resolved[p] for p in parameters], seed=_group_seed(seed, label), **sampler_kwargs
     )
     return GroupPosterior(
         label=label,
@@ -279,7 +281,7 @@ def fit_group(
         parameters=parameters,
         mean={p: hyper.beta[:, 0, j] for j, p in enumerate(parameters)},
         sigma={p: hyper.sigma[:, j] for j, p in enumerate(parameters)},
-        sigma_prior={p: priors[p].describe() for p in parameters},
+        sigma_prior={p: resolved[p].describe() for p in parameters},
         diagnostics=hyper.diagnostics,
     )
 
@@ -296,7 +298,7 @@ def population(
     *,
     by: str | Sequence[str] | None = None,
     pooled: bool = True,
-    sigma_prior: Mapping[str, SigmaPrior | float] | None = None,
+    sigma_prior: Mapping[str, SigmaPriorSpec | float] | None = None,
     seed: int = 0,
     max_samples: int | None = 1000,
     n_walkers: int | None = None,
@@ -322,7 +324,8 @@ def population(
     pooled : bool
         Also infer the population of all runs together.
     sigma_prior : mapping, optional
-        Prior on the between-run σ per parameter: a prior object or a half-Cauchy scale
+        Prior on the between-run σ per parameter: a prior object, or a scale
+        for the default scale-free prior resolved per group
         (:func:`bayestribo.population.hyperpriors.sigma_priors`).
     seed : int
         Campaign seed; each group's sampler seed derives from it and the group label.
@@ -376,7 +379,7 @@ def population_jobs(
     *,
     by: str | Sequence[str] | None = None,
     pooled: bool = True,
-    sigma_prior: Mapping[str, SigmaPrior | float] | None = None,
+    sigma_prior: Mapping[str, SigmaPriorSpec | float] | None = None,
     seed: int = 0,
     max_samples: int | None = 1000,
     n_walkers: int | None = None,

@@ -1,22 +1,26 @@
 """Hyperpriors of the population of repeats: the prior on a between-run σ.
 
 Three repeats say little about a standard deviation, so the prior on each
-between-run σ matters and is stated with the results. The default is a
-**half-Cauchy** distribution (Gelman 2006, *Bayesian Analysis* 1, 515-534):
+between-run σ matters and is stated with the results. The default is **scale-free**,
+p(σ) ∝ 1/σ (:class:`ScaleFree`, resolved per group into a :class:`LogUniform`):
 
-* it is flat near σ = 0, so it does not push the estimate away from "the repeats
-  agree" (an inverse-gamma prior does);
-* its tail falls off only as σ⁻², so it does not rule out a large spread either: with
-  three repeats the posterior of σ keeps a long upper tail, which is the honest answer;
-* its scale ``s`` is the σ below which the prior is nearly flat. The defaults
-  (:data:`DEFAULT_SIGMA_SCALES`) are 0.01 for the dimensionless ζ and μ_k: about half
-  the paper's values (ζ = 0.0236, μ_k = 0.0294), so a run-to-run spread of half the
-  mean is still a priori plausible while the paper's spreads (0.0012 and 0.0036) sit
-  in the flat part.
+* under it, the posterior of a normal population's mean and σ from n repeats that
+  each measure their value exactly is the classical answer: Student's t with n − 1
+  degrees of freedom for the mean, χ²ₙ₋₁ for σ (Jeffreys 1961, *Theory of
+  Probability*, §3.4). Those intervals cover at their nominal rate whatever the true
+  σ, which is what a lab quoting "the spread of three repeats" needs;
+* it is bounded below at a tenth of the runs' own posterior sd, where the repeats can
+  no longer tell σ from zero (the likelihood is flat below), and above at 10 × the
+  quantity's scale (:data:`DEFAULT_SIGMA_SCALES`: 0.01 for the dimensionless ζ and
+  μ_k, about half the paper's values), so it is proper.
 
-A half-normal prior (lighter tail: more informative about large σ) is available for
-comparison. Population means get an improper flat prior: each run bounds its own
-parameter, so their posterior is proper as soon as a group holds one run.
+The half-Cauchy (Gelman 2006, *Bayesian Analysis* 1, 515-534), the package's default
+before, is nearly flat in σ below its scale; with three repeats its mean intervals
+have Cauchy-like tails and over-cover (all of 240 group means in 20 simulated
+campaigns; ``benchmarks/population_prior.py`` compares the two). It and a half-normal
+prior stay available by name. Population means get an improper flat prior: each run
+bounds its own parameter, so their posterior is proper as soon as a group holds one
+run.
 """
 
 from __future__ import annotations
@@ -34,11 +38,15 @@ __all__ = [
     "DEFAULT_SIGMA_SCALES",
     "HalfCauchy",
     "HalfNormal",
+    "LogUniform",
+    "ScaleFree",
     "SigmaPrior",
+    "SigmaPriorSpec",
+    "resolve",
     "sigma_priors",
 ]
 
-#: Default half-Cauchy scales of the between-run σ of the dimensionless parameters.
+#: Default scales (typical between-run σ) of the dimensionless parameters.
 DEFAULT_SIGMA_SCALES: Mapping[str, float] = {"zeta": 0.01, "mu_k": 0.01, "zeta_k": 0.01}
 
 
@@ -96,7 +104,106 @@ class HalfNormal:
         return f"half-normal(scale={self.scale:g})"
 
 
-SigmaPrior = HalfCauchy | HalfNormal
+@dataclass(frozen=True)
+class LogUniform:
+    """Log-uniform prior on σ: density 1 / (σ ln(high/low)) on [low, high], else 0.
+
+    Within its bounds this is the scale-invariant prior p(σ) ∝ 1/σ under which the
+    posterior of a normal population's mean and σ from n repeats measured exactly
+    is the classical one (Student's t with n − 1 degrees of freedom for the mean,
+    χ² for σ), so its intervals cover at their nominal rate whatever the true σ
+    (Jeffreys 1961, *Theory of Probability*, §3.4). The bounds keep it proper: below
+    ``low`` and above ``high`` it is zero.
+
+    Parameters
+    ----------
+    low, high : float
+        Bounds 0 < low < high [units of the parameter].
+    """
+
+    low: float
+    high: float
+
+    def __post_init__(self) -> None:
+        _check_scale(self.low)
+        _check_scale(self.high)
+        if not self.high > self.low:
+            raise BayestriboError(
+                f"high: expected a bound above low = {self.low:g}, got {self.high!r}"
+            )
+
+    def logpdf(self, sigma: ArrayLike) -> NDArray[np.float64]:
+        """Log density at ``sigma`` (−inf outside [low, high])."""
+        s = np.asarray(sigma, dtype=float)
+        inside = (s >= self.low) & (s <= self.high)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            out = -np.log(s) - math.log(math.log(self.high / self.low))
+        return np.where(inside, out, -np.inf)
+
+    def describe(self) -> str:
+        """One-line description, for reports."""
+        return f"log-uniform(σ in [{self.low:.3g}, {self.high:.3g}])"
+
+
+@dataclass(frozen=True)
+class ScaleFree:
+    """The default: p(σ) ∝ 1/σ from a tenth of the runs' own precision to 10 × a scale.
+
+    Resolved per group of runs (:meth:`for_runs`) into a :class:`LogUniform` whose
+    lower bound is ``floor`` × the median over the group's runs of their posterior
+    standard deviation: below it the repeats cannot tell σ from zero (the likelihood
+    is flat there), so a prior ∝ 1/σ reaching further down would only pile mass where
+    the data say nothing, and the per-run samples could not resolve it (importance
+    weights on a handful of samples). The upper bound is ``span`` × ``scale`` (the
+    quantity's typical between-run σ, :data:`DEFAULT_SIGMA_SCALES` or the campaign's
+    :func:`bayestribo.campaign.analysis.sigma_scale`), and at least 100 × the lower one.
+
+    With three repeats this prior gives the classical Student-t interval of the mean
+    and χ² interval of σ, which cover at their nominal rate; the half-Cauchy, nearly
+    flat in σ, gives intervals with Cauchy-like tails that over-cover (measured:
+    ``benchmarks/population_prior.py``).
+
+    Parameters
+    ----------
+    scale : float
+        Typical between-run σ [units of the parameter].
+    floor : float
+        Lower bound as a multiple of the runs' median posterior sd (default 0.1).
+    span : float
+        Upper bound as a multiple of ``scale`` (default 10).
+    """
+
+    scale: float
+    floor: float = 0.1
+    span: float = 10.0
+
+    def __post_init__(self) -> None:
+        _check_scale(self.scale)
+        _check_scale(self.floor)
+        _check_scale(self.span)
+
+    def for_runs(self, run_sds: ArrayLike) -> LogUniform:
+        """The prior of a group whose runs have these posterior sds [parameter units]."""
+        sds = np.asarray(run_sds, dtype=float)
+        sds = sds[np.isfinite(sds) & (sds > 0)]
+        low = self.floor * float(np.median(sds)) if sds.size else self.scale * 1e-4
+        return LogUniform(low, max(self.span * self.scale, 100.0 * low))
+
+    def describe(self) -> str:
+        """One-line description, for reports (before it is resolved for a group)."""
+        return (
+            f"log-uniform(σ from {self.floor:g} × the runs' sd to {self.span * self.scale:.3g})"
+        )
+
+
+SigmaPrior = HalfCauchy | HalfNormal | LogUniform
+#: What :func:`sigma_priors` returns: a prior, or the default resolved per group.
+SigmaPriorSpec = SigmaPrior | ScaleFree
+
+
+def resolve(prior: SigmaPriorSpec, run_sds: ArrayLike) -> SigmaPrior:
+    """The prior of one group: :class:`ScaleFree` resolved on its runs' sds, others as given."""
+    return prior.for_runs(run_sds) if isinstance(prior, ScaleFree) else prior
 
 
 def _check_scale(scale: float) -> None:
@@ -106,8 +213,8 @@ def _check_scale(scale: float) -> None:
 
 def sigma_priors(
     parameters: tuple[str, ...],
-    sigma_prior: Mapping[str, SigmaPrior | float] | None = None,
-) -> dict[str, SigmaPrior]:
+    sigma_prior: Mapping[str, SigmaPriorSpec | float] | None = None,
+) -> dict[str, SigmaPriorSpec]:
     """The prior on the between-run σ of each parameter.
 
     Parameters
@@ -115,8 +222,9 @@ def sigma_priors(
     parameters : tuple of str
         Parameter names.
     sigma_prior : mapping, optional
-        Per parameter, a prior object or a half-Cauchy scale. Parameters not given
-        use a half-Cauchy with the scale of :data:`DEFAULT_SIGMA_SCALES`.
+        Per parameter, a prior object or a scale. A scale (and a parameter not given,
+        with the scale of :data:`DEFAULT_SIGMA_SCALES`) means the default,
+        :class:`ScaleFree` with that scale, resolved per group of runs.
 
     Raises
     ------
@@ -128,13 +236,17 @@ def sigma_priors(
     unknown = sorted(set(given) - set(parameters))
     if unknown:
         raise BayestriboError(f"sigma_prior: {unknown} not among the parameters {list(parameters)}")
-    out: dict[str, SigmaPrior] = {}
+    out: dict[str, SigmaPriorSpec] = {}
     for name in parameters:
         value = given.get(name, DEFAULT_SIGMA_SCALES.get(name))
         if value is None:
             raise BayestriboError(
                 f"sigma_prior: no default scale for the between-run σ of {name!r}; "
-                "give one (a half-Cauchy scale in the parameter's units)"
+                "give one (a typical between-run σ in the parameter's units)"
             )
-        out[name] = value if isinstance(value, HalfCauchy | HalfNormal) else HalfCauchy(value)
+        out[name] = (
+            value
+            if isinstance(value, HalfCauchy | HalfNormal | LogUniform | ScaleFree)
+            else ScaleFree(value)
+        )
     return out

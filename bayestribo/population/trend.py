@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.errors import BayestriboError
-from bayestribo.population.hyperpriors import SigmaPrior, sigma_priors
+from bayestribo.population.hyperpriors import SigmaPriorSpec, resolve, sigma_priors
 from bayestribo.population.likelihood import MarginalLikelihood
 from bayestribo.population.sampler import sample_hyperparameters
 from bayestribo.population.samples import FitLike, RunSamples, as_run_samples
@@ -139,7 +139,7 @@ def trend(
     parameters: Sequence[str] = ("zeta", "mu_k"),
     *,
     rope: Mapping[str, float] | None = None,
-    sigma_prior: Mapping[str, SigmaPrior | float] | None = None,
+    sigma_prior: Mapping[str, SigmaPriorSpec | float] | None = None,
     seed: int = 0,
     max_samples: int | None = 1000,
     n_walkers: int | None = None,
@@ -187,7 +187,10 @@ def trend(
     unknown = sorted(set(rope) - set(parameters))
     if unknown:
         raise BayestriboError(f"rope: {unknown} not among the parameters {list(parameters)}")
-    priors = sigma_priors(parameters, sigma_prior)
+    priors = {
+        p: resolve(prior, [np.std(r.values[p]) for r in samples])
+        for p, prior in sigma_priors(parameters, sigma_prior).items()
+    }
     center = float(xs.mean())
     design = np.column_stack([np.ones_like(xs), xs - center])
     like = MarginalLikelihood(samples, parameters, design)
