@@ -191,9 +191,7 @@ class ScaleFree:
 
     def describe(self) -> str:
         """One-line description, for reports (before it is resolved for a group)."""
-        return (
-            f"log-uniform(σ from {self.floor:g} × the runs' sd to {self.span * self.scale:.3g})"
-        )
+        return f"log-uniform(σ from {self.floor:g} × the runs' sd to {self.span * self.scale:.3g})"
 
 
 SigmaPrior = HalfCauchy | HalfNormal | LogUniform
