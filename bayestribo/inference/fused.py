@@ -58,6 +58,8 @@ from numpy.typing import NDArray
 from bayestribo.inference.likelihood import BASE_NUISANCES, PiLikelihood
 from bayestribo.inference.priors import LogUniform, Normal, PriorSet, Uniform
 from bayestribo.inference.surrogate import SurrogateLikelihood
+from bayestribo.model._averaged_kernel import averaged_amplitude as _averaged_amplitude
+from bayestribo.model._averaged_kernel import pi_of_amplitude as _pi_of_amplitude
 from bayestribo.model._kernel import _one
 
 #: The nuisances every likelihood has (a compile-time constant of the kernels).
@@ -72,13 +74,14 @@ _ABSENT = -2  # the parameter is neither sampled nor fixed
 _UNIFORM, _NORMAL, _LOGUNIFORM = 0, 1, 2
 _EXACT, _AVERAGED, _SURROGATE = 0, 1, 2
 _LOG_2PI = math.log(2.0 * math.pi)
-_TINY = 1e-100
-_PSI_SERIES = 1e-2
 #: The files whose compiled functions those of this file call, and a digest of each
 #: (SHA-256, 16 hex digits). numba's cache of a function is invalidated by a change of
 #: its own file only: when one of these changes, its digest here must be updated (a
 #: test says so), and this file's change discards the stale machine code.
-DEPENDS_ON = {"bayestribo/model/_kernel.py": "7ce85002e033cced"}
+DEPENDS_ON = {
+    "bayestribo/model/_kernel.py": "7ce85002e033cced",
+    "bayestribo/model/_averaged_kernel.py": "820c7670c8eea9d4",
+}
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -112,42 +115,6 @@ def _value(row: NDArray, columns: NDArray, fixed: NDArray, k: int, default: floa
     if c == _SAMPLED_FROM_FIXED:
         return fixed[k]
     return default
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _expm1_ratio(a: float, length: float) -> float:
-    if abs(a) < _TINY:
-        return length
-    return -math.expm1(-a * length) / a
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _averaged_amplitude(t: float, a0: float, z: float, mk: float) -> float:
-    """a(τ) of Eq. 34, zero after the end of motion (averaged.py, ``_amplitude``)."""
-    a = a0 * math.exp(-z * t) - (2.0 * mk / math.pi) * _expm1_ratio(z, t)
-    return max(a, 0.0)
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _pi_of_amplitude(a: float, z: float, mk: float) -> float:
-    """∫_0^a (α²/2)/(ζα + 2μ_k/π) dα (averaged.py, ``_pi_of_amplitude``)."""
-    c = 2.0 * mk / math.pi
-    if z == 0.0 and c == 0.0:
-        return math.inf if a > 0.0 else 0.0
-    w = z * a / c if c > 0.0 else math.inf
-    if w <= 1.0:
-        if w < _PSI_SERIES:
-            psi = 0.0
-            for k in range(8, -1, -1):
-                psi = 1.0 / (k + 3.0) - w * psi
-        else:
-            psi = (math.log1p(w) - w + 0.5 * w * w) / (w**3 if w > 0.0 else 1.0)
-        return a**3 * psi / (2.0 * (c if c > 0.0 else 1.0))
-    wl = w if w > 1.0 else 2.0  # a NaN w takes the numpy reference's placeholder
-    finite = math.isfinite(wl)
-    inv = 1.0 / wl if finite else 0.0
-    chi = 0.5 - inv + (math.log1p(wl) * inv * inv if finite else 0.0)
-    return a * a * chi / (2.0 * (z if z > 0.0 else 1.0))
 
 
 @numba.njit(cache=True, error_model="numpy")
