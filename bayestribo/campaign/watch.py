@@ -1,0 +1,460 @@
+"""A campaign that answers as runs land: ``bayestribo campaign DIR --watch``.
+
+:class:`CampaignWatch` keeps warm worker processes (the package, the numba kernels and
+the sampler imported and compiled once, by a warm-up fit of a simulated run) and a
+loop in the calling thread that polls the folder (:class:`~.arrivals.Arrivals`), sends
+each run file to a worker as soon as it is complete, and with each answer
+
+* records the fit in the catalog (:func:`~.fitting.fit_catalogued`: the same catalog,
+  fit files and cache as ``bayestribo campaign``, so a watched run is not fitted again
+  by a later campaign with the same settings);
+* prints one line (:meth:`~.watchpage.Answer.line`) and rewrites the live page
+  (:mod:`~.watchpage`) and its status file.
+
+The populations of repeats take longer than a fit: they are computed in a background
+thread when the fit queue is empty, or at most every ``population_every_s`` while
+fits keep coming, and written to ``population.json`` (as ``bayestribo campaign``
+writes it, so ``bayestribo report OUTDIR`` reports the watched campaign).
+
+The watch stops after ``max_runs`` answers, after ``timeout_s``, or on Ctrl-C
+(SIGINT; SIGTERM likewise): the workers are ended at once
+(:func:`bayestribo._workers.stop_workers`); each fit is saved and recorded in one
+transaction by the thread that received it, and that thread is waited for, so the
+catalog holds every fit that finished and nothing of one cut short.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import math
+import os
+import sys
+import threading
+import time
+from collections import deque
+from collections.abc import Callable, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import IO, Any
+
+from bayestribo.campaign.arrivals import Arrivals
+from bayestribo.campaign.lock import write_atomic
+from bayestribo.campaign.watchpage import Answer, PageState, render_page, status
+from bayestribo.errors import BayestriboError
+
+__all__ = ["PAGE_NAME", "STATUS_NAME", "CampaignWatch", "WatchOptions", "answer_of"]
+
+#: The live page, in the output folder.
+PAGE_NAME = "watch.html"
+#: The page's state as JSON, beside it.
+STATUS_NAME = "watch.json"
+#: Seconds between the reloads of a browser showing the live page.
+PAGE_REFRESH_S = 2.0
+
+
+@dataclass(frozen=True)
+class WatchOptions:
+    """How a watch runs.
+
+    Attributes
+    ----------
+    settle_s : float
+        A file without a manifest is complete once its size and modification time
+        have not changed for this long [s].
+    poll_s : float
+        Interval between two looks at the folder [s].
+    max_runs : int or None
+        Stop after this many answers (failures included; runs already in the folder
+        when the watch starts count too).
+    timeout_s : float or None
+        Stop after this long [s].
+    population_every_s : float
+        Longest interval between two population updates while fits keep coming [s]
+        (they are also updated whenever the fit queue empties).
+    workers : int
+        Warm worker processes fitting side by side.
+    warm_up : bool
+        Fit a simulated run in each worker before the first file (imports and
+        compiles), so that the first run is answered as fast as the others.
+    """
+
+    settle_s: float = 2.0
+    poll_s: float = 0.2
+    max_runs: int | None = None
+    timeout_s: float | None = None
+    population_every_s: float = 30.0
+    workers: int = 1
+    warm_up: bool = True
+
+    def __post_init__(self) -> None:
+        for name in ("settle_s", "poll_s", "population_every_s"):
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and value > 0 and math.isfinite(value)):
+                raise BayestriboError(
+                    f"{name}: expected a positive number of seconds, got {value!r}"
+                )
+        if self.timeout_s is not None and not self.timeout_s > 0:
+            raise BayestriboError(
+                f"timeout_s: expected a positive number of seconds, got {self.timeout_s!r}"
+            )
+        if self.max_runs is not None and (not isinstance(self.max_runs, int) or self.max_runs < 1):
+            raise BayestriboError(f"max_runs: expected a positive integer, got {self.max_runs!r}")
+        if not isinstance(self.workers, int) or self.workers < 1:
+            raise BayestriboError(f"workers: expected a positive integer, got {self.workers!r}")
+
+
+def answer_of(outcome: Any, path: Path) -> Answer:
+    """The :class:`~.watchpage.Answer` of a :class:`~.fitting.RunOutcome` whose result
+    is a :class:`~.digest.FitDigest`."""
+    if not outcome.ok:
+        return Answer(run=outcome.name, path=str(path), error=outcome.error)
+    digest = outcome.result
+    quantities = {}
+    for name, s in digest.summaries.items():
+        q = digest.quantities.get(name, {})
+        low, high = s["interval"]
+        quantities[name] = {
+            "symbol": str(q.get("symbol") or name),
+            "unit": str(q.get("unit") or "1"),
+            "median": float(s["median"]),
+            "low": float(low),
+            "high": float(high),
+        }
+    return Answer(
+        run=outcome.name,
+        path=str(path),
+        law=digest.law,
+        quantities=quantities,
+        converged=digest.converged,
+        fit_s=float(outcome.elapsed_s),
+        cached=outcome.cached,
+    )
+
+
+def _in_background(function: Callable[..., Any], *args: Any) -> Future[Any]:
+    """Run ``function(*args)`` in a daemon thread: a Ctrl-C does not wait for it."""
+    future: Future[Any] = Future()
+    future.set_running_or_notify_cancel()
+
+    def target() -> None:
+        try:
+            future.set_result(function(*args))
+        except BaseException as exc:  # handed to the loop, which says it
+            future.set_exception(exc)
+
+    threading.Thread(target=target, daemon=True, name="watch-population").start()
+    return future
+
+
+def _utc() -> str:
+    return datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+class CampaignWatch:
+    """Fit the runs of a folder as they land, with warm workers (module notes).
+
+    Parameters
+    ----------
+    folder : path
+        The folder of run files watched (with its sub-folders).
+    out : path
+        The output folder: ``fits/``, the live page (:data:`PAGE_NAME`), its status
+        (:data:`STATUS_NAME`), ``population.json``. Never looked into for runs.
+    catalog : path
+        The results catalog.
+    spec : FitSpec
+        The specification of every fit (its seed is the campaign seed).
+    options : WatchOptions
+    by : sequence of str
+        Grouping keys of the populations.
+    covariate : str
+        Metadata key of the trends.
+    prob : float
+        Credible-interval probability.
+    population_steps : int
+        Ceiling on the population sampler's steps.
+    dissipation : bool
+        Also compare the law-free ΔE across runs.
+    suffixes : sequence of str
+        File suffixes of run files.
+    stream : text stream, optional
+        Where the answers are printed, one line each (default standard output).
+    say : callable, optional
+        Called with progress messages (default: to standard error).
+    json_lines : bool
+        Print each answer as one JSON object instead of a line of text.
+    warm_up : callable, optional
+        ``warm_up(spec)``, run once in each worker before the first file when
+        ``options.warm_up`` (e.g. a fit of a simulated run: imports and compiles);
+        returns its wall time [s]. A module-level function (it is sent to the workers).
+    settings : dict, optional
+        Written with the populations in ``population.json`` (``settings``).
+    """
+
+    def __init__(
+        self,
+        folder: str | os.PathLike[str],
+        out: str | os.PathLike[str],
+        catalog: str | os.PathLike[str],
+        spec: Any,
+        options: WatchOptions,
+        *,
+        by: Sequence[str],
+        covariate: str = "load_N",
+        prob: float = 0.95,
+        population_steps: int = 10_000,
+        dissipation: bool = False,
+        suffixes: Sequence[str],
+        stream: IO[str] | None = None,
+        say: Callable[[str], None] | None = None,
+        json_lines: bool = False,
+        warm_up: Callable[[Any], float] | None = None,
+        settings: dict[str, Any] | None = None,
+    ) -> None:
+        self.folder = Path(folder)
+        self.out = Path(out)
+        self.catalog = Path(catalog)
+        self.spec = spec
+        self.options = options
+        self.by = tuple(by)
+        self.covariate = covariate
+        self.prob = prob
+        self.population_steps = population_steps
+        self.dissipation = dissipation
+        self.stream = stream if stream is not None else sys.stdout
+        self.say = say or (lambda message: print(message, file=sys.stderr, flush=True))
+        self.json_lines = json_lines
+        self.warm_up = warm_up if options.warm_up else None
+        self.settings = settings or {}
+        self.page = self.out / PAGE_NAME
+        self.arrivals = Arrivals(self.folder, suffixes, options.settle_s, exclude=[self.out])
+        self.answers: dict[str, Answer] = {}  # by run file, latest version
+        self.digests: dict[str, Any] = {}  # by run file, the fitted ones
+        self.n_answered = 0
+        self.stopped_by: str | None = None
+        self._state = "warming up"
+        self._populations: list[dict[str, Any]] = []
+        self._population_runs = 0
+        self._population_note = "Computed once the first runs are answered."
+
+    # -- the page ---------------------------------------------------------------------
+    def _page_state(self, waiting: Sequence[str]) -> PageState:
+        return PageState(
+            folder=str(self.folder),
+            state=self._state,
+            prob=self.prob,
+            answers=list(self.answers.values()),
+            waiting=list(waiting),
+            populations=self._populations,
+            population_runs=self._population_runs,
+            population_note=self._population_note,
+            updated_utc=_utc(),
+        )
+
+    def write_page(self, waiting: Sequence[str] = (), *, final: bool = False) -> None:
+        """Rewrite the live page and its status file (atomically); a ``final`` page is
+        not reloaded by the browser."""
+        state = self._page_state(waiting)
+        refresh = None if final else PAGE_REFRESH_S
+        write_atomic(self.page, render_page(state, refresh_s=refresh))
+        write_atomic(self.out / STATUS_NAME, json.dumps(status(state), indent=1) + "\n")
+
+    # -- fits ---------------------------------------------------------------------------
+    def _fit(self, pool: Any, path: Path) -> Any:
+        """Fitter thread: fit one run file on the warm pool, recorded in the catalog."""
+        from bayestribo.campaign.digest import digest_fit
+        from bayestribo.campaign.fitting import fit_catalogued
+
+        keep = functools.partial(digest_fit, prob=self.prob, seed=self.spec.seed)
+        (outcome,) = fit_catalogued(
+            [path],
+            self.catalog,
+            self.out / "fits",
+            pool,
+            campaign_seed=self.spec.seed,
+            progress=False,
+            root=self.folder,
+            keep=keep,
+            spec=self.spec,
+        )
+        return outcome
+
+    def _answer(self, path: Path, outcome: Any) -> None:
+        answer = answer_of(outcome, path)
+        key = str(path)
+        self.answers.pop(key, None)  # a new version of a run goes to the end
+        self.answers[key] = answer
+        if outcome.ok:
+            self.digests[key] = outcome.result
+        else:
+            self.digests.pop(key, None)
+        self.n_answered += 1
+        text = json.dumps(answer.to_dict()) if self.json_lines else answer.line()
+        print(text, file=self.stream, flush=True)
+
+    # -- populations --------------------------------------------------------------------
+    def _populations_of(self, digests: list[Any]) -> Any:
+        """Population thread: the campaign analysis of the runs answered so far."""
+        from bayestribo.campaign.analysis import analyse_campaign
+
+        return analyse_campaign(
+            digests,
+            self.by,
+            covariate=self.covariate,
+            dissipation=self.dissipation,
+            prob=self.prob,
+            seed=self.spec.seed,
+            max_steps=self.population_steps,
+        )
+
+    def _take_populations(self, analysis: Any, n_runs: int) -> None:
+        quantities = {**analysis.quantities, **analysis.dissipation_quantities}
+        rows = []
+        for r in analysis.group_rows():
+            q = quantities.get(r["parameter"], {})
+            unit = str(q.get("unit") or "1")
+            symbol = str(q.get("symbol") or r["parameter"])
+            rows.append({**r, "symbol": symbol if unit in ("1", "-") else f"{symbol} [{unit}]"})
+        self._populations = rows
+        self._population_runs = n_runs
+        self._population_note = (
+            "" if analysis.converged else "A population sampler did not converge."
+        )
+        failures = [{"run": a.run, "error": a.error} for a in self.answers.values() if not a.ok]
+        report = {
+            **analysis.to_dict(),
+            "failures": failures,
+            "n_runs": len(self.answers),
+            "n_cached": sum(a.cached for a in self.answers.values()),
+            "catalog": str(self.catalog),
+            "settings": self.settings,
+        }
+        write_atomic(self.out / "population.json", json.dumps(report, indent=2, default=str) + "\n")
+
+    # -- the loop -----------------------------------------------------------------------
+    def run(self) -> int:
+        """Watch until ``max_runs``, ``timeout_s`` or Ctrl-C.
+
+        Returns
+        -------
+        int
+            0 when every run answered was fitted and converged, 1 when one failed or did
+            not converge, 130 when stopped by Ctrl-C (or SIGTERM).
+        """
+        from bayestribo._workers import process_pool, stop_workers
+
+        opts = self.options
+        start = time.monotonic()
+        self.out.mkdir(parents=True, exist_ok=True)
+        self.write_page()
+        method = "forkserver" if sys.platform.startswith("linux") else None
+        pool = process_pool(opts.workers, method=method)
+        fitters = ThreadPoolExecutor(opts.workers, thread_name_prefix="watch-fit")
+        queue: deque[Path] = deque()
+        running: dict[Future[Any], Path] = {}
+        warming: set[Future[Any]] = set()
+        population: Future[Any] | None = None
+        population_runs = 0
+        last_population = -math.inf
+        changed = False
+        interrupted = False
+        try:
+            if self.warm_up is not None:
+                warming = {pool.submit(self.warm_up, self.spec) for _ in range(opts.workers)}
+                self.say("warming up the fit (imports and compiled kernels) ...")
+            else:
+                self._state = "watching"
+            self.say(f"live page: {self.page.resolve().as_uri()}")
+            while True:
+                now = time.monotonic()
+                if opts.timeout_s is not None and now - start >= opts.timeout_s:
+                    self.stopped_by = f"stopped after --timeout {opts.timeout_s:g} s"
+                    break
+                fresh = self.arrivals.poll()
+                queue.extend(p for p in fresh if p not in queue and p not in running.values())
+                while queue and len(running) < opts.workers and not warming:
+                    path = queue.popleft()
+                    running[fitters.submit(self._fit, pool, path)] = path
+                waiting = [*map(str, self.arrivals.pending()), *map(str, queue)]
+                if fresh:
+                    self.write_page(waiting)
+                watched = set(running) | warming | ({population} if population else set())
+                if watched:
+                    done, _ = wait(watched, timeout=opts.poll_s, return_when=FIRST_COMPLETED)
+                else:
+                    time.sleep(opts.poll_s)
+                    done = set()
+                for future in done & warming:
+                    warming.discard(future)
+                    try:
+                        seconds = future.result()
+                        self.say(f"warm: a fit took {seconds:.1f} s with the imports and compiling")
+                    except Exception as exc:  # the runs' own fits say what is wrong
+                        self.say(f"the warm-up fit failed ({type(exc).__name__}: {exc})")
+                    if not warming:
+                        self._state = "watching"
+                        self.write_page(waiting)
+                answered = False
+                for future in [f for f in done if f in running]:
+                    path = running.pop(future)
+                    self._answer(path, future.result())
+                    answered = changed = True
+                    if opts.max_runs is not None and self.n_answered >= opts.max_runs:
+                        break
+                if answered:
+                    self.write_page([*map(str, self.arrivals.pending()), *map(str, queue)])
+                if population is not None and population.done():
+                    try:
+                        self._take_populations(population.result(), population_runs)
+                    except BayestriboError as exc:
+                        self._population_note = f"Not computed: {exc}"
+                    except Exception as exc:  # the watch goes on; the page says why
+                        self._population_note = f"Failed: {type(exc).__name__}: {exc}"
+                    population = None
+                    self.write_page(waiting)
+                if opts.max_runs is not None and self.n_answered >= opts.max_runs:
+                    self.stopped_by = f"stopped after --max-runs {opts.max_runs}"
+                    break
+                idle = not queue and not running
+                due = time.monotonic() - last_population >= opts.population_every_s
+                if changed and population is None and self.digests and (idle or due):
+                    digests = list(self.digests.values())
+                    population = _in_background(self._populations_of, digests)
+                    population_runs = len(digests)
+                    last_population = time.monotonic()
+                    changed = False
+        except KeyboardInterrupt:
+            interrupted = True
+            self.stopped_by = "stopped by Ctrl-C"
+            # the fits running are dropped: their workers end now, not when they finish
+            stop_workers(pool)
+        finally:
+            for future in running:
+                future.cancel()
+            fitters.shutdown(wait=True, cancel_futures=True)
+            pool.shutdown(wait=True, cancel_futures=True)
+        # a population under way is not waited for after Ctrl-C: its daemon thread writes
+        # nothing (this thread writes the page and population.json)
+        if not interrupted and population is not None:
+            try:
+                self._take_populations(population.result(), population_runs)
+                population = None
+            except Exception as exc:
+                self._population_note = f"Not computed: {exc}"
+        if not interrupted and changed and self.digests and population is None:
+            # the last answers in the populations too, before the page is final
+            try:
+                digests = list(self.digests.values())
+                self._take_populations(self._populations_of(digests), len(digests))
+            except Exception as exc:
+                self._population_note = f"Not computed: {exc}"
+        self._state = self.stopped_by or "stopped"
+        self.write_page([*map(str, self.arrivals.pending())], final=True)
+        self.say(f"{self._state}: {self.n_answered} answers; page {self.page.resolve().as_uri()}")
+        if interrupted:
+            return 130
+        bad = any(not a.ok or not a.converged for a in self.answers.values())
+        return 1 if bad else 0
