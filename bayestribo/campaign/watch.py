@@ -188,8 +188,9 @@ class CampaignWatch:
         Print each answer as one JSON object instead of a line of text.
     warm_up : callable, optional
         ``warm_up(spec)``, run once in each worker before the first file when
-        ``options.warm_up`` (e.g. a fit of a simulated run: imports and compiles);
-        returns its wall time [s]. A module-level function (it is sent to the workers).
+        ``options.warm_up``: a fit of a simulated run (imports and compiles), returning
+        its result, which this process then saves, reads back and digests as it does a
+        run's (its own imports). A module-level function (it is sent to the workers).
     settings : dict, optional
         Written with the populations in ``population.json`` (``settings``).
     """
@@ -211,7 +212,7 @@ class CampaignWatch:
         stream: IO[str] | None = None,
         say: Callable[[str], None] | None = None,
         json_lines: bool = False,
-        warm_up: Callable[[Any], float] | None = None,
+        warm_up: Callable[[Any], Any] | None = None,
         settings: dict[str, Any] | None = None,
     ) -> None:
         self.folder = Path(folder)
@@ -295,6 +296,19 @@ class CampaignWatch:
         text = json.dumps(answer.to_dict()) if self.json_lines else answer.line()
         print(text, file=self.stream, flush=True)
 
+    def _warm_here(self, result: Any) -> None:
+        """What this process does with a fit, once, on the warm-up's result: save it,
+        read it back, digest it (the imports of each, before the first run)."""
+        from bayestribo.campaign.digest import digest_fit
+        from bayestribo.campaign.fitting import _load_fit
+
+        partial = self.out / f".warm-up.{os.getpid()}.nc"
+        try:
+            result.save(partial)
+            digest_fit(_load_fit(str(partial)), prob=self.prob, seed=self.spec.seed)
+        finally:
+            partial.unlink(missing_ok=True)
+
     # -- populations --------------------------------------------------------------------
     def _populations_of(self, digests: list[Any]) -> Any:
         """Population thread: the campaign analysis of the runs answered so far."""
@@ -365,6 +379,10 @@ class CampaignWatch:
             if self.warm_up is not None:
                 warming = {pool.submit(self.warm_up, self.spec) for _ in range(opts.workers)}
                 self.say("warming up the fit (imports and compiled kernels) ...")
+                # this process's own imports, while the workers warm up
+                import bayestribo.campaign.analysis
+                import bayestribo.campaign.digest
+                import bayestribo.inference  # noqa: F401
             else:
                 self._state = "watching"
             self.say(f"live page: {self.page.resolve().as_uri()}")
@@ -390,10 +408,11 @@ class CampaignWatch:
                 for future in done & warming:
                     warming.discard(future)
                     try:
-                        seconds = future.result()
-                        self.say(f"warm: a fit took {seconds:.1f} s with the imports and compiling")
+                        self._warm_here(future.result())
                     except Exception as exc:  # the runs' own fits say what is wrong
                         self.say(f"the warm-up fit failed ({type(exc).__name__}: {exc})")
+                    if not warming:
+                        self.say(f"warm after {time.monotonic() - start:.1f} s")
                     if not warming:
                         self._state = "watching"
                         self.write_page(waiting)
@@ -453,7 +472,8 @@ class CampaignWatch:
                 self._population_note = f"Not computed: {exc}"
         self._state = self.stopped_by or "stopped"
         self.write_page([*map(str, self.arrivals.pending())], final=True)
-        self.say(f"{self._state}: {self.n_answered} answers; page {self.page.resolve().as_uri()}")
+        answers = f"{self.n_answered} answer" + ("" if self.n_answered == 1 else "s")
+        self.say(f"{self._state}: {answers}; page {self.page.resolve().as_uri()}")
         if interrupted:
             return 130
         bad = any(not a.ok or not a.converged for a in self.answers.values())

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from pathlib import Path
 from typing import Any
 
@@ -99,9 +98,9 @@ def add_watch_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def warm_up_fit(spec: Any) -> float:
-    """Fit a simulated run (the paper's rig at 0.31 N) with ``spec``: imports the fit and
-    compiles its kernels in the worker that runs it; the wall time [s]."""
+def warm_up_fit(spec: Any) -> Any:
+    """Fit a simulated run (the paper's rig at 0.31 N) with ``spec``, in the worker that
+    runs it: imports the fit and compiles its kernels there; the fit result."""
     import warnings
     from dataclasses import replace
 
@@ -109,12 +108,10 @@ def warm_up_fit(spec: Any) -> float:
     from bayestribo.inference.spec import FitSpec
     from bayestribo.synthetic import PAPER_RIG, simulate
 
-    start = time.perf_counter()
     run = simulate(rig=replace(PAPER_RIG, load_N=0.31), seed=0, metadata={"run_id": "warm-up"})
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # its answer is not shown: its warnings neither
-        fit(run, spec=FitSpec.of(spec).replace(seed=0))
-    return time.perf_counter() - start
+        return fit(run, spec=FitSpec.of(spec).replace(seed=0))
 
 
 def check_watch_options(args: argparse.Namespace) -> None:
