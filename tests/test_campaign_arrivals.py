@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 
 from bayestribo.campaign.arrivals import Arrivals
-from bayestribo.campaign.watchpage import Answer
+from bayestribo.campaign.watchpage import Answer, interval_text
 
 SETTLE = 2.0
 
@@ -148,3 +148,10 @@ def test_an_answer_line_names_the_run_its_law_and_its_intervals():
     )
     failed = Answer(run="bad", path="bad.csv", error="RunFormatError: no rows")
     assert failed.line() == "FAILED bad: RunFormatError: no rows"
+
+
+def test_an_interval_has_the_digits_that_tell_its_ends_apart():
+    assert interval_text(0.0236, 0.0231, 0.0241) == "0.0236 [0.0231, 0.0241]"
+    # a run's interval is often 1e-4 of its median wide
+    assert interval_text(0.0242506, 0.0242499, 0.0242513) == "0.0242506 [0.0242499, 0.0242513]"
+    assert interval_text(1.0, 1.0, 1.0) == "1 [1, 1]"

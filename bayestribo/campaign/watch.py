@@ -186,6 +186,9 @@ class CampaignWatch:
         Called with progress messages (default: to standard error).
     json_lines : bool
         Print each answer as one JSON object instead of a line of text.
+    label : callable, optional
+        A group's label (``lubricant=glycerol,load_N=0.31``) in words, for the page;
+        default as it is.
     warm_up : callable, optional
         ``warm_up(spec)``, run once in each worker before the first file when
         ``options.warm_up``: a fit of a simulated run (imports and compiles), returning
@@ -212,6 +215,7 @@ class CampaignWatch:
         stream: IO[str] | None = None,
         say: Callable[[str], None] | None = None,
         json_lines: bool = False,
+        label: Callable[[str], str] | None = None,
         warm_up: Callable[[Any], Any] | None = None,
         settings: dict[str, Any] | None = None,
     ) -> None:
@@ -229,6 +233,7 @@ class CampaignWatch:
         self.say = say or (lambda message: print(message, file=sys.stderr, flush=True))
         self.json_lines = json_lines
         self.warm_up = warm_up if options.warm_up else None
+        self.label = label or str
         self.settings = settings or {}
         self.page = self.out / PAGE_NAME
         self.arrivals = Arrivals(self.folder, suffixes, options.settle_s, exclude=[self.out])
@@ -331,7 +336,8 @@ class CampaignWatch:
             q = quantities.get(r["parameter"], {})
             unit = str(q.get("unit") or "1")
             symbol = str(q.get("symbol") or r["parameter"])
-            rows.append({**r, "symbol": symbol if unit in ("1", "-") else f"{symbol} [{unit}]"})
+            symbol = symbol if unit in ("1", "-") else f"{symbol} [{unit}]"
+            rows.append({**r, "symbol": symbol, "label": self.label(r["group"])})
         self._populations = rows
         self._population_runs = n_runs
         self._population_note = (

@@ -16,15 +16,27 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-__all__ = ["Answer", "PageState", "render_page", "status"]
+__all__ = ["Answer", "PageState", "interval_text", "render_page", "status"]
 
 
-def _number(value: Any) -> str:
+def _number(value: Any, digits: int = 4) -> str:
     try:
         x = float(value)
     except (TypeError, ValueError):
         return "–"
-    return f"{x:.4g}" if math.isfinite(x) else "–"
+    return f"{x:.{digits}g}" if math.isfinite(x) else "–"
+
+
+def interval_text(median: Any, low: Any, high: Any) -> str:
+    """``median [low, high]`` with 4 significant digits, or as many more (up to 9) as
+    tell the three apart: a run's interval is often narrower than 1e-4 of its median."""
+    values = (median, low, high)
+    pairs = [(i, j) for i, j in ((0, 1), (0, 2), (1, 2)) if values[i] != values[j]]
+    for digits in range(4, 10):
+        texts = [_number(v, digits) for v in values]
+        if all(texts[i] != texts[j] for i, j in pairs):
+            break
+    return f"{texts[0]} [{texts[1]}, {texts[2]}]"
 
 
 @dataclass(frozen=True)
@@ -74,10 +86,7 @@ class Answer:
         parts = [self.run, self.law or "?"]
         for q in self.quantities.values():
             unit = "" if q.get("unit") in (None, "", "1", "-") else f" {q['unit']}"
-            parts.append(
-                f"{q['symbol']} {_number(q['median'])} "
-                f"[{_number(q['low'])}, {_number(q['high'])}]{unit}"
-            )
+            parts.append(f"{q['symbol']} {interval_text(q['median'], q['low'], q['high'])}{unit}")
         how = "from the catalog" if self.cached else f"fit {self.fit_s:.2f} s"
         if not self.converged:
             how += ", NOT CONVERGED"
@@ -116,7 +125,8 @@ class PageState:
         Files seen that are not complete yet, or queued for a fit.
     populations : sequence of dict
         The population rows (:meth:`bayestribo.campaign.analysis.CampaignAnalysis.group_rows`)
-        with each row's ``symbol``; empty before the first population.
+        with each row's ``symbol`` and its group's ``label`` in words; empty before the
+        first population.
     population_runs : int
         How many runs the populations were computed from.
     population_note : str
@@ -140,7 +150,7 @@ _STYLE = """
 body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 70em; color: #222; }
 table { border-collapse: collapse; margin: 0.5em 0 1.5em; }
 th, td { padding: 0.25em 0.8em; border-bottom: 1px solid #ddd; text-align: left; }
-td.num { font-variant-numeric: tabular-nums; }
+td.num { font-variant-numeric: tabular-nums; white-space: nowrap; }
 tr.failed td { color: #a00; }
 .state { color: #555; }
 """
@@ -148,10 +158,6 @@ tr.failed td { color: #a00; }
 
 def _esc(value: Any) -> str:
     return html.escape(str(value), quote=True)
-
-
-def _interval(median: Any, low: Any, high: Any) -> str:
-    return f"{_number(median)} [{_number(low)}, {_number(high)}]"
 
 
 def _runs_table(answers: Sequence[Answer], prob: float) -> list[str]:
@@ -180,7 +186,7 @@ def _runs_table(answers: Sequence[Answer], prob: float) -> list[str]:
             )
             continue
         cells = "".join(
-            f'<td class="num">{_interval(q["median"], q["low"], q["high"])}</td>'
+            f'<td class="num">{interval_text(q["median"], q["low"], q["high"])}</td>'
             if (q := a.quantities.get(n))
             else "<td></td>"
             for n in names
@@ -202,8 +208,8 @@ def _population_table(state: PageState) -> list[str]:
         out.append(f"<p>{_esc(state.population_note or 'Not computed yet.')}</p>")
         return out
     out.append(
-        f"<p>From the first {state.population_runs} runs answered: the mean and σ (the "
-        f"spread between repeats) of each group, median [{100 * state.prob:g} % interval]."
+        f"<p>Computed from {state.population_runs} fitted runs: the mean and σ (the spread "
+        f"between repeats) of each group, median [{100 * state.prob:g} % interval]."
         + (f" {_esc(state.population_note)}" if state.population_note else "")
         + "</p>"
     )
@@ -213,12 +219,12 @@ def _population_table(state: PageState) -> list[str]:
     )
     for r in state.populations:
         symbol = r.get("symbol") or r.get("parameter")
+        mean = interval_text(r["mean_median"], r["mean_low"], r["mean_high"])
+        sigma = interval_text(r["sigma_median"], r["sigma_low"], r["sigma_high"])
         out.append(
-            f"<tr><td>{_esc(r.get('group'))} ({_esc(r.get('kind'))})</td>"
+            f"<tr><td>{_esc(r.get('label') or r.get('group'))} ({_esc(r.get('kind'))})</td>"
             f"<td>{_esc(r.get('n_runs'))}</td><td>{_esc(symbol)}</td>"
-            f'<td class="num">{_interval(r["mean_median"], r["mean_low"], r["mean_high"])}</td>'
-            f'<td class="num">{_interval(r["sigma_median"], r["sigma_low"], r["sigma_high"])}</td>'
-            "</tr>"
+            f'<td class="num">{mean}</td><td class="num">{sigma}</td></tr>'
         )
     out.append("</table>")
     return out

@@ -142,6 +142,7 @@ def run_watch(args: argparse.Namespace) -> int:
     from bayestribo.campaign.lock import FolderLock
     from bayestribo.campaign.watch import CampaignWatch, WatchOptions
     from bayestribo.cli._spec import spec_from_args
+    from bayestribo.cli.campaign import _words
     from bayestribo.errors import BayestriboError
     from bayestribo.io.registry import get_format, registered_formats
 
@@ -184,6 +185,7 @@ def run_watch(args: argparse.Namespace) -> int:
         suffixes=sorted({s for f in formats for s in f.suffixes}),
         say=say,
         json_lines=args.json,
+        label=_words,
         warm_up=warm_up_fit,
         settings={
             "seed": spec.seed,
