@@ -275,10 +275,10 @@ def test_ctrl_c_stops_the_watch_with_the_catalog_consistent(tmp_path):
     for suffix in (".csv", ".json"):
         shutil.copy(RUNS / f"{run}{suffix}", folder / f"{run}{suffix}")
     out = tmp_path / "results"
-    # no warm-up: the first run's fit imports and compiles; Ctrl-C after its answer
+    # no warm-up: the first fit imports and compiles, and Ctrl-C comes while it runs
     watch = Watch(folder, out, "--settle", "0.5", "--no-warm-up", "--timeout", str(DEADLINE))
     try:
-        watch.wait_for(f"{run}  ")
+        _wait_for_text(out / "watch.json", '"fitting": [\n  "')
         watch.proc.send_signal(signal.SIGINT)
         status = watch.finish()
     finally:
@@ -286,10 +286,14 @@ def test_ctrl_c_stops_the_watch_with_the_catalog_consistent(tmp_path):
             watch.proc.kill()
     assert status == 130, watch.stderr
     assert "stopped by Ctrl-C" in watch.stderr
-    catalog = out / "catalog.sqlite"
-    (fit,) = list_fits(catalog, run=run)
-    assert Path(fit.summary["result_path"]).is_file()
-    assert _sha256(Path(fit.summary["result_path"])) == fit.summary["result_sha256"]
+    # consistent: each fit file is a whole fit the catalog records, and each fit
+    # recorded has its file (the fit cut short left nothing; one that ended is in both)
+    fits = list_fits(out / "catalog.sqlite", run=run)
+    recorded = {Path(f.summary["result_path"]): f.summary["result_sha256"] for f in fits}
+    assert {p.resolve() for p in (out / "fits").iterdir()} == set(recorded)
+    assert all(_sha256(path) == sha for path, sha in recorded.items())
+    assert [line for line in watch.lines if not line.startswith(f"{run}  ")] == []
+    assert len(watch.lines) == len(fits)  # an answer printed is a fit recorded
     assert not (out / LOCK_NAME).exists()
     final = (out / "watch.html").read_text(encoding="utf-8")
     assert "stopped by Ctrl-C" in final and 'http-equiv="refresh"' not in final

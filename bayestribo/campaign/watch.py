@@ -245,25 +245,36 @@ class CampaignWatch:
         self._populations: list[dict[str, Any]] = []
         self._population_runs = 0
         self._population_note = "Computed once the first runs are answered."
+        # the loop's state
+        self._start = 0.0
+        self._queue: deque[Path] = deque()
+        self._running: dict[Future[Any], Path] = {}
+        self._warming: set[Future[Any]] = set()
+        self._population: Future[Any] | None = None
+        self._population_started = 0
+        self._last_population = -math.inf
+        self._changed = False
 
     # -- the page ---------------------------------------------------------------------
-    def _page_state(self, waiting: Sequence[str]) -> PageState:
+    def _page_state(self) -> PageState:
+        waiting = [*self.arrivals.pending(), *self._queue]
         return PageState(
             folder=str(self.folder),
             state=self._state,
             prob=self.prob,
             answers=list(self.answers.values()),
-            waiting=list(waiting),
+            waiting=[str(p) for p in waiting],
+            fitting=[str(p) for p in self._running.values()],
             populations=self._populations,
             population_runs=self._population_runs,
             population_note=self._population_note,
             updated_utc=_utc(),
         )
 
-    def write_page(self, waiting: Sequence[str] = (), *, final: bool = False) -> None:
+    def write_page(self, *, final: bool = False) -> None:
         """Rewrite the live page and its status file (atomically); a ``final`` page is
         not reloaded by the browser."""
-        state = self._page_state(waiting)
+        state = self._page_state()
         refresh = None if final else PAGE_REFRESH_S
         write_atomic(self.page, render_page(state, refresh_s=refresh))
         write_atomic(self.out / STATUS_NAME, json.dumps(status(state), indent=1) + "\n")
@@ -366,121 +377,150 @@ class CampaignWatch:
         """
         from bayestribo._workers import process_pool, stop_workers
 
-        opts = self.options
-        start = time.monotonic()
+        self._start = time.monotonic()
         self.out.mkdir(parents=True, exist_ok=True)
         self.write_page()
         method = "forkserver" if sys.platform.startswith("linux") else None
-        pool = process_pool(opts.workers, method=method)
-        fitters = ThreadPoolExecutor(opts.workers, thread_name_prefix="watch-fit")
-        queue: deque[Path] = deque()
-        running: dict[Future[Any], Path] = {}
-        warming: set[Future[Any]] = set()
-        population: Future[Any] | None = None
-        population_runs = 0
-        last_population = -math.inf
-        changed = False
+        pool = process_pool(self.options.workers, method=method)
+        fitters = ThreadPoolExecutor(self.options.workers, thread_name_prefix="watch-fit")
         interrupted = False
         try:
-            if self.warm_up is not None:
-                warming = {pool.submit(self.warm_up, self.spec) for _ in range(opts.workers)}
-                self.say("warming up the fit (imports and compiled kernels) ...")
-                # this process's own imports, while the workers warm up
-                import bayestribo.campaign.analysis
-                import bayestribo.campaign.digest
-                import bayestribo.inference  # noqa: F401
-            else:
-                self._state = "watching"
+            self._warm(pool)
             self.say(f"live page: {self.page.resolve().as_uri()}")
-            while True:
-                now = time.monotonic()
-                if opts.timeout_s is not None and now - start >= opts.timeout_s:
-                    self.stopped_by = f"stopped after --timeout {opts.timeout_s:g} s"
-                    break
-                fresh = self.arrivals.poll()
-                queue.extend(p for p in fresh if p not in queue and p not in running.values())
-                while queue and len(running) < opts.workers and not warming:
-                    path = queue.popleft()
-                    running[fitters.submit(self._fit, pool, path)] = path
-                waiting = [*map(str, self.arrivals.pending()), *map(str, queue)]
-                if fresh:
-                    self.write_page(waiting)
-                watched = set(running) | warming | ({population} if population else set())
-                if watched:
-                    done, _ = wait(watched, timeout=opts.poll_s, return_when=FIRST_COMPLETED)
-                else:
-                    time.sleep(opts.poll_s)
-                    done = set()
-                for future in done & warming:
-                    warming.discard(future)
-                    try:
-                        self._warm_here(future.result())
-                    except Exception as exc:  # the runs' own fits say what is wrong
-                        self.say(f"the warm-up fit failed ({type(exc).__name__}: {exc})")
-                    if not warming:
-                        self.say(f"warm after {time.monotonic() - start:.1f} s")
-                    if not warming:
-                        self._state = "watching"
-                        self.write_page(waiting)
-                answered = False
-                for future in [f for f in done if f in running]:
-                    path = running.pop(future)
-                    self._answer(path, future.result())
-                    answered = changed = True
-                    if opts.max_runs is not None and self.n_answered >= opts.max_runs:
-                        break
-                if answered:
-                    self.write_page([*map(str, self.arrivals.pending()), *map(str, queue)])
-                if population is not None and population.done():
-                    try:
-                        self._take_populations(population.result(), population_runs)
-                    except BayestriboError as exc:
-                        self._population_note = f"Not computed: {exc}"
-                    except Exception as exc:  # the watch goes on; the page says why
-                        self._population_note = f"Failed: {type(exc).__name__}: {exc}"
-                    population = None
-                    self.write_page(waiting)
-                if opts.max_runs is not None and self.n_answered >= opts.max_runs:
-                    self.stopped_by = f"stopped after --max-runs {opts.max_runs}"
-                    break
-                idle = not queue and not running
-                due = time.monotonic() - last_population >= opts.population_every_s
-                if changed and population is None and self.digests and (idle or due):
-                    digests = list(self.digests.values())
-                    population = _in_background(self._populations_of, digests)
-                    population_runs = len(digests)
-                    last_population = time.monotonic()
-                    changed = False
+            while self.stopped_by is None:
+                self._step(pool, fitters)
         except KeyboardInterrupt:
             interrupted = True
             self.stopped_by = "stopped by Ctrl-C"
-            # the fits running are dropped: their workers end now, not when they finish
+            # the fits running are dropped: their workers end now, not when they finish,
+            # and a fit about to start (its file being registered) is refused
             stop_workers(pool)
+            pool.shutdown(wait=False, cancel_futures=True)
         finally:
-            for future in running:
+            for future in self._running:
                 future.cancel()
+            # a fit that finished is saved and recorded by its thread: waited for
             fitters.shutdown(wait=True, cancel_futures=True)
             pool.shutdown(wait=True, cancel_futures=True)
-        # a population under way is not waited for after Ctrl-C: its daemon thread writes
-        # nothing (this thread writes the page and population.json)
-        if not interrupted and population is not None:
-            try:
-                self._take_populations(population.result(), population_runs)
-                population = None
-            except Exception as exc:
-                self._population_note = f"Not computed: {exc}"
-        if not interrupted and changed and self.digests and population is None:
-            # the last answers in the populations too, before the page is final
-            try:
-                digests = list(self.digests.values())
-                self._take_populations(self._populations_of(digests), len(digests))
-            except Exception as exc:
-                self._population_note = f"Not computed: {exc}"
+            if interrupted:
+                # the fits that ended as the watch stopped are recorded: said too
+                for future, path in self._running.items():
+                    ended = future.done() and not future.cancelled()
+                    if ended and future.exception() is None and future.result().ok:
+                        self._answer(path, future.result())
+        if not interrupted:
+            # the last answers in the populations too, before the page is final; after
+            # Ctrl-C a population under way is not waited for (its daemon thread writes
+            # nothing: this thread writes the page and population.json)
+            self._last_populations()
         self._state = self.stopped_by or "stopped"
-        self.write_page([*map(str, self.arrivals.pending())], final=True)
+        self.write_page(final=True)
         answers = f"{self.n_answered} answer" + ("" if self.n_answered == 1 else "s")
         self.say(f"{self._state}: {answers}; page {self.page.resolve().as_uri()}")
         if interrupted:
             return 130
         bad = any(not a.ok or not a.converged for a in self.answers.values())
         return 1 if bad else 0
+
+    def _warm(self, pool: Any) -> None:
+        """Send the warm-up to every worker; this process imports meanwhile (what a fit's
+        thread needs here is imported before any runs: Ctrl-C stops an import, not a
+        thread)."""
+        if self.warm_up is None:
+            self._state = "watching"
+        else:
+            workers = range(self.options.workers)
+            self._warming = {pool.submit(self.warm_up, self.spec) for _ in workers}
+            self.say("warming up the fit (imports and compiled kernels) ...")
+        import bayestribo.campaign.analysis
+        import bayestribo.campaign.digest
+        import bayestribo.inference  # noqa: F401
+
+    def _step(self, pool: Any, fitters: ThreadPoolExecutor) -> None:
+        """One turn of the loop: look at the folder, start fits, take what finished."""
+        opts = self.options
+        if opts.timeout_s is not None and time.monotonic() - self._start >= opts.timeout_s:
+            self.stopped_by = f"stopped after --timeout {opts.timeout_s:g} s"
+            return
+        fresh = self.arrivals.poll()
+        busy = set(self._running.values())
+        self._queue.extend(p for p in fresh if p not in self._queue and p not in busy)
+        started = False
+        while self._queue and len(self._running) < opts.workers and not self._warming:
+            path = self._queue.popleft()
+            self._running[fitters.submit(self._fit, pool, path)] = path
+            started = True
+        if fresh or started:
+            self.write_page()
+        watched = set(self._running) | self._warming
+        if self._population is not None:
+            watched.add(self._population)
+        if watched:
+            done, _ = wait(watched, timeout=opts.poll_s, return_when=FIRST_COMPLETED)
+        else:
+            time.sleep(opts.poll_s)
+            done = set()
+        self._warmed(done & self._warming)
+        answered = False
+        for future in [f for f in done if f in self._running]:
+            path = self._running.pop(future)
+            self._answer(path, future.result())
+            answered = True
+            if opts.max_runs is not None and self.n_answered >= opts.max_runs:
+                self.stopped_by = f"stopped after --max-runs {opts.max_runs}"
+                break
+        if answered:
+            self._changed = True
+            self.write_page()
+        if self._population is not None and self._population.done():
+            self._take(self._population)
+            self._population = None
+            self.write_page()
+        if self.stopped_by is None:
+            self._populations_due()
+
+    def _warmed(self, done: set[Future[Any]]) -> None:
+        for future in done:
+            self._warming.discard(future)
+            try:
+                self._warm_here(future.result())
+            except Exception as exc:  # the runs' own fits say what is wrong
+                self.say(f"the warm-up fit failed ({type(exc).__name__}: {exc})")
+        if done and not self._warming:
+            self.say(f"warm after {time.monotonic() - self._start:.1f} s")
+            self._state = "watching"
+            self.write_page()
+
+    def _populations_due(self) -> None:
+        """Start the populations when the fit queue is empty, or when the last ones are
+        ``population_every_s`` old, if runs were answered since."""
+        if not self._changed or self._population is not None or not self.digests:
+            return
+        idle = not self._queue and not self._running
+        due = time.monotonic() - self._last_population >= self.options.population_every_s
+        if idle or due:
+            digests = list(self.digests.values())
+            self._population = _in_background(self._populations_of, digests)
+            self._population_started = len(digests)
+            self._last_population = time.monotonic()
+            self._changed = False
+
+    def _take(self, population: Future[Any]) -> None:
+        """The populations computed, on the page and in ``population.json``; or why not."""
+        try:
+            self._take_populations(population.result(), self._population_started)
+        except BayestriboError as exc:
+            self._population_note = f"Not computed: {exc}"
+        except Exception as exc:  # the watch goes on; the page says why
+            self._population_note = f"Failed: {type(exc).__name__}: {exc}"
+
+    def _last_populations(self) -> None:
+        if self._population is not None:
+            self._take(self._population)
+            self._population = None
+        if self._changed and self.digests:
+            digests = list(self.digests.values())
+            self._population = _in_background(self._populations_of, digests)
+            self._population_started = len(digests)
+            self._take(self._population)
+            self._population = None

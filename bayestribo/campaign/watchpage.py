@@ -123,6 +123,8 @@ class PageState:
         Every run answered, in the order of their answers.
     waiting : sequence of str
         Files seen that are not complete yet, or queued for a fit.
+    fitting : sequence of str
+        Files being fitted.
     populations : sequence of dict
         The population rows (:meth:`bayestribo.campaign.analysis.CampaignAnalysis.group_rows`)
         with each row's ``symbol`` and its group's ``label`` in words; empty before the
@@ -140,6 +142,7 @@ class PageState:
     prob: float
     answers: Sequence[Answer] = ()
     waiting: Sequence[str] = ()
+    fitting: Sequence[str] = ()
     populations: Sequence[Mapping[str, Any]] = ()
     population_runs: int = 0
     population_note: str = ""
@@ -242,7 +245,11 @@ def render_page(state: PageState, *, refresh_s: float | None) -> str:
         watch has stopped).
     """
     refresh = "" if refresh_s is None else f'<meta http-equiv="refresh" content="{refresh_s:g}">\n'
-    waiting = f"<p>Waiting for: {_esc(', '.join(state.waiting))}</p>" if state.waiting else ""
+    waiting = "".join(
+        f"<p>{what}: {_esc(', '.join(files))}</p>"
+        for what, files in (("Fitting", state.fitting), ("Waiting for", state.waiting))
+        if files
+    )
     body = [
         f"<h1>Campaign of {_esc(state.folder)}</h1>",
         f'<p class="state" id="state">{_esc(state.state)}; updated {_esc(state.updated_utc)}</p>',
@@ -268,6 +275,7 @@ def status(state: PageState) -> dict[str, Any]:
         "prob": state.prob,
         "answers": [a.to_dict() for a in state.answers],
         "waiting": list(state.waiting),
+        "fitting": list(state.fitting),
         "population_runs": state.population_runs,
         "population_note": state.population_note,
     }
