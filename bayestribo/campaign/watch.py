@@ -247,6 +247,7 @@ class CampaignWatch:
         self._population_note = "Computed once the first runs are answered."
         # the loop's state
         self._start = 0.0
+        self._pool: Any = None
         self._queue: deque[Path] = deque()
         self._running: dict[Future[Any], Path] = {}
         self._warming: set[Future[Any]] = set()
@@ -375,33 +376,32 @@ class CampaignWatch:
             0 when every run answered was fitted and converged, 1 when one failed or did
             not converge, 130 when stopped by Ctrl-C (or SIGTERM).
         """
-        from bayestribo._workers import process_pool, stop_workers
+        from bayestribo._workers import stop_workers
 
         self._start = time.monotonic()
         self.out.mkdir(parents=True, exist_ok=True)
         self.write_page()
-        method = "forkserver" if sys.platform.startswith("linux") else None
-        pool = process_pool(self.options.workers, method=method)
+        self._pool = self._new_pool()
         fitters = ThreadPoolExecutor(self.options.workers, thread_name_prefix="watch-fit")
         interrupted = False
         try:
-            self._warm(pool)
+            self._warm()
             self.say(f"live page: {self.page.resolve().as_uri()}")
             while self.stopped_by is None:
-                self._step(pool, fitters)
+                self._step(fitters)
         except KeyboardInterrupt:
             interrupted = True
             self.stopped_by = "stopped by Ctrl-C"
             # the fits running are dropped: their workers end now, not when they finish,
             # and a fit about to start (its file being registered) is refused
-            stop_workers(pool)
-            pool.shutdown(wait=False, cancel_futures=True)
+            stop_workers(self._pool)
+            self._pool.shutdown(wait=False, cancel_futures=True)
         finally:
             for future in self._running:
                 future.cancel()
             # a fit that finished is saved and recorded by its thread: waited for
             fitters.shutdown(wait=True, cancel_futures=True)
-            pool.shutdown(wait=True, cancel_futures=True)
+            self._pool.shutdown(wait=True, cancel_futures=True)
             if interrupted:
                 # the fits that ended as the watch stopped are recorded: said too
                 for future, path in self._running.items():
@@ -422,7 +422,15 @@ class CampaignWatch:
         bad = any(not a.ok or not a.converged for a in self.answers.values())
         return 1 if bad else 0
 
-    def _warm(self, pool: Any) -> None:
+    def _new_pool(self) -> Any:
+        """The warm workers' pool (forkserver on Linux: workers start clean of this
+        process's threads); they end with this process."""
+        from bayestribo._workers import process_pool
+
+        method = "forkserver" if sys.platform.startswith("linux") else None
+        return process_pool(self.options.workers, method=method)
+
+    def _warm(self) -> None:
         """Send the warm-up to every worker; this process imports meanwhile (what a fit's
         thread needs here is imported before any runs: Ctrl-C stops an import, not a
         thread)."""
@@ -430,13 +438,13 @@ class CampaignWatch:
             self._state = "watching"
         else:
             workers = range(self.options.workers)
-            self._warming = {pool.submit(self.warm_up, self.spec) for _ in workers}
+            self._warming = {self._pool.submit(self.warm_up, self.spec) for _ in workers}
             self.say("warming up the fit (imports and compiled kernels) ...")
         import bayestribo.campaign.analysis
         import bayestribo.campaign.digest
         import bayestribo.inference  # noqa: F401
 
-    def _step(self, pool: Any, fitters: ThreadPoolExecutor) -> None:
+    def _step(self, fitters: ThreadPoolExecutor) -> None:
         """One turn of the loop: look at the folder, start fits, take what finished."""
         opts = self.options
         if opts.timeout_s is not None and time.monotonic() - self._start >= opts.timeout_s:
@@ -448,7 +456,7 @@ class CampaignWatch:
         started = False
         while self._queue and len(self._running) < opts.workers and not self._warming:
             path = self._queue.popleft()
-            self._running[fitters.submit(self._fit, pool, path)] = path
+            self._running[fitters.submit(self._fit, self._pool, path)] = path
             started = True
         if fresh or started:
             self.write_page()
@@ -472,6 +480,13 @@ class CampaignWatch:
         if answered:
             self._changed = True
             self.write_page()
+        if answered and getattr(self._pool, "_broken", False) and not self._running:
+            # a worker died (killed, out of memory): its run is answered with the
+            # error, and the runs after it go to new warm workers
+            self.say("a fit's worker process died; starting new workers")
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool = self._new_pool()
+            self._warm()
         if self._population is not None and self._population.done():
             self._take(self._population)
             self._population = None
