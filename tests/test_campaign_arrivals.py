@@ -16,7 +16,6 @@ from pathlib import Path
 import pytest
 
 from bayestribo.campaign.arrivals import Arrivals
-from bayestribo.campaign.watchpage import Answer, interval_text
 
 SETTLE = 2.0
 
@@ -130,28 +129,3 @@ def test_a_file_removed_and_put_back_arrives_again(tmp_path):
 def test_the_settle_interval_must_be_positive(tmp_path, settle):
     with pytest.raises(ValueError, match="settle_s"):
         Arrivals(tmp_path, [".csv"], settle)
-
-
-def test_an_answer_line_names_the_run_its_law_and_its_intervals():
-    answer = Answer(
-        run="r1",
-        path="r1.csv",
-        law="viscous+quadratic",
-        quantities={
-            "zeta": {"symbol": "ζ", "unit": "1", "median": 0.0236, "low": 0.0231, "high": 0.0241},
-            "c2": {"symbol": "c₂", "unit": "kg/m", "median": 0.5, "low": 0.4, "high": 0.6},
-        },
-        fit_s=1.25,
-    )
-    assert answer.line() == (
-        "r1  viscous+quadratic  ζ 0.0236 [0.0231, 0.0241]  c₂ 0.5 [0.4, 0.6] kg/m  (fit 1.25 s)"
-    )
-    failed = Answer(run="bad", path="bad.csv", error="RunFormatError: no rows")
-    assert failed.line() == "FAILED bad: RunFormatError: no rows"
-
-
-def test_an_interval_has_the_digits_that_tell_its_ends_apart():
-    assert interval_text(0.0236, 0.0231, 0.0241) == "0.0236 [0.0231, 0.0241]"
-    # a run's interval is often 1e-4 of its median wide
-    assert interval_text(0.0242506, 0.0242499, 0.0242513) == "0.0242506 [0.0242499, 0.0242513]"
-    assert interval_text(1.0, 1.0, 1.0) == "1 [1, 1]"
