@@ -14,9 +14,10 @@ is complete when either
 * the file and its sidecar have kept the same size and modification time for the
   settle interval: a writer that appends in chunks is waited for until it stops.
 
-A file already answered is answered again only when its content changes (its size or
-modification time moves, then settles): a run rewritten in place is a new run version.
-The clock is injected, so the rule is tested without waiting.
+A file already given is given again only when it changes (its size or modification
+time moves, then settles); the campaign's catalog then says whether it can take it (a
+run id holds one file's content: a run rewritten with other samples is refused, naming
+both digests). The clock is injected, so the rule is tested without waiting.
 """
 
 from __future__ import annotations
