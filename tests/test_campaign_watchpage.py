@@ -148,3 +148,43 @@ def test_a_bad_watch_option_is_an_argument_error(tmp_path, capsys, argv):
         main(["campaign", str(tmp_path), "--watch", *argv])
     assert exc.value.code == 2
     assert argv[0] in capsys.readouterr().err
+
+
+def test_the_page_shows_the_populations_and_trends_with_their_labels():
+    group = {
+        "group": "lubricant=glycerol,load_N=0.31",
+        "label": "glycerol · 0.31 N",
+        "kind": "contact",
+        "n_runs": 3,
+        "parameter": "zeta",
+        "symbol": "ζ",
+        **{f"mean_{k}": v for k, v in (("median", 0.024), ("low", 0.022), ("high", 0.026))},
+        **{f"sigma_{k}": v for k, v in (("median", 0.001), ("low", 0.0002), ("high", 0.004))},
+    }
+    trend = {
+        "series": "lubricant=glycerol",
+        "label": "glycerol",
+        "covariate": "load_N",
+        "parameter": "zeta",
+        "symbol": "ζ",
+        "slope_median": -0.012,
+        "slope_low": -0.04,
+        "slope_high": 0.02,
+        "prob_positive": 0.1284,
+        "n_runs": 6,
+    }
+    state = _state(
+        populations=[group],
+        trends=[trend],
+        population_runs=3,
+        report_command="bayestribo report out",
+    )
+    page = render_page(state, refresh_s=None)
+    assert "<td>glycerol · 0.31 N (contact)</td><td>3</td><td>ζ</td>" in page
+    assert "0.024 [0.022, 0.026]" in page and "0.001 [0.0002, 0.004]" in page
+    assert "Computed from 3 fitted runs" in page
+    assert "<td>glycerol</td><td>6</td><td>ζ</td>" in page
+    assert "-0.012 [-0.04, 0.02]" in page and ">0.128<" in page
+    assert "<code>bayestribo report out</code>" in page
+    before = render_page(_state(), refresh_s=None)
+    assert '<table id="populations">' not in before and "Not computed yet." in before

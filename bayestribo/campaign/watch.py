@@ -243,6 +243,7 @@ class CampaignWatch:
         self.stopped_by: str | None = None
         self._state = "warming up"
         self._populations: list[dict[str, Any]] = []
+        self._trends: list[dict[str, Any]] = []
         self._population_runs = 0
         self._population_note = "Computed once the first runs are answered."
         # the loop's state
@@ -267,6 +268,8 @@ class CampaignWatch:
             waiting=[str(p) for p in waiting],
             fitting=[str(p) for p in self._running.values()],
             populations=self._populations,
+            trends=self._trends,
+            report_command=f"bayestribo report {self.out}",
             population_runs=self._population_runs,
             population_note=self._population_note,
             updated_utc=_utc(),
@@ -343,14 +346,24 @@ class CampaignWatch:
 
     def _take_populations(self, analysis: Any, n_runs: int) -> None:
         quantities = {**analysis.quantities, **analysis.dissipation_quantities}
-        rows = []
-        for r in analysis.group_rows():
-            q = quantities.get(r["parameter"], {})
-            unit = str(q.get("unit") or "1")
-            symbol = str(q.get("symbol") or r["parameter"])
-            symbol = symbol if unit in ("1", "-") else f"{symbol} [{unit}]"
-            rows.append({**r, "symbol": symbol, "label": self.label(r["group"])})
-        self._populations = rows
+
+        def symbol(name: str) -> str:
+            q = quantities.get(name, {})
+            unit, text = str(q.get("unit") or "1"), str(q.get("symbol") or name)
+            return text if unit in ("1", "-") else f"{text} [{unit}]"
+
+        self._populations = [
+            {**r, "symbol": symbol(r["parameter"]), "label": self.label(r["group"])}
+            for r in analysis.group_rows()
+        ]
+        self._trends = [
+            {
+                **r,
+                "symbol": symbol(r["parameter"]),
+                "label": self.label(str(r["series"]).split(":", 1)[-1]),
+            }
+            for r in analysis.trend_rows()
+        ]
         self._population_runs = n_runs
         self._population_note = (
             "" if analysis.converged else "A population sampler did not converge."

@@ -125,6 +125,11 @@ class PageState:
         Files seen that are not complete yet, or queued for a fit.
     fitting : sequence of str
         Files being fitted.
+    trends : sequence of dict
+        The trend rows (:meth:`bayestribo.campaign.analysis.CampaignAnalysis.trend_rows`)
+        with each row's ``symbol`` and its series' ``label`` in words.
+    report_command : str
+        The command that makes the full campaign report of these results.
     populations : sequence of dict
         The population rows (:meth:`bayestribo.campaign.analysis.CampaignAnalysis.group_rows`)
         with each row's ``symbol`` and its group's ``label`` in words; empty before the
@@ -144,6 +149,8 @@ class PageState:
     waiting: Sequence[str] = ()
     fitting: Sequence[str] = ()
     populations: Sequence[Mapping[str, Any]] = ()
+    trends: Sequence[Mapping[str, Any]] = ()
+    report_command: str = ""
     population_runs: int = 0
     population_note: str = ""
     updated_utc: str = ""
@@ -233,6 +240,29 @@ def _population_table(state: PageState) -> list[str]:
     return out
 
 
+def _trend_table(state: PageState) -> list[str]:
+    if not state.trends:
+        return []
+    out = [
+        "<h2>Trends</h2>",
+        f"<p>Slope of each quantity against {_esc(state.trends[0].get('covariate'))} per "
+        f"series, median [{100 * state.prob:g} % interval], and the probability that it is "
+        "positive.</p>",
+        '<table id="trends"><tr><th>series</th><th>runs</th><th>quantity</th><th>slope</th>'
+        "<th>P(slope &gt; 0)</th></tr>",
+    ]
+    for r in state.trends:
+        slope = interval_text(r["slope_median"], r["slope_low"], r["slope_high"])
+        out.append(
+            f"<tr><td>{_esc(r.get('label') or r.get('series'))}</td>"
+            f"<td>{_esc(r.get('n_runs'))}</td><td>{_esc(r.get('symbol') or r['parameter'])}</td>"
+            f'<td class="num">{slope}</td><td class="num">{_number(r["prob_positive"], 3)}</td>'
+            "</tr>"
+        )
+    out.append("</table>")
+    return out
+
+
 def render_page(state: PageState, *, refresh_s: float | None) -> str:
     """The page as HTML text.
 
@@ -256,6 +286,13 @@ def render_page(state: PageState, *, refresh_s: float | None) -> str:
         waiting,
         *_runs_table(state.answers, state.prob),
         *_population_table(state),
+        *_trend_table(state),
+        (
+            f"<p>The full campaign report (figures, each run's fit): "
+            f"<code>{_esc(state.report_command)}</code></p>"
+            if state.report_command
+            else ""
+        ),
     ]
     return (
         '<!DOCTYPE html>\n<html lang="en">\n<head>\n<meta charset="utf-8">\n'
