@@ -8,8 +8,8 @@ each run file to a worker as soon as it is complete, and with each answer
 * records the fit in the catalog (:func:`~.fitting.fit_catalogued`: the same catalog,
   fit files and cache as ``bayestribo campaign``, so a watched run is not fitted again
   by a later campaign with the same settings);
-* prints one line (:meth:`~.watchpage.Answer.line`) and rewrites the live page
-  (:mod:`~.watchpage`) and its status file.
+* prints one line (:meth:`~.watchpage.Answer.line`), then rewrites the live page
+  (:mod:`~.watchpage`, milliseconds) and its status file.
 
 The populations of repeats take longer than a fit: they are computed in a background
 thread when the fit queue is empty, or at most every ``population_every_s`` while
@@ -381,7 +381,9 @@ class CampaignWatch:
 
     # -- the loop -----------------------------------------------------------------------
     def run(self) -> int:
-        """Watch until ``max_runs``, ``timeout_s`` or Ctrl-C.
+        """Watch until ``max_runs``, ``timeout_s`` or Ctrl-C. After the first two the
+        populations take in the last answers before the final page is written; after
+        Ctrl-C they are left as they were.
 
         Returns
         -------

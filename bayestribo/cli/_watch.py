@@ -79,7 +79,7 @@ def add_watch_options(parser: argparse.ArgumentParser) -> None:
         type=_seconds,
         default=None,
         metavar="SECONDS",
-        help="stop after this long",
+        help="stop after this long (from the start, warm-up included)",
     )
     g.add_argument(
         "--population-every",
