@@ -16,10 +16,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-__all__ = ["WATCH_OPTIONS", "add_watch_options", "run_watch", "warm_up_fit"]
-
-#: The options that mean something with ``--watch`` only (``dest`` names).
-WATCH_OPTIONS = ("settle", "poll", "max_runs", "timeout", "population_every", "no_warm_up")
+__all__ = ["add_watch_options", "check_watch_options", "run_watch", "warm_up_fit"]
 
 
 def _seconds(text: str) -> float:
@@ -42,8 +39,28 @@ def _count(text: str) -> int:
     return value
 
 
+class _Given(argparse.Action):
+    """Store the value, and note that the option was given (``args._watch_given``): an
+    option of a watch without ``--watch`` is refused, not ignored."""
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: Any,
+        option_string: str | None = None,
+    ) -> None:
+        setattr(namespace, self.dest, True if self.nargs == 0 else values)
+        given = getattr(namespace, "_watch_given", [])
+        namespace._watch_given = [*given, option_string]
+
+
 def add_watch_options(parser: argparse.ArgumentParser) -> None:
-    """Add ``--watch`` and the options of a watch to the campaign's parser."""
+    """Add ``--watch`` and the options of a watch to the campaign's parser (their
+    defaults are :class:`~bayestribo.campaign.watch.WatchOptions`')."""
+    from bayestribo.campaign.watch import WatchOptions
+
+    default = WatchOptions()
     g = parser.add_argument_group(
         "watching (--watch)",
         "keep one warm process that fits each run as its file is complete, prints its "
@@ -53,46 +70,52 @@ def add_watch_options(parser: argparse.ArgumentParser) -> None:
     g.add_argument("--watch", action="store_true", help="watch DIR for runs as they land")
     g.add_argument(
         "--settle",
+        action=_Given,
         type=_seconds,
-        default=None,
+        default=default.settle_s,
         metavar="SECONDS",
         help="a file (and its sidecar) is complete once its size and modification time "
         "have not changed for this long; files of `bayestribo acquire` (renamed into "
-        "place, listed in their .sha256 manifest) are complete at once (default 2)",
+        "place, listed in their .sha256 manifest) are complete at once",
     )
     g.add_argument(
         "--poll",
+        action=_Given,
         type=_seconds,
-        default=None,
+        default=default.poll_s,
         metavar="SECONDS",
-        help="interval between looks at DIR (default 0.2)",
+        help="interval between looks at DIR",
     )
     g.add_argument(
         "--max-runs",
+        action=_Given,
         type=_count,
-        default=None,
+        default=argparse.SUPPRESS,
         metavar="N",
         help="stop after N answers (failures and the runs already in DIR count)",
     )
     g.add_argument(
         "--timeout",
+        action=_Given,
         type=_seconds,
-        default=None,
+        default=argparse.SUPPRESS,
         metavar="SECONDS",
         help="stop after this long (from the start, warm-up included)",
     )
     g.add_argument(
         "--population-every",
+        action=_Given,
         type=_seconds,
-        default=None,
+        default=default.population_every_s,
         metavar="SECONDS",
         help="update the populations at most this often while fits keep coming (they "
-        "are updated whenever the fit queue empties; default 30)",
+        "are updated whenever the fit queue empties)",
     )
     g.add_argument(
         "--no-warm-up",
-        action="store_true",
-        default=None,
+        action=_Given,
+        nargs=0,
+        default=not default.warm_up,
         help="do not fit a simulated run first (the first run then waits for the imports "
         "and compiling)",
     )
@@ -125,10 +148,9 @@ def check_watch_options(args: argparse.Namespace) -> None:
     from bayestribo.cli._common import CommandLineError
 
     if not args.watch:
-        given = [n for n in WATCH_OPTIONS if getattr(args, n, None) is not None]
+        given = list(dict.fromkeys(getattr(args, "_watch_given", [])))
         if given:
-            names = ", ".join("--" + n.replace("_", "-") for n in given)
-            raise CommandLineError(f"{names}: options of --watch; add --watch")
+            raise CommandLineError(f"{', '.join(given)}: options of --watch; add --watch")
         return
     if args.dask_scheduler:
         raise CommandLineError("--dask-scheduler: a watch fits in its own warm processes")
@@ -160,11 +182,11 @@ def run_watch(args: argparse.Namespace) -> int:
     file_format = getattr(args, "format", None)
     formats = [get_format(file_format)] if file_format else registered_formats().values()
     options = WatchOptions(
-        settle_s=args.settle or 2.0,
-        poll_s=args.poll or 0.2,
-        max_runs=args.max_runs,
-        timeout_s=args.timeout,
-        population_every_s=args.population_every or 30.0,
+        settle_s=args.settle,
+        poll_s=args.poll,
+        max_runs=getattr(args, "max_runs", None),
+        timeout_s=getattr(args, "timeout", None),
+        population_every_s=args.population_every,
         workers=args.workers or 1,
         warm_up=not args.no_warm_up,
     )
