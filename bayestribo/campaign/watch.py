@@ -25,6 +25,7 @@ catalog holds every fit that finished and nothing of one cut short.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
 import math
@@ -53,6 +54,14 @@ PAGE_NAME = "watch.html"
 STATUS_NAME = "watch.json"
 #: Seconds between the reloads of a browser showing the live page.
 PAGE_REFRESH_S = 2.0
+#: What this process imports before the first run, while the workers warm up.
+_HANDLING_IMPORTS = (
+    "bayestribo.inference",
+    "bayestribo.campaign.digest",
+    "bayestribo.campaign.analysis",
+    "arviz",
+    "netCDF4",
+)
 
 
 @dataclass(frozen=True)
@@ -455,9 +464,13 @@ class CampaignWatch:
             workers = range(self.options.workers)
             self._warming = {self._pool.submit(self.warm_up, self.spec) for _ in workers}
             self.say("warming up the fit (imports and compiled kernels) ...")
-        import bayestribo.campaign.analysis
-        import bayestribo.campaign.digest
-        import bayestribo.inference  # noqa: F401
+        import importlib
+
+        # what handling a fit needs here: the fit's result and digest, and what saving
+        # and reading it back import (ArviZ, xarray, netCDF4: seconds, once)
+        for module in _HANDLING_IMPORTS:
+            with contextlib.suppress(ImportError):
+                importlib.import_module(module)
 
     def _step(self, fitters: ThreadPoolExecutor) -> None:
         """One turn of the loop: look at the folder, start fits, take what finished."""
