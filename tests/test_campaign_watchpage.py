@@ -188,3 +188,28 @@ def test_the_page_shows_the_populations_and_trends_with_their_labels():
     assert "<code>bayestribo report out</code>" in page
     before = render_page(_state(), refresh_s=None)
     assert '<table id="populations">' not in before and "Not computed yet." in before
+
+
+def test_the_page_waits_while_fits_keep_coming_and_not_once_the_queue_is_empty(tmp_path):
+    watch = CampaignWatch(
+        tmp_path / "runs",
+        tmp_path / "out",
+        tmp_path / "out" / "catalog.sqlite",
+        spec=None,
+        options=WatchOptions(page_every_s=3600.0),
+        by=("load_N",),
+        suffixes=[".csv"],
+        stream=io.StringIO(),
+    )
+    (tmp_path / "out").mkdir()
+    page = tmp_path / "out" / "watch.html"
+    watch._queue.append(tmp_path / "runs" / "next.csv")  # a fit still to come
+    watch._answer(tmp_path / "runs" / "r1.csv", RunOutcome("r1", 1, _digest(), elapsed_s=1.0))
+    watch._refresh_page()  # the first page: at once
+    assert 'data-run="r1"' in page.read_text(encoding="utf-8")
+    watch._answer(tmp_path / "runs" / "r2.csv", RunOutcome("r2", 2, _digest(), elapsed_s=1.0))
+    watch._refresh_page()  # within the interval, fits to come: later
+    assert 'data-run="r2"' not in page.read_text(encoding="utf-8")
+    watch._queue.clear()
+    watch._refresh_page()  # the queue is empty: at once
+    assert 'data-run="r2"' in page.read_text(encoding="utf-8")

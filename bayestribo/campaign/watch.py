@@ -83,6 +83,10 @@ class WatchOptions:
     population_every_s : float
         Longest interval between two population updates while fits keep coming [s]
         (they are also updated whenever the fit queue empties).
+    page_every_s : float
+        Shortest interval between two rewrites of the page while fits keep coming [s]
+        (it is rewritten at once whenever the fit queue is empty): a watch started on
+        a folder of many runs does not rewrite it for each.
     workers : int
         Warm worker processes fitting side by side.
     warm_up : bool
@@ -95,11 +99,12 @@ class WatchOptions:
     max_runs: int | None = None
     timeout_s: float | None = None
     population_every_s: float = 30.0
+    page_every_s: float = 2.0
     workers: int = 1
     warm_up: bool = True
 
     def __post_init__(self) -> None:
-        for name in ("settle_s", "poll_s", "population_every_s"):
+        for name in ("settle_s", "poll_s", "population_every_s", "page_every_s"):
             value = getattr(self, name)
             if not (isinstance(value, int | float) and value > 0 and math.isfinite(value)):
                 raise BayestriboError(
@@ -265,6 +270,8 @@ class CampaignWatch:
         self._population_started = 0
         self._last_population = -math.inf
         self._changed = False
+        self._page_stale = False
+        self._last_page = -math.inf
 
     # -- the page ---------------------------------------------------------------------
     def _page_state(self) -> PageState:
@@ -288,9 +295,18 @@ class CampaignWatch:
         """Rewrite the live page and its status file (atomically); a ``final`` page is
         not reloaded by the browser."""
         state = self._page_state()
+        self._page_stale, self._last_page = False, time.monotonic()
         refresh = None if final else PAGE_REFRESH_S
         write_atomic(self.page, render_page(state, refresh_s=refresh))
         write_atomic(self.out / STATUS_NAME, json.dumps(status(state), indent=1) + "\n")
+
+    def _refresh_page(self) -> None:
+        """Rewrite the page now if the fit queue is empty or the page is
+        ``page_every_s`` old; otherwise later, when one of these holds."""
+        self._page_stale = True
+        idle = not self._queue and not self._running
+        if idle or time.monotonic() - self._last_page >= self.options.page_every_s:
+            self.write_page()
 
     # -- fits ---------------------------------------------------------------------------
     def _fit(self, pool: Any, path: Path) -> Any:
@@ -487,7 +503,7 @@ class CampaignWatch:
             self._running[fitters.submit(self._fit, self._pool, path)] = path
             started = True
         if fresh or started:
-            self.write_page()
+            self._refresh_page()
         watched = set(self._running) | self._warming
         if self._population is not None:
             watched.add(self._population)
@@ -507,7 +523,7 @@ class CampaignWatch:
                 break
         if answered:
             self._changed = True
-            self.write_page()
+            self._refresh_page()
         if answered and getattr(self._pool, "_broken", False) and not self._running:
             # a worker died (killed, out of memory): its run is answered with the
             # error, and the runs after it go to new warm workers
@@ -518,9 +534,11 @@ class CampaignWatch:
         if self._population is not None and self._population.done():
             self._take(self._population)
             self._population = None
-            self.write_page()
+            self._refresh_page()
         if self.stopped_by is None:
             self._populations_due()
+        if self._page_stale:
+            self._refresh_page()
 
     def _warmed(self, done: set[Future[Any]]) -> None:
         for future in done:
@@ -532,7 +550,7 @@ class CampaignWatch:
         if done and not self._warming:
             self.say(f"warm after {time.monotonic() - self._start:.1f} s")
             self._state = "watching"
-            self.write_page()
+            self._refresh_page()
 
     def _populations_due(self) -> None:
         """Start the populations when the fit queue is empty, or when the last ones are
