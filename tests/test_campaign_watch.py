@@ -3,8 +3,8 @@
 One watch (module fixture) finds a malformed run file in its folder and, while it warms
 up, two runs of ``bayestribo acquire`` against the simulated instrument land beside it
 while a third run file is written slowly, in chunks. It stops by itself after
-``--max-runs 4``.
-Another watch is stopped with SIGINT (Ctrl-C) after its first answer. Short fits
+``--max-runs 4``. Another watch is stopped with SIGINT (Ctrl-C) while its first fit
+runs. Short fits
 (``--max-steps 400``): the tests check what is answered, recorded and shown, not the
 posteriors. Every wait has a deadline far beyond its need and fails the test when
 reached; nothing is asserted about time.
