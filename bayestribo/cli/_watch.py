@@ -65,7 +65,8 @@ def add_watch_options(parser: argparse.ArgumentParser) -> None:
         "watching (--watch)",
         "keep one warm process that fits each run as its file is complete, prints its "
         "answer as one line and updates the catalog, the populations and a live page "
-        "(OUTDIR/watch.html, which a browser reloads); Ctrl-C stops it",
+        "(OUTDIR/watch.html, which a browser reloads; OUTDIR/watch.json for scripts); "
+        "with --json each answer is one JSON object on its line; Ctrl-C stops it",
     )
     g.add_argument("--watch", action="store_true", help="watch DIR for runs as they land")
     g.add_argument(
