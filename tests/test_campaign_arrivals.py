@@ -80,8 +80,10 @@ def test_a_file_without_its_sidecar_is_not_a_run(tmp_path):
     arrivals.poll()
     clock.now += 10 * SETTLE
     assert arrivals.poll() == []
+    assert arrivals.pending() == []  # nor waited for
     (tmp_path / "alone.json").write_text('{"run_id": "alone"}', encoding="utf-8")
     assert arrivals.poll() == []  # the sidecar has to settle too
+    assert arrivals.pending() == [path]
     clock.now += SETTLE
     assert arrivals.poll() == [path]
 

@@ -137,8 +137,11 @@ class Arrivals:
                 continue
 
     def pending(self) -> list[Path]:
-        """Run files seen and not yet complete (waiting to settle, or for a sidecar)."""
-        return sorted(p for p in self._seen if p not in self._given)
+        """Run files seen and not complete yet (with their sidecar, waiting to settle);
+        a file without a sidecar is no run file, and not listed."""
+        return sorted(
+            p for p, (state, _) in self._seen.items() if p not in self._given and state[1]
+        )
 
     def poll(self) -> list[Path]:
         """Walk the folder once; the run files that became complete, in name order."""
