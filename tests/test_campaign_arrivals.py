@@ -11,9 +11,12 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import tempfile
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from bayestribo.campaign.arrivals import Arrivals
 
@@ -131,3 +134,20 @@ def test_a_file_removed_and_put_back_arrives_again(tmp_path):
 def test_the_settle_interval_must_be_positive(tmp_path, settle):
     with pytest.raises(ValueError, match="settle_s"):
         Arrivals(tmp_path, [".csv"], settle)
+
+
+@settings(max_examples=60, deadline=None)
+@given(gaps=st.lists(st.floats(0.0, 3 * SETTLE), min_size=1, max_size=8))
+def test_a_file_is_given_each_time_it_rests_for_the_settle_interval(gaps):
+    """Appended to, then left alone for each gap in turn: given after every gap of at
+    least the settle interval, and at no other poll."""
+    with tempfile.TemporaryDirectory() as folder:
+        arrivals, clock = _arrivals(Path(folder))
+        path = _run(Path(folder), "run")
+        given = []
+        for i, gap in enumerate(gaps):
+            _append(path, f"{i},{i}\n", stamp=10**9 * (i + 1))
+            assert arrivals.poll() == []  # just written
+            clock.now += gap
+            given.append(arrivals.poll() == [path])
+        assert given == [gap >= SETTLE for gap in gaps]
