@@ -7,7 +7,9 @@ each run file to a worker as soon as it is complete, and with each answer
 
 * records the fit in the catalog (:func:`~.fitting.fit_catalogued`: the same catalog,
   fit files and cache as ``bayestribo campaign``, so a watched run is not fitted again
-  by a later campaign with the same settings);
+  by a later campaign with the same settings). A run's identity is its file stem, as
+  in a campaign whose stems are unique: a second file of one stem in another
+  sub-folder is refused by the catalog, and its line says so;
 * prints one line (:meth:`~.watchpage.Answer.line`), then rewrites the live page
   (:mod:`~.watchpage`, milliseconds) and its status file.
 
