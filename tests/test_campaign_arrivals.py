@@ -116,6 +116,21 @@ def test_hidden_and_excluded_folders_and_other_suffixes_are_not_looked_at(tmp_pa
     assert arrivals.poll() == []
 
 
+def test_links_to_run_files_are_runs_and_links_to_folders_are_not_followed(tmp_path):
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    real = _run(elsewhere, "real")
+    watched = tmp_path / "watched"
+    watched.mkdir()
+    for suffix in (".csv", ".json"):
+        os.symlink(real.with_suffix(suffix), watched / f"linked{suffix}")
+    os.symlink(watched, watched / "loop")  # a folder that holds itself
+    arrivals, clock = _arrivals(watched)
+    arrivals.poll()
+    clock.now += SETTLE
+    assert arrivals.poll() == [watched / "linked.csv"]
+
+
 def test_a_file_removed_and_put_back_arrives_again(tmp_path):
     arrivals, clock = _arrivals(tmp_path)
     path = _run(tmp_path, "back")

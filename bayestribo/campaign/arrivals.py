@@ -128,7 +128,7 @@ class Arrivals:
             if entry.name.startswith("."):
                 continue
             try:
-                if entry.is_dir():
+                if entry.is_dir(follow_symlinks=False):  # as ``rglob``: no loop of links
                     if os.path.abspath(entry.path) not in self._exclude:
                         yield from self._walk(entry.path)
                 elif entry.is_file() and os.path.splitext(entry.name)[1].lower() in self.suffixes:
