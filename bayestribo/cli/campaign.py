@@ -34,6 +34,7 @@ from typing import Any
 
 from bayestribo.cli._common import add_reading_options
 from bayestribo.cli._spec import add_spec_options, spec_from_args
+from bayestribo.cli._watch import add_watch_options, check_watch_options, run_watch
 
 __all__ = ["register"]
 
@@ -104,6 +105,7 @@ def register(subparsers: Any) -> None:
         helps={"seed": "campaign seed: each run's seed derives from it and the run's identity"},
     )
     p.add_argument("--quiet", action="store_true", help="no progress line")
+    add_watch_options(p)
     p.set_defaults(handler=run)
 
 
@@ -377,6 +379,9 @@ def run(args: argparse.Namespace) -> int:
     from bayestribo.campaign.lock import FolderLock
     from bayestribo.errors import BayestriboError
 
+    check_watch_options(args)
+    if args.watch:
+        return run_watch(args)
     folder = Path(args.dir)
     if not folder.is_dir():
         raise BayestriboError(f"DIR: {folder} is not a folder")
