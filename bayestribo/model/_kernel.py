@@ -172,6 +172,12 @@ def _one(
         upper = n_e + 1.0
         tail = _partial(s_e, _amplitude(n_e, a0, mk, x), mk, z, omega, be, q, half)
     endless = 0.5 * f2 / -math.expm1(-2.0 * x) if x >= _TINY else math.inf
+    # A half cycle's amplitude and the integral over the half cycles after it depend on
+    # its index alone: computed once per half cycle, not once per time (a grid holds
+    # several times in each), with the same operations, so the values are the same.
+    last_n = math.nan
+    amp = 0.0
+    rest = 0.0
     for i in range(tau.size):
         t = tau[i]
         if t >= end:
@@ -179,14 +185,16 @@ def _one(
             continue
         n = np.floor((t + sigma0) / half)
         s = t + sigma0 - n * half
-        amp = _amplitude(n, a0, mk, x)
+        if n != last_n:
+            last_n = n
+            amp = _amplitude(n, a0, mk, x)
+            amp_next = q * amp - 2.0 * mk
+            length = upper - n - 1.0
+            if math.isinf(length):
+                rest = endless * amp_next * amp_next
+            else:
+                rest = _whole(max(length, 0.0), amp_next, mk, x, q, half, f1, f2, omq, g_x)
         head = _partial(s, amp, mk, z, omega, be, q, half)
-        amp_next = q * amp - 2.0 * mk
-        length = upper - n - 1.0
-        if math.isinf(length):
-            rest = endless * amp_next * amp_next
-        else:
-            rest = _whole(max(length, 0.0), amp_next, mk, x, q, half, f1, f2, omq, g_x)
         out[i] = head + rest - tail
 
 
