@@ -13,6 +13,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from bayestribo._files import write_text
 from bayestribo.errors import RunFormatError
 from bayestribo.io.run import METADATA_KEYS, check_metadata
 
@@ -141,5 +142,5 @@ def write_sidecar(metadata: Mapping[str, Any], path: str | Path) -> Path:
             )
         ordered["user"] = {**user, **own}
     text = json.dumps(ordered, indent=2, ensure_ascii=False, allow_nan=False)
-    path.write_text(text + "\n", encoding="utf-8")
+    write_text(path, text + "\n")
     return path

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from bayestribo._files import atomic_file
 from bayestribo.reports._errors import ReportError
 
 __all__ = ["PageInspection", "find_chromium", "inspect_report", "main", "screenshot"]
@@ -367,7 +368,8 @@ def screenshot(
 
         with Image.open(out) as image:
             cropped = image.crop((0, top, image.width, image.height))
-        cropped.save(out)
+        with atomic_file(out, "wb") as fh:
+            cropped.save(fh, format="PNG")
     return out
 
 
