@@ -572,7 +572,11 @@ def write_run_files(
     try:
         csv_tmp = staged.csv.path
         digests = {csv_tmp.name: staged.csv.close()}
-        json_tmp = write_sidecar(check_metadata(metadata), tmp / f"{stem}.json")
+        json_tmp = write_sidecar(
+            check_metadata(metadata),
+            tmp / f"{stem}.json",
+            data={"samples": run.n_samples, "sha256": digests[csv_tmp.name]},
+        )
         digests[json_tmp.name] = sha256_file(json_tmp)
         digests[raw_log.name] = raw_sha256 or sha256_file(raw_log)
         manifest_tmp = tmp / f"{stem}.sha256"
