@@ -30,7 +30,7 @@ from pathlib import Path
 from typing import Any
 
 from bayestribo import __version__
-from bayestribo._files import atomic_file, fsync_folder
+from bayestribo._files import atomic_file, fsync_folder, write_text
 from bayestribo.acquisition.assembly import AssembledRun
 from bayestribo.acquisition.csvstream import StagedRun
 from bayestribo.acquisition.faults import RunInUseError, StorageError
@@ -580,12 +580,8 @@ def write_run_files(
         digests[json_tmp.name] = sha256_file(json_tmp)
         digests[raw_log.name] = raw_sha256 or sha256_file(raw_log)
         manifest_tmp = tmp / f"{stem}.sha256"
-        manifest_tmp.write_text(
-            "".join(f"{digest}  {name}\n" for name, digest in digests.items()), encoding="utf-8"
-        )
-        for path in (json_tmp, manifest_tmp):
-            with open(path, "rb") as fh:
-                os.fsync(fh.fileno())
+        # each written whole and fsync-ed (bayestribo._files)
+        write_text(manifest_tmp, "".join(f"{digest}  {name}\n" for name, digest in digests.items()))
         if before_move is not None:
             before_move(dict(digests))
         for path in (csv_tmp, json_tmp, manifest_tmp):
