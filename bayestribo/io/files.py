@@ -122,7 +122,9 @@ def read_run(
         overrides the choice by suffix.
     sidecar : bool or path
         Read the JSON sidecar with the file's stem if it exists (``True``), do not
-        (``False``), or read this sidecar file (which must exist).
+        (``False``), or read this sidecar file (which must exist). A sidecar that
+        records its data file (``data_file``: sample count and SHA-256, written by the
+        package) has the file checked against it.
     validate : bool
         Run the data checks of :func:`~bayestribo.io.validation.validate_run`.
     metadata : mapping, optional
@@ -147,6 +149,9 @@ def read_run(
     RunFormatError
         For a file or sidecar that cannot be read as its format, naming the file, line
         or field and what was expected.
+    DataFileMismatchError
+        (a ``RunFormatError``) For a file that is not the one its sidecar records (cut
+        short, or a value changed): the samples recorded and found, the checksums.
     BayestriboError
         For a keyword argument that is not an option (a misspelt ``delimeter=``, or a
         metadata key given as a keyword instead of in ``metadata=``).
