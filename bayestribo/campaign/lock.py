@@ -13,7 +13,8 @@ crashed), so there is no guessing whether a lock is stale: a lock file nobody ho
 free, and the next campaign takes it (and says whose it was). Many processes taking it
 at one instant get it one at a time: exactly one of them holds it. The owner removes the
 file while it still holds the lock; a process that took the lock of a file removed
-meanwhile sees that (the path names another file, or none) and tries again. A lock file
+meanwhile sees that (the path names another file, or none) and tries again (on Windows,
+where an open file cannot be removed, the owner empties it instead). A lock file
 naming another host is refused with the command that removes it, as that host's process
 cannot be seen from here (and a network file system may not share its locks).
 
@@ -212,7 +213,10 @@ class FolderLock:
         if fd is None:
             return
         try:
-            if remove and _same_file(fd, self.path):
+            if remove and LOCKING == "msvcrt":  # pragma: no cover - Windows
+                # an open file cannot be removed there: left empty (no owner), unlocked
+                os.ftruncate(fd, 0)
+            elif remove and _same_file(fd, self.path):
                 # removed while still held: a process waiting on this file sees that
                 self.path.unlink(missing_ok=True)
             _unlock(fd)
