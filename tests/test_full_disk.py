@@ -5,8 +5,8 @@ The disk fills after a budget of bytes: every byte the package writes from Pytho
 through :func:`os.write` (``bayestribo._files``), which is patched to write what fits and
 then fail with ``ENOSPC``; the netCDF C library, which writes by itself, is charged the
 same way (its file cut where the budget ends). Each command runs once with room to
-spare to learn the bytes it writes, then with budgets that end at its start, half way
-and one byte before its end.
+spare to learn the bytes it writes, then with budgets that end half way and one byte
+before its end (the first with a previous version of every output, the second without).
 """
 
 from __future__ import annotations
@@ -147,7 +147,11 @@ def _check(folder: Path, before: dict[str, bytes], status: int, err: str) -> Non
 
 
 def _budgets(total: int) -> Iterator[int]:
-    yield from sorted({0, total // 2, total - 1})
+    yield from sorted({total // 2, total - 1})
+
+
+def _at_start_and_end(total: int) -> Iterator[int]:
+    yield from (0, total - 1)
 
 
 def _run_full(
@@ -155,6 +159,7 @@ def _run_full(
     tmp_path: Path,
     argv: Callable[[Path], list[str]],
     prepare: Callable[[Path], None] = lambda folder: None,
+    budgets: Callable[[int], Iterator[int]] = _budgets,
 ) -> None:
     """The command's outputs once with room, then on full disks, with and without a
     previous version of each."""
@@ -165,7 +170,7 @@ def _run_full(
     assert status != 2, err
     names = set(_files(reference))
     assert names and total > 0
-    for k, budget in enumerate(_budgets(total)):
+    for k, budget in enumerate(budgets(total)):
         folder = tmp_path / f"out{k}"
         folder.mkdir()
         prepare(folder)
@@ -255,7 +260,10 @@ def test_fit_out(on_disk, campaign: tuple[Path, Path], tmp_path: Path, monkeypat
     saved = campaign[1] / "fits" / "glycerol-N0.07-r1.nc"
     monkeypatch.setattr(bayestribo.inference, "fit", lambda *a, **k: FitResult.load(saved))
     run = RUNS / "glycerol-N0.07-r1.csv"
-    _run_full(on_disk, tmp_path, lambda folder: ["fit", run, "--out", folder, "--json"])
+    # full from the first byte (in the netCDF file), and one byte before the end (in the
+    # last figure)
+    argv = ["fit", run, "--json", "--out"]
+    _run_full(on_disk, tmp_path, lambda folder: [*argv, folder], budgets=_at_start_and_end)
 
 
 _SUMMARY = {
