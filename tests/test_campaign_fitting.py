@@ -235,7 +235,7 @@ def test_a_saved_fit_that_cannot_be_read_is_fitted_again(tmp_path, capsys):
     assert [(o.ok, o.cached) for o in again] == [(True, False), (True, True)]
     assert again[0].result == first[0].result
     assert "the saved fit of a-r1 cannot be read" in capsys.readouterr().err
-    assert not [p for p in out.iterdir() if p.name.endswith(".tmp")]
+    assert not [p for p in out.iterdir() if ".tmp" in p.name]
 
 
 def test_a_fit_saved_over_by_other_settings_is_never_read_for_the_first(tmp_path, capsys):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 from pathlib import Path
 
@@ -56,7 +57,11 @@ def test_written_header_and_sidecar_follow_the_format(tmp_path: Path) -> None:
     write_run(run, tmp_path / "r.csv")
     lines = (tmp_path / "r.csv").read_text().splitlines()
     assert lines == ["time_s,velocity_m_per_s", "0.0,0.0", "0.5,-0.25", "1.0,1e-300"]
-    assert json.loads((tmp_path / "r.json").read_text()) == {"load_N": 0.0}
+    digest = hashlib.sha256((tmp_path / "r.csv").read_bytes()).hexdigest()
+    assert json.loads((tmp_path / "r.json").read_text()) == {
+        "load_N": 0.0,
+        "data_file": {"samples": 3, "sha256": digest},
+    }
 
 
 finite = st.floats(allow_nan=False, allow_infinity=False, width=64)

@@ -12,7 +12,17 @@ PACKAGE = Path(bayestribo.__file__).resolve().parent
 #: What each part of the package may import (besides itself), as drawn in
 #: docs/architecture.md. The shared bottom (errors, summary, _optional, _text, _clock,
 #: _workers) is open to all.
-BOTTOM = {"errors", "summary", "_optional", "_text", "_clock", "_workers", "_warnings", "_lazy"}
+BOTTOM = {
+    "errors",
+    "summary",
+    "_optional",
+    "_text",
+    "_clock",
+    "_workers",
+    "_warnings",
+    "_lazy",
+    "_files",
+}
 #: Every part below the top layer (cli/ and reports/).
 _BELOW_THE_TOP = (
     "model",

@@ -21,7 +21,6 @@ import json
 import os
 import platform
 import re
-import tempfile
 import threading
 import time
 from collections.abc import Callable, Mapping
@@ -31,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 from bayestribo import __version__
+from bayestribo._files import atomic_file, fsync_folder, write_text
 from bayestribo.acquisition.assembly import AssembledRun
 from bayestribo.acquisition.csvstream import StagedRun
 from bayestribo.acquisition.faults import RunInUseError, StorageError
@@ -397,19 +397,10 @@ def claim_raw_log(
 
 
 def write_json_atomic(path: str | os.PathLike[str], data: Mapping[str, Any]) -> None:
-    """Write JSON through a temporary file in the same directory and :func:`os.replace`."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            json.dump(data, fh, indent=2, sort_keys=False, allow_nan=False)
-            fh.write("\n")
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    """Write JSON whole or not at all (:func:`bayestribo._files.atomic_file`)."""
+    with atomic_file(path) as fh:
+        json.dump(data, fh, indent=2, sort_keys=False, allow_nan=False)
+        fh.write("\n")
 
 
 def run_metadata(
@@ -581,16 +572,16 @@ def write_run_files(
     try:
         csv_tmp = staged.csv.path
         digests = {csv_tmp.name: staged.csv.close()}
-        json_tmp = write_sidecar(check_metadata(metadata), tmp / f"{stem}.json")
+        json_tmp = write_sidecar(
+            check_metadata(metadata),
+            tmp / f"{stem}.json",
+            data={"samples": run.n_samples, "sha256": digests[csv_tmp.name]},
+        )
         digests[json_tmp.name] = sha256_file(json_tmp)
         digests[raw_log.name] = raw_sha256 or sha256_file(raw_log)
         manifest_tmp = tmp / f"{stem}.sha256"
-        manifest_tmp.write_text(
-            "".join(f"{digest}  {name}\n" for name, digest in digests.items()), encoding="utf-8"
-        )
-        for path in (json_tmp, manifest_tmp):
-            with open(path, "rb") as fh:
-                os.fsync(fh.fileno())
+        # each written whole and fsync-ed (bayestribo._files)
+        write_text(manifest_tmp, "".join(f"{digest}  {name}\n" for name, digest in digests.items()))
         if before_move is not None:
             before_move(dict(digests))
         for path in (csv_tmp, json_tmp, manifest_tmp):
@@ -608,13 +599,4 @@ def write_run_files(
 
 
 def _fsync_dir(directory: Path) -> None:
-    try:
-        fd = os.open(directory, os.O_RDONLY)
-    except OSError:  # pragma: no cover - platforms without directory fds
-        return
-    try:
-        os.fsync(fd)
-    except OSError:  # pragma: no cover
-        pass
-    finally:
-        os.close(fd)
+    fsync_folder(directory)

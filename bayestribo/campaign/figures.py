@@ -34,6 +34,7 @@ from typing import Any
 
 import numpy as np
 
+from bayestribo._files import atomic_file
 from bayestribo._text import literal
 from bayestribo.campaign.analysis import CampaignAnalysis
 from bayestribo.population.groups import group_words
@@ -485,7 +486,8 @@ def save_figures(
     for name, make in makers:
         fig = make(analysis)
         path = folder / f"{name}.png"
-        fig.savefig(path, dpi=120)
+        with atomic_file(path, "wb") as fh:
+            fig.savefig(fh, format="png", dpi=120)
         plt.close(fig)
         out.append(path)
     return out

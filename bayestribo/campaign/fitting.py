@@ -31,6 +31,7 @@ from typing import IO, Any
 
 import numpy as np
 
+from bayestribo._files import atomic_path
 from bayestribo._optional import require
 from bayestribo._workers import process_pool
 from bayestribo.errors import BayestriboError
@@ -599,13 +600,9 @@ def fit_catalogued(
         target = out / f"{outcome.name}.nc"
         target.parent.mkdir(parents=True, exist_ok=True)
         # written under a temporary name and renamed: the catalog never records a
-        # file that is not whole, and a kill leaves no half-written fit
-        partial = target.with_name(f".{target.name}.{os.getpid()}.tmp")
-        try:
+        # file that is not whole, and a kill or a full disk leaves no half-written fit
+        with atomic_path(target) as partial:
             outcome.result.save(partial)
-            os.replace(partial, target)
-        finally:
-            partial.unlink(missing_ok=True)
         record_fit(
             catalog,
             run=rows[i],

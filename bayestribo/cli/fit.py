@@ -22,6 +22,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from bayestribo._files import atomic_file
 from bayestribo.cli._common import add_run_arguments, read_run_from_args
 from bayestribo.cli._spec import add_spec_options, spec_from_args
 
@@ -115,6 +116,12 @@ def json_record(result: Any, prob: float = 0.95) -> dict[str, Any]:
     }
 
 
+def _save_png(fig: Any, path: Path) -> None:
+    """Write a figure as PNG, whole or not at all (:func:`bayestribo._files.atomic_file`)."""
+    with atomic_file(path, "wb") as fh:
+        fig.savefig(fh, format="png", dpi=100)
+
+
 def write_outputs(result: Any, out_dir: Path, stem: str) -> list[Path]:
     """Write ``<stem>.nc`` and the corner, trace and Π figures (PNG) into ``out_dir``.
 
@@ -142,14 +149,14 @@ def write_outputs(result: Any, out_dir: Path, stem: str) -> list[Path]:
     fig = plt.figure(figsize=(2.2 * len(names) + 1, 2.2 * len(names) + 1))
     corner_plot(result, fig)
     paths.append(out_dir / f"{stem}_corner.png")
-    fig.savefig(paths[-1], dpi=100)
+    _save_png(fig, paths[-1])
     plt.close(fig)
 
     fig, axes = plt.subplots(len(names), 1, figsize=(8, 1.6 * len(names) + 0.6), sharex=True)
     trace_plot(result, np.atleast_1d(axes))
     fig.tight_layout()
     paths.append(out_dir / f"{stem}_trace.png")
-    fig.savefig(paths[-1], dpi=100)
+    _save_png(fig, paths[-1])
     plt.close(fig)
 
     fig, axes = plt.subplots(
@@ -158,7 +165,7 @@ def write_outputs(result: Any, out_dir: Path, stem: str) -> list[Path]:
     pi_plot(result, axes)
     fig.tight_layout()
     paths.append(out_dir / f"{stem}_pi.png")
-    fig.savefig(paths[-1], dpi=100)
+    _save_png(fig, paths[-1])
     plt.close(fig)
     return paths
 

@@ -93,6 +93,27 @@ def _one_line_warning(command: str) -> Callable[..., None]:
     return show
 
 
+def disk_full_message(filename: str | os.PathLike[str] | None) -> str:
+    """What a command says when the disk is full: the file it was writing, whether that
+    file is its previous version or absent, and how to go on.
+
+    Every file the package writes goes through :mod:`bayestribo._files` (a temporary
+    name, then a rename), so a file found under the name is its previous version, whole.
+    """
+    if not filename:
+        kept = "the files written before are kept whole"
+    elif os.path.exists(filename):
+        kept = f"{filename} is its previous version, whole; the files written before are whole"
+    else:
+        kept = f"no file {filename} was made; the files written before are whole"
+    where = f" writing {filename}" if filename else ""
+    return (
+        f"no space left on the device{where}; {kept} (each file is written to a temporary "
+        "name and renamed); free some space and run the command again (a campaign reuses "
+        "the fits it finished)"
+    )
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return the process exit status.
 
@@ -124,12 +145,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if exc.errno not in (errno.ENOSPC, errno.EDQUOT):
             raise
         # a full disk: one line, what was kept, how to go on (no traceback)
-        where = f" writing {exc.filename}" if exc.filename else ""
         print(
-            f"bayestribo {args.command}: error: no space left on the device{where}; the "
-            "files written before are kept whole (each is written to a temporary name and "
-            "renamed); free some space and run the command again (a campaign reuses the "
-            "fits it finished)",
+            f"bayestribo {args.command}: error: {disk_full_message(exc.filename)}",
             file=sys.stderr,
         )
         return 2

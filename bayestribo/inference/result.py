@@ -37,6 +37,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from bayestribo._files import atomic_path
 from bayestribo.inference.priors import PriorSet
 from bayestribo.summary import ParameterSummary, check_prob
 
@@ -607,14 +608,16 @@ class FitResult:
 
     # -- files ----------------------------------------------------------------------
     def save(self, path: str | Path) -> Path:
-        """Write the InferenceData to NetCDF (``.nc``, netCDF-4/HDF5).
+        """Write the InferenceData to NetCDF (``.nc``, netCDF-4/HDF5), whole or not at
+        all (:func:`bayestribo._files.atomic_path`: a failure leaves ``path`` as it was).
 
         Written by the netCDF C library (``netCDF4``), about twice as fast as
         ``h5netcdf`` for a fit's four groups; any netCDF-4 reader (h5netcdf, xarray,
         ArviZ) reads the file.
         """
         path = Path(path)
-        self.idata.to_netcdf(str(path), engine=NETCDF_ENGINE)
+        with atomic_path(path) as partial:  # whole or not at all
+            self.idata.to_netcdf(str(partial), engine=NETCDF_ENGINE)
         return path
 
     @classmethod

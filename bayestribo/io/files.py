@@ -19,12 +19,21 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from bayestribo._files import atomic_path
 from bayestribo._warnings import warn
 from bayestribo.errors import BayestriboError, ReadingWarning, RecordingError, RunFormatError
 from bayestribo.io.options import READ_OPTIONS, ReadOptions, unknown_options
 from bayestribo.io.registry import FileFormat, format_for, registered_formats
 from bayestribo.io.run import ANGULAR, DISPLACEMENT, TIME, VELOCITY, Run
-from bayestribo.io.sidecar import read_sidecar, sidecar_path, write_sidecar
+from bayestribo.io.sidecar import (
+    DATA_FILE,
+    check_data_file,
+    data_record,
+    file_sha256,
+    read_sidecar,
+    sidecar_path,
+    write_sidecar,
+)
 from bayestribo.io.text import PREAMBLE_RATE, StatedRate, write_csv
 from bayestribo.io.validation import validate_run
 
@@ -113,7 +122,9 @@ def read_run(
         overrides the choice by suffix.
     sidecar : bool or path
         Read the JSON sidecar with the file's stem if it exists (``True``), do not
-        (``False``), or read this sidecar file (which must exist).
+        (``False``), or read this sidecar file (which must exist). A sidecar that
+        records its data file (``data_file``: sample count and SHA-256, written by the
+        package) has the file checked against it.
     validate : bool
         Run the data checks of :func:`~bayestribo.io.validation.validate_run`.
     metadata : mapping, optional
@@ -138,6 +149,9 @@ def read_run(
     RunFormatError
         For a file or sidecar that cannot be read as its format, naming the file, line
         or field and what was expected.
+    DataFileMismatchError
+        (a ``RunFormatError``) For a file that is not the one its sidecar records (cut
+        short, or a value changed): the samples recorded and found, the checksums.
     BayestriboError
         For a keyword argument that is not an option (a misspelt ``delimeter=``, or a
         metadata key given as a keyword instead of in ``metadata=``).
@@ -189,13 +203,11 @@ def _read(path: Path, opts: ReadOptions) -> Run:
                 f"{fmt.name} file",
                 where,
             )
-    signals = dict(_call_reader(fmt, path, opts))
-    stated = signals.pop(PREAMBLE_RATE, None)  # the rate a text's preamble states
-    angular = [name for name in ANGULAR if signals.get(name) is not None]
     sidecar = opts.sidecar
     metadata = opts.metadata
     validate = opts.validate
     meta: dict[str, Any] = {}
+    side = None
     if sidecar is True:
         side = sidecar_path(path)
         if side.is_file() and side != path:
@@ -205,6 +217,9 @@ def _read(path: Path, opts: ReadOptions) -> Run:
         if not side.is_file():
             raise RunFormatError("no such sidecar file; expected an existing file", str(side))
         meta.update(read_sidecar(side))
+    signals = _checked_signals(fmt, path, opts, meta.pop(DATA_FILE, None), side)
+    stated = signals.pop(PREAMBLE_RATE, None)  # the rate a text's preamble states
+    angular = [name for name in ANGULAR if signals.get(name) is not None]
     meta.update(metadata or {})
     if angular:
         signals = _as_rotation(signals, angular, meta, where)
@@ -433,6 +448,43 @@ def _check_stated_rate(time: NDArray, stated: StatedRate, where: str) -> None:
         )
 
 
+def _checked_signals(
+    fmt: FileFormat,
+    path: Path,
+    opts: ReadOptions,
+    record: Mapping[str, Any] | None,
+    side: Path | None,
+) -> dict[str, Any]:
+    """The reader's signals, the file checked against its sidecar's ``data_file`` record
+    (:func:`~bayestribo.io.sidecar.check_data_file`) when there is one.
+
+    Raises
+    ------
+    DataFileMismatchError
+        When the file is not the one the record describes (a file that the reader
+        cannot read either is named by this error, not the reader's).
+    """
+    if record is None:
+        return dict(_call_reader(fmt, path, opts))
+    digest = file_sha256(path) if "sha256" in record else None
+    intact = digest is not None and digest == record["sha256"]
+    try:
+        signals = dict(_call_reader(fmt, path, opts))
+    except BayestriboError:
+        if not intact:
+            check_data_file(path, record, None, sidecar=side, sha256=digest)
+        raise
+    if not intact:
+        check_data_file(path, record, _sample_count(signals), sidecar=side, sha256=digest)
+    return signals
+
+
+def _sample_count(signals: Mapping[str, Any]) -> int:
+    """The number of samples a reader returned: its longest column."""
+    sizes = [np.size(v) for k, v in signals.items() if k != PREAMBLE_RATE and v is not None]
+    return int(max(sizes, default=0))
+
+
 def _call_reader(fmt: FileFormat, path: Path, opts: ReadOptions) -> Mapping[str, Any]:
     """``fmt.read``, with any failure of a library it uses made the package's error.
 
@@ -520,7 +572,10 @@ def write_run(run: Run, path: str | Path) -> Path:
     Returns
     -------
     Path
-        The CSV path. ``read_run(path)`` gives a run equal to ``run``.
+        The CSV path. ``read_run(path)`` gives a run equal to ``run``. The sidecar
+        records the CSV's sample count and SHA-256 (``data_file``), which
+        :func:`read_run` checks. Both files are whole: a failure (a full disk) leaves
+        the previous pair, or none.
 
     Raises
     ------
@@ -532,6 +587,9 @@ def write_run(run: Run, path: str | Path) -> Path:
         raise RunFormatError(
             f"the canonical run file is a .csv file; got suffix {path.suffix!r}", str(path)
         )
-    write_csv(run.signals, path)
-    write_sidecar(run.metadata, sidecar_path(path))
+    # both written in full under temporary names before either is renamed into place
+    # (the CSV first): a failure leaves the previous pair, or none
+    with atomic_path(sidecar_path(path)) as side, atomic_path(path) as csv:
+        write_csv(run.signals, csv)
+        write_sidecar(run.metadata, side, data=data_record(csv, run.n_samples))
     return path

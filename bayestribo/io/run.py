@@ -194,8 +194,48 @@ METADATA_KEYS: Mapping[str, _Key] = MappingProxyType(
         "fault": _Key("plain", "the acquisition's fault, if any"),
         "gaps": _Key("plain", "gaps in the acquisition's samples"),
         "samples_missing": _Key("plain", "samples the acquisition did not receive"),
+        "data_file": _Key(
+            "plain",
+            "the data file as written (by the package): {'samples': its sample count, "
+            "'sha256': its SHA-256}; a file that no longer matches is refused when read",
+            check=lambda value, key, where: _data_file(value, key, where),
+        ),
     }
 )
+
+
+def _data_file(value: Any, key: str, where: str | None) -> dict[str, Any]:
+    """Check a ``data_file`` value: ``samples`` (an integer >= 0) and ``sha256`` (64
+    hexadecimal digits), either or both, nothing else."""
+    if not isinstance(value, Mapping) or not value:
+        raise RunFormatError(
+            f"metadata {key!r}: expected {{'samples': N, 'sha256': '64 hex digits'}}, got "
+            f"{_shown(value)}",
+            where,
+        )
+    extra = sorted(set(value) - {"samples", "sha256"})
+    if extra:
+        raise RunFormatError(
+            f"metadata {key!r}: unknown field(s) {extra}; expected 'samples' and 'sha256'", where
+        )
+    samples = value.get("samples")
+    if samples is not None and (
+        isinstance(samples, bool) or not isinstance(samples, int) or samples < 0
+    ):
+        raise RunFormatError(
+            f"metadata '{key}.samples': expected an integer >= 0, got {_shown(samples)}", where
+        )
+    digest = value.get("sha256")
+    if digest is not None and not (
+        isinstance(digest, str)
+        and len(digest) == 64
+        and all(c in "0123456789abcdef" for c in digest.lower())
+    ):
+        raise RunFormatError(
+            f"metadata '{key}.sha256': expected 64 hexadecimal digits, got {_shown(digest)}",
+            where,
+        )
+    return {k: (v.lower() if k == "sha256" else v) for k, v in value.items() if v is not None}
 
 
 def _restoring(value: Any, key: str, where: str | None) -> str:

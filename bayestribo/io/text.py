@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from bayestribo._files import write_text
 from bayestribo._warnings import warn
 from bayestribo.errors import ReadingWarning, RunFormatError
 from bayestribo.io import bulk_text
@@ -1275,5 +1276,5 @@ def write_csv(signals: Mapping[str, NDArray], path: str | Path) -> Path:
     names = [name for name in COLUMNS if signals.get(name) is not None]
     columns = [np.asarray(signals[name], dtype=np.float64).tolist() for name in names]
     body = "\n".join(",".join(map(repr, row)) for row in zip(*columns, strict=True))
-    path.write_text(",".join(names) + "\n" + body + "\n", encoding="utf-8")
+    write_text(path, ",".join(names) + "\n" + body + "\n")
     return path

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from bayestribo._files import atomic_path
 from bayestribo.reports._errors import ReportError
 
 __all__ = ["PageInspection", "find_chromium", "inspect_report", "main", "screenshot"]
@@ -348,26 +349,31 @@ def screenshot(
     exe = _chromium(executable)
     out = Path(png).resolve()
     out.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(prefix="bayestribo-chromium-") as profile:
+    # Chromium writes a temporary beside it, renamed into place once whole (and cropped)
+    with (
+        atomic_path(out) as shot,
+        tempfile.TemporaryDirectory(prefix="bayestribo-chromium-") as profile,
+    ):
+        shot.unlink()  # Chromium's own file, or none if it fails
         proc = _run(
             [
                 exe,
                 *_FLAGS,
                 f"--user-data-dir={profile}",
                 f"--window-size={width},{top + height}",
-                f"--screenshot={out}",
+                f"--screenshot={shot}",
                 Path(html).resolve().as_uri(),
             ],
             timeout,
         )
-    if not out.is_file():
-        raise ReportError(f"Chromium wrote no screenshot (exit {proc.returncode})")
-    if top > 0:
-        from PIL import Image  # pillow comes with matplotlib
+        if not shot.is_file():
+            raise ReportError(f"Chromium wrote no screenshot (exit {proc.returncode})")
+        if top > 0:
+            from PIL import Image  # pillow comes with matplotlib
 
-        with Image.open(out) as image:
-            cropped = image.crop((0, top, image.width, image.height))
-        cropped.save(out)
+            with Image.open(shot) as image:
+                cropped = image.crop((0, top, image.width, image.height))
+            cropped.save(shot, format="PNG")
     return out
 
 

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import hashlib
 import html
+import json
 import platform
 import re
 import warnings
@@ -25,6 +26,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
+from bayestribo._files import atomic_file, write_text
 from bayestribo.reports._errors import ReportError
 from bayestribo.reports.html import NOTE_CLASS
 
@@ -46,6 +48,7 @@ __all__ = [
     "small_texts",
     "table",
     "verdict",
+    "write_summary",
 ]
 
 #: Formats a report's figures can be written in (``--figure-format``).
@@ -255,7 +258,8 @@ def setup(figure_dir: str | None, figure_format: str = "png") -> Callable[[Any, 
             if found:
                 note(plain_symbols(f"figure {name}: {problem}: {'; '.join(found[:3])}"))
         if folder is not None:
-            fig.savefig(folder / f"{name}.{figure_format}", bbox_inches="tight")
+            with atomic_file(folder / f"{name}.{figure_format}", "wb") as fh:
+                fig.savefig(fh, format=figure_format, bbox_inches="tight")
 
     return save
 
@@ -401,6 +405,26 @@ def overlapping_labels(fig: Any) -> list[str]:
             ):
                 found.append(f"{a.get_text()!r} ({wa}) and {b.get_text()!r} ({wb})")
     return found
+
+
+def write_summary(path: str | Path, record: Mapping[str, Any]) -> Path:
+    """Write a report's summary as JSON, whole or not at all (its folder is created).
+
+    Parameters
+    ----------
+    path : str or Path
+        The ``.json`` file (a report's ``summary_path``).
+    record : mapping
+        The summary; a value JSON cannot hold is written as its text (``str``).
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return write_text(path, json.dumps(record, indent=2, default=str))
 
 
 def file_sha256(path: str | Path) -> str:

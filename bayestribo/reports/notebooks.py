@@ -31,6 +31,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from bayestribo._files import atomic_file, write_text
 from bayestribo._optional import require
 from bayestribo.reports import html as _html
 from bayestribo.reports._errors import ReportError
@@ -365,9 +366,10 @@ def run_report(
     execute_notebook(nb, cwd=cwd, timeout=timeout)
     if executed is not None:
         Path(executed).parent.mkdir(parents=True, exist_ok=True)
-        nbformat.write(nb, str(executed))
+        with atomic_file(executed) as fh:
+            nbformat.write(nb, fh)
     if html is not None:
         out = Path(html)
         out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(to_html(nb, show_code=show_code, hide_code=hide_code), encoding="utf-8")
+        write_text(out, to_html(nb, show_code=show_code, hide_code=hide_code))
     return nb

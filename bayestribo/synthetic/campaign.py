@@ -45,6 +45,7 @@ from typing import Any
 
 import numpy as np
 
+from bayestribo._files import atomic_file
 from bayestribo.io.run import Run
 from bayestribo.model.scaling import Rig
 from bayestribo.model.viscosity import glycerol_water_viscosity
@@ -289,7 +290,7 @@ def write_campaign(directory: str | Path, seed: int = CAMPAIGN_SEED) -> Path:
         write_run(run, directory / file)
         rows.append(_manifest_row(planned, run, file))
     manifest = directory / "manifest.csv"
-    with manifest.open("w", newline="", encoding="utf-8") as fh:
+    with atomic_file(manifest) as fh:
         writer = csv.DictWriter(fh, fieldnames=MANIFEST_COLUMNS, lineterminator="\n")
         writer.writeheader()
         writer.writerows(rows)

@@ -55,6 +55,7 @@ from functools import cache
 from pathlib import Path
 from types import ModuleType
 
+from bayestribo._files import write_text
 from bayestribo.model.laws import _core
 
 __all__ = ["DEFAULT_STEPS", "LADDER", "law_cache_dir", "make_integrator"]
@@ -162,9 +163,7 @@ def _load(text: str, forces: list, cacheable: bool) -> ModuleType:
     if not path.is_file() or path.read_text(encoding="utf-8") != text:
         # written whole under another name, then renamed: a concurrent process
         # reads either no file or the whole one
-        tmp = folder / f".{name}.{os.getpid()}.tmp"
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, path)
+        write_text(path, text)
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)  # type: ignore[arg-type]
     if not cacheable:
