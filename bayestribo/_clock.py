@@ -25,8 +25,10 @@ leave the stamps on the grid with whole steps missing: :func:`timeline` finds th
 grid and the gaps, and :func:`bridge_gaps` fills each gap of at most
 :data:`GAP_LIMIT` of a period with the cubic through its neighbours, where the cubic's
 error bound is within the noise; the analysis says which samples it bridged
-(:class:`~bayestribo.errors.GapWarning`). A longer gap, or a clock that restarts, is
-refused with the samples and times, and the advice to fit the parts separately.
+(:class:`~bayestribo.errors.GapWarning`). A longer gap is refused with the samples
+and times, and the advice to fit the parts separately. A clock that restarts (the
+stamps fall back and go on) is put on one clock before any of this
+(:mod:`bayestribo.signal.restarts`).
 """
 
 from __future__ import annotations

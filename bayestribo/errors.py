@@ -11,6 +11,7 @@ from __future__ import annotations
 __all__ = [
     "AcquisitionError",
     "BayestriboError",
+    "ClockRestartWarning",
     "ConvergenceWarning",
     "FrequencyTrendWarning",
     "GapWarning",
@@ -103,6 +104,12 @@ class GapWarning(UserWarning):
     """Samples were missing from a recording's clock and the gaps were bridged on the
     regular grid (the message names each gap: after which sample, how many samples, and
     the interpolation's error bound against the noise)."""
+
+
+class ClockRestartWarning(UserWarning):
+    """A recording's time stamps restart and the signal goes on smoothly across: the
+    stamps after the restart were continued by one sample step (the message names the
+    sample and the stamps)."""
 
 
 class SpikeWarning(UserWarning):

@@ -189,7 +189,11 @@ def run(args: argparse.Namespace) -> int:
 
     check_prob(args.prob)  # before the fit, not after it
     spec = spec_from_args(args, "fit")
-    recording = read_run_from_args(args, spec.reading())
+    with warnings.catch_warnings(record=True) as read:
+        warnings.simplefilter("always")
+        recording = read_run_from_args(args, spec.reading())
+    for w in read:  # told at once; counted with the fit's below (e.g. samples left out)
+        warnings.showwarning(w.message, w.category, w.filename, w.lineno)
     # the fitting machinery (numba, emcee, scipy) only once the input is good: a bad
     # option or file is told at once
     from bayestribo.cli._imports import import_module
@@ -238,5 +242,5 @@ def run(args: argparse.Namespace) -> int:
     sys.stdout.flush()
     # 1 when something is not right: not converged, a posterior on a prior bound, or a
     # misfit the intervals do not carry (the README's exit-status rule).
-    misfit = any(issubclass(w.category, MisfitWarning) for w in caught)
+    misfit = any(issubclass(w.category, MisfitWarning) for w in [*read, *caught])
     return 0 if result.usable and not misfit else 1

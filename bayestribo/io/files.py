@@ -35,7 +35,7 @@ from bayestribo.io.sidecar import (
     write_sidecar,
 )
 from bayestribo.io.text import PREAMBLE_RATE, StatedRate, write_csv
-from bayestribo.io.validation import validate_run
+from bayestribo.io.validation import on_one_clock, validate_run
 
 __all__ = ["READ_OPTIONS", "ReadOptions", "as_run", "format_of", "read_run", "write_run"]
 
@@ -247,6 +247,7 @@ def _read(path: Path, opts: ReadOptions) -> Run:
         source=where,
     )
     del signals  # the reader's arrays: the run holds its own copies
+    run = on_one_clock(run)  # a clock that restarts within the record, continued or cut
     if opts.window is not None:
         run = _windowed(run, opts.window, where)
     if validate:
@@ -551,7 +552,7 @@ def as_run(
                 f"reading options {sorted(given)} apply to a file, but run is "
                 "already a Run; read the file with these options, or drop them"
             )
-        return run
+        return on_one_clock(run)
     if isinstance(run, str | os.PathLike):
         return _read(Path(run), opts)
     raise BayestriboError(

@@ -30,7 +30,10 @@ expected at the first problem found:
 6. a run in metres moves as a rig does: its swing and frequency are plausible
    (:func:`bayestribo.signal.channels.check_plausible_motion`).
 
-Nothing is repaired, clipped or dropped: a run either passes unchanged or fails.
+Nothing is repaired, clipped or dropped: a run either passes unchanged or fails. A
+run whose clock restarts within the record is judged as the analysis will see it, on
+one clock (:func:`on_one_clock`: continued where the signal goes on smoothly across
+the restart, cut where it jumps, and said).
 """
 
 from __future__ import annotations
@@ -38,7 +41,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from bayestribo._warnings import moved
+from bayestribo._warnings import moved, warn
 from bayestribo.errors import RecordingError
 from bayestribo.io.run import DISPLACEMENT, TIME, VELOCITY, Run
 from bayestribo.signal.channels import check_channels, check_plausible_motion
@@ -51,6 +54,7 @@ __all__ = [
     "MIN_SAMPLES",
     "TIME_RTOL",
     "check_channels",
+    "on_one_clock",
     "validate_run",
 ]
 
@@ -302,9 +306,58 @@ def validate_run(
             "samples for a decay analysis",
             where,
         )
+    given = run
+    run = on_one_clock(run, say=False)  # the clock the analysis will see
     _check_time(run, where, time_rtol)
     _check_restoring(run, where)
     _check_clipping(run, where, clip_samples)
     check_channels(run, where)
     check_plausible_motion(run, where)
-    return run
+    return given
+
+
+def on_one_clock(run: Run, *, say: bool = True) -> Run:
+    """The run on one clock when its time stamps restart within the record.
+
+    A restart across which the signal goes on smoothly is continued (the stamps after
+    it follow the one before by a sample step); at one across which the signal jumps,
+    the run is cut and the samples from it on are left out
+    (:mod:`bayestribo.signal.restarts`). Every check and analysis of the run then sees
+    one clock; a run whose stamps never fall is returned as it is.
+
+    Parameters
+    ----------
+    run : Run
+        The run as recorded.
+    say : bool
+        Warn what was done: :class:`~bayestribo.errors.ClockRestartWarning` for a
+        continued clock, :class:`~bayestribo.signal.coverage.ShortAnalysisWarning` (exit
+        status 1) when samples were left out.
+
+    Returns
+    -------
+    Run
+    """
+    from bayestribo.errors import ClockRestartWarning
+    from bayestribo.signal.coverage import ShortAnalysisWarning
+    from bayestribo.signal.restarts import continue_clock
+
+    t, x, v, restarted, cut = continue_clock(run.time, run.displacement, run.velocity)
+    if not restarted:
+        return run
+    where = f"{run.source}: " if run.source else ""
+    said = "; ".join(r.describe() for r in restarted)
+    if say and cut is not None:
+        warn(
+            f"{where}{said}: only samples 0 to {cut - 1} (the part holding the release) "
+            f"are analysed and samples {cut} to {run.n_samples - 1} were left out (save "
+            "them as a record of their own to fit them)",
+            ShortAnalysisWarning,
+        )
+    elif say:
+        warn(
+            f"{where}{said} (this assumes no sample was lost at the restart; times after "
+            "it, --window included, are on the continued clock)",
+            ClockRestartWarning,
+        )
+    return Run(t, x, v, dict(run.metadata), source=run.source)

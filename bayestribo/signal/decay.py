@@ -79,7 +79,7 @@ from scipy.integrate import cumulative_trapezoid
 
 from bayestribo._clock import clock, on_grid
 from bayestribo._warnings import warn
-from bayestribo.errors import ClippingWarning, GapWarning, RecordingError
+from bayestribo.errors import ClippingWarning, ClockRestartWarning, GapWarning, RecordingError
 from bayestribo.model.plausible import MAX_SPEED
 from bayestribo.model.scaling import Rig, Scaling
 from bayestribo.signal.clipping import flattened_turning_points, hard_clips
@@ -95,6 +95,7 @@ from bayestribo.signal.motion import (
 from bayestribo.signal.peaks import Peaks, estimate_noise, estimate_offset, find_peaks
 from bayestribo.signal.period import dominant_period, sample_step
 from bayestribo.signal.quantisation import QUANTISATION_NOISE_FACTOR, quantisation_step
+from bayestribo.signal.restarts import continue_clock
 from bayestribo.signal.spectrum import NoiseSpectrum, RestNoise, fit_line, noise_spectrum
 from bayestribo.signal.spikes import SpikeWarning, bridged, describe, find_spikes
 
@@ -870,6 +871,25 @@ def energy_decay(
         does not decay".
     """
     stamps = np.asarray(t, dtype=float)
+    # a clock that restarts: continued where the signal is contiguous, cut where it
+    # jumps, and said (signal/restarts.py)
+    stamps, displacement, velocity, restarted, cut = continue_clock(
+        stamps, displacement, velocity
+    )
+    if cut is not None:
+        warn(
+            "; ".join(r.describe() for r in restarted)
+            + f": only samples 0 to {cut - 1} (the part holding the release) are analysed; "
+            f"the samples from {cut} on were left out (save them as a record of their own "
+            "to fit them)",
+            ShortAnalysisWarning,
+        )
+    elif restarted:
+        warn(
+            "; ".join(r.describe() for r in restarted)
+            + " (the continuation assumes no sample was lost at the restart)",
+            ClockRestartWarning,
+        )
     # samples missing from a regular clock: bridged on the grid, and said (_clock.py)
     stamps, displacement, velocity, gaps = on_grid(stamps, displacement, velocity)
     if gaps:
