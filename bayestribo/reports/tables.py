@@ -29,7 +29,11 @@ __all__ = [
     "method_text",
     "normal_interval",
     "physical_symbols",
+    "prior_sd_ratio",
+    "probability_text",
     "prose",
+    "quantiles_text",
+    "quantity_text",
     "share_text",
     "unit_text",
     "windows_frame",
@@ -67,6 +71,19 @@ _HIDDEN = ("y0", "mu_s_ratio")
 
 #: Quantiles of a 95 % normal interval, in standard errors.
 _Z95 = 1.959963984540054
+
+#: A posterior whose standard deviation is at least this fraction of its prior's is flat
+#: over the prior: the data do not constrain the quantity, and it is shown as a bound
+#: (:func:`quantity_text`), not as a measurement.
+FLAT_SD_RATIO = 0.8
+
+#: Reported quantities whose spread is set by another sampled parameter: μ_s = (μ_s/μ_k)
+#: μ_k, and the static friction's displacement and torque with it.
+_SPREAD_OF = {
+    "mu_s": "mu_s_ratio",
+    "static_friction_displacement": "mu_s_ratio",
+    "static_friction_torque": "mu_s_ratio",
+}
 
 
 def law_text(law: str) -> str:
@@ -219,6 +236,94 @@ def normal_interval(value: float | None, se: float | None, *, positive: bool = F
     return interval_text(value, low, high)
 
 
+def probability_text(p: float | None) -> str:
+    """A probability in three decimals, ``< 0.001`` and ``> 0.999`` at its ends (a sign
+    probability of 1 from a few thousand draws is not certainty: "P = 1.000" is not said).
+
+    Examples
+    --------
+    >>> probability_text(1.0), probability_text(0.4567), probability_text(0.0)
+    ('> 0.999', '0.457', '< 0.001')
+    """
+    if p is None or not math.isfinite(p):
+        return "–"
+    if p < 1e-3:
+        return "< 0.001"
+    if p > 0.999:
+        return "> 0.999"
+    return f"{p:.3f}"
+
+
+def quantiles_text(samples: Any, prob: float = 0.95) -> str:
+    """Draws as ``median [low, high]``, the equal-tailed ``prob`` interval, in the digits
+    it supports (:func:`bayestribo.summary.interval_text`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> quantiles_text(np.linspace(0.02, 0.03, 1001))
+    '0.0250 [0.0203, 0.0297]'
+    """
+    import numpy as np
+
+    x = np.asarray(samples, dtype=float).ravel()
+    if x.size == 0:
+        return "–"
+    lo, mid, hi = np.quantile(x, [(1 - prob) / 2, 0.5, (1 + prob) / 2])
+    return interval_text(float(mid), float(lo), float(hi))
+
+
+def prior_sd_ratio(result: Any, name: str) -> float | None:
+    """The posterior's standard deviation over the prior's, of the sampled parameter that
+    sets the spread of ``name`` (μ_s: μ_s/μ_k); None where it has no prior of its own (a
+    physical quantity derived from several).
+
+    From the fit's prior contraction 1 - var_post/var_prior
+    (:func:`bayestribo.inference.sensitivity.prior_sensitivity`) where recorded, else from
+    the priors and the draws.
+    """
+    import numpy as np
+
+    sampled = _SPREAD_OF.get(name, name)
+    contraction = ((getattr(result, "prior_sensitivity", None) or {}).get(sampled) or {}).get(
+        "contraction"
+    )
+    if contraction is not None and math.isfinite(contraction):
+        return math.sqrt(max(1.0 - contraction, 0.0))
+    try:
+        prior = result.priors[sampled]
+        draws = np.asarray(result.samples(sampled), dtype=float).ravel()
+    except (KeyError, ValueError, AttributeError):
+        return None
+    prior_sd = float(np.std(prior.sample(np.random.default_rng(0), 20_000)))
+    return float(np.std(draws, ddof=1)) / prior_sd if prior_sd > 0 and draws.size > 1 else None
+
+
+def quantity_text(result: Any, name: str, summary: Any) -> str:
+    """One quantity of a fit as a reader should read it: ``mean [low, high]`` in the
+    digits the interval supports, or, where its posterior is flat over its prior (sd at
+    least :data:`FLAT_SD_RATIO` of the prior's, :func:`prior_sd_ratio`), a bound: ``not
+    constrained by the data: μ_s < 0.082 (its prior's range)``, the upper end of its
+    interval in two digits.
+
+    Parameters
+    ----------
+    result : FitResult
+    name : str
+        The quantity's name in the fit.
+    summary : ParameterSummary
+        Its summary (``result.summary(prob)[name]``).
+    """
+    ratio = prior_sd_ratio(result, name)
+    if ratio is not None and ratio >= FLAT_SD_RATIO:
+        symbol = _symbols(result).get(name, name)
+        return (
+            f"not constrained by the data: {symbol} < {summary.high:.2g} (its prior's range; "
+            f"posterior sd {ratio:.2f} × the prior's)"
+        )
+    return interval_text(summary.mean, *summary.interval)
+
+
 def share_text(share: float | None) -> str:
     """A share between 0 and 1 in three digits, ``< 0.001`` and ``> 0.999`` at its ends
     (a least-squares share of 4e-16 is zero at the precision of any estimate).
@@ -292,7 +397,7 @@ def fit_frame(
         rows.append(
             {
                 "quantity": symbols.get(name, name),
-                column: interval_text(s.mean, *s.interval),
+                column: quantity_text(result, name, s),
                 "unit": unit_text(units.get(name)),
             }
         )
