@@ -649,15 +649,23 @@ def plot_dissipation(
     axes = _panels(fig, n)
     for ax, (label, runs) in zip(axes, shown.items(), strict=False):
         units = {str(bands[r].get("unit")) for r in runs}
+        drawn = []
         for k, run in enumerate(runs):
             band = bands[run]
             amps = np.asarray(band["amplitude"], dtype=float)
             lo, hi = (np.asarray(side, dtype=float) for side in band["interval"])
             mean = np.asarray(band["mean"], dtype=float)
-            keep = (amps > 0) & (lo > 0) & (hi > 0) & (mean > 0)
+            keep = (amps > 0) & (hi > 0) & (mean > 0)
             colour = f"C{k % 10}"
-            ax.fill_between(amps[keep], lo[keep], hi[keep], color=colour, alpha=0.2, lw=0)
+            # ΔE is never negative: a lower end at or below zero is at its bound, drawn
+            # down to the axis' bottom (a log axis has no zero), not left out
+            floor = np.where(lo > 0, lo, np.min(mean[keep], initial=np.inf) * 1e-3)
+            ax.fill_between(amps[keep], floor[keep], hi[keep], color=colour, alpha=0.2, lw=0)
             ax.plot(amps[keep], mean[keep], "-", color=colour, lw=1.2, label=literal(run))
+            drawn += [mean[keep], hi[keep]]
+        values = np.concatenate(drawn) if drawn else np.array([])
+        if values.size:  # the values' decades: a band at zero runs to the bottom
+            ax.set_ylim(values.min() / 3.0, values.max() * 1.5)
         if at.get(label) is not None:
             ax.axvline(at[label], color="0.4", ls=":", lw=1)
         ax.set_yscale("log")

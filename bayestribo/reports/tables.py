@@ -27,6 +27,7 @@ __all__ = [
     "fit_frame",
     "law_text",
     "method_text",
+    "nonnegative_text",
     "normal_interval",
     "physical_symbols",
     "prior_sd_ratio",
@@ -252,6 +253,24 @@ def probability_text(p: float | None) -> str:
     if p > 0.999:
         return "> 0.999"
     return f"{p:.3f}"
+
+
+def nonnegative_text(name: str, center: float, low: float, high: float) -> str:
+    """``center [low, high]`` of a quantity by name, in the digits the interval supports;
+    an energy lost per cycle (``ΔE(A=...)``, the law-free comparison across runs) held at
+    zero below: a free decay never gains energy, so an interval of a population mean
+    that reaches below zero is at its bound there.
+
+    Examples
+    --------
+    >>> nonnegative_text("ΔE(A=1e-04 m)", 2e-07, -1e-07, 5e-07)
+    '0 (at the bound) [0, 5.0e-07]'
+    >>> nonnegative_text("zeta", 0.0236, 0.0230, 0.0242)
+    '0.02360 [0.02300, 0.02420]'
+    """
+    if str(name).startswith("ΔE("):
+        center, low = max(center, 0.0), max(low, 0.0)
+    return interval_text(center, low, high)
 
 
 def quantiles_text(samples: Any, prob: float = 0.95) -> str:
