@@ -19,6 +19,7 @@ from pathlib import Path
 
 import pytest
 from _paths import APPSTAT, REPO
+from _report_numbers import unmatched
 
 from bayestribo import DEFAULT_SEED
 
@@ -330,6 +331,13 @@ def test_notebook_executes_with_test_parameters(name, tmp_path):
         assert "6. The glycerol–water series" in text and "against viscosity" in text
     if name == "real_data":
         record = json.loads(summary.read_text())
+        # every value with its interval in the answer and the fits' section is the fit's
+        # own (as `fit --json` writes it), x_c/A₀ by the recording's first amplitude
+        scales = [1.0, *(1.0 / r["A₀ [signal unit]"] for r in record["overview"])]
+        not_fitted = {r["recording"] for r in record["overview"]} - set(record["fits"])
+        for title in ("The answer", "3. Bayesian fits"):
+            part = _section(text, title)
+            assert unmatched(part, record["fits"], scales=scales, skip_columns=not_fitted) == []
         verdict = {r["recording"]: r["dominated by"] for r in record["verdict"]}
         # HarmOsc3 slides on a metal plate: dry friction dissipates the energy.
         assert verdict == {"HarmOsc3": "friction"}

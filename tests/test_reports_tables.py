@@ -86,3 +86,64 @@ def test_estimators_that_ignore_friction_are_labelled_so():
     assert "logarithmic decrement (x), ignores friction" in labels
     assert "exponential envelope (x), ignores friction" in labels
     assert "least squares on Π, exact model" in labels  # it models friction
+
+
+class _Fit:
+    """A fit with one sampled parameter: uniform prior on [0, 1], posterior draws given."""
+
+    law = "viscous+coulomb"
+
+    def __init__(self, draws):
+        import numpy as np
+
+        from bayestribo.inference.priors import PriorSet, Uniform
+
+        self.symbols, self.prior_sensitivity = {}, {}
+        self._draws = np.asarray(draws, dtype=float)
+        self.priors = PriorSet({"mu_s_ratio": Uniform(0.0, 1.0)})
+
+    def samples(self, name):
+        return self._draws
+
+
+def _summary(draws):
+    from bayestribo.summary import ParameterSummary
+
+    return ParameterSummary.from_samples(draws)
+
+
+def test_a_posterior_flat_over_its_prior_is_shown_as_a_bound_not_a_measurement():
+    import numpy as np
+
+    rng = np.random.default_rng(1)
+    flat = rng.uniform(0.0, 1.0, 4000)  # the prior itself: sd ratio 1
+    text = tables.quantity_text(_Fit(flat), "mu_s", _summary(flat))
+    assert text.startswith("not constrained by the data: μ_s < ")
+    assert f"< {np.quantile(flat, 0.975):.2g} " in text
+    # a posterior that the data narrow (sd ratio 0.1) is a measurement in the digit rule
+    narrow = rng.normal(0.5, 0.029, 4000)
+    s = _summary(narrow)
+    assert tables.quantity_text(_Fit(narrow), "mu_s", s) == tables.interval_text(
+        s.mean, *s.interval
+    )
+
+
+def test_the_flat_test_reads_the_fits_recorded_contraction_where_there_is_one():
+    fit = _Fit([0.1, 0.2, 0.3])
+    fit.prior_sensitivity = {"mu_s_ratio": {"contraction": 1 - 0.8**2}}  # sd ratio 0.8
+    assert tables.prior_sd_ratio(fit, "mu_s") == pytest.approx(0.8)
+    fit.prior_sensitivity = {"mu_s_ratio": {"contraction": 0.99}}
+    assert tables.prior_sd_ratio(fit, "mu_s") == pytest.approx(0.1)
+    assert tables.prior_sd_ratio(fit, "no_such_quantity") is None
+
+
+@pytest.mark.parametrize(
+    ("p", "text"), [(1.0, "> 0.999"), (0.9996, "> 0.999"), (0.0, "< 0.001"), (0.5, "0.500")]
+)
+def test_a_probability_at_its_end_is_not_said_as_certainty(p, text):
+    assert tables.probability_text(p) == text
+
+
+def test_an_energy_per_cycle_is_held_at_zero_below_and_other_quantities_are_not():
+    assert tables.nonnegative_text("ΔE(A=1e-04 m)", 1e-7, -3e-7, 6e-7).startswith("0 (at the")
+    assert "-" in tables.nonnegative_text("slope", 1e-7, -3e-7, 6e-7)
