@@ -18,7 +18,15 @@ from typing import Any
 
 from bayestribo.summary import interval_text
 
-__all__ = ["BOUND", "INTERVAL", "interval_cells", "json_intervals", "section", "unmatched"]
+__all__ = [
+    "BOUND",
+    "INTERVAL",
+    "interval_cells",
+    "json_intervals",
+    "section",
+    "table_cells",
+    "unmatched",
+]
 
 _NUMBER = r"-?(?:\d+(?:\.\d*)?|\.\d+)(?:e[+-]?\d+)?"
 #: A cell that is a value with its interval, in one of the digit rule's forms.
@@ -33,31 +41,47 @@ BOUND = re.compile(rf"^not constrained by the data: \S+ < ({_NUMBER}) ")
 
 
 class _Tables(HTMLParser):
-    """Every table cell's text with the heading of its column (the table's first row)."""
+    """Every table cell's text with the heading of its column (the table's first row);
+    a cell spanning rows (a grouped index) holds its column in the rows below it."""
 
     def __init__(self) -> None:
         super().__init__()
         self.cells: list[tuple[str, str, str]] = []
         self._cell: list[str] | None = None
         self._columns: list[str] = []
-        self._row: list[str] = []
+        self._row: dict[int, str] = {}
+        self._spans: dict[int, int] = {}  # column -> rows it is still held in
+        self._span = 1
         self._first = False
+
+    def _free(self) -> int:
+        """The next column of the row not held by a cell spanning rows above."""
+        i = 0
+        while i in self._row or self._spans.get(i, 0) > 0:
+            i += 1
+        return i
 
     def handle_starttag(self, tag: str, attrs: Any) -> None:
         if tag == "table":
-            self._columns, self._first = [], True
+            self._columns, self._first, self._spans = [], True, {}
         elif tag == "tr":
-            self._row = []
+            self._row = {}
         elif tag in ("td", "th"):
             self._cell = []
+            self._span = int(dict(attrs).get("rowspan") or 1)
 
     def handle_endtag(self, tag: str) -> None:
-        if tag == "tr" and self._first:
-            self._columns, self._first = list(self._row), False
+        if tag == "tr":
+            if self._first:
+                self._columns = [self._row[i] for i in sorted(self._row)]
+                self._first = False
+            self._spans = {i: n - 1 for i, n in self._spans.items() if n > 1}
         elif tag in ("td", "th") and self._cell is not None:
             text = " ".join("".join(self._cell).split())
-            i = len(self._row)
-            self._row.append(text)
+            i = self._free()
+            self._row[i] = text
+            if self._span > 1:
+                self._spans[i] = self._span
             column = self._columns[i] if i < len(self._columns) else ""
             self.cells.append((text, column, " | ".join(self._columns)))
             self._cell = None
@@ -74,12 +98,18 @@ def section(page: str, title: str) -> str:
     return page[heads[start] : heads[start + 1] if start + 1 < len(heads) else len(page)]
 
 
+def table_cells(page: str) -> list[tuple[str, str, str]]:
+    """Every table cell of ``page``: its text, the heading of its column and the table's
+    first row (its headings)."""
+    parser = _Tables()
+    parser.feed(page)
+    return parser.cells
+
+
 def interval_cells(page: str) -> list[tuple[str, str, str]]:
     """Every table cell of ``page`` that is a value with its interval: the cell, the
     heading of its column and the table's first row (its headings)."""
-    parser = _Tables()
-    parser.feed(page)
-    return [cell for cell in parser.cells if INTERVAL.match(cell[0]) or BOUND.match(cell[0])]
+    return [c for c in table_cells(page) if INTERVAL.match(c[0]) or BOUND.match(c[0])]
 
 
 def _triples(node: Any) -> Iterator[tuple[float, float, float]]:
