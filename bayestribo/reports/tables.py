@@ -14,7 +14,7 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-from bayestribo.summary import interval_text
+from bayestribo.summary import NUMERICAL_ZERO, interval_text
 
 __all__ = [
     "METHOD_NAMES",
@@ -226,11 +226,14 @@ def normal_interval(value: float | None, se: float | None, *, positive: bool = F
     '0.02360 [0.02340, 0.02380]'
     >>> normal_interval(3.97e-19, 4.2e-05, positive=True)
     '0 (at the bound) [0, 8.2e-05]'
+    >>> normal_interval(9.31e-26, None), normal_interval(0.0236, None)
+    ('0', '0.0236')
     """
     if value is None or not math.isfinite(value):
         return "–"
     if se is None or not math.isfinite(se) or se <= 0:
-        return f"{value:.3g}"
+        # a numerical zero (a least-squares ζ of 9.3e-26 at its bound) is zero, not a value
+        return "0" if abs(value) < NUMERICAL_ZERO else f"{value:.3g}"
     low, high = value - _Z95 * se, value + _Z95 * se
     if positive and low < 0.0 < high:
         return interval_text(max(value, 0.0), 0.0, high)
