@@ -142,7 +142,14 @@ class SplitHalves:
         parts = []
         for name in self.parameters:
             rel = self.relative[name]
-            rel_text = f"{100 * rel:+.2g} %, " if math.isfinite(rel) else ""
+            percent = 100 * rel  # whole percent from 10 % on: "+200 %", not "+2e+02 %"
+            rel_text = (
+                ""
+                if not math.isfinite(rel)
+                else f"{percent:+.0f} %, "
+                if abs(percent) >= 10
+                else f"{percent:+.2g} %, "
+            )
             shown = [  # each half in the digits its interval supports (a zero as zero)
                 interval_text(getattr(h, name), *getattr(h, f"{name}_interval"))
                 for h in (self.first, self.second)

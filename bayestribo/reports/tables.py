@@ -30,7 +30,7 @@ __all__ = [
     "nonnegative_text",
     "normal_interval",
     "physical_symbols",
-    "prior_sd_ratio",
+    "prior_flatness",
     "probability_text",
     "prose",
     "quantiles_text",
@@ -73,10 +73,12 @@ _HIDDEN = ("y0", "mu_s_ratio")
 #: Quantiles of a 95 % normal interval, in standard errors.
 _Z95 = 1.959963984540054
 
-#: A posterior whose standard deviation is at least this fraction of its prior's is flat
-#: over the prior: the data do not constrain the quantity, and it is shown as a bound
-#: (:func:`quantity_text`), not as a measurement.
-FLAT_SD_RATIO = 0.8
+#: A posterior whose Kolmogorov–Smirnov distance to its prior, restricted to the range the
+#: draws cover, is at most this is flat over its prior there: the data set only the range
+#: (a bound), not a value, and it is shown as a bound (:func:`quantity_text`). A normal
+#: posterior is about 0.2 from the uniform over its draws' range; flat draws about
+#: 1/√(effective sample size).
+FLAT_KS = 0.1
 
 #: Reported quantities whose spread is set by another sampled parameter: μ_s = (μ_s/μ_k)
 #: μ_k, and the static friction's displacement and torque with it.
@@ -295,38 +297,51 @@ def quantiles_text(samples: Any, prob: float = 0.95) -> str:
     return interval_text(float(mid), float(lo), float(hi))
 
 
-def prior_sd_ratio(result: Any, name: str) -> float | None:
-    """The posterior's standard deviation over the prior's, of the sampled parameter that
-    sets the spread of ``name`` (μ_s: μ_s/μ_k); None where it has no prior of its own (a
-    physical quantity derived from several).
+def prior_flatness(result: Any, name: str) -> float | None:
+    """How far the posterior of ``name`` is from flat over its prior: the
+    Kolmogorov–Smirnov distance between the draws of the sampled parameter that sets its
+    spread (μ_s: μ_s/μ_k) and its prior restricted to the range the draws cover (the data
+    may rule part of the prior out, as the stop of the motion bounds μ_s from above).
+    None where the quantity has no prior of its own (a physical quantity derived from
+    several).
 
-    From the fit's prior contraction 1 - var_post/var_prior
-    (:func:`bayestribo.inference.sensitivity.prior_sensitivity`) where recorded, else from
-    the priors and the draws.
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from types import SimpleNamespace as R
+    >>> from bayestribo.inference.priors import PriorSet, Uniform
+    >>> draws = np.random.default_rng(0).uniform(1.0, 2.9, 4000)  # flat up to 2.9
+    >>> fit = R(priors=PriorSet({"mu_s_ratio": Uniform(1.0, 10.0)}), samples=lambda n: draws)
+    >>> prior_flatness(fit, "mu_s") < FLAT_KS
+    True
     """
     import numpy as np
 
     sampled = _SPREAD_OF.get(name, name)
-    contraction = ((getattr(result, "prior_sensitivity", None) or {}).get(sampled) or {}).get(
-        "contraction"
-    )
-    if contraction is not None and math.isfinite(contraction):
-        return math.sqrt(max(1.0 - contraction, 0.0))
     try:
         prior = result.priors[sampled]
-        draws = np.asarray(result.samples(sampled), dtype=float).ravel()
+        draws = np.sort(np.asarray(result.samples(sampled), dtype=float).ravel())
     except (KeyError, ValueError, AttributeError):
         return None
-    prior_sd = float(np.std(prior.sample(np.random.default_rng(0), 20_000)))
-    return float(np.std(draws, ddof=1)) / prior_sd if prior_sd > 0 and draws.size > 1 else None
+    if draws.size < 2 or not draws[-1] > draws[0]:
+        return None
+    grid = np.linspace(draws[0], draws[-1], 1025)
+    density = np.exp(np.asarray(prior.logpdf(grid), dtype=float))
+    steps = 0.5 * (density[1:] + density[:-1]) * np.diff(grid)
+    cdf = np.concatenate([[0.0], np.cumsum(steps)])
+    if not cdf[-1] > 0:
+        return None
+    expected = np.interp(draws, grid, cdf / cdf[-1])
+    ranks = np.arange(1, draws.size + 1) / draws.size
+    return float(max(np.max(ranks - expected), np.max(expected - (ranks - 1 / draws.size))))
 
 
 def quantity_text(result: Any, name: str, summary: Any) -> str:
     """One quantity of a fit as a reader should read it: ``mean [low, high]`` in the
-    digits the interval supports, or, where its posterior is flat over its prior (sd at
-    least :data:`FLAT_SD_RATIO` of the prior's, :func:`prior_sd_ratio`), a bound: ``not
-    constrained by the data: μ_s < 0.082 (its prior's range)``, the upper end of its
-    interval in two digits.
+    digits the interval supports, or, where its posterior is flat over its prior within
+    the range the data allow (:func:`prior_flatness` at most :data:`FLAT_KS`), a bound:
+    ``not constrained by the data: μ_s < 0.082 (...)``, the upper end of its interval in
+    two digits.
 
     Parameters
     ----------
@@ -336,12 +351,12 @@ def quantity_text(result: Any, name: str, summary: Any) -> str:
     summary : ParameterSummary
         Its summary (``result.summary(prob)[name]``).
     """
-    ratio = prior_sd_ratio(result, name)
-    if ratio is not None and ratio >= FLAT_SD_RATIO:
+    distance = prior_flatness(result, name)
+    if distance is not None and distance <= FLAT_KS:
         symbol = _symbols(result).get(name, name)
         return (
-            f"not constrained by the data: {symbol} < {summary.high:.2g} (its prior's range; "
-            f"posterior sd {ratio:.2f} × the prior's)"
+            f"not constrained by the data: {symbol} < {summary.high:.2g} (the posterior is its "
+            f"prior's up to there: Kolmogorov–Smirnov distance {distance:.2f})"
         )
     return interval_text(summary.mean, *summary.interval)
 
