@@ -116,17 +116,17 @@ def prose(text: str, *, paths: Mapping[str, str] | None = None) -> str:
     ("viscous+coulomb" -> "viscous damping + Coulomb friction"), run-file column names as the
     quantity ("velocity_m_per_s" -> "velocity"), quantities by their symbol ("mu_k" ->
     "μ_k"), ``law='auto'`` as "law = auto", the
-    advice on ``columns=[...]`` left out, and each path in ``paths`` replaced by its short
-    name.
+    advice on ``columns=[...]`` and a command's option in parentheses left out, and each
+    path in ``paths`` replaced by its short name.
 
     Examples
     --------
     >>> prose("the law viscous+coulomb misfits; fit with law='auto' (--law auto)")
-    'the law viscous damping + Coulomb friction misfits; fit with law = auto (--law auto)'
+    'the law viscous damping + Coulomb friction misfits; fit with law = auto'
     >>> prose("the law quadratic holds; the power of the test")
     'the law quadratic drag holds; the power of the test'
     >>> prose("raise max_steps (--param max_steps=20000)")
-    'raise maximum number of steps (--param max_steps=20000)'
+    'raise maximum number of steps'
     >>> prose("R-hat 1.02 for log_sigma[mu_k] and beta[0,ΔE(A=1e-04 m)]")
     'R-hat 1.02 for log σ of μ_k and the mean of ΔE(A=1e-04 m)'
     >>> prose("/d/r.csv: 1 row(s) have no value for velocity_m_per_s; they are left out "
@@ -141,6 +141,9 @@ def prose(text: str, *, paths: Mapping[str, str] | None = None) -> str:
     text = re.sub(r" \(give columns=\[\.\.\.\][^)]*\)", "", text)
     text = re.sub(r" \(printed as '[^']*'\)", "", text)  # the terminal's label
     text = text.replace("law='auto'", "law = auto")
+    # a command's option in parentheses ("(--law auto)", "(--param max_steps=20000)"): a
+    # report says the setting in words, not the command line that sets it
+    text = re.sub(r" \(--[a-z][a-z-]*(?: [^()]*)?\)", "", text)
     # a population sampler's coordinates in words: log_sigma[zeta] -> log σ of zeta
     text = re.sub(r"\blog_sigma\[([^\]]+)\]", r"log σ of \1", text)
     text = re.sub(r"\bbeta\[0,([^\]]+)\]", r"the mean of \1", text)
