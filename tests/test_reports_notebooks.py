@@ -275,6 +275,8 @@ def test_notebook_executes_with_test_parameters(name, tmp_path):
     fmt = params["figure_format"]
     files = sorted((tmp_path / "figures").glob(f"*.{fmt}"))
     assert images and files, f"{name}: no figure produced"
+    # every report draws the energy lost per cycle against the swing, ΔE(A)
+    assert (tmp_path / "figures" / f"dissipation.{params['figure_format']}").is_file(), name
     assert len(files) == len(list((tmp_path / "figures").iterdir()))  # all in that format
     if fmt == "pdf":
         assert all(f.read_bytes().startswith(b"%PDF") for f in files)
