@@ -14,7 +14,7 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-from bayestribo.summary import NUMERICAL_ZERO, interval_text
+from bayestribo.summary import NUMERICAL_ZERO, interval_text, probability_text
 
 __all__ = [
     "METHOD_NAMES",
@@ -243,24 +243,6 @@ def normal_interval(value: float | None, se: float | None, *, positive: bool = F
     if positive and low < 0.0 < high:
         return interval_text(max(value, 0.0), 0.0, high)
     return interval_text(value, low, high)
-
-
-def probability_text(p: float | None) -> str:
-    """A probability in three decimals, ``< 0.001`` and ``> 0.999`` at its ends (a sign
-    probability of 1 from a few thousand draws is not certainty: "P = 1.000" is not said).
-
-    Examples
-    --------
-    >>> probability_text(1.0), probability_text(0.4567), probability_text(0.0)
-    ('> 0.999', '0.457', '< 0.001')
-    """
-    if p is None or not math.isfinite(p):
-        return "–"
-    if p < 1e-3:
-        return "< 0.001"
-    if p > 0.999:
-        return "> 0.999"
-    return f"{p:.3f}"
 
 
 def nonnegative_text(name: str, center: float, low: float, high: float) -> str:
