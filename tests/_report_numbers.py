@@ -114,8 +114,8 @@ def interval_cells(page: str) -> list[tuple[str, str, str]]:
 
 def _triples(node: Any) -> Iterator[tuple[float, float, float]]:
     """Every (centre, low, high) a JSON document holds: a summary (``median`` or ``mean``
-    with ``interval``), a row (``X_median``, ``X_low``, ``X_high``), a band (lists of
-    ``mean`` and ``interval``)."""
+    with ``interval``), a row (``X_median``, ``X_low``, ``X_high``, or ``X``, ``X low``,
+    ``X high``), a band (lists of ``mean`` and ``interval``)."""
     if isinstance(node, Mapping):
         interval = node.get("interval")
         if isinstance(interval, list | tuple) and len(interval) == 2:
@@ -131,9 +131,10 @@ def _triples(node: Any) -> Iterator[tuple[float, float, float]]:
                     if None not in (m, lo, hi):
                         yield float(m), float(lo), float(hi)
         for key, value in node.items():
-            if isinstance(key, str) and key.endswith("_median"):
-                stem = key[: -len("_median")]
-                low, high = node.get(f"{stem}_low"), node.get(f"{stem}_high")
+            # a row: "X_median", "X_low", "X_high"; "X median" or "X", "X low", "X high"
+            for sep in ("_", " "):
+                stem = str(key).removesuffix(f"{sep}median")
+                low, high = node.get(f"{stem}{sep}low"), node.get(f"{stem}{sep}high")
                 if all(isinstance(v, int | float) for v in (value, low, high)):
                     yield float(value), float(low), float(high)
             yield from _triples(value)

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 from _paths import APPSTAT, REPO
-from _report_numbers import unmatched
+from _report_numbers import interval_cells, unmatched
 
 from bayestribo import DEFAULT_SEED
 
@@ -319,6 +319,11 @@ def test_notebook_executes_with_test_parameters(name, tmp_path):
         assert f"Verdict: {adequacy['verdict']}." in text
     if name in ("loads", "viscosity"):
         record = json.loads(summary.read_text())
+        # every value with its interval is one of the fits' or the populations' (the
+        # ΔE of each run at a swing every run reaches is read off its band in the report)
+        derived = ("ΔE per cycle", "mean at ")
+        assert len(interval_cells(text)) >= 8
+        assert unmatched(text, record["runs"], record, skip_tables=derived) == []
         assert not record["failed"]
         assert len(record["runs"]) == {"loads": 4, "viscosity": 2}[name]
     if name == "loads":
