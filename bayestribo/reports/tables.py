@@ -25,6 +25,7 @@ __all__ = [
     "estimates_frame",
     "fit_facts",
     "fit_frame",
+    "interval_too_narrow",
     "law_text",
     "method_text",
     "nonnegative_text",
@@ -219,16 +220,39 @@ def physical_symbols(law: str) -> dict[str, str]:
     return out
 
 
-def normal_interval(value: float | None, se: float | None, *, positive: bool = False) -> str:
+def interval_too_narrow(estimate: Any) -> bool:
+    """Whether a classical estimate's interval is known to be too narrow: from the peaks'
+    noise only, or from a Jacobian with correlated residuals (its ``notes`` say so).
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as E
+    >>> interval_too_narrow(E(notes="SE from the peak noise only"))
+    True
+    >>> interval_too_narrow(E(notes="Eq. 21 sign corrected"))
+    False
+    """
+    notes = getattr(estimate, "notes", "") or ""
+    return "peak noise only" in notes or "too small" in notes
+
+
+def normal_interval(
+    value: float | None, se: float | None, *, positive: bool = False, too_narrow: bool = False
+) -> str:
     """``value [low, high]`` of a classical estimate: ±1.96 standard errors, in the digits
     the interval supports; a positive quantity whose interval reaches below zero is shown
     at its bound (``0 (at the bound) [0, 8.2e-05]``). A dash without a value; the value alone
-    (3 digits) without a standard error.
+    (3 digits) without a standard error. An interval known to be ``too_narrow``
+    (:func:`interval_too_narrow`) does not support the digits it would give (ten, for the
+    peaks' noise of a clean record): the value in four significant digits, its half width
+    said apart.
 
     Examples
     --------
     >>> normal_interval(0.0236, 0.0001)
     '0.02360 [0.02340, 0.02380]'
+    >>> normal_interval(0.0242509127, 1.5e-09, too_narrow=True).replace("\\xa0", " ")
+    '0.02425 (± 3e-09, too narrow)'
     >>> normal_interval(3.97e-19, 4.2e-05, positive=True)
     '0 (at the bound) [0, 8.2e-05]'
     >>> normal_interval(9.31e-26, None), normal_interval(0.0236, None)
@@ -239,6 +263,10 @@ def normal_interval(value: float | None, se: float | None, *, positive: bool = F
     if se is None or not math.isfinite(se) or se <= 0:
         # a numerical zero (a least-squares ζ of 9.3e-26 at its bound) is zero, not a value
         return "0" if abs(value) < NUMERICAL_ZERO else f"{value:.3g}"
+    if too_narrow:
+        shown = "0" if abs(value) < NUMERICAL_ZERO else f"{value:.4g}"
+        # no-break spaces: the number and its half width stay on one line in a table
+        return f"{shown}\u00a0(±\u00a0{_Z95 * se:.1g}, too narrow)"
     low, high = value - _Z95 * se, value + _Z95 * se
     if positive and low < 0.0 < high:
         return interval_text(max(value, 0.0), 0.0, high)
@@ -630,11 +658,12 @@ def caveat_text(estimate: Any) -> str:
     return "; ".join(said) or "–"
 
 
-def _signed_interval(value: float | None, se: float | None) -> str:
+def _signed_interval(value: float | None, se: float | None, too_narrow: bool = False) -> str:
     """A classical estimate's interval: at its bound at zero where it reaches below zero
     from a positive value, as it is where the value itself is negative (unphysical,
-    said in the caveat)."""
-    return normal_interval(value, se, positive=value is not None and value >= 0)
+    said in the caveat); four digits where it is known to be too narrow."""
+    positive = value is not None and value >= 0
+    return normal_interval(value, se, positive=positive, too_narrow=too_narrow)
 
 
 def estimates_frame(table: Any, *, unit: str = "m") -> Any:
@@ -664,10 +693,10 @@ def estimates_frame(table: Any, *, unit: str = "m") -> Any:
         rows.append(
             {
                 "method": method_text(e),
-                "ζ [95 %]": _signed_interval(e.zeta, e.zeta_se),
+                "ζ [95 %]": _signed_interval(e.zeta, e.zeta_se, interval_too_narrow(e)),
                 label: "–"
                 if value is None
-                else _signed_interval(value, getattr(e, f"{friction}_se")),
+                else _signed_interval(value, getattr(e, f"{friction}_se"), interval_too_narrow(e)),
                 "friction share": share_text(e.friction_fraction),
                 "caveat": caveat_text(e),
             }
