@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 
 from bayestribo.errors import BayestriboError
 
-__all__ = ["ParameterSummary", "check_prob", "interval_text", "summarize"]
+__all__ = ["ParameterSummary", "check_prob", "interval_text", "probability_text", "summarize"]
 
 
 def check_prob(prob: float) -> float:
@@ -213,6 +213,24 @@ def interval_text(center: float, low: float, high: float) -> str:
         if shown[0] not in shown[1:] or low == center or high == center:
             break
     return f"{shown[0]} [{shown[1]}, {shown[2]}]"
+
+
+def probability_text(p: float | None) -> str:
+    """A probability in three decimals, ``< 0.001`` and ``> 0.999`` at its ends (a sign
+    probability of 1 from a few thousand draws is not certainty: "P = 1.000" is not said).
+
+    Examples
+    --------
+    >>> probability_text(1.0), probability_text(0.4567), probability_text(0.0)
+    ('> 0.999', '0.457', '< 0.001')
+    """
+    if p is None or not math.isfinite(p):
+        return "–"
+    if p < 1e-3:
+        return "< 0.001"
+    if p > 0.999:
+        return "> 0.999"
+    return f"{p:.3f}"
 
 
 def _number(value: float, decimals: int, scale: float) -> str:

@@ -19,6 +19,8 @@ import pytest
 pytest.importorskip("nbclient")
 pytest.importorskip("nbconvert")
 
+from _report_numbers import interval_cells, section, unmatched
+
 from bayestribo.cli import main
 from bayestribo.summary import interval_text
 
@@ -49,13 +51,18 @@ def test_report_and_fit_give_one_answer_on_a_real_recording(appstat_file, tmp_pa
         assert interval_text(r["mean"], *r["interval"]) == interval_text(
             f["mean"], *f["interval"]
         ), name
+    # every value with its interval that the answer and the fit's section show is one of
+    # the command's JSON, in the digits the rule gives
+    page = (tmp_path / "r.html").read_text(encoding="utf-8")
+    for title in ("The answer", "Bayesian fit"):
+        assert interval_cells(section(page, title)), title
+        assert unmatched(section(page, title), fitted) == [], title
     # the grid of Π increments and the sampler's run: the same fit, not a near one
     assert reported["diagnostics"]["n_steps"] == fitted["diagnostics"]["n_steps"]
     assert report_exit == fit_exit
     # the law misfits this recording (dry friction on a plate; the fit exits 1): the
     # report's answer does not present ζ and x_c as a measurement, and says what to do
     assert report_exit == 1
-    page = (tmp_path / "r.html").read_text(encoding="utf-8")
     heads = [m.start() for m in re.finditer(r"<h2\b", page)]
     answer = page[heads[0] : heads[1]]
     assert "The answer" in answer and 'class="bt-verdict"' in answer

@@ -101,3 +101,15 @@ def test_a_drag_law_campaign_report_renders_every_section_in_its_own_quantities(
     for group in analysis["contact"]["groups"]:
         lo, hi = group["parameters"]["c2_SI"]["mean"]["interval"]
         assert lo < C2_SI < hi, group["label"]
+
+
+@pytest.mark.filterwarnings("ignore::bayestribo.errors.ConvergenceWarning")
+def test_every_interval_of_a_drag_law_campaign_report_is_the_campaigns_in_its_digits(report):
+    from _report_numbers import interval_cells, unmatched
+
+    text, _, tmp = report
+    population = json.loads((tmp / "out" / "population.json").read_text())
+    assert len(interval_cells(text)) >= 8
+    # the trend's means at the ends of its loads and each run's ΔE at a shared swing are
+    # the report's own reading of the draws and bands (tests/test_reports_numbers.py)
+    assert unmatched(text, population, skip_tables=("mean at ", "ΔE per cycle")) == []

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import pytest
 from _paths import APPSTAT, REPO
+from _report_numbers import interval_cells, unmatched
 
 from bayestribo import DEFAULT_SEED
 
@@ -274,6 +275,8 @@ def test_notebook_executes_with_test_parameters(name, tmp_path):
     fmt = params["figure_format"]
     files = sorted((tmp_path / "figures").glob(f"*.{fmt}"))
     assert images and files, f"{name}: no figure produced"
+    # every report draws the energy lost per cycle against the swing, ΔE(A)
+    assert (tmp_path / "figures" / f"dissipation.{params['figure_format']}").is_file(), name
     assert len(files) == len(list((tmp_path / "figures").iterdir()))  # all in that format
     if fmt == "pdf":
         assert all(f.read_bytes().startswith(b"%PDF") for f in files)
@@ -316,6 +319,11 @@ def test_notebook_executes_with_test_parameters(name, tmp_path):
         assert f"Verdict: {adequacy['verdict']}." in text
     if name in ("loads", "viscosity"):
         record = json.loads(summary.read_text())
+        # every value with its interval is one of the fits' or the populations' (the
+        # ΔE of each run at a swing every run reaches is read off its band in the report)
+        derived = ("ΔE per cycle", "mean at ")
+        assert len(interval_cells(text)) >= 8
+        assert unmatched(text, record["runs"], record, skip_tables=derived) == []
         assert not record["failed"]
         assert len(record["runs"]) == {"loads": 4, "viscosity": 2}[name]
     if name == "loads":
@@ -330,6 +338,13 @@ def test_notebook_executes_with_test_parameters(name, tmp_path):
         assert "6. The glycerol–water series" in text and "against viscosity" in text
     if name == "real_data":
         record = json.loads(summary.read_text())
+        # every value with its interval in the answer and the fits' section is the fit's
+        # own (as `fit --json` writes it), x_c/A₀ by the recording's first amplitude
+        scales = [1.0, *(1.0 / r["A₀ [signal unit]"] for r in record["overview"])]
+        not_fitted = {r["recording"] for r in record["overview"]} - set(record["fits"])
+        for title in ("The answer", "3. Bayesian fits"):
+            part = _section(text, title)
+            assert unmatched(part, record["fits"], scales=scales, skip_columns=not_fitted) == []
         verdict = {r["recording"]: r["dominated by"] for r in record["verdict"]}
         # HarmOsc3 slides on a metal plate: dry friction dissipates the energy.
         assert verdict == {"HarmOsc3": "friction"}

@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 
 from bayestribo.adequacy.draws import ParameterDraws
 from bayestribo.signal.decay import EnergyDecay
-from bayestribo.summary import ParameterSummary, check_prob
+from bayestribo.summary import ParameterSummary, check_prob, interval_text
 
 __all__ = ["ExtinctionCheck", "extinction_check"]
 
@@ -96,7 +96,7 @@ class ExtinctionCheck:
             if s["median"] is None:
                 return "never stops"
             lo, hi = s["interval"]
-            return f"{s['median']:.4g} s (95 % {lo:.4g} to {hi:.4g} s)"
+            return f"{interval_text(s['median'], lo, hi)} s (median [95 %])"
 
         pred = f"predicted end of motion: exact model {fmt(ex)}, averaged Eq. 38 {fmt(av)}"
         if self.measured is None:

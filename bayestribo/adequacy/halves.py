@@ -60,6 +60,7 @@ from bayestribo.adequacy.windows import (
 )
 from bayestribo.errors import RecordingError
 from bayestribo.signal.decay import EnergyDecay
+from bayestribo.summary import interval_text
 
 __all__ = ["MIN_HALF_OSCILLATIONS", "SplitHalves", "split_halves"]
 
@@ -140,11 +141,21 @@ class SplitHalves:
         """One plain sentence: agree or not, and by how much."""
         parts = []
         for name in self.parameters:
-            a, b = getattr(self.first, name), getattr(self.second, name)
             rel = self.relative[name]
-            rel_text = f"{100 * rel:+.2g} %, " if math.isfinite(rel) else ""
+            percent = 100 * rel  # whole percent from 10 % on: "+200 %", not "+2e+02 %"
+            rel_text = (
+                ""
+                if not math.isfinite(rel)
+                else f"{percent:+.0f} %, "
+                if abs(percent) >= 10
+                else f"{percent:+.2g} %, "
+            )
+            shown = [  # each half in the digits its interval supports (a zero as zero)
+                interval_text(getattr(h, name), *getattr(h, f"{name}_interval"))
+                for h in (self.first, self.second)
+            ]
             parts.append(
-                f"{self._label(name)} {a:.4g} then {b:.4g} ({rel_text}{self.z[name]:+.1f} sd)"
+                f"{self._label(name)} {shown[0]} then {shown[1]} ({rel_text}{self.z[name]:+.1f} sd)"
             )
         held = "; friction held at the whole-decay value" if self.friction_mode == "fixed" else ""
         for label, half in (("first", self.first), ("second", self.second)):

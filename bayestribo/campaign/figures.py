@@ -611,6 +611,7 @@ def plot_dissipation(
     bands: Mapping[str, Mapping[str, Any]],
     fig: Any = None,
     amplitude: float | None = None,
+    measured: Mapping[str, Mapping[str, Any]] | None = None,
 ) -> Any:
     """ΔE(A) per group: each run's energy loss per cycle with its credible band.
 
@@ -631,10 +632,16 @@ def plot_dissipation(
         Empty figure to draw on (one axes per group is added); a new one if None.
     amplitude : float, optional
         The swing of comparison; default the middle of the range the runs share.
+    measured : mapping, optional
+        Run id -> the ΔE(A) measured from its turning points (the law-free answer,
+        :attr:`bayestribo.inference.FitResult.turning_point_dissipation`), drawn as
+        squares with their intervals in the run's colour.
 
     Returns
     -------
     matplotlib Figure
+        ΔE is never negative: a lower end at or below zero is drawn down to the axis'
+        bottom (a log axis has no zero), never left out.
     """
     from bayestribo.campaign.bands import dissipation_rows
 
@@ -651,15 +658,47 @@ def plot_dissipation(
     axes = _panels(fig, n)
     for ax, (label, runs) in zip(axes, shown.items(), strict=False):
         units = {str(bands[r].get("unit")) for r in runs}
+        drawn = []
         for k, run in enumerate(runs):
             band = bands[run]
             amps = np.asarray(band["amplitude"], dtype=float)
             lo, hi = (np.asarray(side, dtype=float) for side in band["interval"])
             mean = np.asarray(band["mean"], dtype=float)
-            keep = (amps > 0) & (lo > 0) & (hi > 0) & (mean > 0)
+            keep = (amps > 0) & (hi > 0) & (mean > 0)
             colour = f"C{k % 10}"
-            ax.fill_between(amps[keep], lo[keep], hi[keep], color=colour, alpha=0.2, lw=0)
+            # ΔE is never negative: a lower end at or below zero is at its bound, drawn
+            # down to the axis' bottom (a log axis has no zero), not left out
+            floor = np.where(lo > 0, lo, np.min(mean[keep], initial=np.inf) * 1e-3)
+            ax.fill_between(amps[keep], floor[keep], hi[keep], color=colour, alpha=0.2, lw=0)
             ax.plot(amps[keep], mean[keep], "-", color=colour, lw=1.2, label=literal(run))
+            drawn += [mean[keep], hi[keep]]
+            points = (measured or {}).get(run) or {}
+            if points.get("amplitude"):
+                a = np.asarray(points["amplitude"], dtype=float)
+                m = np.asarray([np.nan if v is None else v for v in points["mean"]], dtype=float)
+                low, high = (
+                    np.asarray([np.nan if v is None else v for v in side], dtype=float)
+                    for side in points["interval"]
+                )
+                ok = (a > 0) & np.isfinite(m) & (m > 0)
+                below = m - np.where(low > 0, low, m * 1e-3)
+                ax.errorbar(
+                    a[ok],
+                    m[ok],
+                    yerr=np.maximum(np.vstack([below, high - m])[:, ok], 0.0),
+                    fmt="s",
+                    ms=3,
+                    capsize=1.5,
+                    color=colour,
+                    mec="k",
+                    mew=0.4,
+                    lw=0.8,
+                    label="turning points (law-free)" if k == 0 else None,
+                )
+                drawn.append(m[ok])
+        values = np.concatenate(drawn) if drawn else np.array([])
+        if values.size:  # the values' decades: a band at zero runs to the bottom
+            ax.set_ylim(values.min() / 3.0, values.max() * 1.5)
         if at.get(label) is not None:
             ax.axvline(at[label], color="0.4", ls=":", lw=1)
         ax.set_yscale("log")
@@ -675,6 +714,7 @@ def plot_dissipation(
     within = f"{100 * probs.pop():.0f} % band" if len(probs) == 1 else "credible band"
     fig.suptitle(
         f"Energy loss per cycle ΔE(A), each run's mean and {within}"
+        + (", squares: from its turning points" if measured else "")
         + ("\n(dotted: the swing where the runs are compared)" if at else "")
     )
     return fig

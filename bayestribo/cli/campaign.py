@@ -180,8 +180,10 @@ def _symbol(analysis: Any, name: str) -> str:
 
 
 def _interval(median: float, low: float, high: float) -> str:
-    # significant digits, not decimals: a ζ of 1e-6 must not print as 0.00000
-    return f"{median:.4g} [{low:.4g}, {high:.4g}]"
+    # the digits the interval supports, as the reports write it (the digit rule)
+    from bayestribo.summary import interval_text
+
+    return interval_text(median, low, high)
 
 
 def _law_lines(groups: dict[str, Any] | None) -> list[str]:
@@ -207,6 +209,8 @@ def _text(
     analysis: Any, failures: list[dict[str, str]], groups: dict[str, Any] | None = None
 ) -> str:
     """The campaign's answer on the terminal, in at most 100 columns."""
+    from bayestribo.summary import probability_text
+
     percent = f"{100 * analysis.prob:g} %"
     lines = [
         *_law_lines(groups),
@@ -265,7 +269,8 @@ def _text(
                 current = series
             symbol = _symbol(analysis, r["parameter"])
             slope = _interval(r["slope_median"], r["slope_low"], r["slope_high"])
-            positive = f"P(slope > 0) = {r['prob_positive']:.3f}"
+            said = probability_text(r["prob_positive"])  # "> 0.999", never "1.000"
+            positive = f"P(slope > 0) {said}" if said[0] in "<>" else f"P(slope > 0) = {said}"
             lines.append(f"    {symbol:{width}s} {slope:40s} {positive}")
     unconverged = [r["run_id"] for r in analysis.runs if not r.get("converged", True)]
     if failures or analysis.excluded or unconverged or not analysis.converged:

@@ -38,6 +38,7 @@ __all__ = [
     "empty_panels",
     "facts",
     "file_sha256",
+    "folder_text",
     "interval_text",
     "keep_together",
     "note",
@@ -93,6 +94,30 @@ def interval_text(mean: float, low: float, high: float) -> str:
     from bayestribo.summary import interval_text as shared
 
     return shared(mean, low, high)
+
+
+def folder_text(path: str | Path | None, label: str | None = None) -> str | None:
+    """A folder as a report names it: ``label`` (as the user typed it) or its path; one
+    under the system's temporary directory by its name only, said to be temporary (a
+    reader of the report cannot open ``/tmp/pytest-7/...``). None for no folder.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> folder_text(os.path.join(tempfile.gettempdir(), "x1", "results"))
+    'results (a temporary folder)'
+    >>> folder_text("/data/campaign", "campaign/")
+    'campaign/'
+    """
+    import tempfile
+
+    if path is None and label is None:
+        return None
+    shown = str(label if label is not None else path)
+    where = Path(path if path is not None else shown).expanduser().resolve()
+    if where.is_relative_to(Path(tempfile.gettempdir()).resolve()):
+        return f"{where.name} (a temporary folder)"
+    return shown
 
 
 def sentence(text: str) -> str:

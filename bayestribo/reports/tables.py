@@ -14,7 +14,7 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-from bayestribo.summary import interval_text
+from bayestribo.summary import NUMERICAL_ZERO, interval_text, probability_text
 
 __all__ = [
     "METHOD_NAMES",
@@ -25,11 +25,17 @@ __all__ = [
     "estimates_frame",
     "fit_facts",
     "fit_frame",
+    "interval_too_narrow",
     "law_text",
     "method_text",
+    "nonnegative_text",
     "normal_interval",
     "physical_symbols",
+    "prior_flatness",
+    "probability_text",
     "prose",
+    "quantiles_text",
+    "quantity_text",
     "share_text",
     "unit_text",
     "windows_frame",
@@ -68,6 +74,21 @@ _HIDDEN = ("y0", "mu_s_ratio")
 #: Quantiles of a 95 % normal interval, in standard errors.
 _Z95 = 1.959963984540054
 
+#: A posterior whose Kolmogorov–Smirnov distance to its prior, restricted to the range the
+#: draws cover, is at most this is flat over its prior there: the data set only the range
+#: (a bound), not a value, and it is shown as a bound (:func:`quantity_text`). A normal
+#: posterior is about 0.2 from the uniform over its draws' range; flat draws about
+#: 1/√(effective sample size).
+FLAT_KS = 0.1
+
+#: Reported quantities whose spread is set by another sampled parameter: μ_s = (μ_s/μ_k)
+#: μ_k, and the static friction's displacement and torque with it.
+_SPREAD_OF = {
+    "mu_s": "mu_s_ratio",
+    "static_friction_displacement": "mu_s_ratio",
+    "static_friction_torque": "mu_s_ratio",
+}
+
 
 def law_text(law: str) -> str:
     """A dissipation law in words, each term as its registry entry describes it
@@ -96,17 +117,17 @@ def prose(text: str, *, paths: Mapping[str, str] | None = None) -> str:
     ("viscous+coulomb" -> "viscous damping + Coulomb friction"), run-file column names as the
     quantity ("velocity_m_per_s" -> "velocity"), quantities by their symbol ("mu_k" ->
     "μ_k"), ``law='auto'`` as "law = auto", the
-    advice on ``columns=[...]`` left out, and each path in ``paths`` replaced by its short
-    name.
+    advice on ``columns=[...]`` and a command's option in parentheses left out, and each
+    path in ``paths`` replaced by its short name.
 
     Examples
     --------
     >>> prose("the law viscous+coulomb misfits; fit with law='auto' (--law auto)")
-    'the law viscous damping + Coulomb friction misfits; fit with law = auto (--law auto)'
+    'the law viscous damping + Coulomb friction misfits; fit with law = auto'
     >>> prose("the law quadratic holds; the power of the test")
     'the law quadratic drag holds; the power of the test'
     >>> prose("raise max_steps (--param max_steps=20000)")
-    'raise maximum number of steps (--param max_steps=20000)'
+    'raise maximum number of steps'
     >>> prose("R-hat 1.02 for log_sigma[mu_k] and beta[0,ΔE(A=1e-04 m)]")
     'R-hat 1.02 for log σ of μ_k and the mean of ΔE(A=1e-04 m)'
     >>> prose("/d/r.csv: 1 row(s) have no value for velocity_m_per_s; they are left out "
@@ -121,6 +142,9 @@ def prose(text: str, *, paths: Mapping[str, str] | None = None) -> str:
     text = re.sub(r" \(give columns=\[\.\.\.\][^)]*\)", "", text)
     text = re.sub(r" \(printed as '[^']*'\)", "", text)  # the terminal's label
     text = text.replace("law='auto'", "law = auto")
+    # a command's option in parentheses ("(--law auto)", "(--param max_steps=20000)"): a
+    # report says the setting in words, not the command line that sets it
+    text = re.sub(r" \(--[a-z][a-z-]*(?: [^()]*)?\)", "", text)
     # a population sampler's coordinates in words: log_sigma[zeta] -> log σ of zeta
     text = re.sub(r"\blog_sigma\[([^\]]+)\]", r"log σ of \1", text)
     text = re.sub(r"\bbeta\[0,([^\]]+)\]", r"the mean of \1", text)
@@ -196,27 +220,158 @@ def physical_symbols(law: str) -> dict[str, str]:
     return out
 
 
-def normal_interval(value: float | None, se: float | None, *, positive: bool = False) -> str:
+def interval_too_narrow(estimate: Any) -> bool:
+    """Whether a classical estimate's interval is known to be too narrow: from the peaks'
+    noise only, or from a Jacobian with correlated residuals (its ``notes`` say so).
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as E
+    >>> interval_too_narrow(E(notes="SE from the peak noise only"))
+    True
+    >>> interval_too_narrow(E(notes="Eq. 21 sign corrected"))
+    False
+    """
+    notes = getattr(estimate, "notes", "") or ""
+    return "peak noise only" in notes or "too small" in notes
+
+
+def normal_interval(
+    value: float | None, se: float | None, *, positive: bool = False, too_narrow: bool = False
+) -> str:
     """``value [low, high]`` of a classical estimate: ±1.96 standard errors, in the digits
     the interval supports; a positive quantity whose interval reaches below zero is shown
     at its bound (``0 (at the bound) [0, 8.2e-05]``). A dash without a value; the value alone
-    (3 digits) without a standard error.
+    (3 digits) without a standard error. An interval known to be ``too_narrow``
+    (:func:`interval_too_narrow`) does not support the digits it would give (ten, for the
+    peaks' noise of a clean record): the value in four significant digits, its half width
+    said apart.
 
     Examples
     --------
     >>> normal_interval(0.0236, 0.0001)
     '0.02360 [0.02340, 0.02380]'
+    >>> normal_interval(0.0242509127, 1.5e-09, too_narrow=True).replace("\\xa0", " ")
+    '0.02425 (± 3e-09, too narrow)'
     >>> normal_interval(3.97e-19, 4.2e-05, positive=True)
     '0 (at the bound) [0, 8.2e-05]'
+    >>> normal_interval(9.31e-26, None), normal_interval(0.0236, None)
+    ('0', '0.0236')
     """
     if value is None or not math.isfinite(value):
         return "–"
     if se is None or not math.isfinite(se) or se <= 0:
-        return f"{value:.3g}"
+        # a numerical zero (a least-squares ζ of 9.3e-26 at its bound) is zero, not a value
+        return "0" if abs(value) < NUMERICAL_ZERO else f"{value:.3g}"
+    if too_narrow:
+        shown = "0" if abs(value) < NUMERICAL_ZERO else f"{value:.4g}"
+        # no-break spaces: the number and its half width stay on one line in a table
+        return f"{shown}\u00a0(±\u00a0{_Z95 * se:.1g}, too narrow)"
     low, high = value - _Z95 * se, value + _Z95 * se
     if positive and low < 0.0 < high:
         return interval_text(max(value, 0.0), 0.0, high)
     return interval_text(value, low, high)
+
+
+def nonnegative_text(name: str, center: float, low: float, high: float) -> str:
+    """``center [low, high]`` of a quantity by name, in the digits the interval supports;
+    an energy lost per cycle (``ΔE(A=...)``, the law-free comparison across runs) held at
+    zero below: a free decay never gains energy, so an interval of a population mean
+    that reaches below zero is at its bound there.
+
+    Examples
+    --------
+    >>> nonnegative_text("ΔE(A=1e-04 m)", 2e-07, -1e-07, 5e-07)
+    '0 (at the bound) [0, 5.0e-07]'
+    >>> nonnegative_text("zeta", 0.0236, 0.0230, 0.0242)
+    '0.02360 [0.02300, 0.02420]'
+    """
+    if str(name).startswith("ΔE("):
+        center, low = max(center, 0.0), max(low, 0.0)
+    return interval_text(center, low, high)
+
+
+def quantiles_text(samples: Any, prob: float = 0.95) -> str:
+    """Draws as ``median [low, high]``, the equal-tailed ``prob`` interval, in the digits
+    it supports (:func:`bayestribo.summary.interval_text`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> quantiles_text(np.linspace(0.02, 0.03, 1001))
+    '0.0250 [0.0203, 0.0297]'
+    """
+    import numpy as np
+
+    x = np.asarray(samples, dtype=float).ravel()
+    if x.size == 0:
+        return "–"
+    lo, mid, hi = np.quantile(x, [(1 - prob) / 2, 0.5, (1 + prob) / 2])
+    return interval_text(float(mid), float(lo), float(hi))
+
+
+def prior_flatness(result: Any, name: str) -> float | None:
+    """How far the posterior of ``name`` is from flat over its prior: the
+    Kolmogorov–Smirnov distance between the draws of the sampled parameter that sets its
+    spread (μ_s: μ_s/μ_k) and its prior restricted to the range the draws cover (the data
+    may rule part of the prior out, as the stop of the motion bounds μ_s from above).
+    None where the quantity has no prior of its own (a physical quantity derived from
+    several).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from types import SimpleNamespace as R
+    >>> from bayestribo.inference.priors import PriorSet, Uniform
+    >>> draws = np.random.default_rng(0).uniform(1.0, 2.9, 4000)  # flat up to 2.9
+    >>> fit = R(priors=PriorSet({"mu_s_ratio": Uniform(1.0, 10.0)}), samples=lambda n: draws)
+    >>> prior_flatness(fit, "mu_s") < FLAT_KS
+    True
+    """
+    import numpy as np
+
+    sampled = _SPREAD_OF.get(name, name)
+    try:
+        prior = result.priors[sampled]
+        draws = np.sort(np.asarray(result.samples(sampled), dtype=float).ravel())
+    except (KeyError, ValueError, AttributeError):
+        return None
+    if draws.size < 2 or not draws[-1] > draws[0]:
+        return None
+    grid = np.linspace(draws[0], draws[-1], 1025)
+    density = np.exp(np.asarray(prior.logpdf(grid), dtype=float))
+    steps = 0.5 * (density[1:] + density[:-1]) * np.diff(grid)
+    cdf = np.concatenate([[0.0], np.cumsum(steps)])
+    if not cdf[-1] > 0:
+        return None
+    expected = np.interp(draws, grid, cdf / cdf[-1])
+    ranks = np.arange(1, draws.size + 1) / draws.size
+    return float(max(np.max(ranks - expected), np.max(expected - (ranks - 1 / draws.size))))
+
+
+def quantity_text(result: Any, name: str, summary: Any) -> str:
+    """One quantity of a fit as a reader should read it: ``mean [low, high]`` in the
+    digits the interval supports, or, where its posterior is flat over its prior within
+    the range the data allow (:func:`prior_flatness` at most :data:`FLAT_KS`), a bound:
+    ``not constrained by the data: μ_s < 0.082 (...)``, the upper end of its interval in
+    two digits.
+
+    Parameters
+    ----------
+    result : FitResult
+    name : str
+        The quantity's name in the fit.
+    summary : ParameterSummary
+        Its summary (``result.summary(prob)[name]``).
+    """
+    distance = prior_flatness(result, name)
+    if distance is not None and distance <= FLAT_KS:
+        symbol = _symbols(result).get(name, name)
+        return (
+            f"not constrained by the data: {symbol} < {summary.high:.2g} (the posterior is its "
+            f"prior's up to there: Kolmogorov–Smirnov distance {distance:.2f})"
+        )
+    return interval_text(summary.mean, *summary.interval)
 
 
 def share_text(share: float | None) -> str:
@@ -292,7 +447,7 @@ def fit_frame(
         rows.append(
             {
                 "quantity": symbols.get(name, name),
-                column: interval_text(s.mean, *s.interval),
+                column: quantity_text(result, name, s),
                 "unit": unit_text(units.get(name)),
             }
         )
@@ -503,11 +658,12 @@ def caveat_text(estimate: Any) -> str:
     return "; ".join(said) or "–"
 
 
-def _signed_interval(value: float | None, se: float | None) -> str:
+def _signed_interval(value: float | None, se: float | None, too_narrow: bool = False) -> str:
     """A classical estimate's interval: at its bound at zero where it reaches below zero
     from a positive value, as it is where the value itself is negative (unphysical,
-    said in the caveat)."""
-    return normal_interval(value, se, positive=value is not None and value >= 0)
+    said in the caveat); four digits where it is known to be too narrow."""
+    positive = value is not None and value >= 0
+    return normal_interval(value, se, positive=positive, too_narrow=too_narrow)
 
 
 def estimates_frame(table: Any, *, unit: str = "m") -> Any:
@@ -537,10 +693,10 @@ def estimates_frame(table: Any, *, unit: str = "m") -> Any:
         rows.append(
             {
                 "method": method_text(e),
-                "ζ [95 %]": _signed_interval(e.zeta, e.zeta_se),
+                "ζ [95 %]": _signed_interval(e.zeta, e.zeta_se, interval_too_narrow(e)),
                 label: "–"
                 if value is None
-                else _signed_interval(value, getattr(e, f"{friction}_se")),
+                else _signed_interval(value, getattr(e, f"{friction}_se"), interval_too_narrow(e)),
                 "friction share": share_text(e.friction_fraction),
                 "caveat": caveat_text(e),
             }
