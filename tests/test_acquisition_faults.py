@@ -603,3 +603,37 @@ def test_the_simulated_magnet_makes_the_recording_independent_of_the_hosts_timin
     assert samples[0][2] == samples[1][2] == 608  # 0.3 s at 2 kHz, at a frame of 32
     assert np.array_equal(samples[0][0], samples[1][0])
     assert np.array_equal(samples[0][1], samples[1][1])
+
+
+def test_a_failed_sync_seen_by_the_reading_loop_loses_no_chunk(tmp_path, monkeypatch):
+    # The sync thread never gets to run (a loaded machine): the reading loop's own
+    # periodic sync meets the failure while a chunk just read waits to be logged. That
+    # chunk is logged first, so the raw log stays a prefix of the bytes sent.
+    import errno
+
+    from bayestribo.acquisition import logger as logger_module
+    from bayestribo.acquisition.faults import StorageError
+
+    real_fsync, real_init = os.fsync, logger_module.RawLog.__init__
+    raw_fds: set[int] = set()
+
+    def init(self, *args, **kwargs):
+        real_init(self, *args, **kwargs)
+        self.sync_interval_s = 0.0  # every pump syncs
+        raw_fds.add(self._fd)
+
+    def fsync(fd):
+        # fails once the run streams (the header and a few frames are in the log)
+        if fd in raw_fds and os.fstat(fd).st_size > 1024:
+            raise OSError(errno.EIO, "Input/output error")
+        return real_fsync(fd)
+
+    monkeypatch.setattr(logger_module.RawLog, "__init__", init)
+    monkeypatch.setattr(logger_module.RawLog, "_sync_loop", lambda self: None)
+    monkeypatch.setattr(logger_module.os, "fsync", fsync)
+    with simulated() as (sim, path):
+        with pytest.raises(StorageError, match=r"cannot sync the raw log"):
+            acquire_run(path, tmp_path, INPUTS, catalog=None)
+    [raw] = list(tmp_path.glob("*.raw"))
+    kept = raw.read_bytes()
+    assert len(kept) > 1024 and bytes(sim.sent).startswith(kept)
