@@ -217,3 +217,67 @@ def test_hostile_small_files_stay_far_below_half_a_gigabyte_resident(tmp_path):
     assert sorted(result["refused"]) == sorted(map(str, files))
     assert all("read budget" in message for message in result["refused"].values())
     assert result["peak"] < RESIDENT_GOAL
+
+
+def _workbook(path: Path, rows: str) -> Path:
+    """A workbook of one worksheet whose rows are the XML ``rows`` after a header row."""
+    import zipfile
+
+    openpyxl = pytest.importorskip("openpyxl", reason="Excel files need the formats extra")
+    seed = path.with_name("seed.xlsx")
+    book = openpyxl.Workbook()
+    book.active.append(["time_s", "displacement_m"])
+    book.save(seed)
+    with zipfile.ZipFile(seed) as source, zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as out:
+        for name in source.namelist():
+            data = source.read(name)
+            if name == "xl/worksheets/sheet1.xml":
+                text = data.decode()
+                end = text.index("</sheetData>")
+                text = text[:end].replace('<dimension ref="A1:B1" />', "") + rows + text[end:]
+                data = text.encode()
+            out.writestr(name, data)
+    return path
+
+
+def test_a_workbook_whose_parts_declare_more_than_the_budget_is_refused_unparsed(tmp_path):
+    # 2 million rows of repeated XML: 82 MB declared in a file of well under 1 MB
+    row = "<row><c><v>0</v></c><c><v>0</v></c></row>"
+    path = _workbook(tmp_path / "bomb.xlsx", row * 2_000_000)
+    assert path.stat().st_size < 1_000_000
+    with pytest.raises(
+        RunFormatError,
+        match=r"bomb\.xlsx: the workbook's \d+ parts \(largest part 'xl/worksheets/sheet1\.xml'\)"
+        rf" declares .* more than the read budget of {shown(FLOOR_BYTES)}",
+    ):
+        read_run(path)
+
+
+def test_a_worksheets_cells_are_counted_as_they_are_read(tmp_path, monkeypatch):
+    from bayestribo.io.formats.excel import CELL_BYTES
+
+    rows = "".join(f'<row r="{i}"><c><v>{i}</v></c><c><v>0</v></c></row>' for i in range(2, 3000))
+    path = _workbook(tmp_path / "cells.xlsx", rows)
+    assert read_run(path, validate=False).time.size == 2998
+    monkeypatch.setenv(BUDGET_VARIABLE, str(1000 * CELL_BYTES / 1e6))  # 1000 cells
+    with pytest.raises(RunFormatError, match=r"the worksheet \(1002 cells to row 501\) declares"):
+        read_run(path, validate=False)
+
+
+def test_a_tdms_channel_is_counted_before_its_data_are_read(tmp_path, monkeypatch):
+    nptdms = pytest.importorskip("nptdms", reason="TDMS files need the formats extra")
+    path = tmp_path / "run.tdms"
+    with nptdms.TdmsWriter(str(path)) as writer:
+        writer.write_segment(
+            [
+                nptdms.ChannelObject("g", "t", np.arange(4000) / 2000.0),
+                nptdms.ChannelObject("g", "x", np.zeros(4000)),
+            ]
+        )
+    channels = {"time_s": "t", "displacement_m": "x"}
+    assert read_run(path, channels=channels, validate=False).time.size == 4000
+    monkeypatch.setenv(BUDGET_VARIABLE, str(6000 * FLOAT_BYTES / 1e6))  # 1.5 channels
+    with pytest.raises(
+        RunFormatError, match=r"TDMS channel 'g/x' \(4000 values of float64\) declares 32 kB"
+    ):
+        read_run(path, channels=channels, validate=False)

@@ -108,7 +108,7 @@ class ReadBudget:
         )
 
 
-def read_budget(file_size: int, where: str) -> ReadBudget:
+def read_budget(file_size: int, where: str, *, per_file_byte: int = PER_FILE_BYTE) -> ReadBudget:
     """The memory budget of reading a file of ``file_size`` bytes.
 
     Parameters
@@ -117,11 +117,14 @@ def read_budget(file_size: int, where: str) -> ReadBudget:
         The file's size [bytes].
     where : str
         The file, for messages.
+    per_file_byte : int
+        Bytes of memory per byte of the file [-]; a reader whose genuine files expand
+        more (a workbook's cells, as text) states its own.
 
     Returns
     -------
     ReadBudget
-        ``min(CAP_BYTES, max(FLOOR_BYTES, PER_FILE_BYTE * file_size))``, or the budget
+        ``min(CAP_BYTES, max(FLOOR_BYTES, per_file_byte * file_size))``, or the budget
         set in :data:`BUDGET_VARIABLE` [MB].
 
     Raises
@@ -142,9 +145,9 @@ def read_budget(file_size: int, where: str) -> ReadBudget:
                 where,
             )
         return ReadBudget(int(mb * 1e6), where, f"set by {BUDGET_VARIABLE}")
-    limit = min(CAP_BYTES, max(FLOOR_BYTES, PER_FILE_BYTE * int(file_size)))
+    limit = min(CAP_BYTES, max(FLOOR_BYTES, per_file_byte * int(file_size)))
     rule = (
-        f"{PER_FILE_BYTE} x the file's {_mb(file_size)}, at least {_mb(FLOOR_BYTES)} and at "
+        f"{per_file_byte} x the file's {_mb(file_size)}, at least {_mb(FLOOR_BYTES)} and at "
         f"most {_mb(CAP_BYTES)}"
     )
     return ReadBudget(limit, where, rule)
