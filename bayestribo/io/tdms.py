@@ -153,7 +153,8 @@ def _read_channels(
         label = f"{group}/{channel_name}"
         try:
             declared = len(channel)
-            dtype = np.dtype(getattr(channel, "dtype", None) or np.float64)
+            stated = getattr(channel, "dtype", None)
+            dtype = np.dtype(np.float64 if stated is None else stated)
         except Exception as exc:  # npTDMS failure while reading the channel's description
             raise RunFormatError(
                 f"TDMS channel {label}: cannot read its description: {exc!r}", where
