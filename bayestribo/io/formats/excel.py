@@ -237,6 +237,7 @@ def _read(path: Path, options: ReadOptions) -> dict[str, NDArray]:
 
 
 def _describe(path: Path, options: ReadOptions) -> dict[str, Any]:
+    _check_parts(path, str(path))
     book = _open(path)
     try:
         ws = _sheet(book, options.sheet, str(path))
