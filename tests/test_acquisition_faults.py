@@ -221,7 +221,7 @@ def test_header_that_does_not_parse_is_a_clear_error(tmp_path):
         with pytest.raises(HeaderError, match="run header: payload of 20 bytes") as info:
             acquire_run(path, tmp_path, INPUTS, run_id="badheader")
         assert "raw log kept" in str(info.value)
-        assert "STOP" in sim.commands
+        assert sim.received("STOP")
         sim.stop()
         assert (tmp_path / "badheader.raw").read_bytes() == bytes(sim.sent)
     assert len(sim.sent) > 0
@@ -406,13 +406,13 @@ def test_disk_full_while_streaming_stops_the_device_and_keeps_the_raw_log(tmp_pa
     with simulated() as (sim, path):
         with pytest.raises(StorageError, match=r"No space left.*--recover .*\.raw") as caught:
             acquire_run(path, tmp_path, INPUTS, catalog=None)
+        assert sim.received("STOP")
         sent = bytes(sim.sent)
     assert "\n" not in str(caught.value)
     [raw] = list(tmp_path.glob("*.raw"))
     kept = raw.read_bytes()
     assert len(kept) == written["n"] >= 1024 and sent.startswith(kept)
     assert not list(tmp_path.glob("*.csv"))  # no run files on a full disk
-    assert "STOP" in sim.commands
 
 
 def test_disk_full_while_writing_the_run_files_names_the_recovery(tmp_path, monkeypatch):
@@ -477,8 +477,8 @@ def test_a_failed_sync_of_the_raw_log_stops_the_run_with_the_packages_error(tmp_
     ):
         with pytest.raises(StorageError, match=r"cannot sync the raw log.*--recover .*\.raw"):
             acquire_run(path, tmp_path, INPUTS, catalog=None)
+        assert sim.received("STOP")
     assert hooked == []
-    assert "STOP" in sim.commands
     [raw] = list(tmp_path.glob("*.raw"))
     assert bytes(sim.sent).startswith(raw.read_bytes()) and raw.stat().st_size > 0
     assert not list(tmp_path.glob("*.csv"))
@@ -545,8 +545,8 @@ def test_a_real_full_disk_keeps_the_raw_log_and_recover_rebuilds_it(tmp_path, ti
     with simulated(config=big) as (sim, path):
         with pytest.raises(StorageError, match=r"No space left.*--recover"):
             acquire_run(path, tiny_tmpfs, INPUTS, catalog=None, run_id="full")
+        assert sim.received("STOP")
         sent = bytes(sim.sent)
-    assert "STOP" in sim.commands
     kept = (tiny_tmpfs / "full.raw").read_bytes()
     assert 0 < len(kept) < len(sent) and sent.startswith(kept)
     assert not list(tiny_tmpfs.glob("*.csv"))
