@@ -2,7 +2,9 @@
 
 Every numeric dataset of the file (or of ``group``) is a candidate; a dataset's
 ``units`` (or ``unit``) attribute states its unit. See :mod:`bayestribo.io.arrays`
-for how the signals are picked.
+for how the signals are picked. The signals are picked from the datasets' names, shapes
+and types alone; only the picked datasets are read, each once what it declares fits
+the read budget (:mod:`bayestribo.io.budget`).
 """
 
 from __future__ import annotations
