@@ -179,3 +179,51 @@ def test_full_disk_is_a_clear_error():
     with pytest.raises(AcquisitionError, match="cannot append to the raw log"):
         log.write(b"abc")
     log.close()
+
+
+def test_nothing_is_appended_after_a_failed_write(tmp_path, monkeypatch):
+    # A write that fails partway leaves a hole after the bytes it did write: a later
+    # write (the disk has room again) must not append after the hole.
+    import errno
+
+    from bayestribo.acquisition.faults import StorageError
+
+    real_write = os.write
+    fail = [True]
+
+    def write(fd, data):
+        if fail[0]:
+            fail[0] = False
+            real_write(fd, bytes(data[:2]))
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real_write(fd, data)
+
+    log = RawLog(tmp_path / "r.raw")
+    log.write(b"abc")
+    monkeypatch.setattr(logger_module.os, "write", write)
+    with pytest.raises(StorageError, match="cannot append"):
+        log.write(b"defg")
+    with pytest.raises(StorageError, match="cannot append"):
+        log.write(b"hij")
+    log.close()  # the failure was raised already
+    assert (tmp_path / "r.raw").read_bytes() == b"abcde"  # a prefix of what came
+
+
+def test_bytes_after_a_failed_sync_are_still_logged(tmp_path, monkeypatch):
+    # A failed sync leaves the log whole: what comes after it is appended, then the
+    # failure is raised.
+    import errno
+
+    from bayestribo.acquisition.faults import StorageError
+
+    def fsync(fd):
+        raise OSError(errno.EIO, "Input/output error")
+
+    monkeypatch.setattr(logger_module.os, "fsync", fsync)
+    log = RawLog(tmp_path / "r.raw", sync_interval_s=0.0)
+    with pytest.raises(StorageError, match="cannot sync"):
+        log.write(b"abc")
+    with pytest.raises(StorageError, match="cannot sync"):
+        log.write(b"def")
+    log.close()
+    assert (tmp_path / "r.raw").read_bytes() == b"abcdef"

@@ -162,26 +162,6 @@ def test_absurd_sidecar_numbers_are_refused_naming_the_field(tmp_path: Path, run
     assert main(["inspect", str(path)]) == 2
 
 
-def test_the_hdf5_library_reads_under_a_bound_on_new_memory() -> None:
-    """libhdf5 trusts the sizes a damaged file states (a global heap made it fill 4 GB):
-    while it reads, the process may not grow beyond the bound, and after it may again."""
-    import resource
-    import sys
-
-    if not sys.platform.startswith("linux"):
-        pytest.skip("the address-space limit is Linux's")
-    from bayestribo.io.hdf5 import _bounded_address_space
-
-    before = resource.getrlimit(resource.RLIMIT_AS)
-    with _bounded_address_space(64 << 20):
-        with pytest.raises(MemoryError):
-            np.ones(512 << 20, dtype=np.uint8)  # 512 MB past a 64 MB bound
-        small = np.ones(8 << 20, dtype=np.uint8)  # within it
-    assert resource.getrlimit(resource.RLIMIT_AS) == before
-    assert np.ones(512 << 20, dtype=np.uint8).sum() == 512 << 20
-    del small
-
-
 @pytest.mark.parametrize("huge", [1e308, -1.7e308])
 def test_a_sample_near_the_largest_float_is_refused_or_named(
     tmp_path: Path, run, huge: float

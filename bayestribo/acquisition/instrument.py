@@ -362,6 +362,28 @@ class SimulatedInstrument:
         self._thread.join(timeout_s)
         return not self._thread.is_alive()
 
+    def received(self, command: str, timeout_s: float = 30.0) -> bool:
+        """Wait until the instrument has read ``command``; True if it did.
+
+        The host's write returns once the bytes are in the link; the instrument's
+        thread reads them when it next runs, which a loaded machine may delay past the
+        host's return (after a STOP sent on the way out of a failed run).
+
+        Parameters
+        ----------
+        command : str
+            The command line, without its line end (``"STOP"``).
+        timeout_s : float
+            Longest wait [s].
+        """
+        deadline = time.monotonic() + timeout_s
+        while command not in self.commands:
+            alive = self._thread is not None and self._thread.is_alive()
+            if not alive or time.monotonic() > deadline:
+                return command in self.commands
+            time.sleep(0.005)
+        return True
+
     def __enter__(self) -> SimulatedInstrument:
         return self
 

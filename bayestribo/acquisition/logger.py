@@ -116,6 +116,8 @@ class RawLog:
         #: :meth:`write`: a failure of the background sync is not lost.
         self.error: StorageError | None = None
         self._error_raised = False  # raised to the caller (not only seen by the thread)
+        #: The failure of a write, after which nothing more may be appended.
+        self._write_failed: StorageError | None = None
         self._dirty_since: float | None = None
         self._lock = threading.Lock()
         self._closing = threading.Event()
@@ -130,6 +132,11 @@ class RawLog:
         """Append bytes (written to the OS immediately; synced per the interval)."""
         if self._fd is None:
             raise AcquisitionError(f"{self.path}: raw log already closed")
+        if self._write_failed is not None:
+            # bytes after a failed (perhaps partial) write would follow a hole: the log
+            # must stay a prefix of the bytes received, so nothing more is appended
+            self._error_raised = True
+            raise self._write_failed
         failed_before = self.error  # a failed sync: keep what still can be written
         view = memoryview(data)
         try:
@@ -139,12 +146,13 @@ class RawLog:
                 self._sha.update(view[:written])
                 view = view[written:]
         except OSError as exc:
-            self.error = failed_before or StorageError(
+            self._write_failed = StorageError(
                 f"{self.path}: cannot append to the raw log ({exc.strerror or exc}); "
                 f"{len(view)} bytes just received are not logged, the "
                 f"{self.bytes_written} before them are; free space, then "
                 f"`bayestribo acquire --recover {self.path}`"
             )
+            self.error = failed_before or self._write_failed
             self._error_raised = True
             raise self.error from None
         if failed_before is not None:

@@ -181,8 +181,9 @@ class _Conversation:
     def pump_once(self) -> int:
         self.interrupt.check()
         data = self.link.read_available()
-        self.raw.tick()
         if data:
+            # logged before anything else can raise (a failed sync in tick below): a
+            # chunk read from the link and not logged would leave a hole in the raw log
             self.raw.write(data)
             self.last_byte = time.monotonic()
             frames = 0
@@ -192,6 +193,7 @@ class _Conversation:
             if frames:
                 self.last_frame = self.last_byte
                 self.bytes_at_last_frame = self.raw.bytes_written
+        self.raw.tick()
         return len(data)
 
     def wait_for(self, done: Callable[[], bool], what: str, timeout_s: float | None = None) -> None:

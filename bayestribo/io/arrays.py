@@ -11,7 +11,7 @@ for the unit.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -207,6 +207,7 @@ def signals_from_arrays(
     scale: Mapping[str, float] | None = None,
     where: str = "",
     kind: str = "variable",
+    load: Callable[[NamedArray], NDArray] | None = None,
 ) -> dict[str, NDArray]:
     """Pick and convert the signals of a run from a file's named arrays.
 
@@ -225,6 +226,9 @@ def signals_from_arrays(
         The file, for messages.
     kind : str
         What the arrays are called in messages ("variable", "dataset").
+    load : callable, optional
+        Reads the values of a picked array (an HDF5 dataset read only once picked);
+        without it, ``values`` are used as given.
 
     Returns
     -------
@@ -245,7 +249,12 @@ def signals_from_arrays(
     factors = check_scale(scale, list(picked), where)
     out = {}
     for role, (item, factor) in picked.items():
-        out[role] = _as_vector(item, role, where, kind) * factor * factors.get(role, 1.0)
+        if load is not None:
+            item = NamedArray(item.name, load(item), item.unit)
+        values = _as_vector(item, role, where, kind)  # a new float64 array: scaled in place
+        values *= factor
+        values *= factors.get(role, 1.0)
+        out[role] = values
     sizes = {role: values.size for role, values in out.items()}
     if len(set(sizes.values())) > 1:
         detail = ", ".join(f"{picked[r][0].name} ({n})" for r, n in sizes.items())

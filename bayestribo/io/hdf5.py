@@ -2,24 +2,26 @@
 
 Every numeric dataset of the file (or of ``group``) is a candidate; a dataset's
 ``units`` (or ``unit``) attribute states its unit. See :mod:`bayestribo.io.arrays`
-for how the signals are picked.
+for how the signals are picked. The signals are picked from the datasets' names, shapes
+and types alone; only the picked datasets are read, each once what it declares fits
+the read budget (:mod:`bayestribo.io.budget`).
 """
 
 from __future__ import annotations
 
-import contextlib
-import os
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo._optional import require
 from bayestribo.errors import RunFormatError
 from bayestribo.io.arrays import MAX_SAMPLES, NamedArray, signals_from_arrays
+from bayestribo.io.budget import FLOAT_BYTES, ReadBudget, read_budget
 
-__all__ = ["hdf5_arrays", "read_hdf5"]
+__all__ = ["hdf5_signals", "read_hdf5"]
 
 #: Attributes that may hold a dataset's unit.
 UNIT_ATTRIBUTES = ("units", "unit", "unit_string", "Units")
@@ -40,46 +42,71 @@ def _unit(attrs: Mapping) -> str | None:
     return None
 
 
-#: Most address space an HDF5 read may add to the process [bytes]: a channel of
-#: :data:`~bayestribo.io.arrays.MAX_SAMPLES` float64 values is 160 MB.
-READ_ADDRESS_SPACE = 1 << 30
+def _placeholder(shape: tuple[int, ...], dtype: Any) -> NDArray:
+    """An array of a dataset's shape and type that holds no data (every element is one
+    zero), for picking the signals by name before any dataset is read."""
+    return np.lib.stride_tricks.as_strided(np.zeros(1, dtype), shape, (0,) * len(shape))
 
 
-@contextlib.contextmanager
-def _bounded_address_space(extra: int) -> Iterator[None]:
-    """Limit the process's address space to its present size plus ``extra`` while the
-    HDF5 library reads a file, and restore the limit after.
+def _datasets(h5py: Any, root: Any) -> dict[str, Any]:
+    """The numeric datasets (at most 2-D) under ``root``, by path, none of them read."""
+    found: dict[str, Any] = {}
 
-    The HDF5 C library takes the sizes a file states on trust: a damaged global heap
-    made it allocate and fill 4 GB before failing on one file of 4400 mutants
-    (``benchmarks/fuzz.py``). Under the limit that allocation fails at once and the
-    library reports an error, which the reader turns into the package's error. Where
-    the limit cannot be read or set (not Linux), nothing is limited.
-    """
-    try:
-        import resource
+    def visit(name: str, obj: object) -> None:
+        if isinstance(obj, h5py.Dataset) and obj.dtype.kind in "iuf" and obj.ndim <= 2:
+            found[obj.name.lstrip("/")] = obj
 
-        soft, hard = resource.getrlimit(resource.RLIMIT_AS)
-        with open("/proc/self/statm") as fh:
-            size = int(fh.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
-    except (ImportError, OSError, ValueError):
-        yield
-        return
-    limit = size + extra
-    if hard != resource.RLIM_INFINITY:
-        limit = min(limit, hard)
-    if soft != resource.RLIM_INFINITY and soft <= limit:
-        yield
-        return
-    resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
-    try:
-        yield
-    finally:
-        resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
+    root.visititems(visit)
+    return found
 
 
-def hdf5_arrays(path: str | Path, *, group: str | None, where: str) -> list[NamedArray]:
-    """The numeric datasets of an HDF5 file (or of one group), with their units.
+def _reader(datasets: Mapping[str, Any], budget: ReadBudget) -> Callable[[NamedArray], NDArray]:
+    """Read a picked dataset once what it declares is checked: where its data are, its
+    count of values and, with the datasets read before it, the read budget."""
+
+    def load(item: NamedArray) -> NDArray:
+        obj = datasets[item.name]
+        full = item.name
+        if obj.is_virtual or obj.external:
+            raise RunFormatError(
+                f"dataset {full!r} keeps its data in other files (an HDF5 "
+                f"{'virtual' if obj.is_virtual else 'external'} dataset), which are "
+                "not followed; copy the data into the file (h5repack, or write "
+                "the dataset again)",
+                budget.where,
+            )
+        if obj.size > MAX_SAMPLES:
+            raise RunFormatError(
+                f"dataset {full!r} claims {obj.size} values (shape {obj.shape}); "
+                f"expected at most {MAX_SAMPLES} samples per channel (a damaged "
+                "header, or a record to cut into runs)",
+                budget.where,
+            )
+        budget.claim(
+            f"dataset {full!r}",
+            int(obj.size) * max(FLOAT_BYTES, obj.dtype.itemsize),
+            f"shape {obj.shape}, {obj.dtype}",
+        )
+        return obj[()]
+
+    return load
+
+
+def hdf5_signals(
+    path: str | Path,
+    *,
+    group: str | None,
+    channels: Mapping[str, str] | None,
+    scale: Mapping[str, float] | None,
+    where: str,
+    kind: str = "dataset",
+) -> dict[str, NDArray]:
+    """The signals of a run in an HDF5 file, reading only the datasets picked.
+
+    The datasets are picked by name and unit (:func:`~bayestribo.io.arrays.signals_from_arrays`)
+    from what the file declares; each picked dataset is read only once its shape and
+    type fit the read budget (:func:`bayestribo.io.budget.read_budget`), so a small
+    file that declares a huge dataset is refused before anything is allocated.
 
     Parameters
     ----------
@@ -87,32 +114,33 @@ def hdf5_arrays(path: str | Path, *, group: str | None, where: str) -> list[Name
         The file.
     group : str, optional
         Only the datasets under this group.
+    channels, scale : mapping, optional
+        As for :func:`read_hdf5`.
     where : str
         The file, for messages.
+    kind : str
+        What the arrays are called in messages.
 
     Returns
     -------
-    list of NamedArray
-        Datasets by full path (without the leading ``/``).
+    dict
+        Arrays by canonical column name, in s, m and m/s.
 
     Raises
     ------
     RunFormatError
-        For a file that is not HDF5 or a group that does not exist.
+        For a file that is not HDF5, a group that does not exist, signals that cannot
+        be picked, or datasets past the read budget.
     MissingDependencyError
         When h5py is not installed.
     """
     h5py = require("h5py", "hdf5")
-    with _bounded_address_space(READ_ADDRESS_SPACE):
-        return _arrays(h5py, path, group, where)
-
-
-def _arrays(h5py: Any, path: str | Path, group: str | None, where: str) -> list[NamedArray]:
     try:
+        size = Path(path).stat().st_size
         handle = h5py.File(path, "r")
     except OSError as exc:
         raise RunFormatError(f"not a readable HDF5 file ({exc})", where) from None
-    arrays: list[NamedArray] = []
+    budget = read_budget(size, where)
     with handle:
         root = handle
         if group is not None:
@@ -122,30 +150,19 @@ def _arrays(h5py: Any, path: str | Path, group: str | None, where: str) -> list[
                     f"group: no group {group!r} in the file; its groups are {groups}", where
                 )
             root = handle[group]
-
-        def visit(name: str, obj: object) -> None:
-            if isinstance(obj, h5py.Dataset) and obj.dtype.kind in "iuf" and obj.ndim <= 2:
-                full = obj.name.lstrip("/")
-                # what the dataset claims, checked before its data are read
-                if obj.is_virtual or obj.external:
-                    raise RunFormatError(
-                        f"dataset {full!r} keeps its data in other files (an HDF5 "
-                        f"{'virtual' if obj.is_virtual else 'external'} dataset), which are "
-                        "not followed; copy the data into the file (h5repack, or write "
-                        "the dataset again)",
-                        where,
-                    )
-                if obj.size > MAX_SAMPLES:
-                    raise RunFormatError(
-                        f"dataset {full!r} claims {obj.size} values (shape {obj.shape}); "
-                        f"expected at most {MAX_SAMPLES} samples per channel (a damaged "
-                        "header, or a record to cut into runs)",
-                        where,
-                    )
-                arrays.append(NamedArray(full, obj[()], _unit(obj.attrs)))
-
-        root.visititems(visit)
-    return arrays
+        datasets = _datasets(h5py, root)
+        arrays = [
+            NamedArray(name, _placeholder(obj.shape, obj.dtype), _unit(obj.attrs))
+            for name, obj in datasets.items()
+        ]
+        return signals_from_arrays(
+            arrays,
+            channels=channels,
+            scale=scale,
+            where=where,
+            kind=kind,
+            load=_reader(datasets, budget),
+        )
 
 
 def read_hdf5(
@@ -182,5 +199,4 @@ def read_hdf5(
         For a file that is not HDF5, or signals that cannot be picked.
     """
     where = str(path)
-    arrays = hdf5_arrays(path, group=group, where=where)
-    return signals_from_arrays(arrays, channels=channels, scale=scale, where=where, kind="dataset")
+    return hdf5_signals(path, group=group, channels=channels, scale=scale, where=where)

@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 
 from bayestribo._optional import require
 from bayestribo.errors import RunFormatError
+from bayestribo.io.budget import FLOAT_BYTES, read_budget
 from bayestribo.io.run import COLUMNS, DISPLACEMENT, TIME, VELOCITY
 from bayestribo.io.text import check_scale
 from bayestribo.io.uff import LENGTH_UNIT_FACTORS
@@ -86,7 +87,23 @@ def read_tdms(
     path = Path(path)
     where = str(path)
     try:
-        tdms = TdmsFile.read(str(path))
+        # opened, not read: only the chosen channels' data are read, once counted
+        tdms = TdmsFile.open(str(path))
+    except Exception as exc:  # third-party parser, untrusted file: any failure is a format error
+        raise RunFormatError(f"could not read the file as TDMS: {exc!r}", where) from None
+    with tdms:
+        return _read_channels(tdms, path, where, channels, group, scale)
+
+
+def _read_channels(
+    tdms: Any,
+    path: Path,
+    where: str,
+    channels: Mapping[str, str] | None,
+    group: str | None,
+    scale: Mapping[str, float] | None,
+) -> dict[str, NDArray]:
+    try:
         groups = {g.name: g for g in tdms.groups()}
     except Exception as exc:  # third-party parser, untrusted file: any failure is a format error
         raise RunFormatError(f"could not read the file as TDMS: {exc!r}", where) from None
@@ -127,12 +144,26 @@ def read_tdms(
             f"channels: a {DISPLACEMENT!r} or {VELOCITY!r} channel is needed", where
         )
     factors = check_scale(scale, list(channels), where)
+    budget = read_budget(path.stat().st_size, where)
 
     out: dict[str, NDArray] = {}
     steps: dict[str, tuple[float, float]] = {}
     for name, channel_name in channels.items():
         channel = available[channel_name]
         label = f"{group}/{channel_name}"
+        try:
+            declared = len(channel)
+            stated = getattr(channel, "dtype", None)
+            dtype = np.dtype(np.float64 if stated is None else stated)
+        except Exception as exc:  # npTDMS failure while reading the channel's description
+            raise RunFormatError(
+                f"TDMS channel {label}: cannot read its description: {exc!r}", where
+            ) from None
+        budget.claim(
+            f"TDMS channel {label!r}",
+            declared * max(FLOAT_BYTES, dtype.itemsize),
+            f"{declared} values of {dtype}",
+        )
         try:
             data = np.asarray(channel[:])
         except Exception as exc:  # npTDMS failure while reading data

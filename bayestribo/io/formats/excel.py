@@ -24,11 +24,21 @@ from numpy.typing import NDArray
 
 from bayestribo._optional import require
 from bayestribo.errors import RunFormatError
+from bayestribo.io.budget import ReadBudget, read_budget
 from bayestribo.io.options import ReadOptions
 from bayestribo.io.registry import FileFormat
 from bayestribo.io.text import parse_lines
 
 __all__ = ["FORMAT", "read_xlsx"]
+
+#: Memory a cell takes on its way to the text parser, as text and then as a number
+#: [bytes]: a worksheet of two columns of numbers reads in about 200 bytes a cell
+#: (peak resident memory over the number of cells), rounded up.
+CELL_BYTES = 256
+#: Read budget per byte of a workbook [-] (:func:`~bayestribo.io.budget.read_budget`):
+#: its cells take about 35 times the file's size through the parser (13 bytes a row of
+#: two numbers in the file); 48 leaves room for wider rows.
+PER_FILE_BYTE = 48
 
 #: Rows looked at to tell a worksheet of samples from a sheet of notes or a chart.
 _PROBE_ROWS = 50
@@ -47,18 +57,30 @@ def _cell(value: Any) -> str:
     return " ".join(str(value).split())  # no tab or line break inside a field
 
 
-def _lines(rows: Iterable[tuple[Any, ...]]) -> list[str]:
+def _lines(rows: Iterable[tuple[Any, ...]], budget: ReadBudget | None = None) -> list[str]:
     """Rows as tab-separated lines, each as wide as the widest row: a column left empty
-    in its last rows (a derived channel) reads as empty cells, as in a CSV export."""
-    cells = []
-    width = 0
-    for row in rows:
-        kept = list(row)
-        while kept and kept[-1] is None:
-            kept.pop()
-        width = max(width, len(kept))
-        cells.append([_cell(c) for c in kept])
-    return ["\t".join(row + [""] * (width - len(row))) if row else "" for row in cells]
+    in its last rows (a derived channel) reads as empty cells, as in a CSV export.
+
+    With ``budget``, the cells are counted as they come (:data:`CELL_BYTES` each) and
+    refused past it: a workbook compressed from repeated cells declares nothing of its
+    size until its rows are read.
+    """
+    lines: list[str] = []
+    fields: list[int] = []
+    width = cells = 0
+    for i, row in enumerate(rows):
+        cells += len(row)
+        if budget is not None and cells * CELL_BYTES > budget.limit:
+            budget.claim(
+                "the worksheet", cells * CELL_BYTES, f"{cells} cells to row {i + 1}", at_least=True
+            )
+        n = len(row)
+        while n and row[n - 1] is None:
+            n -= 1
+        width = max(width, n)
+        lines.append("\t".join(_cell(c) for c in row[:n]))
+        fields.append(n)
+    return [line + "\t" * (width - n) if n else "" for line, n in zip(lines, fields, strict=True)]
 
 
 #: Rows of numbers alone that make a worksheet of one column a sheet of samples (a
@@ -80,6 +102,23 @@ def _has_numbers(sheet: Any) -> bool:
         if alone >= _COLUMN_ROWS:
             return True
     return False
+
+
+def _check_parts(path: Path, where: str) -> None:
+    """Refuse a workbook whose parts declare more uncompressed bytes than its read budget
+    (:func:`~bayestribo.io.budget.read_budget`), from the zip directory alone: openpyxl
+    holds the shared strings in memory and parses every worksheet it is asked for.
+    A file that is not a zip is left to :func:`_open`, which names what is wrong."""
+    try:
+        with zipfile.ZipFile(path) as archive:
+            parts = archive.infolist()
+    except (zipfile.BadZipFile, OSError, EOFError, ValueError):
+        return
+    declared = sum(part.file_size for part in parts)
+    budget = read_budget(path.stat().st_size, where)
+    largest = max(parts, key=lambda part: part.file_size, default=None)
+    detail = f"largest part {largest.filename!r}" if largest is not None else ""
+    budget.claim(f"the workbook's {len(parts)} parts", declared, detail)
 
 
 def _open(path: Path) -> Any:
@@ -168,11 +207,13 @@ def read_xlsx(
     """
     path = Path(path)
     where = str(path)
+    _check_parts(path, where)
     book = _open(path)
     try:
         ws = _sheet(book, sheet, where)
         title = ws.title
-        lines = _lines(ws.iter_rows(values_only=True))
+        budget = read_budget(path.stat().st_size, where, per_file_byte=PER_FILE_BYTE)
+        lines = _lines(ws.iter_rows(values_only=True), budget)
     finally:
         book.close()
     return parse_lines(
@@ -196,6 +237,7 @@ def _read(path: Path, options: ReadOptions) -> dict[str, NDArray]:
 
 
 def _describe(path: Path, options: ReadOptions) -> dict[str, Any]:
+    _check_parts(path, str(path))
     book = _open(path)
     try:
         ws = _sheet(book, options.sheet, str(path))

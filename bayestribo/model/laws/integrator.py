@@ -45,44 +45,19 @@ the initial state) by a fixed-point iteration; for a constant friction this is e
 from __future__ import annotations
 
 import hashlib
-import importlib.util
 import inspect
-import os
 import sys
-import tempfile
 from collections.abc import Callable
 from functools import cache
-from pathlib import Path
 from types import ModuleType
 
-from bayestribo._files import write_text
 from bayestribo.model.laws import _core
+from bayestribo.model.laws.cache import CACHE_ENV, law_cache_dir, load_module
 
-__all__ = ["DEFAULT_STEPS", "LADDER", "law_cache_dir", "make_integrator"]
+__all__ = ["CACHE_ENV", "DEFAULT_STEPS", "LADDER", "law_cache_dir", "make_integrator"]
 
 DEFAULT_STEPS = _core.DEFAULT_STEPS
 LADDER = _core.LADDER
-#: Environment variable naming the folder of the compiled laws (default: the user's
-#: cache folder, ``$XDG_CACHE_HOME/bayestribo/laws`` or ``~/.cache/bayestribo/laws``).
-CACHE_ENV = "BAYESTRIBO_CACHE_DIR"
-
-
-def law_cache_dir() -> Path | None:
-    """The folder where each law's integrator is written and numba caches it, or None
-    when no such folder can be made (then every process compiles its laws)."""
-    base = os.environ.get(CACHE_ENV)
-    if base:
-        folder = Path(base)
-    else:
-        xdg = os.environ.get("XDG_CACHE_HOME")
-        folder = (Path(xdg) if xdg else Path.home() / ".cache") / "bayestribo" / "laws"
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        probe = tempfile.NamedTemporaryFile(dir=folder, delete=True)
-        probe.close()
-    except OSError:
-        return None
-    return folder
 
 
 def _sum_source(name: str, forces: tuple, offsets: tuple, sizes: tuple, first: int) -> str:
@@ -155,24 +130,9 @@ def _law_source(layout: tuple) -> tuple[str, list, bool]:
 
 def _load(text: str, forces: list, cacheable: bool) -> ModuleType:
     digest = hashlib.sha1(text.encode()).hexdigest()[:20]
-    name = f"bayestribo_law_{digest}"
     folder = law_cache_dir() if cacheable else None
-    if folder is None:
-        folder = Path(tempfile.mkdtemp(prefix="bayestribo-law-"))
-    path = folder / f"{name}.py"
-    if not path.is_file() or path.read_text(encoding="utf-8") != text:
-        # written whole under another name, then renamed: a concurrent process
-        # reads either no file or the whole one
-        write_text(path, text)
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)  # type: ignore[arg-type]
-    if not cacheable:
-        for i, f in enumerate(forces):
-            setattr(module, f"_f{i}", f)
-    # registered under its name: numba's cache finds a function's module by name
-    sys.modules[name] = module
-    spec.loader.exec_module(module)  # type: ignore[union-attr]
-    return module
+    namespace = None if cacheable else {f"_f{i}": f for i, f in enumerate(forces)}
+    return load_module(f"bayestribo_law_{digest}", text, folder, namespace)
 
 
 @cache
@@ -187,8 +147,10 @@ def make_integrator(
     """The compiled Π-grid, turning-point and swing functions of one law.
 
     The template :mod:`bayestribo.model.laws._core` is written with the law's forces to
-    a file of the law cache (:func:`law_cache_dir`) and imported, so that numba compiles
-    it once and later processes load it from its cache. Terms whose forces cannot be
+    a file of the law cache (:func:`~bayestribo.model.laws.cache.law_cache_dir`) and
+    executed, so that numba compiles it once and later processes load it from its
+    cache, each file checked against the SHA-256 recorded when it was written
+    (:mod:`bayestribo.model.laws.cache`). Terms whose forces cannot be
     imported by name (defined in ``__main__`` or inside a function) are compiled in each
     process instead.
 
