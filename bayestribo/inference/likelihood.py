@@ -68,7 +68,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 import scipy.stats
@@ -78,7 +78,16 @@ from bayestribo.model import averaged_pi
 from bayestribo.model.laws import Law, get_law
 from bayestribo.signal.increments import PiData
 
-__all__ = ["BASE_NUISANCES", "MODELS", "SHAPE_TERMS", "Params", "PiLikelihood", "ShapeDeparture"]
+__all__ = [
+    "BASE_NUISANCES",
+    "MODELS",
+    "NEAR_ZERO",
+    "SHAPE_TERMS",
+    "Params",
+    "PiLikelihood",
+    "ShapeDeparture",
+    "departure_size",
+]
 
 #: Parameter values by name: the law's parameters and ``y0``, arrays of shape (n,) or
 #: (n, 1) (a parameter of the law that is missing takes its null value,
@@ -433,6 +442,8 @@ class PiLikelihood:
             max_relative_sd=float(sd_g[worst]),
             at_increment=worst,
             relative=g,
+            reference=float(model[worst]),
+            largest=float(np.max(np.abs(model))),
         )
 
 
@@ -458,6 +469,11 @@ class ShapeDeparture:
         Index of that increment.
     relative : ndarray
         The fitted relative departure at every increment, shape (m,).
+    reference : float
+        The law's own increment of Π there (dimensionless): the departure in Π is
+        ``max_relative × reference`` (:attr:`max_absolute`).
+    largest : float
+        The largest of the law's increments (dimensionless), the scale of Π.
     """
 
     chi2: float
@@ -467,6 +483,18 @@ class ShapeDeparture:
     max_relative_sd: float
     at_increment: int
     relative: NDArray
+    reference: float = math.nan
+    largest: float = math.nan
+
+    @property
+    def max_absolute(self) -> float:
+        """The departure in Π's increment where it is largest (dimensionless)."""
+        return self.max_relative * self.reference
+
+    @property
+    def max_absolute_sd(self) -> float:
+        """Its standard error (dimensionless)."""
+        return self.max_relative_sd * abs(self.reference)
 
     @classmethod
     def undetermined(cls, m: int) -> ShapeDeparture:
@@ -479,12 +507,14 @@ class ShapeDeparture:
             return "the shape of the decay could not be tested (too few increments)"
         return (
             f"the increments depart from the law smoothly along the decay by up to "
-            f"{100 * self.max_relative:+.3g} % (± {100 * self.max_relative_sd:.2g} %; "
-            f"χ² = {self.chi2:.1f} for {self.dof} shape terms, p = {self.p_value:.1e})"
+            f"{departure_size(self.to_dict())} (χ² = {self.chi2:.1f} for {self.dof} shape "
+            f"terms, p = {self.p_value:.1e})"
         )
 
     def to_dict(self) -> dict[str, float | int]:
-        """Plain data (without the per-increment curve)."""
+        """Plain data (without the per-increment curve): ``chi2``, ``dof``,
+        ``p_value``, ``max_relative``, ``max_relative_sd``, ``at_increment``,
+        ``reference``, ``largest``, ``max_absolute``, ``max_absolute_sd``."""
         return {
             "chi2": self.chi2,
             "dof": self.dof,
@@ -492,4 +522,42 @@ class ShapeDeparture:
             "max_relative": self.max_relative,
             "max_relative_sd": self.max_relative_sd,
             "at_increment": self.at_increment,
+            "reference": self.reference,
+            "largest": self.largest,
+            "max_absolute": self.max_absolute,
+            "max_absolute_sd": self.max_absolute_sd,
         }
+
+
+#: Below this fraction of the largest increment, the law's increment is near zero: a
+#: departure relative to it says nothing (+3.7e+03 % of almost nothing).
+NEAR_ZERO = 0.01
+
+
+def departure_size(shape: Mapping[str, Any]) -> str:
+    """How far the decay departs from the law (:meth:`ShapeDeparture.to_dict`), in
+    words: in percent of the law's own increment where that increment is a fair
+    reference, else (the increment near zero, below :data:`NEAR_ZERO` of the largest,
+    or the departure larger than the increment itself) the absolute departure in Π,
+    dimensionless and as a share of the largest increment.
+
+    Examples
+    --------
+    >>> departure_size({"max_relative": 0.012, "max_relative_sd": 0.002,
+    ...                 "reference": 0.5, "largest": 2.0})
+    '+1.2 % (± 0.2 %)'
+    >>> departure_size({"max_relative": 37.0, "max_relative_sd": 3.2,
+    ...                 "reference": 1e-6, "largest": 2.0})
+    '+3.7e-05 (± 3.2e-06) in Π, 0.0018 % of its largest increment, where the law is near zero'
+    """
+    g, sd_g = float(shape["max_relative"]), float(shape["max_relative_sd"])
+    ref = float(shape.get("reference", math.nan))
+    largest = float(shape.get("largest", math.nan))
+    near_zero = abs(g) > 1.0 or (math.isfinite(largest) and abs(ref) < NEAR_ZERO * largest)
+    if not (near_zero and math.isfinite(ref) and largest > 0):
+        return f"{100 * g:+.3g} % (± {100 * sd_g:.2g} %)"
+    diff, sd = g * ref, sd_g * abs(ref)
+    return (
+        f"{diff:+.3g} (± {sd:.2g}) in Π, {100 * abs(diff) / largest:.2g} % of its largest "
+        "increment, where the law is near zero"
+    )
