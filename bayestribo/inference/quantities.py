@@ -4,9 +4,9 @@ A fit's posterior group holds the law's sampled parameters, the physical quantit
 its terms derive (:meth:`bayestribo.model.laws.Term.physical`) and the quantities
 every friction fit derives (μ_s, the friction displacement x_c, ζ_k, d_k, ...).
 :func:`describe` says what one of them is, from the registry of dissipation terms
-first (a law's parameter or physical quantity: its ``symbol``, ``label`` and
-``unit``), then from :data:`DERIVED` (the quantities
-:func:`bayestribo.inference.assemble.derived_quantities` makes); the command line,
+first (a law's parameter: its ``symbol``, ``label`` and ``unit``), then from
+:data:`DERIVED` (the quantities :func:`bayestribo.inference.assemble.derived_quantities`
+makes), then from the registry again (a term's physical quantity); the command line,
 :meth:`bayestribo.inference.FitResult.to_dataframe` and the summaries read it, so that
 a new term's parameters are named in words with no edit here.
 
@@ -40,8 +40,6 @@ __all__ = [
 #: Symbol, name in words and unit of each quantity a friction fit derives beyond the
 #: law's own; ``"length"`` is the displacement's unit (:func:`describe` resolves it).
 DERIVED: dict[str, tuple[str, str, str]] = {
-    # the reported μ_k is the coefficient x_c k/N (the sampled one is in units of y)
-    "mu_k": ("μ_k", "kinetic friction coefficient", "1"),
     "mu_s": ("μ_s", "static friction coefficient", "1"),
     "friction_displacement": ("x_c", "friction as displacement", "length"),
     "static_friction_displacement": ("x_s", "static friction as displacement", "length"),
@@ -53,6 +51,11 @@ DERIVED: dict[str, tuple[str, str, str]] = {
     "log10_discrepancy": ("log₁₀ σ_d", "model discrepancy scale", "1"),
     "log10_shape": ("log₁₀ σ_s", "shape discrepancy scale", "1"),
 }
+
+#: Units of a law's parameters as a fit reports them, where they differ from the
+#: registry's: the reported μ_k is the coefficient x_c k/N, a number (the sampled one
+#: is in units of y, which is the same number where ℓ = N/k).
+_REPORTED_UNITS = {"mu_k": "1"}
 
 #: The same friction quantities for a rotation (the displacement an angle).
 _ANGLES: dict[str, tuple[str, str]] = {
@@ -123,10 +126,11 @@ def _length_unit(metadata: dict[str, Any]) -> str:
     return {"m": "m", "rad": "rad"}.get(unit, "signal length unit")
 
 
-def _registry(law: str) -> dict[str, tuple[str, str, str]]:
-    """Symbol, label and unit of every parameter and physical quantity the terms of
-    ``law`` name (each term's :meth:`~bayestribo.model.laws.Term.physical`, with and
-    without a known stiffness); empty for a law this version does not register."""
+def _registry(law: str) -> tuple[dict[str, tuple[str, str, str]], dict[str, tuple[str, str, str]]]:
+    """Symbol, label and unit of every parameter, and of every physical quantity, the
+    terms of ``law`` name (each term's :meth:`~bayestribo.model.laws.Term.physical`,
+    with and without a known stiffness); empty for a law this version does not
+    register."""
     import numpy as np
 
     from bayestribo.model.laws import PhysicalScale, get_law
@@ -134,12 +138,13 @@ def _registry(law: str) -> dict[str, tuple[str, str, str]]:
     try:
         terms = get_law(law).terms
     except ValueError:
-        return {}
-    out: dict[str, tuple[str, str, str]] = {}
+        return {}, {}
+    parameters: dict[str, tuple[str, str, str]] = {}
+    physical: dict[str, tuple[str, str, str]] = {}
     scales = (PhysicalScale(), PhysicalScale(stiffness=1.0, mass=1.0, load=1.0))
     for term in terms:
         for p in term.parameters:
-            out[p.name] = (p.symbol, p.label, "1" if p.unit == "-" else p.unit)
+            parameters[p.name] = (p.symbol, p.label, "1" if p.unit == "-" else p.unit)
         values = {
             p.name: np.array([0.5 * (p.low + min(p.high, p.low + 1.0))]) for p in term.parameters
         }
@@ -149,8 +154,8 @@ def _registry(law: str) -> dict[str, tuple[str, str, str]]:
             except (KeyError, ValueError, ZeroDivisionError):  # a term needing more
                 continue
             for name, (_, unit, symbol, label) in quantities.items():
-                out.setdefault(name, (symbol, label, "1" if unit == "-" else unit))
-    return out
+                physical.setdefault(name, (symbol, label, "1" if unit == "-" else unit))
+    return parameters, physical
 
 
 def describe(
@@ -185,16 +190,18 @@ def describe(
     """
     metadata = metadata or {}
     length = _length_unit(metadata)
-    known = _registry(law)
-    recorded = units or {}
+    parameters, physical = _registry(law)
+    recorded = {**_REPORTED_UNITS, **(units or {})}
     out: dict[str, Quantity] = {}
     for name in names:
-        if name in DERIVED:
+        if name in parameters:
+            symbol, label, unit = parameters[name]
+        elif name in DERIVED:
             symbol, label, unit = DERIVED[name]
             if length == "rad" and name in _ANGLES:
                 symbol, label = _ANGLES[name]
-        elif name in known:
-            symbol, label, unit = known[name]
+        elif name in physical:
+            symbol, label, unit = physical[name]
         else:
             symbol, label, unit = name, "", ""
         unit = recorded.get(name, unit)
