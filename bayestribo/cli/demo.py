@@ -4,7 +4,18 @@ Fits the bundled (simulated) glycerol run ``glycerol-N0.31-r1`` and a reduced bu
 campaign across the five loads (one repeat per load and one run in air; ``--full`` for
 all of them), prints the credible intervals of ζ and μ_k next to the paper's values,
 and writes two HTML reports, their figures (PNG) and results (JSON) into an output
-folder.
+folder: ``--out``, by default ``demo/`` in the user's cache folder
+(``$XDG_CACHE_HOME/bayestribo/demo``, else ``~/.cache/bayestribo/demo``), never the
+current folder, which may be a source checkout. Where it went is printed at the end.
+
+The numbers printed are read from the results the reports wrote (``single-run.json``,
+``campaign.json``) and shown as the reports show them: a run's posterior mean, a
+population's posterior median, each with its 95 % interval in the digits it supports
+(:func:`bayestribo.summary.interval_text`).
+
+The exit status is 0 when every sampler converged (the run's, each run's of the
+campaign and every population's and trend's), 1 otherwise, with what did not converge
+named on stderr.
 
 The bundled campaign is ``data/`` of a source checkout; without it the campaign is
 simulated again (:func:`bayestribo.synthetic.campaign.write_campaign`, the same fixed seed,
@@ -20,13 +31,21 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import sys
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
-__all__ = ["DEMO_RUN", "PAPER", "campaign_folder", "register", "summary_lines"]
+__all__ = [
+    "DEMO_RUN",
+    "PAPER",
+    "campaign_folder",
+    "default_out",
+    "register",
+    "summary_lines",
+    "unconverged",
+]
 
 #: The bundled run of the single-run report.
 DEMO_RUN = "glycerol-N0.31-r1"
@@ -44,11 +63,20 @@ def register(subparsers: Any) -> None:
             "Fit the bundled simulated run glycerol-N0.31-r1 and the bundled glycerol "
             "campaign across loads (one repeat per load and one run in air, or all runs "
             "with --full), print the 95 % credible intervals of ζ and μ_k next to the "
-            "paper's values, and write HTML reports, figures and JSON results to --out."
+            "paper's values, and write HTML reports, figures and JSON results to --out "
+            f"(default: {default_out()}, the user's cache folder; printed at the end). "
+            "Exit status 1, naming what, when a sampler did not converge (the run's, a "
+            "campaign run's, a population's or a trend's)."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    p.add_argument("--out", type=Path, default=Path("bayestribo-demo"), help="output folder")
+    p.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        help="output folder (default: demo/ in the user's cache folder, $XDG_CACHE_HOME/"
+        "bayestribo or ~/.cache/bayestribo)",
+    )
     size = p.add_mutually_exclusive_group()
     size.add_argument(
         "--quick",
@@ -67,6 +95,12 @@ def register(subparsers: Any) -> None:
 def _cache_dir() -> Path:
     base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
     return Path(base) / "bayestribo"
+
+
+def default_out() -> Path:
+    """Where the demo writes without ``--out``: ``demo/`` in the user's cache folder
+    (``$XDG_CACHE_HOME/bayestribo``, else ``~/.cache/bayestribo``)."""
+    return _cache_dir() / "demo"
 
 
 def campaign_folder(cache: Path | None = None) -> tuple[Path, str]:
@@ -91,22 +125,18 @@ def campaign_folder(cache: Path | None = None) -> tuple[Path, str]:
     return folder, "simulated earlier (cache)"
 
 
-def _interval(summary: dict[str, Any], significant: bool = False) -> str:
-    """``mean [low, high]`` with enough decimals to show the interval's width.
+def _interval(summary: Mapping[str, Any], centre: str = "mean") -> str:
+    """``centre [low, high]`` in the digits the interval supports, as the reports write
+    it (:func:`bayestribo.summary.interval_text`)."""
+    from bayestribo.summary import interval_text
 
-    With ``significant``, two significant digits each (for a σ whose interval starts
-    near zero).
-    """
-    lo, hi = summary["interval"]
-    if significant:
-        return f"{summary['mean']:.2g} [{lo:.2g}, {hi:.2g}]"
-    width = hi - lo
-    decimals = 5 if width <= 0 else min(max(1 - math.floor(math.log10(width)), 4), 9)
-    return f"{summary['mean']:.{decimals}f} [{lo:.{decimals}f}, {hi:.{decimals}f}]"
+    return interval_text(summary[centre], *summary["interval"])
 
 
 def summary_lines(single: dict[str, Any], campaign: dict[str, Any]) -> list[str]:
-    """The printed comparison: the run, the campaign's population and the paper."""
+    """The printed comparison: the run, the campaign's population and the paper, each
+    number as the reports show it (a run's posterior mean, a population's posterior
+    median)."""
     fit = single["fit"]["parameters"]
     w = 34
     lines = [f"{'':34}{'ζ':<{w}}{'μ_k':<{w}}"]
@@ -135,15 +165,22 @@ def summary_lines(single: dict[str, Any], campaign: dict[str, Any]) -> list[str]
         )
     if pooled:
         params = pooled["parameters"]
-        lines.append(
-            f"campaign, {pooled['n_runs']} runs across loads: population (95 % credible interval)"
+        state = (
+            ""
+            if pooled.get("diagnostics", {}).get("converged", True)
+            else ("  (SAMPLER NOT CONVERGED: do not use)")
         )
         lines.append(
-            f"{'  mean':34}" + "".join(f"{_interval(params[p]['mean']):<{w}}" for p in PAPER)
+            f"campaign, {pooled['n_runs']} runs across loads: population, posterior median "
+            "[95 % credible interval]" + state
+        )
+        lines.append(
+            f"{'  mean':34}"
+            + "".join(f"{_interval(params[p]['mean'], 'median'):<{w}}" for p in PAPER)
         )
         lines.append(
             f"{'  between-run σ':34}"
-            + "".join(f"{_interval(params[p]['sigma'], significant=True):<{w}}" for p in PAPER)
+            + "".join(f"{_interval(params[p]['sigma'], 'median'):<{w}}" for p in PAPER)
         )
     lines.append(
         f"{'paper, glycerol (mean, σ)':34}"
@@ -152,12 +189,57 @@ def summary_lines(single: dict[str, Any], campaign: dict[str, Any]) -> list[str]
     return lines
 
 
+def _samplers(analysis: Mapping[str, Any], where: str) -> Iterator[tuple[str, Mapping]]:
+    """Every population and trend sampler of a campaign analysis (its ``to_dict``), as
+    (what it is, its diagnostics)."""
+    for kind in ("contact", "zeta0", "series", "dissipation"):
+        population = analysis.get(kind) or {}
+        for group in population.get("groups") or []:
+            yield f"{where}population {kind} {group.get('label')}", group.get("diagnostics", {})
+        pooled = population.get("pooled")
+        if pooled:
+            yield f"{where}population {kind}, pooled", pooled.get("diagnostics", {})
+    for kind in ("trends", "dissipation_trends"):
+        for label, trend in (analysis.get(kind) or {}).items():
+            yield f"{where}trend {label}", trend.get("diagnostics", {})
+
+
+def unconverged(single: Mapping[str, Any], campaign: Mapping[str, Any]) -> list[str]:
+    """What did not converge, in the results the demo's reports wrote: the run's fit,
+    each run of the campaign, each population and trend (the series across water
+    fractions too, where analysed); each with its reasons. Empty when all converged.
+    """
+    out = []
+
+    def reasons(diagnostics: Mapping[str, Any]) -> str:
+        said = diagnostics.get("reasons") or []
+        return f": {'; '.join(map(str, said))}" if said else ""
+
+    diagnostics = single["fit"].get("diagnostics", {})
+    if not diagnostics.get("converged", False):
+        out.append(f"the fit of {single.get('name', DEMO_RUN)}{reasons(diagnostics)}")
+    for name, r in sorted((campaign.get("runs") or {}).items()):
+        if not r.get("diagnostics", {}).get("converged", False):
+            out.append(f"the fit of {name}{reasons(r.get('diagnostics', {}))}")
+    for name, why in sorted((campaign.get("failed") or {}).items()):
+        out.append(f"the fit of {name} failed: {why}")
+    analyses = [("", campaign.get("analysis") or {})]
+    water = (campaign.get("water_series") or {}).get("analysis")
+    if water:
+        analyses.append(("water series: ", water))
+    for where, analysis in analyses:
+        for what, d in _samplers(analysis, where):
+            if not d.get("converged", True):
+                out.append(f"the {what}{reasons(d)}")
+    return out
+
+
 def run(args: argparse.Namespace) -> int:
     """Fit, report, print where everything is."""
     from bayestribo.reports.notebooks import run_report
 
     data, origin = campaign_folder()
-    out = args.out.resolve()
+    out = (args.out if args.out is not None else default_out()).resolve()
     out.mkdir(parents=True, exist_ok=True)
     figures = out / "figures"
     single_params: dict[str, Any] = {
@@ -175,6 +257,12 @@ def run(args: argparse.Namespace) -> int:
         "figure_dir": str(figures / "campaign"),
         "summary_path": str(out / "campaign.json"),
     }
+    if not args.full:
+        # One repeat per load: a group of one run per load holds no spread between
+        # repeats to infer (its σ is its prior alone, whose funnel no sampler crosses in
+        # 50 autocorrelation times of the ceiling), so the runs form one population
+        # across loads, with its trend against load; --full groups the 3 repeats per load.
+        campaign_params["by"] = []
     if args.quick:
         single_params.update({"check_model": False, "grid_points": 32})
         campaign_params.update(
@@ -211,4 +299,11 @@ def run(args: argparse.Namespace) -> int:
     print(f"figures:  {figures / 'single-run'} ({n_single} PNG)")
     print(f"          {figures / 'campaign'} ({n_campaign} PNG)")
     print(f"results:  {out / 'single-run.json'}, {out / 'campaign.json'}")
+    stuck = unconverged(single, campaign)
+    if stuck:
+        print(
+            f"bayestribo demo: NOT CONVERGED ({len(stuck)}): " + "; ".join(stuck),
+            file=sys.stderr,
+        )
+        return 1
     return 0
