@@ -550,14 +550,20 @@ def departure_size(shape: Mapping[str, Any]) -> str:
     ...                 "reference": 1e-6, "largest": 2.0})
     '+3.7e-05 (± 3.2e-06) in Π, 0.0018 % of its largest increment, where the law is near zero'
     """
-    g, sd_g = float(shape["max_relative"]), float(shape["max_relative_sd"])
-    ref = float(shape.get("reference", math.nan))
-    largest = float(shape.get("largest", math.nan))
+
+    def number(key: str) -> float:
+        value = shape.get(key)
+        return math.nan if value is None else float(value)
+
+    g, sd_g = number("max_relative"), number("max_relative_sd")
+    ref, largest = number("reference"), number("largest")
     near_zero = abs(g) > 1.0 or (math.isfinite(largest) and abs(ref) < NEAR_ZERO * largest)
     if not (near_zero and math.isfinite(ref) and largest > 0):
-        return f"{100 * g:+.3g} % (± {100 * sd_g:.2g} %)"
+        error = f" (± {100 * sd_g:.2g} %)" if math.isfinite(sd_g) else ""
+        return f"{100 * g:+.3g} %{error}"
     diff, sd = g * ref, sd_g * abs(ref)
+    error = f" (± {sd:.2g})" if math.isfinite(sd) else ""
     return (
-        f"{diff:+.3g} (± {sd:.2g}) in Π, {100 * abs(diff) / largest:.2g} % of its largest "
+        f"{diff:+.3g}{error} in Π, {100 * abs(diff) / largest:.2g} % of its largest "
         "increment, where the law is near zero"
     )
