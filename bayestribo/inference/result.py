@@ -727,12 +727,11 @@ class FitResult:
         """The summary table for Jupyter."""
         import html
 
-        units = self.units()
         rows = "".join(
-            f"<tr><td>{html.escape(name)}</td><td>{html.escape(units[name])}</td>"
+            f"<tr><td>{html.escape(s.title)}</td><td>{html.escape(unit_words(s.unit))}</td>"
             f"<td>{s.mean:.6g}</td><td>{s.sd:.3g}</td>"
             f"<td>[{s.interval[0]:.6g}, {s.interval[1]:.6g}]</td></tr>"
-            for name, s in self.summary().items()
+            for s in self.summary().values()
         )
         state = "converged" if self.converged else "NOT converged"
         if self.at_prior_bound:
