@@ -51,7 +51,8 @@ __all__ = [
 DEMO_RUN = "glycerol-N0.31-r1"
 #: The paper's glycerol values (section 3.1): mean and standard deviation of repeats.
 PAPER = {"zeta": (0.0236, 0.0012), "mu_k": (0.0294, 0.0036)}
-_SYMBOL = {"zeta": "ζ", "mu_k": "μ_k"}
+#: Ceiling on the population samplers' steps when each load has one repeat (see run).
+SINGLE_RUN_GROUP_STEPS = 30_000
 
 
 def register(subparsers: Any) -> None:
@@ -138,55 +139,55 @@ def summary_lines(single: dict[str, Any], campaign: dict[str, Any]) -> list[str]
     number as the reports show it (a run's posterior mean, a population's posterior
     median)."""
     fit = single["fit"]["parameters"]
-    w = 34
-    lines = [f"{'':34}{'ζ':<{w}}{'μ_k':<{w}}"]
+    # (label, cells) of the table's rows; None for a line of text
+    rows: list[tuple[str, list[str] | None]] = [("", ["ζ", "μ_k"])]
     converged = single["fit"]["diagnostics"].get("converged", False)
-    lines.append(
-        f"run {single['name']}: posterior mean [95 % credible interval]"
-        + ("" if converged else "  (SAMPLER NOT CONVERGED: do not use)")
+    rows.append(
+        (
+            f"run {single['name']}: posterior mean [95 % credible interval]"
+            + ("" if converged else "  (SAMPLER NOT CONVERGED: do not use)"),
+            None,
+        )
     )
-    lines.append(
-        f"{'  Bayesian fit':34}"
-        + "".join(f"{_interval(fit[p]) if p in fit else '-':<{w}}" for p in PAPER)
-    )
+    rows.append(("  Bayesian fit", [_interval(fit[p]) if p in fit else "-" for p in PAPER]))
     true = single.get("true") or {}
     if true:
-        lines.append(
-            f"{'  true value (simulated run)':34}"
-            + "".join(f"{true[p] if p in true else '-':<{w}.6g}" for p in PAPER)
+        rows.append(
+            (
+                "  true value (simulated run)",
+                [f"{true[p]:.6g}" if p in true else "-" for p in PAPER],
+            )
         )
     runs = campaign.get("runs") or {}
     stuck = sorted(n for n, r in runs.items() if not r["diagnostics"].get("converged", False))
     failed = sorted(campaign.get("failed") or {})
     pooled = (campaign.get("population") or {}).get("pooled")
     if stuck or failed:
-        lines.append(
-            f"campaign: left out of the population: not converged {stuck}, failed {failed}"
+        rows.append(
+            (f"campaign: left out of the population: not converged {stuck}, failed {failed}", None)
         )
     if pooled:
         params = pooled["parameters"]
-        state = (
-            ""
-            if pooled.get("diagnostics", {}).get("converged", True)
-            else ("  (SAMPLER NOT CONVERGED: do not use)")
+        ok = pooled.get("diagnostics", {}).get("converged", True)
+        rows.append(
+            (
+                f"campaign, {pooled['n_runs']} runs across loads: population, posterior median "
+                "[95 % credible interval]"
+                + ("" if ok else "  (SAMPLER NOT CONVERGED: do not use)"),
+                None,
+            )
         )
-        lines.append(
-            f"campaign, {pooled['n_runs']} runs across loads: population, posterior median "
-            "[95 % credible interval]" + state
-        )
-        lines.append(
-            f"{'  mean':34}"
-            + "".join(f"{_interval(params[p]['mean'], 'median'):<{w}}" for p in PAPER)
-        )
-        lines.append(
-            f"{'  between-run σ':34}"
-            + "".join(f"{_interval(params[p]['sigma'], 'median'):<{w}}" for p in PAPER)
-        )
-    lines.append(
-        f"{'paper, glycerol (mean, σ)':34}"
-        + "".join(f"{f'{m} (σ {s})':<{w}}" for m, s in PAPER.values())
-    )
-    return lines
+        for label, key in (("  mean", "mean"), ("  between-run σ", "sigma")):
+            rows.append((label, [_interval(params[p][key], "median") for p in PAPER]))
+    rows.append(("paper, glycerol (mean, σ)", [f"{m} (σ {s})" for m, s in PAPER.values()]))
+    w = max(len(c) for _, cells in rows if cells for c in cells) + 2
+    first = max(len(label) for label, cells in rows if cells is not None) + 2
+    return [
+        label
+        if cells is None
+        else (f"{label:<{first}}" + "".join(f"{c:<{w}}" for c in cells)).rstrip()
+        for label, cells in rows
+    ]
 
 
 def _samplers(analysis: Mapping[str, Any], where: str) -> Iterator[tuple[str, Mapping]]:
@@ -258,11 +259,11 @@ def run(args: argparse.Namespace) -> int:
         "summary_path": str(out / "campaign.json"),
     }
     if not args.full:
-        # One repeat per load: a group of one run per load holds no spread between
-        # repeats to infer (its σ is its prior alone, whose funnel no sampler crosses in
-        # 50 autocorrelation times of the ceiling), so the runs form one population
-        # across loads, with its trend against load; --full groups the 3 repeats per load.
-        campaign_params["by"] = []
+        # One repeat per load: each load's population holds one run, whose spread
+        # between repeats the data cannot tell (σ keeps its prior), and its sampler's
+        # autocorrelation time is some 200-300 steps: 50 of them need 15000 steps,
+        # more than the default ceiling of 10000.
+        campaign_params["population_steps"] = SINGLE_RUN_GROUP_STEPS
     if args.quick:
         single_params.update({"check_model": False, "grid_points": 32})
         campaign_params.update(

@@ -319,7 +319,7 @@ class FitResult:
             sampled.add("friction_displacement")  # no load: x_c is the sampled friction
         return sampled
 
-    def quantities(self) -> dict[str, Quantity]:
+    def quantity_info(self) -> dict[str, Quantity]:
         """What each quantity of the posterior group is: symbol, name in words and unit,
         from the registry of dissipation terms
         (:func:`bayestribo.inference.quantities.describe`), in the order of
@@ -368,7 +368,7 @@ class FitResult:
         n_walkers = self.diagnostics.get("n_walkers")
         return {
             name: QuantitySummary.of(q, self._chains(name), prob, n_walkers)
-            for name, q in self.quantities().items()
+            for name, q in self.quantity_info().items()
         }
 
     def to_dataframe(self, prob: float = 0.95) -> Any:
@@ -513,7 +513,7 @@ class FitResult:
     def units(self) -> dict[str, str]:
         """Unit of each quantity of :meth:`summary` ("1" for a dimensionless one; the
         displacement's unit ``"m"``, ``"rad"`` or ``"signal length unit"``)."""
-        return {name: q.unit for name, q in self.quantities().items()}
+        return {name: q.unit for name, q in self.quantity_info().items()}
 
     def to_dict(self, prob: float = 0.95) -> dict[str, Any]:
         """JSON-ready record: run, model, seed, package version, run metadata, noise,
