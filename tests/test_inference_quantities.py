@@ -76,6 +76,14 @@ def test_a_departure_from_a_reference_near_zero_is_absolute(relative, reference)
     assert f"{100 * abs(difference):.2g} % of its largest increment" in text
 
 
+def test_the_absolute_departure_is_the_largest_in_pi_not_at_the_relative_ones_place() -> None:
+    # the law's increment is zero where the relative departure is largest (the model's
+    # motion ended): the departure that matters is the largest in Π, elsewhere
+    shape = {**_shape(1e6, 0.0), "max_absolute": -2.5e-4, "max_absolute_sd": 4e-5}
+    text = departure_size(shape)
+    assert text.startswith("-0.00025 (± 4e-05) in Π, 0.025 % of its largest increment")
+
+
 def test_a_departure_saved_before_its_reference_was_recorded_stays_relative() -> None:
     old = {"max_relative": 0.05, "max_relative_sd": 0.01}
     assert departure_size(old) == "+5 % (± 1 %)"

@@ -434,6 +434,10 @@ class PiLikelihood:
         g = basis @ c
         sd_g = np.sqrt(np.maximum(np.einsum("jk,kl,jl->j", basis, cov_c, basis), 0.0))
         worst = int(np.argmax(np.abs(g)))
+        # the departure in Π itself: largest where the law's increments are, which the
+        # relative one need not be (where the law's increment is near zero)
+        absolute, sd_absolute = g * model, sd_g * np.abs(model)
+        at = int(np.argmax(np.abs(absolute)))
         return ShapeDeparture(
             chi2=chi2,
             dof=SHAPE_TERMS,
@@ -444,6 +448,8 @@ class PiLikelihood:
             relative=g,
             reference=float(model[worst]),
             largest=float(np.max(np.abs(model))),
+            max_absolute=float(absolute[at]),
+            max_absolute_sd=float(sd_absolute[at]),
         )
 
 
@@ -470,10 +476,14 @@ class ShapeDeparture:
     relative : ndarray
         The fitted relative departure at every increment, shape (m,).
     reference : float
-        The law's own increment of Π there (dimensionless): the departure in Π is
-        ``max_relative × reference`` (:attr:`max_absolute`).
+        The law's own increment of Π at ``at_increment`` (dimensionless).
     largest : float
         The largest of the law's increments (dimensionless), the scale of Π.
+    max_absolute, max_absolute_sd : float
+        The departure in Π's increments (g times the law's increment, dimensionless)
+        where it is largest in magnitude, and its standard error: the size of a
+        departure that the relative one overstates where the law's increment is near
+        zero.
     """
 
     chi2: float
@@ -485,16 +495,8 @@ class ShapeDeparture:
     relative: NDArray
     reference: float = math.nan
     largest: float = math.nan
-
-    @property
-    def max_absolute(self) -> float:
-        """The departure in Π's increment where it is largest (dimensionless)."""
-        return self.max_relative * self.reference
-
-    @property
-    def max_absolute_sd(self) -> float:
-        """Its standard error (dimensionless)."""
-        return self.max_relative_sd * abs(self.reference)
+    max_absolute: float = math.nan
+    max_absolute_sd: float = math.nan
 
     @classmethod
     def undetermined(cls, m: int) -> ShapeDeparture:
@@ -538,16 +540,16 @@ def departure_size(shape: Mapping[str, Any]) -> str:
     """How far the decay departs from the law (:meth:`ShapeDeparture.to_dict`), in
     words: in percent of the law's own increment where that increment is a fair
     reference, else (the increment near zero, below :data:`NEAR_ZERO` of the largest,
-    or the departure larger than the increment itself) the absolute departure in Π,
-    dimensionless and as a share of the largest increment.
+    or the departure larger than the increment itself) the largest absolute departure
+    in Π, dimensionless and as a share of the largest increment.
 
     Examples
     --------
     >>> departure_size({"max_relative": 0.012, "max_relative_sd": 0.002,
     ...                 "reference": 0.5, "largest": 2.0})
     '+1.2 % (± 0.2 %)'
-    >>> departure_size({"max_relative": 37.0, "max_relative_sd": 3.2,
-    ...                 "reference": 1e-6, "largest": 2.0})
+    >>> departure_size({"max_relative": 37.0, "max_relative_sd": 3.2, "reference": 1e-6,
+    ...                 "largest": 2.0, "max_absolute": 3.7e-5, "max_absolute_sd": 3.2e-6})
     '+3.7e-05 (± 3.2e-06) in Π, 0.0018 % of its largest increment, where the law is near zero'
     """
 
@@ -561,7 +563,9 @@ def departure_size(shape: Mapping[str, Any]) -> str:
     if not (near_zero and math.isfinite(ref) and largest > 0):
         error = f" (± {100 * sd_g:.2g} %)" if math.isfinite(sd_g) else ""
         return f"{100 * g:+.3g} %{error}"
-    diff, sd = g * ref, sd_g * abs(ref)
+    diff, sd = number("max_absolute"), number("max_absolute_sd")
+    if not math.isfinite(diff):  # recorded before the absolute departure was
+        diff, sd = g * ref, sd_g * abs(ref)
     error = f" (± {sd:.2g})" if math.isfinite(sd) else ""
     return (
         f"{diff:+.3g}{error} in Π, {100 * abs(diff) / largest:.2g} % of its largest "
