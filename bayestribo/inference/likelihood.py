@@ -550,7 +550,7 @@ def departure_size(shape: Mapping[str, Any]) -> str:
     '+1.2 % (± 0.2 %)'
     >>> departure_size({"max_relative": 37.0, "max_relative_sd": 3.2, "reference": 1e-6,
     ...                 "largest": 2.0, "max_absolute": 3.7e-5, "max_absolute_sd": 3.2e-6})
-    '+3.7e-05 (± 3.2e-06) in Π, 0.0018 % of its largest increment, where the law is near zero'
+    '+3.7e-05 (± 3.2e-06) in an increment of Π (0.0018 % of the largest)'
     """
 
     def number(key: str) -> float:
@@ -567,7 +567,5 @@ def departure_size(shape: Mapping[str, Any]) -> str:
     if not math.isfinite(diff):  # recorded before the absolute departure was
         diff, sd = g * ref, sd_g * abs(ref)
     error = f" (± {sd:.2g})" if math.isfinite(sd) else ""
-    return (
-        f"{diff:+.3g}{error} in Π, {100 * abs(diff) / largest:.2g} % of its largest "
-        "increment, where the law is near zero"
-    )
+    share = 100 * abs(diff) / largest
+    return f"{diff:+.3g}{error} in an increment of Π ({share:.2g} % of the largest)"
