@@ -76,9 +76,10 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "--out",
         type=Path,
-        default=None,
-        help="output folder (default: demo/ in the user's cache folder, $XDG_CACHE_HOME/"
-        "bayestribo or ~/.cache/bayestribo)",
+        metavar="DIR",
+        default=default_out(),
+        help="output folder; by default demo/ in the user's cache folder ($XDG_CACHE_HOME/"
+        "bayestribo, else ~/.cache/bayestribo), never the current folder",
     )
     size = p.add_mutually_exclusive_group()
     size.add_argument(
