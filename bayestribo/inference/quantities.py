@@ -47,7 +47,7 @@ DERIVED: dict[str, tuple[str, str, str]] = {
     "static_friction_torque": ("T_s", "static friction torque", "N m"),
     "zeta_k": ("ζ_k", "viscous damping ratio of the contact (ζ − ζ₀)", "1"),
     "d_k": ("d_k", "damping of the contact per unit load", "s/m"),
-    "y0": ("y₀", "amplitude at the window's start, in units of ℓ", "1"),
+    "y0": ("y₀", "scaled amplitude at the window's start", "1"),
     "log10_discrepancy": ("log₁₀ σ_d", "model discrepancy scale", "1"),
     "log10_shape": ("log₁₀ σ_s", "shape discrepancy scale", "1"),
 }
@@ -131,8 +131,6 @@ def _registry(law: str) -> tuple[dict[str, tuple[str, str, str]], dict[str, tupl
     terms of ``law`` name (each term's :meth:`~bayestribo.model.laws.Term.physical`,
     with and without a known stiffness); empty for a law this version does not
     register."""
-    import numpy as np
-
     from bayestribo.model.laws import PhysicalScale, get_law
 
     try:
