@@ -38,7 +38,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bayestribo.inference.priors import PriorSet
-from bayestribo.inference.quantities import Quantity, QuantitySummary, describe, unit_words
+from bayestribo.inference.quantities import (
+    DERIVED,
+    Quantity,
+    QuantitySummary,
+    describe,
+    unit_words,
+)
 from bayestribo.summary import ParameterSummary, check_prob
 
 if TYPE_CHECKING:
@@ -66,21 +72,14 @@ REPORTED = (
 )
 
 
-#: Unit of each reported quantity; "length" is the displacement's unit (m, rad for a
-#: rotation, or the signal's unit for a run with ``length_unit="arbitrary"``).
+#: Unit of each reported quantity of the default law ("1" when dimensionless);
+#: "length" is the displacement's unit (m, rad for a rotation, or the signal's unit for
+#: a run with ``length_unit="arbitrary"``). The same as
+#: :func:`bayestribo.inference.quantities.describe` gives (:meth:`FitResult.units`).
 UNITS: dict[str, str] = {
     "zeta": "1",
     "mu_k": "1",
-    "mu_s": "1",
-    "friction_displacement": "length",
-    "static_friction_displacement": "length",
-    "friction_torque": "N m",
-    "static_friction_torque": "N m",
-    "zeta_k": "1",
-    "d_k": "s/m",
-    "y0": "1",
-    "log10_discrepancy": "1",
-    "log10_shape": "1",
+    **{name: unit for name, (_, _, unit) in DERIVED.items()},
 }
 
 
