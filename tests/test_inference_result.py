@@ -100,3 +100,54 @@ def test_sample_stats_hold_the_samplers_log_probability_and_acceptance(result: F
         warnings.simplefilter("ignore", FutureWarning)
         table = az.summary(result.idata, group="sample_stats", var_names=["lp"], round_to="none")
     assert table.loc["lp", "mean"] == pytest.approx(float(stats["lp"].mean()))
+
+
+def _no_load_result() -> FitResult:
+    """A fit-shaped result of a run without load or mass, in an unstated length unit:
+    the sampled friction is the friction displacement (draws made up, no sampler)."""
+    import json
+
+    from bayestribo.inference.assemble import FitDraws
+
+    rng = np.random.default_rng(0)
+    draws = {
+        "zeta": rng.normal(0.01, 1e-3, (2, 400)),
+        "mu_s_ratio": 1.0 + rng.exponential(0.5, (2, 400)),
+        "friction_displacement": rng.normal(0.02, 2e-4, (2, 400)),
+        "static_friction_displacement": rng.normal(0.11, 1e-2, (2, 400)),
+        "y0": rng.normal(-1.29, 2e-4, (2, 400)),
+    }
+    priors = {
+        "zeta": {"type": "Uniform", "low": 0.0, "high": 0.3},
+        "mu_k": {"type": "Uniform", "low": 0.0, "high": 0.3},
+        "mu_s_ratio": {"type": "Uniform", "low": 1.0, "high": 10.0},
+        "y0": {"type": "Normal", "mu": -1.29, "sigma": 0.01},
+    }
+    attrs = {
+        "law": "viscous+coulomb",
+        "priors_json": json.dumps(priors),
+        "metadata_json": json.dumps({"length_unit": "arbitrary"}),
+        "diagnostics_json": json.dumps({"converged": True, "n_walkers": 8}),
+    }
+    empty = np.zeros((2, 400, 1))
+    return FitResult(
+        draws=FitDraws(draws, attrs, empty, np.zeros((1, 10, 3)), np.zeros(3), np.arange(3.0))
+    )
+
+
+def test_without_a_load_the_friction_displacement_is_the_sampled_friction() -> None:
+    result = _no_load_result()
+    summary = result.summary()
+    assert summary["friction_displacement"].sampled and summary["mu_s_ratio"].unit == "1"
+    assert {n for n, s in summary.items() if s.sampled} == {
+        "zeta",
+        "friction_displacement",
+        "mu_s_ratio",
+        "y0",
+    }
+    assert result.units()["friction_displacement"] == "signal length unit"
+    frame = result.to_dataframe()
+    assert frame.loc["static_friction_displacement", "unit_words"] == "signal unit"
+    table = result._table_lines(0.95)
+    row = next(line for line in table if line.startswith("friction as displacement x_c"))
+    assert "signal unit" in row
