@@ -40,6 +40,7 @@ _LAZY: dict[str, str] = {
     "fit": "bayestribo.inference.fitting",
     "FitResult": "bayestribo.inference.result",
     "ParameterSummary": "bayestribo.summary",
+    "QuantitySummary": "bayestribo.inference.quantities",
     "as_run": "bayestribo.io",
     "estimate_signals": "bayestribo.estimators",
     "Rig": "bayestribo.model.scaling",

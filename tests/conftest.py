@@ -54,3 +54,18 @@ def bundled_runs() -> Path:
 def bundled_run(bundled_runs: Path) -> Run:
     """The bundled glycerol run at 0.31 N (repeat 1), read."""
     return read_run(bundled_runs / "glycerol-N0.31-r1.csv")
+
+
+@pytest.fixture(scope="session")
+def short_fit(tmp_path_factory: pytest.TempPathFactory):
+    """A converged fit of a short simulated 2 kHz run (a few seconds), read back from its
+    NetCDF file, as the command line and a later session see it; shared by the tests of
+    the result and of its figures."""
+    from bayestribo.inference import FitResult, fit
+    from bayestribo.synthetic import Sensor
+    from bayestribo.synthetic.recording import simulate
+
+    run = simulate(sensor=Sensor(sample_rate_Hz=2000.0), seed=11)
+    path = tmp_path_factory.mktemp("fit") / "run.nc"
+    fit(run, seed=3).save(path)
+    return FitResult.load(path)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import re
 from pathlib import Path
 
@@ -17,8 +18,12 @@ pytest.importorskip("nbclient")
 def test_quick_demo_prints_intervals_beside_the_paper_and_writes_reports(tmp_path, capsys):
     pytest.importorskip("nbconvert")
     out = tmp_path / "demo"
-    assert main(["demo", "--quick", "--out", str(out)]) == 0
-    text = capsys.readouterr().out
+    # --quick cuts the population samplers short: they do not converge, and it says so
+    assert main(["demo", "--quick", "--out", str(out)]) == 1
+    captured = capsys.readouterr()
+    text = captured.out
+    assert "bayestribo demo: NOT CONVERGED" in captured.err
+    assert "fewer than 50 autocorrelation times" in captured.err
     assert "paper, glycerol (mean, σ)" in text
     assert "0.0236 (σ 0.0012)" in text and "0.0294 (σ 0.0036)" in text
     fit_line = next(line for line in text.splitlines() if "Bayesian fit" in line)
@@ -68,44 +73,126 @@ def test_quick_and_full_exclude_each_other(capsys):
 
 
 def _single(converged=True):
-    interval = {"mean": 0.0242507, "interval": [0.0242501, 0.0242513]}
+    interval = {"mean": 0.0242507, "median": 0.0242506, "interval": [0.0242501, 0.0242513]}
     return {
         "name": "glycerol-N0.31-r1",
         "fit": {
             "parameters": {
                 "zeta": interval,
-                "mu_k": {"mean": 0.02854, "interval": [0.0285, 0.0286]},
+                "mu_k": {"mean": 0.02854, "median": 0.02854, "interval": [0.0285, 0.0286]},
             },
-            "diagnostics": {"converged": converged},
+            "diagnostics": {"converged": converged, "reasons": [] if converged else ["short"]},
         },
         "true": {"zeta": 0.0242508, "mu_k": 0.0285408},
     }
 
 
-def _campaign(converged=True):
-    summary = {"mean": 0.0238, "interval": [0.0230, 0.0247]}
+def _campaign(converged=True, population_converged=True):
+    mean = {"mean": 0.0238, "median": 0.0237, "interval": [0.0230, 0.0247]}
+    # a skewed σ: its mean and median differ in the second digit
+    sigma = {"mean": 0.0024, "median": 0.0019, "interval": [0.0010, 0.0060]}
+    group = {
+        "label": "lubricant=glycerol,load_N=0.07",
+        "diagnostics": {
+            "converged": population_converged,
+            "reasons": [] if population_converged else ["only 9596 steps after burn-in"],
+        },
+    }
     return {
         "runs": {"glycerol-N0.07-r1": {"diagnostics": {"converged": converged}}},
         "failed": {},
         "population": {
             "pooled": {
                 "n_runs": 5,
-                "parameters": {p: {"mean": summary, "sigma": summary} for p in ("zeta", "mu_k")},
+                "parameters": {p: {"mean": mean, "sigma": sigma} for p in ("zeta", "mu_k")},
             }
+        },
+        "analysis": {
+            "contact": {"groups": [group], "pooled": None},
+            "trends": {"all": {"diagnostics": {"converged": True}}},
         },
     }
 
 
 def test_summary_shows_enough_digits_for_a_narrow_interval_and_the_truth():
     text = "\n".join(demo.summary_lines(_single(), _campaign()))
-    # an interval 1.2e-6 wide needs seven decimals to be seen at all
-    assert "0.0242507 [0.0242501, 0.0242513]" in text
+    # an interval 1.2e-6 wide needs seven decimals to be seen at all; the report writes
+    # two significant digits of its half width
+    assert "0.02425070 [0.02425010, 0.02425130]" in text
     assert "true value (simulated run)" in text and "0.0242508" in text
     assert "campaign, 5 runs across loads" in text
     assert "NOT CONVERGED" not in text and "left out" not in text
+
+
+def test_summary_shows_the_population_as_the_report_does():
+    from bayestribo.reports import kit
+
+    text = "\n".join(demo.summary_lines(_single(), _campaign()))
+    # the report's answer: the posterior median of the draws and their interval
+    sigma = _campaign()["population"]["pooled"]["parameters"]["mu_k"]["sigma"]
+    line = next(line for line in text.splitlines() if "between-run σ" in line)
+    assert kit.interval_text(sigma["median"], *sigma["interval"]) in line
+    assert "0.0024" not in line  # not the mean
+    assert "posterior median" in text
 
 
 def test_summary_never_shows_an_unconverged_fit_as_if_it_had_converged():
     text = "\n".join(demo.summary_lines(_single(converged=False), _campaign(converged=False)))
     assert "SAMPLER NOT CONVERGED" in text
     assert "not converged ['glycerol-N0.07-r1']" in text
+
+
+def test_unconverged_names_every_sampler_that_did_not_converge():
+    assert demo.unconverged(_single(), _campaign()) == []
+    stuck = demo.unconverged(_single(converged=False), _campaign(population_converged=False))
+    assert stuck == [
+        "the fit of glycerol-N0.31-r1: short",
+        "the population contact lubricant=glycerol,load_N=0.07: only 9596 steps after burn-in",
+    ]
+    assert demo.unconverged(_single(), _campaign(converged=False)) == [
+        "the fit of glycerol-N0.07-r1"
+    ]
+
+
+def _fake_reports(single, campaign):
+    """run_report as the demo calls it, writing the given results and an empty page."""
+
+    def fake(name, params, html, show_code=False):
+        from pathlib import Path
+
+        record = single if name == "single_run" else campaign
+        Path(params["summary_path"]).write_text(json.dumps(record), encoding="utf-8")
+        Path(html).write_text("<html></html>", encoding="utf-8")
+        return Path(html)
+
+    return fake
+
+
+@pytest.mark.parametrize("population_converged", [True, False])
+def test_exit_status_follows_convergence_and_output_goes_to_the_cache(
+    tmp_path, monkeypatch, capsys, population_converged
+):
+    cache = tmp_path / "cache"
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.setenv("XDG_CACHE_HOME", str(cache))
+    monkeypatch.chdir(work)
+    monkeypatch.setattr(demo, "campaign_folder", lambda: (tmp_path, "bundled"))
+    fake = _fake_reports(_single(), _campaign(population_converged=population_converged))
+    monkeypatch.setattr("bayestribo.reports.notebooks.run_report", fake)
+    status = main(["demo"])
+    captured = capsys.readouterr()
+    assert status == (0 if population_converged else 1)
+    if not population_converged:
+        assert "NOT CONVERGED (1)" in captured.err and "load_N=0.07" in captured.err
+    out = cache / "bayestribo" / "demo"
+    assert (out / "campaign-report.html").is_file() and str(out) in captured.out
+    assert list(work.iterdir()) == []  # nothing in the current folder
+
+
+def test_help_names_the_default_output_folder(monkeypatch, tmp_path, capsys):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    assert demo.default_out() == tmp_path / "bayestribo" / "demo"
+    with pytest.raises(SystemExit):
+        main(["demo", "--help"])
+    assert "cache" in capsys.readouterr().out

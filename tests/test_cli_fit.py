@@ -23,7 +23,11 @@ DIAGNOSTICS = {
     "ess_min",
     "acceptance_fraction",
 }
-SUMMARY = {"mean", "sd", "median", "interval", "prob", "kind", "unit"}
+#: The keys of each parameter: the first seven since the first release, then what the
+#: quantity is and its sampler diagnostics (keys are added, never renamed).
+SUMMARY = {"mean", "sd", "median", "interval", "prob", "kind", "unit"} | {
+    "name", "symbol", "label", "sampled", "ess", "r_hat",
+}  # fmt: skip
 
 
 @pytest.fixture(scope="module")
@@ -77,8 +81,13 @@ def test_json_is_one_object_with_the_issue_shape(json_run, run_file: Path) -> No
     assert (units["zeta"], units["mu_k"], units["friction_displacement"]) == ("1", "1", "m")
     assert units.get("d_k", "s/m") == "s/m"
     assert {"zeta", "mu_k", "mu_s", "friction_displacement"} <= set(record["parameters"])
+    # every sampled parameter, the static to kinetic friction ratio too
+    assert {"mu_s_ratio", "y0"} <= set(record["parameters"])
+    assert record["parameters"]["mu_s_ratio"]["sampled"] is True
+    assert record["parameters"]["mu_s"]["sampled"] is False
     for name, s in record["parameters"].items():
         assert set(s) == SUMMARY, name
+        assert s["name"] == name and s["label"] and s["symbol"]
         lo, hi = s["interval"]
         assert lo <= s["median"] <= hi and s["prob"] == 0.95 and s["sd"] > 0
     # the simulated truth (ζ = 0.0236, μ_k = 0.0294) inside the 95 % intervals; the
@@ -109,8 +118,30 @@ def test_table_and_non_convergence_exit_status(run_file: Path, capsys) -> None:
     captured = capsys.readouterr()
     assert status == 1
     assert "NOT CONVERGED" in captured.out
-    assert "zeta" in captured.out and "mu_k" in captured.out
+    assert "equivalent viscous damping ratio ζ" in captured.out
+    assert "kinetic friction coefficient (x_c k/N) μ_k" in captured.out
     assert "did not converge" in captured.err
+
+
+def test_the_table_names_each_quantity_in_words_with_its_unit(json_run, run_file: Path) -> None:
+    from bayestribo.model.laws import get_law
+
+    _, _, out_dir, _ = json_run
+    result = FitResult.load(out_dir / f"{run_file.stem}.nc")
+    lines = result.to_text().splitlines()
+    header = next(i for i, line in enumerate(lines) if line.split()[:2] == ["unit", "mean"])
+    rows = {}
+    for line in lines[header + 1 :]:
+        if line.startswith("energy dissipated"):
+            break
+        title, rest = line.split("  ", 1)
+        rows[title] = rest.split()[0]
+    # the law's parameters by the registry's words and symbol, the friction
+    # displacement in metres, a number said to be dimensionless: no "-" anywhere
+    for p in get_law(result.law).parameters:
+        assert rows[f"{p.label} {p.symbol}"] == "dimensionless", p.name
+    assert rows["friction as displacement x_c"] == "m"
+    assert "-" not in rows.values() and len(rows) == len(result.summary())
 
 
 def test_missing_file_is_a_package_error(tmp_path: Path, capsys) -> None:
@@ -162,7 +193,7 @@ def test_options_reach_the_fit(json_run, run_file: Path, monkeypatch, capsys) ->
     assert seen["skip_oscillations"] == 2
     # --load and --mass override the sidecar, as for the other commands
     assert seen["run"].metadata["load_N"] == 0.5 and seen["run"].metadata["mass_kg"] == 0.04
-    assert "zeta" in capsys.readouterr().out
+    assert "equivalent viscous damping ratio ζ" in capsys.readouterr().out
 
 
 def test_a_misfit_exits_1_with_its_warning(tmp_path, capsys) -> None:

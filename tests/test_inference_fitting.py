@@ -318,8 +318,10 @@ def test_result_repr_and_html_show_the_numbers_with_units(bundled):
     text = repr(result)
     assert text.startswith("<FitResult ") and "zeta=0.02" in text and "converged" in text
     html = result._repr_html_()
-    assert html.startswith("<table>") and "<td>zeta</td><td>1</td>" in html
-    assert "<td>d_k</td><td>s/m</td>" in html or "d_k" not in result.summary()
+    zeta = "<td>equivalent viscous damping ratio ζ</td><td>dimensionless</td>"
+    assert html.startswith("<table>") and zeta in html
+    d_k = "<td>damping of the contact per unit load d_k</td><td>s/m</td>"
+    assert d_k in html or "d_k" not in result.summary()
     assert any(line.split()[:2] == ["unit", "mean"] for line in result.to_text().splitlines())
 
 

@@ -185,3 +185,9 @@ def test_shape_departure_is_chi2_under_the_law_and_finds_an_injected_departure(s
     assert abs(found.max_relative - g[worst]) < 4 * found.max_relative_sd
     assert abs(found.max_relative) > 0.8 * np.max(np.abs(g))
     assert "depart from the law" in found.describe()
+    # in Π itself: the injected departure g × the law's increment, where that is largest
+    injected = g * model
+    at = int(np.argmax(np.abs(found.relative * model)))
+    assert abs(found.max_absolute - injected[at]) < 4 * found.max_absolute_sd
+    assert abs(found.max_absolute) > 0.8 * np.max(np.abs(injected))
+    assert found.largest == np.max(np.abs(model)) and found.reference == model[worst]

@@ -9,22 +9,17 @@ import numpy as np
 import pytest
 
 matplotlib.use("Agg")
+import matplotlib.figure
 import matplotlib.pyplot as plt
 
-from bayestribo.inference import FitResult, fit
+from bayestribo.inference import FitResult
 from bayestribo.inference.plots import corner_plot, pi_plot, plotted_names, trace_plot
-from bayestribo.synthetic import Sensor
-from bayestribo.synthetic.recording import simulate
 
 
 @pytest.fixture(scope="module")
-def result(tmp_path_factory) -> FitResult:
-    # a short 2 kHz run: a converged fit in a few seconds; the plots are drawn from
-    # the NetCDF copy, as the command line and a later session see it
-    run = simulate(sensor=Sensor(sample_rate_Hz=2000.0), seed=11)
-    path = tmp_path_factory.mktemp("fit") / "run.nc"
-    fit(run, seed=3).save(path)
-    return FitResult.load(path)
+def result(short_fit) -> FitResult:
+    # a short 2 kHz run (conftest.py): the plots are drawn from the NetCDF copy
+    return short_fit
 
 
 def _png(fig, tmp_path: Path, name: str) -> Path:
@@ -103,3 +98,31 @@ def test_pi_band_and_residuals(result: FitResult, tmp_path: Path) -> None:
     with pytest.raises(ValueError, match="prob"):
         pi_plot(result, axes, prob=1.5)
     plt.close("all")
+
+
+@pytest.mark.parametrize("kind", ["pi", "decay"])
+def test_result_plot_of_the_decay_is_the_data_against_the_fit(result: FitResult, kind) -> None:
+    fig = result.plot(kind)
+    assert isinstance(fig, matplotlib.figure.Figure) and len(fig.axes) == 2
+    ax_pi = fig.axes[0]
+    observed = np.asarray(result.idata.observed_data["pi"])
+    np.testing.assert_array_equal(ax_pi.lines[-1].get_ydata(), observed)  # the data
+    # the fitted model: the predictive median of Π, beside the data
+    replicated = np.asarray(result.idata.posterior_predictive["pi"]).reshape(-1, observed.size)
+    np.testing.assert_allclose(ax_pi.lines[0].get_ydata(), np.median(replicated, axis=0))
+    plt.close(fig)
+
+
+def test_result_plot_draws_a_corner_and_a_trace_on_the_figure_given(result: FitResult) -> None:
+    d = len(plotted_names(result))
+    fig = plt.figure()
+    assert result.plot("corner", fig) is fig and len(fig.axes) == d * d
+    plt.close(fig)
+    fig = result.plot("trace", names=["zeta", "mu_k"])
+    assert [ax.get_ylabel() for ax in fig.axes] == ["ζ [-]", "μ_k [-]"]
+    plt.close(fig)
+
+
+def test_result_plot_names_the_kinds_it_knows(result: FitResult) -> None:
+    with pytest.raises(ValueError, match=r"kind: expected one of \['corner', 'decay', 'pi'"):
+        result.plot("histogram")

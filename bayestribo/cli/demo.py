@@ -4,7 +4,18 @@ Fits the bundled (simulated) glycerol run ``glycerol-N0.31-r1`` and a reduced bu
 campaign across the five loads (one repeat per load and one run in air; ``--full`` for
 all of them), prints the credible intervals of ζ and μ_k next to the paper's values,
 and writes two HTML reports, their figures (PNG) and results (JSON) into an output
-folder.
+folder: ``--out``, by default ``demo/`` in the user's cache folder
+(``$XDG_CACHE_HOME/bayestribo/demo``, else ``~/.cache/bayestribo/demo``), never the
+current folder, which may be a source checkout. Where it went is printed at the end.
+
+The numbers printed are read from the results the reports wrote (``single-run.json``,
+``campaign.json``) and shown as the reports show them: a run's posterior mean, a
+population's posterior median, each with its 95 % interval in the digits it supports
+(:func:`bayestribo.summary.interval_text`).
+
+The exit status is 0 when every sampler converged (the run's, each run's of the
+campaign and every population's and trend's), 1 otherwise, with what did not converge
+named on stderr. ``--quick`` cuts the population samplers short: its status is 1.
 
 The bundled campaign is ``data/`` of a source checkout; without it the campaign is
 simulated again (:func:`bayestribo.synthetic.campaign.write_campaign`, the same fixed seed,
@@ -20,19 +31,30 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import sys
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
-__all__ = ["DEMO_RUN", "PAPER", "campaign_folder", "register", "summary_lines"]
+__all__ = [
+    "DEMO_RUN",
+    "PAPER",
+    "campaign_folder",
+    "default_out",
+    "register",
+    "summary_lines",
+    "unconverged",
+]
 
 #: The bundled run of the single-run report.
 DEMO_RUN = "glycerol-N0.31-r1"
 #: The paper's glycerol values (section 3.1): mean and standard deviation of repeats.
 PAPER = {"zeta": (0.0236, 0.0012), "mu_k": (0.0294, 0.0036)}
-_SYMBOL = {"zeta": "ζ", "mu_k": "μ_k"}
+#: Ceiling on the population samplers' steps when each load has one repeat (see run).
+SINGLE_RUN_GROUP_STEPS = 40_000
+#: Ceiling on the population samplers' steps with --quick (they do not converge).
+QUICK_STEPS = 600
 
 
 def register(subparsers: Any) -> None:
@@ -44,16 +66,28 @@ def register(subparsers: Any) -> None:
             "Fit the bundled simulated run glycerol-N0.31-r1 and the bundled glycerol "
             "campaign across loads (one repeat per load and one run in air, or all runs "
             "with --full), print the 95 % credible intervals of ζ and μ_k next to the "
-            "paper's values, and write HTML reports, figures and JSON results to --out."
+            "paper's values, and write HTML reports, figures and JSON results to --out "
+            f"(default: {default_out()}, the user's cache folder; printed at the end). "
+            "Exit status 1, naming what, when a sampler did not converge (the run's, a "
+            "campaign run's, a population's or a trend's)."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    p.add_argument("--out", type=Path, default=Path("bayestribo-demo"), help="output folder")
+    p.add_argument(
+        "--out",
+        type=Path,
+        metavar="DIR",
+        default=default_out(),
+        help="output folder; by default demo/ in the user's cache folder ($XDG_CACHE_HOME/"
+        "bayestribo, else ~/.cache/bayestribo), never the current folder",
+    )
     size = p.add_mutually_exclusive_group()
     size.add_argument(
         "--quick",
         action="store_true",
-        help="a fast check: two loads, no run in air, no adequacy checks, short samplers",
+        help="a fast check of the pipeline: two loads, no run in air, no adequacy checks, "
+        f"coarser Π grids, population samplers cut at {QUICK_STEPS} steps (they do not "
+        "converge: exit status 1)",
     )
     size.add_argument(
         "--full", action="store_true", help="every glycerol run (3 repeats × 5 loads) and air run"
@@ -67,6 +101,12 @@ def register(subparsers: Any) -> None:
 def _cache_dir() -> Path:
     base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
     return Path(base) / "bayestribo"
+
+
+def default_out() -> Path:
+    """Where the demo writes without ``--out``: ``demo/`` in the user's cache folder
+    (``$XDG_CACHE_HOME/bayestribo``, else ``~/.cache/bayestribo``)."""
+    return _cache_dir() / "demo"
 
 
 def campaign_folder(cache: Path | None = None) -> tuple[Path, str]:
@@ -91,65 +131,113 @@ def campaign_folder(cache: Path | None = None) -> tuple[Path, str]:
     return folder, "simulated earlier (cache)"
 
 
-def _interval(summary: dict[str, Any], significant: bool = False) -> str:
-    """``mean [low, high]`` with enough decimals to show the interval's width.
+def _interval(summary: Mapping[str, Any], centre: str = "mean") -> str:
+    """``centre [low, high]`` in the digits the interval supports, as the reports write
+    it (:func:`bayestribo.summary.interval_text`)."""
+    from bayestribo.summary import interval_text
 
-    With ``significant``, two significant digits each (for a σ whose interval starts
-    near zero).
-    """
-    lo, hi = summary["interval"]
-    if significant:
-        return f"{summary['mean']:.2g} [{lo:.2g}, {hi:.2g}]"
-    width = hi - lo
-    decimals = 5 if width <= 0 else min(max(1 - math.floor(math.log10(width)), 4), 9)
-    return f"{summary['mean']:.{decimals}f} [{lo:.{decimals}f}, {hi:.{decimals}f}]"
+    return interval_text(summary[centre], *summary["interval"])
 
 
 def summary_lines(single: dict[str, Any], campaign: dict[str, Any]) -> list[str]:
-    """The printed comparison: the run, the campaign's population and the paper."""
+    """The printed comparison: the run, the campaign's population and the paper, each
+    number as the reports show it (a run's posterior mean, a population's posterior
+    median)."""
     fit = single["fit"]["parameters"]
-    w = 34
-    lines = [f"{'':34}{'ζ':<{w}}{'μ_k':<{w}}"]
+    # (label, cells) of the table's rows; None for a line of text
+    rows: list[tuple[str, list[str] | None]] = [("", ["ζ", "μ_k"])]
     converged = single["fit"]["diagnostics"].get("converged", False)
-    lines.append(
-        f"run {single['name']}: posterior mean [95 % credible interval]"
-        + ("" if converged else "  (SAMPLER NOT CONVERGED: do not use)")
+    rows.append(
+        (
+            f"run {single['name']}: posterior mean [95 % credible interval]"
+            + ("" if converged else "  (SAMPLER NOT CONVERGED: do not use)"),
+            None,
+        )
     )
-    lines.append(
-        f"{'  Bayesian fit':34}"
-        + "".join(f"{_interval(fit[p]) if p in fit else '-':<{w}}" for p in PAPER)
-    )
+    rows.append(("  Bayesian fit", [_interval(fit[p]) if p in fit else "-" for p in PAPER]))
     true = single.get("true") or {}
     if true:
-        lines.append(
-            f"{'  true value (simulated run)':34}"
-            + "".join(f"{true[p] if p in true else '-':<{w}.6g}" for p in PAPER)
+        rows.append(
+            (
+                "  true value (simulated run)",
+                [f"{true[p]:.6g}" if p in true else "-" for p in PAPER],
+            )
         )
     runs = campaign.get("runs") or {}
     stuck = sorted(n for n, r in runs.items() if not r["diagnostics"].get("converged", False))
     failed = sorted(campaign.get("failed") or {})
     pooled = (campaign.get("population") or {}).get("pooled")
     if stuck or failed:
-        lines.append(
-            f"campaign: left out of the population: not converged {stuck}, failed {failed}"
+        rows.append(
+            (f"campaign: left out of the population: not converged {stuck}, failed {failed}", None)
         )
     if pooled:
         params = pooled["parameters"]
-        lines.append(
-            f"campaign, {pooled['n_runs']} runs across loads: population (95 % credible interval)"
+        ok = pooled.get("diagnostics", {}).get("converged", True)
+        rows.append(
+            (
+                f"campaign, {pooled['n_runs']} runs across loads: population, posterior median "
+                "[95 % credible interval]"
+                + ("" if ok else "  (SAMPLER NOT CONVERGED: do not use)"),
+                None,
+            )
         )
-        lines.append(
-            f"{'  mean':34}" + "".join(f"{_interval(params[p]['mean']):<{w}}" for p in PAPER)
-        )
-        lines.append(
-            f"{'  between-run σ':34}"
-            + "".join(f"{_interval(params[p]['sigma'], significant=True):<{w}}" for p in PAPER)
-        )
-    lines.append(
-        f"{'paper, glycerol (mean, σ)':34}"
-        + "".join(f"{f'{m} (σ {s})':<{w}}" for m, s in PAPER.values())
-    )
-    return lines
+        for label, key in (("  mean", "mean"), ("  between-run σ", "sigma")):
+            rows.append((label, [_interval(params[p][key], "median") for p in PAPER]))
+    rows.append(("paper, glycerol (mean, σ)", [f"{m} (σ {s})" for m, s in PAPER.values()]))
+    w = max(len(c) for _, cells in rows if cells for c in cells) + 2
+    first = max(len(label) for label, cells in rows if cells is not None) + 2
+    return [
+        label
+        if cells is None
+        else (f"{label:<{first}}" + "".join(f"{c:<{w}}" for c in cells)).rstrip()
+        for label, cells in rows
+    ]
+
+
+def _samplers(analysis: Mapping[str, Any], where: str) -> Iterator[tuple[str, Mapping]]:
+    """Every population and trend sampler of a campaign analysis (its ``to_dict``), as
+    (what it is, its diagnostics)."""
+    for kind in ("contact", "zeta0", "series", "dissipation"):
+        population = analysis.get(kind) or {}
+        for group in population.get("groups") or []:
+            yield f"{where}population {kind} {group.get('label')}", group.get("diagnostics", {})
+        pooled = population.get("pooled")
+        if pooled:
+            yield f"{where}population {kind}, pooled", pooled.get("diagnostics", {})
+    for kind in ("trends", "dissipation_trends"):
+        for label, trend in (analysis.get(kind) or {}).items():
+            yield f"{where}trend {label}", trend.get("diagnostics", {})
+
+
+def unconverged(single: Mapping[str, Any], campaign: Mapping[str, Any]) -> list[str]:
+    """What did not converge, in the results the demo's reports wrote: the run's fit,
+    each run of the campaign, each population and trend (the series across water
+    fractions too, where analysed); each with its reasons. Empty when all converged.
+    """
+    out = []
+
+    def reasons(diagnostics: Mapping[str, Any]) -> str:
+        said = diagnostics.get("reasons") or []
+        return f": {'; '.join(map(str, said))}" if said else ""
+
+    diagnostics = single["fit"].get("diagnostics", {})
+    if not diagnostics.get("converged", False):
+        out.append(f"the fit of {single.get('name', DEMO_RUN)}{reasons(diagnostics)}")
+    for name, r in sorted((campaign.get("runs") or {}).items()):
+        if not r.get("diagnostics", {}).get("converged", False):
+            out.append(f"the fit of {name}{reasons(r.get('diagnostics', {}))}")
+    for name, why in sorted((campaign.get("failed") or {}).items()):
+        out.append(f"the fit of {name} failed: {why}")
+    analyses = [("", campaign.get("analysis") or {})]
+    water = (campaign.get("water_series") or {}).get("analysis")
+    if water:
+        analyses.append(("water series: ", water))
+    for where, analysis in analyses:
+        for what, d in _samplers(analysis, where):
+            if not d.get("converged", True):
+                out.append(f"the {what}{reasons(d)}")
+    return out
 
 
 def run(args: argparse.Namespace) -> int:
@@ -157,7 +245,7 @@ def run(args: argparse.Namespace) -> int:
     from bayestribo.reports.notebooks import run_report
 
     data, origin = campaign_folder()
-    out = args.out.resolve()
+    out = (args.out if args.out is not None else default_out()).resolve()
     out.mkdir(parents=True, exist_ok=True)
     figures = out / "figures"
     single_params: dict[str, Any] = {
@@ -175,13 +263,21 @@ def run(args: argparse.Namespace) -> int:
         "figure_dir": str(figures / "campaign"),
         "summary_path": str(out / "campaign.json"),
     }
+    if not args.full:
+        # One repeat per load: each load's population holds one run, whose spread
+        # between repeats the data cannot tell (σ keeps its prior), and its sampler's
+        # autocorrelation time is some 200-450 steps on the bundled campaign: 50 of them
+        # need 10000-23000 steps, more than the default ceiling of 10000.
+        campaign_params["population_steps"] = SINGLE_RUN_GROUP_STEPS
     if args.quick:
         single_params.update({"check_model": False, "grid_points": 32})
         campaign_params.update(
             {
                 "loads": [0.31, 0.59],
                 "fit_air": False,
-                "population_steps": 600,
+                # cut short: two runs leave a trend's σ to its prior, a sampler that
+                # converges only after some 80000 steps (the exit status says so)
+                "population_steps": QUICK_STEPS,
                 "fit_kwargs": {"grid_points": 32},
             }
         )
@@ -211,4 +307,11 @@ def run(args: argparse.Namespace) -> int:
     print(f"figures:  {figures / 'single-run'} ({n_single} PNG)")
     print(f"          {figures / 'campaign'} ({n_campaign} PNG)")
     print(f"results:  {out / 'single-run.json'}, {out / 'campaign.json'}")
+    stuck = unconverged(single, campaign)
+    if stuck:
+        print(
+            f"bayestribo demo: NOT CONVERGED ({len(stuck)}): " + "; ".join(stuck),
+            file=sys.stderr,
+        )
+        return 1
     return 0

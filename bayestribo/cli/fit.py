@@ -85,7 +85,10 @@ def json_record(result: Any, prob: float = 0.95) -> dict[str, Any]:
 
     ``{"run", "model", "law", "law_comparison" (with ``--law auto``), "seed",
     "bayestribo_version", "metadata", "noise",
-    "parameters": {NAME: {"mean", "sd", "median", "interval", "prob", "kind", "unit"}},
+    "parameters": {NAME: {"mean", "sd", "median", "interval", "prob", "kind", "unit",
+    "name", "symbol", "label", "sampled", "ess", "r_hat"}} (every quantity of the
+    posterior, :meth:`~bayestribo.inference.FitResult.summary`; keys are added, never
+    renamed),
     "dissipation": {"amplitude", "mean", "sd", "interval", "prob", "unit", ...},
     "turning_point_dissipation": (the same, measured from the turning points), "diagnostics":
     {"converged", "n_walkers", "n_steps", "autocorr_time_max", "ess_min",

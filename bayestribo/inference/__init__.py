@@ -22,6 +22,8 @@ _LAZY: dict[str, str] = {
     "Posterior": "bayestribo.inference.posterior",
     "PreparedRun": "bayestribo.inference.pipeline",
     "PriorSet": "bayestribo.inference.priors",
+    "Quantity": "bayestribo.inference.quantities",
+    "QuantitySummary": "bayestribo.inference.quantities",
     "Sampled": "bayestribo.inference.pipeline",
     "SamplerRun": "bayestribo.inference.sampling",
     "SamplerSettings": "bayestribo.inference.sampling",

@@ -217,6 +217,11 @@ class FitDraws:
         Observed Π on the grid.
     grid : ndarray
         τ of the grid points (the coordinate ``grid``).
+    log_prob : ndarray or None
+        Log posterior density of each draw as the sampler saw it, shape (chain,
+        draw) (unnormalised; the surrogate's where the fit sampled one).
+    walker_acceptance : ndarray or None
+        emcee's acceptance fraction of each walker, shape (chain, walker).
     """
 
     posterior: dict[str, NDArray]
@@ -225,6 +230,22 @@ class FitDraws:
     posterior_predictive: NDArray
     observed: NDArray
     grid: NDArray
+    log_prob: NDArray | None = None
+    walker_acceptance: NDArray | None = None
+
+    def sample_stats(self) -> dict[str, NDArray]:
+        """The sampler's statistics per draw, shape (chain, draw) each: ``lp`` (log
+        posterior density, ArviZ's name for it) and ``walker_index`` (the walker that made
+        the draw; draws are step-major); empty where not recorded."""
+        if self.log_prob is None:
+            return {}
+        lp = np.asarray(self.log_prob, dtype=float)
+        out = {"lp": lp}
+        if self.walker_acceptance is not None:
+            n_walkers = np.asarray(self.walker_acceptance).shape[-1]
+            walker = np.arange(lp.shape[1]) % n_walkers
+            out["walker_index"] = np.broadcast_to(walker, lp.shape).copy()
+        return out
 
     def to_inference_data(self) -> Any:
         """The ArviZ InferenceData of these groups (imports ArviZ).
@@ -232,15 +253,20 @@ class FitDraws:
         Returns
         -------
         arviz.InferenceData
-            Groups ``posterior`` (with :attr:`attrs`), ``log_likelihood`` (``pi``, per
-            increment), ``posterior_predictive`` and ``observed_data`` (Π on the grid).
+                Groups ``posterior`` (with :attr:`attrs`), ``log_likelihood`` (``pi``, per
+            increment), ``posterior_predictive`` and ``observed_data`` (Π on the grid),
+            and, where recorded, ``sample_stats``: ``lp`` and ``walker_index`` per draw
+            (:meth:`sample_stats`) and ``acceptance_fraction`` per walker (dims
+            ``chain, walker``).
         """
         import arviz as az
 
+        stats = self.sample_stats()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", FutureWarning)
             idata = az.from_dict(
                 posterior=dict(self.posterior),
+                sample_stats=stats or None,
                 log_likelihood={"pi": self.log_likelihood},
                 posterior_predictive={"pi": self.posterior_predictive},
                 observed_data={"pi": self.observed},
@@ -253,6 +279,12 @@ class FitDraws:
                 log_likelihood_dims={"pi": ["increment"]},
             )
         idata.posterior.attrs.update(self.attrs)
+        if stats and self.walker_acceptance is not None:
+            fractions = np.asarray(self.walker_acceptance, dtype=float)
+            idata.sample_stats["acceptance_fraction"] = (("chain", "walker"), fractions)
+            idata.sample_stats = idata.sample_stats.assign_coords(
+                walker=np.arange(fractions.shape[1])
+            )
         return idata
 
 
@@ -262,6 +294,9 @@ def fit_draws(
     derived: Mapping[str, NDArray],
     rng: np.random.Generator,
     attrs: Mapping[str, Any],
+    *,
+    log_prob: NDArray | None = None,
+    walker_acceptance: NDArray | None = None,
 ) -> FitDraws:
     """The groups of a fit's InferenceData, as numpy arrays.
 
@@ -277,6 +312,10 @@ def fit_draws(
         Source of the posterior predictive draws.
     attrs : mapping
         Attributes of the posterior group (run, settings, diagnostics as JSON).
+    log_prob : ndarray, optional
+        Log posterior density of each draw, shape (chains, draws).
+    walker_acceptance : ndarray, optional
+        Acceptance fraction of each walker, shape (chains, walkers).
 
     Returns
     -------
@@ -299,6 +338,8 @@ def fit_draws(
         posterior_predictive=pi_rep[None, :, :],
         observed=data.pi,
         grid=data.tau_grid[:-1],
+        log_prob=None if log_prob is None else np.asarray(log_prob, dtype=float),
+        walker_acceptance=walker_acceptance,
     )
 
 

@@ -68,7 +68,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 import scipy.stats
@@ -78,7 +78,16 @@ from bayestribo.model import averaged_pi
 from bayestribo.model.laws import Law, get_law
 from bayestribo.signal.increments import PiData
 
-__all__ = ["BASE_NUISANCES", "MODELS", "SHAPE_TERMS", "Params", "PiLikelihood", "ShapeDeparture"]
+__all__ = [
+    "BASE_NUISANCES",
+    "MODELS",
+    "NEAR_ZERO",
+    "SHAPE_TERMS",
+    "Params",
+    "PiLikelihood",
+    "ShapeDeparture",
+    "departure_size",
+]
 
 #: Parameter values by name: the law's parameters and ``y0``, arrays of shape (n,) or
 #: (n, 1) (a parameter of the law that is missing takes its null value,
@@ -425,6 +434,10 @@ class PiLikelihood:
         g = basis @ c
         sd_g = np.sqrt(np.maximum(np.einsum("jk,kl,jl->j", basis, cov_c, basis), 0.0))
         worst = int(np.argmax(np.abs(g)))
+        # the departure in Π itself: largest where the law's increments are, which the
+        # relative one need not be (where the law's increment is near zero)
+        absolute, sd_absolute = g * model, sd_g * np.abs(model)
+        at = int(np.argmax(np.abs(absolute)))
         return ShapeDeparture(
             chi2=chi2,
             dof=SHAPE_TERMS,
@@ -433,6 +446,10 @@ class PiLikelihood:
             max_relative_sd=float(sd_g[worst]),
             at_increment=worst,
             relative=g,
+            reference=float(model[worst]),
+            largest=float(np.max(np.abs(model))),
+            max_absolute=float(absolute[at]),
+            max_absolute_sd=float(sd_absolute[at]),
         )
 
 
@@ -458,6 +475,15 @@ class ShapeDeparture:
         Index of that increment.
     relative : ndarray
         The fitted relative departure at every increment, shape (m,).
+    reference : float
+        The law's own increment of Π at ``at_increment`` (dimensionless).
+    largest : float
+        The largest of the law's increments (dimensionless), the scale of Π.
+    max_absolute, max_absolute_sd : float
+        The departure in Π's increments (g times the law's increment, dimensionless)
+        where it is largest in magnitude, and its standard error: the size of a
+        departure that the relative one overstates where the law's increment is near
+        zero.
     """
 
     chi2: float
@@ -467,6 +493,10 @@ class ShapeDeparture:
     max_relative_sd: float
     at_increment: int
     relative: NDArray
+    reference: float = math.nan
+    largest: float = math.nan
+    max_absolute: float = math.nan
+    max_absolute_sd: float = math.nan
 
     @classmethod
     def undetermined(cls, m: int) -> ShapeDeparture:
@@ -479,12 +509,14 @@ class ShapeDeparture:
             return "the shape of the decay could not be tested (too few increments)"
         return (
             f"the increments depart from the law smoothly along the decay by up to "
-            f"{100 * self.max_relative:+.3g} % (± {100 * self.max_relative_sd:.2g} %; "
-            f"χ² = {self.chi2:.1f} for {self.dof} shape terms, p = {self.p_value:.1e})"
+            f"{departure_size(self.to_dict())} (χ² = {self.chi2:.1f} for {self.dof} shape "
+            f"terms, p = {self.p_value:.1e})"
         )
 
     def to_dict(self) -> dict[str, float | int]:
-        """Plain data (without the per-increment curve)."""
+        """Plain data (without the per-increment curve): ``chi2``, ``dof``,
+        ``p_value``, ``max_relative``, ``max_relative_sd``, ``at_increment``,
+        ``reference``, ``largest``, ``max_absolute``, ``max_absolute_sd``."""
         return {
             "chi2": self.chi2,
             "dof": self.dof,
@@ -492,4 +524,48 @@ class ShapeDeparture:
             "max_relative": self.max_relative,
             "max_relative_sd": self.max_relative_sd,
             "at_increment": self.at_increment,
+            "reference": self.reference,
+            "largest": self.largest,
+            "max_absolute": self.max_absolute,
+            "max_absolute_sd": self.max_absolute_sd,
         }
+
+
+#: Below this fraction of the largest increment, the law's increment is near zero: a
+#: departure relative to it says nothing (+3.7e+03 % of almost nothing).
+NEAR_ZERO = 0.01
+
+
+def departure_size(shape: Mapping[str, Any]) -> str:
+    """How far the decay departs from the law (:meth:`ShapeDeparture.to_dict`), in
+    words: in percent of the law's own increment where that increment is a fair
+    reference, else (the increment near zero, below :data:`NEAR_ZERO` of the largest,
+    or the departure larger than the increment itself) the largest absolute departure
+    in Π, dimensionless and as a share of the largest increment.
+
+    Examples
+    --------
+    >>> departure_size({"max_relative": 0.012, "max_relative_sd": 0.002,
+    ...                 "reference": 0.5, "largest": 2.0})
+    '+1.2 % (± 0.2 %)'
+    >>> departure_size({"max_relative": 37.0, "max_relative_sd": 3.2, "reference": 1e-6,
+    ...                 "largest": 2.0, "max_absolute": 3.7e-5, "max_absolute_sd": 3.2e-6})
+    '+3.7e-05 (± 3.2e-06) in an increment of Π (0.0018 % of the largest)'
+    """
+
+    def number(key: str) -> float:
+        value = shape.get(key)
+        return math.nan if value is None else float(value)
+
+    g, sd_g = number("max_relative"), number("max_relative_sd")
+    ref, largest = number("reference"), number("largest")
+    near_zero = abs(g) > 1.0 or (math.isfinite(largest) and abs(ref) < NEAR_ZERO * largest)
+    if not (near_zero and math.isfinite(ref) and largest > 0):
+        error = f" (± {100 * sd_g:.2g} %)" if math.isfinite(sd_g) else ""
+        return f"{100 * g:+.3g} %{error}"
+    diff, sd = number("max_absolute"), number("max_absolute_sd")
+    if not math.isfinite(diff):  # recorded before the absolute departure was
+        diff, sd = g * ref, sd_g * abs(ref)
+    error = f" (± {sd:.2g})" if math.isfinite(sd) else ""
+    share = 100 * abs(diff) / largest
+    return f"{diff:+.3g}{error} in an increment of Π ({share:.2g} % of the largest)"

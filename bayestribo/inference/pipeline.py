@@ -1295,7 +1295,19 @@ def summarise(
     }
     # the pointwise log-likelihood (PSIS-LOO) of the density the chains sampled: the
     # surrogate's where its check passed (inference/surrogate.py)
-    result = FitResult(draws=fit_draws(sampled.draws_posterior, run.chains, derived, rng, attrs))
+    # the sampler's own statistics (ArviZ's sample_stats), where they match the draws
+    lp = run.log_prob if np.shape(run.log_prob) == run.chains.shape[:2] else None
+    result = FitResult(
+        draws=fit_draws(
+            sampled.draws_posterior,
+            run.chains,
+            derived,
+            rng,
+            attrs,
+            log_prob=lp,
+            walker_acceptance=run.walker_acceptance,
+        )
+    )
     if not run.converged:
         warnings.warn(
             f"the sampler did not converge on {name or 'the run'}: " + "; ".join(run.reasons),

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from bayestribo._text import literal
 from bayestribo.inference.result import FitResult
 
-__all__ = ["LABELS", "corner_plot", "pi_plot", "plotted_names", "trace_plot"]
+__all__ = ["FIGURES", "LABELS", "corner_plot", "pi_plot", "plot_fit", "plotted_names", "trace_plot"]
 
 #: Axis label of each posterior quantity (paper notation, units in brackets).
 LABELS: dict[str, str] = {
@@ -251,3 +251,80 @@ def pi_plot(result: FitResult, axes: Sequence[Any], prob: float = 0.95) -> Any:
     ax_res.set_xlabel("τ = Ωt [-]")
     ax_res.set_ylabel("standardized\nresidual of ΔΠ [-]")
     return axes
+
+
+def _pi_figure(result: FitResult, fig: Any, **kwargs: Any) -> Any:
+    axes = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [3, 1]})
+    pi_plot(result, axes, **kwargs)
+    return fig
+
+
+def _corner_figure(result: FitResult, fig: Any, **kwargs: Any) -> Any:
+    return corner_plot(result, fig, **kwargs)
+
+
+def _trace_figure(result: FitResult, fig: Any, **kwargs: Any) -> Any:
+    n = len(plotted_names(result, kwargs.get("names")))
+    axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
+    trace_plot(result, axes, **kwargs)
+    return fig
+
+
+def _corner_size(result: FitResult, **kwargs: Any) -> tuple[float, float]:
+    d = len(plotted_names(result, kwargs.get("names")))
+    return (2.2 * d + 1, 2.2 * d + 1)
+
+
+def _trace_size(result: FitResult, **kwargs: Any) -> tuple[float, float]:
+    return (8.0, 1.6 * len(plotted_names(result, kwargs.get("names"))) + 0.6)
+
+
+#: The figures of a fit by kind: a function that draws on a figure (making its axes)
+#: and returns it, and the figure's size [in] when one is made for it. ``"decay"``
+#: is the same figure as ``"pi"``.
+FIGURES: dict[str, tuple[Any, Any]] = {
+    "pi": (_pi_figure, lambda result, **kwargs: (8.0, 6.0)),
+    "corner": (_corner_figure, _corner_size),
+    "trace": (_trace_figure, _trace_size),
+}
+_ALIASES = {"decay": "pi"}
+
+
+def plot_fit(result: FitResult, kind: str = "pi", fig: Any = None, **kwargs: Any) -> Any:
+    """One figure of a fit, by kind.
+
+    Parameters
+    ----------
+    result : FitResult
+    kind : {"pi", "decay", "corner", "trace"}
+        ``"pi"`` (or ``"decay"``): the observed Π(τ) with the fitted model's
+        posterior predictive band and the standardized residuals (:func:`pi_plot`);
+        ``"corner"``: the pairwise marginal posteriors (:func:`corner_plot`);
+        ``"trace"``: the draws of each ensemble (:func:`trace_plot`).
+    fig : matplotlib.figure.Figure, optional
+        An empty figure to draw on; default a new one (``matplotlib.pyplot.figure``)
+        of a size that suits the kind.
+    **kwargs
+        Passed to the drawing function (``prob`` for ``"pi"``, ``names`` for
+        ``"corner"`` and ``"trace"``).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure drawn on; its axes are ``fig.axes``. Nothing is shown or saved.
+
+    Raises
+    ------
+    ValueError
+        If ``kind`` is not one of the kinds above (they are named).
+    """
+    key = _ALIASES.get(kind, kind)
+    if key not in FIGURES:
+        known = sorted([*FIGURES, *_ALIASES])
+        raise ValueError(f"kind: expected one of {known}, got {kind!r}")
+    draw, size = FIGURES[key]
+    if fig is None:
+        import matplotlib.pyplot as plt
+
+        fig = plt.figure(figsize=size(result, **kwargs))
+    return draw(result, fig, **kwargs)

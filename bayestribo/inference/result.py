@@ -39,6 +39,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from bayestribo._files import atomic_path
 from bayestribo.inference.priors import PriorSet
+from bayestribo.inference.quantities import (
+    DERIVED,
+    Quantity,
+    QuantitySummary,
+    describe,
+    unit_words,
+)
 from bayestribo.summary import ParameterSummary, check_prob
 
 if TYPE_CHECKING:
@@ -66,21 +73,14 @@ REPORTED = (
 )
 
 
-#: Unit of each reported quantity; "length" is the displacement's unit (m, rad for a
-#: rotation, or the signal's unit for a run with ``length_unit="arbitrary"``).
+#: Unit of each reported quantity of the default law ("1" when dimensionless);
+#: "length" is the displacement's unit (m, rad for a rotation, or the signal's unit for
+#: a run with ``length_unit="arbitrary"``). The same as
+#: :func:`bayestribo.inference.quantities.describe` gives (:meth:`FitResult.units`).
 UNITS: dict[str, str] = {
     "zeta": "1",
     "mu_k": "1",
-    "mu_s": "1",
-    "friction_displacement": "length",
-    "static_friction_displacement": "length",
-    "friction_torque": "N m",
-    "static_friction_torque": "N m",
-    "zeta_k": "1",
-    "d_k": "s/m",
-    "y0": "1",
-    "log10_discrepancy": "1",
-    "log10_shape": "1",
+    **{name: unit for name, (_, _, unit) in DERIVED.items()},
 }
 
 
@@ -301,16 +301,149 @@ class FitResult:
         """Equal-tailed credible interval of ``name`` with probability ``prob``."""
         return ParameterSummary.from_samples(self.samples(name), prob).interval
 
-    def summary(self, prob: float = 0.95) -> dict[str, ParameterSummary]:
-        """Posterior summary (mean, sd, median, equal-tailed ``prob`` interval) of each
-        reported quantity, by name: those of the default law first, then the other
-        laws' parameters and physical quantities."""
+    def _summary_names(self) -> list[str]:
+        """Every quantity of the posterior group, in the order of the summaries: those
+        of the default law (:data:`REPORTED`), the law's own parameters and physical
+        quantities, the other sampled ones (μ_s/μ_k), then y₀ and the scales."""
         names = [n for n in REPORTED if self._has(n)]
-        own = [n for n in self._attr("units_json", {}) if self._has(n)]
-        if own:
-            at = names.index("y0") if "y0" in names else len(names)
-            names[at:at] = own
-        return {name: ParameterSummary.from_samples(self.samples(name), prob) for name in names}
+        own = [n for n in self._attr("units_json", {}) if self._has(n) and n not in names]
+        rest = [n for n in self.parameter_names if n not in names and n not in own]
+        at = names.index("y0") if "y0" in names else len(names)
+        names[at:at] = own + rest
+        return names
+
+    def _sampled_names(self) -> set[str]:
+        """Quantities of the posterior group that are sampled coordinates."""
+        sampled = set(self.priors.names)
+        if "mu_k" in sampled and not self._has("mu_k"):
+            sampled.add("friction_displacement")  # no load: x_c is the sampled friction
+        return sampled
+
+    def quantity_info(self) -> dict[str, Quantity]:
+        """What each quantity of the posterior group is: symbol, name in words and unit,
+        from the registry of dissipation terms
+        (:func:`bayestribo.inference.quantities.describe`), in the order of
+        :meth:`summary`.
+
+        Returns
+        -------
+        dict of str to Quantity
+            By name (``"zeta"``, ``"mu_k"``, ``"mu_s_ratio"``, ...).
+        """
+        return describe(
+            self._summary_names(),
+            law=self.law,
+            metadata=self.metadata,
+            units=self._attr("units_json", {}) or {},
+            sampled=self._sampled_names(),
+        )
+
+    def summary(self, prob: float = 0.95) -> dict[str, QuantitySummary]:
+        """Posterior summary of every quantity of the fit: each sampled parameter
+        (the law's, μ_s/μ_k, y₀, the discrepancy scales) and each derived one.
+
+        Parameters
+        ----------
+        prob : float
+            Probability of the equal-tailed credible intervals, in (0, 1).
+
+        Returns
+        -------
+        dict of str to QuantitySummary
+            By name, in the order: the quantities of the default law (ζ, μ_k, μ_s,
+            x_c, ...), the other laws' parameters and physical quantities, the other
+            sampled ones (μ_s/μ_k), then y₀ and the scales. Each record
+            (:class:`~bayestribo.inference.quantities.QuantitySummary`, a
+            :class:`~bayestribo.summary.ParameterSummary`) holds ``mean``, ``sd``,
+            ``median`` and ``interval`` (low, high) in the quantity's ``unit``,
+            ``prob``, ``kind``, ``name``, ``symbol``, ``label`` (the name in words),
+            ``unit`` (``"1"`` when dimensionless), ``sampled``, ``ess`` and ``r_hat``.
+
+        Raises
+        ------
+        BayestriboError
+            If ``prob`` is not in (0, 1).
+        """
+        check_prob(prob)
+        n_walkers = self.diagnostics.get("n_walkers")
+        return {
+            name: QuantitySummary.of(q, self._chains(name), prob, n_walkers)
+            for name, q in self.quantity_info().items()
+        }
+
+    def to_dataframe(self, prob: float = 0.95) -> Any:
+        """The posterior summary as a table, one row per quantity (:meth:`summary`).
+
+        Parameters
+        ----------
+        prob : float
+            Probability of the equal-tailed credible interval, in (0, 1).
+
+        Returns
+        -------
+        pandas.DataFrame
+            Index ``name`` (``"zeta"``, ...); columns ``symbol``, ``label`` (the name in
+            words), ``unit`` (``"1"`` when dimensionless; ``unit_words`` as a reader
+            reads it), ``mean``, ``sd``, ``median``, ``low`` and ``high`` (the ends
+            of the ``prob`` interval), all in the quantity's unit, ``prob``, ``ess``
+            (effective sample size), ``r_hat`` and ``sampled``.
+
+        Raises
+        ------
+        BayestriboError
+            If ``prob`` is not in (0, 1).
+        """
+        import pandas as pd
+
+        rows = [
+            {
+                "name": name,
+                "symbol": s.symbol,
+                "label": s.label,
+                "unit": s.unit,
+                "unit_words": unit_words(s.unit),
+                "mean": s.mean,
+                "sd": s.sd,
+                "median": s.median,
+                "low": s.low,
+                "high": s.high,
+                "prob": s.prob,
+                "ess": s.ess,
+                "r_hat": s.r_hat,
+                "sampled": s.sampled,
+            }
+            for name, s in self.summary(prob).items()
+        ]
+        return pd.DataFrame(rows).set_index("name")
+
+    def plot(self, kind: str = "pi", fig: Any = None, **kwargs: Any) -> Any:
+        """A figure of the fit (:func:`bayestribo.inference.plots.plot_fit`).
+
+        Parameters
+        ----------
+        kind : {"pi", "decay", "corner", "trace"}
+            ``"pi"`` (or ``"decay"``): the observed Π(τ) against the fitted model's
+            posterior predictive band, with standardized residuals; ``"corner"``: the
+            pairwise marginal posteriors; ``"trace"``: the draws of each ensemble.
+        fig : matplotlib.figure.Figure, optional
+            An empty figure to draw on; default a new one.
+        **kwargs
+            Passed on (``prob`` for ``"pi"``; ``names`` for ``"corner"`` and
+            ``"trace"``).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure (its axes: ``fig.axes``); nothing is shown or saved.
+
+        Raises
+        ------
+        ValueError
+            If ``kind`` is unknown (the kinds are named).
+        """
+        from bayestribo.inference.plots import plot_fit
+
+        return plot_fit(self, kind, fig, **kwargs)
 
     @property
     def frequency_trend(self) -> dict[str, Any] | None:
@@ -378,15 +511,9 @@ class FitResult:
         return str(self._attr("package_version", "unknown"))
 
     def units(self) -> dict[str, str]:
-        """Unit of each reported quantity ("1" for a dimensionless one)."""
-        length = {"m": "m", "rad": "rad"}.get(
-            self.metadata.get("length_unit", "m") or "m", "signal length unit"
-        )
-        own = self._attr("units_json", {}) or {}
-        return {
-            name: length if UNITS.get(name) == "length" else UNITS.get(name, own.get(name, ""))
-            for name in self.summary()
-        }
+        """Unit of each quantity of :meth:`summary` ("1" for a dimensionless one; the
+        displacement's unit ``"m"``, ``"rad"`` or ``"signal length unit"``)."""
+        return {name: q.unit for name, q in self.quantity_info().items()}
 
     def to_dict(self, prob: float = 0.95) -> dict[str, Any]:
         """JSON-ready record: run, model, seed, package version, run metadata, noise,
@@ -437,10 +564,12 @@ class FitResult:
         )
         shape = d.get("shape_departure") or {}
         if shape.get("p_value") is not None and shape["p_value"] < 1e-3:
+            from bayestribo.inference.likelihood import departure_size
+
             lines.append(
                 "NOT ADEQUATE: the decay departs from the constant law by up to "
-                f"{100 * shape['max_relative']:+.3g} % (± {100 * shape['max_relative_sd']:.2g} %) "
-                f"along the decay (χ² = {shape['chi2']:.1f} for {shape['dof']} shape terms)"
+                f"{departure_size(shape)} along the decay (χ² = {shape['chi2']:.1f} for "
+                f"{shape['dof']} shape terms)"
             )
         sd_eps = float(self.attrs.get("frequency_nuisance_sd", 0.0))
         trend = self.frequency_trend
@@ -475,15 +604,27 @@ class FitResult:
                 f"NOT A MEASUREMENT: {entry['parameter']} piles on its prior's upper bound "
                 f"{entry['bound']:.4g}; check units and channels (bayestribo inspect)"
             )
-        header = f"{100 * check_prob(prob):g} % interval"
-        units = self.units()
-        lines.append(f"{'':30}{'unit':>8}{'mean':>14}{'sd':>12}{header:>36}")
-        for name, s in self.summary(prob).items():
-            lo, hi = s.interval
-            unit = {"1": "-", "signal length unit": "signal"}.get(units[name], units[name])
-            lines.append(f"{name:30}{unit:>8}{s.mean:14.6g}{s.sd:12.3g}   [{lo:.6g}, {hi:.6g}]")
+        lines.extend(self._table_lines(prob))
         lines.extend(self._dissipation_lines())
         return "\n".join(lines)
+
+    def _table_lines(self, prob: float) -> list[str]:
+        """The posterior table: each quantity by its name in words and symbol, its
+        unit ("dimensionless" for a number), mean, sd and ``prob`` interval."""
+        header = f"{100 * check_prob(prob):g} % interval"
+        summary = self.summary(prob)
+        titles = {name: s.title for name, s in summary.items()}
+        units = {name: unit_words(s.unit) for name, s in summary.items()}
+        w = max([len(t) for t in titles.values()] + [10]) + 2
+        u = max([len(t) for t in units.values()] + [4]) + 2
+        lines = [f"{'':{w}}{'unit':<{u}}{'mean':>14}{'sd':>12}   {header}"]
+        for name, s in summary.items():
+            lo, hi = s.interval
+            lines.append(
+                f"{titles[name]:<{w}}{units[name]:<{u}}{s.mean:14.6g}{s.sd:12.3g}   "
+                f"[{lo:.6g}, {hi:.6g}]"
+            )
+        return lines
 
     def _comparison_lines(self) -> list[str]:
         """How the law was chosen (``law="auto"``)."""
@@ -586,12 +727,11 @@ class FitResult:
         """The summary table for Jupyter."""
         import html
 
-        units = self.units()
         rows = "".join(
-            f"<tr><td>{html.escape(name)}</td><td>{html.escape(units[name])}</td>"
+            f"<tr><td>{html.escape(s.title)}</td><td>{html.escape(unit_words(s.unit))}</td>"
             f"<td>{s.mean:.6g}</td><td>{s.sd:.3g}</td>"
             f"<td>[{s.interval[0]:.6g}, {s.interval[1]:.6g}]</td></tr>"
-            for name, s in self.summary().items()
+            for s in self.summary().values()
         )
         state = "converged" if self.converged else "NOT converged"
         if self.at_prior_bound:

@@ -173,6 +173,9 @@ class SamplerRun:
         Why the run is not converged (empty if it is).
     names : tuple of str
         Parameter names, in the order of the last axis of ``chains``.
+    walker_acceptance : ndarray or None
+        emcee's acceptance fraction of each walker over the whole run, shape
+        (ensembles, walkers); None where no sampler ran.
     """
 
     chains: NDArray
@@ -187,6 +190,7 @@ class SamplerRun:
     converged: bool
     reasons: list[str] = field(default_factory=list)
     names: tuple[str, ...] = ()
+    walker_acceptance: NDArray | None = None
 
     def summary(self, prob: float = 0.95) -> dict[str, ParameterSummary]:
         """Posterior summary of each parameter over all ensembles' thinned draws.
@@ -536,6 +540,7 @@ def run_ensembles(
         converged=not reasons,
         reasons=reasons,
         names=tuple(labels),
+        walker_acceptance=ensembles.walker_acceptance(),
     )
 
 
@@ -554,6 +559,10 @@ class _Ensembles:
         raise NotImplementedError  # pragma: no cover - interface
 
     def acceptance(self) -> float:  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def walker_acceptance(self) -> NDArray:  # pragma: no cover - interface
+        """Acceptance fraction of each walker, (ensembles, walkers)."""
         raise NotImplementedError
 
 
@@ -591,6 +600,9 @@ class _Separate(_Ensembles):
 
     def acceptance(self) -> float:
         return float(np.mean([s.acceptance_fraction for s in self.samplers]))
+
+    def walker_acceptance(self) -> NDArray:
+        return np.stack([np.asarray(s.acceptance_fraction, dtype=float) for s in self.samplers])
 
 
 class _ResumingSampler(emcee.EnsembleSampler):
@@ -654,3 +666,7 @@ class _Grouped(_Ensembles):
 
     def acceptance(self) -> float:
         return float(np.mean(self.sampler.acceptance_fraction))
+
+    def walker_acceptance(self) -> NDArray:
+        fractions = np.asarray(self.sampler.acceptance_fraction, dtype=float)
+        return fractions.reshape(self.n_ens, self.n_walkers)

@@ -133,8 +133,10 @@ def law_holds(result: Any) -> tuple[bool, str]:
         return False, "no law compared describes the recording"
     shape = d.get("shape_departure") or {}
     if shape.get("p_value") is not None and shape["p_value"] < MISFIT_P:
+        from bayestribo.inference.likelihood import departure_size
+
         off = shape.get("max_relative")
-        by = "" if off is None else f" by up to {100 * off:+.3g} %".replace("-", "−")
+        by = "" if off is None else f" by up to {departure_size(shape)}".replace("-", "−")
         return False, f"the decay departs from the law{by}"
     discrepancy = any(n.startswith("log10_") for n in result.parameter_names)
     white = d.get("misfit_p")

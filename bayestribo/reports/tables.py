@@ -579,10 +579,11 @@ def fit_facts(result: Any) -> dict[str, str]:
     shape = d.get("shape_departure") or {}
     if shape.get("p_value") is not None:
         if getattr(result, "law_departs", False):
+            from bayestribo.inference.likelihood import departure_size
+
             facts["shape of the decay"] = (
-                f"departs from the law by up to {100 * shape['max_relative']:+.3g} % "
-                f"(± {100 * shape['max_relative_sd']:.2g} %) along the decay: the law does "
-                "not hold, and its parameters are not a measurement"
+                f"departs from the law by up to {departure_size(shape)} along the decay: the "
+                "law does not hold, and its parameters are not a measurement"
             )
         else:
             facts["shape of the decay"] = f"follows the law (p = {shape['p_value']:.2g})"
