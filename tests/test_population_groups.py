@@ -565,3 +565,13 @@ def test_population_jobs_assemble_to_the_population():
     np.testing.assert_array_equal(queued.pooled.sigma["zeta"], direct.pooled.sigma["zeta"])
     with pytest.raises(BayestriboError, match="fitted: expected 3 groups, got 2"):
         assemble([fit_group(*job) for job in jobs[:2]])
+
+
+def test_the_default_sigma_prior_of_a_group_of_one_run_is_the_half_cauchy():
+    # One run says nothing of σ: under p(σ) ∝ 1/σ its posterior would be the bounds'.
+    prior = ScaleFree(0.01)
+    assert prior.for_runs([1e-4]) == HalfCauchy(0.01)
+    two = prior.for_runs([1e-4, 3e-4])
+    assert isinstance(two, LogUniform)
+    assert two.low == pytest.approx(0.1 * 2e-4) and two.high == pytest.approx(0.1)
+    assert prior.for_runs([0.0, 0.0]).low == pytest.approx(1e-6)  # no spread: the scale's

@@ -12,7 +12,10 @@ p(σ) ∝ 1/σ (:class:`ScaleFree`, resolved per group into a :class:`LogUniform
 * it is bounded below at a tenth of the runs' own posterior sd, where the repeats can
   no longer tell σ from zero (the likelihood is flat below), and above at 10 × the
   quantity's scale (:data:`DEFAULT_SIGMA_SCALES`: 0.01 for the dimensionless ζ and
-  μ_k, about half the paper's values), so it is proper.
+  μ_k, about half the paper's values), so it is proper;
+* a group of a single run, which says nothing of σ, keeps a half-Cauchy prior of that
+  scale instead (σ's posterior is then its prior, and the bounds of a prior ∝ 1/σ
+  would be all the answer).
 
 The half-Cauchy (Gelman 2006, *Bayesian Analysis* 1, 515-534), the package's default
 before, is nearly flat in σ below its scale; with three repeats its mean intervals
@@ -182,8 +185,15 @@ class ScaleFree:
         _check_scale(self.floor)
         _check_scale(self.span)
 
-    def for_runs(self, run_sds: ArrayLike) -> LogUniform:
-        """The prior of a group whose runs have these posterior sds [parameter units]."""
+    def for_runs(self, run_sds: ArrayLike) -> LogUniform | HalfCauchy:
+        """The prior of a group whose runs have these posterior sds [parameter units].
+
+        A group of one run says nothing of σ: its posterior is its prior, and under
+        p(σ) ∝ 1/σ that would be the arbitrary bounds' answer. Such a group gets
+        ``HalfCauchy(scale)``, which states the typical spread and nothing more.
+        """
+        if np.size(run_sds) < 2:
+            return HalfCauchy(self.scale)
         sds = np.asarray(run_sds, dtype=float)
         sds = sds[np.isfinite(sds) & (sds > 0)]
         low = self.floor * float(np.median(sds)) if sds.size else self.scale * 1e-4
