@@ -610,20 +610,31 @@ class FitResult:
 
     def _table_lines(self, prob: float) -> list[str]:
         """The posterior table: each quantity by its name in words and symbol, its
-        unit ("dimensionless" for a number), mean, sd and ``prob`` interval."""
-        header = f"{100 * check_prob(prob):g} % interval"
+        unit ("dimensionless" for a number), mean and ``prob`` interval in the digits the
+        interval supports, or a bound where the posterior is its prior's
+        (:mod:`bayestribo.inference.flatness`), and sd."""
+        from bayestribo.inference.flatness import FLAT_KS, prior_flatness
+        from bayestribo.summary import interval_text
+
+        header = f"mean [{100 * check_prob(prob):g} % interval]"
         summary = self.summary(prob)
         titles = {name: s.title for name, s in summary.items()}
         units = {name: unit_words(s.unit) for name, s in summary.items()}
-        w = max([len(t) for t in titles.values()] + [10]) + 2
-        u = max([len(t) for t in units.values()] + [4]) + 2
-        lines = [f"{'':{w}}{'unit':<{u}}{'mean':>14}{'sd':>12}   {header}"]
+        values = {}
         for name, s in summary.items():
             lo, hi = s.interval
-            lines.append(
-                f"{titles[name]:<{w}}{units[name]:<{u}}{s.mean:14.6g}{s.sd:12.3g}   "
-                f"[{lo:.6g}, {hi:.6g}]"
-            )
+            flat = prior_flatness(self, name)
+            if flat is not None and flat <= FLAT_KS:
+                # the data set a range, not a value: a bound, never a measurement
+                values[name] = f"< {hi:.2g} (not constrained by the data: its prior up to there)"
+            else:  # the digits the interval supports (bayestribo.summary.interval_text)
+                values[name] = interval_text(s.mean, lo, hi)
+        w = max([len(t) for t in titles.values()] + [10]) + 2
+        u = max([len(t) for t in units.values()] + [4]) + 2
+        v = max([len(t) for t in values.values()] + [len(header)]) + 2
+        lines = [f"{'':{w}}{'unit':<{u}}{header:<{v}}sd"]
+        for name, s in summary.items():
+            lines.append(f"{titles[name]:<{w}}{units[name]:<{u}}{values[name]:<{v}}{s.sd:.2g}")
         return lines
 
     def _comparison_lines(self) -> list[str]:
@@ -698,6 +709,8 @@ class FitResult:
         rows = [(label, d)]
         if measured and measured.get("amplitude"):
             rows.append(("turning points (law-free)", measured))
+        from bayestribo.summary import interval_text
+
         amp = d["amplitude"]
         picks = sorted({len(amp) - 1, len(amp) // 2, 0}, reverse=True)
         swings = {i: f"A = {amp[i]:.4g} {d['amplitude_unit']}" for i in picks}
@@ -708,7 +721,8 @@ class FitResult:
             for i in picks:
                 if mean[i] is None or lo[i] is None or hi[i] is None:
                     continue
-                out.append(f"    {swings[i]:<{width}}{mean[i]:14.6g}   [{lo[i]:.6g}, {hi[i]:.6g}]")
+                text = interval_text(mean[i], lo[i], hi[i])
+                out.append(f"    {swings[i]:<{width}}   {text}")
         return out
 
     def __repr__(self) -> str:

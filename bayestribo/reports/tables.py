@@ -14,6 +14,8 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
+from bayestribo.inference.flatness import FLAT_KS as _FLAT_KS
+from bayestribo.inference.flatness import SPREAD_OF, prior_flatness
 from bayestribo.summary import NUMERICAL_ZERO, interval_text, probability_text
 
 __all__ = [
@@ -74,20 +76,9 @@ _HIDDEN = ("y0", "mu_s_ratio")
 #: Quantiles of a 95 % normal interval, in standard errors.
 _Z95 = 1.959963984540054
 
-#: A posterior whose Kolmogorov–Smirnov distance to its prior, restricted to the range the
-#: draws cover, is at most this is flat over its prior there: the data set only the range
-#: (a bound), not a value, and it is shown as a bound (:func:`quantity_text`). A normal
-#: posterior is about 0.2 from the uniform over its draws' range; flat draws about
-#: 1/√(effective sample size).
-FLAT_KS = 0.1
-
-#: Reported quantities whose spread is set by another sampled parameter: μ_s = (μ_s/μ_k)
-#: μ_k, and the static friction's displacement and torque with it.
-_SPREAD_OF = {
-    "mu_s": "mu_s_ratio",
-    "static_friction_displacement": "mu_s_ratio",
-    "static_friction_torque": "mu_s_ratio",
-}
+#: The flat-posterior test and its threshold (:mod:`bayestribo.inference.flatness`).
+FLAT_KS = _FLAT_KS
+_SPREAD_OF = SPREAD_OF
 
 
 def law_text(law: str) -> str:
@@ -308,45 +299,6 @@ def quantiles_text(samples: Any, prob: float = 0.95) -> str:
         return "–"
     lo, mid, hi = np.quantile(x, [(1 - prob) / 2, 0.5, (1 + prob) / 2])
     return interval_text(float(mid), float(lo), float(hi))
-
-
-def prior_flatness(result: Any, name: str) -> float | None:
-    """How far the posterior of ``name`` is from flat over its prior: the
-    Kolmogorov–Smirnov distance between the draws of the sampled parameter that sets its
-    spread (μ_s: μ_s/μ_k) and its prior restricted to the range the draws cover (the data
-    may rule part of the prior out, as the stop of the motion bounds μ_s from above).
-    None where the quantity has no prior of its own (a physical quantity derived from
-    several).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from types import SimpleNamespace as R
-    >>> from bayestribo.inference.priors import PriorSet, Uniform
-    >>> draws = np.random.default_rng(0).uniform(1.0, 2.9, 4000)  # flat up to 2.9
-    >>> fit = R(priors=PriorSet({"mu_s_ratio": Uniform(1.0, 10.0)}), samples=lambda n: draws)
-    >>> prior_flatness(fit, "mu_s") < FLAT_KS
-    True
-    """
-    import numpy as np
-
-    sampled = _SPREAD_OF.get(name, name)
-    try:
-        prior = result.priors[sampled]
-        draws = np.sort(np.asarray(result.samples(sampled), dtype=float).ravel())
-    except (KeyError, ValueError, AttributeError):
-        return None
-    if draws.size < 2 or not draws[-1] > draws[0]:
-        return None
-    grid = np.linspace(draws[0], draws[-1], 1025)
-    density = np.exp(np.asarray(prior.logpdf(grid), dtype=float))
-    steps = 0.5 * (density[1:] + density[:-1]) * np.diff(grid)
-    cdf = np.concatenate([[0.0], np.cumsum(steps)])
-    if not cdf[-1] > 0:
-        return None
-    expected = np.interp(draws, grid, cdf / cdf[-1])
-    ranks = np.arange(1, draws.size + 1) / draws.size
-    return float(max(np.max(ranks - expected), np.max(expected - (ranks - 1 / draws.size))))
 
 
 def quantity_text(result: Any, name: str, summary: Any) -> str:
