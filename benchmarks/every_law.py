@@ -1,0 +1,111 @@
+"""Every candidate law fitted alone, against the default fit, on the bundled and real runs.
+
+Issue 42's second goal: each law ``law="auto"`` compares
+(:func:`bayestribo.model.laws.candidates.candidate_laws`) fitted on its own within 3× the
+default fit's time, and converged, on the bundled run and on every recording of
+``../shared/external-data`` (read as ``benchmarks/real.py`` reads them).
+
+One process fits everything in turn: first every law once on the bundled run (imports,
+numba compilation and caches are not timed), then, per recording, the default law and
+each candidate law with seed 1. Each fit is timed in process CPU time (user + system;
+on a shared machine the other processes' turns do not count) and wall time; recorded:
+converged, ESS_min, the steps, and the ratio of its CPU time to the default fit's on
+the same recording. Results are written after every fit to
+``benchmarks/results/every_law.json``.
+
+Run (tens of minutes; in the background)::
+
+    timeout 5400 python benchmarks/every_law.py
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+import warnings
+from pathlib import Path
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _machine import write_results
+
+ROOT = Path(__file__).resolve().parents[1]
+BUNDLED = ROOT / "data" / "runs" / "glycerol-N0.31-r1.csv"
+DEFAULT = "viscous+coulomb"
+
+
+def _cpu() -> float:
+    t = os.times()
+    return t.user + t.system
+
+
+def _fit(run: Any, law: str) -> dict[str, Any]:
+    from bayestribo import fit
+
+    cpu, wall = _cpu(), time.perf_counter()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            result = fit(run, law=law, seed=1)
+        except Exception as exc:  # recorded: a law that cannot fit a record says why
+            return {"error": f"{type(exc).__name__}: {exc}"[:400]}
+    diag = result.diagnostics
+    return {
+        "cpu_s": _cpu() - cpu,
+        "wall_s": time.perf_counter() - wall,
+        "converged": bool(result.converged),
+        "ess_min": float(diag.get("ess_min", float("nan"))),
+        "n_steps": int(diag.get("n_steps", 0)),
+        "warnings": sorted({w.category.__name__ for w in caught}),
+    }
+
+
+def main() -> None:
+    from bayestribo import read_run
+    from bayestribo.model.laws.candidates import candidate_laws
+
+    import real
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--laws", nargs="*", default=None, help="default: every candidate")
+    args = parser.parse_args()
+    laws = tuple(args.laws or candidate_laws())
+    runs: dict[str, Any] = {"bundled glycerol-N0.31-r1": read_run(BUNDLED)}
+    for name in real.recordings():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            runs[name] = real.load(name)[0]
+    results: dict[str, Any] = {"laws": list(laws), "recordings": {}}
+    first = runs["bundled glycerol-N0.31-r1"]
+    t0 = time.perf_counter()
+    for law in (DEFAULT, *laws):  # warm-up: imports, compilation, caches
+        _fit(first, law)
+    results["warm_up_s"] = time.perf_counter() - t0
+    for name, run in runs.items():
+        rows: dict[str, Any] = {}
+        results["recordings"][name] = rows
+        for law in (DEFAULT, *[law for law in laws if law != DEFAULT]):
+            rows[law] = _fit(run, law)
+            base = rows[DEFAULT].get("cpu_s")
+            if base and "cpu_s" in rows[law]:
+                rows[law]["over_default"] = rows[law]["cpu_s"] / base
+            print(name, law, rows[law], flush=True)
+            write_results("every_law", {"load_average": os.getloadavg(), **results})
+    summary = {}
+    for name, rows in results["recordings"].items():
+        ratios = {law: r.get("over_default") for law, r in rows.items() if law != DEFAULT}
+        summary[name] = {
+            "worst_law": max(ratios, key=lambda k: ratios[k] or 0.0) if ratios else None,
+            "worst_over_default": max((v for v in ratios.values() if v), default=None),
+            "within_3x": sorted(k for k, v in ratios.items() if v is not None and v <= 3.0),
+            "not_converged": sorted(k for k, r in rows.items() if not r.get("converged")),
+        }
+    results["summary"] = summary
+    write_results("every_law", {"load_average": os.getloadavg(), **results})
+
+
+if __name__ == "__main__":
+    main()
