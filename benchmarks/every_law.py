@@ -64,10 +64,10 @@ def _fit(run: Any, law: str) -> dict[str, Any]:
 
 
 def main() -> None:
+    import real
+
     from bayestribo import read_run
     from bayestribo.model.laws.candidates import candidate_laws
-
-    import real
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--laws", nargs="*", default=None, help="default: every candidate")
