@@ -89,6 +89,7 @@ def test_the_compiled_surrogate_density_is_its_numpy_reference(exact_posterior):
     np.testing.assert_allclose(residuals, expected, rtol=1e-9, atol=1e-9)
 
 
+@pytest.mark.validation  # two posteriors sampled to convergence side by side
 def test_the_surrogate_posterior_is_the_exact_posterior(exact_posterior):
     prepared, posterior, _, _ = exact_posterior
     settings = SamplerSettings(n_walkers=16, n_ensembles=2, max_steps=20_000)
@@ -107,6 +108,7 @@ def test_the_surrogate_posterior_is_the_exact_posterior(exact_posterior):
     assert np.all(np.abs(a.std(axis=0) / sd - 1.0) < 0.1)
 
 
+@pytest.mark.validation  # the exact posterior sampled after three failed surrogates
 def test_a_wrong_surrogate_fails_its_check_and_the_exact_posterior_is_sampled(
     exact_posterior, monkeypatch
 ):

@@ -145,6 +145,7 @@ def test_not_dividing_out_the_prior_is_rejected_by_the_same_tolerance(normal_cas
     assert np.abs(np.median(g.mean["zeta"]) - exact[1]) > 3 * TOL_SD * _sd(mus, pm)
 
 
+@pytest.mark.validation  # a 20 000-step reference emcee run of the joint model
 def test_correlated_parameters_agree_with_a_joint_fit():
     """Two parameters with correlated per-run posteriors (like ζ and μ_k).
 
