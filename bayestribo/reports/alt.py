@@ -92,8 +92,11 @@ def tex_words(tex: str) -> str:
             assert m is not None
             name, i = m.group(1), i + len(m.group(0))
             if name.isalpha():  # TeX ends a command's name at the spaces after it
-                while i < len(tex) and tex[i] == " ":
-                    i += 1
+                j = i
+                while j < len(tex) and tex[j] == " ":
+                    j += 1
+                if j < len(tex) and tex[j].isalnum():  # "\Delta E": one symbol
+                    i = j
             if name in _GREEK:
                 out.append(_GREEK[name])
             elif name in _SYMBOLS:

@@ -206,7 +206,7 @@ def _plain_heading(markdown: str) -> str:
     from bayestribo.reports.alt import tex_words
 
     text = re.sub(r"\$([^$]+)\$", lambda m: tex_words(m.group(1)), markdown)
-    return re.sub(r"[*_`]", "", text).strip()
+    return re.sub(r"[*`]", "", text).strip()
 
 
 def page_facts(nb: Any) -> Any:

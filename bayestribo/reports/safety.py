@@ -47,7 +47,7 @@ CONTENT_SECURITY_POLICY = (
 
 #: Characters with a meaning in Markdown (CommonMark's backslash-escapable punctuation
 #: that starts emphasis, links, images, code, headings, lists, tables or HTML).
-_MARKDOWN_MARKS = re.compile(r"([\\`*_{}\[\]()#+\-.!|<>~$])")
+_MARKDOWN_MARKS = re.compile(r"([\\`*_{}\[\]()#+\-.!|~$])")
 
 
 def html_text(value: object) -> str:
@@ -63,17 +63,18 @@ def html_text(value: object) -> str:
 
 def markdown_text(value: object) -> str:
     """``value`` as plain text inside Markdown: every Markdown mark backslash-escaped and
-    ``&`` as an entity, so it shows as typed (no emphasis, link, image, code or tag).
+    ``&``, ``<``, ``>`` as entities, so it shows as typed (no emphasis, link, image, code
+    or tag).
 
     Examples
     --------
     >>> markdown_text("air <svg onload=alert(1)>-r1")
-    'air \\\\<svg onload=alert\\\\(1\\\\)\\\\>\\\\-r1'
+    'air &lt;svg onload=alert\\\\(1\\\\)&gt;\\\\-r1'
     >>> markdown_text("glycerol_N0.31 [**1**]")
     'glycerol\\\\_N0\\\\.31 \\\\[\\\\*\\\\*1\\\\*\\\\*\\\\]'
     """
-    text = str(value).replace("&", "&amp;")
-    return _MARKDOWN_MARKS.sub(r"\\\1", text).replace("\n", " ")
+    text = _MARKDOWN_MARKS.sub(r"\\\1", str(value)).replace("\n", " ")
+    return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
 
 
 _FENCE = re.compile(r"^(\s*)(```|~~~)")
@@ -83,21 +84,19 @@ _MATH = re.compile(r"\$\$.+?\$\$|(?<![\\$])\$(?!\$)[^$\n]+?(?<!\\)\$(?!\$)", re.
 
 
 def _escape_line(line: str) -> str:
-    """One line of Markdown prose with its ``<`` and ``&`` as text; a code span holding
-    one becomes an HTML ``<code>`` of the escaped text (an entity in a code span would
-    show as typed)."""
+    """One line of Markdown prose with its ``<`` as text (an entity; an entity already
+    there, ``&lt;``, is left to show its character); a code span holding ``<`` becomes an
+    HTML ``<code>`` of the escaped text (an entity in a code span would show as typed)."""
 
     def prose(part: str) -> str:
-        return part.replace("&", "&amp;").replace("<", "&lt;")
+        return part.replace("<", "&lt;")
 
     out, last = [], 0
     for m in _CODE_SPAN.finditer(line):
         out.append(prose(line[last : m.start()]))
         code = m.group(2)
         out.append(
-            f"<code>{html.escape(code.strip(), quote=False)}</code>"
-            if "<" in code or "&" in code
-            else m.group(0)
+            f"<code>{html.escape(code.strip(), quote=False)}</code>" if "<" in code else m.group(0)
         )
         last = m.end()
     out.append(prose(line[last:]))
@@ -105,8 +104,8 @@ def _escape_line(line: str) -> str:
 
 
 def markdown_without_html(markdown: str) -> str:
-    """Markdown whose raw HTML is text: every ``<`` and ``&`` outside code and equations
-    becomes an entity, so no tag or attribute reaches the page (Markdown's own marks,
+    """Markdown whose raw HTML is text: every ``<`` outside code and equations becomes an
+    entity, so no tag or attribute reaches the page (Markdown's own marks,
     ``**bold**``, lists and tables, still work).
 
     A notebook's Markdown *outputs* are made from data (file names, metadata); the
