@@ -12,6 +12,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from _hostile import HOSTILE_FIELD, HOSTILE_FILE_WORD, HOSTILE_SCRIPT, hostile_copy
 from _paths import APPSTAT, RUNS
 
 from bayestribo import Run, read_run
@@ -54,3 +55,29 @@ def bundled_runs() -> Path:
 def bundled_run(bundled_runs: Path) -> Run:
     """The bundled glycerol run at 0.31 N (repeat 1), read."""
     return read_run(bundled_runs / "glycerol-N0.31-r1.csv")
+
+
+@pytest.fixture(scope="session")
+def single_run_report(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The single-run report (``bayestribo report RUN``) of the bundled glycerol run at
+    0.31 N, made once for every test that reads it, from a copy whose file name (the
+    run's label) and sidecar's notes hold markup: ``glycerol <svg onload=...>-r1.csv``."""
+    pytest.importorskip("nbclient")
+    pytest.importorskip("nbconvert")
+    from bayestribo.cli import main
+
+    source = RUNS / "glycerol-N0.31-r1.csv"
+    if not source.is_file():
+        _missing("the bundled run", source)
+    folder = tmp_path_factory.mktemp("report")
+    run = hostile_copy(
+        source,
+        folder,
+        f"glycerol {HOSTILE_FILE_WORD}-r1",
+        run_id=None,  # the run's label is its file's name (a sidecar's run_id is checked)
+        notes=HOSTILE_FIELD,
+        user={"operator": HOSTILE_SCRIPT},
+    )
+    out = folder / "single.html"
+    assert main(["report", str(run), "--out", str(out), "--param", "grid_points=32"]) == 0
+    return out

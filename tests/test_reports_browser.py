@@ -1,9 +1,11 @@
 """A report as a reader sees it: rendered by headless Chromium, offline.
 
-The single-run report of a bundled run is made with ``bayestribo report`` and opened in
-Chromium with the network switched off; the live page must show every image (figures
-and equations) with a non-zero natural size, no raw TeX, no code and no stderr box.
-Skipped, with the reason, where Chromium is not installed (``apt-get install chromium``).
+The single-run report of a bundled run (``single_run_report`` of ``conftest.py``, shared
+with ``test_reports_pages.py``; its file name holds markup) is made with ``bayestribo
+report`` and opened in Chromium with the network switched off; the live page must show
+every image (figures and equations) with a non-zero natural size, no raw TeX, no code
+and no stderr box. Skipped, with the reason, where Chromium is not installed
+(``apt-get install chromium``).
 """
 
 from __future__ import annotations
@@ -32,16 +34,6 @@ pytestmark = pytest.mark.skipif(
     reason=f"no headless browser: none of {', '.join(CHROMIUM_NAMES)} on PATH "
     "(apt-get install chromium)",
 )
-
-
-@pytest.fixture(scope="module")
-def single_run_report(tmp_path_factory):
-    if not RUN.is_file():
-        pytest.skip("the bundled campaign data/ is absent")
-    out = tmp_path_factory.mktemp("report") / "single.html"
-    argv = ["report", str(RUN), "--out", str(out), "--param", "grid_points=32"]
-    assert main(argv) == 0
-    return out
 
 
 def test_the_report_reads_offline_in_a_browser(single_run_report):

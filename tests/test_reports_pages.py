@@ -3,10 +3,11 @@ phone lays it out.
 
 Each report kind is made once (module-scoped fixtures) from runs whose names would run a
 script if a page showed them as markup: a lubricant ``<script>...</script>``, a file
-``air <svg onload=...>-r1.csv``, a sidecar field ``<img src=x onerror=...>``, a run label
-and a README with the same (the recordings of another rig are written here from a
-bundled run). Every payload sets ``document.title`` to ``PWNED``. Then, in
-headless Chromium (one browser for all the checks of a page):
+``air <svg onload=...>-r1.csv`` (the run's label: a sidecar's ``run_id`` is checked and
+cannot hold one), sidecar fields ``<img src=x onerror=...>`` and a README with the same
+(the recordings of another rig are written here from a bundled run). Every payload sets
+``document.title`` to ``PWNED``. Then, in headless Chromium (one browser for all the
+checks):
 
 * no script ran, with the page's Content-Security-Policy and without it (the escaping
   alone holds), and the policy had nothing to block; the names show as text;
@@ -22,12 +23,11 @@ Skipped where Chromium is not installed.
 from __future__ import annotations
 
 import html
-import json
 import re
-import shutil
 
 import numpy as np
 import pytest
+from _hostile import HOSTILE_FIELD, HOSTILE_FILE_WORD, HOSTILE_SCRIPT, hostile_copy
 from _paths import RUNS
 
 pytest.importorskip("nbclient")
@@ -39,62 +39,34 @@ from bayestribo.reports.safety import inert_problems
 
 pytestmark = pytest.mark.skipif(find_chromium() is None, reason="no headless Chromium on PATH")
 
-PAYLOAD = "document.title='PWNED'"
-LUBRICANT = f"<script>{PAYLOAD}</script>"
-FILE_WORD = f"<svg onload={PAYLOAD}>"
-FIELD = f"<img src=x onerror={PAYLOAD}>"
-LABEL = f"<b onmouseover={PAYLOAD}>r1</b>"
-
-
-def _hostile_copy(source, folder, stem, **fields):
-    """A copy of a bundled run (and its sidecar) named ``stem``, with ``fields`` set."""
-    csv = folder / f"{stem}.csv"
-    shutil.copyfile(source, csv)
-    meta = json.loads(source.with_suffix(".json").read_text())
-    meta.update(fields)
-    meta = {k: v for k, v in meta.items() if v is not None}
-    csv.with_suffix(".json").write_text(json.dumps(meta))
-    return csv
+LUBRICANT, FILE_WORD, FIELD = HOSTILE_SCRIPT, HOSTILE_FILE_WORD, HOSTILE_FIELD
 
 
 @pytest.fixture(scope="module")
-def reports(tmp_path_factory):
+def reports(tmp_path_factory, single_run_report):
     """Each report kind's page, made from hostile names: kind -> path."""
     if not RUNS.is_dir():
         pytest.skip("the bundled campaign data/ is absent")
     root = tmp_path_factory.mktemp("hostile")
-    made = {}
-    # a single run: a hostile file name, run label and sidecar field
-    single = root / "single"
-    single.mkdir()
-    run = _hostile_copy(
-        RUNS / "glycerol-N0.31-r1.csv",
-        single,
-        f"glycerol {FILE_WORD}-r1",
-        run_id=LABEL,
-        lubricant=LUBRICANT,
-        notes=FIELD,
-        user={"operator": FIELD},
-    )
-    out = root / "single.html"
-    assert main(["report", str(run), "--out", str(out), "--param", "grid_points=32"]) == 0
-    made["single_run"] = out
+    # a single run: its file name (its label) and sidecar fields (conftest.py)
+    made = {"single_run": single_run_report}
     # a campaign: runs of a hostile lubricant (its series), runs in air with hostile names
     campaign = root / "campaign"
     campaign.mkdir()
     for load in ("0.07", "0.59"):
         for r in ("1", "2"):
-            _hostile_copy(
+            hostile_copy(
                 RUNS / f"glycerol-N{load}-r{r}.csv",
                 campaign,
                 f"lub-N{load}-r{r}",
                 lubricant=LUBRICANT,
                 series=LUBRICANT,
+                run_id=f"lub-N{load}-r{r}",
                 notes=FIELD,
                 user={"operator": FIELD},
             )
     for r in ("1", "2"):
-        _hostile_copy(RUNS / f"air-r{r}.csv", campaign, f"air {FILE_WORD}-r{r}", run_id=None)
+        hostile_copy(RUNS / f"air-r{r}.csv", campaign, f"air {FILE_WORD}-r{r}", run_id=None)
     out = root / "campaign.html"
     argv = ["report", str(campaign), "--notebook", "loads", "--out", str(out)]
     argv += ["--param", f"series={LUBRICANT!r}", "--param", "population_steps=2000"]
@@ -168,8 +140,7 @@ def test_hostile_names_show_as_text_and_run_nothing(seen, kind):
     assert page["scripts"].violations == []  # nothing the policy had to stop
     # the names are shown, as text
     assert "&lt;svg onload=document.title=" in page["source"]
-    if kind != "single_run":
-        assert "&lt;script&gt;document.title=" in page["source"]
+    assert "&lt;script&gt;document.title=" in page["source"]
 
 
 @pytest.mark.parametrize("kind", KINDS)
