@@ -81,3 +81,49 @@ def single_run_report(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = folder / "single.html"
     assert main(["report", str(run), "--out", str(out), "--param", "grid_points=32"]) == 0
     return out
+
+
+@pytest.fixture(scope="session")
+def viscosity_report(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The report against viscosity (``--notebook viscosity``) of two bundled glycerol-water
+    runs at 0.46 N (0.55 and 9 % water), made once, from copies whose file names, series
+    and sidecars' notes hold markup."""
+    pytest.importorskip("nbclient")
+    pytest.importorskip("nbconvert")
+    from bayestribo.cli import main
+
+    folder = tmp_path_factory.mktemp("viscosity")
+    for water in ("0.55", "9.00"):
+        source = RUNS / f"water{water}pc-N0.46-r1.csv"
+        if not source.is_file():
+            _missing("the bundled run", source)
+        hostile_copy(
+            source,
+            folder,
+            f"water{water}pc {HOSTILE_FILE_WORD}-r1",
+            run_id=None,
+            series=HOSTILE_SCRIPT,
+            notes=HOSTILE_FIELD,
+        )
+    out = folder / "viscosity.html"
+    argv = ["report", str(folder), "--notebook", "viscosity", "--out", str(out)]
+    argv += ["--param", f"series={HOSTILE_SCRIPT!r}", "--param", "loads=[0.46]"]
+    argv += ["--param", "population_steps=600", "--param", "fit_kwargs={'grid_points': 32}"]
+    main(argv)
+    return out
+
+
+@pytest.fixture(scope="session")
+def acquisition_report(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The simulated instrument's report (``--notebook acquisition``), made once."""
+    pytest.importorskip("nbclient")
+    pytest.importorskip("nbconvert")
+    pytest.importorskip("bayestribo.acquisition")
+    from bayestribo.cli import main
+
+    folder = tmp_path_factory.mktemp("acquisition")
+    out = folder / "acquisition.html"
+    argv = ["report", "--notebook", "acquisition", "--out", str(out)]
+    argv += ["--param", "duration_s=0.6", "--param", f"out_dir={str(folder / 'acq')!r}"]
+    main(argv)
+    return out
