@@ -27,7 +27,7 @@ import re
 
 import numpy as np
 import pytest
-from _hostile import HOSTILE_FIELD, HOSTILE_FILE_WORD, HOSTILE_SCRIPT, hostile_copy
+from _hostile import HOSTILE_FIELD, HOSTILE_FILE_WORD, HOSTILE_SCRIPT, PAYLOAD, hostile_copy
 from _paths import RUNS
 
 pytest.importorskip("nbclient")
@@ -200,3 +200,28 @@ def test_the_print_stylesheets_margins_are_the_measured_ones():
     template = resources.files("bayestribo.reports") / "template" / "bayestribo" / "index.html.j2"
     rule = re.search(r"@page\s*\{\s*margin:\s*([\d.]+)mm\s+([\d.]+)mm", template.read_text())
     assert rule is not None and tuple(map(float, rule.groups())) == PAGE_MARGIN_MM
+
+
+def test_the_checks_see_a_script_a_cut_table_and_a_squeezed_text(browser, tmp_path):
+    """The checks above can fail: a handler that runs (and, under the report's policy, is
+    stopped and reported), a table wider than the paper, a contents box beside the text
+    on a phone, a heading free to end a page."""
+    from bayestribo.reports.layout import print_layout, screen_layout, script_check
+    from bayestribo.reports.safety import csp_meta
+
+    wide = "".join(f"<td>{'x' * 30}{i}</td>" for i in range(12))
+    body = (
+        f'<main><h1>A report</h1><nav class="bt-toc" style="float:right;width:40%">'
+        f"<ul><li>one</li></ul></nav><p>{'text ' * 80}</p><h2>Table</h2>"
+        f'<table><tr>{wide}</tr></table><img src=x onerror="{PAYLOAD}"></main>'
+    )
+    bare = tmp_path / "bare.html"
+    bare.write_text(f"<html><head><title>t</title></head><body>{body}</body></html>")
+    guarded = tmp_path / "guarded.html"
+    guarded.write_text(f"<html><head>{csp_meta()}<title>t</title></head><body>{body}</body></html>")
+    assert script_check(bare, browser=browser).title == "PWNED"
+    stopped = script_check(guarded, browser=browser)
+    assert stopped.title == "t" and any("script-src" in v for v in stopped.violations)
+    printed = print_layout(bare, "A4", browser=browser)
+    assert len(printed.cut_tables) == 1 and printed.loose_headings == ["A report", "Table"]
+    assert screen_layout(bare, 375, browser=browser).toc_beside_text

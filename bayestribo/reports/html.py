@@ -43,6 +43,7 @@ from importlib import resources
 from typing import Any
 
 from bayestribo._optional import require
+from bayestribo.reports._errors import ReportError
 
 __all__ = [
     "NOTE_CLASS",
@@ -331,7 +332,6 @@ def to_html(nb: Any, *, show_code: bool = False) -> str:
     """
     HTMLExporter = require("nbconvert", "making reports").HTMLExporter
 
-    from bayestribo.reports._errors import ReportError
     from bayestribo.reports.safety import CONTENT_SECURITY_POLICY, inert_problems
 
     nb = _math_in_markdown(page_facts(stderr_as_notes(nb)))
