@@ -225,3 +225,31 @@ def test_the_checks_see_a_script_a_cut_table_and_a_squeezed_text(browser, tmp_pa
     printed = print_layout(bare, "A4", browser=browser)
     assert len(printed.cut_tables) == 1 and printed.loose_headings == ["A report", "Table"]
     assert screen_layout(bare, 375, browser=browser).toc_beside_text
+
+
+def test_printed_text_output_never_breaks_a_number(browser, tmp_path):
+    """A result printed as text (``<pre>``): JupyterLab's stylesheet breaks it anywhere
+    (``word-break: break-all``, "1.5158e- / 07"); the report's rules come after it."""
+    import nbformat
+
+    from bayestribo.reports.html import to_html
+    from bayestribo.reports.layout import screen_layout
+
+    cell = nbformat.v4.new_code_cell("")
+    number = "0.000561643215507 " * 6
+    cell.outputs = [nbformat.v4.new_output("stream", name="stdout", text=number)]
+    page = tmp_path / "pre.html"
+    page.write_text(to_html(nbformat.v4.new_notebook(cells=[cell])), encoding="utf-8")
+    found = screen_layout(page, 375, browser=browser)
+    assert found.pre_breaking_numbers == 0
+    assert found.page_width <= found.width  # the text scrolls in its box, not the page
+    # the check can fail: the same page with JupyterLab's rule last
+    source = page.read_text(encoding="utf-8")
+    broken = tmp_path / "broken.html"
+    broken.write_text(
+        source.replace(
+            "</head>", "<style>.jp-OutputArea-output pre { word-break: break-all; }</style></head>"
+        ),
+        encoding="utf-8",
+    )
+    assert screen_layout(broken, 375, browser=browser).pre_breaking_numbers == 1
