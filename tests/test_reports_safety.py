@@ -183,3 +183,14 @@ def test_the_template_uses_the_figures_description_and_escapes_it():
     assert "&lt;img" in alts[0]
     assert "No description has been provided" not in page
     assert inert_problems(page) == []
+
+
+def test_a_link_to_code_in_a_markdown_output_is_shown_as_typed():
+    """A README's paragraph (the real-data report shows one) may link anywhere: a link to
+    ``javascript:`` or ``data:`` is text, other links stay links."""
+    said = "[x](javascript:alert(1)) [y](DATA:text/html,hi) [ok](https://example.org)"
+    said += "\n\n[r]: javascript:alert(3)\n\nsee [r]"
+    page = to_html(_notebook(_markdown_output(said)))
+    assert inert_problems(page) == []
+    assert "[x](javascript:alert(1))" in page and "[y](DATA:text/html,hi)" in page
+    assert '<a href="https://example.org">ok</a>' in page

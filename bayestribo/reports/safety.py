@@ -77,6 +77,11 @@ def markdown_text(value: object) -> str:
     return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
 
 
+#: A Markdown link or image to an address that runs or embeds code (``[x](javascript:...)``)
+#: and a link reference definition to one (``[x]: javascript:...``).
+_SCHEMES = r"(?:javascript|vbscript|data|file):"
+_HARMFUL_LINK = re.compile(rf"\]\(\s*<?(?={_SCHEMES})", re.IGNORECASE)
+_HARMFUL_REFERENCE = re.compile(rf"^(\s*)\[(?=[^\]]+\]:\s*<?{_SCHEMES})", re.IGNORECASE)
 _FENCE = re.compile(r"^(\s*)(```|~~~)")
 _CODE_SPAN = re.compile(r"(`+)(.+?)\1", re.DOTALL)
 # $$...$$ and $...$ (as bayestribo.reports.html renders them): their "<" is TeX
@@ -89,6 +94,8 @@ def _escape_line(line: str) -> str:
     HTML ``<code>`` of the escaped text (an entity in a code span would show as typed)."""
 
     def prose(part: str) -> str:
+        part = _HARMFUL_LINK.sub(r"]\\(", part)  # shown as typed, not a link
+        part = _HARMFUL_REFERENCE.sub(r"\1\\[", part)
         return part.replace("<", "&lt;")
 
     out, last = [], 0
@@ -105,8 +112,9 @@ def _escape_line(line: str) -> str:
 
 def markdown_without_html(markdown: str) -> str:
     """Markdown whose raw HTML is text: every ``<`` outside code and equations becomes an
-    entity, so no tag or attribute reaches the page (Markdown's own marks,
-    ``**bold**``, lists and tables, still work).
+    entity, so no tag or attribute reaches the page, and a link or image to a
+    ``javascript:``, ``vbscript:``, ``data:`` or ``file:`` address is shown as typed
+    (Markdown's own marks, ``**bold**``, lists, tables and other links, still work).
 
     A notebook's Markdown *outputs* are made from data (file names, metadata); the
     reports pass every one through this before rendering.
@@ -117,6 +125,8 @@ def markdown_without_html(markdown: str) -> str:
     '**&lt;img src=x onerror=alert(1)>** at $a < b$'
     >>> markdown_without_html("the file `a<b.csv`")
     'the file <code>a&lt;b.csv</code>'
+    >>> markdown_without_html("[docs](javascript:alert(1))")
+    '[docs]\\\\(javascript:alert(1))'
     """
     result, fenced = [], False
     for line in markdown.split("\n"):
