@@ -27,7 +27,7 @@ import re
 
 import numpy as np
 import pytest
-from _hostile import HOSTILE_FIELD, HOSTILE_FILE_WORD, HOSTILE_SCRIPT, PAYLOAD, hostile_copy
+from _hostile_names import HOSTILE_FIELD, HOSTILE_FILE_WORD, HOSTILE_SCRIPT, PAYLOAD, hostile_copy
 from _paths import RUNS
 
 pytest.importorskip("nbclient")
