@@ -12,6 +12,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from _hostile_names import HOSTILE_FIELD, HOSTILE_FILE_WORD, HOSTILE_SCRIPT, hostile_copy
 from _paths import APPSTAT, RUNS
 
 from bayestribo import Run, read_run
@@ -69,3 +70,75 @@ def short_fit(tmp_path_factory: pytest.TempPathFactory):
     path = tmp_path_factory.mktemp("fit") / "run.nc"
     fit(run, seed=3).save(path)
     return FitResult.load(path)
+
+
+@pytest.fixture(scope="session")
+def single_run_report(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The single-run report (``bayestribo report RUN``) of the bundled glycerol run at
+    0.31 N, made once for every test that reads it, from a copy whose file name (the
+    run's label) and sidecar's notes hold markup: ``glycerol <svg onload=...>-r1.csv``."""
+    pytest.importorskip("nbclient")
+    pytest.importorskip("nbconvert")
+    from bayestribo.cli import main
+
+    source = RUNS / "glycerol-N0.31-r1.csv"
+    if not source.is_file():
+        _missing("the bundled run", source)
+    folder = tmp_path_factory.mktemp("report")
+    run = hostile_copy(
+        source,
+        folder,
+        f"glycerol {HOSTILE_FILE_WORD}-r1",
+        run_id=None,  # the run's label is its file's name (a sidecar's run_id is checked)
+        notes=HOSTILE_FIELD,
+        user={"operator": HOSTILE_SCRIPT},
+    )
+    out = folder / "single.html"
+    assert main(["report", str(run), "--out", str(out), "--param", "grid_points=32"]) == 0
+    return out
+
+
+@pytest.fixture(scope="session")
+def viscosity_report(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The report against viscosity (``--notebook viscosity``) of two bundled glycerol-water
+    runs at 0.46 N (0.55 and 9 % water), made once, from copies whose file names, series
+    and sidecars' notes hold markup."""
+    pytest.importorskip("nbclient")
+    pytest.importorskip("nbconvert")
+    from bayestribo.cli import main
+
+    folder = tmp_path_factory.mktemp("viscosity")
+    for water in ("0.55", "9.00"):
+        source = RUNS / f"water{water}pc-N0.46-r1.csv"
+        if not source.is_file():
+            _missing("the bundled run", source)
+        hostile_copy(
+            source,
+            folder,
+            f"water{water}pc {HOSTILE_FILE_WORD}-r1",
+            run_id=None,
+            series=HOSTILE_SCRIPT,
+            notes=HOSTILE_FIELD,
+        )
+    out = folder / "viscosity.html"
+    argv = ["report", str(folder), "--notebook", "viscosity", "--out", str(out)]
+    argv += ["--param", f"series={HOSTILE_SCRIPT!r}", "--param", "loads=[0.46]"]
+    argv += ["--param", "population_steps=600", "--param", "fit_kwargs={'grid_points': 32}"]
+    main(argv)
+    return out
+
+
+@pytest.fixture(scope="session")
+def acquisition_report(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The simulated instrument's report (``--notebook acquisition``), made once."""
+    pytest.importorskip("nbclient")
+    pytest.importorskip("nbconvert")
+    pytest.importorskip("bayestribo.acquisition")
+    from bayestribo.cli import main
+
+    folder = tmp_path_factory.mktemp("acquisition")
+    out = folder / "acquisition.html"
+    argv = ["report", "--notebook", "acquisition", "--out", str(out)]
+    argv += ["--param", "duration_s=0.6", "--param", f"out_dir={str(folder / 'acq')!r}"]
+    main(argv)
+    return out

@@ -1,9 +1,11 @@
 """A report as a reader sees it: rendered by headless Chromium, offline.
 
-The single-run report of a bundled run is made with ``bayestribo report`` and opened in
-Chromium with the network switched off; the live page must show every image (figures
-and equations) with a non-zero natural size, no raw TeX, no code and no stderr box.
-Skipped, with the reason, where Chromium is not installed (``apt-get install chromium``).
+The single-run report of a bundled run (``single_run_report`` of ``conftest.py``, shared
+with ``test_reports_pages.py``; its file name holds markup) is made with ``bayestribo
+report`` and opened in Chromium with the network switched off; the live page must show
+every image (figures and equations) with a non-zero natural size, no raw TeX, no code
+and no stderr box. Skipped, with the reason, where Chromium is not installed
+(``apt-get install chromium``).
 """
 
 from __future__ import annotations
@@ -32,16 +34,6 @@ pytestmark = pytest.mark.skipif(
     reason=f"no headless browser: none of {', '.join(CHROMIUM_NAMES)} on PATH "
     "(apt-get install chromium)",
 )
-
-
-@pytest.fixture(scope="module")
-def single_run_report(tmp_path_factory):
-    if not RUN.is_file():
-        pytest.skip("the bundled campaign data/ is absent")
-    out = tmp_path_factory.mktemp("report") / "single.html"
-    argv = ["report", str(RUN), "--out", str(out), "--param", "grid_points=32"]
-    assert main(argv) == 0
-    return out
 
 
 def test_the_report_reads_offline_in_a_browser(single_run_report):
@@ -245,18 +237,11 @@ def test_the_probe_finds_a_figure_with_an_empty_panel(tmp_path, monkeypatch):
     ]
 
 
-def test_the_viscosity_report_reads_as_text_for_people(tmp_path):
-    """The glycerol–water series against viscosity (``--notebook viscosity``): its tables
-    name quantities by symbol and unit (no ``load_N`` or ``mu_k low`` columns), and no
-    result is printed as monospace text."""
-    if not RUN.is_file():
-        pytest.skip("the bundled campaign data/ is absent")
-    out = tmp_path / "viscosity.html"
-    argv = ["report", str(REPO / "data"), "--notebook", "viscosity", "--out", str(out)]
-    argv += ["--param", "loads=[0.46]", "--param", "water_fractions=[0.0055, 0.09]"]
-    argv += ["--param", "repeats=[1]", "--param", "population_steps=600"]
-    argv += ["--param", "fit_kwargs={'grid_points': 32}"]
-    main(argv)
+def test_the_viscosity_report_reads_as_text_for_people(viscosity_report):
+    """The glycerol–water series against viscosity (``--notebook viscosity``,
+    ``viscosity_report`` of ``conftest.py``): its tables name quantities by symbol and unit
+    (no ``load_N`` or ``mu_k low`` columns), and no result is printed as monospace text."""
+    out = viscosity_report
     page = inspect_report(out)
     assert page.all_images_loaded and page.figures >= 2
     _clean(page)
@@ -264,15 +249,10 @@ def test_the_viscosity_report_reads_as_text_for_people(tmp_path):
     assert "<table" in _answer(out)  # the group means against viscosity first
 
 
-def test_the_acquisition_report_reads_as_text_for_people(tmp_path):
+def test_the_acquisition_report_reads_as_text_for_people(acquisition_report):
     """The simulated instrument's report (``--notebook acquisition``): what was logged,
     recovered and fitted as tables in words, no printed lines, dicts or ``mu_k``."""
-    pytest.importorskip("bayestribo.acquisition")
-    out = tmp_path / "acquisition.html"
-    argv = ["report", "--notebook", "acquisition", "--out", str(out)]
-    argv += ["--param", "duration_s=0.6", "--param", f"out_dir={str(tmp_path / 'acq')!r}"]
-    main(argv)
-    page = inspect_report(out)
+    page = inspect_report(acquisition_report)
     assert page.all_images_loaded and page.figures >= 2
     _clean(page)
     assert page.text_dumps == 0

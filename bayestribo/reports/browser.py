@@ -3,10 +3,11 @@
 :func:`inspect_report` opens a copy of the HTML report in headless Chromium with the
 network switched off, lets it load, and reads back from the live page what a reader
 gets: how many images there are, how many loaded with a non-zero natural size, how
-many equations (SVG images with their TeX as ``alt``), whether any raw ``$$`` or
+many equations (SVG images with their TeX in words as ``alt``), whether any raw ``$$`` or
 ``\\(`` TeX is left in the visible text, whether code cells are shown. The probe is a
 small script added to the copy only (the report itself has no script), which writes
-its findings as JSON into the page before Chromium dumps the DOM.
+its findings as JSON into the page before Chromium dumps the DOM; the copy's
+Content-Security-Policy lets that one script run (by its nonce) and no other.
 
 :func:`screenshot` writes a PNG of the page as Chromium renders it. From the command
 line::
@@ -22,6 +23,7 @@ from __future__ import annotations
 import argparse
 import json
 import re
+import secrets
 import shutil
 import subprocess
 import tempfile
@@ -50,7 +52,7 @@ _FLAGS = (
 )
 
 _PROBE = r"""
-<script>
+<script nonce="__NONCE__">
 window.addEventListener("load", function () {
   var imgs = Array.prototype.slice.call(document.images);
   var text = document.body.innerText;
@@ -279,7 +281,11 @@ def inspect_report(
     page = source.read_text(encoding="utf-8")
     from bayestribo.reports.kit import FIGURE_PROBLEMS
 
+    nonce = secrets.token_hex(16)
     probe = _PROBE.replace("__FIGURE_PROBLEMS__", json.dumps(list(FIGURE_PROBLEMS)))
+    probe = probe.replace("__NONCE__", nonce)
+    # the report's policy runs no script: the copy's runs the probe's, and no other
+    page = page.replace("script-src 'none'", f"script-src 'nonce-{nonce}'", 1)
     probed = page.replace("</body>", probe + "</body>", 1)
     with tempfile.NamedTemporaryFile(
         "w", suffix=".html", prefix=".probe-", dir=source.parent, delete=False, encoding="utf-8"

@@ -10,13 +10,22 @@ CDN; this one loads nothing), the code cells are left out unless asked for, and
   ``alt`` text (:func:`math_to_svg`). No JavaScript is needed to read the page, so the
   equations show in a browser offline, in a mail client's preview and on paper;
   mathtext covers the TeX subset the reports use (Greek, sub- and superscripts,
-  ``\\mathrm``, spacing);
+  ``\\mathrm``, spacing); its ``alt`` text is the TeX in words and Unicode
+  (:func:`bayestribo.reports.alt.tex_words`: ``\\mu_k`` -> ``μ_k``);
 * text written to stderr (a warning that escaped the notebook's notes, a progress
   line) becomes a short note in the text instead of a red box (:func:`stderr_as_notes`);
 * a table of contents of the section headings follows the title, and a footer gives
   the bayestribo version and when the page was made;
 * a symbol's subscript is set as one (``μ_k`` -> μ<sub>k</sub>,
-  :func:`bayestribo.reports.symbols.subscripts_html`), in the text only.
+  :func:`bayestribo.reports.symbols.subscripts_html`), in the text only;
+* the page's title is what the notebook said it is about (:func:`bayestribo.reports.kit.
+  page_title`) and the report's own title (its first heading); each figure's ``alt`` text
+  is the description the notebook recorded with it (:func:`bayestribo.reports.kit.setup`),
+  else the section it is in;
+* nothing on the page can run: every Markdown output is read as text, never as HTML
+  (:func:`bayestribo.reports.safety.markdown_without_html`), the page carries a
+  Content-Security-Policy that allows no script, and a page holding anything that could
+  run is refused (:func:`bayestribo.reports.safety.inert_problems`).
 
 :func:`external_references` lists the ``src``/``href`` addresses of a page that would
 be loaded from the network (the tests require none).
@@ -34,9 +43,11 @@ from importlib import resources
 from typing import Any
 
 from bayestribo._optional import require
+from bayestribo.reports._errors import ReportError
 
 __all__ = [
     "NOTE_CLASS",
+    "PAGE_MIME",
     "external_references",
     "math_to_svg",
     "render_math",
@@ -47,6 +58,10 @@ __all__ = [
 
 #: CSS class of the notes (warnings and remarks) in a report.
 NOTE_CLASS = "bt-note"
+
+#: MIME type of the outputs by which a notebook says what its page is about
+#: (``{"subject": ...}``, :func:`bayestribo.reports.kit.page_title`); not shown.
+PAGE_MIME = "application/vnd.bayestribo.page+json"
 
 # $$...$$ first (display), then $...$ (inline, not empty, not spanning a blank line);
 # a backslash-escaped dollar is text.
@@ -70,7 +85,7 @@ def math_to_svg(tex: str, *, fontsize: float = 12.0, display: bool = False) -> s
     Returns
     -------
     str
-        ``<img class="bt-math" ...>`` with the TeX as ``alt`` text, its size in em of
+        ``<img class="bt-math" ...>`` with the TeX in words as ``alt`` text, its size in em of
         the surrounding text and, inline, the baseline aligned with the text
         (``vertical-align`` by the depth).
     """
@@ -85,7 +100,9 @@ def math_to_svg(tex: str, *, fontsize: float = 12.0, display: bool = False) -> s
     size = re.search(r'width="([\d.]+)pt" height="([\d.]+)pt"', svg)
     width, height = (size.group(1), size.group(2)) if size else ("", "")
     data = base64.b64encode(svg.encode("utf-8")).decode("ascii")
-    alt = html_lib.escape(tex.strip(), quote=True)
+    from bayestribo.reports.alt import tex_words
+
+    alt = html_lib.escape(tex_words(tex.strip()), quote=True)
     kind = "bt-math bt-math-display" if display else "bt-math"
     # sizes in em of the text around (rendered at ``fontsize``): an equation in a
     # heading grows with the heading
@@ -103,20 +120,20 @@ def render_math(markdown: str) -> str:
     """Markdown with every ``$$...$$`` and ``$...$`` replaced by its SVG image.
 
     A display equation becomes a centred block of its own. A span that mathtext cannot
-    parse is left as it is (the reader sees its TeX).
+    parse is left as text (the reader sees its TeX, escaped).
     """
 
     def display(m: re.Match[str]) -> str:
         try:
             return f'\n\n<div class="bt-equation">{math_to_svg(m.group(1), display=True)}</div>\n\n'
         except ValueError:
-            return m.group(0)
+            return html_lib.escape(m.group(0), quote=False)
 
     def inline(m: re.Match[str]) -> str:
         try:
             return math_to_svg(m.group(1))
         except ValueError:
-            return m.group(0)
+            return html_lib.escape(m.group(0), quote=False)
 
     return _INLINE.sub(inline, _DISPLAY.sub(display, markdown))
 
@@ -168,13 +185,66 @@ def stderr_as_notes(nb: Any) -> Any:
 
 
 def _math_in_markdown(nb: Any) -> Any:
+    """Equations as SVG; a Markdown output (made from data) read as text, not HTML."""
+    from bayestribo.reports.safety import markdown_without_html
+
     for cell in nb.cells:
         if cell.cell_type == "markdown":
             cell.source = render_math(cell.source)
         for out in cell.get("outputs", []):
             data = out.get("data", {})
             if "text/markdown" in data:
-                data["text/markdown"] = render_math(data["text/markdown"])
+                data["text/markdown"] = render_math(markdown_without_html(data["text/markdown"]))
+    return nb
+
+
+_H1 = re.compile(r"^#\s+(.+?)\s*$", re.MULTILINE)
+_SECTION = re.compile(r"^#{1,3}\s+(.+?)\s*$", re.MULTILINE)
+
+
+def _plain_heading(markdown: str) -> str:
+    """A Markdown heading as plain text: its equations in words, no marks."""
+    from bayestribo.reports.alt import tex_words
+
+    text = re.sub(r"\$([^$]+)\$", lambda m: tex_words(m.group(1)), markdown)
+    return re.sub(r"[*`]", "", text).strip()
+
+
+def page_facts(nb: Any) -> Any:
+    """A copy of ``nb`` with its title set and every figure's ``alt`` text.
+
+    The title (``nb.metadata["title"]``) is the subject the notebook gave
+    (:data:`PAGE_MIME` outputs, removed here), then the report's first ``#`` heading:
+    ``"glycerol-N0.31-r1 – One run: friction ..."``. A figure (``image/png``) without a
+    description of its own is described by the section it is in.
+    """
+    nb = copy.deepcopy(nb)
+    subject, report, section = None, None, None
+    for cell in nb.cells:
+        if cell.cell_type == "markdown":
+            if report is None and (m := _H1.search(cell.source)):
+                report = _plain_heading(m.group(1))
+            headings = _SECTION.findall(cell.source)
+            if headings:
+                section = _plain_heading(headings[-1])
+            continue
+        kept = []
+        for out in cell.get("outputs", []):
+            data = out.get("data", {})
+            if PAGE_MIME in data:
+                subject = str(data[PAGE_MIME].get("subject") or "") or subject
+                continue
+            if "image/png" in data:
+                meta = out.setdefault("metadata", {})
+                png = meta.setdefault("image/png", {})
+                if not png.get("alt"):
+                    png["alt"] = f"Figure in the section {section!r}." if section else "Figure."
+            kept.append(out)
+        if cell.cell_type == "code":
+            cell.outputs = kept
+    title = " – ".join(t for t in (subject, report) if t)
+    if title:
+        nb.metadata["title"] = title
     return nb
 
 
@@ -262,7 +332,9 @@ def to_html(nb: Any, *, show_code: bool = False) -> str:
     """
     HTMLExporter = require("nbconvert", "making reports").HTMLExporter
 
-    nb = _math_in_markdown(stderr_as_notes(nb))
+    from bayestribo.reports.safety import CONTENT_SECURITY_POLICY, inert_problems
+
+    nb = _math_in_markdown(page_facts(stderr_as_notes(nb)))
     template = resources.files("bayestribo.reports") / "template"
     exporter = HTMLExporter(
         extra_template_basedirs=[str(template)],
@@ -271,7 +343,18 @@ def to_html(nb: Any, *, show_code: bool = False) -> str:
         exclude_input_prompt=not show_code,
         exclude_output_prompt=True,
     )
-    body, _ = exporter.from_notebook_node(nb)
+    body, _ = exporter.from_notebook_node(
+        nb, resources={"bayestribo": {"csp": CONTENT_SECURITY_POLICY}}
+    )
     from bayestribo.reports.symbols import subscripts_html
 
-    return _footer(subscripts_html(table_of_contents(body)))
+    page = _footer(subscripts_html(table_of_contents(body)))
+    problems = inert_problems(page)
+    if problems:
+        raise ReportError(
+            "the report would run code in a reader's browser ("
+            + "; ".join(dict.fromkeys(problems))
+            + "): an output holds unescaped HTML; show names with bayestribo.reports.kit "
+            "(note, table, facts, heading), which escape them"
+        )
+    return page

@@ -10,7 +10,12 @@ Called from the notebooks' first code cell::
 (not red stderr boxes) and returns the function that writes a figure to
 ``figure_dir`` in ``figure_format`` (PNG, or PDF/SVG as vector graphics for a paper).
 :func:`note` writes a remark; :func:`about` the table of what a report is about (the
-run's metadata, the file's SHA-256, the bayestribo version, when it was made).
+run's metadata, the file's SHA-256, the bayestribo version, when it was made);
+:func:`heading` a heading; :func:`page_title` what the page is about (its title).
+
+Every one of them escapes the strings it is given (a file name, a lubricant, a sidecar's
+field may hold markup: :mod:`bayestribo.reports.safety`); a notebook that writes its own
+Markdown puts a name in it with :func:`markdown_text`.
 """
 
 from __future__ import annotations
@@ -28,7 +33,8 @@ from typing import Any
 
 from bayestribo._files import atomic_file, write_text
 from bayestribo.reports._errors import ReportError
-from bayestribo.reports.html import NOTE_CLASS
+from bayestribo.reports.html import NOTE_CLASS, PAGE_MIME
+from bayestribo.reports.safety import markdown_text
 
 __all__ = [
     "FIGURE_FORMATS",
@@ -37,12 +43,16 @@ __all__ = [
     "checks",
     "empty_panels",
     "facts",
+    "figure_alt",
     "file_sha256",
     "folder_text",
+    "heading",
     "interval_text",
     "keep_together",
+    "markdown_text",
     "note",
     "overlapping_labels",
+    "page_title",
     "sentence",
     "setup",
     "show_warnings_as_notes",
@@ -181,8 +191,47 @@ def table(frame: Any, *, digits: int = 5) -> None:
             value = f"{value:.{digits}g}"
         return keep_together(value) if isinstance(value, str) else value
 
-    frame = frame.apply(lambda col: col.map(cell))  # the labels are the report's own text
+    frame = _escaped_labels(frame.apply(lambda col: col.map(cell)))
     _display(HTML(frame.to_html(na_rep="–", escape=False, border=0)))
+
+
+def _escaped_labels(frame: Any) -> Any:
+    """``frame`` with its column and index labels and their names escaped for HTML (the
+    table is written with ``escape=False`` for its cells' spans, which pandas applies to
+    the labels too: a run or a lubricant named ``<script>`` would be markup)."""
+
+    def label(value: Any) -> Any:
+        return html.escape(value, quote=False) if isinstance(value, str) else value
+
+    frame = frame.rename(index=label, columns=label)
+    frame.index = frame.index.set_names([label(n) for n in frame.index.names])
+    frame.columns = frame.columns.set_names([label(n) for n in frame.columns.names])
+    return frame
+
+
+def heading(text: str, level: int = 3) -> None:
+    """Show ``text`` (a run's name, a file's) as a heading of ``level`` (2 to 6), as text:
+    its markup and Markdown marks escaped.
+
+    Raises
+    ------
+    ReportError
+        If ``level`` is not 2 to 6 (a report has one title, its first cell's).
+    """
+    from IPython.display import Markdown
+
+    if not isinstance(level, int) or not 2 <= level <= 6:
+        raise ReportError(f"level: expected an integer from 2 to 6, got {level!r}")
+    _display(Markdown(f"{'#' * level} {markdown_text(text)}"))
+
+
+def page_title(subject: str) -> None:
+    """Say what the page is about (a run's name, a campaign's folder): the page's title
+    is ``"<subject> – <the report's title>"`` (:func:`bayestribo.reports.html.page_facts`).
+    Nothing is shown."""
+    from IPython.display import display
+
+    display({PAGE_MIME: {"subject": str(subject)}}, raw=True)
 
 
 #: A cell that is a number or a value with its interval ("0.0243 [0.0241, 0.0245]",
@@ -220,7 +269,29 @@ def show_warnings_as_notes() -> None:
     warnings.filterwarnings("ignore", category=DeprecationWarning)
 
 
-def setup(figure_dir: str | None, figure_format: str = "png") -> Callable[[Any, str], Path | None]:
+def figure_alt(fig: Any, description: str | None = None) -> None:
+    """Show ``fig`` in the report with ``description`` as its alt text (default: what its
+    own texts say it shows, :func:`bayestribo.reports.alt.figure_description`), and close
+    it (the inline backend would show it a second time, without one)."""
+    import matplotlib.pyplot as plt
+    from IPython import get_ipython
+    from IPython.display import publish_display_data
+
+    from bayestribo.reports.alt import figure_description
+
+    shell = get_ipython()
+    if shell is None:  # not in a kernel: nothing to show
+        return
+    said = description or figure_description(fig)
+    data, metadata = shell.display_formatter.format(fig)
+    for mime in ("image/png", "image/jpeg", "image/svg+xml"):
+        if mime in data:
+            metadata[mime] = {**metadata.get(mime, {}), "alt": said}
+    publish_display_data(data, metadata)
+    plt.close(fig)
+
+
+def setup(figure_dir: str | None, figure_format: str = "png") -> Callable[..., Path | None]:
     """Figures' look, warnings as notes; the function that writes a figure.
 
     Parameters
@@ -233,9 +304,10 @@ def setup(figure_dir: str | None, figure_format: str = "png") -> Callable[[Any, 
     Returns
     -------
     callable
-        ``save(fig, name)``: writes ``<figure_dir>/<name>.<figure_format>`` (nothing
-        without ``figure_dir``); it returns None, so a cell ending with it shows only
-        the figure.
+        ``save(fig, name, description=None)``: writes
+        ``<figure_dir>/<name>.<figure_format>`` (nothing without ``figure_dir``) and
+        shows the figure with ``description`` as its alt text (default: what its texts
+        say it shows); it returns None, so a cell ending with it shows only the figure.
 
     Raises
     ------
@@ -264,16 +336,19 @@ def setup(figure_dir: str | None, figure_format: str = "png") -> Callable[[Any, 
     if folder is not None:
         folder.mkdir(parents=True, exist_ok=True)
 
-    def save(fig: Any, name: str) -> None:
-        """Write ``fig`` as ``<name>.<format>`` in the figure folder (if any).
+    def save(fig: Any, name: str, description: str | None = None) -> None:
+        """Write ``fig`` as ``<name>.<format>`` in the figure folder (if any), and show it
+        with ``description`` (default: its own texts, in words) as its alt text.
 
         Texts that overlap, panels with nothing to show and texts smaller than
         :data:`MIN_FONT_PT` are said in a note (the report's tests and the browser's
         probe require none). Symbols' subscripts are set as subscripts first
         (:func:`bayestribo.reports.symbols.subscripts_figure`: ``μ_k`` as ``μ$_{k}$``).
         """
+        from bayestribo.reports.alt import figure_description
         from bayestribo.reports.symbols import plain_symbols, subscripts_figure
 
+        said = description or figure_description(fig)
         subscripts_figure(fig)
         for problem, found in zip(
             FIGURE_PROBLEMS,
@@ -285,6 +360,7 @@ def setup(figure_dir: str | None, figure_format: str = "png") -> Callable[[Any, 
         if folder is not None:
             with atomic_file(folder / f"{name}.{figure_format}", "wb") as fh:
                 fig.savefig(fh, format=figure_format, bbox_inches="tight")
+        figure_alt(fig, said)
 
     return save
 
