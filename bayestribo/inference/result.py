@@ -721,8 +721,10 @@ class FitResult:
             for i in picks:
                 if mean[i] is None or lo[i] is None or hi[i] is None:
                     continue
-                text = interval_text(mean[i], lo[i], hi[i])
-                out.append(f"    {swings[i]:<{width}}   {text}")
+                # the value right-aligned, so every interval starts in one column
+                centre, _, rest = interval_text(mean[i], lo[i], hi[i]).partition(" [")
+                bracket = f" [{rest}" if rest else ""
+                out.append(f"    {swings[i]:<{width}}{centre:>16}{bracket}")
         return out
 
     def __repr__(self) -> str:
