@@ -120,7 +120,7 @@ def test_the_campaign_report_reads_as_text_for_people(tmp_path):
     out = tmp_path / "campaign.html"
     argv = ["report", str(REPO / "data"), "--out", str(out), "--refit"]
     argv += ["--param", "loads=[0.07, 0.59]", "--param", "repeats=[1, 2]"]
-    argv += ["--param", "air_repeats=[1, 2]", "--param", "population_steps=2000"]
+    argv += ["--param", "air_repeats=[1, 2]", "--param", "population_steps=600"]
     main(argv)  # exit 1 is allowed: short population samplers may not converge
     page = inspect_report(out)
     assert page.all_images_loaded and page.figures >= 3

@@ -74,7 +74,7 @@ def reports(tmp_path_factory, single_run_report, viscosity_report, acquisition_r
         hostile_copy(RUNS / f"air-r{r}.csv", campaign, f"air {FILE_WORD}-r{r}", run_id=None)
     out = root / "campaign.html"
     argv = ["report", str(campaign), "--notebook", "loads", "--out", str(out)]
-    argv += ["--param", f"series={LUBRICANT!r}", "--param", "population_steps=2000"]
+    argv += ["--param", f"series={LUBRICANT!r}", "--param", "population_steps=600"]
     argv += ["--param", "fit_kwargs={'grid_points': 32}"]
     main(argv)  # exit 1 is allowed: short population samplers may not converge
     made["loads"] = out

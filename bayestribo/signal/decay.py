@@ -873,9 +873,7 @@ def energy_decay(
     stamps = np.asarray(t, dtype=float)
     # a clock that restarts: continued where the signal is contiguous, cut where it
     # jumps, and said (signal/restarts.py)
-    stamps, displacement, velocity, restarted, cut = continue_clock(
-        stamps, displacement, velocity
-    )
+    stamps, displacement, velocity, restarted, cut = continue_clock(stamps, displacement, velocity)
     if cut is not None:
         warn(
             "; ".join(r.describe() for r in restarted)
