@@ -319,3 +319,30 @@ def test_run_identities_are_stems_unless_they_clash(tmp_path):
     ]
     with pytest.raises(BayestriboError, match="is not in the campaign folder"):
         run_identities([tmp_path / "x.csv", Path("/elsewhere/x.csv")], tmp_path)
+
+
+class _Named:
+    """A fit result's face as the campaign sees it: metadata and attributes."""
+
+    def __init__(self, path: str, run_id: str | None) -> None:
+        self.metadata = {} if run_id is None else {"run_id": run_id}
+        self.attrs = {"run_name": path}
+
+
+def _named_fit(run, *, seed):
+    return _Named(str(run), None if "with-id" not in str(run) else "given-id")
+
+
+def test_a_fit_whose_run_has_no_run_id_is_named_by_its_identity(tmp_path):
+    # Named by its file's path, the fit was not found among the runs of its identity
+    # (the report's ΔE(A) panels came out empty); a run_id of its own is kept.
+    from concurrent.futures import ThreadPoolExecutor
+
+    from bayestribo.campaign.fitting import fit_many
+
+    paths = [tmp_path / "a" / "run7.csv", tmp_path / "with-id.csv"]
+    with ThreadPoolExecutor(1) as pool:
+        outcomes = fit_many(paths, pool, function=_named_fit, progress=False)
+    assert [o.name for o in outcomes] == ["run7", "with-id"]
+    assert outcomes[0].result.attrs["run_name"] == "run7"
+    assert outcomes[1].result.attrs["run_name"] == str(paths[1])

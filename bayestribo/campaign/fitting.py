@@ -344,6 +344,8 @@ def fit_many(
             except Exception as exc:  # the executor lost the task (worker died, ...)
                 result, error, tb = None, f"{type(exc).__name__}: {exc}", traceback.format_exc()
                 elapsed = float("nan")
+            if result is not None:
+                _name_by_identity(result, names[i])
             outcome = RunOutcome(names[i], seeds[i], result, error, tb, elapsed)
             bar.update(outcome.ok)
             if callback is not None:
@@ -673,6 +675,18 @@ def _plain(value: Any) -> Any:
     if isinstance(value, Mapping):
         return {k: _plain(v) for k, v in value.items()}
     return value
+
+
+def _name_by_identity(result: Any, name: str) -> None:
+    """Name a fit by its run's identity in the campaign (the outcome's, the catalog's and
+    the seed's: :func:`run_identity`) where its run carries no ``run_id``: else it keeps
+    its file's path as its name, and the analysis, which names runs by ``run_id`` or
+    name, would not find it among the runs of the same identity (a report's ΔE(A)
+    panels came out empty)."""
+    metadata = getattr(result, "metadata", None) or {}
+    attrs = getattr(result, "attrs", None)
+    if not metadata.get("run_id") and isinstance(attrs, dict):
+        attrs["run_name"] = name
 
 
 def _identity_kwargs(
