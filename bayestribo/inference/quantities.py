@@ -34,6 +34,7 @@ __all__ = [
     "QuantitySummary",
     "chain_diagnostics",
     "describe",
+    "law_quantities",
     "unit_words",
 ]
 
@@ -126,7 +127,9 @@ def _length_unit(metadata: dict[str, Any]) -> str:
     return {"m": "m", "rad": "rad"}.get(unit, "signal length unit")
 
 
-def _registry(law: str) -> tuple[dict[str, tuple[str, str, str]], dict[str, tuple[str, str, str]]]:
+def law_quantities(
+    law: str,
+) -> tuple[dict[str, tuple[str, str, str]], dict[str, tuple[str, str, str]]]:
     """Symbol, label and unit of every parameter, and of every physical quantity, the
     terms of ``law`` name (each term's :meth:`~bayestribo.model.laws.Term.physical`,
     with and without a known stiffness); empty for a law this version does not
@@ -188,7 +191,7 @@ def describe(
     """
     metadata = metadata or {}
     length = _length_unit(metadata)
-    parameters, physical = _registry(law)
+    parameters, physical = law_quantities(law)
     recorded = {**_REPORTED_UNITS, **(units or {})}
     out: dict[str, Quantity] = {}
     for name in names:

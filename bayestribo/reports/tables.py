@@ -188,27 +188,10 @@ def physical_symbols(law: str) -> dict[str, str]:
     >>> physical_symbols("power")["c_alpha_per_k"]
     'c_α/k'
     """
-    import numpy as np
+    from bayestribo.inference.quantities import law_quantities
 
-    from bayestribo.model.laws import PhysicalScale, get_law
-
-    try:
-        terms = get_law(law).terms
-    except ValueError:
-        return {}
-    out: dict[str, str] = {}
-    scales = (PhysicalScale(), PhysicalScale(stiffness=1.0, mass=1.0, load=1.0))
-    for term in terms:
-        values = {
-            p.name: np.array([0.5 * (p.low + min(p.high, p.low + 1.0))]) for p in term.parameters
-        }
-        for scale in scales:
-            try:
-                quantities = term.physical(values, 1.0, scale)
-            except (KeyError, ValueError, ZeroDivisionError):  # a term needing more
-                continue
-            out.update({name: q[2] for name, q in quantities.items()})
-    return out
+    _, physical = law_quantities(law)
+    return {name: symbol for name, (symbol, _, _) in physical.items()}
 
 
 def interval_too_narrow(estimate: Any) -> bool:

@@ -31,6 +31,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from bayestribo._clock import _noise_sd  # robust sd of white noise on a smooth signal
+
 __all__ = ["JUMP_FACTOR", "NEIGHBOURS", "Restart", "continue_clock", "restarts"]
 
 #: Second differences compared on each side of a restart.
@@ -83,12 +85,6 @@ class Restart:
         )
 
 
-def _noise(values: NDArray) -> float:
-    """Robust sd of white noise on a smooth signal (median absolute fourth difference)."""
-    d4 = np.diff(values, 4)
-    return float(1.4826 * np.median(np.abs(d4)) / math.sqrt(70.0)) if d4.size else 0.0
-
-
 def _jump(values: NDArray, k: int) -> float:
     """The second differences across a restart at ``k`` (the two that hold samples of
     both clocks) over their neighbours' largest."""
@@ -99,7 +95,7 @@ def _jump(values: NDArray, k: int) -> float:
     before = np.diff(values[k - 1 - NEIGHBOURS - 1 : k], 2)  # within the old clock
     after = np.diff(values[k : k + NEIGHBOURS + 2], 2)  # within the new one
     scale = float(np.max(np.abs(np.concatenate([before, after]))))
-    floor = 4.0 * _noise(values) + float(np.min(np.abs(np.diff(np.unique(values))), initial=0.0))
+    floor = 4.0 * _noise_sd(values) + float(np.min(np.abs(np.diff(np.unique(values))), initial=0.0))
     reference = scale + floor
     if reference <= 0.0:
         return 0.0 if d2_at == 0.0 else math.inf
