@@ -298,7 +298,7 @@ def test_laws_the_decay_cannot_split_give_one_averaged_dissipation():
     assert np.all((lo < truth) & (truth < hi)), (lo / truth - 1, hi / truth - 1)
     assert band["laws"] == list(runs)
     # as fit(law="auto") assembles it: the verdict's final posterior and the others'
-    from bayestribo.inference.fitting import _averaged_band
+    from bayestribo.inference.auto import _averaged_band
     from bayestribo.inference.pipeline import summarise
 
     verdict = runs[comparison.verdict]

@@ -488,9 +488,9 @@ class FitResult:
     def law_departs(self) -> bool:
         """True when the decay departs from the law smoothly beyond its noise (the shape
         test of :meth:`~bayestribo.inference.likelihood.PiLikelihood.shape_departure`,
-        p below the misfit threshold of :mod:`bayestribo.inference.pipeline`), or when
+        p below the misfit threshold :data:`bayestribo.inference.types.MISFIT_P`), or when
         the law's ΔE(A) has another shape than the turning points' (:attr:`shape_agreement`)."""
-        from bayestribo.inference.pipeline import MISFIT_P
+        from bayestribo.inference.types import MISFIT_P
 
         p = (self.diagnostics.get("shape_departure") or {}).get("p_value")
         agreement = self.shape_agreement
@@ -642,24 +642,13 @@ class FitResult:
         c = self.law_comparison
         if not c:
             return []
-        from bayestribo.inference.comparison import LawComparison
+        from bayestribo.inference.records import LawComparison, LawHalves
 
-        fields = {k: c[k] for k in ("best", "verdict", "as_good", "table", "warnings")}
-        text = LawComparison(
-            c.get("run_name", ""),
-            **fields,
-            adequate=c["adequate"],
-            halves=c.get("halves"),
-            rivals=c.get("rivals"),
-            equivalent=c.get("equivalent") or {},
-            screened=c.get("screened") or [],
-        )
+        text = LawComparison.from_dict(c)
         lines = [f"          {text.describe()}"]
         halves = c.get("halves")
         if halves and halves.get("tested") and halves.get("agree"):
-            from bayestribo.inference.halves import LawHalves
-
-            lines.append(f"          {LawHalves(**halves).describe()}")
+            lines.append(f"          {LawHalves.from_dict(halves).describe()}")
         lines.extend(self._departure_lines(c.get("departures") or {}))
         if not c.get("adequate") and not self.turning_point_dissipation:
             lines.append(

@@ -1,4 +1,9 @@
-"""Starting point of the sampler: maximum a posteriori and a Laplace approximation.
+"""The start stage: the maximum a posteriori, its Laplace approximation and walkers.
+
+:func:`find_optimum` takes a posterior (:mod:`bayestribo.inference.build`) and the
+prepared run's decay and gives the optimum, its covariance and the plausible μ_s/μ_k
+interval; :func:`initial_walkers` draws the walkers the sample stage starts from
+(:mod:`bayestribo.inference.chains`). How:
 
 1. First guesses of ζ and μ_k: the Feeny-Liang peak decrement (Eq. 20-21) of the
    analysed window (falling back to ζ = 0.01 and a friction of 1 % of the amplitude),
@@ -35,7 +40,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import replace
 
 import numpy as np
@@ -49,7 +54,14 @@ from bayestribo.inference.priors import Normal
 from bayestribo.inference.surrogate import stop_ratios
 from bayestribo.signal.decay import EnergyDecay
 
-__all__ = ["initial_walkers", "maximum_a_posteriori", "maximum_from", "refine"]
+__all__ = [
+    "better_optimum",
+    "find_optimum",
+    "initial_walkers",
+    "maximum_a_posteriori",
+    "maximum_from",
+    "refine",
+]
 
 
 def _first_guesses(decay: EnergyDecay, posterior: Posterior) -> list[dict[str, float]]:
@@ -799,3 +811,51 @@ def initial_walkers(
             "posterior may be multimodal or the priors too narrow"
         )
     return np.asarray(kept[:need]).reshape(n_ensembles, n_walkers, d)
+
+
+def find_optimum(
+    posterior: Posterior,
+    decay: EnergyDecay,
+    also_start_at: Mapping[str, float] | None = None,
+) -> tuple[NDArray, NDArray, tuple[float, float] | None]:
+    """The maximum a posteriori of step 3, its Laplace covariance and the plausible
+    μ_s/μ_k interval (:func:`bayestribo.inference.start.maximum_a_posteriori`), with a
+    second starting point of the optimiser kept if its optimum is better.
+
+    Parameters
+    ----------
+    posterior : Posterior
+        From :func:`build_posterior`.
+    decay : EnergyDecay
+        The run's energy decay (its peaks give the first guesses of the optimiser).
+    also_start_at : mapping, optional
+        Values of the sampled coordinates to start the optimiser from as well (e.g.
+        the optimum of a nested law).
+
+    Returns
+    -------
+    theta : ndarray
+        The optimum in sampling coordinates.
+    cov : ndarray
+        Its Laplace covariance.
+    ratio_range : tuple or None
+        The plausible μ_s/μ_k interval (None for a law without static friction).
+    """
+    return better_optimum(posterior, maximum_a_posteriori(posterior, decay), also_start_at)
+
+
+def better_optimum(
+    posterior: Posterior,
+    optimum: tuple[NDArray, NDArray, tuple[float, float] | None],
+    also_start_at: Mapping[str, float] | None,
+) -> tuple[NDArray, NDArray, tuple[float, float] | None]:
+    """``optimum``, or the optimum refined from ``also_start_at`` when its posterior
+    density is higher (the μ_s/μ_k interval kept)."""
+    theta, cov, ratio_range = optimum
+    if also_start_at is not None:
+        start = np.array([also_start_at[n] for n in posterior.names], dtype=float)
+        if np.isfinite(posterior(start[None])[0]):
+            alt, alt_cov = refine(posterior, start)
+            if posterior(alt[None])[0] > posterior(theta[None])[0]:
+                theta, cov = alt, alt_cov
+    return theta, cov, ratio_range
