@@ -23,7 +23,7 @@ with Pareto-smoothed importance-sampling leave-one-out cross-validation (PSIS-LO
 Vehtari, Gelman & Gabry 2017) over the Π increments, through
 :func:`arviz.compare`, and each is checked for misfit at its optimum (the χ² of the
 residuals and the test for a smooth departure along the decay,
-:func:`bayestribo.inference.pipeline.summarise`): a law is *adequate* when neither
+:func:`bayestribo.inference.checks.check`): a law is *adequate* when neither
 has a p-value below 1e-3.
 
 Verdict. The law with the highest ``elpd_loo`` is the best. A law is *as good* as
@@ -63,7 +63,7 @@ comparison's text names it. The law-free fit never reduces.
 
 Screening. Every law is first taken to its optimum (smallest first, each starting
 also from the optimum of the largest law it nests), on the posterior it would be
-sampled on (the second pass of :func:`bayestribo.inference.pipeline.sample`), and its
+sampled on (the second pass of :func:`bayestribo.inference.chains.sample`), and its
 expected log predictive density estimated there: the log-likelihood of the increments
 at the optimum less one per sampled parameter (:func:`optimum_elpd`, Akaike's
 estimate, which PSIS-LOO's matches for a law whose posterior is near normal). A law
@@ -586,7 +586,7 @@ def _optimise(
     posterior = _posterior(law, prepared.data, model, discrepancy)
     nested = _nested_start(law, prepared, optima)
     optimum = find_optimum(posterior, prepared.decay, also_start_at=nested)
-    # the second pass, as pipeline.sample makes it, so that the law is judged on the
+    # the second pass, as chains.sample makes it, so that the law is judged on the
     # posterior it would be sampled on
     second, second_optimum = posterior, optimum
     with warnings.catch_warnings():

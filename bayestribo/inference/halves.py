@@ -5,14 +5,14 @@ the same constants. A law with a free shape (a power of the speed, a friction an
 drag together) can bend to fit a decay whose dissipation changes along the motion
 for another reason (a lubricant film that thins, a contact that wears in, a mount
 that loosens): fitted to the whole, it passes the misfit tests of
-:func:`bayestribo.inference.pipeline.summarise`, yet its halves disagree. On the
+:func:`bayestribo.inference.checks.check`, yet its halves disagree. On the
 AppStat2020 HarmOsc2 recording, ``coulomb+power`` fits the whole decay, and the
 friction of its first half is 4.7 standard deviations from the second's.
 
 The check. The run is cut at the turning point in the middle of the analysed half
 cycles (the cut sample in both halves; a motion that fades into the noise ends an
 oscillation after its last turning point found); each half is prepared as the whole was,
-with its noise model (:func:`bayestribo.inference.pipeline.prepare_part`), and the law
+with its noise model (:func:`bayestribo.inference.preparation.prepare_part`), and the law
 fitted to it (:func:`bayestribo.inference.law_frame.sample_law`,
 the same sampler and law). Each half's posterior gives the energy dissipated per cycle
 at swings spanning the whole motion, ΔE(A)/k (in the length unit squared, so that the
@@ -95,7 +95,7 @@ def law_halves(
     Parameters
     ----------
     prepared : PreparedRun
-        The whole run, from :func:`bayestribo.inference.pipeline.prepare`.
+        The whole run, from :func:`bayestribo.inference.preparation.prepare`.
     law : str or Law
         The law fitted to each half.
     seed : int, Generator or None
