@@ -303,7 +303,7 @@ def test_laws_the_decay_cannot_split_give_one_averaged_dissipation():
 
     verdict = runs[comparison.verdict]
     result = summarise(prepared, verdict, seed=1)
-    wired = _averaged_band(prepared, runs, comparison, result, (prepared, verdict))
+    wired = _averaged_band(prepared, runs, comparison, result.record, (prepared, verdict))
     assert wired["laws"] == comparison.as_good and wired["left_out"] == []
     assert wired["amplitude"] == result.dissipation["amplitude"]
     np.testing.assert_allclose(wired["mean"], band["mean"], rtol=1e-6)

@@ -17,6 +17,7 @@ from bayestribo._lazy import lazy_exports
 # Re-exported lazily: importing the package (for its light modules, such as the fit
 # specification the command line builds its options from) imports no numpy.
 _LAZY: dict[str, str] = {
+    "FitRecord": "bayestribo.inference.fit_record",
     "FitResult": "bayestribo.inference.result",
     "FitSpec": "bayestribo.inference.spec",
     "LogUniform": "bayestribo.inference.priors",

@@ -1,7 +1,8 @@
 """``law="auto"``: compare the laws, choose one, fit it again, and check it.
 
 :func:`fit_auto` takes a prepared run (:func:`bayestribo.inference.preparation.prepare`)
-and gives the :class:`~bayestribo.inference.result.FitResult` of the law it chooses:
+and gives the :class:`~bayestribo.inference.summarising.Summary` of the law it chooses
+(its record complete before the result is made):
 
 1. compare: every candidate law taken to its optimum, screened, sampled and compared
    by PSIS-LOO (:func:`bayestribo.inference.comparison.compare_prepared`), giving a
@@ -14,7 +15,7 @@ and gives the :class:`~bayestribo.inference.result.FitResult` of the law it choo
 3. check: ΔE(A) averaged over the laws as good as the verdict (:func:`_averaged_band`),
    the verdict fitted to each half of the motion (:func:`bayestribo.inference.halves.
    law_halves`) and each law's ΔE(A) set beside the turning points' (
-   :func:`_law_departures`), all recorded in the result.
+   :func:`_law_departures`), all recorded in the fit's record.
 
 This module imports the stages; no stage imports it.
 """
@@ -22,7 +23,6 @@ This module imports the stages; no stage imports it.
 from __future__ import annotations
 
 import dataclasses
-import json
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -38,13 +38,13 @@ from bayestribo.inference.dissipation import (
     physical_scale,
     shape_agreement,
 )
+from bayestribo.inference.fit_record import FitRecord, plain_data
 from bayestribo.inference.halves import law_halves
 from bayestribo.inference.law_frame import posterior_like, sample_in_law_frame
 from bayestribo.inference.preparation import law_frequency
 from bayestribo.inference.records import LawComparison
-from bayestribo.inference.result import FitResult, plain_data
 from bayestribo.inference.sampling import SamplerSettings
-from bayestribo.inference.summarising import summarise
+from bayestribo.inference.summarising import Summary, summary
 from bayestribo.inference.types import PreparedRun, Sampled
 from bayestribo.model.laws import get_law
 
@@ -60,7 +60,7 @@ def fit_auto(
     settings: SamplerSettings,
     recorded_seed: int | None,
     progress: Callable[[str], None] | None = None,
-) -> FitResult:
+) -> Summary:
     """The fit of ``law="auto"`` on a prepared run (module notes).
 
     Parameters
@@ -81,9 +81,11 @@ def fit_auto(
 
     Returns
     -------
-    FitResult
-        The chosen law's fit, its ``law_comparison`` the comparison's record with the
-        halves' check and each law's departure from the turning points' ΔE(A).
+    Summary
+        The chosen law's fit (:meth:`~bayestribo.inference.summarising.Summary.result`
+        makes the result), its record's ``law_comparison`` the comparison with the
+        halves' check and each law's departure from the turning points' ΔE(A), its
+        ``dissipation`` averaged over the laws as good where there are several.
     """
     comparison, runs = compare_prepared(
         prepared,
@@ -109,25 +111,26 @@ def fit_auto(
             settings,
             rng,
         )
-    result = summarise(prepared, sampled, seed=rng, recorded_seed=recorded_seed, compared=True)
-    result.attrs["law_comparison_json"] = json.dumps(plain_data(comparison.to_dict()))
-    averaged = _averaged_band(common, runs, comparison, result, (prepared, sampled))
+    summarised = summary(prepared, sampled, seed=rng, recorded_seed=recorded_seed, compared=True)
+    record = summarised.record
+    averaged = _averaged_band(common, runs, comparison, record, (prepared, sampled))
     if averaged is not None:
-        attrs = result.attrs
-        attrs["verdict_dissipation_json"] = attrs["dissipation_json"]
-        attrs["dissipation_json"] = json.dumps(plain_data(averaged))
+        record = record.replace(
+            verdict_dissipation=record.dissipation, dissipation=plain_data(averaged)
+        )
     comparison = _check_halves(comparison, common, rng, settings, model, discrepancy)
-    record = comparison.to_dict()
+    compared = comparison.to_dict()
     screened = {
         law: row["map"]
-        for law, row in record["table"].items()
+        for law, row in compared["table"].items()
         if row.get("screened") and row.get("map")
     }
-    record["departures"] = _law_departures(
-        common, runs, result, screened, model=model, discrepancy=discrepancy
+    compared["departures"] = _law_departures(
+        common, runs, record, screened, model=model, discrepancy=discrepancy
     )
-    result.attrs["law_comparison_json"] = json.dumps(plain_data(record))
-    return result
+    return dataclasses.replace(
+        summarised, record=record.replace(law_comparison=plain_data(compared))
+    )
 
 
 def _check_halves(
@@ -169,7 +172,7 @@ _DEPARTURE_DRAWS = 200
 def _law_departures(
     common: PreparedRun,
     runs: Mapping[str, Sampled],
-    result: FitResult,
+    record: FitRecord,
     optima: Mapping[str, Mapping[str, float]] | None = None,
     *,
     model: str = "exact",
@@ -177,15 +180,15 @@ def _law_departures(
 ) -> dict[str, Any]:
     """How close each compared law's ΔE(A) comes to the turning points' (the law-free
     answer), by law: :func:`~bayestribo.inference.dissipation.shape_agreement` of its
-    posterior mean at the result's swings, from :data:`_DEPARTURE_DRAWS` draws of the
+    posterior mean at the record's swings, from :data:`_DEPARTURE_DRAWS` draws of the
     comparison's fit on the common preparation; for a law screened out at its optimum
     (``optima``: its values there by name), of its ΔE(A) at that optimum. Empty
     without a turning-point answer."""
-    measured = result.turning_point_dissipation
-    band = result.dissipation
+    measured = record.turning_point_dissipation
+    band = record.dissipation
     if not measured or not band or not band.get("amplitude"):
         return {}
-    sensor = result._attr("sensor_json", None) or {}
+    sensor = record.sensor or {}
     scale = physical_scale(common.decay.scaling, common.metadata)
     scale = dataclasses.replace(
         scale, length_scale=scale.length_scale / float(sensor.get("gain", 1.0))
@@ -217,7 +220,7 @@ def _averaged_band(
     common: PreparedRun,
     runs: Mapping[str, Sampled],
     comparison: LawComparison,
-    result: FitResult,
+    record: FitRecord,
     final: tuple[PreparedRun, Sampled],
 ) -> dict[str, Any] | None:
     """ΔE(A) averaged over the adequate, converged laws as good as the verdict
@@ -233,7 +236,7 @@ def _averaged_band(
     ``left_out``."""
     if not comparison.adequate:
         return None
-    band = result.dissipation
+    band = record.dissipation
     if not band:
         return None
     common_scale = physical_scale(common.decay.scaling, common.metadata)
@@ -260,7 +263,7 @@ def _averaged_band(
         members.append((law, sampled.posterior, chains.reshape(-1, chains.shape[-1]), scale))
     if len(members) < 2:
         return None
-    frequency_sd = float(result.attrs.get("frequency_nuisance_sd", 0.0))
+    frequency_sd = float(record.frequency_nuisance_sd or 0.0)
     try:
         out = averaged_dissipation(
             members,

@@ -10,6 +10,7 @@ and check (:func:`bayestribo.inference.auto.fit_auto`).
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import time
 from collections.abc import Callable, Mapping
@@ -26,7 +27,7 @@ from bayestribo.inference.preparation import prepare
 from bayestribo.inference.priors import Prior
 from bayestribo.inference.result import FitResult
 from bayestribo.inference.spec import FitSpec, spec_fields
-from bayestribo.inference.summarising import summarise
+from bayestribo.inference.summarising import summary
 from bayestribo.io.options import ReadOptions
 from bayestribo.io.run import Run
 from bayestribo.model.laws import Law, get_law
@@ -182,7 +183,7 @@ def fit(
         notch=spec.notch_Hz,
     )
     if auto:
-        result = fit_auto(
+        summarised = fit_auto(
             prepared,
             rng,
             model=model,
@@ -203,10 +204,9 @@ def fit(
             fixed=fixed,
             progress=progress,
         )
-        result = summarise(prepared, sampled, seed=rng, recorded_seed=seed)
-    result.attrs["spec_json"] = spec.to_json()
-    result.attrs["seconds"] = time.perf_counter() - start
-    return result
+        summarised = summary(prepared, sampled, seed=rng, recorded_seed=seed)
+    record = summarised.record.replace(spec=spec.to_dict(), seconds=time.perf_counter() - start)
+    return dataclasses.replace(summarised, record=record).result()
 
 
 #: The defaults of :func:`fit`'s keywords that are fields of :class:`FitSpec` (None for

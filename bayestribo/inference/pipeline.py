@@ -13,8 +13,11 @@
    sampler run to convergence, giving a :class:`Sampled`;
 5. check (:mod:`bayestribo.inference.checks`): :func:`check`, modes, misfit, prior
    bounds and the frequency trend, giving a :class:`~bayestribo.inference.checks.FitChecks`;
-6. summarise (:mod:`bayestribo.inference.summarising`): :func:`summarise`, derived
-   quantities, ΔE(A), diagnostics and the :class:`~bayestribo.inference.result.FitResult`.
+6. summarise (:mod:`bayestribo.inference.summarising`): :func:`summary`, derived
+   quantities, ΔE(A), diagnostics: a :class:`Summary` of the fit's typed record
+   (:class:`~bayestribo.inference.fit_record.FitRecord`) and draws, whose
+   :meth:`~Summary.result` is the :class:`~bayestribo.inference.result.FitResult`
+   (:func:`summarise` is the two in a row).
 
 :func:`bayestribo.fit` is these stages in a row (:mod:`bayestribo.inference.fitting`);
 ``law="auto"`` compares, chooses and refits on top of them
@@ -42,7 +45,7 @@ from bayestribo.inference.preparation import (
     regrid,
 )
 from bayestribo.inference.start import find_optimum
-from bayestribo.inference.summarising import summarise
+from bayestribo.inference.summarising import Summary, summarise, summary
 from bayestribo.inference.types import DEFAULT_SETTINGS, MISFIT_P, PreparedRun, Sampled
 
 __all__ = [
@@ -53,6 +56,7 @@ __all__ = [
     "FitChecks",
     "PreparedRun",
     "Sampled",
+    "Summary",
     "build_posterior",
     "check",
     "find_optimum",
@@ -65,4 +69,5 @@ __all__ = [
     "regrid",
     "sample",
     "summarise",
+    "summary",
 ]

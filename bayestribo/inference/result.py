@@ -28,7 +28,6 @@ importing ArviZ, xarray and pandas.
 from __future__ import annotations
 
 import json
-import math
 import warnings
 from collections.abc import Mapping
 from pathlib import Path
@@ -38,6 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bayestribo._files import atomic_path
+from bayestribo.inference.fit_record import FitRecord, plain_data
 from bayestribo.inference.priors import PriorSet
 from bayestribo.inference.quantities import (
     DERIVED,
@@ -82,21 +82,6 @@ UNITS: dict[str, str] = {
     "mu_k": "1",
     **{name: unit for name, (_, _, unit) in DERIVED.items()},
 }
-
-
-def plain_data(value: Any) -> Any:
-    """JSON-compatible copy (numpy scalars and arrays to Python)."""
-    if isinstance(value, Mapping):
-        return {str(k): plain_data(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [plain_data(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return plain_data(value.tolist())
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
 
 
 class FitResult:
@@ -157,6 +142,12 @@ class FitResult:
         return np.asarray(self._idata.posterior[name])
 
     # -- provenance (from the attributes) -----------------------------------------
+    @property
+    def record(self) -> FitRecord:
+        """Everything the fit records beside its draws, typed
+        (:class:`~bayestribo.inference.fit_record.FitRecord`, read from :attr:`attrs`)."""
+        return FitRecord.from_attrs(self.attrs)
+
     def _attr(self, key: str, default: Any = None) -> Any:
         value = self.attrs.get(key, default)
         if isinstance(value, str) and key.endswith("_json"):

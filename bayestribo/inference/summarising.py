@@ -1,17 +1,20 @@
 """The summarise stage: a checked sample becomes a :class:`FitResult`.
 
-:func:`summarise` takes the prepared run, its sampled posterior and the checks of the
+:func:`summary` takes the prepared run, its sampled posterior and the checks of the
 check stage (:func:`bayestribo.inference.checks.check`, run here when not given) and
-gives the :class:`~bayestribo.inference.result.FitResult`: derived quantities, the law's
-ΔE(A) band and the turning points' (law-free) ΔE(A), diagnostics and the draws.
+gives a :class:`Summary`: the fit's :class:`~bayestribo.inference.fit_record.FitRecord`
+(derived quantities' draws aside: the law's ΔE(A) band and the turning points'
+(law-free) ΔE(A), diagnostics, provenance) and its draws. :meth:`Summary.result` makes
+the :class:`~bayestribo.inference.result.FitResult`, writing the record once;
+:func:`summarise` is the two in a row. ``law="auto"`` completes the record before the
+result is made (:mod:`bayestribo.inference.auto`).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
-import warnings
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -20,7 +23,7 @@ from numpy.typing import NDArray
 from bayestribo import __version__
 from bayestribo._warnings import warn
 from bayestribo.errors import BayestriboError, ConvergenceWarning, MisfitWarning
-from bayestribo.inference.assemble import derived_quantities, fit_draws
+from bayestribo.inference.assemble import FitDraws, derived_quantities, fit_draws
 from bayestribo.inference.checks import FitChecks, Misfit, check, warn_shape
 from bayestribo.inference.dissipation import (
     dissipation_amplitudes,
@@ -30,14 +33,15 @@ from bayestribo.inference.dissipation import (
     shape_agreement,
     turning_point_dissipation,
 )
-from bayestribo.inference.result import FitResult, plain_data
+from bayestribo.inference.fit_record import FitRecord, plain_data
+from bayestribo.inference.result import FitResult
 from bayestribo.inference.sensitivity import prior_sensitivity
 from bayestribo.inference.types import PreparedRun, Sampled
 from bayestribo.model.restoring import get_restoring
 from bayestribo.signal.decay import EnergyDecay
 from bayestribo.signal.sensor import sensor_calibration
 
-__all__ = ["summarise"]
+__all__ = ["Summary", "summarise", "summary"]
 
 
 def _measured_restoring(name: str | None, decay: EnergyDecay) -> tuple[Any, dict | None]:
@@ -138,6 +142,28 @@ def _diagnostics(sampled: Sampled, misfit: Misfit) -> dict[str, Any]:
     }
 
 
+@dataclass(frozen=True)
+class Summary:
+    """A summarised fit before it is a :class:`FitResult`: its record and its draws.
+
+    Attributes
+    ----------
+    record : FitRecord
+        What the fit records (:mod:`bayestribo.inference.fit_record`).
+    draws : FitDraws
+        The draws of every quantity, the pointwise log-likelihood and the predictive
+        draws (:class:`~bayestribo.inference.assemble.FitDraws`; its attributes are the
+        record's, written by :meth:`result`).
+    """
+
+    record: FitRecord
+    draws: FitDraws
+
+    def result(self) -> FitResult:
+        """The :class:`FitResult`: the draws, with the record as their attributes."""
+        return FitResult(draws=dataclasses.replace(self.draws, attrs=self.record.to_attrs()))
+
+
 def summarise(
     prepared: PreparedRun,
     sampled: Sampled,
@@ -147,7 +173,28 @@ def summarise(
     compared: bool = False,
     checks: FitChecks | None = None,
 ) -> FitResult:
-    """Derived quantities, diagnostics and checks, as a :class:`FitResult`.
+    """Derived quantities, diagnostics and checks, as a :class:`FitResult`
+    (:func:`summary` made a result; the parameters and warnings are its)."""
+    return summary(
+        prepared,
+        sampled,
+        seed=seed,
+        recorded_seed=recorded_seed,
+        compared=compared,
+        checks=checks,
+    ).result()
+
+
+def summary(
+    prepared: PreparedRun,
+    sampled: Sampled,
+    *,
+    seed: int | np.random.Generator | None = None,
+    recorded_seed: int | None = None,
+    compared: bool = False,
+    checks: FitChecks | None = None,
+) -> Summary:
+    """Derived quantities, diagnostics and checks: the record and draws of a fit.
 
     Parameters
     ----------
@@ -168,7 +215,8 @@ def summarise(
 
     Returns
     -------
-    FitResult
+    Summary
+        Its :meth:`~Summary.result` is the :class:`FitResult`.
 
     Warns
     -----
@@ -242,74 +290,64 @@ def summarise(
     agreement = shape_agreement(dissipation, measured)
     warn_shape(name, agreement, posterior.law.name, compared, flagged=checks.flagged)
     noise_info = {**prepared.noise.to_dict(), "description": prepared.noise.describe()}
-    attrs = {
-        "run_name": name,
-        "model": posterior.likelihood.model,
-        "law": posterior.law.name,
-        "dissipation_json": json.dumps(plain_data(dissipation)),
-        "turning_point_dissipation_json": json.dumps(plain_data(measured)),
-        "shape_agreement_json": json.dumps(plain_data(agreement)),
-        "restoring_json": json.dumps(
-            plain_data({"name": restoring.name, **(measured_spring or {})})
-        ),
-        "units_json": json.dumps(own_units),
-        "seed": -1 if recorded_seed is None else int(recorded_seed),
-        "package_version": __version__,
-        "friction_defined": int(scaling.friction_defined),
-        "length_scale": scaling.length_scale,
-        "omega": scaling.omega,
-        "tau_end": prepared.data.tau_end,
-        "motion_ended": int(prepared.data.motion_ended),
-        "metadata_json": json.dumps(plain_data(metadata)),
-        "noise_json": json.dumps(plain_data(noise_info)),
-        "channels_json": json.dumps(plain_data(prepared.channels)),
-        "priors_json": json.dumps(posterior.priors.to_spec()),
-        "fixed_json": json.dumps(plain_data(posterior.fixed)),
-        "settings_json": json.dumps(
-            {
-                "grid_points": prepared.grid_points,
-                "skip_oscillations": prepared.skip_oscillations,
-                "discrepancy": discrepancy,
-                "notch_Hz": list(prepared.decay.notch_Hz),
-                "max_steps": sampled.settings.max_steps,
-            }
-        ),
-        "diagnostics_json": json.dumps(
-            plain_data(
-                {
-                    **_diagnostics(sampled, checks.misfit),
-                    "shape_departure": checks.shape.to_dict(),
-                    "at_prior_bound": checks.at_bound,
-                    "modes": checks.modes.to_dict(),  # the mode check (inference/modes.py)
-                    "surrogate": None if sampled.surrogate is None else sampled.surrogate.to_dict(),
-                }
-            )
-        ),
-        "frequency_trend_json": json.dumps(None if trend is None else trend.to_dict()),
-        "frequency_nuisance_sd": frequency_sd,
-        "sensor_json": json.dumps({**dataclasses.asdict(sensor), "description": sensor.describe()}),
-        "law_frequency_change": law_change,
-        "prior_sensitivity_json": json.dumps(plain_data(prior_sensitivity(flat, posterior.priors))),
+    diagnostics = {
+        **_diagnostics(sampled, checks.misfit),
+        "shape_departure": checks.shape.to_dict(),
+        "at_prior_bound": checks.at_bound,
+        "modes": checks.modes.to_dict(),  # the mode check (inference/modes.py)
+        "surrogate": None if sampled.surrogate is None else sampled.surrogate.to_dict(),
     }
+    record = FitRecord(
+        run_name=name,
+        model=posterior.likelihood.model,
+        law=posterior.law.name,
+        dissipation=plain_data(dissipation),
+        turning_point_dissipation=plain_data(measured),
+        shape_agreement=plain_data(agreement),
+        restoring=plain_data({"name": restoring.name, **(measured_spring or {})}),
+        units=own_units,
+        seed=-1 if recorded_seed is None else int(recorded_seed),
+        package_version=__version__,
+        friction_defined=int(scaling.friction_defined),
+        length_scale=scaling.length_scale,
+        omega=scaling.omega,
+        tau_end=prepared.data.tau_end,
+        motion_ended=int(prepared.data.motion_ended),
+        metadata=plain_data(metadata),
+        noise=plain_data(noise_info),
+        channels=plain_data(prepared.channels),
+        priors=posterior.priors.to_spec(),
+        fixed=plain_data(posterior.fixed),
+        settings={
+            "grid_points": prepared.grid_points,
+            "skip_oscillations": prepared.skip_oscillations,
+            "discrepancy": discrepancy,
+            "notch_Hz": list(prepared.decay.notch_Hz),
+            "max_steps": sampled.settings.max_steps,
+        },
+        diagnostics=plain_data(diagnostics),
+        frequency_trend=None if trend is None else trend.to_dict(),
+        frequency_nuisance_sd=frequency_sd,
+        sensor={**dataclasses.asdict(sensor), "description": sensor.describe()},
+        law_frequency_change=law_change,
+        prior_sensitivity=plain_data(prior_sensitivity(flat, posterior.priors)),
+    )
     # the pointwise log-likelihood (PSIS-LOO) of the density the chains sampled: the
     # surrogate's where its check passed (inference/surrogate.py)
     # the sampler's own statistics (ArviZ's sample_stats), where they match the draws
     lp = run.log_prob if np.shape(run.log_prob) == run.chains.shape[:2] else None
-    result = FitResult(
-        draws=fit_draws(
-            sampled.draws_posterior,
-            run.chains,
-            derived,
-            rng,
-            attrs,
-            log_prob=lp,
-            walker_acceptance=run.walker_acceptance,
-        )
+    draws = fit_draws(
+        sampled.draws_posterior,
+        run.chains,
+        derived,
+        rng,
+        {},
+        log_prob=lp,
+        walker_acceptance=run.walker_acceptance,
     )
     if not run.converged:
-        warnings.warn(
+        warn(
             f"the sampler did not converge on {name or 'the run'}: " + "; ".join(run.reasons),
             ConvergenceWarning,
-            stacklevel=3,
         )
-    return result
+    return Summary(record, draws)
