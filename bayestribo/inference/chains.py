@@ -1,13 +1,12 @@
 """The sample stage: a posterior, from its optimum, to converged chains.
 
-:func:`sample` takes a :class:`~bayestribo.inference.posterior.Posterior` (from
-:func:`bayestribo.inference.build.build_posterior`) and the prepared run's decay, and
-gives a :class:`~bayestribo.inference.types.Sampled`: the optimum (the start stage,
-:mod:`bayestribo.inference.start`), the second pass of the increments' variances
-(:mod:`bayestribo.inference.reweight`), walkers, and the sampler
+:func:`sample_from` takes the start stage's :class:`~bayestribo.inference.start.Start`
+(the posterior to sample and its optimum) and gives a
+:class:`~bayestribo.inference.types.Sampled`: walkers about the optimum, and the sampler
 (:func:`bayestribo.inference.sampling.run_ensembles`) run to convergence; for a law
 without a closed form, on its quadratic surrogate where the exact posterior confirms
-it (:mod:`bayestribo.inference.surrogate`).
+it (:mod:`bayestribo.inference.surrogate`). :func:`sample` is the start and sample
+stages in a row, from a posterior.
 """
 
 from __future__ import annotations
@@ -19,9 +18,8 @@ from numpy.typing import NDArray
 
 from bayestribo.inference.modes import run_or_failure
 from bayestribo.inference.posterior import Posterior
-from bayestribo.inference.reweight import reweighted_posterior
 from bayestribo.inference.sampling import SamplerRun, SamplerSettings, run_ensembles
-from bayestribo.inference.start import better_optimum, find_optimum, initial_walkers, maximum_from
+from bayestribo.inference.start import Start, find_start, initial_walkers
 from bayestribo.inference.surrogate import (
     ATTEMPTS,
     NODE_SCALE,
@@ -32,7 +30,7 @@ from bayestribo.inference.surrogate import (
 from bayestribo.inference.types import DEFAULT_SETTINGS, Sampled
 from bayestribo.signal.decay import EnergyDecay
 
-__all__ = ["sample"]
+__all__ = ["sample", "sample_from"]
 
 
 def sample(
@@ -47,53 +45,53 @@ def sample(
     surrogate: bool = True,
     reweight: bool = True,
 ) -> Sampled:
-    """Step 3: maximum a posteriori, starting walkers, and sampling to convergence.
-
-    Parameters
-    ----------
-    posterior : Posterior
-        From :func:`build_posterior`.
-    decay : EnergyDecay
-        The run's energy decay (its peaks give the first guesses of the optimiser).
-    settings : SamplerSettings
-        Walkers, ensembles, step ceiling and stopping rule.
-    seed : int or Generator, optional
-        Seed of the walkers and of the sampler's moves.
-    also_start_at : mapping, optional
-        A second starting point of the optimiser (values of the sampled coordinates,
-        e.g. the optimum of a nested law), kept if its optimum is better.
-    progress : bool
-        Show a progress bar.
-    optimum : tuple, optional
-        The maximum a posteriori, its Laplace covariance and the plausible μ_s/μ_k
-        interval when they are known already (:func:`bayestribo.inference.start.
-        maximum_from`, a nonlinear law's fit in the frame of its own turning times):
-        the optimiser does not run from the first guesses again.
-    surrogate : bool
-        For a law without a closed form, sample a quadratic surrogate of its Π and keep
-        it where the exact posterior confirms it (:mod:`bayestribo.inference.surrogate`;
-        the default); False: sample the exact posterior throughout.
-    reweight : bool
-        The second pass (the default): the increments' variances computed again from
-        the law's motion at the optimum, and the optimum of that posterior, which is
-        sampled (:mod:`bayestribo.inference.reweight`; the observed channels' variances
-        are too large below the noise, and share its sign). False: sample
-        ``posterior`` as it is.
+    """The start and sample stages in a row: :func:`bayestribo.inference.start.
+    find_start` (with ``optimum``, ``also_start_at`` and ``reweight``), then
+    :func:`sample_from` (with ``settings``, ``seed``, ``progress`` and ``surrogate``).
 
     Returns
     -------
     Sampled
         Its ``posterior`` is the one sampled (the second pass's).
     """
+    start = find_start(
+        posterior, decay, optimum=optimum, also_start_at=also_start_at, reweight=reweight
+    )
+    return sample_from(start, settings=settings, seed=seed, progress=progress, surrogate=surrogate)
+
+
+def sample_from(
+    start: Start,
+    *,
+    settings: SamplerSettings = DEFAULT_SETTINGS,
+    seed: int | np.random.Generator | None = None,
+    progress: bool = False,
+    surrogate: bool = True,
+) -> Sampled:
+    """The sample stage: walkers about the start, and the sampler run to convergence.
+
+    Parameters
+    ----------
+    start : Start
+        From :func:`bayestribo.inference.start.find_start`.
+    settings : SamplerSettings
+        Walkers, ensembles, step ceiling and stopping rule.
+    seed : int or Generator, optional
+        Seed of the walkers and of the sampler's moves.
+    progress : bool
+        Show a progress bar.
+    surrogate : bool
+        For a law without a closed form, sample a quadratic surrogate of its Π and keep
+        it where the exact posterior confirms it (:mod:`bayestribo.inference.surrogate`;
+        the default); False: sample the exact posterior throughout.
+
+    Returns
+    -------
+    Sampled
+        Of ``start.posterior``.
+    """
     rng = np.random.default_rng(seed)
-    if optimum is None:
-        optimum = find_optimum(posterior, decay)
-    theta, cov, ratio_range = better_optimum(posterior, optimum, also_start_at)
-    if reweight:
-        second = reweighted_posterior(posterior, decay, theta)
-        if second is not None:
-            posterior = second
-            theta, cov, ratio_range = maximum_from(posterior, theta, decay)
+    posterior, theta, cov, ratio_range = start.posterior, start.theta, start.cov, start.ratio_range
     checked: SurrogateCheck | None = None
     target: Posterior | None = None
     run: SamplerRun | None = None

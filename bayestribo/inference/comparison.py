@@ -115,13 +115,13 @@ from bayestribo import DEFAULT_SEED
 from bayestribo.errors import BayestriboError
 from bayestribo.inference.assemble import pointwise_log_likelihood
 from bayestribo.inference.build import build_posterior
-from bayestribo.inference.chains import sample
+from bayestribo.inference.chains import sample_from
 from bayestribo.inference.checks import misfit, shape_departure
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.preparation import prepare, regrid
 from bayestribo.inference.records import LawComparison
 from bayestribo.inference.sampling import SamplerSettings
-from bayestribo.inference.start import find_optimum
+from bayestribo.inference.start import find_optimum, find_start
 from bayestribo.inference.types import MISFIT_P, PreparedRun, Sampled
 from bayestribo.io.options import ReadOptions
 from bayestribo.io.run import Run
@@ -211,7 +211,8 @@ def _fit_law(
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        sampled = sample(posterior, prepared.decay, settings=settings, seed=rng, optimum=optimum)
+        start = find_start(posterior, prepared.decay, optimum=optimum)
+        sampled = sample_from(start, settings=settings, seed=rng)
     chains = sampled.run.chains
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", FutureWarning)

@@ -18,12 +18,12 @@ from collections.abc import Callable, Mapping
 import numpy as np
 
 from bayestribo.inference.build import build_posterior
-from bayestribo.inference.chains import sample
+from bayestribo.inference.chains import sample_from
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.preparation import law_frequency, reframe
 from bayestribo.inference.priors import Prior
 from bayestribo.inference.sampling import SamplerSettings
-from bayestribo.inference.start import maximum_a_posteriori, maximum_from
+from bayestribo.inference.start import find_start, maximum_a_posteriori, maximum_from
 from bayestribo.inference.types import PreparedRun, Sampled
 from bayestribo.model.laws import Law
 
@@ -102,14 +102,8 @@ def sample_in_law_frame(
             prepared = framed
             posterior = posterior_on(prepared)
             optimum = maximum_from(posterior, optimum[0], prepared.decay)
-    sampled = sample(
-        posterior,
-        prepared.decay,
-        settings=settings,
-        seed=seed,
-        progress=progress,
-        optimum=optimum,
-    )
+    start = find_start(posterior, prepared.decay, optimum=optimum)
+    sampled = sample_from(start, settings=settings, seed=seed, progress=progress)
     return prepared, sampled
 
 

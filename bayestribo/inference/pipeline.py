@@ -6,11 +6,12 @@
 2. build (:mod:`bayestribo.inference.build`): :func:`build_posterior`, default priors
    (or the caller's) × the Π likelihood, with any parameters fixed at a value
    (``fixed={"zeta": 0.0}`` is the Coulomb-only law);
-3. start (:mod:`bayestribo.inference.start`): :func:`find_optimum`, the maximum a
-   posteriori and its Laplace covariance, from which walkers are drawn;
-4. sample (:mod:`bayestribo.inference.chains`): :func:`sample`, the second pass of the
-   increments' variances (:mod:`bayestribo.inference.reweight`), walkers, and the
-   sampler run to convergence, giving a :class:`Sampled`;
+3. start (:mod:`bayestribo.inference.start`): :func:`find_start`, the maximum a
+   posteriori (:func:`find_optimum`), the second pass of the increments' variances
+   (:mod:`bayestribo.inference.reweight`) and its optimum, giving a :class:`Start`;
+4. sample (:mod:`bayestribo.inference.chains`): :func:`sample_from`, walkers about the
+   start and the sampler run to convergence, giving a :class:`Sampled` (:func:`sample`
+   is the start and sample stages in a row, from a posterior);
 5. check (:mod:`bayestribo.inference.checks`): :func:`check`, modes, misfit, prior
    bounds and the frequency trend, giving a :class:`~bayestribo.inference.checks.FitChecks`;
 6. summarise (:mod:`bayestribo.inference.summarising`): :func:`summary`, derived
@@ -28,7 +29,7 @@ they have always been imported from; it defines nothing, and no stage imports it
 from __future__ import annotations
 
 from bayestribo.inference.build import build_posterior
-from bayestribo.inference.chains import sample
+from bayestribo.inference.chains import sample, sample_from
 from bayestribo.inference.checks import (
     FREQUENCY_TREND_CHANGE,
     FREQUENCY_TREND_Z,
@@ -44,7 +45,7 @@ from bayestribo.inference.preparation import (
     reframe,
     regrid,
 )
-from bayestribo.inference.start import find_optimum
+from bayestribo.inference.start import Start, find_optimum, find_start
 from bayestribo.inference.summarising import Summary, summarise, summary
 from bayestribo.inference.types import DEFAULT_SETTINGS, MISFIT_P, PreparedRun, Sampled
 
@@ -56,10 +57,12 @@ __all__ = [
     "FitChecks",
     "PreparedRun",
     "Sampled",
+    "Start",
     "Summary",
     "build_posterior",
     "check",
     "find_optimum",
+    "find_start",
     "frequency_nuisance_sd",
     "law_frequency",
     "misfit_p_value",
@@ -68,6 +71,7 @@ __all__ = [
     "reframe",
     "regrid",
     "sample",
+    "sample_from",
     "summarise",
     "summary",
 ]

@@ -1,9 +1,11 @@
 """The start stage: the maximum a posteriori, its Laplace approximation and walkers.
 
-:func:`find_optimum` takes a posterior (:mod:`bayestribo.inference.build`) and the
-prepared run's decay and gives the optimum, its covariance and the plausible μ_s/μ_k
-interval; :func:`initial_walkers` draws the walkers the sample stage starts from
-(:mod:`bayestribo.inference.chains`). How:
+:func:`find_start` takes a posterior (:mod:`bayestribo.inference.build`) and the
+prepared run's decay and gives a :class:`Start`: the optimum (:func:`find_optimum`:
+the maximum a posteriori, its covariance and the plausible μ_s/μ_k interval), then the
+second pass of the increments' variances (:mod:`bayestribo.inference.reweight`) and
+its optimum; the sample stage (:mod:`bayestribo.inference.chains`) draws its walkers
+from it (:func:`initial_walkers`). How the optimum is found:
 
 1. First guesses of ζ and μ_k: the Feeny-Liang peak decrement (Eq. 20-21) of the
    analysed window (falling back to ζ = 0.01 and a friction of 1 % of the amplitude),
@@ -41,7 +43,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -51,12 +53,15 @@ from bayestribo.errors import BayestriboError
 from bayestribo.inference.likelihood import PiLikelihood
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.priors import Normal
+from bayestribo.inference.reweight import reweighted_posterior
 from bayestribo.inference.surrogate import stop_ratios
 from bayestribo.signal.decay import EnergyDecay
 
 __all__ = [
+    "Start",
     "better_optimum",
     "find_optimum",
+    "find_start",
     "initial_walkers",
     "maximum_a_posteriori",
     "maximum_from",
@@ -859,3 +864,72 @@ def better_optimum(
             if posterior(alt[None])[0] > posterior(theta[None])[0]:
                 theta, cov = alt, alt_cov
     return theta, cov, ratio_range
+
+
+@dataclass(frozen=True)
+class Start:
+    """Where the sampler starts: the posterior it samples and that posterior's optimum.
+
+    Attributes
+    ----------
+    posterior : Posterior
+        The posterior to sample (the second pass's, :mod:`bayestribo.inference.reweight`,
+        where it was made).
+    theta : ndarray
+        Its maximum a posteriori in sampling coordinates.
+    cov : ndarray
+        Its Laplace covariance.
+    ratio_range : tuple or None
+        The plausible μ_s/μ_k interval (None for a law without static friction).
+    """
+
+    posterior: Posterior
+    theta: NDArray
+    cov: NDArray
+    ratio_range: tuple[float, float] | None
+
+
+def find_start(
+    posterior: Posterior,
+    decay: EnergyDecay,
+    *,
+    optimum: tuple[NDArray, NDArray, tuple[float, float] | None] | None = None,
+    also_start_at: Mapping[str, float] | None = None,
+    reweight: bool = True,
+) -> Start:
+    """The start stage: the optimum, then the second pass and its optimum.
+
+    Parameters
+    ----------
+    posterior : Posterior
+        From :func:`bayestribo.inference.build.build_posterior`.
+    decay : EnergyDecay
+        The run's energy decay (its peaks give the first guesses of the optimiser).
+    optimum : tuple, optional
+        The maximum a posteriori, its Laplace covariance and the plausible μ_s/μ_k
+        interval when they are known already (:func:`maximum_from`, a nonlinear law's
+        fit in the frame of its own turning times): the optimiser does not run from the
+        first guesses again.
+    also_start_at : mapping, optional
+        A second starting point of the optimiser (values of the sampled coordinates,
+        e.g. the optimum of a nested law), kept if its optimum is better.
+    reweight : bool
+        The second pass (the default): the increments' variances computed again from
+        the law's motion at the optimum, and the optimum of that posterior, which is
+        the one sampled (:mod:`bayestribo.inference.reweight`; the observed channels'
+        variances are too large below the noise, and share its sign). False: start
+        from ``posterior`` as it is.
+
+    Returns
+    -------
+    Start
+    """
+    if optimum is None:
+        optimum = find_optimum(posterior, decay)
+    theta, cov, ratio_range = better_optimum(posterior, optimum, also_start_at)
+    if reweight:
+        second = reweighted_posterior(posterior, decay, theta)
+        if second is not None:
+            posterior = second
+            theta, cov, ratio_range = maximum_from(posterior, theta, decay)
+    return Start(posterior, theta, cov, ratio_range)
