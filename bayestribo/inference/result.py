@@ -203,7 +203,7 @@ class FitResult:
 
     @property
     def law_comparison(self) -> dict[str, Any] | None:
-        """How ``law="auto"`` chose the law (:class:`~bayestribo.inference.comparison.
+        """How ``law="auto"`` chose the law (:class:`~bayestribo.inference.records.
         LawComparison` as plain data: ``verdict``, ``best``, ``as_good``, ``adequate``,
         ``table``), None for a fit of a named law."""
         return self._attr("law_comparison_json", None)
