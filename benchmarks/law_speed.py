@@ -101,16 +101,16 @@ class _Meter:
 
 
 def _instrument(meter: _Meter) -> None:
-    from bayestribo.inference import fitting, pipeline, start
+    from bayestribo.inference import chains, law_frame, start
     from bayestribo.inference.posterior import Posterior
     from bayestribo.model.laws.law import Law
 
-    for module in (pipeline, fitting, start):
+    for module in (chains, law_frame, start):
         for name in ("maximum_a_posteriori", "refine"):
             if hasattr(module, name):
                 setattr(module, name, meter.timed("map", getattr(start, name)))
-    pipeline.initial_walkers = meter.timed("walkers", start.initial_walkers)
-    pipeline.run_or_failure = meter.timed("sampling", pipeline.run_or_failure)
+    chains.initial_walkers = meter.timed("walkers", start.initial_walkers)
+    chains.run_or_failure = meter.timed("sampling", chains.run_or_failure)
     Law.pi_grid = meter.timed("pi", Law.pi_grid)
 
     def counted(func: Any) -> Any:

@@ -409,7 +409,7 @@ def test_the_verdict_refitted_in_its_frame_keeps_every_term_without_contact(bund
     displacement): the verdict fitted again in its own frame keeps its friction terms
     rather than dropping them, so that the answer is the law the comparison chose."""
     from bayestribo.inference.comparison import _posterior
-    from bayestribo.inference.fitting import _posterior_like
+    from bayestribo.inference.law_frame import posterior_like
     from bayestribo.inference.pipeline import prepare
     from bayestribo.io.run import Run
 
@@ -422,6 +422,6 @@ def test_the_verdict_refitted_in_its_frame_keeps_every_term_without_contact(bund
     prepared = prepare(air)
     assert not prepared.contact
     compared = _posterior("coulomb+power", prepared.data, "exact", False)
-    again = _posterior_like(compared, prepared, "exact", False)
+    again = posterior_like(compared, prepared, "exact", False)
     assert again.names == compared.names and "mu_k" in again.names
     assert again.law.name == compared.law.name

@@ -13,8 +13,8 @@ import pytest
 from _law_recording import law_recording
 
 from bayestribo.errors import MisfitWarning
+from bayestribo.inference.auto import _check_halves
 from bayestribo.inference.comparison import LawComparison
-from bayestribo.inference.fitting import _check_halves
 from bayestribo.inference.halves import HALVES_P, LawHalves, law_halves
 from bayestribo.inference.pipeline import prepare
 from bayestribo.inference.sampling import SamplerSettings

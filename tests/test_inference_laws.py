@@ -298,12 +298,12 @@ def test_laws_the_decay_cannot_split_give_one_averaged_dissipation():
     assert np.all((lo < truth) & (truth < hi)), (lo / truth - 1, hi / truth - 1)
     assert band["laws"] == list(runs)
     # as fit(law="auto") assembles it: the verdict's final posterior and the others'
-    from bayestribo.inference.fitting import _averaged_band
+    from bayestribo.inference.auto import _averaged_band
     from bayestribo.inference.pipeline import summarise
 
     verdict = runs[comparison.verdict]
     result = summarise(prepared, verdict, seed=1)
-    wired = _averaged_band(prepared, runs, comparison, result, (prepared, verdict))
+    wired = _averaged_band(prepared, runs, comparison, result.record, (prepared, verdict))
     assert wired["laws"] == comparison.as_good and wired["left_out"] == []
     assert wired["amplitude"] == result.dissipation["amplitude"]
     np.testing.assert_allclose(wired["mean"], band["mean"], rtol=1e-6)

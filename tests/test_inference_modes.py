@@ -194,13 +194,13 @@ def test_a_nan_inside_the_sampler_is_a_run_reported_not_converged():
 def test_a_sampler_failure_in_a_fit_with_discrepancy_is_reported(bundled_run, monkeypatch):
     # The crash the issue reports (ValueError from a NaN turned into an integer inside
     # the sampler): the fit returns, not converged, naming it, and warns.
-    import bayestribo.inference.pipeline as pipeline
+    import bayestribo.inference.chains as chains
     from bayestribo.inference import fit
 
     def broken(*args, **kwargs):
         raise ValueError("cannot convert float NaN to integer")
 
-    monkeypatch.setattr(pipeline, "run_ensembles", broken)
+    monkeypatch.setattr(chains, "run_ensembles", broken)
     with pytest.warns(ConvergenceWarning, match="cannot convert float NaN to integer"):
         result = fit(bundled_run, seed=1, discrepancy=True)
     assert not result.converged

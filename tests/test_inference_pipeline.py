@@ -43,6 +43,45 @@ def test_fit_is_the_composition_of_the_four_steps(run):
     assert whole.idata.posterior.attrs["seed"] == steps.idata.posterior.attrs["seed"] == 4
 
 
+def test_fit_is_the_composition_of_the_named_stages(run):
+    # prepare, build, start, sample, check, summarise: each stage's typed output is the
+    # next one's input, and together they are fit to the bit
+    from bayestribo.inference.chains import sample_from
+    from bayestribo.inference.checks import FitChecks, check
+    from bayestribo.inference.start import Start, find_start
+    from bayestribo.inference.summarising import Summary, summary
+
+    settings = SamplerSettings(n_walkers=16, n_ensembles=2, max_steps=1000)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        whole = fit(run, seed=4, max_steps=1000)
+        rng = np.random.default_rng(4)
+        prepared = prepare(run)
+        posterior = build_posterior(prepared.data, friction=prepared.contact)
+        start = find_start(posterior, prepared.decay)
+        sampled = sample_from(start, settings=settings, seed=rng)
+        checks = check(prepared, sampled)
+        summarised = summary(prepared, sampled, seed=rng, recorded_seed=4, checks=checks)
+    assert isinstance(start, Start) and isinstance(checks, FitChecks)
+    assert isinstance(summarised, Summary)
+    assert sampled.posterior is start.posterior  # the second pass's, as sampled
+    steps = summarised.result()
+    for name in ("zeta", "mu_k", "mu_s", "y0"):
+        np.testing.assert_array_equal(
+            whole.idata.posterior[name].values, steps.idata.posterior[name].values
+        )
+    # what the fit records, but the spec and the time that fit adds (and ArviZ's own
+    # attributes, such as when the InferenceData was made: no record of the fit)
+    whole_record, steps_record = whole.record, steps.record
+    expected = {
+        k: v
+        for k, v in whole_record.to_attrs().items()
+        if k not in whole_record.extra and k not in ("spec_json", "seconds")
+    }
+    got = {k: v for k, v in steps_record.to_attrs().items() if k not in steps_record.extra}
+    assert got == expected
+
+
 def test_a_fixed_parameter_is_reported_at_its_value(run):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

@@ -23,7 +23,7 @@ with Pareto-smoothed importance-sampling leave-one-out cross-validation (PSIS-LO
 Vehtari, Gelman & Gabry 2017) over the Π increments, through
 :func:`arviz.compare`, and each is checked for misfit at its optimum (the χ² of the
 residuals and the test for a smooth departure along the decay,
-:func:`bayestribo.inference.pipeline.summarise`): a law is *adequate* when neither
+:func:`bayestribo.inference.checks.check`): a law is *adequate* when neither
 has a p-value below 1e-3.
 
 Verdict. The law with the highest ``elpd_loo`` is the best. A law is *as good* as
@@ -63,7 +63,7 @@ comparison's text names it. The law-free fit never reduces.
 
 Screening. Every law is first taken to its optimum (smallest first, each starting
 also from the optimum of the largest law it nests), on the posterior it would be
-sampled on (the second pass of :func:`bayestribo.inference.pipeline.sample`), and its
+sampled on (the second pass of :func:`bayestribo.inference.chains.sample`), and its
 expected log predictive density estimated there: the log-likelihood of the increments
 at the optimum less one per sampled parameter (:func:`optimum_elpd`, Akaike's
 estimate, which PSIS-LOO's matches for a law whose posterior is near normal). A law
@@ -87,7 +87,7 @@ a half cycle they differ: a friction dissipates in proportion to |ẋ|, viscous 
 to ẋ², and the energy lost by a quarter of a half cycle is 0.146 of the half cycle's
 loss against 0.091. When adequate laws as good as the verdict do not nest it (its
 *rivals*), they and the verdict are compared again on :data:`TIE_GRID` increments per
-half cycle (:func:`bayestribo.inference.pipeline.regrid`); that comparison's verdict
+half cycle (:func:`bayestribo.inference.preparation.regrid`); that comparison's verdict
 replaces the first when it is adequate there, and the laws it rejects leave the laws as
 good as the verdict. Otherwise the verdict stands, and the comparison says that the
 finer grid did not tell them apart. The finer grid rests on white, independent channel
@@ -105,7 +105,7 @@ import time
 import warnings
 import zlib
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -114,20 +114,15 @@ from numpy.typing import NDArray
 from bayestribo import DEFAULT_SEED
 from bayestribo.errors import BayestriboError
 from bayestribo.inference.assemble import pointwise_log_likelihood
-from bayestribo.inference.halves import _p_text
-from bayestribo.inference.pipeline import (
-    MISFIT_P,
-    PreparedRun,
-    Sampled,
-    _misfit,
-    _shape_departure,
-    build_posterior,
-    find_optimum,
-    prepare,
-    sample,
-)
+from bayestribo.inference.build import build_posterior
+from bayestribo.inference.chains import sample_from
+from bayestribo.inference.checks import misfit, shape_departure
 from bayestribo.inference.posterior import Posterior
+from bayestribo.inference.preparation import prepare, regrid
+from bayestribo.inference.records import LawComparison
 from bayestribo.inference.sampling import SamplerSettings
+from bayestribo.inference.start import find_optimum, find_start
+from bayestribo.inference.types import MISFIT_P, PreparedRun, Sampled
 from bayestribo.io.options import ReadOptions
 from bayestribo.io.run import Run
 from bayestribo.model.laws import Law, get_law
@@ -176,146 +171,6 @@ PARETO_K_LIMIT = 0.7
 REDUCTION_LOSS = 0.5
 
 
-@dataclass(frozen=True)
-class LawComparison:
-    """PSIS-LOO comparison of the dissipation laws of one run.
-
-    Attributes
-    ----------
-    run_name : str
-        The run.
-    table : dict
-        Law -> ``elpd_loo``, ``se``, ``p_loo``, ``elpd_diff``, ``dse``, ``weight``,
-        ``rank``, ``pareto_k_max``, ``converged``, ``sampled``, the posterior medians,
-        and the time the law took (optimum and sampling: ``seconds`` of wall time,
-        ``cpu_seconds`` of the process's).
-    best : str
-        Law with the highest elpd_loo.
-    verdict : str
-        Simplest adequate law as good as the best (see the module notes).
-    as_good : list of str
-        Laws as good as the best (the best included).
-    warnings : list of str
-        Unreliable estimates (Pareto k) and unconverged fits.
-    adequate : bool
-        True when the verdict is adequate (no misfit at its optimum, and the halves of
-        the motion agree); False when no law compared holds, and the verdict is only
-        the best of them.
-    rivals : dict or None
-        The comparison of the verdict and its rivals on the finer grid (module notes):
-        ``laws``, ``grid_points``, ``verdict``, ``adequate``, ``decided`` and its table.
-    halves : dict or None
-        The verdict fitted to each half of the motion
-        (:class:`bayestribo.inference.halves.LawHalves` as plain data), when checked.
-    equivalent : dict
-        Law -> the law compared that it reduces to: its extra terms at 0 at its
-        optimum, so that it was neither sampled nor compared by PSIS-LOO (module
-        notes); its table row says ``reduces_to``, ``terms_at_zero`` and
-        ``sampled`` False.
-    screened : list of str
-        Laws screened out at their optimum: too far behind the best to win (module
-        notes, Screening), not sampled; their rows say ``screened`` and ``screen``
-        (the estimate at the optimum and the limit it passed).
-    """
-
-    run_name: str
-    table: dict[str, dict[str, Any]]
-    best: str
-    verdict: str
-    as_good: list[str]
-    warnings: list[str] = field(default_factory=list)
-    adequate: bool = True
-    halves: dict[str, Any] | None = None
-    rivals: dict[str, Any] | None = None
-    equivalent: dict[str, str] = field(default_factory=dict)
-    screened: list[str] = field(default_factory=list)
-
-    def describe(self) -> str:
-        """One sentence: the law chosen and why (the laws that reduced to others, and
-        those screened out at their optimum)."""
-        text = self._choice()
-        if self.equivalent:
-            text += "; " + _equivalence_text(self.equivalent, self.table)
-        if self.screened:
-            text += (
-                f"; {len(self.screened)} not sampled, too far behind the best to win "
-                f"(screened): {', '.join(self.screened)}"
-            )
-        return text
-
-    def _choice(self) -> str:
-        """The law chosen and why."""
-        n = len(self.table)
-        split = self.halves or {}
-        if not self.adequate and split.get("tested") and not split.get("agree"):
-            return (
-                f"{self.verdict} fits the decay as a whole, but not both halves of it "
-                f"alike: fitted to each half, it measures a ΔE(A) {split['largest_z']:.1f} "
-                f"sd apart ({_p_text(split['p_value'])} over {split['n_swings']} swings). "
-                f"No law of the {n} compared holds along the decay: its parameters are not "
-                "a measurement, and the answer is ΔE(A) measured from the turning points "
-                "(law-free)"
-            )
-        if not self.adequate:
-            return (
-                f"no law of the {n} compared holds (each misfits the decay); "
-                f"{self.verdict} is the simplest of the best by PSIS-LOO, but its parameters "
-                "are not a measurement: the answer is ΔE(A) measured from the turning "
-                "points (law-free)"
-            )
-        others = [law for law in self.as_good if law != self.verdict]
-        tie = f", as good as {', '.join(others)}" if others else ""
-        rivals = self.rivals or {}
-        if rivals.get("decided"):
-            lost = [law for law in rivals["laws"] if law != self.verdict]
-            tie += (
-                f"; chosen over {', '.join(lost)} on {rivals['per_half_cycle']} increments per "
-                "half cycle, where the decay tells them apart"
-            )
-        elif rivals:
-            tie += (
-                f"; {rivals['per_half_cycle']} increments per half cycle did not tell it from "
-                f"{', '.join(law for law in rivals['laws'] if law != self.verdict)}"
-            )
-        if self.verdict == "free":
-            return (
-                f"no law of the {n - 1} compared holds; the law-free fit (ΔE(A) any "
-                "increasing polynomial of degree 1-4) describes the decay: its ΔE(A) is "
-                "the answer, its parameters are not a measurement of any mechanism"
-            )
-        return (
-            f"{self.verdict} chosen from {n} laws: the simplest adequate law as good as "
-            f"the best by PSIS-LOO (best {self.best}{tie})"
-        )
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready summary."""
-        return {
-            "run_name": self.run_name,
-            "best": self.best,
-            "verdict": self.verdict,
-            "as_good": list(self.as_good),
-            "adequate": self.adequate,
-            "halves": self.halves,
-            "rivals": self.rivals,
-            "table": self.table,
-            "warnings": list(self.warnings),
-            "equivalent": dict(self.equivalent),
-            "screened": list(self.screened),
-        }
-
-
-def _equivalence_text(equivalent: Mapping[str, str], table: Mapping[str, Any]) -> str:
-    """The laws that reduced to a nested law at their optimum, in words: "not sampled,
-    equivalent at the optimum to a nested law compared: coulomb+power to coulomb (power
-    at 0)"."""
-    parts = []
-    for law, nested in equivalent.items():
-        zero = table.get(law, {}).get("terms_at_zero") or []
-        parts.append(f"{law} to {nested} ({', '.join(zero)} at 0)")
-    return "not sampled, equivalent at the optimum to a nested law compared: " + ", ".join(parts)
-
-
 def _law(name: str | Law) -> Law:
     """The law of a comparison entry (the original names included)."""
     if isinstance(name, str) and name in LAWS:
@@ -356,7 +211,8 @@ def _fit_law(
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        sampled = sample(posterior, prepared.decay, settings=settings, seed=rng, optimum=optimum)
+        start = find_start(posterior, prepared.decay, optimum=optimum)
+        sampled = sample_from(start, settings=settings, seed=rng)
     chains = sampled.run.chains
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", FutureWarning)
@@ -518,7 +374,7 @@ class LawOptimum:
         Its posterior on the first pass (variances from the observed channels).
     optimum : tuple
         Its maximum a posteriori there, Laplace covariance and μ_s/μ_k interval
-        (:func:`bayestribo.inference.pipeline.find_optimum`).
+        (:func:`bayestribo.inference.start.find_optimum`).
     second : Posterior
         The posterior that is sampled: the second pass's, variances from the law's
         motion at ``optimum`` (:func:`bayestribo.inference.reweight.reweighted_posterior`),
@@ -731,7 +587,7 @@ def _optimise(
     posterior = _posterior(law, prepared.data, model, discrepancy)
     nested = _nested_start(law, prepared, optima)
     optimum = find_optimum(posterior, prepared.decay, also_start_at=nested)
-    # the second pass, as pipeline.sample makes it, so that the law is judged on the
+    # the second pass, as chains.sample makes it, so that the law is judged on the
     # posterior it would be sampled on
     second, second_optimum = posterior, optimum
     with warnings.catch_warnings():
@@ -747,8 +603,8 @@ def _optimise(
 
 def _checks(posterior: Posterior, theta: NDArray) -> dict[str, Any]:
     """The misfit checks at a point: χ², its p-value, the shape test and adequacy."""
-    chi2, m, misfit_p = _misfit(posterior, theta)
-    shape = _shape_departure(posterior, theta)
+    chi2, m, misfit_p = misfit(posterior, theta)
+    shape = shape_departure(posterior, theta)
     return {
         "adequate": bool(misfit_p >= MISFIT_P and not shape.p_value < MISFIT_P),
         "chi2_map": chi2,
@@ -1051,8 +907,6 @@ def _compare_rivals(
 ) -> dict[str, Any]:
     """The verdict and its rivals compared on :data:`TIE_GRID` increments per half
     cycle (module notes)."""
-    from bayestribo.inference.pipeline import regrid
-
     fine = regrid(prepared, TIE_GRID * int(prepared.data.increments.size))
     out: dict[str, Any] = {
         "laws": list(laws),

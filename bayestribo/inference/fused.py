@@ -65,7 +65,7 @@ from bayestribo.model._kernel import _one
 #: The nuisances every likelihood has (a compile-time constant of the kernels).
 _BASE = BASE_NUISANCES
 
-__all__ = ["FusedLogPosterior"]
+__all__ = ["FusedLogPosterior", "SurrogateLayout"]
 
 #: Parameters in the order of the ``columns`` table (as posterior.PARAMETERS).
 _ORDER = ("zeta", "mu_k", "mu_s_ratio", "y0", "log10_discrepancy", "log10_shape")
@@ -133,38 +133,159 @@ def _averaged_grid(
             out[i] = pi
 
 
+#: Slots of the scalars after the base seven where a quadratic surrogate's layout is
+#: written (:class:`SurrogateLayout`, :meth:`SurrogateLayout.header`): its coordinates
+#: p, monomials per piece R, where its coordinates' columns, centres, scales and the
+#: thresholds start in the scalars, the column of μ_s/μ_k (-1 without pieces), the
+#: number of pieces K, and the row of ``data`` where its first piece's table starts.
+(
+    _P_SLOT,
+    _R_SLOT,
+    _COLUMNS_SLOT,
+    _CENTRE_SLOT,
+    _SCALE_SLOT,
+    _RATIO_SLOT,
+    _PIECES_SLOT,
+    _THRESHOLDS_SLOT,
+    _TABLE_SLOT,
+) = range(7, 16)
+_HEADER_END = 16
+
+
+@dataclass(frozen=True)
+class SurrogateLayout:
+    """Where a :class:`~bayestribo.inference.surrogate.QuadraticPi`'s numbers sit in
+    the compiled density's tables.
+
+    Its header (:meth:`header`) follows the base scalars at the ``_*_SLOT`` positions,
+    and the compiled density reads every offset from there; its coordinates' columns,
+    centres, scales and the thresholds' rows follow the header in the scalars (the
+    slices below); its coefficient tables are rows of ``data``, piece after piece
+    (:meth:`piece_rows`).
+
+    Attributes
+    ----------
+    n_coordinates : int
+        p, the coordinates of the quadratic.
+    n_pieces : int
+        K, its pieces in μ_s/μ_k.
+    table_row : int
+        The row of ``data`` where the first piece's table starts (after τ, D, V, ∫E²
+        and the nuisances' design).
+    """
+
+    n_coordinates: int
+    n_pieces: int
+    table_row: int
+
+    @property
+    def rows_per_piece(self) -> int:
+        """R, the monomials of one piece: 1 + p + p(p+1)/2."""
+        p = self.n_coordinates
+        return 1 + p + p * (p + 1) // 2
+
+    @property
+    def columns(self) -> slice:
+        """The coordinates' columns of θ, in the scalars."""
+        return slice(_HEADER_END, _HEADER_END + self.n_coordinates)
+
+    @property
+    def centre(self) -> slice:
+        """The expansion point, in the scalars."""
+        return slice(self.columns.stop, self.columns.stop + self.n_coordinates)
+
+    @property
+    def scale(self) -> slice:
+        """The unit of each coordinate, in the scalars."""
+        return slice(self.centre.stop, self.centre.stop + self.n_coordinates)
+
+    @property
+    def thresholds(self) -> slice:
+        """The K - 1 thresholds' rows of R coefficients, row after row, in the scalars."""
+        return slice(self.scale.stop, self.scale.stop + (self.n_pieces - 1) * self.rows_per_piece)
+
+    def piece_rows(self, piece: int) -> slice:
+        """The rows of ``data`` holding piece ``piece``'s table."""
+        r = self.rows_per_piece
+        return slice(self.table_row + piece * r, self.table_row + (piece + 1) * r)
+
+    def header(self, ratio_column: int) -> NDArray:
+        """The header's values, slots ``_P_SLOT`` to ``_TABLE_SLOT`` in order."""
+        values = np.empty(_HEADER_END - _P_SLOT)
+        values[_P_SLOT - _P_SLOT] = self.n_coordinates
+        values[_R_SLOT - _P_SLOT] = self.rows_per_piece
+        values[_COLUMNS_SLOT - _P_SLOT] = self.columns.start
+        values[_CENTRE_SLOT - _P_SLOT] = self.centre.start
+        values[_SCALE_SLOT - _P_SLOT] = self.scale.start
+        values[_RATIO_SLOT - _P_SLOT] = ratio_column
+        values[_PIECES_SLOT - _P_SLOT] = self.n_pieces
+        values[_THRESHOLDS_SLOT - _P_SLOT] = self.thresholds.start
+        values[_TABLE_SLOT - _P_SLOT] = self.table_row
+        return values
+
+    def pack(self, base: NDArray, surrogate: Any, columns: list[int], ratio_column: int) -> NDArray:
+        """The scalars: the base seven, the header, then the surrogate's numbers.
+
+        Parameters
+        ----------
+        base : ndarray
+            The base scalars (shape (7,)).
+        surrogate : QuadraticPi
+            The quadratic.
+        columns : list of int
+            The column of θ of each of its coordinates.
+        ratio_column : int
+            The column of μ_s/μ_k (-1 without pieces).
+        """
+        out = np.empty(self.thresholds.stop)
+        out[:_P_SLOT] = base
+        out[_P_SLOT:_HEADER_END] = self.header(ratio_column)
+        out[self.columns] = columns
+        out[self.centre] = surrogate.centre
+        out[self.scale] = surrogate.scale
+        out[self.thresholds] = np.ravel(surrogate.thresholds)
+        return out
+
+    @classmethod
+    def read(cls, scalars: NDArray) -> SurrogateLayout:
+        """The layout a table of scalars holds (its header)."""
+        return cls(int(scalars[_P_SLOT]), int(scalars[_PIECES_SLOT]), int(scalars[_TABLE_SLOT]))
+
+
 @numba.njit(cache=True, error_model="numpy")
 def _surrogate_pi(row: NDArray, data: NDArray, scalars: NDArray, pi: NDArray) -> None:
     """The quadratic surrogate's Π (:class:`~bayestribo.inference.surrogate.QuadraticPi`)
-    into ``pi``: its tables follow the nuisances' design in ``data``; after the seven
-    scalars come its p coordinates' columns, centres and scales, the column of μ_s/μ_k
-    (-1 without pieces), the number of pieces K and the K - 1 thresholds' rows of
-    coefficients of the R monomials."""
+    into ``pi``, every offset read from its header (:class:`SurrogateLayout`): the
+    monomials of its coordinates, the piece that μ_s/μ_k falls in between the
+    thresholds, and that piece's table."""
     m = pi.size
-    p = int(scalars[7])
-    r = 1 + p + p * (p + 1) // 2
+    p = int(scalars[_P_SLOT])
+    r = int(scalars[_R_SLOT])
+    columns = int(scalars[_COLUMNS_SLOT])
+    centre = int(scalars[_CENTRE_SLOT])
+    scale = int(scalars[_SCALE_SLOT])
     basis = np.empty(r)
     basis[0] = 1.0
     for a in range(p):
-        basis[1 + a] = (row[int(scalars[8 + a])] - scalars[8 + p + a]) / scalars[8 + 2 * p + a]
+        basis[1 + a] = (row[int(scalars[columns + a])] - scalars[centre + a]) / scalars[scale + a]
     k = 1 + p
     for a in range(p):
         for b in range(a, p):
             basis[k] = basis[1 + a] * basis[1 + b]
             k += 1
-    ratio_column = int(scalars[8 + 3 * p])
-    pieces = int(scalars[9 + 3 * p])
+    ratio_column = int(scalars[_RATIO_SLOT])
+    pieces = int(scalars[_PIECES_SLOT])
     piece = 0
     if ratio_column >= 0:
         ratio = row[ratio_column]
-        start = 10 + 3 * p
+        thresholds = int(scalars[_THRESHOLDS_SLOT])
         for edge in range(pieces - 1):
             threshold = 0.0
             for i in range(r):
-                threshold += scalars[start + edge * r + i] * basis[i]
+                threshold += scalars[thresholds + edge * r + i] * basis[i]
             if threshold <= ratio:
                 piece += 1
-    first = 4 + _BASE + int(scalars[6]) + piece * r
+    first = int(scalars[_TABLE_SLOT]) + piece * r
     for j in range(m):
         pi[j] = 0.0
     for i in range(r):
@@ -645,6 +766,7 @@ class FusedLogPosterior:
         shape = columns[5] != _ABSENT
         design = likelihood.design(shape)
         rows = [d.tau_grid[:-1], d.increments, d.variance, d.energy_squared, design.T]
+        table_row = 4 + design.shape[1]
         if surrogate is not None:
             rows.append(surrogate.table)
         data = np.ascontiguousarray(np.vstack(rows), dtype=np.float64)
@@ -661,19 +783,10 @@ class FusedLogPosterior:
         )
         if surrogate is not None:
             scalars[5] = _SURROGATE
+            layout = SurrogateLayout(surrogate.n_coordinates, surrogate.n_pieces, table_row)
             index = [priors.names.index(name) for name in surrogate.names]
             ratio = -1 if surrogate.ratio is None else priors.names.index(surrogate.ratio)
-            scalars = np.concatenate(
-                [
-                    scalars,
-                    [len(index)],
-                    index,
-                    surrogate.centre,
-                    surrogate.scale,
-                    [ratio, surrogate.n_pieces],
-                    np.ravel(surrogate.thresholds),
-                ]
-            )
+            scalars = layout.pack(scalars, surrogate, index, ratio)
         return cls(table, columns, values, data, scalars, law)
 
     def __call__(self, theta: NDArray) -> tuple[NDArray, int]:

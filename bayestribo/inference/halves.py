@@ -5,15 +5,15 @@ the same constants. A law with a free shape (a power of the speed, a friction an
 drag together) can bend to fit a decay whose dissipation changes along the motion
 for another reason (a lubricant film that thins, a contact that wears in, a mount
 that loosens): fitted to the whole, it passes the misfit tests of
-:func:`bayestribo.inference.pipeline.summarise`, yet its halves disagree. On the
+:func:`bayestribo.inference.checks.check`, yet its halves disagree. On the
 AppStat2020 HarmOsc2 recording, ``coulomb+power`` fits the whole decay, and the
 friction of its first half is 4.7 standard deviations from the second's.
 
 The check. The run is cut at the turning point in the middle of the analysed half
 cycles (the cut sample in both halves; a motion that fades into the noise ends an
 oscillation after its last turning point found); each half is prepared as the whole was,
-with its noise model (:func:`bayestribo.inference.pipeline.prepare_part`), and the law
-fitted to it (:func:`bayestribo.inference.fitting.sample_law`,
+with its noise model (:func:`bayestribo.inference.preparation.prepare_part`), and the law
+fitted to it (:func:`bayestribo.inference.law_frame.sample_law`,
 the same sampler and law). Each half's posterior gives the energy dissipated per cycle
 at swings spanning the whole motion, ΔE(A)/k (in the length unit squared, so that the
 two halves' own measured frequencies do not enter): each half predicts the other
@@ -40,9 +40,7 @@ or a half that cannot be prepared or fitted, is not tested; the result says why.
 
 from __future__ import annotations
 
-import math
 import warnings
-from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
@@ -51,8 +49,11 @@ from numpy.typing import NDArray
 
 from bayestribo.errors import BayestriboError
 from bayestribo.inference.dissipation import _swing_dissipation
-from bayestribo.inference.pipeline import MISFIT_P, PreparedRun, prepare_part
+from bayestribo.inference.law_frame import sample_law
+from bayestribo.inference.preparation import prepare_part
+from bayestribo.inference.records import LawHalves
 from bayestribo.inference.sampling import SamplerSettings
+from bayestribo.inference.types import MISFIT_P, PreparedRun
 from bayestribo.model.laws import Law, get_law
 
 __all__ = ["HALVES_P", "MIN_HALF_CYCLES", "LawHalves", "law_halves"]
@@ -65,92 +66,6 @@ MIN_HALF_CYCLES = 8
 N_SWINGS = 8
 #: Posterior draws of each half evaluated (evenly spaced over every chain).
 N_DRAWS = 1000
-
-
-@dataclass(frozen=True)
-class LawHalves:
-    """The law fitted to each half of the motion, and whether they agree.
-
-    Attributes
-    ----------
-    law : str
-        The law fitted.
-    tested : bool
-        False when the run could not be split or a half not fitted (``note`` says why).
-    cut_time_s : float
-        Time of the cut [s] (a turning point).
-    amplitude : list of float
-        Swings A compared [length unit].
-    unit : str
-        Unit of ΔE(A)/k (the length unit squared).
-    first, second : dict
-        Each half's ``mean`` and ``sd`` of ΔE(A)/k at ``amplitude``, and its
-        ``range``: the smallest and largest swing of its own motion.
-    largest_z : float
-        The largest |z| over the swings (module notes).
-    n_swings : int
-        The number of swings compared.
-    p_value : float
-        Its Bonferroni p-value over the swings.
-    agree : bool
-        True when ``p_value >= HALVES_P`` (or not tested).
-    note : str
-        Why the halves were not tested, if so.
-    """
-
-    law: str
-    tested: bool
-    cut_time_s: float = math.nan
-    amplitude: list[float] = field(default_factory=list)
-    unit: str = ""
-    first: dict[str, Any] = field(default_factory=dict)
-    second: dict[str, Any] = field(default_factory=dict)
-    largest_z: float = math.nan
-    n_swings: int = 0
-    p_value: float = math.nan
-    agree: bool = True
-    note: str = ""
-
-    def most_apart(self) -> tuple[float, float]:
-        """The swing at which the halves differ most, in sd of the difference, and that
-        difference ``(A, z)``."""
-        if not self.amplitude:
-            return math.nan, math.nan
-        m1, s1 = np.asarray(self.first["mean"]), np.asarray(self.first["sd"])
-        m2, s2 = np.asarray(self.second["mean"]), np.asarray(self.second["sd"])
-        z = (m1 - m2) / np.hypot(s1, s2)
-        i = int(np.nanargmax(np.abs(z)))
-        return float(self.amplitude[i]), float(z[i])
-
-    def describe(self) -> str:
-        """One sentence: what the halves say."""
-        if not self.tested:
-            return f"halves not compared: {self.note}"
-        a, z = self.most_apart()
-        i = self.amplitude.index(a)
-        unit = self.unit.replace("^2", "²")
-        verdict = "agree" if self.agree else "disagree"
-        return (
-            f"the {self.law} law fitted to each half of the motion (cut at "
-            f"{self.cut_time_s:.4g} s): the halves {verdict}; most apart at the swing "
-            f"{a:.3g}: ΔE/k = {self.first['mean'][i]:.4g} ± {self.first['sd'][i]:.2g} "
-            f"(first half) against {self.second['mean'][i]:.4g} ± "
-            f"{self.second['sd'][i]:.2g} (second) [{unit}], {abs(z):.1f} sd "
-            f"({_p_text(self.p_value)} over {self.n_swings} swings)"
-        )
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready fields."""
-        out = asdict(self)
-        for key in ("cut_time_s", "largest_z", "p_value"):
-            if not math.isfinite(out[key]):
-                out[key] = None
-        return out
-
-
-def _p_text(p: float) -> str:
-    """``p = 1.2e-05``, or ``p < 1e-300`` where the p-value underflows."""
-    return "p < 1e-300" if p < 1e-300 else f"p = {p:.1e}"
 
 
 def _draws(sampled: Any, prepared: PreparedRun, amplitude: NDArray) -> NDArray:
@@ -180,7 +95,7 @@ def law_halves(
     Parameters
     ----------
     prepared : PreparedRun
-        The whole run, from :func:`bayestribo.inference.pipeline.prepare`.
+        The whole run, from :func:`bayestribo.inference.preparation.prepare`.
     law : str or Law
         The law fitted to each half.
     seed : int, Generator or None
@@ -195,8 +110,6 @@ def law_halves(
     LawHalves
         ``agree`` False when the halves measure different ΔE(A) (module notes).
     """
-    from bayestribo.inference.fitting import sample_law
-
     the_law = law if isinstance(law, Law) else get_law(law)
     decay = prepared.decay
     times = decay.turning_times

@@ -50,8 +50,8 @@ A failed sampler. :func:`run_or_failure` runs the sampler and turns an error ins
 it (a NaN log-probability, a NaN turned into an integer: :data:`SAMPLER_FAILURES`)
 into a run reported not converged, with the error named in its reasons, so that a
 fit (``--discrepancy`` included) returns and says so instead of crashing.
-:func:`bayestribo.inference.pipeline.sample` calls :func:`run_or_failure`, and
-:func:`bayestribo.inference.pipeline.summarise` calls :func:`mode_check`.
+:func:`bayestribo.inference.chains.sample` calls :func:`run_or_failure`, and
+:func:`bayestribo.inference.checks.check` calls :func:`mode_check`.
 
 References
 ----------
@@ -429,7 +429,7 @@ def mode_check(sampled: Any) -> tuple[Any, ModeReport]:
     Parameters
     ----------
     sampled : Sampled
-        From :func:`bayestribo.inference.pipeline.sample` (its ``run`` is a
+        From :func:`bayestribo.inference.chains.sample` (its ``run`` is a
         :class:`~bayestribo.inference.sampling.SamplerRun`, its ``settings`` give the
         walkers per ensemble).
 

@@ -11,13 +11,15 @@ E = (y² + y'²)/2, Eq. 39).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo._text import literal
-from bayestribo.inference.result import FitResult
+
+if TYPE_CHECKING:
+    from bayestribo.inference.result import FitResult
 
 __all__ = ["FIGURES", "LABELS", "corner_plot", "pi_plot", "plot_fit", "plotted_names", "trace_plot"]
 

@@ -28,7 +28,6 @@ importing ArviZ, xarray and pandas.
 from __future__ import annotations
 
 import json
-import math
 import warnings
 from collections.abc import Mapping
 from pathlib import Path
@@ -38,6 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bayestribo._files import atomic_path
+from bayestribo.inference.fit_record import FitRecord, plain_data
 from bayestribo.inference.priors import PriorSet
 from bayestribo.inference.quantities import (
     DERIVED,
@@ -82,21 +82,6 @@ UNITS: dict[str, str] = {
     "mu_k": "1",
     **{name: unit for name, (_, _, unit) in DERIVED.items()},
 }
-
-
-def plain_data(value: Any) -> Any:
-    """JSON-compatible copy (numpy scalars and arrays to Python)."""
-    if isinstance(value, Mapping):
-        return {str(k): plain_data(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [plain_data(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return plain_data(value.tolist())
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
 
 
 class FitResult:
@@ -157,6 +142,12 @@ class FitResult:
         return np.asarray(self._idata.posterior[name])
 
     # -- provenance (from the attributes) -----------------------------------------
+    @property
+    def record(self) -> FitRecord:
+        """Everything the fit records beside its draws, typed
+        (:class:`~bayestribo.inference.fit_record.FitRecord`, read from :attr:`attrs`)."""
+        return FitRecord.from_attrs(self.attrs)
+
     def _attr(self, key: str, default: Any = None) -> Any:
         value = self.attrs.get(key, default)
         if isinstance(value, str) and key.endswith("_json"):
@@ -212,7 +203,7 @@ class FitResult:
 
     @property
     def law_comparison(self) -> dict[str, Any] | None:
-        """How ``law="auto"`` chose the law (:class:`~bayestribo.inference.comparison.
+        """How ``law="auto"`` chose the law (:class:`~bayestribo.inference.records.
         LawComparison` as plain data: ``verdict``, ``best``, ``as_good``, ``adequate``,
         ``table``), None for a fit of a named law."""
         return self._attr("law_comparison_json", None)
@@ -488,9 +479,9 @@ class FitResult:
     def law_departs(self) -> bool:
         """True when the decay departs from the law smoothly beyond its noise (the shape
         test of :meth:`~bayestribo.inference.likelihood.PiLikelihood.shape_departure`,
-        p below the misfit threshold of :mod:`bayestribo.inference.pipeline`), or when
+        p below the misfit threshold :data:`bayestribo.inference.types.MISFIT_P`), or when
         the law's ΔE(A) has another shape than the turning points' (:attr:`shape_agreement`)."""
-        from bayestribo.inference.pipeline import MISFIT_P
+        from bayestribo.inference.types import MISFIT_P
 
         p = (self.diagnostics.get("shape_departure") or {}).get("p_value")
         agreement = self.shape_agreement
@@ -642,24 +633,13 @@ class FitResult:
         c = self.law_comparison
         if not c:
             return []
-        from bayestribo.inference.comparison import LawComparison
+        from bayestribo.inference.records import LawComparison, LawHalves
 
-        fields = {k: c[k] for k in ("best", "verdict", "as_good", "table", "warnings")}
-        text = LawComparison(
-            c.get("run_name", ""),
-            **fields,
-            adequate=c["adequate"],
-            halves=c.get("halves"),
-            rivals=c.get("rivals"),
-            equivalent=c.get("equivalent") or {},
-            screened=c.get("screened") or [],
-        )
+        text = LawComparison.from_dict(c)
         lines = [f"          {text.describe()}"]
         halves = c.get("halves")
         if halves and halves.get("tested") and halves.get("agree"):
-            from bayestribo.inference.halves import LawHalves
-
-            lines.append(f"          {LawHalves(**halves).describe()}")
+            lines.append(f"          {LawHalves.from_dict(halves).describe()}")
         lines.extend(self._departure_lines(c.get("departures") or {}))
         if not c.get("adequate") and not self.turning_point_dissipation:
             lines.append(

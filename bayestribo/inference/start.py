@@ -1,4 +1,11 @@
-"""Starting point of the sampler: maximum a posteriori and a Laplace approximation.
+"""The start stage: the maximum a posteriori, its Laplace approximation and walkers.
+
+:func:`find_start` takes a posterior (:mod:`bayestribo.inference.build`) and the
+prepared run's decay and gives a :class:`Start`: the optimum (:func:`find_optimum`:
+the maximum a posteriori, its covariance and the plausible μ_s/μ_k interval), then the
+second pass of the increments' variances (:mod:`bayestribo.inference.reweight`) and
+its optimum; the sample stage (:mod:`bayestribo.inference.chains`) draws its walkers
+from it (:func:`initial_walkers`). How the optimum is found:
 
 1. First guesses of ζ and μ_k: the Feeny-Liang peak decrement (Eq. 20-21) of the
    analysed window (falling back to ζ = 0.01 and a friction of 1 % of the amplitude),
@@ -35,8 +42,8 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
-from dataclasses import replace
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -46,10 +53,20 @@ from bayestribo.errors import BayestriboError
 from bayestribo.inference.likelihood import PiLikelihood
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.priors import Normal
+from bayestribo.inference.reweight import reweighted_posterior
 from bayestribo.inference.surrogate import stop_ratios
 from bayestribo.signal.decay import EnergyDecay
 
-__all__ = ["initial_walkers", "maximum_a_posteriori", "maximum_from", "refine"]
+__all__ = [
+    "Start",
+    "better_optimum",
+    "find_optimum",
+    "find_start",
+    "initial_walkers",
+    "maximum_a_posteriori",
+    "maximum_from",
+    "refine",
+]
 
 
 def _first_guesses(decay: EnergyDecay, posterior: Posterior) -> list[dict[str, float]]:
@@ -799,3 +816,120 @@ def initial_walkers(
             "posterior may be multimodal or the priors too narrow"
         )
     return np.asarray(kept[:need]).reshape(n_ensembles, n_walkers, d)
+
+
+def find_optimum(
+    posterior: Posterior,
+    decay: EnergyDecay,
+    also_start_at: Mapping[str, float] | None = None,
+) -> tuple[NDArray, NDArray, tuple[float, float] | None]:
+    """The maximum a posteriori of step 3, its Laplace covariance and the plausible
+    μ_s/μ_k interval (:func:`bayestribo.inference.start.maximum_a_posteriori`), with a
+    second starting point of the optimiser kept if its optimum is better.
+
+    Parameters
+    ----------
+    posterior : Posterior
+        From :func:`build_posterior`.
+    decay : EnergyDecay
+        The run's energy decay (its peaks give the first guesses of the optimiser).
+    also_start_at : mapping, optional
+        Values of the sampled coordinates to start the optimiser from as well (e.g.
+        the optimum of a nested law).
+
+    Returns
+    -------
+    theta : ndarray
+        The optimum in sampling coordinates.
+    cov : ndarray
+        Its Laplace covariance.
+    ratio_range : tuple or None
+        The plausible μ_s/μ_k interval (None for a law without static friction).
+    """
+    return better_optimum(posterior, maximum_a_posteriori(posterior, decay), also_start_at)
+
+
+def better_optimum(
+    posterior: Posterior,
+    optimum: tuple[NDArray, NDArray, tuple[float, float] | None],
+    also_start_at: Mapping[str, float] | None,
+) -> tuple[NDArray, NDArray, tuple[float, float] | None]:
+    """``optimum``, or the optimum refined from ``also_start_at`` when its posterior
+    density is higher (the μ_s/μ_k interval kept)."""
+    theta, cov, ratio_range = optimum
+    if also_start_at is not None:
+        start = np.array([also_start_at[n] for n in posterior.names], dtype=float)
+        if np.isfinite(posterior(start[None])[0]):
+            alt, alt_cov = refine(posterior, start)
+            if posterior(alt[None])[0] > posterior(theta[None])[0]:
+                theta, cov = alt, alt_cov
+    return theta, cov, ratio_range
+
+
+@dataclass(frozen=True)
+class Start:
+    """Where the sampler starts: the posterior it samples and that posterior's optimum.
+
+    Attributes
+    ----------
+    posterior : Posterior
+        The posterior to sample (the second pass's, :mod:`bayestribo.inference.reweight`,
+        where it was made).
+    theta : ndarray
+        Its maximum a posteriori in sampling coordinates.
+    cov : ndarray
+        Its Laplace covariance.
+    ratio_range : tuple or None
+        The plausible μ_s/μ_k interval (None for a law without static friction).
+    """
+
+    posterior: Posterior
+    theta: NDArray
+    cov: NDArray
+    ratio_range: tuple[float, float] | None
+
+
+def find_start(
+    posterior: Posterior,
+    decay: EnergyDecay,
+    *,
+    optimum: tuple[NDArray, NDArray, tuple[float, float] | None] | None = None,
+    also_start_at: Mapping[str, float] | None = None,
+    reweight: bool = True,
+) -> Start:
+    """The start stage: the optimum, then the second pass and its optimum.
+
+    Parameters
+    ----------
+    posterior : Posterior
+        From :func:`bayestribo.inference.build.build_posterior`.
+    decay : EnergyDecay
+        The run's energy decay (its peaks give the first guesses of the optimiser).
+    optimum : tuple, optional
+        The maximum a posteriori, its Laplace covariance and the plausible μ_s/μ_k
+        interval when they are known already (:func:`maximum_from`, a nonlinear law's
+        fit in the frame of its own turning times): the optimiser does not run from the
+        first guesses again.
+    also_start_at : mapping, optional
+        A second starting point of the optimiser (values of the sampled coordinates,
+        e.g. the optimum of a nested law), kept if its optimum is better.
+    reweight : bool
+        The second pass (the default): the increments' variances computed again from
+        the law's motion at the optimum, and the optimum of that posterior, which is
+        the one sampled (:mod:`bayestribo.inference.reweight`; the observed channels'
+        variances are too large below the noise, and share its sign). False: start
+        from ``posterior`` as it is.
+
+    Returns
+    -------
+    Start
+    """
+    if optimum is None:
+        optimum = find_optimum(posterior, decay)
+    theta, cov, ratio_range = better_optimum(posterior, optimum, also_start_at)
+    if reweight:
+        second = reweighted_posterior(posterior, decay, theta)
+        if second is not None:
+            posterior = second
+            theta, cov, ratio_range = maximum_from(posterior, theta, decay)
+    return Start(posterior, theta, cov, ratio_range)

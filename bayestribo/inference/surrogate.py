@@ -37,7 +37,7 @@ cv(w) is below :data:`MAX_WEIGHT_CV`; otherwise it builds the surrogate again ab
 the checked draw of highest exact density with the surrogate posterior's spread (the
 optimiser can stop short of the optimum of a law that misfits), up to
 :data:`ATTEMPTS` times, and then samples the exact posterior
-(:func:`bayestribo.inference.pipeline.sample`).
+(:func:`bayestribo.inference.chains.sample`).
 
 Where the posterior depends on Π discontinuously (a law with static friction whose
 motion ends inside the record: one turning point more or less before the pin sticks),
@@ -59,10 +59,13 @@ from bayestribo.inference.likelihood import Params, PiLikelihood
 
 if TYPE_CHECKING:
     from bayestribo.inference.posterior import Posterior
+    from bayestribo.model.laws import Law
 
 __all__ = [
     "ATTEMPTS",
     "MAX_WEIGHT_CV",
+    "CoefficientLayout",
+    "ForceColumns",
     "QuadraticPi",
     "SurrogateCheck",
     "SurrogateLikelihood",
@@ -95,6 +98,57 @@ _PROBES = 16
 _NOT_IN_PI = ("log10_discrepancy", "log10_shape")
 #: The static to kinetic friction ratio, on which Π depends piecewise.
 _RATIO = "mu_s_ratio"
+
+
+@dataclass(frozen=True)
+class ForceColumns:
+    """One compiled force of a law and the columns of its coefficients.
+
+    Attributes
+    ----------
+    force : callable
+        ``force(x, coefficients) -> float``, the term's compiled force
+        (:attr:`bayestribo.model.laws.Term.force`).
+    columns : slice
+        Its coefficients' columns in a row of :meth:`bayestribo.model.laws.Law.
+        coefficients`.
+    """
+
+    force: Callable[[float, NDArray], float]
+    columns: slice
+
+
+@dataclass(frozen=True)
+class CoefficientLayout:
+    """Which columns of a law's coefficient rows each of its compiled forces reads.
+
+    :meth:`bayestribo.model.laws.Law.coefficients` gives the drags' coefficients, then
+    the frictions', each term's in the law's order and as many as it declares
+    (``n_coefficients``).
+
+    Attributes
+    ----------
+    drags, frictions : tuple of ForceColumns
+        The drag terms' and the friction terms' forces and columns.
+    width : int
+        The columns of a row.
+    """
+
+    drags: tuple[ForceColumns, ...]
+    frictions: tuple[ForceColumns, ...]
+    width: int
+
+    @classmethod
+    def of(cls, law: Law) -> CoefficientLayout:
+        """The layout of ``law``'s coefficient rows."""
+        slots: dict[str, list[ForceColumns]] = {"drag": [], "friction": []}
+        start = 0
+        for kind in ("drag", "friction"):
+            for term in (t for t in law.terms if t.kind == kind):
+                stop = start + int(term.n_coefficients)
+                slots[kind].append(ForceColumns(term.force, slice(start, stop)))
+                start = stop
+        return cls(tuple(slots["drag"]), tuple(slots["friction"]), start)
 
 
 @dataclass(frozen=True)
@@ -149,6 +203,11 @@ class QuadraticPi:
         p = self.n_coordinates
         return 1 + p + p * (p + 1) // 2
 
+    def piece_rows(self, piece: int) -> slice:
+        """The rows of :attr:`table` holding piece ``piece``'s coefficients."""
+        r = self.rows_per_piece
+        return slice(piece * r, (piece + 1) * r)
+
     def monomials(self, u: NDArray) -> NDArray:
         """The monomials 1, u_a, u_a u_b (a <= b) of rows ``u`` (n, p), shape (n, R)."""
         u = np.atleast_2d(u)
@@ -172,14 +231,13 @@ class QuadraticPi:
             ]
         )
         basis = self.monomials(u)
-        r = self.rows_per_piece
         if self.ratio is None:
-            return basis @ self.table[:r]
+            return basis @ self.table[self.piece_rows(0)]
         pieces = self.piece(np.asarray(params[self.ratio], dtype=float), basis)
         out = np.empty((basis.shape[0], self.table.shape[1]))
         for k in np.unique(pieces):
             rows = pieces == k
-            out[rows] = basis[rows] @ self.table[k * r : (k + 1) * r]
+            out[rows] = basis[rows] @ self.table[self.piece_rows(int(k))]
         return out
 
 
@@ -318,8 +376,8 @@ def stop_ratios(likelihood: PiLikelihood, values: Mapping[str, float]) -> NDArra
     a = np.abs(np.asarray(turns, dtype=float))
     coef = law.coefficients({n: np.array([v]) for n, v in law_values.items()}, reference)[0]
     mu = np.zeros(a.size)
-    for force, offset, size in zip(*law._layout[0][3:], strict=True):
-        mu += np.array([force(float(x), coef[offset : offset + size]) for x in a])
+    for friction in CoefficientLayout.of(law).frictions:
+        mu += np.array([friction.force(float(x), coef[friction.columns]) for x in a])
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(mu > 0, a / mu, np.inf)
 

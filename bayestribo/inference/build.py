@@ -1,0 +1,100 @@
+"""Building a law's posterior for prepared increments: priors × the Π likelihood.
+
+:func:`build_posterior` takes the increments of the prepare stage
+(:attr:`~bayestribo.inference.types.PreparedRun.data`) and gives the
+:class:`~bayestribo.inference.posterior.Posterior` the start and sample stages take.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from bayestribo.errors import BayestriboError
+from bayestribo.inference.likelihood import MODELS, PiLikelihood
+from bayestribo.inference.posterior import Posterior
+from bayestribo.inference.priors import Prior, PriorSet, default_priors
+from bayestribo.model.laws import Law, get_law
+from bayestribo.signal.increments import PiData
+
+__all__ = ["build_posterior"]
+
+
+def build_posterior(
+    data: PiData,
+    *,
+    model: str = "exact",
+    friction: bool = True,
+    discrepancy: bool = False,
+    priors: Mapping[str, Prior] | None = None,
+    fixed: Mapping[str, float] | None = None,
+    law: str | Law | None = None,
+) -> Posterior:
+    """Step 2: the posterior for observed Π increments.
+
+    The equilibrium nuisance gets prior standard deviations of 1 % of the initial
+    amplitude (δ₀) and 1 % of it over the analysed window (δ₁), hundreds of times
+    the errors of the equilibrium estimate.
+
+    Parameters
+    ----------
+    data : PiData
+        Observed increments (:func:`bayestribo.signal.pi_data`).
+    model : {"exact", "averaged"}
+        Forward model.
+    friction : bool
+        Fit μ_k and μ_s/μ_k (False: viscous damping only).
+    discrepancy : bool
+        Add the model-discrepancy terms: white (``log10_discrepancy``) and shape
+        (``log10_shape``).
+    priors : mapping, optional
+        Replacement priors by parameter name (see
+        :func:`bayestribo.inference.priors.default_priors`).
+    fixed : mapping, optional
+        Parameters held at a value instead of sampled, e.g. ``{"zeta": 0.0}`` for
+        friction alone; their priors are dropped.
+    law : str or Law, optional
+        The dissipation law (:mod:`bayestribo.model.laws`): a name such as
+        ``"viscous+quadratic+coulomb"``, or a :class:`~bayestribo.model.laws.Law`
+        (one of terms defined outside the package too); default
+        ``"viscous+coulomb"``.
+
+    Returns
+    -------
+    Posterior
+
+    Raises
+    ------
+    BayestriboError
+        If a parameter is both given a prior and fixed, a fixed name is unknown, the
+        law is unknown, or a prior names a parameter the law does not have.
+    """
+    if model not in MODELS:
+        raise BayestriboError(f"model: expected one of {MODELS}, got {model!r}")
+    try:
+        the_law = get_law(law)
+    except ValueError as exc:
+        raise BayestriboError(str(exc)) from None
+    if model == "averaged" and not the_law.closed_form:
+        raise BayestriboError(
+            f"model='averaged' has no closed form for the law {the_law.name}: use model='exact'"
+        )
+    fixed = dict(fixed or {})
+    both = sorted(set(fixed) & set(priors or {}))
+    if both:
+        raise BayestriboError(f"priors and fixed both name {both}: give one or the other")
+    prior_set = default_priors(data.y0, friction=friction, discrepancy=discrepancy, law=the_law)
+    if priors:
+        try:
+            prior_set = prior_set.replace(**dict(priors))
+        except ValueError as exc:
+            raise BayestriboError(f"priors: {exc} (law {the_law.name})") from None
+    if fixed:
+        prior_set = PriorSet({n: p for n, p in prior_set.priors.items() if n not in fixed})
+    likelihood = PiLikelihood(
+        data,
+        model=model,  # type: ignore[arg-type]
+        offset_sd=max(1e-2 * abs(data.y0), 1e-12),
+        drift_sd=max(1e-2 * abs(data.y0) / data.tau_end, 1e-15),
+        law=the_law,
+    )
+    return Posterior(prior_set, likelihood, fixed)

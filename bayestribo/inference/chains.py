@@ -1,0 +1,196 @@
+"""The sample stage: a posterior, from its optimum, to converged chains.
+
+:func:`sample_from` takes the start stage's :class:`~bayestribo.inference.start.Start`
+(the posterior to sample and its optimum) and gives a
+:class:`~bayestribo.inference.types.Sampled`: walkers about the optimum, and the sampler
+(:func:`bayestribo.inference.sampling.run_ensembles`) run to convergence; for a law
+without a closed form, on its quadratic surrogate where the exact posterior confirms
+it (:mod:`bayestribo.inference.surrogate`). :func:`sample` is the start and sample
+stages in a row, from a posterior.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bayestribo.inference.modes import run_or_failure
+from bayestribo.inference.posterior import Posterior
+from bayestribo.inference.sampling import SamplerRun, SamplerSettings, run_ensembles
+from bayestribo.inference.start import Start, find_start, initial_walkers
+from bayestribo.inference.surrogate import (
+    ATTEMPTS,
+    NODE_SCALE,
+    SurrogateCheck,
+    check,
+    surrogate_posterior,
+)
+from bayestribo.inference.types import DEFAULT_SETTINGS, Sampled
+from bayestribo.signal.decay import EnergyDecay
+
+__all__ = ["sample", "sample_from"]
+
+
+def sample(
+    posterior: Posterior,
+    decay: EnergyDecay,
+    *,
+    settings: SamplerSettings = DEFAULT_SETTINGS,
+    seed: int | np.random.Generator | None = None,
+    also_start_at: Mapping[str, float] | None = None,
+    progress: bool = False,
+    optimum: tuple[NDArray, NDArray, tuple[float, float] | None] | None = None,
+    surrogate: bool = True,
+    reweight: bool = True,
+) -> Sampled:
+    """The start and sample stages in a row: :func:`bayestribo.inference.start.
+    find_start` (with ``optimum``, ``also_start_at`` and ``reweight``), then
+    :func:`sample_from` (with ``settings``, ``seed``, ``progress`` and ``surrogate``).
+
+    Returns
+    -------
+    Sampled
+        Its ``posterior`` is the one sampled (the second pass's).
+    """
+    start = find_start(
+        posterior, decay, optimum=optimum, also_start_at=also_start_at, reweight=reweight
+    )
+    return sample_from(start, settings=settings, seed=seed, progress=progress, surrogate=surrogate)
+
+
+def sample_from(
+    start: Start,
+    *,
+    settings: SamplerSettings = DEFAULT_SETTINGS,
+    seed: int | np.random.Generator | None = None,
+    progress: bool = False,
+    surrogate: bool = True,
+) -> Sampled:
+    """The sample stage: walkers about the start, and the sampler run to convergence.
+
+    Parameters
+    ----------
+    start : Start
+        From :func:`bayestribo.inference.start.find_start`.
+    settings : SamplerSettings
+        Walkers, ensembles, step ceiling and stopping rule.
+    seed : int or Generator, optional
+        Seed of the walkers and of the sampler's moves.
+    progress : bool
+        Show a progress bar.
+    surrogate : bool
+        For a law without a closed form, sample a quadratic surrogate of its Π and keep
+        it where the exact posterior confirms it (:mod:`bayestribo.inference.surrogate`;
+        the default); False: sample the exact posterior throughout.
+
+    Returns
+    -------
+    Sampled
+        Of ``start.posterior``.
+    """
+    rng = np.random.default_rng(seed)
+    posterior, theta, cov, ratio_range = start.posterior, start.theta, start.cov, start.ratio_range
+    checked: SurrogateCheck | None = None
+    target: Posterior | None = None
+    run: SamplerRun | None = None
+    first = None
+    if surrogate and not posterior.law.closed_form and posterior.likelihood.model == "exact":
+        first = _first_surrogate(posterior, theta, cov)
+    # the walkers are kept by the surrogate's density where there is one (it stands for
+    # the exact one near the optimum, where they start, at no integration of the law)
+    walkers = initial_walkers(
+        posterior if first is None else first,
+        theta,
+        cov,
+        ratio_range,
+        settings.n_ensembles,
+        settings.n_walkers,
+        rng,
+    )
+    seed_of_run = int(rng.integers(2**31))
+    if first is not None:
+        run, checked, target = _sample_surrogate(
+            posterior, theta, cov, walkers, settings, seed_of_run, progress, first
+        )
+        if run is None:
+            # the exact posterior is sampled: its walkers by its own density
+            walkers = initial_walkers(
+                posterior, theta, cov, ratio_range, settings.n_ensembles, settings.n_walkers, rng
+            )
+    if run is None:
+        # -- a failure inside sampling is a reported non-convergence (inference/modes.py) --
+        run = run_or_failure(
+            run_ensembles, posterior, walkers, settings, seed=seed_of_run, progress=progress
+        )
+        # -- end of the failure guard --
+    # The optimiser can stop short of the optimum on the ridge of a law that misfits
+    # (HarmOsc3 under viscous+coulomb+quadratic: χ² 228590 at its optimum, 8332 where
+    # the walkers went); the best point the walkers visited then stands for the MAP
+    # in the misfit checks.
+    if run.log_prob.size and np.isfinite(run.log_prob).any():
+        best = np.unravel_index(np.nanargmax(run.log_prob), run.log_prob.shape)
+        point = np.array(run.chains[best], dtype=float)
+        if posterior(point[None])[0] > posterior(theta[None])[0]:
+            theta = point
+    return Sampled(posterior, theta, run, settings, checked, target)
+
+
+def _first_surrogate(posterior: Posterior, theta: NDArray, cov: NDArray) -> Posterior | None:
+    """The surrogate posterior about the maximum a posteriori with the Laplace scales
+    (:func:`~bayestribo.inference.surrogate.surrogate_posterior`), or None when it
+    cannot be built or has no compiled density (the exact posterior is sampled)."""
+    sd = np.sqrt(np.clip(np.diag(np.atleast_2d(cov)), 0.0, None))
+    target = surrogate_posterior(posterior, theta, NODE_SCALE * sd)
+    if target is None or not target.uses_compiled:
+        return None
+    if not np.isfinite(target(np.asarray(theta, dtype=float)[None])[0]):
+        return None
+    return target
+
+
+def _sample_surrogate(
+    posterior: Posterior,
+    theta: NDArray,
+    cov: NDArray,
+    walkers: NDArray,
+    settings: SamplerSettings,
+    seed: int,
+    progress: bool,
+    first: Posterior | None = None,
+) -> tuple[SamplerRun | None, SurrogateCheck | None, Posterior | None]:
+    """Sample the quadratic surrogate posterior of a law without a closed form and
+    check it against the exact one (:mod:`bayestribo.inference.surrogate`).
+
+    The surrogate is built about the maximum a posteriori with the Laplace scales
+    (``first``, when the caller has built it already); if its check fails, again about
+    the best draw checked with the surrogate posterior's spread (up to
+    :data:`~bayestribo.inference.surrogate.ATTEMPTS` surrogates). Returns the run, the
+    last check and the surrogate posterior when a check passed; ``(None, check, None)``
+    when none did (the caller samples the exact posterior).
+    """
+    rng = np.random.default_rng(seed)
+    sd = np.sqrt(np.clip(np.diag(np.atleast_2d(cov)), 0.0, None))
+    centre, scale = theta, NODE_SCALE * sd
+    checked: SurrogateCheck | None = None
+    for attempt in range(1, ATTEMPTS + 1):
+        target = first if attempt == 1 and first is not None else None
+        if target is None:
+            target = surrogate_posterior(posterior, centre, scale)
+        if target is None or not target.uses_compiled:
+            return None, checked, None
+        run = run_or_failure(run_ensembles, target, walkers, settings, seed=seed, progress=progress)
+        flat = run.chains.reshape(-1, run.chains.shape[-1])
+        if flat.shape[0] < 2 or not np.all(np.isfinite(flat)):
+            return None, checked, None
+        # a run that did not converge is checked too, and kept when the check passes:
+        # the fit reports its non-convergence as an exact run would, at a fraction of
+        # the cost of sampling the exact posterior to the step ceiling
+        checked = check(posterior, target, flat, rng, attempt=attempt)
+        if checked.passed:
+            return run, checked, target
+        if checked.best is None:
+            break
+        centre, scale = checked.best, NODE_SCALE * flat.std(axis=0)
+    return None, checked, None

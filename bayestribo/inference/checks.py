@@ -1,0 +1,465 @@
+"""The check stage: is the sampled law adequate for the run, and is the sample sound?
+
+:func:`check` takes the prepared run (:class:`~bayestribo.inference.types.PreparedRun`)
+and its sampled posterior (:class:`~bayestribo.inference.types.Sampled`) and gives a
+:class:`FitChecks`: separated modes (:mod:`bayestribo.inference.modes`), the misfit of
+the optimum's residuals (:func:`misfit_p_value`) and their smooth departure along the
+decay, posteriors piled on a prior's bound, and the half period's trend with amplitude
+beyond the law's own (:func:`frequency_nuisance_sd`, the nuisance the summarise stage
+carries into the intervals). Each finding is warned about here, with numbers and what
+to do; :func:`warn_shape` is the check of the law's ΔE(A) against the turning points',
+which the summarise stage calls once it has both.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, NamedTuple
+
+import numpy as np
+import scipy.stats
+from numpy.typing import NDArray
+
+from bayestribo._warnings import warn
+from bayestribo.errors import FrequencyTrendWarning, MisfitWarning, PriorBoundWarning
+from bayestribo.inference.dissipation import FEWEST_HALF_CYCLES
+from bayestribo.inference.likelihood import ShapeDeparture
+from bayestribo.inference.modes import ModeReport, mode_check
+from bayestribo.inference.posterior import Posterior
+from bayestribo.inference.preparation import matched_law_times
+from bayestribo.inference.priors import piled_on_bounds
+from bayestribo.inference.types import MISFIT_P, PreparedRun, Sampled
+from bayestribo.io.run import Run
+from bayestribo.model.restoring import get_restoring
+from bayestribo.signal.decay import EnergyDecay
+from bayestribo.signal.frequency import FrequencyTrend, frequency_trend, turning_point_trend
+
+__all__ = [
+    "FREQUENCY_TREND_CHANGE",
+    "FREQUENCY_TREND_Z",
+    "FitChecks",
+    "Misfit",
+    "check",
+    "frequency_nuisance_sd",
+    "misfit",
+    "misfit_p_value",
+    "shape_departure",
+    "warn_shape",
+]
+
+
+class Misfit(NamedTuple):
+    """The χ² of the standardized residuals at the optimum and its p-value."""
+
+    chi2: float
+    n_increments: int
+    p_value: float
+
+
+@dataclass(frozen=True)
+class FitChecks:
+    """What the check stage found.
+
+    Attributes
+    ----------
+    sampled : Sampled
+        The sampled posterior as checked: not converged where a minor mode matters
+        (:func:`~bayestribo.inference.modes.mode_check`).
+    modes : ModeReport
+        The mode check.
+    discrepancy : bool
+        The posterior has the model-discrepancy terms.
+    misfit : Misfit
+        χ², increments and p-value of the residuals at the optimum.
+    shape : ShapeDeparture
+        The smooth departure of the decay from the law at the optimum.
+    at_bound : list of dict
+        Parameters piled on an upper bound of their prior
+        (:func:`~bayestribo.inference.priors.piled_on_bounds`).
+    trend : FrequencyTrend or None
+        The half period's trend with amplitude beyond the law's own.
+    law_change : float
+        The law's own relative change of the half period over the decay [-].
+    frequency_sd : float
+        Relative sd of the frequency nuisance the trend asks for [-].
+    """
+
+    sampled: Sampled
+    modes: ModeReport
+    discrepancy: bool
+    misfit: Misfit
+    shape: ShapeDeparture
+    at_bound: list[dict[str, Any]]
+    trend: FrequencyTrend | None
+    law_change: float
+    frequency_sd: float
+
+    @property
+    def flagged(self) -> bool:
+        """True when the misfit warning has said the law misfits (or the discrepancy
+        holds a white misfit): the shape warning then adds nothing."""
+        return _flagged(self.misfit, self.shape)
+
+
+def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) -> FitChecks:
+    """The checks of a sampled fit, each warned about.
+
+    Parameters
+    ----------
+    prepared : PreparedRun
+        From :func:`bayestribo.inference.preparation.prepare`.
+    sampled : Sampled
+        From :func:`bayestribo.inference.chains.sample` on a posterior of
+        ``prepared.data``.
+    compared : bool
+        The law is the verdict of a comparison of laws (``law="auto"``): a misfit then
+        says that no law compared holds, instead of advising the comparison.
+
+    Returns
+    -------
+    FitChecks
+
+    Warns
+    -----
+    MisfitWarning, PriorBoundWarning, FrequencyTrendWarning
+        As :func:`bayestribo.inference.summarising.summarise` lists them.
+    """
+    # -- separated modes: not converged when a minor one matters (inference/modes.py) --
+    sampled, modes = mode_check(sampled)
+    # -- end of the mode check --
+    posterior, run = sampled.posterior, sampled.run
+    name = prepared.name
+    discrepancy = any(
+        n in posterior.names or n in posterior.fixed for n in ("log10_discrepancy", "log10_shape")
+    )
+    found = misfit(posterior, sampled.theta_map)
+    shape = shape_departure(posterior, sampled.theta_map)
+    half_cycles = int(prepared.decay.peaks.value.size) - 1
+    _warn_misfit(name, found, shape, discrepancy, posterior.law.name, compared, half_cycles)
+    flat = run.chains.reshape(-1, run.chains.shape[-1])
+    at_bound = piled_on_bounds(flat, posterior.priors)
+    for entry in at_bound:
+        warn(
+            f"{entry['parameter']} piles on the upper bound of its prior "
+            f"({entry['bound']:.4g}; {100 * entry['fraction']:.0f} % of the draws within 1 % "
+            f"of the range below it) for {name or 'the run'}: the prior, not the data, "
+            "ends the interval, so this is no measurement. The default bounds are physical "
+            "(the data then ask for a value the motion cannot have): check the units and "
+            "the channels (bayestribo inspect) and that the record is a free decay; a "
+            "narrowed prior: widen it",
+            PriorBoundWarning,
+        )
+    decay = prepared.decay
+    if decay.turning_times is not None:
+        trend = turning_point_trend(decay.turning_times, decay.peaks.value)
+    else:
+        trend = frequency_trend(prepared.run.time, prepared.run.displacement, prepared.run.velocity)
+    trend, law_change = _beyond_the_law(posterior, sampled.theta_map, trend, decay)
+    pendulum = _pendulum_change(
+        prepared.run, prepared.metadata, decay.peaks.value / decay.scaling.length_scale
+    )
+    _warn_frequency_trend(name, trend, posterior.law.name, pendulum)
+    return FitChecks(
+        sampled,
+        modes,
+        discrepancy,
+        found,
+        shape,
+        at_bound,
+        trend,
+        law_change,
+        frequency_nuisance_sd(trend),
+    )
+
+
+def misfit_p_value(chi2: float, m: int, noise_dof: float | None) -> float:
+    """p-value of a residual χ² for m increments, with the noise variance's own error.
+
+    The residuals are standardised by a noise variance measured at rest from a finite
+    number of samples: the estimate is σ² χ²_ν/ν, ν its degrees of freedom, and
+    ``(χ²/m)`` then follows an F(m, ν) distribution, not χ²_m/m. With 200 samples of
+    rest (±10 % on σ²) and m = 2000 increments, χ² = 2300 is p = 3e-6 as a χ² but
+    p = 0.10 as an F: the rest, not the law, is uncertain by that much.
+
+    Parameters
+    ----------
+    chi2 : float
+        Sum of the squared standardised residuals.
+    m : int
+        Number of increments.
+    noise_dof : float or None
+        ν (:attr:`bayestribo.signal.noise.NoiseModel.measured_dof`); None for a noise
+        taken as exact (the instrument's resolution): the χ² test.
+
+    Returns
+    -------
+    float
+    """
+    if noise_dof is None or not math.isfinite(noise_dof) or noise_dof <= 0:
+        return float(scipy.stats.chi2.sf(chi2, m))
+    return float(scipy.stats.f.sf(chi2 / m, m, noise_dof))
+
+
+def misfit(posterior: Posterior, theta: NDArray) -> Misfit:
+    """χ², number of increments and p-value of the standardized residuals at θ
+    (:func:`misfit_p_value`, with the degrees of freedom of the measured noise)."""
+    resid = posterior.standardized_residuals(theta[None])[0]
+    chi2 = float(np.sum(resid * resid))
+    preparation = posterior.likelihood.data.preparation or {}
+    noise = preparation.get("noise")
+    dof = getattr(noise, "measured_dof", None)
+    return Misfit(chi2, int(resid.size), misfit_p_value(chi2, int(resid.size), dof))
+
+
+def shape_departure(posterior: Posterior, theta: NDArray) -> ShapeDeparture:
+    """The smooth departure of the decay from the law at θ (noise variances alone)."""
+    params = posterior.physical(theta[None])["params"]
+    return posterior.likelihood.shape_departure({k: float(v[0]) for k, v in params.items()})
+
+
+#: A half period changing along the decay by more than this fraction, and by more than
+#: FREQUENCY_TREND_Z standard errors, is reported: the linear law's Ω is constant.
+FREQUENCY_TREND_CHANGE = 2e-4
+
+FREQUENCY_TREND_Z = 4.0
+
+
+def frequency_nuisance_sd(trend: FrequencyTrend | None) -> float:
+    """Relative standard deviation of the frequency nuisance ε from the frequency trend.
+
+    The equivalent constant frequency of a decay whose half period changes by a
+    fraction Δ (± its standard error σ_Δ) from the largest swing to the smallest lies
+    anywhere in that span: ε gets the standard deviation ½√(Δ² + σ_Δ²), so that its
+    95 % interval reaches both ends of the span about the measured frequency (which
+    lies inside it). A linear oscillator's Δ is noise, of order σ_Δ, and ε is then
+    small beside ζ's own uncertainty (see
+    :func:`bayestribo.inference.assemble.derived_quantities`).
+
+    Parameters
+    ----------
+    trend : FrequencyTrend or None
+        From :func:`bayestribo.signal.frequency.frequency_trend` (None: too few half cycles
+        to measure a trend, and no nuisance).
+
+    Returns
+    -------
+    float
+    """
+    if trend is None or not math.isfinite(trend.change):
+        return 0.0
+    se = abs(trend.change / trend.z) if trend.z and math.isfinite(trend.z) else 0.0
+    return 0.5 * math.hypot(trend.change, se)
+
+
+def _beyond_the_law(
+    posterior: Posterior, theta: NDArray, trend: FrequencyTrend | None, decay: EnergyDecay
+) -> tuple[FrequencyTrend | None, float]:
+    """The measured frequency trend less the one the law itself makes.
+
+    Viscous damping and Coulomb friction leave the half period constant (Eq. 15);
+    a nonlinear drag does not: its equivalent damping, and with it the damped half
+    period, changes with amplitude (quadratic drag of ζ_e = 0.02 at the release: the
+    half period shortens by 3e-4 over the decay). The law's turning times at the MAP
+    (the compiled integrator) are matched to the record's; their departure from
+    even spacing is taken off the record's turning times before the trend is fitted
+    (:func:`~bayestribo.signal.frequency.turning_point_trend`), so that only a trend the
+    law does not make (a stiffness that depends on amplitude) is reported and put into
+    the frequency nuisance. (Fitting the law's own turning points with the trend model
+    and subtracting the two trends does not work: the model's 1/|Y_n| terms, meant for
+    a filter's delay, absorb a drag's trend on exact turning points and not on
+    measured ones; the quadratic drag above then left -2.6e-4 at 75 standard errors.)
+
+    Returns
+    -------
+    trend : FrequencyTrend or None
+        The part of the trend beyond the law.
+    law_change : float
+        The law's own relative change of the half period from the largest swing to the
+        smallest (0 for the closed-form laws).
+    """
+    law = posterior.law
+    times = decay.turning_times
+    if trend is None or law.closed_form or times is None or not math.isfinite(trend.change):
+        return trend, 0.0
+    pair = matched_law_times(posterior, theta, decay)
+    if pair is None:
+        return trend, 0.0
+    _, matched, close = pair
+    omega = decay.scaling.omega
+    n = np.arange(matched.size, dtype=float)
+    uneven = matched - np.polyval(np.polyfit(n, matched, 1), n)
+    beyond = turning_point_trend(
+        np.asarray(times, dtype=float)[close] - uneven / omega,
+        np.asarray(decay.peaks.value, dtype=float)[close],
+    )
+    half = np.diff(matched)
+    law_change = float((half[-1] - half[1]) / np.mean(half)) if half.size >= 3 else 0.0
+    if beyond is None or not math.isfinite(beyond.change):
+        return trend, law_change
+    return beyond, law_change
+
+
+def _warn_frequency_trend(
+    name: str | None,
+    trend: FrequencyTrend | None,
+    law: str,
+    pendulum: float | None = None,
+) -> None:
+    """Say when the frequency is not constant along the decay beyond the law's own
+    change (the nuisance that carries it is in the intervals); ``pendulum``: the change
+    a pendulum's half period makes over the same swings (a run in radians with a linear
+    restoring force), named when the measured change is the pendulum's."""
+    if trend is None:
+        return
+    if abs(trend.change) > FREQUENCY_TREND_CHANGE and abs(trend.z) > FREQUENCY_TREND_Z:
+        like = (
+            "; if the spring stiffens or softens with the swing (a cubic, Duffing spring), "
+            "--restoring duffing (sidecar 'restoring': 'duffing') measures its β from the "
+            "half periods and the energy lost per cycle with its potential"
+        )
+        if pendulum is not None:
+            se = abs(trend.change / trend.z)
+            if abs(trend.change - pendulum) <= max(3.0 * se, 0.25 * abs(pendulum)):
+                like = (
+                    f"; it changes as a pendulum's does over these swings ({100 * pendulum:+.3f} "
+                    "%): for a pendulum, --restoring pendulum (sidecar 'restoring': "
+                    "'pendulum') measures the energy lost per cycle with its potential"
+                )
+        warn(
+            f"the oscillation's half period changes by {100 * trend.change:+.3f} % from the "
+            f"largest swing to the smallest of {name or 'the run'} ({trend.z:+.0f} "
+            f"standard errors) beyond what the law {law} makes: a stiffness that depends "
+            "on amplitude, or a dissipation that changes the period otherwise than the law "
+            "does; the constant Ω of the fit is then an average, and the reported "
+            "parameters and ΔE(A) carry a frequency nuisance of "
+            f"± {100 * frequency_nuisance_sd(trend):.2g} % for it{like}",
+            FrequencyTrendWarning,
+        )
+
+
+def _pendulum_change(run: Run, metadata: Mapping[str, Any], turning: NDArray) -> float | None:
+    """The relative change of a pendulum's half period over the analysed turning points
+    [-] (:func:`~bayestribo.signal.frequency.turning_point_trend` of the times a pendulum
+    takes between them), for a run in radians whose restoring force is the default
+    linear one; None otherwise."""
+    if run.length_unit != "rad" or metadata.get("restoring") not in (None, "linear"):
+        return None
+    a = np.abs(np.asarray(turning, dtype=float))
+    if a.size < 2 or not np.all(a < np.pi):
+        return None
+    # the turning times a pendulum would take between these turning points, measured
+    # as the record's are (the trend's own model, linear in the swing, reads a
+    # pendulum's quadratic change otherwise than its end points do)
+    ratio = get_restoring("pendulum").half_period_ratio
+    swing = 0.5 * (a[1:] + a[:-1])
+    times = np.concatenate(([0.0], np.cumsum(ratio(swing))))
+    found = turning_point_trend(times, turning)
+    return None if found is None else float(found.change)
+
+
+def _flagged(misfit: Misfit, shape: ShapeDeparture) -> bool:
+    """True when :func:`_warn_misfit` has said the law misfits (or the discrepancy holds
+    it)."""
+    return bool(misfit[2] < MISFIT_P or shape.p_value < MISFIT_P)
+
+
+def warn_shape(
+    name: str | None,
+    agreement: dict[str, Any] | None,
+    law: str,
+    compared: bool,
+    flagged: bool,
+) -> None:
+    """Say when the law's ΔE(A) has another shape than the turning points' ΔE(A)
+    (:func:`~bayestribo.inference.dissipation.shape_agreement`): a friction law on a
+    record of drag passes a χ² test when the noise is taken from a segment that still
+    moves, but its ΔE(A) grows as A where the turning points' grows as A²."""
+    if agreement is None or agreement["same_shape"] or flagged:
+        return
+    run = name or "the run"
+    how = (
+        f"its ΔE(A) grows as A^{agreement['law_slope']:.2f}, the turning points' as "
+        f"A^{agreement['measured_slope']:.2f} ± {agreement['measured_slope_se']:.2f} "
+        f"(departing by up to {agreement['max_percent']:.0f} %)"
+    )
+    if compared:
+        text = (
+            f"no law compared has the shape of the energy lost per cycle of {run}: the "
+            f"best, {law}, {how}. The answer is the turning points' ΔE(A), whatever the "
+            "law (printed as 'turning points (law-free)')"
+        )
+    else:
+        text = (
+            f"the law {law} has another shape than the energy lost per cycle of {run}: "
+            f"{how}; its parameters are not a measurement. Fit with law='auto' (--law "
+            "auto); the turning points' ΔE(A) (printed as 'turning points (law-free)') "
+            "holds whatever the law"
+        )
+    warn(text, MisfitWarning)
+
+
+def _warn_misfit(
+    name: str | None,
+    misfit: Misfit,
+    shape: ShapeDeparture,
+    discrepancy: bool,
+    law: str,
+    compared: bool = False,
+    half_cycles: int | None = None,
+) -> None:
+    """Say, with numbers, that the law misfits the run, and what to do (see
+    :func:`summarise`); ``half_cycles``: how many the analysis holds (the law-free answer
+    needs three, :func:`~bayestribo.inference.dissipation.turning_point_dissipation`)."""
+    law_free = (
+        "The answer is the energy dissipated per cycle measured from the turning points, "
+        "whatever the law (result.turning_point_dissipation, printed as 'turning points "
+        "(law-free)')"
+    )
+    if half_cycles is not None and half_cycles < FEWEST_HALF_CYCLES:
+        law_free = (
+            f"The analysis holds {half_cycles} half cycle(s), too few for the energy "
+            "dissipated per cycle measured from the turning points either: the record "
+            "holds no measurement of the dissipation; record more of the decay"
+        )
+    chi2, m, misfit_p = misfit
+    shaped = bool(shape.p_value < MISFIT_P)
+    if not (misfit_p < MISFIT_P or shaped):
+        return
+    run = name or "the run"
+    how = f"χ² = {chi2:.0f} for {m} increments, p = {misfit_p:.1e}"
+    if shaped:
+        how = shape.describe() + f"; {how}"
+    if discrepancy:
+        if not shaped:
+            return  # white misfit only: the discrepancy's white term carries it
+        warn(
+            f"the law {law} is not adequate for {run}: {how}. The discrepancy terms "
+            "carry the departure into the intervals, so its parameters are the law's best "
+            "constant values over this decay, not those of a law that holds at every "
+            "amplitude (bayestribo check shows how they change along the decay)",
+            MisfitWarning,
+        )
+        return
+    if compared:
+        warn(
+            f"no law compared holds for {run}: the best, {law}, misfits it beyond its "
+            f"noise ({how}); its parameters are not a measurement of any mechanism and its "
+            f"intervals are too narrow. {law_free}",
+            MisfitWarning,
+        )
+        return
+    few = half_cycles is not None and half_cycles < FEWEST_HALF_CYCLES
+    warn(
+        f"the law {law} misfits {run} beyond its noise ({how}): its parameters are not "
+        "a measurement and its intervals are too narrow. Fit with law='auto' "
+        "(--law auto): it compares the registered laws and keeps one that holds"
+        + (
+            f". {law_free}"
+            if few
+            else "; the energy dissipated per cycle measured from the turning points "
+            "(printed as 'turning points (law-free)') holds whatever the law"
+        ),
+        MisfitWarning,
+    )
