@@ -20,11 +20,12 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import Executor
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
+from bayestribo.campaign.bands import group_runs, run_bands, run_metadata, swing_record
 from bayestribo.campaign.dissipation import common_amplitudes, dissipation_samples, has_band
 from bayestribo.errors import BayestriboError
 from bayestribo.population.groups import Population, fit_group, population_jobs
@@ -178,6 +179,11 @@ class CampaignAnalysis:
     dissipation_quantities : dict of str to dict
         Each ΔE at a swing compared: its symbol, unit and label (apart from
         :attr:`quantities`, the laws' own).
+    dissipation_at_swing : dict or None
+        Each analysed run's ΔE from its law's band at one swing every run of the
+        populations reaches (:func:`bayestribo.campaign.bands.swing_record`:
+        ``amplitude`` and ``rows``, each run's ``mean`` with its ``interval``); None
+        where no fit holds a band.
     sigma_scales : dict of str to float
         The scale (typical between-run σ) of each quantity's σ prior (module notes of
         :mod:`bayestribo.population.hyperpriors`; a quantity without a default takes
@@ -201,6 +207,7 @@ class CampaignAnalysis:
     dissipation: Population | None = None
     dissipation_trends: dict[str, Trend] = field(default_factory=dict)
     dissipation_quantities: dict[str, dict[str, Any]] = field(default_factory=dict)
+    dissipation_at_swing: dict[str, Any] | None = None
 
     @property
     def converged(self) -> bool:
@@ -232,6 +239,7 @@ class CampaignAnalysis:
             "dissipation": None if self.dissipation is None else self.dissipation.to_dict(p),
             "dissipation_trends": {k: t.to_dict(p) for k, t in self.dissipation_trends.items()},
             "dissipation_quantities": self.dissipation_quantities,
+            "dissipation_at_swing": self.dissipation_at_swing,
         }
 
     def group_rows(self) -> list[dict[str, Any]]:
@@ -752,7 +760,7 @@ def analyse_campaign(
         else:
             row["status"] = "used"
         runs.append(row)
-    return CampaignAnalysis(
+    analysis = CampaignAnalysis(
         by=keys,
         covariate=covariate,
         prob=prob,
@@ -771,6 +779,12 @@ def analyse_campaign(
         dissipation_trends=dissipation_trends,
         dissipation_quantities=laws_free,
     )
+    # each run's ΔE from its law's band, at a swing every run of the populations reaches
+    bands = run_bands({_name(r): r for r in results})
+    if not bands:
+        return analysis
+    swing = swing_record(group_runs(analysis), bands, metadata=run_metadata(analysis))
+    return replace(analysis, dissipation_at_swing=swing)
 
 
 def _runs_by_law(runs: Sequence[Any]) -> dict[str, list[str]]:

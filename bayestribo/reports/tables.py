@@ -16,6 +16,7 @@ from typing import Any
 
 from bayestribo.inference.flatness import FLAT_KS as _FLAT_KS
 from bayestribo.inference.flatness import SPREAD_OF, prior_flatness
+from bayestribo.inference.quantities import unit_words
 from bayestribo.summary import NUMERICAL_ZERO, interval_text, probability_text
 
 __all__ = [
@@ -157,17 +158,18 @@ def prose(text: str, *, paths: Mapping[str, str] | None = None) -> str:
 
 
 def unit_text(unit: str | None) -> str:
-    """A unit as a reader writes it: ``"-"`` for a dimensionless quantity, ``"signal
-    unit"`` for a length in a recording's unstated unit, superscript squares.
+    """A unit as a reader writes it, in a report's tables as in the command line's:
+    ``"dimensionless"`` for a number without a dimension, ``"signal unit"`` for a
+    length in a recording's unstated unit, superscript squares
+    (:func:`bayestribo.inference.quantities.unit_words`, which ``bayestribo fit``
+    prints).
 
     Examples
     --------
     >>> unit_text("1"), unit_text("signal length unit^2"), unit_text("J")
-    ('-', 'signal unit²', 'J')
+    ('dimensionless', 'signal unit²', 'J')
     """
-    if unit in (None, "", "1", "-"):
-        return "-"
-    return str(unit).replace("signal length unit", "signal unit").replace("^2", "²")
+    return unit_words(unit)
 
 
 def _symbols(result: Any) -> dict[str, str]:
