@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from bayestribo._plural import count
 from bayestribo.campaign.bands import group_runs, run_bands, run_metadata, swing_record
 from bayestribo.campaign.dissipation import common_amplitudes, dissipation_samples, has_band
 from bayestribo.errors import BayestriboError
@@ -634,7 +635,7 @@ def analyse_campaign(
         # apart; otherwise pooled over the loads of each series.
         words = ", ".join(law_keys) or "none"
         fitted_in = f" fitted in {law}" if several else ""
-        say(f"population of {len(samples)} runs with contact{fitted_in}, by {words}")
+        say(f"population of {count(len(samples), 'run')} with contact{fitted_in}, by {words}")
         add_population(
             "contact", samples, names, extra, by=law_keys or None, pooled=not series_keys
         )
@@ -702,7 +703,10 @@ def analyse_campaign(
         }
         for n in names:
             scales.setdefault(n, float(extra["sigma_prior"][n]))
-        say(f"ΔE (law-free) of {label} at {len(names)} common swings, {len(drawn)} runs")
+        say(
+            f"ΔE (law-free) of {label} at {count(len(names), 'common swing')}, "
+            f"{count(len(drawn), 'run')}"
+        )
         add_population("dissipation", drawn, names, extra, by=keys or None, pooled=not keys)
         if len({d.metadata.get(covariate) for d in drawn}) >= 2 and all(
             isinstance(d.metadata.get(covariate), int | float) for d in drawn
@@ -724,7 +728,7 @@ def analyse_campaign(
         symbols = ", ".join(str(described.get(n, {}).get("symbol", n)) for n in names)
         symbols = "ζ₀" if names == ("zeta",) else f"{symbols} without contact"
         fitted_in = f" fitted in {law}" if several_free else ""
-        say(f"{symbols} from {len(zs)} runs without contact{fitted_in}")
+        say(f"{symbols} from {count(len(zs), 'run')} without contact{fitted_in}")
         if several_free:
             add_population("zeta0", zs, names, extra, by=("law",), pooled=False)
         else:

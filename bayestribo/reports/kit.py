@@ -32,6 +32,7 @@ from pathlib import Path
 from typing import Any
 
 from bayestribo._files import atomic_file, write_text
+from bayestribo._plural import count
 from bayestribo.reports._errors import ReportError
 from bayestribo.reports.html import NOTE_CLASS, PAGE_MIME
 from bayestribo.reports.safety import markdown_text
@@ -41,6 +42,7 @@ __all__ = [
     "FIGURE_PROBLEMS",
     "about",
     "checks",
+    "count",
     "empty_panels",
     "facts",
     "figure_alt",

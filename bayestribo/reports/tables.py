@@ -14,6 +14,7 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
+from bayestribo._plural import count
 from bayestribo.inference.flatness import FLAT_KS as _FLAT_KS
 from bayestribo.inference.flatness import SPREAD_OF, prior_flatness
 from bayestribo.inference.quantities import unit_words
@@ -501,8 +502,8 @@ def fit_facts(result: Any) -> dict[str, str]:
     if noise:
         facts["noise"] = noise
     runs = (
-        f"{d.get('n_walkers')} walkers × {d.get('n_ensembles')} ensembles × "
-        f"{d.get('n_steps')} steps"
+        f"{count(d.get('n_walkers'), 'walker')} × {count(d.get('n_ensembles'), 'ensemble')} × "
+        f"{count(d.get('n_steps'), 'step')}"
     )
     stats = (
         f"autocorrelation time ≤ {d.get('autocorr_time_max', 0):.1f} steps, effective sample "
