@@ -40,6 +40,12 @@ def test_a_classical_table_names_methods_in_words_and_gives_intervals():
 
 def test_units_and_laws_read_as_words():
     assert tables.unit_text("signal length unit") == "signal unit"
+    # a number's unit in a report's tables is the command line's word for it
+    from bayestribo.inference.quantities import unit_words
+
+    for unit in (None, "", "1", "-", "y", "J", "signal length unit^2", "1/y"):
+        assert tables.unit_text(unit) == unit_words(unit), unit
+    assert tables.unit_text("1") == "dimensionless"
     assert tables.law_text("viscous+quadratic") == "viscous damping + quadratic drag"
     assert tables.normal_interval(None, None) == "–"
     assert tables.normal_interval(0.5, None) == "0.5"
