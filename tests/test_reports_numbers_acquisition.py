@@ -15,6 +15,7 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import re
 
 import pytest
 from _report_numbers import interval_cells, unmatched
@@ -64,3 +65,12 @@ def test_the_acquisition_reports_fit_is_the_commands(acquired):
     for name in ("zeta", "mu_k"):
         ours, theirs = reported["parameters"][name], fitted["parameters"][name]
         assert (ours["mean"], ours["interval"]) == (theirs["mean"], theirs["interval"]), name
+
+
+def test_the_acquisition_report_says_a_misfit_when_the_command_does(acquired):
+    from bayestribo.cli.report import fit_reasons
+
+    page, _, fitted = acquired
+    misfit = any("misfits" in reason for reason in fit_reasons({"fit": fitted}))
+    text = re.sub(r"<[^>]+>", " ", re.sub(r"<(style|script)\b.*?</\1>", "", page, flags=re.S))
+    assert ("misfits" in text) == misfit
