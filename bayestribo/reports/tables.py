@@ -117,6 +117,8 @@ def prose(text: str, *, paths: Mapping[str, str] | None = None) -> str:
     --------
     >>> prose("the law viscous+coulomb misfits; fit with law='auto' (--law auto)")
     'the law viscous damping + Coulomb friction misfits; fit with law = auto'
+    >>> prose(prose("the law viscous+coulomb misfits; the law viscous holds"))
+    'the law viscous damping + Coulomb friction misfits; the law viscous damping holds'
     >>> prose("the law quadratic holds; the power of the test")
     'the law quadratic drag holds; the power of the test'
     >>> prose("raise max_steps (--param max_steps=20000)")
@@ -151,10 +153,15 @@ def prose(text: str, *, paths: Mapping[str, str] | None = None) -> str:
         text = re.sub(rf"\b{name}\b", symbol, text)
     for name, words in _COLUMNS.items():
         text = re.sub(rf"\b{name}\b", words, text)
+    from bayestribo.reports.laws import term_words
+
     terms = "|".join(TERMS)
-    # a law's name: terms joined by "+", or one term named as "the law ..." ("power" alone
-    # is a word)
-    law = rf"\b(?:{terms})(?:\+(?:{terms}))+\b|(?<=\blaw )(?:{terms})\b"
+    # one term named as "the law ..." ("power" alone is a word), unless its words follow
+    # it already ("the law viscous damping": text said once is not said again)
+    said = {n: term_words(n)[len(n) :] if term_words(n).startswith(n) else "" for n in TERMS}
+    single = "|".join(f"{n}(?!{re.escape(rest)})" if rest else n for n, rest in said.items())
+    # a law's name: terms joined by "+", or a single term so named
+    law = rf"\b(?:{terms})(?:\+(?:{terms}))+\b|(?<=\blaw )(?:{single})\b"
     return re.sub(law, lambda m: law_text(m.group(0)), text)
 
 
