@@ -38,7 +38,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bayestribo._files import atomic_path
-from bayestribo._plural import count
 from bayestribo.inference.priors import PriorSet
 from bayestribo.inference.quantities import (
     DERIVED,
@@ -552,6 +551,8 @@ class FitResult:
             *self._comparison_lines(),
             f"noise     {self.noise.get('description', '')}",
         ]
+        from bayestribo._plural import count
+
         d = self.diagnostics
         status = (
             "converged"
