@@ -14,6 +14,7 @@ import math
 import re
 from collections.abc import Iterable, Iterator, Mapping
 from html.parser import HTMLParser
+from statistics import NormalDist
 from typing import Any
 
 from bayestribo.summary import interval_text
@@ -112,10 +113,17 @@ def interval_cells(page: str) -> list[tuple[str, str, str]]:
     return [c for c in table_cells(page) if INTERVAL.match(c[0]) or BOUND.match(c[0])]
 
 
+#: A classical estimate's 95 % interval, in standard errors either side (written apart
+#: from the package's, so that a wrong factor there is caught).
+Z95 = NormalDist().inv_cdf(0.975)
+
+
 def _triples(node: Any) -> Iterator[tuple[float, float, float]]:
     """Every (centre, low, high) a JSON document holds: a summary (``median`` or ``mean``
     with ``interval``), a row (``X_median``, ``X_low``, ``X_high``, or ``X``, ``X low``,
-    ``X high``), a band (lists of ``mean`` and ``interval``)."""
+    ``X high``, or ``X`` with ``X_interval``), a band (lists of ``mean`` and
+    ``interval``), a classical estimate (``X`` with its standard error ``X_se``: ±1.96
+    of it)."""
     if isinstance(node, Mapping):
         interval = node.get("interval")
         if isinstance(interval, list | tuple) and len(interval) == 2:
@@ -137,6 +145,15 @@ def _triples(node: Any) -> Iterator[tuple[float, float, float]]:
                 low, high = node.get(f"{stem}{sep}low"), node.get(f"{stem}{sep}high")
                 if all(isinstance(v, int | float) for v in (value, low, high)):
                     yield float(value), float(low), float(high)
+            if isinstance(value, int | float) and not isinstance(value, bool):
+                # a windowed fit's "zeta" with "zeta_interval"; an estimate's "zeta_se"
+                ends = node.get(f"{key}_interval")
+                if isinstance(ends, list | tuple) and len(ends) == 2:
+                    if all(isinstance(v, int | float) for v in ends):
+                        yield float(value), float(ends[0]), float(ends[1])
+                se = node.get(f"{key}_se")
+                if isinstance(se, int | float) and se > 0:
+                    yield float(value), value - Z95 * se, value + Z95 * se
             yield from _triples(value)
     elif isinstance(node, list):
         for item in node:

@@ -359,3 +359,66 @@ def test_the_viscosity_figure_draws_each_load_beside_the_paper_and_reads_in_prin
     x = np.sort(means[0].lines[0].get_xdata())
     np.testing.assert_allclose(x, glycerol_water_viscosity(np.array([0.09, 0.0055])), rtol=0.03)
     assert small_texts(fig) == [] and overlapping_labels(fig) == []
+
+
+def test_each_trend_keeps_its_population_mean_at_the_ends_of_its_loads(analysis):
+    """population.json holds the trend's mean at the lightest and heaviest load of its
+    runs, the median and equal-tailed 95 % interval of its draws there (the campaign
+    report's table of them reads these numbers)."""
+    record = analysis.to_dict()["trends"]["lubricant=glycerol"]
+    t = analysis.trends["lubricant=glycerol"]
+    assert record["span"] == [0.12, 0.46]
+    assert set(record["mean_at_ends"]) == {"zeta", "mu_k"}
+    for p, ends in record["mean_at_ends"].items():
+        assert [e["at"] for e in ends] == [0.12, 0.46]
+        for end in ends:
+            draws = t.intercept[p] + t.slope[p] * end["at"]
+            lo, mid, hi = np.quantile(draws, [0.025, 0.5, 0.975])
+            assert end["median"] == pytest.approx(mid, rel=1e-12)
+            assert end["interval"] == pytest.approx([lo, hi], rel=1e-12)
+
+
+@dataclass
+class _BandFit(_Fit):
+    """A fit with a law's ΔE(A) band: ΔE = c A² [J], its interval 0.9 c A² to 1.1 c A²."""
+
+    swings: tuple[float, float] = (1e-4, 1e-3)
+    c: float = 1.0
+
+    @property
+    def dissipation(self):
+        a = np.geomspace(*self.swings, 12)
+        return {
+            "law": "viscous+coulomb",
+            "amplitude": a.tolist(),
+            "amplitude_unit": "m",
+            "mean": (self.c * a**2).tolist(),
+            "interval": [(0.9 * self.c * a**2).tolist(), (1.1 * self.c * a**2).tolist()],
+            "unit": "J",
+            "prob": 0.95,
+        }
+
+
+def test_each_runs_energy_loss_at_a_swing_every_run_reaches_is_kept():
+    """population.json holds each run's ΔE from its law's band at one swing inside every
+    run's range (the geometric middle of the range they share), read off its band on
+    log-log axes: exact for ΔE ∝ A²."""
+    fits = [
+        _BandFit(f.draws, f.metadata, swings=(1e-4 * (1 + i / 10), 1e-3 * (1 - i / 20)), c=i + 1)
+        for i, f in enumerate(_campaign(np.random.default_rng(3)))
+    ]
+    got = analyse_campaign(fits, seed=1, max_steps=300).to_dict()["dissipation_at_swing"]
+    a = got["amplitude"]
+    assert a == pytest.approx(np.sqrt(1e-4 * 1.8 * 1e-3 * 0.6), rel=1e-12)
+    assert [r["run"] for r in got["rows"]] == [f.metadata["run_id"] for f in fits]
+    for row, fit in zip(got["rows"], fits, strict=True):
+        assert row["amplitude"] == a and row["unit"] == "J" and row["amplitude_unit"] == "m"
+        assert row["mean"] == pytest.approx(fit.c * a**2, rel=1e-9)
+        assert row["interval"] == pytest.approx([0.9 * fit.c * a**2, 1.1 * fit.c * a**2])
+    # fits without a band keep none
+    assert (
+        analyse_campaign(_campaign(np.random.default_rng(3)), seed=1, max_steps=300).to_dict()[
+            "dissipation_at_swing"
+        ]
+        is None
+    )

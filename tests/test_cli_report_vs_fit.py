@@ -57,6 +57,11 @@ def test_report_and_fit_give_one_answer_on_a_real_recording(appstat_file, tmp_pa
     for title in ("The answer", "Bayesian fit"):
         assert interval_cells(section(page, title)), title
         assert unmatched(section(page, title), fitted) == [], title
+    # every other one (the classical estimates, by ±1.96 standard errors) is one of the
+    # report's record, in the same digits
+    record = json.loads(summary.read_text())
+    assert interval_cells(section(page, "Classical estimates"))
+    assert unmatched(page, fitted, record) == []
     # the grid of Π increments and the sampler's run: the same fit, not a near one
     assert reported["diagnostics"]["n_steps"] == fitted["diagnostics"]["n_steps"]
     assert report_exit == fit_exit

@@ -10,13 +10,14 @@ import bayestribo
 PACKAGE = Path(bayestribo.__file__).resolve().parent
 
 #: What each part of the package may import (besides itself), as drawn in
-#: docs/architecture.md. The shared bottom (errors, summary, _optional, _text, _clock,
-#: _workers) is open to all.
+#: docs/architecture.md. The shared bottom (errors, summary, _optional, _text, _plural,
+#: _clock, _workers) is open to all.
 BOTTOM = {
     "errors",
     "summary",
     "_optional",
     "_text",
+    "_plural",
     "_clock",
     "_workers",
     "_warnings",

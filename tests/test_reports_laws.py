@@ -110,3 +110,19 @@ def test_the_dissipation_figure_never_draws_below_zero_on_log_axes(paper_fit):
     # the tables hold it at zero too
     frame = tables.dissipation_frame(paper_fit)
     assert not any("[-" in str(v) for v in frame.to_numpy().ravel())
+
+
+def test_a_share_reads_in_the_digits_its_interval_supports_as_its_record_keeps_it(paper_fit):
+    """The share with its interval by the digit rule: its ends never print as its median
+    ("0.095 [0.095, 0.095]" once did, each number in three digits), and its record (a
+    report's summary) holds the numbers the text shows."""
+    from bayestribo.summary import interval_text
+
+    for share in laws.share_rows(paper_fit).values():
+        record = share.to_dict()
+        median, (low, high) = record["median"], record["interval"]
+        assert low <= median <= high and record["swing"] == share.swing
+        text = share.text()
+        assert text == interval_text(median, low, high)
+        shown = [t.strip("[],") for t in text.split()]
+        assert len(set(shown)) == 3 or low == high, text

@@ -56,6 +56,16 @@ def test_a_tables_headers_index_and_cells_are_escaped(shown):
     assert '<span class="bt-num">' in page  # the cells' own markup is kept
 
 
+def test_a_labels_number_stays_on_one_line_and_its_words_are_escaped(shown):
+    """A row label's number ("ΔE(A = 2.45e-05 m)") does not break at its exponent's
+    sign where its column is narrow; the label's markup stays text."""
+    frame = pd.DataFrame({"value": ["1.0 [0.9, 1.1]"]}, index=[f"ΔE(A = 2.45e-05 m) {SCRIPT}"])
+    kit.table(frame)
+    [(_, page)] = shown
+    assert '<span class="bt-num">2.45e-05</span> m' in page
+    assert inert_problems(page) == [] and "&lt;script&gt;" in page
+
+
 def test_a_multi_index_table_is_escaped(shown):
     frame = pd.DataFrame(
         {"ζ": [1.0, 2.0]}, index=pd.MultiIndex.from_tuples([(SCRIPT, SVG), ("a", IMG)])

@@ -40,6 +40,12 @@ def test_a_classical_table_names_methods_in_words_and_gives_intervals():
 
 def test_units_and_laws_read_as_words():
     assert tables.unit_text("signal length unit") == "signal unit"
+    # a number's unit in a report's tables is the command line's word for it
+    from bayestribo.inference.quantities import unit_words
+
+    for unit in (None, "", "1", "-", "y", "J", "signal length unit^2", "1/y"):
+        assert tables.unit_text(unit) == unit_words(unit), unit
+    assert tables.unit_text("1") == "dimensionless"
     assert tables.law_text("viscous+quadratic") == "viscous damping + quadratic drag"
     assert tables.normal_interval(None, None) == "–"
     assert tables.normal_interval(0.5, None) == "0.5"
@@ -152,3 +158,16 @@ def test_a_probability_at_its_end_is_not_said_as_certainty(p, text):
 def test_an_energy_per_cycle_is_held_at_zero_below_and_other_quantities_are_not():
     assert tables.nonnegative_text("ΔE(A=1e-04 m)", 1e-7, -3e-7, 6e-7).startswith("0 (at the")
     assert "-" in tables.nonnegative_text("slope", 1e-7, -3e-7, 6e-7)
+
+
+def test_prose_said_twice_is_prose_said_once():
+    """A note's text goes through prose where it is made and again in kit.note: the
+    law's words are said once ("the law viscous damping damping + Coulomb friction"
+    once stood in the real-data report's notes)."""
+    from bayestribo.model.laws import TERMS
+
+    for name in TERMS:
+        for text in (f"the law {name} holds", f"the law {name}+coulomb misfits /d/r_1.csv"):
+            once = tables.prose(text, paths={"/d/r_1.csv": "r_1.csv"})
+            assert tables.prose(once) == once, once
+            assert f"law {tables.law_text(name)} " in once and f"{name}+" not in once

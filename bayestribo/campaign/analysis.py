@@ -20,11 +20,13 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import Executor
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
+from bayestribo._plural import count
+from bayestribo.campaign.bands import group_runs, run_bands, run_metadata, swing_record
 from bayestribo.campaign.dissipation import common_amplitudes, dissipation_samples, has_band
 from bayestribo.errors import BayestriboError
 from bayestribo.population.groups import Population, fit_group, population_jobs
@@ -178,6 +180,11 @@ class CampaignAnalysis:
     dissipation_quantities : dict of str to dict
         Each ΔE at a swing compared: its symbol, unit and label (apart from
         :attr:`quantities`, the laws' own).
+    dissipation_at_swing : dict or None
+        Each analysed run's ΔE from its law's band at one swing every run of the
+        populations reaches (:func:`bayestribo.campaign.bands.swing_record`:
+        ``amplitude`` and ``rows``, each run's ``mean`` with its ``interval``); None
+        where no fit holds a band.
     sigma_scales : dict of str to float
         The scale (typical between-run σ) of each quantity's σ prior (module notes of
         :mod:`bayestribo.population.hyperpriors`; a quantity without a default takes
@@ -201,6 +208,7 @@ class CampaignAnalysis:
     dissipation: Population | None = None
     dissipation_trends: dict[str, Trend] = field(default_factory=dict)
     dissipation_quantities: dict[str, dict[str, Any]] = field(default_factory=dict)
+    dissipation_at_swing: dict[str, Any] | None = None
 
     @property
     def converged(self) -> bool:
@@ -232,6 +240,7 @@ class CampaignAnalysis:
             "dissipation": None if self.dissipation is None else self.dissipation.to_dict(p),
             "dissipation_trends": {k: t.to_dict(p) for k, t in self.dissipation_trends.items()},
             "dissipation_quantities": self.dissipation_quantities,
+            "dissipation_at_swing": self.dissipation_at_swing,
         }
 
     def group_rows(self) -> list[dict[str, Any]]:
@@ -626,7 +635,7 @@ def analyse_campaign(
         # apart; otherwise pooled over the loads of each series.
         words = ", ".join(law_keys) or "none"
         fitted_in = f" fitted in {law}" if several else ""
-        say(f"population of {len(samples)} runs with contact{fitted_in}, by {words}")
+        say(f"population of {count(len(samples), 'run')} with contact{fitted_in}, by {words}")
         add_population(
             "contact", samples, names, extra, by=law_keys or None, pooled=not series_keys
         )
@@ -694,7 +703,10 @@ def analyse_campaign(
         }
         for n in names:
             scales.setdefault(n, float(extra["sigma_prior"][n]))
-        say(f"ΔE (law-free) of {label} at {len(names)} common swings, {len(drawn)} runs")
+        say(
+            f"ΔE (law-free) of {label} at {count(len(names), 'common swing')}, "
+            f"{count(len(drawn), 'run')}"
+        )
         add_population("dissipation", drawn, names, extra, by=keys or None, pooled=not keys)
         if len({d.metadata.get(covariate) for d in drawn}) >= 2 and all(
             isinstance(d.metadata.get(covariate), int | float) for d in drawn
@@ -716,7 +728,7 @@ def analyse_campaign(
         symbols = ", ".join(str(described.get(n, {}).get("symbol", n)) for n in names)
         symbols = "ζ₀" if names == ("zeta",) else f"{symbols} without contact"
         fitted_in = f" fitted in {law}" if several_free else ""
-        say(f"{symbols} from {len(zs)} runs without contact{fitted_in}")
+        say(f"{symbols} from {count(len(zs), 'run')} without contact{fitted_in}")
         if several_free:
             add_population("zeta0", zs, names, extra, by=("law",), pooled=False)
         else:
@@ -752,7 +764,7 @@ def analyse_campaign(
         else:
             row["status"] = "used"
         runs.append(row)
-    return CampaignAnalysis(
+    analysis = CampaignAnalysis(
         by=keys,
         covariate=covariate,
         prob=prob,
@@ -771,6 +783,12 @@ def analyse_campaign(
         dissipation_trends=dissipation_trends,
         dissipation_quantities=laws_free,
     )
+    # each run's ΔE from its law's band, at a swing every run of the populations reaches
+    bands = run_bands({_name(r): r for r in results})
+    if not bands:
+        return analysis
+    swing = swing_record(group_runs(analysis), bands, metadata=run_metadata(analysis))
+    return replace(analysis, dissipation_at_swing=swing)
 
 
 def _runs_by_law(runs: Sequence[Any]) -> dict[str, list[str]]:

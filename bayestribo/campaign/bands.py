@@ -33,6 +33,7 @@ __all__ = [
     "group_runs",
     "run_bands",
     "run_metadata",
+    "swing_record",
 ]
 
 
@@ -201,6 +202,32 @@ def dissipation_rows(
                 row.update(value)
             rows.append(row)
     return (shared, rows)
+
+
+def swing_record(
+    groups: Mapping[str, Sequence[str]],
+    bands: Mapping[str, Mapping[str, Any]],
+    metadata: Mapping[str, Mapping[str, Any]] | None = None,
+) -> dict[str, Any]:
+    """:func:`dissipation_rows` as a campaign's JSON keeps them: the shared swing, and
+    each run's ΔE there as a summary (``mean`` with ``interval`` [low, high]).
+
+    Returns
+    -------
+    dict
+        ``amplitude``: the swing shared by every run [its ``amplitude_unit``], or None
+        where each group has its own; ``rows``: per run ``group``, ``run``, ``law``,
+        ``load_N``, ``amplitude``, ``amplitude_unit``, ``unit``, ``prob`` and
+        ``mean``, ``interval`` [``unit``], or ``note`` (why it has none).
+    """
+    shared, rows = dissipation_rows(groups, bands, metadata=metadata)
+    out = []
+    for row in rows:
+        row = dict(row)
+        if "mean" in row:
+            row["interval"] = [row.pop("low"), row.pop("high")]
+        out.append(row)
+    return {"amplitude": shared, "rows": out}
 
 
 def run_metadata(analysis: Any) -> dict[str, dict[str, Any]]:

@@ -70,6 +70,10 @@ class FitDigest:
     turning_points : dict or None
         The law-free ΔE(A) from the run's turning points (``amplitude``, ``mean``,
         ``sd``, ``unit``, ``amplitude_unit``), for :mod:`bayestribo.campaign.dissipation`.
+    dissipation : dict or None
+        The law's ΔE(A) band (``law``, ``amplitude``, ``mean``, ``interval``, ``unit``,
+        ``amplitude_unit``, ``prob``), read at a swing its group shares
+        (:mod:`bayestribo.campaign.bands`).
     """
 
     run_name: str
@@ -86,6 +90,7 @@ class FitDigest:
     left_out: dict[str, str] = field(default_factory=dict)
     comparison: dict[str, Any] | None = None
     turning_points: dict[str, Any] | None = None
+    dissipation: dict[str, Any] | None = None
 
     def samples(self, name: str) -> NDArray[np.float64]:
         """The subset of draws of ``name``."""
@@ -202,6 +207,7 @@ def digest_fit(
         left_out=left_out,
         comparison=comparison_digest(getattr(result, "law_comparison", None)),
         turning_points=_turning_points(result),
+        dissipation=_law_band(result),
     )
 
 
@@ -211,6 +217,15 @@ def _turning_points(result: Any) -> dict[str, Any] | None:
     if not isinstance(band, dict) or not band.get("amplitude"):
         return None
     keys = ("amplitude", "mean", "sd", "unit", "amplitude_unit")
+    return {k: band.get(k) for k in keys}
+
+
+def _law_band(result: Any) -> dict[str, Any] | None:
+    """The law's ΔE(A) band a digest keeps (its mean and interval at each swing)."""
+    band = getattr(result, "dissipation", None)
+    if not isinstance(band, dict) or not band.get("amplitude") or "interval" not in band:
+        return None
+    keys = ("law", "amplitude", "mean", "interval", "unit", "amplitude_unit", "prob")
     return {k: band.get(k) for k in keys}
 
 

@@ -16,6 +16,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from bayestribo._plural import count
+
 __all__ = ["Answer", "PageState", "interval_text", "render_page", "status"]
 
 
@@ -218,8 +220,8 @@ def _population_table(state: PageState) -> list[str]:
         out.append(f"<p>{_esc(state.population_note or 'Not computed yet.')}</p>")
         return out
     out.append(
-        f"<p>Computed from {state.population_runs} fitted runs: the mean and σ (the spread "
-        f"between repeats) of each group, median [{100 * state.prob:g} % interval]."
+        f"<p>Computed from {count(state.population_runs, 'fitted run')}: the mean and σ (the "
+        f"spread between repeats) of each group, median [{100 * state.prob:g} % interval]."
         + (f" {_esc(state.population_note)}" if state.population_note else "")
         + "</p>"
     )

@@ -32,6 +32,7 @@ from contextlib import nullcontext
 from pathlib import Path
 from typing import Any
 
+from bayestribo._plural import count
 from bayestribo.cli._common import add_reading_options
 from bayestribo.cli._spec import add_spec_options, spec_from_args
 from bayestribo.cli._watch import add_watch_options, check_watch_options, run_watch
@@ -219,7 +220,7 @@ def _text(
     ]
     laws = getattr(analysis, "laws", {}) or {}
     if len(laws) > 1:
-        listing = ", ".join(f"{law} ({len(runs)} runs)" for law, runs in laws.items())
+        listing = ", ".join(f"{law} ({count(len(runs), 'run')})" for law, runs in laws.items())
         lines.append(f"Laws fitted: {listing}; runs of different laws are grouped apart.")
     elif laws and next(iter(laws)) != "viscous+coulomb":
         lines.append(f"Law fitted: {next(iter(laws))}.")
@@ -242,7 +243,7 @@ def _text(
             group = "no contact (ζ₀)" + ("" if words == "all" else f": {words}")
         else:
             group = f"{words}{titles.get(r['kind'], '')}"
-        group += f", {r['n_runs']} runs"
+        group += f", {count(r['n_runs'], 'run')}"
         if group != current:
             lines.append("")
             lines.append(group)

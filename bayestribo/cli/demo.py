@@ -37,6 +37,8 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
+from bayestribo._plural import count
+
 __all__ = [
     "DEMO_RUN",
     "PAPER",
@@ -176,7 +178,8 @@ def summary_lines(single: dict[str, Any], campaign: dict[str, Any]) -> list[str]
         ok = pooled.get("diagnostics", {}).get("converged", True)
         rows.append(
             (
-                f"campaign, {pooled['n_runs']} runs across loads: population, posterior median "
+                f"campaign, {count(pooled['n_runs'], 'run')} across loads: population, posterior "
+                "median "
                 "[95 % credible interval]"
                 + ("" if ok else "  (SAMPLER NOT CONVERGED: do not use)"),
                 None,

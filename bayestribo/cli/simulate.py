@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from bayestribo._plural import count
 from bayestribo.errors import BayestriboError
 
 __all__ = ["register"]
@@ -90,7 +91,8 @@ def run(args: argparse.Namespace) -> int:
 
         seed = CAMPAIGN_SEED if args.seed is None else args.seed
         manifest = write_campaign(args.campaign, seed=seed)
-        print(f"wrote {len(campaign_plan(seed))} runs and {manifest} (campaign seed {seed})")
+        runs = count(len(campaign_plan(seed)), "run")
+        print(f"wrote {runs} and {manifest} (campaign seed {seed})")
         return 0
 
     from bayestribo.io import write_run

@@ -542,6 +542,8 @@ class FitResult:
             *self._comparison_lines(),
             f"noise     {self.noise.get('description', '')}",
         ]
+        from bayestribo._plural import count
+
         d = self.diagnostics
         status = (
             "converged"
@@ -549,8 +551,9 @@ class FitResult:
             else "NOT CONVERGED: " + "; ".join(d.get("reasons", []))
         )
         lines.append(
-            f"sampler   {status}; {d.get('n_walkers')} walkers × {d.get('n_ensembles')} "
-            f"ensembles × {d.get('n_steps')} steps, τ_max {d.get('autocorr_time_max', 0):.1f}, "
+            f"sampler   {status}; {count(d.get('n_walkers'), 'walker')} × "
+            f"{count(d.get('n_ensembles'), 'ensemble')} × {count(d.get('n_steps'), 'step')}, "
+            f"τ_max {d.get('autocorr_time_max', 0):.1f}, "
             f"ESS_min {d.get('ess_min', 0):.0f}, R-hat_max {d.get('rhat_max', 0):.4f}"
         )
         shape = d.get("shape_departure") or {}

@@ -80,6 +80,9 @@ class Trend:
         ROPE half-width per parameter (absent: none).
     diagnostics : dict
         Sampler diagnostics.
+    span : tuple of float or None
+        The smallest and largest covariate of the runs [the covariate's unit]: the
+        population mean is summarised at both (:meth:`ends`).
     """
 
     covariate: str
@@ -91,6 +94,7 @@ class Trend:
     sigma: dict[str, NDArray[np.float64]]
     rope: dict[str, float] = field(default_factory=dict)
     diagnostics: dict[str, Any] = field(default_factory=dict)
+    span: tuple[float, float] | None = None
 
     def mean_at(self, parameter: str, x: float) -> NDArray[np.float64]:
         """Posterior samples of the population mean of ``parameter`` at covariate ``x``."""
@@ -103,6 +107,17 @@ class Trend:
         out = summarize(self.slope[parameter], prob)
         out.update(slope_probabilities(self.slope[parameter], self.rope.get(parameter)))
         return out
+
+    def ends(self, prob: float = 0.95) -> dict[str, list[dict[str, Any]]]:
+        """Per parameter, the population mean at the smallest and the largest covariate
+        of the runs (:attr:`span`): each :func:`~bayestribo.summary.summarize` of its
+        draws with ``at``, the covariate there; empty without a span."""
+        if self.span is None:
+            return {}
+        return {
+            p: [{"at": float(x), **summarize(self.mean_at(p, float(x)), prob)} for x in self.span]
+            for p in self.parameters
+        }
 
     def summary(self, prob: float = 0.95) -> dict[str, dict[str, ParameterSummary]]:
         """Per parameter, posterior summaries of the slope, the intercept and σ."""
@@ -130,6 +145,8 @@ class Trend:
                 for p in self.parameters
             },
             "diagnostics": dict(self.diagnostics),
+            "span": None if self.span is None else [float(x) for x in self.span],
+            "mean_at_ends": self.ends(prob),
         }
 
 
@@ -221,4 +238,5 @@ def trend(
         rope={k: float(v) for k, v in rope.items()},
         diagnostics=hyper.diagnostics
         | {"sigma_prior": {p: priors[p].describe() for p in parameters}},
+        span=(float(xs.min()), float(xs.max())),
     )

@@ -32,6 +32,7 @@ from pathlib import Path
 from typing import Any
 
 from bayestribo._files import atomic_file, write_text
+from bayestribo._plural import count
 from bayestribo.reports._errors import ReportError
 from bayestribo.reports.html import NOTE_CLASS, PAGE_MIME
 from bayestribo.reports.safety import markdown_text
@@ -41,6 +42,7 @@ __all__ = [
     "FIGURE_PROBLEMS",
     "about",
     "checks",
+    "count",
     "empty_panels",
     "facts",
     "figure_alt",
@@ -201,7 +203,9 @@ def _escaped_labels(frame: Any) -> Any:
     the labels too: a run or a lubricant named ``<script>`` would be markup)."""
 
     def label(value: Any) -> Any:
-        return html.escape(value, quote=False) if isinstance(value, str) else value
+        return (
+            _unbroken_numbers(html.escape(value, quote=False)) if isinstance(value, str) else value
+        )
 
     frame = frame.rename(index=label, columns=label)
     frame.index = frame.index.set_names([label(n) for n in frame.index.names])
@@ -237,6 +241,25 @@ def page_title(subject: str) -> None:
 #: A cell that is a number or a value with its interval ("0.0243 [0.0241, 0.0245]",
 #: "< 1e-9", "0.0236 ± 0.0012", "0 (at the bound) [0, 8.2e-05]").
 _NUMERIC = re.compile(r"^[-+0-9.eE−–,;\[\]<>≤±% ]+$|^0 \(at the bound\) \[")
+
+
+#: A number in words that a line may break inside: at the sign of its exponent
+#: ("2.45e-05") or after its leading minus.
+_BREAKABLE_NUMBER = re.compile(r"(?<![\w.])-?\d[\d.]*[eE][-+]?\d+|(?<![\w.])-\d[\d.]*")
+
+
+def _unbroken_numbers(text: str) -> str:
+    """Escaped text (a table's row or column label, "ΔE(A = 2.45e-05 m), law") with each
+    number that could break across lines in a span that does not wrap (``bt-num``).
+
+    Examples
+    --------
+    >>> _unbroken_numbers("ΔE(A = 2.45e-05 m), law")
+    'ΔE(A = <span class="bt-num">2.45e-05</span> m), law'
+    >>> _unbroken_numbers("N = 0.12 N, run-2")
+    'N = 0.12 N, run-2'
+    """
+    return _BREAKABLE_NUMBER.sub(lambda m: f'<span class="bt-num">{m.group(0)}</span>', text)
 
 
 def keep_together(text: str) -> str:

@@ -220,13 +220,22 @@ class EnergyShare:
         return float(lo), float(hi)
 
     def text(self, prob: float = 0.95) -> str:
-        """The share with its interval, or what the law says instead."""
-        from bayestribo.reports.tables import share_text
+        """The share with its interval in the digits the interval supports
+        (:func:`bayestribo.summary.interval_text`: its ends never print as its median),
+        or what the law says instead."""
+        from bayestribo.summary import interval_text
 
         if self.draws is None:
             return self.said or "–"
-        lo, hi = self.interval(prob)
-        return f"{share_text(self.median)} [{share_text(lo)}, {share_text(hi)}]"
+        return interval_text(self.median, *self.interval(prob))
+
+    def to_dict(self, prob: float = 0.95) -> dict[str, Any]:
+        """JSON-ready: the swing [``unit``], and the share's ``median`` with its
+        ``interval`` (absent without draws, ``said`` telling why)."""
+        out: dict[str, Any] = {"swing": self.swing, "unit": self.unit}
+        if self.draws is None:
+            return {**out, "said": self.said}
+        return {**out, "median": self.median, "interval": list(self.interval(prob))}
 
     @property
     def dominant(self) -> str:

@@ -14,8 +14,10 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
+from bayestribo._plural import count
 from bayestribo.inference.flatness import FLAT_KS as _FLAT_KS
 from bayestribo.inference.flatness import SPREAD_OF, prior_flatness
+from bayestribo.inference.quantities import unit_words
 from bayestribo.summary import NUMERICAL_ZERO, interval_text, probability_text
 
 __all__ = [
@@ -115,6 +117,8 @@ def prose(text: str, *, paths: Mapping[str, str] | None = None) -> str:
     --------
     >>> prose("the law viscous+coulomb misfits; fit with law='auto' (--law auto)")
     'the law viscous damping + Coulomb friction misfits; fit with law = auto'
+    >>> prose(prose("the law viscous+coulomb misfits; the law viscous holds"))
+    'the law viscous damping + Coulomb friction misfits; the law viscous damping holds'
     >>> prose("the law quadratic holds; the power of the test")
     'the law quadratic drag holds; the power of the test'
     >>> prose("raise max_steps (--param max_steps=20000)")
@@ -149,25 +153,31 @@ def prose(text: str, *, paths: Mapping[str, str] | None = None) -> str:
         text = re.sub(rf"\b{name}\b", symbol, text)
     for name, words in _COLUMNS.items():
         text = re.sub(rf"\b{name}\b", words, text)
+    from bayestribo.reports.laws import term_words
+
     terms = "|".join(TERMS)
-    # a law's name: terms joined by "+", or one term named as "the law ..." ("power" alone
-    # is a word)
-    law = rf"\b(?:{terms})(?:\+(?:{terms}))+\b|(?<=\blaw )(?:{terms})\b"
+    # one term named as "the law ..." ("power" alone is a word), unless its words follow
+    # it already ("the law viscous damping": text said once is not said again)
+    said = {n: term_words(n)[len(n) :] if term_words(n).startswith(n) else "" for n in TERMS}
+    single = "|".join(f"{n}(?!{re.escape(rest)})" if rest else n for n, rest in said.items())
+    # a law's name: terms joined by "+", or a single term so named
+    law = rf"\b(?:{terms})(?:\+(?:{terms}))+\b|(?<=\blaw )(?:{single})\b"
     return re.sub(law, lambda m: law_text(m.group(0)), text)
 
 
 def unit_text(unit: str | None) -> str:
-    """A unit as a reader writes it: ``"-"`` for a dimensionless quantity, ``"signal
-    unit"`` for a length in a recording's unstated unit, superscript squares.
+    """A unit as a reader writes it, in a report's tables as in the command line's:
+    ``"dimensionless"`` for a number without a dimension, ``"signal unit"`` for a
+    length in a recording's unstated unit, superscript squares
+    (:func:`bayestribo.inference.quantities.unit_words`, which ``bayestribo fit``
+    prints).
 
     Examples
     --------
     >>> unit_text("1"), unit_text("signal length unit^2"), unit_text("J")
-    ('-', 'signal unit²', 'J')
+    ('dimensionless', 'signal unit²', 'J')
     """
-    if unit in (None, "", "1", "-"):
-        return "-"
-    return str(unit).replace("signal length unit", "signal unit").replace("^2", "²")
+    return unit_words(unit)
 
 
 def _symbols(result: Any) -> dict[str, str]:
@@ -499,8 +509,8 @@ def fit_facts(result: Any) -> dict[str, str]:
     if noise:
         facts["noise"] = noise
     runs = (
-        f"{d.get('n_walkers')} walkers × {d.get('n_ensembles')} ensembles × "
-        f"{d.get('n_steps')} steps"
+        f"{count(d.get('n_walkers'), 'walker')} × {count(d.get('n_ensembles'), 'ensemble')} × "
+        f"{count(d.get('n_steps'), 'step')}"
     )
     stats = (
         f"autocorrelation time ≤ {d.get('autocorr_time_max', 0):.1f} steps, effective sample "
