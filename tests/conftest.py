@@ -4,6 +4,10 @@ A test that needs the real recordings asks for ``appstat`` (the folder) or calls
 ``appstat_file(name)``. Where the folder is absent the test is skipped with the reason
 (shown by ``pytest -ra``, the default here); where it is present every real-data test
 runs.
+
+The report tests share one rendering of each report kind (``single_run_report``,
+``loads_report``, ``real_data_report``, ``viscosity_report``, ``acquisition_report``:
+``bayestribo report`` run once per session, ``_renderings.py``).
 """
 
 from __future__ import annotations
