@@ -4,6 +4,10 @@ A test that needs the real recordings asks for ``appstat`` (the folder) or calls
 ``appstat_file(name)``. Where the folder is absent the test is skipped with the reason
 (shown by ``pytest -ra``, the default here); where it is present every real-data test
 runs.
+
+The report tests share one rendering of each report kind (``single_run_report``,
+``loads_report``, ``real_data_report``, ``viscosity_report``, ``acquisition_report``:
+``bayestribo report`` run once per session, ``_renderings.py``).
 """
 
 from __future__ import annotations
@@ -13,9 +17,28 @@ from pathlib import Path
 
 import pytest
 from _hostile_names import HOSTILE_FIELD, HOSTILE_FILE_WORD, HOSTILE_SCRIPT, hostile_copy
-from _paths import APPSTAT, RUNS
+from _paths import APPSTAT, DATA, RUNS
+from _renderings import Rendering, render
 
 from bayestribo import Run, read_run
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config: pytest.Config, log: object) -> object | None:
+    """With ``-n`` and ``--dist loadgroup`` (pyproject.toml): the tests of one
+    ``xdist_group`` on one worker (the report tests sharing the renderings of
+    ``_renderings.py``: each made once), and each other module's tests on one worker, as
+    ``--dist loadscope`` sends them (a module's fixtures made once)."""
+    if config.getvalue("dist") != "loadgroup":
+        return None
+    from xdist.scheduler import LoadGroupScheduling
+
+    class GroupOrModule(LoadGroupScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            group = super()._split_scope(nodeid)
+            return group if group != nodeid else nodeid.split("::", 1)[0]
+
+    return GroupOrModule(config, log)
 
 
 def _missing(what: str, path: Path) -> None:
@@ -72,15 +95,22 @@ def short_fit(tmp_path_factory: pytest.TempPathFactory):
     return FitResult.load(path)
 
 
-@pytest.fixture(scope="session")
-def single_run_report(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The single-run report (``bayestribo report RUN``) of the bundled glycerol run at
-    0.31 N, made once for every test that reads it, from a copy whose file name (the
-    run's label) and sidecar's notes hold markup: ``glycerol <svg onload=...>-r1.csv``."""
+def _needs_jupyter() -> None:
     pytest.importorskip("nbclient")
     pytest.importorskip("nbconvert")
-    from bayestribo.cli import main
 
+
+# -- one rendering per report kind (tests/_renderings.py), shared by the notebook, browser
+# -- and page tests: the modules using them are one xdist_group (GROUP)
+
+
+@pytest.fixture(scope="session")
+def single_run_report(tmp_path_factory: pytest.TempPathFactory) -> Rendering:
+    """The single-run report (``bayestribo report RUN``) of the bundled glycerol run at
+    0.31 N, from a copy whose file name (the run's label) and sidecar's notes hold markup:
+    ``glycerol <svg onload=...>-r1.csv``; 32 Π increments, figures as PDF (the command's
+    default), its summary JSON beside it."""
+    _needs_jupyter()
     source = RUNS / "glycerol-N0.31-r1.csv"
     if not source.is_file():
         _missing("the bundled run", source)
@@ -93,20 +123,17 @@ def single_run_report(tmp_path_factory: pytest.TempPathFactory) -> Path:
         notes=HOSTILE_FIELD,
         user={"operator": HOSTILE_SCRIPT},
     )
-    out = folder / "single.html"
-    assert main(["report", str(run), "--out", str(out), "--param", "grid_points=32"]) == 0
-    return out
+    made = render(folder, "single", run, {"grid_points": 32}, figure_format="pdf")
+    assert made.status == 0
+    return made
 
 
 @pytest.fixture(scope="session")
-def viscosity_report(tmp_path_factory: pytest.TempPathFactory) -> Path:
+def viscosity_report(tmp_path_factory: pytest.TempPathFactory) -> Rendering:
     """The report against viscosity (``--notebook viscosity``) of two bundled glycerol-water
-    runs at 0.46 N (0.55 and 9 % water), made once, from copies whose file names, series
-    and sidecars' notes hold markup."""
-    pytest.importorskip("nbclient")
-    pytest.importorskip("nbconvert")
-    from bayestribo.cli import main
-
+    runs at 0.46 N (0.55 and 9 % water), from copies whose file names, series and sidecars'
+    notes hold markup."""
+    _needs_jupyter()
     folder = tmp_path_factory.mktemp("viscosity")
     for water in ("0.55", "9.00"):
         source = RUNS / f"water{water}pc-N0.46-r1.csv"
@@ -120,25 +147,43 @@ def viscosity_report(tmp_path_factory: pytest.TempPathFactory) -> Path:
             series=HOSTILE_SCRIPT,
             notes=HOSTILE_FIELD,
         )
-    out = folder / "viscosity.html"
-    argv = ["report", str(folder), "--notebook", "viscosity", "--out", str(out)]
-    argv += ["--param", f"series={HOSTILE_SCRIPT!r}", "--param", "loads=[0.46]"]
-    argv += ["--param", "population_steps=600", "--param", "fit_kwargs={'grid_points': 32}"]
-    main(argv)
-    return out
+    params = {"series": HOSTILE_SCRIPT, "loads": [0.46], "population_steps": 600}
+    params.update(fit_kwargs={"grid_points": 32}, max_workers=2)
+    return render(folder, "viscosity", folder, params, notebook="viscosity")
 
 
 @pytest.fixture(scope="session")
-def acquisition_report(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The simulated instrument's report (``--notebook acquisition``), made once."""
-    pytest.importorskip("nbclient")
-    pytest.importorskip("nbconvert")
+def acquisition_report(tmp_path_factory: pytest.TempPathFactory) -> Rendering:
+    """The simulated instrument's report (``--notebook acquisition``): 0.6 s recorded."""
+    _needs_jupyter()
     pytest.importorskip("bayestribo.acquisition")
-    from bayestribo.cli import main
-
     folder = tmp_path_factory.mktemp("acquisition")
-    out = folder / "acquisition.html"
-    argv = ["report", "--notebook", "acquisition", "--out", str(out)]
-    argv += ["--param", "duration_s=0.6", "--param", f"out_dir={str(folder / 'acq')!r}"]
-    main(argv)
-    return out
+    params = {"duration_s": 0.6, "out_dir": str(folder / "acq")}
+    return render(folder, "acquisition", None, params, notebook="acquisition", summary=False)
+
+
+@pytest.fixture(scope="session")
+def loads_report(tmp_path_factory: pytest.TempPathFactory) -> Rendering:
+    """The campaign report (``bayestribo report data/ --refit``) of the bundled campaign:
+    glycerol at three loads (a slope is inferred) and one run in air, repeat 1, and two
+    runs of the glycerol-water series (section 6); 32 Π increments, populations sampled
+    600 steps, figures as SVG."""
+    _needs_jupyter()
+    if not RUNS.is_dir():
+        _missing("the bundled runs", RUNS)
+    folder = tmp_path_factory.mktemp("loads")
+    params = {"loads": [0.12, 0.31, 0.59], "repeats": [1], "air_repeats": [1]}
+    params.update(water_fractions=[0.0055, 0.09], fit_kwargs={"grid_points": 32})
+    params.update(population_steps=600, max_workers=2)
+    return render(folder, "loads", DATA, params, figure_format="svg", options=("--refit",))
+
+
+@pytest.fixture(scope="session")
+def real_data_report(tmp_path_factory: pytest.TempPathFactory, appstat: Path) -> Rendering:
+    """The real-data report (``--notebook real_data``) of the AppStat2020 recordings: all
+    three read, HarmOsc3 fitted (24 Π increments), HarmOsc2's adequacy checked."""
+    _needs_jupyter()
+    folder = tmp_path_factory.mktemp("real")
+    params = {"fit_files": ["HarmOsc3.txt"], "fit_kwargs": {"grid_points": 24}}
+    params["check_files"] = ["HarmOsc2.txt"]
+    return render(folder, "real", appstat, params, notebook="real_data")

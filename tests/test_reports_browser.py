@@ -1,7 +1,8 @@
 """A report as a reader sees it: rendered by headless Chromium, offline.
 
-The single-run report of a bundled run (``single_run_report`` of ``conftest.py``, shared
-with ``test_reports_pages.py``; its file name holds markup) is made with ``bayestribo
+The single-run report of a bundled run (``single_run_report`` of ``conftest.py``: one
+rendering per report kind, ``_renderings.py``, shared with ``test_reports_notebooks.py``
+and ``test_reports_pages.py``; its file name holds markup) is made with ``bayestribo
 report`` and opened in Chromium with the network switched off; the live page must show
 every image (figures and equations) with a non-zero natural size, no raw TeX, no code
 and no stderr box. Skipped, with the reason, where Chromium is not installed
@@ -15,6 +16,7 @@ import re
 
 import pytest
 from _paths import REPO
+from _renderings import GROUP
 
 pytest.importorskip("nbclient")
 pytest.importorskip("nbconvert")
@@ -29,15 +31,18 @@ from bayestribo.reports.browser import (
 
 RUN = REPO / "data" / "runs" / "glycerol-N0.31-r1.csv"
 
-pytestmark = pytest.mark.skipif(
-    find_chromium() is None,
-    reason=f"no headless browser: none of {', '.join(CHROMIUM_NAMES)} on PATH "
-    "(apt-get install chromium)",
-)
+pytestmark = [
+    pytest.mark.skipif(
+        find_chromium() is None,
+        reason=f"no headless browser: none of {', '.join(CHROMIUM_NAMES)} on PATH "
+        "(apt-get install chromium)",
+    ),
+    pytest.mark.xdist_group(GROUP),  # the shared renderings made on one worker
+]
 
 
 def test_the_report_reads_offline_in_a_browser(single_run_report):
-    page = inspect_report(single_run_report)
+    page = inspect_report(single_run_report.html)
     assert page.images > 0 and page.all_images_loaded, page.broken
     assert page.figures >= 8  # signals ... peak residuals, none left out on this run
     assert page.equations >= 5  # the equation of motion and the symbols in the text
@@ -47,7 +52,7 @@ def test_the_report_reads_offline_in_a_browser(single_run_report):
 
 
 def test_the_figure_files_are_vector_pdf_next_to_the_report(single_run_report):
-    figures = single_run_report.with_name("single-figures")
+    figures = single_run_report.figures  # <report stem>-figures, the command's default
     files = sorted(figures.glob("*.pdf"))
     assert len(files) >= 8 and all(f.read_bytes().startswith(b"%PDF") for f in files)
 
@@ -65,7 +70,7 @@ def test_a_missing_image_is_seen(tmp_path):
 
 
 def test_a_screenshot_is_written(single_run_report, tmp_path):
-    png = screenshot(single_run_report, tmp_path / "shot.png", width=800, height=600)
+    png = screenshot(single_run_report.html, tmp_path / "shot.png", width=800, height=600)
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
 
 
@@ -99,29 +104,25 @@ def _answer(report) -> str:
 
 
 def test_the_single_run_report_reads_as_text_for_people(single_run_report):
-    page = inspect_report(single_run_report)
+    page = inspect_report(single_run_report.html)
     _clean(page)
     assert page.text_dumps == 0  # the fit as tables, not a monospace dump
-    text = single_run_report.read_text(encoding="utf-8")
+    text = single_run_report.html.read_text(encoding="utf-8")
     assert "load N" in text and "0.31 N" in text  # metadata in words with units
     assert "viscous damping + Coulomb friction" in text and "viscous+coulomb" not in text
     assert "ignores friction" in text  # the logarithmic decrement, labelled
     assert "Ζ" not in text  # a capital zeta opening a sentence ("Ζ and μ_k are ...")
     # the answer first: the law's parameters with intervals beside the paper's values,
     # and the verdict in one line, before section 1
-    answer = _answer(single_run_report)
+    answer = _answer(single_run_report.html)
     assert "<table" in answer and "ζ" in answer and "μ<sub>k</sub>" in answer
     assert "paper, glycerol" in answer and 'class="bt-verdict"' in answer
 
 
-def test_the_campaign_report_reads_as_text_for_people(tmp_path):
-    if not RUN.is_file():
-        pytest.skip("the bundled campaign data/ is absent")
-    out = tmp_path / "campaign.html"
-    argv = ["report", str(REPO / "data"), "--out", str(out), "--refit"]
-    argv += ["--param", "loads=[0.07, 0.59]", "--param", "repeats=[1, 2]"]
-    argv += ["--param", "air_repeats=[1, 2]", "--param", "population_steps=600"]
-    main(argv)  # exit 1 is allowed: short population samplers may not converge
+def test_the_campaign_report_reads_as_text_for_people(loads_report):
+    """The bundled campaign's report, its runs fitted for it (``loads_report`` of
+    ``conftest.py``: three loads, a run in air and the glycerol-water series)."""
+    out = loads_report.html
     page = inspect_report(out)
     assert page.all_images_loaded and page.figures >= 3
     _clean(page)
@@ -241,7 +242,7 @@ def test_the_viscosity_report_reads_as_text_for_people(viscosity_report):
     """The glycerol–water series against viscosity (``--notebook viscosity``,
     ``viscosity_report`` of ``conftest.py``): its tables name quantities by symbol and unit
     (no ``load_N`` or ``mu_k low`` columns), and no result is printed as monospace text."""
-    out = viscosity_report
+    out = viscosity_report.html
     page = inspect_report(out)
     assert page.all_images_loaded and page.figures >= 2
     _clean(page)
@@ -252,7 +253,7 @@ def test_the_viscosity_report_reads_as_text_for_people(viscosity_report):
 def test_the_acquisition_report_reads_as_text_for_people(acquisition_report):
     """The simulated instrument's report (``--notebook acquisition``): what was logged,
     recovered and fitted as tables in words, no printed lines, dicts or ``mu_k``."""
-    page = inspect_report(acquisition_report)
+    page = inspect_report(acquisition_report.html)
     assert page.all_images_loaded and page.figures >= 2
     _clean(page)
     assert page.text_dumps == 0

@@ -1,13 +1,14 @@
 """Every kind of report, made from hostile names, as a browser shows it, prints it and a
 phone lays it out.
 
-Each report kind is made once (module-scoped fixtures) from runs whose names would run a
-script if a page showed them as markup: a lubricant ``<script>...</script>``, a file
-``air <svg onload=...>-r1.csv`` (the run's label: a sidecar's ``run_id`` is checked and
-cannot hold one), sidecar fields ``<img src=x onerror=...>`` and a README with the same
-(the recordings of another rig are written here from a bundled run). Every payload sets
-``document.title`` to ``PWNED``. Then, in headless Chromium (one browser for all the
-checks):
+Each report kind is made once from runs whose names would run a script if a page showed
+them as markup (the single-run and viscosity reports are the session's shared renderings
+of ``conftest.py``, the campaign and real-data ones this module's own, on few runs): a
+lubricant ``<script>...</script>``, a file ``air <svg onload=...>-r1.csv`` (the run's
+label: a sidecar's ``run_id`` is checked and cannot hold one), sidecar fields ``<img
+src=x onerror=...>`` and a README with the same (the recordings of another rig are written
+here from a bundled run). Every payload sets ``document.title`` to ``PWNED``. Then, in
+headless Chromium (one browser for all the checks):
 
 * no script ran, with the page's Content-Security-Policy and without it (the escaping
   alone holds), and the policy had nothing to block; the names show as text;
@@ -29,6 +30,7 @@ import numpy as np
 import pytest
 from _hostile_names import HOSTILE_FIELD, HOSTILE_FILE_WORD, HOSTILE_SCRIPT, PAYLOAD, hostile_copy
 from _paths import RUNS
+from _renderings import GROUP
 
 pytest.importorskip("nbclient")
 pytest.importorskip("nbconvert")
@@ -37,7 +39,10 @@ from bayestribo.cli import main
 from bayestribo.reports.browser import find_chromium
 from bayestribo.reports.safety import inert_problems
 
-pytestmark = pytest.mark.skipif(find_chromium() is None, reason="no headless Chromium on PATH")
+pytestmark = [
+    pytest.mark.skipif(find_chromium() is None, reason="no headless Chromium on PATH"),
+    pytest.mark.xdist_group(GROUP),  # the shared renderings made on one worker
+]
 
 LUBRICANT, FILE_WORD, FIELD = HOSTILE_SCRIPT, HOSTILE_FILE_WORD, HOSTILE_FIELD
 
@@ -51,27 +56,26 @@ def reports(tmp_path_factory, single_run_report, viscosity_report, acquisition_r
     # a single run, the series against viscosity: their file names (their runs' labels),
     # series and sidecar fields (conftest.py); the simulated acquisition takes no name
     made = {
-        "single_run": single_run_report,
-        "viscosity": viscosity_report,
-        "acquisition": acquisition_report,
+        "single_run": single_run_report.html,
+        "viscosity": viscosity_report.html,
+        "acquisition": acquisition_report.html,
     }
-    # a campaign: runs of a hostile lubricant (its series), runs in air with hostile names
+    # a campaign: runs of a hostile lubricant (its series) at two loads (a trend), a run in
+    # air with a hostile name; one run each (the names and the layout are checked)
     campaign = root / "campaign"
     campaign.mkdir()
     for load in ("0.07", "0.59"):
-        for r in ("1", "2"):
-            hostile_copy(
-                RUNS / f"glycerol-N{load}-r{r}.csv",
-                campaign,
-                f"lub-N{load}-r{r}",
-                lubricant=LUBRICANT,
-                series=LUBRICANT,
-                run_id=f"lub-N{load}-r{r}",
-                notes=FIELD,
-                user={"operator": FIELD},
-            )
-    for r in ("1", "2"):
-        hostile_copy(RUNS / f"air-r{r}.csv", campaign, f"air {FILE_WORD}-r{r}", run_id=None)
+        hostile_copy(
+            RUNS / f"glycerol-N{load}-r1.csv",
+            campaign,
+            f"lub-N{load}-r1",
+            lubricant=LUBRICANT,
+            series=LUBRICANT,
+            run_id=f"lub-N{load}-r1",
+            notes=FIELD,
+            user={"operator": FIELD},
+        )
+    hostile_copy(RUNS / "air-r1.csv", campaign, f"air {FILE_WORD}-r1", run_id=None)
     out = root / "campaign.html"
     argv = ["report", str(campaign), "--notebook", "loads", "--out", str(out)]
     argv += ["--param", f"series={LUBRICANT!r}", "--param", "population_steps=600"]
