@@ -264,7 +264,8 @@ def _unbroken_numbers(text: str) -> str:
 
 def keep_together(text: str) -> str:
     """A cell's text as HTML: escaped, and a number or a value with its interval in a
-    span that does not wrap (class ``bt-num``).
+    span that does not wrap (class ``bt-num``); in a cell of words, each number that could
+    break at its exponent's sign or its minus (:func:`_unbroken_numbers`).
 
     Examples
     --------
@@ -272,9 +273,13 @@ def keep_together(text: str) -> str:
     '<span class="bt-num">-3.58e-05 [-3.65e-05, -3.51e-05]</span>'
     >>> keep_together("ignores friction: ζ < μ")
     'ignores friction: ζ &lt; μ'
+    >>> keep_together("0.0007568 (± 3e-05, too narrow)")
+    '0.0007568 (± <span class="bt-num">3e-05</span>, too narrow)'
     """
     escaped = html.escape(text, quote=False)
-    return f'<span class="bt-num">{escaped}</span>' if _NUMERIC.match(text) else escaped
+    if _NUMERIC.match(text):
+        return f'<span class="bt-num">{escaped}</span>'
+    return _unbroken_numbers(escaped)
 
 
 def _warning_as_note(message, category, filename, lineno, file=None, line=None) -> None:
