@@ -17,6 +17,7 @@ __all__ = [
     "GapWarning",
     "MisfitWarning",
     "MissingDependencyError",
+    "PluginWarning",
     "ReadingWarning",
     "RecordingError",
     "RunFormatError",
@@ -115,6 +116,11 @@ class ClockRestartWarning(UserWarning):
 class SpikeWarning(UserWarning):
     """Isolated samples far off their neighbours were left out of the analysis (the
     message names the channel, times and values)."""
+
+
+class PluginWarning(UserWarning):
+    """A dissipation term offered by an installed package (entry point group
+    ``bayestribo.terms``) could not be loaded; its terms are not available."""
 
 
 class ShortAnalysisWarning(MisfitWarning):

@@ -36,6 +36,7 @@ command line's ``--law`` choices are derived from the registry.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
@@ -43,7 +44,10 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from bayestribo.errors import PluginWarning
+
 __all__ = [
+    "PLUGIN_GROUP",
     "TERMS",
     "Parameter",
     "PhysicalScale",
@@ -240,20 +244,61 @@ class Term:
         return [p.name for p in self.parameters]
 
 
+#: Entry point group of installed packages that offer dissipation terms: each entry
+#: point names a module whose import registers its terms (as the built-in modules do),
+#: or a :class:`Term`, which is registered. A lab's package declares, in its
+#: ``pyproject.toml``::
+#:
+#:     [project.entry-points."bayestribo.terms"]
+#:     lab_quad = "labdrag.term"
+PLUGIN_GROUP = "bayestribo.terms"
+
+
 class _Registry(Mapping[str, Term]):
-    """Registered terms by name, in registration order."""
+    """Registered terms by name, in registration order: the built-in ones, then those of
+    installed packages (:data:`PLUGIN_GROUP`), loaded once, the first time the registry
+    is listed or asked for a name it does not hold."""
 
     def __init__(self) -> None:
         self._terms: dict[str, Term] = {}
+        self._plugins_loaded = False
 
     def __getitem__(self, name: str) -> Term:
+        if name not in self._terms:
+            self._load_plugins()
         return self._terms[name]
 
     def __iter__(self) -> Iterator[str]:
+        self._load_plugins()
         return iter(self._terms)
 
     def __len__(self) -> int:
+        self._load_plugins()
         return len(self._terms)
+
+    def _load_plugins(self) -> None:
+        """Import each installed package's terms once; one that fails is named in a
+        :class:`~bayestribo.errors.PluginWarning` and left out, the others kept."""
+        if self._plugins_loaded:
+            return
+        self._plugins_loaded = True
+        from importlib.metadata import entry_points
+
+        for point in entry_points(group=PLUGIN_GROUP):
+            origin = f"{point.name} = {point.value}"
+            if point.dist is not None:
+                origin += f" (package {point.dist.name})"
+            try:
+                offered = point.load()
+                if isinstance(offered, Term) and self._terms.get(offered.name) is not offered:
+                    self.add(offered)
+            except Exception as exc:  # a lab's package must not stop the built-in laws
+                warnings.warn(
+                    f"the dissipation term plug-in {origin} could not be loaded "
+                    f"({type(exc).__name__}: {exc}); its terms are not available",
+                    PluginWarning,
+                    stacklevel=3,
+                )
 
     def add(self, term: Term, replace: bool = False) -> None:
         if term.name in self._terms and not replace:
