@@ -4,7 +4,8 @@ Every numeric dataset of the file (or of ``group``) is a candidate; a dataset's
 ``units`` (or ``unit``) attribute states its unit. See :mod:`bayestribo.io.arrays`
 for how the signals are picked. The signals are picked from the datasets' names, shapes
 and types alone; only the picked datasets are read, each once what it declares fits
-the read budget (:mod:`bayestribo.io.budget`).
+the read budget (:mod:`bayestribo.io.budget`) and its stored chunks are known to decode
+to no more than they declare (:mod:`bayestribo.io.hdf5_storage`).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from bayestribo._optional import require
 from bayestribo.errors import RunFormatError
 from bayestribo.io.arrays import MAX_SAMPLES, NamedArray, signals_from_arrays
 from bayestribo.io.budget import FLOAT_BYTES, ReadBudget, read_budget
+from bayestribo.io.hdf5_storage import check_storage
 
 __all__ = ["hdf5_signals", "read_hdf5"]
 
@@ -60,9 +62,12 @@ def _datasets(h5py: Any, root: Any) -> dict[str, Any]:
     return found
 
 
-def _reader(datasets: Mapping[str, Any], budget: ReadBudget) -> Callable[[NamedArray], NDArray]:
+def _reader(
+    datasets: Mapping[str, Any], budget: ReadBudget, file_size: int
+) -> Callable[[NamedArray], NDArray]:
     """Read a picked dataset once what it declares is checked: where its data are, its
-    count of values and, with the datasets read before it, the read budget."""
+    count of values and, with the datasets read before it, the read budget, and what
+    its stored chunks decode to (:func:`~bayestribo.io.hdf5_storage.check_storage`)."""
 
     def load(item: NamedArray) -> NDArray:
         obj = datasets[item.name]
@@ -87,6 +92,7 @@ def _reader(datasets: Mapping[str, Any], budget: ReadBudget) -> Callable[[NamedA
             int(obj.size) * max(FLOAT_BYTES, obj.dtype.itemsize),
             f"shape {obj.shape}, {obj.dtype}",
         )
+        check_storage(obj, full, budget, file_size)
         return obj[()]
 
     return load
@@ -161,7 +167,7 @@ def hdf5_signals(
             scale=scale,
             where=where,
             kind=kind,
-            load=_reader(datasets, budget),
+            load=_reader(datasets, budget, size),
         )
 
 
