@@ -55,7 +55,7 @@ def test_a_chunk_shape_past_the_read_budget_is_refused_before_any_chunk_is_read(
 ):
     path = hostile.huge_chunk(tmp_path / "chunk.h5", 128)
     read = []
-    monkeypatch.setattr(hdf5_storage, "_decoded_size", lambda *a: read.append(a))
+    monkeypatch.setattr(hdf5_storage, "_decode", lambda *a: read.append(a))
     message = _refused(path)
     assert "dataset 'run1/displacement': its chunks (shape (16777216,), float64)" in message
     assert "declare 134 MB each, more than the read budget of 67.1 MB" in message
@@ -86,7 +86,9 @@ def test_a_chunk_that_is_not_deflate_data_is_refused(tmp_path):
         hostile._time(group)
         dsid = hostile._filtered(group, "displacement", hostile.SAMPLES, ["deflate"])
         dsid.write_direct_chunk((0,), b"not a zlib stream at all", 0)
-    assert "its chunk at (0,) is not readable deflate data" in _refused(path)
+    message = _refused(path)
+    assert "dataset 'run1/displacement': its chunk at (0,) (" in message
+    assert "filters deflate) is not readable deflate data (" in message
 
 
 def _ordinary(path: Path) -> dict[str, np.ndarray]:
@@ -100,6 +102,8 @@ def _ordinary(path: Path) -> dict[str, np.ndarray]:
         "contiguous": rng.normal(size=300),
         "matrix": rng.normal(size=(7, 301)),
         "sparse": np.zeros(4000),  # chunks never written: the fill value
+        "odd_bytes": rng.integers(-128, 128, size=1000).astype("i1"),  # 33-byte checksums
+        "narrow": rng.integers(-(2**23), 2**23, size=500).astype("<i4"),  # stored in 24 bits
     }
     with h5py.File(path, "w") as handle:
         handle.create_dataset("gzip", data=values["gzip"], chunks=(100,), compression="gzip")
@@ -127,6 +131,16 @@ def _ordinary(path: Path) -> dict[str, np.ndarray]:
             maxshape=(None,),
         )
         sparse[1000:1100] = 0.0
+        handle.create_dataset("odd_bytes", data=values["odd_bytes"], chunks=(33,), fletcher32=True)
+        narrow = h5py.h5t.STD_I32LE.copy()
+        narrow.set_precision(24)
+        dcpl = h5py.h5p.create(h5py.h5p.DATASET_CREATE)
+        dcpl.set_chunk((100,))
+        dcpl.set_deflate(4)
+        space = h5py.h5s.create_simple((500,))
+        h5py.h5d.create(handle.id, b"narrow", narrow, space, dcpl=dcpl).write(
+            h5py.h5s.ALL, h5py.h5s.ALL, values["narrow"]
+        )
         values["sparse"][:] = 2.5
         values["sparse"][1000:1100] = 0.0
     return values
@@ -136,8 +150,8 @@ def test_ordinary_datasets_of_every_layout_read_as_h5py_reads_them(tmp_path, mon
     path = tmp_path / "ordinary.h5"
     values = _ordinary(path)
     checked = []
-    original = hdf5_storage._decoded_size
-    monkeypatch.setattr(hdf5_storage, "_decoded_size", lambda *a: checked.append(a) or original(*a))
+    original = hdf5_storage._decode
+    monkeypatch.setattr(hdf5_storage, "_decode", lambda *a: checked.append(a) or original(*a))
     from bayestribo.io.arrays import NamedArray
     from bayestribo.io.budget import read_budget
     from bayestribo.io.hdf5 import _datasets, _reader
@@ -151,11 +165,12 @@ def test_ordinary_datasets_of_every_layout_read_as_h5py_reads_them(tmp_path, mon
             assert np.array_equal(got, expected), name
             assert np.array_equal(got, handle[name][()]), name
     # every stored filtered chunk was decoded once: gzip 11, shuffled 16, checked 16,
-    # matrix 3 x 8, sparse the 2 of its 16 that values 1000-1099 fall in
-    assert len(checked) == 11 + 16 + 16 + 24 + 2
+    # matrix 3 x 8, sparse the 2 of its 16 that values 1000-1099 fall in, odd_bytes 31,
+    # narrow 5 (then read by libhdf5: its decoded chunks are not its numpy values)
+    assert len(checked) == 11 + 16 + 16 + 24 + 2 + 31 + 5
 
 
-def test_a_damaged_checksum_is_still_caught_by_libhdf5(tmp_path):
+def test_a_damaged_checksum_is_refused_naming_the_chunk(tmp_path):
     path = tmp_path / "checked.h5"
     with h5py.File(path, "w") as handle:
         group = handle.create_group("run1")
@@ -171,8 +186,8 @@ def test_a_damaged_checksum_is_still_caught_by_libhdf5(tmp_path):
     data = bytearray(path.read_bytes())
     data[offset + 2] ^= 0x01  # inside the deflate stream's data
     path.write_bytes(bytes(data))
-    with pytest.raises(RunFormatError, match=r"checked\.h5"):
-        read_run(path, group="run1", validate=False)
+    assert "its chunk at (0,) (" in _refused(path)
+    assert "fails its Fletcher-32 checksum (damaged data)" in _refused(path)
 
 
 CHILD = """
@@ -226,7 +241,7 @@ def test_read_hdf5_reads_the_same_signals_with_the_check(tmp_path, monkeypatch):
             "displacement", data=1e6 * x, chunks=(256,), compression="gzip", shuffle=True
         ).attrs["units"] = "um"
     checked = read_hdf5(path)
-    monkeypatch.setattr("bayestribo.io.hdf5.check_storage", lambda *a: None)
+    monkeypatch.setattr("bayestribo.io.hdf5.read_dataset", lambda dataset, *a: dataset[()])
     unchecked = read_hdf5(path)
     assert checked.keys() == unchecked.keys()
     for key in checked:

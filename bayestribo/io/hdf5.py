@@ -4,8 +4,8 @@ Every numeric dataset of the file (or of ``group``) is a candidate; a dataset's
 ``units`` (or ``unit``) attribute states its unit. See :mod:`bayestribo.io.arrays`
 for how the signals are picked. The signals are picked from the datasets' names, shapes
 and types alone; only the picked datasets are read, each once what it declares fits
-the read budget (:mod:`bayestribo.io.budget`) and its stored chunks are known to decode
-to no more than they declare (:mod:`bayestribo.io.hdf5_storage`).
+the read budget (:mod:`bayestribo.io.budget`); a filtered dataset's chunks are decoded
+each within the bytes its chunk shape declares (:mod:`bayestribo.io.hdf5_storage`).
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from bayestribo._optional import require
 from bayestribo.errors import RunFormatError
 from bayestribo.io.arrays import MAX_SAMPLES, NamedArray, signals_from_arrays
 from bayestribo.io.budget import FLOAT_BYTES, ReadBudget, read_budget
-from bayestribo.io.hdf5_storage import check_storage
+from bayestribo.io.hdf5_storage import read_dataset
 
 __all__ = ["hdf5_signals", "read_hdf5"]
 
@@ -66,8 +66,8 @@ def _reader(
     datasets: Mapping[str, Any], budget: ReadBudget, file_size: int
 ) -> Callable[[NamedArray], NDArray]:
     """Read a picked dataset once what it declares is checked: where its data are, its
-    count of values and, with the datasets read before it, the read budget, and what
-    its stored chunks decode to (:func:`~bayestribo.io.hdf5_storage.check_storage`)."""
+    count of values and, with the datasets read before it, the read budget; its chunks
+    are decoded within their declared size (:func:`~bayestribo.io.hdf5_storage.read_dataset`)."""
 
     def load(item: NamedArray) -> NDArray:
         obj = datasets[item.name]
@@ -92,8 +92,7 @@ def _reader(
             int(obj.size) * max(FLOAT_BYTES, obj.dtype.itemsize),
             f"shape {obj.shape}, {obj.dtype}",
         )
-        check_storage(obj, full, budget, file_size)
-        return obj[()]
+        return read_dataset(obj, full, budget, file_size)
 
     return load
 
