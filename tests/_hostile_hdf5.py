@@ -106,3 +106,23 @@ def scaleoffset_count(path: Path, count: int) -> Path:
     data[at : at + 4] = struct.pack("<I", count)
     path.write_bytes(bytes(data))
     return path
+
+
+def vlen_unit_length(path: Path, length: int) -> Path:
+    """A run (old-style headers, no checksums) whose ``units`` attributes, variable-length
+    strings of one character, state a length of ``length`` bytes."""
+    import h5py
+
+    with h5py.File(path, "w", libver="earliest") as handle:
+        group = handle.create_group("run1")
+        _time(group)
+        group.create_dataset("displacement", data=np.zeros(SAMPLES)).attrs["units"] = "m"
+    data = bytearray(path.read_bytes())
+    heap = struct.pack("<Q", data.index(b"GCOL"))
+    # each value: its length (4 bytes), the heap collection's address, its index
+    at = data.find(struct.pack("<I", 1) + heap)
+    while at >= 0:
+        data[at : at + 4] = struct.pack("<I", length)
+        at = data.find(struct.pack("<I", 1) + heap, at + 4)
+    path.write_bytes(bytes(data))
+    return path

@@ -215,6 +215,7 @@ def test_hostile_hdf5_files_stay_far_below_half_a_gigabyte_resident(tmp_path):
         hostile.inflating_chunk(tmp_path / "twice.mat", 1024, passes=2, v73=True),
         hostile.huge_chunk(tmp_path / "chunk.h5", 1024),
         hostile.scaleoffset_count(tmp_path / "scaled.h5", 1 << 28),
+        hostile.vlen_unit_length(tmp_path / "unit.h5", 2**31 - 1),  # 2 GB, its attribute
     ]
     assert all(f.stat().st_size < 10_000_000 for f in files)
     out = subprocess.run(

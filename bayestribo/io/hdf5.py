@@ -21,6 +21,7 @@ from bayestribo._optional import require
 from bayestribo.errors import RunFormatError
 from bayestribo.io.arrays import MAX_SAMPLES, NamedArray, signals_from_arrays
 from bayestribo.io.budget import FLOAT_BYTES, ReadBudget, read_budget
+from bayestribo.io.hdf5_attributes import FileLayout, checked_attribute
 from bayestribo.io.hdf5_storage import read_dataset
 
 __all__ = ["hdf5_signals", "read_hdf5"]
@@ -29,10 +30,11 @@ __all__ = ["hdf5_signals", "read_hdf5"]
 UNIT_ATTRIBUTES = ("units", "unit", "unit_string", "Units")
 
 
-def _unit(attrs: Mapping) -> str | None:
+def _unit(obj: Any, name: str, layout: FileLayout, where: str) -> str | None:
+    """The unit a dataset's attribute states (:data:`UNIT_ATTRIBUTES`), or None."""
     for key in UNIT_ATTRIBUTES:
-        if key in attrs:
-            value = attrs[key]
+        if key in obj.attrs:
+            value = checked_attribute(obj, key, name, layout, where)
             if isinstance(value, bytes):
                 value = value.decode("utf-8", "replace")
             if hasattr(value, "shape") and getattr(value, "shape", ()) != ():
@@ -146,7 +148,8 @@ def hdf5_signals(
     except OSError as exc:
         raise RunFormatError(f"not a readable HDF5 file ({exc})", where) from None
     budget = read_budget(size, where)
-    with handle:
+    with handle, open(path, "rb") as fh:
+        layout = FileLayout.of(handle, fh, size)
         root = handle
         if group is not None:
             if group not in handle or not isinstance(handle[group], h5py.Group):
@@ -157,7 +160,7 @@ def hdf5_signals(
             root = handle[group]
         datasets = _datasets(h5py, root)
         arrays = [
-            NamedArray(name, _placeholder(obj.shape, obj.dtype), _unit(obj.attrs))
+            NamedArray(name, _placeholder(obj.shape, obj.dtype), _unit(obj, name, layout, where))
             for name, obj in datasets.items()
         ]
         return signals_from_arrays(
