@@ -247,3 +247,29 @@ def test_read_hdf5_reads_the_same_signals_with_the_check(tmp_path, monkeypatch):
     assert checked.keys() == unchecked.keys()
     for key in checked:
         assert np.array_equal(checked[key], unchecked[key])
+
+
+class _WithoutChunkIter:
+    """A dataset's id whose libhdf5 cannot iterate over its chunk index."""
+
+    def __init__(self, dsid) -> None:
+        self._dsid = dsid
+
+    def chunk_iter(self, visit) -> None:
+        raise NotImplementedError("HDF5 1.14 or later")
+
+    def __getattr__(self, name):
+        return getattr(self._dsid, name)
+
+
+def test_the_chunks_are_listed_alike_with_and_without_the_index_iterator(tmp_path):
+    path = tmp_path / "ordinary.h5"
+    _ordinary(path)
+    with h5py.File(path, "r") as handle:
+        for name in ("gzip", "matrix", "sparse"):
+            data = handle[name]
+            args = (data.chunks, data.shape, name, str(path))
+            iterated = hdf5_storage._stored_chunks(data.id, *args)
+            looked_up = hdf5_storage._stored_chunks(_WithoutChunkIter(data.id), *args)
+            assert len(iterated) == data.id.get_num_chunks() > 0
+            assert sorted(iterated) == sorted(looked_up), name

@@ -135,6 +135,49 @@ def _decode(
     return data
 
 
+def _stored_chunks(
+    dsid: Any, chunks: tuple[int, ...], shape: tuple[int, ...], name: str, where: str
+) -> list[Any]:
+    """The chunks of a dataset that are stored (h5py ``StoreInfo``: offset in the
+    dataset, filter mask, address, size), each at a chunk's place within its shape.
+
+    Raises
+    ------
+    RunFormatError
+        For an index listing more chunks than the shape holds, or one out of place.
+    """
+    counts = [math.ceil(n / c) for n, c in zip(shape, chunks, strict=True)]
+    total = math.prod(counts)
+    found: list[Any] = []
+    try:  # one pass over the index (HDF5 1.10.10, 1.12.3, 1.14 or later)
+        dsid.chunk_iter(lambda info: found.append(info) or (len(found) > total or None))
+    except (AttributeError, NotImplementedError):  # one look-up per chunk of the shape
+        found = []
+        for index in itertools.product(*(range(n) for n in counts)):
+            offset = tuple(i * c for i, c in zip(index, chunks, strict=True))
+            info = dsid.get_chunk_info_by_coord(offset)
+            if info.byte_offset is not None:  # else never written: the fill value
+                found.append(info)
+    if len(found) > total:
+        raise RunFormatError(
+            f"dataset {name!r}: its chunk index lists more than the {total} chunks its "
+            f"shape {shape} holds in chunks of {chunks}; a damaged chunk index",
+            where,
+        )
+    for info in found:
+        offset = info.chunk_offset
+        if offset is None or any(
+            o % c or not 0 <= o < n for o, c, n in zip(offset, chunks, shape, strict=True)
+        ):
+            raise RunFormatError(
+                f"dataset {name!r}: its chunk index places a chunk at {offset}, not at a "
+                f"multiple of its chunk shape {chunks} within its shape {shape}; a damaged "
+                "chunk index",
+                where,
+            )
+    return found
+
+
 def _read_as_stored(dataset: Any) -> bool:
     """Whether the dataset's stored type is, byte for byte, the numpy type h5py reads
     it as (so its decoded chunks are its values)."""
@@ -209,12 +252,8 @@ def read_dataset(dataset: Any, name: str, budget: ReadBudget, file_size: int) ->
     shape = dataset.shape
     direct = _read_as_stored(dataset)
     out = np.full(shape, dataset.fillvalue, dataset.dtype) if direct else None
-    counts = [math.ceil(n / c) for n, c in zip(shape, chunks, strict=True)]
-    for index in itertools.product(*(range(n) for n in counts)):
-        offset = tuple(i * c for i, c in zip(index, chunks, strict=True))
-        info = dsid.get_chunk_info_by_coord(offset)
-        if info.byte_offset is None:  # never written: the fill value
-            continue
+    for info in _stored_chunks(dsid, chunks, shape, name, where):
+        offset = info.chunk_offset
         if info.size > file_size:
             raise RunFormatError(
                 f"dataset {name!r}: its chunk at {offset} is stored as {_mb(info.size)}, "
