@@ -85,10 +85,11 @@ def _checksum_matches(data: bytes, stored: bytes) -> bool:
 
 
 def _unshuffle(data: bytes, size: int) -> bytes:
-    """Undo HDF5's shuffle filter of elements of ``size`` bytes."""
-    n = len(data) // size
-    if size <= 1 or n <= 1:
+    """Undo HDF5's shuffle filter of elements of ``size`` bytes (as libhdf5 does,
+    nothing for elements of one byte or fewer, or for one element)."""
+    if size <= 1 or len(data) // size <= 1:
         return data
+    n = len(data) // size
     head = np.frombuffer(data, np.uint8, n * size).reshape(size, n).T.tobytes()
     return head + data[n * size :]
 
