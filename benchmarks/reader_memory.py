@@ -361,18 +361,25 @@ def main() -> None:
             "files": len(mine),
             "peak_MB": max(r["peak_MB"] for r in mine),
             "outcomes": dict(collections.Counter(r["outcome"] for r in mine)),
+            "over_goal": sum(r["peak_MB"] + baseline >= GOAL_MB for r in mine),
             "largest": sorted(mine, key=lambda r: -r["peak_MB"])[:3],
         }
     peak = max(r["peak_MB"] for r in results)
     print(f"baseline (the forking process) {baseline:.0f} MB")
     print(f"{'reader':8s} {'files':>6s} {'peak MB':>8s}  outcomes")
     for reader, row in per_reader.items():
-        print(f"{reader:8s} {row['files']:6d} {row['peak_MB']:8.0f}  {row['outcomes']}")
+        print(
+            f"{reader:8s} {row['files']:6d} {row['peak_MB']:8.0f}  {row['over_goal']} over the "
+            f"goal; {row['outcomes']}"
+        )
     for r in results:
         if r["seed"] == "hostile HDF5":
             print(
                 f"  {r['mutation']:38s} {r['bytes']:9d} B  {r['peak_MB']:6.0f} MB  {r['outcome']}"
             )
+    for r in results:
+        if r["outcome"] not in ("read", "package error"):
+            print(f"  {r['seed']} ({r['mutation']}): {r['outcome']}")
     for row in cost:
         med = row["cpu_seconds_median"]
         print(
@@ -400,6 +407,7 @@ def main() -> None:
             "goal_met": peak + baseline < GOAL_MB,
             "per_reader": per_reader,
             "hostile_hdf5": [r for r in results if r["seed"] == "hostile HDF5"],
+            "escapes": [r for r in results if r["outcome"] not in ("read", "package error")],
             "cost_on_ordinary_files": cost,
         },
     )
