@@ -273,3 +273,21 @@ def test_the_chunks_are_listed_alike_with_and_without_the_index_iterator(tmp_pat
             looked_up = hdf5_storage._stored_chunks(_WithoutChunkIter(data.id), *args)
             assert len(iterated) == data.id.get_num_chunks() > 0
             assert sorted(iterated) == sorted(looked_up), name
+
+
+def test_a_damaged_fill_value_is_not_asked_for_when_every_chunk_is_stored(tmp_path):
+    # libhdf5 crashed (SIGSEGV) asked for a fill value whose message claims 2 GB
+    path = tmp_path / "fill.h5"
+    values = np.arange(200.0)
+    with h5py.File(path, "w", libver="earliest") as handle:
+        handle.create_dataset("time", data=values / 1e3).attrs["units"] = np.bytes_(b"s")
+        handle.create_dataset("displacement", data=values, chunks=(50,), compression="gzip")
+        handle["displacement"].attrs["units"] = np.bytes_(b"m")
+    data = bytearray(path.read_bytes())
+    # the fill value message: type 5, 8 bytes, constant; version 2, times, defined, size 0
+    message = bytes.fromhex("0500080001000000020302010000000000")[:16]
+    at = data.index(message)
+    data[at + 12 : at + 16] = b"\x00\x00\x00\x80"
+    path.write_bytes(bytes(data))
+    run = read_run(path, validate=False)
+    assert np.array_equal(run.displacement, values)

@@ -251,9 +251,20 @@ def read_dataset(dataset: Any, name: str, budget: ReadBudget, file_size: int) ->
             where,
         )
     shape = dataset.shape
-    direct = _read_as_stored(dataset)
-    out = np.full(shape, dataset.fillvalue, dataset.dtype) if direct else None
-    for info in _stored_chunks(dsid, chunks, shape, name, where):
+    stored = _stored_chunks(dsid, chunks, shape, name, where)
+    out = None
+    if _read_as_stored(dataset):
+        whole = len(stored) == math.prod(
+            math.ceil(n / c) for n, c in zip(shape, chunks, strict=True)
+        )
+        # the fill value only where a chunk was never written (a damaged fill value
+        # message can crash libhdf5 when it is asked for it)
+        out = (
+            np.empty(shape, dataset.dtype)
+            if whole
+            else np.full(shape, dataset.fillvalue, dataset.dtype)
+        )
+    for info in stored:
         offset = info.chunk_offset
         if info.size > file_size:
             raise RunFormatError(
