@@ -8,7 +8,8 @@ memory taken from ``wait4``:
 - hostile HDF5 files (``tests/_hostile_hdf5.py``): a chunk of ten values whose deflate
   stream inflates to 1 GB (deflated once, a 1 MB file; twice, 11 kB; twice in a MATLAB
   v7.3 file), a chunk shape of 1 GB, a scale-offset filter claiming 2^28 values, a
-  variable-length string ``units`` attribute whose stored length is 2^31 bytes;
+  variable-length string ``units`` attribute whose stored length is 2^31 bytes, a
+  global heap object stating 2^64 - 1 bytes (libhdf5 loops on it);
 - a sweep of an HDF5 file's metadata (superblock, object headers, B-trees, local and
   global heaps, layout, filter pipeline, dataspace, attribute and link messages, in an
   old-style and a new-style file with compact, contiguous and filtered datasets and
@@ -91,6 +92,11 @@ def _hostile(folder: Path) -> list[dict[str, Any]]:
             "string units claiming 2^31 bytes",
             "hdf5",
             hostile.vlen_unit_length(folder / "unit.h5", 2**31 - 1),
+        ),
+        (
+            "global heap object of 2^64 - 1 bytes",
+            "hdf5",
+            hostile.heap_object_size(folder / "heap.h5"),
         ),
     ]
     return [

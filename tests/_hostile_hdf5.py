@@ -126,3 +126,22 @@ def vlen_unit_length(path: Path, length: int) -> Path:
         at = data.find(struct.pack("<I", 1) + heap, at + 4)
     path.write_bytes(bytes(data))
     return path
+
+
+def heap_object_size(path: Path) -> Path:
+    """A run (old-style headers) whose global heap's first object, a ``units`` value,
+    states a size of 2^64 - 1 bytes (libhdf5 loops on it)."""
+    import h5py
+
+    with h5py.File(path, "w", libver="earliest") as handle:
+        group = handle.create_group("run1")
+        _time(group)
+        group.create_dataset("displacement", data=np.zeros(SAMPLES)).attrs["units"] = "m"
+    data = bytearray(path.read_bytes())
+    heap = data.index(b"GCOL")
+    # the collection: signature, version, reserved, size (8); each object: index,
+    # references, reserved, size (8)
+    first = heap + 16
+    data[first + 8 : first + 16] = b"\xff" * 8
+    path.write_bytes(bytes(data))
+    return path

@@ -90,3 +90,15 @@ def test_a_fixed_length_unit_in_dense_storage_is_read(tmp_path):
             data.attrs["units"] = np.bytes_(unit)
     run = read_run(path, group="run1", validate=False)
     np.testing.assert_allclose(run.displacement, np.arange(100) / 1e6, rtol=1e-15, atol=0)
+
+
+def test_a_global_heap_object_running_past_its_collection_is_refused(tmp_path):
+    path = hostile.heap_object_size(tmp_path / "heap.h5")
+    heap = path.read_bytes().index(b"GCOL")
+    with pytest.raises(RunFormatError) as info:
+        read_run(path, group="run1")
+    assert str(info.value) == (
+        f"{path}: dataset 'run1/displacement': attribute 'units': its global heap "
+        f"collection at {heap} holds an object of {2**64 - 1} bytes in 4096 bytes; a "
+        "damaged global heap"
+    )

@@ -6,7 +6,8 @@ buffer of the stored length before it looks the value up in the heap (and finds 
 shorter): a length field set to 2^31 in a file of a few kB makes the reading process
 take 2 GB. So before such an attribute is read, its stored lengths are read here from
 the attribute message in the object's header (version 1 or 2, with its continuation
-blocks) and each must be at most the file's size.
+blocks) and each must be at most the file's size; and each global heap collection they
+refer to must hold its objects within it (libhdf5 loops on one that does not).
 
 An attribute this walk does not find in its object's header (one kept in dense storage,
 past eight attributes of a file written for HDF5 1.8 or later, or a shared message) is
@@ -145,9 +146,12 @@ def _attribute_data(body: bytes, name: str) -> bytes | None:
     return body[at + pad(name_size) + pad(type_size) + pad(space_size) :]
 
 
-def _stored_lengths(layout: FileLayout, address: int, name: str, count: int) -> list[int]:
-    """The lengths stored for the ``count`` variable-length values of attribute ``name``
-    of the object whose header is at ``address``."""
+def _stored_values(
+    layout: FileLayout, address: int, name: str, count: int
+) -> list[tuple[int, int]]:
+    """The length and global heap collection stored for each of the ``count``
+    variable-length values of attribute ``name`` of the object whose header is at
+    ``address``."""
     dense = False
     for kind, mflags, body in _messages(layout, address):
         dense |= kind == _ATTRIBUTE_INFO
@@ -159,8 +163,45 @@ def _stored_lengths(layout: FileLayout, address: int, name: str, count: int) -> 
         element = 4 + layout.offset_size + 4  # length, heap collection, index
         if len(data) < count * element:
             raise _Unreadable(f"its message holds {len(data)} bytes for {count} values")
-        return [layout.unsigned(data, k * element, 4) for k in range(count)]
+        return [
+            (
+                layout.unsigned(data, k * element, 4),
+                layout.unsigned(data, k * element + 4, layout.offset_size),
+            )
+            for k in range(count)
+        ]
     raise _Unreadable("kept in dense storage" if dense else "not in its object's header")
+
+
+def _collection_fault(layout: FileLayout, address: int) -> str | None:
+    """What is wrong with the global heap collection at ``address`` (its objects each
+    within it, it within the file), or None. libhdf5 loops on an object whose size
+    runs past its collection."""
+    try:
+        head = layout.read(address, 8 + layout.length_size)
+    except _Unreadable:
+        return f"its global heap collection at {address} is out of the file"
+    if head[:4] != b"GCOL":
+        return f"no global heap collection at {address}"
+    size = layout.unsigned(head, 8, layout.length_size)
+    try:
+        data = layout.read(address, size)
+    except _Unreadable:
+        return f"its global heap collection at {address} claims {size} bytes, past the file"
+    at = 8 + layout.length_size
+    header = 8 + layout.length_size  # index, references, reserved, size
+    while at + header <= size:
+        index = layout.unsigned(data, at, 2)
+        length = layout.unsigned(data, at + 8, layout.length_size)
+        if index == 0:  # the free space, to the collection's end
+            break
+        if length > size - at - header:
+            return (
+                f"its global heap collection at {address} holds an object of {length} bytes "
+                f"in {size} bytes"
+            )
+        at += header + (length + 7) // 8 * 8
+    return None
 
 
 def _variable_length(attribute_id: Any) -> bool:
@@ -208,7 +249,7 @@ def checked_attribute(obj: Any, key: str, name: str, layout: FileLayout, where: 
         what = f"dataset {name!r}: attribute {key!r}"
         try:
             address = h5py.h5o.get_info(obj.id).addr
-            lengths = _stored_lengths(layout, address, key, count)
+            values = _stored_values(layout, address, key, count)
         except _Unreadable as exc:
             raise RunFormatError(
                 f"{what} is of variable length and its stored lengths could not be checked "
@@ -216,11 +257,15 @@ def checked_attribute(obj: Any, key: str, name: str, layout: FileLayout, where: 
                 "string, e.g. numpy.bytes_)",
                 where,
             ) from None
-        longest = max(lengths, default=0)
+        longest = max((length for length, _ in values), default=0)
         if longest > layout.file_size:
             raise RunFormatError(
                 f"{what} claims a value of {longest} bytes, more than the file's "
                 f"{layout.file_size}; a damaged or hostile reference into the global heap",
                 where,
             )
+        for collection in sorted({heap for length, heap in values if length}):
+            fault = _collection_fault(layout, collection)
+            if fault is not None:
+                raise RunFormatError(f"{what}: {fault}; a damaged global heap", where)
     return obj.attrs[key]
