@@ -57,8 +57,13 @@ def test_string_units_are_read_from_every_header_layout(tmp_path, options):
     np.testing.assert_allclose(run.displacement, np.arange(100) / 1e6, rtol=1e-15, atol=0)
 
 
-def test_units_past_a_header_continuation_are_found(tmp_path):
-    path = _run(tmp_path / "run.h5", 40)
+@pytest.mark.parametrize(
+    ("notes", "options"),
+    [(40, {}), (6, {"libver": "latest"})],
+    ids=["old-style headers", "new-style headers"],
+)
+def test_units_past_a_header_continuation_are_found(tmp_path, notes, options):
+    path = _run(tmp_path / "run.h5", notes, **options)
     with h5py.File(path, "r") as handle, open(path, "rb") as fh:
         layout = FileLayout.of(handle, fh, path.stat().st_size)
         address = h5py.h5o.get_info(handle["run1/time"].id).addr
