@@ -4,7 +4,8 @@ Every numeric dataset of the file (or of ``group``) is a candidate; a dataset's
 ``units`` (or ``unit``) attribute states its unit. See :mod:`bayestribo.io.arrays`
 for how the signals are picked. The signals are picked from the datasets' names, shapes
 and types alone; only the picked datasets are read, each once what it declares fits
-the read budget (:mod:`bayestribo.io.budget`).
+the read budget (:mod:`bayestribo.io.budget`); a filtered dataset's chunks are decoded
+each within the bytes its chunk shape declares (:mod:`bayestribo.io.hdf5_storage`).
 """
 
 from __future__ import annotations
@@ -20,6 +21,8 @@ from bayestribo._optional import require
 from bayestribo.errors import RunFormatError
 from bayestribo.io.arrays import MAX_SAMPLES, NamedArray, signals_from_arrays
 from bayestribo.io.budget import FLOAT_BYTES, ReadBudget, read_budget
+from bayestribo.io.hdf5_attributes import FileLayout, checked_attribute
+from bayestribo.io.hdf5_storage import read_dataset
 
 __all__ = ["hdf5_signals", "read_hdf5"]
 
@@ -27,10 +30,11 @@ __all__ = ["hdf5_signals", "read_hdf5"]
 UNIT_ATTRIBUTES = ("units", "unit", "unit_string", "Units")
 
 
-def _unit(attrs: Mapping) -> str | None:
+def _unit(obj: Any, name: str, layout: FileLayout, where: str) -> str | None:
+    """The unit a dataset's attribute states (:data:`UNIT_ATTRIBUTES`), or None."""
     for key in UNIT_ATTRIBUTES:
-        if key in attrs:
-            value = attrs[key]
+        if key in obj.attrs:
+            value = checked_attribute(obj, key, name, layout, where)
             if isinstance(value, bytes):
                 value = value.decode("utf-8", "replace")
             if hasattr(value, "shape") and getattr(value, "shape", ()) != ():
@@ -60,9 +64,12 @@ def _datasets(h5py: Any, root: Any) -> dict[str, Any]:
     return found
 
 
-def _reader(datasets: Mapping[str, Any], budget: ReadBudget) -> Callable[[NamedArray], NDArray]:
+def _reader(
+    datasets: Mapping[str, Any], budget: ReadBudget, file_size: int
+) -> Callable[[NamedArray], NDArray]:
     """Read a picked dataset once what it declares is checked: where its data are, its
-    count of values and, with the datasets read before it, the read budget."""
+    count of values and, with the datasets read before it, the read budget; its chunks
+    are decoded within their declared size (:func:`~bayestribo.io.hdf5_storage.read_dataset`)."""
 
     def load(item: NamedArray) -> NDArray:
         obj = datasets[item.name]
@@ -87,7 +94,7 @@ def _reader(datasets: Mapping[str, Any], budget: ReadBudget) -> Callable[[NamedA
             int(obj.size) * max(FLOAT_BYTES, obj.dtype.itemsize),
             f"shape {obj.shape}, {obj.dtype}",
         )
-        return obj[()]
+        return read_dataset(obj, full, budget, file_size)
 
     return load
 
@@ -141,7 +148,8 @@ def hdf5_signals(
     except OSError as exc:
         raise RunFormatError(f"not a readable HDF5 file ({exc})", where) from None
     budget = read_budget(size, where)
-    with handle:
+    with handle, open(path, "rb") as fh:
+        layout = FileLayout.of(handle, fh, size)
         root = handle
         if group is not None:
             if group not in handle or not isinstance(handle[group], h5py.Group):
@@ -152,7 +160,7 @@ def hdf5_signals(
             root = handle[group]
         datasets = _datasets(h5py, root)
         arrays = [
-            NamedArray(name, _placeholder(obj.shape, obj.dtype), _unit(obj.attrs))
+            NamedArray(name, _placeholder(obj.shape, obj.dtype), _unit(obj, name, layout, where))
             for name, obj in datasets.items()
         ]
         return signals_from_arrays(
@@ -161,7 +169,7 @@ def hdf5_signals(
             scale=scale,
             where=where,
             kind=kind,
-            load=_reader(datasets, budget),
+            load=_reader(datasets, budget, size),
         )
 
 
