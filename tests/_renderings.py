@@ -46,6 +46,8 @@ class Rendering:
         The notebook parameters given with ``--param``.
     status : int
         The command's exit status.
+    source : Path or None
+        The run or folder the report was made of.
     """
 
     html: Path
@@ -55,6 +57,7 @@ class Rendering:
     summary: Path | None
     parameters: dict[str, Any] = field(default_factory=dict)
     status: int = 0
+    source: Path | None = None
 
 
 def render(
@@ -119,4 +122,5 @@ def render(
         summary=summary_path,
         parameters=given,
         status=status,
+        source=path,
     )

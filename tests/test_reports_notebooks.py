@@ -402,3 +402,25 @@ def test_notebook_renders_every_section_for_another_law_where_no_law_holds(name,
         assert {r["recording"]: r["dominated by"] for r in record["verdict"]} == {
             "HarmOsc3": "friction"
         }
+
+
+def test_every_interval_of_the_single_run_report_is_the_fits_or_its_records(single_run_report):
+    # the whole page of the bundled run's report (answer, classical estimates, fit, model
+    # checks with their windowed fits, friction's share): every value with its interval
+    # is one of `bayestribo fit --json` of the same run and settings, or of the report's
+    # record of what no command prints, in the digits the rule gives
+    import contextlib
+    import io
+
+    from bayestribo.cli.main import main
+
+    made = single_run_report
+    record = json.loads(made.summary.read_text())
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        main(["fit", str(made.source), "--grid-points", "32", "--json"])
+    fitted = json.loads(printed.getvalue())
+    page = made.html.read_text(encoding="utf-8")
+    heads = {head for _, _, head in interval_cells(page)}
+    assert len(heads) >= 4 and len(interval_cells(page)) >= 30
+    assert unmatched(page, fitted, record) == []
