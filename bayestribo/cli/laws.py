@@ -97,14 +97,16 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(table, allow_nan=True))
         return 0
+    from bayestribo.inference.quantities import unit_words
+
     for entry in table:
         print(f"{entry['term']:<12} ({entry['kind']}) {entry['description']}")
         for p in entry["parameters"]:
             low, high = p["support"]
             typical = "" if p["typical"] is None else f" (typical {p['typical']:g})"
             print(
-                f"    {p['name']:<12} {p['symbol']:<8} [{low:g}, {high:g}] {p['unit']:<4} "
-                f"{p['label']}{typical}"
+                f"    {p['name']:<12} {p['symbol']:<8} [{low:g}, {high:g}] "
+                f"{unit_words(p['unit']):<13} {p['label']}{typical}"
             )
     print("A law is terms joined with '+', e.g. --law viscous+quadratic+coulomb.")
     print(
