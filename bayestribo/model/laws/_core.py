@@ -70,6 +70,7 @@ _MAX_PAST_HALF_CYCLES = 20_000
 _AVERAGED_DROP = 0.02
 _AVERAGED_MIN_HALF_CYCLES = 64
 _AVERAGED_NODES = 7
+_AVERAGED_SPANS = 4
 _AVERAGED_TOLERANCE = 1e-8
 # Floating-point contraction (fused multiply-add) and reciprocals only: no assumption
 # of finite values, which the overdamped-arc and end-of-record checks rely on.
@@ -383,20 +384,25 @@ def creep_integral(a: float, c: NDArray) -> float:
 
 @numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
 def averaged_rate(a: float, c: NDArray) -> float:
-    """V₁(a) = 2μ(a) + ∫₀^π sin θ g(a sin θ) dθ: the drop of the turning points per half
-    cycle of the first-order averaged motion at amplitude ``a`` (Gauss-Legendre in the
-    stretched angle of :func:`nodes`, smooth at the ends for a drag not smooth at zero
-    speed)."""
+    """V₁(a) = (1 + μ'(a)) (∫₀^π sin θ g(a sin θ) dθ + 2μ(a)): the rate of decay of the
+    turning points per half cycle of the averaged motion from the turning point ``a``,
+    to second order in the drop per half cycle (the drag's first-order rate is odd in
+    it; the friction, fixed at each half cycle's start, adds the factor 1 + μ'). The
+    drag's integral by Gauss-Legendre in the stretched angle of :func:`nodes`, smooth
+    at the ends for a drag not smooth at zero speed."""
     total = 0.0
     if HAS_DRAG:
+        two_pi = 2.0 * math.pi
         for i in range(_GL_X.size):
             psi = 0.5 * (_GL_X[i] + 1.0)
-            two_pi = 2.0 * math.pi
             th = math.pi * (psi - math.sin(two_pi * psi) / two_pi)
             s = math.sin(th)
             total += _GL_W[i] * s * drag(a * s, c) * 0.5 * math.pi * (1.0 - math.cos(two_pi * psi))
-    mu = friction(a, c) if HAS_FRICTION else 0.0
-    return total + 2.0 * mu
+    if not HAS_FRICTION:
+        return total
+    mu = friction(a, c)
+    slope = (friction(a * (1.0 + 1e-4), c) - friction(a * (1.0 - 1e-4), c)) / (2e-4 * a)
+    return (1.0 + slope) * (total + 2.0 * mu)
 
 
 @numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
@@ -433,41 +439,33 @@ def tail_integral(
 
 
 @numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
-def averaged_tail(
+def averaged_segment(
     a0: float,
+    v0: float,
+    j0: float,
+    curve0: float,
     c: NDArray,
     ratio: float,
-    n_rem: int,
+    n_rem: float,
     negligible: float,
     tables: NDArray,
     offsets: NDArray,
     tau_at: NDArray,
     c_at: NDArray,
     e_at: NDArray,
-) -> float:
-    """∑ of ∫E over the next ``n_rem`` half cycles from rest at the turning point
-    ``a0`` (or over all of them where the rest falls below ``negligible``), from the
-    averaged motion; NaN where it cannot be trusted (the caller integrates the half
-    cycles then).
-
-    The turning points are the values at whole n of a smooth flow da/dn = -V(a) (n
-    counting half cycles), and the sums of ∫E those of S with dS/dn = J(a): with
-    u = ln a, n = ∫ a/V du and S = ∫ aJ/V du. V and J are the first-order averaged
-    motion's (V₁ of :func:`averaged_rate`, J₁ = πa²/2) times factors 1 + O(ε²) (ε the
-    relative drop per half cycle), measured at _AVERAGED_NODES amplitudes from four
-    half cycles of the law's own motion each (:func:`flow_at`) and interpolated at
-    Chebyshev points of z = (a/a0)^q, q = p - 1 for the local power law V ∝ a^p at
-    ``a0`` (the factors' logarithms are then near polynomials in z); their last
-    Chebyshev coefficients must be below _AVERAGED_TOLERANCE. The span is chosen from
-    that power law, and every node must drop by less than _AVERAGED_DROP per half cycle.
-    """
-    v0, j0, curve0 = flow_at(a0, c, ratio, tables, offsets, tau_at, c_at, e_at)
+) -> tuple[int, float, float, float, float, float, float]:
+    """One span of :func:`averaged_tail` from the turning point ``a0`` (V, J and d²a/dn²
+    there given): (status, S, n, a, V, J, d²a/dn² at its lower end), status 0 where it
+    cannot be trusted, 1 where the sum ends in it (S with the rest when negligible), 2
+    where it goes on below it."""
+    fail = (0, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan)
     if not (v0 > 0.0 and j0 > 0.0 and math.isfinite(curve0)) or v0 > _AVERAGED_DROP * a0:
-        return math.nan
+        return fail
     eps = v0 / a0
     p = a0 * curve0 / (v0 * v0)  # d ln V / d ln a
     if not p > 0.95:
-        return math.nan  # a decay that quickens down the tail: the exact sum ends soon
+        return fail  # a decay that quickens down the tail: the exact sum ends soon
+    curve = curve0
     # the span: to the end of the n_rem half cycles or to where the rest is negligible
     if abs(p - 1.0) < 1e-3:
         span = n_rem * eps
@@ -482,10 +480,10 @@ def averaged_tail(
         if rest > negligible:
             span = min(span, math.log(rest / negligible) / (3.0 - p))
     if not (span > 0.0 and math.isfinite(span)):
-        return math.nan
+        return fail
     width = 1.2 * span + 0.1
     if eps * math.exp((1.0 - p) * width) > _AVERAGED_DROP:
-        return math.nan  # the drop grows past the bound down the span
+        return fail  # the drop grows past the bound down the span
     u0 = math.log(a0)
     q = max(p - 1.0, 0.05)
     z_lo = math.exp(-q * width)
@@ -500,9 +498,9 @@ def averaged_tail(
             a, v, j = a0, v0, j0
         else:
             a = a0 * z ** (1.0 / q)
-            v, j, _ = flow_at(a, c, ratio, tables, offsets, tau_at, c_at, e_at)
+            v, j, curve = flow_at(a, c, ratio, tables, offsets, tau_at, c_at, e_at)
         if not (v > 0.0 and j > 0.0) or v > _AVERAGED_DROP * a:
-            return math.nan
+            return fail
         h_n[k] = math.log(averaged_rate(a, c) / v)
         h_s[k] = math.log(j / (0.5 * math.pi * a * a))
     # the interpolants' last Chebyshev coefficients: their error
@@ -514,7 +512,7 @@ def averaged_tail(
                 coef += w * f[k] * math.cos(math.pi * m * k / (k_n - 1))
             coef *= 2.0 / (k_n - 1)
             if not abs(coef) <= _AVERAGED_TOLERANCE:
-                return math.nan
+                return fail
     # integrate down from u0, panel by panel, until n_rem half cycles are summed
     panels = int(width) + 1
     step = width / panels
@@ -546,14 +544,63 @@ def averaged_tail(
                 u = u_next
                 break
             u = u_next
-        return s_sum + tail_integral(u, hi, u0, q, z_lo, nodes, h_n, h_s, c, True)
-    # the span ends before the n_rem half cycles: the rest below it must be negligible
+        s_sum += tail_integral(u, hi, u0, q, z_lo, nodes, h_n, h_s, c, True)
+        return 1, s_sum, n_rem, math.nan, math.nan, math.nan, math.nan
+    # the span ends before the n_rem half cycles: the rest below it negligible, or on
     lo = u0 - width
     ds = tail_integral(lo, lo + 1e-6, u0, q, z_lo, nodes, h_n, h_s, c, True) / 1e-6
     rest = ds / (3.0 - p) if p < 3.0 else math.inf
-    if not rest <= negligible:
-        return math.nan
-    return s_sum + rest
+    if rest <= negligible:
+        return 1, s_sum + rest, n_sum, math.nan, math.nan, math.nan, math.nan
+    return 2, s_sum, n_sum, a, v, j, curve
+
+
+@numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
+def averaged_tail(
+    a0: float,
+    c: NDArray,
+    ratio: float,
+    n_rem: int,
+    negligible: float,
+    tables: NDArray,
+    offsets: NDArray,
+    tau_at: NDArray,
+    c_at: NDArray,
+    e_at: NDArray,
+) -> float:
+    """∑ of ∫E over the next ``n_rem`` half cycles from rest at the turning point
+    ``a0`` (or over all of them where the rest falls below ``negligible``), from the
+    averaged motion; NaN where it cannot be trusted (the caller integrates the half
+    cycles then).
+
+    The turning points are the values at whole n of a smooth flow da/dn = -V(a) (n
+    counting half cycles), and the sums of ∫E those of S with dS/dn = J(a): with
+    u = ln a, n = ∫ a/V du and S = ∫ aJ/V du. V and J are the first-order averaged
+    motion's (V₁ of :func:`averaged_rate`, J₁ = πa²/2) times factors 1 + O(ε²) (ε the
+    relative drop per half cycle), measured at _AVERAGED_NODES amplitudes from four
+    half cycles of the law's own motion each (:func:`flow_at`) and interpolated at
+    Chebyshev points of z = (a/a0)^q, q = p - 1 for the local power law V ∝ a^p at
+    the span's top (the factors' logarithms are then near polynomials in z); their
+    last Chebyshev coefficients must be below _AVERAGED_TOLERANCE. Each span is chosen
+    from that power law (:func:`averaged_segment`), up to _AVERAGED_SPANS of them down
+    the amplitudes (the local power changes along a decay whose drag is a sum of
+    terms), and every node must drop by less than _AVERAGED_DROP per half cycle.
+    """
+    v, j, curve = flow_at(a0, c, ratio, tables, offsets, tau_at, c_at, e_at)
+    a = a0
+    total = 0.0
+    left = float(n_rem)
+    for _ in range(_AVERAGED_SPANS):
+        status, part, count, a, v, j, curve = averaged_segment(
+            a, v, j, curve, c, ratio, left, negligible, tables, offsets, tau_at, c_at, e_at
+        )
+        if status == 0:
+            return math.nan
+        total += part
+        if status == 1:
+            return total
+        left -= count
+    return math.nan
 
 
 @numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
