@@ -169,3 +169,24 @@ def test_a_drag_below_alpha_one_creeps_to_rest_with_a_finite_pi():
     integral = np.trapezoid(0.5 * (y**2 + v**2), t)
     ratio = module.creep_integral(start, c) / integral
     assert 0.5 < ratio < 2.0
+
+
+@pytest.mark.parametrize("alpha", [0.4, 0.5, 0.77, 0.95])
+def test_the_creeps_integral_is_the_quasi_static_balances_in_closed_form(alpha):
+    """For g = c w^α the quasi-static creep from a holds ∫₀^a (y²/2)(c/y)^(1/α) dy =
+    c^(1/α) a^(3-1/α) / (2(3 - 1/α)), to 1e-6 (α > 1/3)."""
+    module = _module("power")
+    c = _coefficients("power", {"zeta_alpha": 0.025, "alpha": alpha})
+    a = 1e-4
+    closed = c[0] ** (1 / alpha) * a ** (3 - 1 / alpha) / (2 * (3 - 1 / alpha))
+    assert module.creep_integral(a, c) == pytest.approx(closed, rel=1e-6)
+
+
+def test_a_creep_that_never_ends_leaves_the_row_outside_the_laws_domain():
+    """At α <= 1/3 the creep's energy integral diverges: the row stays NaN."""
+    module = _module("power")
+    c = _coefficients("power", {"zeta_alpha": 0.025, "alpha": 0.3})
+    assert math.isnan(module.creep_integral(1e-4, c))
+    law = get_law("power")
+    values = {"zeta_alpha": np.array([0.025]), "alpha": np.array([0.3])}
+    assert np.all(np.isnan(law.pi_grid(TAU, values, [Y0], reference=Y0, method="integrate")))

@@ -354,32 +354,47 @@ def creep_integral(a: float, c: NDArray) -> float:
     """∫E dτ of the overdamped creep from rest at y = ``a`` > 0 to y = 0 under the drag
     alone, from its quasi-static balance g(|y'|) = y (inertia neglected: the creep
     follows an overdamped arc of the decay, whose energy ½a² is the record's smallest):
-    ∫₀^a (y²/2) / w(y) dy with g(w(y)) = y, by Gauss-Legendre in s (y = a s³); inf
-    where the drag cannot balance the spring."""
+    ∫₀^a f(y) dy, f = (y²/2) / w(y) with g(w(y)) = y. Near y = 0, f ∝ y^k (k = 2 - 1/α
+    for a power law): the integral diverges for k <= -1 (α <= 1/3: the creep never
+    ends, and its energy integral is infinite; NaN then), and is taken by
+    Gauss-Legendre in s, y = a s^m with m = 3/(k + 1), where the integrand is smooth."""
+    k = math.log(_creep_integrand(a * 1e-6, c) / _creep_integrand(a * 1e-7, c)) / math.log(10.0)
+    if not k > -0.95:
+        return math.nan
+    m = min(max(3.0 / (k + 1.0), 3.0), 60.0)
     total = 0.0
     for i in range(_GL_X.size):
         s = 0.5 * (_GL_X[i] + 1.0)
-        y = a * s * s * s
-        lo = 0.0
-        hi = y
-        for _ in range(200):
-            if drag(hi, c) >= y:
-                break
-            lo = hi
-            hi *= 2.0
-        else:
-            return math.inf
-        for _ in range(60):
-            mid = 0.5 * (lo + hi)
-            if drag(mid, c) < y:
-                lo = mid
-            else:
-                hi = mid
-        w = 0.5 * (lo + hi)
-        if not w > 0.0:
-            return math.inf
-        total += _GL_W[i] * 0.5 * y * y / w * 1.5 * a * s * s
+        y = a * s**m
+        total += _GL_W[i] * _creep_integrand(y, c) * 0.5 * m * a * s ** (m - 1.0)
     return total
+
+
+@numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
+def _creep_integrand(y: float, c: NDArray) -> float:
+    """(y²/2)/w with g(w) = y (bisection within a factor 2 found by doubling or
+    halving); inf where the drag cannot balance y."""
+    hi = y
+    for _ in range(2000):
+        if drag(hi, c) >= y:
+            break
+        hi *= 2.0
+    else:
+        return math.inf
+    lo = 0.5 * hi
+    for _ in range(2000):
+        if drag(lo, c) < y or lo == 0.0:
+            break
+        hi = lo
+        lo *= 0.5
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if drag(mid, c) < y:
+            lo = mid
+        else:
+            hi = mid
+    w = 0.5 * (lo + hi)
+    return 0.5 * y * y / w if w > 0.0 else math.inf
 
 
 @numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
@@ -694,8 +709,10 @@ def one(
                 if fixed_steps <= 0 and n_half > 0 and mu == 0.0:
                     # a drag that the decay has made stronger than the spring (a power
                     # law below α = 1): the motion ends by an overdamped creep to rest
-                    c_start += creep_integral(a_from, c)
-                    break
+                    creep = creep_integral(a_from, c)
+                    if math.isfinite(creep):
+                        c_start += creep
+                        break
                 for i in range(n_t):
                     out[i] = math.nan
                 return 1
