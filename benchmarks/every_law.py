@@ -71,6 +71,7 @@ def main() -> None:
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--laws", nargs="*", default=None, help="default: every candidate")
+    parser.add_argument("--output", default="every_law", help="results/NAME.json")
     args = parser.parse_args()
     laws = tuple(args.laws or candidate_laws())
     runs: dict[str, Any] = {"bundled glycerol-N0.31-r1": read_run(BUNDLED)}
@@ -93,7 +94,7 @@ def main() -> None:
             if base and "cpu_s" in rows[law]:
                 rows[law]["over_default"] = rows[law]["cpu_s"] / base
             print(name, law, rows[law], flush=True)
-            write_results("every_law", {"load_average": os.getloadavg(), **results})
+            write_results(args.output, {"load_average": os.getloadavg(), **results})
     summary = {}
     for name, rows in results["recordings"].items():
         ratios = {law: r.get("over_default") for law, r in rows.items() if law != DEFAULT}
@@ -104,7 +105,7 @@ def main() -> None:
             "not_converged": sorted(k for k, r in rows.items() if not r.get("converged")),
         }
     results["summary"] = summary
-    write_results("every_law", {"load_average": os.getloadavg(), **results})
+    write_results(args.output, {"load_average": os.getloadavg(), **results})
 
 
 if __name__ == "__main__":
