@@ -151,10 +151,17 @@ def _one(
     elif excess <= 0.0:
         m = n_min
     else:
-        den = a0 * omq + 2.0 * mk
-        w = excess * omq / den
+        if mk == 0.0:
+            # w = excess/A₀ and excess/den = w/(1 - q), exactly: a tiny amplitude times
+            # a tiny 1 - q (den below the smallest double) is not 0/0
+            w = excess / a0
+            per_den = w / omq
+        else:
+            den = a0 * omq + 2.0 * mk
+            w = excess * omq / den
+            per_den = excess / den
         lr = 1.0 if w < _TINY else -math.log1p(-w) / w
-        n_star = excess * _expm1_ratio(x, 1.0) * lr / den
+        n_star = per_den * _expm1_ratio(x, 1.0) * lr
         m = max(n_min, np.ceil(n_star))  # a float: n_star may be huge or infinite
         if math.isfinite(m):
             if m - 1.0 >= n_min and _amplitude(m - 1.0, a0, mk, x) <= delta:

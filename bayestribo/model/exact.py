@@ -153,9 +153,14 @@ def _trajectory(
     never = (mk == 0.0) & (excess > 0.0) & ((x < TINY) | (delta == 0.0))
     ok = (excess > 0.0) & ~never
     safe_den = np.where(ok, den, 1.0)
-    w = np.where(ok, excess * one_m_q / safe_den, 0.0)
-    with np.errstate(over="ignore", invalid="ignore"):
-        n_star = np.where(ok, excess * expm1_ratio(x, 1.0) * log1p_ratio(w) / safe_den, 0.0)
+    # without friction w = excess/A₀ and excess/den = w/(1 - q), exactly: written so, a
+    # tiny amplitude times a tiny 1 - q (den below the smallest double) is not 0/0
+    viscous = mk == 0.0
+    safe_a0 = np.where(ok & viscous, a0, 1.0)
+    w = np.where(ok, np.where(viscous, excess / safe_a0, excess * one_m_q / safe_den), 0.0)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        per_den = np.where(viscous, w / np.where(ok, one_m_q, 1.0), excess / safe_den)
+        n_star = np.where(ok, per_den * expm1_ratio(x, 1.0) * log1p_ratio(w), 0.0)
     n_moving = np.maximum(n_min, np.ceil(n_star))
 
     # One correction step either way absorbs rounding in the logarithm.
