@@ -69,6 +69,45 @@ def test_a_filter_whose_output_cannot_be_bounded_is_refused_by_name(tmp_path):
     assert "expected only deflate, shuffle, fletcher32" in message
 
 
+def _lzf_chunk(path: Path, stream: bytes) -> Path:
+    """A displacement of ten values in one 80-byte LZF chunk holding ``stream``."""
+    with h5py.File(path, "w") as handle:
+        group = handle.create_group("run1")
+        hostile._time(group)
+        group.create_dataset(
+            "displacement",
+            shape=(hostile.SAMPLES,),
+            dtype="<f8",
+            chunks=(hostile.SAMPLES,),
+            compression="lzf",
+        )
+        group["displacement"].attrs["units"] = "m"
+        group["displacement"].id.write_direct_chunk((0,), stream, 0)
+    return path
+
+
+def test_an_lzf_chunk_inflating_past_its_shape_is_refused(tmp_path):
+    # one literal byte, then back references of 264 bytes (3 bytes each): 1 MB of zeros
+    stream = b"\x00\x00" + b"\xe0\xff\x00" * 4000
+    message = _refused(_lzf_chunk(tmp_path / "lzf_bomb.h5", stream))
+    assert (
+        "its chunk at (0,) (" in message and "filters lzf) decodes to more than 80 bytes" in message
+    )
+
+
+@pytest.mark.parametrize(
+    ("stream", "why"),
+    [
+        (b"\x1f\x00\x01", "a literal run past its end"),
+        (b"\x00\x00\x20\x05", "a reference before its start"),
+        (b"\x00\x00\xe0", "a reference past its end"),
+    ],
+)
+def test_a_chunk_that_is_not_lzf_data_is_refused(tmp_path, stream, why):
+    message = _refused(_lzf_chunk(tmp_path / "noise.h5", stream))
+    assert f"filters lzf) is not readable LZF data ({why})" in message
+
+
 def test_a_chunk_decoding_to_less_than_its_shape_is_refused(tmp_path):
     path = tmp_path / "short.h5"
     with h5py.File(path, "w") as handle:
@@ -104,6 +143,8 @@ def _ordinary(path: Path) -> dict[str, np.ndarray]:
         "sparse": np.zeros(4000),  # chunks never written: the fill value
         "odd_bytes": rng.integers(-128, 128, size=1000).astype("i1"),  # 33-byte checksums
         "narrow": rng.integers(-(2**23), 2**23, size=500).astype("<i4"),  # stored in 24 bits
+        "lzf": np.repeat(rng.normal(size=125), 8),  # runs: back references, some overlapping
+        "lzf_shuffled": rng.normal(size=1000).astype("<f4"),
     }
     with h5py.File(path, "w") as handle:
         handle.create_dataset("gzip", data=values["gzip"], chunks=(100,), compression="gzip")
@@ -141,6 +182,15 @@ def _ordinary(path: Path) -> dict[str, np.ndarray]:
         h5py.h5d.create(handle.id, b"narrow", narrow, space, dcpl=dcpl).write(
             h5py.h5s.ALL, h5py.h5s.ALL, values["narrow"]
         )
+        handle.create_dataset("lzf", data=values["lzf"], chunks=(100,), compression="lzf")
+        handle.create_dataset(
+            "lzf_shuffled",
+            data=values["lzf_shuffled"],
+            chunks=(128,),
+            compression="lzf",
+            shuffle=True,
+            fletcher32=True,
+        )
         values["sparse"][:] = 2.5
         values["sparse"][1000:1100] = 0.0
     return values
@@ -166,8 +216,9 @@ def test_ordinary_datasets_of_every_layout_read_as_h5py_reads_them(tmp_path, mon
             assert np.array_equal(got, handle[name][()]), name
     # every stored filtered chunk was decoded once: gzip 11, shuffled 16, checked 16,
     # matrix 3 x 8, sparse the 2 of its 16 that values 1000-1099 fall in, odd_bytes 31,
-    # narrow 5 (then read by libhdf5: its decoded chunks are not its numpy values)
-    assert len(checked) == 11 + 16 + 16 + 24 + 2 + 31 + 5
+    # narrow 5 (then read by libhdf5: its decoded chunks are not its numpy values), lzf 10,
+    # lzf_shuffled 8
+    assert len(checked) == 11 + 16 + 16 + 24 + 2 + 31 + 5 + 10 + 8
 
 
 def test_a_damaged_checksum_is_refused_naming_the_chunk(tmp_path):

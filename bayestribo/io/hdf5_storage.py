@@ -14,10 +14,12 @@ integer, a custom float) is read by libhdf5 once every chunk is known to decode 
 its size.
 
 Only the filters whose output can be bounded this way are accepted: deflate (gzip),
-shuffle and the Fletcher-32 checksum, what h5py's ``compression="gzip"`` and MATLAB
-v7.3 files use. A dataset with another filter (szip, n-bit, scale-offset, LZF, a
-plugin) is refused by name: their decoders size their output from the filter's stored
-parameters or from the stream. ``h5repack -f GZIP=4 in.h5 out.h5`` rewrites such a file.
+shuffle, the Fletcher-32 checksum and LZF, what h5py's ``compression="gzip"`` and
+``compression="lzf"`` and MATLAB v7.3 files use (LZF is decoded here as liblzf's
+``lzf_decompress`` does, stopping at the chunk's bytes). A dataset with another filter
+(szip, n-bit, scale-offset, a plugin) is refused by name: their decoders size their
+output from the filter's stored parameters or from the stream.
+``h5repack -f GZIP=4 in.h5 out.h5`` rewrites such a file.
 """
 
 from __future__ import annotations
@@ -36,10 +38,10 @@ from bayestribo.io.budget import ReadBudget, _mb
 __all__ = ["BOUNDED_FILTERS", "read_dataset"]
 
 #: HDF5 filter identifiers whose decoded size is checked here, by name.
-BOUNDED_FILTERS = {1: "deflate", 2: "shuffle", 3: "fletcher32"}
+BOUNDED_FILTERS = {1: "deflate", 2: "shuffle", 3: "fletcher32", 32000: "lzf"}
 #: Bytes the Fletcher-32 filter appends to a chunk [bytes].
 FLETCHER_BYTES = 4
-_DEFLATE, _SHUFFLE, _FLETCHER = 1, 2, 3
+_DEFLATE, _SHUFFLE, _FLETCHER, _LZF = 1, 2, 3, 32000
 #: Fletcher-32's sums are kept modulo this [-].
 _FLETCHER_MODULUS = 65535
 
@@ -82,6 +84,55 @@ def _checksum_matches(data: bytes, stored: bytes) -> bool:
         ) % _FLETCHER_MODULUS == high:
             return True
     return False
+
+
+def _unlzf(data: bytes, limit: int) -> bytes:
+    """Undo LZF (liblzf's format: a control byte below 32 starts a run of that many
+    plus one literal bytes; above, a back reference of length ``ctrl >> 5`` (+ a byte
+    when 7) + 2 at an offset of 13 bits), stopping as soon as the output would exceed
+    ``limit`` bytes.
+
+    Raises
+    ------
+    _Refused
+        For output past ``limit`` or a stream that is not LZF data (a run past its end,
+        a reference before the start of the output).
+    """
+    out = bytearray()
+    ip, n = 0, len(data)
+    while ip < n:
+        ctrl = data[ip]
+        ip += 1
+        if ctrl < 32:
+            run = ctrl + 1
+            if ip + run > n:
+                raise _Refused("is not readable LZF data (a literal run past its end)")
+            if len(out) + run > limit:
+                raise _Refused(f"decodes to more than {_mb(limit)}")
+            out += data[ip : ip + run]
+            ip += run
+            continue
+        length = ctrl >> 5
+        if ip >= n:
+            raise _Refused("is not readable LZF data (a reference past its end)")
+        if length == 7:
+            length += data[ip]
+            ip += 1
+            if ip >= n:
+                raise _Refused("is not readable LZF data (a reference past its end)")
+        start = len(out) - ((ctrl & 0x1F) << 8) - 1 - data[ip]
+        ip += 1
+        length += 2
+        if start < 0:
+            raise _Refused("is not readable LZF data (a reference before its start)")
+        if len(out) + length > limit:
+            raise _Refused(f"decodes to more than {_mb(limit)}")
+        while length > 0:  # the reference may overlap what it writes: copy by spans
+            span = min(length, len(out) - start)
+            out += out[start : start + span]
+            start += span
+            length -= span
+    return bytes(out)
 
 
 def _unshuffle(data: bytes, size: int) -> bytes:
@@ -129,6 +180,8 @@ def _decode(
                 raise _Refused(f"is not readable deflate data ({exc})") from None
             if len(data) > sizes[k]:
                 raise _Refused(f"decodes to more than {_mb(sizes[k])}")
+        elif code == _LZF:
+            data = _unlzf(data, sizes[k])
         elif code == _SHUFFLE:
             data = _unshuffle(data, values[0] if values else 1)
     if len(data) != chunk_bytes:
