@@ -28,7 +28,8 @@ Run (in the background; a campaign of 18 runs takes minutes)::
     timeout 10000 python benchmarks/campaign_laws.py --campaigns 20 --law auto
 
 Results accumulate campaign by campaign in
-``benchmarks/results/campaign_laws_<law>.json``.
+``benchmarks/results/campaign_laws_<law>.json``, each with the package's commit;
+``--resume`` keeps the campaigns already there and runs only the seeds it lacks.
 """
 
 from __future__ import annotations
@@ -47,7 +48,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import _laws_sim as sim
-from _machine import machine
+from _machine import commit, machine
 
 RESULTS = Path(__file__).resolve().parent / "results"
 LOADS = (0.1, 0.2, 0.3)
@@ -183,10 +184,21 @@ def main() -> None:
     parser.add_argument("--campaigns", type=int, default=20)
     parser.add_argument("--law", choices=("auto", "given"), default="auto")
     parser.add_argument("--first-seed", type=int, default=1)
+    parser.add_argument(
+        "--resume",
+        action="store_true",
+        help="keep the campaigns already in the results file and skip their seeds",
+    )
     args = parser.parse_args()
     path = RESULTS / f"campaign_laws_{args.law}.json"
     results = {"machine": machine(), "settings": vars(args), "campaigns": []}
+    if args.resume and path.exists():
+        results["campaigns"] = json.loads(path.read_text())["campaigns"]
+    done_seeds = {c["seed"] for c in results["campaigns"]}
+    tree = commit(short=True, unknown="unknown")
     for seed in range(args.first_seed, args.first_seed + args.campaigns):
+        if seed in done_seeds:
+            continue
         with tempfile.TemporaryDirectory() as tmp:
             folder = Path(tmp) / "runs"
             truths = write_campaign(folder, seed)
@@ -205,7 +217,7 @@ def main() -> None:
                     part = score(report, lubricant_of)
                     for key in scored:
                         scored[key].extend(part[key])
-        results["campaigns"].append({"seed": seed, "seconds": seconds, **scored})
+        results["campaigns"].append({"seed": seed, "commit": tree, "seconds": seconds, **scored})
         results["summary"] = summarise(results["campaigns"])
         path.write_text(json.dumps(results, indent=1) + "\n")
         print(json.dumps({"seed": seed, "seconds": round(seconds), **results["summary"]}))
