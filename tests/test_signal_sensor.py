@@ -18,6 +18,7 @@ import pytest
 import scipy.signal
 from scipy.integrate import solve_ivp
 
+from bayestribo.errors import RunFormatError
 from bayestribo.inference import fit
 from bayestribo.io.run import Run
 from bayestribo.signal.sensor import (
@@ -71,10 +72,17 @@ def test_channel_gains_combine_as_the_energy_weighs_them():
     assert amplitude_gain_sd(0.02, None) == 0.02
     assert amplitude_gain_sd(None, 0.01) == 0.01
     assert amplitude_gain_sd(0.02, 0.02) == pytest.approx(0.02 / math.sqrt(2))
+    # one transducer behind both channels: one gain error, not two that average out
+    assert amplitude_gain_sd(0.02, 0.02, correlation=1.0) == pytest.approx(0.02)
+    assert amplitude_gain_sd(0.02, 0.04, correlation=1.0) == pytest.approx(0.03)
+    with pytest.raises(ValueError, match="correlation"):
+        amplitude_gain_sd(0.02, 0.02, correlation=1.5)
+    # a sensor of unstated kind: its two channels taken as one transducer's
     default = sensor_calibration({}, F_HZ)
     assert not default.stated and default.gain == 1.0
-    assert default.gain_sd == pytest.approx(DEFAULT_GAIN_UNCERTAINTY / math.sqrt(2))
-    assert "the default" in default.describe()
+    assert default.gain_sd == pytest.approx(DEFAULT_GAIN_UNCERTAINTY)
+    assert "the default for a sensor of unstated kind" in default.describe()
+    assert "'sensor_kind'" in default.describe()
     stated = sensor_calibration({"gain_uncertainty": 0.0, "filter": ONE_POLE}, F_HZ)
     assert stated.stated and stated.gain_sd == 0.0
     assert stated.gain == pytest.approx(1 / math.sqrt(1.01))
@@ -147,6 +155,71 @@ def test_a_declared_filter_is_corrected_and_an_undeclared_one_is_within_the_gain
     # nothing declared: the default gain uncertainty holds the filter's gain
     default = _fit_filtered()
     assert abs(np.mean(default) - MU_K) < 2 * np.std(default)
-    assert np.std(default) / np.mean(default) == pytest.approx(
-        DEFAULT_GAIN_UNCERTAINTY / math.sqrt(2), rel=0.2
+    assert np.std(default) / np.mean(default) == pytest.approx(DEFAULT_GAIN_UNCERTAINTY, rel=0.2)
+
+
+@functools.lru_cache(maxsize=1)
+def _spread_without_gain() -> float:
+    """Relative sd of μ_k from the filtered record with the gain known exactly."""
+    exact = _fit_filtered(gain_uncertainty=0.0, filter=ONE_POLE)
+    return float(np.std(exact) / np.mean(exact))
+
+
+@pytest.mark.parametrize(
+    ("kind", "relative_sd"),
+    [("accelerometer", 0.05), ("laser_vibrometer", 0.01 / math.sqrt(2)), ("encoder", 0.001)],
+)
+def test_the_sensor_kind_sets_the_friction_interval_where_no_gain_is_stated(kind, relative_sd):
+    # μ_k is a length over N/k: its relative sd is the amplitude gain's and that of the
+    # Π increments alone (the fit with a gain known exactly) in quadrature; the
+    # vibrometer's two decoders are calibrated apart, the other kinds' channels share one
+    # gain error
+    draws = _fit_filtered(filter=ONE_POLE, sensor_kind=kind)
+    spread = math.hypot(relative_sd, _spread_without_gain())
+    assert np.std(draws) / np.mean(draws) == pytest.approx(spread, rel=0.15)
+    assert abs(np.mean(draws) - MU_K) < 3 * np.std(draws)
+
+
+def test_the_sensor_kind_gives_the_default_and_says_whose():
+    accelerometer = sensor_calibration({"sensor_kind": "accelerometer"}, F_HZ)
+    assert accelerometer.gain_sd == pytest.approx(0.05) and not accelerometer.stated
+    assert "the default for an accelerometer" in accelerometer.describe()
+    # a stated uncertainty wins over the kind's; the kind still says how channels combine
+    stated = sensor_calibration({"sensor_kind": "accelerometer", "gain_uncertainty": 0.002}, F_HZ)
+    assert stated.stated and stated.gain_sd == pytest.approx(0.002)
+    vibrometer = sensor_calibration({"sensor_kind": "laser_vibrometer"}, F_HZ)
+    assert vibrometer.gain_sd == pytest.approx(0.01 / math.sqrt(2))
+    # one channel recorded: that channel's σ, whatever the kind
+    alone = sensor_calibration({"sensor_kind": "laser_vibrometer"}, F_HZ, velocity=False)
+    assert alone.gain_sd == pytest.approx(0.01)
+    per_channel = sensor_calibration(
+        {"sensor_kind": "video", "displacement_gain_uncertainty": 0.04}, F_HZ
     )
+    assert per_channel.gain_sd == pytest.approx((0.04 + 0.02) / 2)
+
+
+def test_a_sidecar_names_an_unknown_sensor_kind_and_the_nearest():
+    time, x, v = _filtered_record()
+    run = Run(time, x, v, {"sensor_kind": "Laser-Vibrometer"})
+    assert run.metadata["sensor_kind"] == "laser_vibrometer"
+    with pytest.raises(RunFormatError, match=r"'sensor_kind'.*did you mean 'accelerometer'"):
+        Run(time, x, v, {"sensor_kind": "acclerometer"})
+    with pytest.raises(RunFormatError, match="'sensor_kind': expected a name, got 3"):
+        Run(time, x, v, {"sensor_kind": 3})
+
+
+def test_a_lab_registers_its_own_sensor_kind():
+    from bayestribo.signal import sensor_kinds
+
+    kind = sensor_kinds.SensorKind("strain_gauge_blade", "a strain-gauged blade", 0.03, "own")
+    sensor_kinds.register_sensor_kind(kind)
+    try:
+        assert sensor_calibration({"sensor_kind": "strain_gauge_blade"}, F_HZ).gain_sd == 0.03
+        with pytest.raises(ValueError, match="registered already"):
+            sensor_kinds.register_sensor_kind(kind)
+    finally:
+        sensor_kinds._KINDS.pop("strain_gauge_blade")
+    with pytest.raises(ValueError, match="gain_uncertainty"):
+        sensor_kinds.SensorKind("wide", "a wide one", 0.9, "none")
+    with pytest.raises(ValueError, match="name"):
+        sensor_kinds.SensorKind("Bad Name", "a bad one", 0.01, "none")

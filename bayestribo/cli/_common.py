@@ -165,6 +165,17 @@ def add_reading_options(parser: argparse.ArgumentParser) -> None:
         + "; ".join(f"{name}: {description}" for name, description in restoring.items())
         + ". The energy lost per cycle from the turning points takes its potential",
     )
+    from bayestribo.signal.sensor_kinds import sensor_kind_table
+
+    kinds = sensor_kind_table()
+    parser.add_argument(
+        "--sensor-kind",
+        choices=tuple(kinds),
+        help="the kind of sensor (sidecar 'sensor_kind'), whose typical gain uncertainty "
+        "the fit draws into every length where the sidecar states no 'gain_uncertainty': "
+        + "; ".join(f"{k.name}: {100 * k.gain_uncertainty:.1f} %%" for k in kinds.values())
+        + " (default: 1.0 %%; the output says which it took)",
+    )
 
 
 def _positive_rate(text: str) -> float:
@@ -313,6 +324,7 @@ def reading_options(args: argparse.Namespace) -> Any:
             ("load_N", args.load),
             ("mass_kg", args.mass),
             ("restoring", getattr(args, "restoring", None)),
+            ("sensor_kind", getattr(args, "sensor_kind", None)),
         )
         if value is not None
     }

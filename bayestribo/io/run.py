@@ -148,7 +148,7 @@ METADATA_KEYS: Mapping[str, _Key] = MappingProxyType(
         "gain_uncertainty": _Key(
             "float",
             "relative standard uncertainty of the sensor's gain (calibration), both channels "
-            "[-]; default 0.01",
+            "[-]; default: the sensor_kind's, else 0.01",
             0.0,
             high=0.5,
         ),
@@ -163,6 +163,14 @@ METADATA_KEYS: Mapping[str, _Key] = MappingProxyType(
             "relative standard uncertainty of the velocity channel's gain [-]",
             0.0,
             high=0.5,
+        ),
+        "sensor_kind": _Key(
+            "plain",
+            "the kind of sensor ('laser_vibrometer', 'motion_sensor', 'encoder', 'video', "
+            "'accelerometer', 'smartphone', 'seismometer', 'displacement_probe', or one "
+            "registered): its typical gain uncertainty where gain_uncertainty is not given, "
+            "see bayestribo.signal.sensor_kinds",
+            check=lambda value, key, where: _sensor_kind(value, key, where),
         ),
         "filter": _Key(
             "plain",
@@ -248,6 +256,17 @@ def _restoring(value: Any, key: str, where: str | None) -> str:
         return get_restoring(value).name
     except ValueError as exc:
         raise RunFormatError(f"metadata {key!r}: {exc}", where) from None
+
+
+def _sensor_kind(value: Any, key: str, where: str | None) -> str:
+    """Check a ``sensor_kind`` value: a registered kind of sensor's name."""
+    from bayestribo.signal.sensor_kinds import get_sensor_kind
+
+    try:
+        return get_sensor_kind(value).name
+    except ValueError as exc:
+        reason = str(exc).removeprefix("sensor_kind: ")
+        raise RunFormatError(f"metadata {key!r}: {reason}", where) from None
 
 
 def _window(value: Any, key: str, where: str | None) -> list[float]:

@@ -10,7 +10,9 @@ intervals:
 
 * the gain's relative standard uncertainty σ_g (the sidecar's ``gain_uncertainty``,
   per channel ``displacement_gain_uncertainty`` and ``velocity_gain_uncertainty``;
-  :data:`DEFAULT_GAIN_UNCERTAINTY` when not stated, and the output says so) is drawn
+  when not stated, the typical uncertainty of the sidecar's ``sensor_kind``
+  (:mod:`bayestribo.signal.sensor_kinds`), else :data:`DEFAULT_GAIN_UNCERTAINTY`, and
+  the output says which) is drawn
   per posterior draw into every length the fit reports
   (:func:`bayestribo.inference.assemble.derived_quantities`);
 * a known filter (the sidecar's ``filter``: kind, order, cutoff) multiplies the
@@ -21,8 +23,12 @@ intervals:
 
 The energy ``(y² + y'²)/2`` weighs the displacement and the velocity channel equally
 over a cycle, so with both channels the amplitude's relative uncertainty is
-``√(σ_x² + σ_v²)/2`` (:func:`amplitude_gain_sd`); with one channel (the other derived
-from it) it is that channel's.
+``√(σ_x² + σ_v²)/2`` (:func:`amplitude_gain_sd`) where the two were calibrated apart
+(a kind of sensor whose ``independent_channels`` is true: a vibrometer's two
+decoders), and ``(σ_x + σ_v)/2`` where they come from one transducer (every other
+kind, and a sensor of unstated kind: a velocity column is most often the software's
+derivative of the position); with one channel (the other derived from it) it is that
+channel's.
 """
 
 from __future__ import annotations
@@ -34,6 +40,8 @@ from typing import Any
 
 import numpy as np
 
+from bayestribo.signal.sensor_kinds import UNKNOWN, SensorKind, get_sensor_kind
+
 __all__ = [
     "DEFAULT_GAIN_UNCERTAINTY",
     "FILTER_KINDS",
@@ -44,9 +52,10 @@ __all__ = [
     "sensor_calibration",
 ]
 
-#: Relative standard uncertainty of a sensor's gain where the sidecar states none: the
-#: calibration accuracy of laser vibrometers and of teaching-lab motion sensors (1 %).
-DEFAULT_GAIN_UNCERTAINTY = 0.01
+#: Relative standard uncertainty of a sensor's gain where the sidecar states neither one
+#: nor a ``sensor_kind``: the calibration accuracy of laser vibrometers and of
+#: teaching-lab motion sensors (1 %).
+DEFAULT_GAIN_UNCERTAINTY = UNKNOWN.gain_uncertainty
 
 #: Filter kinds a sidecar may name (analog prototypes of :mod:`scipy.signal`).
 FILTER_KINDS = ("butterworth", "bessel")
@@ -129,25 +138,40 @@ def filter_gain(spec: Mapping[str, Any], frequency_Hz: float) -> float:
     return float(abs(h[0]))
 
 
-def amplitude_gain_sd(displacement_sd: float | None, velocity_sd: float | None) -> float:
+def amplitude_gain_sd(
+    displacement_sd: float | None, velocity_sd: float | None, correlation: float = 0.0
+) -> float:
     """Relative standard uncertainty of the energy's amplitude from the channels' gains.
+
+    The energy ``(g_x² y² + g_v² y'²)/2`` of gains ``g = 1 + ε`` has, over a cycle, the
+    amplitude ``A √((g_x² + g_v²)/2) ≈ A (1 + (ε_x + ε_v)/2)``.
 
     Parameters
     ----------
     displacement_sd, velocity_sd : float or None
         Relative gain uncertainty of each recorded channel; None for a channel not
         recorded (derived from the other, it shares that one's gain).
+    correlation : float
+        Correlation ρ of the two channels' gain errors in [-1, 1]: 0 for channels
+        calibrated apart (a vibrometer's two decoders), 1 for two channels of one
+        transducer (a velocity differentiated from the position by the sensor's
+        software).
 
     Returns
     -------
     float
-        ``√(σ_x² + σ_v²)/2`` with both channels, else the recorded channel's σ.
+        ``√(σ_x² + σ_v² + 2ρσ_xσ_v)/2`` with both channels, else the recorded channel's σ.
     """
     if displacement_sd is None and velocity_sd is None:
         raise ValueError("at least one channel's gain uncertainty is needed")
+    if not -1.0 <= correlation <= 1.0:
+        raise ValueError(f"correlation: expected a number in [-1, 1], got {correlation!r}")
     if displacement_sd is None or velocity_sd is None:
         return float(displacement_sd if velocity_sd is None else velocity_sd)
-    return 0.5 * math.hypot(displacement_sd, velocity_sd)
+    variance = (
+        displacement_sd**2 + velocity_sd**2 + 2.0 * correlation * displacement_sd * velocity_sd
+    )
+    return 0.5 * math.sqrt(max(variance, 0.0))
 
 
 @dataclass(frozen=True)
@@ -162,16 +186,21 @@ class SensorCalibration:
     gain_sd : float
         Relative standard uncertainty of the amplitude's gain [-].
     stated : bool
-        False where ``gain_sd`` is :data:`DEFAULT_GAIN_UNCERTAINTY` for want of a
+        False where ``gain_sd`` is the default of the sensor's kind for want of a
         sidecar value (the output says so).
     filter : dict or None
         The filter, as the sidecar gives it.
+    kind : SensorKind
+        The sensor's kind (the sidecar's ``sensor_kind``; :data:`~bayestribo.signal.
+        sensor_kinds.UNKNOWN` where it names none), whose gain uncertainty is the
+        default.
     """
 
     gain: float = 1.0
     gain_sd: float = 0.0
     stated: bool = True
     filter: dict[str, Any] | None = None
+    kind: SensorKind = UNKNOWN
 
     def draws(self, rng: np.random.Generator, size: int) -> np.ndarray:
         """Draws of the chain's gain: ``gain (1 + ε)``, ε ~ N(0, gain_sd²) truncated to
@@ -188,11 +217,18 @@ class SensorCalibration:
     def describe(self) -> str:
         """One line for the output: the gain uncertainty used and where it came from."""
         text = f"sensor gain uncertainty {self.gain_sd:.2%}"
-        text += (
-            " (stated)"
-            if self.stated
-            else (" (the default: state yours as 'gain_uncertainty' in the sidecar)")
-        )
+        if self.stated:
+            text += " (stated)"
+        elif self.kind is UNKNOWN:
+            text += (
+                " (the default for a sensor of unstated kind: state yours as "
+                "'gain_uncertainty' in the sidecar, or the sensor as 'sensor_kind')"
+            )
+        else:
+            text += (
+                f" (the default for {self.kind.title}: {self.kind.basis}; state yours as "
+                "'gain_uncertainty' in the sidecar)"
+            )
         if self.filter is not None:
             f = self.filter
             text += (
@@ -215,7 +251,8 @@ def sensor_calibration(
     ----------
     metadata : mapping
         ``gain_uncertainty``, ``displacement_gain_uncertainty``,
-        ``velocity_gain_uncertainty`` [-] and ``filter`` (any may be absent).
+        ``velocity_gain_uncertainty`` [-], ``sensor_kind`` (the default uncertainty of
+        a channel none of the former covers) and ``filter`` (any may be absent).
     frequency_Hz : float
         The oscillation frequency [Hz] at which the filter's gain is taken.
     displacement, velocity : bool
@@ -225,6 +262,7 @@ def sensor_calibration(
     -------
     SensorCalibration
     """
+    kind = get_sensor_kind(metadata.get("sensor_kind"))
     both = metadata.get("gain_uncertainty")
     stated = both is not None
     sds: dict[str, float | None] = {}
@@ -236,14 +274,19 @@ def sensor_calibration(
         elif own is not None:
             sds[channel] = float(own)
         else:
-            sds[channel] = float(both) if both is not None else DEFAULT_GAIN_UNCERTAINTY
+            sds[channel] = float(both) if both is not None else kind.gain_uncertainty
     if not (displacement or velocity):
         raise ValueError("a run records a displacement, a velocity or both")
     spec = metadata.get("filter")
     gain = 1.0 if spec is None else filter_gain(spec, frequency_Hz)
     return SensorCalibration(
         gain=gain,
-        gain_sd=amplitude_gain_sd(sds["displacement"], sds["velocity"]),
+        gain_sd=amplitude_gain_sd(
+            sds["displacement"],
+            sds["velocity"],
+            correlation=0.0 if kind.independent_channels else 1.0,
+        ),
         stated=stated,
         filter=None if spec is None else check_filter(spec),
+        kind=kind,
     )
