@@ -137,3 +137,65 @@ def test_a_broken_plugin_is_named_and_the_built_in_laws_still_work(tmp_path):
     assert "viscous+coulomb" in done.stdout and "lab_quad" not in done.stdout.split("\n")[0]
     assert "PluginWarning the dissipation term plug-in lab_quad = labdrag" in done.stdout
     assert "(package labdrag)" in done.stdout and "the lab module is broken" in done.stdout
+
+
+LAB_MODULE_SI = LAB_MODULE.replace(
+    """def physical(values, reference, scale):
+    return {}""",
+    """def physical(values, reference, scale):
+    g = np.asarray(values["lab_g"], dtype=float)
+    if scale.mass is None:
+        return {}
+    return {"lab_g_SI": (g / scale.length_scale * scale.mass, "kg/m", "g", "a lab's drag")}""",
+)
+
+
+@pytest.mark.validation  # minutes: numba compiles the new law afresh, then a notebook runs
+def test_an_installed_packages_term_reaches_a_campaign_and_its_report(tmp_path):
+    # runs with quadratic drag simulated by the package's solve_ivp path from the
+    # built-in term (not the lab's), fitted and reported in the lab's law by the commands
+    # a user types, each in a fresh process with the lab's package installed
+    pytest.importorskip("nbclient")
+    import math
+
+    from bayestribo.io import write_run
+    from bayestribo.model.scaling import Rig
+    from bayestribo.synthetic.recording import simulate
+    from bayestribo.synthetic.setup import LawParameters, Release
+
+    site = tmp_path / "site"
+    _package(site, LAB_MODULE_SI, "labdrag")
+    mass, frequency, c2_si = 0.035, 32.6, 0.5
+    stiffness = mass * (2 * math.pi * frequency) ** 2
+    data, out = tmp_path / "data", tmp_path / "out"
+    data.mkdir()
+    for load in (0.1, 0.3):
+        for repeat in (1, 2):
+            gamma = c2_si * (load / stiffness) / mass  # c₂ℓ/m, ℓ = N/k
+            run_id = f"oil-N{load}-r{repeat}"
+            run = simulate(
+                LawParameters("viscous+quadratic", {"zeta": 0.004, "c2": gamma}),
+                rig=Rig(frequency, mass, load),
+                release=Release(initial_displacement_m=1e-3, motion_duration_s=1.2),
+                seed=10 * repeat + int(10 * load),
+                metadata={"run_id": run_id, "lubricant": "oil", "series": "oil", "repeat": repeat},
+            )
+            write_run(run, data / f"{run_id}.csv")
+    argv = ["-m", "bayestribo", "campaign", str(data), "--out", str(out), "--json", "--quiet"]
+    argv += ["--law", "viscous+lab_quad", "--max-steps", "3000", "--workers", "1"]
+    done = _run(site, *argv, cwd=tmp_path)
+    assert done.returncode in (0, 1), done.stderr
+    campaign = json.loads(done.stdout)
+    assert list(campaign["quantities"]) == ["zeta", "lab_g_SI"]
+    assert campaign["quantities"]["lab_g_SI"]["unit"] == "kg/m"
+    for group in campaign["contact"]["groups"]:
+        mean = group["parameters"]["lab_g_SI"]["mean"]
+        assert mean["interval"][0] <= c2_si <= mean["interval"][1], group["label"]
+    html = tmp_path / "report.html"
+    reported = _run(site, "-m", "bayestribo", "report", str(out), "--out", str(html), cwd=tmp_path)
+    assert reported.returncode == 0, reported.stderr
+    text = html.read_text(encoding="utf-8")
+    assert "Traceback" not in text and "KeyError" not in text
+    for heading in ("1. One fit per run", "4. Each quantity against load", "7. Energy loss"):
+        assert heading in text, heading
+    assert "g [kg/m]" in text and "μ_k [" not in text  # the term's own symbol and unit
