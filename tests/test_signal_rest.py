@@ -130,3 +130,29 @@ def test_bayestribo_decay_exits_1_on_a_short_analysis(tmp_path, monkeypatch, cap
     monkeypatch.setattr(decay_module, "energy_decay", short)
     assert main(["decay", str(path)]) == 1
     assert "analysed 2 s to 36 s" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "run_id",
+    ["water8.00pc-N0.12-r1", "water2.30pc-N0.12-r3", "water6.00pc-N0.46-r2", "glycerol-N0.31-r1"],
+)
+def test_steps_as_fine_as_the_noise_do_not_move_the_end_of_motion(bundled_runs, run_id):
+    # The bundled runs are rounded to the vibrometer's resolution, about their noise: at
+    # rest the noise toggles the displacement between levels, and a block straddling the
+    # stop may still look periodic. The stop is the last excursion beyond the noise (the
+    # manifest's true stop within a few samples), not the noise's last change of level
+    # (80 ms late on the first three before).
+    import csv
+
+    from bayestribo.io import read_run
+    from bayestribo.signal.motion import motion_span
+
+    truth = {r["run_id"]: r for r in csv.DictReader(open(bundled_runs.parent / "manifest.csv"))}
+    row = truth[run_id]
+    stop = float(row["release_time_s"]) + float(row["motion_duration_s"])
+    run = read_run(bundled_runs / f"{run_id}.csv")
+    period = 1.0 / run.metadata["natural_frequency_Hz"]
+    span = motion_span(run.time, run.velocity, period, periodic=run.displacement)
+    dt = float(run.time[1] - run.time[0])
+    assert abs(span.stop_time - stop) < 5 * dt
+    assert span.stop_time == motion_span(run.time, run.velocity, period).stop_time

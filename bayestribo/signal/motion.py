@@ -35,7 +35,11 @@ the rig's frequency**.
   (motion, not rest) long after the velocity derived from it is buried in rounding
   noise; a rest on one level or toggling at random has no such periodicity. The
   motion runs on as long as either channel's blocks are coherent, and then ends at
-  the displacement's last change of level (its rest level is the tail's median).
+  the displacement's last change of level (its rest level is the tail's median) where
+  the rest stays on its level (at most :data:`STEADY_REST` of its samples off it: steps
+  coarse beside the noise). Where the noise toggles the rest between levels (steps of
+  the order of the noise, a vibrometer's), a last change of level is the noise's, and
+  the end of motion is the last excursion beyond the threshold, as without steps.
 * The blocks' sinusoid is at the frequency measured from the record's own spectrum
   (a peak of the spectrum of its first difference: the one whose oscillation is the
   strongest in the signal itself, so that a line of the noise that the difference
@@ -76,6 +80,10 @@ COHERENCE = 0.5
 #: Excursion of a displacement from its rest level, in rest noise standard deviations,
 #: that ends the motion when the velocity was derived (Gaussian tail 6e-7 per sample).
 DISPLACEMENT_THRESHOLD = 5.0
+#: Largest fraction of a quantised displacement's samples at rest off its rest level for
+#: the end of motion to be its last change of level: above it the noise toggles the
+#: rest between levels, and a change of level marks nothing.
+STEADY_REST = 0.2
 #: Default excursion threshold, in rest noise standard deviations, that marks motion
 #: when the release and the end of motion are refined (a Gaussian sample exceeds 8σ
 #: with probability 1e-15).
@@ -395,13 +403,15 @@ def motion_span(
                 out = out[:0]
         if by_steps:
             xp = np.asarray(periodic, dtype=float)
-            rest_level = float(np.median(xp[tail_start : min(n, tail_start + size)]))
-            off = np.flatnonzero(xp[lo:hi] != rest_level)
-            if off.size:
-                i = min(n - 1, lo + int(off[-1]) + 1)
-                stop_time = float(t[i])
-                stop_index = i
-            out = out[:0]
+            tail = xp[tail_start : min(n, tail_start + size)]
+            rest_level = float(np.median(tail))
+            if np.mean(tail != rest_level) <= STEADY_REST:  # a rest on its step
+                off = np.flatnonzero(xp[lo:hi] != rest_level)
+                if off.size:
+                    i = min(n - 1, lo + int(off[-1]) + 1)
+                    stop_time = float(t[i])
+                    stop_index = i
+                out = out[:0]
         if out.size:
             i = lo + int(out[-1])
             stop_time = _root(t, v, level, max(0, i + 1 - fit_len), i + 1 - skip, i)
