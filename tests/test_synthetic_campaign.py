@@ -196,8 +196,8 @@ def test_one_command_regenerates_the_bundle(tmp_path: Path) -> None:
     simulate_command.register(parser.add_subparsers(dest="command"))
     args = parser.parse_args(["simulate", "--campaign", str(tmp_path)])
     assert args.handler(args) == 0
-    bundled = sorted(p.relative_to(DATA) for p in (DATA / "runs").iterdir())
-    fresh = sorted(p.relative_to(tmp_path) for p in (tmp_path / "runs").iterdir())
+    bundled = sorted(p.relative_to(DATA) for p in (DATA / "runs").rglob("*") if p.is_file())
+    fresh = sorted(p.relative_to(tmp_path) for p in (tmp_path / "runs").rglob("*") if p.is_file())
     assert fresh == bundled
     # The signals (quantised, time stamps rounded to 1 ns) regenerate byte for byte.
     csvs = [str(p) for p in bundled if p.suffix == ".csv"]

@@ -73,6 +73,7 @@ __all__ = [
     "MANIFEST_COLUMNS",
     "OIL_LAW",
     "OIL_LOADS_N",
+    "OIL_POPULATION",
     "PlannedRun",
     "campaign_plan",
     "write_campaign",
@@ -95,9 +96,9 @@ DISPLACEMENT_RANGE_M, VELOCITY_RANGE_M_PER_S = 5e-3, 0.5
 #: The oil series: its law (registry names), loads, and per-run means and σ (module notes).
 OIL_LAW = "viscous+coulomb+quadratic"
 OIL_LOADS_N = (0.12, 0.31, 0.59)
-ZETA_OIL, SIGMA_ZETA_OIL = 0.006, 0.0003
-MU_K_OIL, SIGMA_MU_K_OIL = 0.04, 0.004
-C2_OIL_KG_PER_M, SIGMA_C2_OIL_KG_PER_M = 0.35, 0.0175
+#: Each quantity a campaign compares (:mod:`bayestribo.campaign.quantities`: ζ, μ_k,
+#: c₂ [kg/m]) by name: the (mean, σ) of its per-run draws, the same at every load.
+OIL_POPULATION = {"zeta": (0.006, 0.0003), "mu_k": (0.04, 0.004), "c2_SI": (0.35, 0.0175)}
 STATIC_RATIO = 1.2
 
 #: The columns of the paper's law, every run's.
@@ -154,6 +155,13 @@ class PlannedRun:
     sensor: Sensor
     seed: int
     metadata: Mapping[str, Any] = field(default_factory=dict)
+    #: Its folder in the campaign (``runs``, or a series' own sub-folder of it).
+    folder: str = "runs"
+
+    @property
+    def file(self) -> str:
+        """The run's file in the campaign folder: ``<folder>/<run_id>.csv``."""
+        return f"{self.folder}/{self.run_id}.csv"
 
     def simulate(self) -> Run:
         """Simulate the run (deterministic: the noise seed is part of the plan)."""
@@ -203,6 +211,7 @@ def campaign_plan(seed: int = CAMPAIGN_SEED) -> list[PlannedRun]:
         metadata: Mapping[str, Any],
         motion_duration_s: float | None = None,
         rest_after_s: float = 0.1,
+        folder: str = "runs",
     ) -> None:
         index = len(plan)
         x0 = round(2.0e-3 + rng.uniform(-1e-4, 1e-4), 6)
@@ -225,7 +234,9 @@ def campaign_plan(seed: int = CAMPAIGN_SEED) -> list[PlannedRun]:
         rig = Rig(natural_frequency_Hz=FREQUENCY_HZ, mass_kg=MASS_KG, load_N=load_N)
         meta = {**metadata, "run_id": run_id, "series": series, "temperature_C": 20.0}
         plan.append(
-            PlannedRun(run_id, series, law, rig, release, sensor, int(noise_seeds[index]), meta)
+            PlannedRun(
+                run_id, series, law, rig, release, sensor, int(noise_seeds[index]), meta, folder
+            )
         )
 
     for r in range(1, REPEATS + 1):
@@ -277,14 +288,12 @@ def campaign_plan(seed: int = CAMPAIGN_SEED) -> list[PlannedRun]:
     for load in OIL_LOADS_N:
         length_scale = load / (MASS_KG * (2.0 * math.pi * FREQUENCY_HZ) ** 2)  # ℓ = N/k
         for r in range(1, REPEATS + 1):
-            zeta = float(rng.normal(ZETA_OIL, SIGMA_ZETA_OIL))
-            mu_k = float(rng.normal(MU_K_OIL, SIGMA_MU_K_OIL))
-            c2 = float(rng.normal(C2_OIL_KG_PER_M, SIGMA_C2_OIL_KG_PER_M))
+            drawn = {q: float(rng.normal(*ms)) for q, ms in OIL_POPULATION.items()}
             values = {
-                "zeta": zeta,
-                "mu_k": mu_k,
+                "zeta": drawn["zeta"],
+                "mu_k": drawn["mu_k"],
                 "mu_s_ratio": STATIC_RATIO,
-                "c2": c2 * length_scale / MASS_KG,  # γ = c₂ℓ/m
+                "c2": drawn["c2_SI"] * length_scale / MASS_KG,  # γ = c₂ℓ/m
             }
             add(
                 f"oil-N{load:.2f}-r{r}",
@@ -293,6 +302,8 @@ def campaign_plan(seed: int = CAMPAIGN_SEED) -> list[PlannedRun]:
                 load_N=load,
                 sample_rate_Hz=2000.0,
                 metadata={"lubricant": "oil", "repeat": r},
+                # a folder of its own: `bayestribo campaign runs/oil --law auto`
+                folder="runs/oil",
             )
     return plan
 
@@ -352,7 +363,8 @@ def _manifest_row(planned: PlannedRun, run: Run, file: str) -> dict[str, Any]:
 
 
 def write_campaign(directory: str | Path, seed: int = CAMPAIGN_SEED) -> Path:
-    """Simulate the whole campaign into ``directory``: ``runs/*.csv`` (+ sidecars), manifest.
+    """Simulate the whole campaign into ``directory``: ``runs/*.csv`` and ``runs/oil/*.csv``
+    (+ sidecars), manifest.
 
     Parameters
     ----------
@@ -371,14 +383,12 @@ def write_campaign(directory: str | Path, seed: int = CAMPAIGN_SEED) -> Path:
     from bayestribo.io import write_run
 
     directory = Path(directory)
-    runs_dir = directory / "runs"
-    runs_dir.mkdir(parents=True, exist_ok=True)
     rows = []
     for planned in campaign_plan(seed):
         run = planned.simulate()
-        file = f"runs/{planned.run_id}.csv"
-        write_run(run, directory / file)
-        rows.append(_manifest_row(planned, run, file))
+        (directory / planned.folder).mkdir(parents=True, exist_ok=True)
+        write_run(run, directory / planned.file)
+        rows.append(_manifest_row(planned, run, planned.file))
     manifest = directory / "manifest.csv"
     with atomic_file(manifest) as fh:
         writer = csv.DictWriter(fh, fieldnames=MANIFEST_COLUMNS, lineterminator="\n")
