@@ -154,13 +154,18 @@ def test_unconverged_names_every_sampler_that_did_not_converge():
     ]
 
 
-def _fake_reports(single, campaign):
-    """run_report as the demo calls it, writing the given results and an empty page."""
+def _fake_reports(single, campaign, drag=None, calls=None):
+    """run_report as the demo calls it, writing the given results (``drag``: the drag
+    series' campaign) and an empty page; each call's (name, params) into ``calls``."""
 
     def fake(name, params, html, show_code=False):
         from pathlib import Path
 
+        if calls is not None:
+            calls.append((name, params))
         record = single if name == "single_run" else campaign
+        if params.get("series") == demo.DRAG_SERIES:
+            record = drag
         Path(params["summary_path"]).write_text(json.dumps(record), encoding="utf-8")
         Path(html).write_text("<html></html>", encoding="utf-8")
         return Path(html)
@@ -188,6 +193,71 @@ def test_exit_status_follows_convergence_and_output_goes_to_the_cache(
     out = cache / "bayestribo" / "demo"
     assert (out / "campaign-report.html").is_file() and str(out) in captured.out
     assert list(work.iterdir()) == []  # nothing in the current folder
+
+
+def _drag(converged=True):
+    """The drag series' campaign results, as its report writes them."""
+    from bayestribo.synthetic.campaign import OIL_LAW
+
+    mean = {"mean": 0.3371, "median": 0.3368, "interval": [0.3248, 0.3492]}
+    sigma = {"mean": 0.018, "median": 0.0167, "interval": [0.0106, 0.0304]}
+    return {
+        "runs": {
+            f"oil-N0.31-r{r}": {"law": OIL_LAW, "diagnostics": {"converged": converged}}
+            for r in (1, 2, 3)
+        },
+        "failed": {},
+        "population": {
+            "pooled": {
+                "n_runs": 3,
+                "parameters": {p: {"mean": mean, "sigma": sigma} for p in ("zeta", "c2_SI")},
+            }
+        },
+        "analysis": {
+            "quantities": {
+                "zeta": {"symbol": "ζ", "unit": "1"},
+                "c2_SI": {"symbol": "c₂", "unit": "kg/m"},
+            },
+            "contact": {"groups": [], "pooled": None},
+        },
+    }
+
+
+def test_full_demo_fits_the_drag_series_with_law_auto_and_prints_its_populations(
+    tmp_path, monkeypatch, capsys
+):
+    calls = []
+    monkeypatch.setattr(demo, "campaign_folder", lambda: (tmp_path, "bundled"))
+    fake = _fake_reports(_single(), _campaign(), _drag(), calls)
+    monkeypatch.setattr("bayestribo.reports.notebooks.run_report", fake)
+    out = tmp_path / "out"
+    assert main(["demo", "--full", "--out", str(out)]) == 0
+    (params,) = [p for _, p in calls if p.get("series") == demo.DRAG_SERIES]
+    assert params["fit_kwargs"] == {"law": "auto"} and params["fit_air"] is False
+    assert params["water_series"] is None and params["data_dir"] == str(tmp_path)
+    text = capsys.readouterr().out
+    assert "oil series, law auto: each run's law viscous+coulomb+quadratic (3 runs)" in text
+    line = next(line for line in text.splitlines() if "  mean" in line and "0.337" in line)
+    assert "0.337 [0.325, 0.349]" in line  # the posterior median, as the report shows it
+    assert "c₂ [kg/m]" in text and "0.35 (σ 0.0175)" in text  # beside the simulated values
+    assert str(out / "oil-campaign-report.html") in text
+    # the default demo leaves it out
+    calls.clear()
+    assert main(["demo", "--out", str(out)]) == 0
+    assert [p.get("series") for _, p in calls if "series" in p] == []
+
+
+def test_unconverged_names_the_drag_series_fits_and_samplers():
+    assert demo.unconverged(_single(), _campaign(), _drag()) == []
+    stuck = demo.unconverged(_single(), _campaign(), _drag(converged=False))
+    assert stuck == [f"the fit of oil-N0.31-r{r}" for r in (1, 2, 3)]
+    drag = _drag()
+    drag["analysis"]["contact"]["groups"] = [
+        {"label": "lubricant=oil,load_N=0.31", "diagnostics": {"converged": False}}
+    ]
+    assert demo.unconverged(_single(), _campaign(), drag) == [
+        "the oil series: population contact lubricant=oil,load_N=0.31"
+    ]
 
 
 def test_help_names_the_default_output_folder(monkeypatch, tmp_path, capsys):

@@ -15,11 +15,15 @@ from _paths import DATA
 
 from bayestribo import read_run
 from bayestribo.cli import simulate as simulate_command
+from bayestribo.model.laws import get_law
 from bayestribo.model.viscosity import glycerol_water_viscosity
+from bayestribo.synthetic import LawParameters
 from bayestribo.synthetic.campaign import (
     CAMPAIGN_SEED,
     LOADS_N,
     MANIFEST_COLUMNS,
+    OIL_LAW,
+    OIL_LOADS_N,
     WATER_FRACTIONS,
     campaign_plan,
 )
@@ -51,6 +55,28 @@ def test_programme_of_the_paper(plan) -> None:
         assert p.metadata["repeat"] in (1, 2, 3)
     air = [p for p in plan if p.series == "air"]
     assert all(p.rig.load_N == 0.0 and p.law.mu_k == 0.0 for p in air)
+    oil = [p for p in plan if p.series == "oil"]
+    assert len(oil) == len(OIL_LOADS_N) * 3 and sorted({p.rig.load_N for p in oil}) == list(
+        OIL_LOADS_N
+    )
+    assert all(isinstance(p.law, LawParameters) and p.law.name == OIL_LAW for p in oil)
+    assert all(p.sensor.sample_rate_Hz == 2000.0 for p in oil)
+    # the series of the paper come first: their draws do not depend on the oil's
+    assert [p.series for p in plan[-len(oil) :]] == ["oil"] * len(oil)
+
+
+def test_the_oil_runs_lose_about_half_their_first_cycle_to_the_drag(plan) -> None:
+    """Each term of the oil's law has a measurable share of the energy lost over the
+    first cycle from the release displacement, by the registry's ΔE(A) of each term."""
+    law = get_law(OIL_LAW)
+    for p in (p for p in plan if p.series == "oil"):
+        y0 = p.release.initial_displacement_m / p.rig.scaling().length_scale
+        shares = law.dissipation([y0], dict(p.law.values), y0, by_term=True)
+        total = sum(float(v[0, 0]) for v in shares.values())
+        drag = float(shares["quadratic"][0, 0]) / total
+        assert 0.35 < drag < 0.6, (p.run_id, drag)
+        assert float(shares["viscous"][0, 0]) / total > 0.25
+        assert float(shares["coulomb"][0, 0]) / total > 0.05
 
 
 def test_glycerol_scatter_is_the_papers(plan) -> None:
@@ -87,8 +113,15 @@ def test_manifest_lists_every_run_with_its_true_parameters(plan, manifest) -> No
     assert list(manifest[0]) == list(MANIFEST_COLUMNS)
     assert [row["run_id"] for row in manifest] == [p.run_id for p in plan]
     for row, planned in zip(manifest, plan, strict=True):
-        assert float(row["zeta"]) == planned.law.zeta
-        assert float(row["mu_k"]) == planned.law.mu_k
+        law = planned.law
+        if isinstance(law, LawParameters):  # a registered law: every parameter a column
+            assert row["law"] == law.name
+            for name, value in law.values.items():
+                assert float(row[name]) == value, (row["run_id"], name)
+        else:
+            assert float(row["zeta"]) == law.zeta
+            assert float(row["mu_k"]) == law.mu_k
+            assert row["law"] == ("viscous+coulomb" if planned.rig.load_N else "viscous")
         assert float(row["load_N"]) == planned.rig.load_N
         assert (DATA / row["file"]).is_file()
 
@@ -98,12 +131,34 @@ def test_every_bundled_run_reads_and_matches_the_manifest(manifest) -> None:
         run = read_run(DATA / row["file"])
         assert run.n_samples == int(row["n_samples"])
         assert run.metadata["run_id"] == row["run_id"]
-        assert run.metadata["simulation"]["zeta"] == float(row["zeta"])
         assert run.metadata["sample_rate_Hz"] == float(row["sample_rate_Hz"])
         rig = run.rig()
         assert rig.natural_frequency_Hz == 32.6 and rig.mass_kg == 0.035
         if row["series"] == "glycerol":
             assert run.metadata["sample_rate_Hz"] == 10_000.0
+
+
+def test_the_manifest_states_the_truth_of_each_sidecar(manifest) -> None:
+    """The manifest's true values are those of each run's sidecar, by name: ζ, μ_k and
+    μ_s of the paper's law, or a registered law's name, parameters and physical
+    quantities; the columns of values a run's sidecar does not state are empty."""
+    law_columns = MANIFEST_COLUMNS[MANIFEST_COLUMNS.index("law") + 1 :]
+    laws = set()
+    for row in manifest:
+        truth = read_run(DATA / row["file"]).metadata["simulation"]
+        if "law" in truth:
+            assert row["law"] == truth["law"]
+            laws.add(truth["law"])
+            values = {
+                k: v["value"] for part in ("parameters", "physical") for k, v in truth[part].items()
+            }
+            assert float(row["mu_s"]) == values["mu_s_ratio"] * values["mu_k"]
+        else:
+            values = {k: truth[k] for k in ("zeta", "mu_k", "mu_s")}
+        for name in dict.fromkeys((*values, *law_columns)):
+            got = float(row[name]) if row[name] else None
+            assert got == values.get(name), (row["run_id"], name)
+    assert laws == {OIL_LAW}
 
 
 def test_glycerol_runs_have_about_half_a_second_of_motion_at_10_khz(manifest) -> None:
@@ -141,8 +196,8 @@ def test_one_command_regenerates_the_bundle(tmp_path: Path) -> None:
     simulate_command.register(parser.add_subparsers(dest="command"))
     args = parser.parse_args(["simulate", "--campaign", str(tmp_path)])
     assert args.handler(args) == 0
-    bundled = sorted(p.relative_to(DATA) for p in (DATA / "runs").iterdir())
-    fresh = sorted(p.relative_to(tmp_path) for p in (tmp_path / "runs").iterdir())
+    bundled = sorted(p.relative_to(DATA) for p in (DATA / "runs").rglob("*") if p.is_file())
+    fresh = sorted(p.relative_to(tmp_path) for p in (tmp_path / "runs").rglob("*") if p.is_file())
     assert fresh == bundled
     # The signals (quantised, time stamps rounded to 1 ns) regenerate byte for byte.
     csvs = [str(p) for p in bundled if p.suffix == ".csv"]

@@ -8,6 +8,13 @@ folder: ``--out``, by default ``demo/`` in the user's cache folder
 (``$XDG_CACHE_HOME/bayestribo/demo``, else ``~/.cache/bayestribo/demo``), never the
 current folder, which may be a source checkout. Where it went is printed at the end.
 
+``--full`` also fits the bundled oil series (:data:`DRAG_SERIES`: viscous damping,
+quadratic drag and Coulomb friction, three loads, three repeats) with ``law="auto"``:
+each run compares the dissipation laws, and the third report gives the populations
+and load trends over the chosen law's own quantities (ζ, μ_k and c₂ [kg/m]), printed
+next to the values the series was simulated with. It is left out of the default demo:
+its nine law comparisons would make the demo half as long again.
+
 The numbers printed are read from the results the reports wrote (``single-run.json``,
 ``campaign.json``) and shown as the reports show them: a run's posterior mean, a
 population's posterior median, each with its 95 % interval in the digits it supports
@@ -41,9 +48,11 @@ from bayestribo._plural import count
 
 __all__ = [
     "DEMO_RUN",
+    "DRAG_SERIES",
     "PAPER",
     "campaign_folder",
     "default_out",
+    "drag_lines",
     "register",
     "summary_lines",
     "unconverged",
@@ -57,6 +66,8 @@ PAPER = {"zeta": (0.0236, 0.0012), "mu_k": (0.0294, 0.0036)}
 SINGLE_RUN_GROUP_STEPS = 40_000
 #: Ceiling on the population samplers' steps with --quick (they do not converge).
 QUICK_STEPS = 600
+#: The bundled series whose runs follow a law with drag (fitted with law="auto", --full).
+DRAG_SERIES = "oil"
 
 
 def register(subparsers: Any) -> None:
@@ -68,7 +79,9 @@ def register(subparsers: Any) -> None:
             "Fit the bundled simulated run glycerol-N0.31-r1 and the bundled glycerol "
             "campaign across loads (one repeat per load and one run in air, or all runs "
             "with --full), print the 95 % credible intervals of ζ and μ_k next to the "
-            "paper's values, and write HTML reports, figures and JSON results to --out "
+            "paper's values (--full: and the oil series, whose runs follow a law with drag, "
+            "with the law compared per run and its own quantities' populations), and "
+            "write HTML reports, figures and JSON results to --out "
             f"(default: {default_out()}, the user's cache folder; printed at the end). "
             "Exit status 1, naming what, when a sampler did not converge (the run's, a "
             "campaign run's, a population's or a trend's)."
@@ -92,7 +105,10 @@ def register(subparsers: Any) -> None:
         "converge: exit status 1)",
     )
     size.add_argument(
-        "--full", action="store_true", help="every glycerol run (3 repeats × 5 loads) and air run"
+        "--full",
+        action="store_true",
+        help="every glycerol run (3 repeats × 5 loads) and air run, and the oil series "
+        "(3 repeats × 3 loads) with the dissipation law chosen per run (law auto)",
     )
     p.add_argument(
         "--show-code", action="store_true", help="include the notebooks' code in the reports"
@@ -198,6 +214,54 @@ def summary_lines(single: dict[str, Any], campaign: dict[str, Any]) -> list[str]
     ]
 
 
+def drag_lines(drag: Mapping[str, Any]) -> list[str]:
+    """The printed summary of the drag series (its report's results): the laws the
+    runs chose, and per quantity of the law the population pooled over loads, each as
+    the reports show it, next to the values the series was simulated with
+    (:data:`bayestribo.synthetic.campaign.OIL_POPULATION`)."""
+    from bayestribo.synthetic.campaign import OIL_POPULATION
+
+    runs = drag.get("runs") or {}
+    laws: dict[str, int] = {}
+    for r in runs.values():
+        laws[str(r.get("law"))] = laws.get(str(r.get("law")), 0) + 1
+    chosen = ", ".join(f"{law} ({count(n, 'run')})" for law, n in sorted(laws.items()))
+    lines = [f"{DRAG_SERIES} series, law auto: each run's law {chosen or 'none'}"]
+    pooled = (drag.get("population") or {}).get("pooled")
+    if not pooled:
+        return [*lines, "  no population pooled over loads (see its report)"]
+    params = pooled["parameters"]
+    quantities = (drag.get("analysis") or {}).get("quantities") or {}
+    names = [p for p in params if p in OIL_POPULATION]
+
+    def heading(p: str) -> str:
+        q = quantities.get(p) or {}
+        unit = str(q.get("unit") or "1")
+        return str(q.get("symbol") or p) + ("" if unit in ("1", "-") else f" [{unit}]")
+
+    ok = pooled.get("diagnostics", {}).get("converged", True)
+    rows: list[tuple[str, list[str]]] = [("", [heading(p) for p in names])]
+    for label, key in (("  mean", "mean"), ("  between-run σ", "sigma")):
+        rows.append((label, [_interval(params[p][key], "median") for p in names]))
+    rows.append(
+        (
+            "  simulated (mean, σ)",
+            [f"{OIL_POPULATION[p][0]} (σ {OIL_POPULATION[p][1]})" for p in names],
+        )
+    )
+    w = max(len(c) for _, cells in rows for c in cells) + 2
+    first = max(len(label) for label, _ in rows) + 2
+    lines.append(
+        f"{DRAG_SERIES}, {count(pooled['n_runs'], 'run')} across loads: population, posterior "
+        "median [95 % credible interval]" + ("" if ok else "  (SAMPLER NOT CONVERGED: do not use)")
+    )
+    lines += [
+        (f"{label:<{first}}" + "".join(f"{c:<{w}}" for c in cells)).rstrip()
+        for label, cells in rows
+    ]
+    return lines
+
+
 def _samplers(analysis: Mapping[str, Any], where: str) -> Iterator[tuple[str, Mapping]]:
     """Every population and trend sampler of a campaign analysis (its ``to_dict``), as
     (what it is, its diagnostics)."""
@@ -213,10 +277,15 @@ def _samplers(analysis: Mapping[str, Any], where: str) -> Iterator[tuple[str, Ma
             yield f"{where}trend {label}", trend.get("diagnostics", {})
 
 
-def unconverged(single: Mapping[str, Any], campaign: Mapping[str, Any]) -> list[str]:
+def unconverged(
+    single: Mapping[str, Any],
+    campaign: Mapping[str, Any],
+    drag: Mapping[str, Any] | None = None,
+) -> list[str]:
     """What did not converge, in the results the demo's reports wrote: the run's fit,
     each run of the campaign, each population and trend (the series across water
-    fractions too, where analysed); each with its reasons. Empty when all converged.
+    fractions too, where analysed, and the drag series' campaign, ``drag``, where
+    fitted); each with its reasons. Empty when all converged.
     """
     out = []
 
@@ -227,15 +296,19 @@ def unconverged(single: Mapping[str, Any], campaign: Mapping[str, Any]) -> list[
     diagnostics = single["fit"].get("diagnostics", {})
     if not diagnostics.get("converged", False):
         out.append(f"the fit of {single.get('name', DEMO_RUN)}{reasons(diagnostics)}")
-    for name, r in sorted((campaign.get("runs") or {}).items()):
-        if not r.get("diagnostics", {}).get("converged", False):
-            out.append(f"the fit of {name}{reasons(r.get('diagnostics', {}))}")
-    for name, why in sorted((campaign.get("failed") or {}).items()):
-        out.append(f"the fit of {name} failed: {why}")
+    campaigns = [campaign] if drag is None else [campaign, drag]
+    for results in campaigns:
+        for name, r in sorted((results.get("runs") or {}).items()):
+            if not r.get("diagnostics", {}).get("converged", False):
+                out.append(f"the fit of {name}{reasons(r.get('diagnostics', {}))}")
+        for name, why in sorted((results.get("failed") or {}).items()):
+            out.append(f"the fit of {name} failed: {why}")
     analyses = [("", campaign.get("analysis") or {})]
     water = (campaign.get("water_series") or {}).get("analysis")
     if water:
         analyses.append(("water series: ", water))
+    if drag is not None:
+        analyses.append((f"{DRAG_SERIES} series: ", drag.get("analysis") or {}))
     for where, analysis in analyses:
         for what, d in _samplers(analysis, where):
             if not d.get("converged", True):
@@ -299,18 +372,47 @@ def run(args: argparse.Namespace) -> int:
         html=out / "campaign-report.html",
         show_code=args.show_code,
     )
+    drag = None
+    if args.full:
+        print(
+            f"fitting the {DRAG_SERIES} series across loads, each run comparing the laws ...",
+            file=sys.stderr,
+        )
+        run_report(
+            "loads",
+            {
+                "data_dir": str(data),
+                "series": DRAG_SERIES,
+                "fit_air": False,
+                "water_series": None,
+                "fit_kwargs": {"law": "auto"},
+                "figure_dir": str(figures / DRAG_SERIES),
+                "summary_path": str(out / f"{DRAG_SERIES}-campaign.json"),
+            },
+            html=out / f"{DRAG_SERIES}-campaign-report.html",
+            show_code=args.show_code,
+        )
+        drag = json.loads((out / f"{DRAG_SERIES}-campaign.json").read_text(encoding="utf-8"))
     single = json.loads((out / "single-run.json").read_text(encoding="utf-8"))
     campaign = json.loads((out / "campaign.json").read_text(encoding="utf-8"))
     print("\n".join(summary_lines(single, campaign)))
-    n_single = len(list((figures / "single-run").glob("*.png")))
-    n_campaign = len(list((figures / "campaign").glob("*.png")))
+    if drag is not None:
+        print()
+        print("\n".join(drag_lines(drag)))
+    names = ["single-run", "campaign"] + ([DRAG_SERIES] if drag is not None else [])
+    reports = ["single-run-report.html", "campaign-report.html"]
+    results = ["single-run.json", "campaign.json"]
+    if drag is not None:
+        reports.append(f"{DRAG_SERIES}-campaign-report.html")
+        results.append(f"{DRAG_SERIES}-campaign.json")
     print()
-    print(f"reports:  {out / 'single-run-report.html'}")
-    print(f"          {out / 'campaign-report.html'}")
-    print(f"figures:  {figures / 'single-run'} ({n_single} PNG)")
-    print(f"          {figures / 'campaign'} ({n_campaign} PNG)")
-    print(f"results:  {out / 'single-run.json'}, {out / 'campaign.json'}")
-    stuck = unconverged(single, campaign)
+    for i, name in enumerate(reports):
+        print(f"{'reports:' if i == 0 else '':<10}{out / name}")
+    for i, name in enumerate(names):
+        n_png = len(list((figures / name).glob("*.png")))
+        print(f"{'figures:' if i == 0 else '':<10}{figures / name} ({n_png} PNG)")
+    print(f"results:  {', '.join(str(out / name) for name in results)}")
+    stuck = unconverged(single, campaign, drag)
     if stuck:
         print(
             f"bayestribo demo: NOT CONVERGED ({len(stuck)}): " + "; ".join(stuck),
