@@ -70,7 +70,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass, replace
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 import scipy.signal
@@ -228,6 +228,10 @@ class EnergyDecay:
         swings whose period depends on the amplitude, a start still driven:
         :func:`~bayestribo.signal.motion.regular_turning_points`), beyond the skipped
         oscillations; 0 when none was.
+    restoring : RestoringKernel or None
+        The nonlinear restoring force whose potential the energy holds,
+        ``E = ½y'² + V(y)`` (:func:`bayestribo.inference.preparation.prepare`, from the
+        run's ``restoring``); None for the linear spring's ``½(y² + y'²)``.
     """
 
     t: NDArray
@@ -257,6 +261,7 @@ class EnergyDecay:
     turning_times: NDArray | None = None
     flattened_turning_points: int = 0
     irregular_turning_points: int = 0
+    restoring: Any = None
 
     @property
     def tau_end(self) -> float:

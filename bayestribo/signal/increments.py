@@ -231,6 +231,9 @@ class PiData:
         The law's increments where the second pass computed the variances, shape
         (m,): without the noise, they scale the shape discrepancy's columns
         (:mod:`bayestribo.inference.likelihood`). None on a first pass.
+    restoring : RestoringKernel or None
+        The nonlinear restoring force of the energy (:attr:`EnergyDecay.restoring`),
+        which the likelihood's law takes; None for the linear spring.
     """
 
     tau_grid: NDArray
@@ -246,6 +249,7 @@ class PiData:
     neighbour_covariance: NDArray | None = None
     preparation: Mapping[str, Any] | None = None
     law_increments: NDArray | None = None
+    restoring: Any = None
 
     @property
     def tau_end(self) -> float:
@@ -759,6 +763,11 @@ def pi_data(
                 f"motion: expected two arrays of shape {decay.tau.shape} (the decay's "
                 f"samples), got {y.shape} and {yp.shape}"
             )
+    restoring = decay.restoring
+    if restoring is not None:
+        # the noise of E = ½y'² + V(y) and the equilibrium's shift of it take V'(y)
+        # where the linear spring's take y
+        y = np.asarray(restoring.spring(y), dtype=float)
     e2 = integrate_increments(decay.energy**2, edges, weights)
     longest = int(np.max(np.diff(edges))) + 1
     options = spectral_options(decay, noise, 2 * longest) if spectral else {}
@@ -802,6 +811,7 @@ def pi_data(
         plus = np.maximum(neighbours, 0.0)
         variance = variance + np.r_[0.0, plus] + np.r_[plus, 0.0]
     observed = integrate_increments(decay.energy, edges, weights) - bias
+    force = decay.y if restoring is None else np.asarray(restoring.spring(decay.y), dtype=float)
     if decay.motion_ended:
         # The end of motion is located within about a sample: allow for the energy of
         # ±2 samples at the end in the last increment.
@@ -825,10 +835,11 @@ def pi_data(
             "seed": seed,
             "spectral": spectral,
         },
+        restoring=restoring,
         offset_design=np.column_stack(
             [
-                integrate_increments(decay.y, edges, weights),
-                integrate_increments(tau * decay.y, edges, weights),
+                integrate_increments(force, edges, weights),
+                integrate_increments(tau * force, edges, weights),
                 bias * noise_bias_sd(decay, noise),
             ]
         ),

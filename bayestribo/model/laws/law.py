@@ -17,14 +17,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bayestribo.model.laws.base import TERMS, Parameter, PhysicalScale, Term, get_term
 from bayestribo.model.laws.integrator import DEFAULT_STEPS, make_integrator
+
+if TYPE_CHECKING:
+    from bayestribo.model.restoring.base import RestoringKernel
 
 __all__ = ["ALIASES", "DEFAULT_LAW", "Law", "get_law"]
 
@@ -49,9 +53,14 @@ class Law:
         Distinct terms (see :func:`bayestribo.model.laws.base.register_term`); a
         term need not be registered to be used here, which is how a law defined
         outside the package is fitted.
+    restoring : RestoringKernel, optional
+        The oscillator's restoring force when it is not the linear spring
+        (:meth:`bayestribo.model.restoring.RestoringForce.kernel`): Π then comes from
+        :mod:`bayestribo.model.laws.nonlinear`, with the energy ``½y'² + V(y)``.
     """
 
     terms: tuple[Term, ...]
+    restoring: RestoringKernel | None = None
 
     def __post_init__(self) -> None:
         terms = tuple(self.terms)
@@ -134,11 +143,18 @@ class Law:
         """True when a term carries static friction (μ_s/μ_k is a parameter)."""
         return any(t.sticks for t in self.terms)
 
+    def with_restoring(self, restoring: RestoringKernel | None) -> Law:
+        """The same law on another restoring force (None: the linear spring)."""
+        return self if restoring == self.restoring else replace(self, restoring=restoring)
+
     @property
     def closed_form(self) -> bool:
-        """True when Π has a closed form (viscous damping, Coulomb friction or both)."""
-        return {t.name for t in self.terms} <= _CLOSED_FORM and all(
-            t is TERMS.get(t.name) for t in self.terms
+        """True when Π has a closed form (viscous damping, Coulomb friction or both, on
+        a linear spring)."""
+        return (
+            self.restoring is None
+            and {t.name for t in self.terms} <= _CLOSED_FORM
+            and all(t is TERMS.get(t.name) for t in self.terms)
         )
 
     def default_priors(self, amplitude: float) -> dict[str, Mapping[str, float | str]]:
@@ -248,6 +264,8 @@ class Law:
             for n in self.parameter_names
         }
         end = math.inf if tau_end is None else float(tau_end)
+        if self.restoring is not None:
+            return self._nonlinear_grid(t, y, vals, float(yp0), end, reference, steps)
         if method not in ("auto", "closed", "integrate"):
             raise ValueError(f"method must be 'auto', 'closed' or 'integrate', got {method!r}")
         if method == "closed" and not self.closed_form:
@@ -304,8 +322,46 @@ class Law:
         vals = {n: np.atleast_1d(np.asarray(values[n], dtype=float)) for n in self.parameter_names}
         coef = self.coefficients(vals, ref)[0]
         ratio = float(self.static_ratio(vals, 1)[0])
+        if self.restoring is not None:
+            from bayestribo.model.laws.nonlinear import DEFAULT_STEPS as STEPS
+
+            _, turns_nl = self._nonlinear
+            k = np.asarray(self.restoring.coefficients or (0.0,), dtype=float)
+            return turns_nl(
+                float(y0), coef, k, ratio, float(yp0), float(tau_max), int(max_count), STEPS
+            )
         _, turns, _ = make_integrator(*self._layout[0])
         return turns(float(y0), coef, ratio, float(yp0), float(tau_max), int(max_count))
+
+    @property
+    def _nonlinear(self) -> tuple:
+        """The compiled Π-grid and turning-point functions on the restoring force."""
+        from bayestribo.model.laws.nonlinear import make_nonlinear_integrator
+
+        r = self.restoring
+        assert r is not None
+        return make_nonlinear_integrator(self._layout[0], r.spring_kernel, r.potential_kernel)
+
+    def _nonlinear_grid(
+        self,
+        t: NDArray,
+        y: NDArray,
+        vals: Mapping[str, NDArray],
+        yp0: float,
+        end: float,
+        reference: float | None,
+        steps: int,
+    ) -> NDArray:
+        """Π on the restoring force (:mod:`bayestribo.model.laws.nonlinear`)."""
+        from bayestribo.model.laws.nonlinear import DEFAULT_STEPS as STEPS
+
+        ref = abs(float(y[0])) if reference is None else float(reference)
+        coef = self.coefficients(vals, ref)
+        grid, _ = self._nonlinear
+        k = np.asarray(self.restoring.coefficients or (0.0,), dtype=float)  # type: ignore[union-attr]
+        ratio = self.static_ratio(vals, y.size)
+        pi, _ = grid(t, y, coef, k, ratio, yp0, end, int(steps) if steps > 0 else STEPS)
+        return pi
 
     # -- what the law dissipates ---------------------------------------------------
     def dissipation(

@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -104,6 +105,19 @@ def fit_beta(times: ArrayLike, values: ArrayLike) -> tuple[float, float]:
     return float(found.x[2]) * scale, se
 
 
+@numba.njit(cache=True, inline="always")
+def spring_kernel(y: float, k: NDArray) -> float:
+    """V'(y) = y + βy³, β = k[0]."""
+    return y + k[0] * y * y * y
+
+
+@numba.njit(cache=True, inline="always")
+def potential_kernel(y: float, k: NDArray) -> float:
+    """V(y) = y²/2 + βy⁴/4, β = k[0]."""
+    y2 = y * y
+    return 0.5 * y2 + 0.25 * k[0] * y2 * y2
+
+
 def duffing(beta: float) -> RestoringForce:
     """The Duffing spring of a given β [1/unit²]."""
 
@@ -111,10 +125,15 @@ def duffing(beta: float) -> RestoringForce:
         y = np.asarray(y, dtype=float)
         return 0.5 * y * y + 0.25 * beta * y**4
 
+    def spring(y: ArrayLike) -> NDArray:
+        y = np.asarray(y, dtype=float)
+        return y + beta * y**3
+
     return replace(
         DUFFING,
         description=f"a Duffing spring, k(x + βx³), β = {beta:.4g}",
         potential=potential,
+        spring=spring,
         half_period_ratio=lambda a: half_period_ratio(a, beta),
         parameters={"beta": beta},
     )
@@ -139,5 +158,8 @@ DUFFING = register_builtin(
         half_period_ratio=lambda a: half_period_ratio(a, 0.0),
         fitted=True,
         measure=_measure,
+        spring=lambda y: np.asarray(y, dtype=float),
+        kernels=(spring_kernel, potential_kernel),
+        kernel_parameters=("beta",),
     )
 )
