@@ -54,6 +54,14 @@ def _data_seed(decay: EnergyDecay) -> int:
     return zlib.crc32(np.ascontiguousarray(decay.yp).tobytes(), crc)
 
 
+def _linear_spring(run: Run) -> bool:
+    """True when the run's restoring force (its metadata's ``restoring``) is one the
+    laws take as the linear spring (no compiled kernels)."""
+    from bayestribo.model.restoring import get_restoring
+
+    return get_restoring(dict(run.metadata).get("restoring")).kernels is None
+
+
 def _run_restoring(run: Run, decay: EnergyDecay) -> Any:
     """The run's nonlinear restoring force (its metadata's ``restoring``), its
     parameters measured from the turning points where it has any, as the energy and the
@@ -182,6 +190,7 @@ def prepare(
     PreparedRun
     """
     recording, channels = calibrate_channels(as_run(run, read_options), correct=correct_channels)
+    linear = _linear_spring(recording)
     decay = energy_decay(
         recording.time,
         recording.displacement,
@@ -189,8 +198,9 @@ def prepare(
         rig=recording.rig(),
         skip_oscillations=skip_oscillations,
         notch=notch,
+        linear_spring=linear,
     )
-    restoring = _run_restoring(recording, decay)
+    restoring = None if linear else _run_restoring(recording, decay)
     if restoring is not None:
         # the small swings' frequency scales time (τ = ω₀t), in which V is written
         decay = energy_decay(
@@ -201,6 +211,7 @@ def prepare(
             skip_oscillations=skip_oscillations,
             notch=notch,
             frequency_Hz=small_swing_frequency(decay, restoring),
+            linear_spring=False,
         )
         decay = with_restoring(decay, restoring)
     noise_used = noise or noise_model(decay, dict(recording.metadata))
@@ -249,6 +260,7 @@ def reframe(prepared: PreparedRun, frequency_Hz: float) -> PreparedRun:
         skip_oscillations=prepared.skip_oscillations,
         notch=old.notch_Hz[0] if old.notch_Hz else None,
         frequency_Hz=frequency_Hz,
+        linear_spring=old.restoring is None,
     )
     decay = with_restoring(decay, old.restoring)
     noise_used = prepared.noise if prepared.noise_given else noise_model(decay, dict(run.metadata))
@@ -320,6 +332,7 @@ def prepare_part(prepared: PreparedRun, start: int, stop: int) -> PreparedRun:
         skip_oscillations=prepared.skip_oscillations,
         notch=old.notch_Hz[0] if old.notch_Hz else None,
         frequency_Hz=None if old.restoring is None else old.scaling.omega / (2.0 * math.pi),
+        linear_spring=old.restoring is None,
     )
     decay = with_restoring(decay, old.restoring)
     data = pi_data(decay, prepared.noise, grid_points=prepared.grid_points, seed=_data_seed(decay))

@@ -99,13 +99,14 @@ def _restoring_scale(
     return dataclasses.replace(scale, stiffness=stiffness), math.hypot(spread, energy_sd)
 
 
-def _warn_restoring(name: str | None, restoring: Any, law: str) -> None:
-    """Say that the laws assume a linear restoring force when the run's is another."""
-    if restoring.name == "linear":
+def _warn_restoring(name: str | None, restoring: Any, law: Any) -> None:
+    """Say that the law assumes a linear restoring force when the run's is another that
+    the law's model does not take (a force registered without compiled kernels)."""
+    if restoring.name == "linear" or law.restoring is not None:
         return
     warn(
         f"the restoring force of {name or 'the run'} is the {restoring.name}'s, and the law "
-        f"{law} assumes a linear one: its parameters are not a measurement. The energy "
+        f"{law.name} assumes a linear one: its parameters are not a measurement. The energy "
         "dissipated per cycle measured from the turning points with the "
         f"{restoring.name}'s potential (printed as 'turning points (law-free)') is the "
         "answer",
@@ -286,7 +287,7 @@ def summary(
         restoring=restoring,
         energy_sd=energy_sd,
     )
-    _warn_restoring(name, restoring, posterior.law.name)
+    _warn_restoring(name, restoring, posterior.law)
     agreement = shape_agreement(dissipation, measured)
     warn_shape(name, agreement, posterior.law.name, compared, flagged=checks.flagged)
     noise_info = {**prepared.noise.to_dict(), "description": prepared.noise.describe()}
@@ -304,7 +305,14 @@ def summary(
         dissipation=plain_data(dissipation),
         turning_point_dissipation=plain_data(measured),
         shape_agreement=plain_data(agreement),
-        restoring=plain_data({"name": restoring.name, **(measured_spring or {})}),
+        restoring=plain_data(
+            {
+                "name": restoring.name,
+                **(measured_spring or {}),
+                # the law's model takes its potential (model/laws/nonlinear.py)
+                "in_model": posterior.law.restoring is not None,
+            }
+        ),
         units=own_units,
         seed=-1 if recorded_seed is None else int(recorded_seed),
         package_version=__version__,

@@ -85,6 +85,7 @@ from bayestribo.model.scaling import Rig, Scaling
 from bayestribo.signal.clipping import flattened_turning_points, hard_clips
 from bayestribo.signal.coverage import ShortAnalysisWarning, coverage_note
 from bayestribo.signal.motion import (
+    SPACING_TOLERANCE,
     THRESHOLD,
     IrregularStartWarning,
     RegularTurningPoints,
@@ -805,6 +806,7 @@ def energy_decay(
     notch: float | Literal["auto"] | None = None,
     motion_threshold: float = THRESHOLD,
     frequency_Hz: float | None = None,
+    linear_spring: bool = True,
 ) -> EnergyDecay:
     """Energy decay curve and Π(τ) of a free-decay recording (Eq. 6, 26, 39).
 
@@ -861,6 +863,11 @@ def energy_decay(
         frequency that makes a nonlinear law's turning times match the record's,
         :func:`bayestribo.inference.pipeline.law_frequency`); the measured one is still
         reported in ``natural_frequency_Hz``.
+    linear_spring : bool
+        False for a run whose restoring force is declared nonlinear (a pendulum, a
+        Duffing spring): its first half periods differ from the later ones and its peaks
+        are not a linear oscillator's by the force itself, so that neither leaves
+        turning points out (as an irregular start or soft clipping).
 
     Returns
     -------
@@ -938,6 +945,7 @@ def energy_decay(
         min_turning_points=min_turning_points,
         offset=offset,
         motion_threshold=motion_threshold,
+        linear_spring=linear_spring,
     )
     if notch is None:
         return _analyse(t, x, v, notch_Hz=(), **options)
@@ -1253,6 +1261,7 @@ def _analyse(
     offset: float | Literal["auto", "constant"] | None,
     motion_threshold: float,
     notch_Hz: tuple[float, ...],
+    linear_spring: bool = True,
 ) -> EnergyDecay:
     """:func:`energy_decay` on checked (and notched) signals."""
     derived: str | None = None
@@ -1326,7 +1335,12 @@ def _analyse(
         raise RecordingError(f"turning points: {e}") from e
     peaks = replace(found, index=found.index + lo)
     # the free decay starts where the turning points are half a period apart
-    spacing = regular_turning_points(peaks.t, peaks.value, timing_sd=_timing_sd(t, peaks))
+    spacing = regular_turning_points(
+        peaks.t,
+        peaks.value,
+        timing_sd=_timing_sd(t, peaks),
+        tolerance=SPACING_TOLERANCE if linear_spring else math.inf,
+    )
     if spacing.start:
         peaks = _equilibrium_from(peaks, spacing.start, offset)
     peaks = replace(peaks, stop_time=stop_time)
@@ -1355,13 +1369,17 @@ def _analyse(
         irregular = _irregular_start(spacing, peaks, skipped, int(min_turning_points))
         skip = irregular
     left_out = 0
-    flattened = _flattened(
-        t,
-        x if derived != "displacement" else None,  # recorded channels only: a derived
-        v if derived != "velocity" else None,  # one is distorted by its derivation
-        peaks,
-        period0 / per_samples,
-        spacing.half_period,
+    flattened = (
+        None
+        if not linear_spring
+        else _flattened(
+            t,
+            x if derived != "displacement" else None,  # recorded channels only: a derived
+            v if derived != "velocity" else None,  # one is distorted by its derivation
+            peaks,
+            period0 / per_samples,
+            spacing.half_period,
+        )
     )
     if flattened is not None and flattened[0] > skip:
         skip = left_out = _clipped_start(

@@ -237,7 +237,7 @@ def one(
     cum = 0.0
     j = 0
     c_end = math.nan
-    stopped = (yp0 == 0.0 and stuck(y0, mu, ratio, k)) or y0 == 0.0 and yp0 == 0.0
+    stopped = (yp0 == 0.0 and stuck(y0, mu, ratio, k)) or (y0 == 0.0 and yp0 == 0.0)
     last = 0.0
     before = 0.0
     n_half = 0
