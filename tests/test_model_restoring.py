@@ -89,11 +89,19 @@ def test_a_pendulum_is_named_by_its_period_and_measured_with_its_potential():
     trend = [str(w.message) for w in caught if issubclass(w.category, FrequencyTrendWarning)]
     assert trend and "--restoring pendulum" in trend[0]
     pendulum, caught = _fit(restoring="pendulum")
-    assert any(
+    # the law's model takes the pendulum's potential (model/laws/nonlinear.py): no
+    # warning that it assumes a linear spring, and the output says which it took
+    assert not any(
         "assumes a linear one" in str(w.message)
         for w in caught
         if issubclass(w.category, MisfitWarning)
     )
+    assert "the law's model (viscous) and the law-free ΔE(A) take its potential" in (
+        pendulum.to_text()
+    )
+    # the truth, ζ = 0.005, inside the law's 95 % interval on the pendulum's potential
+    lo, hi = pendulum.interval("zeta", 0.95)
+    assert lo <= ZETA <= hi
     for result, holds in ((pendulum, True), (linear, False)):
         band = result.turning_point_dissipation
         amplitude = np.asarray(band["amplitude"])
