@@ -78,11 +78,13 @@ def spring(case: dict[str, Any], x: float) -> float:
     return x + case["beta"] * x**3
 
 
-def simulate(case: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
-    """The noise-free displacement sampled at ``fs`` from release to ``duration``."""
+def simulate(case: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The noise-free displacement and velocity sampled at ``fs`` from release to
+    ``duration``."""
     w = 2.0 * math.pi * case["f0"]
     t = np.arange(0.0, case["duration"], 1.0 / case["fs"])
     x = np.empty_like(t)
+    v = np.zeros_like(t)
     y, t0 = float(case["x0"]), 0.0
     filled = 0
     while filled < t.size:
@@ -117,10 +119,10 @@ def simulate(case: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
         )
         t1 = float(sol.t_events[0][0])
         stop = int(np.searchsorted(t, t1, side="right"))
-        x[filled:stop] = sol.sol(t[filled:stop])[0]
+        x[filled:stop], v[filled:stop] = sol.sol(t[filled:stop])
         filled = stop
         y, t0 = float(sol.y_events[0][0][0]), t1
-    return t, x
+    return t, x, v
 
 
 def one_run(name: str, index: int, seed: int, max_steps: int | None) -> dict[str, Any]:
@@ -130,7 +132,7 @@ def one_run(name: str, index: int, seed: int, max_steps: int | None) -> dict[str
 
     case = CASES[name]
     entropy = [seed, zlib.crc32(name.encode()), index]
-    t, x = simulate(case)
+    t, x, _ = simulate(case)
     xs = x + np.random.default_rng(entropy).normal(0.0, case["noise"], x.size)
     run = Run(t, xs, metadata={"gain_uncertainty": 0.0, **case["meta"]})
     out: dict[str, Any] = {"case": name, "index": index, "entropy": entropy}

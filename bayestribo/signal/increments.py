@@ -79,7 +79,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -554,8 +554,13 @@ def increment_noise(
     autocov_yp: NDArray | None = None,
     spectrum: NoiseSpectrum | None = None,
     spectrum_scale: float = 1.0,
+    potential: Callable[[NDArray], NDArray] | None = None,
 ) -> tuple[NDArray, NDArray]:
     """Noise bias and noise variance of each increment of E = (y² + y'²)/2.
+
+    With a nonlinear restoring force's ``potential`` V the Monte Carlo of a derived
+    channel takes E = ½y'² + V(y); with recorded channels the caller passes V'(y)
+    for y (the white and coloured formulas are linear in the noise).
 
     With both channels recorded (``derived`` None) the noise is white and
     independent per channel: per sample E has the bias ½(σ_y² + σ_y'²) and the
@@ -631,9 +636,15 @@ def increment_noise(
     if derived not in ("velocity", "displacement"):
         raise ValueError(f"derived must be None, 'velocity' or 'displacement', got {derived!r}")
     rng = np.random.default_rng(seed)
+
     # by BLAS as the replicates are: their differences from it are small, and the two
     # sums must round alike for them
-    reference = _integrate_by_blas(0.5 * (y * y + yp * yp), edges, weights)
+    def energy_of(y: NDArray, yp: NDArray) -> NDArray:
+        if potential is None:
+            return 0.5 * (y * y + yp * yp)
+        return 0.5 * yp * yp + potential(y)
+
+    reference = _integrate_by_blas(energy_of(y, yp), edges, weights)
     draws = np.empty((n_replicates, edges.size - 1))
     for first in range(0, n_replicates, _BLOCK):
         count = min(_BLOCK, n_replicates - first)
@@ -647,7 +658,7 @@ def increment_noise(
             yn, ypn = _rederive(tau, y + draw, yp, y, yp, derived, savgol_window)
         else:
             yn, ypn = _rederive(tau, y, yp + draw, y, yp, derived, savgol_window)
-        energy = 0.5 * (yn * yn + ypn * ypn)
+        energy = energy_of(yn, ypn)
         draws[first : first + count] = integrate_increments(energy, edges, weights) - reference
     return draws.mean(axis=0), draws.var(axis=0, ddof=1)
 
@@ -764,9 +775,11 @@ def pi_data(
                 f"samples), got {y.shape} and {yp.shape}"
             )
     restoring = decay.restoring
-    if restoring is not None:
-        # the noise of E = ½y'² + V(y) and the equilibrium's shift of it take V'(y)
-        # where the linear spring's take y
+    potential = None
+    if restoring is not None and decay.derived_channel is not None:
+        potential = restoring.potential  # the Monte Carlo takes E = ½y'² + V(y)
+    elif restoring is not None:
+        # the noise of E = ½y'² + V(y) takes V'(y) where the linear spring's takes y
         y = np.asarray(restoring.spring(y), dtype=float)
     e2 = integrate_increments(decay.energy**2, edges, weights)
     longest = int(np.max(np.diff(edges))) + 1
@@ -783,6 +796,7 @@ def pi_data(
         savgol_window=decay.savgol_window,
         n_replicates=n_replicates,
         seed=seed,
+        potential=potential,
         **options,
     )
     if options:
