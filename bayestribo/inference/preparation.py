@@ -78,6 +78,13 @@ def _run_restoring(run: Run, decay: EnergyDecay) -> Any:
     force = get_restoring(name)
     if force.kernels is None:
         return None
+    if force.angle and decay.scaling.length_scale != 1.0:
+        raise BayestriboError(
+            f"restoring force {force.name!r}: its potential takes the angle in radians, "
+            f"but the run's displacement is scaled by {decay.scaling.length_scale:.6g} (a "
+            "rig's load, mass or inertia make y = kx/N): fit the angle without them, or "
+            "with another restoring force"
+        )
     if force.fitted and force.measure is not None:
         if decay.turning_times is None:
             raise BayestriboError(
