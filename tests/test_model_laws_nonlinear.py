@@ -199,3 +199,26 @@ def test_the_averaged_energy_balance_holds_to_second_order(name):
         # the integrator's own half cycle loses what the ODE's does
         integrated = potential(abs(ours[k])) - potential(abs(ours[k + 1]))
         assert integrated == pytest.approx(loss, rel=1e-5)
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_the_laws_loss_per_cycle_takes_the_restoring_force(name):
+    """ΔE(A) of the law on the force: per cycle of its own motion, twice the half cycle's
+    loss of V (against the ODE's half cycles, interpolated at their swings), and to
+    first order the averaged Eq. 3 at the swing (within ε, as above), its terms'
+    shares summing to it."""
+    kernel, (_, points, _), y0 = _case(name)
+    potential = CASES[name][2]
+    law = get_law("viscous+quadratic+coulomb").with_restoring(kernel)
+    a = np.abs(points[:20])
+    swing = 0.5 * (a[1:] + a[:-1])
+    loss = 2.0 * (np.array([potential(x) for x in a[:-1]]) - [potential(x) for x in a[1:]])
+    own = law.swing_dissipation(swing[[2, 9]], VALUES, y0)[0]
+    np.testing.assert_allclose(own, loss[[2, 9]], rtol=1e-5)
+    parts = law.dissipation(swing[[2, 9]], VALUES, y0, by_term=True)
+    total = law.dissipation(swing[[2, 9]], VALUES, y0)[0]
+    np.testing.assert_allclose(sum(parts.values())[0], total, rtol=1e-12)
+    eps = loss[[2, 9]] / np.array([potential(s) for s in swing[[2, 9]]]) / 2.0
+    assert np.all(np.abs(total - loss[[2, 9]]) < eps * loss[[2, 9]])
+    # the friction's share is 4μA, whatever the force
+    np.testing.assert_allclose(parts["coulomb"][0], 4.0 * MU * swing[[2, 9]], rtol=1e-12)

@@ -354,3 +354,89 @@ def turns(
             break
         sgn = -1.0 if y > 0.0 else 1.0
     return times[:n], where[:n]
+
+
+# Gauss-Legendre nodes of the averaged loss per cycle (in φ, x = A sin φ).
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(48)
+
+
+@numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
+def cycle_dissipation(a: float, c: NDArray, k: NDArray) -> float:
+    """The energy lost over one cycle of the undamped motion of swing ``a``, to first
+    order in the loss: ``2(∫_{-a}^{a} g(v(x)) dx + 2μ(a) a)``, v(x) = √(2(V(a) - V(x)))
+    (docs/restoring.md, Eq. 3), by Gauss-Legendre in φ (x = a sin φ: v ∝ cos φ near
+    the ends, no singularity)."""
+    total = 0.0
+    if HAS_DRAG:
+        e = potential(a, k)
+        for i in range(_GL_X.size):
+            phi = 0.5 * math.pi * _GL_X[i]
+            x = a * math.sin(phi)
+            v = math.sqrt(max(2.0 * (e - potential(x, k)), 0.0))
+            total += _GL_W[i] * drag(v, c) * a * math.cos(phi) * 0.5 * math.pi
+    mu = friction(a, c) if HAS_FRICTION else 0.0
+    return 2.0 * (total + 2.0 * mu * a)
+
+
+@numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
+def dissipation(coef: NDArray, k: NDArray, amplitudes: NDArray) -> NDArray:
+    """:func:`cycle_dissipation` for each row of ``coef`` (P, K) at each amplitude (A,):
+    shape (P, A)."""
+    out = np.empty((coef.shape[0], amplitudes.size))
+    for p in range(coef.shape[0]):
+        for j in range(amplitudes.size):
+            out[p, j] = cycle_dissipation(amplitudes[j], coef[p], k)
+    return out
+
+
+@numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
+def half_cycle_end(a: float, c: NDArray, k: NDArray, h: float) -> float:
+    """|Y| at the end of the half cycle from rest at the turning point ``a`` > 0,
+    static friction ignored (NaN when the motion cannot leave ``a``, the drag stops it
+    before it turns, or it ends on the side it started)."""
+    mu = friction(a, c) if HAS_FRICTION else 0.0
+    if not (spring(a, k) > mu) or mu < 0.0:
+        return math.nan
+    none = np.empty(0)
+    y, _, _, _, _, status = half_cycle(
+        a, 0.0, 0.0, 0.0, -1.0, mu, c, k, h, none, 0, math.inf, none, math.nan
+    )
+    if status != 0 or y >= 0.0:
+        return math.nan
+    return -y
+
+
+@numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
+def swing_drops(coef: NDArray, k: NDArray, swing: NDArray, steps: int) -> NDArray:
+    """The energy V(a_s) - V(a_e) lost over the half cycle whose swing ½(a_s + a_e) is
+    each of ``swing`` (S,), for each row of ``coef`` (P, K): shape (P, S). a_s by the
+    secant method on ½(a_s + a_e(a_s)) = A from a_s = A + ½ drop(A); NaN where no such
+    half cycle exists."""
+    h = math.pi / steps
+    out = np.empty((coef.shape[0], swing.size))
+    for p in range(coef.shape[0]):
+        c = coef[p]
+        for j in range(swing.size):
+            target = swing[j]
+            e0 = half_cycle_end(target, c, k, h)
+            x0 = 2.0 * target if not math.isfinite(e0) else target + 0.5 * (target - e0)
+            f0 = 0.5 * (x0 + half_cycle_end(x0, c, k, h)) - target
+            x1 = x0 - f0
+            value = math.nan
+            for _ in range(40):
+                end = half_cycle_end(x1, c, k, h)
+                if not math.isfinite(end):
+                    break
+                f1 = 0.5 * (x1 + end) - target
+                if abs(f1) <= 1e-14 * target:
+                    value = potential(x1, k) - potential(end, k)
+                    break
+                if f1 == f0 or not math.isfinite(f0):
+                    x0, f0 = x1, f1
+                    x1 = x1 - f1
+                    continue
+                x2 = x1 - f1 * (x1 - x0) / (f1 - f0)
+                x0, f0 = x1, f1
+                x1 = x2
+            out[p, j] = value
+    return out

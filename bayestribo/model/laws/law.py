@@ -325,7 +325,7 @@ class Law:
         if self.restoring is not None:
             from bayestribo.model.laws.nonlinear import DEFAULT_STEPS as STEPS
 
-            _, turns_nl = self._nonlinear
+            _, turns_nl, _, _ = self._nonlinear
             k = np.asarray(self.restoring.coefficients or (0.0,), dtype=float)
             return turns_nl(
                 float(y0), coef, k, ratio, float(yp0), float(tau_max), int(max_count), STEPS
@@ -357,7 +357,7 @@ class Law:
 
         ref = abs(float(y[0])) if reference is None else float(reference)
         coef = self.coefficients(vals, ref)
-        grid, _ = self._nonlinear
+        grid, _, _, _ = self._nonlinear
         k = np.asarray(self.restoring.coefficients or (0.0,), dtype=float)  # type: ignore[union-attr]
         ratio = self.static_ratio(vals, y.size)
         pi, _ = grid(t, y, coef, k, ratio, yp0, end, int(steps) if steps > 0 else STEPS)
@@ -372,7 +372,9 @@ class Law:
         *,
         by_term: bool = False,
     ) -> NDArray | dict[str, NDArray]:
-        """Energy dissipated over one cycle of ``y = A cos τ``, ΔE(A) = ∮F(y')y' dτ.
+        """Energy dissipated over one cycle of ``y = A cos τ``, ΔE(A) = ∮F(y')y' dτ
+        (on a nonlinear restoring force, over one cycle of its undamped motion of swing
+        A: docs/restoring.md, Eq. 3).
 
         Parameters
         ----------
@@ -391,6 +393,8 @@ class Law:
             In dimensionless energy units (y²); multiply by kℓ² for joules
             (:attr:`PhysicalScale.energy_factor`).
         """
+        if self.restoring is not None:
+            return self._restoring_dissipation(amplitude, values, reference, by_term)
         a = np.atleast_1d(np.asarray(amplitude, dtype=float))[None, :]
         vals = {
             n: np.atleast_1d(np.asarray(values[n], dtype=float))[:, None]
@@ -401,13 +405,45 @@ class Law:
             return parts
         return sum(parts.values())
 
+    def _restoring_dissipation(
+        self,
+        amplitude: ArrayLike,
+        values: Mapping[str, ArrayLike],
+        reference: float,
+        by_term: bool,
+    ) -> NDArray | dict[str, NDArray]:
+        """:meth:`dissipation` on the restoring force: the first-order loss per cycle of
+        its undamped motion (docs/restoring.md, Eq. 3); each term's share with the other
+        terms' coefficients at zero (a term's force is proportional to them)."""
+        a = np.ascontiguousarray(np.atleast_1d(np.asarray(amplitude, dtype=float)))
+        vals = {n: np.atleast_1d(np.asarray(values[n], dtype=float)) for n in self.parameter_names}
+        size = max((v.size for v in vals.values()), default=1)
+        vals = {n: np.broadcast_to(v, (size,)) for n, v in vals.items()}
+        coef = self.coefficients(vals, float(reference))
+        k = np.asarray(self.restoring.coefficients or (0.0,), dtype=float)  # type: ignore[union-attr]
+        _, _, _, cycle = self._nonlinear
+        if not by_term:
+            return cycle(coef, k, a)
+        parts = {}
+        start = 0
+        for term in self._layout[1]:
+            alone = np.zeros_like(coef)
+            alone[:, start : start + term.n_coefficients] = coef[
+                :, start : start + term.n_coefficients
+            ]
+            start += term.n_coefficients
+            parts[term.name] = cycle(np.ascontiguousarray(alone), k, a)
+        return {t.name: parts[t.name] for t in self.terms}
+
     def swing_dissipation(
         self, swing: ArrayLike, values: Mapping[str, ArrayLike], reference: float
     ) -> NDArray:
         """Energy the law's own motion dissipates per cycle at the swing A:
         ``ΔE(A) = 2 A (a_s - a_e)``, twice the energy ``(a_s² - a_e²)/2`` lost over the
         half cycle from rest at ``a_s`` to the turning point ``a_e`` whose swing
-        ``(a_s + a_e)/2`` is A (static friction ignored: the kinetic law).
+        ``(a_s + a_e)/2`` is A (static friction ignored: the kinetic law). On a
+        nonlinear restoring force (:attr:`restoring`), twice that half cycle's loss of
+        its potential, ``2(V(a_s) - V(a_e))``.
 
         This is what a free decay measures: it is a function of the half-cycle map
         ``a_s -> a_e`` alone, which the turning points pin down, so that two laws that
@@ -438,6 +474,15 @@ class Law:
         a = np.atleast_1d(np.asarray(swing, dtype=float))
         vals = {n: np.atleast_1d(np.asarray(values[n], dtype=float)) for n in self.parameter_names}
         size = max((v.size for v in vals.values()), default=1)
+        if self.restoring is not None:
+            # twice the energy V(a_s) - V(a_e) of the half cycle of swing A
+            from bayestribo.model.laws.nonlinear import DEFAULT_STEPS as STEPS
+
+            vals = {n: np.broadcast_to(v, (size,)) for n, v in vals.items()}
+            coef = self.coefficients(vals, float(reference))
+            k = np.asarray(self.restoring.coefficients or (0.0,), dtype=float)
+            _, _, drops_nl, _ = self._nonlinear
+            return 2.0 * drops_nl(coef, k, np.ascontiguousarray(a), STEPS)
         if self.closed_form:
             zeta = np.broadcast_to(vals.get("zeta", np.zeros(1)), (size,))[:, None]
             mu = np.broadcast_to(vals.get("mu_k", np.zeros(1)), (size,))[:, None]

@@ -81,7 +81,7 @@ def _source(layout: tuple, spring: object, potential: object) -> tuple[str, list
 @cache
 def make_nonlinear_integrator(
     layout: tuple, spring: Callable, potential: Callable
-) -> tuple[Callable, Callable]:
+) -> tuple[Callable, Callable, Callable, Callable]:
     """The compiled Π-grid and turning-point functions of one law on one restoring force.
 
     Parameters
@@ -101,6 +101,12 @@ def make_nonlinear_integrator(
         for an overdamped arc (that row NaN).
     turns : callable
         ``turns(y0, coef_row, k, ratio, yp0, tau_max, max_count, steps) -> (τ_n, Y_n)``.
+    swing_drops : callable
+        ``swing_drops(coef, k, swing, steps) -> drop``: the energy V(a_s) - V(a_e) lost
+        over the half cycle whose swing ½(a_s + a_e) is each of ``swing``, (P, S).
+    dissipation : callable
+        ``dissipation(coef, k, amplitudes) -> ΔE``: the first-order loss per cycle of
+        the undamped motion of each swing (docs/restoring.md, Eq. 3), (P, A).
     """
     text, forces, cacheable = _source(layout, spring, potential)
     if not cacheable:
@@ -109,7 +115,7 @@ def make_nonlinear_integrator(
             "spring = _spring\npotential = _potential\n# -- the law and the restoring force",
         )
     module = _load_with_kernels(text, forces, cacheable, spring, potential)
-    return module.grid, module.turns
+    return module.grid, module.turns, module.swing_drops, module.dissipation
 
 
 def _load_with_kernels(
