@@ -139,16 +139,13 @@ def test_a_fitted_force_gives_no_kernel_before_it_is_measured():
     assert duffing(0.1).kernel() == duffing(0.1).kernel() != duffing(0.2).kernel()
 
 
-def test_a_run_on_a_linear_spring_is_prepared_and_fitted_as_before():
+def test_a_run_on_a_linear_spring_is_prepared_and_fitted_as_before(bundled_run):
     """The bundled run (no ``restoring``): its energy, grid and law are the linear
     spring's, so that its fit is the closed form's, unchanged."""
-    from pathlib import Path
-
     from bayestribo.inference.build import build_posterior
     from bayestribo.inference.preparation import prepare
 
-    path = Path(__file__).resolve().parents[1] / "data" / "runs" / "glycerol-N0.31-r1.csv"
-    prepared = prepare(path)
+    prepared = prepare(bundled_run)
     decay = prepared.decay
     assert decay.restoring is None and prepared.data.restoring is None
     np.testing.assert_array_equal(decay.energy, 0.5 * (decay.y**2 + decay.yp**2))
