@@ -219,3 +219,17 @@ def test_the_laws_loss_per_cycle_takes_the_restoring_force(name):
     assert np.all(np.abs(total - loss[[2, 9]]) < eps * loss[[2, 9]])
     # the friction's share is 4μA, whatever the force
     np.testing.assert_allclose(parts["coulomb"][0], 4.0 * MU * swing[[2, 9]], rtol=1e-12)
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_a_law_on_a_restoring_force_pickles(name):
+    """A campaign's workers hand laws and results between processes."""
+    import pickle
+
+    kernel = _case(name)[0]
+    law = get_law("viscous+coulomb").with_restoring(kernel)
+    back = pickle.loads(pickle.dumps(law))
+    assert back == law and back.restoring.coefficients == kernel.coefficients
+    np.testing.assert_array_equal(
+        back.restoring.potential([0.3, 1.0]), kernel.potential([0.3, 1.0])
+    )
