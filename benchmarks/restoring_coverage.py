@@ -22,8 +22,9 @@ from the record's half periods), and the 95 % interval, mean and sd of ζ, c₂ 
 are recorded against the truth: coverage (with its Clopper-Pearson interval) and the
 mean and sd of z = (mean - truth)/sd per parameter.
 
-Run: ``python benchmarks/restoring_coverage.py --runs 20 --out
-benchmarks/results/restoring_coverage.json``.
+Run: ``python benchmarks/restoring_coverage.py --runs 40 --out
+benchmarks/results/restoring_coverage.json``; ``--linear`` fits the same runs without
+``restoring`` (``restoring_coverage_linear.json``).
 """
 
 from __future__ import annotations
@@ -125,8 +126,11 @@ def simulate(case: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return t, x, v
 
 
-def one_run(name: str, index: int, seed: int, max_steps: int | None) -> dict[str, Any]:
-    """Simulate and fit run ``index`` of case ``name``."""
+def one_run(
+    name: str, index: int, seed: int, max_steps: int | None, linear: bool = False
+) -> dict[str, Any]:
+    """Simulate and fit run ``index`` of case ``name`` (``linear``: without
+    ``restoring``, the laws on the linear spring, for comparison)."""
     from bayestribo import fit
     from bayestribo.io.run import Run
 
@@ -134,7 +138,8 @@ def one_run(name: str, index: int, seed: int, max_steps: int | None) -> dict[str
     entropy = [seed, zlib.crc32(name.encode()), index]
     t, x, _ = simulate(case)
     xs = x + np.random.default_rng(entropy).normal(0.0, case["noise"], x.size)
-    run = Run(t, xs, metadata={"gain_uncertainty": 0.0, **case["meta"]})
+    meta = {k: v for k, v in case["meta"].items() if not (linear and k == "restoring")}
+    run = Run(t, xs, metadata={"gain_uncertainty": 0.0, **meta})
     out: dict[str, Any] = {"case": name, "index": index, "entropy": entropy}
     start = time.process_time()
     try:
@@ -196,11 +201,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--cases", nargs="*", default=list(CASES))
     parser.add_argument("--max-steps", type=int, default=None)
     parser.add_argument("--out", type=Path, default=None)
+    parser.add_argument(
+        "--linear", action="store_true", help="fit without 'restoring' (the linear spring)"
+    )
     args = parser.parse_args(argv)
     records = []
     for name in args.cases:
         for i in range(args.runs):
-            r = one_run(name, i, args.seed, args.max_steps)
+            r = one_run(name, i, args.seed, args.max_steps, args.linear)
             records.append(r)
             brief = r.get("refused") or " ".join(
                 f"{p} z={r[p]['z']:+.2f}{'' if r[p]['covered'] else '!'}" for p in TRUTH
@@ -224,6 +232,7 @@ def _write(args: argparse.Namespace, records: list[dict[str, Any]]) -> dict[str,
         "truth": TRUTH,
         "cases": CASES,
         "seed": args.seed,
+        "restoring_given": not args.linear,
         "commit": commit,
         "summary": table,
         "records": records,
