@@ -189,3 +189,24 @@ def test_a_duffing_spring_is_measured_with_its_potential():
     assert lo <= 0.004 <= hi
     law = np.asarray(result.dissipation["mean"])
     assert np.all(np.abs(law / np.asarray(band["mean"]) - 1.0) < 0.01)
+
+
+def test_a_pendulums_energies_take_its_small_swings_stiffness():
+    """With the pendulum's potential in the model, time runs at the small swings' ω₀
+    (from the turning times and T(A)/T₀), so that κ = Iω₀² (the torque per angle) and
+    the law's ΔE(A) in joules agrees with the turning points' (which take the same κ,
+    not the measured frequency's corrected by T(A)/T₀ a second time)."""
+    t, angle, _ = _pendulum()
+    inertia = 0.01
+    meta = {"length_unit": "rad", "restoring": "pendulum", "inertia_kg_m2": inertia}
+    run = Run(t, angle, metadata={"gain_uncertainty": 0.0, **meta})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = fit(run, law="viscous+coulomb", seed=1, grid_points=32)
+    kappa = np.sum(result.samples("friction_torque")) / np.sum(
+        result.samples("friction_displacement")
+    )
+    assert kappa == pytest.approx(inertia * (2 * math.pi * F0) ** 2, rel=1e-3)
+    law = np.asarray(result.dissipation["mean"])
+    measured = np.asarray(result.turning_point_dissipation["mean"])
+    assert np.all(np.abs(law / measured - 1.0) < 0.01)

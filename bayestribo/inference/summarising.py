@@ -72,7 +72,11 @@ def _measured_restoring(name: str | None, decay: EnergyDecay) -> tuple[Any, dict
 
 
 def _restoring_scale(
-    restoring: Any, scale: Any, turning_points: NDArray, measured: dict | None = None
+    restoring: Any,
+    scale: Any,
+    turning_points: NDArray,
+    measured: dict | None = None,
+    small_swings: bool = False,
 ) -> tuple[Any, float]:
     """The physical scale of the turning points' ΔE(A) under a restoring force, and the
     relative sd of its energy unit.
@@ -82,14 +86,16 @@ def _restoring_scale(
     the analysed half cycles; half the span of the ratio over them (twice, for Ω²) is
     its relative sd. A measured parameter's standard error (a Duffing spring's β) adds
     its effect on the loss at the largest swing, V'(A) = A + βA³: A²δβ/(1 + βA²)
-    relative. A linear spring's scale is returned as it is."""
+    relative. A linear spring's scale is returned as it is, and so is one whose Ω is
+    already the small swings' (``small_swings``: a run prepared with its restoring
+    force's potential, :func:`bayestribo.inference.preparation.small_swing_frequency`)."""
     a = np.abs(np.asarray(turning_points, dtype=float))
     energy_sd = 0.0
     if measured and "beta_se" in measured and a.size:
         top = float(np.max(a))
         beta, se = float(measured["beta"]), float(measured["beta_se"])
         energy_sd = top * top * se / max(1.0 + beta * top * top, 1e-12)
-    if restoring.name == "linear" or scale.stiffness is None:
+    if restoring.name == "linear" or scale.stiffness is None or small_swings:
         return scale, energy_sd
     swing = 0.5 * (a[1:] + a[:-1]) if a.size > 1 else a
     ratio = restoring.half_period_ratio(swing)
@@ -277,7 +283,11 @@ def summary(
     )
     restoring, measured_spring = _measured_restoring(metadata.get("restoring"), decay)
     tp_scale, energy_sd = _restoring_scale(
-        restoring, scale, decay.peaks.value / scaling.length_scale, measured_spring
+        restoring,
+        scale,
+        decay.peaks.value / scaling.length_scale,
+        measured_spring,
+        small_swings=decay.restoring is not None,
     )
     measured = turning_point_dissipation(
         decay.peaks.value / scaling.length_scale,
