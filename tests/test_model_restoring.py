@@ -96,6 +96,12 @@ def test_a_pendulum_is_named_by_its_period_and_measured_with_its_potential():
         for w in caught
         if issubclass(w.category, MisfitWarning)
     )
+    # nor a restoring force to try: the run has named its own
+    assert not any(
+        "--restoring" in str(w.message)
+        for w in caught
+        if issubclass(w.category, FrequencyTrendWarning)
+    )
     assert "the law's model (viscous) and the law-free ΔE(A) take its potential" in (
         pendulum.to_text()
     )
