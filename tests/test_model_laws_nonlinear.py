@@ -151,6 +151,18 @@ def test_a_run_on_a_linear_spring_is_prepared_and_fitted_as_before(bundled_run):
     np.testing.assert_array_equal(decay.energy, 0.5 * (decay.y**2 + decay.yp**2))
     posterior = build_posterior(prepared.data)
     assert posterior.law.restoring is None and posterior.law.closed_form
+    # the same increments declared on a pendulum: the law takes it from the data, and
+    # the averaged model, which has no form there, is refused by name
+    import dataclasses
+
+    from bayestribo.errors import BayestriboError
+
+    kernel = get_restoring("pendulum").kernel()
+    on_pendulum = dataclasses.replace(prepared.data, restoring=kernel)
+    law = build_posterior(on_pendulum).law
+    assert law.restoring == kernel and not law.closed_form
+    with pytest.raises(BayestriboError, match="no form on the pendulum's restoring force"):
+        build_posterior(on_pendulum, model="averaged")
 
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(32)
