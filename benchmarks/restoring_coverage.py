@@ -205,6 +205,7 @@ def main(argv: list[str] | None = None) -> int:
         "--linear", action="store_true", help="fit without 'restoring' (the linear spring)"
     )
     args = parser.parse_args(argv)
+    _SOURCE.update(_source())
     records = []
     for name in args.cases:
         for i in range(args.runs):
@@ -221,11 +222,24 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
+def _source() -> dict[str, Any]:
+    """The package's commit and whether its files differ from it, at the start."""
+
+    def git(*a: str) -> str:
+        here = Path(__file__).parent
+        return subprocess.run(["git", *a], capture_output=True, text=True, cwd=here).stdout
+
+    return {
+        "commit": git("rev-parse", "HEAD").strip(),
+        "package_changed": bool(git("status", "--porcelain", "--", "../bayestribo").strip()),
+    }
+
+
+_SOURCE: dict[str, Any] = {}
+
+
 def _write(args: argparse.Namespace, records: list[dict[str, Any]]) -> dict[str, Any]:
     table = summarise(records)
-    commit = subprocess.run(
-        ["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=Path(__file__).parent
-    ).stdout.strip()
     payload = {
         "benchmark": "restoring_coverage",
         "law": LAW,
@@ -233,7 +247,7 @@ def _write(args: argparse.Namespace, records: list[dict[str, Any]]) -> dict[str,
         "cases": CASES,
         "seed": args.seed,
         "restoring_given": not args.linear,
-        "commit": commit,
+        **_SOURCE,
         "summary": table,
         "records": records,
     }
