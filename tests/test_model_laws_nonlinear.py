@@ -130,6 +130,8 @@ def test_on_a_linear_spring_the_integrator_is_the_closed_form():
         closed = law.pi_grid(tau, values, y0, 0.0, end)
         ours = law.with_restoring(linear).pi_grid(tau, values, y0, 0.0, end)
         np.testing.assert_allclose(ours, closed, rtol=0, atol=1e-6 * float(np.max(closed)))
+    with pytest.raises(ValueError, match="no closed form on the linear"):
+        law.with_restoring(linear).pi_grid(tau, values, y0, method="closed")
 
 
 def test_a_fitted_force_gives_no_kernel_before_it_is_measured():

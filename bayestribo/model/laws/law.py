@@ -264,12 +264,15 @@ class Law:
             for n in self.parameter_names
         }
         end = math.inf if tau_end is None else float(tau_end)
-        if self.restoring is not None:
-            return self._nonlinear_grid(t, y, vals, float(yp0), end, reference, steps)
         if method not in ("auto", "closed", "integrate"):
             raise ValueError(f"method must be 'auto', 'closed' or 'integrate', got {method!r}")
         if method == "closed" and not self.closed_form:
-            raise ValueError(f"law {self.name} has no closed form")
+            raise ValueError(
+                f"law {self.name} has no closed form"
+                + ("" if self.restoring is None else f" on the {self.restoring.name}")
+            )
+        if self.restoring is not None:
+            return self._nonlinear_grid(t, y, vals, float(yp0), end, reference, steps)
         if method != "integrate" and self.closed_form:
             from bayestribo.model._kernel import exact_pi_grid
 
