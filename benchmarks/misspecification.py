@@ -41,6 +41,8 @@ one-pole-10f a first-order low-pass at 10 f (326 Hz) on both channels, nothing d
 one-pole-5f- the same at 5 f (163 Hz, -1.9 % at f), declared in the sidecar's
 declared     ``filter``
 duffing-5pc  k₃ shifting the frequency at 2 mm by +5 %
+duffing-5pc- the same, declared in the sidecar's ``restoring``: ``duffing`` (the law's
+declared     model takes the spring's potential, β measured from the half periods)
 pendulum-90  the spring force k L sin(x/L), released at x₀ = L π/2: a pendulum at 90°
 ===========  =========================================================================
 
@@ -157,6 +159,11 @@ CASES: dict[str, dict[str, Any]] = {
         "kind": "rig",
     },
     "duffing-5pc": {"law": {"k3": 50 * K3_OVER_K * K}, "kind": "rig"},
+    "duffing-5pc-declared": {
+        "law": {"k3": 50 * K3_OVER_K * K},
+        "meta": {"restoring": "duffing"},
+        "kind": "rig",
+    },
     "pendulum-90": {"law": {"pendulum": math.pi / 2}, "kind": "rig"},
 }
 for _case in CASES.values():

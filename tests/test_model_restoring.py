@@ -89,11 +89,25 @@ def test_a_pendulum_is_named_by_its_period_and_measured_with_its_potential():
     trend = [str(w.message) for w in caught if issubclass(w.category, FrequencyTrendWarning)]
     assert trend and "--restoring pendulum" in trend[0]
     pendulum, caught = _fit(restoring="pendulum")
-    assert any(
+    # the law's model takes the pendulum's potential (model/laws/nonlinear.py): no
+    # warning that it assumes a linear spring, and the output says which it took
+    assert not any(
         "assumes a linear one" in str(w.message)
         for w in caught
         if issubclass(w.category, MisfitWarning)
     )
+    # nor a restoring force to try: the run has named its own
+    assert not any(
+        "--restoring" in str(w.message)
+        for w in caught
+        if issubclass(w.category, FrequencyTrendWarning)
+    )
+    assert "the law's model (viscous) and the law-free ΔE(A) take its potential" in (
+        pendulum.to_text()
+    )
+    # the truth, ζ = 0.005, inside the law's 95 % interval on the pendulum's potential
+    lo, hi = pendulum.interval("zeta", 0.95)
+    assert lo <= ZETA <= hi
     for result, holds in ((pendulum, True), (linear, False)):
         band = result.turning_point_dissipation
         amplitude = np.asarray(band["amplitude"])
@@ -175,3 +189,30 @@ def test_a_duffing_spring_is_measured_with_its_potential():
     )
     lo, hi = (np.asarray(side) for side in band["interval"])
     assert np.all((lo <= truth) & (truth <= hi)), (lo / truth, hi / truth)
+    # the law's model takes the spring's potential: its ζ holds the truth, and its own
+    # ΔE(A) agrees with the turning points' (on the linear spring it departed by 14 %)
+    lo, hi = result.interval("zeta", 0.95)
+    assert lo <= 0.004 <= hi
+    law = np.asarray(result.dissipation["mean"])
+    assert np.all(np.abs(law / np.asarray(band["mean"]) - 1.0) < 0.01)
+
+
+def test_a_pendulums_energies_take_its_small_swings_stiffness():
+    """With the pendulum's potential in the model, time runs at the small swings' ω₀
+    (from the turning times and T(A)/T₀), so that κ = Iω₀² (the torque per angle) and
+    the law's ΔE(A) in joules agrees with the turning points' (which take the same κ,
+    not the measured frequency's corrected by T(A)/T₀ a second time)."""
+    t, angle, _ = _pendulum()
+    inertia = 0.01
+    meta = {"length_unit": "rad", "restoring": "pendulum", "inertia_kg_m2": inertia}
+    run = Run(t, angle, metadata={"gain_uncertainty": 0.0, **meta})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = fit(run, law="viscous+coulomb", seed=1, grid_points=32)
+    kappa = np.sum(result.samples("friction_torque")) / np.sum(
+        result.samples("friction_displacement")
+    )
+    assert kappa == pytest.approx(inertia * (2 * math.pi * F0) ** 2, rel=1e-3)
+    law = np.asarray(result.dissipation["mean"])
+    measured = np.asarray(result.turning_point_dissipation["mean"])
+    assert np.all(np.abs(law / measured - 1.0) < 0.01)

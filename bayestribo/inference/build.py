@@ -74,6 +74,11 @@ def build_posterior(
         the_law = get_law(law)
     except ValueError as exc:
         raise BayestriboError(str(exc)) from None
+    if model == "averaged" and data.restoring is not None:
+        raise BayestriboError(
+            f"model='averaged' has no form on the {data.restoring.name}'s restoring force: "
+            "use model='exact'"
+        )
     if model == "averaged" and not the_law.closed_form:
         raise BayestriboError(
             f"model='averaged' has no closed form for the law {the_law.name}: use model='exact'"

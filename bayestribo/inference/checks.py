@@ -160,7 +160,9 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
     pendulum = _pendulum_change(
         prepared.run, prepared.metadata, decay.peaks.value / decay.scaling.length_scale
     )
-    _warn_frequency_trend(name, trend, posterior.law.name, pendulum)
+    _warn_frequency_trend(
+        name, trend, posterior.law.name, pendulum, restoring=posterior.law.restoring
+    )
     return FitChecks(
         sampled,
         modes,
@@ -306,11 +308,13 @@ def _warn_frequency_trend(
     trend: FrequencyTrend | None,
     law: str,
     pendulum: float | None = None,
+    restoring: Any = None,
 ) -> None:
     """Say when the frequency is not constant along the decay beyond the law's own
     change (the nuisance that carries it is in the intervals); ``pendulum``: the change
     a pendulum's half period makes over the same swings (a run in radians with a linear
-    restoring force), named when the measured change is the pendulum's."""
+    restoring force), named when the measured change is the pendulum's; ``restoring``:
+    the law's nonlinear restoring force, named instead of a force to try."""
     if trend is None:
         return
     if abs(trend.change) > FREQUENCY_TREND_CHANGE and abs(trend.z) > FREQUENCY_TREND_Z:
@@ -319,7 +323,12 @@ def _warn_frequency_trend(
             "--restoring duffing (sidecar 'restoring': 'duffing') measures its β from the "
             "half periods and the energy lost per cycle with its potential"
         )
-        if pendulum is not None:
+        if restoring is not None:
+            like = (
+                f" (on the {restoring.name}'s restoring force, which the law's model "
+                "takes: the change is the part its half periods do not make)"
+            )
+        elif pendulum is not None:
             se = abs(trend.change / trend.z)
             if abs(trend.change - pendulum) <= max(3.0 * se, 0.25 * abs(pendulum)):
                 like = (

@@ -236,6 +236,11 @@ def dissipation_band(
     # that small or its drag stop it: such draws are left out, and counted
     keep = np.all(np.isfinite(exact), axis=1)
     definition = "per cycle of the law's own motion at the swing A: 2A(a_s - a_e)"
+    if posterior.law.restoring is not None:
+        definition = (
+            "per cycle of the law's own motion at the swing A on the "
+            f"{posterior.law.restoring.name}'s restoring force: 2(V(a_s) - V(a_e))"
+        )
     if not keep.any():
         exact, keep = harmonic, np.ones(keep.shape, bool)
         definition = "over one cycle of the harmonic motion (no draw has these swings)"

@@ -140,7 +140,9 @@ class PiLikelihood:
     def __post_init__(self) -> None:
         if self.model not in MODELS:
             raise ValueError(f"model must be one of {MODELS}, got {self.model!r}")
-        object.__setattr__(self, "law", get_law(self.law))
+        # the run's restoring force (its energy's potential) is the law's
+        restoring = getattr(self.data, "restoring", None)
+        object.__setattr__(self, "law", get_law(self.law).with_restoring(restoring))
         if self.model == "averaged" and not self.law.closed_form:
             raise ValueError(
                 f"model='averaged' has no closed form for the law {self.law.name}; use "

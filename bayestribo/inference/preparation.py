@@ -25,14 +25,23 @@ from bayestribo.inference.types import PreparedRun
 from bayestribo.io.files import as_run
 from bayestribo.io.options import ReadOptions
 from bayestribo.io.run import Run
-from bayestribo.signal.decay import EnergyDecay, energy_decay
+from bayestribo.signal.decay import EnergyDecay, energy_decay, retrograde_integral
 from bayestribo.signal.increments import pi_data
 from bayestribo.signal.noise import NoiseModel, noise_model
 
 if TYPE_CHECKING:
     from bayestribo.inference.posterior import Posterior
 
-__all__ = ["law_frequency", "matched_law_times", "prepare", "prepare_part", "reframe", "regrid"]
+__all__ = [
+    "law_frequency",
+    "matched_law_times",
+    "prepare",
+    "prepare_part",
+    "reframe",
+    "regrid",
+    "small_swing_frequency",
+    "with_restoring",
+]
 
 
 def _run_name(run: Run) -> str:
@@ -43,6 +52,101 @@ def _data_seed(decay: EnergyDecay) -> int:
     """A seed that is a function of the analysed signals alone (CRC-32 of their bytes)."""
     crc = zlib.crc32(np.ascontiguousarray(decay.y).tobytes())
     return zlib.crc32(np.ascontiguousarray(decay.yp).tobytes(), crc)
+
+
+def _linear_spring(run: Run) -> bool:
+    """True when the run's restoring force (its metadata's ``restoring``) is one the
+    laws take as the linear spring (no compiled kernels)."""
+    from bayestribo.model.restoring import get_restoring
+
+    return get_restoring(dict(run.metadata).get("restoring")).kernels is None
+
+
+def _run_restoring(run: Run, decay: EnergyDecay) -> Any:
+    """The run's nonlinear restoring force (its metadata's ``restoring``), its
+    parameters measured from the turning points where it has any, as the energy and the
+    laws take it; None for the linear spring.
+
+    Raises
+    ------
+    BayestriboError
+        When a force's parameters cannot be measured from the record.
+    """
+    from bayestribo.model.restoring import get_restoring
+
+    name = dict(run.metadata).get("restoring")
+    force = get_restoring(name)
+    if force.kernels is None:
+        return None
+    if force.angle and decay.scaling.length_scale != 1.0:
+        raise BayestriboError(
+            f"restoring force {force.name!r}: its potential takes the angle in radians, "
+            f"but the run's displacement is scaled by {decay.scaling.length_scale:.6g} (a "
+            "rig's load, mass or inertia make y = kx/N): fit the angle without them, or "
+            "with another restoring force"
+        )
+    if force.fitted and force.measure is not None:
+        if decay.turning_times is None:
+            raise BayestriboError(
+                f"restoring force {force.name!r}: its parameters are measured from the "
+                "turning times, which this record's analysis does not give"
+            )
+        try:
+            force, _ = force.measure(
+                decay.turning_times, decay.peaks.value / decay.scaling.length_scale
+            )
+        except ValueError as exc:
+            raise BayestriboError(f"restoring force {force.name!r}: {exc}") from None
+    return force.kernel()
+
+
+def small_swing_frequency(decay: EnergyDecay, restoring: Any) -> float:
+    """The natural frequency [Hz] of the small swings under a nonlinear restoring force.
+
+    The record's turning times are fitted by least squares as
+    ``t_n = t₀ + T₀ Σ_{m<n} T(A_m)/T₀`` (A_m = (|Y_m| + |Y_m+1|)/2, the restoring
+    force's half period ratio); the damping's share of the period is the record's own
+    (its natural over its damped frequency, :func:`~bayestribo.signal.decay.
+    energy_decay`).
+
+    Parameters
+    ----------
+    decay : EnergyDecay
+        The record's decay.
+    restoring : RestoringKernel
+        Its restoring force (:meth:`~bayestribo.model.restoring.RestoringForce.kernel`).
+
+    Returns
+    -------
+    float
+        ω₀/2π [Hz].
+    """
+    times = np.asarray(decay.turning_times, dtype=float)
+    values = np.abs(np.asarray(decay.peaks.value, dtype=float)) / decay.scaling.length_scale
+    swing = 0.5 * (values[1:] + values[:-1])
+    ratio = np.asarray(restoring.half_period_ratio(swing), dtype=float)
+    steps = np.concatenate(([0.0], np.cumsum(ratio)))
+    design = np.column_stack([np.ones_like(steps), steps])
+    (_, half), *_ = np.linalg.lstsq(design, times, rcond=None)
+    if not (math.isfinite(half) and half > 0):
+        raise BayestriboError(
+            f"restoring force {restoring.name!r}: the turning times give no small-swing period"
+        )
+    return decay.natural_frequency_Hz / decay.damped_frequency_Hz / (2.0 * float(half))
+
+
+def with_restoring(decay: EnergyDecay, restoring: Any) -> EnergyDecay:
+    """The decay with the energy of a nonlinear restoring force, ``½y'² + V(y)``, and
+    its Π (the decay as it is for None)."""
+    if restoring is None:
+        return decay
+    energy = 0.5 * decay.yp * decay.yp + np.asarray(restoring.potential(decay.y), dtype=float)
+    return dataclasses.replace(
+        decay,
+        energy=energy,
+        pi=retrograde_integral(decay.tau, energy),
+        restoring=restoring,
+    )
 
 
 def prepare(
@@ -93,6 +197,7 @@ def prepare(
     PreparedRun
     """
     recording, channels = calibrate_channels(as_run(run, read_options), correct=correct_channels)
+    linear = _linear_spring(recording)
     decay = energy_decay(
         recording.time,
         recording.displacement,
@@ -100,7 +205,22 @@ def prepare(
         rig=recording.rig(),
         skip_oscillations=skip_oscillations,
         notch=notch,
+        linear_spring=linear,
     )
+    restoring = None if linear else _run_restoring(recording, decay)
+    if restoring is not None:
+        # the small swings' frequency scales time (τ = ω₀t), in which V is written
+        decay = energy_decay(
+            recording.time,
+            recording.displacement,
+            recording.velocity,
+            rig=recording.rig(),
+            skip_oscillations=skip_oscillations,
+            notch=notch,
+            frequency_Hz=small_swing_frequency(decay, restoring),
+            linear_spring=False,
+        )
+        decay = with_restoring(decay, restoring)
     noise_used = noise or noise_model(decay, dict(recording.metadata))
     if seed is None:
         mc_seed = _data_seed(decay)
@@ -147,7 +267,9 @@ def reframe(prepared: PreparedRun, frequency_Hz: float) -> PreparedRun:
         skip_oscillations=prepared.skip_oscillations,
         notch=old.notch_Hz[0] if old.notch_Hz else None,
         frequency_Hz=frequency_Hz,
+        linear_spring=old.restoring is None,
     )
+    decay = with_restoring(decay, old.restoring)
     noise_used = prepared.noise if prepared.noise_given else noise_model(decay, dict(run.metadata))
     data = pi_data(decay, noise_used, grid_points=prepared.grid_points, seed=_data_seed(decay))
     return dataclasses.replace(prepared, decay=decay, noise=noise_used, data=data)
@@ -216,7 +338,10 @@ def prepare_part(prepared: PreparedRun, start: int, stop: int) -> PreparedRun:
         rig=part.rig(),
         skip_oscillations=prepared.skip_oscillations,
         notch=old.notch_Hz[0] if old.notch_Hz else None,
+        frequency_Hz=None if old.restoring is None else old.scaling.omega / (2.0 * math.pi),
+        linear_spring=old.restoring is None,
     )
+    decay = with_restoring(decay, old.restoring)
     data = pi_data(decay, prepared.noise, grid_points=prepared.grid_points, seed=_data_seed(decay))
     return dataclasses.replace(prepared, run=part, decay=decay, data=data, noise_given=True)
 

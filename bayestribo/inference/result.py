@@ -583,7 +583,13 @@ class FitResult:
                 text += (
                     f", β = {spring['beta']:.4g} ± {spring['beta_se']:.2g} (from the half periods)"
                 )
-            lines.append(text + "; the law-free ΔE(A) takes its potential")
+            if spring.get("in_model"):
+                lines.append(
+                    text + f"; the law's model ({self.law}) and the law-free ΔE(A) take its "
+                    "potential, E = ½y'² + V(y)"
+                )
+            else:
+                lines.append(text + "; the law-free ΔE(A) takes its potential")
         agreement = self._attr("shape_agreement_json", None)
         if agreement:
             lines.append(

@@ -257,7 +257,8 @@ class FitSpec:
     restoring: str | None = _spec_field(
         None,
         doc="The oscillator's restoring force (a registered one, the sidecar's "
-        "'restoring'); None: the sidecar's, else linear.",
+        "'restoring'); None: the sidecar's, else linear. A nonlinear one's potential is "
+        "the law's model's and the record's energy's (docs/restoring.md).",
         option=SpecOption("--restoring", "", kind="reading"),
         check=_restoring,
     )

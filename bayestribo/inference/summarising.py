@@ -72,7 +72,11 @@ def _measured_restoring(name: str | None, decay: EnergyDecay) -> tuple[Any, dict
 
 
 def _restoring_scale(
-    restoring: Any, scale: Any, turning_points: NDArray, measured: dict | None = None
+    restoring: Any,
+    scale: Any,
+    turning_points: NDArray,
+    measured: dict | None = None,
+    small_swings: bool = False,
 ) -> tuple[Any, float]:
     """The physical scale of the turning points' ΔE(A) under a restoring force, and the
     relative sd of its energy unit.
@@ -82,14 +86,16 @@ def _restoring_scale(
     the analysed half cycles; half the span of the ratio over them (twice, for Ω²) is
     its relative sd. A measured parameter's standard error (a Duffing spring's β) adds
     its effect on the loss at the largest swing, V'(A) = A + βA³: A²δβ/(1 + βA²)
-    relative. A linear spring's scale is returned as it is."""
+    relative. A linear spring's scale is returned as it is, and so is one whose Ω is
+    already the small swings' (``small_swings``: a run prepared with its restoring
+    force's potential, :func:`bayestribo.inference.preparation.small_swing_frequency`)."""
     a = np.abs(np.asarray(turning_points, dtype=float))
     energy_sd = 0.0
     if measured and "beta_se" in measured and a.size:
         top = float(np.max(a))
         beta, se = float(measured["beta"]), float(measured["beta_se"])
         energy_sd = top * top * se / max(1.0 + beta * top * top, 1e-12)
-    if restoring.name == "linear" or scale.stiffness is None:
+    if restoring.name == "linear" or scale.stiffness is None or small_swings:
         return scale, energy_sd
     swing = 0.5 * (a[1:] + a[:-1]) if a.size > 1 else a
     ratio = restoring.half_period_ratio(swing)
@@ -99,13 +105,14 @@ def _restoring_scale(
     return dataclasses.replace(scale, stiffness=stiffness), math.hypot(spread, energy_sd)
 
 
-def _warn_restoring(name: str | None, restoring: Any, law: str) -> None:
-    """Say that the laws assume a linear restoring force when the run's is another."""
-    if restoring.name == "linear":
+def _warn_restoring(name: str | None, restoring: Any, law: Any) -> None:
+    """Say that the law assumes a linear restoring force when the run's is another that
+    the law's model does not take (a force registered without compiled kernels)."""
+    if restoring.name == "linear" or law.restoring is not None:
         return
     warn(
         f"the restoring force of {name or 'the run'} is the {restoring.name}'s, and the law "
-        f"{law} assumes a linear one: its parameters are not a measurement. The energy "
+        f"{law.name} assumes a linear one: its parameters are not a measurement. The energy "
         "dissipated per cycle measured from the turning points with the "
         f"{restoring.name}'s potential (printed as 'turning points (law-free)') is the "
         "answer",
@@ -276,7 +283,11 @@ def summary(
     )
     restoring, measured_spring = _measured_restoring(metadata.get("restoring"), decay)
     tp_scale, energy_sd = _restoring_scale(
-        restoring, scale, decay.peaks.value / scaling.length_scale, measured_spring
+        restoring,
+        scale,
+        decay.peaks.value / scaling.length_scale,
+        measured_spring,
+        small_swings=decay.restoring is not None,
     )
     measured = turning_point_dissipation(
         decay.peaks.value / scaling.length_scale,
@@ -286,7 +297,7 @@ def summary(
         restoring=restoring,
         energy_sd=energy_sd,
     )
-    _warn_restoring(name, restoring, posterior.law.name)
+    _warn_restoring(name, restoring, posterior.law)
     agreement = shape_agreement(dissipation, measured)
     warn_shape(name, agreement, posterior.law.name, compared, flagged=checks.flagged)
     noise_info = {**prepared.noise.to_dict(), "description": prepared.noise.describe()}
@@ -304,7 +315,14 @@ def summary(
         dissipation=plain_data(dissipation),
         turning_point_dissipation=plain_data(measured),
         shape_agreement=plain_data(agreement),
-        restoring=plain_data({"name": restoring.name, **(measured_spring or {})}),
+        restoring=plain_data(
+            {
+                "name": restoring.name,
+                **(measured_spring or {}),
+                # the law's model takes its potential (model/laws/nonlinear.py)
+                "in_model": posterior.law.restoring is not None,
+            }
+        ),
         units=own_units,
         seed=-1 if recorded_seed is None else int(recorded_seed),
         package_version=__version__,

@@ -70,7 +70,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass, replace
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 import scipy.signal
@@ -85,6 +85,7 @@ from bayestribo.model.scaling import Rig, Scaling
 from bayestribo.signal.clipping import flattened_turning_points, hard_clips
 from bayestribo.signal.coverage import ShortAnalysisWarning, coverage_note
 from bayestribo.signal.motion import (
+    SPACING_TOLERANCE,
     THRESHOLD,
     IrregularStartWarning,
     RegularTurningPoints,
@@ -228,6 +229,10 @@ class EnergyDecay:
         swings whose period depends on the amplitude, a start still driven:
         :func:`~bayestribo.signal.motion.regular_turning_points`), beyond the skipped
         oscillations; 0 when none was.
+    restoring : RestoringKernel or None
+        The nonlinear restoring force whose potential the energy holds,
+        ``E = ½y'² + V(y)`` (:func:`bayestribo.inference.preparation.prepare`, from the
+        run's ``restoring``); None for the linear spring's ``½(y² + y'²)``.
     """
 
     t: NDArray
@@ -257,6 +262,7 @@ class EnergyDecay:
     turning_times: NDArray | None = None
     flattened_turning_points: int = 0
     irregular_turning_points: int = 0
+    restoring: Any = None
 
     @property
     def tau_end(self) -> float:
@@ -800,6 +806,7 @@ def energy_decay(
     notch: float | Literal["auto"] | None = None,
     motion_threshold: float = THRESHOLD,
     frequency_Hz: float | None = None,
+    linear_spring: bool = True,
 ) -> EnergyDecay:
     """Energy decay curve and Π(τ) of a free-decay recording (Eq. 6, 26, 39).
 
@@ -856,6 +863,11 @@ def energy_decay(
         frequency that makes a nonlinear law's turning times match the record's,
         :func:`bayestribo.inference.pipeline.law_frequency`); the measured one is still
         reported in ``natural_frequency_Hz``.
+    linear_spring : bool
+        False for a run whose restoring force is declared nonlinear (a pendulum, a
+        Duffing spring): its first half periods differ from the later ones and its peaks
+        are not a linear oscillator's by the force itself, so that neither leaves
+        turning points out (as an irregular start or soft clipping).
 
     Returns
     -------
@@ -933,6 +945,7 @@ def energy_decay(
         min_turning_points=min_turning_points,
         offset=offset,
         motion_threshold=motion_threshold,
+        linear_spring=linear_spring,
     )
     if notch is None:
         return _analyse(t, x, v, notch_Hz=(), **options)
@@ -1248,6 +1261,7 @@ def _analyse(
     offset: float | Literal["auto", "constant"] | None,
     motion_threshold: float,
     notch_Hz: tuple[float, ...],
+    linear_spring: bool = True,
 ) -> EnergyDecay:
     """:func:`energy_decay` on checked (and notched) signals."""
     derived: str | None = None
@@ -1321,7 +1335,12 @@ def _analyse(
         raise RecordingError(f"turning points: {e}") from e
     peaks = replace(found, index=found.index + lo)
     # the free decay starts where the turning points are half a period apart
-    spacing = regular_turning_points(peaks.t, peaks.value, timing_sd=_timing_sd(t, peaks))
+    spacing = regular_turning_points(
+        peaks.t,
+        peaks.value,
+        timing_sd=_timing_sd(t, peaks),
+        tolerance=SPACING_TOLERANCE if linear_spring else math.inf,
+    )
     if spacing.start:
         peaks = _equilibrium_from(peaks, spacing.start, offset)
     peaks = replace(peaks, stop_time=stop_time)
@@ -1350,13 +1369,17 @@ def _analyse(
         irregular = _irregular_start(spacing, peaks, skipped, int(min_turning_points))
         skip = irregular
     left_out = 0
-    flattened = _flattened(
-        t,
-        x if derived != "displacement" else None,  # recorded channels only: a derived
-        v if derived != "velocity" else None,  # one is distorted by its derivation
-        peaks,
-        period0 / per_samples,
-        spacing.half_period,
+    flattened = (
+        None
+        if not linear_spring
+        else _flattened(
+            t,
+            x if derived != "displacement" else None,  # recorded channels only: a derived
+            v if derived != "velocity" else None,  # one is distorted by its derivation
+            peaks,
+            period0 / per_samples,
+            spacing.half_period,
+        )
     )
     if flattened is not None and flattened[0] > skip:
         skip = left_out = _clipped_start(

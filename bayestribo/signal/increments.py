@@ -79,7 +79,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -231,6 +231,9 @@ class PiData:
         The law's increments where the second pass computed the variances, shape
         (m,): without the noise, they scale the shape discrepancy's columns
         (:mod:`bayestribo.inference.likelihood`). None on a first pass.
+    restoring : RestoringKernel or None
+        The nonlinear restoring force of the energy (:attr:`EnergyDecay.restoring`),
+        which the likelihood's law takes; None for the linear spring.
     """
 
     tau_grid: NDArray
@@ -246,6 +249,7 @@ class PiData:
     neighbour_covariance: NDArray | None = None
     preparation: Mapping[str, Any] | None = None
     law_increments: NDArray | None = None
+    restoring: Any = None
 
     @property
     def tau_end(self) -> float:
@@ -550,8 +554,13 @@ def increment_noise(
     autocov_yp: NDArray | None = None,
     spectrum: NoiseSpectrum | None = None,
     spectrum_scale: float = 1.0,
+    potential: Callable[[NDArray], NDArray] | None = None,
 ) -> tuple[NDArray, NDArray]:
     """Noise bias and noise variance of each increment of E = (y² + y'²)/2.
+
+    With a nonlinear restoring force's ``potential`` V the Monte Carlo of a derived
+    channel takes E = ½y'² + V(y); with recorded channels the caller passes V'(y)
+    for y (the white and coloured formulas are linear in the noise).
 
     With both channels recorded (``derived`` None) the noise is white and
     independent per channel: per sample E has the bias ½(σ_y² + σ_y'²) and the
@@ -627,9 +636,15 @@ def increment_noise(
     if derived not in ("velocity", "displacement"):
         raise ValueError(f"derived must be None, 'velocity' or 'displacement', got {derived!r}")
     rng = np.random.default_rng(seed)
+
     # by BLAS as the replicates are: their differences from it are small, and the two
     # sums must round alike for them
-    reference = _integrate_by_blas(0.5 * (y * y + yp * yp), edges, weights)
+    def energy_of(y: NDArray, yp: NDArray) -> NDArray:
+        if potential is None:
+            return 0.5 * (y * y + yp * yp)
+        return 0.5 * yp * yp + potential(y)
+
+    reference = _integrate_by_blas(energy_of(y, yp), edges, weights)
     draws = np.empty((n_replicates, edges.size - 1))
     for first in range(0, n_replicates, _BLOCK):
         count = min(_BLOCK, n_replicates - first)
@@ -643,7 +658,7 @@ def increment_noise(
             yn, ypn = _rederive(tau, y + draw, yp, y, yp, derived, savgol_window)
         else:
             yn, ypn = _rederive(tau, y, yp + draw, y, yp, derived, savgol_window)
-        energy = 0.5 * (yn * yn + ypn * ypn)
+        energy = energy_of(yn, ypn)
         draws[first : first + count] = integrate_increments(energy, edges, weights) - reference
     return draws.mean(axis=0), draws.var(axis=0, ddof=1)
 
@@ -759,6 +774,13 @@ def pi_data(
                 f"motion: expected two arrays of shape {decay.tau.shape} (the decay's "
                 f"samples), got {y.shape} and {yp.shape}"
             )
+    restoring = decay.restoring
+    potential = None
+    if restoring is not None and decay.derived_channel is not None:
+        potential = restoring.potential  # the Monte Carlo takes E = ½y'² + V(y)
+    elif restoring is not None:
+        # the noise of E = ½y'² + V(y) takes V'(y) where the linear spring's takes y
+        y = np.asarray(restoring.spring(y), dtype=float)
     e2 = integrate_increments(decay.energy**2, edges, weights)
     longest = int(np.max(np.diff(edges))) + 1
     options = spectral_options(decay, noise, 2 * longest) if spectral else {}
@@ -774,6 +796,7 @@ def pi_data(
         savgol_window=decay.savgol_window,
         n_replicates=n_replicates,
         seed=seed,
+        potential=potential,
         **options,
     )
     if options:
@@ -802,6 +825,7 @@ def pi_data(
         plus = np.maximum(neighbours, 0.0)
         variance = variance + np.r_[0.0, plus] + np.r_[plus, 0.0]
     observed = integrate_increments(decay.energy, edges, weights) - bias
+    force = decay.y if restoring is None else np.asarray(restoring.spring(decay.y), dtype=float)
     if decay.motion_ended:
         # The end of motion is located within about a sample: allow for the energy of
         # ±2 samples at the end in the last increment.
@@ -825,10 +849,11 @@ def pi_data(
             "seed": seed,
             "spectral": spectral,
         },
+        restoring=restoring,
         offset_design=np.column_stack(
             [
-                integrate_increments(decay.y, edges, weights),
-                integrate_increments(tau * decay.y, edges, weights),
+                integrate_increments(force, edges, weights),
+                integrate_increments(tau * force, edges, weights),
                 bias * noise_bias_sd(decay, noise),
             ]
         ),

@@ -17,14 +17,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bayestribo.model.laws.base import TERMS, Parameter, PhysicalScale, Term, get_term
 from bayestribo.model.laws.integrator import DEFAULT_STEPS, make_integrator
+
+if TYPE_CHECKING:
+    from bayestribo.model.restoring.base import RestoringKernel
 
 __all__ = ["ALIASES", "DEFAULT_LAW", "Law", "get_law"]
 
@@ -49,9 +53,14 @@ class Law:
         Distinct terms (see :func:`bayestribo.model.laws.base.register_term`); a
         term need not be registered to be used here, which is how a law defined
         outside the package is fitted.
+    restoring : RestoringKernel, optional
+        The oscillator's restoring force when it is not the linear spring
+        (:meth:`bayestribo.model.restoring.RestoringForce.kernel`): Π then comes from
+        :mod:`bayestribo.model.laws.nonlinear`, with the energy ``½y'² + V(y)``.
     """
 
     terms: tuple[Term, ...]
+    restoring: RestoringKernel | None = None
 
     def __post_init__(self) -> None:
         terms = tuple(self.terms)
@@ -134,11 +143,18 @@ class Law:
         """True when a term carries static friction (μ_s/μ_k is a parameter)."""
         return any(t.sticks for t in self.terms)
 
+    def with_restoring(self, restoring: RestoringKernel | None) -> Law:
+        """The same law on another restoring force (None: the linear spring)."""
+        return self if restoring == self.restoring else replace(self, restoring=restoring)
+
     @property
     def closed_form(self) -> bool:
-        """True when Π has a closed form (viscous damping, Coulomb friction or both)."""
-        return {t.name for t in self.terms} <= _CLOSED_FORM and all(
-            t is TERMS.get(t.name) for t in self.terms
+        """True when Π has a closed form (viscous damping, Coulomb friction or both, on
+        a linear spring)."""
+        return (
+            self.restoring is None
+            and {t.name for t in self.terms} <= _CLOSED_FORM
+            and all(t is TERMS.get(t.name) for t in self.terms)
         )
 
     def default_priors(self, amplitude: float) -> dict[str, Mapping[str, float | str]]:
@@ -251,7 +267,12 @@ class Law:
         if method not in ("auto", "closed", "integrate"):
             raise ValueError(f"method must be 'auto', 'closed' or 'integrate', got {method!r}")
         if method == "closed" and not self.closed_form:
-            raise ValueError(f"law {self.name} has no closed form")
+            raise ValueError(
+                f"law {self.name} has no closed form"
+                + ("" if self.restoring is None else f" on the {self.restoring.name}")
+            )
+        if self.restoring is not None:
+            return self._nonlinear_grid(t, y, vals, float(yp0), end, reference, steps)
         if method != "integrate" and self.closed_form:
             from bayestribo.model._kernel import exact_pi_grid
 
@@ -304,8 +325,46 @@ class Law:
         vals = {n: np.atleast_1d(np.asarray(values[n], dtype=float)) for n in self.parameter_names}
         coef = self.coefficients(vals, ref)[0]
         ratio = float(self.static_ratio(vals, 1)[0])
+        if self.restoring is not None:
+            from bayestribo.model.laws.nonlinear import DEFAULT_STEPS as STEPS
+
+            _, turns_nl, _, _ = self._nonlinear
+            k = np.asarray(self.restoring.coefficients or (0.0,), dtype=float)
+            return turns_nl(
+                float(y0), coef, k, ratio, float(yp0), float(tau_max), int(max_count), STEPS
+            )
         _, turns, _ = make_integrator(*self._layout[0])
         return turns(float(y0), coef, ratio, float(yp0), float(tau_max), int(max_count))
+
+    @property
+    def _nonlinear(self) -> tuple:
+        """The compiled Π-grid and turning-point functions on the restoring force."""
+        from bayestribo.model.laws.nonlinear import make_nonlinear_integrator
+
+        r = self.restoring
+        assert r is not None
+        return make_nonlinear_integrator(self._layout[0], r.spring_kernel, r.potential_kernel)
+
+    def _nonlinear_grid(
+        self,
+        t: NDArray,
+        y: NDArray,
+        vals: Mapping[str, NDArray],
+        yp0: float,
+        end: float,
+        reference: float | None,
+        steps: int,
+    ) -> NDArray:
+        """Π on the restoring force (:mod:`bayestribo.model.laws.nonlinear`)."""
+        from bayestribo.model.laws.nonlinear import DEFAULT_STEPS as STEPS
+
+        ref = abs(float(y[0])) if reference is None else float(reference)
+        coef = self.coefficients(vals, ref)
+        grid, _, _, _ = self._nonlinear
+        k = np.asarray(self.restoring.coefficients or (0.0,), dtype=float)  # type: ignore[union-attr]
+        ratio = self.static_ratio(vals, y.size)
+        pi, _ = grid(t, y, coef, k, ratio, yp0, end, int(steps) if steps > 0 else STEPS)
+        return pi
 
     # -- what the law dissipates ---------------------------------------------------
     def dissipation(
@@ -316,7 +375,9 @@ class Law:
         *,
         by_term: bool = False,
     ) -> NDArray | dict[str, NDArray]:
-        """Energy dissipated over one cycle of ``y = A cos τ``, ΔE(A) = ∮F(y')y' dτ.
+        """Energy dissipated over one cycle of ``y = A cos τ``, ΔE(A) = ∮F(y')y' dτ
+        (on a nonlinear restoring force, over one cycle of its undamped motion of swing
+        A: docs/restoring.md, Eq. 3).
 
         Parameters
         ----------
@@ -335,6 +396,8 @@ class Law:
             In dimensionless energy units (y²); multiply by kℓ² for joules
             (:attr:`PhysicalScale.energy_factor`).
         """
+        if self.restoring is not None:
+            return self._restoring_dissipation(amplitude, values, reference, by_term)
         a = np.atleast_1d(np.asarray(amplitude, dtype=float))[None, :]
         vals = {
             n: np.atleast_1d(np.asarray(values[n], dtype=float))[:, None]
@@ -345,13 +408,45 @@ class Law:
             return parts
         return sum(parts.values())
 
+    def _restoring_dissipation(
+        self,
+        amplitude: ArrayLike,
+        values: Mapping[str, ArrayLike],
+        reference: float,
+        by_term: bool,
+    ) -> NDArray | dict[str, NDArray]:
+        """:meth:`dissipation` on the restoring force: the first-order loss per cycle of
+        its undamped motion (docs/restoring.md, Eq. 3); each term's share with the other
+        terms' coefficients at zero (a term's force is proportional to them)."""
+        a = np.ascontiguousarray(np.atleast_1d(np.asarray(amplitude, dtype=float)))
+        vals = {n: np.atleast_1d(np.asarray(values[n], dtype=float)) for n in self.parameter_names}
+        size = max((v.size for v in vals.values()), default=1)
+        vals = {n: np.broadcast_to(v, (size,)) for n, v in vals.items()}
+        coef = self.coefficients(vals, float(reference))
+        k = np.asarray(self.restoring.coefficients or (0.0,), dtype=float)  # type: ignore[union-attr]
+        _, _, _, cycle = self._nonlinear
+        if not by_term:
+            return cycle(coef, k, a)
+        parts = {}
+        start = 0
+        for term in self._layout[1]:
+            alone = np.zeros_like(coef)
+            alone[:, start : start + term.n_coefficients] = coef[
+                :, start : start + term.n_coefficients
+            ]
+            start += term.n_coefficients
+            parts[term.name] = cycle(np.ascontiguousarray(alone), k, a)
+        return {t.name: parts[t.name] for t in self.terms}
+
     def swing_dissipation(
         self, swing: ArrayLike, values: Mapping[str, ArrayLike], reference: float
     ) -> NDArray:
         """Energy the law's own motion dissipates per cycle at the swing A:
         ``ΔE(A) = 2 A (a_s - a_e)``, twice the energy ``(a_s² - a_e²)/2`` lost over the
         half cycle from rest at ``a_s`` to the turning point ``a_e`` whose swing
-        ``(a_s + a_e)/2`` is A (static friction ignored: the kinetic law).
+        ``(a_s + a_e)/2`` is A (static friction ignored: the kinetic law). On a
+        nonlinear restoring force (:attr:`restoring`), twice that half cycle's loss of
+        its potential, ``2(V(a_s) - V(a_e))``.
 
         This is what a free decay measures: it is a function of the half-cycle map
         ``a_s -> a_e`` alone, which the turning points pin down, so that two laws that
@@ -382,6 +477,15 @@ class Law:
         a = np.atleast_1d(np.asarray(swing, dtype=float))
         vals = {n: np.atleast_1d(np.asarray(values[n], dtype=float)) for n in self.parameter_names}
         size = max((v.size for v in vals.values()), default=1)
+        if self.restoring is not None:
+            # twice the energy V(a_s) - V(a_e) of the half cycle of swing A
+            from bayestribo.model.laws.nonlinear import DEFAULT_STEPS as STEPS
+
+            vals = {n: np.broadcast_to(v, (size,)) for n, v in vals.items()}
+            coef = self.coefficients(vals, float(reference))
+            k = np.asarray(self.restoring.coefficients or (0.0,), dtype=float)
+            _, _, drops_nl, _ = self._nonlinear
+            return 2.0 * drops_nl(coef, k, np.ascontiguousarray(a), STEPS)
         if self.closed_form:
             zeta = np.broadcast_to(vals.get("zeta", np.zeros(1)), (size,))[:, None]
             mu = np.broadcast_to(vals.get("mu_k", np.zeros(1)), (size,))[:, None]

@@ -6,9 +6,13 @@ ones are listed, in this order, in
 :data:`~bayestribo.model.restoring.base.BUILTIN_RESTORING` and each module is imported
 when its force is first asked for (:func:`get_restoring`):
 
-* ``linear``: k x, V = y²/2 (the default, every dissipation law's);
+* ``linear``: k x, V = y²/2 (the default);
 * ``pendulum``: m g L sin θ, V = 1 - cos θ, θ in radians;
 * ``duffing``: k(x + βx³), V = y²/2 + βy⁴/4, β measured from the half periods.
+
+A force with compiled kernels (``RestoringForce.kernels``: the pendulum, the Duffing
+spring) is taken by every dissipation law's model and by the record's energy
+(:mod:`bayestribo.model.laws.nonlinear`, docs/restoring.md).
 
 Importing this package imports no numpy: :func:`restoring_table` names and describes
 every registered force without importing them. ``RESTORING`` (every registered force
@@ -23,6 +27,7 @@ from bayestribo.model.restoring.base import (
     BUILTIN_RESTORING,
     RestoringForce,
     RestoringInfo,
+    RestoringKernel,
     available_restoring,
     get_restoring,
     load_builtin_restoring,
@@ -35,6 +40,7 @@ __all__ = [
     "RESTORING",
     "RestoringForce",
     "RestoringInfo",
+    "RestoringKernel",
     "available_restoring",
     "get_restoring",
     "register_restoring",

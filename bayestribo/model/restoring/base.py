@@ -36,6 +36,7 @@ __all__ = [
     "RESTORING",
     "RestoringForce",
     "RestoringInfo",
+    "RestoringKernel",
     "available_restoring",
     "get_restoring",
     "register_restoring",
@@ -72,6 +73,16 @@ class RestoringForce:
         parameters measured from the turning times [s] and the turning points about the
         equilibrium (the run's unit), and a record of the measurement (values,
         standard errors) for the output.
+    spring : callable, optional
+        ``V'(y) -> array``: the restoring force per unit stiffness [-]; with
+        ``kernels``, what lets the laws' fits use this force
+        (:mod:`bayestribo.model.laws.nonlinear`). A force without them is the
+        linear spring to the laws.
+    kernels : (callable, callable), optional
+        The compiled ``V'(y, k)`` and ``V(y, k)`` (numba functions importable by
+        name), ``k`` the values of ``kernel_parameters``.
+    kernel_parameters : tuple of str
+        The names in ``parameters`` the kernels take, in order.
     """
 
     name: str
@@ -82,6 +93,36 @@ class RestoringForce:
     fitted: bool = False
     parameters: Mapping[str, float] = field(default_factory=dict)
     measure: Callable[[ArrayLike, ArrayLike], tuple[RestoringForce, dict]] | None = None
+    spring: Callable[[ArrayLike], NDArray] | None = None
+    kernels: tuple[Callable, Callable] | None = None
+    kernel_parameters: tuple[str, ...] = ()
+
+    def kernel(self) -> RestoringKernel | None:
+        """What the laws' integrator takes of this force (None for a force without
+        compiled kernels: the linear spring).
+
+        Raises
+        ------
+        ValueError
+            For a fitted force whose parameters were not measured yet.
+        """
+        if self.kernels is None or self.spring is None:
+            return None
+        missing = [name for name in self.kernel_parameters if name not in self.parameters]
+        if missing:
+            raise ValueError(
+                f"restoring force {self.name}: its parameters {missing} are measured from "
+                "the record first (its 'measure')"
+            )
+        return RestoringKernel(
+            self.name,
+            self.kernels[0],
+            self.kernels[1],
+            tuple(float(self.parameters[name]) for name in self.kernel_parameters),
+            self.potential,
+            self.spring,
+            self.half_period_ratio,
+        )
 
     def __post_init__(self) -> None:
         if not self.name.isidentifier():
@@ -89,6 +130,41 @@ class RestoringForce:
         small = float(self.potential(1e-3))
         if not math.isclose(small, 0.5e-6, rel_tol=1e-3):
             raise ValueError(f"restoring force {self.name}: V(y) must be y²/2 near y = 0")
+
+
+@dataclass(frozen=True)
+class RestoringKernel:
+    """A nonlinear restoring force as the laws' integrator and the energy take it.
+
+    Two kernels are equal when their force's name and coefficients are.
+
+    Attributes
+    ----------
+    name : str
+        The force's name.
+    spring_kernel, potential_kernel : numba functions
+        ``V'(y, k)`` and ``V(y, k)``, dimensionless [-].
+    coefficients : tuple of float
+        ``k``.
+    potential, spring : callable
+        ``V(y)`` and ``V'(y)`` over arrays (the record's energy and its noise).
+    half_period_ratio : callable
+        ``T(A)/T₀`` over arrays (:attr:`RestoringForce.half_period_ratio`).
+    """
+
+    name: str
+    spring_kernel: Callable = field(compare=False)
+    potential_kernel: Callable = field(compare=False)
+    coefficients: tuple[float, ...] = ()
+    potential: Callable[[ArrayLike], NDArray] = field(compare=False, default=None)  # type: ignore[assignment]
+    spring: Callable[[ArrayLike], NDArray] = field(compare=False, default=None)  # type: ignore[assignment]
+    half_period_ratio: Callable[[ArrayLike], NDArray] = field(compare=False, default=None)  # type: ignore[assignment]
+
+    def describe(self) -> str:
+        """Its name and coefficients, for the output."""
+        if not self.coefficients:
+            return self.name
+        return f"{self.name} ({', '.join(f'{c:.4g}' for c in self.coefficients)})"
 
 
 class RestoringInfo(NamedTuple):

@@ -15,7 +15,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from functools import partial
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -25,7 +27,7 @@ from bayestribo.model.restoring.base import (
     register_builtin,
 )
 
-__all__ = ["DUFFING", "duffing", "fit_beta", "half_period_ratio"]
+__all__ = ["DUFFING", "duffing", "fit_beta", "half_period_ratio", "potential", "spring"]
 
 _NODES, _WEIGHTS = np.polynomial.legendre.leggauss(48)
 _PHI = 0.25 * math.pi * (_NODES + 1.0)  # [0, π/2]
@@ -104,18 +106,40 @@ def fit_beta(times: ArrayLike, values: ArrayLike) -> tuple[float, float]:
     return float(found.x[2]) * scale, se
 
 
+@numba.njit(cache=True, inline="always")
+def spring_kernel(y: float, k: NDArray) -> float:
+    """V'(y) = y + βy³, β = k[0]."""
+    return y + k[0] * y * y * y
+
+
+@numba.njit(cache=True, inline="always")
+def potential_kernel(y: float, k: NDArray) -> float:
+    """V(y) = y²/2 + βy⁴/4, β = k[0]."""
+    y2 = y * y
+    return 0.5 * y2 + 0.25 * k[0] * y2 * y2
+
+
+def potential(y: ArrayLike, beta: float) -> NDArray:
+    """V(y) = y²/2 + βy⁴/4 at displacements y [unit²]."""
+    y = np.asarray(y, dtype=float)
+    return 0.5 * y * y + 0.25 * beta * y**4
+
+
+def spring(y: ArrayLike, beta: float) -> NDArray:
+    """V'(y) = y + βy³ at displacements y [unit]."""
+    y = np.asarray(y, dtype=float)
+    return y + beta * y**3
+
+
 def duffing(beta: float) -> RestoringForce:
-    """The Duffing spring of a given β [1/unit²]."""
-
-    def potential(y: ArrayLike) -> NDArray:
-        y = np.asarray(y, dtype=float)
-        return 0.5 * y * y + 0.25 * beta * y**4
-
+    """The Duffing spring of a given β [1/unit²] (its functions partials of this
+    module's, so that it pickles with a law that holds it)."""
     return replace(
         DUFFING,
         description=f"a Duffing spring, k(x + βx³), β = {beta:.4g}",
-        potential=potential,
-        half_period_ratio=lambda a: half_period_ratio(a, beta),
+        potential=partial(potential, beta=beta),
+        spring=partial(spring, beta=beta),
+        half_period_ratio=partial(half_period_ratio, beta=beta),
         parameters={"beta": beta},
     )
 
@@ -126,18 +150,16 @@ def _measure(times: ArrayLike, values: ArrayLike) -> tuple[RestoringForce, dict]
     return duffing(beta), {"beta": beta, "beta_se": se}
 
 
-def _potential(y: ArrayLike) -> NDArray:
-    y = np.asarray(y, dtype=float)
-    return 0.5 * y * y
-
-
 DUFFING = register_builtin(
     RestoringForce(
         name="duffing",
         description=builtin_description("duffing"),
-        potential=_potential,
-        half_period_ratio=lambda a: half_period_ratio(a, 0.0),
+        potential=partial(potential, beta=0.0),
+        half_period_ratio=partial(half_period_ratio, beta=0.0),
         fitted=True,
         measure=_measure,
+        spring=partial(spring, beta=0.0),
+        kernels=(spring_kernel, potential_kernel),
+        kernel_parameters=("beta",),
     )
 )

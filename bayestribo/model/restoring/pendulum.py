@@ -7,6 +7,9 @@ The half period of the undamped swing A is ``T(A)/T₀ = 2K(m)/π`` with
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -25,6 +28,23 @@ def _potential(theta: ArrayLike) -> NDArray:
     return 2.0 * np.sin(0.5 * theta) ** 2
 
 
+def _spring(theta: ArrayLike) -> NDArray:
+    return np.sin(np.asarray(theta, dtype=float))
+
+
+@numba.njit(cache=True, inline="always")
+def spring_kernel(y: float, k: NDArray) -> float:
+    """V'(θ) = sin θ."""
+    return math.sin(y)
+
+
+@numba.njit(cache=True, inline="always")
+def potential_kernel(y: float, k: NDArray) -> float:
+    """V(θ) = 1 - cos θ = 2 sin²(θ/2)."""
+    s = math.sin(0.5 * y)
+    return 2.0 * s * s
+
+
 def _ratio(a: ArrayLike) -> NDArray:
     import scipy.special
 
@@ -41,5 +61,7 @@ PENDULUM = register_builtin(
         potential=_potential,
         half_period_ratio=_ratio,
         angle=True,
+        spring=_spring,
+        kernels=(spring_kernel, potential_kernel),
     )
 )
