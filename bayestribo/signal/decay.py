@@ -82,6 +82,7 @@ from bayestribo._warnings import warn
 from bayestribo.errors import ClippingWarning, ClockRestartWarning, GapWarning, RecordingError
 from bayestribo.model.plausible import MAX_SPEED
 from bayestribo.model.scaling import Rig, Scaling
+from bayestribo.signal.coarse import RESOLVED_STEPS, coarse_steps, resolved_turning_points
 from bayestribo.signal.clipping import flattened_turning_points, hard_clips
 from bayestribo.signal.coverage import ShortAnalysisWarning, coverage_note
 from bayestribo.signal.motion import (
@@ -1171,14 +1172,21 @@ def _check_coverage(
     window: Peaks,
     left_out: int,
     stop_time: float | None,
+    unresolved: str | None = None,
 ) -> None:
     """Warn (:class:`~bayestribo.signal.coverage.ShortAnalysisWarning`) when the
     analysed samples ``t[start:stop]`` cover less than half of the recorded motion,
-    saying why: the turning points that end before the motion does, or the cycles
+    saying why: the turning points that end before the motion does, the swings a
+    coarse quantiser does not resolve (``unresolved``, its steps), or the cycles
     left out at the start."""
     motion_end = float(t[-1]) if stop_time is None else float(stop_time)
     last_turn = float(window.t[-1])
-    if stop_time is None and motion_end - last_turn > 0.5 * (motion_end - release):
+    if unresolved is not None:
+        end, why = (
+            float(t[stop - 1]),
+            f"the later swings are below {RESOLVED_STEPS:g} quantisation steps ({unresolved})",
+        )
+    elif stop_time is None and motion_end - last_turn > 0.5 * (motion_end - release):
         end, why = (
             last_turn,
             (f"its last turning point standing out of the noise is at {last_turn:.6g} s"),
@@ -1193,6 +1201,16 @@ def _check_coverage(
     note = coverage_note(float(t[start]), end, release, motion_end, why)
     if note is not None:
         warn(note, ShortAnalysisWarning)
+
+
+def _head(peaks: Peaks, count: int) -> Peaks:
+    """The first ``count`` turning points of ``peaks``."""
+    return replace(peaks, t=peaks.t[:count], value=peaks.value[:count], index=peaks.index[:count])
+
+
+def _steps_text(steps: tuple[float | None, float | None]) -> str:
+    names = ("displacement", "velocity")
+    return ", ".join(f"{n} {q:.3g}" for n, q in zip(names, steps, strict=True) if q is not None)
 
 
 def _check_plausible(peaks: NDArray, natural_hz: float, derived: str | None) -> None:
@@ -1391,6 +1409,25 @@ def _analyse(
             f"skipping {skipped})"
         )
     window = peaks.skip(skip)
+    rest_until = None if released_at is None else release
+    noise = _noise(t, x, v, rest_until, stop_time, period, derived, jitter)
+    motion_ended = stop_time is not None
+    coarse = coarse_steps(
+        (noise.displacement_step, noise.velocity_step), (noise.displacement, noise.velocity)
+    )
+    resolved = resolved_turning_points(window.value, math.pi / spacing.half_period, coarse)
+    if resolved < len(window):
+        # a coarse channel does not resolve the last swings (nor so the end of motion):
+        # the analysis ends at the last turning point it resolves, like a record that
+        # ends in motion
+        if resolved < int(min_turning_points):
+            raise RecordingError(
+                f"turning points: only {resolved} turning points after skipping {skipped} "
+                f"swing by {RESOLVED_STEPS:g} quantisation steps or more "
+                f"(steps {_steps_text(coarse)}); {min_turning_points} are needed"
+            )
+        window = _head(window, resolved)
+        motion_ended = False
     if stop_time is None:
         amp = np.abs(window.value)
         if amp.size >= 6 and np.mean(amp[-3:]) >= 0.99 * np.mean(amp[:3]):
@@ -1414,8 +1451,6 @@ def _analyse(
     else:
         scaling = Scaling(omega, 1.0, friction_defined=False)
 
-    rest_until = None if released_at is None else release
-    noise = _noise(t, x, v, rest_until, stop_time, period, derived, jitter)
     rest_noise = _rest_noise(t, x, v, rest_until, stop_time, period, derived)
     if derived is None:
         at_rest = _rest_samples(v, t, rest_until, stop_time, 0.25 * period)
@@ -1425,8 +1460,19 @@ def _analyse(
 
     start = int(window.index[0])
     stop = t.size if stop_time is None else int(np.searchsorted(t, stop_time)) + 1
+    if not motion_ended and stop_time is not None:
+        stop = int(window.index[-1]) + 1
     stop = min(stop, t.size)
-    _check_coverage(t, start, stop, release, window, max(left_out, irregular), stop_time)
+    _check_coverage(
+        t,
+        start,
+        stop,
+        release,
+        window,
+        max(left_out, irregular),
+        stop_time,
+        None if motion_ended or stop_time is None else _steps_text(coarse),
+    )
     sl = slice(start, stop)
     # the same operations as x[sl] - (offset + drift t) and 0.5 (y² + y'²), in place
     relative = peaks.drift * t[sl]
@@ -1449,7 +1495,7 @@ def _analyse(
         scaling=scaling,
         start_time=float(t[start]),
         end_time=float(t[stop - 1]),
-        motion_ended=stop_time is not None,
+        motion_ended=motion_ended,
         release_time=release,
         equilibrium=peaks.offset + peaks.drift * float(t[start]),
         equilibrium_drift=peaks.drift,

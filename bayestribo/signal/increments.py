@@ -88,6 +88,7 @@ import scipy.signal
 from numpy.typing import NDArray
 from scipy.integrate import cumulative_trapezoid
 
+from bayestribo.signal.coarse import coarse_steps, quantised_increments
 from bayestribo.signal.decay import EnergyDecay, derivative_gain
 from bayestribo.signal.noise import NoiseModel
 from bayestribo.signal.spectrum import NoiseSpectrum, colored_noise
@@ -231,6 +232,10 @@ class PiData:
         The law's increments where the second pass computed the variances, shape
         (m,): without the noise, they scale the shape discrepancy's columns
         (:mod:`bayestribo.inference.likelihood`). None on a first pass.
+    rounding : float
+        The step of a coarse displacement (:mod:`bayestribo.signal.coarse`) in units
+        of y, 0 otherwise: y0 and the equilibrium, read from rounded samples, are
+        known to about half of it.
     """
 
     tau_grid: NDArray
@@ -246,6 +251,7 @@ class PiData:
     neighbour_covariance: NDArray | None = None
     preparation: Mapping[str, Any] | None = None
     law_increments: NDArray | None = None
+    rounding: float = 0.0
 
     @property
     def tau_end(self) -> float:
@@ -314,6 +320,49 @@ def _rederive(
     # equilibrium) is re-estimated from the data, so only the noise's integral remains
     y_new = y + cumulative_trapezoid(yp_noisy - yp, tau, initial=0.0, axis=-1)
     return y_new, yp_noisy
+
+
+def _coarse(decay: EnergyDecay, noise: NoiseModel) -> dict[str, Any] | None:
+    """The coarse channels of a record with both channels recorded (None when it has
+    none): their steps in units of y and y', the rest of their noise, and the white
+    levels left to the white formula (:mod:`bayestribo.signal.coarse`)."""
+    if decay.derived_channel is not None:
+        return None
+    steps = coarse_steps(
+        noise.quantisation_steps, (noise.measured_displacement, noise.measured_velocity)
+    )
+    if steps == (None, None):
+        return None
+    sc = decay.scaling
+    units = (sc.length_scale, sc.length_scale * sc.omega)
+    used = (noise.displacement, noise.velocity)
+    scaled: list[float | None] = []
+    other: list[float] = []
+    white: list[float] = []
+    for step, sd, unit in zip(steps, used, units, strict=True):
+        if step is None:
+            scaled.append(None)
+            other.append(0.0)
+            white.append(sd / unit)
+            continue
+        scaled.append(step / unit)
+        other.append(math.sqrt(max(sd * sd - step * step / 12.0, 0.0)) / unit)
+        white.append(0.0)
+    return {"steps": tuple(scaled), "other": tuple(other), "white": tuple(white)}
+
+
+def decay_motion(decay: EnergyDecay) -> tuple[NDArray, NDArray]:
+    """The decay's channels smoothed over a quarter period (a cubic Savitzky-Golay
+    filter): a first stand-in for the channels without their noise and rounding, where
+    the law's motion is not yet known (:mod:`bayestribo.inference.reweight`)."""
+    h = float(decay.tau[1] - decay.tau[0])
+    window = int(0.5 * math.pi / h) // 2 * 2 + 1
+    window = min(window, decay.tau.size - (1 - decay.tau.size % 2))
+    if window < 5:
+        return decay.y, decay.yp
+    return tuple(  # type: ignore[return-value]
+        scipy.signal.savgol_filter(c, window, 3, mode="interp") for c in (decay.y, decay.yp)
+    )
 
 
 def white_noise_bias(sigma_y: float, sigma_yp: float) -> float:
@@ -761,6 +810,12 @@ def pi_data(
             )
     e2 = integrate_increments(decay.energy**2, edges, weights)
     longest = int(np.max(np.diff(edges))) + 1
+    coarse = _coarse(decay, noise)
+    if coarse is not None:
+        # the rounding of a coarse channel is left to quantised_increments (its rest
+        # shows no spectrum of it), the white formula keeps the rest of the noise
+        sig_y, sig_yp = coarse["white"]
+        spectral = False
     options = spectral_options(decay, noise, 2 * longest) if spectral else {}
     bias, variance = increment_noise(
         tau,
@@ -795,6 +850,19 @@ def pi_data(
         )
     elif decay.derived_channel is None:
         neighbours = shared_sample_covariance(y, yp, edges, weights, sig_y, sig_yp)
+    if coarse is not None:
+        q_bias, q_variance, q_neighbours = quantised_increments(
+            *(decay_motion(decay) if motion is None else (y, yp)),
+            edges,
+            weights,
+            coarse["steps"],
+            coarse["other"],
+            n_replicates=n_replicates,
+            seed=seed,
+        )
+        bias = bias + q_bias
+        variance = variance + q_variance
+        neighbours = neighbours + q_neighbours
     if neighbours.any():
         # The likelihood takes the increments as independent: a positive covariance
         # with a neighbour is added to the variance (any run of increments then has at
@@ -825,6 +893,7 @@ def pi_data(
             "seed": seed,
             "spectral": spectral,
         },
+        rounding=0.0 if coarse is None else float(coarse["steps"][0] or 0.0),
         offset_design=np.column_stack(
             [
                 integrate_increments(decay.y, edges, weights),
