@@ -8,7 +8,6 @@
 from __future__ import annotations
 
 import math
-
 from collections.abc import Mapping
 
 from bayestribo.errors import BayestriboError

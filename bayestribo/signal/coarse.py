@@ -201,4 +201,3 @@ def quantised_increments(
     variance = np.mean(dev * dev, axis=0)
     neighbours = np.mean(dev[:, :-1] * dev[:, 1:], axis=0) if m > 1 else np.zeros(0)
     return bias, variance, neighbours
-

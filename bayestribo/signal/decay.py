@@ -82,8 +82,8 @@ from bayestribo._warnings import warn
 from bayestribo.errors import ClippingWarning, ClockRestartWarning, GapWarning, RecordingError
 from bayestribo.model.plausible import MAX_SPEED
 from bayestribo.model.scaling import Rig, Scaling
-from bayestribo.signal.coarse import RESOLVED_STEPS, coarse_steps, resolved_turning_points
 from bayestribo.signal.clipping import flattened_turning_points, hard_clips
+from bayestribo.signal.coarse import RESOLVED_STEPS, coarse_steps, resolved_turning_points
 from bayestribo.signal.coverage import ShortAnalysisWarning, coverage_note
 from bayestribo.signal.motion import (
     THRESHOLD,
