@@ -85,6 +85,7 @@ from bayestribo.model.scaling import Rig, Scaling
 from bayestribo.signal.clipping import flattened_turning_points, hard_clips
 from bayestribo.signal.coarse import RESOLVED_STEPS, coarse_steps, resolved_turning_points
 from bayestribo.signal.coverage import ShortAnalysisWarning, coverage_note
+from bayestribo.signal.integration import integrate_oscillation, oscillation_pole
 from bayestribo.signal.motion import (
     THRESHOLD,
     IrregularStartWarning,
@@ -1203,6 +1204,38 @@ def _check_coverage(
         warn(note, ShortAnalysisWarning)
 
 
+#: Samples a period below which a velocity-only record's displacement is integrated
+#: as an oscillator's (:mod:`bayestribo.signal.integration`); above, the trapezoids'
+#: error (the square of the step) is below the noise.
+OSCILLATOR_RULE_SAMPLES = 50.0
+
+
+def _integrated(
+    t: NDArray, v: NDArray, period: float, release: int | None, stop: int | None
+) -> NDArray:
+    """The displacement of a velocity-only record, 0 at its first sample.
+
+    Below :data:`OSCILLATOR_RULE_SAMPLES` samples a period, integrated as a damped
+    oscillation with kinks at its turning points, its pole fitted to the velocity over
+    the motion (:func:`~bayestribo.signal.integration.oscillation_pole`); otherwise,
+    or when no pole fits, by the trapezoidal rule with its gain at the record's
+    frequency, (ωh/2)cot(ωh/2) (0.967 at 10 samples a period), divided out as the
+    channel check does (signal/channels.py).
+    """
+    step = sample_step(t)
+    if period / step < OSCILLATOR_RULE_SAMPLES:
+        lo = 0 if release is None else int(release)
+        hi = t.size if stop is None else min(t.size, int(stop) + 1)
+        pole = oscillation_pole(t[lo:hi], v[lo:hi])
+        if pole is not None:
+            return integrate_oscillation(t, v, pole)
+    x = cumulative_trapezoid(v, t, initial=0.0)
+    half = math.pi * step / period
+    if 0.0 < half < 1.0:
+        x /= half / math.tan(half)
+    return x
+
+
 def _head(peaks: Peaks, count: int) -> Peaks:
     """The first ``count`` turning points of ``peaks``."""
     return replace(peaks, t=peaks.t[:count], value=peaks.value[:count], index=peaks.index[:count])
@@ -1302,13 +1335,7 @@ def _analyse(
         if at_rest.size >= MIN_QUIET_SAMPLES:
             velocity_offset = float(np.median(at_rest))
             v = v - velocity_offset
-        x = cumulative_trapezoid(v, t, initial=0.0)
-        # the trapezoids integrate an oscillation at ω with the gain (ωh/2)cot(ωh/2)
-        # (0.967 at 10 samples a period): divided out at the record's frequency, as the
-        # channel check does (signal/channels.py)
-        half = math.pi * sample_step(t) / period0
-        if 0.0 < half < 1.0:
-            x /= half / math.tan(half)
+        x = _integrated(t, v, period0, released_at, span.stop_index)
         sigma_x = None
     else:
         quiet = _quiet_segments(t, rest_until, stop_time, 0.25 * period0)
