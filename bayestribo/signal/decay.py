@@ -85,7 +85,11 @@ from bayestribo.model.scaling import Rig, Scaling
 from bayestribo.signal.clipping import flattened_turning_points, hard_clips
 from bayestribo.signal.coarse import RESOLVED_STEPS, coarse_steps, resolved_turning_points
 from bayestribo.signal.coverage import ShortAnalysisWarning, coverage_note
-from bayestribo.signal.integration import integrate_oscillation, oscillation_pole
+from bayestribo.signal.integration import (
+    integrate_oscillation,
+    oscillation_energy,
+    oscillation_pole,
+)
 from bayestribo.signal.motion import (
     THRESHOLD,
     IrregularStartWarning,
@@ -230,6 +234,11 @@ class EnergyDecay:
         swings whose period depends on the amplitude, a start still driven:
         :func:`~bayestribo.signal.motion.regular_turning_points`), beyond the skipped
         oscillations; 0 when none was.
+    energy_steps : ndarray or None
+        ∫E dτ over each step between analysed samples (``tau.size - 1`` of them) where
+        it is known exactly: a velocity-only record integrated as an oscillator
+        (:mod:`bayestribo.signal.integration`); None otherwise (the increments then
+        integrate ``energy`` by Simpson's rule).
     """
 
     t: NDArray
@@ -259,6 +268,7 @@ class EnergyDecay:
     turning_times: NDArray | None = None
     flattened_turning_points: int = 0
     irregular_turning_points: int = 0
+    energy_steps: NDArray | None = None
 
     @property
     def tau_end(self) -> float:
@@ -1212,8 +1222,9 @@ OSCILLATOR_RULE_SAMPLES = 50.0
 
 def _integrated(
     t: NDArray, v: NDArray, period: float, release: int | None, stop: int | None
-) -> NDArray:
-    """The displacement of a velocity-only record, 0 at its first sample.
+) -> tuple[NDArray, complex | None]:
+    """The displacement of a velocity-only record, 0 at its first sample, and the pole
+    it was integrated with (None for the trapezoids).
 
     Below :data:`OSCILLATOR_RULE_SAMPLES` samples a period, integrated as a damped
     oscillation with kinks at its turning points, its pole fitted to the velocity over
@@ -1228,12 +1239,12 @@ def _integrated(
         hi = t.size if stop is None else min(t.size, int(stop) + 1)
         pole = oscillation_pole(t[lo:hi], v[lo:hi])
         if pole is not None:
-            return integrate_oscillation(t, v, pole)
+            return integrate_oscillation(t, v, pole), pole
     x = cumulative_trapezoid(v, t, initial=0.0)
     half = math.pi * step / period
     if 0.0 < half < 1.0:
         x /= half / math.tan(half)
-    return x
+    return x, None
 
 
 def _head(peaks: Peaks, count: int) -> Peaks:
@@ -1303,6 +1314,7 @@ def _analyse(
     """:func:`energy_decay` on checked (and notched) signals."""
     derived: str | None = None
     velocity_offset = 0.0
+    pole: complex | None = None
     reference = x if x is not None else v
     try:
         period0 = dominant_period(t, reference)
@@ -1335,7 +1347,7 @@ def _analyse(
         if at_rest.size >= MIN_QUIET_SAMPLES:
             velocity_offset = float(np.median(at_rest))
             v = v - velocity_offset
-        x = _integrated(t, v, period0, released_at, span.stop_index)
+        x, pole = _integrated(t, v, period0, released_at, span.stop_index)
         sigma_x = None
     else:
         quiet = _quiet_segments(t, rest_until, stop_time, 0.25 * period0)
@@ -1512,6 +1524,14 @@ def _analyse(
     energy = y * y
     energy += yp * yp
     energy *= 0.5
+    energy_steps = None
+    if pole is not None:
+        # the oscillator's own ∫E between samples (Simpson's rule on E at 10 samples a
+        # period errs by 1e-4 of an increment, hundreds of times a vibrometer's noise)
+        x2, v2 = oscillation_energy(t[sl], v[sl], y * scaling.length_scale, pole)
+        energy_steps = (0.5 * scaling.omega / scaling.length_scale**2) * (
+            x2 + v2 / scaling.omega**2
+        )
     return EnergyDecay(
         t=t[sl].copy(),
         tau=tau,
@@ -1540,4 +1560,5 @@ def _analyse(
         turning_times=np.asarray(times, dtype=float).copy(),
         flattened_turning_points=left_out,
         irregular_turning_points=irregular,
+        energy_steps=energy_steps,
     )

@@ -869,7 +869,10 @@ def pi_data(
         # least its variance); a negative one, which would sharpen it, is not.
         plus = np.maximum(neighbours, 0.0)
         variance = variance + np.r_[0.0, plus] + np.r_[plus, 0.0]
-    observed = integrate_increments(decay.energy, edges, weights) - bias
+    if decay.energy_steps is not None:
+        observed = np.add.reduceat(decay.energy_steps, edges[:-1]) - bias
+    else:
+        observed = integrate_increments(decay.energy, edges, weights) - bias
     if decay.motion_ended:
         # The end of motion is located within about a sample: allow for the energy of
         # ±2 samples at the end in the last increment.

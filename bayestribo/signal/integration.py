@@ -30,7 +30,13 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["MIN_TRIPLETS", "integrate_oscillation", "oscillation_pole", "step_rule"]
+__all__ = [
+    "MIN_TRIPLETS",
+    "integrate_oscillation",
+    "oscillation_energy",
+    "oscillation_pole",
+    "step_rule",
+]
 
 #: Triplets of samples off the turning points that the pole's fit needs.
 MIN_TRIPLETS = 10
@@ -113,6 +119,49 @@ def oscillation_pole(t: ArrayLike, v: ArrayLike) -> complex | None:
     return complex(decay / h, math.acos(cosine) / h)
 
 
+def _pieces(v: NDArray, s: complex, h: float) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    """The damped oscillations the velocity follows step by step.
+
+    Returns the step index, c, and the piece's bounds θ₀ ≤ θ₁ in [0, h] of each piece,
+    the velocity there being ``Re(c e^{sθ})`` with θ from the step's first sample: one
+    piece a step through its two samples, two at a step where the velocity changes sign
+    (through the two samples on each side, meeting at their zero).
+    """
+    n = v.size - 1
+    ahead, back = complex(np.exp(s * h)), complex(np.exp(-s * h))
+    # through v[i] and v[i+1]: c = p + iq, Re(c) = v[i], Re(c e^{sh}) = v[i+1]
+    c = v[:-1] + 1j * ((v[:-1] * ahead.real - v[1:]) / ahead.imag)
+    step = np.arange(n)
+    lo, hi = np.zeros(n), np.full(n, h)
+    extra_step, extra_c, extra_lo, extra_hi = [], [], [], []
+    w = s.imag
+    for i in np.flatnonzero(np.sign(v[:-1]) * np.sign(v[1:]) < 0):
+        if i < 1 or i + 2 >= v.size:
+            continue
+        # left: through v[i-1], v[i]; right: through v[i+1], v[i+2] (θ' from t[i+1])
+        p = v[i]
+        left = complex(p, (p * back.real - v[i - 1]) / back.imag)
+        pr = v[i + 1]
+        right = complex(pr, (pr * ahead.real - v[i + 2]) / ahead.imag)
+        # zeros: p cos(wθ) - q sin(wθ) = 0, θ in [0, h] from t[i], in [-h, 0] from t[i+1]
+        zero_left = (math.atan2(left.real, left.imag) % math.pi) / w
+        zero_right = (math.atan2(right.real, right.imag) % math.pi) / w - math.pi / w
+        if not (0.0 <= zero_left <= h and -h <= zero_right <= 0.0):
+            continue
+        at = 0.5 * (zero_left + h + zero_right)
+        c[i], hi[i] = left, at
+        extra_step.append(i)
+        extra_c.append(right * back)  # θ from t[i]
+        extra_lo.append(at)
+        extra_hi.append(h)
+    return (
+        np.concatenate([step, np.asarray(extra_step, dtype=int)]),
+        np.concatenate([c, np.asarray(extra_c, dtype=complex)]),
+        np.concatenate([lo, np.asarray(extra_lo, dtype=float)]),
+        np.concatenate([hi, np.asarray(extra_hi, dtype=float)]),
+    )
+
+
 def integrate_oscillation(t: ArrayLike, v: ArrayLike, s: complex) -> NDArray:
     """∫v dt from the first sample, exact for a damped oscillation of pole ``s`` with
     kinks at its velocity's zeros (see the module notes).
@@ -134,29 +183,69 @@ def integrate_oscillation(t: ArrayLike, v: ArrayLike, s: complex) -> NDArray:
     t = np.asarray(t, dtype=float)
     v = np.asarray(v, dtype=float)
     h = float(t[1] - t[0])
-    a, b = step_rule(s, h)
-    steps = a * v[:-1] + b * v[1:]
-    back, ahead = complex(np.exp(-s * h)), complex(np.exp(s * h))
-    w = s.imag
-    for i in np.flatnonzero(np.sign(v[:-1]) * np.sign(v[1:]) < 0):
-        if i < 1 or i + 2 >= v.size:
-            continue
-        # the damped oscillation through v[i-1], v[i] (left) and v[i+1], v[i+2] (right),
-        # c = p + iq with Re(c) = v[i] and Re(c e^{-sh}) = v[i-1]
-        p = v[i]
-        left = complex(p, (p * back.real - v[i - 1]) / back.imag)
-        pr = v[i + 1]
-        right = complex(pr, (pr * ahead.real - v[i + 2]) / ahead.imag)
-        # zeros: p cos(wθ) - q sin(wθ) = 0, θ in [0, h] from t[i], in [-h, 0] from t[i+1]
-        zero_left = (math.atan2(left.real, left.imag) % math.pi) / w
-        zero_right = (math.atan2(right.real, right.imag) % math.pi) / w - math.pi / w
-        if not (0.0 <= zero_left <= h and -h <= zero_right <= 0.0):
-            continue
-        at = 0.5 * (zero_left + h + zero_right)
-        piece_left = left * (np.exp(s * at) - 1.0) / s
-        piece_right = right * (1.0 - np.exp(s * (at - h))) / s
-        steps[i] = piece_left.real + piece_right.real
+    step, c, lo, hi = _pieces(v, s, h)
+    moved = (c * (np.exp(s * hi) - np.exp(s * lo)) / s).real
+    steps = np.zeros(v.size - 1)
+    np.add.at(steps, step, moved)
     out = np.empty(v.size)
     out[0] = 0.0
     np.cumsum(steps, out=out[1:])
     return out
+
+
+def _square_integral(g: NDArray, s: complex, lo: NDArray, hi: NDArray) -> NDArray:
+    """∫ Re(g e^{sθ})² dθ from lo to hi."""
+    sigma = s.real
+    whole = (g * g * (np.exp(2 * s * hi) - np.exp(2 * s * lo)) / (2 * s)).real
+    if sigma == 0.0:
+        mean = np.abs(g) ** 2 * (hi - lo)
+    else:
+        mean = np.abs(g) ** 2 * (np.exp(2 * sigma * hi) - np.exp(2 * sigma * lo)) / (2 * sigma)
+    return 0.5 * (whole + mean)
+
+
+def oscillation_energy(
+    t: ArrayLike, v: ArrayLike, x: ArrayLike, s: complex
+) -> tuple[NDArray, NDArray]:
+    """∫x² dt and ∫v² dt over each step between samples, the velocity followed as
+    :func:`integrate_oscillation` integrates it and ``x`` its integral.
+
+    Parameters
+    ----------
+    t : array_like
+        Regular time stamps [s].
+    v : array_like
+        The velocity [unit/s].
+    x : array_like
+        The displacement at the samples [unit] (about the equilibrium), whose steps are
+        the velocity's integrals (:func:`integrate_oscillation` plus a constant; a slow
+        drift of the equilibrium is taken step by step).
+    s : complex
+        The pole [1/s].
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        ∫x² dt [unit² s] and ∫v² dt [unit² / s] of each of the ``t.size - 1`` steps.
+    """
+    t = np.asarray(t, dtype=float)
+    v = np.asarray(v, dtype=float)
+    x = np.asarray(x, dtype=float)
+    h = float(t[1] - t[0])
+    step, c, lo, hi = _pieces(v, s, h)
+    g = c / s
+    # x at each piece's start: its step's first sample; a right half (the pieces after
+    # the first n) starts where its step's left half, piece ``step``, ends
+    n = v.size - 1
+    start = x[step].copy()
+    right = np.arange(step.size) >= n
+    left = step[right]
+    start[right] += (c[left] * (np.exp(s * hi[left]) - np.exp(s * lo[left])) / s).real
+    centre = start - (g * np.exp(s * lo)).real
+    wave = (g * (np.exp(s * hi) - np.exp(s * lo)) / s).real
+    x2 = _square_integral(g, s, lo, hi) + 2.0 * centre * wave + centre * centre * (hi - lo)
+    v2 = _square_integral(c, s, lo, hi)
+    out_x, out_v = np.zeros(n), np.zeros(n)
+    np.add.at(out_x, step, x2)
+    np.add.at(out_v, step, v2)
+    return out_x, out_v
