@@ -163,13 +163,11 @@ def quantised_increments(
     neighbour_cov : ndarray
         Covariance of each pair of neighbouring increments (length ``edges.size - 2``).
     """
-    from bayestribo.signal.increments import integrate_increments
-
     if n_replicates < 2:
         raise ValueError(f"n_replicates: expected at least 2, got {n_replicates}")
     rng = np.random.default_rng(seed)
     m = edges.size - 1
-    clean = integrate_increments(0.5 * (y * y + yp * yp), edges, weights)
+    clean = _integrated(0.5 * (y * y + yp * yp), edges, weights)
     draws = np.empty((n_replicates, m))
     done = 0
     while done < n_replicates:
@@ -186,7 +184,7 @@ def quantised_increments(
             rounded = np.round(noisy / step) * step - offset
             energy += rounded * rounded
         energy *= 0.5
-        draws[done : done + k] = integrate_increments(energy, edges, weights)
+        draws[done : done + k] = _integrated(energy, edges, weights)
         done += k
     sums = np.array([float(np.sum(w)) for w in weights])
     bias = sum(
@@ -201,3 +199,15 @@ def quantised_increments(
     variance = np.mean(dev * dev, axis=0)
     neighbours = np.mean(dev[:, :-1] * dev[:, 1:], axis=0) if m > 1 else np.zeros(0)
     return bias, variance, neighbours
+
+
+def _integrated(values: NDArray, edges: NDArray, weights: list[NDArray]) -> NDArray:
+    """∫ values over each increment, as :func:`bayestribo.signal.increments.
+    integrate_increments` takes them (values of shape (..., samples))."""
+    return np.stack(
+        [
+            values[..., a : b + 1] @ w
+            for a, b, w in zip(edges[:-1], edges[1:], weights, strict=True)
+        ],
+        axis=-1,
+    )

@@ -1,0 +1,161 @@
+"""A coarse digitiser (steps the noise does not dither): the increments' variances from
+the rounding itself, the analysis ended at the last swing of two steps, y0 known to
+half a step."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from bayestribo.inference.priors import default_priors
+from bayestribo.signal.coarse import (
+    DITHER_STEPS,
+    RESOLVED_STEPS,
+    coarse_steps,
+    quantised_increments,
+    resolved_turning_points,
+)
+from bayestribo.signal.coverage import ShortAnalysisWarning
+from bayestribo.signal.decay import energy_decay
+from bayestribo.signal.increments import (
+    increment_noise,
+    increment_weights,
+    integrate_increments,
+    pi_data,
+)
+from bayestribo.signal.noise import noise_model
+
+ZETA = 0.02
+
+
+def _decay_motion(tau: np.ndarray, amplitude: float = 5.0) -> tuple[np.ndarray, np.ndarray]:
+    """A viscous decay (natural frequency 1 in τ) from ``amplitude`` at τ = 0."""
+    wd = math.sqrt(1.0 - ZETA**2)
+    env = amplitude * np.exp(-ZETA * tau)
+    y = env * (np.cos(wd * tau) + ZETA / wd * np.sin(wd * tau))
+    yp = -env / wd * np.sin(wd * tau)
+    return y, yp
+
+
+def test_a_channel_is_coarse_when_its_noise_does_not_dither_its_steps():
+    assert coarse_steps((1.0, 1.0), (1.0 / math.sqrt(12.0), 2.0)) == (1.0, None)
+    assert coarse_steps((None, 1.0), (0.3, DITHER_STEPS)) == (None, 1.0)
+    assert coarse_steps((1.0, None), (DITHER_STEPS * 1.01, 0.1)) == (None, None)
+
+
+def test_the_resolved_turning_points_end_at_the_first_swing_below_two_steps():
+    values = np.array([9.0, -7.0, 5.0, -3.0, 2.5, -1.9, 1.0])
+    assert resolved_turning_points(values, 1.0, (1.0, None)) == 5
+    # the velocity's swing is ω|Y|: at ω = 0.5 a step of 1 resolves |Y| >= 4
+    assert resolved_turning_points(values, 0.5, (None, 1.0)) == 3
+    assert resolved_turning_points(values, 1.0, (None, None)) == values.size
+    assert RESOLVED_STEPS == 2.0
+
+
+def test_the_rounding_variances_match_the_spread_of_rounded_records():
+    """A decay of 10 steps across its swing at 300 samples a period, rounded with 400
+    placements of the levels: the spread of its increments is what
+    quantised_increments says (within its Monte Carlo error), and several times what
+    the white formula with the rounding's q/√12 gives."""
+    h = 2 * math.pi / 300
+    tau = np.arange(0, 12 * math.pi + h / 2, h)
+    y, yp = _decay_motion(tau)
+    step = 1.0
+    edges, weights = increment_weights(tau.size, h, 12)
+    bias, variance, neighbours = quantised_increments(
+        y, yp, edges, weights, (step, step), n_replicates=400, seed=1
+    )
+    clean = integrate_increments(y, edges, weights)
+    clean_e = integrate_increments(0.5 * (y * y + yp * yp), edges, weights)
+    assert clean.shape == bias.shape == variance.shape
+    assert neighbours.shape == (edges.size - 2,)
+    rng = np.random.default_rng(7)
+    errors = []
+    for _ in range(400):
+        u = rng.uniform(-0.5, 0.5, 2)
+        yq = np.round(y + u[0]) - u[0]
+        ypq = np.round(yp + u[1]) - u[1]
+        e = 0.5 * (yq * yq + ypq * ypq)
+        observed = integrate_increments(e, edges, weights)
+        errors.append(observed - clean_e - bias)
+    errors = np.array(errors)
+    # Sheppard's bias: q²/24 per channel per unit τ
+    sums = np.array([w.sum() for w in weights])
+    assert bias == pytest.approx(2 * sums / 24.0, rel=1e-12)
+    assert np.mean(errors) == pytest.approx(0.0, abs=3 * np.sqrt(np.mean(variance) / errors.size))
+    ratio = np.mean(errors**2, axis=0) / variance
+    assert np.all((ratio > 0.7) & (ratio < 1.4))
+    _, white = increment_noise(
+        tau, y, yp, edges, weights, step / math.sqrt(12), step / math.sqrt(12)
+    )
+    assert np.median(variance / white) > 3
+
+
+def _coarse_record(steps: float = 10.0):
+    """A viscous + Coulomb decay at 10 kHz (32.6 Hz, from 2 mm, sticking), both channels
+    rounded to 1/``steps`` of their swing, with 0.1 s of rest before and after."""
+    f, zeta, xc = 32.6, 0.0236, 6.2e-6
+    w = 2 * math.pi * f
+    wd = w * math.sqrt(1 - zeta**2)
+    fs = 10_000.0
+    t = np.arange(0, 0.9, 1 / fs)
+    x = np.full(t.size, 2e-3)
+    v = np.zeros(t.size)
+    t0, amp = 0.1, 2e-3
+    direction = -1.0
+    while abs(amp) > 2 * xc:
+        centre = -direction * xc
+        m = (t >= t0) & (t < t0 + math.pi / wd)
+        s = t[m] - t0
+        env = (amp - centre) * np.exp(-zeta * w * s)
+        x[m] = centre + env * (np.cos(wd * s) + zeta * w / wd * np.sin(wd * s))
+        v[m] = -env * w * w / wd * np.sin(wd * s)
+        amp = centre + (amp - centre) * -math.exp(-zeta * w * math.pi / wd)
+        t0 += math.pi / wd
+        direction = -direction
+    x[t >= t0] = amp
+    qx, qv = np.ptp(x) / steps, np.ptp(v) / steps
+    return t, np.round(x / qx) * qx, np.round(v / qv) * qv, (qx, qv), t0
+
+
+def test_a_coarse_record_ends_its_analysis_at_the_last_resolved_swing():
+    """10 steps across the swing on both channels: the velocity reads 0 cycles before
+    the pin sticks, so the end of motion is not observed. The analysis ends at the last
+    turning point two steps out (Π truncated there), and the increments' variances
+    cover their errors (the white formula left them 5 to 10 times too small)."""
+    t, x, v, (qx, _), _ = _coarse_record()
+    with pytest.warns(ShortAnalysisWarning, match="below 2 quantisation steps"):
+        decay = energy_decay(t, x, v)
+    assert decay.noise.displacement_step == pytest.approx(qx, rel=1e-9)
+    assert decay.motion_ended is False
+    assert decay.stop_time is not None and decay.end_time < decay.stop_time
+    assert abs(decay.peaks.value[-1]) >= RESOLVED_STEPS * qx
+    noise = noise_model(decay, {})
+    data = pi_data(decay, noise)
+    assert data.rounding == pytest.approx(qx / decay.scaling.length_scale, rel=1e-9)
+    assert not data.spectral
+    # the increments' errors against the record before rounding
+    sl = np.searchsorted(t, decay.t)
+    sc = decay.scaling
+    _, x_, v_, _, _ = _coarse_record(steps=1e9)
+    y = (x_[sl] - decay.equilibrium - decay.equilibrium_drift * (decay.t - decay.start_time)) / (
+        sc.length_scale
+    )
+    yp = v_[sl] / (sc.length_scale * sc.omega)
+    edges = np.searchsorted(decay.tau, data.tau_grid)
+    _, weights = increment_weights(
+        decay.tau.size, float(decay.tau[1] - decay.tau[0]), edges.size - 1
+    )
+    true = integrate_increments(0.5 * (y * y + yp * yp), edges, weights)
+    z = (data.increments - true) / np.sqrt(data.variance)
+    assert np.mean(z**2) < 4.0
+
+
+def test_a_coarse_displacement_widens_the_prior_of_y0():
+    priors = default_priors(7.0, y0_sd=0.9)
+    assert priors.priors["y0"].sigma == pytest.approx(0.9)
+    assert default_priors(7.0).priors["y0"].sigma == pytest.approx(0.07)
+    with pytest.raises(ValueError, match="y0_sd"):
+        default_priors(7.0, y0_sd=-1.0)
