@@ -1,5 +1,5 @@
 """A coarse digitiser (steps the noise does not dither): the increments' variances from
-the rounding itself, the analysis ended at the last swing of two steps, y0 known to
+the rounding itself, the analysis ended at the last resolved turning point, y0 known to
 half a step."""
 
 from __future__ import annotations
@@ -45,13 +45,12 @@ def test_a_channel_is_coarse_when_its_noise_does_not_dither_its_steps():
     assert coarse_steps((1.0, None), (DITHER_STEPS * 1.01, 0.1)) == (None, None)
 
 
-def test_the_resolved_turning_points_end_at_the_first_swing_below_two_steps():
-    values = np.array([9.0, -7.0, 5.0, -3.0, 2.5, -1.9, 1.0])
+def test_the_resolved_turning_points_end_at_the_first_amplitude_below_the_limit():
+    values = RESOLVED_STEPS * np.array([9.0, -7.0, 5.0, -3.0, 2.5, -0.9, 1.0])
     assert resolved_turning_points(values, 1.0, (1.0, None)) == 5
-    # the velocity's swing is ω|Y|: at ω = 0.5 a step of 1 resolves |Y| >= 4
-    assert resolved_turning_points(values, 0.5, (None, 1.0)) == 3
+    # the velocity's amplitude is ω|Y|: at ω = 0.25 a step of 1 resolves |Y| >= 4
+    assert resolved_turning_points(values, 0.25, (None, 1.0)) == 3
     assert resolved_turning_points(values, 1.0, (None, None)) == values.size
-    assert RESOLVED_STEPS == 2.0
 
 
 def test_the_rounding_variances_match_the_spread_of_rounded_records():
@@ -123,10 +122,10 @@ def _coarse_record(steps: float = 10.0):
 def test_a_coarse_record_ends_its_analysis_at_the_last_resolved_swing():
     """10 steps across the swing on both channels: the velocity reads 0 cycles before
     the pin sticks, so the end of motion is not observed. The analysis ends at the last
-    turning point two steps out (Π truncated there), and the increments' variances
+    turning point it resolves (Π truncated there), and the increments' variances
     cover their errors (the white formula left them 5 to 10 times too small)."""
     t, x, v, (qx, _), _ = _coarse_record()
-    with pytest.warns(ShortAnalysisWarning, match="below 2 quantisation steps"):
+    with pytest.warns(ShortAnalysisWarning, match="below 1 quantisation step"):
         decay = energy_decay(t, x, v)
     assert decay.noise.displacement_step == pytest.approx(qx, rel=1e-9)
     assert decay.motion_ended is False

@@ -16,14 +16,20 @@ a sawtooth that follows the signal. Two things follow.
   over a step), integrated like the data. The mean of the rounding error over the
   placement is 0 and that of its square q²/12 for any signal (the levels' placement
   acts as a subtractive dither), so the bias of E is Sheppard's q²/24 per channel.
-* **A swing of a few steps is not resolved.** Below about two steps the rounded
-  swing says little about the true one (below half a step it reads as rest), so a
-  motion that sticks at a swing of a few µm seems to stop cycles early on a
-  coarse velocity channel: the end of motion is not observed.
-  :func:`resolved_turning_points` counts the turning points whose swing stands
-  :data:`RESOLVED_STEPS` steps out in each coarse channel; the analysis ends at the
-  last of them (:func:`bayestribo.signal.decay.energy_decay`), and Π is truncated
-  there like a record that ends in motion.
+* **A swing of a few steps is not resolved.** Below a step of amplitude the rounded
+  signal says little about the true one (below half a step it reads as rest), so a
+  motion that sticks at an amplitude of a few µm seems to stop cycles early on a
+  coarse velocity channel, and the turning points of the smallest swings are not
+  found at all: the end of motion is not observed.
+  :func:`resolved_turning_points` counts the turning points whose amplitude is at
+  least :data:`RESOLVED_STEPS` steps in each coarse channel (ω_d|Y_n| for the
+  velocity); the analysis ends at the last of them
+  (:func:`bayestribo.signal.decay.energy_decay`), and Π is truncated there like a
+  record that ends in motion. Where the rounding is left to the variances above, one
+  step is enough: on the paper's rig rounded to a tenth of its swing with the levels
+  placed at random, the 95 % intervals of ζ and μ_k covered 6 runs in 6 (sd(z) 0.8),
+  where ending the motion at the velocity's last reading off its rest put μ_k ten
+  posterior standard deviations off.
 
 A channel is coarse (:func:`coarse_steps`) when it is quantised and the noise measured
 at rest is at most :data:`DITHER_STEPS` steps (a rest on one level shows none; the
@@ -46,8 +52,8 @@ __all__ = [
 
 #: Noise at rest, in steps, up to which a quantised channel is coarse (not dithered).
 DITHER_STEPS = 0.5
-#: Swing, in steps of a coarse channel, a turning point needs to be resolved.
-RESOLVED_STEPS = 2.0
+#: Amplitude, in steps of a coarse channel, a turning point needs to be resolved.
+RESOLVED_STEPS = 1.0
 #: Monte Carlo replicates drawn at once (memory: block × samples floats).
 _BLOCK = 50
 

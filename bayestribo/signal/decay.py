@@ -1195,7 +1195,8 @@ def _check_coverage(
     if unresolved is not None:
         end, why = (
             float(t[stop - 1]),
-            f"the later swings are below {RESOLVED_STEPS:g} quantisation steps ({unresolved})",
+            f"the later amplitudes are below {RESOLVED_STEPS:g} quantisation step(s) "
+            f"({unresolved})",
         )
     elif stop_time is None and motion_end - last_turn > 0.5 * (motion_end - release):
         end, why = (
@@ -1407,10 +1408,18 @@ def _analyse(
         irregular = _irregular_start(spacing, peaks, skipped, int(min_turning_points))
         skip = irregular
     left_out = 0
+    rest_until = None if released_at is None else release
+    noise = _noise(t, x, v, rest_until, stop_time, period, derived, jitter)
+    motion_ended = stop_time is not None
+    coarse = coarse_steps(
+        (noise.displacement_step, noise.velocity_step), (noise.displacement, noise.velocity)
+    )
     flattened = _flattened(
         t,
-        x if derived != "displacement" else None,  # recorded channels only: a derived
-        v if derived != "velocity" else None,  # one is distorted by its derivation
+        # recorded channels only (a derived one is distorted by its derivation), and
+        # not a coarse one (its extremes dwell on a level, however round the motion)
+        x if derived != "displacement" and coarse[0] is None else None,
+        v if derived != "velocity" and coarse[1] is None else None,
         peaks,
         period0 / per_samples,
         spacing.half_period,
@@ -1448,21 +1457,16 @@ def _analyse(
             f"skipping {skipped})"
         )
     window = peaks.skip(skip)
-    rest_until = None if released_at is None else release
-    noise = _noise(t, x, v, rest_until, stop_time, period, derived, jitter)
-    motion_ended = stop_time is not None
-    coarse = coarse_steps(
-        (noise.displacement_step, noise.velocity_step), (noise.displacement, noise.velocity)
-    )
     resolved = resolved_turning_points(window.value, math.pi / spacing.half_period, coarse)
-    if resolved < len(window):
-        # a coarse channel does not resolve the last swings (nor so the end of motion):
-        # the analysis ends at the last turning point it resolves, like a record that
-        # ends in motion
+    if coarse != (None, None) and (resolved < len(window) or motion_ended):
+        # a coarse channel resolves neither the last swings nor the end of motion (a
+        # velocity below half a step reads as rest cycles before the pin sticks, and
+        # turning points of the smallest swings go unfound): the analysis ends at
+        # the last turning point it resolves, like a record that ends in motion
         if resolved < int(min_turning_points):
             raise RecordingError(
                 f"turning points: only {resolved} turning points after skipping {skipped} "
-                f"swing by {RESOLVED_STEPS:g} quantisation steps or more "
+                f"have an amplitude of {RESOLVED_STEPS:g} quantisation step(s) or more "
                 f"(steps {_steps_text(coarse)}); {min_turning_points} are needed"
             )
         window = _head(window, resolved)
