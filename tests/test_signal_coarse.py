@@ -92,9 +92,10 @@ def test_the_rounding_variances_match_the_spread_of_rounded_records():
     assert np.median(variance / white) > 3
 
 
-def _coarse_record(steps: float = 10.0):
+def _coarse_record(steps: float = 10.0, placement: float = 0.0):
     """A viscous + Coulomb decay at 10 kHz (32.6 Hz, from 2 mm, sticking), both channels
-    rounded to 1/``steps`` of their swing, with 0.1 s of rest before and after."""
+    rounded to 1/``steps`` of their swing on levels shifted by ``placement`` of a step
+    from the zero, with 0.1 s of rest before and after."""
     f, zeta, xc = 32.6, 0.0236, 6.2e-6
     w = 2 * math.pi * f
     wd = w * math.sqrt(1 - zeta**2)
@@ -116,19 +117,25 @@ def _coarse_record(steps: float = 10.0):
         direction = -direction
     x[t >= t0] = amp
     qx, qv = np.ptp(x) / steps, np.ptp(v) / steps
-    return t, np.round(x / qx) * qx, np.round(v / qv) * qv, (qx, qv), t0
+    u = placement
+    return t, (np.round(x / qx + u) - u) * qx, (np.round(v / qv + u) - u) * qv, (qx, qv), t0
 
 
-def test_a_coarse_record_ends_its_analysis_at_the_last_resolved_swing():
+@pytest.mark.parametrize("placement", [0.0, 0.37])
+def test_a_coarse_record_ends_its_analysis_at_the_last_resolved_swing(placement):
     """10 steps across the swing on both channels: the velocity reads 0 cycles before
     the pin sticks, so the end of motion is not observed. The analysis ends at the last
     turning point it resolves (Π truncated there), and the increments' variances
-    cover their errors (the white formula left them 5 to 10 times too small)."""
-    t, x, v, (qx, _), _ = _coarse_record()
+    cover their errors (the white formula left them 5 to 10 times too small). With the
+    levels off the zero, the velocity's rest reads the level nearest its zero: taken
+    for an offset, it moved every moving sample by a third of a step (residuals of ±5
+    standard deviations alternating with the half cycles)."""
+    t, x, v, (qx, _), _ = _coarse_record(placement=placement)
     with pytest.warns(ShortAnalysisWarning, match="below 1 quantisation step"):
         decay = energy_decay(t, x, v)
     assert decay.noise.displacement_step == pytest.approx(qx, rel=1e-9)
     assert decay.motion_ended is False
+    assert decay.velocity_offset == 0.0
     assert decay.stop_time is not None and decay.end_time < decay.stop_time
     assert abs(decay.peaks.value[-1]) >= RESOLVED_STEPS * qx
     noise = noise_model(decay, {})

@@ -103,7 +103,7 @@ def build_posterior(
         data,
         model=model,  # type: ignore[arg-type]
         offset_sd=max(math.hypot(1e-2 * data.y0, half_step), 1e-12),
-        drift_sd=max(1e-2 * abs(data.y0) / data.tau_end, 1e-15),
+        drift_sd=max(math.hypot(1e-2 * data.y0, half_step) / data.tau_end, 1e-15),
         law=the_law,
     )
     return Posterior(prior_set, likelihood, fixed)

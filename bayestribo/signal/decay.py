@@ -1495,7 +1495,10 @@ def _analyse(
         scaling = Scaling(omega, 1.0, friction_defined=False)
 
     rest_noise = _rest_noise(t, x, v, rest_until, stop_time, period, derived)
-    if derived is None:
+    if derived is None and coarse[1] is None:
+        # (a coarse velocity at rest sits on the level nearest its zero: the rest says
+        # where that level is, not where the zero is, and the rounding, which averages
+        # out while the velocity moves, is the variances' (signal/coarse.py))
         at_rest = _rest_samples(v, t, rest_until, stop_time, 0.25 * period)
         if at_rest.size >= MIN_QUIET_SAMPLES:
             velocity_offset = float(np.median(at_rest))
