@@ -165,3 +165,16 @@ def test_a_coarse_displacement_widens_the_prior_of_y0():
     assert default_priors(7.0).priors["y0"].sigma == pytest.approx(0.07)
     with pytest.raises(ValueError, match="y0_sd"):
         default_priors(7.0, y0_sd=-1.0)
+
+
+def test_turning_points_on_a_coarse_digitisers_levels_give_a_law_free_answer():
+    """Turning points rounded to levels a step apart repeat their swings exactly: the
+    local fit's curvature is not determined, its mean is (it was a singular matrix)."""
+    from bayestribo.inference.dissipation import turning_point_dissipation
+    from bayestribo.model.laws import PhysicalScale
+
+    # the swings near 4 are all 4: the local fit's x is 0 throughout
+    turning = np.array([4.0, 4, 4, 4, 4, 4, 4, 4, 1, 1, 1, 1]) * (-1.0) ** np.arange(12)
+    found = turning_point_dissipation(turning, np.array([4.0]), PhysicalScale())
+    assert found is not None
+    assert np.all(np.isfinite(found["mean"])) and np.all(np.isfinite(found["sd"]))
