@@ -59,10 +59,19 @@ from the end of motion T. A real recording needs some care first, and
 * **One channel only**: a missing velocity is the Savitzky-Golay derivative of the
   displacement (5th-order polynomial over about 1/8 of a period; the bias on a
   sinusoid is below 1e-5 and white noise is filtered above about 4 times the
-  oscillation frequency). A missing displacement is the trapezoidal integral of the
-  velocity, after removing the velocity's zero offset measured at rest (when a rest
-  segment exists); the integration constant is the equilibrium estimate above, and
-  a residual velocity offset shows as the fitted drift.
+  oscillation frequency). A missing displacement is the integral of the velocity,
+  after removing the velocity's zero offset measured at rest (when a rest segment
+  exists); the integration constant is the equilibrium estimate above, and a residual
+  velocity offset shows as the fitted drift. Below 50 samples a period it is
+  integrated as a damped oscillation with kinks at its turning points, the pole
+  fitted to the velocity, and ∫E between samples is the oscillator's own
+  (:mod:`bayestribo.signal.integration`; :attr:`EnergyDecay.energy_steps`); above,
+  by the trapezoidal rule with its gain at the record's frequency divided out.
+* **A coarse digitiser** (a channel quantised in steps its noise does not dither,
+  :mod:`bayestribo.signal.coarse`) resolves neither the smallest swings nor the end of
+  motion: the analysis ends at the last turning point of at least one step of
+  amplitude, like a record that ends in motion; its rest is not taken for the
+  velocity's zero, and its extremes are not checked for soft clipping.
 """
 
 from __future__ import annotations

@@ -55,6 +55,19 @@ noise of E (y²σ_y²). Measured on the paper's rig at 1 kHz, leaving it out mak
 standard deviations of ζ and μ_k 0.5-0.7 % too small. Its positive part is added to
 both neighbours' variances as for coloured noise.
 
+**A coarse digitiser** (steps the noise does not dither, :mod:`bayestribo.signal.coarse`)
+rounds the signal the same way wherever it passes a level: its error does not average
+out over an increment, and its variances come from rounding the channels without their
+noise with the levels placed at random (:func:`~bayestribo.signal.coarse.
+quantised_increments`; the bias is Sheppard's q²/24 per channel, the rest spectrum is
+not used), the white formula keeping the rest of the noise.
+
+**A velocity-only record integrated as an oscillator** (below 50 samples a period,
+:mod:`bayestribo.signal.integration`) carries the oscillator's exact ∫E between its
+samples (:attr:`~bayestribo.signal.decay.EnergyDecay.energy_steps`): the observed
+increments are their sums, not Simpson's rule on E, which errs by 1e-4 of an
+increment at 10 samples a period; the variances keep the Simpson weights.
+
 **Noise-free channels in the variances.** The variances need y and y' without their
 noise. The observed ones stand in on a first pass only: below the noise their square
 has the mean y² + σ_y² (the tail's variances come out about 3 times too large at 30
