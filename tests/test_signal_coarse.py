@@ -1,10 +1,11 @@
 """A coarse digitiser (steps the noise does not dither): the increments' variances from
-the rounding itself, the analysis ended at the last resolved turning point, y0 known to
+the rounding itself, the analysis ended after the last resolved turning point, y0 known to
 half a step."""
 
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -15,6 +16,7 @@ from bayestribo.signal.coarse import (
     RESOLVED_STEPS,
     coarse_steps,
     quantised_increments,
+    resolved_end,
     resolved_turning_points,
 )
 from bayestribo.signal.coverage import ShortAnalysisWarning
@@ -45,11 +47,13 @@ def test_a_channel_is_coarse_when_its_noise_does_not_dither_its_steps():
     assert coarse_steps((1.0, None), (DITHER_STEPS * 1.01, 0.1)) == (None, None)
 
 
-def test_the_resolved_turning_points_end_at_the_first_amplitude_below_the_limit():
-    values = RESOLVED_STEPS * np.array([9.0, -7.0, 5.0, -3.0, 2.5, -0.9, 1.0])
-    assert resolved_turning_points(values, 1.0, (1.0, None)) == 5
+def test_the_resolved_turning_points_end_at_the_last_amplitude_above_the_limit():
+    values = RESOLVED_STEPS * np.array([9.0, -7.0, 5.0, -3.0, 2.5, -0.9, 1.0, -0.5, 0.4])
+    # one reading below the limit (-0.9, rounded) does not end them
+    assert resolved_turning_points(values, 1.0, (1.0, None)) == 7
     # the velocity's amplitude is ω|Y|: at ω = 0.25 a step of 1 resolves |Y| >= 4
-    assert resolved_turning_points(values, 0.25, (None, 1.0)) == 3
+    assert resolved_turning_points(values, 0.25, (None, RESOLVED_STEPS)) == 3
+    assert resolved_turning_points(values, 1.0, (100.0, None)) == 0
     assert resolved_turning_points(values, 1.0, (None, None)) == values.size
 
 
@@ -131,13 +135,19 @@ def test_a_coarse_record_ends_its_analysis_at_the_last_resolved_swing(placement)
     for an offset, it moved every moving sample by a third of a step (residuals of ±5
     standard deviations alternating with the half cycles)."""
     t, x, v, (qx, _), _ = _coarse_record(placement=placement)
-    with pytest.warns(ShortAnalysisWarning, match="below 1 quantisation step"):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ShortAnalysisWarning)
         decay = energy_decay(t, x, v)
     assert decay.noise.displacement_step == pytest.approx(qx, rel=1e-9)
     assert decay.motion_ended is False
     assert decay.velocity_offset == 0.0
     assert decay.stop_time is not None and decay.end_time < decay.stop_time
-    assert abs(decay.peaks.value[-1]) >= RESOLVED_STEPS * qx
+    # the last sample analysed is the last the displacement reaches a step from its
+    # equilibrium (the velocity's steps, ω × the displacement's, end it no sooner)
+    about = x - decay.equilibrium - decay.equilibrium_drift * (t - decay.start_time)
+    last = np.flatnonzero(np.abs(about) >= RESOLVED_STEPS * qx)[-1]
+    assert decay.end_time <= t[last]
+    assert decay.end_time > decay.peaks.t[-1]
     noise = noise_model(decay, {})
     data = pi_data(decay, noise)
     assert data.rounding == pytest.approx(qx / decay.scaling.length_scale, rel=1e-9)
@@ -150,13 +160,20 @@ def test_a_coarse_record_ends_its_analysis_at_the_last_resolved_swing(placement)
         sc.length_scale
     )
     yp = v_[sl] / (sc.length_scale * sc.omega)
-    edges = np.searchsorted(decay.tau, data.tau_grid)
-    _, weights = increment_weights(
-        decay.tau.size, float(decay.tau[1] - decay.tau[0]), edges.size - 1
-    )
+    h = float(decay.tau[1] - decay.tau[0])
+    edges, weights = increment_weights(decay.tau.size, h, data.preparation["grid_points"])
+    assert np.allclose(decay.tau[edges], data.tau_grid)
     true = integrate_increments(0.5 * (y * y + yp * yp), edges, weights)
     z = (data.increments - true) / np.sqrt(data.variance)
     assert np.mean(z**2) < 4.0
+
+
+def test_the_resolved_end_is_the_last_sample_every_coarse_channel_reaches_a_step():
+    x = np.array([3.0, -2.0, 1.5, -0.5, 1.2, 0.2, 0.1])
+    v = np.array([0.0, 3.0, -2.0, 1.0, -0.5, 0.2, 0.1])
+    assert resolved_end((x, v), (RESOLVED_STEPS, None), 1) == 4
+    assert resolved_end((x, v), (RESOLVED_STEPS, RESOLVED_STEPS), 1) == 3
+    assert resolved_end((x, v), (None, None), 2) == 2
 
 
 def test_a_coarse_displacement_widens_the_prior_of_y0():

@@ -69,8 +69,8 @@ from the end of motion T. A real recording needs some care first, and
   by the trapezoidal rule with its gain at the record's frequency divided out.
 * **A coarse digitiser** (a channel quantised in steps its noise does not dither,
   :mod:`bayestribo.signal.coarse`) resolves neither the smallest swings nor the end of
-  motion: the analysis ends at the last turning point of at least one step of
-  amplitude, like a record that ends in motion; its rest is not taken for the
+  motion: the analysis ends at the turning point after the last one of at least one
+  step of amplitude, like a record that ends in motion; its rest is not taken for the
   velocity's zero, and its extremes are not checked for soft clipping.
 """
 
@@ -92,7 +92,12 @@ from bayestribo.errors import ClippingWarning, ClockRestartWarning, GapWarning, 
 from bayestribo.model.plausible import MAX_SPEED
 from bayestribo.model.scaling import Rig, Scaling
 from bayestribo.signal.clipping import flattened_turning_points, hard_clips
-from bayestribo.signal.coarse import RESOLVED_STEPS, coarse_steps, resolved_turning_points
+from bayestribo.signal.coarse import (
+    RESOLVED_STEPS,
+    coarse_steps,
+    resolved_end,
+    resolved_turning_points,
+)
 from bayestribo.signal.coverage import ShortAnalysisWarning, coverage_note
 from bayestribo.signal.integration import (
     integrate_oscillation,
@@ -1420,6 +1425,7 @@ def _analyse(
     rest_until = None if released_at is None else release
     noise = _noise(t, x, v, rest_until, stop_time, period, derived, jitter)
     motion_ended = stop_time is not None
+    truncated = False
     coarse = coarse_steps(
         (noise.displacement_step, noise.velocity_step), (noise.displacement, noise.velocity)
     )
@@ -1470,16 +1476,19 @@ def _analyse(
     if coarse != (None, None) and (resolved < len(window) or motion_ended):
         # a coarse channel resolves neither the last swings nor the end of motion (a
         # velocity below half a step reads as rest cycles before the pin sticks, and
-        # turning points of the smallest swings go unfound): the analysis ends at
-        # the last turning point it resolves, like a record that ends in motion
-        if resolved < int(min_turning_points):
+        # turning points of the smallest swings go unfound): the analysis ends at the
+        # turning point after the last it resolves (the swing down to it starts
+        # resolved), like a record that ends in motion
+        kept = min(resolved + 1, len(window))
+        if kept < int(min_turning_points):
             raise RecordingError(
                 f"turning points: only {resolved} turning points after skipping {skipped} "
                 f"have an amplitude of {RESOLVED_STEPS:g} quantisation step(s) or more "
                 f"(steps {_steps_text(coarse)}); {min_turning_points} are needed"
             )
-        window = _head(window, resolved)
+        window = _head(window, kept)
         motion_ended = False
+        truncated = True
     if stop_time is None:
         amp = np.abs(window.value)
         if amp.size >= 6 and np.mean(amp[-3:]) >= 0.99 * np.mean(amp[:3]):
@@ -1515,8 +1524,11 @@ def _analyse(
 
     start = int(window.index[0])
     stop = t.size if stop_time is None else int(np.searchsorted(t, stop_time)) + 1
-    if not motion_ended and stop_time is not None:
-        stop = int(window.index[-1]) + 1
+    if truncated:
+        # to the last sample the coarse channels still reach a step from their zero
+        about = x - (peaks.offset + peaks.drift * t)
+        last = resolved_end((about, v), coarse, int(window.index[-1]))
+        stop = min(last, stop - 1) + 1
     stop = min(stop, t.size)
     _check_coverage(
         t,
@@ -1526,7 +1538,7 @@ def _analyse(
         window,
         max(left_out, irregular),
         stop_time,
-        None if motion_ended or stop_time is None else _steps_text(coarse),
+        _steps_text(coarse) if truncated else None,
     )
     sl = slice(start, stop)
     # the same operations as x[sl] - (offset + drift t) and 0.5 (y² + y'²), in place
