@@ -195,3 +195,18 @@ def test_turning_points_on_a_coarse_digitisers_levels_give_a_law_free_answer():
     found = turning_point_dissipation(turning, np.array([4.0]), PhysicalScale())
     assert found is not None
     assert np.all(np.isfinite(found["mean"])) and np.all(np.isfinite(found["sd"]))
+
+
+def test_channels_rounded_to_five_steps_are_one_motion():
+    """Both channels rounded to a fifth of their swing, the levels off the zero: the
+    windows whose change is a step or so are the rounding's; over the others the
+    displacement follows the velocity's integral (over all moving windows the small
+    swings brought the correlation below 0.9 and the record was refused as two
+    motions)."""
+    from bayestribo.io.run import Run
+    from bayestribo.signal.channels import channel_consistency, check_channels
+
+    t, x, v, _, _ = _coarse_record(steps=5.0, placement=0.37)
+    run = Run(time=t, displacement=x, velocity=v, metadata={})
+    check_channels(run)
+    assert channel_consistency(run).correlation > 0.95
