@@ -210,3 +210,16 @@ def test_channels_rounded_to_five_steps_are_one_motion():
     run = Run(time=t, displacement=x, velocity=v, metadata={})
     check_channels(run)
     assert channel_consistency(run).correlation > 0.95
+
+
+@pytest.mark.parametrize("placement", [-0.45, -0.35, 0.25, 0.35, 0.45])
+def test_a_coarse_displacement_gives_the_frequency_of_its_velocitys_zeros(placement):
+    """5 steps across the swing: the decrement read off turning points on the levels is
+    no measurement (it made the natural frequency 1.4 times the record's); the damped
+    frequency of the turning times is taken, within the rounding's timing error."""
+    t, x, v, _, _ = _coarse_record(steps=5.0, placement=placement)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        decay = energy_decay(t, x, v)
+    assert decay.natural_frequency_Hz == decay.damped_frequency_Hz
+    assert decay.natural_frequency_Hz == pytest.approx(32.6, rel=0.01)
