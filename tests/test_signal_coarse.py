@@ -130,7 +130,7 @@ def test_a_coarse_record_ends_its_analysis_at_the_last_resolved_swing(placement)
     """10 steps across the swing on both channels: the velocity reads 0 cycles before
     the pin sticks, so the end of motion is not observed. The analysis ends at the last
     turning point it resolves (Π truncated there), and the increments' variances
-    cover their errors (the white formula left them 5 to 10 times too small). With the
+    cover their errors (the white formula left them 4 to 10 times too small). With the
     levels off the zero, the velocity's rest reads the level nearest its zero: taken
     for an offset, it moved every moving sample by a third of a step (residuals of ±5
     standard deviations alternating with the half cycles)."""
