@@ -7,6 +7,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 from bayestribo.errors import BayestriboError
@@ -87,7 +88,15 @@ def build_posterior(
     both = sorted(set(fixed) & set(priors or {}))
     if both:
         raise BayestriboError(f"priors and fixed both name {both}: give one or the other")
-    prior_set = default_priors(data.y0, friction=friction, discrepancy=discrepancy, law=the_law)
+    # a coarse displacement reads y0 and the equilibrium to about half a step
+    half_step = 0.5 * float(getattr(data, "rounding", 0.0))
+    prior_set = default_priors(
+        data.y0,
+        friction=friction,
+        discrepancy=discrepancy,
+        law=the_law,
+        y0_sd=math.hypot(0.01 * data.y0, half_step) if half_step > 0 else None,
+    )
     if priors:
         try:
             prior_set = prior_set.replace(**dict(priors))
@@ -98,8 +107,8 @@ def build_posterior(
     likelihood = PiLikelihood(
         data,
         model=model,  # type: ignore[arg-type]
-        offset_sd=max(1e-2 * abs(data.y0), 1e-12),
-        drift_sd=max(1e-2 * abs(data.y0) / data.tau_end, 1e-15),
+        offset_sd=max(math.hypot(1e-2 * data.y0, half_step), 1e-12),
+        drift_sd=max(math.hypot(1e-2 * data.y0, half_step) / data.tau_end, 1e-15),
         law=the_law,
     )
     return Posterior(prior_set, likelihood, fixed)

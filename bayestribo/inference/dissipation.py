@@ -496,7 +496,12 @@ def turning_point_dissipation(
         dof = x.size - degree - 1
         resid = ratio[near] - design @ coef
         s2 = float(resid @ resid) / dof
-        cov = s2 * np.linalg.inv(design.T @ design)
+        try:
+            cov = s2 * np.linalg.inv(design.T @ design)
+        except np.linalg.LinAlgError:
+            # swings that repeat exactly (the turning points of a coarse digitiser sit
+            # on its levels): the curvature terms are not determined, the mean is
+            cov = s2 * np.linalg.pinv(design.T @ design)
         se = math.sqrt(max(cov[0, 0], 0.0))
         q = float(student.ppf(0.5 * (1.0 + prob), dof))
         mean[j] = amp * coef[0]

@@ -48,6 +48,25 @@ def _run_name(run: Run) -> str:
     return str(run.source or dict(run.metadata).get("run_id", "") or "")
 
 
+def _undo_declared_filter(run: Run) -> tuple[Run, bool]:
+    """The run before its declared first-order filter, when it records both channels
+    (:func:`bayestribo.signal.sensor.undo_first_order`), and whether it was undone."""
+    spec = dict(run.metadata).get("filter")
+    if spec is None or run.displacement is None or run.velocity is None:
+        return run, False
+    from bayestribo.signal.period import dominant_period
+    from bayestribo.signal.sensor import check_filter, undo_first_order
+
+    if check_filter(spec)["order"] != 1:
+        return run, False
+    try:
+        period = dominant_period(run.time, run.displacement)
+    except BayestriboError:
+        return run, False  # no oscillation: energy_decay says so
+    x, v = undo_first_order(run.time, run.displacement, run.velocity, spec, period)
+    return dataclasses.replace(run, displacement=x, velocity=v), True
+
+
 def _data_seed(decay: EnergyDecay) -> int:
     """A seed that is a function of the analysed signals alone (CRC-32 of their bytes)."""
     crc = zlib.crc32(np.ascontiguousarray(decay.y).tobytes())
@@ -196,7 +215,8 @@ def prepare(
     -------
     PreparedRun
     """
-    recording, channels = calibrate_channels(as_run(run, read_options), correct=correct_channels)
+    recording, undone = _undo_declared_filter(as_run(run, read_options))
+    recording, channels = calibrate_channels(recording, correct=correct_channels)
     linear = _linear_spring(recording)
     decay = energy_decay(
         recording.time,
@@ -237,6 +257,7 @@ def prepare(
         skip_oscillations,
         channels,
         noise is not None,
+        undone,
     )
 
 

@@ -19,7 +19,8 @@ term of :mod:`bayestribo.model.laws` declares its own:
   friction, and dry contacts reach several times it; the ratio mostly decides at
   which turning point the pin sticks.
 * ``y0`` (initial amplitude): normal, centred on the observed y(0) with a standard
-  deviation of 1 % of it, which is hundreds of times the noise of one sample.
+  deviation of 1 % of it, which is hundreds of times the noise of one sample (or,
+  for a coarse displacement, the 1 % and half its step added in quadrature).
 * ``log10_discrepancy`` (optional): base-10 logarithm of the relative model
   discrepancy per unit √τ, uniform on [-7, 0] (a log-uniform scale).
 * ``log10_shape`` (optional, with the discrepancy): base-10 logarithm of the standard
@@ -212,6 +213,7 @@ def default_priors(
     friction: bool = True,
     discrepancy: bool = False,
     law: str | Law | None = None,
+    y0_sd: float | None = None,
 ) -> PriorSet:
     """The documented default priors (see the module notes).
 
@@ -228,6 +230,10 @@ def default_priors(
         The dissipation law whose parameters get their default priors (each term's
         :class:`~bayestribo.model.laws.Parameter` gives its own); default
         ``"viscous+coulomb"``.
+    y0_sd : float, optional
+        Standard deviation of y0's prior where the observed y(0) is known worse than
+        1 % of it (a coarse displacement: :mod:`bayestribo.signal.coarse`); default
+        1 % of |y0|.
     """
     amp = abs(float(y0))
     if not amp > 0:
@@ -239,7 +245,9 @@ def default_priors(
             continue
         for p in term.parameters:
             priors[p.name] = Prior.from_spec(p.prior(amp))
-    priors["y0"] = Normal(float(y0), 0.01 * amp)
+    if y0_sd is not None and not (math.isfinite(y0_sd) and y0_sd > 0):
+        raise ValueError(f"y0_sd: expected a positive number, got {y0_sd!r}")
+    priors["y0"] = Normal(float(y0), 0.01 * amp if y0_sd is None else float(y0_sd))
     if discrepancy:
         priors["log10_discrepancy"] = Uniform(-7.0, 0.0)
         priors["log10_shape"] = Uniform(-7.0, 0.0)

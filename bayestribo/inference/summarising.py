@@ -270,6 +270,7 @@ def summary(
         scaling.omega / (2.0 * np.pi),
         displacement=prepared.run.displacement is not None,
         velocity=prepared.run.velocity is not None,
+        filter_undone=prepared.filter_undone,
     )
     gain = sensor.draws(rng.spawn(1)[0], flat.shape[0])
     derived = derived_quantities(posterior, flat, scaling, metadata, rng, frequency_sd, gain)

@@ -57,6 +57,9 @@ class PreparedRun:
         None for a run with one signal.
     noise_given : bool
         True when the noise model was given rather than measured in the recording.
+    filter_undone : bool
+        True when the run's declared first-order filter was undone on its channels
+        (:func:`bayestribo.signal.sensor.undo_first_order`): ``run`` holds them so.
     """
 
     run: Run
@@ -68,6 +71,7 @@ class PreparedRun:
     skip_oscillations: int = 1
     channels: dict[str, Any] | None = None
     noise_given: bool = False
+    filter_undone: bool = False
 
     @property
     def metadata(self) -> dict[str, Any]:

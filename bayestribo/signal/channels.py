@@ -77,6 +77,8 @@ _UNIT_MIN_CORRELATION = 0.9
 #: Windows whose velocity integral exceeds this fraction of its largest are in motion,
 #: where the correlation of the channels is measured (:func:`channel_consistency`).
 MOTION_FRACTION = 0.01
+#: Steps of a quantised displacement a window's motion must exceed to count there.
+QUANTISED_WINDOW_STEPS = 1.5
 #: Anticorrelation beyond which, with a large negative gain, the columns look swapped
 #: (rests at the initial displacement and after the stop weaken it below 1).
 _SWAP_MIN_ANTICORRELATION = 0.3
@@ -481,10 +483,13 @@ def _solve(gram: NDArray, moment: NDArray) -> tuple[float, float] | None:
     return float(a), float(-b / a)
 
 
-def _moving_correlation(xc: NDArray, ic: NDArray) -> float:
+def _moving_correlation(xc: NDArray, ic: NDArray, step: float = 0.0) -> float:
     """Correlation [-] of the displacement's changes ``xc`` with the velocity's integral
     ``ic`` over the windows in motion: ``|ic|`` above :data:`MOTION_FRACTION` of its
-    largest.
+    largest, and above :data:`QUANTISED_WINDOW_STEPS` of a quantised displacement's
+    ``step`` (a change of a step or so is its rounding: at 5 steps across the swing
+    the small swings at the end of a decay, rounded on both channels, brought the
+    correlation of one motion to 0.88).
 
     At rest the displacement's change is its noise alone, and the velocity's integral
     almost nothing. Taken over every window, the correlation of one motion fell with
@@ -497,7 +502,9 @@ def _moving_correlation(xc: NDArray, ic: NDArray) -> float:
     still do not correlate, and swapped ones still anticorrelate.
     """
     size = np.abs(ic)
-    moving = size > MOTION_FRACTION * float(np.max(size))
+    moving = size > max(MOTION_FRACTION * float(np.max(size)), QUANTISED_WINDOW_STEPS * step)
+    if not np.any(moving):
+        moving = size > MOTION_FRACTION * float(np.max(size))
     del size
     xm = xc[moving]
     xm -= xm.mean()
@@ -591,6 +598,9 @@ def _channel_consistency(run: Recording) -> ChannelConsistency | None:
     np.cumsum(area, out=integral[1:])
     step = sample_step(t)
     lag = max(1, round(period / (40.0 * step)), _quantised_lag(x, v, step, period))
+    from bayestribo.signal.quantisation import quantisation_step
+
+    x_step = quantisation_step(x) or 0.0
     if 2 * lag >= x.size:
         return None
     xc = x[lag:] - x[:-lag]
@@ -603,7 +613,7 @@ def _channel_consistency(run: Recording) -> ChannelConsistency | None:
     sxx, sii = _dot(xc, xc), _dot(ic, ic)
     if sxx == 0.0 or sii == 0.0:
         return None
-    correlation = _moving_correlation(xc, ic)
+    correlation = _moving_correlation(xc, ic, x_step)
     half = math.pi * step / period  # ω dt / 2
     trapezoid = half / math.tan(half) if 0.0 < half < 1.0 else 1.0
     # Δx ≈ g ΔI − g δ Δv by least squares, from the normal equations summed over

@@ -59,10 +59,19 @@ from the end of motion T. A real recording needs some care first, and
 * **One channel only**: a missing velocity is the Savitzky-Golay derivative of the
   displacement (5th-order polynomial over about 1/8 of a period; the bias on a
   sinusoid is below 1e-5 and white noise is filtered above about 4 times the
-  oscillation frequency). A missing displacement is the trapezoidal integral of the
-  velocity, after removing the velocity's zero offset measured at rest (when a rest
-  segment exists); the integration constant is the equilibrium estimate above, and
-  a residual velocity offset shows as the fitted drift.
+  oscillation frequency). A missing displacement is the integral of the velocity,
+  after removing the velocity's zero offset measured at rest (when a rest segment
+  exists); the integration constant is the equilibrium estimate above, and a residual
+  velocity offset shows as the fitted drift. Below 50 samples a period it is
+  integrated as a damped oscillation with kinks at its turning points, the pole
+  fitted to the velocity, and ∫E between samples is the oscillator's own
+  (:mod:`bayestribo.signal.integration`; :attr:`EnergyDecay.energy_steps`); above,
+  by the trapezoidal rule with its gain at the record's frequency divided out.
+* **A coarse digitiser** (a channel quantised in steps its noise does not dither,
+  :mod:`bayestribo.signal.coarse`) resolves neither the smallest swings nor the end of
+  motion: the analysis ends at the turning point after the last one of at least one
+  step of amplitude, like a record that ends in motion; its rest is not taken for the
+  velocity's zero, and its extremes are not checked for soft clipping.
 """
 
 from __future__ import annotations
@@ -83,7 +92,18 @@ from bayestribo.errors import ClippingWarning, ClockRestartWarning, GapWarning, 
 from bayestribo.model.plausible import MAX_SPEED
 from bayestribo.model.scaling import Rig, Scaling
 from bayestribo.signal.clipping import flattened_turning_points, hard_clips
+from bayestribo.signal.coarse import (
+    RESOLVED_STEPS,
+    coarse_steps,
+    resolved_end,
+    resolved_turning_points,
+)
 from bayestribo.signal.coverage import ShortAnalysisWarning, coverage_note
+from bayestribo.signal.integration import (
+    integrate_oscillation,
+    oscillation_energy,
+    oscillation_pole,
+)
 from bayestribo.signal.motion import (
     SPACING_TOLERANCE,
     THRESHOLD,
@@ -233,6 +253,11 @@ class EnergyDecay:
         The nonlinear restoring force whose potential the energy holds,
         ``E = ½y'² + V(y)`` (:func:`bayestribo.inference.preparation.prepare`, from the
         run's ``restoring``); None for the linear spring's ``½(y² + y'²)``.
+    energy_steps : ndarray or None
+        ∫E dτ over each step between analysed samples (``tau.size - 1`` of them) where
+        it is known exactly: a velocity-only record integrated as an oscillator
+        (:mod:`bayestribo.signal.integration`); None otherwise (the increments then
+        integrate ``energy`` by Simpson's rule).
     """
 
     t: NDArray
@@ -263,6 +288,7 @@ class EnergyDecay:
     flattened_turning_points: int = 0
     irregular_turning_points: int = 0
     restoring: Any = None
+    energy_steps: NDArray | None = None
 
     @property
     def tau_end(self) -> float:
@@ -1184,14 +1210,22 @@ def _check_coverage(
     window: Peaks,
     left_out: int,
     stop_time: float | None,
+    unresolved: str | None = None,
 ) -> None:
     """Warn (:class:`~bayestribo.signal.coverage.ShortAnalysisWarning`) when the
     analysed samples ``t[start:stop]`` cover less than half of the recorded motion,
-    saying why: the turning points that end before the motion does, or the cycles
+    saying why: the turning points that end before the motion does, the swings a
+    coarse quantiser does not resolve (``unresolved``, its steps), or the cycles
     left out at the start."""
     motion_end = float(t[-1]) if stop_time is None else float(stop_time)
     last_turn = float(window.t[-1])
-    if stop_time is None and motion_end - last_turn > 0.5 * (motion_end - release):
+    if unresolved is not None:
+        end, why = (
+            float(t[stop - 1]),
+            f"the later amplitudes are below {RESOLVED_STEPS:g} quantisation step(s) "
+            f"({unresolved})",
+        )
+    elif stop_time is None and motion_end - last_turn > 0.5 * (motion_end - release):
         end, why = (
             last_turn,
             (f"its last turning point standing out of the noise is at {last_turn:.6g} s"),
@@ -1206,6 +1240,49 @@ def _check_coverage(
     note = coverage_note(float(t[start]), end, release, motion_end, why)
     if note is not None:
         warn(note, ShortAnalysisWarning)
+
+
+#: Samples a period below which a velocity-only record's displacement is integrated
+#: as an oscillator's (:mod:`bayestribo.signal.integration`); above, the trapezoids'
+#: error (the square of the step) is below the noise.
+OSCILLATOR_RULE_SAMPLES = 50.0
+
+
+def _integrated(
+    t: NDArray, v: NDArray, period: float, release: int | None, stop: int | None
+) -> tuple[NDArray, complex | None]:
+    """The displacement of a velocity-only record, 0 at its first sample, and the pole
+    it was integrated with (None for the trapezoids).
+
+    Below :data:`OSCILLATOR_RULE_SAMPLES` samples a period, integrated as a damped
+    oscillation with kinks at its turning points, its pole fitted to the velocity over
+    the motion (:func:`~bayestribo.signal.integration.oscillation_pole`); otherwise,
+    or when no pole fits, by the trapezoidal rule with its gain at the record's
+    frequency, (ωh/2)cot(ωh/2) (0.967 at 10 samples a period), divided out as the
+    channel check does (signal/channels.py).
+    """
+    step = sample_step(t)
+    if period / step < OSCILLATOR_RULE_SAMPLES:
+        lo = 0 if release is None else int(release)
+        hi = t.size if stop is None else min(t.size, int(stop) + 1)
+        pole = oscillation_pole(t[lo:hi], v[lo:hi])
+        if pole is not None:
+            return integrate_oscillation(t, v, pole), pole
+    x = cumulative_trapezoid(v, t, initial=0.0)
+    half = math.pi * step / period
+    if 0.0 < half < 1.0:
+        x /= half / math.tan(half)
+    return x, None
+
+
+def _head(peaks: Peaks, count: int) -> Peaks:
+    """The first ``count`` turning points of ``peaks``."""
+    return replace(peaks, t=peaks.t[:count], value=peaks.value[:count], index=peaks.index[:count])
+
+
+def _steps_text(steps: tuple[float | None, float | None]) -> str:
+    names = ("displacement", "velocity")
+    return ", ".join(f"{n} {q:.3g}" for n, q in zip(names, steps, strict=True) if q is not None)
 
 
 def _check_plausible(peaks: NDArray, natural_hz: float, derived: str | None) -> None:
@@ -1266,6 +1343,7 @@ def _analyse(
     """:func:`energy_decay` on checked (and notched) signals."""
     derived: str | None = None
     velocity_offset = 0.0
+    pole: complex | None = None
     reference = x if x is not None else v
     try:
         period0 = dominant_period(t, reference)
@@ -1298,13 +1376,7 @@ def _analyse(
         if at_rest.size >= MIN_QUIET_SAMPLES:
             velocity_offset = float(np.median(at_rest))
             v = v - velocity_offset
-        x = cumulative_trapezoid(v, t, initial=0.0)
-        # the trapezoids integrate an oscillation at ω with the gain (ωh/2)cot(ωh/2)
-        # (0.967 at 10 samples a period): divided out at the record's frequency, as the
-        # channel check does (signal/channels.py)
-        half = math.pi * sample_step(t) / period0
-        if 0.0 < half < 1.0:
-            x /= half / math.tan(half)
+        x, pole = _integrated(t, v, period0, released_at, span.stop_index)
         sigma_x = None
     else:
         quiet = _quiet_segments(t, rest_until, stop_time, 0.25 * period0)
@@ -1369,13 +1441,22 @@ def _analyse(
         irregular = _irregular_start(spacing, peaks, skipped, int(min_turning_points))
         skip = irregular
     left_out = 0
+    rest_until = None if released_at is None else release
+    noise = _noise(t, x, v, rest_until, stop_time, period, derived, jitter)
+    motion_ended = stop_time is not None
+    truncated = False
+    coarse = coarse_steps(
+        (noise.displacement_step, noise.velocity_step), (noise.displacement, noise.velocity)
+    )
     flattened = (
         None
         if not linear_spring
         else _flattened(
             t,
-            x if derived != "displacement" else None,  # recorded channels only: a derived
-            v if derived != "velocity" else None,  # one is distorted by its derivation
+            # recorded channels only (a derived one is distorted by its derivation), and
+            # not a coarse one (its extremes dwell on a level, however round the motion)
+            x if derived != "displacement" and coarse[0] is None else None,
+            v if derived != "velocity" and coarse[1] is None else None,
             peaks,
             period0 / per_samples,
             spacing.half_period,
@@ -1414,6 +1495,23 @@ def _analyse(
             f"skipping {skipped})"
         )
     window = peaks.skip(skip)
+    resolved = resolved_turning_points(window.value, math.pi / spacing.half_period, coarse)
+    if coarse != (None, None) and (resolved < len(window) or motion_ended):
+        # a coarse channel resolves neither the last swings nor the end of motion (a
+        # velocity below half a step reads as rest cycles before the pin sticks, and
+        # turning points of the smallest swings go unfound): the analysis ends at the
+        # turning point after the last it resolves (the swing down to it starts
+        # resolved), like a record that ends in motion
+        kept = min(resolved + 1, len(window))
+        if kept < int(min_turning_points):
+            raise RecordingError(
+                f"turning points: only {resolved} turning points after skipping {skipped} "
+                f"have an amplitude of {RESOLVED_STEPS:g} quantisation step(s) or more "
+                f"(steps {_steps_text(coarse)}); {min_turning_points} are needed"
+            )
+        window = _head(window, kept)
+        motion_ended = False
+        truncated = True
     if stop_time is None:
         amp = np.abs(window.value)
         if amp.size >= 6 and np.mean(amp[-3:]) >= 0.99 * np.mean(amp[:3]):
@@ -1425,6 +1523,11 @@ def _analyse(
             )
     times = window.t if derived == "velocity" else _turning_times(t, v, window, period)
     damped_hz, natural_hz = _frequencies(times, window.value)
+    if coarse[0] is not None:
+        # the decrement of a coarse displacement's turning points (on its levels) is
+        # not measured: √(1+β²) is left out, an error of β²/2 (3e-4 at ζ = 0.024),
+        # where a decrement read off the levels gave a frequency 1.4 times the record's
+        natural_hz = damped_hz
     nominal_hz = None if rig is None else rig.natural_frequency_Hz
     omega = 2.0 * math.pi * (nominal_hz if use_nominal_frequency else natural_hz)
     if frequency_Hz is not None:
@@ -1437,10 +1540,11 @@ def _analyse(
     else:
         scaling = Scaling(omega, 1.0, friction_defined=False)
 
-    rest_until = None if released_at is None else release
-    noise = _noise(t, x, v, rest_until, stop_time, period, derived, jitter)
     rest_noise = _rest_noise(t, x, v, rest_until, stop_time, period, derived)
-    if derived is None:
+    if derived is None and coarse[1] is None:
+        # (a coarse velocity at rest sits on the level nearest its zero: the rest says
+        # where that level is, not where the zero is, and the rounding, which averages
+        # out while the velocity moves, is the variances' (signal/coarse.py))
         at_rest = _rest_samples(v, t, rest_until, stop_time, 0.25 * period)
         if at_rest.size >= MIN_QUIET_SAMPLES:
             velocity_offset = float(np.median(at_rest))
@@ -1448,8 +1552,22 @@ def _analyse(
 
     start = int(window.index[0])
     stop = t.size if stop_time is None else int(np.searchsorted(t, stop_time)) + 1
+    if truncated:
+        # to the last sample the coarse channels still reach a step from their zero
+        about = x - (peaks.offset + peaks.drift * t)
+        last = resolved_end((about, v), coarse, int(window.index[-1]))
+        stop = min(last, stop - 1) + 1
     stop = min(stop, t.size)
-    _check_coverage(t, start, stop, release, window, max(left_out, irregular), stop_time)
+    _check_coverage(
+        t,
+        start,
+        stop,
+        release,
+        window,
+        max(left_out, irregular),
+        stop_time,
+        _steps_text(coarse) if truncated else None,
+    )
     sl = slice(start, stop)
     # the same operations as x[sl] - (offset + drift t) and 0.5 (y² + y'²), in place
     relative = peaks.drift * t[sl]
@@ -1462,6 +1580,14 @@ def _analyse(
     energy = y * y
     energy += yp * yp
     energy *= 0.5
+    energy_steps = None
+    if pole is not None:
+        # the oscillator's own ∫E between samples (Simpson's rule on E at 10 samples a
+        # period errs by 1e-4 of an increment, hundreds of times a vibrometer's noise)
+        x2, v2 = oscillation_energy(t[sl], v[sl], y * scaling.length_scale, pole)
+        energy_steps = (0.5 * scaling.omega / scaling.length_scale**2) * (
+            x2 + v2 / scaling.omega**2
+        )
     return EnergyDecay(
         t=t[sl].copy(),
         tau=tau,
@@ -1472,7 +1598,7 @@ def _analyse(
         scaling=scaling,
         start_time=float(t[start]),
         end_time=float(t[stop - 1]),
-        motion_ended=stop_time is not None,
+        motion_ended=motion_ended,
         release_time=release,
         equilibrium=peaks.offset + peaks.drift * float(t[start]),
         equilibrium_drift=peaks.drift,
@@ -1490,4 +1616,5 @@ def _analyse(
         turning_times=np.asarray(times, dtype=float).copy(),
         flattened_turning_points=left_out,
         irregular_turning_points=irregular,
+        energy_steps=energy_steps,
     )

@@ -55,6 +55,23 @@ noise of E (y²σ_y²). Measured on the paper's rig at 1 kHz, leaving it out mak
 standard deviations of ζ and μ_k 0.5-0.7 % too small. Its positive part is added to
 both neighbours' variances as for coloured noise.
 
+**A coarse digitiser** (steps the noise does not dither, :mod:`bayestribo.signal.coarse`)
+rounds the signal the same way wherever it passes a level: its error does not average
+out over an increment, and its variances come from rounding the channels without their
+noise with the levels placed at random (:func:`~bayestribo.signal.coarse.
+quantised_increments`; the bias is Sheppard's q²/24 per channel, the rest spectrum is
+not used), the white formula keeping the rest of the noise. Its errors alternate
+between half cycles (correlation about -0.6 between neighbours: a level above the zero
+at one turning point is below it at the next), so its default grid is one increment a
+cycle, whose variance holds the two together (with one a half cycle, the independent
+increments left ζ's and μ_k's intervals twice too wide, sd(z) 0.47).
+
+**A velocity-only record integrated as an oscillator** (below 50 samples a period,
+:mod:`bayestribo.signal.integration`) carries the oscillator's exact ∫E between its
+samples (:attr:`~bayestribo.signal.decay.EnergyDecay.energy_steps`): the observed
+increments are their sums, not Simpson's rule on E, which errs by 1e-4 of an
+increment at 10 samples a period; the variances keep the Simpson weights.
+
 **Noise-free channels in the variances.** The variances need y and y' without their
 noise. The observed ones stand in on a first pass only: below the noise their square
 has the mean y² + σ_y² (the tail's variances come out about 3 times too large at 30
@@ -88,6 +105,7 @@ import scipy.signal
 from numpy.typing import NDArray
 from scipy.integrate import cumulative_trapezoid
 
+from bayestribo.signal.coarse import coarse_steps, quantised_increments
 from bayestribo.signal.decay import EnergyDecay, derivative_gain
 from bayestribo.signal.noise import NoiseModel
 from bayestribo.signal.spectrum import NoiseSpectrum, colored_noise
@@ -234,6 +252,10 @@ class PiData:
     restoring : RestoringKernel or None
         The nonlinear restoring force of the energy (:attr:`EnergyDecay.restoring`),
         which the likelihood's law takes; None for the linear spring.
+    rounding : float
+        The step of a coarse displacement (:mod:`bayestribo.signal.coarse`) in units
+        of y, 0 otherwise: y0 and the equilibrium, read from rounded samples, are
+        known to about half of it.
     """
 
     tau_grid: NDArray
@@ -250,6 +272,7 @@ class PiData:
     preparation: Mapping[str, Any] | None = None
     law_increments: NDArray | None = None
     restoring: Any = None
+    rounding: float = 0.0
 
     @property
     def tau_end(self) -> float:
@@ -318,6 +341,49 @@ def _rederive(
     # equilibrium) is re-estimated from the data, so only the noise's integral remains
     y_new = y + cumulative_trapezoid(yp_noisy - yp, tau, initial=0.0, axis=-1)
     return y_new, yp_noisy
+
+
+def _coarse(decay: EnergyDecay, noise: NoiseModel) -> dict[str, Any] | None:
+    """The coarse channels of a record with both channels recorded (None when it has
+    none): their steps in units of y and y', the rest of their noise, and the white
+    levels left to the white formula (:mod:`bayestribo.signal.coarse`)."""
+    if decay.derived_channel is not None:
+        return None
+    steps = coarse_steps(
+        noise.quantisation_steps, (noise.measured_displacement, noise.measured_velocity)
+    )
+    if steps == (None, None):
+        return None
+    sc = decay.scaling
+    units = (sc.length_scale, sc.length_scale * sc.omega)
+    used = (noise.displacement, noise.velocity)
+    scaled: list[float | None] = []
+    other: list[float] = []
+    white: list[float] = []
+    for step, sd, unit in zip(steps, used, units, strict=True):
+        if step is None:
+            scaled.append(None)
+            other.append(0.0)
+            white.append(sd / unit)
+            continue
+        scaled.append(step / unit)
+        other.append(math.sqrt(max(sd * sd - step * step / 12.0, 0.0)) / unit)
+        white.append(0.0)
+    return {"steps": tuple(scaled), "other": tuple(other), "white": tuple(white)}
+
+
+def decay_motion(decay: EnergyDecay) -> tuple[NDArray, NDArray]:
+    """The decay's channels smoothed over a quarter period (a cubic Savitzky-Golay
+    filter): a first stand-in for the channels without their noise and rounding, where
+    the law's motion is not yet known (:mod:`bayestribo.inference.reweight`)."""
+    h = float(decay.tau[1] - decay.tau[0])
+    window = int(0.5 * math.pi / h) // 2 * 2 + 1
+    window = min(window, decay.tau.size - (1 - decay.tau.size % 2))
+    if window < 5:
+        return decay.y, decay.yp
+    return tuple(  # type: ignore[return-value]
+        scipy.signal.savgol_filter(c, window, 3, mode="interp") for c in (decay.y, decay.yp)
+    )
 
 
 def white_noise_bias(sigma_y: float, sigma_yp: float) -> float:
@@ -730,7 +796,8 @@ def pi_data(
         Noise standard deviations per channel, in signal units.
     grid_points : int, optional
         Number of Π increments (the grid is on samples, Simpson-compatible). Default:
-        one per half cycle of the analysed window (see the notes).
+        one per half cycle of the analysed window, one per cycle for a coarse
+        digitiser (see the notes).
     n_replicates : int
         Monte Carlo replicates for a derived channel (relative error of each variance
         about √(2/n)).
@@ -759,8 +826,12 @@ def pi_data(
     """
     tau = decay.tau
     h = float(tau[1] - tau[0])
+    coarse = _coarse(decay, noise)
     if grid_points is None:
-        grid_points = max(4, round(float(tau[-1]) / math.pi))
+        # a coarse digitiser's errors alternate between half cycles (a level above the
+        # zero at one turning point is below it at the next): one increment a cycle
+        # holds both, and its variance their sum
+        grid_points = max(4, round(float(tau[-1]) / (math.pi if coarse is None else 2 * math.pi)))
     edges, weights = increment_weights(tau.size, h, grid_points)
     sc = decay.scaling
     sig_y = noise.displacement / sc.length_scale
@@ -783,6 +854,11 @@ def pi_data(
         y = np.asarray(restoring.spring(y), dtype=float)
     e2 = integrate_increments(decay.energy**2, edges, weights)
     longest = int(np.max(np.diff(edges))) + 1
+    if coarse is not None:
+        # the rounding of a coarse channel is left to quantised_increments (its rest
+        # shows no spectrum of it), the white formula keeps the rest of the noise
+        sig_y, sig_yp = coarse["white"]
+        spectral = False
     options = spectral_options(decay, noise, 2 * longest) if spectral else {}
     bias, variance = increment_noise(
         tau,
@@ -818,13 +894,29 @@ def pi_data(
         )
     elif decay.derived_channel is None:
         neighbours = shared_sample_covariance(y, yp, edges, weights, sig_y, sig_yp)
+    if coarse is not None:
+        q_bias, q_variance, q_neighbours = quantised_increments(
+            *(decay_motion(decay) if motion is None else (y, yp)),
+            edges,
+            weights,
+            coarse["steps"],
+            coarse["other"],
+            n_replicates=n_replicates,
+            seed=seed,
+        )
+        bias = bias + q_bias
+        variance = variance + q_variance
+        neighbours = neighbours + q_neighbours
     if neighbours.any():
         # The likelihood takes the increments as independent: a positive covariance
         # with a neighbour is added to the variance (any run of increments then has at
         # least its variance); a negative one, which would sharpen it, is not.
         plus = np.maximum(neighbours, 0.0)
         variance = variance + np.r_[0.0, plus] + np.r_[plus, 0.0]
-    observed = integrate_increments(decay.energy, edges, weights) - bias
+    if decay.energy_steps is not None:
+        observed = np.add.reduceat(decay.energy_steps, edges[:-1]) - bias
+    else:
+        observed = integrate_increments(decay.energy, edges, weights) - bias
     force = decay.y if restoring is None else np.asarray(restoring.spring(decay.y), dtype=float)
     if decay.motion_ended:
         # The end of motion is located within about a sample: allow for the energy of
@@ -850,6 +942,7 @@ def pi_data(
             "spectral": spectral,
         },
         restoring=restoring,
+        rounding=0.0 if coarse is None else float(coarse["steps"][0] or 0.0),
         offset_design=np.column_stack(
             [
                 integrate_increments(force, edges, weights),

@@ -81,8 +81,9 @@ class NoiseModel:
         Degrees of freedom of the measured variance where a measured figure is used
         (:attr:`exceeds_nominal`): the quiescent samples less one per segment for white
         noise, ``2/spectrum_rel_se²`` for coloured noise; None where the noise is the
-        instrument's resolution, or measured from signal differences over the whole
-        record. A misfit test compares the residuals' χ² with this estimate's own
+        instrument's resolution, the rounding of a coarse digitiser on every recorded
+        channel (:mod:`bayestribo.signal.coarse`), or measured from signal differences
+        over the whole record. A misfit test compares the residuals' χ² with this estimate's own
         uncertainty (an F test), so a short rest gives no false alarms
         (:func:`bayestribo.inference.pipeline.misfit_p_value`).
     """
@@ -215,8 +216,23 @@ def noise_model(
             getattr(meas, "displacement_step", None),
             getattr(meas, "velocity_step", None),
         ),
-        measured_dof=_measured_dof(meas, rest, "measured" in (src_x, src_v)),
+        measured_dof=None
+        if _all_coarse(meas, derived)
+        else _measured_dof(meas, rest, "measured" in (src_x, src_v)),
     )
+
+
+def _all_coarse(meas: Any, derived: str | None) -> bool:
+    """Every recorded channel is coarse (:mod:`bayestribo.signal.coarse`): its noise is
+    its rounding, q/√12 exactly, and the increments' variances come from the rounding
+    itself, not from a level measured at rest (whose spectrum, of a rest on one level,
+    says nothing)."""
+    from bayestribo.signal.coarse import coarse_steps
+
+    steps = (getattr(meas, "displacement_step", None), getattr(meas, "velocity_step", None))
+    coarse = coarse_steps(steps, (meas.displacement, meas.velocity))
+    recorded = [i for i, ch in enumerate(("displacement", "velocity")) if ch != derived]
+    return all(coarse[i] is not None for i in recorded)
 
 
 def _measured_dof(meas: Any, rest: Any, used: bool) -> float | None:

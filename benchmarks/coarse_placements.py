@@ -1,0 +1,123 @@
+"""A coarse digitiser's levels placed at random: the calibration ``steps-10`` cannot show.
+
+The ``steps-10`` case of ``benchmarks/misspecification.py`` rounds both channels of the
+independent simulation (``benchmarks/_chain.py``: solve_ivp half cycle by half cycle,
+the paper's rig, ζ = 0.0236, μ_k = 0.0294, 10 kHz) to a tenth of their swing, with levels
+at whole multiples of the step from the zero. Its white noise (1.5 µm, 0.15 µm/s) is a
+thousandth of a step: its 20 runs are one rounded record twenty times, and its coverage
+is one draw. Here run ``i`` places the levels of each channel at an offset drawn
+uniformly over a step (``numpy.random.default_rng([77, i])``), the noise from
+``[77, i, 1]``; the fit is :func:`bayestribo.fit` with seed ``i``. Per run: refused (the
+message), the z and coverage of ζ and μ_k, and the flags (MisfitWarning,
+ChannelCalibrationWarning, ConvergenceWarning, PriorBoundWarning).
+
+Run (by hand)::
+
+    nice python benchmarks/coarse_placements.py --steps 10 --runs 20
+
+Writes ``benchmarks/results/coarse_placements_<steps>.json`` (``--output NAME``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import warnings
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+from _chain import MU_K, ZETA, apply_chain, metadata, record  # noqa: E402
+from _machine import commit, write_results  # noqa: E402
+
+FLAGS = ("MisfitWarning", "ChannelCalibrationWarning", "ConvergenceWarning", "PriorBoundWarning")
+TRUTH = {"zeta": ZETA, "mu_k": MU_K}
+
+
+def one_run(steps: float, index: int) -> dict[str, Any]:
+    """Round run ``index`` to ``steps`` across the swing on levels placed at random, fit
+    it, and say how its intervals stand against the truth."""
+    from bayestribo import fit
+    from bayestribo.io.run import Run
+
+    t, x, v = record(10_000.0, 0.1, 0.1)
+    rng = np.random.default_rng([77, index])
+    xs, vs = apply_chain(t, x, v, 10_000.0, seed=[77, index, 1], noise=10.0)
+    qx, qv = np.ptp(x) / steps, np.ptp(v) / steps
+    ux, uv = rng.uniform(-0.5, 0.5, 2)
+    xs = (np.round(xs / qx + ux) - ux) * qx
+    vs = (np.round(vs / qv + uv) - uv) * qv
+    out: dict[str, Any] = {"index": index, "placement_steps": [float(ux), float(uv)]}
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            result = fit(Run(time=t, displacement=xs, velocity=vs, metadata=metadata()), seed=index)
+    except Exception as exc:  # recorded, never silently dropped
+        out["refused"] = f"{type(exc).__name__}: {exc}"
+        return out
+    out["flags"] = sorted({w.category.__name__ for w in caught if w.category.__name__ in FLAGS})
+    for name, truth in TRUTH.items():
+        draws = result.samples(name)
+        lo, hi = result.interval(name, 0.95)
+        sd = float(np.std(draws, ddof=1))
+        out[name] = {
+            "mean": float(np.mean(draws)),
+            "sd": sd,
+            "z": float((np.mean(draws) - truth) / sd),
+            "covered": bool(lo <= truth <= hi),
+        }
+    return out
+
+
+def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """Refused, covered (both), flagged, missed, silently wrong (|z| > 3.29 unflagged),
+    and z's mean and sd per parameter over the fitted runs."""
+    fitted = [r for r in rows if "refused" not in r]
+    both = [r for r in fitted if r["zeta"]["covered"] and r["mu_k"]["covered"]]
+    uncovered = [r for r in fitted if r not in both]
+    table: dict[str, Any] = {
+        "runs": len(rows),
+        "refused": len(rows) - len(fitted),
+        "covered": len(both),
+        "flagged": sum(bool(r["flags"]) for r in uncovered),
+        "missed": sum(not r["flags"] for r in uncovered),
+        "silently_wrong": sum(
+            1 for r in fitted if not r["flags"] and max(abs(r[p]["z"]) for p in TRUTH) > 3.2905
+        ),
+        "warned": sum(bool(r["flags"]) for r in fitted),
+    }
+    for p in TRUTH:
+        z = np.array([r[p]["z"] for r in fitted])
+        table[f"z_{p}"] = (
+            {"mean": float(z.mean()), "sd": float(z.std(ddof=1))} if z.size > 1 else None
+        )
+        table[f"covered_{p}"] = sum(r[p]["covered"] for r in fitted)
+    return table
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", type=float, default=10.0, help="steps across the swing")
+    parser.add_argument("--runs", type=int, default=20)
+    parser.add_argument("--output", default=None, help="results/NAME.json")
+    args = parser.parse_args(argv)
+    rows = []
+    for i in range(args.runs):
+        rows.append(one_run(args.steps, i))
+        print(rows[-1], flush=True)
+    table = summarise(rows)
+    print(table)
+    name = args.output or f"coarse_placements_{args.steps:g}"
+    path = write_results(
+        name,
+        {"source": commit(), "steps": args.steps, "truth": TRUTH, "table": table, "runs": rows},
+    )
+    print(f"wrote {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,225 @@
+"""A coarse digitiser (steps the noise does not dither): the increments' variances from
+the rounding itself, the analysis ended after the last resolved turning point, y0 known to
+half a step."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+from bayestribo.inference.priors import default_priors
+from bayestribo.signal.coarse import (
+    DITHER_STEPS,
+    RESOLVED_STEPS,
+    coarse_steps,
+    quantised_increments,
+    resolved_end,
+    resolved_turning_points,
+)
+from bayestribo.signal.coverage import ShortAnalysisWarning
+from bayestribo.signal.decay import energy_decay
+from bayestribo.signal.increments import (
+    increment_noise,
+    increment_weights,
+    integrate_increments,
+    pi_data,
+)
+from bayestribo.signal.noise import noise_model
+
+ZETA = 0.02
+
+
+def _decay_motion(tau: np.ndarray, amplitude: float = 5.0) -> tuple[np.ndarray, np.ndarray]:
+    """A viscous decay (natural frequency 1 in τ) from ``amplitude`` at τ = 0."""
+    wd = math.sqrt(1.0 - ZETA**2)
+    env = amplitude * np.exp(-ZETA * tau)
+    y = env * (np.cos(wd * tau) + ZETA / wd * np.sin(wd * tau))
+    yp = -env / wd * np.sin(wd * tau)
+    return y, yp
+
+
+def test_a_channel_is_coarse_when_its_noise_does_not_dither_its_steps():
+    assert coarse_steps((1.0, 1.0), (1.0 / math.sqrt(12.0), 2.0)) == (1.0, None)
+    assert coarse_steps((None, 1.0), (0.3, DITHER_STEPS)) == (None, 1.0)
+    assert coarse_steps((1.0, None), (DITHER_STEPS * 1.01, 0.1)) == (None, None)
+
+
+def test_the_resolved_turning_points_end_at_the_last_amplitude_above_the_limit():
+    values = RESOLVED_STEPS * np.array([9.0, -7.0, 5.0, -3.0, 2.5, -0.9, 1.0, -0.5, 0.4])
+    # one reading below the limit (-0.9, rounded) does not end them
+    assert resolved_turning_points(values, 1.0, (1.0, None)) == 7
+    # the velocity's amplitude is ω|Y|: at ω = 0.25 a step of 1 resolves |Y| >= 4
+    assert resolved_turning_points(values, 0.25, (None, RESOLVED_STEPS)) == 3
+    assert resolved_turning_points(values, 1.0, (100.0, None)) == 0
+    assert resolved_turning_points(values, 1.0, (None, None)) == values.size
+
+
+def test_the_rounding_variances_match_the_spread_of_rounded_records():
+    """A decay of 10 steps across its swing at 300 samples a period, rounded with 400
+    placements of the levels: the spread of its increments is what
+    quantised_increments says (within its Monte Carlo error), and several times what
+    the white formula with the rounding's q/√12 gives."""
+    h = 2 * math.pi / 300
+    tau = np.arange(0, 12 * math.pi + h / 2, h)
+    y, yp = _decay_motion(tau)
+    step = 1.0
+    edges, weights = increment_weights(tau.size, h, 12)
+    bias, variance, neighbours = quantised_increments(
+        y, yp, edges, weights, (step, step), n_replicates=400, seed=1
+    )
+    clean = integrate_increments(y, edges, weights)
+    clean_e = integrate_increments(0.5 * (y * y + yp * yp), edges, weights)
+    assert clean.shape == bias.shape == variance.shape
+    assert neighbours.shape == (edges.size - 2,)
+    rng = np.random.default_rng(7)
+    errors = []
+    for _ in range(400):
+        u = rng.uniform(-0.5, 0.5, 2)
+        yq = np.round(y + u[0]) - u[0]
+        ypq = np.round(yp + u[1]) - u[1]
+        e = 0.5 * (yq * yq + ypq * ypq)
+        observed = integrate_increments(e, edges, weights)
+        errors.append(observed - clean_e - bias)
+    errors = np.array(errors)
+    # Sheppard's bias: q²/24 per channel per unit τ
+    sums = np.array([w.sum() for w in weights])
+    assert bias == pytest.approx(2 * sums / 24.0, rel=1e-12)
+    assert np.mean(errors) == pytest.approx(0.0, abs=3 * np.sqrt(np.mean(variance) / errors.size))
+    ratio = np.mean(errors**2, axis=0) / variance
+    assert np.all((ratio > 0.7) & (ratio < 1.4))
+    _, white = increment_noise(
+        tau, y, yp, edges, weights, step / math.sqrt(12), step / math.sqrt(12)
+    )
+    assert np.median(variance / white) > 3
+
+
+def _coarse_record(steps: float = 10.0, placement: float = 0.0):
+    """A viscous + Coulomb decay at 10 kHz (32.6 Hz, from 2 mm, sticking), both channels
+    rounded to 1/``steps`` of their swing on levels shifted by ``placement`` of a step
+    from the zero, with 0.1 s of rest before and after."""
+    f, zeta, xc = 32.6, 0.0236, 6.2e-6
+    w = 2 * math.pi * f
+    wd = w * math.sqrt(1 - zeta**2)
+    fs = 10_000.0
+    t = np.arange(0, 0.9, 1 / fs)
+    x = np.full(t.size, 2e-3)
+    v = np.zeros(t.size)
+    t0, amp = 0.1, 2e-3
+    direction = -1.0
+    while abs(amp) > 2 * xc:
+        centre = -direction * xc
+        m = (t >= t0) & (t < t0 + math.pi / wd)
+        s = t[m] - t0
+        env = (amp - centre) * np.exp(-zeta * w * s)
+        x[m] = centre + env * (np.cos(wd * s) + zeta * w / wd * np.sin(wd * s))
+        v[m] = -env * w * w / wd * np.sin(wd * s)
+        amp = centre + (amp - centre) * -math.exp(-zeta * w * math.pi / wd)
+        t0 += math.pi / wd
+        direction = -direction
+    x[t >= t0] = amp
+    qx, qv = np.ptp(x) / steps, np.ptp(v) / steps
+    u = placement
+    return t, (np.round(x / qx + u) - u) * qx, (np.round(v / qv + u) - u) * qv, (qx, qv), t0
+
+
+@pytest.mark.parametrize("placement", [0.0, 0.37])
+def test_a_coarse_record_ends_its_analysis_at_the_last_resolved_swing(placement):
+    """10 steps across the swing on both channels: the velocity reads 0 cycles before
+    the pin sticks, so the end of motion is not observed. The analysis ends at the last
+    turning point it resolves (Π truncated there), and the increments' variances
+    cover their errors (the white formula left them 4 to 10 times too small). With the
+    levels off the zero, the velocity's rest reads the level nearest its zero: taken
+    for an offset, it moved every moving sample by a third of a step (residuals of ±5
+    standard deviations alternating with the half cycles)."""
+    t, x, v, (qx, _), _ = _coarse_record(placement=placement)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ShortAnalysisWarning)
+        decay = energy_decay(t, x, v)
+    assert decay.noise.displacement_step == pytest.approx(qx, rel=1e-9)
+    assert decay.motion_ended is False
+    assert decay.velocity_offset == 0.0
+    assert decay.stop_time is not None and decay.end_time < decay.stop_time
+    # the last sample analysed is the last the displacement reaches a step from its
+    # equilibrium (the velocity's steps, ω × the displacement's, end it no sooner)
+    about = x - decay.equilibrium - decay.equilibrium_drift * (t - decay.start_time)
+    last = np.flatnonzero(np.abs(about) >= RESOLVED_STEPS * qx)[-1]
+    assert decay.end_time <= t[last]
+    assert decay.end_time > decay.peaks.t[-1]
+    noise = noise_model(decay, {})
+    data = pi_data(decay, noise)
+    assert data.rounding == pytest.approx(qx / decay.scaling.length_scale, rel=1e-9)
+    assert not data.spectral
+    # the increments' errors against the record before rounding
+    sl = np.searchsorted(t, decay.t)
+    sc = decay.scaling
+    _, x_, v_, _, _ = _coarse_record(steps=1e9)
+    y = (x_[sl] - decay.equilibrium - decay.equilibrium_drift * (decay.t - decay.start_time)) / (
+        sc.length_scale
+    )
+    yp = v_[sl] / (sc.length_scale * sc.omega)
+    h = float(decay.tau[1] - decay.tau[0])
+    edges, weights = increment_weights(decay.tau.size, h, data.preparation["grid_points"])
+    assert np.allclose(decay.tau[edges], data.tau_grid)
+    true = integrate_increments(0.5 * (y * y + yp * yp), edges, weights)
+    z = (data.increments - true) / np.sqrt(data.variance)
+    assert np.mean(z**2) < 4.0
+
+
+def test_the_resolved_end_is_the_last_sample_every_coarse_channel_reaches_a_step():
+    x = np.array([3.0, -2.0, 1.5, -0.5, 1.2, 0.2, 0.1])
+    v = np.array([0.0, 3.0, -2.0, 1.0, -0.5, 0.2, 0.1])
+    assert resolved_end((x, v), (RESOLVED_STEPS, None), 1) == 4
+    assert resolved_end((x, v), (RESOLVED_STEPS, RESOLVED_STEPS), 1) == 3
+    assert resolved_end((x, v), (None, None), 2) == 2
+
+
+def test_a_coarse_displacement_widens_the_prior_of_y0():
+    priors = default_priors(7.0, y0_sd=0.9)
+    assert priors.priors["y0"].sigma == pytest.approx(0.9)
+    assert default_priors(7.0).priors["y0"].sigma == pytest.approx(0.07)
+    with pytest.raises(ValueError, match="y0_sd"):
+        default_priors(7.0, y0_sd=-1.0)
+
+
+def test_turning_points_on_a_coarse_digitisers_levels_give_a_law_free_answer():
+    """Turning points rounded to levels a step apart repeat their swings exactly: the
+    local fit's curvature is not determined, its mean is (it was a singular matrix)."""
+    from bayestribo.inference.dissipation import turning_point_dissipation
+    from bayestribo.model.laws import PhysicalScale
+
+    # the swings near 4 are all 4: the local fit's x is 0 throughout
+    turning = np.array([4.0, 4, 4, 4, 4, 4, 4, 4, 1, 1, 1, 1]) * (-1.0) ** np.arange(12)
+    found = turning_point_dissipation(turning, np.array([4.0]), PhysicalScale())
+    assert found is not None
+    assert np.all(np.isfinite(found["mean"])) and np.all(np.isfinite(found["sd"]))
+
+
+def test_channels_rounded_to_five_steps_are_one_motion():
+    """Both channels rounded to a fifth of their swing, the levels off the zero: the
+    windows whose change is a step or so are the rounding's; over the others the
+    displacement follows the velocity's integral (over all moving windows the small
+    swings brought the correlation below 0.9 and the record was refused as two
+    motions)."""
+    from bayestribo.io.run import Run
+    from bayestribo.signal.channels import channel_consistency, check_channels
+
+    t, x, v, _, _ = _coarse_record(steps=5.0, placement=0.37)
+    run = Run(time=t, displacement=x, velocity=v, metadata={})
+    check_channels(run)
+    assert channel_consistency(run).correlation > 0.95
+
+
+@pytest.mark.parametrize("placement", [-0.45, -0.35, 0.25, 0.35, 0.45])
+def test_a_coarse_displacement_gives_the_frequency_of_its_velocitys_zeros(placement):
+    """5 steps across the swing: the decrement read off turning points on the levels is
+    no measurement (it made the natural frequency 1.4 times the record's); the damped
+    frequency of the turning times is taken, within the rounding's timing error."""
+    t, x, v, _, _ = _coarse_record(steps=5.0, placement=placement)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        decay = energy_decay(t, x, v)
+    assert decay.natural_frequency_Hz == decay.damped_frequency_Hz
+    assert decay.natural_frequency_Hz == pytest.approx(32.6, rel=0.01)
