@@ -42,6 +42,7 @@ def _synthetic(rng, n=6, slope=0.0, sd=(1e-4, 2e-4), rho=-0.8, fixed=False):
     return WindowedAnalysis(out, 2, "least_squares", "mu_k", "m", 1.0, "test")
 
 
+@pytest.mark.validation  # a false-alarm rate over many simulated analyses
 @pytest.mark.parametrize("fixed", [False, True])
 def test_false_alarm_rate_is_nominal_on_known_gaussian_estimates(fixed):
     # Statistical, seeded: 500 sets of 6 windows with correct covariances and no

@@ -121,6 +121,7 @@ def _chi2(posterior, theta) -> tuple[float, int]:
     return float(np.sum(r**2)), r.size
 
 
+@pytest.mark.validation  # six records fitted: a calibration of the variances
 def test_second_pass_variances_make_chi2_per_increment_one():
     """Six independent records (solve_ivp) at 30 times the vibrometer's resolution:
     with the observed channels the tail's variances are too large (χ² per increment

@@ -326,7 +326,7 @@ def test_the_snooker_move_is_undone_by_swapping_z1_and_z2():
         assert not np.allclose(back, x, rtol=1e-6, atol=0.0)
 
 
-@pytest.mark.parametrize("moves", ["grouped", "emcee"])
+@pytest.mark.parametrize("moves", ["grouped", pytest.param("emcee", marks=pytest.mark.validation)])
 def test_scales_far_apart_are_sampled_with_their_spread(moves):
     # The single-run posterior's shape: ζ and μ_k correlated at -0.9 with sds 1e-5 and
     # 4e-5, μ_s/μ_k uniform on [1, 3], y0 with sd 1e-3. emcee 3.1.6's snooker move in

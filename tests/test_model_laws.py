@@ -378,6 +378,7 @@ print(repr(pi.tolist()), grid.stats.cache_hits and sum(grid.stats.cache_hits.val
 """
 
 
+@pytest.mark.validation  # a process compiles the law afresh (a minute)
 def test_a_laws_integrator_is_compiled_once_and_loaded_by_later_processes(tmp_path):
     import os
     import subprocess
@@ -399,6 +400,7 @@ def test_a_laws_integrator_is_compiled_once_and_loaded_by_later_processes(tmp_pa
     assert list(tmp_path.glob("bayestribo_law_*.py"))
 
 
+@pytest.mark.validation  # numba compiles a law of a local term afresh
 def test_a_term_that_cannot_be_imported_by_name_is_compiled_in_each_process():
     @numba.njit
     def local_drag(w, c):

@@ -134,6 +134,7 @@ def test_sample_reuse_agrees_with_the_exact_joint_posterior(normal_case):
         np.testing.assert_array_less(np.abs(got - exact), TOL_SD * _sd(grid, w))
 
 
+@pytest.mark.validation  # the power of the tolerance above, a second population
 def test_not_dividing_out_the_prior_is_rejected_by_the_same_tolerance(normal_case):
     # The same samples with a flat "prior" (nothing divided out) double-count the
     # informative per-run prior: the test's tolerance must see the difference.

@@ -324,7 +324,7 @@ NOISES = {
     [
         "filter-10kHz",
         "pink+hum-10kHz",
-        pytest.param("filter-100kHz", marks=pytest.mark.slow),
+        pytest.param("filter-100kHz", marks=pytest.mark.validation),
     ],
 )
 def test_spectral_increment_variance_matches_monte_carlo(name):

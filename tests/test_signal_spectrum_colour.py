@@ -42,6 +42,7 @@ def test_a_white_rest_with_a_low_band_level_is_not_called_coloured():
     assert not spectrum.coloured
 
 
+@pytest.mark.validation  # a false-alarm rate over many simulated rests
 def test_white_rests_are_not_called_coloured_by_their_band_level():
     # the Ljung-Box test keeps its own 1e-3 (3 expected here): the rests it passes are
     # judged by their band level alone; the symmetric test flagged 2 of them (1 in 700)
