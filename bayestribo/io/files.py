@@ -22,9 +22,10 @@ from numpy.typing import NDArray
 from bayestribo._files import atomic_path
 from bayestribo._warnings import warn
 from bayestribo.errors import BayestriboError, ReadingWarning, RecordingError, RunFormatError
+from bayestribo.io.acceleration import integrated_signals
 from bayestribo.io.options import READ_OPTIONS, ReadOptions, unknown_options
 from bayestribo.io.registry import FileFormat, format_for, registered_formats
-from bayestribo.io.run import ANGULAR, DISPLACEMENT, TIME, VELOCITY, Run
+from bayestribo.io.run import ACCELERATIONS, ANGULAR, DISPLACEMENT, TIME, VELOCITY, Run
 from bayestribo.io.sidecar import (
     DATA_FILE,
     check_data_file,
@@ -239,8 +240,10 @@ def _read(path: Path, opts: ReadOptions) -> Run:
         time, origin = _implicit_time(signals, meta, path, stated, _rate_origin(opts, path))
     elif stated is not None:
         _check_stated_rate(time, stated, where)
+    if any(signals.get(name) is not None for name in ACCELERATIONS):
+        signals = _integrated(signals, time, meta, opts.window, where)
     run = Run(
-        time,
+        signals.get(TIME, time),
         signals.get(DISPLACEMENT),
         signals.get(VELOCITY),
         meta,
@@ -263,6 +266,32 @@ def _read(path: Path, opts: ReadOptions) -> Run:
                 exc.where,
             ) from None
     return run
+
+
+def _integrated(
+    signals: Mapping[str, Any],
+    time: NDArray,
+    meta: dict[str, Any],
+    window: tuple[float, float] | None,
+    where: str,
+) -> dict[str, Any]:
+    """The columns with an acceleration integrated into the velocity
+    (:func:`bayestribo.io.acceleration.integrated_signals`), over the ``window`` only
+    when one is given (the part of the record that holds the free decay); an angular
+    velocity so made is read as a rotation's."""
+    signals = {**signals, TIME: time}
+    if window is not None:
+        keep = (time >= window[0]) & (time <= window[1])
+        if int(keep.sum()) >= 2:
+            signals = {
+                name: (value[keep] if isinstance(value, np.ndarray) else value)
+                for name, value in signals.items()
+            }
+    out = integrated_signals(signals, meta, where)
+    angular = [name for name in ANGULAR if out.get(name) is not None]
+    if angular:
+        out = _as_rotation(out, angular, meta, where)
+    return out
 
 
 def _as_rotation(

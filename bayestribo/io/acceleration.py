@@ -1,0 +1,573 @@
+r"""An accelerometer's record as a velocity: bias removed, integrated, drift filtered.
+
+A free-decay record made with an accelerometer (a cantilever's, a spring-mass rig's, a
+smartphone's: phyphox exports ``Acceleration x (m/s^2)``) holds a = ẍ. The fit takes a
+velocity (a run with a velocity only derives its displacement), so the acceleration is
+integrated once, at read time (:func:`integrate_acceleration`):
+
+1. **Bias.** A sensor's offset (and a smartphone's share of gravity along the axis) is
+   a constant b under the motion. Where the record is at rest (before the release and
+   after the stop, found as the stretches where no oscillation at the record's own
+   frequency stands out of the noise, :func:`bayestribo.signal.motion.motion_span`,
+   half a period away from either), the true acceleration is 0, so b is the mean
+   acceleration there, with standard error σ_a/√n. A record with no rest has its mean
+   taken for b, and the output says so (the mean of a over a record is
+   (v_end − v_start)/T, 0 only when it starts and ends at the same speed).
+2. **Integration**, in the frequency domain: V(f) = A(f) / (i 2π f) on the record padded
+   with as many zeros (after step 1 the rest's mean is 0, so the padding is rest too).
+   Unlike the trapezoid rule, whose gain at 20 samples a period is 0.992, this is exact
+   below Nyquist for an acceleration sampled through an anti-alias filter. (A jump of
+   the acceleration, at the release or where dry friction turns, sampled at one instant
+   without such a filter, leaves an error of up to the jump times half a sample step.)
+3. **Drift.** What is left of the bias integrates into a ramp and the sensor's white
+   noise into a random walk, a noise whose variance grows without bound. The velocity
+   at rest is 0: a line through the integral over each rest, and between them the
+   straight line from the one to the other, is taken off (the best estimate of a random
+   walk between two points where it is known). Then a zero-phase high-pass,
+   H(f) = r / (1 + r) with r = (f / f_c)⁴ (the squared magnitude of a second-order
+   Butterworth: that filter run forwards and backwards), f_c = 0.3 f, leaves the
+   integrated noise stationary, the same at rest as in the motion, so that the fit's
+   noise model, measured at rest as a spectrum (:mod:`bayestribo.signal.spectrum`),
+   is the motion's. Its gain at f, 1 / (1 + 0.3⁴) = 0.992, is divided out (the
+   sidebands of a decay with ζ <= 0.1 differ from it by under 0.5 %).
+   A free decay has no velocity below a tenth of its frequency but for the steps of
+   the displacement at the release (from the held position to the centre of the
+   oscillation) and at the stop: those two steps, measured from the integral at rest
+   and over the motion, are kept out of the filter (it removes what is left below
+   f_c: the drift). Without a rest on both sides the steps cannot be measured: the
+   high-pass then takes them too, distorting the first and last cycles, and the
+   record says so.
+
+On simulated records of an accelerometer with 200 µg/√Hz of noise (an independent
+``solve_ivp`` integration, ``benchmarks/acceleration.py``), the velocity so made is
+within 1e-3 of the oscillation's amplitude of the true one after the first cycle, and
+the fit's intervals of ζ and μ_k cover the truth (``benchmarks/results/acceleration.json``).
+
+Several axes of one sensor (phyphox's x, y and z) are projected on the principal axis
+of the oscillation (:func:`principal_axis`): the direction of the largest variance of
+the de-meaned axes, its sign that of its largest component. A motion along one line
+gives that line, with the noise of one axis; axes that do not move along one line (the
+second principal axis holding over a quarter of the first's variance) are refused
+naming the ``columns=`` that picks one axis.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from bayestribo._warnings import warn
+from bayestribo.errors import ReadingWarning, RecordingError, RunFormatError
+from bayestribo.io.run import (
+    ACCELERATION,
+    ACCELERATION_AXES,
+    ACCELERATIONS,
+    ANGULAR_ACCELERATION,
+    ANGULAR_VELOCITY,
+    TIME,
+    VELOCITY,
+    Run,
+)
+
+__all__ = [
+    "CUTOFF_RATIO",
+    "SPREAD_LIMIT",
+    "Integration",
+    "PrincipalAxis",
+    "from_acceleration",
+    "integrate_acceleration",
+    "integrated_signals",
+    "principal_axis",
+]
+
+#: Cut-off of the high-pass over the oscillation frequency, f_c / f.
+CUTOFF_RATIO = 0.3
+#: Order n of the Butterworth high-pass whose squared magnitude is applied (zero phase).
+ORDER = 2
+#: Largest share of the first principal axis's variance the second may hold for axes to
+#: be projected on one line.
+SPREAD_LIMIT = 0.25
+#: Samples of rest each side of the motion needs for its drift to be measured there.
+_REST_SAMPLES = 8
+#: Samples left out on each side of the release and of the stop when the bias is
+#: measured, in periods: the motion starts and ends within a block of the motion span.
+_MARGIN_PERIODS = 0.5
+
+
+def highpass_gain(f: ArrayLike, cutoff_Hz: float) -> NDArray:
+    """Gain of the zero-phase high-pass at frequencies ``f`` [Hz]: r / (1 + r), r = (f/f_c)⁴.
+
+    Parameters
+    ----------
+    f : array_like
+        Frequencies [Hz].
+    cutoff_Hz : float
+        The cut-off f_c [Hz] (gain 1/2 there).
+
+    Returns
+    -------
+    ndarray
+        The gain, real and in [0, 1).
+    """
+    r = (np.abs(np.asarray(f, dtype=float)) / cutoff_Hz) ** (2 * ORDER)
+    return r / (1.0 + r)
+
+
+@dataclass(frozen=True)
+class Integration:
+    """A velocity integrated from an acceleration, and how.
+
+    Attributes
+    ----------
+    velocity : ndarray
+        The velocity [m/s or rad/s].
+    column : str
+        The acceleration column integrated (canonical name, or the axes' projection).
+    bias : float
+        The bias removed [m/s² or rad/s²].
+    bias_se : float
+        Its standard error [m/s² or rad/s²] (rest noise / √n).
+    bias_from : str
+        Where the bias was measured, in words.
+    rest_samples : int
+        Samples of rest the bias is the mean of (0: none, the record's mean taken).
+    frequency_Hz : float
+        The oscillation frequency measured from the acceleration [Hz].
+    cutoff_Hz : float
+        The high-pass's cut-off [Hz].
+    gain_at_frequency : float
+        The high-pass's gain at ``frequency_Hz`` (divided out).
+    drift_from : str
+        How the drift was removed, in words.
+    """
+
+    velocity: NDArray
+    column: str
+    bias: float
+    bias_se: float
+    bias_from: str
+    rest_samples: int
+    frequency_Hz: float
+    cutoff_Hz: float
+    gain_at_frequency: float
+    drift_from: str
+
+    def record(self) -> dict[str, Any]:
+        """The metadata record (plain data) of the integration."""
+        return {
+            "column": self.column,
+            "bias": self.bias,
+            "bias_se": self.bias_se,
+            "bias_from": self.bias_from,
+            "rest_samples": self.rest_samples,
+            "frequency_Hz": self.frequency_Hz,
+            "filter": {
+                "kind": "zero-phase high-pass, |H|^2 of a Butterworth",
+                "order": ORDER,
+                "cutoff_Hz": self.cutoff_Hz,
+                "gain_at_frequency": self.gain_at_frequency,
+                "gain_divided_out": True,
+            },
+            "drift": self.drift_from,
+            "method": "frequency-domain integral V = A / (i 2 pi f), zero-padded",
+        }
+
+    def note(self, unit: str) -> str:
+        """One sentence saying what was done, for a warning."""
+        return (
+            f"the velocity is integrated from the acceleration {self.column!r}: bias "
+            f"{self.bias:.4g} ± {self.bias_se:.2g} {unit} removed ({self.bias_from}); "
+            f"{self.drift_from}; then a zero-phase high-pass at {self.cutoff_Hz:.3g} Hz "
+            f"(order-{ORDER} Butterworth, forwards and backwards; its gain "
+            f"{self.gain_at_frequency:.4f} at the oscillation's {self.frequency_Hz:.4g} Hz "
+            "divided out)"
+        )
+
+
+def _rest(t: NDArray, a: NDArray, period: float) -> tuple[NDArray, NDArray, Any]:
+    """Samples at rest before the release and after the stop (two masks), half a period
+    away from either, and the motion span."""
+    from bayestribo.signal.motion import motion_span
+
+    span = motion_span(t, a - np.median(a), period)
+    quiet = np.array(span.quiet, dtype=bool)
+    margin = _MARGIN_PERIODS * period
+    for edge in (span.release_time, span.stop_time):
+        if edge is not None:
+            quiet &= np.abs(t - edge) > margin
+    before = np.zeros_like(quiet)
+    after = np.zeros_like(quiet)
+    if span.release_time is not None:
+        before = quiet & (t < span.release_time)
+    if span.stop_time is not None:
+        after = quiet & (t > span.stop_time)
+    return before, after, span
+
+
+def _line(t: NDArray, v: NDArray) -> tuple[float, float]:
+    """Least-squares line (value at the mean time, slope) through samples."""
+    centre = float(t.mean())
+    slope = float(np.polyfit(t - centre, v, 1)[0]) if t.size > 2 else 0.0
+    return float(v.mean()) - slope * 0.0, slope  # value at `centre`
+
+
+def _drift(t: NDArray, v: NDArray, before: NDArray, after: NDArray) -> NDArray:
+    """The drift of an integrated velocity, measured at rest: a line through each rest,
+    and between them the straight line from the first's end to the second's start."""
+    tb, ta = t[before], t[after]
+    cb, ca = float(tb.mean()), float(ta.mean())
+    vb, sb = _line(tb, v[before])
+    va, sa = _line(ta, v[after])
+    t0, t1 = float(tb[-1]), float(ta[0])
+    d0, d1 = vb + sb * (t0 - cb), va + sa * (t1 - ca)
+    return np.where(
+        t <= t0,
+        vb + sb * (t - cb),
+        np.where(t >= t1, va + sa * (t - ca), d0 + (d1 - d0) * (t - t0) / (t1 - t0)),
+    )
+
+
+def _steps(
+    t: NDArray, v: NDArray, before: NDArray, after: NDArray, span: Any, period: float
+) -> list[tuple[float, float]]:
+    """The low-frequency content of a free decay's velocity: the displacement's steps
+    at the release (from the rest before to the centre of the oscillation) and at the
+    stop (from that centre to the rest after), as (time [s], size [m]).
+
+    The oscillation about its centre has none below a tenth of its frequency (a decay
+    that starts at a turning point puts (f_c/f)² of its swing there), so what the
+    high-pass removes besides these steps is the drift of the integral."""
+    from scipy.integrate import cumulative_trapezoid
+
+    x = cumulative_trapezoid(v, t, initial=0.0)
+    t_release, t_stop = float(span.release_time), float(span.stop_time)
+    inner = (t > t_release + period) & (t < t_stop - period)
+    if int(inner.sum()) < 8:
+        inner = (t > t_release) & (t < t_stop)
+    centre = float(x[inner].mean())
+    return [
+        (t_release, centre - float(x[before].mean())),
+        (t_stop, float(x[after].mean()) - centre),
+    ]
+
+
+def integrate_acceleration(
+    time: ArrayLike, acceleration: ArrayLike, *, column: str = ACCELERATION
+) -> Integration:
+    """The velocity of a free-decay record from its acceleration (see the module notes).
+
+    Parameters
+    ----------
+    time : array_like
+        Sample times t [s], regular.
+    acceleration : array_like
+        Acceleration a [m/s²] (or rad/s²), with the sensor's bias.
+    column : str
+        The acceleration's column name, for the record and messages.
+
+    Returns
+    -------
+    Integration
+
+    Raises
+    ------
+    RecordingError
+        When the acceleration holds no oscillation standing out of its noise (no free
+        decay), or is not finite.
+    """
+    from scipy.fft import irfft, next_fast_len, rfft, rfftfreq
+
+    from bayestribo.signal.period import dominant_period, sample_step
+
+    t = np.asarray(time, dtype=np.float64)
+    a = np.asarray(acceleration, dtype=np.float64)
+    if t.shape != a.shape or t.ndim != 1 or t.size < 16:
+        raise RecordingError(
+            f"{column}: expected 1-D time and acceleration of the same length (16 samples "
+            f"or more), got shapes {t.shape} and {a.shape}"
+        )
+    if not np.all(np.isfinite(a)):
+        bad = np.flatnonzero(~np.isfinite(a))
+        raise RecordingError(
+            f"{column}: {bad.size} sample(s) not finite, the first at t = {t[bad[0]]:g} s; "
+            "an acceleration is integrated over the whole record"
+        )
+    dt = sample_step(t)
+    rough = np.cumsum(a - a.mean()) * dt  # a velocity with a drift: the period only
+    try:
+        period = dominant_period(t, rough)
+        before, after, span = _rest(t, a, period)
+    except RecordingError as exc:
+        raise RecordingError(
+            f"{column}: {exc.message}; no free decay in the acceleration"
+        ) from None
+    rest = before | after
+    n_rest = int(rest.sum())
+    if n_rest >= 2:
+        bias = float(a[rest].mean())
+        bias_se = float(a[rest].std(ddof=1) / math.sqrt(n_rest))
+        bias_from = f"the mean of {n_rest} samples at rest, where the acceleration is 0"
+    else:
+        n_rest = 0
+        bias = float(a.mean())
+        bias_se = float(a.std(ddof=1) / math.sqrt(a.size))
+        bias_from = (
+            "no rest in the record: its mean acceleration was taken for the bias, assuming "
+            "the velocity is the same at its start and end"
+        )
+    frequency = 1.0 / period
+    n = a.size
+    m = next_fast_len(2 * n, real=True)
+    f = rfftfreq(m, dt)
+    response = np.zeros(f.size, dtype=np.complex128)
+    response[1:] = 1.0 / (2j * math.pi * f[1:])
+    if m % 2 == 0:
+        response[-1] = 0.0  # Nyquist: the integral of a real signal there is not real
+    bridged = int(before.sum()) >= _REST_SAMPLES and int(after.sum()) >= _REST_SAMPLES
+    cutoff = CUTOFF_RATIO * frequency
+    gain = highpass_gain(f, cutoff)
+    if bridged:
+        velocity = irfft(rfft(a - bias, m) * response, m)[:n]
+        velocity = velocity - _drift(t, velocity, before, after)
+        steps = _steps(t, velocity, before, after, span, period)
+        spectrum = rfft(velocity, m)
+        for time_j, size in steps:
+            spectrum -= (size / dt) * np.exp(-2j * math.pi * f * (time_j - t[0]))
+        velocity = velocity - irfft((1.0 - gain) * spectrum, m)[:n]
+        drift_from = (
+            "the drift measured at rest before the release and after the stop taken off "
+            f"(the displacement's steps there, {steps[0][1]:.4g} and {steps[1][1]:.4g}, "
+            "kept out of the high-pass)"
+        )
+    else:
+        velocity = irfft(rfft(a - bias, m) * response * gain, m)[:n]
+        drift_from = (
+            "no rest on "
+            + ("either side" if not (before.any() or after.any()) else "one side")
+            + " of the motion to measure the drift at: the high-pass alone removes it, "
+            "and the displacement's step at the release or the stop with it (the first "
+            "and last cycles are distorted)"
+        )
+    at_frequency = float(highpass_gain(frequency, cutoff))
+    velocity /= at_frequency  # the oscillation's amplitude as recorded
+    velocity.setflags(write=False)
+    return Integration(
+        velocity=velocity,
+        column=column,
+        bias=bias,
+        bias_se=bias_se,
+        bias_from=bias_from,
+        rest_samples=n_rest,
+        frequency_Hz=frequency,
+        cutoff_Hz=cutoff,
+        gain_at_frequency=at_frequency,
+        drift_from=drift_from,
+    )
+
+
+@dataclass(frozen=True)
+class PrincipalAxis:
+    """The projection of a sensor's axes on the principal axis of the oscillation.
+
+    Attributes
+    ----------
+    values : ndarray
+        The projection Σ w_i a_i [m/s²].
+    weights : dict
+        The unit vector w by axis column.
+    spread : float
+        The second principal variance over the first (0 for a motion along one line).
+    """
+
+    values: NDArray
+    weights: dict[str, float]
+    spread: float
+
+    def describe(self) -> str:
+        """The projection in words: ``0.12 x + 0.99 z``."""
+        return " + ".join(f"{w:.3f}·{_axis_name(c)}" for c, w in self.weights.items())
+
+
+def _axis_name(column: str) -> str:
+    return next((axis for axis, name in ACCELERATION_AXES.items() if name == column), column)
+
+
+def principal_axis(axes: Mapping[str, ArrayLike]) -> PrincipalAxis:
+    """Several acceleration axes projected on the direction of their largest variance.
+
+    Parameters
+    ----------
+    axes : mapping
+        Acceleration [m/s²] by axis column, of equal lengths.
+
+    Returns
+    -------
+    PrincipalAxis
+        The projection of the axes as recorded (their bias projected with them), the
+        axis (sign: its largest component positive) and the spread.
+    """
+    names = list(axes)
+    data = np.vstack([np.asarray(axes[name], dtype=np.float64) for name in names])
+    centred = data - data.mean(axis=1, keepdims=True)
+    variances, vectors = np.linalg.eigh(np.cov(centred))
+    order = np.argsort(variances)[::-1]
+    variances, vectors = variances[order], vectors[:, order]
+    w = vectors[:, 0]
+    if w[np.argmax(np.abs(w))] < 0:
+        w = -w
+    spread = float(variances[1] / variances[0]) if variances[0] > 0 else 1.0
+    return PrincipalAxis(
+        values=w @ data,
+        weights={name: float(x) for name, x in zip(names, w, strict=True)},
+        spread=spread,
+    )
+
+
+def _one_column(
+    signals: Mapping[str, Any], where: str
+) -> tuple[str, NDArray, dict[str, Any] | None]:
+    """The acceleration to integrate: the one column, or the axes' principal projection
+    (with its record)."""
+    present = [name for name in ACCELERATIONS if signals.get(name) is not None]
+    axes = [name for name in ACCELERATION_AXES.values() if name in present]
+    others = [name for name in present if name not in axes]
+    if len(others) > 1 or (others and axes):
+        raise RunFormatError(
+            f"the file holds the accelerations {present}; read one (columns=[...], 'ignore' "
+            "for the others)",
+            where,
+        )
+    if len(axes) == 1:
+        return axes[0], signals[axes[0]], None
+    if not axes:
+        return present[0], signals[present[0]], None
+    projection = principal_axis({name: signals[name] for name in axes})
+    pick = [
+        f"{_axis_name(name)}: columns=[..., {name!r}, ...] ('ignore' for the other axes)"
+        for name in axes
+    ]
+    if projection.spread > SPREAD_LIMIT:
+        raise RunFormatError(
+            f"the acceleration's axes {[_axis_name(a) for a in axes]} do not move along one "
+            f"line (the second principal axis holds {projection.spread:.0%} of the first's "
+            f"variance, over {SPREAD_LIMIT:.0%}): the motion is not one oscillation along "
+            f"one direction, or it is buried in the noise; pick the axis of the motion, "
+            f"{'; '.join(pick)}",
+            where,
+        )
+    record = {"weights": projection.weights, "spread": projection.spread}
+    warn(
+        f"{where}: the acceleration's axes {[_axis_name(a) for a in axes]} are projected on "
+        f"the principal axis of the oscillation, {projection.describe()} (the second axis "
+        f"holds {projection.spread:.1%} of its variance); to read one axis instead, "
+        f"{'; '.join(pick)}",
+        ReadingWarning,
+    )
+    return "projection " + projection.describe(), projection.values, record
+
+
+def integrated_signals(
+    signals: Mapping[str, Any], meta: dict[str, Any], where: str
+) -> dict[str, Any]:
+    """A reader's columns with an acceleration integrated into the velocity.
+
+    An acceleration beside a displacement or a velocity is not read (said with a
+    :class:`~bayestribo.errors.ReadingWarning`): the recorded motion is used. Otherwise
+    the acceleration (or its axes' projection, :func:`principal_axis`) is integrated
+    (:func:`integrate_acceleration`), said with a ``ReadingWarning``, and recorded in
+    ``meta`` under ``acceleration``.
+
+    Parameters
+    ----------
+    signals : mapping
+        The reader's columns by canonical name, time [s] among them.
+    meta : dict
+        The run's metadata, updated with the integration's record.
+    where : str
+        The file, for messages.
+
+    Returns
+    -------
+    dict
+        The columns, accelerations replaced by the velocity (or an angular velocity).
+    """
+    present = [name for name in ACCELERATIONS if signals.get(name) is not None]
+    if not present:
+        return dict(signals)
+    out = {name: value for name, value in signals.items() if name not in ACCELERATIONS}
+    motion = [name for name in out if name != TIME and out[name] is not None]
+    if motion:
+        warn(
+            f"{where}: column(s) {present} not read: the run is read from {motion}, the "
+            "motion recorded",
+            ReadingWarning,
+        )
+        return out
+    time = out.get(TIME)
+    if time is None:
+        raise RunFormatError(
+            "an acceleration is integrated over time: the file needs a time column or a "
+            "sample rate (sample_rate_Hz=HZ)",
+            where,
+        )
+    column, values, axes = _one_column(signals, where)
+    try:
+        integration = integrate_acceleration(time, values, column=column)
+    except RecordingError as exc:
+        raise RecordingError(exc.message, where) from None
+    angular = column == ANGULAR_ACCELERATION
+    unit = "rad/s²" if angular else "m/s²"
+    meta["acceleration"] = integration.record()
+    if axes is not None:
+        meta["acceleration"]["axes"] = axes
+    warn(f"{where}: {integration.note(unit)}", ReadingWarning)
+    out[ANGULAR_VELOCITY if angular else VELOCITY] = integration.velocity
+    return out
+
+
+def from_acceleration(
+    time: ArrayLike,
+    acceleration: ArrayLike,
+    metadata: Mapping[str, Any] | None = None,
+    *,
+    angular: bool = False,
+    source: str | None = None,
+) -> Run:
+    """A run whose velocity is integrated from an acceleration (see the module notes).
+
+    Parameters
+    ----------
+    time : array_like
+        Sample times t [s], regular.
+    acceleration : array_like
+        Acceleration a [m/s²] (``angular``: angular acceleration [rad/s²]), bias and
+        all.
+    metadata : mapping, optional
+        The run's metadata; the integration's record is added under ``acceleration``
+        (and ``length_unit`` ``"rad"`` for an angular acceleration).
+    angular : bool
+        The acceleration is an angular one.
+    source : str, optional
+        Where the record came from, for messages.
+
+    Returns
+    -------
+    Run
+        With the time and the velocity (the fit derives the displacement).
+    """
+    meta = dict(metadata or {})
+    name = ANGULAR_ACCELERATION if angular else ACCELERATION
+    signals = integrated_signals(
+        {TIME: np.asarray(time, dtype=float), name: np.asarray(acceleration, dtype=float)},
+        meta,
+        source or "acceleration",
+    )
+    if angular:
+        meta["length_unit"] = "rad"
+    velocity = signals.get(ANGULAR_VELOCITY if angular else VELOCITY)
+    return Run(signals[TIME], velocity=velocity, metadata=meta, source=source)
