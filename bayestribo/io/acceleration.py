@@ -94,6 +94,9 @@ ORDER = 2
 SPREAD_LIMIT = 0.25
 #: Samples of rest each side of the motion needs for its drift to be measured there.
 _REST_SAMPLES = 8
+#: Terms of the low-frequency content of a free decay's edge (the release, the stop)
+#: kept out of the high-pass: the displacement's step and its first two derivatives.
+_MULTIPOLES = 3
 #: Samples left out on each side of the release and of the stop when the bias is
 #: measured, in periods: the motion starts and ends within a block of the motion span.
 _MARGIN_PERIODS = 0.5
@@ -232,28 +235,27 @@ def _drift(t: NDArray, v: NDArray, before: NDArray, after: NDArray) -> NDArray:
     )
 
 
-def _steps(
-    t: NDArray, v: NDArray, before: NDArray, after: NDArray, span: Any, period: float
-) -> list[tuple[float, float]]:
-    """The low-frequency content of a free decay's velocity: the displacement's steps
-    at the release (from the rest before to the centre of the oscillation) and at the
-    stop (from that centre to the rest after), as (time [s], size [m]).
+def _kept_steps(
+    t: NDArray, low: NDArray, f: NDArray, lowpass: NDArray, times: list[float], m: int
+) -> tuple[NDArray, list[float]]:
+    """The displacement's steps at ``times`` that best explain the low-frequency part
+    ``low`` of a velocity (least squares), as that part of them, and their sizes [m].
 
-    The oscillation about its centre has none below a tenth of its frequency (a decay
-    that starts at a turning point puts (f_c/f)² of its swing there), so what the
-    high-pass removes besides these steps is the drift of the integral."""
-    from scipy.integrate import cumulative_trapezoid
+    A free decay's velocity holds nothing below a tenth of its frequency but these steps
+    (the held position to the centre of the oscillation at the release, the centre to
+    the stuck position at the stop; a decay starting at a turning point puts a share
+    (f_c/f)² of its swing there): the rest of ``low`` is the drift of the integral."""
+    from scipy.fft import irfft
 
-    x = cumulative_trapezoid(v, t, initial=0.0)
-    t_release, t_stop = float(span.release_time), float(span.stop_time)
-    inner = (t > t_release + period) & (t < t_stop - period)
-    if int(inner.sum()) < 8:
-        inner = (t > t_release) & (t < t_stop)
-    centre = float(x[inner].mean())
-    return [
-        (t_release, centre - float(x[before].mean())),
-        (t_stop, float(x[after].mean()) - centre),
-    ]
+    dt = float(t[1] - t[0])
+    columns = []
+    for tj in times:
+        shift = lowpass * np.exp(-2j * math.pi * f * (tj - t[0])) / dt
+        for k in range(_MULTIPOLES):  # the step, and its derivatives (the edge's shape)
+            columns.append(irfft(shift * (2j * math.pi * f * dt) ** k, m)[: t.size])
+    basis = np.column_stack(columns)
+    sizes, *_ = np.linalg.lstsq(basis, low, rcond=None)
+    return basis @ sizes, [float(x) for x in sizes[::_MULTIPOLES]]
 
 
 def integrate_acceleration(
@@ -334,11 +336,12 @@ def integrate_acceleration(
     if bridged:
         velocity = irfft(rfft(a - bias, m) * response, m)[:n]
         velocity = velocity - _drift(t, velocity, before, after)
-        steps = _steps(t, velocity, before, after, span, period)
-        spectrum = rfft(velocity, m)
-        for time_j, size in steps:
-            spectrum -= (size / dt) * np.exp(-2j * math.pi * f * (time_j - t[0]))
-        velocity = velocity - irfft((1.0 - gain) * spectrum, m)[:n]
+        low = irfft((1.0 - gain) * rfft(velocity, m), m)[:n]
+        kept, sizes = _kept_steps(
+            t, low, f, 1.0 - gain, [float(span.release_time), float(span.stop_time)], m
+        )
+        velocity = velocity - low + kept
+        steps = list(zip([span.release_time, span.stop_time], sizes, strict=True))
         drift_from = (
             "the drift measured at rest before the release and after the stop taken off "
             f"(the displacement's steps there, {steps[0][1]:.4g} and {steps[1][1]:.4g}, "
