@@ -431,8 +431,19 @@ def principal_axis(axes: Mapping[str, ArrayLike]) -> PrincipalAxis:
     )
 
 
+def _pick(axis: str, file_columns: list[str] | None) -> str:
+    """The ``columns=`` that reads one axis of a file whose names are ``file_columns``."""
+    if file_columns is None:
+        return f"{_axis_name(axis)}: columns=[...] naming {axis!r} and 'ignore' for the other axes"
+    names = [
+        name if name not in ACCELERATIONS else (ACCELERATION if name == axis else "ignore")
+        for name in file_columns
+    ]
+    return f"{_axis_name(axis)}: columns={names} (--columns {' '.join(names)})"
+
+
 def _one_column(
-    signals: Mapping[str, Any], where: str
+    signals: Mapping[str, Any], where: str, file_columns: list[str] | None = None
 ) -> tuple[str, NDArray, dict[str, Any] | None]:
     """The acceleration to integrate: the one column, or the axes' principal projection
     (with its record)."""
@@ -450,10 +461,7 @@ def _one_column(
     if not axes:
         return present[0], signals[present[0]], None
     projection = principal_axis({name: signals[name] for name in axes})
-    pick = [
-        f"{_axis_name(name)}: columns=[..., {name!r}, ...] ('ignore' for the other axes)"
-        for name in axes
-    ]
+    pick = [_pick(name, file_columns) for name in axes]
     if projection.spread > SPREAD_LIMIT:
         raise RunFormatError(
             f"the acceleration's axes {[_axis_name(a) for a in axes]} do not move along one "
@@ -475,7 +483,10 @@ def _one_column(
 
 
 def integrated_signals(
-    signals: Mapping[str, Any], meta: dict[str, Any], where: str
+    signals: Mapping[str, Any],
+    meta: dict[str, Any],
+    where: str,
+    file_columns: list[str] | None = None,
 ) -> dict[str, Any]:
     """A reader's columns with an acceleration integrated into the velocity.
 
@@ -493,6 +504,9 @@ def integrated_signals(
         The run's metadata, updated with the integration's record.
     where : str
         The file, for messages.
+    file_columns : list of str, optional
+        The file's column names in file order (canonical, ``ignore``), to name the
+        ``columns=`` that reads one axis.
 
     Returns
     -------
@@ -518,7 +532,7 @@ def integrated_signals(
             "sample rate (sample_rate_Hz=HZ)",
             where,
         )
-    column, values, axes = _one_column(signals, where)
+    column, values, axes = _one_column(signals, where, file_columns)
     try:
         integration = integrate_acceleration(time, values, column=column)
     except RecordingError as exc:

@@ -35,6 +35,7 @@ __all__ = [
     "acceleration_label",
     "check_scale",
     "combine_units_row",
+    "motion_label",
     "other_quantity",
     "parse_column",
     "split_run_tag",
@@ -203,6 +204,13 @@ def acceleration_label(name: str) -> bool:
     )
 
 
+def motion_label(name: str) -> bool:
+    """True for a header name of a displacement, a velocity, an angle or an angular
+    velocity, with or without its unit (``position``, ``Velocity (m/s)``)."""
+    word, _ = _split(name.replace("\u03bc", "\u00b5"))
+    return any(word in QUANTITIES[q] for q in (DISPLACEMENT, VELOCITY, ANGLE, ANGULAR_VELOCITY))
+
+
 def combine_units_row(names: Sequence[str], units: Sequence[str]) -> list[str] | None:
     """A header of names and a row of units below it (``Time``/``s``), as ``Time (s)``.
 
@@ -308,7 +316,11 @@ def si_names(labels: Sequence[str]) -> list[str] | None:
         One name per label, for ``columns=`` when the file's units are SI.
     """
     names = []
-    for label in labels:
+    motion = any(motion_label(label) for label in labels)  # an acceleration beside it
+    for label in labels:  # is not read
+        if motion and acceleration_label(label):
+            names.append(IGNORE)
+            continue
         word, _ = _split(label.replace("\u03bc", "\u00b5"))
         canonical = next((c for c, words in QUANTITIES.items() if word in words), None)
         axis = _AXIS.match(word)

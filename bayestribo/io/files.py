@@ -35,7 +35,7 @@ from bayestribo.io.sidecar import (
     sidecar_path,
     write_sidecar,
 )
-from bayestribo.io.text import PREAMBLE_RATE, StatedRate, write_csv
+from bayestribo.io.text import FILE_COLUMNS, PREAMBLE_RATE, StatedRate, write_csv
 from bayestribo.io.validation import on_one_clock, validate_run
 
 __all__ = ["READ_OPTIONS", "ReadOptions", "as_run", "format_of", "read_run", "write_run"]
@@ -220,6 +220,7 @@ def _read(path: Path, opts: ReadOptions) -> Run:
         meta.update(read_sidecar(side))
     signals = _checked_signals(fmt, path, opts, meta.pop(DATA_FILE, None), side)
     stated = signals.pop(PREAMBLE_RATE, None)  # the rate a text's preamble states
+    file_columns = signals.pop(FILE_COLUMNS, None)  # a text's names, with several axes
     angular = [name for name in ANGULAR if signals.get(name) is not None]
     meta.update(metadata or {})
     if angular:
@@ -241,7 +242,7 @@ def _read(path: Path, opts: ReadOptions) -> Run:
     elif stated is not None:
         _check_stated_rate(time, stated, where)
     if any(signals.get(name) is not None for name in ACCELERATIONS):
-        signals = _integrated(signals, time, meta, opts.window, where)
+        signals = _integrated(signals, time, meta, opts.window, where, file_columns)
     run = Run(
         signals.get(TIME, time),
         signals.get(DISPLACEMENT),
@@ -274,6 +275,7 @@ def _integrated(
     meta: dict[str, Any],
     window: tuple[float, float] | None,
     where: str,
+    file_columns: list[str] | None = None,
 ) -> dict[str, Any]:
     """The columns with an acceleration integrated into the velocity
     (:func:`bayestribo.io.acceleration.integrated_signals`), over the ``window`` only
@@ -287,7 +289,7 @@ def _integrated(
                 name: (value[keep] if isinstance(value, np.ndarray) else value)
                 for name, value in signals.items()
             }
-    out = integrated_signals(signals, meta, where)
+    out = integrated_signals(signals, meta, where, file_columns)
     angular = [name for name in ANGULAR if out.get(name) is not None]
     if angular:
         out = _as_rotation(out, angular, meta, where)
@@ -511,7 +513,11 @@ def _checked_signals(
 
 def _sample_count(signals: Mapping[str, Any]) -> int:
     """The number of samples a reader returned: its longest column."""
-    sizes = [np.size(v) for k, v in signals.items() if k != PREAMBLE_RATE and v is not None]
+    sizes = [
+        np.size(v)
+        for k, v in signals.items()
+        if k not in (PREAMBLE_RATE, FILE_COLUMNS) and v is not None
+    ]
     return int(max(sizes, default=0))
 
 

@@ -41,13 +41,22 @@ from bayestribo.io.columns import (
     acceleration_label,
     check_scale,
     combine_units_row,
+    motion_label,
     other_quantity,
     parse_column,
     si_names,
     split_run_tag,
 )
 from bayestribo.io.instruments import PREAMBLE_LINES, detect_export, read_export
-from bayestribo.io.run import ACCELERATIONS, ANGULAR, COLUMNS, DISPLACEMENT, TIME, VELOCITY
+from bayestribo.io.run import (
+    ACCELERATION_AXES,
+    ACCELERATIONS,
+    ANGULAR,
+    COLUMNS,
+    DISPLACEMENT,
+    TIME,
+    VELOCITY,
+)
 
 #: Every column name a text file's columns are read as.
 _READ = (*COLUMNS, *ANGULAR, *ACCELERATIONS)
@@ -584,7 +593,9 @@ def _header(
     other = []
     # an acceleration is read only where the file records no displacement, velocity or
     # angle: the motion recorded is used, the acceleration said and left out
-    motion = any(_motion_label(label) for label in labels)
+    motion = any(
+        label in (DISPLACEMENT, VELOCITY, *ANGULAR) or motion_label(label) for label in labels
+    )
     for label in labels:
         if label in (*_READ, IGNORE) or not (
             other_quantity(label) or (motion and acceleration_label(label))
@@ -619,17 +630,6 @@ def _header(
             ReadingWarning,
         )
     return names, units, count
-
-
-def _motion_label(label: str) -> bool:
-    """True for a header name of a displacement, a velocity or an angle."""
-    if label in (DISPLACEMENT, VELOCITY, *ANGULAR):
-        return True
-    try:
-        parsed = parse_column(label)
-    except ValueError:
-        return False
-    return parsed is not None and parsed[0] in (DISPLACEMENT, VELOCITY, *ANGULAR)
 
 
 def _side_by_side(labels: Sequence[str], tags: Sequence[str | None], runs: list[str]) -> str:
@@ -1075,6 +1075,7 @@ def _read_streamed(
     if len(data) != len(names) or data[0].size < 1:
         return None
     out: dict[str, Any] = _columns([data[i] for i, _ in keep], keep, units, scale, where)
+    _with_file_columns(out, names)
     return _with_stated_rate(out, list(enumerate(head_lines[:skip], start=1)), where)
 
 
@@ -1259,8 +1260,22 @@ def parse_lines(
         data = _trim_missing(data, rows, keep, where)
 
     out: dict[str, Any] = _columns(data, keep, units, scale, where)
+    _with_file_columns(out, names)
     above = enumerate(all_lines[skip_rows : rows[0][0] - 1], start=skip_rows + 1)
     return _with_stated_rate(out, list(above), where)
+
+
+#: The key under which :func:`read_text` returns, beside the columns of a file that
+#: holds several acceleration axes, the canonical names of its columns in file order
+#: (a list): :func:`bayestribo.read_run` names the ``columns=`` that read one axis.
+FILE_COLUMNS = "file_columns"
+
+
+def _with_file_columns(out: dict[str, Any], names: Sequence[str]) -> None:
+    """Add the file's column names (:data:`FILE_COLUMNS`) to ``out`` when it holds
+    several acceleration axes."""
+    if sum(name in ACCELERATION_AXES.values() for name in names) > 1:
+        out[FILE_COLUMNS] = list(names)
 
 
 def _with_stated_rate(
