@@ -97,6 +97,9 @@ _REST_SAMPLES = 8
 #: Terms of the low-frequency content of a free decay's edge (the release, the stop)
 #: kept out of the high-pass: the displacement's step and its first two derivatives.
 _MULTIPOLES = 3
+#: Excursion of the acceleration from its rest level, in rest noise standard deviations,
+#: beyond which a decay that fades into the noise is still moving.
+_FADED = 5.0
 #: Samples left out on each side of the release and of the stop when the bias is
 #: measured, in periods: the motion starts and ends within a block of the motion span.
 _MARGIN_PERIODS = 0.5
@@ -192,41 +195,62 @@ class Integration:
         )
 
 
-def _rest(t: NDArray, a: NDArray, period: float) -> tuple[NDArray, NDArray, Any]:
+def _rest(
+    t: NDArray, a: NDArray, period: float
+) -> tuple[NDArray, NDArray, float | None, float | None]:
     """Samples at rest before the release and after the stop (two masks), half a period
-    away from either, and the motion span."""
+    away from the motion, and the times of the release and of the stop (None where the
+    record starts or ends in motion). A decay that fades into the noise has no sharp
+    stop: the end of its last block of coherent oscillation is taken."""
     from bayestribo.signal.motion import motion_span
 
     span = motion_span(t, a - np.median(a), period)
     quiet = np.array(span.quiet, dtype=bool)
+    moving = np.flatnonzero(~quiet)
+    release, stop = span.release_time, span.stop_time
+    if moving.size and release is None and quiet[0]:
+        release = float(t[moving[0]])
+    if stop is None and release is not None:
+        # a decay that fades into the noise: its last excursion beyond 5σ of the rest
+        # (white noise there: a chance of 6e-7 a sample), a period before the rest
+        level = float(np.median(a[t < release]))
+        out = np.flatnonzero(np.abs(a - level) > _FADED * span.noise)
+        if out.size and t[-1] - t[out[-1]] > 4.0 * period:
+            stop = float(t[out[-1]]) + period
     margin = _MARGIN_PERIODS * period
-    for edge in (span.release_time, span.stop_time):
-        if edge is not None:
-            quiet &= np.abs(t - edge) > margin
-    before = np.zeros_like(quiet)
-    after = np.zeros_like(quiet)
-    if span.release_time is not None:
-        before = quiet & (t < span.release_time)
-    if span.stop_time is not None:
-        after = quiet & (t > span.stop_time)
-    return before, after, span
-
-
-def _line(t: NDArray, v: NDArray) -> tuple[float, float]:
-    """Least-squares line (value at the mean time, slope) through samples."""
-    centre = float(t.mean())
-    slope = float(np.polyfit(t - centre, v, 1)[0]) if t.size > 2 else 0.0
-    return float(v.mean()) - slope * 0.0, slope  # value at `centre`
+    none = np.zeros_like(quiet)
+    before = quiet & (t < release - margin) if release is not None else none
+    after = none
+    if stop is not None:
+        after = (t > stop + margin) & (quiet if span.stop_time is not None else True)
+    return before, after, release, stop
 
 
 def _drift(t: NDArray, v: NDArray, before: NDArray, after: NDArray) -> NDArray:
     """The drift of an integrated velocity, measured at rest: a line through each rest,
-    and between them the straight line from the first's end to the second's start."""
-    tb, ta = t[before], t[after]
-    cb, ca = float(tb.mean()), float(ta.mean())
-    vb, sb = _line(tb, v[before])
-    va, sa = _line(ta, v[after])
-    t0, t1 = float(tb[-1]), float(ta[0])
+    between them the straight line from the first's end to the second's start (the
+    best estimate of a random walk known at both ends), and beyond a rest on one side
+    only, the level at its end (a random walk's best estimate past its last value)."""
+    lines = []
+    for mask in (before, after):
+        if int(mask.sum()) >= _REST_SAMPLES:
+            tm = t[mask]
+            centre = float(tm.mean())
+            slope = float(np.polyfit(tm - centre, v[mask], 1)[0])
+            lines.append((centre, float(v[mask].mean()), slope, float(tm[0]), float(tm[-1])))
+        else:
+            lines.append(None)
+    first, second = lines
+    if first is None and second is None:
+        return np.zeros_like(v)
+    if second is None:
+        c, level, slope, _, end = first
+        return level + slope * (np.minimum(t, end) - c)
+    if first is None:
+        c, level, slope, start, _ = second
+        return level + slope * (np.maximum(t, start) - c)
+    cb, vb, sb, _, t0 = first
+    ca, va, sa, t1, _ = second
     d0, d1 = vb + sb * (t0 - cb), va + sa * (t1 - ca)
     return np.where(
         t <= t0,
@@ -235,8 +259,26 @@ def _drift(t: NDArray, v: NDArray, before: NDArray, after: NDArray) -> NDArray:
     )
 
 
+def _lowpass(x: NDArray, dt: float, cutoff: float) -> NDArray:
+    """What the zero-phase high-pass removes from ``x``: x filtered by 1 − H(f), the
+    record extended at each end by its odd reflection about its end value over eight
+    time constants (as ``scipy.signal.filtfilt`` pads), so that a record that ends in
+    motion, or on a drift, ends without a jump."""
+    from scipy.fft import irfft, next_fast_len, rfft, rfftfreq
+
+    n = x.size
+    pad = min(n - 1, math.ceil(8.0 / (2.0 * math.pi * cutoff * dt)))
+    left = 2.0 * x[0] - x[pad:0:-1]
+    right = 2.0 * x[-1] - x[-2 : -pad - 2 : -1]
+    extended = np.concatenate([left, x, right])
+    m = next_fast_len(extended.size + pad, real=True)
+    f = rfftfreq(m, dt)
+    low = irfft(rfft(extended, m) / (1.0 + (f / cutoff) ** (2 * ORDER)), m)
+    return low[pad : pad + n]
+
+
 def _kept_steps(
-    t: NDArray, low: NDArray, f: NDArray, lowpass: NDArray, times: list[float], m: int
+    t: NDArray, low: NDArray, cutoff: float, times: list[float]
 ) -> tuple[NDArray, list[float]]:
     """The displacement's steps at ``times`` that best explain the low-frequency part
     ``low`` of a velocity (least squares), as that part of them, and their sizes [m].
@@ -244,15 +286,20 @@ def _kept_steps(
     A free decay's velocity holds nothing below a tenth of its frequency but these steps
     (the held position to the centre of the oscillation at the release, the centre to
     the stuck position at the stop; a decay starting at a turning point puts a share
-    (f_c/f)² of its swing there): the rest of ``low`` is the drift of the integral."""
-    from scipy.fft import irfft
+    (f_c/f)² of its swing there): the rest of ``low`` is the drift of the integral.
+    Each step is a delta of the velocity at its time, with its first two derivatives
+    for the shape of the edge, band-limited to the samples."""
+    from scipy.fft import irfft, next_fast_len, rfftfreq
 
     dt = float(t[1] - t[0])
+    m = next_fast_len(2 * t.size, real=True)
+    f = rfftfreq(m, dt)
     columns = []
     for tj in times:
-        shift = lowpass * np.exp(-2j * math.pi * f * (tj - t[0])) / dt
+        shift = np.exp(-2j * math.pi * f * (tj - t[0])) / dt
         for k in range(_MULTIPOLES):  # the step, and its derivatives (the edge's shape)
-            columns.append(irfft(shift * (2j * math.pi * f * dt) ** k, m)[: t.size])
+            delta = irfft(shift * (2j * math.pi * f * dt) ** k, m)[: t.size]
+            columns.append(_lowpass(delta, dt, cutoff))
     basis = np.column_stack(columns)
     sizes, *_ = np.linalg.lstsq(basis, low, rcond=None)
     return basis @ sizes, [float(x) for x in sizes[::_MULTIPOLES]]
@@ -303,7 +350,7 @@ def integrate_acceleration(
     rough = np.cumsum(a - a.mean()) * dt  # a velocity with a drift: the period only
     try:
         period = dominant_period(t, rough)
-        before, after, span = _rest(t, a, period)
+        before, after, release, stop = _rest(t, a, period)
     except RecordingError as exc:
         raise RecordingError(
             f"{column}: {exc.message}; no free decay in the acceleration"
@@ -330,31 +377,39 @@ def integrate_acceleration(
     response[1:] = 1.0 / (2j * math.pi * f[1:])
     if m % 2 == 0:
         response[-1] = 0.0  # Nyquist: the integral of a real signal there is not real
-    bridged = int(before.sum()) >= _REST_SAMPLES and int(after.sum()) >= _REST_SAMPLES
     cutoff = CUTOFF_RATIO * frequency
-    gain = highpass_gain(f, cutoff)
-    if bridged:
-        velocity = irfft(rfft(a - bias, m) * response, m)[:n]
-        velocity = velocity - _drift(t, velocity, before, after)
-        low = irfft((1.0 - gain) * rfft(velocity, m), m)[:n]
-        kept, sizes = _kept_steps(
-            t, low, f, 1.0 - gain, [float(span.release_time), float(span.stop_time)], m
+    edges = [
+        (name, float(edge))
+        for name, edge, mask in (
+            ("the release", release, before),
+            ("the stop", stop, after),
         )
-        velocity = velocity - low + kept
-        steps = list(zip([span.release_time, span.stop_time], sizes, strict=True))
+        if edge is not None and int(mask.sum()) >= _REST_SAMPLES
+    ]
+    velocity = irfft(rfft(a - bias, m) * response, m)[:n]
+    velocity = velocity - _drift(t, velocity, before, after)
+    low = _lowpass(velocity, dt, cutoff)
+    if edges:
+        kept, sizes = _kept_steps(t, low, cutoff, [e for _, e in edges])
+        low = low - kept
+    velocity = velocity - low
+    where = " and ".join(name for name, _ in edges)
+    rests = {2: "before the release and after the stop", 1: f"at {where} only", 0: ""}
+    if edges:
+        steps = ", ".join(
+            f"{size:.4g} m at {name}" for (name, _), size in zip(edges, sizes, strict=True)
+        )
         drift_from = (
-            "the drift measured at rest before the release and after the stop taken off "
-            f"(the displacement's steps there, {steps[0][1]:.4g} and {steps[1][1]:.4g}, "
-            "kept out of the high-pass)"
+            f"the drift measured at rest {rests[len(edges)]} taken off (the displacement's "
+            f"steps, {steps}, kept out of the high-pass)"
         )
     else:
-        velocity = irfft(rfft(a - bias, m) * response * gain, m)[:n]
-        drift_from = (
-            "no rest on "
-            + ("either side" if not (before.any() or after.any()) else "one side")
-            + " of the motion to measure the drift at: the high-pass alone removes it, "
-            "and the displacement's step at the release or the stop with it (the first "
-            "and last cycles are distorted)"
+        drift_from = "no rest before the release or after the stop to measure the drift at"
+    if len(edges) < 2:
+        drift_from += (
+            "; where the record starts or ends in motion, the high-pass takes the "
+            "displacement's step there with the drift (the first or last cycles are "
+            "distorted)"
         )
     at_frequency = float(highpass_gain(frequency, cutoff))
     velocity /= at_frequency  # the oscillation's amplitude as recorded
