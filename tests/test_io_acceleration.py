@@ -246,3 +246,4 @@ def test_a_fit_of_an_accelerometer_record_covers_the_truth() -> None:
     low, high = result.interval("mu_k")
     assert low <= mu <= high
     assert result.metadata["acceleration"]["column"] == "acceleration_m_per_s2"
+    assert "velocity  integrated from the acceleration" in result.to_text()

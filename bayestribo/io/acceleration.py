@@ -79,6 +79,7 @@ __all__ = [
     "SPREAD_LIMIT",
     "Integration",
     "PrincipalAxis",
+    "describe",
     "from_acceleration",
     "integrate_acceleration",
     "integrated_signals",
@@ -193,6 +194,26 @@ class Integration:
             f"{self.gain_at_frequency:.4f} at the oscillation's {self.frequency_Hz:.4g} Hz "
             "divided out)"
         )
+
+
+def describe(record: Mapping[str, Any]) -> str:
+    """One line for a fit's report: where its velocity came from, from the metadata
+    record of :meth:`Integration.record` (``run.metadata["acceleration"]``)."""
+    filt = record.get("filter", {})
+    text = (
+        f"integrated from the acceleration {record.get('column')!r}: bias "
+        f"{record.get('bias', float('nan')):.4g} ± {record.get('bias_se', float('nan')):.2g} "
+        f"removed ({record.get('bias_from')}); zero-phase high-pass at "
+        f"{filt.get('cutoff_Hz', float('nan')):.3g} Hz (gain "
+        f"{filt.get('gain_at_frequency', float('nan')):.4f} at f, divided out)"
+    )
+    axes = record.get("axes")
+    if axes:
+        weights = ", ".join(
+            f"{_axis_name(c)} {w:.3f}" for c, w in (axes.get("weights") or {}).items()
+        )
+        text += f"; the axes projected on their principal axis ({weights})"
+    return text
 
 
 def _rest(
