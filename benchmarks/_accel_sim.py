@@ -10,7 +10,8 @@ half cycle, each ending on the event ẋ = 0; at a turning point the contact sti
 anti-alias filter samples it: the mean of ẍ over each sample interval,
 (ẋ(t + Δt/2) − ẋ(t − Δt/2))/Δt (the acceleration jumps at the release, at each turn
 of the friction and at the stop), plus a constant bias and white noise, with rest
-before the release and after the stop.
+before the release and after the stop (a drag-only motion, which never stops, is
+recorded until it has faded into the noise).
 """
 
 from __future__ import annotations
@@ -102,7 +103,9 @@ def record(
 ) -> dict:
     """Time [s], acceleration with bias and noise [m/s²], and the truth."""
     pieces, stop = motion(rig, x0, duration)
-    end = (stop if stop is not None else pieces[-1][1]) + rest_after
+    # a motion that does not stop (drag only) is recorded until ``duration``: it fades
+    # into the noise there, and is never cut short by a rest it does not reach
+    end = stop + rest_after if stop is not None else pieces[-1][1]
     t = np.arange(0.0, rest_before + end, 1.0 / rate)
     tau = t - rest_before
 

@@ -7,8 +7,10 @@ f = 2.5 Hz, N = m g), sampled as an accelerometer would at 200 Hz: the mean acce
 over each sample interval, a constant bias (± 0.5 m/s², and in half the runs a
 smartphone's share of gravity, 9.3 to 9.8 m/s²) and white noise of 0.01 to 0.03 m/s²
 per sample (log-uniform: 100 to 300 µg/√Hz, MEMS and phone sensors), 2 s of rest
-before the release and 3 s after the stop (the drag-only records run 12 s and end in a
-decay below the noise). The record is written as a CSV with one column
+before the release and 3 s after the stop (a drag-only record ends in motion, when the
+viscous decay alone would be at e⁻⁴ of the release: a recording stopped before the swing
+fades into the noise; one that runs into the noise is refused by the fit's turning-point
+check, the integrated noise's wiggles taken for turning points: ``--window`` cuts it). The record is written as a CSV with one column
 ``acceleration_m_per_s2`` (and the time) and read by :func:`bayestribo.read_run`,
 which integrates it (:mod:`bayestribo.io.acceleration`), then fitted:
 
@@ -16,7 +18,7 @@ which integrates it (:mod:`bayestribo.io.acceleration`), then fitted:
   x₀ ~ U(30, 50) mm; ``bayestribo.fit(run)`` (viscous+coulomb), ζ and μ_k checked;
 * ``viscous``: ζ ~ U(0.01, 0.04), no contact (``load_N`` 0), x₀ ~ U(20, 40) mm;
   ``fit(run)``, ζ₀ checked;
-* ``quadratic``: quadratic drag q ~ U(0.5, 2) m⁻¹ per unit mass and ζ ~ U(0.001, 0.003),
+* ``quadratic``: quadratic drag q ~ U(0.5, 2) m⁻¹ per unit mass and ζ ~ U(0.005, 0.01),
   no contact; ``fit(run, law="auto")``, the drag's coefficient c₂ = q m [kg/m] checked
   when the law chosen holds it (the law chosen is reported).
 
@@ -78,12 +80,12 @@ def draw(case: str, seed: int) -> tuple[sim.Rig, dict, dict]:
     elif case == "viscous":
         rig = sim.Rig(zeta=float(rng.uniform(0.01, 0.04)))
         settings["x0"] = float(rng.uniform(0.02, 0.04))
-        settings["duration"] = 12.0
+        settings["duration"] = 4.0 / (rig.zeta * rig.omega)  # ends at e^-4 of x0
         truth = {"zeta0": rig.zeta}
     else:
-        rig = sim.Rig(zeta=float(rng.uniform(0.001, 0.003)), q=float(rng.uniform(0.5, 2.0)))
+        rig = sim.Rig(zeta=float(rng.uniform(0.005, 0.01)), q=float(rng.uniform(0.5, 2.0)))
         settings["x0"] = float(rng.uniform(0.03, 0.05))
-        settings["duration"] = 12.0
+        settings["duration"] = 4.0 / (rig.zeta * rig.omega)
         truth = {"c2_SI": rig.q * rig.mass}
     return rig, settings, truth
 
