@@ -10,9 +10,10 @@ per sample (log-uniform: 100 to 300 µg/√Hz, MEMS and phone sensors), 2 s of r
 before the release and 3 s after the stop (a drag-only record ends in motion, when the
 viscous decay alone would be at e⁻⁴ of the release: a recording stopped before the swing
 fades into the noise; one that runs into the noise is refused by the fit's turning-point
-check, the integrated noise's wiggles taken for turning points: ``--window`` cuts it). The record is written as a CSV with one column
-``acceleration_m_per_s2`` (and the time) and read by :func:`bayestribo.read_run`,
-which integrates it (:mod:`bayestribo.io.acceleration`), then fitted:
+check, the integrated noise's wiggles taken for turning points: ``--window`` cuts it).
+The record is written as a CSV with one column ``acceleration_m_per_s2`` (and the
+time) and read by :func:`bayestribo.read_run`, which integrates it
+(:mod:`bayestribo.io.acceleration`), then fitted:
 
 * ``coulomb``: ζ ~ U(0.003, 0.01), μ_k ~ U(0.01, 0.03), μ_s/μ_k ~ U(1.1, 1.5),
   x₀ ~ U(30, 50) mm; ``bayestribo.fit(run)`` (viscous+coulomb), ζ and μ_k checked;
@@ -51,7 +52,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-import _accel_sim as sim  # noqa: E402
+import _accel_sim as sim
 
 RESULTS = Path(__file__).resolve().parent / "results"
 RUNS = RESULTS / "acceleration_runs.jsonl"
