@@ -247,3 +247,27 @@ def test_a_fit_of_an_accelerometer_record_covers_the_truth() -> None:
     assert low <= mu <= high
     assert result.metadata["acceleration"]["column"] == "acceleration_m_per_s2"
     assert "velocity  integrated from the acceleration" in result.to_text()
+
+
+def test_an_angular_acceleration_is_read_as_a_rotation(tmp_path: Path) -> None:
+    t, a, v = _record()  # the same numbers read as radians
+    degrees = np.degrees(a)
+    path = _csv(tmp_path / "gyro.csv", "time_s,angular_acceleration_deg_per_s2", [t, degrees])
+    with pytest.warns(ReadingWarning, match="'angular_acceleration_rad_per_s2'.*rad/s²"):
+        run = read_run(path)
+    assert run.length_unit == "rad"
+    late = t > REST + 1.0 / F_HZ
+    assert np.abs(run.velocity - v)[late].max() < 0.01 * np.abs(v).max()
+
+
+def test_a_window_is_integrated_alone(tmp_path: Path) -> None:
+    """A second disturbance after the decay: the window keeps the decay and its rests."""
+    t, a, v = _record()
+    kick = (t > 21.0) & (t < 21.5)
+    a = np.where(kick, a + 5.0, a)
+    path = _csv(tmp_path / "kicked.csv", "time_s,acceleration_m_per_s2", [t, a])
+    with pytest.warns(ReadingWarning, match="integrated from the acceleration"):
+        run = read_run(path, window=(0.0, 20.0))
+    assert run.time[-1] <= 20.0 and run.metadata["window_s"][1] <= 20.0
+    late = run.time > REST + 1.0 / F_HZ
+    assert np.abs(run.velocity - v[: run.time.size])[late].max() < 0.01 * np.abs(v).max()
