@@ -19,7 +19,12 @@ import pytest
 
 from bayestribo import fit, read_run
 from bayestribo.errors import ReadingWarning, RecordingError, RunFormatError
-from bayestribo.io.acceleration import from_acceleration, integrate_acceleration, principal_axis
+from bayestribo.io.acceleration import (
+    CUTOFF_RATIO,
+    from_acceleration,
+    integrate_acceleration,
+    principal_axis,
+)
 from bayestribo.io.columns import STANDARD_GRAVITY, parse_column
 from bayestribo.io.sidecar import sidecar_path, write_sidecar
 
@@ -87,7 +92,7 @@ def test_the_integrated_velocity_follows_the_true_one_and_the_bias_is_measured_a
     # never below the white noise's σ/√n (the faded decay's last swings add to it)
     assert result.bias_se > 0.9 * NOISE / math.sqrt(result.rest_samples)
     assert result.frequency_Hz == pytest.approx(F_HZ, rel=0.01)
-    assert result.cutoff_Hz == pytest.approx(0.3 * result.frequency_Hz)
+    assert result.cutoff_Hz == pytest.approx(CUTOFF_RATIO * result.frequency_Hz)
     # after the first period the error is a small part of the swing: the random walk
     # of 0.02 m/s² at 200 Hz over seconds is of order 1e-3 m/s
     late = t > REST + 1.0 / F_HZ

@@ -25,23 +25,29 @@ integrated once, at read time (:func:`integrate_acceleration`):
    straight line from the one to the other, is taken off (the best estimate of a random
    walk between two points where it is known). Then a zero-phase high-pass,
    H(f) = r / (1 + r) with r = (f / f_c)⁴ (the squared magnitude of a second-order
-   Butterworth: that filter run forwards and backwards), f_c = 0.3 f, leaves the
+   Butterworth: that filter run forwards and backwards), f_c = 0.15 f, leaves the
    integrated noise stationary, the same at rest as in the motion, so that the fit's
    noise model, measured at rest as a spectrum (:mod:`bayestribo.signal.spectrum`),
-   is the motion's. Its gain at f, 1 / (1 + 0.3⁴) = 0.992, is divided out (the
-   sidebands of a decay with ζ <= 0.1 differ from it by under 0.5 %).
-   A free decay has no velocity below a tenth of its frequency but for the steps of
-   the displacement at the release (from the held position to the centre of the
-   oscillation) and at the stop: those two steps, measured from the integral at rest
-   and over the motion, are kept out of the filter (it removes what is left below
-   f_c: the drift). Without a rest on both sides the steps cannot be measured: the
-   high-pass then takes them too, distorting the first and last cycles, and the
-   record says so.
+   is the motion's (its correlation time, about a period, is well inside a rest of a
+   few periods). Its gain at f, 1 / (1 + 0.15⁴) = 0.9995, is divided out. The cut-off
+   is a compromise: the filter's slope across the decay's band lowers the ζ fitted to
+   a dry-friction decay (with no noise: by 0.3 % of ζ at f_c = 0.1 f, 1 % at 0.2 f,
+   2.6 % at 0.3 f), and a lower cut-off leaves a noise correlated over longer than the
+   rest shows.
+   A free decay's velocity has almost nothing below f_c but the steps of the
+   displacement at the release (from the held position to the centre of the
+   oscillation) and at the stop: what the high-pass would remove is fitted there by
+   least squares with a step at each edge and its first two derivatives (the edge's
+   shape), and that part is kept; the rest is the drift. A decay that fades into the
+   noise ends at its last excursion beyond 5σ of the rest, a period later. Without a
+   rest on a side (a record that starts or ends in motion) the step there cannot be
+   told from the drift: the high-pass takes it, the cycles near that end are distorted,
+   and the record says so.
 
-On simulated records of an accelerometer with 200 µg/√Hz of noise (an independent
-``solve_ivp`` integration, ``benchmarks/acceleration.py``), the velocity so made is
-within 1e-3 of the oscillation's amplitude of the true one after the first cycle, and
-the fit's intervals of ζ and μ_k cover the truth (``benchmarks/results/acceleration.json``).
+Without noise the velocity so made is within 2e-3 of the swing of the true one after
+the first period (``tests/test_io_acceleration.py``); the coverage of fits of simulated
+accelerometer records (an independent ``solve_ivp`` integration, 100 to 300 µg/√Hz of
+noise) is ``benchmarks/acceleration.py`` (``benchmarks/results/acceleration.json``).
 
 Several axes of one sensor (phyphox's x, y and z) are projected on the principal axis
 of the oscillation (:func:`principal_axis`): the direction of the largest variance of
@@ -87,7 +93,7 @@ __all__ = [
 ]
 
 #: Cut-off of the high-pass over the oscillation frequency, f_c / f.
-CUTOFF_RATIO = 0.3
+CUTOFF_RATIO = 0.15
 #: Order n of the Butterworth high-pass whose squared magnitude is applied (zero phase).
 ORDER = 2
 #: Largest share of the first principal axis's variance the second may hold for axes to
