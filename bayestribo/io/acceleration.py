@@ -228,7 +228,8 @@ def _rest(
     """Samples at rest before the release and after the stop (two masks), half a period
     away from the motion, and the times of the release and of the stop (None where the
     record starts or ends in motion). A decay that fades into the noise has no sharp
-    stop: the end of its last block of coherent oscillation is taken."""
+    stop: a period after its last excursion beyond 5σ of the rest is taken, when the
+    record goes on four periods beyond it."""
     from bayestribo.signal.motion import motion_span
 
     span = motion_span(t, a - np.median(a), period)
@@ -310,7 +311,7 @@ def _kept_steps(
     """The displacement's steps at ``times`` that best explain the low-frequency part
     ``low`` of a velocity (least squares), as that part of them, and their sizes [m].
 
-    A free decay's velocity holds nothing below a tenth of its frequency but these steps
+    A free decay's velocity holds almost nothing below f_c but these steps
     (the held position to the centre of the oscillation at the release, the centre to
     the stuck position at the stop; a decay starting at a turning point puts a share
     (f_c/f)² of its swing there): the rest of ``low`` is the drift of the integral.
@@ -424,7 +425,7 @@ def integrate_acceleration(
     rests = {2: "before the release and after the stop", 1: f"at {where} only", 0: ""}
     if edges:
         steps = ", ".join(
-            f"{size:.4g} m at {name}" for (name, _), size in zip(edges, sizes, strict=True)
+            f"{size:.4g} at {name}" for (name, _), size in zip(edges, sizes, strict=True)
         )
         drift_from = (
             f"the drift measured at rest {rests[len(edges)]} taken off (the displacement's "
