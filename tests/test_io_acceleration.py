@@ -21,6 +21,7 @@ from bayestribo import fit, read_run
 from bayestribo.errors import ReadingWarning, RecordingError, RunFormatError
 from bayestribo.io.acceleration import (
     CUTOFF_RATIO,
+    CUTOFF_RATIO_OPEN,
     from_acceleration,
     integrate_acceleration,
     principal_axis,
@@ -219,6 +220,7 @@ def test_no_rest_after_the_motion_is_said() -> None:
     result = integrate_acceleration(t[keep], a[keep])
     assert "at the release only" in result.drift_from
     assert "the high-pass takes the displacement's step there" in result.drift_from
+    assert result.cutoff_Hz == pytest.approx(CUTOFF_RATIO_OPEN * result.frequency_Hz)
 
 
 def _coulomb_velocity(t: np.ndarray, mu: float, static: float) -> np.ndarray:
