@@ -278,3 +278,14 @@ def test_a_window_is_integrated_alone(tmp_path: Path) -> None:
     assert run.time[-1] <= 20.0 and run.metadata["window_s"][1] <= 20.0
     late = run.time > REST + 1.0 / F_HZ
     assert np.abs(run.velocity - v[: run.time.size])[late].max() < 0.01 * np.abs(v).max()
+
+
+def test_a_matlab_file_of_an_acceleration_is_read_too(tmp_path: Path) -> None:
+    scipy_io = pytest.importorskip("scipy.io")
+    t, a, v = _record()
+    path = tmp_path / "accel.mat"
+    scipy_io.savemat(path, {"time_s": t, "acceleration_g": a / STANDARD_GRAVITY})
+    with pytest.warns(ReadingWarning, match="integrated from the acceleration"):
+        run = read_run(path, sidecar=False)
+    late = t > REST + 1.0 / F_HZ
+    assert np.abs(run.velocity - v)[late].max() < 0.01 * np.abs(v).max()
