@@ -576,6 +576,11 @@ class FitResult:
         sensor = self._attr("sensor_json", None)
         if sensor:
             lines.append(f"sensor    {sensor['description']}")
+        integrated = self.metadata.get("acceleration")
+        if integrated:
+            from bayestribo.io.acceleration import describe
+
+            lines.append(f"velocity  {describe(integrated)}")
         spring = self._attr("restoring_json", None)
         if spring and spring.get("name") not in (None, "linear"):
             text = f"restoring {spring['name']}"

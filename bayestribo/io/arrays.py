@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 
 from bayestribo.errors import RunFormatError
 from bayestribo.io.columns import check_scale, parse_column
-from bayestribo.io.run import COLUMNS, DISPLACEMENT, TIME, VELOCITY
+from bayestribo.io.run import ACCELERATIONS, COLUMNS, DISPLACEMENT, TIME, VELOCITY
 
 __all__ = ["MAX_SAMPLES", "NamedArray", "signals_from_arrays"]
 
@@ -115,8 +115,8 @@ def _automatic(
                 where,
             )
         picked[role] = (item, factor)
-    if TIME in picked and (DISPLACEMENT in picked or VELOCITY in picked):
-        return picked
+    if TIME in picked and {DISPLACEMENT, VELOCITY, *ACCELERATIONS} & set(picked):
+        return picked  # an acceleration is integrated by read_run
     listing = ", ".join(a.describe() for a in arrays) or "none"
     hint = f"; {', '.join(map(repr, unitless))} name a quantity without a unit" if unitless else ""
     raise RunFormatError(
@@ -259,4 +259,4 @@ def signals_from_arrays(
     if len(set(sizes.values())) > 1:
         detail = ", ".join(f"{picked[r][0].name} ({n})" for r, n in sizes.items())
         raise RunFormatError(f"the signals have different lengths: {detail}", where)
-    return {name: out[name] for name in COLUMNS if name in out}
+    return {name: out[name] for name in (*COLUMNS, *ACCELERATIONS) if name in out}

@@ -15,15 +15,27 @@ import re
 from collections.abc import Mapping, Sequence
 
 from bayestribo.errors import RunFormatError
-from bayestribo.io.run import ANGLE, ANGULAR_VELOCITY, DISPLACEMENT, TIME, VELOCITY
+from bayestribo.io.run import (
+    ACCELERATION,
+    ACCELERATION_AXES,
+    ANGLE,
+    ANGULAR_ACCELERATION,
+    ANGULAR_VELOCITY,
+    DISPLACEMENT,
+    TIME,
+    VELOCITY,
+)
 
 __all__ = [
     "IGNORE",
+    "MAGNITUDES",
     "OTHER_QUANTITIES",
     "QUANTITIES",
     "UNITS",
+    "acceleration_label",
     "check_scale",
     "combine_units_row",
+    "motion_label",
     "other_quantity",
     "parse_column",
     "split_run_tag",
@@ -35,6 +47,8 @@ IGNORE = "ignore"
 #: Words naming each canonical quantity (lower case). Angular quantities come first:
 #: ``angular_velocity_rad_per_s`` is an angular velocity, not a velocity.
 QUANTITIES: dict[str, tuple[str, ...]] = {
+    ANGULAR_ACCELERATION: ("angular_acceleration", "angular acceleration"),
+    ACCELERATION: ("acceleration", "accel", "acc", "a"),
     ANGULAR_VELOCITY: (
         "angular_velocity",
         "angular velocity",
@@ -50,6 +64,8 @@ QUANTITIES: dict[str, tuple[str, ...]] = {
 }
 
 _DEGREE = math.pi / 180.0
+#: Standard gravity [m/s²], the unit ``g`` of an accelerometer (CGPM 1901).
+STANDARD_GRAVITY = 9.80665
 
 #: Units of each quantity and their factor to the canonical unit.
 UNITS: dict[str, dict[str, float]] = {
@@ -83,20 +99,31 @@ UNITS: dict[str, dict[str, float]] = {
         "°/s": _DEGREE,
         "rpm": 2.0 * math.pi / 60.0,
     },
+    ACCELERATION: {
+        **{
+            f"{prefix}{form}": factor
+            for prefix, factor in (("m", 1.0), ("cm", 1e-2), ("mm", 1e-3))
+            for form in ("_per_s2", "/s^2", "/s²", "/s2", "_per_s^2")
+        },
+        "g": STANDARD_GRAVITY,
+    },
+    ANGULAR_ACCELERATION: {
+        **{
+            f"{prefix}{form}": factor
+            for prefix, factor in (("rad", 1.0), ("deg", _DEGREE), ("°", _DEGREE))
+            for form in ("_per_s2", "/s^2", "/s²", "/s2", "_per_s^2")
+        },
+    },
 }
 
 #: Quantities that sensor software exports beside position and velocity; a header
 #: column naming one of these is not read (and said), any other unknown name is an error.
 OTHER_QUANTITIES: tuple[str, ...] = (
-    "acceleration",
-    "accel",
-    "a",
     "force",
     "voltage",
     "potential",
     "current",
     "temperature",
-    "angular acceleration",
     "energy",
     "kinetic energy",
     "potential energy",
@@ -119,6 +146,15 @@ OTHER_QUANTITIES: tuple[str, ...] = (
 #: acceleration``, ``Acceleration with g z``).
 _AXIS_SUFFIX = re.compile(r"\s+(?:[xyz]|with\s+g(?:\s+[xyz])?)$")
 _KIND_PREFIX = re.compile(r"^(?:absolute|linear|total|resultant|raw)\s+")
+#: An acceleration along one axis of a three-axis sensor: ``acceleration x``, ``linear
+#: acceleration y``, ``acceleration with g z``, ``accel_x``.
+_AXIS = re.compile(
+    r"^(?:(?:linear|raw)\s+)?(?P<word>acceleration|accel|acc|a)"
+    r"(?:\s+with\s+g)?[\s_](?P<axis>[xyz])$"
+)
+#: Prefixes that make an acceleration a magnitude (``Absolute acceleration``): never
+#: a motion's signed component, so not read.
+MAGNITUDES = re.compile(r"^(?:absolute|total|resultant)\s+")
 
 #: Run labels sensor software adds to column names: ``Time (s) Run #1`` (PASCO),
 #: ``Run 1: Position (m)`` and ``Latest: Time (s)`` (Vernier), ``Data Set 2: ...``.
@@ -147,8 +183,32 @@ def other_quantity(name: str) -> bool:
     with an axis or a kind about it (``Acceleration x (m/s^2)``, ``Absolute
     acceleration``)."""
     word, _ = _split(name.replace("\u03bc", "\u00b5"))
+    if (
+        MAGNITUDES.match(word)
+        and _AXIS_SUFFIX.sub("", MAGNITUDES.sub("", word)) in (QUANTITIES[ACCELERATION])
+    ):
+        return True  # the magnitude of an acceleration: not a signed motion
     word = _KIND_PREFIX.sub("", _AXIS_SUFFIX.sub("", word))
     return word in OTHER_QUANTITIES
+
+
+def acceleration_label(name: str) -> bool:
+    """True for a header name of an acceleration that is read: a signed component
+    (``Acceleration (m/s^2)``, ``Acceleration x (m/s^2)``, ``accel_g``, ``angular
+    acceleration [rad/s^2]``), not a magnitude (``Absolute acceleration``)."""
+    word, _ = _split(name.replace("\u03bc", "\u00b5"))
+    return (
+        word in QUANTITIES[ACCELERATION]
+        or word in QUANTITIES[ANGULAR_ACCELERATION]
+        or _AXIS.match(word) is not None
+    )
+
+
+def motion_label(name: str) -> bool:
+    """True for a header name of a displacement, a velocity, an angle or an angular
+    velocity, with or without its unit (``position``, ``Velocity (m/s)``)."""
+    word, _ = _split(name.replace("\u03bc", "\u00b5"))
+    return any(word in QUANTITIES[q] for q in (DISPLACEMENT, VELOCITY, ANGLE, ANGULAR_VELOCITY))
 
 
 def combine_units_row(names: Sequence[str], units: Sequence[str]) -> list[str] | None:
@@ -211,6 +271,14 @@ def parse_column(name: str) -> tuple[str, float] | None:
     """
     # the Greek letter mu (U+03BC) and the micro sign (U+00B5) look alike: one unit
     word, unit = _split(name.replace("\u03bc", "\u00b5"))
+    column = None
+    axis = _AXIS.match(word)
+    if axis is not None:  # Acceleration x (m/s^2)
+        word, column = axis.group("word"), ACCELERATION_AXES[axis.group("axis")]
+    elif word in QUANTITIES[ACCELERATION] and unit is not None:
+        under = re.match(r"^(?P<axis>[xyz])_(?P<unit>.+)$", unit)  # accel_x_g
+        if under is not None:
+            unit, column = under.group("unit"), ACCELERATION_AXES[under.group("axis")]
     for canonical, words in QUANTITIES.items():
         if word not in words:
             continue
@@ -226,7 +294,7 @@ def parse_column(name: str) -> tuple[str, float] | None:
                 f"column {name!r}: unknown unit {unit!r} for {canonical}; expected one of "
                 f"{sorted(units)}"
             )
-        return canonical, units[key]
+        return column or canonical, units[key]
     return None
 
 
@@ -248,9 +316,16 @@ def si_names(labels: Sequence[str]) -> list[str] | None:
         One name per label, for ``columns=`` when the file's units are SI.
     """
     names = []
-    for label in labels:
+    motion = any(motion_label(label) for label in labels)  # an acceleration beside it
+    for label in labels:  # is not read
+        if motion and acceleration_label(label):
+            names.append(IGNORE)
+            continue
         word, _ = _split(label.replace("\u03bc", "\u00b5"))
         canonical = next((c for c, words in QUANTITIES.items() if word in words), None)
+        axis = _AXIS.match(word)
+        if axis is not None:
+            canonical = ACCELERATION_AXES[axis.group("axis")]
         if canonical is not None:
             names.append(canonical)
         elif word in OTHER_QUANTITIES:

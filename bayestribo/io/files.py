@@ -22,9 +22,10 @@ from numpy.typing import NDArray
 from bayestribo._files import atomic_path
 from bayestribo._warnings import warn
 from bayestribo.errors import BayestriboError, ReadingWarning, RecordingError, RunFormatError
+from bayestribo.io.acceleration import integrated_signals
 from bayestribo.io.options import READ_OPTIONS, ReadOptions, unknown_options
 from bayestribo.io.registry import FileFormat, format_for, registered_formats
-from bayestribo.io.run import ANGULAR, DISPLACEMENT, TIME, VELOCITY, Run
+from bayestribo.io.run import ACCELERATIONS, ANGULAR, DISPLACEMENT, TIME, VELOCITY, Run
 from bayestribo.io.sidecar import (
     DATA_FILE,
     check_data_file,
@@ -34,7 +35,7 @@ from bayestribo.io.sidecar import (
     sidecar_path,
     write_sidecar,
 )
-from bayestribo.io.text import PREAMBLE_RATE, StatedRate, write_csv
+from bayestribo.io.text import FILE_COLUMNS, PREAMBLE_RATE, StatedRate, write_csv
 from bayestribo.io.validation import on_one_clock, validate_run
 
 __all__ = ["READ_OPTIONS", "ReadOptions", "as_run", "format_of", "read_run", "write_run"]
@@ -219,6 +220,7 @@ def _read(path: Path, opts: ReadOptions) -> Run:
         meta.update(read_sidecar(side))
     signals = _checked_signals(fmt, path, opts, meta.pop(DATA_FILE, None), side)
     stated = signals.pop(PREAMBLE_RATE, None)  # the rate a text's preamble states
+    file_columns = signals.pop(FILE_COLUMNS, None)  # a text's names, with several axes
     angular = [name for name in ANGULAR if signals.get(name) is not None]
     meta.update(metadata or {})
     if angular:
@@ -239,8 +241,10 @@ def _read(path: Path, opts: ReadOptions) -> Run:
         time, origin = _implicit_time(signals, meta, path, stated, _rate_origin(opts, path))
     elif stated is not None:
         _check_stated_rate(time, stated, where)
+    if any(signals.get(name) is not None for name in ACCELERATIONS):
+        signals = _integrated(signals, time, meta, opts.window, where, file_columns)
     run = Run(
-        time,
+        signals.get(TIME, time),
         signals.get(DISPLACEMENT),
         signals.get(VELOCITY),
         meta,
@@ -263,6 +267,33 @@ def _read(path: Path, opts: ReadOptions) -> Run:
                 exc.where,
             ) from None
     return run
+
+
+def _integrated(
+    signals: Mapping[str, Any],
+    time: NDArray,
+    meta: dict[str, Any],
+    window: tuple[float, float] | None,
+    where: str,
+    file_columns: list[str] | None = None,
+) -> dict[str, Any]:
+    """The columns with an acceleration integrated into the velocity
+    (:func:`bayestribo.io.acceleration.integrated_signals`), over the ``window`` only
+    when one is given (the part of the record that holds the free decay); an angular
+    velocity so made is read as a rotation's."""
+    signals = {**signals, TIME: time}
+    if window is not None:
+        keep = (time >= window[0]) & (time <= window[1])
+        if int(keep.sum()) >= 2:
+            signals = {
+                name: (value[keep] if isinstance(value, np.ndarray) else value)
+                for name, value in signals.items()
+            }
+    out = integrated_signals(signals, meta, where, file_columns)
+    angular = [name for name in ANGULAR if out.get(name) is not None]
+    if angular:
+        out = _as_rotation(out, angular, meta, where)
+    return out
 
 
 def _as_rotation(
@@ -482,7 +513,11 @@ def _checked_signals(
 
 def _sample_count(signals: Mapping[str, Any]) -> int:
     """The number of samples a reader returned: its longest column."""
-    sizes = [np.size(v) for k, v in signals.items() if k != PREAMBLE_RATE and v is not None]
+    sizes = [
+        np.size(v)
+        for k, v in signals.items()
+        if k not in (PREAMBLE_RATE, FILE_COLUMNS) and v is not None
+    ]
     return int(max(sizes, default=0))
 
 

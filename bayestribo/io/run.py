@@ -34,8 +34,12 @@ from bayestribo.signal.frequency import oscillation_frequency
 from bayestribo.signal.period import sample_step
 
 __all__ = [
+    "ACCELERATION",
+    "ACCELERATIONS",
+    "ACCELERATION_AXES",
     "ANGLE",
     "ANGULAR",
+    "ANGULAR_ACCELERATION",
     "ANGULAR_VELOCITY",
     "COLUMNS",
     "DISPLACEMENT",
@@ -60,6 +64,26 @@ COLUMNS: tuple[str, str, str] = (TIME, DISPLACEMENT, VELOCITY)
 ANGLE = "angle_rad"
 ANGULAR_VELOCITY = "angular_velocity_rad_per_s"
 ANGULAR: Mapping[str, str] = MappingProxyType({ANGLE: DISPLACEMENT, ANGULAR_VELOCITY: VELOCITY})
+
+#: Canonical column names of an accelerometer's channel: acceleration [m/s²], angular
+#: acceleration [rad/s²], and the axes of a three-axis accelerometer (phyphox's
+#: ``Acceleration x (m/s^2)``) [m/s²]. A reader returns them; :func:`bayestribo.read_run`
+#: integrates the acceleration into the run's velocity
+#: (:mod:`bayestribo.io.acceleration`) and records how under the metadata key
+#: ``acceleration``.
+ACCELERATION = "acceleration_m_per_s2"
+ANGULAR_ACCELERATION = "angular_acceleration_rad_per_s2"
+ACCELERATION_AXES: Mapping[str, str] = MappingProxyType(
+    {axis: f"acceleration_{axis}_m_per_s2" for axis in "xyz"}
+)
+#: Every acceleration column, and the velocity it is integrated into.
+ACCELERATIONS: Mapping[str, str] = MappingProxyType(
+    {
+        ACCELERATION: VELOCITY,
+        ANGULAR_ACCELERATION: ANGULAR_VELOCITY,
+        **{name: VELOCITY for name in ACCELERATION_AXES.values()},
+    }
+)
 
 #: Values of the ``length_unit`` metadata key: metres, an unknown unit, or radians (the
 #: displacement an angle, the velocity an angular velocity).
@@ -198,6 +222,12 @@ METADATA_KEYS: Mapping[str, _Key] = MappingProxyType(
             "registry its name, parameters with their units and the solver of its motion",
         ),
         "acquisition": _Key("plain", "the acquisition's report (written by the package)"),
+        "acceleration": _Key(
+            "plain",
+            "how the velocity was integrated from an acceleration column (written by the "
+            "package, bayestribo.io.acceleration): the column, the bias removed and where "
+            "it was measured, the high-pass filter and its gain at the oscillation frequency",
+        ),
         "complete": _Key("plain", "whether the acquisition received every sample"),
         "fault": _Key("plain", "the acquisition's fault, if any"),
         "gaps": _Key("plain", "gaps in the acquisition's samples"),

@@ -38,18 +38,28 @@ from bayestribo.errors import ReadingWarning, RunFormatError
 from bayestribo.io import bulk_text
 from bayestribo.io.columns import (
     IGNORE,
+    acceleration_label,
     check_scale,
     combine_units_row,
+    motion_label,
     other_quantity,
     parse_column,
     si_names,
     split_run_tag,
 )
 from bayestribo.io.instruments import PREAMBLE_LINES, detect_export, read_export
-from bayestribo.io.run import ANGULAR, COLUMNS, DISPLACEMENT, TIME, VELOCITY
+from bayestribo.io.run import (
+    ACCELERATION_AXES,
+    ACCELERATIONS,
+    ANGULAR,
+    COLUMNS,
+    DISPLACEMENT,
+    TIME,
+    VELOCITY,
+)
 
 #: Every column name a text file's columns are read as.
-_READ = (*COLUMNS, *ANGULAR)
+_READ = (*COLUMNS, *ANGULAR, *ACCELERATIONS)
 
 __all__ = [
     "IGNORE",
@@ -276,7 +286,8 @@ def _canonical(name: str, where: str, what: str) -> tuple[str, float]:
         raise RunFormatError(
             f"{what}: unknown column {name!r}; expected per column one of "
             f"{[*COLUMNS, IGNORE]} or a quantity with its unit (time_ms, displacement_um, "
-            "velocity_mm_per_s, angle_deg, angular_velocity_rad_per_s, ...); columns=[...] "
+            "velocity_mm_per_s, angle_deg, angular_velocity_rad_per_s, acceleration_g, ...); "
+            "columns=[...] "
             "names the columns in file order",
             where,
         )
@@ -300,10 +311,11 @@ def _check_columns(
     for name in set(used):
         if used.count(name) > 1:
             raise RunFormatError(f"{what}: {name!r} is given {used.count(name)} times", where)
-    if not {DISPLACEMENT, VELOCITY, *ANGULAR} & set(used):
+    if not {DISPLACEMENT, VELOCITY, *ANGULAR, *ACCELERATIONS} & set(used):
         raise RunFormatError(
             f"{what}: a {DISPLACEMENT!r} or {VELOCITY!r} column is needed (or an angle, "
-            f"angle_deg, angular_velocity_rad_per_s, ...); got {list(columns)}",
+            "angle_deg, angular_velocity_rad_per_s, ..., or an acceleration, "
+            f"acceleration_m_per_s2, accel_g, ...); got {list(columns)}",
             where,
         )
     return names, factors
@@ -579,8 +591,15 @@ def _header(
         raise RunFormatError(f"{what}: {_side_by_side(labels, tags, runs)}", where)
     kept = []
     other = []
+    # an acceleration is read only where the file records no displacement, velocity or
+    # angle: the motion recorded is used, the acceleration said and left out
+    motion = any(
+        label in (DISPLACEMENT, VELOCITY, *ANGULAR) or motion_label(label) for label in labels
+    )
     for label in labels:
-        if label in (*COLUMNS, IGNORE) or not other_quantity(label):
+        if label in (*_READ, IGNORE) or not (
+            other_quantity(label) or (motion and acceleration_label(label))
+        ):
             kept.append(label)
         else:
             kept.append(IGNORE)
@@ -590,9 +609,9 @@ def _header(
     except RunFormatError as exc:
         if other and "column is needed" in exc.message:
             raise RunFormatError(
-                f"{what}: no displacement or velocity column; {other} are other quantities, "
-                "which are not read (an acceleration is not integrated into a motion); "
-                "export the position or the velocity, or name the columns with columns=[...]",
+                f"{what}: no displacement, velocity or acceleration column; {other} are "
+                "other quantities, which are not read; export the position, the velocity "
+                "or the acceleration, or name the columns with columns=[...]",
                 where,
             ) from None
         si = si_names(labels)
@@ -605,8 +624,9 @@ def _header(
         ) from None
     if other:
         warn(
-            f"{where}: {what}: column(s) {other} not read (another quantity); the run is "
-            f"read from {[n for n in names if n != IGNORE]}",
+            f"{where}: {what}: column(s) {other} not read (another quantity, or an "
+            "acceleration beside the motion recorded); the run is read from "
+            f"{[n for n in names if n != IGNORE]}",
             ReadingWarning,
         )
     return names, units, count
@@ -1055,6 +1075,7 @@ def _read_streamed(
     if len(data) != len(names) or data[0].size < 1:
         return None
     out: dict[str, Any] = _columns([data[i] for i, _ in keep], keep, units, scale, where)
+    _with_file_columns(out, names)
     return _with_stated_rate(out, list(enumerate(head_lines[:skip], start=1)), where)
 
 
@@ -1239,8 +1260,22 @@ def parse_lines(
         data = _trim_missing(data, rows, keep, where)
 
     out: dict[str, Any] = _columns(data, keep, units, scale, where)
+    _with_file_columns(out, names)
     above = enumerate(all_lines[skip_rows : rows[0][0] - 1], start=skip_rows + 1)
     return _with_stated_rate(out, list(above), where)
+
+
+#: The key under which :func:`read_text` returns, beside the columns of a file that
+#: holds several acceleration axes, the canonical names of its columns in file order
+#: (a list): :func:`bayestribo.read_run` names the ``columns=`` that read one axis.
+FILE_COLUMNS = "file_columns"
+
+
+def _with_file_columns(out: dict[str, Any], names: Sequence[str]) -> None:
+    """Add the file's column names (:data:`FILE_COLUMNS`) to ``out`` when it holds
+    several acceleration axes."""
+    if sum(name in ACCELERATION_AXES.values() for name in names) > 1:
+        out[FILE_COLUMNS] = list(names)
 
 
 def _with_stated_rate(

@@ -1,0 +1,685 @@
+r"""An accelerometer's record as a velocity: bias removed, integrated, drift filtered.
+
+A free-decay record made with an accelerometer (a cantilever's, a spring-mass rig's, a
+smartphone's: phyphox exports ``Acceleration x (m/s^2)``) holds a = ẍ. The fit takes a
+velocity (a run with a velocity only derives its displacement), so the acceleration is
+integrated once, at read time (:func:`integrate_acceleration`):
+
+1. **Bias.** A sensor's offset (and a smartphone's share of gravity along the axis) is
+   a constant b under the motion. Where the record is at rest (before the release and
+   after the stop, found as the stretches where no oscillation at the record's own
+   frequency stands out of the noise, :func:`bayestribo.signal.motion.motion_span`,
+   half a period away from either), the true acceleration is 0, so b is the mean
+   acceleration there, with standard error σ_a/√n. A record with no rest has its mean
+   taken for b, and the output says so (the mean of a over a record is
+   (v_end − v_start)/T, 0 only when it starts and ends at the same speed).
+2. **Integration**, in the frequency domain: V(f) = A(f) / (i 2π f) on the record padded
+   with as many zeros (after step 1 the rest's mean is 0, so the padding is rest too).
+   Unlike the trapezoid rule, whose gain at 20 samples a period is 0.992, this is exact
+   below Nyquist for an acceleration sampled through an anti-alias filter. (A jump of
+   the acceleration, at the release or where dry friction turns, sampled at one instant
+   without such a filter, leaves an error of up to the jump times half a sample step.)
+3. **Drift.** What is left of the bias integrates into a ramp and the sensor's white
+   noise into a random walk, a noise whose variance grows without bound. The velocity
+   at rest is 0: a line through the integral over each rest, and between them the
+   straight line from the one to the other, is taken off (the best estimate of a random
+   walk between two points where it is known). Then a zero-phase high-pass,
+   H(f) = r / (1 + r) with r = (f / f_c)⁴ (the squared magnitude of a second-order
+   Butterworth: that filter run forwards and backwards), f_c = 0.15 f, leaves the
+   integrated noise stationary, the same at rest as in the motion, so that the fit's
+   noise model, measured at rest as a spectrum (:mod:`bayestribo.signal.spectrum`),
+   is the motion's (its correlation time, about a period, is well inside a rest of a
+   few periods). Its gain at f, 1 / (1 + 0.15⁴) = 0.9995, is divided out. The cut-off
+   is a compromise: the filter's slope across the decay's band lowers the ζ fitted to
+   a dry-friction decay (with no noise: by 0.3 % of ζ at f_c = 0.1 f, 1 % at 0.2 f,
+   2.6 % at 0.3 f), and a lower cut-off leaves a noise correlated over longer than the
+   rest shows.
+   A free decay's velocity has almost nothing below f_c but the steps of the
+   displacement at the release (from the held position to the centre of the
+   oscillation) and at the stop: what the high-pass would remove is fitted there by
+   least squares with a step at each edge and its first two derivatives (the edge's
+   shape), and that part is kept; the rest is the drift. A decay that fades into the
+   noise ends at its last excursion beyond 5σ of the rest, a period later. Without a
+   rest on a side (a record that starts or ends in motion) the step there cannot be
+   told from the drift: the high-pass takes it, at f_c = 0.3 f to confine what it does
+   there to fewer cycles (its gain 0.992 at f divided out), and the record says so.
+
+Without noise the velocity so made is within 2e-3 of the swing of the true one after
+the first period (``tests/test_io_acceleration.py``). Fits of simulated accelerometer
+records (an independent ``solve_ivp`` integration, 100 to 300 µg/√Hz of noise, 20 runs
+a case, ``benchmarks/acceleration.py``, ``benchmarks/results/acceleration.json``):
+dry friction, μ_k 16 covered and 4 flagged (misfit) of 20, none silently wrong (z
+0.16 ± 0.54), ζ 15 covered, 4 flagged, 1 silently wrong (z −0.25 ± 1.12); viscous
+drag, ζ₀ 18 covered, 1 flagged, 1 refused (z 0.34 ± 0.86); quadratic drag with
+``law="auto"``, c₂ 9 covered (z −0.76 ± 0.40), 5 flagged (another law chosen), 6
+refused. The refusals are the fit's turning-point check on a decay that runs into the
+noise, where the integrated noise's wiggles are taken for turning points
+(``--window`` cuts the record before).
+
+Several axes of one sensor (phyphox's x, y and z) are projected on the principal axis
+of the oscillation (:func:`principal_axis`): the direction of the largest variance of
+the de-meaned axes, its sign that of its largest component. A motion along one line
+gives that line, with the noise of one axis; axes that do not move along one line (the
+second principal axis holding over a quarter of the first's variance) are refused
+naming the ``columns=`` that picks one axis.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from bayestribo._warnings import warn
+from bayestribo.errors import ReadingWarning, RecordingError, RunFormatError
+from bayestribo.io.run import (
+    ACCELERATION,
+    ACCELERATION_AXES,
+    ACCELERATIONS,
+    ANGULAR_ACCELERATION,
+    ANGULAR_VELOCITY,
+    TIME,
+    VELOCITY,
+    Run,
+)
+
+__all__ = [
+    "CUTOFF_RATIO",
+    "CUTOFF_RATIO_OPEN",
+    "SPREAD_LIMIT",
+    "Integration",
+    "PrincipalAxis",
+    "describe",
+    "from_acceleration",
+    "integrate_acceleration",
+    "integrated_signals",
+    "principal_axis",
+]
+
+#: Cut-off of the high-pass over the oscillation frequency, f_c / f, for a record with
+#: rest before the release and after the stop.
+CUTOFF_RATIO = 0.15
+#: The same for a record that starts or ends in motion: the edge there is not modelled,
+#: and a higher cut-off confines what the filter does to it to fewer cycles.
+CUTOFF_RATIO_OPEN = 0.3
+#: Order n of the Butterworth high-pass whose squared magnitude is applied (zero phase).
+ORDER = 2
+#: Largest share of the first principal axis's variance the second may hold for axes to
+#: be projected on one line.
+SPREAD_LIMIT = 0.25
+#: Samples of rest each side of the motion needs for its drift to be measured there.
+_REST_SAMPLES = 8
+#: Terms of the low-frequency content of a free decay's edge (the release, the stop)
+#: kept out of the high-pass: the displacement's step and its first two derivatives.
+_MULTIPOLES = 3
+#: Excursion of the acceleration from its rest level, in rest noise standard deviations,
+#: beyond which a decay that fades into the noise is still moving.
+_FADED = 5.0
+#: Samples left out on each side of the release and of the stop when the bias is
+#: measured, in periods: the motion starts and ends within a block of the motion span.
+_MARGIN_PERIODS = 0.5
+
+
+def highpass_gain(f: ArrayLike, cutoff_Hz: float) -> NDArray:
+    """Gain of the zero-phase high-pass at frequencies ``f`` [Hz]: r / (1 + r), r = (f/f_c)⁴.
+
+    Parameters
+    ----------
+    f : array_like
+        Frequencies [Hz].
+    cutoff_Hz : float
+        The cut-off f_c [Hz] (gain 1/2 there).
+
+    Returns
+    -------
+    ndarray
+        The gain, real and in [0, 1).
+    """
+    r = (np.abs(np.asarray(f, dtype=float)) / cutoff_Hz) ** (2 * ORDER)
+    return r / (1.0 + r)
+
+
+@dataclass(frozen=True)
+class Integration:
+    """A velocity integrated from an acceleration, and how.
+
+    Attributes
+    ----------
+    velocity : ndarray
+        The velocity [m/s or rad/s].
+    column : str
+        The acceleration column integrated (canonical name, or the axes' projection).
+    bias : float
+        The bias removed [m/s² or rad/s²].
+    bias_se : float
+        Its standard error [m/s² or rad/s²] (rest noise / √n).
+    bias_from : str
+        Where the bias was measured, in words.
+    rest_samples : int
+        Samples of rest the bias is the mean of (0: none, the record's mean taken).
+    frequency_Hz : float
+        The oscillation frequency measured from the acceleration [Hz].
+    cutoff_Hz : float
+        The high-pass's cut-off [Hz].
+    gain_at_frequency : float
+        The high-pass's gain at ``frequency_Hz`` (divided out).
+    drift_from : str
+        How the drift was removed, in words.
+    """
+
+    velocity: NDArray
+    column: str
+    bias: float
+    bias_se: float
+    bias_from: str
+    rest_samples: int
+    frequency_Hz: float
+    cutoff_Hz: float
+    gain_at_frequency: float
+    drift_from: str
+
+    def record(self) -> dict[str, Any]:
+        """The metadata record (plain data) of the integration."""
+        return {
+            "column": self.column,
+            "bias": self.bias,
+            "bias_se": self.bias_se,
+            "bias_from": self.bias_from,
+            "rest_samples": self.rest_samples,
+            "frequency_Hz": self.frequency_Hz,
+            "filter": {
+                "kind": "zero-phase high-pass, |H|^2 of a Butterworth",
+                "order": ORDER,
+                "cutoff_Hz": self.cutoff_Hz,
+                "gain_at_frequency": self.gain_at_frequency,
+                "gain_divided_out": True,
+            },
+            "drift": self.drift_from,
+            "method": "frequency-domain integral V = A / (i 2 pi f), zero-padded",
+        }
+
+    def note(self, unit: str) -> str:
+        """One sentence saying what was done, for a warning."""
+        return (
+            f"the velocity is integrated from the acceleration {self.column!r}: bias "
+            f"{self.bias:.4g} ± {self.bias_se:.2g} {unit} removed ({self.bias_from}); "
+            f"{self.drift_from}; then a zero-phase high-pass at {self.cutoff_Hz:.3g} Hz "
+            f"(order-{ORDER} Butterworth, forwards and backwards; its gain "
+            f"{self.gain_at_frequency:.4f} at the oscillation's {self.frequency_Hz:.4g} Hz "
+            "divided out)"
+        )
+
+
+def describe(record: Mapping[str, Any]) -> str:
+    """One line for a fit's report: where its velocity came from, from the metadata
+    record of :meth:`Integration.record` (``run.metadata["acceleration"]``)."""
+    filt = record.get("filter", {})
+    text = (
+        f"integrated from the acceleration {record.get('column')!r}: bias "
+        f"{record.get('bias', float('nan')):.4g} ± {record.get('bias_se', float('nan')):.2g} "
+        f"removed ({record.get('bias_from')}); zero-phase high-pass at "
+        f"{filt.get('cutoff_Hz', float('nan')):.3g} Hz (gain "
+        f"{filt.get('gain_at_frequency', float('nan')):.4f} at f, divided out)"
+    )
+    axes = record.get("axes")
+    if axes:
+        weights = ", ".join(
+            f"{_axis_name(c)} {w:.3f}" for c, w in (axes.get("weights") or {}).items()
+        )
+        text += f"; the axes projected on their principal axis ({weights})"
+    return text
+
+
+def _rest(
+    t: NDArray, a: NDArray, period: float
+) -> tuple[NDArray, NDArray, float | None, float | None]:
+    """Samples at rest before the release and after the stop (two masks), half a period
+    away from the motion, and the times of the release and of the stop (None where the
+    record starts or ends in motion). A decay that fades into the noise has no sharp
+    stop: a period after its last excursion beyond 5σ of the rest is taken, when the
+    record goes on four periods beyond it."""
+    from bayestribo.signal.motion import motion_span
+
+    span = motion_span(t, a - np.median(a), period)
+    quiet = np.array(span.quiet, dtype=bool)
+    moving = np.flatnonzero(~quiet)
+    release, stop = span.release_time, span.stop_time
+    if moving.size and release is None and quiet[0]:
+        release = float(t[moving[0]])
+    if stop is None and release is not None:
+        # a decay that fades into the noise: its last excursion beyond 5σ of the rest
+        # (white noise there: a chance of 6e-7 a sample), a period before the rest
+        level = float(np.median(a[t < release]))
+        out = np.flatnonzero(np.abs(a - level) > _FADED * span.noise)
+        if out.size and t[-1] - t[out[-1]] > 4.0 * period:
+            stop = float(t[out[-1]]) + period
+    margin = _MARGIN_PERIODS * period
+    none = np.zeros_like(quiet)
+    before = quiet & (t < release - margin) if release is not None else none
+    after = none
+    if stop is not None:
+        after = (t > stop + margin) & (quiet if span.stop_time is not None else True)
+    return before, after, release, stop
+
+
+def _drift(t: NDArray, v: NDArray, before: NDArray, after: NDArray) -> NDArray:
+    """The drift of an integrated velocity, measured at rest: a line through each rest,
+    between them the straight line from the first's end to the second's start (the
+    best estimate of a random walk known at both ends), and beyond a rest on one side
+    only, the level at its end (a random walk's best estimate past its last value)."""
+    lines = []
+    for mask in (before, after):
+        if int(mask.sum()) >= _REST_SAMPLES:
+            tm = t[mask]
+            centre = float(tm.mean())
+            slope = float(np.polyfit(tm - centre, v[mask], 1)[0])
+            lines.append((centre, float(v[mask].mean()), slope, float(tm[0]), float(tm[-1])))
+        else:
+            lines.append(None)
+    first, second = lines
+    if first is None and second is None:
+        return np.zeros_like(v)
+    if second is None:
+        c, level, slope, _, end = first
+        return level + slope * (np.minimum(t, end) - c)
+    if first is None:
+        c, level, slope, start, _ = second
+        return level + slope * (np.maximum(t, start) - c)
+    cb, vb, sb, _, t0 = first
+    ca, va, sa, t1, _ = second
+    d0, d1 = vb + sb * (t0 - cb), va + sa * (t1 - ca)
+    return np.where(
+        t <= t0,
+        vb + sb * (t - cb),
+        np.where(t >= t1, va + sa * (t - ca), d0 + (d1 - d0) * (t - t0) / (t1 - t0)),
+    )
+
+
+def _lowpass(x: NDArray, dt: float, cutoff: float) -> NDArray:
+    """What the zero-phase high-pass removes from ``x``: x filtered by 1 − H(f), the
+    record extended at each end by its odd reflection about its end value over eight
+    time constants (as ``scipy.signal.filtfilt`` pads), so that a record that ends in
+    motion, or on a drift, ends without a jump."""
+    from scipy.fft import irfft, next_fast_len, rfft, rfftfreq
+
+    n = x.size
+    pad = min(n - 1, math.ceil(8.0 / (2.0 * math.pi * cutoff * dt)))
+    left = 2.0 * x[0] - x[pad:0:-1]
+    right = 2.0 * x[-1] - x[-2 : -pad - 2 : -1]
+    extended = np.concatenate([left, x, right])
+    m = next_fast_len(extended.size + pad, real=True)
+    f = rfftfreq(m, dt)
+    low = irfft(rfft(extended, m) / (1.0 + (f / cutoff) ** (2 * ORDER)), m)
+    return low[pad : pad + n]
+
+
+def _kept_steps(
+    t: NDArray, low: NDArray, cutoff: float, times: list[float]
+) -> tuple[NDArray, list[float]]:
+    """The displacement's steps at ``times`` that best explain the low-frequency part
+    ``low`` of a velocity (least squares), as that part of them, and their sizes [m].
+
+    A free decay's velocity holds almost nothing below f_c but these steps
+    (the held position to the centre of the oscillation at the release, the centre to
+    the stuck position at the stop; a decay starting at a turning point puts a share
+    (f_c/f)² of its swing there): the rest of ``low`` is the drift of the integral.
+    Each step is a delta of the velocity at its time, with its first two derivatives
+    for the shape of the edge, band-limited to the samples."""
+    from scipy.fft import irfft, next_fast_len, rfftfreq
+
+    dt = float(t[1] - t[0])
+    m = next_fast_len(2 * t.size, real=True)
+    f = rfftfreq(m, dt)
+    columns = []
+    for tj in times:
+        shift = np.exp(-2j * math.pi * f * (tj - t[0])) / dt
+        for k in range(_MULTIPOLES):  # the step, and its derivatives (the edge's shape)
+            delta = irfft(shift * (2j * math.pi * f * dt) ** k, m)[: t.size]
+            columns.append(_lowpass(delta, dt, cutoff))
+    basis = np.column_stack(columns)
+    sizes, *_ = np.linalg.lstsq(basis, low, rcond=None)
+    return basis @ sizes, [float(x) for x in sizes[::_MULTIPOLES]]
+
+
+def integrate_acceleration(
+    time: ArrayLike, acceleration: ArrayLike, *, column: str = ACCELERATION
+) -> Integration:
+    """The velocity of a free-decay record from its acceleration (see the module notes).
+
+    Parameters
+    ----------
+    time : array_like
+        Sample times t [s], regular.
+    acceleration : array_like
+        Acceleration a [m/s²] (or rad/s²), with the sensor's bias.
+    column : str
+        The acceleration's column name, for the record and messages.
+
+    Returns
+    -------
+    Integration
+
+    Raises
+    ------
+    RecordingError
+        When the acceleration holds no oscillation standing out of its noise (no free
+        decay), or is not finite.
+    """
+    from scipy.fft import irfft, next_fast_len, rfft, rfftfreq
+
+    from bayestribo.signal.period import dominant_period, sample_step
+
+    t = np.asarray(time, dtype=np.float64)
+    a = np.asarray(acceleration, dtype=np.float64)
+    if t.shape != a.shape or t.ndim != 1 or t.size < 16:
+        raise RecordingError(
+            f"{column}: expected 1-D time and acceleration of the same length (16 samples "
+            f"or more), got shapes {t.shape} and {a.shape}"
+        )
+    if not np.all(np.isfinite(a)):
+        bad = np.flatnonzero(~np.isfinite(a))
+        raise RecordingError(
+            f"{column}: {bad.size} sample(s) not finite, the first at t = {t[bad[0]]:g} s; "
+            "an acceleration is integrated over the whole record"
+        )
+    dt = sample_step(t)
+    rough = np.cumsum(a - a.mean()) * dt  # a velocity with a drift: the period only
+    try:
+        period = dominant_period(t, rough)
+        before, after, release, stop = _rest(t, a, period)
+    except RecordingError as exc:
+        raise RecordingError(
+            f"{column}: {exc.message}; no free decay in the acceleration"
+        ) from None
+    rest = before | after
+    n_rest = int(rest.sum())
+    if n_rest >= 2:
+        bias = float(a[rest].mean())
+        bias_se = float(a[rest].std(ddof=1) / math.sqrt(n_rest))
+        bias_from = f"the mean of {n_rest} samples at rest, where the acceleration is 0"
+    else:
+        n_rest = 0
+        bias = float(a.mean())
+        bias_se = float(a.std(ddof=1) / math.sqrt(a.size))
+        bias_from = (
+            "no rest in the record: its mean acceleration was taken for the bias, assuming "
+            "the velocity is the same at its start and end"
+        )
+    frequency = 1.0 / period
+    n = a.size
+    m = next_fast_len(2 * n, real=True)
+    f = rfftfreq(m, dt)
+    response = np.zeros(f.size, dtype=np.complex128)
+    response[1:] = 1.0 / (2j * math.pi * f[1:])
+    if m % 2 == 0:
+        response[-1] = 0.0  # Nyquist: the integral of a real signal there is not real
+    edges = [
+        (name, float(edge))
+        for name, edge, mask in (
+            ("the release", release, before),
+            ("the stop", stop, after),
+        )
+        if edge is not None and int(mask.sum()) >= _REST_SAMPLES
+    ]
+    cutoff = (CUTOFF_RATIO if len(edges) == 2 else CUTOFF_RATIO_OPEN) * frequency
+    velocity = irfft(rfft(a - bias, m) * response, m)[:n]
+    velocity = velocity - _drift(t, velocity, before, after)
+    low = _lowpass(velocity, dt, cutoff)
+    if edges:
+        kept, sizes = _kept_steps(t, low, cutoff, [e for _, e in edges])
+        low = low - kept
+    velocity = velocity - low
+    where = " and ".join(name for name, _ in edges)
+    rests = {2: "before the release and after the stop", 1: f"at {where} only", 0: ""}
+    if edges:
+        steps = ", ".join(
+            f"{size:.4g} at {name}" for (name, _), size in zip(edges, sizes, strict=True)
+        )
+        drift_from = (
+            f"the drift measured at rest {rests[len(edges)]} taken off (the displacement's "
+            f"steps, {steps}, kept out of the high-pass)"
+        )
+    else:
+        drift_from = "no rest before the release or after the stop to measure the drift at"
+    if len(edges) < 2:
+        drift_from += (
+            "; where the record starts or ends in motion, the high-pass takes the "
+            "displacement's step there with the drift (the first or last cycles are "
+            "distorted)"
+        )
+    at_frequency = float(highpass_gain(frequency, cutoff))
+    velocity /= at_frequency  # the oscillation's amplitude as recorded
+    velocity.setflags(write=False)
+    return Integration(
+        velocity=velocity,
+        column=column,
+        bias=bias,
+        bias_se=bias_se,
+        bias_from=bias_from,
+        rest_samples=n_rest,
+        frequency_Hz=frequency,
+        cutoff_Hz=cutoff,
+        gain_at_frequency=at_frequency,
+        drift_from=drift_from,
+    )
+
+
+@dataclass(frozen=True)
+class PrincipalAxis:
+    """The projection of a sensor's axes on the principal axis of the oscillation.
+
+    Attributes
+    ----------
+    values : ndarray
+        The projection Σ w_i a_i [m/s²].
+    weights : dict
+        The unit vector w by axis column.
+    spread : float
+        The second principal variance over the first (0 for a motion along one line).
+    """
+
+    values: NDArray
+    weights: dict[str, float]
+    spread: float
+
+    def describe(self) -> str:
+        """The projection in words: ``0.12 x + 0.99 z``."""
+        return " + ".join(f"{w:.3f}·{_axis_name(c)}" for c, w in self.weights.items())
+
+
+def _axis_name(column: str) -> str:
+    return next((axis for axis, name in ACCELERATION_AXES.items() if name == column), column)
+
+
+def principal_axis(axes: Mapping[str, ArrayLike]) -> PrincipalAxis:
+    """Several acceleration axes projected on the direction of their largest variance.
+
+    Parameters
+    ----------
+    axes : mapping
+        Acceleration [m/s²] by axis column, of equal lengths.
+
+    Returns
+    -------
+    PrincipalAxis
+        The projection of the axes as recorded (their bias projected with them), the
+        axis (sign: its largest component positive) and the spread.
+    """
+    names = list(axes)
+    data = np.vstack([np.asarray(axes[name], dtype=np.float64) for name in names])
+    centred = data - data.mean(axis=1, keepdims=True)
+    variances, vectors = np.linalg.eigh(np.cov(centred))
+    order = np.argsort(variances)[::-1]
+    variances, vectors = variances[order], vectors[:, order]
+    w = vectors[:, 0]
+    if w[np.argmax(np.abs(w))] < 0:
+        w = -w
+    spread = float(variances[1] / variances[0]) if variances[0] > 0 else 1.0
+    return PrincipalAxis(
+        values=w @ data,
+        weights={name: float(x) for name, x in zip(names, w, strict=True)},
+        spread=spread,
+    )
+
+
+def _pick(axis: str, file_columns: list[str] | None) -> str:
+    """The ``columns=`` that reads one axis of a file whose names are ``file_columns``."""
+    if file_columns is None:
+        return f"{_axis_name(axis)}: columns=[...] naming {axis!r} and 'ignore' for the other axes"
+    names = [
+        name if name not in ACCELERATIONS else (ACCELERATION if name == axis else "ignore")
+        for name in file_columns
+    ]
+    return f"{_axis_name(axis)}: columns={names} (--columns {' '.join(names)})"
+
+
+def _one_column(
+    signals: Mapping[str, Any], where: str, file_columns: list[str] | None = None
+) -> tuple[str, NDArray, dict[str, Any] | None]:
+    """The acceleration to integrate: the one column, or the axes' principal projection
+    (with its record)."""
+    present = [name for name in ACCELERATIONS if signals.get(name) is not None]
+    axes = [name for name in ACCELERATION_AXES.values() if name in present]
+    others = [name for name in present if name not in axes]
+    if len(others) > 1 or (others and axes):
+        raise RunFormatError(
+            f"the file holds the accelerations {present}; read one (columns=[...], 'ignore' "
+            "for the others)",
+            where,
+        )
+    if len(axes) == 1:
+        return axes[0], signals[axes[0]], None
+    if not axes:
+        return present[0], signals[present[0]], None
+    projection = principal_axis({name: signals[name] for name in axes})
+    pick = [_pick(name, file_columns) for name in axes]
+    if projection.spread > SPREAD_LIMIT:
+        raise RunFormatError(
+            f"the acceleration's axes {[_axis_name(a) for a in axes]} do not move along one "
+            f"line (the second principal axis holds {projection.spread:.0%} of the first's "
+            f"variance, over {SPREAD_LIMIT:.0%}): the motion is not one oscillation along "
+            f"one direction, or it is buried in the noise; pick the axis of the motion, "
+            f"{'; '.join(pick)}",
+            where,
+        )
+    record = {"weights": projection.weights, "spread": projection.spread}
+    warn(
+        f"{where}: the acceleration's axes {[_axis_name(a) for a in axes]} are projected on "
+        f"the principal axis of the oscillation, {projection.describe()} (the second axis "
+        f"holds {projection.spread:.1%} of its variance); to read one axis instead, "
+        f"{'; '.join(pick)}",
+        ReadingWarning,
+    )
+    return "projection " + projection.describe(), projection.values, record
+
+
+def integrated_signals(
+    signals: Mapping[str, Any],
+    meta: dict[str, Any],
+    where: str,
+    file_columns: list[str] | None = None,
+) -> dict[str, Any]:
+    """A reader's columns with an acceleration integrated into the velocity.
+
+    An acceleration beside a displacement or a velocity is not read (said with a
+    :class:`~bayestribo.errors.ReadingWarning`): the recorded motion is used. Otherwise
+    the acceleration (or its axes' projection, :func:`principal_axis`) is integrated
+    (:func:`integrate_acceleration`), said with a ``ReadingWarning``, and recorded in
+    ``meta`` under ``acceleration``.
+
+    Parameters
+    ----------
+    signals : mapping
+        The reader's columns by canonical name, time [s] among them.
+    meta : dict
+        The run's metadata, updated with the integration's record.
+    where : str
+        The file, for messages.
+    file_columns : list of str, optional
+        The file's column names in file order (canonical, ``ignore``), to name the
+        ``columns=`` that reads one axis.
+
+    Returns
+    -------
+    dict
+        The columns, accelerations replaced by the velocity (or an angular velocity).
+    """
+    present = [name for name in ACCELERATIONS if signals.get(name) is not None]
+    if not present:
+        return dict(signals)
+    out = {name: value for name, value in signals.items() if name not in ACCELERATIONS}
+    motion = [name for name in out if name != TIME and out[name] is not None]
+    if motion:
+        warn(
+            f"{where}: column(s) {present} not read: the run is read from {motion}, the "
+            "motion recorded",
+            ReadingWarning,
+        )
+        return out
+    time = out.get(TIME)
+    if time is None:
+        raise RunFormatError(
+            "an acceleration is integrated over time: the file needs a time column or a "
+            "sample rate (sample_rate_Hz=HZ)",
+            where,
+        )
+    column, values, axes = _one_column(signals, where, file_columns)
+    try:
+        integration = integrate_acceleration(time, values, column=column)
+    except RecordingError as exc:
+        raise RecordingError(exc.message, where) from None
+    angular = column == ANGULAR_ACCELERATION
+    unit = "rad/s²" if angular else "m/s²"
+    meta["acceleration"] = integration.record()
+    if axes is not None:
+        meta["acceleration"]["axes"] = axes
+    warn(f"{where}: {integration.note(unit)}", ReadingWarning)
+    out[ANGULAR_VELOCITY if angular else VELOCITY] = integration.velocity
+    return out
+
+
+def from_acceleration(
+    time: ArrayLike,
+    acceleration: ArrayLike,
+    metadata: Mapping[str, Any] | None = None,
+    *,
+    angular: bool = False,
+    source: str | None = None,
+) -> Run:
+    """A run whose velocity is integrated from an acceleration (see the module notes).
+
+    Parameters
+    ----------
+    time : array_like
+        Sample times t [s], regular.
+    acceleration : array_like
+        Acceleration a [m/s²] (``angular``: angular acceleration [rad/s²]), bias and
+        all.
+    metadata : mapping, optional
+        The run's metadata; the integration's record is added under ``acceleration``
+        (and ``length_unit`` ``"rad"`` for an angular acceleration).
+    angular : bool
+        The acceleration is an angular one.
+    source : str, optional
+        Where the record came from, for messages.
+
+    Returns
+    -------
+    Run
+        With the time and the velocity (the fit derives the displacement).
+    """
+    meta = dict(metadata or {})
+    name = ANGULAR_ACCELERATION if angular else ACCELERATION
+    signals = integrated_signals(
+        {TIME: np.asarray(time, dtype=float), name: np.asarray(acceleration, dtype=float)},
+        meta,
+        source or "acceleration",
+    )
+    if angular:
+        meta["length_unit"] = "rad"
+    velocity = signals.get(ANGULAR_VELOCITY if angular else VELOCITY)
+    return Run(signals[TIME], velocity=velocity, metadata=meta, source=source)

@@ -1,0 +1,215 @@
+"""Coverage of fits of accelerometer records (a velocity integrated from an acceleration).
+
+Each run is simulated by ``benchmarks/_accel_sim.py`` (its own ``solve_ivp`` of
+m ẍ + c ẋ + k x + μ_k N sgn ẋ + m q ẋ|ẋ| = 0, sticking when |k x| <= μ_s N,
+independent of the package) on a spring-mass rig sliding on a flat (m = 0.25 kg,
+f = 2.5 Hz, N = m g), sampled as an accelerometer would at 200 Hz: the mean acceleration
+over each sample interval, a constant bias (± 0.5 m/s², and in half the runs a
+smartphone's share of gravity, 9.3 to 9.8 m/s²) and white noise of 0.01 to 0.03 m/s²
+per sample (log-uniform: 100 to 300 µg/√Hz, MEMS and phone sensors), 2 s of rest
+before the release and 3 s after the stop (a drag-only record ends in motion, when the
+viscous decay alone would be at e⁻⁴ of the release: a recording stopped before the swing
+fades into the noise; one that runs into the noise is refused by the fit's turning-point
+check, the integrated noise's wiggles taken for turning points: ``--window`` cuts it).
+The record is written as a CSV with one column ``acceleration_m_per_s2`` (and the
+time) and read by :func:`bayestribo.read_run`, which integrates it
+(:mod:`bayestribo.io.acceleration`), then fitted:
+
+* ``coulomb``: ζ ~ U(0.003, 0.01), μ_k ~ U(0.01, 0.03), μ_s/μ_k ~ U(1.1, 1.5),
+  x₀ ~ U(30, 50) mm; ``bayestribo.fit(run)`` (viscous+coulomb), ζ and μ_k checked;
+* ``viscous``: ζ ~ U(0.01, 0.04), no contact (``load_N`` 0), x₀ ~ U(20, 40) mm;
+  ``fit(run)``, ζ₀ checked;
+* ``quadratic``: quadratic drag q ~ U(0.5, 2) m⁻¹ per unit mass and ζ ~ U(0.005, 0.01),
+  no contact; ``fit(run, law="auto")``, the drag's coefficient c₂ = q m [kg/m] checked
+  when the law chosen holds it (the law chosen is reported).
+
+A parameter is *covered* when the truth is in the 95 % interval of a fit that raised
+no :class:`~bayestribo.errors.MisfitWarning` or ConvergenceWarning; *flagged* when the
+fit warned (whatever its interval); *silently wrong* when it did not warn and missed.
+z = (posterior mean − truth) / posterior sd.
+
+Run::
+
+    nice -n 10 python benchmarks/acceleration.py --runs 20 --workers 2
+
+Runs are appended to ``benchmarks/results/acceleration_runs.jsonl`` (``--resume``);
+writes ``benchmarks/results/acceleration.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import tempfile
+import time
+import warnings
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import _accel_sim as sim
+
+RESULTS = Path(__file__).resolve().parent / "results"
+RUNS = RESULTS / "acceleration_runs.jsonl"
+SUMMARY = RESULTS / "acceleration.json"
+CASES = ("coulomb", "viscous", "quadratic")
+FLAGS = ("MisfitWarning", "ConvergenceWarning")
+
+
+def draw(case: str, seed: int) -> tuple[sim.Rig, dict, dict]:
+    """The rig, the record's settings and the truth of run ``seed`` of ``case``."""
+    rng = np.random.default_rng([CASES.index(case), seed])
+    noise = float(np.exp(rng.uniform(math.log(0.01), math.log(0.03))))
+    bias = float(rng.uniform(-0.5, 0.5))
+    if seed % 2:
+        bias += float(sim.G * math.cos(rng.uniform(0.0, 0.35)))  # a phone's gravity
+    settings = {"noise": noise, "bias": bias, "seed": seed + 1000}
+    if case == "coulomb":
+        mu = float(rng.uniform(0.01, 0.03))
+        rig = sim.Rig(
+            zeta=float(rng.uniform(0.003, 0.01)),
+            mu_k=mu,
+            mu_s_ratio=float(rng.uniform(1.1, 1.5)),
+        )
+        settings["x0"] = float(rng.uniform(0.03, 0.05))
+        truth = {"zeta": rig.zeta, "mu_k": rig.mu_k}
+    elif case == "viscous":
+        rig = sim.Rig(zeta=float(rng.uniform(0.01, 0.04)))
+        settings["x0"] = float(rng.uniform(0.02, 0.04))
+        settings["duration"] = 4.0 / (rig.zeta * rig.omega)  # ends at e^-4 of x0
+        truth = {"zeta0": rig.zeta}
+    else:
+        rig = sim.Rig(zeta=float(rng.uniform(0.005, 0.01)), q=float(rng.uniform(0.5, 2.0)))
+        settings["x0"] = float(rng.uniform(0.03, 0.05))
+        settings["duration"] = 4.0 / (rig.zeta * rig.omega)
+        truth = {"c2_SI": rig.q * rig.mass}
+    return rig, settings, truth
+
+
+def one(case: str, seed: int) -> dict:
+    """Simulate, write, read and fit one run; its record."""
+    import bayestribo
+
+    rig, settings, truth = draw(case, seed)
+    x0 = settings.pop("x0")
+    rec = sim.record(rig, x0, **settings)
+    load = rig.load if case == "coulomb" else 0.0
+    meta = {"load_N": load, "mass_kg": rig.mass, "natural_frequency_Hz": rig.f_Hz}
+    out = {"case": case, "seed": seed, "truth": truth, "noise": settings["noise"]}
+    out["bias"] = settings["bias"]
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "accel.csv"
+        rows = np.column_stack([rec["time"], rec["acceleration"]])
+        np.savetxt(path, rows, delimiter=",", header="time_s,acceleration_m_per_s2", comments="")
+        (Path(tmp) / "accel.json").write_text(json.dumps(meta))
+        start = time.process_time()
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            try:
+                run = bayestribo.read_run(path)
+                result = bayestribo.fit(run, law="auto" if case == "quadratic" else None)
+            except Exception as exc:  # recorded, never dropped
+                out["error"] = f"{type(exc).__name__}: {exc}"
+                return out
+        out["cpu_s"] = time.process_time() - start
+    out["bias_read"] = run.metadata["acceleration"]["bias"]
+    out["flags"] = sorted({type(w.message).__name__ for w in caught} & set(FLAGS))
+    out["law"] = result.law
+    summary = result.summary(prob=0.95)
+    out["parameters"] = {}
+    for name, value in truth.items():
+        key = name if name in summary else {"zeta0": "zeta"}.get(name, name)
+        if key not in summary:
+            continue
+        s = summary[key]
+        low, high = s.interval
+        out["parameters"][name] = {
+            "mean": s.mean,
+            "sd": s.sd,
+            "interval": [low, high],
+            "covered": bool(low <= value <= high),
+            "z": (s.mean - value) / s.sd if s.sd > 0 else None,
+        }
+    return out
+
+
+def summarise(records: list[dict]) -> dict:
+    """Covered / flagged / silently wrong and z statistics per case and parameter."""
+    out: dict = {}
+    for case in CASES:
+        mine = [r for r in records if r["case"] == case]
+        errors = [r for r in mine if "error" in r]
+        entry: dict = {"runs": len(mine), "errors": len(errors), "parameters": {}}
+        entry["error_messages"] = [r["error"][:200] for r in errors]
+        entry["laws"] = {}
+        for r in mine:
+            if "law" in r:
+                entry["laws"][r["law"]] = entry["laws"].get(r["law"], 0) + 1
+        names = sorted({n for r in mine for n in r.get("truth", {})})
+        for name in names:
+            fitted = [r for r in mine if name in r.get("parameters", {})]
+            flagged = [r for r in fitted if r["flags"]]
+            quiet = [r for r in fitted if not r["flags"]]
+            z = [r["parameters"][name]["z"] for r in fitted if r["parameters"][name]["z"]]
+            entry["parameters"][name] = {
+                "fitted": len(fitted),
+                "not_in_the_law_chosen": len([r for r in mine if "law" in r]) - len(fitted),
+                "covered": sum(r["parameters"][name]["covered"] for r in quiet),
+                "flagged": len(flagged),
+                "flagged_and_covered": sum(r["parameters"][name]["covered"] for r in flagged),
+                "silently_wrong": sum(not r["parameters"][name]["covered"] for r in quiet),
+                "coverage_all_fits": (
+                    sum(r["parameters"][name]["covered"] for r in fitted) / len(fitted)
+                    if fitted
+                    else None
+                ),
+                "z_mean": float(np.mean(z)) if z else None,
+                "z_sd": float(np.std(z, ddof=1)) if len(z) > 1 else None,
+            }
+        cpu = [r["cpu_s"] for r in mine if "cpu_s" in r]
+        entry["median_cpu_s"] = float(np.median(cpu)) if cpu else None
+        out[case] = entry
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=20)
+    parser.add_argument("--workers", type=int, default=1)
+    parser.add_argument("--cases", nargs="+", default=list(CASES), choices=CASES)
+    parser.add_argument("--resume", action="store_true")
+    parser.add_argument("--report-only", action="store_true")
+    args = parser.parse_args(argv)
+    RESULTS.mkdir(exist_ok=True)
+    done: list[dict] = []
+    if (args.resume or args.report_only) and RUNS.exists():
+        done = [json.loads(line) for line in RUNS.read_text().splitlines() if line.strip()]
+    elif RUNS.exists():
+        RUNS.unlink()
+    if not args.report_only:
+        have = {(r["case"], r["seed"]) for r in done}
+        todo = [(c, s) for c in args.cases for s in range(args.runs) if (c, s) not in have]
+        with ProcessPoolExecutor(args.workers) as pool:
+            for record in pool.map(one, *zip(*todo, strict=True)) if todo else []:
+                done.append(record)
+                with RUNS.open("a") as handle:
+                    handle.write(json.dumps(record) + "\n")
+                print(json.dumps(record)[:300], flush=True)
+    import subprocess
+
+    commit = subprocess.run(
+        ["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=RESULTS
+    ).stdout.strip()
+    summary = {"commit": commit, "cases": summarise(done)}
+    SUMMARY.write_text(json.dumps(summary, indent=2) + "\n")
+    print(json.dumps(summary, indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
