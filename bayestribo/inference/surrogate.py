@@ -33,11 +33,20 @@ computes the importance weights w = p(θ)/p̃(θ): by Cauchy-Schwarz, any poster
 under the exact posterior differs from the surrogate's by at most
 ``cv(w) × sd`` (cv the coefficient of variation of the weights, sd the posterior
 standard deviation of the quantity). The fit keeps the surrogate's draws only when
-cv(w) is below :data:`MAX_WEIGHT_CV`; otherwise it builds the surrogate again about
-the checked draw of highest exact density with the surrogate posterior's spread (the
-optimiser can stop short of the optimum of a law that misfits), up to
+cv(w) is below :data:`MAX_WEIGHT_CV`; otherwise it builds the surrogate again, up to
 :data:`ATTEMPTS` times, and then samples the exact posterior
-(:func:`bayestribo.inference.chains.sample`).
+(:func:`bayestribo.inference.chains.sample`). The Laplace scales about the maximum a
+posteriori describe a posterior that is nearly Gaussian; one that is not (a
+parameter whose optimum is on its prior's bound, with its mass a few tenths of the
+prior's width inside, as α of ``coulomb+power`` at 3 on the AppStat records: a
+Laplace sd of 0.02 against a posterior sd of 0.3) is covered poorly by the nodes of
+the design, and the check fails. The surrogate is then fitted again by least squares
+to the exact Π at :data:`REFIT_DRAWS` draws of the failed surrogate's posterior
+(:func:`regressed_pi`), which lie where the exact posterior's mass is to within the
+failed surrogate's error: the quadratic is fitted where it is used. Where μ_s/μ_k
+cuts Π into pieces, it is built again about the checked draw of highest exact
+density with the surrogate posterior's spread (the optimiser can stop short of the
+optimum of a law that misfits).
 
 Where the posterior depends on Π discontinuously (a law with static friction whose
 motion ends inside the record: one turning point more or less before the pin sticks),
@@ -64,6 +73,7 @@ if TYPE_CHECKING:
 __all__ = [
     "ATTEMPTS",
     "MAX_WEIGHT_CV",
+    "REFIT_DRAWS",
     "CoefficientLayout",
     "ForceColumns",
     "QuadraticPi",
@@ -71,6 +81,8 @@ __all__ = [
     "SurrogateLikelihood",
     "check",
     "quadratic_pi",
+    "regressed_pi",
+    "regressed_posterior",
     "stop_ratios",
     "surrogate_posterior",
 ]
@@ -84,6 +96,10 @@ MAX_WEIGHT_CV = 0.05
 CHECK_DRAWS = 128
 #: Surrogates built and checked before the exact posterior is sampled instead.
 ATTEMPTS = 3
+#: Draws of a failed surrogate's posterior at which the exact Π is evaluated to fit
+#: the next surrogate by least squares (:func:`regressed_pi`): at least this many, and
+#: at least four per coefficient of the quadratic.
+REFIT_DRAWS = 128
 #: Scales of the nodes of the fit, in Laplace standard deviations.
 NODE_SCALE = 2.0
 #: Smallest relative change of Π at a node (see :func:`quadratic_pi`).
@@ -723,3 +739,91 @@ def surrogate_posterior(posterior: Posterior, centre: NDArray, scale: NDArray) -
     fields = {f: getattr(exact, f) for f in ("data", "model", "offset_sd", "drift_sd", "law")}
     likelihood = SurrogateLikelihood(**fields, surrogate=quadratic)
     return replace(posterior, likelihood=likelihood)
+
+
+def regressed_pi(
+    likelihood: PiLikelihood,
+    names: tuple[str, ...],
+    params: Mapping[str, NDArray],
+    ratio: str | None = None,
+) -> QuadraticPi | None:
+    """A one-piece quadratic fitted by least squares to the exact Π at given points.
+
+    Parameters
+    ----------
+    likelihood : PiLikelihood
+        The exact likelihood (its law's compiled integrator gives Π).
+    names : tuple of str
+        The coordinates of the quadratic (those Π depends on smoothly).
+    params : mapping
+        The law's parameters and ``y0`` by name at each point, each (n,): draws of a
+        surrogate posterior. The expansion point is their mean, the unit
+        :data:`NODE_SCALE` times their standard deviation.
+    ratio : str, optional
+        The name of a sampled μ_s/μ_k on which Π does not depend over the points (a
+        surrogate of one piece); the points keep their own values of it, and a
+        point where it changes Π leaves its mark in the check.
+
+    Returns
+    -------
+    QuadraticPi or None
+        None when the points where Π is finite do not determine the quadratic (a
+        coordinate without spread among them, or too few points).
+    """
+    theta = np.column_stack([np.asarray(params[n], dtype=float) for n in names])
+    c = theta.mean(axis=0)
+    s = NODE_SCALE * theta.std(axis=0)
+    if not np.all(np.isfinite(s) & (s > 0)):
+        return None
+    shell = QuadraticPi(tuple(names), c, s, np.zeros((0, 1)))
+    basis = shell.monomials((theta - c) / s)
+    pi = PiLikelihood.model_pi(likelihood, dict(params))
+    coef = _fit(basis, pi, np.all(np.isfinite(pi), axis=1))
+    if coef is None:
+        return None
+    return QuadraticPi(tuple(names), c, s, coef, ratio, np.zeros((0, basis.shape[1])))
+
+
+def regressed_posterior(
+    posterior: Posterior,
+    failed: Posterior,
+    draws: NDArray,
+    rng: np.random.Generator,
+    n: int = REFIT_DRAWS,
+) -> Posterior | None:
+    """The surrogate posterior fitted again at draws of a surrogate that failed its check.
+
+    Parameters
+    ----------
+    posterior : Posterior
+        The exact posterior.
+    failed : Posterior
+        The surrogate posterior whose check failed (its likelihood a
+        :class:`SurrogateLikelihood`).
+    draws : ndarray
+        Its draws, (N, d) in sampling coordinates.
+    rng : Generator
+        Picks the draws (``max(n, 4 R)`` of them, R the quadratic's coefficients; all
+        when there are fewer).
+    n : int
+        The fewest draws picked.
+
+    Returns
+    -------
+    Posterior or None
+        With :func:`regressed_pi` of the draws in place of the failed quadratic; None
+        when the failed surrogate has more than one piece in μ_s/μ_k (its pieces need
+        the nodes of :func:`quadratic_pi`) or the draws do not determine the quadratic.
+    """
+    previous = getattr(failed.likelihood, "surrogate", None)
+    if not isinstance(previous, QuadraticPi) or previous.n_pieces != 1:
+        return None
+    draws = np.atleast_2d(np.asarray(draws, dtype=float))
+    want = max(int(n), 4 * previous.rows_per_piece)
+    if draws.shape[0] > want:
+        draws = draws[rng.choice(draws.shape[0], want, replace=False)]
+    params = posterior.physical(draws)["params"]
+    quadratic = regressed_pi(posterior.likelihood, previous.names, params, previous.ratio)
+    if quadratic is None:
+        return None
+    return replace(failed, likelihood=replace(failed.likelihood, surrogate=quadratic))
