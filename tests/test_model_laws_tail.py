@@ -190,27 +190,3 @@ def test_a_creep_that_never_ends_leaves_the_row_outside_the_laws_domain():
     law = get_law("power")
     values = {"zeta_alpha": np.array([0.025]), "alpha": np.array([0.3])}
     assert np.all(np.isnan(law.pi_grid(TAU, values, [Y0], reference=Y0, method="integrate")))
-
-
-@pytest.mark.parametrize(("law", "values"), DRAG_CASES)
-def test_the_coarse_model_sums_past_the_record_as_the_default(law, values):
-    """``steps=-8`` (the optimiser's coarse model): inside the record the 8 steps of
-    each half cycle that ``steps=8`` integrates, and past it the default's sum (its
-    averaged tail and its stop below 1e-12 of Π(0)) instead of 8 fixed steps for each
-    of up to 20,000 half cycles: within 1e-4 of Π(0) of the default's Π (the coarse
-    steps hold Π within ~1e-5 of Π(0) inside the record, and their error at the
-    record's end carries into the sum past it)."""
-    the_law = get_law(law)
-    vals = {k: np.array([v]) for k, v in values.items()}
-
-    def pi(steps, tau_end=None):
-        return the_law.pi_grid(
-            TAU, vals, [Y0], tau_end=tau_end, reference=Y0, method="integrate", steps=steps
-        )[0]
-
-    coarse, default = pi(-8), pi(0)
-    assert np.all(np.isfinite(coarse))
-    # the same half cycles inside the record: the same increments of Π
-    np.testing.assert_allclose(np.diff(coarse), np.diff(pi(8)), rtol=1e-12, atol=0.0)
-    np.testing.assert_array_equal(pi(-8, TAU[-1]), pi(8, TAU[-1]))
-    assert np.max(np.abs(coarse - default)) < 1e-4 * default[0]

@@ -900,5 +900,5 @@ class LawSource:
             data.yp0,
             None if data.motion_ended else data.tau_end,
             reference=lik.reference_amplitude,
-            steps=-lik.steps,  # a coarse model's steps inside the record only
+            steps=lik.steps,
         )

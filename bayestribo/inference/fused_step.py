@@ -34,7 +34,7 @@ __all__ = ["grouped_step"]
 #: The files whose compiled functions :func:`_step` calls, and a digest of each
 #: (see :data:`bayestribo.inference.fused.DEPENDS_ON`).
 DEPENDS_ON = {
-    "bayestribo/inference/fused.py": "e3e6641fd727a40b",
+    "bayestribo/inference/fused.py": "084290db38821b24",
     "bayestribo/inference/moves.py": "a26a7dcb7538888f",
 }
 

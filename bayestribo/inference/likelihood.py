@@ -127,10 +127,7 @@ class PiLikelihood:
         Runge-Kutta steps per half cycle of the law's integrator where it has no
         closed form: 0 (the default) chooses them per half cycle for Π within ~2e-9 of
         Π(0); a small fixed number is the coarse model on which the optimiser's
-        multi-start runs (:func:`bayestribo.inference.start.maximum_a_posteriori`):
-        that many steps in each half cycle inside the record, and past it (a record
-        whose motion ended, summed to the end of the model's motion) the sum of the
-        default (:meth:`bayestribo.model.laws.Law.pi_grid` with ``-steps``).
+        multi-start runs (:func:`bayestribo.inference.start.maximum_a_posteriori`).
     """
 
     data: PiData
@@ -194,7 +191,7 @@ class PiLikelihood:
                 self.data.yp0,
                 end,
                 reference=self.reference_amplitude,
-                steps=-self.steps,
+                steps=self.steps,
             )
         amplitude = np.hypot(y0, self.data.yp0)[:, None]
         zeta = values.get("zeta", np.zeros_like(y0))[:, None]

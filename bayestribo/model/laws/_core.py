@@ -30,10 +30,7 @@ if TYPE_CHECKING:  # defined for each law after this text (see the module notes)
     HAS_DRAG: bool = True
 
 #: Runge-Kutta steps per half cycle: 0 chooses them per half cycle (see
-#: :func:`make_integrator`); a positive number fixes them (for convergence tests: every
-#: half cycle integrated, no shortcut past the record); a negative one fixes -steps
-#: inside the record and sums past it as 0 does (the coarse model of the optimiser's
-#: multi-start, whose cost past the record is then that of the exact model's).
+#: :func:`make_integrator`); a positive number fixes them (for convergence tests).
 DEFAULT_STEPS = 0
 #: The step counts a half cycle may take (at most 25 % apart: the count chosen is never
 #: far above the one the error asks for). Those below :data:`_MIN_STEPS` serve only the
@@ -639,9 +636,7 @@ def one(
     out: NDArray,
 ) -> int:
     n_t = tau.size
-    size = max(abs(fixed_steps), LADDER[-1]) + 1
-    # the coarse model: -fixed_steps steps inside the record, its node table made once
-    coarse_table = nodes(0.0, max(-fixed_steps, 1))
+    size = max(fixed_steps, LADDER[-1]) + 1
     tau_at = np.empty(size)
     c_at = np.empty(size)
     e_at = np.empty((2, size))
@@ -697,15 +692,12 @@ def one(
             t_half = math.pi - theta0
             c_half = arc_integral(t_half, r, mu, theta0)
         else:
-            past = j >= n_t and math.isinf(tau_end)
             if fixed_steps > 0:
                 steps = fixed_steps
                 table = tables if theta0 == 0.0 else nodes(theta0, steps)
-            elif fixed_steps < 0 and not past:
-                steps = -fixed_steps
-                table = coarse_table if theta0 == 0.0 else nodes(theta0, steps)
             else:
                 weight = 1.0
+                past = j >= n_t and math.isinf(tau_end)
                 if past and frictionless and mu == 0.0 and 0.0 < last < before:
                     # past the record only the sum counts: each half cycle may be off by
                     # its share of it, over the ~1/(1 - ρ) half cycles that remain

@@ -232,11 +232,7 @@ class Law:
         method : {"auto", "closed", "integrate"}
             The closed form where the law has one (``"auto"``), or the integrator.
         steps : int
-            Runge-Kutta steps per half cycle of the integrator: 0 chosen per half cycle
-            (Π within ~2e-9 of Π(0)); positive, that many in every half cycle, with
-            no shortcut past the record (the reference of convergence tests);
-            negative, -steps in every half cycle inside the record and the sum past
-            it as with 0 (a coarse model as cheap past the record as the exact one).
+            Runge-Kutta steps per half cycle of the integrator.
 
         Returns
         -------
