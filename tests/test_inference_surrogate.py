@@ -210,6 +210,14 @@ def test_the_surrogate_of_a_friction_law_follows_the_stop_of_the_motion(bundled_
     assert np.mean(error < 1e-8) >= 0.99
     # and the compiled density picks the same pieces as the numpy one
     np.testing.assert_allclose(sur(rows), sur.reference(rows), rtol=1e-10, atol=1e-8)
+    # fitted again at draws (after a failed check), piece by piece as from the design
+    again = surrogate.regressed_posterior(posterior, sur, rows, np.random.default_rng(4))
+    q2 = again.likelihood.surrogate
+    assert q2.ratio == "mu_s_ratio" and q2.n_pieces >= 2
+    approx = again.likelihood.model_pi(again.physical(rows)["params"])
+    error = np.max(np.abs(exact - approx), axis=1) / np.max(np.abs(exact))
+    assert np.mean(error < 1e-8) >= 0.99
+    np.testing.assert_allclose(again(rows), again.reference(rows), rtol=1e-10, atol=1e-8)
 
 
 def test_each_piece_of_a_misfitting_friction_law_is_fitted_where_it_exists():

@@ -167,9 +167,9 @@ def _sample_surrogate(
     The surrogate is built about the maximum a posteriori with the Laplace scales
     (``first``, when the caller has built it already); if its check fails, fitted again
     by least squares to the exact Π at the failed surrogate's draws
-    (:func:`~bayestribo.inference.surrogate.regressed_posterior`), or where that
-    cannot be (a surrogate in pieces of μ_s/μ_k) built again about the best draw
-    checked with the surrogate posterior's spread (up to
+    (:func:`~bayestribo.inference.surrogate.regressed_posterior`), or where those do
+    not determine it, built again about the best draw checked with the surrogate
+    posterior's spread (up to
     :data:`~bayestribo.inference.surrogate.ATTEMPTS` surrogates). Returns the run, the
     last check and the surrogate posterior when a check passed; ``(None, check, None)``
     when none did (the caller samples the exact posterior).

@@ -42,11 +42,12 @@ prior's width inside, as α of ``coulomb+power`` at 3 on the AppStat records: a
 Laplace sd of 0.02 against a posterior sd of 0.3) is covered poorly by the nodes of
 the design, and the check fails. The surrogate is then fitted again by least squares
 to the exact Π at :data:`REFIT_DRAWS` draws of the failed surrogate's posterior
-(:func:`regressed_pi`), which lie where the exact posterior's mass is to within the
-failed surrogate's error: the quadratic is fitted where it is used. Where μ_s/μ_k
-cuts Π into pieces, it is built again about the checked draw of highest exact
-density with the surrogate posterior's spread (the optimiser can stop short of the
-optimum of a law that misfits).
+(:func:`regressed_pi`; piecewise in μ_s/μ_k as the design's), which lie where the
+exact posterior's mass is to within the failed surrogate's error: the quadratic is
+fitted where it is used, and its centre follows the posterior's mass where the
+optimiser stopped short of the optimum of a law that misfits. Where the draws do not
+determine it, it is built again from a design about the checked draw of highest
+exact density with the surrogate posterior's spread.
 
 Where the posterior depends on Π discontinuously (a law with static friction whose
 motion ends inside the record: one turning point more or less before the pin sticks),
@@ -524,7 +525,22 @@ def quadratic_pi(
         if not (ok[0] or ok[1]):
             return None
         sides[a] = 1.0 if ok[1] else -1.0
-    u = _nodes(p, sides)
+    return _fit_pieces(likelihood, names, c, s, _nodes(p, sides), fixed_params, ratio, ratio_bounds)
+
+
+def _fit_pieces(
+    likelihood: PiLikelihood,
+    names: tuple[str, ...],
+    c: NDArray,
+    s: NDArray,
+    u: NDArray,
+    fixed_params: Mapping[str, float],
+    ratio: str | None,
+    ratio_bounds: tuple[float, float] | None,
+) -> QuadraticPi | None:
+    """The quadratic of :func:`quadratic_pi` fitted by least squares to the exact Π at
+    the points ``c + u s`` (rows of ``u``, the first the centre, ``u = 0``): the nodes
+    of a design, or draws (:func:`regressed_pi`); piecewise in ``ratio`` as there."""
     shell = QuadraticPi(tuple(names), c, s, np.zeros((0, 1)))
     basis = shell.monomials(u)
     thresholds = np.zeros((0, basis.shape[1]))
@@ -744,10 +760,13 @@ def surrogate_posterior(posterior: Posterior, centre: NDArray, scale: NDArray) -
 def regressed_pi(
     likelihood: PiLikelihood,
     names: tuple[str, ...],
-    params: Mapping[str, NDArray],
+    points: NDArray,
+    fixed_params: Mapping[str, float],
     ratio: str | None = None,
+    ratio_bounds: tuple[float, float] | None = None,
 ) -> QuadraticPi | None:
-    """A one-piece quadratic fitted by least squares to the exact Π at given points.
+    """The quadratic of :func:`quadratic_pi` fitted by least squares to the exact Π at
+    given points instead of the nodes of a design.
 
     Parameters
     ----------
@@ -755,14 +774,16 @@ def regressed_pi(
         The exact likelihood (its law's compiled integrator gives Π).
     names : tuple of str
         The coordinates of the quadratic (those Π depends on smoothly).
-    params : mapping
-        The law's parameters and ``y0`` by name at each point, each (n,): draws of a
-        surrogate posterior. The expansion point is their mean, the unit
-        :data:`NODE_SCALE` times their standard deviation.
-    ratio : str, optional
-        The name of a sampled μ_s/μ_k on which Π does not depend over the points (a
-        surrogate of one piece); the points keep their own values of it, and a
-        point where it changes Π leaves its mark in the check.
+    points : ndarray
+        Their values at the points, (n, p): draws of a surrogate posterior. The
+        expansion point is their mean, the unit :data:`NODE_SCALE` times their
+        standard deviation.
+    fixed_params : mapping
+        The law's other parameters and their values (and ``y0`` when it is not a
+        coordinate), as in :func:`quadratic_pi`.
+    ratio, ratio_bounds : optional
+        A sampled μ_s/μ_k and its prior's support: Π is fitted piecewise in it, the
+        pieces found at the expansion point, as in :func:`quadratic_pi`.
 
     Returns
     -------
@@ -770,18 +791,13 @@ def regressed_pi(
         None when the points where Π is finite do not determine the quadratic (a
         coordinate without spread among them, or too few points).
     """
-    theta = np.column_stack([np.asarray(params[n], dtype=float) for n in names])
-    c = theta.mean(axis=0)
-    s = NODE_SCALE * theta.std(axis=0)
+    points = np.atleast_2d(np.asarray(points, dtype=float))
+    c = points.mean(axis=0)
+    s = NODE_SCALE * points.std(axis=0)
     if not np.all(np.isfinite(s) & (s > 0)):
         return None
-    shell = QuadraticPi(tuple(names), c, s, np.zeros((0, 1)))
-    basis = shell.monomials((theta - c) / s)
-    pi = PiLikelihood.model_pi(likelihood, dict(params))
-    coef = _fit(basis, pi, np.all(np.isfinite(pi), axis=1))
-    if coef is None:
-        return None
-    return QuadraticPi(tuple(names), c, s, coef, ratio, np.zeros((0, basis.shape[1])))
+    u = np.vstack([np.zeros((1, c.size)), (points - c) / s])
+    return _fit_pieces(likelihood, names, c, s, u, fixed_params, ratio, ratio_bounds)
 
 
 def regressed_posterior(
@@ -812,18 +828,29 @@ def regressed_posterior(
     -------
     Posterior or None
         With :func:`regressed_pi` of the draws in place of the failed quadratic; None
-        when the failed surrogate has more than one piece in μ_s/μ_k (its pieces need
-        the nodes of :func:`quadratic_pi`) or the draws do not determine the quadratic.
+        when the draws do not determine the quadratic.
     """
     previous = getattr(failed.likelihood, "surrogate", None)
-    if not isinstance(previous, QuadraticPi) or previous.n_pieces != 1:
+    if not isinstance(previous, QuadraticPi):
         return None
     draws = np.atleast_2d(np.asarray(draws, dtype=float))
     want = max(int(n), 4 * previous.rows_per_piece)
     if draws.shape[0] > want:
         draws = draws[rng.choice(draws.shape[0], want, replace=False)]
-    params = posterior.physical(draws)["params"]
-    quadratic = regressed_pi(posterior.likelihood, previous.names, params, previous.ratio)
+    names = previous.names
+    points = draws[:, [posterior.names.index(name) for name in names]]
+    centre = np.asarray(draws.mean(axis=0))
+    law_values = posterior.law_draws(centre[None])
+    others = {k: float(v[0]) for k, v in law_values.items() if k not in names}
+    if "y0" not in names:
+        others["y0"] = float(posterior.values(centre[None])["y0"][0])
+    bounds = None
+    if previous.ratio is not None:
+        prior = posterior.priors[previous.ratio]
+        bounds = (float(getattr(prior, "low", math.nan)), float(getattr(prior, "high", math.nan)))
+        if not all(math.isfinite(b) for b in bounds):
+            return None  # a prior without bounds: its pieces cannot be listed
+    quadratic = regressed_pi(posterior.likelihood, names, points, others, previous.ratio, bounds)
     if quadratic is None:
         return None
     return replace(failed, likelihood=replace(failed.likelihood, surrogate=quadratic))
