@@ -28,6 +28,8 @@ import warnings
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from _machine import write_results
@@ -52,14 +54,24 @@ def _fit(run: Any, law: str) -> dict[str, Any]:
             result = fit(run, law=law, seed=1)
         except Exception as exc:  # recorded: a law that cannot fit a record says why
             return {"error": f"{type(exc).__name__}: {exc}"[:400]}
+    cpu, wall = _cpu() - cpu, time.perf_counter() - wall
     diag = result.diagnostics
+    surrogate = diag.get("surrogate") or {}
     return {
-        "cpu_s": _cpu() - cpu,
-        "wall_s": time.perf_counter() - wall,
+        "cpu_s": cpu,
+        "wall_s": wall,
         "converged": bool(result.converged),
         "ess_min": float(diag.get("ess_min", float("nan"))),
         "n_steps": int(diag.get("n_steps", 0)),
+        "surrogate_attempt": surrogate.get("attempt"),
+        "surrogate_passed": surrogate.get("passed"),
         "warnings": sorted({w.category.__name__ for w in caught}),
+        # each parameter's posterior mean and sd: a change that speeds a law up must
+        # leave them where they were (compare two runs with --compare)
+        "posterior": {
+            name: [float(np.mean(result.samples(name))), float(np.std(result.samples(name)))]
+            for name in result.parameter_names
+        },
     }
 
 

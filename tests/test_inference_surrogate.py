@@ -89,6 +89,36 @@ def test_the_compiled_surrogate_density_is_its_numpy_reference(exact_posterior):
     np.testing.assert_allclose(residuals, expected, rtol=1e-9, atol=1e-9)
 
 
+def test_the_quadratic_fitted_at_draws_follows_the_integrator_where_they_are(exact_posterior):
+    """A surrogate fitted again by least squares at draws (regressed_posterior, after a
+    failed check) follows the exact Π over the draws' spread, and its compiled
+    density is its numpy reference."""
+    _, posterior, theta, cov = exact_posterior
+    sur = surrogate_posterior(posterior, theta, 2.0 * np.sqrt(np.diag(cov)))
+    draws = _around(theta, cov, 3.0, 400, seed=8)
+    again = surrogate.regressed_posterior(posterior, sur, draws, np.random.default_rng(0))
+    q = again.likelihood.surrogate
+    assert isinstance(q, QuadraticPi) and q.n_pieces == 1
+    # centred on the draws picked, not on the failed surrogate's centre
+    assert not np.allclose(q.centre, sur.likelihood.surrogate.centre)
+    rows = _around(theta, cov, 2.0, 40, seed=9)
+    exact = posterior.likelihood.model_pi(posterior.physical(rows)["params"])
+    approx = again.likelihood.model_pi(again.physical(rows)["params"])
+    assert np.max(np.abs(exact - approx)) < 1e-8 * np.max(np.abs(exact))
+    assert np.max(np.abs(posterior(rows) - again(rows))) < 1e-3
+    assert again.uses_compiled
+    np.testing.assert_allclose(again(rows), again.reference(rows), rtol=1e-10)
+
+
+def test_draws_without_spread_give_no_refitted_surrogate(exact_posterior):
+    _, posterior, theta, cov = exact_posterior
+    sur = surrogate_posterior(posterior, theta, 2.0 * np.sqrt(np.diag(cov)))
+    draws = _around(theta, cov, 1.0, 200, seed=10)
+    draws[:, 0] = theta[0]  # one coordinate the same in every draw
+    rng = np.random.default_rng(0)
+    assert surrogate.regressed_posterior(posterior, sur, draws, rng) is None
+
+
 @pytest.mark.validation  # two posteriors sampled to convergence side by side
 def test_the_surrogate_posterior_is_the_exact_posterior(exact_posterior):
     prepared, posterior, _, _ = exact_posterior
@@ -123,15 +153,18 @@ def test_a_wrong_surrogate_fails_its_check_and_the_exact_posterior_is_sampled(
     assert not verdict.passed and verdict.weight_cv > MAX_WEIGHT_CV
     assert check(posterior, sur, rows, np.random.default_rng(0)).passed
 
-    real = surrogate.quadratic_pi
+    def skewing(real):
+        def skewed(*args, **kwargs):
+            good = real(*args, **kwargs)
+            table = good.table.copy()
+            table[0] += 0.5 * table[1]
+            return QuadraticPi(good.names, good.centre, good.scale, table)
 
-    def skewed(*args, **kwargs):
-        good = real(*args, **kwargs)
-        table = good.table.copy()
-        table[0] += 0.5 * table[1]
-        return QuadraticPi(good.names, good.centre, good.scale, table)
+        return skewed
 
-    monkeypatch.setattr(surrogate, "quadratic_pi", skewed)
+    # every surrogate wrong: those of the design and those fitted again at the draws
+    monkeypatch.setattr(surrogate, "quadratic_pi", skewing(surrogate.quadratic_pi))
+    monkeypatch.setattr(surrogate, "regressed_pi", skewing(surrogate.regressed_pi))
     settings = SamplerSettings(n_walkers=16, n_ensembles=2, max_steps=4_000)
     sampled = pipeline.sample(posterior, prepared.decay, settings=settings, seed=5)
     assert sampled.surrogate is not None and not sampled.surrogate.passed
@@ -177,6 +210,14 @@ def test_the_surrogate_of_a_friction_law_follows_the_stop_of_the_motion(bundled_
     assert np.mean(error < 1e-8) >= 0.99
     # and the compiled density picks the same pieces as the numpy one
     np.testing.assert_allclose(sur(rows), sur.reference(rows), rtol=1e-10, atol=1e-8)
+    # fitted again at draws (after a failed check), piece by piece as from the design
+    again = surrogate.regressed_posterior(posterior, sur, rows, np.random.default_rng(4))
+    q2 = again.likelihood.surrogate
+    assert q2.ratio == "mu_s_ratio" and q2.n_pieces >= 2
+    approx = again.likelihood.model_pi(again.physical(rows)["params"])
+    error = np.max(np.abs(exact - approx), axis=1) / np.max(np.abs(exact))
+    assert np.mean(error < 1e-8) >= 0.99
+    np.testing.assert_allclose(again(rows), again.reference(rows), rtol=1e-10, atol=1e-8)
 
 
 def test_each_piece_of_a_misfitting_friction_law_is_fitted_where_it_exists():

@@ -25,6 +25,7 @@ from bayestribo.inference.surrogate import (
     NODE_SCALE,
     SurrogateCheck,
     check,
+    regressed_posterior,
     surrogate_posterior,
 )
 from bayestribo.inference.types import DEFAULT_SETTINGS, Sampled
@@ -164,8 +165,11 @@ def _sample_surrogate(
     check it against the exact one (:mod:`bayestribo.inference.surrogate`).
 
     The surrogate is built about the maximum a posteriori with the Laplace scales
-    (``first``, when the caller has built it already); if its check fails, again about
-    the best draw checked with the surrogate posterior's spread (up to
+    (``first``, when the caller has built it already); if its check fails, fitted again
+    by least squares to the exact Π at the failed surrogate's draws
+    (:func:`~bayestribo.inference.surrogate.regressed_posterior`), or where those do
+    not determine it, built again about the best draw checked with the surrogate
+    posterior's spread (up to
     :data:`~bayestribo.inference.surrogate.ATTEMPTS` surrogates). Returns the run, the
     last check and the surrogate posterior when a check passed; ``(None, check, None)``
     when none did (the caller samples the exact posterior).
@@ -174,8 +178,9 @@ def _sample_surrogate(
     sd = np.sqrt(np.clip(np.diag(np.atleast_2d(cov)), 0.0, None))
     centre, scale = theta, NODE_SCALE * sd
     checked: SurrogateCheck | None = None
+    refit: Posterior | None = None
     for attempt in range(1, ATTEMPTS + 1):
-        target = first if attempt == 1 and first is not None else None
+        target = first if attempt == 1 and first is not None else refit
         if target is None:
             target = surrogate_posterior(posterior, centre, scale)
         if target is None or not target.uses_compiled:
@@ -192,5 +197,6 @@ def _sample_surrogate(
             return run, checked, target
         if checked.best is None:
             break
+        refit = regressed_posterior(posterior, target, flat, rng)
         centre, scale = checked.best, NODE_SCALE * flat.std(axis=0)
     return None, checked, None

@@ -33,11 +33,21 @@ computes the importance weights w = p(θ)/p̃(θ): by Cauchy-Schwarz, any poster
 under the exact posterior differs from the surrogate's by at most
 ``cv(w) × sd`` (cv the coefficient of variation of the weights, sd the posterior
 standard deviation of the quantity). The fit keeps the surrogate's draws only when
-cv(w) is below :data:`MAX_WEIGHT_CV`; otherwise it builds the surrogate again about
-the checked draw of highest exact density with the surrogate posterior's spread (the
-optimiser can stop short of the optimum of a law that misfits), up to
+cv(w) is below :data:`MAX_WEIGHT_CV`; otherwise it builds the surrogate again, up to
 :data:`ATTEMPTS` times, and then samples the exact posterior
-(:func:`bayestribo.inference.chains.sample`).
+(:func:`bayestribo.inference.chains.sample`). The Laplace scales about the maximum a
+posteriori describe a posterior that is nearly Gaussian; one that is not (a
+parameter whose optimum is on its prior's bound, with its mass a few tenths of the
+prior's width inside, as α of ``coulomb+power`` at 3 on the AppStat records: a
+Laplace sd of 0.02 against a posterior sd of 0.3) is covered poorly by the nodes of
+the design, and the check fails. The surrogate is then fitted again by least squares
+to the exact Π at :data:`REFIT_DRAWS` draws of the failed surrogate's posterior
+(:func:`regressed_pi`; piecewise in μ_s/μ_k as the design's), which lie where the
+exact posterior's mass is to within the failed surrogate's error: the quadratic is
+fitted where it is used, and its centre follows the posterior's mass where the
+optimiser stopped short of the optimum of a law that misfits. Where the draws do not
+determine it, it is built again from a design about the checked draw of highest
+exact density with the surrogate posterior's spread.
 
 Where the posterior depends on Π discontinuously (a law with static friction whose
 motion ends inside the record: one turning point more or less before the pin sticks),
@@ -64,6 +74,7 @@ if TYPE_CHECKING:
 __all__ = [
     "ATTEMPTS",
     "MAX_WEIGHT_CV",
+    "REFIT_DRAWS",
     "CoefficientLayout",
     "ForceColumns",
     "QuadraticPi",
@@ -71,6 +82,8 @@ __all__ = [
     "SurrogateLikelihood",
     "check",
     "quadratic_pi",
+    "regressed_pi",
+    "regressed_posterior",
     "stop_ratios",
     "surrogate_posterior",
 ]
@@ -84,6 +97,10 @@ MAX_WEIGHT_CV = 0.05
 CHECK_DRAWS = 128
 #: Surrogates built and checked before the exact posterior is sampled instead.
 ATTEMPTS = 3
+#: Draws of a failed surrogate's posterior at which the exact Π is evaluated to fit
+#: the next surrogate by least squares (:func:`regressed_pi`): at least this many, and
+#: at least four per coefficient of the quadratic.
+REFIT_DRAWS = 128
 #: Scales of the nodes of the fit, in Laplace standard deviations.
 NODE_SCALE = 2.0
 #: Smallest relative change of Π at a node (see :func:`quadratic_pi`).
@@ -508,7 +525,22 @@ def quadratic_pi(
         if not (ok[0] or ok[1]):
             return None
         sides[a] = 1.0 if ok[1] else -1.0
-    u = _nodes(p, sides)
+    return _fit_pieces(likelihood, names, c, s, _nodes(p, sides), fixed_params, ratio, ratio_bounds)
+
+
+def _fit_pieces(
+    likelihood: PiLikelihood,
+    names: tuple[str, ...],
+    c: NDArray,
+    s: NDArray,
+    u: NDArray,
+    fixed_params: Mapping[str, float],
+    ratio: str | None,
+    ratio_bounds: tuple[float, float] | None,
+) -> QuadraticPi | None:
+    """The quadratic of :func:`quadratic_pi` fitted by least squares to the exact Π at
+    the points ``c + u s`` (rows of ``u``, the first the centre, ``u = 0``): the nodes
+    of a design, or draws (:func:`regressed_pi`); piecewise in ``ratio`` as there."""
     shell = QuadraticPi(tuple(names), c, s, np.zeros((0, 1)))
     basis = shell.monomials(u)
     thresholds = np.zeros((0, basis.shape[1]))
@@ -723,3 +755,102 @@ def surrogate_posterior(posterior: Posterior, centre: NDArray, scale: NDArray) -
     fields = {f: getattr(exact, f) for f in ("data", "model", "offset_sd", "drift_sd", "law")}
     likelihood = SurrogateLikelihood(**fields, surrogate=quadratic)
     return replace(posterior, likelihood=likelihood)
+
+
+def regressed_pi(
+    likelihood: PiLikelihood,
+    names: tuple[str, ...],
+    points: NDArray,
+    fixed_params: Mapping[str, float],
+    ratio: str | None = None,
+    ratio_bounds: tuple[float, float] | None = None,
+) -> QuadraticPi | None:
+    """The quadratic of :func:`quadratic_pi` fitted by least squares to the exact Π at
+    given points instead of the nodes of a design.
+
+    Parameters
+    ----------
+    likelihood : PiLikelihood
+        The exact likelihood (its law's compiled integrator gives Π).
+    names : tuple of str
+        The coordinates of the quadratic (those Π depends on smoothly).
+    points : ndarray
+        Their values at the points, (n, p): draws of a surrogate posterior. The
+        expansion point is their mean, the unit :data:`NODE_SCALE` times their
+        standard deviation.
+    fixed_params : mapping
+        The law's other parameters and their values (and ``y0`` when it is not a
+        coordinate), as in :func:`quadratic_pi`.
+    ratio, ratio_bounds : optional
+        A sampled μ_s/μ_k and its prior's support: Π is fitted piecewise in it, the
+        pieces found at the expansion point, as in :func:`quadratic_pi`.
+
+    Returns
+    -------
+    QuadraticPi or None
+        None when the points where Π is finite do not determine the quadratic (a
+        coordinate without spread among them, or too few points).
+    """
+    points = np.atleast_2d(np.asarray(points, dtype=float))
+    c = points.mean(axis=0)
+    s = NODE_SCALE * points.std(axis=0)
+    if not np.all(np.isfinite(s) & (s > 0)):
+        return None
+    u = np.vstack([np.zeros((1, c.size)), (points - c) / s])
+    return _fit_pieces(likelihood, names, c, s, u, fixed_params, ratio, ratio_bounds)
+
+
+def regressed_posterior(
+    posterior: Posterior,
+    failed: Posterior,
+    draws: NDArray,
+    rng: np.random.Generator,
+    n: int = REFIT_DRAWS,
+) -> Posterior | None:
+    """The surrogate posterior fitted again at draws of a surrogate that failed its check.
+
+    Parameters
+    ----------
+    posterior : Posterior
+        The exact posterior.
+    failed : Posterior
+        The surrogate posterior whose check failed (its likelihood a
+        :class:`SurrogateLikelihood`).
+    draws : ndarray
+        Its draws, (N, d) in sampling coordinates.
+    rng : Generator
+        Picks the draws (``max(n, 4 R)`` of them, R the quadratic's coefficients; all
+        when there are fewer).
+    n : int
+        The fewest draws picked.
+
+    Returns
+    -------
+    Posterior or None
+        With :func:`regressed_pi` of the draws in place of the failed quadratic; None
+        when the draws do not determine the quadratic.
+    """
+    previous = getattr(failed.likelihood, "surrogate", None)
+    if not isinstance(previous, QuadraticPi):
+        return None
+    draws = np.atleast_2d(np.asarray(draws, dtype=float))
+    want = max(int(n), 4 * previous.rows_per_piece)
+    if draws.shape[0] > want:
+        draws = draws[rng.choice(draws.shape[0], want, replace=False)]
+    names = previous.names
+    points = draws[:, [posterior.names.index(name) for name in names]]
+    centre = np.asarray(draws.mean(axis=0))
+    law_values = posterior.law_draws(centre[None])
+    others = {k: float(v[0]) for k, v in law_values.items() if k not in names}
+    if "y0" not in names:
+        others["y0"] = float(posterior.values(centre[None])["y0"][0])
+    bounds = None
+    if previous.ratio is not None:
+        prior = posterior.priors[previous.ratio]
+        bounds = (float(getattr(prior, "low", math.nan)), float(getattr(prior, "high", math.nan)))
+        if not all(math.isfinite(b) for b in bounds):
+            return None  # a prior without bounds: its pieces cannot be listed
+    quadratic = regressed_pi(posterior.likelihood, names, points, others, previous.ratio, bounds)
+    if quadratic is None:
+        return None
+    return replace(failed, likelihood=replace(failed.likelihood, surrogate=quadratic))
