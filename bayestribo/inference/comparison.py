@@ -113,10 +113,10 @@ from numpy.typing import NDArray
 
 from bayestribo import DEFAULT_SEED
 from bayestribo.errors import BayestriboError
-from bayestribo.inference.assemble import pointwise_log_likelihood
 from bayestribo.inference.build import build_posterior
 from bayestribo.inference.chains import sample_from
 from bayestribo.inference.checks import misfit, shape_departure
+from bayestribo.inference.loo import law_loo, loo_frame, pareto_k_max
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.preparation import prepare, regrid
 from bayestribo.inference.records import LawComparison
@@ -186,17 +186,6 @@ def _posterior(law: str | Law, data: PiData, model: str, discrepancy: bool) -> P
     return build_posterior(data, model=model, discrepancy=discrepancy, law=_law(law))
 
 
-def _loo(idata: Any) -> float:
-    """Largest Pareto k of the PSIS-LOO of one law (a high k is reported, not warned)."""
-    import arviz as az
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)
-        warnings.simplefilter("ignore", RuntimeWarning)
-        loo = az.loo(idata, pointwise=True)
-    return float(np.max(np.asarray(loo.pareto_k)))
-
-
 def _fit_law(
     law: str,
     prepared: PreparedRun,
@@ -205,22 +194,13 @@ def _fit_law(
     posterior: Posterior,
     optimum: tuple[NDArray, NDArray, tuple[float, float] | None],
 ) -> tuple[Sampled, Any]:
-    """Sample one law's posterior from its optimum; its InferenceData holds the
-    pointwise log-likelihood."""
-    import arviz as az
-
+    """Sample one law's posterior from its optimum; also return its PSIS-LOO
+    (:func:`bayestribo.inference.loo.law_loo`, pointwise)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         start = find_start(posterior, prepared.decay, optimum=optimum)
         sampled = sample_from(start, settings=settings, seed=rng)
-    chains = sampled.run.chains
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", FutureWarning)
-        idata = az.from_dict(
-            posterior={name: chains[..., i] for i, name in enumerate(posterior.names)},
-            log_likelihood={"pi": pointwise_log_likelihood(sampled.posterior, chains)},
-        )
-    return sampled, idata
+    return sampled, law_loo(sampled)
 
 
 def _amount(term: Any, values: Mapping[str, float], reference: float) -> Any:
@@ -614,30 +594,6 @@ def _checks(posterior: Posterior, theta: NDArray) -> dict[str, Any]:
     }
 
 
-def _loo_frame(idatas: Mapping[str, Any]) -> Any:
-    """PSIS-LOO of the laws sampled, compared (:func:`arviz.compare`); one law alone
-    is its own best."""
-    import arviz as az
-    import pandas as pd
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        if len(idatas) >= 2:
-            return az.compare(dict(idatas), ic="loo")
-        ((law, idata),) = idatas.items()
-        loo = az.loo(idata)
-    row = {
-        "rank": 0.0,
-        "elpd_loo": float(loo["elpd_loo"]),
-        "p_loo": float(loo["p_loo"]),
-        "elpd_diff": 0.0,
-        "weight": 1.0,
-        "se": float(loo["se"]),
-        "dse": 0.0,
-    }
-    return pd.DataFrame([row], index=[law])
-
-
 def compare_prepared(
     prepared: PreparedRun,
     laws: Sequence[str],
@@ -689,7 +645,7 @@ def compare_prepared(
     settings = settings or SamplerSettings()
     say = progress or (lambda text: None)
     root = np.random.SeedSequence(seed)
-    idatas, table, notes, runs = {}, {}, [], {}
+    loos, table, notes, runs = {}, {}, [], {}
     optima: dict[str, dict[str, float]] = {}
     equivalent: dict[str, str] = {}
     found: dict[str, LawOptimum] = {}
@@ -728,7 +684,7 @@ def compare_prepared(
             reduced = _reduction(law, at.posterior, at.optimum[0], runs, optima)
             if reduced is None:
                 say(f"sampling {law} ({k}/{n})")
-                sampled, idatas[law] = _fit_law(
+                sampled, loos[law] = _fit_law(
                     law, prepared, settings, rng, at.second, at.second_optimum
                 )
         except BayestriboError as exc:
@@ -755,7 +711,7 @@ def compare_prepared(
         names = sampled.posterior.names
         best_row = np.unravel_index(np.argmax(s.log_prob), s.log_prob.shape)
         optima[law] = dict(zip(names, s.chains[best_row], strict=True))
-        k_max = _loo(idatas[law])
+        k_max = pareto_k_max(loos[law])
         table[law] = {
             "law": _law(law).name,
             "pareto_k_max": k_max,
@@ -839,11 +795,11 @@ def compare_prepared(
             optimise("free", 1, 1)
             if "free" in found:
                 sample_one("free", 1, 1)
-    if not idatas or len(idatas) + len(equivalent) + len(screened) < 2:
+    if not loos or len(loos) + len(equivalent) + len(screened) < 2:
         raise BayestriboError(
             f"laws: fewer than two of {laws} could be fitted: " + "; ".join(notes)
         )
-    frame = _loo_frame(idatas)
+    frame = loo_frame(loos)
     for law, row in frame.iterrows():
         table[str(law)].update(
             {
@@ -851,7 +807,7 @@ def compare_prepared(
                 for key in ("rank", "elpd_loo", "p_loo", "elpd_diff", "weight", "se", "dse")
             }
         )
-    best, as_good, verdict, adequate = _verdict(list(idatas), table, frame)
+    best, as_good, verdict, adequate = _verdict(list(loos), table, frame)
     rematch = None
     if rivals and adequate:
         contenders = _rivals(verdict, as_good, table)
