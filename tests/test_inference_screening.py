@@ -71,7 +71,7 @@ def _stub_fits(monkeypatch, shifts: dict[str, float]) -> list[str]:
 
     sampled: list[str] = []
 
-    def optimise(law, prepared, model, discrepancy, optima):
+    def optimise(law, prepared, model, discrepancy, optima, start=None):
         post = _Posterior(comparison._law(law).parameter_names)
         theta = np.zeros(len(post.names))
         opt = (theta, np.eye(len(theta)), None)

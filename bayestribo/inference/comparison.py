@@ -87,7 +87,11 @@ a half cycle they differ: a friction dissipates in proportion to |ẋ|, viscous 
 to ẋ², and the energy lost by a quarter of a half cycle is 0.146 of the half cycle's
 loss against 0.091. When adequate laws as good as the verdict do not nest it (its
 *rivals*), they and the verdict are compared again on :data:`TIE_GRID` increments per
-half cycle (:func:`bayestribo.inference.preparation.regrid`); that comparison's verdict
+half cycle (:func:`bayestribo.inference.preparation.regrid`), each law's optimiser
+started at its optimum on the first grid (the same law on the same motion: the finer
+grid moves it by about a posterior sd, far less than the first guesses are apart;
+:func:`bayestribo.inference.start.maximum_from`, which falls back to the first guesses
+where the density there is not finite); that comparison's verdict
 replaces the first when it is adequate there, and the laws it rejects leave the laws as
 good as the verdict. Otherwise the verdict stands, and the comparison says that the
 finer grid did not tell them apart. The finer grid rests on white, independent channel
@@ -557,16 +561,27 @@ def _optimise(
     model: str,
     discrepancy: bool,
     optima: Mapping[str, dict[str, float]],
+    start: Mapping[str, float] | None = None,
 ) -> LawOptimum:
-    """A law's optimum on both passes and its pointwise log-likelihood there."""
+    """A law's optimum on both passes and its pointwise log-likelihood there; with
+    ``start`` (its optimum on another grid of the run, by coordinate), the optimiser
+    starts there rather than from the first guesses (module notes, Rivals)."""
     from bayestribo.inference.reweight import reweighted_posterior
-    from bayestribo.inference.start import maximum_from
+    from bayestribo.inference.start import better_optimum, maximum_from
 
     # friction terms are fitted without contact too (as a friction displacement): the
     # data, not the metadata, decide whether there is friction to see
     posterior = _posterior(law, prepared.data, model, discrepancy)
     nested = _nested_start(law, prepared, optima)
-    optimum = find_optimum(posterior, prepared.decay, also_start_at=nested)
+    if start is not None and all(name in start for name in posterior.names):
+        theta = np.array([start[name] for name in posterior.names], dtype=float)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            optimum = better_optimum(
+                posterior, maximum_from(posterior, theta, prepared.decay), nested
+            )
+    else:
+        optimum = find_optimum(posterior, prepared.decay, also_start_at=nested)
     # the second pass, as chains.sample makes it, so that the law is judged on the
     # posterior it would be sampled on
     second, second_optimum = posterior, optimum
@@ -606,6 +621,7 @@ def compare_prepared(
     rivals: bool = True,
     screening: bool = True,
     progress: Callable[[str], None] | None = None,
+    starts: Mapping[str, Mapping[str, float]] | None = None,
 ) -> tuple[LawComparison, dict[str, Sampled]]:
     """Compare laws on a prepared run; also return each law's sampled posterior.
 
@@ -632,6 +648,12 @@ def compare_prepared(
     progress : callable, optional
         Called with one line of text per law as the comparison goes (its optimum,
         then its sampling or why it is not sampled).
+    starts : mapping, optional
+        Law -> its optimum on another grid of the same run (values of its sampled
+        coordinates by name): that law's optimiser starts there alone
+        (:func:`bayestribo.inference.start.maximum_from`) rather than from the first
+        guesses of :func:`bayestribo.inference.start.find_optimum` (the rivals'
+        comparison on the finer grid, module notes).
 
     Returns
     -------
@@ -660,7 +682,9 @@ def compare_prepared(
     def optimise(law: str, k: int, n: int) -> None:
         start, cpu = time.perf_counter(), time.process_time()
         try:
-            found[law] = _optimise(law, prepared, model, discrepancy, optima)
+            found[law] = _optimise(
+                law, prepared, model, discrepancy, optima, start=(starts or {}).get(law)
+            )
         except BayestriboError as exc:
             failed(law, exc)
             say(f"law {k}/{n} {law}: not fitted ({exc})")
@@ -820,6 +844,10 @@ def compare_prepared(
                 settings,
                 discrepancy,
                 screening,
+                starts={
+                    law: dict(zip(at.posterior.names, at.optimum[0], strict=True))
+                    for law, at in found.items()
+                },
             )
             if rematch["decided"]:
                 verdict = rematch["verdict"]
@@ -860,9 +888,11 @@ def _compare_rivals(
     settings: SamplerSettings,
     discrepancy: bool,
     screening: bool = True,
+    starts: Mapping[str, Mapping[str, float]] | None = None,
 ) -> dict[str, Any]:
     """The verdict and its rivals compared on :data:`TIE_GRID` increments per half
-    cycle (module notes)."""
+    cycle (module notes), each law's optimiser started at ``starts`` (its optimum on
+    the first grid) where given."""
     fine = regrid(prepared, TIE_GRID * int(prepared.data.increments.size))
     out: dict[str, Any] = {
         "laws": list(laws),
@@ -880,6 +910,7 @@ def _compare_rivals(
             discrepancy=discrepancy,
             rivals=False,
             screening=screening,
+            starts=starts,
         )
     except BayestriboError as exc:
         out["error"] = str(exc)
