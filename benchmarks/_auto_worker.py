@@ -105,6 +105,9 @@ def main() -> int:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 fit(request["path"], seed=1)
+                if request.get("auto"):
+                    # and every compiled law and surrogate kernel auto uses
+                    fit(request["path"], seed=1, law="auto")
             print(json.dumps({"warm": True}), flush=True)
             continue
         print(json.dumps(fit_auto(request)), flush=True)

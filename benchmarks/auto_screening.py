@@ -5,7 +5,9 @@ Each recording is fitted with ``fit(..., law="auto")`` by two worker processes
 (``--baseline``, e.g. ``git worktree add --detach /tmp/wt-base 2730dd2``), in
 alternation: for each repeat and each recording, the two trees one after the other, the
 first of them alternating between repeats, each worker having fitted the bundled run
-with the default law once before (numba's cached kernels loaded). The machine is
+with the default law once before (numba's cached kernels loaded; with ``--warm-auto``
+also with ``law="auto"``, so that the first recording timed finds every kernel auto
+uses loaded too). The machine is
 shared, so the times compared are each process's CPU time of the call
 (``time.process_time``), with the wall time and the load averages beside them.
 
@@ -88,7 +90,7 @@ def recordings(external: Path) -> dict[str, dict[str, Any]]:
 class Worker:
     """A worker process importing one tree's bayestribo."""
 
-    def __init__(self, tree: Path) -> None:
+    def __init__(self, tree: Path, warm_auto: bool = False) -> None:
         env = dict(os.environ, PYTHONPATH=str(tree))
         self.proc = subprocess.Popen(
             [sys.executable, str(HERE / "_auto_worker.py")],
@@ -99,7 +101,7 @@ class Worker:
             cwd=str(tree),
         )
         self.module = json.loads(self.proc.stdout.readline())["module"]
-        self.fit({"warm_up": True, "path": str(BUNDLED)})
+        self.fit({"warm_up": True, "path": str(BUNDLED), "auto": warm_auto})
 
     def fit(self, request: dict[str, Any]) -> dict[str, Any]:
         self.proc.stdin.write(json.dumps(request) + "\n")
@@ -152,6 +154,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--trees", nargs="*", default=["baseline", "current"])
     parser.add_argument("--output", default="auto_screening")
     parser.add_argument(
+        "--warm-auto",
+        action="store_true",
+        help="each worker also fits the bundled run with law='auto' before anything is timed",
+    )
+    parser.add_argument(
         "--default",
         action="store_true",
         help="also time the default fit of each recording after its auto fit (same worker)",
@@ -163,7 +170,7 @@ def main(argv: list[str] | None = None) -> int:
     trees = {"baseline": args.baseline.resolve(), "current": ROOT}
     trees = {k: v for k, v in trees.items() if k in args.trees}
     load_start = os.getloadavg()
-    workers = {name: Worker(tree) for name, tree in trees.items()}
+    workers = {name: Worker(tree, args.warm_auto) for name, tree in trees.items()}
     fits: dict[str, dict[str, list[dict[str, Any]]]] = {
         name: {tree: [] for tree in trees} for name in runs
     }
