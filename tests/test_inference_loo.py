@@ -109,7 +109,7 @@ def test_a_surrogate_that_disagrees_gives_way_to_the_exact_pointwise():
 def test_the_frame_of_precomputed_loos_is_arvizs_comparison():
     laws = {"a": _stub(["zeta", "y0"], 0.0, False), "b": _stub(["mu_k", "y0"], 0.0, False)}
     laws["b"].posterior.pointwise = lambda theta: (
-        -0.5 * (theta[:, :1] - 0.3) ** 2 - 0.2 + 0 * (np.linspace(-1, 1, 12))
+        -0.5 * (theta[:, :1] - 0.3 * np.linspace(-1, 1, 12)) ** 2 - 0.2
     )
     loos = {law: loo.law_loo(s) for law, s in laws.items()}
     with warnings.catch_warnings():
@@ -130,3 +130,41 @@ def test_the_frame_of_precomputed_loos_is_arvizs_comparison():
     alone = loo.loo_frame({"a": loos["a"]})
     assert list(alone.index) == ["a"] and alone.loc["a", "elpd_diff"] == 0.0
     assert alone.loc["a", "elpd_loo"] == float(loos["a"]["elpd_loo"])
+
+
+def _arviz_loo(ll, chains):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        idata = az.from_dict(
+            posterior={f"p{i}": chains[..., i] for i in range(chains.shape[-1])},
+            log_likelihood={"pi": ll},
+        )
+        return az.loo(idata, pointwise=True)
+
+
+@pytest.mark.parametrize(
+    "case", ["normal", "heavy tails", "tied draws", "misfit and constant rows", "few draws"]
+)
+def test_psis_loo_is_arvizs_loo(case):
+    rng = np.random.default_rng(len(case))
+    n_draws, m = (40, 12) if case == "few draws" else (300, 25)
+    # autocorrelated chains: a relative efficiency well below 1
+    chains = 0.1 * rng.normal(size=(2, n_draws, 3)).cumsum(axis=1)
+    if case == "normal":
+        ll = -0.5 * rng.normal(size=(2, n_draws, m)) ** 2
+    else:
+        ll = -0.5 * (3.0 * rng.standard_t(3, size=(2, n_draws, m))) ** 2
+    if case == "tied draws":
+        ll[:, 100:130, :] = ll[:, 100:101, :]  # a walker stuck: ties in every tail
+    if case == "misfit and constant rows":
+        ll[0, :, 3] = -1e5
+        ll[:, :, 7] = 0.0
+    expected = _arviz_loo(ll, chains)
+    got = loo.psis_loo(ll, loo.relative_efficiency(chains))
+    for key in ("elpd_loo", "se", "p_loo", "good_k"):
+        assert float(got[key]) == pytest.approx(float(expected[key]), rel=1e-10, abs=1e-10)
+    for key in ("n_samples", "n_data_points", "warning", "scale"):
+        assert got[key] == expected[key]
+    np.testing.assert_allclose(got["loo_i"].values, expected["loo_i"].values, rtol=1e-10)
+    np.testing.assert_allclose(got["pareto_k"].values, expected["pareto_k"].values, rtol=1e-10)
+    assert loo.relative_efficiency(chains[:1]) == 1.0

@@ -18,7 +18,11 @@ draw, and the laws' ``elpd_loo`` agree to 1e-3.)
 
 :func:`law_loo` is one law's PSIS-LOO (its pointwise values kept, for
 :func:`arviz.compare`), :func:`loo_frame` the laws' comparison from them: each law's
-PSIS-LOO is computed once.
+PSIS-LOO is computed once. :func:`psis_loo` computes it as :func:`arviz.loo` does, to
+rounding (``tests/test_inference_loo.py``), with the Pareto smoothing of all increments
+at once (:func:`psis`) where ArviZ fits one increment at a time: 3-4 times faster (5
+ms against 21 ms for 31 increments and 1800 draws, 72 against 229 ms for 738), which
+on a record of several hundred increments per grid was a tenth of ``law="auto"``.
 """
 
 from __future__ import annotations
@@ -33,7 +37,17 @@ from numpy.typing import NDArray
 from bayestribo.inference.assemble import pointwise_log_likelihood
 from bayestribo.inference.types import Sampled
 
-__all__ = ["CHECK_DRAWS", "TOLERANCE", "law_loo", "loo_frame", "pareto_k_max", "sampled_pointwise"]
+__all__ = [
+    "CHECK_DRAWS",
+    "TOLERANCE",
+    "law_loo",
+    "loo_frame",
+    "pareto_k_max",
+    "psis",
+    "psis_loo",
+    "relative_efficiency",
+    "sampled_pointwise",
+]
 
 #: Draws, evenly spaced over the flattened chains, at which the surrogate's pointwise
 #: log-likelihood is compared with the exact one.
@@ -92,24 +106,202 @@ def law_loo(sampled: Sampled, pointwise: NDArray | None = None) -> Any:
     Returns
     -------
     ELPDData
-        With ``loo_i`` and ``pareto_k`` per increment. A high Pareto k is reported by
-        the comparison, not warned here.
+        :func:`psis_loo` of the pointwise log-likelihood with the relative efficiency
+        of the chains (:func:`relative_efficiency`). A high Pareto k is reported by the
+        comparison, not warned here.
+    """
+    if pointwise is None:
+        pointwise = sampled_pointwise(sampled)
+    return psis_loo(pointwise, relative_efficiency(sampled.run.chains))
+
+
+def relative_efficiency(chains: NDArray) -> float:
+    """The draws' mean effective sample size over their number: ArviZ's ``reff`` of
+    :func:`arviz.loo` (the "mean" ESS of each coordinate, averaged; 1 for one chain).
+
+    Parameters
+    ----------
+    chains : ndarray
+        Draws of shape (chains, draws, d).
     """
     import arviz as az
 
-    chains = np.asarray(sampled.run.chains, dtype=float)
-    if pointwise is None:
-        pointwise = sampled_pointwise(sampled)
-    names = sampled.posterior.names
+    chains = np.asarray(chains, dtype=float)
+    n_chains, n_draws, d = chains.shape
+    if n_chains == 1:
+        return 1.0
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", FutureWarning)
-        warnings.simplefilter("ignore", UserWarning)
-        warnings.simplefilter("ignore", RuntimeWarning)
-        idata = az.from_dict(
-            posterior={name: chains[..., i] for i, name in enumerate(names)},
-            log_likelihood={"pi": pointwise},
+        warnings.simplefilter("ignore")
+        ess = [float(az.ess(chains[..., i], method="mean")) for i in range(d)]
+    return float(np.mean(ess)) / (n_chains * n_draws)
+
+
+def psis_loo(log_likelihood: NDArray, reff: float) -> Any:
+    """PSIS-LOO from a pointwise log-likelihood, as :func:`arviz.loo` computes it
+    (``pointwise=True``, log scale), with the Pareto smoothing of every increment's
+    weights at once (:func:`psis`) rather than one increment at a time.
+
+    Parameters
+    ----------
+    log_likelihood : ndarray
+        Shape (chains, draws, m): each increment's log-likelihood at each draw.
+    reff : float
+        Relative efficiency of the draws (:func:`relative_efficiency`).
+
+    Returns
+    -------
+    ELPDData
+        ``elpd_loo``, ``se``, ``p_loo``, ``n_samples``, ``n_data_points``,
+        ``warning`` (a Pareto k above ``good_k``), ``loo_i`` and ``pareto_k`` (per
+        increment), ``scale`` ("log") and ``good_k``, as :func:`arviz.loo` gives them.
+    """
+    import xarray as xr
+    from arviz import ELPDData
+
+    ll = np.asarray(log_likelihood, dtype=float)
+    ll = ll.reshape(-1, ll.shape[-1]).T  # (m, samples), samples in chain-major order
+    m, n_samples = ll.shape
+    log_weights, pareto_k = psis(-ll, reff)
+    loo_i = _logsumexp_rows(log_weights + ll)
+    elpd = float(np.sum(loo_i))
+    se = float((m * np.var(loo_i)) ** 0.5)
+    lppd = float(np.sum(_logsumexp_rows(ll) - np.log(n_samples)))
+    good_k = min(1.0 - 1.0 / np.log10(n_samples), 0.7)
+    dims = ["pi_dim_0"]
+    return ELPDData(
+        data=[
+            elpd,
+            se,
+            lppd - elpd,
+            n_samples,
+            m,
+            bool(np.any(pareto_k > good_k)),
+            xr.DataArray(loo_i, dims=dims, name="loo_i"),
+            xr.DataArray(pareto_k, dims=dims, name="pareto_shape"),
+            "log",
+            good_k,
+        ],
+        index=[
+            "elpd_loo",
+            "se",
+            "p_loo",
+            "n_samples",
+            "n_data_points",
+            "warning",
+            "loo_i",
+            "pareto_k",
+            "scale",
+            "good_k",
+        ],
+    )
+
+
+def _logsumexp_rows(x: NDArray) -> NDArray:
+    """log Σ exp along the last axis, stably (ArviZ's order of operations)."""
+    top = np.max(x, axis=-1, keepdims=True)
+    return np.log(np.sum(np.exp(x - top), axis=-1)) + top[..., 0]
+
+
+def psis(log_weights: NDArray, reff: float) -> tuple[NDArray, NDArray]:
+    """Pareto-smoothed importance sampling of many rows of log weights at once
+    (Vehtari et al. 2024), the algorithm of :func:`arviz.psislw` row by row.
+
+    Each row's largest weights (its tail: ``ceil(min(S/5, 3 sqrt(S/reff)))`` of its S
+    samples) are replaced by the quantiles of a generalized Pareto distribution fitted
+    to them (Zhang & Stephens 2009, with ArviZ's weakly informative prior on k),
+    truncated at the largest raw weight, and the row normalised. Rows whose tail holds
+    ties at its cut (a different number of samples beyond it) are smoothed by ArviZ's
+    own row function.
+
+    Parameters
+    ----------
+    log_weights : ndarray
+        Shape (rows, S).
+    reff : float
+        Relative efficiency of the samples.
+
+    Returns
+    -------
+    smoothed : ndarray
+        Shape (rows, S), normalised log weights.
+    k : ndarray
+        Shape (rows,): each row's Pareto shape k (inf where the tail is too short).
+    """
+    from arviz.stats.stats import _psislw
+
+    x = np.array(log_weights, dtype=float)
+    rows, n = x.shape
+    cutoff_ind = -int(np.ceil(min(n / 5.0, 3 * (n / reff) ** 0.5))) - 1
+    cutoffmin = np.log(np.finfo(float).tiny)
+    x -= np.max(x, axis=1, keepdims=True)
+    tail = -cutoff_ind - 1
+    # the tail and the cut below it: the largest tail + 1 of each row, in order
+    top = np.argpartition(x, n - tail - 1, axis=1)[:, n - tail - 1 :]
+    top = np.take_along_axis(top, np.argsort(np.take_along_axis(x, top, axis=1), axis=1), axis=1)
+    ordered = np.take_along_axis(x, top, axis=1)
+    cut = np.maximum(ordered[:, 0], cutoffmin)
+    in_tail = np.sum(x > cut[:, None], axis=1)
+    k = np.full(rows, np.inf)
+    regular = in_tail == tail
+    if tail > 4 and np.any(regular):
+        r = np.flatnonzero(regular)
+        exp_cut = np.exp(cut[r])
+        sample = np.exp(ordered[r, 1:]) - exp_cut[:, None]
+        k_r, sigma = _gpdfit_rows(sample)
+        probs = np.arange(0.5, tail) / tail
+        smoothed = _gpinv_rows(probs, k_r, sigma)
+        smoothed = np.log(smoothed + exp_cut[:, None])
+        fitted = np.isfinite(k_r)
+        k[r] = k_r
+        rows_fitted = r[fitted]
+        if rows_fitted.size:
+            block = x[rows_fitted]
+            np.put_along_axis(block, top[rows_fitted, 1:], smoothed[fitted], axis=1)
+            block[block > 0] = 0.0
+            x[rows_fitted] = block
+    x -= _logsumexp_rows(x)[:, None]
+    for i in np.flatnonzero(~regular | (tail <= 4)):
+        # ties at the cut, or too short a tail: ArviZ's own row function
+        row = np.array(log_weights[i], dtype=float)
+        x[i], k[i] = _psislw(row, cutoff_ind, cutoffmin, True)
+    return x, k
+
+
+def _gpdfit_rows(sample: NDArray) -> tuple[NDArray, NDArray]:
+    """ArviZ's empirical-Bayes fit of a generalized Pareto distribution (Zhang &
+    Stephens 2009, prior on k of weight 10 at 0.5), each row of sorted exceedances
+    at once: shape k and scale sigma, each (rows,)."""
+    n = sample.shape[1]
+    prior_bs, prior_k = 3, 10
+    m_est = 30 + int(n**0.5)
+    b = 1 - np.sqrt(m_est / (np.arange(1, m_est + 1, dtype=float) - 0.5))
+    b = b[None, :] / (prior_bs * sample[:, int(n / 4 + 0.5) - 1])[:, None]
+    b = b + (1 / sample[:, -1])[:, None]
+    k_b = np.log1p(-b[:, :, None] * sample[:, None, :]).mean(axis=2)
+    len_scale = n * (np.log(-(b / k_b)) - k_b - 1)
+    weights = 1 / np.exp(len_scale[:, None, :] - len_scale[:, :, None]).sum(axis=2)
+    weights = np.where(weights >= 10 * np.finfo(float).eps, weights, 0.0)
+    weights /= weights.sum(axis=1, keepdims=True)
+    b_post = np.sum(b * weights, axis=1)
+    k_post = np.log1p(-b_post[:, None] * sample).mean(axis=1)
+    sigma = -k_post / b_post
+    k_post = (n * k_post + prior_k * 0.5) / (n + prior_k)
+    return k_post, sigma
+
+
+def _gpinv_rows(probs: NDArray, kappa: NDArray, sigma: NDArray) -> NDArray:
+    """Quantiles ``probs`` (all inside (0, 1)) of each row's generalized Pareto
+    distribution (shape ``kappa``, scale ``sigma``); NaN where sigma <= 0."""
+    with np.errstate(all="ignore"):
+        small = np.abs(kappa) < np.finfo(float).eps
+        safe = np.where(small, 1.0, kappa)
+        x = np.where(
+            small[:, None],
+            -np.log1p(-probs)[None, :],
+            np.expm1(-safe[:, None] * np.log1p(-probs)[None, :]) / safe[:, None],
         )
-        return az.loo(idata, pointwise=True)
+        x = x * sigma[:, None]
+    return np.where((sigma > 0)[:, None], x, np.nan)
 
 
 def pareto_k_max(loo: Any) -> float:
