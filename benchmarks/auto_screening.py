@@ -5,23 +5,27 @@ Each recording is fitted with ``fit(..., law="auto")`` by two worker processes
 (``--baseline``, e.g. ``git worktree add --detach /tmp/wt-base 2730dd2``), in
 alternation: for each repeat and each recording, the two trees one after the other, the
 first of them alternating between repeats, each worker having fitted the bundled run
-with the default law once before (numba's cached kernels loaded). The machine is
+with the default law once before (numba's cached kernels loaded; with ``--warm-auto``
+also with ``law="auto"``, so that the first recording timed finds every kernel auto
+uses loaded too). The machine is
 shared, so the times compared are each process's CPU time of the call
 (``time.process_time``), with the wall time and the load averages beside them.
 
-Recordings: the bundled run ``data/runs/glycerol-N0.31-r1.csv`` and the five real
-recordings of ``../shared/external-data`` (``--external``), read as
+Recordings: the bundled runs ``data/runs/glycerol-N0.31-r1.csv`` and ``air-r1.csv``
+and the five real recordings of ``../shared/external-data`` (``--external``), read as
 ``benchmarks/real.py`` reads them (HarmOsc1-3: t and position in an arbitrary unit;
 the spring-and-disc records: position and velocity, the mass from the file name).
 
 Recorded per recording: each tree's law and verdict, the laws as good as it, each
 law's row (elpd difference, its sd, sampled or screened and why); the ratio of CPU
 times (this tree over the baseline, medians over the repeats); whether the same law
-was chosen; and the largest difference of a posterior mean between the trees in units
-of the baseline's posterior sd, over every quantity both summarise. The screening's
-margin is checked against the sampled comparison: for every law this tree screened
-out, its sampled ``elpd_diff`` in the baseline (where the baseline compared it) and
-whether the baseline found it as good as its best.
+was chosen, and the same choices (verdict, laws as good, adequacy) in every repeat;
+with ``--default``, each tree's default fit of the recording timed in the same worker
+after its auto fit, and auto's CPU time over it; and the largest difference of a
+posterior mean between the trees in units of the baseline's posterior sd, over every
+quantity both summarise. The screening's margin is checked against the sampled
+comparison: for every law this tree screened out, its sampled ``elpd_diff`` in the
+baseline (where the baseline compared it) and whether the baseline found it as good as its best.
 
 Run (by hand)::
 
@@ -50,6 +54,8 @@ from _machine import commit, write_results  # noqa: E402
 
 ROOT = HERE.parent
 BUNDLED = ROOT / "data" / "runs" / "glycerol-N0.31-r1.csv"
+#: Bundled runs fitted besides ``BUNDLED`` (a run in air: no contact).
+OTHER_BUNDLED = {"air-r1": ROOT / "data" / "runs" / "air-r1.csv"}
 EXTERNAL = ROOT.parent / "shared" / "external-data"
 #: elpd difference below which two laws are not told apart (the comparison's own).
 SMALL = 4.0
@@ -58,6 +64,8 @@ SMALL = 4.0
 def recordings(external: Path) -> dict[str, dict[str, Any]]:
     """Each recording's request (path and reading keywords) by a short name."""
     out: dict[str, dict[str, Any]] = {"bundled": {"path": str(BUNDLED), "read": None}}
+    for name, path in OTHER_BUNDLED.items():
+        out[name] = {"path": str(path), "read": None}
     appstat = external / "appstat2020-harmonic-oscillator"
     for p in sorted(appstat.glob("HarmOsc*.txt")):
         out[p.stem] = {
@@ -82,7 +90,7 @@ def recordings(external: Path) -> dict[str, dict[str, Any]]:
 class Worker:
     """A worker process importing one tree's bayestribo."""
 
-    def __init__(self, tree: Path) -> None:
+    def __init__(self, tree: Path, warm_auto: bool = False) -> None:
         env = dict(os.environ, PYTHONPATH=str(tree))
         self.proc = subprocess.Popen(
             [sys.executable, str(HERE / "_auto_worker.py")],
@@ -93,7 +101,7 @@ class Worker:
             cwd=str(tree),
         )
         self.module = json.loads(self.proc.stdout.readline())["module"]
-        self.fit({"warm_up": True, "path": str(BUNDLED)})
+        self.fit({"warm_up": True, "path": str(BUNDLED), "auto": warm_auto})
 
     def fit(self, request: dict[str, Any]) -> dict[str, Any]:
         self.proc.stdin.write(json.dumps(request) + "\n")
@@ -145,6 +153,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--only", nargs="*", help="recordings to fit (default: all)")
     parser.add_argument("--trees", nargs="*", default=["baseline", "current"])
     parser.add_argument("--output", default="auto_screening")
+    parser.add_argument(
+        "--warm-auto",
+        action="store_true",
+        help="each worker also fits the bundled run with law='auto' before anything is timed",
+    )
+    parser.add_argument(
+        "--default",
+        action="store_true",
+        help="also time the default fit of each recording after its auto fit (same worker)",
+    )
     args = parser.parse_args(argv)
     runs = recordings(args.external)
     if args.only:
@@ -152,7 +170,7 @@ def main(argv: list[str] | None = None) -> int:
     trees = {"baseline": args.baseline.resolve(), "current": ROOT}
     trees = {k: v for k, v in trees.items() if k in args.trees}
     load_start = os.getloadavg()
-    workers = {name: Worker(tree) for name, tree in trees.items()}
+    workers = {name: Worker(tree, args.warm_auto) for name, tree in trees.items()}
     fits: dict[str, dict[str, list[dict[str, Any]]]] = {
         name: {tree: [] for tree in trees} for name in runs
     }
@@ -179,11 +197,15 @@ def main(argv: list[str] | None = None) -> int:
     for repeat in range(args.repeats):
         for name, request in runs.items():
             for tree in order if repeat % 2 == 0 else order[::-1]:
-                out = workers[tree].fit({**request, "name": name, "seed": args.seed})
+                out = workers[tree].fit(
+                    {**request, "name": name, "seed": args.seed, "default": args.default}
+                )
                 fits[name][tree].append(out)
+                default = out.get("default_cpu_seconds")
                 print(
                     f"{name:<14} {tree:<8} {out['cpu_seconds']:7.1f} s CPU "
-                    f"{out['seconds']:7.1f} s wall  {out['law']}",
+                    f"{out['seconds']:7.1f} s wall  {out['law']}"
+                    + (f"  (default fit {default:.2f} s CPU)" if default else ""),
                     flush=True,
                 )
             record(False)
@@ -205,10 +227,28 @@ def summarise(fits: dict[str, dict[str, list[dict[str, Any]]]]) -> dict[str, Any
             if runs:
                 row[f"{tree}_cpu_median"] = statistics.median(r["cpu_seconds"] for r in runs)
                 row[f"{tree}_laws"] = sorted({r["law"] for r in runs})
+                default = [r["default_cpu_seconds"] for r in runs if r.get("default_cpu_seconds")]
+                if default:
+                    row[f"{tree}_default_cpu_median"] = statistics.median(default)
+                    row[f"{tree}_auto_over_default"] = (
+                        row[f"{tree}_cpu_median"] / row[f"{tree}_default_cpu_median"]
+                    )
         new, old = by_tree.get("current") or [], by_tree.get("baseline") or []
         if new and old:
             row["cpu_ratio"] = row["current_cpu_median"] / row["baseline_cpu_median"]
             row["same_law"] = row["current_laws"] == row["baseline_laws"]
+            # every repeat's choices (verdict, laws as good, adequacy) in both trees
+            choices = {
+                tree: sorted(
+                    {
+                        json.dumps([r["verdict"], sorted(r["as_good"] or []), r["adequate"]])
+                        for r in by_tree[tree]
+                    }
+                )
+                for tree in ("current", "baseline")
+            }
+            row["same_choices"] = choices["current"] == choices["baseline"]
+            row["choices"] = {tree: [json.loads(c) for c in v] for tree, v in choices.items()}
             shifts = mean_shift(new[0], old[0])
             finite = {k: v for k, v in shifts.items() if math.isfinite(v)}
             if finite:

@@ -71,7 +71,7 @@ def _stub_fits(monkeypatch, shifts: dict[str, float]) -> list[str]:
 
     sampled: list[str] = []
 
-    def optimise(law, prepared, model, discrepancy, optima):
+    def optimise(law, prepared, model, discrepancy, optima, start=None):
         post = _Posterior(comparison._law(law).parameter_names)
         theta = np.zeros(len(post.names))
         opt = (theta, np.eye(len(theta)), None)
@@ -88,12 +88,12 @@ def _stub_fits(monkeypatch, shifts: dict[str, float]) -> list[str]:
             posterior={n: chains[..., i] for i, n in enumerate(posterior.names)},
             log_likelihood={"pi": lpd},
         )
-        return fit, idata
+        return fit, az.loo(idata, pointwise=True)
 
     monkeypatch.setattr(comparison, "_optimise", optimise)
     monkeypatch.setattr(comparison, "_fit_law", fit_law)
     monkeypatch.setattr(comparison, "_reduction", lambda *args: None)
-    monkeypatch.setattr(comparison, "_loo", lambda idata: 0.1)
+    monkeypatch.setattr(comparison, "pareto_k_max", lambda loo: 0.1)
     monkeypatch.setattr(comparison, "_checks", lambda posterior, theta: {"adequate": True})
     monkeypatch.setattr(comparison, "turning_point_screen", lambda prepared, laws: {})
     return sampled

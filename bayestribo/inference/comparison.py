@@ -87,7 +87,11 @@ a half cycle they differ: a friction dissipates in proportion to |ẋ|, viscous 
 to ẋ², and the energy lost by a quarter of a half cycle is 0.146 of the half cycle's
 loss against 0.091. When adequate laws as good as the verdict do not nest it (its
 *rivals*), they and the verdict are compared again on :data:`TIE_GRID` increments per
-half cycle (:func:`bayestribo.inference.preparation.regrid`); that comparison's verdict
+half cycle (:func:`bayestribo.inference.preparation.regrid`), each law's optimiser
+started at its optimum on the first grid (the same law on the same motion: the finer
+grid moves it by about a posterior sd, far less than the first guesses are apart;
+:func:`bayestribo.inference.start.maximum_from`, which falls back to the first guesses
+where the density there is not finite); that comparison's verdict
 replaces the first when it is adequate there, and the laws it rejects leave the laws as
 good as the verdict. Otherwise the verdict stands, and the comparison says that the
 finer grid did not tell them apart. The finer grid rests on white, independent channel
@@ -113,10 +117,10 @@ from numpy.typing import NDArray
 
 from bayestribo import DEFAULT_SEED
 from bayestribo.errors import BayestriboError
-from bayestribo.inference.assemble import pointwise_log_likelihood
 from bayestribo.inference.build import build_posterior
 from bayestribo.inference.chains import sample_from
 from bayestribo.inference.checks import misfit, shape_departure
+from bayestribo.inference.loo import law_loo, loo_frame, pareto_k_max
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.preparation import prepare, regrid
 from bayestribo.inference.records import LawComparison
@@ -186,17 +190,6 @@ def _posterior(law: str | Law, data: PiData, model: str, discrepancy: bool) -> P
     return build_posterior(data, model=model, discrepancy=discrepancy, law=_law(law))
 
 
-def _loo(idata: Any) -> float:
-    """Largest Pareto k of the PSIS-LOO of one law (a high k is reported, not warned)."""
-    import arviz as az
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)
-        warnings.simplefilter("ignore", RuntimeWarning)
-        loo = az.loo(idata, pointwise=True)
-    return float(np.max(np.asarray(loo.pareto_k)))
-
-
 def _fit_law(
     law: str,
     prepared: PreparedRun,
@@ -205,22 +198,13 @@ def _fit_law(
     posterior: Posterior,
     optimum: tuple[NDArray, NDArray, tuple[float, float] | None],
 ) -> tuple[Sampled, Any]:
-    """Sample one law's posterior from its optimum; its InferenceData holds the
-    pointwise log-likelihood."""
-    import arviz as az
-
+    """Sample one law's posterior from its optimum; also return its PSIS-LOO
+    (:func:`bayestribo.inference.loo.law_loo`, pointwise)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         start = find_start(posterior, prepared.decay, optimum=optimum)
         sampled = sample_from(start, settings=settings, seed=rng)
-    chains = sampled.run.chains
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", FutureWarning)
-        idata = az.from_dict(
-            posterior={name: chains[..., i] for i, name in enumerate(posterior.names)},
-            log_likelihood={"pi": pointwise_log_likelihood(sampled.posterior, chains)},
-        )
-    return sampled, idata
+    return sampled, law_loo(sampled)
 
 
 def _amount(term: Any, values: Mapping[str, float], reference: float) -> Any:
@@ -577,16 +561,27 @@ def _optimise(
     model: str,
     discrepancy: bool,
     optima: Mapping[str, dict[str, float]],
+    start: Mapping[str, float] | None = None,
 ) -> LawOptimum:
-    """A law's optimum on both passes and its pointwise log-likelihood there."""
+    """A law's optimum on both passes and its pointwise log-likelihood there; with
+    ``start`` (its optimum on another grid of the run, by coordinate), the optimiser
+    starts there rather than from the first guesses (module notes, Rivals)."""
     from bayestribo.inference.reweight import reweighted_posterior
-    from bayestribo.inference.start import maximum_from
+    from bayestribo.inference.start import better_optimum, maximum_from
 
     # friction terms are fitted without contact too (as a friction displacement): the
     # data, not the metadata, decide whether there is friction to see
     posterior = _posterior(law, prepared.data, model, discrepancy)
     nested = _nested_start(law, prepared, optima)
-    optimum = find_optimum(posterior, prepared.decay, also_start_at=nested)
+    if start is not None and all(name in start for name in posterior.names):
+        theta = np.array([start[name] for name in posterior.names], dtype=float)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            optimum = better_optimum(
+                posterior, maximum_from(posterior, theta, prepared.decay), nested
+            )
+    else:
+        optimum = find_optimum(posterior, prepared.decay, also_start_at=nested)
     # the second pass, as chains.sample makes it, so that the law is judged on the
     # posterior it would be sampled on
     second, second_optimum = posterior, optimum
@@ -614,30 +609,6 @@ def _checks(posterior: Posterior, theta: NDArray) -> dict[str, Any]:
     }
 
 
-def _loo_frame(idatas: Mapping[str, Any]) -> Any:
-    """PSIS-LOO of the laws sampled, compared (:func:`arviz.compare`); one law alone
-    is its own best."""
-    import arviz as az
-    import pandas as pd
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        if len(idatas) >= 2:
-            return az.compare(dict(idatas), ic="loo")
-        ((law, idata),) = idatas.items()
-        loo = az.loo(idata)
-    row = {
-        "rank": 0.0,
-        "elpd_loo": float(loo["elpd_loo"]),
-        "p_loo": float(loo["p_loo"]),
-        "elpd_diff": 0.0,
-        "weight": 1.0,
-        "se": float(loo["se"]),
-        "dse": 0.0,
-    }
-    return pd.DataFrame([row], index=[law])
-
-
 def compare_prepared(
     prepared: PreparedRun,
     laws: Sequence[str],
@@ -650,6 +621,7 @@ def compare_prepared(
     rivals: bool = True,
     screening: bool = True,
     progress: Callable[[str], None] | None = None,
+    starts: Mapping[str, Mapping[str, float]] | None = None,
 ) -> tuple[LawComparison, dict[str, Sampled]]:
     """Compare laws on a prepared run; also return each law's sampled posterior.
 
@@ -676,6 +648,12 @@ def compare_prepared(
     progress : callable, optional
         Called with one line of text per law as the comparison goes (its optimum,
         then its sampling or why it is not sampled).
+    starts : mapping, optional
+        Law -> its optimum on another grid of the same run (values of its sampled
+        coordinates by name): that law's optimiser starts there alone
+        (:func:`bayestribo.inference.start.maximum_from`) rather than from the first
+        guesses of :func:`bayestribo.inference.start.find_optimum` (the rivals'
+        comparison on the finer grid, module notes).
 
     Returns
     -------
@@ -689,7 +667,7 @@ def compare_prepared(
     settings = settings or SamplerSettings()
     say = progress or (lambda text: None)
     root = np.random.SeedSequence(seed)
-    idatas, table, notes, runs = {}, {}, [], {}
+    loos, table, notes, runs = {}, {}, [], {}
     optima: dict[str, dict[str, float]] = {}
     equivalent: dict[str, str] = {}
     found: dict[str, LawOptimum] = {}
@@ -704,7 +682,9 @@ def compare_prepared(
     def optimise(law: str, k: int, n: int) -> None:
         start, cpu = time.perf_counter(), time.process_time()
         try:
-            found[law] = _optimise(law, prepared, model, discrepancy, optima)
+            found[law] = _optimise(
+                law, prepared, model, discrepancy, optima, start=(starts or {}).get(law)
+            )
         except BayestriboError as exc:
             failed(law, exc)
             say(f"law {k}/{n} {law}: not fitted ({exc})")
@@ -728,7 +708,7 @@ def compare_prepared(
             reduced = _reduction(law, at.posterior, at.optimum[0], runs, optima)
             if reduced is None:
                 say(f"sampling {law} ({k}/{n})")
-                sampled, idatas[law] = _fit_law(
+                sampled, loos[law] = _fit_law(
                     law, prepared, settings, rng, at.second, at.second_optimum
                 )
         except BayestriboError as exc:
@@ -755,7 +735,7 @@ def compare_prepared(
         names = sampled.posterior.names
         best_row = np.unravel_index(np.argmax(s.log_prob), s.log_prob.shape)
         optima[law] = dict(zip(names, s.chains[best_row], strict=True))
-        k_max = _loo(idatas[law])
+        k_max = pareto_k_max(loos[law])
         table[law] = {
             "law": _law(law).name,
             "pareto_k_max": k_max,
@@ -839,11 +819,11 @@ def compare_prepared(
             optimise("free", 1, 1)
             if "free" in found:
                 sample_one("free", 1, 1)
-    if not idatas or len(idatas) + len(equivalent) + len(screened) < 2:
+    if not loos or len(loos) + len(equivalent) + len(screened) < 2:
         raise BayestriboError(
             f"laws: fewer than two of {laws} could be fitted: " + "; ".join(notes)
         )
-    frame = _loo_frame(idatas)
+    frame = loo_frame(loos)
     for law, row in frame.iterrows():
         table[str(law)].update(
             {
@@ -851,7 +831,7 @@ def compare_prepared(
                 for key in ("rank", "elpd_loo", "p_loo", "elpd_diff", "weight", "se", "dse")
             }
         )
-    best, as_good, verdict, adequate = _verdict(list(idatas), table, frame)
+    best, as_good, verdict, adequate = _verdict(list(loos), table, frame)
     rematch = None
     if rivals and adequate:
         contenders = _rivals(verdict, as_good, table)
@@ -864,6 +844,10 @@ def compare_prepared(
                 settings,
                 discrepancy,
                 screening,
+                starts={
+                    law: dict(zip(at.posterior.names, at.optimum[0], strict=True))
+                    for law, at in found.items()
+                },
             )
             if rematch["decided"]:
                 verdict = rematch["verdict"]
@@ -904,9 +888,11 @@ def _compare_rivals(
     settings: SamplerSettings,
     discrepancy: bool,
     screening: bool = True,
+    starts: Mapping[str, Mapping[str, float]] | None = None,
 ) -> dict[str, Any]:
     """The verdict and its rivals compared on :data:`TIE_GRID` increments per half
-    cycle (module notes)."""
+    cycle (module notes), each law's optimiser started at ``starts`` (its optimum on
+    the first grid) where given."""
     fine = regrid(prepared, TIE_GRID * int(prepared.data.increments.size))
     out: dict[str, Any] = {
         "laws": list(laws),
@@ -924,6 +910,7 @@ def _compare_rivals(
             discrepancy=discrepancy,
             rivals=False,
             screening=screening,
+            starts=starts,
         )
     except BayestriboError as exc:
         out["error"] = str(exc)

@@ -1,0 +1,170 @@
+"""PSIS-LOO of one sampled law (inference/loo.py): the surrogate's pointwise
+log-likelihood where it agrees with the exact one, the exact one otherwise, and each
+law's PSIS-LOO computed once for the comparison."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import warnings
+from types import SimpleNamespace
+
+import arviz as az
+import numpy as np
+import pytest
+from _law_recording import law_recording
+
+from bayestribo.inference import loo, pipeline
+from bayestribo.inference.assemble import pointwise_log_likelihood
+from bayestribo.inference.likelihood import PiLikelihood
+from bayestribo.inference.sampling import SamplerSettings
+from bayestribo.inference.surrogate import SurrogateLikelihood
+
+OMEGA = 2 * math.pi * 32.6
+ELL = 0.31 / (0.035 * OMEGA**2)
+
+
+@pytest.fixture(scope="module")
+def drag_fit():
+    """``viscous+quadratic`` (no closed form: sampled on its surrogate) fitted to an
+    independent solve_ivp simulation of that law."""
+    run = law_recording(
+        lambda v: 2 * 0.01 * OMEGA * v + (0.004 / ELL) * v * abs(v),
+        x0=1.5e-3,
+        duration_s=1.5,
+        sample_rate_Hz=2000.0,
+        seed=4,
+    )
+    prepared = pipeline.prepare(run, seed=1)
+    posterior = pipeline.build_posterior(prepared.data, law="viscous+quadratic")
+    settings = SamplerSettings(n_walkers=16, n_ensembles=2, max_steps=4_000)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return pipeline.sample(posterior, prepared.decay, settings=settings, seed=3)
+
+
+def test_the_surrogate_pointwise_stands_for_the_exact_at_every_draw(drag_fit, monkeypatch):
+    assert drag_fit.surrogate_posterior is not None  # the chains are the surrogate's
+    # every eighth draw of each chain (the exact Π of each costs the integrator)
+    drag_fit = dataclasses.replace(
+        drag_fit, run=dataclasses.replace(drag_fit.run, chains=drag_fit.run.chains[:, ::8])
+    )
+    exact = pointwise_log_likelihood(drag_fit.posterior, drag_fit.run.chains)
+    evaluated: list[int] = []
+    real = PiLikelihood.pointwise
+
+    def counted(self, *args, **kwargs):
+        out = real(self, *args, **kwargs)
+        if not isinstance(self, SurrogateLikelihood):
+            evaluated.append(out.shape[0])
+        return out
+
+    monkeypatch.setattr(PiLikelihood, "pointwise", counted)
+    got = loo.sampled_pointwise(drag_fit)
+    monkeypatch.undo()
+    # the exact Π only at the draws compared
+    assert sum(evaluated) == loo.CHECK_DRAWS
+    assert got.shape == exact.shape
+    # at every draw, not only those compared, within the tolerance the check applies
+    assert np.max(np.sum(np.abs(got - exact), axis=-1)) <= loo.TOLERANCE
+    with_exact = loo.law_loo(drag_fit, exact)
+    with_surrogate = loo.law_loo(drag_fit)
+    assert abs(float(with_surrogate["elpd_loo"]) - float(with_exact["elpd_loo"])) <= loo.TOLERANCE
+
+
+def _stub(names, exact_shift: float, surrogate: bool):
+    """A sampled law of two chains of 30 draws whose pointwise log-likelihood is a
+    function of the draw; the surrogate's is the exact one plus ``exact_shift`` at
+    every increment."""
+    rng = np.random.default_rng(0)
+    chains = rng.normal(size=(2, 30, len(names)))
+    m = 12
+
+    def pointwise_of(shift):
+        return lambda theta: -0.5 * (theta[:, :1] - np.linspace(-1, 1, m)) ** 2 + shift
+
+    exact = SimpleNamespace(names=names, pointwise=pointwise_of(0.0))
+    approx = SimpleNamespace(names=names, pointwise=pointwise_of(exact_shift))
+    run = SimpleNamespace(chains=chains)
+    return SimpleNamespace(
+        posterior=exact, surrogate_posterior=approx if surrogate else None, run=run
+    )
+
+
+def test_a_surrogate_that_disagrees_gives_way_to_the_exact_pointwise():
+    names = ["zeta", "y0"]
+    # a shift of the tolerance spread over the 12 increments, and a little more
+    close = _stub(names, 0.9 * loo.TOLERANCE / 12, surrogate=True)
+    far = _stub(names, 1.1 * loo.TOLERANCE / 12, surrogate=True)
+    none = _stub(names, 1.0, surrogate=False)
+    exact = pointwise_log_likelihood(close.posterior, close.run.chains)
+    assert np.allclose(loo.sampled_pointwise(close), exact + 0.9 * loo.TOLERANCE / 12)
+    assert np.array_equal(loo.sampled_pointwise(far), exact)
+    assert np.array_equal(loo.sampled_pointwise(none), exact)
+    # a surrogate whose value is not finite where the exact one is gives way too
+    broken = _stub(names, math.nan, surrogate=True)
+    assert np.array_equal(loo.sampled_pointwise(broken), exact)
+
+
+def test_the_frame_of_precomputed_loos_is_arvizs_comparison():
+    laws = {"a": _stub(["zeta", "y0"], 0.0, False), "b": _stub(["mu_k", "y0"], 0.0, False)}
+    laws["b"].posterior.pointwise = lambda theta: (
+        -0.5 * (theta[:, :1] - 0.3 * np.linspace(-1, 1, 12)) ** 2 - 0.2
+    )
+    loos = {law: loo.law_loo(s) for law, s in laws.items()}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        idatas = {
+            law: az.from_dict(
+                posterior={n: s.run.chains[..., i] for i, n in enumerate(s.posterior.names)},
+                log_likelihood={"pi": pointwise_log_likelihood(s.posterior, s.run.chains)},
+            )
+            for law, s in laws.items()
+        }
+        expected = az.compare(idatas, ic="loo")
+    frame = loo.loo_frame(loos)
+    assert list(frame.index) == list(expected.index)
+    for key in ("elpd_loo", "p_loo", "elpd_diff", "se", "dse"):
+        np.testing.assert_allclose(frame[key].astype(float), expected[key].astype(float))
+    assert loo.pareto_k_max(loos["a"]) == float(np.max(loos["a"].pareto_k))
+    alone = loo.loo_frame({"a": loos["a"]})
+    assert list(alone.index) == ["a"] and alone.loc["a", "elpd_diff"] == 0.0
+    assert alone.loc["a", "elpd_loo"] == float(loos["a"]["elpd_loo"])
+
+
+def _arviz_loo(ll, chains):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        idata = az.from_dict(
+            posterior={f"p{i}": chains[..., i] for i in range(chains.shape[-1])},
+            log_likelihood={"pi": ll},
+        )
+        return az.loo(idata, pointwise=True)
+
+
+@pytest.mark.parametrize(
+    "case", ["normal", "heavy tails", "tied draws", "misfit and constant rows", "few draws"]
+)
+def test_psis_loo_is_arvizs_loo(case):
+    rng = np.random.default_rng(len(case))
+    n_draws, m = (40, 12) if case == "few draws" else (300, 25)
+    # autocorrelated chains: a relative efficiency well below 1
+    chains = 0.1 * rng.normal(size=(2, n_draws, 3)).cumsum(axis=1)
+    if case == "normal":
+        ll = -0.5 * rng.normal(size=(2, n_draws, m)) ** 2
+    else:
+        ll = -0.5 * (3.0 * rng.standard_t(3, size=(2, n_draws, m))) ** 2
+    if case == "tied draws":
+        ll[:, 100:130, :] = ll[:, 100:101, :]  # a walker stuck: ties in every tail
+    if case == "misfit and constant rows":
+        ll[0, :, 3] = -1e5
+        ll[:, :, 7] = 0.0
+    expected = _arviz_loo(ll, chains)
+    got = loo.psis_loo(ll, loo.relative_efficiency(chains))
+    for key in ("elpd_loo", "se", "p_loo", "good_k"):
+        assert float(got[key]) == pytest.approx(float(expected[key]), rel=1e-10, abs=1e-10)
+    for key in ("n_samples", "n_data_points", "warning", "scale"):
+        assert got[key] == expected[key]
+    np.testing.assert_allclose(got["loo_i"].values, expected["loo_i"].values, rtol=1e-10)
+    np.testing.assert_allclose(got["pareto_k"].values, expected["pareto_k"].values, rtol=1e-10)
+    assert loo.relative_efficiency(chains[:1]) == 1.0
