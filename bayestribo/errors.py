@@ -13,6 +13,7 @@ __all__ = [
     "BayestriboError",
     "ClockRestartWarning",
     "ConvergenceWarning",
+    "FadeWarning",
     "FrequencyTrendWarning",
     "GapWarning",
     "MisfitWarning",
@@ -116,6 +117,12 @@ class ClockRestartWarning(UserWarning):
 class SpikeWarning(UserWarning):
     """Isolated samples far off their neighbours were left out of the analysis (the
     message names the channel, times and values)."""
+
+
+class FadeWarning(UserWarning):
+    """A decay fades into the noise: its last turning points, of swings within the
+    noise's reach, break its half period and are left out; the analysis ends at the
+    last turning point before them (the message names it)."""
 
 
 class PluginWarning(UserWarning):

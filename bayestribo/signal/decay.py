@@ -88,7 +88,13 @@ from scipy.integrate import cumulative_trapezoid
 
 from bayestribo._clock import clock, on_grid
 from bayestribo._warnings import warn
-from bayestribo.errors import ClippingWarning, ClockRestartWarning, GapWarning, RecordingError
+from bayestribo.errors import (
+    ClippingWarning,
+    ClockRestartWarning,
+    FadeWarning,
+    GapWarning,
+    RecordingError,
+)
 from bayestribo.model.plausible import MAX_SPEED
 from bayestribo.model.scaling import Rig, Scaling
 from bayestribo.signal.clipping import flattened_turning_points, hard_clips
@@ -1010,6 +1016,10 @@ def energy_decay(
 PEAK_STEPS = 2.0
 #: Prominence of a turning point, in noise standard deviations (find_peaks' default).
 PEAK_THRESHOLD = 10.0
+#: Swings within this many times the turning points' threshold over the noise at rest
+#: are in the noise's reach: where their turning points break the half period, the decay
+#: has faded into the noise (:func:`bayestribo.signal.motion.regular_turning_points`).
+FADE = 2.0
 
 
 def _peak_noise(sigma: float | None, step: float | None) -> tuple[float | None, float]:
@@ -1370,6 +1380,7 @@ def _analyse(
     rest_until = None if released_at is None else float(t[released_at])
     stop_time = span.stop_time
 
+    quiet = _quiet_segments(t, rest_until, stop_time, 0.25 * period0)
     if x is None:
         derived = "displacement"
         at_rest = _rest_samples(v, t, rest_until, stop_time, 0.0)
@@ -1378,9 +1389,12 @@ def _analyse(
             v = v - velocity_offset
         x, pole = _integrated(t, v, period0, released_at, span.stop_index)
         sigma_x = None
+        # the derived displacement's noise over two periods at rest (its wander, which
+        # a sample-to-sample estimate does not see): where its swings fade into it
+        band_x = block_noise(t, x, quiet, span.block)
     else:
-        quiet = _quiet_segments(t, rest_until, stop_time, 0.25 * period0)
         sigma_x = block_noise(t, x, quiet, span.block)
+        band_x = sigma_x
 
     # Turning points inside the motion only: the rest holds none (a wiggle of the
     # noise there is not one), and the noise threshold is the one measured at rest.
@@ -1407,12 +1421,29 @@ def _analyse(
         raise RecordingError(f"turning points: {e}") from e
     peaks = replace(found, index=found.index + lo)
     # the free decay starts where the turning points are half a period apart
+    fade_level = None if not band_x else FADE * PEAK_THRESHOLD * band_x
     spacing = regular_turning_points(
         peaks.t,
         peaks.value,
         timing_sd=_timing_sd(t, peaks),
         tolerance=SPACING_TOLERANCE if linear_spring else math.inf,
+        fade_level=fade_level,
     )
+    faded_at = None
+    if spacing.faded is not None:
+        # the decay fades into the noise: its last swings' turning points are the
+        # noise's; the analysis ends at the last turning point before them, as a record
+        # that ends in the motion
+        faded_at = float(peaks.t[spacing.faded - 1])
+        warn(
+            f"turning points: the decay fades into the noise after turning point "
+            f"{spacing.faded - 1} (t = {faded_at:.6g} s): the {len(peaks) - spacing.faded} "
+            f"turning points after it, of swings within {fade_level:.3g} ({FADE:g} times "
+            "the turning points' threshold over the noise at rest), break the decay's half "
+            "period; the analysis ends there",
+            FadeWarning,
+        )
+        peaks = _head(peaks, spacing.faded)
     if spacing.start:
         peaks = _equilibrium_from(peaks, spacing.start, offset)
     peaks = replace(peaks, stop_time=stop_time)
@@ -1443,7 +1474,7 @@ def _analyse(
     left_out = 0
     rest_until = None if released_at is None else release
     noise = _noise(t, x, v, rest_until, stop_time, period, derived, jitter)
-    motion_ended = stop_time is not None
+    motion_ended = stop_time is not None and faded_at is None
     truncated = False
     coarse = coarse_steps(
         (noise.displacement_step, noise.velocity_step), (noise.displacement, noise.velocity)
@@ -1552,6 +1583,8 @@ def _analyse(
 
     start = int(window.index[0])
     stop = t.size if stop_time is None else int(np.searchsorted(t, stop_time)) + 1
+    if faded_at is not None:
+        stop = min(stop, int(window.index[-1]) + 1)
     if truncated:
         # to the last sample the coarse channels still reach a step from their zero
         about = x - (peaks.offset + peaks.drift * t)

@@ -57,7 +57,7 @@ wiggle of the noise or a missed turning point.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -513,12 +513,17 @@ class RegularTurningPoints:
         All the turning times [s].
     allowed : ndarray
         The deviation from ``half_period`` accepted for each interval [s].
+    faded : int or None
+        Where the decay fades into the noise: the count of turning points kept, those
+        after it (swings within ``fade_level``, off the half period) left out; None when
+        none was.
     """
 
     start: int
     half_period: float
     times: NDArray
     allowed: NDArray
+    faded: int | None = None
 
     @property
     def gaps(self) -> NDArray:
@@ -597,6 +602,7 @@ def regular_turning_points(
     *,
     tolerance: float = SPACING_TOLERANCE,
     timing_sd: ArrayLike | None = None,
+    fade_level: float | None = None,
 ) -> RegularTurningPoints:
     """The run of turning points half a period apart that ends the record.
 
@@ -625,6 +631,12 @@ def regular_turning_points(
     timing_sd : array_like, optional
         Standard deviation of each turning-point time from the noise [s]: an interval
         may also be off by 6 times the sum of its ends'.
+    fade_level : float, optional
+        Swing [signal unit] within which a turning point is in the noise's reach: where
+        the turning points from the first such one on break the spacing of those before
+        it (at least :data:`REGULAR_RUN` + 1 of them), the decay has faded into the
+        noise, and they are left out (:attr:`RegularTurningPoints.faded`) instead of
+        refusing the record. None: never.
 
     Returns
     -------
@@ -646,6 +658,39 @@ def regular_turning_points(
             f"turning points: {tt.size} found; at least 2 are needed for the half period"
         )
     sd = None if timing_sd is None else np.asarray(timing_sd, dtype=float)
+    faded = None if fade_level is None else _faded(tt, w, sd, tolerance, fade_level)
+    if faded is not None:
+        tt, w = tt[:faded], w[:faded]
+        sd = None if sd is None else sd[:faded]
+    found = _regular(tt, w, sd, tolerance)
+    return found if faded is None else replace(found, faded=faded)
+
+
+def _faded(
+    tt: NDArray, w: NDArray, sd: NDArray | None, tolerance: float, fade_level: float
+) -> int | None:
+    """The count of turning points before the decay fades into the noise: the first
+    turning point whose swing is within ``fade_level``, where an interval from the one
+    before it on is off the half period of the turning points before it; None when
+    the spacing holds (or too few turning points come before it to say)."""
+    low = np.flatnonzero(w <= fade_level)
+    if low.size == 0:
+        return None
+    m = int(low[0])
+    if m < REGULAR_RUN + 1:
+        return None
+    head = _held(tt[:m], w[:m], None if sd is None else sd[:m], tolerance, 0)
+    gaps = np.diff(tt[m - 1 :])
+    allowed = np.full(gaps.size, tolerance * abs(head.half_period))
+    if sd is not None:
+        allowed = allowed + 6.0 * (sd[m - 1 : -1] + sd[m:])
+    if np.any(np.abs(gaps - head.half_period) > allowed):
+        return m
+    return None
+
+
+def _regular(tt: NDArray, w: NDArray, sd: NDArray | None, tolerance: float) -> RegularTurningPoints:
+    """:func:`regular_turning_points` of turning points that do not fade."""
     found = _held(tt, w, sd, tolerance, 0)
     while True:
         off = found.off
