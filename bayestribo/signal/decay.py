@@ -1022,22 +1022,34 @@ PEAK_THRESHOLD = 10.0
 FADE = 2.0
 
 
-def _peak_noise(sigma: float | None, step: float | None) -> tuple[float | None, float]:
-    """Noise and threshold for the turning points of a displacement.
+def _peak_noise(
+    sigma: float | None, step: float | None
+) -> tuple[float | None, float, float | None]:
+    """Noise, threshold and rest band for the turning points of a displacement.
 
-    Unquantised: the rest noise ``sigma`` and :data:`PEAK_THRESHOLD`. Quantised in
+    Unquantised: the rest noise ``sigma``, :data:`PEAK_THRESHOLD` and the default band
+    (None: :func:`~bayestribo.signal.peaks.find_peaks`' four noise sd). Quantised in
     ``step``: a rounding error is bounded (at most step/2 at each turning point), so a
     turning point is one whose swing stands :data:`PEAK_STEPS` steps out beyond ten
     times the noise other than rounding; the noise is at least step/√12 (a rest on one
-    level shows none).
+    level shows none). A rounded swing reads in whole steps, so the threshold is half a
+    step below :data:`PEAK_STEPS` (a swing between the levels two steps apart reads
+    2.0 steps, give or take the rounding of floating point, and one a step apart 1.0).
+    The rest band: a rest on a coarse channel holds one level, or two neighbouring ones
+    where its other noise straddles their boundary (a range of one step); a swing across
+    three levels (two steps) is motion. The band is √((3/4 step)² + (4 × other)²): a
+    range of 1.5 steps without other noise, four sd of that noise where it dominates,
+    and never wider than the unquantised band of four times the level (at least
+    step/√12).
     """
     if step is None:
-        return sigma, PEAK_THRESHOLD
+        return sigma, PEAK_THRESHOLD, None
     rounding = step * QUANTISATION_NOISE_FACTOR
     level = max(sigma or 0.0, rounding)
     other = math.sqrt(max(level * level - rounding * rounding, 0.0))
-    floor = max(PEAK_THRESHOLD * other, PEAK_STEPS * step)
-    return level, floor / level
+    floor = max(PEAK_THRESHOLD * other, (PEAK_STEPS - 0.5) * step)
+    band = math.hypot(0.75 * step, 4.0 * other)
+    return level, floor / level, band
 
 
 def _despiked(
@@ -1404,7 +1416,7 @@ def _analyse(
         hi = min(t.size, int(span.stop_index) + 2 + span.block // 8)
     if sigma_x is None and x_step is not None:
         sigma_x = estimate_noise(x[lo:hi])  # as find_peaks would, floored below
-    peak_noise, peak_threshold = _peak_noise(sigma_x, x_step)
+    peak_noise, peak_threshold, rest_band = _peak_noise(sigma_x, x_step)
     try:
         # the record's period, which set the motion span (not estimated again on it)
         found = find_peaks(
@@ -1415,6 +1427,7 @@ def _analyse(
             offset=offset,
             noise=peak_noise,
             threshold=peak_threshold,
+            rest_band=rest_band,
             period=period0,
         )
     except RecordingError as e:

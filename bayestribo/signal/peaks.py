@@ -373,6 +373,7 @@ def find_peaks(
     threshold: float = 10.0,
     min_peaks: int = 3,
     period: float | None = None,
+    rest_band: float | None = None,
 ) -> Peaks:
     """Find the successive extrema of a free-decay recording.
 
@@ -409,6 +410,12 @@ def find_peaks(
         default the dominant period of ``signal``. It sets the least distance between
         extrema (0.6 period), the parabola's half-width (1/12 period) and the shortest
         rest tail (one period).
+    rest_band : float, optional
+        Half-width of the rest tail [signal unit]: the final stretch whose range stays
+        within twice it, at least a period long, is the rest after the motion stops.
+        By default four noise standard deviations; a coarsely quantised signal's caller
+        gives a narrower one (a rest holds one or two neighbouring levels, a swing
+        across three is motion: :func:`bayestribo.signal.decay.energy_decay`).
 
     Returns
     -------
@@ -453,7 +460,9 @@ def find_peaks(
         )
 
     # the rest tail after the motion stops (dry friction): flat within the noise
-    band = max(4.0 * sigma, 1e-7 * span)
+    if rest_band is not None and not (math.isfinite(rest_band) and rest_band > 0):
+        raise RecordingError(f"rest_band must be a positive number, got {rest_band!r}")
+    band = max(4.0 * sigma if rest_band is None else float(rest_band), 1e-7 * span)
     tail = _rest_tail_start(s, band, math.ceil(per_samples))
     end = s.size if tail is None else tail + 1
 
