@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -210,3 +211,16 @@ def test_rest_tail_found_block_by_block_is_the_whole_records():
         assert _rest_tail_start(s, band, min_len) == expected
         found += expected is not None
     assert found > 50
+
+
+def test_swings_of_whole_steps_give_the_equilibrium_without_a_rank_warning():
+    # a coarse channel's turning points sit on its levels: every peak-to-peak height is
+    # the same whole number of steps, so the decay ratio of the heights is not
+    # determined by their straight-line fit (numpy's polyfit warned); the equilibrium is
+    # the mid-level all the same
+    q = 0.77e-3
+    levels = np.array([1, -1, 1, -1, 1, -1, 1, -1.0]) * q + 0.25 * q
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        level, slope = estimate_offset(levels, noise=q / np.sqrt(12.0))
+    assert level == pytest.approx(0.25 * q, rel=1e-9) and slope == 0.0
