@@ -12,6 +12,7 @@ __all__ = [
     "AcquisitionError",
     "BayestriboError",
     "ClockRestartWarning",
+    "CoarseSignalWarning",
     "ConvergenceWarning",
     "FadeWarning",
     "FrequencyTrendWarning",
@@ -128,6 +129,12 @@ class FadeWarning(UserWarning):
 class PluginWarning(UserWarning):
     """A dissipation term offered by an installed package (entry point group
     ``bayestribo.terms``) could not be loaded; its terms are not available."""
+
+
+class CoarseSignalWarning(MisfitWarning):
+    """A coarse channel holds fewer than four of its quantisation steps across the
+    motion's swing: the turning points stand on a few levels and the intervals are not
+    calibrated there (the message names the channel, its step and the count)."""
 
 
 class ShortAnalysisWarning(MisfitWarning):
