@@ -249,3 +249,19 @@ def test_five_steps_across_the_swing_keep_every_swing_of_two_steps(placement):
     # turning points 2 to `clear` of the motion (the release's is 0; the first
     # oscillation, 1 and 2, is skipped) are analysed: at least clear - 1 of them
     assert len(decay.peaks) >= clear - 1
+
+
+@pytest.mark.parametrize("placement", [-0.3, 0.0, 0.45])
+def test_a_coarse_velocity_alone_is_answered_and_said_to_be_uncalibrated(placement):
+    """The velocity alone, rounded to a tenth of its swing: its integral's last turning
+    points are the rounding's (they broke the half period and the record was refused
+    at two placements of three). The decay fades where the velocity resolves no swing,
+    and the record is answered, with a CoarseSignalWarning: the rounding accumulates in
+    the integral, which the noise model does not hold."""
+    from bayestribo.errors import CoarseSignalWarning, MisfitWarning
+
+    t, _, v, _, _ = _coarse_record(steps=10.0, placement=placement)
+    with pytest.warns(CoarseSignalWarning, match="integral of the velocity"):
+        decay = energy_decay(t, None, v)
+    assert len(decay.peaks) >= 6
+    assert issubclass(CoarseSignalWarning, MisfitWarning)  # the fit's exit status is 1
