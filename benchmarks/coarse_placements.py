@@ -58,7 +58,15 @@ def one_run(steps: float, index: int) -> dict[str, Any]:
     except Exception as exc:  # recorded, never silently dropped
         out["refused"] = f"{type(exc).__name__}: {exc}"
         return out
-    out["flags"] = sorted({w.category.__name__ for w in caught if w.category.__name__ in FLAGS})
+    # a flag is one of FLAGS or a subclass of one (ShortAnalysisWarning and
+    # CoarseSignalWarning are MisfitWarnings: the command's exit status is 1)
+    out["flags"] = sorted(
+        {
+            w.category.__name__
+            for w in caught
+            if any(c.__name__ in FLAGS for c in w.category.__mro__)
+        }
+    )
     for name, truth in TRUTH.items():
         draws = result.samples(name)
         lo, hi = result.interval(name, 0.95)

@@ -255,10 +255,11 @@ def one_run(case: str, noise: float, index: int, seed: int, max_steps: int) -> d
         out["refused"] = f"{type(exc).__name__}: {exc}"
         return out
     ours = [w for w in caught if w.category.__module__.startswith("bayestribo")]
-    out["warnings"] = sorted({w.category.__name__ for w in ours if w.category.__name__ in FLAGS})
-    out["other_warnings"] = sorted(
-        {w.category.__name__ for w in caught if w.category.__name__ not in FLAGS}
-    )
+    # a flag is one of FLAGS or a subclass of one (ShortAnalysisWarning and
+    # CoarseSignalWarning are MisfitWarnings: the command's exit status is 1)
+    flag = [w for w in ours if any(c.__name__ in FLAGS for c in w.category.__mro__)]
+    out["warnings"] = sorted({w.category.__name__ for w in flag})
+    out["other_warnings"] = sorted({w.category.__name__ for w in caught if w not in flag})
     messages: dict[str, str] = {}
     for w in ours:
         messages.setdefault(w.category.__name__, str(w.message)[:400])
