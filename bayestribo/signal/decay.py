@@ -1577,10 +1577,17 @@ def _analyse(
         )
     needed = skip + int(min_turning_points)
     if len(peaks) < needed:
+        why = ""
+        if coarse[0] is not None and derived != "displacement":
+            why = (
+                f"; the displacement is quantised in steps of {coarse[0]:.3g} that its "
+                f"noise does not dither ({float(np.ptp(x[lo:hi])) / coarse[0]:.0f} steps "
+                "across its swing), and a swing of less than two steps is no turning point"
+            )
         raise RecordingError(
             f"turning points: the recording holds {len(peaks)} turning points after the "
             f"release; {needed} are needed ({min_turning_points} turning points after "
-            f"skipping {skipped})"
+            f"skipping {skipped}){why}"
         )
     window = peaks.skip(skip)
     resolved = resolved_turning_points(window.value, math.pi / spacing.half_period, coarse)
