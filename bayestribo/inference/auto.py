@@ -123,7 +123,7 @@ def fit_auto(
     screened = {
         law: row["map"]
         for law, row in compared["table"].items()
-        if row.get("screened") and row.get("map")
+        if (row.get("screened") or row.get("settled")) and row.get("map")
     }
     compared["departures"] = _law_departures(
         common, runs, record, screened, model=model, discrepancy=discrepancy

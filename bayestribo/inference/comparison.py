@@ -125,6 +125,7 @@ from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.preparation import prepare, regrid
 from bayestribo.inference.records import LawComparison
 from bayestribo.inference.sampling import SamplerSettings
+from bayestribo.inference.settling import settle
 from bayestribo.inference.start import find_optimum, find_start
 from bayestribo.inference.types import MISFIT_P, PreparedRun, Sampled
 from bayestribo.io.options import ReadOptions
@@ -274,6 +275,12 @@ def _reduction(
     return None
 
 
+def _tie_key(law: str, rank: Sequence[str]) -> tuple[int, int, int]:
+    """The verdict's tie-break: fewest terms, then fewest parameters, then the order of
+    the laws compared (``rank``)."""
+    return (*_complexity(law), rank.index(law) if law in rank else len(rank))
+
+
 def _complexity(law: str) -> tuple[int, int]:
     """Fewest terms first, then fewest parameters."""
     the_law = _law(law)
@@ -285,12 +292,22 @@ def _verdict(
 ) -> tuple[str, list[str], str, bool]:
     """Best law, the laws as good as the best, the simplest adequate of those, and
     whether it is adequate."""
-    best = str(frame.index[0])
+    differences = {law: (table[law]["elpd_diff"], table[law]["dse"]) for law in laws}
+    return _choose(laws, str(frame.index[0]), differences, table)
+
+
+def _choose(
+    laws: Sequence[str],
+    best: str,
+    differences: Mapping[str, tuple[float, float]],
+    table: Mapping[str, Mapping[str, Any]],
+) -> tuple[str, list[str], str, bool]:
+    """:func:`_verdict` from each law's elpd difference from the best and its sd."""
     as_good = [
         law
         for law in laws
         if law == best
-        or table[law]["elpd_diff"] < max(SMALL_ELPD_DIFFERENCE, 2.0 * table[law]["dse"])
+        or differences[law][0] < max(SMALL_ELPD_DIFFERENCE, 2.0 * differences[law][1])
     ]
     # ties go to the simplest, then to the order compared, not to the PSIS-LOO rank:
     # laws this close are ranked by noise (the seed chose between two misfitting laws
@@ -305,6 +322,19 @@ def _verdict(
         converged = [law for law in as_good if table[law]["converged"]]
         return best, as_good, simplest(converged) if converged else best, False
     return best, as_good, simplest(adequate), True
+
+
+def _standing(loos: Mapping[str, Any]) -> tuple[str, dict[str, tuple[float, float]]]:
+    """The best of the laws sampled so far by PSIS-LOO, and each law's difference from
+    it with its sd (as :func:`arviz.compare` computes them)."""
+    elpd = {law: float(loo["elpd_loo"]) for law, loo in loos.items()}
+    best = max(elpd, key=elpd.__getitem__)
+    top = np.asarray(loos[best]["loo_i"], dtype=float)
+    out = {}
+    for law, loo in loos.items():
+        d = top - np.asarray(loo["loo_i"], dtype=float)
+        out[law] = (elpd[best] - elpd[law], float(np.sqrt(d.size * np.var(d))))
+    return best, out
 
 
 def _law_seed(root: np.random.SeedSequence, law: str) -> np.random.SeedSequence:
@@ -700,12 +730,60 @@ def compare_prepared(
             "cpu_seconds": used + time.process_time() - cpu,
         }
 
-    def sample_one(law: str, k: int, n: int) -> None:
+    def settling(law: str) -> dict[str, Any] | None:
+        # can the law still change the choice? judged at its optimum against the
+        # verdict and the best of the laws sampled so far (module notes, Settling)
+        at = found[law]
+        theta = np.asarray(at.second_optimum[0], dtype=float)
+        if law not in misfits:
+            misfits[law] = _checks(at.second, theta)
+        if misfits[law]["adequate"] or not loos:
+            return None
+        best, differences = _standing(loos)
+        sampled_laws = [other for other in rank if other in loos]
+        _, _, verdict, adequate = _choose(sampled_laws, best, differences, table)
+        info = settle(
+            (at.pointwise, at.n_parameters),
+            (found[verdict].pointwise, found[verdict].n_parameters),
+            (found[best].pointwise, found[best].n_parameters),
+            verdict_adequate=adequate,
+            loses_tie=_tie_key(law, rank) > _tie_key(verdict, rank),
+            small=SMALL_ELPD_DIFFERENCE,
+        )
+        return {**info, "verdict": verdict, "best": best}
+
+    def settle_one(law: str, info: dict[str, Any], start: float, cpu: float) -> None:
+        at = found[law]
+        theta = np.asarray(at.second_optimum[0], dtype=float)
+        table[law] = {
+            "law": _law(law).name,
+            "sampled": False,
+            "converged": None,
+            "settled": True,
+            "settle": info,
+            **misfits[law],
+            "map": {n: float(v) for n, v in zip(at.second.names, theta, strict=True)},
+            **elapsed(law, start, cpu),
+        }
+        if screens.get(law):
+            table[law]["screen"] = screens[law]
+        settled.append(law)
+
+    def sample_one(law: str, k: int, n: int, force: bool = False) -> None:
         start, cpu = time.perf_counter(), time.process_time()
         rng = np.random.default_rng(_law_seed(root, law))
         at = found[law]
         try:
             reduced = _reduction(law, at.posterior, at.optimum[0], runs, optima)
+            info = settling(law) if screening and not force and reduced is None else None
+            if info is not None and info["settled"]:
+                settle_one(law, info, start, cpu)
+                say(
+                    f"{law} ({k}/{n}): not sampled, cannot change the choice at its optimum "
+                    f"({'as good as' if info['as_good'] else 'behind'} {info['best']}, "
+                    f"verdict {info['verdict']})"
+                )
+                return
             if reduced is None:
                 say(f"sampling {law} ({k}/{n})")
                 sampled, loos[law] = _fit_law(
@@ -758,6 +836,10 @@ def compare_prepared(
 
     # smallest laws first: their optima are starting points of the laws that nest them
     ordered = sorted(laws, key=_complexity)
+    # the order of the laws compared, for ties of complexity (the law-free fit last)
+    rank = [*ordered, *([] if "free" in ordered else ["free"])]
+    misfits: dict[str, dict[str, Any]] = {}
+    settled: list[str] = []
     # laws whose ΔE(A) cannot follow the turning points' are not taken to an optimum
     early = turning_point_screen(prepared, ordered) if screening else {}
     for law in ordered:
@@ -819,7 +901,21 @@ def compare_prepared(
             optimise("free", 1, 1)
             if "free" in found:
                 sample_one("free", 1, 1)
-    if not loos or len(loos) + len(equivalent) + len(screened) < 2:
+    # a law sampled later may have moved the verdict or the best: every settled law is
+    # judged again against them, and sampled when it could now change the choice
+    while settled:
+        reopened = [law for law in settled if not (settling(law) or {}).get("settled")]
+        if not reopened:
+            break
+        law = reopened[0]
+        settled.remove(law)
+        del table[law]
+        say(f"{law}: the verdict moved; sampled after all")
+        sample_one(law, 1, 1, force=True)
+    for law in settled:
+        table[law]["settle"] = {**table[law]["settle"], **(settling(law) or {})}
+    loos = {law: loos[law] for law in rank if law in loos}
+    if not loos or len(loos) + len(equivalent) + len(screened) + len(settled) < 2:
         raise BayestriboError(
             f"laws: fewer than two of {laws} could be fitted: " + "; ".join(notes)
         )
@@ -832,6 +928,12 @@ def compare_prepared(
             }
         )
     best, as_good, verdict, adequate = _verdict(list(loos), table, frame)
+    # the settled laws as good as the best at their optimum stand beside the sampled
+    as_good = [
+        law
+        for law in rank
+        if law in as_good or (law in settled and table[law]["settle"]["as_good"])
+    ]
     rematch = None
     if rivals and adequate:
         contenders = _rivals(verdict, as_good, table)
@@ -863,6 +965,7 @@ def compare_prepared(
         rivals=rematch,
         equivalent=equivalent,
         screened=screened,
+        settled=[law for law in rank if law in settled],
     )
     return comparison, runs
 
