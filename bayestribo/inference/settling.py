@@ -57,8 +57,9 @@ def _elpd(pointwise: NDArray, n_parameters: int) -> float:
 
 def _dse(a: NDArray, b: NDArray) -> float:
     """Standard error of the summed pointwise difference of two laws."""
-    d = np.asarray(a, dtype=float) - np.asarray(b, dtype=float)
-    return float(np.sqrt(d.size * np.var(d))) if d.size > 1 else 0.0
+    with np.errstate(invalid="ignore"):
+        d = np.asarray(a, dtype=float) - np.asarray(b, dtype=float)
+        return float(np.sqrt(d.size * np.var(d))) if d.size > 1 else 0.0
 
 
 def settle(
