@@ -177,3 +177,26 @@ def test_a_settled_law_is_sampled_when_a_later_law_moves_the_verdict(monkeypatch
     sampled.clear()
     full, _ = _compare(shifts, screening=False)
     assert (full.verdict, full.as_good) == (c.verdict, c.as_good)
+
+
+def test_an_adequate_law_is_settled_only_where_it_cannot_be_chosen():
+    # the rivals' comparison: an adequate law as good as the best but more complex than
+    # an adequate verdict cannot be chosen; with the verdict misfitting it would be
+    assert _settle(0.5, adequate=True, verdict_adequate=True)["settled"]
+    assert not _settle(0.5, adequate=True, verdict_adequate=False)["settled"]
+    assert not _settle(0.5, adequate=True, verdict_adequate=True, loses_tie=False)["settled"]
+    assert _settle(REACH * 2, adequate=True, loses_tie=False)["settled"]
+
+
+@pytest.mark.filterwarnings("ignore")
+def test_adequate_laws_are_settled_in_the_rivals_comparison_alone(monkeypatch):
+    shifts = {"viscous+coulomb": 0.0, "coulomb+power": 1.0}
+    sampled = _stub_fits(monkeypatch, shifts, adequate=set(shifts))
+    c, _ = _compare(shifts)
+    assert sampled == list(shifts) and c.settled == []
+    sampled.clear()
+    c, _ = compare_prepared(
+        SimpleNamespace(name="stub"), list(shifts), seed=1, rivals=False, settle_adequate=True
+    )
+    assert sampled == ["viscous+coulomb"] and c.settled == ["coulomb+power"]
+    assert c.verdict == "viscous+coulomb" and c.as_good == list(shifts)

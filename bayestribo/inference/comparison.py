@@ -79,6 +79,21 @@ PSIS-LOO, and decide the verdict. Against the sampled comparison of every candid
 ``../shared/external-data``, side by side with the comparison before screening) no
 law screened out was as good as the best there, and the verdicts are the same.
 
+Settling. The laws left are sampled smallest first, and before each the verdict and
+best among the laws sampled so far are known. A law that misfits at its optimum, whose
+estimated gain over them cannot push the verdict out nor make it the best by more than
+noise, whose standing (as good as the best or not) is clear of the tie rule's edge by a
+third of its reach, and that cannot be chosen (the verdict adequate, or simpler, or the
+law behind) is *settled* there, not sampled (:mod:`bayestribo.inference.settling`); its
+row says ``settled`` and ``settle`` (the estimate and its standing), it is in
+``as_good`` when the estimate puts it there, and the comparison's text names it. Every
+settled law is judged again against the final verdict and best, and sampled where it
+could now change the choice. On HarmOsc1 the laws as good as ``quadratic`` by
+PSIS-LOO there (``power``, ``quadratic+hysteretic``, ``coulomb+power`` and the law-free
+fit, a third of the time ``law="auto"`` took) are settled as good, on HarmOsc3 the
+``coulomb+power`` that ran to the step ceiling is settled behind
+(``benchmarks/results/auto_speed_real.json``: the same verdicts and laws as good).
+
 Rivals. Simplicity settles a tie between a law and one that nests it; it does not
 settle one between laws of different mechanisms: viscous damping and a friction that
 grows with amplitude (``hysteretic``) make the same turning points, so one increment
@@ -652,6 +667,7 @@ def compare_prepared(
     screening: bool = True,
     progress: Callable[[str], None] | None = None,
     starts: Mapping[str, Mapping[str, float]] | None = None,
+    settle_adequate: bool = False,
 ) -> tuple[LawComparison, dict[str, Sampled]]:
     """Compare laws on a prepared run; also return each law's sampled posterior.
 
@@ -684,6 +700,11 @@ def compare_prepared(
         (:func:`bayestribo.inference.start.maximum_from`) rather than from the first
         guesses of :func:`bayestribo.inference.start.find_optimum` (the rivals'
         comparison on the finer grid, module notes).
+    settle_adequate : bool
+        Settle adequate laws too where they cannot be chosen
+        (:mod:`bayestribo.inference.settling`): for a comparison whose draws serve its
+        choice alone (the rivals' on the finer grid); False (the default) samples every
+        adequate law, whose draws may enter the ΔE(A) averaged over the laws as good.
 
     Returns
     -------
@@ -737,7 +758,7 @@ def compare_prepared(
         theta = np.asarray(at.second_optimum[0], dtype=float)
         if law not in misfits:
             misfits[law] = _checks(at.second, theta)
-        if misfits[law]["adequate"] or not loos:
+        if (misfits[law]["adequate"] and not settle_adequate) or not loos:
             return None
         best, differences = _standing(loos)
         sampled_laws = [other for other in rank if other in loos]
@@ -749,6 +770,7 @@ def compare_prepared(
             verdict_adequate=adequate,
             loses_tie=_tie_key(law, rank) > _tie_key(verdict, rank),
             small=SMALL_ELPD_DIFFERENCE,
+            adequate=bool(misfits[law]["adequate"]),
         )
         return {**info, "verdict": verdict, "best": best}
 
@@ -1014,6 +1036,7 @@ def _compare_rivals(
             rivals=False,
             screening=screening,
             starts=starts,
+            settle_adequate=True,
         )
     except BayestriboError as exc:
         out["error"] = str(exc)

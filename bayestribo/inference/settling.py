@@ -30,6 +30,12 @@ against V and B (:func:`settle`):
 4. it cannot be chosen: V is adequate, or L loses the tie-break to V, or L is not as
    good as the best.
 
+An adequate law is always sampled in the comparison of ``law="auto"``: its draws may
+enter the ΔE(A) averaged over the laws as good as the verdict, and it may be a rival.
+The rivals' comparison on the finer grid uses its draws for its choice alone, and there
+an adequate law is settled too when it cannot be chosen (not as good as the best, or V
+adequate and simpler).
+
 A settled law is reported with its estimate and whether it is as good (its row's
 ``settle``); it is in the comparison's ``as_good`` when the estimate says so. The
 comparison checks every settled law again against the final verdict and best, and
@@ -71,9 +77,10 @@ def settle(
     loses_tie: bool,
     small: float,
     factor: float = FACTOR,
+    adequate: bool = False,
 ) -> dict[str, Any]:
-    """Whether a law that misfits at its optimum can change the comparison's choice
-    (module notes).
+    """Whether a law can change the comparison's choice, judged at its optimum (module
+    notes).
 
     Parameters
     ----------
@@ -89,6 +96,11 @@ def settle(
         The tie rule's smallest reach (an elpd difference).
     factor : float
         :data:`FACTOR` by default.
+    adequate : bool
+        Whether the law is adequate at its optimum (only a comparison whose draws serve
+        its choice alone judges such a law here: the rivals' on the finer grid). It
+        cannot be chosen when it is not as good as the best, or V is adequate and it
+        loses the tie-break.
 
     Returns
     -------
@@ -116,7 +128,10 @@ def settle(
         and gain_v <= reach_v * (1.0 - 1.0 / factor)
         and -diff <= reach / factor
     )
-    cannot_be_chosen = verdict_adequate or loses_tie or as_good is False
+    if adequate:
+        cannot_be_chosen = as_good is False or (verdict_adequate and loses_tie)
+    else:
+        cannot_be_chosen = verdict_adequate or loses_tie or as_good is False
     return {
         "elpd_diff": float(diff),
         "dse": dse,
