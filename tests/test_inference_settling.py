@@ -200,3 +200,41 @@ def test_adequate_laws_are_settled_in_the_rivals_comparison_alone(monkeypatch):
     )
     assert sampled == ["viscous+coulomb"] and c.settled == ["coulomb+power"]
     assert c.verdict == "viscous+coulomb" and c.as_good == list(shifts)
+
+
+@pytest.mark.filterwarnings("ignore")
+def test_the_rivals_comparison_has_its_progress_line(monkeypatch):
+    shifts = {"viscous+coulomb": 0.0, "coulomb+hysteretic": 0.5}
+    _stub_fits(monkeypatch, shifts, adequate=set(shifts))
+    asked: list[list[str]] = []
+
+    def rivals(prepared, laws, *args, **kwargs):
+        asked.append(list(laws))
+        return {"laws": list(laws), "decided": False, "per_half_cycle": 4}
+
+    monkeypatch.setattr(comparison, "_compare_rivals", rivals)
+    lines: list[str] = []
+    compare_prepared(SimpleNamespace(name="stub"), list(shifts), seed=1, progress=lines.append)
+    assert asked == [list(shifts)]
+    assert lines[-1] == (
+        "comparing viscous+coulomb with coulomb+hysteretic again on 4 increments per half cycle"
+    )
+
+
+def test_the_halves_check_has_its_progress_line(monkeypatch):
+    from bayestribo.inference import auto
+
+    halves = SimpleNamespace(agree=True, to_dict=lambda: {"agree": True})
+    monkeypatch.setattr(auto, "law_halves", lambda *args, **kwargs: halves)
+    c = LawComparison("stub", {}, "viscous", "viscous", ["viscous"])
+    lines: list[str] = []
+    checked = auto._check_halves(
+        c, None, np.random.default_rng(1), None, "exact", False, lines.append
+    )
+    assert checked.halves == {"agree": True}
+    assert lines == ["fitting viscous to each half of the motion"]
+    # a comparison that does not hold is not split, and says nothing
+    lines.clear()
+    misfit = LawComparison("stub", {}, "viscous", "viscous", ["viscous"], adequate=False)
+    auto._check_halves(misfit, None, np.random.default_rng(1), None, "exact", False, lines.append)
+    assert lines == []

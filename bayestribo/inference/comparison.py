@@ -960,6 +960,10 @@ def compare_prepared(
     if rivals and adequate:
         contenders = _rivals(verdict, as_good, table)
         if contenders:
+            say(
+                f"comparing {verdict} with {', '.join(contenders)} again on {TIE_GRID} "
+                "increments per half cycle"
+            )
             rematch = _compare_rivals(
                 prepared,
                 [verdict, *contenders],
