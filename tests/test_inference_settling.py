@@ -238,3 +238,15 @@ def test_the_halves_check_has_its_progress_line(monkeypatch):
     misfit = LawComparison("stub", {}, "viscous", "viscous", ["viscous"], adequate=False)
     auto._check_halves(misfit, None, np.random.default_rng(1), None, "exact", False, lines.append)
     assert lines == []
+
+
+@pytest.mark.filterwarnings("ignore")
+def test_an_adequate_law_clearly_behind_is_settled_and_still_counts_as_holding(monkeypatch):
+    # coulomb holds but is far behind the misfitting viscous: its draws would serve
+    # nothing, and it still keeps the law-free fit away (no stub answers for "free")
+    shifts = {"viscous": 0.0, "coulomb": 9.0}
+    sampled = _stub_fits(monkeypatch, shifts, adequate={"coulomb"})
+    c, _ = compare_prepared(SimpleNamespace(name="stub"), list(shifts), seed=1, law_free=True)
+    assert sampled == ["viscous"] and c.settled == ["coulomb"]
+    assert c.table["coulomb"]["settle"]["as_good"] is False
+    assert c.verdict == "viscous" and not c.adequate and c.as_good == ["viscous"]

@@ -80,7 +80,9 @@ PSIS-LOO, and decide the verdict. Against the sampled comparison of every candid
 law screened out was as good as the best there, and the verdicts are the same.
 
 Settling. The laws left are sampled smallest first, and before each the verdict and
-best among the laws sampled so far are known. A law that misfits at its optimum, whose
+best among the laws sampled so far are known. A law that misfits at its optimum (or
+holds there but is not as good as the best, so that its draws would enter neither the
+averaged ΔE(A) nor the rivals' comparison), whose
 estimated gain over them cannot push the verdict out nor make it the best by more than
 noise, whose standing (as good as the best or not) is clear of the tie rule's edge by a
 third of its reach, and that cannot be chosen (the verdict adequate, or simpler, or the
@@ -701,10 +703,11 @@ def compare_prepared(
         guesses of :func:`bayestribo.inference.start.find_optimum` (the rivals'
         comparison on the finer grid, module notes).
     settle_adequate : bool
-        Settle adequate laws too where they cannot be chosen
+        Settle adequate laws as good as the best too where they cannot be chosen
         (:mod:`bayestribo.inference.settling`): for a comparison whose draws serve its
-        choice alone (the rivals' on the finer grid); False (the default) samples every
-        adequate law, whose draws may enter the ΔE(A) averaged over the laws as good.
+        choice alone (the rivals' on the finer grid); False (the default) settles an
+        adequate law only when it is not as good as the best (the draws of one that is
+        may enter the ΔE(A) averaged over the laws as good, or make it a rival).
 
     Returns
     -------
@@ -758,7 +761,7 @@ def compare_prepared(
         theta = np.asarray(at.second_optimum[0], dtype=float)
         if law not in misfits:
             misfits[law] = _checks(at.second, theta)
-        if (misfits[law]["adequate"] and not settle_adequate) or not loos:
+        if not loos:
             return None
         best, differences = _standing(loos)
         sampled_laws = [other for other in rank if other in loos]
@@ -772,6 +775,10 @@ def compare_prepared(
             small=SMALL_ELPD_DIFFERENCE,
             adequate=bool(misfits[law]["adequate"]),
         )
+        if misfits[law]["adequate"] and not settle_adequate and info["as_good"] is not False:
+            # an adequate law as good as the best may enter the averaged ΔE(A) or be a
+            # rival: its draws are needed
+            info["settled"] = False
         return {**info, "verdict": verdict, "best": best}
 
     def settle_one(law: str, info: dict[str, Any], start: float, cpu: float) -> None:
@@ -914,7 +921,10 @@ def compare_prepared(
     survivors = [law for law in ordered if law in found and law not in screened]
     for k, law in enumerate(survivors, 1):
         sample_one(law, k, len(survivors))
-    if law_free and not any(row.get("adequate") and row.get("converged") for row in table.values()):
+    if law_free and not any(
+        row.get("adequate") and (row.get("converged") or row.get("settled"))
+        for row in table.values()
+    ):
         # no law compared holds: the law-free fit, whose ΔE(A) is any increasing
         # polynomial of degree 1-4, says how much energy the decay loses
         free = get_law("free").name

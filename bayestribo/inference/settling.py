@@ -20,7 +20,8 @@ the tie rule's reach (the AppStat runs: within 1.7 where the reach is 4, within 
 of the reach where it is tens to hundreds). A law is *settled* without sampling when, judged there
 against V and B (:func:`settle`):
 
-1. it misfits at its optimum (not adequate: the caller's check);
+1. it misfits at its optimum (not adequate: the caller's check), or it holds there and
+   is clearly not as good as the best (below);
 2. it cannot push V out: its estimated gain over V short of the reach by a
    :data:`FACTOR` th of it; and it cannot become the best by more than noise: its gain
    over B at most a :data:`FACTOR` th of the reach;
@@ -30,11 +31,12 @@ against V and B (:func:`settle`):
 4. it cannot be chosen: V is adequate, or L loses the tie-break to V, or L is not as
    good as the best.
 
-An adequate law is always sampled in the comparison of ``law="auto"``: its draws may
-enter the ΔE(A) averaged over the laws as good as the verdict, and it may be a rival.
-The rivals' comparison on the finer grid uses its draws for its choice alone, and there
-an adequate law is settled too when it cannot be chosen (not as good as the best, or V
-adequate and simpler).
+An adequate law as good as the best is always sampled in the comparison of
+``law="auto"``: its draws may enter the ΔE(A) averaged over the laws as good as the
+verdict, and it may be a rival; one clearly not as good is settled as a misfitting law
+is. The rivals' comparison on the finer grid uses its draws for its choice alone, and
+there an adequate law is settled too when it cannot be chosen (not as good as the
+best, or V adequate and simpler).
 
 A settled law is reported with its estimate and whether it is as good (its row's
 ``settle``); it is in the comparison's ``as_good`` when the estimate says so. The
