@@ -250,3 +250,17 @@ def test_an_adequate_law_clearly_behind_is_settled_and_still_counts_as_holding(m
     assert sampled == ["viscous"] and c.settled == ["coulomb"]
     assert c.table["coulomb"]["settle"]["as_good"] is False
     assert c.verdict == "viscous" and not c.adequate and c.as_good == ["viscous"]
+
+
+def test_rivals_all_as_good_at_their_optima_on_the_finer_grid_are_not_sampled(monkeypatch):
+    shifts = {"viscous": 0.0, "power": 1.0}
+    sampled = _stub_fits(monkeypatch, shifts, adequate=set(shifts))
+    monkeypatch.setattr(comparison, "regrid", lambda prepared, n: prepared)
+    fine = SimpleNamespace(name="stub", data=SimpleNamespace(increments=np.zeros(N)))
+    out = comparison._compare_rivals(fine, list(shifts), 1, "exact", None, False)
+    assert sampled == [] and out["decided"] is False and out["settled"] is True
+    assert out["as_good"] == list(shifts) and out["table"]["power"]["elpd_diff"] > 0
+    # a rival the optima leave near the tie rule's edge: the laws are sampled
+    shifts["power"] = REACH
+    out = comparison._compare_rivals(fine, list(shifts), 1, "exact", None, False)
+    assert sampled == ["viscous", "power"] and "settled" not in out

@@ -114,7 +114,11 @@ good as the verdict. Otherwise the verdict stands, and the comparison says that 
 finer grid did not tell them apart. The finer grid rests on white, independent channel
 noise and on the calibration of both channels (:mod:`bayestribo.signal.increments`):
 it only breaks the tie, and only with a law that holds on it; the posterior reported is
-the verdict's on the half-cycle grid. (``benchmarks/laws.py``: a hysteretic decay at
+the verdict's on the half-cycle grid. When at their optima on the finer grid every law
+is as good as the best there, clear of the tie rule's edge by a third of its reach
+(:func:`bayestribo.inference.settling.settle`), the finer grid cannot tell them apart
+whatever the draws, and they are not sampled there (the rivals' record says
+``settled``, with each law's estimate). (``benchmarks/laws.py``: a hysteretic decay at
 10x the resolution, viscous misfits at p < 1e-300 on the finer grid and the true law
 holds.)
 """
@@ -1039,6 +1043,11 @@ def _compare_rivals(
         "grid_points": int(fine.data.increments.size),
         "decided": False,
     }
+    if screening:
+        undecided = _undecided_at_optimum(fine, laws, model, discrepancy, starts)
+        if undecided is not None:
+            out.update(undecided)
+            return out
     try:
         comparison, _ = compare_prepared(
             fine,
@@ -1086,6 +1095,54 @@ def _compare_rivals(
     # first verdict is not as good there
     out["decided"] = bool(comparison.adequate and set(as_good) != set(laws))
     return out
+
+
+def _undecided_at_optimum(
+    fine: PreparedRun,
+    laws: Sequence[str],
+    model: str,
+    discrepancy: bool,
+    starts: Mapping[str, Mapping[str, float]] | None,
+) -> dict[str, Any] | None:
+    """The rivals' comparison judged at the laws' optima on the finer grid, when that
+    settles it: every law as good as the best there, clear of the tie rule's edge by a
+    third of its reach (:func:`bayestribo.inference.settling.settle`), so that PSIS-LOO
+    would find them all as good and the finer grid cannot tell them apart, whatever the
+    draws. Returns the comparison's fields (``as_good`` every law, ``settled`` True and
+    each law's estimate in ``table``), or None when the optima do not settle it (the
+    laws are then sampled)."""
+    found: dict[str, LawOptimum] = {}
+    optima: dict[str, dict[str, float]] = {}
+    for law in sorted(laws, key=_complexity):
+        try:
+            found[law] = _optimise(
+                law, fine, model, discrepancy, optima, start=(starts or {}).get(law)
+            )
+        except BayestriboError:
+            return None
+        at = found[law]
+        optima[law] = dict(zip(at.posterior.names, at.optimum[0], strict=True))
+    elpd = {law: optimum_elpd(at.pointwise, at.n_parameters) for law, at in found.items()}
+    if not all(np.isfinite(v) for v in elpd.values()):
+        return None
+    best = max(laws, key=elpd.__getitem__)
+    top = (found[best].pointwise, found[best].n_parameters)
+    table = {}
+    for law in laws:
+        at = found[law]
+        info = settle(
+            (at.pointwise, at.n_parameters),
+            top,
+            top,
+            verdict_adequate=True,
+            loses_tie=True,
+            small=SMALL_ELPD_DIFFERENCE,
+            adequate=True,
+        )
+        if info["as_good"] is not True:
+            return None
+        table[law] = {k: info[k] for k in ("elpd_diff", "dse", "reach")}
+    return {"verdict": laws[0], "as_good": list(laws), "settled": True, "table": table}
 
 
 def compare_dissipation_laws(
