@@ -97,8 +97,8 @@ class LawComparison:
             )
         if self.settled:
             text += (
-                f"; {len(self.settled)} not sampled, misfitting and unable to change the "
-                f"choice at their optimum (settled): {', '.join(self.settled)}"
+                f"; {len(self.settled)} not sampled, unable to change the choice at their "
+                f"optimum (settled): {', '.join(self.settled)}"
             )
         return text
 
