@@ -252,15 +252,30 @@ def test_an_adequate_law_clearly_behind_is_settled_and_still_counts_as_holding(m
     assert c.verdict == "viscous" and not c.adequate and c.as_good == ["viscous"]
 
 
-def test_rivals_all_as_good_at_their_optima_on_the_finer_grid_are_not_sampled(monkeypatch):
-    shifts = {"viscous": 0.0, "power": 1.0}
-    sampled = _stub_fits(monkeypatch, shifts, adequate=set(shifts))
+def test_rivals_judged_at_their_optima_on_the_finer_grid_are_not_sampled(monkeypatch):
+    shifts = {"viscous": 0.0, "power": 1.0, "coulomb": 30.0}
+    adequate = set(shifts)
+    sampled = _stub_fits(monkeypatch, shifts, adequate=adequate)
     monkeypatch.setattr(comparison, "regrid", lambda prepared, n: prepared)
     fine = SimpleNamespace(name="stub", data=SimpleNamespace(increments=np.zeros(N)))
-    out = comparison._compare_rivals(fine, list(shifts), 1, "exact", None, False)
-    assert sampled == [] and out["decided"] is False and out["settled"] is True
-    assert out["as_good"] == list(shifts) and out["table"]["power"]["elpd_diff"] > 0
-    # a rival the optima leave near the tie rule's edge: the laws are sampled
+
+    def rivals(laws):
+        return comparison._compare_rivals(fine, laws, 1, "exact", None, False)
+
+    # every law as good: the finer grid cannot tell them apart
+    out = rivals(["viscous", "power"])
+    assert sampled == [] and out["settled"] is True and out["decided"] is False
+    assert out["as_good"] == ["viscous", "power"] and out["table"]["power"]["elpd_diff"] > 0
+    # coulomb clearly behind there: decided, the first verdict kept
+    out = rivals(["viscous", "power", "coulomb"])
+    assert sampled == [] and out["decided"] is True and out["verdict"] == "viscous"
+    assert out["as_good"] == ["viscous", "power"] and out["adequate"] is True
+    # a rival near the tie rule's edge, or another verdict there: the laws are sampled
     shifts["power"] = REACH
-    out = comparison._compare_rivals(fine, list(shifts), 1, "exact", None, False)
+    out = rivals(["viscous", "power"])
     assert sampled == ["viscous", "power"] and "settled" not in out
+    sampled.clear()
+    shifts["power"] = 1.0
+    adequate.discard("viscous")
+    out = rivals(["viscous", "power"])
+    assert sampled and "settled" not in out

@@ -114,13 +114,14 @@ good as the verdict. Otherwise the verdict stands, and the comparison says that 
 finer grid did not tell them apart. The finer grid rests on white, independent channel
 noise and on the calibration of both channels (:mod:`bayestribo.signal.increments`):
 it only breaks the tie, and only with a law that holds on it; the posterior reported is
-the verdict's on the half-cycle grid. When at their optima on the finer grid every law
-is as good as the best there, clear of the tie rule's edge by a third of its reach
-(:func:`bayestribo.inference.settling.settle`), the finer grid cannot tell them apart
-whatever the draws, and they are not sampled there (the rivals' record says
-``settled``, with each law's estimate). (``benchmarks/laws.py``: a hysteretic decay at
+the verdict's on the half-cycle grid. (``benchmarks/laws.py``: a hysteretic decay at
 10x the resolution, viscous misfits at p < 1e-300 on the finer grid and the true law
-holds.)
+holds.) When at their optima on the finer grid every law's standing (as good as the
+best there or not) is clear of the tie rule's edge by a third of its reach
+(:func:`bayestribo.inference.settling.settle`), and the simplest law as good that holds
+there is the first grid's verdict, no draws on the finer grid could change the outcome,
+and the laws are not sampled there (the rivals' record says ``settled``, with each
+law's estimate and misfit checks at its optimum).
 """
 
 from __future__ import annotations
@@ -1044,9 +1045,9 @@ def _compare_rivals(
         "decided": False,
     }
     if screening:
-        undecided = _undecided_at_optimum(fine, laws, model, discrepancy, starts)
-        if undecided is not None:
-            out.update(undecided)
+        judged = _judged_at_optimum(fine, laws, model, discrepancy, starts)
+        if judged is not None:
+            out.update(judged)
             return out
     try:
         comparison, _ = compare_prepared(
@@ -1097,7 +1098,7 @@ def _compare_rivals(
     return out
 
 
-def _undecided_at_optimum(
+def _judged_at_optimum(
     fine: PreparedRun,
     laws: Sequence[str],
     model: str,
@@ -1105,12 +1106,14 @@ def _undecided_at_optimum(
     starts: Mapping[str, Mapping[str, float]] | None,
 ) -> dict[str, Any] | None:
     """The rivals' comparison judged at the laws' optima on the finer grid, when that
-    settles it: every law as good as the best there, clear of the tie rule's edge by a
-    third of its reach (:func:`bayestribo.inference.settling.settle`), so that PSIS-LOO
-    would find them all as good and the finer grid cannot tell them apart, whatever the
-    draws. Returns the comparison's fields (``as_good`` every law, ``settled`` True and
-    each law's estimate in ``table``), or None when the optima do not settle it (the
-    laws are then sampled)."""
+    settles it (module notes, Rivals): every law's standing (as good as the best there
+    or not) clear of the tie rule's edge by a third of its reach
+    (:func:`bayestribo.inference.settling.settle`), and the verdict there, the simplest
+    law as good that holds at its optimum, the first grid's verdict (``laws[0]``, whose
+    posterior is the one reported, sampled and converged on the first grid). Returns the
+    comparison's fields (``verdict``, ``as_good``, ``adequate``, ``decided``,
+    ``settled`` True and each law's estimate in ``table``), or None when the optima do
+    not settle it (the laws are then sampled)."""
     found: dict[str, LawOptimum] = {}
     optima: dict[str, dict[str, float]] = {}
     for law in sorted(laws, key=_complexity):
@@ -1127,7 +1130,7 @@ def _undecided_at_optimum(
         return None
     best = max(laws, key=elpd.__getitem__)
     top = (found[best].pointwise, found[best].n_parameters)
-    table = {}
+    table: dict[str, dict[str, Any]] = {}
     for law in laws:
         at = found[law]
         info = settle(
@@ -1139,10 +1142,28 @@ def _undecided_at_optimum(
             small=SMALL_ELPD_DIFFERENCE,
             adequate=True,
         )
-        if info["as_good"] is not True:
+        if info["as_good"] is None:
             return None
-        table[law] = {k: info[k] for k in ("elpd_diff", "dse", "reach")}
-    return {"verdict": laws[0], "as_good": list(laws), "settled": True, "table": table}
+        checks = _checks(at.second, np.asarray(at.second_optimum[0], dtype=float))
+        table[law] = {
+            **{k: info[k] for k in ("elpd_diff", "dse", "reach", "as_good")},
+            **{k: checks.get(k) for k in ("adequate", "misfit_p", "shape_p")},
+        }
+    as_good = [law for law in laws if table[law]["as_good"]]
+    holding = [law for law in as_good if table[law]["adequate"]]
+    if not holding:
+        return None
+    verdict = min(holding, key=lambda law: _tie_key(law, list(laws)))
+    if verdict != laws[0]:
+        return None
+    return {
+        "verdict": verdict,
+        "as_good": as_good,
+        "adequate": True,
+        "decided": set(as_good) != set(laws),
+        "settled": True,
+        "table": table,
+    }
 
 
 def compare_dissipation_laws(
