@@ -252,6 +252,7 @@ def test_an_adequate_law_clearly_behind_is_settled_and_still_counts_as_holding(m
     assert c.verdict == "viscous" and not c.adequate and c.as_good == ["viscous"]
 
 
+@pytest.mark.filterwarnings("ignore")
 def test_rivals_judged_at_their_optima_on_the_finer_grid_are_not_sampled(monkeypatch):
     shifts = {"viscous": 0.0, "power": 1.0, "coulomb": 30.0}
     adequate = set(shifts)
