@@ -34,6 +34,8 @@ ROW_KEYS = (
     "reduces_to",
     "screened",
     "screen",
+    "settled",
+    "settle",
     "seconds",
     "cpu_seconds",
 )

@@ -25,7 +25,10 @@ after its auto fit, and auto's CPU time over it; and the largest difference of a
 posterior mean between the trees in units of the baseline's posterior sd, over every
 quantity both summarise. The screening's margin is checked against the sampled
 comparison: for every law this tree screened out, its sampled ``elpd_diff`` in the
-baseline (where the baseline compared it) and whether the baseline found it as good as its best.
+baseline (where the baseline compared it) and whether the baseline found it as good as
+its best; for every law this tree settled (not sampled: it could no longer change the
+choice, :mod:`bayestribo.inference.settling`), the same, and the laws whose standing (as
+good or not) differs from the baseline's (``standing_differs``).
 
 Run (by hand)::
 
@@ -126,15 +129,18 @@ def mean_shift(new: dict[str, Any], old: dict[str, Any]) -> dict[str, float]:
 
 
 def screen_check(new: dict[str, Any], old: dict[str, Any]) -> dict[str, Any]:
-    """For every law the new tree screened out: the baseline's sampled elpd difference
-    and whether the baseline found it as good as its best."""
+    """For every law the new tree screened out or settled: the baseline's sampled elpd
+    difference and whether the baseline found it as good as its best (and, for a
+    settled law, whether the new tree's estimate at the optimum said the same)."""
     out = {}
     for law, row in new["table"].items():
-        if not row.get("screened"):
+        if not (row.get("screened") or row.get("settled")):
             continue
         base = old["table"].get(law, {})
         out[law] = {
             "screen": row.get("screen"),
+            "settle": row.get("settle"),
+            "as_good": law in (new.get("as_good") or []),
             "baseline_elpd_diff": base.get("elpd_diff"),
             "baseline_dse": base.get("dse"),
             "baseline_as_good": law in (old.get("as_good") or []),
@@ -255,6 +261,14 @@ def summarise(fits: dict[str, dict[str, list[dict[str, Any]]]]) -> dict[str, Any
                 worst = max(finite, key=finite.get)
                 row["largest_mean_shift_sd"] = {worst: finite[worst]}
             row["screened"] = screen_check(new[0], old[0])
+            # the laws screened out or settled that the baseline's sampled comparison
+            # placed otherwise (as good where the new tree says not, or the reverse)
+            row["standing_differs"] = sorted(
+                law
+                for law, check in row["screened"].items()
+                if check["as_good"] != check["baseline_as_good"]
+                and check.get("baseline_reduces_to") is None
+            )
         out[name] = row
     return out
 

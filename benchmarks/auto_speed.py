@@ -9,7 +9,8 @@ One run of a case of ``benchmarks/laws.py`` (the independent solve_ivp simulator
 fit. Each law's fit inside the comparison (:func:`bayestribo.inference.comparison.
 _fit_law`, the first grid and the rivals' finer grid apart) is timed, with its steps,
 whether it converged and why not, and whether the comparison recognised it as its
-nested law (extra terms at zero); the rest of the fit (preparation, the verdict again
+nested law (extra terms at zero) or settled it at its optimum (not sampled: it could no
+longer change the choice); the rest of the fit (preparation, the verdict again
 in its own frame, the halves check, the summaries) is the total minus their sum.
 
 Run (by hand)::
@@ -113,7 +114,7 @@ def timed_auto(case: str, noise: float, index: int, seed: int, max_steps: int) -
                 entry["sampling_cpu_seconds"] = entry["cpu_seconds"]
                 entry["cpu_seconds"] = row["cpu_seconds"]
     for law, row in table.items():
-        if row.get("reduces_to"):
+        if row.get("reduces_to") or row.get("settled"):
             fits.append(
                 {
                     "law": law,
@@ -125,8 +126,10 @@ def timed_auto(case: str, noise: float, index: int, seed: int, max_steps: int) -
                     "hit_max_steps": False,
                     "converged": None,
                     "reasons": [],
-                    "reduces_to": row["reduces_to"],
-                    "terms_at_zero": row["terms_at_zero"],
+                    "reduces_to": row.get("reduces_to"),
+                    "terms_at_zero": row.get("terms_at_zero"),
+                    "settled": bool(row.get("settled")),
+                    "settle": row.get("settle"),
                 }
             )
     return {
@@ -177,7 +180,8 @@ def main(argv: list[str] | None = None) -> None:
                 f"  {f['law']:<28} {f['grid_points']:>5} pts {f['seconds']:7.1f} s "
                 f"(CPU {f.get('cpu_seconds') or 0.0:7.1f} s) "
                 f"{f['n_steps']:>6} steps converged={f['converged']} "
-                f"{f.get('reduces_to', '')} {'; '.join(f['reasons'])}",
+                f"{f.get('reduces_to') or ('settled' if f.get('settled') else '')} "
+                f"{'; '.join(f['reasons'])}",
                 flush=True,
             )
     path = write_results(

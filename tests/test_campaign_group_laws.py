@@ -121,3 +121,22 @@ def test_every_group_of_repeats_has_its_own_law():
         "b2": "viscous",
     }
     assert groups["lubricant=oil,load_N=0.3"].disagree == ("b2",)
+
+
+def test_a_law_settled_at_its_optimum_counts_with_its_estimate_there():
+    a = _comparison("viscous", {"viscous": (50, 0, True), "coulomb": (48, 1, True)})
+    b = _comparison("viscous", {"viscous": (60, 0, True)})
+    b["table"]["coulomb"] = {
+        "sampled": False,
+        "settled": True,
+        "adequate": True,
+        "settle": {"best": "viscous", "elpd_diff": 1.5, "dse": 0.5, "as_good": True},
+    }
+    for digest in (None, comparison_digest):
+        runs = {"r1": a, "r2": digest(b) if digest else b}
+        got = choose_group_law("g", runs)
+        assert got.table["coulomb"]["elpd"] == 48 + 58.5
+        assert got.law == "viscous"
+    # a settled row without its best's elpd is left out, as a screened one is
+    del b["table"]["viscous"]["elpd_loo"]
+    assert "coulomb" not in choose_group_law("g", {"r1": a, "r2": b}).table

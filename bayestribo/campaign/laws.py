@@ -18,7 +18,10 @@ that run's ``dse`` of each law against its own best, combined as independent
 over the runs.
 
 A law a run did not sample is taken at the elpd of the nested law it reduced to at
-its optimum (``equivalent``), which it equals there; a law a run left out otherwise
+its optimum (``equivalent``), which it equals there; a law a run settled at its
+optimum (not sampled: it could not change that run's choice,
+:mod:`bayestribo.inference.settling`) at the run's best elpd less its difference
+estimated there, with that estimate's sd; a law a run left out otherwise
 (screened out as unable to win, or failed) cannot be the group's: only laws with an
 elpd in every run of the group are compared. Where no law has one (runs compared on
 disjoint candidates), the group keeps the law most of its runs chose, and says so.
@@ -92,7 +95,8 @@ class GroupLaw:
 
 def comparison_digest(comparison: Mapping[str, Any] | None) -> dict[str, Any] | None:
     """What the joint choice needs of one run's law comparison (its ``to_dict``):
-    verdict, adequacy, equivalences and per law its elpd and dse."""
+    verdict, adequacy, equivalences and per law its elpd and dse (a law settled at its
+    optimum: its estimate there against the run's best)."""
     if not comparison:
         return None
     table = {}
@@ -104,6 +108,10 @@ def comparison_digest(comparison: Mapping[str, Any] | None) -> dict[str, Any] | 
             "adequate": bool(row.get("adequate", True)),
             "reduces_to": row.get("reduces_to"),
         }
+        settle = row.get("settle") if row.get("settled") else None
+        if settle:
+            table[law]["settled"] = True
+            table[law]["settle"] = {k: settle.get(k) for k in ("best", "elpd_diff", "dse")}
     return {
         "verdict": comparison.get("verdict"),
         "best": comparison.get("best"),
@@ -127,6 +135,13 @@ def _elpd(comparison: Mapping[str, Any], law: str) -> tuple[float, float, bool] 
     table = comparison.get("table") or {}
     row = table.get(law) or {}
     adequate = bool(row.get("adequate", True))
+    settle = row.get("settle") or {}
+    if row.get("elpd_loo") is None and settle.get("best") in table:
+        # settled at its optimum: the run's best less the difference estimated there
+        best = _number((table.get(settle["best"]) or {}).get("elpd_loo"))
+        diff, dse = _number(settle.get("elpd_diff")), _number(settle.get("dse"))
+        if best is not None and diff is not None:
+            return best - diff, dse or 0.0, adequate
     if row.get("elpd_loo") is None:
         nested = (comparison.get("equivalent") or {}).get(law) or row.get("reduces_to")
         row = (table.get(nested) or {}) if nested else {}

@@ -77,7 +77,8 @@ def fit_auto(
     recorded_seed : int or None
         The fit's seed, recorded in the result.
     progress : callable, optional
-        Called with one line of text per law as the comparison goes.
+        Called with one line of text per law as the comparison goes, and one as each
+        later stage that fits the verdict again starts (its frame, its halves).
 
     Returns
     -------
@@ -105,6 +106,9 @@ def fit_auto(
         # comparison's best draw, which the seed moves, set the frame before, and
         # the frame moved the answer by up to 0.7 posterior sd from seed to seed
         verdict = sampled.posterior
+        (progress or (lambda text: None))(
+            f"fitting {comparison.verdict} again in the frame of its own turning times"
+        )
         prepared, sampled = sample_in_law_frame(
             prepared,
             lambda prep: posterior_like(verdict, prep, model, discrepancy),
@@ -118,12 +122,12 @@ def fit_auto(
         record = record.replace(
             verdict_dissipation=record.dissipation, dissipation=plain_data(averaged)
         )
-    comparison = _check_halves(comparison, common, rng, settings, model, discrepancy)
+    comparison = _check_halves(comparison, common, rng, settings, model, discrepancy, progress)
     compared = comparison.to_dict()
     screened = {
         law: row["map"]
         for law, row in compared["table"].items()
-        if row.get("screened") and row.get("map")
+        if (row.get("screened") or row.get("settled")) and row.get("map")
     }
     compared["departures"] = _law_departures(
         common, runs, record, screened, model=model, discrepancy=discrepancy
@@ -140,12 +144,16 @@ def _check_halves(
     settings: SamplerSettings,
     model: str,
     discrepancy: bool,
+    progress: Callable[[str], None] | None = None,
 ) -> LawComparison:
     """The verdict of an adequate comparison fitted to each half of the motion
     (:func:`bayestribo.inference.halves.law_halves`); when they disagree the comparison
-    is no longer adequate, and a :class:`~bayestribo.errors.MisfitWarning` says so."""
+    is no longer adequate, and a :class:`~bayestribo.errors.MisfitWarning` says so.
+    ``progress`` is told when the halves are fitted."""
     if not comparison.adequate or get_law(comparison.verdict).name == get_law("free").name:
         return comparison
+    if progress is not None:
+        progress(f"fitting {comparison.verdict} to each half of the motion")
     halves = law_halves(
         prepared,
         comparison.verdict,

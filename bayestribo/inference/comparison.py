@@ -79,6 +79,23 @@ PSIS-LOO, and decide the verdict. Against the sampled comparison of every candid
 ``../shared/external-data``, side by side with the comparison before screening) no
 law screened out was as good as the best there, and the verdicts are the same.
 
+Settling. The laws left are sampled smallest first, and before each the verdict and
+best among the laws sampled so far are known. A law that misfits at its optimum (or
+holds there but is not as good as the best, so that its draws would enter neither the
+averaged ΔE(A) nor the rivals' comparison), whose
+estimated gain over them cannot push the verdict out nor make it the best by more than
+noise, whose standing (as good as the best or not) is clear of the tie rule's edge by a
+third of its reach, and that cannot be chosen (the verdict adequate, or simpler, or the
+law behind) is *settled* there, not sampled (:mod:`bayestribo.inference.settling`); its
+row says ``settled`` and ``settle`` (the estimate and its standing), it is in
+``as_good`` when the estimate puts it there, and the comparison's text names it. Every
+settled law is judged again against the final verdict and best, and sampled where it
+could now change the choice. On HarmOsc1 the laws as good as ``quadratic`` by
+PSIS-LOO there (``power``, ``quadratic+hysteretic``, ``coulomb+power`` and the law-free
+fit, a third of the time ``law="auto"`` took) are settled as good, on HarmOsc3 the
+``coulomb+power`` that ran to the step ceiling is settled behind
+(``benchmarks/results/auto_speed_real.json``: the same verdicts and laws as good).
+
 Rivals. Simplicity settles a tie between a law and one that nests it; it does not
 settle one between laws of different mechanisms: viscous damping and a friction that
 grows with amplitude (``hysteretic``) make the same turning points, so one increment
@@ -99,7 +116,12 @@ noise and on the calibration of both channels (:mod:`bayestribo.signal.increment
 it only breaks the tie, and only with a law that holds on it; the posterior reported is
 the verdict's on the half-cycle grid. (``benchmarks/laws.py``: a hysteretic decay at
 10x the resolution, viscous misfits at p < 1e-300 on the finer grid and the true law
-holds.)
+holds.) When at their optima on the finer grid every law's standing (as good as the
+best there or not) is clear of the tie rule's edge by a third of its reach
+(:func:`bayestribo.inference.settling.settle`), and the simplest law as good that holds
+there is the first grid's verdict, no draws on the finer grid could change the outcome,
+and the laws are not sampled there (the rivals' record says ``settled``, with each
+law's estimate and misfit checks at its optimum).
 """
 
 from __future__ import annotations
@@ -125,6 +147,7 @@ from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.preparation import prepare, regrid
 from bayestribo.inference.records import LawComparison
 from bayestribo.inference.sampling import SamplerSettings
+from bayestribo.inference.settling import settle
 from bayestribo.inference.start import find_optimum, find_start
 from bayestribo.inference.types import MISFIT_P, PreparedRun, Sampled
 from bayestribo.io.options import ReadOptions
@@ -274,6 +297,12 @@ def _reduction(
     return None
 
 
+def _tie_key(law: str, rank: Sequence[str]) -> tuple[int, int, int]:
+    """The verdict's tie-break: fewest terms, then fewest parameters, then the order of
+    the laws compared (``rank``)."""
+    return (*_complexity(law), rank.index(law) if law in rank else len(rank))
+
+
 def _complexity(law: str) -> tuple[int, int]:
     """Fewest terms first, then fewest parameters."""
     the_law = _law(law)
@@ -285,12 +314,22 @@ def _verdict(
 ) -> tuple[str, list[str], str, bool]:
     """Best law, the laws as good as the best, the simplest adequate of those, and
     whether it is adequate."""
-    best = str(frame.index[0])
+    differences = {law: (table[law]["elpd_diff"], table[law]["dse"]) for law in laws}
+    return _choose(laws, str(frame.index[0]), differences, table)
+
+
+def _choose(
+    laws: Sequence[str],
+    best: str,
+    differences: Mapping[str, tuple[float, float]],
+    table: Mapping[str, Mapping[str, Any]],
+) -> tuple[str, list[str], str, bool]:
+    """:func:`_verdict` from each law's elpd difference from the best and its sd."""
     as_good = [
         law
         for law in laws
         if law == best
-        or table[law]["elpd_diff"] < max(SMALL_ELPD_DIFFERENCE, 2.0 * table[law]["dse"])
+        or differences[law][0] < max(SMALL_ELPD_DIFFERENCE, 2.0 * differences[law][1])
     ]
     # ties go to the simplest, then to the order compared, not to the PSIS-LOO rank:
     # laws this close are ranked by noise (the seed chose between two misfitting laws
@@ -305,6 +344,19 @@ def _verdict(
         converged = [law for law in as_good if table[law]["converged"]]
         return best, as_good, simplest(converged) if converged else best, False
     return best, as_good, simplest(adequate), True
+
+
+def _standing(loos: Mapping[str, Any]) -> tuple[str, dict[str, tuple[float, float]]]:
+    """The best of the laws sampled so far by PSIS-LOO, and each law's difference from
+    it with its sd (as :func:`arviz.compare` computes them)."""
+    elpd = {law: float(loo["elpd_loo"]) for law, loo in loos.items()}
+    best = max(elpd, key=elpd.__getitem__)
+    top = np.asarray(loos[best]["loo_i"], dtype=float)
+    out = {}
+    for law, loo in loos.items():
+        d = top - np.asarray(loo["loo_i"], dtype=float)
+        out[law] = (elpd[best] - elpd[law], float(np.sqrt(d.size * np.var(d))))
+    return best, out
 
 
 def _law_seed(root: np.random.SeedSequence, law: str) -> np.random.SeedSequence:
@@ -622,6 +674,7 @@ def compare_prepared(
     screening: bool = True,
     progress: Callable[[str], None] | None = None,
     starts: Mapping[str, Mapping[str, float]] | None = None,
+    settle_adequate: bool = False,
 ) -> tuple[LawComparison, dict[str, Sampled]]:
     """Compare laws on a prepared run; also return each law's sampled posterior.
 
@@ -654,6 +707,12 @@ def compare_prepared(
         (:func:`bayestribo.inference.start.maximum_from`) rather than from the first
         guesses of :func:`bayestribo.inference.start.find_optimum` (the rivals'
         comparison on the finer grid, module notes).
+    settle_adequate : bool
+        Settle adequate laws as good as the best too where they cannot be chosen
+        (:mod:`bayestribo.inference.settling`): for a comparison whose draws serve its
+        choice alone (the rivals' on the finer grid); False (the default) settles an
+        adequate law only when it is not as good as the best (the draws of one that is
+        may enter the ΔE(A) averaged over the laws as good, or make it a rival).
 
     Returns
     -------
@@ -700,12 +759,65 @@ def compare_prepared(
             "cpu_seconds": used + time.process_time() - cpu,
         }
 
-    def sample_one(law: str, k: int, n: int) -> None:
+    def settling(law: str) -> dict[str, Any] | None:
+        # can the law still change the choice? judged at its optimum against the
+        # verdict and the best of the laws sampled so far (module notes, Settling)
+        at = found[law]
+        theta = np.asarray(at.second_optimum[0], dtype=float)
+        if law not in misfits:
+            misfits[law] = _checks(at.second, theta)
+        if not loos:
+            return None
+        best, differences = _standing(loos)
+        sampled_laws = [other for other in rank if other in loos]
+        _, _, verdict, adequate = _choose(sampled_laws, best, differences, table)
+        info = settle(
+            (at.pointwise, at.n_parameters),
+            (found[verdict].pointwise, found[verdict].n_parameters),
+            (found[best].pointwise, found[best].n_parameters),
+            verdict_adequate=adequate,
+            loses_tie=_tie_key(law, rank) > _tie_key(verdict, rank),
+            small=SMALL_ELPD_DIFFERENCE,
+            adequate=bool(misfits[law]["adequate"]),
+        )
+        if misfits[law]["adequate"] and not settle_adequate and info["as_good"] is not False:
+            # an adequate law as good as the best may enter the averaged ΔE(A) or be a
+            # rival: its draws are needed
+            info["settled"] = False
+        return {**info, "verdict": verdict, "best": best}
+
+    def settle_one(law: str, info: dict[str, Any], start: float, cpu: float) -> None:
+        at = found[law]
+        theta = np.asarray(at.second_optimum[0], dtype=float)
+        table[law] = {
+            "law": _law(law).name,
+            "sampled": False,
+            "converged": None,
+            "settled": True,
+            "settle": info,
+            **misfits[law],
+            "map": {n: float(v) for n, v in zip(at.second.names, theta, strict=True)},
+            **elapsed(law, start, cpu),
+        }
+        if screens.get(law):
+            table[law]["screen"] = screens[law]
+        settled.append(law)
+
+    def sample_one(law: str, k: int, n: int, force: bool = False) -> None:
         start, cpu = time.perf_counter(), time.process_time()
         rng = np.random.default_rng(_law_seed(root, law))
         at = found[law]
         try:
             reduced = _reduction(law, at.posterior, at.optimum[0], runs, optima)
+            info = settling(law) if screening and not force and reduced is None else None
+            if info is not None and info["settled"]:
+                settle_one(law, info, start, cpu)
+                say(
+                    f"{law} ({k}/{n}): not sampled, cannot change the choice at its optimum "
+                    f"({'as good as' if info['as_good'] else 'behind'} {info['best']}, "
+                    f"verdict {info['verdict']})"
+                )
+                return
             if reduced is None:
                 say(f"sampling {law} ({k}/{n})")
                 sampled, loos[law] = _fit_law(
@@ -758,6 +870,10 @@ def compare_prepared(
 
     # smallest laws first: their optima are starting points of the laws that nest them
     ordered = sorted(laws, key=_complexity)
+    # the order of the laws compared, for ties of complexity (the law-free fit last)
+    rank = [*ordered, *([] if "free" in ordered else ["free"])]
+    misfits: dict[str, dict[str, Any]] = {}
+    settled: list[str] = []
     # laws whose ΔE(A) cannot follow the turning points' are not taken to an optimum
     early = turning_point_screen(prepared, ordered) if screening else {}
     for law in ordered:
@@ -810,7 +926,10 @@ def compare_prepared(
     survivors = [law for law in ordered if law in found and law not in screened]
     for k, law in enumerate(survivors, 1):
         sample_one(law, k, len(survivors))
-    if law_free and not any(row.get("adequate") and row.get("converged") for row in table.values()):
+    if law_free and not any(
+        row.get("adequate") and (row.get("converged") or row.get("settled"))
+        for row in table.values()
+    ):
         # no law compared holds: the law-free fit, whose ΔE(A) is any increasing
         # polynomial of degree 1-4, says how much energy the decay loses
         free = get_law("free").name
@@ -819,7 +938,21 @@ def compare_prepared(
             optimise("free", 1, 1)
             if "free" in found:
                 sample_one("free", 1, 1)
-    if not loos or len(loos) + len(equivalent) + len(screened) < 2:
+    # a law sampled later may have moved the verdict or the best: every settled law is
+    # judged again against them, and sampled when it could now change the choice
+    while settled:
+        reopened = [law for law in settled if not (settling(law) or {}).get("settled")]
+        if not reopened:
+            break
+        law = reopened[0]
+        settled.remove(law)
+        del table[law]
+        say(f"{law}: the verdict moved; sampled after all")
+        sample_one(law, 1, 1, force=True)
+    for law in settled:
+        table[law]["settle"] = {**table[law]["settle"], **(settling(law) or {})}
+    loos = {law: loos[law] for law in rank if law in loos}
+    if not loos or len(loos) + len(equivalent) + len(screened) + len(settled) < 2:
         raise BayestriboError(
             f"laws: fewer than two of {laws} could be fitted: " + "; ".join(notes)
         )
@@ -832,10 +965,20 @@ def compare_prepared(
             }
         )
     best, as_good, verdict, adequate = _verdict(list(loos), table, frame)
+    # the settled laws as good as the best at their optimum stand beside the sampled
+    as_good = [
+        law
+        for law in rank
+        if law in as_good or (law in settled and table[law]["settle"]["as_good"])
+    ]
     rematch = None
     if rivals and adequate:
         contenders = _rivals(verdict, as_good, table)
         if contenders:
+            say(
+                f"comparing {verdict} with {', '.join(contenders)} again on {TIE_GRID} "
+                "increments per half cycle"
+            )
             rematch = _compare_rivals(
                 prepared,
                 [verdict, *contenders],
@@ -863,6 +1006,7 @@ def compare_prepared(
         rivals=rematch,
         equivalent=equivalent,
         screened=screened,
+        settled=[law for law in rank if law in settled],
     )
     return comparison, runs
 
@@ -900,6 +1044,11 @@ def _compare_rivals(
         "grid_points": int(fine.data.increments.size),
         "decided": False,
     }
+    if screening:
+        judged = _judged_at_optimum(fine, laws, model, discrepancy, starts)
+        if judged is not None:
+            out.update(judged)
+            return out
     try:
         comparison, _ = compare_prepared(
             fine,
@@ -911,6 +1060,7 @@ def _compare_rivals(
             rivals=False,
             screening=screening,
             starts=starts,
+            settle_adequate=True,
         )
     except BayestriboError as exc:
         out["error"] = str(exc)
@@ -946,6 +1096,74 @@ def _compare_rivals(
     # first verdict is not as good there
     out["decided"] = bool(comparison.adequate and set(as_good) != set(laws))
     return out
+
+
+def _judged_at_optimum(
+    fine: PreparedRun,
+    laws: Sequence[str],
+    model: str,
+    discrepancy: bool,
+    starts: Mapping[str, Mapping[str, float]] | None,
+) -> dict[str, Any] | None:
+    """The rivals' comparison judged at the laws' optima on the finer grid, when that
+    settles it (module notes, Rivals): every law's standing (as good as the best there
+    or not) clear of the tie rule's edge by a third of its reach
+    (:func:`bayestribo.inference.settling.settle`), and the verdict there, the simplest
+    law as good that holds at its optimum, the first grid's verdict (``laws[0]``, whose
+    posterior is the one reported, sampled and converged on the first grid). Returns the
+    comparison's fields (``verdict``, ``as_good``, ``adequate``, ``decided``,
+    ``settled`` True and each law's estimate in ``table``), or None when the optima do
+    not settle it (the laws are then sampled)."""
+    found: dict[str, LawOptimum] = {}
+    optima: dict[str, dict[str, float]] = {}
+    for law in sorted(laws, key=_complexity):
+        try:
+            found[law] = _optimise(
+                law, fine, model, discrepancy, optima, start=(starts or {}).get(law)
+            )
+        except BayestriboError:
+            return None
+        at = found[law]
+        optima[law] = dict(zip(at.posterior.names, at.optimum[0], strict=True))
+    elpd = {law: optimum_elpd(at.pointwise, at.n_parameters) for law, at in found.items()}
+    if not all(np.isfinite(v) for v in elpd.values()):
+        return None
+    best = max(laws, key=elpd.__getitem__)
+    top = (found[best].pointwise, found[best].n_parameters)
+    table: dict[str, dict[str, Any]] = {}
+    for law in laws:
+        at = found[law]
+        info = settle(
+            (at.pointwise, at.n_parameters),
+            top,
+            top,
+            verdict_adequate=True,
+            loses_tie=True,
+            small=SMALL_ELPD_DIFFERENCE,
+            adequate=True,
+        )
+        if info["as_good"] is None:
+            return None
+        checks = _checks(at.second, np.asarray(at.second_optimum[0], dtype=float))
+        table[law] = {
+            **{k: info[k] for k in ("elpd_diff", "dse", "reach", "as_good")},
+            **{k: checks.get(k) for k in ("adequate", "misfit_p", "shape_p")},
+        }
+    as_good = [law for law in laws if table[law]["as_good"]]
+    holding = [law for law in as_good if table[law]["adequate"]]
+    if not holding:
+        return None
+    verdict = min(holding, key=lambda law: _tie_key(law, list(laws)))
+    if verdict != laws[0]:
+        return None
+    return {
+        "verdict": verdict,
+        "as_good": as_good,
+        "adequate": True,
+        "decided": set(as_good) != set(laws),
+        "settled": True,
+        "table": table,
+    }
 
 
 def compare_dissipation_laws(

@@ -64,6 +64,11 @@ class LawComparison:
         Laws screened out at their optimum: too far behind the best to win (module
         notes, Screening), not sampled; their rows say ``screened`` and ``screen``
         (the estimate at the optimum and the limit it passed).
+    settled : list of str
+        Laws not sampled because they could no longer change the choice, judged at
+        their optimum (:mod:`bayestribo.inference.settling`); their rows say
+        ``settled`` and ``settle`` (the estimate, its reach and whether the law is as
+        good as the best, by which it is in ``as_good`` or not).
     """
 
     run_name: str
@@ -77,10 +82,11 @@ class LawComparison:
     rivals: dict[str, Any] | None = None
     equivalent: dict[str, str] = field(default_factory=dict)
     screened: list[str] = field(default_factory=list)
+    settled: list[str] = field(default_factory=list)
 
     def describe(self) -> str:
-        """One sentence: the law chosen and why (the laws that reduced to others, and
-        those screened out at their optimum)."""
+        """One sentence: the law chosen and why (the laws that reduced to others, those
+        screened out at their optimum and those settled there)."""
         text = self._choice()
         if self.equivalent:
             text += "; " + _equivalence_text(self.equivalent, self.table)
@@ -88,6 +94,11 @@ class LawComparison:
             text += (
                 f"; {len(self.screened)} not sampled, too far behind the best to win "
                 f"(screened): {', '.join(self.screened)}"
+            )
+        if self.settled:
+            text += (
+                f"; {len(self.settled)} not sampled, unable to change the choice at their "
+                f"optimum (settled): {', '.join(self.settled)}"
             )
         return text
 
@@ -150,6 +161,7 @@ class LawComparison:
             "warnings": list(self.warnings),
             "equivalent": dict(self.equivalent),
             "screened": list(self.screened),
+            "settled": list(self.settled),
         }
 
     @classmethod
@@ -169,6 +181,7 @@ class LawComparison:
             rivals=data.get("rivals"),
             equivalent=dict(data.get("equivalent") or {}),
             screened=list(data.get("screened") or []),
+            settled=list(data.get("settled") or []),
         )
 
 
