@@ -37,8 +37,16 @@ integrated once, at read time (:func:`integrate_acceleration`):
    A free decay's velocity has almost nothing below f_c but the steps of the
    displacement at the release (from the held position to the centre of the
    oscillation) and at the stop: what the high-pass would remove is fitted there by
-   least squares with a step at each edge and its first two derivatives (the edge's
-   shape), and that part is kept; the rest is the drift. A decay that fades into the
+   least squares with a step at each edge and its first four derivatives (the edge's
+   shape), and that part is kept; the rest is the drift. A decay that loses much of its
+   energy per cycle at the release (quadratic drag at a large swing) starts with a
+   low-frequency content the step and two derivatives did not hold: the high-pass took
+   the rest of it, and its swings in the first cycles after the first period were 0.2 %
+   low (noise-free, ``tests/test_io_acceleration.py``), which moved a fit's share of
+   the loss from the quadratic drag to the viscous (ζ +1.5 %, c₂ -0.9 % with almost no
+   noise; with the benchmark's, c₂'s z -0.76 ± 0.40); with four derivatives they are
+   within 4e-4, and that record's fit within 0.1 %. A fifth derivative fits the noise
+   near the edge (1e-3 again). A decay that fades into the
    noise ends at its last excursion beyond 5σ of the rest, a period later. Without a
    rest on a side (a record that starts or ends in motion) the step there cannot be
    told from the drift: the high-pass takes it, at f_c = 0.3 f to confine what it does
@@ -114,8 +122,8 @@ SPREAD_LIMIT = 0.25
 #: Samples of rest each side of the motion needs for its drift to be measured there.
 _REST_SAMPLES = 8
 #: Terms of the low-frequency content of a free decay's edge (the release, the stop)
-#: kept out of the high-pass: the displacement's step and its first two derivatives.
-_MULTIPOLES = 3
+#: kept out of the high-pass: the displacement's step and its first four derivatives.
+_MULTIPOLES = 5
 #: Excursion of the acceleration from its rest level, in rest noise standard deviations,
 #: beyond which a decay that fades into the noise is still moving.
 _FADED = 5.0
@@ -327,7 +335,7 @@ def _kept_steps(
     (the held position to the centre of the oscillation at the release, the centre to
     the stuck position at the stop; a decay starting at a turning point puts a share
     (f_c/f)² of its swing there): the rest of ``low`` is the drift of the integral.
-    Each step is a delta of the velocity at its time, with its first two derivatives
+    Each step is a delta of the velocity at its time, with its first four derivatives
     for the shape of the edge, band-limited to the samples."""
     from scipy.fft import irfft, next_fast_len, rfftfreq
 
