@@ -315,8 +315,8 @@ def _quadratic_drag_velocity(t: np.ndarray) -> np.ndarray:
 def test_a_fast_decay_keeps_its_first_swings_after_the_high_pass() -> None:
     # a record ending in motion (the high-pass at 0.3 f), noise-free: what the release
     # holds below f_c is kept, so that the swings of the first cycles after the first
-    # period (where quadratic drag loses most) are those of the motion; taken by the
-    # high-pass, they were 0.2 % low and a fit moved the loss from c₂ to ζ
+    # period (where quadratic drag loses most) are those of the motion; with the edge's
+    # terms unsmoothed, they were 0.17 % low and a fit moved the loss from c₂ to ζ
     dt = 1.0 / RATE
     t = np.arange(0.0, REST + 18.0, dt)
     v = _quadratic_drag_velocity(t)

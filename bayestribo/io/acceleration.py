@@ -37,20 +37,18 @@ integrated once, at read time (:func:`integrate_acceleration`):
    A free decay's velocity has almost nothing below f_c but the steps of the
    displacement at the release (from the held position to the centre of the
    oscillation) and at the stop: what the high-pass would remove is fitted there by
-   least squares with a step at each edge and its first four derivatives (the edge's
-   shape), and that part is kept; the rest is the drift. A decay that loses much of its
-   energy per cycle at the release (quadratic drag at a large swing) starts with a
-   low-frequency content the step and two derivatives did not hold: the high-pass took
-   the rest of it, and its swings in the first cycles after the first period were 0.2 %
-   low (noise-free, ``tests/test_io_acceleration.py``), which moved a fit's share of
-   the loss from the quadratic drag to the viscous (ζ +1.5 %, c₂ -0.9 % with almost no
-   noise; with the benchmark's, c₂'s z -0.76 ± 0.40); with four derivatives they are
-   within 4e-4, and that record's fit within 0.1 %. A fifth derivative fits the noise
-   near the edge (1e-3 again). A decay that fades into the
-   noise ends at its last excursion beyond 5σ of the rest, a period later. Without a
-   rest on a side (a record that starts or ends in motion) the step there cannot be
-   told from the drift: the high-pass takes it, at f_c = 0.3 f to confine what it does
-   there to fewer cycles (its gain 0.992 at f divided out), and the record says so.
+   least squares with a step at each edge and its first two derivatives (the edge's
+   shape, smoothed above 16 f_c: unsmoothed, a step between two samples rang over the
+   whole record and the high-pass took part of the edge's content, so that a decay
+   that loses much per cycle at the release, quadratic drag at a large swing, kept its
+   first swings after the first period 0.2 % low, noise-free; a fit then moved its
+   loss from c₂ to ζ: ζ +1.5 %, c₂ -0.9 % with almost no noise, c₂'s z -0.76 ± 0.40 in
+   the benchmark; now within 4e-4, ``tests/test_io_acceleration.py``), and that part
+   is kept; the rest is the drift. A decay that fades into the noise ends at its last
+   excursion beyond 5σ of the rest, a period later. Without a rest on a side (a record
+   that starts or ends in motion) the step there cannot be told from the drift: the
+   high-pass takes it, at f_c = 0.3 f to confine what it does there to fewer cycles
+   (its gain 0.992 at f divided out), and the record says so.
 
 Without noise the velocity so made is within 2e-3 of the swing of the true one after
 the first period (``tests/test_io_acceleration.py``). Fits of simulated accelerometer
@@ -123,7 +121,9 @@ SPREAD_LIMIT = 0.25
 _REST_SAMPLES = 8
 #: Terms of the low-frequency content of a free decay's edge (the release, the stop)
 #: kept out of the high-pass: the displacement's step and its first four derivatives.
-_MULTIPOLES = 5
+_MULTIPOLES = 3
+#: Spectral width of the Gaussian that smooths the edge's terms, in cut-offs f_c.
+_SMOOTHING = 16.0
 #: Excursion of the acceleration from its rest level, in rest noise standard deviations,
 #: beyond which a decay that fades into the noise is still moving.
 _FADED = 5.0
@@ -325,6 +325,19 @@ def _lowpass(x: NDArray, dt: float, cutoff: float) -> NDArray:
     return low[pad : pad + n]
 
 
+def _edge_smoothing(f: NDArray, cutoff: float, dt: float) -> NDArray:
+    """The spectrum of the Gaussian that smooths the edge's terms: spectral width
+    16 f_c, an eighth of the sampling rate at most.
+
+    A delta between two samples, unsmoothed, rings over the whole record (its spectrum
+    reaches the Nyquist frequency, and its derivatives' grow there), and the odd
+    reflection at the record's ends (:func:`_lowpass`) turns that ringing into a
+    low-frequency part at the ends; below a few f_c, where the edge's content is, the
+    Gaussian is 1."""
+    width = min(_SMOOTHING * cutoff, 0.125 / dt)
+    return np.exp(-0.5 * (f / width) ** 2)
+
+
 def _kept_steps(
     t: NDArray, low: NDArray, cutoff: float, times: list[float]
 ) -> tuple[NDArray, list[float]]:
@@ -343,8 +356,9 @@ def _kept_steps(
     m = next_fast_len(2 * t.size, real=True)
     f = rfftfreq(m, dt)
     columns = []
+    smooth = _edge_smoothing(f, cutoff, dt)
     for tj in times:
-        shift = np.exp(-2j * math.pi * f * (tj - t[0])) / dt
+        shift = smooth * np.exp(-2j * math.pi * f * (tj - t[0])) / dt
         for k in range(_MULTIPOLES):  # the step, and its derivatives (the edge's shape)
             delta = irfft(shift * (2j * math.pi * f * dt) ** k, m)[: t.size]
             columns.append(_lowpass(delta, dt, cutoff))
