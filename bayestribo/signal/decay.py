@@ -62,10 +62,14 @@ from the end of motion T. A real recording needs some care first, and
   oscillation frequency). A missing displacement is the integral of the velocity,
   after removing the velocity's zero offset measured at rest (when a rest segment
   exists); the integration constant is the equilibrium estimate above, and a residual
-  velocity offset shows as the fitted drift. Below 50 samples a period it is
-  integrated as a damped oscillation with kinks at its turning points, the pole
-  fitted to the velocity, and ∫E between samples is the oscillator's own
-  (:mod:`bayestribo.signal.integration`; :attr:`EnergyDecay.energy_steps`); above,
+  velocity offset shows as the fitted drift. The integral wanders (its noise over two
+  periods at rest, far above its sample-to-sample noise): the equilibrium's fit weighs
+  each turning point by that wander, or the smallest swings, the wander's own, would set
+  the drift (integrated accelerometer records: the first swings off centre by up to
+  11 % of their size, now about 1 %, ``tests/test_io_acceleration.py``). Below 50
+  samples a period it is integrated as a damped oscillation with kinks at its turning
+  points, the pole fitted to the velocity, and ∫E between samples is the oscillator's
+  own (:mod:`bayestribo.signal.integration`; :attr:`EnergyDecay.energy_steps`); above,
   by the trapezoidal rule with its gain at the record's frequency divided out.
 * **A coarse digitiser** (a channel quantised in steps its noise does not dither,
   :mod:`bayestribo.signal.coarse`) resolves neither the smallest swings nor the end of
