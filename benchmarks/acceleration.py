@@ -8,9 +8,9 @@ over each sample interval, a constant bias (± 0.5 m/s², and in half the runs a
 smartphone's share of gravity, 9.3 to 9.8 m/s²) and white noise of 0.01 to 0.03 m/s²
 per sample (log-uniform: 100 to 300 µg/√Hz, MEMS and phone sensors), 2 s of rest
 before the release and 3 s after the stop (a drag-only record ends in motion, when the
-viscous decay alone would be at e⁻⁴ of the release: a recording stopped before the swing
-fades into the noise; one that runs into the noise is refused by the fit's turning-point
-check, the integrated noise's wiggles taken for turning points: ``--window`` cuts it).
+viscous decay alone would be at e⁻⁴ of the release; where the swing fades into the
+noise before, the analysis ends at the last turning point above it, with a
+``FadeWarning``, :mod:`bayestribo.signal.decay`).
 The record is written as a CSV with one column ``acceleration_m_per_s2`` (and the
 time) and read by :func:`bayestribo.read_run`, which integrates it
 (:mod:`bayestribo.io.acceleration`), then fitted:

@@ -172,6 +172,9 @@ def test_a_duffing_spring_is_measured_with_its_potential():
         result = fit(run, law="viscous", seed=1, grid_points=32)
     spring = result._attr("restoring_json")
     assert spring["name"] == "duffing" and "β = " in result.to_text()
+    # β's standard error is marginalised into the intervals, and the output says so
+    assert spring["error"]["parameter"] == "beta" and spring["error"]["draws_unshifted"] == 0
+    assert "its error marginalised into the intervals" in result.to_text()
     # β from the package's turning times: 0.6007 (their interpolation's bias is some
     # 60 times the timing scatter's standard error; exact turning times give 0.60003)
     assert spring["beta"] == pytest.approx(beta, rel=5e-3)

@@ -33,6 +33,7 @@ if TYPE_CHECKING:
     from bayestribo.inference.posterior import Posterior
 
 __all__ = [
+    "data_seed",
     "law_frequency",
     "matched_law_times",
     "prepare",
@@ -67,7 +68,7 @@ def _undo_declared_filter(run: Run) -> tuple[Run, bool]:
     return dataclasses.replace(run, displacement=x, velocity=v), True
 
 
-def _data_seed(decay: EnergyDecay) -> int:
+def data_seed(decay: EnergyDecay) -> int:
     """A seed that is a function of the analysed signals alone (CRC-32 of their bytes)."""
     crc = zlib.crc32(np.ascontiguousarray(decay.y).tobytes())
     return zlib.crc32(np.ascontiguousarray(decay.yp).tobytes(), crc)
@@ -243,7 +244,7 @@ def prepare(
         decay = with_restoring(decay, restoring)
     noise_used = noise or noise_model(decay, dict(recording.metadata))
     if seed is None:
-        mc_seed = _data_seed(decay)
+        mc_seed = data_seed(decay)
     else:
         mc_seed = int(np.random.default_rng(seed).integers(2**31))
     data = pi_data(decay, noise_used, grid_points=grid_points, seed=mc_seed)
@@ -261,7 +262,13 @@ def prepare(
     )
 
 
-def reframe(prepared: PreparedRun, frequency_Hz: float) -> PreparedRun:
+def reframe(
+    prepared: PreparedRun,
+    frequency_Hz: float,
+    *,
+    restoring: Any = None,
+    seed: int | None = None,
+) -> PreparedRun:
     """The same run prepared again with time scaled by another natural frequency.
 
     Parameters
@@ -271,6 +278,14 @@ def reframe(prepared: PreparedRun, frequency_Hz: float) -> PreparedRun:
     frequency_Hz : float
         The natural frequency [Hz] that scales time (τ = 2πf t), e.g.
         :func:`law_frequency`.
+    restoring : RestoringKernel, optional
+        Another nonlinear restoring force for the energy (the same force at other
+        parameters, :mod:`bayestribo.inference.restoring_error`); default the run's.
+    seed : int, optional
+        Seed of the Monte Carlo noise of a derived channel's increments; default one
+        computed from the decay (:func:`prepare`). The seed of ``prepared`` keeps the
+        variances' Monte Carlo draws as they were, so that two preparations differ by
+        their energy alone.
 
     Returns
     -------
@@ -290,9 +305,10 @@ def reframe(prepared: PreparedRun, frequency_Hz: float) -> PreparedRun:
         frequency_Hz=frequency_Hz,
         linear_spring=old.restoring is None,
     )
-    decay = with_restoring(decay, old.restoring)
+    decay = with_restoring(decay, old.restoring if restoring is None else restoring)
     noise_used = prepared.noise if prepared.noise_given else noise_model(decay, dict(run.metadata))
-    data = pi_data(decay, noise_used, grid_points=prepared.grid_points, seed=_data_seed(decay))
+    mc_seed = data_seed(decay) if seed is None else seed
+    data = pi_data(decay, noise_used, grid_points=prepared.grid_points, seed=mc_seed)
     return dataclasses.replace(prepared, decay=decay, noise=noise_used, data=data)
 
 
@@ -316,7 +332,7 @@ def regrid(prepared: PreparedRun, grid_points: int) -> PreparedRun:
     if grid_points < 2:
         raise BayestriboError(f"grid_points: expected at least 2, got {grid_points}")
     decay = prepared.decay
-    data = pi_data(decay, prepared.noise, grid_points=int(grid_points), seed=_data_seed(decay))
+    data = pi_data(decay, prepared.noise, grid_points=int(grid_points), seed=data_seed(decay))
     return dataclasses.replace(prepared, data=data, grid_points=int(grid_points))
 
 
@@ -363,7 +379,7 @@ def prepare_part(prepared: PreparedRun, start: int, stop: int) -> PreparedRun:
         linear_spring=old.restoring is None,
     )
     decay = with_restoring(decay, old.restoring)
-    data = pi_data(decay, prepared.noise, grid_points=prepared.grid_points, seed=_data_seed(decay))
+    data = pi_data(decay, prepared.noise, grid_points=prepared.grid_points, seed=data_seed(decay))
     return dataclasses.replace(prepared, run=part, decay=decay, data=data, noise_given=True)
 
 

@@ -588,6 +588,17 @@ class FitResult:
                 text += (
                     f", β = {spring['beta']:.4g} ± {spring['beta_se']:.2g} (from the half periods)"
                 )
+            error = spring.get("error")
+            if error:
+                shares = [
+                    v
+                    for k, v in error["sd_added_over_sd"].items()
+                    if k != "y0" and not k.startswith("log10_")
+                ]
+                text += (
+                    f", its error marginalised into the intervals (an sd of at most "
+                    f"{100 * max(shares, default=0.0):.2g} % of a law parameter's own)"
+                )
             if spring.get("in_model"):
                 lines.append(
                     text + f"; the law's model ({self.law}) and the law-free ΔE(A) take its "

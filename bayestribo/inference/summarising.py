@@ -34,6 +34,7 @@ from bayestribo.inference.dissipation import (
     turning_point_dissipation,
 )
 from bayestribo.inference.fit_record import FitRecord, plain_data
+from bayestribo.inference.restoring_error import restoring_error, shifted
 from bayestribo.inference.result import FitResult
 from bayestribo.inference.sensitivity import prior_sensitivity
 from bayestribo.inference.types import PreparedRun, Sampled
@@ -273,14 +274,19 @@ def summary(
         filter_undone=prepared.filter_undone,
     )
     gain = sensor.draws(rng.spawn(1)[0], flat.shape[0])
-    derived = derived_quantities(posterior, flat, scaling, metadata, rng, frequency_sd, gain)
+    # a measured restoring force's error (a Duffing spring's β), marginalised into the
+    # draws the intervals and the law's ΔE(A) are taken from; its own stream, so that
+    # the other nuisances' draws do not move with it
+    spring_error = restoring_error(prepared, posterior, flat, rng.spawn(1)[0])
+    reported = shifted(flat, spring_error)
+    derived = derived_quantities(posterior, reported, scaling, metadata, rng, frequency_sd, gain)
     scale = physical_scale(scaling, metadata)
-    own, own_units = law_quantities(posterior, flat, scale, gain)
+    own, own_units = law_quantities(posterior, reported, scale, gain)
     derived = {**derived, **{k: v for k, v in own.items() if k not in derived}}
     swings = dissipation_amplitudes(decay.peaks.value / scaling.length_scale)
     scale = dataclasses.replace(scale, length_scale=scale.length_scale / sensor.gain)
     dissipation = dissipation_band(
-        posterior, flat, swings, scale, frequency_sd=frequency_sd, gain_sd=sensor.gain_sd
+        posterior, reported, swings, scale, frequency_sd=frequency_sd, gain_sd=sensor.gain_sd
     )
     restoring, measured_spring = _measured_restoring(metadata.get("restoring"), decay)
     tp_scale, energy_sd = _restoring_scale(
@@ -320,6 +326,7 @@ def summary(
             {
                 "name": restoring.name,
                 **(measured_spring or {}),
+                **({} if spring_error is None else {"error": spring_error.to_dict()}),
                 # the law's model takes its potential (model/laws/nonlinear.py)
                 "in_model": posterior.law.restoring is not None,
             }

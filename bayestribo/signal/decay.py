@@ -62,10 +62,14 @@ from the end of motion T. A real recording needs some care first, and
   oscillation frequency). A missing displacement is the integral of the velocity,
   after removing the velocity's zero offset measured at rest (when a rest segment
   exists); the integration constant is the equilibrium estimate above, and a residual
-  velocity offset shows as the fitted drift. Below 50 samples a period it is
-  integrated as a damped oscillation with kinks at its turning points, the pole
-  fitted to the velocity, and ∫E between samples is the oscillator's own
-  (:mod:`bayestribo.signal.integration`; :attr:`EnergyDecay.energy_steps`); above,
+  velocity offset shows as the fitted drift. The integral wanders (its noise over two
+  periods at rest, far above its sample-to-sample noise): the equilibrium's fit weighs
+  each turning point by that wander, or the smallest swings, the wander's own, would set
+  the drift (integrated accelerometer records: the first swings off centre by up to
+  11 % of their size, now about 1 %, ``tests/test_io_acceleration.py``). Below 50
+  samples a period it is integrated as a damped oscillation with kinks at its turning
+  points, the pole fitted to the velocity, and ∫E between samples is the oscillator's
+  own (:mod:`bayestribo.signal.integration`; :attr:`EnergyDecay.energy_steps`); above,
   by the trapezoidal rule with its gain at the record's frequency divided out.
 * **A coarse digitiser** (a channel quantised in steps its noise does not dither,
   :mod:`bayestribo.signal.coarse`) resolves neither the smallest swings nor the end of
@@ -1161,14 +1165,20 @@ def _irregular_start(spacing: RegularTurningPoints, peaks: Peaks, skipped: str, 
 
 
 def _equilibrium_from(
-    peaks: Peaks, start: int, offset: float | Literal["auto", "constant"] | None
+    peaks: Peaks,
+    start: int,
+    offset: float | Literal["auto", "constant"] | None,
+    noise: float | None = None,
 ) -> Peaks:
     """The turning points about the equilibrium estimated from turning point ``start``
     on, as :func:`~bayestribo.signal.peaks.find_peaks` estimates it from all of them
     (Eq. 20: the irregular ones before do not follow it); unchanged for an ``offset``
-    given as a number or None, or when fewer than 4 remain."""
+    given as a number or None, or when fewer than 4 remain. ``noise``: the turning
+    points' noise [signal unit] where it exceeds their value noise (a derived
+    displacement's wander)."""
     if not isinstance(offset, str) or len(peaks) - start < 4:
         return peaks
+    value_noise = peaks.value_noise if noise is None else max(noise, peaks.value_noise)
     raw = peaks.value + (peaks.offset + peaks.drift * peaks.t)
     tail = peaks.stop_time
     rest_raw = (
@@ -1177,11 +1187,9 @@ def _equilibrium_from(
         else peaks.rest_value + peaks.offset + peaks.drift * tail
     )
     if offset == "auto" and len(peaks) - start >= 8:
-        level, slope = estimate_offset(
-            raw[start:], peaks.t[start:], drift=True, noise=peaks.value_noise
-        )
+        level, slope = estimate_offset(raw[start:], peaks.t[start:], drift=True, noise=value_noise)
     else:
-        level, slope = estimate_offset(raw[start:], noise=peaks.value_noise)[0], 0.0
+        level, slope = estimate_offset(raw[start:], noise=value_noise)[0], 0.0
     return replace(
         peaks,
         value=raw - (level + slope * peaks.t),
@@ -1475,8 +1483,14 @@ def _analyse(
             FadeWarning,
         )
         peaks = _head(peaks, spacing.faded)
-    if spacing.start:
-        peaks = _equilibrium_from(peaks, spacing.start, offset)
+    # a derived displacement's turning points carry its wander (band_x), which its
+    # sample-to-sample noise does not show: weighted by that alone, the smallest swings
+    # weighed most in the equilibrium's fit, and its drift followed their wander
+    wander = band_x if derived == "displacement" and band_x else None
+    if spacing.start or faded_at is not None or wander is not None:
+        # the equilibrium from the decay's own turning points (those of an irregular
+        # start do not follow Eq. 20, nor those of the noise after a fade)
+        peaks = _equilibrium_from(peaks, spacing.start, offset, noise=wander)
     peaks = replace(peaks, stop_time=stop_time)
     period = 2.0 * spacing.half_period
     if v is None:

@@ -83,6 +83,11 @@ class RestoringForce:
         name), ``k`` the values of ``kernel_parameters``.
     kernel_parameters : tuple of str
         The names in ``parameters`` the kernels take, in order.
+    with_parameters : callable, optional
+        ``with_parameters(values) -> RestoringForce``: the force at other values of its
+        measured parameters (a mapping by name), for a fitted force: what lets a fit
+        carry their standard errors into its intervals
+        (:mod:`bayestribo.inference.restoring_error`).
     """
 
     name: str
@@ -96,6 +101,7 @@ class RestoringForce:
     spring: Callable[[ArrayLike], NDArray] | None = None
     kernels: tuple[Callable, Callable] | None = None
     kernel_parameters: tuple[str, ...] = ()
+    with_parameters: Callable[[Mapping[str, float]], RestoringForce] | None = None
 
     def kernel(self) -> RestoringKernel | None:
         """What the laws' integrator takes of this force (None for a force without

@@ -14,6 +14,7 @@ period with the swing is the spring's.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import replace
 from functools import partial
 
@@ -144,6 +145,11 @@ def duffing(beta: float) -> RestoringForce:
     )
 
 
+def _with_parameters(values: Mapping[str, float]) -> RestoringForce:
+    """The Duffing spring at another β (``values["beta"]``, 1/unit²)."""
+    return duffing(float(values["beta"]))
+
+
 def _measure(times: ArrayLike, values: ArrayLike) -> tuple[RestoringForce, dict]:
     """The Duffing spring of the run: β fitted to its turning times (:func:`fit_beta`)."""
     beta, se = fit_beta(times, values)
@@ -161,5 +167,6 @@ DUFFING = register_builtin(
         spring=partial(spring, beta=0.0),
         kernels=(spring_kernel, potential_kernel),
         kernel_parameters=("beta",),
+        with_parameters=_with_parameters,
     )
 )
