@@ -268,20 +268,34 @@ def autocorr_time(chain: NDArray, c: float = 5.0) -> NDArray:
 
 def _autocorr_times(chains: NDArray, c: float = 5.0) -> NDArray:
     """:func:`autocorr_time` of each ensemble's chain, (ensembles, steps, walkers,
-    params) -> (ensembles, params), in one batched transform."""
-    n_t = chains.shape[1]
-    # Zero padding to any length >= 2n - 1 gives the linear (not circular)
-    # autocorrelation exactly; emcee pads to twice the next power of two, a fast
-    # length is up to twice as quick, and so are transforms along contiguous rows.
+    params) -> (ensembles, params).
+
+    Zero padding to any length >= 2n - 1 gives the linear (not circular)
+    autocorrelation exactly; emcee pads to twice the next power of two, a fast length
+    is up to twice as quick, and so are transforms along contiguous rows. Each
+    walker's autocorrelation is taken over its value at lag 0 (its sum of squares) and
+    averaged over the walkers; the transform being linear, the average is taken of
+    the normalised power spectra, transformed back once per parameter. The walkers of
+    one ensemble and parameter are transformed together, in one reused padded buffer:
+    a few hundred kB at a time, where the whole at once (megabytes, allocated afresh
+    at every check) costs more in fresh memory pages than in arithmetic.
+    """
+    n_ens, n_t, n_walkers, n_params = chains.shape
     size = scipy.fft.next_fast_len(max(2 * n_t - 1, 1), real=True)
-    # (ensembles, params, walkers, steps)
-    rows = np.ascontiguousarray(np.transpose(chains, (0, 3, 2, 1)))
+    rows = np.zeros((n_walkers, size))
+    kept = rows[:, :n_t]
+    power = np.empty((n_ens, n_params, size // 2 + 1))
     with np.errstate(invalid="ignore", divide="ignore"):
-        spectrum = scipy.fft.rfft(rows - rows.mean(axis=-1, keepdims=True), n=size, axis=-1)
-        power = spectrum.real**2 + spectrum.imag**2
+        for e in range(n_ens):
+            for p in range(n_params):
+                kept[...] = chains[e, :, :, p].T
+                kept -= kept.mean(axis=-1, keepdims=True)
+                spectrum = scipy.fft.rfft(rows, axis=-1)
+                walkers = spectrum.real**2 + spectrum.imag**2
+                walkers /= np.einsum("ij,ij->i", kept, kept)[:, None]
+                walkers.mean(axis=0, out=power[e, p])
         acf = scipy.fft.irfft(power, n=size, axis=-1)[..., :n_t]
-        acf = acf / acf[..., :1]
-        taus = 2.0 * np.cumsum(acf.mean(axis=2), axis=-1) - 1.0  # (ensembles, params, steps)
+        taus = 2.0 * np.cumsum(acf, axis=-1) - 1.0  # (ensembles, params, steps)
         inside = np.arange(n_t) < c * taus
     window = np.where(inside.any(axis=-1), np.argmin(inside, axis=-1), n_t - 1)
     return np.take_along_axis(taus, window[..., None], axis=-1)[..., 0]
