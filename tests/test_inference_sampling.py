@@ -387,6 +387,29 @@ def test_grouped_moves_never_use_another_ensembles_walkers(move):
         assert np.all(np.isnan(q[1]))
 
 
+@pytest.mark.parametrize("move", [GroupedDEMove(3), GroupedDESnookerMove(3)])
+def test_a_steps_numbers_drawn_together_are_those_drawn_one_by_one(move):
+    # propose draws the uniform numbers that follow one another in one call; they must
+    # be the numbers of the draws one by one: the split, then per split the proposal
+    # numbers (_draw) and the Metropolis uniforms.
+    g, per, ndim = 3, 8, 3
+    size = per // move.nsplits
+    together = np.random.RandomState(5)
+    order, uniform, gamma, log_u = move._numbers(together, g, per, ndim)
+    random = np.random.RandomState(5)
+    ref_order = np.argsort(random.rand(g, per), axis=1) + per * np.arange(g)[:, None]
+    np.testing.assert_array_equal(order, ref_order)
+    for split in range(move.nsplits):
+        ref_uniform, ref_gamma = move._draw(random, g, size, ndim)
+        np.testing.assert_array_equal(uniform[split], ref_uniform)
+        np.testing.assert_array_equal(gamma[split], ref_gamma)
+        np.testing.assert_array_equal(log_u[split], np.log(random.rand(g * size)))
+    # and the generators are left in the same state
+    assert together.rand() == random.rand()
+    for array in (order, uniform, gamma, log_u):
+        assert array.flags.c_contiguous
+
+
 @pytest.mark.parametrize("moves", ["grouped", "emcee"])
 def test_a_bounded_skewed_target_is_sampled(moves):
     # x ~ Gamma(2, 1) (log density −inf below 0) and y ~ N(x, 0.5²): the marginal of

@@ -172,18 +172,23 @@ class _GroupedRedBlueMove(emcee.moves.Move):
         self.nsplits = int(nsplits)
 
     def _shape(self, nwalkers: int, ndim: int) -> int:
+        if getattr(self, "_checked", None) == (nwalkers, ndim):
+            return nwalkers // self.n_groups
         per, rest = divmod(nwalkers, self.n_groups)
         if rest or per % self.nsplits or per < 2 * ndim:
             raise BayestriboError(
                 f"{type(self).__name__}: {nwalkers} walkers do not form {self.n_groups} "
                 f"ensembles of a multiple of {self.nsplits} walkers, at least {2 * ndim} each"
             )
+        self._checked = (nwalkers, ndim)
         return per
 
     #: Move code of the compiled step (:data:`DE` or :data:`SNOOKER`).
     kind: int
     #: Uniform numbers per proposal (``_draw``).
     n_uniform: int
+    #: Normal numbers per proposal (``_draw``, after its uniform ones).
+    n_normal: int
 
     def _draw(
         self, random: np.random.RandomState, g: int, size: int, ndim: int
@@ -214,29 +219,86 @@ class _GroupedRedBlueMove(emcee.moves.Move):
         q, factors = self._split_proposal(coords, order, 0, uniform, gamma)
         return q.reshape(g, ns, ndim), factors.reshape(g, ns)
 
+    def _numbers(
+        self, random: np.random.RandomState, g: int, per: int, ndim: int
+    ) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+        """Every random number of one step, in emcee's order: each ensemble's split
+        (``rand(g, per)``), then split by split its proposal numbers (``_draw``) and
+        its Metropolis uniforms (``rand(g·size)``).
+
+        The uniform numbers that follow one another in that order are drawn in one
+        call (the generator gives ``rand(a)`` then ``rand(b)`` as ``rand(a + b)``), so
+        the numbers are those of drawing them one by one.
+
+        Returns
+        -------
+        order : ndarray
+            Each ensemble's walkers in split order, (g, per), int64.
+        uniform, gamma, log_u : ndarray
+            As the compiled step takes them (see the module notes).
+        """
+        size = per // self.nsplits
+        n_prop, n_acc = g * size * self.n_uniform, g * size
+        if self.n_normal == 0:
+            # one call: the split, then each split's proposal and Metropolis numbers
+            drawn = random.rand(g * per + self.nsplits * (n_prop + n_acc))
+            rest = drawn[g * per :].reshape(self.nsplits, n_prop + n_acc)
+            uniform = np.ascontiguousarray(rest[:, :n_prop]).reshape(
+                self.nsplits, g, size, self.n_uniform
+            )
+            log_u = np.log(rest[:, n_prop:])
+            gamma = self._stretch(None, g, size, ndim)
+            keys = drawn[: g * per]
+        else:
+            # a normal draw (γ) sits between the uniforms of each split
+            uniform = np.empty((self.nsplits, g, size, self.n_uniform))
+            normal = np.empty((self.nsplits, g, size))
+            log_u = np.empty((self.nsplits, n_acc))
+            drawn = random.rand(g * per + n_prop)
+            keys = drawn[: g * per]
+            uniform[0] = drawn[g * per :].reshape(g, size, self.n_uniform)
+            for split in range(self.nsplits):
+                normal[split] = random.randn(g, size)
+                if split + 1 < self.nsplits:
+                    drawn = random.rand(n_acc + n_prop)
+                    log_u[split] = drawn[:n_acc]
+                    uniform[split + 1] = drawn[n_acc:].reshape(g, size, self.n_uniform)
+                else:
+                    log_u[split] = random.rand(n_acc)
+            np.log(log_u, out=log_u)
+            gamma = self._stretch(normal, g, size, ndim)
+        # A random, balanced split of each ensemble (emcee: ``arange % nsplits``
+        # shuffled), as a uniformly random permutation of each ensemble's walkers.
+        order = np.argsort(keys.reshape(g, per), axis=1)
+        order += self._offsets(g, per)
+        return order, uniform, gamma, log_u
+
+    def _stretch(self, normal: NDArray | None, g: int, size: int, ndim: int) -> NDArray:
+        """The stretches γ (splits, g, size) from the normal numbers ``_draw`` takes
+        (None for a move that takes none)."""
+        raise NotImplementedError  # pragma: no cover - interface
+
+    def _offsets(self, g: int, per: int) -> NDArray:
+        """The first walker of each ensemble, (g, 1): ``per · arange(g)``."""
+        offsets = getattr(self, "_offsets_cache", None)
+        if offsets is None or offsets.shape[0] != g or (g > 1 and offsets[1, 0] != per):
+            offsets = (per * np.arange(g))[:, None]
+            self._offsets_cache = offsets
+        return offsets
+
     def propose(self, model, state: State) -> tuple[State, NDArray]:
         """One update of every walker of every ensemble (emcee's ``Move`` interface).
 
         Every random number of the step is drawn first, in the order of the splits
-        (each split's proposal numbers, then its Metropolis uniforms); the splits then
-        run in the log-probability's compiled step if it offers one (see the module
-        notes), else, or from the split where that step stops, here.
+        (each split's proposal numbers, then its Metropolis uniforms; :meth:`_numbers`);
+        the splits then run in the log-probability's compiled step if it offers one
+        (see the module notes), else, or from the split where that step stops, here.
         """
         nwalkers, ndim = state.coords.shape
         per = self._shape(nwalkers, ndim)
-        random = model.random
         g = self.n_groups
-        # A random, balanced split of each ensemble (emcee: ``arange % nsplits``
-        # shuffled), as a uniformly random permutation of each ensemble's walkers.
-        order = np.argsort(random.rand(g, per), axis=1) + (per * np.arange(g))[:, None]
+        order, uniforms, gammas, log_u = self._numbers(model.random, g, per, ndim)
         size = per // self.nsplits
-        uniforms = np.empty((self.nsplits, g, size, self.n_uniform))
-        gammas = np.empty((self.nsplits, g, size))
-        log_u = np.empty((self.nsplits, g * size))
-        for split in range(self.nsplits):
-            uniforms[split], gammas[split] = self._draw(random, g, size, ndim)
-            log_u[split] = random.rand(g * size)
-        np.log(log_u, out=log_u)
         coords = np.ascontiguousarray(state.coords, dtype=np.float64)
         log_prob = np.ascontiguousarray(state.log_prob, dtype=np.float64)
         accepted = np.zeros(nwalkers, dtype=bool)
@@ -278,14 +340,19 @@ class GroupedDEMove(_GroupedRedBlueMove):
 
     kind = DE
     n_uniform = 2
+    n_normal = 1
 
     def _draw(
         self, random: np.random.RandomState, g: int, size: int, ndim: int
     ) -> tuple[NDArray, NDArray]:
         """Two uniform numbers per walker (the pair) and its stretch γ."""
-        g0 = 2.38 / np.sqrt(2 * ndim) if self.gamma0 is None else self.gamma0
         uniform = random.rand(g, size, 2)
-        return uniform, g0 * (1 + self.sigma * random.randn(g, size))
+        return uniform, self._stretch(random.randn(g, size), g, size, ndim)
+
+    def _stretch(self, normal: NDArray | None, g: int, size: int, ndim: int) -> NDArray:
+        """γ = γ₀ (1 + σ n) of the normal numbers n."""
+        g0 = 2.38 / math.sqrt(2 * ndim) if self.gamma0 is None else self.gamma0
+        return g0 * (1 + self.sigma * normal)
 
     def _split_proposal(
         self, coords: NDArray, order: NDArray, split: int, uniform: NDArray, gamma: NDArray
@@ -314,6 +381,7 @@ class GroupedDESnookerMove(_GroupedRedBlueMove):
 
     kind = SNOOKER
     n_uniform = 4
+    n_normal = 0
 
     def _draw(
         self, random: np.random.RandomState, g: int, size: int, ndim: int
@@ -321,6 +389,10 @@ class GroupedDESnookerMove(_GroupedRedBlueMove):
         """Four uniform numbers per walker (three walkers and their order); the
         stretch is the constant ``gammas``."""
         return random.rand(g, size, 4), np.full((g, size), self.gammas)
+
+    def _stretch(self, normal: NDArray | None, g: int, size: int, ndim: int) -> NDArray:
+        """The constant stretch ``gammas`` of every split."""
+        return np.full((self.nsplits, g, size), self.gammas)
 
     def _split_proposal(
         self, coords: NDArray, order: NDArray, split: int, uniform: NDArray, gamma: NDArray
