@@ -476,19 +476,18 @@ def run_ensembles(
     enough = settled = False
     try:
         while steps < settings.max_steps:
-            chunk = min(settings.check_every, settings.max_steps - steps)
+            chunk = settings.check_every
+            if np.all(np.isfinite(tau)):
+                # The rule cannot be met this early with the last τ (which short chains
+                # underestimate): the checks before this many steps are skipped, and
+                # the steps up to the next check run in one call of the sampler.
+                early = _EARLY * (2.0 + settings.autocorr_multiple) * np.max(tau)
+                chunk *= max(1, math.ceil((early - steps) / settings.check_every))
+            chunk = min(chunk, settings.max_steps - steps)
             ensembles.run(chunk)
             steps += chunk
             if bar is not None:
                 bar.update(chunk)
-            if (
-                np.all(np.isfinite(tau))
-                and steps < settings.max_steps
-                and steps < _EARLY * (2.0 + settings.autocorr_multiple) * np.max(tau)
-            ):
-                # The rule cannot be met this early with the last τ (which short chains
-                # underestimate): skip the check, which costs as much as 30 steps.
-                continue
             burn = min(int(2 * np.max(tau)) if np.all(np.isfinite(tau)) else steps // 3, steps // 2)
             tau = np.max(_autocorr_times(ensembles.chains(burn)), axis=0)
             if not np.all(np.isfinite(tau)):
