@@ -35,7 +35,7 @@ __all__ = ["grouped_step"]
 #: (see :data:`bayestribo.inference.fused.DEPENDS_ON`).
 DEPENDS_ON = {
     "bayestribo/inference/fused.py": "084290db38821b24",
-    "bayestribo/inference/moves.py": "d36872a2d5540601",
+    "bayestribo/inference/moves.py": "fd1eb965a208dbd0",
 }
 
 

@@ -228,7 +228,8 @@ class _GroupedRedBlueMove(emcee.moves.Move):
 
         The uniform numbers that follow one another in that order are drawn in one
         call (the generator gives ``rand(a)`` then ``rand(b)`` as ``rand(a + b)``), so
-        the numbers are those of drawing them one by one.
+        the numbers are those of drawing them one by one; one compiled call
+        (:func:`_arrange`) lays them out.
 
         Returns
         -------
@@ -240,51 +241,43 @@ class _GroupedRedBlueMove(emcee.moves.Move):
         size = per // self.nsplits
         n_prop, n_acc = g * size * self.n_uniform, g * size
         if self.n_normal == 0:
-            # one call: the split, then each split's proposal and Metropolis numbers
-            drawn = random.rand(g * per + self.nsplits * (n_prop + n_acc))
-            rest = drawn[g * per :].reshape(self.nsplits, n_prop + n_acc)
-            uniform = np.ascontiguousarray(rest[:, :n_prop]).reshape(
-                self.nsplits, g, size, self.n_uniform
-            )
-            log_u = np.log(rest[:, n_prop:])
-            gamma = self._stretch(None, g, size, ndim)
-            keys = drawn[: g * per]
+            uniforms = random.rand(g * per + self.nsplits * (n_prop + n_acc))
+            normals = _NO_NORMALS
         else:
-            # a normal draw (γ) sits between the uniforms of each split
-            uniform = np.empty((self.nsplits, g, size, self.n_uniform))
-            normal = np.empty((self.nsplits, g, size))
-            log_u = np.empty((self.nsplits, n_acc))
-            drawn = random.rand(g * per + n_prop)
-            keys = drawn[: g * per]
-            uniform[0] = drawn[g * per :].reshape(g, size, self.n_uniform)
+            # a normal draw (γ) sits between the proposal and Metropolis uniforms
+            drawn = [random.rand(g * per + n_prop)]
+            normal = []
             for split in range(self.nsplits):
-                normal[split] = random.randn(g, size)
-                if split + 1 < self.nsplits:
-                    drawn = random.rand(n_acc + n_prop)
-                    log_u[split] = drawn[:n_acc]
-                    uniform[split + 1] = drawn[n_acc:].reshape(g, size, self.n_uniform)
-                else:
-                    log_u[split] = random.rand(n_acc)
-            np.log(log_u, out=log_u)
-            gamma = self._stretch(normal, g, size, ndim)
-        # A random, balanced split of each ensemble (emcee: ``arange % nsplits``
-        # shuffled), as a uniformly random permutation of each ensemble's walkers.
-        order = np.argsort(keys.reshape(g, per), axis=1)
-        order += self._offsets(g, per)
+                normal.append(random.randn(n_acc * self.n_normal))
+                last = split + 1 == self.nsplits
+                drawn.append(random.rand(n_acc if last else n_acc + n_prop))
+            uniforms = np.concatenate(drawn)
+            normals = np.concatenate(normal)
+        g0, sigma = self._stretch_of(ndim)
+        order, uniform, gamma, log_u = self._layout(g, per)
+        _arrange(uniforms, normals, g0, sigma, order, uniform, gamma, log_u)
+        np.log(log_u, out=log_u)
         return order, uniform, gamma, log_u
 
-    def _stretch(self, normal: NDArray | None, g: int, size: int, ndim: int) -> NDArray:
-        """The stretches γ (splits, g, size) from the normal numbers ``_draw`` takes
-        (None for a move that takes none)."""
-        raise NotImplementedError  # pragma: no cover - interface
+    def _layout(self, g: int, per: int) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+        """The arrays of one step's numbers (:meth:`_numbers`), made once per shape
+        and filled anew at every step (a step reads them only while it runs)."""
+        layout = getattr(self, "_layout_cache", None)
+        if layout is None or layout[0].shape != (g, per):
+            size = per // self.nsplits
+            layout = (
+                np.empty((g, per), dtype=np.int64),
+                np.empty((self.nsplits, g, size, self.n_uniform)),
+                np.empty((self.nsplits, g, size)),
+                np.empty((self.nsplits, g * size)),
+            )
+            self._layout_cache = layout
+        return layout
 
-    def _offsets(self, g: int, per: int) -> NDArray:
-        """The first walker of each ensemble, (g, 1): ``per · arange(g)``."""
-        offsets = getattr(self, "_offsets_cache", None)
-        if offsets is None or offsets.shape[0] != g or (g > 1 and offsets[1, 0] != per):
-            offsets = (per * np.arange(g))[:, None]
-            self._offsets_cache = offsets
-        return offsets
+    def _stretch_of(self, ndim: int) -> tuple[float, float]:
+        """γ₀ and σ of the stretch γ = γ₀ (1 + σ n) (σ unused by a move without normal
+        numbers, whose γ is γ₀)."""
+        raise NotImplementedError  # pragma: no cover - interface
 
     def propose(self, model, state: State) -> tuple[State, NDArray]:
         """One update of every walker of every ensemble (emcee's ``Move`` interface).
@@ -346,13 +339,14 @@ class GroupedDEMove(_GroupedRedBlueMove):
         self, random: np.random.RandomState, g: int, size: int, ndim: int
     ) -> tuple[NDArray, NDArray]:
         """Two uniform numbers per walker (the pair) and its stretch γ."""
+        g0, sigma = self._stretch_of(ndim)
         uniform = random.rand(g, size, 2)
-        return uniform, self._stretch(random.randn(g, size), g, size, ndim)
+        return uniform, g0 * (1 + sigma * random.randn(g, size))
 
-    def _stretch(self, normal: NDArray | None, g: int, size: int, ndim: int) -> NDArray:
-        """γ = γ₀ (1 + σ n) of the normal numbers n."""
+    def _stretch_of(self, ndim: int) -> tuple[float, float]:
+        """γ₀ (default 2.38/√(2d)) and σ."""
         g0 = 2.38 / math.sqrt(2 * ndim) if self.gamma0 is None else self.gamma0
-        return g0 * (1 + self.sigma * normal)
+        return float(g0), float(self.sigma)
 
     def _split_proposal(
         self, coords: NDArray, order: NDArray, split: int, uniform: NDArray, gamma: NDArray
@@ -390,9 +384,9 @@ class GroupedDESnookerMove(_GroupedRedBlueMove):
         stretch is the constant ``gammas``."""
         return random.rand(g, size, 4), np.full((g, size), self.gammas)
 
-    def _stretch(self, normal: NDArray | None, g: int, size: int, ndim: int) -> NDArray:
-        """The constant stretch ``gammas`` of every split."""
-        return np.full((self.nsplits, g, size), self.gammas)
+    def _stretch_of(self, ndim: int) -> tuple[float, float]:
+        """The constant stretch ``gammas`` (no normal numbers)."""
+        return float(self.gammas), 0.0
 
     def _split_proposal(
         self, coords: NDArray, order: NDArray, split: int, uniform: NDArray, gamma: NDArray
@@ -476,6 +470,53 @@ def _snooker_proposals(
                 dist += (q[row, j] - z[j]) ** 2
             metropolis[row] = math.log(math.sqrt(dist)) - math.log(norm)
     return q, metropolis
+
+
+#: The normal numbers of a move that draws none.
+_NO_NORMALS = np.empty(0)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _arrange(
+    uniforms: NDArray,
+    normals: NDArray,
+    g0: float,
+    sigma: float,
+    order: NDArray,
+    uniform: NDArray,
+    gamma: NDArray,
+    log_u: NDArray,
+) -> None:
+    """A step's numbers laid out for the splits (:meth:`_GroupedRedBlueMove._numbers`).
+
+    ``uniforms`` in the order drawn: the keys of each ensemble's split (g·per), then per
+    split its proposal numbers (g·size·k) and Metropolis uniforms (g·size);
+    ``normals``: per split g·size normal numbers n (none: γ = γ₀). Fills ``order``
+    (g, per) with each ensemble's walkers sorted by their keys, ``uniform`` (splits,
+    g, size, k) with the proposal numbers, ``gamma`` (splits, g, size) with the
+    stretches γ₀ (1 + σ n) and ``log_u`` (splits, g·size) with the Metropolis
+    uniforms, not yet logged.
+    """
+    nsplits, g, size, k = uniform.shape
+    per = order.shape[1]
+    for e in range(g):
+        order[e] = np.argsort(uniforms[e * per : (e + 1) * per]) + e * per
+    at = g * per
+    for split in range(nsplits):
+        for e in range(g):
+            for i in range(size):
+                for j in range(k):
+                    uniform[split, e, i, j] = uniforms[at]
+                    at += 1
+        for row in range(g * size):
+            log_u[split, row] = uniforms[at]
+            at += 1
+        for e in range(g):
+            for i in range(size):
+                if normals.size:
+                    gamma[split, e, i] = g0 * (1 + sigma * normals[(split * g + e) * size + i])
+                else:
+                    gamma[split, e, i] = g0
 
 
 def grouped_moves(n_groups: int) -> list[tuple[emcee.moves.Move, float]]:
