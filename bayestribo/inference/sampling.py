@@ -663,7 +663,12 @@ class _Grouped(_Ensembles):
         return np.moveaxis(shaped, 1, 0)
 
     def run(self, steps: int) -> None:
-        self.state = self.sampler.run_mcmc(self.state, steps, progress=False)
+        # emcee checks that the starting walkers are linearly independent; a run
+        # resumed from the sampler's own last state was checked when it began
+        resumed = self.sampler.iteration > 0
+        self.state = self.sampler.run_mcmc(
+            self.state, steps, progress=False, skip_initial_state_check=resumed
+        )
 
     def chains(self, discard: int) -> NDArray:
         return self._split(self.sampler.get_chain(discard=discard))
