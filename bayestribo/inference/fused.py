@@ -825,6 +825,14 @@ class FusedLogPosterior:
         )
         return out, flagged
 
+    def log_prior(self, theta: NDArray) -> NDArray:
+        """Σ log π_i(θ_i) of each row of ``theta`` (n, d), −inf outside the priors'
+        support (the numpy priors' value to rounding, the same support)."""
+        theta = np.ascontiguousarray(theta, dtype=np.float64)
+        out = np.empty(theta.shape[0])
+        _log_priors(theta, self.prior, out)
+        return out
+
     def standardized_residuals(
         self, theta: NDArray, nuisances: bool = False
     ) -> tuple[NDArray, int]:

@@ -394,6 +394,8 @@ def refine(
 
     low, high = _free_bounds(posterior, [names[i] for i in free])
     bounded = np.flatnonzero(np.isfinite(low) | np.isfinite(high))
+    # the compiled prior where the posterior has one (it is evaluated at every point)
+    log_prior = getattr(posterior, "log_prior", posterior.priors.logpdf)
 
     def residual_rows(u: NDArray) -> NDArray:
         """Residuals at the rows ``u`` (k, free) in one call of the posterior."""
@@ -415,7 +417,7 @@ def refine(
         # outside the law's domain (the model cannot move there): both get 1e6. The
         # model is evaluated once per row (the law's integrator where it has no
         # closed form), not once for the density and again for the residuals.
-        ok = np.isfinite(posterior.priors.logpdf(th))
+        ok = np.isfinite(log_prior(th))
         if np.any(ok):
             resid = posterior.standardized_residuals(th[ok], nuisances=True)
             ok[ok] = np.all(np.isfinite(resid), axis=1)
