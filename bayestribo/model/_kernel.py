@@ -23,6 +23,9 @@ __all__ = ["exact_pi_grid", "exact_pi_rows"]
 _TINY = 1e-100
 _SERIES_XL = 1e-6
 _GMINUS_SERIES = 1e-3
+#: Below this (upper - 1)·x the decay of the half cycles left is taken from e^{-(upper-1)x}
+#: (relative error at most this many ε from its argument's rounding).
+_TOP_ARGUMENT = 30.0
 #: From this n·x on the whole half cycles' sums divide by their constants through
 #: reciprocals (below it e1 - e2 cancels by 1/(n·x) and the divisions are kept).
 _RECIPROCAL_NX = 0.1
@@ -55,12 +58,13 @@ def _amplitude(n: float, a0: float, mu_k: float, x: float) -> float:
 
 
 @numba.njit(cache=True, inline="always")
-def _amplitude_of(n: float, a0: float, mu_k: float, x: float, omq: float) -> float:
+def _amplitude_of(n: float, a0: float, mu_k: float, x: float, omq: float) -> tuple[float, float]:
     """:func:`_amplitude` with one transcendental call, for the loop over the grid:
     e^{-nx} where e^{-nx} - 1 does not cancel, e^{-nx} - 1 where it would (1 + that is
-    then at least 0.6, exact enough); ``omq`` = 1 - e^{-x}."""
+    then at least 0.6, exact enough); ``omq`` = 1 - e^{-x}. Returns the amplitude and
+    e^{-nx}."""
     if x < _TINY:
-        return a0 - 2.0 * mu_k * n
+        return a0 - 2.0 * mu_k * n, 1.0
     nx = n * x
     if nx > 0.5:
         e = math.exp(-nx)
@@ -68,7 +72,7 @@ def _amplitude_of(n: float, a0: float, mu_k: float, x: float, omq: float) -> flo
     else:
         em = math.expm1(-nx)
         e = 1.0 + em
-    return a0 * e + 2.0 * mu_k * (em * (1.0 / omq))
+    return a0 * e + 2.0 * mu_k * (em * (1.0 / omq)), e
 
 
 @numba.njit(cache=True, inline="always")
@@ -83,8 +87,10 @@ def _whole(
     f2: float,
     omq: float,
     g_x: float,
+    em_nx: float = math.nan,
 ) -> float:
-    """Σ ∫E over n whole half cycles starting with amplitude amp (see exact.py)."""
+    """Σ ∫E over n whole half cycles starting with amplitude amp (see exact.py);
+    ``em_nx`` is e^{-nx} - 1 where the caller has it (NaN: computed here)."""
     if n <= 0.0:
         return 0.0
     if x < _TINY:
@@ -95,7 +101,7 @@ def _whole(
         e3 = (n - 1.0) * n * (2.0 * n - 1.0) / 6.0
     else:
         nx = n * x
-        em = math.expm1(-nx)
+        em = math.expm1(-nx) if math.isnan(em_nx) else em_nx
         g_nx = _gminus(nx) if nx < _GMINUS_SERIES else em + nx
         if nx >= _RECIPROCAL_NX:
             # products with the reciprocals of the grid's constants: e1 - e2 cancels
@@ -216,6 +222,13 @@ def _one(
     # A half cycle's amplitude and the integral over the half cycles after it depend on
     # its index alone: computed once per half cycle, not once per time (a grid holds
     # several times in each), with the same operations, so the values are the same.
+    # The whole half cycles after the n-th, upper - n - 1 of them, decay by
+    # e^{-(upper-1)x}/e^{-nx}: one division instead of an exponential where that is
+    # at most e^{-0.5} (its difference from 1 does not cancel) and e^{-(upper-1)x}
+    # carries the rounding of an argument below _TOP_ARGUMENT only.
+    top_arg = (upper - 1.0) * x
+    top_ok = x >= _TINY and top_arg < _TOP_ARGUMENT
+    top = math.exp(-top_arg) if top_ok else 0.0
     last_n = math.nan
     amp = 0.0
     rest = 0.0
@@ -228,13 +241,16 @@ def _one(
         s = t + sigma0 - n * half
         if n != last_n:
             last_n = n
-            amp = _amplitude_of(n, a0, mk, x, omq)
+            amp, e_n = _amplitude_of(n, a0, mk, x, omq)
             amp_next = q * amp - 2.0 * mk
             length = upper - n - 1.0
             if math.isinf(length):
                 rest = endless * amp_next * amp_next
             else:
-                rest = _whole(max(length, 0.0), amp_next, mk, x, q, half, f1, f2, omq, g_x)
+                em_length = top / e_n - 1.0 if top_ok and length * x > 0.5 else math.nan
+                rest = _whole(
+                    max(length, 0.0), amp_next, mk, x, q, half, f1, f2, omq, g_x, em_length
+                )
         head = _partial(s, amp, mk, z, omega, be, q, half)
         out[i] = head + rest - tail
 
