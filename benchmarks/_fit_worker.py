@@ -5,7 +5,7 @@ Run with ``PYTHONPATH`` pointing at the tree to time; it imports nothing else fr
 worktree. It reads one JSON request per line on stdin, ``{"path": ..., "seed": ...}``,
 fits the recording with the defaults of that tree's ``fit`` (``bayestribo.inference.fit``,
 or ``bayestribo.fit.fit`` in older trees) and writes one JSON line per request: wall
-time of the call, convergence, the sampler's diagnostics, posterior means and
+and process CPU time of the call, convergence, the sampler's diagnostics, posterior means and
 standard deviations, and the load average before and after.
 """
 
@@ -38,15 +38,17 @@ def main() -> int:
     for line in sys.stdin:
         request = json.loads(line)
         load_before = os.getloadavg()
-        start = time.perf_counter()
+        start, cpu_start = time.perf_counter(), time.process_time()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             result = fit(request["path"], seed=int(request["seed"]))
         seconds = time.perf_counter() - start
+        cpu_seconds = time.process_time() - cpu_start
         d = result.diagnostics
         out = {
             "seed": request["seed"],
             "seconds": seconds,
+            "cpu_seconds": cpu_seconds,
             "converged": bool(result.converged),
             "ess_min": float(d["ess_min"]),
             "ess_per_second": float(d["ess_min"]) / seconds,

@@ -8,10 +8,10 @@
    (after a warm-up fit of seed 0 each) and ``--realistic`` simulated runs like the
    coverage benchmark's (2 and 10 kHz, 10× and 50× the vibrometer resolution, the
    magnet pull, an offset and rest segments; written to CSV once and read by both)
-   for ``--realistic-seeds`` seeds each. Reported per version: median wall time,
-   ESS_min and ESS per second, convergence; the ratio of the medians; posterior means
-   of ζ, μ_k, μ_s/μ_k and y0 against each other in units of the posterior sd (mean
-   over seeds); the load average (1 min) before each fit.
+   for ``--realistic-seeds`` seeds each. Reported per version: median wall and
+   process CPU time, ESS_min and ESS per second, convergence; the ratio of the
+   medians; posterior means of ζ, μ_k, μ_s/μ_k and y0 against each other in units
+   of the posterior sd (mean over seeds); the load average (1 min) before each fit.
 1. Wall time of :func:`bayestribo.inference.fit` on the bundled run
    ``data/runs/glycerol-N0.31-r1.csv`` (10 kHz, about 0.5 s of motion), exact model,
    defaults, in one process after a warm-up fit (imports and compilation are timed
@@ -152,8 +152,11 @@ def realistic_runs(folder: Path, seed: int = 2024) -> list[dict[str, Any]]:
 
 def _summary(fits: list[dict[str, Any]]) -> dict[str, Any]:
     seconds = [f["seconds"] for f in fits]
+    cpu = [f.get("cpu_seconds", np.nan) for f in fits]
     return {
         "median_seconds": float(np.median(seconds)),
+        "median_cpu_seconds": float(np.median(cpu)),
+        "min_cpu_seconds": float(np.min(cpu)),
         "min_seconds": float(np.min(seconds)),
         "max_seconds": float(np.max(seconds)),
         "median_ess_min": float(np.median([f["ess_min"] for f in fits])),
@@ -190,7 +193,8 @@ def side_by_side(baseline: Path, repeats: int, realistic: int, seeds: int) -> di
                 fits[key].setdefault(name, []).append({**fit, "path": Path(path).name})
                 print(
                     f"  {key:9s} {Path(path).name[:28]:28s} seed {seed} {name:8s} "
-                    f"{fit['seconds']:6.2f} s ESS {fit['ess_min']:5.0f} "
+                    f"{fit['seconds']:6.3f} s (CPU {fit['cpu_seconds']:6.3f} s) "
+                    f"ESS {fit['ess_min']:5.0f} "
                     f"steps {fit['n_steps']:5d} load {fit['load_before'][0]:.2f}",
                     flush=True,
                 )
@@ -223,10 +227,12 @@ def side_by_side(baseline: Path, repeats: int, realistic: int, seeds: int) -> di
             continue  # --realistic 0
         per = {name: _summary(f) for name, f in fits[key].items()}
         ratio = per["baseline"]["median_seconds"] / per["current"]["median_seconds"]
+        cpu_ratio = per["baseline"]["median_cpu_seconds"] / per["current"]["median_cpu_seconds"]
         out[key] = {
             "fits": fits[key],
             "summary": per,
             "speedup_of_medians": ratio,
+            "cpu_speedup_of_medians": cpu_ratio,
             "ess_per_second_ratio": per["current"]["median_ess_per_second"]
             / per["baseline"]["median_ess_per_second"],
         }
@@ -455,13 +461,15 @@ def main(argv: list[str] | None = None) -> int:
                 continue
             for name, v in c["summary"].items():
                 print(
-                    f"{key:9s} {name:8s} median {v['median_seconds']:6.3f} s, ESS_min median "
+                    f"{key:9s} {name:8s} median {v['median_seconds']:6.3f} s "
+                    f"(CPU {v['median_cpu_seconds']:6.3f} s), ESS_min median "
                     f"{v['median_ess_min']:.0f} (smallest {v['smallest_ess_min']:.0f}), "
                     f"{v['median_ess_per_second']:.0f} ESS/s, converged {v['all_converged']}, "
                     f"load {v['median_load_1min']:.2f}"
                 )
             print(
-                f"{key:9s} speedup of medians {c['speedup_of_medians']:.2f}x, "
+                f"{key:9s} speedup of medians {c['speedup_of_medians']:.2f}x "
+                f"(CPU {c['cpu_speedup_of_medians']:.2f}x), "
                 f"ESS/s ratio {c['ess_per_second_ratio']:.2f}x"
             )
         print(

@@ -270,6 +270,20 @@ def test_what_is_not_compiled_uses_the_reference(data):
     np.testing.assert_allclose(subclass(rows)[ok] - 1.0, ref[ok], rtol=1e-12)
 
 
+def test_the_compiled_log_prior_is_the_priors_own(data):
+    # inside and outside the support, on its edges, with the discrepancy's priors and
+    # a NaN row: the same support, the same value to rounding
+    for post in (build_posterior(data), build_posterior(data, discrepancy=True)):
+        assert post.uses_compiled
+        rows = _rows(post, data.y0, 400, seed=8)
+        rows[-1, 0] = np.nan
+        ours, ref = post.log_prior(rows), post.priors.logpdf(rows)
+        np.testing.assert_array_equal(np.isfinite(ours), np.isfinite(ref))
+        inside = np.isfinite(ref)
+        assert 0 < inside.sum() < rows.shape[0]
+        np.testing.assert_allclose(ours[inside], ref[inside], rtol=1e-14)
+
+
 def test_rows_of_the_wrong_length_are_refused(data):
     post = build_posterior(data)
     with pytest.raises(BayestriboError, match=r"theta: expected rows of 4 values"):

@@ -265,3 +265,32 @@ def test_a_walker_stuck_far_below_is_named_stuck_not_a_mode():
     assert stuck.kind == "stuck" and stuck.walkers == 1 and stuck.stuck_walkers == 1
     assert stuck.weight == pytest.approx(1 / 16)
     assert "1 walker(s) stay" in report.reason
+
+
+def _numpy_two_means(z, iterations=50):
+    """Lloyd's two means in numpy, started as the module's (the reference)."""
+    c0 = np.median(z, axis=0)
+    centres = np.vstack([c0, z[int(np.argmax(np.sum((z - c0) ** 2, axis=1)))]])
+    labels = np.zeros(z.shape[0], dtype=int)
+    for it in range(iterations):
+        new = np.argmin(np.sum((z[:, None, :] - centres[None, :, :]) ** 2, axis=2), axis=1)
+        if np.all(new == labels) and it > 0:
+            break
+        labels = new
+        for k in (0, 1):
+            if np.any(labels == k):
+                centres[k] = z[labels == k].mean(axis=0)
+    return labels
+
+
+def test_the_compiled_two_means_split_the_draws_as_numpy_does():
+    # two overlapping clouds, a single one, and draws with ties (rounded)
+    from bayestribo.inference.modes import _kmeans2
+
+    rng = np.random.default_rng(21)
+    two = rng.standard_normal((900, 4))
+    two[:300] += [2.0, 0.5, 0.0, 1.0]
+    for z in (two, rng.standard_normal((500, 3)), np.round(rng.standard_normal((400, 2)), 1)):
+        labels = _kmeans2(z)
+        np.testing.assert_array_equal(labels, _numpy_two_means(z))
+        assert 0 < labels.sum() < labels.size

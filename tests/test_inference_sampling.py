@@ -210,12 +210,16 @@ def test_bad_settings_and_start_shapes_are_refused():
 
 def test_autocorrelation_time_is_emcees_estimator():
     # The batched FFT against emcee's own loop over walkers and parameters, on
-    # chains with long and short memory, and on a chain that does not move.
+    # chains with long and short memory (Sokal's window beyond the first quarter of the
+    # lags, and within it: white noise and the same with drift), and on a chain that
+    # does not move.
     rng = np.random.default_rng(9)
     for shape in [(1000, 16, 4), (777, 8, 3), (6, 4, 2)]:
-        x = 0.1 * np.cumsum(rng.standard_normal(shape), axis=0) + rng.standard_normal(shape)
-        ref = emcee.autocorr.integrated_time(x, tol=0, quiet=True)
-        np.testing.assert_allclose(autocorr_time(x), ref, rtol=1e-12)
+        for drift in (0.1, 0.0):
+            x = drift * np.cumsum(rng.standard_normal(shape), axis=0)
+            x += rng.standard_normal(shape)
+            ref = emcee.autocorr.integrated_time(x, tol=0, quiet=True)
+            np.testing.assert_allclose(autocorr_time(x), ref, rtol=1e-12)
     x = np.ones((50, 4, 2))
     x[:, :, 1] = rng.standard_normal((50, 4))
     tau = autocorr_time(x)
@@ -385,6 +389,29 @@ def test_grouped_moves_never_use_another_ensembles_walkers(move):
         q, f = move.get_proposal(s, c, random)
         assert np.all(np.isfinite(q[0])) and np.all(np.isfinite(f[0]))
         assert np.all(np.isnan(q[1]))
+
+
+@pytest.mark.parametrize("move", [GroupedDEMove(3), GroupedDESnookerMove(3)])
+def test_a_steps_numbers_drawn_together_are_those_drawn_one_by_one(move):
+    # propose draws the uniform numbers that follow one another in one call; they must
+    # be the numbers of the draws one by one: the split, then per split the proposal
+    # numbers (_draw) and the Metropolis uniforms.
+    g, per, ndim = 3, 8, 3
+    size = per // move.nsplits
+    together = np.random.RandomState(5)
+    order, uniform, gamma, log_u = move._numbers(together, g, per, ndim)
+    random = np.random.RandomState(5)
+    ref_order = np.argsort(random.rand(g, per), axis=1) + per * np.arange(g)[:, None]
+    np.testing.assert_array_equal(order, ref_order)
+    for split in range(move.nsplits):
+        ref_uniform, ref_gamma = move._draw(random, g, size, ndim)
+        np.testing.assert_array_equal(uniform[split], ref_uniform)
+        np.testing.assert_array_equal(gamma[split], ref_gamma)
+        np.testing.assert_array_equal(log_u[split], np.log(random.rand(g * size)))
+    # and the generators are left in the same state
+    assert together.rand() == random.rand()
+    for array in (order, uniform, gamma, log_u):
+        assert array.flags.c_contiguous
 
 
 @pytest.mark.parametrize("moves", ["grouped", "emcee"])

@@ -172,6 +172,14 @@ def test_averaged_agrees_with_exact_in_its_regime(zeta, mu_k, y0):
         ({"y0": -1.0}, "y0"),
         ({"tau": np.nan}, "tau"),
         ({"tau": -2.0}, "tau"),
+        # one bad value among good ones, and the non-finite ones of each argument
+        ({"tau": [0.0, 1.0, np.inf]}, "tau"),
+        ({"tau": "later"}, "tau"),
+        ({"zeta": [0.02, np.nan]}, "zeta"),
+        ({"mu_k": np.inf}, "mu_k"),
+        ({"y0": [5.0, -np.inf]}, "y0"),
+        ({"tau_end": -1.0}, "tau_end"),
+        ({"tau_end": np.nan}, "tau_end"),
     ],
 )
 def test_bad_arguments(kwargs, name):

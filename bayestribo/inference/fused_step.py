@@ -34,8 +34,8 @@ __all__ = ["grouped_step"]
 #: The files whose compiled functions :func:`_step` calls, and a digest of each
 #: (see :data:`bayestribo.inference.fused.DEPENDS_ON`).
 DEPENDS_ON = {
-    "bayestribo/inference/fused.py": "084290db38821b24",
-    "bayestribo/inference/moves.py": "a26a7dcb7538888f",
+    "bayestribo/inference/fused.py": "0bf9b0b9f61069cb",
+    "bayestribo/inference/moves.py": "fd1eb965a208dbd0",
 }
 
 

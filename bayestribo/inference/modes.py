@@ -67,6 +67,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 
@@ -225,17 +226,47 @@ def _kmeans2(z: NDArray, iterations: int = 50) -> NDArray:
     """Labels (0/1) of a two-means split started at the median and the farthest draw."""
     c0 = np.median(z, axis=0)
     far = z[int(np.argmax(np.sum((z - c0) ** 2, axis=1)))]
-    centres = np.vstack([c0, far])
-    labels = np.zeros(z.shape[0], dtype=int)
-    for _ in range(iterations):
-        d = np.sum((z[:, None, :] - centres[None, :, :]) ** 2, axis=2)
-        new = np.argmin(d, axis=1)
-        if np.all(new == labels) and _ > 0:
+    return _lloyd(np.ascontiguousarray(z, dtype=float), np.vstack([c0, far]), iterations)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _lloyd(z: NDArray, centres: NDArray, iterations: int) -> NDArray:
+    """Lloyd's iterations of two means from ``centres`` (2, d), updated in place: each
+    draw to the nearer centre (the first on a tie), each centre to its draws' mean,
+    until the labels stop changing (after one update at least) or ``iterations``.
+    The squared distances and the means are summed in numpy's order (the distances
+    along a row, the means row after row), so the labels are numpy's."""
+    n, d = z.shape
+    labels = np.zeros(n, dtype=np.int64)
+    sums = np.empty((2, d))
+    counts = np.empty(2, dtype=np.int64)
+    for it in range(iterations):
+        changed = False
+        for i in range(n):
+            d0 = 0.0
+            d1 = 0.0
+            for j in range(d):
+                a = z[i, j] - centres[0, j]
+                b = z[i, j] - centres[1, j]
+                d0 += a * a
+                d1 += b * b
+            new = 1 if d1 < d0 else 0
+            if new != labels[i]:
+                labels[i] = new
+                changed = True
+        if not changed and it > 0:
             break
-        labels = new
-        for k in (0, 1):
-            if np.any(labels == k):
-                centres[k] = z[labels == k].mean(axis=0)
+        sums[:] = 0.0
+        counts[:] = 0
+        for i in range(n):
+            k = labels[i]
+            counts[k] += 1
+            for j in range(d):
+                sums[k, j] += z[i, j]
+        for k in range(2):
+            if counts[k] > 0:
+                for j in range(d):
+                    centres[k, j] = sums[k, j] / counts[k]
     return labels
 
 

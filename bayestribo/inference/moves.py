@@ -172,18 +172,23 @@ class _GroupedRedBlueMove(emcee.moves.Move):
         self.nsplits = int(nsplits)
 
     def _shape(self, nwalkers: int, ndim: int) -> int:
+        if getattr(self, "_checked", None) == (nwalkers, ndim):
+            return nwalkers // self.n_groups
         per, rest = divmod(nwalkers, self.n_groups)
         if rest or per % self.nsplits or per < 2 * ndim:
             raise BayestriboError(
                 f"{type(self).__name__}: {nwalkers} walkers do not form {self.n_groups} "
                 f"ensembles of a multiple of {self.nsplits} walkers, at least {2 * ndim} each"
             )
+        self._checked = (nwalkers, ndim)
         return per
 
     #: Move code of the compiled step (:data:`DE` or :data:`SNOOKER`).
     kind: int
     #: Uniform numbers per proposal (``_draw``).
     n_uniform: int
+    #: Normal numbers per proposal (``_draw``, after its uniform ones).
+    n_normal: int
 
     def _draw(
         self, random: np.random.RandomState, g: int, size: int, ndim: int
@@ -214,29 +219,79 @@ class _GroupedRedBlueMove(emcee.moves.Move):
         q, factors = self._split_proposal(coords, order, 0, uniform, gamma)
         return q.reshape(g, ns, ndim), factors.reshape(g, ns)
 
+    def _numbers(
+        self, random: np.random.RandomState, g: int, per: int, ndim: int
+    ) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+        """Every random number of one step, in emcee's order: each ensemble's split
+        (``rand(g, per)``), then split by split its proposal numbers (``_draw``) and
+        its Metropolis uniforms (``rand(g·size)``).
+
+        The uniform numbers that follow one another in that order are drawn in one
+        call (the generator gives ``rand(a)`` then ``rand(b)`` as ``rand(a + b)``), so
+        the numbers are those of drawing them one by one; one compiled call
+        (:func:`_arrange`) lays them out.
+
+        Returns
+        -------
+        order : ndarray
+            Each ensemble's walkers in split order, (g, per), int64.
+        uniform, gamma, log_u : ndarray
+            As the compiled step takes them (see the module notes).
+        """
+        size = per // self.nsplits
+        n_prop, n_acc = g * size * self.n_uniform, g * size
+        if self.n_normal == 0:
+            uniforms = random.rand(g * per + self.nsplits * (n_prop + n_acc))
+            normals = _NO_NORMALS
+        else:
+            # a normal draw (γ) sits between the proposal and Metropolis uniforms
+            drawn = [random.rand(g * per + n_prop)]
+            normal = []
+            for split in range(self.nsplits):
+                normal.append(random.randn(n_acc * self.n_normal))
+                last = split + 1 == self.nsplits
+                drawn.append(random.rand(n_acc if last else n_acc + n_prop))
+            uniforms = np.concatenate(drawn)
+            normals = np.concatenate(normal)
+        g0, sigma = self._stretch_of(ndim)
+        order, uniform, gamma, log_u = self._layout(g, per)
+        _arrange(uniforms, normals, g0, sigma, order, uniform, gamma, log_u)
+        np.log(log_u, out=log_u)
+        return order, uniform, gamma, log_u
+
+    def _layout(self, g: int, per: int) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+        """The arrays of one step's numbers (:meth:`_numbers`), made once per shape
+        and filled anew at every step (a step reads them only while it runs)."""
+        layout = getattr(self, "_layout_cache", None)
+        if layout is None or layout[0].shape != (g, per):
+            size = per // self.nsplits
+            layout = (
+                np.empty((g, per), dtype=np.int64),
+                np.empty((self.nsplits, g, size, self.n_uniform)),
+                np.empty((self.nsplits, g, size)),
+                np.empty((self.nsplits, g * size)),
+            )
+            self._layout_cache = layout
+        return layout
+
+    def _stretch_of(self, ndim: int) -> tuple[float, float]:
+        """γ₀ and σ of the stretch γ = γ₀ (1 + σ n) (σ unused by a move without normal
+        numbers, whose γ is γ₀)."""
+        raise NotImplementedError  # pragma: no cover - interface
+
     def propose(self, model, state: State) -> tuple[State, NDArray]:
         """One update of every walker of every ensemble (emcee's ``Move`` interface).
 
         Every random number of the step is drawn first, in the order of the splits
-        (each split's proposal numbers, then its Metropolis uniforms); the splits then
-        run in the log-probability's compiled step if it offers one (see the module
-        notes), else, or from the split where that step stops, here.
+        (each split's proposal numbers, then its Metropolis uniforms; :meth:`_numbers`);
+        the splits then run in the log-probability's compiled step if it offers one
+        (see the module notes), else, or from the split where that step stops, here.
         """
         nwalkers, ndim = state.coords.shape
         per = self._shape(nwalkers, ndim)
-        random = model.random
         g = self.n_groups
-        # A random, balanced split of each ensemble (emcee: ``arange % nsplits``
-        # shuffled), as a uniformly random permutation of each ensemble's walkers.
-        order = np.argsort(random.rand(g, per), axis=1) + (per * np.arange(g))[:, None]
+        order, uniforms, gammas, log_u = self._numbers(model.random, g, per, ndim)
         size = per // self.nsplits
-        uniforms = np.empty((self.nsplits, g, size, self.n_uniform))
-        gammas = np.empty((self.nsplits, g, size))
-        log_u = np.empty((self.nsplits, g * size))
-        for split in range(self.nsplits):
-            uniforms[split], gammas[split] = self._draw(random, g, size, ndim)
-            log_u[split] = random.rand(g * size)
-        np.log(log_u, out=log_u)
         coords = np.ascontiguousarray(state.coords, dtype=np.float64)
         log_prob = np.ascontiguousarray(state.log_prob, dtype=np.float64)
         accepted = np.zeros(nwalkers, dtype=bool)
@@ -278,14 +333,20 @@ class GroupedDEMove(_GroupedRedBlueMove):
 
     kind = DE
     n_uniform = 2
+    n_normal = 1
 
     def _draw(
         self, random: np.random.RandomState, g: int, size: int, ndim: int
     ) -> tuple[NDArray, NDArray]:
         """Two uniform numbers per walker (the pair) and its stretch γ."""
-        g0 = 2.38 / np.sqrt(2 * ndim) if self.gamma0 is None else self.gamma0
+        g0, sigma = self._stretch_of(ndim)
         uniform = random.rand(g, size, 2)
-        return uniform, g0 * (1 + self.sigma * random.randn(g, size))
+        return uniform, g0 * (1 + sigma * random.randn(g, size))
+
+    def _stretch_of(self, ndim: int) -> tuple[float, float]:
+        """γ₀ (default 2.38/√(2d)) and σ."""
+        g0 = 2.38 / math.sqrt(2 * ndim) if self.gamma0 is None else self.gamma0
+        return float(g0), float(self.sigma)
 
     def _split_proposal(
         self, coords: NDArray, order: NDArray, split: int, uniform: NDArray, gamma: NDArray
@@ -314,6 +375,7 @@ class GroupedDESnookerMove(_GroupedRedBlueMove):
 
     kind = SNOOKER
     n_uniform = 4
+    n_normal = 0
 
     def _draw(
         self, random: np.random.RandomState, g: int, size: int, ndim: int
@@ -321,6 +383,10 @@ class GroupedDESnookerMove(_GroupedRedBlueMove):
         """Four uniform numbers per walker (three walkers and their order); the
         stretch is the constant ``gammas``."""
         return random.rand(g, size, 4), np.full((g, size), self.gammas)
+
+    def _stretch_of(self, ndim: int) -> tuple[float, float]:
+        """The constant stretch ``gammas`` (no normal numbers)."""
+        return float(self.gammas), 0.0
 
     def _split_proposal(
         self, coords: NDArray, order: NDArray, split: int, uniform: NDArray, gamma: NDArray
@@ -404,6 +470,53 @@ def _snooker_proposals(
                 dist += (q[row, j] - z[j]) ** 2
             metropolis[row] = math.log(math.sqrt(dist)) - math.log(norm)
     return q, metropolis
+
+
+#: The normal numbers of a move that draws none.
+_NO_NORMALS = np.empty(0)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _arrange(
+    uniforms: NDArray,
+    normals: NDArray,
+    g0: float,
+    sigma: float,
+    order: NDArray,
+    uniform: NDArray,
+    gamma: NDArray,
+    log_u: NDArray,
+) -> None:
+    """A step's numbers laid out for the splits (:meth:`_GroupedRedBlueMove._numbers`).
+
+    ``uniforms`` in the order drawn: the keys of each ensemble's split (g·per), then per
+    split its proposal numbers (g·size·k) and Metropolis uniforms (g·size);
+    ``normals``: per split g·size normal numbers n (none: γ = γ₀). Fills ``order``
+    (g, per) with each ensemble's walkers sorted by their keys, ``uniform`` (splits,
+    g, size, k) with the proposal numbers, ``gamma`` (splits, g, size) with the
+    stretches γ₀ (1 + σ n) and ``log_u`` (splits, g·size) with the Metropolis
+    uniforms, not yet logged.
+    """
+    nsplits, g, size, k = uniform.shape
+    per = order.shape[1]
+    for e in range(g):
+        order[e] = np.argsort(uniforms[e * per : (e + 1) * per]) + e * per
+    at = g * per
+    for split in range(nsplits):
+        for e in range(g):
+            for i in range(size):
+                for j in range(k):
+                    uniform[split, e, i, j] = uniforms[at]
+                    at += 1
+        for row in range(g * size):
+            log_u[split, row] = uniforms[at]
+            at += 1
+        for e in range(g):
+            for i in range(size):
+                if normals.size:
+                    gamma[split, e, i] = g0 * (1 + sigma * normals[(split * g + e) * size + i])
+                else:
+                    gamma[split, e, i] = g0
 
 
 def grouped_moves(n_groups: int) -> list[tuple[emcee.moves.Move, float]]:

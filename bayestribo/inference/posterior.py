@@ -188,6 +188,17 @@ class Posterior:
         shape = "log10_shape" in self.names or "log10_shape" in self.fixed
         return self.likelihood.data.increments.size + self.likelihood.design(shape).shape[1]
 
+    def log_prior(self, theta: NDArray) -> NDArray:
+        """Joint log prior density of each row of ``theta`` (n, d), −inf outside the
+        priors' support: compiled where :attr:`uses_compiled` (the optimiser of the
+        starting point tests every point it evaluates), else
+        :meth:`PriorSet.logpdf <bayestribo.inference.priors.PriorSet.logpdf>`."""
+        fused: FusedLogPosterior | None = self._fused
+        theta = np.asarray(theta, dtype=float)
+        if fused is not None and theta.ndim == 2 and theta.shape[1] == len(self.names):
+            return fused.log_prior(theta)
+        return self.priors.logpdf(theta)
+
     def standardized_residuals(self, theta: NDArray, nuisances: bool = False) -> NDArray:
         """Standardized conditional residuals of each increment, shape (n, m); with
         ``nuisances`` the linear nuisances' conditional means over their prior sd

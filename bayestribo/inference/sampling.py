@@ -268,23 +268,69 @@ def autocorr_time(chain: NDArray, c: float = 5.0) -> NDArray:
 
 def _autocorr_times(chains: NDArray, c: float = 5.0) -> NDArray:
     """:func:`autocorr_time` of each ensemble's chain, (ensembles, steps, walkers,
-    params) -> (ensembles, params), in one batched transform."""
+    params) -> (ensembles, params).
+
+    Sokal's window M is the first lag with M >= c τ(M), and τ(M) needs the
+    autocorrelation up to M alone: it is computed for the first quarter of the lags
+    (:data:`_FIRST_LAGS` at least), where a chain long enough to be judged has its
+    window (M ≈ cτ, a tenth of the steps at 50τ), and for all of them for an ensemble
+    with a parameter whose window is not there (:func:`_windowed_taus`; an ensemble's
+    τ is the same whether it is transformed alone or with others).
+    """
     n_t = chains.shape[1]
-    # Zero padding to any length >= 2n - 1 gives the linear (not circular)
-    # autocorrelation exactly; emcee pads to twice the next power of two, a fast
-    # length is up to twice as quick, and so are transforms along contiguous rows.
-    size = scipy.fft.next_fast_len(max(2 * n_t - 1, 1), real=True)
-    # (ensembles, params, walkers, steps)
-    rows = np.ascontiguousarray(np.transpose(chains, (0, 3, 2, 1)))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        spectrum = scipy.fft.rfft(rows - rows.mean(axis=-1, keepdims=True), n=size, axis=-1)
-        power = spectrum.real**2 + spectrum.imag**2
-        acf = scipy.fft.irfft(power, n=size, axis=-1)[..., :n_t]
-        acf = acf / acf[..., :1]
-        taus = 2.0 * np.cumsum(acf.mean(axis=2), axis=-1) - 1.0  # (ensembles, params, steps)
-        inside = np.arange(n_t) < c * taus
-    window = np.where(inside.any(axis=-1), np.argmin(inside, axis=-1), n_t - 1)
+    lags = min(n_t, max(_FIRST_LAGS, n_t // 4))
+    taus, inside = _windowed_taus(chains, c, lags)
+    out = _at_window(taus, inside)
+    # an ensemble with a parameter whose window is not among the first lags: all of them
+    longer = ~np.all(np.any(~inside, axis=-1), axis=-1)
+    if lags < n_t and longer.any():
+        out[longer] = _at_window(*_windowed_taus(chains[longer], c, n_t))
+    return out
+
+
+def _at_window(taus: NDArray, inside: NDArray) -> NDArray:
+    """τ at Sokal's window by emcee's rule: the first lag M >= c τ(M) (``inside`` is
+    M < c τ(M)); the last lag where none is below c τ (a NaN τ)."""
+    window = np.where(inside.any(axis=-1), np.argmin(inside, axis=-1), taus.shape[-1] - 1)
     return np.take_along_axis(taus, window[..., None], axis=-1)[..., 0]
+
+
+#: Lags of the autocorrelation computed first (:func:`_autocorr_times`), at least.
+_FIRST_LAGS = 64
+
+
+def _windowed_taus(chains: NDArray, c: float, lags: int) -> tuple[NDArray, NDArray]:
+    """τ(M) = 1 + 2 Σ_{t=1}^{M} ρ(t) for the lags M < ``lags``, (ensembles, params,
+    lags), and whether M < c τ(M) at each.
+
+    Zero padding to n + lags - 1 or more gives the linear (not circular)
+    autocorrelation exactly at those lags; emcee pads to twice the next power of two,
+    a fast length is quicker, and so are transforms along contiguous rows. Each
+    walker's autocorrelation is taken over its value at lag 0 (its sum of squares) and
+    averaged over the walkers; the transform being linear, the average is taken of
+    the normalised power spectra, transformed back once per parameter. The walkers of
+    one ensemble and parameter are transformed together, in one reused padded buffer:
+    a few hundred kB at a time, where the whole at once (megabytes, allocated afresh
+    at every check) costs more in fresh memory pages than in arithmetic.
+    """
+    n_ens, n_t, n_walkers, n_params = chains.shape
+    size = scipy.fft.next_fast_len(max(n_t + lags - 1, 1), real=True)
+    rows = np.zeros((n_walkers, size))
+    kept = rows[:, :n_t]
+    power = np.empty((n_ens, n_params, size // 2 + 1))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        for e in range(n_ens):
+            for p in range(n_params):
+                kept[...] = chains[e, :, :, p].T
+                kept -= kept.mean(axis=-1, keepdims=True)
+                spectrum = scipy.fft.rfft(rows, axis=-1)
+                walkers = spectrum.real**2 + spectrum.imag**2
+                walkers /= np.einsum("ij,ij->i", kept, kept)[:, None]
+                walkers.mean(axis=0, out=power[e, p])
+        acf = scipy.fft.irfft(power, n=size, axis=-1)[..., :lags]
+        taus = 2.0 * np.cumsum(acf, axis=-1) - 1.0  # (ensembles, params, lags)
+        inside = np.arange(lags) < c * taus
+    return taus, inside
 
 
 def effective_sample_size(chain: NDArray) -> NDArray:
@@ -462,19 +508,18 @@ def run_ensembles(
     enough = settled = False
     try:
         while steps < settings.max_steps:
-            chunk = min(settings.check_every, settings.max_steps - steps)
+            chunk = settings.check_every
+            if np.all(np.isfinite(tau)):
+                # The rule cannot be met this early with the last τ (which short chains
+                # underestimate): the checks before this many steps are skipped, and
+                # the steps up to the next check run in one call of the sampler.
+                early = _EARLY * (2.0 + settings.autocorr_multiple) * np.max(tau)
+                chunk *= max(1, math.ceil((early - steps) / settings.check_every))
+            chunk = min(chunk, settings.max_steps - steps)
             ensembles.run(chunk)
             steps += chunk
             if bar is not None:
                 bar.update(chunk)
-            if (
-                np.all(np.isfinite(tau))
-                and steps < settings.max_steps
-                and steps < _EARLY * (2.0 + settings.autocorr_multiple) * np.max(tau)
-            ):
-                # The rule cannot be met this early with the last τ (which short chains
-                # underestimate): skip the check, which costs as much as 30 steps.
-                continue
             burn = min(int(2 * np.max(tau)) if np.all(np.isfinite(tau)) else steps // 3, steps // 2)
             tau = np.max(_autocorr_times(ensembles.chains(burn)), axis=0)
             if not np.all(np.isfinite(tau)):
@@ -650,7 +695,12 @@ class _Grouped(_Ensembles):
         return np.moveaxis(shaped, 1, 0)
 
     def run(self, steps: int) -> None:
-        self.state = self.sampler.run_mcmc(self.state, steps, progress=False)
+        # emcee checks that the starting walkers are linearly independent; a run
+        # resumed from the sampler's own last state was checked when it began
+        resumed = self.sampler.iteration > 0
+        self.state = self.sampler.run_mcmc(
+            self.state, steps, progress=False, skip_initial_state_check=resumed
+        )
 
     def chains(self, discard: int) -> NDArray:
         return self._split(self.sampler.get_chain(discard=discard))

@@ -232,6 +232,8 @@ def _plateau_middle(posterior: Posterior, theta: NDArray) -> NDArray:
 
 #: Rounds of ratio scan and least squares from one starting point.
 _MAX_ROUNDS = 4
+#: √ε of doubles, the relative step of the forward differences (scipy's "2-point").
+_SQRT_EPS = math.sqrt(float(np.finfo(float).eps))
 
 
 Optimum = tuple[NDArray, NDArray, float]
@@ -394,45 +396,58 @@ def refine(
 
     low, high = _free_bounds(posterior, [names[i] for i in free])
     bounded = np.flatnonzero(np.isfinite(low) | np.isfinite(high))
+    # the compiled prior where the posterior has one (it is evaluated at every point)
+    log_prior = getattr(posterior, "log_prior", posterior.priors.logpdf)
+
+    # the fixed parts of every evaluation (the least squares make a few hundred)
+    at = np.asarray(free)
+    start_free = theta[at]
+    n_rows = size + len(gaussian) + bounded.size
+    gauss_at = at[[j for j, _ in gaussian]]
+    gauss_mu = np.array([p.mu for _, p in gaussian])
+    gauss_sigma = np.array([p.sigma for _, p in gaussian])
 
     def residual_rows(u: NDArray) -> NDArray:
         """Residuals at the rows ``u`` (k, free) in one call of the posterior."""
         th = np.repeat(theta[None], u.shape[0], axis=0)
-        th[:, free] = theta[free] + u * scale
+        part = start_free + u * scale
+        out = np.full((u.shape[0], n_rows), 1e6)
         # A step across a bound of the support is evaluated at the bound (the nearest
         # point inside), plus a residual for each coordinate beyond it: the optimiser
         # keeps moving the others along the bound where the optimum sits on it (a drag
         # piled at zero), instead of stalling at a wall of rejected steps.
-        beyond = np.zeros((u.shape[0], bounded.size))
         if bounded.size:
-            part = th[:, free]
-            inside = np.clip(part, low, high)
-            beyond = ((part - inside) / scale)[:, bounded]
-            th[:, free] = inside
-        out = np.full((u.shape[0], size + len(gaussian) + bounded.size), 1e6)
-        out[:, size + len(gaussian) :] = beyond
+            inside = np.minimum(np.maximum(part, low), high)
+            out[:, size + len(gaussian) :] = ((part - inside) / scale)[:, bounded]
+            part = inside
+        th[:, at] = part
         # inside the priors' support, a row whose residuals are not all finite is
         # outside the law's domain (the model cannot move there): both get 1e6. The
         # model is evaluated once per row (the law's integrator where it has no
         # closed form), not once for the density and again for the residuals.
-        ok = np.isfinite(posterior.priors.logpdf(th))
-        if np.any(ok):
-            resid = posterior.standardized_residuals(th[ok], nuisances=True)
-            ok[ok] = np.all(np.isfinite(resid), axis=1)
-            out[ok, :size] = resid[np.all(np.isfinite(resid), axis=1)]
-            for k, (j, p) in enumerate(gaussian):
-                out[ok, size + k] = (th[ok, free[j]] - p.mu) / p.sigma
+        ok = np.isfinite(log_prior(th))
+        every = bool(ok.all())
+        if every or ok.any():
+            resid = posterior.standardized_residuals(th if every else th[ok], nuisances=True)
+            finite = np.isfinite(resid).all(axis=1)
+            ok[ok] = finite
+            out[ok, :size] = resid if every and finite.all() else resid[finite]
+            if gaussian:
+                out[ok, size : size + len(gaussian)] = (
+                    th[ok][:, gauss_at] - gauss_mu
+                ) / gauss_sigma
         return out
 
     last: list[NDArray] = []
 
     def residuals(u: NDArray) -> NDArray:
+        u = np.array(u, dtype=float)
         if near is not None:
-            at = theta.copy()
-            at[free] = theta[free] + np.asarray(u, dtype=float) * scale
-            near(at)
-        f = residual_rows(np.asarray(u, dtype=float)[None])[0]
-        last[:] = [np.array(u, dtype=float), f]
+            point = theta.copy()
+            point[at] = start_free + u * scale
+            near(point)
+        f = residual_rows(u[None])[0]
+        last[:] = [u, f]
         return f
 
     def jacobian(u: NDArray, sign: NDArray | None = None) -> NDArray:
@@ -441,9 +456,9 @@ def refine(
         u = np.asarray(u, dtype=float)
         if sign is None:
             sign = np.where(u >= 0, 1.0, -1.0)
-        h = np.sqrt(np.finfo(float).eps) * sign * np.maximum(1.0, abs(u))
+        h = _SQRT_EPS * sign * np.maximum(1.0, abs(u))
         h = (u + h) - u
-        if last and np.array_equal(last[0], u):
+        if last and last[0].shape == u.shape and bool((last[0] == u).all()):
             f0 = last[1]
             shifted = residual_rows(u[None, :] + np.diag(h))
         else:

@@ -20,9 +20,13 @@ __all__ = ["averaged_amplitude", "averaged_pi_ufunc", "averaged_pi_until", "pi_o
 _TINY = 1e-100
 #: Below this w = ζa/c, ψ(w) is summed as its series (cancellation in the direct form).
 PSI_SERIES = 1e-2
+#: The one floating-point liberty taken: a product and a sum fused into one rounding
+#: (FMA) where the processor has it, which takes a tenth off the averaged Π's time; no
+#: other (NaN, infinities, signed zeros and the order of operations are kept).
+_CONTRACT = {"contract"}
 
 
-@numba.njit(cache=True, error_model="numpy")
+@numba.njit(cache=True, error_model="numpy", fastmath=_CONTRACT)
 def _expm1_ratio(a: float, length: float) -> float:
     """(1 - exp(-a L))/a, L at a = 0."""
     if abs(a) < _TINY:
@@ -30,7 +34,7 @@ def _expm1_ratio(a: float, length: float) -> float:
     return -math.expm1(-a * length) / a
 
 
-@numba.njit(cache=True, error_model="numpy")
+@numba.njit(cache=True, error_model="numpy", fastmath=_CONTRACT)
 def averaged_amplitude(t: float, a0: float, z: float, mk: float) -> float:
     """a(τ) of Eq. 34, zero after the end of motion."""
     if abs(z) < _TINY:
@@ -47,7 +51,7 @@ def averaged_amplitude(t: float, a0: float, z: float, mk: float) -> float:
     return max(a, 0.0)
 
 
-@numba.njit(cache=True, error_model="numpy")
+@numba.njit(cache=True, error_model="numpy", fastmath=_CONTRACT)
 def pi_of_amplitude(a: float, z: float, mk: float) -> float:
     """∫_0^a (α²/2)/(ζα + 2μ_k/π) dα, stable for every ζ, μ_k >= 0 (inf for ζ = μ_k = 0)."""
     c = 2.0 * mk / math.pi
@@ -71,13 +75,15 @@ def pi_of_amplitude(a: float, z: float, mk: float) -> float:
     return a * a * chi / (2.0 * (z if z > 0.0 else 1.0))
 
 
-@numba.vectorize(["float64(float64, float64, float64, float64)"], cache=True)
+@numba.vectorize(["float64(float64, float64, float64, float64)"], cache=True, fastmath=_CONTRACT)
 def averaged_pi_ufunc(t: float, a0: float, z: float, mk: float) -> float:  # pragma: no cover
     """Π_app(τ) to the end of motion (a numpy ufunc: broadcasts its arguments)."""
     return pi_of_amplitude(averaged_amplitude(t, a0, z, mk), z, mk)
 
 
-@numba.vectorize(["float64(float64, float64, float64, float64, float64)"], cache=True)
+@numba.vectorize(
+    ["float64(float64, float64, float64, float64, float64)"], cache=True, fastmath=_CONTRACT
+)
 def averaged_pi_until(
     t: float, t_end: float, a0: float, z: float, mk: float
 ) -> float:  # pragma: no cover

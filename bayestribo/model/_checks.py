@@ -5,7 +5,19 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["as_finite", "check_parameters"]
+__all__ = ["all_within", "as_finite", "check_parameters"]
+
+
+def all_within(value: NDArray, low: float, high: float = np.inf) -> bool:
+    """Every element of the float array ``value`` finite and in [low, high), ``low``
+    finite.
+
+    Two reductions (a NaN fails both comparisons, ±inf one of them): the quick test of
+    arguments that are usually right, before the checks that name what is wrong.
+    """
+    if value.size == 0:
+        return True
+    return bool(value.min() >= low) and bool(value.max() < high)
 
 
 def as_finite(name: str, value: ArrayLike) -> NDArray:

@@ -23,6 +23,12 @@ __all__ = ["exact_pi_grid", "exact_pi_rows"]
 _TINY = 1e-100
 _SERIES_XL = 1e-6
 _GMINUS_SERIES = 1e-3
+#: Below this (upper - 1)·x the decay of the half cycles left is taken from e^{-(upper-1)x}
+#: (relative error at most this many ε from its argument's rounding).
+_TOP_ARGUMENT = 30.0
+#: From this n·x on the whole half cycles' sums divide by their constants through
+#: reciprocals (below it e1 - e2 cancels by 1/(n·x) and the divisions are kept).
+_RECIPROCAL_NX = 0.1
 
 
 @numba.njit(cache=True, inline="always")
@@ -52,6 +58,24 @@ def _amplitude(n: float, a0: float, mu_k: float, x: float) -> float:
 
 
 @numba.njit(cache=True, inline="always")
+def _amplitude_of(n: float, a0: float, mu_k: float, x: float, omq: float) -> tuple[float, float]:
+    """:func:`_amplitude` with one transcendental call, for the loop over the grid:
+    e^{-nx} where e^{-nx} - 1 does not cancel, e^{-nx} - 1 where it would (1 + that is
+    then at least 0.6, exact enough); ``omq`` = 1 - e^{-x}. Returns the amplitude and
+    e^{-nx}."""
+    if x < _TINY:
+        return a0 - 2.0 * mu_k * n, 1.0
+    nx = n * x
+    if nx > 0.5:
+        e = math.exp(-nx)
+        em = e - 1.0
+    else:
+        em = math.expm1(-nx)
+        e = 1.0 + em
+    return a0 * e + 2.0 * mu_k * (em * (1.0 / omq)), e
+
+
+@numba.njit(cache=True, inline="always")
 def _whole(
     n: float,
     amp: float,
@@ -63,8 +87,10 @@ def _whole(
     f2: float,
     omq: float,
     g_x: float,
+    em_nx: float = math.nan,
 ) -> float:
-    """Σ ∫E over n whole half cycles starting with amplitude amp (see exact.py)."""
+    """Σ ∫E over n whole half cycles starting with amplitude amp (see exact.py);
+    ``em_nx`` is e^{-nx} - 1 where the caller has it (NaN: computed here)."""
     if n <= 0.0:
         return 0.0
     if x < _TINY:
@@ -75,18 +101,30 @@ def _whole(
         e3 = (n - 1.0) * n * (2.0 * n - 1.0) / 6.0
     else:
         nx = n * x
-        em = math.expm1(-nx)
-        d1 = -em / omq
-        d2 = d1 * (2.0 + em) / (1.0 + q)
+        em = math.expm1(-nx) if math.isnan(em_nx) else em_nx
         g_nx = _gminus(nx) if nx < _GMINUS_SERIES else em + nx
-        e1 = (g_nx - n * g_x) / (omq * omq)
-        e2 = d1 * (d1 - 1.0) / (1.0 + q)
-        if nx < _SERIES_XL:
-            s2 = (n - 1.0) * n * (2.0 * n - 1.0) / 6.0
-            s3 = (0.5 * n * (n - 1.0)) ** 2
-            e3 = s2 - x * (s3 - s2)
+        if nx >= _RECIPROCAL_NX:
+            # products with the reciprocals of the grid's constants: e1 - e2 cancels
+            # by about a factor nx only, so their last-bit differences from the
+            # divisions below stay in the last bits
+            inv_omq = 1.0 / omq
+            inv_1pq = 1.0 / (1.0 + q)
+            d1 = -em * inv_omq
+            d2 = d1 * (2.0 + em) * inv_1pq
+            e1 = (g_nx - n * g_x) * (inv_omq * inv_omq)
+            e2 = d1 * (d1 - 1.0) * inv_1pq
+            e3 = (e1 - e2) * inv_omq
         else:
-            e3 = (e1 - e2) / omq
+            d1 = -em / omq
+            d2 = d1 * (2.0 + em) / (1.0 + q)
+            e1 = (g_nx - n * g_x) / (omq * omq)
+            e2 = d1 * (d1 - 1.0) / (1.0 + q)
+            if nx < _SERIES_XL:
+                s2 = (n - 1.0) * n * (2.0 * n - 1.0) / 6.0
+                s3 = (0.5 * n * (n - 1.0)) ** 2
+                e3 = s2 - x * (s3 - s2)
+            else:
+                e3 = (e1 - e2) / omq
     sum_a = amp * d1 - 2.0 * mu_k * e1
     sum_a2 = amp * amp * d2 - 4.0 * mu_k * amp * e2 + 4.0 * mu_k * mu_k * e3
     return 0.5 * mu_k * mu_k * half * n + mu_k * f1 * sum_a + 0.5 * f2 * sum_a2
@@ -102,12 +140,14 @@ def _partial(
     inv = 1.0 / (1.0 + t * t)
     sin = 2.0 * t * inv
     cos = (1.0 - t * t) * inv
-    p1 = 2.0 * z * q + decay * (2.0 * z * (cos + be * sin) - sin / om)
+    p1 = 2.0 * z * q + decay * (2.0 * z * (cos + be * sin) - sin * (1.0 / om))
     sin2 = 2.0 * sin * cos
     cos2 = cos * cos - sin * sin
     g_s = 0.5 * z * decay * decay * ((be * be - 1.0) * cos2 - 2.0 * be * sin2)
     g_end = 0.5 * z * q * q * (be * be - 1.0)
-    p2 = (1.0 + be * be) * decay * decay * _expm1_ratio(2.0 * z, half - s) + g_end - g_s
+    a = 2.0 * z
+    ratio = half - s if abs(a) < _TINY else -math.expm1(-a * (half - s)) * (1.0 / a)
+    p2 = (1.0 + be * be) * decay * decay * ratio + g_end - g_s
     return 0.5 * mu_k * mu_k * (half - s) + mu_k * amp * p1 + 0.5 * amp * amp * p2
 
 
@@ -182,6 +222,13 @@ def _one(
     # A half cycle's amplitude and the integral over the half cycles after it depend on
     # its index alone: computed once per half cycle, not once per time (a grid holds
     # several times in each), with the same operations, so the values are the same.
+    # The whole half cycles after the n-th, upper - n - 1 of them, decay by
+    # e^{-(upper-1)x}/e^{-nx}: one division instead of an exponential where that is
+    # at most e^{-0.5} (its difference from 1 does not cancel) and e^{-(upper-1)x}
+    # carries the rounding of an argument below _TOP_ARGUMENT only.
+    top_arg = (upper - 1.0) * x
+    top_ok = x >= _TINY and top_arg < _TOP_ARGUMENT
+    top = math.exp(-top_arg) if top_ok else 0.0
     last_n = math.nan
     amp = 0.0
     rest = 0.0
@@ -194,13 +241,16 @@ def _one(
         s = t + sigma0 - n * half
         if n != last_n:
             last_n = n
-            amp = _amplitude(n, a0, mk, x)
+            amp, e_n = _amplitude_of(n, a0, mk, x, omq)
             amp_next = q * amp - 2.0 * mk
             length = upper - n - 1.0
             if math.isinf(length):
                 rest = endless * amp_next * amp_next
             else:
-                rest = _whole(max(length, 0.0), amp_next, mk, x, q, half, f1, f2, omq, g_x)
+                em_length = top / e_n - 1.0 if top_ok and length * x > 0.5 else math.nan
+                rest = _whole(
+                    max(length, 0.0), amp_next, mk, x, q, half, f1, f2, omq, g_x, em_length
+                )
         head = _partial(s, amp, mk, z, omega, be, q, half)
         out[i] = head + rest - tail
 

@@ -30,7 +30,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from bayestribo.model._checks import as_finite, check_parameters
+from bayestribo.model._checks import all_within, as_finite, check_parameters
 from bayestribo.model._special import expm1_ratio
 
 __all__ = ["averaged_amplitude", "averaged_energy", "averaged_pi", "extinction_time"]
@@ -39,11 +39,34 @@ _PSI_SERIES = 1e-2
 
 
 def _check(y0: ArrayLike, zeta: ArrayLike, mu_k: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:
+    try:
+        a0, z, mk = (np.asarray(v, dtype=float) for v in (y0, zeta, mu_k))
+    except (TypeError, ValueError):
+        pass  # named below
+    else:
+        if all_within(a0, 0.0) and all_within(z, 0.0, 1.0) and all_within(mk, 0.0):
+            return a0, z, mk
     a0 = as_finite("y0", y0)
     if np.any(a0 < 0.0):
         raise ValueError("y0 must be >= 0: it is the initial amplitude of the averaged model")
     z, mk, _ = check_parameters(zeta, mu_k)
     return a0, z, mk
+
+
+def _times(name: str, value: ArrayLike) -> NDArray:
+    """``value`` as a float array of times τ >= 0; ``ValueError`` naming ``name``
+    otherwise."""
+    try:
+        t = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        pass  # named below
+    else:
+        if all_within(t, 0.0):
+            return t
+    t = as_finite(name, value)
+    if np.any(t < 0.0):
+        raise ValueError(f"{name} must be >= 0")
+    return t
 
 
 def _log1p_over(w: NDArray) -> NDArray:
@@ -158,14 +181,10 @@ def averaged_pi(
     from bayestribo.model._averaged_kernel import averaged_pi_ufunc, averaged_pi_until
 
     a0, z, mk = _check(y0, zeta, mu_k)
-    t = as_finite("tau", tau)
-    if np.any(t < 0.0):
-        raise ValueError("tau must be >= 0")
+    t = _times("tau", tau)
     # One compiled pass over the broadcast arguments (the same formulas as
     # _pi_of_amplitude and _amplitude here, which stay the numpy reference).
     if tau_end is None:
         return np.asarray(averaged_pi_ufunc(t, a0, z, mk), dtype=float)
-    te = as_finite("tau_end", tau_end)
-    if np.any(te < 0.0):
-        raise ValueError("tau_end must be >= 0")
+    te = _times("tau_end", tau_end)
     return np.asarray(averaged_pi_until(t, te, a0, z, mk), dtype=float)
