@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from bayestribo.model import exact_pi
@@ -56,6 +56,12 @@ def test_kernel_agrees_with_numpy_model(yp0, tau_end):
 def test_kernel_property(zeta, mu_k, extra, y0, yp0, tau_end):
     if zeta == 0.0 and mu_k == 0.0 and tau_end is None:
         return  # endless, undamped: both are inf
+    # The stick rule is a discontinuity: a swing of amplitude exactly μ_s - μ_k sticks,
+    # one a rounding error above it goes on. Started at |y0| = μ_s with a velocity of
+    # 1e-132 (the same float drawn for y0 and μ_s), the first swing is μ_s - μ_k
+    # to the last bit, and which side of the tie each implementation's rounding lands
+    # on decides Π; that is not a disagreement of the two. Such ties are left out.
+    assume(abs(abs(y0) - (mu_k + extra)) > 1e-9 * max(1.0, abs(y0)))
     tau = np.linspace(0.0, 200.0, 41)
     fast = exact_pi_grid(
         tau,
