@@ -5,8 +5,8 @@ simulator of ``benchmarks/_laws_sim.py``, run ``--index``), prepared as
 ``bayestribo.fit`` prepares it. Each law of :data:`bayestribo.inference.comparison.
 auto_laws()` is optimised as the comparison does it, smallest first
 (:func:`bayestribo.inference.pipeline.find_optimum`, started also at the optimum of the
-largest nested law optimised before, :func:`bayestribo.inference.comparison.
-_nested_start`); unlike the comparison, a nested law's optimum is the optimiser's, not
+largest nested law optimised before, :func:`bayestribo.inference.reduction.
+nested_start`); unlike the comparison, a nested law's optimum is the optimiser's, not
 its sampler's best draw, and nothing is sampled. Each law's CPU time
 (``time.process_time``: the load of other processes hardly changes it) and wall time,
 its optimum, Laplace covariance and log density are written, so that two trees can be
@@ -44,7 +44,9 @@ from laws import CASES, _entropy, case_record  # noqa: E402
 def optima(case: str, noise: float, index: int, seed: int) -> list[dict[str, Any]]:
     """Each auto law's optimum on run ``index`` of ``case``, timed."""
     from bayestribo.inference import comparison
+    from bayestribo.inference.choice import complexity
     from bayestribo.inference.pipeline import find_optimum, prepare
+    from bayestribo.inference.reduction import nested_start
 
     run, _facts = case_record(case, noise, _entropy(case, noise, index, seed))
     with warnings.catch_warnings():
@@ -52,9 +54,9 @@ def optima(case: str, noise: float, index: int, seed: int) -> list[dict[str, Any
         prepared = prepare(run)
         found: dict[str, dict[str, float]] = {}
         out = []
-        for law in sorted(comparison.auto_laws(), key=comparison._complexity):
+        for law in sorted(comparison.auto_laws(), key=complexity):
             posterior = comparison._posterior(law, prepared.data, "exact", False)
-            nested = comparison._nested_start(law, prepared, found)
+            nested = nested_start(law, prepared, found)
             wall, cpu = time.perf_counter(), time.process_time()
             theta, cov, ratio_range = find_optimum(posterior, prepared.decay, also_start_at=nested)
             cpu, wall = time.process_time() - cpu, time.perf_counter() - wall

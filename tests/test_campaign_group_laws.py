@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from bayestribo.campaign.laws import choose_group_law, comparison_digest, group_laws
-from bayestribo.inference.comparison import SMALL_ELPD_DIFFERENCE
+from bayestribo.inference.choice import SMALL_ELPD_DIFFERENCE
 
 
 def _comparison(verdict: str, rows: dict[str, tuple], equivalent: dict | None = None) -> dict:

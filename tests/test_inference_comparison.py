@@ -94,7 +94,7 @@ def test_the_verdict_between_laws_the_data_cannot_split_is_not_the_seeds():
     them is noise: the seed used to choose)."""
     import pandas as pd
 
-    from bayestribo.inference.comparison import _verdict
+    from bayestribo.inference.choice import verdict_of
 
     laws = ["viscous", "coulomb", "viscous+coulomb", "coulomb+hysteretic"]
 
@@ -107,11 +107,11 @@ def test_the_verdict_between_laws_the_data_cannot_split_is_not_the_seeds():
     # the best is coulomb+hysteretic by noise; viscous+coulomb is as good and first
     rows = table(True, [50.0, 60.0, 0.3, 0.0])
     frame = pd.DataFrame(index=["coulomb+hysteretic", "viscous+coulomb", "viscous", "coulomb"])
-    best, as_good, verdict, ok = _verdict(laws, rows, frame)
+    best, as_good, verdict, ok = verdict_of(laws, rows, frame)
     assert (best, verdict, ok) == ("coulomb+hysteretic", "viscous+coulomb", True)
     assert as_good == ["viscous+coulomb", "coulomb+hysteretic"]
     # none adequate: not the best by noise, the simplest of those as good
     rows = table(False, [0.5, 0.0, 1.0, 80.0])
     frame = pd.DataFrame(index=["coulomb", "viscous", "viscous+coulomb", "coulomb+hysteretic"])
-    _, as_good, verdict, ok = _verdict(laws, rows, frame)
+    _, as_good, verdict, ok = verdict_of(laws, rows, frame)
     assert verdict == "viscous" and not ok

@@ -17,13 +17,9 @@ import pytest
 
 from bayestribo import simulate
 from bayestribo.inference import prepare
-from bayestribo.inference.comparison import (
-    REDUCTION_LOSS,
-    LawComparison,
-    _reduction,
-    compare_prepared,
-)
+from bayestribo.inference.comparison import LawComparison, compare_prepared
 from bayestribo.inference.pipeline import build_posterior, find_optimum
+from bayestribo.inference.reduction import REDUCTION_LOSS, reduction
 from bayestribo.inference.sampling import SamplerSettings
 from bayestribo.synthetic import DissipationLaw
 
@@ -112,12 +108,12 @@ def test_a_law_reduces_only_to_a_converged_nested_law(coulomb_run):
     nested[names.index("zeta_alpha")] = 0.0
     assert theta[names.index("zeta_alpha")] < 1e-6
     assert bigger(nested[None])[0] >= bigger(theta[None])[0] - REDUCTION_LOSS
-    assert _reduction("coulomb+power", bigger, theta, _fitted(True), optima) == (
+    assert reduction("coulomb+power", bigger, theta, _fitted(True), optima) == (
         "coulomb",
         ["power"],
     )
     # a nested law that did not converge is no answer to reduce to: sampled instead
-    assert _reduction("coulomb+power", bigger, theta, _fitted(False), optima) is None
+    assert reduction("coulomb+power", bigger, theta, _fitted(False), optima) is None
 
 
 def test_a_drag_the_data_need_does_not_reduce(both_run):
@@ -126,7 +122,7 @@ def test_a_drag_the_data_need_does_not_reduce(both_run):
     bigger, theta, optima = _optima(both_run, "coulomb+power", "coulomb")
     names = bigger.names
     assert theta[names.index("zeta_alpha")] > 1e-3
-    assert _reduction("coulomb+power", bigger, theta, _fitted(True), optima) is None
+    assert reduction("coulomb+power", bigger, theta, _fitted(True), optima) is None
 
 
 def test_the_comparison_text_names_the_laws_reduced_as_a_result_reads_it_back():

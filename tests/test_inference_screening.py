@@ -1,5 +1,5 @@
 """Screening in ``law="auto"``: laws too far behind the best at their optimum are not
-sampled (:func:`bayestribo.inference.comparison.screen`), on stubs of the fits."""
+sampled (:func:`bayestribo.inference.screening.screen`), on stubs of the fits."""
 
 from __future__ import annotations
 
@@ -10,13 +10,14 @@ import numpy as np
 import pytest
 
 from bayestribo.inference import comparison
-from bayestribo.inference.comparison import (
+from bayestribo.inference.choice import SMALL_ELPD_DIFFERENCE, law_of
+from bayestribo.inference.comparison import compare_prepared
+from bayestribo.inference.screening import (
     SCREEN_FACTOR,
-    SMALL_ELPD_DIFFERENCE,
     LawOptimum,
-    compare_prepared,
     optimum_elpd,
     screen,
+    turning_point_misfit,
 )
 
 N = 200
@@ -72,7 +73,7 @@ def _stub_fits(monkeypatch, shifts: dict[str, float]) -> list[str]:
     sampled: list[str] = []
 
     def optimise(law, prepared, model, discrepancy, optima, start=None):
-        post = _Posterior(comparison._law(law).parameter_names)
+        post = _Posterior(law_of(law).parameter_names)
         theta = np.zeros(len(post.names))
         opt = (theta, np.eye(len(theta)), None)
         return LawOptimum(law, post, opt, post, opt, _pointwise(shifts[law], 0.01, 2))
@@ -92,7 +93,7 @@ def _stub_fits(monkeypatch, shifts: dict[str, float]) -> list[str]:
 
     monkeypatch.setattr(comparison, "_optimise", optimise)
     monkeypatch.setattr(comparison, "_fit_law", fit_law)
-    monkeypatch.setattr(comparison, "_reduction", lambda *args: None)
+    monkeypatch.setattr(comparison, "reduction", lambda *args: None)
     monkeypatch.setattr(comparison, "pareto_k_max", lambda loo: 0.1)
     monkeypatch.setattr(comparison, "_checks", lambda posterior, theta: {"adequate": True})
     monkeypatch.setattr(comparison, "turning_point_screen", lambda prepared, laws: {})
@@ -143,7 +144,7 @@ def test_a_law_whose_dissipation_cannot_follow_the_turning_points_is_judged_so()
     mean = 4 * 0.03 * amp + 2 * np.pi * 0.02 * amp**2
     sd = 1e-3 * mean
     chi2 = {
-        law: comparison.turning_point_misfit(law, amp, mean, sd, 10.0)
+        law: turning_point_misfit(law, amp, mean, sd, 10.0)
         for law in ("viscous+coulomb", "coulomb+hysteretic", "coulomb+quadratic", "power")
     }
     assert chi2["viscous+coulomb"] < 1e-6 and chi2["coulomb+hysteretic"] < 1e-6

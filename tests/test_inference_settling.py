@@ -10,8 +10,10 @@ import numpy as np
 import pytest
 
 from bayestribo.inference import comparison
-from bayestribo.inference.comparison import SMALL_ELPD_DIFFERENCE, LawOptimum, compare_prepared
+from bayestribo.inference.choice import SMALL_ELPD_DIFFERENCE, law_of
+from bayestribo.inference.comparison import compare_prepared
 from bayestribo.inference.records import LawComparison
+from bayestribo.inference.screening import LawOptimum
 from bayestribo.inference.settling import FACTOR, settle
 
 N = 200
@@ -80,7 +82,7 @@ def _stub_fits(
     spread = spread or {}
 
     def optimise(law, prepared, model, discrepancy, optima, start=None):
-        post = _Posterior(comparison._law(law).parameter_names)
+        post = _Posterior(law_of(law).parameter_names)
         post.law = law
         theta = np.zeros(len(post.names))
         opt = (theta, np.eye(len(theta)), None)
@@ -103,7 +105,7 @@ def _stub_fits(
 
     monkeypatch.setattr(comparison, "_optimise", optimise)
     monkeypatch.setattr(comparison, "_fit_law", fit_law)
-    monkeypatch.setattr(comparison, "_reduction", lambda *args: None)
+    monkeypatch.setattr(comparison, "reduction", lambda *args: None)
     monkeypatch.setattr(comparison, "pareto_k_max", lambda loo: 0.1)
     monkeypatch.setattr(
         comparison, "_checks", lambda posterior, theta: {"adequate": posterior.law in adequate}

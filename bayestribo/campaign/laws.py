@@ -11,7 +11,7 @@ independent runs, so a group's elpd of a law is the sum over its runs,
 and the group's law is chosen by the rule each run's comparison uses: the best law is
 the one of highest elpd_G; the verdict is the simplest law (fewest sampled
 parameters, then the registry's order) whose elpd_G is within the larger of
-:data:`~bayestribo.inference.comparison.SMALL_ELPD_DIFFERENCE` and two standard errors
+:data:`~bayestribo.inference.choice.SMALL_ELPD_DIFFERENCE` and two standard errors
 of the difference of the best's. The standard error of a difference in one run is
 that run's ``dse`` of each law against its own best, combined as independent
 (√(dse_L² + dse_best²), an upper bound of the paired one), and summed in quadrature
@@ -193,7 +193,7 @@ def choose_group_law(
     -------
     GroupLaw
     """
-    from bayestribo.inference.comparison import SMALL_ELPD_DIFFERENCE
+    from bayestribo.inference.choice import SMALL_ELPD_DIFFERENCE
 
     fitted = dict(fitted or {})
     runs = tuple(sorted(comparisons))

@@ -42,42 +42,20 @@ comparison says that no law compared holds: the ΔE(A) measured from the turning
 is then the answer. A Pareto k above 0.7 is reported, since the estimate is then
 unreliable for that law.
 
-Reduction. A law whose extra terms the data put at zero is the law it nests: at its
-optimum its extra terms' amounts sit on their null (ζ, γ, ζ_α at 0: the lower bound of
-their support, :func:`bayestribo.inference.start.refine`), and the parameters that only
-shape those terms (a power drag's exponent α, μ_s/μ_k without μ_k) are left to their
-prior. Sampling such a posterior judges convergence on parameters the data say nothing
-of, and runs to the step ceiling: ``coulomb+power`` on a record of Coulomb friction
-alone (ζ_α → 0 leaves α free, and α → 0 makes the drag a second Coulomb friction) ran
-all its steps without converging: a third of the time ``law="auto"`` took there
-(``benchmarks/auto_speed.py``). The laws are
-fitted smallest first, and a law *reduces* to the largest law it nests that is fitted
-and converged already when its optimum loses at most :data:`REDUCTION_LOSS` (half a
-unit) of log posterior density with the extra terms' amounts put on their null (the
-others where they are, or at the nested law's optimum). It is then not sampled and not
-compared by PSIS-LOO (the nested law, simpler and of the same optimum, stands for it
-in the verdict and in the ΔE(A) averaged over the laws as good as the verdict): its
-table row says ``reduces_to``, ``terms_at_zero``, ``sampled`` False and
-``converged`` None (not "converged"), with the misfit checks at its optimum, and the
-comparison's text names it. The law-free fit never reduces.
+Reduction. A law whose extra terms the data put at zero at its optimum (within
+:data:`~bayestribo.inference.reduction.REDUCTION_LOSS` of log density) *reduces* to the
+largest law it nests that is fitted and converged already: it is not sampled and not
+compared by PSIS-LOO (:mod:`bayestribo.inference.reduction`); its table row says
+``reduces_to``, ``terms_at_zero``, ``sampled`` False and ``converged`` None, with the
+misfit checks at its optimum, and the comparison's text names it. The law-free fit
+never reduces.
 
-Screening. Every law is first taken to its optimum (smallest first, each starting
-also from the optimum of the largest law it nests), on the posterior it would be
-sampled on (the second pass of :func:`bayestribo.inference.chains.sample`), and its
-expected log predictive density estimated there: the log-likelihood of the increments
-at the optimum less one per sampled parameter (:func:`optimum_elpd`, Akaike's
-estimate, which PSIS-LOO's matches for a law whose posterior is near normal). A law
-whose estimate falls behind the best one's by more than :data:`SCREEN_FACTOR` (3)
-times the tie rule's reach, ``max(4, 2 dse)`` with dse the standard error of the
-pointwise difference at the two optima, cannot be as good as the best once sampled:
-it is *screened out*, not sampled and not compared by PSIS-LOO (:func:`screen`); its
-row says ``screened``, ``screen`` (the estimate, its sd and the limit) and the
-misfit checks at its optimum, and the comparison's text names it. The rest are
-sampled as before (a law that reduces to a nested law sampled is not), compared by
-PSIS-LOO, and decide the verdict. Against the sampled comparison of every candidate
-(``benchmarks/auto_screening.py``: the bundled run and the five real recordings of
-``../shared/external-data``, side by side with the comparison before screening) no
-law screened out was as good as the best there, and the verdicts are the same.
+Screening. Every law is first taken to its optimum on the posterior it would be
+sampled on; a law whose ΔE(A) cannot follow the turning points', or whose expected log
+predictive density estimated at its optimum falls far behind the best one's, is
+*screened out*, not sampled and not compared by PSIS-LOO
+(:mod:`bayestribo.inference.screening`); its row says ``screened`` and ``screen``, with
+the misfit checks at its optimum, and the comparison's text names it.
 
 Settling. The laws left are sampled smallest first, and before each the verdict and
 best among the laws sampled so far are known. A law that misfits at its optimum (or
@@ -131,7 +109,6 @@ import time
 import warnings
 import zlib
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -142,11 +119,28 @@ from bayestribo.errors import BayestriboError
 from bayestribo.inference.build import build_posterior
 from bayestribo.inference.chains import sample_from
 from bayestribo.inference.checks import misfit, shape_departure
+from bayestribo.inference.choice import (
+    LAWS,
+    SMALL_ELPD_DIFFERENCE,
+    choose_law,
+    complexity,
+    law_of,
+    loo_standing,
+    tie_key,
+    verdict_of,
+)
 from bayestribo.inference.loo import law_loo, loo_frame, pareto_k_max
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.preparation import prepare, regrid
 from bayestribo.inference.records import LawComparison
+from bayestribo.inference.reduction import nested_start, reduction
 from bayestribo.inference.sampling import SamplerSettings
+from bayestribo.inference.screening import (
+    LawOptimum,
+    optimum_elpd,
+    screen,
+    turning_point_screen,
+)
 from bayestribo.inference.settling import settle
 from bayestribo.inference.start import find_optimum, find_start
 from bayestribo.inference.types import MISFIT_P, PreparedRun, Sampled
@@ -166,9 +160,6 @@ __all__ = [
     "screen",
 ]
 
-#: The original comparison's names and the laws they stand for.
-LAWS: Mapping[str, str] = {"viscous": "viscous", "coulomb": "coulomb", "both": "viscous+coulomb"}
-
 
 def auto_laws() -> tuple[str, ...]:
     """The laws ``law="auto"`` compares: :func:`bayestribo.model.laws.candidates.
@@ -180,37 +171,13 @@ def auto_laws() -> tuple[str, ...]:
 
 #: Increments per half cycle of the grid that compares rivals (module notes).
 TIE_GRID = 4
-#: elpd difference below which two laws are not told apart.
-SMALL_ELPD_DIFFERENCE = 4.0
-#: How many times the tie rule's reach (``max(SMALL_ELPD_DIFFERENCE, 2 dse)``) a law's
-#: elpd estimated at its optimum must fall behind the best's to be screened out, not
-#: sampled (module notes, Screening).
-SCREEN_FACTOR = 3.0
-#: How many times the best law's χ² against the turning points' ΔE(A) (plus the number
-#: of swings) a law's must exceed for it to be screened out before its optimum is
-#: sought (module notes, Screening).
-TURNING_POINT_FACTOR = 1000.0
 #: Pareto k above which PSIS-LOO is unreliable.
 PARETO_K_LIMIT = 0.7
-#: Log posterior density a law's optimum may lose with its extra terms at zero and
-#: still reduce to the law it nests (module notes): half a unit, the reach of a bound
-#: in :func:`bayestribo.inference.start.refine` and of the μ_s/μ_k interval.
-REDUCTION_LOSS = 0.5
-
-
-def _law(name: str | Law) -> Law:
-    """The law of a comparison entry (the original names included)."""
-    if isinstance(name, str) and name in LAWS:
-        return get_law(LAWS[name])
-    try:
-        return get_law(name)
-    except ValueError as exc:
-        raise BayestriboError(f"laws: {exc}") from None
 
 
 def _posterior(law: str | Law, data: PiData, model: str, discrepancy: bool) -> Posterior:
     """The posterior of one law."""
-    return build_posterior(data, model=model, discrepancy=discrepancy, law=_law(law))
+    return build_posterior(data, model=model, discrepancy=discrepancy, law=law_of(law))
 
 
 def _fit_law(
@@ -230,135 +197,6 @@ def _fit_law(
     return sampled, law_loo(sampled)
 
 
-def _amount(term: Any, values: Mapping[str, float], reference: float) -> Any:
-    """The parameter of ``term`` whose null on a bound of its support stops the term
-    (its ΔE(A) 0 at every amplitude, the others at ``values``): a drag's coefficient,
-    μ_k; None when there is none (a friction that may take either sign)."""
-    amplitudes = reference * np.array([1e-3, 0.1, 0.5, 1.0])
-    for p in term.parameters:
-        if p.null not in (p.low, p.high):
-            continue
-        at = {q.name: np.array([values[q.name]]) for q in term.parameters}
-        at[p.name] = np.array([p.null])
-        energy = np.asarray(term.dissipation(amplitudes, at, reference), dtype=float)
-        if np.all(energy == 0.0):
-            return p
-    return None
-
-
-def _reduction(
-    law: str,
-    posterior: Posterior,
-    theta: NDArray,
-    fitted: Mapping[str, Sampled],
-    optima: Mapping[str, Mapping[str, float]],
-) -> tuple[str, list[str]] | None:
-    """The law compared that ``law`` reduces to at its optimum ``theta``, and the terms
-    at zero; None when it reduces to none (module notes).
-
-    A law reduces to a law it nests, fitted and converged in this comparison, when its
-    extra terms at zero lose at most :data:`REDUCTION_LOSS` of log posterior density
-    from ``theta``: each extra term's amount (the parameter whose null, a bound of its
-    support, stops the term) put on its null, the other coordinates at ``theta`` or at
-    the nested law's optimum, whichever is higher. The largest such law is the one. The
-    law-free fit never reduces (its answer is its ΔE(A), not a mechanism)."""
-    the_law = posterior.law
-    if the_law.name == _law("free").name:
-        return None
-    names = list(posterior.names)
-    values = dict(zip(names, np.asarray(theta, dtype=float).tolist(), strict=True))
-    reference = float(posterior.likelihood.reference_amplitude)
-    best = float(posterior(np.asarray(theta, dtype=float)[None])[0])
-    nested = [
-        other
-        for other, sampled in fitted.items()
-        if sampled.run.converged
-        and other in optima
-        and _law(other).name != the_law.name
-        and the_law.nests(_law(other))
-    ]
-    for other in sorted(nested, key=_complexity, reverse=True):
-        extra = [t for t in the_law.terms if t.name not in _law(other).term_names]
-        if any(p.name not in names for t in extra for p in t.parameters):
-            continue  # a held parameter: not the optimiser's answer
-        amounts = [_amount(t, values, reference) for t in extra]
-        if any(a is None for a in amounts):
-            continue
-        at_zero = np.array(theta, dtype=float)
-        for a in amounts:
-            at_zero[names.index(a.name)] = a.null
-        embedded = at_zero.copy()
-        for name, value in optima[other].items():
-            if name in names:
-                embedded[names.index(name)] = value
-        lp = posterior(np.vstack([at_zero, embedded]))
-        if np.isfinite(best) and np.max(lp) >= best - REDUCTION_LOSS:
-            return other, [t.name for t in extra]
-    return None
-
-
-def _tie_key(law: str, rank: Sequence[str]) -> tuple[int, int, int]:
-    """The verdict's tie-break: fewest terms, then fewest parameters, then the order of
-    the laws compared (``rank``)."""
-    return (*_complexity(law), rank.index(law) if law in rank else len(rank))
-
-
-def _complexity(law: str) -> tuple[int, int]:
-    """Fewest terms first, then fewest parameters."""
-    the_law = _law(law)
-    return len(the_law.terms), len(the_law.parameters)
-
-
-def _verdict(
-    laws: Sequence[str], table: dict[str, dict[str, Any]], frame: Any
-) -> tuple[str, list[str], str, bool]:
-    """Best law, the laws as good as the best, the simplest adequate of those, and
-    whether it is adequate."""
-    differences = {law: (table[law]["elpd_diff"], table[law]["dse"]) for law in laws}
-    return _choose(laws, str(frame.index[0]), differences, table)
-
-
-def _choose(
-    laws: Sequence[str],
-    best: str,
-    differences: Mapping[str, tuple[float, float]],
-    table: Mapping[str, Mapping[str, Any]],
-) -> tuple[str, list[str], str, bool]:
-    """:func:`_verdict` from each law's elpd difference from the best and its sd."""
-    as_good = [
-        law
-        for law in laws
-        if law == best
-        or differences[law][0] < max(SMALL_ELPD_DIFFERENCE, 2.0 * differences[law][1])
-    ]
-    # ties go to the simplest, then to the order compared, not to the PSIS-LOO rank:
-    # laws this close are ranked by noise (the seed chose between two misfitting laws
-    # of HarmOsc1's second half, benchmarks/results/real.json)
-    order = {law: i for i, law in enumerate(laws)}
-
-    def simplest(candidates: list[str]) -> str:
-        return min(candidates, key=lambda law: (*_complexity(law), order[law]))
-
-    adequate = [law for law in as_good if table[law]["adequate"] and table[law]["converged"]]
-    if not adequate:
-        converged = [law for law in as_good if table[law]["converged"]]
-        return best, as_good, simplest(converged) if converged else best, False
-    return best, as_good, simplest(adequate), True
-
-
-def _standing(loos: Mapping[str, Any]) -> tuple[str, dict[str, tuple[float, float]]]:
-    """The best of the laws sampled so far by PSIS-LOO, and each law's difference from
-    it with its sd (as :func:`arviz.compare` computes them)."""
-    elpd = {law: float(loo["elpd_loo"]) for law, loo in loos.items()}
-    best = max(elpd, key=elpd.__getitem__)
-    top = np.asarray(loos[best]["loo_i"], dtype=float)
-    out = {}
-    for law, loo in loos.items():
-        d = top - np.asarray(loo["loo_i"], dtype=float)
-        out[law] = (elpd[best] - elpd[law], float(np.sqrt(d.size * np.var(d))))
-    return best, out
-
-
 def _law_seed(root: np.random.SeedSequence, law: str) -> np.random.SeedSequence:
     """Each law's stream from the seed and the law's name alone (not from which other
     laws are compared); the original three keep the streams they had."""
@@ -367,244 +205,6 @@ def _law_seed(root: np.random.SeedSequence, law: str) -> np.random.SeedSequence:
         # as the original comparison spawned them (a fresh sequence: spawn counts calls)
         return np.random.SeedSequence(root.entropy).spawn(1 + len(legacy))[1 + legacy.index(law)]
     return np.random.SeedSequence(root.entropy, spawn_key=(1000 + zlib.crc32(law.encode()),))
-
-
-def _nested_start(
-    law: str, prepared: PreparedRun, optima: Mapping[str, dict[str, float]]
-) -> dict[str, float] | None:
-    """The optimum of the largest law already fitted that this one nests, with the extra
-    parameters at small values: a weak extra term is otherwise hard to find."""
-    the_law = _law(law)
-    nested = [
-        other
-        for other in optima
-        if other != law and the_law.nests(_law(other)) and len(_law(other).terms) > 0
-    ]
-    if not nested:
-        return None
-    other = max(nested, key=lambda o: len(_law(o).parameters))
-    amp = abs(prepared.data.y0)
-    start = dict(optima[other])
-    for p in the_law.parameters:
-        if p.name not in start:
-            if p.name == "mu_s_ratio":
-                start[p.name] = 1.2
-            elif p.name == "mu_k":
-                start[p.name] = 1e-6 * amp
-            elif p.name == "alpha":
-                start[p.name] = 1.0
-            else:
-                start[p.name] = p.null + 1e-6 * (1.0 if p.high == np.inf else p.high - p.null)
-    return start
-
-
-@dataclass
-class LawOptimum:
-    """One law at its optimum, before any sampling (the screening's input).
-
-    Attributes
-    ----------
-    law : str
-        The law compared.
-    posterior : Posterior
-        Its posterior on the first pass (variances from the observed channels).
-    optimum : tuple
-        Its maximum a posteriori there, Laplace covariance and μ_s/μ_k interval
-        (:func:`bayestribo.inference.start.find_optimum`).
-    second : Posterior
-        The posterior that is sampled: the second pass's, variances from the law's
-        motion at ``optimum`` (:func:`bayestribo.inference.reweight.reweighted_posterior`),
-        or ``posterior`` where there is none.
-    second_optimum : tuple
-        The maximum a posteriori of ``second``.
-    pointwise : ndarray
-        Log-likelihood of each Π increment at ``second_optimum`` under ``second``.
-    """
-
-    law: str
-    posterior: Posterior
-    optimum: tuple[NDArray, NDArray, tuple[float, float] | None]
-    second: Posterior
-    second_optimum: tuple[NDArray, NDArray, tuple[float, float] | None]
-    pointwise: NDArray
-
-    @property
-    def n_parameters(self) -> int:
-        """Sampled parameters of its posterior."""
-        return len(self.second.names)
-
-
-def optimum_elpd(pointwise: NDArray, n_parameters: int) -> float:
-    """Expected log predictive density estimated at a law's optimum: the sum of the
-    pointwise log-likelihood there less one per sampled parameter (Akaike 1974; what
-    PSIS-LOO's ``p_loo`` is for a law whose posterior is near normal)."""
-    return float(np.sum(pointwise)) - float(n_parameters)
-
-
-def screen(
-    pointwise: Mapping[str, NDArray],
-    n_parameters: Mapping[str, int],
-    *,
-    factor: float | None = None,
-) -> dict[str, dict[str, Any]]:
-    """Which laws can still win, judged at their optima (module notes, Screening).
-
-    Parameters
-    ----------
-    pointwise : mapping of str to ndarray
-        Each law's log-likelihood of every Π increment at its optimum (one shape).
-    n_parameters : mapping of str to int
-        Each law's sampled parameters.
-    factor : float, optional
-        How many times the comparison's own tie rule, ``max(SMALL_ELPD_DIFFERENCE,
-        2 dse)``, a law must fall behind the best to be screened out; default
-        :data:`SCREEN_FACTOR`.
-
-    Returns
-    -------
-    dict
-        Law -> ``elpd_diff`` (the best law's :func:`optimum_elpd` less this one's),
-        ``dse`` (the standard error of that difference over the increments),
-        ``limit`` (the difference beyond which the law is screened out), ``best`` (the
-        law of the highest estimate) and ``screened`` (True: it cannot win). A law whose
-        estimate is not finite is screened out.
-    """
-    factor = SCREEN_FACTOR if factor is None else float(factor)
-    elpd = {
-        law: optimum_elpd(np.asarray(lpd, dtype=float), n_parameters[law])
-        for law, lpd in pointwise.items()
-    }
-    finite = [law for law, value in elpd.items() if np.isfinite(value)]
-    out: dict[str, dict[str, Any]] = {}
-    if not finite:
-        return {law: {"screened": False, "best": None} for law in elpd}
-    best = max(finite, key=elpd.__getitem__)
-    top = np.asarray(pointwise[best], dtype=float)
-    for law, value in elpd.items():
-        if law not in finite:
-            out[law] = {"elpd_diff": None, "dse": None, "limit": None, "best": best}
-            out[law]["screened"] = True
-            continue
-        d = top - np.asarray(pointwise[law], dtype=float)
-        dse = float(np.sqrt(d.size * np.var(d))) if d.size > 1 else 0.0
-        diff = elpd[best] - value
-        limit = factor * max(SMALL_ELPD_DIFFERENCE, 2.0 * dse)
-        out[law] = {
-            "elpd_diff": float(diff),
-            "dse": dse,
-            "limit": float(limit),
-            "best": best,
-            "screened": bool(diff > limit),
-        }
-    return out
-
-
-def _shape_grid(p: Any, reference: float, n: int = 25) -> NDArray:
-    """Values of a parameter that shapes a term (not its amount) to scan: its prior's
-    range where that is finite, else its support's."""
-    spec = p.prior(reference)
-    low, high = float(spec.get("low", p.low)), float(spec.get("high", p.high))
-    if not (np.isfinite(low) and np.isfinite(high)):
-        low, high = p.low, p.high
-    return np.linspace(low, high, n) if np.isfinite(high) else np.array([low])
-
-
-def _term_bases(term: Any, swings: NDArray, reference: float) -> list[tuple[NDArray, Any]] | None:
-    """Each shape of a term's ΔE(A) at ``swings`` per unit of its amount (the parameter
-    whose null stops the term and in which ΔE(A) is linear), with that parameter;
-    None when the term has no such parameter (it is then never screened this way)."""
-    for amount in term.parameters:
-        others = [p for p in term.parameters if p is not amount]
-        grids = [_shape_grid(p, reference) for p in others]
-        combos = np.zeros((1, 0))
-        if others:
-            combos = np.array(np.meshgrid(*grids, indexing="ij")).reshape(len(others), -1).T
-        out = []
-        for combo in combos:
-            values = {p.name: np.array([v]) for p, v in zip(others, combo, strict=True)}
-
-            def at(x: float, values: dict = values, name: str = amount.name) -> NDArray:
-                vals = {**values, name: np.array([x])}
-                return np.asarray(term.dissipation(swings, vals, reference), dtype=float).ravel()
-
-            with np.errstate(all="ignore"):
-                zero, one = at(float(amount.null)), at(float(amount.null) + 1.0)
-                two = at(float(amount.null) + 2.0)
-            if not (np.all(zero == 0.0) and np.allclose(two, 2.0 * one, rtol=1e-9)):
-                out = None
-                break
-            out.append((one, amount))
-        if out:
-            # shapes that do not differ (a parameter ΔE(A) does not see) count once
-            unique = {tuple(np.round(b / (np.max(np.abs(b)) or 1.0), 12)): (b, a) for b, a in out}
-            return list(unique.values())
-    return None
-
-
-def turning_point_misfit(
-    law: str, swings: NDArray, mean: NDArray, sd: NDArray, reference: float
-) -> float | None:
-    """The least χ² of a law's ΔE(A) over one cycle of the harmonic motion
-    (:meth:`~bayestribo.model.laws.Law.dissipation`, each term's amount within its
-    support, each shape parameter over its prior) against the turning points' ΔE(A)
-    (:func:`bayestribo.inference.dissipation.turning_point_dissipation`); None when a
-    term's ΔE(A) is not linear in an amount (the law is then not judged this way)."""
-    from itertools import product
-
-    from scipy.optimize import lsq_linear
-
-    per_term = [_term_bases(t, swings, reference) for t in _law(law).terms]
-    if any(b is None for b in per_term):
-        return None
-    best = np.inf
-    for choice in product(*per_term):
-        design = np.column_stack([b / sd for b, _ in choice])
-        low = [a.low - a.null for _, a in choice]
-        high = [a.high - a.null for _, a in choice]
-        fit = lsq_linear(design, mean / sd, bounds=(low, high))
-        best = min(best, float(2.0 * fit.cost))
-    return best
-
-
-def turning_point_screen(
-    prepared: PreparedRun, laws: Sequence[str], factor: float | None = None
-) -> dict[str, dict[str, Any]]:
-    """Laws whose ΔE(A) cannot follow the turning points' (module notes, Screening):
-    law -> ``chi2`` (:func:`turning_point_misfit`), ``limit`` (``factor`` times the
-    best law's χ² plus the number of swings; :data:`TURNING_POINT_FACTOR` by default)
-    and ``screened``. Empty without a turning-point ΔE(A)."""
-    from bayestribo.inference.dissipation import (
-        dissipation_amplitudes,
-        turning_point_dissipation,
-    )
-    from bayestribo.model.laws import PhysicalScale
-
-    factor = TURNING_POINT_FACTOR if factor is None else float(factor)
-    decay = prepared.decay
-    peaks = np.asarray(decay.peaks.value, dtype=float) / decay.scaling.length_scale
-    swings = dissipation_amplitudes(peaks)
-    try:
-        measured = turning_point_dissipation(peaks, swings, PhysicalScale())
-    except ValueError:
-        measured = None
-    if not measured or not measured.get("amplitude"):
-        return {}
-    mean = np.asarray(measured["mean"], dtype=float)
-    sd = np.asarray(measured["sd"], dtype=float)
-    ok = np.isfinite(mean) & np.isfinite(sd) & (sd > 0)
-    if ok.sum() < 3:
-        return {}
-    amp = np.asarray(measured["amplitude"], dtype=float)[ok]
-    reference = float(abs(prepared.data.y0))
-    chi2 = {law: turning_point_misfit(law, amp, mean[ok], sd[ok], reference) for law in laws}
-    known = [v for v in chi2.values() if v is not None and np.isfinite(v)]
-    if not known:
-        return {}
-    limit = factor * (min(known) + int(ok.sum()))
-    return {
-        law: {"chi2": value, "limit": limit, "screened": value is not None and value > limit}
-        for law, value in chi2.items()
-    }
 
 
 def _optimise(
@@ -624,7 +224,7 @@ def _optimise(
     # friction terms are fitted without contact too (as a friction displacement): the
     # data, not the metadata, decide whether there is friction to see
     posterior = _posterior(law, prepared.data, model, discrepancy)
-    nested = _nested_start(law, prepared, optima)
+    nested = nested_start(law, prepared, optima)
     if start is not None and all(name in start for name in posterior.names):
         theta = np.array([start[name] for name in posterior.names], dtype=float)
         with warnings.catch_warnings():
@@ -722,7 +322,7 @@ def compare_prepared(
     if len(laws) < 2:
         raise BayestriboError(f"laws: expected two or more laws to compare, got {laws}")
     for law in laws:
-        _law(law)
+        law_of(law)
     settings = settings or SamplerSettings()
     say = progress or (lambda text: None)
     root = np.random.SeedSequence(seed)
@@ -735,7 +335,7 @@ def compare_prepared(
     def failed(law: str, exc: BayestriboError) -> None:
         # a law that cannot be fitted here is reported and left out of the comparison,
         # not a failure of the others
-        table[law] = {"law": _law(law).name, "error": str(exc), "converged": False}
+        table[law] = {"law": law_of(law).name, "error": str(exc), "converged": False}
         notes.append(f"{law}: not fitted ({exc})")
 
     def optimise(law: str, k: int, n: int) -> None:
@@ -768,15 +368,15 @@ def compare_prepared(
             misfits[law] = _checks(at.second, theta)
         if not loos:
             return None
-        best, differences = _standing(loos)
+        best, differences = loo_standing(loos)
         sampled_laws = [other for other in rank if other in loos]
-        _, _, verdict, adequate = _choose(sampled_laws, best, differences, table)
+        _, _, verdict, adequate = choose_law(sampled_laws, best, differences, table)
         info = settle(
             (at.pointwise, at.n_parameters),
             (found[verdict].pointwise, found[verdict].n_parameters),
             (found[best].pointwise, found[best].n_parameters),
             verdict_adequate=adequate,
-            loses_tie=_tie_key(law, rank) > _tie_key(verdict, rank),
+            loses_tie=tie_key(law, rank) > tie_key(verdict, rank),
             small=SMALL_ELPD_DIFFERENCE,
             adequate=bool(misfits[law]["adequate"]),
         )
@@ -790,7 +390,7 @@ def compare_prepared(
         at = found[law]
         theta = np.asarray(at.second_optimum[0], dtype=float)
         table[law] = {
-            "law": _law(law).name,
+            "law": law_of(law).name,
             "sampled": False,
             "converged": None,
             "settled": True,
@@ -808,7 +408,7 @@ def compare_prepared(
         rng = np.random.default_rng(_law_seed(root, law))
         at = found[law]
         try:
-            reduced = _reduction(law, at.posterior, at.optimum[0], runs, optima)
+            reduced = reduction(law, at.posterior, at.optimum[0], runs, optima)
             info = settling(law) if screening and not force and reduced is None else None
             if info is not None and info["settled"]:
                 settle_one(law, info, start, cpu)
@@ -830,7 +430,7 @@ def compare_prepared(
             # its optimum is the nested law's: not sampled, not compared (module notes)
             theta = at.optimum[0]
             table[law] = {
-                "law": _law(law).name,
+                "law": law_of(law).name,
                 "reduces_to": reduced[0],
                 "terms_at_zero": reduced[1],
                 "sampled": False,
@@ -849,7 +449,7 @@ def compare_prepared(
         optima[law] = dict(zip(names, s.chains[best_row], strict=True))
         k_max = pareto_k_max(loos[law])
         table[law] = {
-            "law": _law(law).name,
+            "law": law_of(law).name,
             "pareto_k_max": k_max,
             "converged": bool(s.converged),
             **_checks(sampled.posterior, sampled.theta_map),
@@ -869,7 +469,7 @@ def compare_prepared(
         )
 
     # smallest laws first: their optima are starting points of the laws that nest them
-    ordered = sorted(laws, key=_complexity)
+    ordered = sorted(laws, key=complexity)
     # the order of the laws compared, for ties of complexity (the law-free fit last)
     rank = [*ordered, *([] if "free" in ordered else ["free"])]
     misfits: dict[str, dict[str, Any]] = {}
@@ -879,7 +479,7 @@ def compare_prepared(
     for law in ordered:
         if early.get(law, {}).get("screened"):
             table[law] = {
-                "law": _law(law).name,
+                "law": law_of(law).name,
                 "sampled": False,
                 "converged": None,
                 "screened": True,
@@ -907,7 +507,7 @@ def compare_prepared(
         at = found[law]
         theta = np.asarray(at.second_optimum[0], dtype=float)
         table[law] = {
-            "law": _law(law).name,
+            "law": law_of(law).name,
             "sampled": False,
             "converged": None,
             "screened": True,
@@ -933,7 +533,7 @@ def compare_prepared(
         # no law compared holds: the law-free fit, whose ΔE(A) is any increasing
         # polynomial of degree 1-4, says how much energy the decay loses
         free = get_law("free").name
-        if free not in {_law(law).name for law in laws}:
+        if free not in {law_of(law).name for law in laws}:
             laws = [*laws, "free"]
             optimise("free", 1, 1)
             if "free" in found:
@@ -964,7 +564,7 @@ def compare_prepared(
                 for key in ("rank", "elpd_loo", "p_loo", "elpd_diff", "weight", "se", "dse")
             }
         )
-    best, as_good, verdict, adequate = _verdict(list(loos), table, frame)
+    best, as_good, verdict, adequate = verdict_of(list(loos), table, frame)
     # the settled laws as good as the best at their optimum stand beside the sampled
     as_good = [
         law
@@ -1013,14 +613,14 @@ def compare_prepared(
 
 def _rivals(verdict: str, as_good: Sequence[str], table: Mapping[str, Any]) -> list[str]:
     """Adequate, converged laws as good as the verdict that do not nest it."""
-    the_verdict = _law(verdict)
+    the_verdict = law_of(verdict)
     return [
         law
         for law in as_good
         if law != verdict
         and table[law].get("adequate")
         and table[law].get("converged")
-        and not _law(law).nests(the_verdict)
+        and not law_of(law).nests(the_verdict)
     ]
 
 
@@ -1116,7 +716,7 @@ def _judged_at_optimum(
     not settle it (the laws are then sampled)."""
     found: dict[str, LawOptimum] = {}
     optima: dict[str, dict[str, float]] = {}
-    for law in sorted(laws, key=_complexity):
+    for law in sorted(laws, key=complexity):
         try:
             found[law] = _optimise(
                 law, fine, model, discrepancy, optima, start=(starts or {}).get(law)
@@ -1153,7 +753,7 @@ def _judged_at_optimum(
     holding = [law for law in as_good if table[law]["adequate"]]
     if not holding:
         return None
-    verdict = min(holding, key=lambda law: _tie_key(law, list(laws)))
+    verdict = min(holding, key=lambda law: tie_key(law, list(laws)))
     if verdict != laws[0]:
         return None
     return {
@@ -1213,7 +813,7 @@ def compare_dissipation_laws(
     if len(laws) < 2:
         raise BayestriboError(f"laws: expected two or more laws to compare, got {laws}")
     for law in laws:
-        _law(law)
+        law_of(law)
     prepared = prepare(
         run,
         skip_oscillations=skip_oscillations,

@@ -14,7 +14,7 @@ still to be sampled can change the choice only
   ``max(4, 2 dse)``; or by becoming the best and so moving the others' differences.
 
 At its optimum each law's elpd is estimated already (Akaike's,
-:func:`bayestribo.inference.comparison.optimum_elpd`; the screening's estimate), and the
+:func:`bayestribo.inference.screening.optimum_elpd`; the screening's estimate), and the
 difference of two laws' estimates follows their PSIS-LOO difference to well inside the
 tie rule's reach: of the 17 laws settled on the bundled, AppStat and spring-and-disc
 recordings (``benchmarks/results/auto_speed_real.json``), 16 came within a fifth of the
