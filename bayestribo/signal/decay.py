@@ -593,10 +593,10 @@ def _decrement_beta(values: NDArray) -> float:
     if heights.size >= 3:
         # heights that do not vary (a coarse channel's swings of a whole number of
         # steps) determine no slope: no decrement is measured
-        design = np.column_stack([heights[:-1], np.ones(heights.size - 1)])
-        (r, _), _, rank, _ = np.linalg.lstsq(design, heights[1:], rcond=1e-9)
-        if rank == 2 and 0.0 < r < 1.0:
-            return -math.log(float(r)) / math.pi
+        if np.ptp(heights[:-1]) > 1e-9 * np.max(heights[:-1]):
+            r = float(np.polyfit(heights[:-1], heights[1:], 1)[0])
+            if 0.0 < r < 1.0:
+                return -math.log(r) / math.pi
     return 0.0
 
 

@@ -343,10 +343,11 @@ def estimate_offset(
         # h_{n+1} = r h_n - 2b by weighted least squares; heights that do not vary (a
         # coarse channel's swings, each a whole number of its steps) leave the slope
         # undetermined: the ratio of the mean heights is r then
-        w = 1.0 / sd[1:]
-        design = np.column_stack([h[:-1] * w, w])
-        (slope, _), _, rank, _ = np.linalg.lstsq(design, h[1:] * w, rcond=1e-9)
-        r = float(slope) if rank == 2 else float(np.mean(h[1:]) / np.mean(h[:-1]))
+        x = h[:-1]
+        if np.ptp(x) > 1e-9 * np.max(x):
+            r = float(np.polyfit(x, h[1:], 1, w=1.0 / sd[1:])[0])
+        else:
+            r = float(np.mean(h[1:]) / np.mean(x))
     # r outside (0, 1] only from noise on nearly undamped records: the mid-point fit
     # below stays well posed for any r, so r is used as fitted.
     m = 0.5 * (p[:-1] + p[1:])
