@@ -69,7 +69,9 @@ def test_to_dataframe_has_one_row_per_quantity_with_its_interval(result: FitResu
         assert column in frame.columns
     for name in frame.index:
         draws = result.samples(name)
-        low, median, high = np.quantile(draws, [0.05, 0.5, 0.95])
+        # the equal-tailed interval's quantiles as the summary defines them: (1 - 0.9)/2
+        # is 0.04999999999999999, not 0.05, which moves an interpolated quantile by an ulp
+        low, median, high = np.quantile(draws, [(1 - 0.9) / 2, 0.5, (1 + 0.9) / 2])
         row = frame.loc[name]
         assert (row["low"], row["median"], row["high"]) == (low, median, high)
         assert row["mean"] == np.mean(draws) and row["prob"] == 0.9
