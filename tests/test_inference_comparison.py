@@ -50,8 +50,14 @@ def test_a_glycerol_run_needs_both_mechanisms():
     assert c.best == "both" and c.verdict == "both" and c.as_good == ["both"]
     for law in ("viscous", "coulomb"):
         assert _far_behind(c.table[law])
-    # The losing laws' PSIS-LOO may be flagged unreliable (Pareto k); the winner's is not.
-    assert not any(w.startswith("both") for w in c.warnings)
+    # PSIS-LOO's Pareto k varies with the draws (the winner's 0.36-0.80 over seeds 1-4 at
+    # 1500 steps): a k above 0.7 is said, naming the law and its k, and the verdict does
+    # not rest on it here (the other laws are far behind)
+    k = c.table["both"]["pareto_k_max"]
+    said = [w for w in c.warnings if w.startswith("both: Pareto k up to")]
+    assert bool(said) == (k > 0.7)
+    if said:
+        assert f"{k:.2f}" in said[0] and "unreliable" in said[0]
 
 
 def test_a_fixed_parameter_is_the_full_posterior_at_that_value_without_its_prior():
