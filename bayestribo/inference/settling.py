@@ -56,16 +56,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from bayestribo.inference.screening import optimum_elpd
+
 __all__ = ["FACTOR", "settle"]
 
 #: How far inside (or beyond) the tie rule's reach an estimate at the optimum must be
 #: for the verdict not to hang on it: a third of the reach, the screening's factor.
 FACTOR = 3.0
-
-
-def _elpd(pointwise: NDArray, n_parameters: int) -> float:
-    """Akaike's estimate at an optimum: the summed log-likelihood less the parameters."""
-    return float(np.sum(pointwise)) - float(n_parameters)
 
 
 def _dse(a: NDArray, b: NDArray) -> float:
@@ -118,10 +115,10 @@ def settle(
         estimate is clear, None where it is not) and ``settled``.
     """
     pw, k = np.asarray(law[0], dtype=float), int(law[1])
-    mine = _elpd(pw, k)
-    gain_v = mine - _elpd(verdict[0], verdict[1])
+    mine = optimum_elpd(pw, k)
+    gain_v = mine - optimum_elpd(verdict[0], verdict[1])
     reach_v = max(small, 2.0 * _dse(pw, verdict[0]))
-    diff = _elpd(best[0], best[1]) - mine
+    diff = optimum_elpd(best[0], best[1]) - mine
     dse = _dse(best[0], pw)
     reach = max(small, 2.0 * dse)
     as_good: bool | None = None
