@@ -337,10 +337,41 @@ def _rederive(
             y_noisy, window, 5, deriv=1, delta=h, mode="interp", axis=-1
         )
         return y_noisy, yp_new
-    # displacement integrated from the velocity: the integration constant (the
-    # equilibrium) is re-estimated from the data, so only the noise's integral remains
-    y_new = y + cumulative_trapezoid(yp_noisy - yp, tau, initial=0.0, axis=-1)
-    return y_new, yp_noisy
+    # displacement integrated from the velocity: the equilibrium and its drift (a line
+    # in τ) are estimated from the record's own turning points, so the line the noise's
+    # integral holds goes with them and only its departure from a line remains
+    walk = cumulative_trapezoid(yp_noisy - yp, tau, initial=0.0, axis=-1)
+    return y + detrended(walk, tau), yp_noisy
+
+
+def detrended(walk: NDArray, tau: NDArray) -> NDArray:
+    """``walk`` (rows of samples at ``tau``) less its least-squares line in τ.
+
+    The noise a derived displacement inherits from its velocity is that velocity's
+    noise integrated: a random walk, whose variance grows with τ from wherever the
+    integral starts. The decay measures the displacement about an equilibrium that
+    drifts linearly (δ₀ + δ₁τ, fitted to the turning points,
+    :mod:`bayestribo.signal.decay`), which takes the walk's line with it; what reaches
+    E is the walk about its line, a bridge whose variance is largest near the middle
+    and a small fraction of the walk's at the end (1/6 of it at a walk's midpoint
+    against its variance at the end: T/4·σ² – about T/12 σ² at the ends).
+
+    Parameters
+    ----------
+    walk : ndarray
+        Integrated noise, shape (..., n) [units of y].
+    tau : ndarray
+        Dimensionless times of the samples, shape (n,).
+
+    Returns
+    -------
+    ndarray
+        ``walk`` less its least-squares line in τ, same shape.
+    """
+    centred = tau - tau.mean()
+    mean = walk.mean(axis=-1, keepdims=True)
+    slope = (walk @ centred)[..., None] / float(centred @ centred)
+    return walk - mean - slope * centred
 
 
 def _coarse(decay: EnergyDecay, noise: NoiseModel) -> dict[str, Any] | None:
