@@ -109,6 +109,7 @@ __all__ = [
     "integrate_acceleration",
     "integrated_signals",
     "principal_axis",
+    "velocity_noise",
 ]
 
 #: Cut-off of the high-pass over the oscillation frequency, f_c / f, for a record with
@@ -194,6 +195,7 @@ class Integration:
     cutoff_Hz: float
     gain_at_frequency: float
     drift_from: str
+    noise: dict[str, Any] | None = None
 
     def record(self) -> dict[str, Any]:
         """The metadata record (plain data) of the integration."""
@@ -213,6 +215,7 @@ class Integration:
             },
             "drift": self.drift_from,
             "method": "frequency-domain integral V = A / (i 2 pi f), zero-padded",
+            **({} if self.noise is None else {"noise": self.noise}),
         }
 
     def note(self, unit: str) -> str:
@@ -368,8 +371,9 @@ def _kept_steps(
             delta = irfft(shift * (2j * math.pi * f * dt) ** k, m)[: t.size]
             columns.append(_lowpass(delta, dt, cutoff))
     basis = np.column_stack(columns)
-    sizes, *_ = np.linalg.lstsq(basis, low, rcond=None)
-    return basis @ sizes, [float(x) for x in sizes[::_MULTIPOLES]]
+    # several rows of ``low`` at once (the draws of :func:`velocity_noise`)
+    sizes, *_ = np.linalg.lstsq(basis, low.T, rcond=None)
+    return (basis @ sizes).T, [float(x) for x in np.atleast_2d(sizes.T)[-1, ::_MULTIPOLES]]
 
 
 def integrate_acceleration(
@@ -396,7 +400,6 @@ def integrate_acceleration(
         When the acceleration holds no oscillation standing out of its noise (no free
         decay), or is not finite.
     """
-    from scipy.fft import irfft, next_fast_len, rfft, rfftfreq
 
     from bayestribo.signal.period import dominant_period, sample_step
 
@@ -437,13 +440,6 @@ def integrate_acceleration(
             "the velocity is the same at its start and end"
         )
     frequency = 1.0 / period
-    n = a.size
-    m = next_fast_len(2 * n, real=True)
-    f = rfftfreq(m, dt)
-    response = np.zeros(f.size, dtype=np.complex128)
-    response[1:] = 1.0 / (2j * math.pi * f[1:])
-    if m % 2 == 0:
-        response[-1] = 0.0  # Nyquist: the integral of a real signal there is not real
     edges = [
         (name, float(edge))
         for name, edge, mask in (
@@ -453,13 +449,7 @@ def integrate_acceleration(
         if edge is not None and int(mask.sum()) >= _REST_SAMPLES
     ]
     cutoff = (CUTOFF_RATIO if len(edges) == 2 else CUTOFF_RATIO_OPEN) * frequency
-    velocity = irfft(rfft(a - bias, m) * response, m)[:n]
-    velocity = velocity - _drift(t, velocity, before, after)
-    low = _lowpass(velocity, dt, cutoff)
-    if edges:
-        kept, sizes = _kept_steps(t, low, cutoff, [e for _, e in edges])
-        low = low - kept
-    velocity = velocity - low
+    velocity, sizes = _integrated(t, a - bias, before, after, cutoff, [e for _, e in edges])
     where = " and ".join(name for name, _ in edges)
     rests = {2: "before the release and after the stop", 1: f"at {where} only", 0: ""}
     if edges:
@@ -481,6 +471,19 @@ def integrate_acceleration(
     at_frequency = float(highpass_gain(frequency, cutoff))
     velocity /= at_frequency  # the oscillation's amplitude as recorded
     velocity.setflags(write=False)
+    noise = None
+    if n_rest >= _REST_SAMPLES:
+        noise = {
+            "sigma": bias_se * math.sqrt(n_rest),
+            "start_s": float(t[0]),
+            "step_s": dt,
+            "samples": int(t.size),
+            "rest_before": _runs(before),
+            "rest_after": _runs(after),
+            "edges_s": [e for _, e in edges],
+            "cutoff_Hz": cutoff,
+            "gain": at_frequency,
+        }
     return Integration(
         velocity=velocity,
         column=column,
@@ -492,7 +495,92 @@ def integrate_acceleration(
         cutoff_Hz=cutoff,
         gain_at_frequency=at_frequency,
         drift_from=drift_from,
+        noise=noise,
     )
+
+
+def _integrated(
+    t: NDArray,
+    a: NDArray,
+    before: NDArray,
+    after: NDArray,
+    cutoff: float,
+    edges: list[float],
+) -> tuple[NDArray, list[float]]:
+    """Steps 2 and 3 of the module notes on an acceleration without its bias: the
+    integral, its drift measured at rest taken off, and the high-pass with the
+    displacement's steps at ``edges`` kept; linear in ``a`` (rows of samples for
+    several). Returns the velocity and the steps' sizes (of the last row)."""
+    from scipy.fft import irfft, next_fast_len, rfft, rfftfreq
+
+    dt = float(t[1] - t[0])
+    n = t.size
+    m = next_fast_len(2 * n, real=True)
+    f = rfftfreq(m, dt)
+    response = np.zeros(f.size, dtype=np.complex128)
+    response[1:] = 1.0 / (2j * math.pi * f[1:])
+    if m % 2 == 0:
+        response[-1] = 0.0  # Nyquist: the integral of a real signal there is not real
+    rows = np.atleast_2d(a)
+    velocity = irfft(rfft(rows, m, axis=-1) * response, m, axis=-1)[:, :n]
+    velocity = np.array([v - _drift(t, v, before, after) for v in velocity])
+    low = np.array([_lowpass(v, dt, cutoff) for v in velocity])
+    sizes: list[float] = []
+    if edges:
+        kept, sizes = _kept_steps(t, low, cutoff, edges)
+        low = low - kept
+    out = velocity - low
+    return (out[0] if np.ndim(a) == 1 else out), sizes
+
+
+def _runs(mask: NDArray) -> list[list[int]]:
+    """The runs of true samples of ``mask`` as [first, stop) index pairs."""
+    change = np.flatnonzero(np.diff(np.r_[0, mask.astype(np.int8), 0]))
+    return [[int(a), int(b)] for a, b in zip(change[::2], change[1::2], strict=True)]
+
+
+def velocity_noise(noise: Mapping[str, Any], count: int, rng: np.random.Generator) -> NDArray:
+    """Draws of the noise an integrated velocity holds: the sensor's white noise put
+    through the integration (:func:`integrate_acceleration`'s linear steps, with the
+    rests, edges and cut-off it found).
+
+    The rest's spectrum of the velocity does not show this noise in the motion: the
+    drift between the two rests is the straight line from one to the other, so the
+    integrated noise is a random walk held at the rests and free between them, of
+    which the high-pass leaves a part near its cut-off (measured on a dry-friction
+    record with 3 s of motion: the velocity's noise in the motion 2.7 times the rest's).
+
+    Parameters
+    ----------
+    noise : mapping
+        The integration's ``noise`` record (:meth:`Integration.record`): the
+        acceleration's noise ``sigma`` at rest [m/s² or rad/s²], the sampling, the
+        rests as index runs, the edges' times [s], the cut-off [Hz] and the gain
+        divided out.
+    count : int
+        Draws.
+    rng : numpy.random.Generator
+        Their source.
+
+    Returns
+    -------
+    ndarray
+        Shape (count, samples): velocity noise [m/s or rad/s] on the record's samples.
+    """
+    n = int(noise["samples"])
+    t = float(noise["start_s"]) + float(noise["step_s"]) * np.arange(n)
+    masks = []
+    for key in ("rest_before", "rest_after"):
+        mask = np.zeros(n, dtype=bool)
+        for first, stop in noise[key]:
+            mask[first:stop] = True
+        masks.append(mask)
+    rest = masks[0] | masks[1]
+    a = rng.normal(0.0, float(noise["sigma"]), (count, n))
+    a -= a[:, rest].mean(axis=1, keepdims=True)  # the bias measured at rest
+    edges = [float(e) for e in noise["edges_s"]]
+    velocity, _ = _integrated(t, a, masks[0], masks[1], float(noise["cutoff_Hz"]), edges)
+    return velocity / float(noise["gain"])
 
 
 @dataclass(frozen=True)

@@ -112,6 +112,7 @@ from bayestribo.signal.spectrum import NoiseSpectrum, colored_noise
 
 __all__ = [
     "PiData",
+    "accelerometer_draws",
     "correlated_sum_variance",
     "increment_noise",
     "increment_weights",
@@ -652,6 +653,7 @@ def increment_noise(
     spectrum: NoiseSpectrum | None = None,
     spectrum_scale: float = 1.0,
     potential: Callable[[NDArray], NDArray] | None = None,
+    velocity_draws: Callable[[int, np.random.Generator], NDArray] | None = None,
 ) -> tuple[NDArray, NDArray]:
     """Noise bias and noise variance of each increment of E = (y² + y'²)/2.
 
@@ -699,6 +701,11 @@ def increment_noise(
         noise of ``sigma_y`` or ``sigma_yp``.
     spectrum_scale : float
         Factor from the spectrum's units to y (or y') units.
+    velocity_draws : callable, optional
+        ``velocity_draws(count, rng)``: ``count`` draws of the recorded velocity's noise
+        on the samples, in units of y' (``derived="displacement"``; a velocity
+        integrated from an acceleration, :func:`accelerometer_draws`). Used in place of
+        white noise or ``spectrum``.
 
     Returns
     -------
@@ -746,7 +753,9 @@ def increment_noise(
     for first in range(0, n_replicates, _BLOCK):
         count = min(_BLOCK, n_replicates - first)
         # one (count, samples) draw is the same stream as ``count`` draws of a row
-        if spectrum is not None:
+        if velocity_draws is not None and derived == "displacement":
+            draw = velocity_draws(count, rng)
+        elif spectrum is not None:
             draw = spectrum_scale * colored_noise(spectrum, tau.size, rng, count)
         else:
             sigma = sigma_y if derived == "velocity" else sigma_yp
@@ -805,6 +814,53 @@ def spectral_options(decay: EnergyDecay, noise: NoiseModel, n_lags: int) -> dict
     if use_v:
         options["autocov_yp"] = rest.velocity.autocovariance(n_lags) * to_yp**2
     return options
+
+
+def accelerometer_draws(
+    decay: EnergyDecay, noise: NoiseModel
+) -> Callable[[int, np.random.Generator], NDArray] | None:
+    """Draws of the noise of a velocity integrated from an accelerometer's record, on
+    the decay's samples in units of y' (for :func:`increment_noise`), or None.
+
+    The sensor's white noise is put through the integration over the whole record
+    (:func:`bayestribo.io.acceleration.velocity_noise`) and the decay's samples taken
+    from it. None when the noise model holds no integration
+    (:attr:`NoiseModel.integrated_velocity`), or when the decay's samples are not the
+    integrated record's (a run cut or resampled after reading).
+
+    Parameters
+    ----------
+    decay : EnergyDecay
+        The recording's energy decay, its displacement derived from the velocity.
+    noise : NoiseModel
+        The noise model used.
+
+    Returns
+    -------
+    callable or None
+        ``draws(count, rng)``, shape (count, decay samples).
+    """
+    plan = noise.integrated_velocity
+    if plan is None or decay.derived_channel != "displacement":
+        return None
+    step = float(plan["step_s"])
+    first = round((float(decay.t[0]) - float(plan["start_s"])) / step)
+    expected = float(plan["start_s"]) + step * (first + np.arange(decay.t.size))
+    if (
+        first < 0
+        or first + decay.t.size > int(plan["samples"])
+        or not np.allclose(decay.t, expected, rtol=0.0, atol=1e-3 * step)
+    ):
+        return None
+    sc = decay.scaling
+    unit = sc.length_scale * sc.omega
+
+    def draws(count: int, rng: np.random.Generator) -> NDArray:
+        from bayestribo.io.acceleration import velocity_noise
+
+        return velocity_noise(plan, count, rng)[:, first : first + decay.t.size] / unit
+
+    return draws
 
 
 def pi_data(
@@ -890,7 +946,8 @@ def pi_data(
         # shows no spectrum of it), the white formula keeps the rest of the noise
         sig_y, sig_yp = coarse["white"]
         spectral = False
-    options = spectral_options(decay, noise, 2 * longest) if spectral else {}
+    draws = accelerometer_draws(decay, noise)
+    options = spectral_options(decay, noise, 2 * longest) if spectral and draws is None else {}
     bias, variance = increment_noise(
         tau,
         y,
@@ -904,6 +961,7 @@ def pi_data(
         n_replicates=n_replicates,
         seed=seed,
         potential=potential,
+        velocity_draws=draws,
         **options,
     )
     if options:
