@@ -50,6 +50,16 @@ integrated once, at read time (:func:`integrate_acceleration`):
    high-pass takes it, at f_c = 0.3 f to confine what it does there to fewer cycles
    (its gain 0.992 at f divided out), and the record says so.
 
+**Its noise.** The velocity's noise is the sensor's through these steps: a random walk
+held at the rests by the drift's line and free between them, of which the high-pass
+keeps a part near its cut-off, so that in the motion it is larger than at rest (2.7
+times in sd over 3 s of motion between 2 s and 3 s of rest). The rest's spectrum does
+not show it; the integration records its linear steps (``noise`` in
+:meth:`Integration.record`: the sensor's noise at rest, the rests, the edges, the
+cut-off and the gain) and :func:`velocity_noise` draws the noise they leave, from
+which the fit takes the increments' variances
+(:func:`bayestribo.signal.increments.accelerometer_draws`).
+
 Without noise the velocity so made is within 2e-3 of the swing of the true one after
 the first period (``tests/test_io_acceleration.py``). Fits of simulated accelerometer
 records (an independent ``solve_ivp`` integration, 100 to 300 µg/√Hz of noise, 20 runs

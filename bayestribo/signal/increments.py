@@ -21,6 +21,22 @@ integral), its noise is correlated with the recorded channel's and across sample
 the increment variances and the bias are then obtained by propagating simulated noise
 through the same processing (Monte Carlo, ``n_replicates`` seeded draws).
 
+**An integrated displacement** holds the velocity's noise integrated, a random walk;
+the decay measures it about an equilibrium and its drift fitted as a line, which takes
+the walk's line with it, so the Monte Carlo takes the walk about its least-squares line
+(:func:`detrended`). Taken from the decay's first sample instead, the walk's variance
+grew along the record: on an independent simulation (a velocity alone, white noise)
+the second half's increment variances came out 3 to 8 times too large and the noise
+bias removed from them too large (mean standardised error −0.36; now +0.07 ± 0.04,
+χ²/n 1.05, ``tests/test_signal_integrated_noise.py``). **An accelerometer's velocity**
+is itself an integral, its drift taken off as the line between the rests: its noise in
+the motion is a random walk held at the rests and free between them, larger than the
+rest shows (2.7 times in sd over 3 s of motion), so the Monte Carlo draws the sensor's
+white noise through the integration itself (:func:`accelerometer_draws`,
+:func:`bayestribo.io.acceleration.velocity_noise`) instead of the rest's spectrum
+(χ²/n of the increments 3.1 with the spectrum, 0.86 now, on the same test's
+dry-friction record).
+
 **Coloured noise.** A real signal chain filters the noise (anti-alias filter), adds
 mains lines and 1/f noise: the samples' errors are then correlated, and the variance
 of a weighted sum of them is ``wᵀ C w`` with C the noise's autocovariance, not
@@ -114,6 +130,7 @@ __all__ = [
     "PiData",
     "accelerometer_draws",
     "correlated_sum_variance",
+    "detrended",
     "increment_noise",
     "increment_weights",
     "integrate_increments",
