@@ -302,8 +302,11 @@ def _drift(t: NDArray, v: NDArray, before: NDArray, after: NDArray) -> NDArray:
         if int(mask.sum()) >= _REST_SAMPLES:
             tm = t[mask]
             centre = float(tm.mean())
-            slope = float(np.polyfit(tm - centre, v[mask], 1)[0])
-            lines.append((centre, float(v[mask].mean()), slope, float(tm[0]), float(tm[-1])))
+            offsets = tm - centre
+            at_rest = v[..., mask]  # rows of draws too (velocity_noise)
+            level = at_rest.mean(axis=-1, keepdims=True)
+            slope = (at_rest - level) @ offsets / float(offsets @ offsets)
+            lines.append((centre, level, slope[..., None], float(tm[0]), float(tm[-1])))
         else:
             lines.append(None)
     first, second = lines
@@ -332,15 +335,15 @@ def _lowpass(x: NDArray, dt: float, cutoff: float) -> NDArray:
     motion, or on a drift, ends without a jump."""
     from scipy.fft import irfft, next_fast_len, rfft, rfftfreq
 
-    n = x.size
+    n = x.shape[-1]
     pad = min(n - 1, math.ceil(8.0 / (2.0 * math.pi * cutoff * dt)))
-    left = 2.0 * x[0] - x[pad:0:-1]
-    right = 2.0 * x[-1] - x[-2 : -pad - 2 : -1]
-    extended = np.concatenate([left, x, right])
-    m = next_fast_len(extended.size + pad, real=True)
+    left = 2.0 * x[..., :1] - x[..., pad:0:-1]
+    right = 2.0 * x[..., -1:] - x[..., -2 : -pad - 2 : -1]
+    extended = np.concatenate([left, x, right], axis=-1)
+    m = next_fast_len(extended.shape[-1] + pad, real=True)
     f = rfftfreq(m, dt)
-    low = irfft(rfft(extended, m) / (1.0 + (f / cutoff) ** (2 * ORDER)), m)
-    return low[pad : pad + n]
+    low = irfft(rfft(extended, m, axis=-1) / (1.0 + (f / cutoff) ** (2 * ORDER)), m, axis=-1)
+    return low[..., pad : pad + n]
 
 
 def _edge_smoothing(f: NDArray, cutoff: float, dt: float) -> NDArray:
@@ -533,8 +536,8 @@ def _integrated(
         response[-1] = 0.0  # Nyquist: the integral of a real signal there is not real
     rows = np.atleast_2d(a)
     velocity = irfft(rfft(rows, m, axis=-1) * response, m, axis=-1)[:, :n]
-    velocity = np.array([v - _drift(t, v, before, after) for v in velocity])
-    low = np.array([_lowpass(v, dt, cutoff) for v in velocity])
+    velocity = velocity - _drift(t, velocity, before, after)
+    low = _lowpass(velocity, dt, cutoff)
     sizes: list[float] = []
     if edges:
         kept, sizes = _kept_steps(t, low, cutoff, edges)
