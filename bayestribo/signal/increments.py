@@ -880,6 +880,26 @@ def accelerometer_draws(
     return draws
 
 
+def _velocity_rest_floor(
+    decay: EnergyDecay, yp: NDArray, edges: NDArray, weights: list[NDArray], sigma_yp: float
+) -> NDArray:
+    """Increment variances from the velocity's noise measured at rest (its spectrum's
+    autocovariance where coloured, else white at ``sigma_yp``), in the velocity alone."""
+    rest = decay.rest_noise
+    spectrum = None if rest is None else rest.velocity
+    if spectrum is not None and spectrum.coloured:
+        sc = decay.scaling
+        lags = 2 * (int(np.max(np.diff(edges))) + 1)
+        autocov = spectrum.autocovariance(lags) / (sc.length_scale * sc.omega) ** 2
+    else:
+        autocov = np.array([sigma_yp**2])
+    zero = np.zeros_like(yp)
+    _, floor = increment_noise(
+        decay.tau, zero, yp, edges, weights, 0.0, sigma_yp, autocov_yp=autocov
+    )
+    return floor
+
+
 def pi_data(
     decay: EnergyDecay,
     noise: NoiseModel,
@@ -963,25 +983,31 @@ def pi_data(
         # shows no spectrum of it), the white formula keeps the rest of the noise
         sig_y, sig_yp = coarse["white"]
         spectral = False
-    options = spectral_options(decay, noise, 2 * longest) if spectral else {}
-    common = {
-        "derived": decay.derived_channel,
-        "savgol_window": decay.savgol_window,
-        "n_replicates": n_replicates,
-        "seed": seed,
-        "potential": potential,
-    }
-    bias, variance = increment_noise(tau, y, yp, edges, weights, sig_y, sig_yp, **common, **options)
     draws = accelerometer_draws(decay, noise)
+    options = spectral_options(decay, noise, 2 * longest) if spectral and draws is None else {}
+    bias, variance = increment_noise(
+        tau,
+        y,
+        yp,
+        edges,
+        weights,
+        sig_y,
+        sig_yp,
+        derived=decay.derived_channel,
+        savgol_window=decay.savgol_window,
+        n_replicates=n_replicates,
+        seed=seed,
+        potential=potential,
+        velocity_draws=draws,
+        **options,
+    )
     if draws is not None:
         # the sensor's noise through the integration, which the rest does not show in
-        # the motion; never below what the rest shows (which also holds what the
-        # integration leaves there without noise, its edges' ringing: noise-free, 3e-5
-        # of the swing)
-        bias, sensor = increment_noise(
-            tau, y, yp, edges, weights, sig_y, sig_yp, **common, velocity_draws=draws
-        )
-        variance = np.maximum(variance, sensor)
+        # the motion; never below the velocity's own noise as the rest shows it, which
+        # also holds what the integration leaves there without noise (its edges'
+        # ringing, 3e-5 of the swing): that noise in the velocity channel alone, its
+        # integral's wander being the sensor's
+        variance = np.maximum(variance, _velocity_rest_floor(decay, yp, edges, weights, sig_yp))
     if options:
         # never below the white noise at the instrument's nominal resolution
         nominal_y = (noise.nominal_displacement or 0.0) / sc.length_scale
