@@ -35,7 +35,10 @@ rest shows (2.7 times in sd over 3 s of motion), so the Monte Carlo draws the se
 white noise through the integration itself (:func:`accelerometer_draws`,
 :func:`bayestribo.io.acceleration.velocity_noise`) instead of the rest's spectrum
 (χ²/n of the increments 3.1 with the spectrum, 0.86 now, on the same test's
-dry-friction record).
+dry-friction record), each variance at least that of the velocity's noise at rest in
+the velocity alone (which holds the integration's residue there, its edges' ringing;
+the rest's spectrum integrated into the displacement would wander over a long record,
+its low frequencies extrapolated from a short rest).
 
 **Coloured noise.** A real signal chain filters the noise (anti-alias filter), adds
 mains lines and 1/f noise: the samples' errors are then correlated, and the variance
