@@ -120,6 +120,9 @@ def one(case: str, seed: int) -> dict:
     out["bias_read"] = run.metadata["acceleration"]["bias"]
     out["flags"] = sorted({type(w.message).__name__ for w in caught} & set(FLAGS))
     out["law"] = result.law
+    diagnostics = result.diagnostics
+    if diagnostics.get("chi2_map") is not None and diagnostics.get("n_increments"):
+        out["chi2_per_n"] = diagnostics["chi2_map"] / diagnostics["n_increments"]
     summary = result.summary(prob=0.95)
     out["parameters"] = {}
     for name, value in truth.items():
@@ -171,6 +174,9 @@ def summarise(records: list[dict]) -> dict:
                 "z_mean": float(np.mean(z)) if z else None,
                 "z_sd": float(np.std(z, ddof=1)) if len(z) > 1 else None,
             }
+        chi2 = [r["chi2_per_n"] for r in mine if r.get("chi2_per_n") is not None]
+        entry["chi2_per_n_median"] = float(np.median(chi2)) if chi2 else None
+        entry["chi2_per_n_range"] = [float(min(chi2)), float(max(chi2))] if chi2 else None
         cpu = [r["cpu_s"] for r in mine if "cpu_s" in r]
         entry["median_cpu_s"] = float(np.median(cpu)) if cpu else None
         out[case] = entry

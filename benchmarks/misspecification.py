@@ -265,6 +265,9 @@ def one_run(case: str, noise: float, index: int, seed: int, max_steps: int) -> d
         messages.setdefault(w.category.__name__, str(w.message)[:400])
     out["warning_messages"] = messages
     out["converged"] = bool(result.converged)
+    diagnostics = result.diagnostics
+    if diagnostics.get("chi2_map") is not None and diagnostics.get("n_increments"):
+        out["chi2_per_n"] = diagnostics["chi2_map"] / diagnostics["n_increments"]
     out["notch_Hz"] = result.settings.get("notch_Hz")
     out["interval"] = {n: [float(b) for b in result.interval(n, 0.95)] for n in PARAMS}
     out["mean"] = {n: float(np.mean(result.samples(n))) for n in PARAMS}
@@ -320,6 +323,8 @@ def summarise(records: list[dict[str, Any]]) -> dict[str, Any]:
                     float(np.median([r["fit_seconds"] for r in fitted])) if fitted else None
                 ),
             }
+            chi2 = [r["chi2_per_n"] for r in fitted if r.get("chi2_per_n") is not None]
+            row["chi2_per_n_median"] = float(np.median(chi2)) if chi2 else None
             n = len(fitted)
             for p in PARAMS:
                 k = sum(r["covered"][p] for r in fitted)

@@ -210,7 +210,8 @@ def test_simpson_weights_integrate_polynomials_exactly(n):
 def test_derived_channel_noise_agrees_with_the_linearised_propagation():
     # Velocity recorded, displacement integrated from it: the change of each
     # increment is, to first order, a_j·η with a_j = Cᵀ(w_j y) + w_j y' (C the
-    # cumulative-trapezoid matrix), so its variance is σ²|a_j|², computed here by
+    # cumulative-trapezoid matrix less its least-squares line in τ, which the
+    # equilibrium and its drift take), so its variance is σ²|a_j|², computed here by
     # linear algebra independently of the Monte Carlo in increment_noise.
     from bayestribo.signal.increments import increment_noise, increment_weights
 
@@ -227,6 +228,8 @@ def test_derived_channel_noise_agrees_with_the_linearised_propagation():
     for i in range(1, n):
         cum[i, : i + 1] = h
         cum[i, 0] = cum[i, i] = h / 2
+    line = np.column_stack([np.ones(n), tau])
+    cum -= line @ np.linalg.lstsq(line, cum, rcond=None)[0]
     expected, expected_bias = [], []
     dy2 = sigma**2 * np.sum(cum * cum, axis=1)  # Var δy_i
     for a, b, w in zip(edges[:-1], edges[1:], weights, strict=True):

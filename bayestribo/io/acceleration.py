@@ -50,6 +50,16 @@ integrated once, at read time (:func:`integrate_acceleration`):
    high-pass takes it, at f_c = 0.3 f to confine what it does there to fewer cycles
    (its gain 0.992 at f divided out), and the record says so.
 
+**Its noise.** The velocity's noise is the sensor's through these steps: a random walk
+held at the rests by the drift's line and free between them, of which the high-pass
+keeps a part near its cut-off, so that in the motion it is larger than at rest (2.7
+times in sd over 3 s of motion between 2 s and 3 s of rest). The rest's spectrum does
+not show it; the integration records its linear steps (``noise`` in
+:meth:`Integration.record`: the sensor's noise at rest, the rests, the edges, the
+cut-off and the gain) and :func:`velocity_noise` draws the noise they leave, from
+which the fit takes the increments' variances
+(:func:`bayestribo.signal.increments.accelerometer_draws`).
+
 Without noise the velocity so made is within 2e-3 of the swing of the true one after
 the first period (``tests/test_io_acceleration.py``). Fits of simulated accelerometer
 records (an independent ``solve_ivp`` integration, 100 to 300 µg/√Hz of noise, 20 runs
@@ -109,6 +119,7 @@ __all__ = [
     "integrate_acceleration",
     "integrated_signals",
     "principal_axis",
+    "velocity_noise",
 ]
 
 #: Cut-off of the high-pass over the oscillation frequency, f_c / f, for a record with
@@ -194,6 +205,7 @@ class Integration:
     cutoff_Hz: float
     gain_at_frequency: float
     drift_from: str
+    noise: dict[str, Any] | None = None
 
     def record(self) -> dict[str, Any]:
         """The metadata record (plain data) of the integration."""
@@ -213,6 +225,7 @@ class Integration:
             },
             "drift": self.drift_from,
             "method": "frequency-domain integral V = A / (i 2 pi f), zero-padded",
+            **({} if self.noise is None else {"noise": self.noise}),
         }
 
     def note(self, unit: str) -> str:
@@ -289,8 +302,11 @@ def _drift(t: NDArray, v: NDArray, before: NDArray, after: NDArray) -> NDArray:
         if int(mask.sum()) >= _REST_SAMPLES:
             tm = t[mask]
             centre = float(tm.mean())
-            slope = float(np.polyfit(tm - centre, v[mask], 1)[0])
-            lines.append((centre, float(v[mask].mean()), slope, float(tm[0]), float(tm[-1])))
+            offsets = tm - centre
+            at_rest = v[..., mask]  # rows of draws too (velocity_noise)
+            level = at_rest.mean(axis=-1, keepdims=True)
+            slope = (at_rest - level) @ offsets / float(offsets @ offsets)
+            lines.append((centre, level, slope[..., None], float(tm[0]), float(tm[-1])))
         else:
             lines.append(None)
     first, second = lines
@@ -319,15 +335,15 @@ def _lowpass(x: NDArray, dt: float, cutoff: float) -> NDArray:
     motion, or on a drift, ends without a jump."""
     from scipy.fft import irfft, next_fast_len, rfft, rfftfreq
 
-    n = x.size
+    n = x.shape[-1]
     pad = min(n - 1, math.ceil(8.0 / (2.0 * math.pi * cutoff * dt)))
-    left = 2.0 * x[0] - x[pad:0:-1]
-    right = 2.0 * x[-1] - x[-2 : -pad - 2 : -1]
-    extended = np.concatenate([left, x, right])
-    m = next_fast_len(extended.size + pad, real=True)
+    left = 2.0 * x[..., :1] - x[..., pad:0:-1]
+    right = 2.0 * x[..., -1:] - x[..., -2 : -pad - 2 : -1]
+    extended = np.concatenate([left, x, right], axis=-1)
+    m = next_fast_len(extended.shape[-1] + pad, real=True)
     f = rfftfreq(m, dt)
-    low = irfft(rfft(extended, m) / (1.0 + (f / cutoff) ** (2 * ORDER)), m)
-    return low[pad : pad + n]
+    low = irfft(rfft(extended, m, axis=-1) / (1.0 + (f / cutoff) ** (2 * ORDER)), m, axis=-1)
+    return low[..., pad : pad + n]
 
 
 def _edge_smoothing(f: NDArray, cutoff: float, dt: float) -> NDArray:
@@ -368,8 +384,9 @@ def _kept_steps(
             delta = irfft(shift * (2j * math.pi * f * dt) ** k, m)[: t.size]
             columns.append(_lowpass(delta, dt, cutoff))
     basis = np.column_stack(columns)
-    sizes, *_ = np.linalg.lstsq(basis, low, rcond=None)
-    return basis @ sizes, [float(x) for x in sizes[::_MULTIPOLES]]
+    # several rows of ``low`` at once (the draws of :func:`velocity_noise`)
+    sizes, *_ = np.linalg.lstsq(basis, low.T, rcond=None)
+    return (basis @ sizes).T, [float(x) for x in np.atleast_2d(sizes.T)[-1, ::_MULTIPOLES]]
 
 
 def integrate_acceleration(
@@ -396,7 +413,6 @@ def integrate_acceleration(
         When the acceleration holds no oscillation standing out of its noise (no free
         decay), or is not finite.
     """
-    from scipy.fft import irfft, next_fast_len, rfft, rfftfreq
 
     from bayestribo.signal.period import dominant_period, sample_step
 
@@ -437,13 +453,6 @@ def integrate_acceleration(
             "the velocity is the same at its start and end"
         )
     frequency = 1.0 / period
-    n = a.size
-    m = next_fast_len(2 * n, real=True)
-    f = rfftfreq(m, dt)
-    response = np.zeros(f.size, dtype=np.complex128)
-    response[1:] = 1.0 / (2j * math.pi * f[1:])
-    if m % 2 == 0:
-        response[-1] = 0.0  # Nyquist: the integral of a real signal there is not real
     edges = [
         (name, float(edge))
         for name, edge, mask in (
@@ -453,13 +462,7 @@ def integrate_acceleration(
         if edge is not None and int(mask.sum()) >= _REST_SAMPLES
     ]
     cutoff = (CUTOFF_RATIO if len(edges) == 2 else CUTOFF_RATIO_OPEN) * frequency
-    velocity = irfft(rfft(a - bias, m) * response, m)[:n]
-    velocity = velocity - _drift(t, velocity, before, after)
-    low = _lowpass(velocity, dt, cutoff)
-    if edges:
-        kept, sizes = _kept_steps(t, low, cutoff, [e for _, e in edges])
-        low = low - kept
-    velocity = velocity - low
+    velocity, sizes = _integrated(t, a - bias, before, after, cutoff, [e for _, e in edges])
     where = " and ".join(name for name, _ in edges)
     rests = {2: "before the release and after the stop", 1: f"at {where} only", 0: ""}
     if edges:
@@ -481,6 +484,19 @@ def integrate_acceleration(
     at_frequency = float(highpass_gain(frequency, cutoff))
     velocity /= at_frequency  # the oscillation's amplitude as recorded
     velocity.setflags(write=False)
+    noise = None
+    if n_rest >= _REST_SAMPLES:
+        noise = {
+            "sigma": bias_se * math.sqrt(n_rest),
+            "start_s": float(t[0]),
+            "step_s": dt,
+            "samples": int(t.size),
+            "rest_before": _runs(before),
+            "rest_after": _runs(after),
+            "edges_s": [e for _, e in edges],
+            "cutoff_Hz": cutoff,
+            "gain": at_frequency,
+        }
     return Integration(
         velocity=velocity,
         column=column,
@@ -492,7 +508,92 @@ def integrate_acceleration(
         cutoff_Hz=cutoff,
         gain_at_frequency=at_frequency,
         drift_from=drift_from,
+        noise=noise,
     )
+
+
+def _integrated(
+    t: NDArray,
+    a: NDArray,
+    before: NDArray,
+    after: NDArray,
+    cutoff: float,
+    edges: list[float],
+) -> tuple[NDArray, list[float]]:
+    """Steps 2 and 3 of the module notes on an acceleration without its bias: the
+    integral, its drift measured at rest taken off, and the high-pass with the
+    displacement's steps at ``edges`` kept; linear in ``a`` (rows of samples for
+    several). Returns the velocity and the steps' sizes (of the last row)."""
+    from scipy.fft import irfft, next_fast_len, rfft, rfftfreq
+
+    dt = float(t[1] - t[0])
+    n = t.size
+    m = next_fast_len(2 * n, real=True)
+    f = rfftfreq(m, dt)
+    response = np.zeros(f.size, dtype=np.complex128)
+    response[1:] = 1.0 / (2j * math.pi * f[1:])
+    if m % 2 == 0:
+        response[-1] = 0.0  # Nyquist: the integral of a real signal there is not real
+    rows = np.atleast_2d(a)
+    velocity = irfft(rfft(rows, m, axis=-1) * response, m, axis=-1)[:, :n]
+    velocity = velocity - _drift(t, velocity, before, after)
+    low = _lowpass(velocity, dt, cutoff)
+    sizes: list[float] = []
+    if edges:
+        kept, sizes = _kept_steps(t, low, cutoff, edges)
+        low = low - kept
+    out = velocity - low
+    return (out[0] if np.ndim(a) == 1 else out), sizes
+
+
+def _runs(mask: NDArray) -> list[list[int]]:
+    """The runs of true samples of ``mask`` as [first, stop) index pairs."""
+    change = np.flatnonzero(np.diff(np.r_[0, mask.astype(np.int8), 0]))
+    return [[int(a), int(b)] for a, b in zip(change[::2], change[1::2], strict=True)]
+
+
+def velocity_noise(noise: Mapping[str, Any], count: int, rng: np.random.Generator) -> NDArray:
+    """Draws of the noise an integrated velocity holds: the sensor's white noise put
+    through the integration (:func:`integrate_acceleration`'s linear steps, with the
+    rests, edges and cut-off it found).
+
+    The rest's spectrum of the velocity does not show this noise in the motion: the
+    drift between the two rests is the straight line from one to the other, so the
+    integrated noise is a random walk held at the rests and free between them, of
+    which the high-pass leaves a part near its cut-off (measured on a dry-friction
+    record with 3 s of motion: the velocity's noise in the motion 2.7 times the rest's).
+
+    Parameters
+    ----------
+    noise : mapping
+        The integration's ``noise`` record (:meth:`Integration.record`): the
+        acceleration's noise ``sigma`` at rest [m/s² or rad/s²], the sampling, the
+        rests as index runs, the edges' times [s], the cut-off [Hz] and the gain
+        divided out.
+    count : int
+        Draws.
+    rng : numpy.random.Generator
+        Their source.
+
+    Returns
+    -------
+    ndarray
+        Shape (count, samples): velocity noise [m/s or rad/s] on the record's samples.
+    """
+    n = int(noise["samples"])
+    t = float(noise["start_s"]) + float(noise["step_s"]) * np.arange(n)
+    masks = []
+    for key in ("rest_before", "rest_after"):
+        mask = np.zeros(n, dtype=bool)
+        for first, stop in noise[key]:
+            mask[first:stop] = True
+        masks.append(mask)
+    rest = masks[0] | masks[1]
+    a = rng.normal(0.0, float(noise["sigma"]), (count, n))
+    a -= a[:, rest].mean(axis=1, keepdims=True)  # the bias measured at rest
+    edges = [float(e) for e in noise["edges_s"]]
+    velocity, _ = _integrated(t, a, masks[0], masks[1], float(noise["cutoff_Hz"]), edges)
+    return velocity / float(noise["gain"])
 
 
 @dataclass(frozen=True)

@@ -226,7 +226,9 @@ METADATA_KEYS: Mapping[str, _Key] = MappingProxyType(
             "plain",
             "how the velocity was integrated from an acceleration column (written by the "
             "package, bayestribo.io.acceleration): the column, the bias removed and where "
-            "it was measured, the high-pass filter and its gain at the oscillation frequency",
+            "it was measured, the high-pass filter and its gain at the oscillation frequency, "
+            "and under 'noise' its steps as the fit's noise model puts the sensor's noise "
+            "through them",
         ),
         "complete": _Key("plain", "whether the acquisition received every sample"),
         "fault": _Key("plain", "the acquisition's fault, if any"),

@@ -21,6 +21,25 @@ integral), its noise is correlated with the recorded channel's and across sample
 the increment variances and the bias are then obtained by propagating simulated noise
 through the same processing (Monte Carlo, ``n_replicates`` seeded draws).
 
+**An integrated displacement** holds the velocity's noise integrated, a random walk;
+the decay measures it about an equilibrium and its drift fitted as a line, which takes
+the walk's line with it, so the Monte Carlo takes the walk about its least-squares line
+(:func:`detrended`). Taken from the decay's first sample instead, the walk's variance
+grew along the record: on an independent simulation (a velocity alone, white noise)
+the second half's increment variances came out 3 to 8 times too large and the noise
+bias removed from them too large (mean standardised error −0.36; now +0.07 ± 0.04,
+χ²/n 1.05, ``tests/test_signal_integrated_noise.py``). **An accelerometer's velocity**
+is itself an integral, its drift taken off as the line between the rests: its noise in
+the motion is a random walk held at the rests and free between them, larger than the
+rest shows (2.7 times in sd over 3 s of motion), so the Monte Carlo draws the sensor's
+white noise through the integration itself (:func:`accelerometer_draws`,
+:func:`bayestribo.io.acceleration.velocity_noise`) instead of the rest's spectrum
+(χ²/n of the increments 3.1 with the spectrum, 0.86 now, on the same test's
+dry-friction record), each variance at least that of the velocity's noise at rest in
+the velocity alone (which holds the integration's residue there, its edges' ringing;
+the rest's spectrum integrated into the displacement would wander over a long record,
+its low frequencies extrapolated from a short rest).
+
 **Coloured noise.** A real signal chain filters the noise (anti-alias filter), adds
 mains lines and 1/f noise: the samples' errors are then correlated, and the variance
 of a weighted sum of them is ``wᵀ C w`` with C the noise's autocovariance, not
@@ -112,7 +131,9 @@ from bayestribo.signal.spectrum import NoiseSpectrum, colored_noise
 
 __all__ = [
     "PiData",
+    "accelerometer_draws",
     "correlated_sum_variance",
+    "detrended",
     "increment_noise",
     "increment_weights",
     "integrate_increments",
@@ -337,10 +358,41 @@ def _rederive(
             y_noisy, window, 5, deriv=1, delta=h, mode="interp", axis=-1
         )
         return y_noisy, yp_new
-    # displacement integrated from the velocity: the integration constant (the
-    # equilibrium) is re-estimated from the data, so only the noise's integral remains
-    y_new = y + cumulative_trapezoid(yp_noisy - yp, tau, initial=0.0, axis=-1)
-    return y_new, yp_noisy
+    # displacement integrated from the velocity: the equilibrium and its drift (a line
+    # in τ) are estimated from the record's own turning points, so the line the noise's
+    # integral holds goes with them and only its departure from a line remains
+    walk = cumulative_trapezoid(yp_noisy - yp, tau, initial=0.0, axis=-1)
+    return y + detrended(walk, tau), yp_noisy
+
+
+def detrended(walk: NDArray, tau: NDArray) -> NDArray:
+    """``walk`` (rows of samples at ``tau``) less its least-squares line in τ.
+
+    The noise a derived displacement inherits from its velocity is that velocity's
+    noise integrated: a random walk, whose variance grows with τ from wherever the
+    integral starts. The decay measures the displacement about an equilibrium that
+    drifts linearly (δ₀ + δ₁τ, fitted to the turning points,
+    :mod:`bayestribo.signal.decay`), which takes the walk's line with it; what reaches
+    E is the walk about its line, a bridge whose variance is largest near the middle
+    and a small fraction of the walk's at the end (1/6 of it at a walk's midpoint
+    against its variance at the end: T/4·σ² – about T/12 σ² at the ends).
+
+    Parameters
+    ----------
+    walk : ndarray
+        Integrated noise, shape (..., n) [units of y].
+    tau : ndarray
+        Dimensionless times of the samples, shape (n,).
+
+    Returns
+    -------
+    ndarray
+        ``walk`` less its least-squares line in τ, same shape.
+    """
+    centred = tau - tau.mean()
+    mean = walk.mean(axis=-1, keepdims=True)
+    slope = (walk @ centred)[..., None] / float(centred @ centred)
+    return walk - mean - slope * centred
 
 
 def _coarse(decay: EnergyDecay, noise: NoiseModel) -> dict[str, Any] | None:
@@ -621,6 +673,7 @@ def increment_noise(
     spectrum: NoiseSpectrum | None = None,
     spectrum_scale: float = 1.0,
     potential: Callable[[NDArray], NDArray] | None = None,
+    velocity_draws: Callable[[int, np.random.Generator], NDArray] | None = None,
 ) -> tuple[NDArray, NDArray]:
     """Noise bias and noise variance of each increment of E = (y² + y'²)/2.
 
@@ -668,6 +721,11 @@ def increment_noise(
         noise of ``sigma_y`` or ``sigma_yp``.
     spectrum_scale : float
         Factor from the spectrum's units to y (or y') units.
+    velocity_draws : callable, optional
+        ``velocity_draws(count, rng)``: ``count`` draws of the recorded velocity's noise
+        on the samples, in units of y' (``derived="displacement"``; a velocity
+        integrated from an acceleration, :func:`accelerometer_draws`). Used in place of
+        white noise or ``spectrum``.
 
     Returns
     -------
@@ -715,7 +773,9 @@ def increment_noise(
     for first in range(0, n_replicates, _BLOCK):
         count = min(_BLOCK, n_replicates - first)
         # one (count, samples) draw is the same stream as ``count`` draws of a row
-        if spectrum is not None:
+        if velocity_draws is not None and derived == "displacement":
+            draw = velocity_draws(count, rng)
+        elif spectrum is not None:
             draw = spectrum_scale * colored_noise(spectrum, tau.size, rng, count)
         else:
             sigma = sigma_y if derived == "velocity" else sigma_yp
@@ -774,6 +834,73 @@ def spectral_options(decay: EnergyDecay, noise: NoiseModel, n_lags: int) -> dict
     if use_v:
         options["autocov_yp"] = rest.velocity.autocovariance(n_lags) * to_yp**2
     return options
+
+
+def accelerometer_draws(
+    decay: EnergyDecay, noise: NoiseModel
+) -> Callable[[int, np.random.Generator], NDArray] | None:
+    """Draws of the noise of a velocity integrated from an accelerometer's record, on
+    the decay's samples in units of y' (for :func:`increment_noise`), or None.
+
+    The sensor's white noise is put through the integration over the whole record
+    (:func:`bayestribo.io.acceleration.velocity_noise`) and the decay's samples taken
+    from it. None when the noise model holds no integration
+    (:attr:`NoiseModel.integrated_velocity`), or when the decay's samples are not the
+    integrated record's (a run cut or resampled after reading).
+
+    Parameters
+    ----------
+    decay : EnergyDecay
+        The recording's energy decay, its displacement derived from the velocity.
+    noise : NoiseModel
+        The noise model used.
+
+    Returns
+    -------
+    callable or None
+        ``draws(count, rng)``, shape (count, decay samples).
+    """
+    plan = noise.integrated_velocity
+    if plan is None or decay.derived_channel != "displacement":
+        return None
+    step = float(plan["step_s"])
+    first = round((float(decay.t[0]) - float(plan["start_s"])) / step)
+    expected = float(plan["start_s"]) + step * (first + np.arange(decay.t.size))
+    if (
+        first < 0
+        or first + decay.t.size > int(plan["samples"])
+        or not np.allclose(decay.t, expected, rtol=0.0, atol=1e-3 * step)
+    ):
+        return None
+    sc = decay.scaling
+    unit = sc.length_scale * sc.omega
+
+    def draws(count: int, rng: np.random.Generator) -> NDArray:
+        from bayestribo.io.acceleration import velocity_noise
+
+        return velocity_noise(plan, count, rng)[:, first : first + decay.t.size] / unit
+
+    return draws
+
+
+def _velocity_rest_floor(
+    decay: EnergyDecay, yp: NDArray, edges: NDArray, weights: list[NDArray], sigma_yp: float
+) -> NDArray:
+    """Increment variances from the velocity's noise measured at rest (its spectrum's
+    autocovariance where coloured, else white at ``sigma_yp``), in the velocity alone."""
+    rest = decay.rest_noise
+    spectrum = None if rest is None else rest.velocity
+    if spectrum is not None and spectrum.coloured:
+        sc = decay.scaling
+        lags = 2 * (int(np.max(np.diff(edges))) + 1)
+        autocov = spectrum.autocovariance(lags) / (sc.length_scale * sc.omega) ** 2
+    else:
+        autocov = np.array([sigma_yp**2])
+    zero = np.zeros_like(yp)
+    _, floor = increment_noise(
+        decay.tau, zero, yp, edges, weights, 0.0, sigma_yp, autocov_yp=autocov
+    )
+    return floor
 
 
 def pi_data(
@@ -859,7 +986,8 @@ def pi_data(
         # shows no spectrum of it), the white formula keeps the rest of the noise
         sig_y, sig_yp = coarse["white"]
         spectral = False
-    options = spectral_options(decay, noise, 2 * longest) if spectral else {}
+    draws = accelerometer_draws(decay, noise)
+    options = spectral_options(decay, noise, 2 * longest) if spectral and draws is None else {}
     bias, variance = increment_noise(
         tau,
         y,
@@ -873,8 +1001,16 @@ def pi_data(
         n_replicates=n_replicates,
         seed=seed,
         potential=potential,
+        velocity_draws=draws,
         **options,
     )
+    if draws is not None:
+        # the sensor's noise through the integration, which the rest does not show in
+        # the motion; never below the velocity's own noise as the rest shows it, which
+        # also holds what the integration leaves there without noise (its edges'
+        # ringing, 3e-5 of the swing): that noise in the velocity channel alone, its
+        # integral's wander being the sensor's
+        variance = np.maximum(variance, _velocity_rest_floor(decay, yp, edges, weights, sig_yp))
     if options:
         # never below the white noise at the instrument's nominal resolution
         nominal_y = (noise.nominal_displacement or 0.0) / sc.length_scale

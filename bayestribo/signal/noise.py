@@ -86,6 +86,13 @@ class NoiseModel:
         over the whole record. A misfit test compares the residuals' χ² with this estimate's own
         uncertainty (an F test), so a short rest gives no false alarms
         (:func:`bayestribo.inference.pipeline.misfit_p_value`).
+    integrated_velocity : dict or None
+        For a velocity integrated from an accelerometer's record (and the displacement
+        derived from it), the integration's ``noise`` record
+        (:meth:`bayestribo.io.acceleration.Integration.record`): the increments'
+        variances then come from the sensor's noise put through the integration
+        (:func:`bayestribo.io.acceleration.velocity_noise`), which the velocity's rest
+        does not show in the motion.
     """
 
     displacement: float
@@ -103,6 +110,7 @@ class NoiseModel:
     spectrum_rel_se: float | None = None
     quantisation_steps: tuple[float | None, float | None] = (None, None)
     measured_dof: float | None = None
+    integrated_velocity: dict[str, Any] | None = None
 
     @property
     def exceeds_nominal(self) -> bool:
@@ -219,7 +227,17 @@ def noise_model(
         measured_dof=None
         if _all_coarse(meas, derived)
         else _measured_dof(meas, rest, "measured" in (src_x, src_v)),
+        integrated_velocity=_integrated_velocity(meta) if derived == "displacement" else None,
     )
+
+
+def _integrated_velocity(meta: Mapping[str, Any]) -> dict[str, Any] | None:
+    """The accelerometer integration's noise record in a run's metadata, or None."""
+    record = meta.get("acceleration")
+    if not isinstance(record, Mapping):
+        return None
+    noise = record.get("noise")
+    return dict(noise) if isinstance(noise, Mapping) else None
 
 
 def _all_coarse(meas: Any, derived: str | None) -> bool:
