@@ -16,6 +16,7 @@ from collections.abc import Mapping
 import numpy as np
 from numpy.typing import NDArray
 
+from bayestribo.inference.correction import MAX_CORRECTED_CV, importance_corrected
 from bayestribo.inference.modes import run_or_failure
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.sampling import SamplerRun, SamplerSettings, run_ensembles
@@ -170,9 +171,14 @@ def _sample_surrogate(
     (:func:`~bayestribo.inference.surrogate.regressed_posterior`), or where those do
     not determine it, built again about the best draw checked with the surrogate
     posterior's spread (up to
-    :data:`~bayestribo.inference.surrogate.ATTEMPTS` surrogates). Returns the run, the
-    last check and the surrogate posterior when a check passed; ``(None, check, None)``
-    when none did (the caller samples the exact posterior).
+    :data:`~bayestribo.inference.surrogate.ATTEMPTS` surrogates). A surrogate whose
+    check fails by little (weights' cv at most
+    :data:`~bayestribo.inference.correction.MAX_CORRECTED_CV`) has its draws resampled
+    to the exact posterior by their importance weights where that is reliable
+    (:func:`~bayestribo.inference.correction.importance_corrected`). Returns the run,
+    the last check and the surrogate posterior when a check passed or a correction
+    held; ``(None, check, None)`` when none did (the caller samples the exact
+    posterior).
     """
     rng = np.random.default_rng(seed)
     sd = np.sqrt(np.clip(np.diag(np.atleast_2d(cov)), 0.0, None))
@@ -195,6 +201,20 @@ def _sample_surrogate(
         checked = check(posterior, target, flat, rng, attempt=attempt)
         if checked.passed:
             return run, checked, target
+        if checked.weight_cv <= MAX_CORRECTED_CV:
+            # close enough for its draws to be resampled to the exact posterior by
+            # their importance weights (inference/correction.py)
+            corrected = importance_corrected(run, posterior, rng, settings.rhat_max)
+            if corrected is not None:
+                record = SurrogateCheck(
+                    corrected.draws,
+                    corrected.weight_cv,
+                    corrected.log_weight_sd,
+                    attempt,
+                    checked.best,
+                    corrected=True,
+                )
+                return corrected.run, record, target
         if checked.best is None:
             break
         refit = regressed_posterior(posterior, target, flat, rng)

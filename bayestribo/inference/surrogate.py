@@ -634,6 +634,10 @@ class SurrogateCheck:
     best : ndarray or None
         The checked draw of highest exact log posterior (the next centre when the
         check fails).
+    corrected : bool
+        The surrogate's draws were resampled to the exact posterior by their
+        importance weights (:mod:`bayestribo.inference.correction`); ``draws``,
+        ``weight_cv`` and ``log_weight_sd`` are then those of every draw weighted.
     """
 
     draws: int
@@ -641,11 +645,13 @@ class SurrogateCheck:
     log_weight_sd: float
     attempt: int
     best: NDArray | None = field(default=None, repr=False, compare=False)
+    corrected: bool = False
 
     @property
     def passed(self) -> bool:
-        """True when the surrogate's draws stand for the exact posterior's."""
-        return bool(self.weight_cv <= MAX_WEIGHT_CV)
+        """True when the chains kept stand for the exact posterior's: the surrogate's
+        draws as they are, or corrected by their importance weights."""
+        return bool(self.corrected or self.weight_cv <= MAX_WEIGHT_CV)
 
     def to_dict(self) -> dict[str, float | int | bool]:
         """Plain values for the fit's JSON."""
@@ -656,6 +662,7 @@ class SurrogateCheck:
             "attempt": self.attempt,
             "passed": self.passed,
             "max_weight_cv": MAX_WEIGHT_CV,
+            "corrected": self.corrected,
         }
 
 
