@@ -59,7 +59,7 @@ def test_the_corrected_draws_are_of_the_exact_posterior():
     rng = np.random.default_rng(2)
     run = _normal_run(rng)
     exact = scipy.stats.norm(0.1, 1.05)
-    out = importance_corrected(run, lambda x: exact.logpdf(x[:, 0]), rng, rhat_max=1.01)
+    out = importance_corrected(run, lambda x: (exact.logpdf(x[:, 0]), None), rng, rhat_max=1.01)
     assert out is not None
     assert MAX_WEIGHT_CV < out.weight_cv <= MAX_CORRECTED_CV
     draws = out.run.chains.reshape(-1)
@@ -76,6 +76,43 @@ def test_the_corrected_draws_are_of_the_exact_posterior():
     assert np.isin(draws, run.chains.reshape(-1)).all()
     assert out.run.chains.shape == run.chains.shape
     assert np.all(out.run.ess < run.ess)
+    assert out.pointwise is None
+
+
+def test_the_pointwise_values_given_follow_the_draws_kept():
+    """A density that gives each row's pointwise values too: the corrected run's are
+    those of the draws it kept, in their place."""
+    rng = np.random.default_rng(5)
+    run = _normal_run(rng, (2, 500))
+    exact = scipy.stats.norm(0.05, 1.0)
+
+    def density(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return exact.logpdf(x[:, 0]), np.column_stack([x[:, 0], 2.0 * x[:, 0]])
+
+    out = importance_corrected(run, density, rng, 1.01)
+    assert out is not None and out.pointwise.shape == (2, 500, 2)
+    np.testing.assert_array_equal(out.pointwise[..., 0], out.run.chains[..., 0])
+    np.testing.assert_array_equal(out.pointwise[..., 1], 2.0 * out.run.chains[..., 0])
+
+
+def test_the_exact_density_is_the_posteriors_from_one_pi(bundled_run):
+    """exact_density gives the posterior's own log density (compiled) and pointwise
+    log-likelihood, a law without a closed form, from one evaluation of Π."""
+    from bayestribo.inference import pipeline
+    from bayestribo.inference.correction import exact_density
+    from bayestribo.inference.start import maximum_a_posteriori
+
+    prepared = pipeline.prepare(bundled_run, seed=1)
+    posterior = pipeline.build_posterior(prepared.data, law="viscous+quadratic")
+    assert not posterior.law.closed_form
+    theta, cov, _ = maximum_a_posteriori(posterior, prepared.decay)
+    rows = np.random.default_rng(6).multivariate_normal(theta, cov, size=12)
+    rows[:, posterior.names.index("c2")] = np.abs(rows[:, posterior.names.index("c2")])
+    rows[0, posterior.names.index("y0")] = np.inf  # outside the support
+    lp, pointwise = exact_density(posterior)(rows)
+    assert lp[0] == -np.inf and np.all(np.isnan(pointwise[0]))
+    np.testing.assert_allclose(lp[1:], posterior(rows[1:]), rtol=1e-10, atol=1e-8)
+    np.testing.assert_allclose(pointwise[1:], posterior.pointwise(rows[1:]), rtol=1e-12)
 
 
 @pytest.mark.parametrize(
@@ -88,15 +125,15 @@ def test_a_surrogate_that_misses_the_exact_mass_is_not_corrected(exact):
     k̂ above 1/2) or shifted by 1.5 sd (cv above 1) is left to the exact sampler."""
     rng = np.random.default_rng(3)
     run = _normal_run(rng)
-    assert importance_corrected(run, lambda x: exact.logpdf(x[:, 0]), rng, 1.01) is None
+    assert importance_corrected(run, lambda x: (exact.logpdf(x[:, 0]), None), rng, 1.01) is None
 
 
 def test_a_draw_outside_the_exact_support_refuses_the_correction():
     rng = np.random.default_rng(4)
     run = _normal_run(rng)
 
-    def exact(x: np.ndarray) -> np.ndarray:
-        return np.where(x[:, 0] > 3.0, -np.inf, scipy.stats.norm.logpdf(x[:, 0]))
+    def exact(x: np.ndarray) -> tuple[np.ndarray, None]:
+        return np.where(x[:, 0] > 3.0, -np.inf, scipy.stats.norm.logpdf(x[:, 0])), None
 
     assert importance_corrected(run, exact, rng, 1.01) is None
 

@@ -16,7 +16,11 @@ from collections.abc import Mapping
 import numpy as np
 from numpy.typing import NDArray
 
-from bayestribo.inference.correction import MAX_CORRECTED_CV, importance_corrected
+from bayestribo.inference.correction import (
+    MAX_CORRECTED_CV,
+    exact_density,
+    importance_corrected,
+)
 from bayestribo.inference.modes import run_or_failure
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.sampling import SamplerRun, SamplerSettings, run_ensembles
@@ -97,6 +101,7 @@ def sample_from(
     checked: SurrogateCheck | None = None
     target: Posterior | None = None
     run: SamplerRun | None = None
+    pointwise: NDArray | None = None
     first = None
     if surrogate and not posterior.law.closed_form and posterior.likelihood.model == "exact":
         first = _first_surrogate(posterior, theta, cov)
@@ -113,7 +118,7 @@ def sample_from(
     )
     seed_of_run = int(rng.integers(2**31))
     if first is not None:
-        run, checked, target = _sample_surrogate(
+        run, checked, target, pointwise = _sample_surrogate(
             posterior, theta, cov, walkers, settings, seed_of_run, progress, first
         )
         if run is None:
@@ -136,7 +141,7 @@ def sample_from(
         point = np.array(run.chains[best], dtype=float)
         if posterior(point[None])[0] > posterior(theta[None])[0]:
             theta = point
-    return Sampled(posterior, theta, run, settings, checked, target)
+    return Sampled(posterior, theta, run, settings, checked, target, pointwise)
 
 
 def _first_surrogate(posterior: Posterior, theta: NDArray, cov: NDArray) -> Posterior | None:
@@ -161,7 +166,7 @@ def _sample_surrogate(
     seed: int,
     progress: bool,
     first: Posterior | None = None,
-) -> tuple[SamplerRun | None, SurrogateCheck | None, Posterior | None]:
+) -> tuple[SamplerRun | None, SurrogateCheck | None, Posterior | None, NDArray | None]:
     """Sample the quadratic surrogate posterior of a law without a closed form and
     check it against the exact one (:mod:`bayestribo.inference.surrogate`).
 
@@ -177,7 +182,8 @@ def _sample_surrogate(
     to the exact posterior by their importance weights where that is reliable
     (:func:`~bayestribo.inference.correction.importance_corrected`). Returns the run,
     the last check and the surrogate posterior when a check passed or a correction
-    held; ``(None, check, None)`` when none did (the caller samples the exact
+    held (with the exact pointwise log-likelihood of the corrected draws, else None);
+    ``(None, check, None, None)`` when none did (the caller samples the exact
     posterior).
     """
     rng = np.random.default_rng(seed)
@@ -190,21 +196,21 @@ def _sample_surrogate(
         if target is None:
             target = surrogate_posterior(posterior, centre, scale)
         if target is None or not target.uses_compiled:
-            return None, checked, None
+            return None, checked, None, None
         run = run_or_failure(run_ensembles, target, walkers, settings, seed=seed, progress=progress)
         flat = run.chains.reshape(-1, run.chains.shape[-1])
         if flat.shape[0] < 2 or not np.all(np.isfinite(flat)):
-            return None, checked, None
+            return None, checked, None, None
         # a run that did not converge is checked too, and kept when the check passes:
         # the fit reports its non-convergence as an exact run would, at a fraction of
         # the cost of sampling the exact posterior to the step ceiling
         checked = check(posterior, target, flat, rng, attempt=attempt)
         if checked.passed:
-            return run, checked, target
+            return run, checked, target, None
         if checked.weight_cv <= MAX_CORRECTED_CV:
             # close enough for its draws to be resampled to the exact posterior by
             # their importance weights (inference/correction.py)
-            corrected = importance_corrected(run, posterior, rng, settings.rhat_max)
+            corrected = importance_corrected(run, exact_density(posterior), rng, settings.rhat_max)
             if corrected is not None:
                 record = SurrogateCheck(
                     corrected.draws,
@@ -214,9 +220,9 @@ def _sample_surrogate(
                     checked.best,
                     corrected=True,
                 )
-                return corrected.run, record, target
+                return corrected.run, record, target, corrected.pointwise
         if checked.best is None:
             break
         refit = regressed_posterior(posterior, target, flat, rng)
         centre, scale = checked.best, NODE_SCALE * flat.std(axis=0)
-    return None, checked, None
+    return None, checked, None, None

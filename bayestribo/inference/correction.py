@@ -36,16 +36,22 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
+from bayestribo.inference.likelihood import Params, PiLikelihood
 from bayestribo.inference.sampling import SamplerRun, rhat
+
+if TYPE_CHECKING:
+    from bayestribo.inference.posterior import Posterior
 
 __all__ = [
     "MAX_CORRECTED_CV",
     "MAX_PARETO_K",
     "Correction",
+    "exact_density",
     "importance_corrected",
     "resample_in_order",
 ]
@@ -74,6 +80,9 @@ class Correction:
         Pareto k̂ of the weights' upper tail.
     draws : int
         Draws weighted.
+    pointwise : ndarray or None
+        The exact pointwise log-likelihood of the resampled draws, (chains, draws, m),
+        where the density gave it.
     """
 
     run: SamplerRun
@@ -81,6 +90,7 @@ class Correction:
     log_weight_sd: float
     pareto_k: float
     draws: int
+    pointwise: NDArray | None = dataclasses.field(default=None, repr=False)
 
 
 def resample_in_order(weights: NDArray, u: float) -> NDArray:
@@ -107,7 +117,7 @@ def resample_in_order(weights: NDArray, u: float) -> NDArray:
 
 def importance_corrected(
     run: SamplerRun,
-    exact: Callable[[NDArray], NDArray],
+    exact: Callable[[NDArray], tuple[NDArray, NDArray | None]],
     rng: np.random.Generator,
     rhat_max: float,
 ) -> Correction | None:
@@ -119,7 +129,9 @@ def importance_corrected(
         The surrogate posterior's run; its ``log_prob`` the surrogate's log density of
         each draw.
     exact : callable
-        The exact log posterior of rows (k, d), (k,).
+        Rows (k, d) -> the exact log posterior of each, (k,), and the exact pointwise
+        log-likelihood of each row's increments, (k, m), or None
+        (:func:`exact_density`).
     rng : Generator
         The resampling's offsets (one per ensemble).
     rhat_max : float
@@ -137,7 +149,8 @@ def importance_corrected(
     if chains.ndim != 3 or surrogate_lp.shape != chains.shape[:2] or chains.shape[1] < 4:
         return None
     flat = chains.reshape(-1, chains.shape[-1])
-    exact_lp = np.asarray(exact(flat), dtype=float).reshape(surrogate_lp.shape)
+    exact_lp, exact_pointwise = exact(flat)
+    exact_lp = np.asarray(exact_lp, dtype=float).reshape(surrogate_lp.shape)
     log_w = exact_lp - surrogate_lp
     if not np.all(np.isfinite(log_w)):
         return None
@@ -150,6 +163,10 @@ def importance_corrected(
     picks = [resample_in_order(w[e], float(rng.uniform())) for e in range(chains.shape[0])]
     new_chains = np.stack([chains[e, p] for e, p in enumerate(picks)])
     new_lp = np.stack([exact_lp[e, p] for e, p in enumerate(picks)])
+    pointwise = None
+    if exact_pointwise is not None:
+        table = np.asarray(exact_pointwise, dtype=float).reshape(*chains.shape[:2], -1)
+        pointwise = np.stack([table[e, p] for e, p in enumerate(picks)])
     new_rhat = rhat(new_chains)
     old_ok = np.asarray(run.rhat) <= rhat_max
     if np.any(old_ok & ~(np.asarray(new_rhat) <= rhat_max)):
@@ -161,4 +178,60 @@ def importance_corrected(
         ess=np.asarray(run.ess, dtype=float) / (1.0 + cv * cv),
         rhat=new_rhat,
     )
-    return Correction(corrected, cv, float(np.std(log_w)), pareto_k, int(flat.shape[0]))
+    return Correction(corrected, cv, float(np.std(log_w)), pareto_k, int(flat.shape[0]), pointwise)
+
+
+def exact_density(
+    posterior: Posterior,
+) -> Callable[[NDArray], tuple[NDArray, NDArray]]:
+    """Rows -> the exact log posterior of each and the pointwise log-likelihood of
+    its increments (:meth:`~bayestribo.inference.posterior.Posterior.pointwise`, for
+    PSIS-LOO), both from one evaluation of the law's Π (the integrator is the cost:
+    the comparison's PSIS-LOO then needs no second pass over the draws).
+
+    Parameters
+    ----------
+    posterior : Posterior
+        The exact posterior.
+
+    Returns
+    -------
+    callable
+        ``rows (k, d) -> (log posterior (k,), pointwise (k, m))``; −inf (and a
+        pointwise row of NaN) outside the priors' support.
+    """
+
+    def density(rows: NDArray) -> tuple[NDArray, NDArray]:
+        rows = np.atleast_2d(np.asarray(rows, dtype=float))
+        lp = np.asarray(posterior.priors.logpdf(rows), dtype=float)
+        m = posterior.likelihood.data.increments.size
+        pointwise = np.full((rows.shape[0], m), np.nan)
+        ok = np.isfinite(lp)
+        if np.any(ok):
+            args = posterior.physical(rows[ok])
+            exact = posterior.likelihood
+            given = _GivenPi(
+                **{f.name: getattr(exact, f.name) for f in dataclasses.fields(PiLikelihood)},
+                table=exact.model_pi(args["params"]),
+            )
+            lp[ok] += given.log_likelihood(args["params"], args["discrepancy"], args["shape"])
+            pointwise[ok] = given.pointwise(args["params"], args["discrepancy"], args["shape"])
+        return lp, pointwise
+
+    return density
+
+
+@dataclasses.dataclass(frozen=True)
+class _GivenPi(PiLikelihood):
+    """A :class:`~bayestribo.inference.likelihood.PiLikelihood` whose model Π is
+    given, computed once for the rows its densities are asked of."""
+
+    table: NDArray | None = dataclasses.field(default=None, repr=False)
+
+    def model_pi(self, params: Params) -> NDArray:
+        """The given Π, shape (n, m) (the rows of ``params``, in their order)."""
+        table = np.asarray(self.table, dtype=float)
+        n = np.ravel(np.asarray(params["y0"])).size
+        if table.shape[0] != n:
+            raise ValueError(f"params: expected the {table.shape[0]} rows of Π given, got {n}")
+        return table
