@@ -35,7 +35,9 @@ under the exact posterior differs from the surrogate's by at most
 standard deviation of the quantity). The fit keeps the surrogate's draws only when
 cv(w) is below :data:`MAX_WEIGHT_CV`; otherwise it builds the surrogate again, up to
 :data:`ATTEMPTS` times, and then samples the exact posterior
-(:func:`bayestribo.inference.chains.sample`). The Laplace scales about the maximum a
+(:func:`bayestribo.inference.chains.sample`); a surrogate built again that misses the
+check by a little has its draws resampled to the exact posterior by their importance
+weights instead (:mod:`bayestribo.inference.correction`). The Laplace scales about the maximum a
 posteriori describe a posterior that is nearly Gaussian; one that is not (a
 parameter whose optimum is on its prior's bound, with its mass a few tenths of the
 prior's width inside, as α of ``coulomb+power`` at 3 on the AppStat records: a
