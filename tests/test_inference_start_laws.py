@@ -12,7 +12,6 @@ minute) from walkers that never reached the maximum.
 
 from __future__ import annotations
 
-import dataclasses
 import warnings
 
 import numpy as np
@@ -21,7 +20,6 @@ import pytest
 from bayestribo.inference.likelihood import PiLikelihood
 from bayestribo.inference.pipeline import build_posterior, prepare
 from bayestribo.inference.start import (
-    COARSE_STEPS,
     _candidates,
     _coarse,
     _first_guesses,
@@ -88,28 +86,6 @@ def test_a_law_without_drag_is_optimised_on_its_own_model(prepared):
     # the arcs of friction alone need no Runge-Kutta steps: no coarse model
     assert _coarse(_posterior(prepared, "coulomb+hysteretic")) is None
     assert _coarse(_posterior(prepared, "viscous+coulomb")) is None
-
-
-def test_a_law_no_friction_of_which_stops_the_motion_is_optimised_on_its_own_model(prepared):
-    """On a record whose motion ended, Π is summed to the end of the law's motion:
-    with fixed steps that is 20,000 half cycles for a law nothing stops, against the
-    exact model's averaged tail. Such a law's multi-start runs on the exact model; a
-    law with a Coulomb friction (which stops the motion) keeps the coarse one, and so
-    does any law on a record that ends inside the motion."""
-    assert prepared.data.motion_ended
-    for law in ("quadratic", "quadratic+hysteretic", "power"):
-        posterior = _posterior(prepared, law)
-        assert _coarse(posterior) is posterior, law
-        going = dataclasses.replace(
-            posterior,
-            likelihood=dataclasses.replace(
-                posterior.likelihood,
-                data=dataclasses.replace(prepared.data, motion_ended=False),
-            ),
-        )
-        assert _coarse(going).likelihood.steps == COARSE_STEPS, law
-    for law in ("coulomb+power", "viscous+coulomb+quadratic", "coulomb+quadratic"):
-        assert _coarse(_posterior(prepared, law)).likelihood.steps == COARSE_STEPS, law
 
 
 def test_distinct_optima_within_the_coarse_error_are_each_polished():

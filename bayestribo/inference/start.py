@@ -55,7 +55,6 @@ from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.priors import Normal
 from bayestribo.inference.reweight import reweighted_posterior
 from bayestribo.inference.surrogate import stop_ratios
-from bayestribo.model.laws import Law
 from bayestribo.signal.decay import EnergyDecay
 
 __all__ = [
@@ -669,35 +668,13 @@ def _coarse(posterior: Posterior) -> Posterior | None:
     """The posterior with the law's Π from :data:`COARSE_STEPS` Runge-Kutta steps per
     half cycle, or None when the law has a closed form, no drag (its arcs need no
     Runge-Kutta steps: the coarse model would be the exact one) or the model is not the
-    exact integrator: the multi-start then runs on the posterior itself. On a record
-    whose motion ended, a law no friction of which can stop the motion gets the
-    posterior itself (the exact model is the cheaper there), its optima polished as a
-    coarse model's are."""
+    exact integrator: the multi-start then runs on the posterior itself."""
     lik = posterior.likelihood
     if lik.law.closed_form or lik.model != "exact" or type(lik) is not PiLikelihood:
         return None
     if not any(t.kind == "drag" for t in lik.law.terms):
         return None
-    if lik.data.motion_ended and not _friction_holds(lik.law):
-        # Π is summed past the record to the end of the law's motion, which no friction
-        # of this law ends: the exact model sums its tail by the averaged motion, which
-        # fixed steps forgo, summing 20,000 half cycles instead (HarmOsc3: 10-15 ms a
-        # parameter set against 0.35 ms; quadratic+hysteretic's multi-start 4.2 s of
-        # its 5). The multi-start runs on the exact model, as on a coarse one
-        return posterior
     return replace(posterior, likelihood=replace(lik, steps=COARSE_STEPS))
-
-
-def _friction_holds(law: Law) -> bool:
-    """Whether a friction term of ``law`` keeps its force as the amplitude goes to
-    zero (Coulomb's μ_k; not a friction proportional to the amplitude), so that it
-    can stop the motion."""
-    for term in law.terms:
-        if term.kind == "friction":
-            ones = np.ones(max(int(term.n_coefficients), 1))
-            if float(term.force(0.0, ones)) != 0.0:
-                return True
-    return False
 
 
 def _candidates(posterior: Posterior, rough: list[Optimum]) -> list[NDArray]:
