@@ -189,10 +189,14 @@ def _fit_law(
     optimum: tuple[NDArray, NDArray, tuple[float, float] | None],
 ) -> tuple[Sampled, Any]:
     """Sample one law's posterior from its optimum; also return its PSIS-LOO
-    (:func:`bayestribo.inference.loo.law_loo`, pointwise)."""
+    (:func:`bayestribo.inference.loo.law_loo`, pointwise).
+
+    ``posterior`` and ``optimum`` are the second pass's (:func:`_optimise`), the
+    posterior a fit of the law alone samples: it is sampled as it is, not reweighted
+    a third time."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        start = find_start(posterior, prepared.decay, optimum=optimum)
+        start = find_start(posterior, prepared.decay, optimum=optimum, reweight=False)
         sampled = sample_from(start, settings=settings, seed=rng)
     return sampled, law_loo(sampled)
 

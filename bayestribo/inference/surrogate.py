@@ -35,7 +35,9 @@ under the exact posterior differs from the surrogate's by at most
 standard deviation of the quantity). The fit keeps the surrogate's draws only when
 cv(w) is below :data:`MAX_WEIGHT_CV`; otherwise it builds the surrogate again, up to
 :data:`ATTEMPTS` times, and then samples the exact posterior
-(:func:`bayestribo.inference.chains.sample`). The Laplace scales about the maximum a
+(:func:`bayestribo.inference.chains.sample`); a surrogate built again that misses the
+check by a little has its draws resampled to the exact posterior by their importance
+weights instead (:mod:`bayestribo.inference.correction`). The Laplace scales about the maximum a
 posteriori describe a posterior that is nearly Gaussian; one that is not (a
 parameter whose optimum is on its prior's bound, with its mass a few tenths of the
 prior's width inside, as α of ``coulomb+power`` at 3 on the AppStat records: a
@@ -634,6 +636,10 @@ class SurrogateCheck:
     best : ndarray or None
         The checked draw of highest exact log posterior (the next centre when the
         check fails).
+    corrected : bool
+        The surrogate's draws were resampled to the exact posterior by their
+        importance weights (:mod:`bayestribo.inference.correction`); ``draws``,
+        ``weight_cv`` and ``log_weight_sd`` are then those of every draw weighted.
     """
 
     draws: int
@@ -641,11 +647,13 @@ class SurrogateCheck:
     log_weight_sd: float
     attempt: int
     best: NDArray | None = field(default=None, repr=False, compare=False)
+    corrected: bool = False
 
     @property
     def passed(self) -> bool:
-        """True when the surrogate's draws stand for the exact posterior's."""
-        return bool(self.weight_cv <= MAX_WEIGHT_CV)
+        """True when the chains kept stand for the exact posterior's: the surrogate's
+        draws as they are, or corrected by their importance weights."""
+        return bool(self.corrected or self.weight_cv <= MAX_WEIGHT_CV)
 
     def to_dict(self) -> dict[str, float | int | bool]:
         """Plain values for the fit's JSON."""
@@ -656,6 +664,7 @@ class SurrogateCheck:
             "attempt": self.attempt,
             "passed": self.passed,
             "max_weight_cv": MAX_WEIGHT_CV,
+            "corrected": self.corrected,
         }
 
 

@@ -9,7 +9,7 @@ thresholds several stages share live here too.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from numpy.typing import NDArray
@@ -103,6 +103,11 @@ class Sampled:
         None when no surrogate was tried.
     surrogate_posterior : Posterior or None
         The surrogate posterior the chains sampled (None: the exact one).
+    pointwise : ndarray or None
+        The exact posterior's pointwise log-likelihood of the chains' draws, (chains,
+        draws, m), where the sampler computed it already (draws of a surrogate
+        corrected by their importance weights, :mod:`bayestribo.inference.correction`);
+        PSIS-LOO takes it (:func:`bayestribo.inference.loo.sampled_pointwise`).
     """
 
     posterior: Posterior
@@ -111,6 +116,7 @@ class Sampled:
     settings: SamplerSettings
     surrogate: SurrogateCheck | None = None
     surrogate_posterior: Posterior | None = None
+    pointwise: NDArray | None = field(default=None, repr=False, compare=False)
 
     @property
     def draws_posterior(self) -> Posterior:

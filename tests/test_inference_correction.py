@@ -1,0 +1,144 @@
+"""The importance-resampling correction of a surrogate posterior's draws
+(bayestribo/inference/correction.py), on targets whose answer is known."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.stats
+
+from bayestribo.inference.correction import (
+    MAX_CORRECTED_CV,
+    importance_corrected,
+    resample_in_order,
+)
+from bayestribo.inference.sampling import SamplerRun, rhat
+from bayestribo.inference.surrogate import MAX_WEIGHT_CV, SurrogateCheck
+
+
+def _run(chains: np.ndarray, log_prob: np.ndarray) -> SamplerRun:
+    """A run of independent draws (τ = 1) with its diagnostics."""
+    n_chains, n_draws, d = chains.shape
+    return SamplerRun(
+        chains=chains,
+        log_prob=log_prob,
+        autocorr_time=np.ones(d),
+        n_steps=n_draws,
+        burn=0,
+        thin=1,
+        acceptance_fraction=1.0,
+        ess=np.full(d, float(n_chains * n_draws)),
+        rhat=rhat(chains),
+        converged=True,
+    )
+
+
+def _normal_run(rng: np.random.Generator, shape=(2, 3000)) -> SamplerRun:
+    """Draws of the standard normal, its log density as the run's log_prob."""
+    x = rng.standard_normal((*shape, 1))
+    return _run(x, scipy.stats.norm.logpdf(x[..., 0]))
+
+
+def test_resampling_in_order_keeps_each_draw_its_weight_in_copies():
+    rng = np.random.default_rng(1)
+    w = rng.uniform(0.5, 1.5, 200)
+    idx = resample_in_order(w, 0.37)
+    assert idx.size == w.size
+    assert np.all(np.diff(idx) >= 0)
+    expected = w.size * w / w.sum()
+    counts = np.bincount(idx, minlength=w.size)
+    assert np.all((counts == np.floor(expected)) | (counts == np.ceil(expected)))
+    # equal weights keep every draw once
+    np.testing.assert_array_equal(resample_in_order(np.ones(50), 0.5), np.arange(50))
+
+
+def test_the_corrected_draws_are_of_the_exact_posterior():
+    """Surrogate N(0, 1), exact N(0.1, 1.05²): weights' cv about 0.12 (above the
+    check's limit, below the correction's); the corrected mean and sd are the exact
+    ones within four Monte Carlo standard errors, the uncorrected mean is not."""
+    rng = np.random.default_rng(2)
+    run = _normal_run(rng)
+    exact = scipy.stats.norm(0.1, 1.05)
+    out = importance_corrected(run, lambda x: (exact.logpdf(x[:, 0]), None), rng, rhat_max=1.01)
+    assert out is not None
+    assert MAX_WEIGHT_CV < out.weight_cv <= MAX_CORRECTED_CV
+    draws = out.run.chains.reshape(-1)
+    # Kish's effective number of the weighted draws
+    n_eff = draws.size / (1.0 + out.weight_cv**2)
+    error = 1.05 / np.sqrt(n_eff)
+    assert abs(draws.mean() - 0.1) < 4.0 * error
+    assert abs(run.chains.mean() - 0.1) > 4.0 * error
+    # the sd of a normal sample's sd is σ/√(2n)
+    assert abs(draws.std() - 1.05) < 4.0 * 1.05 / np.sqrt(2.0 * n_eff)
+    # the log_prob kept is the exact density of the draws kept, and every draw kept
+    # is one of the surrogate's
+    np.testing.assert_allclose(out.run.log_prob, exact.logpdf(out.run.chains[..., 0]))
+    assert np.isin(draws, run.chains.reshape(-1)).all()
+    assert out.run.chains.shape == run.chains.shape
+    assert np.all(out.run.ess < run.ess)
+    assert out.pointwise is None
+
+
+def test_the_pointwise_values_given_follow_the_draws_kept():
+    """A density that gives each row's pointwise values too: the corrected run's are
+    those of the draws it kept, in their place."""
+    rng = np.random.default_rng(5)
+    run = _normal_run(rng, (2, 500))
+    exact = scipy.stats.norm(0.05, 1.0)
+
+    def density(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return exact.logpdf(x[:, 0]), np.column_stack([x[:, 0], 2.0 * x[:, 0]])
+
+    out = importance_corrected(run, density, rng, 1.01)
+    assert out is not None and out.pointwise.shape == (2, 500, 2)
+    np.testing.assert_array_equal(out.pointwise[..., 0], out.run.chains[..., 0])
+    np.testing.assert_array_equal(out.pointwise[..., 1], 2.0 * out.run.chains[..., 0])
+
+
+def test_the_exact_density_is_the_posteriors_from_one_pi(bundled_run):
+    """exact_density gives the posterior's own log density (compiled) and pointwise
+    log-likelihood, a law without a closed form, from one evaluation of Π."""
+    from bayestribo.inference import pipeline
+    from bayestribo.inference.correction import exact_density
+    from bayestribo.inference.start import maximum_a_posteriori
+
+    prepared = pipeline.prepare(bundled_run, seed=1)
+    posterior = pipeline.build_posterior(prepared.data, law="viscous+quadratic")
+    assert not posterior.law.closed_form
+    theta, cov, _ = maximum_a_posteriori(posterior, prepared.decay)
+    rows = np.random.default_rng(6).multivariate_normal(theta, cov, size=12)
+    rows[:, posterior.names.index("c2")] = np.abs(rows[:, posterior.names.index("c2")])
+    rows[0, posterior.names.index("y0")] = np.inf  # outside the support
+    lp, pointwise = exact_density(posterior)(rows)
+    assert lp[0] == -np.inf and np.all(np.isnan(pointwise[0]))
+    np.testing.assert_allclose(lp[1:], posterior(rows[1:]), rtol=1e-10, atol=1e-8)
+    np.testing.assert_allclose(pointwise[1:], posterior.pointwise(rows[1:]), rtol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "exact",
+    [scipy.stats.norm(0.0, 2.0), scipy.stats.norm(1.5, 1.0)],
+    ids=["wider than the surrogate", "shifted far"],
+)
+def test_a_surrogate_that_misses_the_exact_mass_is_not_corrected(exact):
+    """An exact posterior twice as wide (the weights unbounded in the tails: a Pareto
+    k̂ above 1/2) or shifted by 1.5 sd (cv above 1) is left to the exact sampler."""
+    rng = np.random.default_rng(3)
+    run = _normal_run(rng)
+    assert importance_corrected(run, lambda x: (exact.logpdf(x[:, 0]), None), rng, 1.01) is None
+
+
+def test_a_draw_outside_the_exact_support_refuses_the_correction():
+    rng = np.random.default_rng(4)
+    run = _normal_run(rng)
+
+    def exact(x: np.ndarray) -> tuple[np.ndarray, None]:
+        return np.where(x[:, 0] > 3.0, -np.inf, scipy.stats.norm.logpdf(x[:, 0])), None
+
+    assert importance_corrected(run, exact, rng, 1.01) is None
+
+
+def test_a_corrected_check_passes_and_says_so():
+    check = SurrogateCheck(1800, 0.09, 0.1, 2, corrected=True)
+    assert check.passed and check.to_dict()["corrected"] is True
+    assert not SurrogateCheck(128, 0.09, 0.1, 2).passed
