@@ -33,7 +33,7 @@ is itself an integral, its drift taken off as the line between the rests: its no
 the motion is a random walk held at the rests and free between them, larger than the
 rest shows (2.7 times in sd over 3 s of motion), so the Monte Carlo draws the sensor's
 white noise through the integration itself (:func:`accelerometer_draws`,
-:func:`bayestribo.io.acceleration.velocity_noise`) instead of the rest's spectrum
+:func:`bayestribo.signal.velocity_integral.velocity_noise`) instead of the rest's spectrum
 (χ²/n of the increments 3.1 with the spectrum, 0.86 now, on the same test's
 dry-friction record), each variance at least that of the velocity's noise at rest in
 the velocity alone (which holds the integration's residue there, its edges' ringing;
@@ -843,7 +843,7 @@ def accelerometer_draws(
     the decay's samples in units of y' (for :func:`increment_noise`), or None.
 
     The sensor's white noise is put through the integration over the whole record
-    (:func:`bayestribo.io.acceleration.velocity_noise`) and the decay's samples taken
+    (:func:`bayestribo.signal.velocity_integral.velocity_noise`) and the decay's samples taken
     from it. None when the noise model holds no integration
     (:attr:`NoiseModel.integrated_velocity`), or when the decay's samples are not the
     integrated record's (a run cut or resampled after reading).
@@ -876,7 +876,7 @@ def accelerometer_draws(
     unit = sc.length_scale * sc.omega
 
     def draws(count: int, rng: np.random.Generator) -> NDArray:
-        from bayestribo.io.acceleration import velocity_noise
+        from bayestribo.signal.velocity_integral import velocity_noise
 
         return velocity_noise(plan, count, rng)[:, first : first + decay.t.size] / unit
 

@@ -91,7 +91,7 @@ class NoiseModel:
         derived from it), the integration's ``noise`` record
         (:meth:`bayestribo.io.acceleration.Integration.record`): the increments'
         variances then come from the sensor's noise put through the integration
-        (:func:`bayestribo.io.acceleration.velocity_noise`), which the velocity's rest
+        (:func:`bayestribo.signal.velocity_integral.velocity_noise`), which the velocity's rest
         does not show in the motion.
     """
 
