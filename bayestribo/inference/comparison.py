@@ -363,13 +363,29 @@ def compare_prepared(
             "cpu_seconds": used + time.process_time() - cpu,
         }
 
-    def settling(law: str) -> dict[str, Any] | None:
-        # can the law still change the choice? judged at its optimum against the
-        # verdict and the best of the laws sampled so far (module notes, Settling)
+    def at_optimum(law: str) -> dict[str, Any]:
+        # the misfit checks at a law's second-pass optimum, computed once
         at = found[law]
         theta = np.asarray(at.second_optimum[0], dtype=float)
         if law not in misfits:
             misfits[law] = _checks(at.second, theta)
+        return misfits[law]
+
+    def unsampled(law: str, posterior: Posterior, theta: NDArray, checks: dict) -> dict:
+        # the row of a law taken no further than a point of its posterior
+        return {
+            "law": law_of(law).name,
+            "sampled": False,
+            "converged": None,
+            **checks,
+            "map": {n: float(v) for n, v in zip(posterior.names, theta, strict=True)},
+        }
+
+    def settling(law: str) -> dict[str, Any] | None:
+        # can the law still change the choice? judged at its optimum against the
+        # verdict and the best of the laws sampled so far (module notes, Settling)
+        at = found[law]
+        checks = at_optimum(law)
         if not loos:
             return None
         best, differences = loo_standing(loos)
@@ -382,9 +398,9 @@ def compare_prepared(
             verdict_adequate=adequate,
             loses_tie=tie_key(law, rank) > tie_key(verdict, rank),
             small=SMALL_ELPD_DIFFERENCE,
-            adequate=bool(misfits[law]["adequate"]),
+            adequate=bool(checks["adequate"]),
         )
-        if misfits[law]["adequate"] and not settle_adequate and info["as_good"] is not False:
+        if checks["adequate"] and not settle_adequate and info["as_good"] is not False:
             # an adequate law as good as the best may enter the averaged ΔE(A) or be a
             # rival: its draws are needed
             info["settled"] = False
@@ -394,13 +410,9 @@ def compare_prepared(
         at = found[law]
         theta = np.asarray(at.second_optimum[0], dtype=float)
         table[law] = {
-            "law": law_of(law).name,
-            "sampled": False,
-            "converged": None,
+            **unsampled(law, at.second, theta, at_optimum(law)),
             "settled": True,
             "settle": info,
-            **misfits[law],
-            "map": {n: float(v) for n, v in zip(at.second.names, theta, strict=True)},
             **elapsed(law, start, cpu),
         }
         if screens.get(law):
@@ -434,13 +446,9 @@ def compare_prepared(
             # its optimum is the nested law's: not sampled, not compared (module notes)
             theta = at.optimum[0]
             table[law] = {
-                "law": law_of(law).name,
+                **unsampled(law, at.posterior, theta, _checks(at.posterior, theta)),
                 "reduces_to": reduced[0],
                 "terms_at_zero": reduced[1],
-                "sampled": False,
-                "converged": None,
-                **_checks(at.posterior, theta),
-                "map": {n: float(v) for n, v in zip(at.posterior.names, theta, strict=True)},
                 **elapsed(law, start, cpu),
             }
             equivalent[law] = reduced[0]
@@ -511,13 +519,9 @@ def compare_prepared(
         at = found[law]
         theta = np.asarray(at.second_optimum[0], dtype=float)
         table[law] = {
-            "law": law_of(law).name,
-            "sampled": False,
-            "converged": None,
+            **unsampled(law, at.second, theta, at_optimum(law)),
             "screened": True,
             "screen": screens[law],
-            **_checks(at.second, theta),
-            "map": {n: float(v) for n, v in zip(at.second.names, theta, strict=True)},
             "seconds": spent[law][0],
             "cpu_seconds": spent[law][1],
         }
