@@ -8,34 +8,23 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from _comparison_stubs import N, lpd_shifted, stub_fits
 
-from bayestribo.inference import comparison
-from bayestribo.inference.choice import SMALL_ELPD_DIFFERENCE, law_of
+from bayestribo.inference.choice import SMALL_ELPD_DIFFERENCE
 from bayestribo.inference.comparison import compare_prepared
 from bayestribo.inference.screening import (
     SCREEN_FACTOR,
-    LawOptimum,
     optimum_elpd,
     screen,
     turning_point_misfit,
 )
 
-N = 200
-
-
-def _pointwise(shift: float, spread: float = 0.0, seed: int = 0) -> np.ndarray:
-    """Pointwise log-likelihood of N increments whose sum is ``-shift`` below a law
-    at zero, with a pointwise scatter ``spread`` about it."""
-    rng = np.random.default_rng(seed)
-    noise = rng.normal(0.0, spread, N) if spread else np.zeros(N)
-    return -shift / N + noise - noise.mean()
-
 
 def test_a_law_within_the_margin_is_kept_and_one_beyond_it_is_screened_out():
     pointwise = {
-        "best": _pointwise(0.0),
-        "close": _pointwise(3.0 * SMALL_ELPD_DIFFERENCE - 1.0),
-        "far": _pointwise(3.0 * SMALL_ELPD_DIFFERENCE + 3.0),
+        "best": lpd_shifted(0.0),
+        "close": lpd_shifted(3.0 * SMALL_ELPD_DIFFERENCE - 1.0),
+        "far": lpd_shifted(3.0 * SMALL_ELPD_DIFFERENCE + 3.0),
         "broken": np.full(N, np.nan),
     }
     out = screen(pointwise, dict.fromkeys(pointwise, 2))
@@ -49,61 +38,21 @@ def test_a_law_within_the_margin_is_kept_and_one_beyond_it_is_screened_out():
 def test_the_margin_grows_with_the_sd_of_the_difference_and_counts_parameters():
     # a difference of 30 with pointwise scatter: its dse is about sqrt(N) * 0.5 = 7,
     # so the limit 3 * 2 * dse = 42 keeps it
-    pointwise = {"a": _pointwise(0.0), "b": _pointwise(30.0, spread=0.5, seed=1)}
+    pointwise = {"a": lpd_shifted(0.0), "b": lpd_shifted(30.0, spread=0.5, seed=1)}
     out = screen(pointwise, {"a": 2, "b": 2})
     assert out["b"]["dse"] == pytest.approx(np.sqrt(N) * np.std(pointwise["b"]), rel=1e-12)
     assert not out["b"]["screened"] and out["b"]["limit"] > 30.0
     # one parameter costs one unit of elpd: equal fits, the simpler is best
-    same = {"simple": _pointwise(0.0), "rich": _pointwise(0.0)}
+    same = {"simple": lpd_shifted(0.0), "rich": lpd_shifted(0.0)}
     ranked = screen(same, {"simple": 1, "rich": 4})
     assert ranked["rich"]["best"] == "simple" and ranked["rich"]["elpd_diff"] == 3.0
     assert optimum_elpd(np.zeros(3), 2) == -2.0
 
 
-class _Posterior:
-    def __init__(self, names):
-        self.names = list(names)
-
-
-def _stub_fits(monkeypatch, shifts: dict[str, float]) -> list[str]:
-    """Stub the optimiser, the sampler and the checks of compare_prepared: each law's
-    pointwise log-likelihood is ``-shift`` in all; returns the laws sampled."""
-    import arviz as az
-
-    sampled: list[str] = []
-
-    def optimise(law, prepared, model, discrepancy, optima, start=None):
-        post = _Posterior(law_of(law).parameter_names)
-        theta = np.zeros(len(post.names))
-        opt = (theta, np.eye(len(theta)), None)
-        return LawOptimum(law, post, opt, post, opt, _pointwise(shifts[law], 0.01, 2))
-
-    def fit_law(law, prepared, settings, rng, posterior, optimum):
-        sampled.append(law)
-        d = len(posterior.names)
-        chains = rng.normal(size=(2, 40, d))
-        lpd = _pointwise(shifts[law], 0.01, 2) + 0.001 * rng.normal(size=(2, 40, N))
-        run = SimpleNamespace(chains=chains, log_prob=np.zeros((2, 40)), converged=True, reasons=[])
-        fit = SimpleNamespace(run=run, posterior=posterior, theta_map=np.zeros(d))
-        idata = az.from_dict(
-            posterior={n: chains[..., i] for i, n in enumerate(posterior.names)},
-            log_likelihood={"pi": lpd},
-        )
-        return fit, az.loo(idata, pointwise=True)
-
-    monkeypatch.setattr(comparison, "_optimise", optimise)
-    monkeypatch.setattr(comparison, "_fit_law", fit_law)
-    monkeypatch.setattr(comparison, "reduction", lambda *args: None)
-    monkeypatch.setattr(comparison, "pareto_k_max", lambda loo: 0.1)
-    monkeypatch.setattr(comparison, "_checks", lambda posterior, theta: {"adequate": True})
-    monkeypatch.setattr(comparison, "turning_point_screen", lambda prepared, laws: {})
-    return sampled
-
-
 @pytest.mark.filterwarnings("ignore")
 def test_only_the_laws_that_can_still_win_are_sampled(monkeypatch):
     shifts = {"viscous": 5000.0, "coulomb": 2.0, "viscous+coulomb": 0.0, "quadratic": 900.0}
-    sampled = _stub_fits(monkeypatch, shifts)
+    sampled = stub_fits(monkeypatch, shifts)
     lines: list[str] = []
     prepared = SimpleNamespace(name="stub")
     c, runs = compare_prepared(prepared, list(shifts), seed=1, rivals=False, progress=lines.append)
@@ -126,7 +75,7 @@ def test_only_the_laws_that_can_still_win_are_sampled(monkeypatch):
 @pytest.mark.filterwarnings("ignore")
 def test_one_law_left_after_screening_is_the_verdict(monkeypatch):
     shifts = {"viscous": 5000.0, "viscous+coulomb": 0.0}
-    sampled = _stub_fits(monkeypatch, shifts)
+    sampled = stub_fits(monkeypatch, shifts)
     c, _ = compare_prepared(SimpleNamespace(name="stub"), list(shifts), seed=1, rivals=False)
     assert sampled == ["viscous+coulomb"] and c.verdict == "viscous+coulomb"
     assert c.table["viscous+coulomb"]["elpd_diff"] == 0.0

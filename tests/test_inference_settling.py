@@ -8,29 +8,21 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from _comparison_stubs import N, lpd_shifted, stub_fits
 
 from bayestribo.inference import comparison
-from bayestribo.inference.choice import SMALL_ELPD_DIFFERENCE, law_of
+from bayestribo.inference.choice import SMALL_ELPD_DIFFERENCE
 from bayestribo.inference.comparison import compare_prepared
 from bayestribo.inference.records import LawComparison
-from bayestribo.inference.screening import LawOptimum
 from bayestribo.inference.settling import FACTOR, settle
 
-N = 200
 REACH = SMALL_ELPD_DIFFERENCE
-
-
-def _pointwise(shift: float, spread: float = 0.0, seed: int = 0) -> np.ndarray:
-    """N increments' log-likelihood summing to ``-shift``, scattered by ``spread``."""
-    rng = np.random.default_rng(seed)
-    noise = rng.normal(0.0, spread, N) if spread else np.zeros(N)
-    return -shift / N + noise - noise.mean()
 
 
 def _settle(shift: float, *, verdict_shift: float = 0.0, **kw) -> dict:
     kw = {"verdict_adequate": False, "loses_tie": True, "small": REACH, **kw}
     return settle(
-        (_pointwise(shift), 2), (_pointwise(verdict_shift), 2), (_pointwise(0.0), 2), **kw
+        (lpd_shifted(shift), 2), (lpd_shifted(verdict_shift), 2), (lpd_shifted(0.0), 2), **kw
     )
 
 
@@ -65,55 +57,6 @@ def test_a_law_that_could_be_chosen_is_sampled():
     assert _settle(REACH * 2, loses_tie=False)["settled"]
 
 
-class _Posterior:
-    def __init__(self, names):
-        self.names = list(names)
-
-
-def _stub_fits(
-    monkeypatch, shifts: dict[str, float], adequate: set[str], spread: dict | None = None
-) -> list[str]:
-    """Stub the optimiser, sampler and checks: each law's pointwise log-likelihood sums
-    to ``-shift`` at its optimum and in its draws, scattered by ``spread`` (0.01 by
-    default); adequate laws are ``adequate``."""
-    import arviz as az
-
-    sampled: list[str] = []
-    spread = spread or {}
-
-    def optimise(law, prepared, model, discrepancy, optima, start=None):
-        post = _Posterior(law_of(law).parameter_names)
-        post.law = law
-        theta = np.zeros(len(post.names))
-        opt = (theta, np.eye(len(theta)), None)
-        pointwise = _pointwise(shifts[law], spread.get(law, 0.01), 2)
-        return LawOptimum(law, post, opt, post, opt, pointwise)
-
-    def fit_law(law, prepared, settings, rng, posterior, optimum):
-        sampled.append(law)
-        d = len(posterior.names)
-        chains = rng.normal(size=(2, 40, d))
-        lpd = _pointwise(shifts[law], spread.get(law, 0.01), 2)
-        lpd = lpd + 0.001 * rng.normal(size=(2, 40, N))
-        run = SimpleNamespace(chains=chains, log_prob=np.zeros((2, 40)), converged=True, reasons=[])
-        fit = SimpleNamespace(run=run, posterior=posterior, theta_map=np.zeros(d))
-        idata = az.from_dict(
-            posterior={n: chains[..., i] for i, n in enumerate(posterior.names)},
-            log_likelihood={"pi": lpd},
-        )
-        return fit, az.loo(idata, pointwise=True)
-
-    monkeypatch.setattr(comparison, "_optimise", optimise)
-    monkeypatch.setattr(comparison, "_fit_law", fit_law)
-    monkeypatch.setattr(comparison, "reduction", lambda *args: None)
-    monkeypatch.setattr(comparison, "pareto_k_max", lambda loo: 0.1)
-    monkeypatch.setattr(
-        comparison, "_checks", lambda posterior, theta: {"adequate": posterior.law in adequate}
-    )
-    monkeypatch.setattr(comparison, "turning_point_screen", lambda prepared, laws: {})
-    return sampled
-
-
 def _compare(shifts, adequate=(), screening=True, lines=None):
     return compare_prepared(
         SimpleNamespace(name="stub"),
@@ -130,7 +73,7 @@ def test_misfitting_laws_that_cannot_change_the_choice_are_settled(monkeypatch):
     # none adequate: viscous (simplest) is the verdict; coulomb and viscous+coulomb
     # cannot change that, one as good and one behind
     shifts = {"viscous": 0.0, "coulomb": 1.0, "viscous+coulomb": 9.0}
-    sampled = _stub_fits(monkeypatch, shifts, adequate=set())
+    sampled = stub_fits(monkeypatch, shifts, adequate=set())
     lines: list[str] = []
     c, runs = _compare(shifts, lines=lines)
     assert sampled == ["viscous"] == list(runs)
@@ -156,7 +99,7 @@ def test_misfitting_laws_that_cannot_change_the_choice_are_settled(monkeypatch):
 def test_an_adequate_law_or_one_ahead_of_the_verdict_is_sampled(monkeypatch):
     # coulomb holds (it may be the verdict); viscous+coulomb is ahead of viscous by far
     shifts = {"viscous": 8.0, "coulomb": 9.0, "viscous+coulomb": 0.0}
-    sampled = _stub_fits(monkeypatch, shifts, adequate={"coulomb"})
+    sampled = stub_fits(monkeypatch, shifts, adequate={"coulomb"})
     c, _ = _compare(shifts)
     assert sampled == list(shifts) and c.settled == []
     assert c.verdict == "viscous+coulomb"
@@ -169,7 +112,7 @@ def test_a_settled_law_is_sampled_when_a_later_law_moves_the_verdict(monkeypatch
     # leaves viscous behind, and quadratic, still as good and simpler, could now be the
     # verdict: it is sampled after all
     shifts = {"viscous": 10.0, "quadratic": 10.5, "viscous+coulomb": 0.0}
-    sampled = _stub_fits(monkeypatch, shifts, adequate=set(), spread={"quadratic": 0.5})
+    sampled = stub_fits(monkeypatch, shifts, adequate=set(), spread={"quadratic": 0.5})
     lines: list[str] = []
     c, _ = _compare(shifts, lines=lines)
     assert sampled == ["viscous", "viscous+coulomb", "quadratic"]
@@ -193,7 +136,7 @@ def test_an_adequate_law_is_settled_only_where_it_cannot_be_chosen():
 @pytest.mark.filterwarnings("ignore")
 def test_adequate_laws_are_settled_in_the_rivals_comparison_alone(monkeypatch):
     shifts = {"viscous+coulomb": 0.0, "coulomb+power": 1.0}
-    sampled = _stub_fits(monkeypatch, shifts, adequate=set(shifts))
+    sampled = stub_fits(monkeypatch, shifts, adequate=set(shifts))
     c, _ = _compare(shifts)
     assert sampled == list(shifts) and c.settled == []
     sampled.clear()
@@ -207,7 +150,7 @@ def test_adequate_laws_are_settled_in_the_rivals_comparison_alone(monkeypatch):
 @pytest.mark.filterwarnings("ignore")
 def test_the_rivals_comparison_has_its_progress_line(monkeypatch):
     shifts = {"viscous+coulomb": 0.0, "coulomb+hysteretic": 0.5}
-    _stub_fits(monkeypatch, shifts, adequate=set(shifts))
+    stub_fits(monkeypatch, shifts, adequate=set(shifts))
     asked: list[list[str]] = []
 
     def rivals(prepared, laws, *args, **kwargs):
@@ -247,7 +190,7 @@ def test_an_adequate_law_clearly_behind_is_settled_and_still_counts_as_holding(m
     # coulomb holds but is far behind the misfitting viscous: its draws would serve
     # nothing, and it still keeps the law-free fit away (no stub answers for "free")
     shifts = {"viscous": 0.0, "coulomb": 9.0}
-    sampled = _stub_fits(monkeypatch, shifts, adequate={"coulomb"})
+    sampled = stub_fits(monkeypatch, shifts, adequate={"coulomb"})
     c, _ = compare_prepared(SimpleNamespace(name="stub"), list(shifts), seed=1, law_free=True)
     assert sampled == ["viscous"] and c.settled == ["coulomb"]
     assert c.table["coulomb"]["settle"]["as_good"] is False
@@ -258,7 +201,7 @@ def test_an_adequate_law_clearly_behind_is_settled_and_still_counts_as_holding(m
 def test_rivals_judged_at_their_optima_on_the_finer_grid_are_not_sampled(monkeypatch):
     shifts = {"viscous": 0.0, "power": 1.0, "coulomb": 30.0}
     adequate = set(shifts)
-    sampled = _stub_fits(monkeypatch, shifts, adequate=adequate)
+    sampled = stub_fits(monkeypatch, shifts, adequate=adequate)
     monkeypatch.setattr(comparison, "regrid", lambda prepared, n: prepared)
     fine = SimpleNamespace(name="stub", data=SimpleNamespace(increments=np.zeros(N)))
 
