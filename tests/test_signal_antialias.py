@@ -3,19 +3,16 @@ and its smoothing of the friction's kinks), not only its gain divided out."""
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 import scipy.signal
+from test_signal_integration import F_HZ, OMEGA, X0, _motion
 
 from bayestribo.inference.preparation import prepare
 from bayestribo.io.run import Run
 from bayestribo.signal.sensor import sensor_calibration, undo_first_order
 
-F_HZ, ZETA, XC, X0, FS = 32.6, 0.0236, 6.2e-6, 2e-3, 10_000.0
-OMEGA = 2 * math.pi * F_HZ
-WD = OMEGA * math.sqrt(1 - ZETA**2)
+FS = 10_000.0
 ONE_POLE = {"kind": "butterworth", "order": 1, "cutoff_Hz": 5 * F_HZ}
 
 
@@ -24,19 +21,7 @@ def _record() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarra
     half cycle, and both channels through the bilinear one-pole at 5 f (at rest at the
     start)."""
     t = np.arange(0, 0.8, 1 / FS)
-    x, v = np.full(t.size, X0), np.zeros(t.size)
-    t0, amp, direction = 0.1, X0, -1.0
-    while abs(amp) > 2 * XC:
-        centre = -direction * XC
-        m = (t >= t0) & (t < t0 + math.pi / WD)
-        s = t[m] - t0
-        env = (amp - centre) * np.exp(-ZETA * OMEGA * s)
-        x[m] = centre + env * (np.cos(WD * s) + ZETA * OMEGA / WD * np.sin(WD * s))
-        v[m] = -env * OMEGA**2 / WD * np.sin(WD * s)
-        amp = centre + (amp - centre) * -math.exp(-ZETA * OMEGA * math.pi / WD)
-        t0 += math.pi / WD
-        direction = -direction
-    x[t >= t0] = amp
+    x, v = _motion(t, release=0.1)
     b, a = scipy.signal.butter(1, ONE_POLE["cutoff_Hz"], fs=FS)
     zi = scipy.signal.lfilter_zi(b, a)
     xf = scipy.signal.lfilter(b, a, x, zi=zi * x[0])[0]
