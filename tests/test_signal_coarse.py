@@ -5,6 +5,7 @@ half a step."""
 from __future__ import annotations
 
 import math
+import re
 import warnings
 
 import numpy as np
@@ -286,3 +287,17 @@ def test_three_steps_across_the_swing_are_said_to_be_too_few(placement):
             return
     said = [w for w in caught if issubclass(w.category, CoarseSignalWarning)]
     assert said and "3 steps" in str(said[0].message)
+
+
+@pytest.mark.parametrize("placement", [0.25, 0.35])
+def test_a_record_too_short_for_the_skipped_oscillation_is_told_to_keep_it(placement):
+    """Three steps across the swing, six turning points: one oscillation skipped (the
+    default) leaves too few, and the refusal's advice, followed, gives the analysis."""
+    t, x, v, _, _ = _coarse_record(steps=3.0, placement=placement)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(RecordingError, match=r"skip_oscillations=0 \(--skip 0\)") as told:
+            energy_decay(t, x, v)
+        left = int(re.search(r"which leaves (\d+) turning points", str(told.value)).group(1))
+        decay = energy_decay(t, x, v, skip_oscillations=0)
+    assert len(decay.peaks) == left

@@ -1512,6 +1512,7 @@ def _analyse(
         skip = max(2 * int(skip_oscillations) - 1, 0)
     if skip_turning_points is None:
         skipped = f"{skip_oscillations} oscillations"
+    base_skip = skip
     irregular = 0
     if spacing.start > skip:
         irregular = _irregular_start(spacing, peaks, skipped, int(min_turning_points))
@@ -1597,6 +1598,17 @@ def _analyse(
                 f"; the displacement is quantised in steps of {coarse[0]:.3g} that its "
                 f"noise does not dither ({float(np.ptp(x[lo:hi])) / coarse[0]:.0f} steps "
                 "across its swing), and a swing of less than two steps is no turning point"
+            )
+        if (
+            skip_turning_points is None
+            and skip == base_skip > 0
+            and len(peaks) >= int(min_turning_points)
+        ):
+            # the first oscillation, skipped by default (the release's transient), is
+            # what a short record needs: say so, as an option that can be followed
+            why += (
+                f"; skip_oscillations=0 (--skip 0) analyses the first oscillation too, "
+                f"which leaves {len(peaks)} turning points"
             )
         raise RecordingError(
             f"turning points: the recording holds {len(peaks)} turning points after the "
