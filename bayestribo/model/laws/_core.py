@@ -2,11 +2,14 @@
 
 The algorithm is described in :mod:`bayestribo.model.laws.integrator`. This module is
 never compiled as it is: its functions call ``drag``, ``friction`` and read
-``HAS_FRICTION``, which it does not define. :func:`bayestribo.model.laws.integrator.
-make_integrator` writes its text followed by those definitions for one law (imports of
-the terms' compiled forces and their sum) to a file of the law cache, and imports that
-file: every function is then compiled with ``cache=True`` and loaded from numba's cache
-by later processes.
+``HAS_FRICTION``, which it does not define, and the functions it shares with the
+template of the laws on a nonlinear restoring force (``outside_domain``,
+``geometric_rest``, ``finish``, ``swing_ends``), which
+:mod:`bayestribo.model.laws._core_shared` holds. :func:`bayestribo.model.laws.integrator.
+make_integrator` writes its text, then the shared text, then those definitions for one
+law (imports of the terms' compiled forces and their sum) to a file of the law cache,
+and imports that file: every function is then compiled with ``cache=True`` and loaded
+from numba's cache by later processes.
 """
 
 from __future__ import annotations
@@ -18,7 +21,20 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from bayestribo.model.laws._core_shared import (
+    _FAST,
+    _MAX_HALF_CYCLES,
+    _MAX_PAST_HALF_CYCLES,
+    _TAIL_TOLERANCE,
+)
+
 if TYPE_CHECKING:  # defined for each law after this text (see the module notes)
+    from bayestribo.model.laws._core_shared import (
+        finish,
+        geometric_rest,
+        outside_domain,
+        swing_ends,
+    )
 
     def drag(w: float, c: NDArray) -> float: ...
 
@@ -46,23 +62,11 @@ _STEP_SCALE = 440.0
 # The fewest steps of a half cycle inside the record: with little damping the motion
 # lasts many half cycles, each one's error in r carried into the next ones.
 _MIN_STEPS = 32
-# A run of half cycles past the record whose energy falls below this fraction of the
-# total ends the sum (the rest is extrapolated geometrically).
-_TAIL_TOLERANCE = 1e-12
 # Past the record (a law without friction, summed to the end of motion) the half cycles
 # that halve the energy may together be off by this fraction of the scheme's error
 # inside the record (each by (1 - ρ) of it, ρ the ratio of successive half cycles' Π):
 # a half cycle's steps follow from the error ∝ h⁴ relative to its own share of Π(0).
 _TAIL_SHARE = 1e-2
-# At most this many half cycles are integrated for one parameter set.
-_MAX_HALF_CYCLES = 200_000
-# At most this many past the record, summing to the end of motion of a record whose
-# motion ended: a law whose motion would go on for longer (a friction far too small
-# to stop it soon) is far from such a record whatever its tail (the Π it gives at the
-# record's end is already the energy of thousands of half cycles, where the record's
-# is zero), so its sum stops there instead of at the end of its motion; the optimiser
-# and the sampler leave it as they would with its whole tail.
-_MAX_PAST_HALF_CYCLES = 20_000
 # The averaged tail (see :func:`averaged_tail`): tried once the half cycles past the
 # record lose less than this fraction of their amplitude each and more than
 # _AVERAGED_MIN_HALF_CYCLES of them remain; its nodes, and the tolerance on the
@@ -76,9 +80,6 @@ _AVERAGED_TOLERANCE = 1e-8
 # within a factor 2, is at most this fraction of Π(0): the integrator's accuracy against
 # the closed form (1e-8 of Π(0)); a larger creep leaves the row NaN.
 _CREEP_SHARE = 1e-8
-# Floating-point contraction (fused multiply-add) and reciprocals only: no assumption
-# of finite values, which the overdamped-arc and end-of-record checks rely on.
-_FAST = {"contract", "arcp"}
 # Fixed-point iterations for the friction of a start inside a half cycle.
 _START_ITERATIONS = 6
 
@@ -682,9 +683,7 @@ def one(
     while not stopped:
         if mu < 0.0:
             # a friction that falls with amplitude below zero: outside the law's domain
-            for i in range(n_t):
-                out[i] = math.nan
-            return 1
+            return outside_domain(out)
         exact = not HAS_DRAG and fixed_steps <= 0
         if exact:
             # no drag: an arc of the undamped motion about the centre, in closed form
@@ -720,9 +719,7 @@ def one(
                     if math.isfinite(creep) and creep <= _CREEP_SHARE * c_start:
                         c_start += creep
                         break
-                for i in range(n_t):
-                    out[i] = math.nan
-                return 1
+                return outside_domain(out)
             t_half = tau_at[steps]
             c_half = c_at[steps]
         t_next = t_start + t_half
@@ -769,9 +766,7 @@ def one(
             # endless motion (no friction, or one that vanishes with the amplitude): sum
             # until the half cycles hold nothing, then a tail
             if last < _TAIL_TOLERANCE * c_start:
-                rho = last / before if before > 0.0 else 0.0
-                if rho < 1.0:
-                    c_start += last * rho / (1.0 - rho)
+                c_start += geometric_rest(last, before)
                 break
         if n_half >= _MAX_HALF_CYCLES:
             break
@@ -807,14 +802,7 @@ def one(
                 if math.isfinite(rest):
                     c_start += rest
                     break
-    if math.isnan(c_end):
-        c_end = c_start
-    for i in range(n_t):
-        if i < j:
-            out[i] = max(c_end - out[i], 0.0) if tau[i] < tau_end else 0.0
-        else:
-            out[i] = 0.0  # at or after the end of motion
-    return 0
+    return finish(out, tau, j, c_end, c_start, tau_end)
 
 
 @numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
@@ -909,10 +897,12 @@ def turns(
 
 
 @numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
-def half_cycle_end(a: float, c: NDArray, tables: NDArray, offsets: NDArray, work: NDArray) -> float:
+def half_cycle_end(a: float, c: NDArray, aux: tuple[NDArray, NDArray, NDArray]) -> float:
     """|Y| at the end of the half cycle that starts at rest at the turning point
     ``a`` > 0, ignoring static friction (NaN when the motion cannot leave ``a`` or
-    the drag stops it before it turns)."""
+    the drag stops it before it turns); ``aux`` the ladder's tables, their offsets
+    and a work array (4, LADDER[-1] + 1)."""
+    tables, offsets, work = aux
     mu = friction(a, c) if HAS_FRICTION else 0.0
     r = a - mu
     if not (r > 0.0) or mu < 0.0:
@@ -933,39 +923,14 @@ def swing_drops(coef: NDArray, swing: NDArray) -> NDArray:
     """The drop a_s - a_e of the half cycle whose swing ½(a_s + a_e) is each of
     ``swing`` (S,), for each coefficient row of ``coef`` (P, K): shape (P, S).
 
-    a_s is found by the secant method on ½(a_s + a_e(a_s)) = A from the fixed point
-    a_s = A + ½ drop(A); NaN where no such half cycle exists."""
-    tables, offsets = _TABLES, _OFFSETS
+    a_s is found by the secant method on ½(a_s + a_e(a_s)) = A
+    (:func:`~bayestribo.model.laws._core_shared.swing_ends`); NaN where no such half
+    cycle exists."""
     size = LADDER[-1] + 1
-    work = np.empty((4, size))
+    aux = (_TABLES, _OFFSETS, np.empty((4, size)))
     out = np.empty((coef.shape[0], swing.size))
     for p in range(coef.shape[0]):
-        c = coef[p]
         for j in range(swing.size):
-            target = swing[j]
-            e0 = half_cycle_end(target, c, tables, offsets, work)
-            if not math.isfinite(e0):
-                # the swing's own start does not move: start above it
-                x0 = 2.0 * target
-            else:
-                x0 = target + 0.5 * (target - e0)
-            f0 = 0.5 * (x0 + half_cycle_end(x0, c, tables, offsets, work)) - target
-            x1 = x0 - f0
-            value = math.nan
-            for _ in range(40):
-                end = half_cycle_end(x1, c, tables, offsets, work)
-                if not math.isfinite(end):
-                    break
-                f1 = 0.5 * (x1 + end) - target
-                if abs(f1) <= 1e-14 * target:
-                    value = x1 - end
-                    break
-                if f1 == f0 or not math.isfinite(f0):
-                    x0, f0 = x1, f1
-                    x1 = x1 - f1
-                    continue
-                x2 = x1 - f1 * (x1 - x0) / (f1 - f0)
-                x0, f0 = x1, f1
-                x1 = x2
-            out[p, j] = value
+            a_s, a_e = swing_ends(swing[j], coef[p], aux)
+            out[p, j] = a_s - a_e
     return out

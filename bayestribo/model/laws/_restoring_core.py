@@ -5,7 +5,20 @@ The algorithm is described in :mod:`bayestribo.model.laws.nonlinear`. Like
 functions call ``drag``, ``friction`` (the law's terms), ``spring`` and ``potential``
 (the restoring force's compiled ``V'(y)`` and ``V(y)``), which
 :func:`bayestribo.model.laws.nonlinear.make_nonlinear_integrator` defines after its text
-for one law and one restoring force.
+for one law and one restoring force, and the functions it shares with ``_core``
+(``outside_domain``, ``geometric_rest``, ``finish``, ``swing_ends``), whose text
+:mod:`bayestribo.model.laws._core_shared` holds and the generator writes after this
+module's.
+
+What stays apart from ``_core`` is the motion itself: a half cycle here is integrated
+in τ (the linear spring's polar coordinates do not hold), ends at a root of y' rather
+than at θ = π, starts from the swing of the undamped motion through the initial state
+(Newton on V(a) = E rather than the linear spring's fixed point), sticks where
+|V'(Y)| <= ρμ rather than |Y| <= ρμ, and takes a fixed step; ``_core``'s step ladder,
+averaged tail and creep to rest are built on the linear spring (its polar arcs, its
+averaged motion, its force y) and have no counterpart here. ``grid``, ``one``,
+``turns`` and ``half_cycle_end`` take the restoring force's coefficients ``k`` and the
+step ``h``, which ``_core``'s do not, so they keep their own text.
 """
 
 from __future__ import annotations
@@ -17,7 +30,20 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from bayestribo.model.laws._core_shared import (
+    _FAST,
+    _MAX_HALF_CYCLES,
+    _MAX_PAST_HALF_CYCLES,
+    _TAIL_TOLERANCE,
+)
+
 if TYPE_CHECKING:  # defined for each law and restoring force after this text
+    from bayestribo.model.laws._core_shared import (
+        finish,
+        geometric_rest,
+        outside_domain,
+        swing_ends,
+    )
 
     def drag(w: float, c: NDArray) -> float: ...
 
@@ -35,17 +61,8 @@ DEFAULT_STEPS = 40
 # A half cycle still moving after this long (τ) is an overdamped arc: outside the law's
 # domain (its row of Π is NaN).
 _MAX_HALF_SPAN = 40.0 * math.pi
-# At most this many half cycles for one parameter set, and this many past the record
-# when Π runs to the end of motion.
-_MAX_HALF_CYCLES = 200_000
-_MAX_PAST_HALF_CYCLES = 20_000
-# Past the record (a law without friction, summed to the end of motion), the sum ends
-# once a half cycle holds less than this fraction of it; the rest is extrapolated as a
-# geometric series.
-_TAIL_TOLERANCE = 1e-12
 # Newton iterations for the turning point of the undamped motion at a given energy.
 _TURN_ITERATIONS = 40
-_FAST = {"contract", "arcp"}
 
 
 @numba.njit(cache=True, inline="always", error_model="numpy", fastmath=_FAST)
@@ -244,17 +261,13 @@ def one(
     n_past = 0
     while not stopped:
         if mu < 0.0 or not math.isfinite(mu):
-            for i in range(n_t):
-                out[i] = math.nan
-            return 1
+            return outside_domain(out)
         c_start = cum
         y, t, cum, j, c_end, status = half_cycle(
             y, v, t, cum, sgn, mu, c, k, h, tau, j, tau_end, out, c_end
         )
         if status == 1:
-            for i in range(n_t):
-                out[i] = math.nan
-            return 1
+            return outside_domain(out)
         if status == 2:
             break
         v = 0.0
@@ -273,22 +286,13 @@ def one(
         if math.isinf(tau_end) and j >= n_t:
             n_past += 1
             if last < _TAIL_TOLERANCE * cum:
-                rho = last / before if before > 0.0 else 0.0
-                if rho < 1.0:
-                    cum += last * rho / (1.0 - rho)
+                cum += geometric_rest(last, before)
                 break
             if n_past >= _MAX_PAST_HALF_CYCLES:
                 break
         if n_half >= _MAX_HALF_CYCLES:
             break
-    if math.isnan(c_end):
-        c_end = cum
-    for i in range(n_t):
-        if i < j:
-            out[i] = max(c_end - out[i], 0.0) if tau[i] < tau_end else 0.0
-        else:
-            out[i] = 0.0  # at or after the end of motion
-    return 0
+    return finish(out, tau, j, c_end, cum, tau_end)
 
 
 @numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
@@ -390,10 +394,12 @@ def dissipation(coef: NDArray, k: NDArray, amplitudes: NDArray) -> NDArray:
 
 
 @numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
-def half_cycle_end(a: float, c: NDArray, k: NDArray, h: float) -> float:
+def half_cycle_end(a: float, c: NDArray, aux: tuple[NDArray, float]) -> float:
     """|Y| at the end of the half cycle from rest at the turning point ``a`` > 0,
     static friction ignored (NaN when the motion cannot leave ``a``, the drag stops it
-    before it turns, or it ends on the side it started)."""
+    before it turns, or it ends on the side it started); ``aux`` the restoring force's
+    coefficients ``k`` and the step ``h``."""
+    k, h = aux
     mu = friction(a, c) if HAS_FRICTION else 0.0
     if not (spring(a, k) > mu) or mu < 0.0:
         return math.nan
@@ -410,33 +416,13 @@ def half_cycle_end(a: float, c: NDArray, k: NDArray, h: float) -> float:
 def swing_drops(coef: NDArray, k: NDArray, swing: NDArray, steps: int) -> NDArray:
     """The energy V(a_s) - V(a_e) lost over the half cycle whose swing ½(a_s + a_e) is
     each of ``swing`` (S,), for each row of ``coef`` (P, K): shape (P, S). a_s by the
-    secant method on ½(a_s + a_e(a_s)) = A from a_s = A + ½ drop(A); NaN where no such
-    half cycle exists."""
-    h = math.pi / steps
+    secant method on ½(a_s + a_e(a_s)) = A
+    (:func:`~bayestribo.model.laws._core_shared.swing_ends`); NaN where no such half
+    cycle exists."""
+    aux = (k, math.pi / steps)
     out = np.empty((coef.shape[0], swing.size))
     for p in range(coef.shape[0]):
-        c = coef[p]
         for j in range(swing.size):
-            target = swing[j]
-            e0 = half_cycle_end(target, c, k, h)
-            x0 = 2.0 * target if not math.isfinite(e0) else target + 0.5 * (target - e0)
-            f0 = 0.5 * (x0 + half_cycle_end(x0, c, k, h)) - target
-            x1 = x0 - f0
-            value = math.nan
-            for _ in range(40):
-                end = half_cycle_end(x1, c, k, h)
-                if not math.isfinite(end):
-                    break
-                f1 = 0.5 * (x1 + end) - target
-                if abs(f1) <= 1e-14 * target:
-                    value = potential(x1, k) - potential(end, k)
-                    break
-                if f1 == f0 or not math.isfinite(f0):
-                    x0, f0 = x1, f1
-                    x1 = x1 - f1
-                    continue
-                x2 = x1 - f1 * (x1 - x0) / (f1 - f0)
-                x0, f0 = x1, f1
-                x1 = x2
-            out[p, j] = value
+            a_s, a_e = swing_ends(swing[j], coef[p], aux)
+            out[p, j] = math.nan if math.isnan(a_s) else potential(a_s, k) - potential(a_e, k)
     return out

@@ -57,11 +57,11 @@ from __future__ import annotations
 import hashlib
 import inspect
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from functools import cache
 from types import ModuleType
 
-from bayestribo.model.laws import _core
+from bayestribo.model.laws import _core, _core_shared
 from bayestribo.model.laws.cache import CACHE_ENV, law_cache_dir, load_module
 
 __all__ = [
@@ -116,39 +116,53 @@ def _importable(force: object) -> tuple[str, str] | None:
     return module, name
 
 
-def _law_source(layout: tuple) -> tuple[str, list, bool]:
-    """The template's text followed by one law's forces; the forces to inject when
-    they cannot be imported (no cache then)."""
+def _law_source(
+    template: ModuleType, layout: tuple, kernels: Mapping[str, object] | None = None
+) -> tuple[str, dict[str, object], bool]:
+    """The text of one law's module: the template's (:mod:`._core` or
+    :mod:`._restoring_core`), the text the templates share (:mod:`._core_shared`),
+    then the law's forces, and a restoring force's compiled ``kernels`` by the names the
+    template calls them. Also the functions to set in the module when one of them cannot
+    be imported (no cache then), and whether the module may be cached."""
     drags, d_off, d_size, frictions, f_off, f_size = layout
-    forces = [*drags, *frictions]
-    where = [_importable(f) for f in forces]
-    cacheable = all(w is not None for w in where)
+    named: dict[str, object] = {f"_f{i}": f for i, f in enumerate((*drags, *frictions))}
+    named.update(kernels or {})
+    where = {name: _importable(f) for name, f in named.items()}
+    cacheable = all(w is not None for w in where.values())
     lines = ["", "", "# -- the law " + "-" * 68]
     if cacheable:
-        for i, (module, name) in enumerate(where):  # type: ignore[misc]
-            lines.append(f"from {module} import {name} as _f{i}  # noqa: E402")
+        for name, (module, attr) in where.items():  # type: ignore[misc]
+            lines.append(f"from {module} import {attr} as {name}  # noqa: E402")
     lines.append("")
     lines.append(_sum_source("drag", drags, d_off, d_size, 0))
     lines.append(_sum_source("friction", frictions, f_off, f_size, len(drags)))
     lines.append(_off_source(f_off, f_size))
     lines.append(f"HAS_FRICTION = {bool(frictions)}")
     lines.append(f"HAS_DRAG = {bool(drags)}")
-    text = inspect.getsource(_core) + "\n".join(lines) + "\n"
-    if cacheable:
-        # a change of a term's force (its source) is a new file, never a stale cache
-        text += "".join(
-            f"# force {i}: {hashlib.sha1(inspect.getsource(f.py_func).encode()).hexdigest()}\n"
-            for i, f in enumerate(forces)
-        )
-    else:
-        text = text.replace("cache=True", "cache=False")
-    return text, forces, cacheable
+    text = (
+        inspect.getsource(template)
+        + "\n\n# -- shared by the templates "
+        + "-" * 52
+        + "\n"
+        + inspect.getsource(_core_shared)
+        + "\n".join(lines)
+        + "\n"
+    )
+    if not cacheable:
+        return text.replace("cache=True", "cache=False"), named, False
+    # a change of a force's or kernel's source is a new file, never a stale cache
+    text += "".join(
+        f"# {name}: {hashlib.sha1(inspect.getsource(f.py_func).encode()).hexdigest()}\n"  # type: ignore[attr-defined]
+        for name, f in named.items()
+    )
+    return text, {}, True
 
 
-def _load(text: str, forces: list, cacheable: bool) -> ModuleType:
+def _load(text: str, namespace: Mapping[str, object], cacheable: bool) -> ModuleType:
+    """Execute one law's module text (:func:`_law_source`) in the law cache, or, when it
+    may not be cached, in a temporary folder with ``namespace`` set first."""
     digest = hashlib.sha1(text.encode()).hexdigest()[:20]
     folder = law_cache_dir() if cacheable else None
-    namespace = None if cacheable else {f"_f{i}": f for i, f in enumerate(forces)}
     return load_module(f"bayestribo_law_{digest}", text, folder, namespace)
 
 
@@ -162,10 +176,11 @@ def compiled_law(
     friction_sizes: tuple,
 ) -> ModuleType:
     """The compiled module of one law (the template :mod:`bayestribo.model.laws._core`
-    with the law's forces; arguments as :func:`make_integrator`'s), whose functions the
+    and the text it shares with the other template, :mod:`._core_shared`, with the
+    law's forces; arguments as :func:`make_integrator`'s), whose functions the
     tests call one by one (the averaged tail against the half cycles' sum)."""
     layout = (drags, drag_offsets, drag_sizes, frictions, friction_offsets, friction_sizes)
-    return _load(*_law_source(layout))
+    return _load(*_law_source(_core, layout))
 
 
 @cache
@@ -179,10 +194,12 @@ def make_integrator(
 ) -> tuple[Callable, Callable, Callable]:
     """The compiled Π-grid, turning-point and swing functions of one law.
 
-    The template :mod:`bayestribo.model.laws._core` is written with the law's forces to
-    a file of the law cache (:func:`~bayestribo.model.laws.cache.law_cache_dir`) and
-    executed, so that numba compiles it once and later processes load it from its
-    cache, each file checked against the SHA-256 recorded when it was written
+    The template :mod:`bayestribo.model.laws._core` is written with the text it shares
+    with the template of the laws on a restoring force
+    (:mod:`bayestribo.model.laws._core_shared`) and the law's forces to a file of the
+    law cache (:func:`~bayestribo.model.laws.cache.law_cache_dir`) and executed, so
+    that numba compiles it once and later processes load it from its cache, each file
+    checked against the SHA-256 recorded when it was written
     (:mod:`bayestribo.model.laws.cache`). Terms whose forces cannot be
     imported by name (defined in ``__main__`` or inside a function) are compiled in each
     process instead.

@@ -33,50 +33,15 @@ integrator reproduces the closed form of viscous damping and Coulomb friction.
 
 from __future__ import annotations
 
-import hashlib
-import inspect
 from collections.abc import Callable
 from functools import cache
-from types import ModuleType
 
 from bayestribo.model.laws import _restoring_core
-from bayestribo.model.laws.integrator import _importable, _load, _off_source, _sum_source
+from bayestribo.model.laws.integrator import _law_source, _load
 
 __all__ = ["DEFAULT_STEPS", "make_nonlinear_integrator"]
 
 DEFAULT_STEPS = _restoring_core.DEFAULT_STEPS
-
-
-def _source(layout: tuple, spring: object, potential: object) -> tuple[str, list, bool]:
-    """The template's text followed by one law's forces and one restoring force's
-    kernels; the functions to inject when they cannot be imported (no cache then)."""
-    drags, d_off, d_size, frictions, f_off, f_size = layout
-    forces = [*drags, *frictions]
-    kernels = [spring, potential]
-    where = [_importable(f) for f in (*forces, *kernels)]
-    cacheable = all(w is not None for w in where)
-    lines = ["", "", "# -- the law and the restoring force " + "-" * 44]
-    if cacheable:
-        names = [f"_f{i}" for i in range(len(forces))] + ["spring", "potential"]
-        for name, (module, attr) in zip(names, where, strict=True):  # type: ignore[misc]
-            lines.append(f"from {module} import {attr} as {name}  # noqa: E402")
-    lines.append("")
-    lines.append(_sum_source("drag", drags, d_off, d_size, 0))
-    lines.append(_sum_source("friction", frictions, f_off, f_size, len(drags)))
-    lines.append(_off_source(f_off, f_size))
-    lines.append(f"HAS_FRICTION = {bool(frictions)}")
-    lines.append(f"HAS_DRAG = {bool(drags)}")
-    text = inspect.getsource(_restoring_core) + "\n".join(lines) + "\n"
-    injected = forces
-    if cacheable:
-        # a change of a force's or kernel's source is a new file, never a stale cache
-        text += "".join(
-            f"# kernel {i}: {hashlib.sha1(inspect.getsource(f.py_func).encode()).hexdigest()}\n"
-            for i, f in enumerate((*forces, *kernels))
-        )
-    else:
-        text = text.replace("cache=True", "cache=False")
-    return text, injected, cacheable
 
 
 @cache
@@ -109,24 +74,6 @@ def make_nonlinear_integrator(
         ``dissipation(coef, k, amplitudes) -> ΔE``: the first-order loss per cycle of
         the undamped motion of each swing (docs/restoring.md, Eq. 3), (P, A).
     """
-    text, forces, cacheable = _source(layout, spring, potential)
-    if not cacheable:
-        text = text.replace(
-            "# -- the law and the restoring force",
-            "spring = _spring\npotential = _potential\n# -- the law and the restoring force",
-        )
-    module = _load_with_kernels(text, forces, cacheable, spring, potential)
+    kernels = {"spring": spring, "potential": potential}
+    module = _load(*_law_source(_restoring_core, layout, kernels))
     return module.grid, module.turns, module.swing_drops, module.dissipation
-
-
-def _load_with_kernels(
-    text: str, forces: list, cacheable: bool, spring: object, potential: object
-) -> ModuleType:
-    if cacheable:
-        return _load(text, forces, cacheable)
-    from bayestribo.model.laws.cache import load_module
-
-    digest = hashlib.sha1(text.encode()).hexdigest()[:20]
-    namespace = {f"_f{i}": f for i, f in enumerate(forces)}
-    namespace.update(_spring=spring, _potential=potential)
-    return load_module(f"bayestribo_restoring_{digest}", text, None, namespace)
