@@ -4,6 +4,7 @@ line-by-line reader on every layout, plain or not."""
 
 from __future__ import annotations
 
+import shutil
 import sys
 import warnings
 from pathlib import Path
@@ -268,19 +269,39 @@ def _large_record(path: Path) -> None:
     )
 
 
+@pytest.fixture(scope="module")
+def large_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The large record, written once for the module (tests that alter it copy it)."""
+    path = tmp_path_factory.mktemp("large") / "run.csv"
+    _large_record(path)
+    return path
+
+
+@pytest.fixture(scope="module")
+def large_read_row_by_row(large_file: Path) -> tuple[dict, list[str]]:
+    """The large record as the row-by-row reader alone reads it, with its warnings."""
+    with pytest.MonkeyPatch.context() as patch:
+        return _read(large_file, {}, False, patch)
+
+
+def _copy(path: Path, folder: Path) -> Path:
+    copy = folder / path.name
+    shutil.copyfile(path, copy)
+    return copy
+
+
 @pytest.mark.parametrize(
     ("parser", "threads"), [("pyarrow", False), ("pyarrow", True), ("pandas", None)]
 )
 def test_a_large_file_with_comments_and_units_reads_as_the_row_by_row_reader_reads_it(
-    parser: str, threads: bool | None, tmp_path: Path, monkeypatch
+    parser: str, threads: bool | None, large_file: Path, large_read_row_by_row, monkeypatch
 ) -> None:
     """The whole fast path (the head laid out, the rows parsed by a compiled parser, on
     one thread or several) against the row-by-row reader alone, on a file of the size
     the fast path is for: the same arrays bit for bit and the same warnings."""
     pytest.importorskip(parser)
     monkeypatch.setattr(bulk_text, "ARROW_THREADS", threads)
-    path = tmp_path / "run.csv"
-    _large_record(path)
+    path = large_file
     assert path.stat().st_size > text_module._ARROW_BYTES
     taken: list[bool] = []
     large = _parsing_with(parser, taken)
@@ -289,7 +310,7 @@ def test_a_large_file_with_comments_and_units_reads_as_the_row_by_row_reader_rea
     monkeypatch.setattr(text_module, "_read_large", large)
     fast, fast_warnings = _read(path, {}, True, monkeypatch)
     assert taken == [True]
-    slow, slow_warnings = _read(path, {}, False, monkeypatch)
+    slow, slow_warnings = large_read_row_by_row
     assert list(fast) == list(slow) == ["time_s", "displacement_m", "velocity_m_per_s"]
     for key in fast:
         assert fast[key].tobytes() == slow[key].tobytes(), key
@@ -297,10 +318,11 @@ def test_a_large_file_with_comments_and_units_reads_as_the_row_by_row_reader_rea
     assert fast_warnings == slow_warnings
 
 
-def test_a_bad_row_of_a_large_file_is_named_by_the_row_by_row_reader(tmp_path: Path) -> None:
+def test_a_bad_row_of_a_large_file_is_named_by_the_row_by_row_reader(
+    large_file: Path, tmp_path: Path
+) -> None:
     """The compiled parser refuses the file; the line-by-line reader names the line."""
-    path = tmp_path / "run.csv"
-    _large_record(path)
+    path = _copy(large_file, tmp_path)
     lines = path.read_text(encoding="utf-8").splitlines()
     lines[200_004] = lines[200_004].replace(";", ";x", 1)
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
@@ -309,13 +331,12 @@ def test_a_bad_row_of_a_large_file_is_named_by_the_row_by_row_reader(tmp_path: P
 
 
 def test_a_pyarrow_that_does_not_import_leaves_the_file_to_pandas(
-    tmp_path: Path, monkeypatch
+    large_file: Path, large_read_row_by_row, monkeypatch
 ) -> None:
     """A broken pyarrow install (found on the path, failing to import) costs speed, not
     the reading: pandas' parser reads the file, with the row-by-row reader's numbers."""
     pytest.importorskip("pandas")
-    path = tmp_path / "run.csv"
-    _large_record(path)
+    path = large_file
     used = []
     read_numbers = bulk_text.read_numbers
 
@@ -330,18 +351,17 @@ def test_a_pyarrow_that_does_not_import_leaves_the_file_to_pandas(
     monkeypatch.setattr(text_module, "_LARGE_BYTES", 0)
     fast, _ = _read(path, {}, True, monkeypatch)
     assert used == [("pyarrow", False), ("pandas", True)]
-    slow, _ = _read(path, {}, False, monkeypatch)
+    slow, _ = large_read_row_by_row
     for key in fast:
         assert fast[key].tobytes() == slow[key].tobytes(), key
 
 
 @pytest.mark.parametrize("bad", [False, True])
-def test_pyarrows_pool_keeps_nothing_of_a_read(bad: bool, tmp_path: Path) -> None:
+def test_pyarrows_pool_keeps_nothing_of_a_read(bad: bool, large_file: Path, tmp_path: Path) -> None:
     """The columns are the reader's own arrays: once a file is read (or refused), no
     memory of pyarrow's pool is left allocated for the parser's table."""
     pyarrow = pytest.importorskip("pyarrow")
-    path = tmp_path / "run.csv"
-    _large_record(path)
+    path = _copy(large_file, tmp_path) if bad else large_file
     if bad:
         with path.open("a", encoding="utf-8") as handle:
             handle.write("1.0;x;2.0\n")
