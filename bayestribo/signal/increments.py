@@ -40,6 +40,16 @@ the velocity alone (which holds the integration's residue there, its edges' ring
 the rest's spectrum integrated into the displacement would wander over a long record,
 its low frequencies extrapolated from a short rest).
 
+**The increments of an integrated displacement are correlated.** The integrated
+noise is a low-frequency error, and an accelerometer's velocity noise a random walk
+held at the rests: over a half cycle y and y' change sign, so the increments' errors
+alternate about a slowly varying level (correlation about -0.6 between neighbours on
+a dry-friction accelerometer record; a run of four increments has 0.4 times the sum of
+their variances). For a displacement derived by integration the Monte Carlo draws at
+least ten per increment and gives their covariance
+(:mod:`bayestribo.signal.increment_correlation`, :attr:`PiData.correlation`), which
+the likelihood whitens the increments with.
+
 **Coloured noise.** A real signal chain filters the noise (anti-alias filter), adds
 mains lines and 1/f noise: the samples' errors are then correlated, and the variance
 of a weighted sum of them is ``wᵀ C w`` with C the noise's autocovariance, not
@@ -126,6 +136,11 @@ from scipy.integrate import cumulative_trapezoid
 
 from bayestribo.signal.coarse import coarse_steps, quantised_increments
 from bayestribo.signal.decay import EnergyDecay, derivative_gain
+from bayestribo.signal.increment_correlation import (
+    correlation_matrix,
+    integrated_noise,
+    replicates_for,
+)
 from bayestribo.signal.noise import NoiseModel
 from bayestribo.signal.spectrum import NoiseSpectrum, colored_noise
 
@@ -134,6 +149,7 @@ __all__ = [
     "accelerometer_draws",
     "correlated_sum_variance",
     "detrended",
+    "increment_draws",
     "increment_noise",
     "increment_weights",
     "integrate_increments",
@@ -277,6 +293,12 @@ class PiData:
         The step of a coarse displacement (:mod:`bayestribo.signal.coarse`) in units
         of y, 0 otherwise: y0 and the equilibrium, read from rounded samples, are
         known to about half of it.
+    correlation : ndarray or None
+        The correlation of the increments' noise, shape (m, m), for a displacement
+        integrated from the velocity, whose noise reaches many increments alike
+        (:mod:`bayestribo.signal.increment_correlation`); the covariance is
+        ``√V_i R_ij √V_j`` and the likelihood whitens the increments with it. None:
+        independent increments (both channels recorded, or a derived velocity).
     """
 
     tau_grid: NDArray
@@ -294,6 +316,7 @@ class PiData:
     law_increments: NDArray | None = None
     restoring: Any = None
     rounding: float = 0.0
+    correlation: NDArray | None = None
 
     @property
     def tau_end(self) -> float:
@@ -757,6 +780,59 @@ def increment_noise(
             ]
         )
         return bias, variance
+    draws = increment_draws(
+        tau,
+        y,
+        yp,
+        edges,
+        weights,
+        sigma_y,
+        sigma_yp,
+        derived=derived,
+        savgol_window=savgol_window,
+        n_replicates=n_replicates,
+        seed=seed,
+        spectrum=spectrum,
+        spectrum_scale=spectrum_scale,
+        potential=potential,
+        velocity_draws=velocity_draws,
+    )
+    return draws.mean(axis=0), draws.var(axis=0, ddof=1)
+
+
+def increment_draws(
+    tau: NDArray,
+    y: NDArray,
+    yp: NDArray,
+    edges: NDArray,
+    weights: list[NDArray],
+    sigma_y: float,
+    sigma_yp: float,
+    *,
+    derived: str,
+    savgol_window: int | None = None,
+    n_replicates: int = 300,
+    seed: int = 0,
+    spectrum: NoiseSpectrum | None = None,
+    spectrum_scale: float = 1.0,
+    potential: Callable[[NDArray], NDArray] | None = None,
+    velocity_draws: Callable[[int, np.random.Generator], NDArray] | None = None,
+) -> NDArray:
+    """Monte Carlo draws of the noise of each increment when one channel is derived.
+
+    Noise is drawn on the recorded channel (white at ``sigma_y`` or ``sigma_yp``, with
+    ``spectrum``, or from ``velocity_draws``), the derivation is repeated on it, and
+    the increments' change is returned: their mean is the noise bias, their variance
+    the increments' variances (:func:`increment_noise`) and, for an integrated
+    channel, their covariance the increments' correlation
+    (:mod:`bayestribo.signal.increment_correlation`). The arguments are those of
+    :func:`increment_noise`.
+
+    Returns
+    -------
+    ndarray
+        Shape (n_replicates, m): the change of each increment in each draw.
+    """
     if derived not in ("velocity", "displacement"):
         raise ValueError(f"derived must be None, 'velocity' or 'displacement', got {derived!r}")
     rng = np.random.default_rng(seed)
@@ -786,7 +862,7 @@ def increment_noise(
             yn, ypn = _rederive(tau, y, yp + draw, y, yp, derived, savgol_window)
         energy = energy_of(yn, ypn)
         draws[first : first + count] = integrate_increments(energy, edges, weights) - reference
-    return draws.mean(axis=0), draws.var(axis=0, ddof=1)
+    return draws
 
 
 def spectral_options(decay: EnergyDecay, noise: NoiseModel, n_lags: int) -> dict:
@@ -988,22 +1064,44 @@ def pi_data(
         spectral = False
     draws = accelerometer_draws(decay, noise)
     options = spectral_options(decay, noise, 2 * longest) if spectral and draws is None else {}
-    bias, variance = increment_noise(
-        tau,
-        y,
-        yp,
-        edges,
-        weights,
-        sig_y,
-        sig_yp,
-        derived=decay.derived_channel,
-        savgol_window=decay.savgol_window,
-        n_replicates=n_replicates,
-        seed=seed,
-        potential=potential,
-        velocity_draws=draws,
-        **options,
-    )
+    covariance = None
+    if decay.derived_channel == "displacement":
+        # an integrated displacement: its noise correlates the increments, whose
+        # covariance the draws give (bayestribo.signal.increment_correlation)
+        mc = increment_draws(
+            tau,
+            y,
+            yp,
+            edges,
+            weights,
+            sig_y,
+            sig_yp,
+            derived="displacement",
+            n_replicates=replicates_for(edges.size - 1, n_replicates),
+            seed=seed,
+            potential=potential,
+            velocity_draws=draws,
+            **options,
+        )
+        bias, covariance = integrated_noise(mc)
+        variance = np.diag(covariance).copy()
+    else:
+        bias, variance = increment_noise(
+            tau,
+            y,
+            yp,
+            edges,
+            weights,
+            sig_y,
+            sig_yp,
+            derived=decay.derived_channel,
+            savgol_window=decay.savgol_window,
+            n_replicates=n_replicates,
+            seed=seed,
+            potential=potential,
+            velocity_draws=draws,
+            **options,
+        )
     if draws is not None:
         # the sensor's noise through the integration, which the rest does not show in
         # the motion; never below the velocity's own noise as the rest shows it, which
@@ -1070,6 +1168,7 @@ def pi_data(
         noise_bias=bias,
         spectral=bool(options),
         neighbour_covariance=neighbours,
+        correlation=None if covariance is None else correlation_matrix(covariance, variance),
         preparation={
             "noise": noise,
             "grid_points": int(grid_points),
