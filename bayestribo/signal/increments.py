@@ -40,15 +40,21 @@ the velocity alone (which holds the integration's residue there, its edges' ring
 the rest's spectrum integrated into the displacement would wander over a long record,
 its low frequencies extrapolated from a short rest).
 
-**The increments of an integrated displacement are correlated.** The integrated
-noise is a low-frequency error, and an accelerometer's velocity noise a random walk
-held at the rests: over a half cycle y and y' change sign, so the increments' errors
-alternate about a slowly varying level (correlation about -0.6 between neighbours on
-a dry-friction accelerometer record; a run of four increments has 0.4 times the sum of
-their variances). For a displacement derived by integration the Monte Carlo draws at
+**The increments of an accelerometer's record are correlated.** Its velocity noise
+is a random walk held at the rests and its displacement that walk integrated: over a
+half cycle y and y' change sign, so the increments' errors alternate about a slowly
+varying level (correlation -0.63 between neighbours on a dry-friction record, +0.27
+at lag 2, -0.23 at lag 4, as the Monte Carlo's -0.65, +0.29, -0.22; a run of four
+increments has 0.4 times the sum of their variances). The Monte Carlo then draws at
 least ten per increment and gives their covariance
 (:mod:`bayestribo.signal.increment_correlation`, :attr:`PiData.correlation`), which
-the likelihood whitens the increments with.
+the likelihood whitens the increments with. A velocity recorded alone keeps
+independent increments: with white noise at 40 samples a period its increments' errors
+are uncorrelated once the equilibrium's line is out (lag 1: 0.01 over 90 draws), and
+at 10 samples a period (integrated as an oscillator, the Monte Carlo by the
+trapezoids) whitening with the draws' correlation narrowed intervals that were
+already a little narrow (``benchmarks/misspecification.py --cases velocity-10``: ζ's
+z sd 1.20 to 1.30 at 30 times the resolution).
 
 **Coloured noise.** A real signal chain filters the noise (anti-alias filter), adds
 mains lines and 1/f noise: the samples' errors are then correlated, and the variance
@@ -294,11 +300,11 @@ class PiData:
         of y, 0 otherwise: y0 and the equilibrium, read from rounded samples, are
         known to about half of it.
     correlation : ndarray or None
-        The correlation of the increments' noise, shape (m, m), for a displacement
-        integrated from the velocity, whose noise reaches many increments alike
+        The correlation of the increments' noise, shape (m, m), for an
+        accelerometer's record, whose integrated noise reaches many increments alike
         (:mod:`bayestribo.signal.increment_correlation`); the covariance is
         ``√V_i R_ij √V_j`` and the likelihood whitens the increments with it. None:
-        independent increments (both channels recorded, or a derived velocity).
+        independent increments (see the module notes).
     """
 
     tau_grid: NDArray
@@ -1065,9 +1071,10 @@ def pi_data(
     draws = accelerometer_draws(decay, noise)
     options = spectral_options(decay, noise, 2 * longest) if spectral and draws is None else {}
     covariance = None
-    if decay.derived_channel == "displacement":
-        # an integrated displacement: its noise correlates the increments, whose
-        # covariance the draws give (bayestribo.signal.increment_correlation)
+    if draws is not None:
+        # an accelerometer's record: the noise of its integrals correlates the
+        # increments, whose covariance the draws give
+        # (bayestribo.signal.increment_correlation)
         mc = increment_draws(
             tau,
             y,
