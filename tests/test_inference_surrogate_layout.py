@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from bayestribo.inference.comparison import auto_laws
-from bayestribo.inference.fused import SurrogateLayout, _surrogate_pi
+from bayestribo.inference.fused import _P_SLOT, SurrogateLayout, _surrogate_pi
 from bayestribo.inference.surrogate import CoefficientLayout, QuadraticPi
 from bayestribo.model.laws import get_law
 
@@ -52,10 +52,10 @@ def _quadratic(p: int, pieces: int, m: int, seed: int) -> QuadraticPi:
 def test_the_packed_surrogate_reads_back_from_its_layout():
     q = _quadratic(3, 4, 5, seed=1)
     layout = SurrogateLayout(q.n_coordinates, q.n_pieces, table_row=9)
-    base = np.arange(7.0)
+    base = np.arange(float(_P_SLOT))  # the base scalars
     scalars = layout.pack(base, q, [4, 0, 2], ratio_column=3)
     assert SurrogateLayout.read(scalars) == layout
-    np.testing.assert_array_equal(scalars[:7], base)
+    np.testing.assert_array_equal(scalars[:_P_SLOT], base)
     np.testing.assert_array_equal(scalars[layout.columns], [4, 0, 2])
     np.testing.assert_array_equal(scalars[layout.centre], q.centre)
     np.testing.assert_array_equal(scalars[layout.scale], q.scale)
@@ -73,7 +73,7 @@ def test_the_compiled_surrogate_is_the_quadratic_on_every_piece():
     columns = [4, 0, 2]  # θ's columns of x0, x1, x2; μ_s/μ_k in column 3
     table_row = 7
     layout = SurrogateLayout(p, pieces, table_row)
-    scalars = layout.pack(np.zeros(7), q, columns, ratio_column=3)
+    scalars = layout.pack(np.zeros(_P_SLOT), q, columns, ratio_column=3)
     data = np.vstack([np.zeros((table_row, m)), q.table])
     rng = np.random.default_rng(3)
     n = 200

@@ -194,7 +194,12 @@ def _predictive_pi(
     model_inc = lik.model_increments(p["params"])
     nuisance = lik.nuisance_mean(p["params"], p["discrepancy"], p["shape"])
     var = np.broadcast_to(lik.variance(p["discrepancy"]), model_inc.shape)
-    replicated = model_inc + nuisance + rng.normal(0.0, np.sqrt(var))
+    correlation = getattr(data, "correlation", None)
+    if correlation is None:
+        replicated = model_inc + nuisance + rng.normal(0.0, np.sqrt(var))
+    else:  # the increments' noise correlated as the likelihood takes it
+        noise = rng.normal(0.0, 1.0, model_inc.shape) @ np.linalg.cholesky(correlation).T
+        replicated = model_inc + nuisance + np.sqrt(var) * noise
     return np.cumsum(replicated[:, ::-1], axis=1)[:, ::-1]
 
 

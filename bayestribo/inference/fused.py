@@ -15,7 +15,8 @@ that loops over the walkers:
 3. the model Π on the grid, exact (the compiled kernel of
    :mod:`bayestribo.model._kernel`, with sticking) or averaged (Eq. 34 and 40 with the
    corrected Eq. 41, :mod:`bayestribo.model.averaged`), and its increments M_j;
-4. the increment variances V_j (+ s² ∫_j E² with the discrepancy term) and the
+4. the increment variances V_j (+ s² ∫_j E² with the discrepancy term), the
+   residuals and the design whitened where the increments are correlated, and the
    Gaussian log-likelihood with the linear nuisances marginalised analytically: the
    equilibrium (δ₀, δ₁), the noise level's error (a standard normal coefficient)
    and, with the shape discrepancy, its coefficients c_k (a q × q system, q = 3 +
@@ -133,7 +134,10 @@ def _averaged_grid(
             out[i] = pi
 
 
-#: Slots of the scalars after the base seven where a quadratic surrogate's layout is
+#: The base scalars' slot holding the row of ``data`` where the whitening T of
+#: correlated increments starts (m rows, :attr:`PiLikelihood.whitening`), 0 without.
+_WHITENING_SLOT = 7
+#: Slots of the scalars after the base eight where a quadratic surrogate's layout is
 #: written (:class:`SurrogateLayout`, :meth:`SurrogateLayout.header`): its coordinates
 #: p, monomials per piece R, where its coordinates' columns, centres, scales and the
 #: thresholds start in the scalars, the column of μ_s/μ_k (-1 without pieces), the
@@ -148,8 +152,8 @@ def _averaged_grid(
     _PIECES_SLOT,
     _THRESHOLDS_SLOT,
     _TABLE_SLOT,
-) = range(7, 16)
-_HEADER_END = 16
+) = range(8, 17)
+_HEADER_END = 17
 
 
 @dataclass(frozen=True)
@@ -224,12 +228,12 @@ class SurrogateLayout:
         return values
 
     def pack(self, base: NDArray, surrogate: Any, columns: list[int], ratio_column: int) -> NDArray:
-        """The scalars: the base seven, the header, then the surrogate's numbers.
+        """The scalars: the base eight, the header, then the surrogate's numbers.
 
         Parameters
         ----------
         base : ndarray
-            The base scalars (shape (7,)).
+            The base scalars (shape (8,)).
         surrogate : QuadraticPi
             The quadratic.
         columns : list of int
@@ -369,6 +373,54 @@ def _normal_matrix(design: NDArray, var: NDArray, q: int, out: NDArray) -> None:
 
 
 @numba.njit(cache=True, error_model="numpy")
+def _whiten(t: NDArray, z: NDArray) -> None:
+    """``z ← T z`` in place for the lower triangular whitening T (m, m)."""
+    for i in range(z.size - 1, -1, -1):
+        acc = 0.0
+        for k in range(i + 1):
+            acc += t[i, k] * z[k]
+        z[i] = acc
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _whitened_design(
+    design: NDArray, var: NDArray, t: NDArray, q: int, xw: NDArray, a: NDArray
+) -> None:
+    """The nuisances' design whitened, ``T (X / √V)`` (q, m) into ``xw``, and its Gram
+    matrix XᵀΣ⁻¹X (q × q) into ``a``."""
+    m = var.size
+    for k in range(q):
+        for j in range(m):
+            xw[k, j] = design[k, j] / math.sqrt(var[j])
+        _whiten(t, xw[k])
+    for k in range(q):
+        for i in range(k + 1):
+            acc = 0.0
+            for j in range(m):
+                acc += xw[k, j] * xw[i, j]
+            a[k, i] = acc
+            a[i, k] = acc
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _whitening(data: NDArray, scalars: NDArray) -> NDArray:
+    """The whitening T of correlated increments (m rows of ``data``), or no rows."""
+    first = int(scalars[_WHITENING_SLOT])
+    if first <= 0:
+        return data[0:0]
+    return data[first : first + data.shape[1]]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _log_det_correlation(t: NDArray) -> float:
+    """log|R| = -2 Σ log T_jj (0 without a whitening)."""
+    out = 0.0
+    for j in range(t.shape[0]):
+        out -= 2.0 * math.log(t[j, j])
+    return out
+
+
+@numba.njit(cache=True, error_model="numpy")
 def _precisions(
     row: NDArray, columns: NDArray, fixed: NDArray, scalars: NDArray, q: int, out: NDArray
 ) -> float:
@@ -408,6 +460,7 @@ def _standardized(
     b = np.empty(q)
     x = np.empty(q)
     prec = np.empty(q)
+    xw = np.empty((q, m))
     flagged = 0
     for n in range(theta.shape[0]):
         row = theta[n]
@@ -415,7 +468,7 @@ def _standardized(
             flagged += 1
             continue
         if not _standardized_row(
-            row, pi, columns, fixed, data, scalars, var, a, b, x, prec, out[n]
+            row, pi, columns, fixed, data, scalars, var, a, b, x, prec, xw, out[n]
         ):
             flagged += 1
     return flagged
@@ -434,10 +487,12 @@ def _standardized_row(
     b: NDArray,
     x: NDArray,
     prec: NDArray,
+    xw: NDArray,
     out: NDArray,
 ) -> bool:
     """The standardized conditional residuals of one row given its model Π into
-    ``out`` (m,); False where the nuisances' system is singular."""
+    ``out`` (m,), whitened where the increments are correlated; False where the
+    nuisances' system is singular."""
     inc = data[1]
     var0 = data[2]
     e2 = data[3]
@@ -450,6 +505,29 @@ def _standardized_row(
         s2 = s * s
     for k in range(q):
         b[k] = 0.0
+    t = _whitening(data, scalars)
+    if t.shape[0] > 0:
+        for j in range(m):
+            var[j] = var0[j] + s2 * e2[j] if columns[4] != _ABSENT else var0[j]
+            model_inc = pi[j] - pi[j + 1] if j < m - 1 else pi[j]
+            out[j] = (inc[j] - model_inc) / math.sqrt(var[j])
+        _whiten(t, out[:m])
+        _whitened_design(design, var, t, q, xw, a)
+        for j in range(m):
+            for k in range(q):
+                b[k] += out[j] * xw[k, j]
+        _precisions(row, columns, fixed, scalars, q, prec)
+        for k in range(q):
+            a[k, k] += prec[k]
+        if not math.isfinite(_cholesky_solve(a, b, q, x)):
+            return False
+        for j in range(m):
+            for k in range(q):
+                out[j] -= x[k] * xw[k, j]
+        if out.size >= m + q:
+            for k in range(q):
+                out[m + k] = x[k] * math.sqrt(prec[k])
+        return True
     for j in range(m):
         var[j] = var0[j] + s2 * e2[j] if columns[4] != _ABSENT else var0[j]
         model_inc = pi[j] - pi[j + 1] if j < m - 1 else pi[j]
@@ -495,6 +573,7 @@ def _law_standardized(
     b = np.empty(q)
     x = np.empty(q)
     prec = np.empty(q)
+    xw = np.empty((q, m))
     flagged = 0
     for n in range(theta.shape[0]):
         moves = True
@@ -502,7 +581,7 @@ def _law_standardized(
             if not math.isfinite(pi[n, j]):
                 moves = False
         if not moves or not _standardized_row(
-            theta[n], pi[n], columns, fixed, data, scalars, var, a, b, x, prec, out[n]
+            theta[n], pi[n], columns, fixed, data, scalars, var, a, b, x, prec, xw, out[n]
         ):
             flagged += 1
     return flagged
@@ -521,12 +600,13 @@ def _log_posterior(
     """Log posterior of each row of ``theta`` into ``out`` (see the module notes).
 
     ``data`` rows: τ_j, D_j, V_j, ∫_j E², then the nuisances' design: ∫_j y, ∫_j τy,
-    the noise bias's standard error and the shape columns D_j P_k(u_j) (j < m).
+    the noise bias's standard error and the shape columns D_j P_k(u_j) (j < m), and
+    last, for correlated increments, the whitening T (m rows).
     ``scalars``: y'0, the end of the model's Π (inf when the record holds the end of
     motion), the prior precisions of δ₀ and δ₁, their log|P|, the model code, the
-    number of shape terms (and for the quadratic surrogate of Π, whose table rows
-    follow the design in ``data``: its number of coordinates p, their columns,
-    centres and scales). Returns the
+    number of shape terms, the row of ``data`` where T starts (0 without) (and for
+    the quadratic surrogate of Π, whose table rows follow the design in ``data``: its
+    number of coordinates p, their columns, centres and scales). Returns the
     number of rows whose log posterior is NaN or whose parameters are outside the
     averaged model's domain (NaN in ``out``): the caller then lets the reference
     raise its error.
@@ -544,14 +624,20 @@ def _log_posterior(
     prec = np.empty(q)
     discrepancy = columns[4] != _ABSENT
     # Without the white discrepancy the variances, hence A's data part and Σ log 2πV,
-    # are the same for every walker.
+    # are the same for every walker (and the whitened design of correlated increments).
     c = np.zeros((q, q))
-    norm0 = 0.0
+    t = _whitening(data, scalars)
+    xw = np.empty((q, m))
+    z = np.empty(m)
+    norm0 = _log_det_correlation(t)
     if not discrepancy:
         for j in range(m):
             var[j] = var0[j]
             norm0 += math.log(var[j]) + _LOG_2PI
-        _normal_matrix(design, var, q, c)
+        if t.shape[0] > 0:
+            _whitened_design(design, var, t, q, xw, c)
+        else:
+            _normal_matrix(design, var, q, c)
     flagged = 0
     for n in range(theta.shape[0]):
         row = theta[n]
@@ -565,7 +651,7 @@ def _log_posterior(
             out[n] = math.nan
             continue
         out[n] = lp + _log_likelihood(
-            row, pi, columns, fixed, data, scalars, q, var, a, b, x, prec, c, norm0
+            row, pi, columns, fixed, data, scalars, q, var, a, b, x, prec, c, norm0, t, xw, z
         )
         flagged += math.isnan(out[n])
     return flagged
@@ -587,23 +673,32 @@ def _log_likelihood(
     prec: NDArray,
     c: NDArray,
     norm0: float,
+    t: NDArray,
+    xw: NDArray,
+    z: NDArray,
 ) -> float:
     """The log-likelihood of one row given its model Π (see the module notes), with
     the work arrays of :func:`_log_posterior`; without the white discrepancy, ``var``,
-    ``c`` (A's data part) and ``norm0`` (Σ log 2πV) are the same for every row."""
+    ``c`` (A's data part), ``xw`` (the whitened design of correlated increments) and
+    ``norm0`` (Σ log 2πV + log|R|) are the same for every row. ``t``: the whitening
+    (no rows for independent increments)."""
     inc = data[1]
     var0 = data[2]
     e2 = data[3]
     m = inc.size
     design = data[4 : 4 + q]
     norm = norm0
+    whitened = t.shape[0] > 0
     if columns[4] != _ABSENT:
         s = 10.0 ** _value(row, columns, fixed, 4, 0.0)
         s2 = s * s
         for j in range(m):
             var[j] = var0[j] + s2 * e2[j]
             norm += math.log(var[j]) + _LOG_2PI
-        _normal_matrix(design, var, q, a)
+        if whitened:
+            _whitened_design(design, var, t, q, xw, a)
+        else:
+            _normal_matrix(design, var, q, a)
     else:
         for k in range(q):
             for i in range(q):
@@ -611,13 +706,23 @@ def _log_likelihood(
     for k in range(q):
         b[k] = 0.0
     rr = 0.0
-    for j in range(m):
-        model_inc = pi[j] - pi[j + 1] if j < m - 1 else pi[j]
-        r = inc[j] - model_inc
-        rw = r / var[j]
-        for k in range(q):
-            b[k] += rw * design[k, j]
-        rr += r * rw
+    if whitened:
+        for j in range(m):
+            model_inc = pi[j] - pi[j + 1] if j < m - 1 else pi[j]
+            z[j] = (inc[j] - model_inc) / math.sqrt(var[j])
+        _whiten(t, z)
+        for j in range(m):
+            for k in range(q):
+                b[k] += z[j] * xw[k, j]
+            rr += z[j] * z[j]
+    else:
+        for j in range(m):
+            model_inc = pi[j] - pi[j + 1] if j < m - 1 else pi[j]
+            r = inc[j] - model_inc
+            rw = r / var[j]
+            for k in range(q):
+                b[k] += rw * design[k, j]
+            rr += r * rw
     log_prior_det = _precisions(row, columns, fixed, scalars, q, prec)
     for k in range(q):
         a[k, k] += prec[k]
@@ -655,12 +760,18 @@ def _law_log_posterior(
     x = np.empty(q)
     prec = np.empty(q)
     c = np.zeros((q, q))
-    norm0 = 0.0
+    t = _whitening(data, scalars)
+    xw = np.empty((q, m))
+    z = np.empty(m)
+    norm0 = _log_det_correlation(t)
     if columns[4] == _ABSENT:
         for j in range(m):
             var[j] = var0[j]
             norm0 += math.log(var[j]) + _LOG_2PI
-        _normal_matrix(design, var, q, c)
+        if t.shape[0] > 0:
+            _whitened_design(design, var, t, q, xw, c)
+        else:
+            _normal_matrix(design, var, q, c)
     flagged = 0
     for n in range(theta.shape[0]):
         row = theta[n]
@@ -677,7 +788,7 @@ def _law_log_posterior(
             out[n] = -math.inf
             continue
         out[n] = lp + _log_likelihood(
-            row, pi[n], columns, fixed, data, scalars, q, var, a, b, x, prec, c, norm0
+            row, pi[n], columns, fixed, data, scalars, q, var, a, b, x, prec, c, norm0, t, xw, z
         )
         flagged += math.isnan(out[n])
     return flagged
@@ -707,10 +818,12 @@ class FusedLogPosterior:
     data : ndarray
         Shape (4 + q, m): τ_j, D_j, V_j, ∫_j E², then the q nuisance columns ∫_j y,
         ∫_j τy, the noise bias's standard error (and the shape columns D_j P_k(u_j)
-        with the shape discrepancy).
+        with the shape discrepancy); then a surrogate's table, and the whitening T of
+        correlated increments (:attr:`PiLikelihood.whitening`, m rows) last.
     scalars : ndarray
         y'0, the end of Π, the prior precisions of δ₀ and δ₁, their log|P|, the model
-        code, the number of shape terms.
+        code, the number of shape terms, the row of ``data`` where T starts (0
+        without).
     law : LawSource or None
         Where Π comes from for a law without a closed form (None: the closed form,
         compiled here).
@@ -769,6 +882,11 @@ class FusedLogPosterior:
         table_row = 4 + design.shape[1]
         if surrogate is not None:
             rows.append(surrogate.table)
+        whitening = likelihood.whitening
+        first = 0
+        if whitening is not None:  # the last m rows
+            first = sum(np.atleast_2d(r).shape[0] for r in rows)
+            rows.append(whitening)
         data = np.ascontiguousarray(np.vstack(rows), dtype=np.float64)
         scalars = np.array(
             [
@@ -779,6 +897,7 @@ class FusedLogPosterior:
                 likelihood._log_prior_det(),
                 _EXACT if likelihood.model == "exact" else _AVERAGED,
                 design.shape[1] - _BASE,
+                first,
             ]
         )
         if surrogate is not None:

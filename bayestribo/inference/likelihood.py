@@ -26,6 +26,16 @@ with ``r = D - M``, ``W = diag(1/V)``, design ``X`` (∫y, ∫τy per increment)
 log-likelihood (for PSIS-LOO) is the conditional one at the conditional mean
 ``δ̂ = A⁻¹b``.
 
+**Correlated increments.** Where the noise of the increments is correlated (a
+displacement integrated from the velocity: :attr:`~bayestribo.signal.increments.
+PiData.correlation` R, the covariance ``√V_i R_ij √V_j``), the residuals and the
+design are whitened once by ``T = L⁻¹``, R = LLᵀ (:attr:`PiLikelihood.whitening`):
+``r → T(r/√V)``, ``X → T(X/√V)``, and W above becomes the identity on them, with
+``log|R|`` added to ``Σ log V``. The white discrepancy's term is taken with the
+same correlation (the variances scaled, R kept), which keeps one whitening for every
+parameter set. The pointwise log-likelihood of an increment is then its density
+given all the others (:meth:`PiLikelihood.pointwise`).
+
 **Noise-level nuisance.** The noise bias removed from each increment rests on σ²
 measured in the recording, known to a relative √(2/n) or so: a third column of the
 design, the bias's standard error per increment (:attr:`~bayestribo.signal.
@@ -71,6 +81,7 @@ from functools import cached_property
 from typing import Any, Literal
 
 import numpy as np
+import scipy.linalg
 import scipy.stats
 from numpy.typing import NDArray
 
@@ -238,8 +249,36 @@ class PiLikelihood:
             return self.data.offset_design
         return np.hstack([self.data.offset_design, self.shape_design])
 
+    @cached_property
+    def whitening(self) -> NDArray | None:
+        """T = L⁻¹ for the increments' noise correlation R = LLᵀ
+        (:attr:`~bayestribo.signal.increments.PiData.correlation`), lower triangular
+        (m, m): ``T (r / √V)`` are independent standard normals; None for independent
+        increments."""
+        correlation = getattr(self.data, "correlation", None)
+        if correlation is None:
+            return None
+        chol = np.linalg.cholesky(np.asarray(correlation, dtype=float))
+        return scipy.linalg.solve_triangular(chol, np.eye(chol.shape[0]), lower=True)
+
+    @cached_property
+    def log_det_correlation(self) -> float:
+        """log|R| of the increments' noise correlation (0 for independent ones)."""
+        t = self.whitening
+        return 0.0 if t is None else float(-2.0 * np.sum(np.log(np.diag(t))))
+
+    def _whiten(self, standardized: NDArray) -> NDArray:
+        """``T x`` along the last axis of increments already divided by √V (x as it is
+        for independent increments)."""
+        t = self.whitening
+        return standardized if t is None else standardized @ t.T
+
     def variance(self, discrepancy: NDArray | None = None) -> NDArray:
-        """Variance of each increment (noise, plus the discrepancy term if given)."""
+        """Variance of each increment (noise, plus the discrepancy term if given).
+
+        With correlated increments (:attr:`whitening`) the covariance is
+        ``√V_i R_ij √V_j``: the white discrepancy's term is taken with the noise's
+        correlation (one whitening for all parameters)."""
         if discrepancy is None:
             return self.data.variance
         return self.data.variance + np.asarray(discrepancy) ** 2 * self.data.energy_squared
@@ -256,19 +295,33 @@ class PiLikelihood:
         P⁻¹ with X = :meth:`design`. Returns δ̂ (n, q), b·δ̂ (n,), log|A| (n,).
         """
         x = self.design(shape is not None)  # (m, q)
-        w = 1.0 / var  # (m,) or (n, m)
         resid = np.atleast_2d(resid)
         n, q = resid.shape[0], x.shape[1]
-        if w.ndim == 1:
-            a = np.broadcast_to((x.T * w) @ x, (n, q, q)).copy()
+        if self.whitening is not None:
+            a, b = self._whitened_system(resid, var, x)
         else:
-            a = np.einsum("nj,jk,jl->nkl", w, x, x)
+            w = 1.0 / var  # (m,) or (n, m)
+            if w.ndim == 1:
+                a = np.broadcast_to((x.T * w) @ x, (n, q, q)).copy()
+            else:
+                a = np.einsum("nj,jk,jl->nkl", w, x, x)
+            b = (resid * w) @ x
         precision = self._prior_sd(n, shape) ** -2
         a[:, np.arange(q), np.arange(q)] += precision
-        b = (resid * w) @ x
         delta = np.linalg.solve(a, b[..., None])[..., 0]
         logdet = np.linalg.slogdet(a)[1]
         return delta, np.sum(b * delta, axis=-1), logdet
+
+    def _whitened_system(self, resid: NDArray, var: NDArray, x: NDArray) -> tuple[NDArray, NDArray]:
+        """XᵀΣ⁻¹X (n, q, q) and XᵀΣ⁻¹r (n, q) with the increments' correlation."""
+        n, q = resid.shape[0], x.shape[1]
+        sd = np.sqrt(var)
+        z = self._whiten(resid / sd)  # (n, m)
+        if sd.ndim == 1:
+            xw = self._whiten((x / sd[:, None]).T).T  # (m, q)
+            return np.broadcast_to(xw.T @ xw, (n, q, q)).copy(), z @ xw
+        xw = np.swapaxes(self._whiten(np.swapaxes(x[None] / sd[..., None], 1, 2)), 1, 2)
+        return np.einsum("njk,njl->nkl", xw, xw), np.einsum("nj,njk->nk", z, xw)
 
     def _prior_sd(self, n: int, shape: NDArray | None = None) -> NDArray:
         """Prior standard deviations of the q linear nuisances for n rows, (n, q):
@@ -339,8 +392,13 @@ class PiLikelihood:
                 resid = np.where(outside[:, None], 0.0, resid)
         var = self.variance(discrepancy)
         _, explained, logdet_a = self._solve(resid, var, shape)
-        chi2 = np.sum(resid * resid / var, axis=-1) - explained
-        norm = np.sum(np.log(var) + _LOG_2PI, axis=-1)
+        if self.whitening is None:
+            chi2 = np.sum(resid * resid / var, axis=-1) - explained
+            norm = np.sum(np.log(var) + _LOG_2PI, axis=-1)
+        else:
+            z = self._whiten(resid / np.sqrt(var))
+            chi2 = np.sum(z * z, axis=-1) - explained
+            norm = np.sum(np.log(var) + _LOG_2PI, axis=-1) + self.log_det_correlation
         out = -0.5 * (chi2 + norm + logdet_a + self._log_prior_det(shape))
         if outside is not None and np.any(outside):
             out = np.where(outside, -np.inf, out)
@@ -363,10 +421,20 @@ class PiLikelihood:
         discrepancy: NDArray | None = None,
         shape: NDArray | None = None,
     ) -> NDArray:
-        """Conditional log-likelihood of each increment, shape (n, m) (for PSIS-LOO)."""
+        """Conditional log-likelihood of each increment, shape (n, m) (for PSIS-LOO).
+
+        With correlated increments (:attr:`whitening`), each increment's density given
+        all the others: with u = r/√V, g = R⁻¹u and p = diag(R⁻¹), the increment is
+        normal about its value less ``√V g/p`` with variance ``V/p`` (the independent
+        formula when R = I)."""
         resid = self.conditional_residuals(params, discrepancy, shape)
         var = self.variance(discrepancy)
-        return -0.5 * (resid * resid / var + np.log(var) + _LOG_2PI)
+        t = self.whitening
+        if t is None:
+            return -0.5 * (resid * resid / var + np.log(var) + _LOG_2PI)
+        g = self._whiten(resid / np.sqrt(var)) @ t
+        p = np.sum(t * t, axis=0)
+        return -0.5 * (g * g / p + np.log(var / p) + _LOG_2PI)
 
     def standardized_residuals(
         self,
@@ -376,7 +444,8 @@ class PiLikelihood:
         nuisances: bool = False,
     ) -> NDArray:
         """Conditional residuals over √V_j: standard normals if the model is right,
-        shape (n, m).
+        shape (n, m); whitened (``T r/√V``, :attr:`whitening`) where the increments
+        are correlated.
 
         With ``nuisances`` the q linear nuisances' conditional means over their prior
         sd follow, shape (n, m + q): the sum of squares of a row is then the χ²
@@ -386,7 +455,7 @@ class PiLikelihood:
         resid = self._residuals(params)
         var = self.variance(discrepancy)
         delta = self._solve(resid, var, shape)[0]
-        out = (resid - delta @ self.design(shape is not None).T) / np.sqrt(var)
+        out = self._whiten((resid - delta @ self.design(shape is not None).T) / np.sqrt(var))
         if not nuisances:
             return out
         return np.hstack([out, delta / self._prior_sd(delta.shape[0], shape)])
@@ -414,13 +483,16 @@ class PiLikelihood:
         one = {k: np.array([float(v)]) for k, v in params.items()}
         model = self.model_increments(one)[0]
         resid = self.data.increments - model
-        w = 1.0 / self.data.variance
         # the law's increments at these parameters scale the departure (module notes)
         x = np.hstack([self.data.offset_design, model[:, None] * self.shape_basis])
-        a = (x.T * w) @ x
+        if self.whitening is None:
+            w = 1.0 / self.data.variance
+            a = (x.T * w) @ x
+            b = (resid * w) @ x
+        else:
+            a, b = (v[0] for v in self._whitened_system(resid[None], self.data.variance, x))
         base = np.arange(BASE_NUISANCES)
         a[base, base] += self._prior_sd(1)[0] ** -2  # the shape coefficients: no prior
-        b = (resid * w) @ x
         try:
             cov = np.linalg.inv(a)
         except np.linalg.LinAlgError:
