@@ -66,6 +66,7 @@ def stub_fits(
     monkeypatch.setattr(comparison, "_optimise", optimise)
     monkeypatch.setattr(comparison, "_fit_law", fit_law)
     monkeypatch.setattr(comparison, "reduction", lambda *args: None)
+    monkeypatch.setattr(comparison, "reduction_among", lambda *args: None)
     monkeypatch.setattr(comparison, "pareto_k_max", lambda loo: 0.1)
     monkeypatch.setattr(
         comparison,

@@ -19,7 +19,7 @@ from bayestribo import simulate
 from bayestribo.inference import prepare
 from bayestribo.inference.comparison import LawComparison, compare_prepared
 from bayestribo.inference.pipeline import build_posterior, find_optimum
-from bayestribo.inference.reduction import REDUCTION_LOSS, reduction
+from bayestribo.inference.reduction import REDUCTION_LOSS, reduction, reduction_among
 from bayestribo.inference.sampling import SamplerSettings
 from bayestribo.synthetic import DissipationLaw
 
@@ -116,6 +116,19 @@ def test_a_law_reduces_only_to_a_converged_nested_law(coulomb_run):
     assert reduction("coulomb+power", bigger, theta, _fitted(False), optima) is None
 
 
+def test_a_law_reduces_by_the_optima_alone_to_any_law_named(coulomb_run):
+    # the screening's use: the law reduced to need not be sampled, only optimised
+    bigger, theta, optima = _optima(coulomb_run, "coulomb+power", "coulomb")
+    assert reduction_among("coulomb+power", bigger, theta, ["coulomb"], optima) == (
+        "coulomb",
+        ["power"],
+    )
+    # a law not named, or named without an optimum, is not reduced to
+    assert reduction_among("coulomb+power", bigger, theta, [], optima) is None
+    assert reduction_among("coulomb+power", bigger, theta, ["coulomb"], {}) is None
+    assert reduction_among("coulomb+power", bigger, theta, ["viscous"], optima) is None
+
+
 def test_a_drag_the_data_need_does_not_reduce(both_run):
     # viscous damping in the record: coulomb+power's drag stands for it (α near 1),
     # and removing it costs far more than half a unit
@@ -123,6 +136,7 @@ def test_a_drag_the_data_need_does_not_reduce(both_run):
     names = bigger.names
     assert theta[names.index("zeta_alpha")] > 1e-3
     assert reduction("coulomb+power", bigger, theta, _fitted(True), optima) is None
+    assert reduction_among("coulomb+power", bigger, theta, ["coulomb"], optima) is None
 
 
 def test_the_comparison_text_names_the_laws_reduced_as_a_result_reads_it_back():

@@ -10,14 +10,17 @@ import numpy as np
 import pytest
 from _comparison_stubs import N, lpd_shifted, stub_fits
 
+from bayestribo.inference import comparison
 from bayestribo.inference.choice import SMALL_ELPD_DIFFERENCE
 from bayestribo.inference.comparison import compare_prepared
 from bayestribo.inference.screening import (
     SCREEN_FACTOR,
     optimum_elpd,
     screen,
+    screened_by_reduction,
     turning_point_misfit,
 )
+from bayestribo.inference.settling import FACTOR
 
 
 def test_a_law_within_the_margin_is_kept_and_one_beyond_it_is_screened_out():
@@ -126,3 +129,94 @@ def test_fit_takes_quiet():
 
     args = build_parser().parse_args(["fit", "run.csv", "--law", "auto", "--quiet"])
     assert args.quiet and args.law == "auto"
+
+
+def _row(diff: float, dse: float, screened: bool = False) -> dict:
+    return {"elpd_diff": diff, "dse": dse, "screened": screened, "stage": "optimum"}
+
+
+def test_a_law_that_is_a_screened_law_at_its_optimum_goes_with_it():
+    # far behind (a difference of 4.3 dse: kept by the screen's limit of 6 dse) and
+    # its extra term at zero: the nested law screened out stands for it
+    screens = {
+        "viscous": _row(3.2e9, 5.2e8, screened=True),
+        "viscous+quadratic": _row(3.3e9, 7.7e8),
+        "viscous+quadratic+x": _row(3.4e9, 7.8e8),
+        "close": _row(40.0, 25.0),
+        "own": _row(3.0e9, 5.0e8),
+        "best": _row(0.0, 0.0),
+    }
+    asked: list[tuple[str, list[str]]] = []
+
+    def reduces(law, laws):
+        asked.append((law, laws))
+        if law == "own":
+            return None
+        return (laws[-1], ["quadratic"]) if laws else None
+
+    out = screened_by_reduction(list(screens), screens, reduces)
+    assert sorted(out) == ["viscous+quadratic", "viscous+quadratic+x"]
+    row = out["viscous+quadratic"]
+    assert row["screened"] and row["stage"] == "reduction"
+    assert row["reduces_to"] == "viscous" and row["terms_at_zero"] == ["quadratic"]
+    assert row["elpd_diff"] == screens["viscous+quadratic"]["elpd_diff"]
+    # a law screened out this way counts for the laws after it
+    assert out["viscous+quadratic+x"]["reduces_to"] == "viscous+quadratic"
+    # within the tie rule's reach of the best (40 < 2 x 25) or at the best: never asked
+    assert [law for law, _ in asked] == ["viscous+quadratic", "viscous+quadratic+x", "own"]
+    assert not screens["viscous+quadratic"]["screened"]  # the screen's rows are kept
+
+
+def test_a_law_not_clearly_behind_the_best_is_not_screened_by_reduction():
+    # the tie rule's reach is max(4, 2 dse); clearly behind: beyond it by a third
+    clear = 1.0 + 1.0 / FACTOR
+    screens = {
+        "a": _row(300.0, 1.0, screened=True),
+        "at the reach": _row(SMALL_ELPD_DIFFERENCE, 0.1),
+        "past it by less than a third": _row(2.0 * 10.0 * clear - 0.5, 10.0),
+        "clearly behind": _row(2.0 * 10.0 * clear + 0.5, 10.0),
+        "small reach, clearly behind": _row(SMALL_ELPD_DIFFERENCE * clear + 0.1, 0.1),
+    }
+    out = screened_by_reduction(list(screens), screens, lambda law, laws: ("a", ["t"]))
+    assert sorted(out) == ["clearly behind", "small reach, clearly behind"]
+
+
+@pytest.mark.filterwarnings("ignore")
+def test_a_law_that_reduces_to_a_screened_law_is_not_sampled(monkeypatch):
+    # viscous+quadratic is behind by 2000 with a dse of 400 at its optimum (5 dse: kept
+    # by the screen), and at its optimum it is viscous, which is screened out
+    shifts = {"viscous": 5000.0, "viscous+quadratic": 2000.0, "viscous+coulomb": 0.0}
+    spread = {"viscous+quadratic": 400.0 / np.sqrt(N), "viscous+coulomb": 0.0}
+    sampled = stub_fits(monkeypatch, shifts, spread=spread)
+    calls: list[tuple[str, list[str]]] = []
+
+    def among(law, posterior, theta, laws, optima):
+        calls.append((law, list(laws)))
+        return ("viscous", ["quadratic"]) if law == "viscous+quadratic" else None
+
+    monkeypatch.setattr(comparison, "reduction_among", among)
+    lines: list[str] = []
+    c, runs = compare_prepared(
+        SimpleNamespace(name="stub"), list(shifts), seed=1, rivals=False, progress=lines.append
+    )
+    assert sampled == ["viscous+coulomb"] == list(runs)
+    assert calls == [("viscous+quadratic", ["viscous"])]
+    assert c.screened == ["viscous", "viscous+quadratic"]
+    row = c.table["viscous+quadratic"]
+    assert row["screened"] and row["sampled"] is False and row["converged"] is None
+    assert row["screen"]["stage"] == "reduction" and row["screen"]["reduces_to"] == "viscous"
+    assert row["screen"]["elpd_diff"] < row["screen"]["limit"]  # kept by the screen alone
+    assert "viscous+quadratic" not in c.equivalent
+    assert c.verdict == "viscous+coulomb"
+    assert any("cannot win" in line and "viscous+quadratic" in line for line in lines)
+
+
+@pytest.mark.filterwarnings("ignore")
+def test_without_screening_a_law_that_reduces_to_a_far_law_is_sampled(monkeypatch):
+    shifts = {"viscous": 5000.0, "viscous+quadratic": 2000.0, "viscous+coulomb": 0.0}
+    sampled = stub_fits(monkeypatch, shifts)
+    monkeypatch.setattr(comparison, "reduction_among", lambda *args: ("viscous", ["quadratic"]))
+    c, _ = compare_prepared(
+        SimpleNamespace(name="stub"), list(shifts), seed=1, rivals=False, screening=False
+    )
+    assert sorted(sampled) == sorted(shifts) and c.screened == []

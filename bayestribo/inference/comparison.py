@@ -54,8 +54,11 @@ Screening. Every law is first taken to its optimum on the posterior it would be
 sampled on; a law whose ΔE(A) cannot follow the turning points', or whose expected log
 predictive density estimated at its optimum falls far behind the best one's, is
 *screened out*, not sampled and not compared by PSIS-LOO
-(:mod:`bayestribo.inference.screening`); its row says ``screened`` and ``screen``, with
-the misfit checks at its optimum, and the comparison's text names it.
+(:mod:`bayestribo.inference.screening`); so is a law that is, at its optimum, a law
+screened out (its extra terms at zero, the rule of Reduction) and whose own estimate
+is clearly behind the best's (``screen`` says ``reduces_to``); its row says
+``screened`` and ``screen``, with the misfit checks at its optimum, and the
+comparison's text names it.
 
 Settling. The laws left are sampled smallest first, and before each the verdict and
 best among the laws sampled so far are known. A law that misfits at its optimum (or
@@ -133,12 +136,13 @@ from bayestribo.inference.loo import law_loo, loo_frame, pareto_k_max
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.preparation import prepare, regrid
 from bayestribo.inference.records import LawComparison
-from bayestribo.inference.reduction import nested_start, reduction
+from bayestribo.inference.reduction import nested_start, reduction, reduction_among
 from bayestribo.inference.sampling import SamplerSettings
 from bayestribo.inference.screening import (
     LawOptimum,
     optimum_elpd,
     screen,
+    screened_by_reduction,
     turning_point_screen,
 )
 from bayestribo.inference.settling import settle
@@ -514,6 +518,17 @@ def compare_prepared(
     for law in ordered:
         if law in screens:
             screens[law] = {"stage": "optimum", **screens[law]}
+    if screens:
+        # a law that is, at its optimum, a law screened out goes with it (screening.py)
+        screens.update(
+            screened_by_reduction(
+                ordered,
+                screens,
+                lambda law, out: reduction_among(
+                    law, found[law].posterior, found[law].optimum[0], out, optima
+                ),
+            )
+        )
     screened = [law for law in ordered if screens.get(law, {}).get("screened")]
     for law in screened:
         at = found[law]

@@ -21,7 +21,7 @@ reduces.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from typing import Any
 
 import numpy as np
@@ -31,7 +31,7 @@ from bayestribo.inference.choice import complexity, law_of
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.types import PreparedRun, Sampled
 
-__all__ = ["REDUCTION_LOSS", "nested_start", "reduction"]
+__all__ = ["REDUCTION_LOSS", "nested_start", "reduction", "reduction_among"]
 
 #: Log posterior density a law's optimum may lose with its extra terms at zero and
 #: still reduce to the law it nests (module notes): half a unit, the reach of a bound
@@ -71,6 +71,42 @@ def reduction(
     support, stops the term) put on its null, the other coordinates at ``theta`` or at
     the nested law's optimum, whichever is higher. The largest such law is the one. The
     law-free fit never reduces (its answer is its ΔE(A), not a mechanism)."""
+    converged = [other for other, sampled in fitted.items() if sampled.run.converged]
+    return reduction_among(law, posterior, theta, converged, optima)
+
+
+def reduction_among(
+    law: str,
+    posterior: Posterior,
+    theta: NDArray,
+    laws: Iterable[str],
+    optima: Mapping[str, Mapping[str, float]],
+) -> tuple[str, list[str]] | None:
+    """The largest of ``laws`` that ``law`` nests and reduces to at its optimum
+    ``theta``, and the terms at zero; None when it reduces to none.
+
+    The rule of :func:`reduction`, over any laws whose optimum is in ``optima`` (by
+    coordinate) rather than over the laws sampled and converged: the screening takes
+    the laws screened out (:func:`bayestribo.inference.screening.screened_by_reduction`).
+
+    Parameters
+    ----------
+    law : str
+        The law judged.
+    posterior : Posterior
+        Its posterior (log density in units of log probability).
+    theta : ndarray
+        Its optimum, in the coordinates of ``posterior.names``.
+    laws : iterable of str
+        The laws it may reduce to.
+    optima : mapping
+        Law -> its optimum by coordinate name; a law not in it is not reduced to.
+
+    Returns
+    -------
+    (str, list of str) or None
+        The law reduced to and the names of the terms at zero.
+    """
     the_law = posterior.law
     if the_law.name == law_of("free").name:
         return None
@@ -80,11 +116,8 @@ def reduction(
     best = float(posterior(np.asarray(theta, dtype=float)[None])[0])
     nested = [
         other
-        for other, sampled in fitted.items()
-        if sampled.run.converged
-        and other in optima
-        and law_of(other).name != the_law.name
-        and the_law.nests(law_of(other))
+        for other in dict.fromkeys(laws)
+        if other in optima and law_of(other).name != the_law.name and the_law.nests(law_of(other))
     ]
     for other in sorted(nested, key=complexity, reverse=True):
         extra = [t for t in the_law.terms if t.name not in law_of(other).term_names]

@@ -17,11 +17,27 @@ PSIS-LOO, and decide the verdict. Against the sampled comparison of every candid
 (``benchmarks/auto_screening.py``: the bundled run and the five real recordings of
 ``../shared/external-data``, side by side with the comparison before screening) no
 law screened out was as good as the best there, and the verdicts are the same.
+
+A law that is, at its optimum, a law screened out is screened out with it
+(:func:`screened_by_reduction`): its extra terms sit on their null there, within
+half a unit of log density (the rule of :mod:`bayestribo.inference.reduction`), and
+its own estimate is clearly behind the best's (beyond the tie rule's reach by a
+third of it, as :mod:`bayestribo.inference.settling` judges a standing). The nested law
+stands for it, as a law sampled and converged stands for the laws that reduce to it.
+Such a law's own estimate is no steadier than its optimiser's path: far behind the
+best, the dse grows with the difference, and a change in the last digits of the exact
+Π kernel that moves the optimiser's path moves their ratio across the screen's limit.
+On the simulated ``coulomb+hysteretic`` decay of ``benchmarks/laws.py`` (run 1 at 10x
+the resolution), ``viscous+quadratic`` and ``quadratic+hysteretic`` have γ = 0 at their
+optimum and are 3.3e9 behind the best at 4.3 and 4.7 dse, where the ``viscous`` and
+``hysteretic`` they reduce to are at 6.1 dse, screened out; sampled (on the exact
+posterior, three surrogates having failed) they took nine tenths of the fit's time, and
+PSIS-LOO put them 5.9 and 6.1 dse behind the best, misfitting.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -38,6 +54,7 @@ __all__ = [
     "LawOptimum",
     "optimum_elpd",
     "screen",
+    "screened_by_reduction",
     "turning_point_misfit",
     "turning_point_screen",
 ]
@@ -150,6 +167,61 @@ def screen(
             "best": best,
             "screened": bool(diff > limit),
         }
+    return out
+
+
+def screened_by_reduction(
+    order: Sequence[str],
+    screens: Mapping[str, Mapping[str, Any]],
+    reduces: Callable[[str, list[str]], tuple[str, list[str]] | None],
+) -> dict[str, dict[str, Any]]:
+    """The laws left by :func:`screen` that are, at their optimum, a law it screened out
+    (module notes).
+
+    Parameters
+    ----------
+    order : sequence of str
+        The laws, smallest first: a law screened out here counts as screened out for
+        the laws after it.
+    screens : mapping
+        :func:`screen`'s answer.
+    reduces : callable
+        ``reduces(law, laws)``: the one of ``laws`` that ``law`` reduces to at its
+        optimum and the terms at zero, or None
+        (:func:`bayestribo.inference.reduction.reduction_among`).
+
+    Returns
+    -------
+    dict
+        Law -> its row of ``screens`` with ``stage`` "reduction", ``screened`` True,
+        ``reduces_to`` (the law screened out that it is at its optimum) and
+        ``terms_at_zero``. A law whose estimate is not clearly behind the best's,
+        beyond the tie rule's reach ``max(4, 2 dse)`` by a third of it (as
+        :func:`bayestribo.inference.settling.settle` judges a law's standing), is never
+        screened out this way.
+    """
+    from bayestribo.inference.settling import FACTOR  # settling imports this module
+
+    out_laws = [law for law in order if screens.get(law, {}).get("screened")]
+    out: dict[str, dict[str, Any]] = {}
+    for law in order:
+        row = screens.get(law)
+        if not row or row.get("screened") or row.get("elpd_diff") is None:
+            continue
+        reach = max(SMALL_ELPD_DIFFERENCE, 2.0 * row["dse"])
+        if not row["elpd_diff"] >= reach * (1.0 + 1.0 / FACTOR):
+            continue
+        reduced = reduces(law, list(out_laws))
+        if reduced is None:
+            continue
+        out[law] = {
+            **row,
+            "stage": "reduction",
+            "screened": True,
+            "reduces_to": reduced[0],
+            "terms_at_zero": list(reduced[1]),
+        }
+        out_laws.append(law)
     return out
 
 
