@@ -200,8 +200,6 @@ def screened_by_reduction(
         :func:`bayestribo.inference.settling.settle` judges a law's standing), is never
         screened out this way.
     """
-    from bayestribo.inference.settling import FACTOR  # settling imports this module
-
     out_laws = [law for law in order if screens.get(law, {}).get("screened")]
     out: dict[str, dict[str, Any]] = {}
     for law in order:
@@ -209,7 +207,7 @@ def screened_by_reduction(
         if not row or row.get("screened") or row.get("elpd_diff") is None:
             continue
         reach = max(SMALL_ELPD_DIFFERENCE, 2.0 * row["dse"])
-        if not row["elpd_diff"] >= reach * (1.0 + 1.0 / FACTOR):
+        if not row["elpd_diff"] >= reach * (1.0 + 1.0 / SCREEN_FACTOR):
             continue
         reduced = reduces(law, list(out_laws))
         if reduced is None:

@@ -56,13 +56,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from bayestribo.inference.screening import optimum_elpd
+from bayestribo.inference.screening import SCREEN_FACTOR, optimum_elpd
 
 __all__ = ["FACTOR", "settle"]
 
 #: How far inside (or beyond) the tie rule's reach an estimate at the optimum must be
 #: for the verdict not to hang on it: a third of the reach, the screening's factor.
-FACTOR = 3.0
+FACTOR = SCREEN_FACTOR
 
 
 def _dse(a: NDArray, b: NDArray) -> float:
