@@ -86,7 +86,7 @@ def unidentified_reasons(draws: NDArray, names: Sequence[str], law: Law) -> list
             f"{scale.symbol} ({scale.name}) reaches {null:g}, where the {term.name} term "
             f"exerts no force (95 % of the draws {low:.3g} to {high:.3g}): there "
             f"{symbols} {'has' if len(others) == 1 else 'have'} no effect, so this record "
-            f"does not identify {symbols} (95 % of the draws {', '.join(spread)}) and the "
+            f"does not identify {symbols} (95 % of the draws: {', '.join(spread)}) and the "
             f"walkers cross a ridge, not a mode{without}"
         )
     return reasons
