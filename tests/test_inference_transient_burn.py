@@ -61,3 +61,32 @@ def test_a_run_not_converged_otherwise_keeps_its_draws_and_names_the_transient()
     assert not sampled.run.converged and report.dropped_steps == 0
     assert sampled.run.reasons[0].startswith("R-hat")
     assert "burn-in too short" in sampled.run.reasons[-1]
+
+
+class _Stored:
+    """Ensembles whose draws are given (the sampler's ``flat`` over them)."""
+
+    def __init__(self, x: np.ndarray) -> None:
+        self.x = x  # (ensembles, steps, walkers, d)
+
+    def flat(self, discard: int, thin: int) -> tuple[np.ndarray, np.ndarray]:
+        x = self.x[:, discard::thin]
+        n_ens, steps, walkers, d = x.shape
+        return x.reshape(n_ens, steps * walkers, d), -0.5 * np.sum(x**2, axis=3).reshape(n_ens, -1)
+
+
+def test_the_sampler_extends_its_burn_in_past_a_transient():
+    from bayestribo.inference.sampling import _past_transient
+
+    rng = np.random.default_rng(9)
+    steps, burn = 600, 10
+    x = rng.standard_normal((ENSEMBLES, steps, WALKERS, 2))
+    x[:, : burn + AWAY] += 30.0  # the walkers' way in, past the burn-in
+    settings = SamplerSettings(n_walkers=WALKERS, n_ensembles=ENSEMBLES)
+    past = _past_transient(_Stored(x), steps, burn, 1, np.ones(2), settings, ("a", "b"))
+    assert past is not None
+    assert past[:3] == (steps, burn + AWAY, 1)
+    assert np.all(past[3] < settings.rhat_max)
+    # no transient: the burn-in stays the sampler's
+    x[:, : burn + AWAY] -= 30.0
+    assert _past_transient(_Stored(x), steps, burn, 1, np.ones(2), settings, ("a", "b")) is None

@@ -82,6 +82,7 @@ __all__ = [
     "find_modes",
     "mode_check",
     "run_or_failure",
+    "transient_steps",
 ]
 
 #: Smallest group of draws split off as a mode of its own.
@@ -494,36 +495,61 @@ def mode_check(sampled: Any) -> tuple[Any, ModeReport]:
     return sampled, report
 
 
+def transient_steps(
+    chains: NDArray, log_prob: NDArray, names: Sequence[str], n_walkers: int
+) -> int:
+    """Kept steps at the start of the draws that hold the walkers' way to the posterior.
+
+    Parameters
+    ----------
+    chains, log_prob, names, n_walkers
+        As :func:`find_modes` takes them.
+
+    Returns
+    -------
+    int
+        The kept steps up to the last visit of the transients (rule 6 of the module
+        notes) when every minor mode that matters is one and what follows them holds
+        no minor mode that matters; 0 otherwise (no transient, or other modes).
+    """
+    report = find_modes(chains, log_prob, names, n_walkers)
+    if not report.matters:
+        return 0
+    minor = [m for m in report.modes[1:] if _matters(m, report.modes[0])]
+    if any(m.kind != "transient" for m in minor):
+        return 0
+    per_step = max(int(n_walkers), 1)
+    kept = np.asarray(chains).shape[1] // per_step
+    cut = max(round(m.steps[1] * max(1, kept - 1)) for m in minor) + 1
+    if cut >= kept - 1:
+        return 0
+    rest = np.asarray(log_prob)[:, cut * per_step :]
+    if find_modes(np.asarray(chains)[:, cut * per_step :], rest, names, n_walkers).matters:
+        return 0
+    return int(cut)
+
+
 def _past_transients(sampled: Any, report: ModeReport) -> tuple[Any, ModeReport] | None:
     """The sampled posterior with its burn-in extended past the transients of
-    ``report``, when every minor mode that matters is one and what is left meets the
-    sampler's rule; else None.
+    ``report`` (:func:`transient_steps`), when what is left meets the sampler's rule;
+    else None.
 
     A transient holds the walkers' way from where they started to the posterior (its
     draws are not the posterior's: rule 6 of the module notes). The kept steps up to
     its last visit are dropped, in every ensemble; the rest must still hold
-    ``autocorr_multiple`` autocorrelation times after the burn-in, have R-hat below
-    ``rhat_max`` for every parameter, and hold no minor mode that matters. The report
-    returned is that of the draws kept, with ``dropped_steps`` the sampler steps added
-    to the burn-in.
+    ``autocorr_multiple`` autocorrelation times after the burn-in and have R-hat below
+    ``rhat_max`` for every parameter. The report returned is that of the draws kept,
+    with ``dropped_steps`` the sampler steps added to the burn-in.
     """
     from bayestribo.inference.sampling import rhat
 
     run, settings = sampled.run, sampled.settings
-    minor = [m for m in report.modes[1:] if _matters(m, report.modes[0])]
-    if not minor or any(m.kind != "transient" for m in minor):
-        return None
     per_step = max(int(settings.n_walkers), 1)
-    kept = run.chains.shape[1] // per_step
-    if kept < 2:
-        return None
-    last = max(1, kept - 1)
-    cut = max(round(m.steps[1] * last) for m in minor) + 1
-    if cut >= kept:
+    cut = transient_steps(run.chains, run.log_prob, run.names, per_step)
+    if cut == 0:
         return None
     burn = run.burn + cut * run.thin
-    tau = float(np.max(run.autocorr_time))
-    if not run.n_steps - burn >= settings.autocorr_multiple * tau:
+    if not run.n_steps - burn >= settings.autocorr_multiple * float(np.max(run.autocorr_time)):
         return None
     chains = run.chains[:, cut * per_step :]
     log_prob = run.log_prob[:, cut * per_step :]
@@ -531,8 +557,6 @@ def _past_transients(sampled: Any, report: ModeReport) -> tuple[Any, ModeReport]
     if not np.all(r_hat < settings.rhat_max):
         return None
     after = find_modes(chains, log_prob, run.names, per_step)
-    if after.matters:
-        return None
     n_ens = run.chains.shape[0]
     trimmed = replace(
         run,
