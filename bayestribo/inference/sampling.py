@@ -512,6 +512,7 @@ def run_ensembles(
     steps = 0
     enough = settled = False
     extended: int | None = None  # a burn-in extended past a transient
+    skip = 0  # the end of a transient found at the start of the draws (steps)
     try:
         while steps < settings.max_steps:
             chunk = settings.check_every
@@ -527,12 +528,19 @@ def run_ensembles(
             if bar is not None:
                 bar.update(chunk)
             burn = min(int(2 * np.max(tau)) if np.all(np.isfinite(tau)) else steps // 3, steps // 2)
+            burn = max(burn, min(skip, steps // 2))
             tau = np.max(_autocorr_times(ensembles.chains(burn)), axis=0)
             if not np.all(np.isfinite(tau)):
                 # A stuck chain (no move accepted): τ is undefined; keep sampling.
                 history, enough, settled = [], False, False
                 continue
             burn = math.ceil(2 * np.max(tau))
+            if history and np.max(tau) < 0.5 * np.max(history[-1][1]):
+                # τ fell by half: the draws the last estimate kept may begin with the
+                # walkers' way in from their start (a transient, which lengthens τ
+                # while it is kept): the burn-in is extended past it from now on
+                skip = max(skip, _transient_end(ensembles, burn, tau, settings, labels))
+            burn = max(burn, skip)
             earlier = [t for at, t in history if at <= steps - settings.settle_steps]
             settled = bool(earlier) and bool(np.all(np.abs(tau - earlier[-1]) < 0.1 * tau))
             history.append((steps, tau))
@@ -560,7 +568,7 @@ def run_ensembles(
             bar.close()
 
     defined = bool(np.all(np.isfinite(tau)))
-    burn = min(math.ceil(2 * np.max(tau)), steps - 1) if defined else steps // 2
+    burn = min(max(math.ceil(2 * np.max(tau)), skip), steps - 1) if defined else steps // 2
     if extended is not None:
         burn = extended
     thin = max(1, math.ceil(np.max(tau))) if defined else 1
@@ -603,6 +611,22 @@ def run_ensembles(
         names=tuple(labels),
         walker_acceptance=ensembles.walker_acceptance(),
     )
+
+
+def _transient_end(
+    ensembles: _Ensembles,
+    burn: int,
+    tau: NDArray,
+    settings: SamplerSettings,
+    labels: Sequence[str],
+) -> int:
+    """The step at which a transient at the start of the draws after ``burn`` ends
+    (:func:`bayestribo.inference.modes.transient_steps`, the draws thinned by ⌈τ⌉), or
+    0 when there is none."""
+    thin = max(1, math.ceil(np.max(tau)))
+    chains, lps = ensembles.flat(burn, thin)
+    cut = transient_steps(chains, lps, labels, settings.n_walkers)
+    return burn + cut * thin if cut else 0
 
 
 def _past_transient(
