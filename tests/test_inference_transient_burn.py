@@ -90,3 +90,15 @@ def test_the_sampler_extends_its_burn_in_past_a_transient():
     # no transient: the burn-in stays the sampler's
     x[:, : burn + AWAY] -= 30.0
     assert _past_transient(_Stored(x), steps, burn, 1, np.ones(2), settings, ("a", "b")) is None
+
+
+def test_the_end_of_a_transient_is_found_in_steps_of_the_sampler():
+    from bayestribo.inference.sampling import _transient_end
+
+    rng = np.random.default_rng(10)
+    x = rng.standard_normal((ENSEMBLES, 600, WALKERS, 2))
+    x[:, : 10 + 2 * AWAY] += 30.0  # 2 AWAY steps past a burn-in of 10, thinned by 2
+    settings = SamplerSettings(n_walkers=WALKERS, n_ensembles=ENSEMBLES)
+    assert _transient_end(_Stored(x), 10, np.full(2, 2.0), settings, ("a", "b")) == 10 + 2 * AWAY
+    x[:, : 10 + 2 * AWAY] -= 30.0
+    assert _transient_end(_Stored(x), 10, np.full(2, 2.0), settings, ("a", "b")) == 0
