@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -25,6 +25,7 @@ from numpy.typing import NDArray
 from bayestribo._warnings import warn
 from bayestribo.errors import FrequencyTrendWarning, MisfitWarning, PriorBoundWarning
 from bayestribo.inference.dissipation import FEWEST_HALF_CYCLES
+from bayestribo.inference.identifiability import unidentified_reasons
 from bayestribo.inference.likelihood import ShapeDeparture
 from bayestribo.inference.modes import ModeReport, mode_check
 from bayestribo.inference.posterior import Posterior
@@ -65,8 +66,11 @@ class FitChecks:
     Attributes
     ----------
     sampled : Sampled
-        The sampled posterior as checked: not converged where a minor mode matters
-        (:func:`~bayestribo.inference.modes.mode_check`).
+        The sampled posterior as checked: not converged where a minor mode matters,
+        its burn-in extended past a transient (:func:`~bayestribo.inference.modes.
+        mode_check`); a run not converged names the parameters a term whose force the
+        draws reach zero leaves unidentified (:func:`~bayestribo.inference.
+        identifiability.unidentified_reasons`).
     modes : ModeReport
         The mode check.
     discrepancy : bool
@@ -130,6 +134,15 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
     sampled, modes = mode_check(sampled)
     # -- end of the mode check --
     posterior, run = sampled.posterior, sampled.run
+    if not run.converged:
+        # a term whose force the draws put at zero: its other parameters are not
+        # identified, which says why the walkers did not converge (inference/
+        # identifiability.py)
+        flat_draws = run.chains.reshape(-1, run.chains.shape[-1])
+        unseen = unidentified_reasons(flat_draws, run.names, posterior.law)
+        if unseen:
+            run = replace(run, reasons=[*run.reasons, *unseen])
+            sampled = replace(sampled, run=run)
     name = prepared.name
     discrepancy = any(
         n in posterior.names or n in posterior.fixed for n in ("log10_discrepancy", "log10_shape")

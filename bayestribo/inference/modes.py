@@ -82,6 +82,7 @@ __all__ = [
     "find_modes",
     "mode_check",
     "run_or_failure",
+    "transient_steps",
 ]
 
 #: Smallest group of draws split off as a mode of its own.
@@ -176,12 +177,17 @@ class ModeReport:
         draws must not be summarised as one population.
     reason : str
         The non-convergence reason naming the modes ("" when nothing matters).
+    dropped_steps : int
+        Sampler steps added to the burn-in to drop a transient (the walkers' way to
+        the posterior from where they started) that the autocorrelation's burn-in did
+        not cover (:func:`mode_check`); 0 when none was.
     """
 
     modes: list[Mode]
     names: tuple[str, ...]
     matters: bool
     reason: str = ""
+    dropped_steps: int = 0
     rule: dict[str, float] = field(
         default_factory=lambda: {
             "min_weight": MIN_WEIGHT,
@@ -202,6 +208,7 @@ class ModeReport:
             "n_modes": self.n_modes,
             "matters": self.matters,
             "reason": self.reason,
+            "dropped_steps": self.dropped_steps,
             "rule": dict(self.rule),
             "modes": [m.to_dict() for m in self.modes],
         }
@@ -467,16 +474,105 @@ def mode_check(sampled: Any) -> tuple[Any, ModeReport]:
     Returns
     -------
     sampled : Sampled
-        ``sampled`` itself, or, when a minor mode matters, a copy whose run is not
-        converged with the modes' reason added to its reasons.
+        ``sampled`` itself; when every minor mode that matters is a transient of a
+        converged run, a copy with the burn-in extended past it where the draws left
+        still meet the sampler's rule (:func:`_past_transients`); otherwise, when a
+        minor mode matters, a copy whose run is not converged with the modes' reason
+        added to its reasons.
     report : ModeReport
+        Of the draws in the ``sampled`` returned.
     """
     run = sampled.run
     report = find_modes(run.chains, run.log_prob, run.names, sampled.settings.n_walkers)
+    if report.matters and run.converged:
+        # -- a transient the burn-in did not cover: the burn-in extended past it --
+        trimmed = _past_transients(sampled, report)
+        if trimmed is not None:
+            return trimmed
     if report.matters:
         run = replace(run, converged=False, reasons=[*run.reasons, report.reason])
         sampled = replace(sampled, run=run)
     return sampled, report
+
+
+def transient_steps(
+    chains: NDArray, log_prob: NDArray, names: Sequence[str], n_walkers: int
+) -> int:
+    """Kept steps at the start of the draws that hold the walkers' way to the posterior.
+
+    Parameters
+    ----------
+    chains, log_prob, names, n_walkers
+        As :func:`find_modes` takes them.
+
+    Returns
+    -------
+    int
+        The kept steps up to the last visit of the transients (rule 6 of the module
+        notes) when every minor mode that matters is one and what follows them holds
+        no minor mode that matters; 0 otherwise (no transient, or other modes).
+    """
+    report = find_modes(chains, log_prob, names, n_walkers)
+    if not report.matters:
+        return 0
+    minor = [m for m in report.modes[1:] if _matters(m, report.modes[0])]
+    if any(m.kind != "transient" for m in minor):
+        return 0
+    per_step = max(int(n_walkers), 1)
+    kept = np.asarray(chains).shape[1] // per_step
+    cut = max(round(m.steps[1] * max(1, kept - 1)) for m in minor) + 1
+    if cut >= kept - 1:
+        return 0
+    rest = np.asarray(log_prob)[:, cut * per_step :]
+    if find_modes(np.asarray(chains)[:, cut * per_step :], rest, names, n_walkers).matters:
+        return 0
+    return int(cut)
+
+
+def _past_transients(sampled: Any, report: ModeReport) -> tuple[Any, ModeReport] | None:
+    """The sampled posterior with its burn-in extended past the transients of
+    ``report`` (:func:`transient_steps`), when what is left meets the sampler's rule;
+    else None.
+
+    A transient holds the walkers' way from where they started to the posterior (its
+    draws are not the posterior's: rule 6 of the module notes). The kept steps up to
+    its last visit are dropped, in every ensemble; the rest must still hold
+    ``autocorr_multiple`` autocorrelation times after the burn-in and have R-hat below
+    ``rhat_max`` for every parameter. The report returned is that of the draws kept,
+    with ``dropped_steps`` the sampler steps added to the burn-in.
+    """
+    from bayestribo.inference.sampling import rhat
+
+    run, settings = sampled.run, sampled.settings
+    per_step = max(int(settings.n_walkers), 1)
+    cut = transient_steps(run.chains, run.log_prob, run.names, per_step)
+    if cut == 0:
+        return None
+    burn = run.burn + cut * run.thin
+    if not run.n_steps - burn >= settings.autocorr_multiple * float(np.max(run.autocorr_time)):
+        return None
+    chains = run.chains[:, cut * per_step :]
+    log_prob = run.log_prob[:, cut * per_step :]
+    r_hat = rhat(chains)
+    if not np.all(r_hat < settings.rhat_max):
+        return None
+    after = find_modes(chains, log_prob, run.names, per_step)
+    n_ens = run.chains.shape[0]
+    trimmed = replace(
+        run,
+        chains=chains,
+        log_prob=log_prob,
+        burn=burn,
+        rhat=r_hat,
+        ess=(run.n_steps - burn) * per_step * n_ens / run.autocorr_time,
+    )
+    pointwise = sampled.pointwise
+    if pointwise is not None:
+        pointwise = pointwise[:, cut * per_step :]
+    return (
+        replace(sampled, run=trimmed, pointwise=pointwise),
+        replace(after, dropped_steps=cut * run.thin),
+    )
 
 
 #: Errors inside the sampler that become a reported non-convergence (a NaN

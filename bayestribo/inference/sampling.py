@@ -12,6 +12,10 @@
   ``rhat_max`` for every parameter, or at ``max_steps``. Checking often (every 50
   steps by default) stops the run near the first step that meets the rule; comparing
   τ over at least 200 steps keeps "settled" as demanding as with checks 200 apart.
+* Where R-hat fails at a check because the kept draws begin with the walkers' way
+  from their start to the posterior (a transient the burn-in of 2τ did not cover:
+  :func:`bayestribo.inference.modes.transient_steps`), the burn-in is extended past it
+  and the run stops there when what is left still meets the rule.
 * Samples are thinned by ⌈τ⌉; the effective sample size of a parameter is
   (steps after burn-in × walkers × ensembles)/τ.
 * A run that does not meet the criteria is reported as not converged, never silently.
@@ -57,6 +61,7 @@ import scipy.fft
 from numpy.typing import NDArray
 
 from bayestribo.errors import BayestriboError
+from bayestribo.inference.modes import transient_steps
 from bayestribo.inference.moves import DESnookerMove, grouped_moves
 from bayestribo.summary import ParameterSummary
 
@@ -506,6 +511,8 @@ def run_ensembles(
     tau = np.full(ndim, np.inf)
     steps = 0
     enough = settled = False
+    extended: int | None = None  # a burn-in extended past a transient
+    skip = 0  # the end of a transient found at the start of the draws (steps)
     try:
         while steps < settings.max_steps:
             chunk = settings.check_every
@@ -521,12 +528,19 @@ def run_ensembles(
             if bar is not None:
                 bar.update(chunk)
             burn = min(int(2 * np.max(tau)) if np.all(np.isfinite(tau)) else steps // 3, steps // 2)
+            burn = max(burn, min(skip, steps // 2))
             tau = np.max(_autocorr_times(ensembles.chains(burn)), axis=0)
             if not np.all(np.isfinite(tau)):
                 # A stuck chain (no move accepted): τ is undefined; keep sampling.
                 history, enough, settled = [], False, False
                 continue
             burn = math.ceil(2 * np.max(tau))
+            if history and np.max(tau) < 0.5 * np.max(history[-1][1]):
+                # τ fell by half: the draws the last estimate kept may begin with the
+                # walkers' way in from their start (a transient, which lengthens τ
+                # while it is kept): the burn-in is extended past it from now on
+                skip = max(skip, _transient_end(ensembles, burn, tau, settings, labels))
+            burn = max(burn, skip)
             earlier = [t for at, t in history if at <= steps - settings.settle_steps]
             settled = bool(earlier) and bool(np.all(np.abs(tau - earlier[-1]) < 0.1 * tau))
             history.append((steps, tau))
@@ -541,12 +555,22 @@ def run_ensembles(
                 last_rhat = (steps, burn_now, thin_now, rhat(ensembles.flat(burn_now, thin_now)[0]))
                 if np.all(last_rhat[3] < settings.rhat_max):
                     break
+                # the walkers' way from their start to the posterior, left after the
+                # burn-in of 2τ, makes the ensembles disagree: the burn-in extended past
+                # it where what is left meets the rule (inference/modes.py)
+                past = _past_transient(ensembles, steps, burn_now, thin_now, tau, settings, labels)
+                if past is not None:
+                    last_rhat = past
+                    extended = past[1]
+                    break
     finally:
         if bar is not None:
             bar.close()
 
     defined = bool(np.all(np.isfinite(tau)))
-    burn = min(math.ceil(2 * np.max(tau)), steps - 1) if defined else steps // 2
+    burn = min(max(math.ceil(2 * np.max(tau)), skip), steps - 1) if defined else steps // 2
+    if extended is not None:
+        burn = extended
     thin = max(1, math.ceil(np.max(tau))) if defined else 1
     chains, lps = ensembles.flat(burn, thin)
     acceptance = ensembles.acceptance()
@@ -587,6 +611,47 @@ def run_ensembles(
         names=tuple(labels),
         walker_acceptance=ensembles.walker_acceptance(),
     )
+
+
+def _transient_end(
+    ensembles: _Ensembles,
+    burn: int,
+    tau: NDArray,
+    settings: SamplerSettings,
+    labels: Sequence[str],
+) -> int:
+    """The step at which a transient at the start of the draws after ``burn`` ends
+    (:func:`bayestribo.inference.modes.transient_steps`, the draws thinned by ⌈τ⌉), or
+    0 when there is none."""
+    thin = max(1, math.ceil(np.max(tau)))
+    chains, lps = ensembles.flat(burn, thin)
+    cut = transient_steps(chains, lps, labels, settings.n_walkers)
+    return burn + cut * thin if cut else 0
+
+
+def _past_transient(
+    ensembles: _Ensembles,
+    steps: int,
+    burn: int,
+    thin: int,
+    tau: NDArray,
+    settings: SamplerSettings,
+    labels: Sequence[str],
+) -> tuple[int, int, int, NDArray] | None:
+    """``(steps, burn, thin, R-hat)`` with the burn-in extended past a transient of the
+    draws kept (:func:`bayestribo.inference.modes.transient_steps`) when what is left
+    holds ``autocorr_multiple`` τ after it and R-hat below ``rhat_max``; else None."""
+    chains, lps = ensembles.flat(burn, thin)
+    cut = transient_steps(chains, lps, labels, settings.n_walkers)
+    if cut == 0:
+        return None
+    longer = burn + cut * thin
+    if not steps - longer >= settings.autocorr_multiple * np.max(tau):
+        return None
+    r_hat = rhat(ensembles.flat(longer, thin)[0])
+    if not np.all(r_hat < settings.rhat_max):
+        return None
+    return steps, longer, thin, r_hat
 
 
 class _Ensembles:

@@ -1,0 +1,92 @@
+"""A term the record does not see: its other parameters are not identified.
+
+A term's first parameter scales its force (ζ_α of the power-law drag, μ_k of Coulomb
+friction); at its ``null`` the term exerts no force, and the term's other parameters
+(α, μ_s/μ_k) have no effect on the motion. When the draws of the first parameter
+reach its null, the posterior of the others is a ridge along their whole prior, not a
+mode: the sampler crosses it slowly (HarmOsc3 under ``coulomb+power``: ζ_α at 0 with α
+anywhere in 0-3, and at α = 0 a drag that is a constant force trading with μ_k; τ ~
+1300 steps). :func:`unidentified_reasons` says so, naming the term, the parameters
+and the law without that term, so that a fit that does not converge there says why
+instead of only which criterion failed.
+
+The rule: the first parameter *reaches its null* when the lower end of its central 95 %
+interval is within :data:`REACH` of that interval's width from the null (the draws
+pile against it), and a *term's other parameter* is named when it is sampled.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bayestribo.model.laws.law import Law
+
+__all__ = ["REACH", "unidentified_reasons"]
+
+#: The lower end of the central 95 % interval within this fraction of the interval's
+#: width from the null: the draws reach the null.
+REACH = 0.05
+
+
+def unidentified_reasons(draws: NDArray, names: Sequence[str], law: Law) -> list[str]:
+    """Reasons naming the parameters a record does not identify because their term's
+    force reaches zero in the draws.
+
+    Parameters
+    ----------
+    draws : ndarray
+        Posterior draws in sampling coordinates, shape (n, len(names)).
+    names : sequence of str
+        The sampled parameters' names (the columns of ``draws``).
+    law : Law
+        The fitted law (:class:`~bayestribo.model.laws.Law`).
+
+    Returns
+    -------
+    list of str
+        One reason per term whose first parameter reaches its null while another of
+        its parameters is sampled (empty when there is none).
+    """
+    draws = np.atleast_2d(np.asarray(draws, dtype=float))
+    names = list(names)
+    terms = list(law.terms)
+    reasons: list[str] = []
+    for term in terms:
+        if not term.parameters or term.parameters[0].name not in names:
+            continue
+        scale = term.parameters[0]
+        others = [p for p in term.parameters[1:] if p.name in names]
+        if not others:
+            continue
+        x = draws[:, names.index(scale.name)]
+        x = x[np.isfinite(x)]
+        if x.size < 2:
+            continue
+        null = float(scale.null if scale.null is not None else scale.low)
+        low, high = (float(v) for v in np.quantile(x, [0.025, 0.975]))
+        if not high > null or low - null > REACH * (high - null):
+            continue
+        spread = []
+        for p in others:
+            y = draws[:, names.index(p.name)]
+            y = y[np.isfinite(y)]
+            a, b = (float(v) for v in np.quantile(y, [0.025, 0.975]))
+            spread.append(f"{p.symbol} ({p.name}) {a:.3g} to {b:.3g}")
+        rest = [t.name for t in terms if t is not term]
+        without = (
+            f"; the record is described without the {term.name} term: fit law='{'+'.join(rest)}'"
+            if rest
+            else ""
+        )
+        symbols = ", ".join(p.symbol for p in others)
+        reasons.append(
+            f"{scale.symbol} ({scale.name}) reaches {null:g}, where the {term.name} term "
+            f"exerts no force (95 % of the draws {low:.3g} to {high:.3g}): there "
+            f"{symbols} {'has' if len(others) == 1 else 'have'} no effect, so this record "
+            f"does not identify {symbols} (95 % of the draws: {', '.join(spread)}) and the "
+            f"walkers cross a ridge, not a mode{without}"
+        )
+    return reasons
