@@ -25,7 +25,8 @@ import numpy as np
 import pytest
 
 from bayestribo.errors import ConvergenceWarning
-from bayestribo.inference.modes import MIN_DRAWS, find_modes, run_or_failure
+from bayestribo.inference.chains import run_or_failure
+from bayestribo.inference.modes import MIN_DRAWS, find_modes
 from bayestribo.inference.sampling import (
     SamplerSettings,
     effective_sample_size,

@@ -11,7 +11,8 @@ stages in a row, from a posterior.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -21,7 +22,6 @@ from bayestribo.inference.correction import (
     exact_density,
     importance_corrected,
 )
-from bayestribo.inference.modes import run_or_failure
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.sampling import SamplerRun, SamplerSettings, run_ensembles
 from bayestribo.inference.start import Start, find_start, initial_walkers
@@ -36,7 +36,7 @@ from bayestribo.inference.surrogate import (
 from bayestribo.inference.types import DEFAULT_SETTINGS, Sampled
 from bayestribo.signal.decay import EnergyDecay
 
-__all__ = ["sample", "sample_from"]
+__all__ = ["SAMPLER_FAILURES", "run_or_failure", "sample", "sample_from"]
 
 
 def sample(
@@ -229,3 +229,71 @@ def _sample_surrogate(
         refit = regressed_posterior(posterior, target, flat, rng)
         centre, scale = checked.best, NODE_SCALE * flat.std(axis=0)
     return None, checked, None, None
+
+
+#: Errors inside the sampler that become a reported non-convergence (a NaN
+#: log-probability is a :class:`~bayestribo.inference.sampling.NaNLogProbabilityError`,
+#: itself a FloatingPointError; a NaN autocorrelation time turned into an integer is a
+#: ValueError). Programming errors (TypeError, KeyError, ...) still propagate.
+SAMPLER_FAILURES: tuple[type[BaseException], ...] = (ValueError, ArithmeticError)
+
+
+def run_or_failure(
+    run_ensembles: Callable[..., Any],
+    log_prob: Callable[[NDArray], NDArray],
+    initial: NDArray,
+    settings: Any,
+    *,
+    seed: int | None,
+    progress: bool = False,
+) -> Any:
+    """Run the sampler; a failure inside it becomes a run reported not converged.
+
+    Parameters
+    ----------
+    run_ensembles : callable
+        :func:`bayestribo.inference.sampling.run_ensembles`, or a stand-in with its
+        signature.
+    log_prob : callable
+        Vectorised log posterior (with ``names``).
+    initial : ndarray
+        Starting walkers, shape (ensembles, walkers, params).
+    settings : SamplerSettings
+    seed : int or None
+    progress : bool
+
+    Returns
+    -------
+    SamplerRun
+        The sampler's run; or, when it raised one of :data:`SAMPLER_FAILURES`, a run
+        whose draws are the starting walkers (one per walker: a Gaussian
+        approximation around the optimum, not a posterior), ``converged`` False and a
+        reason naming the error.
+    """
+    try:
+        return run_ensembles(log_prob, initial, settings, seed=seed, progress=progress)
+    except SAMPLER_FAILURES as exc:
+        initial = np.asarray(initial, dtype=float)
+        n_ens, n_walkers, ndim = initial.shape
+        names = tuple(getattr(log_prob, "names", ()))
+        if len(names) != ndim:
+            names = tuple(f"theta[{i}]" for i in range(ndim))
+        with np.errstate(invalid="ignore"):
+            lp = np.asarray(log_prob(initial.reshape(-1, ndim)), dtype=float)
+        return SamplerRun(
+            chains=initial.copy(),
+            log_prob=lp.reshape(n_ens, n_walkers),
+            autocorr_time=np.full(ndim, np.nan),
+            n_steps=0,
+            burn=0,
+            thin=1,
+            acceptance_fraction=float("nan"),
+            ess=np.zeros(ndim),
+            rhat=np.full(ndim, np.nan),
+            converged=False,
+            reasons=[
+                f"the sampler failed ({type(exc).__name__}: {exc}); the draws are the "
+                "starting walkers around the optimum, not a posterior"
+            ],
+            names=names,
+        )

@@ -46,12 +46,11 @@ The rule (documented, tested on known targets in ``tests/test_inference_modes.py
    says which, with the mode's mean log-posterior against the main mode's (a region
    hundreds below holds no posterior mass).
 
-A failed sampler. :func:`run_or_failure` runs the sampler and turns an error inside
-it (a NaN log-probability, a NaN turned into an integer: :data:`SAMPLER_FAILURES`)
-into a run reported not converged, with the error named in its reasons, so that a
-fit (``--discrepancy`` included) returns and says so instead of crashing.
-:func:`bayestribo.inference.chains.sample` calls :func:`run_or_failure`, and
-:func:`bayestribo.inference.checks.check` calls :func:`mode_check`.
+A failed sampler is the sample stage's to report
+(:func:`bayestribo.inference.chains.run_or_failure`).
+:func:`bayestribo.inference.checks.check` calls :func:`mode_check`;
+:func:`bayestribo.inference.sampling.run_ensembles` calls :func:`transient_steps` to keep
+its burn-in past a transient.
 
 References
 ----------
@@ -63,7 +62,7 @@ taxonomic problems (the discriminant direction).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -71,17 +70,17 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from bayestribo.inference.rhat import rhat
+
 __all__ = [
     "MAX_MODES",
     "MIN_DRAWS",
     "MIN_SHIFT",
     "MIN_WEIGHT",
-    "SAMPLER_FAILURES",
     "Mode",
     "ModeReport",
     "find_modes",
     "mode_check",
-    "run_or_failure",
     "transient_steps",
 ]
 
@@ -541,8 +540,6 @@ def _past_transients(sampled: Any, report: ModeReport) -> tuple[Any, ModeReport]
     ``rhat_max`` for every parameter. The report returned is that of the draws kept,
     with ``dropped_steps`` the sampler steps added to the burn-in.
     """
-    from bayestribo.inference.sampling import rhat
-
     run, settings = sampled.run, sampled.settings
     per_step = max(int(settings.n_walkers), 1)
     cut = transient_steps(run.chains, run.log_prob, run.names, per_step)
@@ -573,73 +570,3 @@ def _past_transients(sampled: Any, report: ModeReport) -> tuple[Any, ModeReport]
         replace(sampled, run=trimmed, pointwise=pointwise),
         replace(after, dropped_steps=cut * run.thin),
     )
-
-
-#: Errors inside the sampler that become a reported non-convergence (a NaN
-#: log-probability is a :class:`~bayestribo.inference.sampling.NaNLogProbabilityError`,
-#: itself a FloatingPointError; a NaN autocorrelation time turned into an integer is a
-#: ValueError). Programming errors (TypeError, KeyError, ...) still propagate.
-SAMPLER_FAILURES: tuple[type[BaseException], ...] = (ValueError, ArithmeticError)
-
-
-def run_or_failure(
-    run_ensembles: Callable[..., Any],
-    log_prob: Callable[[NDArray], NDArray],
-    initial: NDArray,
-    settings: Any,
-    *,
-    seed: int | None,
-    progress: bool = False,
-) -> Any:
-    """Run the sampler; a failure inside it becomes a run reported not converged.
-
-    Parameters
-    ----------
-    run_ensembles : callable
-        :func:`bayestribo.inference.sampling.run_ensembles` (passed in, so that this
-        module depends on the sampler only through what it returns).
-    log_prob : callable
-        Vectorised log posterior (with ``names``).
-    initial : ndarray
-        Starting walkers, shape (ensembles, walkers, params).
-    settings : SamplerSettings
-    seed : int or None
-    progress : bool
-
-    Returns
-    -------
-    SamplerRun
-        The sampler's run; or, when it raised one of :data:`SAMPLER_FAILURES`, a run
-        whose draws are the starting walkers (one per walker: a Gaussian
-        approximation around the optimum, not a posterior), ``converged`` False and a
-        reason naming the error.
-    """
-    try:
-        return run_ensembles(log_prob, initial, settings, seed=seed, progress=progress)
-    except SAMPLER_FAILURES as exc:
-        from bayestribo.inference.sampling import SamplerRun
-
-        initial = np.asarray(initial, dtype=float)
-        n_ens, n_walkers, ndim = initial.shape
-        names = tuple(getattr(log_prob, "names", ()))
-        if len(names) != ndim:
-            names = tuple(f"theta[{i}]" for i in range(ndim))
-        with np.errstate(invalid="ignore"):
-            lp = np.asarray(log_prob(initial.reshape(-1, ndim)), dtype=float)
-        return SamplerRun(
-            chains=initial.copy(),
-            log_prob=lp.reshape(n_ens, n_walkers),
-            autocorr_time=np.full(ndim, np.nan),
-            n_steps=0,
-            burn=0,
-            thin=1,
-            acceptance_fraction=float("nan"),
-            ess=np.zeros(ndim),
-            rhat=np.full(ndim, np.nan),
-            converged=False,
-            reasons=[
-                f"the sampler failed ({type(exc).__name__}: {exc}); the draws are the "
-                "starting walkers around the optimum, not a posterior"
-            ],
-            names=names,
-        )
