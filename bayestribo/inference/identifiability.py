@@ -77,7 +77,8 @@ def unidentified_reasons(draws: NDArray, names: Sequence[str], law: Law) -> list
             spread.append(f"{p.symbol} ({p.name}) {a:.3g} to {b:.3g}")
         rest = [t.name for t in terms if t is not term]
         without = (
-            f"; the record is described without the {term.name} term: fit law='{'+'.join(rest)}'"
+            f"; the {term.name} term can be left out: fit law='{'+'.join(rest)}' "
+            f"(--law {'+'.join(rest)})"
             if rest
             else ""
         )
