@@ -15,6 +15,9 @@ Run (by hand)::
 
     nice python benchmarks/coarse_placements.py --steps 10 --runs 20
 
+``--skip 0`` fits with the first oscillation kept, as the refusal of a record too short
+for the skipped one advises.
+
 Writes ``benchmarks/results/coarse_placements_<steps>.json`` (``--output NAME``).
 """
 
@@ -37,7 +40,7 @@ FLAGS = ("MisfitWarning", "ChannelCalibrationWarning", "ConvergenceWarning", "Pr
 TRUTH = {"zeta": ZETA, "mu_k": MU_K}
 
 
-def one_run(steps: float, index: int) -> dict[str, Any]:
+def one_run(steps: float, index: int, skip: int = 1) -> dict[str, Any]:
     """Round run ``index`` to ``steps`` across the swing on levels placed at random, fit
     it, and say how its intervals stand against the truth."""
     from bayestribo import fit
@@ -54,7 +57,11 @@ def one_run(steps: float, index: int) -> dict[str, Any]:
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            result = fit(Run(time=t, displacement=xs, velocity=vs, metadata=metadata()), seed=index)
+            result = fit(
+                Run(time=t, displacement=xs, velocity=vs, metadata=metadata()),
+                seed=index,
+                skip_oscillations=skip,
+            )
     except Exception as exc:  # recorded, never silently dropped
         out["refused"] = f"{type(exc).__name__}: {exc}"
         return out
@@ -110,18 +117,28 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=float, default=10.0, help="steps across the swing")
     parser.add_argument("--runs", type=int, default=20)
+    parser.add_argument(
+        "--skip", type=int, default=1, help="oscillations skipped after the release (the fit's)"
+    )
     parser.add_argument("--output", default=None, help="results/NAME.json")
     args = parser.parse_args(argv)
     rows = []
     for i in range(args.runs):
-        rows.append(one_run(args.steps, i))
+        rows.append(one_run(args.steps, i, args.skip))
         print(rows[-1], flush=True)
     table = summarise(rows)
     print(table)
     name = args.output or f"coarse_placements_{args.steps:g}"
     path = write_results(
         name,
-        {"source": commit(), "steps": args.steps, "truth": TRUTH, "table": table, "runs": rows},
+        {
+            "source": commit(),
+            "steps": args.steps,
+            "skip": args.skip,
+            "truth": TRUTH,
+            "table": table,
+            "runs": rows,
+        },
     )
     print(f"wrote {path}")
     return 0
