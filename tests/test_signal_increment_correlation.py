@@ -28,7 +28,11 @@ import warnings
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
+from test_signal_integrated_noise import (
+    ACCELERATION_NOISE,
+    FREQUENCY_HZ,
+    _dry_motion,  # the same dry-friction rig, simulated with solve_ivp
+)
 
 from bayestribo.io.acceleration import from_acceleration
 from bayestribo.signal.decay import energy_decay
@@ -37,59 +41,8 @@ from bayestribo.signal.noise import noise_model
 
 pytestmark = pytest.mark.slow  # 20 records, each integrated with its noise drawn: ~6 s CPU
 
-FREQUENCY_HZ = 2.5
-STICKING = 1.3  # μ_s/μ_k
-X0 = 0.04  # [m]
-ZETA, DRY_FRICTION = 0.01, 0.02
-RATE_HZ, REST_BEFORE_S, REST_AFTER_S = 200.0, 2.0, 3.0
-ACCELERATION_NOISE = 0.02  # [m/s²], 200 µg/√Hz at 200 Hz
 BIAS = 0.2  # [m/s²]
 DRAWS = 20
-
-
-def _motion() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Time, displacement, velocity and the mean acceleration over each sample
-    interval of the rig at rest before the release, sliding, and stuck after its last
-    turning point."""
-    omega = 2.0 * math.pi * FREQUENCY_HZ
-    mu_g = DRY_FRICTION * 9.81
-    pieces, start, x = [], 0.0, X0
-    while omega**2 * abs(x) > STICKING * mu_g:  # slides on from this turning point
-        sign = -math.copysign(1.0, x)  # the direction of the coming half cycle
-
-        def rhs(_t: float, s: np.ndarray, sign: float = sign) -> list[float]:
-            return [s[1], -2 * ZETA * omega * s[1] - omega**2 * s[0] - sign * mu_g]
-
-        def turn(_t: float, s: np.ndarray) -> float:
-            return s[1]
-
-        turn.terminal, turn.direction = True, -sign
-        sol = solve_ivp(
-            rhs,
-            (start, start + 1.0),
-            [x, 0.0],
-            rtol=1e-11,
-            atol=1e-13,
-            dense_output=True,
-            events=turn,
-        )
-        end = float(sol.t_events[0][0])
-        pieces.append((start, end, sol.sol))
-        start, x = end, float(sol.y_events[0][0][0])
-
-    def state(times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        xs, vs = np.full(times.size, X0), np.zeros(times.size)
-        for lo, hi, sol in pieces:
-            inside = (times >= lo) & (times < hi)
-            xs[inside], vs[inside] = sol(times[inside])
-        xs[times >= start] = x
-        return xs, vs
-
-    t = np.arange(0.0, REST_BEFORE_S + start + REST_AFTER_S, 1.0 / RATE_HZ)
-    xs, vs = state(t - REST_BEFORE_S)
-    h = 0.5 / RATE_HZ  # the mean acceleration over each sample interval
-    a = (state(t - REST_BEFORE_S + h)[1] - state(t - REST_BEFORE_S - h)[1]) / (2.0 * h)
-    return t, xs, vs, a
 
 
 def _errors(
@@ -135,7 +88,7 @@ def whitened_errors() -> dict[bool, list[tuple[np.ndarray, np.ndarray]]]:
     """Per draw of the accelerometer's record, the whitened increments' errors and
     their covariance if the noise model is right: with the increments' correlation
     (True) and with the increments taken as independent (False)."""
-    t, x, v, a = _motion()
+    t, x, v, a = _dry_motion()
     rng = np.random.default_rng(2026)
     out: dict[bool, list[tuple[np.ndarray, np.ndarray]]] = {True: [], False: []}
     for _ in range(DRAWS):
