@@ -3,6 +3,7 @@ with a fix that works when followed."""
 
 from __future__ import annotations
 
+import ast
 from pathlib import Path
 
 import numpy as np
@@ -69,6 +70,42 @@ def test_runs_side_by_side_are_refused_with_the_columns_that_read_each(
     assert "Run #2: --columns - - t displacement_mm velocity_mm_per_s" in err
     fix = err.split("Run #2: ")[1].split()[1:]
     assert main(["inspect", str(path), "--columns", *fix, "--json"]) == 0
+
+
+@pytest.mark.parametrize(
+    ("angle", "rate", "scale"),
+    [
+        ("Angle (rad)", "Angular Velocity (rad/s)", 1.0),
+        ("Angle (°)", "Angular Velocity (deg/s)", 180 / np.pi),
+    ],
+)
+def test_rotary_runs_side_by_side_are_read_by_the_advice_followed(
+    tmp_path: Path, capsys: pytest.CaptureFixture, angle: str, rate: str, scale: float
+) -> None:
+    """A rotary motion sensor's runs side by side, with an acceleration in m/s²: every
+    column name the refusal gives reads back (an angular velocity is no 'angular_…')."""
+    header = ",".join(
+        f'"{name} Run #{k}"'
+        for k in (1, 2)
+        for name in ("Time (s)", angle, rate, "Angular Acceleration (rad/s²)")
+    )
+    rows = [
+        ",".join(f"{value!r}" for value in (t, scale * x, scale * v, 0.0) * 2)
+        for t, x, v in zip(T, X, V, strict=True)
+    ]
+    path = _write(tmp_path / "rotary.csv", header, rows)
+    assert main(["inspect", str(path)]) == 2
+    err = capsys.readouterr().err
+    for run in ("Run #1", "Run #2"):
+        fix = err.split(f"{run}: ")[1].split(";")[0].split()[1:]
+        assert main(["inspect", str(path), "--columns", *fix, "--json"]) == 0, fix
+        assert "unknown column" not in capsys.readouterr().err
+    with pytest.raises(RunFormatError) as info:
+        read_run(path)
+    first = str(info.value).split("Run #1: columns=")[1].split("; Run #2")[0]
+    read = read_run(path, columns=ast.literal_eval(first))  # the list the message prints
+    np.testing.assert_allclose(read.displacement, X, rtol=1e-13, atol=0)
+    np.testing.assert_allclose(read.velocity, V, rtol=1e-13, atol=0)
 
 
 def test_vernier_latest_labels_and_centimetres(tmp_path: Path) -> None:

@@ -34,6 +34,7 @@ __all__ = [
     "UNITS",
     "acceleration_label",
     "check_scale",
+    "column_name",
     "combine_units_row",
     "motion_label",
     "other_quantity",
@@ -296,6 +297,58 @@ def parse_column(name: str) -> tuple[str, float] | None:
             )
         return column or canonical, units[key]
     return None
+
+
+#: A unit spelled as a column name's suffix: letters, digits and underscores only.
+_NAME_UNIT = re.compile(r"^[A-Za-z0-9_]+$")
+
+
+def column_name(label: str, column: str, factor: float) -> str:
+    """The column name, with its unit, that reads a header label as it was parsed.
+
+    ``Position (mm)`` parsed as ``("displacement_m", 0.001)`` gives
+    ``displacement_mm``; ``Angular Velocity (deg/s)`` gives
+    ``angular_velocity_deg_per_s``; ``Acceleration x (m/s²)`` gives
+    ``acceleration_x_m_per_s2``. The name is one that :func:`parse_column` reads back
+    as the same column and factor; the file's own spelling of the unit is kept where it
+    is such a name. Where no name of letters, digits and underscores does, the label
+    itself is returned (it reads the same).
+
+    Parameters
+    ----------
+    label : str
+        The header label, without its run tag.
+    column : str
+        The canonical column :func:`parse_column` gave for it (``time_s``, ...).
+    factor : float
+        The factor to the canonical column's unit it gave.
+
+    Returns
+    -------
+    str
+        A name for ``columns=`` (``--columns``).
+    """
+    m = re.search(r"[\[\(]\s*([^\]\)]+?)\s*[\]\)]", label)
+    spelled = None if m is None else m.group(1).replace(" ", "").replace("/", "_per_")
+    for canonical, units in UNITS.items():
+        si = next((u for u, f in units.items() if f == 1.0 and canonical.endswith(f"_{u}")), None)
+        if si is None or not column.endswith(f"_{si}"):
+            continue
+        base = column[: -len(si) - 1]
+        if not (column == canonical or base.startswith(canonical[: -len(si) - 1])):
+            continue
+        keys = [u for u, f in units.items() if _NAME_UNIT.match(u) and math.isclose(f, factor)]
+        if spelled in keys:
+            keys.insert(0, spelled)
+        for key in keys:
+            name = f"{base}_{key}"
+            try:
+                parsed = parse_column(name)
+            except ValueError:
+                continue
+            if parsed is not None and parsed[0] == column and math.isclose(parsed[1], factor):
+                return name
+    return label
 
 
 def si_names(labels: Sequence[str]) -> list[str] | None:

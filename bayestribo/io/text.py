@@ -40,6 +40,7 @@ from bayestribo.io.columns import (
     IGNORE,
     acceleration_label,
     check_scale,
+    column_name,
     combine_units_row,
     motion_label,
     other_quantity,
@@ -642,20 +643,12 @@ def _side_by_side(labels: Sequence[str], tags: Sequence[str | None], runs: list[
                 parsed = None if tag != run else parse_column(label)
             except ValueError:
                 parsed = None
-            names.append(IGNORE if parsed is None else _with_unit(label, parsed[0]))
+            names.append(IGNORE if parsed is None else column_name(label, *parsed))
         choices.append(f"{run}: columns={names}")
     return (
         f"the file holds {len(runs)} runs side by side ({', '.join(runs)}); read one at a "
         f"time, {'; '.join(choices)}"
     )
-
-
-def _with_unit(label: str, canonical: str) -> str:
-    """``Position (mm)`` as the column name ``displacement_mm``."""
-    m = re.search(r"[\[\(]\s*([^\]\)]+?)\s*[\]\)]", label)
-    unit = "" if m is None else m.group(1).replace(" ", "").replace("/", "_per_")
-    quantity = canonical.split("_")[0]
-    return f"{quantity}_{unit}" if unit else canonical
 
 
 #: Rows of numbers looked at to tell the delimiter and the decimal mark.
