@@ -30,6 +30,7 @@ __all__ = [
     "IGNORE",
     "MAGNITUDES",
     "OTHER_QUANTITIES",
+    "PIXEL_UNITS",
     "QUANTITIES",
     "UNITS",
     "acceleration_label",
@@ -39,6 +40,7 @@ __all__ = [
     "motion_label",
     "other_quantity",
     "parse_column",
+    "pixel_column",
     "split_run_tag",
 ]
 
@@ -140,7 +142,25 @@ OTHER_QUANTITIES: tuple[str, ...] = (
     "frequency",
     "tilt",
     "inclination",
+    # a sample's or a video frame's number beside the time (video tracking, loggers)
+    "frame",
+    "frames",
+    "frame number",
+    "frame no.",
+    "frame index",
+    "index",
+    "sample",
+    "sample number",
+    "sample no.",
+    "sample index",
+    "point",
+    "no.",
+    "#",
 )
+
+#: Spellings of the pixel, the unit of a video tracker's position (and of its speed,
+#: per second): no length, until a camera's scale makes it one.
+PIXEL_UNITS: tuple[str, ...] = ("px", "pix", "pixel", "pixels")
 
 #: Words before or after a quantity that name its axis or its kind, not another
 #: quantity (phyphox's ``Acceleration x``, ``Linear Acceleration y``, ``Absolute
@@ -251,6 +271,29 @@ def _split(name: str) -> tuple[str, str | None]:
     return low, None
 
 
+def _in_pixels(unit: str | None, canonical: str) -> bool:
+    """True for a position in pixels (``px``) or a speed in pixels per second."""
+    if unit is None:
+        return False
+    unit = unit.lower()
+    if canonical == VELOCITY:
+        for per in ("/s", "_per_s", "/sec"):
+            if unit.endswith(per):
+                return unit[: -len(per)] in PIXEL_UNITS
+        return False
+    return unit in PIXEL_UNITS
+
+
+def pixel_column(name: str) -> str | None:
+    """The canonical column of a header name in pixels (``x (px)``: ``displacement_m``,
+    ``v (px/s)``: ``velocity_m_per_s``), or None for a name that is not in pixels."""
+    word, unit = _split(name.replace("\u03bc", "\u00b5"))
+    for canonical in (DISPLACEMENT, VELOCITY):
+        if word in QUANTITIES[canonical] and _in_pixels(unit, canonical):
+            return canonical
+    return None
+
+
 def parse_column(name: str) -> tuple[str, float] | None:
     """The canonical column and the factor to its unit, for a header name.
 
@@ -284,6 +327,8 @@ def parse_column(name: str) -> tuple[str, float] | None:
         if word not in words:
             continue
         units = UNITS[canonical]
+        if canonical in (DISPLACEMENT, VELOCITY) and _in_pixels(unit, canonical):
+            raise ValueError(f"column {name!r} is in pixels, not in a unit of length")
         if unit is None:
             raise ValueError(
                 f"column {name!r} has no unit; name it with one, e.g. "

@@ -45,6 +45,7 @@ from bayestribo.io.columns import (
     motion_label,
     other_quantity,
     parse_column,
+    pixel_column,
     si_names,
     split_run_tag,
 )
@@ -616,6 +617,8 @@ def _header(
                 where,
             ) from None
         si = si_names(labels)
+        if "in pixels" in exc.message:
+            raise RunFormatError(f"{exc.message}; {_pixel_advice(labels)}", where) from None
         if "has no unit" not in exc.message or si is None:
             raise
         raise RunFormatError(
@@ -631,6 +634,30 @@ def _header(
             ReadingWarning,
         )
     return names, units, count
+
+
+def _pixel_advice(labels: Sequence[str]) -> str:
+    """How to read a video tracker's columns in pixels: as an arbitrary length unit, or
+    in metres with the camera's scale (a column of no known quantity, a second
+    coordinate ``y (px)``, is left out)."""
+    names, pixels = [], []
+    for label in labels:
+        pixel = pixel_column(label)
+        if pixel is not None:
+            pixels.append(pixel)
+            names.append(pixel)
+            continue
+        try:
+            parsed = parse_column(label)
+        except ValueError:  # a quantity without its unit: in SI, as si_names says
+            parsed = ((si_names([label]) or [IGNORE])[0], 1.0)
+        names.append(IGNORE if parsed is None or other_quantity(label) else parsed[0])
+    scale = ", ".join(f"'{name}': 0.001" for name in pixels)
+    return (
+        f"read it in pixels with columns={names} and length_unit='arbitrary' (friction "
+        f"then in pixels), or in metres with columns={names} and scale={{{scale}}} for a "
+        "camera that sees 1 mm per pixel (its own metres per pixel in place of 0.001)"
+    )
 
 
 def _side_by_side(labels: Sequence[str], tags: Sequence[str | None], runs: list[str]) -> str:
