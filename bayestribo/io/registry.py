@@ -248,6 +248,23 @@ BUILTIN_FORMATS: tuple[FormatInfo, ...] = (
         hint="HDF5 datasets, one per signal",
         module="bayestribo.io.formats.hdf5",
     ),
+    FormatInfo(
+        "wav",
+        "WAV sound file",
+        (".wav", ".wave"),
+        ("channels",),
+        hint="WAV from a sound card or audio interface (integer PCM as fractions of full "
+        "scale, float as stored; --channel x=0 names what a channel holds)",
+        module="bayestribo.io.formats.wav",
+    ),
+    FormatInfo(
+        "npz",
+        "NumPy .npz/.npy",
+        (".npz", ".npy"),
+        ("channels", "columns"),
+        hint="NumPy .npz archives of named arrays (as .mat variables), .npy arrays (--columns)",
+        module="bayestribo.io.formats.numpy",
+    ),
 )
 _BUILTIN = {info.name: info for info in BUILTIN_FORMATS}
 
@@ -342,7 +359,6 @@ _NOT_READ = {
     ".xls": "the old binary Excel format is not read; save the sheet as .xlsx or as CSV",
     ".ods": "OpenDocument sheets are not read; save the sheet as .xlsx or as CSV",
     ".numbers": "Numbers files are not read; export the sheet as CSV",
-    ".wav": "sound files are not read; export the channels as CSV",
 }
 
 
