@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.io.wavfile
-
 from _free_decay import F_HZ, METADATA, RATE_HZ, X_C, ZETA, free_decay
+
 from bayestribo import fit, read_run
 from bayestribo.cli import main
 from bayestribo.errors import ClippingWarning, ReadingWarning, RecordingError, RunFormatError
