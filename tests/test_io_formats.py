@@ -281,6 +281,7 @@ def test_a_format_defined_outside_the_package_reads_inspects_and_fits(
         ({"name": "Bad Name"}, "lower-case identifier"),
         ({"suffixes": ("csv",)}, "starting with '.'"),
         ({"options": ("columns", "colour")}, r"\['colour'\] are not format options"),
+        ({"signature": b"(RIFF"}, "signature: expected a regular expression over bytes"),
     ],
 )
 def test_a_malformed_format_is_refused_naming_the_field(kwargs: dict, match: str) -> None:

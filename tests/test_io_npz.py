@@ -183,6 +183,18 @@ def test_npz_is_listed_and_chosen_by_suffix_or_format(tmp_path, decay, capsys) -
         np.savez(handle, time_s=decay.time, displacement_m=decay.displacement)
     run = read_run(path, file_format="npz", metadata=ARBITRARY)
     np.testing.assert_array_equal(run.displacement, decay.displacement)
+    # under a text suffix: named as what it is, not parsed as text
+    table = tmp_path / "table.txt"
+    with table.open("wb") as handle:
+        np.save(handle, np.column_stack([decay.time, decay.displacement]))
+    with pytest.raises(
+        RunFormatError, match=r"first bytes .* are those of NumPy .*\(--format npz\)"
+    ):
+        read_run(table, columns=["time_s", "displacement_m"])
+    archive = tmp_path / "archive.csv"
+    archive.write_bytes(path.read_bytes())
+    with pytest.raises(RunFormatError, match=r"Excel workbook \(xlsx\) or NumPy"):
+        read_run(archive)
 
 
 def test_an_npz_record_is_fitted_with_its_truth_inside_the_intervals(tmp_path, decay) -> None:

@@ -177,10 +177,13 @@ def test_wav_is_listed_and_chosen_by_suffix_or_format(tmp_path, decay, capsys) -
     assert main(["inspect", "--formats"]) == 0
     assert re.search(r"^wav\s+\.wav", capsys.readouterr().out, re.MULTILINE)
     assert format_for("x.WAV").name == "wav"
-    path = tmp_path / "record.dat"  # a WAV saved under another suffix
+    path = tmp_path / "record.dat"  # a WAV saved under a text suffix: named, not parsed
     scipy.io.wavfile.write(path, RATE_HZ, decay.displacement.astype(np.float32))
-    with pytest.raises(RunFormatError):
-        read_run(path, columns=["displacement_m"], metadata=ARBITRARY)  # as text: refused
+    named = r"not delimited text: its first bytes .* are those of WAV sound \(wav\) files"
+    with pytest.raises(RunFormatError, match=named):
+        read_run(path, columns=["displacement_m"], metadata=ARBITRARY)
+    with pytest.raises(RunFormatError, match=named):
+        describe_file(path)
     run = read_run(path, file_format="wav", channels={"displacement_m": "0"}, metadata=ARBITRARY)
     assert run.n_samples == decay.time.size
 

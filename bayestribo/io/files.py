@@ -24,7 +24,7 @@ from bayestribo._warnings import warn
 from bayestribo.errors import BayestriboError, ReadingWarning, RecordingError, RunFormatError
 from bayestribo.io.acceleration import integrated_signals
 from bayestribo.io.options import READ_OPTIONS, ReadOptions, unknown_options
-from bayestribo.io.registry import FileFormat, format_for, registered_formats
+from bayestribo.io.registry import FileFormat, check_content, format_for, registered_formats
 from bayestribo.io.run import ACCELERATIONS, ANGULAR, DISPLACEMENT, TIME, VELOCITY, Run
 from bayestribo.io.sidecar import (
     DATA_FILE,
@@ -196,6 +196,8 @@ def _read(path: Path, opts: ReadOptions) -> Run:
     if not path.is_file():
         raise RunFormatError("no such run file; expected an existing file", where)
     fmt = format_for(path, opts.file_format)
+    if opts.file_format is None:
+        check_content(path, fmt)  # a binary file under a text suffix, named as what it is
     for option in opts.format_options():
         if option not in fmt.options:
             takes = [f.name for f in registered_formats().values() if option in f.options]
