@@ -32,19 +32,24 @@ NOISE = 2e-4
 
 @dataclass(frozen=True)
 class Decay:
-    """The record: time [s], displacement and velocity [length unit, /s]."""
+    """The record: time [s], displacement, velocity and acceleration [length unit, /s,
+    /s²]."""
 
     time: NDArray
     displacement: NDArray
     velocity: NDArray
+    acceleration: NDArray
 
 
-def free_decay(seed: int = 7) -> Decay:
-    """The record at ``RATE_HZ``: rest, release, decay to a stop, rest; noise added."""
+def free_decay(seed: int = 7, noise: float = NOISE) -> Decay:
+    """The record at ``RATE_HZ``: rest, release, decay to a stop, rest; Gaussian noise
+    of sd ``noise`` added to the displacement (``Ω noise`` to the velocity, ``Ω² noise``
+    to the acceleration)."""
     omega = 2.0 * math.pi * F_HZ
     t = np.arange(int(DURATION_S * RATE_HZ)) / RATE_HZ
     x = np.full(t.size, X0)
     v = np.zeros(t.size)
+    a = np.zeros(t.size)
     start, position = RELEASE_S, X0
     while abs(position) > X_C and start < t[-1]:
         sign = -math.copysign(1.0, position)  # the direction of this half cycle
@@ -70,10 +75,16 @@ def free_decay(seed: int = 7) -> Decay:
         inside = (t >= start) & (t < end)
         states = sol.sol(t[inside])
         x[inside], v[inside] = states[0], states[1]
+        a[inside] = [rhs(0.0, state)[1] for state in states.T]
         start, position = end, float(sol.sol(end)[0])
         x[t >= end], v[t >= end] = position, 0.0
     rng = np.random.default_rng(seed)
-    return Decay(t, x + rng.normal(0.0, NOISE, t.size), v + rng.normal(0.0, omega * NOISE, t.size))
+    return Decay(
+        t,
+        x + rng.normal(0.0, noise, t.size),
+        v + rng.normal(0.0, omega * noise, t.size),
+        a + rng.normal(0.0, omega**2 * noise, t.size),
+    )
 
 
 #: The metadata a fit of the record needs: its length unit is the file's.

@@ -16,7 +16,7 @@ from _free_decay import METADATA, RATE_HZ, X_C, ZETA, free_decay
 
 from bayestribo import fit, read_run
 from bayestribo.cli import main
-from bayestribo.errors import RunFormatError
+from bayestribo.errors import ReadingWarning, RunFormatError
 from bayestribo.io.layout import describe_file
 from bayestribo.io.registry import format_for
 
@@ -69,6 +69,16 @@ def test_other_names_are_picked_with_channels_as_on_the_command_line(
     cli = ["--channel", "t=t", "--channel", "x=x", "--length-unit", "arbitrary"]
     assert main(["inspect", str(path), *cli]) == 0
     assert "time_s, displacement_m (arbitrary length unit)" in capsys.readouterr().out
+
+
+def test_an_acceleration_alone_is_picked_with_channels(tmp_path, decay) -> None:
+    # channels= naming an acceleration and no displacement or velocity: integrated
+    path = tmp_path / "accelerometer.npz"
+    np.savez(path, t=decay.time, a=decay.acceleration / 9.80665)
+    with pytest.warns(ReadingWarning, match="integrated from the acceleration"):
+        run = read_run(path, channels={"time_s": "t", "acceleration_g": "a"}, metadata=ARBITRARY)
+    assert run.displacement is None and run.velocity is not None
+    assert run.metadata["acceleration"]["column"] == "acceleration_m_per_s2"
 
 
 def test_an_npy_array_is_read_by_columns(tmp_path, decay, capsys) -> None:

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.io.wavfile
-from _free_decay import F_HZ, METADATA, RATE_HZ, X_C, ZETA, free_decay
+from _free_decay import F_HZ, METADATA, RATE_HZ, RELEASE_S, X_C, ZETA, free_decay
 
 from bayestribo import fit, read_run
 from bayestribo.cli import main
@@ -116,6 +116,26 @@ def test_stereo_channels_by_number_and_name(tmp_path, decay) -> None:
     assert [c["label"] for c in columns] == ["0 (left)", "1 (right)"]
 
 
+def test_an_accelerometer_channel_is_integrated_into_the_velocity(tmp_path, decay) -> None:
+    path = tmp_path / "accelerometer.wav"
+    scipy.io.wavfile.write(path, RATE_HZ, decay.acceleration / 2e4)  # float64, as stored
+    with pytest.warns(ReadingWarning, match="integrated from the acceleration"):
+        run = read_run(
+            path,
+            channels={"acceleration_m_per_s2": "0"},
+            scale={"acceleration_m_per_s2": 2e4},
+            metadata=ARBITRARY,
+        )
+    assert run.displacement is None
+    assert run.metadata["acceleration"]["column"] == "acceleration_m_per_s2"
+    # the channel read is the one integrated: past the high-pass's transient after the
+    # release's step (the integrator's own accuracy, tests/test_io_acceleration.py),
+    # the velocity is the decay's within 1 % of its swing
+    late = decay.time > RELEASE_S + 5.0 / F_HZ
+    error = np.abs(run.velocity - decay.velocity)[late].max()
+    assert error < 0.01 * np.abs(decay.velocity).max()
+
+
 def test_integer_pcm_named_in_metres_without_a_sensitivity_is_said(tmp_path, decay) -> None:
     path = tmp_path / "pcm.wav"
     scipy.io.wavfile.write(path, RATE_HZ, _pcm(decay.displacement, 16))
@@ -186,6 +206,9 @@ def test_wav_is_listed_and_chosen_by_suffix_or_format(tmp_path, decay, capsys) -
         describe_file(path)
     run = read_run(path, file_format="wav", channels={"displacement_m": "0"}, metadata=ARBITRARY)
     assert run.n_samples == decay.time.size
+    cli = ["--format", "wav", "--channel", "x=0", "--length-unit", "arbitrary", "--json"]
+    assert main(["inspect", str(path), *cli]) == 0
+    assert '"format": "wav"' in capsys.readouterr().out
 
 
 def _bad(tmp: Path, name: str, content: bytes) -> Path:
