@@ -81,6 +81,16 @@ def test_an_acceleration_alone_is_picked_with_channels(tmp_path, decay) -> None:
     assert run.metadata["acceleration"]["column"] == "acceleration_m_per_s2"
 
 
+def test_an_angle_is_read_as_a_rotation(tmp_path, decay) -> None:
+    path = tmp_path / "pendulum.npz"
+    degrees = 10.0 * decay.displacement
+    np.savez(path, time_s=decay.time, angle_deg=degrees, theta=degrees)
+    for channels in (None, {"time_s": "time_s", "angle_deg": "theta"}):
+        run = read_run(path, channels=channels)
+        assert run.length_unit == "rad"
+        np.testing.assert_allclose(run.displacement, np.deg2rad(degrees), rtol=1e-15)
+
+
 def test_an_npy_array_is_read_by_columns(tmp_path, decay, capsys) -> None:
     path = tmp_path / "run.npy"
     np.save(path, np.column_stack([decay.time, decay.displacement, decay.velocity]))
