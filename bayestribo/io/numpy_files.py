@@ -17,6 +17,7 @@ gigabytes), is refused before it is read; only the arrays picked are read.
 
 from __future__ import annotations
 
+import zipfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -170,7 +171,7 @@ def _npz_signals(
     budget = read_budget(size, where)
     try:
         archive = np.load(path, allow_pickle=False)
-    except (OSError, ValueError) as exc:
+    except (OSError, ValueError, zipfile.BadZipFile) as exc:
         raise RunFormatError(f"not a readable NumPy .npz archive ({exc})", where) from None
     with archive:
         headers = _archive_headers(archive, where)

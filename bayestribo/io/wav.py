@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import struct
 import warnings
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, BinaryIO
@@ -97,7 +97,7 @@ class WavLayout:
         )
 
 
-def _chunks(fh: BinaryIO, end: int, order: str) -> Any:
+def _chunks(fh: BinaryIO, end: int, order: str) -> Iterator[tuple[bytes, int, int]]:
     """``(id, size, offset of its data)`` of each chunk from the file's position to ``end``."""
     while fh.tell() + 8 <= end:
         head = fh.read(8)
@@ -171,10 +171,8 @@ def wav_layout(path: str | Path) -> WavLayout:
                 data_start = start
                 break
     if fmt is None or data_size is None or data_start is None:
-        missing = "fmt" if fmt is None else "data"
-        raise RunFormatError(
-            f"not a readable WAV file: no {missing!r} chunk before the end of the file", where
-        )
+        missing = "no 'fmt' chunk before its data" if fmt is None else "no 'data' chunk"
+        raise RunFormatError(f"not a readable WAV file: {missing}", where)
     tag, channels, rate, align, bits = fmt
     if tag not in (_PCM, _FLOAT):
         raise RunFormatError(
