@@ -136,6 +136,26 @@ def _hdf5(tmp: Path, run: Any) -> Written:
     return path, ReadOptions(group="run1"), ["--group", "run1"]
 
 
+def _wav(tmp: Path, run: Any) -> Written:
+    import scipy.io.wavfile
+
+    path = tmp / "run.wav"  # float64 samples: read as stored
+    scipy.io.wavfile.write(path, int(RATE), np.column_stack([run.displacement, run.velocity]))
+    options = ReadOptions(channels={"displacement_m": "0", "velocity_m_per_s": "1"})
+    return path, options, ["--channel", "x=0", "--channel", "v=1"]
+
+
+def _npz(tmp: Path, run: Any) -> Written:
+    path = tmp / "run.npz"
+    np.savez(
+        path,
+        time_s=run.time,
+        displacement_um=1e6 * run.displacement,
+        velocity_m_per_s=run.velocity,
+    )
+    return path, ReadOptions(), []
+
+
 WRITERS: dict[str, Callable[[Path, Any], Written]] = {
     "text": _text,
     "xlsx": _xlsx,
@@ -143,6 +163,8 @@ WRITERS: dict[str, Callable[[Path, Any], Written]] = {
     "tdms": _tdms,
     "mat": _mat,
     "hdf5": _hdf5,
+    "wav": _wav,
+    "npz": _npz,
 }
 
 
@@ -259,6 +281,7 @@ def test_a_format_defined_outside_the_package_reads_inspects_and_fits(
         ({"name": "Bad Name"}, "lower-case identifier"),
         ({"suffixes": ("csv",)}, "starting with '.'"),
         ({"options": ("columns", "colour")}, r"\['colour'\] are not format options"),
+        ({"signature": b"(RIFF"}, "signature: expected a regular expression over bytes"),
     ],
 )
 def test_a_malformed_format_is_refused_naming_the_field(kwargs: dict, match: str) -> None:

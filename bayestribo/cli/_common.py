@@ -37,8 +37,8 @@ def add_run_arguments(parser: argparse.ArgumentParser, *, optional: bool = False
         metavar="RUN",
         nargs="?" if optional else None,
         help="run file: canonical CSV, other text, an oscilloscope or DAQ export (Tektronix, "
-        "Keysight/Agilent, Rigol, PicoScope CSV, LabVIEW .lvm), Excel .xlsx, UFF, TDMS, .mat "
-        "or HDF5 (bayestribo inspect --formats lists them)",
+        "Keysight/Agilent, Rigol, PicoScope CSV, LabVIEW .lvm), Excel .xlsx, UFF, TDMS, .mat, "
+        "HDF5, WAV or NumPy .npz/.npy (bayestribo inspect --formats lists them)",
     )
     add_reading_options(parser)
 

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 
 from bayestribo.errors import RunFormatError
 from bayestribo.io.columns import check_scale, parse_column
-from bayestribo.io.run import ACCELERATIONS, COLUMNS, DISPLACEMENT, TIME, VELOCITY
+from bayestribo.io.run import ACCELERATIONS, ANGULAR, COLUMNS, DISPLACEMENT, TIME, VELOCITY
 
 __all__ = ["MAX_SAMPLES", "NamedArray", "signals_from_arrays"]
 
@@ -28,6 +28,11 @@ __all__ = ["MAX_SAMPLES", "NamedArray", "signals_from_arrays"]
 #: MATLAB variable's header) before any data is read, so that a damaged header that
 #: claims billions of samples is refused in bounded memory.
 MAX_SAMPLES = 20_000_000
+
+#: The columns that carry the motion, any one of which makes a run (with the time, or
+#: the sample rate): a displacement, a velocity, an angle or angular velocity (a
+#: rotation), an acceleration (integrated into the velocity by read_run).
+_MOTION: tuple[str, ...] = (DISPLACEMENT, VELOCITY, *ANGULAR, *ACCELERATIONS)
 
 
 @dataclass(frozen=True)
@@ -115,7 +120,7 @@ def _automatic(
                 where,
             )
         picked[role] = (item, factor)
-    if TIME in picked and {DISPLACEMENT, VELOCITY, *ACCELERATIONS} & set(picked):
+    if TIME in picked and set(_MOTION) & set(picked):
         return picked  # an acceleration is integrated by read_run
     listing = ", ".join(a.describe() for a in arrays) or "none"
     hint = f"; {', '.join(map(repr, unitless))} name a quantity without a unit" if unitless else ""
@@ -189,12 +194,12 @@ def _chosen(
                     where,
                 )
         picked[role] = (item, factor)
-    if DISPLACEMENT not in picked and VELOCITY not in picked:
+    if not set(_MOTION) & set(picked):
         # without a time channel the run's time comes from its sample rate (read_run)
         raise RunFormatError(
-            f"channels: expected {DISPLACEMENT!r} or {VELOCITY!r} (and {TIME!r}, or the "
-            "sample rate); got "
-            f"{sorted(channels)}",
+            f"channels: expected {DISPLACEMENT!r} or {VELOCITY!r} (or an angle, an "
+            f"acceleration: {', '.join(map(repr, _MOTION[2:]))}; and {TIME!r}, or the "
+            f"sample rate); got {sorted(channels)}",
             where,
         )
     return picked
@@ -259,4 +264,4 @@ def signals_from_arrays(
     if len(set(sizes.values())) > 1:
         detail = ", ".join(f"{picked[r][0].name} ({n})" for r, n in sizes.items())
         raise RunFormatError(f"the signals have different lengths: {detail}", where)
-    return {name: out[name] for name in (*COLUMNS, *ACCELERATIONS) if name in out}
+    return {name: out[name] for name in (TIME, *_MOTION) if name in out}

@@ -24,7 +24,7 @@ from bayestribo._warnings import warn
 from bayestribo.errors import BayestriboError, ReadingWarning, RecordingError, RunFormatError
 from bayestribo.io.acceleration import integrated_signals
 from bayestribo.io.options import READ_OPTIONS, ReadOptions, unknown_options
-from bayestribo.io.registry import FileFormat, format_for, registered_formats
+from bayestribo.io.registry import FileFormat, check_content, format_for, registered_formats
 from bayestribo.io.run import ACCELERATIONS, ANGULAR, DISPLACEMENT, TIME, VELOCITY, Run
 from bayestribo.io.sidecar import (
     DATA_FILE,
@@ -84,11 +84,13 @@ def read_run(
         recognised by their preamble (Tektronix, Keysight/Agilent, Rigol, PicoScope CSV
         and LabVIEW ``.lvm``, see :mod:`bayestribo.io.instruments`), Excel (``.xlsx``),
         UFF 58/58b (``.uff .unv .uf .58``), TDMS (``.tdms``), MATLAB (``.mat``, v4 to
-        v7.3) or HDF5 (``.h5 .hdf5``, the ``hdf5`` extra).
+        v7.3), HDF5 (``.h5 .hdf5``, the ``hdf5`` extra), WAV (``.wav``,
+        :mod:`bayestribo.io.wav`) or NumPy (``.npz .npy``,
+        :mod:`bayestribo.io.numpy_files`).
     columns : list of str, optional
-        Text files and spreadsheets: one canonical name (``time_s``, ``displacement_m``,
-        ``velocity_m_per_s``) or ``"ignore"`` per column, in file order. Needed when
-        the file has no canonical header row.
+        Text files, spreadsheets and ``.npy`` arrays: one canonical name (``time_s``,
+        ``displacement_m``, ``velocity_m_per_s``) or ``"ignore"`` per column, in file
+        order. Needed when the file has no canonical header row.
     scale : mapping, optional
         Factor per canonical name converting the file's unit to s, m or m/s, e.g.
         ``{"displacement_m": 1e-3}`` for millimetres.
@@ -111,16 +113,17 @@ def read_run(
         TDMS, HDF5: the group holding the channels.
     channels : mapping, optional
         TDMS: channel name per canonical name (required). UFF: record index per
-        canonical name (when the records' types are ambiguous). MATLAB, HDF5:
-        variable or dataset name per column name (a key may carry a unit,
-        ``"displacement_um"``), when the names are not canonical.
+        canonical name (when the records' types are ambiguous). MATLAB, HDF5, NumPy
+        ``.npz``: variable, dataset or array name per column name (a key may carry a
+        unit, ``"displacement_um"``), when the names are not canonical. WAV: channel
+        number from 0 per column name (required).
     sheet : str or int, optional
         Spreadsheets: the worksheet, by name or position from 0 (needed when several
         hold numbers).
     file_format : str, optional
         A registered format (``"text"``, ``"xlsx"``, ``"uff"``, ``"tdms"``, ``"mat"``,
-        ``"hdf5"``, or one added with :func:`~bayestribo.io.registry.register_format`);
-        overrides the choice by suffix.
+        ``"hdf5"``, ``"wav"``, ``"npz"``, or one added with
+        :func:`~bayestribo.io.registry.register_format`); overrides the choice by suffix.
     sidecar : bool or path
         Read the JSON sidecar with the file's stem if it exists (``True``), do not
         (``False``), or read this sidecar file (which must exist). A sidecar that
@@ -196,6 +199,8 @@ def _read(path: Path, opts: ReadOptions) -> Run:
     if not path.is_file():
         raise RunFormatError("no such run file; expected an existing file", where)
     fmt = format_for(path, opts.file_format)
+    if opts.file_format is None:
+        check_content(path, fmt)  # a binary file under a text suffix, named as what it is
     for option in opts.format_options():
         if option not in fmt.options:
             takes = [f.name for f in registered_formats().values() if option in f.options]

@@ -14,7 +14,7 @@ from typing import Any
 
 from bayestribo.errors import RunFormatError
 from bayestribo.io.options import ReadOptions
-from bayestribo.io.registry import format_for
+from bayestribo.io.registry import check_content, format_for
 from bayestribo.io.sidecar import sidecar_path
 
 __all__ = ["describe_file"]
@@ -54,7 +54,10 @@ def describe_file(
     path = Path(path)
     if not path.is_file():
         raise RunFormatError("no such run file; expected an existing file", str(path))
-    out = format_for(path, opts.file_format).describe_file(path, opts)
+    fmt = format_for(path, opts.file_format)
+    if opts.file_format is None:
+        check_content(path, fmt)
+    out = fmt.describe_file(path, opts)
     side = sidecar_path(path)
     out["sidecar"] = str(side) if side.is_file() and side != path else None
     return out

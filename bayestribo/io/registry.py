@@ -29,6 +29,7 @@ one defined elsewhere (a lab's own file layout) is one :func:`register_format` c
 from __future__ import annotations
 
 import importlib
+import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -43,8 +44,10 @@ if TYPE_CHECKING:
 __all__ = [
     "BUILTIN_FORMATS",
     "BUILTIN_MODULES",
+    "SIGNATURE_BYTES",
     "FileFormat",
     "FormatInfo",
+    "check_content",
     "format_for",
     "format_table",
     "get_format",
@@ -57,9 +60,14 @@ Describer = Callable[[Path, ReadOptions], Mapping[str, Any]]
 
 
 def _check_description(
-    kind: str, name: str, suffixes: tuple[str, ...], options: tuple[str, ...]
+    kind: str,
+    name: str,
+    suffixes: tuple[str, ...],
+    options: tuple[str, ...],
+    signature: bytes = b"",
 ) -> None:
-    """Refuse a format's name, suffixes or options that the registry cannot take."""
+    """Refuse a format's name, suffixes, options or signature that the registry cannot
+    take."""
     if not name or name != name.lower() or not name.isidentifier():
         raise BayestriboError(f"{kind} name: expected a lower-case identifier, got {name!r}")
     for suffix in suffixes:
@@ -74,6 +82,12 @@ def _check_description(
             f"{kind} {name!r} options: {bad} are not format options; expected some of "
             f"{', '.join(FORMAT_OPTIONS)}"
         )
+    try:
+        re.compile(signature, re.DOTALL)
+    except (re.error, TypeError) as exc:
+        raise BayestriboError(
+            f"{kind} {name!r} signature: expected a regular expression over bytes ({exc})"
+        ) from None
 
 
 @dataclass(frozen=True)
@@ -83,7 +97,7 @@ class FormatInfo:
 
     Parameters
     ----------
-    name, title, suffixes, options, extra, hint
+    name, title, suffixes, options, extra, hint, signature
         As :class:`FileFormat`'s.
     module : str, optional
         A built-in format's module, which defines its :class:`FileFormat` as ``FORMAT``
@@ -97,11 +111,12 @@ class FormatInfo:
     extra: str | None = None
     hint: str = ""
     module: str | None = None
+    signature: bytes = b""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "suffixes", tuple(self.suffixes))
         object.__setattr__(self, "options", tuple(self.options))
-        _check_description("FormatInfo", self.name, self.suffixes, self.options)
+        _check_description("FormatInfo", self.name, self.suffixes, self.options, self.signature)
 
 
 @dataclass(frozen=True)
@@ -136,6 +151,13 @@ class FileFormat:
         The ``pip install 'bayestribo[EXTRA]'`` extra that installs what it needs.
     hint : str
         Help text for the format on the command line (what writes such files).
+    signature : bytes
+        A regular expression (over bytes, ``.`` matching any byte) that the first
+        :data:`SIGNATURE_BYTES` bytes of the format's files match, e.g.
+        ``rb"\\x89HDF\\r\\n\\x1a\\n"``; empty for files without a fixed start (text). A
+        file given to a built-in format without one (by its suffix) that starts as
+        another format's files do is refused, naming that format
+        (:func:`check_content`).
     """
 
     name: str
@@ -146,11 +168,12 @@ class FileFormat:
     describe: Describer | None = None
     extra: str | None = None
     hint: str = ""
+    signature: bytes = b""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "suffixes", tuple(self.suffixes))
         object.__setattr__(self, "options", tuple(self.options))
-        _check_description("FileFormat", self.name, self.suffixes, self.options)
+        _check_description("FileFormat", self.name, self.suffixes, self.options, self.signature)
         if not callable(self.read):
             raise BayestriboError(f"FileFormat {self.name!r} read: expected a callable")
 
@@ -168,12 +191,21 @@ class FileFormat:
             describe=describe,
             extra=info.extra,
             hint=info.hint,
+            signature=info.signature,
         )
 
     @property
     def info(self) -> FormatInfo:
         """What the format is, without its reader."""
-        return FormatInfo(self.name, self.title, self.suffixes, self.options, self.extra, self.hint)
+        return FormatInfo(
+            self.name,
+            self.title,
+            self.suffixes,
+            self.options,
+            self.extra,
+            self.hint,
+            signature=self.signature,
+        )
 
     def describe_file(self, path: Path, options: ReadOptions) -> dict[str, Any]:
         """``{"format", "reader", "columns"}`` for ``inspect``."""
@@ -212,6 +244,7 @@ BUILTIN_FORMATS: tuple[FormatInfo, ...] = (
         extra="formats",
         hint="Excel .xlsx workbooks (one worksheet of samples in columns; --sheet)",
         module="bayestribo.io.formats.excel",
+        signature=rb"PK\x03\x04",
     ),
     FormatInfo(
         "uff",
@@ -230,6 +263,7 @@ BUILTIN_FORMATS: tuple[FormatInfo, ...] = (
         extra="formats",
         hint="LabVIEW TDMS (National Instruments DAQ)",
         module="bayestribo.io.formats.tdms",
+        signature=rb"TDSm",
     ),
     FormatInfo(
         "mat",
@@ -238,6 +272,7 @@ BUILTIN_FORMATS: tuple[FormatInfo, ...] = (
         ("channels",),
         hint="MATLAB .mat, v4 to v7.3 (v7.3 needs the hdf5 extra)",
         module="bayestribo.io.formats.matlab",
+        signature=rb"MATLAB \d\.\d MAT-file",
     ),
     FormatInfo(
         "hdf5",
@@ -247,6 +282,26 @@ BUILTIN_FORMATS: tuple[FormatInfo, ...] = (
         extra="hdf5",
         hint="HDF5 datasets, one per signal",
         module="bayestribo.io.formats.hdf5",
+        signature=rb"\x89HDF\r\n\x1a\n",
+    ),
+    FormatInfo(
+        "wav",
+        "WAV sound",
+        (".wav", ".wave"),
+        ("channels",),
+        hint="WAV from a sound card or audio interface (integer PCM as fractions of full "
+        "scale, float as stored; --channel x=0 names what a channel holds)",
+        module="bayestribo.io.formats.wav",
+        signature=rb"(RIFF|RIFX|RF64)....WAVE",
+    ),
+    FormatInfo(
+        "npz",
+        "NumPy .npz/.npy",
+        (".npz", ".npy"),
+        ("channels", "columns"),
+        hint="NumPy .npz archives of named arrays (as .mat variables), .npy arrays (--columns)",
+        module="bayestribo.io.formats.numpy",
+        signature=rb"\x93NUMPY|PK\x03\x04|PK\x05\x06",
     ),
 )
 _BUILTIN = {info.name: info for info in BUILTIN_FORMATS}
@@ -342,8 +397,53 @@ _NOT_READ = {
     ".xls": "the old binary Excel format is not read; save the sheet as .xlsx or as CSV",
     ".ods": "OpenDocument sheets are not read; save the sheet as .xlsx or as CSV",
     ".numbers": "Numbers files are not read; export the sheet as CSV",
-    ".wav": "sound files are not read; export the channels as CSV",
 }
+
+
+#: Bytes from the start of a file that the formats' signatures are matched against.
+SIGNATURE_BYTES = 32
+
+
+def check_content(path: str | Path, fmt: FileFormat) -> None:
+    """Refuse a file that its suffix gives to a built-in format without a signature
+    (delimited text, UFF) but that starts as another format's files do: a WAV, NumPy
+    or HDF5 file saved as ``.dat`` or ``.txt`` is named as what it is, not parsed as
+    text.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file (one that cannot be opened is left to the reader, which names it).
+    fmt : FileFormat
+        The format its suffix selects.
+
+    Raises
+    ------
+    RunFormatError
+        Naming the formats whose signature the file's first bytes match and the
+        ``file_format`` that reads it.
+    """
+    if fmt.signature or _BUILTIN.get(fmt.name) is None:
+        return  # a format with a signature of its own, or one defined elsewhere
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(SIGNATURE_BYTES)
+    except OSError:
+        return
+    matches = [
+        info
+        for info in _REGISTRY.values()
+        if info.signature and re.match(info.signature, head, re.DOTALL)
+    ]
+    if not matches:
+        return
+    kinds = " or ".join(f"{info.title} ({info.name})" for info in matches)
+    ways = " or ".join(f"file_format='{i.name}' (--format {i.name})" for i in matches)
+    raise RunFormatError(
+        f"the file is not {fmt.title}: its first bytes ({head[:12]!r}) are those of {kinds} "
+        f"files; read it as one with {ways}",
+        str(path),
+    )
 
 
 def format_for(path: str | Path, file_format: str | None = None) -> FileFormat:
