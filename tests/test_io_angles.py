@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from bayestribo import fit, read_run
+from bayestribo import check_adequacy, fit, read_run
 from bayestribo.errors import RunFormatError
 from bayestribo.io.columns import parse_column
 
@@ -131,3 +131,22 @@ def test_a_torsion_pendulum_gives_its_friction_torque(tmp_path):
     zeta = result.samples("zeta")
     assert abs(np.mean(zeta) - ZETA) < 4.5 * np.std(zeta)
     assert result.dissipation["unit"] == "J" and result.dissipation["amplitude_unit"] == "rad"
+
+
+def test_the_adequacy_check_of_a_rotation_speaks_of_angles(tmp_path):
+    """Its amplitudes in rad and its friction the angle θ_c, never x_c in a signal unit."""
+    check = check_adequacy(read_run(_write(tmp_path)), seed=1)
+    text = check.to_text()
+    assert "amplitude [rad]" in text and "signal unit" not in text
+    assert "θ_c" in text and "x_c" not in text
+    assert check.windows.length_unit == "rad" and check.windows.friction_symbol == "θ_c"
+
+
+def test_a_reports_symbols_for_a_rotation_are_angles(tmp_path):
+    from bayestribo.reports.laws import paper_parameters
+    from bayestribo.reports.tables import fit_frame
+
+    result = fit(read_run(_write(tmp_path)), seed=2, grid_points=16)
+    assert paper_parameters(result)["friction_displacement"] == "θ_c"
+    quantities = list(fit_frame(result, dissipation=False).index)
+    assert "θ_c" in quantities and "x_c" not in quantities

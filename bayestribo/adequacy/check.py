@@ -271,9 +271,11 @@ def check_adequacy(
             fit_result = fit(run, seed=seed, skip_oscillations=skip_oscillations)
     else:
         windows = windowed_fits(decay, window=window, seed=seed)
-        if windows.length_unit != "m" and getattr(run, "length_unit", None) == "m":
-            # fitted on the decay alone: the recording says its position is in metres
-            windows = replace(windows, length_unit="m")
+        stated = getattr(run, "length_unit", None)
+        if windows.length_unit != stated and stated in ("m", "rad"):
+            # fitted on the decay alone: the recording says its position is in metres,
+            # or is a rotation's angle in radians
+            windows = replace(windows, length_unit=stated)
     try:
         constancy: ConstancyTest | None = constancy_test(windows, alpha=alpha)
         note = ""
@@ -294,6 +296,8 @@ def check_adequacy(
             seed=seed,
             progress=progress,
         )
+        if halves is not None and getattr(run, "length_unit", None) == "rad":
+            halves = replace(halves, length_unit="rad")  # fitted on the decay alone
         halves_note = ""
     except RecordingError as exc:
         halves, halves_note = None, f"not tested: {exc}"

@@ -347,10 +347,9 @@ def constancy_test(
     tm = _trend(windows.friction_name, float(coef[2]), float(coef[3]), float(cb[1, 1]), span, crit)
     constant = p >= alpha
     unit = windows.length_unit
-    # in prose, the symbol: μ_k (x_c for a friction displacement), not the field name
-    symbol = {"mu_k": "μ_k", "friction_displacement": "x_c"}.get(
-        windows.friction_name, windows.friction_name
-    )
+    # in prose, the symbol: μ_k (x_c for a friction displacement, θ_c for an angle), not
+    # the field name
+    symbol = windows.friction_symbol
     head = (
         f"ζ and {symbol} are constant within the data's precision "
         f"(p = {p:.2g} for a trend with amplitude, {n} windows from {np.min(amp):.3g} to "

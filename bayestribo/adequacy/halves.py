@@ -57,6 +57,7 @@ from bayestribo.adequacy.windows import (
     _as_run,
     _estimate,
     analysed_decay,
+    friction_symbol,
 )
 from bayestribo.errors import RecordingError
 from bayestribo.signal.decay import EnergyDecay
@@ -101,6 +102,9 @@ class SplitHalves:
         ``"least_squares"`` or ``"bayes"``.
     interval_kind : str
         How the halves' intervals were obtained.
+    length_unit : str
+        ``"rad"`` for a rotation (its friction is the angle θ_c), else
+        ``"signal unit"``.
     """
 
     first: WindowEstimate
@@ -118,6 +122,7 @@ class SplitHalves:
     alpha: float
     method: str
     interval_kind: str
+    length_unit: str = "signal unit"
 
     @property
     def consistent(self) -> bool:
@@ -132,9 +137,7 @@ class SplitHalves:
     def _label(self, name: str) -> str:
         if name == "zeta":
             return "ζ"
-        return {"mu_k": "μ_k", "friction_displacement": "x_c"}.get(
-            self.friction_name, self.friction_name
-        )
+        return friction_symbol(self.friction_name, self.length_unit)
 
     @property
     def statement(self) -> str:
@@ -330,4 +333,5 @@ def split_halves(
         alpha=alpha,
         method=fitter.method,
         interval_kind=fitter.interval_kind,
+        length_unit="rad" if getattr(recording, "length_unit", None) == "rad" else "signal unit",
     )

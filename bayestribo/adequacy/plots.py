@@ -122,13 +122,13 @@ def plot_windows(
             ax.plot(a, trend.mean + trend.slope * (a - mean_amp), "k--", label="trend")
         ax.grid(alpha=0.3)
     ax_z.set_ylabel("ζ [-]")
-    symbol = "μ_k" if windows.friction_name == "mu_k" else "x_c"
+    symbol = windows.friction_symbol
     if ax_m is None:
         ax_z.set_xlabel(f"window amplitude [{windows.length_unit}]")
     elif windows.friction_name == "mu_k":
         ax_m.set_ylabel("μ_k [-]")
-    else:  # the friction displacement x_c, in the signal's unit
-        ax_m.set_ylabel(f"x_c [{windows.length_unit}]")
+    else:  # the friction displacement x_c (angle θ_c), in the signal's unit
+        ax_m.set_ylabel(f"{symbol} [{windows.length_unit}]")
     if ax_m is not None:
         ax_m.set_xlabel(f"window amplitude [{windows.length_unit}]")
     ax_z.legend(fontsize="small")

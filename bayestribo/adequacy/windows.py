@@ -61,6 +61,7 @@ __all__ = [
     "WindowFitter",
     "WindowedAnalysis",
     "analysed_decay",
+    "friction_symbol",
     "window_bounds",
     "windowed_fits",
 ]
@@ -127,6 +128,16 @@ def window_bounds(decay: EnergyDecay, window: int) -> list[tuple[int, int, int, 
         else:
             out.append((int(pos[first]), int(pos[last]) + 1, first, last))
     return out
+
+
+def friction_symbol(friction_name: str, length_unit: str) -> str:
+    """The symbol of a windowed fit's friction: ``μ_k`` (``"mu_k"``), ``θ_c`` (a friction
+    displacement in radians: a rotation's friction angle) or ``x_c``."""
+    if friction_name == "mu_k":
+        return "μ_k"
+    if friction_name == "friction_displacement":
+        return "θ_c" if length_unit == "rad" else "x_c"
+    return friction_name
 
 
 @dataclass(frozen=True)
@@ -240,7 +251,8 @@ class WindowedAnalysis:
         ``"mu_k"`` (dimensionless, loaded rig) or ``"friction_displacement"``
         (signal length unit).
     length_unit : str
-        Unit of amplitudes (``"m"`` or ``"signal unit"``).
+        Unit of amplitudes (``"m"``, ``"rad"`` for a rotation's angles, or
+        ``"signal unit"``).
     length_scale : float
         ℓ of the decay's scaling [length unit]: μ_k·ℓ is the friction displacement.
     interval_kind : str
@@ -258,6 +270,12 @@ class WindowedAnalysis:
 
     def __len__(self) -> int:
         return len(self.windows)
+
+    @property
+    def friction_symbol(self) -> str:
+        """The friction's symbol in prose: μ_k, the friction angle θ_c of a rotation, or
+        the friction displacement x_c."""
+        return friction_symbol(self.friction_name, self.length_unit)
 
     def column(self, name: str) -> NDArray:
         """One attribute over the windows as an array (``"zeta"``, ``"amplitude"``...)."""
@@ -678,13 +696,14 @@ def windowed_fits(
     scale = context.mu_scale
     # metres with a load (ℓ = N/k), or where the recording says so (another rig's position
     # in metres); otherwise the signal's own unit
-    in_metres = loaded or getattr(recording, "length_unit", None) == "m"
+    stated = getattr(recording, "length_unit", None)
+    in_metres = loaded or stated == "m"
     return WindowedAnalysis(
         windows=out,
         window_oscillations=window,
         method=fitter.method,
         friction_name="mu_k" if loaded else "friction_displacement",
-        length_unit="m" if in_metres else "signal unit",
+        length_unit="m" if in_metres else ("rad" if stated == "rad" else "signal unit"),
         length_scale=ell,
         interval_kind=fitter.interval_kind,
         extra={

@@ -161,12 +161,14 @@ def paper_parameters(result: Any) -> dict[str, str]:
     from bayestribo.reports.tables import SYMBOLS
 
     names = set(result.parameter_names)
+    info = getattr(result, "quantity_info", None)
+    symbols = {**SYMBOLS, **({n: q.symbol for n, q in info().items()} if callable(info) else {})}
     out = {}
     if "zeta" in names:
-        out["zeta"] = SYMBOLS["zeta"]
+        out["zeta"] = symbols["zeta"]
     for friction in ("mu_k", "friction_displacement"):
         if friction in names:
-            out[friction] = SYMBOLS[friction]
+            out[friction] = symbols[friction]  # θ_c for a rotation
             break
     return out
 

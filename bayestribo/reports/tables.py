@@ -185,7 +185,12 @@ def _symbols(result: Any) -> dict[str, str]:
     term's :meth:`~bayestribo.model.laws.Term.physical`, with and without a known
     stiffness), then the common ones."""
     own = dict(getattr(result, "symbols", {}) or {})
-    return {**physical_symbols(getattr(result, "law", "")), **own, **SYMBOLS}
+    out = {**physical_symbols(getattr(result, "law", "")), **own, **SYMBOLS}
+    # the fit's own description last: a rotation's friction is the angle θ_c, not x_c
+    info = getattr(result, "quantity_info", None)
+    if callable(info):
+        out.update({name: q.symbol for name, q in info().items()})
+    return out
 
 
 def physical_symbols(law: str) -> dict[str, str]:
