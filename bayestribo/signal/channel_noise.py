@@ -7,12 +7,14 @@ derivation (:func:`bayestribo.signal.increments.increment_draws`). The noise dra
 depends on the record and the recipe alone (samples, replicates, seed, noise level or
 spectrum), not on the motion it is added to: the second pass of every law compared on
 one record (:mod:`bayestribo.inference.reweight`) draws the same numbers.
-:func:`recorded_noise` gives them; inside :func:`reused_noise` it keeps them, keyed
-by every input that determines them, so that a law's second pass finds them drawn by
-the first's. The derivation is repeated on each motion as before, so every increment
-variance is the same, to the last bit, as drawing the noise again; what is saved is
-the drawing, by far the larger part for coloured noise (300 replicates of 10,822
-samples shaped in frequency on HarmOsc3: 0.35 of the 0.55-0.6 s a second pass took).
+:func:`recorded_noise` gives them; inside :func:`reused_noise` (a comparison of laws,
+:func:`bayestribo.inference.comparison.compare_prepared`, and ``fit(..., law="auto")``
+from its first pass on) it keeps them, keyed by every input that determines them, so
+that each law's second pass finds them drawn by the first pass. The derivation is
+repeated on each motion as before, so every increment variance is the same, to the
+last bit, as drawing the noise again; what is saved is the drawing, the larger part for
+coloured noise (300 replicates of 10,822 samples shaped in frequency on HarmOsc3: 0.39
+of the 0.59 s a second pass took; the rest is the derivative filter, 85 samples wide).
 Outside such a block nothing is kept (a record of a million samples would hold
 ``replicates × 10⁶`` floats).
 """
