@@ -134,3 +134,18 @@ def test_an_accelerometers_draws_and_a_generator_seed_are_not_kept(calls):
     assert len(calls) == 4
     np.testing.assert_array_equal(first, second)
     assert not np.array_equal(a, b)
+
+
+def test_the_recipes_used_longest_ago_are_let_go_first(calls, monkeypatch):
+    y, yp = motion(0.03)
+    # room for two recipes of 60 replicates
+    monkeypatch.setattr(channel_noise, "KEEP_LIMIT", 2 * 60 * N)
+    fresh = {seed: draws(y, yp, seed=seed) for seed in (1, 2, 3)}
+    calls.clear()
+    with reused_noise():
+        for seed, drawn in [(1, 1), (2, 2), (1, 2), (3, 3), (1, 3), (2, 4)]:
+            # seed 3 lets go of seed 2, used longer ago than seed 1
+            np.testing.assert_array_equal(draws(y, yp, seed=seed), fresh[seed])
+            assert len(calls) == drawn
+        kept = channel_noise._KEPT.get()
+        assert sum(entry[2] for entry in kept.values()) <= 2 * 60 * N

@@ -15,8 +15,9 @@ repeated on each motion as before, so every increment variance is the same, to t
 last bit, as drawing the noise again; what is saved is the drawing, the larger part for
 coloured noise (300 replicates of 10,822 samples shaped in frequency on HarmOsc3: 0.39
 of the 0.59 s a second pass took; the rest is the derivative filter, 85 samples wide).
-Outside such a block nothing is kept (a record of a million samples would hold
-``replicates × 10⁶`` floats).
+Inside one, at most :data:`KEEP_LIMIT` floats are kept in all, the recipes used longest
+ago let go first (a comparison's laws use one recipe in a row, the verdict's frame and
+each half of the motion theirs after it); outside, nothing is kept.
 """
 
 from __future__ import annotations
@@ -32,8 +33,9 @@ from bayestribo.signal.spectrum import NoiseSpectrum, colored_noise
 
 __all__ = ["KEEP_LIMIT", "recorded_noise", "reused_noise"]
 
-#: Largest number of floats :func:`reused_noise` keeps for one recipe (every
-#: replicate's samples): 2²⁴, 134 MB. A larger record's noise is drawn at every call.
+#: Largest number of floats :func:`reused_noise` keeps in all (every replicate's
+#: samples of every recipe kept): 2²⁴, 134 MB. The recipes used longest ago are let go
+#: to keep a new one within it; a recipe larger than it is drawn at every call.
 KEEP_LIMIT = 2**24
 
 _KEPT: contextvars.ContextVar[dict | None] = contextvars.ContextVar(
@@ -106,7 +108,9 @@ def recorded_noise(
             float(spectrum_scale),
         )
         if key in kept:
-            yield from kept[key][1]
+            # the most recently used last: the first to be let go is the oldest
+            kept[key] = entry = kept.pop(key)
+            yield from entry[1]
             return
     drawn = _draw(
         n_samples, sigma, n_replicates, seed, block, spectrum, spectrum_scale, velocity_draws
@@ -117,7 +121,10 @@ def recorded_noise(
     blocks = tuple(drawn)
     for b in blocks:
         b.flags.writeable = False
-    kept[key] = (spectrum, blocks)
+    size = n_replicates * n_samples
+    while kept and sum(entry[2] for entry in kept.values()) + size > KEEP_LIMIT:
+        del kept[next(iter(kept))]
+    kept[key] = (spectrum, blocks, size)
     yield from blocks
 
 
