@@ -151,6 +151,7 @@ from bayestribo.inference.types import MISFIT_P, PreparedRun, Sampled
 from bayestribo.io.options import ReadOptions
 from bayestribo.io.run import Run
 from bayestribo.model.laws import Law, get_law
+from bayestribo.signal.channel_noise import reused_noise
 from bayestribo.signal.increments import PiData
 
 __all__ = [
@@ -269,6 +270,7 @@ def _checks(posterior: Posterior, theta: NDArray) -> dict[str, Any]:
     }
 
 
+@reused_noise()
 def compare_prepared(
     prepared: PreparedRun,
     laws: Sequence[str],

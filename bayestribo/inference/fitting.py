@@ -10,6 +10,7 @@ and check (:func:`bayestribo.inference.auto.fit_auto`).
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import os
 import time
@@ -31,6 +32,7 @@ from bayestribo.inference.summarising import summary
 from bayestribo.io.options import ReadOptions
 from bayestribo.io.run import Run
 from bayestribo.model.laws import Law, get_law
+from bayestribo.signal.channel_noise import reused_noise
 from bayestribo.signal.noise import NoiseModel
 
 __all__ = ["fit", "sample_law"]
@@ -173,38 +175,41 @@ def fit(
     fixed = dict(spec.fixed) or None
     settings = spec.sampler_settings()
     rng = np.random.default_rng(seed)
-    prepared = prepare(
-        run,
-        skip_oscillations=spec.skip_oscillations,
-        grid_points=spec.grid_points,
-        noise=noise,
-        read_options=spec.reading(),
-        correct_channels=spec.correct_channels,
-        notch=spec.notch_Hz,
-    )
-    if auto:
-        summarised = fit_auto(
-            prepared,
-            rng,
-            model=model,
-            discrepancy=discrepancy,
-            settings=settings,
-            recorded_seed=seed,
-            progress=law_progress,
+    # law="auto": every law's second pass, and the first pass, take the recorded
+    # channel's Monte Carlo noise drawn once (bayestribo.signal.channel_noise)
+    with reused_noise() if auto else contextlib.nullcontext():
+        prepared = prepare(
+            run,
+            skip_oscillations=spec.skip_oscillations,
+            grid_points=spec.grid_points,
+            noise=noise,
+            read_options=spec.reading(),
+            correct_channels=spec.correct_channels,
+            notch=spec.notch_Hz,
         )
-    else:
-        prepared, sampled = sample_law(
-            prepared,
-            the_law,
-            model=model,
-            discrepancy=discrepancy,
-            settings=settings,
-            seed=rng,
-            priors=priors,
-            fixed=fixed,
-            progress=progress,
-        )
-        summarised = summary(prepared, sampled, seed=rng, recorded_seed=seed)
+        if auto:
+            summarised = fit_auto(
+                prepared,
+                rng,
+                model=model,
+                discrepancy=discrepancy,
+                settings=settings,
+                recorded_seed=seed,
+                progress=law_progress,
+            )
+        else:
+            prepared, sampled = sample_law(
+                prepared,
+                the_law,
+                model=model,
+                discrepancy=discrepancy,
+                settings=settings,
+                seed=rng,
+                priors=priors,
+                fixed=fixed,
+                progress=progress,
+            )
+            summarised = summary(prepared, sampled, seed=rng, recorded_seed=seed)
     record = summarised.record.replace(spec=spec.to_dict(), seconds=time.perf_counter() - start)
     return dataclasses.replace(summarised, record=record).result()
 

@@ -140,6 +140,7 @@ import scipy.signal
 from numpy.typing import NDArray
 from scipy.integrate import cumulative_trapezoid
 
+from bayestribo.signal.channel_noise import recorded_noise
 from bayestribo.signal.coarse import coarse_steps, quantised_increments
 from bayestribo.signal.decay import EnergyDecay, derivative_gain
 from bayestribo.signal.increment_correlation import (
@@ -148,7 +149,7 @@ from bayestribo.signal.increment_correlation import (
     replicates_for,
 )
 from bayestribo.signal.noise import NoiseModel
-from bayestribo.signal.spectrum import NoiseSpectrum, colored_noise
+from bayestribo.signal.spectrum import NoiseSpectrum
 
 __all__ = [
     "PiData",
@@ -846,7 +847,6 @@ def increment_draws(
     """
     if derived not in ("velocity", "displacement"):
         raise ValueError(f"derived must be None, 'velocity' or 'displacement', got {derived!r}")
-    rng = np.random.default_rng(seed)
 
     # by BLAS as the replicates are: their differences from it are small, and the two
     # sums must round alike for them
@@ -857,23 +857,28 @@ def increment_draws(
 
     reference = _integrate_by_blas(energy_of(y, yp), edges, weights)
     draws = np.empty((n_replicates, edges.size - 1))
-    block = _DRAW_BLOCK if velocity_draws is not None and derived == "displacement" else _BLOCK
-    for first in range(0, n_replicates, block):
-        count = min(block, n_replicates - first)
-        # one (count, samples) draw is the same stream as ``count`` draws of a row
-        if velocity_draws is not None and derived == "displacement":
-            draw = velocity_draws(count, rng)
-        elif spectrum is not None:
-            draw = spectrum_scale * colored_noise(spectrum, tau.size, rng, count)
-        else:
-            sigma = sigma_y if derived == "velocity" else sigma_yp
-            draw = rng.normal(0.0, sigma, (count, tau.size))
+    integrated = velocity_draws is not None and derived == "displacement"
+    first = 0
+    # the recorded channel's noise, the same whatever the motion (drawn once per
+    # recipe inside bayestribo.signal.channel_noise.reused_noise)
+    for draw in recorded_noise(
+        tau.size,
+        sigma_y if derived == "velocity" else sigma_yp,
+        n_replicates=n_replicates,
+        seed=seed,
+        block=_DRAW_BLOCK if integrated else _BLOCK,
+        spectrum=spectrum,
+        spectrum_scale=spectrum_scale,
+        velocity_draws=velocity_draws if integrated else None,
+    ):
+        count = draw.shape[0]
         if derived == "velocity":
             yn, ypn = _rederive(tau, y + draw, yp, y, yp, derived, savgol_window)
         else:
             yn, ypn = _rederive(tau, y, yp + draw, y, yp, derived, savgol_window)
         energy = energy_of(yn, ypn)
         draws[first : first + count] = integrate_increments(energy, edges, weights) - reference
+        first += count
     return draws
 
 

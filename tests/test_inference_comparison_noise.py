@@ -1,0 +1,69 @@
+"""A comparison draws a derived channel's Monte Carlo noise once for all its laws."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+from _comparison_stubs import stub_fits
+
+from bayestribo.inference import comparison
+from bayestribo.inference.comparison import compare_prepared
+from bayestribo.signal import channel_noise
+
+RUN = Path(__file__).resolve().parents[1] / "data" / "runs" / "air-r1.csv"
+
+
+def test_every_laws_optimum_in_a_comparison_shares_the_kept_noise(monkeypatch):
+    shifts = {"viscous": 5000.0, "coulomb": 2.0, "viscous+coulomb": 0.0}
+    stub_fits(monkeypatch, shifts)
+    stubbed = comparison._optimise
+    seen = []
+
+    def optimise(*args, **kwargs):
+        # the second pass runs inside this call (reweight.reweighted_posterior)
+        seen.append(channel_noise._KEPT.get())
+        return stubbed(*args, **kwargs)
+
+    monkeypatch.setattr(comparison, "_optimise", optimise)
+    assert channel_noise._KEPT.get() is None
+    compare_prepared(SimpleNamespace(name="stub"), list(shifts), seed=1, rivals=False)
+    assert len(seen) == len(shifts)
+    assert seen[0] is not None and all(kept is seen[0] for kept in seen)
+    # released once the comparison is done
+    assert channel_noise._KEPT.get() is None
+
+
+class _Stop(Exception):
+    pass
+
+
+@pytest.mark.parametrize("law", ["auto", "viscous+coulomb"])
+def test_law_auto_keeps_the_first_passes_noise_for_the_comparison(monkeypatch, law):
+    from bayestribo.inference import fitting
+
+    seen = {}
+
+    def prepare(run, **kwargs):
+        seen["prepare"] = channel_noise._KEPT.get()
+        return SimpleNamespace(name="stub")
+
+    def stop(name):
+        def record(*args, **kwargs):
+            seen[name] = channel_noise._KEPT.get()
+            raise _Stop
+
+        return record
+
+    monkeypatch.setattr(fitting, "prepare", prepare)
+    monkeypatch.setattr(fitting, "fit_auto", stop("fit_auto"))
+    monkeypatch.setattr(fitting, "sample_law", stop("sample_law"))
+    with pytest.raises(_Stop):
+        fitting.fit(RUN, law=law)
+    assert channel_noise._KEPT.get() is None
+    if law == "auto":
+        assert seen["prepare"] is not None and seen["fit_auto"] is seen["prepare"]
+    else:
+        # a fit of one law keeps nothing: its two passes are all it draws
+        assert seen["prepare"] is None and seen["sample_law"] is None
