@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from bayestribo import check_adequacy, fit, read_run
+from bayestribo import check_adequacy, estimate_all, fit, read_run
 from bayestribo.errors import RunFormatError
 from bayestribo.io.columns import parse_column
 
@@ -144,9 +144,11 @@ def test_the_adequacy_check_of_a_rotation_speaks_of_angles(tmp_path):
 
 def test_a_reports_symbols_for_a_rotation_are_angles(tmp_path):
     from bayestribo.reports.laws import paper_parameters
-    from bayestribo.reports.tables import fit_frame
+    from bayestribo.reports.tables import estimates_frame, fit_frame
 
     result = fit(read_run(_write(tmp_path)), seed=2, grid_points=16)
     assert paper_parameters(result)["friction_displacement"] == "θ_c"
     quantities = list(fit_frame(result, dissipation=False).index)
     assert "θ_c" in quantities and "x_c" not in quantities
+    classical = estimates_frame(estimate_all(read_run(_write(tmp_path))), unit="rad")
+    assert "θ_c [rad] [95 %]" in classical.columns

@@ -629,15 +629,16 @@ def estimates_frame(table: Any, *, unit: str = "m") -> Any:
     Returns
     -------
     pandas.DataFrame
-        Index ``method``; columns ``ζ [95 %]``, ``μ_k [95 %]`` or ``x_c [unit] [95 %]``,
-        ``friction share``, ``caveat``.
+        Index ``method``; columns ``ζ [95 %]``, ``μ_k [95 %]`` or ``x_c [unit] [95 %]``
+        (``θ_c [rad] [95 %]`` for a rotation), ``friction share``, ``caveat``.
     """
     import pandas as pd
 
     estimates = list(table)
     has_mu = any(e.mu_k is not None for e in estimates)
     friction = "mu_k" if has_mu else "friction_displacement"
-    label = "μ_k [95 %]" if has_mu else f"x_c [{unit_text(unit)}] [95 %]"
+    symbol = "θ_c" if unit == "rad" else "x_c"  # a rotation's friction is an angle
+    label = "μ_k [95 %]" if has_mu else f"{symbol} [{unit_text(unit)}] [95 %]"
     rows = []
     for e in estimates:
         value = getattr(e, friction)
@@ -677,7 +678,7 @@ def windows_frame(adequacy: Any, *, unit: str | None = None) -> Any:
 
     w = adequacy.windows
     unit = unit_text(unit or w.length_unit)
-    friction = "μ_k" if w.friction_name == "mu_k" else f"x_c [{unit}]"
+    friction = "μ_k" if w.friction_name == "mu_k" else f"{w.friction_symbol} [{unit}]"
     held = w.extra.get("friction_mode", "fit") == "fixed"
 
     def row(label: Any, x: Any) -> dict[str, Any]:
