@@ -194,18 +194,19 @@ def _parabola_peak(x: NDArray, values: NDArray) -> NDArray:
     """Vertex value of least-squares parabolas of ``values`` (D, P, K) over ``x`` (P, K).
 
     Falls back to the largest sample when the parabola does not open downwards or
-    its vertex leaves the fitted span.
+    its vertex leaves the fitted span. The P fits are one stacked least-squares solve
+    (the columns scaled as :func:`numpy.polyfit` scales them).
     """
-    out = np.empty(values.shape[:2])
-    for p in range(x.shape[0]):
-        xp = x[p] - np.mean(x[p])
-        c = np.polyfit(xp, values[:, p, :].T, 2)  # (3, D)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            v = -c[1] / (2.0 * c[0])
-            peak = c[2] - c[1] ** 2 / (4.0 * c[0])
-        ok = (c[0] < 0.0) & (v >= xp[0]) & (v <= xp[-1])
-        out[:, p] = np.where(ok, peak, np.max(values[:, p, :], axis=1))
-    return out
+    xp = x - np.mean(x, axis=1, keepdims=True)  # (P, K)
+    design = np.stack([xp**2, xp, np.ones_like(xp)], axis=-1)  # (P, K, 3)
+    scale = np.sqrt(np.sum(design**2, axis=1, keepdims=True))  # (P, 1, 3)
+    solve = np.linalg.pinv(design / scale)  # (P, 3, K)
+    c = np.einsum("pjk,dpk->jdp", solve, values) / scale[:, 0, :].T[:, None, :]  # (3, D, P)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v = -c[1] / (2.0 * c[0])
+        peak = c[2] - c[1] ** 2 / (4.0 * c[0])
+    ok = (c[0] < 0.0) & (v >= xp[:, 0]) & (v <= xp[:, -1])
+    return np.where(ok, peak, np.max(values, axis=2))
 
 
 def _summaries(
