@@ -1401,10 +1401,13 @@ def _analyse(
         threshold=motion_threshold,
         displacement=x if v is None else None,
         periodic=x if x_step is not None else None,
+        fades=x is None,
     )
     released_at = span.release_index
     rest_until = None if released_at is None else float(t[released_at])
-    stop_time = span.stop_time
+    # a decay that fades into the noise (a velocity alone): its rest starts where its
+    # oscillation ends, and the analysis ends where its swings sink below the threshold
+    stop_time = span.stop_time if span.fade_time is None else span.fade_time
 
     quiet = _quiet_segments(t, rest_until, stop_time, 0.25 * period0)
     coarse_fade = None
@@ -1457,6 +1460,18 @@ def _analyse(
     except RecordingError as e:
         raise RecordingError(f"turning points: {e}") from e
     peaks = replace(found, index=found.index + lo)
+    fade_span = None
+    if span.fade_time is not None:
+        fade_span = float(peaks.t[-1])
+        warn(
+            f"turning points: the decay fades into the noise: its velocity's swings sink "
+            f"below {span.threshold:.3g} ({motion_threshold:g} times the noise at rest) at "
+            f"t = {span.stop_time:.6g} s and its oscillation goes on under them until "
+            f"t = {span.fade_time:.6g} s, without stopping (a viscous decay); the analysis "
+            f"ends at turning point {len(peaks) - 1} (t = {fade_span:.6g} s), the last before "
+            "it, as for a record that ends in motion",
+            FadeWarning,
+        )
     # the free decay starts where the turning points are half a period apart
     fade_level = None if not band_x else FADE * PEAK_THRESHOLD * band_x
     if coarse_fade is not None:
@@ -1483,6 +1498,8 @@ def _analyse(
             FadeWarning,
         )
         peaks = _head(peaks, spacing.faded)
+    elif fade_span is not None:
+        faded_at = fade_span
     # a derived displacement's turning points carry its wander (band_x), which its
     # sample-to-sample noise does not show: weighted by that alone, the smallest swings
     # weighed most in the equilibrium's fit, and its drift followed their wander
@@ -1491,7 +1508,7 @@ def _analyse(
         # the equilibrium from the decay's own turning points (those of an irregular
         # start do not follow Eq. 20, nor those of the noise after a fade)
         peaks = _equilibrium_from(peaks, spacing.start, offset, noise=wander)
-    peaks = replace(peaks, stop_time=stop_time)
+    peaks = replace(peaks, stop_time=stop_time if span.fade_time is None else None)
     period = 2.0 * spacing.half_period
     if v is None:
         derived = "velocity"

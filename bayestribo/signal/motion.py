@@ -131,6 +131,11 @@ class MotionSpan:
         Excursion threshold used [unit/s] (``THRESHOLD`` times ``noise``).
     block : int
         Samples per block (two periods).
+    fade_time : float or None
+        When the oscillation fades into the noise instead of stopping (asked for with
+        ``fades``): the end of the last block holding it [s], where ``quiet`` starts;
+        ``stop_time`` is then where its swings sink below ``threshold``, not an end of
+        motion. ``None`` otherwise.
     """
 
     release_index: int | None
@@ -141,11 +146,12 @@ class MotionSpan:
     noise: float
     threshold: float
     block: int
+    fade_time: float | None = None
 
     @property
     def motion_ended(self) -> bool:
-        """True when the record holds the end of motion."""
-        return self.stop_time is not None
+        """True when the record holds the end of motion (not a fade into the noise)."""
+        return self.stop_time is not None and self.fade_time is None
 
 
 #: Samples of blocks taken together by :func:`_block_fits` (4 MB of float64 at most).
@@ -273,6 +279,7 @@ def motion_span(
     threshold: float = THRESHOLD,
     displacement: ArrayLike | None = None,
     periodic: ArrayLike | None = None,
+    fades: bool = False,
 ) -> MotionSpan:
     """Release, end of motion and rest of a free-decay record (see the module notes).
 
@@ -297,6 +304,10 @@ def motion_span(
     periodic : array_like, optional
         A recorded displacement quantised in steps [unit]: blocks where it toggles
         periodically at the oscillation frequency are moving too (see the module notes).
+    fades : bool
+        Judge whether the velocity's oscillation stops where its swings sink below
+        ``threshold`` or fades into the noise (see the module notes): a viscous decay
+        never stops. Default False: the end found is the end of motion.
 
     Returns
     -------
@@ -376,7 +387,7 @@ def motion_span(
     # the rest after it cannot move it.
     fit_len = max(9, round(period / dt / 8.0))
     skip = fit_len // 3  # samples next to the crossing, where a filter rounds the corner
-    stop_index = stop_time = None
+    stop_index = stop_time = fade_time = None
     if tail_start + size // 2 <= n and not moving[-1]:
         lo = max(0, int(starts[last]) - size)
         hi = min(n, tail_start + size)
@@ -412,14 +423,23 @@ def motion_span(
                     stop_time = float(t[i])
                     stop_index = i
                 out = out[:0]
+        by_velocity = fades and displacement is None and not by_steps
+        if by_velocity and not out.size:
+            # no excursion near the last coherent block: the swings sank below the
+            # threshold more than a block before the oscillation did
+            base = int(starts[first])
+            out = base - lo + np.flatnonzero(np.abs(v[base:lo] - level) > level_cut)
         if out.size:
             i = lo + int(out[-1])
             stop_time = _root(t, v, level, max(0, i + 1 - fit_len), i + 1 - skip, i)
             if stop_time is None or not t[max(0, i - skip)] <= stop_time <= t[min(n - 1, i + skip)]:
                 stop_time = float(t[i])  # within a sample of the last excursion
             stop_index = int(np.searchsorted(t, stop_time, side="right")) - 1
+        if by_velocity and stop_index is not None:
+            fade_time = _fade_time(t, v, stop_index, size, period, tail_start)
         if stop_index is not None:
-            quiet[stop_index + 1 + max(1, size // 8) :] = True
+            rest = stop_index + 1 if fade_time is None else tail_start
+            quiet[rest + max(1, size // 8) :] = True
     # Release: refined near the first moving block only.
     release_index = release_time = None
     if head_end >= size // 2 and not moving[0]:
@@ -446,7 +466,33 @@ def motion_span(
         noise=sigma,
         threshold=level_cut,
         block=size,
+        fade_time=fade_time,
     )
+
+
+def _fade_time(
+    t: NDArray, v: NDArray, stop_index: int, size: int, period: float, tail_start: int
+) -> float | None:
+    """Where the oscillation ends when it fades into the noise after ``stop_index``:
+    ``t[tail_start]``, the end of the last coherent block, when the block after the
+    stop (two periods, or what the record holds of them, one period at least) holds a
+    coherent oscillation at the rig's frequency (:data:`COHERENCE`, as a moving block);
+    None when it does not (the motion stopped: after a dry-friction stop the velocity
+    is the rest's noise)."""
+    after = stop_index + 1
+    length = min(size, v.size - after)
+    if length < size // 2 or tail_start <= after:
+        return None
+    var1, var2 = _block_fits(
+        t[after : after + length],
+        v[after : after + length],
+        np.zeros(1, int),
+        length,
+        2.0 * math.pi / period,
+    )
+    if not var1[0] > 0 or 1.0 - var2[0] / var1[0] <= COHERENCE:
+        return None
+    return float(t[tail_start])
 
 
 def check_turning_points(
