@@ -1401,7 +1401,7 @@ def _analyse(
         threshold=motion_threshold,
         displacement=x if v is None else None,
         periodic=x if x_step is not None else None,
-        fades=x is None,
+        velocity_alone=x is None,
     )
     released_at = span.release_index
     rest_until = None if released_at is None else float(t[released_at])

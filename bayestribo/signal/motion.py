@@ -133,7 +133,7 @@ class MotionSpan:
         Samples per block (two periods).
     fade_time : float or None
         When the oscillation fades into the noise instead of stopping (asked for with
-        ``fades``): the end of the last block holding it [s], where ``quiet`` starts;
+        ``velocity_alone``): the end of the last block holding it [s], where ``quiet`` starts;
         ``stop_time`` is then where its swings sink below ``threshold``, not an end of
         motion. ``None`` otherwise.
     """
@@ -279,7 +279,7 @@ def motion_span(
     threshold: float = THRESHOLD,
     displacement: ArrayLike | None = None,
     periodic: ArrayLike | None = None,
-    fades: bool = False,
+    velocity_alone: bool = False,
 ) -> MotionSpan:
     """Release, end of motion and rest of a free-decay record (see the module notes).
 
@@ -304,10 +304,12 @@ def motion_span(
     periodic : array_like, optional
         A recorded displacement quantised in steps [unit]: blocks where it toggles
         periodically at the oscillation frequency are moving too (see the module notes).
-    fades : bool
-        Judge whether the velocity's oscillation stops where its swings sink below
-        ``threshold`` or fades into the noise (see the module notes): a viscous decay
-        never stops. Default False: the end found is the end of motion.
+    velocity_alone : bool
+        The velocity is the record's only channel (its displacement is its integral):
+        judge whether its oscillation stops where its swings sink below ``threshold``
+        or fades into the noise (a viscous decay never stops), and find a rest before
+        the release that is shorter than a period (the integral's wander there would
+        give turning points); see the module notes. Default False.
 
     Returns
     -------
@@ -423,7 +425,7 @@ def motion_span(
                     stop_time = float(t[i])
                     stop_index = i
                 out = out[:0]
-        by_velocity = fades and displacement is None and not by_steps
+        by_velocity = velocity_alone and displacement is None and not by_steps
         if by_velocity and not out.size:
             # no excursion near the last coherent block: the swings sank below the
             # threshold more than a block before the oscillation did
@@ -442,21 +444,34 @@ def motion_span(
             quiet[rest + max(1, size // 8) :] = True
     # Release: refined near the first moving block only.
     release_index = release_time = None
+    out = np.zeros(0, int)
+    base = head_end
+    hi = min(n, int(starts[first]) + 2 * size)
     if head_end >= size // 2 and not moving[0]:
         lo = max(0, head_end - size)
-        hi = min(n, int(starts[first]) + 2 * size)
         level = float(np.median(v[lo:head_end]))
         out = np.flatnonzero(np.abs(v[head_end:hi] - level) > level_cut)
-        if out.size:
-            i = head_end + int(out[0])
-            release_time = _root(t, v, level, i + skip, min(n, i + fit_len), i)
-            if (
-                release_time is None
-                or not t[max(0, i - skip)] <= release_time <= t[min(n - 1, i + skip)]
-            ):
-                release_time = float(t[max(0, i - 1)])
-            release_index = int(np.searchsorted(t, release_time, side="right")) - 1
-            quiet[: max(0, release_index - max(1, size // 8))] = True
+    elif velocity_alone and moving[0]:
+        # a rest shorter than a period before the release (a velocity alone, whose
+        # integral's wander there would give turning points): a first quarter period
+        # within the threshold of its median, then the first excursion beyond it (a
+        # record that starts in motion leaves the median within a quarter period)
+        head = max(fit_len, round(0.25 * period / dt))
+        level = float(np.median(v[:head]))
+        base = 0
+        out = np.flatnonzero(np.abs(v[:hi] - level) > level_cut)
+        if out.size and out[0] < head:
+            out = out[:0]
+    if out.size:
+        i = base + int(out[0])
+        release_time = _root(t, v, level, i + skip, min(n, i + fit_len), i)
+        if (
+            release_time is None
+            or not t[max(0, i - skip)] <= release_time <= t[min(n - 1, i + skip)]
+        ):
+            release_time = float(t[max(0, i - 1)])
+        release_index = int(np.searchsorted(t, release_time, side="right")) - 1
+        quiet[: max(0, release_index - max(1, size // 8))] = True
     return MotionSpan(
         release_index=release_index,
         release_time=release_time,
