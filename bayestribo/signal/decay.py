@@ -1464,12 +1464,13 @@ def _analyse(
     if span.fade_time is not None:
         fade_span = float(peaks.t[-1])
         warn(
-            f"turning points: the decay fades into the noise: its velocity's swings sink "
-            f"below {span.threshold:.3g} ({motion_threshold:g} times the noise at rest) at "
+            f"turning points: the decay fades into the noise after turning point "
+            f"{len(peaks) - 1} (t = {fade_span:.6g} s): its velocity's swings sink below "
+            f"{span.threshold:.3g} ({motion_threshold:g} times the noise at rest) at "
             f"t = {span.stop_time:.6g} s and its oscillation goes on under them until "
             f"t = {span.fade_time:.6g} s, without stopping (a viscous decay); the analysis "
-            f"ends at turning point {len(peaks) - 1} (t = {fade_span:.6g} s), the last before "
-            "it, as for a record that ends in motion",
+            "ends at that turning point, the last before the swings sink, as for a record "
+            "that ends in motion",
             FadeWarning,
         )
     # the free decay starts where the turning points are half a period apart
