@@ -98,6 +98,7 @@ from bayestribo.errors import (
     CoarseSignalWarning,
     FadeWarning,
     GapWarning,
+    OffsetDriftWarning,
     RecordingError,
 )
 from bayestribo.model.plausible import MAX_SPEED
@@ -800,6 +801,47 @@ def _timing_sd(t: NDArray, peaks: Peaks) -> NDArray:
     return peaks.noise / (math.sqrt(sum_u2) * omega**2 * amplitude)
 
 
+#: Difference of a velocity's levels at rest before the release and after the motion,
+#: in standard errors of white noise, beyond which its offset drifts (a Gaussian
+#: difference exceeds it with probability 1e-15).
+OFFSET_DRIFT_Z = 8.0
+
+
+def _offset_drift(
+    t: NDArray, v: NDArray, rest_until: float | None, stop: float | None, sigma: float
+) -> NDArray | None:
+    """The offset of a velocity recorded alone where it drifts: its median at rest
+    before the release and after the motion differ by more than
+    :data:`OFFSET_DRIFT_Z` standard errors (white noise of sd ``sigma`` [unit/s]); the
+    line between the two rests' medians (at their centres), each rest's own median
+    beyond it, which is the best estimate of a random walk known at both ends; a
+    :class:`~bayestribo.errors.OffsetDriftWarning` says so. None when the levels agree
+    or there are not two rests."""
+    head, tail = _rest_bounds(t, rest_until, stop, 0.0)
+    if head < MIN_QUIET_SAMPLES or t.size - tail < MIN_QUIET_SAMPLES or not sigma > 0:
+        return None
+    before, after = float(np.median(v[:head])), float(np.median(v[tail:]))
+    # the median's standard error is √(π/2) times the mean's for white noise
+    se = sigma * math.sqrt(0.5 * math.pi * (1.0 / head + 1.0 / (t.size - tail)))
+    z = abs(after - before) / se
+    if z <= OFFSET_DRIFT_Z:
+        return None
+    t0, t1 = float(np.mean(t[:head])), float(np.mean(t[tail:]))
+    warn(
+        f"velocity offset: the velocity, recorded alone, rests at {before:.4g} before the "
+        f"release (to t = {float(t[head - 1]):.6g} s) and at {after:.4g} after the motion "
+        f"(from t = {float(t[tail]):.6g} s), {z:.0f} standard errors of its noise apart: "
+        "its offset drifts. It is taken off as the line between the two rests, but the "
+        "drift's wander between them, integrated into the displacement, moves it off its "
+        "equilibrium, which the noise model does not hold: the intervals are not "
+        "calibrated (on simulated records with a random-walk offset of 1e-4 per √s "
+        "ζ was off by up to 6 sd); a record whose offset is steady, or one with the "
+        "displacement recorded, can be fitted",
+        OffsetDriftWarning,
+    )
+    return before + (after - before) * np.clip((t - t0) / (t1 - t0), 0.0, 1.0)
+
+
 def _rest_noise(
     t: NDArray,
     x: NDArray,
@@ -1416,7 +1458,10 @@ def _analyse(
         at_rest = _rest_samples(v, t, rest_until, stop_time, 0.0)
         if at_rest.size >= MIN_QUIET_SAMPLES:
             velocity_offset = float(np.median(at_rest))
-            v = v - velocity_offset
+            drifting = _offset_drift(t, v, rest_until, stop_time, span.noise)
+            v = v - (velocity_offset if drifting is None else drifting)
+            if drifting is not None:
+                velocity_offset = float(drifting[0])
         x, pole = _integrated(t, v, period0, released_at, span.stop_index)
         v_step = quantisation_step(v)
         if (
