@@ -22,14 +22,15 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import bayestribo
-from bayestribo.errors import FadeWarning, MisfitWarning
+from bayestribo.errors import FadeWarning, MisfitWarning, OffsetDriftWarning
 from bayestribo.signal.decay import energy_decay
 
 ZETA, PERIOD, RELEASE, SIGMA, RATE = 0.08, 15.0, 10.0, 2e-4, 5.0
 
 
-def _record(seed: int) -> tuple[np.ndarray, np.ndarray]:
-    """Time [s] and velocity [arbitrary] of the seismometer, noise seeded by ``seed``."""
+def _record(seed: int, drift: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Time [s] and velocity [arbitrary] of the seismometer, noise seeded by ``seed``,
+    its offset a random walk of ``drift`` per √s."""
     omega = 2.0 * math.pi / PERIOD
     t = np.arange(0.0, 300.0, 1.0 / RATE)
     moving = t >= RELEASE
@@ -43,7 +44,9 @@ def _record(seed: int) -> tuple[np.ndarray, np.ndarray]:
     )
     v = np.zeros(t.size)
     v[moving] = 40.0 * solution.y[1]
-    return t, v + np.random.default_rng(seed).normal(0.0, SIGMA, t.size)
+    rng = np.random.default_rng(seed)
+    v += drift * np.cumsum(rng.normal(0.0, 1.0, t.size)) * math.sqrt(t[1] - t[0])
+    return t, v + rng.normal(0.0, SIGMA, t.size)
 
 
 @pytest.fixture(scope="module")
@@ -88,3 +91,14 @@ def test_the_default_fit_covers_zeta_without_a_misfit():
     assert not [w for w in caught if issubclass(w.category, MisfitWarning)]
     lo, hi = result.interval("zeta", 0.95)
     assert lo <= ZETA <= hi
+
+
+def test_an_offset_that_drifts_between_the_rests_is_flagged(decay_and_warnings):
+    _, clean = decay_and_warnings
+    assert not [w for w in clean if issubclass(w.category, OffsetDriftWarning)]
+    t, v = _record(0, drift=1e-4)  # the rests' levels about 7 σ apart
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        energy_decay(t, velocity=v)
+    said = [str(w.message) for w in caught if issubclass(w.category, OffsetDriftWarning)]
+    assert len(said) == 1 and "its offset drifts" in said[0]

@@ -61,8 +61,14 @@ from the end of motion T. A real recording needs some care first, and
   sinusoid is below 1e-5 and white noise is filtered above about 4 times the
   oscillation frequency). A missing displacement is the integral of the velocity,
   after removing the velocity's zero offset measured at rest (when a rest segment
-  exists); the integration constant is the equilibrium estimate above, and a residual
-  velocity offset shows as the fitted drift. The integral wanders (its noise over two
+  exists; where its levels before the release and after the motion differ beyond its
+  noise, the offset drifts: the line between them is taken off and an
+  :class:`~bayestribo.errors.OffsetDriftWarning` says the intervals are not calibrated);
+  the integration constant is the equilibrium estimate above, and a residual
+  velocity offset shows as the fitted drift. A velocity alone that fades into the noise
+  (a viscous decay) is analysed to its last turning point before its swings sink below
+  the motion threshold, with a :class:`~bayestribo.errors.FadeWarning`
+  (:func:`bayestribo.signal.motion.motion_span`). The integral wanders (its noise over two
   periods at rest, far above its sample-to-sample noise): the equilibrium's fit weighs
   each turning point by that wander, or the smallest swings, the wander's own, would set
   the drift (integrated accelerometer records: the first swings off centre by up to

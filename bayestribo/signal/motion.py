@@ -40,6 +40,19 @@ the rig's frequency**.
   coarse beside the noise). Where the noise toggles the rest between levels (steps of
   the order of the noise, a vibrometer's), a last change of level is the noise's, and
   the end of motion is the last excursion beyond the threshold, as without steps.
+* **A velocity recorded alone** (``velocity_alone``: a seismometer's coil, its
+  displacement to be integrated) may hold a **viscous decay that fades into the noise**
+  instead of stopping: its last excursion beyond the threshold is then followed by a
+  coherent oscillation at the rig's frequency (the two periods after it are a moving
+  block, which after a dry-friction stop are the rest's noise). That crossing is not an
+  end of motion (:attr:`MotionSpan.fade_time`): the rest starts after the last moving
+  block, and the analysis ends before the crossing, as for a record that ends in motion.
+  Taken for a stop, it set the model's energy after it to zero and counted the
+  oscillation under the threshold as rest noise (ζ 2.5 to 5 sd low on a seismometer's
+  record, ``tests/test_signal_seismometer.py``). Its **rest before the release** may be
+  shorter than a block, the first block then moving: a first quarter period within the
+  threshold of its median is rest, and the release is its first excursion beyond it
+  (else the integral's wander at rest gave a turning point).
 * The blocks' sinusoid is at the frequency measured from the record's own spectrum
   (a peak of the spectrum of its first difference: the one whose oscillation is the
   strongest in the signal itself, so that a line of the noise that the difference
