@@ -73,6 +73,9 @@ def test_the_rest_noise_is_measured_where_the_oscillation_has_ended(decay_and_wa
     decay, _ = decay_and_warnings
     # about 700 samples of rest: the sd of their sd is 2.7 %; 10 % is 3.7 of it
     assert decay.noise.velocity == pytest.approx(SIGMA, rel=0.1)
+    # white, as simulated: the oscillation left under the noise, a line at the rig's
+    # frequency, is taken out of the rest before its spectrum is measured
+    assert not decay.rest_noise.coloured
 
 
 def test_a_rest_shorter_than_a_period_is_found_before_the_release(decay_and_warnings):
