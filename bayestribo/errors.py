@@ -19,6 +19,7 @@ __all__ = [
     "GapWarning",
     "MisfitWarning",
     "MissingDependencyError",
+    "OffsetDriftWarning",
     "PluginWarning",
     "ReadingWarning",
     "RecordingError",
@@ -135,6 +136,13 @@ class CoarseSignalWarning(MisfitWarning):
     """A coarse channel holds fewer than four of its quantisation steps across the
     motion's swing: the turning points stand on a few levels and the intervals are not
     calibrated there (the message names the channel, its step and the count)."""
+
+
+class OffsetDriftWarning(MisfitWarning):
+    """A velocity recorded alone is not at one level at rest: its level before the
+    release and after the motion differ beyond its noise (an offset that drifts). The
+    displacement integrated from it wanders off its equilibrium between the rests, which
+    the noise model does not hold (the message gives both levels and the difference)."""
 
 
 class ShortAnalysisWarning(MisfitWarning):

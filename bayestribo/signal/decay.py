@@ -61,8 +61,14 @@ from the end of motion T. A real recording needs some care first, and
   sinusoid is below 1e-5 and white noise is filtered above about 4 times the
   oscillation frequency). A missing displacement is the integral of the velocity,
   after removing the velocity's zero offset measured at rest (when a rest segment
-  exists); the integration constant is the equilibrium estimate above, and a residual
-  velocity offset shows as the fitted drift. The integral wanders (its noise over two
+  exists; where its levels before the release and after the motion differ beyond its
+  noise, the offset drifts: the line between them is taken off and an
+  :class:`~bayestribo.errors.OffsetDriftWarning` says the intervals are not calibrated);
+  the integration constant is the equilibrium estimate above, and a residual
+  velocity offset shows as the fitted drift. A velocity alone that fades into the noise
+  (a viscous decay) is analysed to its last turning point before its swings sink below
+  the motion threshold, with a :class:`~bayestribo.errors.FadeWarning`
+  (:func:`bayestribo.signal.motion.motion_span`). The integral wanders (its noise over two
   periods at rest, far above its sample-to-sample noise): the equilibrium's fit weighs
   each turning point by that wander, or the smallest swings, the wander's own, would set
   the drift (integrated accelerometer records: the first swings off centre by up to
@@ -98,6 +104,7 @@ from bayestribo.errors import (
     CoarseSignalWarning,
     FadeWarning,
     GapWarning,
+    OffsetDriftWarning,
     RecordingError,
 )
 from bayestribo.model.plausible import MAX_SPEED
@@ -800,6 +807,83 @@ def _timing_sd(t: NDArray, peaks: Peaks) -> NDArray:
     return peaks.noise / (math.sqrt(sum_u2) * omega**2 * amplitude)
 
 
+#: Turning points of a decay that fades into the noise whose decrement continues its
+#: oscillation under the noise (:func:`_without_faded`).
+FADED_POINTS = 6
+
+
+def _without_faded(
+    t: NDArray, v: NDArray, rest_from: float, peaks: Peaks, period: float
+) -> NDArray:
+    """``v`` with the oscillation that a decay fading into the noise keeps under it
+    taken out from ``rest_from`` [s] on: e^(-λt)(a cos ω_d t + b sin ω_d t) with the
+    decay rate λ of the last :data:`FADED_POINTS` turning points' swings and ω_d
+    their half period's (2π/``period``), a and b (and a constant, kept) fitted by
+    least squares to the samples there.
+
+    At 1.4 times the noise per sample where the rest starts, the oscillation was
+    counted as rest noise: its spectrum a line at the rig's frequency, the rest
+    called coloured, and the Monte Carlo of a velocity alone drew that line into
+    the increments (on a seismometer's record χ²/n of the fit 0.2, ζ's sd(z) 0.4)."""
+    first = int(np.searchsorted(t, rest_from, "left"))
+    tail = t[first:] - rest_from
+    last = slice(max(0, len(peaks) - FADED_POINTS), len(peaks))
+    swings = np.abs(np.asarray(peaks.value[last], dtype=float))
+    if tail.size < 4 or swings.size < 3 or not np.all(swings > 0):
+        return v
+    rate = -float(np.polyfit(np.asarray(peaks.t[last], dtype=float), np.log(swings), 1)[0])
+    rate = max(rate, 0.0)
+    omega = 2.0 * math.pi / period
+    envelope = np.exp(-rate * tail)
+    wave = np.column_stack([envelope * np.cos(omega * tail), envelope * np.sin(omega * tail)])
+    design = np.column_stack([np.ones(tail.size), wave])
+    coef, *_ = np.linalg.lstsq(design, v[first:], rcond=None)
+    out = v.copy()
+    out[first:] -= wave @ coef[1:]
+    return out
+
+
+#: Difference of a velocity's levels at rest before the release and after the motion,
+#: in standard errors of white noise, beyond which its offset drifts (a Gaussian
+#: difference exceeds it with probability 1e-15).
+OFFSET_DRIFT_Z = 8.0
+
+
+def _offset_drift(
+    t: NDArray, v: NDArray, rest_until: float | None, stop: float | None, sigma: float
+) -> NDArray | None:
+    """The offset of a velocity recorded alone where it drifts: its median at rest
+    before the release and after the motion differ by more than
+    :data:`OFFSET_DRIFT_Z` standard errors (white noise of sd ``sigma`` [unit/s]); the
+    line between the two rests' medians (at their centres), each rest's own median
+    beyond it, which is the best estimate of a random walk known at both ends; a
+    :class:`~bayestribo.errors.OffsetDriftWarning` says so. None when the levels agree
+    or there are not two rests."""
+    head, tail = _rest_bounds(t, rest_until, stop, 0.0)
+    if head < MIN_QUIET_SAMPLES or t.size - tail < MIN_QUIET_SAMPLES or not sigma > 0:
+        return None
+    before, after = float(np.median(v[:head])), float(np.median(v[tail:]))
+    # the median's standard error is √(π/2) times the mean's for white noise
+    se = sigma * math.sqrt(0.5 * math.pi * (1.0 / head + 1.0 / (t.size - tail)))
+    z = abs(after - before) / se
+    if z <= OFFSET_DRIFT_Z:
+        return None
+    t0, t1 = float(np.mean(t[:head])), float(np.mean(t[tail:]))
+    warn(
+        f"velocity offset: the velocity, recorded alone, rests at {before:.4g} before the "
+        f"release (to t = {float(t[head - 1]):.6g} s) and at {after:.4g} after the motion "
+        f"(from t = {float(t[tail]):.6g} s), {z:.0f} standard errors of its noise apart: "
+        "its offset drifts. It is taken off as the line between the two rests, but the "
+        "drift's wander between them, integrated into the displacement, moves it off its "
+        "equilibrium, which the noise model does not hold: the intervals are not "
+        "calibrated (on simulated records with a random-walk offset of 1e-4 per √s "
+        "ζ was off by up to 6 sd); a record whose offset is steady, or one with the "
+        "displacement recorded, can be fitted",
+        OffsetDriftWarning,
+    )
+    return before + (after - before) * np.clip((t - t0) / (t1 - t0), 0.0, 1.0)
+
+
 def _rest_noise(
     t: NDArray,
     x: NDArray,
@@ -1401,10 +1485,13 @@ def _analyse(
         threshold=motion_threshold,
         displacement=x if v is None else None,
         periodic=x if x_step is not None else None,
+        velocity_alone=x is None,
     )
     released_at = span.release_index
     rest_until = None if released_at is None else float(t[released_at])
-    stop_time = span.stop_time
+    # a decay that fades into the noise (a velocity alone): its rest starts where its
+    # oscillation ends, and the analysis ends where its swings sink below the threshold
+    stop_time = span.stop_time if span.fade_time is None else span.fade_time
 
     quiet = _quiet_segments(t, rest_until, stop_time, 0.25 * period0)
     coarse_fade = None
@@ -1413,7 +1500,10 @@ def _analyse(
         at_rest = _rest_samples(v, t, rest_until, stop_time, 0.0)
         if at_rest.size >= MIN_QUIET_SAMPLES:
             velocity_offset = float(np.median(at_rest))
-            v = v - velocity_offset
+            drifting = _offset_drift(t, v, rest_until, stop_time, span.noise)
+            v = v - (velocity_offset if drifting is None else drifting)
+            if drifting is not None:
+                velocity_offset = float(drifting[0])
         x, pole = _integrated(t, v, period0, released_at, span.stop_index)
         v_step = quantisation_step(v)
         if (
@@ -1457,6 +1547,19 @@ def _analyse(
     except RecordingError as e:
         raise RecordingError(f"turning points: {e}") from e
     peaks = replace(found, index=found.index + lo)
+    fade_span = None
+    if span.fade_time is not None:
+        fade_span = float(peaks.t[-1])
+        warn(
+            f"turning points: the decay fades into the noise after turning point "
+            f"{len(peaks) - 1} (t = {fade_span:.6g} s): its velocity's swings sink below "
+            f"{span.threshold:.3g} ({motion_threshold:g} times the noise at rest) at "
+            f"t = {span.stop_time:.6g} s and its oscillation goes on under them until "
+            f"t = {span.fade_time:.6g} s, without stopping (a viscous decay); the analysis "
+            "ends at that turning point, the last before the swings sink, as for a record "
+            "that ends in motion",
+            FadeWarning,
+        )
     # the free decay starts where the turning points are half a period apart
     fade_level = None if not band_x else FADE * PEAK_THRESHOLD * band_x
     if coarse_fade is not None:
@@ -1483,6 +1586,8 @@ def _analyse(
             FadeWarning,
         )
         peaks = _head(peaks, spacing.faded)
+    elif fade_span is not None:
+        faded_at = fade_span
     # a derived displacement's turning points carry its wander (band_x), which its
     # sample-to-sample noise does not show: weighted by that alone, the smallest swings
     # weighed most in the equilibrium's fit, and its drift followed their wander
@@ -1491,7 +1596,7 @@ def _analyse(
         # the equilibrium from the decay's own turning points (those of an irregular
         # start do not follow Eq. 20, nor those of the noise after a fade)
         peaks = _equilibrium_from(peaks, spacing.start, offset, noise=wander)
-    peaks = replace(peaks, stop_time=stop_time)
+    peaks = replace(peaks, stop_time=stop_time if span.fade_time is None else None)
     period = 2.0 * spacing.half_period
     if v is None:
         derived = "velocity"
@@ -1519,7 +1624,9 @@ def _analyse(
         skip = irregular
     left_out = 0
     rest_until = None if released_at is None else release
-    noise = _noise(t, x, v, rest_until, stop_time, period, derived, jitter)
+    # the oscillation a fade leaves under the noise is not the rest's noise
+    v_rest = v if span.fade_time is None else _without_faded(t, v, stop_time, peaks, period)
+    noise = _noise(t, x, v_rest, rest_until, stop_time, period, derived, jitter)
     motion_ended = stop_time is not None and faded_at is None
     truncated = False
     coarse = coarse_steps(
@@ -1661,7 +1768,7 @@ def _analyse(
     else:
         scaling = Scaling(omega, 1.0, friction_defined=False)
 
-    rest_noise = _rest_noise(t, x, v, rest_until, stop_time, period, derived)
+    rest_noise = _rest_noise(t, x, v_rest, rest_until, stop_time, period, derived)
     if derived is None and coarse[1] is None:
         # (a coarse velocity at rest sits on the level nearest its zero: the rest says
         # where that level is, not where the zero is, and the rounding, which averages

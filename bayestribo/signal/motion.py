@@ -40,6 +40,19 @@ the rig's frequency**.
   coarse beside the noise). Where the noise toggles the rest between levels (steps of
   the order of the noise, a vibrometer's), a last change of level is the noise's, and
   the end of motion is the last excursion beyond the threshold, as without steps.
+* **A velocity recorded alone** (``velocity_alone``: a seismometer's coil, its
+  displacement to be integrated) may hold a **viscous decay that fades into the noise**
+  instead of stopping: its last excursion beyond the threshold is then followed by a
+  coherent oscillation at the rig's frequency (the two periods after it are a moving
+  block, which after a dry-friction stop are the rest's noise). That crossing is not an
+  end of motion (:attr:`MotionSpan.fade_time`): the rest starts after the last moving
+  block, and the analysis ends before the crossing, as for a record that ends in motion.
+  Taken for a stop, it set the model's energy after it to zero and counted the
+  oscillation under the threshold as rest noise (ζ 2.5 to 5 sd low on a seismometer's
+  record, ``tests/test_signal_seismometer.py``). Its **rest before the release** may be
+  shorter than a block, the first block then moving: a first quarter period within the
+  threshold of its median is rest, and the release is its first excursion beyond it
+  (else the integral's wander at rest gave a turning point).
 * The blocks' sinusoid is at the frequency measured from the record's own spectrum
   (a peak of the spectrum of its first difference: the one whose oscillation is the
   strongest in the signal itself, so that a line of the noise that the difference
@@ -131,6 +144,11 @@ class MotionSpan:
         Excursion threshold used [unit/s] (``THRESHOLD`` times ``noise``).
     block : int
         Samples per block (two periods).
+    fade_time : float or None
+        When the oscillation fades into the noise instead of stopping (asked for with
+        ``velocity_alone``): the end of the last block holding it [s], where ``quiet`` starts;
+        ``stop_time`` is then where its swings sink below ``threshold``, not an end of
+        motion. ``None`` otherwise.
     """
 
     release_index: int | None
@@ -141,11 +159,12 @@ class MotionSpan:
     noise: float
     threshold: float
     block: int
+    fade_time: float | None = None
 
     @property
     def motion_ended(self) -> bool:
-        """True when the record holds the end of motion."""
-        return self.stop_time is not None
+        """True when the record holds the end of motion (not a fade into the noise)."""
+        return self.stop_time is not None and self.fade_time is None
 
 
 #: Samples of blocks taken together by :func:`_block_fits` (4 MB of float64 at most).
@@ -273,6 +292,7 @@ def motion_span(
     threshold: float = THRESHOLD,
     displacement: ArrayLike | None = None,
     periodic: ArrayLike | None = None,
+    velocity_alone: bool = False,
 ) -> MotionSpan:
     """Release, end of motion and rest of a free-decay record (see the module notes).
 
@@ -297,6 +317,12 @@ def motion_span(
     periodic : array_like, optional
         A recorded displacement quantised in steps [unit]: blocks where it toggles
         periodically at the oscillation frequency are moving too (see the module notes).
+    velocity_alone : bool
+        The velocity is the record's only channel (its displacement is its integral):
+        judge whether its oscillation stops where its swings sink below ``threshold``
+        or fades into the noise (a viscous decay never stops), and find a rest before
+        the release that is shorter than a period (the integral's wander there would
+        give turning points); see the module notes. Default False.
 
     Returns
     -------
@@ -376,7 +402,7 @@ def motion_span(
     # the rest after it cannot move it.
     fit_len = max(9, round(period / dt / 8.0))
     skip = fit_len // 3  # samples next to the crossing, where a filter rounds the corner
-    stop_index = stop_time = None
+    stop_index = stop_time = fade_time = None
     if tail_start + size // 2 <= n and not moving[-1]:
         lo = max(0, int(starts[last]) - size)
         hi = min(n, tail_start + size)
@@ -412,31 +438,53 @@ def motion_span(
                     stop_time = float(t[i])
                     stop_index = i
                 out = out[:0]
+        by_velocity = velocity_alone and displacement is None and not by_steps
+        if by_velocity and not out.size:
+            # no excursion near the last coherent block: the swings sank below the
+            # threshold more than a block before the oscillation did
+            base = int(starts[first])
+            out = base - lo + np.flatnonzero(np.abs(v[base:lo] - level) > level_cut)
         if out.size:
             i = lo + int(out[-1])
             stop_time = _root(t, v, level, max(0, i + 1 - fit_len), i + 1 - skip, i)
             if stop_time is None or not t[max(0, i - skip)] <= stop_time <= t[min(n - 1, i + skip)]:
                 stop_time = float(t[i])  # within a sample of the last excursion
             stop_index = int(np.searchsorted(t, stop_time, side="right")) - 1
+        if by_velocity and stop_index is not None:
+            fade_time = _fade_time(t, v, stop_index, size, period, tail_start)
         if stop_index is not None:
-            quiet[stop_index + 1 + max(1, size // 8) :] = True
+            rest = stop_index + 1 if fade_time is None else tail_start
+            quiet[rest + max(1, size // 8) :] = True
     # Release: refined near the first moving block only.
     release_index = release_time = None
+    out = np.zeros(0, int)
+    base = head_end
+    hi = min(n, int(starts[first]) + 2 * size)
     if head_end >= size // 2 and not moving[0]:
         lo = max(0, head_end - size)
-        hi = min(n, int(starts[first]) + 2 * size)
         level = float(np.median(v[lo:head_end]))
         out = np.flatnonzero(np.abs(v[head_end:hi] - level) > level_cut)
-        if out.size:
-            i = head_end + int(out[0])
-            release_time = _root(t, v, level, i + skip, min(n, i + fit_len), i)
-            if (
-                release_time is None
-                or not t[max(0, i - skip)] <= release_time <= t[min(n - 1, i + skip)]
-            ):
-                release_time = float(t[max(0, i - 1)])
-            release_index = int(np.searchsorted(t, release_time, side="right")) - 1
-            quiet[: max(0, release_index - max(1, size // 8))] = True
+    elif velocity_alone and moving[0]:
+        # a rest shorter than a period before the release (a velocity alone, whose
+        # integral's wander there would give turning points): a first quarter period
+        # within the threshold of its median, then the first excursion beyond it (a
+        # record that starts in motion leaves the median within a quarter period)
+        head = max(fit_len, round(0.25 * period / dt))
+        level = float(np.median(v[:head]))
+        base = 0
+        out = np.flatnonzero(np.abs(v[:hi] - level) > level_cut)
+        if out.size and out[0] < head:
+            out = out[:0]
+    if out.size:
+        i = base + int(out[0])
+        release_time = _root(t, v, level, i + skip, min(n, i + fit_len), i)
+        if (
+            release_time is None
+            or not t[max(0, i - skip)] <= release_time <= t[min(n - 1, i + skip)]
+        ):
+            release_time = float(t[max(0, i - 1)])
+        release_index = int(np.searchsorted(t, release_time, side="right")) - 1
+        quiet[: max(0, release_index - max(1, size // 8))] = True
     return MotionSpan(
         release_index=release_index,
         release_time=release_time,
@@ -446,7 +494,33 @@ def motion_span(
         noise=sigma,
         threshold=level_cut,
         block=size,
+        fade_time=fade_time,
     )
+
+
+def _fade_time(
+    t: NDArray, v: NDArray, stop_index: int, size: int, period: float, tail_start: int
+) -> float | None:
+    """Where the oscillation ends when it fades into the noise after ``stop_index``:
+    ``t[tail_start]``, the end of the last coherent block, when the block after the
+    stop (two periods, or what the record holds of them, one period at least) holds a
+    coherent oscillation at the rig's frequency (:data:`COHERENCE`, as a moving block);
+    None when it does not (the motion stopped: after a dry-friction stop the velocity
+    is the rest's noise)."""
+    after = stop_index + 1
+    length = min(size, v.size - after)
+    if length < size // 2 or tail_start <= after:
+        return None
+    var1, var2 = _block_fits(
+        t[after : after + length],
+        v[after : after + length],
+        np.zeros(1, int),
+        length,
+        2.0 * math.pi / period,
+    )
+    if not var1[0] > 0 or 1.0 - var2[0] / var1[0] <= COHERENCE:
+        return None
+    return float(t[tail_start])
 
 
 def check_turning_points(
