@@ -75,12 +75,15 @@ _MIN_STEPS = 32
 _TAIL_SHARE = 1e-2
 # The averaged tail (see :func:`averaged_tail`): tried once the half cycles past the
 # record lose less than this fraction of their amplitude each and more than
-# _AVERAGED_MIN_HALF_CYCLES of them remain; its nodes, and the tolerance on the
-# Chebyshev coefficients of its interpolants (relative error of dn/du and dS/du).
+# _AVERAGED_MIN_HALF_CYCLES of them remain; its nodes, the most spans down the
+# amplitudes, the halvings of a span whose interpolants miss their tolerance (the
+# local power of a drag that is a sum of terms changes along it), and the tolerance on
+# the Chebyshev coefficients of its interpolants (relative error of dn/du and dS/du).
 _AVERAGED_DROP = 0.02
 _AVERAGED_MIN_HALF_CYCLES = 64
 _AVERAGED_NODES = 7
-_AVERAGED_SPANS = 4
+_AVERAGED_SPANS = 8
+_AVERAGED_HALVINGS = 3
 _AVERAGED_TOLERANCE = 1e-8
 # A drag's creep to rest (a power law below α = 1) ends the sum only where its ∫E, known
 # within a factor 2, is at most this fraction of Π(0): the integrator's accuracy against
@@ -474,6 +477,57 @@ def tail_integral(
 
 
 @numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
+def interpolants(
+    a0: float,
+    v0: float,
+    j0: float,
+    curve0: float,
+    q: float,
+    z_lo: float,
+    c: NDArray,
+    ratio: float,
+    tables: NDArray,
+    offsets: NDArray,
+    tau_at: NDArray,
+    c_at: NDArray,
+    e_at: NDArray,
+    fixed: int,
+    nodes: NDArray,
+    h_n: NDArray,
+    h_s: NDArray,
+) -> tuple[bool, float, float, float, float]:
+    """Fill ``nodes`` (Chebyshev points of z = (a/a0)^q over [``z_lo``, 1]) and the
+    factors' logarithms ``h_n`` = ln(V₁/V) and ``h_s`` = ln(J/J₁) there, from the flow
+    of the law's half cycles (:func:`flow_at`; at a0 its V, J and d²a/dn² given):
+    (taken, a, V, J, d²a/dn² at the lower end z_lo), taken False where a node's motion
+    stops or drops by _AVERAGED_DROP or more per half cycle, or where either
+    interpolant's last two Chebyshev coefficients exceed _AVERAGED_TOLERANCE."""
+    k_n = nodes.size
+    a, v, j, curve = a0, v0, j0, curve0
+    for k in range(k_n):
+        nodes[k] = math.cos(math.pi * k / (k_n - 1))
+        z = 0.5 * ((nodes[k] + 1.0) * (1.0 - z_lo)) + z_lo
+        if k > 0:
+            a = a0 * z ** (1.0 / q)
+            v, j, curve = flow_at(a, c, ratio, tables, offsets, tau_at, c_at, e_at, fixed)
+        if not (v > 0.0 and j > 0.0) or v > _AVERAGED_DROP * a:
+            return False, a, v, j, curve
+        h_n[k] = math.log(averaged_rate(a, c) / v)
+        h_s[k] = math.log(j / (0.5 * math.pi * a * a))
+    # the interpolants' last Chebyshev coefficients: their error
+    for f in (h_n, h_s):
+        for m in (k_n - 2, k_n - 1):
+            coef = 0.0
+            for k in range(k_n):
+                w = 0.5 if k == 0 or k == k_n - 1 else 1.0
+                coef += w * f[k] * math.cos(math.pi * m * k / (k_n - 1))
+            coef *= 2.0 / (k_n - 1)
+            if not abs(coef) <= _AVERAGED_TOLERANCE:
+                return False, a, v, j, curve
+    return True, a, v, j, curve
+
+
+@numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
 def averaged_segment(
     a0: float,
     v0: float,
@@ -501,7 +555,6 @@ def averaged_segment(
     p = a0 * curve0 / (v0 * v0)  # d ln V / d ln a
     if not p > 0.95:
         return fail  # a decay that quickens down the tail: the exact sum ends soon
-    curve = curve0
     # the span: to the end of the n_rem half cycles or to where the rest is negligible
     if abs(p - 1.0) < 1e-3:
         span = n_rem * eps
@@ -517,38 +570,47 @@ def averaged_segment(
             span = min(span, math.log(rest / negligible) / (3.0 - p))
     if not (span > 0.0 and math.isfinite(span)):
         return fail
-    width = 1.2 * span + 0.1
-    if eps * math.exp((1.0 - p) * width) > _AVERAGED_DROP:
-        return fail  # the drop grows past the bound down the span
+    # the span's interpolants, on a half, a quarter ... of it where they miss their
+    # tolerance (a drag whose local power changes down the span: the next spans go on
+    # from its lower end, each with its own power law)
     u0 = math.log(a0)
     q = max(p - 1.0, 0.05)
-    z_lo = math.exp(-q * width)
-    k_n = _AVERAGED_NODES
-    nodes = np.empty(k_n)
-    h_n = np.empty(k_n)  # ln(V₁/V)
-    h_s = np.empty(k_n)  # ln(J/J₁)
-    for k in range(k_n):
-        nodes[k] = math.cos(math.pi * k / (k_n - 1))
-        z = 0.5 * ((nodes[k] + 1.0) * (1.0 - z_lo)) + z_lo
-        if k == 0:
-            a, v, j = a0, v0, j0
-        else:
-            a = a0 * z ** (1.0 / q)
-            v, j, curve = flow_at(a, c, ratio, tables, offsets, tau_at, c_at, e_at, fixed)
-        if not (v > 0.0 and j > 0.0) or v > _AVERAGED_DROP * a:
-            return fail
-        h_n[k] = math.log(averaged_rate(a, c) / v)
-        h_s[k] = math.log(j / (0.5 * math.pi * a * a))
-    # the interpolants' last Chebyshev coefficients: their error
-    for f in (h_n, h_s):
-        for m in (k_n - 2, k_n - 1):
-            coef = 0.0
-            for k in range(k_n):
-                w = 0.5 if k == 0 or k == k_n - 1 else 1.0
-                coef += w * f[k] * math.cos(math.pi * m * k / (k_n - 1))
-            coef *= 2.0 / (k_n - 1)
-            if not abs(coef) <= _AVERAGED_TOLERANCE:
-                return fail
+    nodes = np.empty(_AVERAGED_NODES)
+    h_n = np.empty(_AVERAGED_NODES)  # ln(V₁/V)
+    h_s = np.empty(_AVERAGED_NODES)  # ln(J/J₁)
+    full = 1.2 * span + 0.1
+    taken = False
+    width = full
+    z_lo = 0.0
+    a, v, j = a0, v0, j0
+    for halving in range(_AVERAGED_HALVINGS + 1):
+        width = full * 0.5**halving
+        if eps * math.exp((1.0 - p) * width) > _AVERAGED_DROP:
+            continue  # the drop grows past the bound down the span
+        z_lo = math.exp(-q * width)
+        taken, a, v, j, curve = interpolants(
+            a0,
+            v0,
+            j0,
+            curve0,
+            q,
+            z_lo,
+            c,
+            ratio,
+            tables,
+            offsets,
+            tau_at,
+            c_at,
+            e_at,
+            fixed,
+            nodes,
+            h_n,
+            h_s,
+        )
+        if taken:
+            break
+    if not taken:
+        return fail
     # integrate down from u0, panel by panel, until n_rem half cycles are summed
     panels = int(width) + 1
     step = width / panels
@@ -621,7 +683,8 @@ def averaged_tail(
     Chebyshev points of z = (a/a0)^q, q = p - 1 for the local power law V ∝ a^p at
     the span's top (the factors' logarithms are then near polynomials in z); their
     last Chebyshev coefficients must be below _AVERAGED_TOLERANCE. Each span is chosen
-    from that power law (:func:`averaged_segment`), up to _AVERAGED_SPANS of them down
+    from that power law (:func:`averaged_segment`; halved up to _AVERAGED_HALVINGS
+    times where its interpolants miss their tolerance), up to _AVERAGED_SPANS of them down
     the amplitudes (the local power changes along a decay whose drag is a sum of
     terms), and every node must drop by less than _AVERAGED_DROP per half cycle.
     """
