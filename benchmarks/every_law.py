@@ -16,6 +16,11 @@ the same recording. Results are written after every fit to
 Run (tens of minutes; in the background)::
 
     timeout 5400 python benchmarks/every_law.py
+
+``--recordings`` keeps the recordings whose names contain one of the words given
+("bundled", "HarmOsc3", ...). The package fitted is the one Python imports: a side by
+side of two trees runs this file twice at once, each with ``PYTHONPATH`` at its tree
+and its own ``--output``; the results name the tree and its commit.
 """
 
 from __future__ import annotations
@@ -32,7 +37,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _machine import write_results
+from _machine import commit, write_results
 
 ROOT = Path(__file__).resolve().parents[1]
 BUNDLED = ROOT / "data" / "runs" / "glycerol-N0.31-r1.csv"
@@ -78,21 +83,43 @@ def _fit(run: Any, law: str) -> dict[str, Any]:
 def main() -> None:
     import real
 
+    import bayestribo
     from bayestribo import read_run
     from bayestribo.model.laws.candidates import candidate_laws
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--laws", nargs="*", default=None, help="default: every candidate")
     parser.add_argument("--output", default="every_law", help="results/NAME.json")
+    parser.add_argument(
+        "--recordings",
+        nargs="*",
+        default=None,
+        help="keep the recordings whose names contain one of these (default: every one)",
+    )
     args = parser.parse_args()
     laws = tuple(args.laws or candidate_laws())
+
+    def kept(name: str) -> bool:
+        return args.recordings is None or any(word in name for word in args.recordings)
+
     runs: dict[str, Any] = {"bundled glycerol-N0.31-r1": read_run(BUNDLED)}
+    first = runs["bundled glycerol-N0.31-r1"]
     for name in real.recordings():
+        if not kept(name):
+            continue
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             runs[name] = real.load(name)[0]
-    results: dict[str, Any] = {"laws": list(laws), "recordings": {}}
-    first = runs["bundled glycerol-N0.31-r1"]
+    runs = {name: run for name, run in runs.items() if kept(name)}
+    if not runs:
+        parser.error(f"--recordings: no recording's name contains any of {args.recordings}")
+    tree = Path(bayestribo.__file__).resolve().parents[1]
+    results: dict[str, Any] = {
+        "laws": list(laws),
+        "package_tree": str(tree),
+        "package_commit": commit(tree),
+        "recordings": {},
+    }
     t0 = time.perf_counter()
     for law in (DEFAULT, *laws):  # warm-up: imports, compilation, caches
         _fit(first, law)
