@@ -168,3 +168,21 @@ def test_psis_loo_is_arvizs_loo(case):
     np.testing.assert_allclose(got["loo_i"].values, expected["loo_i"].values, rtol=1e-10)
     np.testing.assert_allclose(got["pareto_k"].values, expected["pareto_k"].values, rtol=1e-10)
     assert loo.relative_efficiency(chains[:1]) == 1.0
+
+
+def test_psis_of_regular_rows_does_not_import_arviz():
+    """Rows whose tails have no ties are smoothed without ArviZ, which takes seconds
+    to import (a fit's importance correction smooths one such row); the smoothing
+    against ArviZ's own is :func:`test_psis_loo_is_arvizs_loo`'s."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, numpy as np\n"
+        "from bayestribo.inference.loo import psis\n"
+        "x, k = psis(np.random.default_rng(0).normal(size=(2, 2000)), 1.0)\n"
+        "assert np.all(np.isfinite(x)) and np.all(np.isfinite(k))\n"
+        "print('arviz' in sys.modules)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"

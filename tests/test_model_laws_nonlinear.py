@@ -249,3 +249,18 @@ def test_a_law_on_a_restoring_force_pickles(name):
     np.testing.assert_array_equal(
         back.restoring.potential([0.3, 1.0]), kernel.potential([0.3, 1.0])
     )
+
+
+def test_fixed_steps_of_either_sign_are_the_same_steps_on_a_restoring_force():
+    """The coarse model's steps=-8 on a nonlinear restoring force integrates with 8
+    steps as steps=8 does (its integrator has no sum past the record to shorten), not
+    with its default steps."""
+    kernel, _, y0 = _case("duffing")
+    law = get_law("viscous+quadratic+coulomb").with_restoring(kernel)
+    tau = np.linspace(0.0, TAU_END - 1.0, 9)
+    pi = {
+        s: law.pi_grid(tau, VALUES, np.array([y0]), 0.0, TAU_END, reference=y0, steps=s)[0]
+        for s in (8, -8, 0)
+    }
+    np.testing.assert_array_equal(pi[-8], pi[8])
+    assert np.max(np.abs(pi[0] - pi[8])) > 0.0

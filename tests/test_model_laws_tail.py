@@ -27,6 +27,9 @@ DRAG_CASES = [
     ("quadratic", {"c2": 0.01}),
     ("viscous+quadratic", {"zeta": 0.002, "c2": 0.01}),
     ("quadratic+hysteretic", {"c2": 0.01, "eta": 0.0005}),
+    # a quadratic drag down to where a small hysteretic loss takes over (the bundled
+    # run's multi-start): the local power falls from 2 to 1 down the tail
+    ("quadratic+hysteretic", {"c2": 0.018, "eta": 4.5e-5}),
     ("coulomb+power", {"mu_k": 2e-4, "mu_s_ratio": 1.0, "zeta_alpha": 0.01, "alpha": 2.0}),
     ("coulomb+quadratic", {"mu_k": 2e-4, "mu_s_ratio": 1.0, "c2": 0.01}),
 ]
@@ -69,6 +72,8 @@ def _coefficients(law: str, values: dict) -> np.ndarray:
         ("power", {"zeta_alpha": 0.003, "alpha": 3.0}, 4.0),
         ("quadratic", {"c2": 0.003}, 1.0),
         ("viscous+quadratic", {"zeta": 0.001, "c2": 0.003}, 1.0),
+        # its first span's interpolants miss their tolerance: taken on a half of it
+        ("quadratic+hysteretic", {"c2": 0.018, "eta": 4.5e-5}, 0.5),
     ],
 )
 @pytest.mark.parametrize("count", [300, 20_000])
@@ -190,3 +195,71 @@ def test_a_creep_that_never_ends_leaves_the_row_outside_the_laws_domain():
     law = get_law("power")
     values = {"zeta_alpha": np.array([0.025]), "alpha": np.array([0.3])}
     assert np.all(np.isnan(law.pi_grid(TAU, values, [Y0], reference=Y0, method="integrate")))
+
+
+# The coarse model of the optimiser's multi-start (steps=-8): the half cycles of 8 steps
+# each, as steps=8 integrates them, with the sum past the record shortened as the
+# default model's is. A law whose friction vanishes with the amplitude (its motion never
+# stopped by it) ends geometrically; a decay that slows takes the averaged tail of its
+# own 8-step half cycles, up to the same cap of 20,000 past the record.
+COARSE_CASES = [
+    *DRAG_CASES,
+    ("quadratic+hysteretic", {"c2": 1e-6, "eta": 0.04}),
+    ("quadratic", {"c2": 0.034}),
+]
+
+
+@pytest.mark.parametrize(("law", "values"), COARSE_CASES)
+def test_the_coarse_models_shortened_sum_is_its_half_cycles_sum(law, values):
+    """steps=-8 within 1e-9 of Π(0) and 1e-6 of the tail past the record of steps=8,
+    which integrates every half cycle of 8 steps (the coarse model's own error against
+    the exact one is ~1e-5 of Π(0))."""
+    shortened = _pi(law, values, -8)
+    summed = _pi(law, values, 8)
+    assert np.all(np.isfinite(summed)) and np.all(np.isfinite(shortened))
+    tolerance = 1e-9 * summed[0] + 1e-6 * summed[-1]
+    assert np.max(np.abs(shortened - summed)) < tolerance
+
+
+def test_a_record_that_ends_in_the_motion_has_the_same_coarse_model_either_way():
+    """Truncated at the end of the record, nothing is summed past it: steps=-8 and
+    steps=8 give the same Π to rounding."""
+    law = get_law("power")
+    vals = {"zeta_alpha": np.array([0.01]), "alpha": np.array([2.0])}
+    both = [
+        law.pi_grid(TAU, vals, [Y0], tau_end=TAU[-1], reference=Y0, method="integrate", steps=s)
+        for s in (8, -8)
+    ]
+    np.testing.assert_allclose(both[1], both[0], rtol=1e-14, atol=0.0)
+
+
+@pytest.mark.parametrize(
+    ("law", "values", "amplitude"),
+    [
+        ("power", {"zeta_alpha": 0.003, "alpha": 2.0}, 2.0),
+        ("quadratic", {"c2": 0.003}, 1.0),
+    ],
+)
+def test_the_averaged_tail_of_fixed_steps_is_the_sum_of_those_half_cycles(law, values, amplitude):
+    """The averaged tail of half cycles of 8 steps each (``fixed=8``: those the coarse
+    model integrates) over the 20,000 past a record that ends at the first point,
+    against the same half cycles integrated one by one (steps=8); the default's tail
+    (the ladder's half cycles) is another sum, off by the 8 steps' own error."""
+    module = _module(law)
+    c = _coefficients(law, values)
+    size = module.LADDER[-1] + 1
+    work = np.empty(size), np.empty(size), np.empty((2, size))
+    table = module.nodes(0.0, 8)
+    negligible = 1e-12 * amplitude**2
+    tail = module.averaged_tail(
+        amplitude, c, 1.0, 20_000, negligible, table, np.zeros(1, np.int64), *work, 8
+    )
+    assert math.isfinite(tail)  # taken, not left to the half cycles
+    summed, _ = module.grid(
+        np.zeros(1), np.array([amplitude]), c[None], np.ones(1), 0.0, math.inf, 8
+    )
+    assert tail == pytest.approx(summed[0, 0], rel=1e-6)
+    ladder = module.averaged_tail(
+        amplitude, c, 1.0, 20_000, negligible, module._TABLES, module._OFFSETS, *work
+    )
+    assert abs(ladder - summed[0, 0]) > abs(tail - summed[0, 0])

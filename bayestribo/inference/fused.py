@@ -1027,5 +1027,5 @@ class LawSource:
             data.yp0,
             None if data.motion_ended else data.tau_end,
             reference=lik.reference_amplitude,
-            steps=lik.steps,
+            steps=lik.integrator_steps,
         )

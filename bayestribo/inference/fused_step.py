@@ -34,7 +34,7 @@ __all__ = ["grouped_step"]
 #: The files whose compiled functions :func:`_step` calls, and a digest of each
 #: (see :data:`bayestribo.inference.fused.DEPENDS_ON`).
 DEPENDS_ON = {
-    "bayestribo/inference/fused.py": "c34302d608e3f4d3",
+    "bayestribo/inference/fused.py": "aafaf3dc1a0198d3",
     "bayestribo/inference/moves.py": "fd1eb965a208dbd0",
 }
 

@@ -138,7 +138,8 @@ class PiLikelihood:
         Runge-Kutta steps per half cycle of the law's integrator where it has no
         closed form: 0 (the default) chooses them per half cycle for Π within ~2e-9 of
         Π(0); a small fixed number is the coarse model on which the optimiser's
-        multi-start runs (:func:`bayestribo.inference.start.maximum_a_posteriori`).
+        multi-start runs (:func:`bayestribo.inference.start.maximum_a_posteriori`),
+        its sum past the record shortened (:attr:`integrator_steps`).
     """
 
     data: PiData
@@ -167,6 +168,15 @@ class PiLikelihood:
             raise ValueError(f"steps must be a non-negative integer, got {self.steps!r}")
 
     # -- model --------------------------------------------------------------------
+    @property
+    def integrator_steps(self) -> int:
+        """The ``steps`` of :meth:`bayestribo.model.laws.Law.pi_grid`: 0, or -:attr:`steps`
+        for a coarse model (that many steps per half cycle, and past the record of a
+        motion that ended the sum of those half cycles shortened where they hold
+        nothing and taken from their averaged flow, instead of up to 20,000 of them
+        one by one)."""
+        return -int(self.steps)
+
     @property
     def reference_amplitude(self) -> float:
         """The amplitude at which laws parametrised at a reference are (the observed
@@ -204,7 +214,7 @@ class PiLikelihood:
                 self.data.yp0,
                 end,
                 reference=self.reference_amplitude,
-                steps=self.steps,
+                steps=self.integrator_steps,
             )
         amplitude = np.hypot(y0, self.data.yp0)[:, None]
         zeta = values.get("zeta", np.zeros_like(y0))[:, None]

@@ -231,8 +231,6 @@ def psis(log_weights: NDArray, reff: float) -> tuple[NDArray, NDArray]:
     k : ndarray
         Shape (rows,): each row's Pareto shape k (inf where the tail is too short).
     """
-    from arviz.stats.stats import _psislw
-
     x = np.array(log_weights, dtype=float)
     rows, n = x.shape
     cutoff_ind = -int(np.ceil(min(n / 5.0, 3 * (n / reff) ** 0.5))) - 1
@@ -264,7 +262,12 @@ def psis(log_weights: NDArray, reff: float) -> tuple[NDArray, NDArray]:
             block[block > 0] = 0.0
             x[rows_fitted] = block
     x -= _logsumexp_rows(x)[:, None]
-    for i in np.flatnonzero(~regular | (tail <= 4)):
+    irregular = np.flatnonzero(~regular | (tail <= 4))
+    if irregular.size:
+        # imported only here: ArviZ takes seconds to import, and a fit that smooths
+        # importance weights (inference/correction.py) rarely meets such a row
+        from arviz.stats.stats import _psislw
+    for i in irregular:
         # ties at the cut, or too short a tail: ArviZ's own row function
         row = np.array(log_weights[i], dtype=float)
         x[i], k[i] = _psislw(row, cutoff_ind, cutoffmin, True)

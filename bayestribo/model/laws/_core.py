@@ -46,7 +46,13 @@ if TYPE_CHECKING:  # defined for each law after this text (see the module notes)
     HAS_DRAG: bool = True
 
 #: Runge-Kutta steps per half cycle: 0 chooses them per half cycle (see
-#: :func:`make_integrator`); a positive number fixes them (for convergence tests).
+#: :func:`make_integrator`); a positive number fixes them and integrates every half
+#: cycle (the reference of convergence tests: no shortcut past the record); a negative
+#: one fixes -steps and shortens the sum past the record as 0 does, with the same
+#: half cycles (the coarse model of the optimiser's multi-start): it stops where the
+#: half cycles hold less than _TAIL_TOLERANCE of the sum, and takes the rest up to the
+#: cap of half cycles past the record from the averaged flow of those -steps half
+#: cycles, within _AVERAGED_TOLERANCE of what summing them would give.
 DEFAULT_STEPS = 0
 #: The step counts a half cycle may take (at most 25 % apart: the count chosen is never
 #: far above the one the error asks for). Those below :data:`_MIN_STEPS` serve only the
@@ -69,12 +75,15 @@ _MIN_STEPS = 32
 _TAIL_SHARE = 1e-2
 # The averaged tail (see :func:`averaged_tail`): tried once the half cycles past the
 # record lose less than this fraction of their amplitude each and more than
-# _AVERAGED_MIN_HALF_CYCLES of them remain; its nodes, and the tolerance on the
-# Chebyshev coefficients of its interpolants (relative error of dn/du and dS/du).
+# _AVERAGED_MIN_HALF_CYCLES of them remain; its nodes, the most spans down the
+# amplitudes, the halvings of a span whose interpolants miss their tolerance (the
+# local power of a drag that is a sum of terms changes along it), and the tolerance on
+# the Chebyshev coefficients of its interpolants (relative error of dn/du and dS/du).
 _AVERAGED_DROP = 0.02
 _AVERAGED_MIN_HALF_CYCLES = 64
 _AVERAGED_NODES = 7
-_AVERAGED_SPANS = 4
+_AVERAGED_SPANS = 8
+_AVERAGED_HALVINGS = 3
 _AVERAGED_TOLERANCE = 1e-8
 # A drag's creep to rest (a power law below α = 1) ends the sum only where its ∫E, known
 # within a factor 2, is at most this fraction of Π(0): the integrator's accuracy against
@@ -283,18 +292,25 @@ def turn_to_turn(
     tau_at: NDArray,
     c_at: NDArray,
     e_at: NDArray,
+    fixed: int,
 ) -> tuple[float, float]:
     """|Y| of the next turning point and ∫E over the half cycle from rest at the turning
     point ``a`` > 0, with more steps than the ladder's (its error about ten times
-    smaller); NaN for both where the motion stops at ``a`` or cannot turn."""
+    smaller), or with ``fixed`` > 0 steps (``tables`` then that count's node table):
+    the half cycle of a model with fixed steps; NaN for both where the motion stops at
+    ``a`` or cannot turn."""
     mu = friction(a, c) if HAS_FRICTION else 0.0
     r = a - mu
     if not (mu >= 0.0 and r > 0.0 and a > ratio * mu):
         return math.nan, math.nan
     if HAS_DRAG:
-        k = min(choose_steps(r, c, 1.0) + 3, LADDER.size - 1)
-        steps = LADDER[k]
-        table = tables[:, offsets[k] : offsets[k] + 2 * steps + 1]
+        if fixed > 0:
+            steps = fixed
+            table = tables
+        else:
+            k = min(choose_steps(r, c, 1.0) + 3, LADDER.size - 1)
+            steps = LADDER[k]
+            table = tables[:, offsets[k] : offsets[k] + 2 * steps + 1]
         r_end = half_cycle(table, r, mu, c, steps, tau_at, c_at, e_at)
         c_half = c_at[steps]
     else:
@@ -316,17 +332,19 @@ def flow_at(
     tau_at: NDArray,
     c_at: NDArray,
     e_at: NDArray,
+    fixed: int,
 ) -> tuple[float, float, float]:
     """V = -da/dn, J = dS/dn and d²a/dn² at the turning point ``a`` of the smooth flow
     whose values at whole n are the turning points (n counts half cycles, S sums their
     ∫E): one-sided five-point differences over the four half cycles from ``a`` (error
-    ~ε⁴/5 of each for a relative drop ε per half cycle). NaN where one of them stops."""
+    ~ε⁴/5 of each for a relative drop ε per half cycle), each half cycle with ``fixed``
+    steps where > 0 (:func:`turn_to_turn`). NaN where one of them stops."""
     xs = np.empty(5)
     cs = np.empty(5)
     xs[0] = a
     cs[0] = 0.0
     for i in range(4):
-        nxt, part = turn_to_turn(xs[i], c, ratio, tables, offsets, tau_at, c_at, e_at)
+        nxt, part = turn_to_turn(xs[i], c, ratio, tables, offsets, tau_at, c_at, e_at, fixed)
         if not math.isfinite(nxt):
             return math.nan, math.nan, math.nan
         xs[i + 1] = nxt
@@ -459,6 +477,57 @@ def tail_integral(
 
 
 @numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
+def interpolants(
+    a0: float,
+    v0: float,
+    j0: float,
+    curve0: float,
+    q: float,
+    z_lo: float,
+    c: NDArray,
+    ratio: float,
+    tables: NDArray,
+    offsets: NDArray,
+    tau_at: NDArray,
+    c_at: NDArray,
+    e_at: NDArray,
+    fixed: int,
+    nodes: NDArray,
+    h_n: NDArray,
+    h_s: NDArray,
+) -> tuple[bool, float, float, float, float]:
+    """Fill ``nodes`` (Chebyshev points of z = (a/a0)^q over [``z_lo``, 1]) and the
+    factors' logarithms ``h_n`` = ln(V₁/V) and ``h_s`` = ln(J/J₁) there, from the flow
+    of the law's half cycles (:func:`flow_at`; at a0 its V, J and d²a/dn² given):
+    (taken, a, V, J, d²a/dn² at the lower end z_lo), taken False where a node's motion
+    stops or drops by _AVERAGED_DROP or more per half cycle, or where either
+    interpolant's last two Chebyshev coefficients exceed _AVERAGED_TOLERANCE."""
+    k_n = nodes.size
+    a, v, j, curve = a0, v0, j0, curve0
+    for k in range(k_n):
+        nodes[k] = math.cos(math.pi * k / (k_n - 1))
+        z = 0.5 * ((nodes[k] + 1.0) * (1.0 - z_lo)) + z_lo
+        if k > 0:
+            a = a0 * z ** (1.0 / q)
+            v, j, curve = flow_at(a, c, ratio, tables, offsets, tau_at, c_at, e_at, fixed)
+        if not (v > 0.0 and j > 0.0) or v > _AVERAGED_DROP * a:
+            return False, a, v, j, curve
+        h_n[k] = math.log(averaged_rate(a, c) / v)
+        h_s[k] = math.log(j / (0.5 * math.pi * a * a))
+    # the interpolants' last Chebyshev coefficients: their error
+    for f in (h_n, h_s):
+        for m in (k_n - 2, k_n - 1):
+            coef = 0.0
+            for k in range(k_n):
+                w = 0.5 if k == 0 or k == k_n - 1 else 1.0
+                coef += w * f[k] * math.cos(math.pi * m * k / (k_n - 1))
+            coef *= 2.0 / (k_n - 1)
+            if not abs(coef) <= _AVERAGED_TOLERANCE:
+                return False, a, v, j, curve
+    return True, a, v, j, curve
+
+
+@numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
 def averaged_segment(
     a0: float,
     v0: float,
@@ -473,6 +542,7 @@ def averaged_segment(
     tau_at: NDArray,
     c_at: NDArray,
     e_at: NDArray,
+    fixed: int,
 ) -> tuple[int, float, float, float, float, float, float]:
     """One span of :func:`averaged_tail` from the turning point ``a0`` (V, J and d²a/dn²
     there given): (status, S, n, a, V, J, d²a/dn² at its lower end), status 0 where it
@@ -485,7 +555,6 @@ def averaged_segment(
     p = a0 * curve0 / (v0 * v0)  # d ln V / d ln a
     if not p > 0.95:
         return fail  # a decay that quickens down the tail: the exact sum ends soon
-    curve = curve0
     # the span: to the end of the n_rem half cycles or to where the rest is negligible
     if abs(p - 1.0) < 1e-3:
         span = n_rem * eps
@@ -501,38 +570,47 @@ def averaged_segment(
             span = min(span, math.log(rest / negligible) / (3.0 - p))
     if not (span > 0.0 and math.isfinite(span)):
         return fail
-    width = 1.2 * span + 0.1
-    if eps * math.exp((1.0 - p) * width) > _AVERAGED_DROP:
-        return fail  # the drop grows past the bound down the span
+    # the span's interpolants, on a half, a quarter ... of it where they miss their
+    # tolerance (a drag whose local power changes down the span: the next spans go on
+    # from its lower end, each with its own power law)
     u0 = math.log(a0)
     q = max(p - 1.0, 0.05)
-    z_lo = math.exp(-q * width)
-    k_n = _AVERAGED_NODES
-    nodes = np.empty(k_n)
-    h_n = np.empty(k_n)  # ln(V₁/V)
-    h_s = np.empty(k_n)  # ln(J/J₁)
-    for k in range(k_n):
-        nodes[k] = math.cos(math.pi * k / (k_n - 1))
-        z = 0.5 * ((nodes[k] + 1.0) * (1.0 - z_lo)) + z_lo
-        if k == 0:
-            a, v, j = a0, v0, j0
-        else:
-            a = a0 * z ** (1.0 / q)
-            v, j, curve = flow_at(a, c, ratio, tables, offsets, tau_at, c_at, e_at)
-        if not (v > 0.0 and j > 0.0) or v > _AVERAGED_DROP * a:
-            return fail
-        h_n[k] = math.log(averaged_rate(a, c) / v)
-        h_s[k] = math.log(j / (0.5 * math.pi * a * a))
-    # the interpolants' last Chebyshev coefficients: their error
-    for f in (h_n, h_s):
-        for m in (k_n - 2, k_n - 1):
-            coef = 0.0
-            for k in range(k_n):
-                w = 0.5 if k == 0 or k == k_n - 1 else 1.0
-                coef += w * f[k] * math.cos(math.pi * m * k / (k_n - 1))
-            coef *= 2.0 / (k_n - 1)
-            if not abs(coef) <= _AVERAGED_TOLERANCE:
-                return fail
+    nodes = np.empty(_AVERAGED_NODES)
+    h_n = np.empty(_AVERAGED_NODES)  # ln(V₁/V)
+    h_s = np.empty(_AVERAGED_NODES)  # ln(J/J₁)
+    full = 1.2 * span + 0.1
+    taken = False
+    width = full
+    z_lo = 0.0
+    a, v, j = a0, v0, j0
+    for halving in range(_AVERAGED_HALVINGS + 1):
+        width = full * 0.5**halving
+        if eps * math.exp((1.0 - p) * width) > _AVERAGED_DROP:
+            continue  # the drop grows past the bound down the span
+        z_lo = math.exp(-q * width)
+        taken, a, v, j, curve = interpolants(
+            a0,
+            v0,
+            j0,
+            curve0,
+            q,
+            z_lo,
+            c,
+            ratio,
+            tables,
+            offsets,
+            tau_at,
+            c_at,
+            e_at,
+            fixed,
+            nodes,
+            h_n,
+            h_s,
+        )
+        if taken:
+            break
+    if not taken:
+        return fail
     # integrate down from u0, panel by panel, until n_rem half cycles are summed
     panels = int(width) + 1
     step = width / panels
@@ -587,11 +665,14 @@ def averaged_tail(
     tau_at: NDArray,
     c_at: NDArray,
     e_at: NDArray,
+    fixed: int = 0,
 ) -> float:
     """∑ of ∫E over the next ``n_rem`` half cycles from rest at the turning point
     ``a0`` (or over all of them where the rest falls below ``negligible``), from the
     averaged motion; NaN where it cannot be trusted (the caller integrates the half
-    cycles then).
+    cycles then). The half cycles are the ladder's (``fixed`` 0; ``tables`` and
+    ``offsets`` the ladder's) or of ``fixed`` steps each (``tables`` that count's node
+    table), whose sum it then stands for.
 
     The turning points are the values at whole n of a smooth flow da/dn = -V(a) (n
     counting half cycles), and the sums of ∫E those of S with dS/dn = J(a): with
@@ -602,17 +683,18 @@ def averaged_tail(
     Chebyshev points of z = (a/a0)^q, q = p - 1 for the local power law V ∝ a^p at
     the span's top (the factors' logarithms are then near polynomials in z); their
     last Chebyshev coefficients must be below _AVERAGED_TOLERANCE. Each span is chosen
-    from that power law (:func:`averaged_segment`), up to _AVERAGED_SPANS of them down
+    from that power law (:func:`averaged_segment`; halved up to _AVERAGED_HALVINGS
+    times where its interpolants miss their tolerance), up to _AVERAGED_SPANS of them down
     the amplitudes (the local power changes along a decay whose drag is a sum of
     terms), and every node must drop by less than _AVERAGED_DROP per half cycle.
     """
-    v, j, curve = flow_at(a0, c, ratio, tables, offsets, tau_at, c_at, e_at)
+    v, j, curve = flow_at(a0, c, ratio, tables, offsets, tau_at, c_at, e_at, fixed)
     a = a0
     total = 0.0
     left = float(n_rem)
     for _ in range(_AVERAGED_SPANS):
         status, part, count, a, v, j, curve = averaged_segment(
-            a, v, j, curve, c, ratio, left, negligible, tables, offsets, tau_at, c_at, e_at
+            a, v, j, curve, c, ratio, left, negligible, tables, offsets, tau_at, c_at, e_at, fixed
         )
         if status == 0:
             return math.nan
@@ -637,7 +719,11 @@ def one(
     out: NDArray,
 ) -> int:
     n_t = tau.size
-    size = max(fixed_steps, LADDER[-1]) + 1
+    # fixed steps (either sign; see DEFAULT_STEPS), and whether the sum past the record
+    # may be shortened (not for the reference, fixed_steps > 0)
+    fixed = abs(fixed_steps)
+    shorten = fixed_steps <= 0
+    size = max(fixed, LADDER[-1]) + 1
     tau_at = np.empty(size)
     c_at = np.empty(size)
     e_at = np.empty((2, size))
@@ -684,15 +770,15 @@ def one(
         if mu < 0.0:
             # a friction that falls with amplitude below zero: outside the law's domain
             return outside_domain(out)
-        exact = not HAS_DRAG and fixed_steps <= 0
+        exact = not HAS_DRAG and fixed == 0
         if exact:
             # no drag: an arc of the undamped motion about the centre, in closed form
             r_end = r
             t_half = math.pi - theta0
             c_half = arc_integral(t_half, r, mu, theta0)
         else:
-            if fixed_steps > 0:
-                steps = fixed_steps
+            if fixed > 0:
+                steps = fixed
                 table = tables if theta0 == 0.0 else nodes(theta0, steps)
             else:
                 weight = 1.0
@@ -709,7 +795,7 @@ def one(
                     table = nodes(theta0, steps)
             r_end = half_cycle(table, r, mu, c, steps, tau_at, c_at, e_at)
             if not math.isfinite(r_end):
-                if fixed_steps <= 0 and n_half > 0 and mu == 0.0:
+                if fixed == 0 and n_half > 0 and mu == 0.0:
                     # a drag that the decay has made stronger than the spring (a power
                     # law below α = 1): the motion ends by an overdamped creep to rest
                     # its ∫E is known only within a factor 2 (the quasi-static balance):
@@ -762,7 +848,7 @@ def one(
             break  # the record ends inside the motion: nothing more to integrate
         if t_start > tau_end and j >= n_t:
             break
-        if math.isinf(tau_end) and j >= n_t and ((frictionless and mu == 0.0) or fixed_steps <= 0):
+        if math.isinf(tau_end) and j >= n_t and ((frictionless and mu == 0.0) or shorten):
             # endless motion (no friction, or one that vanishes with the amplitude): sum
             # until the half cycles hold nothing, then a tail
             if last < _TAIL_TOLERANCE * c_start:
@@ -776,7 +862,7 @@ def one(
                 break
             remaining = min(_MAX_PAST_HALF_CYCLES - n_past, _MAX_HALF_CYCLES - n_half)
             if (
-                fixed_steps <= 0
+                shorten
                 and math.isinf(tau_end)
                 and HAS_DRAG
                 and 0.0 < drop < _AVERAGED_DROP
@@ -784,8 +870,9 @@ def one(
                 and a < 0.5 * a_try
                 and remaining > _AVERAGED_MIN_HALF_CYCLES
             ):
-                # the rest of the sum from the averaged motion (the exact sum's steps
-                # are the reference: fixed_steps > 0 never takes it)
+                # the rest of the sum from the averaged motion of these half cycles
+                # (the exact sum's steps are the reference: fixed_steps > 0 never
+                # takes it)
                 a_try = a
                 rest = averaged_tail(
                     a,
@@ -798,6 +885,7 @@ def one(
                     tau_at,
                     c_at,
                     e_at,
+                    fixed,
                 )
                 if math.isfinite(rest):
                     c_start += rest
@@ -817,8 +905,8 @@ def grid(
 ) -> tuple[NDArray, NDArray]:
     out = np.empty((y0.size, tau.size))
     status = np.zeros(y0.size, dtype=np.int64)
-    if steps > 0:
-        tables = nodes(0.0, steps)
+    if steps != 0:
+        tables = nodes(0.0, abs(steps))
         offsets = np.zeros(1, dtype=np.int64)
     else:
         tables, offsets = _TABLES, _OFFSETS

@@ -42,7 +42,12 @@ less than 2 % of their amplitude each, the rest of the sum (up to the cap of hal
 cycles past the record) is taken from the averaged motion, whose rate of decay and
 energy per half cycle are measured from a few half cycles of the law's own motion at
 seven amplitudes (``_core.averaged_tail``; within ~1e-7 of the tail of the half
-cycles' sum, which is as far as that sum's own steps take it). A drag below α = 1
+cycles' sum, which is as far as that sum's own steps take it), each span of amplitudes
+halved where its interpolants miss their tolerance (a drag whose local power changes
+down the tail). A fixed number of steps per half cycle integrates every half cycle
+(``steps > 0``: the reference of convergence tests); ``steps < 0`` fixes -steps and
+shortens the sum past the record as the default does, from those same half cycles (the
+coarse model of the optimiser's multi-start). A drag below α = 1
 stops the motion in a finite time, by an overdamped creep: an overdamped arc whose
 energy is below 1e-12 of the integral so far ends the motion there.
 
@@ -216,7 +221,8 @@ def make_integrator(
     grid : callable
         ``grid(tau, y0, coef, ratio, yp0, tau_end, steps) -> (Π, status)``: ``tau``
         sorted (T,), ``y0`` (P,), ``coef`` (P, K), ``ratio`` (P,) the static to kinetic
-        friction ratio; Π of shape (P, T); status (P,) 0 when the motion could be
+        friction ratio, ``steps`` 0 (chosen per half cycle) or fixed (see the module
+        notes for its sign); Π of shape (P, T); status (P,) 0 when the motion could be
         integrated, 1 when the drag stops a half cycle before it turns (an overdamped
         arc: that row of Π is NaN).
     turns : callable
