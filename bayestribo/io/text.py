@@ -59,6 +59,7 @@ from bayestribo.io.run import (
     TIME,
     VELOCITY,
 )
+from bayestribo.io.stamped_lines import START_TIME, stamped_lines
 
 #: Every column name a text file's columns are read as.
 _READ = (*COLUMNS, *ANGULAR, *ACCELERATIONS)
@@ -1265,6 +1266,10 @@ def parse_lines(
         for number, line in enumerate(all_lines[skip_rows:], start=skip_rows + 1)
         if line.strip() and not line.lstrip().startswith("#")
     ]
+    # a column of dates and times: microseconds from the first sample (time_us)
+    stamped = stamped_lines(lines, delimiter, where) if columns is None else None
+    if stamped is not None:
+        lines = stamped.lines
     names, units, header_lines, delimiter, decimal = _layout(
         lines, where, columns, delimiter, decimal
     )
@@ -1281,6 +1286,8 @@ def parse_lines(
 
     out: dict[str, Any] = _columns(data, keep, units, scale, where)
     _with_file_columns(out, names)
+    if stamped is not None:
+        out[START_TIME] = stamped.start
     above = enumerate(all_lines[skip_rows : rows[0][0] - 1], start=skip_rows + 1)
     return _with_stated_rate(out, list(above), where)
 

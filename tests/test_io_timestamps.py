@@ -1,0 +1,265 @@
+"""Text files whose time column holds absolute time stamps (data loggers, Arduino
+sketches, phone sensor apps): read with no option as seconds from the first sample,
+in every common spelling, the first sample's date and time kept in the metadata; a
+pass through midnight, time zones, day-first dates and bad cells; and a free decay
+written with ISO stamps fitted with its truth inside the intervals."""
+
+from __future__ import annotations
+
+import contextlib
+import datetime as dt
+import io
+import json
+import math
+import re
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from _free_decay import METADATA, X_C, ZETA, free_decay
+
+from bayestribo import read_run
+from bayestribo.cli import main
+from bayestribo.errors import ReadingWarning, RunFormatError
+from bayestribo.io.text import read_text
+from bayestribo.io.timestamps import parse_stamps
+
+#: The first sample's date and time, and the seconds written after it: 100 Hz with a
+#: microsecond in some stamps (the reading must keep every one).
+START = dt.datetime(2026, 11, 30, 9, 15, 2, 120000)
+SECONDS = np.round(np.arange(400) / 100.0 + np.where(np.arange(400) % 7 == 3, 1e-6, 0.0), 6)
+#: A slowly decaying oscillation [mm], any values: the time is what is tested.
+POSITION_MM = 20.0 * np.exp(-0.2 * SECONDS) * np.cos(2.0 * math.pi * 2.0 * SECONDS)
+
+
+def _stamp(seconds: float, zone: dt.timezone | None = None) -> dt.datetime:
+    return (START + dt.timedelta(microseconds=round(seconds * 1e6))).replace(tzinfo=zone)
+
+
+def _iso(stamp: dt.datetime, sep: str = " ") -> str:
+    return stamp.isoformat(sep=sep, timespec="microseconds")
+
+
+def _day_first(stamp: dt.datetime) -> str:
+    return stamp.strftime("%d/%m/%Y %H:%M:%S,%f")
+
+
+def _toolbox(stamp: dt.datetime) -> str:
+    # Physics Toolbox: milliseconds after a third colon (whole milliseconds only)
+    return stamp.strftime("%H:%M:%S:") + f"{stamp.microsecond // 1000:03d}"
+
+
+#: (header of the time column(s), cell writer, delimiter, decimal comma, seconds).
+SPELLINGS = {
+    "Timestamp, ISO with a blank": ("Timestamp", _iso, ",", False),
+    "Time stamp, ISO with T": ("Time stamp", lambda s: _iso(s, "T"), ",", False),
+    "Date Time, UTC (Z)": (
+        "Date Time",
+        lambda s: _iso(s.replace(tzinfo=dt.UTC), "T").replace("+00:00", "Z"),
+        ",",
+        False,
+    ),
+    "DateTime, +01:00": (
+        "DateTime",
+        lambda s: _iso(s.replace(tzinfo=dt.timezone(dt.timedelta(hours=1))), "T"),
+        ",",
+        False,
+    ),
+    "Date/Time, day first, decimal comma": ("Date/Time", _day_first, ";", True),
+    "Time, a time of day": ("Time", lambda s: s.strftime("%H:%M:%S.%f"), "\t", False),
+    "Date and Time columns": (
+        "Date,Time",
+        lambda s: s.strftime("%Y-%m-%d,%H:%M:%S.%f"),
+        ",",
+        False,
+    ),
+}
+
+
+def _write(path: Path, header: str, cells: list[str], delimiter: str, comma: bool) -> Path:
+    values = [f"{x:.6f}".replace(".", ",") if comma else f"{x:.6f}" for x in POSITION_MM]
+    rows = [f"{c}{delimiter}{v}" for c, v in zip(cells, values, strict=True)]
+    name = "Position (mm)"
+    path.write_text(f"{header.replace(',', delimiter)}{delimiter}{name}\n" + "\n".join(rows))
+    return path
+
+
+@pytest.mark.parametrize("spelling", list(SPELLINGS))
+def test_each_spelling_reads_as_seconds_from_the_first_sample(tmp_path, spelling) -> None:
+    header, cell, delimiter, comma = SPELLINGS[spelling]
+    cells = [cell(_stamp(s)) for s in SECONDS]
+    path = _write(tmp_path / "stamps.csv", header, cells, delimiter, comma)
+    run = read_run(path, metadata={"length_unit": "m"})
+    assert run.time.size == SECONDS.size
+    assert np.max(np.abs(run.time - SECONDS)) < 1e-6
+    np.testing.assert_allclose(run.displacement, POSITION_MM * 1e-3, rtol=0, atol=1e-9)
+    written = cell(_stamp(0.0))
+    start = run.metadata["start_time"]
+    if "Time, a time of day" == spelling:
+        assert start == "09:15:02.120000"
+    else:
+        assert dt.datetime.fromisoformat(start).replace(tzinfo=None) == START, written
+    if "+01:00" in spelling:
+        assert start.endswith("+01:00")
+
+
+def test_physics_toolbox_milliseconds_after_a_colon(tmp_path) -> None:
+    whole_ms = np.arange(300) * 0.01 + np.where(np.arange(300) % 5 == 2, 0.003, 0.0)
+    cells = [_toolbox(_stamp(s)) for s in whole_ms]
+    path = tmp_path / "toolbox.csv"
+    path.write_text(
+        "time,x (m)\n"
+        + "\n".join(f"{c},{x!r}" for c, x in zip(cells, whole_ms.tolist(), strict=True))
+    )
+    out = read_text(path)
+    assert np.max(np.abs(out["time_s"] - whole_ms)) < 1e-6
+    assert out["start_time"] == "09:15:02.120000"
+
+
+def test_stamps_separated_by_blanks_with_the_date_and_time_split(tmp_path) -> None:
+    path = tmp_path / "logger.txt"
+    rows = [f"{_iso(_stamp(s))}   {x:.6f}" for s, x in zip(SECONDS, POSITION_MM, strict=True)]
+    path.write_text("Date Time   Position (mm)\n" + "\n".join(rows) + "\n")
+    out = read_text(path)
+    assert np.max(np.abs(out["time_s"] - SECONDS)) < 1e-6
+    np.testing.assert_allclose(out["displacement_m"], POSITION_MM * 1e-3, atol=1e-9)
+
+
+def test_a_pass_through_midnight_adds_a_day_and_says_so(tmp_path) -> None:
+    first = dt.datetime(2026, 11, 30, 23, 59, 59, 500000)
+    seconds = np.arange(200) * 0.01
+    cells = [(first + dt.timedelta(seconds=float(s))).strftime("%H:%M:%S.%f") for s in seconds]
+    path = tmp_path / "midnight.csv"
+    path.write_text("Time,x (mm)\n" + "\n".join(f"{c},{i % 3}" for i, c in enumerate(cells)) + "\n")
+    with pytest.warns(ReadingWarning, match=r"passes midnight at line 52 .*a day is added"):
+        out = read_text(path)
+    assert np.max(np.abs(out["time_s"] - seconds)) < 1e-6
+    assert out["start_time"] == "23:59:59.500000"
+
+
+def test_dated_stamps_cross_midnight_without_a_warning(tmp_path) -> None:
+    first = dt.datetime(2026, 11, 30, 23, 59, 59, 500000)
+    seconds = np.arange(200) * 0.01
+    cells = [_iso(first + dt.timedelta(seconds=float(s))) for s in seconds]
+    path = tmp_path / "dated.csv"
+    path.write_text("Timestamp,x (mm)\n" + "\n".join(f"{c},1" for c in cells) + "\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ReadingWarning)
+        out = read_text(path)
+    assert np.max(np.abs(out["time_s"] - seconds)) < 1e-6
+
+
+def test_zones_are_put_on_one_clock(tmp_path) -> None:
+    # the same instants written in two zones (a logger whose clock changes zone)
+    zones = [dt.timezone(dt.timedelta(hours=1)), dt.timezone(dt.timedelta(hours=-5, minutes=-30))]
+    utc = [_stamp(s).replace(tzinfo=dt.UTC) for s in SECONDS]
+    cells = [_iso(u.astimezone(zones[i >= 200]), "T") for i, u in enumerate(utc)]
+    assert cells[0].endswith("+01:00") and cells[-1].endswith("-05:30")
+    path = tmp_path / "zones.csv"
+    path.write_text("Timestamp,x (mm)\n" + "\n".join(f"{c},1" for c in cells) + "\n")
+    out = read_text(path)
+    assert np.max(np.abs(out["time_s"] - SECONDS)) < 1e-6
+    assert dt.datetime.fromisoformat(out["start_time"]) == utc[0]
+
+
+def test_a_zone_on_some_cells_only_is_refused(tmp_path) -> None:
+    cells = [_iso(_stamp(s), "T") for s in SECONDS[:5]]
+    cells[3] += "Z"
+    path = tmp_path / "mixed.csv"
+    path.write_text("Timestamp,x (mm)\n" + "\n".join(f"{c},1" for c in cells) + "\n")
+    with pytest.raises(RunFormatError, match=r"line 5, column 'Timestamp'.* two clocks"):
+        read_text(path)
+
+
+@pytest.mark.parametrize("bad", ["12.5", "2026-11-30 09:15:xx", "2026-11-31 09:15:02", ""])
+def test_a_cell_that_is_no_date_and_time_is_named(tmp_path, bad) -> None:
+    cells = [_iso(_stamp(s)) for s in SECONDS[:40]]
+    cells[17] = bad
+    path = tmp_path / "bad.csv"
+    path.write_text("Timestamp,x (mm)\n" + "\n".join(f"{c},1" for c in cells) + "\n")
+    where = "line 19, column 'Timestamp'" if bad else "line 19, column 'time_s'"
+    with pytest.raises(RunFormatError, match=re.escape(where)) as caught:
+        read_run(path, metadata={"length_unit": "m"})
+    if bad:
+        assert repr(bad) in str(caught.value)
+
+
+def test_dates_that_read_both_ways_are_refused_naming_both(tmp_path) -> None:
+    cells = [f"0{d}/11/2026 09:15:0{d},000" for d in range(1, 6)]
+    path = tmp_path / "ambiguous.csv"
+    path.write_text("Date/Time;x (mm)\n" + "\n".join(f"{c};1,0" for c in cells) + "\n")
+    with pytest.raises(
+        RunFormatError, match=r"line 2.*'01/11/2026 09:15:01,000'.*2026-11-01\).*2026-01-11\)"
+    ):
+        read_text(path)
+
+
+def test_month_first_dates_are_read_where_a_day_above_12_tells(tmp_path) -> None:
+    stamps = [dt.datetime(2026, 11, 12, 23, 59, 59) + dt.timedelta(seconds=i) for i in range(4)]
+    cells = [s.strftime("%m/%d/%Y %H:%M:%S") for s in stamps]
+    assert cells[-1].startswith("11/13/")
+    np.testing.assert_array_equal(parse_stamps(cells).offsets_us, [0, 1e6, 2e6, 3e6])
+
+
+def test_the_fast_and_the_cell_by_cell_readings_agree() -> None:
+    # cells of one layout go column-wise, others (no leading zero, a trimmed fraction,
+    # a blank before the zone) one by one: both give the same microseconds
+    regular = ["2026-11-30 09:15:02.120000+01:00", "2026-11-30 09:15:03.000000+01:00"]
+    other = ["2026-11-30 9:15:02.12 +01:00", "2026-11-30 09:15:03+0100"]
+    fast, slow = parse_stamps(regular), parse_stamps(other)
+    np.testing.assert_array_equal(fast.offsets_us, [0, 880_000])
+    np.testing.assert_array_equal(slow.offsets_us, fast.offsets_us)
+    assert slow.start == fast.start == "2026-11-30T09:15:02.120000+01:00"
+
+
+def test_stamps_rounded_to_a_millisecond_read_as_jitter(tmp_path) -> None:
+    # 300 Hz written to the millisecond: steps of 3 and 4 ms, the clock's rounding
+    exact = np.arange(900) / 300.0
+    rounded = np.round(exact, 3)
+    cells = [_iso(_stamp(s))[:-3] for s in rounded]
+    x = np.exp(-0.3 * exact) * np.cos(2.0 * math.pi * 5.0 * exact)
+    path = tmp_path / "rounded.csv"
+    path.write_text(
+        "Timestamp,x (mm)\n"
+        + "\n".join(f"{c},{v!r}" for c, v in zip(cells, x.tolist(), strict=True))
+    )
+    run = read_run(path, metadata={"length_unit": "m"})
+    assert run.time.size == exact.size
+    assert np.max(np.abs(run.time - exact)) <= 0.5e-3 + 1e-9  # within the rounding
+
+
+def test_numeric_time_columns_are_read_as_before(tmp_path) -> None:
+    path = tmp_path / "numbers.csv"
+    path.write_text(
+        "Recorded: 2026-11-30 09:15:02\nTime (s),x (mm)\n"
+        + "\n".join(
+            f"{s!r},{x!r}" for s, x in zip(SECONDS.tolist(), POSITION_MM.tolist(), strict=True)
+        )
+    )
+    out = read_text(path)
+    np.testing.assert_array_equal(out["time_s"], SECONDS)
+    assert "start_time" not in out
+
+
+def test_an_iso_stamped_free_decay_is_fitted_with_its_truth_inside_the_intervals(
+    tmp_path,
+) -> None:
+    # the helper's decay (2 kHz) slowed twentyfold: 1 Hz written at 100 Hz with ISO stamps
+    slow = 20.0
+    decay = free_decay()
+    seconds, x = decay.time * slow, decay.displacement
+    path = tmp_path / "logger.csv"
+    rows = [f"{_iso(_stamp(s), 'T')[:-3]},{v!r}" for s, v in zip(seconds, x.tolist(), strict=True)]
+    path.write_text("Timestamp,x (m)\n" + "\n".join(rows) + "\n")
+    metadata = {**METADATA, "natural_frequency_Hz": METADATA["natural_frequency_Hz"] / slow}
+    path.with_suffix(".json").write_text(json.dumps(metadata))
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        status = main(["fit", str(path), "--seed", "3", "--grid-points", "32", "--json"])
+    assert status == 0
+    record = json.loads(out.getvalue())
+    assert record["metadata"]["start_time"] == "2026-11-30T09:15:02.120000"
+    for name, truth in (("zeta", ZETA), ("friction_displacement", X_C)):
+        low, high = record["parameters"][name]["interval"]
+        assert low < truth < high, (name, low, high, truth)
