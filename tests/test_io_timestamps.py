@@ -263,3 +263,44 @@ def test_an_iso_stamped_free_decay_is_fitted_with_its_truth_inside_the_intervals
     for name, truth in (("zeta", ZETA), ("friction_displacement", X_C)):
         low, high = record["parameters"][name]["interval"]
         assert low < truth < high, (name, low, high, truth)
+
+
+def _large(path: Path, rows: int = 4000, bad: int | None = None) -> Path:
+    """A file beyond the reader's first 64 kB: read by the columns' parser."""
+    seconds = np.arange(rows) * 0.001
+    cells = [_iso(_stamp(s)) for s in seconds]
+    if bad is not None:
+        cells[bad] = "2026-11-30 09:61:00.000000"
+    x = np.sin(seconds * 40.0).tolist()
+    path.write_text(
+        "# logger 2.1\nTimestamp,x (mm),v (mm/s)\n"
+        + "\n".join(f"{c},{a!r},{2 * a!r}" for c, a in zip(cells, x, strict=True))
+        + "\n"
+    )
+    assert path.stat().st_size > 1 << 16
+    return path
+
+
+def test_a_large_file_reads_column_wise_as_the_line_reader_reads_it(tmp_path, monkeypatch) -> None:
+    from bayestribo.io import bulk_text
+    from bayestribo.io.text import parse_lines
+
+    calls = []
+    read = bulk_text.read_with_text
+    monkeypatch.setattr(bulk_text, "read_with_text", lambda *a: calls.append(a) or read(*a))
+    path = _large(tmp_path / "large.csv")
+    fast = read_text(path)
+    assert len(calls) == 1
+    slow = parse_lines(path.read_text().splitlines(), str(path))
+    assert (
+        fast.keys() == slow.keys() == {"time_s", "displacement_m", "velocity_m_per_s", "start_time"}
+    )
+    for name in ("time_s", "displacement_m", "velocity_m_per_s"):
+        np.testing.assert_array_equal(fast[name], slow[name])
+    assert np.max(np.abs(fast["time_s"] - np.arange(4000) * 0.001)) < 1e-6
+
+
+def test_a_bad_cell_far_in_a_large_file_is_named(tmp_path) -> None:
+    path = _large(tmp_path / "large.csv", bad=3500)
+    with pytest.raises(RunFormatError, match=r"line 3503, column 'Timestamp': '2026-11-30 09:61"):
+        read_text(path)

@@ -63,11 +63,22 @@ class Stamped:
         The first sample's date and time, ISO 8601.
     label : str
         The header's name of the column (``Date`` + ``Time``: both).
+    delimiter : str or None
+        The file's column separator (None: blanks).
+    cell, cells : int
+        The index of the stamps' first field in a row of the file, and the number of
+        its fields (two: a date and a time of day).
+    midnight : bool
+        Whether a time of day passed midnight (said with a warning).
     """
 
     lines: list[tuple[int, str]]
     start: str
     label: str
+    delimiter: str | None = None
+    cell: int = 0
+    cells: int = 1
+    midnight: bool = False
 
 
 def _name(field: str) -> str:
@@ -191,30 +202,30 @@ def stamped_lines(
     header, label = _header_line(lines[column.header][1], column)
     rows = lines[column.header + 1 :]
     d = column.delimiter
-    width = len(_split(rows[0][1], d))
-    split = [_split(line, d) for _, line in rows]
-    if len(split) > 1 and len(split[-1]) < width:
+    j, k = column.cell, column.cells
+    cut = j + k  # the fields split off each row: those before the stamps, and the stamps
+    if len(rows) > 1 and len(_split(rows[-1][1], d)) < len(_split(rows[0][1], d)):
         number, line = rows[-1]
         warn(
             f"{where}: the last line (line {number}) is incomplete: {line[:80]!r}; it is "
             "left out of the run",
             ReadingWarning,
         )
-        rows, split = rows[:-1], split[:-1]
-    j, k = column.cell, column.cells
-    for (number, line), fields in zip(rows, split, strict=True):
-        if len(fields) != width:
-            raise RunFormatError(
-                f"line {number}: expected {width} field(s) like the first row, got "
-                f"{len(fields)}: {line[:80]!r}",
-                where,
-            )
-    cells = [" ".join(f[j : j + k]) for f in split]
+        rows = rows[:-1]
+    # the rest of each row stays as written: the text reader reads and checks it
+    split = [line.split(d, cut) for _, line in rows]
+    if min(map(len, split)) < cut:
+        i = next(i for i, f in enumerate(split) if len(f) < cut)
+        number, line = rows[i]
+        raise RunFormatError(
+            f"line {number}, column {label!r}: no time stamp in {line[:80]!r}", where
+        )
+    cells = [f[j] for f in split] if k == 1 else [f"{f[j]} {f[j + 1]}" for f in split]
     present = [i for i, c in enumerate(cells) if c.strip().strip('"')]
     if not present:
         raise RunFormatError(f"column {label!r} has no time stamp in any row", where)
     try:
-        stamps = parse_stamps([cells[i] for i in present])
+        stamps = parse_stamps(cells if len(present) == len(cells) else [cells[i] for i in present])
     except StampError as exc:
         number = rows[present[exc.row]][0]
         raise RunFormatError(f"line {number}, column {label!r}: {exc}", where) from None
@@ -226,14 +237,15 @@ def stamped_lines(
             f"({before!r} to {cells[present[m]].strip()!r}): a day is added from there on",
             ReadingWarning,
         )
+    del cells
     values = [""] * len(rows)
-    for i, offset in zip(present, stamps.offsets_us.tolist(), strict=True):
-        values[i] = str(offset)
+    for i, offset in zip(present, map(str, stamps.offsets_us.tolist()), strict=True):
+        values[i] = offset
     joiner = d if d is not None else " "
     out = list(lines[: column.header])
     out.append((lines[column.header][0], header))
     out.extend(
-        (number, joiner.join([*f[:j], value, *f[j + k :]]))
+        (number, joiner.join([*f[:j], value, *f[cut:]]))
         for (number, _), f, value in zip(rows, split, values, strict=True)
     )
-    return Stamped(out, stamps.start, label)
+    return Stamped(out, stamps.start, label, d, j, k, bool(stamps.midnight))

@@ -60,6 +60,7 @@ from bayestribo.io.run import (
     VELOCITY,
 )
 from bayestribo.io.stamped_lines import START_TIME, stamped_lines
+from bayestribo.io.timestamps import StampError, parse_stamps
 
 #: Every column name a text file's columns are read as.
 _READ = (*COLUMNS, *ANGULAR, *ACCELERATIONS)
@@ -1068,7 +1069,9 @@ def _read_streamed(
                 lines[:PREAMBLE_LINES], where, columns, delimiter, decimal
             )
         except (RunFormatError, Warning):
-            return None
+            if columns is not None or complete or decimal == ",":
+                return None
+            return _read_stamped(path, where, head_lines, lines, scale, delimiter)
     if header_lines >= len(lines) or decimal != ".":
         return None
     skip = lines[header_lines][0] - 1  # physical lines before the first row of numbers
@@ -1097,6 +1100,59 @@ def _read_streamed(
         return None
     out: dict[str, Any] = _columns([data[i] for i, _ in keep], keep, units, scale, where)
     _with_file_columns(out, names)
+    return _with_stated_rate(out, list(enumerate(head_lines[:skip], start=1)), where)
+
+
+def _read_stamped(
+    path: Path,
+    where: str,
+    head_lines: list[str],
+    lines: list[tuple[int, str]],
+    scale: Mapping[str, float] | None,
+    delimiter: str | None,
+) -> dict[str, Any] | None:
+    """A large plain file whose time column holds time stamps
+    (:mod:`bayestribo.io.stamped_lines`), read by pandas' C parser with the stamps as
+    text, parsed column-wise; None for anything else, or anything the line-by-line
+    reader says or names (a cell that is no time stamp, a pass through midnight, an
+    empty cell, a comment among the rows), which then reads the file."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        try:
+            stamped = stamped_lines(lines[:PREAMBLE_LINES], delimiter, where)
+            if stamped is None or stamped.midnight:
+                return None
+            names, units, header_lines, _, decimal = _layout(
+                stamped.lines, where, None, stamped.delimiter, None
+            )
+        except (RunFormatError, Warning):
+            return None
+    if decimal != "." or header_lines >= len(stamped.lines):
+        return None
+    skip = stamped.lines[header_lines][0] - 1
+    if any(line.lstrip().startswith("#") for line in head_lines[skip:]):
+        return None
+    j, k = stamped.cell, stamped.cells
+    read = bulk_text.read_with_text(
+        path, stamped.delimiter, skip, len(names) + k - 1, range(j, j + k)
+    )
+    if read is None:
+        return None
+    numbers, text = read
+    cells = text[j] if k == 1 else [f"{a} {b}" for a, b in zip(text[j], text[j + 1], strict=True)]
+    del text
+    try:
+        stamps = parse_stamps(cells)
+    except StampError:
+        return None
+    if stamps.midnight:
+        return None
+    del cells
+    columns = [*numbers[:j], stamps.offsets_us.astype(np.float64), *numbers[j + k :]]
+    keep = [(i, n) for i, n in enumerate(names) if n != IGNORE]
+    out: dict[str, Any] = _columns([columns[i] for i, _ in keep], keep, units, scale, where)
+    _with_file_columns(out, names)
+    out[START_TIME] = stamps.start
     return _with_stated_rate(out, list(enumerate(head_lines[:skip], start=1)), where)
 
 

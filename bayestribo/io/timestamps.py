@@ -211,7 +211,10 @@ def _columnwise(
 def _fields(cells: Sequence[str]) -> tuple[_Fields, int]:
     """The fields of every cell and their date form; :class:`StampError` for a cell
     that is no date and time or of another form than the first."""
-    stripped = [c.strip().strip('"').strip() for c in cells]
+    first = cells[0].strip().strip('"').strip()
+    # cells written bare (the first one is) are read as they are: one with a blank or a
+    # quote about it is then read one by one, below
+    stripped = list(cells) if first == cells[0] else [c.strip().strip('"').strip() for c in cells]
     template = STAMP_CELL.fullmatch(stripped[0])
     if template is None:
         raise StampError(f"{cells[0][:40]!r} is not a date and time", 0)
@@ -223,7 +226,7 @@ def _fields(cells: Sequence[str]) -> tuple[_Fields, int]:
     else:
         fields, ok = found
     for i in np.flatnonzero(~ok):  # another layout: read one by one, or refused
-        match = STAMP_CELL.fullmatch(stripped[i])
+        match = STAMP_CELL.fullmatch(stripped[i].strip().strip('"').strip())
         if match is None:
             raise StampError(
                 f"{cells[i][:40]!r} is not a date and time like the column's first cell "
