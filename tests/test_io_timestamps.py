@@ -304,3 +304,22 @@ def test_a_bad_cell_far_in_a_large_file_is_named(tmp_path) -> None:
     path = _large(tmp_path / "large.csv", bad=3500)
     with pytest.raises(RunFormatError, match=r"line 3503, column 'Timestamp': '2026-11-30 09:61"):
         read_text(path)
+
+
+def test_start_time_in_metadata_is_checked_as_iso_text() -> None:
+    from bayestribo.io.run import check_metadata
+
+    for good in ("2026-11-30T09:15:02.120000+01:00", "09:15:02.120000"):
+        assert check_metadata({"start_time": good})["start_time"] == good
+    for bad in ("30/11/2026 09:15", 12.0):
+        with pytest.raises(RunFormatError, match=r"metadata 'start_time': expected a date"):
+            check_metadata({"start_time": bad})
+
+
+def test_inspect_says_the_stamps_are_read_as_seconds(tmp_path, capsys) -> None:
+    header, cell, _, _ = SPELLINGS["Date and Time columns"]
+    path = _write(tmp_path / "stamps.csv", header, [cell(_stamp(s)) for s in SECONDS], ",", False)
+    assert main(["inspect", str(path), "--length-unit", "m"]) == 0
+    shown = capsys.readouterr().out
+    assert "time stamps in 'Date Time': seconds from the first sample" in shown
+    assert "start_time 2026-11-30T09:15:02.120000" in shown

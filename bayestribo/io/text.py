@@ -59,7 +59,7 @@ from bayestribo.io.run import (
     TIME,
     VELOCITY,
 )
-from bayestribo.io.stamped_lines import START_TIME, stamped_lines
+from bayestribo.io.stamped_lines import STAMP_COLUMN, START_TIME, stamped_lines
 from bayestribo.io.timestamps import StampError, parse_stamps
 
 #: Every column name a text file's columns are read as.
@@ -907,6 +907,9 @@ class TextLayout:
     rate : StatedRate or None
         The sample rate a line above the rows of numbers states (``Sample rate: 1
         kHz``), or None.
+    stamps : str or None
+        The header's name of a column of time stamps (read as seconds from the first
+        sample, :mod:`bayestribo.io.stamped_lines`), or None.
     """
 
     names: list[str]
@@ -915,6 +918,7 @@ class TextLayout:
     delimiter: str | None
     decimal: str
     rate: StatedRate | None = None
+    stamps: str | None = None
 
 
 def text_layout(
@@ -955,6 +959,14 @@ def text_layout(
     ]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ReadingWarning)
+        stamped = None
+        if columns is None:
+            try:
+                stamped = stamped_lines(lines[:PREAMBLE_LINES], delimiter, where)
+            except RunFormatError:
+                stamped = None  # the reader names the cell
+        if stamped is not None:
+            lines = stamped.lines
         names, _, header_lines, delimiter, decimal = _layout(
             lines[:PREAMBLE_LINES], where, columns, delimiter, decimal
         )
@@ -971,7 +983,10 @@ def text_layout(
         labels, preamble = header, start
     end = lines[header_lines][0] - 1 if header_lines < len(lines) else len(all_lines)
     rate = stated_rate(list(enumerate(all_lines[skip_rows:end], start=skip_rows + 1)), where)
-    return TextLayout(list(names), labels, preamble, delimiter, decimal, rate)
+    stamps = None if stamped is None else stamped.label
+    if stamps is not None:
+        labels = [stamps if label == STAMP_COLUMN else label for label in labels]
+    return TextLayout(list(names), labels, preamble, delimiter, decimal, rate, stamps)
 
 
 def _no_time_hint(width: int) -> str:
