@@ -323,3 +323,17 @@ def test_inspect_says_the_stamps_are_read_as_seconds(tmp_path, capsys) -> None:
     shown = capsys.readouterr().out
     assert "time stamps in 'Date Time': seconds from the first sample" in shown
     assert "start_time 2026-11-30T09:15:02.120000" in shown
+
+
+def test_stamps_beside_a_time_column_of_the_files_own_are_not_the_time(tmp_path) -> None:
+    # a logger writing both: the seconds column is the time, the first stamp is kept
+    path = tmp_path / "both.csv"
+    offset = 0.25  # the seconds column's own origin, not the first stamp's
+    rows = [
+        f"{_iso(_stamp(s))},{s + offset!r},{x!r}"
+        for s, x in zip(SECONDS.tolist(), POSITION_MM.tolist(), strict=True)
+    ]
+    path.write_text("Timestamp,Time (s),Position (mm)\n" + "\n".join(rows) + "\n")
+    out = read_text(path)
+    np.testing.assert_array_equal(out["time_s"], SECONDS + offset)
+    assert out["start_time"] == "2026-11-30T09:15:02.120000"

@@ -7,7 +7,9 @@ dates and times or times of day (:mod:`bayestribo.io.timestamps`), is such a col
 anew with that column as ``time_us``, microseconds from the first sample (integers,
 which read alike with a decimal point or comma): the text reader then reads them as any
 other file, with every check of its rows. The absolute time of the first sample is kept
-(:attr:`Stamped.start`) for the run's metadata (``start_time``).
+(:attr:`Stamped.start`) for the run's metadata (``start_time``). Beside a time column of
+the file's own (``Time (s)``), the stamps are not read as the time (``ignore``); the
+first one is kept all the same.
 """
 
 from __future__ import annotations
@@ -15,10 +17,13 @@ from __future__ import annotations
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
+from itertools import pairwise
 
 from bayestribo._warnings import warn
 from bayestribo.errors import ReadingWarning, RunFormatError
+from bayestribo.io.columns import IGNORE, parse_column
 from bayestribo.io.instruments import PREAMBLE_LINES
+from bayestribo.io.run import TIME
 from bayestribo.io.timestamps import STAMP_CELL, StampError, parse_stamps
 
 __all__ = ["STAMP_COLUMN", "STAMP_NAMES", "START_TIME", "Stamped", "stamped_lines"]
@@ -158,16 +163,34 @@ def _find(lines: Sequence[tuple[int, str]], delimiter: str | None) -> _Column | 
     return None
 
 
+def _a_time(names: Sequence[str]) -> bool:
+    """True when one of a header's other names (or two neighbours, split by blanks) is
+    a time column in seconds or another unit (``time_s``, ``Time (s)``)."""
+    pairs = [f"{a} {b}" for a, b in pairwise(names)]
+    for name in (*names, *pairs):
+        try:
+            parsed = parse_column(name.strip().strip('"'))
+        except ValueError:
+            continue
+        if parsed is not None and parsed[0] == TIME:
+            return True
+    return False
+
+
 def _header_line(line: str, column: _Column) -> tuple[str, str]:
-    """The header line with the stamp column's name(s) replaced, and the name(s)."""
-    if column.delimiter is not None:
-        fields = line.split(column.delimiter)
-        label = " ".join(f.strip().strip('"') for f in fields[column.at : column.at + column.names])
-        fields[column.at : column.at + column.names] = [STAMP_COLUMN]
-        return column.delimiter.join(fields), label
+    """The header line with the stamp column's name(s) replaced, and the name(s): by
+    :data:`STAMP_COLUMN`, or by ``ignore`` beside a time column of the file's own."""
+    d = column.delimiter
+    fields = line.split(d)
+    stamps = slice(column.at, column.at + column.names)
+    name = IGNORE if _a_time(fields[: stamps.start] + fields[stamps.stop :]) else STAMP_COLUMN
+    if d is not None:
+        label = " ".join(f.strip().strip('"') for f in fields[stamps])
+        fields[stamps] = [name]
+        return d.join(fields), label
     spans = [m.span() for m in re.finditer(r"\S+", line)]
-    start, end = spans[column.at][0], spans[column.at + column.names - 1][1]
-    return line[:start] + STAMP_COLUMN + line[end:], line[start:end]
+    start, end = spans[stamps.start][0], spans[stamps.stop - 1][1]
+    return line[:start] + name + line[end:], line[start:end]
 
 
 def stamped_lines(
