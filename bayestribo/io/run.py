@@ -236,8 +236,8 @@ METADATA_KEYS: Mapping[str, _Key] = MappingProxyType(
         "samples_missing": _Key("plain", "samples the acquisition did not receive"),
         "start_time": _Key(
             "plain",
-            "date and time of the first sample, ISO 8601 text (a file's time stamps; a time "
-            "of day alone when they hold no date)",
+            "date and time of t = 0, ISO 8601 text: a text file's first time stamp (a time "
+            "of day alone when the stamps hold no date)",
             check=lambda value, key, where: _start_time(value, key, where),
         ),
         "data_file": _Key(
