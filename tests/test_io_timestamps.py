@@ -385,3 +385,20 @@ def test_any_layout_reads_the_microseconds_written(
     np.testing.assert_array_equal(read.offsets_us, offsets)
     expected = stamps[0].replace(tzinfo=dt.timezone(dt.timedelta(hours=2)) if zone else None)
     assert dt.datetime.fromisoformat(read.start) == expected
+
+
+def test_an_excel_column_of_dates_and_times_reads_as_seconds(tmp_path) -> None:
+    openpyxl = pytest.importorskip("openpyxl")
+    book = openpyxl.Workbook()
+    sheet = book.active
+    sheet.append(["Date/Time", "Position (mm)"])
+    # a workbook keeps a time to the millisecond (a fraction of a day, which openpyxl
+    # rounds there): the stamps written hold whole milliseconds
+    seconds = np.arange(400) * 0.01 + np.where(np.arange(400) % 7 == 3, 0.001, 0.0)
+    for s, x in zip(seconds.tolist(), POSITION_MM.tolist(), strict=True):
+        sheet.append([_stamp(s), x])
+    path = tmp_path / "logger.xlsx"
+    book.save(path)
+    run = read_run(path, metadata={"length_unit": "m"})
+    assert np.max(np.abs(run.time - seconds)) < 1e-6
+    assert run.metadata["start_time"] == "2026-11-30T09:15:02.120000"
