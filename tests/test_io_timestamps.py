@@ -25,7 +25,7 @@ from bayestribo import read_run
 from bayestribo.cli import main
 from bayestribo.errors import ReadingWarning, RunFormatError
 from bayestribo.io.text import read_text
-from bayestribo.io.timestamps import parse_stamps
+from bayestribo.io.timestamps import StampError, parse_stamps
 from bayestribo.signal.decay import check_time
 
 #: The first sample's date and time, and the seconds written after it: 100 Hz with a
@@ -402,3 +402,35 @@ def test_an_excel_column_of_dates_and_times_reads_as_seconds(tmp_path) -> None:
     run = read_run(path, metadata={"length_unit": "m"})
     assert np.max(np.abs(run.time - seconds)) < 1e-6
     assert run.metadata["start_time"] == "2026-11-30T09:15:02.120000"
+
+
+@pytest.mark.parametrize(
+    ("cells", "said"),
+    [
+        (["2026-11-30T09:15:02+01:75", "2026-11-30T09:15:03+01:00"], "no time zone"),
+        (["2026-11-30T09:15:02+25:00", "2026-11-30T09:15:03+25:00"], "no time zone"),
+        (["0000-01-01 00:00:00", "0000-01-01 00:00:01"], "no date of the calendar"),
+        (["00/05/2026 09:15:02", "01/05/2026 09:15:02"], "no date of the calendar"),
+        (["2026-11-30 24:00:00", "2026-11-30 23:00:01"], "no time of day"),
+    ],
+)
+def test_impossible_stamps_are_refused_naming_the_cell(cells, said) -> None:
+    with pytest.raises(StampError, match=said) as caught:
+        parse_stamps(cells)
+    assert repr(cells[caught.value.row].strip()) in str(caught.value)
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    st.lists(
+        st.text(alphabet="0123456789-/.:T Z+,", min_size=0, max_size=30)
+        | st.sampled_from(["2026-11-30 09:15:02.120", "09:15:02:120", "31/12/2026 23:59:59"]),
+        min_size=1,
+        max_size=8,
+    )
+)
+def test_any_text_is_read_or_refused_as_a_stamp_error(cells) -> None:
+    try:
+        parse_stamps(cells)
+    except StampError as exc:
+        assert 0 <= exc.row < len(cells)

@@ -46,6 +46,8 @@ _US_PER_DAY = 86_400 * _US_PER_S
 _NONE, _YMD, _AB, _DOTTED = 0, 1, 2, 3
 #: No zone (a sentinel among offsets in minutes).
 _NAIVE = np.iinfo(np.int32).min
+#: An offset that is no time zone (24 h or more from UTC, or 60 minutes or more).
+_NO_ZONE = 24 * 60
 
 
 class StampError(ValueError):
@@ -117,7 +119,10 @@ def _zone_min(zone: str | None) -> int:
     if zone == "Z":
         return 0
     digits = zone[1:].replace(":", "")
-    minutes = int(digits[:2]) * 60 + (int(digits[2:4]) if len(digits) > 2 else 0)
+    part = int(digits[2:4]) if len(digits) > 2 else 0
+    if part >= 60:
+        return _NO_ZONE  # refused by parse_stamps
+    minutes = int(digits[:2]) * 60 + part
     return -minutes if zone[0] == "-" else minutes
 
 
@@ -191,6 +196,8 @@ def _columnwise(
     packed = hh & isdig[:, 3] & isdig[:, 4] & (rest[:, 5] == 0)
     hours = hh & (rest[:, 3] == 0)
     ok &= naive | utc | colon | packed | hours
+    tens = np.where(colon, rest[:, 4], rest[:, 3])  # the tens of the zone's minutes
+    ok &= ~(colon | packed) | (tens < ord("6"))
     zone_h = (r[:, 1] - 48) * 10 + (r[:, 2] - 48)
     zone_m = np.where(colon, (r[:, 4] - 48) * 10 + r[:, 5] - 48, 0)
     zone_m = np.where(packed, (r[:, 3] - 48) * 10 + r[:, 4] - 48, zone_m)
@@ -253,6 +260,10 @@ def _date_order(fields: _Fields, form: int, cells: Sequence[str]) -> tuple[NDArr
     """(month, day) of dates written day or month first: the order a number above 12
     tells, refused when none tells (naming both readings) or both do."""
     a, b = fields.n1, fields.n2
+    zero = np.flatnonzero((a < 1) | (b < 1))
+    if zero.size:
+        i = int(zero[0])
+        raise StampError(f"{cells[i].strip()[:40]!r} is no date of the calendar", i)
     if form == _DOTTED:
         return b, a
     big_a, big_b = np.flatnonzero(a > 12), np.flatnonzero(b > 12)
@@ -269,14 +280,22 @@ def _date_order(fields: _Fields, form: int, cells: Sequence[str]) -> tuple[NDArr
         return a, b
     i = int(np.flatnonzero(a != b)[0])
     first = str(cells[i]).strip()
-    day_first = _dt.date(int(fields.n3[i]), int(b[i]), int(a[i])) if b[i] >= 1 else None
-    month_first = _dt.date(int(fields.n3[i]), int(a[i]), int(b[i])) if a[i] >= 1 else None
+    day_first = _reading(int(fields.n3[i]), int(b[i]), int(a[i]))
+    month_first = _reading(int(fields.n3[i]), int(a[i]), int(b[i]))
     raise StampError(
         f"{first[:40]!r}: the date reads day first ({day_first}) or month first "
         f"({month_first}), and no day above 12 in the column tells which; write the dates "
         "year first (YYYY-MM-DD)",
         i,
     )
+
+
+def _reading(year: int, month: int, day: int) -> str:
+    """A reading of a date, for a message: ISO text, or that it is none."""
+    try:
+        return _dt.date(year, month, day).isoformat()
+    except ValueError:
+        return "no date"
 
 
 def _days(fields: _Fields, form: int, cells: Sequence[str]) -> NDArray[np.int64]:
@@ -288,7 +307,7 @@ def _days(fields: _Fields, form: int, cells: Sequence[str]) -> NDArray[np.int64]
     else:
         month, day = _date_order(fields, form, cells)
         year = fields.n3
-    bad = (month < 1) | (month > 12) | (day < 1)
+    bad = (month < 1) | (month > 12) | (day < 1) | (year < 1)
     months = (year - 1970) * 12 + np.clip(month, 1, 12) - 1
     first = months.astype("datetime64[M]").astype("datetime64[D]").astype(np.int64)
     after = (months + 1).astype("datetime64[M]").astype("datetime64[D]").astype(np.int64)
@@ -345,6 +364,14 @@ def parse_stamps(cells: Sequence[str]) -> Stamps:
         raise StampError(
             f"{cells[i].strip()[:40]!r} {has} but {cells[0].strip()[:40]!r} "
             f"{'does' if naive[i] else 'does not'}: the cells are on two clocks",
+            i,
+        )
+    zoned = fields.zone_min[~naive]
+    if zoned.size and np.abs(zoned).max() >= 24 * 60:
+        i = int(np.flatnonzero(~naive)[np.argmax(np.abs(zoned))])
+        raise StampError(
+            f"{cells[i].strip()[:40]!r}: its offset is no time zone (hh:mm, less than 24 h "
+            "from UTC)",
             i,
         )
     days = _days(fields, form, cells)
