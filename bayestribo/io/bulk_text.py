@@ -26,13 +26,14 @@ import importlib.util
 import os
 import re
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["ARROW_THREADS", "arrow_available", "read_numbers"]
+__all__ = ["ARROW_THREADS", "arrow_available", "read_numbers", "read_with_text"]
 
 #: Whether pyarrow's reader parses blocks of the file on its thread pool: True, False,
 #: or None for "when the machine has a core to spare" (a load average over the last
@@ -223,3 +224,66 @@ def _read_pandas(path: Path, delimiter: str | None, skip: int, width: int) -> li
     # column by column: to_numpy() of the frame interleaves the rows (50 ms at
     # 1,000,001 rows), and each column is read whole afterwards
     return [frame.iloc[:, j].to_numpy(dtype=np.float64, copy=True) for j in range(width)]
+
+
+def read_with_text(
+    path: Path, delimiter: str | None, skip: int, width: int, text: Sequence[int]
+) -> tuple[list[NDArray | None], dict[int, list[str]]] | None:
+    """The rows of a plain text file whose columns ``text`` hold text (time stamps) and
+    every other column numbers, read by pandas' C parser, or None to leave the file to
+    the line-by-line reader (any empty cell, any field of a number column that is not
+    a number, any row of another width).
+
+    Parameters
+    ----------
+    path : Path
+        The file (UTF-8).
+    delimiter : str or None
+        The column separator; None for white space.
+    skip : int
+        Physical lines before the first row (header, blank lines).
+    width : int
+        Fields in every row.
+    text : sequence of int
+        The columns read as text.
+
+    Returns
+    -------
+    (list, dict) or None
+        The ``width`` columns, each a contiguous float64 array (None for a text
+        column), and the cells of each text column by its index.
+    """
+    try:
+        import pandas
+    except ImportError:
+        return None
+    options: dict = {}
+    if tuple(int(p) for p in re.findall(r"\d+", pandas.__version__)[:2]) < (3, 1):
+        options["float_precision"] = "round_trip"
+    dtype = {j: (str if j in text else np.float64) for j in range(width)}
+    try:
+        with path.open("rb") as handle:
+            frame = pandas.read_csv(
+                handle,
+                sep=r"\s+" if delimiter is None else delimiter,
+                header=None,
+                skiprows=skip,
+                dtype=dtype,
+                engine="c",
+                comment=None,
+                quoting=csv.QUOTE_NONE,
+                na_filter=False,
+                skip_blank_lines=True,
+                encoding="utf-8",
+                **options,
+            )
+    except (ValueError, UnicodeDecodeError, OverflowError, pandas.errors.ParserError):
+        return None
+    if frame.shape[1] != width or frame.shape[0] < 1:
+        return None
+    numbers: list[NDArray | None] = [
+        None if j in text else frame.iloc[:, j].to_numpy(dtype=np.float64, copy=True)
+        for j in range(width)
+    ]
+    cells = {j: frame.iloc[:, j].tolist() for j in text}
+    return numbers, cells

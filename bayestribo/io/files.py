@@ -35,6 +35,7 @@ from bayestribo.io.sidecar import (
     sidecar_path,
     write_sidecar,
 )
+from bayestribo.io.stamped_lines import START_TIME
 from bayestribo.io.text import FILE_COLUMNS, PREAMBLE_RATE, StatedRate, write_csv
 from bayestribo.io.validation import on_one_clock, validate_run
 
@@ -226,6 +227,9 @@ def _read(path: Path, opts: ReadOptions) -> Run:
     signals = _checked_signals(fmt, path, opts, meta.pop(DATA_FILE, None), side)
     stated = signals.pop(PREAMBLE_RATE, None)  # the rate a text's preamble states
     file_columns = signals.pop(FILE_COLUMNS, None)  # a text's names, with several axes
+    start = signals.pop(START_TIME, None)  # the first of a text's time stamps
+    if start is not None:
+        meta[START_TIME] = start
     angular = [name for name in ANGULAR if signals.get(name) is not None]
     meta.update(metadata or {})
     if angular:
@@ -521,7 +525,7 @@ def _sample_count(signals: Mapping[str, Any]) -> int:
     sizes = [
         np.size(v)
         for k, v in signals.items()
-        if k not in (PREAMBLE_RATE, FILE_COLUMNS) and v is not None
+        if k not in (PREAMBLE_RATE, FILE_COLUMNS, START_TIME) and v is not None
     ]
     return int(max(sizes, default=0))
 

@@ -234,6 +234,12 @@ METADATA_KEYS: Mapping[str, _Key] = MappingProxyType(
         "fault": _Key("plain", "the acquisition's fault, if any"),
         "gaps": _Key("plain", "gaps in the acquisition's samples"),
         "samples_missing": _Key("plain", "samples the acquisition did not receive"),
+        "start_time": _Key(
+            "plain",
+            "date and time of t = 0, ISO 8601 text: a text file's first time stamp (a time "
+            "of day alone when the stamps hold no date)",
+            check=lambda value, key, where: _start_time(value, key, where),
+        ),
         "data_file": _Key(
             "plain",
             "the data file as written (by the package): {'samples': its sample count, "
@@ -276,6 +282,24 @@ def _data_file(value: Any, key: str, where: str | None) -> dict[str, Any]:
             where,
         )
     return {k: (v.lower() if k == "sha256" else v) for k, v in value.items() if v is not None}
+
+
+def _start_time(value: Any, key: str, where: str | None) -> str:
+    """Check a ``start_time`` value: a date and time, or a time of day, in ISO 8601."""
+    import datetime
+
+    if isinstance(value, str):
+        for kind in (datetime.datetime, datetime.time):
+            try:
+                kind.fromisoformat(value)
+            except ValueError:
+                continue
+            return value
+    raise RunFormatError(
+        f"metadata {key!r}: expected a date and time in ISO 8601 text, such as "
+        f"'2026-11-30T09:15:02.120000', got {_shown(value)}",
+        where,
+    )
 
 
 def _restoring(value: Any, key: str, where: str | None) -> str:

@@ -59,6 +59,8 @@ from bayestribo.io.run import (
     TIME,
     VELOCITY,
 )
+from bayestribo.io.stamped_lines import STAMP_COLUMN, START_TIME, stamped_lines
+from bayestribo.io.timestamps import StampError, parse_stamps
 
 #: Every column name a text file's columns are read as.
 _READ = (*COLUMNS, *ANGULAR, *ACCELERATIONS)
@@ -905,6 +907,9 @@ class TextLayout:
     rate : StatedRate or None
         The sample rate a line above the rows of numbers states (``Sample rate: 1
         kHz``), or None.
+    stamps : str or None
+        The header's name of a column of time stamps (read as seconds from the first
+        sample, :mod:`bayestribo.io.stamped_lines`), or None.
     """
 
     names: list[str]
@@ -913,6 +918,7 @@ class TextLayout:
     delimiter: str | None
     decimal: str
     rate: StatedRate | None = None
+    stamps: str | None = None
 
 
 def text_layout(
@@ -953,6 +959,14 @@ def text_layout(
     ]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ReadingWarning)
+        stamped = None
+        if columns is None:
+            try:
+                stamped = stamped_lines(lines[:PREAMBLE_LINES], delimiter, where)
+            except RunFormatError:
+                stamped = None  # the reader names the cell
+        if stamped is not None:
+            lines = stamped.lines
         names, _, header_lines, delimiter, decimal = _layout(
             lines[:PREAMBLE_LINES], where, columns, delimiter, decimal
         )
@@ -969,7 +983,10 @@ def text_layout(
         labels, preamble = header, start
     end = lines[header_lines][0] - 1 if header_lines < len(lines) else len(all_lines)
     rate = stated_rate(list(enumerate(all_lines[skip_rows:end], start=skip_rows + 1)), where)
-    return TextLayout(list(names), labels, preamble, delimiter, decimal, rate)
+    stamps = None if stamped is None else stamped.label
+    if stamps is not None:
+        labels = [stamps if label == STAMP_COLUMN else label for label in labels]
+    return TextLayout(list(names), labels, preamble, delimiter, decimal, rate, stamps)
 
 
 def _no_time_hint(width: int) -> str:
@@ -1067,7 +1084,9 @@ def _read_streamed(
                 lines[:PREAMBLE_LINES], where, columns, delimiter, decimal
             )
         except (RunFormatError, Warning):
-            return None
+            if columns is not None or complete or decimal == ",":
+                return None
+            return _read_stamped(path, where, head_lines, lines, scale, delimiter)
     if header_lines >= len(lines) or decimal != ".":
         return None
     skip = lines[header_lines][0] - 1  # physical lines before the first row of numbers
@@ -1096,6 +1115,59 @@ def _read_streamed(
         return None
     out: dict[str, Any] = _columns([data[i] for i, _ in keep], keep, units, scale, where)
     _with_file_columns(out, names)
+    return _with_stated_rate(out, list(enumerate(head_lines[:skip], start=1)), where)
+
+
+def _read_stamped(
+    path: Path,
+    where: str,
+    head_lines: list[str],
+    lines: list[tuple[int, str]],
+    scale: Mapping[str, float] | None,
+    delimiter: str | None,
+) -> dict[str, Any] | None:
+    """A large plain file whose time column holds time stamps
+    (:mod:`bayestribo.io.stamped_lines`), read by pandas' C parser with the stamps as
+    text, parsed column-wise; None for anything else, or anything the line-by-line
+    reader says or names (a cell that is no time stamp, a pass through midnight, an
+    empty cell, a comment among the rows), which then reads the file."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        try:
+            stamped = stamped_lines(lines[:PREAMBLE_LINES], delimiter, where)
+            if stamped is None or stamped.midnight:
+                return None
+            names, units, header_lines, _, decimal = _layout(
+                stamped.lines, where, None, stamped.delimiter, None
+            )
+        except (RunFormatError, Warning):
+            return None
+    if decimal != "." or header_lines >= len(stamped.lines):
+        return None
+    skip = stamped.lines[header_lines][0] - 1
+    if any(line.lstrip().startswith("#") for line in head_lines[skip:]):
+        return None
+    j, k = stamped.cell, stamped.cells
+    read = bulk_text.read_with_text(
+        path, stamped.delimiter, skip, len(names) + k - 1, range(j, j + k)
+    )
+    if read is None:
+        return None
+    numbers, text = read
+    cells = text[j] if k == 1 else [f"{a} {b}" for a, b in zip(text[j], text[j + 1], strict=True)]
+    del text
+    try:
+        stamps = parse_stamps(cells)
+    except StampError:
+        return None
+    if stamps.midnight:
+        return None
+    del cells
+    columns = [*numbers[:j], stamps.offsets_us.astype(np.float64), *numbers[j + k :]]
+    keep = [(i, n) for i, n in enumerate(names) if n != IGNORE]
+    out: dict[str, Any] = _columns([columns[i] for i, _ in keep], keep, units, scale, where)
+    _with_file_columns(out, names)
+    out[START_TIME] = stamps.start
     return _with_stated_rate(out, list(enumerate(head_lines[:skip], start=1)), where)
 
 
@@ -1265,6 +1337,10 @@ def parse_lines(
         for number, line in enumerate(all_lines[skip_rows:], start=skip_rows + 1)
         if line.strip() and not line.lstrip().startswith("#")
     ]
+    # a column of dates and times: microseconds from the first sample (time_us)
+    stamped = stamped_lines(lines, delimiter, where) if columns is None else None
+    if stamped is not None:
+        lines = stamped.lines
     names, units, header_lines, delimiter, decimal = _layout(
         lines, where, columns, delimiter, decimal
     )
@@ -1281,6 +1357,8 @@ def parse_lines(
 
     out: dict[str, Any] = _columns(data, keep, units, scale, where)
     _with_file_columns(out, names)
+    if stamped is not None:
+        out[START_TIME] = stamped.start
     above = enumerate(all_lines[skip_rows : rows[0][0] - 1], start=skip_rows + 1)
     return _with_stated_rate(out, list(above), where)
 

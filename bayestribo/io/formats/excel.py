@@ -95,7 +95,12 @@ def _has_numbers(sheet: Any) -> bool:
     for i, row in enumerate(sheet.iter_rows(values_only=True)):
         if i >= _PROBE_ROWS:
             break
-        numbers = sum(isinstance(c, int | float) and not isinstance(c, bool) for c in row)
+        # a date and time is a sample's time stamp (read as seconds from the first)
+        numbers = sum(
+            isinstance(c, int | float | datetime.datetime | datetime.time)
+            and not isinstance(c, bool)
+            for c in row
+        )
         if numbers >= 2:
             return True
         alone += numbers == 1 and sum(c is not None for c in row) == 1

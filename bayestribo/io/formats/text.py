@@ -90,6 +90,8 @@ def describe_text(path: Path, options: ReadOptions) -> dict[str, Any]:
             notes.append(f"{layout.preamble} preamble line(s) skipped")
         if layout.decimal == ",":
             notes.append("decimal comma")
+        if layout.stamps is not None:
+            notes.append(f"time stamps in {layout.stamps!r}: seconds from the first sample")
         if TIME not in layout.names:
             note = "no time column: t = i / sample rate"
             if getattr(layout, "rate", None) is not None:
