@@ -35,7 +35,13 @@ from bayestribo.inference.types import MISFIT_P, PreparedRun, Sampled
 from bayestribo.io.run import Run
 from bayestribo.model.restoring import get_restoring
 from bayestribo.signal.decay import EnergyDecay
-from bayestribo.signal.frequency import FrequencyTrend, frequency_trend, turning_point_trend
+from bayestribo.signal.frequency import (
+    FREQUENCY_TREND_CHANGE,
+    FREQUENCY_TREND_Z,
+    FrequencyTrend,
+    frequency_trend,
+    turning_point_trend,
+)
 
 __all__ = [
     "FREQUENCY_TREND_CHANGE",
@@ -234,13 +240,6 @@ def shape_departure(posterior: Posterior, theta: NDArray) -> ShapeDeparture:
     return posterior.likelihood.shape_departure({k: float(v[0]) for k, v in params.items()})
 
 
-#: A half period changing along the decay by more than this fraction, and by more than
-#: FREQUENCY_TREND_Z standard errors, is reported: the linear law's Ω is constant.
-FREQUENCY_TREND_CHANGE = 2e-4
-
-FREQUENCY_TREND_Z = 4.0
-
-
 def frequency_nuisance_sd(trend: FrequencyTrend | None) -> float:
     """Relative standard deviation of the frequency nuisance ε from the frequency trend.
 
@@ -330,7 +329,7 @@ def _warn_frequency_trend(
     the law's nonlinear restoring force, named instead of a force to try."""
     if trend is None:
         return
-    if abs(trend.change) > FREQUENCY_TREND_CHANGE and abs(trend.z) > FREQUENCY_TREND_Z:
+    if trend.significant:
         like = (
             "; if the spring stiffens or softens with the swing (a cubic, Duffing spring), "
             "--restoring duffing (sidecar 'restoring': 'duffing') measures its β from the "
