@@ -221,7 +221,9 @@ def choose_restoring(
     if not trend.significant:
         return RestoringChoice("linear", trend, left)
     small = bool(np.all(np.abs(y) < math.pi))
-    pendulum = trend_beyond(times, y, get_restoring("pendulum").half_period_ratio) if small else None
+    pendulum = (
+        trend_beyond(times, y, get_restoring("pendulum").half_period_ratio) if small else None
+    )
     if length_unit == "rad" and angle:
         left["pendulum"] = pendulum
         if pendulum is not None and not pendulum.significant:
@@ -269,8 +271,7 @@ def choose_restoring(
         )
         + ". A change the forms cannot follow is not the spring's (a frequency that drifts "
         "in time, a change that is not monotonic in the swing): the fit carries it as a "
-        "frequency nuisance"
-        + (f"; {hint}" if hint else "")
+        "frequency nuisance" + (f"; {hint}" if hint else "")
     )
     warn(text, FrequencyTrendWarning)
     return RestoringChoice(best, trend, left, beta, beta_se, warning=text, followed=False)
