@@ -100,17 +100,15 @@ class RestoringChoice:
         if self.name == "linear" and not trend.significant:
             return f"{head}: the half period is constant within its noise, {measured}"
         left = self.left.get(self.name)
-        rest = "" if left is None else f"; {_percent(left.change)} left, {left.z:+.1f} SE"
-        if self.name == "pendulum":
-            how = "as the pendulum's does"
-        elif self.name == "duffing":
-            how = "as a Duffing spring's does"
-        else:
-            how = "which no force follows"
-        text = f"{head}: the half period changes by {measured} {how}{rest}"
         if not self.followed:
-            text += "; no force follows it (warned)"
-        return text
+            least = "" if self.name == "linear" or left is None else f", {_percent(left.change)}"
+            return (
+                f"{head}: the half period changes by {measured} and no force follows it; "
+                f"the {_noun(self.name)} leaves the least of it{least} (warned)"
+            )
+        rest = "" if left is None else f"; {_percent(left.change)} left, {left.z:+.1f} SE"
+        how = "as the pendulum's does" if self.name == "pendulum" else "as a Duffing spring's does"
+        return f"{head}: the half period changes by {measured} {how}{rest}"
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready: the choice, the measured change and what each force leaves."""
@@ -123,6 +121,11 @@ class RestoringChoice:
             "warning": self.warning,
             "followed": self.followed,
         }
+
+
+def _noun(name: str) -> str:
+    """A force's name in a sentence."""
+    return {"linear": "linear spring", "duffing": "Duffing spring"}.get(name, name)
 
 
 def _percent(change: float) -> str:
@@ -258,7 +261,9 @@ def choose_restoring(
     # no force follows the change: keep the one that leaves the least of it
     found = {k: v for k, v in left.items() if v is not None}
     best = min(found, key=lambda k: abs(found[k].change))
-    parts = ", ".join(f"the {k}'s {_percent(v.change)}" for k, v in found.items() if k != "linear")
+    parts = ", ".join(
+        f"the {_noun(k)}'s {_percent(v.change)}" for k, v in found.items() if k != "linear"
+    )
     text = (
         f"restoring auto: the half period of {run} changes by {_percent(trend.change)} "
         f"({trend.z:+.0f} standard errors) from the largest swing to the smallest, and no "
@@ -267,7 +272,7 @@ def choose_restoring(
         + (
             "; the linear spring is taken"
             if best == "linear"
-            else f"; the {best}, which leaves the least, is taken"
+            else f"; the {_noun(best)}, which leaves the least, is taken"
         )
         + ". A change the forms cannot follow is not the spring's (a frequency that drifts "
         "in time, a change that is not monotonic in the swing): the fit carries it as a "
