@@ -215,3 +215,16 @@ def test_auto_on_the_bundled_run_is_the_default_fit(bundled_runs):
     assert auto.dissipation == default.dissipation
     assert auto.turning_point_dissipation == default.turning_point_dissipation
     assert "restoring auto → linear: the half period is constant" in auto.to_text()
+
+
+def test_the_adequacy_checks_choose_once_for_every_window():
+    # a window holds too few turning points to measure the change: the checks choose on
+    # the whole run, and each window's fit takes that force
+    from bayestribo.adequacy.check import _chosen_restoring
+
+    t, angle = _rubbing_pendulum()
+    run = Run(t, angle, metadata={"length_unit": "rad", "restoring": "auto"})
+    decay = energy_decay(t, angle, None)
+    assert _chosen_restoring(run, decay).metadata["restoring"] == "pendulum"
+    named = run.with_metadata(restoring="duffing")
+    assert _chosen_restoring(named, decay) is named
