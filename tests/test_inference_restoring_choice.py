@@ -228,3 +228,29 @@ def test_the_adequacy_checks_choose_once_for_every_window():
     assert _chosen_restoring(run, decay).metadata["restoring"] == "pendulum"
     named = run.with_metadata(restoring="duffing")
     assert _chosen_restoring(named, decay) is named
+
+
+def test_auto_fits_a_stiffening_spring_on_the_papers_rig_without_a_warning():
+    # test_inference_fitting's cubic spring (+0.1 % at 2 mm) on the paper's rig: the
+    # linear fit warns of the frequency's change and advises --restoring auto; followed,
+    # the Duffing spring is chosen, no change is left to warn of, and ζ and μ_k hold
+    # the simulation's values
+    from test_signal_frequency import _decay
+
+    t, x, v = _decay(10_000.0, k3_over_k=667.0)
+    rng = np.random.default_rng(5)
+    run = Run(
+        t,
+        x + rng.normal(0.0, 1.5e-6, t.size),
+        v + rng.normal(0.0, 1.5e-7, t.size),
+        {"natural_frequency_Hz": 32.6, "mass_kg": 0.035, "load_N": 0.31},
+    )
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = fit(run, seed=1, max_steps=3000, restoring="auto")
+    assert not [w for w in caught if w.category is FrequencyTrendWarning]
+    assert result.restoring["auto"]["chosen"] == "duffing"
+    mu_k = 0.035 * (2 * np.pi * 32.6) ** 2 * 6.2e-6 / 0.31
+    for name, truth in (("zeta", 0.0236), ("mu_k", mu_k)):
+        lo, hi = result.interval(name, 0.95)
+        assert lo < truth < hi, name
