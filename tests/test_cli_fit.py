@@ -236,3 +236,38 @@ def test_the_table_writes_each_value_by_the_digit_rule_and_a_flat_one_as_a_bound
             assert interval_text(s.mean, *s.interval) in row, row
     # μ_s/μ_k of a run that stops inside its static band is flat up to the stop
     assert bounds >= 1 and "not constrained by the data" in text
+
+
+@pytest.fixture(scope="module")
+def pendulum_file(tmp_path_factory) -> Path:
+    """A pendulum released at 90° (test_inference_restoring_choice), in radians, whose
+    sidecar says 'restoring': 'auto'."""
+    from test_inference_restoring_choice import _rubbing_pendulum
+
+    from bayestribo.io import write_run
+    from bayestribo.io.run import Run
+
+    t, angle = _rubbing_pendulum()
+    path = tmp_path_factory.mktemp("pendulum") / "pendulum.csv"
+    metadata = {"length_unit": "rad", "gain_uncertainty": 0.0, "restoring": "auto"}
+    write_run(Run(t, angle, metadata=metadata), path)
+    assert json.loads(path.with_suffix(".json").read_text())["restoring"] == "auto"
+    return path
+
+
+def test_restoring_auto_from_the_sidecar_is_printed_and_in_the_json(pendulum_file, capsys):
+    argv = ["fit", str(pendulum_file), "--grid-points", "32", "--seed", "3"]
+    assert main([*argv, "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["restoring"]["name"] == "pendulum"
+    assert record["restoring"]["auto"]["chosen"] == "pendulum"
+    assert record["metadata"]["restoring"] == "pendulum"
+    # the same from the command line over the sidecar, and the table's line
+    assert main([*argv, "--restoring", "auto"]) == 0
+    out = capsys.readouterr().out
+    assert "restoring auto → pendulum: the half period changes by" in out
+
+
+def test_inspect_reads_a_run_whose_restoring_is_auto(pendulum_file, capsys):
+    assert main(["inspect", str(pendulum_file), "--restoring", "auto"]) == 0
+    assert "pendulum.csv" in capsys.readouterr().out

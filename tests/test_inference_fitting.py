@@ -344,6 +344,8 @@ def test_a_frequency_that_changes_with_amplitude_is_reported():
         result = fit(run, seed=1, max_steps=3000)
     trend = [w for w in caught if issubclass(w.category, FrequencyTrendWarning)]
     assert trend and "half period changes by +0.0" in str(trend[0].message)
+    # the advice (followed in test_inference_restoring_choice.py)
+    assert "--restoring auto chooses the force" in str(trend[0].message)
     # carried into the intervals, so no misfit is claimed for it
     assert not [w for w in caught if issubclass(w.category, MisfitWarning)]
     assert result.frequency_trend["z"] > 4

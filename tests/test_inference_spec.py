@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import inspect
 import json
+import re
 import subprocess
 import sys
 from typing import ClassVar
@@ -46,6 +47,7 @@ def test_the_field_table_imports_no_numpy():
         ({"fixed": {"mu_k": "a lot"}}, r"fixed\['mu_k'\]: expected a finite number"),
         ({"law": "auto", "fixed": {"zeta": 0.0}}, r"fixed: .*not law='auto'"),
         ({"colour": 1}, r"unknown field\(s\) 'colour'"),
+        ({"restoring": "spring"}, r"restoring: expected one of linear, pendulum, duffing, auto"),
     ],
 )
 def test_a_bad_value_is_refused_naming_its_field(changes, message):
@@ -81,8 +83,6 @@ def test_fit_keywords_are_the_specifications_with_its_defaults():
     assert SPEC_MODELS == MODELS
     params = inspect.signature(fit).parameters
     for f in spec_fields():
-        if f.name == "restoring":
-            continue  # inside read_options
         keyword = f.metadata["keyword"] or f.name
         assert keyword in params, keyword
         if f.default is not __import__("dataclasses").MISSING:
@@ -136,6 +136,27 @@ def test_the_command_line_gives_the_python_specification(tmp_path):
     path.write_text(python.to_json())
     args = build_parser().parse_args(["fit", "x.csv", "--spec", str(path), "--seed", "7"])
     assert spec_from_args(args, "fit") == python.replace(seed=7)
+
+
+@pytest.mark.parametrize("command", FITTING)
+def test_every_fitting_command_takes_restoring_auto(command):
+    from bayestribo.cli._spec import spec_from_args
+
+    args = build_parser().parse_args([command, "somewhere", "--restoring", "auto"])
+    spec = spec_from_args(args, command)
+    assert spec.restoring == "auto" and spec.reading().metadata == {"restoring": "auto"}
+    assert FitSpec.from_json(spec.to_json()) == spec
+
+
+def test_a_bad_restoring_force_on_the_command_line_names_the_choices(capsys):
+    from bayestribo.cli.main import main
+
+    with pytest.raises(SystemExit):
+        main(["fit", "x.csv", "--restoring", "spring"])
+    err = capsys.readouterr().err
+    assert re.search(
+        r"invalid choice: .spring. \(choose from .*linear.*pendulum.*duffing.*auto", err
+    )
 
 
 def test_an_option_a_command_cannot_use_is_refused_naming_it(capsys):

@@ -35,6 +35,10 @@ from bayestribo.io.sidecar import read_sidecar
             '{"gain_uncertainty": 2}',
             "metadata 'gain_uncertainty'.*expected a finite number >= 0 and <= 0.5",
         ),
+        (
+            '{"restoring": "spring"}',
+            "metadata 'restoring': expected one of linear, pendulum, duffing, auto, got 'spring'",
+        ),
     ],
     ids=[
         "400 digits",
@@ -50,6 +54,7 @@ from bayestribo.io.sidecar import read_sidecar
         "a key of ones own",
         "impossible filter",
         "gain beyond its range",
+        "unknown restoring force",
     ],
 )
 def test_absurd_sidecars_are_refused_naming_what_is_wrong(tmp_path, text, match):
@@ -57,6 +62,13 @@ def test_absurd_sidecars_are_refused_naming_what_is_wrong(tmp_path, text, match)
     path.write_text(text)
     with pytest.raises(RunFormatError, match=match):
         read_sidecar(path)
+
+
+@pytest.mark.parametrize("name", ["linear", "pendulum", "duffing", "auto"])
+def test_every_restoring_choice_is_read_from_the_sidecar(tmp_path, name):
+    path = tmp_path / "r.json"
+    path.write_text(json.dumps({"length_unit": "rad", "restoring": name}))
+    assert read_sidecar(path)["restoring"] == name
 
 
 JSON = st.recursive(

@@ -248,6 +248,8 @@ def check_adequacy(
     AdequacyReport
     """
     decay = analysed_decay(run, skip_oscillations=skip_oscillations)
+    if bayes:
+        run = _chosen_restoring(run, decay)
     if window is None:
         window = default_window(decay)
         if bayes:
@@ -321,3 +323,31 @@ def check_adequacy(
         halves=halves,
         halves_note=halves_note,
     )
+
+
+def _chosen_restoring(run: Any, decay: EnergyDecay) -> Any:
+    """A run whose ``restoring`` is ``"auto"`` with the force chosen once, on the whole
+    run (:func:`bayestribo.inference.restoring_choice.choose_restoring`), so that every
+    window's and half's fit takes the same force (a window's few turning points cannot
+    measure the change); any other run (or an EnergyDecay) as it is."""
+    from bayestribo.io.run import Run
+    from bayestribo.model.restoring import AUTO
+
+    if isinstance(run, EnergyDecay):
+        return run
+    if not isinstance(run, Run):
+        from bayestribo.io import as_run
+
+        run = as_run(run)
+    if run.metadata.get("restoring") != AUTO:
+        return run
+    from bayestribo.inference.restoring_choice import choose_restoring
+
+    choice = choose_restoring(
+        decay.turning_times,
+        decay.peaks.value / decay.scaling.length_scale,
+        length_unit=run.length_unit,
+        angle=decay.scaling.length_scale == 1.0,
+        name=str(run.source or run.metadata.get("run_id") or "") or None,
+    )
+    return run.with_metadata(restoring=choice.name)

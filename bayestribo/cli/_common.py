@@ -155,15 +155,17 @@ def add_reading_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--frequency", type=float, help="nominal natural frequency f [Hz]")
     parser.add_argument("--load", type=float, help="normal load N [N]")
     parser.add_argument("--mass", type=float, help="oscillating mass m [kg]")
-    from bayestribo.model.restoring import restoring_table
+    from bayestribo.model.restoring import AUTO, restoring_table
 
     restoring = restoring_table()
     parser.add_argument(
         "--restoring",
-        choices=tuple(restoring),
+        choices=(*restoring, AUTO),
         help="the oscillator's restoring force (sidecar 'restoring'): "
         + "; ".join(f"{name}: {description}" for name, description in restoring.items())
-        + ". The energy lost per cycle from the turning points takes its potential",
+        + f"; {AUTO}: chosen by the fit from how the half period changes with the swing "
+        "(constant: linear; as a pendulum's, in radians: pendulum; else duffing). The "
+        "energy lost per cycle from the turning points takes its potential",
     )
     from bayestribo.signal.sensor_kinds import sensor_kind_table
 

@@ -83,7 +83,8 @@ def register(subparsers: Any) -> None:
 def json_record(result: Any, prob: float = 0.95) -> dict[str, Any]:
     """The JSON object printed by ``--json``.
 
-    ``{"run", "model", "law", "law_comparison" (with ``--law auto``), "seed",
+    ``{"run", "model", "law", "law_comparison" (with ``--law auto``), "restoring" (the
+    force, what was measured of it, and with ``--restoring auto`` the choice), "seed",
     "bayestribo_version", "metadata", "noise",
     "parameters": {NAME: {"mean", "sd", "median", "interval", "prob", "kind", "unit",
     "name", "symbol", "label", "sampled", "ess", "r_hat"}} (every quantity of the
@@ -105,6 +106,7 @@ def json_record(result: Any, prob: float = 0.95) -> dict[str, Any]:
         "model": full["model"],
         "law": full["law"],
         "law_comparison": full["law_comparison"],
+        "restoring": full["restoring"],
         "seed": full["seed"],
         "bayestribo_version": full["bayestribo_version"],
         "metadata": full["metadata"],

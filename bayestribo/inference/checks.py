@@ -35,7 +35,13 @@ from bayestribo.inference.types import MISFIT_P, PreparedRun, Sampled
 from bayestribo.io.run import Run
 from bayestribo.model.restoring import get_restoring
 from bayestribo.signal.decay import EnergyDecay
-from bayestribo.signal.frequency import FrequencyTrend, frequency_trend, turning_point_trend
+from bayestribo.signal.frequency import (
+    FREQUENCY_TREND_CHANGE,
+    FREQUENCY_TREND_Z,
+    FrequencyTrend,
+    frequency_trend,
+    turning_point_trend,
+)
 
 __all__ = [
     "FREQUENCY_TREND_CHANGE",
@@ -174,7 +180,12 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
         prepared.run, prepared.metadata, decay.peaks.value / decay.scaling.length_scale
     )
     _warn_frequency_trend(
-        name, trend, posterior.law.name, pendulum, restoring=posterior.law.restoring
+        name,
+        trend,
+        posterior.law.name,
+        pendulum,
+        restoring=posterior.law.restoring,
+        chosen=prepared.restoring_choice is not None,
     )
     return FitChecks(
         sampled,
@@ -232,13 +243,6 @@ def shape_departure(posterior: Posterior, theta: NDArray) -> ShapeDeparture:
     """The smooth departure of the decay from the law at θ (noise variances alone)."""
     params = posterior.physical(theta[None])["params"]
     return posterior.likelihood.shape_departure({k: float(v[0]) for k, v in params.items()})
-
-
-#: A half period changing along the decay by more than this fraction, and by more than
-#: FREQUENCY_TREND_Z standard errors, is reported: the linear law's Ω is constant.
-FREQUENCY_TREND_CHANGE = 2e-4
-
-FREQUENCY_TREND_Z = 4.0
 
 
 def frequency_nuisance_sd(trend: FrequencyTrend | None) -> float:
@@ -322,21 +326,26 @@ def _warn_frequency_trend(
     law: str,
     pendulum: float | None = None,
     restoring: Any = None,
+    chosen: bool = False,
 ) -> None:
     """Say when the frequency is not constant along the decay beyond the law's own
     change (the nuisance that carries it is in the intervals); ``pendulum``: the change
     a pendulum's half period makes over the same swings (a run in radians with a linear
     restoring force), named when the measured change is the pendulum's; ``restoring``:
-    the law's nonlinear restoring force, named instead of a force to try."""
+    the law's nonlinear restoring force, named instead of a force to try; ``chosen``:
+    the force was chosen by ``restoring="auto"`` (which has said why), none is advised."""
     if trend is None:
         return
-    if abs(trend.change) > FREQUENCY_TREND_CHANGE and abs(trend.z) > FREQUENCY_TREND_Z:
+    if trend.significant:
         like = (
             "; if the spring stiffens or softens with the swing (a cubic, Duffing spring), "
             "--restoring duffing (sidecar 'restoring': 'duffing') measures its β from the "
-            "half periods and the energy lost per cycle with its potential"
+            "half periods and the energy lost per cycle with its potential; --restoring "
+            "auto chooses the force from the half periods"
         )
-        if restoring is not None:
+        if chosen and restoring is None:
+            like = " (on the linear spring that --restoring auto took)"
+        elif restoring is not None:
             like = (
                 f" (on the {restoring.name}'s restoring force, which the law's model "
                 "takes: the change is the part its half periods do not make)"
@@ -347,7 +356,8 @@ def _warn_frequency_trend(
                 like = (
                     f"; it changes as a pendulum's does over these swings ({100 * pendulum:+.3f} "
                     "%): for a pendulum, --restoring pendulum (sidecar 'restoring': "
-                    "'pendulum') measures the energy lost per cycle with its potential"
+                    "'pendulum') measures the energy lost per cycle with its potential "
+                    "(--restoring auto chooses it from the half periods)"
                 )
         warn(
             f"the oscillation's half period changes by {100 * trend.change:+.3f} % from the "

@@ -59,6 +59,7 @@ def fit(
     notch: float | Literal["auto"] | None = None,
     law: str | Law | None = None,
     law_progress: Callable[[str], None] | None = None,
+    restoring: str | None = None,
 ) -> FitResult:
     """Posterior of ζ and μ_k (or ζ₀, or the friction displacement) for one run, or
     of the parameters of another dissipation law, with the energy dissipated per
@@ -134,6 +135,17 @@ def fit(
     law_progress : callable, optional
         With ``law="auto"``: called with one line of text per law as the comparison
         goes (its optimum; then its sampling, or why it is not sampled).
+    restoring : str, optional
+        The oscillator's restoring force (:mod:`bayestribo.model.restoring`:
+        ``"linear"``, ``"pendulum"``, ``"duffing"``), over the run's sidecar
+        ``restoring``; default the sidecar's, else linear. ``"auto"`` chooses it from
+        how the half period changes with the swing, measured from the turning times
+        (:mod:`bayestribo.inference.restoring_choice`): constant within its noise,
+        linear (the fit is then the linear one's, unchanged); a run in radians whose
+        change is the pendulum's own, pendulum; otherwise duffing, β measured. When
+        no force follows the change the one that leaves the least of it is kept, with
+        a :class:`~bayestribo.errors.FrequencyTrendWarning`. The result's
+        ``restoring["auto"]`` records the choice and why.
 
     Returns
     -------
@@ -163,6 +175,7 @@ def fit(
         "correct_channels": correct_channels,
         "notch": notch,
         "law": law,
+        "restoring": restoring,
     }
     # checked before the run is read and prepared, each error naming its field
     spec = FitSpec.of(spec, **{k: v for k, v in keywords.items() if v != _KEYWORD_DEFAULTS[k]})
@@ -175,6 +188,10 @@ def fit(
     fixed = dict(spec.fixed) or None
     settings = spec.sampler_settings()
     rng = np.random.default_rng(seed)
+    reading = spec.reading()
+    if isinstance(run, Run) and spec.restoring is not None:
+        # a run already read takes the restoring force in its metadata
+        run, reading = run.with_metadata(restoring=spec.restoring), spec.read_options
     # law="auto": every law's second pass, and the first pass, take the recorded
     # channel's Monte Carlo noise drawn once (bayestribo.signal.channel_noise)
     with reused_noise() if auto else contextlib.nullcontext():
@@ -183,7 +200,7 @@ def fit(
             skip_oscillations=spec.skip_oscillations,
             grid_points=spec.grid_points,
             noise=noise,
-            read_options=spec.reading(),
+            read_options=reading,
             correct_channels=spec.correct_channels,
             notch=spec.notch_Hz,
         )
@@ -217,7 +234,7 @@ def fit(
 #: The defaults of :func:`fit`'s keywords that are fields of :class:`FitSpec` (None for
 #: the mappings and reading options: the spec's empty ones).
 _KEYWORD_DEFAULTS: dict[str, Any] = {
-    **{f.metadata["keyword"] or f.name: f.default for f in spec_fields() if f.name != "restoring"},
+    **{f.metadata["keyword"] or f.name: f.default for f in spec_fields()},
     "priors": None,
     "fixed": None,
     "read_options": None,

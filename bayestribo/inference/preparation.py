@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 
 from bayestribo.errors import BayestriboError
 from bayestribo.inference.calibration import calibrate_channels
+from bayestribo.inference.restoring_choice import AUTO, choose_restoring
 from bayestribo.inference.types import PreparedRun
 from bayestribo.io.files import as_run
 from bayestribo.io.options import ReadOptions
@@ -218,7 +219,8 @@ def prepare(
     """
     recording, undone = _undo_declared_filter(as_run(run, read_options))
     recording, channels = calibrate_channels(recording, correct=correct_channels)
-    linear = _linear_spring(recording)
+    auto = dict(recording.metadata).get("restoring") == AUTO
+    linear = auto or _linear_spring(recording)
     decay = energy_decay(
         recording.time,
         recording.displacement,
@@ -228,6 +230,31 @@ def prepare(
         notch=notch,
         linear_spring=linear,
     )
+    choice = None
+    if auto:
+        # restoring "auto": chosen from the linear analysis's turning times; a linear
+        # choice keeps that analysis, as restoring "linear" would
+        choice = choose_restoring(
+            decay.turning_times,
+            decay.peaks.value / decay.scaling.length_scale,
+            length_unit=recording.length_unit,
+            angle=decay.scaling.length_scale == 1.0,
+            name=_run_name(recording) or None,
+        )
+        recording = recording.with_metadata(restoring=choice.name)
+        linear = _linear_spring(recording)
+        if not linear:
+            # analysed again as a run that names the force is (its turning points not
+            # held to a linear oscillator's)
+            decay = energy_decay(
+                recording.time,
+                recording.displacement,
+                recording.velocity,
+                rig=recording.rig(),
+                skip_oscillations=skip_oscillations,
+                notch=notch,
+                linear_spring=False,
+            )
     restoring = None if linear else _run_restoring(recording, decay)
     if restoring is not None:
         # the small swings' frequency scales time (τ = ω₀t), in which V is written
@@ -259,6 +286,7 @@ def prepare(
         channels,
         noise is not None,
         undone,
+        choice,
     )
 
 

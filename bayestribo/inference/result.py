@@ -202,6 +202,15 @@ class FitResult:
         return self._attr("turning_point_dissipation_json", None)
 
     @property
+    def restoring(self) -> dict[str, Any] | None:
+        """The oscillator's restoring force as the fit took it: ``name``, what was
+        measured of it (a Duffing spring's ``beta`` and ``beta_se``, their ``error`` in
+        the intervals), ``in_model``, and for ``restoring="auto"`` the choice and why
+        (``auto``: :meth:`~bayestribo.inference.restoring_choice.RestoringChoice.
+        to_dict` with its ``description``); None for fits saved before it was recorded."""
+        return self._attr("restoring_json", None)
+
+    @property
     def law_comparison(self) -> dict[str, Any] | None:
         """How ``law="auto"`` chose the law (:class:`~bayestribo.inference.records.
         LawComparison` as plain data: ``verdict``, ``best``, ``as_good``, ``adequate``,
@@ -516,6 +525,7 @@ class FitResult:
                 "model": self.model,
                 "law": self.law,
                 "law_comparison": self.law_comparison,
+                "restoring": self.restoring,
                 "seed": self.seed,
                 "bayestribo_version": self.package_version,
                 "metadata": self.metadata,
@@ -582,8 +592,11 @@ class FitResult:
 
             lines.append(f"velocity  {describe(integrated)}")
         spring = self._attr("restoring_json", None)
-        if spring and spring.get("name") not in (None, "linear"):
-            text = f"restoring {spring['name']}"
+        chosen = (spring or {}).get("auto")
+        if chosen and spring.get("name") in (None, "linear"):
+            lines.append(f"restoring {chosen['description']}")
+        elif spring and spring.get("name") not in (None, "linear"):
+            text = f"restoring {chosen['description'] if chosen else spring['name']}"
             if "beta" in spring:
                 text += (
                     f", β = {spring['beta']:.4g} ± {spring['beta_se']:.2g} (from the half periods)"

@@ -158,11 +158,11 @@ def _law(name: str, value: Any) -> str | None:
 def _restoring(name: str, value: Any) -> str | None:
     if value is None:
         return None
-    from bayestribo.model.restoring import restoring_table
+    from bayestribo.model.restoring import restoring_choices
 
-    known = tuple(restoring_table())
+    known = restoring_choices()
     if value not in known:
-        raise _error(name, f"a registered restoring force, one of {known}", value)
+        raise _error(name, f"one of {', '.join(known)}", value)
     return str(value)
 
 
@@ -257,8 +257,10 @@ class FitSpec:
     restoring: str | None = _spec_field(
         None,
         doc="The oscillator's restoring force (a registered one, the sidecar's "
-        "'restoring'); None: the sidecar's, else linear. A nonlinear one's potential is "
-        "the law's model's and the record's energy's (docs/restoring.md).",
+        "'restoring'); None: the sidecar's, else linear; 'auto': chosen from how the half "
+        "period changes with the swing (bayestribo.inference.restoring_choice). A "
+        "nonlinear one's potential is the law's model's and the record's energy's "
+        "(docs/restoring.md).",
         option=SpecOption("--restoring", "", kind="reading"),
         check=_restoring,
     )

@@ -329,6 +329,17 @@ def summary(
                 **({} if spring_error is None else {"error": spring_error.to_dict()}),
                 # the law's model takes its potential (model/laws/nonlinear.py)
                 "in_model": posterior.law.restoring is not None,
+                # restoring "auto": the force chosen and why (inference/restoring_choice.py)
+                **(
+                    {}
+                    if prepared.restoring_choice is None
+                    else {
+                        "auto": {
+                            **prepared.restoring_choice.to_dict(),
+                            "description": prepared.restoring_choice.describe(),
+                        }
+                    }
+                ),
             }
         ),
         units=own_units,

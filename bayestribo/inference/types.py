@@ -60,6 +60,10 @@ class PreparedRun:
     filter_undone : bool
         True when the run's declared first-order filter was undone on its channels
         (:func:`bayestribo.signal.sensor.undo_first_order`): ``run`` holds them so.
+    restoring_choice : RestoringChoice or None
+        For a run whose ``restoring`` was ``"auto"``: the force chosen and why
+        (:func:`bayestribo.inference.restoring_choice.choose_restoring`); ``run``'s
+        metadata name the force chosen.
     """
 
     run: Run
@@ -72,6 +76,7 @@ class PreparedRun:
     channels: dict[str, Any] | None = None
     noise_given: bool = False
     filter_undone: bool = False
+    restoring_choice: Any = None
 
     @property
     def metadata(self) -> dict[str, Any]:

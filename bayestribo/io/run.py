@@ -153,8 +153,9 @@ METADATA_KEYS: Mapping[str, _Key] = MappingProxyType(
         ),
         "restoring": _Key(
             "plain",
-            "the oscillator's restoring force: 'linear' (default) or 'pendulum' (the angle "
-            "in radians), see bayestribo.model.restoring",
+            "the oscillator's restoring force: 'linear' (default), 'pendulum' (the angle "
+            "in radians), 'duffing' (β measured), or 'auto' (chosen by the fit from how the "
+            "half period changes with the swing), see bayestribo.model.restoring",
             check=lambda value, key, where: _restoring(value, key, where),
         ),
         "inertia_kg_m2": _Key(
@@ -303,15 +304,23 @@ def _start_time(value: Any, key: str, where: str | None) -> str:
 
 
 def _restoring(value: Any, key: str, where: str | None) -> str:
-    """Check a ``restoring`` value: a registered restoring force's name."""
-    from bayestribo.model.restoring import get_restoring
+    """Check a ``restoring`` value: a registered restoring force's name, or ``"auto"``."""
+    from bayestribo.model.restoring import AUTO, get_restoring, restoring_choices
 
     if not isinstance(value, str):
-        raise RunFormatError(f"metadata {key!r}: expected a name, got {value!r}", where)
+        raise RunFormatError(
+            f"metadata {key!r}: expected one of {', '.join(restoring_choices())}, got {value!r}",
+            where,
+        )
+    if value == AUTO:
+        return AUTO
     try:
         return get_restoring(value).name
-    except ValueError as exc:
-        raise RunFormatError(f"metadata {key!r}: {exc}", where) from None
+    except ValueError:
+        raise RunFormatError(
+            f"metadata {key!r}: expected one of {', '.join(restoring_choices())}, got {value!r}",
+            where,
+        ) from None
 
 
 def _sensor_kind(value: Any, key: str, where: str | None) -> str:

@@ -132,10 +132,14 @@ def _bridgeable(run: Run, where: str | None) -> bool:
 
 def _check_restoring(run: Run, where: str | None) -> None:
     """A restoring force whose potential takes an angle (a pendulum's) needs the run in
-    radians: its potential at a swing of 2 in another unit means nothing."""
-    from bayestribo.model.restoring import get_restoring
+    radians: its potential at a swing of 2 in another unit means nothing (``"auto"``
+    chooses one the run's unit allows)."""
+    from bayestribo.model.restoring import AUTO, get_restoring
 
-    restoring = get_restoring(run.metadata.get("restoring"))
+    name = run.metadata.get("restoring")
+    if name == AUTO:
+        return
+    restoring = get_restoring(name)
     if restoring.angle and run.length_unit != "rad":
         raise _fail(
             f"metadata 'restoring' is {restoring.name!r}, whose potential takes the angle in "

@@ -30,6 +30,8 @@ from bayestribo.errors import RecordingError
 from bayestribo.signal.period import dominant_period, sample_step
 
 __all__ = [
+    "FREQUENCY_TREND_CHANGE",
+    "FREQUENCY_TREND_Z",
     "HYSTERESIS",
     "FrequencyTrend",
     "crossing_frequency",
@@ -37,6 +39,13 @@ __all__ = [
     "oscillation_frequency",
     "turning_point_trend",
 ]
+
+#: A half period changing along the decay by more than this fraction, and by more than
+#: FREQUENCY_TREND_Z standard errors, is beyond its noise (:attr:`FrequencyTrend.
+#: significant`): the linear law's Ω is constant.
+FREQUENCY_TREND_CHANGE = 2e-4
+
+FREQUENCY_TREND_Z = 4.0
 
 #: Swing between two counted crossings, as a fraction of the largest excursion.
 HYSTERESIS = 0.1
@@ -168,6 +177,13 @@ class FrequencyTrend:
     def to_dict(self) -> dict[str, float | int]:
         """JSON-ready values."""
         return {"change": self.change, "z": self.z, "n_half_cycles": self.n_half_cycles}
+
+    @property
+    def significant(self) -> bool:
+        """True when the change is beyond its noise: more than
+        :data:`FREQUENCY_TREND_CHANGE` and more than :data:`FREQUENCY_TREND_Z` standard
+        errors."""
+        return abs(self.change) > FREQUENCY_TREND_CHANGE and abs(self.z) > FREQUENCY_TREND_Z
 
 
 def frequency_trend(

@@ -8,7 +8,10 @@ when its force is first asked for (:func:`get_restoring`):
 
 * ``linear``: k x, V = y²/2 (the default);
 * ``pendulum``: m g L sin θ, V = 1 - cos θ, θ in radians;
-* ``duffing``: k(x + βx³), V = y²/2 + βy⁴/4, β measured from the half periods.
+* ``duffing``: k(x + βx³), V = y²/2 + βy⁴/4, β measured from the half periods;
+
+and ``auto`` (:data:`AUTO`) asks a fit to choose one of them from how the half period
+changes with the swing (:mod:`bayestribo.inference.restoring_choice`).
 
 A force with compiled kernels (``RestoringForce.kernels``: the pendulum, the Duffing
 spring) is taken by every dissipation law's model and by the record's energy
@@ -24,6 +27,7 @@ from __future__ import annotations
 from typing import Any
 
 from bayestribo.model.restoring.base import (
+    AUTO,
     BUILTIN_RESTORING,
     RestoringForce,
     RestoringInfo,
@@ -32,10 +36,12 @@ from bayestribo.model.restoring.base import (
     get_restoring,
     load_builtin_restoring,
     register_restoring,
+    restoring_choices,
     restoring_table,
 )
 
 __all__ = [
+    "AUTO",
     "BUILTIN_RESTORING",
     "RESTORING",
     "RestoringForce",
@@ -44,6 +50,7 @@ __all__ = [
     "available_restoring",
     "get_restoring",
     "register_restoring",
+    "restoring_choices",
     "restoring_table",
 ]
 

@@ -32,6 +32,7 @@ if TYPE_CHECKING:
     from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
+    "AUTO",
     "BUILTIN_RESTORING",
     "RESTORING",
     "RestoringForce",
@@ -40,8 +41,14 @@ __all__ = [
     "available_restoring",
     "get_restoring",
     "register_restoring",
+    "restoring_choices",
     "restoring_table",
 ]
+
+#: The name that asks a fit to choose the restoring force from the record
+#: (:mod:`bayestribo.inference.restoring_choice`): accepted wherever ``restoring`` is
+#: (the sidecar, ``--restoring``, ``FitSpec.restoring``), never a registered force.
+AUTO = "auto"
 
 
 @dataclass(frozen=True)
@@ -231,6 +238,8 @@ def register_restoring(force: RestoringForce, *, replace: bool = False) -> Resto
     ValueError
         When the name is taken, by a built-in force too (and ``replace`` is False).
     """
+    if force.name == AUTO:
+        raise ValueError(f"a restoring force cannot be named {AUTO!r}: it asks a fit to choose")
     if (force.name in RESTORING or force.name in _BUILTIN) and not replace:
         raise ValueError(f"a restoring force named {force.name!r} is already registered")
     RESTORING[force.name] = force
@@ -248,6 +257,12 @@ def restoring_table() -> dict[str, str]:
 def available_restoring() -> list[str]:
     """Names of the registered restoring forces."""
     return list(restoring_table())
+
+
+def restoring_choices() -> list[str]:
+    """What ``restoring`` accepts: every registered force's name, then ``"auto"``
+    (:data:`AUTO`)."""
+    return [*available_restoring(), AUTO]
 
 
 def load_builtin_restoring() -> dict[str, RestoringForce]:
@@ -268,6 +283,11 @@ def get_restoring(name: str | RestoringForce | None) -> RestoringForce:
     if isinstance(name, RestoringForce):
         return name
     key = "linear" if name is None else str(name)
+    if key == AUTO:
+        raise ValueError(
+            f"restoring force {AUTO!r} is chosen by a fit from how the half period changes "
+            "with the swing (bayestribo.inference.restoring_choice), not a force of its own"
+        )
     if key not in RESTORING and key in _BUILTIN:
         importlib.import_module(_BUILTIN[key].module)  # registers it
     if key not in RESTORING:
