@@ -465,6 +465,17 @@ class FitResult:
         return self._attr("channels_json", None)
 
     @property
+    def sensor(self) -> dict[str, Any] | None:
+        """The signal chain's gain as the fit drew it into the reported lengths
+        (:mod:`bayestribo.signal.sensor`): ``gain``, its relative sd ``gain_sd``,
+        whether it was ``stated``, the sensor's ``kind``, the ``filter``, the
+        output's ``description``, and ``variance_share``: for each quantity, the
+        fraction of its posterior variance the gain's draws make
+        (:func:`bayestribo.signal.sensor.gain_variance_share`; absent in fits made
+        before it was recorded). None for a fit that recorded no sensor."""
+        return self._attr("sensor_json", None)
+
+    @property
     def symbols(self) -> dict[str, str]:
         """The symbol of each of the law's parameters (``{"zeta": "ζ", ...}``); empty
         for a law this version does not register."""
