@@ -65,7 +65,12 @@ def motion(rig: Rig, x0: float, duration: float) -> tuple[list, float | None]:
         sign = -math.copysign(1.0, x)  # direction of the half cycle
 
         def rhs(t, y, sign=sign):
-            return [y[1], rig.accel(y[0], y[1] if y[1] != 0.0 else sign * 1e-300)]
+            # the friction opposes the half cycle's motion up to its turning point and
+            # a step beyond it: a friction that flipped with the velocity's sign there
+            # held a turn inside the sticking zone at v = 0, which the solver chattered
+            # about (steps of 1e-12 s, the event never found)
+            v = y[1] if y[1] * sign > 0.0 else sign * 1e-300
+            return [y[1], rig.accel(y[0], v)]
 
         def turn(t, y):
             return y[1]
