@@ -40,6 +40,11 @@ z = (posterior mean − truth) / posterior sd.
 Run::
 
     nice -n 10 python benchmarks/acceleration.py --runs 20 --workers 2
+    # the sensor's gain: exact and stated so, and drawn at 1 % with none stated
+    python benchmarks/acceleration.py --runs 96 --cases coulomb --gain-uncertainty 0 \
+        --output acceleration_gain_stated_zero
+    python benchmarks/acceleration.py --runs 96 --cases coulomb --gain-error 0.01 \
+        --output acceleration_gain_error
 
 Runs are appended to ``benchmarks/results/acceleration_runs.jsonl`` (``--resume``);
 writes ``benchmarks/results/acceleration.json`` (``--output NAME``: ``NAME_runs.jsonl``
