@@ -9,7 +9,8 @@ half cycle, each ending on the event ẋ = 0; at a turning point the contact sti
 |k x| <= μ_s N. The record is the acceleration a = ẍ as an accelerometer with an
 anti-alias filter samples it: the mean of ẍ over each sample interval,
 (ẋ(t + Δt/2) − ẋ(t − Δt/2))/Δt (the acceleration jumps at the release, at each turn
-of the friction and at the stop), plus a constant bias and white noise, with rest
+of the friction and at the stop), times the sensor's gain (its sensitivity's error,
+1 for an exact sensor), plus a constant bias and white noise, with rest
 before the release and after the stop (a drag-only motion, which never stops, is
 recorded until it has faded into the noise).
 """
@@ -64,7 +65,12 @@ def motion(rig: Rig, x0: float, duration: float) -> tuple[list, float | None]:
         sign = -math.copysign(1.0, x)  # direction of the half cycle
 
         def rhs(t, y, sign=sign):
-            return [y[1], rig.accel(y[0], y[1] if y[1] != 0.0 else sign * 1e-300)]
+            # the friction opposes the half cycle's motion up to its turning point and
+            # a step beyond it: a friction that flipped with the velocity's sign there
+            # held a turn inside the sticking zone at v = 0, which the solver chattered
+            # about (steps of 1e-12 s, the event never found)
+            v = y[1] if y[1] * sign > 0.0 else sign * 1e-300
+            return [y[1], rig.accel(y[0], v)]
 
         def turn(t, y):
             return y[1]
@@ -100,8 +106,13 @@ def record(
     noise: float = 0.02,
     bias: float = 0.2,
     seed: int = 0,
+    gain: float = 1.0,
 ) -> dict:
-    """Time [s], acceleration with bias and noise [m/s²], and the truth."""
+    """Time [s], acceleration with gain, bias and noise [m/s²], and the truth.
+
+    ``gain`` multiplies the acceleration the sensor reads (a sensitivity off by
+    ``gain - 1``): every length integrated from the record is ``gain`` times the motion's.
+    """
     pieces, stop = motion(rig, x0, duration)
     # a motion that does not stop (drag only) is recorded until ``duration``: it fades
     # into the noise there, and is never cut short by a rest it does not reach
@@ -124,5 +135,5 @@ def record(
     dt = 1.0 / rate
     a = (state(tau + 0.5 * dt)[1] - state(tau - 0.5 * dt)[1]) / dt
     rng = np.random.default_rng(seed)
-    measured = a + bias + noise * rng.standard_normal(t.size)
+    measured = gain * a + bias + noise * rng.standard_normal(t.size)
     return {"time": t, "acceleration": measured, "x": x, "v": v, "a": a, "stop": stop}

@@ -23,6 +23,15 @@ time) and read by :func:`bayestribo.read_run`, which integrates it
   no contact; ``fit(run, law="auto")``, the drag's coefficient c₂ = q m [kg/m] checked
   when the law chosen holds it (the law chosen is reported).
 
+The sensor's gain: the records are exact (gain 1) and their sidecars state no
+``gain_uncertainty``, so each fit draws the default for a sensor of unstated kind (1 %,
+:mod:`bayestribo.signal.sensor`) into μ_k, whose posterior sd it makes most of (its
+share of μ_k's variance is recorded per run). ``--gain-error SD`` multiplies each
+record's acceleration by a gain 1 + ε, ε ~ N(0, SD²) drawn per run (its own random
+stream: the records are otherwise the same), the error a real sensor's calibration
+has; ``--gain-uncertainty U`` states U in the sidecar (``0``: the data's part of the
+intervals alone).
+
 A parameter is *covered* when the truth is in the 95 % interval of a fit that raised
 no :class:`~bayestribo.errors.MisfitWarning` or ConvergenceWarning; *flagged* when the
 fit warned (whatever its interval); *silently wrong* when it did not warn and missed.
@@ -31,9 +40,15 @@ z = (posterior mean − truth) / posterior sd.
 Run::
 
     nice -n 10 python benchmarks/acceleration.py --runs 20 --workers 2
+    # the sensor's gain: exact and stated so, and drawn at 1 % with none stated
+    python benchmarks/acceleration.py --runs 96 --cases coulomb --gain-uncertainty 0 \
+        --output acceleration_gain_stated_zero
+    python benchmarks/acceleration.py --runs 96 --cases coulomb --gain-error 0.01 \
+        --output acceleration_gain_error
 
 Runs are appended to ``benchmarks/results/acceleration_runs.jsonl`` (``--resume``);
-writes ``benchmarks/results/acceleration.json``.
+writes ``benchmarks/results/acceleration.json`` (``--output NAME``: ``NAME_runs.jsonl``
+and ``NAME.json``).
 """
 
 from __future__ import annotations
@@ -55,8 +70,6 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _accel_sim as sim
 
 RESULTS = Path(__file__).resolve().parent / "results"
-RUNS = RESULTS / "acceleration_runs.jsonl"
-SUMMARY = RESULTS / "acceleration.json"
 CASES = ("coulomb", "viscous", "quadratic")
 FLAGS = ("MisfitWarning", "ConvergenceWarning")
 
@@ -91,17 +104,35 @@ def draw(case: str, seed: int) -> tuple[sim.Rig, dict, dict]:
     return rig, settings, truth
 
 
-def one(case: str, seed: int) -> dict:
-    """Simulate, write, read and fit one run; its record."""
+def sensor_gain(case: str, seed: int, sd: float) -> float:
+    """The sensor's gain 1 + ε of run ``seed`` of ``case``, ε ~ N(0, sd²) (1 for sd 0).
+
+    Its own random stream: the run's motion, noise and bias are those of ``draw``."""
+    if sd == 0.0:
+        return 1.0
+    return 1.0 + sd * float(np.random.default_rng([CASES.index(case), seed, 1]).normal())
+
+
+def one(
+    case: str, seed: int, gain_error: float = 0.0, gain_uncertainty: float | None = None
+) -> dict:
+    """Simulate, write, read and fit one run; its record.
+
+    ``gain_error``: relative sd of the sensor's gain drawn into the record;
+    ``gain_uncertainty``: stated in the sidecar (None: not stated)."""
     import bayestribo
 
     rig, settings, truth = draw(case, seed)
     x0 = settings.pop("x0")
-    rec = sim.record(rig, x0, **settings)
+    gain = sensor_gain(case, seed, gain_error)
+    rec = sim.record(rig, x0, gain=gain, **settings)
     load = rig.load if case == "coulomb" else 0.0
     meta = {"load_N": load, "mass_kg": rig.mass, "natural_frequency_Hz": rig.f_Hz}
+    if gain_uncertainty is not None:
+        meta["gain_uncertainty"] = gain_uncertainty
     out = {"case": case, "seed": seed, "truth": truth, "noise": settings["noise"]}
     out["bias"] = settings["bias"]
+    out["gain"] = gain
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "accel.csv"
         rows = np.column_stack([rec["time"], rec["acceleration"]])
@@ -120,6 +151,9 @@ def one(case: str, seed: int) -> dict:
     out["bias_read"] = run.metadata["acceleration"]["bias"]
     out["flags"] = sorted({type(w.message).__name__ for w in caught} & set(FLAGS))
     out["law"] = result.law
+    sensor = result.sensor or {}
+    out["gain_sd"] = sensor.get("gain_sd")
+    out["gain_variance_share"] = sensor.get("variance_share")
     diagnostics = result.diagnostics
     if diagnostics.get("chi2_map") is not None and diagnostics.get("n_increments"):
         out["chi2_per_n"] = diagnostics["chi2_map"] / diagnostics["n_increments"]
@@ -177,6 +211,9 @@ def summarise(records: list[dict]) -> dict:
         chi2 = [r["chi2_per_n"] for r in mine if r.get("chi2_per_n") is not None]
         entry["chi2_per_n_median"] = float(np.median(chi2)) if chi2 else None
         entry["chi2_per_n_range"] = [float(min(chi2)), float(max(chi2))] if chi2 else None
+        shares = [(r.get("gain_variance_share") or {}).get("mu_k") for r in mine]
+        shares = [v for v in shares if v is not None]
+        entry["mu_k_gain_variance_share_median"] = float(np.median(shares)) if shares else None
         cpu = [r["cpu_s"] for r in mine if "cpu_s" in r]
         entry["median_cpu_s"] = float(np.median(cpu)) if cpu else None
         out[case] = entry
@@ -190,20 +227,52 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--cases", nargs="+", default=list(CASES), choices=CASES)
     parser.add_argument("--resume", action="store_true")
     parser.add_argument("--report-only", action="store_true")
+    parser.add_argument(
+        "--gain-error",
+        type=float,
+        default=0.0,
+        metavar="SD",
+        help="relative sd of the sensor's gain drawn into each record (default 0: exact)",
+    )
+    parser.add_argument(
+        "--gain-uncertainty",
+        type=float,
+        default=None,
+        metavar="U",
+        help="gain_uncertainty stated in each sidecar (default: none stated, the "
+        "package's default for a sensor of unstated kind)",
+    )
+    parser.add_argument(
+        "--output",
+        default="acceleration",
+        metavar="NAME",
+        help="results/NAME.json and results/NAME_runs.jsonl (default: acceleration)",
+    )
     args = parser.parse_args(argv)
+    if not (math.isfinite(args.gain_error) and 0.0 <= args.gain_error < 0.3):
+        parser.error(f"--gain-error: expected a relative sd in [0, 0.3), got {args.gain_error}")
+    if args.gain_uncertainty is not None and not 0.0 <= args.gain_uncertainty <= 0.5:
+        parser.error(
+            f"--gain-uncertainty: expected a value in [0, 0.5], got {args.gain_uncertainty}"
+        )
+    runs_path = RESULTS / f"{args.output}_runs.jsonl"
+    summary_path = RESULTS / f"{args.output}.json"
     RESULTS.mkdir(exist_ok=True)
     done: list[dict] = []
-    if (args.resume or args.report_only) and RUNS.exists():
-        done = [json.loads(line) for line in RUNS.read_text().splitlines() if line.strip()]
-    elif RUNS.exists():
-        RUNS.unlink()
+    if (args.resume or args.report_only) and runs_path.exists():
+        done = [json.loads(line) for line in runs_path.read_text().splitlines() if line.strip()]
+    elif runs_path.exists():
+        runs_path.unlink()
     if not args.report_only:
         have = {(r["case"], r["seed"]) for r in done}
         todo = [(c, s) for c in args.cases for s in range(args.runs) if (c, s) not in have]
         with ProcessPoolExecutor(args.workers) as pool:
-            for record in pool.map(one, *zip(*todo, strict=True)) if todo else []:
+            cases, seeds = zip(*todo, strict=True) if todo else ((), ())
+            n = len(cases)
+            options = ([args.gain_error] * n, [args.gain_uncertainty] * n)
+            for record in pool.map(one, cases, seeds, *options) if todo else []:
                 done.append(record)
-                with RUNS.open("a") as handle:
+                with runs_path.open("a") as handle:
                     handle.write(json.dumps(record) + "\n")
                 print(json.dumps(record)[:300], flush=True)
     import subprocess
@@ -211,8 +280,13 @@ def main(argv: list[str] | None = None) -> int:
     commit = subprocess.run(
         ["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=RESULTS
     ).stdout.strip()
-    summary = {"commit": commit, "cases": summarise(done)}
-    SUMMARY.write_text(json.dumps(summary, indent=2) + "\n")
+    summary = {
+        "commit": commit,
+        "gain_error": args.gain_error,
+        "gain_uncertainty": args.gain_uncertainty,
+        "cases": summarise(done),
+    }
+    summary_path.write_text(json.dumps(summary, indent=2) + "\n")
     print(json.dumps(summary, indent=2))
     return 0
 

@@ -26,6 +26,7 @@ from bayestribo.signal.sensor import (
     amplitude_gain_sd,
     check_filter,
     filter_gain,
+    gain_variance_share,
     sensor_calibration,
 )
 
@@ -223,3 +224,53 @@ def test_a_lab_registers_its_own_sensor_kind():
         sensor_kinds.SensorKind("wide", "a wide one", 0.9, "none")
     with pytest.raises(ValueError, match="name"):
         sensor_kinds.SensorKind("Bad Name", "a bad one", 0.01, "none")
+
+
+def test_the_gains_share_of_a_variance_is_its_part_of_the_quantitys():
+    rng = np.random.default_rng(5)
+    n, sd_g, rel_data = 100_000, 0.01, 0.005
+    gain = 1.0 + sd_g * rng.standard_normal(n)
+    data = 0.02 * (1.0 + rel_data * rng.standard_normal(n))  # the posterior's own spread
+    shares = gain_variance_share(
+        {"mu_k": data / gain, "zeta": 0.004 + 1e-5 * rng.standard_normal(n)}, gain
+    )
+    # μ_k = f/g: to first order the variance is f's plus the gain's, (0.01)² against (0.005)²
+    assert shares["mu_k"] == pytest.approx(sd_g**2 / (sd_g**2 + rel_data**2), abs=0.01)
+    assert shares["zeta"] < 1e-3  # not a length: the gain has no part in it
+
+
+def test_the_gains_share_leaves_out_what_it_cannot_measure_and_refuses_a_mismatch():
+    gain = np.linspace(0.99, 1.01, 50)
+    assert gain_variance_share({"mu_k": 1.0 / gain}, np.ones(50)) == {}  # gain exact
+    values = {"fixed": np.full(50, 3.0), "broken": np.where(gain > 1.0, np.nan, 1.0)}
+    assert gain_variance_share(values, gain) == {}
+    with pytest.raises(ValueError, match=r"quantities\['mu_k'\]: expected 50 draws"):
+        gain_variance_share({"mu_k": np.ones(49)}, gain)
+
+
+@pytest.fixture(scope="module")
+def gain_fits():
+    """One short simulated run fitted with its gain exact and with a gain uncertainty as
+    large as μ_k's own relative sd (the same seed: the same draws of the posterior)."""
+    from bayestribo.synthetic import Sensor
+    from bayestribo.synthetic.recording import simulate
+
+    run = simulate(sensor=Sensor(sample_rate_Hz=2000.0), seed=11)
+    exact = fit(run.with_metadata(gain_uncertainty=0.0), seed=3)
+    mu_k = exact.samples("mu_k")
+    uncertain = run.with_metadata(gain_uncertainty=float(np.std(mu_k) / np.mean(mu_k)))
+    return exact, fit(uncertain, seed=3)
+
+
+def test_a_fit_records_and_says_how_much_of_mu_ks_variance_the_gain_makes(gain_fits):
+    exact, uncertain = gain_fits
+    added = 1.0 - np.var(exact.samples("mu_k")) / np.var(uncertain.samples("mu_k"))
+    share = uncertain.sensor["variance_share"]
+    assert share["mu_k"] == pytest.approx(added, abs=0.03)
+    assert share["zeta"] < 0.05
+    line = next(s for s in uncertain.to_text().splitlines() if s.startswith("sensor"))
+    assert f"the gain makes {100 * share['mu_k']:.0f} % of μ_k's" in line
+    assert "ζ's" not in line  # under a tenth: not named
+    assert exact.sensor["variance_share"] == {}
+    exact_line = next(s for s in exact.to_text().splitlines() if s.startswith("sensor"))
+    assert "the gain makes" not in exact_line

@@ -56,6 +56,10 @@ __all__ = ["UNITS", "FitResult", "plain_data"]
 #: Backend of the fit files (:meth:`FitResult.save`, :meth:`FitResult.load`).
 NETCDF_ENGINE = "netcdf4"
 
+#: The output names the sensor's gain's share of a quantity's posterior variance from
+#: this fraction up (:func:`bayestribo.signal.sensor.gain_variance_share`).
+GAIN_SHARE_SHOWN = 0.1
+
 #: Quantities reported by :meth:`FitResult.summary` and the command line, in order.
 REPORTED = (
     "zeta",
@@ -474,6 +478,31 @@ class FitResult:
         return self._attr("channels_json", None)
 
     @property
+    def sensor(self) -> dict[str, Any] | None:
+        """The signal chain's gain as the fit drew it into the reported lengths
+        (:mod:`bayestribo.signal.sensor`): ``gain``, its relative sd ``gain_sd``,
+        whether it was ``stated``, the sensor's ``kind``, the ``filter``, the
+        output's ``description``, and ``variance_share``: for each quantity, the
+        fraction of its posterior variance the gain's draws make
+        (:func:`bayestribo.signal.sensor.gain_variance_share`; absent in fits made
+        before it was recorded). None for a fit that recorded no sensor."""
+        return self._attr("sensor_json", None)
+
+    def _gain_share_text(self, sensor: dict[str, Any]) -> str:
+        """Where the gain makes a tenth or more of a reported quantity's posterior
+        variance, how much (``"; of the posterior variance, the gain makes 93 % of
+        μ_k's"``)."""
+        shares = sensor.get("variance_share") or {}
+        parts = [
+            f"{100 * shares[name]:.0f} % of {quantity.symbol}'s"
+            for name, quantity in self.quantity_info().items()
+            if shares.get(name, 0.0) >= GAIN_SHARE_SHOWN
+        ]
+        if not parts:
+            return ""
+        return f"; of the posterior variance, the gain makes {', '.join(parts)}"
+
+    @property
     def symbols(self) -> dict[str, str]:
         """The symbol of each of the law's parameters (``{"zeta": "ζ", ...}``); empty
         for a law this version does not register."""
@@ -585,7 +614,7 @@ class FitResult:
             )
         sensor = self._attr("sensor_json", None)
         if sensor:
-            lines.append(f"sensor    {sensor['description']}")
+            lines.append(f"sensor    {sensor['description']}{self._gain_share_text(sensor)}")
         integrated = self.metadata.get("acceleration")
         if integrated:
             from bayestribo.io.acceleration import describe

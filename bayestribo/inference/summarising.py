@@ -40,7 +40,7 @@ from bayestribo.inference.sensitivity import prior_sensitivity
 from bayestribo.inference.types import PreparedRun, Sampled
 from bayestribo.model.restoring import get_restoring
 from bayestribo.signal.decay import EnergyDecay
-from bayestribo.signal.sensor import sensor_calibration
+from bayestribo.signal.sensor import gain_variance_share, sensor_calibration
 
 __all__ = ["Summary", "summarise", "summary"]
 
@@ -365,7 +365,11 @@ def summary(
         diagnostics=plain_data(diagnostics),
         frequency_trend=None if trend is None else trend.to_dict(),
         frequency_nuisance_sd=frequency_sd,
-        sensor={**dataclasses.asdict(sensor), "description": sensor.describe()},
+        sensor={
+            **dataclasses.asdict(sensor),
+            "description": sensor.describe(),
+            "variance_share": gain_variance_share(derived, gain),
+        },
         law_frequency_change=law_change,
         prior_sensitivity=plain_data(prior_sensitivity(flat, posterior.priors)),
     )
