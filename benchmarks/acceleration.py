@@ -24,9 +24,12 @@ time) and read by :func:`bayestribo.read_run`, which integrates it
   when the law chosen holds it (the law chosen is reported).
 
 The sensor's gain: the records are exact (gain 1) and their sidecars state no
-``gain_uncertainty``, so each fit draws the default for a sensor of unstated kind (1 %,
-:mod:`bayestribo.signal.sensor`) into μ_k, whose posterior sd it makes most of (its
-share of μ_k's variance is recorded per run). ``--gain-error SD`` multiplies each
+``gain_uncertainty``, so each fit draws the default for an accelerometer (5 %, implied
+by the acceleration the run is read from; 1 %, a sensor of unstated kind's, before
+commit "An acceleration implies an accelerometer's gain uncertainty", which the
+``acceleration_gain_*`` results below predate: ``--gain-uncertainty 0.01`` gives their
+setting today; :mod:`bayestribo.signal.sensor`) into μ_k, whose posterior sd it makes
+most of (its share of μ_k's variance is recorded per run). ``--gain-error SD`` multiplies each
 record's acceleration by a gain 1 + ε, ε ~ N(0, SD²) drawn per run (its own random
 stream: the records are otherwise the same), the error a real sensor's calibration
 has; ``--gain-uncertainty U`` states U in the sidecar (``0``: the data's part of the

@@ -274,3 +274,24 @@ def test_a_fit_records_and_says_how_much_of_mu_ks_variance_the_gain_makes(gain_f
     assert exact.sensor["variance_share"] == {}
     exact_line = next(s for s in exact.to_text().splitlines() if s.startswith("sensor"))
     assert "the gain makes" not in exact_line
+
+
+def test_a_run_integrated_from_an_acceleration_takes_an_accelerometers_gain() -> None:
+    """The kind is known from the column: an accelerometer's 5 %, said as such; a stated
+    kind or uncertainty wins."""
+    from bayestribo.signal.sensor import sensor_calibration
+    from bayestribo.signal.sensor_kinds import get_sensor_kind
+
+    integrated = {"acceleration": {"method": "any record of the integration"}}
+    implied = sensor_calibration(integrated, 20.0, displacement=True, velocity=True)
+    assert implied.kind is get_sensor_kind("accelerometer") and not implied.stated
+    assert implied.gain_sd == pytest.approx(get_sensor_kind("accelerometer").gain_uncertainty)
+    assert "the run being read from an acceleration" in implied.describe()
+    phone = sensor_calibration({**integrated, "sensor_kind": "smartphone"}, 20.0)
+    assert phone.gain_sd == pytest.approx(get_sensor_kind("smartphone").gain_uncertainty)
+    assert "read from" not in phone.describe()
+    stated = sensor_calibration({**integrated, "gain_uncertainty": 0.002}, 20.0)
+    assert stated.stated and stated.gain_sd == pytest.approx(0.002)
+    assert "read from" not in stated.describe()
+    plain = sensor_calibration({}, 20.0)
+    assert "a sensor of unstated kind" in plain.describe()

@@ -11,8 +11,9 @@ intervals:
 * the gain's relative standard uncertainty σ_g (the sidecar's ``gain_uncertainty``,
   per channel ``displacement_gain_uncertainty`` and ``velocity_gain_uncertainty``;
   when not stated, the typical uncertainty of the sidecar's ``sensor_kind``
-  (:mod:`bayestribo.signal.sensor_kinds`), else :data:`DEFAULT_GAIN_UNCERTAINTY`, and
-  the output says which) is drawn
+  (:mod:`bayestribo.signal.sensor_kinds`), or of an accelerometer for a run integrated
+  from an acceleration, else :data:`DEFAULT_GAIN_UNCERTAINTY`, and the output says
+  which) is drawn
   per posterior draw into every length the fit reports
   (:func:`bayestribo.inference.assemble.derived_quantities`);
 * a known filter (the sidecar's ``filter``: kind, order, cutoff) multiplies the
@@ -36,11 +37,13 @@ How much of a reported interval is the gain's: the gain is drawn independently o
 posterior's draws, so the fraction of a quantity's posterior variance its draws
 explain (:func:`gain_variance_share`) is the gain's part of that quantity's interval.
 On a good record it is most of μ_k's: on 96 simulated accelerometer records of dry
-friction with the default 1 %, a median 89 % (29-99 %) of μ_k's variance, the data's
-own part a relative sd of 0.35 % (0.12-1.5 %); their intervals cover the truth
-whether the simulated sensor's gain is exact and stated so or drawn at 1 % and not
-stated (z sd 1.05 and 1.09), and an exact gain left at the default gives them z sd
-0.39 (``benchmarks/results/acceleration_gain_*.json``).
+friction with a gain uncertainty of 1 % (the unstated kind's default, which these
+records took before an acceleration implied an accelerometer's 5 %), a median 89 %
+(29-99 %) of μ_k's variance, the data's own part a relative sd of 0.35 %
+(0.12-1.5 %); their intervals cover the truth whether the simulated sensor's gain is
+exact and stated so or drawn at 1 % and fitted with 1 % (z sd 1.05 and 1.09), and an
+exact gain fitted with 1 % gives them z sd 0.39
+(``benchmarks/results/acceleration_gain_*.json``).
 """
 
 from __future__ import annotations
@@ -251,12 +254,15 @@ class SensorCalibration:
     filter : dict or None
         The filter, as the sidecar gives it.
     kind : SensorKind
-        The sensor's kind (the sidecar's ``sensor_kind``; :data:`~bayestribo.signal.
-        sensor_kinds.UNKNOWN` where it names none), whose gain uncertainty is the
-        default.
+        The sensor's kind (the sidecar's ``sensor_kind``; an accelerometer for a run
+        integrated from an acceleration that names none; :data:`~bayestribo.signal.
+        sensor_kinds.UNKNOWN` otherwise), whose gain uncertainty is the default.
     undone : bool
         The filter was undone on the channels before the analysis
         (:func:`undo_first_order`; ``gain`` is then 1).
+    implied_by : str or None
+        What the kind was taken from where the sidecar names none (``"an
+        acceleration"``), for the output; None where it is stated or unknown.
     """
 
     gain: float = 1.0
@@ -265,6 +271,7 @@ class SensorCalibration:
     filter: dict[str, Any] | None = None
     kind: SensorKind = UNKNOWN
     undone: bool = False
+    implied_by: str | None = None
 
     def draws(self, rng: np.random.Generator, size: int) -> np.ndarray:
         """Draws of the chain's gain: ``gain (1 + ε)``, ε ~ N(0, gain_sd²) truncated to
@@ -287,6 +294,12 @@ class SensorCalibration:
             text += (
                 " (the default for a sensor of unstated kind: state yours as "
                 "'gain_uncertainty' in the sidecar, or the sensor as 'sensor_kind')"
+            )
+        elif self.implied_by is not None:
+            text += (
+                f" (the default for {self.kind.title}, the run being read from "
+                f"{self.implied_by}: {self.kind.basis}; state yours as 'gain_uncertainty' in "
+                "the sidecar, or the sensor as 'sensor_kind')"
             )
         else:
             text += (
@@ -331,7 +344,11 @@ def sensor_calibration(
     -------
     SensorCalibration
     """
-    kind = get_sensor_kind(metadata.get("sensor_kind"))
+    name, implied_by = metadata.get("sensor_kind"), None
+    if name is None and metadata.get("acceleration") is not None:
+        # the run was integrated from an acceleration: its sensor is an accelerometer
+        name, implied_by = "accelerometer", "an acceleration"
+    kind = get_sensor_kind(name)
     both = metadata.get("gain_uncertainty")
     stated = both is not None
     sds: dict[str, float | None] = {}
@@ -359,6 +376,7 @@ def sensor_calibration(
         filter=None if spec is None else check_filter(spec),
         kind=kind,
         undone=bool(filter_undone and spec is not None),
+        implied_by=None if stated else implied_by,
     )
 
 
