@@ -9,10 +9,16 @@ point, the first one inside the static-friction band (Eq. 8,
 that :func:`bayestribo.signal.decay.energy_decay` detected (start of the rest tail, known
 to about two sample periods, which widen the predicted interval). Times
 are in seconds after the start of the analysed decay (its first turning point).
+
+On a nonlinear restoring force (a decay whose ``restoring`` is set) the exact model is
+the law's motion on that force (:func:`bayestribo.adequacy.restoring.chains`: the
+first turning point inside |V'(Y)| <= μ_s); Eq. 38 is the linear spring's averaged
+motion and has no counterpart there: it is not evaluated, and the statement says so.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -20,6 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.adequacy.draws import ParameterDraws
+from bayestribo.adequacy.restoring import chains, force_text
 from bayestribo.signal.decay import EnergyDecay
 from bayestribo.summary import ParameterSummary, check_prob, interval_text
 
@@ -55,6 +62,9 @@ class ExtinctionCheck:
     resolution : float
         Time resolution of the detected end [s]: two sample periods (the end is the
         first sample of the rest tail); the prediction interval is widened by it.
+    averaged_note : str
+        Why Eq. 38 was not evaluated (a nonlinear restoring force: ``averaged`` is then
+        NaN); empty when it was.
     """
 
     measured: float | None
@@ -63,6 +73,7 @@ class ExtinctionCheck:
     exact: NDArray
     label: str
     resolution: float = 0.0
+    averaged_note: str = ""
 
     def quantile_of_measured(self, which: str = "exact") -> float | None:
         """Fraction of predicted durations below the measured one (None if not measured)."""
@@ -98,7 +109,8 @@ class ExtinctionCheck:
             lo, hi = s["interval"]
             return f"{interval_text(s['median'], lo, hi)} s (median [95 %])"
 
-        pred = f"predicted end of motion: exact model {fmt(ex)}, averaged Eq. 38 {fmt(av)}"
+        averaged = self.averaged_note or f"averaged Eq. 38 {fmt(av)}"
+        pred = f"predicted end of motion: exact model {fmt(ex)}, {averaged}"
         if self.measured is None:
             return (
                 f"{pred}; the record ends at {self.record_end:.4g} s while still moving "
@@ -125,15 +137,19 @@ class ExtinctionCheck:
         """
         check_prob(prob)
         out = {}
-        for name, values in (("exact", self.exact), ("averaged", self.averaged)):
+        pairs = [("exact", self.exact), ("averaged", self.averaged)]
+        if self.averaged_note:
+            pairs = pairs[:1]
+        for name, values in pairs:
             finite = values[np.isfinite(values)]
             if finite.size:
                 out[name] = ParameterSummary.from_samples(finite, prob)
         return out
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready mapping."""
-        return {
+        """JSON-ready mapping (``averaged_note`` only where Eq. 38 was not evaluated, its
+        entries then None)."""
+        out = {
             "measured_s": self.measured,
             "record_end_s": self.record_end,
             "exact": _summary(self.exact),
@@ -146,6 +162,14 @@ class ExtinctionCheck:
             "draws": self.label,
             "statement": self.statement,
         }
+        if self.averaged_note:
+            out.update(
+                averaged=None,
+                quantile_of_measured_averaged=None,
+                consistent_averaged=None,
+                averaged_note=self.averaged_note,
+            )
+        return out
 
 
 def extinction_check(decay: EnergyDecay, draws: ParameterDraws) -> ExtinctionCheck:
@@ -165,9 +189,18 @@ def extinction_check(decay: EnergyDecay, draws: ParameterDraws) -> ExtinctionChe
     from bayestribo.model import extinction_time, stop_time
 
     omega = decay.scaling.omega
-    tf = np.asarray(extinction_time(draws.y0, draws.zeta, draws.mu), dtype=float)
-    ts = np.asarray(stop_time(draws.y0, draws.zeta, draws.mu, draws.mu_s), dtype=float)
     measured = decay.tau_end / omega if decay.motion_ended else None
+    note = ""
+    if decay.restoring is None:
+        tf = np.asarray(extinction_time(draws.y0, draws.zeta, draws.mu), dtype=float)
+        ts = np.asarray(stop_time(draws.y0, draws.zeta, draws.mu, draws.mu_s), dtype=float)
+    else:
+        ts = _restoring_stop(decay, draws)
+        tf = np.full(ts.shape, np.nan)
+        note = (
+            f"averaged Eq. 38 not evaluated (the linear spring's averaged motion: it has "
+            f"no form on {force_text(decay.restoring)})"
+        )
     return ExtinctionCheck(
         measured=None if measured is None else float(measured),
         record_end=float(decay.tau_end / omega),
@@ -175,4 +208,21 @@ def extinction_check(decay: EnergyDecay, draws: ParameterDraws) -> ExtinctionChe
         exact=ts / omega,
         label=draws.label,
         resolution=2.0 * float(np.median(np.diff(decay.t))),
+        averaged_note=note,
     )
+
+
+#: How far past the record [record lengths] a draw's motion is followed to its stop.
+RECORDS_FOLLOWED = 20.0
+
+
+def _restoring_stop(decay: EnergyDecay, draws: ParameterDraws) -> NDArray:
+    """Each draw's stop time [-] on the decay's nonlinear restoring force: its last
+    turning point when that is inside the static friction band, ``inf`` when the
+    motion goes on past :data:`RECORDS_FOLLOWED` record lengths."""
+    sign0 = 1.0 if decay.peaks.value[0] >= 0.0 else -1.0
+    span = float(decay.tau[-1] - decay.tau[0])
+    out = []
+    for tn, _, stopped in chains(decay.restoring, draws, sign0, RECORDS_FOLLOWED * span, 1_000_000):
+        out.append(float(tn[-1]) if stopped else math.inf)
+    return np.array(out)
