@@ -34,6 +34,7 @@ __all__ = [
     "chosen_run",
     "force_text",
     "hermite",
+    "law_frame_frequency",
     "rest_grid",
     "restoring_decay",
     "segment_law",
@@ -99,13 +100,66 @@ def nonlinear(run: Any) -> bool:
     return get_restoring(name).kernels is not None
 
 
-def restoring_decay(run: Any, *, skip_oscillations: int = 1) -> EnergyDecay:
+def restoring_decay(run: Any, *, skip_oscillations: int = 1, seed: int = 0) -> EnergyDecay:
     """The decay of a run on its nonlinear restoring force, as the fit prepares it (time
     in the small swings' ω₀, the energy ½y'² + V(y), a Duffing spring's β measured from
-    the record); :attr:`EnergyDecay.restoring` holds the force."""
-    from bayestribo.inference.preparation import prepare
+    the record), then again in the frame of the law's own turning times
+    (:func:`law_frame_frequency`), as the fit samples it; :attr:`EnergyDecay.restoring`
+    holds the force.
 
-    return prepare(run, skip_oscillations=skip_oscillations).decay
+    The small swings' ω₀ is measured from the turning times with the undamped half
+    periods at each swing, which friction and damping change a little on a nonlinear
+    force (about 0.3 % over a pendulum's decay from 75° with a friction angle of
+    0.012 rad): left as it is, the predicted end of motion, a sum of every half period,
+    is off by as much, far beyond its interval.
+    """
+    from bayestribo.inference.preparation import prepare, reframe
+
+    prepared = prepare(run, skip_oscillations=skip_oscillations)
+    frequency = law_frame_frequency(prepared.decay, seed=seed)
+    return prepared.decay if frequency is None else reframe(prepared, frequency).decay
+
+
+def law_frame_frequency(decay: EnergyDecay, *, seed: int = 0) -> float | None:
+    """The natural frequency [Hz] at which the turning times of the law of constant ζ
+    and friction on the decay's restoring force, fitted to the whole decay
+    (:func:`~bayestribo.adequacy.segments.whole_decay_fit`), keep step with the
+    record's: the slope of the record's turning times against the law's, weighted by
+    |Y_n| (as :func:`bayestribo.inference.preparation.law_frequency` finds it for a
+    fit). None when fewer than 90 % of them (and 4) have a turning point of the law
+    within a quarter period.
+    """
+    from bayestribo.adequacy.segments import whole_decay_fit
+
+    times = decay.turning_times
+    if decay.restoring is None or times is None or np.size(times) < 4:
+        return None
+    whole = whole_decay_fit(decay, seed=seed)
+    sign = 1.0 if decay.y[0] >= 0.0 else -1.0
+    tau_law, _ = segment_law(decay.restoring).turning_points(
+        _values(whole.zeta, whole.mu, whole.mu),
+        sign * whole.y0,
+        float(decay.yp[0]),
+        tau_max=float(decay.tau[-1] - decay.tau[0]) + 2.0 * math.pi,
+    )
+    if tau_law.size < 3:
+        return None
+    tau_meas = decay.scaling.omega * (np.asarray(times, dtype=float) - decay.start_time)
+    at = np.clip(np.searchsorted(tau_law, tau_meas), 1, tau_law.size - 1)
+    nearer = np.where(
+        np.abs(tau_law[at - 1] - tau_meas) <= np.abs(tau_law[at] - tau_meas), at - 1, at
+    )
+    close = np.abs(tau_law[nearer] - tau_meas) <= 0.25 * math.pi
+    nearer = nearer[close]
+    if close.sum() < max(4, 0.9 * close.size) or np.unique(nearer).size != nearer.size:
+        return None
+    weight = np.abs(np.asarray(decay.peaks.value, dtype=float))[close]
+    if weight.size != nearer.size or not np.any(weight > 0.0):
+        weight = np.ones(nearer.size)
+    slope = float(np.polyfit(tau_law[nearer], tau_meas[close], 1, w=np.sqrt(weight))[0])
+    if not (math.isfinite(slope) and slope > 0.0):
+        return None
+    return decay.scaling.omega / slope / (2.0 * math.pi)
 
 
 def force_text(kernel: Any) -> str:
