@@ -322,7 +322,7 @@ def check_adequacy(
         draws = draws_from_posterior(fit_result, decay, n_draws, seed=seed)
     else:
         draws = draws_from_least_squares(whole_decay_fit(decay, seed=seed), n_draws, seed=seed)
-    extinction = extinction_check(decay, draws)
+    extinction = extinction_check(decay, draws, seed=seed)
     predictive = predictive_check(decay, draws, seed=seed)
     try:
         halves: SplitHalves | None = split_halves(

@@ -12,8 +12,10 @@ are in seconds after the start of the analysed decay (its first turning point).
 
 On a nonlinear restoring force (a decay whose ``restoring`` is set) the exact model is
 the law's motion on that force (:func:`bayestribo.adequacy.restoring.chains`: the
-first turning point inside |V'(Y)| <= μ_s); Eq. 38 is the linear spring's averaged
-motion and has no counterpart there: it is not evaluated, and the statement says so.
+first turning point inside |V'(Y)| <= μ_s), and its end is taken where the record's
+would be detected: the last time the model's motion exceeds the record's threshold of
+motion (:func:`_restoring_stop`); Eq. 38 is the linear spring's averaged motion and has
+no counterpart there: it is not evaluated, and the statement says so.
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.adequacy.draws import ParameterDraws
-from bayestribo.adequacy.restoring import chains, force_text
+from bayestribo.adequacy.restoring import chains, force_text, hermite, rest_grid
 from bayestribo.signal.decay import EnergyDecay
 from bayestribo.summary import ParameterSummary, check_prob, interval_text
 
@@ -172,7 +174,9 @@ class ExtinctionCheck:
         return out
 
 
-def extinction_check(decay: EnergyDecay, draws: ParameterDraws) -> ExtinctionCheck:
+def extinction_check(
+    decay: EnergyDecay, draws: ParameterDraws, *, seed: int | None = 0
+) -> ExtinctionCheck:
     """Predicted end of motion (Eq. 38 and the exact model) against the detected one.
 
     Parameters
@@ -181,6 +185,9 @@ def extinction_check(decay: EnergyDecay, draws: ParameterDraws) -> ExtinctionChe
         The analysed decay; its start is the initial turning point of the draws.
     draws : ParameterDraws
         Parameter draws (posterior, or the labelled Gaussian stand-in).
+    seed : int, optional
+        Seed of the noise and sampling phase drawn on the model's end of motion on a
+        nonlinear restoring force (not used on the linear spring).
 
     Returns
     -------
@@ -190,16 +197,25 @@ def extinction_check(decay: EnergyDecay, draws: ParameterDraws) -> ExtinctionChe
 
     omega = decay.scaling.omega
     measured = decay.tau_end / omega if decay.motion_ended else None
+    dt = float(np.median(np.diff(decay.t)))
+    resolution = 2.0 * dt
     note = ""
     if decay.restoring is None:
         tf = np.asarray(extinction_time(draws.y0, draws.zeta, draws.mu), dtype=float)
         ts = np.asarray(stop_time(draws.y0, draws.zeta, draws.mu, draws.mu_s), dtype=float)
     else:
-        ts = _restoring_stop(decay, draws)
+        ts = _restoring_stop(decay, draws, np.random.default_rng(seed))
         tf = np.full(ts.shape, np.nan)
+        # the detected end is the last excursion's, moved to the root of the velocity's
+        # line before it when that is within a third of the line's samples
+        # (motion_span): the prediction, the last excursion, is known to as much
+        period = 2.0 * decay.peaks.half_period
+        resolution = max(resolution, (max(9, round(period / dt / 8.0)) // 3) * dt)
         note = (
             f"averaged Eq. 38 not evaluated (the linear spring's averaged motion: it has "
-            f"no form on {force_text(decay.restoring)})"
+            f"no form on {force_text(decay.restoring)}); the exact model's end is where "
+            "its motion last exceeds the record's threshold of motion, as the record's is "
+            "detected"
         )
     return ExtinctionCheck(
         measured=None if measured is None else float(measured),
@@ -207,7 +223,7 @@ def extinction_check(decay: EnergyDecay, draws: ParameterDraws) -> ExtinctionChe
         averaged=tf / omega,
         exact=ts / omega,
         label=draws.label,
-        resolution=2.0 * float(np.median(np.diff(decay.t))),
+        resolution=resolution,
         averaged_note=note,
     )
 
@@ -215,14 +231,76 @@ def extinction_check(decay: EnergyDecay, draws: ParameterDraws) -> ExtinctionChe
 #: How far past the record [record lengths] a draw's motion is followed to its stop.
 RECORDS_FOLLOWED = 20.0
 
+#: Half cycles before the stop searched for the last excursion beyond the detection
+#: threshold.
+LAST_HALF_CYCLES = 3
 
-def _restoring_stop(decay: EnergyDecay, draws: ParameterDraws) -> NDArray:
-    """Each draw's stop time [-] on the decay's nonlinear restoring force: its last
-    turning point when that is inside the static friction band, ``inf`` when the
-    motion goes on past :data:`RECORDS_FOLLOWED` record lengths."""
+
+def _restoring_stop(decay: EnergyDecay, draws: ParameterDraws, rng: np.random.Generator) -> NDArray:
+    """Each draw's end of motion [-] on the decay's nonlinear restoring force, as the
+    record's is detected (:func:`bayestribo.signal.motion.motion_span`): the last
+    sample at which its velocity, with the record's noise drawn on it, exceeds
+    :data:`~bayestribo.signal.motion.THRESHOLD` times that noise (a recorded velocity),
+    or its displacement departs from its rest by more than
+    :data:`~bayestribo.signal.motion.DISPLACEMENT_THRESHOLD` times the displacement
+    noise (a derived velocity); the samples at the record's rate, at a phase drawn per
+    draw; ``inf`` when the motion goes on past :data:`RECORDS_FOLLOWED` record lengths.
+
+    The motion creeps into its stop (its acceleration there is the spring's force less
+    the friction's, small on a slow oscillator): the last sample beyond the threshold
+    comes before the stop, on a pendulum of 0.7 Hz with 4 mrad/s of noise by 0.1-0.8 s
+    (the last half cycle's swing can stay under the threshold, or the noise lift it
+    over), thousands of times the interval of the stop's own time.
+    """
+    from bayestribo.signal.motion import DISPLACEMENT_THRESHOLD, THRESHOLD
+
+    kernel = decay.restoring
     sign0 = 1.0 if decay.peaks.value[0] >= 0.0 else -1.0
     span = float(decay.tau[-1] - decay.tau[0])
-    out = []
-    for tn, _, stopped in chains(decay.restoring, draws, sign0, RECORDS_FOLLOWED * span, 1_000_000):
-        out.append(float(tn[-1]) if stopped else math.inf)
-    return np.array(out)
+    chain = chains(kernel, draws, sign0, RECORDS_FOLLOWED * span, 1_000_000)
+    by_velocity = decay.derived_channel != "velocity"
+    noise = float((decay.noise_yp if by_velocity else decay.noise_y) or 0.0)
+    level = (THRESHOLD if by_velocity else DISPLACEMENT_THRESHOLD) * noise
+    stopped = np.array([c[2] for c in chain])
+    out = np.array([float(c[0][-1]) if c[2] else math.inf for c in chain])
+    if not np.any(stopped) or level <= 0.0:
+        return out
+    dt = float(np.median(np.diff(decay.t))) * decay.scaling.omega  # sample period [-]
+    phase = rng.uniform(0.0, dt, len(chain))
+    rest = np.array([c[1][-1] for c in chain])
+    found = np.zeros(len(chain), dtype=bool)
+    for back in range(1, LAST_HALF_CYCLES + 1):
+        todo = stopped & ~found & np.array([c[1].size > back for c in chain])
+        if not np.any(todo):
+            break
+        index = np.flatnonzero(todo)
+        start = np.array([chain[i][1][-1 - back] for i in index])
+        t0 = np.array([chain[i][0][-1 - back] for i in index])
+        t1 = np.array([chain[i][0][-back] for i in index])
+        h, y, yp, ypp = rest_grid(
+            kernel.spring,
+            start,
+            -np.sign(start),
+            draws.zeta[index],
+            draws.mu[index],
+            float(np.max(t1 - t0)),
+        )
+        # the record's samples inside this half cycle, and the channel there with noise
+        first = np.mod(phase[index] - t0, dt)
+        count = int(np.max(t1 - t0) / dt) + 2
+        since = first[:, None] + dt * np.arange(count)[None, :]
+        inside = since < (t1 - t0)[:, None]
+        column = np.broadcast_to(np.arange(index.size)[:, None], since.shape)
+        g = y.shape[0]
+        if by_velocity:
+            value = hermite(h, yp.reshape(g, -1), ypp.reshape(g, -1), since, column)
+        else:
+            value = hermite(h, y.reshape(g, -1), yp.reshape(g, -1), since, column)
+            value = value - rest[index][:, None]
+        value = value + noise * rng.standard_normal(value.shape)
+        beyond = (np.abs(value) > level) & inside
+        hit = beyond.any(axis=1)
+        last = count - 1 - np.argmax(beyond[:, ::-1], axis=1)
+        out[index[hit]] = (t0 + since[np.arange(index.size), last])[hit]
+        found[index[hit]] = True
+    return out
