@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.adequacy.draws import ParameterDraws
-from bayestribo.adequacy.restoring import chains, force_text, hermite, rest_grid
+from bayestribo.adequacy.restoring import chains, first_turn, force_text, hermite, rest_grid
 from bayestribo.signal.decay import EnergyDecay
 from bayestribo.summary import ParameterSummary, check_prob, interval_text
 
@@ -257,7 +257,9 @@ def _restoring_stop(decay: EnergyDecay, draws: ParameterDraws, rng: np.random.Ge
     kernel = decay.restoring
     sign0 = 1.0 if decay.peaks.value[0] >= 0.0 else -1.0
     span = float(decay.tau[-1] - decay.tau[0])
-    chain = chains(kernel, draws, sign0, RECORDS_FOLLOWED * span, 1_000_000)
+    turned, before = first_turn(decay, draws)
+    chain = chains(kernel, turned, sign0, RECORDS_FOLLOWED * span, 1_000_000)
+    chain = [(tn - b, yn, stopped) for (tn, yn, stopped), b in zip(chain, before, strict=True)]
     by_velocity = decay.derived_channel != "velocity"
     noise = float((decay.noise_yp if by_velocity else decay.noise_y) or 0.0)
     level = (THRESHOLD if by_velocity else DISPLACEMENT_THRESHOLD) * noise

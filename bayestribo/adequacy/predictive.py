@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.adequacy.draws import ParameterDraws
-from bayestribo.adequacy.restoring import chains, hermite, rest_grid
+from bayestribo.adequacy.restoring import chains, first_turn, hermite, rest_grid
 from bayestribo.adequacy.segments import peak_positions
 from bayestribo.errors import BayestriboError
 from bayestribo.signal.decay import EnergyDecay
@@ -376,7 +376,7 @@ def _restoring_peaks(
     rest_grid`); a peak a draw does not reach (stopped before it) is 0."""
     kernel = decay.restoring
     zeta, mu = draws.zeta[:, None], draws.mu[:, None]
-    chain = chains(kernel, draws, sign0, math.inf, n)
+    chain = chains(kernel, first_turn(decay, draws)[0], sign0, math.inf, n)
     d = len(chain)
     turns = np.full((d, n), np.nan)
     stuck = np.zeros((d, n), dtype=bool)
@@ -429,7 +429,9 @@ def _restoring_band(
     """y and y' of each draw (D, T) at ``tau`` on the decay's nonlinear restoring force:
     from the last turning point before each time (at rest after a stop)."""
     kernel = decay.restoring
-    chain = chains(kernel, draws, sign0, float(tau[-1]), 1_000_000)
+    turned, before = first_turn(decay, draws)
+    chain = chains(kernel, turned, sign0, float(tau[-1]) + float(np.max(before)), 1_000_000)
+    chain = [(tn - b, yn, stopped) for (tn, yn, stopped), b in zip(chain, before, strict=True)]
     d, length = len(chain), max(yn.size for _, yn, _ in chain)
     turns = np.zeros((d, length))
     k = np.empty((d, tau.size), dtype=np.int64)

@@ -32,6 +32,7 @@ __all__ = [
     "LAW",
     "chains",
     "chosen_run",
+    "first_turn",
     "force_text",
     "hermite",
     "law_frame_frequency",
@@ -216,6 +217,38 @@ def chains(
         force = abs(float(kernel.spring(yn[-1]))) if yn.size else 0.0
         out.append((tn, yn, bool(yn.size and force <= ms)))
     return out
+
+
+def first_turn(decay: EnergyDecay, draws: Any) -> tuple[Any, NDArray]:
+    """The draws from the first turning point: its amplitude [-] in place of ``y0``,
+    and how long before the decay's first sample it was [-] (negative when it comes
+    after it), per draw.
+
+    The least-squares and Bayesian fits start the model at the decay's first sample,
+    at ``y0`` with the recorded velocity there (``decay.yp[0]``: the sample nearest the
+    turning point is not on it); the turning point before it is that of the undamped
+    motion through that state, V(A) = ½y'² + V(y₀) (the loss over the part of a sample
+    period between them is of the order of ζ and μ times the distance, far below the
+    noise), reached |y'|/(|V'(A)| - μ) earlier (the acceleration there held).
+    """
+    import dataclasses
+
+    kernel = decay.restoring
+    yp0 = float(decay.yp[0])
+    y0 = np.abs(np.asarray(draws.y0, dtype=float))
+    energy = 0.5 * yp0 * yp0 + np.asarray(kernel.potential(y0), dtype=float)
+    amp = np.sqrt(2.0 * energy)
+    for _ in range(40):  # Newton on V(A) = E from the linear spring's amplitude
+        step = (np.asarray(kernel.potential(amp), dtype=float) - energy) / np.asarray(
+            kernel.spring(amp), dtype=float
+        )
+        amp = amp - step
+        if np.all(np.abs(step) <= 1e-14 * amp):
+            break
+    pull = np.maximum(np.abs(np.asarray(kernel.spring(amp), dtype=float)) - draws.mu, 1e-12)
+    # moving away from the equilibrium: the turning point is still ahead
+    ahead = yp0 * float(decay.y[0]) > 0.0
+    return dataclasses.replace(draws, y0=amp), (-1.0 if ahead else 1.0) * abs(yp0) / pull
 
 
 def rest_grid(
