@@ -128,7 +128,8 @@ def summary(runs: list[dict[str, Any]], restoring: str) -> dict[str, Any]:
         }
     failed = sum(1 for r in rows if not r["adequate"])
     out["not_adequate"] = {"count": failed, "rate": failed / n, "interval_95": _interval(failed, n)}
-    out["forces"] = sorted({str(r["force"]) for r in rows})
+    # the force's name, without a Duffing spring's measured β
+    out["forces"] = sorted({str(r["force"]).split(" (β")[0] for r in rows})
     out["cpu_s_median"] = float(np.median([r["cpu_s"] for r in rows]))
     return out
 
