@@ -220,14 +220,15 @@ def test_auto_on_the_bundled_run_is_the_default_fit(bundled_runs):
 def test_the_adequacy_checks_choose_once_for_every_window():
     # a window holds too few turning points to measure the change: the checks choose on
     # the whole run, and each window's fit takes that force
-    from bayestribo.adequacy.check import _chosen_restoring
+    from bayestribo.adequacy.restoring import chosen_run
 
     t, angle = _rubbing_pendulum()
     run = Run(t, angle, metadata={"length_unit": "rad", "restoring": "auto"})
-    decay = energy_decay(t, angle, None)
-    assert _chosen_restoring(run, decay).metadata["restoring"] == "pendulum"
+    assert chosen_run(run).metadata["restoring"] == "pendulum"
     named = run.with_metadata(restoring="duffing")
-    assert _chosen_restoring(named, decay) is named
+    assert chosen_run(named) is named
+    # the option overrides the run's own
+    assert chosen_run(named, "auto").metadata["restoring"] == "pendulum"
 
 
 def test_auto_fits_a_stiffening_spring_on_the_papers_rig_without_a_warning():

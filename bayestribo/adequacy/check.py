@@ -3,7 +3,9 @@
 Windowed fits and the constancy test, the extinction time, the peak-by-peak
 predictive check and the split-half consistency of the first and second halves of
 the motion (:mod:`bayestribo.adequacy.halves`), with one plain verdict: is the linear
-law (constant ζ and μ_k, Eq. 7) adequate for this recording?
+law (constant ζ and μ_k, Eq. 7) adequate for this recording? On a nonlinear restoring
+force (the run's ``restoring``, or the ``restoring`` option: a pendulum, a Duffing
+spring) the same law on that force (:mod:`bayestribo.adequacy.restoring`).
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from bayestribo.adequacy.draws import (
 from bayestribo.adequacy.extinction import ExtinctionCheck, extinction_check
 from bayestribo.adequacy.halves import SplitHalves, split_halves
 from bayestribo.adequacy.predictive import PredictiveCheck, predictive_check
+from bayestribo.adequacy.restoring import chosen_run, force_text, nonlinear
 from bayestribo.adequacy.segments import peak_positions, whole_decay_fit
 from bayestribo.adequacy.windows import (
     BayesianWindows,
@@ -59,14 +62,19 @@ class AdequacyReport:
     predictive : PredictiveCheck
     draws : ParameterDraws
     adequate : bool
-        The linear law is adequate: constancy not rejected, the measured end of
-        motion inside the exact model's 95 % interval, the peak coverage not
+        The law (constant ζ and friction, on the run's restoring force) is
+        adequate: constancy not rejected, the measured end of motion inside the
+        exact model's 95 % interval, the peak coverage not
         far below 95 % (at least 80 %), and the two halves of the motion in
         agreement. Computed once, from :attr:`checks`.
     halves : SplitHalves or None
         The split-half check (None when the decay is too short for it:
         ``halves_note`` says why).
     halves_note : str
+    restoring : str or None
+        The run's nonlinear restoring force in words (:func:`~bayestribo.adequacy.
+        restoring.force_text`), whose motion every check takes; None for the linear
+        spring.
     """
 
     run_name: str | None
@@ -80,6 +88,15 @@ class AdequacyReport:
     adequate: bool
     halves: SplitHalves | None = None
     halves_note: str = ""
+    restoring: str | None = None
+
+    @property
+    def law_text(self) -> str:
+        """The law judged, in words: the linear law, or the law on the run's nonlinear
+        restoring force."""
+        if self.restoring is None:
+            return "the linear law (constant ζ and friction)"
+        return f"the law with {self.restoring} (constant ζ and friction)"
 
     @property
     def checks(self) -> list[dict[str, Any]]:
@@ -98,15 +115,16 @@ class AdequacyReport:
     def verdict(self) -> str:
         """The plain conclusion, naming the checks that failed."""
         if self.adequate:
-            return "the linear law (constant ζ and friction) is adequate for this recording"
+            return f"{self.law_text} is adequate for this recording"
         failed = [c["name"] for c in self.checks if c["passed"] is False]
-        return "the linear law (constant ζ and friction) is not adequate for this recording" + (
+        return f"{self.law_text} is not adequate for this recording" + (
             f" (failed: {', '.join(failed)})" if failed else ""
         )
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready mapping."""
-        return {
+        """JSON-ready mapping (``restoring``: the run's nonlinear restoring force in
+        words, present only on one)."""
+        out = {
             "run": self.run_name,
             "adequate": self.adequate,
             "verdict": self.verdict,
@@ -119,12 +137,17 @@ class AdequacyReport:
             "halves": None if self.halves is None else self.halves.to_dict(),
             "halves_note": self.halves_note,
         }
+        if self.restoring is not None:
+            out["restoring"] = self.restoring
+        return out
 
     def to_text(self) -> str:
         """A report for the terminal."""
         w = self.windows
         unit = w.length_unit
         lines = [f"run: {self.run_name}"] if self.run_name else []
+        if self.restoring is not None:
+            lines.append(f"restoring force: {self.restoring}")
         lines.append(
             f"windows of {w.window_oscillations} oscillations ({w.method}, friction "
             f"{w.extra.get('friction_mode', 'fit')}); {w.interval_kind}"
@@ -211,6 +234,7 @@ def check_adequacy(
     skip_oscillations: int = 1,
     bayes: bool = False,
     progress: Callable[[str], None] | None = None,
+    restoring: str | None = None,
 ) -> AdequacyReport:
     """Windowed fits, constancy test, extinction time and predictive check of one run.
 
@@ -242,14 +266,25 @@ def check_adequacy(
     progress : callable, optional
         Called with a one-line message before each window fit, each half's fit and
         the whole-run fit.
+    restoring : str, optional
+        The oscillator's restoring force (a name of
+        :func:`bayestribo.model.restoring.restoring_choices`, ``"auto"`` to choose it
+        from the record); default the run's own (its metadata's ``restoring``, else
+        the linear spring). On a nonlinear force (a pendulum, a Duffing spring) every
+        check takes its motion (:mod:`bayestribo.adequacy.restoring`), and the verdict
+        names it. Not used with an EnergyDecay (whose own ``restoring`` is taken).
 
     Returns
     -------
     AdequacyReport
     """
-    decay = analysed_decay(run, skip_oscillations=skip_oscillations)
-    if bayes:
-        run = _chosen_restoring(run, decay)
+    if isinstance(run, EnergyDecay):
+        decay = run
+    else:
+        recording = chosen_run(run, restoring, skip_oscillations=skip_oscillations)
+        if bayes or restoring is not None or nonlinear(recording):
+            run = recording
+        decay = analysed_decay(recording, skip_oscillations=skip_oscillations)
     if window is None:
         window = default_window(decay)
         if bayes:
@@ -287,7 +322,7 @@ def check_adequacy(
         draws = draws_from_posterior(fit_result, decay, n_draws, seed=seed)
     else:
         draws = draws_from_least_squares(whole_decay_fit(decay, seed=seed), n_draws, seed=seed)
-    extinction = extinction_check(decay, draws)
+    extinction = extinction_check(decay, draws, seed=seed)
     predictive = predictive_check(decay, draws, seed=seed)
     try:
         halves: SplitHalves | None = split_halves(
@@ -322,32 +357,5 @@ def check_adequacy(
         adequate=adequate,
         halves=halves,
         halves_note=halves_note,
+        restoring=None if decay.restoring is None else force_text(decay.restoring),
     )
-
-
-def _chosen_restoring(run: Any, decay: EnergyDecay) -> Any:
-    """A run whose ``restoring`` is ``"auto"`` with the force chosen once, on the whole
-    run (:func:`bayestribo.inference.restoring_choice.choose_restoring`), so that every
-    window's and half's fit takes the same force (a window's few turning points cannot
-    measure the change); any other run (or an EnergyDecay) as it is."""
-    from bayestribo.io.run import Run
-    from bayestribo.model.restoring import AUTO
-
-    if isinstance(run, EnergyDecay):
-        return run
-    if not isinstance(run, Run):
-        from bayestribo.io import as_run
-
-        run = as_run(run)
-    if run.metadata.get("restoring") != AUTO:
-        return run
-    from bayestribo.inference.restoring_choice import choose_restoring
-
-    choice = choose_restoring(
-        decay.turning_times,
-        decay.peaks.value / decay.scaling.length_scale,
-        length_unit=run.length_unit,
-        angle=decay.scaling.length_scale == 1.0,
-        name=str(run.source or run.metadata.get("run_id") or "") or None,
-    )
-    return run.with_metadata(restoring=choice.name)

@@ -159,7 +159,8 @@ def plot_extinction(check: ExtinctionCheck, ax: Any = None) -> Any:
     record's end when the motion outlasts the record) in milliseconds, so that
     intervals far narrower than the time since the release stay visible; the measured
     end's resolution (two sample periods) is the grey band around zero. A model whose
-    draws never stop is said so on its row.
+    draws never stop is said so on its row, and so is Eq. 38 where it was not evaluated
+    (a nonlinear restoring force).
 
     Parameters
     ----------
@@ -183,6 +184,9 @@ def plot_extinction(check: ExtinctionCheck, ax: Any = None) -> Any:
     spans = [0.0, check.resolution * ms, -check.resolution * ms]
     for y, (label, values, color) in zip((1, 0), rows, strict=True):
         finite = (values[np.isfinite(values)] - ref) * ms
+        if values is check.averaged and check.averaged_note:
+            ax.text(0.0, y, f"{label}: none on this restoring force", ha="center", fontsize=9)
+            continue
         if finite.size == 0:
             ax.text(0.0, y, f"{label}: never stops", ha="center", va="center", fontsize=9)
             continue

@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.adequacy.draws import ParameterDraws
+from bayestribo.adequacy.restoring import chains, first_turn, hermite, rest_grid
 from bayestribo.adequacy.segments import peak_positions
 from bayestribo.errors import BayestriboError
 from bayestribo.signal.decay import EnergyDecay
@@ -288,6 +289,54 @@ def predictive_check(
     # the sampling phase then affect both alike).
     offsets_y = _offsets(decay.t, pos, decay.peaks.t, half_width) * decay.scaling.omega
     offsets_v = _offsets(decay.t, np.array(v_i), np.array(v_t), half_width) * decay.scaling.omega
+    if decay.restoring is None:
+        model_y, model_v, a0 = _linear_peaks(draws, n, sign0, sign_seq, offsets_y, offsets_v)
+    else:
+        model_y, model_v = _restoring_peaks(decay, draws, n, sign0, offsets_y, offsets_v)
+
+    noise_y = decay.peaks.value_noise / ell
+    sd_yp = decay.noise_yp if decay.noise_yp else estimate_noise(decay.yp)
+    noise_v = float(sd_yp) * math.sqrt(9.0 / 4.0 / (2 * half_width + 1))
+    disp = _summaries("displacement", decay.peaks.t, y_obs, model_y, noise_y, relative_error, rng)
+    vel = _summaries(
+        "velocity", np.array(v_t), np.array(v_obs), model_v, noise_v, relative_error, rng
+    )
+
+    idx = np.unique(np.linspace(0, decay.tau.size - 1, BAND_POINTS).round().astype(int))
+    tau = decay.tau[idx] - decay.tau[0]
+    if decay.restoring is None:
+        y_sim, yp_sim = exact_response(
+            tau,
+            a0,
+            draws.zeta[:, None],
+            draws.mu[:, None],
+            np.maximum(draws.mu_s, draws.mu)[:, None],
+        )
+    else:
+        y_sim, yp_sim = _restoring_band(decay, draws, sign0, tau)
+    q = [0.025, 0.5, 0.975]
+    return PredictiveCheck(
+        displacement=disp,
+        velocity=vel,
+        band_t=decay.t[idx],
+        y_band=np.quantile(y_sim, q, axis=0),
+        yp_band=np.quantile(yp_sim, q, axis=0),
+        label=draws.label,
+    )
+
+
+def _linear_peaks(
+    draws: ParameterDraws,
+    n: int,
+    sign0: float,
+    sign_seq: NDArray,
+    offsets_y: NDArray,
+    offsets_v: NDArray,
+) -> tuple[NDArray, NDArray, NDArray]:
+    """The draws' processed peaks (D, n) and (D, n - 1) on the linear spring (Eq. 16-17),
+    and their initial state (D, 1)."""
+    from bayestribo.model import exact_response
+
     z = draws.zeta[:, None]
     m = draws.mu[:, None]
     ms = np.maximum(draws.mu_s, draws.mu)[:, None]
@@ -310,29 +359,101 @@ def predictive_check(
     _, v_sim = exact_response(tau_v, a0[:, :, None], z3, m3, ms3)
     model_v = np.maximum(_parabola_peak(offsets_v, -v_sim * sign_seq[None, :-1, None]), 0.0)
 
-    noise_y = decay.peaks.value_noise / ell
-    sd_yp = decay.noise_yp if decay.noise_yp else estimate_noise(decay.yp)
-    noise_v = float(sd_yp) * math.sqrt(9.0 / 4.0 / (2 * half_width + 1))
-    disp = _summaries("displacement", decay.peaks.t, y_obs, model_y, noise_y, relative_error, rng)
-    vel = _summaries(
-        "velocity", np.array(v_t), np.array(v_obs), model_v, noise_v, relative_error, rng
-    )
+    return model_y, model_v, a0
 
-    idx = np.unique(np.linspace(0, decay.tau.size - 1, BAND_POINTS).round().astype(int))
-    tau = decay.tau[idx] - decay.tau[0]
-    y_sim, yp_sim = exact_response(
-        tau,
-        a0,
+
+def _restoring_peaks(
+    decay: EnergyDecay,
+    draws: ParameterDraws,
+    n: int,
+    sign0: float,
+    offsets_y: NDArray,
+    offsets_v: NDArray,
+) -> tuple[NDArray, NDArray]:
+    """The draws' processed peaks (D, n) and (D, n - 1) on the decay's nonlinear
+    restoring force: the turning points from the law's integrator, the motion about
+    each (the samples' offsets) from rest there (:func:`~bayestribo.adequacy.restoring.
+    rest_grid`); a peak a draw does not reach (stopped before it) is 0."""
+    kernel = decay.restoring
+    zeta, mu = draws.zeta[:, None], draws.mu[:, None]
+    chain = chains(kernel, first_turn(decay, draws)[0], sign0, math.inf, n)
+    d = len(chain)
+    turns = np.full((d, n), np.nan)
+    stuck = np.zeros((d, n), dtype=bool)
+    for i, (_, yn, stopped) in enumerate(chain):
+        turns[i, : yn.size] = yn
+        if stopped:
+            stuck[i, yn.size - 1] = True
+    reached = np.isfinite(turns)
+    start = np.where(reached, turns, 0.0)
+    outward = np.sign(start)  # the direction of the motion that arrives at each turn
+    # displacement about each turning point: back along the motion that arrived, on
+    # along the next half cycle (at rest where the draw stops)
+    off = np.broadcast_to(offsets_y[None, :, :], (d, *offsets_y.shape))
+    column = np.broadcast_to(np.arange(d * n).reshape(d, n, 1), off.shape)
+    h, y, yp, _ = rest_grid(
+        kernel.spring, start, -outward, zeta, mu, max(float(np.max(offsets_y)), 0.0)
+    )
+    on = hermite(h, y.reshape(y.shape[0], -1), yp.reshape(y.shape[0], -1), off, column)
+    h, y, yp, _ = rest_grid(
+        kernel.spring, start, outward, zeta, mu, min(float(np.min(offsets_y)), 0.0)
+    )
+    back = hermite(h, y.reshape(y.shape[0], -1), yp.reshape(y.shape[0], -1), off, column)
+    y = np.where(off < 0.0, back, np.where(stuck[:, :, None], start[:, :, None], on))
+    model_y = np.maximum(_parabola_peak(offsets_y, y * outward[:, :, None]), 0.0)
+    model_y = np.where(reached, model_y, 0.0)
+    # the velocity's extremum of each half cycle: where y'' = 0 (linear interpolation
+    # between grid points), then y' about it
+    moving = reached[:, :-1] & reached[:, 1:] & ~stuck[:, :-1]
+    first, sgn = start[:, :-1], -outward[:, :-1]
+    ratio = np.asarray(kernel.half_period_ratio(np.abs(first)), dtype=float)
+    span = 0.75 * math.pi * float(np.max(ratio, initial=1.0)) + float(np.max(offsets_v))
+    h, _, yp, ypp = rest_grid(kernel.spring, first, sgn, zeta, mu, span)
+    flipped = np.sign(ypp) != sgn[None]  # past the extremum: the acceleration turned
+    k = np.clip(np.argmax(flipped, axis=0), 1, ypp.shape[0] - 1)
+    a_lo = np.take_along_axis(ypp, (k - 1)[None], axis=0)[0]
+    a_hi = np.take_along_axis(ypp, k[None], axis=0)[0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        frac = np.where(a_lo != a_hi, a_lo / (a_lo - a_hi), 0.5)
+    s_star = (k - 1 + np.clip(frac, 0.0, 1.0)) * h
+    at = np.maximum(s_star[:, :, None] + offsets_v[None, :, :], 0.0)
+    column = np.broadcast_to(np.arange(d * (n - 1)).reshape(d, n - 1, 1), at.shape)
+    v = hermite(h, yp.reshape(yp.shape[0], -1), ypp.reshape(yp.shape[0], -1), at, column)
+    model_v = np.maximum(_parabola_peak(offsets_v, v * sgn[:, :, None]), 0.0)
+    return model_y, np.where(moving, model_v, 0.0)
+
+
+def _restoring_band(
+    decay: EnergyDecay, draws: ParameterDraws, sign0: float, tau: NDArray
+) -> tuple[NDArray, NDArray]:
+    """y and y' of each draw (D, T) at ``tau`` on the decay's nonlinear restoring force:
+    from the last turning point before each time (at rest after a stop)."""
+    kernel = decay.restoring
+    turned, before = first_turn(decay, draws)
+    chain = chains(kernel, turned, sign0, float(tau[-1]) + float(np.max(before)), 1_000_000)
+    chain = [(tn - b, yn, stopped) for (tn, yn, stopped), b in zip(chain, before, strict=True)]
+    d, length = len(chain), max(yn.size for _, yn, _ in chain)
+    turns = np.zeros((d, length))
+    k = np.empty((d, tau.size), dtype=np.int64)
+    since = np.empty((d, tau.size))
+    still = np.zeros((d, tau.size), dtype=bool)
+    for i, (tn, yn, stopped) in enumerate(chain):
+        turns[i, : yn.size] = yn
+        k[i] = np.clip(np.searchsorted(tn, tau, side="right") - 1, 0, tn.size - 1)
+        since[i] = tau - tn[k[i]]
+        still[i] = stopped & (k[i] == tn.size - 1)
+    span = float(np.max(np.where(still, 0.0, since)))
+    h, y, yp, ypp = rest_grid(
+        kernel.spring,
+        turns,
+        -np.sign(turns),
         draws.zeta[:, None],
         draws.mu[:, None],
-        np.maximum(draws.mu_s, draws.mu)[:, None],
+        span,
     )
-    q = [0.025, 0.5, 0.975]
-    return PredictiveCheck(
-        displacement=disp,
-        velocity=vel,
-        band_t=decay.t[idx],
-        y_band=np.quantile(y_sim, q, axis=0),
-        yp_band=np.quantile(yp_sim, q, axis=0),
-        label=draws.label,
-    )
+    g = y.shape[0]
+    column = np.arange(d)[:, None] * length + k
+    y_at = hermite(h, y.reshape(g, -1), yp.reshape(g, -1), since, column)
+    yp_at = hermite(h, yp.reshape(g, -1), ypp.reshape(g, -1), since, column)
+    start = np.take_along_axis(turns, k, axis=1)
+    return np.where(still, start, y_at), np.where(still, 0.0, yp_at)

@@ -17,6 +17,11 @@ point with amplitude Y_0 fitted, μ_s = μ_k). The free parameters are ζ, the
 dimensionless friction μ (μ_k with a loaded rig, else the friction displacement in
 signal units) and Y_0.
 
+On a nonlinear restoring force (a decay whose ``restoring`` is set: a pendulum, a
+Duffing spring, docs/restoring.md) the energy is ½y'² + V(y) and the model's Π is that
+of viscous damping and Coulomb friction on the force, from the law's integrator
+(:meth:`bayestribo.model.laws.Law.pi_grid`, :mod:`bayestribo.adequacy.restoring`).
+
 Noise: :func:`bayestribo.signal.increments.increment_noise`, white per channel when
 both are recorded, propagated by Monte Carlo through the derivation of a derived
 channel.
@@ -146,14 +151,27 @@ def segment_noise(decay: EnergyDecay) -> _Noise:
 
 
 def _observed(
-    tau: NDArray, y: NDArray, yp: NDArray, noise: _Noise, n_increments: int, seed: int
+    tau: NDArray,
+    y: NDArray,
+    yp: NDArray,
+    noise: _Noise,
+    n_increments: int,
+    seed: int,
+    restoring: Any = None,
 ) -> tuple[NDArray, NDArray, NDArray]:
-    """Grid edges, observed increments (bias-corrected) and their noise variances."""
+    """Grid edges, observed increments (bias-corrected) and their noise variances, of
+    the energy ½(y² + y'²), or ½y'² + V(y) on a nonlinear ``restoring`` force (whose
+    noise takes V'(y) for y, or V itself in the Monte Carlo of a derived channel)."""
     h = float(tau[1] - tau[0])
     edges, weights = increment_weights(tau.size, h, n_increments)
+    force, potential = y, None
+    if restoring is not None and noise.derived is not None:
+        potential = restoring.potential
+    elif restoring is not None:
+        force = np.asarray(restoring.spring(y), dtype=float)
     bias, var = increment_noise(
         tau,
-        y,
+        force,
         yp,
         edges,
         weights,
@@ -163,8 +181,13 @@ def _observed(
         savgol_window=noise.savgol_window,
         n_replicates=NOISE_REPLICATES,
         seed=seed,
+        potential=potential,
     )
-    obs = integrate_increments(0.5 * (y * y + yp * yp), edges, weights) - bias
+    if restoring is None:
+        energy = 0.5 * (y * y + yp * yp)
+    else:
+        energy = 0.5 * yp * yp + np.asarray(restoring.potential(y), dtype=float)
+    obs = integrate_increments(energy, edges, weights) - bias
     floor = 1e-12 * max(float(np.max(var)), 1e-300)
     return edges, obs, np.maximum(var, floor)
 
@@ -223,6 +246,11 @@ def fit_segment(
     """
     from bayestribo.model import exact_pi
 
+    law = None
+    if decay.restoring is not None:
+        from bayestribo.adequacy.restoring import segment_law
+
+        law = segment_law(decay.restoring)
     noise = segment_noise(decay) if noise is None else noise
     tau = decay.tau[start:stop] - decay.tau[start]
     y, yp = decay.y[start:stop], decay.yp[start:stop]
@@ -232,7 +260,7 @@ def fit_segment(
             "short to fit; use a longer window"
         )
     n_increments = INCREMENTS_PER_HALF_CYCLE * max(peaks_abs.size - 1, 1)
-    edges, obs, var = _observed(tau, y, yp, noise, n_increments, seed)
+    edges, obs, var = _observed(tau, y, yp, noise, n_increments, seed, decay.restoring)
     if edges.size < 9:
         raise RecordingError(
             f"a segment with {edges.size - 1} Π increments is too short to fit; use a longer window"
@@ -258,9 +286,14 @@ def fit_segment(
         p[free] = q
         return p
 
+    def model_pi(p: NDArray) -> NDArray:
+        if law is None:
+            return exact_pi(tau_e, sign * p[2], p[0], p[1], p[1], yp0, tau_end=tau_end)
+        values = {"zeta": p[0], "mu_k": p[1], "mu_s_ratio": 1.0}
+        return law.pi_grid(tau_e, values, [sign * p[2]], yp0, tau_end, reference=amp)[0]
+
     def resid(q: NDArray) -> NDArray:
-        p = full(q)
-        pi = exact_pi(tau_e, sign * p[2], p[0], p[1], p[1], yp0, tau_end=tau_end)
+        pi = model_pi(full(q))
         return (pi[:-1] - pi[1:] - obs) / sd
 
     lower = np.array([0.0, 0.0, 0.5 * amp])

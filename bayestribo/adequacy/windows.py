@@ -76,14 +76,22 @@ _Z95 = 1.959963984540054
 def analysed_decay(run: Any, *, skip_oscillations: int = 1) -> EnergyDecay:
     """The energy decay of a run (a :class:`bayestribo.io.run.Run`, a path, or a decay).
 
+    A run whose ``restoring`` names a nonlinear force (a pendulum, a Duffing spring) is
+    analysed on it, as the fit analyses it
+    (:func:`bayestribo.adequacy.restoring.restoring_decay`).
+
     Raises
     ------
     RecordingError
         When the argument is none of those, or the recording cannot be analysed.
     """
+    from bayestribo.adequacy.restoring import nonlinear, restoring_decay
+
     if isinstance(run, EnergyDecay):
         return run
     run = _as_run(run)
+    if nonlinear(run):
+        return restoring_decay(run, skip_oscillations=skip_oscillations)
     return energy_decay(
         run.time, run.displacement, run.velocity, rig=run.rig(), skip_oscillations=skip_oscillations
     )

@@ -2,6 +2,9 @@
 
 Windowed fits along the decay with the constancy test, the predicted end of motion
 against the recorded one, and the peak-by-peak predictive check, as a report or JSON.
+With ``--restoring pendulum|duffing|auto`` (or the sidecar's ``restoring``) the law of
+constant ζ and friction is checked on that restoring force
+(:mod:`bayestribo.adequacy.restoring`), and the verdict names it.
 
 Examples::
 
@@ -35,14 +38,17 @@ def register(subparsers: Any) -> None:
     """Add the ``check`` sub-command."""
     p = subparsers.add_parser(
         "check",
-        help="adequacy of the linear law: windowed fits, extinction time, predictive check",
+        help="adequacy of the linear law (on the run's restoring force): windowed fits, "
+        "extinction time, predictive check",
         description=(
             "Fit ζ and μ_k in windows of a few oscillations along the decay and test whether "
             "they change with amplitude; compare the predicted end of motion (Eq. 38 and the "
             "exact model) with the recorded one; compare the recorded peaks with their "
             "predictive intervals; fit the first and second halves of the motion and test "
             "whether they agree. Without a Bayesian fit the parameter draws come from the "
-            "Gaussian approximation of the least-squares fit, and the report says so."
+            "Gaussian approximation of the least-squares fit, and the report says so. With "
+            "--restoring (or the sidecar's restoring) every check takes that restoring "
+            "force's motion."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
