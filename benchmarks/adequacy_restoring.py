@@ -11,6 +11,7 @@ pendulum        θ'' = -ω₀² sin θ - 2ζω₀θ' - ω₀²θ_c sgn θ', f₀
                 with 1 mrad and 4 mrad/s of white noise
 linear          the same with a linear spring (x + 0·x³, released at 1.05-1.57 units):
                 the checks' false alarms where they judged the linear law before
+linear-fast     the linear spring at f₀ = 3 Hz, 15 s (the same friction, damping and noise)
 duffing         x'' = -ω₀²(x + βx³) - ..., β = 0.6, f₀ = 1.5 Hz, ζ = 0.003, x_c = 0.01,
                 released at 0.8-1.0 units, 20 s at 200 Hz, 0.3 and 3 units·mrad of noise
 ==============  ===========================================================================
@@ -59,6 +60,13 @@ CASES: dict[str, dict[str, Any]] = {
     },
     "linear": {
         "swing": Swing(f0=0.7, zeta=0.003, friction=0.012, x0=1.0, beta=0.0, duration=40.0),
+        "release": (math.radians(60.0), math.radians(90.0)),
+        "unit": "arbitrary",
+        "force": "linear",
+        "restoring": ("linear",),
+    },
+    "linear-fast": {
+        "swing": Swing(f0=3.0, zeta=0.003, friction=0.012, x0=1.0, beta=0.0, duration=15.0),
         "release": (math.radians(60.0), math.radians(90.0)),
         "unit": "arbitrary",
         "force": "linear",

@@ -6,9 +6,18 @@ duration ``T_f = ln(1 + πζa_0/(2μ_k))/ζ`` (Eq. 38,
 point, the first one inside the static-friction band (Eq. 8,
 :func:`bayestribo.model.stop_time`). Both are evaluated for every parameter draw
 (posterior, or the labelled Gaussian stand-in) and compared with the end of motion
-that :func:`bayestribo.signal.decay.energy_decay` detected (start of the rest tail, known
-to about two sample periods, which widen the predicted interval). Times
-are in seconds after the start of the analysed decay (its first turning point).
+that :func:`bayestribo.signal.decay.energy_decay` detected. Times are in seconds after
+the start of the analysed decay (its first sample).
+
+The exact model's end is taken where the record's would be detected
+(:func:`bayestribo.signal.motion.motion_span`): the last sample of the record's rate at
+which the model's motion, with the record's noise drawn on it, exceeds the record's
+threshold of motion (:func:`_linear_stop`). The motion creeps into its stop (its
+acceleration there is the spring's force less the friction's, small on a slow
+oscillator), so that sample comes before the stop itself, on a linear spring of 0.7 Hz
+with 4 mrad/s of noise by 0.1-0.8 s. The detected end is the last excursion's, moved to
+the root of the velocity's line before it, so the predicted interval is widened by that
+line's reach (or two sample periods, whichever is longer).
 
 On a nonlinear restoring force (a decay whose ``restoring`` is set) the exact model is
 the law's motion on that force (:func:`bayestribo.adequacy.restoring.chains`: the
@@ -62,7 +71,8 @@ class ExtinctionCheck:
     label : str
         Origin of the draws.
     resolution : float
-        Time resolution of the detected end [s]: two sample periods (the end is the
+        Time resolution of the detected end [s]: the reach of the velocity's line
+        through which the end is refined, at least two sample periods (the end is the
         first sample of the rest tail); the prediction interval is widened by it.
     averaged_note : str
         Why Eq. 38 was not evaluated (a nonlinear restoring force: ``averaged`` is then
@@ -186,31 +196,31 @@ def extinction_check(
     draws : ParameterDraws
         Parameter draws (posterior, or the labelled Gaussian stand-in).
     seed : int, optional
-        Seed of the noise and sampling phase drawn on the model's end of motion on a
-        nonlinear restoring force (not used on the linear spring).
+        Seed of the noise (and, on a nonlinear restoring force, the sampling phase)
+        drawn on the model's motion before its end.
 
     Returns
     -------
     ExtinctionCheck
     """
-    from bayestribo.model import extinction_time, stop_time
+    from bayestribo.model import extinction_time
 
     omega = decay.scaling.omega
     measured = decay.tau_end / omega if decay.motion_ended else None
     dt = float(np.median(np.diff(decay.t)))
     resolution = 2.0 * dt
     note = ""
+    # the detected end is the last excursion's, moved to the root of the velocity's
+    # line before it when that is within a third of the line's samples (motion_span):
+    # the prediction, the last excursion, is known to as much
+    period = 2.0 * decay.peaks.half_period
+    resolution = max(resolution, (max(9, round(period / dt / 8.0)) // 3) * dt)
     if decay.restoring is None:
         tf = np.asarray(extinction_time(draws.y0, draws.zeta, draws.mu), dtype=float)
-        ts = np.asarray(stop_time(draws.y0, draws.zeta, draws.mu, draws.mu_s), dtype=float)
+        ts = _linear_stop(decay, draws, np.random.default_rng(seed))
     else:
         ts = _restoring_stop(decay, draws, np.random.default_rng(seed))
         tf = np.full(ts.shape, np.nan)
-        # the detected end is the last excursion's, moved to the root of the velocity's
-        # line before it when that is within a third of the line's samples
-        # (motion_span): the prediction, the last excursion, is known to as much
-        period = 2.0 * decay.peaks.half_period
-        resolution = max(resolution, (max(9, round(period / dt / 8.0)) // 3) * dt)
         note = (
             f"averaged Eq. 38 not evaluated (the linear spring's averaged motion: it has "
             f"no form on {force_text(decay.restoring)}); the exact model's end is where "
@@ -252,17 +262,13 @@ def _restoring_stop(decay: EnergyDecay, draws: ParameterDraws, rng: np.random.Ge
     (the last half cycle's swing can stay under the threshold, or the noise lift it
     over), thousands of times the interval of the stop's own time.
     """
-    from bayestribo.signal.motion import DISPLACEMENT_THRESHOLD, THRESHOLD
-
     kernel = decay.restoring
     sign0 = 1.0 if decay.peaks.value[0] >= 0.0 else -1.0
     span = float(decay.tau[-1] - decay.tau[0])
     turned, before = first_turn(decay, draws)
     chain = chains(kernel, turned, sign0, RECORDS_FOLLOWED * span, 1_000_000)
     chain = [(tn - b, yn, stopped) for (tn, yn, stopped), b in zip(chain, before, strict=True)]
-    by_velocity = decay.derived_channel != "velocity"
-    noise = float((decay.noise_yp if by_velocity else decay.noise_y) or 0.0)
-    level = (THRESHOLD if by_velocity else DISPLACEMENT_THRESHOLD) * noise
+    by_velocity, noise, level = _detection(decay)
     stopped = np.array([c[2] for c in chain])
     out = np.array([float(c[0][-1]) if c[2] else math.inf for c in chain])
     if not np.any(stopped) or level <= 0.0:
@@ -305,4 +311,76 @@ def _restoring_stop(decay: EnergyDecay, draws: ParameterDraws, rng: np.random.Ge
         last = count - 1 - np.argmax(beyond[:, ::-1], axis=1)
         out[index[hit]] = (t0 + since[np.arange(index.size), last])[hit]
         found[index[hit]] = True
+    return out
+
+
+def _detection(decay: EnergyDecay) -> tuple[bool, float, float]:
+    """How the record's end of motion is detected: on the velocity (True, a recorded
+    velocity) or on the displacement (False, a derived velocity); that channel's noise
+    [-] and the threshold of motion [-] (:data:`~bayestribo.signal.motion.THRESHOLD`
+    or :data:`~bayestribo.signal.motion.DISPLACEMENT_THRESHOLD` times the noise)."""
+    from bayestribo.signal.motion import DISPLACEMENT_THRESHOLD, THRESHOLD
+
+    by_velocity = decay.derived_channel != "velocity"
+    noise = float((decay.noise_yp if by_velocity else decay.noise_y) or 0.0)
+    return by_velocity, noise, (THRESHOLD if by_velocity else DISPLACEMENT_THRESHOLD) * noise
+
+
+#: At most this many values of the model's motion evaluated at once by
+#: :func:`_linear_stop` (draws times samples).
+CHUNK_VALUES = 1_000_000
+
+
+def _linear_stop(decay: EnergyDecay, draws: ParameterDraws, rng: np.random.Generator) -> NDArray:
+    """Each draw's end of motion [-] on the linear spring, as the record's is detected
+    (:func:`bayestribo.signal.motion.motion_span`): the last of the record's samples
+    (τ = k·Δτ from the decay's first one) at which the exact model's velocity, with the
+    record's noise drawn on it, exceeds the threshold of motion (a recorded velocity),
+    or its displacement departs from its rest by more than the displacement's
+    threshold (a derived velocity); searched over the :data:`LAST_HALF_CYCLES` half
+    cycles before the stop (the stop itself when none exceeds it there); ``inf`` for a
+    draw that never stops.
+
+    The model starts where the fits start it (:func:`~bayestribo.adequacy.segments.
+    whole_decay_fit`, the Bayesian likelihood): at the decay's first sample, at ``y0``
+    with the recorded velocity there, its turning point before it located by the
+    exact model (Eq. 16-17 with y'₀).
+    """
+    from bayestribo.model import exact_response, rest_position, stop_time
+
+    sign = 1.0 if decay.y[0] >= 0.0 else -1.0
+    yp0 = float(decay.yp[0])
+    y0 = sign * np.abs(np.asarray(draws.y0, dtype=float))
+    zeta, mu = np.asarray(draws.zeta, dtype=float), np.asarray(draws.mu, dtype=float)
+    mu_s = np.maximum(np.asarray(draws.mu_s, dtype=float), mu)
+    out = np.asarray(stop_time(y0, zeta, mu, mu_s, yp0), dtype=float).copy()
+    by_velocity, noise, level = _detection(decay)
+    stopped = np.flatnonzero(np.isfinite(out))
+    if stopped.size == 0 or level <= 0.0:
+        return out
+    rest = np.asarray(rest_position(y0, zeta, mu, mu_s, yp0), dtype=float)
+    dt = float(np.median(np.diff(decay.t))) * decay.scaling.omega  # sample period [-]
+    back = LAST_HALF_CYCLES * np.pi / np.sqrt(1.0 - zeta * zeta)
+    first = np.maximum(np.ceil((out - back) / dt), 0.0)
+    last = np.floor(out / dt)
+    count = int(np.max((last - first)[stopped])) + 1
+    step = max(1, CHUNK_VALUES // count)
+    for lo in range(0, stopped.size, step):
+        rows = stopped[lo : lo + step]
+        k = first[rows][:, None] + np.arange(count)[None, :]
+        inside = k <= last[rows][:, None]
+        y, yp = exact_response(
+            k * dt,
+            y0[rows][:, None],
+            zeta[rows][:, None],
+            mu[rows][:, None],
+            mu_s[rows][:, None],
+            yp0,
+        )
+        value = yp if by_velocity else y - rest[rows][:, None]
+        value = value + noise * rng.standard_normal(value.shape)
+        beyond = (np.abs(value) > level) & inside
+        hit = beyond.any(axis=1)
+        at = count - 1 - np.argmax(beyond[:, ::-1], axis=1)
+        out[rows[hit]] = k[np.flatnonzero(hit), at[hit]] * dt
     return out

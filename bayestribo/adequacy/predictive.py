@@ -290,7 +290,10 @@ def predictive_check(
     offsets_y = _offsets(decay.t, pos, decay.peaks.t, half_width) * decay.scaling.omega
     offsets_v = _offsets(decay.t, np.array(v_i), np.array(v_t), half_width) * decay.scaling.omega
     if decay.restoring is None:
-        model_y, model_v, a0 = _linear_peaks(draws, n, sign0, sign_seq, offsets_y, offsets_v)
+        # the peaks from the turning point before the decay's first sample, where the
+        # fits start the model (at y0 with the recorded velocity)
+        turned = first_turn(decay, draws)[0]
+        model_y, model_v, _ = _linear_peaks(turned, n, sign0, sign_seq, offsets_y, offsets_v)
     else:
         model_y, model_v = _restoring_peaks(decay, draws, n, sign0, offsets_y, offsets_v)
 
@@ -307,10 +310,11 @@ def predictive_check(
     if decay.restoring is None:
         y_sim, yp_sim = exact_response(
             tau,
-            a0,
+            (1.0 if decay.y[0] >= 0.0 else -1.0) * np.abs(draws.y0)[:, None],
             draws.zeta[:, None],
             draws.mu[:, None],
             np.maximum(draws.mu_s, draws.mu)[:, None],
+            float(decay.yp[0]),
         )
     else:
         y_sim, yp_sim = _restoring_band(decay, draws, sign0, tau)

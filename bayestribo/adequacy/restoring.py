@@ -21,6 +21,7 @@ over draws and peaks.
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -30,6 +31,7 @@ from bayestribo.signal.decay import EnergyDecay
 
 __all__ = [
     "LAW",
+    "LINEAR_SPRING",
     "chains",
     "chosen_run",
     "first_turn",
@@ -43,6 +45,9 @@ __all__ = [
 
 #: The law the checks judge: constant ζ and friction.
 LAW = "viscous+coulomb"
+
+#: The linear spring's force and potential, V'(y) = y and V(y) = y²/2, as a kernel's.
+LINEAR_SPRING = SimpleNamespace(spring=lambda y: y, potential=lambda y: 0.5 * y * y)
 
 #: Runge-Kutta steps per π of τ of :func:`rest_grid` (as the law's integrator takes).
 STEPS_PER_PI = 40
@@ -224,6 +229,8 @@ def first_turn(decay: EnergyDecay, draws: Any) -> tuple[Any, NDArray]:
     and how long before the decay's first sample it was [-] (negative when it comes
     after it), per draw.
 
+    On the linear spring (``decay.restoring`` None) the potential is y²/2.
+
     The least-squares and Bayesian fits start the model at the decay's first sample,
     at ``y0`` with the recorded velocity there (``decay.yp[0]``: the sample nearest the
     turning point is not on it); the turning point before it is that of the undamped
@@ -233,7 +240,7 @@ def first_turn(decay: EnergyDecay, draws: Any) -> tuple[Any, NDArray]:
     """
     import dataclasses
 
-    kernel = decay.restoring
+    kernel = decay.restoring or LINEAR_SPRING
     yp0 = float(decay.yp[0])
     y0 = np.abs(np.asarray(draws.y0, dtype=float))
     energy = 0.5 * yp0 * yp0 + np.asarray(kernel.potential(y0), dtype=float)
