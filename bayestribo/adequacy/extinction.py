@@ -67,7 +67,8 @@ class ExtinctionCheck:
     record_end : float
         End of the analysed record [s after the analysis start].
     averaged, exact : ndarray
-        Predicted durations per draw [s] (``inf`` where the motion never stops).
+        Predicted durations per draw [s] (``inf`` where the motion never stops):
+        Eq. 38, and the exact model's end as the record's is detected.
     label : str
         Origin of the draws.
     resolution : float
@@ -142,7 +143,8 @@ class ExtinctionCheck:
         Returns
         -------
         dict of str to ParameterSummary
-            ``"exact"`` (the exact model's last turning point, Eq. 8) and
+            ``"exact"`` (the exact model's end as the record would show it: its last
+            sample beyond the threshold of motion before its stop, Eq. 8) and
             ``"averaged"`` (Eq. 38), each over its finite durations; a model none of
             whose draws stops is left out (``to_dict()`` gives the finite fraction).
             The measured end is :attr:`measured`.
