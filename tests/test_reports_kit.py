@@ -30,6 +30,46 @@ def test_a_plain_figure_has_no_overlapping_labels():
     plt.close(fig)
 
 
+def test_the_overlaps_are_those_of_a_full_draw():
+    """The check lays the figure out without rasterising it: the texts' boxes are a
+    full draw's (exactly; a constrained layout, whose solver moves on by hundredths of
+    a pixel from one draw to the next, within 0.05 px), and so are the overlaps."""
+    from bayestribo.reports.kit import _texts
+
+    def figure(layout):
+        fig, axes = plt.subplots(2, 1, figsize=(2.5, 2), layout=layout)
+        for ax in axes:
+            ax.plot([0.02360001, 0.02360009], [0, 1])
+            ax.ticklabel_format(useOffset=False)
+            ax.set_xticks([0.02360001 + i * 1e-8 for i in range(9)])
+            ax.set_ylabel("μ$_{k}$ [-]")
+        return fig
+
+    for layout, tolerance in ((None, 0.0), ("tight", 0.0), ("constrained", 0.05)):
+        fig, reference = figure(layout), figure(layout)
+        found = overlapping_labels(fig)
+        laid_out = [t.get_window_extent(fig.canvas.get_renderer()) for _, t in _texts(fig)]
+        reference.canvas.draw()  # the first draw of the same figure, in full
+        renderer = reference.canvas.get_renderer()
+        drawn = [t.get_window_extent(renderer) for _, t in _texts(reference)]
+        assert len(laid_out) == len(drawn) == 24
+        for a, b in zip(laid_out, drawn, strict=True):
+            assert max(abs(u - v) for u, v in zip(a.bounds, b.bounds, strict=True)) <= tolerance
+        # the overlapping pairs of the drawn boxes, shrunk by a pixel as the check does
+        pairs = [
+            (i, j)
+            for i, a in enumerate(drawn)
+            for j, b in enumerate(drawn[i + 1 :], i + 1)
+            if a.x1 - 1 > b.x0 + 1
+            and b.x1 - 1 > a.x0 + 1
+            and a.y1 - 1 > b.y0 + 1
+            and b.y1 - 1 > a.y0 + 1
+        ]
+        assert found and len(found) == len(pairs)
+        plt.close(fig)
+        plt.close(reference)
+
+
 @pytest.mark.parametrize("fmt", FIGURE_FORMATS)
 def test_figures_are_written_in_the_format_asked_for(tmp_path, fmt):
     save = setup(str(tmp_path / "figs"), fmt)

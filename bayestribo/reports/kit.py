@@ -520,7 +520,10 @@ def overlapping_labels(fig: Any) -> list[str]:
         ``"'a' (x tick of 'title') and 'b' (y label of ...)"`` for each overlapping
         pair; empty if none.
     """
-    fig.canvas.draw()
+    # the layout of a draw without its pixels: the same boxes as a full draw (same
+    # renderer and dpi) at a quarter of its time; the figure is rasterised later, once
+    # for its file and once for the page
+    fig.draw_without_rendering()
     renderer = fig.canvas.get_renderer()
     boxes = [(w, t, t.get_window_extent(renderer)) for w, t in _texts(fig)]
     found = []
