@@ -47,11 +47,25 @@ __all__ = [
 #: Column name that skips a column of a text file.
 IGNORE = "ignore"
 
-#: Words naming each canonical quantity (lower case). Angular quantities come first:
-#: ``angular_velocity_rad_per_s`` is an angular velocity, not a velocity.
+#: Words naming each canonical quantity (lower case), in English and in the languages
+#: of the labs whose sensor software heads a column in theirs (German, French,
+#: Italian, Spanish, Dutch: ``Zeit [s]``, ``Weg [mm]``, ``vitesse (m/s)``). Angular
+#: quantities come first: ``angular_velocity_rad_per_s`` is an angular velocity, not a
+#: velocity.
 QUANTITIES: dict[str, tuple[str, ...]] = {
     ANGULAR_ACCELERATION: ("angular_acceleration", "angular acceleration"),
-    ACCELERATION: ("acceleration", "accel", "acc", "a"),
+    ACCELERATION: (
+        "acceleration",
+        "accel",
+        "acc",
+        "a",
+        "beschleunigung",
+        "accélération",
+        "accelerazione",
+        "aceleración",
+        "aceleracion",
+        "versnelling",
+    ),
     ANGULAR_VELOCITY: (
         "angular_velocity",
         "angular velocity",
@@ -60,10 +74,51 @@ QUANTITIES: dict[str, tuple[str, ...]] = {
         "omega",
         "ω",
     ),
-    ANGLE: ("angle", "angular position", "angular displacement", "theta", "θ", "phi", "φ"),
-    TIME: ("time", "t"),
-    DISPLACEMENT: ("displacement", "position", "distance", "x"),
-    VELOCITY: ("velocity", "speed", "v"),
+    ANGLE: (
+        "angle",
+        "angular position",
+        "angular displacement",
+        "theta",
+        "θ",
+        "phi",
+        "φ",
+        "winkel",
+        "angolo",
+        "ángulo",
+        "angulo",
+        "hoek",
+    ),
+    TIME: ("time", "t", "zeit", "temps", "tempo", "tiempo", "tijd"),
+    DISPLACEMENT: (
+        "displacement",
+        "position",
+        "distance",
+        "x",
+        "weg",
+        "auslenkung",
+        "verschiebung",
+        "déplacement",
+        "deplacement",
+        "spostamento",
+        "posizione",
+        "desplazamiento",
+        "posición",
+        "posicion",
+        "positie",
+        "verplaatsing",
+        "uitwijking",
+    ),
+    VELOCITY: (
+        "velocity",
+        "speed",
+        "v",
+        "geschwindigkeit",
+        "vitesse",
+        "velocità",
+        "velocita",
+        "velocidad",
+        "snelheid",
+    ),
 }
 
 _DEGREE = math.pi / 180.0
