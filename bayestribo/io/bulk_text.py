@@ -185,12 +185,14 @@ def _parse_arrow(
     return columns
 
 
-def _read_pandas(path: Path, delimiter: str | None, skip: int, width: int) -> list[NDArray] | None:
-    """pandas' C parser, held to numpy's reader: every field a number (no quotes; an
-    empty cell, "NA" or "nan" is an error here, and numpy reads the file: "nan" as
-    NaN, the others refused), every row ``width`` fields, each number correctly
-    rounded (pandas 3.1's one converter; "round_trip", Python's conversion, before
-    it)."""
+def _pandas_frame(
+    path: Path, delimiter: str | None, skip: int, width: int, dtype: Any
+) -> Any | None:
+    """pandas' C parser, held to numpy's reader: every field of a float64 column a
+    number (no quotes; an empty cell, "NA" or "nan" is an error here, and numpy reads
+    the file: "nan" as NaN, the others refused), every row ``width`` fields, each
+    number correctly rounded (pandas 3.1's one converter; "round_trip", Python's
+    conversion, before it). The frame, or None to leave the file to another reader."""
     try:
         import pandas
     except ImportError:  # a core dependency, but numpy's reader does without
@@ -208,7 +210,7 @@ def _read_pandas(path: Path, delimiter: str | None, skip: int, width: int) -> li
                 sep=r"\s+" if delimiter is None else delimiter,
                 header=None,
                 skiprows=skip,
-                dtype=np.float64,
+                dtype=dtype,
                 engine="c",
                 comment=None,
                 quoting=csv.QUOTE_NONE,
@@ -220,6 +222,14 @@ def _read_pandas(path: Path, delimiter: str | None, skip: int, width: int) -> li
     except (ValueError, UnicodeDecodeError, OverflowError, pandas.errors.ParserError):
         return None
     if frame.shape[1] != width or frame.shape[0] < 1:
+        return None
+    return frame
+
+
+def _read_pandas(path: Path, delimiter: str | None, skip: int, width: int) -> list[NDArray] | None:
+    """Every column a float64 array, by :func:`_pandas_frame`, or None."""
+    frame = _pandas_frame(path, delimiter, skip, width, np.float64)
+    if frame is None:
         return None
     # column by column: to_numpy() of the frame interleaves the rows (50 ms at
     # 1,000,001 rows), and each column is read whole afterwards
@@ -253,33 +263,9 @@ def read_with_text(
         The ``width`` columns, each a contiguous float64 array (None for a text
         column), and the cells of each text column by its index.
     """
-    try:
-        import pandas
-    except ImportError:
-        return None
-    options: dict = {}
-    if tuple(int(p) for p in re.findall(r"\d+", pandas.__version__)[:2]) < (3, 1):
-        options["float_precision"] = "round_trip"
     dtype = {j: (str if j in text else np.float64) for j in range(width)}
-    try:
-        with path.open("rb") as handle:
-            frame = pandas.read_csv(
-                handle,
-                sep=r"\s+" if delimiter is None else delimiter,
-                header=None,
-                skiprows=skip,
-                dtype=dtype,
-                engine="c",
-                comment=None,
-                quoting=csv.QUOTE_NONE,
-                na_filter=False,
-                skip_blank_lines=True,
-                encoding="utf-8",
-                **options,
-            )
-    except (ValueError, UnicodeDecodeError, OverflowError, pandas.errors.ParserError):
-        return None
-    if frame.shape[1] != width or frame.shape[0] < 1:
+    frame = _pandas_frame(path, delimiter, skip, width, dtype)
+    if frame is None:
         return None
     numbers: list[NDArray | None] = [
         None if j in text else frame.iloc[:, j].to_numpy(dtype=np.float64, copy=True)
