@@ -136,6 +136,7 @@ def law_frame_frequency(decay: EnergyDecay, *, seed: int = 0) -> float | None:
     within a quarter period.
     """
     from bayestribo.adequacy.segments import whole_decay_fit
+    from bayestribo.inference.preparation import match_turning_times
 
     times = decay.turning_times
     if decay.restoring is None or times is None or np.size(times) < 4:
@@ -148,21 +149,14 @@ def law_frame_frequency(decay: EnergyDecay, *, seed: int = 0) -> float | None:
         float(decay.yp[0]),
         tau_max=float(decay.tau[-1] - decay.tau[0]) + 2.0 * math.pi,
     )
-    if tau_law.size < 3:
+    matched = match_turning_times(tau_law, decay)
+    if matched is None:
         return None
-    tau_meas = decay.scaling.omega * (np.asarray(times, dtype=float) - decay.start_time)
-    at = np.clip(np.searchsorted(tau_law, tau_meas), 1, tau_law.size - 1)
-    nearer = np.where(
-        np.abs(tau_law[at - 1] - tau_meas) <= np.abs(tau_law[at] - tau_meas), at - 1, at
-    )
-    close = np.abs(tau_law[nearer] - tau_meas) <= 0.25 * math.pi
-    nearer = nearer[close]
-    if close.sum() < max(4, 0.9 * close.size) or np.unique(nearer).size != nearer.size:
-        return None
+    tau_meas, tau_matched, close = matched
     weight = np.abs(np.asarray(decay.peaks.value, dtype=float))[close]
-    if weight.size != nearer.size or not np.any(weight > 0.0):
-        weight = np.ones(nearer.size)
-    slope = float(np.polyfit(tau_law[nearer], tau_meas[close], 1, w=np.sqrt(weight))[0])
+    if weight.size != tau_matched.size or not np.any(weight > 0.0):
+        weight = np.ones(tau_matched.size)
+    slope = float(np.polyfit(tau_matched, tau_meas, 1, w=np.sqrt(weight))[0])
     if not (math.isfinite(slope) and slope > 0.0):
         return None
     return decay.scaling.omega / slope / (2.0 * math.pi)

@@ -36,6 +36,7 @@ if TYPE_CHECKING:
 __all__ = [
     "data_seed",
     "law_frequency",
+    "match_turning_times",
     "matched_law_times",
     "prepare",
     "prepare_part",
@@ -431,7 +432,18 @@ def matched_law_times(
         tau_max=float(data.tau_end) + 2.0 * math.pi,
         reference=posterior.likelihood.reference_amplitude,
     )
-    if tau_law.size < 3:
+    return match_turning_times(tau_law, decay)
+
+
+def match_turning_times(
+    tau_law: NDArray, decay: EnergyDecay
+) -> tuple[NDArray, NDArray, NDArray] | None:
+    """The record's turning times τ (in its frame) that have a turning time of the law,
+    ``tau_law`` (in the same frame), within a quarter period, the law's matched to
+    them, and which of the record's have one; None with fewer than 3 of the law's,
+    fewer than 90 % (and 4) of the record's matched, or two matched to one."""
+    times = decay.turning_times
+    if times is None or np.size(times) < 4 or tau_law.size < 3:
         return None
     tau_meas = decay.scaling.omega * (np.asarray(times, dtype=float) - decay.start_time)
     at = np.clip(np.searchsorted(tau_law, tau_meas), 1, tau_law.size - 1)
