@@ -222,15 +222,19 @@ def prepare(
     recording, channels = calibrate_channels(recording, correct=correct_channels)
     auto = dict(recording.metadata).get("restoring") == AUTO
     linear = auto or _linear_spring(recording)
-    decay = energy_decay(
-        recording.time,
-        recording.displacement,
-        recording.velocity,
-        rig=recording.rig(),
-        skip_oscillations=skip_oscillations,
-        notch=notch,
-        linear_spring=linear,
-    )
+
+    def analysed(linear_spring: bool) -> EnergyDecay:
+        return energy_decay(
+            recording.time,
+            recording.displacement,
+            recording.velocity,
+            rig=recording.rig(),
+            skip_oscillations=skip_oscillations,
+            notch=notch,
+            linear_spring=linear_spring,
+        )
+
+    decay = analysed(linear)
     choice = None
     if auto:
         # restoring "auto": chosen from the linear analysis's turning times; a linear
@@ -247,15 +251,7 @@ def prepare(
         if not linear:
             # analysed again as a run that names the force is (its turning points not
             # held to a linear oscillator's)
-            decay = energy_decay(
-                recording.time,
-                recording.displacement,
-                recording.velocity,
-                rig=recording.rig(),
-                skip_oscillations=skip_oscillations,
-                notch=notch,
-                linear_spring=False,
-            )
+            decay = analysed(False)
     restoring = None if linear else _run_restoring(recording, decay)
     if restoring is not None:
         # the small swings' frequency scales time (τ = ω₀t), in which V is written
