@@ -9,7 +9,7 @@ was counted as rest noise (the velocity's noise 1.9 times the simulated), and ζ
 2.5 to 4.7 sd low; the 10 s rest, shorter than the motion's two-period blocks, made the
 record one that starts in motion, whose integral's wander at rest gave a turning point.
 ``benchmarks/seismometer.py`` measures the coverage over seeds
-(``results/seismometer_fade.json``).
+(``results/seismometer_fade_moment.json``).
 """
 
 from __future__ import annotations
@@ -96,6 +96,11 @@ def test_the_default_fit_covers_zeta_without_a_misfit():
     assert not [w for w in caught if issubclass(w.category, MisfitWarning)]
     lo, hi = result.interval("zeta", 0.95)
     assert lo <= ZETA <= hi
+    # The half period's trend is within its standard error (the last swings are timed
+    # to a few percent of a half period): no frequency nuisance widens ζ's interval
+    # (½√(Δ̂² + σ_Δ²) made it 1.5 times the fit's own).
+    assert abs(result.frequency_trend["z"]) <= 1.0
+    assert result.idata.posterior.attrs["frequency_nuisance_sd"] == 0.0
 
 
 def test_an_offset_that_drifts_between_the_rests_is_flagged(decay_and_warnings):
