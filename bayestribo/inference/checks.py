@@ -249,19 +249,12 @@ def frequency_nuisance_sd(trend: FrequencyTrend | None) -> float:
     """Relative standard deviation of the frequency nuisance ε from the frequency trend.
 
     The equivalent constant frequency of a decay whose half period changes by a
-    fraction Δ from the largest swing to the smallest lies anywhere in that span: ε
-    gets the standard deviation ½|Δ|, so that its 95 % interval reaches both ends of
-    the span about the measured frequency (which lies inside it). Δ is measured as Δ̂
-    with a standard error σ_Δ, and the mean of Δ̂² is Δ² + σ_Δ²: Δ² is taken as its
-    moment estimate, the part of Δ̂² beyond the noise, max(Δ̂² - σ_Δ², 0), and ε's
-    standard deviation is ½√max(Δ̂² - σ_Δ², 0) = ½|Δ̂|√max(1 - 1/z², 0) (z = Δ̂/σ_Δ).
-    A trend within its standard error (|z| ≤ 1) gives no nuisance; a clear one
-    (Duffing, a pendulum: |z| in the tens) gives ½|Δ̂| to within 1/z² of it.
-
-    (½√(Δ̂² + σ_Δ²), which counted the noise twice, made ε about 0.6 σ_Δ for a linear
-    oscillator. Where the smallest swings are poorly timed, a velocity fading into its
-    noise (``benchmarks/seismometer.py``), σ_Δ is 7-17e-4, two to four times ζ's own
-    relative sd, and ζ's intervals came out 2.4 times too wide.)
+    fraction Δ (± its standard error σ_Δ) from the largest swing to the smallest lies
+    anywhere in that span: ε gets the standard deviation ½√(Δ² + σ_Δ²), so that its
+    95 % interval reaches both ends of the span about the measured frequency (which
+    lies inside it). A linear oscillator's Δ is noise, of order σ_Δ, and ε is then
+    small beside ζ's own uncertainty (see
+    :func:`bayestribo.inference.assemble.derived_quantities`).
 
     Parameters
     ----------
@@ -272,17 +265,11 @@ def frequency_nuisance_sd(trend: FrequencyTrend | None) -> float:
     Returns
     -------
     float
-        ε's standard deviation [-], 0 for no trend beyond its standard error.
     """
     if trend is None or not math.isfinite(trend.change):
         return 0.0
-    if not trend.z:
-        return 0.0
-    if math.isnan(trend.z):  # no standard error: all of the change is taken as trend
-        return 0.5 * abs(trend.change)
-    # 1/z² of a change measured exactly (z infinite) is 0: all of it is the trend
-    beyond = 1.0 - 1.0 / (trend.z * trend.z)
-    return 0.5 * abs(trend.change) * math.sqrt(max(beyond, 0.0))
+    se = abs(trend.change / trend.z) if trend.z and math.isfinite(trend.z) else 0.0
+    return 0.5 * math.hypot(trend.change, se)
 
 
 def _beyond_the_law(
