@@ -25,6 +25,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any
 
+import numpy as np
+
 from bayestribo.adequacy.constancy import ConstancyTest, constancy_test
 from bayestribo.adequacy.draws import (
     ParameterDraws,
@@ -266,6 +268,32 @@ def _checks(
     ]
 
 
+#: Periods of the rest after the stop whose displacement gives the record's rest.
+REST_PERIODS = 10
+
+
+def _record_rest(run: Any, decay: EnergyDecay) -> tuple[float, float] | None:
+    """The record's rest after its stop [-] and its standard error [-]: the median over
+    up to :data:`REST_PERIODS` periods after the decay's end of the displacement about
+    the decay's equilibrium (its line), over ℓ; None without a displacement channel or
+    samples at rest."""
+    t = getattr(run, "time", None)
+    x = getattr(run, "displacement", None)
+    if t is None or x is None or not decay.motion_ended:
+        return None
+    t, x = np.asarray(t, dtype=float), np.asarray(x, dtype=float)
+    period = 1.0 / decay.damped_frequency_Hz
+    tail = (t > decay.end_time) & (t <= decay.end_time + REST_PERIODS * period)
+    if np.count_nonzero(tail) < 2:
+        return None
+    line = decay.equilibrium + decay.equilibrium_drift * (t[tail] - decay.start_time)
+    y = (x[tail] - line) / decay.scaling.length_scale
+    rest = float(np.median(y))
+    # the median's standard error, √(π/2) σ/√n
+    se = 1.2533 * float(np.std(y)) / np.sqrt(y.size)
+    return (rest, se) if np.isfinite(rest) and np.isfinite(se) else None
+
+
 def check_adequacy(
     run: Any,
     *,
@@ -381,7 +409,14 @@ def check_adequacy(
     else:
         draws = draws_from_least_squares(whole_decay_fit(decay, seed=seed), n_draws, seed=seed)
         if decay.restoring is None:
-            draws = static_friction_at_rest(draws, decay, seed=seed)
+            rest = None if isinstance(run, EnergyDecay) else _record_rest(run, decay)
+            draws = static_friction_at_rest(
+                draws,
+                decay,
+                rest=None if rest is None else rest[0],
+                rest_sd=None if rest is None else rest[1],
+                seed=seed,
+            )
     extinction = extinction_check(decay, draws, seed=seed, alpha=level)
     predictive = predictive_check(decay, draws, seed=seed)
     try:
