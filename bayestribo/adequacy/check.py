@@ -16,7 +16,7 @@ motion against the model's ``1 - α/3`` interval), so the verdict says "not adeq
 on a record of the law at most ``alpha`` of the time (5 % by default). The peaks'
 check is a fixed rule (at least :data:`MIN_PEAK_COVERAGE` of the peaks inside their
 95 % predictive intervals), not a test at a level; on records of the law it failed
-none of 362 (``benchmarks/README.md``, "The adequacy verdict's level").
+none of 442 (``benchmarks/README.md``, "The adequacy verdict's level").
 """
 
 from __future__ import annotations
