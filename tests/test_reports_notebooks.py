@@ -278,6 +278,8 @@ def test_notebook_executes_with_test_parameters(name, request):
         adequacy = record["adequacy"]
         assert adequacy["adequate"] == all(c["passed"] is not False for c in adequacy["checks"])
         assert f"Verdict: {adequacy['verdict']}." in text
+        # and its false-alarm rate on a record of the law, stated under it
+        assert "verdict says" in adequacy["level"] and "at most 5 % of the time" in text
     if name in ("loads", "viscosity"):
         record = json.loads(summary.read_text())
         # every value with its interval is one of the fits' or the populations', the

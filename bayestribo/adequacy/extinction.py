@@ -38,6 +38,7 @@ from numpy.typing import NDArray
 
 from bayestribo.adequacy.draws import ParameterDraws
 from bayestribo.adequacy.restoring import chains, first_turn, force_text, hermite, rest_grid
+from bayestribo.errors import BayestriboError
 from bayestribo.signal.decay import EnergyDecay
 from bayestribo.summary import ParameterSummary, check_prob, interval_text
 
@@ -78,6 +79,10 @@ class ExtinctionCheck:
     averaged_note : str
         Why Eq. 38 was not evaluated (a nonlinear restoring force: ``averaged`` is then
         NaN); empty when it was.
+    alpha : float
+        False-alarm rate of :meth:`consistent` on a record of the law: the measured end
+        is tested against the central ``1 - alpha`` of the predictions (0.05: their
+        95 % interval).
     """
 
     measured: float | None
@@ -87,6 +92,12 @@ class ExtinctionCheck:
     label: str
     resolution: float = 0.0
     averaged_note: str = ""
+    alpha: float = 0.05
+
+    @property
+    def interval_text(self) -> str:
+        """The prediction interval tested, in words (``95 %``, ``98.3 %``)."""
+        return f"{100.0 * (1.0 - self.alpha):.3g} %"
 
     def quantile_of_measured(self, which: str = "exact") -> float | None:
         """Fraction of predicted durations below the measured one (None if not measured)."""
@@ -96,18 +107,20 @@ class ExtinctionCheck:
         return float(np.mean(pred < self.measured))
 
     def consistent(self, which: str = "exact") -> bool | None:
-        """True when the measured end lies inside the central 95 % of the predictions.
+        """True when the measured end lies inside the central ``1 - alpha`` of the
+        predictions, widened by :attr:`resolution`.
 
         Without a measured end: True when the predictions allow the motion to last
-        beyond the record (at least 2.5 % of them do).
+        beyond the record (at least ``alpha / 2`` of them do).
         """
         pred = self.exact if which == "exact" else self.averaged
+        tail = 0.5 * self.alpha
         if self.measured is None:
-            return bool(np.mean(pred > self.record_end) >= 0.025)
+            return bool(np.mean(pred > self.record_end) >= tail)
         finite = pred[np.isfinite(pred)]
         if finite.size == 0:
             return False
-        lo, hi = np.quantile(finite, [0.025, 0.975])
+        lo, hi = np.quantile(finite, [tail, 1.0 - tail])
         return bool(lo - self.resolution <= self.measured <= hi + self.resolution)
 
     @property
@@ -130,7 +143,10 @@ class ExtinctionCheck:
                 f"({'consistent' if self.consistent() else 'not consistent'} with the prediction)"
             )
         verdict = "inside" if self.consistent() else "outside"
-        return f"{pred}; measured {self.measured:.4g} s, {verdict} the exact model's 95 % interval"
+        return (
+            f"{pred}; measured {self.measured:.4g} s, {verdict} the exact model's "
+            f"{self.interval_text} interval"
+        )
 
     def summary(self, prob: float = 0.95) -> dict[str, ParameterSummary]:
         """Summaries of the predicted durations [s] over the draws that stop.
@@ -173,6 +189,7 @@ class ExtinctionCheck:
             "consistent_exact": self.consistent("exact"),
             "consistent_averaged": self.consistent("averaged"),
             "resolution_s": self.resolution,
+            "alpha": self.alpha,
             "draws": self.label,
             "statement": self.statement,
         }
@@ -187,7 +204,7 @@ class ExtinctionCheck:
 
 
 def extinction_check(
-    decay: EnergyDecay, draws: ParameterDraws, *, seed: int | None = 0
+    decay: EnergyDecay, draws: ParameterDraws, *, seed: int | None = 0, alpha: float = 0.05
 ) -> ExtinctionCheck:
     """Predicted end of motion (Eq. 38 and the exact model) against the detected one.
 
@@ -200,12 +217,23 @@ def extinction_check(
     seed : int, optional
         Seed of the noise (and, on a nonlinear restoring force, the sampling phase)
         drawn on the model's motion before its end.
+    alpha : float
+        False-alarm rate of the check, in (0, 1): the measured end is tested against the
+        central ``1 - alpha`` of the predictions (:meth:`ExtinctionCheck.consistent`).
 
     Returns
     -------
     ExtinctionCheck
+
+    Raises
+    ------
+    BayestriboError
+        ``alpha`` outside (0, 1).
     """
     from bayestribo.model import extinction_time
+
+    if not (isinstance(alpha, (int, float)) and 0.0 < float(alpha) < 1.0):
+        raise BayestriboError(f"alpha must be a number in (0, 1), got {alpha!r}")
 
     omega = decay.scaling.omega
     measured = decay.tau_end / omega if decay.motion_ended else None
@@ -237,6 +265,7 @@ def extinction_check(
         label=draws.label,
         resolution=resolution,
         averaged_note=note,
+        alpha=float(alpha),
     )
 
 

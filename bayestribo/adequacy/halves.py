@@ -172,7 +172,7 @@ class SplitHalves:
                 held += f"; the {label} half: {', '.join(notes)}"
         test = (
             f"χ² = {self.chi2:.3g} for {self.dof} dof, p = {self.p_value:.2g} "
-            f"{'≥' if self.consistent else '<'} α = {self.alpha:g}"
+            f"{'≥' if self.consistent else '<'} α = {self.alpha:.3g}"
         )
         if self.consistent:
             return f"the two halves agree ({', '.join(parts)}; {test}{held})"

@@ -154,11 +154,13 @@ def plot_windows(
 def plot_extinction(check: ExtinctionCheck, ax: Any = None) -> Any:
     """Predicted end of motion (exact model and Eq. 38) against the measured one.
 
-    Each model's predictions over the draws are shown as their median and central
-    95 % interval, on the scale of the difference from the measured end (or from the
-    record's end when the motion outlasts the record) in milliseconds, so that
-    intervals far narrower than the time since the release stay visible; the measured
-    end's resolution (two sample periods) is the grey band around zero. A model whose
+    Each model's predictions over the draws are shown as their median and the central
+    interval the check tests (``1 - check.alpha``: 95 %, or 98.3 % in the verdict of
+    :func:`~bayestribo.adequacy.check_adequacy`), on the scale of the difference from
+    the measured end (or from the record's end when the motion outlasts the record) in
+    milliseconds, so that intervals far narrower than the time since the release stay
+    visible; the measured end's resolution (two sample periods) is the grey band around
+    zero. A model whose
     draws never stop is said so on its row, and so is Eq. 38 where it was not evaluated
     (a nonlinear restoring force).
 
@@ -190,9 +192,10 @@ def plot_extinction(check: ExtinctionCheck, ax: Any = None) -> Any:
         if finite.size == 0:
             ax.text(0.0, y, f"{label}: never stops", ha="center", va="center", fontsize=9)
             continue
-        lo, med, hi = np.quantile(finite, [0.025, 0.5, 0.975])
+        tail = 0.5 * check.alpha
+        lo, med, hi = np.quantile(finite, [tail, 0.5, 1.0 - tail])
         ax.plot([lo, hi], [y, y], color=color, lw=3, solid_capstyle="butt")
-        ax.plot([med], [y], "o", color=color, ms=6, label=f"{label}: median, 95 %")
+        ax.plot([med], [y], "o", color=color, ms=6, label=f"{label}: median, {check.interval_text}")
         spans += [lo, hi]
     if check.resolution > 0:
         ax.axvspan(

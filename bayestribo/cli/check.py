@@ -48,7 +48,9 @@ def register(subparsers: Any) -> None:
             "whether they agree. Without a Bayesian fit the parameter draws come from the "
             "Gaussian approximation of the least-squares fit, and the report says so. With "
             "--restoring (or the sidecar's restoring) every check takes that restoring "
-            "force's motion."
+            "force's motion. The verdict is 'not adequate' when any check fails; on a "
+            "record of the law it says so at most --alpha of the time (the constancy "
+            "test, the halves and the end of motion each at alpha/3, Bonferroni)."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
@@ -59,7 +61,13 @@ def register(subparsers: Any) -> None:
         help="length of the windowed fits in oscillations (default: about 1/8 of the decay); "
         "--window T0:T1 crops the record",
     )
-    p.add_argument("--alpha", type=float, default=0.05, help="false-alarm rate of the test")
+    p.add_argument(
+        "--alpha",
+        type=float,
+        default=0.05,
+        help="false-alarm rate of the verdict on a record of the law (each of its three "
+        "tests at alpha/3)",
+    )
     p.add_argument("--draws", type=int, default=400, help="parameter draws for the checks")
     p.add_argument(
         "--bayes",

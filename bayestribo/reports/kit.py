@@ -590,7 +590,8 @@ def facts(items: Mapping[str, Any], *, title: str) -> None:
 
 def checks(adequacy: Any) -> None:
     """Show an adequacy check's checks, each passed or failed with its statement, then
-    its verdict in a sentence of its own (``Verdict: ... .``)."""
+    its verdict in a sentence of its own (``Verdict: ... .``) and, where the check states
+    it (``level_text``), the verdict's false-alarm rate on a record of the law."""
     from IPython.display import Markdown
 
     mark = {True: "passed", False: "**failed**", None: "not made"}
@@ -603,6 +604,9 @@ def checks(adequacy: Any) -> None:
         )
     )
     verdict("Verdict: " + adequacy.verdict + ".")
+    level = getattr(adequacy, "level_text", None)
+    if level:
+        _display(Markdown(sentence(level)))
 
 
 def about(items: Mapping[str, Any], *, title: str = "About this report") -> None:
