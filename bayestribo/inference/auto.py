@@ -44,6 +44,7 @@ from bayestribo.inference.law_frame import posterior_like, sample_in_law_frame
 from bayestribo.inference.preparation import law_frequency
 from bayestribo.inference.records import LawComparison
 from bayestribo.inference.sampling import SamplerSettings
+from bayestribo.inference.screening import LawOptimum
 from bayestribo.inference.summarising import Summary, summary
 from bayestribo.inference.types import PreparedRun, Sampled
 from bayestribo.model.laws import get_law
@@ -88,6 +89,7 @@ def fit_auto(
         halves' check and each law's departure from the turning points' ΔE(A), its
         ``dissipation`` averaged over the laws as good where there are several.
     """
+    at_optima: dict[str, LawOptimum] = {}
     comparison, runs = compare_prepared(
         prepared,
         auto_laws(),
@@ -97,6 +99,7 @@ def fit_auto(
         discrepancy=discrepancy,
         law_free=True,
         progress=progress,
+        at_optima=at_optima,
     )
     common = prepared
     sampled = runs[comparison.verdict]
@@ -104,7 +107,10 @@ def fit_auto(
         # the verdict fitted again as that law alone is (sample_law): in the frame
         # of its own turning times, found from the optimiser's optimum. The
         # comparison's best draw, which the seed moves, set the frame before, and
-        # the frame moved the answer by up to 0.7 posterior sd from seed to seed
+        # the frame moved the answer by up to 0.7 posterior sd from seed to seed. The
+        # comparison's search from the first guesses is the record frame's; where the
+        # law's frame is the record's own, the comparison's draws are those of the
+        # very posterior the refit would sample, and are kept
         verdict = sampled.posterior
         (progress or (lambda text: None))(
             f"fitting {comparison.verdict} again in the frame of its own turning times"
@@ -114,6 +120,8 @@ def fit_auto(
             lambda prep: posterior_like(verdict, prep, model, discrepancy),
             settings,
             rng,
+            known=at_optima.get(comparison.verdict),
+            known_run=sampled,
         )
     summarised = summary(prepared, sampled, seed=rng, recorded_seed=recorded_seed, compared=True)
     record = summarised.record
