@@ -80,7 +80,8 @@ def test_another_posterior_is_searched_and_sampled_afresh(known, monkeypatch):
     prepared, at = known
     # the same law on other data: the comparison's optimum is not this posterior's
     other = dataclasses.replace(
-        prepared, data=dataclasses.replace(prepared.data, increments=prepared.data.increments * 1.01)
+        prepared,
+        data=dataclasses.replace(prepared.data, increments=prepared.data.increments * 1.01),
     )
     searched, sampled = [], []
     real = law_frame.maximum_a_posteriori
@@ -91,7 +92,9 @@ def test_another_posterior_is_searched_and_sampled_afresh(known, monkeypatch):
 
     monkeypatch.setattr(law_frame, "_in_law_frame", lambda *args: None)
     monkeypatch.setattr(law_frame, "maximum_a_posteriori", search)
-    monkeypatch.setattr(law_frame, "sample_from", lambda start, **kw: sampled.append(start) or "new")
+    monkeypatch.setattr(
+        law_frame, "sample_from", lambda start, **kw: sampled.append(start) or "new"
+    )
     _, out = sample_in_law_frame(
         other,
         _posterior_on(at),

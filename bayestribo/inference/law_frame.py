@@ -149,7 +149,10 @@ def _same_start(start: Start, known: LawOptimum | None, known_run: Sampled | Non
     if known is None or known_run is None or known_run.posterior is not known.second:
         return False
     theta, cov, _ = known.second_optimum
-    if start.posterior.names != known.second.names or start.posterior.law.name != known.second.law.name:
+    if (
+        start.posterior.names != known.second.names
+        or start.posterior.law.name != known.second.law.name
+    ):
         return False
     if not (np.array_equal(start.theta, theta) and np.array_equal(start.cov, cov)):
         return False
