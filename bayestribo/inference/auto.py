@@ -10,8 +10,9 @@ and gives the :class:`~bayestribo.inference.summarising.Summary` of the law it c
    :class:`~bayestribo.inference.types.Sampled`;
 2. choose: the comparison's verdict; a law without a closed form refitted alone in
    the frame of its own turning times (:func:`bayestribo.inference.law_frame.
-   sample_in_law_frame`), and summarised (:func:`bayestribo.inference.summarising.
-   summarise`);
+   sample_in_law_frame`, from the comparison's optimum; where that frame is the
+   record's own, the posterior it samples is the comparison's, whose draws are kept),
+   and summarised (:func:`bayestribo.inference.summarising.summarise`);
 3. check: ΔE(A) averaged over the laws as good as the verdict (:func:`_averaged_band`),
    the verdict fitted to each half of the motion (:func:`bayestribo.inference.halves.
    law_halves`) and each law's ΔE(A) set beside the turning points' (
