@@ -8,10 +8,12 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from _comparison_stubs import stub_fits
 
 from bayestribo.inference import comparison, law_frame, prepare
 from bayestribo.inference.law_frame import posterior_like, sample_in_law_frame
 from bayestribo.inference.sampling import SamplerSettings
+from bayestribo.inference.screening import LawOptimum
 
 LAW = "viscous+quadratic"
 
@@ -104,3 +106,17 @@ def test_another_posterior_is_searched_and_sampled_afresh(known, monkeypatch):
         known_run=SimpleNamespace(posterior=at.second),
     )
     assert searched and out == "new" and len(sampled) == 1
+
+
+@pytest.mark.filterwarnings("ignore")
+def test_the_comparison_hands_over_every_law_it_took_to_its_optimum(monkeypatch):
+    # quadratic far behind: screened at its optimum, but taken there all the same
+    shifts = {"viscous": 0.0, "coulomb": 1.0, "quadratic": 500.0}
+    stub_fits(monkeypatch, shifts)
+    at_optima: dict = {}
+    c, runs = comparison.compare_prepared(
+        SimpleNamespace(name="stub"), list(shifts), seed=1, rivals=False, at_optima=at_optima
+    )
+    assert set(at_optima) == set(shifts)
+    assert all(isinstance(at, LawOptimum) and at.law == law for law, at in at_optima.items())
+    assert "quadratic" in c.screened and "quadratic" not in runs
