@@ -297,3 +297,40 @@ def test_the_interpolated_dissipation_is_the_integrated_one(exact_posterior, mon
     again = dissipation._swing_dissipation(law, swings, values, ref)
     np.testing.assert_array_equal(again, exact)
     assert calls[-1] == draws.shape[0]
+
+
+def test_the_dissipation_is_integrated_only_at_the_swings_the_interpolation_misses(
+    exact_posterior, monkeypatch
+):
+    """A swing where the interpolation misses its check is integrated at every draw;
+    the others keep the interpolation (inference/dissipation.py)."""
+    from bayestribo.inference import dissipation
+
+    _, posterior, theta, cov = exact_posterior
+    draws = _around(theta, cov, 1.0, 600, seed=7)
+    values = posterior.law_draws(draws)
+    law, ref = posterior.law, posterior.likelihood.reference_amplitude
+    swings = np.linspace(0.3, 1.0, 6) * ref
+    name = next(n for n in law.parameter_names if n != "mu_s_ratio" and np.std(values[n]) > 0)
+    centre, spread = float(np.mean(values[name])), float(np.std(values[name]))
+    real = law.swing_dissipation
+    calls = []
+
+    def rough(a, v, r):
+        # the largest swing made far from quadratic in one parameter over the draws
+        a = np.atleast_1d(np.asarray(a, dtype=float))
+        x = np.atleast_1d(np.asarray(v[name], dtype=float))
+        calls.append((a.size, x.size))
+        bump = 0.3 * np.sin(20.0 * (x - centre) / spread)[:, None] * (a == swings[-1])[None, :]
+        return real(a, v, r) * (1.0 + bump)
+
+    monkeypatch.setattr(type(law), "swing_dissipation", lambda self, a, v, r: rough(a, v, r))
+    out = dissipation._swing_dissipation(law, swings, values, ref)
+    calls_made = list(calls)
+    want = rough(swings, values, ref)
+    np.testing.assert_array_equal(out[:, -1], want[:, -1])
+    sd = want[:, :-1].std(axis=0)
+    assert np.max(np.abs(out[:, :-1] - want[:, :-1]) / sd) < 1e-2
+    assert not np.array_equal(out[:, :-1], want[:, :-1])  # interpolated there
+    n = draws.shape[0]
+    assert (1, n) in calls_made and (swings.size, n) not in calls_made

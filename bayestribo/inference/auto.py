@@ -10,8 +10,9 @@ and gives the :class:`~bayestribo.inference.summarising.Summary` of the law it c
    :class:`~bayestribo.inference.types.Sampled`;
 2. choose: the comparison's verdict; a law without a closed form refitted alone in
    the frame of its own turning times (:func:`bayestribo.inference.law_frame.
-   sample_in_law_frame`), and summarised (:func:`bayestribo.inference.summarising.
-   summarise`);
+   sample_in_law_frame`, from the comparison's optimum; where that frame is the
+   record's own, the posterior it samples is the comparison's, whose draws are kept),
+   and summarised (:func:`bayestribo.inference.summarising.summarise`);
 3. check: ΔE(A) averaged over the laws as good as the verdict (:func:`_averaged_band`),
    the verdict fitted to each half of the motion (:func:`bayestribo.inference.halves.
    law_halves`) and each law's ΔE(A) set beside the turning points' (
@@ -44,6 +45,7 @@ from bayestribo.inference.law_frame import posterior_like, sample_in_law_frame
 from bayestribo.inference.preparation import law_frequency
 from bayestribo.inference.records import LawComparison
 from bayestribo.inference.sampling import SamplerSettings
+from bayestribo.inference.screening import LawOptimum
 from bayestribo.inference.summarising import Summary, summary
 from bayestribo.inference.types import PreparedRun, Sampled
 from bayestribo.model.laws import get_law
@@ -88,6 +90,7 @@ def fit_auto(
         halves' check and each law's departure from the turning points' ΔE(A), its
         ``dissipation`` averaged over the laws as good where there are several.
     """
+    at_optima: dict[str, LawOptimum] = {}
     comparison, runs = compare_prepared(
         prepared,
         auto_laws(),
@@ -97,6 +100,7 @@ def fit_auto(
         discrepancy=discrepancy,
         law_free=True,
         progress=progress,
+        at_optima=at_optima,
     )
     common = prepared
     sampled = runs[comparison.verdict]
@@ -104,7 +108,10 @@ def fit_auto(
         # the verdict fitted again as that law alone is (sample_law): in the frame
         # of its own turning times, found from the optimiser's optimum. The
         # comparison's best draw, which the seed moves, set the frame before, and
-        # the frame moved the answer by up to 0.7 posterior sd from seed to seed
+        # the frame moved the answer by up to 0.7 posterior sd from seed to seed. The
+        # comparison's search from the first guesses is the record frame's; where the
+        # law's frame is the record's own, the comparison's draws are those of the
+        # very posterior the refit would sample, and are kept
         verdict = sampled.posterior
         (progress or (lambda text: None))(
             f"fitting {comparison.verdict} again in the frame of its own turning times"
@@ -114,6 +121,8 @@ def fit_auto(
             lambda prep: posterior_like(verdict, prep, model, discrepancy),
             settings,
             rng,
+            known=at_optima.get(comparison.verdict),
+            known_run=sampled,
         )
     summarised = summary(prepared, sampled, seed=rng, recorded_seed=recorded_seed, compared=True)
     record = summarised.record

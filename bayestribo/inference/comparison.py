@@ -285,6 +285,7 @@ def compare_prepared(
     progress: Callable[[str], None] | None = None,
     starts: Mapping[str, Mapping[str, float]] | None = None,
     settle_adequate: bool = False,
+    at_optima: dict[str, LawOptimum] | None = None,
 ) -> tuple[LawComparison, dict[str, Sampled]]:
     """Compare laws on a prepared run; also return each law's sampled posterior.
 
@@ -323,6 +324,10 @@ def compare_prepared(
         choice alone (the rivals' on the finer grid); False (the default) settles an
         adequate law only when it is not as good as the best (the draws of one that is
         may enter the ΔE(A) averaged over the laws as good, or make it a rival).
+    at_optima : dict, optional
+        Filled with each law taken to its optimum (:class:`LawOptimum`, by law), for
+        a caller that fits a law again on the same preparation (the verdict of
+        ``law="auto"``, :mod:`bayestribo.inference.auto`).
 
     Returns
     -------
@@ -339,7 +344,7 @@ def compare_prepared(
     loos, table, notes, runs = {}, {}, [], {}
     optima: dict[str, dict[str, float]] = {}
     equivalent: dict[str, str] = {}
-    found: dict[str, LawOptimum] = {}
+    found: dict[str, LawOptimum] = {} if at_optima is None else at_optima
     spent: dict[str, tuple[float, float]] = {}
 
     def failed(law: str, exc: BayestriboError) -> None:

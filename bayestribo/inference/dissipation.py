@@ -285,9 +285,10 @@ def _swing_dissipation(
     quadratic in them through 1 + 2p + p(p-1)/2 integrated draws about the draws' mean
     (nodes two sd out along each parameter, and one per pair), as Π is for sampling
     (:mod:`bayestribo.inference.surrogate`). The interpolation is checked at
-    :data:`_SWING_CHECK_DRAWS` draws against the integrator: when it is off by more
-    than :data:`_SWING_TOLERANCE` of the band's sd at any swing (or any value is not
-    finite), every draw is integrated.
+    :data:`_SWING_CHECK_DRAWS` draws against the integrator, swing by swing: at a
+    swing where it is off by more than :data:`_SWING_TOLERANCE` of the band's sd (or a
+    value is not finite), every draw is integrated at that swing (the swings are
+    independent half cycles), and kept at the others.
     """
     if law.closed_form:
         return law.swing_dissipation(amplitudes, values, reference)
@@ -340,11 +341,17 @@ def _swing_dissipation(
     picked = np.linspace(0, size - 1, _SWING_CHECK_DRAWS).astype(int)
     checked = law.swing_dissipation(amplitudes, {n: vals[n][picked] for n in vals}, reference)
     spread = np.std(fitted, axis=0)
-    if not (
-        np.all(np.isfinite(checked))
-        and np.all(np.abs(fitted[picked] - checked) <= _SWING_TOLERANCE * spread)
-    ):
+    with np.errstate(invalid="ignore"):
+        held = np.all(np.isfinite(checked), axis=0) & np.all(
+            np.abs(fitted[picked] - checked) <= _SWING_TOLERANCE * spread, axis=0
+        )
+    if not np.any(held):
         return law.swing_dissipation(amplitudes, vals, reference)
+    if not np.all(held):
+        # the swings where the interpolation missed are integrated at every draw
+        fitted[:, ~held] = law.swing_dissipation(
+            np.asarray(amplitudes, dtype=float)[~held], vals, reference
+        )
     fitted[picked] = checked
     return fitted
 

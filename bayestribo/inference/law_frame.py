@@ -23,7 +23,8 @@ from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.preparation import law_frequency, reframe
 from bayestribo.inference.priors import Prior
 from bayestribo.inference.sampling import SamplerSettings
-from bayestribo.inference.start import find_start, maximum_a_posteriori, maximum_from
+from bayestribo.inference.screening import LawOptimum
+from bayestribo.inference.start import Start, find_start, maximum_a_posteriori, maximum_from
 from bayestribo.inference.types import PreparedRun, Sampled
 from bayestribo.model.laws import Law
 
@@ -88,23 +89,75 @@ def sample_in_law_frame(
     settings: SamplerSettings,
     seed: int | np.random.Generator | None,
     progress: bool = False,
+    *,
+    known: LawOptimum | None = None,
+    known_run: Sampled | None = None,
 ) -> tuple[PreparedRun, Sampled]:
     """Sample the posterior ``posterior_on(prepared)``; for a law without a closed
     form, in the law's frame, found from the optimum in the record's frame (one
     search from the first guesses, which no seed moves), the optimiser starting from
-    that optimum in the law's frame."""
+    that optimum in the law's frame.
+
+    ``known`` and ``known_run``: the same law taken to its optimum on ``prepared``
+    already, and sampled from there (the comparison of ``law="auto"``,
+    :func:`bayestribo.inference.comparison.compare_prepared`). Where ``known`` was
+    found on this very posterior (the same coordinates, and the same log density at
+    its optimum to the bit), its optimum stands for the search (it is that search's
+    optimum, or a nested law's start's where that is better: no seed moves either).
+    Where the law's frame is then the record's own and the sampler would start
+    where ``known_run`` started (the same second-pass optimum and Laplace covariance,
+    to the bit), the posterior to sample is the one ``known_run`` sampled, and
+    ``known_run`` is returned rather than that posterior sampled again.
+    """
     posterior = posterior_on(prepared)
     optimum = None
+    framed = None
     if not posterior.law.closed_form:
-        optimum = maximum_a_posteriori(posterior, prepared.decay)
+        optimum = _known_search(posterior, known)
+        if optimum is None:
+            optimum = maximum_a_posteriori(posterior, prepared.decay)
         framed = _in_law_frame(prepared, posterior, optimum[0])
         if framed is not None:
             prepared = framed
             posterior = posterior_on(prepared)
             optimum = maximum_from(posterior, optimum[0], prepared.decay)
     start = find_start(posterior, prepared.decay, optimum=optimum)
+    if framed is None and _same_start(start, known, known_run):
+        return prepared, known_run
     sampled = sample_from(start, settings=settings, seed=seed, progress=progress)
     return prepared, sampled
+
+
+def _known_search(
+    posterior: Posterior, known: LawOptimum | None
+) -> tuple[np.ndarray, np.ndarray, tuple[float, float] | None] | None:
+    """``known``'s optimum when it was found on a posterior equal to ``posterior``
+    (the same coordinates, the same log density at the optimum to the bit), else
+    None."""
+    if known is None or known.posterior.names != posterior.names:
+        return None
+    theta = np.asarray(known.optimum[0], dtype=float)[None]
+    if not np.array_equal(known.posterior(theta), posterior(theta)):
+        return None
+    return known.optimum
+
+
+def _same_start(start: Start, known: LawOptimum | None, known_run: Sampled | None) -> bool:
+    """Whether the sampler would start where ``known_run`` started: the same law and
+    coordinates, and the same second-pass optimum, Laplace covariance and log density
+    there, to the bit."""
+    if known is None or known_run is None or known_run.posterior is not known.second:
+        return False
+    theta, cov, _ = known.second_optimum
+    if (
+        start.posterior.names != known.second.names
+        or start.posterior.law.name != known.second.law.name
+    ):
+        return False
+    if not (np.array_equal(start.theta, theta) and np.array_equal(start.cov, cov)):
+        return False
+    point = np.asarray(theta, dtype=float)[None]
+    return bool(np.array_equal(start.posterior(point), known.second(point)))
 
 
 #: A law's frequency closer than this to the record's leaves the frame as it is.
