@@ -407,8 +407,19 @@ def refine(
     gauss_mu = np.array([p.mu for _, p in gaussian])
     gauss_sigma = np.array([p.sigma for _, p in gaussian])
 
+    # the same rows in one compiled call where the posterior offers it
+    compiled = getattr(posterior, "residual_rows", None)
+    gauss_args = (gauss_at.astype(np.int64), gauss_mu.astype(float), gauss_sigma.astype(float))
+    at_int = at.astype(np.int64)
+
     def residual_rows(u: NDArray) -> NDArray:
         """Residuals at the rows ``u`` (k, free) in one call of the posterior."""
+        if compiled is not None:
+            out = compiled(
+                u, theta, at_int, start_free, scale, low, high, bounded, *gauss_args, size
+            )
+            if out is not None:
+                return out
         th = np.repeat(theta[None], u.shape[0], axis=0)
         part = start_free + u * scale
         out = np.full((u.shape[0], n_rows), 1e6)
