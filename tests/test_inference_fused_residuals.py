@@ -69,19 +69,19 @@ def _rows_asked(post: Posterior, theta: np.ndarray, monkeypatch, compiled: bool)
     if not compiled:
         monkeypatch.setattr(Posterior, "residual_rows", property(lambda self: None))
     asked: list[np.ndarray] = []
-    real = start.least_squares
+    real = start._least_squares
 
-    def spy(fun, x0, jac, **kwargs):
-        solution = real(fun, x0, jac=jac, **kwargs)
+    def spy(fun, jac, n, method):
+        solution = real(fun, jac, n, method)
         rng = np.random.default_rng(0)
         for scale in (1e-2, 1.0, 1e2, 1e4):
-            u = scale * rng.standard_normal(x0.size)
+            u = scale * rng.standard_normal(n)
             asked.append(fun(u))
             asked.append(jac(u))
-        asked.append(fun(np.full(x0.size, -1e6)))  # beyond every lower bound
+        asked.append(fun(np.full(n, -1e6)))  # beyond every lower bound
         return solution
 
-    monkeypatch.setattr(start, "least_squares", spy)
+    monkeypatch.setattr(start, "_least_squares", spy)
     result = start.refine(post, theta)
     monkeypatch.undo()
     return asked, result
