@@ -36,7 +36,7 @@ __all__ = ["grouped_step"]
 #: (see :data:`bayestribo.inference.fused.DEPENDS_ON`).
 DEPENDS_ON = {
     "bayestribo/inference/fused.py": "e944541d7f7a7ef7",
-    "bayestribo/inference/moves.py": "fd1eb965a208dbd0",
+    "bayestribo/inference/moves.py": "3e955db75b8e9506",
 }
 
 
