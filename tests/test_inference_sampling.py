@@ -464,3 +464,24 @@ def test_the_grouped_sampler_gives_the_chains_of_emcees_own_sampler():
     assert isinstance(sampling._Grouped(_gaussian, start, 1).sampler, sampling._ResumingSampler)
     np.testing.assert_array_equal(runs[0], runs[1])
     assert runs[0].shape == (300, 16, 3) and np.unique(runs[0][:, 0, 0]).size > 10
+
+
+def test_the_move_choice_draws_what_numpys_choice_draws():
+    # one uniform draw per choice, numpy's rule: the same picks and the same stream
+    from bayestribo.inference.sampling import _MoveChoice
+
+    items = ["a", "b", "c"]
+    for p in ([0.8, 0.2, 0.0], [0.1, 0.6, 0.3], [0.0, 0.0, 1.0]):
+        ours, numpys = _MoveChoice(3), np.random.RandomState(3)
+        picks = [ours.choice(items, p=np.array(p)) for _ in range(2000)]
+        assert picks == [numpys.choice(items, p=np.array(p)) for _ in range(2000)]
+        assert ours.random_sample() == numpys.random_sample()
+    # other calls and bad probabilities are numpy's own
+    ours, numpys = _MoveChoice(4), np.random.RandomState(4)
+    assert list(ours.choice(items, size=5, p=[0.5, 0.5, 0.0])) == list(
+        numpys.choice(items, size=5, p=[0.5, 0.5, 0.0])
+    )
+    with pytest.raises(ValueError, match="probabilities"):
+        ours.choice(items, p=np.array([0.5, 0.6, 0.0]))
+    with pytest.raises(ValueError):
+        ours.choice(items, p=np.array([0.5, 0.5]))

@@ -9,12 +9,12 @@ from pathlib import Path
 
 import pytest
 
-from bayestribo.inference import fused, fused_step
+from bayestribo.inference import fused, fused_residuals, fused_step
 
 ROOT = Path(fused.__file__).resolve().parents[2]
 
 
-@pytest.mark.parametrize("module", [fused, fused_step], ids=lambda m: m.__name__)
+@pytest.mark.parametrize("module", [fused, fused_residuals, fused_step], ids=lambda m: m.__name__)
 def test_the_digests_of_the_compiled_dependencies_are_current(module):
     for path, digest in module.DEPENDS_ON.items():
         current = hashlib.sha256((ROOT / path).read_bytes()).hexdigest()[:16]

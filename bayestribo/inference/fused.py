@@ -611,6 +611,21 @@ def _log_posterior(
     averaged model's domain (NaN in ``out``): the caller then lets the reference
     raise its error.
     """
+    pi, var, a, b, x, prec, c, xw, z, norm0 = _workspace(columns, data, scalars)
+    return _log_posterior_in(
+        theta, prior, columns, fixed, data, scalars, out, pi, var, a, b, x, prec, c, xw, z, norm0
+    )
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _workspace(
+    columns: NDArray, data: NDArray, scalars: NDArray
+) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray, NDArray, NDArray, NDArray, float]:
+    """The work arrays of :func:`_log_posterior_in` and the parts of the log-likelihood
+    that are the same for every row: without the white discrepancy the variances
+    ``var``, A's data part ``c``, the whitened design ``xw`` of correlated increments
+    and ``norm0`` = Σ log 2πV + log|R| (with it, log|R| alone, and ``var``, ``xw``
+    scratch). Made once for any number of calls (the sampler step's splits)."""
     tau = data[0]
     var0 = data[2]
     m = tau.size
@@ -622,7 +637,6 @@ def _log_posterior(
     b = np.empty(q)
     x = np.empty(q)
     prec = np.empty(q)
-    discrepancy = columns[4] != _ABSENT
     # Without the white discrepancy the variances, hence A's data part and Σ log 2πV,
     # are the same for every walker (and the whitened design of correlated increments).
     c = np.zeros((q, q))
@@ -630,7 +644,7 @@ def _log_posterior(
     xw = np.empty((q, m))
     z = np.empty(m)
     norm0 = _log_det_correlation(t)
-    if not discrepancy:
+    if columns[4] == _ABSENT:
         for j in range(m):
             var[j] = var0[j]
             norm0 += math.log(var[j]) + _LOG_2PI
@@ -638,6 +652,33 @@ def _log_posterior(
             _whitened_design(design, var, t, q, xw, c)
         else:
             _normal_matrix(design, var, q, c)
+    return pi, var, a, b, x, prec, c, xw, z, norm0
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _log_posterior_in(
+    theta: NDArray,
+    prior: NDArray,
+    columns: NDArray,
+    fixed: NDArray,
+    data: NDArray,
+    scalars: NDArray,
+    out: NDArray,
+    pi: NDArray,
+    var: NDArray,
+    a: NDArray,
+    b: NDArray,
+    x: NDArray,
+    prec: NDArray,
+    c: NDArray,
+    xw: NDArray,
+    z: NDArray,
+    norm0: float,
+) -> int:
+    """:func:`_log_posterior` with the work arrays and constant parts of
+    :func:`_workspace`."""
+    q = _BASE + int(scalars[6])
+    t = _whitening(data, scalars)
     flagged = 0
     for n in range(theta.shape[0]):
         row = theta[n]

@@ -8,7 +8,8 @@ a few dozen array operations and four calls down to the compiled log posterior
 runs all splits of a step in one compiled call: the same proposal loops as the moves
 (:func:`~bayestribo.inference.moves._de_proposals`,
 :func:`~bayestribo.inference.moves._snooker_proposals`), the same log posterior
-(:func:`~bayestribo.inference.fused._log_posterior`) and the same acceptance rule,
+(:func:`~bayestribo.inference.fused._log_posterior`, its constant parts made once per
+step) and the same acceptance rule,
 with the random numbers the move drew, so that the chains are bit-identical to the
 Python splits' (tests). emcee still runs the chain: its sampler, state, backend and
 random state, and the choice of the move at each step.
@@ -26,7 +27,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from bayestribo.inference.fused import FusedLogPosterior, _log_posterior
+from bayestribo.inference.fused import FusedLogPosterior, _log_posterior_in, _workspace
 from bayestribo.inference.moves import DE, _de_proposals, _snooker_proposals
 
 __all__ = ["grouped_step"]
@@ -34,8 +35,8 @@ __all__ = ["grouped_step"]
 #: The files whose compiled functions :func:`_step` calls, and a digest of each
 #: (see :data:`bayestribo.inference.fused.DEPENDS_ON`).
 DEPENDS_ON = {
-    "bayestribo/inference/fused.py": "aafaf3dc1a0198d3",
-    "bayestribo/inference/moves.py": "fd1eb965a208dbd0",
+    "bayestribo/inference/fused.py": "e944541d7f7a7ef7",
+    "bayestribo/inference/moves.py": "3e955db75b8e9506",
 }
 
 
@@ -63,6 +64,9 @@ def _step(
     n = g * size
     out = np.empty(n)
     factors = np.zeros(n)
+    # the log posterior's work arrays and the parts the same for every walker, made
+    # once for all splits
+    pi, var, a, b, x, prec, c, xw, z, norm0 = _workspace(columns, data, scalars)
     for split in range(nsplits):
         if kind == DE:
             q = _de_proposals(coords, order, split, uniform[split], gamma[split])
@@ -76,7 +80,10 @@ def _step(
             for j in range(ndim):
                 if not math.isfinite(q[row, j]):
                     return split
-        if _log_posterior(q, prior, columns, fixed, data, scalars, out) > 0:
+        flagged = _log_posterior_in(
+            q, prior, columns, fixed, data, scalars, out, pi, var, a, b, x, prec, c, xw, z, norm0
+        )
+        if flagged > 0:
             return split
         for e in range(g):
             for i in range(size):

@@ -240,17 +240,18 @@ class _GroupedRedBlueMove(emcee.moves.Move):
         """
         size = per // self.nsplits
         n_prop, n_acc = g * size * self.n_uniform, g * size
+        # random_sample(n) and standard_normal(n) are what rand(n) and randn(n) call
         if self.n_normal == 0:
-            uniforms = random.rand(g * per + self.nsplits * (n_prop + n_acc))
+            uniforms = random.random_sample(g * per + self.nsplits * (n_prop + n_acc))
             normals = _NO_NORMALS
         else:
             # a normal draw (γ) sits between the proposal and Metropolis uniforms
-            drawn = [random.rand(g * per + n_prop)]
+            drawn = [random.random_sample(g * per + n_prop)]
             normal = []
             for split in range(self.nsplits):
-                normal.append(random.randn(n_acc * self.n_normal))
+                normal.append(random.standard_normal(n_acc * self.n_normal))
                 last = split + 1 == self.nsplits
-                drawn.append(random.rand(n_acc if last else n_acc + n_prop))
+                drawn.append(random.random_sample(n_acc if last else n_acc + n_prop))
             uniforms = np.concatenate(drawn)
             normals = np.concatenate(normal)
         g0, sigma = self._stretch_of(ndim)

@@ -35,6 +35,7 @@ from numpy.typing import NDArray
 
 from bayestribo.errors import BayestriboError
 from bayestribo.inference.fused import FusedLogPosterior
+from bayestribo.inference.fused_residuals import residual_rows
 from bayestribo.inference.fused_step import grouped_step
 from bayestribo.inference.likelihood import PiLikelihood
 from bayestribo.inference.priors import PriorSet
@@ -119,6 +120,14 @@ class Posterior:
         False."""
         fused: FusedLogPosterior | None = self._fused
         return None if fused is None else partial(grouped_step, fused)
+
+    @property
+    def residual_rows(self) -> Callable[..., NDArray | None] | None:
+        """The start stage's least-squares residuals in one compiled call
+        (:func:`bayestribo.inference.fused_residuals.residual_rows`, its arguments
+        after the tables), or None where :attr:`uses_compiled` is False."""
+        fused: FusedLogPosterior | None = self._fused
+        return None if fused is None else partial(residual_rows, fused)
 
     @property
     def names(self) -> list[str]:

@@ -18,7 +18,7 @@ from it (:func:`initial_walkers`). How the optimum is found:
    edge a small change of ζ or μ_k moves the stick to another turning point, and the
    optimiser stops there far below the maximum. Guesses outside a (user-narrowed)
    prior's support are moved inside it.
-3. Levenberg-Marquardt least squares (:func:`scipy.optimize.least_squares`) of the
+3. Levenberg-Marquardt least squares (MINPACK, :func:`scipy.optimize.leastsq`) of the
    standardized residuals over the continuous parameters, from which the Laplace
    covariance (JᵀJ)⁻¹ follows. Scan and least squares alternate until the log density
    stops rising or the scan leaves the ratio on its step, from each guess with the
@@ -47,7 +47,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.optimize import least_squares
+from scipy.optimize import least_squares, leastsq
 
 from bayestribo.errors import BayestriboError
 from bayestribo.inference.likelihood import PiLikelihood
@@ -407,8 +407,19 @@ def refine(
     gauss_mu = np.array([p.mu for _, p in gaussian])
     gauss_sigma = np.array([p.sigma for _, p in gaussian])
 
+    # the same rows in one compiled call where the posterior offers it
+    compiled = getattr(posterior, "residual_rows", None)
+    gauss_args = (gauss_at.astype(np.int64), gauss_mu.astype(float), gauss_sigma.astype(float))
+    at_int = at.astype(np.int64)
+
     def residual_rows(u: NDArray) -> NDArray:
         """Residuals at the rows ``u`` (k, free) in one call of the posterior."""
+        if compiled is not None:
+            out = compiled(
+                u, theta, at_int, start_free, scale, low, high, bounded, *gauss_args, size
+            )
+            if out is not None:
+                return out
         th = np.repeat(theta[None], u.shape[0], axis=0)
         part = start_free + u * scale
         out = np.full((u.shape[0], n_rows), 1e6)
@@ -470,9 +481,8 @@ def refine(
     # follows the ζ-μ_k ridge in a few iterations where the trust-region method
     # crawls along it (two to four times the time on the bundled run).
     method = "lm" if size + len(gaussian) + bounded.size >= len(free) else "trf"
-    sol = least_squares(residuals, np.zeros(len(free)), jac=jacobian, x_scale="jac", method=method)
-    found = theta[free] + sol.x * scale
-    jac, fun = sol.jac, sol.fun
+    x, fun, jac = _least_squares(residuals, jacobian, len(free), method)
+    found = theta[free] + x * scale
     on_bound = (found <= low) | (found >= high)
     if np.any(on_bound):
         # stopped on or beyond a bound: the optimum is on it; its Jacobian is taken
@@ -494,6 +504,42 @@ def refine(
     cov = np.zeros((len(names), len(names)))
     cov[np.ix_(free, free)] = cov_free
     return _measured_at_bounds(posterior, theta, cov, free, low, high, jac)
+
+
+def _least_squares(
+    residuals: Callable[[NDArray], NDArray],
+    jacobian: Callable[[NDArray], NDArray],
+    n: int,
+    method: str,
+) -> tuple[NDArray, NDArray, NDArray]:
+    """The least squares of :func:`refine` from zero: the solution, its residuals and
+    their Jacobian there.
+
+    Levenberg-Marquardt (``method="lm"``) is MINPACK's ``lmder`` called as
+    :func:`scipy.optimize.least_squares` calls it (its default tolerances of 1e-8, at
+    most 100 n evaluations, the steps scaled by the Jacobian's columns), through
+    :func:`scipy.optimize.leastsq`, whose wrapper adds a few microseconds to each of
+    the few hundred evaluations of a fit where ``least_squares``' adds tens: the same
+    iterates and solution. Otherwise ``least_squares``' trust-region method.
+    """
+    x0 = np.zeros(n)
+    if method != "lm":
+        sol = least_squares(residuals, x0, jac=jacobian, x_scale="jac", method=method)
+        return sol.x, sol.fun, sol.jac
+    tol = 1e-8
+    x, _, info, _, _ = leastsq(
+        residuals,
+        x0,
+        Dfun=jacobian,
+        full_output=True,
+        ftol=tol,
+        xtol=tol,
+        gtol=tol,
+        maxfev=100 * n,
+        factor=100.0,
+        diag=None,
+    )
+    return x, info["fvec"], jacobian(x)
 
 
 #: Steps into the support at which the log density is evaluated from a bound, in units
