@@ -26,6 +26,7 @@ from bayestribo.inference.types import PreparedRun
 from bayestribo.io.files import as_run
 from bayestribo.io.options import ReadOptions
 from bayestribo.io.run import Run
+from bayestribo.model.restoring import rescaled
 from bayestribo.signal.decay import EnergyDecay, energy_decay, retrograde_integral
 from bayestribo.signal.increments import pi_data
 from bayestribo.signal.noise import NoiseModel, noise_model
@@ -255,6 +256,7 @@ def prepare(
     restoring = None if linear else _run_restoring(recording, decay)
     if restoring is not None:
         # the small swings' frequency scales time (τ = ω₀t), in which V is written
+        measured_in = decay.scaling.length_scale
         decay = energy_decay(
             recording.time,
             recording.displacement,
@@ -265,6 +267,8 @@ def prepare(
             frequency_Hz=small_swing_frequency(decay, restoring),
             linear_spring=False,
         )
+        # y's unit N/k moved with the frequency: the force's coefficients follow it
+        restoring = rescaled(restoring, decay.scaling.length_scale / measured_in)
         decay = with_restoring(decay, restoring)
     noise_used = noise or noise_model(decay, dict(recording.metadata))
     if seed is None:
@@ -305,7 +309,10 @@ def reframe(
         :func:`law_frequency`.
     restoring : RestoringKernel, optional
         Another nonlinear restoring force for the energy (the same force at other
-        parameters, :mod:`bayestribo.inference.restoring_error`); default the run's.
+        parameters, :mod:`bayestribo.inference.restoring_error`), its coefficients in the
+        unit of ``prepared``'s y; default the run's. Either is taken to the unit of y in
+        the new frame (:func:`~bayestribo.model.restoring.rescaled`: y = x k/N, and k
+        moves with the frequency).
     seed : int, optional
         Seed of the Monte Carlo noise of a derived channel's increments; default one
         computed from the decay (:func:`prepare`). The seed of ``prepared`` keeps the
@@ -330,7 +337,9 @@ def reframe(
         frequency_Hz=frequency_Hz,
         linear_spring=old.restoring is None,
     )
-    decay = with_restoring(decay, old.restoring if restoring is None else restoring)
+    force = old.restoring if restoring is None else restoring
+    force = rescaled(force, decay.scaling.length_scale / old.scaling.length_scale)
+    decay = with_restoring(decay, force)
     noise_used = prepared.noise if prepared.noise_given else noise_model(decay, dict(run.metadata))
     mc_seed = data_seed(decay) if seed is None else seed
     data = pi_data(decay, noise_used, grid_points=prepared.grid_points, seed=mc_seed)
@@ -403,7 +412,9 @@ def prepare_part(prepared: PreparedRun, start: int, stop: int) -> PreparedRun:
         frequency_Hz=None if old.restoring is None else old.scaling.omega / (2.0 * math.pi),
         linear_spring=old.restoring is None,
     )
-    decay = with_restoring(decay, old.restoring)
+    decay = with_restoring(
+        decay, rescaled(old.restoring, decay.scaling.length_scale / old.scaling.length_scale)
+    )
     data = pi_data(decay, prepared.noise, grid_points=prepared.grid_points, seed=data_seed(decay))
     return dataclasses.replace(prepared, run=part, decay=decay, data=data, noise_given=True)
 
