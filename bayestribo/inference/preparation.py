@@ -9,9 +9,11 @@ another grid (:func:`regrid`) or in part (:func:`prepare_part`).
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 import os
+import warnings
 import zlib
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any, Literal
@@ -235,7 +237,12 @@ def prepare(
             linear_spring=linear_spring,
         )
 
-    decay = analysed(linear)
+    with warnings.catch_warnings(record=True) if auto else contextlib.nullcontext() as held:
+        if auto:
+            # what the linear analysis says of the record (a softening read as a soft
+            # clip, the turning points it leaves out) holds for a linear choice only
+            warnings.simplefilter("always")
+        decay = analysed(linear)
     choice = None
     if auto:
         # restoring "auto": chosen from the linear analysis's turning times; a linear
@@ -251,8 +258,11 @@ def prepare(
         linear = _linear_spring(recording)
         if not linear:
             # analysed again as a run that names the force is (its turning points not
-            # held to a linear oscillator's)
+            # held to a linear oscillator's), which says what holds of it
             decay = analysed(False)
+        else:
+            for w in held or ():
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     restoring = None if linear else _run_restoring(recording, decay)
     if restoring is not None:
         # the small swings' frequency scales time (τ = ω₀t), in which V is written
