@@ -84,6 +84,9 @@ def motion(
     c2: float = 0.0,
     track: tuple[float, float] = (0.0, 1.0),
     pendulum: float = 0.0,
+    zeta: float = ZETA,
+    mu_k: float = MU_K,
+    until: float = math.inf,
 ) -> tuple[tuple, float, float]:
     """Half cycles of the free decay from x₀ at rest at t = 0: (dense solutions per half
     cycle as (t_start, t_end, sol), the stop time [s], the displacement at rest [m]).
@@ -91,24 +94,28 @@ def motion(
     ``k3`` [N/m³] cubic stiffness, ``c2`` [N s²/m²] quadratic drag, ``track`` = (a, λ [m])
     friction varying along the track; ``pendulum`` > 0: the spring force is
     k L sin(x/L) with L = x₀/pendulum (a pendulum released at ``pendulum`` rad, its
-    small-swing stiffness k) instead of k x."""
+    small-swing stiffness k) instead of k x; ``zeta`` and ``mu_k`` the viscous damping
+    ratio and the kinetic friction coefficient (the paper's rig's by default); ``until``
+    [s]: no half cycle is begun after this time (a record that ends in motion; the stop
+    time is then that of the last half cycle integrated)."""
     amplitude, wavelength = track
     length = X0 / pendulum if pendulum else 0.0
+    c = 2 * zeta * MASS * OMEGA
 
     def mu(x: float) -> float:
-        return MU_K * (1.0 + amplitude * math.sin(2 * math.pi * x / wavelength))
+        return mu_k * (1.0 + amplitude * math.sin(2 * math.pi * x / wavelength))
 
     def spring(x: float) -> float:
         linear = K * length * math.sin(x / length) if length else K * x
         return linear + k3 * x**3
 
     arcs, x, t0 = [], X0, 0.0
-    while abs(spring(x)) > MU_S * LOAD:
+    while abs(spring(x)) > MU_S * LOAD * mu_k / MU_K and t0 <= until:
         s = -math.copysign(1.0, x)  # direction of the coming half cycle
 
         def rhs(_t, u, s=s):
             friction = mu(u[0]) * LOAD * s
-            force = -C * u[1] - c2 * abs(u[1]) * u[1] - spring(u[0]) - friction
+            force = -c * u[1] - c2 * abs(u[1]) * u[1] - spring(u[0]) - friction
             return [u[1], force / MASS]
 
         def turned(_t, u):
@@ -140,11 +147,20 @@ def record(
     c2: float = 0.0,
     track: tuple[float, float] = (0.0, 1.0),
     pendulum: float = 0.0,
+    zeta: float = ZETA,
+    mu_k: float = MU_K,
+    duration: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Noise-free t [s], x [m], v [m/s] sampled at ``fs`` [Hz], with ``rest_before`` and
-    ``rest_after`` [s] of rest around the motion of :func:`motion` (same law options)."""
-    arcs, stop, x_stop = motion(k3, c2, tuple(track), pendulum)
-    t = np.arange(round((rest_before + stop + rest_after) * fs) + 1) / fs
+    ``rest_after`` [s] of rest around the motion of :func:`motion` (same law options);
+    ``duration`` [s]: the record ends this long after the release, in motion (no rest
+    after it; ``rest_after`` is then not used)."""
+    until = math.inf if duration is None else duration
+    arcs, stop, x_stop = motion(k3, c2, tuple(track), pendulum, zeta, mu_k, until)
+    if duration is not None and duration > stop:
+        raise ValueError(f"duration: the motion stops at {stop:.3f} s, before {duration} s")
+    end = rest_before + (stop + rest_after if duration is None else duration)
+    t = np.arange(round(end * fs) + 1) / fs
     tm = t - rest_before
     x, v = np.full(t.size, X0), np.zeros(t.size)
     for a, b, sol in arcs:

@@ -44,10 +44,20 @@ duffing-5pc  k₃ shifting the frequency at 2 mm by +5 %
 duffing-5pc- the same, declared in the sidecar's ``restoring``: ``duffing`` (the law's
 declared     model takes the spring's potential, β measured from the half periods)
 pendulum-90  the spring force k L sin(x/L), released at x₀ = L π/2: a pendulum at 90°
+duffing-5pc- duffing-5pc and pendulum-90 fitted with ``restoring="auto"`` (the advice of
+auto,        the linear fit's ``FrequencyTrendWarning``; ``--restoring auto`` gives it
+pendulum-    to every case)
+90-auto
+pendulum-90- pendulum-90 recorded as the angle x/L [rad] (``length_unit`` ``rad``, no load:
+rad-auto     friction as the angle μ_k N/(k L), the fit's friction displacement), fitted
+             with ``restoring="auto"``
+long-60s     a long, lightly damped record (ζ = 0.0002, μ_k = 0.0002) at 1 kHz, 0.2 s
+             of rest before the release and none after: 60 s that end in motion
 ===========  =========================================================================
 
 Every run is fitted with :func:`bayestribo.fit` (exact model, 16 walkers × 2 ensembles,
-at most ``--max-steps`` steps). The truth is ζ = 0.0236 and μ_k = 0.0294; for the laws
+at most ``--max-steps`` steps). The truth is ζ = 0.0236 and μ_k = 0.0294 (a case's own
+``truth`` where it simulates another rig: ``long-60s``); for the laws
 that are not viscous + Coulomb it is the parameters of their linear part, and the fit is
 right either to cover them or to say that the law is not adequate. With
 z = (posterior mean - truth) / posterior sd for each of ζ and μ_k, a run is
@@ -112,6 +122,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 from _chain import (  # noqa: E402
     CHAIN_EFFECTS,
+    LOAD,
     MU_K,
     OMEGA,
     X0,
@@ -132,9 +143,14 @@ K3_OVER_K = 0.001 * 8.0 / (3.0 * X0**2)
 #: c₂ whose loss per cycle at X0 is 10 % of the viscous one (8/3 c₂ ω² A³ = 0.1 π c ω A²).
 C2 = 0.1 * math.pi * C / ((8.0 / 3.0) * OMEGA * X0)
 REST_BEFORE_S = 0.1
+#: The pendulum's length [m] (released at 90°: x₀ = L π/2).
+PENDULUM_LENGTH = X0 / (math.pi / 2)
+#: ζ and μ_k of the long record (``long-60s``): light enough to move for 60 s.
+LONG_TRUTH = {"zeta": 0.0002, "mu_k": 0.0002}
 
 #: case -> sample rate [Hz], rest after the stop [s], law (options of ``_chain.record``),
-#: chain (options of ``_chain.apply_chain`` but the noise), notch for the fit, kind.
+#: chain (options of ``_chain.apply_chain`` but the noise), notch for the fit, kind; and
+#: where set, rest before the release [s], the fit's ``restoring``, the truth (ζ, μ_k).
 CASES: dict[str, dict[str, Any]] = {
     **{
         name: {"fs": fs, "rest_after": rest, "law": {}, "chain": chain, "notch": notch}
@@ -165,6 +181,22 @@ CASES: dict[str, dict[str, Any]] = {
         "kind": "rig",
     },
     "pendulum-90": {"law": {"pendulum": math.pi / 2}, "kind": "rig"},
+    "duffing-5pc-auto": {"law": {"k3": 50 * K3_OVER_K * K}, "restoring": "auto", "kind": "rig"},
+    "pendulum-90-auto": {"law": {"pendulum": math.pi / 2}, "restoring": "auto", "kind": "rig"},
+    "pendulum-90-rad-auto": {
+        "law": {"pendulum": math.pi / 2},
+        "angle": PENDULUM_LENGTH,
+        "restoring": "auto",
+        "truth": {"zeta": ZETA, "mu_k": MU_K * LOAD / (K * PENDULUM_LENGTH)},
+        "kind": "rig",
+    },
+    "long-60s": {
+        "fs": 1_000.0,
+        "rest_before": 0.2,
+        "law": {"zeta": LONG_TRUTH["zeta"], "mu_k": LONG_TRUTH["mu_k"], "duration": 60.0},
+        "truth": LONG_TRUTH,
+        "kind": "rig",
+    },
 }
 for _case in CASES.values():
     for _key, _default in (
@@ -176,6 +208,10 @@ for _case in CASES.values():
         ("time", {}),
         ("channels", "both"),
         ("meta", {}),
+        ("rest_before", REST_BEFORE_S),
+        ("restoring", None),
+        ("truth", {"zeta": ZETA, "mu_k": MU_K}),
+        ("angle", None),
     ):
         _case.setdefault(_key, _default)
 NOISE_LEVELS = (10.0, 30.0)
@@ -218,13 +254,23 @@ def _clock(
     return stamps[keep], x[keep], v[keep]
 
 
-def one_run(case: str, noise: float, index: int, seed: int, max_steps: int) -> dict[str, Any]:
+def one_run(
+    case: str,
+    noise: float,
+    index: int,
+    seed: int,
+    max_steps: int,
+    restoring: str | None = None,
+) -> dict[str, Any]:
     """Simulate run ``index`` of ``case`` at ``noise`` x the resolution, fit it, record
-    refusal, intervals, z and warnings."""
+    refusal, intervals, z and warnings; ``restoring`` over the case's own restoring
+    force for the fit (``fit(..., restoring=...)``)."""
     from bayestribo.inference import fit
     from bayestribo.io.run import Run
 
     spec = CASES[case]
+    truth = spec["truth"]
+    restoring = restoring or spec["restoring"]
     entropy = _entropy(case, noise, index, seed)
     fit_seed = int(np.random.default_rng([*entropy, 1]).integers(2**31))
     out: dict[str, Any] = {
@@ -233,14 +279,21 @@ def one_run(case: str, noise: float, index: int, seed: int, max_steps: int) -> d
         "index": index,
         "entropy": entropy,
         "fit_seed": fit_seed,
+        "restoring": restoring,
     }
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            t, x, v = record(spec["fs"], REST_BEFORE_S, spec["rest_after"], **spec["law"])
+            t, x, v = record(spec["fs"], spec["rest_before"], spec["rest_after"], **spec["law"])
             xs, vs = apply_chain(t, x, v, spec["fs"], seed=entropy, noise=noise, **spec["chain"])
             t, xs, vs = _clock(t, xs, vs, spec["time"], entropy)
             meta = {**metadata(), **spec["meta"]}
+            if spec["angle"]:  # the angle x/L of a pendulum of length L, in radians
+                length = spec["angle"]
+                xs, vs = xs / length, vs / length
+                meta |= {"length_unit": "rad", "load_N": None, "mass_kg": None}
+                meta["displacement_resolution_m"] /= length
+                meta["velocity_resolution_m_per_s"] /= length
             meta = {k: value for k, value in meta.items() if value is not None}
             run = Run(
                 time=t,
@@ -249,7 +302,9 @@ def one_run(case: str, noise: float, index: int, seed: int, max_steps: int) -> d
                 metadata=meta,
             )
             start = time.perf_counter()
-            result = fit(run, seed=fit_seed, max_steps=max_steps, notch=spec["notch"])
+            result = fit(
+                run, seed=fit_seed, max_steps=max_steps, notch=spec["notch"], restoring=restoring
+            )
             out["fit_seconds"] = time.perf_counter() - start
     except Exception as exc:  # recorded and reported, never silently dropped
         out["refused"] = f"{type(exc).__name__}: {exc}"
@@ -269,13 +324,19 @@ def one_run(case: str, noise: float, index: int, seed: int, max_steps: int) -> d
     if diagnostics.get("chi2_map") is not None and diagnostics.get("n_increments"):
         out["chi2_per_n"] = diagnostics["chi2_map"] / diagnostics["n_increments"]
     out["notch_Hz"] = result.settings.get("notch_Hz")
-    out["interval"] = {n: [float(b) for b in result.interval(n, 0.95)] for n in PARAMS}
-    out["mean"] = {n: float(np.mean(result.samples(n))) for n in PARAMS}
-    out["sd"] = {n: float(np.std(result.samples(n), ddof=1)) for n in PARAMS}
+    chosen = (result.restoring or {}).get("auto")
+    if chosen:
+        out["restoring_chosen"] = chosen.get("chosen")
+    # without a load (an angle), friction is the friction displacement x_c = μ_k N/k
+    named = {"zeta": "zeta", "mu_k": "friction_displacement" if spec["angle"] else "mu_k"}
+    draws = {n: result.samples(named[n]) for n in PARAMS}
+    out["interval"] = {n: [float(b) for b in result.interval(named[n], 0.95)] for n in PARAMS}
+    out["mean"] = {n: float(np.mean(draws[n])) for n in PARAMS}
+    out["sd"] = {n: float(np.std(draws[n], ddof=1)) for n in PARAMS}
     out["covered"] = {
-        n: bool(out["interval"][n][0] <= TRUTH[n] <= out["interval"][n][1]) for n in PARAMS
+        n: bool(out["interval"][n][0] <= truth[n] <= out["interval"][n][1]) for n in PARAMS
     }
-    out["z"] = {n: (out["mean"][n] - TRUTH[n]) / out["sd"][n] for n in PARAMS}
+    out["z"] = {n: (out["mean"][n] - truth[n]) / out["sd"][n] for n in PARAMS}
     return out
 
 
@@ -319,6 +380,12 @@ def summarise(records: list[dict[str, Any]]) -> dict[str, Any]:
                     for w in sorted({w for r in fitted for w in r["warnings"]})
                 },
                 "not_converged": sum(not r["converged"] for r in fitted),
+                "restoring_chosen": {
+                    f: sum(r.get("restoring_chosen") == f for r in fitted)
+                    for f in sorted(
+                        {r["restoring_chosen"] for r in fitted if "restoring_chosen" in r}
+                    )
+                },
                 "median_fit_seconds": (
                     float(np.median([r["fit_seconds"] for r in fitted])) if fitted else None
                 ),
@@ -358,7 +425,10 @@ def _print_table(table: dict[str, Any]) -> None:
         f"{'flagged':>7s} {'missed':>6s} {'SILENT':>6s} {'warned':>6s}  warnings (runs)"
     )
     for key, r in table.items():
-        warned = ", ".join(f"{w.removesuffix('Warning')} {k}" for w, k in r["warnings"].items())
+        warned = ", ".join(
+            [f"{w.removesuffix('Warning')} {k}" for w, k in r["warnings"].items()]
+            + [f"auto→{f} {k}" for f, k in r.get("restoring_chosen", {}).items()]
+        )
         print(
             f"{key:15s} {r['kind']:7s} {r['runs']:4d} {r['refused']:7d} {r['covered']:7d} "
             f"{r['flagged']:7d} {r['missed']:6d} {r['silently_wrong']:6d} {r['warned']:6d}  "
@@ -478,6 +548,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--noise", nargs="*", type=float, default=list(NOISE_LEVELS))
     parser.add_argument("--no-real", action="store_true", help="skip the split-half table")
     parser.add_argument("--output", default="misspecification", help="results/NAME.json")
+    parser.add_argument(
+        "--restoring",
+        default=None,
+        help="the fit's restoring force for every case (linear, pendulum, duffing, auto), "
+        "over the case's own",
+    )
     args = parser.parse_args(argv)
     load_start = os.getloadavg()
     source = _source_state()
@@ -488,15 +564,22 @@ def main(argv: list[str] | None = None) -> int:
         for n in args.noise
         for i in range(args.clean_runs if c == "clean" else args.runs)
     ]
+
     # the slow cases first, so that the two workers end together
-    jobs.sort(key=lambda j: -CASES[j[0]]["fs"] * (CASES[j[0]]["rest_after"] + 0.6))
+    def length(case: dict[str, Any]) -> float:
+        return case["law"].get("duration") or case["rest_after"] + 0.6
+
+    jobs.sort(key=lambda j: -CASES[j[0]]["fs"] * length(CASES[j[0]]))
     print(
         f"{len(jobs)} fits on {args.workers} workers, load average {load_start[0]:.2f}",
         flush=True,
     )
     records: list[dict[str, Any]] = []
     with ProcessPoolExecutor(max_workers=args.workers, initializer=niced_worker) as pool:
-        futures = [pool.submit(one_run, c, n, i, args.seed, args.max_steps) for c, n, i in jobs]
+        futures = [
+            pool.submit(one_run, c, n, i, args.seed, args.max_steps, args.restoring)
+            for c, n, i in jobs
+        ]
         for k, future in enumerate(as_completed(futures), 1):
             records.append(future.result())
             if k % 25 == 0 or k == len(jobs):
@@ -542,6 +625,7 @@ def main(argv: list[str] | None = None) -> int:
                 "resolution": {"displacement_m": 0.15e-6, "velocity_m_per_s": 0.015e-6},
                 "truth": TRUTH,
                 "rest_before_s": REST_BEFORE_S,
+                "restoring": args.restoring,
                 "cases": {
                     c: {k: (str(v) if k in ("law", "chain") else v) for k, v in CASES[c].items()}
                     for c in args.cases

@@ -9,9 +9,11 @@ another grid (:func:`regrid`) or in part (:func:`prepare_part`).
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 import os
+import warnings
 import zlib
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any, Literal
@@ -26,6 +28,7 @@ from bayestribo.inference.types import PreparedRun
 from bayestribo.io.files import as_run
 from bayestribo.io.options import ReadOptions
 from bayestribo.io.run import Run
+from bayestribo.model.restoring import rescaled
 from bayestribo.signal.decay import EnergyDecay, energy_decay, retrograde_integral
 from bayestribo.signal.increments import pi_data
 from bayestribo.signal.noise import NoiseModel, noise_model
@@ -234,7 +237,12 @@ def prepare(
             linear_spring=linear_spring,
         )
 
-    decay = analysed(linear)
+    with warnings.catch_warnings(record=True) if auto else contextlib.nullcontext() as held:
+        if auto:
+            # what the linear analysis says of the record (a softening read as a soft
+            # clip, the turning points it leaves out) holds for a linear choice only
+            warnings.simplefilter("always")
+        decay = analysed(linear)
     choice = None
     if auto:
         # restoring "auto": chosen from the linear analysis's turning times; a linear
@@ -250,11 +258,15 @@ def prepare(
         linear = _linear_spring(recording)
         if not linear:
             # analysed again as a run that names the force is (its turning points not
-            # held to a linear oscillator's)
+            # held to a linear oscillator's), which says what holds of it
             decay = analysed(False)
+        else:
+            for w in held or ():
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     restoring = None if linear else _run_restoring(recording, decay)
     if restoring is not None:
         # the small swings' frequency scales time (τ = ω₀t), in which V is written
+        measured_in = decay.scaling.length_scale
         decay = energy_decay(
             recording.time,
             recording.displacement,
@@ -265,6 +277,8 @@ def prepare(
             frequency_Hz=small_swing_frequency(decay, restoring),
             linear_spring=False,
         )
+        # y's unit N/k moved with the frequency: the force's coefficients follow it
+        restoring = rescaled(restoring, decay.scaling.length_scale / measured_in)
         decay = with_restoring(decay, restoring)
     noise_used = noise or noise_model(decay, dict(recording.metadata))
     if seed is None:
@@ -305,7 +319,10 @@ def reframe(
         :func:`law_frequency`.
     restoring : RestoringKernel, optional
         Another nonlinear restoring force for the energy (the same force at other
-        parameters, :mod:`bayestribo.inference.restoring_error`); default the run's.
+        parameters, :mod:`bayestribo.inference.restoring_error`), its coefficients in the
+        unit of ``prepared``'s y; default the run's. Either is taken to the unit of y in
+        the new frame (:func:`~bayestribo.model.restoring.rescaled`: y = x k/N, and k
+        moves with the frequency).
     seed : int, optional
         Seed of the Monte Carlo noise of a derived channel's increments; default one
         computed from the decay (:func:`prepare`). The seed of ``prepared`` keeps the
@@ -330,7 +347,9 @@ def reframe(
         frequency_Hz=frequency_Hz,
         linear_spring=old.restoring is None,
     )
-    decay = with_restoring(decay, old.restoring if restoring is None else restoring)
+    force = old.restoring if restoring is None else restoring
+    force = rescaled(force, decay.scaling.length_scale / old.scaling.length_scale)
+    decay = with_restoring(decay, force)
     noise_used = prepared.noise if prepared.noise_given else noise_model(decay, dict(run.metadata))
     mc_seed = data_seed(decay) if seed is None else seed
     data = pi_data(decay, noise_used, grid_points=prepared.grid_points, seed=mc_seed)
@@ -403,7 +422,9 @@ def prepare_part(prepared: PreparedRun, start: int, stop: int) -> PreparedRun:
         frequency_Hz=None if old.restoring is None else old.scaling.omega / (2.0 * math.pi),
         linear_spring=old.restoring is None,
     )
-    decay = with_restoring(decay, old.restoring)
+    decay = with_restoring(
+        decay, rescaled(old.restoring, decay.scaling.length_scale / old.scaling.length_scale)
+    )
     data = pi_data(decay, prepared.noise, grid_points=prepared.grid_points, seed=data_seed(decay))
     return dataclasses.replace(prepared, run=part, decay=decay, data=data, noise_given=True)
 

@@ -15,8 +15,12 @@ chooses, in this order:
 2. **pendulum** when the run is in radians (``length_unit`` ``"rad"``, the angle itself,
    every turning point below π) and its change is the pendulum's own: the turning times
    less the unevenness the pendulum's half periods put in them (``t_n = t₀ + T₀ Σ_{m<n}
-   T(A_m)/T₀``, T₀ by least squares) leave a change within the same noise. The pendulum
-   has no parameter to adjust: its change is that of the swings the record holds;
+   T(A_m)/T₀``, T₀ by least squares) leave a change within the same noise, or at most
+   :data:`FOLLOWED` of the change, as for the Duffing spring below: damping moves a
+   nonlinear oscillator's turning points off its undamped half periods by a share that
+   grows as ζ² (a pendulum released at 90° with ζ = 0.04 on the paper's rig: -0.1 % of
+   a -7 % change, at 18 standard errors), which the pendulum, with no parameter to
+   adjust, cannot take up and a Duffing spring's β would;
 3. **duffing** otherwise, β measured from the turning times
    (:func:`~bayestribo.model.restoring.duffing.fit_beta`). Its half periods follow the
    change when what they leave is within the noise or at most :data:`FOLLOWED` of the
@@ -53,8 +57,8 @@ from bayestribo.signal.frequency import FrequencyTrend, turning_point_trend
 
 __all__ = ["AUTO", "FOLLOWED", "RestoringChoice", "choose_restoring", "trend_beyond"]
 
-#: The largest share of the measured change a Duffing spring's half periods may leave
-#: and still be said to follow it (rule 3 of the module notes) [-].
+#: The largest share of the measured change a force's half periods may leave and still
+#: be said to follow it (rules 2 and 3 of the module notes) [-].
 FOLLOWED = 0.1
 
 
@@ -130,6 +134,15 @@ def _noun(name: str) -> str:
 
 def _percent(change: float) -> str:
     return f"{100 * change:+.3g} %"
+
+
+def _follows(left: FrequencyTrend | None, trend: FrequencyTrend) -> bool:
+    """True when a force leaves of the measured change ``trend`` at most what its noise
+    or :data:`FOLLOWED` of it allows (``left``: what the force leaves; None: nothing
+    measured)."""
+    return left is not None and (
+        not left.significant or abs(left.change) <= FOLLOWED * abs(trend.change)
+    )
 
 
 def trend_beyond(
@@ -229,7 +242,7 @@ def choose_restoring(
     )
     if length_unit == "rad" and angle:
         left["pendulum"] = pendulum
-        if pendulum is not None and not pendulum.significant:
+        if _follows(pendulum, trend):
             return RestoringChoice("pendulum", trend, left)
     beta = beta_se = None
     try:
@@ -238,14 +251,11 @@ def choose_restoring(
         left["duffing"] = trend_beyond(times, y, force.half_period_ratio)
     except ValueError:
         left["duffing"] = None
-    duffing = left["duffing"]
-    followed = duffing is not None and (
-        not duffing.significant or abs(duffing.change) <= FOLLOWED * abs(trend.change)
-    )
+    followed = _follows(left["duffing"], trend)
     # a record not in radians that changes as a pendulum's would were it an angle
     hint = (
         ""
-        if pendulum is None or pendulum.significant or "pendulum" in left
+        if not _follows(pendulum, trend) or "pendulum" in left
         else f"it changes as a pendulum's would were the displacement an angle in radians "
         f"({_percent(pendulum.change)} left), but the run's unit is {length_unit!r}"
         + ("" if angle else " and its displacement is scaled by the rig")

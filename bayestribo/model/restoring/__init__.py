@@ -36,6 +36,7 @@ from bayestribo.model.restoring.base import (
     get_restoring,
     load_builtin_restoring,
     register_restoring,
+    rescaled,
     restoring_choices,
     restoring_table,
 )
@@ -50,6 +51,7 @@ __all__ = [
     "available_restoring",
     "get_restoring",
     "register_restoring",
+    "rescaled",
     "restoring_choices",
     "restoring_table",
 ]

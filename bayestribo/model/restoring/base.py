@@ -41,6 +41,7 @@ __all__ = [
     "available_restoring",
     "get_restoring",
     "register_restoring",
+    "rescaled",
     "restoring_choices",
     "restoring_table",
 ]
@@ -95,6 +96,11 @@ class RestoringForce:
         measured parameters (a mapping by name), for a fitted force: what lets a fit
         carry their standard errors into its intervals
         (:mod:`bayestribo.inference.restoring_error`).
+    length_powers : tuple of int
+        The power of y's unit in the unit of each of ``kernel_parameters`` (a Duffing
+        spring's β is in 1/unit²: -2), so that a kernel measured in one unit of y is
+        the same force in another (:func:`rescaled`): the fit's unit of y is N/k, which
+        moves with the frequency that scales time.
     """
 
     name: str
@@ -109,6 +115,7 @@ class RestoringForce:
     kernels: tuple[Callable, Callable] | None = None
     kernel_parameters: tuple[str, ...] = ()
     with_parameters: Callable[[Mapping[str, float]], RestoringForce] | None = None
+    length_powers: tuple[int, ...] = ()
 
     def kernel(self) -> RestoringKernel | None:
         """What the laws' integrator takes of this force (None for a force without
@@ -178,6 +185,56 @@ class RestoringKernel:
         if not self.coefficients:
             return self.name
         return f"{self.name} ({', '.join(f'{c:.4g}' for c in self.coefficients)})"
+
+
+def rescaled(kernel: RestoringKernel | None, ratio: float) -> RestoringKernel | None:
+    """The same restoring force with y in a unit ``ratio`` times as long.
+
+    A kernel's coefficients are in the unit of the y it was measured on: a Duffing
+    spring's β y² is the same number for y = x/ℓ and β in 1/ℓ², so that with y in the
+    unit ℓ' = ratio ℓ, β' = β ratio² (``RestoringForce.length_powers``). A fit measures
+    β on the record scaled by the rig's nominal frequency (ℓ = N/k) and then scales it
+    by the small swings' ω₀, or the law's own frequency: k, and ℓ with it, move by the
+    square of that frequency's ratio.
+
+    Parameters
+    ----------
+    kernel : RestoringKernel or None
+        The force measured in the unit ℓ (None: the linear spring, returned as None).
+    ratio : float
+        ℓ'/ℓ [-], positive.
+
+    Returns
+    -------
+    RestoringKernel or None
+        The kernel itself when it has no coefficients or ``ratio`` is 1.
+
+    Raises
+    ------
+    ValueError
+        For a ratio that is not positive and finite, or a force with coefficients that
+        declares no ``length_powers`` (or no ``with_parameters``) to rescale them by.
+    """
+    if kernel is None:
+        return None
+    if not (math.isfinite(ratio) and ratio > 0.0):
+        raise ValueError(f"ratio: expected a positive, finite number, got {ratio!r}")
+    if not kernel.coefficients or ratio == 1.0:
+        return kernel
+    force = get_restoring(kernel.name)
+    powers = force.length_powers
+    if len(powers) != len(kernel.coefficients) or force.with_parameters is None:
+        raise ValueError(
+            f"restoring force {kernel.name}: its coefficients cannot be taken to another "
+            "unit of y (it declares no length_powers, or no with_parameters)"
+        )
+    values = {
+        name: value * ratio ** (-power)
+        for name, value, power in zip(
+            force.kernel_parameters, kernel.coefficients, powers, strict=True
+        )
+    }
+    return force.with_parameters(values).kernel()
 
 
 class RestoringInfo(NamedTuple):

@@ -168,5 +168,6 @@ DUFFING = register_builtin(
         kernels=(spring_kernel, potential_kernel),
         kernel_parameters=("beta",),
         with_parameters=_with_parameters,
+        length_powers=(-2,),
     )
 )
