@@ -17,6 +17,7 @@ __all__ = [
     "FadeWarning",
     "FrequencyTrendWarning",
     "GapWarning",
+    "LinearSpringWarning",
     "MisfitWarning",
     "MissingDependencyError",
     "OffsetDriftWarning",
@@ -75,6 +76,14 @@ class FrequencyTrendWarning(UserWarning):
     """The half period changes along the decay beyond what the law makes (a stiffness
     that depends on amplitude): the reported quantities carry it as a frequency
     nuisance, so the intervals hold it (the message gives the change and the nuisance)."""
+
+
+class LinearSpringWarning(FrequencyTrendWarning, MisfitWarning):
+    """A :class:`FrequencyTrendWarning` on the linear spring: the half period changes
+    with amplitude beyond its noise, which no linear restoring force makes. The
+    intervals carry the frequency nuisance, but they are then wide for what the record
+    holds and the law's parameters are those of an average spring; the message names
+    the restoring force to try (``--restoring auto``). A misfit: ``fit`` exits 1."""
 
 
 class ReadingWarning(UserWarning):

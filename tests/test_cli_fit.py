@@ -266,6 +266,10 @@ def test_restoring_auto_from_the_sidecar_is_printed_and_in_the_json(pendulum_fil
     assert main([*argv, "--restoring", "auto"]) == 0
     out = capsys.readouterr().out
     assert "restoring auto → pendulum: the half period changes by" in out
+    # the linear spring on the same swings: a misfit, exit 1, naming the force to try
+    assert main([*argv, "--restoring", "linear"]) == 1
+    err = capsys.readouterr().err
+    assert "half period changes by" in err and "--restoring auto chooses it" in err
 
 
 def test_inspect_reads_a_run_whose_restoring_is_auto(pendulum_file, capsys):

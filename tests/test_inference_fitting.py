@@ -328,7 +328,7 @@ def test_result_repr_and_html_show_the_numbers_with_units(bundled):
 def test_a_frequency_that_changes_with_amplitude_is_reported():
     from test_signal_frequency import _decay
 
-    from bayestribo.errors import FrequencyTrendWarning, MisfitWarning
+    from bayestribo.errors import FrequencyTrendWarning, LinearSpringWarning, MisfitWarning
     from bayestribo.io.run import Run
 
     t, x, v = _decay(10_000.0, k3_over_k=667.0)  # a cubic spring: +0.1 % at 2 mm
@@ -346,8 +346,10 @@ def test_a_frequency_that_changes_with_amplitude_is_reported():
     assert trend and "half period changes by +0.0" in str(trend[0].message)
     # the advice (followed in test_inference_restoring_choice.py)
     assert "--restoring auto chooses the force" in str(trend[0].message)
-    # carried into the intervals, so no misfit is claimed for it
-    assert not [w for w in caught if issubclass(w.category, MisfitWarning)]
+    # on the linear spring a misfit (exit 1 from the command line), and the only one
+    assert trend[0].category is LinearSpringWarning
+    misfits = [w for w in caught if issubclass(w.category, MisfitWarning)]
+    assert [w.category for w in misfits] == [LinearSpringWarning]
     assert result.frequency_trend["z"] > 4
     # The frequency nuisance (half the span of the frequency) widens ζ and μ_k so that
     # their 95 % intervals hold the linear part's values (ζ, μ_k = k x_c / N of the

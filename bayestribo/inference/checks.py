@@ -23,7 +23,12 @@ import scipy.stats
 from numpy.typing import NDArray
 
 from bayestribo._warnings import warn
-from bayestribo.errors import FrequencyTrendWarning, MisfitWarning, PriorBoundWarning
+from bayestribo.errors import (
+    FrequencyTrendWarning,
+    LinearSpringWarning,
+    MisfitWarning,
+    PriorBoundWarning,
+)
 from bayestribo.inference.dissipation import FEWEST_HALF_CYCLES
 from bayestribo.inference.identifiability import unidentified_reasons
 from bayestribo.inference.likelihood import ShapeDeparture
@@ -133,7 +138,7 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
 
     Warns
     -----
-    MisfitWarning, PriorBoundWarning, FrequencyTrendWarning
+    MisfitWarning, PriorBoundWarning, FrequencyTrendWarning, LinearSpringWarning
         As :func:`bayestribo.inference.summarising.summarise` lists them.
     """
     # -- separated modes: not converged when a minor one matters (inference/modes.py) --
@@ -367,7 +372,9 @@ def _warn_frequency_trend(
             "does; the constant Ω of the fit is then an average, and the reported "
             "parameters and ΔE(A) carry a frequency nuisance of "
             f"± {100 * frequency_nuisance_sd(trend):.2g} % for it{like}",
-            FrequencyTrendWarning,
+            # on the linear spring a misfit (exit 1): no linear force makes the change,
+            # and the nuisance that holds it leaves the intervals wide for the record
+            FrequencyTrendWarning if restoring is not None else LinearSpringWarning,
         )
 
 
