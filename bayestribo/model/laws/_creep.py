@@ -74,10 +74,6 @@ _D_SWITCH = 0.5
 # (the relative departure of w from the balance's, times that rest) is below this
 # fraction of the integral so far: the half cycles' own tolerance past the record.
 _CREEP_TOLERANCE = 1e-12
-# The creep's rest is integrated down to this fraction of its start, and below it
-# taken from the power law its integrand tends to; in this many panels of ln y.
-_CREEP_LOW = 1e-8
-_CREEP_PANELS = 4
 # Relative tolerance of the steps on w and on the arc's ∫E.
 _ARC_RTOL = 1e-6
 # At most this many steps of the arc (a creep that never settles on the balance
@@ -152,9 +148,9 @@ def _creep_integrand(y: float, c: NDArray) -> float:
 
 @numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
 def _creep_power(a: float, c: NDArray) -> float:
-    """The power k of the creep's integrand f ∝ y^k at ``a``, measured between a/10
-    and a: the creep's ∫E below a is finite where k > -1."""
-    return math.log(_creep_integrand(a, c) / _creep_integrand(0.1 * a, c)) / math.log(10.0)
+    """The power k of the creep's integrand f ∝ y^k near y = 0, measured between
+    1e-7 and 1e-6 of ``a``: its ∫E is finite where k > -1."""
+    return math.log(_creep_integrand(a * 1e-6, c) / _creep_integrand(a * 1e-7, c)) / math.log(10.0)
 
 
 @numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
@@ -162,24 +158,19 @@ def creep_integral(a: float, c: NDArray) -> float:
     """∫E dτ of the creep from y = ``a`` > 0 to y = 0 under the drag alone, from its
     quasi-static balance g(w₀) = y corrected to first order in its inertia
     (:func:`_creep_integrand`; the error is of the order of ε² of the integral, ε the
-    departure at ``a``): ∫₀^a f(y) dy. Down to :data:`_CREEP_LOW` of ``a`` by
-    Gauss-Legendre in ln y (:data:`_CREEP_PANELS` panels of 16 nodes), where f y is
-    smooth; below, f is the power law f ∝ y^k it tends to near y = 0 (k = 2 - 1/α for
-    a power drag), measured there, whose integral is f(y) y/(k + 1): it diverges for
-    k <= -1 (α <= 1/3: the creep never ends, and its energy integral is infinite; NaN
-    then), and grows without bound as k falls to -1."""
-    low = _CREEP_LOW * a
-    k = _creep_power(low, c)
-    if not k > -1.0:
+    departure at ``a``): ∫₀^a f(y) dy. Near y = 0, f ∝ y^k (k = 2 - 1/α for a power
+    law): the integral diverges for k <= -1 (α <= 1/3: the creep never ends, and its
+    energy integral is infinite; NaN then), and is taken by Gauss-Legendre in s,
+    y = a s^m with m = 3/(k + 1), where the integrand is smooth."""
+    k = _creep_power(a, c)
+    if not k > -0.95:
         return math.nan
-    total = _creep_integrand(low, c) * low / (k + 1.0)
-    u0 = math.log(low)
-    width = (math.log(a) - u0) / _CREEP_PANELS
-    for panel in range(_CREEP_PANELS):
-        mid = u0 + (panel + 0.5) * width
-        for i in range(_GL_X.size):
-            y = math.exp(mid + 0.5 * width * _GL_X[i])
-            total += 0.5 * width * _GL_W[i] * _creep_integrand(y, c) * y
+    m = min(max(3.0 / (k + 1.0), 3.0), 60.0)
+    total = 0.0
+    for i in range(_GL_X.size):
+        s = 0.5 * (_GL_X[i] + 1.0)
+        y = a * s**m
+        total += _GL_W[i] * _creep_integrand(y, c) * 0.5 * m * a * s ** (m - 1.0)
     return total
 
 
@@ -331,7 +322,7 @@ def overdamped_end(
     w = r * table[0, 2 * k]
     if not (y > 0.0 and w >= 0.0):
         return math.nan, j, c_end, math.nan, math.nan
-    if math.isinf(tau_end) and not _creep_power(_CREEP_LOW * y, c) > -1.0:
+    if math.isinf(tau_end) and not _creep_power(y, c) > -0.95:
         return math.nan, j, c_end, math.nan, math.nan  # a creep that never ends
     t = t_chk
     cum = c_at[k]
