@@ -47,14 +47,9 @@ halved where its interpolants miss their tolerance (a drag whose local power cha
 down the tail). A fixed number of steps per half cycle integrates every half cycle
 (``steps > 0``: the reference of convergence tests); ``steps < 0`` fixes -steps and
 shortens the sum past the record as the default does, from those same half cycles (the
-coarse model of the optimiser's multi-start). A drag below α = 1 ends the motion by
-an overdamped creep to rest: where a half cycle without friction cannot turn (the drag
-turns θ back before y' = 0), its motion is integrated to rest in every model
-(:mod:`bayestribo.model.laws._creep`: the polar steps while the drag leaves the angle
-half its rate, then an L-stable implicit Runge-Kutta method in τ, the rest from the
-quasi-static balance to first order in its inertia), within 1e-6 of the equation of
-motion's ∫E over it; a row stays NaN where that creep never ends (its ∫E diverges, a
-power drag at α <= 1/3) or a friction holds the arc.
+coarse model of the optimiser's multi-start). A drag below α = 1
+stops the motion in a finite time, by an overdamped creep: an overdamped arc whose
+energy is below 1e-12 of the integral so far ends the motion there.
 
 A start inside a half cycle (y'₀ ≠ 0) needs μ at the half cycle's virtual turning
 point, which is not known for a friction that varies with amplitude: it is taken
@@ -236,8 +231,8 @@ def make_integrator(
         sorted (T,), ``y0`` (P,), ``coef`` (P, K), ``ratio`` (P,) the static to kinetic
         friction ratio, ``steps`` 0 (chosen per half cycle) or fixed (see the module
         notes for its sign); Π of shape (P, T); status (P,) 0 when the motion could be
-        integrated, 1 where the row is outside the law's domain (NaN: a creep to
-        rest that never ends, an overdamped arc with friction).
+        integrated, 1 when the drag stops a half cycle before it turns (an overdamped
+        arc: that row of Π is NaN).
     turns : callable
         ``turns(y0, coef_row, ratio, yp0, tau_max, max_count) -> (τ_n, Y_n)``: the
         turning points of one trajectory.

@@ -260,10 +260,8 @@ class Law:
         Returns
         -------
         ndarray
-            Π, shape (P, T); a row is NaN outside the law's domain: where a drag
-            that outgrows the spring ends the motion by a creep that never ends (its
-            ∫E diverges) or holds an arc with friction (an overdamped creep to rest
-            without friction is integrated to its end).
+            Π, shape (P, T); a row is NaN where the drag is too strong for the
+            motion to turn (an overdamped arc, outside the law's domain).
         """
         t = np.ascontiguousarray(np.atleast_1d(np.asarray(tau, dtype=float)))
         y = np.ascontiguousarray(np.atleast_1d(np.asarray(y0, dtype=float)).ravel())
