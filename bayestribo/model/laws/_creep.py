@@ -147,13 +147,6 @@ def _creep_integrand(y: float, c: NDArray) -> float:
 
 
 @numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
-def _creep_power(a: float, c: NDArray) -> float:
-    """The power k of the creep's integrand f ∝ y^k near y = 0, measured between
-    1e-7 and 1e-6 of ``a``: its ∫E is finite where k > -1."""
-    return math.log(_creep_integrand(a * 1e-6, c) / _creep_integrand(a * 1e-7, c)) / math.log(10.0)
-
-
-@numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
 def creep_integral(a: float, c: NDArray) -> float:
     """∫E dτ of the creep from y = ``a`` > 0 to y = 0 under the drag alone, from its
     quasi-static balance g(w₀) = y corrected to first order in its inertia
@@ -162,7 +155,7 @@ def creep_integral(a: float, c: NDArray) -> float:
     law): the integral diverges for k <= -1 (α <= 1/3: the creep never ends, and its
     energy integral is infinite; NaN then), and is taken by Gauss-Legendre in s,
     y = a s^m with m = 3/(k + 1), where the integrand is smooth."""
-    k = _creep_power(a, c)
+    k = math.log(_creep_integrand(a * 1e-6, c) / _creep_integrand(a * 1e-7, c)) / math.log(10.0)
     if not k > -0.95:
         return math.nan
     m = min(max(3.0 / (k + 1.0), 3.0), 60.0)
@@ -322,8 +315,6 @@ def overdamped_end(
     w = r * table[0, 2 * k]
     if not (y > 0.0 and w >= 0.0):
         return math.nan, j, c_end, math.nan, math.nan
-    if math.isinf(tau_end) and not _creep_power(y, c) > -0.95:
-        return math.nan, j, c_end, math.nan, math.nan  # a creep that never ends
     t = t_chk
     cum = c_at[k]
     scale = c_start + cum
