@@ -295,3 +295,30 @@ def test_the_compiled_two_means_split_the_draws_as_numpy_does():
         labels = _kmeans2(z)
         np.testing.assert_array_equal(labels, _numpy_two_means(z))
         assert 0 < labels.sum() < labels.size
+
+
+def test_the_exact_run_is_told_which_terms_the_draws_put_at_zero_force(bundled_run, monkeypatch):
+    """The fit's exact run gets ``unidentified`` for its own law and names: no reason
+    for draws whose friction is far from zero, one naming μ_s/μ_k for draws whose
+    friction reaches zero (inference/identifiability.py)."""
+    import bayestribo.inference.chains as chains
+    from bayestribo.inference import fit
+
+    seen = {}
+    real_run = chains.run_ensembles
+
+    def recording(log_prob, initial, settings, **kwargs):
+        seen["unidentified"] = kwargs.get("unidentified")
+        seen["names"] = list(log_prob.names)
+        return real_run(log_prob, initial, settings, **kwargs)
+
+    monkeypatch.setattr(chains, "run_ensembles", recording)
+    result = fit(bundled_run, seed=1)
+    unidentified, names = seen["unidentified"], seen["names"]
+    assert callable(unidentified)
+    flat = np.column_stack([result.samples(n) for n in names])
+    assert unidentified(flat) == []
+    scale = next(n for n in ("mu_k", "friction_displacement") if n in names)
+    flat[:, names.index(scale)] = np.linspace(0.0, 1e-3, flat.shape[0])
+    reasons = unidentified(flat)
+    assert len(reasons) == 1 and "(mu_s_ratio)" in reasons[0]

@@ -485,3 +485,36 @@ def test_the_move_choice_draws_what_numpys_choice_draws():
         ours.choice(items, p=np.array([0.5, 0.6, 0.0]))
     with pytest.raises(ValueError):
         ours.choice(items, p=np.array([0.5, 0.5]))
+
+
+def _banana(theta: np.ndarray) -> np.ndarray:
+    """A thin curved ridge (y = x² within 0.01): its autocorrelation time under the
+    DE moves is hundreds of steps."""
+    d = np.atleast_2d(theta)
+    return -0.5 * ((d[:, 1] - d[:, 0] ** 2) / 0.01) ** 2 - 0.5 * d[:, 0] ** 2 / 4.0
+
+
+@pytest.mark.parametrize("ridge", [True, False])
+def test_a_ridge_the_record_does_not_identify_stops_the_run_before_its_ceiling(ridge):
+    """Where ``unidentified`` names a reason and the rule needs more steps than the
+    ceiling even at the τ measured so far, the run stops there, saying so; where it
+    names none, the same run goes on to its ceiling."""
+    settings = SamplerSettings(n_walkers=16, n_ensembles=2, max_steps=3000)
+    start = np.array([0.0, 0.0]) + 0.01 * np.random.default_rng(9).standard_normal((2, 16, 2))
+    calls = []
+
+    def unidentified(draws: np.ndarray) -> list[str]:
+        calls.append(draws.shape)
+        return ["a ridge"] if ridge else []
+
+    run = run_ensembles(_banana, start, settings, seed=4, unidentified=unidentified)
+    assert not run.converged and calls and all(shape[1] == 2 for shape in calls)
+    stopped = [r for r in run.reasons if r.startswith("stopped at")]
+    if ridge:
+        assert run.n_steps < settings.max_steps
+        assert (
+            stopped == [r for r in stopped if re.search(r"beyond the ceiling of 3000$", r)]
+            and len(stopped) == 1
+        )
+    else:
+        assert run.n_steps == settings.max_steps and not stopped

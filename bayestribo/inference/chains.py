@@ -12,6 +12,7 @@ stages in a row, from a posterior.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -22,6 +23,7 @@ from bayestribo.inference.correction import (
     exact_density,
     importance_corrected,
 )
+from bayestribo.inference.identifiability import unidentified_reasons
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.sampling import SamplerRun, SamplerSettings, run_ensembles
 from bayestribo.inference.start import Start, find_start, initial_walkers
@@ -127,9 +129,20 @@ def sample_from(
                 posterior, theta, cov, ratio_range, settings.n_ensembles, settings.n_walkers, rng
             )
     if run is None:
+        # a ridge the record does not identify (a term at zero force: its other
+        # parameters have no effect) stops the run once its rule cannot be met by the
+        # ceiling (inference/identifiability.py), instead of walking it to the ceiling
+        def unseen(draws: NDArray) -> list[str]:
+            return unidentified_reasons(draws, posterior.names, posterior.law)
+
         # -- a failure inside sampling is a reported non-convergence (inference/modes.py) --
         run = run_or_failure(
-            run_ensembles, posterior, walkers, settings, seed=seed_of_run, progress=progress
+            partial(run_ensembles, unidentified=unseen),
+            posterior,
+            walkers,
+            settings,
+            seed=seed_of_run,
+            progress=progress,
         )
         # -- end of the failure guard --
     # The optimiser can stop short of the optimum on the ridge of a law that misfits

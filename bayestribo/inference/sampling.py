@@ -374,6 +374,7 @@ def run_ensembles(
     seed: int | None,
     progress: bool = False,
     names: Sequence[str] | None = None,
+    unidentified: Callable[[NDArray], list[str]] | None = None,
 ) -> SamplerRun:
     """Run ``settings.n_ensembles`` independent emcee ensembles to convergence.
 
@@ -391,6 +392,13 @@ def run_ensembles(
     names : sequence of str, optional
         Parameter names, for messages (default ``names`` of ``log_prob`` if it has
         them, else ``theta[i]``).
+    unidentified : callable, optional
+        ``unidentified(draws) -> reasons``: why the draws (n, d) show a posterior that
+        the record does not identify (a ridge, not a mode; empty when they do not:
+        :func:`bayestribo.inference.identifiability.unidentified_reasons`). Where it
+        gives reasons at a check at which the rule needs more steps than the ceiling
+        even at the τ measured so far (which short chains underestimate), the run
+        stops there, not converged, instead of walking the ridge to the ceiling.
 
     Returns
     -------
@@ -430,6 +438,7 @@ def run_ensembles(
     steps = 0
     enough = settled = False
     extended: int | None = None  # a burn-in extended past a transient
+    hopeless: list[str] = []  # why a run on a ridge was stopped before its ceiling
     skip = 0  # the end of a transient found at the start of the draws (steps)
     try:
         while steps < settings.max_steps:
@@ -463,6 +472,20 @@ def run_ensembles(
             settled = bool(earlier) and bool(np.all(np.abs(tau - earlier[-1]) < 0.1 * tau))
             history.append((steps, tau))
             enough = steps - burn >= settings.autocorr_multiple * np.max(tau)
+            need = burn + settings.autocorr_multiple * np.max(tau)
+            if unidentified is not None and not enough and need > settings.max_steps:
+                # the rule cannot be met by the ceiling: where the draws show why (a
+                # ridge the record does not identify), the run stops here
+                kept = ensembles.flat(min(burn, steps - 1), 1)[0]
+                unseen = unidentified(kept.reshape(-1, ndim))
+                if unseen:
+                    hopeless = [
+                        f"stopped at {steps} steps: the rule needs at least {need:.0f} "
+                        f"(burn-in and {settings.autocorr_multiple:g} autocorrelation times "
+                        f"of {np.max(tau):.0f} steps), beyond the ceiling of "
+                        f"{settings.max_steps}"
+                    ]
+                    break
             if bar is not None:
                 need = int(burn + settings.autocorr_multiple * np.max(tau))
                 bar.set_postfix(tau=f"{np.max(tau):.0f}", need=need)
@@ -496,7 +519,7 @@ def run_ensembles(
     reuse = last_rhat is not None and last_rhat[:3] == (steps, burn, thin)
     r_hat = last_rhat[3] if reuse else rhat(chains)
 
-    reasons = []
+    reasons = list(hopeless)
     if not defined:
         reasons.append("the autocorrelation time is undefined (a chain did not move)")
     elif not enough:
