@@ -353,7 +353,7 @@ def test_the_viscosity_figure_draws_each_load_beside_the_paper_and_reads_in_prin
                 "mu_k": rng.normal(0.03, 5e-5, 400),
             }
             fits.append(_Fit(draws, meta))
-    analysis = analyse_campaign(fits, seed=1, max_steps=1500)
+    analysis = analyse_campaign(fits, seed=1, max_steps=300)  # the figure, not the samplers
     fig = plot_against_viscosity(analysis)
     labels = {t.get_text() for t in fig.legends[0].get_texts()}
     assert {"N = 0.12 N", "a run (median)", "paper, glycerol (mean ± σ)", "6 % water"} <= labels
