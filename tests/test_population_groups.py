@@ -548,6 +548,7 @@ def test_the_shared_queue_returns_results_and_warnings_in_call_order():
         run_calls(calls, pool, costs[:2])
 
 
+@pytest.mark.filterwarnings("ignore::bayestribo.errors.ConvergenceWarning")
 def test_population_jobs_assemble_to_the_population():
     from bayestribo.population.groups import fit_group, population_jobs
 
@@ -558,7 +559,8 @@ def test_population_jobs_assemble_to_the_population():
         runs.append(
             RunSamples(f"r{i}", {"zeta": x}, np.full(x.size, -math.log(0.3)), {"load_N": load})
         )
-    kw = {"by": "load_N", "seed": 1, "max_steps": 3000}
+    # the queue's answer is the direct one, draw for draw: short samplers do (not converged)
+    kw = {"by": "load_N", "seed": 1, "max_steps": 600}
     jobs, assemble = population_jobs(runs, ("zeta",), **kw)
     assert [job[0] for job in jobs] == ["load_N=0.12", "load_N=0.46", "all"]
     queued = assemble([fit_group(*job) for job in jobs])
