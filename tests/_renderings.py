@@ -2,7 +2,8 @@
 
 The notebook tests (``test_reports_notebooks.py``), the browser tests
 (``test_reports_browser.py``) and the page tests (``test_reports_pages.py``) each check
-the single-run, campaign (loads), real-data, viscosity and acquisition reports: each kind
+the single-run, campaign (loads), real-data, viscosity and acquisition reports (the
+acquisition report's numbers too: ``test_reports_numbers_acquisition.py``): each kind
 is made once per test session (``conftest.py`` holds the fixtures) on short test
 parameters, with the executed notebook and, where the notebook writes one, its summary
 JSON beside the HTML, and every test asserts on that one output. The single-run and
@@ -20,10 +21,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-__all__ = ["GROUP", "Rendering", "render"]
+__all__ = ["ACQUISITION_SETTINGS", "GROUP", "Rendering", "render"]
 
 #: The ``xdist_group`` of the test modules sharing the renderings.
 GROUP = "renderings"
+
+#: The acquisition report's fit settings, as options of ``bayestribo report`` (and of
+#: ``bayestribo fit``, which ``test_reports_numbers_acquisition.py`` runs on the run the
+#: report acquired): a short sampler, whose convergence the tests do not need.
+ACQUISITION_SETTINGS = ("--max-steps", "1500", "--grid-points", "32")
 
 
 @dataclass(frozen=True)
@@ -91,8 +97,7 @@ def render(
     options : tuple of str
         Further options of the command.
     summary : bool
-        Ask the notebook for its summary JSON (``summary_path``; the acquisition
-        notebook has none).
+        Ask the notebook for its summary JSON (``summary_path``).
 
     Returns
     -------

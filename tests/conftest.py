@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 from _hostile_names import HOSTILE_FIELD, HOSTILE_FILE_WORD, HOSTILE_SCRIPT, hostile_copy
 from _paths import APPSTAT, DATA, RUNS
-from _renderings import Rendering, render
+from _renderings import ACQUISITION_SETTINGS, Rendering, render
 
 from bayestribo import Run, read_run
 
@@ -166,12 +166,17 @@ def viscosity_report(tmp_path_factory: pytest.TempPathFactory) -> Rendering:
 
 @pytest.fixture(scope="session")
 def acquisition_report(tmp_path_factory: pytest.TempPathFactory) -> Rendering:
-    """The simulated instrument's report (``--notebook acquisition``): 0.6 s recorded."""
+    """The simulated instrument's report (``--notebook acquisition``): 0.6 s recorded,
+    fitted with :data:`ACQUISITION_SETTINGS`, its summary JSON beside it."""
     _needs_jupyter()
     pytest.importorskip("bayestribo.acquisition")
     folder = tmp_path_factory.mktemp("acquisition")
     params = {"duration_s": 0.6, "out_dir": str(folder / "acq")}
-    return render(folder, "acquisition", None, params, notebook="acquisition", summary=False)
+    made = render(
+        folder, "acquisition", None, params, notebook="acquisition", options=ACQUISITION_SETTINGS
+    )
+    assert made.status == 0
+    return made
 
 
 @pytest.fixture(scope="session")

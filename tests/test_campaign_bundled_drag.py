@@ -6,6 +6,14 @@ group of repeats takes one law from all of them (:mod:`bayestribo.campaign.laws`
 the population is over that law's own quantities (ζ, μ_k and c₂ [kg/m]), whose true
 values the manifest holds under the same names. One load's three repeats (the middle
 load, whose comparisons are the shortest: some 4 s of CPU a run) keep the test short.
+
+A statistical check on the bundled files (three law comparisons, some 20 s of CPU), left
+out of the default run (``-m validation``: run by hand). The default run covers each of
+its steps: the choice of a group's law from its runs' comparisons
+(``test_campaign_group_laws.py``), a campaign over a drag law's own quantities ζ and
+c₂ [kg/m] with their intervals holding the truth (``test_campaign_laws.py``), the law
+comparison's verdict on bundled runs (``test_inference_comparison.py``) and ``law="auto"``
+finding a law that holds on a simulated run (``test_inference_fitting.py``).
 """
 
 from __future__ import annotations
@@ -23,6 +31,7 @@ from bayestribo.synthetic.campaign import OIL_LAW, OIL_LOADS_N
 
 pytestmark = [
     pytest.mark.slow,  # three law comparisons, some 20 s of CPU
+    pytest.mark.validation,  # statistical: its steps are checked by default (above)
     pytest.mark.skipif(not (DATA / "manifest.csv").is_file(), reason="bundled data/ absent"),
     # a run's comparison may find no law holding beyond its noise and say so: the
     # choice and the intervals are what is tested here

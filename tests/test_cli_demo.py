@@ -8,14 +8,25 @@ from pathlib import Path
 
 import pytest
 from _paths import REPO
+from _renderings import GROUP
 
 from bayestribo.cli import demo, main
 
 pytest.importorskip("nbclient")
 
 
+@pytest.mark.validation  # two reports rendered: run by hand (-m validation)
 @pytest.mark.skipif(not (REPO / "data").is_dir(), reason="the bundled campaign data/ is absent")
 def test_quick_demo_prints_intervals_beside_the_paper_and_writes_reports(tmp_path, capsys):
+    """The quick demo end to end: its two reports rendered, its intervals printed.
+
+    Left out of the default run. By default, the demo's parameters are checked against the
+    notebooks and its printing against the records they write (the session's shared
+    renderings: the next test), its steps and exit status with stand-in reports (the
+    tests below), and each notebook is rendered on parameters like the demo's (the loads
+    report without runs in air: ``test_reports_campaign_laws.py``; the single-run report
+    without its model checks: ``test_cli_report_vs_fit.py``).
+    """
     pytest.importorskip("nbconvert")
     out = tmp_path / "demo"
     # --quick cuts the population samplers short: they do not converge, and it says so
@@ -38,6 +49,48 @@ def test_quick_demo_prints_intervals_beside_the_paper_and_writes_reports(tmp_pat
         assert "data:image/png;base64" in (out / name).read_text(encoding="utf-8")
     assert list((out / "figures" / "single-run").glob("*.png"))
     assert list((out / "figures" / "campaign").glob("*.png"))
+
+
+@pytest.mark.xdist_group(GROUP)  # the shared renderings made on one worker
+@pytest.mark.skipif(not (REPO / "data").is_dir(), reason="the bundled campaign data/ is absent")
+def test_quick_demo_gives_the_notebooks_their_parameters_and_prints_their_records(
+    single_run_report, loads_report, tmp_path, monkeypatch, capsys
+):
+    """``bayestribo demo --quick`` with its reports standing in: each notebook's parameters
+    are checked as a report run checks them (names and types), and what the demo prints
+    is read from the records those notebooks wrote for the session's shared single-run and
+    campaign reports (``conftest.py``; the campaign's populations sampled 600 steps, too
+    few to converge, as the quick demo's)."""
+    from bayestribo.reports.notebooks import inject_parameters, read_notebook
+
+    records = {"single_run": single_run_report.summary, "loads": loads_report.summary}
+    calls = []
+
+    def report(name, params, html, show_code=False):
+        inject_parameters(read_notebook(name), params)  # names and types valid
+        calls.append(name)
+        Path(params["summary_path"]).write_text(records[name].read_text(encoding="utf-8"))
+        Path(html).write_text("<html></html>", encoding="utf-8")
+        return Path(html)
+
+    monkeypatch.setattr("bayestribo.reports.notebooks.run_report", report)
+    out = tmp_path / "demo"
+    assert main(["demo", "--quick", "--out", str(out)]) == 1
+    assert calls == ["single_run", "loads"]
+    captured = capsys.readouterr()
+    text = captured.out
+    assert "bayestribo demo: NOT CONVERGED" in captured.err
+    assert "fewer than 50 autocorrelation times" in captured.err
+    assert "paper, glycerol (mean, σ)" in text
+    assert "0.0236 (σ 0.0012)" in text and "0.0294 (σ 0.0036)" in text
+    fit_line = next(line for line in text.splitlines() if "Bayesian fit" in line)
+    intervals = re.findall(r"([\d.]+) \[([\d.]+), ([\d.]+)\]", fit_line)
+    assert len(intervals) == 2  # ζ and μ_k
+    for mean, lo, hi in intervals:
+        assert float(lo) <= float(mean) <= float(hi)
+    assert "population" in text and "between-run σ" in text
+    for name in ("single-run-report.html", "campaign-report.html"):
+        assert str(out / name) in text  # says where they are
 
 
 def test_campaign_is_simulated_into_the_cache_when_data_is_absent(tmp_path, monkeypatch):

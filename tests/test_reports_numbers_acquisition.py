@@ -6,8 +6,9 @@ it; ``bayestribo fit --json`` then fits the run file the report acquired with th
 seed and settings. Every table cell that is a value with its interval must be a
 (mean, interval) of that JSON written by the digit rule
 (:func:`bayestribo.summary.interval_text`), and the report's own record of its fit
-(``summary_path``) must be the command's: one answer per question. One rendering and
-one fit for the module, with a short sampler.
+(``summary_path``) must be the command's: one answer per question. The rendering is the
+session's shared one (``acquisition_report`` of ``conftest.py``, short sampler
+``ACQUISITION_SETTINGS``), and one fit for the module.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import json
 import re
 
 import pytest
+from _renderings import ACQUISITION_SETTINGS, GROUP
 from _report_numbers import interval_cells, unmatched
 
 pytest.importorskip("nbclient")
@@ -25,25 +27,23 @@ pytest.importorskip("nbconvert")
 
 from bayestribo.cli.main import main
 
-#: A short sampler: whether it converges does not matter here, only that the report
-#: and the command give the same numbers.
-SETTINGS = ["--max-steps", "1500", "--grid-points", "32"]
+pytestmark = pytest.mark.xdist_group(GROUP)  # the shared renderings made on one worker
+
 #: The acquisition notebook's default seed (its board's noise and its fit).
 SEED = 2010
 
 
 @pytest.fixture(scope="module")
-def acquired(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("acquisition")
-    out, summary, page = tmp / "out", tmp / "summary.json", tmp / "report.html"
-    argv = ["report", "--notebook", "acquisition", "--out", str(page), *SETTINGS]
-    argv += ["--figure-format", "png", "--param", f"out_dir={out}"]
-    assert main([*argv, "--param", f"summary_path={summary}"]) == 0
-    record = json.loads(summary.read_text())
+def acquired(acquisition_report):
+    """The shared rendering's page and record, and ``bayestribo fit --json`` of the run it
+    acquired with the same seed and settings (a short sampler: whether it converges does
+    not matter here, only that the report and the command give the same numbers)."""
+    record = json.loads(acquisition_report.summary.read_text())
     printed = io.StringIO()
     with contextlib.redirect_stdout(printed):
-        main(["fit", record["run"], "--seed", str(SEED), *SETTINGS, "--json"])
-    return page.read_text(encoding="utf-8"), record, json.loads(printed.getvalue())
+        main(["fit", record["run"], "--seed", str(SEED), *ACQUISITION_SETTINGS, "--json"])
+    page = acquisition_report.html.read_text(encoding="utf-8")
+    return page, record, json.loads(printed.getvalue())
 
 
 @pytest.mark.filterwarnings("ignore::bayestribo.errors.ConvergenceWarning")
