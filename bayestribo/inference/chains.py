@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.inference.correction import (
+    CORRECTING_ATTEMPTS,
     MAX_CORRECTED_CV,
     exact_density,
     importance_corrected,
@@ -180,8 +181,10 @@ def _sample_surrogate(
     again whose check fails by little (weights' cv at most
     :data:`~bayestribo.inference.correction.MAX_CORRECTED_CV`) has its draws resampled
     to the exact posterior by their importance weights where that is reliable
-    (:func:`~bayestribo.inference.correction.importance_corrected`). Returns the run,
-    the last check and the surrogate posterior when a check passed or a correction
+    (:func:`~bayestribo.inference.correction.importance_corrected`); once one has come
+    within that reach, up to
+    :data:`~bayestribo.inference.correction.CORRECTING_ATTEMPTS` surrogates are built.
+    Returns the run, the last check and the surrogate posterior when a check passed or a correction
     held (with the exact pointwise log-likelihood of the corrected draws, else None);
     ``(None, check, None, None)`` when none did (the caller samples the exact
     posterior).
@@ -191,7 +194,10 @@ def _sample_surrogate(
     centre, scale = theta, NODE_SCALE * sd
     checked: SurrogateCheck | None = None
     refit: Posterior | None = None
-    for attempt in range(1, ATTEMPTS + 1):
+    attempts = ATTEMPTS
+    attempt = 0
+    while attempt < attempts:
+        attempt += 1
         target = first if attempt == 1 and first is not None else refit
         if target is None:
             target = surrogate_posterior(posterior, centre, scale)
@@ -212,7 +218,10 @@ def _sample_surrogate(
             # to the exact posterior by their importance weights (inference/
             # correction.py; HarmOsc2's coulomb+power: cv 0.09 then 0.084, never 0.05).
             # The first one's failure is left to the next surrogate, which often
-            # passes at less cost than the exact density at every draw
+            # passes at less cost than the exact density at every draw. Within the
+            # correction's reach, a refused correction is followed by further
+            # surrogates (up to CORRECTING_ATTEMPTS in all) before the exact sampler
+            attempts = max(attempts, CORRECTING_ATTEMPTS)
             corrected = importance_corrected(run, exact_density(posterior), rng, settings.rhat_max)
             if corrected is not None:
                 record = SurrogateCheck(
