@@ -191,14 +191,15 @@ class _Scripted:
 
 def test_a_refused_correction_within_reach_is_followed_by_further_surrogates(monkeypatch):
     """The second surrogate comes within the correction's reach and its correction is
-    refused, the third misses by more: a fourth and a fifth are built rather than the
-    exact posterior sampled, and the fifth's correction is kept."""
-    from bayestribo.inference.correction import CORRECTING_ATTEMPTS
+    refused, the next ones miss by more: further surrogates are built, up to
+    ``CORRECTING_ATTEMPTS``, rather than the exact posterior sampled, and the last
+    one's correction is kept."""
+    from bayestribo.inference.correction import CORRECTING_ATTEMPTS, NEAR_CORRECTED_CV
     from bayestribo.inference.surrogate import ATTEMPTS
 
     assert CORRECTING_ATTEMPTS > ATTEMPTS
     near = 0.5 * MAX_CORRECTED_CV
-    far = 2.0 * MAX_CORRECTED_CV
+    far = 2.0 * NEAR_CORRECTED_CV
     cvs = [far, near] + [far] * (CORRECTING_ATTEMPTS - 3) + [near]
     scripted = _Scripted(monkeypatch, cvs, [False, True])
     run, checked, _, _ = scripted.sample()
@@ -207,12 +208,29 @@ def test_a_refused_correction_within_reach_is_followed_by_further_surrogates(mon
     assert run is scripted.run and checked.corrected and checked.attempt == CORRECTING_ATTEMPTS
 
 
-def test_surrogates_never_within_reach_stop_at_the_usual_attempts(monkeypatch):
-    """Checks all beyond the correction's reach: the exact posterior after
-    ``ATTEMPTS`` surrogates, as before, and no correction tried."""
+def test_checks_a_little_beyond_the_reach_are_followed_by_further_surrogates(monkeypatch):
+    """Surrogates built again whose checks miss the correction's reach by a little (cv
+    between ``MAX_CORRECTED_CV`` and ``NEAR_CORRECTED_CV``) up to ``ATTEMPTS``: the
+    next one, within reach, is corrected rather than the exact posterior sampled."""
+    from bayestribo.inference.correction import NEAR_CORRECTED_CV
     from bayestribo.inference.surrogate import ATTEMPTS
 
-    far = 2.0 * MAX_CORRECTED_CV
+    beyond = 0.5 * (MAX_CORRECTED_CV + NEAR_CORRECTED_CV)
+    cvs = [2.0 * NEAR_CORRECTED_CV] + [beyond] * (ATTEMPTS - 1) + [0.5 * MAX_CORRECTED_CV]
+    scripted = _Scripted(monkeypatch, cvs, [True])
+    run, checked, _, _ = scripted.sample()
+    assert scripted.checks == list(range(1, ATTEMPTS + 2))
+    assert scripted.corrected == [ATTEMPTS + 1]
+    assert run is scripted.run and checked.corrected
+
+
+def test_surrogates_never_near_the_reach_stop_at_the_usual_attempts(monkeypatch):
+    """Checks all beyond ``NEAR_CORRECTED_CV``: the exact posterior after
+    ``ATTEMPTS`` surrogates, as before, and no correction tried."""
+    from bayestribo.inference.correction import NEAR_CORRECTED_CV
+    from bayestribo.inference.surrogate import ATTEMPTS
+
+    far = 2.0 * NEAR_CORRECTED_CV
     scripted = _Scripted(monkeypatch, [far] * 10, [])
     run, _, target, _ = scripted.sample()
     assert run is None and target is None

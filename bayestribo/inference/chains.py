@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 from bayestribo.inference.correction import (
     CORRECTING_ATTEMPTS,
     MAX_CORRECTED_CV,
+    NEAR_CORRECTED_CV,
     exact_density,
     importance_corrected,
 )
@@ -182,8 +183,8 @@ def _sample_surrogate(
     :data:`~bayestribo.inference.correction.MAX_CORRECTED_CV`) has its draws resampled
     to the exact posterior by their importance weights where that is reliable
     (:func:`~bayestribo.inference.correction.importance_corrected`); once one has come
-    within that reach, up to
-    :data:`~bayestribo.inference.correction.CORRECTING_ATTEMPTS` surrogates are built.
+    near that reach (:data:`~bayestribo.inference.correction.NEAR_CORRECTED_CV`), up
+    to :data:`~bayestribo.inference.correction.CORRECTING_ATTEMPTS` surrogates are built.
     Returns the run, the last check and the surrogate posterior when a check passed or a correction
     held (with the exact pointwise log-likelihood of the corrected draws, else None);
     ``(None, check, None, None)`` when none did (the caller samples the exact
@@ -213,15 +214,17 @@ def _sample_surrogate(
         checked = check(posterior, target, flat, rng, attempt=attempt)
         if checked.passed:
             return run, checked, target, None
+        if attempt >= 2 and checked.weight_cv <= NEAR_CORRECTED_CV:
+            # near the correction's reach: a refused correction or a check a little
+            # beyond it is followed by further surrogates (up to CORRECTING_ATTEMPTS in
+            # all) before the exact sampler
+            attempts = max(attempts, CORRECTING_ATTEMPTS)
         if attempt >= 2 and checked.weight_cv <= MAX_CORRECTED_CV:
             # a surrogate built again that still fails, by little: its draws resampled
             # to the exact posterior by their importance weights (inference/
             # correction.py; HarmOsc2's coulomb+power: cv 0.09 then 0.084, never 0.05).
             # The first one's failure is left to the next surrogate, which often
-            # passes at less cost than the exact density at every draw. Within the
-            # correction's reach, a refused correction is followed by further
-            # surrogates (up to CORRECTING_ATTEMPTS in all) before the exact sampler
-            attempts = max(attempts, CORRECTING_ATTEMPTS)
+            # passes at less cost than the exact density at every draw
             corrected = importance_corrected(run, exact_density(posterior), rng, settings.rhat_max)
             if corrected is not None:
                 record = SurrogateCheck(
