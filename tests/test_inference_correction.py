@@ -142,3 +142,96 @@ def test_a_corrected_check_passes_and_says_so():
     check = SurrogateCheck(1800, 0.09, 0.1, 2, corrected=True)
     assert check.passed and check.to_dict()["corrected"] is True
     assert not SurrogateCheck(128, 0.09, 0.1, 2).passed
+
+
+class _Scripted:
+    """Stand-ins for the surrogate loop's stages (``bayestribo.inference.chains``):
+    each surrogate's check gives the next weights' cv of ``cvs``, each correction the
+    next answer of ``corrections`` (True: kept)."""
+
+    def __init__(self, monkeypatch, cvs: list[float], corrections: list[bool]) -> None:
+        import types
+
+        from bayestribo.inference import chains
+
+        self.cvs, self.corrections = list(cvs), list(corrections)
+        self.checks: list[int] = []
+        self.corrected: list[int] = []
+        rng = np.random.default_rng(5)
+        self.run = _normal_run(rng, shape=(2, 40))
+        target = types.SimpleNamespace(uses_compiled=True)
+        monkeypatch.setattr(chains, "surrogate_posterior", lambda *a: target)
+        monkeypatch.setattr(chains, "regressed_posterior", lambda *a: target)
+        monkeypatch.setattr(chains, "run_or_failure", lambda *a, **k: self.run)
+        monkeypatch.setattr(chains, "exact_density", lambda posterior: None)
+        monkeypatch.setattr(chains, "check", self.check)
+        monkeypatch.setattr(chains, "importance_corrected", self.correct)
+
+    def check(self, exact, surrogate, draws, rng, attempt=1) -> SurrogateCheck:
+        self.checks.append(attempt)
+        return SurrogateCheck(128, self.cvs.pop(0), 0.1, attempt, draws[0])
+
+    def correct(self, run, exact, rng, rhat_max):
+        import types
+
+        self.corrected.append(self.checks[-1])
+        if not self.corrections.pop(0):
+            return None
+        return types.SimpleNamespace(
+            run=run, draws=80, weight_cv=0.2, log_weight_sd=0.1, pointwise=None
+        )
+
+    def sample(self):
+        from bayestribo.inference.chains import _sample_surrogate
+        from bayestribo.inference.sampling import SamplerSettings
+
+        walkers = np.zeros((2, 32, 1))
+        return _sample_surrogate(None, np.zeros(1), np.eye(1), walkers, SamplerSettings(), 1, False)
+
+
+def test_a_refused_correction_within_reach_is_followed_by_further_surrogates(monkeypatch):
+    """The second surrogate comes within the correction's reach and its correction is
+    refused, the next ones miss by more: further surrogates are built, up to
+    ``CORRECTING_ATTEMPTS``, rather than the exact posterior sampled, and the last
+    one's correction is kept."""
+    from bayestribo.inference.correction import CORRECTING_ATTEMPTS, NEAR_CORRECTED_CV
+    from bayestribo.inference.surrogate import ATTEMPTS
+
+    assert CORRECTING_ATTEMPTS > ATTEMPTS
+    near = 0.5 * MAX_CORRECTED_CV
+    far = 2.0 * NEAR_CORRECTED_CV
+    cvs = [far, near] + [far] * (CORRECTING_ATTEMPTS - 3) + [near]
+    scripted = _Scripted(monkeypatch, cvs, [False, True])
+    run, checked, _, _ = scripted.sample()
+    assert scripted.checks == list(range(1, CORRECTING_ATTEMPTS + 1))
+    assert scripted.corrected == [2, CORRECTING_ATTEMPTS]
+    assert run is scripted.run and checked.corrected and checked.attempt == CORRECTING_ATTEMPTS
+
+
+def test_checks_a_little_beyond_the_reach_are_followed_by_further_surrogates(monkeypatch):
+    """Surrogates built again whose checks miss the correction's reach by a little (cv
+    between ``MAX_CORRECTED_CV`` and ``NEAR_CORRECTED_CV``) up to ``ATTEMPTS``: the
+    next one, within reach, is corrected rather than the exact posterior sampled."""
+    from bayestribo.inference.correction import NEAR_CORRECTED_CV
+    from bayestribo.inference.surrogate import ATTEMPTS
+
+    beyond = 0.5 * (MAX_CORRECTED_CV + NEAR_CORRECTED_CV)
+    cvs = [2.0 * NEAR_CORRECTED_CV] + [beyond] * (ATTEMPTS - 1) + [0.5 * MAX_CORRECTED_CV]
+    scripted = _Scripted(monkeypatch, cvs, [True])
+    run, checked, _, _ = scripted.sample()
+    assert scripted.checks == list(range(1, ATTEMPTS + 2))
+    assert scripted.corrected == [ATTEMPTS + 1]
+    assert run is scripted.run and checked.corrected
+
+
+def test_surrogates_never_near_the_reach_stop_at_the_usual_attempts(monkeypatch):
+    """Checks all beyond ``NEAR_CORRECTED_CV``: the exact posterior after
+    ``ATTEMPTS`` surrogates, as before, and no correction tried."""
+    from bayestribo.inference.correction import NEAR_CORRECTED_CV
+    from bayestribo.inference.surrogate import ATTEMPTS
+
+    far = 2.0 * NEAR_CORRECTED_CV
+    scripted = _Scripted(monkeypatch, [far] * 10, [])
+    run, _, target, _ = scripted.sample()
+    assert run is None and target is None
+    assert scripted.checks == list(range(1, ATTEMPTS + 1)) and scripted.corrected == []

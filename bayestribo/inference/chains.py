@@ -19,7 +19,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.inference.correction import (
+    CORRECTING_ATTEMPTS,
     MAX_CORRECTED_CV,
+    NEAR_CORRECTED_CV,
     exact_density,
     importance_corrected,
 )
@@ -193,8 +195,10 @@ def _sample_surrogate(
     again whose check fails by little (weights' cv at most
     :data:`~bayestribo.inference.correction.MAX_CORRECTED_CV`) has its draws resampled
     to the exact posterior by their importance weights where that is reliable
-    (:func:`~bayestribo.inference.correction.importance_corrected`). Returns the run,
-    the last check and the surrogate posterior when a check passed or a correction
+    (:func:`~bayestribo.inference.correction.importance_corrected`); once one has come
+    near that reach (:data:`~bayestribo.inference.correction.NEAR_CORRECTED_CV`), up
+    to :data:`~bayestribo.inference.correction.CORRECTING_ATTEMPTS` surrogates are built.
+    Returns the run, the last check and the surrogate posterior when a check passed or a correction
     held (with the exact pointwise log-likelihood of the corrected draws, else None);
     ``(None, check, None, None)`` when none did (the caller samples the exact
     posterior).
@@ -204,7 +208,10 @@ def _sample_surrogate(
     centre, scale = theta, NODE_SCALE * sd
     checked: SurrogateCheck | None = None
     refit: Posterior | None = None
-    for attempt in range(1, ATTEMPTS + 1):
+    attempts = ATTEMPTS
+    attempt = 0
+    while attempt < attempts:
+        attempt += 1
         target = first if attempt == 1 and first is not None else refit
         if target is None:
             target = surrogate_posterior(posterior, centre, scale)
@@ -220,6 +227,11 @@ def _sample_surrogate(
         checked = check(posterior, target, flat, rng, attempt=attempt)
         if checked.passed:
             return run, checked, target, None
+        if attempt >= 2 and checked.weight_cv <= NEAR_CORRECTED_CV:
+            # near the correction's reach: a refused correction or a check a little
+            # beyond it is followed by further surrogates (up to CORRECTING_ATTEMPTS in
+            # all) before the exact sampler
+            attempts = max(attempts, CORRECTING_ATTEMPTS)
         if attempt >= 2 and checked.weight_cv <= MAX_CORRECTED_CV:
             # a surrogate built again that still fails, by little: its draws resampled
             # to the exact posterior by their importance weights (inference/

@@ -37,7 +37,9 @@ cv(w) is below :data:`MAX_WEIGHT_CV`; otherwise it builds the surrogate again, u
 :data:`ATTEMPTS` times, and then samples the exact posterior
 (:func:`bayestribo.inference.chains.sample`); a surrogate built again that misses the
 check by a little has its draws resampled to the exact posterior by their importance
-weights instead (:mod:`bayestribo.inference.correction`). The Laplace scales about the maximum a
+weights instead (:mod:`bayestribo.inference.correction`; once one has come near that
+reach, up to :data:`~bayestribo.inference.correction.CORRECTING_ATTEMPTS` surrogates
+are built before the exact posterior is sampled). The Laplace scales about the maximum a
 posteriori describe a posterior that is nearly Gaussian; one that is not (a
 parameter whose optimum is on its prior's bound, with its mass a few tenths of the
 prior's width inside, as α of ``coulomb+power`` at 3 on the AppStat records: a
