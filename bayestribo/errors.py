@@ -79,11 +79,13 @@ class FrequencyTrendWarning(UserWarning):
 
 
 class LinearSpringWarning(FrequencyTrendWarning, MisfitWarning):
-    """A :class:`FrequencyTrendWarning` on the linear spring: the half period changes
-    with amplitude beyond its noise, which no linear restoring force makes. The
-    intervals carry the frequency nuisance, but they are then wide for what the record
-    holds and the law's parameters are those of an average spring; the message names
-    the restoring force to try (``--restoring auto``). A misfit: ``fit`` exits 1."""
+    """A :class:`FrequencyTrendWarning` on the linear spring with a law whose half
+    period is constant (viscous damping and Coulomb friction, the closed forms): the
+    half period changes with amplitude beyond its noise, which neither the spring nor
+    the law makes. The intervals carry the frequency nuisance, but they are then wide for
+    what the record holds and the law's parameters are those of an average spring; the
+    message names the restoring force to try (``--restoring auto``). A misfit: ``fit``
+    exits 1."""
 
 
 class ReadingWarning(UserWarning):

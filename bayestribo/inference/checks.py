@@ -191,6 +191,7 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
         pendulum,
         restoring=posterior.law.restoring,
         chosen=prepared.restoring_choice is not None,
+        constant_period=posterior.law.closed_form,
     )
     return FitChecks(
         sampled,
@@ -332,13 +333,20 @@ def _warn_frequency_trend(
     pendulum: float | None = None,
     restoring: Any = None,
     chosen: bool = False,
+    constant_period: bool = False,
 ) -> None:
     """Say when the frequency is not constant along the decay beyond the law's own
     change (the nuisance that carries it is in the intervals); ``pendulum``: the change
     a pendulum's half period makes over the same swings (a run in radians with a linear
     restoring force), named when the measured change is the pendulum's; ``restoring``:
     the law's nonlinear restoring force, named instead of a force to try; ``chosen``:
-    the force was chosen by ``restoring="auto"`` (which has said why), none is advised."""
+    the force was chosen by ``restoring="auto"`` (which has said why), none is advised;
+    ``constant_period``: the law's half period is constant on the linear spring (a
+    closed form: viscous damping and Coulomb friction, Eq. 15), so any change beyond the
+    noise is not the law's: a :class:`~bayestribo.errors.LinearSpringWarning`, a misfit.
+    A law that changes the period itself (a drag) has its own change taken off first,
+    and what it leaves is a :class:`~bayestribo.errors.FrequencyTrendWarning` that the
+    nuisance carries, as on a nonlinear restoring force."""
     if trend is None:
         return
     if trend.significant:
@@ -372,9 +380,9 @@ def _warn_frequency_trend(
             "does; the constant Ω of the fit is then an average, and the reported "
             "parameters and ΔE(A) carry a frequency nuisance of "
             f"± {100 * frequency_nuisance_sd(trend):.2g} % for it{like}",
-            # on the linear spring a misfit (exit 1): no linear force makes the change,
-            # and the nuisance that holds it leaves the intervals wide for the record
-            FrequencyTrendWarning if restoring is not None else LinearSpringWarning,
+            # a law of constant half period on the linear spring: a misfit (exit 1), and
+            # the nuisance that holds it leaves the intervals wide for the record
+            LinearSpringWarning if restoring is None and constant_period else FrequencyTrendWarning,
         )
 
 

@@ -245,8 +245,9 @@ def summary(
         reported ζ, μ_k, μ_s, ζ_k, d_k and ΔE(A) carry a frequency nuisance for it in
         any case (:func:`frequency_nuisance_sd`, recorded in the result's
         ``frequency_nuisance_sd`` attribute), so the intervals hold it. On the linear
-        spring it is a :class:`~bayestribo.errors.LinearSpringWarning` (also a
-        MisfitWarning: the command line exits 1), naming the restoring force to try.
+        spring with a law of constant half period (a closed form) it is a
+        :class:`~bayestribo.errors.LinearSpringWarning` (also a MisfitWarning: the
+        command line exits 1), naming the restoring force to try.
     ConvergenceWarning
         When the sampler did not converge (the result says so too).
     PriorBoundWarning
