@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from bayestribo.errors import ClippingWarning, RecordingError
-from bayestribo.signal.clipping import MAX_DEFICIT, flattened_turning_points
+from bayestribo.signal.clipping import MAX_DEFICIT, MIN_FLATTENED, flattened_turning_points
 from bayestribo.signal.decay import energy_decay
 from bayestribo.synthetic import Sensor, simulate
 
@@ -137,3 +137,44 @@ def test_a_velocity_only_record_is_checked_at_its_extremes():
     assert any(issubclass(w.category, ClippingWarning) for w in caught)
     clean = energy_decay(run.time, velocity=run.velocity, rig=run.rig())
     assert clean.flattened_turning_points == 0
+
+
+@pytest.fixture(scope="module")
+def stribeck_record():
+    """A record whose friction grows towards zero speed (viscous damping and Stribeck
+    friction, 5 Hz at 500 Hz, by solve_ivp): 0.14 m/s² of friction at speed and an
+    excess of 0.31 m/s² below v_s = 0.014 m/s; the benchmark's record 3, which the check
+    refused as soft clipping ("the first 15 turning points bend up to 30 % less")."""
+    from scipy.integrate import solve_ivp
+
+    w = 2 * np.pi * 5.0
+    zeta, a_k, a_delta, v_s = 0.0014282458, 0.1355215760, 0.3102548930, 0.0141502685
+
+    def rhs(t, s):
+        friction = a_k + a_delta * np.exp(-((s[1] / v_s) ** 2))
+        return [s[1], -w * w * s[0] - 2 * zeta * w * s[1] - friction * np.tanh(s[1] / 1e-4)]
+
+    t = np.arange(0.0, 6.0, 1.0 / 500.0)
+    sol = solve_ivp(
+        rhs, (0.0, 6.0), [0.0051882573, 0.0], t_eval=t, rtol=1e-9, atol=1e-12, max_step=1.0 / 500.0
+    )
+    rng = np.random.default_rng(1_000_006)
+    return t, sol.y[0] + rng.normal(0.0, 5e-7, t.size), sol.y[1] + rng.normal(0.0, 5e-5, t.size)
+
+
+def test_stribeck_friction_is_not_taken_for_a_clip(stribeck_record):
+    t, x, v = stribeck_record
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        decay = energy_decay(t, displacement=x, velocity=v)
+    assert decay.flattened_turning_points == 0
+    assert not [w for w in caught if issubclass(w.category, ClippingWarning)]
+
+
+def test_a_saturated_stribeck_record_is_still_a_clip(stribeck_record):
+    t, x, v = stribeck_record
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        decay = energy_decay(t, displacement=_saturated(x, 1.0), velocity=v)
+    assert decay.flattened_turning_points >= MIN_FLATTENED
+    assert len([w for w in caught if issubclass(w.category, ClippingWarning)]) == 1
