@@ -14,6 +14,10 @@ law, both              both channels, the same records of the law: the results t
                        velocity-only changes must leave alone
 =====================  ==================================================================
 
+With ``--bayes N`` also the Bayesian fit (:func:`bayestribo.inference.fit`, seed 0) of
+the first N records of the law with the velocity alone: each posterior mean's z against
+the truth.
+
 Per record the constancy p-value and each window's μ_k and ζ relative to the truth.
 Counted at 5 % and at 5/3 % (the level ``check_adequacy`` tests it at). Run with the
 package to measure on ``PYTHONPATH``.
@@ -76,6 +80,22 @@ def one(case: str, change: float, channels: tuple[str, ...], seed: int) -> dict[
     }
 
 
+def bayes(seed: int) -> dict[str, Any]:
+    """The Bayesian fit of one velocity-only record of the law: z of ζ and μ_k."""
+    from bayestribo.inference import fit
+
+    run = simulate(law(), sensor=Sensor(channels=("velocity",)), seed=seed)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = fit(run, seed=0)
+    out: dict[str, Any] = {"seed": seed}
+    for name, truth in (("zeta", ZETA), ("mu_k", MU)):
+        draws = np.asarray(result.samples(name), dtype=float)
+        out[name] = {"mean": float(draws.mean()), "sd": float(draws.std())}
+        out[name]["z"] = (out[name]["mean"] - truth) / out[name]["sd"]
+    return out
+
+
 def summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
     """Failures at each level, the median p-value and CPU."""
     ps = [r["p"] for r in rows]
@@ -91,6 +111,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=24, help="records of the law")
     parser.add_argument("--power-runs", type=int, default=10, help="records per other case")
+    parser.add_argument("--bayes", type=int, default=0, help="Bayesian fits of the law")
     parser.add_argument("--out", default="adequacy_velocity_only", help="results file stem")
     args = parser.parse_args()
     rows = [one("law, velocity", 0.0, ("velocity",), s) for s in range(args.runs)]
@@ -108,7 +129,11 @@ def main() -> None:
             f"{s['cpu_s_median']:.2f} s CPU (median)",
             flush=True,
         )
-    path = write_results(args.out, {"summary": table, "runs": rows})
+    fits = [bayes(s) for s in range(args.bayes)]
+    for name in ("zeta", "mu_k") if fits else ():
+        z = np.array([f[name]["z"] for f in fits])
+        print(f"Bayesian fit, {name}: z {z.mean():+.2f} ± {z.std(ddof=1):.2f}", flush=True)
+    path = write_results(args.out, {"summary": table, "runs": rows, "bayes": fits})
     print(f"wrote {path}")
 
 
