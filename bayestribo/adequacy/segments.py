@@ -46,6 +46,7 @@ from numpy.typing import NDArray
 from bayestribo.errors import RecordingError
 from bayestribo.signal.decay import EnergyDecay
 from bayestribo.signal.increments import (
+    increment_draws,
     increment_noise,
     increment_weights,
     integrate_increments,
@@ -158,10 +159,13 @@ def _observed(
     n_increments: int,
     seed: int,
     restoring: Any = None,
-) -> tuple[NDArray, NDArray, NDArray]:
+    keep_draws: bool = False,
+) -> tuple[NDArray, NDArray, NDArray, NDArray | None]:
     """Grid edges, observed increments (bias-corrected) and their noise variances, of
     the energy ½(y² + y'²), or ½y'² + V(y) on a nonlinear ``restoring`` force (whose
-    noise takes V'(y) for y, or V itself in the Monte Carlo of a derived channel)."""
+    noise takes V'(y) for y, or V itself in the Monte Carlo of a derived channel), and
+    with ``keep_draws`` (a derived channel) the Monte Carlo's draws of the increments'
+    noise, shape (replicates, increments)."""
     h = float(tau[1] - tau[0])
     edges, weights = increment_weights(tau.size, h, n_increments)
     force, potential = y, None
@@ -169,27 +173,45 @@ def _observed(
         potential = restoring.potential
     elif restoring is not None:
         force = np.asarray(restoring.spring(y), dtype=float)
-    bias, var = increment_noise(
-        tau,
-        force,
-        yp,
-        edges,
-        weights,
-        noise.sigma_y,
-        noise.sigma_yp,
-        derived=noise.derived,
-        savgol_window=noise.savgol_window,
-        n_replicates=NOISE_REPLICATES,
-        seed=seed,
-        potential=potential,
-    )
+    draws = None
+    if keep_draws and noise.derived is not None:
+        draws = increment_draws(
+            tau,
+            force,
+            yp,
+            edges,
+            weights,
+            noise.sigma_y,
+            noise.sigma_yp,
+            derived=noise.derived,
+            savgol_window=noise.savgol_window,
+            n_replicates=NOISE_REPLICATES,
+            seed=seed,
+            potential=potential,
+        )
+        bias, var = draws.mean(axis=0), draws.var(axis=0, ddof=1)
+    else:
+        bias, var = increment_noise(
+            tau,
+            force,
+            yp,
+            edges,
+            weights,
+            noise.sigma_y,
+            noise.sigma_yp,
+            derived=noise.derived,
+            savgol_window=noise.savgol_window,
+            n_replicates=NOISE_REPLICATES,
+            seed=seed,
+            potential=potential,
+        )
     if restoring is None:
         energy = 0.5 * (y * y + yp * yp)
     else:
         energy = 0.5 * yp * yp + np.asarray(restoring.potential(y), dtype=float)
     obs = integrate_increments(energy, edges, weights) - bias
     floor = 1e-12 * max(float(np.max(var)), 1e-300)
-    return edges, obs, np.maximum(var, floor)
+    return edges, obs, np.maximum(var, floor), draws
 
 
 def _start_values(peaks_abs: NDArray) -> tuple[float, float]:
@@ -205,6 +227,27 @@ def _start_values(peaks_abs: NDArray) -> tuple[float, float]:
     return 0.01, 0.0
 
 
+def _rest_pi(
+    tau: NDArray, y0: float, zeta: float, mu: float, yp0: float, tau_end: float
+) -> NDArray:
+    """∫_τ^{τ_end} E of the pin at rest: the energy ½y_rest² from the model's stop to
+    the segment's end, 0 when it does not stop before.
+
+    The model's Π (:func:`bayestribo.model.exact_pi`) runs to the stop and leaves the
+    rest out, but a segment that ends at the end of motion holds the sample after the
+    stop, and its last increment the energy at rest up to it (about ½y_rest² times a
+    sample's step): 4 % of that increment on the paper's rig, thousands of its noise sd
+    on a velocity-only record, whose windows' fit then bends ζ and μ in the last window.
+    """
+    from bayestribo.model import rest_position, stop_time
+
+    stop = float(stop_time(y0, zeta, mu, mu, yp0))
+    if not stop < tau_end:
+        return np.zeros_like(tau)
+    rest = float(rest_position(y0, zeta, mu, mu, yp0))
+    return 0.5 * rest * rest * np.clip(tau_end - np.maximum(tau, stop), 0.0, None)
+
+
 def fit_segment(
     decay: EnergyDecay,
     start: int,
@@ -214,6 +257,8 @@ def fit_segment(
     noise: _Noise | None = None,
     seed: int = 0,
     fixed_mu: float | None = None,
+    free_offset: bool = False,
+    rest_energy: bool = False,
 ) -> SegmentFit:
     """Fit ζ, μ and Y_0 to the Π increments of samples ``start:stop`` of a decay.
 
@@ -234,6 +279,19 @@ def fit_segment(
         Hold μ at this value (dimensionless) and fit ζ and Y_0 only: the
         *equivalent* damping of the segment, all of its dissipation beyond that
         friction counted as viscous. Its row and column of the covariance are 0.
+    free_offset : bool
+        Fit an offset δ of the segment's displacement from the decay's equilibrium
+        as well (the energy taken as ½((y - δ)² + y'²)), a nuisance parameter whose
+        uncertainty the covariance of (ζ, μ, Y_0) includes: for a displacement
+        integrated from the velocity, whose integration constant wanders along the
+        record with the integrated noise. The covariance is then the Monte Carlo's
+        of the estimates (each draw of the increments' noise through the
+        least-squares step), widened by the reduced χ² beyond what the draws give it.
+    rest_energy : bool
+        Count the energy of the pin at rest from the model's stop to the segment's end
+        in the model's Π (:func:`_rest_pi`), as the observed increments count it. Below
+        the noise of a recorded displacement (there the fit is left as it was); on a
+        velocity-only record thousands of the last increment's sd.
 
     Returns
     -------
@@ -260,7 +318,9 @@ def fit_segment(
             "short to fit; use a longer window"
         )
     n_increments = INCREMENTS_PER_HALF_CYCLE * max(peaks_abs.size - 1, 1)
-    edges, obs, var = _observed(tau, y, yp, noise, n_increments, seed, decay.restoring)
+    edges, obs, var, draws = _observed(
+        tau, y, yp, noise, n_increments, seed, decay.restoring, keep_draws=free_offset
+    )
     if edges.size < 9:
         raise RecordingError(
             f"a segment with {edges.size - 1} Π increments is too short to fit; use a longer window"
@@ -288,35 +348,76 @@ def fit_segment(
 
     def model_pi(p: NDArray) -> NDArray:
         if law is None:
-            return exact_pi(tau_e, sign * p[2], p[0], p[1], p[1], yp0, tau_end=tau_end)
+            pi = exact_pi(tau_e, sign * p[2], p[0], p[1], p[1], yp0, tau_end=tau_end)
+            if rest_energy:
+                pi = pi + _rest_pi(tau_e, sign * p[2], p[0], p[1], yp0, tau_end)
+            return pi
         values = {"zeta": p[0], "mu_k": p[1], "mu_s_ratio": 1.0}
         return law.pi_grid(tau_e, values, [sign * p[2]], yp0, tau_end, reference=amp)[0]
 
+    n_core = int(np.count_nonzero(free))
+    if free_offset:
+        # ∫(y - δ)²/2 = ∫y²/2 - δ∫y + δ²∫1/2 over each increment
+        _, weights = increment_weights(tau.size, float(tau[1] - tau[0]), n_increments)
+        int_y = integrate_increments(y, edges, weights)
+        int_1 = integrate_increments(np.ones_like(y), edges, weights)
+
     def resid(q: NDArray) -> NDArray:
-        pi = model_pi(full(q))
-        return (pi[:-1] - pi[1:] - obs) / sd
+        pi = model_pi(full(q[:n_core]))
+        observed = obs
+        if free_offset:
+            delta = q[n_core]
+            observed = obs - delta * int_y + 0.5 * delta * delta * int_1
+        return (pi[:-1] - pi[1:] - observed) / sd
 
     lower = np.array([0.0, 0.0, 0.5 * amp])
     upper = np.array([0.95, amp, 2.0 * amp])
     scale = np.array([max(z0, 1e-3), max(m0, 1e-3 * amp), amp])
+    start_q, low_q, high_q, scale_q = (
+        np.array([z0, m0, amp])[free],
+        lower[free],
+        upper[free],
+        scale[free],
+    )
+    if free_offset:
+        start_q = np.append(start_q, 0.0)
+        low_q = np.append(low_q, -0.5 * amp)
+        high_q = np.append(high_q, 0.5 * amp)
+        scale_q = np.append(scale_q, 1e-3 * amp)
     sol = scipy.optimize.least_squares(
         resid,
-        np.array([z0, m0, amp])[free],
-        bounds=(lower[free], upper[free]),
-        x_scale=scale[free],
+        start_q,
+        bounds=(low_q, high_q),
+        x_scale=scale_q,
         xtol=1e-10,
         ftol=1e-10,
         gtol=1e-10,
         max_nfev=500,
     )
     n = obs.size
-    n_free = int(np.count_nonzero(free))
+    n_free = sol.x.size
     chi2 = float(np.sum(sol.fun**2))
     red = chi2 / max(n - n_free, 1)
     jac = sol.jac
+    inverse = np.linalg.pinv(jac.T @ jac)
+    widen = max(red, 1.0)
+    if draws is None:
+        full_cov = inverse
+    else:
+        # the estimates' own Monte Carlo: each draw of the increments' noise moves them
+        # by the least-squares step (JᵀJ)⁻¹Jᵀ (in sd units), the increments' correlation
+        # (an integrated channel's) included, which the inverse alone leaves out; and
+        # the reduced χ² is widened for only beyond what the same draws give it
+        noise_sd = (draws - draws.mean(axis=0)) / sd
+        steps = noise_sd @ (jac @ inverse.T)
+        full_cov = np.atleast_2d(np.cov(steps, rowvar=False))
+        left = noise_sd - steps @ jac.T
+        expected = float(np.mean(np.sum(left * left, axis=1))) / max(n - n_free, 1)
+        widen = max(red / expected, 1.0) if expected > 0.0 else widen
     cov = np.zeros((3, 3))
-    cov[np.ix_(free, free)] = np.linalg.pinv(jac.T @ jac) * max(red, 1.0)
-    x = full(sol.x)
+    # the offset's row and column dropped: the marginal covariance of (ζ, μ, Y_0)
+    cov[np.ix_(free, free)] = (full_cov * widen)[:n_core, :n_core]
+    x = full(sol.x[:n_core])
     tol = 1e-6 * np.array([1.0, amp, amp])
     at_bound = tuple(
         name
@@ -334,7 +435,7 @@ def fit_segment(
         tau_end=float(decay.tau[stop - 1]),
         at_bound=at_bound,
         notes="" if sol.success else f"optimiser: {sol.message}",
-        extra={"fixed_mu": fixed_mu},
+        extra={"fixed_mu": fixed_mu} | ({"offset": float(sol.x[n_core])} if free_offset else {}),
     )
 
 

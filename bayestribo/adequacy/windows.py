@@ -427,7 +427,17 @@ def _gaussian_interval(value: float, sd: float) -> tuple[float, float]:
 @dataclass(frozen=True)
 class LeastSquaresWindows:
     """Least squares on each window's Π increments (Gaussian intervals from the
-    curvature, scaled by the reduced χ² when above 1)."""
+    curvature, scaled by the reduced χ² when above 1).
+
+    On a velocity-only record (the displacement integrated from the velocity) each
+    window also fits its own offset from the equilibrium (the integral's constant
+    wanders with the integrated noise, and the windows resolve μ_k to 1e-5 of itself),
+    its covariance is the Monte Carlo's of the estimates (the integrated noise's
+    increments are correlated), and the model counts the energy at rest after the
+    stop up to the last window's end (:func:`~bayestribo.adequacy.segments.fit_segment`).
+    Without these the windows of such a record of the law changed μ_k with the
+    amplitude by tens of their sd (``tests/test_adequacy_velocity_only.py``).
+    """
 
     method: ClassVar[str] = "least_squares"
     interval_kind: ClassVar[str] = (
@@ -450,6 +460,7 @@ class LeastSquaresWindows:
         decay, scale = context.decay, context.mu_scale
         start, stop, first, last = bounds
         peaks_abs = np.abs(decay.peaks.value) / context.length_scale
+        integrated = decay.derived_channel == "displacement"
         fit = fit_segment(
             decay,
             start,
@@ -458,6 +469,8 @@ class LeastSquaresWindows:
             noise=segment_noise(decay),
             seed=context.seed + index,
             fixed_mu=fixed_mu,
+            free_offset=integrated,
+            rest_energy=integrated,
         )
         cov = fit.covariance[:2, :2].copy()
         cov[1, :] *= scale

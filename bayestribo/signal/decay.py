@@ -72,11 +72,13 @@ from the end of motion T. A real recording needs some care first, and
   periods at rest, far above its sample-to-sample noise): the equilibrium's fit weighs
   each turning point by that wander, or the smallest swings, the wander's own, would set
   the drift (integrated accelerometer records: the first swings off centre by up to
-  11 % of their size, now about 1 %, ``tests/test_io_acceleration.py``). Below 50
-  samples a period it is integrated as a damped oscillation with kinks at its turning
-  points, the pole fitted to the velocity, and ∫E between samples is the oscillator's
-  own (:mod:`bayestribo.signal.integration`; :attr:`EnergyDecay.energy_steps`); above,
-  by the trapezoidal rule with its gain at the record's frequency divided out.
+  11 % of their size, now about 1 %, ``tests/test_io_acceleration.py``). It is
+  integrated as a damped oscillation with kinks at its turning points, the pole
+  fitted to the velocity, and ∫E between samples is the oscillator's own
+  (:mod:`bayestribo.signal.integration`; :attr:`EnergyDecay.energy_steps`); where no
+  pole fits, by the trapezoidal rule with its gain at the record's frequency divided
+  out. Its turning points are valued where the velocity crosses zero
+  (:func:`_integral_turning_values`).
 * **A coarse digitiser** (a channel quantised in steps its noise does not dither,
   :mod:`bayestribo.signal.coarse`) resolves neither the smallest swings nor the end of
   motion: the analysis ends at the turning point after the last one of at least one
@@ -559,6 +561,40 @@ def _turning_times(t: NDArray, v: NDArray, peaks: Peaks, period: float) -> NDArr
         else:
             times[j] = t[c] + (t[c + 1] - t[c]) * v0 / (v0 - v1)
     return times
+
+
+def _integral_turning_values(
+    t: NDArray, x: NDArray, v: NDArray, peaks: Peaks, period: float
+) -> Peaks:
+    """The turning points of a displacement integrated from the velocity, valued where
+    the velocity crosses zero.
+
+    A parabola through the samples around an extremum puts its vertex low by about
+    3e-4 of the swing (:func:`~bayestribo.signal.peaks.find_peaks`), and not by the same
+    fraction at a maximum and a minimum: the arcs on either side have their centres
+    at ±x_c, and the sampling phase differs. The equilibrium fitted to those values
+    (Eq. 20) is then off by some 1e-5 of ℓ and drifts, which a windowed fit of a
+    velocity-only record, precise to 1e-4 of μ_k in a window, sees as a change of μ_k
+    with the amplitude. The velocity says where the turning point is
+    (:func:`_turning_times`, the velocity's zero from each side's damped arc), and the
+    integral there is the sample before it plus the velocity's integral up to it, the
+    velocity linear between the two samples around its zero (an error of the cube of
+    the step). Turning points without a crossing keep their parabola values.
+    """
+    times = _turning_times(t, v, peaks, period)
+    where = np.searchsorted(t, times, side="right") - 1
+    ok = (where >= 0) & (where + 1 < t.size)
+    if not np.any(ok):
+        return peaks
+    c = where[ok]
+    before = times[ok] - t[c]
+    after = t[c + 1] - times[ok]
+    # each side's velocity runs straight to its zero (the kink between them): the
+    # integral from either sample is a triangle's
+    raw = 0.5 * ((x[c] + 0.5 * v[c] * before) + (x[c + 1] - 0.5 * v[c + 1] * after))
+    value = peaks.value.copy()
+    value[ok] = raw - (peaks.offset + peaks.drift * peaks.t[ok])
+    return replace(peaks, value=value)
 
 
 def _one_sided_zero(
@@ -1363,9 +1399,13 @@ def _check_coverage(
 
 
 #: Samples a period below which a velocity-only record's displacement is integrated
-#: as an oscillator's (:mod:`bayestribo.signal.integration`); above, the trapezoids'
-#: error (the square of the step) is below the noise.
-OSCILLATOR_RULE_SAMPLES = 50.0
+#: as an oscillator's (:mod:`bayestribo.signal.integration`): at any rate. The
+#: trapezoids' error, though of the square of the step, is not below what the windows
+#: of a velocity-only record resolve: at 300 samples a period (the paper's rig) the
+#: damping's part of it, (ωh)²ζ/6 times the velocity, shifts the displacement against
+#: the velocity, and the windows' μ_k came out 5e-4 low at the largest swings, tens of
+#: their sd (``tests/test_adequacy_velocity_only.py``).
+OSCILLATOR_RULE_SAMPLES = math.inf
 
 
 def _integrated(
@@ -1374,9 +1414,9 @@ def _integrated(
     """The displacement of a velocity-only record, 0 at its first sample, and the pole
     it was integrated with (None for the trapezoids).
 
-    Below :data:`OSCILLATOR_RULE_SAMPLES` samples a period, integrated as a damped
-    oscillation with kinks at its turning points, its pole fitted to the velocity over
-    the motion (:func:`~bayestribo.signal.integration.oscillation_pole`); otherwise,
+    Below :data:`OSCILLATOR_RULE_SAMPLES` samples a period (any rate), integrated as a
+    damped oscillation with kinks at its turning points, its pole fitted to the velocity
+    over the motion (:func:`~bayestribo.signal.integration.oscillation_pole`); otherwise,
     or when no pole fits, by the trapezoidal rule with its gain at the record's
     frequency, (ωh/2)cot(ωh/2) (0.967 at 10 samples a period), divided out as the
     channel check does (signal/channels.py).
@@ -1547,6 +1587,8 @@ def _analyse(
     except RecordingError as e:
         raise RecordingError(f"turning points: {e}") from e
     peaks = replace(found, index=found.index + lo)
+    if derived == "displacement":
+        peaks = _integral_turning_values(t, x, v, peaks, period0)
     fade_span = None
     if span.fade_time is not None:
         fade_span = float(peaks.t[-1])
@@ -1592,7 +1634,7 @@ def _analyse(
     # sample-to-sample noise does not show: weighted by that alone, the smallest swings
     # weighed most in the equilibrium's fit, and its drift followed their wander
     wander = band_x if derived == "displacement" and band_x else None
-    if spacing.start or faded_at is not None or wander is not None:
+    if spacing.start or faded_at is not None or derived == "displacement":
         # the equilibrium from the decay's own turning points (those of an irregular
         # start do not follow Eq. 20, nor those of the noise after a fade)
         peaks = _equilibrium_from(peaks, spacing.start, offset, noise=wander)
