@@ -173,38 +173,20 @@ def _observed(
         potential = restoring.potential
     elif restoring is not None:
         force = np.asarray(restoring.spring(y), dtype=float)
+    args = (tau, force, yp, edges, weights, noise.sigma_y, noise.sigma_yp)
+    options = {
+        "derived": noise.derived,
+        "savgol_window": noise.savgol_window,
+        "n_replicates": NOISE_REPLICATES,
+        "seed": seed,
+        "potential": potential,
+    }
     draws = None
     if keep_draws and noise.derived is not None:
-        draws = increment_draws(
-            tau,
-            force,
-            yp,
-            edges,
-            weights,
-            noise.sigma_y,
-            noise.sigma_yp,
-            derived=noise.derived,
-            savgol_window=noise.savgol_window,
-            n_replicates=NOISE_REPLICATES,
-            seed=seed,
-            potential=potential,
-        )
+        draws = increment_draws(*args, **options)
         bias, var = draws.mean(axis=0), draws.var(axis=0, ddof=1)
     else:
-        bias, var = increment_noise(
-            tau,
-            force,
-            yp,
-            edges,
-            weights,
-            noise.sigma_y,
-            noise.sigma_yp,
-            derived=noise.derived,
-            savgol_window=noise.savgol_window,
-            n_replicates=NOISE_REPLICATES,
-            seed=seed,
-            potential=potential,
-        )
+        bias, var = increment_noise(*args, **options)
     if restoring is None:
         energy = 0.5 * (y * y + yp * yp)
     else:
