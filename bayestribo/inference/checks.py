@@ -344,8 +344,8 @@ def _warn_frequency_trend(
     ``constant_period``: the law's half period is constant on the linear spring (a
     closed form: viscous damping and Coulomb friction, Eq. 15), so any change beyond the
     noise is not the law's: a :class:`~bayestribo.errors.LinearSpringWarning`, a misfit.
-    A law that changes the period itself (a drag) has its own change taken off first,
-    and what it leaves is a :class:`~bayestribo.errors.FrequencyTrendWarning` that the
+    A law without a closed form (a drag, a hysteretic loss) has its own change taken
+    off first, and what it leaves is a :class:`~bayestribo.errors.FrequencyTrendWarning` that the
     nuisance carries, as on a nonlinear restoring force."""
     if trend is None:
         return
