@@ -345,8 +345,9 @@ def _warn_frequency_trend(
     closed form: viscous damping and Coulomb friction, Eq. 15), so any change beyond the
     noise is not the law's: a :class:`~bayestribo.errors.LinearSpringWarning`, a misfit.
     A law without a closed form (a drag, a hysteretic loss) has its own change taken
-    off first, and what it leaves is a :class:`~bayestribo.errors.FrequencyTrendWarning` that the
-    nuisance carries, as on a nonlinear restoring force."""
+    off first, and what it leaves is a
+    :class:`~bayestribo.errors.FrequencyTrendWarning` that the nuisance carries, as on a
+    nonlinear restoring force."""
     if trend is None:
         return
     if trend.significant:
