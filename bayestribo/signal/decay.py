@@ -113,9 +113,11 @@ from bayestribo.model.plausible import MAX_SPEED
 from bayestribo.model.scaling import Rig, Scaling
 from bayestribo.signal.clipping import flattened_turning_points, hard_clips
 from bayestribo.signal.coarse import (
+    MIN_COARSE_TURNING_POINTS,
     MIN_SWING_STEPS,
     RESOLVED_STEPS,
     coarse_steps,
+    coarse_window,
     few_steps_note,
     resolved_end,
     resolved_turning_points,
@@ -963,7 +965,7 @@ def energy_decay(
     skip_oscillations: int = 1,
     use_nominal_frequency: bool = False,
     skip_turning_points: int | None = None,
-    min_turning_points: int = 2 * MIN_OSCILLATIONS,
+    min_turning_points: int | None = None,
     offset: float | Literal["auto", "constant"] | None = "auto",
     notch: float | Literal["auto"] | None = None,
     motion_threshold: float = THRESHOLD,
@@ -994,9 +996,14 @@ def energy_decay(
         not the record starts at rest: the convention of the peak-based estimators
         (:mod:`bayestribo.estimators`, 2 = the first oscillation of a record that
         starts in motion). Given, ``skip_oscillations`` is not used.
-    min_turning_points : int
+    min_turning_points : int, optional
         Fewest turning points needed after the skipped ones, default
-        2 × :data:`MIN_OSCILLATIONS` (the Bayesian fit's three oscillations).
+        2 × :data:`MIN_OSCILLATIONS` (the Bayesian fit's three oscillations); for a
+        coarse record whose swings sink below two steps sooner, down to
+        :data:`~bayestribo.signal.coarse.MIN_COARSE_TURNING_POINTS` with the skipped
+        oscillation analysed too where it is what the record lacks
+        (:func:`~bayestribo.signal.coarse.coarse_window`; a
+        :class:`~bayestribo.errors.CoarseSignalWarning` says so). Given, it is kept.
     offset : float, "auto", "constant" or None
         How the equilibrium of the displacement is found, as in
         :func:`bayestribo.signal.peaks.find_peaks`: "auto" from the turning points
@@ -1080,7 +1087,8 @@ def energy_decay(
     _check_count("skip_oscillations", skip_oscillations, 0)
     if skip_turning_points is not None:
         _check_count("skip_turning_points", skip_turning_points, 0)
-    _check_count("min_turning_points", min_turning_points, 2)
+    if min_turning_points is not None:
+        _check_count("min_turning_points", min_turning_points, 2)
     if use_nominal_frequency and rig is None:
         raise RecordingError("use_nominal_frequency needs a rig with a natural frequency")
     if frequency_Hz is not None and not (math.isfinite(frequency_Hz) and frequency_Hz > 0):
@@ -1494,13 +1502,16 @@ def _analyse(
     frequency_Hz: float | None,
     jitter: float,
     skip_turning_points: int | None,
-    min_turning_points: int,
+    min_turning_points: int | None,
     offset: float | Literal["auto", "constant"] | None,
     motion_threshold: float,
     notch_Hz: tuple[float, ...],
     linear_spring: bool = True,
 ) -> EnergyDecay:
     """:func:`energy_decay` on checked (and notched) signals."""
+    least_by_default = min_turning_points is None
+    if min_turning_points is None:
+        min_turning_points = 2 * MIN_OSCILLATIONS
     derived: str | None = None
     velocity_offset = 0.0
     pole: complex | None = None
@@ -1739,6 +1750,35 @@ def _analyse(
             f"the clipped cycles are left out: the analysis starts at turning point {count} "
             f"({start}) instead of after {skipped}",
         )
+    least = int(min_turning_points)
+    if coarse != (None, None) and least_by_default:
+        # a coarse record's swings may sink below two steps within three oscillations:
+        # analysed on two (signal/coarse.py), the first one too when it is what it lacks
+        omega_d = math.pi / spacing.half_period
+        chosen = coarse_window(
+            len(peaks),
+            lambda s: min(
+                resolved_turning_points(peaks.value[s:], omega_d, coarse) + 1, len(peaks) - s
+            ),
+            skip,
+            least,
+            keep_skip=skip != base_skip or skip_turning_points is not None,
+        )
+        if chosen.note is not None:
+            if chosen.skip != skip:
+                skipped = "0 oscillations"
+            skip, least = chosen.skip, chosen.least
+            warn(
+                f"coarse digitiser: only {len(peaks)} turning points after the release "
+                f"stand out of the rounding (steps {_steps_text(coarse)}): the analysis "
+                f"takes {chosen.note}; with so short a decay ζ and μ_k are told apart "
+                "by little, and the intervals are wide (on simulated records at 3 steps "
+                "across the swing ζ and μ_k were covered in every fit, μ_k's interval "
+                "some ten times μ_k itself); a finer range or gain of the recorder "
+                "gives a record that can be fitted",
+                CoarseSignalWarning,
+            )
+    min_turning_points = least
     needed = skip + int(min_turning_points)
     if len(peaks) < needed:
         why = ""
@@ -1746,8 +1786,15 @@ def _analyse(
             why = (
                 f"; the displacement is quantised in steps of {coarse[0]:.3g} that its "
                 f"noise does not dither ({float(np.ptp(x[lo:hi])) / coarse[0]:.0f} steps "
-                "across its swing), and a swing of less than two steps is no turning point"
+                "across its swing), and a swing of less than two steps is no turning point: "
+                f"the swings after turning point {len(peaks) - 1} (t = "
+                f"{float(peaks.t[-1]):.6g} s) hold fewer"
             )
+            if least_by_default:
+                why += (
+                    f" (a coarse record is analysed on {MIN_COARSE_TURNING_POINTS} turning "
+                    "points at least, the first oscillation's included)"
+                )
         if (
             skip_turning_points is None
             and skip == base_skip > 0
