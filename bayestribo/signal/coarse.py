@@ -71,6 +71,7 @@ __all__ = [
     "quantised_increments",
     "resolved_end",
     "resolved_turning_points",
+    "swing_end",
 ]
 
 #: Noise at rest, in steps, up to which a quantised channel is coarse (not dithered).
@@ -282,6 +283,54 @@ def resolved_turning_points(
         ok &= float(omega_d) * amp >= RESOLVED_STEPS * step_v
     good = np.flatnonzero(ok)
     return int(0 if good.size == 0 else good[-1] + 1)
+
+
+def swing_end(signal: ArrayLike, step: float, period_samples: float, steps: float) -> int | None:
+    """The sample after which a coarse channel's swing stays below ``steps`` steps.
+
+    The swing is the range of the channel over one period about each sample (2ω|Y| for
+    the velocity). A velocity recorded alone is integrated into the displacement, and
+    where its swing is a step or two the integral's turning points are the rounding's:
+    its mean over a cycle, a good part of a step, changes with the swing and the
+    integral wanders by far more than the swing.
+
+    Parameters
+    ----------
+    signal : array_like
+        The channel [signal unit].
+    step : float
+        Its coarse step [signal unit].
+    period_samples : float
+        Samples per period of the oscillation.
+    steps : float
+        Swing, in steps, below which the channel no longer resolves the motion.
+
+    Returns
+    -------
+    int or None
+        One past the last sample whose period holds a swing of at least ``steps``
+        steps; None when there is no such sample, or when the swing holds to the end.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> v = np.round(np.exp(-np.arange(400) / 100.0) * 4 * np.sin(np.arange(400) / 3.0))
+    >>> swing_end(v, 1.0, 6 * np.pi, 4.0)
+    91
+    """
+    from scipy.ndimage import maximum_filter1d, minimum_filter1d
+
+    values = np.asarray(signal, dtype=float)
+    if not (step > 0 and period_samples > 0) or values.size == 0:
+        raise ValueError(
+            f"step, period_samples: expected positive numbers, got {step!r}, {period_samples!r}"
+        )
+    size = max(round(period_samples), 1)
+    swing = maximum_filter1d(values, size) - minimum_filter1d(values, size)
+    wide = np.flatnonzero(swing >= (steps - 0.5) * step)
+    if wide.size == 0 or wide[-1] == values.size - 1:
+        return None
+    return int(wide[-1]) + 1
 
 
 def resolved_end(

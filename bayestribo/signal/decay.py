@@ -121,6 +121,7 @@ from bayestribo.signal.coarse import (
     few_steps_note,
     resolved_end,
     resolved_turning_points,
+    swing_end,
 )
 from bayestribo.signal.coverage import ShortAnalysisWarning, coverage_note
 from bayestribo.signal.integration import (
@@ -1579,6 +1580,14 @@ def _analyse(
     hi = t.size
     if span.stop_index is not None:
         hi = min(t.size, int(span.stop_index) + 2 + span.block // 8)
+    coarse_cut = None
+    if coarse_fade is not None:
+        # a coarse velocity alone: where its swing is within FADE steps (ω|Y| below
+        # FADE q_v) the integral's turning points are the rounding's, its mean over a
+        # cycle changing with the swing; the turning points are looked for before that
+        cut = swing_end(v, v_step, period0 / sample_step(t), 2.0 * FADE * RESOLVED_STEPS)
+        if cut is not None and lo < cut < hi:
+            hi, coarse_cut = cut, float(t[cut - 1])
     if sigma_x is None and x_step is not None:
         sigma_x = estimate_noise(x[lo:hi])  # as find_peaks would, floored below
     peak_noise, peak_threshold, rest_band = _peak_noise(sigma_x, x_step)
@@ -1611,6 +1620,17 @@ def _analyse(
             f"t = {span.fade_time:.6g} s, without stopping (a viscous decay); the analysis "
             "ends at that turning point, the last before the swings sink, as for a record "
             "that ends in motion",
+            FadeWarning,
+        )
+    elif coarse_cut is not None:
+        fade_span = float(peaks.t[-1])
+        warn(
+            f"turning points: the decay fades into the velocity's steps of {v_step:.3g} "
+            f"after turning point {len(peaks) - 1} (t = {fade_span:.6g} s): from "
+            f"t = {coarse_cut:.6g} s on its swing over a period is within "
+            f"{2 * FADE * RESOLVED_STEPS:g} steps, where the displacement integrated from "
+            "it follows the rounding more than the motion; the analysis ends at that "
+            "turning point, as for a record that ends in motion",
             FadeWarning,
         )
     # the free decay starts where the turning points are half a period apart
@@ -1649,7 +1669,9 @@ def _analyse(
         # the equilibrium from the decay's own turning points (those of an irregular
         # start do not follow Eq. 20, nor those of the noise after a fade)
         peaks = _equilibrium_from(peaks, spacing.start, offset, noise=wander)
-    peaks = replace(peaks, stop_time=stop_time if span.fade_time is None else None)
+    peaks = replace(
+        peaks, stop_time=stop_time if span.fade_time is None and coarse_cut is None else None
+    )
     period = 2.0 * spacing.half_period
     if v is None:
         derived = "velocity"
