@@ -1376,12 +1376,14 @@ def _check_coverage(
     left_out: int,
     stop_time: float | None,
     unresolved: str | None = None,
+    *,
+    faded: str | None = None,
 ) -> None:
     """Warn (:class:`~bayestribo.signal.coverage.ShortAnalysisWarning`) when the
     analysed samples ``t[start:stop]`` cover less than half of the recorded motion,
     saying why: the turning points that end before the motion does, the swings a
-    coarse quantiser does not resolve (``unresolved``, its steps), or the cycles
-    left out at the start."""
+    coarse quantiser does not resolve (``unresolved``, its steps), a decay that fades
+    (``faded``, in words), or the cycles left out at the start."""
     motion_end = float(t[-1]) if stop_time is None else float(stop_time)
     last_turn = float(window.t[-1])
     if unresolved is not None:
@@ -1390,6 +1392,8 @@ def _check_coverage(
             f"the later amplitudes are below {RESOLVED_STEPS:g} quantisation step(s) "
             f"({unresolved})",
         )
+    elif faded is not None:
+        end, why = float(t[stop - 1]), faded
     elif stop_time is None and motion_end - last_turn > 0.5 * (motion_end - release):
         end, why = (
             last_turn,
@@ -1908,6 +1912,14 @@ def _analyse(
         max(left_out, irregular),
         stop_time,
         _steps_text(coarse) if truncated else None,
+        faded=None
+        if faded_at is None
+        else (
+            f"its velocity's swing over a period is within {2 * FADE * RESOLVED_STEPS:g} "
+            f"of its steps of {v_step:.3g} from t = {coarse_cut:.6g} s on"
+            if coarse_cut is not None
+            else f"the decay fades into the noise after t = {faded_at:.6g} s"
+        ),
     )
     sl = slice(start, stop)
     # the same operations as x[sl] - (offset + drift t) and 0.5 (y² + y'²), in place
