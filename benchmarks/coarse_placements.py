@@ -16,7 +16,10 @@ Run (by hand)::
     nice python benchmarks/coarse_placements.py --steps 10 --runs 20
 
 ``--skip 0`` fits with the first oscillation kept, as the refusal of a record too short
-for the skipped one advises.
+for the skipped one advises. ``--velocity-steps N`` rounds the velocity to its own count
+of steps across its swing (``--steps 0``: the displacement is not rounded), so that the
+velocity swings over a few steps only near the stop; ``--velocity-only`` fits the
+velocity alone (the displacement is not given).
 
 Writes ``benchmarks/results/coarse_placements_<steps>.json`` (``--output NAME``).
 """
@@ -40,25 +43,43 @@ FLAGS = ("MisfitWarning", "ChannelCalibrationWarning", "ConvergenceWarning", "Pr
 TRUTH = {"zeta": ZETA, "mu_k": MU_K}
 
 
-def one_run(steps: float, index: int, skip: int = 1) -> dict[str, Any]:
-    """Round run ``index`` to ``steps`` across the swing on levels placed at random, fit
-    it, and say how its intervals stand against the truth."""
+def one_run(
+    steps: float,
+    index: int,
+    skip: int = 1,
+    *,
+    velocity_steps: float | None = None,
+    velocity_only: bool = False,
+) -> dict[str, Any]:
+    """Round run ``index`` to ``steps`` across the swing (the velocity to
+    ``velocity_steps``, default ``steps``; 0: not rounded) on levels placed at random,
+    fit it (the velocity alone with ``velocity_only``), and say how its intervals stand
+    against the truth."""
     from bayestribo import fit
     from bayestribo.io.run import Run
 
     t, x, v = record(10_000.0, 0.1, 0.1)
     rng = np.random.default_rng([77, index])
     xs, vs = apply_chain(t, x, v, 10_000.0, seed=[77, index, 1], noise=10.0)
-    qx, qv = np.ptp(x) / steps, np.ptp(v) / steps
     ux, uv = rng.uniform(-0.5, 0.5, 2)
-    xs = (np.round(xs / qx + ux) - ux) * qx
-    vs = (np.round(vs / qv + uv) - uv) * qv
+    vsteps = steps if velocity_steps is None else velocity_steps
+    if steps > 0:
+        qx = np.ptp(x) / steps
+        xs = (np.round(xs / qx + ux) - ux) * qx
+    if vsteps > 0:
+        qv = np.ptp(v) / vsteps
+        vs = (np.round(vs / qv + uv) - uv) * qv
     out: dict[str, Any] = {"index": index, "placement_steps": [float(ux), float(uv)]}
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             result = fit(
-                Run(time=t, displacement=xs, velocity=vs, metadata=metadata()),
+                Run(
+                    time=t,
+                    displacement=None if velocity_only else xs,
+                    velocity=vs,
+                    metadata=metadata(),
+                ),
                 seed=index,
                 skip_oscillations=skip,
             )
@@ -120,11 +141,28 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--skip", type=int, default=1, help="oscillations skipped after the release (the fit's)"
     )
+    parser.add_argument(
+        "--velocity-steps",
+        type=float,
+        default=None,
+        help="the velocity's steps across its swing (default --steps; 0: not rounded)",
+    )
+    parser.add_argument("--velocity-only", action="store_true", help="fit the velocity alone")
     parser.add_argument("--output", default=None, help="results/NAME.json")
     args = parser.parse_args(argv)
+    if args.steps < 0 or (args.velocity_steps is not None and args.velocity_steps < 0):
+        parser.error("--steps, --velocity-steps: expected a count >= 0 (0: not rounded)")
     rows = []
     for i in range(args.runs):
-        rows.append(one_run(args.steps, i, args.skip))
+        rows.append(
+            one_run(
+                args.steps,
+                i,
+                args.skip,
+                velocity_steps=args.velocity_steps,
+                velocity_only=args.velocity_only,
+            )
+        )
         print(rows[-1], flush=True)
     table = summarise(rows)
     print(table)
@@ -134,6 +172,8 @@ def main(argv: list[str] | None = None) -> int:
         {
             "source": commit(),
             "steps": args.steps,
+            "velocity_steps": args.velocity_steps,
+            "velocity_only": args.velocity_only,
             "skip": args.skip,
             "truth": TRUTH,
             "table": table,
