@@ -42,8 +42,8 @@ oscillation too, when the one skipped after the release is what it lacks), where
 record dithered by its noise needs three oscillations: the intervals are wide (ζ and
 μ_k are told apart by the shape of a longer decay) and come with a
 :class:`~bayestribo.errors.CoarseSignalWarning`. On the paper's rig at 3 steps across
-the swing (``benchmarks/coarse_placements.py``) main refused 9 placements of 20 for
-lacking one or two turning points; on two oscillations each was covered.
+the swing (``benchmarks/coarse_placements.py``) 9 placements of 20 were refused for
+lacking one to three turning points; on two oscillations each was covered.
 
 A channel is coarse (:func:`coarse_steps`) when it is quantised and the noise measured
 at rest is at most :data:`DITHER_STEPS` steps (a rest on one level shows none; the
@@ -80,7 +80,9 @@ DITHER_STEPS = 0.5
 RESOLVED_STEPS = 1.0
 #: Fewest steps across a coarse channel's swing at which the rounding's variances hold:
 #: on the paper's rig (``benchmarks/coarse_placements.py``, 20 placements a count) 4 and 5
-#: steps covered ζ and μ_k in 20 of 20 fits, 3 steps missed ζ in 2 of 11 (z -2.7, -3.6).
+#: steps covered ζ and μ_k in 20 of 20 fits; 3 steps covered both in 20 of 20 (z of μ_k
+#: +1.1 in each: wide intervals whose centres are off alike), and an earlier version
+#: missed ζ in 2 of 11 (z -2.7, -3.6).
 MIN_SWING_STEPS = 4
 #: Fewest turning points a coarse record is analysed on when its swings sink below two
 #: steps within three oscillations (two oscillations: the total decay is measured, its
