@@ -378,3 +378,23 @@ def test_the_swing_end_is_where_a_period_last_holds_the_steps():
     assert swing_end(np.sin(np.arange(100.0)), 0.1, 6.0, 4.0) is None  # to the end
     with pytest.raises(ValueError, match="step"):
         swing_end(v, 0.0, 6.0, 4.0)
+
+
+@pytest.mark.parametrize("placement", [-0.3, 0.25])
+def test_a_coarse_record_without_two_oscillations_is_refused_saying_what_it_lacks(placement):
+    """Two and a half steps across the swing: three or four turning points stand two
+    steps out, and fewer than two oscillations of them swing a step or more about the
+    equilibrium. The refusal names the step, the last turning point that stands out and
+    its time, the two oscillations a coarse record is analysed on, and how many it has
+    (an earlier message asked for 7 and said nothing of the two oscillations)."""
+    t, x, v, (qx, _), _ = _coarse_record(steps=2.5, placement=placement)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(RecordingError) as told:
+            energy_decay(t, x, v)
+    said = str(told.value)
+    assert f"quantised in steps of {qx:.3g}" in said
+    assert re.search(r"the swings after turning point \d+ \(t = [0-9.]+ s\) hold fewer", said)
+    assert f"analysed on {MIN_COARSE_TURNING_POINTS} turning points at least" in said
+    kept = int(re.search(r"about the equilibrium: (\d+) here", said).group(1))
+    assert kept < MIN_COARSE_TURNING_POINTS

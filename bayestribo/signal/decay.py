@@ -1824,9 +1824,15 @@ def _analyse(
                 f"{float(peaks.t[-1]):.6g} s) hold fewer"
             )
             if least_by_default:
+                kept = min(
+                    resolved_turning_points(peaks.value, math.pi / spacing.half_period, coarse) + 1,
+                    len(peaks),
+                )
                 why += (
                     f" (a coarse record is analysed on {MIN_COARSE_TURNING_POINTS} turning "
-                    "points at least, the first oscillation's included)"
+                    "points at least, the first oscillation's included, up to the one "
+                    f"after the last of a swing of {RESOLVED_STEPS:g} step(s) or more "
+                    f"about the equilibrium: {kept} here)"
                 )
         if (
             skip_turning_points is None
