@@ -144,9 +144,13 @@ class PluginWarning(UserWarning):
 
 
 class CoarseSignalWarning(MisfitWarning):
-    """A coarse channel holds fewer than four of its quantisation steps across the
-    motion's swing: the turning points stand on a few levels and the intervals are not
-    calibrated there (the message names the channel, its step and the count)."""
+    """A coarse channel (steps its noise does not dither) leaves the intervals
+    uncalibrated or wide: it holds fewer than four of its steps across the motion's
+    swing (the turning points stand on a few levels), its swings sink below two steps
+    within three oscillations (the analysis takes two, the one skipped after the release
+    included where it is what the record lacks), or it is a velocity recorded alone,
+    whose rounding accumulates in its integral. The message names the channel, its step
+    and the count."""
 
 
 class OffsetDriftWarning(MisfitWarning):

@@ -34,6 +34,17 @@ a sawtooth that follows the signal. Two things follow.
   where ending the motion at the velocity's last reading off its rest put μ_k ten
   posterior standard deviations off.
 
+**A record whose swings sink below two steps within three oscillations** still holds
+a decay: its first swings stand out of the rounding and shrink from one turning point
+to the next. :func:`coarse_window` lets such a record be analysed on as few as
+:data:`MIN_COARSE_TURNING_POINTS` turning points (two oscillations; the first
+oscillation too, when the one skipped after the release is what it lacks), where a
+record dithered by its noise needs three oscillations: the intervals are wide (ζ and
+μ_k are told apart by the shape of a longer decay) and come with a
+:class:`~bayestribo.errors.CoarseSignalWarning`. On the paper's rig at 3 steps across
+the swing (``benchmarks/coarse_placements.py``) 9 placements of 20 were refused for
+lacking one to three turning points; on two oscillations each was covered.
+
 A channel is coarse (:func:`coarse_steps`) when it is quantised and the noise measured
 at rest is at most :data:`DITHER_STEPS` steps (a rest on one level shows none; the
 measured level is floored at q/√12). A finer quantiser (a vibrometer's resolution, the
@@ -42,18 +53,25 @@ AppStat2020 files' three decimals) is dithered by the noise: the white formula h
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import dataclass
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
     "DITHER_STEPS",
+    "MIN_COARSE_TURNING_POINTS",
     "MIN_SWING_STEPS",
     "RESOLVED_STEPS",
+    "CoarseWindow",
     "coarse_steps",
+    "coarse_window",
     "few_steps_note",
     "quantised_increments",
     "resolved_end",
     "resolved_turning_points",
+    "swing_end",
 ]
 
 #: Noise at rest, in steps, up to which a quantised channel is coarse (not dithered).
@@ -62,10 +80,101 @@ DITHER_STEPS = 0.5
 RESOLVED_STEPS = 1.0
 #: Fewest steps across a coarse channel's swing at which the rounding's variances hold:
 #: on the paper's rig (``benchmarks/coarse_placements.py``, 20 placements a count) 4 and 5
-#: steps covered ζ and μ_k in 20 of 20 fits, 3 steps missed ζ in 2 of 11 (z -2.7, -3.6).
+#: steps covered ζ and μ_k in 20 of 20 fits; 3 steps covered both in 20 of 20 (z of μ_k
+#: +1.1 in each: wide intervals whose centres are off alike), and an earlier version
+#: missed ζ in 2 of 11 (z -2.7, -3.6).
 MIN_SWING_STEPS = 4
+#: Fewest turning points a coarse record is analysed on when its swings sink below two
+#: steps within three oscillations (two oscillations: the total decay is measured, its
+#: split between ζ and μ_k is left wide).
+MIN_COARSE_TURNING_POINTS = 4
 #: Monte Carlo replicates drawn at once (memory: block × samples floats).
 _BLOCK = 50
+
+
+@dataclass(frozen=True)
+class CoarseWindow:
+    """The turning points a coarse record is analysed on (:func:`coarse_window`).
+
+    Parameters
+    ----------
+    skip : int
+        Turning points skipped before the analysis.
+    least : int
+        Fewest turning points needed after them.
+    note : str or None
+        What was changed from the requested analysis, in words (None: nothing).
+    """
+
+    skip: int
+    least: int
+    note: str | None = None
+
+
+def coarse_window(
+    found: int,
+    resolved: Callable[[int], int],
+    skip: int,
+    least: int,
+    *,
+    keep_skip: bool = False,
+) -> CoarseWindow:
+    """The skip and least count of turning points for a coarse record that lacks some.
+
+    A coarse record whose swings sink below two steps before ``skip + least`` turning
+    points (the turning points of smaller swings are the rounding's) is analysed on
+    :data:`MIN_COARSE_TURNING_POINTS`, and with the skipped turning points too when
+    only they are missing.
+
+    Parameters
+    ----------
+    found : int
+        Turning points found after the release.
+    resolved : callable
+        ``resolved(s)``: how many of the turning points from ``s`` on the analysis keeps
+        (those the coarse channels resolve, and the one after the last of them).
+    skip : int
+        Turning points the analysis was asked to skip (the release's oscillation).
+    least : int
+        Turning points it was asked to keep at least, after them.
+    keep_skip : bool
+        Never analyse the skipped turning points (they were left out for a reason of
+        their own: clipped, irregular, or skipped by count on request).
+
+    Returns
+    -------
+    CoarseWindow
+        ``skip`` and ``least`` unchanged (note None) when the record has enough or too
+        few even so (the caller refuses it).
+
+    Examples
+    --------
+    >>> coarse_window(5, lambda s: 5 - s, 1, 6).note
+    '4 turning points after the skipped ones, where 6 are asked for'
+    >>> coarse_window(4, lambda s: 4 - s, 1, 6).skip
+    0
+    >>> coarse_window(9, lambda s: 9 - s, 1, 6).note is None
+    True
+    """
+
+    def enough(s: int, n: int) -> bool:
+        return found - s >= n and resolved(s) >= n
+
+    if enough(skip, least):
+        return CoarseWindow(skip, least)
+    fewest = min(least, MIN_COARSE_TURNING_POINTS)
+    asked = f"{fewest} turning points after the skipped ones, where {least} are asked for"
+    if enough(skip, fewest):
+        return CoarseWindow(skip, fewest, asked)
+    if skip > 0 and not keep_skip and enough(0, fewest):
+        return CoarseWindow(
+            0,
+            fewest,
+            f"{fewest} turning points from the first one after the release on ("
+            + ("the one" if skip == 1 else f"the {skip}")
+            + " skipped after the release analysed too)",
+        )
+    return CoarseWindow(skip, least)
 
 
 def coarse_steps(
@@ -176,6 +285,54 @@ def resolved_turning_points(
         ok &= float(omega_d) * amp >= RESOLVED_STEPS * step_v
     good = np.flatnonzero(ok)
     return int(0 if good.size == 0 else good[-1] + 1)
+
+
+def swing_end(signal: ArrayLike, step: float, period_samples: float, steps: float) -> int | None:
+    """The sample after which a coarse channel's swing stays below ``steps`` steps.
+
+    The swing is the range of the channel over one period about each sample (2ω|Y| for
+    the velocity). A velocity recorded alone is integrated into the displacement, and
+    where its swing is a step or two the integral's turning points are the rounding's:
+    its mean over a cycle, a good part of a step, changes with the swing and the
+    integral wanders by far more than the swing.
+
+    Parameters
+    ----------
+    signal : array_like
+        The channel [signal unit].
+    step : float
+        Its coarse step [signal unit].
+    period_samples : float
+        Samples per period of the oscillation.
+    steps : float
+        Swing, in steps, below which the channel no longer resolves the motion.
+
+    Returns
+    -------
+    int or None
+        One past the last sample whose period holds a swing of at least ``steps``
+        steps; None when there is no such sample, or when the swing holds to the end.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> v = np.round(np.exp(-np.arange(400) / 100.0) * 4 * np.sin(np.arange(400) / 3.0))
+    >>> swing_end(v, 1.0, 6 * np.pi, 4.0)
+    91
+    """
+    from scipy.ndimage import maximum_filter1d, minimum_filter1d
+
+    values = np.asarray(signal, dtype=float)
+    if not (step > 0 and period_samples > 0) or values.size == 0:
+        raise ValueError(
+            f"step, period_samples: expected positive numbers, got {step!r}, {period_samples!r}"
+        )
+    size = max(round(period_samples), 1)
+    swing = maximum_filter1d(values, size) - minimum_filter1d(values, size)
+    wide = np.flatnonzero(swing >= (steps - 0.5) * step)
+    if wide.size == 0 or wide[-1] == values.size - 1:
+        return None
+    return int(wide[-1]) + 1
 
 
 def resolved_end(

@@ -83,7 +83,13 @@ from the end of motion T. A real recording needs some care first, and
   :mod:`bayestribo.signal.coarse`) resolves neither the smallest swings nor the end of
   motion: the analysis ends at the turning point after the last one of at least one
   step of amplitude, like a record that ends in motion; its rest is not taken for the
-  velocity's zero, and its extremes are not checked for soft clipping.
+  velocity's zero, and its extremes are not checked for soft clipping. Where its swings
+  sink below two steps within three oscillations, two are analysed (the one skipped
+  after the release too, where it is what the record lacks;
+  :func:`~bayestribo.signal.coarse.coarse_window`). A coarse velocity recorded alone is
+  searched for turning points only while it swings over four steps a period
+  (:func:`~bayestribo.signal.coarse.swing_end`): below, its integral's turning points
+  are the rounding's.
 """
 
 from __future__ import annotations
@@ -113,12 +119,15 @@ from bayestribo.model.plausible import MAX_SPEED
 from bayestribo.model.scaling import Rig, Scaling
 from bayestribo.signal.clipping import flattened_turning_points, hard_clips
 from bayestribo.signal.coarse import (
+    MIN_COARSE_TURNING_POINTS,
     MIN_SWING_STEPS,
     RESOLVED_STEPS,
     coarse_steps,
+    coarse_window,
     few_steps_note,
     resolved_end,
     resolved_turning_points,
+    swing_end,
 )
 from bayestribo.signal.coverage import ShortAnalysisWarning, coverage_note
 from bayestribo.signal.integration import (
@@ -963,7 +972,7 @@ def energy_decay(
     skip_oscillations: int = 1,
     use_nominal_frequency: bool = False,
     skip_turning_points: int | None = None,
-    min_turning_points: int = 2 * MIN_OSCILLATIONS,
+    min_turning_points: int | None = None,
     offset: float | Literal["auto", "constant"] | None = "auto",
     notch: float | Literal["auto"] | None = None,
     motion_threshold: float = THRESHOLD,
@@ -994,9 +1003,14 @@ def energy_decay(
         not the record starts at rest: the convention of the peak-based estimators
         (:mod:`bayestribo.estimators`, 2 = the first oscillation of a record that
         starts in motion). Given, ``skip_oscillations`` is not used.
-    min_turning_points : int
+    min_turning_points : int, optional
         Fewest turning points needed after the skipped ones, default
-        2 × :data:`MIN_OSCILLATIONS` (the Bayesian fit's three oscillations).
+        2 × :data:`MIN_OSCILLATIONS` (the Bayesian fit's three oscillations); for a
+        coarse record whose swings sink below two steps sooner, down to
+        :data:`~bayestribo.signal.coarse.MIN_COARSE_TURNING_POINTS` with the skipped
+        oscillation analysed too where it is what the record lacks
+        (:func:`~bayestribo.signal.coarse.coarse_window`; a
+        :class:`~bayestribo.errors.CoarseSignalWarning` says so). Given, it is kept.
     offset : float, "auto", "constant" or None
         How the equilibrium of the displacement is found, as in
         :func:`bayestribo.signal.peaks.find_peaks`: "auto" from the turning points
@@ -1080,7 +1094,8 @@ def energy_decay(
     _check_count("skip_oscillations", skip_oscillations, 0)
     if skip_turning_points is not None:
         _check_count("skip_turning_points", skip_turning_points, 0)
-    _check_count("min_turning_points", min_turning_points, 2)
+    if min_turning_points is not None:
+        _check_count("min_turning_points", min_turning_points, 2)
     if use_nominal_frequency and rig is None:
         raise RecordingError("use_nominal_frequency needs a rig with a natural frequency")
     if frequency_Hz is not None and not (math.isfinite(frequency_Hz) and frequency_Hz > 0):
@@ -1367,12 +1382,14 @@ def _check_coverage(
     left_out: int,
     stop_time: float | None,
     unresolved: str | None = None,
+    *,
+    faded: str | None = None,
 ) -> None:
     """Warn (:class:`~bayestribo.signal.coverage.ShortAnalysisWarning`) when the
     analysed samples ``t[start:stop]`` cover less than half of the recorded motion,
     saying why: the turning points that end before the motion does, the swings a
-    coarse quantiser does not resolve (``unresolved``, its steps), or the cycles
-    left out at the start."""
+    coarse quantiser does not resolve (``unresolved``, its steps), a decay that fades
+    (``faded``, in words), or the cycles left out at the start."""
     motion_end = float(t[-1]) if stop_time is None else float(stop_time)
     last_turn = float(window.t[-1])
     if unresolved is not None:
@@ -1381,6 +1398,8 @@ def _check_coverage(
             f"the later amplitudes are below {RESOLVED_STEPS:g} quantisation step(s) "
             f"({unresolved})",
         )
+    elif faded is not None:
+        end, why = float(t[stop - 1]), faded
     elif stop_time is None and motion_end - last_turn > 0.5 * (motion_end - release):
         end, why = (
             last_turn,
@@ -1494,13 +1513,16 @@ def _analyse(
     frequency_Hz: float | None,
     jitter: float,
     skip_turning_points: int | None,
-    min_turning_points: int,
+    min_turning_points: int | None,
     offset: float | Literal["auto", "constant"] | None,
     motion_threshold: float,
     notch_Hz: tuple[float, ...],
     linear_spring: bool = True,
 ) -> EnergyDecay:
     """:func:`energy_decay` on checked (and notched) signals."""
+    least_by_default = min_turning_points is None
+    if min_turning_points is None:
+        min_turning_points = 2 * MIN_OSCILLATIONS
     derived: str | None = None
     velocity_offset = 0.0
     pole: complex | None = None
@@ -1568,6 +1590,14 @@ def _analyse(
     hi = t.size
     if span.stop_index is not None:
         hi = min(t.size, int(span.stop_index) + 2 + span.block // 8)
+    coarse_cut = None
+    if coarse_fade is not None:
+        # a coarse velocity alone: where its swing is within FADE steps (ω|Y| below
+        # FADE q_v) the integral's turning points are the rounding's, its mean over a
+        # cycle changing with the swing; the turning points are looked for before that
+        cut = swing_end(v, v_step, period0 / sample_step(t), 2.0 * FADE * RESOLVED_STEPS)
+        if cut is not None and lo < cut < hi:
+            hi, coarse_cut = cut, float(t[cut - 1])
     if sigma_x is None and x_step is not None:
         sigma_x = estimate_noise(x[lo:hi])  # as find_peaks would, floored below
     peak_noise, peak_threshold, rest_band = _peak_noise(sigma_x, x_step)
@@ -1600,6 +1630,17 @@ def _analyse(
             f"t = {span.fade_time:.6g} s, without stopping (a viscous decay); the analysis "
             "ends at that turning point, the last before the swings sink, as for a record "
             "that ends in motion",
+            FadeWarning,
+        )
+    elif coarse_cut is not None:
+        fade_span = float(peaks.t[-1])
+        warn(
+            f"turning points: the decay fades into the velocity's steps of {v_step:.3g} "
+            f"after turning point {len(peaks) - 1} (t = {fade_span:.6g} s): from "
+            f"t = {coarse_cut:.6g} s on its swing over a period is within "
+            f"{2 * FADE * RESOLVED_STEPS:g} steps, where the displacement integrated from "
+            "it follows the rounding more than the motion; the analysis ends at that "
+            "turning point, as for a record that ends in motion",
             FadeWarning,
         )
     # the free decay starts where the turning points are half a period apart
@@ -1638,7 +1679,9 @@ def _analyse(
         # the equilibrium from the decay's own turning points (those of an irregular
         # start do not follow Eq. 20, nor those of the noise after a fade)
         peaks = _equilibrium_from(peaks, spacing.start, offset, noise=wander)
-    peaks = replace(peaks, stop_time=stop_time if span.fade_time is None else None)
+    peaks = replace(
+        peaks, stop_time=stop_time if span.fade_time is None and coarse_cut is None else None
+    )
     period = 2.0 * spacing.half_period
     if v is None:
         derived = "velocity"
@@ -1696,8 +1739,9 @@ def _analyse(
         warn(
             f"coarse digitiser: {few}; below {MIN_SWING_STEPS} steps the turning points "
             "stand on a few levels and the intervals are not calibrated (on simulated "
-            "records at 3 steps ζ was missed by up to 3.6 sd); a finer range or gain of "
-            "the recorder gives a record that can be fitted",
+            "records at 3 steps they covered ζ and μ_k in 20 fits of 20, but wide and "
+            "their centres off alike, μ_k's one sd above the truth in each); a finer "
+            "range or gain of the recorder gives a record that can be fitted",
             CoarseSignalWarning,
         )
     flattened = (
@@ -1739,6 +1783,35 @@ def _analyse(
             f"the clipped cycles are left out: the analysis starts at turning point {count} "
             f"({start}) instead of after {skipped}",
         )
+    least = int(min_turning_points)
+    if coarse != (None, None) and least_by_default:
+        # a coarse record's swings may sink below two steps within three oscillations:
+        # analysed on two (signal/coarse.py), the first one too when it is what it lacks
+        omega_d = math.pi / spacing.half_period
+        chosen = coarse_window(
+            len(peaks),
+            lambda s: min(
+                resolved_turning_points(peaks.value[s:], omega_d, coarse) + 1, len(peaks) - s
+            ),
+            skip,
+            least,
+            keep_skip=skip != base_skip or skip_turning_points is not None,
+        )
+        if chosen.note is not None:
+            if chosen.skip != skip:
+                skipped = "0 oscillations"
+            skip, least = chosen.skip, chosen.least
+            warn(
+                f"coarse digitiser: only {len(peaks)} turning points after the release "
+                f"stand out of the rounding (steps {_steps_text(coarse)}): the analysis "
+                f"takes {chosen.note}; with so short a decay ζ and μ_k are told apart "
+                "by little, and the intervals are wide (on simulated records at 3 steps "
+                "across the swing they covered ζ and μ_k in each of 9 such fits, μ_k's "
+                "reaching 10 to 20 times μ_k); a finer range or gain of the recorder "
+                "gives a record that can be fitted",
+                CoarseSignalWarning,
+            )
+    min_turning_points = least
     needed = skip + int(min_turning_points)
     if len(peaks) < needed:
         why = ""
@@ -1746,8 +1819,21 @@ def _analyse(
             why = (
                 f"; the displacement is quantised in steps of {coarse[0]:.3g} that its "
                 f"noise does not dither ({float(np.ptp(x[lo:hi])) / coarse[0]:.0f} steps "
-                "across its swing), and a swing of less than two steps is no turning point"
+                "across its swing), and a swing of less than two steps is no turning point: "
+                f"the swings after turning point {len(peaks) - 1} (t = "
+                f"{float(peaks.t[-1]):.6g} s) hold fewer"
             )
+            if least_by_default:
+                kept = min(
+                    resolved_turning_points(peaks.value, math.pi / spacing.half_period, coarse) + 1,
+                    len(peaks),
+                )
+                why += (
+                    f" (a coarse record is analysed on {MIN_COARSE_TURNING_POINTS} turning "
+                    "points at least, the first oscillation's included, up to the one "
+                    f"after the last of a swing of {RESOLVED_STEPS:g} step(s) or more "
+                    f"about the equilibrium: {kept} here)"
+                )
         if (
             skip_turning_points is None
             and skip == base_skip > 0
@@ -1839,6 +1925,14 @@ def _analyse(
         max(left_out, irregular),
         stop_time,
         _steps_text(coarse) if truncated else None,
+        faded=None
+        if faded_at is None
+        else (
+            f"its velocity's swing over a period is within {2 * FADE * RESOLVED_STEPS:g} "
+            f"of its steps of {v_step:.3g} from t = {coarse_cut:.6g} s on"
+            if coarse_cut is not None
+            else f"the decay fades into the noise after t = {faded_at:.6g} s"
+        ),
     )
     sl = slice(start, stop)
     # the same operations as x[sl] - (offset + drift t) and 0.5 (y² + y'²), in place
