@@ -105,6 +105,9 @@ FLAGS = (
 )
 Z_AGREE = 1.959964
 SPREAD_GOAL = 0.2
+#: The goal's largest difference of log-log slopes of ΔE(A), the law's against the
+#: turning points', for a fit that says the law holds (exit 0).
+SLOPE_GOAL = 0.5
 
 
 def recordings() -> dict[str, Path]:
@@ -334,6 +337,8 @@ def one_fit(
             for k in ("amplitude", "mean", "sd", "interval", "unit", "by_term")
         }
         rec["turning_point_dissipation"] = result.turning_point_dissipation
+        rec["shape_agreement"] = result.shape_agreement
+        rec["slopes"] = slope_check(band, result.turning_point_dissipation)
         if reference is None:
             from bayestribo.inference import prepare
 
@@ -350,6 +355,38 @@ def one_fit(
         rec["probes"] = _law_band(result, probes, reference)
         out[kind] = rec
     return out
+
+
+def _slope(amplitude: np.ndarray, energy: np.ndarray) -> float:
+    """Least-squares slope of ln ΔE against ln A (nan with fewer than two usable points)."""
+    ok = np.isfinite(amplitude) & np.isfinite(energy) & (amplitude > 0) & (energy > 0)
+    if ok.sum() < 2:
+        return math.nan
+    return float(np.polyfit(np.log(amplitude[ok]), np.log(energy[ok]), 1)[0])
+
+
+def slope_check(band: dict[str, Any], measured: dict[str, Any] | None) -> dict[str, Any] | None:
+    """The goal's shape test, computed here from the two means: the log-log slopes of
+    the fit's ΔE(A) and of the turning points' ΔE(A) over the analysed (reported)
+    amplitudes, their difference, and whether it is within :data:`SLOPE_GOAL`. None
+    without a turning-point answer at the same amplitudes."""
+    if not measured or not measured.get("amplitude") or not band.get("amplitude"):
+        return None
+    amp = np.asarray(band["amplitude"], dtype=float)
+    if amp.shape != np.shape(measured["amplitude"]) or not np.allclose(
+        amp, measured["amplitude"], rtol=1e-9
+    ):
+        return {"error": "the fit's band and the turning points' are at other amplitudes"}
+    law = _slope(amp, np.asarray(band["mean"], dtype=float))
+    tp = _slope(amp, np.asarray(measured["mean"], dtype=float))
+    difference = abs(law - tp)
+    return {
+        "amplitude_range": [float(amp.min()), float(amp.max())],
+        "law_slope": law,
+        "turning_point_slope": tp,
+        "difference": difference,
+        "within_goal": bool(difference <= SLOPE_GOAL),
+    }
 
 
 # -- analysis --------------------------------------------------------------------------
@@ -434,6 +471,14 @@ def summarise(records: list[dict[str, Any]], prepared: dict[str, Any]) -> dict[s
                     if spread is not None:
                         worst = max(worst, spread)
                 s["dissipation"] = de
+                # the goal's shape test per seed: never "the law holds" (exit 0) with a
+                # ΔE(A) whose log-log slope is more than SLOPE_GOAL off the turning points'
+                slopes = [f.get("slopes") or {} for f in ok]
+                s["slope_difference"] = [sl.get("difference") for sl in slopes]
+                s["shape_goal_met"] = [
+                    (not f["adequate"]) or bool(sl.get("within_goal"))
+                    for f, sl in zip(ok, slopes, strict=True)
+                ]
                 if kind == "auto":
                     # the goal: the law fitted to each half predicts the other's ΔE(A),
                     # or the fit says that no law holds (and gives the law-free ΔE(A))
@@ -573,6 +618,13 @@ def _print_table(table: dict[str, Any], prepared: dict[str, Any]) -> None:
                 answer_text = f"  answer ({k.get('answer')}) spread {_fmt(answer, '.2f')}"
                 goal = k.get("halves_goal_met")
                 halves = f"  halves-or-no-law {sum(goal)}/{len(goal)}" if goal is not None else ""
+                diffs = [d for d in k.get("slope_difference", []) if d is not None]
+                shape = k.get("shape_goal_met", [])
+                halves += (
+                    f"  |Δslope| ≤ {_fmt(max(diffs), '.2f')} shape-goal {sum(shape)}/{len(shape)}"
+                    if diffs
+                    else ""
+                )
                 print(
                     f"  {which:12s} {kind:7s} {_laws_text(k['laws']):42s} "
                     f"adeq {sum(map(bool, k['adequate']))}/{len(k['adequate'])} "
