@@ -33,6 +33,7 @@ from typing import Any
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from _machine import machine
+from real import SLOPE_GOAL, slope_check
 
 RESULTS = Path(__file__).resolve().parent / "results"
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "external-data"
@@ -107,6 +108,15 @@ def one(name: str, shared: Path) -> dict[str, Any]:
         measured_slope_se=departure.get("measured_slope_se"),
         same_shape=departure.get("same_shape"),
     )
+    # the goal's shape test on the law the command answers with (exit 0) or fitted
+    # last (exit 1): its ΔE(A) and the turning points' log-log slopes over the
+    # analysed amplitudes, which may differ by at most SLOPE_GOAL when the law holds
+    slopes = slope_check(out.get("dissipation") or {}, out.get("turning_point_dissipation"))
+    row["slopes"] = slopes
+    row["answer_has_band"] = bool(
+        out.get("dissipation") if done.returncode == 0 else out.get("turning_point_dissipation")
+    )
+    row["shape_goal_met"] = done.returncode != 0 or bool(slopes and slopes.get("within_goal"))
     return row
 
 
@@ -114,12 +124,13 @@ def table(rows: list[dict[str, Any]]) -> str:
     """The README's table."""
     lines = [
         "| recording (what a physicist expects) | command | exit | answer | the closest law, "
-        "and how far its ΔE(A) is from the turning points' |",
-        "|---|---|---|---|---|",
+        "and how far its ΔE(A) is from the turning points' | sampler; the answering "
+        f"law's log-log slope against the turning points' (goal ≤ {SLOPE_GOAL} at exit 0) |",
+        "|---|---|---|---|---|---|",
     ]
     for r in rows:
         if r["exit"] not in (0, 1):
-            lines.append(f"| {r['recording']} | `{r['command']}` | {r['exit']} | refused | |")
+            lines.append(f"| {r['recording']} | `{r['command']}` | {r['exit']} | refused | | |")
             continue
         answer = f"`{r['law']}`" if r["exit"] == 0 else "the turning points' ΔE(A) (law-free)"
         slopes = (
@@ -129,9 +140,17 @@ def table(rows: list[dict[str, Any]]) -> str:
             else ""
         )
         close = f"`{r['best']}`: up to {r['max_percent']:.3g} % off; {slopes}"
+        sl = r.get("slopes") or {}
+        check = (
+            f"`{r['law']}` Δslope {sl['difference']:.2f}"
+            + ("" if r["shape_goal_met"] else " (**over the goal**)")
+            if sl.get("difference") is not None
+            else "no slope"
+        )
+        sampler = "converged" if r.get("converged") else "**not converged**"
         lines.append(
             f"| {r['recording']} ({r['expected']}) | `{r['command']}` | {r['exit']} | "
-            f"{answer} | {close} |"
+            f"{answer} | {close} | {sampler}; {check} |"
         )
     return "\n".join(lines)
 
