@@ -32,7 +32,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _machine import machine
+from _machine import commit, machine
 from real import SLOPE_GOAL, slope_check
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -167,7 +167,7 @@ def main(argv: list[str] | None = None) -> int:
         r = rows[-1]
         print(f"{name}: exit {r['exit']}, {r.get('law')}, {r['seconds']:.0f} s", flush=True)
     RESULTS.mkdir(exist_ok=True)
-    record = {"machine": machine(), "rows": rows, "table": table(rows)}
+    record = {"machine": machine(), "commit": commit(), "rows": rows, "table": table(rows)}
     (RESULTS / f"{args.output}.json").write_text(json.dumps(record, indent=1) + "\n")
     print(record["table"])
     return 0
