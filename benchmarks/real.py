@@ -569,8 +569,47 @@ def summarise(records: list[dict[str, Any]], prepared: dict[str, Any]) -> dict[s
                     ),
                     "seeds": len(per_seed),
                 }
+        entry["goal"] = {
+            which: goal(seg["auto"])
+            for which, seg in entry["segments"].items()
+            if seg.get("auto") and seg["auto"]["laws"]
+        }
         table[name] = entry
     return table
+
+
+def goal(s: dict[str, Any]) -> dict[str, Any]:
+    """Issue 39's goal on one segment's ``law="auto"`` fits over the seeds (a summary of
+    :func:`summarise`): each seed's exit status (0 when the law holds, 1 with the
+    turning points' ΔE(A)), every seed converged, the answer's and the laws' seed spread
+    below :data:`SPREAD_GOAL`, the halves agreeing or the law flagged, and never exit 0
+    with a law whose log-log slope of ΔE(A) is more than :data:`SLOPE_GOAL` off the
+    turning points'. ``met`` lists the criteria met; ``failed`` the others."""
+    answer = s.get("max_seed_spread_answer")
+    laws = s.get("max_seed_spread_dissipation")
+    params = s.get("seed_spread_parameters_in_sd") or {}
+    criteria = {
+        "answer with ΔE(A)": not s["errors"],
+        "converged": all(s["converged"]),
+        "seed-stable answer": answer is None or answer < SPREAD_GOAL,
+        "seed-stable law band": laws is None or laws < SPREAD_GOAL,
+        "seed-stable parameters": all(v is None or v < SPREAD_GOAL for v in params.values()),
+        "halves agree or law flagged": all(s.get("halves_goal_met") or [False]),
+        "no exit 0 with another shape": all(s.get("shape_goal_met") or [True]),
+    }
+    diffs = [d for d in s.get("slope_difference", []) if d is not None]
+    return {
+        "exit": [0 if a else 1 for a in s["adequate"]],
+        "laws": s["laws"],
+        "answer_seed_spread_sd": answer,
+        "law_band_seed_spread_sd": laws,
+        "parameters_seed_spread_sd": max(
+            (v for v in params.values() if v is not None), default=None
+        ),
+        "largest_slope_difference": max(diffs) if diffs else None,
+        "met": [k for k, v in criteria.items() if v],
+        "failed": [k for k, v in criteria.items() if not v],
+    }
 
 
 def _fmt(x: float | None, spec: str = ".3g") -> str:
@@ -639,6 +678,19 @@ def _print_table(table: dict[str, Any], prepared: dict[str, Any]) -> None:
                     + (f"  errors {len(k['errors'])}" if k["errors"] else "")
                 )
     print(
+        "\nIssue 39's goal per recording and segment (law='auto' over the seeds): exit "
+        "status per seed, the criteria failed"
+    )
+    for name, entry in table.items():
+        for which, g in entry.get("goal", {}).items():
+            failed = "; ".join(g["failed"]) or "every criterion met"
+            print(
+                f"{name:16s} {which:12s} exit {g['exit']} {_laws_text(g['laws']):30s} "
+                f"answer spread {_fmt(g['answer_seed_spread_sd'], '.2f')} sd, law band "
+                f"{_fmt(g['law_band_seed_spread_sd'], '.2f')} sd, |Δslope| "
+                f"{_fmt(g['largest_slope_difference'], '.2f')}: {failed}"
+            )
+    print(
         "\nHalves: seeds whose law of one half agrees with the other half's ΔE(A) band "
         "(|z| <= 1.96 at every amplitude): at the cut, and over the other half's amplitudes"
     )
@@ -676,6 +728,19 @@ def write_json(path: Path, results: dict[str, Any]) -> Path:
     return path
 
 
+def resummarise(path: Path) -> int:
+    """Summarise the fits of ``path`` again with this version's :func:`summarise`
+    (the fits, their settings and source kept; ``summarised_at`` records the commit of
+    the summary) and print the table."""
+    old = json.loads(path.read_text())
+    old.pop("machine", None)
+    old["table"] = summarise(old["fits"], old["prepared"])
+    old["summarised_at"] = commit()
+    write_json(path, old)
+    _print_table(old["table"], old["prepared"])
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     names = list(recordings())
@@ -691,7 +756,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--resume", action="store_true", help="keep the fits of an interrupted output file"
     )
+    parser.add_argument(
+        "--summarise",
+        action="store_true",
+        help="summarise the fits of the output file again (no fit) and print its table",
+    )
     args = parser.parse_args(argv)
+    if args.summarise:
+        return resummarise(output_path(args.output))
     import bayestribo
 
     start = time.perf_counter()
