@@ -475,6 +475,11 @@ def summarise(records: list[dict[str, Any]], prepared: dict[str, Any]) -> dict[s
                 # ΔE(A) whose log-log slope is more than SLOPE_GOAL off the turning points'
                 slopes = [f.get("slopes") or {} for f in ok]
                 s["slope_difference"] = [sl.get("difference") for sl in slopes]
+                # the package's standard error of the turning points' slope (from the
+                # relative sds at the two ends of the amplitudes)
+                s["turning_point_slope_se"] = [
+                    (f.get("shape_agreement") or {}).get("measured_slope_se") for f in ok
+                ]
                 s["shape_goal_met"] = [
                     (not f["adequate"]) or bool(sl.get("within_goal"))
                     for f, sl in zip(ok, slopes, strict=True)
@@ -582,9 +587,10 @@ def goal(s: dict[str, Any]) -> dict[str, Any]:
     """Issue 39's goal on one segment's ``law="auto"`` fits over the seeds (a summary of
     :func:`summarise`): each seed's exit status (0 when the law holds, 1 with the
     turning points' ΔE(A)), every seed converged, the answer's and the laws' seed spread
-    below :data:`SPREAD_GOAL`, the halves agreeing or the law flagged, and never exit 0
-    with a law whose log-log slope of ΔE(A) is more than :data:`SLOPE_GOAL` off the
-    turning points'. ``met`` lists the criteria met; ``failed`` the others."""
+    below :data:`SPREAD_GOAL` (the law's band when every seed chose the same law), the
+    halves agreeing or the law flagged, and never exit 0 with a law whose log-log slope
+    of ΔE(A) is more than :data:`SLOPE_GOAL` off the turning points'. ``met`` lists the
+    criteria met; ``failed`` the others."""
     answer = s.get("max_seed_spread_answer")
     laws = s.get("max_seed_spread_dissipation")
     params = s.get("seed_spread_parameters_in_sd") or {}
@@ -592,7 +598,9 @@ def goal(s: dict[str, Any]) -> dict[str, Any]:
         "answer with ΔE(A)": not s["errors"],
         "converged": all(s["converged"]),
         "seed-stable answer": answer is None or answer < SPREAD_GOAL,
-        "seed-stable law band": laws is None or laws < SPREAD_GOAL,
+        "same law on every seed": s["same_law"],
+        # the band of one law over the seeds (apart across two laws, it says nothing more)
+        "seed-stable law band": not s["same_law"] or laws is None or laws < SPREAD_GOAL,
         "seed-stable parameters": all(v is None or v < SPREAD_GOAL for v in params.values()),
         "halves agree or law flagged": all(s.get("halves_goal_met") or [False]),
         "no exit 0 with another shape": all(s.get("shape_goal_met") or [True]),
@@ -607,6 +615,7 @@ def goal(s: dict[str, Any]) -> dict[str, Any]:
             (v for v in params.values() if v is not None), default=None
         ),
         "largest_slope_difference": max(diffs) if diffs else None,
+        "turning_point_slope_se": s.get("turning_point_slope_se"),
         "met": [k for k, v in criteria.items() if v],
         "failed": [k for k, v in criteria.items() if not v],
     }
