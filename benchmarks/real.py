@@ -52,6 +52,18 @@ is the package's own check since law="auto" fits its verdict to each half of the
 segment (:mod:`bayestribo.inference.halves`): per auto fit, ``package_halves`` and
 ``halves_goal_met`` (the comparison is not adequate, or the verdict's halves agree).
 
+Issue 39's goal, per recording and segment over the seeds of its ``law="auto"`` fits
+(``table[name]["goal"]``, printed last but one): the exit status each seed would give (0
+when the law holds, 1 with the turning points' ΔE(A)), every seed converged, the
+answer's, the law's band's and its parameters' seed spreads below 0.2 sd, the same law
+on every seed, the halves agreeing or the law flagged, and never exit 0 with a law
+whose ΔE(A) has another shape: the log-log slopes of the fit's ΔE(A) and of the
+turning points' ΔE(A) (least squares of their means over the 12 reported amplitudes,
+computed here, ``slopes`` per fit) may differ by at most 0.5 where the law holds. The
+package's own shape test (:func:`bayestribo.inference.dissipation.shape_agreement`,
+which also asks for three standard errors of the turning points' slope) is recorded
+beside it (``shape_agreement``).
+
 A recording or segment the package refuses is recorded with its error message (a
 finding, not a failure of the benchmark).
 
@@ -61,7 +73,9 @@ Run (by hand)::
 
 Writes ``benchmarks/results/real.json`` (``--output NAME``: ``NAME.json``, or a path
 ending in .json) after every fit (``"complete": false`` until the end; ``--resume``
-keeps the fits of an interrupted file with the same settings).
+keeps the fits of an interrupted file with the same settings, and so adds seeds to a
+finished one; ``--summarise`` summarises a file's fits again with this version's
+summary, without fitting).
 """
 
 from __future__ import annotations

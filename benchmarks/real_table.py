@@ -10,7 +10,11 @@ status, the law it answers with (exit 0) or the law-free answer (the turning poi
 ΔE(A), exit 1, when no law holds), the law that came closest and how far it departs
 from the turning points' ΔE(A) over the analysed amplitudes (largest departure in
 percent, and the log-log slopes of ΔE(A): the law's and the turning points', with its
-standard error), and the seconds it took.
+standard error), and the seconds it took. Its last column is issue 39's shape test on
+the law the command answers with, or fitted last when it gives the law-free answer:
+the log-log slopes of that law's ΔE(A) and of the turning points' (least squares of
+the means over the analysed amplitudes, :func:`real.slope_check`) may differ by at most
+0.5 where the command exits 0.
 
 Run (in the background; ``auto`` compares every candidate law)::
 
