@@ -755,8 +755,7 @@ def resummarise(path: Path) -> int:
     """Summarise the fits of ``path`` again with this version's :func:`summarise`
     (the fits, their settings and source kept; ``summarised_at`` records the commit of
     the summary) and print the table."""
-    old = json.loads(path.read_text())
-    old.pop("machine", None)
+    old = json.loads(path.read_text())  # its "machine" kept: the one the fits ran on
     old["table"] = summarise(old["fits"], old["prepared"])
     old["summarised_at"] = commit()
     write_json(path, old)
