@@ -52,6 +52,18 @@ is the package's own check since law="auto" fits its verdict to each half of the
 segment (:mod:`bayestribo.inference.halves`): per auto fit, ``package_halves`` and
 ``halves_goal_met`` (the comparison is not adequate, or the verdict's halves agree).
 
+Issue 39's goal, per recording and segment over the seeds of its ``law="auto"`` fits
+(``table[name]["goal"]``, printed last but one): the exit status each seed would give (0
+when the law holds, 1 with the turning points' ΔE(A)), every seed converged, the
+answer's, the law's band's and its parameters' seed spreads below 0.2 sd, the same law
+on every seed, the halves agreeing or the law flagged, and never exit 0 with a law
+whose ΔE(A) has another shape: the log-log slopes of the fit's ΔE(A) and of the
+turning points' ΔE(A) (least squares of their means over the 12 reported amplitudes,
+computed here, ``slopes`` per fit) may differ by at most 0.5 where the law holds. The
+package's own shape test (:func:`bayestribo.inference.dissipation.shape_agreement`,
+which also asks for three standard errors of the turning points' slope) is recorded
+beside it (``shape_agreement``).
+
 A recording or segment the package refuses is recorded with its error message (a
 finding, not a failure of the benchmark).
 
@@ -61,7 +73,9 @@ Run (by hand)::
 
 Writes ``benchmarks/results/real.json`` (``--output NAME``: ``NAME.json``, or a path
 ending in .json) after every fit (``"complete": false`` until the end; ``--resume``
-keeps the fits of an interrupted file with the same settings).
+keeps the fits of an interrupted file with the same settings, and so adds seeds to a
+finished one; ``--summarise`` summarises a file's fits again with this version's
+summary, without fitting).
 """
 
 from __future__ import annotations
@@ -105,6 +119,9 @@ FLAGS = (
 )
 Z_AGREE = 1.959964
 SPREAD_GOAL = 0.2
+#: The goal's largest difference of log-log slopes of ΔE(A), the law's against the
+#: turning points', for a fit that says the law holds (exit 0).
+SLOPE_GOAL = 0.5
 
 
 def recordings() -> dict[str, Path]:
@@ -334,6 +351,8 @@ def one_fit(
             for k in ("amplitude", "mean", "sd", "interval", "unit", "by_term")
         }
         rec["turning_point_dissipation"] = result.turning_point_dissipation
+        rec["shape_agreement"] = result.shape_agreement
+        rec["slopes"] = slope_check(band, result.turning_point_dissipation)
         if reference is None:
             from bayestribo.inference import prepare
 
@@ -350,6 +369,38 @@ def one_fit(
         rec["probes"] = _law_band(result, probes, reference)
         out[kind] = rec
     return out
+
+
+def _slope(amplitude: np.ndarray, energy: np.ndarray) -> float:
+    """Least-squares slope of ln ΔE against ln A (nan with fewer than two usable points)."""
+    ok = np.isfinite(amplitude) & np.isfinite(energy) & (amplitude > 0) & (energy > 0)
+    if ok.sum() < 2:
+        return math.nan
+    return float(np.polyfit(np.log(amplitude[ok]), np.log(energy[ok]), 1)[0])
+
+
+def slope_check(band: dict[str, Any], measured: dict[str, Any] | None) -> dict[str, Any] | None:
+    """The goal's shape test, computed here from the two means: the log-log slopes of
+    the fit's ΔE(A) and of the turning points' ΔE(A) over the analysed (reported)
+    amplitudes, their difference, and whether it is within :data:`SLOPE_GOAL`. None
+    without a turning-point answer at the same amplitudes."""
+    if not measured or not measured.get("amplitude") or not band.get("amplitude"):
+        return None
+    amp = np.asarray(band["amplitude"], dtype=float)
+    if amp.shape != np.shape(measured["amplitude"]) or not np.allclose(
+        amp, measured["amplitude"], rtol=1e-9
+    ):
+        return {"error": "the fit's band and the turning points' are at other amplitudes"}
+    law = _slope(amp, np.asarray(band["mean"], dtype=float))
+    tp = _slope(amp, np.asarray(measured["mean"], dtype=float))
+    difference = abs(law - tp)
+    return {
+        "amplitude_range": [float(amp.min()), float(amp.max())],
+        "law_slope": law,
+        "turning_point_slope": tp,
+        "difference": difference,
+        "within_goal": bool(difference <= SLOPE_GOAL),
+    }
 
 
 # -- analysis --------------------------------------------------------------------------
@@ -434,6 +485,19 @@ def summarise(records: list[dict[str, Any]], prepared: dict[str, Any]) -> dict[s
                     if spread is not None:
                         worst = max(worst, spread)
                 s["dissipation"] = de
+                # the goal's shape test per seed: never "the law holds" (exit 0) with a
+                # ΔE(A) whose log-log slope is more than SLOPE_GOAL off the turning points'
+                slopes = [f.get("slopes") or {} for f in ok]
+                s["slope_difference"] = [sl.get("difference") for sl in slopes]
+                # the package's standard error of the turning points' slope (from the
+                # relative sds at the two ends of the amplitudes)
+                s["turning_point_slope_se"] = [
+                    (f.get("shape_agreement") or {}).get("measured_slope_se") for f in ok
+                ]
+                s["shape_goal_met"] = [
+                    (not f["adequate"]) or bool(sl.get("within_goal"))
+                    for f, sl in zip(ok, slopes, strict=True)
+                ]
                 if kind == "auto":
                     # the goal: the law fitted to each half predicts the other's ΔE(A),
                     # or the fit says that no law holds (and gives the law-free ΔE(A))
@@ -524,8 +588,51 @@ def summarise(records: list[dict[str, Any]], prepared: dict[str, Any]) -> dict[s
                     ),
                     "seeds": len(per_seed),
                 }
+        entry["goal"] = {
+            which: goal(seg["auto"])
+            for which, seg in entry["segments"].items()
+            if seg.get("auto") and seg["auto"]["laws"]
+        }
         table[name] = entry
     return table
+
+
+def goal(s: dict[str, Any]) -> dict[str, Any]:
+    """Issue 39's goal on one segment's ``law="auto"`` fits over the seeds (a summary of
+    :func:`summarise`): each seed's exit status (0 when the law holds, 1 with the
+    turning points' ΔE(A)), every seed converged, the answer's and the laws' seed spread
+    below :data:`SPREAD_GOAL` (the law's band when every seed chose the same law), the
+    halves agreeing or the law flagged, and never exit 0 with a law whose log-log slope
+    of ΔE(A) is more than :data:`SLOPE_GOAL` off the turning points'. ``met`` lists the
+    criteria met; ``failed`` the others."""
+    answer = s.get("max_seed_spread_answer")
+    laws = s.get("max_seed_spread_dissipation")
+    params = s.get("seed_spread_parameters_in_sd") or {}
+    criteria = {
+        "answer with ΔE(A)": not s["errors"],
+        "converged": all(s["converged"]),
+        "seed-stable answer": answer is None or answer < SPREAD_GOAL,
+        "same law on every seed": s["same_law"],
+        # the band of one law over the seeds (apart across two laws, it says nothing more)
+        "seed-stable law band": not s["same_law"] or laws is None or laws < SPREAD_GOAL,
+        "seed-stable parameters": all(v is None or v < SPREAD_GOAL for v in params.values()),
+        "halves agree or law flagged": all(s.get("halves_goal_met") or [False]),
+        "no exit 0 with another shape": all(s.get("shape_goal_met") or [True]),
+    }
+    diffs = [d for d in s.get("slope_difference", []) if d is not None]
+    return {
+        "exit": [0 if a else 1 for a in s["adequate"]],
+        "laws": s["laws"],
+        "answer_seed_spread_sd": answer,
+        "law_band_seed_spread_sd": laws,
+        "parameters_seed_spread_sd": max(
+            (v for v in params.values() if v is not None), default=None
+        ),
+        "largest_slope_difference": max(diffs) if diffs else None,
+        "turning_point_slope_se": s.get("turning_point_slope_se"),
+        "met": [k for k, v in criteria.items() if v],
+        "failed": [k for k, v in criteria.items() if not v],
+    }
 
 
 def _fmt(x: float | None, spec: str = ".3g") -> str:
@@ -573,6 +680,13 @@ def _print_table(table: dict[str, Any], prepared: dict[str, Any]) -> None:
                 answer_text = f"  answer ({k.get('answer')}) spread {_fmt(answer, '.2f')}"
                 goal = k.get("halves_goal_met")
                 halves = f"  halves-or-no-law {sum(goal)}/{len(goal)}" if goal is not None else ""
+                diffs = [d for d in k.get("slope_difference", []) if d is not None]
+                shape = k.get("shape_goal_met", [])
+                halves += (
+                    f"  |Δslope| ≤ {_fmt(max(diffs), '.2f')} shape-goal {sum(shape)}/{len(shape)}"
+                    if diffs
+                    else ""
+                )
                 print(
                     f"  {which:12s} {kind:7s} {_laws_text(k['laws']):42s} "
                     f"adeq {sum(map(bool, k['adequate']))}/{len(k['adequate'])} "
@@ -586,6 +700,19 @@ def _print_table(table: dict[str, Any], prepared: dict[str, Any]) -> None:
                     )
                     + (f"  errors {len(k['errors'])}" if k["errors"] else "")
                 )
+    print(
+        "\nIssue 39's goal per recording and segment (law='auto' over the seeds): exit "
+        "status per seed, the criteria failed"
+    )
+    for name, entry in table.items():
+        for which, g in entry.get("goal", {}).items():
+            failed = "; ".join(g["failed"]) or "every criterion met"
+            print(
+                f"{name:16s} {which:12s} exit {g['exit']} {_laws_text(g['laws']):30s} "
+                f"answer spread {_fmt(g['answer_seed_spread_sd'], '.2f')} sd, law band "
+                f"{_fmt(g['law_band_seed_spread_sd'], '.2f')} sd, |Δslope| "
+                f"{_fmt(g['largest_slope_difference'], '.2f')}: {failed}"
+            )
     print(
         "\nHalves: seeds whose law of one half agrees with the other half's ΔE(A) band "
         "(|z| <= 1.96 at every amplitude): at the cut, and over the other half's amplitudes"
@@ -624,6 +751,18 @@ def write_json(path: Path, results: dict[str, Any]) -> Path:
     return path
 
 
+def resummarise(path: Path) -> int:
+    """Summarise the fits of ``path`` again with this version's :func:`summarise`
+    (the fits, their settings and source kept; ``summarised_at`` records the commit of
+    the summary) and print the table."""
+    old = json.loads(path.read_text())  # its "machine" kept: the one the fits ran on
+    old["table"] = summarise(old["fits"], old["prepared"])
+    old["summarised_at"] = commit()
+    write_json(path, old)
+    _print_table(old["table"], old["prepared"])
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     names = list(recordings())
@@ -639,7 +778,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--resume", action="store_true", help="keep the fits of an interrupted output file"
     )
+    parser.add_argument(
+        "--summarise",
+        action="store_true",
+        help="summarise the fits of the output file again (no fit) and print its table",
+    )
     args = parser.parse_args(argv)
+    if args.summarise:
+        return resummarise(output_path(args.output))
     import bayestribo
 
     start = time.perf_counter()

@@ -10,7 +10,11 @@ status, the law it answers with (exit 0) or the law-free answer (the turning poi
 ΔE(A), exit 1, when no law holds), the law that came closest and how far it departs
 from the turning points' ΔE(A) over the analysed amplitudes (largest departure in
 percent, and the log-log slopes of ΔE(A): the law's and the turning points', with its
-standard error), and the seconds it took.
+standard error), and the seconds it took. Its last column is issue 39's shape test on
+the law the command answers with, or fitted last when it gives the law-free answer:
+the log-log slopes of that law's ΔE(A) and of the turning points' (least squares of
+the means over the analysed amplitudes, :func:`real.slope_check`) may differ by at most
+0.5 where the command exits 0.
 
 Run (in the background; ``auto`` compares every candidate law)::
 
@@ -32,7 +36,8 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _machine import machine
+from _machine import commit, machine
+from real import SLOPE_GOAL, slope_check
 
 RESULTS = Path(__file__).resolve().parent / "results"
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "external-data"
@@ -107,6 +112,15 @@ def one(name: str, shared: Path) -> dict[str, Any]:
         measured_slope_se=departure.get("measured_slope_se"),
         same_shape=departure.get("same_shape"),
     )
+    # the goal's shape test on the law the command answers with (exit 0) or fitted
+    # last (exit 1): its ΔE(A) and the turning points' log-log slopes over the
+    # analysed amplitudes, which may differ by at most SLOPE_GOAL when the law holds
+    slopes = slope_check(out.get("dissipation") or {}, out.get("turning_point_dissipation"))
+    row["slopes"] = slopes
+    row["answer_has_band"] = bool(
+        out.get("dissipation") if done.returncode == 0 else out.get("turning_point_dissipation")
+    )
+    row["shape_goal_met"] = done.returncode != 0 or bool(slopes and slopes.get("within_goal"))
     return row
 
 
@@ -114,12 +128,13 @@ def table(rows: list[dict[str, Any]]) -> str:
     """The README's table."""
     lines = [
         "| recording (what a physicist expects) | command | exit | answer | the closest law, "
-        "and how far its ΔE(A) is from the turning points' |",
-        "|---|---|---|---|---|",
+        "and how far its ΔE(A) is from the turning points' | sampler; the answering "
+        f"law's log-log slope against the turning points' (goal ≤ {SLOPE_GOAL} at exit 0) |",
+        "|---|---|---|---|---|---|",
     ]
     for r in rows:
         if r["exit"] not in (0, 1):
-            lines.append(f"| {r['recording']} | `{r['command']}` | {r['exit']} | refused | |")
+            lines.append(f"| {r['recording']} | `{r['command']}` | {r['exit']} | refused | | |")
             continue
         answer = f"`{r['law']}`" if r["exit"] == 0 else "the turning points' ΔE(A) (law-free)"
         slopes = (
@@ -129,9 +144,17 @@ def table(rows: list[dict[str, Any]]) -> str:
             else ""
         )
         close = f"`{r['best']}`: up to {r['max_percent']:.3g} % off; {slopes}"
+        sl = r.get("slopes") or {}
+        check = (
+            f"`{r['law']}` Δslope {sl['difference']:.2f}"
+            + ("" if r["shape_goal_met"] else " (**over the goal**)")
+            if sl.get("difference") is not None
+            else "no slope"
+        )
+        sampler = "converged" if r.get("converged") else "**not converged**"
         lines.append(
             f"| {r['recording']} ({r['expected']}) | `{r['command']}` | {r['exit']} | "
-            f"{answer} | {close} |"
+            f"{answer} | {close} | {sampler}; {check} |"
         )
     return "\n".join(lines)
 
@@ -148,7 +171,7 @@ def main(argv: list[str] | None = None) -> int:
         r = rows[-1]
         print(f"{name}: exit {r['exit']}, {r.get('law')}, {r['seconds']:.0f} s", flush=True)
     RESULTS.mkdir(exist_ok=True)
-    record = {"machine": machine(), "rows": rows, "table": table(rows)}
+    record = {"machine": machine(), "commit": commit(), "rows": rows, "table": table(rows)}
     (RESULTS / f"{args.output}.json").write_text(json.dumps(record, indent=1) + "\n")
     print(record["table"])
     return 0
