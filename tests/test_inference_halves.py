@@ -177,3 +177,32 @@ def test_a_second_half_that_fades_into_the_noise_is_still_compared():
     assert channel_consistency(alone).correlation < 0.9
     h = law_halves(prepared, "viscous", seed=1)
     assert h.tested and h.agree, h.describe()
+
+
+def test_a_half_whose_weights_do_not_hold_is_sampled_as_a_fit_alone(constant, held, monkeypatch):
+    # each half's fit returned as a surrogate's run left for the halves to weight
+    # (check failed, surrogate posterior given), whose weights never hold: each half is
+    # fitted again without weighting, with its own seed, and the check is the one
+    # the plain fits give
+    import dataclasses
+
+    from bayestribo.inference.surrogate import SurrogateCheck
+
+    calls = []
+    plain = halves_module.sample_law
+
+    def sample_law(*args, weighted=0, **kwargs):
+        calls.append(weighted)
+        prepared, sampled = plain(*args, weighted=weighted, **kwargs)
+        if weighted:
+            failed = SurrogateCheck(128, 0.2, 0.2, 2)
+            sampled = dataclasses.replace(
+                sampled, surrogate=failed, surrogate_posterior=sampled.posterior
+            )
+        return prepared, sampled
+
+    monkeypatch.setattr(halves_module, "sample_law", sample_law)
+    monkeypatch.setattr(halves_module, "weights_at", lambda run, posterior, picks: None)
+    h = law_halves(constant, "viscous+coulomb", seed=1)
+    assert calls == [N_FIRST_DRAWS, N_FIRST_DRAWS, 0, 0]
+    assert h == held

@@ -61,11 +61,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.errors import BayestriboError
+from bayestribo.inference.correction import evenly_spaced, weights_at
 from bayestribo.inference.dissipation import _swing_dissipation
 from bayestribo.inference.halves_statistic import (
     SwingDifference,
     swing_difference,
     verdict_is_clear,
+    weighted_moments,
 )
 from bayestribo.inference.law_frame import sample_law
 from bayestribo.inference.preparation import prepare_part
@@ -90,17 +92,39 @@ N_DRAWS = 1000
 N_FIRST_DRAWS = 200
 
 
-def _draws(sampled: Any, prepared: PreparedRun, amplitude: NDArray, count: int) -> NDArray:
+#: One half's ΔE(A) draws, their importance weights (None: equal) and effective number.
+Side = tuple[NDArray, NDArray | None, float]
+
+
+class _Unweighable(Exception):
+    """A half's surrogate draws whose importance weights are not reliable."""
+
+
+def _draws(
+    sampled: Any, prepared: PreparedRun, amplitude: NDArray, count: int
+) -> tuple[NDArray, NDArray | None]:
     """ΔE(A)/k [length unit²] of ``count`` of a half's posterior draws (evenly spaced over
-    every chain) at the swings ``amplitude`` [length unit], shape (draws, swings)."""
+    every chain) at the swings ``amplitude`` [length unit], shape (draws, swings), and
+    their importance weights (None: equal).
+
+    The draws of a surrogate posterior not corrected (:func:`bayestribo.inference.
+    law_frame.sample_law` with ``weighted``) are weighted by the exact posterior's
+    density over the surrogate's (:func:`bayestribo.inference.correction.weights_at`);
+    :class:`_Unweighable` where those weights are not reliable."""
     posterior = sampled.posterior
+    picks = evenly_spaced(sampled.run, count)
+    weights = None
+    check = sampled.surrogate
+    if sampled.surrogate_posterior is not None and check is not None and not check.passed:
+        weights = weights_at(sampled.run, posterior, picks)
+        if weights is None:
+            raise _Unweighable("the importance weights of its draws are not reliable")
     flat = sampled.run.chains.reshape(-1, sampled.run.chains.shape[-1])
-    flat = flat[np.linspace(0, flat.shape[0] - 1, min(count, flat.shape[0])).astype(int)]
     ell = float(prepared.decay.scaling.length_scale)
-    values = posterior.law_draws(flat)
+    values = posterior.law_draws(flat[picks])
     ref = posterior.likelihood.reference_amplitude
     dimensionless = _swing_dissipation(posterior.law, amplitude / ell, values, ref)
-    return np.asarray(dimensionless, dtype=float) * ell**2
+    return np.asarray(dimensionless, dtype=float) * ell**2, weights
 
 
 def _effective_fraction(sampled: Any) -> float:
@@ -172,30 +196,44 @@ def law_halves(
         end = min(decay.end_time, times[-1] + 1.0 / decay.natural_frequency_Hz)
         stop = int(np.searchsorted(run.time, end, side="right"))
     rng = np.random.default_rng(seed)
+    bounds = ((0, k + 1), (k, stop))
+    seeds = [int(rng.integers(2**31)) for _ in bounds]
+
+    def fit_half(i: int, weighted: int) -> tuple[Any, PreparedRun, NDArray]:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            half = prepare_part(prepared, *bounds[i])
+            half, sampled = sample_law(
+                half,
+                the_law,
+                model=model,
+                discrepancy=discrepancy,
+                settings=settings,
+                seed=seeds[i],
+                weighted=weighted,
+            )
+        own = np.abs(np.asarray(half.decay.peaks.value, dtype=float))
+        return sampled, half, 0.5 * (own[1:] + own[:-1]) if own.size > 1 else own
+
     halves = []
-    for first, last in ((0, k + 1), (k, stop)):
+    for i in range(len(bounds)):
         try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                half = prepare_part(prepared, first, last)
-                half, sampled = sample_law(
-                    half,
-                    the_law,
-                    model=model,
-                    discrepancy=discrepancy,
-                    settings=settings,
-                    seed=int(rng.integers(2**31)),
-                )
+            halves.append(fit_half(i, weighted=N_FIRST_DRAWS))
         except BayestriboError as exc:
             which = "first" if not halves else "second"
             return LawHalves(
                 the_law.name, False, cut_time, note=f"the {which} half was not fitted: {exc}"
             )
-        own = np.abs(np.asarray(half.decay.peaks.value, dtype=float))
-        own_swings = 0.5 * (own[1:] + own[:-1]) if own.size > 1 else own
-        halves.append((sampled, half, own_swings))
     for count in (N_FIRST_DRAWS, N_DRAWS):
-        compared = _compared(halves, amplitude, count)
+        compared = None
+        for _ in range(len(halves) + 1):
+            try:
+                compared = _compared(halves, amplitude, count)
+                break
+            except _Unweighable as exc:
+                # that half's surrogate run resampled by its importance weights at every
+                # draw, or sampled further, as a fit of the law alone does (same seed)
+                halves[exc.args[1]] = fit_half(exc.args[1], weighted=0)
         if compared is None:
             return LawHalves(
                 the_law.name,
@@ -203,17 +241,18 @@ def law_halves(
                 cut_time,
                 note="no swing at which both halves' draws have a half cycle",
             )
-        used, (d1, n1), (d2, n2), difference = compared
+        used, (d1, w1, n1), (d2, w2, n2), difference = compared
         if verdict_is_clear(difference, HALVES_P):
             break
     (_, _, r1), (_, _, r2) = halves
     unit = prepared.run.length_unit
     unit = "signal unit" if unit == "arbitrary" else unit
 
-    def side(d: NDArray, own: NDArray, draws: float) -> dict[str, Any]:
+    def side(d: NDArray, w: NDArray | None, own: NDArray, draws: float) -> dict[str, Any]:
+        mean, var, _ = weighted_moments(d, w)
         return {
-            "mean": d.mean(axis=0).tolist(),
-            "sd": d.std(axis=0, ddof=1).tolist(),
+            "mean": mean.tolist(),
+            "sd": np.sqrt(var).tolist(),
             "range": [float(own.min()), float(own.max())],
             "draws": draws,
         }
@@ -224,8 +263,8 @@ def law_halves(
         cut_time,
         used.tolist(),
         f"{unit}^2",
-        side(d1, r1, n1),
-        side(d2, r2, n2),
+        side(d1, w1, r1, n1),
+        side(d2, w2, r2, n2),
         difference.largest,
         int(difference.z.size),
         difference.p_value,
@@ -235,21 +274,32 @@ def law_halves(
 
 def _compared(
     halves: list[tuple[Any, PreparedRun, NDArray]], amplitude: NDArray, count: int
-) -> tuple[NDArray, tuple[NDArray, float], tuple[NDArray, float], SwingDifference] | None:
+) -> tuple[NDArray, Side, Side, SwingDifference] | None:
     """``count`` draws of each half's ΔE(A) at ``amplitude``: the swings at which both
     halves' draws have a half cycle (95 % of them or more; the draws without one left
-    out), each half's draws there and their effective number, and the difference
-    there; None when no swing (or fewer than two draws) is left."""
-    (s1, h1, _), (s2, h2, _) = halves
-    d1, d2 = _draws(s1, h1, amplitude, count), _draws(s2, h2, amplitude, count)
+    out), each half's draws there, their importance weights (None: equal) and their
+    effective number, and the difference there; None when no swing (or fewer than two
+    draws) is left. Raises :class:`_Unweighable` with the half's index."""
+    drawn = []
+    for i, (sampled, half, _) in enumerate(halves):
+        try:
+            drawn.append(_draws(sampled, half, amplitude, count))
+        except _Unweighable as exc:
+            raise _Unweighable(str(exc), i) from exc
+    (d1, w1), (d2, w2) = drawn
     usable = np.mean(np.isfinite(d1), axis=0) >= 0.95
     usable &= np.mean(np.isfinite(d2), axis=0) >= 0.95
     if usable.sum() < 1:
         return None
-    d1 = d1[:, usable][np.all(np.isfinite(d1[:, usable]), axis=1)]
-    d2 = d2[:, usable][np.all(np.isfinite(d2[:, usable]), axis=1)]
-    if min(d1.shape[0], d2.shape[0]) < 2:
-        return None
-    n1 = max(2.0, d1.shape[0] * _effective_fraction(s1))
-    n2 = max(2.0, d2.shape[0] * _effective_fraction(s2))
-    return amplitude[usable], (d1, n1), (d2, n2), swing_difference(d1, d2, n1, n2)
+    sides = []
+    for (d, w), (sampled, _, _) in zip(drawn, halves, strict=True):
+        keep = np.all(np.isfinite(d[:, usable]), axis=1)
+        d, w = d[:, usable][keep], None if w is None else w[keep]
+        if d.shape[0] < 2 or (w is not None and not w.sum() > 0):
+            return None
+        # Kish's number of the weighted draws, of the evenly spaced ones as they are
+        kish = d.shape[0] if w is None else float(w.sum() ** 2 / np.sum(w * w))
+        sides.append((d, w, max(2.0, kish * _effective_fraction(sampled))))
+    (d1, w1, n1), (d2, w2, n2) = sides
+    difference = swing_difference(d1, d2, n1, n2, weights=(w1, w2))
+    return amplitude[usable], (d1, w1, n1), (d2, w2, n2), difference

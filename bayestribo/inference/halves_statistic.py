@@ -31,7 +31,14 @@ import numpy as np
 import scipy.stats
 from numpy.typing import NDArray
 
-__all__ = ["CLEAR_SDS", "SwingDifference", "swing_difference", "threshold", "verdict_is_clear"]
+__all__ = [
+    "CLEAR_SDS",
+    "SwingDifference",
+    "swing_difference",
+    "threshold",
+    "verdict_is_clear",
+    "weighted_moments",
+]
 
 #: Monte Carlo standard deviations of z by which a verdict from fewer draws must clear
 #: the threshold to be kept.
@@ -62,17 +69,30 @@ class SwingDifference:
     p_value: float
 
 
-def _kurtosis(d: NDArray) -> NDArray:
-    """Kurtosis (not excess) of each column of ``d``; 3 where it is not defined."""
-    centred = d - d.mean(axis=0)
-    var = np.mean(centred**2, axis=0)
+def weighted_moments(
+    d: NDArray, weights: NDArray | None = None
+) -> tuple[NDArray, NDArray, NDArray]:
+    """Mean, variance and kurtosis (not excess; 3 where not defined) of each column of
+    the draws ``d`` (draws, swings) under ``weights`` (draws,), non-negative (None:
+    equal). The variance is made unbiased with Kish's effective number of the weights
+    (with equal weights, the sample variance with ``ddof=1``)."""
+    w = np.ones(d.shape[0]) if weights is None else np.asarray(weights, dtype=float)
+    w = w / w.sum()
+    kish = 1.0 / float(np.sum(w * w))
+    mean = w @ d
+    centred = d - mean
+    second = w @ centred**2
     with np.errstate(invalid="ignore", divide="ignore"):
-        k = np.mean(centred**4, axis=0) / var**2
-    return np.where(np.isfinite(k), k, 3.0)
+        kurtosis = (w @ centred**4) / second**2
+    return mean, second * kish / (kish - 1.0), np.where(np.isfinite(kurtosis), kurtosis, 3.0)
 
 
 def swing_difference(
-    first: NDArray, second: NDArray, first_draws: float, second_draws: float
+    first: NDArray,
+    second: NDArray,
+    first_draws: float,
+    second_draws: float,
+    weights: tuple[NDArray | None, NDArray | None] = (None, None),
 ) -> SwingDifference:
     """z at each swing from the halves' draws of ΔE(A) (module notes).
 
@@ -81,7 +101,11 @@ def swing_difference(
     first, second : ndarray
         Draws of ΔE(A)/k [length unit²] of each half, shape (draws, swings), finite.
     first_draws, second_draws : float
-        Effective number of each half's draws, at least 2.
+        Effective number of each half's draws, at least 2 (with weights, at most their
+        Kish number).
+    weights : tuple of ndarray or None
+        Importance weights of each half's draws, (draws,), non-negative (None: equal):
+        draws of a surrogate posterior weighted to the exact one.
 
     Returns
     -------
@@ -91,7 +115,8 @@ def swing_difference(
     ------
     ValueError
         Draws not two-dimensional with the same number of swings, fewer than two of
-        them, or an effective number below 2.
+        them, weights not one finite non-negative value per draw with a positive sum,
+        or an effective number below 2.
     """
     d1, d2 = np.asarray(first, dtype=float), np.asarray(second, dtype=float)
     if d1.ndim != 2 or d2.ndim != 2 or d1.shape[1] != d2.shape[1]:
@@ -107,17 +132,28 @@ def swing_difference(
         raise ValueError(
             f"first_draws, second_draws: expected at least 2, got {first_draws}, {second_draws}"
         )
+    for name, d, w in (("first", d1, weights[0]), ("second", d2, weights[1])):
+        if w is None:
+            continue
+        w = np.asarray(w, dtype=float)
+        if w.shape != (d.shape[0],) or not (np.all(np.isfinite(w)) and np.all(w >= 0)):
+            raise ValueError(
+                f"weights: expected {d.shape[0]} finite non-negative values for the "
+                f"{name} half's draws, got shape {w.shape}"
+            )
+        if not w.sum() > 0:
+            raise ValueError(f"weights: expected a positive sum for the {name} half's draws")
     n1, n2 = float(first_draws), float(second_draws)
-    var1, var2 = d1.var(axis=0, ddof=1), d2.var(axis=0, ddof=1)
+    m1, var1, k1 = weighted_moments(d1, weights[0])
+    m2, var2, k2 = weighted_moments(d2, weights[1])
     mc = var1 / n1 + var2 / n2
     total = var1 + var2 + mc
     with np.errstate(invalid="ignore", divide="ignore"):
-        z = (d1.mean(axis=0) - d2.mean(axis=0)) / np.sqrt(total)
+        z = (m1 - m2) / np.sqrt(total)
         # the sd's relative error, each half's weighted by its share of the variance
         sd_rel = (
             np.sqrt(
-                ((var1 / total) ** 2 * (_kurtosis(d1) - 1.0) / n1)
-                + ((var2 / total) ** 2 * (_kurtosis(d2) - 1.0) / n2)
+                ((var1 / total) ** 2 * (k1 - 1.0) / n1) + ((var2 / total) ** 2 * (k2 - 1.0) / n2)
             )
             / 2.0
         )
