@@ -45,7 +45,19 @@ four Monte Carlo standard deviations of z (the means' error and the sds' own, fr
 the draws' kurtosis: :func:`bayestribo.inference.halves_statistic.verdict_is_clear`),
 more draws would not change it and it stands; otherwise :data:`N_DRAWS` draws are
 evaluated, and the verdict is theirs. On HarmOsc2 under ``coulomb+power`` (halves
-6.5-6.9 sd apart) 200 draws settle it, as they do for halves well within their noise.
+6.5-7.2 sd apart) 200 draws settle it, as they do for halves well within their noise.
+
+Weights. A half whose surrogate of Π misses its check by a little would have every
+draw of its run resampled to the exact posterior by its importance weights
+(:mod:`bayestribo.inference.correction`: the exact Π at some 1,600 draws, 0.5-1 s on
+HarmOsc2's second half). The check uses a few hundred draws, so each half is sampled
+with ``weighted`` (:func:`bayestribo.inference.law_frame.sample_law`): that run is kept
+as it is where the weights of :data:`N_FIRST_DRAWS` of its draws hold by the
+correction's own limits (cv at most 0.3, Pareto k̂ at most 0.5), and the draws the
+check uses are weighted by exact over surrogate density
+(:func:`bayestribo.inference.correction.weights_at`), their effective number Kish's.
+Where the weights of the draws used do not hold, that half is fitted again as a fit of
+the law alone is (resampled, or sampled further), with its own seed.
 
 A run too short to split (fewer than :data:`MIN_HALF_CYCLES` half cycles in a half),
 or a half that cannot be prepared or fitted, is not tested; the result says why.
