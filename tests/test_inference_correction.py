@@ -235,3 +235,33 @@ def test_surrogates_never_near_the_reach_stop_at_the_usual_attempts(monkeypatch)
     run, _, target, _ = scripted.sample()
     assert run is None and target is None
     assert scripted.checks == list(range(1, ATTEMPTS + 1)) and scripted.corrected == []
+
+
+def test_weights_at_few_draws_weight_them_to_the_exact_posterior():
+    """Surrogate N(0, 1), exact N(0.1, 1.05²): 400 evenly spaced draws, weighted, give
+    the exact mean and sd within four Monte Carlo standard errors; a surrogate far from
+    the exact posterior gives no weights."""
+    from bayestribo.inference.correction import evenly_spaced, weights_at
+    from bayestribo.inference.halves_statistic import weighted_moments
+
+    rng = np.random.default_rng(5)
+    run = _normal_run(rng)
+
+    def exact(rows: np.ndarray) -> np.ndarray:
+        return scipy.stats.norm.logpdf(rows[:, 0], 0.1, 1.05)
+
+    picks = evenly_spaced(run, 400)
+    assert picks.size == 400 and picks[0] == 0 and picks[-1] == 5999
+    w = weights_at(run, exact, picks)
+    x = run.chains.reshape(-1, 1)[picks]
+    expected = np.exp(exact(x) - run.log_prob.reshape(-1)[picks])
+    np.testing.assert_allclose(w, expected / expected.max(), rtol=1e-12)
+    mean, var, _ = weighted_moments(x, w)
+    kish = w.sum() ** 2 / np.sum(w * w)
+    assert abs(mean[0] - 0.1) < 4 * 1.05 / np.sqrt(kish)
+    assert abs(np.sqrt(var[0]) - 1.05) < 4 * 1.05 / np.sqrt(2 * kish)
+
+    def far(rows: np.ndarray) -> np.ndarray:
+        return scipy.stats.norm.logpdf(rows[:, 0], 1.5, 0.5)
+
+    assert weights_at(run, far, picks) is None

@@ -13,9 +13,10 @@ import pytest
 from _law_recording import law_recording
 
 from bayestribo.errors import MisfitWarning
+from bayestribo.inference import halves as halves_module
 from bayestribo.inference.auto import _check_halves
 from bayestribo.inference.comparison import LawComparison
-from bayestribo.inference.halves import HALVES_P, LawHalves, law_halves
+from bayestribo.inference.halves import HALVES_P, N_DRAWS, N_FIRST_DRAWS, LawHalves, law_halves
 from bayestribo.inference.pipeline import prepare
 from bayestribo.inference.sampling import SamplerSettings
 
@@ -47,8 +48,13 @@ def changing():
     return _prepared(seed=4, friction_change=(0.25, 1.3 * FRICTION))
 
 
-def test_a_law_that_holds_gives_halves_that_agree(constant):
-    h = law_halves(constant, "viscous+coulomb", seed=1)
+@pytest.fixture(scope="module")
+def held(constant):
+    return law_halves(constant, "viscous+coulomb", seed=1)
+
+
+def test_a_law_that_holds_gives_halves_that_agree(held):
+    h = held
     assert h.tested and h.agree, h.describe()
     assert h.p_value >= HALVES_P
     assert h.n_swings == len(h.amplitude) >= 4
@@ -66,6 +72,19 @@ def test_a_friction_that_changes_during_the_run_splits_the_halves(changing):
     a, z = h.most_apart()
     assert a in h.amplitude and abs(z) == pytest.approx(h.largest_z)
     assert "disagree" in h.describe()
+    # so far beyond the threshold that the first draws settle it
+    assert 2 <= h.first["draws"] <= N_FIRST_DRAWS and 2 <= h.second["draws"] <= N_FIRST_DRAWS
+
+
+def test_a_verdict_the_first_draws_leave_open_takes_all_of_them(constant, held, monkeypatch):
+    monkeypatch.setattr(halves_module, "verdict_is_clear", lambda difference, p: False)
+    h = law_halves(constant, "viscous+coulomb", seed=1)
+    assert held.first["draws"] <= N_FIRST_DRAWS < h.first["draws"] <= N_DRAWS
+    assert N_FIRST_DRAWS < h.second["draws"] <= N_DRAWS
+    # the same fits (the same seed), more draws of each: the same verdict, and z
+    # within a few of the first draws' Monte Carlo sds (of z, at most ~0.1 here)
+    assert h.agree == held.agree and h.amplitude == held.amplitude
+    assert abs(h.largest_z - held.largest_z) < 0.5
 
 
 def test_the_verdict_does_not_depend_on_the_seed(changing, constant):
@@ -158,3 +177,32 @@ def test_a_second_half_that_fades_into_the_noise_is_still_compared():
     assert channel_consistency(alone).correlation < 0.9
     h = law_halves(prepared, "viscous", seed=1)
     assert h.tested and h.agree, h.describe()
+
+
+def test_a_half_whose_weights_do_not_hold_is_sampled_as_a_fit_alone(constant, held, monkeypatch):
+    # each half's fit returned as a surrogate's run left for the halves to weight
+    # (check failed, surrogate posterior given), whose weights never hold: each half is
+    # fitted again without weighting, with its own seed, and the check is the one
+    # the plain fits give
+    import dataclasses
+
+    from bayestribo.inference.surrogate import SurrogateCheck
+
+    calls = []
+    plain = halves_module.sample_law
+
+    def sample_law(*args, weighted=0, **kwargs):
+        calls.append(weighted)
+        prepared, sampled = plain(*args, weighted=weighted, **kwargs)
+        if weighted:
+            failed = SurrogateCheck(128, 0.2, 0.2, 2)
+            sampled = dataclasses.replace(
+                sampled, surrogate=failed, surrogate_posterior=sampled.posterior
+            )
+        return prepared, sampled
+
+    monkeypatch.setattr(halves_module, "sample_law", sample_law)
+    monkeypatch.setattr(halves_module, "weights_at", lambda run, posterior, picks: None)
+    h = law_halves(constant, "viscous+coulomb", seed=1)
+    assert calls == [N_FIRST_DRAWS, N_FIRST_DRAWS, 0, 0]
+    assert h == held

@@ -22,8 +22,10 @@ from bayestribo.inference.correction import (
     CORRECTING_ATTEMPTS,
     MAX_CORRECTED_CV,
     NEAR_CORRECTED_CV,
+    evenly_spaced,
     exact_density,
     importance_corrected,
+    weights_at,
 )
 from bayestribo.inference.identifiability import unidentified_reasons
 from bayestribo.inference.posterior import Posterior
@@ -77,6 +79,7 @@ def sample_from(
     seed: int | np.random.Generator | None = None,
     progress: bool = False,
     surrogate: bool = True,
+    weighted: int = 0,
 ) -> Sampled:
     """The sample stage: walkers about the start, and the sampler run to convergence.
 
@@ -94,6 +97,15 @@ def sample_from(
         For a law without a closed form, sample a quadratic surrogate of its Π and keep
         it where the exact posterior confirms it (:mod:`bayestribo.inference.surrogate`;
         the default); False: sample the exact posterior throughout.
+    weighted : int
+        A positive number n: a surrogate's run that would be resampled to the exact
+        posterior by its importance weights (:func:`~bayestribo.inference.correction.
+        importance_corrected`) is returned as it is where the weights of n of its
+        draws evenly spaced are reliable (:func:`~bayestribo.inference.correction.
+        weights_at`), its check failed (``surrogate.passed`` False) and its surrogate
+        posterior given: for a caller that uses those draws alone and weights them
+        (the halves' ΔE(A), :mod:`bayestribo.inference.halves`). 0 (the default):
+        every draw resampled.
 
     Returns
     -------
@@ -123,7 +135,7 @@ def sample_from(
     seed_of_run = int(rng.integers(2**31))
     if first is not None:
         run, checked, target, pointwise = _sample_surrogate(
-            posterior, theta, cov, walkers, settings, seed_of_run, progress, first
+            posterior, theta, cov, walkers, settings, seed_of_run, progress, first, weighted
         )
         if run is None:
             # the exact posterior is sampled: its walkers by its own density
@@ -181,6 +193,7 @@ def _sample_surrogate(
     seed: int,
     progress: bool,
     first: Posterior | None = None,
+    weighted: int = 0,
 ) -> tuple[SamplerRun | None, SurrogateCheck | None, Posterior | None, NDArray | None]:
     """Sample the quadratic surrogate posterior of a law without a closed form and
     check it against the exact one (:mod:`bayestribo.inference.surrogate`).
@@ -201,7 +214,9 @@ def _sample_surrogate(
     Returns the run, the last check and the surrogate posterior when a check passed or a correction
     held (with the exact pointwise log-likelihood of the corrected draws, else None);
     ``(None, check, None, None)`` when none did (the caller samples the exact
-    posterior).
+    posterior). ``weighted``: the run a correction would resample is returned as it
+    is where the weights of that many of its draws hold, with its failed check and its
+    surrogate posterior (:func:`sample_from`).
     """
     rng = np.random.default_rng(seed)
     sd = np.sqrt(np.clip(np.diag(np.atleast_2d(cov)), 0.0, None))
@@ -238,6 +253,9 @@ def _sample_surrogate(
             # correction.py; HarmOsc2's coulomb+power: cv 0.09 then 0.084, never 0.05).
             # The first one's failure is left to the next surrogate, which often
             # passes at less cost than the exact density at every draw
+            if weighted and weights_at(run, posterior, evenly_spaced(run, weighted)) is not None:
+                # the caller weights the few draws it uses (their weights reliable)
+                return run, checked, target, None
             corrected = importance_corrected(run, exact_density(posterior), rng, settings.rhat_max)
             if corrected is not None:
                 record = SurrogateCheck(

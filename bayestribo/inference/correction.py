@@ -62,9 +62,11 @@ __all__ = [
     "MAX_PARETO_K",
     "NEAR_CORRECTED_CV",
     "Correction",
+    "evenly_spaced",
     "exact_density",
     "importance_corrected",
     "resample_in_order",
+    "weights_at",
 ]
 
 #: Largest coefficient of variation of the importance weights over all draws at which
@@ -198,6 +200,50 @@ def importance_corrected(
         rhat=new_rhat,
     )
     return Correction(corrected, cv, float(np.std(log_w)), pareto_k, int(flat.shape[0]), pointwise)
+
+
+def evenly_spaced(run: SamplerRun, count: int) -> NDArray:
+    """Flat indices of ``count`` draws of ``run`` evenly spaced over every chain (all of
+    them when it has fewer), in the order of ``run.chains.reshape(-1, d)``."""
+    total = run.chains.shape[0] * run.chains.shape[1]
+    return np.linspace(0, total - 1, min(count, total)).astype(int)
+
+
+def weights_at(run: SamplerRun, posterior: Posterior, picks: NDArray) -> NDArray | None:
+    """Importance weights exact/surrogate of the draws ``picks`` (flat indices) of a
+    surrogate's run, for a caller that uses those draws alone, weighted, rather than
+    every draw resampled (:func:`importance_corrected`).
+
+    Parameters
+    ----------
+    run : SamplerRun
+        The surrogate posterior's run; its ``log_prob`` the surrogate's log density.
+    posterior : Posterior
+        The exact posterior.
+    picks : ndarray
+        Flat indices of the draws weighted (:func:`evenly_spaced`).
+
+    Returns
+    -------
+    ndarray or None
+        The weights (largest 1), shape (len(picks),); None when they are not reliable
+        by the correction's own tests: a weight not finite, their cv above
+        :data:`MAX_CORRECTED_CV` or their Pareto k̂ above :data:`MAX_PARETO_K`.
+    """
+    from bayestribo.inference.loo import psis
+
+    picks = np.asarray(picks, dtype=int)
+    flat = np.asarray(run.chains, dtype=float).reshape(-1, run.chains.shape[-1])[picks]
+    log_w = np.asarray(posterior(flat), dtype=float)
+    log_w = log_w - np.asarray(run.log_prob, dtype=float).reshape(-1)[picks]
+    if picks.size < 4 or not np.all(np.isfinite(log_w)):
+        return None
+    w = np.exp(log_w - log_w.max())
+    cv = float(np.std(w) / np.mean(w))
+    _, k = psis(log_w.reshape(1, -1), 1.0)
+    if not (cv <= MAX_CORRECTED_CV and float(np.ravel(k)[0]) <= MAX_PARETO_K):
+        return None
+    return w
 
 
 def exact_density(

@@ -19,8 +19,12 @@ at swings spanning the whole motion, ΔE(A)/k (in the length unit squared, so th
 two halves' own measured frequencies do not enter): each half predicts the other
 half's range. With m₁, m₂ the posterior means and s₁, s₂ the standard deviations of
 the draws at each swing (the halves share no increment, their noise is independent),
+estimated from n₁, n₂ effective draws,
 
-.. math::  z_i = (m_1 - m_2) / \sqrt{s_1^2 + s_2^2},
+.. math::  z_i = (m_1 - m_2) / \sqrt{s_1^2 (1 + 1/n_1) + s_2^2 (1 + 1/n_2)}
+
+(the terms s²/n: the Monte Carlo error of the estimated means,
+:mod:`bayestribo.inference.halves_statistic`),
 
 and the halves disagree when the largest |z_i| is beyond what chance gives at
 :data:`HALVES_P` (that of the misfit tests, 1e-3) over the n swings compared:
@@ -34,21 +38,49 @@ diluted a 5-sd difference to p = 1e-3, on one side of the threshold or the other
 the seed. Swings at which a draw has no half cycle (a friction that holds the
 motion, a drag that stops it) are left out.
 
+Draws. ΔE(A) of a law without a closed form is integrated draw by draw where its
+interpolation misses (some 0.5 ms a draw and swing). :data:`N_FIRST_DRAWS` draws of
+each half are evaluated first; where the verdict they give clears the threshold by
+four Monte Carlo standard deviations of z (the means' error and the sds' own, from
+the draws' kurtosis: :func:`bayestribo.inference.halves_statistic.verdict_is_clear`),
+more draws would not change it and it stands; otherwise :data:`N_DRAWS` draws are
+evaluated, and the verdict is theirs. On HarmOsc2 under ``coulomb+power`` (halves
+6.5-7.2 sd apart) 200 draws settle it, as they do for halves well within their noise.
+
+Weights. A half whose surrogate of Π misses its check by a little would have every
+draw of its run resampled to the exact posterior by its importance weights
+(:mod:`bayestribo.inference.correction`: the exact Π at some 1,600 draws, 0.5-1 s on
+HarmOsc2's second half). The check uses a few hundred draws, so each half is sampled
+with ``weighted`` (:func:`bayestribo.inference.law_frame.sample_law`): that run is kept
+as it is where the weights of :data:`N_FIRST_DRAWS` of its draws hold by the
+correction's own limits (cv at most 0.3, Pareto k̂ at most 0.5), and the draws the
+check uses are weighted by exact over surrogate density
+(:func:`bayestribo.inference.correction.weights_at`), their effective number Kish's.
+Where the weights of the draws used do not hold, that half is fitted again as a fit of
+the law alone is (resampled, or sampled further), with its own seed.
+
 A run too short to split (fewer than :data:`MIN_HALF_CYCLES` half cycles in a half),
 or a half that cannot be prepared or fitted, is not tested; the result says why.
 """
 
 from __future__ import annotations
 
+import math
 import warnings
 from typing import Any
 
 import numpy as np
-import scipy.stats
 from numpy.typing import NDArray
 
 from bayestribo.errors import BayestriboError
+from bayestribo.inference.correction import evenly_spaced, weights_at
 from bayestribo.inference.dissipation import _swing_dissipation
+from bayestribo.inference.halves_statistic import (
+    SwingDifference,
+    swing_difference,
+    verdict_is_clear,
+    weighted_moments,
+)
 from bayestribo.inference.law_frame import sample_law
 from bayestribo.inference.preparation import prepare_part
 from bayestribo.inference.records import LawHalves
@@ -66,19 +98,58 @@ MIN_HALF_CYCLES = 8
 N_SWINGS = 8
 #: Posterior draws of each half evaluated (evenly spaced over every chain).
 N_DRAWS = 1000
+#: Draws of each half evaluated first: where they settle the verdict beyond their
+#: Monte Carlo error (:func:`bayestribo.inference.halves_statistic.verdict_is_clear`),
+#: the :data:`N_DRAWS` are not evaluated.
+N_FIRST_DRAWS = 200
 
 
-def _draws(sampled: Any, prepared: PreparedRun, amplitude: NDArray) -> NDArray:
-    """ΔE(A)/k [length unit²] of ``N_DRAWS`` of a half's posterior draws at the swings
-    ``amplitude`` [length unit], shape (draws, swings)."""
+#: One half's ΔE(A) draws, their importance weights (None: equal) and effective number.
+Side = tuple[NDArray, NDArray | None, float]
+
+
+class _Unweighable(Exception):
+    """A half's surrogate draws whose importance weights are not reliable."""
+
+
+def _draws(
+    sampled: Any, prepared: PreparedRun, amplitude: NDArray, count: int
+) -> tuple[NDArray, NDArray | None]:
+    """ΔE(A)/k [length unit²] of ``count`` of a half's posterior draws (evenly spaced over
+    every chain) at the swings ``amplitude`` [length unit], shape (draws, swings), and
+    their importance weights (None: equal).
+
+    The draws of a surrogate posterior not corrected (:func:`bayestribo.inference.
+    law_frame.sample_law` with ``weighted``) are weighted by the exact posterior's
+    density over the surrogate's (:func:`bayestribo.inference.correction.weights_at`);
+    :class:`_Unweighable` where those weights are not reliable."""
     posterior = sampled.posterior
+    picks = evenly_spaced(sampled.run, count)
+    weights = None
+    check = sampled.surrogate
+    if sampled.surrogate_posterior is not None and check is not None and not check.passed:
+        weights = weights_at(sampled.run, posterior, picks)
+        if weights is None:
+            raise _Unweighable("the importance weights of its draws are not reliable")
     flat = sampled.run.chains.reshape(-1, sampled.run.chains.shape[-1])
-    flat = flat[np.linspace(0, flat.shape[0] - 1, min(N_DRAWS, flat.shape[0])).astype(int)]
     ell = float(prepared.decay.scaling.length_scale)
-    values = posterior.law_draws(flat)
+    values = posterior.law_draws(flat[picks])
     ref = posterior.likelihood.reference_amplitude
     dimensionless = _swing_dissipation(posterior.law, amplitude / ell, values, ref)
-    return np.asarray(dimensionless, dtype=float) * ell**2
+    return np.asarray(dimensionless, dtype=float) * ell**2, weights
+
+
+def _effective_fraction(sampled: Any) -> float:
+    """The chains' effective sample size over their draws (the smallest over the
+    parameters), at most 1: the share of evenly spaced draws that count as independent
+    (fewer draws than that are further apart, so this errs on the side of fewer)."""
+    run = sampled.run
+    total = run.chains.shape[0] * run.chains.shape[1]
+    ess = np.asarray(run.ess, dtype=float)
+    smallest = float(np.nanmin(ess)) if ess.size and np.isfinite(ess).any() else math.nan
+    if not (total > 0 and smallest > 0):
+        return 1.0
+    return min(1.0, smallest / total)
 
 
 def law_halves(
@@ -137,66 +208,110 @@ def law_halves(
         end = min(decay.end_time, times[-1] + 1.0 / decay.natural_frequency_Hz)
         stop = int(np.searchsorted(run.time, end, side="right"))
     rng = np.random.default_rng(seed)
+    bounds = ((0, k + 1), (k, stop))
+    seeds = [int(rng.integers(2**31)) for _ in bounds]
+
+    def fit_half(i: int, weighted: int) -> tuple[Any, PreparedRun, NDArray]:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            half = prepare_part(prepared, *bounds[i])
+            half, sampled = sample_law(
+                half,
+                the_law,
+                model=model,
+                discrepancy=discrepancy,
+                settings=settings,
+                seed=seeds[i],
+                weighted=weighted,
+            )
+        own = np.abs(np.asarray(half.decay.peaks.value, dtype=float))
+        return sampled, half, 0.5 * (own[1:] + own[:-1]) if own.size > 1 else own
+
     halves = []
-    for first, last in ((0, k + 1), (k, stop)):
+    for i in range(len(bounds)):
         try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                half = prepare_part(prepared, first, last)
-                half, sampled = sample_law(
-                    half,
-                    the_law,
-                    model=model,
-                    discrepancy=discrepancy,
-                    settings=settings,
-                    seed=int(rng.integers(2**31)),
-                )
+            halves.append(fit_half(i, weighted=N_FIRST_DRAWS))
         except BayestriboError as exc:
             which = "first" if not halves else "second"
             return LawHalves(
                 the_law.name, False, cut_time, note=f"the {which} half was not fitted: {exc}"
             )
-        own = np.abs(np.asarray(half.decay.peaks.value, dtype=float))
-        own_swings = 0.5 * (own[1:] + own[:-1]) if own.size > 1 else own
-        halves.append((_draws(sampled, half, amplitude), own_swings))
-    (d1, r1), (d2, r2) = halves
-    usable = np.mean(np.isfinite(d1), axis=0) >= 0.95
-    usable &= np.mean(np.isfinite(d2), axis=0) >= 0.95
-    if usable.sum() < 1:
-        return LawHalves(
-            the_law.name,
-            False,
-            cut_time,
-            note="no swing at which both halves' draws have a half cycle",
-        )
-    amplitude = amplitude[usable]
-    d1 = d1[:, usable][np.all(np.isfinite(d1[:, usable]), axis=1)]
-    d2 = d2[:, usable][np.all(np.isfinite(d2[:, usable]), axis=1)]
-    m1, m2 = d1.mean(axis=0), d2.mean(axis=0)
-    z = (m1 - m2) / np.hypot(d1.std(axis=0, ddof=1), d2.std(axis=0, ddof=1))
-    z = np.where(np.isfinite(z), z, 0.0)
-    largest = float(np.max(np.abs(z)))
-    p = float(min(1.0, 2.0 * z.size * scipy.stats.norm.sf(largest)))
+    for count in (N_FIRST_DRAWS, N_DRAWS):
+        compared = None
+        for _ in range(len(halves) + 1):
+            try:
+                compared = _compared(halves, amplitude, count)
+                break
+            except _Unweighable as exc:
+                # that half's surrogate run resampled by its importance weights at every
+                # draw, or sampled further, as a fit of the law alone does (same seed)
+                halves[exc.args[1]] = fit_half(exc.args[1], weighted=0)
+        if compared is None:
+            return LawHalves(
+                the_law.name,
+                False,
+                cut_time,
+                note="no swing at which both halves' draws have a half cycle",
+            )
+        used, (d1, w1, n1), (d2, w2, n2), difference = compared
+        if verdict_is_clear(difference, HALVES_P):
+            break
+    (_, _, r1), (_, _, r2) = halves
     unit = prepared.run.length_unit
     unit = "signal unit" if unit == "arbitrary" else unit
 
-    def side(d: NDArray, own: NDArray) -> dict[str, Any]:
+    def side(d: NDArray, w: NDArray | None, own: NDArray, draws: float) -> dict[str, Any]:
+        mean, var, _ = weighted_moments(d, w)
         return {
-            "mean": d.mean(axis=0).tolist(),
-            "sd": d.std(axis=0, ddof=1).tolist(),
+            "mean": mean.tolist(),
+            "sd": np.sqrt(var).tolist(),
             "range": [float(own.min()), float(own.max())],
+            "draws": draws,
         }
 
     return LawHalves(
         the_law.name,
         True,
         cut_time,
-        amplitude.tolist(),
+        used.tolist(),
         f"{unit}^2",
-        side(d1, r1),
-        side(d2, r2),
-        largest,
-        int(z.size),
-        p,
-        agree=not (p < HALVES_P),
+        side(d1, w1, r1, n1),
+        side(d2, w2, r2, n2),
+        difference.largest,
+        int(difference.z.size),
+        difference.p_value,
+        agree=not (difference.p_value < HALVES_P),
     )
+
+
+def _compared(
+    halves: list[tuple[Any, PreparedRun, NDArray]], amplitude: NDArray, count: int
+) -> tuple[NDArray, Side, Side, SwingDifference] | None:
+    """``count`` draws of each half's ΔE(A) at ``amplitude``: the swings at which both
+    halves' draws have a half cycle (95 % of them or more; the draws without one left
+    out), each half's draws there, their importance weights (None: equal) and their
+    effective number, and the difference there; None when no swing (or fewer than two
+    draws) is left. Raises :class:`_Unweighable` with the half's index."""
+    drawn = []
+    for i, (sampled, half, _) in enumerate(halves):
+        try:
+            drawn.append(_draws(sampled, half, amplitude, count))
+        except _Unweighable as exc:
+            raise _Unweighable(str(exc), i) from exc
+    (d1, w1), (d2, w2) = drawn
+    usable = np.mean(np.isfinite(d1), axis=0) >= 0.95
+    usable &= np.mean(np.isfinite(d2), axis=0) >= 0.95
+    if usable.sum() < 1:
+        return None
+    sides = []
+    for (d, w), (sampled, _, _) in zip(drawn, halves, strict=True):
+        keep = np.all(np.isfinite(d[:, usable]), axis=1)
+        d, w = d[:, usable][keep], None if w is None else w[keep]
+        if d.shape[0] < 2 or (w is not None and not w.sum() > 0):
+            return None
+        # Kish's number of the weighted draws, of the evenly spaced ones as they are
+        kish = d.shape[0] if w is None else float(w.sum() ** 2 / np.sum(w * w))
+        sides.append((d, w, max(2.0, kish * _effective_fraction(sampled))))
+    (d1, w1, n1), (d2, w2, n2) = sides
+    difference = swing_difference(d1, d2, n1, n2, weights=(w1, w2))
+    return amplitude[usable], (d1, w1, n1), (d2, w2, n2), difference

@@ -42,6 +42,7 @@ def sample_law(
     priors: Mapping[str, Prior] | None = None,
     fixed: Mapping[str, float] | None = None,
     progress: bool = False,
+    weighted: int = 0,
 ) -> tuple[PreparedRun, Sampled]:
     """Build one law's posterior for a prepared run and sample it.
 
@@ -61,6 +62,10 @@ def sample_law(
         Sampler size; default :class:`~bayestribo.inference.sampling.SamplerSettings`.
     seed : int, Generator or None
         Seed of the sampler.
+    weighted : int
+        As in :func:`bayestribo.inference.chains.sample_from`: a surrogate's run that
+        would be resampled by its importance weights is returned as it is where the
+        weights of that many of its draws hold (0: never).
 
     Returns
     -------
@@ -80,7 +85,7 @@ def sample_law(
             law=law,
         )
 
-    return sample_in_law_frame(prepared, posterior_on, settings, seed, progress)
+    return sample_in_law_frame(prepared, posterior_on, settings, seed, progress, weighted=weighted)
 
 
 def sample_in_law_frame(
@@ -92,6 +97,7 @@ def sample_in_law_frame(
     *,
     known: LawOptimum | None = None,
     known_run: Sampled | None = None,
+    weighted: int = 0,
 ) -> tuple[PreparedRun, Sampled]:
     """Sample the posterior ``posterior_on(prepared)``; for a law without a closed
     form, in the law's frame, found from the optimum in the record's frame (one
@@ -108,6 +114,7 @@ def sample_in_law_frame(
     where ``known_run`` started (the same second-pass optimum and Laplace covariance,
     to the bit), the posterior to sample is the one ``known_run`` sampled, and
     ``known_run`` is returned rather than that posterior sampled again.
+    ``weighted``: as in :func:`bayestribo.inference.chains.sample_from`.
     """
     posterior = posterior_on(prepared)
     optimum = None
@@ -124,7 +131,7 @@ def sample_in_law_frame(
     start = find_start(posterior, prepared.decay, optimum=optimum)
     if framed is None and _same_start(start, known, known_run):
         return prepared, known_run
-    sampled = sample_from(start, settings=settings, seed=seed, progress=progress)
+    sampled = sample_from(start, settings=settings, seed=seed, progress=progress, weighted=weighted)
     return prepared, sampled
 
 

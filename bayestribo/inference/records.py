@@ -213,8 +213,10 @@ class LawHalves:
     unit : str
         Unit of ΔE(A)/k (the length unit squared).
     first, second : dict
-        Each half's ``mean`` and ``sd`` of ΔE(A)/k at ``amplitude``, and its
-        ``range``: the smallest and largest swing of its own motion.
+        Each half's ``mean`` and ``sd`` of ΔE(A)/k at ``amplitude``, its ``range``: the
+        smallest and largest swing of its own motion, and ``draws``: the effective
+        number of the draws they are estimated from (their Monte Carlo error is carried
+        in the z, :mod:`bayestribo.inference.halves_statistic`).
     largest_z : float
         The largest |z| over the swings (module notes).
     n_swings : int
@@ -247,7 +249,9 @@ class LawHalves:
             return math.nan, math.nan
         m1, s1 = np.asarray(self.first["mean"]), np.asarray(self.first["sd"])
         m2, s2 = np.asarray(self.second["mean"]), np.asarray(self.second["sd"])
-        z = (m1 - m2) / np.hypot(s1, s2)
+        # each mean's Monte Carlo variance s²/n where the effective draws are recorded
+        n1, n2 = self.first.get("draws", math.inf), self.second.get("draws", math.inf)
+        z = (m1 - m2) / np.sqrt(s1**2 * (1.0 + 1.0 / n1) + s2**2 * (1.0 + 1.0 / n2))
         i = int(np.nanargmax(np.abs(z)))
         return float(self.amplitude[i]), float(z[i])
 
