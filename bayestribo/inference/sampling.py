@@ -14,6 +14,9 @@
   ``rhat_max`` for every parameter, or at ``max_steps``. Checking often (every 50
   steps by default) stops the run near the first step that meets the rule; comparing
   τ over at least 200 steps keeps "settled" as demanding as with checks 200 apart.
+  The single-run fit asks for an effective sample size of :data:`FIT_MIN_ESS` (1000)
+  and at least :data:`FIT_AUTOCORR_MULTIPLE` (20) τ; the settings' defaults (50 τ, no
+  ESS target) are the population's.
 * Where R-hat fails at a check because the kept draws begin with the walkers' way
   from their start to the posterior (a transient the burn-in of 2τ did not cover:
   :func:`bayestribo.inference.modes.transient_steps`), the burn-in is extended past it
@@ -318,9 +321,10 @@ def _autocorr_times(chains: NDArray, c: float = 5.0) -> NDArray:
     Sokal's window M is the first lag with M >= c τ(M), and τ(M) needs the
     autocorrelation up to M alone: it is computed for the first quarter of the lags
     (:data:`_FIRST_LAGS` at least), where a chain long enough to be judged has its
-    window (M ≈ cτ, a tenth of the steps at 50τ), and for all of them for an ensemble
-    with a parameter whose window is not there (:func:`_windowed_taus`; an ensemble's
-    τ is the same whether it is transformed alone or with others).
+    window (M ≈ cτ: a tenth of the steps at 50 τ, a sixth at the fit's 31 τ), and for
+    all of them for an ensemble with a parameter whose window is not there
+    (:func:`_windowed_taus`; an ensemble's τ is the same whether it is transformed
+    alone or with others).
     """
     n_t = chains.shape[1]
     lags = min(n_t, max(_FIRST_LAGS, n_t // 4))
