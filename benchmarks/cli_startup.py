@@ -15,8 +15,10 @@ and each in a fresh interpreter,
 * the same floor imported as the command imports its machinery, the cyclic collector
   paused and what the imports made frozen (``gc.disable(); import ...; gc.freeze()``,
   :mod:`bayestribo.cli._imports`): the floor of any command that needs these libraries;
-* ``import bayestribo.inference`` in that way: everything a fit imports, numba's first
-  load of the cached integrator included (it runs at import);
+* ``import bayestribo.inference.fitting, bayestribo.cli.fit`` in that way: everything a
+  fit imports, numba's first load of the cached integrator included (it runs at import);
+* the floor import by import (:data:`BREAKDOWN`): numba, SciPy's parts a fit computes
+  with, then scipy.stats, scipy.signal, emcee, and the first call of a cached kernel;
 
 and asks a long-lived worker process (in the same shuffled order) for one in-process
 warm fit of the same run (:func:`bayestribo.fit` on the file, the command's defaults,
@@ -77,8 +79,37 @@ FLOOR_NO_SIGNAL = "import numpy, numba, scipy.optimize, emcee"
 #: The floor imported with the collector paused and its objects frozen after.
 FLOOR_FROZEN = f"import gc; gc.disable(); {FLOOR_NO_SIGNAL}; gc.enable(); gc.freeze()"
 #: Everything a fit imports (numba's first load of a cached kernel runs at import), in
-#: the same way.
-FIT_IMPORTS = "import gc; gc.disable(); import bayestribo.inference; gc.enable(); gc.freeze()"
+#: the same way: the modules that run the fit and the command (``bayestribo.inference``
+#: itself imports its names on first use).
+FIT_IMPORTS = (
+    "import gc; gc.disable(); import bayestribo.inference.fitting, bayestribo.cli.fit; "
+    "gc.enable(); gc.freeze()"
+)
+#: Where the floor's time goes, import by import (each a fresh process, the collector
+#: paused): numba; SciPy's parts a fit computes with; those and scipy.stats (which
+#: emcee imports for its KDE move, and the package's checks for their p-values); those
+#: and scipy.signal (which imports scipy.stats and scipy.ndimage itself); all of them
+#: and emcee; and the same with the first call of a kernel compiled before (numba's
+#: code generator set up and the kernel loaded from its cache, as a fit's first
+#: compiled call does).
+_PAUSED = "import gc; gc.disable(); "
+_SCIPY_CORE = "import numpy, numba, scipy.optimize, scipy.linalg, scipy.fft, scipy.special"
+BREAKDOWN = {
+    "import_numba": _PAUSED + "import numpy, numba",
+    "import_scipy_core": _PAUSED + _SCIPY_CORE,
+    "import_scipy_core_stats": _PAUSED + _SCIPY_CORE + ", scipy.stats",
+    "import_scipy_core_signal": _PAUSED + _SCIPY_CORE + ", scipy.signal",
+    "import_scipy_core_stats_signal_emcee": (
+        _PAUSED + _SCIPY_CORE + ", scipy.stats, scipy.signal, emcee"
+    ),
+    "import_libraries_first_cached_call": (
+        _PAUSED
+        + _SCIPY_CORE
+        + ", scipy.stats, scipy.signal, emcee; import numpy as np; "
+        + "from bayestribo.model._kernel import _one; "
+        + "_one(np.array([0.0, 1.0, 2.0]), 1.0, 0.01, 0.01, 0.02, 0.0, np.inf, np.empty(3))"
+    ),
+}
 
 #: A long-lived worker: one warm fit of the run per line read, its CPU and wall times
 #: printed.
@@ -155,6 +186,7 @@ def commands(run: Path) -> dict[str, list[str]]:
         "import_floor": [py, "-c", FLOOR_NO_SIGNAL],
         "import_floor_frozen": [py, "-c", FLOOR_FROZEN],
         "import_fit": [py, "-c", FIT_IMPORTS],
+        **{name: [py, "-c", code] for name, code in BREAKDOWN.items()},
     }
 
 
@@ -178,6 +210,8 @@ def _ratios(times: dict[str, list[float]], warm: list[float]) -> dict[str, Any]:
         "import_floor_over_warm_fit": med["import_floor"] / med["warm_fit"],
         "import_floor_frozen_over_warm_fit": med["import_floor_frozen"] / med["warm_fit"],
         "import_fit_over_warm_fit": med["import_fit"] / med["warm_fit"],
+        # where the floor's time goes (BREAKDOWN), each over the warm fit
+        "breakdown_over_warm_fit": {name: med[name] / med["warm_fit"] for name in BREAKDOWN},
         "goal_every_help_within_1_3x": max(helps.values()) <= 1.3,
         "goal_fit_within_4x": med["fit"] / med["warm_fit"] <= 4.0,
     }
@@ -247,6 +281,7 @@ def main() -> None:
             "import_floor": f'python -c "{FLOOR_NO_SIGNAL}"',
             "import_floor_frozen": f'python -c "{FLOOR_FROZEN}"',
             "import_fit": f'python -c "{FIT_IMPORTS}"',
+            **{name: f'python -c "{code}"' for name, code in BREAKDOWN.items()},
             "warm_fit": "bayestribo.fit(RUN) in a process that fitted it before",
         },
         "bytecode": "compiled before the rounds (compileall); PYTHONDONTWRITEBYTECODE="
@@ -281,6 +316,10 @@ def main() -> None:
             f"{med['fit']:9.3f}{med['warm_fit']:10.3f}{out['fit_over_warm_fit']:7.2f}"
             f"{med['import_fit_libraries']:10.3f}{med['import_floor']:8.3f}"
             f"{med['import_floor_frozen']:8.3f}{med['import_fit']:9.3f}"
+        )
+        print(
+            "  breakdown [s]: "
+            + ", ".join(f"{n.removeprefix('import_')} {med[n]:.3f}" for n in BREAKDOWN)
         )
     if "baseline" in trees:
         cur, base = results["trees"]["current"], results["trees"]["baseline"]

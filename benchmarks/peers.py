@@ -7,7 +7,7 @@ nuisance marginalised):
 
 (a) the package: :func:`bayestribo.inference.fit` with its defaults (compiled closed
     form of Π, its compiled sampler step, start from a Laplace approximation, run to
-    50 autocorrelation times and R-hat);
+    an effective sample size of 1000, at least 20 autocorrelation times, and R-hat);
 (b) a competent user's code: the equation of motion y'' + 2ζy' + y = -μ_k sgn(y')
     (the package's dimensionless form, Eq. 7-8) integrated by a numba-compiled
     fixed-step RK4 with Π carried as a third state (Π' = E = (y² + y'²)/2), steps

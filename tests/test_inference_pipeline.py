@@ -16,6 +16,7 @@ from bayestribo.inference import (
     sample,
     summarise,
 )
+from bayestribo.inference.sampling import FIT_AUTOCORR_MULTIPLE, FIT_MIN_ESS
 
 
 @pytest.fixture(scope="module")
@@ -24,7 +25,13 @@ def run():
 
 
 def test_fit_is_the_composition_of_the_four_steps(run):
-    settings = SamplerSettings(n_walkers=16, n_ensembles=2, max_steps=1000)
+    settings = SamplerSettings(
+        n_walkers=16,
+        n_ensembles=2,
+        max_steps=1000,
+        autocorr_multiple=FIT_AUTOCORR_MULTIPLE,
+        min_ess=FIT_MIN_ESS,
+    )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         whole = fit(run, seed=4, max_steps=1000)
@@ -51,7 +58,13 @@ def test_fit_is_the_composition_of_the_named_stages(run):
     from bayestribo.inference.start import Start, find_start
     from bayestribo.inference.summarising import Summary, summary
 
-    settings = SamplerSettings(n_walkers=16, n_ensembles=2, max_steps=1000)
+    settings = SamplerSettings(
+        n_walkers=16,
+        n_ensembles=2,
+        max_steps=1000,
+        autocorr_multiple=FIT_AUTOCORR_MULTIPLE,
+        min_ess=FIT_MIN_ESS,
+    )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         whole = fit(run, seed=4, max_steps=1000)

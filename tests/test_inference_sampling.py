@@ -158,6 +158,24 @@ def test_a_run_too_short_to_converge_is_reported_with_its_reason():
     assert run.names == ("theta[0]", "theta[1]", "theta[2]")
 
 
+@pytest.mark.parametrize("min_ess", [500.0, 1500.0])
+def test_a_run_with_an_ess_target_stops_once_it_holds_that_ess(min_ess):
+    # 2 × 16 walkers: an ESS of 500 is 15.6 τ (the floor of 20 τ rules), 1500 is
+    # 46.9 τ (the ESS rules).
+    settings = SamplerSettings(
+        n_walkers=16, n_ensembles=2, max_steps=20_000, autocorr_multiple=20.0, min_ess=min_ess
+    )
+    assert settings.required_multiple() == max(20.0, min_ess / 32)
+    start = MEAN + 0.01 * np.random.default_rng(4).standard_normal((2, 16, 3))
+    run = run_ensembles(_gaussian, start, settings, seed=5)
+    assert run.converged, run.reasons
+    tau = np.max(run.autocorr_time)
+    after = run.n_steps - run.burn
+    assert after >= settings.required_multiple() * tau
+    assert np.min(run.ess) == pytest.approx(after * 32 / tau)
+    assert np.min(run.ess) >= max(min_ess, 20 * 32)
+
+
 def test_ensembles_stuck_in_separate_modes_are_not_converged():
     # Two far-apart narrow modes; each ensemble starts in its own and never crosses:
     # each chain looks fine alone, only R-hat between the ensembles sees the problem.
@@ -204,6 +222,10 @@ def test_bad_settings_and_start_shapes_are_refused():
         SamplerSettings(moves="stretch")
     with pytest.raises(BayestriboError, match="n_ensembles"):
         SamplerSettings(n_ensembles=1)
+    with pytest.raises(BayestriboError, match="min_ess: expected > 0 or None, got 0"):
+        SamplerSettings(min_ess=0)
+    with pytest.raises(BayestriboError, match="autocorr_multiple: expected > 0"):
+        SamplerSettings(autocorr_multiple=-1.0)
     with pytest.raises(BayestriboError, match=r"initial: expected shape \(2, 16, d\)"):
         run_ensembles(_gaussian, np.zeros((16, 3)), SamplerSettings(n_walkers=16), seed=0)
 

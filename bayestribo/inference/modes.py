@@ -535,8 +535,9 @@ def _past_transients(sampled: Any, report: ModeReport) -> tuple[Any, ModeReport]
 
     A transient holds the walkers' way from where they started to the posterior (its
     draws are not the posterior's: rule 6 of the module notes). The kept steps up to
-    its last visit are dropped, in every ensemble; the rest must still hold
-    ``autocorr_multiple`` autocorrelation times after the burn-in and have R-hat below
+    its last visit are dropped, in every ensemble; the rest must still hold the
+    sampler's required autocorrelation times after the burn-in
+    (:meth:`~bayestribo.inference.sampling.SamplerSettings.required_multiple`) and have R-hat below
     ``rhat_max`` for every parameter. The report returned is that of the draws kept,
     with ``dropped_steps`` the sampler steps added to the burn-in.
     """
@@ -546,7 +547,8 @@ def _past_transients(sampled: Any, report: ModeReport) -> tuple[Any, ModeReport]
     if cut == 0:
         return None
     burn = run.burn + cut * run.thin
-    if not run.n_steps - burn >= settings.autocorr_multiple * float(np.max(run.autocorr_time)):
+    required = settings.required_multiple()
+    if not run.n_steps - burn >= required * float(np.max(run.autocorr_time)):
         return None
     chains = run.chains[:, cut * per_step :]
     log_prob = run.log_prob[:, cut * per_step :]

@@ -7,11 +7,16 @@
 * Every ``check_every`` steps the integrated autocorrelation time τ of each parameter
   is estimated per ensemble (:func:`autocorr_time`, emcee's estimator); burn-in is 2τ;
   the run stops once every ensemble has at least ``autocorr_multiple`` × τ steps after
-  burn-in, τ has settled (changed by less than 10 % since the estimate of the check
+  burn-in and, where ``min_ess`` is given, an effective sample size of at least
+  ``min_ess`` (:meth:`SamplerSettings.required_multiple`: the larger of the two in
+  units of τ), τ has settled (changed by less than 10 % since the estimate of the check
   ``settle_steps`` or more steps before) and the between-ensemble R-hat is below
   ``rhat_max`` for every parameter, or at ``max_steps``. Checking often (every 50
   steps by default) stops the run near the first step that meets the rule; comparing
   τ over at least 200 steps keeps "settled" as demanding as with checks 200 apart.
+  The single-run fit asks for an effective sample size of :data:`FIT_MIN_ESS` (1000)
+  and at least :data:`FIT_AUTOCORR_MULTIPLE` (20) τ; the settings' defaults (50 τ, no
+  ESS target) are the population's.
 * Where R-hat fails at a check because the kept draws begin with the walkers' way
   from their start to the posterior (a transient the burn-in of 2τ did not cover:
   :func:`bayestribo.inference.modes.transient_steps`), the burn-in is extended past it
@@ -68,6 +73,8 @@ from bayestribo.inference.rhat import rhat
 from bayestribo.summary import ParameterSummary
 
 __all__ = [
+    "FIT_AUTOCORR_MULTIPLE",
+    "FIT_MIN_ESS",
     "MOVES",
     "NaNLogProbabilityError",
     "SamplerRun",
@@ -80,10 +87,16 @@ __all__ = [
 ]
 
 
-#: Checks are skipped while the steps are below this fraction of (2 + autocorr_multiple) τ.
+#: Checks are skipped while the steps are below this fraction of (2 + the required
+#: multiple) τ (:meth:`SamplerSettings.required_multiple`).
 _EARLY = 0.9
 #: Ways to run the ensembles (:class:`SamplerSettings` ``moves``).
 MOVES = ("grouped", "emcee")
+#: The single-run fit's stopping rule (:meth:`bayestribo.inference.spec.FitSpec.sampler_settings`):
+#: an effective sample size of 1000 (31.25 τ with its 2 × 16 walkers), and at least
+#: 20 τ after burn-in however many walkers there are.
+FIT_MIN_ESS = 1000.0
+FIT_AUTOCORR_MULTIPLE = 20.0
 
 
 class NaNLogProbabilityError(BayestriboError, FloatingPointError):
@@ -110,6 +123,9 @@ class SamplerSettings:
         Independent ensembles (>= 2 for R-hat).
     autocorr_multiple : float
         Steps after burn-in required, in units of the autocorrelation time.
+    min_ess : float or None
+        Effective sample size required as well (over all ensembles' walkers, of the
+        parameter with the longest τ); None: the rule is ``autocorr_multiple`` alone.
     check_every : int
         Steps between convergence checks.
     settle_steps : int
@@ -128,6 +144,7 @@ class SamplerSettings:
     n_walkers: int = 32
     n_ensembles: int = 2
     autocorr_multiple: float = 50.0
+    min_ess: float | None = None
     check_every: int = 50
     settle_steps: int = 200
     max_steps: int = 20_000
@@ -139,6 +156,13 @@ class SamplerSettings:
             raise BayestriboError(f"moves: expected one of {MOVES}, got {self.moves!r}")
         if self.n_ensembles < 2:
             raise BayestriboError(f"n_ensembles: expected >= 2 for R-hat, got {self.n_ensembles}")
+        if not self.autocorr_multiple > 0:
+            raise BayestriboError(
+                "autocorr_multiple: expected > 0 autocorrelation times, "
+                f"got {self.autocorr_multiple}"
+            )
+        if self.min_ess is not None and not self.min_ess > 0:
+            raise BayestriboError(f"min_ess: expected > 0 or None, got {self.min_ess}")
         if self.check_every < 10:
             raise BayestriboError(f"check_every: expected >= 10 steps, got {self.check_every}")
         if self.settle_steps < self.check_every:
@@ -151,6 +175,23 @@ class SamplerSettings:
                 f"max_steps: expected at least check_every = {self.check_every} steps, "
                 f"got {self.max_steps}"
             )
+
+    def required_multiple(self) -> float:
+        """Steps after burn-in the rule requires, in units of the longest τ.
+
+        ``autocorr_multiple``, or, where ``min_ess`` is given and asks for more, the
+        steps whose effective sample size is ``min_ess``: ESS = steps × walkers ×
+        ensembles / τ, so ``min_ess / (n_walkers × n_ensembles)`` τ.
+
+        Returns
+        -------
+        float
+            The multiple of τ [dimensionless].
+        """
+        multiple = float(self.autocorr_multiple)
+        if self.min_ess is not None:
+            multiple = max(multiple, float(self.min_ess) / (self.n_walkers * self.n_ensembles))
+        return multiple
 
 
 @dataclass
@@ -280,9 +321,10 @@ def _autocorr_times(chains: NDArray, c: float = 5.0) -> NDArray:
     Sokal's window M is the first lag with M >= c τ(M), and τ(M) needs the
     autocorrelation up to M alone: it is computed for the first quarter of the lags
     (:data:`_FIRST_LAGS` at least), where a chain long enough to be judged has its
-    window (M ≈ cτ, a tenth of the steps at 50τ), and for all of them for an ensemble
-    with a parameter whose window is not there (:func:`_windowed_taus`; an ensemble's
-    τ is the same whether it is transformed alone or with others).
+    window (M ≈ cτ: a tenth of the steps at 50 τ, a sixth at the fit's 31 τ), and for
+    all of them for an ensemble with a parameter whose window is not there
+    (:func:`_windowed_taus`; an ensemble's τ is the same whether it is transformed
+    alone or with others).
     """
     n_t = chains.shape[1]
     lags = min(n_t, max(_FIRST_LAGS, n_t // 4))
@@ -427,6 +469,7 @@ def run_ensembles(
     else:
         ensembles = _Separate(checked, initial, seed)
 
+    multiple = settings.required_multiple()
     bar = None
     if progress:
         from tqdm.auto import tqdm
@@ -447,7 +490,7 @@ def run_ensembles(
                 # The rule cannot be met this early with the last τ (which short chains
                 # underestimate): the checks before this many steps are skipped, and
                 # the steps up to the next check run in one call of the sampler.
-                early = _EARLY * (2.0 + settings.autocorr_multiple) * np.max(tau)
+                early = _EARLY * (2.0 + multiple) * np.max(tau)
                 chunk *= max(1, math.ceil((early - steps) / settings.check_every))
             chunk = min(chunk, settings.max_steps - steps)
             ensembles.run(chunk)
@@ -471,8 +514,8 @@ def run_ensembles(
             earlier = [t for at, t in history if at <= steps - settings.settle_steps]
             settled = bool(earlier) and bool(np.all(np.abs(tau - earlier[-1]) < 0.1 * tau))
             history.append((steps, tau))
-            enough = steps - burn >= settings.autocorr_multiple * np.max(tau)
-            need = burn + settings.autocorr_multiple * np.max(tau)
+            enough = steps - burn >= multiple * np.max(tau)
+            need = burn + multiple * np.max(tau)
             if unidentified is not None and not enough and need > settings.max_steps:
                 # the rule cannot be met by the ceiling: where the draws show why (a
                 # ridge the record does not identify), the run stops here
@@ -481,13 +524,13 @@ def run_ensembles(
                 if unseen:
                     hopeless = [
                         f"stopped at {steps} steps: the rule needs at least {need:.0f} "
-                        f"(burn-in and {settings.autocorr_multiple:g} autocorrelation times "
+                        f"(burn-in and {multiple:g} autocorrelation times "
                         f"of {np.max(tau):.0f} steps), beyond the ceiling of "
                         f"{settings.max_steps}"
                     ]
                     break
             if bar is not None:
-                need = int(burn + settings.autocorr_multiple * np.max(tau))
+                need = int(burn + multiple * np.max(tau))
                 bar.set_postfix(tau=f"{np.max(tau):.0f}", need=need)
             if enough and settled:
                 # Independent ensembles must also agree; otherwise keep sampling.
@@ -525,7 +568,7 @@ def run_ensembles(
     elif not enough:
         reasons.append(
             f"only {steps - burn} steps after burn-in, fewer than "
-            f"{settings.autocorr_multiple:g} autocorrelation times ({np.max(tau):.1f})"
+            f"{multiple:g} autocorrelation times ({np.max(tau):.1f})"
         )
     elif not settled:
         reasons.append(
@@ -581,13 +624,14 @@ def _past_transient(
 ) -> tuple[int, int, int, NDArray] | None:
     """``(steps, burn, thin, R-hat)`` with the burn-in extended past a transient of the
     draws kept (:func:`bayestribo.inference.modes.transient_steps`) when what is left
-    holds ``autocorr_multiple`` τ after it and R-hat below ``rhat_max``; else None."""
+    holds the required multiple of τ after it (:meth:`SamplerSettings.required_multiple`)
+    and R-hat below ``rhat_max``; else None."""
     chains, lps = ensembles.flat(burn, thin)
     cut = transient_steps(chains, lps, labels, settings.n_walkers)
     if cut == 0:
         return None
     longer = burn + cut * thin
-    if not steps - longer >= settings.autocorr_multiple * np.max(tau):
+    if not steps - longer >= settings.required_multiple() * np.max(tau):
         return None
     r_hat = rhat(ensembles.flat(longer, thin)[0])
     if not np.all(r_hat < settings.rhat_max):

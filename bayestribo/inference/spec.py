@@ -555,11 +555,22 @@ class FitSpec:
         return out
 
     def sampler_settings(self) -> Any:
-        """The sampler's :class:`~bayestribo.inference.sampling.SamplerSettings`."""
-        from bayestribo.inference.sampling import SamplerSettings
+        """The sampler's :class:`~bayestribo.inference.sampling.SamplerSettings`: the
+        walkers, ensembles and ceiling given, and the fit's stopping rule (an effective
+        sample size of :data:`~bayestribo.inference.sampling.FIT_MIN_ESS` and at least
+        :data:`~bayestribo.inference.sampling.FIT_AUTOCORR_MULTIPLE` τ)."""
+        from bayestribo.inference.sampling import (
+            FIT_AUTOCORR_MULTIPLE,
+            FIT_MIN_ESS,
+            SamplerSettings,
+        )
 
         return SamplerSettings(
-            n_walkers=self.n_walkers, n_ensembles=self.n_ensembles, max_steps=self.max_steps
+            n_walkers=self.n_walkers,
+            n_ensembles=self.n_ensembles,
+            max_steps=self.max_steps,
+            autocorr_multiple=FIT_AUTOCORR_MULTIPLE,
+            min_ess=FIT_MIN_ESS,
         )
 
 

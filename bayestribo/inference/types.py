@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 from numpy.typing import NDArray
 
-from bayestribo.inference.sampling import SamplerSettings
+from bayestribo.inference.sampling import FIT_AUTOCORR_MULTIPLE, FIT_MIN_ESS, SamplerSettings
 
 if TYPE_CHECKING:
     from bayestribo.inference.posterior import Posterior
@@ -28,7 +28,13 @@ if TYPE_CHECKING:
 __all__ = ["DEFAULT_SETTINGS", "MISFIT_P", "PreparedRun", "Sampled"]
 
 #: Sampler settings of a default fit.
-DEFAULT_SETTINGS = SamplerSettings(n_walkers=16, n_ensembles=2, max_steps=20_000)
+DEFAULT_SETTINGS = SamplerSettings(
+    n_walkers=16,
+    n_ensembles=2,
+    max_steps=20_000,
+    autocorr_multiple=FIT_AUTOCORR_MULTIPLE,
+    min_ess=FIT_MIN_ESS,
+)
 
 #: χ² p-value of the MAP residuals below which a fit warns of misfit.
 MISFIT_P = 1e-3
