@@ -2,7 +2,8 @@
 
 For each replication, the parameters are drawn from the documented prior-like box
 
-* ζ ~ Uniform(0.01, 0.05), μ_k ~ Uniform(0.01, 0.05), μ_s/μ_k ~ Uniform(1, 3),
+* ζ ~ Uniform(0.01, 0.05), μ_k ~ Uniform(0.01, 0.05), μ_s/μ_k from the fit's own
+  default prior (:func:`bayestribo.inference.priors.default_priors`, Uniform(1, 10)),
 
 a run is simulated with :func:`bayestribo.simulate` (the paper's rig: m = 0.035 kg,
 f = 32.6 Hz, N = 0.31 N, x₀ = 1.5 mm, 10 kHz, an ideal release, white noise on both
@@ -55,7 +56,16 @@ from _machine import RESULTS, niced_worker, write_results  # noqa: E402
 
 __all__ = ["replicate", "summarise"]
 
-BOX = {"zeta": (0.01, 0.05), "mu_k": (0.01, 0.05), "mu_s_ratio": (1.0, 3.0)}
+
+def _mu_s_ratio_prior() -> tuple[float, float]:
+    """The fit's default prior of μ_s/μ_k (a uniform's bounds), read from the package."""
+    from bayestribo.inference.priors import default_priors
+
+    prior = default_priors(1.0)["mu_s_ratio"]
+    return float(prior.low), float(prior.high)
+
+
+BOX = {"zeta": (0.01, 0.05), "mu_k": (0.01, 0.05), "mu_s_ratio": _mu_s_ratio_prior()}
 NOISE_LEVELS = (1.0, 30.0)
 RANKED = ("zeta", "mu_k", "mu_s_ratio")
 N_DRAWS = 99  # L: ranks take the values 0..L
@@ -200,6 +210,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--resume", action="store_true", help="continue from the raw file")
     parser.add_argument("--report-only", action="store_true", help="summarise the raw file")
     parser.add_argument("--raw", type=Path, default=RAW)
+    parser.add_argument(
+        "--output", default="sbc", help="name of the summary JSON and PNG under results/"
+    )
     args = parser.parse_args(argv)
 
     records = _load(args.raw) if (args.resume or args.report_only) else []
@@ -242,10 +255,10 @@ def main(argv: list[str] | None = None) -> int:
                 f"{entry['not_converged'] + entry['errors']:>9}{p['chi2_p']:>8.3f}"
                 f"{p['ks_p']:>8.3f}{p['coverage95']:>7.3f}"
             )
-    png = RESULTS / "sbc_ranks.png"
+    png = RESULTS / f"{args.output}_ranks.png"
     plot(levels, png)
     path = write_results(
-        "sbc",
+        args.output,
         {
             "benchmark": "sbc",
             "description": __doc__.split("\n\n")[1:3],
