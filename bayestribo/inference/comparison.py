@@ -64,9 +64,7 @@ Settling. The laws left are sampled, the verdict their optima predict first and 
 others smallest first (:func:`bayestribo.inference.settling.sampling_order`), and
 before each the verdict and best among the laws sampled so far are known. A law that
 misfits at its optimum (or holds there but is not as good as the best, so that its
-draws would enter neither the averaged ΔE(A) nor the rivals' comparison; or nests the
-verdict and is the verdict at its optimum, which then stands for it, as for a law that
-reduces), whose
+draws would enter neither the averaged ΔE(A) nor the rivals' comparison), whose
 estimated gain over them cannot push the verdict out nor make it the best by more than
 noise, whose standing (as good as the best or not) is clear of the tie rule's edge by a
 third of its reach, and that cannot be chosen (the verdict adequate, or simpler, or the
@@ -416,27 +414,9 @@ def compare_prepared(
         )
         if checks["adequate"] and not settle_adequate and info["as_good"] is not False:
             # an adequate law as good as the best may enter the averaged ΔE(A) or be a
-            # rival: its draws are needed, unless it nests the verdict and is the
-            # verdict at its optimum (settling.py): the verdict stands for it
-            if info["settled"] and stands_for(law, verdict):
-                info["stands_for"] = verdict
-            else:
-                info["settled"] = False
+            # rival: its draws are needed
+            info["settled"] = False
         return {**info, "verdict": verdict, "best": best}
-
-    def standing_in() -> list[str]:
-        # the settled laws that the verdict stands for
-        return [law for law in settled if table[law]["settle"].get("stands_for")]
-
-    def stands_for(law: str, verdict: str) -> bool:
-        # the law nests the verdict and is it at its optimum on the posterior it would
-        # be sampled on: its extra terms on their null (reduction.py's rule)
-        the_law, nested = law_of(law), law_of(verdict)
-        if the_law.name == nested.name or not the_law.nests(nested):
-            return False
-        at = found[law]
-        theta = np.asarray(at.second_optimum[0], dtype=float)
-        return reduction_among(law, at.second, theta, [verdict], optima) is not None
 
     def settle_one(law: str, info: dict[str, Any], start: float, cpu: float) -> None:
         at = found[law]
@@ -456,11 +436,7 @@ def compare_prepared(
         rng = np.random.default_rng(_law_seed(root, law))
         at = found[law]
         try:
-            # a settled law that the verdict stands for is, like a law sampled, a law
-            # the larger laws may reduce to
             reduced = reduction(law, at.posterior, at.optimum[0], runs, optima)
-            if reduced is None and standing_in():
-                reduced = reduction_among(law, at.posterior, at.optimum[0], standing_in(), optima)
             info = settling(law) if screening and not force and reduced is None else None
             if info is not None and info["settled"]:
                 settle_one(law, info, start, cpu)

@@ -43,18 +43,6 @@ is. The rivals' comparison on the finer grid uses its draws for its choice alone
 there an adequate law is settled too when it cannot be chosen (not as good as the
 best, or V adequate and simpler).
 
-One adequate law as good as the best is settled in ``law="auto"`` too: a law that nests
-V and is V at its optimum on the posterior it would be sampled on (its extra terms'
-amounts on their null within :data:`~bayestribo.inference.reduction.REDUCTION_LOSS` of
-log density, the rule of :mod:`bayestribo.inference.reduction`), when it cannot be
-chosen nor push V out. It nests V, so it is no rival of V; V stands for it in the ΔE(A)
-averaged over the laws as good, as V stands for a law that reduces to it (its row's
-``settle`` says ``stands_for``). The bundled run in air (no contact) is such a case:
-``viscous+coulomb`` has μ_k at 0 at its second-pass optimum (the first pass's ζ-μ_k
-ridge leaves it at 7e-11 there, 12 units of log density above μ_k = 0 with ζ held, so it
-does not reduce), and sampling it, μ_k's mass against its bound, took 16-22
-autocorrelation times a step against 6-8 for ``viscous``.
-
 A settled law is reported with its estimate and whether it is as good (its row's
 ``settle``); it is in the comparison's ``as_good`` when the estimate says so. The
 comparison checks every settled law again against the final verdict and best, and
