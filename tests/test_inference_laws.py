@@ -162,9 +162,12 @@ def test_the_comparison_keeps_the_simplest_adequate_law_as_good_as_the_best(drag
     assert table["viscous+coulomb+quadratic"]["adequate"]
     assert comparison.verdict == "viscous+coulomb+quadratic" and comparison.adequate
     assert comparison.as_good == ["viscous+coulomb+quadratic"]
-    assert table["viscous+coulomb"]["elpd_diff"] > 1000
+    # the verdict the optima predict is sampled first; the paper's law, clearly behind
+    # it at its optimum, is settled there (its estimate), not sampled
+    assert comparison.settled == ["viscous+coulomb"]
+    assert table["viscous+coulomb"]["settle"]["elpd_diff"] > 1000
     assert "chosen from 3 laws" in comparison.describe()
-    assert set(runs) == set(table)
+    assert set(runs) == {law for law, row in table.items() if row.get("sampled")}
 
 
 def test_a_friction_that_falls_with_amplitude_is_measured():

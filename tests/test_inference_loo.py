@@ -186,3 +186,52 @@ def test_psis_of_regular_rows_does_not_import_arviz():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+def _scattered(scale: float):
+    """A stub whose surrogate errs by ``scale`` times the draw's centred second
+    coordinate at every increment: of either sign from draw to draw, the sum over the
+    increments at a draw beyond the tolerance, its shift of ``elpd_loo`` small."""
+    fit = _stub(["zeta", "y0"], 0.0, surrogate=True)
+    centre = float(np.mean(fit.run.chains[..., 1]))
+    exact = fit.posterior.pointwise
+    fit.surrogate_posterior = SimpleNamespace(
+        names=fit.posterior.names,
+        pointwise=lambda theta: exact(theta) + scale * (theta[:, 1:2] - centre),
+    )
+    return fit
+
+
+def test_a_surrogate_whose_errors_cancel_stands_where_its_shift_of_elpd_is_small():
+    fit = _scattered(0.0025)
+    chains = fit.run.chains
+    flat = chains.reshape(-1, chains.shape[-1])
+    approx = pointwise_log_likelihood(fit.surrogate_posterior, chains)
+    exact = pointwise_log_likelihood(fit.posterior, chains)
+    # the check at CHECK_DRAWS draws fails: its sum over the increments at some draw
+    # is beyond the tolerance
+    assert np.max(np.sum(np.abs(approx - exact), axis=-1)) > loo.TOLERANCE
+    reff = loo.relative_efficiency(chains)
+    shift, se, second = loo.surrogate_shift(
+        approx.reshape(flat.shape[0], -1), flat, fit.posterior.pointwise, reff
+    )
+    true = float(loo.psis_loo(approx, reff)["elpd_loo"] - loo.psis_loo(exact, reff)["elpd_loo"])
+    assert abs(true) < loo.TOLERANCE / 2
+    assert abs(shift - true) <= 3.0 * se + second
+    assert np.array_equal(loo.sampled_pointwise(fit), approx)
+    # ten times the error: its shift is no longer within the tolerance
+    big = _scattered(0.025)
+    assert np.array_equal(loo.sampled_pointwise(big), exact)
+
+
+def test_a_surrogate_shift_with_an_exact_value_outside_the_support_is_infinite():
+    fit = _stub(["zeta", "y0"], 0.0, surrogate=True)
+    flat = fit.run.chains.reshape(-1, 2)
+    approx = fit.surrogate_posterior.pointwise(flat)
+
+    def outside(theta):
+        out = fit.posterior.pointwise(theta)
+        out[0] = -np.inf
+        return out
+
+    assert loo.surrogate_shift(approx, flat, outside, 1.0) == (np.inf, np.inf, np.inf)

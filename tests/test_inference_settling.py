@@ -95,11 +95,18 @@ def test_misfitting_laws_that_cannot_change_the_choice_are_settled(monkeypatch):
     assert (full.verdict, full.as_good) == (c.verdict, c.as_good)
 
 
+def _smallest_first(monkeypatch) -> None:
+    # the laws sampled in the order given (smallest first), not the predicted verdict
+    # first: the settling of a law sampled later than a provisional verdict
+    monkeypatch.setattr(comparison, "sampling_order", lambda laws, *args, **kwargs: list(laws))
+
+
 @pytest.mark.filterwarnings("ignore")
 def test_an_adequate_law_or_one_ahead_of_the_verdict_is_sampled(monkeypatch):
     # coulomb holds (it may be the verdict); viscous+coulomb is ahead of viscous by far
     shifts = {"viscous": 8.0, "coulomb": 9.0, "viscous+coulomb": 0.0}
     sampled = stub_fits(monkeypatch, shifts, adequate={"coulomb"})
+    _smallest_first(monkeypatch)
     c, _ = _compare(shifts)
     assert sampled == list(shifts) and c.settled == []
     assert c.verdict == "viscous+coulomb"
@@ -113,6 +120,7 @@ def test_a_settled_law_is_sampled_when_a_later_law_moves_the_verdict(monkeypatch
     # verdict: it is sampled after all
     shifts = {"viscous": 10.0, "quadratic": 10.5, "viscous+coulomb": 0.0}
     sampled = stub_fits(monkeypatch, shifts, adequate=set(), spread={"quadratic": 0.5})
+    _smallest_first(monkeypatch)
     lines: list[str] = []
     c, _ = _compare(shifts, lines=lines)
     assert sampled == ["viscous", "viscous+coulomb", "quadratic"]
@@ -225,3 +233,53 @@ def test_rivals_judged_at_their_optima_on_the_finer_grid_are_not_sampled(monkeyp
     adequate.discard("viscous")
     out = rivals(["viscous", "power"])
     assert sampled and "settled" not in out
+
+
+@pytest.mark.filterwarnings("ignore")
+def test_the_verdict_the_optima_predict_is_sampled_first(monkeypatch):
+    # smallest first, power is ahead of viscous and coulomb+power ahead of both when
+    # their turns come: all three are sampled. The optima predict coulomb+power (the
+    # one adequate law): sampled first, the others are settled behind it
+    shifts = {"viscous": 11.0, "power": 8.0, "coulomb+power": 0.0}
+    sampled = stub_fits(monkeypatch, shifts, adequate={"coulomb+power"})
+    lines: list[str] = []
+    c, _ = _compare(shifts, lines=lines)
+    assert sampled == ["coulomb+power"] and c.settled == ["viscous", "power"]
+    assert lines.index("sampling coulomb+power (1/3)") < min(
+        i for i, line in enumerate(lines) if "cannot change the choice" in line
+    )
+    sampled.clear()
+    _smallest_first(monkeypatch)
+    smallest, _ = _compare(shifts)
+    assert sampled == list(shifts) and smallest.settled == []
+    assert (smallest.verdict, smallest.as_good) == (c.verdict, c.as_good)
+    assert c.verdict == "coulomb+power" and c.as_good == ["coulomb+power"]
+
+
+def test_sampling_order_puts_the_simplest_adequate_law_as_good_as_the_best_first():
+    from bayestribo.inference.settling import sampling_order
+
+    laws = ["viscous", "coulomb", "power", "viscous+coulomb"]
+    est = {
+        "viscous": (lpd_shifted(9.0), 1),
+        "coulomb": (lpd_shifted(1.0), 2),
+        "power": (lpd_shifted(0.5), 2),
+        "viscous+coulomb": (lpd_shifted(0.0), 3),
+    }
+    # best viscous+coulomb; coulomb and power as good (viscous 6 behind with one
+    # parameter less: not); coulomb simplest of the adequate, then the misfitting
+    holds = {"coulomb": True, "power": True, "viscous+coulomb": True, "viscous": True}
+    order = sampling_order(laws, est, holds.get, laws, small=REACH)
+    assert order == ["coulomb", "viscous", "power", "viscous+coulomb"]
+    assert sampling_order(laws, est, {"viscous+coulomb": True}.get, laws, small=REACH)[0] == (
+        "viscous+coulomb"
+    )
+    # none adequate: the simplest as good; one kept back does not lead
+    assert sampling_order(laws, est, lambda law: False, laws, small=REACH)[0] == "coulomb"
+    kept = sampling_order(
+        laws, est, holds.get, laws, small=REACH, leads=lambda law: law != "coulomb"
+    )
+    assert kept[0] == "power" and sorted(kept) == sorted(laws)
+    # no finite estimate: the order given
+    inf = {law: (np.full(N, -np.inf), 1) for law in laws}
+    assert sampling_order(laws, inf, holds.get, laws, small=REACH) == laws

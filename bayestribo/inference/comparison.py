@@ -60,10 +60,11 @@ is clearly behind the best's (``screen`` says ``reduces_to``); its row says
 ``screened`` and ``screen``, with the misfit checks at its optimum, and the
 comparison's text names it.
 
-Settling. The laws left are sampled smallest first, and before each the verdict and
-best among the laws sampled so far are known. A law that misfits at its optimum (or
-holds there but is not as good as the best, so that its draws would enter neither the
-averaged ΔE(A) nor the rivals' comparison), whose
+Settling. The laws left are sampled, the verdict their optima predict first and the
+others smallest first (:func:`bayestribo.inference.settling.sampling_order`), and
+before each the verdict and best among the laws sampled so far are known. A law that
+misfits at its optimum (or holds there but is not as good as the best, so that its
+draws would enter neither the averaged ΔE(A) nor the rivals' comparison), whose
 estimated gain over them cannot push the verdict out nor make it the best by more than
 noise, whose standing (as good as the best or not) is clear of the tie rule's edge by a
 third of its reach, and that cannot be chosen (the verdict adequate, or simpler, or the
@@ -145,7 +146,7 @@ from bayestribo.inference.screening import (
     screened_by_reduction,
     turning_point_screen,
 )
-from bayestribo.inference.settling import settle
+from bayestribo.inference.settling import sampling_order, settle
 from bayestribo.inference.start import find_optimum, find_start
 from bayestribo.inference.types import MISFIT_P, PreparedRun, Sampled
 from bayestribo.io.options import ReadOptions
@@ -554,6 +555,19 @@ def compare_prepared(
         )
     screened = [law for law in ordered if table.get(law, {}).get("screened")]
     survivors = [law for law in ordered if law in found and law not in screened]
+    if screening and len(survivors) > 1:
+        # the verdict the optima predict first: the laws after it are judged against it
+        survivors = sampling_order(
+            survivors,
+            {law: (found[law].pointwise, found[law].n_parameters) for law in survivors},
+            lambda law: bool(at_optimum(law)["adequate"]),
+            rank,
+            small=SMALL_ELPD_DIFFERENCE,
+            leads=lambda law: (
+                reduction_among(law, found[law].posterior, found[law].optimum[0], survivors, optima)
+                is None
+            ),
+        )
     for k, law in enumerate(survivors, 1):
         sample_one(law, k, len(survivors))
     if law_free and not any(
