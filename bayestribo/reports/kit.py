@@ -594,7 +594,7 @@ def checks(adequacy: Any) -> None:
     it (``level_text``), the verdict's false-alarm rate on a record of the law."""
     from IPython.display import Markdown
 
-    mark = {True: "passed", False: "**failed**", None: "not made"}
+    mark = {True: "passed", False: "**failed**", None: "not run"}
     _display(
         Markdown(
             "\n".join(
