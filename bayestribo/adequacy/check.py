@@ -60,18 +60,26 @@ TESTS_AT_A_LEVEL = 3
 
 
 def default_window(decay: EnergyDecay) -> int:
-    """Window length [oscillations] giving about eight windows, at least two oscillations
-    where the analysed decay holds one window of two (5 turning points), else one (a
-    record analysed on fewer turning points, such as a coarse digitiser's two
-    oscillations, still has its windows)."""
+    """Window length [oscillations]: about eight windows of at least two oscillations;
+    one oscillation where windows of two would be fewer than the constancy test's
+    three (:data:`~bayestribo.adequacy.constancy.MIN_WINDOWS`: a decay of 3-6
+    oscillations) or none (a coarse digitiser's record analysed on 4 turning points).
+
+    On records of the law of 4-6 oscillations (the paper's rig at ten times the
+    vibrometer's noise, 200 each) the constancy test on windows of one oscillation
+    rejected at α/3 = 1.7 % in 1.5-2.5 % of them (``benchmarks/README.md``, "Short
+    records checked").
+    """
     turning_points = peak_positions(decay).size
     oscillations = (turning_points - 1) / 2.0
-    if turning_points < 2 * MIN_DEFAULT_WINDOW + 1:
+    window = max(MIN_DEFAULT_WINDOW, round(oscillations / TARGET_WINDOWS))
+    if (turning_points - 1) // (2 * window) < MIN_WINDOWS:
         return 1
-    return max(MIN_DEFAULT_WINDOW, round(oscillations / TARGET_WINDOWS))
+    return window
 
 
-#: The shortest default window [oscillations] on a decay that holds one.
+#: The shortest default window [oscillations] on a decay that holds the constancy
+#: test's windows of it.
 MIN_DEFAULT_WINDOW = 2
 
 
