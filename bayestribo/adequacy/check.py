@@ -161,12 +161,18 @@ class AdequacyReport:
         """The verdict's false-alarm rate on a record of the law, in one sentence."""
         a = f"{100.0 * self.alpha:.3g} %"
         each = f"{100.0 * self.check_alpha:.3g} %"
-        return (
+        text = (
             f'on a record of the law the verdict says "not adequate" at most {a} of the '
             f"time (the constancy test, the halves and the end of motion each at {each}, "
             f"Bonferroni; the peaks' check a fixed rule of "
             f"{100.0 * MIN_PEAK_COVERAGE:.0f} % coverage)"
         )
+        if self.not_run:
+            text += (
+                "; a record too short for a check is never called adequate, the checks "
+                "that ran keep their level"
+            )
+        return text
 
     @property
     def law_text(self) -> str:
