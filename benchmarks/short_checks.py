@@ -18,8 +18,14 @@ its statement), the verdict and whether it calls the law adequate; ``--fit`` als
 it (:func:`bayestribo.fit`) and ``--auto`` compares the laws (``law="auto"``), each
 refused or answered with its warnings.
 
-Run: ``python benchmarks/short_checks.py [--fit] [--auto] [--output short_checks]``;
-writes ``benchmarks/results/<output>.json``.
+``--level N`` instead measures the constancy test on windows of one oscillation (the
+default window of a decay of 3-6 oscillations) on ``cut-4``, ``cut-5`` and ``cut-6``
+records of the law, ``N`` noise draws each: how often it rejects at α/3 (1.7 %) and at
+5 %.
+
+Run: ``python benchmarks/short_checks.py [--fit] [--auto] [--output short_checks]`` or
+``python benchmarks/short_checks.py --level 200 --output short_checks_level``; writes
+``benchmarks/results/<output>.json``.
 """
 
 from __future__ import annotations
@@ -134,13 +140,46 @@ def one_case(name: str, *, with_fit: bool, with_auto: bool) -> dict[str, Any]:
     return out
 
 
+def constancy_level(draws: int, oscillations: tuple[int, ...] = (4, 5, 6)) -> dict[str, Any]:
+    """The constancy test on windows of one oscillation over ``draws`` noise draws of
+    each ``cut-<n>`` record of the law: p-values and rejections at α/3 and 5 %."""
+    from bayestribo.adequacy import constancy_test, windowed_fits
+    from bayestribo.adequacy.windows import analysed_decay
+
+    out: dict[str, Any] = {}
+    for n in oscillations:
+        p_values = []
+        for seed in range(draws):
+            decay = analysed_decay(cut(n, seed), skip_oscillations=1)
+            windows = windowed_fits(decay, window=1, seed=seed)
+            p_values.append(constancy_test(windows, alpha=0.05 / 3).p_value)
+        p = np.array(p_values)
+        out[f"cut-{n}"] = {
+            "draws": draws,
+            "windows": len(windows),
+            "rejected_at_alpha_3": int(np.sum(p < 0.05 / 3)),
+            "rejected_at_5pc": int(np.sum(p < 0.05)),
+            "p_values": p.tolist(),
+        }
+        print(n, {k: v for k, v in out[f"cut-{n}"].items() if k != "p_values"}, flush=True)
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", nargs="*", default=sorted(CASES), choices=sorted(CASES))
     parser.add_argument("--fit", action="store_true", help="also fit each record")
     parser.add_argument("--auto", action="store_true", help="also compare the laws")
     parser.add_argument("--output", default=None, help="results/NAME.json")
+    parser.add_argument(
+        "--level", type=int, default=0, help="measure the constancy test's level instead"
+    )
     args = parser.parse_args(argv)
+    if args.level:
+        table = constancy_level(args.level)
+        if args.output:
+            print("wrote", write_results(args.output, {"source": commit(), "level": table}))
+        return 0
     rows = []
     for name in args.cases:
         rows.append(one_case(name, with_fit=args.fit, with_auto=args.auto))
