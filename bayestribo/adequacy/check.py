@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from bayestribo._plural import count
 from bayestribo.adequacy.constancy import MIN_WINDOWS, ConstancyTest, constancy_test
 from bayestribo.adequacy.draws import (
     ParameterDraws,
@@ -89,13 +90,12 @@ def _constancy_not_run(decay: EnergyDecay, windows: WindowedAnalysis, reason: st
     if len(windows) >= MIN_WINDOWS:
         return f"not run: {reason}"
     turning_points = peak_positions(decay).size
-    w = windows.window_oscillations
-    needed = 2 * w * MIN_WINDOWS + 1
+    each = count(windows.window_oscillations, "oscillation")
+    needed = 2 * windows.window_oscillations * MIN_WINDOWS + 1
     return (
         f"not run: the analysed decay holds {turning_points} turning points, "
-        f"{len(windows)} window{'s' if len(windows) != 1 else ''} of {w} oscillation"
-        f"{'s' if w != 1 else ''}; the constancy test needs {MIN_WINDOWS} windows "
-        f"({needed} turning points at {w} oscillation{'s' if w != 1 else ''} a window)"
+        f"{count(len(windows), 'window')} of {each}; the constancy test needs "
+        f"{MIN_WINDOWS} windows ({needed} turning points at {each} a window)"
     )
 
 
@@ -244,7 +244,7 @@ class AdequacyReport:
         if self.restoring is not None:
             lines.append(f"restoring force: {self.restoring}")
         lines.append(
-            f"windows of {w.window_oscillations} oscillations ({w.method}, friction "
+            f"windows of {count(w.window_oscillations, 'oscillation')} ({w.method}, friction "
             f"{w.extra.get('friction_mode', 'fit')}); {w.interval_kind}"
         )
         amp = f"amplitude [{unit}]"
