@@ -10,7 +10,8 @@ Records (independent simulations, nothing from the package):
   vibrometer's resolution;
 * ``stop-<mu>``: the paper's rig with μ_k = ``mu``, sticking within a few oscillations;
 * ``seismometer-<seed>``: the seismometer's velocity alone fading after about ten half
-  cycles (``benchmarks/seismometer.py``, the clean case).
+  cycles (``benchmarks/seismometer.py``, the clean case); ``seismometer-cut<T>``: seed 0
+  cut ``T`` seconds after the record's start, in motion (released at 10 s, 15 s period).
 
 Each is checked by :func:`bayestribo.adequacy.check_adequacy` (the command ``bayestribo
 check``): refused (the message) or each check's outcome (passed, failed, not run with
@@ -18,13 +19,14 @@ its statement), the verdict and whether it calls the law adequate; ``--fit`` als
 it (:func:`bayestribo.fit`) and ``--auto`` compares the laws (``law="auto"``), each
 refused or answered with its warnings.
 
-``--level N`` instead measures the constancy test on windows of one oscillation (the
-default window of a decay of 3-6 oscillations) on ``cut-4``, ``cut-5`` and ``cut-6``
-records of the law, ``N`` noise draws each: how often it rejects at α/3 (1.7 %) and at
-5 %.
+``--level`` instead measures the constancy test on windows of one oscillation (the
+default window of a decay of 3-6 oscillations with a recorded displacement) on records
+of the law (:data:`LEVEL_CASES`: ``cut-4`` to ``cut-6`` with both channels and with the
+displacement alone, the seismometer's velocity alone cut at 85-115 s, and at 130 and
+160 s on windows of two): how often it rejects at α/3 (1.7 %) and at 5 %.
 
 Run: ``python benchmarks/short_checks.py [--fit] [--auto] [--output short_checks]`` or
-``python benchmarks/short_checks.py --level 200 --output short_checks_level``; writes
+``python benchmarks/short_checks.py --level --output short_checks_level``; writes
 ``benchmarks/results/<output>.json``.
 """
 
@@ -77,14 +79,16 @@ def stop(mu_k: float, seed: int = 0) -> Any:
     return Run(time=t, displacement=xs, velocity=vs, metadata=metadata())
 
 
-def seismometer(seed: int) -> Any:
-    """The seismometer's clean velocity alone (``benchmarks/seismometer.py``)."""
+def seismometer(seed: int, duration_s: float | None = None) -> Any:
+    """The seismometer's clean velocity alone (``benchmarks/seismometer.py``), cut
+    ``duration_s`` after its start (in motion) if given."""
     from seismometer import record as seismo_record
 
     from bayestribo.io.run import Run
 
     t, v = seismo_record(seed)
-    return Run(time=t, velocity=v, metadata={"length_unit": "arbitrary"})
+    keep = t < (duration_s if duration_s is not None else np.inf)
+    return Run(time=t[keep], velocity=v[keep], metadata={"length_unit": "arbitrary"})
 
 
 CASES: dict[str, Callable[[], Any]] = {
@@ -92,6 +96,7 @@ CASES: dict[str, Callable[[], Any]] = {
     **{f"cut-{n}": (lambda n=n: cut(n)) for n in (2, 3, 4)},
     **{f"stop-{mu:g}": (lambda mu=mu: stop(mu)) for mu in (0.3, 0.5, 0.8)},
     **{f"seismometer-{s}": (lambda s=s: seismometer(s)) for s in range(3)},
+    **{f"seismometer-cut{d:g}": (lambda d=d: seismometer(0, d)) for d in (65.0, 85.0, 115.0)},
 }
 
 
@@ -140,28 +145,61 @@ def one_case(name: str, *, with_fit: bool, with_auto: bool) -> dict[str, Any]:
     return out
 
 
-def constancy_level(draws: int, oscillations: tuple[int, ...] = (4, 5, 6)) -> dict[str, Any]:
-    """The constancy test on windows of one oscillation over ``draws`` noise draws of
-    each ``cut-<n>`` record of the law: p-values and rejections at α/3 and 5 %."""
+def _displacement_only(run: Any) -> Any:
+    from bayestribo.io.run import Run
+
+    return Run(time=run.time, displacement=run.displacement, metadata=run.metadata)
+
+
+#: The records of the law of ``--level``: name, record of a noise draw, window
+#: [oscillations], draws.
+LEVEL_CASES: tuple[tuple[str, Callable[[int], Any], int, int], ...] = (
+    *((f"cut-{n}", lambda seed, n=n: cut(n, seed), 1, 200) for n in (4, 5, 6)),
+    *(
+        (f"cut-{n} displacement alone", lambda seed, n=n: _displacement_only(cut(n, seed)), 1, 100)
+        for n in (4, 6)
+    ),
+    *(
+        (f"seismometer-cut{d:g}", lambda seed, d=d: seismometer(seed, d), 1, 40)
+        for d in (85.0, 100.0, 115.0)
+    ),
+    *(
+        (f"seismometer-cut{d:g}", lambda seed, d=d: seismometer(seed, d), 2, 40)
+        for d in (130.0, 160.0)
+    ),
+)
+
+
+def constancy_level() -> dict[str, Any]:
+    """The constancy test at α/3 over noise draws of records of the law
+    (:data:`LEVEL_CASES`): p-values, rejections at α/3 and 5 %, and the draws the
+    package refused (with the message)."""
     from bayestribo.adequacy import constancy_test, windowed_fits
     from bayestribo.adequacy.windows import analysed_decay
 
     out: dict[str, Any] = {}
-    for n in oscillations:
-        p_values = []
+    for name, make, window, draws in LEVEL_CASES:
+        p_values, refused, counts = [], {}, set()
         for seed in range(draws):
-            decay = analysed_decay(cut(n, seed), skip_oscillations=1)
-            windows = windowed_fits(decay, window=1, seed=seed)
-            p_values.append(constancy_test(windows, alpha=0.05 / 3).p_value)
+            try:
+                decay = analysed_decay(make(seed), skip_oscillations=1)
+                windows = windowed_fits(decay, window=window, seed=seed)
+                p_values.append(constancy_test(windows, alpha=0.05 / 3).p_value)
+                counts.add(len(windows))
+            except Exception as exc:  # recorded, never silently dropped
+                refused[seed] = f"{type(exc).__name__}: {exc}"
         p = np.array(p_values)
-        out[f"cut-{n}"] = {
+        key = f"{name}, windows of {window}"
+        out[key] = {
             "draws": draws,
-            "windows": len(windows),
+            "tested": int(p.size),
+            "windows": sorted(counts),
             "rejected_at_alpha_3": int(np.sum(p < 0.05 / 3)),
             "rejected_at_5pc": int(np.sum(p < 0.05)),
+            "refused": refused,
             "p_values": p.tolist(),
         }
-        print(n, {k: v for k, v in out[f"cut-{n}"].items() if k != "p_values"}, flush=True)
+        print(key, {k: v for k, v in out[key].items() if k != "p_values"}, flush=True)
     return out
 
 
@@ -172,11 +210,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--auto", action="store_true", help="also compare the laws")
     parser.add_argument("--output", default=None, help="results/NAME.json")
     parser.add_argument(
-        "--level", type=int, default=0, help="measure the constancy test's level instead"
+        "--level", action="store_true", help="measure the constancy test's level instead"
     )
     args = parser.parse_args(argv)
     if args.level:
-        table = constancy_level(args.level)
+        table = constancy_level()
         if args.output:
             print("wrote", write_results(args.output, {"source": commit(), "level": table}))
         return 0

@@ -61,20 +61,23 @@ TESTS_AT_A_LEVEL = 3
 
 
 def default_window(decay: EnergyDecay) -> int:
-    """Window length [oscillations]: about eight windows of at least two oscillations;
-    one oscillation where windows of two would be fewer than the constancy test's
-    three (:data:`~bayestribo.adequacy.constancy.MIN_WINDOWS`: a decay of 3-6
-    oscillations) or none (a coarse digitiser's record analysed on 4 turning points).
+    """Window length [oscillations]: about eight windows of at least two oscillations.
 
-    On records of the law of 4-6 oscillations (the paper's rig at ten times the
-    vibrometer's noise, 200 each) the constancy test on windows of one oscillation
-    rejected at α/3 = 1.7 % in 1.5-2.5 % of them (``benchmarks/README.md``, "Short
-    records checked").
+    One oscillation where windows of two would be fewer than the constancy test's three
+    (:data:`~bayestribo.adequacy.constancy.MIN_WINDOWS`: a decay of 3-6 oscillations)
+    on a recorded displacement, or where the decay holds no window of two (a coarse
+    digitiser's record analysed on 4 turning points). A displacement integrated from a
+    velocity recorded alone keeps windows of two: fitting its own offset in one
+    oscillation, the constancy test on such windows rejected 5-14 of about 40 records of
+    the law at α/3, where on a recorded displacement it rejected 1.5-2.5 % of 200
+    (``benchmarks/README.md``, "Short records checked").
     """
     turning_points = peak_positions(decay).size
     oscillations = (turning_points - 1) / 2.0
     window = max(MIN_DEFAULT_WINDOW, round(oscillations / TARGET_WINDOWS))
-    if (turning_points - 1) // (2 * window) < MIN_WINDOWS:
+    windows = (turning_points - 1) // (2 * window)
+    recorded = decay.derived_channel != "displacement"
+    if windows < 1 or (windows < MIN_WINDOWS and recorded):
         return 1
     return window
 
