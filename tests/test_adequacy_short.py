@@ -147,6 +147,21 @@ def test_the_default_window_of_a_long_decay_is_unchanged():
     assert default_window(decay) == max(2, round((n - 1) / 2 / 8))
 
 
+def test_a_velocity_recorded_alone_keeps_windows_of_two():
+    """Its windows fit their own offset: on one oscillation the constancy test was not
+    calibrated (``benchmarks/short_checks.py --level``), so a short one has fewer than
+    three windows of two, and the constancy test is named as not run."""
+    run = simulate(release=Release(initial_displacement_m=2e-4), seed=33)
+    alone = Run(time=run.time, velocity=run.velocity, metadata=dict(run.metadata))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        decay = analysed_decay(alone)
+    assert decay.derived_channel == "displacement"
+    assert peak_positions(decay).size < 13
+    assert default_window(decay) == 2
+    assert default_window(analysed_decay(run)) == 1
+
+
 def test_check_answers_a_coarse_record_with_exit_1(tmp_path, capsys):
     """Before, ``bayestribo check`` refused it (exit 2: fewer than one window of 2)."""
     path = write_run(_coarse_run(), tmp_path / "coarse.csv")
