@@ -98,7 +98,7 @@ def test_the_checks_not_run_are_named_in_text_and_json(coarse):
     assert data["not_run"] == [CONSTANCY, HALVES]
     assert data["rests_on"] == ["end of motion", "peak-by-peak predictive check"]
     text = coarse.to_text()
-    assert "constancy: [not run] not run: the analysed decay holds 4 turning points" in text
+    assert "constancy: [not run] the analysed decay holds 4 turning points" in text
     assert "halves: [not run]" in text
 
 

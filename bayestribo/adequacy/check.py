@@ -82,6 +82,9 @@ def default_window(decay: EnergyDecay) -> int:
     return window
 
 
+#: How the statement of a check that was not run begins.
+NOT_RUN = "not run: "
+
 #: The shortest default window [oscillations] on a decay that holds the constancy
 #: test's windows of it.
 MIN_DEFAULT_WINDOW = 2
@@ -91,12 +94,12 @@ def _constancy_not_run(decay: EnergyDecay, windows: WindowedAnalysis, reason: st
     """Why the constancy test was not run: the record too short for its windows, or
     the windows' estimates on a bound (``reason``, the test's own message)."""
     if len(windows) >= MIN_WINDOWS:
-        return f"not run: {reason}"
+        return f"{NOT_RUN}{reason}"
     turning_points = peak_positions(decay).size
     each = count(windows.window_oscillations, "oscillation")
     needed = 2 * windows.window_oscillations * MIN_WINDOWS + 1
     return (
-        f"not run: the analysed decay holds {turning_points} turning points, "
+        f"{NOT_RUN}the analysed decay holds {turning_points} turning points, "
         f"{count(len(windows), 'window')} of {each}; the constancy test needs "
         f"{MIN_WINDOWS} windows ({needed} turning points at {each} a window)"
     )
@@ -274,7 +277,8 @@ class AdequacyReport:
         lines.append("")
         for check in self.checks:
             mark = {True: "pass", False: "FAIL", None: "not run"}[check["passed"]]
-            lines.append(f"{check['key']}: [{mark}] {check['statement']}")
+            statement = check["statement"].removeprefix(NOT_RUN)
+            lines.append(f"{check['key']}: [{mark}] {statement}")
         lines.append("")
         lines.append("verdict: " + self.verdict)
         lines.append("level: " + self.level_text)
@@ -512,7 +516,7 @@ def check_adequacy(
             halves = replace(halves, length_unit="rad")  # fitted on the decay alone
         halves_note = ""
     except RecordingError as exc:
-        halves, halves_note = None, f"not run: {exc}"
+        halves, halves_note = None, f"{NOT_RUN}{exc}"
     adequate = _adequate(_checks(constancy, note, extinction, predictive, halves, halves_note))
     name = getattr(run, "source", None) if not isinstance(run, EnergyDecay) else None
     if name is None and isinstance(run, str):

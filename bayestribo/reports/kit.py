@@ -598,7 +598,8 @@ def checks(adequacy: Any) -> None:
     _display(
         Markdown(
             "\n".join(
-                f"* **{sentence(c['name'])[:-1]}**: {mark[c['passed']]}. {sentence(c['statement'])}"
+                f"* **{sentence(c['name'])[:-1]}**: {mark[c['passed']]}. "
+                f"{sentence(c['statement'].removeprefix('not run: '))}"
                 for c in adequacy.checks
             )
         )
