@@ -115,8 +115,7 @@ def test_a_short_record_of_the_law_is_not_called_adequate_on_the_checks_that_ran
     assert not report.adequate
     assert report.verdict.endswith(
         f"is not shown adequate for this recording: the checks run pass ({CONSTANCY}, "
-        f"end of motion, peak-by-peak predictive check); not run, the record too short "
-        f"for them: {HALVES}"
+        f"end of motion, peak-by-peak predictive check); not run: {HALVES}"
     )
 
 
@@ -129,7 +128,7 @@ def _check(key: str, passed: bool | None) -> dict:
     [
         ((True, True), True, "law is adequate for this recording"),
         ((True, None), False, "not shown adequate for this recording: the checks run pass (a)"),
-        ((None, None), False, "no check could run; not run, the record too short"),
+        ((None, None), False, "not shown adequate for this recording: no check could run"),
         ((False, None), False, "is not adequate for this recording (failed: a; not run: b)"),
         ((False, True), False, "is not adequate for this recording (failed: a)"),
     ],

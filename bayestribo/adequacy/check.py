@@ -70,7 +70,17 @@ def default_window(decay: EnergyDecay) -> int:
     velocity recorded alone keeps windows of two: fitting its own offset in one
     oscillation, the constancy test on such windows rejected 5-14 of about 40 records of
     the law at α/3, where on a recorded displacement it rejected 1.5-2.5 % of 200
-    (``benchmarks/README.md``, "Short records checked").
+    (``benchmarks/README.md``, "Short records checked, not refused").
+
+    Parameters
+    ----------
+    decay : EnergyDecay
+        The analysed decay.
+
+    Returns
+    -------
+    int
+        The window length [oscillations], at least 1.
     """
     turning_points = peak_positions(decay).size
     oscillations = (turning_points - 1) / 2.0
@@ -175,8 +185,8 @@ class AdequacyReport:
         )
         if self.not_run:
             text += (
-                "; a record too short for a check is never called adequate, the checks "
-                "that ran keep their level"
+                "; a record on which a check could not run is never called adequate, the "
+                "checks that ran keep their level"
             )
         return text
 
@@ -191,7 +201,8 @@ class AdequacyReport:
     @property
     def checks(self) -> list[dict[str, Any]]:
         """Each check with its outcome: ``name``, ``passed`` (True, False, or None if not
-        made) and its one-sentence ``statement``; :attr:`adequate` is their conjunction."""
+        run) and its one-sentence ``statement``; :attr:`adequate` is True when every
+        one is True."""
         return _checks(
             self.constancy,
             self.constancy_note,
@@ -303,8 +314,8 @@ def _verdict(law: str, checks: list[dict[str, Any]]) -> str:
     if not_run:
         rests = f"the checks run pass ({', '.join(passed)})" if passed else "no check could run"
         return (
-            f"{law} is not shown adequate for this recording: {rests}; not run, the "
-            f"record too short for them: {', '.join(not_run)}"
+            f"{law} is not shown adequate for this recording: {rests}; not run: "
+            f"{', '.join(not_run)}"
         )
     return f"{law} is adequate for this recording"
 
