@@ -10,8 +10,11 @@ Records (independent simulations, nothing from the package):
   vibrometer's resolution;
 * ``stop-<mu>``: the paper's rig with μ_k = ``mu``, sticking within a few oscillations;
 * ``seismometer-<seed>``: the seismometer's velocity alone fading after about ten half
-  cycles (``benchmarks/seismometer.py``, the clean case); ``seismometer-cut<T>``: seed 0
-  cut ``T`` seconds after the record's start, in motion (released at 10 s, 15 s period).
+  cycles (``benchmarks/seismometer.py``, the clean case, seeds 0-9); ``seismometer-cut<T>``:
+  seed 0 cut ``T`` seconds after the record's start, in motion (released at 10 s, 15 s
+  period);
+* ``paper-velocity-<seed>``: the paper's rig's velocity alone (the package's simulator),
+  long enough for every check.
 
 Each is checked by :func:`bayestribo.adequacy.check_adequacy` (the command ``bayestribo
 check``): refused (the message) or each check's outcome (passed, failed, not run with
@@ -91,11 +94,22 @@ def seismometer(seed: int, duration_s: float | None = None) -> Any:
     return Run(time=t[keep], velocity=v[keep], metadata={"length_unit": "arbitrary"})
 
 
+def paper_velocity(seed: int) -> Any:
+    """The paper's rig's velocity alone, :func:`bayestribo.synthetic.recording.simulate`
+    with ``seed`` (a record of the law long enough for every check)."""
+    from bayestribo.io.run import Run
+    from bayestribo.synthetic.recording import simulate
+
+    run = simulate(seed=seed)
+    return Run(time=run.time, velocity=run.velocity, metadata=dict(run.metadata))
+
+
 CASES: dict[str, Callable[[], Any]] = {
     **{f"coarse3-{i}": (lambda i=i: coarse3(i)) for i in range(20)},
     **{f"cut-{n}": (lambda n=n: cut(n)) for n in (2, 3, 4)},
     **{f"stop-{mu:g}": (lambda mu=mu: stop(mu)) for mu in (0.3, 0.5, 0.8)},
-    **{f"seismometer-{s}": (lambda s=s: seismometer(s)) for s in range(3)},
+    **{f"seismometer-{s}": (lambda s=s: seismometer(s)) for s in range(10)},
+    **{f"paper-velocity-{s}": (lambda s=s: paper_velocity(s)) for s in range(10)},
     **{f"seismometer-cut{d:g}": (lambda d=d: seismometer(0, d)) for d in (65.0, 85.0, 115.0)},
 }
 
