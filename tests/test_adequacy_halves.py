@@ -110,7 +110,7 @@ def test_halves_split_at_the_middle_turning_point():
 
 def test_too_short_a_decay_and_bad_arguments_are_refused():
     short = simulate(release=Release(initial_displacement_m=2e-4), seed=33)  # 3.5 osc.
-    with pytest.raises(RecordingError, match="split-half"):
+    with pytest.raises(RecordingError, match="the halves need 9"):
         split_halves(short)
     with pytest.raises(RecordingError, match="alpha"):
         split_halves(simulate(seed=34), alpha=1.5)

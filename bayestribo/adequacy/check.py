@@ -27,7 +27,8 @@ from typing import Any
 
 import numpy as np
 
-from bayestribo.adequacy.constancy import ConstancyTest, constancy_test
+from bayestribo._plural import count
+from bayestribo.adequacy.constancy import MIN_WINDOWS, ConstancyTest, constancy_test
 from bayestribo.adequacy.draws import (
     ParameterDraws,
     draws_from_least_squares,
@@ -60,9 +61,58 @@ TESTS_AT_A_LEVEL = 3
 
 
 def default_window(decay: EnergyDecay) -> int:
-    """Window length [oscillations] giving about eight windows, at least two oscillations."""
-    oscillations = (peak_positions(decay).size - 1) / 2.0
-    return max(2, round(oscillations / TARGET_WINDOWS))
+    """Window length [oscillations]: about eight windows of at least two oscillations.
+
+    One oscillation where windows of two would be fewer than the constancy test's three
+    (:data:`~bayestribo.adequacy.constancy.MIN_WINDOWS`: a decay of 3-6 oscillations)
+    on a recorded displacement, or where the decay holds no window of two (a coarse
+    digitiser's record analysed on 4 turning points). A displacement integrated from a
+    velocity recorded alone keeps windows of two: fitting its own offset in one
+    oscillation, the constancy test on such windows rejected 5-14 of about 40 records of
+    the law at α/3, where on a recorded displacement it rejected 1.5-2.5 % of 200
+    (``benchmarks/README.md``, "Short records checked, not refused").
+
+    Parameters
+    ----------
+    decay : EnergyDecay
+        The analysed decay.
+
+    Returns
+    -------
+    int
+        The window length [oscillations], at least 1.
+    """
+    turning_points = peak_positions(decay).size
+    oscillations = (turning_points - 1) / 2.0
+    window = max(MIN_DEFAULT_WINDOW, round(oscillations / TARGET_WINDOWS))
+    windows = (turning_points - 1) // (2 * window)
+    recorded = decay.derived_channel != "displacement"
+    if windows < 1 or (windows < MIN_WINDOWS and recorded):
+        return 1
+    return window
+
+
+#: How the statement of a check that was not run begins.
+NOT_RUN = "not run: "
+
+#: The shortest default window [oscillations] on a decay that holds the constancy
+#: test's windows of it.
+MIN_DEFAULT_WINDOW = 2
+
+
+def _constancy_not_run(decay: EnergyDecay, windows: WindowedAnalysis, reason: str) -> str:
+    """Why the constancy test was not run: the record too short for its windows, or
+    the windows' estimates on a bound (``reason``, the test's own message)."""
+    if len(windows) >= MIN_WINDOWS:
+        return f"{NOT_RUN}{reason}"
+    turning_points = peak_positions(decay).size
+    each = count(windows.window_oscillations, "oscillation")
+    needed = 2 * windows.window_oscillations * MIN_WINDOWS + 1
+    return (
+        f"{NOT_RUN}the analysed decay holds {turning_points} turning points, "
+        f"{count(len(windows), 'window')} of {each}; the constancy test needs "
+        f"{MIN_WINDOWS} windows ({needed} turning points at {each} a window)"
+    )
 
 
 @dataclass(frozen=True)
@@ -81,10 +131,13 @@ class AdequacyReport:
     draws : ParameterDraws
     adequate : bool
         The law (constant ζ and friction, on the run's restoring force) is
-        adequate: constancy not rejected, the measured end of motion inside the
-        exact model's ``1 - alpha/3`` interval, the peak coverage not
-        far below 95 % (at least 80 %), and the two halves of the motion in
-        agreement. Computed once, from :attr:`checks`. On a record of the law it is
+        adequate: every check run and passed (constancy not rejected, the measured
+        end of motion inside the exact model's ``1 - alpha/3`` interval, the peak
+        coverage not far below 95 % (at least 80 %), and the two halves of the
+        motion in agreement). A check the record is too short for is not run
+        (:attr:`not_run`), and the law is then not called adequate on the strength
+        of the others (:attr:`verdict` names what it rests on). Computed once, from
+        :attr:`checks`. On a record of the law long enough for every check it is
         False at most ``alpha`` of the time (:attr:`level_text`).
     halves : SplitHalves or None
         The split-half check (None when the decay is too short for it:
@@ -124,12 +177,18 @@ class AdequacyReport:
         """The verdict's false-alarm rate on a record of the law, in one sentence."""
         a = f"{100.0 * self.alpha:.3g} %"
         each = f"{100.0 * self.check_alpha:.3g} %"
-        return (
+        text = (
             f'on a record of the law the verdict says "not adequate" at most {a} of the '
             f"time (the constancy test, the halves and the end of motion each at {each}, "
             f"Bonferroni; the peaks' check a fixed rule of "
             f"{100.0 * MIN_PEAK_COVERAGE:.0f} % coverage)"
         )
+        if self.not_run:
+            text += (
+                "; a record on which a check could not run is never called adequate, the "
+                "checks that ran keep their level"
+            )
+        return text
 
     @property
     def law_text(self) -> str:
@@ -142,7 +201,8 @@ class AdequacyReport:
     @property
     def checks(self) -> list[dict[str, Any]]:
         """Each check with its outcome: ``name``, ``passed`` (True, False, or None if not
-        made) and its one-sentence ``statement``; :attr:`adequate` is their conjunction."""
+        run) and its one-sentence ``statement``; :attr:`adequate` is True when every
+        one is True."""
         return _checks(
             self.constancy,
             self.constancy_note,
@@ -153,14 +213,20 @@ class AdequacyReport:
         )
 
     @property
+    def rests_on(self) -> list[str]:
+        """The names of the checks that were run: what the verdict rests on."""
+        return [c["name"] for c in self.checks if c["passed"] is not None]
+
+    @property
+    def not_run(self) -> list[str]:
+        """The names of the checks that could not be run on this record (each
+        check's statement says why)."""
+        return [c["name"] for c in self.checks if c["passed"] is None]
+
+    @property
     def verdict(self) -> str:
-        """The plain conclusion, naming the checks that failed."""
-        if self.adequate:
-            return f"{self.law_text} is adequate for this recording"
-        failed = [c["name"] for c in self.checks if c["passed"] is False]
-        return f"{self.law_text} is not adequate for this recording" + (
-            f" (failed: {', '.join(failed)})" if failed else ""
-        )
+        """The plain conclusion, naming the checks that failed and those not run."""
+        return _verdict(self.law_text, self.checks)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready mapping (``restoring``: the run's nonlinear restoring force in
@@ -169,6 +235,8 @@ class AdequacyReport:
             "run": self.run_name,
             "adequate": self.adequate,
             "verdict": self.verdict,
+            "rests_on": self.rests_on,
+            "not_run": self.not_run,
             "alpha": self.alpha,
             "check_alpha": self.check_alpha,
             "level": self.level_text,
@@ -193,7 +261,7 @@ class AdequacyReport:
         if self.restoring is not None:
             lines.append(f"restoring force: {self.restoring}")
         lines.append(
-            f"windows of {w.window_oscillations} oscillations ({w.method}, friction "
+            f"windows of {count(w.window_oscillations, 'oscillation')} ({w.method}, friction "
             f"{w.extra.get('friction_mode', 'fit')}); {w.interval_kind}"
         )
         amp = f"amplitude [{unit}]"
@@ -219,8 +287,9 @@ class AdequacyReport:
                 )
         lines.append("")
         for check in self.checks:
-            mark = {True: "pass", False: "FAIL", None: "not made"}[check["passed"]]
-            lines.append(f"{check['key']}: [{mark}] {check['statement']}")
+            mark = {True: "pass", False: "FAIL", None: "not run"}[check["passed"]]
+            statement = check["statement"].removeprefix(NOT_RUN)
+            lines.append(f"{check['key']}: [{mark}] {statement}")
         lines.append("")
         lines.append("verdict: " + self.verdict)
         lines.append("level: " + self.level_text)
@@ -231,6 +300,31 @@ class AdequacyReport:
 MIN_PEAK_COVERAGE = 0.8
 
 
+def _verdict(law: str, checks: list[dict[str, Any]]) -> str:
+    """The verdict on ``law`` (in words) from its ``checks`` (:func:`_checks`): adequate
+    only when every check was run and passed; otherwise the checks that failed and
+    those not run, by name."""
+    failed = [c["name"] for c in checks if c["passed"] is False]
+    passed = [c["name"] for c in checks if c["passed"] is True]
+    not_run = [c["name"] for c in checks if c["passed"] is None]
+    if failed:
+        return f"{law} is not adequate for this recording (failed: {', '.join(failed)}" + (
+            f"; not run: {', '.join(not_run)})" if not_run else ")"
+        )
+    if not_run:
+        rests = f"the checks run pass ({', '.join(passed)})" if passed else "no check could run"
+        return (
+            f"{law} is not shown adequate for this recording: {rests}; not run: "
+            f"{', '.join(not_run)}"
+        )
+    return f"{law} is adequate for this recording"
+
+
+def _adequate(checks: list[dict[str, Any]]) -> bool:
+    """Every check run and passed: the one place the verdict's outcome is decided."""
+    return all(c["passed"] is True for c in checks)
+
+
 def _checks(
     constancy: ConstancyTest | None,
     constancy_note: str,
@@ -239,7 +333,8 @@ def _checks(
     halves: SplitHalves | None = None,
     halves_note: str = "",
 ) -> list[dict[str, Any]]:
-    """The four checks with their outcomes; the one place the verdict is decided."""
+    """The four checks with their outcomes (``passed`` None: not run, the statement
+    says why); :func:`_adequate` decides the verdict from them."""
     return [
         {
             "key": "constancy",
@@ -403,7 +498,7 @@ def check_adequacy(
         constancy: ConstancyTest | None = constancy_test(windows, alpha=level)
         note = ""
     except RecordingError as exc:
-        constancy, note = None, f"not tested: {exc}"
+        constancy, note = None, _constancy_not_run(decay, windows, str(exc))
     if fit_result is not None:
         draws = draws_from_posterior(fit_result, decay, n_draws, seed=seed)
     else:
@@ -432,11 +527,8 @@ def check_adequacy(
             halves = replace(halves, length_unit="rad")  # fitted on the decay alone
         halves_note = ""
     except RecordingError as exc:
-        halves, halves_note = None, f"not tested: {exc}"
-    adequate = all(
-        c["passed"] is not False
-        for c in _checks(constancy, note, extinction, predictive, halves, halves_note)
-    )
+        halves, halves_note = None, f"{NOT_RUN}{exc}"
+    adequate = _adequate(_checks(constancy, note, extinction, predictive, halves, halves_note))
     name = getattr(run, "source", None) if not isinstance(run, EnergyDecay) else None
     if name is None and isinstance(run, str):
         name = run

@@ -210,8 +210,9 @@ def _half_bounds(decay: EnergyDecay, min_oscillations: int) -> list[tuple[int, i
     middle = half_cycles // 2
     if middle < 2 * min_oscillations:
         raise RecordingError(
-            f"the analysed decay holds {half_cycles / 2:g} oscillations: two halves of at "
-            f"least {min_oscillations} each are needed for the split-half check"
+            f"the analysed decay holds {pos.size} turning points ({half_cycles / 2:g} "
+            f"oscillations); the halves need {4 * min_oscillations + 1} (two halves of at "
+            f"least {min_oscillations} oscillations each)"
         )
     return [
         (int(pos[0]), int(pos[middle]) + 1, 0, middle),

@@ -11,8 +11,11 @@ Examples::
     bayestribo check runs/glycerol_N0.31_r2.csv
     bayestribo check HarmOsc2.txt --columns t x --length-unit arbitrary --window-length 6 --json
 
-Exit status: 0 when the law is adequate, 1 when a check rejects it (the report says
-which and by how much), 2 for bad input.
+Exit status: 0 when the law is adequate (every check run and passed), 1 when a check
+rejects it (the report says which and by how much) or a check could not run on the
+record (too few turning points for the constancy test's windows or for the halves: the
+report names it and the turning points it needs, and the verdict says what it rests
+on), 2 for bad input.
 """
 
 from __future__ import annotations
@@ -50,7 +53,9 @@ def register(subparsers: Any) -> None:
             "--restoring (or the sidecar's restoring) every check takes that restoring "
             "force's motion. The verdict is 'not adequate' when any check fails; on a "
             "record of the law it says so at most --alpha of the time (the constancy "
-            "test, the halves and the end of motion each at alpha/3, Bonferroni)."
+            "test, the halves and the end of motion each at alpha/3, Bonferroni). A check "
+            "the record is too short for is not run and named; the law is then not called "
+            "adequate on the others alone (exit 1)."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )

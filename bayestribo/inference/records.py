@@ -142,9 +142,14 @@ class LawComparison:
                 "increasing polynomial of degree 1-4) describes the decay: its ΔE(A) is "
                 "the answer, its parameters are not a measurement of any mechanism"
             )
+        untested = (
+            f"; adequate on its misfit tests alone, the halves not compared: {split['note']}"
+            if split and not split.get("tested", True)
+            else ""
+        )
         return (
             f"{self.verdict} chosen from {n} laws: the simplest adequate law as good as "
-            f"the best by PSIS-LOO (best {self.best}{tie})"
+            f"the best by PSIS-LOO (best {self.best}{tie}){untested}"
         )
 
     def to_dict(self) -> dict[str, Any]:

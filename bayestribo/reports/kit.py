@@ -594,11 +594,12 @@ def checks(adequacy: Any) -> None:
     it (``level_text``), the verdict's false-alarm rate on a record of the law."""
     from IPython.display import Markdown
 
-    mark = {True: "passed", False: "**failed**", None: "not made"}
+    mark = {True: "passed", False: "**failed**", None: "not run"}
     _display(
         Markdown(
             "\n".join(
-                f"* **{sentence(c['name'])[:-1]}**: {mark[c['passed']]}. {sentence(c['statement'])}"
+                f"* **{sentence(c['name'])[:-1]}**: {mark[c['passed']]}. "
+                f"{sentence(c['statement'].removeprefix('not run: '))}"
                 for c in adequacy.checks
             )
         )
