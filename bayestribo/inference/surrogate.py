@@ -53,6 +53,12 @@ optimiser stopped short of the optimum of a law that misfits. Where the draws do
 determine it, it is built again from a design about the checked draw of highest
 exact density with the surrogate posterior's spread.
 
+Where the law cannot move on one side of a coordinate inside its prior's support (η
+of ``quadratic+hysteretic`` below zero, a friction ηA < 0), the nodes on that side
+have no Π and the design cannot be fitted: the surrogate's uniform prior of that
+coordinate then ends at the edge of the law's domain, where the exact posterior ends
+too (its likelihood is zero beyond), and the design takes the coordinate's other side.
+
 Where the posterior depends on Π discontinuously (a law with static friction whose
 motion ends inside the record: one turning point more or less before the pin sticks),
 the quadratic cannot follow, the check fails and the exact posterior is sampled.
