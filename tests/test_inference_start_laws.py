@@ -82,6 +82,35 @@ def test_the_coarse_multistart_finds_the_exact_multistarts_optimum(prepared):
     assert theta[ratio] == exact[ratio]
 
 
+@pytest.mark.parametrize(
+    ("law", "middle_starts"),
+    [("coulomb+power", False), ("coulomb+hysteretic", True)],
+)
+def test_the_ratio_middle_starts_run_only_without_a_coarse_model(
+    prepared, monkeypatch, law, middle_starts
+):
+    # a law with a drag starts its coarse multi-start from the first guesses with the
+    # ratio at the middle of its scan's highest step only (the optimum it reaches is
+    # every start's on the exact model: the test above); a law without a coarse model
+    # is also started with the ratio at the middle of its range
+    from bayestribo.inference import start
+
+    posterior = _posterior(prepared, law)
+    middle = float(np.median(_ratio_grid(posterior)))
+    ratios = []
+
+    def recording(post, guess, ratio=None, found=None):
+        if found is not None or _coarse(posterior) is None:
+            ratios.append(ratio)  # the starts (the polish passes no ``found``)
+        return _optimise(post, guess, ratio, found)
+
+    monkeypatch.setattr(start, "_optimise", recording)
+    start.maximum_a_posteriori(posterior, prepared.decay)
+    n_guesses = len(_first_guesses(prepared.decay, posterior))
+    assert ratios.count(None) == n_guesses
+    assert ratios.count(middle) == (n_guesses if middle_starts else 0)
+
+
 def test_a_law_without_drag_is_optimised_on_its_own_model(prepared):
     # the arcs of friction alone need no Runge-Kutta steps: no coarse model
     assert _coarse(_posterior(prepared, "coulomb+hysteretic")) is None

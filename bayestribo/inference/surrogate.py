@@ -53,6 +53,12 @@ optimiser stopped short of the optimum of a law that misfits. Where the draws do
 determine it, it is built again from a design about the checked draw of highest
 exact density with the surrogate posterior's spread.
 
+Where the law cannot move on one side of a coordinate inside its prior's support (η
+of ``quadratic+hysteretic`` below zero, a friction ηA < 0), the nodes on that side
+have no Π and the design cannot be fitted: the surrogate's uniform prior of that
+coordinate then ends at the edge of the law's domain, where the exact posterior ends
+too (its likelihood is zero beyond), and the design takes the coordinate's other side.
+
 Where the posterior depends on Π discontinuously (a law with static friction whose
 motion ends inside the record: one turning point more or less before the pin sticks),
 the quadratic cannot follow, the check fails and the exact posterior is sampled.
@@ -70,6 +76,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.inference.likelihood import Params, PiLikelihood
+from bayestribo.inference.priors import PriorSet, Uniform
 
 if TYPE_CHECKING:
     from bayestribo.inference.posterior import Posterior
@@ -745,6 +752,7 @@ def surrogate_posterior(posterior: Posterior, centre: NDArray, scale: NDArray) -
         row = centre.copy()
         for name, value in values.items():
             row[posterior.names.index(name)] = value
+        # the posterior of this scope: narrowed to the law's domain below, if at all
         return bool(np.isfinite(posterior.priors.logpdf(row[None])[0]))
 
     law_values = posterior.law_draws(centre[None])
@@ -762,10 +770,81 @@ def surrogate_posterior(posterior: Posterior, centre: NDArray, scale: NDArray) -
         exact, names, dict(zip(names, c, strict=True)), s, others, inside, ratio, bounds
     )
     if quadratic is None:
-        return None
+        # the law cannot move on one side of a coordinate inside its prior's support:
+        # the surrogate's prior ends at the edge of the law's domain, where the exact
+        # posterior's density does, and its design takes that coordinate's other side
+        narrowed = _domain_priors(posterior, names, c, s, others)
+        if narrowed is None:
+            return None
+        posterior = replace(posterior, priors=narrowed)
+        quadratic = quadratic_pi(
+            exact, names, dict(zip(names, c, strict=True)), s, others, inside, ratio, bounds
+        )
+        if quadratic is None:
+            return None
     fields = {f: getattr(exact, f) for f in ("data", "model", "offset_sd", "drift_sd", "law")}
     likelihood = SurrogateLikelihood(**fields, surrogate=quadratic)
     return replace(posterior, likelihood=likelihood)
+
+
+#: Rounds of the search for the edge of a law's domain along one coordinate
+#: (:func:`_domain_priors`), each narrowing it by a factor of :data:`_EDGE_POINTS`.
+_EDGE_ROUNDS = 3
+#: Points of Π evaluated per round of that search (one call of the integrator).
+_EDGE_POINTS = 32
+
+
+def _domain_priors(
+    posterior: Posterior,
+    names: tuple[str, ...],
+    c: NDArray,
+    s: NDArray,
+    fixed_params: Mapping[str, float],
+) -> PriorSet | None:
+    """The priors with each uniform prior of a coordinate on one side of which the law
+    cannot move (Π not finite at ``c - s`` or ``c + s`` alone, finite on the other
+    side) ending at the edge of the law's domain along it.
+
+    The exact posterior is zero beyond the edge (the law's likelihood is), so the
+    posterior is the same under the narrowed prior; the surrogate's quadratic, which
+    does not know the domain, is zero there too (η of ``quadratic+hysteretic``, a
+    friction per unit amplitude, below zero: μ(A) < 0 on the AppStat HarmOsc1
+    record, where its posterior lies within 1.3 sd of zero). The edge is searched
+    between the last node outside and the centre in :data:`_EDGE_ROUNDS` rounds of
+    :data:`_EDGE_POINTS` points; the bound is the first point found inside the domain
+    (at most ``s / 32768`` inside it). An edge that moves with the other coordinates is
+    not what this finds: the check then fails (an exact density of zero at a draw),
+    as it would have without it.
+
+    Returns
+    -------
+    PriorSet or None
+        None when no coordinate has such an edge inside a uniform prior.
+    """
+    likelihood = posterior.likelihood
+    p = len(names)
+    rows = np.repeat(c[None], 2 * p, axis=0)
+    rows[np.arange(p) * 2, np.arange(p)] -= s
+    rows[np.arange(p) * 2 + 1, np.arange(p)] += s
+    finite = np.all(np.isfinite(_evaluate(likelihood, names, rows, fixed_params)), axis=1)
+    narrowed: dict[str, Uniform] = {}
+    for a, name in enumerate(names):
+        below, above = bool(finite[2 * a]), bool(finite[2 * a + 1])
+        prior = posterior.priors[name] if name in posterior.names else None
+        if below == above or not isinstance(prior, Uniform):
+            continue
+        outside, inner = (c[a] - s[a], c[a]) if above else (c[a] + s[a], c[a])
+        for _ in range(_EDGE_ROUNDS):
+            line = np.linspace(outside, inner, _EDGE_POINTS)
+            probe = np.repeat(c[None], _EDGE_POINTS, axis=0)
+            probe[:, a] = line
+            ok = np.all(np.isfinite(_evaluate(likelihood, names, probe, fixed_params)), axis=1)
+            first = int(np.argmax(ok))  # the last point, the centre, is inside
+            outside, inner = line[max(first - 1, 0)], line[first]
+        low, high = (inner, prior.high) if above else (prior.low, inner)
+        if low < high:
+            narrowed[name] = Uniform(float(low), float(high))
+    return posterior.priors.replace(**narrowed) if narrowed else None
 
 
 def regressed_pi(
