@@ -311,4 +311,4 @@ def test_errors_name_the_part_of_the_analysis():
     with pytest.raises(RecordingError, match="release: no motion found"):
         energy_decay(t, 1e-6 * rng.standard_normal(t.size), 1e-7 * rng.standard_normal(t.size))
     with pytest.raises(RecordingError, match="turning points: "):
-        energy_decay(t[:300], x[:300], v[:300])
+        energy_decay(t[:200], x[:200], v[:200])
