@@ -1011,7 +1011,10 @@ def energy_decay(
         :data:`~bayestribo.signal.coarse.MIN_COARSE_TURNING_POINTS` with the skipped
         oscillation analysed too where it is what the record lacks
         (:func:`~bayestribo.signal.coarse.coarse_window`; a
-        :class:`~bayestribo.errors.CoarseSignalWarning` says so). Given, it is kept.
+        :class:`~bayestribo.errors.CoarseSignalWarning` says so); for a free decay
+        that stops or ends within three oscillations, likewise down to two
+        (:mod:`bayestribo.signal.short`; a
+        :class:`~bayestribo.errors.ShortAnalysisWarning` says so). Given, it is kept.
     offset : float, "auto", "constant" or None
         How the equilibrium of the displacement is found, as in
         :func:`bayestribo.signal.peaks.find_peaks`: "auto" from the turning points
