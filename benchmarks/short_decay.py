@@ -16,8 +16,15 @@ Each is fitted by :func:`bayestribo.fit` with seed ``i`` and tallied as in
 parameter hold the truth), flagged (not covered, a MisfitWarning or one of its
 subclasses said so), missed, silently wrong (|z| > 3.29 unflagged), and z's mean and sd.
 
+``--prepared`` instead prepares every bundled run (``data/runs/*.csv``) and every
+recording in ``/work/shared/external-data`` (read as ``real.py`` reads them) by
+:func:`bayestribo.inference.preparation.prepare`, the default fit's, and records a
+SHA-256 of each one's analysed window, Π increments and their variances (or its
+refusal): two packages whose digests agree give the same default fits, seed for seed.
+
 Run: ``python benchmarks/short_decay.py [--runs 20] [--cases stop-0.5 stop-0.8 cut-2]
-[--output short_decay]``; writes ``benchmarks/results/<output>.json``. The package is
+[--output short_decay]`` or ``python benchmarks/short_decay.py --prepared --output
+short_decay_prepared``; writes ``benchmarks/results/<output>.json``. The package is
 the one on ``PYTHONPATH`` (its directory and commit are recorded).
 """
 
@@ -109,11 +116,49 @@ def one_run(case: str, index: int) -> dict[str, Any]:
     return out
 
 
+def prepared_digests() -> dict[str, str]:
+    """File name -> SHA-256 of its prepared data (or ``refused: <message>``)."""
+    import hashlib
+
+    from real import load, recordings
+
+    from bayestribo.inference.preparation import prepare
+
+    files: dict[str, Callable[[], Any]] = {
+        path.name: (lambda path=path: path)
+        for path in sorted((HERE.parent / "data" / "runs").glob("*.csv"))
+    }
+    # the external recordings read as benchmarks/real.py reads them
+    files.update({name: (lambda name=name: load(name)[0]) for name in recordings()})
+    out: dict[str, str] = {}
+    for name, run in files.items():
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                p = prepare(run())
+        except Exception as exc:  # recorded, never silently dropped
+            out[name] = f"refused: {type(exc).__name__}: {exc}"
+            continue
+        h = hashlib.sha256()
+        d = p.decay
+        h.update(np.array([d.start_time, d.end_time, len(d.peaks)], dtype=float).tobytes())
+        for name in ("tau", "energy", "pi"):
+            h.update(np.ascontiguousarray(getattr(d, name), dtype=float).tobytes())
+        for value in vars(p.data).values():
+            if isinstance(value, np.ndarray) and value.dtype.kind == "f":
+                h.update(np.ascontiguousarray(value).tobytes())
+        out[name] = h.hexdigest()
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=20)
     parser.add_argument("--cases", nargs="+", choices=sorted(CASES), default=sorted(CASES))
     parser.add_argument("--output", default="short_decay", help="results/NAME.json")
+    parser.add_argument(
+        "--prepared", action="store_true", help="digests of the bundled runs' prepared data"
+    )
     args = parser.parse_args(argv)
     import bayestribo
 
@@ -124,6 +169,11 @@ def main(argv: list[str] | None = None) -> int:
         "package_commit": commit(package),
         "cases": {},
     }
+    if args.prepared:
+        results["prepared"] = prepared_digests()
+        print(results["prepared"])
+        print(f"wrote {write_results(args.output, results)}")
+        return 0
     for case in args.cases:
         rows = [one_run(case, i) for i in range(args.runs)]
         for r in rows:
