@@ -142,8 +142,8 @@ def prepared_digests() -> dict[str, str]:
         h = hashlib.sha256()
         d = p.decay
         h.update(np.array([d.start_time, d.end_time, len(d.peaks)], dtype=float).tobytes())
-        for name in ("tau", "energy", "pi"):
-            h.update(np.ascontiguousarray(getattr(d, name), dtype=float).tobytes())
+        for field in ("tau", "energy", "pi"):
+            h.update(np.ascontiguousarray(getattr(d, field), dtype=float).tobytes())
         for value in vars(p.data).values():
             if isinstance(value, np.ndarray) and value.dtype.kind == "f":
                 h.update(np.ascontiguousarray(value).tobytes())
