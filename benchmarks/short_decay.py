@@ -8,6 +8,8 @@ resolution; run ``i`` draws its noise from ``[80, i]``):
   pin sticks within two or three oscillations of the release, 0.1 s of rest after it;
 * ``cut-2``: μ_k = 0.0294, the record ending in motion 3 periods after the release (2
   periods after the skipped one), as ``short_checks.py``'s ``cut-2``;
+* ``end-2.1``: the same ending 2.1 periods after the release (4 turning points; a
+  record of 2 periods holds 3, its fourth at its last sample, and is refused);
 * ``seismometer-100``: ``benchmarks/seismometer.py``'s clean velocity alone (seed ``i +
   30``, so that seed 37 is run 7), cut 100 s after its start (ζ = 0.08, no contact).
 
@@ -76,6 +78,7 @@ CASES: dict[str, tuple[Callable[[int], Any], dict[str, float]]] = {
     "stop-0.5": (_paper(0.5, None), {"zeta": ZETA, "mu_k": 0.5}),
     "stop-0.8": (_paper(0.8, None), {"zeta": ZETA, "mu_k": 0.8}),
     "cut-2": (_paper(MU_K, 3.0 / F_HZ), {"zeta": ZETA, "mu_k": MU_K}),
+    "end-2.1": (_paper(MU_K, 2.1 / F_HZ), {"zeta": ZETA, "mu_k": MU_K}),
     "seismometer-100": (_seismometer(100.0), {"zeta": 0.08}),
 }
 
