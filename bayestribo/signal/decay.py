@@ -148,6 +148,7 @@ from bayestribo.signal.peaks import Peaks, estimate_noise, estimate_offset, find
 from bayestribo.signal.period import dominant_period, sample_step
 from bayestribo.signal.quantisation import QUANTISATION_NOISE_FACTOR, quantisation_step
 from bayestribo.signal.restarts import continue_clock
+from bayestribo.signal.short import short_decay_note
 from bayestribo.signal.spectrum import NoiseSpectrum, RestNoise, fit_line, noise_spectrum
 from bayestribo.signal.spikes import SpikeWarning, bridged, describe, find_spikes
 
@@ -1010,7 +1011,10 @@ def energy_decay(
         :data:`~bayestribo.signal.coarse.MIN_COARSE_TURNING_POINTS` with the skipped
         oscillation analysed too where it is what the record lacks
         (:func:`~bayestribo.signal.coarse.coarse_window`; a
-        :class:`~bayestribo.errors.CoarseSignalWarning` says so). Given, it is kept.
+        :class:`~bayestribo.errors.CoarseSignalWarning` says so); for a free decay
+        that stops or ends within three oscillations, likewise down to two
+        (:mod:`bayestribo.signal.short`; a
+        :class:`~bayestribo.errors.ShortAnalysisWarning` says so). Given, it is kept.
     offset : float, "auto", "constant" or None
         How the equilibrium of the displacement is found, as in
         :func:`bayestribo.signal.peaks.find_peaks`: "auto" from the turning points
@@ -1811,6 +1815,22 @@ def _analyse(
                 "gives a record that can be fitted",
                 CoarseSignalWarning,
             )
+    elif least_by_default and len(peaks) < skip + least:
+        # a short free decay (high friction stops it within two or three oscillations,
+        # or the record ends after two): analysed on what it holds, down to two
+        # oscillations, the first one too when it is what it lacks (signal/coarse.py)
+        chosen = coarse_window(
+            len(peaks),
+            lambda s: len(peaks) - s,
+            skip,
+            least,
+            keep_skip=skip != base_skip or skip_turning_points is not None,
+        )
+        if chosen.note is not None:
+            if chosen.skip != skip:
+                skipped = "0 oscillations"
+            skip, least = chosen.skip, chosen.least
+            warn(short_decay_note(len(peaks), chosen.note, motion_ended), ShortAnalysisWarning)
     min_turning_points = least
     needed = skip + int(min_turning_points)
     if len(peaks) < needed:
@@ -1834,6 +1854,16 @@ def _analyse(
                     f"after the last of a swing of {RESOLVED_STEPS:g} step(s) or more "
                     f"about the equilibrium: {kept} here)"
                 )
+        if least_by_default and coarse == (None, None) and skip == base_skip:
+            # below the short decay's least (signal/short.py): the count it needs
+            raise RecordingError(
+                f"turning points: the recording holds {len(peaks)} turning points after "
+                f"the release; {MIN_COARSE_TURNING_POINTS} are needed at least (two "
+                "oscillations, the first one after the release included; "
+                f"{skip + int(min_turning_points)} for the full analysis, "
+                f"{min_turning_points} after skipping {skipped}): is the record of a free "
+                "decay, and does it hold two oscillations of it?"
+            )
         if (
             skip_turning_points is None
             and skip == base_skip > 0

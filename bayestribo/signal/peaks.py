@@ -487,8 +487,17 @@ def find_peaks(
         tp[j], vp[j] = _refine(t, s, i, half_width)
 
     # a decay without friction fades into the noise: stop at the first small swing
+    # after the largest; a small swing before it is a wiggle of the rest before the
+    # release (a displacement integrated from a velocity wanders there), not the fade:
+    # the extrema up to it are left out
     if vp.size >= 2:
-        small = np.flatnonzero(np.abs(np.diff(vp)) < floor)
+        swings = np.abs(np.diff(vp))
+        small = np.flatnonzero(swings < floor)
+        before = small[small < int(np.argmax(swings))]
+        if before.size:
+            first = int(before[-1]) + 1
+            tp, vp, idx = tp[first:], vp[first:], idx[first:]
+            small = small[small >= first] - first
         if small.size:
             keep = int(small[0]) + 1
             tp, vp, idx = tp[:keep], vp[:keep], idx[:keep]
