@@ -9,7 +9,8 @@ comparison's progress lines are stamped with the CPU time since the fit began. W
 written to ``PATH-<mu>-<repeat>.prof`` (the profiler inflates Python-heavy stages).
 
 Run: ``python benchmarks/auto_stop_profile.py --mu 0.3 0.1 0.2 [--output NAME]``;
-writes ``benchmarks/results/<output>.json``: per record the CPU times, the verdict, its
+writes ``benchmarks/results/<output>.json`` (with the commit of the package imported,
+so that ``PYTHONPATH`` on another tree times that tree): per record the CPU times, the verdict, its
 adequacy and the chosen law's posterior mean and sd of each parameter.
 """
 
@@ -91,7 +92,11 @@ def main(argv: list[str] | None = None) -> int:
         rows.append(profile_one(mu, stats, args.repeats))
         print({k: v for k, v in rows[-1].items() if k != "progress"}, flush=True)
     if args.output:
-        print("wrote", write_results(args.output, {"source": commit(), "rows": rows}))
+        import bayestribo
+
+        tree = Path(bayestribo.__file__).resolve().parents[1]
+        source = {"package": commit(tree), "benchmark": commit()}
+        print("wrote", write_results(args.output, {"source": source, "rows": rows}))
     return 0
 
 
