@@ -334,3 +334,44 @@ def test_the_dissipation_is_integrated_only_at_the_swings_the_interpolation_miss
     assert not np.array_equal(out[:, :-1], want[:, :-1])  # interpolated there
     n = draws.shape[0]
     assert (1, n) in calls_made and (swings.size, n) not in calls_made
+
+
+def test_a_motion_no_friction_stops_has_its_stop_ratios_within_the_record(bundled_run):
+    """A friction law at μ_k = 0 (a start of the optimiser on its bound) never sticks:
+    its stop ratios are all infinite, found over the record's turning points, not over
+    the 100,000 half cycles its drag alone takes to bring the motion to rest; with
+    friction the motion is still followed past the record to where it sticks."""
+    prepared = pipeline.prepare(bundled_run, seed=1)
+    data = prepared.data
+    assert data.motion_ended
+    posterior = pipeline.build_posterior(data, law="viscous+coulomb+quadratic")
+    likelihood = posterior.likelihood
+    law = likelihood.law
+    values = {"zeta": 0.07, "mu_k": 0.0, "mu_s_ratio": 1.0, "c2": 0.0, "y0": float(data.y0)}
+    ratios = surrogate.stop_ratios(likelihood, values)
+    within, _ = law.turning_points(
+        values,
+        float(data.y0),
+        float(data.yp0),
+        tau_max=float(data.tau_end),
+        reference=likelihood.reference_amplitude,
+    )
+    assert ratios.size == within.size
+    assert np.all(np.isinf(ratios))
+    # the density's scan over μ_s/μ_k there is still the density at every grid point
+    from bayestribo.inference import start
+
+    rows, lp, _ = start._scan_ratio(posterior, start._vector(posterior, values))
+    assert np.all(np.isfinite(lp))
+    np.testing.assert_array_equal(lp, posterior(rows))
+    # with friction the motion sticks past the record's end, and is followed there
+    sticking = {**values, "zeta": 0.0, "mu_k": 0.002}
+    ratios = surrogate.stop_ratios(likelihood, sticking)
+    _, to_rest = law.turning_points(
+        sticking,
+        float(data.y0),
+        float(data.yp0),
+        reference=likelihood.reference_amplitude,
+    )
+    assert ratios.size == to_rest.size > within.size
+    assert np.all(np.isfinite(ratios))

@@ -385,6 +385,9 @@ def stop_ratios(likelihood: PiLikelihood, values: Mapping[str, float]) -> NDArra
     -------
     ndarray
         One value per turning point, in their order (inf where the friction is zero).
+        A motion whose friction terms are all off (their coefficients zero: μ_k = 0)
+        never sticks: every value is inf, given for the turning points up to the
+        record's end only.
     """
     law = likelihood.law
     data = likelihood.data
@@ -392,19 +395,24 @@ def stop_ratios(likelihood: PiLikelihood, values: Mapping[str, float]) -> NDArra
     law_values = {n: float(values[n]) for n in law.parameter_names}
     if "mu_s_ratio" in law_values:
         law_values["mu_s_ratio"] = 1.0
+    coef = law.coefficients({n: np.array([v]) for n, v in law_values.items()}, reference)[0]
+    frictions = CoefficientLayout.of(law).frictions
     # the model's Π runs to the end of motion when the record holds it (past the
-    # record's end, if the model moves longer), else to the record's end
+    # record's end, if the model moves longer), else to the record's end. A motion no
+    # friction stops has no stop ratio to find past the record: to its end of motion
+    # its drag alone takes up to 100,000 half cycles (a viscous+coulomb+quadratic start
+    # at μ_k = 0 on a sticking record, 1.2 s a scan of μ_s/μ_k)
+    frictionless = not any(np.any(coef[f.columns] != 0.0) for f in frictions)
     _, turns = law.turning_points(
         law_values,
         float(values["y0"]),
         float(data.yp0),
-        tau_max=math.inf if data.motion_ended else float(data.tau_end),
+        tau_max=math.inf if data.motion_ended and not frictionless else float(data.tau_end),
         reference=reference,
     )
     a = np.abs(np.asarray(turns, dtype=float))
-    coef = law.coefficients({n: np.array([v]) for n, v in law_values.items()}, reference)[0]
     mu = np.zeros(a.size)
-    for friction in CoefficientLayout.of(law).frictions:
+    for friction in frictions:
         mu += np.array([friction.force(float(x), coef[friction.columns]) for x in a])
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(mu > 0, a / mu, np.inf)
