@@ -14,6 +14,7 @@ __all__ = [
     "ClockRestartWarning",
     "CoarseSignalWarning",
     "ConvergenceWarning",
+    "CreepWarning",
     "FadeWarning",
     "FrequencyTrendWarning",
     "GapWarning",
@@ -154,6 +155,13 @@ class OffsetDriftWarning(MisfitWarning):
     release and after the motion differ beyond its noise (an offset that drifts). The
     displacement integrated from it wanders off its equilibrium between the rests, which
     the noise model does not hold (the message gives both levels and the difference)."""
+
+
+class CreepWarning(UserWarning):
+    """The mass still moves after the stop (a friction that vanishes towards zero speed
+    lets it creep towards the equilibrium): the creep is not taken as rest, and the
+    noise is measured elsewhere (the message gives the times, the drift and where the
+    noise comes from)."""
 
 
 class ShortAnalysisWarning(MisfitWarning):
