@@ -64,6 +64,7 @@ import numpy as np  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
+import _creep_sim  # noqa: E402
 from _laws_sim import OMEGA, Truth, metadata, simulate, true_dissipation  # noqa: E402
 from _machine import RESULTS, commit, niced_worker, write_results  # noqa: E402
 
@@ -110,7 +111,7 @@ def _band(d: dict[str, Any] | None) -> tuple[np.ndarray, ...] | None:
     return arr(d["amplitude"]), arr(d["mean"]), arr(d["interval"][0]), arr(d["interval"][1])
 
 
-def check(result: Any, truth: Truth) -> dict[str, Any]:
+def check(result: Any, truth_fn: Any) -> dict[str, Any]:
     """The law's and the turning points' ΔE(A) against the truth (see the module)."""
     out: dict[str, Any] = {}
     law = _band(result.dissipation)
@@ -120,7 +121,7 @@ def check(result: Any, truth: Truth) -> dict[str, Any]:
     amp = law[0]
     order = np.argsort(amp)
     picks = [int(order[0]), int(order[len(order) // 2]), int(order[-1])]
-    true = np.asarray(true_dissipation(truth, amp[picks]), dtype=float)
+    true = np.asarray(truth_fn(amp[picks]), dtype=float)
     out["amplitude_m"] = amp[picks].tolist()
     out["truth_J"] = true.tolist()
     out["law_interval_J"] = [[float(law[2][i]), float(law[3][i])] for i in picks]
@@ -138,7 +139,7 @@ def check(result: Any, truth: Truth) -> dict[str, Any]:
     return out
 
 
-def _fit(run: Any, law: str | None, seed: int, truth: Truth) -> dict[str, Any]:
+def _fit(run: Any, law: str | None, seed: int, truth_fn: Any) -> dict[str, Any]:
     from bayestribo import fit
     from bayestribo.errors import BayestriboError, MisfitWarning
 
@@ -167,7 +168,7 @@ def _fit(run: Any, law: str | None, seed: int, truth: Truth) -> dict[str, Any]:
         rec["verdict"] = comparison.get("verdict")
         rec["adequate"] = bool(comparison.get("adequate"))
     rec["shape_agreement"] = result.shape_agreement
-    rec.update(check(result, truth))
+    rec.update(check(result, truth_fn))
     covered = rec.get("law_covered")
     gap = rec.get("slope_gap", math.nan)
     if rec["exit"] == 1:
@@ -181,29 +182,58 @@ def _fit(run: Any, law: str | None, seed: int, truth: Truth) -> dict[str, Any]:
     return rec
 
 
-def one_run(strength: float, seed: int, velocity_only: bool) -> dict[str, Any]:
-    """Simulate record ``seed`` at ``strength``, fit it both ways, check the answers."""
+def draw_creep(strength: float, seed: int) -> _creep_sim.CreepTruth:
+    """The truth of record ``seed`` of the creep rig at ``strength`` = a_Δ/a_k."""
+    rng = np.random.default_rng([ENTROPY, 1, round(100 * strength), seed])
+    zeta = float(rng.uniform(0.001, 0.006))
+    a_k = float(rng.uniform(0.1, 0.25))
+    delta = float(rng.uniform(1.0, 2.0))
+    x0 = float(rng.uniform(5e-3, 7e-3))
+    v_s = float(rng.uniform(0.02, 0.05)) * _creep_sim.OMEGA * x0
+    return _creep_sim.CreepTruth(zeta, a_k, strength * a_k, v_s, delta, x0)
+
+
+def _record(rig: str, strength: float, seed: int, velocity_only: bool) -> tuple[Any, ...]:
+    """The run, the true ΔE(A) as a function of the swings [m] and the truth's record."""
     from bayestribo.io.run import Run
 
-    truth, x0 = draw(strength, seed)
-    t, xs, vs, facts = simulate(
-        truth, x0=x0, fs=FS, noise=NOISE, seed=[ENTROPY, round(100 * strength), seed, 1]
-    )
-    run = Run(
-        time=t,
-        displacement=None if velocity_only else xs,
-        velocity=vs,
-        metadata=metadata(),
-    )
+    noise_seed = [ENTROPY, round(100 * strength), seed, 1]
+    if rig == "creep":
+        creep = draw_creep(strength, seed)
+        t, xs, vs = _creep_sim.simulate(creep, noise_seed)
+        meta: dict[str, Any] = {}
+        peak = _creep_sim.OMEGA * creep.x0
+        told = {**creep.__dict__, "v_s_over_peak": creep.v_s / peak}
+        facts: dict[str, Any] = {}
+
+        def truth_fn(a: Any) -> Any:
+            return _creep_sim.true_dissipation(creep, a)
+    else:
+        truth, x0 = draw(strength, seed)
+        t, xs, vs, facts = simulate(truth, x0=x0, fs=FS, noise=NOISE, seed=noise_seed)
+        meta = metadata()
+        told = {**truth.__dict__, "x0_m": x0, "v_s_over_peak": truth.v_s / (OMEGA * x0)}
+
+        def truth_fn(a: Any) -> Any:
+            return true_dissipation(truth, a)
+
+    run = Run(time=t, displacement=None if velocity_only else xs, velocity=vs, metadata=meta)
+    return run, truth_fn, told, facts
+
+
+def one_run(strength: float, seed: int, velocity_only: bool, rig: str = "paper") -> dict[str, Any]:
+    """Simulate record ``seed`` at ``strength``, fit it both ways, check the answers."""
+    run, truth_fn, told, facts = _record(rig, strength, seed, velocity_only)
     out: dict[str, Any] = {
+        "rig": rig,
         "strength": strength,
         "seed": seed,
         "velocity_only": velocity_only,
-        "truth": {**truth.__dict__, "x0_m": x0, "v_s_over_peak": truth.v_s / (OMEGA * x0)},
+        "truth": told,
         "simulation": facts,
     }
     for name, law in zip(FITS, (None, "auto"), strict=True):
-        out[name] = _fit(run, law, seed, truth)
+        out[name] = _fit(run, law, seed, truth_fn)
     return out
 
 
@@ -247,6 +277,7 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=20)
     parser.add_argument("--workers", type=int, default=1)
     parser.add_argument("--velocity-only", action="store_true")
+    parser.add_argument("--rig", choices=("paper", "creep"), default="paper")
     parser.add_argument("--resume", action="store_true")
     parser.add_argument("--report-only", action="store_true")
     parser.add_argument("--output", default=NAME)
@@ -263,7 +294,7 @@ def main() -> None:
             (s, k) for k in range(1, args.seeds + 1) for s in args.strengths if (s, k) not in done
         ]
         with ProcessPoolExecutor(args.workers, initializer=niced_worker) as pool:
-            futures = [pool.submit(one_run, s, k, args.velocity_only) for s, k in todo]
+            futures = [pool.submit(one_run, s, k, args.velocity_only, args.rig) for s, k in todo]
             for future in as_completed(futures):
                 run = future.result()
                 runs.append(run)
@@ -286,6 +317,7 @@ def main() -> None:
             "rate_Hz": FS,
             "noise_x_resolution": NOISE,
             "velocity_only": args.velocity_only,
+            "rig": args.rig,
             "slope_tolerance": SLOPE_TOLERANCE,
             "entropy": ENTROPY,
         },
