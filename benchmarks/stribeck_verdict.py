@@ -32,8 +32,16 @@ Each record is fitted with the default law and with ``law="auto"``, as the CLI's
 A fit is *refused* (exit 2), *flagged* (exit 1), *covered* (exit 0, the truth inside
 the law's band at the three swings and the slopes within 0.5) or *silently wrong*
 (exit 0 and the truth outside the band at one of the three swings, or the slopes
-apart by more than 0.5). A flagged fit's honest answer is the law-free one: whether
-the turning points' band covers the truth is counted too.
+apart by more than 0.5); *confidently* silently wrong when the truth is beyond 3.29
+sd of the band there (sd = the 95 % band's width / 3.92) or the slopes are apart. A
+flagged fit's honest answer is the law-free one: whether the turning points' band
+covers the truth is counted too.
+
+``--rig creep`` simulates instead the 5 Hz record of the ``stribeck`` branches
+(``benchmarks/_creep_sim.py``: 500 Hz, 6 s, noise 5e-7 m and 5e-5 m/s, no metadata)
+whose friction is regularised below 0.1 mm/s, so that the mass creeps on towards the
+equilibrium after its last half cycle; a_k ~ U(0.1, 0.25) m/s², a_Δ = s a_k,
+ζ ~ U(0.001, 0.006), δ ~ U(1, 2), x₀ ~ U(5, 7) mm, v_s ~ U(0.02, 0.05) Ωx₀.
 
 Run (the package imported from ``PYTHONPATH``; the results name its tree's commit)::
 
@@ -73,6 +81,7 @@ ENTROPY = 2039
 FS = 5000.0
 NOISE = 10.0
 SLOPE_TOLERANCE = 0.5  # issue 39's goal: log-log slopes within 0.5
+Z_CONFIDENT = 3.2905  # two-sided 99.9 % of the normal
 FITS = ("default", "auto")
 
 
@@ -237,6 +246,24 @@ def one_run(strength: float, seed: int, velocity_only: bool, rig: str = "paper")
     return out
 
 
+def band_z(rec: dict[str, Any], key: str = "law_interval_J") -> list[float]:
+    """(truth - band's centre) over the band's sd, (high - low)/3.92, at the three swings."""
+    out = []
+    for (lo, hi), true in zip(rec[key], rec["truth_J"], strict=True):
+        sd = (hi - lo) / 3.92
+        out.append((true - 0.5 * (lo + hi)) / sd if sd > 0 else math.inf)
+    return out
+
+
+def confidently_wrong(rec: dict[str, Any]) -> bool:
+    """Silently wrong with the truth beyond 3.29 sd of the band (two-sided 99.9 %) at
+    one of the three swings, or the slopes apart by more than the tolerance."""
+    if rec.get("outcome") != "silently wrong":
+        return False
+    far = max(abs(z) for z in band_z(rec)) > Z_CONFIDENT
+    return bool(far or rec.get("slope_gap", 0.0) > SLOPE_TOLERANCE)
+
+
 def summarise(runs: list[dict[str, Any]]) -> dict[str, Any]:
     """Counts of each outcome by strength and fit."""
     table: dict[str, Any] = {}
@@ -260,6 +287,14 @@ def summarise(runs: list[dict[str, Any]]) -> dict[str, Any]:
                 "silently_wrong_seeds": [
                     r["seed"] for r in rows if r[name].get("outcome") == "silently wrong"
                 ],
+                "confidently_silently_wrong_seeds": [
+                    r["seed"] for r in rows if confidently_wrong(r[name])
+                ],
+                "max_abs_z_silently_wrong": {
+                    str(r["seed"]): max(abs(z) for z in band_z(r[name]))
+                    for r in rows
+                    if r[name].get("outcome") == "silently wrong"
+                },
                 "median_cpu_s": float(np.median([rec["cpu_s"] for rec in recs])),
             }
     return table
