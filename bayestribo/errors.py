@@ -157,11 +157,13 @@ class OffsetDriftWarning(MisfitWarning):
     the noise model does not hold (the message gives both levels and the difference)."""
 
 
-class CreepWarning(UserWarning):
-    """The mass still moves after the stop (a friction that vanishes towards zero speed
-    lets it creep towards the equilibrium): the creep is not taken as rest, and the
-    noise is measured elsewhere (the message gives the times, the drift and where the
-    noise comes from)."""
+class CreepWarning(MisfitWarning):
+    """The mass still moves after the stop: it creeps towards the equilibrium, which no
+    law's motion does (a friction sticks, a drag oscillates on), so the friction
+    vanishes towards zero speed and the law's ΔE(A) at the smallest swings is not to be
+    trusted; the creep is not taken as rest, the noise is measured elsewhere, and the
+    turning points' ΔE(A) is the answer. The message gives the times, the drift and
+    where the noise comes from. A misfit: ``fit`` exits 1."""
 
 
 class ShortAnalysisWarning(MisfitWarning):

@@ -1686,8 +1686,11 @@ def _analyse(
     noise = _noise(t, x, v_rest, rest_until, rest_stop, period, derived, jitter)
     if creep is not None:
         warn(
-            f"rest: {creep.describe()}. That is motion, not rest: the noise is measured "
-            f"from the {noise.source} instead of the rest after the stop",
+            f"rest: {creep.describe()}. No law's motion creeps (a friction sticks, a drag "
+            "oscillates on): the friction vanishes towards zero speed, and a law's ΔE(A) "
+            "at the smallest swings is not to be trusted; the turning points' ΔE(A) "
+            "(printed as 'turning points (law-free)') holds whatever the law. The creep "
+            f"is not rest: the noise is measured from the {noise.source} instead",
             CreepWarning,
         )
     motion_ended = stop_time is not None and faded_at is None
