@@ -14,6 +14,7 @@ __all__ = [
     "ClockRestartWarning",
     "CoarseSignalWarning",
     "ConvergenceWarning",
+    "CreepWarning",
     "FadeWarning",
     "FrequencyTrendWarning",
     "GapWarning",
@@ -158,6 +159,15 @@ class OffsetDriftWarning(MisfitWarning):
     release and after the motion differ beyond its noise (an offset that drifts). The
     displacement integrated from it wanders off its equilibrium between the rests, which
     the noise model does not hold (the message gives both levels and the difference)."""
+
+
+class CreepWarning(MisfitWarning):
+    """The mass still moves after the stop: it creeps towards the equilibrium, which no
+    law's motion does (a friction sticks, a drag oscillates on), so the friction
+    vanishes towards zero speed and the law's ΔE(A) at the smallest swings is not to be
+    trusted; the creep is not taken as rest, the noise is measured elsewhere, and the
+    turning points' ΔE(A) is the answer. The message gives the times, the drift and
+    where the noise comes from. A misfit: ``fit`` exits 1."""
 
 
 class ShortAnalysisWarning(MisfitWarning):

@@ -7,7 +7,7 @@ motion, in physical units,
 
     a_d(v) = 2ζΩ v + q v|v| + b |v|^α sgn v                (drag, per unit mass)
     a_f    = μ(|ẋ|) N/m + η Ω² |X_n|                          (friction, per unit mass)
-    μ(w)   = μ_k + (μ_s - μ_k) exp(-w / v_s)  (Stribeck; μ_k when v_s = 0)
+    μ(w)   = μ_k + (μ_s - μ_k) exp(-(w / v_s)^δ)  (Stribeck; μ_k when v_s = 0)
 
 is integrated with :func:`scipy.integrate.solve_ivp` (DOP853, rtol 1e-11) half cycle
 by half cycle (each ends on the event ẋ = 0; within one the friction's sign is
@@ -84,6 +84,8 @@ class Truth:
         Friction per unit amplitude, dimensionless (a = η Ω² |X_n|).
     mu_s_stribeck, v_s : float
         Stribeck friction: static μ_s and the velocity scale v_s [m/s] (v_s = 0: none).
+    stribeck_exponent : float
+        Stribeck exponent δ: μ falls as exp(-(w/v_s)^δ) (1 by default).
     """
 
     zeta: float = 0.0
@@ -95,6 +97,7 @@ class Truth:
     eta: float = 0.0
     mu_s_stribeck: float = 0.0
     v_s: float = 0.0
+    stribeck_exponent: float = 1.0
 
     @property
     def stribeck(self) -> bool:
@@ -110,7 +113,8 @@ class Truth:
     def mu(self, w: float) -> float:
         """Friction coefficient at speed w >= 0 (Stribeck, or μ_k)."""
         if self.stribeck:
-            return self.mu_k + (self.mu_s_stribeck - self.mu_k) * math.exp(-w / self.v_s)
+            fall = math.exp(-((w / self.v_s) ** self.stribeck_exponent))
+            return self.mu_k + (self.mu_s_stribeck - self.mu_k) * fall
         return self.mu_k
 
     def friction(self, w: float, turning: float) -> float:

@@ -130,6 +130,7 @@ from bayestribo.signal.coarse import (
     swing_end,
 )
 from bayestribo.signal.coverage import ShortAnalysisWarning, coverage_note
+from bayestribo.signal.creep import Creep, CreepWarning, creeping_rest
 from bayestribo.signal.integration import (
     integrate_oscillation,
     oscillation_energy,
@@ -930,6 +931,17 @@ def _offset_drift(
     return before + (after - before) * np.clip((t - t0) / (t1 - t0), 0.0, 1.0)
 
 
+def _creep(
+    t: NDArray, x: NDArray, v: NDArray, stop: float | None, period: float, derived: str | None
+) -> Creep | None:
+    """The creep in the rest after ``stop`` (:func:`~bayestribo.signal.creep.creeping_rest`)
+    of a record with both channels recorded, from a quarter ``period`` after it."""
+    if derived is not None or stop is None:
+        return None
+    _, tail = _rest_bounds(t, None, stop, 0.25 * period)
+    return creeping_rest(t, x, v, tail)
+
+
 def _rest_noise(
     t: NDArray,
     x: NDArray,
@@ -1715,7 +1727,19 @@ def _analyse(
     rest_until = None if released_at is None else release
     # the oscillation a fade leaves under the noise is not the rest's noise
     v_rest = v if span.fade_time is None else _without_faded(t, v, stop_time, peaks, period)
-    noise = _noise(t, x, v_rest, rest_until, stop_time, period, derived, jitter)
+    # a mass that creeps on after the stop is not at rest: its creep is not the noise
+    creep = None if span.fade_time is not None else _creep(t, x, v, stop_time, period, derived)
+    rest_stop = stop_time if creep is None else None
+    noise = _noise(t, x, v_rest, rest_until, rest_stop, period, derived, jitter)
+    if creep is not None:
+        warn(
+            f"rest: {creep.describe()}. No law's motion creeps (a friction sticks, a drag "
+            "oscillates on): the friction vanishes towards zero speed, and a law's ΔE(A) "
+            "at the smallest swings is not to be trusted; the turning points' ΔE(A) "
+            "(printed as 'turning points (law-free)') holds whatever the law. The creep "
+            f"is not rest: the noise is measured from the {noise.source} instead",
+            CreepWarning,
+        )
     motion_ended = stop_time is not None and faded_at is None
     truncated = False
     coarse = coarse_steps(
@@ -1926,12 +1950,12 @@ def _analyse(
     else:
         scaling = Scaling(omega, 1.0, friction_defined=False)
 
-    rest_noise = _rest_noise(t, x, v_rest, rest_until, stop_time, period, derived)
+    rest_noise = _rest_noise(t, x, v_rest, rest_until, rest_stop, period, derived)
     if derived is None and coarse[1] is None:
         # (a coarse velocity at rest sits on the level nearest its zero: the rest says
         # where that level is, not where the zero is, and the rounding, which averages
         # out while the velocity moves, is the variances' (signal/coarse.py))
-        at_rest = _rest_samples(v, t, rest_until, stop_time, 0.25 * period)
+        at_rest = _rest_samples(v, t, rest_until, rest_stop, 0.25 * period)
         if at_rest.size >= MIN_QUIET_SAMPLES:
             velocity_offset = float(np.median(at_rest))
             v = v - velocity_offset
