@@ -186,10 +186,11 @@ def _unidentified(posterior: Posterior) -> Callable[[NDArray], list[str]]:
     ridge the record does not identify (a term at zero force, or no more increments
     than sampled parameters): a run stops once its rule cannot be met by the ceiling
     and the draws say why (:func:`~bayestribo.inference.identifiability.
-    unidentified_reasons`), instead of walking the ridge to the ceiling."""
-    n_increments = int(np.asarray(posterior.likelihood.data.increments).size) or None
+    unidentified_reasons`), instead of walking the ridge to the ceiling. The posterior
+    is read only when the rule asks (after a check the run cannot meet)."""
 
     def unseen(draws: NDArray) -> list[str]:
+        n_increments = int(np.asarray(posterior.likelihood.data.increments).size) or None
         return unidentified_reasons(draws, posterior.names, posterior.law, n_increments)
 
     return unseen
