@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from bayestribo.inference.identifiability import unidentified_reasons
 from bayestribo.model.laws import get_law
@@ -45,3 +46,25 @@ def test_friction_at_zero_names_the_static_ratio():
     draws[:, 0] = np.abs(rng.normal(0.0, 1e-4, 4000))
     reasons = unidentified_reasons(draws, NAMES, get_law("coulomb+power"))
     assert len(reasons) == 1 and "mu_s_ratio" in reasons[0] and "law='power'" in reasons[0]
+
+
+def test_no_more_increments_than_parameters_is_named_and_fewer_parameters_are_not():
+    """The count rule: five sampled parameters on five increments are not identified
+    (ζ_α well clear of its null), on six they are not named by it."""
+    rng = np.random.default_rng(2)
+    draws = _draws(rng.uniform(0.02, 0.04, 4000), rng)
+    law = get_law("coulomb+power")
+    assert unidentified_reasons(draws, NAMES, law) == []
+    reasons = unidentified_reasons(draws, NAMES, law, n_increments=5)
+    assert len(reasons) == 1
+    assert "5 sampled parameters" in reasons[0] and "5 increments" in reasons[0]
+    assert "coulomb+power" in reasons[0]
+    assert unidentified_reasons(draws, NAMES, law, n_increments=6) == []
+
+
+def test_a_bad_number_of_increments_names_the_argument():
+    law = get_law("coulomb+power")
+    draws = np.zeros((4, len(NAMES)))
+    for bad in (0, -3, 2.5, True):
+        with pytest.raises(ValueError, match="n_increments: expected a positive integer"):
+            unidentified_reasons(draws, NAMES, law, n_increments=bad)

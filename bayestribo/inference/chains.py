@@ -12,6 +12,7 @@ stages in a row, from a posterior.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from dataclasses import replace
 from functools import partial
 from typing import Any
 
@@ -143,15 +144,9 @@ def sample_from(
                 posterior, theta, cov, ratio_range, settings.n_ensembles, settings.n_walkers, rng
             )
     if run is None:
-        # a ridge the record does not identify (a term at zero force: its other
-        # parameters have no effect) stops the run once its rule cannot be met by the
-        # ceiling (inference/identifiability.py), instead of walking it to the ceiling
-        def unseen(draws: NDArray) -> list[str]:
-            return unidentified_reasons(draws, posterior.names, posterior.law)
-
         # -- a failure inside sampling is a reported non-convergence (inference/modes.py) --
         run = run_or_failure(
-            partial(run_ensembles, unidentified=unseen),
+            partial(run_ensembles, unidentified=_unidentified(posterior)),
             posterior,
             walkers,
             settings,
@@ -169,6 +164,36 @@ def sample_from(
         if posterior(point[None])[0] > posterior(theta[None])[0]:
             theta = point
     return Sampled(posterior, theta, run, settings, checked, target, pointwise)
+
+
+def _ridge_run(run: SamplerRun, checked: SurrogateCheck) -> SamplerRun:
+    """A surrogate's run stopped on a ridge, its reasons saying that its draws are the
+    surrogate's, its check failed and the exact posterior not sampled."""
+    return replace(
+        run,
+        converged=False,
+        reasons=[
+            *run.reasons,
+            "the draws are the quadratic surrogate's, whose check against the exact "
+            f"posterior failed (importance weights' cv {checked.weight_cv:.3g}); the exact "
+            "posterior, on the same ridge, was not sampled",
+        ],
+    )
+
+
+def _unidentified(posterior: Posterior) -> Callable[[NDArray], list[str]]:
+    """Why draws of ``posterior`` (or of its surrogate, in the same coordinates) show a
+    ridge the record does not identify (a term at zero force, or no more increments
+    than sampled parameters): a run stops once its rule cannot be met by the ceiling
+    and the draws say why (:func:`~bayestribo.inference.identifiability.
+    unidentified_reasons`), instead of walking the ridge to the ceiling. The posterior
+    is read only when the rule asks (after a check the run cannot meet)."""
+
+    def unseen(draws: NDArray) -> list[str]:
+        n_increments = int(np.asarray(posterior.likelihood.data.increments).size) or None
+        return unidentified_reasons(draws, posterior.names, posterior.law, n_increments)
+
+    return unseen
 
 
 def _first_surrogate(posterior: Posterior, theta: NDArray, cov: NDArray) -> Posterior | None:
@@ -232,7 +257,14 @@ def _sample_surrogate(
             target = surrogate_posterior(posterior, centre, scale)
         if target is None or not target.uses_compiled:
             return None, checked, None, None
-        run = run_or_failure(run_ensembles, target, walkers, settings, seed=seed, progress=progress)
+        run = run_or_failure(
+            partial(run_ensembles, unidentified=_unidentified(posterior)),
+            target,
+            walkers,
+            settings,
+            seed=seed,
+            progress=progress,
+        )
         flat = run.chains.reshape(-1, run.chains.shape[-1])
         if flat.shape[0] < 2 or not np.all(np.isfinite(flat)):
             return None, checked, None, None
@@ -242,6 +274,12 @@ def _sample_surrogate(
         checked = check(posterior, target, flat, rng, attempt=attempt)
         if checked.passed:
             return run, checked, target, None
+        if run.ridge:
+            # stopped on a ridge the record does not identify: another surrogate, or
+            # the exact posterior, walks the same ridge and stops unconverged too; the
+            # law is reported not converged with this run's draws (not the exact
+            # posterior's, and so said)
+            return _ridge_run(run, checked), checked, target, None
         if attempt >= 2 and checked.weight_cv <= NEAR_CORRECTED_CV:
             # near the correction's reach: a refused correction or a check a little
             # beyond it is followed by further surrogates (up to CORRECTING_ATTEMPTS in

@@ -146,11 +146,17 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
     # -- end of the mode check --
     posterior, run = sampled.posterior, sampled.run
     if not run.converged:
-        # a term whose force the draws put at zero: its other parameters are not
-        # identified, which says why the walkers did not converge (inference/
-        # identifiability.py)
+        # a term whose force the draws put at zero, or no more increments than
+        # parameters: they are not identified, which says why the walkers did not
+        # converge (inference/identifiability.py; a run stopped on that ridge says so
+        # already)
         flat_draws = run.chains.reshape(-1, run.chains.shape[-1])
-        unseen = unidentified_reasons(flat_draws, run.names, posterior.law)
+        n_increments = int(np.asarray(posterior.likelihood.data.increments).size) or None
+        unseen = [
+            reason
+            for reason in unidentified_reasons(flat_draws, run.names, posterior.law, n_increments)
+            if reason not in run.reasons
+        ]
         if unseen:
             run = replace(run, reasons=[*run.reasons, *unseen])
             sampled = replace(sampled, run=run)

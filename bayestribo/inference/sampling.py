@@ -224,6 +224,9 @@ class SamplerRun:
     walker_acceptance : ndarray or None
         emcee's acceptance fraction of each walker over the whole run, shape
         (ensembles, walkers); None where no sampler ran.
+    ridge : bool
+        Stopped before its ceiling on a ridge the record does not identify (the
+        ``unidentified`` rule of :func:`run_ensembles`; its reasons say so).
     """
 
     chains: NDArray
@@ -239,6 +242,7 @@ class SamplerRun:
     reasons: list[str] = field(default_factory=list)
     names: tuple[str, ...] = ()
     walker_acceptance: NDArray | None = None
+    ridge: bool = False
 
     def summary(self, prob: float = 0.95) -> dict[str, ParameterSummary]:
         """Posterior summary of each parameter over all ensembles' thinned draws.
@@ -526,7 +530,8 @@ def run_ensembles(
                         f"stopped at {steps} steps: the rule needs at least {need:.0f} "
                         f"(burn-in and {multiple:g} autocorrelation times "
                         f"of {np.max(tau):.0f} steps), beyond the ceiling of "
-                        f"{settings.max_steps}"
+                        f"{settings.max_steps}",
+                        *unseen,
                     ]
                     break
             if bar is not None:
@@ -594,6 +599,7 @@ def run_ensembles(
         reasons=reasons,
         names=tuple(labels),
         walker_acceptance=ensembles.walker_acceptance(),
+        ridge=bool(hopeless),
     )
 
 
