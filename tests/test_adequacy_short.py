@@ -90,6 +90,14 @@ def test_a_record_of_four_turning_points_is_checked_not_refused(coarse):
     assert checks["peaks"]["passed"] is not None
 
 
+def test_an_analysis_cut_before_the_records_end_is_not_called_the_records_end(coarse):
+    # the coarse analysis ends at its last resolved turning point (0.18 s), long before
+    # the record's 0.9 s: the statement must not say the record ends there
+    statement = _by_key(coarse)["extinction"]["statement"]
+    assert coarse.decay.end_time < 0.5
+    assert "the analysis ends at" in statement and "the record ends at" not in statement
+
+
 def test_the_checks_not_run_are_named_in_text_and_json(coarse):
     assert not coarse.adequate
     assert f"not run: {CONSTANCY}, {HALVES}" in coarse.verdict

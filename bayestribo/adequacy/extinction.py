@@ -66,7 +66,8 @@ class ExtinctionCheck:
         Detected end of motion [s after the analysis start]; None when the record
         ends before the motion does.
     record_end : float
-        End of the analysed record [s after the analysis start].
+        End of the analysed window [s after the analysis start]: the record's end, or
+        where the analysis was cut before it (a fade, a coarse or short record).
     averaged, exact : ndarray
         Predicted durations per draw [s] (``inf`` where the motion never stops):
         Eq. 38, and the exact model's end as the record's is detected.
@@ -139,8 +140,10 @@ class ExtinctionCheck:
         pred = f"predicted end of motion: exact model {fmt(ex)}, {averaged}"
         if self.measured is None:
             return (
-                f"{pred}; the record ends at {self.record_end:.4g} s while still moving "
-                f"({'consistent' if self.consistent() else 'not consistent'} with the prediction)"
+                f"{pred}; the analysis ends at {self.record_end:.4g} s with the motion going "
+                f"on, {'consistent' if self.consistent() else 'not consistent'} with the "
+                "prediction (the record ends in motion, or the analysis was cut before its "
+                "end: a fade into the noise, a coarse or short record)"
             )
         verdict = "inside" if self.consistent() else "outside"
         return (

@@ -212,7 +212,7 @@ def plot_extinction(check: ExtinctionCheck, ax: Any = None) -> Any:
     ax.set_ylim(-0.7, 1.7)
     ax.set_yticks([1, 0], [r[0] for r in rows])
     ax.xaxis.set_major_locator(MaxNLocator(6))
-    what = "measured end" if check.measured is not None else "end of the record (still moving)"
+    what = "measured end" if check.measured is not None else "end of the analysis (still moving)"
     ax.set_xlabel(f"predicted end of motion − {what} [ms]")
     ax.grid(alpha=0.3, axis="x")
     ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
