@@ -10,6 +10,7 @@ import warnings
 
 import numpy as np
 import pytest
+from _coarse_decay import coarse_record
 
 from bayestribo.adequacy import check_adequacy
 from bayestribo.adequacy.check import _adequate, _verdict, default_window
@@ -28,35 +29,12 @@ CONSTANCY = "constant ζ and friction along the decay"
 
 
 def _coarse_run(steps: float = 3.0, placement: float = 0.45) -> Run:
-    """A viscous + Coulomb decay at 10 kHz (32.6 Hz, from 2 mm, sticking, closed form
-    half cycle by half cycle), both channels rounded to 1/``steps`` of their swing on
-    levels shifted by ``placement`` of a step; at 3 steps and 0.45 the fit analyses it
-    on 4 turning points (two oscillations, the skipped one included)."""
-    f, zeta, xc = 32.6, 0.0236, 6.2e-6
-    w = 2 * math.pi * f
-    wd = w * math.sqrt(1 - zeta**2)
-    t = np.arange(0, 0.9, 1e-4)
-    x, v = np.full(t.size, 2e-3), np.zeros(t.size)
-    t0, amp, direction = 0.1, 2e-3, -1.0
-    while abs(amp) > 2 * xc:
-        centre = -direction * xc
-        m = (t >= t0) & (t < t0 + math.pi / wd)
-        s = t[m] - t0
-        env = (amp - centre) * np.exp(-zeta * w * s)
-        x[m] = centre + env * (np.cos(wd * s) + zeta * w / wd * np.sin(wd * s))
-        v[m] = -env * w * w / wd * np.sin(wd * s)
-        amp = centre + (amp - centre) * -math.exp(-zeta * w * math.pi / wd)
-        t0 += math.pi / wd
-        direction = -direction
-    x[t >= t0] = amp
-    qx, qv = np.ptp(x) / steps, np.ptp(v) / steps
-    u = placement
-    return Run(
-        time=t,
-        displacement=(np.round(x / qx + u) - u) * qx,
-        velocity=(np.round(v / qv + u) - u) * qv,
-        metadata=dict(RIG),
-    )
+    """The coarse decay of ``_coarse_decay.coarse_record`` (both channels rounded to
+    1/``steps`` of their swing on levels shifted by ``placement`` of a step) as a run of
+    the paper's rig; at 3 steps and 0.45 the fit analyses it on 4 turning points (two
+    oscillations, the skipped one included)."""
+    t, x, v, _, _ = coarse_record(steps, placement)
+    return Run(time=t, displacement=x, velocity=v, metadata=dict(RIG))
 
 
 @pytest.fixture(scope="module")

@@ -10,6 +10,7 @@ import warnings
 
 import numpy as np
 import pytest
+from _coarse_decay import coarse_record
 
 from bayestribo.errors import RecordingError
 from bayestribo.inference.priors import default_priors
@@ -102,35 +103,6 @@ def test_the_rounding_variances_match_the_spread_of_rounded_records():
     assert np.median(variance / white) > 3
 
 
-def _coarse_record(steps: float = 10.0, placement: float = 0.0):
-    """A viscous + Coulomb decay at 10 kHz (32.6 Hz, from 2 mm, sticking), both channels
-    rounded to 1/``steps`` of their swing on levels shifted by ``placement`` of a step
-    from the zero, with 0.1 s of rest before and after."""
-    f, zeta, xc = 32.6, 0.0236, 6.2e-6
-    w = 2 * math.pi * f
-    wd = w * math.sqrt(1 - zeta**2)
-    fs = 10_000.0
-    t = np.arange(0, 0.9, 1 / fs)
-    x = np.full(t.size, 2e-3)
-    v = np.zeros(t.size)
-    t0, amp = 0.1, 2e-3
-    direction = -1.0
-    while abs(amp) > 2 * xc:
-        centre = -direction * xc
-        m = (t >= t0) & (t < t0 + math.pi / wd)
-        s = t[m] - t0
-        env = (amp - centre) * np.exp(-zeta * w * s)
-        x[m] = centre + env * (np.cos(wd * s) + zeta * w / wd * np.sin(wd * s))
-        v[m] = -env * w * w / wd * np.sin(wd * s)
-        amp = centre + (amp - centre) * -math.exp(-zeta * w * math.pi / wd)
-        t0 += math.pi / wd
-        direction = -direction
-    x[t >= t0] = amp
-    qx, qv = np.ptp(x) / steps, np.ptp(v) / steps
-    u = placement
-    return t, (np.round(x / qx + u) - u) * qx, (np.round(v / qv + u) - u) * qv, (qx, qv), t0
-
-
 @pytest.mark.parametrize("placement", [0.0, 0.37])
 def test_a_coarse_record_ends_its_analysis_at_the_last_resolved_swing(placement):
     """10 steps across the swing on both channels: the velocity reads 0 cycles before
@@ -140,7 +112,7 @@ def test_a_coarse_record_ends_its_analysis_at_the_last_resolved_swing(placement)
     levels off the zero, the velocity's rest reads the level nearest its zero: taken
     for an offset, it moved every moving sample by a third of a step (residuals of ±5
     standard deviations alternating with the half cycles)."""
-    t, x, v, (qx, _), _ = _coarse_record(placement=placement)
+    t, x, v, (qx, _), _ = coarse_record(placement=placement)
     with warnings.catch_warnings():
         warnings.simplefilter("error", ShortAnalysisWarning)
         decay = energy_decay(t, x, v)
@@ -161,7 +133,7 @@ def test_a_coarse_record_ends_its_analysis_at_the_last_resolved_swing(placement)
     # the increments' errors against the record before rounding
     sl = np.searchsorted(t, decay.t)
     sc = decay.scaling
-    _, x_, v_, _, _ = _coarse_record(steps=1e9)
+    _, x_, v_, _, _ = coarse_record(steps=1e9)
     y = (x_[sl] - decay.equilibrium - decay.equilibrium_drift * (decay.t - decay.start_time)) / (
         sc.length_scale
     )
@@ -212,7 +184,7 @@ def test_channels_rounded_to_five_steps_are_one_motion():
     from bayestribo.io.run import Run
     from bayestribo.signal.channels import channel_consistency, check_channels
 
-    t, x, v, _, _ = _coarse_record(steps=5.0, placement=0.37)
+    t, x, v, _, _ = coarse_record(steps=5.0, placement=0.37)
     run = Run(time=t, displacement=x, velocity=v, metadata={})
     check_channels(run)
     assert channel_consistency(run).correlation > 0.95
@@ -223,7 +195,7 @@ def test_a_coarse_displacement_gives_the_frequency_of_its_velocitys_zeros(placem
     """5 steps across the swing: the decrement read off turning points on the levels is
     no measurement (it made the natural frequency 1.4 times the record's); the damped
     frequency of the turning times is taken, within the rounding's timing error."""
-    t, x, v, _, _ = _coarse_record(steps=5.0, placement=placement)
+    t, x, v, _, _ = coarse_record(steps=5.0, placement=placement)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         decay = energy_decay(t, x, v)
@@ -239,8 +211,8 @@ def test_five_steps_across_the_swing_keep_every_swing_of_two_steps(placement):
     turning points: the record was refused for want of 7). Every leading swing whose
     true peak-to-peak height is 2.5 steps or more reads two steps or more after rounding
     (at most half a step off at each end), so each is found."""
-    t, x, v, (qx, _), _ = _coarse_record(steps=5.0, placement=placement)
-    _, x_true, v_true, _, _ = _coarse_record(steps=1e12)
+    t, x, v, (qx, _), _ = coarse_record(steps=5.0, placement=placement)
+    _, x_true, v_true, _, _ = coarse_record(steps=1e12)
     moving = (t > 0.1) & (np.abs(v_true) > 0)
     turns = np.flatnonzero(np.diff(np.sign(v_true[moving])) != 0)
     values = np.concatenate([[2e-3], x_true[moving][turns]])
@@ -266,7 +238,7 @@ def test_a_coarse_velocity_alone_is_answered_and_said_to_be_uncalibrated(placeme
     the integral, which the noise model does not hold."""
     from bayestribo.errors import CoarseSignalWarning, MisfitWarning
 
-    t, _, v, _, _ = _coarse_record(steps=10.0, placement=placement)
+    t, _, v, _, _ = coarse_record(steps=10.0, placement=placement)
     with pytest.warns(CoarseSignalWarning, match="integral of the velocity"):
         decay = energy_decay(t, None, v)
     assert len(decay.peaks) >= 6
@@ -282,7 +254,7 @@ def test_three_steps_across_the_swing_are_answered_and_said_to_be_too_few(placem
     the swing, and the turning points analysed where the record lacks some."""
     from bayestribo.errors import CoarseSignalWarning
 
-    t, x, v, (qx, _), _ = _coarse_record(steps=3.0, placement=placement)
+    t, x, v, (qx, _), _ = coarse_record(steps=3.0, placement=placement)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         decay = energy_decay(t, x, v)
@@ -302,7 +274,7 @@ def test_a_coarse_record_asked_for_three_oscillations_is_told_to_keep_the_first(
     """Three steps across the swing, six turning points, ``min_turning_points=6`` asked
     for: one oscillation skipped (the default) leaves too few, the refusal names the
     last swing of two steps, and its advice, followed, gives the analysis."""
-    t, x, v, (qx, _), _ = _coarse_record(steps=3.0, placement=placement)
+    t, x, v, (qx, _), _ = coarse_record(steps=3.0, placement=placement)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         with pytest.raises(RecordingError, match=r"skip_oscillations=0 \(--skip 0\)") as told:
@@ -387,7 +359,7 @@ def test_a_coarse_record_without_two_oscillations_is_refused_saying_what_it_lack
     equilibrium. The refusal names the step, the last turning point that stands out and
     its time, the two oscillations a coarse record is analysed on, and how many it has
     (an earlier message asked for 7 and said nothing of the two oscillations)."""
-    t, x, v, (qx, _), _ = _coarse_record(steps=2.5, placement=placement)
+    t, x, v, (qx, _), _ = coarse_record(steps=2.5, placement=placement)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         with pytest.raises(RecordingError) as told:
