@@ -38,6 +38,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 from _chain import MU_K, ZETA, apply_chain, metadata, record  # noqa: E402
 from _machine import commit, write_results  # noqa: E402
+from _outcome import against_truth, flags_of  # noqa: E402
 
 FLAGS = ("MisfitWarning", "ChannelCalibrationWarning", "ConvergenceWarning", "PriorBoundWarning")
 TRUTH = {"zeta": ZETA, "mu_k": MU_K}
@@ -104,25 +105,8 @@ def one_run(
     except Exception as exc:  # recorded, never silently dropped
         out["refused"] = f"{type(exc).__name__}: {exc}"
         return out
-    # a flag is one of FLAGS or a subclass of one (ShortAnalysisWarning and
-    # CoarseSignalWarning are MisfitWarnings: the command's exit status is 1)
-    out["flags"] = sorted(
-        {
-            w.category.__name__
-            for w in caught
-            if any(c.__name__ in FLAGS for c in w.category.__mro__)
-        }
-    )
-    for name, truth in truth_of.items():
-        draws = result.samples(name)
-        lo, hi = result.interval(name, 0.95)
-        sd = float(np.std(draws, ddof=1))
-        out[name] = {
-            "mean": float(np.mean(draws)),
-            "sd": sd,
-            "z": float((np.mean(draws) - truth) / sd),
-            "covered": bool(lo <= truth <= hi),
-        }
+    out["flags"] = flags_of(caught, FLAGS)
+    out.update(against_truth(result, truth_of))
     return out
 
 

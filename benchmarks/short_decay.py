@@ -46,6 +46,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 from _chain import F_HZ, MU_K, ZETA, apply_chain, metadata, record  # noqa: E402
 from _machine import commit, write_results  # noqa: E402
+from _outcome import against_truth, flags_of  # noqa: E402
 from coarse_placements import FLAGS, summarise  # noqa: E402
 
 
@@ -99,23 +100,8 @@ def one_run(case: str, index: int) -> dict[str, Any]:
         out["refused"] = f"{type(exc).__name__}: {exc}"
         return out
     out["cpu_s"] = time.process_time() - start
-    out["flags"] = sorted(
-        {
-            w.category.__name__
-            for w in caught
-            if any(c.__name__ in FLAGS for c in w.category.__mro__)
-        }
-    )
-    for name, value in truth.items():
-        draws = result.samples(name)
-        lo, hi = result.interval(name, 0.95)
-        sd = float(np.std(draws, ddof=1))
-        out[name] = {
-            "mean": float(np.mean(draws)),
-            "sd": sd,
-            "z": float((np.mean(draws) - value) / sd),
-            "covered": bool(lo <= value <= hi),
-        }
+    out["flags"] = flags_of(caught, FLAGS)
+    out.update(against_truth(result, truth))
     return out
 
 
