@@ -48,7 +48,15 @@ largest law it nests that is fitted and converged already: it is not sampled and
 compared by PSIS-LOO (:mod:`bayestribo.inference.reduction`); its table row says
 ``reduces_to``, ``terms_at_zero``, ``sampled`` False and ``converged`` None, with the
 misfit checks at its optimum, and the comparison's text names it. The law-free fit
-never reduces.
+never reduces. Such a law's second pass (the increments' variances from its motion, and
+the optimum again: a third to two fifths of its optimiser's time) waits until it is
+judged on its own (:class:`~bayestribo.inference.screening.LawOptimum`): where its
+optimum is a law it nests, it stays out of the screen's estimates (it cannot be the
+best there: it is the nested law with more parameters) unless that law is screened out
+(its second pass is then made and the screen made again with it, as before), and its
+second pass is made only where it is not reduced in the end (the nested law settled or
+not converged); on air-r1 the three drag laws that reduce (``viscous+quadratic``,
+``coulomb+power``, ``viscous+coulomb+quadratic``) never make theirs.
 
 Screening. Every law is first taken to its optimum on the posterior it would be
 sampled on; a law whose ΔE(A) cannot follow the turning points', or whose expected log
