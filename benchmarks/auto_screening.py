@@ -23,12 +23,13 @@ was chosen, and the same choices (verdict, laws as good, adequacy) in every repe
 with ``--default``, each tree's default fit of the recording timed in the same worker
 after its auto fit, and auto's CPU time over it; and the largest difference of a
 posterior mean between the trees in units of the baseline's posterior sd, over every
-quantity both summarise. The screening's margin is checked against the sampled
-comparison: for every law this tree screened out, its sampled ``elpd_diff`` in the
-baseline (where the baseline compared it) and whether the baseline found it as good as
-its best; for every law this tree settled (not sampled: it could no longer change the
-choice, :mod:`bayestribo.inference.settling`), the same, and the laws whose standing (as
-good or not) differs from the baseline's (``standing_differs``).
+quantity both summarise and every repeat (the same seed in both trees; ``--seeds``: a
+seed per repeat, ``per_seed`` each one's times). The screening's margin is checked
+against the sampled comparison: for every law this tree screened out, its sampled
+``elpd_diff`` in the baseline (where the baseline compared it) and whether the
+baseline found it as good as its best; for every law this tree settled (not sampled: it
+could no longer change the choice, :mod:`bayestribo.inference.settling`), the same, and
+the laws whose standing (as good or not) differs from the baseline's (``standing_differs``).
 
 Run (by hand)::
 
@@ -155,6 +156,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--baseline", type=Path, required=True)
     parser.add_argument("--repeats", type=int, default=2)
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument(
+        "--seeds",
+        type=int,
+        nargs="*",
+        help="one seed per repeat, in turn (overrides --seed; --repeats defaults to their number)",
+    )
     parser.add_argument("--external", type=Path, default=EXTERNAL)
     parser.add_argument("--only", nargs="*", help="recordings to fit (default: all)")
     parser.add_argument("--trees", nargs="*", default=["baseline", "current"])
@@ -165,11 +172,19 @@ def main(argv: list[str] | None = None) -> int:
         help="each worker also fits the bundled run with law='auto' before anything is timed",
     )
     parser.add_argument(
+        "--warm-all",
+        action="store_true",
+        help="each worker also fits every recording with law='auto' (seed 99) before "
+        "anything is timed: every compiled kernel the recordings use loaded",
+    )
+    parser.add_argument(
         "--default",
         action="store_true",
         help="also time the default fit of each recording after its auto fit (same worker)",
     )
     args = parser.parse_args(argv)
+    if args.seeds and "--repeats" not in (argv if argv is not None else sys.argv):
+        args.repeats = len(args.seeds)
     runs = recordings(args.external)
     if args.only:
         runs = {k: v for k, v in runs.items() if k in args.only}
@@ -200,11 +215,16 @@ def main(argv: list[str] | None = None) -> int:
         )
 
     order = list(trees)
+    if args.warm_all:
+        for name, request in runs.items():
+            for tree in order:
+                workers[tree].fit({**request, "name": name, "seed": 99, "default": False})
     for repeat in range(args.repeats):
+        seed = args.seeds[repeat % len(args.seeds)] if args.seeds else args.seed
         for name, request in runs.items():
             for tree in order if repeat % 2 == 0 else order[::-1]:
                 out = workers[tree].fit(
-                    {**request, "name": name, "seed": args.seed, "default": args.default}
+                    {**request, "name": name, "seed": seed, "default": args.default}
                 )
                 fits[name][tree].append(out)
                 default = out.get("default_cpu_seconds")
@@ -255,11 +275,27 @@ def summarise(fits: dict[str, dict[str, list[dict[str, Any]]]]) -> dict[str, Any
             }
             row["same_choices"] = choices["current"] == choices["baseline"]
             row["choices"] = {tree: [json.loads(c) for c in v] for tree, v in choices.items()}
-            shifts = mean_shift(new[0], old[0])
-            finite = {k: v for k, v in shifts.items() if math.isfinite(v)}
+            # the same seed's fits in both trees (every repeat), the largest shift of all
+            finite: dict[str, float] = {}
+            for a, b in zip(new, old, strict=False):
+                for k, v in mean_shift(a, b).items():
+                    if math.isfinite(v) and v > finite.get(k, -1.0):
+                        finite[k] = v
             if finite:
                 worst = max(finite, key=finite.get)
                 row["largest_mean_shift_sd"] = {worst: finite[worst]}
+            row["per_seed"] = [
+                {
+                    "seed": a["seed"],
+                    "current_cpu": a["cpu_seconds"],
+                    "baseline_cpu": b["cpu_seconds"],
+                    "current_default_cpu": a.get("default_cpu_seconds"),
+                    "baseline_default_cpu": b.get("default_cpu_seconds"),
+                    "current_law": a["law"],
+                    "baseline_law": b["law"],
+                }
+                for a, b in zip(new, old, strict=False)
+            ]
             row["screened"] = screen_check(new[0], old[0])
             # the laws screened out or settled that the baseline's sampled comparison
             # placed otherwise (as good where the new tree says not, or the reverse)

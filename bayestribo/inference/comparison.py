@@ -48,7 +48,15 @@ largest law it nests that is fitted and converged already: it is not sampled and
 compared by PSIS-LOO (:mod:`bayestribo.inference.reduction`); its table row says
 ``reduces_to``, ``terms_at_zero``, ``sampled`` False and ``converged`` None, with the
 misfit checks at its optimum, and the comparison's text names it. The law-free fit
-never reduces.
+never reduces. Such a law's second pass (the increments' variances from its motion, and
+the optimum again: a third to two fifths of its optimiser's time) waits until it is
+judged on its own (:class:`~bayestribo.inference.screening.LawOptimum`): where its
+optimum is a law it nests, it stays out of the screen's estimates (it cannot be the
+best there: it is the nested law with more parameters) unless that law is screened out
+(its second pass is then made and the screen made again with it, as before), and its
+second pass is made only where it is not reduced in the end (the nested law settled or
+not converged); on air-r1 the three drag laws that reduce (``viscous+quadratic``,
+``coulomb+power``, ``viscous+coulomb+quadratic``) never make theirs.
 
 Screening. Every law is first taken to its optimum on the posterior it would be
 sampled on; a law whose ΔE(A) cannot follow the turning points', or whose expected log
@@ -227,8 +235,8 @@ def _optimise(
 ) -> LawOptimum:
     """A law's optimum on both passes and its pointwise log-likelihood there; with
     ``start`` (its optimum on another grid of the run, by coordinate), the optimiser
-    starts there rather than from the first guesses (module notes, Rivals)."""
-    from bayestribo.inference.reweight import reweighted_posterior
+    starts there rather than from the first guesses (module notes, Rivals). The second
+    pass is made when first asked for (:attr:`LawOptimum.pending`)."""
     from bayestribo.inference.start import better_optimum, maximum_from
 
     # friction terms are fitted without contact too (as a friction displacement): the
@@ -244,8 +252,22 @@ def _optimise(
             )
     else:
         optimum = find_optimum(posterior, prepared.decay, also_start_at=nested)
-    # the second pass, as chains.sample makes it, so that the law is judged on the
-    # posterior it would be sampled on
+    return LawOptimum(
+        law, posterior, optimum, finish=lambda: _second_pass(posterior, prepared, optimum)
+    )
+
+
+def _second_pass(
+    posterior: Posterior,
+    prepared: PreparedRun,
+    optimum: tuple[NDArray, NDArray, tuple[float, float] | None],
+) -> tuple[Posterior, tuple[NDArray, NDArray, tuple[float, float] | None], NDArray]:
+    """The second pass from a law's first-pass optimum, as :func:`bayestribo.inference.
+    chains.sample` makes it, so that the law is judged on the posterior it would be
+    sampled on: that posterior, its optimum and the pointwise log-likelihood there."""
+    from bayestribo.inference.reweight import reweighted_posterior
+    from bayestribo.inference.start import maximum_from
+
     second, second_optimum = posterior, optimum
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
@@ -255,7 +277,7 @@ def _optimise(
             second_optimum = maximum_from(reweighted, optimum[0], prepared.decay)
         theta = np.asarray(second_optimum[0], dtype=float)
         pointwise = np.asarray(second.pointwise(theta[None]), dtype=float)[0]
-    return LawOptimum(law, posterior, optimum, second, second_optimum, pointwise)
+    return second, second_optimum, pointwise
 
 
 def _checks(posterior: Posterior, theta: NDArray) -> dict[str, Any]:
@@ -347,6 +369,8 @@ def compare_prepared(
     equivalent: dict[str, str] = {}
     found: dict[str, LawOptimum] = {} if at_optima is None else at_optima
     spent: dict[str, tuple[float, float]] = {}
+    # laws whose second pass waits, each with the law it nests that its optimum is
+    deferred: dict[str, str] = {}
 
     def failed(law: str, exc: BayestriboError) -> None:
         # a law that cannot be fitted here is reported and left out of the comparison,
@@ -357,9 +381,18 @@ def compare_prepared(
     def optimise(law: str, k: int, n: int) -> None:
         start, cpu = time.perf_counter(), time.process_time()
         try:
-            found[law] = _optimise(
-                law, prepared, model, discrepancy, optima, start=(starts or {}).get(law)
+            at = _optimise(law, prepared, model, discrepancy, optima, start=(starts or {}).get(law))
+            # a law whose optimum is a law it nests is that law there: its second pass
+            # waits until it is judged on its own (module notes, Reduction)
+            inner = [o for o in found if law_of(law).nests(law_of(o)) and o != law]
+            nests = (
+                reduction_among(law, at.posterior, at.optimum[0], inner, optima) if inner else None
             )
+            if not screening or nests is None:
+                at.pointwise  # noqa: B018  the second pass, made now
+            else:
+                deferred[law] = nests[0]
+            found[law] = at
         except BayestriboError as exc:
             failed(law, exc)
             say(f"law {k}/{n} {law}: not fitted ({exc})")
@@ -519,10 +552,7 @@ def compare_prepared(
         optimise(law, k, len(first))
     screens: dict[str, dict[str, Any]] = {}
     if screening and len(found) >= 2:
-        screens = screen(
-            {law: at.pointwise for law, at in found.items()},
-            {law: at.n_parameters for law, at in found.items()},
-        )
+        screens = _screen_optima(found, deferred, failed)
     for law in ordered:
         if law in screens:
             screens[law] = {"stage": "optimum", **screens[law]}
@@ -559,7 +589,11 @@ def compare_prepared(
         # the verdict the optima predict first: the laws after it are judged against it
         survivors = sampling_order(
             survivors,
-            {law: (found[law].pointwise, found[law].n_parameters) for law in survivors},
+            {
+                law: (found[law].pointwise, found[law].n_parameters)
+                for law in survivors
+                if not found[law].pending
+            },
             lambda law: bool(at_optimum(law)["adequate"]),
             rank,
             small=SMALL_ELPD_DIFFERENCE,
@@ -653,6 +687,40 @@ def compare_prepared(
         settled=[law for law in rank if law in settled],
     )
     return comparison, runs
+
+
+def _screen_optima(
+    found: dict[str, LawOptimum],
+    deferred: Mapping[str, str],
+    failed: Callable[[str, BayestriboError], None],
+) -> dict[str, dict[str, Any]]:
+    """:func:`screen` of the laws taken to their optima whose second pass is made. A
+    law whose second pass waits (``deferred``: its optimum is the law it nests there)
+    stays out of it, and is later judged by the reduction rule or on its own; where
+    the law it nests is screened out, its second pass is made and the screen made
+    again with it (the screen as it was before any second pass waited). A law whose
+    second pass fails is reported by ``failed`` and left out of ``found``."""
+    while True:
+        done = {law: at for law, at in found.items() if not at.pending}
+        if len(done) < 2:
+            return {}
+        screens = screen(
+            {law: at.pointwise for law, at in done.items()},
+            {law: at.n_parameters for law, at in done.items()},
+        )
+        due = [
+            law
+            for law, at in found.items()
+            if at.pending and screens.get(deferred.get(law, ""), {}).get("screened")
+        ]
+        if not due:
+            return screens
+        for law in due:
+            try:
+                found[law].pointwise  # noqa: B018  the second pass, made now
+            except BayestriboError as exc:
+                failed(law, exc)
+                del found[law]
 
 
 def _rivals(verdict: str, as_good: Sequence[str], table: Mapping[str, Any]) -> list[str]:
@@ -765,6 +833,7 @@ def _judged_at_optimum(
             found[law] = _optimise(
                 law, fine, model, discrepancy, optima, start=(starts or {}).get(law)
             )
+            found[law].pointwise  # noqa: B018  the second pass, made now
         except BayestriboError:
             return None
         at = found[law]

@@ -38,7 +38,6 @@ PSIS-LOO put them 5.9 and 6.1 dse behind the best, misfitting.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -69,9 +68,18 @@ SCREEN_FACTOR = 3.0
 TURNING_POINT_FACTOR = 1000.0
 
 
-@dataclass
+#: A law's second pass: the posterior sampled, its optimum and the pointwise
+#: log-likelihood there (:class:`LawOptimum`).
+SecondPass = tuple[Posterior, tuple[NDArray, NDArray, tuple[float, float] | None], NDArray]
+
+
 class LawOptimum:
     """One law at its optimum, before any sampling (the screening's input).
+
+    The second pass (``second``, ``second_optimum``, ``pointwise``) is given, or made
+    by ``finish`` when first asked for (:attr:`pending` until then): the comparison
+    leaves it undone for a law whose optimum is a law it nests (its extra terms at
+    zero, :mod:`bayestribo.inference.reduction`) until the law is judged on its own.
 
     Attributes
     ----------
@@ -92,17 +100,55 @@ class LawOptimum:
         Log-likelihood of each Π increment at ``second_optimum`` under ``second``.
     """
 
-    law: str
-    posterior: Posterior
-    optimum: tuple[NDArray, NDArray, tuple[float, float] | None]
-    second: Posterior
-    second_optimum: tuple[NDArray, NDArray, tuple[float, float] | None]
-    pointwise: NDArray
+    def __init__(
+        self,
+        law: str,
+        posterior: Posterior,
+        optimum: tuple[NDArray, NDArray, tuple[float, float] | None],
+        second: Posterior | None = None,
+        second_optimum: tuple[NDArray, NDArray, tuple[float, float] | None] | None = None,
+        pointwise: NDArray | None = None,
+        *,
+        finish: Callable[[], SecondPass] | None = None,
+    ) -> None:
+        self.law, self.posterior, self.optimum = law, posterior, optimum
+        if finish is None and (second is None or second_optimum is None or pointwise is None):
+            raise ValueError("LawOptimum: expected the second pass or a way to make it")
+        self._second: SecondPass | None = None
+        if finish is None:
+            self._second = (second, second_optimum, pointwise)
+        self._finish = finish
+
+    @property
+    def pending(self) -> bool:
+        """Whether the second pass is still to be made."""
+        return self._second is None
+
+    def _second_pass(self) -> SecondPass:
+        if self._second is None:
+            assert self._finish is not None
+            self._second, self._finish = self._finish(), None
+        return self._second
+
+    @property
+    def second(self) -> Posterior:
+        """The posterior that is sampled (class notes)."""
+        return self._second_pass()[0]
+
+    @property
+    def second_optimum(self) -> tuple[NDArray, NDArray, tuple[float, float] | None]:
+        """The maximum a posteriori of :attr:`second`."""
+        return self._second_pass()[1]
+
+    @property
+    def pointwise(self) -> NDArray:
+        """Log-likelihood of each Π increment at :attr:`second_optimum`."""
+        return self._second_pass()[2]
 
     @property
     def n_parameters(self) -> int:
-        """Sampled parameters of its posterior."""
-        return len(self.second.names)
+        """Sampled parameters of its posterior (the same on both passes)."""
+        return len(self.posterior.names)
 
 
 def optimum_elpd(pointwise: NDArray, n_parameters: int) -> float:
