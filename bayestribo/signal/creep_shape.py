@@ -148,20 +148,21 @@ def _approach(
     """The exponential approach to zero A exp(-c/τ) (plus a line b c through zero when
     ``slope``) closest to the block means ``m`` at times ``c`` (from the rest's start)
     [s]: (A, τ, rms of the residuals, b)."""
-    best = (0.0, math.inf, math.inf, 0.0)
-    for tau in _TAUS * length:
-        e = np.exp(-c / tau)
-        if slope:
-            basis = np.column_stack((e, c))
-            (a, b), *_ = np.linalg.lstsq(basis, m, rcond=None)
-            fitted = basis @ np.array([a, b])
-        else:
-            a, b = float(e @ m) / float(e @ e), 0.0
-            fitted = a * e
-        rms = float(np.sqrt(np.mean((m - fitted) ** 2)))
-        if rms < best[2]:
-            best = (float(a), float(tau), rms, float(b))
-    return best
+    taus = _TAUS * length
+    e = np.exp(-np.outer(1.0 / taus, c))  # one row per time constant
+    ee, em = np.einsum("ij,ij->i", e, e), e @ m
+    if slope:
+        # the 2x2 normal equations of (A, b) on the basis (e, c), for every τ at once
+        ec, cc, cm = e @ c, float(c @ c), float(c @ m)
+        det = ee * cc - ec * ec
+        a = (em * cc - ec * cm) / det
+        b = (ee * cm - ec * em) / det
+    else:
+        a, b = em / ee, np.zeros(taus.size)
+    residual = m - a[:, None] * e - b[:, None] * c
+    rms = np.sqrt(np.mean(residual * residual, axis=1))
+    k = int(np.argmin(rms))
+    return float(a[k]), float(taus[k]), float(rms[k]), float(b[k])
 
 
 def _line_rms(c: NDArray, m: NDArray) -> float:
