@@ -19,8 +19,9 @@ is raised. Nothing is fitted. Records:
   noise's sd, log-uniform), 1/f noise (``_chain.apply_chain``'s, rms 1-5 times), 50 Hz
   hum (1-5 times), a digitiser's steps (10-100 across the swing), or nothing; the
   effect runs over the whole record, the rest before the release included.
-  ``--drift-records`` records, each once with its displacement alone and once with its
-  velocity alone;
+  ``--drift-records`` records (360), each once with its displacement alone and once
+  with its velocity alone; records 0-179 were seen while the test's limits were set,
+  180-359 were not (``summary["drift fresh/..."]`` counts those alone);
 * **seismometer**: ``benchmarks/seismometer.py``'s velocity alone (a viscous decay that
   fades into the noise), clean and with its random-walk offset;
 * **creep**: the 5 Hz Stribeck records of ``stribeck_verdict.py --rig creep``
@@ -254,7 +255,7 @@ def _count(rows: list[dict[str, Any]]) -> dict[str, Any]:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--workers", type=int, default=1)
-    parser.add_argument("--drift-records", type=int, default=180)
+    parser.add_argument("--drift-records", type=int, default=360)
     parser.add_argument("--creep-seeds", type=int, default=20)
     parser.add_argument("--seismometer-seeds", type=int, default=5)
     parser.add_argument(
@@ -289,6 +290,8 @@ def main(argv: list[str] | None = None) -> None:
                 flag = "CREEP" if r["creep"] else ("refused" if "refused" in r else "")
                 print(r["set"], r["name"], r["channels"], flag, flush=True)
     summary = _count(rows)
+    fresh = [{**r, "set": "drift fresh"} for r in rows if r["set"] == "drift" and r["name"] >= 180]
+    summary.update(_count(fresh))
     creep_rows = [r for r in rows if r["set"] == "creep"]
     for channels in ("displacement", "velocity") if creep_rows else ():
         # detection where the two channels' test finds the creep

@@ -124,6 +124,13 @@ def test_a_stuck_contact_under_a_drifting_sensor_is_rest(motion) -> None:
         decay, creeps = _decay(t, xx, vv)
         assert creeps == [], name
         assert "rest after stop" in decay.noise.source, name
+    # a velocity recorded from the release on (no rest before it to measure its offset)
+    # whose offset drifts: its integral at rest curves, but not towards the equilibrium
+    moving = t >= HOLD_S
+    for size in (1e-5, 3e-5, -3e-5):
+        ramp = vs + towards * size * t / DURATION_S
+        _, creeps = _decay(t[moving] - HOLD_S, None, ramp[moving])
+        assert creeps == [], size
 
 
 def _path(r: np.ndarray, t: np.ndarray, **kw) -> object:

@@ -76,6 +76,9 @@ CURVATURE = 0.5
 OVERSHOOT = 0.1
 #: Largest share of the move a rest before the release may make over as long a time.
 BEFORE_SHARE = 0.25
+#: Largest move of the line fitted beside the approach (a velocity alone), as a share
+#: of the approach's own move: the creep, not the equilibrium's unknown pace, moves it.
+SLOPE_SHARE = 1.0
 #: Standard errors by which the rest before the release must move to be a drift.
 HELD_Z = 4.0
 #: Time constants tried, as multiples of the rest's length.
@@ -209,6 +212,9 @@ class RestPath:
         The rest before the release's move over as long a time as the rest after the
         stop, over the move (0 when it does not move beyond :data:`HELD_Z` standard
         errors, NaN when there is no rest before the release).
+    slope_share : float
+        How far the line fitted beside the approach (a velocity alone) moves over the
+        rest, over the move (0 when none is fitted).
     """
 
     start: float
@@ -226,6 +232,7 @@ class RestPath:
     at_stop: float
     pace: float
     held: float
+    slope_share: float = 0.0
 
     def creeps(self) -> bool:
         """Every condition of the module notes holds."""
@@ -240,6 +247,7 @@ class RestPath:
             and self.at_stop <= 1.0
             and self.pace <= 1.0
             and not self.held >= BEFORE_SHARE
+            and self.slope_share <= SLOPE_SHARE
         )
 
 
@@ -308,6 +316,7 @@ def rest_path(
         at_stop=back / last_swing,
         pace=back / tau / (omega * last_swing),
         held=held,
+        slope_share=abs(slope) * length / scale,
     )
 
 
@@ -357,7 +366,8 @@ def creep_towards_equilibrium(
         The equilibrium's pace over the rest is not known (a velocity alone, whose
         offset during the motion is measured by the turning points' equilibrium only
         roughly): a line through the rest's start is fitted beside the approach and
-        taken off before the conditions are tested.
+        taken off before the conditions are tested, and may move the rest by at most
+        :data:`SLOPE_SHARE` of the approach's move.
 
     Returns
     -------

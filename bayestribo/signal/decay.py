@@ -1613,6 +1613,7 @@ def _analyse(
 
     quiet = _quiet_segments(t, rest_until, stop_time, 0.25 * period0)
     coarse_fade = None
+    offset_drifts = False
     if x is None:
         derived = "displacement"
         at_rest = _rest_samples(v, t, rest_until, stop_time, 0.0)
@@ -1622,6 +1623,7 @@ def _analyse(
             v = v - (velocity_offset if drifting is None else drifting)
             if drifting is not None:
                 velocity_offset = float(drifting[0])
+                offset_drifts = True
         x, pole = _integrated(t, v, period0, released_at, span.stop_index)
         v_step = quantisation_step(v)
         if (
@@ -1768,9 +1770,11 @@ def _analyse(
     # the oscillation a fade leaves under the noise is not the rest's noise
     v_rest = v if span.fade_time is None else _without_faded(t, v, stop_time, peaks, period)
     # a mass that creeps on after the stop is not at rest: its creep is not the noise
+    # (a velocity alone whose offset drifts, said by its OffsetDriftWarning, moves its
+    # integral at rest as a creep would: its rest is not tested)
     creep = (
         None
-        if span.fade_time is not None
+        if span.fade_time is not None or offset_drifts
         else _creep(t, x, v, stop_time, period, derived, peaks, rest_until)
     )
     rest_stop = stop_time if creep is None else None
