@@ -16,7 +16,9 @@ line over the rest changes by more than :data:`CREEP_Z` standard errors of white
 mean differs from zero by as many, and the two agree (the same sign, the line's slope
 within a factor :data:`CREEP_AGREEMENT` of the mean velocity). A sensor's offset moves
 one channel and not the other, a coloured noise moves them independently; a creep
-moves both as one.
+moves both as one. With one channel recorded, the creep is told by its path instead
+(:mod:`bayestribo.signal.creep_shape`: towards the oscillation's equilibrium, slowing
+down, from inside the last swing, not in a rest before the release).
 
 No registered law's motion creeps (a friction sticks where its swings end, a drag
 oscillates on), so a creep is a misfit of the law at low speed: the

@@ -131,6 +131,7 @@ from bayestribo.signal.coarse import (
 )
 from bayestribo.signal.coverage import ShortAnalysisWarning, coverage_note
 from bayestribo.signal.creep import Creep, CreepWarning, creeping_rest
+from bayestribo.signal.creep_shape import ShapeCreep, creep_towards_equilibrium
 from bayestribo.signal.integration import (
     integrate_oscillation,
     oscillation_energy,
@@ -932,14 +933,53 @@ def _offset_drift(
 
 
 def _creep(
-    t: NDArray, x: NDArray, v: NDArray, stop: float | None, period: float, derived: str | None
-) -> Creep | None:
-    """The creep in the rest after ``stop`` (:func:`~bayestribo.signal.creep.creeping_rest`)
-    of a record with both channels recorded, from a quarter ``period`` after it."""
-    if derived is not None or stop is None:
+    t: NDArray,
+    x: NDArray,
+    v: NDArray,
+    stop: float | None,
+    period: float,
+    derived: str | None,
+    peaks: Peaks,
+    rest_until: float | None,
+) -> Creep | ShapeCreep | None:
+    """The creep in the rest after ``stop``, from a quarter ``period`` after it: where both
+    channels are recorded, the two moving as one
+    (:func:`~bayestribo.signal.creep.creeping_rest`); where one is, the displacement
+    (recorded or integrated) approaching the turning points' equilibrium
+    (:func:`~bayestribo.signal.creep_shape.creep_towards_equilibrium`)."""
+    if stop is None:
         return None
-    _, tail = _rest_bounds(t, None, stop, 0.25 * period)
-    return creeping_rest(t, x, v, tail)
+    head, tail = _rest_bounds(t, rest_until, stop, 0.25 * period)
+    if derived is None:
+        return creeping_rest(t, x, v, tail)
+    if peaks.kind != "displacement" or len(peaks) == 0 or t.size - tail < MIN_QUIET_SAMPLES:
+        return None
+    recorded = "velocity" if derived == "displacement" else "displacement"
+    channel = v if recorded == "velocity" else x
+    sigma = estimate_noise(channel[tail:])
+    if recorded == "displacement":
+        # the equilibrium where the motion ends, held: its line's drift, fitted on the
+        # turning points, is not extended over the rest (a law's misfit tilts it)
+        equilibrium = np.full(t.size, peaks.offset + peaks.drift * float(peaks.t[-1]))
+    else:
+        # the integral of a velocity alone, whose offset was taken as its median at rest
+        # (a creep's own pace there): the line's drift is the offset left in during the
+        # motion, measured roughly; the approach is fitted with a pace of its own
+        equilibrium = peaks.offset + peaks.drift * t
+    return creep_towards_equilibrium(
+        t,
+        x,
+        equilibrium,
+        tail,
+        recorded=recorded,
+        sigma=sigma,
+        stop_time=float(stop),
+        last_swing=float(abs(peaks.value[-1])),
+        omega=2.0 * math.pi / period,
+        before=head if head >= MIN_QUIET_SAMPLES else 0,
+        step=quantisation_step(channel),
+        free_slope=recorded == "velocity",
+    )
 
 
 def _rest_noise(
@@ -1573,6 +1613,7 @@ def _analyse(
 
     quiet = _quiet_segments(t, rest_until, stop_time, 0.25 * period0)
     coarse_fade = None
+    offset_drifts = False
     if x is None:
         derived = "displacement"
         at_rest = _rest_samples(v, t, rest_until, stop_time, 0.0)
@@ -1582,6 +1623,7 @@ def _analyse(
             v = v - (velocity_offset if drifting is None else drifting)
             if drifting is not None:
                 velocity_offset = float(drifting[0])
+                offset_drifts = True
         x, pole = _integrated(t, v, period0, released_at, span.stop_index)
         v_step = quantisation_step(v)
         if (
@@ -1728,7 +1770,13 @@ def _analyse(
     # the oscillation a fade leaves under the noise is not the rest's noise
     v_rest = v if span.fade_time is None else _without_faded(t, v, stop_time, peaks, period)
     # a mass that creeps on after the stop is not at rest: its creep is not the noise
-    creep = None if span.fade_time is not None else _creep(t, x, v, stop_time, period, derived)
+    # (a velocity alone whose offset drifts, said by its OffsetDriftWarning, moves its
+    # integral at rest as a creep would: its rest is not tested)
+    creep = (
+        None
+        if span.fade_time is not None or offset_drifts
+        else _creep(t, x, v, stop_time, period, derived, peaks, rest_until)
+    )
     rest_stop = stop_time if creep is None else None
     noise = _noise(t, x, v_rest, rest_until, rest_stop, period, derived, jitter)
     if creep is not None:
@@ -1737,7 +1785,13 @@ def _analyse(
             "oscillates on): the friction vanishes towards zero speed, and a law's ΔE(A) "
             "at the smallest swings is not to be trusted; the turning points' ΔE(A) "
             "(printed as 'turning points (law-free)') holds whatever the law. The creep "
-            f"is not rest: the noise is measured from the {noise.source} instead",
+            f"is not rest: the noise is measured from the {noise.source} instead"
+            + (
+                ""
+                if isinstance(creep, Creep)
+                else " (with one channel a creep is told from a sensor's drift by its path "
+                "alone: recording both channels tells them apart by their agreement)"
+            ),
             CreepWarning,
         )
     motion_ended = stop_time is not None and faded_at is None
