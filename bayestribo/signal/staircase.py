@@ -1,0 +1,216 @@
+r"""Turning points of a coarse displacement from the time its staircase spends above a level.
+
+A displacement rounded to steps q that its noise does not dither
+(:mod:`bayestribo.signal.coarse`) reads, at each turning point, the level nearest the
+extreme: its turning points sit on a few levels, each up to q/2 from the true one,
+and many successive turning points on the same level. The energy lost in a half cycle,
+``Y_n² − Y_n+1²``, is then zero for most half cycles and a whole step's worth for a few:
+the law-free ΔE(A) read off them (:func:`~bayestribo.inference.dissipation.
+turning_point_dissipation`) came out negative, or several times the truth, on simulated
+records of 3 to 5 steps across the swing (``benchmarks/coarse_dissipation.py``).
+
+The staircase still says where the extreme is: near a turning point of swing A about
+the equilibrium c the motion is ``c + A cos ω(t − t_n)`` (to second order in the
+damping: the first-order asymmetry of the two sides cancels in their sum), and it is
+above a boundary b between two levels (``(L + L')/2``, known exactly from the levels)
+for a time D with ``b − c = A cos(ωD/2)``. D is the number of samples above b times the
+sample step: exact to a sample without noise, and unbiased to first order with a noise
+below a step (each crossing's noise moves samples across b in both directions alike).
+Near the turning point the time above the boundaries says how wide the arc is at each
+level, and so both the swing and the equilibrium: ``b = c + A cos(ωD/2)`` is a straight
+line in ``cos(ωD/2)`` whose slope is A. Every boundary the arc crosses between its two
+neighbouring turning points gives one such equation (in the turning point's frame,
+minima turned over), with the equilibrium ``c0 + c1 t`` shared by all turning points:
+one linear least-squares fit gives the equilibrium and every A at once (a swing of a
+step or two crosses one or two boundaries, and leans on the others for c). Its error is
+that of D, ``A sin(ωD/2) ω δD/2`` in b: a few thousandths of a step at 300 samples a
+period, where the level itself is off by up to half a step.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from bayestribo.signal.coarse import coarse_steps
+
+__all__ = ["NOISE_CLEARANCE", "coarse_turning_points", "staircase_turning_points"]
+
+#: A boundary is used when it lies this many noise sd inside the arc at least, from its
+#: top level and from the lower of its neighbouring turning points' levels (a level the
+#: motion only grazes is crossed by the noise alone, and its time above is biased).
+NOISE_CLEARANCE = 2.0
+#: Relative error of the cosine model of an arc (second order in the damping).
+_MODEL_ERROR = 1e-3
+
+
+def _boundaries(
+    t: NDArray,
+    s: NDArray,
+    lo: float,
+    hi: float,
+    sign: float,
+    step: float,
+    omega: float,
+    noise: float,
+) -> tuple[NDArray, NDArray, NDArray]:
+    """Boundaries (in the frame ``sign × s``) the arc over [lo, hi] crosses, the cosine
+    of the half angle of each, and the sd of one sample's time [s] at them."""
+    w = (t >= lo) & (t <= hi)
+    empty = np.empty(0)
+    if w.sum() < 3:
+        return empty, empty, empty
+    z = sign * s[w]
+    dt = float(np.median(np.diff(t[w])))
+    top, bottom = float(np.max(z)), float(np.min(z))
+    clear = NOISE_CLEARANCE * noise - 1e-6 * step  # (levels read back within rounding)
+    b = top - (np.arange(round((top - bottom) / step) + 1) + 0.5) * step
+    b = b[(b <= top - 0.5 * step - clear) & (b >= bottom + 0.5 * step + clear)]
+    if b.size == 0:
+        return empty, empty, empty
+    above = (z[None, :] > b[:, None]).sum(axis=1)
+    half = 0.5 * omega * dt * above
+    ok = (above > 0) & (half < math.pi)
+    return b[ok], np.cos(half[ok]), np.full(int(ok.sum()), dt)
+
+
+def staircase_turning_points(
+    t: ArrayLike,
+    displacement: ArrayLike,
+    times: ArrayLike,
+    signs: ArrayLike,
+    step: float,
+    omega: float,
+    *,
+    noise: float = 0.0,
+    fit_drift: bool = False,
+) -> tuple[NDArray, float, float] | None:
+    """Turning points of a coarse displacement from the time it spends above its levels.
+
+    Parameters
+    ----------
+    t : array_like
+        Sample times [s].
+    displacement : array_like
+        The recorded displacement, rounded to ``step`` [length unit].
+    times : array_like
+        Times of the turning points [s], in order (from the staircase's extremes).
+    signs : array_like
+        +1 for a maximum, −1 for a minimum, one per turning point.
+    step : float
+        The quantisation step [length unit].
+    omega : float
+        Angular frequency of the oscillation [rad/s] (the damped one).
+    noise : float
+        Noise sd of the displacement at rest [length unit] (0: none).
+    fit_drift : bool
+        Fit a linear drift of the equilibrium too.
+
+    Returns
+    -------
+    (values, offset, drift) or None
+        The turning points about the equilibrium [length unit] (NaN for those at either
+        end whose arc crosses no boundary the noise leaves clear: swings of a step or
+        less), the equilibrium at t = 0 [length unit] and its drift [length unit/s];
+        None when no arc, or one between others, crosses a boundary, or the fit is not
+        determined.
+    """
+    t = np.asarray(t, dtype=float)
+    s = np.asarray(displacement, dtype=float)
+    tn = np.asarray(times, dtype=float)
+    sg = np.sign(np.asarray(signs, dtype=float))
+    n = tn.size
+    if n < 2 or not (step > 0 and omega > 0) or np.any(sg == 0):
+        return None
+    half_period = math.pi / omega
+    edges = np.concatenate([[tn[0] - half_period], tn, [tn[-1] + half_period]])
+    found = [_boundaries(t, s, edges[j], edges[j + 2], sg[j], step, omega, noise) for j in range(n)]
+    crossed = np.array([f[0].size > 0 for f in found])
+    if not crossed.any():
+        return None
+    first, last = int(np.argmax(crossed)), n - int(np.argmax(crossed[::-1]))
+    if not crossed[first:last].all():
+        return None  # a swing inside the run that crosses no boundary
+    keep = np.arange(first, last)
+    m = keep.size
+    cols = (2 if fit_drift else 1) + m
+    t0 = float(tn[first])
+    rows, target, sd = [], [], []
+    for i, j in enumerate(keep):
+        b, cos, dt = found[j]
+        # the boundary in the turning point's frame: sign × c(t_n) + A_n cos(ωD/2)
+        block = np.zeros((b.size, cols))
+        block[:, 0] = sg[j]
+        if fit_drift:
+            block[:, 1] = sg[j] * (tn[j] - t0)
+        block[:, cols - m + i] = cos
+        rows.append(block)
+        target.append(b)
+        # the time above: a sample's rounding at each end, and the noise's at each crossing
+        sin = np.sqrt(np.clip(1.0 - cos * cos, 0.0, None))
+        guess = 0.5 * float(np.ptp(b)) + step
+        slope = guess * omega * sin
+        timing = dt * dt / 6.0 + 0.56 * noise * dt / np.maximum(slope, 1e-300)
+        sd.append(np.sqrt((0.5 * slope) ** 2 * timing + (_MODEL_ERROR * guess) ** 2))
+    design, y, w = np.vstack(rows), np.concatenate(target), 1.0 / np.concatenate(sd)
+    if y.size <= cols:
+        return None
+    coef, _, rank, _ = np.linalg.lstsq(design * w[:, None], y * w, rcond=None)
+    if rank < cols:
+        return None
+    amp = coef[cols - m :]
+    if not np.all(np.isfinite(amp) & (amp > 0)):
+        return None
+    values = np.full(n, np.nan)
+    values[keep] = sg[keep] * amp
+    c1 = float(coef[1]) if fit_drift else 0.0
+    return values, float(coef[0]) - c1 * t0, c1
+
+
+def coarse_turning_points(
+    decay: Any, time: ArrayLike, displacement: ArrayLike | None
+) -> NDArray | None:
+    """A decay's turning points from its displacement's staircase, where it is coarse.
+
+    Parameters
+    ----------
+    decay : EnergyDecay
+        The run's energy decay (:func:`bayestribo.signal.decay.energy_decay`): its
+        turning points, noise levels and steps.
+    time : array_like
+        The recording's time stamps [s], as the decay was measured on.
+    displacement : array_like or None
+        The recorded displacement [length unit] (None: not recorded).
+
+    Returns
+    -------
+    ndarray or None
+        :func:`staircase_turning_points` of the decay's turning points, about its
+        equilibrium (NaN where a swing crosses no boundary); None where the displacement
+        is not recorded, or not coarse (its noise dithers the steps: the turning points'
+        parabolas hold), or the staircase gives no answer.
+    """
+    noise = decay.noise
+    if displacement is None or decay.derived_channel == "displacement":
+        return None
+    step = coarse_steps((noise.displacement_step, None), (noise.displacement, None))[0]
+    peaks = decay.peaks
+    if step is None or peaks.kind != "displacement" or len(peaks) < 2:
+        return None
+    rest = getattr(decay.rest_noise, "displacement", None)
+    # the noise measured at rest (a rest on one level: none), not the floor of q/√12
+    level = math.sqrt(rest.variance) if rest is not None else float(noise.displacement)
+    found = staircase_turning_points(
+        time,
+        displacement,
+        peaks.t,
+        np.sign(peaks.value),
+        step,
+        math.pi / peaks.half_period,
+        noise=level,
+        fit_drift=peaks.drift != 0.0,
+    )
+    return None if found is None else found[0]
