@@ -61,11 +61,17 @@ def _boundaries(
     of the half angle of each, and the sd of one sample's time [s] at them."""
     w = (t >= lo) & (t <= hi)
     empty = np.empty(0)
-    if w.sum() < 3:
+    if w.sum() < 3 or lo < t[0] or hi > t[-1]:  # an arc the record does not hold whole
         return empty, empty, empty
     z = sign * s[w]
     dt = float(np.median(np.diff(t[w])))
-    top, bottom = float(np.max(z)), float(np.min(z))
+    # the boundaries above the shallower of the two neighbouring extremes: the arc leaves
+    # each of them on both sides within the window
+    centre = int(np.argmax(z))
+    if centre == 0 or centre == z.size - 1:
+        return empty, empty, empty
+    top = float(z[centre])
+    bottom = max(float(np.min(z[:centre])), float(np.min(z[centre:])))
     clear = NOISE_CLEARANCE * noise - 1e-6 * step  # (levels read back within rounding)
     b = top - (np.arange(round((top - bottom) / step) + 1) + 0.5) * step
     b = b[(b <= top - 0.5 * step - clear) & (b >= bottom + 0.5 * step + clear)]
@@ -138,7 +144,7 @@ def staircase_turning_points(
     m = keep.size
     cols = (2 if fit_drift else 1) + m
     t0 = float(tn[first])
-    rows, target, sd = [], [], []
+    rows, target, timing_sd, sines, owner = [], [], [], [], []
     for i, j in enumerate(keep):
         b, cos, dt = found[j]
         # the boundary in the turning point's frame: sign × c(t_n) + A_n cos(ωD/2)
@@ -154,16 +160,31 @@ def staircase_turning_points(
         guess = 0.5 * float(np.ptp(b)) + step
         slope = guess * omega * sin
         timing = dt * dt / 6.0 + 0.56 * noise * dt / np.maximum(slope, 1e-300)
-        sd.append(np.sqrt((0.5 * slope) ** 2 * timing + (_MODEL_ERROR * guess) ** 2))
-    design, y, w = np.vstack(rows), np.concatenate(target), 1.0 / np.concatenate(sd)
+        timing_sd.append(0.5 * slope * np.sqrt(timing))
+        sines.append(sin)
+        owner.append(np.full(b.size, i))
+    design, y = np.vstack(rows), np.concatenate(target)
+    timing_sd, sines, owner = (np.concatenate(a) for a in (timing_sd, sines, owner))
     if y.size <= cols:
         return None
-    coef, _, rank, _ = np.linalg.lstsq(design * w[:, None], y * w, rcond=None)
-    if rank < cols:
-        return None
-    amp = coef[cols - m :]
-    if not np.all(np.isfinite(amp) & (amp > 0)):
-        return None
+    amp = np.full(m, step)
+    decrement = np.zeros(m)
+    for _ in range(2):
+        # the cosine model's error: 1e-3 of the swing, and the second order of the damping,
+        # about 4 d²/sin²(ωD/2) of it (d the half cycle's relative loss of swing: the two
+        # sides' arcs differ by it, which their sum cancels to first order only)
+        model = amp[owner] * (
+            _MODEL_ERROR + 4.0 * decrement[owner] ** 2 / np.maximum(sines, 0.1) ** 2
+        )
+        w = 1.0 / np.hypot(timing_sd, model)
+        coef, _, rank, _ = np.linalg.lstsq(design * w[:, None], y * w, rcond=None)
+        if rank < cols:
+            return None
+        amp = coef[cols - m :]
+        if not np.all(np.isfinite(amp) & (amp > 0)):
+            return None
+        if m >= 2:
+            decrement = np.abs(np.gradient(amp)) / amp
     values = np.full(n, np.nan)
     values[keep] = sg[keep] * amp
     c1 = float(coef[1]) if fit_drift else 0.0
