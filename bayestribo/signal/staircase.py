@@ -37,14 +37,22 @@ from numpy.typing import ArrayLike, NDArray
 
 from bayestribo.signal.coarse import coarse_steps
 
-__all__ = ["NOISE_CLEARANCE", "coarse_turning_points", "staircase_turning_points"]
+__all__ = [
+    "LARGEST_MODEL_ERROR",
+    "NOISE_CLEARANCE",
+    "coarse_turning_points",
+    "staircase_turning_points",
+]
 
 #: A boundary is used when it lies this many noise sd inside the arc at least, from its
 #: top level and from the lower of its neighbouring turning points' levels (a level the
 #: motion only grazes is crossed by the noise alone, and its time above is biased).
 NOISE_CLEARANCE = 2.0
-#: Relative error of the cosine model of an arc (second order in the damping).
+#: Relative error of the cosine model of an arc, beside the damping's second order.
 _MODEL_ERROR = 1e-3
+#: Largest second-order error of the cosine model, as a fraction of the swing, of the
+#: best boundary of a turning point kept at either end of the run.
+LARGEST_MODEL_ERROR = 0.01
 
 
 def _boundaries(
@@ -144,7 +152,7 @@ def staircase_turning_points(
     m = keep.size
     cols = (2 if fit_drift else 1) + m
     t0 = float(tn[first])
-    rows, target, timing_sd, sines, owner = [], [], [], [], []
+    rows, target, timing_sd, owner = [], [], [], []
     for i, j in enumerate(keep):
         b, cos, dt = found[j]
         # the boundary in the turning point's frame: sign × c(t_n) + A_n cos(ωD/2)
@@ -161,21 +169,22 @@ def staircase_turning_points(
         slope = guess * omega * sin
         timing = dt * dt / 6.0 + 0.56 * noise * dt / np.maximum(slope, 1e-300)
         timing_sd.append(0.5 * slope * np.sqrt(timing))
-        sines.append(sin)
         owner.append(np.full(b.size, i))
     design, y = np.vstack(rows), np.concatenate(target)
-    timing_sd, sines, owner = (np.concatenate(a) for a in (timing_sd, sines, owner))
+    timing_sd, owner = np.concatenate(timing_sd), np.concatenate(owner)
     if y.size <= cols:
         return None
     amp = np.full(m, step)
     decrement = np.zeros(m)
-    for _ in range(2):
-        # the cosine model's error: 1e-3 of the swing, and the second order of the damping,
-        # about 4 d²/sin²(ωD/2) of it (d the half cycle's relative loss of swing: the two
-        # sides' arcs differ by it, which their sum cancels to first order only)
-        model = amp[owner] * (
-            _MODEL_ERROR + 4.0 * decrement[owner] ** 2 / np.maximum(sines, 0.1) ** 2
-        )
+    for _ in range(3):
+        # the cosine model's error: 1e-3 of the swing, and the second order of the damping:
+        # the arcs on the two sides differ by the half cycle's loss of swing d, which
+        # their sum cancels to first order only; the rest is about (d/2)² (1 − cos)/(1 + cos)
+        # of the swing (for Coulomb friction, exactly so within a factor 2 from the top of
+        # the arc to near the bottom): the boundaries below the equilibrium weigh less
+        cos_all = design[np.arange(y.size), cols - m + owner]
+        second = (0.5 * decrement[owner]) ** 2 * (1.0 - cos_all) / np.maximum(1.0 + cos_all, 0.02)
+        model = amp[owner] * (_MODEL_ERROR + second)
         w = 1.0 / np.hypot(timing_sd, model)
         coef, _, rank, _ = np.linalg.lstsq(design * w[:, None], y * w, rcond=None)
         if rank < cols:
@@ -185,8 +194,17 @@ def staircase_turning_points(
             return None
         if m >= 2:
             decrement = np.abs(np.gradient(amp)) / amp
+    # a swing at either end whose best boundary leaves more than LARGEST_MODEL_ERROR of it
+    # to the second order (a swing of a step or two losing a third of itself in a half
+    # cycle) is left out, as one that crosses no boundary is
+    best = np.full(m, np.inf)
+    np.minimum.at(best, owner, second)
+    good = best <= LARGEST_MODEL_ERROR
+    if not good.any():
+        return None
+    lo, hi = int(np.argmax(good)), m - int(np.argmax(good[::-1]))
     values = np.full(n, np.nan)
-    values[keep] = sg[keep] * amp
+    values[keep[lo:hi]] = sg[keep[lo:hi]] * amp[lo:hi]
     c1 = float(coef[1]) if fit_drift else 0.0
     return values, float(coef[0]) - c1 * t0, c1
 
