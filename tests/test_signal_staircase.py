@@ -189,3 +189,25 @@ def test_a_band_wholly_below_zero_is_an_energy_gain_warning():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert warn_energy_gain("run", measured) == []
+
+
+def test_a_fit_of_a_coarse_record_reports_the_staircase_law_free_answer():
+    from bayestribo import fit
+    from bayestribo.inference.law_free import STAIRCASE
+
+    t, x, v, _, _ = coarse_record(4.0, 0.3)
+    exact = coarse_record(1e9, 0.0)[1]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = fit(Run(time=t, displacement=x, velocity=v, metadata=META), seed=2)
+    measured = result.turning_point_dissipation
+    assert STAIRCASE in measured["definition"]
+    lo, hi = (np.asarray(b) for b in measured["interval"])
+    assert np.all(np.asarray(measured["mean"]) > 0)
+    # the truth in joules at the reported swings (k = mω² of the record's 32.6 Hz)
+    k = META["mass_kg"] * (2 * math.pi * 32.6) ** 2
+    swings = np.asarray(measured["amplitude"])
+    d = np.diff(exact)
+    turns = np.flatnonzero((d[:-1] > 0) & (d[1:] <= 0) | (d[:-1] < 0) & (d[1:] >= 0)) + 1
+    truth = k * _true_loss(np.concatenate([[exact[0]], exact[turns]]), swings)
+    assert np.mean((lo <= truth) & (truth <= hi)) >= 0.75
