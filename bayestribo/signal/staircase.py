@@ -126,11 +126,11 @@ def staircase_turning_points(
     Returns
     -------
     (values, offset, drift) or None
-        The turning points about the equilibrium [length unit] (NaN for those at either
-        end whose arc crosses no boundary the noise leaves clear: swings of a step or
-        less), the equilibrium at t = 0 [length unit] and its drift [length unit/s];
-        None when no arc, or one between others, crosses a boundary, or the fit is not
-        determined.
+        The turning points about the equilibrium [length unit] (NaN outside the longest
+        run of those whose arc crosses a boundary the noise leaves clear, and for a
+        swing at either end of it left to the cosine model's second order), the
+        equilibrium at t = 0 [length unit] and its drift [length unit/s]; None when no
+        arc crosses a boundary, or the fit is not determined.
     """
     t = np.asarray(t, dtype=float)
     s = np.asarray(displacement, dtype=float)
@@ -145,9 +145,13 @@ def staircase_turning_points(
     crossed = np.array([f[0].size > 0 for f in found])
     if not crossed.any():
         return None
-    first, last = int(np.argmax(crossed)), n - int(np.argmax(crossed[::-1]))
-    if not crossed[first:last].all():
-        return None  # a swing inside the run that crosses no boundary
+    # the longest run of turning points whose arcs cross a boundary (the smallest swings,
+    # in the noise's reach, may cross none here and there: those after the first such
+    # gap are left out, as the resolved swings end a coarse record's analysis)
+    edges_of_runs = np.flatnonzero(np.diff(np.concatenate([[0], crossed.astype(int), [0]])))
+    starts, stops = edges_of_runs[::2], edges_of_runs[1::2]
+    longest = int(np.argmax(stops - starts))
+    first, last = int(starts[longest]), int(stops[longest])
     keep = np.arange(first, last)
     m = keep.size
     cols = (2 if fit_drift else 1) + m
