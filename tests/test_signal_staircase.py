@@ -4,6 +4,7 @@ Coulomb decay of ``tests/_coarse_decay.py``, and solve_ivp of a quadratic drag).
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 
@@ -41,9 +42,10 @@ def _true_loss(turning: np.ndarray, swings: np.ndarray) -> np.ndarray:
     return np.exp(np.interp(np.log(swings), np.log(swing[order]), np.log(loss[order])))
 
 
-def _quadratic_record(steps: float, placement: float) -> tuple[np.ndarray, ...]:
+@functools.cache
+def _quadratic_motion() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Quadratic drag (x'' + β|x'|x' + ω²x = 0) from 2 mm at rest, 10 kHz, 0.1 s of
-    rest first; both channels rounded to 1/``steps`` of their swing."""
+    rest first."""
     w, beta = 2 * math.pi * 32.6, 80.0
     sol = solve_ivp(
         lambda _, s: [s[1], -(w**2) * s[0] - beta * abs(s[1]) * s[1]],
@@ -57,6 +59,12 @@ def _quadratic_record(steps: float, placement: float) -> tuple[np.ndarray, ...]:
     x, v = np.full(t.size, 2e-3), np.zeros(t.size)
     moving = t >= 0.1
     x[moving], v[moving] = sol.sol(t[moving] - 0.1)
+    return t, x, v
+
+
+def _quadratic_record(steps: float, placement: float) -> tuple[np.ndarray, ...]:
+    """The quadratic drag's motion, both channels rounded to 1/``steps`` of their swing."""
+    t, x, v = _quadratic_motion()
     qx, qv = np.ptp(x) / steps, np.ptp(v) / steps
     u = placement
     return t, x, (np.round(x / qx + u) - u) * qx, (np.round(v / qv + u) - u) * qv, qx
