@@ -75,7 +75,7 @@ def law_free_turning_points(prepared: Any, *, warn_levels: bool = True) -> tuple
             "half a step off, and its staircase does not place them (a swing crosses no "
             "level clear of the noise): the law-free ΔE(A) read off them is not calibrated "
             "(on simulated records of 3 to 5 steps across the swing whose staircase placed "
-            "none, its 95 % intervals held the truth at 57 to 89 % of the swings, where the "
+            "none, its 95 % intervals held the truth at 57 to 87 % of the swings, where the "
             "staircase's held it at 99 %; benchmarks/coarse_dissipation.py)",
             CoarseSignalWarning,
         )
