@@ -15,6 +15,7 @@ __all__ = [
     "CoarseSignalWarning",
     "ConvergenceWarning",
     "CreepWarning",
+    "EnergyGainWarning",
     "FadeWarning",
     "FrequencyTrendWarning",
     "GapWarning",
@@ -152,6 +153,13 @@ class CoarseSignalWarning(MisfitWarning):
     included where it is what the record lacks), or it is a velocity recorded alone,
     whose rounding accumulates in its integral. The message names the channel, its step
     and the count."""
+
+
+class EnergyGainWarning(MisfitWarning):
+    """The law-free ΔE(A) (the turning points' energy lost per cycle) is below zero
+    beyond its interval at some swings: an energy gain, which no free decay has, so the
+    turning points there are not the motion's. The message gives the swings. A misfit:
+    ``fit`` exits 1."""
 
 
 class OffsetDriftWarning(MisfitWarning):

@@ -437,7 +437,9 @@ def turning_point_dissipation(
     swings, a torsion pendulum recorded for two seconds) fits all of them at every swing,
     with a polynomial of degree ``min(2, n - 3)`` so that two degrees of freedom remain
     for the interval: wide, but an answer; with fewer than three half cycles there is
-    none.
+    none. A fit passes a coarse displacement's turning points as its staircase places
+    them (:func:`bayestribo.inference.law_free.law_free_turning_points`): on its levels
+    they are up to half a step off, and the band is not calibrated.
 
     Parameters
     ----------

@@ -350,8 +350,10 @@ def turning_point_screen(
     from bayestribo.model.laws import PhysicalScale
 
     factor = TURNING_POINT_FACTOR if factor is None else float(factor)
-    decay = prepared.decay
-    peaks = np.asarray(decay.peaks.value, dtype=float) / decay.scaling.length_scale
+    from bayestribo.inference.law_free import law_free_turning_points
+
+    # the turning points of the law-free answer (a coarse displacement's staircase's)
+    peaks, _ = law_free_turning_points(prepared, warn_levels=False)
     swings = dissipation_amplitudes(peaks)
     try:
         measured = turning_point_dissipation(peaks, swings, PhysicalScale())

@@ -34,6 +34,7 @@ from bayestribo.inference.dissipation import (
     turning_point_dissipation,
 )
 from bayestribo.inference.fit_record import FitRecord, plain_data
+from bayestribo.inference.law_free import STAIRCASE, law_free_turning_points, warn_energy_gain
 from bayestribo.inference.restoring_error import restoring_error, shifted
 from bayestribo.inference.result import FitResult
 from bayestribo.inference.sensitivity import prior_sensitivity
@@ -286,7 +287,10 @@ def summary(
     scale = physical_scale(scaling, metadata)
     own, own_units = law_quantities(posterior, reported, scale, gain)
     derived = {**derived, **{k: v for k, v in own.items() if k not in derived}}
-    swings = dissipation_amplitudes(decay.peaks.value / scaling.length_scale)
+    # the law-free answer's turning points: a coarse displacement's from its staircase
+    # (inference/law_free.py); the swings span them
+    turning, staircase = law_free_turning_points(prepared)
+    swings = dissipation_amplitudes(turning)
     scale = dataclasses.replace(scale, length_scale=scale.length_scale / sensor.gain)
     dissipation = dissipation_band(
         posterior, reported, swings, scale, frequency_sd=frequency_sd, gain_sd=sensor.gain_sd
@@ -300,13 +304,16 @@ def summary(
         small_swings=decay.restoring is not None,
     )
     measured = turning_point_dissipation(
-        decay.peaks.value / scaling.length_scale,
+        turning,
         swings,
         tp_scale,
         gain_sd=sensor.gain_sd,
         restoring=restoring,
         energy_sd=energy_sd,
     )
+    if measured is not None and staircase:
+        measured["definition"] += f"; {STAIRCASE}"
+    warn_energy_gain(name, measured)
     _warn_restoring(name, restoring, posterior.law)
     agreement = shape_agreement(dissipation, measured)
     warn_shape(name, agreement, posterior.law.name, compared, flagged=checks.flagged)
