@@ -143,6 +143,7 @@ from scipy.integrate import cumulative_trapezoid
 from bayestribo.signal.channel_noise import recorded_noise
 from bayestribo.signal.coarse import coarse_steps, quantised_increments
 from bayestribo.signal.decay import EnergyDecay, derivative_gain
+from bayestribo.signal.derivative_correlation import derived_velocity_correlation
 from bayestribo.signal.increment_correlation import (
     correlation_matrix,
     integrated_noise,
@@ -308,7 +309,9 @@ class PiData:
     correlation : ndarray or None
         The correlation of the increments' noise, shape (m, m), for an
         accelerometer's record, whose integrated noise reaches many increments alike
-        (:mod:`bayestribo.signal.increment_correlation`); the covariance is
+        (:mod:`bayestribo.signal.increment_correlation`), and for a velocity derived
+        from the displacement on a nonlinear restoring force, whose neighbours share
+        the derivative's noise (:mod:`bayestribo.signal.derivative_correlation`); the covariance is
         ``√V_i R_ij √V_j`` and the likelihood whitens the increments with it. None:
         independent increments (see the module notes).
     """
@@ -1175,6 +1178,29 @@ def pi_data(
         # ±2 samples at the end in the last increment.
         end_energy = float(np.max(decay.energy[edges[-2] :]))
         variance[-1] += (2.0 * h * end_energy) ** 2
+    if (
+        covariance is None
+        and restoring is not None
+        and decay.derived_channel == "velocity"
+        and coarse is None
+        and not options
+    ):
+        # a nonlinear force's half cycles drift through the grid: neighbours share the
+        # derivative's noise at boundaries where the motion is fast
+        # (bayestribo.signal.derivative_correlation); the linear spring's grid keeps
+        # its boundaries near turning points, its increments independent
+        correlation = derived_velocity_correlation(
+            np.asarray(restoring.spring(y), dtype=float),
+            yp,
+            edges,
+            weights,
+            variance,
+            sig_y,
+            decay.savgol_window,
+            h,
+        )
+    else:
+        correlation = None if covariance is None else correlation_matrix(covariance, variance)
     return PiData(
         tau_grid=tau[edges],
         increments=observed,
@@ -1186,7 +1212,7 @@ def pi_data(
         noise_bias=bias,
         spectral=bool(options),
         neighbour_covariance=neighbours,
-        correlation=None if covariance is None else correlation_matrix(covariance, variance),
+        correlation=correlation,
         preparation={
             "noise": noise,
             "grid_points": int(grid_points),
