@@ -1008,6 +1008,7 @@ def pi_data(
     seed: int = 0,
     spectral: bool = True,
     motion: tuple[NDArray, NDArray] | None = None,
+    derivative_correlation: bool = True,
 ) -> PiData:
     """Build the likelihood's observation from a recording's energy decay.
 
@@ -1042,6 +1043,12 @@ def pi_data(
         optimum (:func:`bayestribo.inference.reweight.law_motion`). Default: the
         observed channels (see the module notes for what that costs below the
         noise). The observed increments are the same either way.
+    derivative_correlation : bool
+        On a nonlinear restoring force with a derived velocity, give the likelihood the
+        correlation the derivative's noise makes between neighbouring increments
+        (:mod:`bayestribo.signal.derivative_correlation`); False keeps them
+        independent, as on the linear spring (:func:`bayestribo.inference.preparation.
+        prepare` does so where the force is in doubt).
 
     Returns
     -------
@@ -1179,7 +1186,8 @@ def pi_data(
         end_energy = float(np.max(decay.energy[edges[-2] :]))
         variance[-1] += (2.0 * h * end_energy) ** 2
     if (
-        covariance is None
+        derivative_correlation
+        and covariance is None
         and restoring is not None
         and decay.derived_channel == "velocity"
         and coarse is None
@@ -1219,6 +1227,7 @@ def pi_data(
             "n_replicates": n_replicates,
             "seed": seed,
             "spectral": spectral,
+            "derivative_correlation": derivative_correlation,
         },
         restoring=restoring,
         rounding=0.0 if coarse is None else float(coarse["steps"][0] or 0.0),
