@@ -4,6 +4,7 @@ displacement (bayestribo.signal.derivative_correlation)."""
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -79,9 +80,7 @@ def test_first_order_correlation_is_the_monte_carlos(frequency: float) -> None:
 
 def _record(beta: float | None, restoring: str) -> Run:
     """A Duffing spring (or a linear one, β = 0) with the displacement alone."""
-    case = Swing(
-        f0=2.0, zeta=0.005, friction=0.002, x0=2.0, beta=beta, rate=200.0, duration=12.0
-    )
+    case = Swing(f0=2.0, zeta=0.005, friction=0.002, x0=2.0, beta=beta, rate=200.0, duration=12.0)
     t, x, _ = swing(case, seed=3)
     return Run(t, x, metadata={"length_unit": "arbitrary", "restoring": restoring})
 
@@ -95,3 +94,22 @@ def test_a_nonlinear_force_with_a_derived_velocity_correlates_its_increments() -
     assert np.mean(np.diag(nonlinear.correlation, 1)) < -0.1
     linear = prepare(_record(0.0, "linear")).data
     assert linear.correlation is None
+
+
+@pytest.mark.parametrize("restoring", ["auto", "duffing"])
+def test_a_force_in_doubt_keeps_independent_increments(restoring: str) -> None:
+    """A pendulum recorded as a length (not radians): ``auto`` takes the Duffing spring
+    and warns that a pendulum is fitted in radians, and a Duffing spring named for it is
+    the force auto would take with that warning. The increments stay independent, the
+    width that covered that force; the same pendulum in radians, named, is correlated."""
+    case = Swing(f0=0.5, zeta=0.005, friction=0.002, x0=0.5 * math.pi, rate=100.0, duration=30.0)
+    t, x, _ = swing(case, seed=5)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # auto's FrequencyTrendWarning
+        doubtful = prepare(Run(t, x, metadata={"length_unit": "arbitrary", "restoring": restoring}))
+    assert doubtful.run.metadata["restoring"] == "duffing"
+    assert doubtful.data.correlation is None
+    assert doubtful.data.preparation["derivative_correlation"] is False
+    settled = prepare(Run(t, x, metadata={"length_unit": "rad", "restoring": "pendulum"}))
+    assert settled.data.correlation is not None
+    assert np.mean(np.diag(settled.data.correlation, 1)) < -0.1
