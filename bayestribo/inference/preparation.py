@@ -133,7 +133,8 @@ def force_settled(run: Run, decay: EnergyDecay, choice: Any = None) -> bool:
     takes that correlation only where the force is not in doubt. Taken as independent,
     the increments leave the intervals some 30 % wider than the estimates' scatter,
     which is what covered a force that is not the record's (a Duffing spring fitted to
-    a pendulum recorded as a length: with the correlation, μ_k's z-scores' sd 1.3).
+    a pendulum recorded as a length: with the correlation, c₂'s and μ_k's z-scores' sd
+    1.26-1.27 over 31 runs, ``benchmarks/README.md``).
 
     Parameters
     ----------
