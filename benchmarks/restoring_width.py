@@ -201,6 +201,60 @@ def bundled_observations() -> dict[str, Any]:
     return out
 
 
+_TIMED = """
+import sys, time, warnings, zlib
+import numpy as np
+sys.path.insert(0, {here!r})
+import restoring_coverage as rc
+from bayestribo import fit
+from bayestribo.io.run import Run
+name, index = {name!r}, {index}
+case = rc.CASES[name]
+entropy = [{seed}, zlib.crc32(name.encode()), index]
+t, x, _ = rc.simulate(case)
+xs = x + np.random.default_rng(entropy).normal(0.0, case["noise"], x.size)
+run = Run(t, xs, metadata={{"gain_uncertainty": 0.0, **case["meta"]}})
+with warnings.catch_warnings():
+    warnings.simplefilter("ignore")
+    fit(run, law=rc.LAW, seed=1)
+    start = time.process_time()
+    fit(run, law=rc.LAW, seed=int(np.random.default_rng(entropy).integers(2**31)))
+    print(time.process_time() - start)
+"""
+
+
+def cpu_side_by_side(baseline: str, repeats: int, seed: int) -> dict[str, Any]:
+    """Process CPU time of one fit (after a warm-up fit) of runs 0 .. repeats-1 of
+    pendulum-90 and duffing-5pc, this tree's package and ``baseline``'s alternating, each
+    in its own subprocess."""
+    import os
+    import statistics
+    import subprocess
+
+    trees = {"baseline": baseline, "this": str(Path(__file__).resolve().parents[1])}
+    times: dict[str, dict[str, list[float]]] = {k: {} for k in trees}
+    for name in ("pendulum-90", "duffing-5pc"):
+        for index in range(repeats):
+            order = ["baseline", "this"] if index % 2 == 0 else ["this", "baseline"]
+            for tree in order:
+                code = _TIMED.format(
+                    here=str(Path(__file__).parent), name=name, index=index, seed=seed
+                )
+                env = {**os.environ, "PYTHONPATH": trees[tree]}
+                done = subprocess.run(
+                    [sys.executable, "-c", code], capture_output=True, text=True, env=env
+                )
+                cpu = float(done.stdout.strip().splitlines()[-1])
+                times[tree].setdefault(name, []).append(cpu)
+                print(name, index, tree, cpu, flush=True)
+    summary = {}
+    for name in times["this"]:
+        before = statistics.median(times["baseline"][name])
+        after = statistics.median(times["this"][name])
+        summary[name] = {"baseline_median": before, "median": after, "ratio": after / before}
+    return {"trees": trees, "seconds": times, "summary": summary}
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--seed", type=int, default=2026)
@@ -212,8 +266,14 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="only the bundled runs' observations (run with each package to compare)",
     )
+    parser.add_argument("--cpu", default=None, help="a baseline worktree: CPU side by side")
+    parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args(argv)
     results: dict[str, Any] = {"benchmark": "restoring_width", "seed": args.seed}
+    if args.cpu:
+        results["cpu"] = cpu_side_by_side(args.cpu, args.repeats, args.seed)
+        print(write_results(args.output, results))
+        return 0
     if args.bundled:
         import bayestribo
 
