@@ -171,8 +171,8 @@ def force_settled(run: Run, decay: EnergyDecay, choice: Any = None) -> bool:
 
 
 def _derivative_correlation(prepared: PreparedRun) -> bool:
-    """What :func:`prepare` decided of the derivative's correlation (as it was for a
-    preparation without the record)."""
+    """What :func:`prepare` decided of the derivative's correlation (kept in the data's
+    ``preparation``), for the preparations made again from it."""
     return bool((prepared.data.preparation or {}).get("derivative_correlation", True))
 
 

@@ -56,6 +56,15 @@ trapezoids) whitening with the draws' correlation narrowed intervals that were
 already a little narrow (``benchmarks/misspecification.py --cases velocity-10``: ζ's
 z sd 1.20 to 1.30 at 30 times the resolution).
 
+**A velocity derived from the displacement** (its Savitzky-Golay derivative) shares
+the displacement's noise within half the derivative's window of a boundary between
+increments, with opposite signs in the two neighbours where the motion is fast
+(∫ y'δy' = [y'δy] − ∫ y''δy). The linear spring's grid keeps its boundaries near
+turning points (neighbours uncorrelated, +0.015); a nonlinear force's half cycles
+drift through the grid (−0.24 to −0.26), and :func:`pi_data` gives the likelihood
+their first-order correlation there
+(:mod:`bayestribo.signal.derivative_correlation`).
+
 **Coloured noise.** A real signal chain filters the noise (anti-alias filter), adds
 mains lines and 1/f noise: the samples' errors are then correlated, and the variance
 of a weighted sum of them is ``wᵀ C w`` with C the noise's autocovariance, not
