@@ -24,10 +24,14 @@ the phase of the motion, and the correlation of neighbours reaches -0.24 (a pend
 released at 90°) and -0.26 (a Duffing spring 5 % stiffer at the release): the sum of
 all the increments then has 0.54-0.59 of the sum of their variances, and
 independent increments left ζ's, c₂'s and μ_k's intervals some 30 % too wide
-(z-scores' sd 0.71-0.77). :func:`derived_velocity_correlation` gives the likelihood
-that correlation (:attr:`~bayestribo.signal.increments.PiData.correlation`), with
-which it whitens the increments (:mod:`bayestribo.inference.likelihood`); the
-increments' variances stay the Monte Carlo's, which holds the second-order terms too.
+(z-scores' sd 0.71-0.77; with it 0.94-1.06, ``benchmarks/restoring_coverage.py``).
+:func:`derived_velocity_correlation` gives the likelihood that correlation
+(:attr:`~bayestribo.signal.increments.PiData.correlation`), with which it whitens the
+increments (:mod:`bayestribo.inference.likelihood`); the increments' variances stay
+the Monte Carlo's, which holds the second-order terms too. It is given where the force
+is not in doubt (:func:`bayestribo.inference.preparation.force_settled`): a force that
+is not the record's scatters its estimates more than the noise alone would, and keeps
+the independent increments' width.
 """
 
 from __future__ import annotations
