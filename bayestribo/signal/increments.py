@@ -56,6 +56,15 @@ trapezoids) whitening with the draws' correlation narrowed intervals that were
 already a little narrow (``benchmarks/misspecification.py --cases velocity-10``: ζ's
 z sd 1.20 to 1.30 at 30 times the resolution).
 
+**A velocity derived from the displacement** (its Savitzky-Golay derivative) shares
+the displacement's noise within half the derivative's window of a boundary between
+increments, with opposite signs in the two neighbours where the motion is fast
+(∫ y'δy' = [y'δy] − ∫ y''δy). The linear spring's grid keeps its boundaries near
+turning points (neighbours uncorrelated, +0.015); a nonlinear force's half cycles
+drift through the grid (−0.24 to −0.26), and :func:`pi_data` gives the likelihood
+their first-order correlation there
+(:mod:`bayestribo.signal.derivative_correlation`).
+
 **Coloured noise.** A real signal chain filters the noise (anti-alias filter), adds
 mains lines and 1/f noise: the samples' errors are then correlated, and the variance
 of a weighted sum of them is ``wᵀ C w`` with C the noise's autocovariance, not
@@ -143,6 +152,7 @@ from scipy.integrate import cumulative_trapezoid
 from bayestribo.signal.channel_noise import recorded_noise
 from bayestribo.signal.coarse import coarse_steps, quantised_increments
 from bayestribo.signal.decay import EnergyDecay, derivative_gain
+from bayestribo.signal.derivative_correlation import derived_velocity_correlation
 from bayestribo.signal.increment_correlation import (
     correlation_matrix,
     integrated_noise,
@@ -308,7 +318,9 @@ class PiData:
     correlation : ndarray or None
         The correlation of the increments' noise, shape (m, m), for an
         accelerometer's record, whose integrated noise reaches many increments alike
-        (:mod:`bayestribo.signal.increment_correlation`); the covariance is
+        (:mod:`bayestribo.signal.increment_correlation`), and for a velocity derived
+        from the displacement on a nonlinear restoring force, whose neighbours share
+        the derivative's noise (:mod:`bayestribo.signal.derivative_correlation`); the covariance is
         ``√V_i R_ij √V_j`` and the likelihood whitens the increments with it. None:
         independent increments (see the module notes).
     """
@@ -1005,6 +1017,7 @@ def pi_data(
     seed: int = 0,
     spectral: bool = True,
     motion: tuple[NDArray, NDArray] | None = None,
+    derivative_correlation: bool = True,
 ) -> PiData:
     """Build the likelihood's observation from a recording's energy decay.
 
@@ -1039,6 +1052,12 @@ def pi_data(
         optimum (:func:`bayestribo.inference.reweight.law_motion`). Default: the
         observed channels (see the module notes for what that costs below the
         noise). The observed increments are the same either way.
+    derivative_correlation : bool
+        On a nonlinear restoring force with a derived velocity, give the likelihood the
+        correlation the derivative's noise makes between neighbouring increments
+        (:mod:`bayestribo.signal.derivative_correlation`); False keeps them
+        independent, as on the linear spring (:func:`bayestribo.inference.preparation.
+        prepare` does so where the force is in doubt).
 
     Returns
     -------
@@ -1175,6 +1194,30 @@ def pi_data(
         # ±2 samples at the end in the last increment.
         end_energy = float(np.max(decay.energy[edges[-2] :]))
         variance[-1] += (2.0 * h * end_energy) ** 2
+    if (
+        derivative_correlation
+        and covariance is None
+        and restoring is not None
+        and decay.derived_channel == "velocity"
+        and coarse is None
+        and not options
+    ):
+        # a nonlinear force's half cycles drift through the grid: neighbours share the
+        # derivative's noise at boundaries where the motion is fast
+        # (bayestribo.signal.derivative_correlation); the linear spring's grid keeps
+        # its boundaries near turning points, its increments independent
+        correlation = derived_velocity_correlation(
+            np.asarray(restoring.spring(y), dtype=float),
+            yp,
+            edges,
+            weights,
+            variance,
+            sig_y,
+            decay.savgol_window,
+            h,
+        )
+    else:
+        correlation = None if covariance is None else correlation_matrix(covariance, variance)
     return PiData(
         tau_grid=tau[edges],
         increments=observed,
@@ -1186,13 +1229,14 @@ def pi_data(
         noise_bias=bias,
         spectral=bool(options),
         neighbour_covariance=neighbours,
-        correlation=None if covariance is None else correlation_matrix(covariance, variance),
+        correlation=correlation,
         preparation={
             "noise": noise,
             "grid_points": int(grid_points),
             "n_replicates": n_replicates,
             "seed": seed,
             "spectral": spectral,
+            "derivative_correlation": derivative_correlation,
         },
         restoring=restoring,
         rounding=0.0 if coarse is None else float(coarse["steps"][0] or 0.0),
