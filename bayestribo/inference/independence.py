@@ -424,7 +424,10 @@ class GroupedIndependenceMove(emcee.moves.Move):
         χ² of each (as 2 × Gamma(ν/2), ν of the first proposal: the fitted ones share
         it), the uniforms of the flat coordinates, the Metropolis uniforms; a
         compiled loop makes the proposals and the proposal's side of the Hastings
-        ratio, and the log-probability of all walkers is one vectorised call.
+        ratio, and the log-probability of all walkers is one vectorised call, or,
+        where the log-probability offers it (:func:`_compiled_step`), the log
+        posterior and the acceptance are one compiled call
+        (:func:`bayestribo.inference.fused_step.independence_step`).
         """
         nwalkers, ndim = state.coords.shape
         g = len(self.proposals)
@@ -439,13 +442,25 @@ class GroupedIndependenceMove(emcee.moves.Move):
         coords = np.array(state.coords, dtype=np.float64)
         log_prob = np.array(state.log_prob, dtype=np.float64)
         q, factors = _proposals(coords, *self._stacked(), z, w, u)
-        new_log_prob = _log_prob(model, q)
-        accepted = factors + new_log_prob - log_prob > log_u
-        coords[accepted] = q[accepted]
-        log_prob[accepted] = new_log_prob[accepted]
+        accepted = np.zeros(nwalkers, dtype=bool)
+        step = _compiled_step(model)
+        if step is None or not step(coords, log_prob, q, factors, log_u, accepted):
+            new_log_prob = _log_prob(model, q)
+            accepted = factors + new_log_prob - log_prob > log_u
+            coords[accepted] = q[accepted]
+            log_prob[accepted] = new_log_prob[accepted]
         state.coords = coords
         state.log_prob = log_prob
         return state, accepted
+
+
+def _compiled_step(model):
+    """The compiled independence step the sampler's log-probability offers (its
+    ``independence_step`` attribute: ``step(coords, log_prob, q, factors, log_u,
+    accepted) -> bool``, updating the first and last three in place by the rule of
+    :meth:`GroupedIndependenceMove.propose`, False where it did nothing), or None."""
+    function = getattr(model.log_prob_fn, "f", model.log_prob_fn)  # emcee's wrapper
+    return getattr(function, "independence_step", None)
 
 
 @numba.njit(cache=True, error_model="numpy")

@@ -320,6 +320,7 @@ def _nan_checked(
     # A compiled step of the grouped moves stops before any split with a NaN and
     # leaves it to this function (bayestribo.inference.moves).
     checked.grouped_step = getattr(log_prob, "grouped_step", None)  # type: ignore[attr-defined]
+    checked.independence_step = getattr(log_prob, "independence_step", None)  # type: ignore[attr-defined]
     return checked
 
 
