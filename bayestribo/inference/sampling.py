@@ -50,6 +50,16 @@ Two ways to run the ensembles (``SamplerSettings.moves``):
 Either way a step updates every walker of every ensemble once: the autocorrelation
 time, the stopping rule and the effective sample size mean the same.
 
+Where ``SamplerSettings.independence`` is above 0, the first ``adapt_steps`` steps
+are an adaptation phase with the DE moves alone; at its end each ensemble's
+independence proposal is fitted to its own walkers and held fixed, and the
+independence Metropolis-Hastings move joins the mix with that weight (less where its
+expected acceptance is low): :mod:`bayestribo.inference.independence`, which says
+why the chain after the phase is valid and the ensembles independent. The phase is
+never kept (the burn-in is at least ``adapt_steps``). The population's sampler uses
+it; the single-run fit does not (its runs are held by the rule that τ settle, not
+by τ: ``benchmarks/README.md``).
+
 This module knows nothing of the models: :func:`run_ensembles` samples any vectorised
 log-probability; the single-run fit and the population both use it.
 """
