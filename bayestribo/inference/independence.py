@@ -19,9 +19,19 @@ the move is rarely accepted and the DE moves it is mixed with do the work.
 whose location and scale matrix are the mean and the covariance (times
 ``scale²``) of that ensemble's own walkers over the second half of an adaptation
 phase (the sampler's first ``adapt_steps`` steps, DE moves alone), fitted once at the
-end of that phase and **held fixed** afterwards. Its tails, heavier than a Gaussian's,
-keep π/q bounded where π is near-Gaussian or bounded (a uniform ratio μ_s/μ_k), which
-makes the independence sampler uniformly ergodic there (Mengersen & Tweedie 1996).
+end of that phase and **held fixed** afterwards; a coordinate whose draws look
+bounded and flat (the ratio μ_s/μ_k) is proposed on its own, uniform on their range
+with a Cauchy defence (:class:`StudentProposal`). The t's tails, heavier than a
+Gaussian's, and the defence keep π/q bounded where π is near-Gaussian or flat and
+bounded, which makes the independence sampler uniformly ergodic there (Mengersen &
+Tweedie 1996).
+
+**Its weight in the mix** is fixed at the same time: ``SamplerSettings.independence``
+where the expected acceptance of the move (:func:`expected_acceptance`, from the
+phase's draws and one pilot proposal per walker, evaluated outside any chain) is at
+least :data:`FULL_ACCEPTANCE` in every ensemble, less below, none under
+:data:`NO_ACCEPTANCE` (:func:`mix_weight`): a move that is rarely accepted does not
+take the DE moves' steps.
 
 **Why the chain after the adaptation phase is valid.** From the end of the phase
 on, every move of the mix is a Markov kernel that leaves the product of the
@@ -36,8 +46,11 @@ it) is discarded as burn-in: the sampler's burn-in is at least ``adapt_steps``.
 
 **Why ensembles stay independent.** Ensemble g's proposal is fitted from ensemble g's
 walkers alone, and its walkers' proposals are drawn from it alone, so the ensembles
-share no walker and no fitted quantity, only the sampler's random stream, as the DE
-moves do: R-hat between ensembles compares independent chains.
+share no walker and no proposal, only the sampler's random stream and its choice of
+the move at each step, as with the DE moves, and the one weight of the move in the
+mix (the least expected acceptance of the ensembles'). Given the phase, each
+ensemble's chain is its own valid chain: the shared weight sets how fast they mix,
+never where they go, so two ensembles that disagree still show it in R-hat.
 
 The log-probability is evaluated for every walker of every ensemble in one
 vectorised call (no split: a proposal does not depend on the other walkers).
