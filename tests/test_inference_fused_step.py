@@ -201,3 +201,32 @@ def test_a_law_without_closed_form_leaves_every_split_to_python(data):
     np.testing.assert_array_equal(chain, ref_chain)
     np.testing.assert_array_equal(lp, ref_lp)
     assert np.unique(chain[:, 0, 0]).size > 3
+
+
+def _independence_chain(log_prob, start: np.ndarray, steps: int, seed: int = 13):
+    """300 DE steps, then ``steps`` with the independence move (fitted to each
+    ensemble's walkers) in the mix at 0.75."""
+    from bayestribo.inference.independence import GroupedIndependenceMove
+
+    ens = sampling._Grouped(sampling._nan_checked(log_prob, log_prob.names), start, seed)
+    ens.run(300)  # from the small box into the posterior
+    ens.use_independence(GroupedIndependenceMove.fitted(ens.chains(150)), 0.75)
+    ens.run(steps)
+    return ens.sampler.get_chain(), ens.sampler.get_log_prob()
+
+
+@pytest.mark.parametrize("variant", list(VARIANTS))
+def test_the_compiled_independence_step_gives_the_python_steps_chains_to_the_bit(data, variant):
+    post = build_posterior(data, **VARIANTS[variant])
+    assert post.independence_step is not None
+    start = _start(post)
+    chain, lp = _independence_chain(post, start, 100)
+    ref_chain, ref_lp = _independence_chain(_Python(post), start, 100)
+    np.testing.assert_array_equal(chain, ref_chain)
+    np.testing.assert_array_equal(lp, ref_lp)
+    assert np.unique(chain[:, 0, 0]).size > 10
+
+
+def test_without_a_compiled_density_there_is_no_independence_step(data):
+    post = build_posterior(data)
+    assert Posterior(post.priors, post.likelihood, compiled=False).independence_step is None

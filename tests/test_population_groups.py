@@ -274,6 +274,12 @@ def test_trend_slope_agrees_with_the_exact_posterior():
     runs = _normal_runs(y, s, 0.03, 0.02, rng, n_samples=1000, meta=meta)
     tr = trend(runs, "load_N", ("zeta",), seed=4)
     assert tr.diagnostics["converged"]
+    # sampled with the independence move in the mix, its adaptation phase not kept
+    from bayestribo.inference.sampling import SamplerSettings
+    from bayestribo.population.sampler import POPULATION_INDEPENDENCE
+
+    assert tr.diagnostics["independence_weight"] == POPULATION_INDEPENDENCE
+    assert tr.diagnostics["burn"] >= SamplerSettings.adapt_steps
     w, means, sds = _trend_exact(loads, y, s, _default(runs), np.geomspace(1e-6, 0.1, 3000))
     grid = np.linspace(means.min() - 8 * sds.max(), means.max() + 8 * sds.max(), 4000)
     cdf = (w[:, None] * norm.cdf((grid[None] - means[:, None]) / sds[:, None])).sum(0)

@@ -17,6 +17,10 @@ random state, and the choice of the move at each step.
 The step stops before a split whose proposals are not finite or whose log posterior
 is NaN or outside the compiled form's domain; the move runs that split and the rest
 in Python, where the errors naming the cause are raised.
+
+:func:`independence_step` does the same for a step of the independence move
+(:mod:`bayestribo.inference.independence`): the log posterior of every walker's
+proposal and the acceptance in one compiled call.
 """
 
 from __future__ import annotations
@@ -30,7 +34,7 @@ from numpy.typing import NDArray
 from bayestribo.inference.fused import FusedLogPosterior, _log_posterior_in, _workspace
 from bayestribo.inference.moves import DE, _de_proposals, _snooker_proposals
 
-__all__ = ["grouped_step"]
+__all__ = ["grouped_step", "independence_step"]
 
 #: The files whose compiled functions :func:`_step` calls, and a digest of each
 #: (see :data:`bayestribo.inference.fused.DEPENDS_ON`).
@@ -154,6 +158,103 @@ def grouped_step(
             order,
             uniform,
             gamma,
+            log_u,
+            accepted,
+            fused.prior,
+            fused.columns,
+            fused.fixed,
+            fused.data,
+            fused.scalars,
+        )
+    )
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _independence(
+    coords: NDArray,
+    log_prob: NDArray,
+    q: NDArray,
+    factors: NDArray,
+    log_u: NDArray,
+    accepted: NDArray,
+    prior: NDArray,
+    columns: NDArray,
+    fixed: NDArray,
+    data: NDArray,
+    scalars: NDArray,
+) -> bool:
+    """One independence step (see :func:`independence_step`); False, nothing
+    changed, where a proposal is not finite or its log posterior cannot be given."""
+    n, ndim = q.shape
+    for row in range(n):
+        for j in range(ndim):
+            if not math.isfinite(q[row, j]):
+                return False
+    out = np.empty(n)
+    pi, var, a, b, x, prec, c, xw, z, norm0 = _workspace(columns, data, scalars)
+    flagged = _log_posterior_in(
+        q, prior, columns, fixed, data, scalars, out, pi, var, a, b, x, prec, c, xw, z, norm0
+    )
+    if flagged > 0:
+        return False
+    for row in range(n):
+        if factors[row] + out[row] - log_prob[row] > log_u[row]:
+            for j in range(ndim):
+                coords[row, j] = q[row, j]
+            log_prob[row] = out[row]
+            accepted[row] = True
+    return True
+
+
+def independence_step(
+    fused: FusedLogPosterior,
+    coords: NDArray,
+    log_prob: NDArray,
+    q: NDArray,
+    factors: NDArray,
+    log_u: NDArray,
+    accepted: NDArray,
+) -> bool:
+    """One step of the independence move with the compiled log posterior ``fused``.
+
+    The ``independence_step`` of :mod:`bayestribo.inference.independence` (see
+    :class:`~bayestribo.inference.independence.GroupedIndependenceMove`), bound to a
+    posterior by :attr:`bayestribo.inference.posterior.Posterior.independence_step`:
+    walker i moves to ``q[i]`` where ``factors[i] + log π(q[i]) − log_prob[i] >
+    log_u[i]``, the Metropolis-Hastings rule of the move's Python step.
+
+    Parameters
+    ----------
+    fused : FusedLogPosterior
+        The compiled density's tables.
+    coords : ndarray
+        Walkers (n, d), C-contiguous float64; updated in place.
+    log_prob : ndarray
+        Their log posterior (n,), float64; updated in place.
+    q : ndarray
+        The proposals (n, d).
+    factors : ndarray
+        log q(x) − log q(y) of each walker (n,).
+    log_u : ndarray
+        Log Metropolis uniforms (n,).
+    accepted : ndarray
+        Bool (n,); set True for every walker that moved.
+
+    Returns
+    -------
+    bool
+        True when the step is done; False, nothing changed, where a proposal is not
+        finite or its log posterior cannot be given here (the move then runs the step
+        in Python, where the errors are raised), and for a law without a closed form.
+    """
+    if fused.law is not None:
+        return False
+    return bool(
+        _independence(
+            coords,
+            log_prob,
+            q,
+            factors,
             log_u,
             accepted,
             fused.prior,

@@ -36,7 +36,7 @@ from numpy.typing import NDArray
 from bayestribo.errors import BayestriboError
 from bayestribo.inference.fused import FusedLogPosterior
 from bayestribo.inference.fused_residuals import residual_rows
-from bayestribo.inference.fused_step import grouped_step
+from bayestribo.inference.fused_step import grouped_step, independence_step
 from bayestribo.inference.likelihood import PiLikelihood
 from bayestribo.inference.priors import PriorSet
 from bayestribo.inference.sampling import NaNLogProbabilityError
@@ -120,6 +120,14 @@ class Posterior:
         False."""
         fused: FusedLogPosterior | None = self._fused
         return None if fused is None else partial(grouped_step, fused)
+
+    @property
+    def independence_step(self) -> Callable[..., bool] | None:
+        """A whole step of the independence move with the compiled density
+        (:func:`bayestribo.inference.fused_step.independence_step`), or None where
+        :attr:`uses_compiled` is False."""
+        fused: FusedLogPosterior | None = self._fused
+        return None if fused is None else partial(independence_step, fused)
 
     @property
     def residual_rows(self) -> Callable[..., NDArray | None] | None:

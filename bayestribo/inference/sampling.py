@@ -50,6 +50,16 @@ Two ways to run the ensembles (``SamplerSettings.moves``):
 Either way a step updates every walker of every ensemble once: the autocorrelation
 time, the stopping rule and the effective sample size mean the same.
 
+Where ``SamplerSettings.independence`` is above 0, the first ``adapt_steps`` steps
+are an adaptation phase with the DE moves alone; at its end each ensemble's
+independence proposal is fitted to its own walkers and held fixed, and the
+independence Metropolis-Hastings move joins the mix with that weight (less where its
+expected acceptance is low): :mod:`bayestribo.inference.independence`, which says
+why the chain after the phase is valid and the ensembles independent. The phase is
+never kept (the burn-in is at least ``adapt_steps``). The population's sampler uses
+it; the single-run fit does not (its runs are held by the rule that τ settle, not
+by τ: ``benchmarks/README.md``).
+
 This module knows nothing of the models: :func:`run_ensembles` samples any vectorised
 log-probability; the single-run fit and the population both use it.
 """
@@ -67,6 +77,11 @@ import scipy.fft
 from numpy.typing import NDArray
 
 from bayestribo.errors import BayestriboError
+from bayestribo.inference.independence import (
+    GroupedIndependenceMove,
+    expected_acceptance,
+    mix_weight,
+)
 from bayestribo.inference.modes import transient_steps
 from bayestribo.inference.moves import DESnookerMove, grouped_moves
 from bayestribo.inference.rhat import rhat
@@ -139,6 +154,14 @@ class SamplerSettings:
         All ensembles in one emcee sampler with the grouped DE moves (the default;
         used when ``n_walkers`` is a multiple of 4, else ``"emcee"``), or one sampler
         per ensemble with emcee's own moves (see the module notes).
+    independence : float
+        Weight in [0, 1) of the independence Metropolis-Hastings move in the mix after
+        the adaptation phase (:mod:`bayestribo.inference.independence`; the DE moves
+        share the rest, 80/20); 0 (the default): DE moves alone, no adaptation phase.
+    adapt_steps : int
+        Steps of the adaptation phase where ``independence`` > 0: DE moves alone,
+        each ensemble's proposal then fitted to its walkers' second half of the phase
+        and held fixed; the burn-in is at least this long.
     """
 
     n_walkers: int = 32
@@ -150,10 +173,21 @@ class SamplerSettings:
     max_steps: int = 20_000
     rhat_max: float = 1.01
     moves: str = "grouped"
+    independence: float = 0.0
+    adapt_steps: int = 100
 
     def __post_init__(self) -> None:
         if self.moves not in MOVES:
             raise BayestriboError(f"moves: expected one of {MOVES}, got {self.moves!r}")
+        if not 0.0 <= self.independence < 1.0:
+            raise BayestriboError(
+                f"independence: expected a weight in [0, 1), got {self.independence}"
+            )
+        if self.independence > 0 and not 2 <= self.adapt_steps < self.max_steps:
+            raise BayestriboError(
+                f"adapt_steps: expected 2 to max_steps - 1 = {self.max_steps - 1} steps "
+                f"with the independence move, got {self.adapt_steps}"
+            )
         if self.n_ensembles < 2:
             raise BayestriboError(f"n_ensembles: expected >= 2 for R-hat, got {self.n_ensembles}")
         if not self.autocorr_multiple > 0:
@@ -227,6 +261,12 @@ class SamplerRun:
     ridge : bool
         Stopped before its ceiling on a ridge the record does not identify (the
         ``unidentified`` rule of :func:`run_ensembles`; its reasons say so).
+    independence : float
+        Weight of the independence move in the mix after the adaptation phase (0:
+        not used; ``SamplerSettings.independence``).
+    independence_acceptance : float
+        The least of the ensembles' expected acceptances of that move at the end of
+        the adaptation phase (NaN where there was none).
     """
 
     chains: NDArray
@@ -243,6 +283,8 @@ class SamplerRun:
     names: tuple[str, ...] = ()
     walker_acceptance: NDArray | None = None
     ridge: bool = False
+    independence: float = 0.0
+    independence_acceptance: float = float("nan")
 
     def summary(self, prob: float = 0.95) -> dict[str, ParameterSummary]:
         """Posterior summary of each parameter over all ensembles' thinned draws.
@@ -288,6 +330,7 @@ def _nan_checked(
     # A compiled step of the grouped moves stops before any split with a NaN and
     # leaves it to this function (bayestribo.inference.moves).
     checked.grouped_step = getattr(log_prob, "grouped_step", None)  # type: ignore[attr-defined]
+    checked.independence_step = getattr(log_prob, "independence_step", None)  # type: ignore[attr-defined]
     return checked
 
 
@@ -487,14 +530,24 @@ def run_ensembles(
     extended: int | None = None  # a burn-in extended past a transient
     hopeless: list[str] = []  # why a run on a ridge was stopped before its ceiling
     skip = 0  # the end of a transient found at the start of the draws (steps)
+    floor = 0  # the adaptation phase, never kept (inference/independence.py)
+    independence = (0.0, float("nan"))  # the move's weight and expected acceptance
     try:
+        if settings.independence > 0:
+            floor = settings.adapt_steps
+            ensembles.run(floor)
+            steps = floor
+            if bar is not None:
+                bar.update(floor)
+            independence = _adapted(ensembles, checked, floor, settings.independence, seed)
         while steps < settings.max_steps:
             chunk = settings.check_every
             if np.all(np.isfinite(tau)):
                 # The rule cannot be met this early with the last τ (which short chains
                 # underestimate): the checks before this many steps are skipped, and
                 # the steps up to the next check run in one call of the sampler.
-                early = _EARLY * (2.0 + multiple) * np.max(tau)
+                longest = np.max(tau)
+                early = _EARLY * max((2.0 + multiple) * longest, floor + multiple * longest)
                 chunk *= max(1, math.ceil((early - steps) / settings.check_every))
             chunk = min(chunk, settings.max_steps - steps)
             ensembles.run(chunk)
@@ -502,7 +555,7 @@ def run_ensembles(
             if bar is not None:
                 bar.update(chunk)
             burn = min(int(2 * np.max(tau)) if np.all(np.isfinite(tau)) else steps // 3, steps // 2)
-            burn = max(burn, min(skip, steps // 2))
+            burn = max(burn, min(skip, steps // 2), floor)
             tau = np.max(_autocorr_times(ensembles.chains(burn)), axis=0)
             if not np.all(np.isfinite(tau)):
                 # A stuck chain (no move accepted): τ is undefined; keep sampling.
@@ -514,7 +567,7 @@ def run_ensembles(
                 # walkers' way in from their start (a transient, which lengthens τ
                 # while it is kept): the burn-in is extended past it from now on
                 skip = max(skip, _transient_end(ensembles, burn, tau, settings, labels))
-            burn = max(burn, skip)
+            burn = max(burn, skip, floor)
             earlier = [t for at, t in history if at <= steps - settings.settle_steps]
             settled = bool(earlier) and bool(np.all(np.abs(tau - earlier[-1]) < 0.1 * tau))
             history.append((steps, tau))
@@ -557,7 +610,9 @@ def run_ensembles(
             bar.close()
 
     defined = bool(np.all(np.isfinite(tau)))
-    burn = min(max(math.ceil(2 * np.max(tau)), skip), steps - 1) if defined else steps // 2
+    burn = min(max(math.ceil(2 * np.max(tau)), skip, floor), steps - 1) if defined else steps // 2
+    if not defined:
+        burn = max(burn, min(floor, steps - 1))
     if extended is not None:
         burn = extended
     thin = max(1, math.ceil(np.max(tau))) if defined else 1
@@ -600,7 +655,39 @@ def run_ensembles(
         names=tuple(labels),
         walker_acceptance=ensembles.walker_acceptance(),
         ridge=bool(hopeless),
+        independence=independence[0],
+        independence_acceptance=independence[1],
     )
+
+
+def _adapted(
+    ensembles: _Ensembles,
+    log_prob: Callable[[NDArray], NDArray],
+    steps: int,
+    weight: float,
+    seed: int | None,
+) -> tuple[float, float]:
+    """The end of the adaptation phase (:mod:`bayestribo.inference.independence`):
+    each ensemble's proposal fitted to its own walkers over the phase's second half,
+    its expected acceptance estimated from those draws and one proposal per walker
+    (evaluated here, not part of any chain), and the move put in the mix with its
+    weight (:func:`~bayestribo.inference.independence.mix_weight` of the least
+    expected acceptance; none where that is 0). Returns (weight, least acceptance)."""
+    move = GroupedIndependenceMove.fitted(ensembles.chains(steps // 2))
+    draws, lps = ensembles.flat(steps // 2, 1)
+    n_ens, _, ndim = draws.shape
+    per = ensembles.walker_acceptance().shape[1]
+    child = np.random.SeedSequence(seed).spawn(2)[1]  # not the sampler's stream
+    random = np.random.RandomState(child.generate_state(1)[0])
+    proposed = np.stack([p.draw(random, per) for p in move.proposals])
+    proposed_lp = np.asarray(log_prob(proposed.reshape(-1, ndim)), dtype=float)
+    acceptance = expected_acceptance(
+        move.proposals, draws, lps, proposed, proposed_lp.reshape(n_ens, per)
+    )
+    used = mix_weight(float(np.min(acceptance)), weight)
+    if used > 0:
+        ensembles.use_independence(move, used)
+    return used, float(np.min(acceptance))
 
 
 def _transient_end(
@@ -666,6 +753,21 @@ class _Ensembles:
         """Acceptance fraction of each walker, (ensembles, walkers)."""
         raise NotImplementedError
 
+    def use_independence(self, move: GroupedIndependenceMove, weight: float) -> None:
+        """From the next step on, ``move`` (one fixed proposal per ensemble) with
+        ``weight`` in the mix, the DE moves sharing the rest as before."""
+        raise NotImplementedError  # pragma: no cover - interface
+
+
+def _with_independence(sampler: emcee.EnsembleSampler, move, weight: float) -> None:
+    """Set ``sampler``'s move mix to its moves so far at ``1 - weight`` of their
+    weights and ``move`` at ``weight``, as emcee's constructor stores a mix (a tuple
+    of moves, normalised float weights), which its ``sample`` draws from at every
+    step."""
+    weights = np.append(np.asarray(sampler._weights, dtype=float) * (1.0 - weight), weight)
+    sampler._moves = (*sampler._moves, move)
+    sampler._weights = weights / np.sum(weights)
+
 
 class _Separate(_Ensembles):
     """One emcee sampler per ensemble, with emcee's own moves (the reference)."""
@@ -704,6 +806,10 @@ class _Separate(_Ensembles):
 
     def walker_acceptance(self) -> NDArray:
         return np.stack([np.asarray(s.acceptance_fraction, dtype=float) for s in self.samplers])
+
+    def use_independence(self, move: GroupedIndependenceMove, weight: float) -> None:
+        for sampler, proposal in zip(self.samplers, move.proposals, strict=True):
+            _with_independence(sampler, GroupedIndependenceMove([proposal]), weight)
 
 
 class _MoveChoice(np.random.RandomState):
@@ -819,3 +925,6 @@ class _Grouped(_Ensembles):
     def walker_acceptance(self) -> NDArray:
         fractions = np.asarray(self.sampler.acceptance_fraction, dtype=float)
         return fractions.reshape(self.n_ens, self.n_walkers)
+
+    def use_independence(self, move: GroupedIndependenceMove, weight: float) -> None:
+        _with_independence(self.sampler, move, weight)
