@@ -65,46 +65,6 @@ def test_a_drag_piled_at_zero_is_followed_along_its_bound(prepared):
     assert np.mean(good) > 0.5
 
 
-def test_an_optimum_on_a_bound_is_polished_from_the_bound(prepared, monkeypatch):
-    # the polish of an optimum found already (the coarse model's, or the law's in its
-    # own frame or second pass) starts on the bound where the optimum lies, not 1e-3 of
-    # the prior's width inside it as a first guess does: the same optimum, in fewer
-    # integrations of the law (a dozen least-squares iterations back to the bound)
-    from bayestribo.inference import start
-    from bayestribo.inference.posterior import Posterior
-
-    posterior = _posterior(prepared, "viscous+coulomb+quadratic")
-    theta, _, _ = maximum_a_posteriori(posterior, prepared.decay)
-    c2 = posterior.names.index("c2")
-    assert theta[c2] == 0.0
-    guess = dict(zip(posterior.names, theta.tolist(), strict=True))
-    assert start._into_support(posterior, guess)["c2"] > 0.0  # a first guess: inside
-    starts, rows = [], [0]
-    refine, residuals = start.refine, Posterior.standardized_residuals
-
-    def recording(post, th, **kwargs):
-        starts.append(np.array(th))
-        return refine(post, th, **kwargs)
-
-    def counting(self, th, **kwargs):
-        rows[0] += np.atleast_2d(th).shape[0]
-        return residuals(self, th, **kwargs)
-
-    monkeypatch.setattr(start, "refine", recording)
-    monkeypatch.setattr(Posterior, "standardized_residuals", counting)
-    again, _, _ = start.maximum_from(posterior, theta, prepared.decay)
-    from_bound = rows[0]
-    assert starts[0][c2] == 0.0
-    assert again[c2] == 0.0
-    lp, lp_again = (float(posterior(t[None])[0]) for t in (theta, again))
-    assert lp_again >= lp - 1e-9 * abs(lp)
-    rows[0] = 0
-    inside, _, lp_inside = _optimise(posterior, guess, ratio=guess["mu_s_ratio"])
-    assert inside[c2] == 0.0  # the same optimum from inside, at more cost
-    assert lp_again == pytest.approx(lp_inside, abs=1e-3)  # to the least squares' tolerance
-    assert from_bound < rows[0], (from_bound, rows[0])
-
-
 def test_the_coarse_multistart_finds_the_exact_multistarts_optimum(prepared):
     posterior = _posterior(prepared, "coulomb+power")
     assert _coarse(posterior) is not None
@@ -139,10 +99,10 @@ def test_the_ratio_middle_starts_run_only_without_a_coarse_model(
     middle = float(np.median(_ratio_grid(posterior)))
     ratios = []
 
-    def recording(post, guess, ratio=None, found=None, from_optimum=False):
+    def recording(post, guess, ratio=None, found=None):
         if found is not None or _coarse(posterior) is None:
             ratios.append(ratio)  # the starts (the polish passes no ``found``)
-        return _optimise(post, guess, ratio, found, from_optimum)
+        return _optimise(post, guess, ratio, found)
 
     monkeypatch.setattr(start, "_optimise", recording)
     start.maximum_a_posteriori(posterior, prepared.decay)

@@ -165,23 +165,14 @@ def _support(prior: object) -> tuple[float, float]:
     return float(getattr(prior, "low", -np.inf)), float(getattr(prior, "high", np.inf))
 
 
-#: How far inside its prior's support a first guess is moved, in units of the support's
-#: width (a guess on a bound, or beyond a prior a user narrowed).
-_GUESS_MARGIN = 1e-3
-
-
-def _into_support(
-    posterior: Posterior, values: dict[str, float], margin: float = _GUESS_MARGIN
-) -> dict[str, float]:
-    """Move guesses inside their priors' support (a user may have narrowed a prior),
-    ``margin`` of each bounded support's width from its bounds (0: onto the bound, for
-    a start that is an optimum found already and may lie on one)."""
+def _into_support(posterior: Posterior, values: dict[str, float]) -> dict[str, float]:
+    """Move guesses inside their priors' support (a user may have narrowed a prior)."""
     out = dict(values)
     for name in posterior.names:
         low, high = _support(posterior.priors[name])
         if np.isfinite(low) and np.isfinite(high):
-            width = margin * (high - low)
-            out[name] = float(np.clip(out[name], low + width, high - width))
+            margin = 1e-3 * (high - low)
+            out[name] = float(np.clip(out[name], low + margin, high - margin))
     return out
 
 
@@ -280,7 +271,6 @@ def _optimise(
     guess: dict[str, float],
     ratio: float | None = None,
     found: list[Optimum] | None = None,
-    from_optimum: bool = False,
 ) -> Optimum:
     """Optimum from one guess and its Laplace covariance and log density.
 
@@ -297,12 +287,6 @@ def _optimise(
         Optima found from other starts: when the least squares come within one
         Laplace sd of one of them (on the same step of μ_s/μ_k), that optimum is
         returned at once (the coarse multi-start of :func:`maximum_a_posteriori`).
-    from_optimum : bool
-        ``guess`` is an optimum found already (of a coarse model, or of the same law in
-        another frame or weighting): a coordinate on its prior's bound starts there,
-        not :data:`_GUESS_MARGIN` of the support inside it (a drag or a friction the
-        data put at zero: the least squares would walk back to the bound over a dozen
-        iterations, each integrating the law's motion).
 
     Returns
     -------
@@ -323,13 +307,7 @@ def _optimise(
         "log10_shape": -5.0,
         **guess,
     }
-    start = {n: values[n] for n in names}
-    margin = 0.0 if from_optimum else _GUESS_MARGIN
-    theta = _vector(posterior, _into_support(posterior, start, margin))
-    if from_optimum and not np.isfinite(posterior(theta[None])[0]):
-        # the bound itself outside the density's support (an open bound, the edge of
-        # the law's domain): started inside it, as a first guess is
-        theta = _vector(posterior, _into_support(posterior, start))
+    theta = _vector(posterior, _into_support(posterior, {n: values[n] for n in names}))
     has_ratio = "mu_s_ratio" in names
     if has_ratio and ratio is None:
         theta = _plateau_middle(posterior, theta)
@@ -798,7 +776,7 @@ def _polish(posterior: Posterior, theta: NDArray) -> tuple[NDArray, NDArray, flo
     """The optimum of ``posterior`` from a coarse model's optimum ``theta`` (μ_s/μ_k
     kept on its step there), with its Laplace covariance and log density."""
     start = dict(zip(posterior.names, np.asarray(theta, dtype=float).tolist(), strict=True))
-    return _optimise(posterior, start, ratio=start.get("mu_s_ratio"), from_optimum=True)
+    return _optimise(posterior, start, ratio=start.get("mu_s_ratio"))
 
 
 def _ratio_range(posterior: Posterior, theta: NDArray) -> tuple[float, float] | None:
@@ -839,7 +817,7 @@ def maximum_from(
         As :func:`maximum_a_posteriori`.
     """
     start = dict(zip(posterior.names, np.asarray(theta, dtype=float).tolist(), strict=True))
-    opt, cov, lp = _optimise(posterior, start, ratio=start.get("mu_s_ratio"), from_optimum=True)
+    opt, cov, lp = _optimise(posterior, start, ratio=start.get("mu_s_ratio"))
     if not np.isfinite(lp):
         return maximum_a_posteriori(posterior, decay)
     return opt, cov, _ratio_range(posterior, opt)
