@@ -336,6 +336,51 @@ def test_the_dissipation_is_integrated_only_at_the_swings_the_interpolation_miss
     assert (1, n) in calls_made and (swings.size, n) not in calls_made
 
 
+def test_a_swing_the_quadratic_misses_is_fitted_at_draws_not_integrated_at_every_one(
+    exact_posterior, monkeypatch
+):
+    """Where the quadratic through the nodes misses its check (ΔE cubic in a parameter
+    over the draws), a cubic fitted by least squares at a few draws takes its place
+    when it meets the same check, instead of the integrator at every draw
+    (inference/dissipation.py)."""
+    from bayestribo.inference import dissipation
+
+    _, posterior, theta, cov = exact_posterior
+    draws = _around(theta, cov, 1.0, 600, seed=7)
+    values = posterior.law_draws(draws)
+    law, ref = posterior.law, posterior.likelihood.reference_amplitude
+    swings = np.linspace(0.3, 1.0, 6) * ref
+    name = next(n for n in law.parameter_names if n != "mu_s_ratio" and np.std(values[n]) > 0)
+    centre, spread = float(np.mean(values[name])), float(np.std(values[name]))
+    real = law.swing_dissipation
+    level = float(np.mean(real(swings, values, ref)))
+    calls = []
+
+    def curved(a, v, r):
+        a = np.atleast_1d(np.asarray(a, dtype=float))
+        x = np.atleast_1d(np.asarray(v[name], dtype=float))
+        calls.append((a.size, x.size))
+        return real(a, v, r) + 0.05 * level * ((x - centre) / spread)[:, None] ** 3
+
+    monkeypatch.setattr(type(law), "swing_dissipation", lambda self, a, v, r: curved(a, v, r))
+    out = dissipation._swing_dissipation(law, swings, values, ref)
+    calls_made = list(calls)
+    want = curved(swings, values, ref)
+    sd = want.std(axis=0)
+    assert np.max(np.abs(out - want) / sd) < 1e-2
+    n = draws.shape[0]
+    assert all(size < n for _, size in calls_made)  # never every draw
+    # the quadratic through the nodes alone misses it: every draw integrated there
+
+    def nothing(law, amplitudes, *rest):
+        return np.zeros((n, amplitudes.size)), np.zeros(amplitudes.size, dtype=bool)
+
+    monkeypatch.setattr(dissipation, "_refit_at_draws", nothing)
+    calls.clear()
+    dissipation._swing_dissipation(law, swings, values, ref)
+    assert any(size == n for _, size in calls)
+
+
 def test_a_motion_no_friction_stops_has_its_stop_ratios_within_the_record(bundled_run):
     """A friction law at μ_k = 0 (a start of the optimiser on its bound) never sticks:
     its stop ratios are all infinite, found over the record's turning points, not over

@@ -76,6 +76,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.inference.likelihood import Params, PiLikelihood
+from bayestribo.inference.piece_pi import TOLERANCE, longest_motion_pi, piece_rows, stop_times
 from bayestribo.inference.priors import PriorSet, Uniform
 
 if TYPE_CHECKING:
@@ -372,7 +373,15 @@ def _node_distances(
 def stop_ratios(likelihood: PiLikelihood, values: Mapping[str, float]) -> NDArray:
     """``|Y_n|/μ(|Y_n|)`` at each turning point Y_n of one motion (with μ_s = μ_k, so
     that it runs longest): the motion stops at Y_n when μ_s/μ_k is at least this, and
-    Π changes with μ_s/μ_k only where it crosses one of them.
+    Π changes with μ_s/μ_k only where it crosses one of them. The stop ratios of
+    :func:`turning_stops`.
+    """
+    return turning_stops(likelihood, values)[1]
+
+
+def turning_stops(likelihood: PiLikelihood, values: Mapping[str, float]) -> tuple[NDArray, NDArray]:
+    """The turning times τ_n of one motion (with μ_s = μ_k, so that it runs longest)
+    and the stop ratios ``|Y_n|/μ(|Y_n|)`` of its turning points Y_n (:func:`stop_ratios`).
 
     Parameters
     ----------
@@ -383,11 +392,11 @@ def stop_ratios(likelihood: PiLikelihood, values: Mapping[str, float]) -> NDArra
 
     Returns
     -------
-    ndarray
-        One value per turning point, in their order (inf where the friction is zero).
-        A motion whose friction terms are all off (their coefficients zero: μ_k = 0)
-        never sticks: every value is inf, given for the turning points up to the
-        record's end only.
+    times, ratios : ndarray
+        One value per turning point, in their order (a ratio inf where the friction is
+        zero). A motion whose friction terms are all off (their coefficients zero:
+        μ_k = 0) never sticks: every ratio is inf, given for the turning points up to
+        the record's end only.
     """
     law = likelihood.law
     data = likelihood.data
@@ -403,7 +412,7 @@ def stop_ratios(likelihood: PiLikelihood, values: Mapping[str, float]) -> NDArra
     # its drag alone takes up to 100,000 half cycles (a viscous+coulomb+quadratic start
     # at μ_k = 0 on a sticking record, 1.2 s a scan of μ_s/μ_k)
     frictionless = not any(np.any(coef[f.columns] != 0.0) for f in frictions)
-    _, turns = law.turning_points(
+    times, turns = law.turning_points(
         law_values,
         float(values["y0"]),
         float(data.yp0),
@@ -415,18 +424,18 @@ def stop_ratios(likelihood: PiLikelihood, values: Mapping[str, float]) -> NDArra
     for friction in frictions:
         mu += np.array([friction.force(float(x), coef[friction.columns]) for x in a])
     with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(mu > 0, a / mu, np.inf)
+        return np.asarray(times, dtype=float), np.where(mu > 0, a / mu, np.inf)
 
 
-def _stop_ratios_at(
+def _turning_stops_at(
     likelihood: PiLikelihood,
     names: tuple[str, ...],
     nodes: NDArray,
     fixed_params: Mapping[str, float],
-) -> list[NDArray]:
-    """:func:`stop_ratios` at each node (rows of ``nodes``, the first the centre)."""
+) -> list[tuple[NDArray, NDArray]]:
+    """:func:`turning_stops` at each node (rows of ``nodes``, the first the centre)."""
     return [
-        stop_ratios(likelihood, {**fixed_params, **dict(zip(names, node, strict=True))})
+        turning_stops(likelihood, {**fixed_params, **dict(zip(names, node, strict=True))})
         for node in nodes
     ]
 
@@ -569,7 +578,8 @@ def _fit_pieces(
         # the ratios where the stick moves to another turning point: each turning
         # point's |Y_n|/μ inside the prior's support at the centre, fitted as Π is
         # over the nodes whose motion reaches that turning point
-        ratios = _stop_ratios_at(likelihood, names, c + u * s, fixed_params)
+        turning = _turning_stops_at(likelihood, names, c + u * s, fixed_params)
+        ratios = [stops for _, stops in turning]
         centre_ratios = ratios[0]
         inside_support = np.flatnonzero(
             np.isfinite(centre_ratios) & (centre_ratios > low) & (centre_ratios < high)
@@ -589,18 +599,29 @@ def _fit_pieces(
             coef = _fit(basis, at_nodes[:, None], reached)
             if coef is not None:
                 thresholds[k] = coef[:, 0]
+    pieces = None
+    shared = None
+    if ratio is not None and ratio_bounds is not None:
+        # each node's Π of each piece: at a ratio inside the piece at that node, whose
+        # edges move with the other coordinates (a ratio fixed at the centre's midpoint
+        # falls in the next piece at nodes where an edge has moved past it, and the
+        # piece's quadratic then fits two motions); all pieces from one integration of
+        # each node's longest motion where that agrees with the direct one
+        pieces = [_piece_ratios(ratios, order, k, v, (low, high)) for k, v in enumerate(values)]
+        shared = _pieces_from_longest(
+            likelihood, names, ratio, c + u * s, [r for r, _ in pieces], fixed_params, turning
+        )
     tables = []
     for k, value in enumerate(values):
-        if value is None:
+        if value is None or pieces is None:
             pi = _evaluate(likelihood, names, c + u * s, fixed_params)
         else:
-            # each node's Π of this piece: at a ratio inside the piece at that node,
-            # whose edges move with the other coordinates (a ratio fixed at the
-            # centre's midpoint falls in the next piece at nodes where an edge has
-            # moved past it, and the piece's quadratic then fits two motions)
-            at_nodes, valid = _piece_ratios(ratios, order, k, value, (low, high))
-            rows = np.column_stack([c + u * s, at_nodes])
-            pi = _evaluate(likelihood, (*names, ratio), rows, fixed_params)
+            at_nodes, valid = pieces[k]
+            if shared is not None:
+                pi = shared[k]
+            else:
+                rows = np.column_stack([c + u * s, at_nodes])
+                pi = _evaluate(likelihood, (*names, ratio), rows, fixed_params)
             # where the piece leaves the support at a node, or an edge's turning point
             # is not reached there, its motion is not the piece's: the quadratic is
             # fitted to the other nodes (it serves only where the piece exists)
@@ -614,6 +635,51 @@ def _fit_pieces(
             return None
         tables.append(coef)
     return QuadraticPi(tuple(names), c, s, np.vstack(tables), ratio, thresholds)
+
+
+def _pieces_from_longest(
+    likelihood: PiLikelihood,
+    names: tuple[str, ...],
+    ratio: str,
+    points: NDArray,
+    piece_ratios: list[NDArray],
+    fixed_params: Mapping[str, float],
+    turning: list[tuple[NDArray, NDArray]],
+) -> list[NDArray] | None:
+    """Each piece's Π at the points (rows of ``points``, the first the centre), each
+    (n, m), from one integration of each point's longest motion
+    (:mod:`bayestribo.inference.piece_pi`); None where that does not agree with the
+    direct integration at the centre within :data:`~bayestribo.inference.piece_pi.
+    TOLERANCE` of Π(0) (the caller integrates each piece directly). A point whose
+    longest motion cannot be integrated has its pieces integrated directly."""
+    grid = np.asarray(likelihood.data.tau_grid[:-1], dtype=float)
+    times = [t for t, _ in turning]
+    stops = [r for _, r in turning]
+    ends = [stop_times(times, stops, np.asarray(r, dtype=float)) for r in piece_ratios]
+    needed = np.concatenate([e[np.isfinite(e)] for e in ends])
+    at = np.unique(np.concatenate([grid, needed]))
+    n = points.shape[0]
+    params: dict[str, NDArray] = {k: np.full(n, float(v)) for k, v in fixed_params.items()}
+    params.update({name: points[:, a] for a, name in enumerate(names)})
+    params[ratio] = np.ones(n)
+    longest = longest_motion_pi(likelihood, params, at)
+    moved = np.all(np.isfinite(longest), axis=1)
+    if not moved[0]:
+        return None
+    out = [piece_rows(longest, at, grid, e) for e in ends]
+    centre = np.array([[*points[0], float(r[0])] for r in piece_ratios])
+    direct = _evaluate(likelihood, (*names, ratio), centre, fixed_params)
+    scale = max(float(np.nanmax(np.abs(direct))), float(np.max(np.abs(longest[0]))))
+    for k, pi in enumerate(out):
+        if not np.allclose(pi[0], direct[k], rtol=0.0, atol=TOLERANCE * scale, equal_nan=False):
+            return None
+        pi[0] = direct[k]
+    if not moved.all():
+        rows = np.flatnonzero(~moved)
+        for k, r in enumerate(piece_ratios):
+            at_rows = np.column_stack([points[rows], np.asarray(r, dtype=float)[rows]])
+            out[k][rows] = _evaluate(likelihood, (*names, ratio), at_rows, fixed_params)
+    return out
 
 
 @dataclass(frozen=True)
