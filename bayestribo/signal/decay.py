@@ -147,7 +147,7 @@ from bayestribo.signal.motion import (
     regular_turning_points,
 )
 from bayestribo.signal.peaks import Peaks, estimate_noise, estimate_offset, find_peaks
-from bayestribo.signal.period import dominant_period, sample_step
+from bayestribo.signal.period import MIN_PERIOD_SAMPLES, dominant_period, sample_step
 from bayestribo.signal.quantisation import QUANTISATION_NOISE_FACTOR, quantisation_step
 from bayestribo.signal.restarts import continue_clock
 from bayestribo.signal.short import short_decay_note
@@ -1588,11 +1588,12 @@ def _analyse(
     except RecordingError as e:
         raise RecordingError(f"release: no motion found: {e}") from e
     per_samples = period0 / sample_step(t)
-    if per_samples < 6:
+    if per_samples < MIN_PERIOD_SAMPLES:
         raise RecordingError(
             f"release: no motion found: the record's dominant period is {per_samples:.1f} "
-            "samples long; a free decay needs at least 6 samples per period to locate its "
-            "turning points (is there an oscillation above the noise, sampled fast enough?)"
+            f"samples long; a free decay needs at least {MIN_PERIOD_SAMPLES} samples per "
+            "period to locate its turning points (is there an oscillation above the noise, "
+            "sampled fast enough?)"
         )
     v_span = v if v is not None else derive_velocity(t, x, period0)[0]
     x_step = None if x is None else quantisation_step(x)
