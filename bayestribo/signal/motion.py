@@ -484,6 +484,15 @@ def motion_span(
         ):
             release_time = float(t[max(0, i - 1)])
         release_index = int(np.searchsorted(t, release_time, side="right")) - 1
+    elif periodic is not None and head_end >= size // 2 and not moving[0]:
+        # no velocity excursion beyond the threshold: a coarse velocity whose rest
+        # toggles between two levels (dither) has its σ near half a step, and eight of
+        # them can exceed its whole swing; the displacement's levels place the release
+        lo = max(0, head_end - size)
+        release_index = _release_from_levels(np.asarray(periodic, dtype=float), lo, head_end, hi)
+        if release_index is not None:
+            release_time = float(t[release_index])
+    if release_index is not None:
         quiet[: max(0, release_index - max(1, size // 8))] = True
     return MotionSpan(
         release_index=release_index,
@@ -496,6 +505,26 @@ def motion_span(
         block=size,
         fade_time=fade_time,
     )
+
+
+def _release_from_levels(x: NDArray, lo: int, head_end: int, hi: int) -> int | None:
+    """Release of a quantised displacement ``x`` from its levels, or None.
+
+    ``x[lo:head_end]`` is rest (on one level, or toggling between neighbouring levels
+    by its noise), ``x[head_end:hi]`` holds the start of the motion. The motion leaves
+    the levels the rest occupies; the release is the last sample before that on the
+    rest's own level (its median): within the time the motion takes to fall by a step
+    from the held position, the resolution the levels give.
+    """
+    head = x[lo:head_end]
+    low, high = float(np.min(head)), float(np.max(head))
+    span = x[head_end:hi]
+    beyond = np.flatnonzero((span < low) | (span > high))
+    if not beyond.size:
+        return None
+    leaves = head_end + int(beyond[0])
+    on_level = np.flatnonzero(x[lo:leaves] == float(np.median(head)))
+    return lo + int(on_level[-1]) if on_level.size else None
 
 
 def _fade_time(
