@@ -463,7 +463,13 @@ def motion_span(
     if head_end >= size // 2 and not moving[0]:
         lo = max(0, head_end - size)
         level = float(np.median(v[lo:head_end]))
-        out = np.flatnonzero(np.abs(v[head_end:hi] - level) > level_cut)
+        excursion = np.abs(v[head_end:hi] - level)
+        out = np.flatnonzero(excursion > level_cut)
+        if periodic is not None and out.size and 2.0 * level_cut > float(np.max(excursion)):
+            # a threshold beyond half the first swings (a coarse velocity whose rest
+            # toggles, its σ near half a step) is crossed late, if at all: the
+            # displacement's levels place the release (below)
+            out = out[:0]
     elif velocity_alone and moving[0]:
         # a rest shorter than a period before the release (a velocity alone, whose
         # integral's wander there would give turning points): a first quarter period
