@@ -81,3 +81,13 @@ def test_dithered_rest_alone_is_still_refused(noise):
     v = 0.1 * (np.round(noise * rng.standard_normal(t.size) + u[1]) - u[1])
     with pytest.raises(RecordingError, match="release: no motion found"):
         energy_decay(t, x, v)
+
+
+@pytest.mark.parametrize("steps", [3, 4])
+def test_a_steady_dithered_coarse_oscillation_is_still_refused(steps):
+    # its turning points go on to the record's end: no decay hides under the levels
+    t, x, v = _record(steps, 0.1, 0, zeta=0.0, beta=0.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(RecordingError, match="does not decay"):
+            energy_decay(t, x, v)

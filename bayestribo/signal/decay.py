@@ -1977,7 +1977,11 @@ def _analyse(
         window = _head(window, kept)
         motion_ended = False
         truncated = True
-    if stop_time is None:
+    # a coarse displacement's turning points stand on its levels: a decay within a
+    # step reads as none there, but its swings then sink below the levels long before
+    # the record ends (a driven oscillation's go on to its end)
+    sinks = coarse[0] is not None and float(t[-1] - peaks.t[-1]) > 2.0 * period
+    if stop_time is None and not sinks:
         amp = np.abs(window.value)
         if amp.size >= 6 and np.mean(amp[-3:]) >= 0.99 * np.mean(amp[:3]):
             raise RecordingError(
