@@ -97,6 +97,10 @@ DISPLACEMENT_THRESHOLD = 5.0
 #: the end of motion to be its last change of level: above it the noise toggles the
 #: rest between levels, and a change of level marks nothing.
 STEADY_REST = 0.2
+#: Most levels of a quantised displacement whose levels place the release when the
+#: velocity's threshold does not (a coarse digitiser's: 3 to 10 steps across the swing
+#: and its noise's toggling take 4 to 14; a fine one's thousands).
+FEW_LEVELS = 32
 #: Default excursion threshold, in rest noise standard deviations, that marks motion
 #: when the release and the end of motion are refined (a Gaussian sample exceeds 8σ
 #: with probability 1e-15).
@@ -465,7 +469,7 @@ def motion_span(
         level = float(np.median(v[lo:head_end]))
         excursion = np.abs(v[head_end:hi] - level)
         out = np.flatnonzero(excursion > level_cut)
-        if periodic is not None and out.size and 2.0 * level_cut > float(np.max(excursion)):
+        if out.size and _few_levels(periodic) and 2.0 * level_cut > float(np.max(excursion)):
             # a threshold beyond half the first swings (a coarse velocity whose rest
             # toggles, its σ near half a step) is crossed late, if at all: the
             # displacement's levels place the release (below)
@@ -490,7 +494,7 @@ def motion_span(
         ):
             release_time = float(t[max(0, i - 1)])
         release_index = int(np.searchsorted(t, release_time, side="right")) - 1
-    elif periodic is not None and head_end >= size // 2 and not moving[0]:
+    elif _few_levels(periodic) and head_end >= size // 2 and not moving[0]:
         # no velocity excursion beyond the threshold: a coarse velocity whose rest
         # toggles between two levels (dither) has its σ near half a step, and eight of
         # them can exceed its whole swing; the displacement's levels place the release
@@ -511,6 +515,11 @@ def motion_span(
         block=size,
         fade_time=fade_time,
     )
+
+
+def _few_levels(x: ArrayLike | None) -> bool:
+    """Whether ``x`` is a displacement on at most :data:`FEW_LEVELS` levels."""
+    return x is not None and np.unique(np.asarray(x, dtype=float)).size <= FEW_LEVELS
 
 
 def _release_from_levels(x: NDArray, lo: int, head_end: int, hi: int) -> int | None:
