@@ -679,6 +679,31 @@ def _quiet_segments(
     return quiet
 
 
+def _dithered_rest(
+    t: NDArray,
+    x: NDArray,
+    step: float | None,
+    rest_until: float | None,
+    stop: float | None,
+    period: float,
+) -> bool:
+    """Whether a quantised displacement's rest toggles between two neighbouring levels
+    at most, in each of its parts (before the release, after the stop).
+
+    White noise of a fraction of a step before the rounding (dither) toggles a rest near
+    a level's boundary between the two levels: a spread of about half a step that is
+    the rounding's, not a noise of that size (which would reach a third level). Its
+    turning points are then judged as on a rest on one level (:func:`_peak_noise`
+    without the rest's σ): a swing across three levels (two steps) is one, which the
+    noise reaches with a chance of a Gaussian beyond 1.5 steps.
+    """
+    if step is None:
+        return False
+    head, tail = _rest_bounds(t, rest_until, stop, 0.25 * period)
+    parts = [p for p in (x[:head], x[max(head, tail) :]) if p.size >= MIN_QUIET_SAMPLES]
+    return bool(parts) and all(float(np.ptp(p)) <= 1.5 * step for p in parts)
+
+
 def _rest_samples(
     s: NDArray, t: NDArray, rest_until: float | None, stop: float | None, margin: float
 ) -> NDArray:
@@ -1659,7 +1684,10 @@ def _analyse(
             hi, coarse_cut = cut, float(t[cut - 1])
     if sigma_x is None and x_step is not None:
         sigma_x = estimate_noise(x[lo:hi])  # as find_peaks would, floored below
-    peak_noise, peak_threshold, rest_band = _peak_noise(sigma_x, x_step)
+    peak_noise, peak_threshold, rest_band = _peak_noise(
+        None if _dithered_rest(t, x, x_step, rest_until, stop_time, period0) else sigma_x,
+        x_step,
+    )
     try:
         # the record's period, which set the motion span (not estimated again on it)
         found = find_peaks(
