@@ -26,7 +26,7 @@ RATE = 5_000.0  # Hz
 RELEASE = 0.15  # s
 
 
-def _record(steps: int, noise: float, seed: int, zeta: float = 0.008, beta: float = 15.0):
+def _record(steps: int, noise: float, seed: int, zeta: float = 0.005, beta: float = 10.0):
     """A decay from 3 mm held until :data:`RELEASE`, both channels rounded to
     ``steps`` levels across their swing after white noise of ``noise`` steps."""
     w = 2 * math.pi * FREQUENCY
@@ -59,16 +59,18 @@ def test_the_period_of_a_dithered_coarse_record_is_the_oscillations(steps, noise
 
 
 @pytest.mark.parametrize("steps", [3, 4, 5])
-def test_a_dithered_coarse_record_is_answered_from_its_release(steps):
+@pytest.mark.parametrize("noise", [0.05, 0.2])
+def test_a_dithered_coarse_record_is_answered_from_its_release(steps, noise):
     period = 1.0 / FREQUENCY
     for seed in range(3):
-        t, x, v = _record(steps, 0.1, seed)
+        t, x, v = _record(steps, noise, seed)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             decay = energy_decay(t, x, v)
         # the release from the levels: at most the fall by a step from the held swing
         assert RELEASE - 0.02 * period <= decay.release_time <= RELEASE + 0.2 * period
-        assert 1.0 / decay.natural_frequency_Hz == pytest.approx(period, rel=0.02)
+        # from as few as four turning times on the levels at 3 steps: a few percent
+        assert 1.0 / decay.natural_frequency_Hz == pytest.approx(period, rel=0.05)
         assert len(decay.peaks) >= 4
 
 
