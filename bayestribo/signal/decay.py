@@ -1684,10 +1684,15 @@ def _analyse(
             hi, coarse_cut = cut, float(t[cut - 1])
     if sigma_x is None and x_step is not None:
         sigma_x = estimate_noise(x[lo:hi])  # as find_peaks would, floored below
-    peak_noise, peak_threshold, rest_band = _peak_noise(
-        None if _dithered_rest(t, x, x_step, rest_until, stop_time, period0) else sigma_x,
-        x_step,
-    )
+    peak_noise, peak_threshold, rest_band = _peak_noise(sigma_x, x_step)
+    if (
+        peak_noise is not None
+        and peak_noise * peak_threshold >= 0.5 * float(np.ptp(x[lo:hi]))
+        and _dithered_rest(t, x, x_step, rest_until, stop_time, period0)
+    ):
+        # a threshold of the first swing's amplitude or more, from a rest toggling
+        # between two levels: the rounding's spread, not a noise of its size
+        peak_noise, peak_threshold, rest_band = _peak_noise(None, x_step)
     try:
         # the record's period, which set the motion span (not estimated again on it)
         found = find_peaks(

@@ -101,6 +101,13 @@ STEADY_REST = 0.2
 #: velocity's threshold does not (a coarse digitiser's: 3 to 10 steps across the swing
 #: and its noise's toggling take 4 to 14; a fine one's thousands).
 FEW_LEVELS = 32
+#: Most levels of a displacement whose release the levels place even where the
+#: velocity crosses its threshold, when that threshold is beyond half the first swings
+#: (3 to 5 steps across the swing and the noise's toggling: 4 to 7 levels). At 10 steps
+#: (11 to 13 levels) the velocity's crossing is kept: the levels moved the release by
+#: a millisecond there and a turning point was then missed (measured on
+#: ``benchmarks/coarse_dissipation.py``'s records).
+COARSE_LEVELS = 8
 #: Default excursion threshold, in rest noise standard deviations, that marks motion
 #: when the release and the end of motion are refined (a Gaussian sample exceeds 8σ
 #: with probability 1e-15).
@@ -469,7 +476,11 @@ def motion_span(
         level = float(np.median(v[lo:head_end]))
         excursion = np.abs(v[head_end:hi] - level)
         out = np.flatnonzero(excursion > level_cut)
-        if out.size and _few_levels(periodic) and 2.0 * level_cut > float(np.max(excursion)):
+        if (
+            out.size
+            and _few_levels(periodic, COARSE_LEVELS)
+            and 2.0 * level_cut > float(np.max(excursion))
+        ):
             # a threshold beyond half the first swings (a coarse velocity whose rest
             # toggles, its σ near half a step) is crossed late, if at all: the
             # displacement's levels place the release (below)
@@ -517,9 +528,11 @@ def motion_span(
     )
 
 
-def _few_levels(x: ArrayLike | None) -> bool:
-    """Whether ``x`` is a displacement on at most :data:`FEW_LEVELS` levels."""
-    return x is not None and np.unique(np.asarray(x, dtype=float)).size <= FEW_LEVELS
+def _few_levels(x: ArrayLike | None, most: int = 0) -> bool:
+    """Whether ``x`` is a displacement on at most ``most`` levels (default
+    :data:`FEW_LEVELS`)."""
+    limit = most or FEW_LEVELS
+    return x is not None and np.unique(np.asarray(x, dtype=float)).size <= limit
 
 
 def _release_from_levels(x: NDArray, lo: int, head_end: int, hi: int) -> int | None:
