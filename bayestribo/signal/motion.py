@@ -478,8 +478,8 @@ def motion_span(
         out = np.flatnonzero(excursion > level_cut)
         if (
             out.size
-            and _few_levels(periodic, COARSE_LEVELS)
             and 2.0 * level_cut > float(np.max(excursion))
+            and _few_levels(periodic, COARSE_LEVELS)
         ):
             # a threshold beyond half the first swings (a coarse velocity whose rest
             # toggles, its σ near half a step) is crossed late, if at all: the
@@ -505,7 +505,7 @@ def motion_span(
         ):
             release_time = float(t[max(0, i - 1)])
         release_index = int(np.searchsorted(t, release_time, side="right")) - 1
-    elif _few_levels(periodic) and head_end >= size // 2 and not moving[0]:
+    elif head_end >= size // 2 and not moving[0] and _few_levels(periodic):
         # no velocity excursion beyond the threshold: a coarse velocity whose rest
         # toggles between two levels (dither) has its σ near half a step, and eight of
         # them can exceed its whole swing; the displacement's levels place the release
