@@ -147,7 +147,7 @@ from bayestribo.signal.motion import (
     regular_turning_points,
 )
 from bayestribo.signal.peaks import Peaks, estimate_noise, estimate_offset, find_peaks
-from bayestribo.signal.period import dominant_period, sample_step
+from bayestribo.signal.period import MIN_PERIOD_SAMPLES, dominant_period, sample_step
 from bayestribo.signal.quantisation import QUANTISATION_NOISE_FACTOR, quantisation_step
 from bayestribo.signal.restarts import continue_clock
 from bayestribo.signal.short import short_decay_note
@@ -677,6 +677,31 @@ def _quiet_segments(
     quiet[:head] = True
     quiet[tail:] = True
     return quiet
+
+
+def _dithered_rest(
+    t: NDArray,
+    x: NDArray,
+    step: float | None,
+    rest_until: float | None,
+    stop: float | None,
+    period: float,
+) -> bool:
+    """Whether a quantised displacement's rest toggles between two neighbouring levels
+    at most, in each of its parts (before the release, after the stop).
+
+    White noise of a fraction of a step before the rounding (dither) toggles a rest near
+    a level's boundary between the two levels: a spread of about half a step that is
+    the rounding's, not a noise of that size (which would reach a third level). Its
+    turning points are then judged as on a rest on one level (:func:`_peak_noise`
+    without the rest's σ): a swing across three levels (two steps) is one, which the
+    noise reaches with a chance of a Gaussian beyond 1.5 steps.
+    """
+    if step is None:
+        return False
+    head, tail = _rest_bounds(t, rest_until, stop, 0.25 * period)
+    parts = [p for p in (x[:head], x[max(head, tail) :]) if p.size >= MIN_QUIET_SAMPLES]
+    return bool(parts) and all(float(np.ptp(p)) <= 1.5 * step for p in parts)
 
 
 def _rest_samples(
@@ -1588,11 +1613,12 @@ def _analyse(
     except RecordingError as e:
         raise RecordingError(f"release: no motion found: {e}") from e
     per_samples = period0 / sample_step(t)
-    if per_samples < 6:
+    if per_samples < MIN_PERIOD_SAMPLES:
         raise RecordingError(
             f"release: no motion found: the record's dominant period is {per_samples:.1f} "
-            "samples long; a free decay needs at least 6 samples per period to locate its "
-            "turning points (is there an oscillation above the noise, sampled fast enough?)"
+            f"samples long; a free decay needs at least {MIN_PERIOD_SAMPLES} samples per "
+            "period to locate its turning points (is there an oscillation above the noise, "
+            "sampled fast enough?)"
         )
     v_span = v if v is not None else derive_velocity(t, x, period0)[0]
     x_step = None if x is None else quantisation_step(x)
@@ -1659,6 +1685,14 @@ def _analyse(
     if sigma_x is None and x_step is not None:
         sigma_x = estimate_noise(x[lo:hi])  # as find_peaks would, floored below
     peak_noise, peak_threshold, rest_band = _peak_noise(sigma_x, x_step)
+    if (
+        peak_noise is not None
+        and peak_noise * peak_threshold >= 0.5 * float(np.ptp(x[lo:hi]))
+        and _dithered_rest(t, x, x_step, rest_until, stop_time, period0)
+    ):
+        # a threshold of the first swing's amplitude or more, from a rest toggling
+        # between two levels: the rounding's spread, not a noise of its size
+        peak_noise, peak_threshold, rest_band = _peak_noise(None, x_step)
     try:
         # the record's period, which set the motion span (not estimated again on it)
         found = find_peaks(
@@ -1976,7 +2010,11 @@ def _analyse(
         window = _head(window, kept)
         motion_ended = False
         truncated = True
-    if stop_time is None:
+    # a coarse displacement's turning points stand on its levels: a decay within a
+    # step reads as none there, but its swings then sink below the levels long before
+    # the record ends (a driven oscillation's go on to its end)
+    sinks = coarse[0] is not None and float(t[-1] - peaks.t[-1]) > 2.0 * period
+    if stop_time is None and not sinks:
         amp = np.abs(window.value)
         if amp.size >= 6 and np.mean(amp[-3:]) >= 0.99 * np.mean(amp[:3]):
             raise RecordingError(

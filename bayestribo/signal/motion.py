@@ -97,6 +97,17 @@ DISPLACEMENT_THRESHOLD = 5.0
 #: the end of motion to be its last change of level: above it the noise toggles the
 #: rest between levels, and a change of level marks nothing.
 STEADY_REST = 0.2
+#: Most levels of a quantised displacement whose levels place the release when the
+#: velocity's threshold does not (a coarse digitiser's: 3 to 10 steps across the swing
+#: and its noise's toggling take 4 to 14; a fine one's thousands).
+FEW_LEVELS = 32
+#: Most levels of a displacement whose release the levels place even where the
+#: velocity crosses its threshold, when that threshold is beyond half the first swings
+#: (3 to 5 steps across the swing and the noise's toggling: 4 to 7 levels). At 10 steps
+#: (11 to 13 levels) the velocity's crossing is kept: the levels moved the release by
+#: a millisecond there and a turning point was then missed (measured on
+#: ``benchmarks/coarse_dissipation.py``'s records).
+COARSE_LEVELS = 8
 #: Default excursion threshold, in rest noise standard deviations, that marks motion
 #: when the release and the end of motion are refined (a Gaussian sample exceeds 8σ
 #: with probability 1e-15).
@@ -463,7 +474,17 @@ def motion_span(
     if head_end >= size // 2 and not moving[0]:
         lo = max(0, head_end - size)
         level = float(np.median(v[lo:head_end]))
-        out = np.flatnonzero(np.abs(v[head_end:hi] - level) > level_cut)
+        excursion = np.abs(v[head_end:hi] - level)
+        out = np.flatnonzero(excursion > level_cut)
+        if (
+            out.size
+            and 2.0 * level_cut > float(np.max(excursion))
+            and _few_levels(periodic, COARSE_LEVELS)
+        ):
+            # a threshold beyond half the first swings (a coarse velocity whose rest
+            # toggles, its σ near half a step) is crossed late, if at all: the
+            # displacement's levels place the release (below)
+            out = out[:0]
     elif velocity_alone and moving[0]:
         # a rest shorter than a period before the release (a velocity alone, whose
         # integral's wander there would give turning points): a first quarter period
@@ -484,6 +505,15 @@ def motion_span(
         ):
             release_time = float(t[max(0, i - 1)])
         release_index = int(np.searchsorted(t, release_time, side="right")) - 1
+    elif head_end >= size // 2 and not moving[0] and _few_levels(periodic):
+        # no velocity excursion beyond the threshold: a coarse velocity whose rest
+        # toggles between two levels (dither) has its σ near half a step, and eight of
+        # them can exceed its whole swing; the displacement's levels place the release
+        lo = max(0, head_end - size)
+        release_index = _release_from_levels(np.asarray(periodic, dtype=float), lo, head_end, hi)
+        if release_index is not None:
+            release_time = float(t[release_index])
+    if release_index is not None:
         quiet[: max(0, release_index - max(1, size // 8))] = True
     return MotionSpan(
         release_index=release_index,
@@ -496,6 +526,33 @@ def motion_span(
         block=size,
         fade_time=fade_time,
     )
+
+
+def _few_levels(x: ArrayLike | None, most: int = 0) -> bool:
+    """Whether ``x`` is a displacement on at most ``most`` levels (default
+    :data:`FEW_LEVELS`)."""
+    limit = most or FEW_LEVELS
+    return x is not None and np.unique(np.asarray(x, dtype=float)).size <= limit
+
+
+def _release_from_levels(x: NDArray, lo: int, head_end: int, hi: int) -> int | None:
+    """Release of a quantised displacement ``x`` from its levels, or None.
+
+    ``x[lo:head_end]`` is rest (on one level, or toggling between neighbouring levels
+    by its noise), ``x[head_end:hi]`` holds the start of the motion. The motion leaves
+    the levels the rest occupies; the release is the last sample before that on the
+    rest's own level (its median): within the time the motion takes to fall by a step
+    from the held position, the resolution the levels give.
+    """
+    head = x[lo:head_end]
+    low, high = float(np.min(head)), float(np.max(head))
+    span = x[head_end:hi]
+    beyond = np.flatnonzero((span < low) | (span > high))
+    if not beyond.size:
+        return None
+    leaves = head_end + int(beyond[0])
+    on_level = np.flatnonzero(x[lo:leaves] == float(np.median(head)))
+    return lo + int(on_level[-1]) if on_level.size else None
 
 
 def _fade_time(
