@@ -85,10 +85,15 @@ from bayestribo.inference.independence import (
 from bayestribo.inference.modes import transient_steps
 from bayestribo.inference.moves import DESnookerMove, grouped_moves
 from bayestribo.inference.rhat import rhat
+from bayestribo.inference.tau_bias import TauCheck, debiased, settle_span
+from bayestribo.inference.tau_bias import settled as tau_settled
+from bayestribo.inference.thinning import capped_thin, thinned_ess
 from bayestribo.summary import ParameterSummary
 
 __all__ = [
     "FIT_AUTOCORR_MULTIPLE",
+    "FIT_INDEPENDENCE",
+    "FIT_MAX_DRAWS",
     "FIT_MIN_ESS",
     "MOVES",
     "NaNLogProbabilityError",
@@ -112,6 +117,10 @@ MOVES = ("grouped", "emcee")
 #: 20 τ after burn-in however many walkers there are.
 FIT_MIN_ESS = 1000.0
 FIT_AUTOCORR_MULTIPLE = 20.0
+#: The single-run fit's weight of the independence move (``SamplerSettings.independence``).
+FIT_INDEPENDENCE = 0.75
+#: The single-run fit's largest number of draws kept (``SamplerSettings.max_draws``).
+FIT_MAX_DRAWS = 2000
 
 
 class NaNLogProbabilityError(BayestriboError, FloatingPointError):
@@ -162,6 +171,11 @@ class SamplerSettings:
         Steps of the adaptation phase where ``independence`` > 0: DE moves alone,
         each ensemble's proposal then fitted to its walkers' second half of the phase
         and held fixed; the burn-in is at least this long.
+    max_draws : int or None
+        Largest number of draws kept (all walkers and ensembles): the thinning is
+        coarser than ⌈τ⌉ where the run has more, and the effective sample size is
+        that of the draws kept (:mod:`bayestribo.inference.thinning`); None: every
+        ⌈τ⌉-th step's.
     """
 
     n_walkers: int = 32
@@ -175,6 +189,7 @@ class SamplerSettings:
     moves: str = "grouped"
     independence: float = 0.0
     adapt_steps: int = 100
+    max_draws: int | None = None
 
     def __post_init__(self) -> None:
         if self.moves not in MOVES:
@@ -187,6 +202,11 @@ class SamplerSettings:
             raise BayestriboError(
                 f"adapt_steps: expected 2 to max_steps - 1 = {self.max_steps - 1} steps "
                 f"with the independence move, got {self.adapt_steps}"
+            )
+        if self.max_draws is not None and self.max_draws < self.n_walkers * self.n_ensembles:
+            raise BayestriboError(
+                "max_draws: expected at least one step's draws "
+                f"({self.n_walkers * self.n_ensembles}), got {self.max_draws}"
             )
         if self.n_ensembles < 2:
             raise BayestriboError(f"n_ensembles: expected >= 2 for R-hat, got {self.n_ensembles}")
@@ -522,11 +542,12 @@ def run_ensembles(
         from tqdm.auto import tqdm
 
         bar = tqdm(total=settings.max_steps, desc="sampling", unit="step", leave=False)
-    history: list[tuple[int, NDArray]] = []  # (steps, τ) of the checks since τ was defined
+    history: list[TauCheck] = []  # the checks since τ was defined
     last_rhat: tuple[int, int, int, NDArray] | None = None  # steps, burn, thin, R-hat
     tau = np.full(ndim, np.inf)
     steps = 0
     enough = settled = False
+    span = settings.settle_steps  # the span τ is judged settled over
     extended: int | None = None  # a burn-in extended past a transient
     hopeless: list[str] = []  # why a run on a ridge was stopped before its ceiling
     skip = 0  # the end of a transient found at the start of the draws (steps)
@@ -548,6 +569,8 @@ def run_ensembles(
                 # the steps up to the next check run in one call of the sampler.
                 longest = np.max(tau)
                 early = _EARLY * max((2.0 + multiple) * longest, floor + multiple * longest)
+                # a check is left a span before it, for the rule that τ settle
+                early -= settle_span(tau, settings.check_every, settings.settle_steps)
                 chunk *= max(1, math.ceil((early - steps) / settings.check_every))
             chunk = min(chunk, settings.max_steps - steps)
             ensembles.run(chunk)
@@ -556,21 +579,24 @@ def run_ensembles(
                 bar.update(chunk)
             burn = min(int(2 * np.max(tau)) if np.all(np.isfinite(tau)) else steps // 3, steps // 2)
             burn = max(burn, min(skip, steps // 2), floor)
-            tau = np.max(_autocorr_times(ensembles.chains(burn)), axis=0)
+            raw = np.max(_autocorr_times(ensembles.chains(burn)), axis=0)
+            # τ̂ of a short chain is low by its known bias (inference/tau_bias.py)
+            tau, comparable = debiased(raw, steps - burn)
             if not np.all(np.isfinite(tau)):
                 # A stuck chain (no move accepted): τ is undefined; keep sampling.
                 history, enough, settled = [], False, False
                 continue
             burn = math.ceil(2 * np.max(tau))
-            if history and np.max(tau) < 0.5 * np.max(history[-1][1]):
+            if history and np.max(tau) < 0.5 * np.max(history[-1].tau):
                 # τ fell by half: the draws the last estimate kept may begin with the
                 # walkers' way in from their start (a transient, which lengthens τ
                 # while it is kept): the burn-in is extended past it from now on
                 skip = max(skip, _transient_end(ensembles, burn, tau, settings, labels))
             burn = max(burn, skip, floor)
-            earlier = [t for at, t in history if at <= steps - settings.settle_steps]
-            settled = bool(earlier) and bool(np.all(np.abs(tau - earlier[-1]) < 0.1 * tau))
-            history.append((steps, tau))
+            span = settle_span(tau, settings.check_every, settings.settle_steps)
+            now = TauCheck(steps, raw, tau, comparable)
+            settled = tau_settled(history, now, span)
+            history.append(now)
             enough = steps - burn >= multiple * np.max(tau)
             need = burn + multiple * np.max(tau)
             if unidentified is not None and not enough and need > settings.max_steps:
@@ -616,9 +642,15 @@ def run_ensembles(
     if extended is not None:
         burn = extended
     thin = max(1, math.ceil(np.max(tau))) if defined else 1
+    step_thin = thin
+    if defined and settings.max_draws is not None:
+        # at most max_draws draws kept, their own ESS reported (inference/thinning.py)
+        thin = max(thin, capped_thin(steps - burn, n_walkers * n_ens, settings.max_draws))
     chains, lps = ensembles.flat(burn, thin)
     acceptance = ensembles.acceptance()
     ess = (steps - burn) * n_walkers * n_ens / tau
+    if thin > step_thin:
+        ess = np.minimum(ess, thinned_ess(chains.shape[0] * chains.shape[1], tau, thin))
     reuse = last_rhat is not None and last_rhat[:3] == (steps, burn, thin)
     r_hat = last_rhat[3] if reuse else rhat(chains)
 
@@ -633,7 +665,7 @@ def run_ensembles(
     elif not settled:
         reasons.append(
             "the autocorrelation time has not settled (changed by 10 % or more over the "
-            f"last {settings.settle_steps} steps)"
+            f"last {span} steps, its estimator's bias on short chains removed)"
         )
     if not np.all(r_hat < settings.rhat_max):
         worst = int(np.argmax(r_hat))
