@@ -5,24 +5,32 @@
   Gelman-Rubin R-hat compares independent chains (R-hat over the walkers of one
   ensemble is not valid: they are coupled by the moves).
 * Every ``check_every`` steps the integrated autocorrelation time τ of each parameter
-  is estimated per ensemble (:func:`autocorr_time`, emcee's estimator); burn-in is 2τ;
+  is estimated per ensemble (:func:`autocorr_time`, emcee's estimator) and corrected
+  for that estimator's known bias on a chain of L steps, low by about 10.5 τ/L of
+  itself (:func:`bayestribo.inference.tau_bias.debiased`); burn-in is 2τ;
   the run stops once every ensemble has at least ``autocorr_multiple`` × τ steps after
   burn-in and, where ``min_ess`` is given, an effective sample size of at least
   ``min_ess`` (:meth:`SamplerSettings.required_multiple`: the larger of the two in
-  units of τ), τ has settled (changed by less than 10 % since the estimate of the check
-  ``settle_steps`` or more steps before) and the between-ensemble R-hat is below
+  units of τ), τ has settled (the raw or the debiased estimate changed by less than
+  10 % since the check 30 τ, at most ``settle_steps``, or more steps before:
+  :func:`bayestribo.inference.tau_bias.settled`, which says why a chain still on its
+  way to the posterior does not settle) and the between-ensemble R-hat is below
   ``rhat_max`` for every parameter, or at ``max_steps``. Checking often (every 50
-  steps by default) stops the run near the first step that meets the rule; comparing
-  τ over at least 200 steps keeps "settled" as demanding as with checks 200 apart.
+  steps by default) stops the run near the first step that meets the rule; the check
+  a span before the earliest stop is never skipped.
   The single-run fit asks for an effective sample size of :data:`FIT_MIN_ESS` (1000)
-  and at least :data:`FIT_AUTOCORR_MULTIPLE` (20) τ; the settings' defaults (50 τ, no
-  ESS target) are the population's.
+  and at least :data:`FIT_AUTOCORR_MULTIPLE` (20) τ, keeps at most
+  :data:`FIT_MAX_DRAWS` draws (``SamplerSettings.max_draws``,
+  :mod:`bayestribo.inference.thinning`: the effective sample size reported is that of
+  the draws kept) and mixes in the independence move (:data:`FIT_INDEPENDENCE`); the
+  settings' defaults (50 τ, no ESS target, every ⌈τ⌉-th step kept) are the population's.
 * Where R-hat fails at a check because the kept draws begin with the walkers' way
   from their start to the posterior (a transient the burn-in of 2τ did not cover:
   :func:`bayestribo.inference.modes.transient_steps`), the burn-in is extended past it
   and the run stops there when what is left still meets the rule.
-* Samples are thinned by ⌈τ⌉; the effective sample size of a parameter is
-  (steps after burn-in × walkers × ensembles)/τ.
+* Samples are thinned by ⌈τ⌉ (more where ``max_draws`` asks); the effective sample
+  size of a parameter is (steps after burn-in × walkers × ensembles)/τ, or the draws'
+  own where they are thinned more (:func:`~bayestribo.inference.thinning.thinned_ess`).
 * A run that does not meet the criteria is reported as not converged, never silently.
 
 * A NaN log-probability is an error naming the parameters (a broken model or input),
@@ -56,9 +64,8 @@ independence proposal is fitted to its own walkers and held fixed, and the
 independence Metropolis-Hastings move joins the mix with that weight (less where its
 expected acceptance is low): :mod:`bayestribo.inference.independence`, which says
 why the chain after the phase is valid and the ensembles independent. The phase is
-never kept (the burn-in is at least ``adapt_steps``). The population's sampler uses
-it; the single-run fit does not (its runs are held by the rule that τ settle, not
-by τ: ``benchmarks/README.md``).
+never kept (the burn-in is at least ``adapt_steps``). The population's sampler
+and the single-run fit use it (``benchmarks/README.md``).
 
 This module knows nothing of the models: :func:`run_ensembles` samples any vectorised
 log-probability; the single-run fit and the population both use it.
