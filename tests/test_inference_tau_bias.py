@@ -161,3 +161,15 @@ def test_the_ess_of_thinned_draws_is_that_of_their_mean():
     # against draws / τ (no thinning) and the draws themselves (independent)
     assert draws / tau < ess < draws
     assert thinned_ess(100, np.array([tau]), 1)[0] == pytest.approx(100 / tau)
+
+
+def test_the_default_fit_mixes_in_the_move_and_keeps_at_most_2000_draws():
+    from bayestribo.inference.spec import FitSpec
+    from bayestribo.inference.types import DEFAULT_SETTINGS
+
+    for settings in (FitSpec().sampler_settings(), DEFAULT_SETTINGS):
+        assert settings.independence == 0.75 and settings.max_draws == 2000
+    # a ceiling too short for the adaptation phase and a run after it: DE moves alone
+    assert FitSpec(max_steps=200).sampler_settings().independence == 0.0
+    # more walkers than the cap allows in one step: one step's draws
+    assert FitSpec(n_walkers=640, n_ensembles=4).sampler_settings().max_draws == 2560
