@@ -27,6 +27,7 @@ __all__ = [
     "ReadingWarning",
     "RecordingError",
     "RunFormatError",
+    "ShapeUnresolvedWarning",
     "ShortAnalysisWarning",
     "SpikeWarning",
 ]
@@ -176,6 +177,15 @@ class CreepWarning(MisfitWarning):
     trusted; the creep is not taken as rest, the noise is measured elsewhere, and the
     turning points' ΔE(A) is the answer. The message gives the times, the drift and
     where the noise comes from. A misfit: ``fit`` exits 1."""
+
+
+class ShapeUnresolvedWarning(MisfitWarning):
+    """``law="auto"``: laws whose ΔE(A) has another shape over the analysed swings (log-log
+    slopes more than 0.5 apart: friction's A¹ against drag's A²) are as good as the
+    verdict, so the record does not tell which law dissipates; the verdict's parameters
+    hold only if its law is the one. The message names the laws and their slopes, and
+    the ΔE(A) averaged over them (or the turning points') is the answer. A misfit:
+    ``fit`` exits 1."""
 
 
 class ShortAnalysisWarning(MisfitWarning):

@@ -30,10 +30,11 @@ from typing import Any
 import numpy as np
 
 from bayestribo._warnings import warn
-from bayestribo.errors import MisfitWarning
+from bayestribo.errors import MisfitWarning, ShapeUnresolvedWarning
 from bayestribo.inference.build import build_posterior
 from bayestribo.inference.comparison import auto_laws, compare_prepared
 from bayestribo.inference.dissipation import (
+    SHAPE_SLOPE_TOLERANCE,
     averaged_dissipation,
     dissipation_band,
     physical_scale,
@@ -50,7 +51,7 @@ from bayestribo.inference.summarising import Summary, summary
 from bayestribo.inference.types import PreparedRun, Sampled
 from bayestribo.model.laws import get_law
 
-__all__ = ["fit_auto"]
+__all__ = ["fit_auto", "shape_unresolved"]
 
 
 def fit_auto(
@@ -141,6 +142,10 @@ def fit_auto(
     compared["departures"] = _law_departures(
         common, runs, record, screened, model=model, discrepancy=discrepancy
     )
+    unresolved = shape_unresolved(comparison, compared["departures"])
+    if unresolved is not None:
+        compared["shape_unresolved"] = unresolved
+        _warn_unresolved(prepared.name, comparison.verdict, unresolved, averaged is not None)
     return dataclasses.replace(
         summarised, record=record.replace(law_comparison=plain_data(compared))
     )
@@ -180,6 +185,77 @@ def _check_halves(
         MisfitWarning,
     )
     return checked
+
+
+def shape_unresolved(
+    comparison: LawComparison, departures: Mapping[str, Any]
+) -> dict[str, Any] | None:
+    """The laws as good as an adequate verdict whose ΔE(A) has another shape than the
+    verdict's over the analysed swings, or None.
+
+    Laws the comparison cannot tell apart (PSIS-LOO, :mod:`bayestribo.inference.choice`)
+    are chosen between by simplicity, not by the record. Where they agree on ΔE(A) the
+    choice does not matter; where their log-log slopes over the analysed swings differ
+    by more than :data:`~bayestribo.inference.dissipation.SHAPE_SLOPE_TOLERANCE`
+    (friction's A¹ against drag's A²: ``departures[law]["law_slope"]``,
+    :func:`_law_departures`), the record does not say which law dissipates, and the
+    verdict's parameters are a measurement only if its law is the one.
+
+    Parameters
+    ----------
+    comparison : LawComparison
+        The comparison, halves checked.
+    departures : mapping
+        Each compared law's :func:`~bayestribo.inference.dissipation.shape_agreement`.
+
+    Returns
+    -------
+    dict or None
+        ``slopes`` (law -> log-log slope of its ΔE(A), the verdict's first) and
+        ``others`` (the laws as good whose slope differs from the verdict's by more than
+        the tolerance); None when the verdict is not adequate (its answer is already
+        the turning points'), its slope is unknown, or no such law is as good.
+    """
+    if not comparison.adequate:
+        return None
+    verdict = departures.get(comparison.verdict) or {}
+    own = verdict.get("law_slope")
+    if own is None or not np.isfinite(own):
+        return None
+    slopes = {comparison.verdict: float(own)}
+    others = []
+    for law in comparison.as_good:
+        row = comparison.table.get(law, {})
+        found = departures.get(law) or {}
+        slope = found.get("law_slope")
+        if law == comparison.verdict or not row.get("adequate") or slope is None:
+            continue
+        if np.isfinite(slope) and abs(slope - own) > SHAPE_SLOPE_TOLERANCE:
+            slopes[law] = float(slope)
+            others.append(law)
+    return {"slopes": slopes, "others": others} if others else None
+
+
+def _warn_unresolved(
+    name: str | None, verdict: str, unresolved: Mapping[str, Any], averaged: bool
+) -> None:
+    """Say that laws of other shapes are as good as the verdict (:func:`shape_unresolved`)."""
+    slopes = unresolved["slopes"]
+    shapes = ", ".join(f"{law} (ΔE ∝ A^{slope:.2f})" for law, slope in slopes.items())
+    answer = (
+        "the ΔE(A) averaged over the laws as good (result.dissipation) holds whichever it is"
+        if averaged
+        else "the turning points' ΔE(A) (result.turning_point_dissipation) holds whichever it is"
+    )
+    warn(
+        f"{name or 'the run'}: laws whose energy lost per cycle has another shape are as "
+        f"good as {verdict}: {shapes}. The record does not tell which law dissipates "
+        f"(its swings span too little, or its noise is too large), so {verdict}'s "
+        f"parameters are a measurement only if {verdict} is the law; {answer} "
+        "(result.law_comparison['shape_unresolved']). A record over a wider range of "
+        "swings, or --law NAME where the physics says which, settles it",
+        ShapeUnresolvedWarning,
+    )
 
 
 #: Draws of each compared law from which its ΔE(A) is set beside the turning points'.
