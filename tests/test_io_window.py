@@ -34,6 +34,8 @@ def test_the_window_keeps_its_samples_and_says_so(record):
         ((5.0, 2.0), BayestriboError, "t0 < t1"),
         ((20.0, 30.0), RunFormatError, r"holds 0 sample\(s\); the record spans 0 s to 9.99 s"),
         (("a", 2), BayestriboError, "two times"),
+        # an integer beyond a float's range (a JSON sidecar may hold one)
+        ((10**400, None), BayestriboError, "two times"),
     ],
 )
 def test_a_window_that_cannot_be_is_refused(record, window, error, match):

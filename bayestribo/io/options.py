@@ -171,9 +171,10 @@ def check_window(window: Any) -> tuple[float, float]:
     """
     try:
         t0, t1 = (float(value) for value in window)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
+        # an integer beyond a float's range (a JSON sidecar holds any) is no time either
         raise BayestriboError(
-            f"window: expected two times (t0, t1) in seconds, got {window!r}"
+            f"window: expected two times (t0, t1) in seconds, got {window!r:.200}"
         ) from None
     if math.isnan(t0) or math.isnan(t1) or not t0 < t1:
         raise BayestriboError(f"window: expected times t0 < t1 in seconds, got ({t0!r}, {t1!r})")
