@@ -510,7 +510,7 @@ def check_scale(
             )
         try:
             value = float(factor)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             value = math.nan
         if not math.isfinite(value) or value == 0.0 or isinstance(factor, bool):
             raise RunFormatError(

@@ -363,7 +363,7 @@ def _rate(value: Any, name: str, where: str) -> float:
     """A sample rate [Hz]: a finite number > 0."""
     try:
         rate = float(value)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         rate = math.nan
     if isinstance(value, bool) or not math.isfinite(rate) or rate <= 0.0:
         raise RunFormatError(f"{name}: expected a sample rate in Hz > 0, got {value!r}", where)
