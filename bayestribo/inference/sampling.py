@@ -5,24 +5,32 @@
   Gelman-Rubin R-hat compares independent chains (R-hat over the walkers of one
   ensemble is not valid: they are coupled by the moves).
 * Every ``check_every`` steps the integrated autocorrelation time τ of each parameter
-  is estimated per ensemble (:func:`autocorr_time`, emcee's estimator); burn-in is 2τ;
+  is estimated per ensemble (:func:`autocorr_time`, emcee's estimator) and corrected
+  for that estimator's known bias on a chain of L steps, low by about 10.5 τ/L of
+  itself (:func:`bayestribo.inference.tau_bias.debiased`); burn-in is 2τ;
   the run stops once every ensemble has at least ``autocorr_multiple`` × τ steps after
   burn-in and, where ``min_ess`` is given, an effective sample size of at least
   ``min_ess`` (:meth:`SamplerSettings.required_multiple`: the larger of the two in
-  units of τ), τ has settled (changed by less than 10 % since the estimate of the check
-  ``settle_steps`` or more steps before) and the between-ensemble R-hat is below
+  units of τ), τ has settled (the raw or the debiased estimate changed by less than
+  10 % since the check 30 τ, at most ``settle_steps``, or more steps before:
+  :func:`bayestribo.inference.tau_bias.settled`, which says why a chain still on its
+  way to the posterior does not settle) and the between-ensemble R-hat is below
   ``rhat_max`` for every parameter, or at ``max_steps``. Checking often (every 50
-  steps by default) stops the run near the first step that meets the rule; comparing
-  τ over at least 200 steps keeps "settled" as demanding as with checks 200 apart.
+  steps by default) stops the run near the first step that meets the rule; the check
+  a span before the earliest stop is never skipped.
   The single-run fit asks for an effective sample size of :data:`FIT_MIN_ESS` (1000)
-  and at least :data:`FIT_AUTOCORR_MULTIPLE` (20) τ; the settings' defaults (50 τ, no
-  ESS target) are the population's.
+  and at least :data:`FIT_AUTOCORR_MULTIPLE` (20) τ, keeps at most
+  :data:`FIT_MAX_DRAWS` draws (``SamplerSettings.max_draws``,
+  :mod:`bayestribo.inference.thinning`: the effective sample size reported is that of
+  the draws kept) and mixes in the independence move (:data:`FIT_INDEPENDENCE`); the
+  settings' defaults (50 τ, no ESS target, every ⌈τ⌉-th step kept) are the population's.
 * Where R-hat fails at a check because the kept draws begin with the walkers' way
   from their start to the posterior (a transient the burn-in of 2τ did not cover:
   :func:`bayestribo.inference.modes.transient_steps`), the burn-in is extended past it
   and the run stops there when what is left still meets the rule.
-* Samples are thinned by ⌈τ⌉; the effective sample size of a parameter is
-  (steps after burn-in × walkers × ensembles)/τ.
+* Samples are thinned by ⌈τ⌉ (more where ``max_draws`` asks); the effective sample
+  size of a parameter is (steps after burn-in × walkers × ensembles)/τ, or the draws'
+  own where they are thinned more (:func:`~bayestribo.inference.thinning.thinned_ess`).
 * A run that does not meet the criteria is reported as not converged, never silently.
 
 * A NaN log-probability is an error naming the parameters (a broken model or input),
@@ -56,9 +64,8 @@ independence proposal is fitted to its own walkers and held fixed, and the
 independence Metropolis-Hastings move joins the mix with that weight (less where its
 expected acceptance is low): :mod:`bayestribo.inference.independence`, which says
 why the chain after the phase is valid and the ensembles independent. The phase is
-never kept (the burn-in is at least ``adapt_steps``). The population's sampler uses
-it; the single-run fit does not (its runs are held by the rule that τ settle, not
-by τ: ``benchmarks/README.md``).
+never kept (the burn-in is at least ``adapt_steps``). The population's sampler
+and the single-run fit use it (``benchmarks/README.md``).
 
 This module knows nothing of the models: :func:`run_ensembles` samples any vectorised
 log-probability; the single-run fit and the population both use it.
@@ -85,10 +92,15 @@ from bayestribo.inference.independence import (
 from bayestribo.inference.modes import transient_steps
 from bayestribo.inference.moves import DESnookerMove, grouped_moves
 from bayestribo.inference.rhat import rhat
+from bayestribo.inference.tau_bias import TauCheck, debiased, settle_span
+from bayestribo.inference.tau_bias import settled as tau_settled
+from bayestribo.inference.thinning import capped_thin, thinned_ess
 from bayestribo.summary import ParameterSummary
 
 __all__ = [
     "FIT_AUTOCORR_MULTIPLE",
+    "FIT_INDEPENDENCE",
+    "FIT_MAX_DRAWS",
     "FIT_MIN_ESS",
     "MOVES",
     "NaNLogProbabilityError",
@@ -112,6 +124,10 @@ MOVES = ("grouped", "emcee")
 #: 20 τ after burn-in however many walkers there are.
 FIT_MIN_ESS = 1000.0
 FIT_AUTOCORR_MULTIPLE = 20.0
+#: The single-run fit's weight of the independence move (``SamplerSettings.independence``).
+FIT_INDEPENDENCE = 0.75
+#: The single-run fit's largest number of draws kept (``SamplerSettings.max_draws``).
+FIT_MAX_DRAWS = 2000
 
 
 class NaNLogProbabilityError(BayestriboError, FloatingPointError):
@@ -162,6 +178,11 @@ class SamplerSettings:
         Steps of the adaptation phase where ``independence`` > 0: DE moves alone,
         each ensemble's proposal then fitted to its walkers' second half of the phase
         and held fixed; the burn-in is at least this long.
+    max_draws : int or None
+        Largest number of draws kept (all walkers and ensembles): the thinning is
+        coarser than ⌈τ⌉ where the run has more, and the effective sample size is
+        that of the draws kept (:mod:`bayestribo.inference.thinning`); None: every
+        ⌈τ⌉-th step's.
     """
 
     n_walkers: int = 32
@@ -175,6 +196,7 @@ class SamplerSettings:
     moves: str = "grouped"
     independence: float = 0.0
     adapt_steps: int = 100
+    max_draws: int | None = None
 
     def __post_init__(self) -> None:
         if self.moves not in MOVES:
@@ -187,6 +209,11 @@ class SamplerSettings:
             raise BayestriboError(
                 f"adapt_steps: expected 2 to max_steps - 1 = {self.max_steps - 1} steps "
                 f"with the independence move, got {self.adapt_steps}"
+            )
+        if self.max_draws is not None and self.max_draws < self.n_walkers * self.n_ensembles:
+            raise BayestriboError(
+                "max_draws: expected at least one step's draws "
+                f"({self.n_walkers * self.n_ensembles}), got {self.max_draws}"
             )
         if self.n_ensembles < 2:
             raise BayestriboError(f"n_ensembles: expected >= 2 for R-hat, got {self.n_ensembles}")
@@ -522,11 +549,12 @@ def run_ensembles(
         from tqdm.auto import tqdm
 
         bar = tqdm(total=settings.max_steps, desc="sampling", unit="step", leave=False)
-    history: list[tuple[int, NDArray]] = []  # (steps, τ) of the checks since τ was defined
+    history: list[TauCheck] = []  # the checks since τ was defined
     last_rhat: tuple[int, int, int, NDArray] | None = None  # steps, burn, thin, R-hat
     tau = np.full(ndim, np.inf)
     steps = 0
     enough = settled = False
+    span = settings.settle_steps  # the span τ is judged settled over
     extended: int | None = None  # a burn-in extended past a transient
     hopeless: list[str] = []  # why a run on a ridge was stopped before its ceiling
     skip = 0  # the end of a transient found at the start of the draws (steps)
@@ -548,6 +576,8 @@ def run_ensembles(
                 # the steps up to the next check run in one call of the sampler.
                 longest = np.max(tau)
                 early = _EARLY * max((2.0 + multiple) * longest, floor + multiple * longest)
+                # a check is left a span before it, for the rule that τ settle
+                early -= settle_span(tau, settings.check_every, settings.settle_steps)
                 chunk *= max(1, math.ceil((early - steps) / settings.check_every))
             chunk = min(chunk, settings.max_steps - steps)
             ensembles.run(chunk)
@@ -556,21 +586,24 @@ def run_ensembles(
                 bar.update(chunk)
             burn = min(int(2 * np.max(tau)) if np.all(np.isfinite(tau)) else steps // 3, steps // 2)
             burn = max(burn, min(skip, steps // 2), floor)
-            tau = np.max(_autocorr_times(ensembles.chains(burn)), axis=0)
+            raw = np.max(_autocorr_times(ensembles.chains(burn)), axis=0)
+            # τ̂ of a short chain is low by its known bias (inference/tau_bias.py)
+            tau, comparable = debiased(raw, steps - burn)
             if not np.all(np.isfinite(tau)):
                 # A stuck chain (no move accepted): τ is undefined; keep sampling.
                 history, enough, settled = [], False, False
                 continue
             burn = math.ceil(2 * np.max(tau))
-            if history and np.max(tau) < 0.5 * np.max(history[-1][1]):
+            if history and np.max(tau) < 0.5 * np.max(history[-1].tau):
                 # τ fell by half: the draws the last estimate kept may begin with the
                 # walkers' way in from their start (a transient, which lengthens τ
                 # while it is kept): the burn-in is extended past it from now on
                 skip = max(skip, _transient_end(ensembles, burn, tau, settings, labels))
             burn = max(burn, skip, floor)
-            earlier = [t for at, t in history if at <= steps - settings.settle_steps]
-            settled = bool(earlier) and bool(np.all(np.abs(tau - earlier[-1]) < 0.1 * tau))
-            history.append((steps, tau))
+            span = settle_span(tau, settings.check_every, settings.settle_steps)
+            now = TauCheck(steps, raw, tau, comparable)
+            settled = tau_settled(history, now, span)
+            history.append(now)
             enough = steps - burn >= multiple * np.max(tau)
             need = burn + multiple * np.max(tau)
             if unidentified is not None and not enough and need > settings.max_steps:
@@ -616,9 +649,15 @@ def run_ensembles(
     if extended is not None:
         burn = extended
     thin = max(1, math.ceil(np.max(tau))) if defined else 1
+    step_thin = thin
+    if defined and settings.max_draws is not None:
+        # at most max_draws draws kept, their own ESS reported (inference/thinning.py)
+        thin = max(thin, capped_thin(steps - burn, n_walkers * n_ens, settings.max_draws))
     chains, lps = ensembles.flat(burn, thin)
     acceptance = ensembles.acceptance()
     ess = (steps - burn) * n_walkers * n_ens / tau
+    if thin > step_thin:
+        ess = np.minimum(ess, thinned_ess(chains.shape[0] * chains.shape[1], tau, thin))
     reuse = last_rhat is not None and last_rhat[:3] == (steps, burn, thin)
     r_hat = last_rhat[3] if reuse else rhat(chains)
 
@@ -633,7 +672,7 @@ def run_ensembles(
     elif not settled:
         reasons.append(
             "the autocorrelation time has not settled (changed by 10 % or more over the "
-            f"last {settings.settle_steps} steps)"
+            f"last {span} steps, its estimator's bias on short chains removed)"
         )
     if not np.all(r_hat < settings.rhat_max):
         worst = int(np.argmax(r_hat))

@@ -561,6 +561,8 @@ class FitSpec:
         :data:`~bayestribo.inference.sampling.FIT_AUTOCORR_MULTIPLE` τ)."""
         from bayestribo.inference.sampling import (
             FIT_AUTOCORR_MULTIPLE,
+            FIT_INDEPENDENCE,
+            FIT_MAX_DRAWS,
             FIT_MIN_ESS,
             SamplerSettings,
         )
@@ -571,6 +573,9 @@ class FitSpec:
             max_steps=self.max_steps,
             autocorr_multiple=FIT_AUTOCORR_MULTIPLE,
             min_ess=FIT_MIN_ESS,
+            # the move's adaptation phase (100 steps) needs room after it
+            independence=FIT_INDEPENDENCE if self.max_steps >= 300 else 0.0,
+            max_draws=max(FIT_MAX_DRAWS, self.n_walkers * self.n_ensembles),
         )
 
 

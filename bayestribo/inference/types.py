@@ -14,7 +14,13 @@ from typing import TYPE_CHECKING, Any
 
 from numpy.typing import NDArray
 
-from bayestribo.inference.sampling import FIT_AUTOCORR_MULTIPLE, FIT_MIN_ESS, SamplerSettings
+from bayestribo.inference.sampling import (
+    FIT_AUTOCORR_MULTIPLE,
+    FIT_INDEPENDENCE,
+    FIT_MAX_DRAWS,
+    FIT_MIN_ESS,
+    SamplerSettings,
+)
 
 if TYPE_CHECKING:
     from bayestribo.inference.posterior import Posterior
@@ -34,6 +40,8 @@ DEFAULT_SETTINGS = SamplerSettings(
     max_steps=20_000,
     autocorr_multiple=FIT_AUTOCORR_MULTIPLE,
     min_ess=FIT_MIN_ESS,
+    independence=FIT_INDEPENDENCE,
+    max_draws=FIT_MAX_DRAWS,
 )
 
 #: χ² p-value of the MAP residuals below which a fit warns of misfit.
