@@ -83,6 +83,7 @@ __all__ = [
     "StudentProposal",
     "expected_acceptance",
     "mix_weight",
+    "mixing_tau",
 ]
 
 #: Degrees of freedom of the fitted Student-t proposal (tails heavier than a
@@ -366,6 +367,35 @@ def mix_weight(acceptance: float, weight: float) -> float:
     between."""
     share = (acceptance - NO_ACCEPTANCE) / (FULL_ACCEPTANCE - NO_ACCEPTANCE)
     return float(weight * min(1.0, max(0.0, share)))
+
+
+def mixing_tau(acceptance: float, weight: float) -> float:
+    """The autocorrelation time the move alone gives a chain where its proposal
+    covers the posterior: (2 − p)/p steps, p = ``weight`` × ``acceptance``.
+
+    At each step a walker jumps with probability p to a proposal that, where the
+    proposal is close to the posterior, is nearly an independent draw of it; its
+    autocorrelation then falls as (1 − p)^t, whose integrated time is (2 − p)/p (the
+    DE moves in the mix only shorten it). A chain whose measured τ is several times
+    this has posterior mass the proposal does not reach (a ridge, a tail, a bound
+    the adaptation phase did not see), where the move is rejected and the DE moves,
+    left a share 1 − ``weight`` of the steps, do the work alone
+    (:func:`bayestribo.inference.sampling.run_ensembles` then takes the move out).
+
+    Parameters
+    ----------
+    acceptance : float
+        Expected acceptance of the move (:func:`expected_acceptance`), in [0, 1].
+    weight : float
+        The move's weight in the mix, in [0, 1).
+
+    Returns
+    -------
+    float
+        τ [steps]; infinite where p is 0.
+    """
+    p = float(weight) * float(acceptance)
+    return (2.0 - p) / p if p > 0 else math.inf
 
 
 class GroupedIndependenceMove(emcee.moves.Move):

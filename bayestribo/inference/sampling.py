@@ -67,6 +67,22 @@ why the chain after the phase is valid and the ensembles independent. The phase 
 never kept (the burn-in is at least ``adapt_steps``). The population's sampler
 and the single-run fit use it (``benchmarks/README.md``).
 
+Where ``SamplerSettings.independence_limit`` is given (the single-run fit's
+:data:`FIT_INDEPENDENCE_LIMIT`), the move is **taken out** at the first check whose
+longest raw τ is above that multiple of the τ the move's weight and expected
+acceptance predict (:func:`~bayestribo.inference.independence.mixing_tau`): the
+proposal, fitted to the adaptation phase's walkers, misses posterior mass they had
+not reached (a ridge along a bound, a tail), where the move is rejected and the DE
+moves, left a quarter of the steps, do the work alone. From that step on the DE
+moves run alone with their own weights, and every step before it is discarded like
+an adaptation phase (the burn-in is at least that step): the draws kept are all of
+one fixed kernel, which leaves the posterior invariant, so the chain after the step
+is valid however the step was chosen. The raw τ̂ (low on a short chain) is compared,
+so a chain does not pass the limit by its estimator's bias. τ is debiased and its
+settling judged over 30 τ only while the move is in the mix; the DE moves alone
+(the move taken out, never put in, or left out for its low acceptance) are judged
+by the rule as it was before the move: the raw τ̂, settled over ``settle_steps``.
+
 This module knows nothing of the models: :func:`run_ensembles` samples any vectorised
 log-probability; the single-run fit and the population both use it.
 """
@@ -88,6 +104,7 @@ from bayestribo.inference.independence import (
     GroupedIndependenceMove,
     expected_acceptance,
     mix_weight,
+    mixing_tau,
 )
 from bayestribo.inference.modes import transient_steps
 from bayestribo.inference.moves import DESnookerMove, grouped_moves
@@ -100,6 +117,7 @@ from bayestribo.summary import ParameterSummary
 __all__ = [
     "FIT_AUTOCORR_MULTIPLE",
     "FIT_INDEPENDENCE",
+    "FIT_INDEPENDENCE_LIMIT",
     "FIT_MAX_DRAWS",
     "FIT_MIN_ESS",
     "MOVES",
@@ -128,6 +146,9 @@ FIT_AUTOCORR_MULTIPLE = 20.0
 FIT_INDEPENDENCE = 0.75
 #: The single-run fit's largest number of draws kept (``SamplerSettings.max_draws``).
 FIT_MAX_DRAWS = 2000
+#: The single-run fit's limit on τ with the independence move, in units of the τ its
+#: expected acceptance predicts (``SamplerSettings.independence_limit``).
+FIT_INDEPENDENCE_LIMIT = 4.0
 
 
 class NaNLogProbabilityError(BayestriboError, FloatingPointError):
@@ -183,6 +204,12 @@ class SamplerSettings:
         coarser than ⌈τ⌉ where the run has more, and the effective sample size is
         that of the draws kept (:mod:`bayestribo.inference.thinning`); None: every
         ⌈τ⌉-th step's.
+    independence_limit : float or None
+        Where the independence move is in the mix: the longest raw τ at a check above
+        this multiple of the τ the move's expected acceptance predicts
+        (:func:`~bayestribo.inference.independence.mixing_tau`) takes the move out
+        for the rest of the run, and every step before is discarded (see the module
+        notes); None: the move stays in.
     """
 
     n_walkers: int = 32
@@ -197,6 +224,7 @@ class SamplerSettings:
     independence: float = 0.0
     adapt_steps: int = 100
     max_draws: int | None = None
+    independence_limit: float | None = None
 
     def __post_init__(self) -> None:
         if self.moves not in MOVES:
@@ -214,6 +242,10 @@ class SamplerSettings:
             raise BayestriboError(
                 "max_draws: expected at least one step's draws "
                 f"({self.n_walkers * self.n_ensembles}), got {self.max_draws}"
+            )
+        if self.independence_limit is not None and not self.independence_limit > 1.0:
+            raise BayestriboError(
+                f"independence_limit: expected > 1 or None, got {self.independence_limit}"
             )
         if self.n_ensembles < 2:
             raise BayestriboError(f"n_ensembles: expected >= 2 for R-hat, got {self.n_ensembles}")
@@ -294,6 +326,10 @@ class SamplerRun:
     independence_acceptance : float
         The least of the ensembles' expected acceptances of that move at the end of
         the adaptation phase (NaN where there was none).
+    independence_dropped : int or None
+        The step at which the move was taken out (``SamplerSettings.independence_limit``:
+        the draws kept are all after it, with the DE moves alone, and ``independence``
+        is then 0); None where it was not.
     """
 
     chains: NDArray
@@ -312,6 +348,7 @@ class SamplerRun:
     ridge: bool = False
     independence: float = 0.0
     independence_acceptance: float = float("nan")
+    independence_dropped: int | None = None
 
     def summary(self, prob: float = 0.95) -> dict[str, ParameterSummary]:
         """Posterior summary of each parameter over all ensembles' thinned draws.
@@ -560,6 +597,7 @@ def run_ensembles(
     skip = 0  # the end of a transient found at the start of the draws (steps)
     floor = 0  # the adaptation phase, never kept (inference/independence.py)
     independence = (0.0, float("nan"))  # the move's weight and expected acceptance
+    dropped: int | None = None  # the step at which the move was taken out
     try:
         if settings.independence > 0:
             floor = settings.adapt_steps
@@ -569,6 +607,7 @@ def run_ensembles(
                 bar.update(floor)
             independence = _adapted(ensembles, checked, floor, settings.independence, seed)
         while steps < settings.max_steps:
+            mixing = independence[0] > 0  # the move in the mix (τ debiased, spans of 30 τ)
             chunk = settings.check_every
             if np.all(np.isfinite(tau)):
                 # The rule cannot be met this early with the last τ (which short chains
@@ -576,8 +615,9 @@ def run_ensembles(
                 # the steps up to the next check run in one call of the sampler.
                 longest = np.max(tau)
                 early = _EARLY * max((2.0 + multiple) * longest, floor + multiple * longest)
-                # a check is left a span before it, for the rule that τ settle
-                early -= settle_span(tau, settings.check_every, settings.settle_steps)
+                if mixing:
+                    # a check is left a span before it, for the rule that τ settle
+                    early -= settle_span(tau, settings.check_every, settings.settle_steps)
                 chunk *= max(1, math.ceil((early - steps) / settings.check_every))
             chunk = min(chunk, settings.max_steps - steps)
             ensembles.run(chunk)
@@ -587,11 +627,23 @@ def run_ensembles(
             burn = min(int(2 * np.max(tau)) if np.all(np.isfinite(tau)) else steps // 3, steps // 2)
             burn = max(burn, min(skip, steps // 2), floor)
             raw = np.max(_autocorr_times(ensembles.chains(burn)), axis=0)
-            # τ̂ of a short chain is low by its known bias (inference/tau_bias.py)
-            tau, comparable = debiased(raw, steps - burn)
+            # With the move, τ̂ of a short chain is low by its known bias
+            # (inference/tau_bias.py); with the DE moves alone it is the rule as is.
+            tau, comparable = debiased(raw, steps - burn) if mixing else (raw, True)
             if not np.all(np.isfinite(tau)):
                 # A stuck chain (no move accepted): τ is undefined; keep sampling.
                 history, enough, settled = [], False, False
+                continue
+            if mixing and _move_fails(raw, independence, settings.independence_limit):
+                # the proposal misses posterior mass (a ridge, a tail, a bound): the
+                # move is taken out and the run starts again from here with the DE
+                # moves alone, every step before discarded (the kept draws are all
+                # of one kernel)
+                ensembles.drop_independence()
+                independence = (0.0, independence[1])
+                dropped = floor = steps
+                history, enough, settled, skip, last_rhat = [], False, False, 0, None
+                tau = np.full(ndim, np.inf)
                 continue
             burn = math.ceil(2 * np.max(tau))
             if history and np.max(tau) < 0.5 * np.max(history[-1].tau):
@@ -600,7 +652,11 @@ def run_ensembles(
                 # while it is kept): the burn-in is extended past it from now on
                 skip = max(skip, _transient_end(ensembles, burn, tau, settings, labels))
             burn = max(burn, skip, floor)
-            span = settle_span(tau, settings.check_every, settings.settle_steps)
+            span = (
+                settle_span(tau, settings.check_every, settings.settle_steps)
+                if mixing
+                else settings.settle_steps
+            )
             now = TauCheck(steps, raw, tau, comparable)
             settled = tau_settled(history, now, span)
             history.append(now)
@@ -696,7 +752,20 @@ def run_ensembles(
         ridge=bool(hopeless),
         independence=independence[0],
         independence_acceptance=independence[1],
+        independence_dropped=dropped,
     )
+
+
+def _move_fails(raw: NDArray, independence: tuple[float, float], limit: float | None) -> bool:
+    """Whether the longest raw τ is above ``limit`` × the τ the move's weight and
+    expected acceptance ``independence`` predict
+    (:func:`~bayestribo.inference.independence.mixing_tau`); False where ``limit`` is
+    None. The raw τ̂ (low on a short chain) is compared: a chain does not pass the
+    limit by its estimator's bias."""
+    if limit is None:
+        return False
+    weight, acceptance = independence
+    return bool(np.max(raw) > limit * mixing_tau(acceptance, weight))
 
 
 def _adapted(
@@ -797,6 +866,11 @@ class _Ensembles:
         ``weight`` in the mix, the DE moves sharing the rest as before."""
         raise NotImplementedError  # pragma: no cover - interface
 
+    def drop_independence(self) -> None:
+        """From the next step on, the DE moves alone, with their weights before
+        :meth:`use_independence`."""
+        raise NotImplementedError  # pragma: no cover - interface
+
 
 def _with_independence(sampler: emcee.EnsembleSampler, move, weight: float) -> None:
     """Set ``sampler``'s move mix to its moves so far at ``1 - weight`` of their
@@ -804,8 +878,14 @@ def _with_independence(sampler: emcee.EnsembleSampler, move, weight: float) -> N
     of moves, normalised float weights), which its ``sample`` draws from at every
     step."""
     weights = np.append(np.asarray(sampler._weights, dtype=float) * (1.0 - weight), weight)
+    sampler._plain_moves = (sampler._moves, sampler._weights)
     sampler._moves = (*sampler._moves, move)
     sampler._weights = weights / np.sum(weights)
+
+
+def _without_independence(sampler: emcee.EnsembleSampler) -> None:
+    """Restore ``sampler``'s move mix from before :func:`_with_independence`."""
+    sampler._moves, sampler._weights = sampler._plain_moves
 
 
 class _Separate(_Ensembles):
@@ -849,6 +929,10 @@ class _Separate(_Ensembles):
     def use_independence(self, move: GroupedIndependenceMove, weight: float) -> None:
         for sampler, proposal in zip(self.samplers, move.proposals, strict=True):
             _with_independence(sampler, GroupedIndependenceMove([proposal]), weight)
+
+    def drop_independence(self) -> None:
+        for sampler in self.samplers:
+            _without_independence(sampler)
 
 
 class _MoveChoice(np.random.RandomState):
@@ -967,3 +1051,6 @@ class _Grouped(_Ensembles):
 
     def use_independence(self, move: GroupedIndependenceMove, weight: float) -> None:
         _with_independence(self.sampler, move, weight)
+
+    def drop_independence(self) -> None:
+        _without_independence(self.sampler)

@@ -562,6 +562,7 @@ class FitSpec:
         from bayestribo.inference.sampling import (
             FIT_AUTOCORR_MULTIPLE,
             FIT_INDEPENDENCE,
+            FIT_INDEPENDENCE_LIMIT,
             FIT_MAX_DRAWS,
             FIT_MIN_ESS,
             SamplerSettings,
@@ -576,6 +577,7 @@ class FitSpec:
             # the move's adaptation phase (100 steps) needs room after it
             independence=FIT_INDEPENDENCE if self.max_steps >= 300 else 0.0,
             max_draws=max(FIT_MAX_DRAWS, self.n_walkers * self.n_ensembles),
+            independence_limit=FIT_INDEPENDENCE_LIMIT,
         )
 
 

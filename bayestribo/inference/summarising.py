@@ -144,6 +144,10 @@ def _diagnostics(sampled: Sampled, misfit: Misfit) -> dict[str, Any]:
         "rhat": by_name(s.rhat),
         "rhat_max": float(np.max(s.rhat)),
         "acceptance_fraction": s.acceptance_fraction,
+        # the independence move's weight in the kernel of the draws kept, and the step
+        # it was taken out at where it did not mix (inference/sampling.py)
+        "independence_weight": s.independence,
+        "independence_dropped": s.independence_dropped,
         "map": by_name(sampled.theta_map),
         "chi2_map": chi2,
         "n_increments": m,

@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 from bayestribo.inference.sampling import (
     FIT_AUTOCORR_MULTIPLE,
     FIT_INDEPENDENCE,
+    FIT_INDEPENDENCE_LIMIT,
     FIT_MAX_DRAWS,
     FIT_MIN_ESS,
     SamplerSettings,
@@ -42,6 +43,7 @@ DEFAULT_SETTINGS = SamplerSettings(
     min_ess=FIT_MIN_ESS,
     independence=FIT_INDEPENDENCE,
     max_draws=FIT_MAX_DRAWS,
+    independence_limit=FIT_INDEPENDENCE_LIMIT,
 )
 
 #: χ² p-value of the MAP residuals below which a fit warns of misfit.
