@@ -6,7 +6,8 @@
 * where a check's τ passes the limit, the move is taken out, every step before is
   discarded, the run ends with the DE moves alone, and its draws sample the target;
   the mix is the DE moves' own again;
-* without a limit the move stays in; the DE moves alone judge τ raw (not debiased);
+* without a limit the move stays in; τ is debiased only by the fit's rule
+  (``debias``) with the move in the mix;
 * on a curved ridge no Student-t fits, the fit's limit takes the move out and the
   draws still sample the target.
 
@@ -145,14 +146,38 @@ def test_on_a_gaussian_the_fits_limit_keeps_the_move():
     _samples_the_gaussian(run)
 
 
-def test_the_de_moves_alone_judge_tau_raw(monkeypatch):
+@pytest.mark.parametrize(
+    "rule",
+    [
+        {"debias": True},  # the fit's rule, the DE moves alone
+        {"independence": 0.75},  # the population's: the move in, τ raw
+    ],
+)
+def test_tau_is_judged_raw_without_the_fits_rule_and_the_move(rule, monkeypatch):
     def refused(tau, length):
-        raise AssertionError("τ debiased without the independence move")
+        raise AssertionError("τ debiased")
 
     monkeypatch.setattr(sampling, "debiased", refused)
-    settings = SamplerSettings(n_walkers=16, n_ensembles=2, max_steps=20_000)
+    settings = SamplerSettings(n_walkers=16, n_ensembles=2, max_steps=20_000, **rule)
     run = run_ensembles(_gaussian, _start(8), settings, seed=9)
-    assert run.converged and run.independence == 0.0
+    assert run.converged
+    assert run.independence == rule.get("independence", 0.0)
+
+
+def test_the_fits_rule_debiases_tau_while_the_move_is_in(monkeypatch):
+    calls = []
+    original = sampling.debiased
+
+    def counted(tau, length):
+        calls.append(length)
+        return original(tau, length)
+
+    monkeypatch.setattr(sampling, "debiased", counted)
+    settings = SamplerSettings(
+        n_walkers=16, n_ensembles=2, max_steps=20_000, independence=0.75, debias=True
+    )
+    run = run_ensembles(_gaussian, _start(10), settings, seed=11)
+    assert run.converged and run.independence == 0.75 and calls
 
 
 def _banana(theta: np.ndarray) -> np.ndarray:

@@ -113,6 +113,7 @@ def test_a_run_from_far_away_finds_the_posterior_before_it_stops():
         min_ess=1000.0,
         independence=0.75,
         max_draws=2000,
+        debias=True,
     )
     rng = np.random.default_rng(11)
     start = np.array([40.0, 30.0]) + 0.01 * rng.standard_normal((2, 16, 2))

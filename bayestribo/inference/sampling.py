@@ -5,25 +5,29 @@
   Gelman-Rubin R-hat compares independent chains (R-hat over the walkers of one
   ensemble is not valid: they are coupled by the moves).
 * Every ``check_every`` steps the integrated autocorrelation time τ of each parameter
-  is estimated per ensemble (:func:`autocorr_time`, emcee's estimator) and corrected
-  for that estimator's known bias on a chain of L steps, low by about 10.5 τ/L of
-  itself (:func:`bayestribo.inference.tau_bias.debiased`); burn-in is 2τ;
+  is estimated per ensemble (:func:`autocorr_time`, emcee's estimator) and, where
+  ``SamplerSettings.debias`` asks and the independence move is in the mix (the
+  single-run fit), corrected for that estimator's known bias on a chain of L steps,
+  low by about 10.5 τ/L of itself (:func:`bayestribo.inference.tau_bias.debiased`);
+  burn-in is 2τ;
   the run stops once every ensemble has at least ``autocorr_multiple`` × τ steps after
   burn-in and, where ``min_ess`` is given, an effective sample size of at least
   ``min_ess`` (:meth:`SamplerSettings.required_multiple`: the larger of the two in
-  units of τ), τ has settled (the raw or the debiased estimate changed by less than
-  10 % since the check 30 τ, at most ``settle_steps``, or more steps before:
+  units of τ), τ has settled (changed by less than 10 % since the check
+  ``settle_steps`` or more steps before; with the debiased τ, the raw or the debiased
+  estimate since the check 30 τ, at most ``settle_steps``, before:
   :func:`bayestribo.inference.tau_bias.settled`, which says why a chain still on its
   way to the posterior does not settle) and the between-ensemble R-hat is below
   ``rhat_max`` for every parameter, or at ``max_steps``. Checking often (every 50
-  steps by default) stops the run near the first step that meets the rule; the check
-  a span before the earliest stop is never skipped.
+  steps by default) stops the run near the first step that meets the rule; with the
+  debiased τ, the check a span before the earliest stop is never skipped.
   The single-run fit asks for an effective sample size of :data:`FIT_MIN_ESS` (1000)
   and at least :data:`FIT_AUTOCORR_MULTIPLE` (20) τ, keeps at most
   :data:`FIT_MAX_DRAWS` draws (``SamplerSettings.max_draws``,
   :mod:`bayestribo.inference.thinning`: the effective sample size reported is that of
-  the draws kept) and mixes in the independence move (:data:`FIT_INDEPENDENCE`); the
-  settings' defaults (50 τ, no ESS target, every ⌈τ⌉-th step kept) are the population's.
+  the draws kept) and mixes in the independence move (:data:`FIT_INDEPENDENCE`, taken
+  out past :data:`FIT_INDEPENDENCE_LIMIT`, τ debiased while it is in); the settings'
+  defaults (50 τ, no ESS target, every ⌈τ⌉-th step kept, τ raw) are the population's.
 * Where R-hat fails at a check because the kept draws begin with the walkers' way
   from their start to the posterior (a transient the burn-in of 2τ did not cover:
   :func:`bayestribo.inference.modes.transient_steps`), the burn-in is extended past it
@@ -78,10 +82,11 @@ moves run alone with their own weights, and every step before it is discarded li
 an adaptation phase (the burn-in is at least that step): the draws kept are all of
 one fixed kernel, which leaves the posterior invariant, so the chain after the step
 is valid however the step was chosen. The raw τ̂ (low on a short chain) is compared,
-so a chain does not pass the limit by its estimator's bias. τ is debiased and its
-settling judged over 30 τ only while the move is in the mix; the DE moves alone
-(the move taken out, never put in, or left out for its low acceptance) are judged
-by the rule as it was before the move: the raw τ̂, settled over ``settle_steps``.
+so a chain does not pass the limit by its estimator's bias. Where
+``SamplerSettings.debias`` asks (the single-run fit), τ is debiased and its settling
+judged over 30 τ while the move is in the mix; the DE moves alone (the move taken
+out, never put in, or left out for its low acceptance), and the population's sampler,
+are judged by the raw τ̂, settled over ``settle_steps``.
 
 This module knows nothing of the models: :func:`run_ensembles` samples any vectorised
 log-probability; the single-run fit and the population both use it.
@@ -210,6 +215,11 @@ class SamplerSettings:
         (:func:`~bayestribo.inference.independence.mixing_tau`) takes the move out
         for the rest of the run, and every step before is discarded (see the module
         notes); None: the move stays in.
+    debias : bool
+        While the independence move is in the mix, τ corrected for its estimator's
+        bias on short chains and its settling judged over 30 τ
+        (:mod:`bayestribo.inference.tau_bias`; the single-run fit's rule); False (the
+        default, the population's): the raw τ̂, settled over ``settle_steps``.
     """
 
     n_walkers: int = 32
@@ -225,6 +235,7 @@ class SamplerSettings:
     adapt_steps: int = 100
     max_draws: int | None = None
     independence_limit: float | None = None
+    debias: bool = False
 
     def __post_init__(self) -> None:
         if self.moves not in MOVES:
@@ -607,7 +618,8 @@ def run_ensembles(
                 bar.update(floor)
             independence = _adapted(ensembles, checked, floor, settings.independence, seed)
         while steps < settings.max_steps:
-            mixing = independence[0] > 0  # the move in the mix (τ debiased, spans of 30 τ)
+            mixing = independence[0] > 0  # the move in the mix
+            debias = mixing and settings.debias  # τ debiased, settled over 30 τ
             chunk = settings.check_every
             if np.all(np.isfinite(tau)):
                 # The rule cannot be met this early with the last τ (which short chains
@@ -615,7 +627,7 @@ def run_ensembles(
                 # the steps up to the next check run in one call of the sampler.
                 longest = np.max(tau)
                 early = _EARLY * max((2.0 + multiple) * longest, floor + multiple * longest)
-                if mixing:
+                if debias:
                     # a check is left a span before it, for the rule that τ settle
                     early -= settle_span(tau, settings.check_every, settings.settle_steps)
                 chunk *= max(1, math.ceil((early - steps) / settings.check_every))
@@ -629,7 +641,7 @@ def run_ensembles(
             raw = np.max(_autocorr_times(ensembles.chains(burn)), axis=0)
             # With the move, τ̂ of a short chain is low by its known bias
             # (inference/tau_bias.py); with the DE moves alone it is the rule as is.
-            tau, comparable = debiased(raw, steps - burn) if mixing else (raw, True)
+            tau, comparable = debiased(raw, steps - burn) if debias else (raw, True)
             if not np.all(np.isfinite(tau)):
                 # A stuck chain (no move accepted): τ is undefined; keep sampling.
                 history, enough, settled = [], False, False
@@ -654,7 +666,7 @@ def run_ensembles(
             burn = max(burn, skip, floor)
             span = (
                 settle_span(tau, settings.check_every, settings.settle_steps)
-                if mixing
+                if debias
                 else settings.settle_steps
             )
             now = TauCheck(steps, raw, tau, comparable)

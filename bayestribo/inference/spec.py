@@ -578,6 +578,7 @@ class FitSpec:
             independence=FIT_INDEPENDENCE if self.max_steps >= 300 else 0.0,
             max_draws=max(FIT_MAX_DRAWS, self.n_walkers * self.n_ensembles),
             independence_limit=FIT_INDEPENDENCE_LIMIT,
+            debias=True,
         )
 
 

@@ -25,9 +25,10 @@ far back the earlier estimate is taken: :data:`SETTLE_TAUS` autocorrelation time
 τ̂ is a fixed share of its length is compared with one of at most half its length or
 so, and a chain of a long τ keeps the 200 steps of the population's rule.
 
-The sampler applies both only while the independence move is in the mix
-(:func:`bayestribo.inference.sampling.run_ensembles`): chains of the DE moves alone
-are judged by the raw τ̂ settled over ``settle_steps``. Their τ̂ at several hundred
+The sampler applies both where ``SamplerSettings.debias`` asks (the single-run fit)
+and only while the independence move is in the mix
+(:func:`bayestribo.inference.sampling.run_ensembles`): chains of the DE moves alone,
+and the population's, are judged by the raw τ̂ settled over ``settle_steps``. Their τ̂ at several hundred
 steps barely creeps, and on a ridge, where τ̂ is a large share of the chain's length
 (kτ̂/L above :data:`MAX_SHARE`), the capped correction doubles an estimate the rule
 already finds long and predicts a need past the step ceiling (HarmOsc2's first half,

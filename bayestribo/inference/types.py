@@ -44,6 +44,7 @@ DEFAULT_SETTINGS = SamplerSettings(
     independence=FIT_INDEPENDENCE,
     max_draws=FIT_MAX_DRAWS,
     independence_limit=FIT_INDEPENDENCE_LIMIT,
+    debias=True,
 )
 
 #: χ² p-value of the MAP residuals below which a fit warns of misfit.
