@@ -100,6 +100,19 @@ def test_a_move_past_the_limit_is_taken_out_and_the_draws_after_it_sample_the_ta
     _samples_the_gaussian(run)
 
 
+def test_the_move_is_not_taken_out_at_the_ceiling(monkeypatch):
+    # the first check is at the ceiling: taking the move out would leave no step
+    monkeypatch.setattr(sampling, "mixing_tau", lambda acceptance, weight: 0.01)
+    settings = SamplerSettings(
+        n_walkers=16, n_ensembles=2, max_steps=150, independence=0.75, independence_limit=4.0
+    )
+    run = run_ensembles(_gaussian, _start(12), settings, seed=13)
+    assert run.n_steps == 150 and run.independence_dropped is None
+    assert run.independence == 0.75 and np.all(np.isfinite(run.autocorr_time))
+    assert not run.converged
+    assert not any("undefined" in reason for reason in run.reasons)
+
+
 @pytest.mark.parametrize("moves", ["grouped", "emcee"])
 def test_taking_the_move_out_restores_the_de_moves_mix(moves, monkeypatch):
     mixes = []

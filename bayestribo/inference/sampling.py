@@ -646,11 +646,12 @@ def run_ensembles(
                 # A stuck chain (no move accepted): τ is undefined; keep sampling.
                 history, enough, settled = [], False, False
                 continue
-            if mixing and _move_fails(raw, independence, settings.independence_limit):
+            limit = settings.independence_limit if steps < settings.max_steps else None
+            if mixing and _move_fails(raw, independence, limit):
                 # the proposal misses posterior mass (a ridge, a tail, a bound): the
                 # move is taken out and the run starts again from here with the DE
                 # moves alone, every step before discarded (the kept draws are all
-                # of one kernel)
+                # of one kernel); not at the ceiling, where no step would be left
                 ensembles.drop_independence()
                 independence = (0.0, independence[1])
                 dropped = floor = steps
