@@ -9,14 +9,14 @@ import pytest
 
 from bayestribo import simulate
 from bayestribo.inference import (
-    SamplerSettings,
     build_posterior,
     fit,
     prepare,
     sample,
     summarise,
 )
-from bayestribo.inference.sampling import FIT_AUTOCORR_MULTIPLE, FIT_MIN_ESS
+from bayestribo.inference.sampling import FIT_INDEPENDENCE, FIT_INDEPENDENCE_LIMIT
+from bayestribo.inference.spec import FitSpec
 
 
 @pytest.fixture(scope="module")
@@ -25,13 +25,9 @@ def run():
 
 
 def test_fit_is_the_composition_of_the_four_steps(run):
-    settings = SamplerSettings(
-        n_walkers=16,
-        n_ensembles=2,
-        max_steps=1000,
-        autocorr_multiple=FIT_AUTOCORR_MULTIPLE,
-        min_ess=FIT_MIN_ESS,
-    )
+    settings = FitSpec(max_steps=1000).sampler_settings()  # the fit's own rule
+    assert settings.independence == FIT_INDEPENDENCE and settings.debias
+    assert settings.independence_limit == FIT_INDEPENDENCE_LIMIT
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         whole = fit(run, seed=4, max_steps=1000)
@@ -58,13 +54,7 @@ def test_fit_is_the_composition_of_the_named_stages(run):
     from bayestribo.inference.start import Start, find_start
     from bayestribo.inference.summarising import Summary, summary
 
-    settings = SamplerSettings(
-        n_walkers=16,
-        n_ensembles=2,
-        max_steps=1000,
-        autocorr_multiple=FIT_AUTOCORR_MULTIPLE,
-        min_ess=FIT_MIN_ESS,
-    )
+    settings = FitSpec(max_steps=1000).sampler_settings()  # the fit's own rule
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         whole = fit(run, seed=4, max_steps=1000)
