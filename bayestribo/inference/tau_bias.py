@@ -28,11 +28,11 @@ so, and a chain of a long τ keeps the 200 steps of the population's rule.
 The sampler applies both where ``SamplerSettings.debias`` asks (the single-run fit)
 and only while the independence move is in the mix
 (:func:`bayestribo.inference.sampling.run_ensembles`): chains of the DE moves alone,
-and the population's, are judged by the raw τ̂ settled over ``settle_steps``. Their τ̂ at several hundred
-steps barely creeps, and on a ridge, where τ̂ is a large share of the chain's length
-(kτ̂/L above :data:`MAX_SHARE`), the capped correction doubles an estimate the rule
-already finds long and predicts a need past the step ceiling (HarmOsc2's first half,
-``benchmarks/README.md``).
+and the population's, are judged by the raw τ̂ settled over ``settle_steps``. Their
+τ̂ at several hundred steps barely creeps, and on a ridge, where τ̂ is a large share of
+the chain's length (kτ̂/L above :data:`MAX_SHARE`), the capped correction doubles an
+estimate the rule already finds long and predicts a need past the step ceiling
+(HarmOsc2's first half, ``benchmarks/README.md``).
 """
 
 from __future__ import annotations
