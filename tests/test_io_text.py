@@ -102,7 +102,8 @@ def _good_rows(n: int = 100) -> str:
 
 
 BAD_TEXT = [
-    ("time_s,pos\n" + _good_rows(), {}, "unknown column 'pos'.*columns="),
+    ("time_s,chan_b\n" + _good_rows(), {}, "unknown column 'chan_b'.*columns="),
+    ("time_s,pos\n" + _good_rows(), {}, "column 'pos' has no unit.*pos_m"),
     (_good_rows(), {}, "no header row.*columns="),
     (
         "time_s,displacement_m\n0.0,1.0\n0.001\n" + _good_rows(),
