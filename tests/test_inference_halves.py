@@ -202,7 +202,7 @@ def test_a_half_whose_weights_do_not_hold_is_sampled_as_a_fit_alone(constant, he
         return prepared, sampled
 
     monkeypatch.setattr(halves_module, "sample_law", sample_law)
-    monkeypatch.setattr(halves_module, "weights_at", lambda run, posterior, picks: None)
+    monkeypatch.setattr(halves_module, "weights_at", lambda *args: None)
     h = law_halves(constant, "viscous+coulomb", seed=1)
     assert calls == [N_FIRST_DRAWS, N_FIRST_DRAWS, 0, 0]
     assert h == held
