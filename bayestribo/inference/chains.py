@@ -295,9 +295,9 @@ def _sample_surrogate(
             # included (HarmOsc2's second half under coulomb+power: cv 0.3-0.5 at the
             # first surrogate, then three or four more at 0.3 s each before one came
             # within the correction's reach)
-            picks = evenly_spaced(run, weighted)
-            if weights_at(run, posterior, picks, MAX_WEIGHTED_CV) is not None:
-                return run, checked, target, None
+            weights = weights_at(run, posterior, evenly_spaced(run, weighted), MAX_WEIGHTED_CV)
+            if weights is not None:
+                return run, replace(checked, weights=weights), target, None
         if attempt >= 2 and checked.weight_cv <= MAX_CORRECTED_CV:
             # a surrogate built again that still fails, by little: its draws resampled
             # to the exact posterior by their importance weights (inference/

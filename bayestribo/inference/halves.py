@@ -131,7 +131,10 @@ def _draws(
     weights = None
     check = sampled.surrogate
     if sampled.surrogate_posterior is not None and check is not None and not check.passed:
-        weights = weights_at(sampled.run, posterior, picks, MAX_WEIGHTED_CV)
+        weights = check.weights
+        if weights is None or weights.size != picks.size:
+            # not those the sampler weighted already (the same draws, the same density)
+            weights = weights_at(sampled.run, posterior, picks, MAX_WEIGHTED_CV)
         if weights is None:
             raise _Unweighable("the importance weights of its draws are not reliable")
     flat = sampled.run.chains.reshape(-1, sampled.run.chains.shape[-1])
