@@ -87,9 +87,9 @@ NEAR_CORRECTED_CV = 2.0 * MAX_CORRECTED_CV
 #: uses weighted and counts by Kish's effective number (:func:`weights_at` with
 #: ``max_cv``; the halves' ΔE(A), :mod:`bayestribo.inference.halves`): at least
 #: 1/(1 + 0.6²) = 74 % of the draws count, and the weights' Pareto k̂ of at most
-#: :data:`MAX_PARETO_K` keeps their variance finite, so that Kish's number is the
-#: weighted means' Monte Carlo error (tests/test_inference_correction.py checks it
-#: over fresh draws at this cv).
+#: :data:`MAX_PARETO_K` keeps their variance finite, so that Kish's number gives the
+#: weighted means' Monte Carlo error to within some 15 % of its sd (the halves' z over
+#: fresh weighted draws at this cv: tests/test_inference_halves_statistic.py).
 MAX_WEIGHTED_CV = 2.0 * MAX_CORRECTED_CV
 
 
