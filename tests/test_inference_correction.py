@@ -324,7 +324,7 @@ def test_a_caller_that_does_not_weight_never_keeps_a_failed_check(monkeypatch):
     between = 0.5 * (MAX_CORRECTED_CV + MAX_WEIGHTED_CV)
     scripted = _Scripted(monkeypatch, [between, 0.5 * MAX_CORRECTED_CV], [True])
     calls = _weights_scripted(monkeypatch, [])
-    run, checked, _, _ = scripted.sample()
+    _, checked, _, _ = scripted.sample()
     assert scripted.checks == [1, 2] and scripted.corrected == [2] and calls == []
     assert checked.corrected
 
