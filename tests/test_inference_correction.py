@@ -181,12 +181,14 @@ class _Scripted:
             run=run, draws=80, weight_cv=0.2, log_weight_sd=0.1, pointwise=None
         )
 
-    def sample(self):
+    def sample(self, weighted: int = 0):
         from bayestribo.inference.chains import _sample_surrogate
         from bayestribo.inference.sampling import SamplerSettings
 
         walkers = np.zeros((2, 32, 1))
-        return _sample_surrogate(None, np.zeros(1), np.eye(1), walkers, SamplerSettings(), 1, False)
+        return _sample_surrogate(
+            None, np.zeros(1), np.eye(1), walkers, SamplerSettings(), 1, False, weighted=weighted
+        )
 
 
 def test_a_refused_correction_within_reach_is_followed_by_further_surrogates(monkeypatch):
@@ -265,3 +267,87 @@ def test_weights_at_few_draws_weight_them_to_the_exact_posterior():
         return scipy.stats.norm.logpdf(rows[:, 0], 1.5, 0.5)
 
     assert weights_at(run, far, picks) is None
+
+
+def _weights_scripted(monkeypatch, holds: list[bool]) -> list[tuple[int, float]]:
+    """``weights_at`` in the surrogate loop answering each call with the next of
+    ``holds`` (True: weights given); returns the calls' (draws, max_cv)."""
+    from bayestribo.inference import chains
+
+    calls: list[tuple[int, float]] = []
+
+    def weights_at(run, posterior, picks, max_cv):
+        calls.append((len(picks), max_cv))
+        return np.ones(len(picks)) if holds.pop(0) else None
+
+    monkeypatch.setattr(chains, "weights_at", weights_at)
+    return calls
+
+
+def test_a_weighted_caller_keeps_the_first_surrogate_whose_weights_hold(monkeypatch):
+    """A caller that weights its draws (the halves): the first surrogate, its check
+    failed within ``MAX_WEIGHTED_CV``, is returned as it is where the weights of the
+    draws it uses hold by that limit; no further surrogate, no correction."""
+    from bayestribo.inference.correction import MAX_WEIGHTED_CV
+
+    between = 0.5 * (MAX_CORRECTED_CV + MAX_WEIGHTED_CV)
+    scripted = _Scripted(monkeypatch, [between] * 5, [])
+    calls = _weights_scripted(monkeypatch, [True])
+    run, checked, target, pointwise = scripted.sample(weighted=50)
+    assert scripted.checks == [1] and scripted.corrected == []
+    assert calls == [(50, MAX_WEIGHTED_CV)]
+    assert run is scripted.run and not checked.passed and target is not None
+    assert pointwise is None
+
+
+def test_a_weighted_caller_whose_weights_do_not_hold_gets_the_next_surrogate(monkeypatch):
+    """The first surrogate's weights refused, the second's check within the
+    correction's reach and its weights refused too: that one is corrected, as for
+    any caller; a check beyond ``MAX_WEIGHTED_CV`` asks for no weights."""
+    from bayestribo.inference.correction import MAX_WEIGHTED_CV
+
+    between = 0.5 * (MAX_CORRECTED_CV + MAX_WEIGHTED_CV)
+    far = 2.0 * MAX_WEIGHTED_CV
+    scripted = _Scripted(monkeypatch, [far, between, 0.5 * MAX_CORRECTED_CV], [True])
+    calls = _weights_scripted(monkeypatch, [False, False])
+    run, checked, _, _ = scripted.sample(weighted=50)
+    assert scripted.checks == [1, 2, 3] and scripted.corrected == [3]
+    assert calls == [(50, MAX_WEIGHTED_CV)] * 2
+    assert run is scripted.run and checked.corrected
+
+
+def test_a_caller_that_does_not_weight_never_keeps_a_failed_check(monkeypatch):
+    """Without ``weighted``, a first check within ``MAX_WEIGHTED_CV`` is followed by
+    another surrogate, as before."""
+    from bayestribo.inference.correction import MAX_WEIGHTED_CV
+
+    between = 0.5 * (MAX_CORRECTED_CV + MAX_WEIGHTED_CV)
+    scripted = _Scripted(monkeypatch, [between, 0.5 * MAX_CORRECTED_CV], [True])
+    calls = _weights_scripted(monkeypatch, [])
+    _, checked, _, _ = scripted.sample()
+    assert scripted.checks == [1, 2] and scripted.corrected == [2] and calls == []
+    assert checked.corrected
+
+
+def test_weights_at_the_weighted_limit_are_given_only_when_asked_for():
+    """Surrogate N(0, 1), exact N(0.45, 1): the weights' cv about 0.47, beyond the
+    correction's limit and within the weighted callers'; their Pareto k̂ below 1/2."""
+    from bayestribo.inference.correction import MAX_WEIGHTED_CV, evenly_spaced, weights_at
+
+    rng = np.random.default_rng(6)
+    run = _normal_run(rng)
+
+    def exact(rows: np.ndarray) -> np.ndarray:
+        return scipy.stats.norm.logpdf(rows[:, 0], 0.45, 1.0)
+
+    picks = evenly_spaced(run, 400)
+    assert weights_at(run, exact, picks) is None
+    w = weights_at(run, exact, picks, MAX_WEIGHTED_CV)
+    assert w is not None
+    assert MAX_CORRECTED_CV < np.std(w) / np.mean(w) <= MAX_WEIGHTED_CV
+
+    def wider(rows: np.ndarray) -> np.ndarray:
+        return scipy.stats.norm.logpdf(rows[:, 0], 0.0, 2.0)
+
+    # unbounded weights (Pareto k̂ above 1/2) are refused at any cv limit
+    assert weights_at(run, wider, picks, MAX_WEIGHTED_CV) is None

@@ -202,7 +202,50 @@ def test_a_half_whose_weights_do_not_hold_is_sampled_as_a_fit_alone(constant, he
         return prepared, sampled
 
     monkeypatch.setattr(halves_module, "sample_law", sample_law)
-    monkeypatch.setattr(halves_module, "weights_at", lambda run, posterior, picks: None)
+    monkeypatch.setattr(halves_module, "weights_at", lambda *args: None)
     h = law_halves(constant, "viscous+coulomb", seed=1)
     assert calls == [N_FIRST_DRAWS, N_FIRST_DRAWS, 0, 0]
     assert h == held
+
+
+def test_a_half_weighted_by_the_sampler_is_not_weighted_again(monkeypatch):
+    # the weights the sampler computed at the draws the halves use (check failed, run
+    # kept for its weighted draws) are taken as they are: the exact posterior is not
+    # evaluated there again; for another number of draws it is
+    import types
+
+    from bayestribo.inference.correction import evenly_spaced
+    from bayestribo.inference.surrogate import SurrogateCheck
+
+    rng = np.random.default_rng(2)
+    chains = rng.normal(size=(2, 150, 2))
+    run = types.SimpleNamespace(chains=chains)
+    posterior = types.SimpleNamespace(
+        law=None,
+        law_draws=lambda rows: {"a": rows[:, 0]},
+        likelihood=types.SimpleNamespace(reference_amplitude=1.0),
+    )
+    given = rng.uniform(0.5, 1.0, evenly_spaced(run, 200).size)
+    check = SurrogateCheck(128, 0.4, 0.4, 1, weights=given)
+    sampled = types.SimpleNamespace(
+        run=run, posterior=posterior, surrogate=check, surrogate_posterior=posterior
+    )
+    prepared = types.SimpleNamespace(
+        decay=types.SimpleNamespace(scaling=types.SimpleNamespace(length_scale=2.0))
+    )
+    asked = []
+
+    def weights_at(run, posterior, picks, max_cv):
+        asked.append(picks.size)
+        return np.ones(picks.size)
+
+    monkeypatch.setattr(halves_module, "weights_at", weights_at)
+    monkeypatch.setattr(
+        halves_module, "_swing_dissipation", lambda law, a, values, ref: values["a"][:, None] + a
+    )
+    amplitude = np.array([1.0, 2.0])
+    d, w = halves_module._draws(sampled, prepared, amplitude, 200)
+    assert w is given and asked == []
+    assert d.shape == (200, 2)
+    _, w = halves_module._draws(sampled, prepared, amplitude, 100)
+    assert asked == [100] and np.all(w == 1.0)

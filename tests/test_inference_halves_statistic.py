@@ -75,3 +75,46 @@ def test_a_verdict_is_clear_only_beyond_its_monte_carlo_error():
 def test_bad_draws_are_refused_by_name(first, second, n1, n2, field):
     with pytest.raises(ValueError, match=field):
         swing_difference(first, second, n1, n2)
+
+
+@pytest.mark.validation
+def test_weighted_draws_at_the_weighted_limit_scatter_by_their_monte_carlo_sd():
+    """Each half's draws from a surrogate shifted by half a posterior sd (importance
+    weights' cv about 0.5, up to the halves' limit ``MAX_WEIGHTED_CV``, kept only where
+    they hold as ``weights_at`` keeps them), weighted to the exact posterior and counted
+    by Kish's number: z scatters about the exact posteriors' z by its Monte Carlo sd;
+    the same draws unweighted are off by more than half of it."""
+    from bayestribo.inference.correction import MAX_PARETO_K, MAX_WEIGHTED_CV
+    from bayestribo.inference.loo import psis
+
+    rng = np.random.default_rng(1)
+    sd1, sd2, mean2 = 0.3, 0.4, 1.6
+    reference = -mean2 / np.sqrt(sd1**2 + sd2**2)
+
+    def half(mean: float, sd: float) -> tuple[np.ndarray, np.ndarray, float] | None:
+        x = rng.normal(mean - 0.5 * sd, sd, 200)
+        log_w = scipy.stats.norm.logpdf(x, mean, sd) - scipy.stats.norm.logpdf(
+            x, mean - 0.5 * sd, sd
+        )
+        w = np.exp(log_w - log_w.max())
+        k = float(np.ravel(psis(log_w[None], 1.0)[1])[0])
+        if not (np.std(w) / np.mean(w) <= MAX_WEIGHTED_CV and k <= MAX_PARETO_K):
+            return None
+        return x[:, None], w, float(w.sum() ** 2 / np.sum(w * w))
+
+    weighted, unweighted, cvs = [], [], []
+    while len(weighted) < 2000:
+        first, second = half(0.0, sd1), half(mean2, sd2)
+        if first is None or second is None:
+            continue
+        cvs.append(np.sqrt(first[0].size / first[2] - 1.0))
+        got = swing_difference(first[0], second[0], first[2], second[2], (first[1], second[1]))
+        weighted.append((got.z[0] - reference) / got.z_mc_sd[0])
+        plain = swing_difference(first[0], second[0], first[2], second[2])
+        unweighted.append((plain.z[0] - reference) / plain.z_mc_sd[0])
+    assert 0.4 < np.median(cvs) <= MAX_WEIGHTED_CV
+    # 2000 replicates: the sd to about 1.6 %; the weighted means' own bias (of order
+    # 1/n) is a fifth of a Monte Carlo sd
+    assert np.std(weighted) == pytest.approx(1.0, abs=0.1)
+    assert abs(np.mean(weighted)) < 0.3
+    assert abs(np.mean(unweighted)) > 0.5

@@ -102,7 +102,8 @@ def _good_rows(n: int = 100) -> str:
 
 
 BAD_TEXT = [
-    ("time_s,pos\n" + _good_rows(), {}, "unknown column 'pos'.*columns="),
+    ("time_s,chan_b\n" + _good_rows(), {}, "unknown column 'chan_b'.*columns="),
+    ("time_s,pos\n" + _good_rows(), {}, "column 'pos' has no unit.*pos_m"),
     (_good_rows(), {}, "no header row.*columns="),
     (
         "time_s,displacement_m\n0.0,1.0\n0.001\n" + _good_rows(),
@@ -345,4 +346,45 @@ def test_a_bad_row_far_beyond_the_head_is_still_named(tmp_path: Path) -> None:
     path = tmp_path / "run.csv"
     path.write_text("time_s,displacement_m\n" + "\n".join(rows) + "\n")
     with pytest.raises(RunFormatError, match=r"line 15002, column 'displacement_m': 'oops'"):
+        read_run(path, validate=False)
+
+
+@pytest.mark.parametrize(
+    ("header", "delimiter", "decimal"),
+    [
+        ('"Time (s)","Position (mm)",', ",", "."),
+        ("Zeit [s];Weg [mm];", ";", ","),
+        ("time_s,displacement_mm,", ",", "."),
+    ],
+)
+@pytest.mark.parametrize("rows", [40, 6000], ids=["short", "long"])
+def test_a_delimiter_ending_every_line_ends_no_field(
+    tmp_path: Path, header: str, delimiter: str, decimal: str, rows: int
+) -> None:
+    """A spreadsheet export's delimiter at the end of each line (the header's too) reads
+    as the same file without it, through both readers."""
+    t = np.arange(rows) * 1e-3
+    x = np.round(5.0 * np.cos(t * 40.0), 6)
+    body = [
+        f"{float(a)!r}{delimiter}{float(b)!r}".replace(".", decimal)
+        for a, b in zip(t, x, strict=True)
+    ]
+    plain = tmp_path / "plain.csv"
+    plain.write_text("\r\n".join([header[:-1], *body]) + "\r\n", encoding="utf-8")
+    ending = tmp_path / "ending.csv"
+    ending.write_text(
+        "\r\n".join([header, *(line + delimiter for line in body)]) + "\r\n", encoding="utf-8"
+    )
+    one, other = read_run(plain, validate=False), read_run(ending, validate=False)
+    np.testing.assert_array_equal(one.time, other.time)
+    np.testing.assert_array_equal(one.displacement, other.displacement)
+    np.testing.assert_allclose(other.displacement, 1e-3 * x, rtol=1e-15)
+
+
+def test_an_unnamed_last_column_with_values_is_not_dropped(tmp_path: Path) -> None:
+    """Rows that hold a value after the header's last name keep it: refused, not cut."""
+    path = tmp_path / "run.csv"
+    rows = [f"{k * 1e-3!r},{np.cos(k / 9):.6f},{k}" for k in range(50)]
+    path.write_text("time_s,displacement_m,\n" + "\n".join(rows) + "\n")
+    with pytest.raises(RunFormatError, match=r"unknown column ''"):
         read_run(path, validate=False)

@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 from bayestribo.inference.correction import (
     CORRECTING_ATTEMPTS,
     MAX_CORRECTED_CV,
+    MAX_WEIGHTED_CV,
     NEAR_CORRECTED_CV,
     evenly_spaced,
     exact_density,
@@ -99,14 +100,16 @@ def sample_from(
         it where the exact posterior confirms it (:mod:`bayestribo.inference.surrogate`;
         the default); False: sample the exact posterior throughout.
     weighted : int
-        A positive number n: a surrogate's run that would be resampled to the exact
-        posterior by its importance weights (:func:`~bayestribo.inference.correction.
-        importance_corrected`) is returned as it is where the weights of n of its
-        draws evenly spaced are reliable (:func:`~bayestribo.inference.correction.
-        weights_at`), its check failed (``surrogate.passed`` False) and its surrogate
-        posterior given: for a caller that uses those draws alone and weights them
-        (the halves' ΔE(A), :mod:`bayestribo.inference.halves`). 0 (the default):
-        every draw resampled.
+        A positive number n: a surrogate's run whose check failed is returned as it
+        is where the weights of n of its draws evenly spaced are reliable for a caller
+        that counts them by Kish's number (:func:`~bayestribo.inference.correction.
+        weights_at` with :data:`~bayestribo.inference.correction.MAX_WEIGHTED_CV`),
+        its check failed (``surrogate.passed`` False) and its surrogate posterior
+        given, rather than another surrogate built or its draws resampled to the
+        exact posterior (:func:`~bayestribo.inference.correction.
+        importance_corrected`): for a caller that uses those draws alone and weights
+        them (the halves' ΔE(A), :mod:`bayestribo.inference.halves`). 0 (the
+        default): every draw resampled.
 
     Returns
     -------
@@ -239,9 +242,10 @@ def _sample_surrogate(
     Returns the run, the last check and the surrogate posterior when a check passed or a correction
     held (with the exact pointwise log-likelihood of the corrected draws, else None);
     ``(None, check, None, None)`` when none did (the caller samples the exact
-    posterior). ``weighted``: the run a correction would resample is returned as it
-    is where the weights of that many of its draws hold, with its failed check and its
-    surrogate posterior (:func:`sample_from`).
+    posterior). ``weighted``: a run whose check failed by no more than
+    :data:`~bayestribo.inference.correction.MAX_WEIGHTED_CV` is returned as it is
+    where the weights of that many of its draws hold by that limit, with its failed
+    check and its surrogate posterior (:func:`sample_from`).
     """
     rng = np.random.default_rng(seed)
     sd = np.sqrt(np.clip(np.diag(np.atleast_2d(cov)), 0.0, None))
@@ -285,15 +289,21 @@ def _sample_surrogate(
             # beyond it is followed by further surrogates (up to CORRECTING_ATTEMPTS in
             # all) before the exact sampler
             attempts = max(attempts, CORRECTING_ATTEMPTS)
+        if weighted and checked.weight_cv <= MAX_WEIGHTED_CV:
+            # the caller weights the few draws it uses and counts them by Kish's
+            # number: any surrogate whose weights there hold will do, the first one
+            # included (HarmOsc2's second half under coulomb+power: cv 0.3-0.5 at the
+            # first surrogate, then three or four more at 0.3 s each before one came
+            # within the correction's reach)
+            weights = weights_at(run, posterior, evenly_spaced(run, weighted), MAX_WEIGHTED_CV)
+            if weights is not None:
+                return run, replace(checked, weights=weights), target, None
         if attempt >= 2 and checked.weight_cv <= MAX_CORRECTED_CV:
             # a surrogate built again that still fails, by little: its draws resampled
             # to the exact posterior by their importance weights (inference/
             # correction.py; HarmOsc2's coulomb+power: cv 0.09 then 0.084, never 0.05).
             # The first one's failure is left to the next surrogate, which often
             # passes at less cost than the exact density at every draw
-            if weighted and weights_at(run, posterior, evenly_spaced(run, weighted)) is not None:
-                # the caller weights the few draws it uses (their weights reliable)
-                return run, checked, target, None
             corrected = importance_corrected(run, exact_density(posterior), rng, settings.rhat_max)
             if corrected is not None:
                 record = SurrogateCheck(

@@ -60,6 +60,7 @@ __all__ = [
     "CORRECTING_ATTEMPTS",
     "MAX_CORRECTED_CV",
     "MAX_PARETO_K",
+    "MAX_WEIGHTED_CV",
     "NEAR_CORRECTED_CV",
     "Correction",
     "evenly_spaced",
@@ -82,6 +83,14 @@ CORRECTING_ATTEMPTS = 5
 #: from one regressed surrogate to the next the cv varies by a factor of about two
 #: (0.13-0.51 on HarmOsc2's second half under ``coulomb+power``).
 NEAR_CORRECTED_CV = 2.0 * MAX_CORRECTED_CV
+#: Largest coefficient of variation of the importance weights of draws that a caller
+#: uses weighted and counts by Kish's effective number (:func:`weights_at` with
+#: ``max_cv``; the halves' ΔE(A), :mod:`bayestribo.inference.halves`): at least
+#: 1/(1 + 0.6²) = 74 % of the draws count, and the weights' Pareto k̂ of at most
+#: :data:`MAX_PARETO_K` keeps their variance finite, so that Kish's number gives the
+#: weighted means' Monte Carlo error to within some 15 % of its sd (the halves' z over
+#: fresh weighted draws at this cv: tests/test_inference_halves_statistic.py).
+MAX_WEIGHTED_CV = 2.0 * MAX_CORRECTED_CV
 
 
 @dataclasses.dataclass(frozen=True)
@@ -209,7 +218,9 @@ def evenly_spaced(run: SamplerRun, count: int) -> NDArray:
     return np.linspace(0, total - 1, min(count, total)).astype(int)
 
 
-def weights_at(run: SamplerRun, posterior: Posterior, picks: NDArray) -> NDArray | None:
+def weights_at(
+    run: SamplerRun, posterior: Posterior, picks: NDArray, max_cv: float = MAX_CORRECTED_CV
+) -> NDArray | None:
     """Importance weights exact/surrogate of the draws ``picks`` (flat indices) of a
     surrogate's run, for a caller that uses those draws alone, weighted, rather than
     every draw resampled (:func:`importance_corrected`).
@@ -222,13 +233,17 @@ def weights_at(run: SamplerRun, posterior: Posterior, picks: NDArray) -> NDArray
         The exact posterior.
     picks : ndarray
         Flat indices of the draws weighted (:func:`evenly_spaced`).
+    max_cv : float
+        The largest coefficient of variation of the weights kept:
+        :data:`MAX_CORRECTED_CV` (the correction's own), or :data:`MAX_WEIGHTED_CV` for
+        a caller that counts the draws by Kish's effective number.
 
     Returns
     -------
     ndarray or None
-        The weights (largest 1), shape (len(picks),); None when they are not reliable
-        by the correction's own tests: a weight not finite, their cv above
-        :data:`MAX_CORRECTED_CV` or their Pareto k̂ above :data:`MAX_PARETO_K`.
+        The weights (largest 1), shape (len(picks),); None when they are not reliable:
+        a weight not finite, their cv above ``max_cv`` or their Pareto k̂ above
+        :data:`MAX_PARETO_K`.
     """
     from bayestribo.inference.loo import psis
 
@@ -241,7 +256,7 @@ def weights_at(run: SamplerRun, posterior: Posterior, picks: NDArray) -> NDArray
     w = np.exp(log_w - log_w.max())
     cv = float(np.std(w) / np.mean(w))
     _, k = psis(log_w.reshape(1, -1), 1.0)
-    if not (cv <= MAX_CORRECTED_CV and float(np.ravel(k)[0]) <= MAX_PARETO_K):
+    if not (cv <= max_cv and float(np.ravel(k)[0]) <= MAX_PARETO_K):
         return None
     return w
 

@@ -51,11 +51,14 @@ Weights. A half whose surrogate of Π misses its check by a little would have ev
 draw of its run resampled to the exact posterior by its importance weights
 (:mod:`bayestribo.inference.correction`: the exact Π at some 1,600 draws, 0.5-1 s on
 HarmOsc2's second half). The check uses a few hundred draws, so each half is sampled
-with ``weighted`` (:func:`bayestribo.inference.law_frame.sample_law`): that run is kept
-as it is where the weights of :data:`N_FIRST_DRAWS` of its draws hold by the
-correction's own limits (cv at most 0.3, Pareto k̂ at most 0.5), and the draws the
-check uses are weighted by exact over surrogate density
-(:func:`bayestribo.inference.correction.weights_at`), their effective number Kish's.
+with ``weighted`` (:func:`bayestribo.inference.law_frame.sample_law`): a surrogate's
+run whose check fails is kept as it is where the weights of :data:`N_FIRST_DRAWS` of
+its draws hold (cv at most :data:`~bayestribo.inference.correction.MAX_WEIGHTED_CV`,
+0.6, Pareto k̂ at most 0.5; the first surrogate's included: on HarmOsc2's second half
+its cv is 0.3-0.5, and four further surrogates cost 1-1.5 s), and the draws the check
+uses are weighted by exact over surrogate density
+(:func:`bayestribo.inference.correction.weights_at`), their effective number Kish's,
+which the limits keep the weighted means' Monte Carlo error.
 Where the weights of the draws used do not hold, that half is fitted again as a fit of
 the law alone is (resampled, or sampled further), with its own seed.
 
@@ -73,7 +76,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.errors import BayestriboError
-from bayestribo.inference.correction import evenly_spaced, weights_at
+from bayestribo.inference.correction import MAX_WEIGHTED_CV, evenly_spaced, weights_at
 from bayestribo.inference.dissipation import _swing_dissipation
 from bayestribo.inference.halves_statistic import (
     SwingDifference,
@@ -128,7 +131,10 @@ def _draws(
     weights = None
     check = sampled.surrogate
     if sampled.surrogate_posterior is not None and check is not None and not check.passed:
-        weights = weights_at(sampled.run, posterior, picks)
+        weights = check.weights
+        if weights is None or weights.size != picks.size:
+            # not those the sampler weighted already (the same draws, the same density)
+            weights = weights_at(sampled.run, posterior, picks, MAX_WEIGHTED_CV)
         if weights is None:
             raise _Unweighable("the importance weights of its draws are not reliable")
     flat = sampled.run.chains.reshape(-1, sampled.run.chains.shape[-1])

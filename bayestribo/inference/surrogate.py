@@ -723,6 +723,12 @@ class SurrogateCheck:
         The surrogate's draws were resampled to the exact posterior by their
         importance weights (:mod:`bayestribo.inference.correction`); ``draws``,
         ``weight_cv`` and ``log_weight_sd`` are then those of every draw weighted.
+    weights : ndarray or None
+        Where the check failed and the run was kept for a caller that weights its
+        draws (:func:`bayestribo.inference.chains.sample_from` with ``weighted``): the
+        importance weights of those draws (:func:`bayestribo.inference.correction.
+        weights_at` of :func:`~bayestribo.inference.correction.evenly_spaced`), so that
+        the caller need not evaluate the exact posterior there again.
     """
 
     draws: int
@@ -731,6 +737,7 @@ class SurrogateCheck:
     attempt: int
     best: NDArray | None = field(default=None, repr=False, compare=False)
     corrected: bool = False
+    weights: NDArray | None = field(default=None, repr=False, compare=False)
 
     @property
     def passed(self) -> bool:

@@ -25,6 +25,7 @@ from bayestribo.io.run import (
     TIME,
     VELOCITY,
 )
+from bayestribo.io.units import INCH_M, LENGTHS, PER_SECOND, TIMES
 
 __all__ = [
     "IGNORE",
@@ -91,8 +92,11 @@ QUANTITIES: dict[str, tuple[str, ...]] = {
     TIME: ("time", "t", "zeit", "temps", "tempo", "tiempo", "tijd"),
     DISPLACEMENT: (
         "displacement",
+        "disp",
         "position",
+        "pos",
         "distance",
+        "deflection",
         "x",
         "weg",
         "auslenkung",
@@ -110,6 +114,7 @@ QUANTITIES: dict[str, tuple[str, ...]] = {
     ),
     VELOCITY: (
         "velocity",
+        "vel",
         "speed",
         "v",
         "geschwindigkeit",
@@ -127,22 +132,19 @@ STANDARD_GRAVITY = 9.80665
 
 #: Units of each quantity and their factor to the canonical unit.
 UNITS: dict[str, dict[str, float]] = {
-    TIME: {"s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6},
-    DISPLACEMENT: {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "nm": 1e-9},
+    TIME: dict(TIMES),
+    DISPLACEMENT: dict(LENGTHS),
     VELOCITY: {
-        "m_per_s": 1.0,
-        "m/s": 1.0,
-        "cm_per_s": 1e-2,
-        "cm/s": 1e-2,
-        "mm_per_s": 1e-3,
-        "mm/s": 1e-3,
-        "um_per_s": 1e-6,
-        "um/s": 1e-6,
-        "µm/s": 1e-6,
-        "µm_per_s": 1e-6,
-    },
+        f"{length}{per}": factor
+        for length, factor in LENGTHS.items()
+        if length not in ("micron", "microns", "inches", "mils")
+        for per in PER_SECOND
+    }
+    | {"ips": INCH_M},
     ANGLE: {
         "rad": 1.0,
+        "radian": 1.0,
+        "radians": 1.0,
         "mrad": 1e-3,
         "deg": _DEGREE,
         "degree": _DEGREE,
@@ -150,11 +152,10 @@ UNITS: dict[str, dict[str, float]] = {
         "°": _DEGREE,
     },
     ANGULAR_VELOCITY: {
-        "rad_per_s": 1.0,
-        "rad/s": 1.0,
-        "deg_per_s": _DEGREE,
-        "deg/s": _DEGREE,
+        **{f"rad{per}": 1.0 for per in PER_SECOND},
+        **{f"deg{per}": _DEGREE for per in PER_SECOND},
         "°/s": _DEGREE,
+        "°/sec": _DEGREE,
         "rpm": 2.0 * math.pi / 60.0,
     },
     ACCELERATION: {

@@ -40,21 +40,13 @@ from numpy.typing import NDArray
 from bayestribo.errors import RunFormatError
 from bayestribo.io.columns import IGNORE, UNITS, check_scale, parse_column
 from bayestribo.io.run import COLUMNS, DISPLACEMENT, TIME, VELOCITY
+from bayestribo.io.units import TIMES
 
 __all__ = ["TIME_UNITS", "VOLT_UNITS", "InstrumentExport", "detect_export", "read_export"]
 
-#: Time units written by instruments and their factor to seconds (lower case).
-TIME_UNITS = {
-    "s": 1.0,
-    "second": 1.0,
-    "seconds": 1.0,
-    "sec": 1.0,
-    "ms": 1e-3,
-    "us": 1e-6,
-    "µs": 1e-6,
-    "μs": 1e-6,
-    "ns": 1e-9,
-}
+#: Time units written by instruments and their factor to seconds (lower case): the
+#: package's one table.
+TIME_UNITS = TIMES
 
 #: Voltage units written by instruments and their factor to volts (lower case).
 VOLT_UNITS = {"v": 1.0, "volt": 1.0, "volts": 1.0, "mv": 1e-3, "uv": 1e-6, "µv": 1e-6, "kv": 1e3}
@@ -564,7 +556,7 @@ def _column_factor(
     if role == TIME:
         if unit == "index":
             return 1.0
-        factor = TIME_UNITS.get(unit.strip().lower())
+        factor = TIME_UNITS.get(unit.strip().lower().replace("\u03bc", "\u00b5"))
         if factor is None:
             raise RunFormatError(
                 f"{export.vendor} export: time column {label} has no known time unit; "

@@ -24,22 +24,19 @@ from bayestribo.errors import RunFormatError
 from bayestribo.io.budget import FLOAT_BYTES, read_budget
 from bayestribo.io.run import COLUMNS, DISPLACEMENT, TIME, VELOCITY
 from bayestribo.io.text import check_scale
-from bayestribo.io.uff import LENGTH_UNIT_FACTORS
+from bayestribo.io.units import TIMES, length_unit
 
 __all__ = ["read_tdms"]
-
-_TIME_UNITS = {"s": 1.0, "ms": 1e-3}
 
 
 def _unit_factor(name: str, unit: Any, where: str, label: str) -> float:
     """Factor from a TDMS ``unit_string`` to the canonical unit of ``name``."""
     text = str(unit).strip()
     if name == TIME:
-        factor = _TIME_UNITS.get(text.lower())
-    elif name == VELOCITY:
-        factor = LENGTH_UNIT_FACTORS.get(text[:-2]) if text.endswith("/s") else None
+        factor = TIMES.get(text.lower().replace("\u03bc", "\u00b5"))
     else:
-        factor = None if text.endswith("/s") else LENGTH_UNIT_FACTORS.get(text)
+        parsed = length_unit(text)
+        factor = None if parsed is None or parsed[1] != (name == VELOCITY) else parsed[0]
     if factor is None:
         raise RunFormatError(
             f"TDMS channel {label}: unit_string {text!r} is not a unit of {name}; give the "

@@ -497,6 +497,37 @@ def stated_rate(lines: Sequence[tuple[int, str]], where: str) -> StatedRate | No
     return found
 
 
+#: Delimiters a spreadsheet export may write at the end of every line (``1.0,2.5,``).
+_TRAILING = (",", ";")
+
+
+def without_trailing_delimiter(lines: list[tuple[int, str]]) -> list[tuple[int, str]]:
+    """The lines without the delimiter that ends every one of them that holds it.
+
+    Spreadsheet and LabVIEW exports often end each line, the header's too, with the
+    delimiter (``"Time (s)","Position (mm)",`` then ``0.001,0.52,``): a field after it
+    is empty on every line, so it ends no field, and it is taken off. Nothing is taken
+    off when a line that holds the delimiter does not end with it (a header without it
+    above rows with it keeps its empty column, which is then said as one without
+    values), or when fewer than two lines hold it.
+
+    Parameters
+    ----------
+    lines : list of (int, str)
+        Line numbers and lines, blank and comment lines left out.
+
+    Returns
+    -------
+    list of (int, str)
+        ``lines`` itself when nothing is taken off, else new lines.
+    """
+    for mark in _TRAILING:
+        holding = [line.rstrip() for _, line in lines if mark in line]
+        if len(holding) >= 2 and all(line.endswith(mark) for line in holding):
+            return [(n, line.rstrip()[:-1] if mark in line else line) for n, line in lines]
+    return lines
+
+
 def _fields_of(line: str, delimiter: str | None) -> list[str]:
     return [f.strip().strip('"').strip("'").strip() for f in _split(line, delimiter)]
 
@@ -1075,8 +1106,8 @@ def _read_streamed(
         for n, line in enumerate(head_lines, start=1)
         if line.strip() and not line.lstrip().startswith("#")
     ]
-    if len(lines) < 3:
-        return None
+    if len(lines) < 3 or without_trailing_delimiter(lines) is not lines:
+        return None  # (a delimiter ending every line: the line-by-line reader drops it)
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # a header that warns goes the line-by-line way
         try:
@@ -1332,11 +1363,13 @@ def parse_lines(
                 decimal=None if decimal in (None, ".") else decimal,
                 where=where,
             )
-    lines = [
-        (number, line)
-        for number, line in enumerate(all_lines[skip_rows:], start=skip_rows + 1)
-        if line.strip() and not line.lstrip().startswith("#")
-    ]
+    lines = without_trailing_delimiter(
+        [
+            (number, line)
+            for number, line in enumerate(all_lines[skip_rows:], start=skip_rows + 1)
+            if line.strip() and not line.lstrip().startswith("#")
+        ]
+    )
     # a column of dates and times: microseconds from the first sample (time_us)
     stamped = stamped_lines(lines, delimiter, where) if columns is None else None
     if stamped is not None:

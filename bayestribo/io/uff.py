@@ -21,20 +21,15 @@ from bayestribo._optional import require
 from bayestribo.errors import RunFormatError
 from bayestribo.io.run import COLUMNS, DISPLACEMENT, TIME, VELOCITY
 from bayestribo.io.text import check_scale
+from bayestribo.io.units import LENGTHS, TIMES, length_unit
 
 __all__ = ["LENGTH_UNIT_FACTORS", "read_uff"]
 
-#: Length unit labels and their factor to metres.
-LENGTH_UNIT_FACTORS: Mapping[str, float] = {
-    "m": 1.0,
-    "mm": 1e-3,
-    "um": 1e-6,
-    "µm": 1e-6,
-    "μm": 1e-6,
-    "micron": 1e-6,
-    "nm": 1e-9,
-}
-_TIME_UNIT_FACTORS = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "none": 1.0, "": 1.0}
+#: Length unit labels and their factor to metres (the package's one table).
+LENGTH_UNIT_FACTORS: Mapping[str, float] = LENGTHS
+#: Abscissa labels and their factor to seconds; a record of no abscissa unit is in
+#: seconds, as UFF 58 defines its time records.
+_TIME_UNIT_FACTORS = {**TIMES, "none": 1.0, "": 1.0}
 _SPEC_TYPES = {8: DISPLACEMENT, 11: VELOCITY}
 _TIME_RESPONSE = 1
 
@@ -42,11 +37,8 @@ _TIME_RESPONSE = 1
 def _channel_and_factor(record: dict, index: int, where: str) -> tuple[str | None, float | None]:
     """Canonical channel of a record from its data type / unit label, and the unit factor."""
     label = str(record.get("ordinate_axis_units_lab", "")).strip()
-    low = label.lower()
-    per_second = low.endswith("/s")
-    factor = LENGTH_UNIT_FACTORS.get(label[:-2] if per_second else label)
-    if factor is None:
-        factor = LENGTH_UNIT_FACTORS.get(low[:-2] if per_second else low)
+    parsed = length_unit(label)
+    factor, per_second = (None, False) if parsed is None else parsed
     name = _SPEC_TYPES.get(int(record.get("ordinate_spec_data_type", 0) or 0))
     if name is None and factor is not None:
         name = VELOCITY if per_second else DISPLACEMENT
@@ -169,9 +161,11 @@ def read_uff(
                 where,
             )
         t_label = str(record.get("abscissa_axis_units_lab", "")).strip().lower()
+        t_label = t_label.replace("\u03bc", "\u00b5")
         if t_label not in _TIME_UNIT_FACTORS:
             raise RunFormatError(
-                f"UFF record {index}: abscissa unit {t_label!r}; expected seconds ('s' or 'ms')",
+                f"UFF record {index}: abscissa unit {t_label!r}; expected a unit of time, one "
+                f"of {sorted(TIMES)}",
                 where,
             )
         t = np.asarray(record.get("x"), dtype=np.float64) * _TIME_UNIT_FACTORS[t_label]
