@@ -278,6 +278,29 @@ def test_the_integrator_handles_many_parameter_sets_at_once():
     assert np.all(err < 1e-8 * closed[:, 0])
 
 
+def test_a_parameter_given_once_or_per_set_gives_the_same_rows():
+    """A value shared by every set (a scalar) and the same value given per set give Π
+    equal to the bit, row by row as each set alone; the names a law hands out are a
+    copy (changing them leaves the law's own)."""
+    law = get_law("coulomb+power")
+    tau = np.linspace(0.0, 40.0, 12)
+    per_set = {
+        "mu_k": np.array([0.01, 0.02]),
+        "mu_s_ratio": np.array([1.2, 1.2]),
+        "zeta_alpha": np.array([0.01, 0.01]),
+        "alpha": np.array([0.7, 1.6]),
+    }
+    shared = {**per_set, "mu_s_ratio": 1.2, "zeta_alpha": 0.01}
+    both = law.pi_grid(tau, per_set, [1.0, 1.0], reference=1.0)
+    assert np.array_equal(law.pi_grid(tau, shared, [1.0, 1.0], reference=1.0), both)
+    for i in range(2):
+        alone = {name: value[i : i + 1] for name, value in per_set.items()}
+        assert np.array_equal(law.pi_grid(tau, alone, [1.0], reference=1.0)[0], both[i])
+    names = law.parameter_names
+    names.append("extra")
+    assert law.parameter_names == ["mu_k", "mu_s_ratio", "zeta_alpha", "alpha"]
+
+
 def test_a_drag_too_strong_to_turn_is_outside_the_laws_domain():
     """An overdamped arc (the drag stops the motion before it turns) gives a NaN row."""
     law = get_law("quadratic")

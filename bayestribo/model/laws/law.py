@@ -114,15 +114,20 @@ class Law:
         return [t.name for t in self.terms]
 
     # -- parameters ---------------------------------------------------------------
-    @property
+    @cached_property
     def parameters(self) -> tuple[Parameter, ...]:
         """Sampled parameters of every term, in order."""
         return tuple(p for t in self.terms for p in t.parameters)
 
+    @cached_property
+    def _names(self) -> tuple[str, ...]:
+        # read on every evaluation of Π (the sampler's tens of thousands): built once
+        return tuple(p.name for p in self.parameters)
+
     @property
     def parameter_names(self) -> list[str]:
         """Names of the sampled parameters."""
-        return [p.name for p in self.parameters]
+        return list(self._names)
 
     def parameter(self, name: str) -> Parameter:
         """The parameter ``name`` (ValueError naming the law's parameters otherwise)."""
@@ -200,9 +205,14 @@ class Law:
     def coefficients(self, values: Mapping[str, ArrayLike], reference: float) -> NDArray:
         """Coefficient rows of the compiled forces, shape (P, K), from parameter values
         by name (each of shape (P,)) and the reference amplitude."""
-        vals = {n: np.atleast_1d(np.asarray(values[n], dtype=float)) for n in self.parameter_names}
-        size = vals[self.parameter_names[0]].shape[0]
-        cols = [c for term in self._layout[1] for c in term.coefficients(vals, float(reference))]
+        vals = {n: np.atleast_1d(np.asarray(values[n], dtype=float)) for n in self._names}
+        return self._coefficient_rows(vals, vals[self._names[0]].shape[0], float(reference))
+
+    def _coefficient_rows(
+        self, vals: Mapping[str, NDArray], size: int, reference: float
+    ) -> NDArray:
+        """:meth:`coefficients` from float arrays by name (each broadcast to ``size``)."""
+        cols = [c for term in self._layout[1] for c in term.coefficients(vals, reference)]
         out = np.empty((size, len(cols)))
         for k, c in enumerate(cols):
             out[:, k] = c  # each column broadcast to the rows
@@ -210,7 +220,7 @@ class Law:
 
     def static_ratio(self, values: Mapping[str, ArrayLike], size: int) -> NDArray:
         """μ_s/μ_k of each row (1 where the law has no static friction parameter)."""
-        if "mu_s_ratio" in self.parameter_names:
+        if "mu_s_ratio" in self._names:
             out = np.empty(size)
             out[:] = np.asarray(values["mu_s_ratio"], dtype=float)
             return out
@@ -266,10 +276,7 @@ class Law:
         t = np.ascontiguousarray(np.atleast_1d(np.asarray(tau, dtype=float)))
         y = np.ascontiguousarray(np.atleast_1d(np.asarray(y0, dtype=float)).ravel())
         size = y.size
-        vals = {
-            n: np.broadcast_to(np.asarray(values[n], dtype=float).ravel(), (size,))
-            for n in self.parameter_names
-        }
+        vals = {n: _rows(values[n], size) for n in self._names}
         end = math.inf if tau_end is None else float(tau_end)
         if method not in ("auto", "closed", "integrate"):
             raise ValueError(f"method must be 'auto', 'closed' or 'integrate', got {method!r}")
@@ -289,7 +296,7 @@ class Law:
             mu_s = mu_k * vals.get("mu_s_ratio", np.ones(size))
             return exact_pi_grid(t, y, zeta, mu_k, mu_s, float(yp0), tau_end)
         ref = abs(float(y[0])) if reference is None else float(reference)
-        coef = self.coefficients(vals, ref)
+        coef = self._coefficient_rows(vals, size, ref)
         # serial: numba's threads (1.9x on an idle two-core machine) spun against the
         # other processes of a loaded one, 10x slower (tests on two workers, campaigns)
         grid, _, _ = make_integrator(*self._layout[0])
@@ -515,6 +522,13 @@ class Law:
         for t in self.terms:
             out.update(t.physical(values, float(reference), scale))
         return out
+
+
+def _rows(value: ArrayLike, size: int) -> NDArray:
+    """``value`` as float rows of shape (size,): itself where it has that shape already,
+    else broadcast (a scalar or one row for every set)."""
+    rows = np.asarray(value, dtype=float).ravel()
+    return rows if rows.shape[0] == size else np.broadcast_to(rows, (size,))
 
 
 def get_law(law: str | Law | Sequence[Term] | None = None) -> Law:
