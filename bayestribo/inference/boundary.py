@@ -196,14 +196,19 @@ def boundary_mixture(
     fit_nested: Callable[[str], Sampled],
     rng_of: Callable[[], np.random.Generator],
 ) -> tuple[Sampled, dict[str, Any] | None]:
-    """The draws to report for a fit of the default law, and the record of the boundary.
+    """The draws to report for a fit of the default law, and the record of its
+    boundaries.
+
+    Each boundary whose nested law has a posterior probability of at least
+    :data:`THRESHOLD` takes that share of the draws, at most :data:`MAX_SHARE`; both
+    can (a record that cannot tell friction from viscous damping: half the draws each).
 
     Parameters
     ----------
     sampled : Sampled
         The full law's checked sample.
     fit_nested : callable
-        Called with the nested law's name (:data:`NESTED`), it samples that law on the
+        Called with a nested law's name (:data:`NESTED`), it samples that law on the
         same prepared run and returns its :class:`Sampled`.
     rng_of : callable
         Called once where the draws are mixed: the generator that picks them.
@@ -212,58 +217,78 @@ def boundary_mixture(
     -------
     Sampled, dict or None
         The sample to summarise (``sampled`` itself where the nested laws are
-        improbable) and the record: per boundary parameter its density ratio and
-        probability, and ``mixed`` (the parameter whose nested law was mixed in, or
-        None), ``nested_law``, ``nested_share`` and ``nested_converged``. None for a
-        law other than the default, or the default with one of its parameters fixed.
+        improbable) and the record: ``parameters``, per boundary parameter (``mu_k``,
+        ``zeta``) its density ratio and probability; ``mixed``, the parameters whose
+        nested law was mixed in (empty: the full law's draws as sampled); ``nested``,
+        per one of those its ``law``, ``share`` of the draws and whether its fit
+        ``converged``; ``full_share``. None for a law other than the default, or the
+        default with one of its parameters fixed.
     """
     candidates = _candidates(sampled)
     if not candidates:
         return sampled, None
-    name = max(candidates, key=lambda k: candidates[k]["probability"])
-    probability = candidates[name]["probability"]
+    shares = {
+        name: min(c["probability"], MAX_SHARE)
+        for name, c in candidates.items()
+        if c["probability"] >= THRESHOLD
+    }
     record: dict[str, Any] = {
         "prior_probability": 0.5,
-        "parameters": candidates,
         "threshold": THRESHOLD,
-        "mixed": None,
+        "max_share": MAX_SHARE,
+        "parameters": candidates,
+        "mixed": sorted(shares),
+        "nested": {},
+        "full_share": 1.0 - sum(shares.values()),
     }
-    if probability < THRESHOLD:
+    if not shares:
         return sampled, record
-    nested = fit_nested(NESTED[name])
-    share = min(probability, MAX_SHARE)
-    mixed = _mixed(sampled, nested, name, share, rng_of())
-    record.update(
-        mixed=name,
-        nested_law=NESTED[name],
-        nested_share=share,
-        nested_converged=bool(nested.run.converged),
-    )
-    return mixed, record
+    nested = {name: fit_nested(NESTED[name]) for name in sorted(shares)}
+    record["nested"] = {
+        name: {
+            "law": NESTED[name],
+            "share": shares[name],
+            "converged": bool(fit.run.converged),
+        }
+        for name, fit in nested.items()
+    }
+    return _mixed(sampled, nested, shares, rng_of()), record
 
 
 def _mixed(
-    full: Sampled, nested: Sampled, name: str, share: float, rng: np.random.Generator
+    full: Sampled,
+    nested: Mapping[str, Sampled],
+    shares: Mapping[str, float],
+    rng: np.random.Generator,
 ) -> Sampled:
-    """``full`` with the share ``share`` of its draws, picked at random, replaced by
-    draws of ``nested`` set in the full law's coordinates (``name`` at 0)."""
+    """``full`` with the share ``shares[name]`` of its draws, picked at random (apart
+    for each name), replaced by draws of ``nested[name]`` set in the full law's
+    coordinates (``name`` at 0; the coordinates the nested law does not have keep the
+    full law's draws)."""
     run = full.run
     names = full.posterior.names
-    d = len(names)
-    chains = run.chains.reshape(-1, d).copy()
+    chains = run.chains.reshape(-1, len(names)).copy()
     n = chains.shape[0]
-    k = round(share * n)
-    rows = np.sort(rng.choice(n, size=k, replace=False))
-    source = nested.run.chains.reshape(-1, nested.run.chains.shape[-1])
-    picked = source[rng.choice(source.shape[0], size=k, replace=k > source.shape[0])]
-    nested_names = nested.posterior.names
-    for j, col in enumerate(names):
-        if col == name:
-            chains[rows, j] = 0.0
-        elif col in nested_names:
-            chains[rows, j] = picked[:, nested_names.index(col)]
+    order = rng.permutation(n)
+    first = 0
+    replaced = []
+    for name in sorted(shares):
+        k = round(shares[name] * n)
+        rows = np.sort(order[first : first + k])
+        first += k
+        replaced.append(rows)
+        fit = nested[name]
+        source = fit.run.chains.reshape(-1, fit.run.chains.shape[-1])
+        picked = source[rng.choice(source.shape[0], size=k, replace=k > source.shape[0])]
+        nested_names = fit.posterior.names
+        for j, col in enumerate(names):
+            if col == name:
+                chains[rows, j] = 0.0
+            elif col in nested_names:
+                chains[rows, j] = picked[:, nested_names.index(col)]
+    rows = np.concatenate(replaced)
     log_prob = np.asarray(run.log_prob, dtype=float)
-    if log_prob.shape == run.chains.shape[:2]:
+    if log_prob.shape == run.chains.shape[:2] and rows.size:
         log_prob = log_prob.reshape(-1).copy()
         log_prob[rows] = full.posterior(chains[rows])
         log_prob = log_prob.reshape(run.chains.shape[:2])
@@ -271,17 +296,23 @@ def _mixed(
     return dataclasses.replace(full, run=new_run, pointwise=None)
 
 
+_WHAT = {"mu_k": "no friction (x_c or μ_k = 0)", "zeta": "no viscous damping (ζ = 0)"}
+
+
 def describe(record: Mapping[str, Any] | None) -> str | None:
-    """One line on what was done at the boundary (None where nothing was mixed)."""
-    if not record or record.get("mixed") is None:
+    """One line on what was done at the boundaries (None where nothing was mixed)."""
+    if not record or not record.get("mixed"):
         return None
-    name = record["mixed"]
-    what = "no friction (x_c or μ_k = 0)" if name == "mu_k" else "no viscous damping (ζ = 0)"
-    share = record["nested_share"]
-    probability = record["parameters"][name]["probability"]
+    parts = []
+    for name in record["mixed"]:
+        nested = record["nested"][name]
+        probability = record["parameters"][name]["probability"]
+        parts.append(
+            f"{_WHAT[name]} has posterior probability {probability:.2f}: the {nested['law']} "
+            f"law's fit makes {nested['share']:.0%} of the draws"
+            + ("" if nested.get("converged", True) else " (that fit did not converge)")
+        )
     return (
-        f"{what} has posterior probability {probability:.2f} (Savage–Dickey ratio, prior "
-        f"1/2): the intervals average the {record['nested_law']} law's fit ({share:.0%} of "
-        f"the draws) with {DEFAULT_LAW}'s"
-        + ("" if record.get("nested_converged", True) else "; the nested fit did not converge")
+        "; ".join(parts)
+        + f" (Savage–Dickey ratio, prior 1/2); the intervals average it with {DEFAULT_LAW}'s"
     )

@@ -226,9 +226,11 @@ class FitResult:
         """The default law's boundaries (:mod:`bayestribo.inference.boundary`): per
         boundary parameter (``mu_k`` for no friction, ``zeta`` for no viscous damping)
         its Savage–Dickey ``density_ratio`` and the nested law's posterior
-        ``probability``; ``mixed``, the parameter whose nested law's fit was mixed into
-        the draws (None: the full law's draws as sampled), with ``nested_law`` and its
-        ``nested_share`` of the draws. None for a fit of another law."""
+        ``probability`` (``parameters``); ``mixed``, the parameters whose nested law's
+        fit was mixed into the draws (empty: the full law's draws as sampled), with
+        each one's ``law`` and ``share`` of the draws (``nested``). None for a fit of
+        another law.
+        """
         return self._attr("boundary_json", None)
 
     @property
