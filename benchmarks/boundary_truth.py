@@ -171,6 +171,12 @@ def main() -> None:
     parser.add_argument("--law", default=None)
     parser.add_argument("--out", required=True)
     parser.add_argument(
+        "--collect",
+        nargs="+",
+        default=None,
+        help="write --out from the rows these runs' outputs printed (runs split in parts)",
+    )
+    parser.add_argument(
         "--max-share",
         type=float,
         default=None,
@@ -185,6 +191,18 @@ def main() -> None:
 
     import bayestribo
 
+    if args.collect:
+        rows = [
+            json.loads(line)
+            for log in args.collect
+            for line in Path(log).read_text().splitlines()
+            if line.startswith('{"design"')
+        ]
+        result = {"machine": machine(), "law": args.law or "default", "runs": rows}
+        result["coverage"] = table(rows)
+        Path(args.out).write_text(json.dumps(result, indent=1) + "\n")
+        print(json.dumps(result["coverage"], indent=1))
+        return
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         # seed by seed, so that a run cut short has every cell
