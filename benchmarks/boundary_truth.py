@@ -138,7 +138,7 @@ def one_run(design: str, truth: str, seed: int, law: str | None, folder: Path) -
             lo, hi = summ[name].interval
             out[key] = [float(lo), float(hi)]
             out[f"{key}_covered"] = bool(lo <= true <= hi)
-        elif key == "xc":  # a law without friction: x_c is 0
+        else:  # a law without that term: it is 0
             out[key] = [0.0, 0.0]
             out[f"{key}_covered"] = bool(true == 0.0)
     boundary = r.record.boundary if hasattr(r.record, "boundary") else None
