@@ -157,8 +157,9 @@ def table(rows: list[dict]) -> dict[str, dict[str, Any]]:
             cell["errors"] += 1
             continue
         cell["n"] += 1
-        cell["zeta"] += row["zeta_covered"]
-        cell["xc"] += row["xc_covered"]
+        # a law without the term (law="auto"): its value is 0
+        cell["zeta"] += row.get("zeta_covered", row["zeta_true"] == 0.0)
+        cell["xc"] += row.get("xc_covered", row["xc_true"] == 0.0)
     return out
 
 
