@@ -122,7 +122,12 @@ def fit(
         The dissipation law: terms of :mod:`bayestribo.model.laws` joined with ``+``
         (``"viscous+coulomb"``, the default; ``"viscous+quadratic"``,
         ``"coulomb+hysteretic"``, ...) or a :class:`~bayestribo.model.laws.Law`. A run
-        without contact (``load_N`` of 0) drops the law's friction terms. ``"auto"``
+        without contact (``load_N`` of 0) drops the law's friction terms. The default
+        law is averaged over its boundaries: where no friction or no viscous damping
+        is probable (at least 1 %, from the Savage–Dickey density ratio), the law
+        without that term is fitted too and makes that share of the draws, at most
+        half (:mod:`bayestribo.inference.boundary`; the result's ``boundary`` says
+        what was done). ``"auto"``
         compares the laws the registry's terms make by the rule of
         :mod:`bayestribo.model.laws.candidates`
         (:func:`bayestribo.inference.comparison.auto_laws`): each is taken to its
