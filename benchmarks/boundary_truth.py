@@ -193,12 +193,14 @@ def main() -> None:
     import bayestribo
 
     if args.collect:
-        rows = [
-            json.loads(line)
-            for log in args.collect
-            for line in Path(log).read_text().splitlines()
-            if line.startswith('{"design"')
-        ]
+        # the first row of each (design, truth, seed): parts may overlap
+        by_key: dict[tuple, dict] = {}
+        for log in args.collect:
+            for line in Path(log).read_text().splitlines():
+                if line.startswith('{"design"'):
+                    row = json.loads(line)
+                    by_key.setdefault((row["design"], row["truth"], row["seed"]), row)
+        rows = list(by_key.values())
         result = {"machine": machine(), "law": args.law or "default", "runs": rows}
         result["coverage"] = table(rows)
         Path(args.out).write_text(json.dumps(result, indent=1) + "\n")
