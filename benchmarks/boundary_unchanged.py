@@ -62,10 +62,11 @@ def fit_in(tree: Path, name: str) -> dict:
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
-def names(bundled: list[str]) -> list[str]:
+def names(bundled: list[str], real: bool = True) -> list[str]:
     from real import recordings
 
-    return [*(f"bundled:{ROOT / 'data/runs' / b}" for b in bundled), *recordings()]
+    bundled_names = [f"bundled:{ROOT / 'data/runs' / b}" for b in bundled if b]
+    return [*bundled_names, *(recordings() if real else [])]
 
 
 def compare(a: dict, b: dict) -> dict:
@@ -86,12 +87,13 @@ def main() -> None:
     parser.add_argument("--base", required=True, help="the other tree (main)")
     parser.add_argument("--bundled", default="air-r1.csv,glycerol-N0.31-r1.csv")
     parser.add_argument("--repeats", type=int, default=2)
+    parser.add_argument("--no-real", action="store_true", help="the bundled runs only")
     parser.add_argument("--out", required=True)
     args = parser.parse_args()
     from _machine import commit, machine
 
     rows = []
-    for name in names(args.bundled.split(",")):
+    for name in names(args.bundled.split(","), real=not args.no_real):
         row: dict = {"recording": name, "main": [], "branch": []}
         for i in range(args.repeats):
             order = [("main", Path(args.base)), ("branch", ROOT)]
