@@ -152,6 +152,13 @@ def test_a_record_that_cannot_tell_the_two_apart_mixes_both(tmp_path) -> None:
     assert summary["friction_displacement"].interval[0] == 0.0
 
 
+def test_clear_friction_leaves_the_bundled_run_alone(bundled_run) -> None:
+    """The bundled glycerol run at 0.31 N: both nested laws ruled out, nothing mixed."""
+    b = _fit(bundled_run).boundary
+    assert b["mixed"] == [] and b["full_share"] == 1.0
+    assert all(p["probability"] == 0.0 for p in b["parameters"].values())
+
+
 def test_clear_friction_leaves_the_fit_alone(tmp_path) -> None:
     """Half the loss to friction: the nested laws are ruled out, nothing is mixed in
     (the draws are the full law's: none at x_c = 0)."""
@@ -177,3 +184,12 @@ def test_intervals_cover_a_truth_on_the_boundary(tmp_path, share: float, name: s
         lo, hi = _fit(run).summary()[name].interval
         covered += lo <= (zeta if name == "zeta" else xc) <= hi
     assert covered >= 17
+
+
+def test_a_run_without_contact_has_no_boundary_to_average(bundled_runs) -> None:
+    """A bundled air run (load 0): friction is dropped, the law is viscous alone."""
+    import bayestribo as bt
+
+    result = _fit(bt.read_run(bundled_runs / "air-r1.csv"))
+    assert result.boundary is None
+    assert "boundary" not in result.to_text()

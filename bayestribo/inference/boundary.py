@@ -171,11 +171,13 @@ def nested_probability(
 def _candidates(sampled: Sampled) -> dict[str, dict[str, float]]:
     """The nested-law probability of each of the default law's boundary parameters
     that is sampled with a prior of positive density at 0 (none where a parameter of
-    the law is fixed)."""
+    the law is fixed, or friction is dropped for a run without contact)."""
     posterior = sampled.posterior
     laws = {p.name for p in posterior.law.parameters}
     if posterior.law.name != DEFAULT_LAW or laws & set(posterior.fixed):
         return {}  # another law, or one of its parameters held at a value
+    if not set(NESTED) <= set(posterior.names):
+        return {}  # a run without contact: friction dropped, the viscous law alone
     chains = sampled.run.chains
     flat = chains.reshape(-1, chains.shape[-1])
     out = {}
@@ -221,8 +223,9 @@ def boundary_mixture(
         ``zeta``) its density ratio and probability; ``mixed``, the parameters whose
         nested law was mixed in (empty: the full law's draws as sampled); ``nested``,
         per one of those its ``law``, ``share`` of the draws and whether its fit
-        ``converged``; ``full_share``. None for a law other than the default, or the
-        default with one of its parameters fixed.
+        ``converged``; ``full_share``. None for a law other than the default, the
+        default with one of its parameters fixed, or a run without contact (friction
+        dropped).
     """
     candidates = _candidates(sampled)
     if not candidates:
