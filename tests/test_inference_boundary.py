@@ -168,7 +168,7 @@ def test_clear_friction_leaves_the_fit_alone(tmp_path) -> None:
     assert b["mixed"] == [] and b["full_share"] == 1.0
     assert all(p["probability"] < THRESHOLD for p in b["parameters"].values())
     assert np.all(result.samples("friction_displacement") > 0.0)
-    assert "boundary" not in result.to_text()
+    assert not any(line.startswith("boundary") for line in result.to_text().splitlines())
 
 
 @pytest.mark.validation
@@ -192,4 +192,4 @@ def test_a_run_without_contact_has_no_boundary_to_average(bundled_runs) -> None:
 
     result = _fit(bt.read_run(bundled_runs / "air-r1.csv"))
     assert result.boundary is None
-    assert "boundary" not in result.to_text()
+    assert not any(line.startswith("boundary") for line in result.to_text().splitlines())
