@@ -42,6 +42,7 @@ WRITTEN = (
     "prior_sensitivity_json",
     "spec_json",
     "seconds",
+    "boundary_json",
 )
 
 

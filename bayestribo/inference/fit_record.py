@@ -105,6 +105,11 @@ class FitRecord:
         The fit's specification (:meth:`~bayestribo.inference.spec.FitSpec.to_dict`).
     seconds : float or None
         Wall time of the fit [s].
+    boundary : dict or None
+        The default law's boundaries (no friction, no viscous damping): each one's
+        posterior probability from the Savage–Dickey density ratio, and the nested law
+        whose fit was mixed into the draws, if any
+        (:mod:`bayestribo.inference.boundary`); None for another law.
     unwritten : frozenset of str
         Attributes the record does not write (those a file of an earlier version does
         not hold, and the optional ones left None).
@@ -163,8 +168,9 @@ class FitRecord:
         default=None, metadata=_json("spec_json", plain=False, allow_nan=False)
     )
     seconds: float | None = field(default=None, metadata=_number("seconds"))
+    boundary: dict[str, Any] | None = field(default=None, metadata=_json("boundary_json"))
     unwritten: frozenset[str] = field(
-        default=frozenset({"law_comparison", "verdict_dissipation", "spec", "seconds"})
+        default=frozenset({"law_comparison", "verdict_dissipation", "spec", "seconds", "boundary"})
     )
     extra: dict[str, Any] = field(default_factory=dict)
 

@@ -22,6 +22,8 @@ import numpy as np
 from bayestribo import DEFAULT_SEED
 from bayestribo.errors import BayestriboError
 from bayestribo.inference.auto import fit_auto
+from bayestribo.inference.boundary import boundary_mixture
+from bayestribo.inference.checks import check
 from bayestribo.inference.law_frame import sample_law
 from bayestribo.inference.likelihood import MODELS
 from bayestribo.inference.preparation import prepare
@@ -120,7 +122,12 @@ def fit(
         The dissipation law: terms of :mod:`bayestribo.model.laws` joined with ``+``
         (``"viscous+coulomb"``, the default; ``"viscous+quadratic"``,
         ``"coulomb+hysteretic"``, ...) or a :class:`~bayestribo.model.laws.Law`. A run
-        without contact (``load_N`` of 0) drops the law's friction terms. ``"auto"``
+        without contact (``load_N`` of 0) drops the law's friction terms. The default
+        law is averaged over its boundaries: where no friction or no viscous damping
+        is probable (at least 1 %, from the Savage–Dickey density ratio), the law
+        without that term is fitted too and makes that share of the draws, at most
+        half (:mod:`bayestribo.inference.boundary`; the result's ``boundary`` says
+        what was done). ``"auto"``
         compares the laws the registry's terms make by the rule of
         :mod:`bayestribo.model.laws.candidates`
         (:func:`bayestribo.inference.comparison.auto_laws`): each is taken to its
@@ -226,9 +233,37 @@ def fit(
                 fixed=fixed,
                 progress=progress,
             )
-            summarised = summary(prepared, sampled, seed=rng, recorded_seed=seed)
+            checks = check(prepared, sampled)
+            sampled, boundary = boundary_mixture(
+                checks.sampled,
+                lambda nested: sample_law(
+                    prepared,
+                    get_law(nested),
+                    model=model,
+                    discrepancy=discrepancy,
+                    settings=settings,
+                    seed=rng.spawn(1)[0],
+                    priors=_nested(priors, nested),
+                    fixed=_nested(fixed, nested),
+                )[1],
+                lambda: rng.spawn(1)[0],
+            )
+            checks = dataclasses.replace(checks, sampled=sampled)
+            summarised = summary(prepared, sampled, seed=rng, recorded_seed=seed, checks=checks)
+            if boundary is not None:
+                summarised = dataclasses.replace(
+                    summarised, record=summarised.record.replace(boundary=boundary)
+                )
     record = summarised.record.replace(spec=spec.to_dict(), seconds=time.perf_counter() - start)
     return dataclasses.replace(summarised, record=record).result()
+
+
+def _nested(given: Mapping[str, Any] | None, nested: str) -> dict[str, Any] | None:
+    """The priors (or fixed values) given for the default law that its nested law
+    ``nested`` has (:mod:`bayestribo.inference.boundary`)."""
+    names = {p.name for p in get_law(nested).parameters}
+    names |= {"y0", "log10_discrepancy", "log10_shape"}
+    return {k: v for k, v in (given or {}).items() if k in names} or None
 
 
 #: The defaults of :func:`fit`'s keywords that are fields of :class:`FitSpec` (None for

@@ -222,6 +222,18 @@ class FitResult:
         return self._attr("law_comparison_json", None)
 
     @property
+    def boundary(self) -> dict[str, Any] | None:
+        """The default law's boundaries (:mod:`bayestribo.inference.boundary`): per
+        boundary parameter (``mu_k`` for no friction, ``zeta`` for no viscous damping)
+        its Savage–Dickey ``density_ratio`` and the nested law's posterior
+        ``probability`` (``parameters``); ``mixed``, the parameters whose nested law's
+        fit was mixed into the draws (empty: the full law's draws as sampled), with
+        each one's ``law`` and ``share`` of the draws (``nested``). None for a fit of
+        another law.
+        """
+        return self._attr("boundary_json", None)
+
+    @property
     def seed(self) -> int | None:
         """Seed of the sampler (``None`` if the run was not seeded)."""
         seed = self._attr("seed")
@@ -554,6 +566,7 @@ class FitResult:
                 "model": self.model,
                 "law": self.law,
                 "law_comparison": self.law_comparison,
+                "boundary": self.boundary,
                 "restoring": self.restoring,
                 "seed": self.seed,
                 "bayestribo_version": self.package_version,
@@ -581,6 +594,11 @@ class FitResult:
             *self._comparison_lines(),
             f"noise     {self.noise.get('description', '')}",
         ]
+        from bayestribo.inference.boundary import describe as describe_boundary
+
+        at_boundary = describe_boundary(self.boundary)
+        if at_boundary:
+            lines.append(f"boundary  {at_boundary}")
         from bayestribo._plural import count
 
         d = self.diagnostics
