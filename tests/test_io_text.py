@@ -355,6 +355,7 @@ def test_a_bad_row_far_beyond_the_head_is_still_named(tmp_path: Path) -> None:
         ('"Time (s)","Position (mm)",', ",", "."),
         ("Zeit [s];Weg [mm];", ";", ","),
         ("time_s,displacement_mm,", ",", "."),
+        ("Time [s]\tDisplacement [mm]\t", "\t", "."),
     ],
 )
 @pytest.mark.parametrize("rows", [40, 6000], ids=["short", "long"])

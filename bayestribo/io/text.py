@@ -497,15 +497,22 @@ def stated_rate(lines: Sequence[tuple[int, str]], where: str) -> StatedRate | No
     return found
 
 
-#: Delimiters a spreadsheet export may write at the end of every line (``1.0,2.5,``).
-_TRAILING = (",", ";")
+#: Delimiters a spreadsheet export may write at the end of every line (``1.0,2.5,``,
+#: ``1.0\t2.5\t``).
+_TRAILING = (",", ";", "\t")
+
+
+def _line_end(line: str, mark: str) -> str:
+    """``line`` without the blanks at its end, a tab kept when ``mark`` is one."""
+    return line.rstrip(" \r\n\f\v") if mark == "\t" else line.rstrip()
 
 
 def without_trailing_delimiter(lines: list[tuple[int, str]]) -> list[tuple[int, str]]:
     """The lines without the delimiter that ends every one of them that holds it.
 
     Spreadsheet and LabVIEW exports often end each line, the header's too, with the
-    delimiter (``"Time (s)","Position (mm)",`` then ``0.001,0.52,``): a field after it
+    delimiter (``"Time (s)","Position (mm)",`` then ``0.001,0.52,``; a tab in a
+    tab-separated export): a field after it
     is empty on every line, so it ends no field, and it is taken off. Nothing is taken
     off when a line that holds the delimiter does not end with it (a header without it
     above rows with it keeps its empty column, which is then said as one without
@@ -522,9 +529,9 @@ def without_trailing_delimiter(lines: list[tuple[int, str]]) -> list[tuple[int, 
         ``lines`` itself when nothing is taken off, else new lines.
     """
     for mark in _TRAILING:
-        holding = [line.rstrip() for _, line in lines if mark in line]
+        holding = [_line_end(line, mark) for _, line in lines if mark in line]
         if len(holding) >= 2 and all(line.endswith(mark) for line in holding):
-            return [(n, line.rstrip()[:-1] if mark in line else line) for n, line in lines]
+            return [(n, _line_end(line, mark)[:-1] if mark in line else line) for n, line in lines]
     return lines
 
 
