@@ -9,7 +9,7 @@ import pytest
 from _paths import APPSTAT
 
 from bayestribo import read_run
-from bayestribo.errors import RunFormatError
+from bayestribo.errors import ReadingWarning, RunFormatError
 
 EXTERNAL = APPSTAT
 
@@ -389,3 +389,20 @@ def test_an_unnamed_last_column_with_values_is_not_dropped(tmp_path: Path) -> No
     path.write_text("time_s,displacement_m,\n" + "\n".join(rows) + "\n")
     with pytest.raises(RunFormatError, match=r"unknown column ''"):
         read_run(path, validate=False)
+
+
+@pytest.mark.parametrize("rows", [40, 6000], ids=["short", "long"])
+def test_a_header_repeated_among_the_rows_is_left_out_and_said(tmp_path: Path, rows: int) -> None:
+    """Two acquisitions appended to one file, each below the same header: the repeated
+    header line is named in a ReadingWarning, and the time starting over below it is a
+    restart of the clock: the first acquisition is read, the second named as left out."""
+    t = np.arange(rows) * 1e-3
+    x = np.round(2e-3 * np.cos(t * 40.0), 9)
+    header = "time_s,displacement_m"
+    body = [f"{float(a)!r},{float(b)!r}" for a, b in zip(t, x, strict=True)]
+    path = tmp_path / "appended.csv"
+    path.write_text("\n".join([header, *body, header, *body]) + "\n")
+    with pytest.warns(ReadingWarning, match=rf"line\(s\) {rows + 2} repeat the header"):
+        run = read_run(path, validate=False)
+    np.testing.assert_array_equal(run.time, t)
+    np.testing.assert_array_equal(run.displacement, x)

@@ -50,6 +50,7 @@ from bayestribo.io.columns import (
     split_run_tag,
 )
 from bayestribo.io.instruments import PREAMBLE_LINES, detect_export, read_export
+from bayestribo.io.repeated_header import without_repeated_header
 from bayestribo.io.run import (
     ACCELERATION_AXES,
     ACCELERATIONS,
@@ -1384,7 +1385,7 @@ def parse_lines(
     names, units, header_lines, delimiter, decimal = _layout(
         lines, where, columns, delimiter, decimal
     )
-    rows = lines[header_lines:]
+    rows = without_repeated_header(lines[header_lines:], lines[:header_lines], where)
     if not rows:
         raise RunFormatError("the file holds a header but no data rows", where)
 
