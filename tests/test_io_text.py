@@ -406,3 +406,28 @@ def test_a_header_repeated_among_the_rows_is_left_out_and_said(tmp_path: Path, r
         run = read_run(path, validate=False)
     np.testing.assert_array_equal(run.time, t)
     np.testing.assert_array_equal(run.displacement, x)
+
+
+@pytest.mark.parametrize("decimal", [None, ","], ids=["guessed", "given"])
+def test_decimal_commas_with_thousands_points_read_as_numbers(
+    tmp_path: Path, decimal: str | None
+) -> None:
+    """A European spreadsheet's numbers grouped in thousands (``1.234,5``) read as the
+    numbers they show, the decimal comma guessed or given; a point that groups no
+    thousands beside decimal commas is still named."""
+    t = np.arange(3000) * 0.5  # ms, past 1 000
+    x = np.round(2500.0 * np.cos(t / 40.0), 2)  # µm, past ±1 000
+
+    def european(value: float, digits: int) -> str:
+        return f"{value:,.{digits}f}".replace(",", "_").replace(".", ",").replace("_", ".")
+
+    rows = [f"{european(a, 1)};{european(b, 2)}" for a, b in zip(t, x, strict=True)]
+    path = tmp_path / "run.csv"
+    path.write_text("Zeit [ms];Weg [µm]\n" + "\n".join(rows) + "\n", encoding="utf-8")
+    run = read_run(path, validate=False, decimal=decimal)
+    np.testing.assert_allclose(run.time, t * 1e-3, rtol=1e-15)
+    np.testing.assert_allclose(run.displacement, x * 1e-6, rtol=1e-15)
+    rows[100] = rows[100].split(";")[0] + ";12.34,5"
+    path.write_text("Zeit [ms];Weg [µm]\n" + "\n".join(rows) + "\n", encoding="utf-8")
+    with pytest.raises(RunFormatError, match=r"line 102, column 'displacement_m': '12.34,5'"):
+        read_run(path, validate=False, decimal=decimal)

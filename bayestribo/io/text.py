@@ -156,7 +156,7 @@ def _parse_rows(
         for c, (i, name) in enumerate(keep):
             field = fields[i]
             if decimal == ",":
-                field = "x" if "." in field else field.replace(",", ".")
+                field = _with_point(field)
             if field == "":
                 data[r, c] = np.nan  # an empty cell: kept as missing, see _trim_missing
                 continue
@@ -209,6 +209,25 @@ def decode(data: bytes, encoding: str | None, where: str, *, say: bool = True) -
         ReadingWarning,
     )
     return text
+
+
+#: A number with a decimal comma whose integer part is grouped in thousands by points
+#: (``1.234,5``, a European spreadsheet's number format).
+_GROUPED = re.compile(r"[+-]?\d{1,3}(?:\.\d{3})+,\d*(?:[eE][+-]?\d+)?")
+
+
+def _with_point(field: str) -> str:
+    """A field of a file with decimal commas, written with a decimal point.
+
+    The points of a thousands grouping (``1.234,5`` → ``1234.5``) are taken off; a
+    point anywhere else beside decimal commas is not read (``"x"``, which no reader
+    takes for a number), so the cell is named.
+    """
+    if "." in field:
+        if _GROUPED.fullmatch(field) is None:
+            return "x"
+        field = field.replace(".", "")
+    return field.replace(",", ".")
 
 
 #: What a number cut short can look like: a prefix of a decimal number.
@@ -735,9 +754,7 @@ def _number_or_empty(field: str, decimal: str) -> bool | None:
     if field == "":
         return None
     if decimal == ",":
-        if "." in field:
-            return False  # a point beside a decimal comma: a thousands mark, not read
-        field = field.replace(",", ".")
+        field = _with_point(field)
     return _as_float(field) is not None
 
 
