@@ -323,8 +323,11 @@ def test_channels_of_different_motions_are_refused():
 def test_a_velocity_of_opposite_sign_is_named_as_such():
     good = simulate(seed=3)
     flipped = Run(good.time, good.displacement, -good.velocity, good.metadata)
-    with pytest.raises(RecordingError, match="opposite sign"):
+    with pytest.raises(RecordingError, match="opposite sign") as caught:
         validate_run(flipped)
+    assert "scale={'velocity_m_per_s': -1} reads it" in str(caught.value)
+    fixed = Run(good.time, good.displacement, -flipped.velocity, good.metadata)
+    validate_run(fixed)  # the advice, followed, reads the run
 
 
 def _units_file(tmp_path, t_factor, x_factor, v_factor):
