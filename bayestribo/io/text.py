@@ -131,9 +131,12 @@ def _parse_rows(
     names: list[str],
     keep: list[tuple[int, str]],
     where: str,
+    grouped: bool = False,
 ) -> NDArray:
     """The kept columns, row by row with Python's ``float``; the first row of another
-    width or field that is not a number is an error naming its line and column."""
+    width or field that is not a number is an error naming its line and column.
+    Numbers grouped in thousands by points beside a decimal comma (``1.234,5``) are
+    read only when the decimal comma was given (``grouped``); a guess names them."""
     data = np.empty((len(rows), len(keep)), dtype=np.float64)
     width = len(names)
     last = len(rows) - 1
@@ -156,14 +159,20 @@ def _parse_rows(
         for c, (i, name) in enumerate(keep):
             field = fields[i]
             if decimal == ",":
-                field = _with_point(field)
+                field = _with_point(field) if grouped or "." not in field else "x"
             if field == "":
                 data[r, c] = np.nan  # an empty cell: kept as missing, see _trim_missing
                 continue
             value = _as_float(field)
             if value is None:
+                hint = (
+                    " (a point grouping thousands beside decimal commas: --decimal , reads it so)"
+                    if decimal == "," and not grouped and _GROUPED.fullmatch(fields[i])
+                    else ""
+                )
                 raise RunFormatError(
-                    f"line {number}, column {name!r}: {fields[i][:40]!r} is not a number", where
+                    f"line {number}, column {name!r}: {fields[i][:40]!r} is not a number{hint}",
+                    where,
                 )
             data[r, c] = value
     return data
@@ -677,6 +686,10 @@ def _header(
                 where,
             ) from None
         si = si_names(labels)
+        if si is None and "has no unit" in exc.message:
+            tracked = _coordinates_advice(labels)
+            if tracked:
+                raise RunFormatError(f"{exc.message}; {tracked}", where) from None
         if "in pixels" in exc.message:
             raise RunFormatError(f"{exc.message}; {_pixel_advice(labels)}", where) from None
         if "has no unit" not in exc.message or si is None:
@@ -694,6 +707,25 @@ def _header(
             ReadingWarning,
         )
     return names, units, count
+
+
+def _coordinates_advice(labels: Sequence[str]) -> str:
+    """How to read a video tracker's ``t, x, y`` columns without units (Tracker's
+    export): one coordinate as the displacement, the other left out; "" for other
+    labels."""
+    words = [label.strip().lower() for label in labels]
+    unique = len(set(words)) == len(words)
+    if not (unique and {"x", "y"} <= set(words) <= {"t", "x", "y"}):
+        return ""
+
+    def names(axis: str) -> list[str]:
+        roles = {"t": TIME, axis: DISPLACEMENT}
+        return [roles.get(word, IGNORE) for word in words]
+
+    return (
+        f"or name every column in file order: columns={names('x')} if the motion is "
+        f"along x, columns={names('y')} if along y, the file in s and m"
+    )
 
 
 def _pixel_advice(labels: Sequence[str]) -> str:
@@ -1399,6 +1431,7 @@ def parse_lines(
     stamped = stamped_lines(lines, delimiter, where) if columns is None else None
     if stamped is not None:
         lines = stamped.lines
+    grouped = decimal == ","
     names, units, header_lines, delimiter, decimal = _layout(
         lines, where, columns, delimiter, decimal
     )
@@ -1410,7 +1443,7 @@ def parse_lines(
     width = len(names)
     data = _parse_block(rows, delimiter, width, [i for i, _ in keep], decimal)
     if data is None:
-        data = _parse_rows(rows, delimiter, decimal, names, keep, where)
+        data = _parse_rows(rows, delimiter, decimal, names, keep, where, grouped)
         data = _trim_missing(data, rows, keep, where)
 
     out: dict[str, Any] = _columns(data, keep, units, scale, where)
