@@ -651,7 +651,13 @@ CASES: dict[str, Callable[[Path], Case]] = {
     name[2:]: fn for name, fn in dict(globals()).items() if name.startswith("c_") and callable(fn)
 }
 
-WARN = re.compile(r"(\w+Warning)")
+#: A warning line of the command line: ``bayestribo fit: warning: FILE: text``.
+WARN = re.compile(r"^bayestribo \w+: warning: (?:\S+: )?(.*)$", re.MULTILINE)
+
+
+def warnings_of(stderr: str) -> list[str]:
+    """The warnings a command printed, each cut to its first 90 characters."""
+    return [w[:90] for w in WARN.findall(stderr)]
 
 
 def bayestribo(args: list[str], env: dict[str, str], timeout: float) -> dict[str, Any]:
@@ -701,7 +707,7 @@ def fit_record(
         "command": " ".join(["bayestribo fit", Path(path).name, *args]),
         "rc": fit["rc"],
         "cpu_s": round(fit["cpu_s"], 2),
-        "warnings": sorted(set(WARN.findall(fit["stderr"]))),
+        "warnings": warnings_of(fit["stderr"]),
         "stderr": fit["stderr"][-1500:],
     }
     try:
@@ -741,7 +747,29 @@ def line(r: dict[str, Any]) -> str:
     cov = " ".join(
         f"{k}:{'ok' if v['covers'] else 'MISS'}" for k, v in (r.get("coverage") or {}).items()
     )
-    return f"rc={r['rc']} {','.join(r['warnings'])} {cov}"
+    return f"rc={r['rc']} warnings={len(r['warnings'])} {cov}"
+
+
+def table(path: Path) -> str:
+    """The results as a Markdown table: case, first command's exit, the advice's, coverage."""
+    out = [
+        "| case | file as written by | first `fit` | after the refusal's advice | warnings | "
+        "95 % intervals |",
+        "|---|---|---|---|---|---|",
+    ]
+    for r in json.loads(path.read_text())["cases"]:
+        last = r.get("followup", r)
+        cov = ", ".join(
+            f"{k} {'covers' if v['covers'] else '**misses**'}"
+            for k, v in (last.get("coverage") or {}).items()
+        )
+        then = (
+            f"`{' '.join(last['command'].split()[3:])}`: exit {last['rc']}" if last is not r else ""
+        )
+        warns = "; ".join(" ".join(w.split()[:6]) for w in last["warnings"]) or "-"
+        cells = [r["case"], r["kind"], f"exit {r['rc']}", then or "-", warns, cov or "-"]
+        out.append("| " + " | ".join(cells) + " |")
+    return "\n".join(out)
 
 
 def main() -> None:
@@ -750,7 +778,11 @@ def main() -> None:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--timeout", type=float, default=900.0)
     ap.add_argument("--name", default="unseen_rigs")
+    ap.add_argument("--table", action="store_true", help="print the stored results as a table")
     a = ap.parse_args()
+    if a.table:
+        print(table(RESULTS / f"{a.name}.json"))
+        return
     names = a.only or list(CASES)
     env = {**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg"}
     with tempfile.TemporaryDirectory() as tmp:
