@@ -766,9 +766,10 @@ def table(path: Path) -> str:
         then = (
             f"`{' '.join(last['command'].split()[3:])}`: exit {last['rc']}" if last is not r else ""
         )
-        warns = "; ".join(" ".join(w.split()[:6]) for w in last["warnings"]) or "-"
+        said = [re.sub(r"/\S*/", "", w) for w in last["warnings"]]
+        warns = "; ".join(" ".join(w.split()[:6]) for w in said) or "-"
         cells = [r["case"], r["kind"], f"exit {r['rc']}", then or "-", warns, cov or "-"]
-        out.append("| " + " | ".join(cells) + " |")
+        out.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
     return "\n".join(out)
 
 
