@@ -632,6 +632,29 @@ def c_keysight_v(d: Path) -> Case:
     }
 
 
+def c_coulomb_both(d: Path) -> Case:
+    """A 1 Hz spring with strong friction (x_c 5 % of the release), both channels at 1 kHz."""
+    r = rig(
+        25,
+        f=1.0,
+        zeta=0.01,
+        mu_k=0.02,
+        N=1.0,
+        m=0.2,
+        x0=0.05,
+        fs=1000,
+        t_pre=1.0,
+        t_post=2.0,
+        nx=5e-5,
+        nv=5e-4,
+    )
+    p = d / "strong_friction.csv"
+    rows = [f"{a:.3f},{b:.6e},{c:.6e}" for a, b, c in zip(r["t"], r["x"], r["v"], strict=True)]
+    p.write_text("time_s,displacement_m,velocity_m_per_s\n" + "\n".join(rows) + "\n")
+    sidecar(p, r["meta"])
+    return {"file": p, "args": [], "truth": r["truth"], "kind": "1 Hz, x_c 5 % of release, x and v"}
+
+
 def c_auto(d: Path) -> Case:
     """The canonical CSV, fitted with ``--law auto`` (viscous+coulomb truth)."""
     r = rig(24, fs=2000)
