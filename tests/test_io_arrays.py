@@ -144,3 +144,28 @@ def test_command_line_names_variables_with_channel_options(tmp_path, run, capsys
     assert got["natural_frequency_Hz"] == pytest.approx(32.6, rel=2e-3)
     assert main([*argv, "--channel", "v", *meta]) == 2
     assert "--channel: expected NAME=SOURCE" in capsys.readouterr().err
+
+
+def test_a_structure_with_one_unitless_field_is_named_as_it_is_and_read_so(tmp_path, run, capsys):
+    """``rec.t`` beside ``rec.x_mm``: the refusal names the fields as the options that
+    read them, and the field picked by its role keeps the unit its name states."""
+    path = tmp_path / "struct.mat"
+    scipy.io.savemat(path, {"rec": {"t": run.time, "x_mm": 1e3 * run.displacement}})
+    meta = ["--frequency", "32.6", "--load", "0.31", "--mass", "0.035"]
+    assert main(["decay", str(path), "--json", *meta]) == 2
+    assert "e.g. --channel t=rec.t --channel x=rec.x_mm" in capsys.readouterr().err
+    got = read_run(
+        path, channels={"time_s": "rec.t", "displacement_m": "rec.x_mm"}, metadata=_meta(run)
+    )
+    np.testing.assert_allclose(got.displacement, run.displacement, rtol=1e-15)
+
+
+def test_hdf5_one_dataset_without_time_is_named_with_the_sample_rate(tmp_path, run, capsys):
+    path = tmp_path / "one.h5"
+    with h5py.File(path, "w") as handle:
+        handle.create_dataset("disp", data=1e6 * run.displacement).attrs["units"] = "um"
+    assert main(["decay", str(path), "--json"]) == 2
+    assert "e.g. --channel x=disp with --sample-rate HZ" in capsys.readouterr().err
+    rate = run.sample_rate_Hz
+    got = read_run(path, channels={"displacement_m": "disp"}, sample_rate_Hz=rate)
+    np.testing.assert_allclose(got.displacement, run.displacement, rtol=1e-12)

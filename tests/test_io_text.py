@@ -9,7 +9,7 @@ import pytest
 from _paths import APPSTAT
 
 from bayestribo import read_run
-from bayestribo.errors import RunFormatError
+from bayestribo.errors import ReadingWarning, RunFormatError
 
 EXTERNAL = APPSTAT
 
@@ -355,6 +355,7 @@ def test_a_bad_row_far_beyond_the_head_is_still_named(tmp_path: Path) -> None:
         ('"Time (s)","Position (mm)",', ",", "."),
         ("Zeit [s];Weg [mm];", ";", ","),
         ("time_s,displacement_mm,", ",", "."),
+        ("Time [s]\tDisplacement [mm]\t", "\t", "."),
     ],
 )
 @pytest.mark.parametrize("rows", [40, 6000], ids=["short", "long"])
@@ -388,3 +389,66 @@ def test_an_unnamed_last_column_with_values_is_not_dropped(tmp_path: Path) -> No
     path.write_text("time_s,displacement_m,\n" + "\n".join(rows) + "\n")
     with pytest.raises(RunFormatError, match=r"unknown column ''"):
         read_run(path, validate=False)
+
+
+@pytest.mark.parametrize("rows", [40, 6000], ids=["short", "long"])
+def test_a_header_repeated_among_the_rows_is_left_out_and_said(tmp_path: Path, rows: int) -> None:
+    """Two acquisitions appended to one file, each below the same header: the repeated
+    header line is named in a ReadingWarning, and the time starting over below it is a
+    restart of the clock: the first acquisition is read, the second named as left out."""
+    t = np.arange(rows) * 1e-3
+    x = np.round(2e-3 * np.cos(t * 40.0), 9)
+    header = "time_s,displacement_m"
+    body = [f"{float(a)!r},{float(b)!r}" for a, b in zip(t, x, strict=True)]
+    path = tmp_path / "appended.csv"
+    path.write_text("\n".join([header, *body, header, *body]) + "\n")
+    with pytest.warns(ReadingWarning, match=rf"line\(s\) {rows + 2} repeat the header"):
+        run = read_run(path, validate=False)
+    np.testing.assert_array_equal(run.time, t)
+    np.testing.assert_array_equal(run.displacement, x)
+
+
+@pytest.mark.parametrize("rows", [3000, 12000], ids=["short", "long"])
+def test_decimal_commas_with_thousands_points_read_when_the_comma_is_given(
+    tmp_path: Path, rows: int
+) -> None:
+    """A European spreadsheet's numbers grouped in thousands (``1.234,5``) read as the
+    numbers they show with ``decimal=","``; guessed, the first such cell is named with
+    the option that reads it; a point that groups no thousands is named either way."""
+    t = np.arange(rows) * 0.5  # ms, past 1 000
+    x = np.round(2500.0 * np.cos(t / 40.0), 2)  # µm, past ±1 000
+
+    def european(value: float, digits: int) -> str:
+        return f"{value:,.{digits}f}".replace(",", "_").replace(".", ",").replace("_", ".")
+
+    lines = [f"{european(a, 1)};{european(b, 2)}" for a, b in zip(t, x, strict=True)]
+    path = tmp_path / "run.csv"
+    path.write_text("Zeit [ms];Weg [µm]\n" + "\n".join(lines) + "\n", encoding="utf-8")
+    run = read_run(path, validate=False, decimal=",")
+    np.testing.assert_allclose(run.time, t * 1e-3, rtol=1e-15)
+    np.testing.assert_allclose(run.displacement, x * 1e-6, rtol=1e-15)
+    with pytest.raises(RunFormatError, match=r"'2\.500,00' is not a number \(.*--decimal , "):
+        read_run(path, validate=False)
+    lines[100] = lines[100].split(";")[0] + ";12.34,5"
+    path.write_text("Zeit [ms];Weg [µm]\n" + "\n".join(lines) + "\n", encoding="utf-8")
+    with pytest.raises(RunFormatError, match=r"line 102, column 'displacement_m': '12.34,5'"):
+        read_run(path, validate=False, decimal=",")
+
+
+def test_a_video_trackers_t_x_y_columns_are_named_with_the_columns_that_read_them(
+    tmp_path: Path,
+) -> None:
+    """Tracker's export (``mass A``, then ``t x y`` without units): the refusal names the
+    columns= that reads each coordinate, and following it reads that one."""
+    t = np.arange(200) / 30.0
+    x = np.round(0.12 * np.cos(7.5 * t), 6)
+    path = tmp_path / "tracker.txt"
+    rows = [f"{a:.6E}\t{b:.6E}\t{0.3:.6E}" for a, b in zip(t, x, strict=True)]
+    path.write_text("mass A\nt\tx\ty\n" + "\n".join(rows) + "\n")
+    along_x = ["time_s", "displacement_m", "ignore"]
+    with pytest.raises(RunFormatError, match="has no unit") as caught:
+        read_run(path, validate=False)
+    assert f"columns={along_x} if the motion is along x" in str(caught.value)
+    assert "columns=['time_s', 'ignore', 'displacement_m'] if along y" in str(caught.value)
+    run = read_run(path, columns=along_x, validate=False)
+    np.testing.assert_allclose(run.displacement, x, rtol=1e-6)

@@ -323,8 +323,11 @@ def test_channels_of_different_motions_are_refused():
 def test_a_velocity_of_opposite_sign_is_named_as_such():
     good = simulate(seed=3)
     flipped = Run(good.time, good.displacement, -good.velocity, good.metadata)
-    with pytest.raises(RecordingError, match="opposite sign"):
+    with pytest.raises(RecordingError, match="opposite sign") as caught:
         validate_run(flipped)
+    assert "scale={'velocity_m_per_s': -1} reads it" in str(caught.value)
+    fixed = Run(good.time, good.displacement, -flipped.velocity, good.metadata)
+    validate_run(fixed)  # the advice, followed, reads the run
 
 
 def _units_file(tmp_path, t_factor, x_factor, v_factor):
@@ -417,3 +420,24 @@ def test_values_far_beyond_the_stated_range_are_a_unit_not_a_clip(good):
     message = str(info.value)
     assert "larger range" not in message
     assert "scale={'displacement_m': 0.001, 'velocity_m_per_s': 0.001}" in message
+
+
+def test_nan_cells_name_every_sample_and_deleting_their_rows_reads_the_run(tmp_path):
+    """A DAQ's NaN for a missed reading: the refusal names the samples and says to
+    delete their rows; done, the run reads and its short gaps are bridged."""
+    from bayestribo.errors import GapWarning
+    from bayestribo.signal import energy_decay
+
+    good = simulate(seed=3)
+    bad = good.velocity.copy()
+    bad[[100, 300, 6100]] = np.nan  # single samples at rest
+    path = tmp_path / "nan.csv"
+    write_run(Run(good.time, good.displacement, bad, good.metadata), path)
+    with pytest.raises(RecordingError, match=r"\(samples 100, 300, 6100\).*delete its row"):
+        read_run(path)
+    keep = np.isfinite(bad)
+    write_run(Run(good.time[keep], good.displacement[keep], bad[keep], good.metadata), path)
+    run = read_run(path)
+    assert run.n_samples == good.n_samples - 3
+    with pytest.warns(GapWarning, match="3 gap"):
+        energy_decay(run.time, run.displacement, run.velocity, rig=run.rig())

@@ -365,7 +365,10 @@ _CLI_SPELLINGS = (
 
 def cli_message(message: str) -> str:
     """A reading error's message with its fixes spelled as command-line options."""
-    message = _ONE_CHANNEL.sub(lambda m: f"--channel {m[1]}={m[2].strip()}", message)
+    message = _ONE_CHANNEL.sub(
+        lambda m: f"--channel {_SHORT.get(m[1], m[1])}={m[2].strip()}", message
+    )
+    message = _CHANNEL_MAP.sub(_channel_options, message)
     for python, option in _CLI_SPELLINGS:
         if python == "columns=[...]":
             # a list of column names given in full: the option with its values
@@ -397,6 +400,15 @@ def _scale_options(match: re.Match[str]) -> str:
 
 #: ``channels={'name': source}`` with one entry, spelled as a ``--channel`` option.
 _ONE_CHANNEL = re.compile(r"channels=\{'(\w+)': '?([^,}']+)'?\}")
+
+#: ``channels={'time_s': 'rec.t', 'displacement_m': 'rec.x_mm'}``, spelled as
+#: ``--channel`` options.
+_CHANNEL_MAP = re.compile(r"channels=\{('\w+': '[^',}]+'(?:, '\w+': '[^',}]+')+)\}")
+
+
+def _channel_options(match: re.Match[str]) -> str:
+    pairs = re.findall(r"'(\w+)': '([^',}]+)'", match[1])
+    return " ".join(f"--channel {_SHORT.get(name, name)}={source}" for name, source in pairs)
 
 
 def read_run_from_args(args: argparse.Namespace, options: Any = None) -> Any:

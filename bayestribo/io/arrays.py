@@ -97,6 +97,31 @@ def _basename(name: str) -> str:
     return name.rsplit("/", 1)[-1].rsplit(".", 1)[-1]
 
 
+def _named_factor(item: NamedArray, role: str, factor: float) -> float:
+    """The factor to SI that the array's own name states for ``role`` (``x_mm`` picked
+    as the displacement: 1e-3), else ``factor``: a channel picked by its role alone
+    (``channels={'displacement_m': 'rec.x_mm'}``, ``--channel x=rec.x_mm``) is read in
+    the unit its name carries, as it is when picked by that name."""
+    try:
+        named = parse_column(_basename(item.name))
+    except ValueError:
+        return factor
+    return named[1] if named is not None and named[0] == role else factor
+
+
+def _example(arrays: list[NamedArray]) -> str:
+    """``channels={...}`` naming the file's first two vectors (one vector: it, and the
+    sample rate for its time), for messages."""
+    vectors = [a.name for a in arrays if np.size(a.values) >= 2][:2]
+    if len(vectors) == 1:
+        return (
+            f"channels={{'displacement_m': {vectors[0]!r}}} with "
+            "sample_rate_Hz=HZ (--sample-rate HZ)"
+        )
+    t, x = vectors if len(vectors) == 2 else ("t", "x")
+    return f"channels={{'time_s': {t!r}, 'displacement_m': {x!r}}}"
+
+
 def _automatic(
     arrays: list[NamedArray], where: str, kind: str
 ) -> dict[str, tuple[NamedArray, float]]:
@@ -128,7 +153,7 @@ def _automatic(
         f"no time and displacement or velocity {kind}s found by name (time_s, "
         f"displacement_m, velocity_m_per_s, or with a unit such as displacement_um){hint}; "
         f"the {kind}s are: {listing}; name them with channels={{...}}, e.g. "
-        "channels={'time_s': 't', 'displacement_m': 'x'}",
+        f"{_example(arrays)}",
         where,
     )
 
@@ -193,6 +218,8 @@ def _chosen(
                     f"{item.unit!r}, which contradicts the unit in {key!r}; name it {role!r}",
                     where,
                 )
+        elif str(key) == role:
+            factor = _named_factor(item, role, factor)
         picked[role] = (item, factor)
     if not set(_MOTION) & set(picked):
         # without a time channel the run's time comes from its sample rate (read_run)

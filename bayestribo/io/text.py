@@ -50,6 +50,7 @@ from bayestribo.io.columns import (
     split_run_tag,
 )
 from bayestribo.io.instruments import PREAMBLE_LINES, detect_export, read_export
+from bayestribo.io.repeated_header import without_repeated_header
 from bayestribo.io.run import (
     ACCELERATION_AXES,
     ACCELERATIONS,
@@ -130,9 +131,12 @@ def _parse_rows(
     names: list[str],
     keep: list[tuple[int, str]],
     where: str,
+    grouped: bool = False,
 ) -> NDArray:
     """The kept columns, row by row with Python's ``float``; the first row of another
-    width or field that is not a number is an error naming its line and column."""
+    width or field that is not a number is an error naming its line and column.
+    Numbers grouped in thousands by points beside a decimal comma (``1.234,5``) are
+    read only when the decimal comma was given (``grouped``); a guess names them."""
     data = np.empty((len(rows), len(keep)), dtype=np.float64)
     width = len(names)
     last = len(rows) - 1
@@ -155,14 +159,20 @@ def _parse_rows(
         for c, (i, name) in enumerate(keep):
             field = fields[i]
             if decimal == ",":
-                field = "x" if "." in field else field.replace(",", ".")
+                field = _with_point(field) if grouped or "." not in field else "x"
             if field == "":
                 data[r, c] = np.nan  # an empty cell: kept as missing, see _trim_missing
                 continue
             value = _as_float(field)
             if value is None:
+                hint = (
+                    " (a point grouping thousands beside decimal commas: --decimal , reads it so)"
+                    if decimal == "," and not grouped and _GROUPED.fullmatch(fields[i])
+                    else ""
+                )
                 raise RunFormatError(
-                    f"line {number}, column {name!r}: {fields[i][:40]!r} is not a number", where
+                    f"line {number}, column {name!r}: {fields[i][:40]!r} is not a number{hint}",
+                    where,
                 )
             data[r, c] = value
     return data
@@ -208,6 +218,25 @@ def decode(data: bytes, encoding: str | None, where: str, *, say: bool = True) -
         ReadingWarning,
     )
     return text
+
+
+#: A number with a decimal comma whose integer part is grouped in thousands by points
+#: (``1.234,5``, a European spreadsheet's number format).
+_GROUPED = re.compile(r"[+-]?\d{1,3}(?:\.\d{3})+,\d*(?:[eE][+-]?\d+)?")
+
+
+def _with_point(field: str) -> str:
+    """A field of a file with decimal commas, written with a decimal point.
+
+    The points of a thousands grouping (``1.234,5`` → ``1234.5``) are taken off; a
+    point anywhere else beside decimal commas is not read (``"x"``, which no reader
+    takes for a number), so the cell is named.
+    """
+    if "." in field:
+        if _GROUPED.fullmatch(field) is None:
+            return "x"
+        field = field.replace(".", "")
+    return field.replace(",", ".")
 
 
 #: What a number cut short can look like: a prefix of a decimal number.
@@ -497,15 +526,22 @@ def stated_rate(lines: Sequence[tuple[int, str]], where: str) -> StatedRate | No
     return found
 
 
-#: Delimiters a spreadsheet export may write at the end of every line (``1.0,2.5,``).
-_TRAILING = (",", ";")
+#: Delimiters a spreadsheet export may write at the end of every line (``1.0,2.5,``,
+#: ``1.0\t2.5\t``).
+_TRAILING = (",", ";", "\t")
+
+
+def _line_end(line: str, mark: str) -> str:
+    """``line`` without the blanks at its end, a tab kept when ``mark`` is one."""
+    return line.rstrip(" \r\n\f\v") if mark == "\t" else line.rstrip()
 
 
 def without_trailing_delimiter(lines: list[tuple[int, str]]) -> list[tuple[int, str]]:
     """The lines without the delimiter that ends every one of them that holds it.
 
     Spreadsheet and LabVIEW exports often end each line, the header's too, with the
-    delimiter (``"Time (s)","Position (mm)",`` then ``0.001,0.52,``): a field after it
+    delimiter (``"Time (s)","Position (mm)",`` then ``0.001,0.52,``; a tab in a
+    tab-separated export): a field after it
     is empty on every line, so it ends no field, and it is taken off. Nothing is taken
     off when a line that holds the delimiter does not end with it (a header without it
     above rows with it keeps its empty column, which is then said as one without
@@ -522,9 +558,9 @@ def without_trailing_delimiter(lines: list[tuple[int, str]]) -> list[tuple[int, 
         ``lines`` itself when nothing is taken off, else new lines.
     """
     for mark in _TRAILING:
-        holding = [line.rstrip() for _, line in lines if mark in line]
+        holding = [_line_end(line, mark) for _, line in lines if mark in line]
         if len(holding) >= 2 and all(line.endswith(mark) for line in holding):
-            return [(n, line.rstrip()[:-1] if mark in line else line) for n, line in lines]
+            return [(n, _line_end(line, mark)[:-1] if mark in line else line) for n, line in lines]
     return lines
 
 
@@ -650,6 +686,10 @@ def _header(
                 where,
             ) from None
         si = si_names(labels)
+        if si is None and "has no unit" in exc.message:
+            tracked = _coordinates_advice(labels)
+            if tracked:
+                raise RunFormatError(f"{exc.message}; {tracked}", where) from None
         if "in pixels" in exc.message:
             raise RunFormatError(f"{exc.message}; {_pixel_advice(labels)}", where) from None
         if "has no unit" not in exc.message or si is None:
@@ -667,6 +707,25 @@ def _header(
             ReadingWarning,
         )
     return names, units, count
+
+
+def _coordinates_advice(labels: Sequence[str]) -> str:
+    """How to read a video tracker's ``t, x, y`` columns without units (Tracker's
+    export): one coordinate as the displacement, the other left out; "" for other
+    labels."""
+    words = [label.strip().lower() for label in labels]
+    unique = len(set(words)) == len(words)
+    if not (unique and {"x", "y"} <= set(words) <= {"t", "x", "y"}):
+        return ""
+
+    def names(axis: str) -> list[str]:
+        roles = {"t": TIME, axis: DISPLACEMENT}
+        return [roles.get(word, IGNORE) for word in words]
+
+    return (
+        f"or name every column in file order: columns={names('x')} if the motion is "
+        f"along x, columns={names('y')} if along y, the file in s and m"
+    )
 
 
 def _pixel_advice(labels: Sequence[str]) -> str:
@@ -727,9 +786,7 @@ def _number_or_empty(field: str, decimal: str) -> bool | None:
     if field == "":
         return None
     if decimal == ",":
-        if "." in field:
-            return False  # a point beside a decimal comma: a thousands mark, not read
-        field = field.replace(",", ".")
+        field = _with_point(field)
     return _as_float(field) is not None
 
 
@@ -1374,10 +1431,11 @@ def parse_lines(
     stamped = stamped_lines(lines, delimiter, where) if columns is None else None
     if stamped is not None:
         lines = stamped.lines
+    grouped = decimal == ","
     names, units, header_lines, delimiter, decimal = _layout(
         lines, where, columns, delimiter, decimal
     )
-    rows = lines[header_lines:]
+    rows = without_repeated_header(lines[header_lines:], lines[:header_lines], where)
     if not rows:
         raise RunFormatError("the file holds a header but no data rows", where)
 
@@ -1385,7 +1443,7 @@ def parse_lines(
     width = len(names)
     data = _parse_block(rows, delimiter, width, [i for i, _ in keep], decimal)
     if data is None:
-        data = _parse_rows(rows, delimiter, decimal, names, keep, where)
+        data = _parse_rows(rows, delimiter, decimal, names, keep, where, grouped)
         data = _trim_missing(data, rows, keep, where)
 
     out: dict[str, Any] = _columns(data, keep, units, scale, where)

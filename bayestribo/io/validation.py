@@ -98,11 +98,17 @@ def _check_finite(run: Run, where: str | None) -> None:
     for name, values in run.signals.items():
         bad = ~np.isfinite(values)
         if bad.any():
-            first = int(np.flatnonzero(bad)[0])
+            samples = np.flatnonzero(bad)
+            first = int(samples[0])
+            listed = ", ".join(str(int(i)) for i in samples[:10])
+            more = ", ..." if samples.size > 10 else ""
             raise _fail(
                 f"field {name!r}: {int(bad.sum())} sample(s) are NaN or infinite, the first "
-                f"is sample {first} (counting from 0) with value {values[first]!r}; expected "
-                "finite numbers (gaps must not be filled in the file: cut the run instead)",
+                f"is sample {first} (counting from 0) with value {values[first]!r} (samples "
+                f"{listed}{more}); expected finite numbers: a reading the instrument missed "
+                "is a dropped "
+                "sample, so delete its row from the file (a short gap it leaves is bridged, "
+                "with a GapWarning), or cut the run",
                 where,
             )
 

@@ -389,7 +389,14 @@ def _unit_hint(gain: float, run: Recording) -> str:
     frequency wrong.
     """
     if gain < 0:
-        return "the velocity has the opposite sign of the rate of change of the displacement"
+        flipped = (
+            "the velocity has the opposite sign of the rate of change of the displacement "
+            "(one sensor counts the other way): scale={'velocity_m_per_s': -1} reads it "
+            "(or the displacement's -1: the friction and damping are the same either way)"
+        )
+        if 0.5 <= -gain <= 2.0:
+            return flipped
+        return f"{flipped}; then {_unit_hint(-gain, run)}"
     motion = _motion(run)
     metadata = _metadata(run)
     readings = []
