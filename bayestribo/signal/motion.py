@@ -403,10 +403,7 @@ def motion_span(
         np.r_[starts[:first] + size <= head_end, starts[last + 1 :] >= tail_start]
     ]
     if quiet_blocks.size == 0:
-        # no block lies wholly in a rest (rests shorter than two periods, as on a slow
-        # rig): each block left out of the motion holds some of it, the first and the
-        # last swings, so the quietest of them bounds the noise, not their median
-        quiet_blocks = np.sort(var1[~moving])[:1]
+        quiet_blocks = var1[~moving]
     sigma = float(math.sqrt(np.median(quiet_blocks))) if quiet_blocks.size else 0.0
     # a noise-free record: excursions are measured against rounding
     sigma = max(sigma, 1e-8 * float(np.max(np.abs(v - np.median(v)))))
