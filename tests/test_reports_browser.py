@@ -41,8 +41,15 @@ pytestmark = [
 ]
 
 
-def test_the_report_reads_offline_in_a_browser(single_run_report):
-    page = inspect_report(single_run_report.html)
+@pytest.fixture(scope="module")
+def single_run_page(single_run_report):
+    """What Chromium shows of the shared single-run report (one inspection, read by the
+    tests of its images and of its text)."""
+    return inspect_report(single_run_report.html)
+
+
+def test_the_report_reads_offline_in_a_browser(single_run_page):
+    page = single_run_page
     assert page.images > 0 and page.all_images_loaded, page.broken
     assert page.figures >= 8  # signals ... peak residuals, none left out on this run
     assert page.equations >= 5  # the equation of motion and the symbols in the text
@@ -103,8 +110,8 @@ def _answer(report) -> str:
     return page[heads[0] : heads[1]]
 
 
-def test_the_single_run_report_reads_as_text_for_people(single_run_report):
-    page = inspect_report(single_run_report.html)
+def test_the_single_run_report_reads_as_text_for_people(single_run_report, single_run_page):
+    page = single_run_page
     _clean(page)
     assert page.text_dumps == 0  # the fit as tables, not a monospace dump
     text = single_run_report.html.read_text(encoding="utf-8")
