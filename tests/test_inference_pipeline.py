@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 
 import numpy as np
@@ -46,9 +47,14 @@ def test_fit_is_the_composition_of_the_four_steps(run):
     assert whole.idata.posterior.attrs["seed"] == steps.idata.posterior.attrs["seed"] == 4
 
 
+def _no_refit(*_):
+    raise AssertionError("a nested law refitted on a run with friction and drag")
+
+
 def test_fit_is_the_composition_of_the_named_stages(run):
-    # prepare, build, start, sample, check, summarise: each stage's typed output is the
-    # next one's input, and together they are fit to the bit
+    # prepare, build, start, sample, check, the boundaries, summarise: each stage's typed
+    # output is the next one's input, and together they are fit to the bit
+    from bayestribo.inference.boundary import boundary_mixture
     from bayestribo.inference.chains import sample_from
     from bayestribo.inference.checks import FitChecks, check
     from bayestribo.inference.start import Start, find_start
@@ -64,7 +70,14 @@ def test_fit_is_the_composition_of_the_named_stages(run):
         start = find_start(posterior, prepared.decay)
         sampled = sample_from(start, settings=settings, seed=rng)
         checks = check(prepared, sampled)
+        # the default law's boundaries (no friction, no viscous damping): improbable on
+        # this run, so nothing is refitted and the draws are the sample's, recorded
+        mixed, boundary = boundary_mixture(checks.sampled, _no_refit, _no_refit)
+        assert mixed is checks.sampled and boundary is not None and not boundary["mixed"]
         summarised = summary(prepared, sampled, seed=rng, recorded_seed=4, checks=checks)
+        summarised = dataclasses.replace(
+            summarised, record=summarised.record.replace(boundary=boundary)
+        )
     assert isinstance(start, Start) and isinstance(checks, FitChecks)
     assert isinstance(summarised, Summary)
     assert sampled.posterior is start.posterior  # the second pass's, as sampled
