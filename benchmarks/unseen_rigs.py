@@ -193,7 +193,6 @@ def c_phyphox(d: Path) -> Case:
         nx=1e-9,
         nv=1e-9,
     )
-    w = 2 * np.pi * r["p"]["f"]
     a = np.gradient(r["v"], r["t"])
     rng = np.random.default_rng(12)
     ax = a + rng.normal(0, 0.02, a.size)
@@ -217,7 +216,6 @@ def c_phyphox(d: Path) -> Case:
     ]
     p.write_text(head + "\n" + "\n".join(rows) + "\n")
     sidecar(p, r["meta"])
-    del w
     return {
         "file": p,
         "args": [],
