@@ -225,8 +225,14 @@ class PiLikelihood:
         """Model increments M_j, shape (n, m)."""
         pi = self.model_pi(params)
         inc = np.empty_like(pi)
-        inc[..., :-1] = pi[..., :-1] - pi[..., 1:]
+        endless = np.isposinf(pi).any(axis=-1)  # no dissipation: the motion never ends
+        with np.errstate(invalid="ignore"):
+            inc[..., :-1] = pi[..., :-1] - pi[..., 1:]
         inc[..., -1] = pi[..., -1]
+        if np.any(endless):
+            # Π is infinite where nothing dissipates (ζ = μ_k = 0 on a closed form): no
+            # decay is made, so the increments are infinite, not inf - inf
+            inc[endless] = np.inf
         return inc
 
     @cached_property
@@ -391,15 +397,19 @@ class PiLikelihood:
         ``discrepancy`` is the white discrepancy's scale s and ``shape`` the shape
         discrepancy's s_c (each (n, 1), or None without that term). A row where a law
         without a closed form cannot move (an overdamped arc: its Π is NaN) is outside
-        the law's domain and has log-likelihood −inf; with the closed forms a NaN
-        stays NaN (a bug or a broken input, which the posterior reports).
+        the law's domain and has log-likelihood −inf, as has a row of a closed form that
+        dissipates nothing (ζ = μ_k = 0: its Π infinite, no decay made); with the closed
+        forms a NaN stays NaN (a bug or a broken input, which the posterior reports).
         """
         resid = self._residuals(params)
-        outside = None
-        if not self.law.closed_form:
+        if self.law.closed_form:
+            # a law that dissipates nothing makes no decay (its increments infinite:
+            # :meth:`model_increments`): outside the data's support, not a NaN
+            outside = np.any(np.isinf(resid), axis=-1)
+        else:
             outside = ~np.all(np.isfinite(resid), axis=-1)
-            if np.any(outside):
-                resid = np.where(outside[:, None], 0.0, resid)
+        if np.any(outside):
+            resid = np.where(outside[:, None], 0.0, resid)
         var = self.variance(discrepancy)
         _, explained, logdet_a = self._solve(resid, var, shape)
         if self.whitening is None:
@@ -410,7 +420,7 @@ class PiLikelihood:
             chi2 = np.sum(z * z, axis=-1) - explained
             norm = np.sum(np.log(var) + _LOG_2PI, axis=-1) + self.log_det_correlation
         out = -0.5 * (chi2 + norm + logdet_a + self._log_prior_det(shape))
-        if outside is not None and np.any(outside):
+        if np.any(outside):
             out = np.where(outside, -np.inf, out)
         return out
 
