@@ -263,16 +263,21 @@ def test_nan_and_nonstopping_points_are_treated_as_the_reference_treats_them(dat
     row = good.copy()
     row[3] = np.nan
     assert np.isnan(post(row[None])[0]) and np.isnan(post.reference(row[None])[0])
-    # ζ = μ_k = 0 is in the support but never stops: NaN likelihood, an error naming
-    # the parameters on both paths.
+    # ζ = μ_k = 0 is in the support but never stops (Π infinite): no decay is made, so
+    # no likelihood, −inf on both paths (it used to be an inf − inf NaN, raised as a
+    # bug, which crashed the optimiser's check of its bounds), the good row unchanged.
     row = good.copy()
     row[:2] = 0.0
+    both = np.vstack([good, row])
     for f in (post, post.reference):
-        with (
-            np.errstate(invalid="ignore"),
-            pytest.raises(NaNLogProbabilityError, match=r"zeta=0\.0, mu_k=0\.0"),
-        ):
-            f(np.vstack([good, row]))
+        with np.errstate(invalid="ignore"):
+            lp = f(both)
+        assert np.isfinite(lp[0]) and lp[1] == -np.inf
+        assert lp[0] == pytest.approx(post.reference(good[None])[0], rel=1e-10)
+    # a NaN of the likelihood itself still names the parameters
+    broken = dataclasses.replace(data, increments=np.full_like(data.increments, np.nan))
+    with pytest.raises(NaNLogProbabilityError, match=r"zeta=0\.0236"):
+        build_posterior(broken).reference(good[None])
 
 
 def test_the_averaged_model_outside_its_domain_raises_the_reference_error(data):
