@@ -76,6 +76,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bayestribo.errors import RecordingError
+from bayestribo.signal.difference_noise import difference_noise
 from bayestribo.signal.period import sample_step
 
 __all__ = [
@@ -398,13 +399,33 @@ def motion_span(
     quiet = np.zeros(n, bool)
     head_end = int(starts[first])  # samples before the first moving block
     tail_start = int(starts[last]) + size  # samples after the last moving block
-    quiet_blocks = np.r_[var1[:first], var1[last + 1 :]]
-    quiet_blocks = quiet_blocks[
-        np.r_[starts[:first] + size <= head_end, starts[last + 1 :] >= tail_start]
-    ]
-    if quiet_blocks.size == 0:
-        quiet_blocks = var1[~moving]
+    # A velocity recorded beside the displacement (neither derived from it, whose noise
+    # is smoothed, nor alone, whose decay may fade instead of stopping): its rests may
+    # be shorter than a block (a slow rig's), and are found so.
+    recorded = displacement is None and not velocity_alone
+    head_quiet = np.flatnonzero(starts[:first] + size <= head_end)
+    tail_quiet = last + 1 + np.flatnonzero(starts[last + 1 :] >= tail_start)
+    # the quiet block next to the motion holds the release's first (the stop's last)
+    # instants where the block beside it, half of it motion, fell short of the
+    # coherence (a rest of about two periods): no rest then
+    if recorded and head_quiet.size and _holds_motion(t, v, int(starts[head_quiet[-1]]), size):
+        head_quiet = head_quiet[:-1]
+    if recorded and tail_quiet.size and _holds_motion(t, v, int(starts[tail_quiet[0]]), size):
+        tail_quiet = tail_quiet[1:]
+    quiet_blocks = var1[np.r_[head_quiet, tail_quiet]]
     sigma = float(math.sqrt(np.median(quiet_blocks))) if quiet_blocks.size else 0.0
+    if quiet_blocks.size == 0 and not recorded:
+        sigma = float(math.sqrt(np.median(var1[~moving]))) if (~moving).any() else 0.0
+    elif quiet_blocks.size == 0:
+        # no block lies wholly in a rest (rests shorter than two periods): the blocks
+        # left out of the motion hold its first and last swings, and their median is
+        # the motion's size, not the noise's; a white noise is read off the second
+        # differences where the record holds many samples a period
+        left_out = var1[~moving]
+        sigma = float(math.sqrt(np.median(left_out))) if left_out.size else 0.0
+        white = difference_noise(v, period / dt)
+        if white is not None:
+            sigma = min(sigma, white) if sigma > 0.0 else white
     # a noise-free record: excursions are measured against rounding
     sigma = max(sigma, 1e-8 * float(np.max(np.abs(v - np.median(v)))))
     level_cut = threshold * sigma
@@ -466,6 +487,21 @@ def motion_span(
         if stop_index is not None:
             rest = stop_index + 1 if fade_time is None else tail_start
             quiet[rest + max(1, size // 8) :] = True
+    elif moving[-1] and recorded:
+        # a rest after the stop shorter than a block (the last block holds the last
+        # swings): a last eighth of a period within the threshold of its median, and
+        # after the last excursion beyond it no more spread than the noise's (a
+        # recorded velocity's: a derivative's smoothed noise spreads less than its σ
+        # at two periods, and a decay that fades would be taken for a stop)
+        level = float(np.median(v[n - fit_len :]))
+        out = np.flatnonzero(np.abs(v[int(starts[last]) :] - level) > level_cut)
+        if out.size:
+            i = int(starts[last]) + int(out[-1])
+            if n - 1 - i >= fit_len and _still(v[i + 1 + skip :], sigma):
+                stop_time = _root(t, v, level, max(0, i + 1 - fit_len), i + 1 - skip, i)
+                if stop_time is None or not t[max(0, i - skip)] <= stop_time <= t[i + skip]:
+                    stop_time = float(t[i])
+                stop_index = int(np.searchsorted(t, stop_time, side="right")) - 1
     # Release: refined near the first moving block only.
     release_index = release_time = None
     out = np.zeros(0, int)
@@ -484,6 +520,15 @@ def motion_span(
             # a threshold beyond half the first swings (a coarse velocity whose rest
             # toggles, its σ near half a step) is crossed late, if at all: the
             # displacement's levels place the release (below)
+            out = out[:0]
+    elif moving[0] and recorded:
+        # a rest before the release shorter than a block (the first block holds the
+        # first swings): a first eighth of a period within the threshold of its median,
+        # and before the first excursion beyond it no more spread than the noise's
+        level = float(np.median(v[:fit_len]))
+        base = 0
+        out = np.flatnonzero(np.abs(v[:hi] - level) > level_cut)
+        if out.size and (out[0] < fit_len or not _still(v[: int(out[0]) - skip], sigma)):
             out = out[:0]
     elif velocity_alone and moving[0]:
         # a rest shorter than a period before the release (a velocity alone, whose
@@ -526,6 +571,35 @@ def motion_span(
         block=size,
         fade_time=fade_time,
     )
+
+
+#: Largest ratio of the standard deviations of a quiet block's quarters (each about its
+#: line), the largest to their median, for the block to be rest: a quarter holding a
+#: few hundredths of a second of a swing has ten times the others'.
+QUARTER_SPREAD = 4.0
+
+
+def _holds_motion(t: NDArray, v: NDArray, start: int, size: int) -> bool:
+    """Whether the block of ``size`` samples from ``start`` holds motion at one end: one
+    of its quarters spreads beyond :data:`QUARTER_SPREAD` times their median."""
+    quarter = size // 4
+    if quarter < 4:
+        return False
+    var1, _ = _block_fits(t, v, start + quarter * np.arange(4), quarter, 0.0)
+    return bool(np.max(var1) > QUARTER_SPREAD**2 * np.median(var1))
+
+
+#: Largest standard deviation, in rest noise standard deviations, of a stretch shorter
+#: than a block taken for rest (white noise's over 40 samples exceeds 1.5 σ with
+#: probability below 1e-4; an oscillation of 1.5 σ in amplitude has 1.35 σ).
+REST_SPREAD = 1.5
+
+
+def _still(segment: NDArray, sigma: float) -> bool:
+    """Whether ``segment`` (an eighth of a period at least, minus the samples next to a
+    crossing) spreads about its mean by at most :data:`REST_SPREAD` noise σ: a rest,
+    not an oscillation under the threshold."""
+    return segment.size >= 8 and float(np.std(segment)) <= REST_SPREAD * sigma
 
 
 def _few_levels(x: ArrayLike | None, most: int = 0) -> bool:
