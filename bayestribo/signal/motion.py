@@ -502,6 +502,7 @@ def motion_span(
                 if stop_time is None or not t[max(0, i - skip)] <= stop_time <= t[i + skip]:
                     stop_time = float(t[i])
                 stop_index = int(np.searchsorted(t, stop_time, side="right")) - 1
+                quiet[stop_index + 1 + max(1, size // 8) :] = True
     # Release: refined near the first moving block only.
     release_index = release_time = None
     out = np.zeros(0, int)
