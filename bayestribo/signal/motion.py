@@ -53,6 +53,18 @@ the rig's frequency**.
   shorter than a block, the first block then moving: a first quarter period within the
   threshold of its median is rest, and the release is its first excursion beyond it
   (else the integral's wander at rest gave a turning point).
+* **A slow rig's rests**, shorter than a block (a 1 Hz spring held a second before its
+  release): with a velocity recorded beside the displacement, a quiet block next to the
+  motion whose quarters spread unevenly (one of them beyond :data:`QUARTER_SPREAD`
+  times their median: the release's first instants) is not rest; where no block is
+  left wholly in a rest, the noise is read off the velocity's second differences
+  (:func:`bayestribo.signal.difference_noise.difference_noise`: white noise, many
+  samples a period), not the median of the blocks left out of the motion, which hold
+  its first and last swings; and where the first (last) block moves, the release
+  (stop) is the first (last) excursion beyond the threshold when the first (last)
+  eighth of a period lies within it and the rest beside it spreads by at most
+  :data:`REST_SPREAD` σ. Before, such records were refused ("found 0 usable extrema")
+  or taken to start or end in motion (a mass stuck off centre counted as moving).
 * The blocks' sinusoid is at the frequency measured from the record's own spectrum
   (a peak of the spectrum of its first difference: the one whose oscillation is the
   strongest in the signal itself, so that a line of the noise that the difference
