@@ -35,13 +35,13 @@ def test_the_loss_share_transform_inverts_and_its_jacobian_is_the_determinant():
     rng = np.random.default_rng(1)
     transform = LossShare(reference=0.7, lowest=0.1)
     assert isinstance(transform, SamplingTransform)
-    theta = _prior_box(rng, 40)[:, [0, 2, 3]]
+    theta = _prior_box(rng, 40)[:, :4]
     u = transform.from_law(theta)
     np.testing.assert_allclose(transform.to_law(u), theta, rtol=1e-12, atol=1e-15)
     for row in u[:8]:
-        jac = np.empty((3, 3))
-        for j in range(3):
-            step = np.zeros(3)
+        jac = np.empty((4, 4))
+        for j in range(4):
+            step = np.zeros(4)
             step[j] = 1e-6 * max(1.0, abs(row[j]))
             up = transform.to_law((row + step)[None])[0]
             down = transform.to_law((row - step)[None])[0]
@@ -52,10 +52,10 @@ def test_the_loss_share_transform_inverts_and_its_jacobian_is_the_determinant():
 
 def test_alpha_on_its_bound_maps_to_finite_coordinates():
     transform = LossShare(reference=1.0, lowest=0.2)
-    u = transform.from_law(np.array([[0.05, 0.1, 0.0]]))
+    u = transform.from_law(np.array([[0.05, 2.0, 0.1, 0.0]]))
     assert np.all(np.isfinite(u)) and np.isfinite(transform.log_jacobian(u)[0])
     # a log α so low that 1 - ρ^α underflows is outside the prior, not a NaN
-    far = transform.to_law(np.array([[0.5, 1e-3, -800.0]]))
+    far = transform.to_law(np.array([[0.5, 0.1, 1e-3, -800.0]]))
     assert not np.any(np.isnan(far)) and not np.all(np.isfinite(far))
 
 
@@ -76,7 +76,8 @@ def test_a_law_holding_the_terms_declares_the_transform_where_they_are_sampled()
 class _LShaped:
     """A stand-in posterior on the default priors' box of ``coulomb+power``: the loss
     per cycle at A_r = 1 measured to 0.02, the drag's departure from a friction
-    (ζ_α(1 − 0.3^α), another ρ than the transform's) to 0.003 of 0: an L in (ζ_α, α)."""
+    (ζ_α(1 − 0.3^α), another ρ than the transform's) to 0.003 of 0: an L in (ζ_α, α);
+    the static friction μ_k (μ_s/μ_k) to 0.02 of 0.2."""
 
     names = NAMES
 
@@ -93,6 +94,7 @@ class _LShaped:
             -0.5 * ((loss - 0.8) / 0.02) ** 2
             - 0.5 * (departure / 0.003) ** 2
             - 0.5 * ((y0 - 0.2) / 0.1) ** 2
+            - 0.5 * ((mu_k * ratio - 0.2) / 0.02) ** 2
         )
         return np.where(inside, lp, -np.inf)
 
@@ -101,13 +103,15 @@ def _reference(target: _LShaped, rng: np.random.Generator) -> tuple[np.ndarray, 
     """Draws and their normalised weights under ``target``: ζ_α, α and μ_s/μ_k from
     the prior, y0 from its Gaussian and μ_k from the loss's (both exact factors of the
     density on the box, within it), weighted by the rest: the departure's factor and
-    the box."""
+    the box and the static friction's."""
     n = 1_500_000
     draws = _prior_box(rng, n)
     draws[:, 4] = rng.normal(0.2, 0.1, n)
     draws[:, 0] = (rng.normal(0.8, 0.02, n) - 4.0 * math.pi * draws[:, 2]) / 8.0
     departure = draws[:, 2] * -np.expm1(draws[:, 3] * math.log(0.3))
-    w = np.where(np.isfinite(target(draws)), np.exp(-0.5 * (departure / 0.003) ** 2), 0.0)
+    static = draws[:, 0] * draws[:, 1]
+    factor = -0.5 * (departure / 0.003) ** 2 - 0.5 * ((static - 0.2) / 0.02) ** 2
+    w = np.where(np.isfinite(target(draws)), np.exp(factor), 0.0)
     return draws, w / w.sum()
 
 

@@ -12,10 +12,14 @@ transform (:mod:`bayestribo.model.laws.transforms`) samples
   much the drag's share of the force changes over the record's amplitudes (the
   drag's ΔE(A)/A goes as (A/A_r)^α, friction's is constant), which the record
   measures whatever α is; the two arms of the L (ζ_α ~ 0, and α ~ 0) are both d ~ 0;
-* a = ln α, so that α, spread over decades where d ~ 0, is spread evenly.
+* a = ln α, so that α, spread over decades where d ~ 0, is spread evenly;
+* μ_s = μ_k (μ_s/μ_k): the static friction, which the record's end of motion
+  measures, where μ_s/μ_k trades against μ_k as the drag at α ~ 0 takes a share of
+  the kinetic friction.
 
-Then θ = (μ_k, ζ_α, α) = (A_r(λ − 4πζ_α)/8, d/h(α), e^a); ∂θ/∂u is triangular and
-log |det ∂θ/∂u| = ln(A_r/8) − ln h(α) + a.
+Then θ = (μ_k, μ_s/μ_k, ζ_α, α) = (A_r(λ − 4πζ_α)/8, μ_s/μ_k, d/h(α), e^a); ∂θ/∂u is
+triangular in the order (α, ζ_α, μ_k, μ_s/μ_k) against (a, d, λ, μ_s), and
+log |det ∂θ/∂u| = ln(A_r/8) − ln h(α) + a − ln μ_k.
 """
 
 from __future__ import annotations
@@ -52,8 +56,8 @@ class LossShare:
 
     reference: float
     lowest: float
-    law_names: tuple[str, ...] = ("mu_k", "zeta_alpha", "alpha")
-    names: tuple[str, ...] = ("loss_per_cycle", "drag_shape", "log_alpha")
+    law_names: tuple[str, ...] = ("mu_k", "mu_s_ratio", "zeta_alpha", "alpha")
+    names: tuple[str, ...] = ("loss_per_cycle", "static_friction", "drag_shape", "log_alpha")
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.reference) and self.reference > 0.0):
@@ -70,32 +74,36 @@ class LossShare:
         return -np.expm1(alpha * self.log_rho)
 
     def to_law(self, u: NDArray) -> NDArray:
-        """(μ_k, ζ_α, α) of rows ``u`` = (λ, d, ln α), shape (n, 3)."""
+        """(μ_k, μ_s/μ_k, ζ_α, α) of rows ``u`` = (λ, μ_s, d, ln α), shape (n, 4)."""
         u = np.atleast_2d(np.asarray(u, dtype=float))
-        loss, shape, log_alpha = u[:, 0], u[:, 1], u[:, 2]
+        loss, static, shape, log_alpha = u.T
         with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
             alpha = np.exp(log_alpha)
             h = self._shape(alpha)
             # α so small that h underflows: ζ_α is undefined, the row outside the prior
             zeta = np.where(h > 0.0, shape / np.where(h > 0.0, h, 1.0), np.inf)
             mu_k = self.reference * (loss - 4.0 * math.pi * zeta) / 8.0
-        return np.column_stack([mu_k, zeta, alpha])
+            # no kinetic friction: μ_s/μ_k undefined, the row outside the prior
+            ratio = np.where(mu_k > 0.0, static / np.where(mu_k > 0.0, mu_k, 1.0), np.inf)
+        return np.column_stack([mu_k, ratio, zeta, alpha])
 
     def from_law(self, theta: NDArray) -> NDArray:
-        """(λ, d, ln α) of rows ``theta`` = (μ_k, ζ_α, α), shape (n, 3); α below
-        :data:`ALPHA_FLOOR` is taken at it."""
+        """(λ, μ_s, d, ln α) of rows ``theta`` = (μ_k, μ_s/μ_k, ζ_α, α), shape (n, 4);
+        α below :data:`ALPHA_FLOOR` is taken at it."""
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
-        mu_k, zeta, alpha = theta[:, 0], theta[:, 1], np.maximum(theta[:, 2], ALPHA_FLOOR)
+        mu_k, ratio, zeta = theta[:, 0], theta[:, 1], theta[:, 2]
+        alpha = np.maximum(theta[:, 3], ALPHA_FLOOR)
         loss = 8.0 * mu_k / self.reference + 4.0 * math.pi * zeta
-        return np.column_stack([loss, zeta * self._shape(alpha), np.log(alpha)])
+        return np.column_stack([loss, mu_k * ratio, zeta * self._shape(alpha), np.log(alpha)])
 
     def log_jacobian(self, u: NDArray) -> NDArray:
-        """ln |det ∂(μ_k, ζ_α, α)/∂(λ, d, ln α)| = ln(A_r/8) − ln h(α) + ln α, shape (n,)."""
+        """ln |det ∂θ/∂u| = ln(A_r/8) − ln h(α) + ln α − ln μ_k, shape (n,)."""
         u = np.atleast_2d(np.asarray(u, dtype=float))
-        log_alpha = u[:, 2]
+        mu_k = self.to_law(u)[:, 0]
+        log_alpha = u[:, 3]
         with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
             h = self._shape(np.exp(log_alpha))
-            return math.log(self.reference / 8.0) - np.log(h) + log_alpha
+            return math.log(self.reference / 8.0) - np.log(h) + log_alpha - np.log(mu_k)
 
 
 register_transform(("coulomb", "power"), LossShare)
