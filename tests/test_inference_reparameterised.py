@@ -177,3 +177,70 @@ def test_the_lowest_amplitude_is_read_from_the_increments():
         )
     )
     assert lowest_amplitude(posterior) == pytest.approx(amplitude[-1], rel=1e-12)
+
+
+class _Posterior:
+    """A stand-in posterior of a law on the box of ``_LShaped`` (its density)."""
+
+    def __init__(self, law: str, names: tuple[str, ...]):
+        self.law, self.names = get_law(law), names
+        tau = np.linspace(0.0, 10.0, 11)
+        data = SimpleNamespace(tau_grid=tau, increments=np.exp(-0.1 * tau[:-1]))
+        self.likelihood = SimpleNamespace(reference_amplitude=1.0, data=data)
+
+    def __call__(self, theta):
+        return _LShaped()(theta) if self.names == NAMES else np.zeros(len(np.atleast_2d(theta)))
+
+
+@pytest.mark.parametrize("law", ["coulomb+power", "viscous+coulomb"])
+def test_the_exact_sampler_runs_in_the_laws_coordinates_and_reports_its_own(monkeypatch, law):
+    from bayestribo.inference import chains
+    from bayestribo.inference.sampling import SamplerRun
+
+    names = NAMES if law == "coulomb+power" else ("zeta", "mu_k", "mu_s_ratio", "y0")
+    posterior = _Posterior(law, names)
+    rng = np.random.default_rng(4)
+    seen = {}
+
+    def fake_run(log_prob, initial, settings, *, seed, progress=False, unidentified=None):
+        seen["log_prob"], seen["initial"] = log_prob, initial
+        draws = initial[:, :8]
+        return SamplerRun(
+            chains=draws,
+            log_prob=np.asarray(log_prob(draws.reshape(-1, draws.shape[-1]))).reshape(2, 8),
+            autocorr_time=np.arange(1.0, draws.shape[-1] + 1),
+            n_steps=100,
+            burn=10,
+            thin=1,
+            acceptance_fraction=0.3,
+            ess=np.full(draws.shape[-1], 1000.0),
+            rhat=np.ones(draws.shape[-1]),
+            converged=True,
+            names=tuple(log_prob.names),
+        )
+
+    monkeypatch.setattr(chains, "run_ensembles", fake_run)
+    ref, weights = _reference(_LShaped(), rng)
+    walkers = ref[rng.choice(ref.shape[0], size=32, p=weights)].reshape(2, 16, -1)
+    if law != "coulomb+power":
+        walkers = walkers[..., [2, 0, 1, 4]]
+    settings = SamplerSettings(n_walkers=16, n_ensembles=2)
+    run = chains._exact_run(posterior, walkers, settings, 0, False, rng)
+    assert run.names == names
+    if law == "coulomb+power":
+        assert isinstance(seen["log_prob"], Reparameterised)
+        assert list(seen["log_prob"].names) == [
+            "loss_per_cycle",
+            "static_friction",
+            "drag_shape",
+            "log_alpha",
+            "y0",
+        ]
+        # the draws are the walkers it started from, in the law's own parameters again
+        np.testing.assert_allclose(run.chains, walkers[:, :8], rtol=1e-10, atol=1e-14)
+        np.testing.assert_allclose(run.log_prob.ravel(), posterior(run.chains.reshape(-1, 5)))
+        # τ of each replaced parameter the longest of the transform's coordinates
+        assert np.all(run.autocorr_time[:4] == 4.0) and run.autocorr_time[4] == 5.0
+    else:
+        assert seen["log_prob"] is posterior
+        np.testing.assert_array_equal(run.chains, walkers[:, :8])
