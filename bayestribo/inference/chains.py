@@ -31,6 +31,7 @@ from bayestribo.inference.correction import (
 )
 from bayestribo.inference.identifiability import unidentified_reasons
 from bayestribo.inference.posterior import Posterior
+from bayestribo.inference.reparameterised import Reparameterised, reparameterised
 from bayestribo.inference.sampling import SamplerRun, SamplerSettings, run_ensembles
 from bayestribo.inference.start import Start, find_start, initial_walkers
 from bayestribo.inference.surrogate import (
@@ -147,16 +148,7 @@ def sample_from(
                 posterior, theta, cov, ratio_range, settings.n_ensembles, settings.n_walkers, rng
             )
     if run is None:
-        # -- a failure inside sampling is a reported non-convergence (inference/modes.py) --
-        run = run_or_failure(
-            partial(run_ensembles, unidentified=_unidentified(posterior)),
-            posterior,
-            walkers,
-            settings,
-            seed=seed_of_run,
-            progress=progress,
-        )
-        # -- end of the failure guard --
+        run = _exact_run(posterior, walkers, settings, seed_of_run, progress, rng)
     # The optimiser can stop short of the optimum on the ridge of a law that misfits
     # (HarmOsc3 under viscous+coulomb+quadratic: χ² 228590 at its optimum, 8332 where
     # the walkers went); the best point the walkers visited then stands for the MAP
@@ -167,6 +159,42 @@ def sample_from(
         if posterior(point[None])[0] > posterior(theta[None])[0]:
             theta = point
     return Sampled(posterior, theta, run, settings, checked, target, pointwise)
+
+
+def _exact_run(
+    posterior: Posterior,
+    walkers: NDArray,
+    settings: SamplerSettings,
+    seed: int,
+    progress: bool,
+    rng: np.random.Generator,
+) -> SamplerRun:
+    """The exact posterior sampled from ``walkers``: in its law's sampling coordinates
+    where the law declares them (:mod:`bayestribo.inference.reparameterised`; the run
+    mapped back to the law's own parameters), else in its own."""
+    unseen = _unidentified(posterior)
+    sampled: Posterior | Reparameterised | None = reparameterised(posterior)
+    if sampled is None:
+        sampled, start = posterior, walkers
+    else:
+        start = sampled.initial(walkers, rng)
+        to_theta = sampled.to_theta
+        law_unseen = unseen
+
+        def unseen(draws: NDArray) -> list[str]:
+            return law_unseen(to_theta(draws))
+
+    # -- a failure inside sampling is a reported non-convergence (inference/modes.py) --
+    run = run_or_failure(
+        partial(run_ensembles, unidentified=unseen),
+        sampled,
+        start,
+        settings,
+        seed=seed,
+        progress=progress,
+    )
+    # -- end of the failure guard --
+    return run if sampled is posterior else sampled.law_run(run)
 
 
 def _ridge_run(run: SamplerRun, checked: SurrogateCheck) -> SamplerRun:

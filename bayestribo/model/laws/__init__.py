@@ -22,6 +22,9 @@ from bayestribo.model.laws import quadratic  # noqa: F401  isort: skip
 from bayestribo.model.laws import power  # noqa: F401  isort: skip
 from bayestribo.model.laws import hysteretic  # noqa: F401  isort: skip
 from bayestribo.model.laws import cubic  # noqa: F401  isort: skip
+
+# the sampling transforms of sets of terms (model/laws/transforms.py)
+from bayestribo.model.laws import loss_share  # noqa: F401  isort: skip
 from bayestribo.model.laws.base import (
     TERMS,
     Parameter,

@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from bayestribo.model.laws.base import TERMS, Parameter, PhysicalScale, Term, get_term
 from bayestribo.model.laws.integrator import DEFAULT_STEPS, make_integrator
+from bayestribo.model.laws.transforms import SamplingTransform, transform_for
 
 if TYPE_CHECKING:
     from bayestribo.model.restoring.base import RestoringKernel
@@ -151,6 +152,28 @@ class Law:
     def with_restoring(self, restoring: RestoringKernel | None) -> Law:
         """The same law on another restoring force (None: the linear spring)."""
         return self if restoring == self.restoring else replace(self, restoring=restoring)
+
+    def sampling_transform(
+        self, sampled: Sequence[str], reference: float, lowest: float
+    ) -> SamplingTransform | None:
+        """The coordinates this law's posterior is sampled in, or None (its own).
+
+        Parameters
+        ----------
+        sampled : sequence of str
+            The sampled coordinates' names (a transform applies where every
+            parameter it replaces is sampled).
+        reference, lowest : float
+            The reference amplitude of the law's parameters and the record's smallest
+            amplitude (dimensionless).
+
+        Returns
+        -------
+        SamplingTransform or None
+            The registered transform of a set of this law's terms
+            (:mod:`bayestribo.model.laws.transforms`).
+        """
+        return transform_for(self.term_names, sampled, reference, lowest)
 
     @property
     def closed_form(self) -> bool:
