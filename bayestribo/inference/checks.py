@@ -36,6 +36,7 @@ from bayestribo.inference.modes import ModeReport, mode_check
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.preparation import matched_law_times
 from bayestribo.inference.priors import piled_on_bounds
+from bayestribo.inference.restoring_choice import arm_advice, simple_pendulum_arm
 from bayestribo.inference.types import MISFIT_P, PreparedRun, Sampled
 from bayestribo.io.run import Run
 from bayestribo.model.restoring import get_restoring
@@ -167,7 +168,10 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
     found = misfit(posterior, sampled.theta_map)
     shape = shape_departure(posterior, sampled.theta_map)
     half_cycles = int(prepared.decay.peaks.value.size) - 1
-    _warn_misfit(name, found, shape, discrepancy, posterior.law.name, compared, half_cycles)
+    arm = _simple_pendulum_arm(prepared)
+    _warn_misfit(
+        name, found, shape, discrepancy, posterior.law.name, compared, half_cycles, arm=arm
+    )
     flat = run.chains.reshape(-1, run.chains.shape[-1])
     at_bound = piled_on_bounds(flat, posterior.priors)
     for entry in at_bound:
@@ -198,6 +202,7 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
         restoring=posterior.law.restoring,
         chosen=prepared.restoring_choice is not None,
         constant_period=posterior.law.closed_form,
+        arm=arm,
     )
     return FitChecks(
         sampled,
@@ -340,6 +345,7 @@ def _warn_frequency_trend(
     restoring: Any = None,
     chosen: bool = False,
     constant_period: bool = False,
+    arm: float | None = None,
 ) -> None:
     """Say when the frequency is not constant along the decay beyond the law's own
     change (the nuisance that carries it is in the intervals); ``pendulum``: the change
@@ -353,7 +359,9 @@ def _warn_frequency_trend(
     A law without a closed form (a drag, a hysteretic loss) has its own change taken
     off first, and what it leaves is a
     :class:`~bayestribo.errors.FrequencyTrendWarning` that the nuisance carries, as on a
-    nonlinear restoring force."""
+    nonlinear restoring force. ``arm``: the length of a simple pendulum recorded as a
+    length whose half periods follow the record's (:func:`~bayestribo.inference.
+    restoring_choice.simple_pendulum_arm`), advised instead of any force of x."""
     if trend is None:
         return
     if trend.significant:
@@ -379,6 +387,8 @@ def _warn_frequency_trend(
                     "'pendulum') measures the energy lost per cycle with its potential "
                     "(--restoring auto chooses it from the half periods)"
                 )
+        if arm is not None:
+            like = f"; {arm_advice(arm)}"
         warn(
             f"the oscillation's half period changes by {100 * trend.change:+.3f} % from the "
             f"largest swing to the smallest of {name or 'the run'} ({trend.z:+.0f} "
@@ -391,6 +401,15 @@ def _warn_frequency_trend(
             # the nuisance that holds it leaves the intervals wide for the record
             LinearSpringWarning if restoring is None and constant_period else FrequencyTrendWarning,
         )
+
+
+def _simple_pendulum_arm(prepared: Any) -> float | None:
+    """The length [m] of a simple pendulum recorded as a length whose half periods follow
+    the record's change, for a run in metres not read as an angle; None otherwise."""
+    run, decay = prepared.run, prepared.decay
+    if run.length_unit != "m" or decay.turning_times is None:
+        return None
+    return simple_pendulum_arm(decay.turning_times, decay.peaks.value)
 
 
 def _pendulum_change(run: Run, metadata: Mapping[str, Any], turning: NDArray) -> float | None:
@@ -462,10 +481,13 @@ def _warn_misfit(
     law: str,
     compared: bool = False,
     half_cycles: int | None = None,
+    arm: float | None = None,
 ) -> None:
     """Say, with numbers, that the law misfits the run, and what to do (see
     :func:`summarise`); ``half_cycles``: how many the analysis holds (the law-free answer
-    needs three, :func:`~bayestribo.inference.dissipation.turning_point_dissipation`)."""
+    needs three, :func:`~bayestribo.inference.dissipation.turning_point_dissipation`);
+    ``arm``: the length of a simple pendulum recorded as a length whose half periods
+    follow the record's, the reading advised (no law holds on the wrong force)."""
     law_free = (
         "The answer is the energy dissipated per cycle measured from the turning points, "
         "whatever the law (result.turning_point_dissipation, printed as 'turning points "
@@ -505,10 +527,14 @@ def _warn_misfit(
         )
         return
     few = half_cycles is not None and half_cycles < FEWEST_HALF_CYCLES
+    todo = (
+        "Fit with law='auto' (--law auto): it compares the registered laws and keeps one that holds"
+        if arm is None
+        else arm_advice(arm)[0].upper() + arm_advice(arm)[1:]
+    )
     warn(
         f"the law {law} misfits {run} beyond its noise ({how}): its parameters are not "
-        "a measurement and its intervals are too narrow. Fit with law='auto' "
-        "(--law auto): it compares the registered laws and keeps one that holds"
+        f"a measurement and its intervals are too narrow. {todo}"
         + (
             f". {law_free}"
             if few
