@@ -34,6 +34,7 @@ import re
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -209,11 +210,22 @@ def main() -> None:
     ap.add_argument("--name", default="pendulum_arm")
     a = ap.parse_args()
     env = {**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg"}
-    jobs = [(deg, s) for deg in a.angles for s in a.seeds]
+    jobs = [(deg, s) for s in a.seeds for deg in a.angles]
+    records: list[dict[str, Any]] = []
+    lock = threading.Lock()
+
+    def run(job: tuple[float, int]) -> None:
+        rec = one(job[0], job[1], d, env, a.timeout)
+        with lock:  # what is done so far, written as it lands (a long run cut short)
+            records.append(rec)
+            partial = {"commit": commit(), "done": len(records), "of": len(jobs)}
+            write_results(f"{a.name}_partial", {**partial, "records": records})
+
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp)
         with ThreadPoolExecutor(a.jobs) as pool:
-            records = list(pool.map(lambda j: one(j[0], j[1], d, env, a.timeout), jobs))
+            list(pool.map(run, jobs))
+    records.sort(key=lambda r: (r["degrees"], r["seed"]))
     for r in records:
         f = r.get("followed") or {}
         cov = " ".join(
