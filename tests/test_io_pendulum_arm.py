@@ -19,6 +19,7 @@ from _pendulum_decay import Swing, swing
 from bayestribo import fit, read_run
 from bayestribo.cli.main import main
 from bayestribo.errors import (
+    ClippingWarning,
     LinearSpringWarning,
     MisfitWarning,
     RecordingError,
@@ -132,7 +133,12 @@ def test_a_radius_that_cannot_be_is_refused(metadata, error, match):
 
 def test_only_a_record_that_changes_as_a_simple_pendulums_is_told_to_read_it_so():
     t, x, theta, _ = _bob()
-    decay = energy_decay(t, x, None)
+    with pytest.warns(ClippingWarning) as caught:
+        decay = energy_decay(t, x, None)
+    # its largest swings bend as a saturating sensor's would: the warning says what
+    # they are here, and how to read them
+    said = [str(w.message) for w in caught if w.category is ClippingWarning]
+    assert len(said) == 1 and "--pendulum-radius simple" in said[0]
     assert simple_pendulum_arm(decay.turning_times, decay.peaks.value) == pytest.approx(
         RADIUS, rel=5e-3
     )
