@@ -16,10 +16,14 @@ unless the metadata name another: a torsion pendulum read by a laser is ``linear
 
 The centre c (x at θ = 0) is the equilibrium of the displacement's turning points
 (:func:`bayestribo.signal.peaks.find_peaks`); the velocity, where recorded, becomes
-θ' = v/(r cos θ). The run's metadata get ``length_unit`` ``"rad"`` and the record
-``pendulum_arm`` (radius, its source, the centre, the largest angle), which also marks
-the run as read so: reading it again changes nothing. Friction is then an angle (a
-torque with the sidecar's ``inertia_kg_m2``).
+θ' = v/(r cos θ). The angle's noise is the length's over r cos θ: it grows with the
+swing (×1.15 at 30°, ×2 at 60°), and the fit takes the noise measured at rest (θ ≈ 0)
+for every sample; the output says by how much it grows (how the intervals fare by
+release angle: ``benchmarks/README.md``, ``pendulum_arm.json``). The run's metadata
+get ``length_unit`` ``"rad"`` and the record ``pendulum_arm`` (radius, its source,
+the centre, the largest angle), which also marks the run as read so: reading it again
+changes nothing. Friction is then an angle (a torque with the sidecar's
+``inertia_kg_m2``).
 """
 
 from __future__ import annotations
@@ -171,5 +175,7 @@ def describe(record: dict[str, Any]) -> str:
         f"θ = arcsin((x - c)/r) with r = {record['radius_m']:.6g}"
         + (" (given)" if source == "given" else f", {source}")
         + f", c = {record['centre_m']:.6g} (the swing's centre); largest angle "
-        f"{record['largest_angle_deg']:.3g}°"
+        f"{record['largest_angle_deg']:.3g}°; the angle's noise grows as 1/cos θ, "
+        f"{1.0 / math.cos(math.radians(record['largest_angle_deg'])):.2f}× its value at "
+        "rest there, which the fit takes for every sample"
     )
