@@ -178,3 +178,21 @@ def test_the_advice_of_the_misfit_names_the_reading_and_followed_it_covers_the_t
     for name, truth in (("zeta", ZETA), ("friction_displacement", MU)):
         lo, hi = followed.interval(name, 0.95)
         assert lo <= truth <= hi, (name, lo, hi)
+
+
+def test_a_misfit_at_large_angles_says_the_noise_grows_there_not_another_law():
+    from types import SimpleNamespace
+
+    from bayestribo.inference.checks import _arm_noise_growth, _warn_misfit
+
+    t, x, *_ = _bob(60.0, 100.0, 60.0)
+    wide = as_angle(Run(t, x, metadata={"pendulum_radius_m": RADIUS}))
+    degrees, grown = _arm_noise_growth(wide)
+    assert degrees == pytest.approx(60.0, abs=0.2) and grown == pytest.approx(2.0, rel=0.01)
+    t, x, *_ = _bob(20.0, 100.0, 30.0)
+    assert _arm_noise_growth(as_angle(Run(t, x, metadata={"pendulum_radius_m": RADIUS}))) is None
+    shape = SimpleNamespace(p_value=1.0, describe=lambda: "")
+    with pytest.warns(MisfitWarning) as caught:
+        _warn_misfit("bob", (193.0, 81, 1.5e-10), shape, False, "viscous+coulomb", grown=(60, 2))
+    said = str(caught[0].message)
+    assert "grows as 1/cos θ, to 2.00× its value at rest" in said and "--law auto" not in said

@@ -170,7 +170,15 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
     half_cycles = int(prepared.decay.peaks.value.size) - 1
     arm = _simple_pendulum_arm(prepared)
     _warn_misfit(
-        name, found, shape, discrepancy, posterior.law.name, compared, half_cycles, arm=arm
+        name,
+        found,
+        shape,
+        discrepancy,
+        posterior.law.name,
+        compared,
+        half_cycles,
+        arm=arm,
+        grown=_arm_noise_growth(prepared.run),
     )
     flat = run.chains.reshape(-1, run.chains.shape[-1])
     at_bound = piled_on_bounds(flat, posterior.priors)
@@ -403,6 +411,23 @@ def _warn_frequency_trend(
         )
 
 
+#: The growth of a length's noise read as a pendulum's angle, 1/cos θ at the largest
+#: angle, beyond which a misfit is said to be the noise's (1.25: about 37°; the fits of
+#: ``benchmarks/pendulum_arm.py`` held at 20° and 40° and misfit at 60°).
+ARM_NOISE_GROWTH = 1.25
+
+
+def _arm_noise_growth(run: Run) -> tuple[float, float] | None:
+    """A length read as a pendulum's angle (:mod:`bayestribo.io.pendulum_arm`): its
+    largest angle [°] and 1/cos of it, when that is beyond :data:`ARM_NOISE_GROWTH`."""
+    arm = dict(run.metadata).get("pendulum_arm")
+    if not arm:
+        return None
+    degrees = float(arm["largest_angle_deg"])
+    grown = 1.0 / math.cos(math.radians(degrees))
+    return (degrees, grown) if grown > ARM_NOISE_GROWTH else None
+
+
 def _simple_pendulum_arm(prepared: Any) -> float | None:
     """The length [m] of a simple pendulum recorded as a length whose half periods follow
     the record's change, for a run in metres not read as an angle; None otherwise."""
@@ -482,12 +507,15 @@ def _warn_misfit(
     compared: bool = False,
     half_cycles: int | None = None,
     arm: float | None = None,
+    grown: tuple[float, float] | None = None,
 ) -> None:
     """Say, with numbers, that the law misfits the run, and what to do (see
     :func:`summarise`); ``half_cycles``: how many the analysis holds (the law-free answer
     needs three, :func:`~bayestribo.inference.dissipation.turning_point_dissipation`);
     ``arm``: the length of a simple pendulum recorded as a length whose half periods
-    follow the record's, the reading advised (no law holds on the wrong force)."""
+    follow the record's, the reading advised (no law holds on the wrong force);
+    ``grown``: a length read as a pendulum's angle beyond :data:`ARM_NOISE_GROWTH`, its
+    largest angle [°] and its noise's growth there, said instead of another law."""
     law_free = (
         "The answer is the energy dissipated per cycle measured from the turning points, "
         "whatever the law (result.turning_point_dissipation, printed as 'turning points "
@@ -532,6 +560,13 @@ def _warn_misfit(
         if arm is None
         else arm_advice(arm)[0].upper() + arm_advice(arm)[1:]
     )
+    if grown is not None:
+        todo = (
+            f"The run is a length read as a pendulum's angle (pendulum_radius_m), whose "
+            f"noise grows as 1/cos θ, to {grown[1]:.2f}× its value at rest at the largest "
+            f"angle ({grown[0]:.0f}°), where the fit takes it as at rest: at such angles "
+            "that alone makes a misfit beyond the noise, whatever the law"
+        )
     warn(
         f"the law {law} misfits {run} beyond its noise ({how}): its parameters are not "
         f"a measurement and its intervals are too narrow. {todo}"
