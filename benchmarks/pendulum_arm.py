@@ -201,6 +201,37 @@ def summary(records: list[dict[str, Any]]) -> dict[str, Any]:
     return out
 
 
+def table(path: Path) -> str:
+    """The results by release angle as a Markdown table (``--table``)."""
+    records = json.loads(path.read_text())["records"]
+    out = [
+        "| release | records | default fit: exit 0 / 1 (intervals of ζ covering at exit 0) "
+        "| advised `--pendulum-radius simple` | followed: exit 0 / 1 | ζ covered, z mean ± sd "
+        "| θ_c covered, z mean ± sd |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for deg in sorted({r["degrees"] for r in records}):
+        rs = [r for r in records if r["degrees"] == deg]
+        first = [r["first"] for r in rs]
+        zero = [f for f in first if f["rc"] == 0]
+        covered0 = sum(bool(f.get("coverage", {}).get("zeta", {}).get("covers")) for f in zero)
+        fol = [r["followed"] for r in rs if "followed" in r]
+        cells = [
+            f"{deg:.0f}°",
+            str(len(rs)),
+            f"{len(zero)} / {sum(f['rc'] == 1 for f in first)} ({covered0} of {len(zero)})",
+            f"{sum(bool(r['advised']) for r in rs)} of {len(rs)}",
+            f"{sum(f['rc'] == 0 for f in fol)} / {sum(f['rc'] == 1 for f in fol)}",
+        ]
+        for name in ("zeta", "friction"):
+            cov = [f["coverage"][name] for f in fol if name in (f.get("coverage") or {})]
+            z = np.array([c["z"] for c in cov if c["z"] is not None])
+            spread = f"{z.mean():+.2f} ± {z.std(ddof=1):.2f}" if z.size > 1 else "-"
+            cells.append(f"{sum(c['covers'] for c in cov)}/{len(cov)}, {spread}")
+        out.append("| " + " | ".join(cells) + " |")
+    return "\n".join(out)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--angles", type=float, nargs="+", default=[10.0, 20.0, 40.0, 60.0])
@@ -208,7 +239,13 @@ def main() -> None:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--timeout", type=float, default=1800.0)
     ap.add_argument("--name", default="pendulum_arm")
+    ap.add_argument("--table", action="store_true", help="print the stored results as a table")
     a = ap.parse_args()
+    if a.table:
+        from _machine import RESULTS
+
+        print(table(RESULTS / f"{a.name}.json"))
+        return
     env = {**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg"}
     jobs = [(deg, s) for s in a.seeds for deg in a.angles]
     records: list[dict[str, Any]] = []
