@@ -251,7 +251,8 @@ def arm_advice(radius: float) -> str:
         "restoring force of x alone is a pendulum's; pendulum_radius_m='simple' "
         "(--pendulum-radius simple) reads the record as the angle θ = arcsin(x/r) and fits "
         "it with the pendulum's restoring force (for a point at another distance from the "
-        "pivot, a laser on the arm, give that distance: --pendulum-radius R)"
+        "pivot, a laser on the arm, give that distance: --pendulum-radius R); beyond 48° "
+        "the angle's noise grows too much for calibrated intervals, which the fit then says"
     )
 
 
