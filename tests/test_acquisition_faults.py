@@ -415,6 +415,41 @@ def test_disk_full_while_streaming_stops_the_device_and_keeps_the_raw_log(tmp_pa
     assert not list(tmp_path.glob("*.csv"))  # no run files on a full disk
 
 
+def test_the_recovery_a_full_disk_names_gives_the_run_received(tmp_path, monkeypatch):
+    # the advice of the disk-full error, followed as printed once space is free
+    import re
+
+    from bayestribo.acquisition import logger as logger_module
+    from bayestribo.acquisition.faults import StorageError
+    from bayestribo.cli.main import main
+
+    real_write, real_init = os.write, logger_module.RawLog.__init__
+    raw_fds: set[int] = set()
+
+    def init(self, *args, **kwargs):
+        real_init(self, *args, **kwargs)
+        raw_fds.add(self._fd)
+
+    def write(fd, data):
+        if fd in raw_fds and len(data) and os.fstat(fd).st_size >= 1024:
+            raise OSError(28, "No space left on device")
+        return real_write(fd, data)
+
+    monkeypatch.setattr(logger_module.RawLog, "__init__", init)
+    monkeypatch.setattr(logger_module.os, "write", write)
+    with simulated() as (_, path):
+        with pytest.raises(StorageError) as caught:
+            acquire_run(path, tmp_path, INPUTS, catalog=None)
+    monkeypatch.undo()  # space freed
+    command = re.search(r"`bayestribo acquire (--recover \S+)`", str(caught.value))
+    assert command is not None, str(caught.value)
+    argv = ["acquire", *command[1].split(), "--quiet"]  # as printed: beside the raw log
+    assert main(argv) == 1  # what was received, short of its end: incomplete
+    [csv] = list(tmp_path.glob("*.csv"))
+    run = read_run(csv)
+    assert run.n_samples > 0 and run.metadata["complete"] is False
+
+
 def test_disk_full_while_writing_the_run_files_names_the_recovery(tmp_path, monkeypatch):
     import errno
 

@@ -50,3 +50,25 @@ def test_the_command_line_window(record, capsys):
     with pytest.raises(SystemExit):
         main(["inspect", str(path), "--window", "3"])
     assert "--window-length" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("text", [":5", "3:"])
+def test_an_open_window_is_a_fit_specifications_json(record, text):
+    # `fit --window :5` wrote the spec with -inf and stopped with a traceback
+    # ("Out of range float values are not JSON compliant") before the fit's output
+    import argparse
+    import json
+
+    from bayestribo.cli._common import add_reading_options, reading_options
+    from bayestribo.inference.spec import FitSpec
+
+    parser = argparse.ArgumentParser()
+    add_reading_options(parser)
+    options = reading_options(parser.parse_args(["--window", text]))
+    spec = FitSpec(read_options=options)
+    written = json.loads(spec.to_json())["read_options"]["window"]
+    assert None in written  # the open end, as JSON holds it
+    again = FitSpec.from_json(spec.to_json()).read_options
+    assert again.window == options.window
+    t0, t1 = again.window
+    assert read_run(record[0], window=(t0, t1)) == read_run(record[0], options=options)

@@ -88,6 +88,7 @@ def chosen_run(run: Any, restoring: str | None = None, *, skip_oscillations: int
         decay.peaks.value / decay.scaling.length_scale,
         length_unit=run.length_unit,
         angle=decay.scaling.length_scale == 1.0,
+        length_scale=decay.scaling.length_scale,
         name=str(run.source or run.metadata.get("run_id") or "") or None,
     )
     return run.with_metadata(restoring=choice.name)

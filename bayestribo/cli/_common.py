@@ -167,6 +167,17 @@ def add_reading_options(parser: argparse.ArgumentParser) -> None:
         "(constant: linear; as a pendulum's, in radians: pendulum; else duffing). The "
         "energy lost per cycle from the turning points takes its potential",
     )
+    parser.add_argument(
+        "--pendulum-radius",
+        type=_pendulum_radius,
+        metavar="R|simple",
+        help="the displacement is x = R sin θ of a pendulum's angle θ, recorded at R [m] "
+        "from the pivot (a video-tracked bob, a laser on its arm; sidecar "
+        "'pendulum_radius_m'): read as the angle θ = arcsin(x/R) in radians, friction "
+        "as an angle, fitted with --restoring pendulum unless another is named; 'simple' "
+        "for a simple pendulum's bob, R = g/ω₀² from the record's period (an assumption, "
+        "said in the output)",
+    )
     from bayestribo.signal.sensor_kinds import sensor_kind_table
 
     kinds = sensor_kind_table()
@@ -188,6 +199,21 @@ def _positive_rate(text: str) -> float:
         value = math.nan
     if not math.isfinite(value) or value <= 0.0:
         raise argparse.ArgumentTypeError(f"expected a sample rate in Hz > 0, got {text!r}")
+    return value
+
+
+def _pendulum_radius(text: str) -> float | str:
+    """``--pendulum-radius`` value: a radius [m] > 0, or ``simple``."""
+    if text == "simple":
+        return text
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value) or value <= 0.0:
+        raise argparse.ArgumentTypeError(
+            f"expected the pendulum's radius at the sensor in metres (> 0), or simple, got {text!r}"
+        )
     return value
 
 
@@ -326,6 +352,7 @@ def reading_options(args: argparse.Namespace) -> Any:
             ("load_N", args.load),
             ("mass_kg", args.mass),
             ("restoring", getattr(args, "restoring", None)),
+            ("pendulum_radius_m", getattr(args, "pendulum_radius", None)),
             ("sensor_kind", getattr(args, "sensor_kind", None)),
         )
         if value is not None

@@ -158,6 +158,7 @@ def _reading_flags(reading: Mapping[str, Any]) -> list[str]:
         "load_N": "--load",
         "mass_kg": "--mass",
         "restoring": "--restoring",
+        "pendulum_radius_m": "--pendulum-radius",
     }
     flags += [metadata.get(k, k) for k in reading.get("metadata") or {}]
     return flags

@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 
 from bayestribo._warnings import warn
 from bayestribo.errors import (
+    ArmNoiseWarning,
     FrequencyTrendWarning,
     LinearSpringWarning,
     MisfitWarning,
@@ -36,6 +37,7 @@ from bayestribo.inference.modes import ModeReport, mode_check
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.preparation import matched_law_times
 from bayestribo.inference.priors import piled_on_bounds
+from bayestribo.inference.restoring_choice import arm_advice, simple_pendulum_arm
 from bayestribo.inference.types import MISFIT_P, PreparedRun, Sampled
 from bayestribo.io.run import Run
 from bayestribo.model.restoring import get_restoring
@@ -167,7 +169,29 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
     found = misfit(posterior, sampled.theta_map)
     shape = shape_departure(posterior, sampled.theta_map)
     half_cycles = int(prepared.decay.peaks.value.size) - 1
-    _warn_misfit(name, found, shape, discrepancy, posterior.law.name, compared, half_cycles)
+    arm = _simple_pendulum_arm(prepared)
+    grown = _arm_noise_growth(prepared.run)
+    if grown is not None:
+        warn(
+            f"{name or 'the run'} is a length read as a pendulum's angle "
+            f"(pendulum_radius_m) that swings to {grown[0]:.0f}°: its noise grows as "
+            f"1/cos θ, to {grown[1]:.2f}× its value at rest there, and the fit takes it as "
+            "at rest, so the law's intervals are not calibrated (beyond 48°; at 60° 4 of "
+            "10 intervals of ζ missed the truth); the energy dissipated per cycle measured "
+            "from the turning points (printed as 'turning points (law-free)') is the answer",
+            ArmNoiseWarning,
+        )
+    _warn_misfit(
+        name,
+        found,
+        shape,
+        discrepancy,
+        posterior.law.name,
+        compared,
+        half_cycles,
+        arm=arm,
+        grown=grown,
+    )
     flat = run.chains.reshape(-1, run.chains.shape[-1])
     at_bound = piled_on_bounds(flat, posterior.priors)
     for entry in at_bound:
@@ -198,6 +222,7 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
         restoring=posterior.law.restoring,
         chosen=prepared.restoring_choice is not None,
         constant_period=posterior.law.closed_form,
+        arm=arm,
     )
     return FitChecks(
         sampled,
@@ -340,6 +365,7 @@ def _warn_frequency_trend(
     restoring: Any = None,
     chosen: bool = False,
     constant_period: bool = False,
+    arm: float | None = None,
 ) -> None:
     """Say when the frequency is not constant along the decay beyond the law's own
     change (the nuisance that carries it is in the intervals); ``pendulum``: the change
@@ -353,7 +379,9 @@ def _warn_frequency_trend(
     A law without a closed form (a drag, a hysteretic loss) has its own change taken
     off first, and what it leaves is a
     :class:`~bayestribo.errors.FrequencyTrendWarning` that the nuisance carries, as on a
-    nonlinear restoring force."""
+    nonlinear restoring force. ``arm``: the length of a simple pendulum recorded as a
+    length whose half periods follow the record's (:func:`~bayestribo.inference.
+    restoring_choice.simple_pendulum_arm`), advised instead of any force of x."""
     if trend is None:
         return
     if trend.significant:
@@ -379,6 +407,8 @@ def _warn_frequency_trend(
                     "'pendulum') measures the energy lost per cycle with its potential "
                     "(--restoring auto chooses it from the half periods)"
                 )
+        if arm is not None:
+            like = f"; {arm_advice(arm)}"
         warn(
             f"the oscillation's half period changes by {100 * trend.change:+.3f} % from the "
             f"largest swing to the smallest of {name or 'the run'} ({trend.z:+.0f} "
@@ -391,6 +421,34 @@ def _warn_frequency_trend(
             # the nuisance that holds it leaves the intervals wide for the record
             LinearSpringWarning if restoring is None and constant_period else FrequencyTrendWarning,
         )
+
+
+#: The growth of a length's noise read as a pendulum's angle, 1/cos θ at the largest
+#: angle, beyond which the law's intervals are said to be uncalibrated
+#: (:class:`~bayestribo.errors.ArmNoiseWarning`) and a misfit the noise's (1.5: 48°;
+#: ``benchmarks/pendulum_arm.py``: at 20° and 40° 20 of 20 ζ intervals covered with no
+#: misfit, at 60° 4 of 10 missed).
+ARM_NOISE_GROWTH = 1.5
+
+
+def _arm_noise_growth(run: Run) -> tuple[float, float] | None:
+    """A length read as a pendulum's angle (:mod:`bayestribo.io.pendulum_arm`): its
+    largest angle [°] and 1/cos of it, when that is beyond :data:`ARM_NOISE_GROWTH`."""
+    arm = dict(run.metadata).get("pendulum_arm")
+    if not arm:
+        return None
+    degrees = float(arm["largest_angle_deg"])
+    grown = 1.0 / math.cos(math.radians(degrees))
+    return (degrees, grown) if grown > ARM_NOISE_GROWTH else None
+
+
+def _simple_pendulum_arm(prepared: Any) -> float | None:
+    """The length [m] of a simple pendulum recorded as a length whose half periods follow
+    the record's change, for a run in metres not read as an angle; None otherwise."""
+    run, decay = prepared.run, prepared.decay
+    if run.length_unit != "m" or decay.turning_times is None:
+        return None
+    return simple_pendulum_arm(decay.turning_times, decay.peaks.value)
 
 
 def _pendulum_change(run: Run, metadata: Mapping[str, Any], turning: NDArray) -> float | None:
@@ -462,10 +520,16 @@ def _warn_misfit(
     law: str,
     compared: bool = False,
     half_cycles: int | None = None,
+    arm: float | None = None,
+    grown: tuple[float, float] | None = None,
 ) -> None:
     """Say, with numbers, that the law misfits the run, and what to do (see
     :func:`summarise`); ``half_cycles``: how many the analysis holds (the law-free answer
-    needs three, :func:`~bayestribo.inference.dissipation.turning_point_dissipation`)."""
+    needs three, :func:`~bayestribo.inference.dissipation.turning_point_dissipation`);
+    ``arm``: the length of a simple pendulum recorded as a length whose half periods
+    follow the record's, the reading advised (no law holds on the wrong force);
+    ``grown``: a length read as a pendulum's angle beyond :data:`ARM_NOISE_GROWTH`, its
+    largest angle [°] and its noise's growth there, said instead of another law."""
     law_free = (
         "The answer is the energy dissipated per cycle measured from the turning points, "
         "whatever the law (result.turning_point_dissipation, printed as 'turning points "
@@ -505,10 +569,21 @@ def _warn_misfit(
         )
         return
     few = half_cycles is not None and half_cycles < FEWEST_HALF_CYCLES
+    todo = (
+        "Fit with law='auto' (--law auto): it compares the registered laws and keeps one that holds"
+        if arm is None
+        else arm_advice(arm)[0].upper() + arm_advice(arm)[1:]
+    )
+    if grown is not None:
+        todo = (
+            f"The run is a length read as a pendulum's angle (pendulum_radius_m), whose "
+            f"noise grows as 1/cos θ, to {grown[1]:.2f}× its value at rest at the largest "
+            f"angle ({grown[0]:.0f}°), where the fit takes it as at rest: at such angles "
+            "that alone makes a misfit beyond the noise, whatever the law"
+        )
     warn(
         f"the law {law} misfits {run} beyond its noise ({how}): its parameters are not "
-        "a measurement and its intervals are too narrow. Fit with law='auto' "
-        "(--law auto): it compares the registered laws and keeps one that holds"
+        f"a measurement and its intervals are too narrow. {todo}"
         + (
             f". {law_free}"
             if few

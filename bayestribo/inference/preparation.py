@@ -164,6 +164,7 @@ def force_settled(run: Run, decay: EnergyDecay, choice: Any = None) -> bool:
                 decay.peaks.value / decay.scaling.length_scale,
                 length_unit=run.length_unit,
                 angle=decay.scaling.length_scale == 1.0,
+                length_scale=decay.scaling.length_scale,
             )
         if choice.name != dict(run.metadata).get("restoring"):
             return False
@@ -303,6 +304,7 @@ def prepare(
             decay.peaks.value / decay.scaling.length_scale,
             length_unit=recording.length_unit,
             angle=decay.scaling.length_scale == 1.0,
+            length_scale=decay.scaling.length_scale,
             name=_run_name(recording) or None,
         )
         recording = recording.with_metadata(restoring=choice.name)

@@ -55,7 +55,15 @@ from bayestribo.errors import FrequencyTrendWarning
 from bayestribo.model.restoring import AUTO, get_restoring
 from bayestribo.signal.frequency import FrequencyTrend, turning_point_trend
 
-__all__ = ["AUTO", "FOLLOWED", "RestoringChoice", "choose_restoring", "trend_beyond"]
+__all__ = [
+    "AUTO",
+    "FOLLOWED",
+    "RestoringChoice",
+    "arm_advice",
+    "choose_restoring",
+    "simple_pendulum_arm",
+    "trend_beyond",
+]
 
 #: The largest share of the measured change a force's half periods may leave and still
 #: be said to follow it (rules 2 and 3 of the module notes) [-].
@@ -187,6 +195,67 @@ def trend_beyond(
     return turning_point_trend(t - float(half) * uneven, y)
 
 
+def simple_pendulum_arm(
+    times: ArrayLike | None, values: ArrayLike, trend: FrequencyTrend | None = None
+) -> float | None:
+    """The length of a simple pendulum recorded as a length whose half periods follow the
+    record's change, if one does.
+
+    A record in metres of a simple pendulum's bob, ``x = r sin θ`` with r = g/ω₀²
+    (:func:`~bayestribo.signal.pendulum_arm.simple_radius`), has half periods that
+    change with the swing as the pendulum's at θ = arcsin(A/r); they follow the
+    measured change when what they leave of it is within its noise or at most
+    :data:`FOLLOWED` of it (as a force's half periods in :func:`choose_restoring`).
+    That is when ``pendulum_radius_m`` ``"simple"`` (``--pendulum-radius simple``)
+    reads the record as the angle it is (:mod:`bayestribo.io.pendulum_arm`).
+
+    Parameters
+    ----------
+    times : array_like or None
+        The turning times [s] (None: none measured).
+    values : array_like
+        The turning points about the equilibrium [m].
+    trend : FrequencyTrend, optional
+        The half period's change measured on them (default: measured here).
+
+    Returns
+    -------
+    float or None
+        r [m] when the change is significant and a simple pendulum's follows it; None
+        otherwise.
+    """
+    from bayestribo.signal.pendulum_arm import arm_half_period_ratio, simple_radius
+
+    if times is None:
+        return None
+    y = np.asarray(values, dtype=float)
+    if trend is None:
+        trend = turning_point_trend(times, y)
+    if trend is None or not math.isfinite(trend.change) or not trend.significant:
+        return None
+    found = simple_radius(times, y)
+    if found is None:
+        return None
+    radius = found[0]
+    return (
+        radius if _follows(trend_beyond(times, y, arm_half_period_ratio(radius)), trend) else None
+    )
+
+
+def arm_advice(radius: float) -> str:
+    """What a warning says to a record in metres that changes as a simple pendulum's
+    recorded as a length (:func:`simple_pendulum_arm`) would."""
+    return (
+        "its half period changes with the swing as a simple pendulum's does when its bob "
+        f"is recorded as a length, x = r sin θ with r = g/ω₀² = {radius:.4g} m: no "
+        "restoring force of x alone is a pendulum's; pendulum_radius_m='simple' "
+        "(--pendulum-radius simple) reads the record as the angle θ = arcsin(x/r) and fits "
+        "it with the pendulum's restoring force (for a point at another distance from the "
+        "pivot, a laser on the arm, give that distance: --pendulum-radius R); beyond 48° "
+        "the angle's noise grows too much for calibrated intervals, which the fit then says"
+    )
+
+
 def choose_restoring(
     times: ArrayLike | None,
     values: ArrayLike,
@@ -194,6 +263,7 @@ def choose_restoring(
     length_unit: str,
     angle: bool = True,
     name: str | None = None,
+    length_scale: float = 1.0,
 ) -> RestoringChoice:
     """The restoring force of a record, by the rule of the module notes.
 
@@ -211,6 +281,10 @@ def choose_restoring(
         divides it): no pendulum then either.
     name : str, optional
         The run's name in the warnings.
+    length_scale : float
+        The run's unit per unit of ``values`` (a rig's scale N/k; 1 when they are in the
+        run's unit): a record in metres is examined as a simple pendulum recorded as a
+        length (:func:`simple_pendulum_arm`) in metres.
 
     Returns
     -------
@@ -262,6 +336,9 @@ def choose_restoring(
         + ": a pendulum is fitted with the angle itself in radians (length_unit 'rad', "
         "--length-unit rad) and --restoring pendulum"
     )
+    arm = simple_pendulum_arm(times, y * length_scale) if length_unit == "m" else None
+    if arm is not None:
+        hint = arm_advice(arm)
     if followed and not hint:
         return RestoringChoice("duffing", trend, left, beta, beta_se)
     if followed:

@@ -638,6 +638,11 @@ class FitResult:
             from bayestribo.io.acceleration import describe
 
             lines.append(f"velocity  {describe(integrated)}")
+        arm = self.metadata.get("pendulum_arm")
+        if arm:
+            from bayestribo.io.pendulum_arm import describe as describe_arm
+
+            lines.append(f"angle     {describe_arm(arm)}")
         spring = self._attr("restoring_json", None)
         chosen = (spring or {}).get("auto")
         if chosen and spring.get("name") in (None, "linear"):

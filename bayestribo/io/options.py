@@ -146,7 +146,10 @@ class ReadOptions:
             value = getattr(self, f.name)
             if value == f.default:
                 continue
-            if isinstance(value, tuple):
+            if f.name == "window":
+                # an open end as None: JSON holds no infinity
+                value = [v if math.isfinite(v) else None for v in value]
+            elif isinstance(value, tuple):
                 value = list(value)
             elif isinstance(value, Mapping):
                 value = dict(value)
@@ -162,7 +165,8 @@ class ReadOptions:
 
 
 def check_window(window: Any) -> tuple[float, float]:
-    """A time window ``(t0, t1)`` [s] with ``t0 < t1`` (either end may be infinite: open).
+    """A time window ``(t0, t1)`` [s] with ``t0 < t1`` (either end may be infinite, or
+    None, :meth:`ReadOptions.as_kwargs`'s spelling of it in JSON: open).
 
     Raises
     ------
@@ -170,7 +174,9 @@ def check_window(window: Any) -> tuple[float, float]:
         Naming the option and what was expected.
     """
     try:
-        t0, t1 = (float(value) for value in window)
+        t0, t1 = window
+        t0 = -math.inf if t0 is None else float(t0)
+        t1 = math.inf if t1 is None else float(t1)
     except (TypeError, ValueError, OverflowError):
         # an integer beyond a float's range (a JSON sidecar holds any) is no time either
         raise BayestriboError(

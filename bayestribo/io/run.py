@@ -158,6 +158,21 @@ METADATA_KEYS: Mapping[str, _Key] = MappingProxyType(
             "half period changes with the swing), see bayestribo.model.restoring",
             check=lambda value, key, where: _restoring(value, key, where),
         ),
+        "pendulum_radius_m": _Key(
+            "plain",
+            "the displacement is x = r sin θ of a pendulum's angle θ, recorded at the distance "
+            "r from the pivot [m] (the displacement's unit with length_unit 'arbitrary'), or "
+            "'simple' for a simple pendulum's bob (r = g/ω₀², its length): the run is read as "
+            "the angle θ = arcsin(x/r) in radians (--pendulum-radius), "
+            "see bayestribo.io.pendulum_arm",
+            check=lambda value, key, where: _pendulum_radius(value, key, where),
+        ),
+        "pendulum_arm": _Key(
+            "plain",
+            "how a length recorded on a pendulum was read as its angle (written by the "
+            "package, bayestribo.io.pendulum_arm): the radius, where it came from, the "
+            "centre taken off and the largest angle",
+        ),
         "inertia_kg_m2": _Key(
             "float",
             "moment of inertia of a rotational oscillator [kg m²]: friction as a torque",
@@ -321,6 +336,28 @@ def _restoring(value: Any, key: str, where: str | None) -> str:
             f"metadata {key!r}: expected one of {', '.join(restoring_choices())}, got {value!r}",
             where,
         ) from None
+
+
+def _pendulum_radius(value: Any, key: str, where: str | None) -> float | str:
+    """Check a ``pendulum_radius_m`` value: a radius > 0 (at most 1 km), or ``"simple"``."""
+    from bayestribo.io.pendulum_arm import SIMPLE
+
+    if value == SIMPLE:
+        return SIMPLE
+    radius = math.nan
+    if isinstance(value, int | float) and not isinstance(value, bool):
+        try:
+            radius = float(value)
+        except OverflowError:
+            radius = math.nan
+    if not (math.isfinite(radius) and 0.0 < radius <= 1e3):
+        raise RunFormatError(
+            f"metadata {key!r}: expected the pendulum's radius at the sensor in metres, "
+            f"0 < r <= 1000, or {SIMPLE!r} for a simple pendulum (r = g/ω₀²), got "
+            f"{_shown(value)}",
+            where,
+        )
+    return radius
 
 
 def _sensor_kind(value: Any, key: str, where: str | None) -> str:

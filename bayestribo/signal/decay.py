@@ -1343,6 +1343,13 @@ def _flattened(
         f"peaks than the smaller swings say a linear oscillator does: the {channel} sensor "
         "saturates" + (" (or the spring softens)" if channel == "displacement" else "")
     )
+    if channel == "displacement":
+        # a pendulum's bob recorded as a length, x = r sin θ, bends so: no sensor's fault
+        from bayestribo.inference.restoring_choice import arm_advice, simple_pendulum_arm
+
+        arm = simple_pendulum_arm(peaks.t, peaks.value)
+        if arm is not None:
+            said += f"; or, in metres, {arm_advice(arm)}"
     return count, said
 
 

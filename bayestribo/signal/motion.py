@@ -456,12 +456,13 @@ def motion_span(
         if displacement is not None:
             x = np.asarray(displacement, dtype=float)
             rest_x = x[tail_start : min(n, tail_start + size)]
-            sigma_x = (
-                block_noise(
-                    t, x, np.r_[np.zeros(tail_start, bool), np.ones(n - tail_start, bool)], size
-                )
-                or 0.0
-            )
+            after = np.r_[np.zeros(tail_start, bool), np.ones(n - tail_start, bool)]
+            # a rest shorter than a block (the record ends a period or so after the
+            # last moving block): its noise about a line over all of it, not none (a
+            # noise of zero put every sample of the rest out of it, and the end of
+            # motion at the record's last sample)
+            sigma_x = block_noise(t, x, after, size) or block_noise(t, x, after, n - tail_start)
+            sigma_x = sigma_x or 0.0
             sigma_x = max(sigma_x, 1e-8 * float(np.ptp(x)))
             out_x = np.flatnonzero(
                 np.abs(x[lo:hi] - np.median(rest_x)) > DISPLACEMENT_THRESHOLD * sigma_x
