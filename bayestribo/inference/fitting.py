@@ -129,8 +129,7 @@ def fit(
         fitted too and makes that share of the draws, at most half
         (:mod:`bayestribo.inference.boundary`; the result's ``boundary`` says what was
         done). ``"auto"`` is not averaged (its comparison holds the nested laws
-        already); it
-        compares the laws the registry's terms make by the rule of
+        already); it compares the laws the registry's terms make by the rule of
         :mod:`bayestribo.model.laws.candidates`
         (:func:`bayestribo.inference.comparison.auto_laws`): each is taken to its
         optimum, those too far behind the best there to win are screened out, the rest
