@@ -2,9 +2,9 @@
 the real recordings, fitted side by side with another tree's package (main), the two
 alternating, each fit in its own process: answers and CPU time.
 
-For each recording, each tree: ``bayestribo.fit(run, seed=1)`` (the default law) in a
-fresh process with that tree on ``PYTHONPATH``, after one warm-up fit in the same
-process; recorded: the process CPU time of the fit (``time.process_time``), the mean,
+For each recording, each tree: ``bayestribo.fit(run, seed=1)`` (the default law, or
+``--law``) in a fresh process with that tree on ``PYTHONPATH``, after one warm-up fit in
+the same process; recorded: the process CPU time of the fit (``time.process_time``), the mean,
 sd and 95 % interval of every reported quantity, and the result's ``boundary`` record
 (absent in a package without it). The answers' difference is given in units of the
 other tree's sd.
@@ -38,9 +38,10 @@ if name.startswith("bundled:"):
 else:
     run, _ = load(name)
 warnings.simplefilter("ignore")
-bt.fit(run, seed=2)  # warm
+law = {"law": sys.argv[3]} if sys.argv[3] else {}
+bt.fit(run, seed=2, **law)  # warm
 cpu = time.process_time()
-r = bt.fit(run, seed=1)
+r = bt.fit(run, seed=1, **law)
 cpu = time.process_time() - cpu
 out = {"cpu_s": cpu, "law": r.law, "boundary": getattr(r, "boundary", None)}
 out["summary"] = {
@@ -50,10 +51,10 @@ print(json.dumps(out))
 """
 
 
-def fit_in(tree: Path, name: str) -> dict:
+def fit_in(tree: Path, name: str, law: str = "") -> dict:
     env = {**os.environ, "PYTHONPATH": str(tree)}
     done = subprocess.run(
-        [sys.executable, "-c", _WORKER, name, str(Path(__file__).resolve().parent)],
+        [sys.executable, "-c", _WORKER, name, str(Path(__file__).resolve().parent), law],
         env=env,
         capture_output=True,
         text=True,
@@ -88,6 +89,7 @@ def main() -> None:
     parser.add_argument("--bundled", default="air-r1.csv,glycerol-N0.31-r1.csv")
     parser.add_argument("--repeats", type=int, default=2)
     parser.add_argument("--no-real", action="store_true", help="the bundled runs only")
+    parser.add_argument("--law", default="", help="the law fitted (default: the default law)")
     parser.add_argument("--out", required=True)
     args = parser.parse_args()
     from _machine import commit, machine
@@ -98,7 +100,7 @@ def main() -> None:
         for i in range(args.repeats):
             order = [("main", Path(args.base)), ("branch", ROOT)]
             for label, tree in order if i % 2 == 0 else order[::-1]:
-                row[label].append(fit_in(tree, name))
+                row[label].append(fit_in(tree, name, args.law))
         row["answers"] = compare(row["main"][0], row["branch"][0])
         cpu_main = sorted(r["cpu_s"] for r in row["main"])
         cpu_branch = sorted(r["cpu_s"] for r in row["branch"])
@@ -120,6 +122,7 @@ def main() -> None:
     result = {
         "machine": machine(),
         "load": os.getloadavg(),
+        "law": args.law or "default",
         "main": commit(Path(args.base)),
         "branch": commit(ROOT),
         "recordings": rows,

@@ -1,28 +1,47 @@
-"""A truth on the boundary of the default law: no friction, or no viscous damping.
+"""A truth on a boundary of the law: a term the record does not have.
 
-The default law ``viscous+coulomb`` samples ζ ≥ 0 and μ_k ≥ 0 (or the friction
-displacement x_c ≥ 0). On an oscillator without friction (x_c = 0) or without drag
-(ζ = 0) the truth sits on that bound, the two parameters are anticorrelated, and the
-posterior's mass inside the bound pulls the other parameter's interval off the truth: ζ's
-95 % interval of a linear oscillator ends below its ζ in most runs
-(``benchmarks/boundary_truth.py``).
+A law of several terms samples each term's amount (its *amount* parameter,
+:attr:`bayestribo.model.laws.base.Term.amount`: ζ, μ_k or the friction displacement x_c,
+c₂, ζ_α, ...) on a prior bounded below by the value that removes the term. On a record
+without that term (an oscillator without friction, without viscous damping, without
+quadratic drag) the truth sits on the bound, the amount is anticorrelated with the other
+terms', and the posterior's mass inside the bound pulls the others' intervals off the
+truth: ζ's 95 % interval of a linear oscillator fitted with ``viscous+coulomb`` ends
+below its ζ in most runs (``benchmarks/boundary_truth.py``), and so do ζ's with
+``viscous+quadratic`` and x_c's with ``coulomb+quadratic`` (``benchmarks/boundary_laws.py``).
 
-The honest answer gives the nested law (the law without the term) a point mass: a prior
-probability of 1/2 that the term is absent. Its posterior probability comes from the
-sampled fit by the Savage–Dickey density ratio
+The honest answer gives each nested law (the law without one term,
+:attr:`bayestribo.model.laws.Law.boundaries`) a point mass: a prior probability of 1/2
+that the term is absent. Its posterior probability comes from the sampled fit by the
+Savage–Dickey density ratio
 
     B₀₁ = p(θ = 0 | data) / p(θ = 0),    P(nested | data) = B₀₁ / (1 + B₀₁),
 
-the posterior density of the term's parameter θ at 0 (:func:`boundary_density`, a
+the posterior density of the term's amount θ at its bound (:func:`boundary_density`, a
 boundary-corrected estimate) over its prior density there (the priors are independent,
 so the nested law's prior is the full one's at θ = 0). Where that probability is at
 least :data:`THRESHOLD`, the nested law is fitted too and the reported draws are a
 mixture: that share of the draws, at most :data:`MAX_SHARE`, are the nested fit's
-(θ = 0; the parameters the nested law does not have keep the full fit's draws), the
-rest the full fit's, so every interval (ζ, x_c or μ_k, μ_s, ΔE(A)) is the average's.
-Both boundaries can be probable on one record (one that cannot tell friction from
-drag): each nested law then makes half the draws. Where neither is, the fit is the full
-law's, unchanged (no draw, no refit).
+(θ = 0; the parameters the nested law does not have, such as μ_s/μ_k without μ_k or α
+without ζ_α, keep the full fit's draws), the rest the full fit's, so every interval is
+the average's. Several boundaries can be probable on one record (one that cannot tell
+friction from drag): each nested law makes its share; where three or more shares add
+up to more than all the draws, each is scaled down in proportion (:func:`_shares`). A
+nested law of several terms is averaged over its own boundaries the same way before it
+is mixed in (``viscous+coulomb+quadratic`` on a record of viscous damping alone: its
+nested ``viscous+coulomb`` and ``viscous+quadratic`` each mix ``viscous`` in), each
+nested law fitted once. Where no boundary is probable, the fit is the full law's,
+unchanged (no draw, no refit).
+
+Not averaged: a law of one term (without it there is no law), a fit with one of the
+law's parameters fixed, the law-free fit (its answer is ΔE(A), not its coefficients),
+and ``law="auto"`` (:mod:`bayestribo.inference.comparison`): the laws it compares hold
+every law nested in each of them (:mod:`bayestribo.model.laws.candidates`), a law whose
+optimum puts a term on its bound reduces to the nested law
+(:mod:`bayestribo.inference.reduction`), and the simplest law as good as the best is
+kept, so a term on its bound is dropped by the choice; averaging the chosen law again
+would count the nested laws twice. A term that declares no amount (η of a friction that
+varies with amplitude, whose 0 is inside its prior) has no boundary.
 """
 
 from __future__ import annotations
@@ -37,10 +56,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from bayestribo.inference.types import Sampled
+from bayestribo.model.laws import TERMS, get_law
 
 __all__ = [
     "MAX_SHARE",
-    "NESTED",
     "THRESHOLD",
     "BoundaryDensity",
     "boundary_density",
@@ -49,10 +68,6 @@ __all__ = [
     "nested_probability",
 ]
 
-#: The default law's parameters whose 0 drops a term, and the law without it.
-NESTED: dict[str, str] = {"mu_k": "viscous", "zeta": "coulomb"}
-#: The law whose boundaries are averaged over.
-DEFAULT_LAW = "viscous+coulomb"
 #: Posterior probability of the nested law below which the full law's fit stands.
 THRESHOLD = 0.01
 #: The largest share of the reported draws a nested law's fit takes: its prior
@@ -171,29 +186,57 @@ def nested_probability(
     }
 
 
-def _candidates(sampled: Sampled) -> dict[str, dict[str, float]]:
-    """The nested-law probability of each of the default law's boundary parameters
-    that is sampled with a prior of positive density at 0 (none where a parameter of
-    the law is fixed, or friction is dropped for a run without contact)."""
+def _candidates(sampled: Sampled) -> dict[str, dict[str, Any]]:
+    """The nested law's probability at each boundary of the sampled law
+    (:attr:`~bayestribo.model.laws.Law.boundaries`) whose parameter is sampled with a
+    prior of positive density at its bound: with the name of the law without the term
+    (``law``). None where one of the law's parameters is fixed, the law-free fit, or a
+    law that has fewer than two of its terms sampled (a run without contact: friction
+    dropped)."""
     posterior = sampled.posterior
-    laws = {p.name for p in posterior.law.parameters}
-    if posterior.law.name != DEFAULT_LAW or laws & set(posterior.fixed):
-        return {}  # another law, or one of its parameters held at a value
-    if not set(NESTED) <= set(posterior.names):
-        return {}  # a run without contact: friction dropped, the viscous law alone
+    law = posterior.law
+    if {p.name for p in law.parameters} & set(posterior.fixed) or law.name == _free():
+        return {}  # one of its parameters held at a value, or the law-free fit
+    names = posterior.names
+    present = [t for t in law.terms if all(p.name in names for p in t.parameters)]
+    if len(present) < 2:
+        return {}  # a run without contact: friction dropped, one term left
     chains = sampled.run.chains
     flat = chains.reshape(-1, chains.shape[-1])
     out = {}
-    for name in NESTED:
-        if name not in posterior.names:
+    for term in present:
+        name = term.amount
+        if name is None:
             continue
-        prior_density = float(np.exp(posterior.priors[name].logpdf(0.0)))
-        column = flat[:, posterior.names.index(name)]
+        bound = law.parameter(name).low
+        prior_density = float(np.exp(posterior.priors[name].logpdf(bound)))
+        column = flat[:, names.index(name)] - bound
         if not prior_density > 0.0 or np.any(column < 0):
             continue
-        ess = sampled.run.ess[posterior.names.index(name)]
+        ess = sampled.run.ess[names.index(name)]
         out[name] = nested_probability(column, prior_density, float(ess))
+        out[name]["law"] = law.boundaries[name]
     return out
+
+
+def _free() -> str:
+    """The name of the law-free fit's law."""
+    return get_law("free").name
+
+
+def _shares(candidates: Mapping[str, Mapping[str, float]]) -> dict[str, float]:
+    """Each probable nested law's share of the draws: its probability, at most
+    :data:`MAX_SHARE`; where those add up to more than 1 (three or more probable
+    boundaries), each scaled down in proportion so that they make all the draws."""
+    shares = {
+        name: min(c["probability"], MAX_SHARE)
+        for name, c in candidates.items()
+        if c["probability"] >= THRESHOLD
+    }
+    total = sum(shares.values())
+    if total > 1.0:
+        shares = {name: share / total for name, share in shares.items()}
+    return shares
 
 
 def boundary_mixture(
@@ -201,44 +244,55 @@ def boundary_mixture(
     fit_nested: Callable[[str], Sampled],
     rng_of: Callable[[], np.random.Generator],
 ) -> tuple[Sampled, dict[str, Any] | None]:
-    """The draws to report for a fit of the default law, and the record of its
+    """The draws to report for a fit of a law of several terms, and the record of its
     boundaries.
 
     Each boundary whose nested law has a posterior probability of at least
-    :data:`THRESHOLD` takes that share of the draws, at most :data:`MAX_SHARE`; both
-    can (a record that cannot tell friction from viscous damping: half the draws each).
+    :data:`THRESHOLD` takes that share of the draws, at most :data:`MAX_SHARE`
+    (several can: :func:`_shares`). A nested law of several terms is averaged over its
+    own boundaries the same way before it is mixed in (each nested law is fitted once,
+    however many laws nest it).
 
     Parameters
     ----------
     sampled : Sampled
         The full law's checked sample.
     fit_nested : callable
-        Called with a nested law's name (:data:`NESTED`), it samples that law on the
-        same prepared run and returns its :class:`Sampled`.
+        Called with a nested law's name (:attr:`~bayestribo.model.laws.Law.boundaries`),
+        it samples that law on the same prepared run and returns its :class:`Sampled`.
     rng_of : callable
-        Called once where the draws are mixed: the generator that picks them.
+        Called once for each mixture made: the generator that picks its draws.
 
     Returns
     -------
     Sampled, dict or None
         The sample to summarise (``sampled`` itself where the nested laws are
-        improbable) and the record: ``parameters``, per boundary parameter (``mu_k``,
-        ``zeta``) its density ratio and probability; ``mixed``, the parameters whose
-        nested law was mixed in (empty: the full law's draws as sampled); ``nested``,
-        per one of those its ``law``, ``share`` of the draws and whether its fit
-        ``converged``; ``full_share``. None for a law other than the default, the
-        default with one of its parameters fixed, or a run without contact (friction
-        dropped).
+        improbable) and the record: ``law``, the law averaged; ``parameters``, per
+        boundary parameter (``mu_k``, ``zeta``, ``c2``, ...) its density ratio,
+        probability and nested ``law``; ``mixed``, the parameters whose nested law was
+        mixed in (empty: the full law's draws as sampled); ``nested``, per one of those
+        its ``law``, ``share`` of the draws, whether its fit ``converged`` and, where it
+        was averaged over its own boundaries, its ``boundary`` record; ``full_share``.
+        None for a law of one term, a law with one of its parameters fixed, the
+        law-free fit, or a run without contact where friction dropped leaves one term.
     """
+    return _average(sampled, fit_nested, rng_of, {})
+
+
+def _average(
+    sampled: Sampled,
+    fit_nested: Callable[[str], Sampled],
+    rng_of: Callable[[], np.random.Generator],
+    done: dict[str, _Nested],
+) -> tuple[Sampled, dict[str, Any] | None]:
+    """:func:`boundary_mixture`, with the nested laws already fitted (and averaged)
+    by name in ``done``."""
     candidates = _candidates(sampled)
     if not candidates:
         return sampled, None
-    shares = {
-        name: min(c["probability"], MAX_SHARE)
-        for name, c in candidates.items()
-        if c["probability"] >= THRESHOLD
-    }
+    shares = _shares(candidates)
     record: dict[str, Any] = {
+        "law": sampled.posterior.law.name,
         "prior_probability": 0.5,
         "threshold": THRESHOLD,
         "max_share": MAX_SHARE,
@@ -249,16 +303,31 @@ def boundary_mixture(
     }
     if not shares:
         return sampled, record
-    nested = {name: fit_nested(NESTED[name]) for name in sorted(shares)}
-    record["nested"] = {
-        name: {
-            "law": NESTED[name],
+    for name in sorted(shares):
+        law = candidates[name]["law"]
+        if law not in done:
+            fit = fit_nested(law)
+            averaged, inner = _average(fit, fit_nested, rng_of, done)
+            done[law] = _Nested(averaged, inner, bool(fit.run.converged))
+        nested = done[law]
+        record["nested"][name] = {
+            "law": law,
             "share": shares[name],
-            "converged": bool(fit.run.converged),
+            "converged": nested.converged,
+            **({"boundary": nested.record} if nested.record is not None else {}),
         }
-        for name, fit in nested.items()
-    }
-    return _mixed(sampled, nested, shares, rng_of()), record
+    draws = {name: done[candidates[name]["law"]].sampled for name in shares}
+    return _mixed(sampled, draws, shares, rng_of()), record
+
+
+@dataclass(frozen=True)
+class _Nested:
+    """A nested law's fit as mixed in: its draws (averaged over its own boundaries),
+    that averaging's record, and whether its sampler converged."""
+
+    sampled: Sampled
+    record: dict[str, Any] | None
+    converged: bool
 
 
 def _mixed(
@@ -269,17 +338,18 @@ def _mixed(
 ) -> Sampled:
     """``full`` with the share ``shares[name]`` of its draws, picked at random (apart
     for each name), replaced by draws of ``nested[name]`` set in the full law's
-    coordinates (``name`` at 0; the coordinates the nested law does not have keep the
+    coordinates (``name`` on its bound, 0; the coordinates the nested law does not have keep the
     full law's draws)."""
     run = full.run
     names = full.posterior.names
+    law = full.posterior.law
     chains = run.chains.reshape(-1, len(names)).copy()
     n = chains.shape[0]
     order = rng.permutation(n)
     first = 0
     replaced = []
     for name in sorted(shares):
-        k = round(shares[name] * n)
+        k = min(round(shares[name] * n), n - first)
         rows = np.sort(order[first : first + k])
         first += k
         replaced.append(rows)
@@ -289,7 +359,7 @@ def _mixed(
         nested_names = fit.posterior.names
         for j, col in enumerate(names):
             if col == name:
-                chains[rows, j] = 0.0
+                chains[rows, j] = law.parameter(name).low
             elif col in nested_names:
                 chains[rows, j] = picked[:, nested_names.index(col)]
     rows = np.concatenate(replaced)
@@ -302,23 +372,39 @@ def _mixed(
     return dataclasses.replace(full, run=new_run, pointwise=None)
 
 
-_WHAT = {"mu_k": "no friction (x_c or μ_k = 0)", "zeta": "no viscous damping (ζ = 0)"}
-
-
 def describe(record: Mapping[str, Any] | None) -> str | None:
     """One line on what was done at the boundaries (None where nothing was mixed)."""
     if not record or not record.get("mixed"):
         return None
+    # a record saved before other laws were averaged has no "law": the default law's
+    law = record.get("law", "viscous+coulomb")
+    return (
+        _described(record)
+        + f" (Savage–Dickey ratio, prior 1/2); the intervals average it with {law}'s"
+    )
+
+
+def _described(record: Mapping[str, Any]) -> str:
+    """What :func:`describe` says of one averaging (and of the nested laws' own)."""
     parts = []
     for name in record["mixed"]:
         nested = record["nested"][name]
         probability = record["parameters"][name]["probability"]
-        parts.append(
-            f"{_WHAT[name]} has posterior probability {probability:.2f}: the {nested['law']} "
-            f"law's fit makes {nested['share']:.0%} of the draws"
+        part = (
+            f"{_absent(name)} has posterior probability {probability:.2f}: the "
+            f"{nested['law']} law's fit makes {nested['share']:.0%} of the draws"
             + ("" if nested.get("converged", True) else " (that fit did not converge)")
         )
-    return (
-        "; ".join(parts)
-        + f" (Savage–Dickey ratio, prior 1/2); the intervals average it with {DEFAULT_LAW}'s"
-    )
+        inner = nested.get("boundary")
+        if inner and inner.get("mixed"):
+            part += f" (itself averaged: {_described(inner)}; with {inner['law']}'s)"
+        parts.append(part)
+    return "; ".join(parts)
+
+
+def _absent(name: str) -> str:
+    """How a report says the term whose amount is ``name`` is absent."""
+    for term in TERMS.values():
+        if term.amount == name:
+            return term.absent
+    return f"{name} = 0"

@@ -106,10 +106,11 @@ class FitRecord:
     seconds : float or None
         Wall time of the fit [s].
     boundary : dict or None
-        The default law's boundaries (no friction, no viscous damping): each one's
-        posterior probability from the Savage–Dickey density ratio, and the nested law
-        whose fit was mixed into the draws, if any
-        (:mod:`bayestribo.inference.boundary`); None for another law.
+        The law's boundaries (a term absent: no friction, no viscous damping, no
+        quadratic drag, ...): each one's posterior probability from the Savage–Dickey
+        density ratio, and the nested laws whose fits were mixed into the draws, if any
+        (:mod:`bayestribo.inference.boundary`); None for a law not averaged (one term,
+        ``law="auto"``, the law-free fit, a parameter fixed).
     unwritten : frozenset of str
         Attributes the record does not write (those a file of an earlier version does
         not hold, and the optional ones left None).

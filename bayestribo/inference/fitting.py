@@ -122,13 +122,14 @@ def fit(
         The dissipation law: terms of :mod:`bayestribo.model.laws` joined with ``+``
         (``"viscous+coulomb"``, the default; ``"viscous+quadratic"``,
         ``"coulomb+hysteretic"``, ...) or a :class:`~bayestribo.model.laws.Law`. A run
-        without contact (``load_N`` of 0) drops the law's friction terms. The default
-        law is averaged over its boundaries: where no friction or no viscous damping
-        is probable (at least 1 %, from the Savage–Dickey density ratio), the law
-        without that term is fitted too and makes that share of the draws, at most
-        half (:mod:`bayestribo.inference.boundary`; the result's ``boundary`` says
-        what was done). ``"auto"``
-        compares the laws the registry's terms make by the rule of
+        without contact (``load_N`` of 0) drops the law's friction terms. A law of
+        several terms is averaged over its boundaries: where the absence of one of its
+        terms (no friction, no viscous damping, no quadratic drag, ...) is probable (at
+        least 1 %, from the Savage–Dickey density ratio), the law without that term is
+        fitted too and makes that share of the draws, at most half
+        (:mod:`bayestribo.inference.boundary`; the result's ``boundary`` says what was
+        done). ``"auto"`` is not averaged (its comparison holds the nested laws
+        already); it compares the laws the registry's terms make by the rule of
         :mod:`bayestribo.model.laws.candidates`
         (:func:`bayestribo.inference.comparison.auto_laws`): each is taken to its
         optimum, those too far behind the best there to win are screened out, the rest
@@ -259,8 +260,8 @@ def fit(
 
 
 def _nested(given: Mapping[str, Any] | None, nested: str) -> dict[str, Any] | None:
-    """The priors (or fixed values) given for the default law that its nested law
-    ``nested`` has (:mod:`bayestribo.inference.boundary`)."""
+    """The priors (or fixed values) given for the law that its nested law ``nested``
+    has (:mod:`bayestribo.inference.boundary`)."""
     names = {p.name for p in get_law(nested).parameters}
     names |= {"y0", "log10_discrepancy", "log10_shape"}
     return {k: v for k, v in (given or {}).items() if k in names} or None

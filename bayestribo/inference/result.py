@@ -223,13 +223,16 @@ class FitResult:
 
     @property
     def boundary(self) -> dict[str, Any] | None:
-        """The default law's boundaries (:mod:`bayestribo.inference.boundary`): per
-        boundary parameter (``mu_k`` for no friction, ``zeta`` for no viscous damping)
-        its Savage–Dickey ``density_ratio`` and the nested law's posterior
-        ``probability`` (``parameters``); ``mixed``, the parameters whose nested law's
-        fit was mixed into the draws (empty: the full law's draws as sampled), with
-        each one's ``law`` and ``share`` of the draws (``nested``). None for a fit of
-        another law.
+        """The law's boundaries (:mod:`bayestribo.inference.boundary`): the ``law``
+        averaged; per boundary parameter (``mu_k`` for no friction, ``zeta`` for no
+        viscous damping, ``c2`` for no quadratic drag, ...) its Savage–Dickey
+        ``density_ratio``, the nested law's posterior ``probability`` and its ``law``
+        (``parameters``); ``mixed``, the parameters whose nested law's fit was mixed
+        into the draws (empty: the full law's draws as sampled), with each one's
+        ``law``, ``share`` of the draws and, where that law was averaged over its own
+        boundaries, its ``boundary`` record (``nested``). None for a law of one term,
+        ``law="auto"``, the law-free fit, or a fit with one of the law's parameters
+        fixed.
         """
         return self._attr("boundary_json", None)
 

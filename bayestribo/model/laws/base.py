@@ -208,6 +208,17 @@ class Term:
         False for a term ``law="auto"`` never compares (a building block of the
         law-free fit, not a mechanism); default True, so that a registered term is
         a candidate with no edit elsewhere.
+    amount : str, optional
+        The parameter whose null, the lower bound of its support, removes the term
+        (its force 0 at every speed or amplitude, whatever the others): a drag's
+        coefficient, μ_k. A law holding the term and another then nests the law
+        without it on that bound (:attr:`bayestribo.model.laws.Law.boundaries`), and a
+        fit of the law averages over it (:mod:`bayestribo.inference.boundary`). None
+        (the default) for a term without one: a friction that may take either sign
+        (η, whose null 0 is inside its prior), or a term that declares none.
+    absent : str, optional
+        How a report says the term is absent (``"no viscous damping (ζ = 0)"``);
+        default ``"no <name> term (<symbol> = 0)"`` from ``amount``.
     """
 
     name: str
@@ -224,6 +235,8 @@ class Term:
     nests: Mapping[str, float] = field(default_factory=dict)
     overlaps: tuple[str, ...] = ()
     compared: bool = True
+    amount: str | None = None
+    absent: str = ""
 
     def __post_init__(self) -> None:
         if not self.name.isidentifier():
@@ -237,6 +250,17 @@ class Term:
         object.__setattr__(self, "overlaps", tuple(self.overlaps))
         if self.name in self.overlaps:
             raise ValueError(f"Term {self.name}: a term does not overlap itself")
+        if self.amount is not None:
+            amount = next((p for p in self.parameters if p.name == self.amount), None)
+            if amount is None or amount.null != amount.low:
+                raise ValueError(
+                    f"Term {self.name}: amount must name a parameter whose null is the "
+                    f"lower bound of its support, got {self.amount!r}"
+                )
+            if not self.absent:
+                object.__setattr__(
+                    self, "absent", f"no {self.name} term ({amount.symbol} = {amount.null:g})"
+                )
 
     @property
     def parameter_names(self) -> list[str]:

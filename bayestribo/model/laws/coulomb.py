@@ -98,6 +98,8 @@ COULOMB = register_term(
         dissipation=_dissipation,
         physical=_physical,
         description="Coulomb friction μ_k N sgn v, sticking at μ_s, ΔE = 4μ_kNA",
+        amount="mu_k",
+        absent="no friction (x_c or μ_k = 0)",
         sticks=True,
     )
 )

@@ -71,6 +71,8 @@ CUBIC = register_term(
         dissipation=_dissipation,
         physical=_physical,
         description="cubic drag c₃ v³, ΔE = (3π/4)c₃Ω³A⁴",
+        amount="c3",
+        absent="no cubic drag (c₃ = 0)",
         # the law-free fit's fourth power, not a mechanism law="auto" compares
         compared=False,
     )

@@ -198,6 +198,27 @@ class Law:
         it with its extra terms at zero)."""
         return set(other.term_names) <= set(self.term_names)
 
+    @property
+    def boundaries(self) -> dict[str, str]:
+        """The laws this one nests on a bound of its prior: for each term that
+        declares an amount (:attr:`~bayestribo.model.laws.base.Term.amount`, the
+        parameter whose null, its lower bound, removes the term), that parameter's
+        name and the name of the law without the term. Empty for a law of one term
+        (without it there is no law).
+
+        Examples
+        --------
+        >>> Law.from_name("viscous+coulomb").boundaries
+        {'zeta': 'coulomb', 'mu_k': 'viscous'}
+        """
+        if len(self.terms) < 2:
+            return {}
+        return {
+            t.amount: "+".join(o.name for o in self.terms if o is not t)
+            for t in self.terms
+            if t.amount is not None
+        }
+
     # -- the compiled core --------------------------------------------------------
     @cached_property
     def _layout(self) -> tuple[tuple, tuple]:

@@ -97,6 +97,8 @@ POWER = register_term(
         dissipation=_dissipation,
         physical=_physical,
         description="power-law drag c_α |v|^α sgn v, α free, ΔE ∝ A^(α+1)",
+        amount="zeta_alpha",
+        absent="no power-law drag (ζ_α = 0; α then free)",
         smooth=False,
         # α = 1 is viscous damping (ΔE ∝ A², as a friction proportional to amplitude
         # makes it) and α = 2 quadratic drag, both inside α's prior: with either, ζ_α

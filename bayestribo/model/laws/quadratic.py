@@ -66,5 +66,7 @@ QUADRATIC = register_term(
         dissipation=_dissipation,
         physical=_physical,
         description="quadratic drag c₂ v|v| (air, fluid), ΔE = (8/3)c₂Ω²A³",
+        amount="c2",
+        absent="no quadratic drag (c₂ = 0)",
     )
 )

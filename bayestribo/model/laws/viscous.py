@@ -69,5 +69,7 @@ VISCOUS = register_term(
         dissipation=_dissipation,
         physical=_physical,
         description="viscous damping c v (ζ = c/(2mΩ)), ΔE = 2πζkA²",
+        amount="zeta",
+        absent="no viscous damping (ζ = 0)",
     )
 )
