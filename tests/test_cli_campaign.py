@@ -106,7 +106,7 @@ def test_a_campaign_lists_and_excludes_bad_runs_and_analyses_the_rest(tmp_path, 
     os.symlink(DATA / "air-r1.csv", folder / "air-r1.csv")
     (folder / "air-r1.json").write_text('{"load_N": 0.0, "mass_kg": ')
     out = tmp_path / "out"
-    status, report = _run(capsys, folder, "--out", out, "--no-figures", *FAST)
+    status, report = _run(capsys, folder, "--out", out, "--no-figures", "--workers", 1, *FAST)
     assert status == 1
     assert [f["run"] for f in report["failures"]] == ["air-r1"]
     assert "air-r1.json" in report["failures"][0]["error"]
@@ -204,7 +204,7 @@ def test_equal_names_in_sub_folders_are_two_runs_and_twin_files_are_named(tmp_pa
         target.with_suffix(".json").write_text(json.dumps(metadata))
     os.symlink(DATA / "air-r1.csv", root / "c" / "twin.txt")
     out = tmp_path / "out"
-    status, report = _run(capsys, root, "--out", out, "--workers", 2, *FAST)
+    status, report = _run(capsys, root, "--out", out, "--workers", 1, *FAST)
     assert status == 1
     assert sorted(r["run_id"] for r in report["runs"]) == ["a/run", "b/run"]
     assert sorted(f["run"] for f in report["failures"]) == ["c/twin", "c/twin"]

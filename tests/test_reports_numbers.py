@@ -50,7 +50,7 @@ def campaign(tmp_path_factory):
         for suffix in (".csv", ".json"):
             (data / f"{run_id}{suffix}").symlink_to(RUNS / f"{run_id}{suffix}")
     argv = ["campaign", str(data), "--out", str(out), "--max-steps", "1500"]
-    argv += ["--grid-points", "32", "--population-steps", "600", "--workers", "2", "--quiet"]
+    argv += ["--grid-points", "32", "--population-steps", "600", "--workers", "1", "--quiet"]
     assert main(argv) in (0, 1)  # short population samplers may not converge
     html, summary = tmp / "report.html", tmp / "summary.json"
     argv = ["report", str(out), "--out", str(html), "--figure-format", "png"]
