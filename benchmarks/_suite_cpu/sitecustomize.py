@@ -91,6 +91,14 @@ if _OUT:
     try:  # multiprocessing's children end with os._exit, after its finalizers
         import multiprocessing.util
 
+        class _Child:
+            """Registers the record again in a forked child, whose finalizers the child
+            clears first (a forkserver's pool workers)."""
+
+        _CHILD = _Child()
         multiprocessing.util.Finalize(None, _dump, exitpriority=-100)
+        multiprocessing.util.register_after_fork(
+            _CHILD, lambda _: multiprocessing.util.Finalize(None, _dump, exitpriority=-100)
+        )
     except Exception:
         pass
