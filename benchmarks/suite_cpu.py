@@ -102,6 +102,7 @@ def main() -> None:
     parser.add_argument("--collect", type=Path, help="summarise the run folders under it")
     parser.add_argument("--label", default="run")
     parser.add_argument("--output", default="suite_cpu")
+    parser.add_argument("--note", default="", help="how the collected runs were made")
     args = parser.parse_args()
     work = args.collect or Path(tempfile.mkdtemp(prefix="suite-cpu-"))
     if args.collect is None:
@@ -132,6 +133,7 @@ def main() -> None:
             "benchmark": "suite_cpu",
             "description": __doc__,
             "settings": {"modules": args.modules, "jobs": args.jobs, "commits": resolved},
+            "note": args.note,
             "runs": runs,
             "medians": medians,
         },
