@@ -43,17 +43,23 @@ result's ``restoring["auto"]`` (:meth:`RestoringChoice.to_dict`) and its text's
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from bayestribo._warnings import warn
 from bayestribo.errors import FrequencyTrendWarning
 from bayestribo.model.restoring import AUTO, get_restoring
-from bayestribo.signal.frequency import FrequencyTrend, turning_point_trend
+from bayestribo.signal.frequency import (
+    FOLLOWED,
+    FrequencyTrend,
+    follows,
+    trend_beyond,
+    turning_point_trend,
+)
+from bayestribo.signal.pendulum_arm import arm_advice, simple_pendulum_arm
 
 __all__ = [
     "AUTO",
@@ -64,10 +70,6 @@ __all__ = [
     "simple_pendulum_arm",
     "trend_beyond",
 ]
-
-#: The largest share of the measured change a force's half periods may leave and still
-#: be said to follow it (rules 2 and 3 of the module notes) [-].
-FOLLOWED = 0.1
 
 
 @dataclass(frozen=True)
@@ -144,118 +146,6 @@ def _percent(change: float) -> str:
     return f"{100 * change:+.3g} %"
 
 
-def _follows(left: FrequencyTrend | None, trend: FrequencyTrend) -> bool:
-    """True when a force leaves of the measured change ``trend`` at most what its noise
-    or :data:`FOLLOWED` of it allows (``left``: what the force leaves; None: nothing
-    measured)."""
-    return left is not None and (
-        not left.significant or abs(left.change) <= FOLLOWED * abs(trend.change)
-    )
-
-
-def trend_beyond(
-    times: ArrayLike, values: ArrayLike, ratio: Callable[[ArrayLike], NDArray]
-) -> FrequencyTrend | None:
-    """The half period's change beyond a restoring force's own.
-
-    The force's half periods at the record's swings, ``T₀ T(A_m)/T₀`` (A_m the mean of
-    two turning points' sizes, T₀ and t₀ fitted to the turning times by least squares),
-    make the turning times uneven; that unevenness is taken off the record's turning
-    times and the change measured again (:func:`~bayestribo.signal.frequency.
-    turning_point_trend`), its standard error the record's own.
-
-    Parameters
-    ----------
-    times : array_like
-        Turning times [s], in order.
-    values : array_like
-        The turning points about the equilibrium, in the unit the force takes.
-    ratio : callable
-        The force's ``half_period_ratio`` [-].
-
-    Returns
-    -------
-    FrequencyTrend or None
-        None with too few turning points or a force that has no half period at these
-        swings (a pendulum at π, a softening spring past its turning-over point).
-    """
-    t = np.asarray(times, dtype=float)
-    y = np.asarray(values, dtype=float)
-    a = np.abs(y)
-    try:
-        steps = np.concatenate(([0.0], np.cumsum(ratio(0.5 * (a[1:] + a[:-1])))))
-    except ValueError:
-        return None
-    if not np.all(np.isfinite(steps)):
-        return None
-    n = np.arange(steps.size, dtype=float)
-    design = np.column_stack([np.ones_like(steps), steps])
-    (_, half), *_ = np.linalg.lstsq(design, t, rcond=None)
-    uneven = steps - np.polyval(np.polyfit(n, steps, 1), n)
-    return turning_point_trend(t - float(half) * uneven, y)
-
-
-def simple_pendulum_arm(
-    times: ArrayLike | None, values: ArrayLike, trend: FrequencyTrend | None = None
-) -> float | None:
-    """The length of a simple pendulum recorded as a length whose half periods follow the
-    record's change, if one does.
-
-    A record in metres of a simple pendulum's bob, ``x = r sin θ`` with r = g/ω₀²
-    (:func:`~bayestribo.signal.pendulum_arm.simple_radius`), has half periods that
-    change with the swing as the pendulum's at θ = arcsin(A/r); they follow the
-    measured change when what they leave of it is within its noise or at most
-    :data:`FOLLOWED` of it (as a force's half periods in :func:`choose_restoring`).
-    That is when ``pendulum_radius_m`` ``"simple"`` (``--pendulum-radius simple``)
-    reads the record as the angle it is (:mod:`bayestribo.io.pendulum_arm`).
-
-    Parameters
-    ----------
-    times : array_like or None
-        The turning times [s] (None: none measured).
-    values : array_like
-        The turning points about the equilibrium [m].
-    trend : FrequencyTrend, optional
-        The half period's change measured on them (default: measured here).
-
-    Returns
-    -------
-    float or None
-        r [m] when the change is significant and a simple pendulum's follows it; None
-        otherwise.
-    """
-    from bayestribo.signal.pendulum_arm import arm_half_period_ratio, simple_radius
-
-    if times is None:
-        return None
-    y = np.asarray(values, dtype=float)
-    if trend is None:
-        trend = turning_point_trend(times, y)
-    if trend is None or not math.isfinite(trend.change) or not trend.significant:
-        return None
-    found = simple_radius(times, y)
-    if found is None:
-        return None
-    radius = found[0]
-    return (
-        radius if _follows(trend_beyond(times, y, arm_half_period_ratio(radius)), trend) else None
-    )
-
-
-def arm_advice(radius: float) -> str:
-    """What a warning says to a record in metres that changes as a simple pendulum's
-    recorded as a length (:func:`simple_pendulum_arm`) would."""
-    return (
-        "its half period changes with the swing as a simple pendulum's does when its bob "
-        f"is recorded as a length, x = r sin θ with r = g/ω₀² = {radius:.4g} m: no "
-        "restoring force of x alone is a pendulum's; pendulum_radius_m='simple' "
-        "(--pendulum-radius simple) reads the record as the angle θ = arcsin(x/r) and fits "
-        "it with the pendulum's restoring force (for a point at another distance from the "
-        "pivot, a laser on the arm, give that distance: --pendulum-radius R); beyond 48° "
-        "the angle's noise grows too much for calibrated intervals, which the fit then says"
-    )
-
-
 def choose_restoring(
     times: ArrayLike | None,
     values: ArrayLike,
@@ -316,7 +206,7 @@ def choose_restoring(
     )
     if length_unit == "rad" and angle:
         left["pendulum"] = pendulum
-        if _follows(pendulum, trend):
+        if follows(pendulum, trend):
             return RestoringChoice("pendulum", trend, left)
     beta = beta_se = None
     try:
@@ -325,11 +215,11 @@ def choose_restoring(
         left["duffing"] = trend_beyond(times, y, force.half_period_ratio)
     except ValueError:
         left["duffing"] = None
-    followed = _follows(left["duffing"], trend)
+    followed = follows(left["duffing"], trend)
     # a record not in radians that changes as a pendulum's would were it an angle
     hint = (
         ""
-        if not _follows(pendulum, trend) or "pendulum" in left
+        if not follows(pendulum, trend) or "pendulum" in left
         else f"it changes as a pendulum's would were the displacement an angle in radians "
         f"({_percent(pendulum.change)} left), but the run's unit is {length_unit!r}"
         + ("" if angle else " and its displacement is scaled by the rig")

@@ -1345,7 +1345,7 @@ def _flattened(
     )
     if channel == "displacement":
         # a pendulum's bob recorded as a length, x = r sin θ, bends so: no sensor's fault
-        from bayestribo.inference.restoring_choice import arm_advice, simple_pendulum_arm
+        from bayestribo.signal.pendulum_arm import arm_advice, simple_pendulum_arm
 
         arm = simple_pendulum_arm(peaks.t, peaks.value)
         if arm is not None:

@@ -21,6 +21,7 @@ cycles. It is the damped frequency Ω√(1-ζ²), 0.03 % below the natural frequ
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,13 +31,16 @@ from bayestribo.errors import RecordingError
 from bayestribo.signal.period import dominant_period, sample_step
 
 __all__ = [
+    "FOLLOWED",
     "FREQUENCY_TREND_CHANGE",
     "FREQUENCY_TREND_Z",
     "HYSTERESIS",
     "FrequencyTrend",
     "crossing_frequency",
+    "follows",
     "frequency_trend",
     "oscillation_frequency",
+    "trend_beyond",
     "turning_point_trend",
 ]
 
@@ -312,3 +316,60 @@ def turning_point_trend(times: ArrayLike, values: ArrayLike) -> FrequencyTrend |
     else:
         z = 0.0 if coef[2] == 0 else math.copysign(math.inf, change)
     return FrequencyTrend(change, z, int(swing.size))
+
+
+#: The largest share of the measured change a force's half periods may leave and still
+#: be said to follow it (rules 2 and 3 of
+#: :mod:`bayestribo.inference.restoring_choice`'s notes) [-].
+FOLLOWED = 0.1
+
+
+def follows(left: FrequencyTrend | None, trend: FrequencyTrend) -> bool:
+    """True when a force leaves of the measured change ``trend`` at most what its noise
+    or :data:`FOLLOWED` of it allows (``left``: what the force leaves; None: nothing
+    measured)."""
+    return left is not None and (
+        not left.significant or abs(left.change) <= FOLLOWED * abs(trend.change)
+    )
+
+
+def trend_beyond(
+    times: ArrayLike, values: ArrayLike, ratio: Callable[[ArrayLike], NDArray]
+) -> FrequencyTrend | None:
+    """The half period's change beyond a restoring force's own.
+
+    The force's half periods at the record's swings, ``T₀ T(A_m)/T₀`` (A_m the mean of
+    two turning points' sizes, T₀ and t₀ fitted to the turning times by least squares),
+    make the turning times uneven; that unevenness is taken off the record's turning
+    times and the change measured again (:func:`~bayestribo.signal.frequency.
+    turning_point_trend`), its standard error the record's own.
+
+    Parameters
+    ----------
+    times : array_like
+        Turning times [s], in order.
+    values : array_like
+        The turning points about the equilibrium, in the unit the force takes.
+    ratio : callable
+        The force's ``half_period_ratio`` [-].
+
+    Returns
+    -------
+    FrequencyTrend or None
+        None with too few turning points or a force that has no half period at these
+        swings (a pendulum at π, a softening spring past its turning-over point).
+    """
+    t = np.asarray(times, dtype=float)
+    y = np.asarray(values, dtype=float)
+    a = np.abs(y)
+    try:
+        steps = np.concatenate(([0.0], np.cumsum(ratio(0.5 * (a[1:] + a[:-1])))))
+    except ValueError:
+        return None
+    if not np.all(np.isfinite(steps)):
+        return None
+    n = np.arange(steps.size, dtype=float)
+    design = np.column_stack([np.ones_like(steps), steps])
+    (_, half), *_ = np.linalg.lstsq(design, t, rcond=None)
+    uneven = steps - np.polyval(np.polyfit(n, steps, 1), n)
+    return turning_point_trend(t - float(half) * uneven, y)

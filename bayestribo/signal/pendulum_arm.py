@@ -19,7 +19,20 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["GRAVITY", "arm_half_period_ratio", "simple_radius"]
+from bayestribo.signal.frequency import (
+    FrequencyTrend,
+    follows,
+    trend_beyond,
+    turning_point_trend,
+)
+
+__all__ = [
+    "GRAVITY",
+    "arm_advice",
+    "arm_half_period_ratio",
+    "simple_pendulum_arm",
+    "simple_radius",
+]
 
 #: The standard acceleration of gravity [m/s²] (local values lie within 0.3 % of it,
 #: 9.78 at the equator to 9.83 at the poles): the ``simple`` radius takes it.
@@ -106,3 +119,61 @@ def simple_radius(
     else:
         return None
     return radius, 1.0 / (2.0 * half)
+
+
+def simple_pendulum_arm(
+    times: ArrayLike | None, values: ArrayLike, trend: FrequencyTrend | None = None
+) -> float | None:
+    """The length of a simple pendulum recorded as a length whose half periods follow the
+    record's change, if one does.
+
+    A record in metres of a simple pendulum's bob, ``x = r sin θ`` with r = g/ω₀²
+    (:func:`~bayestribo.signal.pendulum_arm.simple_radius`), has half periods that
+    change with the swing as the pendulum's at θ = arcsin(A/r); they follow the
+    measured change when what they leave of it is within its noise or at most
+    :data:`~bayestribo.signal.frequency.FOLLOWED` of it (as a force's half periods in
+    :func:`~bayestribo.inference.restoring_choice.choose_restoring`).
+    That is when ``pendulum_radius_m`` ``"simple"`` (``--pendulum-radius simple``)
+    reads the record as the angle it is (:mod:`bayestribo.io.pendulum_arm`).
+
+    Parameters
+    ----------
+    times : array_like or None
+        The turning times [s] (None: none measured).
+    values : array_like
+        The turning points about the equilibrium [m].
+    trend : FrequencyTrend, optional
+        The half period's change measured on them (default: measured here).
+
+    Returns
+    -------
+    float or None
+        r [m] when the change is significant and a simple pendulum's follows it; None
+        otherwise.
+    """
+    if times is None:
+        return None
+    y = np.asarray(values, dtype=float)
+    if trend is None:
+        trend = turning_point_trend(times, y)
+    if trend is None or not math.isfinite(trend.change) or not trend.significant:
+        return None
+    found = simple_radius(times, y)
+    if found is None:
+        return None
+    radius = found[0]
+    return radius if follows(trend_beyond(times, y, arm_half_period_ratio(radius)), trend) else None
+
+
+def arm_advice(radius: float) -> str:
+    """What a warning says to a record in metres that changes as a simple pendulum's
+    recorded as a length (:func:`simple_pendulum_arm`) would."""
+    return (
+        "its half period changes with the swing as a simple pendulum's does when its bob "
+        f"is recorded as a length, x = r sin θ with r = g/ω₀² = {radius:.4g} m: no "
+        "restoring force of x alone is a pendulum's; pendulum_radius_m='simple' "
+        "(--pendulum-radius simple) reads the record as the angle θ = arcsin(x/r) and fits "
+        "it with the pendulum's restoring force (for a point at another distance from the "
+        "pivot, a laser on the arm, give that distance: --pendulum-radius R); beyond 48° "
+        "the angle's noise grows too much for calibrated intervals, which the fit then says"
+    )
