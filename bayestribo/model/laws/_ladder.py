@@ -6,8 +6,9 @@ of step counts a half cycle may take, the nodes of the stretched angle for a num
 steps (:func:`nodes`) and the tables of every count of the ladder, computed once at
 import. The template imports them, so that numba compiles :func:`nodes` and
 :func:`ladder_tables` once, into the package's own cache, instead of once per law
-(1.3-1.7 s of CPU per law with an empty law cache; ``benchmarks/law_compile.py``); the
-tables a law's functions read are the same arrays, and :func:`nodes` the same code.
+(1.1-1.4 s of CPU per law with an empty law cache, and the first law of a process
+5-6 s in all with the numba routines they pulled in; ``benchmarks/law_compile.py``);
+the tables a law's functions read are the same arrays, and :func:`nodes` the same code.
 """
 
 from __future__ import annotations
