@@ -3,13 +3,15 @@ a template, the text the two templates share once, then the law's definitions.""
 
 from __future__ import annotations
 
+import hashlib
 import inspect
 import re
 
+import numpy as np
 import pytest
 
-from bayestribo.model.laws import _core, _core_shared, _restoring_core, get_law
-from bayestribo.model.laws.integrator import _law_source
+from bayestribo.model.laws import _core, _core_shared, _ladder, _restoring_core, get_law
+from bayestribo.model.laws.integrator import _law_source, compiled_law
 from bayestribo.model.restoring import get_restoring
 
 LAW = "viscous+quadratic+coulomb"
@@ -42,3 +44,26 @@ def test_a_law_module_holds_each_function_once(template, kernels):
     if kernels is not None:
         assert re.search(r"^from \S+ import \w+ as spring  # noqa", text, flags=re.MULTILINE)
         assert re.search(r"^from \S+ import \w+ as potential  # noqa", text, flags=re.MULTILINE)
+
+
+def test_the_step_ladder_is_compiled_once_for_every_law_not_per_law():
+    text, _, cacheable = _law_source(_core, get_law(LAW)._layout[0])
+    assert cacheable
+    defined = re.findall(r"^def (\w+)\(", text, flags=re.MULTILINE)
+    # compiled in their own module (the package's cache), imported by the template
+    assert "nodes" not in defined and "ladder_tables" not in defined
+    assert re.search(r"^from bayestribo\.model\.laws\._ladder import .*\bnodes\b", text, re.M)
+    # their code is linked into the law's functions: a change of it is a new law file
+    digest = hashlib.sha1(inspect.getsource(_ladder).encode()).hexdigest()
+    assert f"# _ladder: {digest}\n" in text
+
+
+def test_a_law_reads_the_ladders_shared_tables():
+    module = compiled_law(*get_law("quadratic")._layout[0])
+    assert module._TABLES is _ladder.TABLES and module._OFFSETS is _ladder.OFFSETS
+    assert module.nodes is _ladder.nodes and module.LADDER is _ladder.LADDER
+    for i, steps in enumerate(_ladder.LADDER):
+        start = _ladder.OFFSETS[i]
+        block = _ladder.TABLES[:, start : start + 2 * steps + 1]
+        assert np.array_equal(block, _ladder.nodes(0.0, steps))
+    assert _ladder.TABLES.shape[1] == _ladder.OFFSETS[-1] + 2 * _ladder.LADDER[-1] + 1

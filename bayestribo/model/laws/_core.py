@@ -28,6 +28,13 @@ from bayestribo.model.laws._core_shared import (
     _TAIL_TOLERANCE,
 )
 
+# the ladder of step counts, the nodes of a half cycle and the ladder's node tables
+# (frozen into the functions that read them) depend on no law: compiled and computed
+# once, in their own module, for every law
+from bayestribo.model.laws._ladder import LADDER, nodes
+from bayestribo.model.laws._ladder import OFFSETS as _OFFSETS
+from bayestribo.model.laws._ladder import TABLES as _TABLES
+
 if TYPE_CHECKING:  # defined for each law after this text (see the module notes)
     from bayestribo.model.laws._core_shared import (
         finish,
@@ -54,13 +61,6 @@ if TYPE_CHECKING:  # defined for each law after this text (see the module notes)
 #: cap of half cycles past the record from the averaged flow of those -steps half
 #: cycles, within _AVERAGED_TOLERANCE of what summing them would give.
 DEFAULT_STEPS = 0
-#: The step counts a half cycle may take (at most 25 % apart: the count chosen is never
-#: far above the one the error asks for). Those below :data:`_MIN_STEPS` serve only the
-#: half cycles past the record, whose share of Π(0) is small.
-LADDER = np.array(
-    [8, 12, 16, 20, 24, 28, 32, 40, 48, 56, 64, 80, 96, 112, 128, 160, 192, 224, 256, 320, 384],
-    dtype=np.int64,
-)
 # Steps ≈ _STEP_SCALE √ζ_e keep Π within ~2e-9 of Π(0): the error of the scheme measured
 # against the closed form grows as ζ² h⁴ (1.4e-9 at ζ = 0.01 and 48 steps; 2.7e-8 at
 # ζ = 0.2 and 96 steps), so h ∝ ζ^(-1/2) holds it constant.
@@ -123,21 +123,6 @@ def arc_integral(t: float, r: float, mu: float, theta0: float) -> float:
     return 0.5 * (mu * mu + r * r) * t + mu * r * (math.sin(theta0 + t) - math.sin(theta0))
 
 
-@numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
-def ladder_tables() -> tuple[NDArray, NDArray]:
-    """The node tables of every step count of :data:`LADDER`, side by side, and
-    where each starts."""
-    offsets = np.empty(LADDER.size, dtype=np.int64)
-    total = 0
-    for i in range(LADDER.size):
-        offsets[i] = total
-        total += 2 * LADDER[i] + 1
-    out = np.empty((3, total))
-    for i in range(LADDER.size):
-        out[:, offsets[i] : offsets[i] + 2 * LADDER[i] + 1] = nodes(0.0, LADDER[i])
-    return out, offsets
-
-
 @numba.njit(cache=True, inline="always", error_model="numpy", fastmath=_FAST)
 def choose_steps(r: float, c: NDArray, weight: float) -> int:
     """Index in LADDER of the steps for a half cycle of amplitude r about its centre:
@@ -154,21 +139,6 @@ def choose_steps(r: float, c: NDArray, weight: float) -> int:
         if LADDER[i] >= want:
             return i
     return LADDER.size - 1
-
-
-@numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
-def nodes(theta0: float, steps: int) -> NDArray:
-    """sin θ, cos θ and dθ/dψ at ψ = i/(2 steps), i = 0 .. 2 steps, shape (3, 2 steps + 1)."""
-    span = math.pi - theta0
-    two_pi = 2.0 * math.pi
-    out = np.empty((3, 2 * steps + 1))
-    for i in range(2 * steps + 1):
-        psi = i / (2.0 * steps)
-        th = theta0 + span * (psi - math.sin(two_pi * psi) / two_pi)
-        out[0, i] = math.sin(th)
-        out[1, i] = math.cos(th)
-        out[2, i] = span * (1.0 - math.cos(two_pi * psi))
-    return out
 
 
 @numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
@@ -256,11 +226,6 @@ def hermite(t: float, k: int, tau_at: NDArray, c_at: NDArray, e_at: NDArray) -> 
         + (-4.0 * s3 + 7.0 * s4 - 3.0 * s5) * h * e_at[0, k + 1]
         + (0.5 * s3 - s4 + 0.5 * s5) * h * h * e_at[1, k + 1]
     )
-
-
-# The node tables of the ladder depend on no parameter: computed once, at import, and
-# frozen into the compiled functions that read them.
-_TABLES, _OFFSETS = ladder_tables()
 
 
 @numba.njit(cache=True, inline="always", error_model="numpy", fastmath=_FAST)

@@ -66,7 +66,7 @@ from collections.abc import Callable, Mapping
 from functools import cache
 from types import ModuleType
 
-from bayestribo.model.laws import _core, _core_shared
+from bayestribo.model.laws import _core, _core_shared, _ladder
 from bayestribo.model.laws.cache import CACHE_ENV, law_cache_dir, load_module
 
 __all__ = [
@@ -155,7 +155,10 @@ def _law_source(
     )
     if not cacheable:
         return text.replace("cache=True", "cache=False"), named, False
-    # a change of a force's or kernel's source is a new file, never a stale cache
+    # a change of a force's or kernel's source, or of the compiled functions the template
+    # imports (:mod:`._ladder`, linked into the law's own), is a new file, never a stale
+    # cache
+    text += f"# _ladder: {hashlib.sha1(inspect.getsource(_ladder).encode()).hexdigest()}\n"
     text += "".join(
         f"# {name}: {hashlib.sha1(inspect.getsource(f.py_func).encode()).hexdigest()}\n"  # type: ignore[attr-defined]
         for name, f in named.items()
