@@ -244,3 +244,22 @@ def test_the_exact_sampler_runs_in_the_laws_coordinates_and_reports_its_own(monk
     else:
         assert seen["log_prob"] is posterior
         np.testing.assert_array_equal(run.chains, walkers[:, :8])
+
+
+def test_a_run_not_converged_says_which_coordinates_its_reasons_name():
+    rng = np.random.default_rng(3)
+    target = _LShaped()
+    density = Reparameterised(target, LossShare(reference=1.0, lowest=0.2))
+    start = _prior_box(rng, 64)
+    start[:, 0] = (0.8 - 4.0 * math.pi * start[:, 2]) / 8.0
+    start[:, 4] = 0.2
+    walkers = density.initial(start.reshape(2, 32, -1), rng)
+    # far too few steps to converge: the reasons name the sampled coordinates
+    settings = SamplerSettings(n_walkers=32, n_ensembles=2, max_steps=60)
+    sampled = run_ensembles(density, walkers, settings, seed=5)
+    assert not sampled.converged
+    run = density.law_run(sampled)
+    assert run.reasons[: len(sampled.reasons)] == sampled.reasons
+    said = run.reasons[-1]
+    assert all(name in said for name in LossShare.names + LossShare.law_names)
+    assert run.names == NAMES

@@ -137,7 +137,8 @@ class Reparameterised:
         """The run of this density mapped back to the posterior's coordinates.
 
         Draws θ(u); the log posterior of θ (the sampled one less the log Jacobian);
-        R-hat of θ; each replaced parameter's autocorrelation time the longest, and
+        R-hat of θ; a run not converged says, after its reasons, which coordinates
+        they name; each replaced parameter's autocorrelation time the longest, and
         its effective sample size the least, over the transform's coordinates (each
         θ of them is a function of all); the other coordinates' as sampled.
         """
@@ -153,8 +154,17 @@ class Reparameterised:
             ess[cols] = np.min(ess[cols])
         r_hat = rhat(chains) if chains.shape[1] >= 4 else run.rhat
         names = tuple(self.posterior.names) if run.names else run.names
+        reasons = list(run.reasons)
+        if reasons:
+            # the reasons name the sampled coordinates; say what they stand for
+            reasons.append(
+                f"the sampler ran in the coordinates {', '.join(self.transform.names)} in "
+                f"place of {', '.join(self.transform.law_names)} "
+                f"({type(self.transform).__module__}); the reasons above name them"
+            )
         return replace(
             run,
+            reasons=reasons,
             chains=chains,
             log_prob=run.log_prob - jac,
             autocorr_time=tau,
