@@ -191,30 +191,30 @@ def add_reading_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def _positive_rate(text: str) -> float:
-    """``--sample-rate`` value: a sample rate [Hz] > 0."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not math.isfinite(value) or value <= 0.0:
-        raise argparse.ArgumentTypeError(f"expected a sample rate in Hz > 0, got {text!r}")
-    return value
-
-
-def _pendulum_radius(text: str) -> float | str:
-    """``--pendulum-radius`` value: a radius [m] > 0, or ``simple``."""
-    if text == "simple":
+def _positive(text: str, expected: str, keyword: str | None = None) -> float | str:
+    """A finite number > 0 from ``text``, or ``keyword`` itself; else an
+    :class:`argparse.ArgumentTypeError` saying what was ``expected``."""
+    if keyword is not None and text == keyword:
         return text
     try:
         value = float(text)
     except ValueError:
         value = math.nan
     if not math.isfinite(value) or value <= 0.0:
-        raise argparse.ArgumentTypeError(
-            f"expected the pendulum's radius at the sensor in metres (> 0), or simple, got {text!r}"
-        )
+        raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
     return value
+
+
+def _positive_rate(text: str) -> float:
+    """``--sample-rate`` value: a sample rate [Hz] > 0."""
+    return float(_positive(text, "a sample rate in Hz > 0"))
+
+
+def _pendulum_radius(text: str) -> float | str:
+    """``--pendulum-radius`` value: a radius [m] > 0, or ``simple``."""
+    return _positive(
+        text, "the pendulum's radius at the sensor in metres (> 0), or simple", "simple"
+    )
 
 
 def _window(text: str) -> tuple[float, float]:
@@ -237,17 +237,7 @@ def _window(text: str) -> tuple[float, float]:
 
 def notch_value(text: str) -> float | str:
     """``--notch`` value: a frequency [Hz] or ``auto``."""
-    if text == "auto":
-        return text
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not math.isfinite(value) or value <= 0.0:
-        raise argparse.ArgumentTypeError(
-            f"expected a frequency in Hz (50, 60) or auto, got {text!r}"
-        )
-    return value
+    return _positive(text, "a frequency in Hz (50, 60) or auto", "auto")
 
 
 def add_notch_option(parser: argparse.ArgumentParser) -> None:
