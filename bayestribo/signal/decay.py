@@ -148,7 +148,11 @@ from bayestribo.signal.motion import (
 )
 from bayestribo.signal.peaks import Peaks, estimate_noise, estimate_offset, find_peaks
 from bayestribo.signal.period import MIN_PERIOD_SAMPLES, dominant_period, sample_step
-from bayestribo.signal.quantisation import QUANTISATION_NOISE_FACTOR, quantisation_step
+from bayestribo.signal.quantisation import (
+    QUANTISATION_NOISE_FACTOR,
+    quantisation_step,
+    still_on_its_steps,
+)
 from bayestribo.signal.restarts import continue_clock
 from bayestribo.signal.short import short_decay_note
 from bayestribo.signal.spectrum import NoiseSpectrum, RestNoise, fit_line, noise_spectrum
@@ -1016,14 +1020,19 @@ def _rest_noise(
     period: float,
     derived: str | None,
 ) -> RestNoise | None:
-    """Noise spectra of the recorded channels on the rest segments (as :func:`_noise`)."""
+    """Noise spectra of the recorded channels on the rest segments (as :func:`_noise`);
+    None for a quantised channel still on its steps at rest (its noise is the rounding's,
+    white: :func:`~bayestribo.signal.quantisation.still_on_its_steps`)."""
     parts, names = _rest_parts(t, rest_until, stop, 0.25 * period)
     if not parts:
         return None
     fs = 1.0 / sample_step(t)
 
-    def spectrum(s: NDArray) -> NoiseSpectrum:
-        return noise_spectrum([s[part] for part in parts], fs, period_s=period)
+    def spectrum(s: NDArray) -> NoiseSpectrum | None:
+        rests = [s[part] for part in parts]
+        if still_on_its_steps(rests, quantisation_step(s)):
+            return None
+        return noise_spectrum(rests, fs, period_s=period)
 
     return RestNoise(
         displacement=None if derived == "displacement" else spectrum(x),
