@@ -49,6 +49,7 @@ from bayestribo.io.columns import (
     si_names,
     split_run_tag,
 )
+from bayestribo.io.encoder_counts import encoder_advice, encoder_columns
 from bayestribo.io.instruments import PREAMBLE_LINES, detect_export, read_export
 from bayestribo.io.repeated_header import without_repeated_header
 from bayestribo.io.run import (
@@ -678,6 +679,10 @@ def _header(
     try:
         names, units = _check_columns(kept, where, what)
     except RunFormatError as exc:
+        if "unknown column" in exc.message:
+            counts = encoder_advice(labels, [_known(label) for label in labels])
+            if counts:
+                raise RunFormatError(f"{exc.message}; {counts}", where) from None
         if other and "column is needed" in exc.message:
             raise RunFormatError(
                 f"{what}: no displacement, velocity or acceleration column; {other} are "
@@ -707,6 +712,14 @@ def _header(
             ReadingWarning,
         )
     return names, units, count
+
+
+def _known(label: str) -> str | None:
+    """A header name as ``columns=`` takes it where it names a quantity, else None."""
+    try:
+        return label if parse_column(label) is not None else None
+    except ValueError:
+        return None
 
 
 def _coordinates_advice(labels: Sequence[str]) -> str:
@@ -1350,6 +1363,8 @@ def read_text(
     path = Path(path)
     where = str(path)
     _check_options(decimal, delimiter, skip_rows, where)
+    if columns is None and skip_rows == 0:
+        columns, scale = _encoder_counts(path, where, scale, delimiter, encoding)
     if skip_rows == 0 and decimal != ",":
         streamed = _read_streamed(path, where, columns, scale, delimiter, encoding, decimal)
         if streamed is not None:
@@ -1364,6 +1379,34 @@ def read_text(
         decimal=decimal,
         skip_rows=skip_rows,
     )
+
+
+def _encoder_counts(
+    path: Path,
+    where: str,
+    scale: Mapping[str, float] | None,
+    delimiter: str | None,
+    encoding: str | None,
+) -> tuple[list[str] | None, Mapping[str, float] | None]:
+    """The ``columns=`` and ``scale=`` that read a column of an encoder's counts as an
+    angle, where the lines above the rows state the counts per revolution
+    (:mod:`bayestribo.io.encoder_counts`, said); else no columns and ``scale`` as given."""
+    with path.open("rb") as fh:
+        head = fh.read(_HEAD_BYTES)
+    if b"count" not in head.lower() and b"tick" not in head.lower():
+        return None, scale
+    try:
+        text = head.decode(encoding or "utf-8-sig")
+    except (UnicodeDecodeError, LookupError):
+        return None, scale
+    found = encoder_columns(text.splitlines()[:PREAMBLE_LINES], delimiter)
+    if found is None:
+        return None, scale
+    names, factor, reading = found
+    warn(f"{where}: {reading.note()}", ReadingWarning)
+    given = dict(scale or {})
+    given["angle_rad"] = factor * float(given.get("angle_rad", 1.0))
+    return names, given
 
 
 def _check_options(decimal: str | None, delimiter: str | None, skip_rows: int, where: str) -> None:
