@@ -31,6 +31,7 @@ import json
 import os
 import re
 import shlex
+import subprocess
 import sys
 import tempfile
 import time
@@ -45,7 +46,7 @@ from scipy.signal import lfilter
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _machine import RESULTS, ROOT, commit, write_results
-from unseen_rigs import bayestribo, rig, sidecar, warnings_of
+from unseen_rigs import rig, sidecar, warnings_of
 
 G = 9.80665
 Case = dict[str, Any]
@@ -665,7 +666,29 @@ CASES: dict[str, Callable[[Path], Case]] = {
     name[2:]: fn for name, fn in dict(globals()).items() if name.startswith("c_") and callable(fn)
 }
 
+
 # ------------------------------------------------------------------ running
+def bayestribo(args: list[str], env: dict[str, str], timeout: float) -> dict[str, Any]:
+    """Run ``bayestribo ARGS`` in a subprocess from a neutral folder (``python -m`` puts
+    the working folder first on the path: run from a tree, it would import that tree's
+    package whatever ``PYTHONPATH`` says); exit status, stdout, stderr, CPU seconds."""
+    t0 = os.times()
+    try:
+        proc = subprocess.run(
+            [sys.executable, "-m", "bayestribo", *args],
+            capture_output=True,
+            text=True,
+            env=env,
+            timeout=timeout,
+            cwd=tempfile.gettempdir(),
+        )
+        rc, out, err = proc.returncode, proc.stdout, proc.stderr
+    except subprocess.TimeoutExpired:
+        rc, out, err = None, "", "timeout"
+    t1 = os.times()
+    return {"rc": rc, "stdout": out, "stderr": err, "cpu_s": t1.children_user - t0.children_user}
+
+
 #: An option the package's messages advise, written as the user would type it.
 _OPTION = re.compile(r"--[a-z][a-z-]+(?:[ =](?!--)[^\s`'\"),;]+)*")
 

@@ -16,6 +16,8 @@ import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import numpy as np
+
 __all__ = [
     "COUNT_NAMES",
     "EncoderReading",
@@ -23,6 +25,7 @@ __all__ = [
     "encoder_advice",
     "encoder_columns",
     "encoder_reading",
+    "header_and_rows",
 ]
 
 #: Column names (lower case, a unit in brackets taken off) of an encoder's raw counts.
@@ -265,3 +268,55 @@ def encoder_columns(
             return "ignore"
 
     return [role(i, n) for i, n in enumerate(names)], reading.radians_per_count, reading
+
+
+def header_and_rows(
+    lines: Sequence[str], delimiter: str | None, decimal: str | None = None
+) -> tuple[list[str], np.ndarray] | None:
+    """A plain table's header names and its rows of numbers, or None.
+
+    The header is the last line that is not a comment above the first row of numbers;
+    rows that do not hold as many numbers are NaN.
+
+    Parameters
+    ----------
+    lines : sequence of str
+        The file's lines, without line ends.
+    delimiter : str or None
+        The delimiter given, or None (guessed from the header line).
+    decimal : str or None
+        The decimal mark (``,`` read as a point).
+    """
+    header: str | None = None
+    start = None
+    for number, line in enumerate(lines):
+        text = line.strip().lstrip("\ufeff")
+        if not text or text.startswith("#"):
+            continue
+        fields = _header_names(text, delimiter)
+        if fields and all(_number(_point(f, decimal)) for f in fields if f):
+            start = number
+            break
+        header = text
+    if header is None or start is None:
+        return None
+    names = _header_names(header, delimiter)
+    rows = np.full((len(lines) - start, len(names)), np.nan)
+    count = 0
+    for line in lines[start:]:
+        text = line.strip()
+        if not text or text.startswith("#"):
+            continue
+        fields = _header_names(text, delimiter)
+        if len(fields) != len(names):
+            continue
+        try:
+            rows[count] = [float(_point(f, decimal)) for f in fields]
+        except ValueError:
+            continue
+        count += 1
+    return names, rows[:count]
+
+
+def _point(text: str, decimal: str | None) -> str:
+    return text.replace(",", ".") if decimal == "," else text

@@ -49,7 +49,8 @@ from bayestribo.io.columns import (
     si_names,
     split_run_tag,
 )
-from bayestribo.io.encoder_counts import encoder_advice, encoder_columns
+from bayestribo.io.encoder_counts import encoder_advice, encoder_columns, header_and_rows
+from bayestribo.io.gyroscope import gyroscope_columns
 from bayestribo.io.instruments import PREAMBLE_LINES, detect_export, read_export
 from bayestribo.io.repeated_header import without_repeated_header
 from bayestribo.io.run import (
@@ -1365,6 +1366,8 @@ def read_text(
     _check_options(decimal, delimiter, skip_rows, where)
     if columns is None and skip_rows == 0:
         columns, scale = _encoder_counts(path, where, scale, delimiter, encoding)
+    if columns is None and skip_rows == 0:
+        columns = _gyroscope(path, where, delimiter, encoding, decimal)
     if skip_rows == 0 and decimal != ",":
         streamed = _read_streamed(path, where, columns, scale, delimiter, encoding, decimal)
         if streamed is not None:
@@ -1407,6 +1410,29 @@ def _encoder_counts(
     given = dict(scale or {})
     given["angle_rad"] = factor * float(given.get("angle_rad", 1.0))
     return names, given
+
+
+def _gyroscope(
+    path: Path, where: str, delimiter: str | None, encoding: str | None, decimal: str | None
+) -> list[str] | None:
+    """The ``columns=`` that read a gyroscope export's swinging axis as the angular
+    velocity (:mod:`bayestribo.io.gyroscope`, said), or None."""
+    with path.open("rb") as fh:
+        head = fh.read(_HEAD_BYTES)
+    if b"gyr" not in head.lower():
+        return None
+    try:
+        lines = decode(path.read_bytes(), encoding, where, say=False).splitlines()
+    except RunFormatError:
+        return None
+    found = header_and_rows(lines, delimiter, decimal)
+    if found is None:
+        return None
+    reading = gyroscope_columns(*found)
+    if reading is None:
+        return None
+    warn(f"{where}: {reading.note()}", ReadingWarning)
+    return reading.columns
 
 
 def _check_options(decimal: str | None, delimiter: str | None, skip_rows: int, where: str) -> None:

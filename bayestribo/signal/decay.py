@@ -157,6 +157,7 @@ from bayestribo.signal.restarts import continue_clock
 from bayestribo.signal.short import short_decay_note
 from bayestribo.signal.spectrum import NoiseSpectrum, RestNoise, fit_line, noise_spectrum
 from bayestribo.signal.spikes import SpikeWarning, bridged, describe, find_spikes
+from bayestribo.signal.split_stop import split_stop
 
 __all__ = [
     "EnergyDecay",
@@ -1755,6 +1756,13 @@ def _analyse(
     fade_level = None if not band_x else FADE * PEAK_THRESHOLD * band_x
     if coarse_fade is not None:
         fade_level = max(fade_level or 0.0, coarse_fade)
+    if (
+        span.stop_index is not None
+        and fade_level is not None
+        and split_stop(peaks.t, peaks.value, fade_level)
+    ):
+        # the stop's turning point found twice on its plateau's noise: the first is it
+        peaks = _head(peaks, len(peaks) - 1)
     spacing = regular_turning_points(
         peaks.t,
         peaks.value,
