@@ -49,6 +49,7 @@ from bayestribo.io.columns import (
     si_names,
     split_run_tag,
 )
+from bayestribo.io.comment_header import comment_header
 from bayestribo.io.encoder_counts import encoder_advice, encoder_columns, header_and_rows
 from bayestribo.io.gyroscope import gyroscope_columns
 from bayestribo.io.instruments import PREAMBLE_LINES, detect_export, read_export
@@ -1368,6 +1369,8 @@ def read_text(
         columns, scale = _encoder_counts(path, where, scale, delimiter, encoding)
     if columns is None and skip_rows == 0:
         columns = _gyroscope(path, where, delimiter, encoding, decimal)
+    if columns is None and skip_rows == 0:
+        columns = _comment_header(path, where, delimiter, encoding)
     if skip_rows == 0 and decimal != ",":
         streamed = _read_streamed(path, where, columns, scale, delimiter, encoding, decimal)
         if streamed is not None:
@@ -1410,6 +1413,27 @@ def _encoder_counts(
     given = dict(scale or {})
     given["angle_rad"] = factor * float(given.get("angle_rad", 1.0))
     return names, given
+
+
+def _comment_header(
+    path: Path, where: str, delimiter: str | None, encoding: str | None
+) -> list[str] | None:
+    """The ``columns=`` a comment line right above the rows gives a file without a
+    header row (:mod:`bayestribo.io.comment_header`, said), or None."""
+    with path.open("rb") as fh:
+        head = fh.read(_HEAD_BYTES)
+    if b"#" not in head:
+        return None
+    try:
+        text = head.decode(encoding or "utf-8-sig")
+    except (UnicodeDecodeError, LookupError):
+        return None
+    found = comment_header(text.splitlines()[:PREAMBLE_LINES], delimiter)
+    if found is None:
+        return None
+    names, line = found
+    warn(f"{where}: the column names read from comment line {line}: {names}", ReadingWarning)
+    return names
 
 
 def _gyroscope(
