@@ -71,3 +71,23 @@ def test_a_unit_that_cannot_be_read_is_refused(tmp_path, meta, match):
     path = _record(tmp_path, meta)
     with pytest.raises(RunFormatError, match=match):
         read_run(path)
+
+
+def test_a_calibration_key_is_refused_naming_the_scale_that_reads_the_file(tmp_path):
+    t = np.arange(2000) / 2000.0
+    x = 2e-3 * np.exp(-0.02 * 2 * np.pi * 32.0 * t) * np.cos(2 * np.pi * 32.0 * t)
+    lsb = 2.5e-6 / 2**12
+    path = tmp_path / "adc.txt"
+    path.write_text("\n".join(str(int(c)) for c in np.round(x / lsb)) + "\n")
+    meta = {"natural_frequency_Hz": 32.0, "sample_rate_Hz": 2000.0}
+    (tmp_path / "adc.json").write_text(json.dumps({**meta, "scale_m_per_count": lsb}))
+    with pytest.raises(RunFormatError) as err:
+        read_run(path)
+    message = str(err.value)
+    assert "looks like a channel's calibration" in message
+    assert f"scale={{'displacement_m': {lsb!r}}}" in message
+    assert "did you mean" not in message
+    # followed: the key under 'user', the factor given as the scale
+    (tmp_path / "adc.json").write_text(json.dumps({**meta, "user": {"scale_m_per_count": lsb}}))
+    run = read_run(path, columns=["displacement_m"], scale={"displacement_m": lsb})
+    np.testing.assert_allclose(run.displacement, x, atol=lsb)
