@@ -13,8 +13,10 @@ whitespace ``.dat`` with a BOM and CRLF, a scope's pre-trigger, a decay fading i
 TDMS file, a UFF 58 file, a 50 Hz hum, a sidecar in kgf and grams). For each file the
 probe runs ``bayestribo inspect FILE`` and ``bayestribo fit FILE --json`` as a user
 would; where the fit is refused (exit 2) and the message names options, it fits once
-more with the options parsed from the message (:func:`advice_of`), and records the exit
-status, the warnings, and whether the 95 % intervals cover the truth.
+more with the options parsed from the message (:func:`advice_of`), and where it exits 1
+with a warning that advises an option, once more with that option
+(:func:`warning_advice`: a named reading or force before ``--law auto``); it records
+the exit status, the warnings, and whether the 95 % intervals cover the truth.
 
 Run::
 
@@ -714,6 +716,29 @@ def advice_of(stderr: str) -> list[str]:
     return out
 
 
+def warning_advice(stderr: str, given: list[str]) -> list[str]:
+    """The option a warning (exit 1) advises, as a user would follow it: a named
+    reading or force (``--restoring pendulum``, ``--pendulum-radius simple``) before the
+    general ``--law auto``; [] when it names none not given already."""
+    text = " ".join(stderr.split())
+    found = []
+    for option in _OPTION.findall(text):
+        words = option.split()
+        if words[0] in given or words[0] in found_names(found):
+            continue
+        found.append(words)
+    specific = [w for w in found if w[0] != "--law"]
+    chosen = specific[0] if specific else (found[0] if found else [])
+    if chosen and chosen[0] == "--restoring" and "auto" not in chosen:
+        chosen = chosen[:2]
+    return chosen[:2]
+
+
+def found_names(found: list[list[str]]) -> set[str]:
+    """The option names among ``found``."""
+    return {w[0] for w in found}
+
+
 UNITS = {
     "rad": 1.0,
     "deg": np.pi / 180,
@@ -807,6 +832,14 @@ def run_case(name: str, d: Path, env: dict[str, str], timeout: float) -> dict[st
         "inspect_stderr": ins["stderr"][-1500:],
         **fit_record(path, case["args"], case["truth"], env, timeout),
     }
+    if rec["rc"] == 1:
+        advice = warning_advice(rec["stderr"], case["args"])
+        rec["advice"] = advice
+        if advice:
+            rest = [
+                a for a in case["args"] if not (advice[0] == "--law" and a in ("--law", "auto"))
+            ]
+            rec["followup"] = fit_record(path, [*rest, *advice], case["truth"], env, timeout)
     if rec["rc"] == 2:
         advice = advice_of(rec["stderr"])
         rec["advice"] = advice
@@ -840,6 +873,8 @@ def table(path: Path) -> str:
         word = {True: "covers", False: "**misses**", None: "not reported"}
         cov = ", ".join(f"{k} {word[v['covers']]}" for k, v in (last.get("coverage") or {}).items())
         then = f"`{' '.join(r.get('advice', []))}`: exit {last['rc']}" if last is not r else "-"
+        if last is not r and r["rc"] == 1:
+            then = "after the warning's " + then
         said = [re.sub(r"/\S*/", "", w) for w in last["warnings"]]
         warns = "; ".join(" ".join(w.split()[:7]) for w in said) or "-"
         cells = [r["case"], r["kind"], f"exit {r['rc']}", then, warns, cov or "-"]
