@@ -1366,11 +1366,16 @@ def read_text(
     where = str(path)
     _check_options(decimal, delimiter, skip_rows, where)
     if columns is None and skip_rows == 0:
-        columns, scale = _encoder_counts(path, where, scale, delimiter, encoding)
-    if columns is None and skip_rows == 0:
-        columns = _gyroscope(path, where, delimiter, encoding, decimal)
-    if columns is None and skip_rows == 0:
-        columns = _comment_header(path, where, delimiter, encoding)
+        with path.open("rb") as fh:
+            head = fh.read(_HEAD_BYTES)
+        # the words the readings below look for, in the lines a header can be in
+        probe = head[:_PROBE_BYTES].lower()
+        if b"count" in probe or b"tick" in probe:
+            columns, scale = _encoder_counts(head, where, scale, delimiter, encoding)
+        if columns is None and b"gyr" in probe:
+            columns = _gyroscope(path, where, delimiter, encoding, decimal)
+        if columns is None and b"#" in probe:
+            columns = _comment_header(head, where, delimiter, encoding)
     if skip_rows == 0 and decimal != ",":
         streamed = _read_streamed(path, where, columns, scale, delimiter, encoding, decimal)
         if streamed is not None:
@@ -1387,8 +1392,12 @@ def read_text(
     )
 
 
+#: Bytes at the head of a text file in which a header's words are looked for.
+_PROBE_BYTES = 8192
+
+
 def _encoder_counts(
-    path: Path,
+    head: bytes,
     where: str,
     scale: Mapping[str, float] | None,
     delimiter: str | None,
@@ -1396,11 +1405,8 @@ def _encoder_counts(
 ) -> tuple[list[str] | None, Mapping[str, float] | None]:
     """The ``columns=`` and ``scale=`` that read a column of an encoder's counts as an
     angle, where the lines above the rows state the counts per revolution
-    (:mod:`bayestribo.io.encoder_counts`, said); else no columns and ``scale`` as given."""
-    with path.open("rb") as fh:
-        head = fh.read(_HEAD_BYTES)
-    if b"count" not in head.lower() and b"tick" not in head.lower():
-        return None, scale
+    (:mod:`bayestribo.io.encoder_counts`, said); else no columns and ``scale`` as given.
+    ``head`` is the file's first bytes."""
     try:
         text = head.decode(encoding or "utf-8-sig")
     except (UnicodeDecodeError, LookupError):
@@ -1416,14 +1422,11 @@ def _encoder_counts(
 
 
 def _comment_header(
-    path: Path, where: str, delimiter: str | None, encoding: str | None
+    head: bytes, where: str, delimiter: str | None, encoding: str | None
 ) -> list[str] | None:
     """The ``columns=`` a comment line right above the rows gives a file without a
-    header row (:mod:`bayestribo.io.comment_header`, said), or None."""
-    with path.open("rb") as fh:
-        head = fh.read(_HEAD_BYTES)
-    if b"#" not in head:
-        return None
+    header row (:mod:`bayestribo.io.comment_header`, said), or None; ``head`` is the
+    file's first bytes."""
     try:
         text = head.decode(encoding or "utf-8-sig")
     except (UnicodeDecodeError, LookupError):
@@ -1441,10 +1444,6 @@ def _gyroscope(
 ) -> list[str] | None:
     """The ``columns=`` that read a gyroscope export's swinging axis as the angular
     velocity (:mod:`bayestribo.io.gyroscope`, said), or None."""
-    with path.open("rb") as fh:
-        head = fh.read(_HEAD_BYTES)
-    if b"gyr" not in head.lower():
-        return None
     try:
         lines = decode(path.read_bytes(), encoding, where, say=False).splitlines()
     except RunFormatError:

@@ -1022,8 +1022,11 @@ def _rest_noise(
     derived: str | None,
 ) -> RestNoise | None:
     """Noise spectra of the recorded channels on the rest segments (as :func:`_noise`);
-    None for a quantised channel still on its steps at rest (its noise is the rounding's,
-    white: :func:`~bayestribo.signal.quantisation.still_on_its_steps`)."""
+    None for the one channel recorded (the other derived) where it is quantised and
+    still on its steps at rest (its noise is the rounding's, white:
+    :func:`~bayestribo.signal.quantisation.still_on_its_steps`; with both channels
+    recorded a coarse channel's rounding is modelled as such,
+    :mod:`bayestribo.signal.coarse`)."""
     parts, names = _rest_parts(t, rest_until, stop, 0.25 * period)
     if not parts:
         return None
@@ -1031,7 +1034,7 @@ def _rest_noise(
 
     def spectrum(s: NDArray) -> NoiseSpectrum | None:
         rests = [s[part] for part in parts]
-        if still_on_its_steps(rests, quantisation_step(s)):
+        if derived is not None and still_on_its_steps(rests, quantisation_step(s)):
             return None
         return noise_spectrum(rests, fs, period_s=period)
 
