@@ -722,9 +722,10 @@ def warning_advice(stderr: str, given: list[str]) -> list[str]:
     general ``--law auto``; [] when it names none not given already."""
     text = " ".join(stderr.split())
     found = []
+    pairs = {tuple(given[i : i + 2]) for i in range(len(given))}
     for option in _OPTION.findall(text):
         words = option.split()
-        if words[0] in given or words[0] in found_names(found):
+        if tuple(words[:2]) in pairs or words[0] in found_names(found):
             continue
         found.append(words)
     specific = [w for w in found if w[0] != "--law"]
