@@ -21,7 +21,7 @@ the exit status, the warnings, and whether the 95 % intervals cover the truth.
 Run::
 
     python benchmarks/unseen_rigs3.py [--only NAME ...] [--jobs 2] [--name unseen_rigs3]
-    python benchmarks/unseen_rigs3.py --table [--name unseen_rigs3]
+    python benchmarks/unseen_rigs3.py --table [--name unseen_rigs3] [--base unseen_rigs3_main]
 
 Results: ``benchmarks/results/unseen_rigs3.json``.
 """
@@ -862,12 +862,25 @@ def line(r: dict[str, Any]) -> str:
     return f"rc={r['rc']} warnings={len(r['warnings'])} {cov}"
 
 
-def table(path: Path) -> str:
-    """The results as a Markdown table."""
+def outcome(r: dict[str, Any]) -> str:
+    """A case's outcome in a few words: the exit statuses and the intervals' coverage."""
+    last = r.get("followup", r)
+    cov = last.get("coverage") or {}
+    missed = [k for k, v in cov.items() if v["covers"] is False]
+    text = f"exit {r['rc']}" + (f" → {last['rc']}" if last is not r else "")
+    if cov:
+        text += ", " + (f"{', '.join(missed)} missed" if missed else "covered")
+    return text
+
+
+def table(path: Path, base: Path | None = None) -> str:
+    """The results as a Markdown table (with ``base``'s outcome of each case beside)."""
+    before = {}
+    if base is not None:
+        before = {r["case"]: outcome(r) for r in json.loads(base.read_text())["cases"]}
     out = [
-        "| case | recording | first `fit` | advice parsed from the refusal, followed | "
-        "warnings | 95 % intervals |",
-        "|---|---|---|---|---|---|",
+        "| case | recording | main | first `fit` | advice followed | warnings | 95 % intervals |",
+        "|---|---|---|---|---|---|---|",
     ]
     for r in json.loads(path.read_text())["cases"]:
         last = r.get("followup", r)
@@ -878,7 +891,8 @@ def table(path: Path) -> str:
             then = "after the warning's " + then
         said = [re.sub(r"/\S*/", "", w) for w in last["warnings"]]
         warns = "; ".join(" ".join(w.split()[:7]) for w in said) or "-"
-        cells = [r["case"], r["kind"], f"exit {r['rc']}", then, warns, cov or "-"]
+        main = before.get(r["case"], "-")
+        cells = [r["case"], r["kind"], main, f"exit {r['rc']}", then, warns, cov or "-"]
         out.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
     return "\n".join(out)
 
@@ -892,9 +906,11 @@ def main() -> None:
     ap.add_argument("--package", default=str(ROOT), help="tree whose package is run")
     ap.add_argument("--keep", default=None, help="write the files here and keep them")
     ap.add_argument("--table", action="store_true", help="print the stored results as a table")
+    ap.add_argument("--base", default=None, help="with --table: the results of main beside")
     a = ap.parse_args()
     if a.table:
-        print(table(RESULTS / f"{a.name}.json"))
+        base = None if a.base is None else RESULTS / f"{a.base}.json"
+        print(table(RESULTS / f"{a.name}.json", base))
         return
     names = a.only or list(CASES)
     env = {**os.environ, "PYTHONPATH": a.package, "MPLBACKEND": "Agg"}
