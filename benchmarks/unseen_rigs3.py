@@ -702,6 +702,12 @@ def advice_of(stderr: str) -> list[str]:
     written in the text (``--name value ...``), up to the first sentence end.
     """
     text = " ".join(stderr.split())
+    for span in re.findall(r"`([^`]*--[^`]+)`", text):
+        words = shlex.split(span)
+        while words and not words[0].startswith("--"):
+            words.pop(0)
+        if words:
+            return words
     for span in re.findall(r"[`'\"]((?:bayestribo \w+ \S+ )?--[^`'\"]+)[`'\"]", text):
         words = shlex.split(span.split(" --", 1)[0] if not span.startswith("--") else span)
         words = [w for w in shlex.split(span) if w]
@@ -847,10 +853,24 @@ def run_case(name: str, d: Path, env: dict[str, str], timeout: float) -> dict[st
         if advice:
             truth = case["truth"]
             for sheet, other in (case.get("truth_by_sheet") or {}).items():
-                if "--sheet" in advice and advice[advice.index("--sheet") + 1] == sheet:
+                if "--sheet" in advice and advice[advice.index("--sheet") + 1 :][:1] == [sheet]:
                     truth = other
             rec["followup"] = fit_record(path, [*case["args"], *advice], truth, env, timeout)
     return rec
+
+
+def safe_case(name: str, d: Path, env: dict[str, str], timeout: float) -> dict[str, Any]:
+    """:func:`run_case`, a failure of the probe itself recorded, not raised."""
+    try:
+        return run_case(name, d, env, timeout)
+    except Exception as exc:  # the probe's own bug: recorded, the other cases kept
+        return {
+            "case": name,
+            "kind": "probe failed",
+            "rc": None,
+            "warnings": [],
+            "error": repr(exc),
+        }
 
 
 def line(r: dict[str, Any]) -> str:
@@ -918,7 +938,7 @@ def main() -> None:
         d = Path(a.keep or tmp)
         d.mkdir(parents=True, exist_ok=True)
         with ThreadPoolExecutor(a.jobs) as pool:
-            recs = list(pool.map(lambda n: run_case(n, d, env, a.timeout), names))
+            recs = list(pool.map(lambda n: safe_case(n, d, env, a.timeout), names))
     for r in recs:
         print(
             f"{r['case']:18s} {line(r)}"
