@@ -843,9 +843,10 @@ def run_case(name: str, d: Path, env: dict[str, str], timeout: float) -> dict[st
         advice = warning_advice(rec["stderr"], case["args"])
         rec["advice"] = advice
         if advice:
-            rest = [
-                a for a in case["args"] if not (advice[0] == "--law" and a in ("--law", "auto"))
-            ]
+            rest = list(case["args"])
+            if advice[0] in rest:  # the option advised replaces the one given
+                i = rest.index(advice[0])
+                del rest[i : i + 2]
             rec["followup"] = fit_record(path, [*rest, *advice], case["truth"], env, timeout)
     if rec["rc"] == 2:
         advice = advice_of(rec["stderr"])
