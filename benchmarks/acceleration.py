@@ -124,6 +124,7 @@ def one(
     ``gain_error``: relative sd of the sensor's gain drawn into the record;
     ``gain_uncertainty``: stated in the sidecar (None: not stated)."""
     import bayestribo
+    from bayestribo.errors import MisfitWarning
 
     rig, settings, truth = draw(case, seed)
     x0 = settings.pop("x0")
@@ -153,6 +154,11 @@ def one(
         out["cpu_s"] = time.process_time() - start
     out["bias_read"] = run.metadata["acceleration"]["bias"]
     out["flags"] = sorted({type(w.message).__name__ for w in caught} & set(FLAGS))
+    # every warning of the package's, by name, and whether the command would exit 1 on
+    # them (a MisfitWarning or any of its kinds; ``flags`` names the two classes alone)
+    ours = [w for w in caught if type(w.message).__module__.startswith("bayestribo")]
+    out["warnings"] = sorted({type(w.message).__name__ for w in ours})
+    out["misfit_kind"] = any(issubclass(w.category, MisfitWarning) for w in ours)
     out["law"] = result.law
     sensor = result.sensor or {}
     out["gain_sd"] = sensor.get("gain_sd")
