@@ -138,7 +138,7 @@ from _chain import (  # noqa: E402
 )
 from _machine import niced_worker, write_results  # noqa: E402
 
-__all__ = ["CASES", "one_run", "summarise"]
+__all__ = ["CASES", "one_run", "run_indices", "summarise"]
 
 #: k₃/k giving a +0.1 % frequency at amplitude X0 (Duffing: Δf/f = 3/8 k₃/k A²).
 K3_OVER_K = 0.001 * 8.0 / (3.0 * X0**2)
@@ -254,6 +254,19 @@ def _clock(
     lost = rng.choice(np.arange(t.size // 4, t.size // 2), size=drop, replace=False)
     keep = np.setdiff1d(np.arange(t.size), lost)
     return stamps[keep], x[keep], v[keep]
+
+
+def run_indices(
+    cases: list[str], noise: list[float], runs: int, clean_runs: int, first: int = 0
+) -> list[tuple[str, float, int]]:
+    """The runs (case, noise, index) of a sweep: indices ``first`` to ``runs`` - 1 of
+    every case (to ``clean_runs`` - 1 of ``clean``) at every noise level."""
+    return [
+        (c, n, i)
+        for c in cases
+        for n in noise
+        for i in range(first, clean_runs if c == "clean" else runs)
+    ]
 
 
 def one_run(
@@ -569,12 +582,7 @@ def main(argv: list[str] | None = None) -> int:
     load_start = os.getloadavg()
     source = _source_state()
     start = time.perf_counter()
-    jobs = [
-        (c, n, i)
-        for c in args.cases
-        for n in args.noise
-        for i in range(args.first_run, args.clean_runs if c == "clean" else args.runs)
-    ]
+    jobs = run_indices(args.cases, args.noise, args.runs, args.clean_runs, args.first_run)
 
     # the slow cases first, so that the two workers end together
     def length(case: dict[str, Any]) -> float:
