@@ -191,6 +191,12 @@ def main(argv: list[str] | None = None) -> None:
     """Run the cases, print the table and write the results."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--runs", type=int, default=20, help="seeds per case (default 20)")
+    parser.add_argument(
+        "--first-run",
+        type=int,
+        default=0,
+        help="the first seed of every case (seeds FIRST to RUNS-1): a sweep's later seeds",
+    )
     parser.add_argument("--cases", nargs="+", choices=list(CASES), default=list(DEFAULT_CASES))
     parser.add_argument("--law", default="viscous+coulomb", help="the law fitted")
     parser.add_argument("--output", default="seismometer_fade", help="results/<output>.json")
@@ -198,7 +204,7 @@ def main(argv: list[str] | None = None) -> None:
     load = os.getloadavg()
     records = []
     for case in args.cases:
-        for seed in range(args.runs):
+        for seed in range(args.first_run, args.runs):
             r = one_run(case, seed, args.law)
             records.append(r)
             said = r.get("refused") or (
@@ -209,7 +215,13 @@ def main(argv: list[str] | None = None) -> None:
     table = summarise(records)
     for case, row in table.items():
         print(case, {k: v for k, v in row.items() if k != "coverage_clopper_pearson"})
-    settings = {"runs": args.runs, "cases": args.cases, "law": args.law, "truth_zeta": ZETA}
+    settings = {
+        "runs": args.runs,
+        "first_run": args.first_run,
+        "cases": args.cases,
+        "law": args.law,
+        "truth_zeta": ZETA,
+    }
     path = write_results(
         args.output,
         {**provenance("bayestribo.fit", settings, load), "table": table, "runs": records},
