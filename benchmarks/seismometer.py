@@ -27,9 +27,10 @@ recorded with its message), *covered* (the 95 % interval of ζ holds the truth),
 runs, *silently wrong* (|z| > 3.29 and no such warning). ``false_flags`` counts covered
 runs that were flagged.
 
-Run: ``python benchmarks/seismometer.py [--runs 20] [--cases clean drift steps cubic]
-[--law viscous+coulomb] [--output seismometer_fade]``; writes
-``benchmarks/results/<output>.json``.
+Run: ``python benchmarks/seismometer.py [--runs 20] [--first-run 0] [--cases clean drift
+steps cubic] [--law viscous+coulomb] [--output seismometer_fade]``; writes
+``benchmarks/results/<output>.json``. A seed is the same record at any ``--runs``, so
+``--first-run 10 --runs 20`` fits seeds 10-19 of a sweep of 20 alone.
 """
 
 from __future__ import annotations
