@@ -1,0 +1,82 @@
+"""A run whose walkers missed a part of the posterior that holds higher density.
+
+An ensemble sampler explores the part of the posterior its walkers start in. Where
+the posterior is split (a law whose Π is not defined on thin bands of its parameters:
+a power-law drag below α = 1 whose creep to rest the integrator does not take leaves
+those rows outside the law's domain), the walkers can stay in one part, mix there, and
+pass every convergence check, while another part holds density far above theirs.
+Points evaluated under the exact posterior elsewhere in the fit (the draws of a
+quadratic surrogate checked against it, :func:`bayestribo.inference.surrogate.check`)
+show it: one whose log density exceeds every draw of the run by more than
+:data:`MARGIN` lies in a part the walkers did not reach, and the run's draws are not
+the posterior's. :func:`missed_reason` says so, and the run is reported not converged.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["MARGIN", "missed_reason"]
+
+#: Log density [nats] by which a point must exceed the run's best draw to be taken as
+#: a part of the posterior the walkers missed. The best kept draw of a run of 1000
+#: effective draws is within a few nats of the mode of the part it explored, in any
+#: number of parameters a law has; a part higher by this much would hold e^10 times
+#: the mass of as wide a neighbourhood of that mode.
+MARGIN = 10.0
+
+
+def missed_reason(
+    log_posterior: Callable[[NDArray], NDArray],
+    names: Sequence[str],
+    run_log_prob: NDArray,
+    points: Sequence[NDArray],
+    margin: float = MARGIN,
+) -> str | None:
+    """Why a run's draws are not the posterior's, if a point elsewhere holds more.
+
+    Parameters
+    ----------
+    log_posterior : callable
+        The log posterior density the run sampled, rows (n, d) -> (n,), in the
+        coordinates of ``names`` and of ``points``.
+    names : sequence of str
+        The coordinates' names (d).
+    run_log_prob : ndarray
+        The log posterior of each of the run's draws (any shape).
+    points : sequence of ndarray
+        Points (d,) found elsewhere (e.g. the best checked draw of each quadratic
+        surrogate); none: nothing is said.
+    margin : float
+        Nats by which the best point must exceed the best draw (:data:`MARGIN`).
+
+    Returns
+    -------
+    str or None
+        The reason, naming the point and by how much it is higher; None when no point
+        exceeds the run's best draw by ``margin`` (or the run holds no finite
+        density).
+    """
+    rows = [np.asarray(p, dtype=float) for p in points if p is not None]
+    drawn = np.asarray(run_log_prob, dtype=float)
+    if not rows or not np.isfinite(drawn).any():
+        return None
+    at = np.vstack(rows)
+    lp = np.asarray(log_posterior(at), dtype=float)
+    if not np.isfinite(lp).any():
+        return None
+    k = int(np.nanargmax(np.where(np.isfinite(lp), lp, -np.inf)))
+    gap = float(lp[k] - np.nanmax(drawn))
+    if not gap > margin:
+        return None
+    where = ", ".join(f"{n} = {v:.6g}" for n, v in zip(names, at[k], strict=True))
+    return (
+        f"the posterior is higher by {gap:.4g} in log density at {where} (a checked draw "
+        "of a quadratic surrogate) than at any draw of the run: the walkers stayed in "
+        "one part of a posterior split in parts (as by rows the law cannot compute: a "
+        "drag's creep to rest beyond the integrator's accuracy), and the draws are that "
+        "part's, not the posterior's"
+    )
