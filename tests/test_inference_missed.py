@@ -4,17 +4,22 @@ converged when a point evaluated elsewhere holds far more density
 
 from __future__ import annotations
 
+import warnings
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 from scipy.special import logsumexp
 
+from bayestribo import read_run
 from bayestribo.inference import chains
-from bayestribo.inference.missed import MARGIN, missed_reason
+from bayestribo.inference.missed import MARGIN, climbed, missed_reason
+from bayestribo.inference.pipeline import build_posterior, prepare
 from bayestribo.inference.sampling import SamplerRun, SamplerSettings
-from bayestribo.inference.start import Start
+from bayestribo.inference.start import Start, maximum_a_posteriori
 from bayestribo.inference.surrogate import SurrogateCheck
 
+BUNDLED = Path(__file__).resolve().parents[1] / "data" / "runs" / "glycerol-N0.31-r1.csv"
 NAMES = ("a", "b")
 #: The second part's density over the first's at their centres [nats].
 GAP = 40.0
@@ -97,6 +102,13 @@ def test_sample_from_reports_the_exact_run_not_converged(monkeypatch):
 
         return run
 
+    climbed_from: list[list[np.ndarray]] = []
+
+    def climbed(post, points):
+        climbed_from.append(list(points))
+        return list(points)
+
+    monkeypatch.setattr(chains, "climbed", climbed)
     monkeypatch.setattr(chains, "_first_surrogate", lambda *args: object())
     monkeypatch.setattr(chains, "initial_walkers", lambda *args: np.zeros((2, 8, 2)))
     monkeypatch.setattr(chains, "_sample_surrogate", fake_surrogates)
@@ -108,8 +120,30 @@ def test_sample_from_reports_the_exact_run_not_converged(monkeypatch):
     sampled = chains.sample_from(start, settings=settings, seed=0)
     assert not sampled.run.converged
     assert "higher by" in sampled.run.reasons[-1] and "a = 12" in sampled.run.reasons[-1]
+    # the checked draws are climbed from before they are compared
+    assert len(climbed_from) == 1 and np.array_equal(climbed_from[0][0], FAR)
 
     both_parts = first_part + np.where(np.arange(500) % 2 == 0, 1.0, 0.0)[None, :, None] * FAR
     monkeypatch.setattr(chains, "_exact_run", exact_run(both_parts))
     sampled = chains.sample_from(start, settings=settings, seed=0)
     assert sampled.run.converged and sampled.run.reasons == []
+
+
+def test_climbed_adds_the_optimum_from_the_best_point():
+    """A point checked far down the posterior's slope is climbed to its optimum."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        prepared = prepare(read_run(BUNDLED), seed=0)
+    posterior = build_posterior(prepared.data)
+    theta, cov, _ = maximum_a_posteriori(posterior, prepared.decay)
+    sd = np.sqrt(np.diag(cov))
+    zeta = posterior.names.index("zeta")
+    low, lower = theta.copy(), theta.copy()
+    low[zeta] += 5.0 * sd[zeta]
+    lower[zeta] -= 8.0 * sd[zeta]
+    points = climbed(posterior, [lower, low, None])
+    assert len(points) == 3 and np.array_equal(points[0], lower)
+    top, at_optimum, given = posterior(np.vstack([points[-1], theta, low]))
+    assert given < at_optimum - 10.0
+    assert top > at_optimum - 1.0  # climbed from `low`, the better of the two
+    assert climbed(posterior, []) == []

@@ -30,7 +30,7 @@ from bayestribo.inference.correction import (
     weights_at,
 )
 from bayestribo.inference.identifiability import unidentified_reasons
-from bayestribo.inference.missed import missed_reason
+from bayestribo.inference.missed import climbed, missed_reason
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.reparameterised import Reparameterised, reparameterised
 from bayestribo.inference.sampling import SamplerRun, SamplerSettings, run_ensembles
@@ -160,9 +160,11 @@ def sample_from(
             )
     if run is None:
         run = _exact_run(posterior, walkers, settings, seed_of_run, progress, rng)
-        # the surrogates' checks evaluated the exact posterior elsewhere: a point there
-        # far above every draw is a part of the posterior the walkers never reached
-        missed = missed_reason(posterior, posterior.names, run.log_prob, checked_best)
+        # the surrogates' checks evaluated the exact posterior elsewhere: a point there,
+        # or the optimum climbed from the best of them, far above every draw is a part
+        # of the posterior the walkers never reached
+        points = climbed(posterior, checked_best) if checked_best else []
+        missed = missed_reason(posterior, posterior.names, run.log_prob, points)
         if missed is not None:
             run = replace(run, converged=False, reasons=[*run.reasons, missed])
     # The optimiser can stop short of the optimum on the ridge of a law that misfits
