@@ -147,3 +147,15 @@ def test_climbed_adds_the_optimum_from_the_best_point():
     assert given < at_optimum - 10.0
     assert top > at_optimum - 1.0  # climbed from `low`, the better of the two
     assert climbed(posterior, []) == []
+
+
+def test_a_climb_that_fails_leaves_the_points(monkeypatch):
+    import bayestribo.inference.start as start
+
+    def failing(*args, **kwargs):
+        raise FloatingPointError("the least squares met a NaN")
+
+    monkeypatch.setattr(start, "refine", failing)
+    points = [FAR.copy(), np.zeros(2)]
+    out = climbed(lambda theta: _split(theta), points)
+    assert len(out) == 2 and np.array_equal(out[0], FAR)

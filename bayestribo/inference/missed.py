@@ -40,7 +40,8 @@ MARGIN = 10.0
 def climbed(posterior: Posterior, points: Sequence[NDArray]) -> list[NDArray]:
     """``points`` and the optimum of ``posterior`` found by the exact least squares
     (:func:`bayestribo.inference.start.refine`) from the point of highest density
-    among them (none added where no point has a finite density)."""
+    among them (none added where no point has a finite density, or where the least
+    squares fail)."""
     from bayestribo.inference.start import refine
 
     rows = [np.asarray(p, dtype=float) for p in points if p is not None]
@@ -49,7 +50,12 @@ def climbed(posterior: Posterior, points: Sequence[NDArray]) -> list[NDArray]:
     lp = np.asarray(posterior(np.vstack(rows)), dtype=float)
     if not np.isfinite(lp).any():
         return rows
-    top, _ = refine(posterior, rows[int(np.nanargmax(np.where(np.isfinite(lp), lp, -np.inf)))])
+    best = rows[int(np.nanargmax(np.where(np.isfinite(lp), lp, -np.inf)))]
+    try:
+        top, _ = refine(posterior, best)
+    except (ValueError, ArithmeticError):
+        # a check of the run, not the fit: a least squares that fails leaves the points
+        return rows
     return [*rows, np.asarray(top, dtype=float)]
 
 
