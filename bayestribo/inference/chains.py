@@ -116,7 +116,10 @@ def sample_from(
     Returns
     -------
     Sampled
-        Of ``start.posterior``.
+        Of ``start.posterior``. An exact run sampled after failed surrogates is not
+        converged where a point found from the surrogates' checked draws (climbed by the
+        exact least squares) holds more density than all its draws
+        (:mod:`bayestribo.inference.missed`).
     """
     rng = np.random.default_rng(seed)
     posterior, theta, cov, ratio_range = start.posterior, start.theta, start.cov, start.ratio_range
