@@ -27,6 +27,7 @@ importing ArviZ, xarray and pandas.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import warnings
 from collections.abc import Mapping
@@ -377,6 +378,11 @@ class FitResult:
             ``median`` and ``interval`` (low, high) in the quantity's ``unit``,
             ``prob``, ``kind``, ``name``, ``symbol``, ``label`` (the name in words),
             ``unit`` (``"1"`` when dimensionless), ``sampled``, ``ess`` and ``r_hat``.
+            A quantity the data do not constrain (its posterior is its prior's up to a
+            bound, :func:`~bayestribo.inference.flatness.prior_flatness`: μ_s/μ_k of a
+            record that never sticks) has ``kind`` ``"bound"`` and the one-sided
+            interval from the prior's lower end to the bound the text table prints
+            (:func:`~bayestribo.inference.flatness.bound_interval`).
 
         Raises
         ------
@@ -384,11 +390,18 @@ class FitResult:
             If ``prob`` is not in (0, 1).
         """
         check_prob(prob)
+        from bayestribo.inference.flatness import bound_interval
+
         n_walkers = self.diagnostics.get("n_walkers")
-        return {
-            name: QuantitySummary.of(q, self._chains(name), prob, n_walkers)
-            for name, q in self.quantity_info().items()
-        }
+        out = {}
+        for name, q in self.quantity_info().items():
+            draws = self._chains(name)
+            s = QuantitySummary.of(q, draws, prob, n_walkers)
+            bound = bound_interval(self, name, draws, prob)
+            if bound is not None:  # the prior's, up to a bound: never a central interval
+                s = dataclasses.replace(s, interval=bound, kind="bound")
+            out[name] = s
+        return out
 
     def to_dataframe(self, prob: float = 0.95) -> Any:
         """The posterior summary as a table, one row per quantity (:meth:`summary`).
@@ -697,7 +710,6 @@ class FitResult:
         unit ("dimensionless" for a number), mean and ``prob`` interval in the digits the
         interval supports, or a bound where the posterior is its prior's
         (:mod:`bayestribo.inference.flatness`), and sd."""
-        from bayestribo.inference.flatness import FLAT_KS, prior_flatness
         from bayestribo.summary import interval_text
 
         header = f"mean [{100 * check_prob(prob):g} % interval]"
@@ -707,8 +719,7 @@ class FitResult:
         values = {}
         for name, s in summary.items():
             lo, hi = s.interval
-            flat = prior_flatness(self, name)
-            if flat is not None and flat <= FLAT_KS:
+            if s.kind == "bound":
                 # the data set a range, not a value: a bound, never a measurement
                 values[name] = f"< {hi:.2g} (not constrained by the data: its prior up to there)"
             else:  # the digits the interval supports (bayestribo.summary.interval_text)
