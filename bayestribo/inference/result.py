@@ -39,7 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from bayestribo._files import atomic_path
 from bayestribo.inference.fit_record import FitRecord, plain_data
-from bayestribo.inference.priors import PriorSet
+from bayestribo.inference.priors import PriorSet, widened_prior
 from bayestribo.inference.quantities import (
     DERIVED,
     Quantity,
@@ -697,9 +697,17 @@ class FitResult:
                 + ("" if agreement["same_shape"] else ": ANOTHER SHAPE")
             )
         for entry in self.at_prior_bound:
+            option = None
+            if entry["parameter"] in self.priors.names:
+                option = widened_prior(entry["parameter"], self.priors[entry["parameter"]])
             lines.append(
                 f"NOT A MEASUREMENT: {entry['parameter']} piles on its prior's upper bound "
-                f"{entry['bound']:.4g}; check units and channels (bayestribo inspect)"
+                f"{entry['bound']:.4g}; "
+                + (
+                    "check units and channels (bayestribo inspect)"
+                    if option is None
+                    else f"where the stop is real, widen it (--prior {option})"
+                )
             )
         lines.extend(self._table_lines(prob))
         lines.extend(self._dissipation_lines())
