@@ -5,7 +5,8 @@ followed command checked to do what the advice promised.
 Records are independent simulations (``_law_recording.py``, ``_free_decay.py``: ``solve_ivp``
 half cycle by half cycle), written as files and read back as a user's would be. The
 advice that costs a comparison of every law or a campaign is followed under
-``-m validation`` (``tests/test_advice_followed_heavy.py``).
+``-m validation`` (``tests/test_advice_followed_heavy.py``: a campaign, ``--law auto``
+from a misfit, ``--law NAME`` after an unresolved ``auto``).
 """
 
 from __future__ import annotations
