@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from bayestribo.errors import BayestriboError
-from bayestribo.inference.flatness import bound_interval
 from bayestribo.inference import FitResult
+from bayestribo.inference.flatness import bound_interval
 from bayestribo.inference.quantities import QuantitySummary, unit_words
 from bayestribo.summary import ParameterSummary
 
@@ -70,7 +70,7 @@ def test_to_dataframe_has_one_row_per_quantity_with_its_interval(result: FitResu
     assert list(frame.index) == list(summary) and frame.index.name == "name"
     for column in ("symbol", "label", "unit", "mean", "sd", "median", "low", "high"):
         assert column in frame.columns
-    for column in ("ess", "r_hat", "prob", "sampled", "unit_words"):
+    for column in ("ess", "r_hat", "prob", "kind", "sampled", "unit_words"):
         assert column in frame.columns
     for name in frame.index:
         draws = result.samples(name)
@@ -85,6 +85,7 @@ def test_to_dataframe_has_one_row_per_quantity_with_its_interval(result: FitResu
         assert row["unit_words"] == unit_words(summary[name].unit)
     assert frame.loc["zeta", "unit_words"] == "dimensionless"
     assert summary["mu_s_ratio"].kind == "bound" and summary["zeta"].kind == "posterior"
+    assert frame.loc["mu_s_ratio", "kind"] == "bound" and frame.loc["zeta", "kind"] == "posterior"
 
 
 def test_sample_stats_hold_the_samplers_log_probability_and_acceptance(result: FitResult) -> None:

@@ -417,8 +417,10 @@ class FitResult:
             Index ``name`` (``"zeta"``, ...); columns ``symbol``, ``label`` (the name in
             words), ``unit`` (``"1"`` when dimensionless; ``unit_words`` as a reader
             reads it), ``mean``, ``sd``, ``median``, ``low`` and ``high`` (the ends
-            of the ``prob`` interval), all in the quantity's unit, ``prob``, ``ess``
-            (effective sample size), ``r_hat`` and ``sampled``.
+            of the ``prob`` interval), all in the quantity's unit, ``prob``, ``kind``
+            (``"bound"`` for a quantity the data do not constrain, its interval from
+            the prior's lower end), ``ess`` (effective sample size), ``r_hat`` and
+            ``sampled``.
 
         Raises
         ------
@@ -440,6 +442,7 @@ class FitResult:
                 "low": s.low,
                 "high": s.high,
                 "prob": s.prob,
+                "kind": s.kind,
                 "ess": s.ess,
                 "r_hat": s.r_hat,
                 "sampled": s.sampled,
