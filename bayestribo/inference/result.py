@@ -32,6 +32,7 @@ import json
 import warnings
 from collections.abc import Mapping
 from pathlib import Path
+from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -393,11 +394,13 @@ class FitResult:
         from bayestribo.inference.flatness import bound_interval
 
         n_walkers = self.diagnostics.get("n_walkers")
+        # the priors read once (each reading parses them), the draws as they are
+        fit = SimpleNamespace(priors=self.priors, samples=self.samples)
         out = {}
         for name, q in self.quantity_info().items():
             draws = self._chains(name)
             s = QuantitySummary.of(q, draws, prob, n_walkers)
-            bound = bound_interval(self, name, draws, prob)
+            bound = bound_interval(fit, name, draws, prob)
             if bound is not None:  # the prior's, up to a bound: never a central interval
                 s = dataclasses.replace(s, interval=bound, kind="bound")
             out[name] = s
