@@ -208,7 +208,7 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
             "the record is a free decay; a narrowed prior: widen it"
             if option is None
             else "Its bound is a belief, not a physical limit (a contact may stick at "
-            f"more): where the stop is real, widen it (--prior {option})"
+            f"more): where the stop is real, widen it ({_prior_spellings(option)})"
         )
         warn(
             f"{entry['parameter']} piles on the upper bound of its prior "
@@ -524,6 +524,13 @@ def warn_shape(
     warn(text, MisfitWarning)
 
 
+def _prior_spellings(option: str) -> str:
+    """A ``--prior`` value (``mu_s_ratio=Uniform(1,40)``) as the fit's keyword and as the
+    option: ``priors={'mu_s_ratio': Uniform(1,40)}, --prior mu_s_ratio=Uniform(1,40)``."""
+    name, _, prior = option.partition("=")
+    return f"priors={{{name!r}: {prior}}}, --prior {option}"
+
+
 def _warn_misfit(
     name: str | None,
     misfit: Misfit,
@@ -593,7 +600,7 @@ def _warn_misfit(
     )
     if widen:
         names = ", ".join(widen)
-        options = " ".join(f"--prior {option}" for option in widen.values())
+        options = "; ".join(_prior_spellings(option) for option in widen.values())
         todo = (
             f"{names} piles on its prior's upper bound, a belief rather than a physical "
             "limit: the record may ask for more (a pin that sticks harder), and a law held "
