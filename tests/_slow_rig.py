@@ -40,12 +40,14 @@ X_S = MU_S * LOAD_N / STIFFNESS
 METADATA = {"load_N": LOAD_N, "mass_kg": MASS_KG, "natural_frequency_Hz": F_HZ}
 
 
-def slow_decay(seed: int = 20) -> tuple[NDArray, NDArray, float]:
-    """Time [s], displacement [m] (noise added, five decimals) and the stop's time [s]."""
+def slow_decay(seed: int = 20, mu_s: float = MU_S) -> tuple[NDArray, NDArray, float]:
+    """Time [s], displacement [m] (noise added, five decimals) and the stop's time [s]
+    of the rig with static friction coefficient ``mu_s``."""
     omega = 2.0 * math.pi * F_HZ
+    x_s = mu_s * LOAD_N / STIFFNESS
     start, position = REST_S, X0_M
     pieces = []
-    while abs(position) > X_S:
+    while abs(position) > x_s:
         sign = -math.copysign(1.0, position)
 
         def rhs(_t: float, s: NDArray, sign: float = sign) -> list[float]:
@@ -79,13 +81,13 @@ def slow_decay(seed: int = 20) -> tuple[NDArray, NDArray, float]:
     return t, np.round(x, 5), stop
 
 
-def write_slow_decay(folder: Path, seed: int = 20) -> tuple[Path, float]:
-    """The record as a CSV (time_s, displacement_m) with its JSON sidecar; its path and
-    the stop's time [s]."""
+def write_slow_decay(folder: Path, seed: int = 20, mu_s: float = MU_S) -> tuple[Path, float]:
+    """The record (:func:`slow_decay`) as a CSV (time_s, displacement_m) with its JSON
+    sidecar; its path and the stop's time [s]."""
     import json
 
-    t, x, stop = slow_decay(seed)
-    path = folder / "slow_pendulum.csv"
+    t, x, stop = slow_decay(seed, mu_s)
+    path = folder / f"slow_pendulum_{seed}_{mu_s:g}.csv"
     rows = "\n".join(f"{a:.3f},{b:.5f}" for a, b in zip(t, x, strict=True))
     path.write_text("time_s,displacement_m\n" + rows + "\n")
     path.with_suffix(".json").write_text(json.dumps(METADATA))
