@@ -72,6 +72,8 @@ def test_the_text_the_saved_fit_and_a_digest_say_the_same_bound(never_stops) -> 
     high = record["parameters"]["mu_s_ratio"]["interval"][1]
     saved = result.summary()["mu_s_ratio"]
     assert saved.kind == "bound" and saved.interval == pytest.approx((1.0, high), rel=1e-12)
+    assert result.interval("mu_s_ratio") == saved.interval  # the API's interval too
+    assert result.interval("zeta") == result.summary()["zeta"].interval
     row = next(line for line in result.to_text().splitlines() if "μ_s/μ_k" in line)
     assert f"< {high:.2g} (not constrained by the data" in row, row
     digest = digest_fit(result, parameters=["mu_s_ratio", "friction_displacement"])

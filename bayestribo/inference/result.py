@@ -319,8 +319,17 @@ class FitResult:
         return bool(self._attr("friction_defined", 0))
 
     def interval(self, name: str, prob: float = 0.95) -> tuple[float, float]:
-        """Equal-tailed credible interval of ``name`` with probability ``prob``."""
-        return ParameterSummary.from_samples(self.samples(name), prob).interval
+        """Credible interval of ``name`` with probability ``prob``, as :meth:`summary`
+        gives it: equal-tailed, or, for a quantity the data do not constrain, from its
+        prior's lower end to the one-sided bound
+        (:func:`~bayestribo.inference.flatness.bound_interval`)."""
+        from bayestribo.inference.flatness import bound_interval
+
+        check_prob(prob)
+        draws = self.samples(name)
+        fit = SimpleNamespace(priors=self.priors, samples=self.samples)
+        bound = bound_interval(fit, name, draws, prob)
+        return bound if bound is not None else ParameterSummary.from_samples(draws, prob).interval
 
     def _summary_names(self) -> list[str]:
         """Every quantity of the posterior group, in the order of the summaries: those
