@@ -48,8 +48,11 @@ class ParameterSummary:
         normal-approximation confidence interval of a classical estimate.
     prob : float
         Probability of ``interval``.
-    kind : {"posterior", "normal"}
-        How the interval was made.
+    kind : {"posterior", "normal", "bound"}
+        How the interval was made; ``"bound"``: the quantity is not constrained by the
+        data (its posterior is its prior's up to a bound), and the interval runs from the
+        prior's lower end to the one-sided ``prob`` bound
+        (:func:`bayestribo.inference.flatness.bound_interval`).
     """
 
     mean: float
@@ -57,7 +60,7 @@ class ParameterSummary:
     median: float
     interval: tuple[float, float]
     prob: float
-    kind: Literal["posterior", "normal"] = "posterior"
+    kind: Literal["posterior", "normal", "bound"] = "posterior"
 
     @classmethod
     def from_samples(cls, samples: ArrayLike, prob: float = 0.95) -> ParameterSummary:

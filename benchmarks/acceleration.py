@@ -36,8 +36,11 @@ has; ``--gain-uncertainty U`` states U in the sidecar (``0``: the data's part of
 intervals alone).
 
 A parameter is *covered* when the truth is in the 95 % interval of a fit that raised
-no :class:`~bayestribo.errors.MisfitWarning` or ConvergenceWarning; *flagged* when the
-fit warned (whatever its interval); *silently wrong* when it did not warn and missed.
+no :class:`~bayestribo.errors.MisfitWarning` or ConvergenceWarning (nor a kind of
+either, such as ``ShortAnalysisWarning``: the command's exit 1; before commit
+"benchmarks/acceleration: a kind of MisfitWarning flags a fit", those two classes
+alone); *flagged* when the fit warned (whatever its interval); *silently wrong* when it
+did not warn and missed.
 z = (posterior mean − truth) / posterior sd.
 
 Run::
@@ -75,6 +78,19 @@ import _accel_sim as sim
 RESULTS = Path(__file__).resolve().parent / "results"
 CASES = ("coulomb", "viscous", "quadratic")
 FLAGS = ("MisfitWarning", "ConvergenceWarning")
+
+
+def flags(caught: list[warnings.WarningMessage]) -> list[str]:
+    """The warnings of ``caught`` that flag a fit, by name: a warning is a flag when its
+    class is one of :data:`FLAGS` or a kind of one (``ShortAnalysisWarning``,
+    ``OffsetDriftWarning``, ... are MisfitWarnings: the command exits 1 on them)."""
+    return sorted(
+        {
+            w.category.__name__
+            for w in caught
+            if any(c.__name__ in FLAGS for c in w.category.__mro__)
+        }
+    )
 
 
 def draw(case: str, seed: int) -> tuple[sim.Rig, dict, dict]:
@@ -124,6 +140,7 @@ def one(
     ``gain_error``: relative sd of the sensor's gain drawn into the record;
     ``gain_uncertainty``: stated in the sidecar (None: not stated)."""
     import bayestribo
+    from bayestribo.errors import MisfitWarning
 
     rig, settings, truth = draw(case, seed)
     x0 = settings.pop("x0")
@@ -152,7 +169,12 @@ def one(
                 return out
         out["cpu_s"] = time.process_time() - start
     out["bias_read"] = run.metadata["acceleration"]["bias"]
-    out["flags"] = sorted({type(w.message).__name__ for w in caught} & set(FLAGS))
+    out["flags"] = flags(caught)
+    # every warning of the package's, by name, and whether the command would exit 1 on
+    # them (a MisfitWarning or any of its kinds)
+    ours = [w for w in caught if type(w.message).__module__.startswith("bayestribo")]
+    out["warnings"] = sorted({type(w.message).__name__ for w in ours})
+    out["misfit_kind"] = any(issubclass(w.category, MisfitWarning) for w in ours)
     out["law"] = result.law
     sensor = result.sensor or {}
     out["gain_sd"] = sensor.get("gain_sd")

@@ -86,7 +86,9 @@ coverage should be 93-97 % and sd(z) within 10 % of 1, hence its 200 runs.
 
 The runs are seeded: run ``index`` of ``case`` at ``noise`` draws its noise from
 ``numpy.random.default_rng([seed, crc32(case), noise, index])`` and fits with the seed
-recorded beside it; ``one_run(case, noise, index, seed, max_steps)`` repeats it.
+recorded beside it; ``one_run(case, noise, index, seed, max_steps)`` repeats it, and a
+sweep made in parts runs the later indices alone (``--first-run 10 --runs 20``: runs
+10-19, the same records as in a sweep of 20).
 
 The AppStat2020 recordings' split-half table (``benchmarks/halves.py``: least squares,
 the Bayesian fit, the Bayesian fit with the discrepancy term, on HarmOsc1-3) is
@@ -136,7 +138,7 @@ from _chain import (  # noqa: E402
 )
 from _machine import niced_worker, write_results  # noqa: E402
 
-__all__ = ["CASES", "one_run", "summarise"]
+__all__ = ["CASES", "one_run", "run_indices", "summarise"]
 
 #: k₃/k giving a +0.1 % frequency at amplitude X0 (Duffing: Δf/f = 3/8 k₃/k A²).
 K3_OVER_K = 0.001 * 8.0 / (3.0 * X0**2)
@@ -252,6 +254,19 @@ def _clock(
     lost = rng.choice(np.arange(t.size // 4, t.size // 2), size=drop, replace=False)
     keep = np.setdiff1d(np.arange(t.size), lost)
     return stamps[keep], x[keep], v[keep]
+
+
+def run_indices(
+    cases: list[str], noise: list[float], runs: int, clean_runs: int, first: int = 0
+) -> list[tuple[str, float, int]]:
+    """The runs (case, noise, index) of a sweep: indices ``first`` to ``runs`` - 1 of
+    every case (to ``clean_runs`` - 1 of ``clean``) at every noise level."""
+    return [
+        (c, n, i)
+        for c in cases
+        for n in noise
+        for i in range(first, clean_runs if c == "clean" else runs)
+    ]
 
 
 def one_run(
@@ -541,6 +556,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--clean-runs", type=int, default=200, help="runs of the clean case per noise level"
     )
+    parser.add_argument(
+        "--first-run",
+        type=int,
+        default=0,
+        help="the first run index of every case (runs FIRST to RUNS-1, clean FIRST to "
+        "CLEAN_RUNS-1): the later runs of a sweep made in parts",
+    )
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--seed", type=int, default=2010)
     parser.add_argument("--max-steps", type=int, default=6000)
@@ -555,15 +577,12 @@ def main(argv: list[str] | None = None) -> int:
         "over the case's own",
     )
     args = parser.parse_args(argv)
+    if args.first_run < 0:
+        parser.error(f"--first-run: expected a run index >= 0, got {args.first_run}")
     load_start = os.getloadavg()
     source = _source_state()
     start = time.perf_counter()
-    jobs = [
-        (c, n, i)
-        for c in args.cases
-        for n in args.noise
-        for i in range(args.clean_runs if c == "clean" else args.runs)
-    ]
+    jobs = run_indices(args.cases, args.noise, args.runs, args.clean_runs, args.first_run)
 
     # the slow cases first, so that the two workers end together
     def length(case: dict[str, Any]) -> float:
@@ -615,6 +634,7 @@ def main(argv: list[str] | None = None) -> int:
         {
             "settings": {
                 "runs": args.runs,
+                "first_run": args.first_run,
                 "clean_runs": args.clean_runs,
                 "seed": args.seed,
                 "max_steps": args.max_steps,

@@ -27,9 +27,10 @@ recorded with its message), *covered* (the 95 % interval of ζ holds the truth),
 runs, *silently wrong* (|z| > 3.29 and no such warning). ``false_flags`` counts covered
 runs that were flagged.
 
-Run: ``python benchmarks/seismometer.py [--runs 20] [--cases clean drift steps cubic]
-[--law viscous+coulomb] [--output seismometer_fade]``; writes
-``benchmarks/results/<output>.json``.
+Run: ``python benchmarks/seismometer.py [--runs 20] [--first-run 0] [--cases clean drift
+steps cubic] [--law viscous+coulomb] [--output seismometer_fade]``; writes
+``benchmarks/results/<output>.json``. A seed is the same record at any ``--runs``, so
+``--first-run 10 --runs 20`` fits seeds 10-19 of a sweep of 20 alone.
 """
 
 from __future__ import annotations
@@ -191,6 +192,12 @@ def main(argv: list[str] | None = None) -> None:
     """Run the cases, print the table and write the results."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--runs", type=int, default=20, help="seeds per case (default 20)")
+    parser.add_argument(
+        "--first-run",
+        type=int,
+        default=0,
+        help="the first seed of every case (seeds FIRST to RUNS-1): a sweep's later seeds",
+    )
     parser.add_argument("--cases", nargs="+", choices=list(CASES), default=list(DEFAULT_CASES))
     parser.add_argument("--law", default="viscous+coulomb", help="the law fitted")
     parser.add_argument("--output", default="seismometer_fade", help="results/<output>.json")
@@ -198,7 +205,7 @@ def main(argv: list[str] | None = None) -> None:
     load = os.getloadavg()
     records = []
     for case in args.cases:
-        for seed in range(args.runs):
+        for seed in range(args.first_run, args.runs):
             r = one_run(case, seed, args.law)
             records.append(r)
             said = r.get("refused") or (
@@ -209,7 +216,13 @@ def main(argv: list[str] | None = None) -> None:
     table = summarise(records)
     for case, row in table.items():
         print(case, {k: v for k, v in row.items() if k != "coverage_clopper_pearson"})
-    settings = {"runs": args.runs, "cases": args.cases, "law": args.law, "truth_zeta": ZETA}
+    settings = {
+        "runs": args.runs,
+        "first_run": args.first_run,
+        "cases": args.cases,
+        "law": args.law,
+        "truth_zeta": ZETA,
+    }
     path = write_results(
         args.output,
         {**provenance("bayestribo.fit", settings, load), "table": table, "runs": records},

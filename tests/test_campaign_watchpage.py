@@ -213,3 +213,24 @@ def test_the_page_waits_while_fits_keep_coming_and_not_once_the_queue_is_empty(t
     watch._queue.clear()
     watch._refresh_page()  # the queue is empty: at once
     assert 'data-run="r2"' in page.read_text(encoding="utf-8")
+
+
+def test_a_quantity_the_data_do_not_constrain_is_shown_as_its_bound():
+    from bayestribo.campaign.watch import answer_of
+
+    digest = _digest()
+    digest.summaries["mu_s_ratio"] = {
+        "median": 5.5,
+        "interval": [1.0, 9.6],
+        "kind": "bound",  # the fit's summary: flat from its prior's end up to 9.6
+    }
+    digest.quantities["mu_s_ratio"] = {"symbol": "μ_s/μ_k", "unit": "1"}
+    answer = answer_of(RunOutcome("r1", 1, digest, elapsed_s=1.0), "r1.csv")
+    assert answer.quantities["mu_s_ratio"]["bound"] is True
+    assert answer.quantities["zeta"]["bound"] is False
+    assert "μ_s/μ_k < 9.6 (not constrained by the data)" in answer.line()
+    assert "ζ 0.0236 [0.0231, 0.0241]" in answer.line()
+    page = render_page(
+        PageState(folder="runs", state="watching", prob=0.95, answers=[answer]), refresh_s=2.0
+    )
+    assert "&lt; 9.6 (not constrained by the data)" in page and "5.5 [1, 9.6]" not in page

@@ -219,20 +219,24 @@ def test_a_misfit_exits_1_with_its_warning(tmp_path, capsys) -> None:
 def test_the_table_writes_each_value_by_the_digit_rule_and_a_flat_one_as_a_bound(
     json_run, run_file: Path
 ) -> None:
-    from bayestribo.inference.flatness import FLAT_KS, prior_flatness
+    from bayestribo.inference.flatness import is_bound
     from bayestribo.summary import interval_text
 
-    _, _, out_dir, _ = json_run
+    _, record, out_dir, _ = json_run
     result = FitResult.load(out_dir / f"{run_file.stem}.nc")
     text = result.to_text()
     bounds = 0
     for name, s in result.summary().items():
         row = next(line for line in text.splitlines() if line.startswith(s.title + " "))
-        flat = prior_flatness(result, name)
-        if flat is not None and flat <= FLAT_KS:
+        # the JSON says what the table says: a bound where the data set none
+        assert record["parameters"][name]["kind"] == s.kind
+        assert record["parameters"][name]["interval"] == list(s.interval)
+        if is_bound(result, name):
             bounds += 1
+            assert s.kind == "bound", name
             assert f"< {s.interval[1]:.2g} (not constrained by the data" in row, row
         else:
+            assert s.kind == "posterior", name
             assert interval_text(s.mean, *s.interval) in row, row
     # μ_s/μ_k of a run that stops inside its static band is flat up to the stop
     assert bounds >= 1 and "not constrained by the data" in text

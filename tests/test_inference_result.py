@@ -11,6 +11,7 @@ import pytest
 
 from bayestribo.errors import BayestriboError
 from bayestribo.inference import FitResult
+from bayestribo.inference.flatness import bound_interval
 from bayestribo.inference.quantities import QuantitySummary, unit_words
 from bayestribo.summary import ParameterSummary
 
@@ -34,8 +35,12 @@ def test_summary_covers_every_quantity_of_the_posterior(result: FitResult) -> No
 
 
 def test_summary_honours_prob_and_refuses_a_bad_one(result: FitResult) -> None:
-    narrow, wide = result.summary(0.5)["mu_s_ratio"], result.summary(0.99)["mu_s_ratio"]
+    narrow, wide = result.summary(0.5)["zeta"], result.summary(0.99)["zeta"]
     assert wide.low < narrow.low < narrow.high < wide.high and narrow.prob == 0.5
+    # a bound (μ_s/μ_k flat up to the stop) starts at its prior's end at any probability
+    narrow, wide = result.summary(0.5)["mu_s_ratio"], result.summary(0.99)["mu_s_ratio"]
+    assert narrow.kind == wide.kind == "bound"
+    assert wide.low == narrow.low == 1.0 < narrow.high < wide.high and narrow.prob == 0.5
     with pytest.raises(BayestriboError, match="prob"):
         result.summary(95)
 
@@ -65,18 +70,22 @@ def test_to_dataframe_has_one_row_per_quantity_with_its_interval(result: FitResu
     assert list(frame.index) == list(summary) and frame.index.name == "name"
     for column in ("symbol", "label", "unit", "mean", "sd", "median", "low", "high"):
         assert column in frame.columns
-    for column in ("ess", "r_hat", "prob", "sampled", "unit_words"):
+    for column in ("ess", "r_hat", "prob", "kind", "sampled", "unit_words"):
         assert column in frame.columns
     for name in frame.index:
         draws = result.samples(name)
         # the equal-tailed interval's quantiles as the summary defines them: (1 - 0.9)/2
         # is 0.04999999999999999, not 0.05, which moves an interpolated quantile by an ulp
         low, median, high = np.quantile(draws, [(1 - 0.9) / 2, 0.5, (1 + 0.9) / 2])
+        if summary[name].kind == "bound":  # not constrained: from the prior's end
+            low, high = bound_interval(result, name, draws, 0.9)
         row = frame.loc[name]
         assert (row["low"], row["median"], row["high"]) == (low, median, high)
         assert row["mean"] == np.mean(draws) and row["prob"] == 0.9
         assert row["unit_words"] == unit_words(summary[name].unit)
     assert frame.loc["zeta", "unit_words"] == "dimensionless"
+    assert summary["mu_s_ratio"].kind == "bound" and summary["zeta"].kind == "posterior"
+    assert frame.loc["mu_s_ratio", "kind"] == "bound" and frame.loc["zeta", "kind"] == "posterior"
 
 
 def test_sample_stats_hold_the_samplers_log_probability_and_acceptance(result: FitResult) -> None:

@@ -129,7 +129,7 @@ def _run_summary(result: Any, prob: float) -> dict[str, Any]:
     out["law"] = _law(result)
     kept = result.summary_at(prob)
     for p, s in kept.items():
-        out[p] = {"median": s["median"], "interval": s["interval"]}
+        out[p] = {"median": s["median"], "interval": s["interval"], "kind": s.get("kind")}
     out["converged"] = bool(getattr(result, "converged", True))
     return out
 

@@ -52,7 +52,9 @@ class FitDigest:
         Probability of the summaries' intervals.
     summaries : dict of str to dict
         Summaries of the kept quantities over all the fit's draws
-        (:func:`bayestribo.summary.summarize`).
+        (:func:`bayestribo.summary.summarize`; ``kind`` ``"bound"`` with the interval
+        from the prior's lower end to the bound where the data do not constrain one, as
+        the fit's own summary).
     draws : dict of str to ndarray
         The seeded subset of draws of each kept quantity.
     log_prior : dict of str to ndarray
@@ -174,7 +176,7 @@ def digest_fit(
                 values, density = quantity_draws(result, q)
             except (KeyError, ValueError):
                 continue  # no prior of its own: not kept for a population
-            summaries[q.name] = summarize(values, prob)
+            summaries[q.name] = _summary(result, q.parameter, values, q.factor, prob)
             kept = _subset(name, q.name, values, density, metadata, max_samples, seed)
             draws[q.name] = kept.values[q.name]
             log_prior[q.name] = kept.log_prior
@@ -185,7 +187,7 @@ def digest_fit(
                 everything = result.samples(key)
             except (KeyError, ValueError):
                 continue
-            summaries[key] = summarize(everything, prob)
+            summaries[key] = _summary(result, key, everything, 1.0, prob)
             try:
                 kept = run_samples(result, (key,), max_samples=max_samples, seed=seed, name=name)
             except BayestriboError:
@@ -209,6 +211,29 @@ def digest_fit(
         turning_points=_turning_points(result),
         dissipation=_law_band(result),
     )
+
+
+def _summary(
+    result: Any, parameter: str, values: NDArray[np.float64], factor: float, prob: float
+) -> dict[str, Any]:
+    """The summary of ``values`` = ``factor`` × the draws of ``parameter``, as the fit's
+    own (:meth:`bayestribo.inference.FitResult.summary`): where the data do not constrain
+    it, ``kind`` ``"bound"`` and the interval from the prior's lower end to the bound
+    (:func:`~bayestribo.inference.flatness.bound_interval`), never a central interval
+    of a prior."""
+    from bayestribo.inference.flatness import bound_interval
+
+    out = summarize(values, prob)
+    if not (np.isfinite(factor) and factor > 0):
+        return out
+    try:
+        bound = bound_interval(result, parameter, np.asarray(values) / factor, prob)
+    except (KeyError, ValueError, AttributeError):
+        return out
+    if bound is not None:
+        out["interval"] = [float(factor * bound[0]), float(factor * bound[1])]
+        out["kind"] = "bound"
+    return out
 
 
 def _turning_points(result: Any) -> dict[str, Any] | None:

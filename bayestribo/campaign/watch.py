@@ -138,6 +138,7 @@ def answer_of(outcome: Any, path: Path) -> Answer:
             "median": float(s["median"]),
             "low": float(low),
             "high": float(high),
+            "bound": s.get("kind") == "bound",
         }
     return Answer(
         run=outcome.name,

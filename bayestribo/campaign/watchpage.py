@@ -41,6 +41,15 @@ def interval_text(median: Any, low: Any, high: Any) -> str:
     return f"{texts[0]} [{texts[1]}, {texts[2]}]"
 
 
+def quantity_text(q: dict[str, Any]) -> str:
+    """One quantity of an answer: :func:`interval_text`, or ``< high (not constrained
+    by the data)`` for one whose posterior is its prior's up to a bound (``bound``: the
+    fit's summary of ``kind`` ``"bound"``), as the fit's own table says it."""
+    if q.get("bound"):
+        return f"< {_number(q['high'], 2)} (not constrained by the data)"
+    return interval_text(q["median"], q["low"], q["high"])
+
+
 @dataclass(frozen=True)
 class Answer:
     """One run's answer: its law and quantities, or why it has none.
@@ -54,7 +63,9 @@ class Answer:
     law : str or None
         The law it was fitted in.
     quantities : dict of str to dict
-        Per quantity: ``symbol``, ``unit``, ``median``, ``low``, ``high``.
+        Per quantity: ``symbol``, ``unit``, ``median``, ``low``, ``high`` and ``bound``
+        (True where the data do not constrain it: ``low`` is its prior's lower end,
+        ``high`` the bound).
     converged : bool
         Whether the fit's sampler converged.
     fit_s : float
@@ -88,7 +99,7 @@ class Answer:
         parts = [self.run, self.law or "?"]
         for q in self.quantities.values():
             unit = "" if q.get("unit") in (None, "", "1", "-") else f" {q['unit']}"
-            parts.append(f"{q['symbol']} {interval_text(q['median'], q['low'], q['high'])}{unit}")
+            parts.append(f"{q['symbol']} {quantity_text(q)}{unit}")
         how = "from the catalog" if self.cached else f"fit {self.fit_s:.2f} s"
         if not self.converged:
             how += ", NOT CONVERGED"
@@ -198,7 +209,7 @@ def _runs_table(answers: Sequence[Answer], prob: float) -> list[str]:
             )
             continue
         cells = "".join(
-            f'<td class="num">{interval_text(q["median"], q["low"], q["high"])}</td>'
+            f'<td class="num">{_esc(quantity_text(q))}</td>'
             if (q := a.quantities.get(n))
             else "<td></td>"
             for n in names

@@ -386,6 +386,7 @@ def cli_message(message: str) -> str:
         lambda m: f"--channel {_SHORT.get(m[1], m[1])}={m[2].strip()}", message
     )
     message = _CHANNEL_MAP.sub(_channel_options, message)
+    message = _SKIP_ROWS.sub(r"--skip-rows \1", message)
     for python, option in _CLI_SPELLINGS:
         if python == "columns=[...]":
             # a list of column names given in full: the option with its values
@@ -395,6 +396,10 @@ def cli_message(message: str) -> str:
         message = message.replace(python, option)
     return message
 
+
+#: ``skip_rows=N`` with the option named beside it (``skip_rows=2, --skip-rows,`` and
+#: ``skip_rows=2 (--skip-rows)``), spelled as the option with its value once.
+_SKIP_ROWS = re.compile(r"skip_rows=(\d+)(?:, --skip-rows,| \(--skip-rows\))?")
 
 #: ``columns=['time_s', 'ignore', ...]``, spelled as a ``--columns`` option.
 _COLUMN_LIST = re.compile(r"columns=\[('[^'\]]*'(?:, '[^'\]]*')*)\]")

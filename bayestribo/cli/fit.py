@@ -88,8 +88,9 @@ def json_record(result: Any, prob: float = 0.95) -> dict[str, Any]:
     "bayestribo_version", "metadata", "noise",
     "parameters": {NAME: {"mean", "sd", "median", "interval", "prob", "kind", "unit",
     "name", "symbol", "label", "sampled", "ess", "r_hat"}} (every quantity of the
-    posterior, :meth:`~bayestribo.inference.FitResult.summary`; keys are added, never
-    renamed),
+    posterior, :meth:`~bayestribo.inference.FitResult.summary`; ``kind`` ``"bound"``
+    for a quantity the data do not constrain, its interval from the prior's lower end to
+    the bound the table prints; keys are added, never renamed),
     "dissipation": {"amplitude", "mean", "sd", "interval", "prob", "unit", ...},
     "turning_point_dissipation": (the same, measured from the turning points), "diagnostics":
     {"converged", "n_walkers", "n_steps", "autocorr_time_max", "ess_min",

@@ -30,6 +30,7 @@ from bayestribo.inference.correction import (
     weights_at,
 )
 from bayestribo.inference.identifiability import unidentified_reasons
+from bayestribo.inference.missed import climbed, missed_reason
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.reparameterised import Reparameterised, reparameterised
 from bayestribo.inference.sampling import SamplerRun, SamplerSettings, run_ensembles
@@ -115,7 +116,10 @@ def sample_from(
     Returns
     -------
     Sampled
-        Of ``start.posterior``.
+        Of ``start.posterior``. An exact run sampled after failed surrogates is not
+        converged where a point found from the surrogates' checked draws (climbed by the
+        exact least squares) holds more density than all its draws
+        (:mod:`bayestribo.inference.missed`).
     """
     rng = np.random.default_rng(seed)
     posterior, theta, cov, ratio_range = start.posterior, start.theta, start.cov, start.ratio_range
@@ -124,6 +128,7 @@ def sample_from(
     run: SamplerRun | None = None
     pointwise: NDArray | None = None
     first = None
+    checked_best: list[NDArray] = []  # the best checked draw of each surrogate
     if surrogate and not posterior.law.closed_form and posterior.likelihood.model == "exact":
         first = _first_surrogate(posterior, theta, cov)
     # the walkers are kept by the surrogate's density where there is one (it stands for
@@ -140,7 +145,16 @@ def sample_from(
     seed_of_run = int(rng.integers(2**31))
     if first is not None:
         run, checked, target, pointwise = _sample_surrogate(
-            posterior, theta, cov, walkers, settings, seed_of_run, progress, first, weighted
+            posterior,
+            theta,
+            cov,
+            walkers,
+            settings,
+            seed_of_run,
+            progress,
+            first,
+            weighted,
+            seen=checked_best,
         )
         if run is None:
             # the exact posterior is sampled: its walkers by its own density
@@ -149,6 +163,13 @@ def sample_from(
             )
     if run is None:
         run = _exact_run(posterior, walkers, settings, seed_of_run, progress, rng)
+        # the surrogates' checks evaluated the exact posterior elsewhere: a point there,
+        # or the optimum climbed from the best of them, far above every draw is a part
+        # of the posterior the walkers never reached
+        points = climbed(posterior, checked_best) if checked_best else []
+        missed = missed_reason(posterior, posterior.names, run.log_prob, points)
+        if missed is not None:
+            run = replace(run, converged=False, reasons=[*run.reasons, missed])
     # The optimiser can stop short of the optimum on the ridge of a law that misfits
     # (HarmOsc3 under viscous+coulomb+quadratic: χ² 228590 at its optimum, 8332 where
     # the walkers went); the best point the walkers visited then stands for the MAP
@@ -250,6 +271,7 @@ def _sample_surrogate(
     progress: bool,
     first: Posterior | None = None,
     weighted: int = 0,
+    seen: list[NDArray] | None = None,
 ) -> tuple[SamplerRun | None, SurrogateCheck | None, Posterior | None, NDArray | None]:
     """Sample the quadratic surrogate posterior of a law without a closed form and
     check it against the exact one (:mod:`bayestribo.inference.surrogate`).
@@ -304,6 +326,8 @@ def _sample_surrogate(
         # the fit reports its non-convergence as an exact run would, at a fraction of
         # the cost of sampling the exact posterior to the step ceiling
         checked = check(posterior, target, flat, rng, attempt=attempt)
+        if seen is not None and checked.best is not None:
+            seen.append(checked.best)
         if checked.passed:
             return run, checked, target, None
         if run.ridge:

@@ -36,7 +36,7 @@ from bayestribo.inference.likelihood import ShapeDeparture
 from bayestribo.inference.modes import ModeReport, mode_check
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.preparation import matched_law_times
-from bayestribo.inference.priors import piled_on_bounds
+from bayestribo.inference.priors import piled_on_bounds, widened_prior
 from bayestribo.inference.restoring_choice import arm_advice, simple_pendulum_arm
 from bayestribo.inference.types import MISFIT_P, PreparedRun, Sampled
 from bayestribo.io.run import Run
@@ -181,6 +181,13 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
             "from the turning points (printed as 'turning points (law-free)') is the answer",
             ArmNoiseWarning,
         )
+    flat = run.chains.reshape(-1, run.chains.shape[-1])
+    at_bound = piled_on_bounds(flat, posterior.priors)
+    widen = {
+        str(e["parameter"]): option
+        for e in at_bound
+        if (option := widened_prior(str(e["parameter"]), posterior.priors[str(e["parameter"])]))
+    }
     _warn_misfit(
         name,
         found,
@@ -191,18 +198,23 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
         half_cycles,
         arm=arm,
         grown=grown,
+        widen=widen,
     )
-    flat = run.chains.reshape(-1, run.chains.shape[-1])
-    at_bound = piled_on_bounds(flat, posterior.priors)
     for entry in at_bound:
+        option = widen.get(str(entry["parameter"]))
+        advice = (
+            "The default bounds are physical (the data then ask for a value the motion "
+            "cannot have): check the units and the channels (bayestribo inspect) and that "
+            "the record is a free decay; a narrowed prior: widen it"
+            if option is None
+            else "Its bound is a belief, not a physical limit (a contact may stick at "
+            f"more): where the stop is real, widen it ({_prior_spellings(option)})"
+        )
         warn(
             f"{entry['parameter']} piles on the upper bound of its prior "
             f"({entry['bound']:.4g}; {100 * entry['fraction']:.0f} % of the draws within 1 % "
             f"of the range below it) for {name or 'the run'}: the prior, not the data, "
-            "ends the interval, so this is no measurement. The default bounds are physical "
-            "(the data then ask for a value the motion cannot have): check the units and "
-            "the channels (bayestribo inspect) and that the record is a free decay; a "
-            "narrowed prior: widen it",
+            f"ends the interval, so this is no measurement. {advice}",
             PriorBoundWarning,
         )
     decay = prepared.decay
@@ -512,6 +524,13 @@ def warn_shape(
     warn(text, MisfitWarning)
 
 
+def _prior_spellings(option: str) -> str:
+    """A ``--prior`` value (``mu_s_ratio=Uniform(1,40)``) as the fit's keyword and as the
+    option: ``priors={'mu_s_ratio': Uniform(1,40)}, --prior mu_s_ratio=Uniform(1,40)``."""
+    name, _, prior = option.partition("=")
+    return f"priors={{{name!r}: {prior}}}, --prior {option}"
+
+
 def _warn_misfit(
     name: str | None,
     misfit: Misfit,
@@ -522,6 +541,7 @@ def _warn_misfit(
     half_cycles: int | None = None,
     arm: float | None = None,
     grown: tuple[float, float] | None = None,
+    widen: Mapping[str, str] | None = None,
 ) -> None:
     """Say, with numbers, that the law misfits the run, and what to do (see
     :func:`summarise`); ``half_cycles``: how many the analysis holds (the law-free answer
@@ -529,7 +549,11 @@ def _warn_misfit(
     ``arm``: the length of a simple pendulum recorded as a length whose half periods
     follow the record's, the reading advised (no law holds on the wrong force);
     ``grown``: a length read as a pendulum's angle beyond :data:`ARM_NOISE_GROWTH`, its
-    largest angle [°] and its noise's growth there, said instead of another law."""
+    largest angle [°] and its noise's growth there, said instead of another law;
+    ``widen``: parameters on a prior bound that is a belief, by name, with the
+    ``--prior`` value that widens it
+    (:func:`~bayestribo.inference.priors.widened_prior`), advised before another law (a
+    law held below the sticking the record shows misfits it), the other advice after."""
     law_free = (
         "The answer is the energy dissipated per cycle measured from the turning points, "
         "whatever the law (result.turning_point_dissipation, printed as 'turning points "
@@ -574,6 +598,15 @@ def _warn_misfit(
         if arm is None
         else arm_advice(arm)[0].upper() + arm_advice(arm)[1:]
     )
+    if widen:
+        names = ", ".join(widen)
+        options = "; ".join(_prior_spellings(option) for option in widen.values())
+        todo = (
+            f"{names} piles on its prior's upper bound, a belief rather than a physical "
+            "limit: the record may ask for more (a pin that sticks harder), and a law held "
+            f"below it misfits. Fit with the prior widened ({options}); if the law still "
+            f"misfits, {todo[0].lower()}{todo[1:]}"
+        )
     if grown is not None:
         todo = (
             f"The run is a length read as a pendulum's angle (pendulum_radius_m), whose "

@@ -7,7 +7,10 @@ test here compares the draws of the sampled parameter that sets a quantity's spr
 with that parameter's prior restricted to the range the draws cover (the data may rule
 part of the prior out): a Kolmogorov–Smirnov distance of at most :data:`FLAT_KS` means
 the data set a range, not a value, and the quantity is shown as a bound by the fit's
-table and the reports alike.
+table and the reports alike, and every machine-readable summary says the same
+(:func:`bound_interval`: its interval runs from the lowest value the prior allows to the
+one-sided bound, ``kind`` ``"bound"``), so that no central interval of a prior excludes a
+truth at the prior's end (μ_s/μ_k = 1 of a record that never stops).
 """
 
 from __future__ import annotations
@@ -15,14 +18,28 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
-__all__ = ["FLAT_KS", "SPREAD_OF", "prior_flatness"]
+__all__ = [
+    "FLAT_KS",
+    "SPREAD_OF",
+    "bound_interval",
+    "is_bound",
+    "is_flat",
+    "prior_end",
+    "prior_flatness",
+]
 
 #: A posterior whose Kolmogorov–Smirnov distance to its prior, restricted to the range the
 #: draws cover, is at most this is flat over its prior there: the data set only the range
 #: (a bound), not a value. A normal posterior is about 0.2 from the uniform over its
 #: draws' range; flat draws about 1/√(effective sample size).
 FLAT_KS = 0.1
+
+#: The draws reach the prior's lower end when their lowest is within this share of their
+#: range from it: the interval of a bound then starts at the prior's end itself (μ_s/μ_k
+#: at 1), not at the lowest draw above it.
+_REACH = 0.05
 
 #: Reported quantities whose spread is set by another sampled parameter: μ_s = (μ_s/μ_k)
 #: μ_k, and the static friction's displacement and torque with it.
@@ -75,3 +92,107 @@ def prior_flatness(result: Any, name: str) -> float | None:
     expected = np.interp(draws, grid, cdf / cdf[-1])
     ranks = np.arange(1, draws.size + 1) / draws.size
     return float(max(np.max(ranks - expected), np.max(expected - (ranks - 1 / draws.size))))
+
+
+def is_flat(distance: float | None) -> bool:
+    """Whether a :func:`prior_flatness` distance says the data set a range, not a value."""
+    return distance is not None and distance <= FLAT_KS
+
+
+def prior_end(result: Any, name: str) -> float | None:
+    """The lower end of the prior of the parameter that sets the spread of ``name``
+    (:data:`SPREAD_OF`), where that parameter's draws reach it (their lowest within
+    :data:`_REACH` of their range from it); None where they do not (the data rule the
+    prior's lower part out) or the prior has no finite lower end.
+
+    Parameters
+    ----------
+    result : FitResult
+        A fit (its ``priors`` and ``samples``).
+    name : str
+        The quantity.
+
+    Returns
+    -------
+    float or None
+        In the sampled parameter's unit.
+    """
+    sampled = SPREAD_OF.get(name, name)
+    try:
+        end = getattr(result.priors[sampled], "low", None)
+        spread = np.asarray(result.samples(sampled), dtype=float).ravel()
+    except (KeyError, ValueError, AttributeError):
+        return None
+    if end is None or not np.isfinite(end) or spread.size < 2:
+        return None
+    lowest = float(spread.min())
+    return float(end) if lowest - end <= _REACH * float(spread.max() - lowest) else None
+
+
+def is_bound(result: Any, name: str) -> bool:
+    """Whether ``name`` is not constrained by the data: its posterior is flat over its
+    prior (:func:`prior_flatness` at most :data:`FLAT_KS`) from the prior's lower end
+    (:func:`prior_end`) up to a bound. A posterior flat between two ends the data set (a
+    stop that bounds μ_s/μ_k from both sides) is a range the data measured, not a
+    bound."""
+    return is_flat(prior_flatness(result, name)) and prior_end(result, name) is not None
+
+
+def bound_interval(
+    result: Any, name: str, draws: ArrayLike, prob: float = 0.95
+) -> tuple[float, float] | None:
+    """The interval of probability ``prob`` of a quantity the data do not constrain
+    (:func:`is_bound`), None for one they do.
+
+    Such a posterior is its prior's up to a bound: the interval is one-sided, from the
+    prior's lower end (:func:`prior_end`) to the ``prob`` quantile of the draws (the
+    bound the fit's table prints, ``< high``); for a quantity that is the sampled
+    parameter times another (μ_s = (μ_s/μ_k) μ_k, the static friction's displacement
+    and torque), its lower end is the lower ``(1 - prob) / 2`` quantile of the other at
+    the prior's end. A central interval would exclude the prior's end, where the truth
+    of a record that never sticks lies (μ_s/μ_k = 1).
+
+    Parameters
+    ----------
+    result : FitResult
+        A fit (its ``priors`` and ``samples``).
+    name : str
+        The quantity.
+    draws : array_like
+        Its draws (any shape), in the order of the sampled parameter's.
+    prob : float
+        Probability of the interval.
+
+    Returns
+    -------
+    (float, float) or None
+        (low, high) in the quantity's unit.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from types import SimpleNamespace as R
+    >>> from bayestribo.inference.priors import PriorSet, Uniform
+    >>> draws = np.random.default_rng(0).uniform(1.0, 2.9, 4000)  # flat up to 2.9
+    >>> fit = R(priors=PriorSet({"mu_s_ratio": Uniform(1.0, 10.0)}), samples=lambda n: draws)
+    >>> low, high = bound_interval(fit, "mu_s_ratio", draws)
+    >>> float(low), round(float(high), 1)
+    (1.0, 2.8)
+    >>> ranged = np.random.default_rng(0).uniform(18.5, 21.0, 4000)  # the data set both ends
+    >>> fit = R(priors=PriorSet({"mu_s_ratio": Uniform(1.0, 40.0)}), samples=lambda n: ranged)
+    >>> bound_interval(fit, "mu_s_ratio", ranged) is None
+    True
+    """
+    if not is_bound(result, name):
+        return None
+    start = prior_end(result, name)
+    assert start is not None  # is_bound
+    x = np.asarray(draws, dtype=float).ravel()
+    high = float(np.quantile(x, prob))
+    sampled = SPREAD_OF.get(name, name)
+    if sampled == name:
+        return start, high
+    spread = np.asarray(result.samples(sampled), dtype=float).ravel()
+    if spread.shape != x.shape or not np.all(spread > 0):
+        return float(x.min()), high
+    return float(np.quantile(x * (start / spread), (1 - prob) / 2)), high

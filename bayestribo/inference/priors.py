@@ -40,6 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 from bayestribo.model.laws import Law, get_law
 
 __all__ = [
+    "BELIEF_BOUNDS",
     "BOUND_FRACTION",
     "BOUND_WIDTH",
     "LogUniform",
@@ -49,6 +50,7 @@ __all__ = [
     "Uniform",
     "default_priors",
     "piled_on_bounds",
+    "widened_prior",
 ]
 
 #: Width of the band below an upper prior bound, as a fraction of the prior range.
@@ -252,6 +254,38 @@ def default_priors(
         priors["log10_discrepancy"] = Uniform(-7.0, 0.0)
         priors["log10_shape"] = Uniform(-7.0, 0.0)
     return PriorSet(priors)
+
+
+#: Sampled parameters whose default upper bound is a belief about contacts, not a
+#: physical limit, with that bound: a record may ask for more (μ_s/μ_k: a lubricated
+#: contact may stick at twenty times its kinetic friction), and a posterior on it is
+#: answered by a wider prior.
+BELIEF_BOUNDS = {"mu_s_ratio": 10.0}
+#: Factor by which the advice widens such a bound.
+WIDEN = 4.0
+
+
+def widened_prior(name: str, prior: Prior) -> str | None:
+    """The ``--prior`` value that widens the default upper bound of a parameter of
+    :data:`BELIEF_BOUNDS` by :data:`WIDEN` (``mu_s_ratio=Uniform(1,40)``); None for any
+    other parameter (its default bound is a physical limit: the data asking for more
+    say that a unit, a channel or the record is wrong), another kind of prior, or a
+    bound already beyond the default (the advice is given once: a posterior that piles
+    on the widened bound too asks for more than sticking).
+
+    Examples
+    --------
+    >>> widened_prior("mu_s_ratio", Uniform(1.0, 10.0))
+    'mu_s_ratio=Uniform(1,40)'
+    >>> widened_prior("mu_s_ratio", Uniform(1.0, 40.0)) is None
+    True
+    >>> widened_prior("zeta", Uniform(0.0, 0.3)) is None
+    True
+    """
+    default = BELIEF_BOUNDS.get(name)
+    if default is None or not isinstance(prior, Uniform | LogUniform) or prior.high > default:
+        return None
+    return f"{name}={type(prior).__name__}({prior.low:g},{WIDEN * prior.high:g})"
 
 
 def piled_on_bounds(draws: NDArray, priors: PriorSet) -> list[dict[str, float | str]]:

@@ -27,10 +27,12 @@ importing ArviZ, xarray and pandas.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import warnings
 from collections.abc import Mapping
 from pathlib import Path
+from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -38,7 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from bayestribo._files import atomic_path
 from bayestribo.inference.fit_record import FitRecord, plain_data
-from bayestribo.inference.priors import PriorSet
+from bayestribo.inference.priors import PriorSet, widened_prior
 from bayestribo.inference.quantities import (
     DERIVED,
     Quantity,
@@ -317,8 +319,17 @@ class FitResult:
         return bool(self._attr("friction_defined", 0))
 
     def interval(self, name: str, prob: float = 0.95) -> tuple[float, float]:
-        """Equal-tailed credible interval of ``name`` with probability ``prob``."""
-        return ParameterSummary.from_samples(self.samples(name), prob).interval
+        """Credible interval of ``name`` with probability ``prob``, as :meth:`summary`
+        gives it: equal-tailed, or, for a quantity the data do not constrain, from its
+        prior's lower end to the one-sided bound
+        (:func:`~bayestribo.inference.flatness.bound_interval`)."""
+        from bayestribo.inference.flatness import bound_interval
+
+        check_prob(prob)
+        draws = self.samples(name)
+        fit = SimpleNamespace(priors=self.priors, samples=self.samples)
+        bound = bound_interval(fit, name, draws, prob)
+        return bound if bound is not None else ParameterSummary.from_samples(draws, prob).interval
 
     def _summary_names(self) -> list[str]:
         """Every quantity of the posterior group, in the order of the summaries: those
@@ -377,6 +388,11 @@ class FitResult:
             ``median`` and ``interval`` (low, high) in the quantity's ``unit``,
             ``prob``, ``kind``, ``name``, ``symbol``, ``label`` (the name in words),
             ``unit`` (``"1"`` when dimensionless), ``sampled``, ``ess`` and ``r_hat``.
+            A quantity the data do not constrain (its posterior is its prior's up to a
+            bound, :func:`~bayestribo.inference.flatness.prior_flatness`: μ_s/μ_k of a
+            record that never sticks) has ``kind`` ``"bound"`` and the one-sided
+            interval from the prior's lower end to the bound the text table prints
+            (:func:`~bayestribo.inference.flatness.bound_interval`).
 
         Raises
         ------
@@ -384,11 +400,20 @@ class FitResult:
             If ``prob`` is not in (0, 1).
         """
         check_prob(prob)
+        from bayestribo.inference.flatness import bound_interval
+
         n_walkers = self.diagnostics.get("n_walkers")
-        return {
-            name: QuantitySummary.of(q, self._chains(name), prob, n_walkers)
-            for name, q in self.quantity_info().items()
-        }
+        # the priors read once (each reading parses them), the draws as they are
+        fit = SimpleNamespace(priors=self.priors, samples=self.samples)
+        out = {}
+        for name, q in self.quantity_info().items():
+            draws = self._chains(name)
+            s = QuantitySummary.of(q, draws, prob, n_walkers)
+            bound = bound_interval(fit, name, draws, prob)
+            if bound is not None:  # the prior's, up to a bound: never a central interval
+                s = dataclasses.replace(s, interval=bound, kind="bound")
+            out[name] = s
+        return out
 
     def to_dataframe(self, prob: float = 0.95) -> Any:
         """The posterior summary as a table, one row per quantity (:meth:`summary`).
@@ -404,8 +429,10 @@ class FitResult:
             Index ``name`` (``"zeta"``, ...); columns ``symbol``, ``label`` (the name in
             words), ``unit`` (``"1"`` when dimensionless; ``unit_words`` as a reader
             reads it), ``mean``, ``sd``, ``median``, ``low`` and ``high`` (the ends
-            of the ``prob`` interval), all in the quantity's unit, ``prob``, ``ess``
-            (effective sample size), ``r_hat`` and ``sampled``.
+            of the ``prob`` interval), all in the quantity's unit, ``prob``, ``kind``
+            (``"bound"`` for a quantity the data do not constrain, its interval from
+            the prior's lower end), ``ess`` (effective sample size), ``r_hat`` and
+            ``sampled``.
 
         Raises
         ------
@@ -427,6 +454,7 @@ class FitResult:
                 "low": s.low,
                 "high": s.high,
                 "prob": s.prob,
+                "kind": s.kind,
                 "ess": s.ess,
                 "r_hat": s.r_hat,
                 "sampled": s.sampled,
@@ -684,9 +712,17 @@ class FitResult:
                 + ("" if agreement["same_shape"] else ": ANOTHER SHAPE")
             )
         for entry in self.at_prior_bound:
+            option = None
+            if entry["parameter"] in self.priors.names:
+                option = widened_prior(entry["parameter"], self.priors[entry["parameter"]])
             lines.append(
                 f"NOT A MEASUREMENT: {entry['parameter']} piles on its prior's upper bound "
-                f"{entry['bound']:.4g}; check units and channels (bayestribo inspect)"
+                f"{entry['bound']:.4g}; "
+                + (
+                    "check units and channels (bayestribo inspect)"
+                    if option is None
+                    else f"where the stop is real, widen it (--prior {option})"
+                )
             )
         lines.extend(self._table_lines(prob))
         lines.extend(self._dissipation_lines())
@@ -697,7 +733,6 @@ class FitResult:
         unit ("dimensionless" for a number), mean and ``prob`` interval in the digits the
         interval supports, or a bound where the posterior is its prior's
         (:mod:`bayestribo.inference.flatness`), and sd."""
-        from bayestribo.inference.flatness import FLAT_KS, prior_flatness
         from bayestribo.summary import interval_text
 
         header = f"mean [{100 * check_prob(prob):g} % interval]"
@@ -707,8 +742,7 @@ class FitResult:
         values = {}
         for name, s in summary.items():
             lo, hi = s.interval
-            flat = prior_flatness(self, name)
-            if flat is not None and flat <= FLAT_KS:
+            if s.kind == "bound":
                 # the data set a range, not a value: a bound, never a measurement
                 values[name] = f"< {hi:.2g} (not constrained by the data: its prior up to there)"
             else:  # the digits the interval supports (bayestribo.summary.interval_text)

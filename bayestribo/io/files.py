@@ -269,15 +269,45 @@ def _read(path: Path, opts: ReadOptions) -> Run:
         try:
             validate_run(run)
         except RecordingError as exc:
-            if not implicit or "plausibility" not in exc.message:
+            note = _rate_note(run, exc.message, origin, stated) if implicit else None
+            if note is None:
                 raise
-            rate = meta["sample_rate_Hz"]
-            raise RecordingError(
-                f"{exc.message}; the time stamps here are i / {rate:g} Hz, from {origin}: "
-                "a rate wrong by a factor gives a frequency wrong by the same factor",
-                exc.where,
-            ) from None
+            raise RecordingError(f"{exc.message}; {note}", exc.where) from None
     return run
+
+
+def _rate_note(run: Run, message: str, origin: str, stated: StatedRate | None) -> str | None:
+    """What a refusal of a run without a time column says of its sample rate, or None
+    where the refusal is not one a wrong rate makes: an implausible frequency (a rate
+    wrong by a factor makes the frequency wrong by it) or channels that disagree (the
+    integral of the velocity wrong by it: the rate that makes them agree is named).
+    Where the rate is a preamble's, the fix of a wrong one is named as well (the
+    samples' rate given and the preamble's line left out)."""
+    rate = float(run.metadata["sample_rate_Hz"])
+    if "plausibility" in message:
+        note = (
+            f"the time stamps here are i / {rate:g} Hz, from {origin}: a rate wrong by a "
+            "factor gives a frequency wrong by the same factor"
+        )
+    elif " disagree: the displacement is " in message:
+        from bayestribo.signal.channels import channel_consistency
+
+        found = channel_consistency(run)
+        if found is None or not (math.isfinite(found.gain) and found.gain > 0):
+            return None
+        note = (
+            f"the time stamps here are i / {rate:g} Hz, from {origin}: a rate wrong by a "
+            "factor makes the integral of the velocity wrong by the same factor, and at "
+            f"{rate / found.gain:.4g} Hz the channels agree"
+        )
+    else:
+        return None
+    if stated is not None and origin == str(stated):
+        note += (
+            "; if the preamble's is not the samples' rate, give theirs, sample_rate_Hz=HZ "
+            f"(--sample-rate HZ), and leave the preamble's line out with skip_rows={stated.skip}"
+        )
+    return note
 
 
 def _integrated(

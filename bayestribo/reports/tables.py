@@ -16,7 +16,7 @@ from typing import Any
 
 from bayestribo._plural import count
 from bayestribo.inference.flatness import FLAT_KS as _FLAT_KS
-from bayestribo.inference.flatness import SPREAD_OF, prior_flatness
+from bayestribo.inference.flatness import SPREAD_OF, is_flat, prior_end, prior_flatness
 from bayestribo.inference.quantities import unit_words
 from bayestribo.summary import NUMERICAL_ZERO, interval_text, probability_text
 
@@ -301,10 +301,12 @@ def quantiles_text(samples: Any, prob: float = 0.95) -> str:
 
 def quantity_text(result: Any, name: str, summary: Any) -> str:
     """One quantity of a fit as a reader should read it: ``mean [low, high]`` in the
-    digits the interval supports, or, where its posterior is flat over its prior within
-    the range the data allow (:func:`prior_flatness` at most :data:`FLAT_KS`), a bound:
+    digits the interval supports, or, where its posterior is flat over its prior from
+    the prior's lower end up to where the data allow (:func:`prior_flatness` at most
+    :data:`FLAT_KS`, :func:`~bayestribo.inference.flatness.prior_end`), a bound:
     ``not constrained by the data: μ_s < 0.082 (...)``, the upper end of its interval in
-    two digits.
+    two digits (the fit's summary gives that interval from the prior's end, ``kind``
+    ``"bound"``).
 
     Parameters
     ----------
@@ -315,7 +317,7 @@ def quantity_text(result: Any, name: str, summary: Any) -> str:
         Its summary (``result.summary(prob)[name]``).
     """
     distance = prior_flatness(result, name)
-    if distance is not None and distance <= FLAT_KS:
+    if is_flat(distance) and prior_end(result, name) is not None:
         symbol = _symbols(result).get(name, name)
         return (
             f"not constrained by the data: {symbol} < {summary.high:.2g} (the posterior is its "

@@ -150,6 +150,7 @@ from bayestribo.signal.peaks import Peaks, estimate_noise, estimate_offset, find
 from bayestribo.signal.period import MIN_PERIOD_SAMPLES, dominant_period, sample_step
 from bayestribo.signal.quantisation import (
     QUANTISATION_NOISE_FACTOR,
+    finely_dithered,
     quantisation_step,
     still_on_its_steps,
 )
@@ -1648,7 +1649,10 @@ def _analyse(
         period0,
         threshold=motion_threshold,
         displacement=x if v is None else None,
-        periodic=x if x_step is not None else None,
+        # levels dithered finely by the noise are a continuous signal's: their toggling
+        # at the rig's frequency marked a block holding the last swing and a rest
+        # shorter than a block as motion, and the stop was not found
+        periodic=x if x_step is not None and not finely_dithered(x, x_step) else None,
         velocity_alone=x is None,
     )
     released_at = span.release_index

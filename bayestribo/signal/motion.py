@@ -39,7 +39,12 @@ the rig's frequency**.
   the rest stays on its level (at most :data:`STEADY_REST` of its samples off it: steps
   coarse beside the noise). Where the noise toggles the rest between levels (steps of
   the order of the noise, a vibrometer's), a last change of level is the noise's, and
-  the end of motion is the last excursion beyond the threshold, as without steps.
+  the end of motion is the last excursion beyond the threshold, as without steps. The
+  analysis gives no such displacement where its noise spans four steps or more
+  (:func:`bayestribo.signal.quantisation.finely_dithered`: a file written with five
+  decimals of metres under 0.2 mm of noise): its levels are a continuous signal's, and
+  judged as levels the block holding its last swing and a rest shorter than a block
+  was coherent, so that the stop was not found.
 * **A velocity recorded alone** (``velocity_alone``: a seismometer's coil, its
   displacement to be integrated) may hold a **viscous decay that fades into the noise**
   instead of stopping: its last excursion beyond the threshold is then followed by a

@@ -22,10 +22,21 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
-__all__ = ["QUANTISATION_NOISE_FACTOR", "quantisation_step", "still_on_its_steps"]
+__all__ = [
+    "FINE_DITHER_STEPS",
+    "QUANTISATION_NOISE_FACTOR",
+    "finely_dithered",
+    "quantisation_step",
+    "still_on_its_steps",
+]
 
 #: Standard deviation of the rounding error per step: 1/√12.
 QUANTISATION_NOISE_FACTOR = 1.0 / math.sqrt(12.0)
+#: Noise, in steps, from which a quantised channel's levels are dithered finely: its
+#: rounding adds at most 1/192 of the noise's variance, and the levels tell nothing of
+#: the motion the signal itself does not (a file written with five decimals of metres,
+#: 10 µm steps under 0.2 mm of noise).
+FINE_DITHER_STEPS = 4.0
 #: Changes needed to call a step.
 _MIN_CHANGES = 20
 #: Fraction of the changes that must be whole multiples of the step.
@@ -90,6 +101,43 @@ def quantisation_step(values: ArrayLike) -> float | None:
             n = np.round(ratio)
             return float(round(float(np.sum(change) / np.sum(n)), 15))
     return None
+
+
+def finely_dithered(values: ArrayLike, step: float | None) -> bool:
+    """Whether a channel quantised in ``step`` carries a noise of
+    :data:`FINE_DITHER_STEPS` steps or more: its levels are then those of a continuous
+    signal, not a coarse digitiser's.
+
+    The noise is the white noise of the fourth differences, 1.4826 MAD(Δ⁴x)/√70 (the
+    motion's share is below 1 % of its amplitude at 20 samples a period), over the
+    whole channel.
+
+    Parameters
+    ----------
+    values : array_like
+        The channel's samples.
+    step : float or None
+        Its step (:func:`quantisation_step`); None: not quantised (False).
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> noisy = np.random.default_rng(0).normal(0.0, 2e-4, 2000)
+    >>> finely_dithered(np.round(noisy, 5), 1e-5), finely_dithered(np.round(noisy, 3), 1e-3)
+    (True, False)
+    """
+    if step is None or not step > 0:
+        return False
+    x = np.asarray(values, dtype=float)
+    d4 = np.diff(x[np.isfinite(x)], n=4)
+    if d4.size == 0:
+        return False
+    noise = 1.4826 * float(np.median(np.abs(d4 - np.median(d4)))) / math.sqrt(70.0)
+    return noise >= FINE_DITHER_STEPS * step
 
 
 def still_on_its_steps(rests: list[ArrayLike], step: float | None) -> bool:
