@@ -56,6 +56,8 @@ def test_a_load_or_mass_in_another_unit_is_read_in_si_and_said(tmp_path, meta, l
     converted = [k for k in meta if k not in ("load_N", "mass_kg") or isinstance(meta[k], str)]
     for key in converted:
         assert any(repr(key) in s and "read as" in s for s in said), (key, said)
+    # numbers said to six figures, as the units they were written in
+    assert not any("0.030591486" in s for s in said), said
 
 
 @pytest.mark.parametrize(

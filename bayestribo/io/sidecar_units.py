@@ -138,7 +138,7 @@ def si_quantities(metadata: Mapping[str, Any]) -> tuple[dict[str, Any], list[str
                 )
             del out[key]
             out[si_key] = si
-            shown = value if isinstance(value, str) else f"{value!r} {spelt}"
+            shown = repr(value) if isinstance(value, str) else f"{value:.6g} {spelt}"
             weight = (
                 " (its weight, standard gravity)" if table is FORCES and spelt in MASSES else ""
             )
