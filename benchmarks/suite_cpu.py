@@ -51,6 +51,9 @@ def run_one(folder: Path, commit: str, modules: list[str], jobs: int) -> None:
         ["git", "-C", str(ROOT), "archive", commit], capture_output=True, check=True
     ).stdout
     subprocess.run(["tar", "-x", "-C", str(tree)], input=archive, check=True)
+    shared = ROOT.parent / "shared"
+    if shared.is_dir():  # the real recordings, beside the tree as beside a checkout
+        (folder / "shared").symlink_to(shared.resolve())
     env = {
         **os.environ,
         "SUITECUT_LOG": str(log),
