@@ -82,6 +82,15 @@ def summarise(folder: Path) -> dict[str, Any]:
     kernels: Counter[str] = Counter()
     for process in processes:
         kernels.update(process["funcs"].keys())
+    laws: dict[str, list[float]] = {}  # a generated law module: its compilation per process
+    for process in processes:
+        spent: Counter[str] = Counter()
+        for name, cpu in process["funcs"].items():
+            if name.startswith("bayestribo_law_"):
+                spent[name.split(".")[0]] += cpu
+        for module, cpu in spent.items():
+            laws.setdefault(module, []).append(round(cpu, 2))
+    notebooks = [p for p in processes if any("ipykernel" in a for a in p["argv"])]
     return {
         "cpu_s": user + system,
         "wall_s": wall,
@@ -93,6 +102,15 @@ def summarise(folder: Path) -> dict[str, Any]:
         "compile_cpu_s": sum(p["compile"] for p in processes),
         "compiling_processes": sum(1 for p in processes if p["compile"] > 1.0),
         "kernels_compiled_more_than_once": sorted(k for k, n in kernels.items() if n > 1),
+        "law_modules_compiled": len(laws),
+        "law_compile_cpu_s": round(sum(sum(v) for v in laws.values()), 1),
+        "law_modules_compiled_in_more_than_one_process": {
+            k: v for k, v in laws.items() if sum(c > 1.0 for c in v) > 1
+        },
+        # notebook kernels and the processes they start (their argv is the kernel's)
+        "kernel_processes": len(notebooks),
+        "kernel_cpu_s": round(sum(p["cpu"] for p in notebooks), 1),
+        "kernels_started_by_test": sorted({p.get("started_in") or "" for p in notebooks} - {""}),
     }
 
 
