@@ -109,8 +109,12 @@ if _OUT:
 
         _CHILD = _Child()
         multiprocessing.util.Finalize(None, _dump, exitpriority=-100)
-        multiprocessing.util.register_after_fork(
-            _CHILD, lambda _: multiprocessing.util.Finalize(None, _dump, exitpriority=-100)
-        )
+
+        def _after_fork(_):
+            # a forked child starts with its parent's record: it records only its own
+            _state.update(compile=0.0, n=0, funcs={}, tests={})
+            multiprocessing.util.Finalize(None, _dump, exitpriority=-100)
+
+        multiprocessing.util.register_after_fork(_CHILD, _after_fork)
     except Exception:
         pass
