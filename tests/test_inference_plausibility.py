@@ -21,9 +21,9 @@ def _coulomb_record(tmp_path, meta, seed=3):
     w = 2 * np.pi * FREQ
     xc = MU_K * LOAD / (MASS * w**2)
     fs, rest = 5000.0, 0.3
-    t = np.arange(int(4.0 * fs)) / fs
-    x = np.full(t.size, 2e-3)
-    start, x0 = rest, 2e-3
+    t = np.arange(int(1.6 * fs)) / fs
+    x = np.full(t.size, 5e-4)
+    start, x0 = rest, 5e-4
     while abs(x0) > 1.5 * xc:
         centre = np.sign(x0) * xc
         inside = (t >= start) & (t < start + np.pi / w)
