@@ -274,3 +274,26 @@ def test_a_run_id_taken_is_refused_and_another_one_records_the_run(tmp_path, cap
     assert status == 0, err
     assert read_run(out / "r2.csv").n_samples > 0
     assert {k: v for k, v in _sha(out).items() if k.startswith("r1")} == before  # untouched
+
+
+def test_a_stop_beyond_the_bound_on_the_papers_rig_still_advises_the_prior_first(
+    tmp_path, capsys
+) -> None:
+    # viscous damping and Coulomb friction sticking at μ_s/μ_k = 20 (solve_ivp): the
+    # misfit is the stop's, with a smooth part that is significant but small
+    omega = 2.0 * math.pi * F_HZ
+    run = law_recording(
+        lambda v: 2.0 * RIG_ZETA * omega * v,
+        friction=RIG_MU_K * LOAD / MASS,
+        static_ratio=20.0,
+        duration_s=1.0,
+        seed=2,
+    )
+    path = write_run(run, tmp_path / "sticks.csv")
+    status, _, err = command(["fit", str(path), "--json"], capsys)
+    assert status == 1 and "smoothly along the decay" in err
+    option = first_advice(err)
+    assert option.startswith("--prior mu_s_ratio="), err
+    status, out, err = command(["fit", str(path), "--json", *option.split()], capsys)
+    assert status == 0, err
+    covers(json.loads(out), {"zeta": RIG_ZETA, "mu_k": RIG_MU_K, "mu_s": 20.0 * RIG_MU_K})
