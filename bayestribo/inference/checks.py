@@ -349,9 +349,9 @@ def misfit_of_the_law(misfit: Misfit, shape: ShapeDeparture) -> bool:
     A stop the law cannot hold (μ_s/μ_k piled on its prior's bound, the pin at rest
     further off centre than the law lets it stick) misfits in the increments about the
     stop, not along the decay: on the paper's rig at μ_s/μ_k = 15-30 (an independent
-    ``solve_ivp`` record, seeds 1-3) the smooth departure held 1-3 % of a χ² of
-    800-10 000; on a drag's record (quadratic drag, or damping growing with the swing)
-    it held 97 %.
+    ``solve_ivp`` record, seeds 1-3) the smooth departure held 0.5-2.8 % of a χ² of
+    800-10 000 (significant in 5 of 6 at 15 and 20); on a drag's record (quadratic drag,
+    or damping growing with the swing) it held 97 %.
 
     Parameters
     ----------
