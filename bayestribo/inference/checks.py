@@ -376,8 +376,9 @@ def drag_change(trend: FrequencyTrend | None, turning: NDArray) -> bool:
     the swing, the equivalent ζ_e larger at the large swings) by at most
     :data:`DRAG_CHANGE_FACTOR` ζ_e², ζ_e from the first swings' logarithmic decrement,
     ln(|Y_0|/|Y_k|)/(πk) over k ≤ 4 half cycles (quadratic drag on the paper's rig:
-    −0.024 % at ζ_e = 0.017). A spring that stiffens lengthens it as the swing decays;
-    one that softens beyond a drag's change is the spring's.
+    −0.024 % at ζ_e = 0.014, where 2ζ_e² is 0.039 %). A spring that stiffens
+    lengthens it as the swing decays; one that softens beyond a drag's change is the
+    spring's.
 
     Parameters
     ----------
