@@ -146,7 +146,9 @@ print(json.dumps({
 """
 
 
-def measure(tree: Path, law: str, hashes: bool, warm_seconds: float) -> dict:
+def measure(
+    tree: Path, law: str, hashes: bool, warm_seconds: float, cache: Path | None = None
+) -> dict:
     """One fresh process of ``tree`` with an empty law cache: the law's first call, its
     entry points' digests (``hashes``) and its warm calls.
 
@@ -160,6 +162,9 @@ def measure(tree: Path, law: str, hashes: bool, warm_seconds: float) -> dict:
         Whether to call and hash every entry point.
     warm_seconds : float
         About how much CPU [s] the warm calls take.
+    cache : Path, optional
+        A law cache kept from process to process (warm calls only: the first call then
+        loads the law); default an empty one.
 
     Returns
     -------
@@ -167,7 +172,8 @@ def measure(tree: Path, law: str, hashes: bool, warm_seconds: float) -> dict:
         The worker's record: CPU times [s], compilation events, digests.
     """
     with tempfile.TemporaryDirectory(prefix="law-inline-") as tmp:
-        env = {**os.environ, "PYTHONPATH": str(tree), "BAYESTRIBO_CACHE_DIR": str(Path(tmp) / "l")}
+        folder = cache if cache is not None else Path(tmp) / "l"
+        env = {**os.environ, "PYTHONPATH": str(tree), "BAYESTRIBO_CACHE_DIR": str(folder)}
         proc = subprocess.run(
             [
                 sys.executable,
@@ -209,6 +215,11 @@ def main() -> None:
     parser.add_argument("--warm-seconds", type=float, default=0.6)
     parser.add_argument("--output", default="law_inline")
     parser.add_argument(
+        "--cache-dir",
+        type=Path,
+        help="keep each tree's law cache in DIR/NAME (warm calls only; default empty caches)",
+    )
+    parser.add_argument(
         "--skip-warmup", action="store_true", help="the trees' own numba caches are warm"
     )
     args = parser.parse_args()
@@ -222,7 +233,8 @@ def main() -> None:
         for i, law in enumerate(args.laws):
             shift = (r + i) % len(names)
             for kind in names[shift:] + names[:shift]:
-                res = measure(trees[kind], law, r == 0, args.warm_seconds)
+                cache = None if args.cache_dir is None else args.cache_dir.resolve() / kind
+                res = measure(trees[kind], law, r == 0, args.warm_seconds, cache)
                 res["exclusive_cpu_s"] = exclusive(res)
                 del res["events"]
                 runs[law][kind].append(res)
@@ -279,7 +291,7 @@ def write(args: argparse.Namespace, trees: dict, runs: dict, load_start: list) -
             "benchmark": "law_inline",
             "description": __doc__,
             "trees": {k: str(v) for k, v in trees.items()},
-            "settings": {k: v for k, v in vars(args).items() if k != "tree"},
+            "settings": {k: str(v) for k, v in vars(args).items() if k != "tree"},
             "load_average_start": load_start,
             "load_average_end": list(os.getloadavg()),
             "runs": runs,
