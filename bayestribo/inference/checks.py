@@ -14,6 +14,7 @@ which the summarise stage calls once it has both.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from typing import Any, NamedTuple
@@ -37,7 +38,12 @@ from bayestribo.inference.modes import ModeReport, mode_check
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.preparation import matched_law_times
 from bayestribo.inference.priors import piled_on_bounds, widened_prior
-from bayestribo.inference.restoring_choice import arm_advice, simple_pendulum_arm
+from bayestribo.inference.restoring_choice import (
+    RestoringChoice,
+    arm_advice,
+    choose_restoring,
+    simple_pendulum_arm,
+)
 from bayestribo.inference.types import MISFIT_P, PreparedRun, Sampled
 from bayestribo.io.run import Run
 from bayestribo.model.restoring import get_restoring
@@ -233,16 +239,25 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
     pendulum = _pendulum_change(
         prepared.run, prepared.metadata, decay.peaks.value / decay.scaling.length_scale
     )
+    chosen = prepared.restoring_choice is not None
     _warn_frequency_trend(
         name,
         trend,
         posterior.law.name,
         pendulum,
         restoring=posterior.law.restoring,
-        chosen=prepared.restoring_choice is not None,
+        chosen=chosen,
         constant_period=posterior.law.closed_form,
         arm=arm,
         drag=laws and not compared and drag_change(trend, decay.peaks.value),
+        spring=(
+            _spring_of(prepared)
+            if trend is not None
+            and trend.significant
+            and posterior.law.restoring is None
+            and not chosen
+            else None
+        ),
     )
     return FitChecks(
         sampled,
@@ -460,6 +475,7 @@ def _warn_frequency_trend(
     constant_period: bool = False,
     arm: float | None = None,
     drag: bool = False,
+    spring: RestoringChoice | None = None,
 ) -> None:
     """Say when the frequency is not constant along the decay beyond the law's own
     change (the nuisance that carries it is in the intervals); ``pendulum``: the change
@@ -478,7 +494,10 @@ def _warn_frequency_trend(
     restoring_choice.simple_pendulum_arm`), advised instead of any force of x;
     ``drag``: the law misfits the decay as another law would not and the change is one
     a drag makes (:func:`misfit_of_the_law`, :func:`drag_change`): another law is
-    advised first, the spring after it."""
+    advised first, the spring after it. ``spring``: what ``restoring="auto"`` would
+    take on the record (:func:`_spring_of`); where no force follows the change there
+    (``followed`` False), no force is advised, as none would answer: the warning says
+    so instead."""
     if trend is None:
         return
     if trend.significant:
@@ -496,6 +515,19 @@ def _warn_frequency_trend(
                 "own change off; if the change stays beyond the law it keeps, the spring "
                 "stiffens or softens: --restoring duffing (sidecar 'restoring': 'duffing') "
                 "measures its β from the half periods"
+            )
+        if spring is not None and not spring.followed and not drag:
+            like = (
+                "; no registered restoring force follows the change ("
+                + ", ".join(
+                    f"the {'Duffing spring' if force == 'duffing' else force}'s half "
+                    f"periods leave {100 * left.change:+.3g} %"
+                    for force, left in spring.left.items()
+                    if force != "linear" and left is not None
+                )
+                + "): it is not the spring's (a frequency that drifts in time, a change "
+                "that is not monotonic in the swing), so no --restoring option answers it "
+                "and the nuisance carries it"
             )
         if chosen and restoring is None:
             like = " (on the linear spring that --restoring auto took)"
@@ -555,6 +587,23 @@ def _simple_pendulum_arm(prepared: Any) -> float | None:
     if run.length_unit != "m" or decay.turning_times is None:
         return None
     return simple_pendulum_arm(decay.turning_times, decay.peaks.value)
+
+
+def _spring_of(prepared: Any) -> RestoringChoice | None:
+    """What ``restoring="auto"`` would take on the prepared run (its warnings silenced:
+    read for the advice of the frequency warning only); None without turning times."""
+    run, decay = prepared.run, prepared.decay
+    if decay.turning_times is None:
+        return None
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return choose_restoring(
+            decay.turning_times,
+            decay.peaks.value / decay.scaling.length_scale,
+            length_unit=run.length_unit,
+            angle=decay.scaling.length_scale == 1.0,
+            length_scale=decay.scaling.length_scale,
+        )
 
 
 def _pendulum_change(run: Run, metadata: Mapping[str, Any], turning: NDArray) -> float | None:
