@@ -44,6 +44,7 @@ from bayestribo.inference.restoring_choice import (
     choose_restoring,
     simple_pendulum_arm,
 )
+from bayestribo.inference.stop_prior import StopBeyondPrior, stop_beyond_prior
 from bayestribo.inference.types import MISFIT_P, PreparedRun, Sampled
 from bayestribo.io.run import Run
 from bayestribo.model.restoring import get_restoring
@@ -196,6 +197,20 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
         for e in at_bound
         if (option := widened_prior(str(e["parameter"]), posterior.priors[str(e["parameter"])]))
     }
+    # a record that stops where no draw can (its stop needs a μ_s/μ_k beyond the
+    # prior's bound, which the posterior presses on without piling on it): the bound is
+    # the cause, and the prior that holds the stop is advised first
+    stop = (
+        stop_beyond_prior(
+            posterior,
+            flat,
+            float(prepared.decay.peaks.value[-1]) / prepared.decay.scaling.length_scale,
+        )
+        if prepared.data.motion_ended and prepared.decay.peaks.value.size
+        else None
+    )
+    if stop is not None:
+        widen["mu_s_ratio"] = stop.option
     # a misfit that is the law's (a smooth departure along the decay: the decay loses
     # energy with another shape than the law's) is answered by another law before a
     # wider prior or another spring (benchmarks/README.md, advice followed)
@@ -211,7 +226,8 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
         arm=arm,
         grown=grown,
         widen=widen,
-        prior_first=bool(prepared.data.motion_ended) and not laws,
+        prior_first=bool(prepared.data.motion_ended) and (not laws or stop is not None),
+        stop=stop,
     )
     for entry in at_bound:
         option = widen.get(str(entry["parameter"]))
@@ -686,6 +702,7 @@ def _warn_misfit(
     grown: tuple[float, float] | None = None,
     widen: Mapping[str, str] | None = None,
     prior_first: bool = True,
+    stop: StopBeyondPrior | None = None,
 ) -> None:
     """Say, with numbers, that the law misfits the run, and what to do (see
     :func:`summarise`); ``half_cycles``: how many the analysis holds (the law-free answer
@@ -700,7 +717,9 @@ def _warn_misfit(
     law held below the sticking the record shows misfits it), the other advice after;
     ``prior_first``: the record stops and its misfit is the stop's (not
     :func:`misfit_of_the_law`), so the widened prior comes first; otherwise another law
-    does, the prior after it."""
+    does, the prior after it; ``stop``: the record's stop needs a μ_s/μ_k beyond its
+    prior (:func:`~bayestribo.inference.stop_prior.stop_beyond_prior`), said as the
+    cause, and the prior that holds it advised first."""
     law_free = (
         "The answer is the energy dissipated per cycle measured from the turning points, "
         "whatever the law (result.turning_point_dissipation, printed as 'turning points "
@@ -757,11 +776,16 @@ def _warn_misfit(
     elif widen:
         names = ", ".join(widen)
         options = "; ".join(_prior_spellings(option) for option in widen.values())
-        todo = (
+        cause = (
             f"{names} piles on its prior's upper bound, a belief rather than a physical "
             "limit: the record may ask for more (a pin that sticks harder), and a law held "
-            f"below it misfits. Fit with the prior widened ({options}); if the law still "
-            f"misfits, {todo[0].lower()}{todo[1:]}"
+            "below it misfits"
+            if stop is None
+            else stop.describe()
+        )
+        todo = (
+            f"{cause[0].upper()}{cause[1:]}. Fit with the prior widened ({options}); if the "
+            f"law still misfits, {todo[0].lower()}{todo[1:]}"
         )
     if grown is not None:
         todo = (
