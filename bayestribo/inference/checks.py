@@ -201,11 +201,7 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
     # prior's bound, which the posterior presses on without piling on it): the bound is
     # the cause, and the prior that holds the stop is advised first
     stop = (
-        stop_beyond_prior(
-            posterior,
-            flat,
-            float(prepared.decay.peaks.value[-1]) / prepared.decay.scaling.length_scale,
-        )
+        stop_beyond_prior(posterior, flat, *_last_turns(prepared.decay))
         if prepared.data.motion_ended and prepared.decay.peaks.value.size
         else None
     )
@@ -605,6 +601,13 @@ def _simple_pendulum_arm(prepared: Any) -> float | None:
     return simple_pendulum_arm(decay.turning_times, decay.peaks.value)
 
 
+def _last_turns(decay: EnergyDecay) -> tuple[float, float | None]:
+    """The record's last turning point (where its motion ends) and the one before it
+    (None with one), about the equilibrium, in the sampled frame's unit of y."""
+    y = np.asarray(decay.peaks.value, dtype=float) / decay.scaling.length_scale
+    return float(y[-1]), (float(y[-2]) if y.size >= 2 else None)
+
+
 def _spring_of(prepared: Any) -> RestoringChoice | None:
     """What ``restoring="auto"`` would take on the prepared run (its warnings silenced:
     read for the advice of the frequency warning only); None without turning times."""
@@ -751,10 +754,16 @@ def _warn_misfit(
         )
         return
     if compared:
+        held = (
+            ""
+            if stop is None
+            else f" {stop.describe()[0].upper()}{stop.describe()[1:]}: fit with the prior "
+            f"widened ({_prior_spellings(stop.option)}), which may let a law hold."
+        )
         warn(
             f"no law compared holds for {run}: the best, {law}, misfits it beyond its "
             f"noise ({how}); its parameters are not a measurement of any mechanism and its "
-            f"intervals are too narrow. {law_free}",
+            f"intervals are too narrow.{held} {law_free}",
             MisfitWarning,
         )
         return

@@ -67,7 +67,7 @@ class StopBeyondPrior:
 
 
 def stop_beyond_prior(
-    posterior: Posterior, draws: NDArray, y_stop: float
+    posterior: Posterior, draws: NDArray, y_stop: float, y_before: float | None = None
 ) -> StopBeyondPrior | None:
     """Whether the record's stop at ``y_stop`` needs a μ_s/μ_k beyond its prior.
 
@@ -80,6 +80,10 @@ def stop_beyond_prior(
     y_stop : float
         The turning point at which the record's motion ends, about the equilibrium,
         in the sampled frame's unit of y [dimensionless].
+    y_before : float, optional
+        The turning point before it, where the motion did not stick: the ratio is
+        below |Y|/μ(|Y|) there, and the prior advised holds 1.2× that (and at least
+        1.5× the ratio needed).
 
     Returns
     -------
@@ -103,12 +107,19 @@ def stop_beyond_prior(
     values = {n: np.array([float(params[n][0])]) for n in law.parameter_names}
     values["mu_s_ratio"] = np.array([1.0])
     coef = law.coefficients(values, posterior.likelihood.reference_amplitude)[0]
-    swing = abs(float(y_stop))
-    mu = sum(f.force(swing, coef[f.columns]) for f in CoefficientLayout.of(law).frictions)
-    if not (math.isfinite(mu) and mu > 0.0 and math.isfinite(swing)):
+    frictions = CoefficientLayout.of(law).frictions
+
+    def ratio_at(y: float) -> float:
+        swing = abs(float(y))
+        mu = sum(f.force(swing, coef[f.columns]) for f in frictions)
+        return swing / mu if math.isfinite(mu) and mu > 0.0 else math.nan
+
+    needed = ratio_at(y_stop)
+    if not math.isfinite(needed) or needed <= prior.high:
         return None
-    needed = swing / mu
-    if needed <= prior.high:
-        return None
-    option = widened_prior("mu_s_ratio", prior, needed=needed)
+    # the stick the record did not make, at the turning point before, bounds the ratio
+    # from above: the prior advised holds it with room
+    above = ratio_at(y_before) if y_before is not None else math.nan
+    room = max(needed, 1.2 / 1.5 * above) if math.isfinite(above) else needed
+    option = widened_prior("mu_s_ratio", prior, needed=room)
     return None if option is None else StopBeyondPrior(needed, float(prior.high), option)
