@@ -538,8 +538,8 @@ def _warn_frequency_trend(
                     if force != "linear" and left is not None
                 )
                 + "): it is not the spring's (a frequency that drifts in time, a change "
-                "that is not monotonic in the swing), so no --restoring option answers it "
-                "and the nuisance carries it"
+                "that is not monotonic in the swing), so naming a restoring force does not "
+                "answer it, and the nuisance carries it"
             )
         if chosen and restoring is None:
             like = " (on the linear spring that --restoring auto took)"
