@@ -3,10 +3,11 @@ the oscillation's are not counted.
 
 A beam's second bending mode (6.27 times the first, 3 % of the release) swings the
 velocity through zero between its turning points, and a displacement alone in white
-noise (1 % of the release) crosses zero between them once its derivative is taken:
-the zero crossings counted give 48.6 Hz and 120.9 Hz for 32.6 Hz (this test's records), and the warning said
-the stiffness used that frequency (it used the turning times' 32.6 Hz), ``bayestribo
-inspect`` reported it as the oscillation's, and the decay called it the nominal one.
+noise (1.5 % of the release) crosses zero between them once its derivative is taken:
+the zero crossings counted give 48.6 Hz and 120.9 Hz for 32.6 Hz (this test's records),
+and the warning said the stiffness used that frequency (it used the turning times'
+32.6 Hz), ``bayestribo inspect`` reported it as the oscillation's, and the decay called
+it the nominal one.
 
 The records are independent simulations (``_law_recording.py``: ``solve_ivp`` with the
 stick rule; the second mode added in closed form).
