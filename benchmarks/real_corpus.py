@@ -15,7 +15,8 @@ Run (in the background; a step with ``--law auto`` compares every candidate law)
 
     BAYESTRIBO_REAL_CORPUS=/path/to/corpus nice timeout 7200 python benchmarks/real_corpus.py
 
-Writes ``benchmarks/results/real_corpus.json``.
+Writes ``benchmarks/results/real_corpus.json`` (with ``--only NAME ...``, the recordings
+named are run again and the file's other entries kept).
 """
 
 from __future__ import annotations
@@ -106,6 +107,10 @@ def main(argv: list[str] | None = None) -> int:
     load_start = os.getloadavg()
     listed = corpus.manifest()
     table: dict[str, Any] = {}
+    earlier = Path(__file__).resolve().parent / "results" / f"{args.out}.json"
+    if args.only and earlier.is_file():
+        # --only runs again the recordings named and keeps the others' results
+        table = json.loads(earlier.read_text())["recordings"]
     for recording in listed["recordings"]:
         name = recording["name"]
         if args.only and name not in args.only:
