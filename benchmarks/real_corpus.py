@@ -15,7 +15,8 @@ Run (in the background; a step with ``--law auto`` compares every candidate law)
 
     BAYESTRIBO_REAL_CORPUS=/path/to/corpus nice timeout 7200 python benchmarks/real_corpus.py
 
-Writes ``benchmarks/results/real_corpus.json`` (with ``--only NAME ...``, the recordings
+``--table`` prints the README's table from the results. Writes
+``benchmarks/results/real_corpus.json`` (with ``--only NAME ...``, the recordings
 named are run again and the file's other entries kept).
 """
 
@@ -54,7 +55,11 @@ def _summary(answer: dict[str, Any]) -> dict[str, Any]:
     for key in ("law", "restoring", "adequate", "converged", "exit_status", "length_unit"):
         if key in answer:
             keep[key] = answer[key]
+    diagnostics = answer.get("diagnostics") or {}
+    keep["converged"] = diagnostics.get("converged")
+    keep["ess_min"] = diagnostics.get("ess_min")
     for key in (
+        "turning_point_dissipation",
         "parameters",
         "summary",
         "dissipation",
@@ -98,12 +103,58 @@ def run_step(path: Path, options: list[str], timeout: float) -> dict[str, Any]:
     return record
 
 
+def _answer(step: dict[str, Any]) -> str:
+    """One cell: the refusal, or the law (or the law-free answer) and its parameters."""
+    if step["exit_status"] == 2:
+        error = step["error"][0] if step["error"] else "refused"
+        return "refused: " + error.split(": error: ", 1)[-1].split(": ", 1)[-1][:160]
+    answer = step.get("answer") or {}
+    law = answer.get("law", "?")
+    held = not any("no law compared holds" in w or "misfits" in w for w in step["warnings"])
+    cells = []
+    for name, p in (answer.get("parameters") or {}).items():
+        if p.get("kind") == "posterior" and name != "y0":
+            low, high = p["interval"]
+            cells.append(f"{p['symbol']} {p['mean']:.3g} [{low:.3g}, {high:.3g}] {p['unit']}")
+    if held:
+        return f"`{law}` holds; " + "; ".join(cells)
+    band = answer.get("turning_point_dissipation") or {}
+    text = f"the turning points' ΔE(A) (`{law}` closest, misfits)"
+    if band.get("amplitude"):
+        unit = band.get("amplitude_unit", "")
+        ends = []
+        for i in (-1, 0):  # the largest swing first
+            low, high = band["interval"][i]
+            swing, mean = band["amplitude"][i], band["mean"][i]
+            ends.append(f"A = {swing:.3g} {unit}: {mean:.3g} [{low:.3g}, {high:.3g}]")
+        text += "; " + ", ".join(ends)
+    return text
+
+
+def markdown_table(results: dict[str, Any]) -> str:
+    """The Markdown table of the README from a results file: one row per step."""
+    rows = ["| recording | command | exit | answer | CPU s |", "|---|---|---|---|---|"]
+    for name, entry in results["recordings"].items():
+        for step in entry["steps"]:
+            command = step["command"].replace("|", "\\|")
+            rows.append(
+                f"| {name} | `{command}` | {step['exit_status']} | {_answer(step)} | "
+                f"{step['cpu_s']:.1f} |"
+            )
+    return "\n".join(rows)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--only", nargs="*", help="recording names to run (default: all)")
     parser.add_argument("--timeout", type=float, default=1800.0, help="per step [s]")
     parser.add_argument("--out", default="real_corpus", help="results name")
+    parser.add_argument("--table", action="store_true", help="print the table, run nothing")
     args = parser.parse_args(argv)
+    if args.table:
+        path = Path(__file__).resolve().parent / "results" / f"{args.out}.json"
+        print(markdown_table(json.loads(path.read_text())))
+        return 0
     load_start = os.getloadavg()
     listed = corpus.manifest()
     table: dict[str, Any] = {}
