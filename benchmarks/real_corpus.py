@@ -124,9 +124,10 @@ def _answer(step: dict[str, Any]) -> str:
         unit = band.get("amplitude_unit", "")
         ends = []
         for i in (-1, 0):  # the largest swing first
-            low, high = band["interval"][i]
+            low, high = band["interval"][0][i], band["interval"][1][i]
             swing, mean = band["amplitude"][i], band["mean"][i]
             ends.append(f"A = {swing:.3g} {unit}: {mean:.3g} [{low:.3g}, {high:.3g}]")
+        text += f" [{band.get('unit', '')}]"
         text += "; " + ", ".join(ends)
     return text
 
