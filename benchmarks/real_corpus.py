@@ -169,6 +169,7 @@ def main(argv: list[str] | None = None) -> int:
             continue
         path = corpus.locate(recording)
         entry: dict[str, Any] = {
+            "commit": commit(),
             "source": recording["source"],
             "file": recording["file"],
             "stated": recording.get("stated", {}),
