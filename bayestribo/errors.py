@@ -30,6 +30,7 @@ __all__ = [
     "ReadingWarning",
     "RecordingError",
     "RunFormatError",
+    "SeparateMotionWarning",
     "ShapeUnresolvedWarning",
     "ShortAnalysisWarning",
     "SpikeWarning",
@@ -136,6 +137,13 @@ class ClockRestartWarning(UserWarning):
 class SpikeWarning(UserWarning):
     """Isolated samples far off their neighbours were left out of the analysis (the
     message names the channel, times and values)."""
+
+
+class SeparateMotionWarning(UserWarning):
+    """The record holds more than one motion, separated by rests (runs recorded back to
+    back, a knock after the stop): the analysis takes the largest and the rests beside
+    it, and leaves the others out (the message names their times and the ``--window``
+    that analyses another)."""
 
 
 class FadeWarning(UserWarning):
