@@ -23,8 +23,8 @@ from bayestribo._files import atomic_path
 from bayestribo._warnings import warn
 from bayestribo.errors import BayestriboError, ReadingWarning, RecordingError, RunFormatError
 from bayestribo.io.acceleration import integrated_signals
-from bayestribo.io.options import READ_OPTIONS, ReadOptions, unknown_options
 from bayestribo.io.high_pass import undone as high_pass_undone
+from bayestribo.io.options import READ_OPTIONS, ReadOptions, unknown_options
 from bayestribo.io.pendulum_arm import as_angle
 from bayestribo.io.registry import FileFormat, check_content, format_for, registered_formats
 from bayestribo.io.run import ACCELERATIONS, ANGULAR, DISPLACEMENT, TIME, VELOCITY, Run
