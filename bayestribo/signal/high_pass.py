@@ -373,7 +373,7 @@ def _centres_fit(
     z = w / se
     period = 2.0 * float(np.median(np.diff(tt)))
     cutoff = w / (2.0 * math.pi)
-    if z < z_min or cutoff * period > 1.0:
+    if z < z_min or cutoff * period > 2.0:
         return None
     poly = np.column_stack([columns[0], *columns[3:]])
     term = w * mid(jk)
@@ -442,7 +442,7 @@ def detect_high_pass(
     -------
     HighPassSign or None
         None where the turning points are fewer than 12, the corner does not stand
-        out, lies beyond the oscillation's frequency, or the centres move by less than
+        out, lies beyond twice the oscillation's frequency, or the centres move by less than
         :data:`DETECTION_DRIFT` of the largest swing (no sign of a high-pass).
     """
     t = np.asarray(t, dtype=float)
