@@ -146,6 +146,21 @@ def test_the_sign_gives_the_corner(cutoff):
     assert f"--sensor-high-pass {sign.cutoff_Hz:.3g}" in sign.advice()
 
 
+@pytest.mark.parametrize("cutoff", [0.5, 0.9])
+def test_the_sign_tells_a_geophones_two_poles(cutoff):
+    t, y, _ = _recorded(cutoff, 2)
+    tt = prepare(Run(t, None, y, metadata=META)).decay.turning_times
+    sign = detect_high_pass(t, y, tt, velocity=True)
+    assert sign is not None and sign.order == 2
+    assert sign.cutoff_Hz == pytest.approx(cutoff, rel=0.03)
+    assert sign.damping == pytest.approx(0.7, abs=0.03)
+    assert "--sensor-high-pass " + f"{sign.cutoff_Hz:.3g},2," in sign.advice()
+    # one-pole records are not taken for two
+    t, y, _ = _recorded(cutoff, 1)
+    tt = prepare(Run(t, None, y, metadata=META)).decay.turning_times
+    assert detect_high_pass(t, y, tt, velocity=True).order == 1
+
+
 def test_no_sign_without_a_high_pass():
     t, _, v = _recorded(0.5)
     y = v + np.random.default_rng(5).normal(0.0, NOISE, v.size)

@@ -258,15 +258,23 @@ class HighPassSign:
     Attributes
     ----------
     cutoff_Hz : float
-        The corner frequency the centres' drift gives [Hz] (one pole).
+        The corner frequency the centres' drift gives [Hz].
     cutoff_se_Hz : float
-        Its standard error [Hz].
+        Its standard error [Hz] (from the centres' scatter; the estimate's error on
+        simulated records is within about 2 of them).
     channel : str
-        ``"velocity"`` or ``"displacement"``: the channel it was read from.
+        What the centres were read from: ``"velocity's integral"`` or
+        ``"displacement"``.
     z : float
         ``cutoff_Hz / cutoff_se_Hz``.
     drift : float
         How far the centres move over the record, as a fraction of the largest swing.
+    order : int
+        Poles: 1, or 2 where the two-pole inverse explains the centres far better.
+    damping : float or None
+        The two poles' damping ζ_g [-]; None for one pole.
+    rss, dof : float, int
+        The regression's residual sum of squares and degrees of freedom.
     """
 
     cutoff_Hz: float
@@ -274,25 +282,36 @@ class HighPassSign:
     channel: str
     z: float
     drift: float
+    order: int = 1
+    damping: float | None = None
+    rss: float = math.nan
+    dof: int = 0
 
     @property
     def spec(self) -> dict[str, Any]:
-        """The declaration advised (one pole at the estimated corner)."""
-        return {"cutoff_Hz": float(f"{self.cutoff_Hz:.3g}"), "order": 1}
+        """The declaration advised, to three significant digits."""
+        spec: dict[str, Any] = {"cutoff_Hz": float(f"{self.cutoff_Hz:.3g}"), "order": self.order}
+        if self.order == 2 and self.damping is not None:
+            spec["damping"] = float(f"{self.damping:.2g}")
+        return spec
 
     def advice(self) -> str:
         """The sentence a warning gives: the sign, the estimate and the option."""
-        value = option_text(self.spec)
+        spec = self.spec
+        value = option_text(spec)
+        poles = (
+            "one pole"
+            if self.order == 1
+            else f"two poles, damping {spec['damping']:g}, as a geophone's"
+        )
         return (
             f"the {self.channel} swings about a centre that relaxes from the release "
-            f"toward the rest as exp(-t/τ), the sign of a sensor that passes no DC (an "
-            f"AC-coupled channel, a geophone, a piezoelectric sensor: a high-pass with "
-            f"its corner at {self.cutoff_Hz:.3g} ± {self.cutoff_se_Hz:.2g} Hz from the "
-            f"centres, {self.drift:.0%} of the largest swing moved). Declare it: "
-            f"sensor_high_pass={{'cutoff_Hz': {self.spec['cutoff_Hz']:g}, 'order': 1}} "
-            f"(--sensor-high-pass {value}) undoes it when the run is read (with the "
-            "sensor's data-sheet corner and order, 2 poles for a geophone: "
-            "--sensor-high-pass HZ,2,DAMPING)"
+            "toward the rest, the sign of a sensor that passes no DC (an AC-coupled "
+            "channel, a geophone, a piezoelectric sensor): a high-pass of "
+            f"{poles} with its corner at {self.cutoff_Hz:.3g} ± {self.cutoff_se_Hz:.2g} Hz "
+            f"from the centres ({self.drift:.0%} of the largest swing moved). Declare it: "
+            f"sensor_high_pass={spec} (--sensor-high-pass {value}) undoes it when the run "
+            "is read (the sensor's data-sheet corner and poles, where known, are better)"
         )
 
 
@@ -309,6 +328,7 @@ def _centres_fit(
     z_min: float,
     ratio: float = 1.0,
     instrument: float | None = None,
+    order: int = 1,
 ) -> HighPassSign | None:
     """One regression of the centres at the given turning times (see
     :func:`detect_high_pass`): ``(x_{k+1} + r x_k)/(1 + r)`` of consecutive turning
@@ -318,6 +338,8 @@ def _centres_fit(
     regressor ``∬y`` (an instrumental variable): the regressor holds the noise's double
     integral, which the centres' own noise (its single integral) is correlated with,
     and which put the corner 1-4 % low on a 3 Hz rig with poles at 0.3-0.9 Hz.
+    ``order`` 2: the two-pole inverse's terms ``2ζ_g ω_c ∬y`` and ``ω_c² ∭y`` (and a
+    cubic of drift), no instrument.
 
     Parameters
     ----------
@@ -362,15 +384,21 @@ def _centres_fit(
     ]
     if velocity:
         columns.append(mid((tt - tt[0]) ** 2) / scale**2)
+    terms = [mid(jk)]
+    if order == 2:
+        terms.append(mid(_at(tt, t, cumulative_integral(t, j))))
+        columns.append(
+            mid((tt - tt[0]) ** (3 if velocity else 2)) / scale ** (3 if velocity else 2)
+        )
     # the centres as the inverse makes them: mid(d) + ω_c mid(j) = polynomial + alternation
-    a = np.column_stack([mid(jk), *columns])
+    a = np.column_stack([*terms, *columns])
     b = -mid(dk)
     z_ = a.copy()
-    if instrument is not None:
+    if instrument is not None and order == 1:
         z_[:, 0] = np.exp(-instrument * tm)
     # the centres' noise is the integral of the record's: a random walk, whose steps
     # are independent; the regression is on the centres' steps (the constant drops out)
-    keep = [0, *range(2, a.shape[1])]
+    keep = [i for i in range(a.shape[1]) if i != len(terms)]
     a, z_, b = np.diff(a[:, keep], axis=0), np.diff(z_[:, keep], axis=0), np.diff(b)
     dof = b.size - a.shape[1]
     if dof < 4:
@@ -383,7 +411,19 @@ def _centres_fit(
         cov = s2 * inverse @ (z_.T @ z_) @ inverse.T
     except np.linalg.LinAlgError:
         return None
-    w, se = float(coef[0]), math.sqrt(max(float(cov[0, 0]), 0.0))
+    rss = float(resid @ resid)
+    if order == 2:
+        p1, p2 = float(coef[0]), float(coef[1])
+        if not (p1 > 0 and p2 > 0):
+            return None
+        w = math.sqrt(p2)
+        se = 0.5 * math.sqrt(max(float(cov[1, 1]), 0.0)) / w  # of ω_c from that of ω_c²
+        damping = p1 / (2.0 * w)
+        if not 0.05 <= damping <= 5.0:
+            return None
+    else:
+        w, se = float(coef[0]), math.sqrt(max(float(cov[0, 0]), 0.0))
+        damping = None
     if not (w > 0 and se > 0 and math.isfinite(w)):
         return None
     z = w / se
@@ -392,7 +432,7 @@ def _centres_fit(
     if z < z_min or cutoff * period > 2.0:
         return None
     poly = np.column_stack([columns[0], *columns[3:]])
-    term = w * mid(jk)
+    term = sum(c * q for c, q in zip(coef[: len(terms)], terms, strict=True))
     term = term - poly @ np.linalg.lstsq(poly, term, rcond=None)[0]
     drift = float(np.ptp(term)) / float(swing.max()) if swing.max() > 0 else 0.0
     if not drift >= DETECTION_DRIFT:
@@ -403,6 +443,10 @@ def _centres_fit(
         channel="velocity's integral" if velocity else "displacement",
         z=z,
         drift=drift,
+        order=order,
+        damping=damping,
+        rss=rss,
+        dof=dof,
     )
 
 
@@ -478,13 +522,19 @@ def detect_high_pass(
     t = np.asarray(t, dtype=float)
     s = np.asarray(signal, dtype=float)
     tt = np.asarray(turning_times, dtype=float)
-    sign = _centres_fit(t, s, tt, velocity=velocity, z_min=z_min)
+    one = _centres_fit(t, s, tt, velocity=velocity, z_min=z_min)
+    two = _centres_fit(t, s, tt, velocity=velocity, z_min=z_min, order=2)
+    sign = two if _two_poles(one, two, t, s, tt, velocity) else one
     if sign is None:
         return None
     period = 2.0 * float(np.median(np.diff(tt)))
     for _ in range(3):
-        spec = {"cutoff_Hz": sign.cutoff_Hz, "order": 1}
-        u = _inverse_terms(t, s, spec) if velocity else np.gradient(_inverse_terms(t, s, spec), t)
+        spec = {"cutoff_Hz": sign.cutoff_Hz, "order": sign.order}
+        if sign.order == 2:
+            spec["damping"] = sign.damping
+        u = _inverse_terms(t, s, check_high_pass(spec))
+        if not velocity:
+            u = np.gradient(u, t)
         times = _turning_times(t, u, tt, period)
         ratio = _decay_ratio(t, s, times, sign.cutoff_Hz * 2.0 * math.pi, velocity)
         again = _centres_fit(
@@ -495,11 +545,38 @@ def detect_high_pass(
             z_min=z_min,
             ratio=ratio,
             instrument=sign.cutoff_Hz * 2.0 * math.pi,
+            order=sign.order,
         )
         if again is None:
             return None
         sign = again
     return sign
+
+
+#: How many times the two-pole inverse must explain the centres' steps better than the
+#: one-pole inverse (an F statistic) for two poles to be named: on one-pole records up
+#: to 22, on two-pole records (ζ_g 0.7) 10⁴ and more.
+TWO_POLE_F = 300.0
+
+
+def _two_poles(
+    one: HighPassSign | None,
+    two: HighPassSign | None,
+    t: NDArray,
+    s: NDArray,
+    tt: NDArray,
+    velocity: bool,
+) -> bool:
+    """Whether the centres ask for two poles (:data:`TWO_POLE_F`)."""
+    if two is None:
+        return False
+    if one is None:
+        # the one-pole fit refused (a corner of the wrong sign, no drift): its residual
+        one_rss = _centres_fit(t, s, tt, velocity=velocity, z_min=-math.inf)
+        if one_rss is not None:
+            return (one_rss.rss - two.rss) / (two.rss / two.dof) > TWO_POLE_F
+        return True
+    return (one.rss - two.rss) / (two.rss / two.dof) > TWO_POLE_F
 
 
 def _runs(mask: NDArray) -> list[list[int]]:
