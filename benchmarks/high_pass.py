@@ -90,7 +90,7 @@ def record(d: Path, channel: str, order: int, ratio: float, seed: int) -> dict[s
     column = "velocity_mm_per_s" if channel == "velocity" else "displacement_mm"
     path.write_text(f"time_s,{column}\n" + "\n".join(csv_rows([r["t"], y * 1e3], ".6f")) + "\n")
     sidecar(path, r["meta"])
-    declared = f"{cutoff:.6g}" if order == 1 else f"{cutoff:.6g},2,{DAMPING}"
+    declared = f"{cutoff:.6g}" if order == 1 else f"{cutoff:.6g}:2:{DAMPING}"
     return {
         "name": name,
         "path": path,
@@ -105,7 +105,7 @@ def record(d: Path, channel: str, order: int, ratio: float, seed: int) -> dict[s
     }
 
 
-_NAMED = re.compile(r"--sensor-high-pass ([0-9.eE+-]+(?:,[0-9.]+)*)")
+_NAMED = re.compile(r"--sensor-high-pass ([0-9.eE+-]+(?::[0-9.]+)*)")
 
 
 def brief(fit: dict[str, Any]) -> dict[str, Any]:
@@ -161,7 +161,7 @@ def summary(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
             return f"{both}/{len(fits)} (silently wrong {silent})"
 
         named = [r for r in sel if r.get("named")]
-        est = [float(r["named"].split(",")[0]) / r["cutoff_Hz"] for r in named if r.get("named")]
+        est = [float(r["named"].split(":")[0]) / r["cutoff_Hz"] for r in named if r.get("named")]
         out.append(
             {
                 "channel": channel,

@@ -133,8 +133,8 @@ def test_the_option_declares_it(tmp_path, capsys):
     path = write_run(Run(t, None, y, metadata=META), tmp_path / "geophone.csv")
     assert main(["inspect", str(path), "--sensor-high-pass", "0.5"]) in (0, 1)
     with pytest.raises(SystemExit):
-        main(["inspect", str(path), "--sensor-high-pass", "0.5,3"])
-    assert "HZ[,ORDER[,DAMPING]]" in capsys.readouterr().err
+        main(["inspect", str(path), "--sensor-high-pass", "0.5:3"])
+    assert "HZ[:ORDER[:DAMPING]]" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("cutoff", [0.3, 0.5, 0.9])
@@ -154,7 +154,7 @@ def test_the_sign_tells_a_geophones_two_poles(cutoff):
     assert sign is not None and sign.order == 2
     assert sign.cutoff_Hz == pytest.approx(cutoff, rel=0.03)
     assert sign.damping == pytest.approx(0.7, abs=0.03)
-    assert "--sensor-high-pass " + f"{sign.cutoff_Hz:.3g},2," in sign.advice()
+    assert "--sensor-high-pass " + f"{sign.cutoff_Hz:.3g}:2:" in sign.advice()
     # one-pole records are not taken for two
     t, y, _ = _recorded(cutoff, 1)
     tt = prepare(Run(t, None, y, metadata=META)).decay.turning_times

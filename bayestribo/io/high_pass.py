@@ -1,6 +1,6 @@
 """A run recorded through a sensor's high-pass, read as the motion before it.
 
-The metadata key ``sensor_high_pass`` (``--sensor-high-pass HZ[,ORDER[,DAMPING]]``)
+The metadata key ``sensor_high_pass`` (``--sensor-high-pass HZ[:ORDER[:DAMPING]]``)
 declares the analog high-pass every recorded channel went through (an AC-coupled
 channel, a geophone, a piezoelectric sensor): ``{"cutoff_Hz": f_c, "order": 1}``, or
 ``{"cutoff_Hz": f_c, "order": 2, "damping": ζ_g}`` for a geophone's two poles. The run

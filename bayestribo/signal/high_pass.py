@@ -150,11 +150,11 @@ def high_pass_gain(spec: Mapping[str, Any], frequency_Hz: float) -> float:
 
 
 def option_text(spec: Mapping[str, Any]) -> str:
-    """The command-line value of a declaration: ``HZ``, or ``HZ,2,ζ`` for two poles."""
+    """The command-line value of a declaration: ``HZ``, or ``HZ:2:ζ`` for two poles."""
     spec = check_high_pass(spec)
     if spec["order"] == 1:
         return f"{spec['cutoff_Hz']:.3g}"
-    return f"{spec['cutoff_Hz']:.3g},2,{spec['damping']:.2g}"
+    return f"{spec['cutoff_Hz']:.3g}:2:{spec['damping']:.2g}"
 
 
 def cumulative_integral(t: NDArray, y: NDArray) -> NDArray:
