@@ -1,8 +1,9 @@
 """Records through a sensor's analog high-pass: named, and answered when the advice is followed.
 
 Each record is its own simulation, none from the package's simulator: the closed-form
-viscous + Coulomb decay of ``unseen_rigs.simulate`` (noise-free), put through an analog
-high-pass by :func:`scipy.signal.lsim` (one pole ``s/(s + ω_c)``, an RC coupling; two
+viscous + Coulomb decay of ``unseen_rigs.simulate`` (noise-free, at ten times the
+record's rate), put through an analog high-pass by :func:`scipy.signal.lsim` and taken
+at the record's samples (one pole ``s/(s + ω_c)``, an RC coupling; two
 poles ``s²/(s² + 2ζ_g ω_c s + ω_c²)``, ζ_g = 0.7, a geophone), the sensor's white
 noise added after it, written as a velocity alone (mm/s) or a displacement alone (mm)
 with the rig's sidecar. Per record the rig is drawn (f 2-8 Hz, ζ 0.004-0.015, μ_k
@@ -85,10 +86,13 @@ def record(d: Path, channel: str, order: int, ratio: float, seed: int) -> dict[s
         "nx": 0.0,
         "nv": 0.0,
     }
-    r = rig(seed, **p)
+    # the analog filter on the motion sampled ten times finer, then the record's samples
+    r = rig(seed, **{**p, "fs": 10 * p["fs"]})
     cutoff = ratio * f
     u = r["v"] if channel == "velocity" else r["x"]
-    y = high_passed(r["t"], u, cutoff, order) + rng.normal(0, NOISE[channel], u.size)
+    y = high_passed(r["t"], u, cutoff, order)[::10]
+    r["t"] = r["t"][::10]
+    y = y + rng.normal(0, NOISE[channel], y.size)
     name = f"{channel}_{order}p_{ratio:g}f_s{seed}"
     path = d / f"{name}.csv"
     column = "velocity_mm_per_s" if channel == "velocity" else "displacement_mm"
