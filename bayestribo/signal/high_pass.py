@@ -329,6 +329,7 @@ def _centres_fit(
     ratio: float = 1.0,
     instrument: float | None = None,
     order: int = 1,
+    gate: bool = True,
 ) -> HighPassSign | None:
     """One regression of the centres at the given turning times (see
     :func:`detect_high_pass`): ``(x_{k+1} + r x_k)/(1 + r)`` of consecutive turning
@@ -339,7 +340,8 @@ def _centres_fit(
     integral, which the centres' own noise (its single integral) is correlated with,
     and which put the corner 1-4 % low on a 3 Hz rig with poles at 0.3-0.9 Hz.
     ``order`` 2: the two-pole inverse's terms ``2ζ_g ω_c ∬y`` and ``ω_c² ∭y`` (and a
-    cubic of drift), no instrument.
+    cubic of drift), no instrument. ``gate`` False: the regression whatever its corner,
+    standard error and drift (its residual for :func:`_two_poles`).
 
     Parameters
     ----------
@@ -414,28 +416,29 @@ def _centres_fit(
     rss = float(resid @ resid)
     if order == 2:
         p1, p2 = float(coef[0]), float(coef[1])
-        if not (p1 > 0 and p2 > 0):
+        if not (p1 > 0 and p2 > 0) and gate:
             return None
-        w = math.sqrt(p2)
+        w = math.sqrt(abs(p2))
         se = 0.5 * math.sqrt(max(float(cov[1, 1]), 0.0)) / w  # of ω_c from that of ω_c²
-        damping = p1 / (2.0 * w)
-        if not 0.05 <= damping <= 5.0:
+        damping = p1 / (2.0 * w) if w > 0 else math.nan
+        if not 0.05 <= damping <= 5.0 and gate:
             return None
     else:
         w, se = float(coef[0]), math.sqrt(max(float(cov[0, 0]), 0.0))
         damping = None
-    if not (w > 0 and se > 0 and math.isfinite(w)):
+    if not (w > 0 and se > 0 and math.isfinite(w)) and gate:
         return None
-    z = w / se
+    z = w / se if se > 0 else math.inf
     period = 2.0 * float(np.median(np.diff(tt)))
     cutoff = w / (2.0 * math.pi)
-    if z < z_min or cutoff * period > 2.0:
+    least = z_min if order == 1 else max(z_min, TWO_POLE_Z)
+    if gate and (z < least or cutoff * period > 2.0):
         return None
     poly = np.column_stack([columns[0], *columns[3:]])
     term = sum(c * q for c, q in zip(coef[: len(terms)], terms, strict=True))
     term = term - poly @ np.linalg.lstsq(poly, term, rcond=None)[0]
     drift = float(np.ptp(term)) / float(swing.max()) if swing.max() > 0 else 0.0
-    if not drift >= DETECTION_DRIFT:
+    if gate and not drift >= DETECTION_DRIFT:
         return None
     return HighPassSign(
         cutoff_Hz=cutoff,
@@ -553,9 +556,13 @@ def detect_high_pass(
     return sign
 
 
+#: Standard errors by which two poles' corner must stand out of zero (two-pole records
+#: at corners of 0.1-0.3 f give 180 and more; a pendulum in air read as a length, 19).
+TWO_POLE_Z = 50.0
 #: How many times the two-pole inverse must explain the centres' steps better than the
 #: one-pole inverse (an F statistic) for two poles to be named: on one-pole records up
-#: to 22, on two-pole records (ζ_g 0.7) 10⁴ and more.
+#: to 22, on a pendulum in air read as a length 91, on two-pole records (ζ_g 0.7) 10⁴
+#: and more.
 TWO_POLE_F = 300.0
 
 
@@ -571,11 +578,11 @@ def _two_poles(
     if two is None:
         return False
     if one is None:
-        # the one-pole fit refused (a corner of the wrong sign, no drift): its residual
-        one_rss = _centres_fit(t, s, tt, velocity=velocity, z_min=-math.inf)
-        if one_rss is not None:
-            return (one_rss.rss - two.rss) / (two.rss / two.dof) > TWO_POLE_F
-        return True
+        # the one-pole fit named nothing (a corner of the wrong sign, no drift): its
+        # residual all the same
+        one = _centres_fit(t, s, tt, velocity=velocity, z_min=-math.inf, gate=False)
+        if one is None:
+            return False
     return (one.rss - two.rss) / (two.rss / two.dof) > TWO_POLE_F
 
 
