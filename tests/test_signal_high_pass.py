@@ -132,6 +132,8 @@ def test_the_option_declares_it(tmp_path, capsys):
     t, y, _ = _recorded(0.5)
     path = write_run(Run(t, None, y, metadata=META), tmp_path / "geophone.csv")
     assert main(["inspect", str(path), "--sensor-high-pass", "0.5"]) in (0, 1)
+    said = capsys.readouterr().out
+    assert "the sensor's high-pass at 0.5 Hz (one pole; --sensor-high-pass 0.5)" in said
     with pytest.raises(SystemExit):
         main(["inspect", str(path), "--sensor-high-pass", "0.5:3"])
     assert "HZ[:ORDER[:DAMPING]]" in capsys.readouterr().err
