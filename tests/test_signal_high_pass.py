@@ -21,7 +21,7 @@ from scipy.signal import lsim
 from bayestribo import fit, read_run
 from bayestribo.cli.main import main
 from bayestribo.errors import HighPassWarning, MisfitWarning, RunFormatError
-from bayestribo.inference.checks import _high_pass_sign, _warn_misfit
+from bayestribo.inference.checks import _high_corner, _high_pass_sign, _warn_misfit
 from bayestribo.inference.preparation import prepare
 from bayestribo.io import as_run
 from bayestribo.io.files import write_run
@@ -161,6 +161,16 @@ def test_the_sign_tells_a_geophones_two_poles(cutoff):
     t, y, _ = _recorded(cutoff, 1)
     tt = prepare(Run(t, None, y, metadata=META)).decay.turning_times
     assert detect_high_pass(t, y, tt, velocity=True).order == 1
+
+
+def test_a_corner_beyond_the_calibrated_is_said():
+    t, y, _ = _recorded(3.0)  # a corner at the oscillation's frequency
+    high = prepare(Run(t, None, y, metadata={**META, "sensor_high_pass": 3.0}))
+    assert _high_corner(high) == pytest.approx(1.0, rel=0.01)
+    t, y, _ = _recorded(0.9)
+    assert (
+        _high_corner(prepare(Run(t, None, y, metadata={**META, "sensor_high_pass": 0.9}))) is None
+    )
 
 
 def test_no_sign_without_a_high_pass():

@@ -50,7 +50,7 @@ from bayestribo.signal.frequency import (
     frequency_trend,
     turning_point_trend,
 )
-from bayestribo.signal.high_pass import HighPassSign, detect_high_pass
+from bayestribo.signal.high_pass import CALIBRATED_CORNER, HighPassSign, detect_high_pass
 
 __all__ = [
     "FREQUENCY_TREND_CHANGE",
@@ -175,6 +175,19 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
     half_cycles = int(prepared.decay.peaks.value.size) - 1
     arm = _simple_pendulum_arm(prepared)
     high_pass = _high_pass_sign(prepared)
+    corner = _high_corner(prepared)
+    if corner is not None:
+        warn(
+            f"{name or 'the run'}: the sensor's high-pass declared at {corner:.2g} times the "
+            f"oscillation's frequency, beyond the {CALIBRATED_CORNER:g} at which undone "
+            "records were measured to give intervals that cover: the inverse multiplies "
+            "the integral's error at the release and the noise's random walk by the corner "
+            "(at a corner equal to the frequency, 3 of 8 intervals of ζ missed), so the "
+            "law's intervals may be too narrow; the energy dissipated per cycle measured "
+            "from the turning points (printed as 'turning points (law-free)') holds "
+            "whatever the law, and a sensor with a lower corner gives a measurement",
+            HighPassWarning,
+        )
     grown = _arm_noise_growth(prepared.run)
     if grown is not None:
         warn(
@@ -550,6 +563,17 @@ def _arm_noise_growth(run: Run) -> tuple[float, float] | None:
     degrees = float(arm["largest_angle_deg"])
     grown = 1.0 / math.cos(math.radians(degrees))
     return (degrees, grown) if grown > ARM_NOISE_GROWTH else None
+
+
+def _high_corner(prepared: Any) -> float | None:
+    """The declared high-pass's corner over the oscillation's frequency, where it is
+    beyond :data:`~bayestribo.signal.high_pass.CALIBRATED_CORNER`; None otherwise."""
+    undone = dict(prepared.run.metadata).get("high_pass_undone")
+    frequency = prepared.decay.natural_frequency_Hz
+    if not undone or not frequency or not math.isfinite(frequency):
+        return None
+    ratio = float(undone["cutoff_Hz"]) / float(frequency)
+    return ratio if ratio > CALIBRATED_CORNER else None
 
 
 def _high_pass_sign(prepared: Any) -> HighPassSign | None:

@@ -43,6 +43,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
+    "CALIBRATED_CORNER",
     "DEFAULT_DAMPING",
     "DETECTION_DRIFT",
     "DETECTION_Z",
@@ -71,6 +72,13 @@ DETECTION_Z = 12.0
 #: Smallest move of the centres, as a fraction of the largest swing, that is named (the
 #: bundled and real recordings move theirs by 1 % at most).
 DETECTION_DRIFT = 0.03
+#: The highest declared corner, as a fraction of the oscillation's frequency, at which
+#: the undone record's intervals were measured to cover (``benchmarks/high_pass.py``: at
+#: 0.1 f and 0.3 f as a record without the filter; at f, ζ missed in 3 of 8 one-pole
+#: records, 2 of them at exit 0: the inverse multiplies by ω_c the integral's error at
+#: the release's kink, and the noise's random walk grows with it). Above it the fit says
+#: its intervals may be too narrow.
+CALIBRATED_CORNER = 0.5
 #: Fewest turning points the regression of the centres takes (six unknowns).
 _FEWEST_TURNING_POINTS = 12
 
