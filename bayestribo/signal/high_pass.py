@@ -319,7 +319,13 @@ class HighPassSign:
             f"{poles} with its corner at {self.cutoff_Hz:.3g} ± {self.cutoff_se_Hz:.2g} Hz "
             f"from the centres ({self.drift:.0%} of the largest swing moved). Declare it: "
             f"sensor_high_pass={spec} (--sensor-high-pass {value}) undoes it when the run "
-            "is read (the sensor's data-sheet corner and poles, where known, are better)"
+            "is read"
+            + (
+                " (the sensor's data-sheet corner and poles, where known, are better)"
+                if self.order == 1
+                else "; two poles are estimated to a few per cent only, which can leave a "
+                "misfit: the sensor's data-sheet corner and damping answer it"
+            )
         )
 
 
