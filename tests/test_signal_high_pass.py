@@ -164,13 +164,12 @@ def test_the_sign_tells_a_geophones_two_poles(cutoff):
 
 
 def test_a_corner_beyond_the_calibrated_is_said():
-    t, y, _ = _recorded(3.0)  # a corner at the oscillation's frequency
-    high = prepare(Run(t, None, y, metadata={**META, "sensor_high_pass": 3.0}))
-    assert _high_corner(high) == pytest.approx(1.0, rel=0.01)
-    t, y, _ = _recorded(0.9)
-    assert (
-        _high_corner(prepare(Run(t, None, y, metadata={**META, "sensor_high_pass": 0.9}))) is None
-    )
+    t, y, _ = _recorded(0.9)  # a corner at 0.3 times the oscillation's frequency
+    high = prepare(Run(t, None, y, metadata={**META, "sensor_high_pass": 0.9}))
+    assert _high_corner(high) == pytest.approx(0.3, rel=0.01)
+    t, y, _ = _recorded(0.3)
+    low = prepare(Run(t, None, y, metadata={**META, "sensor_high_pass": 0.3}))
+    assert _high_corner(low) is None
 
 
 def test_no_sign_without_a_high_pass():
@@ -209,11 +208,14 @@ def test_the_advice_followed_answers(tmp_path, capsys):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         result = fit(read_run(path, metadata={"sensor_high_pass": float(option)}), seed=1)
-    assert not [w for w in caught if issubclass(w.category, MisfitWarning)]
+    # no misfit; at 0.17 f the corner is beyond the calibrated and said so (exit 1)
+    said = [w for w in caught if issubclass(w.category, MisfitWarning)]
+    assert [w.category for w in said] == [HighPassWarning]
+    assert "may be too narrow" in str(said[0].message)
     for name, true in (("zeta", ZETA), ("mu_k", MU_K)):
         lo, hi = result.interval(name)
         assert lo <= true <= hi, (name, lo, hi)
     assert result.metadata[UNDONE]["cutoff_Hz"] == float(option)
-    assert main(["fit", str(path), "--sensor-high-pass", option, "--json"]) == 0
+    assert main(["fit", str(path), "--sensor-high-pass", option, "--json"]) == 1
     out = json.loads(capsys.readouterr().out)
     assert "high_pass_undone" in json.dumps(out)

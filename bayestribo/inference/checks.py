@@ -182,7 +182,8 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
             f"oscillation's frequency, beyond the {CALIBRATED_CORNER:g} at which undone "
             "records were measured to give intervals that cover: the inverse multiplies "
             "the integral's error at the release and the noise's random walk by the corner "
-            "(at a corner equal to the frequency, 3 of 8 intervals of ζ missed), so the "
+            "(at 0.3 times the frequency 3 of 8 intervals of ζ missed, their z spread 1.65 "
+            "times the intervals' width), so the "
             "law's intervals may be too narrow; the energy dissipated per cycle measured "
             "from the turning points (printed as 'turning points (law-free)') holds "
             "whatever the law, and a sensor with a lower corner gives a measurement",

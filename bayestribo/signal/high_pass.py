@@ -73,12 +73,13 @@ DETECTION_Z = 12.0
 #: bundled and real recordings move theirs by 1 % at most).
 DETECTION_DRIFT = 0.03
 #: The highest declared corner, as a fraction of the oscillation's frequency, at which
-#: the undone record's intervals were measured to cover (``benchmarks/high_pass.py``: at
-#: 0.1 f and 0.3 f as a record without the filter; at f, ζ missed in 3 of 8 one-pole
-#: records, 2 of them at exit 0: the inverse multiplies by ω_c the integral's error at
-#: the release's kink, and the noise's random walk grows with it). Above it the fit says
-#: its intervals may be too narrow.
-CALIBRATED_CORNER = 0.5
+#: the undone records' intervals were measured to cover (``benchmarks/high_pass.py``, 8
+#: records each: at 0.1 f the z of ζ had sd 0.5 (one pole) and 0.8 (two poles); at 0.3 f
+#: sd 1.65, 3 of 8 one-pole records missed at exit 0; at f, 3 of 8). The inverse
+#: multiplies by ω_c the integral's error at the release's kink (up to ω_c ω Δt²/8 of
+#: the swing's speed) and the noise's random walk. Above it the fit says its intervals
+#: may be too narrow.
+CALIBRATED_CORNER = 0.1
 #: Fewest turning points the regression of the centres takes (six unknowns).
 _FEWEST_TURNING_POINTS = 12
 
