@@ -20,6 +20,7 @@ __all__ = [
     "FadeWarning",
     "FrequencyTrendWarning",
     "GapWarning",
+    "HighPassWarning",
     "ImplausibleFrictionWarning",
     "LinearSpringWarning",
     "MisfitWarning",
@@ -206,6 +207,14 @@ class ArmNoiseWarning(MisfitWarning):
     there (simple pendulums released at 60°: 4 of 10 ζ intervals missed, 2 with no
     other warning; at 20° and 40° 20 of 20 covered, ``benchmarks/pendulum_arm.py``).
     The turning points' ΔE(A) is the answer. A misfit: ``fit`` exits 1."""
+
+
+class HighPassWarning(MisfitWarning):
+    """The record bears a sensor high-pass's sign (an AC-coupled channel, a geophone):
+    its swing's centre relaxes from the release toward the rest as exp(-ω_c t)
+    (:func:`bayestribo.signal.high_pass.detect_high_pass`). The message gives the corner
+    frequency the centres give and the option that undoes it (``--sensor-high-pass``).
+    A misfit: ``fit`` exits 1."""
 
 
 class ShortAnalysisWarning(MisfitWarning):
