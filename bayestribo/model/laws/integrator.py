@@ -66,7 +66,7 @@ from collections.abc import Callable, Mapping
 from functools import cache
 from types import ModuleType
 
-from bayestribo.model.laws import _core, _core_shared, _ladder
+from bayestribo.model.laws import _core, _core_shared, _creep, _ladder
 from bayestribo.model.laws.cache import CACHE_ENV, law_cache_dir, load_module
 
 __all__ = [
@@ -122,13 +122,17 @@ def _importable(force: object) -> tuple[str, str] | None:
 
 
 def _law_source(
-    template: ModuleType, layout: tuple, kernels: Mapping[str, object] | None = None
+    template: ModuleType,
+    layout: tuple,
+    kernels: Mapping[str, object] | None = None,
+    parts: tuple[ModuleType, ...] = (),
 ) -> tuple[str, dict[str, object], bool]:
     """The text of one law's module: the template's (:mod:`._core` or
-    :mod:`._restoring_core`), the text the templates share (:mod:`._core_shared`),
-    then the law's forces, and a restoring force's compiled ``kernels`` by the names the
-    template calls them. Also the functions to set in the module when one of them cannot
-    be imported (no cache then), and whether the module may be cached."""
+    :mod:`._restoring_core`), the text the templates share (:mod:`._core_shared`), the
+    template's own further ``parts`` (:mod:`._creep` for :mod:`._core`), then the law's
+    forces, and a restoring force's compiled ``kernels`` by the names the template
+    calls them. Also the functions to set in the module when one of them cannot be
+    imported (no cache then), and whether the module may be cached."""
     drags, d_off, d_size, frictions, f_off, f_size = layout
     named: dict[str, object] = {f"_f{i}": f for i, f in enumerate((*drags, *frictions))}
     named.update(kernels or {})
@@ -150,6 +154,10 @@ def _law_source(
         + "-" * 52
         + "\n"
         + inspect.getsource(_core_shared)
+        + "".join(
+            "\n\n# -- " + part.__name__ + " " + "-" * 40 + "\n" + inspect.getsource(part)
+            for part in parts
+        )
         + "\n".join(lines)
         + "\n"
     )
@@ -188,7 +196,7 @@ def compiled_law(
     law's forces; arguments as :func:`make_integrator`'s), whose functions the
     tests call one by one (the averaged tail against the half cycles' sum)."""
     layout = (drags, drag_offsets, drag_sizes, frictions, friction_offsets, friction_sizes)
-    return _load(*_law_source(_core, layout))
+    return _load(*_law_source(_core, layout, parts=(_creep,)))
 
 
 @cache
