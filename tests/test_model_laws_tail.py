@@ -125,31 +125,25 @@ def test_an_averaged_tail_of_a_decay_that_quickens_is_left_to_the_half_cycles():
 
 
 def test_a_drag_below_alpha_one_creeps_to_rest_with_a_finite_pi():
-    """A power drag below α = 1 ends the motion in a finite time by an overdamped creep:
-    the half cycles' sum makes the row NaN at the creep (an overdamped arc, where the
-    energy is a tiny fraction of Π(0)); the integrator ends the motion there, within
-    1e-9 of Π(0) of the half cycles' sum to the turning point before the creep's start
-    (plus that last half cycle's and the creep's ∫E), and the creep's ∫E, taken from
-    its quasi-static balance, within a factor 2 of the equation of motion's integrated
-    through it (solve_ivp; the balance neglects the inertia of the creep's start)."""
+    """A power drag below α = 1 ends the motion by an overdamped creep to rest, which
+    the integrator follows (:mod:`bayestribo.model.laws._creep`) with the default steps
+    and with fixed steps alike (the reference of 128 steps a half cycle, every half
+    cycle integrated): the two within 1e-8 of Π(0); and the quasi-static balance's ∫E
+    of the creep (the rest past the arc, corrected to first order in its inertia)
+    within a factor 2 of the equation of motion's integrated through it (solve_ivp:
+    the balance's correction is small only once the creep has settled)."""
     law = get_law("power")
     alpha = 0.77  # the bundled run's posterior of a power drag alone
     values = {"zeta_alpha": np.array([0.025]), "alpha": np.array([alpha])}
     fast = law.pi_grid(TAU, values, [Y0], reference=Y0, method="integrate")[0]
     exact = law.pi_grid(TAU, values, [Y0], reference=Y0, method="integrate", steps=128)[0]
-    assert np.all(np.isnan(exact))  # the overdamped arc of the creep
+    assert np.all(np.isfinite(exact))
     assert np.all(np.isfinite(fast))
+    assert np.max(np.abs(fast - exact)) < 1e-8 * exact[0]
     module = _module("power")
     c = _coefficients("power", {"zeta_alpha": 0.025, "alpha": alpha})
-    times, where = module.turns(Y0, c, 1.0, 0.0, math.inf, 10_000)
+    _, where = module.turns(Y0, c, 1.0, 0.0, math.inf, 10_000)
     start = abs(where[-1])  # the creep starts from the last turning point
-    # the half cycles' sum to the turning point before: short of the last half cycle's
-    # ∫E (below π times its energy) and the creep's
-    stopped = law.pi_grid(
-        TAU, values, [Y0], tau_end=times[-2], reference=Y0, method="integrate", steps=128
-    )[0]
-    missing = math.pi * 0.5 * where[-2] ** 2 + module.creep_integral(start, c)
-    assert np.max(np.abs(fast - stopped)) < 1e-9 * fast[0] + missing
 
     # the creep's integral of E against the equation of motion's
     def rhs(t, state):

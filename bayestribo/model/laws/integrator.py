@@ -48,8 +48,14 @@ down the tail). A fixed number of steps per half cycle integrates every half cyc
 (``steps > 0``: the reference of convergence tests); ``steps < 0`` fixes -steps and
 shortens the sum past the record as the default does, from those same half cycles (the
 coarse model of the optimiser's multi-start). A drag below α = 1
-stops the motion in a finite time, by an overdamped creep: an overdamped arc whose
-energy is below 1e-12 of the integral so far ends the motion there.
+ends the motion by an overdamped creep towards the centre (the drag at small speeds
+outgrows the spring): the half cycle whose arc is overdamped is followed from its
+last polar steps in time by an L-stable implicit Runge-Kutta method
+(:mod:`bayestribo.model.laws._creep`), Π at the grid points on it, up to the record's
+end, or to rest where the rest of its ∫E comes from the quasi-static balance; where
+that rest diverges (a power law at α <= 1/3, summed to the end of motion) the row is
+outside the law's domain (NaN). Π within ~2e-8 of Π(0) of ``solve_ivp``'s
+(``tests/test_model_laws_creep.py``).
 
 A start inside a half cycle (y'₀ ≠ 0) needs μ at the half cycle's virtual turning
 point, which is not known for a friction that varies with amplitude: it is taken
