@@ -9,7 +9,7 @@ whose rule takes no creep (``_CREEP_SHARE = 0``), where they are NaN.
 
 Run once, from the tree that integrates the creep, with the older tree's path::
 
-    python tests/_law_pi_cases.py /path/to/older/tree
+    PYTHONPATH=. python tests/_law_pi_cases.py /path/to/older/tree
 
 which writes ``tests/law_pi_before_creep.npz`` (the cases, each tree's Π and the rows
 ended by a creep). The cases themselves (:func:`cases`) are drawn here with a fixed
@@ -137,7 +137,9 @@ def main() -> None:
         if n != 1:
             raise SystemExit("_CREEP_SHARE not found once in the older tree's _core.py")
         core.write_text(text)
-        _run(work / "copy", work / "cache_copy", work / "no_creep.npy")
+        _run(
+            work / "copy", Path(tempfile.gettempdir()) / "law_pi_cases_cache", work / "no_creep.npy"
+        )
         before = np.load(work / "before.npy")
         no_creep = np.load(work / "no_creep.npy")
     finally:
