@@ -20,6 +20,7 @@ __all__ = [
     "FadeWarning",
     "FrequencyTrendWarning",
     "GapWarning",
+    "ImplausibleFrictionWarning",
     "LinearSpringWarning",
     "MisfitWarning",
     "MissingDependencyError",
@@ -201,3 +202,11 @@ class ArmNoiseWarning(MisfitWarning):
 class ShortAnalysisWarning(MisfitWarning):
     """The analysis covers less than half of the motion the record holds; the message
     names the analysed span, the motion's span and why."""
+
+
+class ImplausibleFrictionWarning(MisfitWarning):
+    """μ_k's interval lies wholly above any contact's kinetic friction coefficient
+    (:data:`bayestribo.inference.plausibility.MU_K_LIMIT`): the run's load or mass is
+    likely in another unit (grams under ``mass_kg``, millinewtons under ``load_N``).
+    The message gives the interval and the load and mass it was computed from. Not a
+    measurement: ``fit`` exits 1."""

@@ -51,6 +51,9 @@ def run_one(folder: Path, commit: str, modules: list[str], jobs: int) -> None:
         ["git", "-C", str(ROOT), "archive", commit], capture_output=True, check=True
     ).stdout
     subprocess.run(["tar", "-x", "-C", str(tree)], input=archive, check=True)
+    shared = ROOT.parent / "shared"
+    if shared.is_dir():  # the real recordings, beside the tree as beside a checkout
+        (folder / "shared").symlink_to(shared.resolve())
     env = {
         **os.environ,
         "SUITECUT_LOG": str(log),
@@ -79,6 +82,16 @@ def summarise(folder: Path) -> dict[str, Any]:
     kernels: Counter[str] = Counter()
     for process in processes:
         kernels.update(process["funcs"].keys())
+    # a process forked by a test before this instrument reset a child's record holds its
+    # parent's compilations too: each (function, CPU) pair is counted once
+    distinct = {(name, round(cpu, 6)) for p in processes for name, cpu in p["funcs"].items()}
+    laws: dict[str, list[float]] = {}  # a generated law module: its compilation per process
+    for name, cpu in distinct:
+        if name.startswith("bayestribo_law_"):
+            laws.setdefault(name.split(".")[0], []).append(cpu)
+    laws = {k: [round(sum(v), 2)] for k, v in laws.items()}
+    repeated = Counter(name for name, cpu in distinct if cpu > 0.5)
+    notebooks = [p for p in processes if any("ipykernel" in a for a in p["argv"])]
     return {
         "cpu_s": user + system,
         "wall_s": wall,
@@ -90,6 +103,18 @@ def summarise(folder: Path) -> dict[str, Any]:
         "compile_cpu_s": sum(p["compile"] for p in processes),
         "compiling_processes": sum(1 for p in processes if p["compile"] > 1.0),
         "kernels_compiled_more_than_once": sorted(k for k, n in kernels.items() if n > 1),
+        "law_modules_compiled": len(laws),
+        "law_compile_cpu_s": round(sum(sum(v) for v in laws.values()), 1),
+        "distinct_compile_cpu_s": round(sum(cpu for _, cpu in distinct), 1),
+        "functions_compiled_in_more_than_one_process": {
+            name: sorted(round(c, 1) for f, c in distinct if f == name)
+            for name, n in repeated.items()
+            if n > 1
+        },
+        # notebook kernels and the processes they start (their argv is the kernel's)
+        "kernel_processes": len(notebooks),
+        "kernel_cpu_s": round(sum(p["cpu"] for p in notebooks), 1),
+        "kernels_started_by_test": sorted({p.get("started_in") or "" for p in notebooks} - {""}),
     }
 
 

@@ -122,12 +122,84 @@ def test_the_linear_fits_duffing_advice_followed_fits_the_spring_and_covers(
     # test_inference_restoring_choice)
     option, force = next((o, f) for o, f in named if f != "auto")
     assert force == "duffing"
+    # and it is the first advice the fit prints (the law holds the decay: no misfit)
+    assert first_advice(err) == f"{option} {force}", err
     status, out, err = command(["fit", str(duffing_file), "--json", option, force], capsys)
     record = json.loads(out)
     assert status == 0 and "half period changes" not in err, err
     assert record["restoring"]["name"] == "duffing" and record["restoring"]["in_model"]
     mu_k = 0.035 * (2 * np.pi * 32.6) ** 2 * 6.2e-6 / 0.31
     covers(record, {"zeta": 0.0236, "mu_k": mu_k})
+
+
+#: An option the fit's warnings advise: another law, another restoring force, a prior.
+ADVICE = re.compile(r"--law \w+|--restoring \w+|--prior \S+?=\w+\([^()]*\)")
+
+
+def first_advice(err: str) -> str:
+    """The first option the printed warnings advise (``--law auto``, ...)."""
+    found = ADVICE.search(err)
+    assert found is not None, err
+    return found[0]
+
+
+def quadratic_drag_file(folder: Path) -> Path:
+    """Quadratic drag alone (air drag, c₂/m = 40 /m, ``solve_ivp``) on the paper's rig
+    without a load: the default law misfits it, and the drag shortens the half period
+    as the swing decays (−0.024 %, 87 standard errors)."""
+    run = law_recording(lambda v: 40.0 * v * abs(v), duration_s=1.5, seed=2, load_N=None)
+    return write_run(run, folder / "drag.csv")
+
+
+def test_a_drags_change_of_half_period_advises_another_law_before_the_spring(
+    tmp_path, capsys
+) -> None:
+    path = quadratic_drag_file(tmp_path)
+    status, _, err = command(["fit", str(path), "--json"], capsys)
+    assert status == 1 and "misfits" in err
+    warning = next(w for w in err.split("bayestribo fit: warning: ") if "half period" in w)
+    # the frequency warning's first advice is the law the misfit advises, not a spring
+    # (--restoring duffing, followed, misfits as before); followed under -m validation
+    # (test_advice_followed_heavy.py): exit 0 with the drag, c₂ covered
+    assert first_advice(warning) == "--law auto", warning
+    assert first_advice(err) == "--law auto"
+    assert warning.index("--law auto") < warning.index("--restoring duffing")
+
+
+#: Viscous damping, quadratic drag and Coulomb friction that sticks at μ_s = μ_k on the
+#: paper's rig: ζ, c₂/m [1/m], μ_k.
+VCQ_ZETA, VCQ_DRAG, VCQ_MU_K = 0.01, 47.0, 0.0294
+
+
+def damping_growing_file(folder: Path) -> Path:
+    """Damping that grows with the swing (ζ 0.01 and quadratic drag, about
+    ζ = 0.01 + 20 A, with Coulomb friction; ``solve_ivp``, 2 kHz): the default law
+    misfits it along the decay and holds μ_s/μ_k on its prior's bound 10, which the
+    record's stop does not ask for."""
+    omega = 2.0 * math.pi * F_HZ
+    run = law_recording(
+        lambda v: 2.0 * VCQ_ZETA * omega * v + VCQ_DRAG * v * abs(v),
+        friction=VCQ_MU_K * LOAD / MASS,
+        static_ratio=1.0,
+        x0=1.5e-3,
+        sample_rate_Hz=2000.0,
+        duration_s=1.0,
+        seed=9,
+    )
+    return write_run(run, folder / "growing.csv")
+
+
+def test_a_misfit_along_the_decay_advises_another_law_before_a_wider_prior(
+    tmp_path, capsys
+) -> None:
+    path = damping_growing_file(tmp_path)
+    status, _, err = command(["fit", str(path), "--json"], capsys)
+    assert status == 1 and "mu_s_ratio piles on the upper bound" in err
+    # the widened prior, followed, misfits as before (the misfit is not the stop's):
+    # another law first, the prior after it; followed under -m validation
+    assert first_advice(err) == "--law auto", err
+    misfit = next(w for w in err.split("bayestribo fit: warning: ") if "misfits" in w)
+    assert misfit.index("--law auto") < misfit.index("--prior mu_s_ratio=")
 
 
 def _preamble_file(folder: Path, with_time: bool) -> Path:
@@ -202,3 +274,26 @@ def test_a_run_id_taken_is_refused_and_another_one_records_the_run(tmp_path, cap
     assert status == 0, err
     assert read_run(out / "r2.csv").n_samples > 0
     assert {k: v for k, v in _sha(out).items() if k.startswith("r1")} == before  # untouched
+
+
+def test_a_stop_beyond_the_bound_on_the_papers_rig_still_advises_the_prior_first(
+    tmp_path, capsys
+) -> None:
+    # viscous damping and Coulomb friction sticking at μ_s/μ_k = 20 (solve_ivp): the
+    # misfit is the stop's, with a smooth part that is significant but small
+    omega = 2.0 * math.pi * F_HZ
+    run = law_recording(
+        lambda v: 2.0 * RIG_ZETA * omega * v,
+        friction=RIG_MU_K * LOAD / MASS,
+        static_ratio=20.0,
+        duration_s=1.0,
+        seed=2,
+    )
+    path = write_run(run, tmp_path / "sticks.csv")
+    status, _, err = command(["fit", str(path), "--json"], capsys)
+    assert status == 1 and "smoothly along the decay" in err
+    option = first_advice(err)
+    assert option.startswith("--prior mu_s_ratio="), err
+    status, out, err = command(["fit", str(path), "--json", *option.split()], capsys)
+    assert status == 0, err
+    covers(json.loads(out), {"zeta": RIG_ZETA, "mu_k": RIG_MU_K, "mu_s": 20.0 * RIG_MU_K})

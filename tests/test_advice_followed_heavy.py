@@ -10,7 +10,15 @@ import numpy as np
 import pytest
 from _free_decay import METADATA, free_decay
 from _law_recording import law_recording
-from test_advice_followed import command, covers
+from test_advice_followed import (
+    VCQ_DRAG,
+    VCQ_MU_K,
+    VCQ_ZETA,
+    command,
+    covers,
+    damping_growing_file,
+    first_advice,
+)
 
 from bayestribo.io import write_run
 from bayestribo.io.run import Run
@@ -54,11 +62,28 @@ def test_a_misfits_advice_law_auto_followed_finds_the_drag_and_covers_it(tmp_pat
     assert status == 1 and "misfits" in err
     option = re.search(r"\((--law \w+)\)", err)
     assert option is not None, err
+    # the first advice, the misfit's and the frequency warning's
+    assert first_advice(err) == option[1]
     status, out, err = command(["fit", str(path), "--json", *option[1].split()], capsys)
     record = json_record(out)
     assert status == 0, err
     assert "quadratic" in record["law"].split("+")
     covers(record, {"c2_SI": drag * run.metadata["mass_kg"]})
+
+
+def test_a_misfit_along_the_decay_on_a_prior_bound_followed_as_first_advised_covers(
+    tmp_path, capsys
+) -> None:
+    path = damping_growing_file(tmp_path)
+    status, _, err = command(["fit", str(path), "--json"], capsys)
+    assert status == 1 and "mu_s_ratio piles on the upper bound" in err
+    option = first_advice(err)
+    status, out, err = command(["fit", str(path), "--json", *option.split()], capsys)
+    record = json_record(out)
+    assert status == 0, err
+    assert record["law"] == "viscous+coulomb+quadratic"
+    mass = 0.035
+    covers(record, {"zeta": VCQ_ZETA, "mu_k": VCQ_MU_K, "c2_SI": VCQ_DRAG * mass})
 
 
 #: A Coulomb decay on the paper's rig, x_c = 25 µm from 2 mm.

@@ -68,7 +68,10 @@ def test_several_sheets_of_numbers_need_sheet_and_it_is_never_guessed(
         read_run(path, sheet=5)
     # The command line names its own option, and --sheet picks the run.
     assert main(["inspect", str(path), "--length-unit", "m", "--frequency", "32.6"]) == 2
-    assert "give --sheet" in capsys.readouterr().err
+    said = capsys.readouterr().err
+    assert "give --sheet" in said
+    # each reading named as it is typed
+    assert "`--sheet 'Run 1'` or `--sheet 'Run 2'`" in said
     assert main(["inspect", str(path), "--sheet", "1", "--length-unit", "m", "--json"]) == 0
 
 

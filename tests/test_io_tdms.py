@@ -9,7 +9,7 @@ import pytest
 from nptdms import ChannelObject, TdmsWriter
 
 from bayestribo import read_run
-from bayestribo.errors import RunFormatError
+from bayestribo.errors import ReadingWarning, RunFormatError
 
 RATE = 5000.0
 N = 800
@@ -99,3 +99,31 @@ def test_not_a_tdms_file(tmp_path: Path) -> None:
     (tmp_path / "junk.tdms").write_bytes(b"TDSm garbage that is not a lead in")
     with pytest.raises(RunFormatError, match=r"junk\.tdms.*(not a TDMS file|as TDMS)"):
         read_run(tmp_path / "junk.tdms", channels={"displacement_m": "x"})
+
+
+def test_a_daqs_channels_are_read_by_their_units_and_said(tmp_path: Path) -> None:
+    path = _write(
+        tmp_path / "daq.tdms",
+        _wave("Dev1", "ai0", X * 1e3, unit_string="mm"),
+        _wave("Dev1", "ai1", V * 1e3, NI_UnitDescription="mm/s"),
+        _wave("Dev1", "ai2", np.zeros(N), unit_string="V"),
+    )
+    with pytest.warns(ReadingWarning, match="'ai0' as displacement_m, 'ai1' as velocity_m_per_s"):
+        run = read_run(path)
+    np.testing.assert_allclose(run.displacement, X, rtol=1e-12)
+    np.testing.assert_allclose(run.velocity, V, rtol=1e-12)
+    np.testing.assert_allclose(run.time, 2.5 + np.arange(N) / RATE)
+
+
+def test_channels_whose_units_do_not_decide_are_refused_with_the_files_own_names(
+    tmp_path: Path,
+) -> None:
+    path = _write(
+        tmp_path / "two.tdms",
+        _wave("Dev1", "ai0", X * 1e3, unit_string="mm"),
+        _wave("Dev1", "ai1", X * 2e3, unit_string="mm"),
+    )
+    with pytest.raises(RunFormatError, match=r"channels=\{'displacement_m': 'ai0'\}"):
+        read_run(path)
+    # the example followed reads the file
+    assert read_run(path, channels={"displacement_m": "ai0"}).displacement.size == N

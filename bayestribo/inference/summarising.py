@@ -35,6 +35,7 @@ from bayestribo.inference.dissipation import (
 )
 from bayestribo.inference.fit_record import FitRecord, plain_data
 from bayestribo.inference.law_free import STAIRCASE, law_free_turning_points, warn_energy_gain
+from bayestribo.inference.plausibility import warn_implausible_friction
 from bayestribo.inference.restoring_error import restoring_error, shifted
 from bayestribo.inference.result import FitResult
 from bayestribo.inference.sensitivity import prior_sensitivity
@@ -255,6 +256,10 @@ def summary(
         command line exits 1), naming the restoring force to try.
     ConvergenceWarning
         When the sampler did not converge (the result says so too).
+    ImplausibleFrictionWarning
+        When μ_k's interval lies wholly above any contact's kinetic friction
+        coefficient (:mod:`bayestribo.inference.plausibility`): the load or the mass is
+        in another unit (a MisfitWarning: the command line exits 1).
     PriorBoundWarning
         When a posterior piles on a physical upper bound of its prior
         (:func:`~bayestribo.inference.priors.piled_on_bounds`); the result records it in
@@ -291,6 +296,7 @@ def summary(
     scale = physical_scale(scaling, metadata)
     own, own_units = law_quantities(posterior, reported, scale, gain)
     derived = {**derived, **{k: v for k, v in own.items() if k not in derived}}
+    warn_implausible_friction(name, derived, metadata)
     # the law-free answer's turning points: a coarse displacement's from its staircase
     # (inference/law_free.py); the swings span them
     turning, staircase = law_free_turning_points(prepared)

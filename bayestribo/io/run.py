@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -523,7 +524,7 @@ def check_metadata(
             raise RunFormatError(f"metadata keys must be text strings, got {key!r}", where)
         spec = METADATA_KEYS.get(key)
         if spec is None:
-            _check_unknown_key(key, where, strict)
+            _check_unknown_key(key, where, strict, value)
         out[key] = _typed(key, spec, value, where) if spec else _plain(value, key, where)
     return out
 
@@ -545,13 +546,45 @@ def _nearest_key(key: str) -> str | None:
     return best if shared or ratio >= 0.6 else None
 
 
-def _check_unknown_key(key: str, where: str | None, strict: bool) -> None:
+#: Words of a key that holds a channel's calibration (a factor to SI units).
+_CALIBRATION = re.compile(
+    r"(?:^|_)(?:scale|scaling|per_count|per_counts|per_lsb|per_v|per_mv|sensitivity|"
+    r"calibration|cal|factor|counts_per)(?:_|$)",
+    re.IGNORECASE,
+)
+
+
+def _calibration_advice(key: str, value: Any = None) -> str:
+    """The refusal of a sidecar key that holds a channel's calibration, naming how a
+    calibration is given (with the key's number, where it is one, as the scale of the
+    channel its name says); "" for another key."""
+    if not _CALIBRATION.search(key):
+        return ""
+    channel = "velocity_m_per_s" if re.search(r"per_s(?:ec)?(?:_|$)", key) else "displacement_m"
+    number = (
+        repr(float(value))
+        if isinstance(value, int | float) and not isinstance(value, bool)
+        else "FACTOR"
+    )
+    return (
+        f"metadata key {key!r} looks like a channel's calibration (a factor to SI units), "
+        "which the sidecar does not hold: move the key under 'user' "
+        f'({{"user": {{{json.dumps(key)}: ...}}}}) or leave it out, and give the factor '
+        f"when the file is read, scale={{'{channel}': {number}}} where it is in SI units "
+        "(m, m/s) per unit of the file"
+    )
+
+
+def _check_unknown_key(key: str, where: str | None, strict: bool, value: Any = None) -> None:
     """Refuse a key that is not a known key: always when ``strict``, else when it is a
     known key misspelt (``laod_N``, ``Load_N``, ``load``): kept as free metadata it
     would leave the known key missing, and a missing load would make a run with contact
     look like one without."""
     import difflib
 
+    calibration = _calibration_advice(key, value)
+    if calibration and strict:
+        raise RunFormatError(calibration, where)
     folded = {k.lower(): k for k in METADATA_KEYS}
     close = folded.get(key.lower()) or next(
         iter(difflib.get_close_matches(key, list(METADATA_KEYS), n=1, cutoff=0.8)), None

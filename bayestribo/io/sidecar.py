@@ -22,8 +22,10 @@ from pathlib import Path
 from typing import Any
 
 from bayestribo._files import write_text
-from bayestribo.errors import RunFormatError
+from bayestribo._warnings import warn
+from bayestribo.errors import ReadingWarning, RunFormatError
 from bayestribo.io.run import METADATA_KEYS, check_metadata
+from bayestribo.io.sidecar_units import si_quantities
 
 __all__ = [
     "DATA_FILE",
@@ -200,15 +202,20 @@ def read_sidecar(path: str | Path) -> dict:
     Returns
     -------
     dict
-        Checked metadata (see :func:`bayestribo.io.run.check_metadata`).
+        Checked metadata (see :func:`bayestribo.io.run.check_metadata`). A load or a
+        mass in another unit, named in the key or the value (``load_kgf``, ``mass_g``,
+        ``"load_N": "30 gf"``), is converted to ``load_N`` and ``mass_kg``
+        (:func:`bayestribo.io.sidecar_units.si_quantities`), each with a
+        :class:`~bayestribo.errors.ReadingWarning` that says so.
 
     Raises
     ------
     RunFormatError
-        If the file is not UTF-8 JSON holding one object, repeats a key, holds NaN
-        or infinity, holds a key that is not a known key (a key of one's own goes
-        under ``user``), has a value of the wrong type, or a ``run_id`` that is not a
-        run id (:data:`RUN_ID_PATTERN`: it could name a path outside the folder).
+        If the file is not UTF-8 JSON holding one object, repeats a key (or gives the
+        load or the mass twice, in two units), holds NaN or infinity, holds a key that
+        is not a known key (a key of one's own goes under ``user``), has a value of the
+        wrong type, or a ``run_id`` that is not a run id (:data:`RUN_ID_PATTERN`: it
+        could name a path outside the folder).
     """
     path = Path(path)
     where = str(path)
@@ -228,6 +235,12 @@ def read_sidecar(path: str | Path) -> dict:
         raise RunFormatError(
             f"sidecar must hold one JSON object of metadata; got {type(data).__name__}", where
         )
+    try:
+        data, notes = si_quantities(data)
+    except ValueError as exc:
+        raise RunFormatError(str(exc), where) from None
+    for note in notes:
+        warn(f"{where}: {note}", ReadingWarning)
     try:
         metadata = check_metadata(data, where, strict=True)
     except RecursionError:

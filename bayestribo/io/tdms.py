@@ -5,8 +5,10 @@ The user names the group and the channel of each signal
 single group needs no group name. Time comes from the waveform properties of the
 channels (``wf_start_offset``, default 0, and ``wf_increment`` [s]) or from a
 channel mapped to ``"time_s"``. The unit comes from the channel property
-``unit_string`` (``m``, ``mm``, ``um``, ``m/s``, ``mm/s``...) when present; a
-``scale`` factor replaces it.
+``unit_string`` (``m``, ``mm``, ``um``, ``m/s``, ``mm/s``...), or ``NI_UnitDescription``,
+when present; a ``scale`` factor replaces it. Without channels named, a group whose
+units name one length (the displacement) and/or one length per second (the velocity)
+is read by them, and said.
 """
 
 from __future__ import annotations
@@ -20,7 +22,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo._optional import require
-from bayestribo.errors import RunFormatError
+from bayestribo._warnings import warn
+from bayestribo.errors import ReadingWarning, RunFormatError
 from bayestribo.io.budget import FLOAT_BYTES, read_budget
 from bayestribo.io.run import COLUMNS, DISPLACEMENT, TIME, VELOCITY
 from bayestribo.io.text import check_scale
@@ -46,6 +49,30 @@ def _unit_factor(name: str, unit: Any, where: str, label: str) -> float:
     return factor
 
 
+def _unit_of(channel: Any) -> str:
+    """A channel's unit as a DAQ writes it: ``unit_string``, else ``NI_UnitDescription``."""
+    props = getattr(channel, "properties", {}) or {}
+    for key in ("unit_string", "NI_UnitDescription"):
+        text = str(props.get(key, "")).strip()
+        if text:
+            return text
+    return ""
+
+
+def _by_unit(available: Mapping[str, Any]) -> dict[str, str] | None:
+    """The channels a group's units name, where they name at most one displacement
+    (a length) and one velocity (a length per second), and at least one of them; None
+    otherwise."""
+    found: dict[str, list[str]] = {DISPLACEMENT: [], VELOCITY: []}
+    for name, channel in available.items():
+        parsed = length_unit(_unit_of(channel)) if _unit_of(channel) else None
+        if parsed is not None:
+            found[VELOCITY if parsed[1] else DISPLACEMENT].append(name)
+    if any(len(v) > 1 for v in found.values()) or not any(found.values()):
+        return None
+    return {role: names[0] for role, names in found.items() if names}
+
+
 def read_tdms(
     path: str | Path,
     *,
@@ -59,9 +86,11 @@ def read_tdms(
     ----------
     path : str or Path
         The ``.tdms`` file.
-    channels : mapping
+    channels : mapping, optional
         TDMS channel name per canonical name (``"displacement_m"``,
-        ``"velocity_m_per_s"`` and optionally ``"time_s"``).
+        ``"velocity_m_per_s"`` and optionally ``"time_s"``); default: the channels whose
+        units name one length and/or one length per second (said with a
+        :class:`~bayestribo.errors.ReadingWarning`).
     group : str, optional
         TDMS group; needed when the file has more than one group.
     scale : mapping, optional
@@ -119,10 +148,19 @@ def _read_channels(
         )
     available = {c.name: c for c in groups[group].channels()}
     if not channels:
-        raise RunFormatError(
-            "name the channels, e.g. channels={'displacement_m': 'Disp'}; "
-            f"group {group!r} has channels {sorted(available)}",
-            where,
+        channels = _by_unit(available)
+        if channels is None:
+            example = next(iter(sorted(available)), "Disp")
+            raise RunFormatError(
+                f"name the channels, e.g. channels={{'displacement_m': {example!r}}}; "
+                f"group {group!r} has channels {sorted(available)}",
+                where,
+            )
+        named = ", ".join(f"{channel!r} as {name}" for name, channel in channels.items())
+        warn(
+            f"{where}: channels read by their unit_string: {named}; name others with "
+            "channels={...}",
+            ReadingWarning,
         )
     for name, channel in channels.items():
         if name not in COLUMNS:
@@ -174,8 +212,8 @@ def _read_channels(
         props = channel.properties
         if name in factors:
             factor = factors[name]
-        elif "unit_string" in props and str(props["unit_string"]).strip():
-            factor = _unit_factor(name, props["unit_string"], where, label)
+        elif _unit_of(channel):
+            factor = _unit_factor(name, _unit_of(channel), where, label)
         else:
             factor = 1.0  # no unit given: the canonical unit is assumed (documented)
         out[name] = data.astype(np.float64) * factor

@@ -49,6 +49,9 @@ from bayestribo.io.columns import (
     si_names,
     split_run_tag,
 )
+from bayestribo.io.comment_header import comment_header
+from bayestribo.io.encoder_counts import encoder_advice, encoder_columns, header_and_rows
+from bayestribo.io.gyroscope import gyroscope_columns
 from bayestribo.io.instruments import PREAMBLE_LINES, detect_export, read_export
 from bayestribo.io.repeated_header import without_repeated_header
 from bayestribo.io.run import (
@@ -678,6 +681,10 @@ def _header(
     try:
         names, units = _check_columns(kept, where, what)
     except RunFormatError as exc:
+        if "unknown column" in exc.message:
+            counts = encoder_advice(labels, [_known(label) for label in labels])
+            if counts:
+                raise RunFormatError(f"{exc.message}; {counts}", where) from None
         if other and "column is needed" in exc.message:
             raise RunFormatError(
                 f"{what}: no displacement, velocity or acceleration column; {other} are "
@@ -707,6 +714,14 @@ def _header(
             ReadingWarning,
         )
     return names, units, count
+
+
+def _known(label: str) -> str | None:
+    """A header name as ``columns=`` takes it where it names a quantity, else None."""
+    try:
+        return label if parse_column(label) is not None else None
+    except ValueError:
+        return None
 
 
 def _coordinates_advice(labels: Sequence[str]) -> str:
@@ -1350,6 +1365,17 @@ def read_text(
     path = Path(path)
     where = str(path)
     _check_options(decimal, delimiter, skip_rows, where)
+    if columns is None and skip_rows == 0:
+        with path.open("rb") as fh:
+            head = fh.read(_HEAD_BYTES)
+        # the words the readings below look for, in the lines a header can be in
+        probe = head[:_PROBE_BYTES].lower()
+        if b"count" in probe or b"tick" in probe:
+            columns, scale = _encoder_counts(head, where, scale, delimiter, encoding)
+        if columns is None and b"gyr" in probe:
+            columns = _gyroscope(path, where, delimiter, encoding, decimal)
+        if columns is None and b"#" in probe:
+            columns = _comment_header(head, where, delimiter, encoding)
     if skip_rows == 0 and decimal != ",":
         streamed = _read_streamed(path, where, columns, scale, delimiter, encoding, decimal)
         if streamed is not None:
@@ -1364,6 +1390,72 @@ def read_text(
         decimal=decimal,
         skip_rows=skip_rows,
     )
+
+
+#: Bytes at the head of a text file in which a header's words are looked for.
+_PROBE_BYTES = 8192
+
+
+def _encoder_counts(
+    head: bytes,
+    where: str,
+    scale: Mapping[str, float] | None,
+    delimiter: str | None,
+    encoding: str | None,
+) -> tuple[list[str] | None, Mapping[str, float] | None]:
+    """The ``columns=`` and ``scale=`` that read a column of an encoder's counts as an
+    angle, where the lines above the rows state the counts per revolution
+    (:mod:`bayestribo.io.encoder_counts`, said); else no columns and ``scale`` as given.
+    ``head`` is the file's first bytes."""
+    try:
+        text = head.decode(encoding or "utf-8-sig")
+    except (UnicodeDecodeError, LookupError):
+        return None, scale
+    found = encoder_columns(text.splitlines()[:PREAMBLE_LINES], delimiter)
+    if found is None:
+        return None, scale
+    names, factor, reading = found
+    warn(f"{where}: {reading.note()}", ReadingWarning)
+    given = dict(scale or {})
+    given["angle_rad"] = factor * float(given.get("angle_rad", 1.0))
+    return names, given
+
+
+def _comment_header(
+    head: bytes, where: str, delimiter: str | None, encoding: str | None
+) -> list[str] | None:
+    """The ``columns=`` a comment line right above the rows gives a file without a
+    header row (:mod:`bayestribo.io.comment_header`, said), or None; ``head`` is the
+    file's first bytes."""
+    try:
+        text = head.decode(encoding or "utf-8-sig")
+    except (UnicodeDecodeError, LookupError):
+        return None
+    found = comment_header(text.splitlines()[:PREAMBLE_LINES], delimiter)
+    if found is None:
+        return None
+    names, line = found
+    warn(f"{where}: the column names read from comment line {line}: {names}", ReadingWarning)
+    return names
+
+
+def _gyroscope(
+    path: Path, where: str, delimiter: str | None, encoding: str | None, decimal: str | None
+) -> list[str] | None:
+    """The ``columns=`` that read a gyroscope export's swinging axis as the angular
+    velocity (:mod:`bayestribo.io.gyroscope`, said), or None."""
+    try:
+        lines = decode(path.read_bytes(), encoding, where, say=False).splitlines()
+    except RunFormatError:
+        return None
+    found = header_and_rows(lines, delimiter, decimal)
+    if found is None:
+        return None
+    reading = gyroscope_columns(*found)
+    if reading is None:
+        return None
+    warn(f"{where}: {reading.note()}", ReadingWarning)
+    return reading.columns
 
 
 def _check_options(decimal: str | None, delimiter: str | None, skip_rows: int, where: str) -> None:

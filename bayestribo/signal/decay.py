@@ -152,11 +152,13 @@ from bayestribo.signal.quantisation import (
     QUANTISATION_NOISE_FACTOR,
     finely_dithered,
     quantisation_step,
+    still_on_its_steps,
 )
 from bayestribo.signal.restarts import continue_clock
 from bayestribo.signal.short import short_decay_note
 from bayestribo.signal.spectrum import NoiseSpectrum, RestNoise, fit_line, noise_spectrum
 from bayestribo.signal.spikes import SpikeWarning, bridged, describe, find_spikes
+from bayestribo.signal.split_stop import split_stop
 
 __all__ = [
     "EnergyDecay",
@@ -1020,14 +1022,22 @@ def _rest_noise(
     period: float,
     derived: str | None,
 ) -> RestNoise | None:
-    """Noise spectra of the recorded channels on the rest segments (as :func:`_noise`)."""
+    """Noise spectra of the recorded channels on the rest segments (as :func:`_noise`);
+    None for the one channel recorded (the other derived) where it is quantised and
+    still on its steps at rest (its noise is the rounding's, white:
+    :func:`~bayestribo.signal.quantisation.still_on_its_steps`; with both channels
+    recorded a coarse channel's rounding is modelled as such,
+    :mod:`bayestribo.signal.coarse`)."""
     parts, names = _rest_parts(t, rest_until, stop, 0.25 * period)
     if not parts:
         return None
     fs = 1.0 / sample_step(t)
 
-    def spectrum(s: NDArray) -> NoiseSpectrum:
-        return noise_spectrum([s[part] for part in parts], fs, period_s=period)
+    def spectrum(s: NDArray) -> NoiseSpectrum | None:
+        rests = [s[part] for part in parts]
+        if derived is not None and still_on_its_steps(rests, quantisation_step(s)):
+            return None
+        return noise_spectrum(rests, fs, period_s=period)
 
     return RestNoise(
         displacement=None if derived == "displacement" else spectrum(x),
@@ -1753,6 +1763,13 @@ def _analyse(
     fade_level = None if not band_x else FADE * PEAK_THRESHOLD * band_x
     if coarse_fade is not None:
         fade_level = max(fade_level or 0.0, coarse_fade)
+    if (
+        span.stop_index is not None
+        and fade_level is not None
+        and split_stop(peaks.t, peaks.value, fade_level)
+    ):
+        # the stop's turning point found twice on its plateau's noise: the first is it
+        peaks = _head(peaks, len(peaks) - 1)
     spacing = regular_turning_points(
         peaks.t,
         peaks.value,

@@ -22,7 +22,13 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
-__all__ = ["FINE_DITHER_STEPS", "QUANTISATION_NOISE_FACTOR", "finely_dithered", "quantisation_step"]
+__all__ = [
+    "FINE_DITHER_STEPS",
+    "QUANTISATION_NOISE_FACTOR",
+    "finely_dithered",
+    "quantisation_step",
+    "still_on_its_steps",
+]
 
 #: Standard deviation of the rounding error per step: 1/√12.
 QUANTISATION_NOISE_FACTOR = 1.0 / math.sqrt(12.0)
@@ -132,3 +138,36 @@ def finely_dithered(values: ArrayLike, step: float | None) -> bool:
         return False
     noise = 1.4826 * float(np.median(np.abs(d4 - np.median(d4)))) / math.sqrt(70.0)
     return noise >= FINE_DITHER_STEPS * step
+
+
+def still_on_its_steps(rests: list[ArrayLike], step: float | None) -> bool:
+    """True when the rests of a quantised channel hold (nearly) no noise: a signal at
+    rest on one level, or toggling between two now and then.
+
+    Such rests measure the rounding of a still signal, not the noise of the moving one
+    (whose rounding error, spread over the step, is white at q/√12): their spectrum,
+    near zero, would make the increments' noise vanish.
+
+    Parameters
+    ----------
+    rests : list of array_like
+        The channel's samples in each rest [signal unit].
+    step : float or None
+        The channel's quantisation step q (:func:`quantisation_step`); None: not
+        quantised, and the rests are never called still.
+
+    Returns
+    -------
+    bool
+        True when the rests' variance about each one's mean is under a quarter of the
+        rounding's, q²/48.
+    """
+    if step is None or not step > 0:
+        return False
+    parts = [np.asarray(r, dtype=float) for r in rests]
+    parts = [r for r in parts if r.size]
+    if not parts:
+        return False
+    squares = sum(float(np.sum((r - r.mean()) ** 2)) for r in parts)
+    count = sum(r.size for r in parts)
+    return squares / count < 0.25 * step * step / 12.0

@@ -14,7 +14,14 @@ import time
 
 _OUT = os.environ.get("SUITECUT_LOG")
 _MODULES = ("arviz", "matplotlib", "nbclient", "ipykernel", "numba", "bayestribo")
-_state = {"compile": 0.0, "n": 0, "depth": 0, "t": 0.0, "funcs": {}}
+_state = {"compile": 0.0, "n": 0, "depth": 0, "t": 0.0, "funcs": {}, "tests": {}}
+#: The test this process was started in (a notebook kernel's, a command's), if any.
+_STARTED_IN = os.environ.get("PYTEST_CURRENT_TEST")
+
+
+def _test() -> str:
+    """The test running now (its node id without the phase), or ``""``."""
+    return (os.environ.get("PYTEST_CURRENT_TEST") or "").rsplit(" (", 1)[0]
 
 
 def _register():
@@ -24,6 +31,7 @@ def _register():
         def on_start(self, ev):
             if _state["depth"] == 0:
                 _state["t"] = time.process_time()
+                _state["test"] = _test()
             _state["depth"] += 1
 
         def on_end(self, ev):
@@ -36,6 +44,8 @@ def _register():
                 module = getattr(function, "__module__", "")
                 name = f"{module}.{getattr(function, '__qualname__', '?')}"
                 _state["funcs"][name] = _state["funcs"].get(name, 0.0) + spent
+                tests = _state["tests"].setdefault(_state["test"], {})
+                tests[name] = tests.get(name, 0.0) + spent
 
     event.register("numba:compile", Listener())
 
@@ -77,6 +87,8 @@ def _dump():
             "ncompile": _state["n"],
             "funcs": _state["funcs"],
             "worker": os.environ.get("PYTEST_XDIST_WORKER"),
+            "started_in": _STARTED_IN,
+            "compile_by_test": _state["tests"],
             "mods": [m for m in _MODULES if m in sys.modules],
         }
         with open(os.path.join(_OUT, f"{os.getpid()}.json"), "w") as fh:
@@ -97,8 +109,12 @@ if _OUT:
 
         _CHILD = _Child()
         multiprocessing.util.Finalize(None, _dump, exitpriority=-100)
-        multiprocessing.util.register_after_fork(
-            _CHILD, lambda _: multiprocessing.util.Finalize(None, _dump, exitpriority=-100)
-        )
+
+        def _after_fork(_):
+            # a forked child starts with its parent's record: it records only its own
+            _state.update(compile=0.0, n=0, funcs={}, tests={})
+            multiprocessing.util.Finalize(None, _dump, exitpriority=-100)
+
+        multiprocessing.util.register_after_fork(_CHILD, _after_fork)
     except Exception:
         pass

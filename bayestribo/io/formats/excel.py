@@ -15,6 +15,7 @@ Old binary ``.xls`` workbooks are not read: the error says to save as ``.xlsx`` 
 from __future__ import annotations
 
 import datetime
+import shlex
 import zipfile
 from collections.abc import Iterable
 from pathlib import Path
@@ -172,7 +173,8 @@ def _sheet(book: Any, sheet: str | int | None, where: str) -> Any:
         )
     raise RunFormatError(
         f"several worksheets hold numbers ({data}); give sheet= (--sheet) with the one "
-        "that holds the run",
+        "that holds the run: "
+        + " or ".join(f"`--sheet {shlex.quote(str(name))}`" for name in data),
         where,
     )
 
