@@ -631,6 +631,7 @@ def one(
     tables: NDArray,
     offsets: NDArray,
     out: NDArray,
+    creep_end: float = math.inf,
 ) -> int:
     n_t = tau.size
     # fixed steps (either sign; see DEFAULT_STEPS), and whether the sum past the record
@@ -713,7 +714,11 @@ def one(
                     # a drag that the decay has made stronger than the spring (a power
                     # law below α = 1): the motion ends by an overdamped creep to rest,
                     # integrated to its end (bayestribo.model.laws._creep); the row
-                    # stays outside the law's domain where the creep never ends
+                    # stays outside the law's domain where the creep never ends. Summed
+                    # to the end of motion of a record that holds its stop, the creep
+                    # ends where the record's does (creep_end), or where it begins if
+                    # that is later: its ∫E past the record's stop is none of the data's
+                    arc_at = tau_end if creep_end >= tau_end else max(creep_end, t_start)
                     arc, j, arc_end, t_cross, w_cross = overdamped_end(
                         theta0,
                         r,
@@ -725,7 +730,7 @@ def one(
                         j,
                         t_start,
                         c_start,
-                        tau_end,
+                        arc_at,
                         out,
                     )
                     if math.isnan(c_end):
@@ -838,6 +843,7 @@ def grid(
     yp0: float,
     tau_end: float,
     steps: int,
+    creep_end: float = math.inf,
 ) -> tuple[NDArray, NDArray]:
     out = np.empty((y0.size, tau.size))
     status = np.zeros(y0.size, dtype=np.int64)
@@ -847,7 +853,9 @@ def grid(
     else:
         tables, offsets = _TABLES, _OFFSETS
     for p in range(y0.size):
-        status[p] = one(tau, y0[p], coef[p], ratio[p], yp0, tau_end, steps, tables, offsets, out[p])
+        status[p] = one(
+            tau, y0[p], coef[p], ratio[p], yp0, tau_end, steps, tables, offsets, out[p], creep_end
+        )
     return out, status
 
 

@@ -54,7 +54,12 @@ last polar steps in time by an L-stable implicit Runge-Kutta method
 (:mod:`bayestribo.model.laws._creep`), Π at the grid points on it, up to the record's
 end, or to rest where the rest of its ∫E comes from the quasi-static balance; where
 that rest diverges (a power law at α <= 1/3, summed to the end of motion) the row is
-outside the law's domain (NaN). Π within ~2e-8 of Π(0) of ``solve_ivp``'s
+outside the law's domain (NaN). Summed to the end of motion of a record that holds its
+stop, the creep may be given an end of its own (``creep_end``, the record's detected
+stop): the creep never reaches rest in a finite time, and the data's Π ends where its
+creep was seen to end, so the model's creep is integrated up to there (or not at all
+where it begins later); the half cycles before it run to their end of motion as
+before. Π within ~2e-8 of Π(0) of ``solve_ivp``'s
 (``tests/test_model_laws_creep.py``).
 
 A start inside a half cycle (y'₀ ≠ 0) needs μ at the half cycle's virtual turning
@@ -236,10 +241,12 @@ def make_integrator(
     Returns
     -------
     grid : callable
-        ``grid(tau, y0, coef, ratio, yp0, tau_end, steps) -> (Π, status)``: ``tau``
-        sorted (T,), ``y0`` (P,), ``coef`` (P, K), ``ratio`` (P,) the static to kinetic
-        friction ratio, ``steps`` 0 (chosen per half cycle) or fixed (see the module
-        notes for its sign); Π of shape (P, T); status (P,) 0 when the motion could be
+        ``grid(tau, y0, coef, ratio, yp0, tau_end, steps, creep_end=inf) -> (Π,
+        status)``: ``tau`` sorted (T,), ``y0`` (P,), ``coef`` (P, K), ``ratio`` (P,)
+        the static to kinetic friction ratio, ``steps`` 0 (chosen per half cycle) or
+        fixed (see the module notes for its sign), ``creep_end`` where a creep ends
+        below ``tau_end`` (:meth:`bayestribo.model.laws.Law.pi_grid`); Π of shape (P,
+        T); status (P,) 0 when the motion could be
         integrated, 1 when the drag stops a half cycle before it turns (an overdamped
         arc: that row of Π is NaN).
     turns : callable
