@@ -20,7 +20,7 @@ def _fixture() -> tuple[np.ndarray, np.ndarray, list[dict]]:
     return data["before"], data["creep"], json.loads(str(data["cases"]))
 
 
-def _now(case: dict) -> np.ndarray:
+def _now(case: dict, creep_end: float | None = None) -> np.ndarray:
     from bayestribo.model.laws import get_law
 
     law = get_law(case["law"])
@@ -35,6 +35,7 @@ def _now(case: dict) -> np.ndarray:
         reference=Y0,
         method=case["method"],
         steps=case["steps"],
+        creep_end=creep_end,
     )
 
 
@@ -60,3 +61,15 @@ def test_every_row_defined_before_is_the_same_to_the_bit():
     # the grid holds rows of every kind: most defined before, some refused
     assert same > 0.7 * finite_before.size
     assert (~finite_before).sum() > 0
+
+
+def test_a_creep_end_moves_no_row_defined_before():
+    """A creep's end inside the grid (τ = 50, where a record's motion would have been
+    seen to stop) moves no row the older tree left finite and did not end by a creep,
+    of any law, setting or method: only a creep reads it."""
+    before, creep, cases = _fixture()
+    keep = np.isfinite(before).all(axis=-1) & ~creep
+    for b, case in enumerate(cases):
+        now = _now(case, creep_end=50.0)
+        for r in np.flatnonzero(keep[b]):
+            assert np.array_equal(now[r], before[b, r]), (case["law"], case, r)
