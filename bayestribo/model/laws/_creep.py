@@ -29,7 +29,10 @@ quasi-static balance ``g(w₀(y)) = y`` closely enough, the rest of ∫E is the 
 w₀ at most: the sum ends where that error is below :data:`_CREEP_TOLERANCE` of the
 integral so far. Where the rest diverges (a power drag at α <= 1/3: the creep never
 ends, and its ∫E is infinite) or the arc crosses the centre after all, the row stays
-outside the law's domain (NaN), as an overdamped arc was before.
+outside the law's domain (NaN), as an overdamped arc was before. Given an end
+(a record's end, or its detected stop: ``creep_end`` of
+:meth:`bayestribo.model.laws.Law.pi_grid`), the arc is integrated up to it instead, C
+there returned, and the rest never taken: finite at every α.
 
 Like ``_core_shared`` this text is written after :mod:`._core`'s into one generated
 module (:func:`bayestribo.model.laws.integrator._law_source`), where ``drag``,
