@@ -24,6 +24,7 @@ __all__ = [
     "LinearSpringWarning",
     "MisfitWarning",
     "MissingDependencyError",
+    "NominalFrequencyWarning",
     "OffsetDriftWarning",
     "PluginWarning",
     "ReadingWarning",
@@ -210,3 +211,12 @@ class ImplausibleFrictionWarning(MisfitWarning):
     likely in another unit (grams under ``mass_kg``, millinewtons under ``load_N``).
     The message gives the interval and the load and mass it was computed from. Not a
     measurement: ``fit`` exits 1."""
+
+
+class NominalFrequencyWarning(MisfitWarning):
+    """The natural frequency measured from the record is more than
+    :data:`bayestribo.inference.nominal_frequency.NOMINAL_TOLERANCE` from the nominal
+    ``natural_frequency_Hz`` given with it: the stiffness k = m(2πf)², hence μ_k, takes
+    the measured one, which is wrong where the record's clock is off. The message gives
+    both and the option that reads the record at the nominal frequency. Not a
+    measurement until one of the two is corrected: ``fit`` exits 1."""

@@ -6,7 +6,8 @@ Situations, each an independent ``solve_ivp`` record (``tests/_law_recording.py`
 paper's rig without a load, noise seeds 1-3); damping that grows with the swing
 (ζ = 0.01, c₂/m = 47 /m, Coulomb friction μ_k = 0.0294 sticking at μ_s = μ_k, 2 kHz,
 seeds 1-3); viscous damping and Coulomb friction sticking at μ_s/μ_k = 15 and 20 on
-the paper's rig (seeds 1-3); the slow rig at μ_s/μ_k = 20 (seeds 1-4). Per record and
+the paper's rig (seeds 1-3; other ratios with ``--ratios``, a subset of the records
+with ``--only``); the slow rig at μ_s/μ_k = 20 (seeds 1-4). Per record and
 checkout: ``bayestribo fit FILE --json --seed 1`` (``bayestribo.cli.main``, in a
 subprocess whose PYTHONPATH is the checkout), the first ``--law``, ``--restoring`` or
 ``--prior`` option its warnings print, and the fit with that option added: its exit
@@ -44,8 +45,11 @@ OMEGA = 2.0 * math.pi * 32.6
 MASS, LOAD = 0.035, 0.31
 
 
-def situations(folder: Path) -> dict[str, tuple[Path, dict[str, float]]]:
-    """Each record's file and its truths (names of ``fit --json``'s parameters)."""
+def situations(
+    folder: Path, ratios: tuple[float, ...] = (15, 20)
+) -> dict[str, tuple[Path, dict[str, float]]]:
+    """Each record's file and its truths (names of ``fit --json``'s parameters);
+    ``ratios``: the μ_s/μ_k of the sticking records."""
     sys.path.insert(0, str(ROOT / "tests"))
     from _law_recording import law_recording
     from _slow_rig import MU_K, ZETA, write_slow_decay
@@ -67,7 +71,7 @@ def situations(folder: Path) -> dict[str, tuple[Path, dict[str, float]]]:
         )
         truths = {"zeta": 0.01, "mu_k": 0.0294, "c2_SI": 47 * MASS}
         out[f"growing_s{seed}"] = (write_run(run, folder / f"growing_s{seed}.csv"), truths)
-        for ratio in (15, 20):
+        for ratio in ratios:
             run = law_recording(
                 lambda v: 2.0 * 0.02 * OMEGA * v,
                 friction=0.03 * LOAD / MASS,
@@ -76,7 +80,7 @@ def situations(folder: Path) -> dict[str, tuple[Path, dict[str, float]]]:
                 seed=seed,
             )
             truths = {"zeta": 0.02, "mu_k": 0.03, "mu_s": 0.03 * ratio}
-            name = f"sticks{ratio}_s{seed}"
+            name = f"sticks{ratio:g}_s{seed}"
             out[name] = (write_run(run, folder / f"{name}.csv"), truths)
     for seed in (1, 2, 3, 4):
         path, _ = write_slow_decay(folder, seed=seed)
@@ -128,6 +132,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--base", type=Path)
     ap.add_argument("--name", default="advice_first")
+    ap.add_argument("--ratios", type=float, nargs="+", default=[15, 20], help="μ_s/μ_k sticking")
+    ap.add_argument("--only", nargs="*", help="only the records whose names start so")
     ap.add_argument("--folder", type=Path, help=argparse.SUPPRESS)  # the subprocess's
     ap.add_argument("--out", type=Path, help=argparse.SUPPRESS)
     a = ap.parse_args()
@@ -138,7 +144,11 @@ def main() -> None:
     result: dict[str, Any] = {}
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
-        cases = {k: (str(p), t) for k, (p, t) in situations(folder).items()}
+        cases = {
+            k: (str(p), t)
+            for k, (p, t) in situations(folder, tuple(a.ratios)).items()
+            if not a.only or k.startswith(tuple(a.only))
+        }
         (folder / "cases.json").write_text(json.dumps(cases))
         for label, tree in (("here", ROOT), ("base", a.base.resolve())):
             path = folder / f"{label}.json"
@@ -160,7 +170,13 @@ def main() -> None:
         }
         for label, found in result.items()
     }
-    payload = {"commit": commit(), "base_commit": base_commit, "tally": tally, **result}
+    payload = {
+        "commit": commit(),
+        "base_commit": base_commit,
+        "command": sys.argv[1:],
+        "tally": tally,
+        **result,
+    }
     print(json.dumps(tally))
     print(write_results(a.name, payload))
 

@@ -279,3 +279,34 @@ def test_restoring_auto_from_the_sidecar_is_printed_and_in_the_json(pendulum_fil
 def test_inspect_reads_a_run_whose_restoring_is_auto(pendulum_file, capsys):
     assert main(["inspect", str(pendulum_file), "--restoring", "auto"]) == 0
     assert "pendulum.csv" in capsys.readouterr().out
+
+
+def test_a_warning_raised_by_two_passes_is_told_once(capsys):
+    """``--law auto`` prepares the run for the comparison and again for its verdict's
+    fit: a spike found in both passes was printed twice (a real recording's export);
+    each distinct warning is told once, and one told at reading is not told again."""
+    import sys
+    import warnings
+
+    from bayestribo.cli.fit import tell
+    from bayestribo.errors import MisfitWarning, ReadingWarning
+
+    spike = "1 spike(s) in the displacement at t = 17.6 s (0.513)"
+    with warnings.catch_warnings(record=True) as read:
+        warnings.simplefilter("always")
+        warnings.warn("2 row(s) have no value for velocity_m_per_s", ReadingWarning, stacklevel=1)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for _ in range(2):  # the two passes
+            warnings.warn(spike, ReadingWarning, stacklevel=1)
+            warnings.warn(
+                "2 row(s) have no value for velocity_m_per_s", ReadingWarning, stacklevel=1
+            )
+        warnings.warn(spike, MisfitWarning, stacklevel=1)  # same text, another kind: told
+    with warnings.catch_warnings():
+        warnings.showwarning = lambda message, category, *_: print(
+            f"{category.__name__}: {message}", file=sys.stderr
+        )
+        tell(caught, told=read)
+    told = capsys.readouterr().err.splitlines()
+    assert told == [f"ReadingWarning: {spike}", f"MisfitWarning: {spike}"]

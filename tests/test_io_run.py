@@ -158,7 +158,7 @@ def test_a_load_without_a_frequency_uses_the_measured_frequency_and_says_so():
     recording = simulate(seed=5)
     meta = {k: v for k, v in recording.metadata.items() if k != "natural_frequency_Hz"}
     run = Run(recording.time, recording.displacement, recording.velocity, meta)
-    with pytest.warns(MetadataWarning, match=r"measured from the recording, f = 32\.59"):
+    with pytest.warns(MetadataWarning, match=r"turning times \(about 32\.59 Hz"):
         rig = run.rig()
     # The damped frequency of the simulation (ζ = 0.0236), to 1e-5.
     assert rig.natural_frequency_Hz == pytest.approx(32.6 * (1 - 0.0236**2) ** 0.5, rel=1e-5)

@@ -90,6 +90,24 @@ def test_instrument_preamble_is_skipped(tmp_path: Path) -> None:
     assert run.n_samples == len(t)
 
 
+def test_preamble_of_another_width_names_the_skip_rows_that_reads_it(tmp_path: Path) -> None:
+    """A logger's settings in two lines of three fields above one angle per line (an
+    encoder's serial print, no time column): refused when --columns names one column,
+    with the skip_rows that reads it; followed, the file is read."""
+    angles = 90.0 * np.cos(2 * np.pi * 0.8 * np.arange(2000) / 1000.0)
+    path = tmp_path / "swing.txt"
+    path.write_text(
+        "trigger_start_deg, sample_rate, duration_sec\n90, 1000, 2 \n"
+        + "".join(f"{a:.2f}\n" for a in angles)
+    )
+    with pytest.raises(RunFormatError, match=r"start at line 3: skip_rows=2 "):
+        read_run(path, columns=["angle_deg"], sample_rate_Hz=1000.0)
+    run = read_run(path, columns=["angle_deg"], sample_rate_Hz=1000.0, skip_rows=2)
+    assert run.n_samples == angles.size
+    assert run.length_unit == "rad"
+    np.testing.assert_allclose(run.displacement, np.deg2rad(np.round(angles, 2)))
+
+
 def _write(tmp_path: Path, text: str, name: str = "bad.csv") -> Path:
     path = tmp_path / name
     path.write_text(text)

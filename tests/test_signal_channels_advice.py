@@ -294,3 +294,22 @@ def test_channels_of_one_motion_rounded_to_a_few_steps_are_one_motion() -> None:
     other = np.round(np.exp(-0.05 * t) * np.cos(1.7 * w * t + 1.0) * w / qv) * qv
     with pytest.raises(RecordingError, match="do not describe one motion"):
         check_channels(Run(t, xs, other, meta))
+
+
+def test_channels_of_two_motions_name_the_one_channel_reading_that_reads_them(tmp_path):
+    """A motion-sensor export whose velocity column does not follow its position (here
+    one of another motion): refused, naming the reading of either channel alone, and
+    the position alone, read as that names it, is read."""
+    t = np.arange(0.0, 20.0, 0.01)
+    w = 2 * np.pi * 1.3
+    x = 0.4 + 0.05 * np.exp(-0.05 * t) * np.cos(w * t)
+    other = 0.05 * w * np.exp(-0.05 * t) * np.cos(1.7 * w * t + 1.0)
+    path = tmp_path / "export.csv"
+    path.write_text(
+        "time_s,displacement_m,velocity_m_per_s\n"
+        + "".join(f"{a:.2f},{b:.5f},{c:.5f}\n" for a, b, c in zip(t, x, other, strict=True))
+    )
+    with pytest.raises(RecordingError, match=r"read one alone: 'ignore' in the other's place"):
+        read_run(path)
+    run = read_run(path, columns=["time_s", "displacement_m", "ignore"])
+    assert run.velocity is None and run.n_samples == t.size

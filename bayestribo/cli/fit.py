@@ -18,7 +18,7 @@ import argparse
 import json
 import sys
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -188,6 +188,28 @@ def law_progress(args: argparse.Namespace, law: str | None = None) -> Callable[[
     return say
 
 
+def tell(
+    caught: Sequence[warnings.WarningMessage], told: Sequence[warnings.WarningMessage] = ()
+) -> None:
+    """Print each warning once: the same message of the same kind, raised again by a
+    second pass over the run (``--law auto`` prepares it for the comparison and again
+    for its verdict's fit), or already ``told``, is one warning and is printed once.
+
+    Parameters
+    ----------
+    caught : sequence of warnings.WarningMessage
+        Warnings recorded, in the order raised.
+    told : sequence of warnings.WarningMessage, optional
+        Warnings printed before, not printed again.
+    """
+    seen = {(w.category, str(w.message)) for w in told}
+    for w in caught:
+        key = (w.category, str(w.message))
+        if key not in seen:
+            seen.add(key)
+            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+
+
 def run(args: argparse.Namespace) -> int:
     """Read the run, fit, print; exit status 1 when the sampler did not converge."""
     from bayestribo.errors import MisfitWarning
@@ -198,8 +220,7 @@ def run(args: argparse.Namespace) -> int:
     with warnings.catch_warnings(record=True) as read:
         warnings.simplefilter("always")
         recording = read_run_from_args(args, spec.reading())
-    for w in read:  # told at once; counted with the fit's below (e.g. samples left out)
-        warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    tell(read)  # told at once; counted with the fit's below (e.g. samples left out)
     # the fitting machinery (numba, emcee, scipy) only once the input is good: a bad
     # option or file is told at once
     from bayestribo.cli._imports import import_module
@@ -220,8 +241,7 @@ def run(args: argparse.Namespace) -> int:
     # the run is named by the path the user gave, and read as the specification says
     result.attrs["run_name"] = str(args.run)
     result.attrs["spec_json"] = spec.to_json()
-    for w in caught:
-        warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    tell(caught, told=read)
     notched = result.settings.get("notch_Hz") or []
     lines = result.noise.get("lines_Hz") or []
     if notched:

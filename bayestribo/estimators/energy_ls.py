@@ -162,7 +162,7 @@ def energy_data(
         x,
         v,
         rig=rig,
-        use_nominal_frequency=rig is not None,
+        use_nominal_frequency=rig is not None and not rig.frequency_measured,
         skip_oscillations=skip_oscillations,
         min_turning_points=MIN_TURNING_POINTS,
         offset=offset,

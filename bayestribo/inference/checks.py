@@ -14,6 +14,7 @@ which the summarise stage calls once it has both.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from typing import Any, NamedTuple
@@ -37,7 +38,13 @@ from bayestribo.inference.modes import ModeReport, mode_check
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.preparation import matched_law_times
 from bayestribo.inference.priors import piled_on_bounds, widened_prior
-from bayestribo.inference.restoring_choice import arm_advice, simple_pendulum_arm
+from bayestribo.inference.restoring_choice import (
+    RestoringChoice,
+    arm_advice,
+    choose_restoring,
+    simple_pendulum_arm,
+)
+from bayestribo.inference.stop_prior import StopBeyondPrior, stop_beyond_prior
 from bayestribo.inference.types import MISFIT_P, PreparedRun, Sampled
 from bayestribo.io.run import Run
 from bayestribo.model.restoring import get_restoring
@@ -190,6 +197,16 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
         for e in at_bound
         if (option := widened_prior(str(e["parameter"]), posterior.priors[str(e["parameter"])]))
     }
+    # a record that stops where no draw can (its stop needs a μ_s/μ_k beyond the
+    # prior's bound, which the posterior presses on without piling on it): the bound is
+    # the cause, and the prior that holds the stop is advised first
+    stop = (
+        stop_beyond_prior(posterior, flat, *_last_turns(prepared.decay))
+        if prepared.data.motion_ended and prepared.decay.peaks.value.size
+        else None
+    )
+    if stop is not None:
+        widen["mu_s_ratio"] = stop.option
     # a misfit that is the law's (a smooth departure along the decay: the decay loses
     # energy with another shape than the law's) is answered by another law before a
     # wider prior or another spring (benchmarks/README.md, advice followed)
@@ -205,7 +222,8 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
         arm=arm,
         grown=grown,
         widen=widen,
-        prior_first=bool(prepared.data.motion_ended) and not laws,
+        prior_first=bool(prepared.data.motion_ended) and (not laws or stop is not None),
+        stop=stop,
     )
     for entry in at_bound:
         option = widen.get(str(entry["parameter"]))
@@ -233,16 +251,25 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
     pendulum = _pendulum_change(
         prepared.run, prepared.metadata, decay.peaks.value / decay.scaling.length_scale
     )
+    chosen = prepared.restoring_choice is not None
     _warn_frequency_trend(
         name,
         trend,
         posterior.law.name,
         pendulum,
         restoring=posterior.law.restoring,
-        chosen=prepared.restoring_choice is not None,
+        chosen=chosen,
         constant_period=posterior.law.closed_form,
         arm=arm,
         drag=laws and not compared and drag_change(trend, decay.peaks.value),
+        spring=(
+            _spring_of(prepared)
+            if trend is not None
+            and trend.significant
+            and posterior.law.restoring is None
+            and not chosen
+            else None
+        ),
     )
     return FitChecks(
         sampled,
@@ -460,6 +487,7 @@ def _warn_frequency_trend(
     constant_period: bool = False,
     arm: float | None = None,
     drag: bool = False,
+    spring: RestoringChoice | None = None,
 ) -> None:
     """Say when the frequency is not constant along the decay beyond the law's own
     change (the nuisance that carries it is in the intervals); ``pendulum``: the change
@@ -478,7 +506,10 @@ def _warn_frequency_trend(
     restoring_choice.simple_pendulum_arm`), advised instead of any force of x;
     ``drag``: the law misfits the decay as another law would not and the change is one
     a drag makes (:func:`misfit_of_the_law`, :func:`drag_change`): another law is
-    advised first, the spring after it."""
+    advised first, the spring after it. ``spring``: what ``restoring="auto"`` would
+    take on the record (:func:`_spring_of`); where no force follows the change there
+    (``followed`` False), no force is advised, as none would answer: the warning says
+    so instead."""
     if trend is None:
         return
     if trend.significant:
@@ -496,6 +527,19 @@ def _warn_frequency_trend(
                 "own change off; if the change stays beyond the law it keeps, the spring "
                 "stiffens or softens: --restoring duffing (sidecar 'restoring': 'duffing') "
                 "measures its β from the half periods"
+            )
+        if spring is not None and not spring.followed and not drag:
+            like = (
+                "; no registered restoring force follows the change ("
+                + ", ".join(
+                    f"the {'Duffing spring' if force == 'duffing' else force}'s half "
+                    f"periods leave {100 * left.change:+.3g} %"
+                    for force, left in spring.left.items()
+                    if force != "linear" and left is not None
+                )
+                + "): it is not the spring's (a frequency that drifts in time, a change "
+                "that is not monotonic in the swing), so naming a restoring force does not "
+                "answer it, and the nuisance carries it"
             )
         if chosen and restoring is None:
             like = " (on the linear spring that --restoring auto took)"
@@ -555,6 +599,30 @@ def _simple_pendulum_arm(prepared: Any) -> float | None:
     if run.length_unit != "m" or decay.turning_times is None:
         return None
     return simple_pendulum_arm(decay.turning_times, decay.peaks.value)
+
+
+def _last_turns(decay: EnergyDecay) -> tuple[float, float | None]:
+    """The record's last turning point (where its motion ends) and the one before it
+    (None with one), about the equilibrium, in the sampled frame's unit of y."""
+    y = np.asarray(decay.peaks.value, dtype=float) / decay.scaling.length_scale
+    return float(y[-1]), (float(y[-2]) if y.size >= 2 else None)
+
+
+def _spring_of(prepared: Any) -> RestoringChoice | None:
+    """What ``restoring="auto"`` would take on the prepared run (its warnings silenced:
+    read for the advice of the frequency warning only); None without turning times."""
+    run, decay = prepared.run, prepared.decay
+    if decay.turning_times is None:
+        return None
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return choose_restoring(
+            decay.turning_times,
+            decay.peaks.value / decay.scaling.length_scale,
+            length_unit=run.length_unit,
+            angle=decay.scaling.length_scale == 1.0,
+            length_scale=decay.scaling.length_scale,
+        )
 
 
 def _pendulum_change(run: Run, metadata: Mapping[str, Any], turning: NDArray) -> float | None:
@@ -637,6 +705,7 @@ def _warn_misfit(
     grown: tuple[float, float] | None = None,
     widen: Mapping[str, str] | None = None,
     prior_first: bool = True,
+    stop: StopBeyondPrior | None = None,
 ) -> None:
     """Say, with numbers, that the law misfits the run, and what to do (see
     :func:`summarise`); ``half_cycles``: how many the analysis holds (the law-free answer
@@ -651,7 +720,9 @@ def _warn_misfit(
     law held below the sticking the record shows misfits it), the other advice after;
     ``prior_first``: the record stops and its misfit is the stop's (not
     :func:`misfit_of_the_law`), so the widened prior comes first; otherwise another law
-    does, the prior after it."""
+    does, the prior after it; ``stop``: the record's stop needs a μ_s/μ_k beyond its
+    prior (:func:`~bayestribo.inference.stop_prior.stop_beyond_prior`), said as the
+    cause, and the prior that holds it advised first."""
     law_free = (
         "The answer is the energy dissipated per cycle measured from the turning points, "
         "whatever the law (result.turning_point_dissipation, printed as 'turning points "
@@ -683,10 +754,16 @@ def _warn_misfit(
         )
         return
     if compared:
+        held = (
+            ""
+            if stop is None
+            else f" {stop.describe()[0].upper()}{stop.describe()[1:]}: fit with the prior "
+            f"widened ({_prior_spellings(stop.option)}), which may let a law hold."
+        )
         warn(
             f"no law compared holds for {run}: the best, {law}, misfits it beyond its "
             f"noise ({how}); its parameters are not a measurement of any mechanism and its "
-            f"intervals are too narrow. {law_free}",
+            f"intervals are too narrow.{held} {law_free}",
             MisfitWarning,
         )
         return
@@ -708,11 +785,16 @@ def _warn_misfit(
     elif widen:
         names = ", ".join(widen)
         options = "; ".join(_prior_spellings(option) for option in widen.values())
-        todo = (
+        cause = (
             f"{names} piles on its prior's upper bound, a belief rather than a physical "
             "limit: the record may ask for more (a pin that sticks harder), and a law held "
-            f"below it misfits. Fit with the prior widened ({options}); if the law still "
-            f"misfits, {todo[0].lower()}{todo[1:]}"
+            "below it misfits"
+            if stop is None
+            else stop.describe()
+        )
+        todo = (
+            f"{cause[0].upper()}{cause[1:]}. Fit with the prior widened ({options}); if the "
+            f"law still misfits, {todo[0].lower()}{todo[1:]}"
         )
     if grown is not None:
         todo = (

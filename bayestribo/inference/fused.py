@@ -790,29 +790,10 @@ def _law_log_posterior(
     law without a closed form (:meth:`FusedLogPosterior.law_pi`; not read where the
     prior density is zero). A row whose Π is not finite (the law cannot move: an
     overdamped arc) is outside the law's domain: −inf. Returns the number of NaN rows."""
-    inc = data[1]
-    var0 = data[2]
-    m = inc.size
+    m = data[1].size
     q = _BASE + int(scalars[6])
-    design = data[4 : 4 + q]
-    var = np.empty(m)
-    a = np.empty((q, q))
-    b = np.empty(q)
-    x = np.empty(q)
-    prec = np.empty(q)
-    c = np.zeros((q, q))
     t = _whitening(data, scalars)
-    xw = np.empty((q, m))
-    z = np.empty(m)
-    norm0 = _log_det_correlation(t)
-    if columns[4] == _ABSENT:
-        for j in range(m):
-            var[j] = var0[j]
-            norm0 += math.log(var[j]) + _LOG_2PI
-        if t.shape[0] > 0:
-            _whitened_design(design, var, t, q, xw, c)
-        else:
-            _normal_matrix(design, var, q, c)
+    _, var, a, b, x, prec, c, xw, z, norm0 = _workspace(columns, data, scalars)
     flagged = 0
     for n in range(theta.shape[0]):
         row = theta[n]

@@ -265,9 +265,11 @@ BELIEF_BOUNDS = {"mu_s_ratio": 10.0}
 WIDEN = 4.0
 
 
-def widened_prior(name: str, prior: Prior) -> str | None:
+def widened_prior(name: str, prior: Prior, needed: float | None = None) -> str | None:
     """The ``--prior`` value that widens the default upper bound of a parameter of
-    :data:`BELIEF_BOUNDS` by :data:`WIDEN` (``mu_s_ratio=Uniform(1,40)``); None for any
+    :data:`BELIEF_BOUNDS` by :data:`WIDEN` (``mu_s_ratio=Uniform(1,40)``), or to 1.5×
+    ``needed`` (rounded up to two significant digits) where that is more (a value the
+    record is known to ask for: :mod:`bayestribo.inference.stop_prior`); None for any
     other parameter (its default bound is a physical limit: the data asking for more
     say that a unit, a channel or the record is wrong), another kind of prior, or a
     bound already beyond the default (the advice is given once: a posterior that piles
@@ -277,6 +279,8 @@ def widened_prior(name: str, prior: Prior) -> str | None:
     --------
     >>> widened_prior("mu_s_ratio", Uniform(1.0, 10.0))
     'mu_s_ratio=Uniform(1,40)'
+    >>> widened_prior("mu_s_ratio", Uniform(1.0, 10.0), needed=31.2)
+    'mu_s_ratio=Uniform(1,47)'
     >>> widened_prior("mu_s_ratio", Uniform(1.0, 40.0)) is None
     True
     >>> widened_prior("zeta", Uniform(0.0, 0.3)) is None
@@ -285,7 +289,11 @@ def widened_prior(name: str, prior: Prior) -> str | None:
     default = BELIEF_BOUNDS.get(name)
     if default is None or not isinstance(prior, Uniform | LogUniform) or prior.high > default:
         return None
-    return f"{name}={type(prior).__name__}({prior.low:g},{WIDEN * prior.high:g})"
+    high = WIDEN * prior.high
+    if needed is not None and math.isfinite(needed) and 1.5 * needed > high:
+        digits = 10.0 ** (math.floor(math.log10(1.5 * needed)) - 1)
+        high = math.ceil(1.5 * needed / digits) * digits
+    return f"{name}={type(prior).__name__}({prior.low:g},{high:g})"
 
 
 def piled_on_bounds(draws: NDArray, priors: PriorSet) -> list[dict[str, float | str]]:

@@ -792,6 +792,7 @@ class Run:
         f = natural_frequency_Hz
         if f is None:
             f = self.metadata.get("natural_frequency_Hz")
+        measured = f is None
         if f is None:
             load = self.metadata.get("load_N")
             if load is None or not load > 0 or self.length_unit != "m":
@@ -806,20 +807,23 @@ class Run:
                     "stiffness k = m(2πf)²; give natural_frequency_Hz (--frequency)",
                     self.source,
                 )
+            # the stiffness takes the natural frequency the energy decay measures from
+            # the turning times (signal/decay.py), not this estimate: said as such
             warnings.warn(
-                f"natural_frequency_Hz is not given: the stiffness k = m(2πf)² uses the "
-                f"frequency measured from the recording, f = {f:.6g} Hz (give "
-                "natural_frequency_Hz, --frequency, to use a nominal value)",
+                "natural_frequency_Hz is not given: the stiffness k = m(2πf)² uses the "
+                "natural frequency measured from the recording's turning times (about "
+                f"{f:.4g} Hz; give natural_frequency_Hz, --frequency, to use a nominal value)",
                 MetadataWarning,
                 stacklevel=2,
             )
         try:
             if self.length_unit != "m":  # N/k in metres would not match the signal
-                return Rig(natural_frequency_Hz=f)
+                return Rig(natural_frequency_Hz=f, frequency_measured=measured)
             return Rig(
                 natural_frequency_Hz=f,
                 mass_kg=self.metadata.get("mass_kg"),
                 load_N=self.metadata.get("load_N"),
+                frequency_measured=measured,
             )
         except ValueError as exc:
             raise RecordingError(str(exc), self.source) from None

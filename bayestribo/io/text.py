@@ -970,7 +970,8 @@ def _layout(
         if len(header) != len(names):
             raise RunFormatError(
                 f"header (line {lines[first - 1][0]}) has {len(header)} column(s) but "
-                f"columns= names {len(names)}; expected one name per column",
+                f"columns= names {len(names)}; expected one name per column"
+                + _preamble_hint(lines, delimiter, decimal, len(names)),
                 where,
             )
         return names, units, first, delimiter, decimal
@@ -985,10 +986,43 @@ def _layout(
     if has_header and len(first_fields) != len(names):
         raise RunFormatError(
             f"header (line {lines[0][0]}) has {len(first_fields)} column(s) but columns= "
-            f"names {len(names)}; expected one name per column",
+            f"names {len(names)}; expected one name per column"
+            + _preamble_hint(lines, delimiter, decimal, len(names)),
             where,
         )
     return names, units, 1 if has_header else 0, delimiter, decimal
+
+
+#: Lines of a text's start searched for the first row of a table below a preamble.
+_PREAMBLE_LINES = 50
+
+
+def _preamble_hint(
+    lines: Sequence[tuple[int, str]], delimiter: str | None, decimal: str | None, width: int
+) -> str:
+    """Where a table of ``width`` columns starts below lines of another width (a
+    preamble: a logger's settings written above one column of samples), as the
+    ``skip_rows`` that leaves the lines above it out; empty when no such line is
+    found among the first :data:`_PREAMBLE_LINES`.
+
+    The table's first line is the first from which every line given is a row of
+    ``width`` numbers (a file whose preamble is ``trigger_start_deg, sample_rate,
+    duration_sec`` and ``90, 1000, 5`` above one angle per line starts at line 3)."""
+    mark = decimal or "."
+
+    def row(text: str) -> bool:
+        fields = _split(text, delimiter)
+        return len(fields) == width and all(_number_or_empty(f, mark) for f in fields)
+
+    rows = [row(text) for _, text in lines]
+    for i in range(1, min(len(lines), _PREAMBLE_LINES)):
+        if all(rows[i:]):
+            start = lines[i][0]
+            return (
+                f"; the rows of {width} number(s) start at line {start}: "
+                f"skip_rows={start - 1} (--skip-rows) leaves the lines above out"
+            )
+    return ""
 
 
 @dataclass(frozen=True)

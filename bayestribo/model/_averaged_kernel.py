@@ -2,8 +2,9 @@
 
 One implementation of the averaged amplitude and of Π_app as a function of amplitude,
 in numba, called element by element: by :func:`bayestribo.model.averaged.averaged_pi`
-through the ufuncs here (one pass over the broadcast arguments, no temporaries), and
-by the fused log posterior (:mod:`bayestribo.inference.fused`). The formulas and their
+through the ufuncs of :mod:`bayestribo.model._averaged_ufuncs` (one pass over the
+broadcast arguments, no temporaries), and by the fused log posterior
+(:mod:`bayestribo.inference.fused`). The formulas and their
 series are those of :mod:`bayestribo.model.averaged`'s module notes; the tests check
 them against quadrature of Eq. 35 and the limits ζ → 0 and μ_k → 0.
 """
@@ -14,7 +15,7 @@ import math
 
 import numba
 
-__all__ = ["averaged_amplitude", "averaged_pi_ufunc", "averaged_pi_until", "pi_of_amplitude"]
+__all__ = ["averaged_amplitude", "pi_of_amplitude"]
 
 #: Arguments below this are treated as 0 (as :data:`bayestribo.model._special.TINY`).
 _TINY = 1e-100
@@ -73,22 +74,3 @@ def pi_of_amplitude(a: float, z: float, mk: float) -> float:
     inv = 1.0 / wl if finite else 0.0
     chi = 0.5 - inv + (math.log1p(wl) * inv * inv if finite else 0.0)
     return a * a * chi / (2.0 * (z if z > 0.0 else 1.0))
-
-
-@numba.vectorize(["float64(float64, float64, float64, float64)"], cache=True, fastmath=_CONTRACT)
-def averaged_pi_ufunc(t: float, a0: float, z: float, mk: float) -> float:  # pragma: no cover
-    """Π_app(τ) to the end of motion (a numpy ufunc: broadcasts its arguments)."""
-    return pi_of_amplitude(averaged_amplitude(t, a0, z, mk), z, mk)
-
-
-@numba.vectorize(
-    ["float64(float64, float64, float64, float64, float64)"], cache=True, fastmath=_CONTRACT
-)
-def averaged_pi_until(
-    t: float, t_end: float, a0: float, z: float, mk: float
-) -> float:  # pragma: no cover
-    """Π_app(τ) to min(T_f, τ_end): 0 from τ_end on (a numpy ufunc)."""
-    if not t < t_end:
-        return 0.0
-    pi = pi_of_amplitude(averaged_amplitude(t, a0, z, mk), z, mk)
-    return pi - pi_of_amplitude(averaged_amplitude(t_end, a0, z, mk), z, mk)

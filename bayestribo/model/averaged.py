@@ -178,7 +178,7 @@ def averaged_pi(
     ndarray
         Π_app(τ) = ∫_τ^{T} a(θ)²/2 dθ, 0 at and after T.
     """
-    from bayestribo.model._averaged_kernel import averaged_pi_ufunc, averaged_pi_until
+    from bayestribo.model._averaged_ufuncs import averaged_pi_ufunc, averaged_pi_until
 
     a0, z, mk = _check(y0, zeta, mu_k)
     t = _times("tau", tau)

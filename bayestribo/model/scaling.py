@@ -45,6 +45,12 @@ class Rig:
         Oscillating mass m [kg]. Needed for the stiffness k = mΩ² and for d_k.
     load_N : float, optional
         Normal load N [N]. ``0`` for a test without contact, ``None`` if unknown.
+    frequency_measured : bool
+        True when ``natural_frequency_Hz`` is not a nominal value but an estimate from
+        the recording itself (:meth:`bayestribo.io.run.Run.rig` without
+        ``natural_frequency_Hz`` in the metadata): the energy decay then has no nominal
+        frequency to compare its measured one with (it scales with its own measurement
+        either way, :func:`bayestribo.signal.decay.energy_decay`).
 
     Examples
     --------
@@ -56,6 +62,7 @@ class Rig:
     natural_frequency_Hz: float
     mass_kg: float | None = None
     load_N: float | None = None
+    frequency_measured: bool = False
 
     def __post_init__(self) -> None:
         _positive_finite("natural_frequency_Hz", self.natural_frequency_Hz)

@@ -713,7 +713,9 @@ def _check_units(run: Recording, where: str | None) -> None:
             f"{both} do not describe one motion: the changes of the displacement and the "
             f"integral of the velocity correlate at {correlation:.3f}; expected close to 1 (above "
             f"{_UNIT_MIN_CORRELATION:g}); check which column holds which signal "
-            "(columns=[...])",
+            "(columns=[...]); where each holds what its name says (a channel disturbed, "
+            "spiked or too coarse for the other), read one alone: 'ignore' in the other's "
+            "place in columns=[...]",
             where,
         )
     if not 1.0 / UNIT_GAIN_TOLERANCE <= gain <= UNIT_GAIN_TOLERANCE:

@@ -2061,7 +2061,13 @@ def _analyse(
         # not measured: √(1+β²) is left out, an error of β²/2 (3e-4 at ζ = 0.024),
         # where a decrement read off the levels gave a frequency 1.4 times the record's
         natural_hz = damped_hz
-    nominal_hz = None if rig is None else rig.natural_frequency_Hz
+    # a rig whose frequency was itself measured from the record has no nominal one
+    nominal_hz = None if rig is None or rig.frequency_measured else rig.natural_frequency_Hz
+    if use_nominal_frequency and nominal_hz is None:
+        raise RecordingError(
+            "use_nominal_frequency: the rig's frequency is an estimate from the recording, "
+            "not a nominal value (give natural_frequency_Hz)"
+        )
     omega = 2.0 * math.pi * (nominal_hz if use_nominal_frequency else natural_hz)
     if frequency_Hz is not None:
         omega = 2.0 * math.pi * float(frequency_Hz)
