@@ -245,7 +245,22 @@ def motion(truth: Truth, x0: float, duration: float) -> tuple[list, float, float
             atol=1e-15,
         )
         if sol.t_events[0].size == 0:
-            raise RuntimeError(f"no turning point within a period from t = {t:g} s")
+            if truth.mu_k > 0.0 or truth.eta != 0.0 or truth.stribeck:
+                raise RuntimeError(f"no turning point within a period from t = {t:g} s")
+            # a drag alone that outgrows the spring (a power law below α = 1): the
+            # motion ends by an overdamped creep towards the centre, recorded to the
+            # end of the record
+            creep = solve_ivp(
+                rhs,
+                (t, duration),
+                [sol.y[0, 0], 0.0],
+                method="LSODA",
+                dense_output=True,
+                rtol=1e-11,
+                atol=1e-15,
+            )
+            arcs.append((t, duration, creep.sol))
+            return arcs, duration, None
         t1, x = float(sol.t_events[0][0]), float(sol.y_events[0][0][0])
         arcs.append((t, t1, sol.sol))
         t = t1

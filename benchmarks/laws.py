@@ -170,6 +170,11 @@ CASES: dict[str, tuple[str | None, Truth, float, str]] = {
     "quadratic": ("quadratic", Truth(q=_gamma_share(1.0, 0.02, 2e-3)), 2e-3, "single"),
     "power": ("power", Truth(b=_power_b(0.01, 1.5, 2e-3), alpha=1.5), 2e-3, "single"),
     "hysteretic": ("hysteretic", Truth(eta=0.015), 2e-3, "single"),
+    # a power drag below α = 1: six turning points, then an overdamped creep from
+    # ~85 µm towards the centre, recorded to the end of the record
+    "power-creep": ("power", Truth(b=_power_b(0.1, 0.5, 2e-3), alpha=0.5), 2e-3, "single"),
+    # the same at α = 0.7: a longer decay, a creep that holds less of the energy
+    "power-creep-0.7": ("power", Truth(b=_power_b(0.1, 0.7, 2e-3), alpha=0.7), 2e-3, "single"),
     "viscous+coulomb": (
         "viscous+coulomb",
         Truth(zeta=0.005, mu_k=0.02, static_ratio=1.5),

@@ -17,7 +17,9 @@ over the default fit's, and whether it is reported converged (and why not).
 
 ``--creep-share X`` runs the same in a copy of the package whose creep rule accepts
 a creep up to X of Π(0) (a temporary folder, its own law cache): what the rule
-decides.
+decides. Since branch ``creep-pi`` the package integrates the creep
+(``bayestribo/model/laws/_creep.py``) and has no such rule: ``--creep-share`` then
+needs ``PYTHONPATH`` at a tree before it (main at 6827d02), whose package is copied.
 
 Run (a few minutes)::
 
@@ -170,7 +172,9 @@ def _in_copy(share: float, argv: list[str]) -> None:
     """Run this script on a copy of the package whose creep rule is ``share``."""
     folder = Path(tempfile.mkdtemp(prefix="creep_share_"))
     try:
-        shutil.copytree(ROOT / "bayestribo", folder / "bayestribo")
+        import bayestribo  # the package imported: PYTHONPATH's tree
+
+        shutil.copytree(Path(bayestribo.__file__).parent, folder / "bayestribo")
         core = folder / "bayestribo" / "model" / "laws" / "_core.py"
         text, n = re.subn(
             r"^_CREEP_SHARE = .*$", f"_CREEP_SHARE = {share!r}", core.read_text(), flags=re.M

@@ -1041,13 +1041,4 @@ class LawSource:
             for name, column, value in self.sources
         }
         y0 = values.pop("y0")
-        data = lik.data
-        return lik.law.pi_grid(
-            data.tau_grid[:-1],
-            values,
-            y0,
-            data.yp0,
-            None if data.motion_ended else data.tau_end,
-            reference=lik.reference_amplitude,
-            steps=lik.integrator_steps,
-        )
+        return lik.law_pi(lik.data.tau_grid[:-1], values, y0)

@@ -207,19 +207,44 @@ class PiLikelihood:
             # The law's one compiled core: the closed form where it has one (5-10x
             # faster than the numpy implementation, to which it agrees to 1e-12), the
             # half-cycle integrator otherwise.
-            return self.law.pi_grid(
-                tau,
-                values,
-                y0,
-                self.data.yp0,
-                end,
-                reference=self.reference_amplitude,
-                steps=self.integrator_steps,
-            )
+            return self.law_pi(tau, values, y0)
         amplitude = np.hypot(y0, self.data.yp0)[:, None]
         zeta = values.get("zeta", np.zeros_like(y0))[:, None]
         mu_k = values.get("mu_k", np.zeros_like(y0))[:, None]
         return averaged_pi(tau, amplitude, zeta, mu_k, tau_end=end)
+
+    def law_pi(self, at: NDArray, values: Mapping[str, NDArray], y0: NDArray) -> NDArray:
+        """The exact model's Π at the sorted times ``at`` (its law's
+        :meth:`~bayestribo.model.laws.Law.pi_grid`), shape (n, len(at)), as the data's Π
+        is taken: to the record's end where the record ends in motion, else to the
+        model's own end of motion, a creep to rest ending at the record's detected stop
+        (τ_end, where the data's Π ends: the creep's ∫E past it is none of the data's).
+
+        Parameters
+        ----------
+        at : ndarray
+            Sorted dimensionless times.
+        values : mapping
+            The law's parameter values by name, each (n,) (:meth:`law_values`).
+        y0 : ndarray
+            The initial displacement of each set, (n,).
+
+        Returns
+        -------
+        ndarray
+            Π, (n, len(at)); a row is NaN where the law cannot move.
+        """
+        data = self.data
+        return self.law.pi_grid(
+            at,
+            values,
+            y0,
+            data.yp0,
+            None if data.motion_ended else data.tau_end,
+            reference=self.reference_amplitude,
+            steps=self.integrator_steps,
+            creep_end=data.tau_end,
+        )
 
     def model_increments(self, params: Params) -> NDArray:
         """Model increments M_j, shape (n, m)."""

@@ -1,9 +1,9 @@
 """A run whose walkers missed a part of the posterior that holds higher density.
 
 An ensemble sampler explores the part of the posterior its walkers start in. Where
-the posterior is split (a law whose Π is not defined on thin bands of its parameters:
-a power-law drag below α = 1 whose creep to rest the integrator does not take leaves
-those rows outside the law's domain), the walkers can stay in one part, mix there, and
+the posterior is split (a law whose Π is not defined on thin bands of its parameters,
+as a power-law drag below α = 1 was before its creep to rest was integrated:
+:mod:`bayestribo.model.laws._creep`), the walkers can stay in one part, mix there, and
 pass every convergence check, while another part holds density far above theirs.
 Points evaluated under the exact posterior elsewhere in the fit (the draws of a
 quadratic surrogate checked against it, :func:`bayestribo.inference.surrogate.check`)

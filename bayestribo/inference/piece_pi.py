@@ -74,17 +74,8 @@ def longest_motion_pi(
     (the law's parameters and ``y0`` by name, each (n,)), as
     :meth:`~bayestribo.inference.likelihood.PiLikelihood.model_pi` gives it at the
     grid: (n, len(at))."""
-    data = likelihood.data
     values, y0 = likelihood.law_values(params)
-    return likelihood.law.pi_grid(
-        at,
-        values,
-        y0,
-        data.yp0,
-        None if data.motion_ended else data.tau_end,
-        reference=likelihood.reference_amplitude,
-        steps=likelihood.integrator_steps,
-    )
+    return likelihood.law_pi(at, values, y0)
 
 
 def piece_rows(longest: NDArray, at: NDArray, grid: NDArray, stops: NDArray) -> NDArray:

@@ -275,7 +275,9 @@ class PiData:
         ∫ E² over each increment: the scale of the optional model-discrepancy term.
     motion_ended : bool
         True when the record holds the end of motion: the model's last increment then
-        runs to the model's own end of motion, otherwise to τ_end.
+        runs to the model's own end of motion (a creep to rest, which never ends, up to
+        τ_end: :meth:`bayestribo.inference.likelihood.PiLikelihood.law_pi`), otherwise to
+        τ_end.
     y0, yp0 : float
         Observed dimensionless state at τ = 0.
     noise_bias : ndarray

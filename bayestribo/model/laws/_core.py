@@ -42,6 +42,7 @@ if TYPE_CHECKING:  # defined for each law after this text (see the module notes)
         outside_domain,
         swing_ends,
     )
+    from bayestribo.model.laws._creep import overdamped_end
 
     def drag(w: float, c: NDArray) -> float: ...
 
@@ -85,10 +86,6 @@ _AVERAGED_NODES = 7
 _AVERAGED_SPANS = 8
 _AVERAGED_HALVINGS = 3
 _AVERAGED_TOLERANCE = 1e-8
-# A drag's creep to rest (a power law below α = 1) ends the sum only where its ∫E, known
-# within a factor 2, is at most this fraction of Π(0): the integrator's accuracy against
-# the closed form (1e-8 of Π(0)); a larger creep leaves the row NaN.
-_CREEP_SHARE = 1e-8
 # Fixed-point iterations for the friction of a start inside a half cycle.
 _START_ITERATIONS = 6
 
@@ -335,54 +332,6 @@ def chebyshev_value(x: float, nodes: NDArray, values: NDArray) -> float:
         num += w * values[k]
         den += w
     return num / den
-
-
-@numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
-def creep_integral(a: float, c: NDArray) -> float:
-    """∫E dτ of the overdamped creep from rest at y = ``a`` > 0 to y = 0 under the drag
-    alone, from its quasi-static balance g(|y'|) = y (inertia neglected: the creep
-    follows an overdamped arc of the decay, whose energy ½a² is the record's smallest):
-    ∫₀^a f(y) dy, f = (y²/2) / w(y) with g(w(y)) = y. Near y = 0, f ∝ y^k (k = 2 - 1/α
-    for a power law): the integral diverges for k <= -1 (α <= 1/3: the creep never
-    ends, and its energy integral is infinite; NaN then), and is taken by
-    Gauss-Legendre in s, y = a s^m with m = 3/(k + 1), where the integrand is smooth."""
-    k = math.log(_creep_integrand(a * 1e-6, c) / _creep_integrand(a * 1e-7, c)) / math.log(10.0)
-    if not k > -0.95:
-        return math.nan
-    m = min(max(3.0 / (k + 1.0), 3.0), 60.0)
-    total = 0.0
-    for i in range(_GL_X.size):
-        s = 0.5 * (_GL_X[i] + 1.0)
-        y = a * s**m
-        total += _GL_W[i] * _creep_integrand(y, c) * 0.5 * m * a * s ** (m - 1.0)
-    return total
-
-
-@numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
-def _creep_integrand(y: float, c: NDArray) -> float:
-    """(y²/2)/w with g(w) = y (bisection within a factor 2 found by doubling or
-    halving); inf where the drag cannot balance y."""
-    hi = y
-    for _ in range(2000):
-        if drag(hi, c) >= y:
-            break
-        hi *= 2.0
-    else:
-        return math.inf
-    lo = 0.5 * hi
-    for _ in range(2000):
-        if drag(lo, c) < y or lo == 0.0:
-            break
-        hi = lo
-        lo *= 0.5
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        if drag(mid, c) < y:
-            lo = mid
-        else:
-            hi = mid
-    w = 0.5 * (lo + hi)
-    return 0.5 * y * y / w if w > 0.0 else math.inf
 
 
 @numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
@@ -682,6 +631,7 @@ def one(
     tables: NDArray,
     offsets: NDArray,
     out: NDArray,
+    creep_end: float = math.inf,
 ) -> int:
     n_t = tau.size
     # fixed steps (either sign; see DEFAULT_STEPS), and whether the sum past the record
@@ -760,15 +710,41 @@ def one(
                     table = nodes(theta0, steps)
             r_end = half_cycle(table, r, mu, c, steps, tau_at, c_at, e_at)
             if not math.isfinite(r_end):
-                if fixed == 0 and n_half > 0 and mu == 0.0:
+                if mu == 0.0:
                     # a drag that the decay has made stronger than the spring (a power
-                    # law below α = 1): the motion ends by an overdamped creep to rest
-                    # its ∫E is known only within a factor 2 (the quasi-static balance):
-                    # taken where it is below the integrator's accuracy, else the row
-                    # stays outside the law's domain, as any overdamped arc
-                    creep = creep_integral(a_from, c)
-                    if math.isfinite(creep) and creep <= _CREEP_SHARE * c_start:
-                        c_start += creep
+                    # law below α = 1): the motion ends by an overdamped creep to rest,
+                    # integrated to its end (bayestribo.model.laws._creep); the row
+                    # stays outside the law's domain where the creep never ends. Summed
+                    # to the end of motion of a record that holds its stop, the creep
+                    # ends where the record's does (creep_end), or where it begins if
+                    # that is later: its ∫E past the record's stop is none of the data's
+                    arc_at = tau_end if creep_end >= tau_end else max(creep_end, t_start)
+                    arc, j, arc_end, t_cross, w_cross = overdamped_end(
+                        theta0,
+                        r,
+                        c,
+                        tau_at,
+                        c_at,
+                        e_at,
+                        tau,
+                        j,
+                        t_start,
+                        c_start,
+                        arc_at,
+                        out,
+                    )
+                    if math.isnan(c_end):
+                        c_end = arc_end
+                    if math.isfinite(t_cross):
+                        # it crosses the centre after all: the half cycle goes on from
+                        # there (θ = π/2) in the polar steps
+                        t_start += t_cross
+                        c_start += arc
+                        r = w_cross
+                        theta0 = 0.5 * math.pi
+                        continue
+                    if math.isfinite(arc):
+                        c_start += arc
                         break
                 return outside_domain(out)
             t_half = tau_at[steps]
@@ -867,6 +843,7 @@ def grid(
     yp0: float,
     tau_end: float,
     steps: int,
+    creep_end: float = math.inf,
 ) -> tuple[NDArray, NDArray]:
     out = np.empty((y0.size, tau.size))
     status = np.zeros(y0.size, dtype=np.int64)
@@ -876,7 +853,9 @@ def grid(
     else:
         tables, offsets = _TABLES, _OFFSETS
     for p in range(y0.size):
-        status[p] = one(tau, y0[p], coef[p], ratio[p], yp0, tau_end, steps, tables, offsets, out[p])
+        status[p] = one(
+            tau, y0[p], coef[p], ratio[p], yp0, tau_end, steps, tables, offsets, out[p], creep_end
+        )
     return out, status
 
 

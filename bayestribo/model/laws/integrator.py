@@ -48,8 +48,19 @@ down the tail). A fixed number of steps per half cycle integrates every half cyc
 (``steps > 0``: the reference of convergence tests); ``steps < 0`` fixes -steps and
 shortens the sum past the record as the default does, from those same half cycles (the
 coarse model of the optimiser's multi-start). A drag below α = 1
-stops the motion in a finite time, by an overdamped creep: an overdamped arc whose
-energy is below 1e-12 of the integral so far ends the motion there.
+ends the motion by an overdamped creep towards the centre (the drag at small speeds
+outgrows the spring): the half cycle whose arc is overdamped is followed from its
+last polar steps in time by an L-stable implicit Runge-Kutta method
+(:mod:`bayestribo.model.laws._creep`), Π at the grid points on it, up to the record's
+end, or to rest where the rest of its ∫E comes from the quasi-static balance; where
+that rest diverges (a power law at α <= 1/3, summed to the end of motion) the row is
+outside the law's domain (NaN). Summed to the end of motion of a record that holds its
+stop, the creep may be given an end of its own (``creep_end``, the record's detected
+stop): the creep never reaches rest in a finite time, and the data's Π ends where its
+creep was seen to end, so the model's creep is integrated up to there (or not at all
+where it begins later); the half cycles before it run to their end of motion as
+before. Π within ~2e-8 of Π(0) of ``solve_ivp``'s
+(``tests/test_model_laws_creep.py``).
 
 A start inside a half cycle (y'₀ ≠ 0) needs μ at the half cycle's virtual turning
 point, which is not known for a friction that varies with amplitude: it is taken
@@ -66,7 +77,7 @@ from collections.abc import Callable, Mapping
 from functools import cache
 from types import ModuleType
 
-from bayestribo.model.laws import _core, _core_shared, _ladder
+from bayestribo.model.laws import _core, _core_shared, _creep, _ladder
 from bayestribo.model.laws.cache import CACHE_ENV, law_cache_dir, load_module
 
 __all__ = [
@@ -122,13 +133,17 @@ def _importable(force: object) -> tuple[str, str] | None:
 
 
 def _law_source(
-    template: ModuleType, layout: tuple, kernels: Mapping[str, object] | None = None
+    template: ModuleType,
+    layout: tuple,
+    kernels: Mapping[str, object] | None = None,
+    parts: tuple[ModuleType, ...] = (),
 ) -> tuple[str, dict[str, object], bool]:
     """The text of one law's module: the template's (:mod:`._core` or
-    :mod:`._restoring_core`), the text the templates share (:mod:`._core_shared`),
-    then the law's forces, and a restoring force's compiled ``kernels`` by the names the
-    template calls them. Also the functions to set in the module when one of them cannot
-    be imported (no cache then), and whether the module may be cached."""
+    :mod:`._restoring_core`), the text the templates share (:mod:`._core_shared`), the
+    template's own further ``parts`` (:mod:`._creep` for :mod:`._core`), then the law's
+    forces, and a restoring force's compiled ``kernels`` by the names the template
+    calls them. Also the functions to set in the module when one of them cannot be
+    imported (no cache then), and whether the module may be cached."""
     drags, d_off, d_size, frictions, f_off, f_size = layout
     named: dict[str, object] = {f"_f{i}": f for i, f in enumerate((*drags, *frictions))}
     named.update(kernels or {})
@@ -150,6 +165,10 @@ def _law_source(
         + "-" * 52
         + "\n"
         + inspect.getsource(_core_shared)
+        + "".join(
+            "\n\n# -- " + part.__name__ + " " + "-" * 40 + "\n" + inspect.getsource(part)
+            for part in parts
+        )
         + "\n".join(lines)
         + "\n"
     )
@@ -188,7 +207,7 @@ def compiled_law(
     law's forces; arguments as :func:`make_integrator`'s), whose functions the
     tests call one by one (the averaged tail against the half cycles' sum)."""
     layout = (drags, drag_offsets, drag_sizes, frictions, friction_offsets, friction_sizes)
-    return _load(*_law_source(_core, layout))
+    return _load(*_law_source(_core, layout, parts=(_creep,)))
 
 
 @cache
@@ -222,10 +241,12 @@ def make_integrator(
     Returns
     -------
     grid : callable
-        ``grid(tau, y0, coef, ratio, yp0, tau_end, steps) -> (Π, status)``: ``tau``
-        sorted (T,), ``y0`` (P,), ``coef`` (P, K), ``ratio`` (P,) the static to kinetic
-        friction ratio, ``steps`` 0 (chosen per half cycle) or fixed (see the module
-        notes for its sign); Π of shape (P, T); status (P,) 0 when the motion could be
+        ``grid(tau, y0, coef, ratio, yp0, tau_end, steps, creep_end=inf) -> (Π,
+        status)``: ``tau`` sorted (T,), ``y0`` (P,), ``coef`` (P, K), ``ratio`` (P,)
+        the static to kinetic friction ratio, ``steps`` 0 (chosen per half cycle) or
+        fixed (see the module notes for its sign), ``creep_end`` where a creep ends
+        below ``tau_end`` (:meth:`bayestribo.model.laws.Law.pi_grid`); Π of shape (P,
+        T); status (P,) 0 when the motion could be
         integrated, 1 when the drag stops a half cycle before it turns (an overdamped
         arc: that row of Π is NaN).
     turns : callable

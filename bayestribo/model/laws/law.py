@@ -281,6 +281,7 @@ class Law:
         reference: float | None = None,
         method: str = "auto",
         steps: int = DEFAULT_STEPS,
+        creep_end: float | None = None,
     ) -> NDArray:
         """Π(τ) = ∫_τ^T E on sorted ``tau`` for P parameter sets, shape (P, T).
 
@@ -310,6 +311,15 @@ class Law:
             averaged flow of those half cycles): the coarse model of the optimiser's
             multi-start, within ~1e-8 of the positive count's tail at a fraction of
             its cost.
+        creep_end : float, optional
+            Where the overdamped creep that ends a drag's motion (a power law below
+            α = 1, :mod:`bayestribo.model.laws._creep`) ends when it starts before
+            it: the τ of a record's detected stop of motion, where the data's Π ends
+            (its own end for a creep that starts later: that creep adds nothing).
+            ``None``: to rest. It shortens only such a creep, and only below
+            ``tau_end``: the half cycles run to the end of motion as without it, and
+            the closed form and a law on a nonlinear restoring force (no creep) ignore
+            it.
 
         Returns
         -------
@@ -322,6 +332,9 @@ class Law:
         size = y.size
         vals = {n: _rows(values[n], size) for n in self._names}
         end = math.inf if tau_end is None else float(tau_end)
+        creep = math.inf if creep_end is None else float(creep_end)
+        if math.isnan(creep):
+            raise ValueError("creep_end must be a time or None, got NaN")
         if method not in ("auto", "closed", "integrate"):
             raise ValueError(f"method must be 'auto', 'closed' or 'integrate', got {method!r}")
         if method == "closed" and not self.closed_form:
@@ -344,7 +357,8 @@ class Law:
         # serial: numba's threads (1.9x on an idle two-core machine) spun against the
         # other processes of a loaded one, 10x slower (tests on two workers, campaigns)
         grid, _, _ = make_integrator(*self._layout[0])
-        pi, _ = grid(t, y, coef, self.static_ratio(vals, size), float(yp0), end, int(steps))
+        ratio = self.static_ratio(vals, size)
+        pi, _ = grid(t, y, coef, ratio, float(yp0), end, int(steps), creep)
         return pi
 
     def turning_points(
