@@ -118,6 +118,7 @@ from bayestribo.errors import (
 from bayestribo.model.plausible import MAX_SPEED
 from bayestribo.model.scaling import Rig, Scaling
 from bayestribo.signal.clipping import flattened_turning_points, hard_clips
+from bayestribo.signal.noise_colour import WANDER_FLOOR, NoiseColour, noise_colour, wander_end
 from bayestribo.signal.coarse import (
     MIN_COARSE_TURNING_POINTS,
     MIN_SWING_STEPS,
@@ -1044,6 +1045,26 @@ def _rest_noise(
         velocity=None if derived == "velocity" else spectrum(v),
         source=" and ".join(names),
     )
+
+
+def _rest_colour(
+    t: NDArray,
+    x: NDArray,
+    v: NDArray,
+    rest_until: float | None,
+    stop: float | None,
+    period: float,
+    derived: str | None,
+) -> NoiseColour | None:
+    """The spectral slope of the recorded displacement's noise at rest below the
+    oscillation (:func:`bayestribo.signal.noise_colour.noise_colour`); None for a
+    displacement integrated from the velocity, or without a rest long enough."""
+    if derived == "displacement":
+        return None
+    parts, _ = _rest_parts(t, rest_until, stop, 0.25 * period)
+    if not parts:
+        return None
+    return noise_colour([x[part] for part in parts], 1.0 / sample_step(t), 1.0 / period)
 
 
 def _check_notch(notch: object) -> None:
@@ -2041,6 +2062,21 @@ def _analyse(
         window = _head(window, kept)
         motion_ended = False
         truncated = True
+    colour = _rest_colour(t, x, v, rest_until, rest_stop, period, derived)
+    kept_above = wander_end(window.value, colour, int(min_turning_points))
+    if kept_above is not None and colour is not None:
+        window = _head(window, kept_above)
+        faded_at = float(window.t[-1])
+        motion_ended = False
+        warn(
+            f"turning points: the decay fades into {colour.describe()}: its wander moves "
+            "the equilibrium and the energy of the smallest swings alike over many "
+            "increments, which the noise model, spanning a few periods, does not hold; "
+            f"the analysis ends at t = {faded_at:.6g} s, the last turning point whose "
+            f"swing is at least {WANDER_FLOOR:g} times that rms "
+            f"({WANDER_FLOOR * colour.rms:.3g})",
+            FadeWarning,
+        )
     # a coarse displacement's turning points stand on its levels: a decay within a
     # step reads as none there, but its swings then sink below the levels long before
     # the record ends (a driven oscillation's go on to its end)

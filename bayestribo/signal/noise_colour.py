@@ -1,0 +1,201 @@
+r"""The colour of the noise at rest below the oscillation: its spectral slope.
+
+Sensor drift, amplifier flicker and seismic background add noise whose power spectral
+density grows towards low frequencies, S(f) ∝ f^α with α ≈ -1 (1/f, "pink") or -2
+(a random walk, "brown"). The noise model of the increments
+(:mod:`bayestribo.signal.spectrum`) spans a few periods of the oscillation; the slow
+wander of such noise over the seconds of a decay moves the equilibrium and the energy
+of the smallest swings by as much as the noise's whole variance, alike over many
+increments: a decay analysed down to a few times that noise is bent by it (a viscous
+decay into 2 µm of 1/f noise under a 1 mm release, analysed down to 4 times the noise,
+gave ζ 2.5 % high at z = +32).
+
+:func:`noise_colour` measures α on the rest segments (before the release and after the
+stop) as the least-squares slope of log S against log f, S a Welch estimate with
+segments as long as the rest allows, on its bins from the lowest resolved frequency
+to half the oscillation's (mains lines and the oscillation's residue lie
+above). :attr:`NoiseColour.low_frequency` is true when the slope is below
+:data:`SLOPE_LIMIT` by more than :data:`SLOPE_Z` standard errors.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from bayestribo.signal.spectrum import welch
+
+__all__ = ["SLOPE_LIMIT", "SLOPE_Z", "NoiseColour", "noise_colour"]
+
+#: Log-log slope of the rest's PSD below which its noise is called low-frequency
+#: (1/f-like): white noise has 0, a filtered white noise 0 below its cutoff, 1/f -1.
+SLOPE_LIMIT = -0.5
+#: Standard errors by which the slope must lie below :data:`SLOPE_LIMIT`.
+SLOPE_Z = 2.0
+#: Fewest frequency bins the slope is fitted on.
+MIN_BINS = 8
+
+
+@dataclass(frozen=True)
+class NoiseColour:
+    """Spectral slope of the noise at rest below the oscillation frequency.
+
+    Attributes
+    ----------
+    slope : float
+        Least-squares slope α of log S(f) against log f (dimensionless): 0 white, -1
+        1/f (pink), -2 a random walk (brown).
+    slope_se : float
+        Its standard error (dimensionless), from the scatter of the bands about the
+        line.
+    low_Hz, high_Hz : float
+        Frequency range of the fit [Hz].
+    rms : float
+        Standard deviation of the rest samples about each segment's mean [unit]: the
+        noise a swing is compared with.
+    seconds : float
+        Duration of the rest analysed [s].
+    """
+
+    slope: float
+    slope_se: float
+    low_Hz: float
+    high_Hz: float
+    rms: float
+    seconds: float
+
+    @property
+    def low_frequency(self) -> bool:
+        """True when the PSD rises towards low frequencies beyond white noise's chance."""
+        return self.slope + SLOPE_Z * self.slope_se < SLOPE_LIMIT
+
+    @property
+    def name(self) -> str:
+        """The colour's usual name: ``"1/f (pink)"``, ``"1/f² (brown)"`` or ``"f^α"``."""
+        if -1.5 <= self.slope <= -0.5:
+            return "1/f (pink)"
+        if -2.5 <= self.slope < -1.5:
+            return "1/f² (brown)"
+        return f"f^{self.slope:.1f}"
+
+    def describe(self) -> str:
+        """One phrase: the colour, its slope and where it was measured."""
+        return (
+            f"{self.name} noise at rest (its spectrum goes as f^{self.slope:.2f} ± "
+            f"{self.slope_se:.2f} from {self.low_Hz:.3g} to {self.high_Hz:.3g} Hz, "
+            f"{self.seconds:.3g} s of rest, rms {self.rms:.3g})"
+        )
+
+
+def noise_colour(
+    segments: Sequence[ArrayLike], sample_rate_Hz: float, oscillation_Hz: float
+) -> NoiseColour | None:
+    """The spectral slope of rest segments below half the oscillation frequency.
+
+    Parameters
+    ----------
+    segments : sequence of array_like
+        Rest segments of one channel [unit], regularly sampled.
+    sample_rate_Hz : float
+        Sampling rate [Hz].
+    oscillation_Hz : float
+        Oscillation frequency [Hz]; the slope is fitted up to half of it.
+
+    Returns
+    -------
+    NoiseColour or None
+        None where the rest is too short to resolve :data:`MIN_BINS` bins below half
+        the oscillation frequency, or holds no noise.
+    """
+    fs = float(sample_rate_Hz)
+    segs = [np.asarray(s, dtype=float) for s in segments]
+    segs = [s for s in segs if s.size >= 16]
+    if not segs or not (fs > 0 and oscillation_Hz > 0):
+        return None
+    longest = max(s.size for s in segs)
+    # segments of half the longest rest (three half-overlapping averages there): the
+    # lowest frequencies resolved, at a few averages a bin
+    nper = 1 << max(4, int(math.floor(math.log2(max(longest // 2, 16)))))
+    high = 0.5 * float(oscillation_Hz)
+    low = fs / nper
+    total = np.zeros(nper // 2 + 1)
+    weight = 0
+    averages = 0.0
+    for s in segs:
+        if s.size < nper:
+            continue
+        total += s.size * welch(s, fs, nper, nper)
+        weight += s.size
+        averages += 2.0 * s.size / nper - 1.0
+    if weight == 0:
+        return None
+    psd = total / weight
+    freq = np.fft.rfftfreq(nper, 1.0 / fs)
+    used = (freq >= low * 0.999) & (freq <= high) & (psd > 0)
+    if np.count_nonzero(used) < MIN_BINS:
+        return None
+    xs, ys = np.log10(freq[used]), np.log10(psd[used])
+    design = np.column_stack([np.ones(xs.size), xs])
+    coef, *_ = np.linalg.lstsq(design, ys, rcond=None)
+    resid = ys - design @ coef
+    s2 = float(resid @ resid) / max(xs.size - 2, 1)
+    # a bin of a Welch average of K periodograms scatters in log10 by about 0.434/√K
+    # (K counted for half-overlapping Hann segments): at least that, and the Hann
+    # window correlates neighbouring bins (1.5 bins share their noise)
+    expected = 0.434**2 / max(averages, 1.0)
+    spread = float(np.sum((xs - xs.mean()) ** 2))
+    se = math.sqrt(1.5 * max(s2, expected) / spread)
+    dev = np.concatenate([s - np.mean(s) for s in segs])
+    rms = float(np.sqrt(np.mean(dev * dev)))
+    if rms == 0.0:
+        return None
+    return NoiseColour(
+        slope=float(coef[1]),
+        slope_se=float(se),
+        low_Hz=float(low),
+        high_Hz=float(high),
+        rms=rms,
+        seconds=float(sum(s.size for s in segs) / fs),
+    )
+
+
+#: Smallest swing analysed above low-frequency noise at rest, in its rms: a decay's
+#: turning points below it are left out (:func:`wander_end`).
+WANDER_FLOOR = float(__import__("os").environ.get("BT_WANDER_FLOOR", "10"))
+
+
+def wander_end(swings: ArrayLike, colour: NoiseColour | None, least: int) -> int | None:
+    """How many of a decay's turning points to keep above low-frequency noise.
+
+    Parameters
+    ----------
+    swings : array_like
+        The analysed turning points' values about the equilibrium [unit], in order.
+    colour : NoiseColour or None
+        The noise at rest (:func:`noise_colour`).
+    least : int
+        Fewest turning points the analysis needs.
+
+    Returns
+    -------
+    int or None
+        The count up to the last turning point whose swing is at least
+        :data:`WANDER_FLOOR` times the noise's rms, where the noise is low-frequency
+        (:attr:`NoiseColour.low_frequency`) and later turning points fall below it;
+        None where nothing is to be left out (white noise, every swing above, or fewer
+        than ``least`` above).
+    """
+    if colour is None or not colour.low_frequency:
+        return None
+    a = np.abs(np.asarray(swings, dtype=float))
+    above = np.flatnonzero(a >= WANDER_FLOOR * colour.rms)
+    if above.size == 0:
+        return None
+    kept = int(above[-1]) + 1
+    if kept >= a.size or kept < least:
+        return None
+    return kept
