@@ -124,9 +124,7 @@ def names_colour(stderr: str) -> bool:
     return "1/f" in stderr
 
 
-def one(
-    tree: str, path: Path, truth: dict[str, Any], law: str, timeout: float
-) -> dict[str, Any]:
+def one(tree: str, path: Path, truth: dict[str, Any], law: str, timeout: float) -> dict[str, Any]:
     """Fit ``path`` with the package of ``tree``; on exit 1 follow the advice once."""
     env = {**os.environ, "PYTHONPATH": tree, "MPLBACKEND": "Agg"}
     args = ["--law", law]

@@ -49,6 +49,7 @@ from bayestribo.signal.frequency import (
     frequency_trend,
     turning_point_trend,
 )
+from bayestribo.signal.noise_colour import misfit_note
 
 __all__ = [
     "FREQUENCY_TREND_CHANGE",
@@ -206,6 +207,9 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
         grown=grown,
         widen=widen,
         prior_first=bool(prepared.data.motion_ended) and not laws,
+        noise_note=misfit_note(
+            prepared.decay.noise_colour, prepared.decay.wander_floor, prepared.decay.peaks.value
+        ),
     )
     for entry in at_bound:
         option = widen.get(str(entry["parameter"]))
@@ -637,6 +641,7 @@ def _warn_misfit(
     grown: tuple[float, float] | None = None,
     widen: Mapping[str, str] | None = None,
     prior_first: bool = True,
+    noise_note: str = "",
 ) -> None:
     """Say, with numbers, that the law misfits the run, and what to do (see
     :func:`summarise`); ``half_cycles``: how many the analysis holds (the law-free answer
@@ -651,7 +656,8 @@ def _warn_misfit(
     law held below the sticking the record shows misfits it), the other advice after;
     ``prior_first``: the record stops and its misfit is the stop's (not
     :func:`misfit_of_the_law`), so the widened prior comes first; otherwise another law
-    does, the prior after it."""
+    does, the prior after it; ``noise_note``: what the noise's colour at rest did
+    (:func:`~bayestribo.signal.noise_colour.misfit_note`), said after the numbers."""
     law_free = (
         "The answer is the energy dissipated per cycle measured from the turning points, "
         "whatever the law (result.turning_point_dissipation, printed as 'turning points "
@@ -671,6 +677,9 @@ def _warn_misfit(
     how = f"χ² = {chi2:.0f} for {m} increments, p = {misfit_p:.1e}"
     if shaped:
         how = shape.describe() + f"; {how}"
+    # the noise's colour, where it is low-frequency, as a sentence after the numbers
+    then = f".{noise_note}. So" if noise_note else ":"
+    then_compared = f".{noise_note}. So" if noise_note else ";"
     if discrepancy:
         if not shaped:
             return  # white misfit only: the discrepancy's white term carries it
@@ -685,8 +694,8 @@ def _warn_misfit(
     if compared:
         warn(
             f"no law compared holds for {run}: the best, {law}, misfits it beyond its "
-            f"noise ({how}); its parameters are not a measurement of any mechanism and its "
-            f"intervals are too narrow. {law_free}",
+            f"noise ({how}){then_compared} its parameters are not a measurement of any "
+            f"mechanism and its intervals are too narrow. {law_free}",
             MisfitWarning,
         )
         return
@@ -722,7 +731,7 @@ def _warn_misfit(
             "that alone makes a misfit beyond the noise, whatever the law"
         )
     warn(
-        f"the law {law} misfits {run} beyond its noise ({how}): its parameters are not "
+        f"the law {law} misfits {run} beyond its noise ({how}){then} its parameters are not "
         f"a measurement and its intervals are too narrow. {todo}"
         + (
             f". {law_free}"

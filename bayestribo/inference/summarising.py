@@ -328,6 +328,14 @@ def summary(
     agreement = shape_agreement(dissipation, measured)
     warn_shape(name, agreement, posterior.law.name, compared, flagged=checks.flagged)
     noise_info = {**prepared.noise.to_dict(), "description": prepared.noise.describe()}
+    if decay.wander_floor is not None and decay.noise_colour is not None:
+        # the analysis ended above low-frequency noise at rest (signal/noise_colour.py)
+        noise_info["low_frequency"] = {
+            **dataclasses.asdict(decay.noise_colour),
+            "description": decay.noise_colour.describe(),
+            "smallest_swing_analysed": decay.wander_floor,
+            "analysis_end_s": decay.end_time,
+        }
     diagnostics = {
         **_diagnostics(sampled, checks.misfit),
         "shape_departure": checks.shape.to_dict(),

@@ -118,7 +118,6 @@ from bayestribo.errors import (
 from bayestribo.model.plausible import MAX_SPEED
 from bayestribo.model.scaling import Rig, Scaling
 from bayestribo.signal.clipping import flattened_turning_points, hard_clips
-from bayestribo.signal.noise_colour import WANDER_FLOOR, NoiseColour, noise_colour, wander_end
 from bayestribo.signal.coarse import (
     MIN_COARSE_TURNING_POINTS,
     MIN_SWING_STEPS,
@@ -147,6 +146,7 @@ from bayestribo.signal.motion import (
     motion_span,
     regular_turning_points,
 )
+from bayestribo.signal.noise_colour import WANDER_FLOOR, NoiseColour, noise_colour, wander_end
 from bayestribo.signal.peaks import Peaks, estimate_noise, estimate_offset, find_peaks
 from bayestribo.signal.period import MIN_PERIOD_SAMPLES, dominant_period, sample_step
 from bayestribo.signal.quantisation import (
@@ -299,6 +299,15 @@ class EnergyDecay:
         it is known exactly: a velocity-only record integrated as an oscillator
         (:mod:`bayestribo.signal.integration`); None otherwise (the increments then
         integrate ``energy`` by Simpson's rule).
+    noise_colour : NoiseColour or None
+        Spectral slope of the recorded displacement's noise at rest below the
+        oscillation (:mod:`bayestribo.signal.noise_colour`); None without a rest long
+        enough to measure it.
+    wander_floor : float or None
+        Where the decay faded into low-frequency noise at rest, the smallest swing
+        analysed [length unit]: :data:`~bayestribo.signal.noise_colour.WANDER_FLOOR`
+        times the noise's rms; the turning points below it were left out (a
+        :class:`~bayestribo.errors.FadeWarning` said so). None otherwise.
     """
 
     t: NDArray
@@ -330,6 +339,8 @@ class EnergyDecay:
     irregular_turning_points: int = 0
     restoring: Any = None
     energy_steps: NDArray | None = None
+    noise_colour: NoiseColour | None = None
+    wander_floor: float | None = None
 
     @property
     def tau_end(self) -> float:
@@ -2196,4 +2207,6 @@ def _analyse(
         flattened_turning_points=left_out,
         irregular_turning_points=irregular,
         energy_steps=energy_steps,
+        noise_colour=colour,
+        wander_floor=None if kept_above is None else WANDER_FLOOR * colour.rms,
     )

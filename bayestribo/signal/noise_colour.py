@@ -119,7 +119,7 @@ def noise_colour(
     longest = max(s.size for s in segs)
     # segments of half the longest rest (three half-overlapping averages there): the
     # lowest frequencies resolved, at a few averages a bin
-    nper = 1 << max(4, int(math.floor(math.log2(max(longest // 2, 16)))))
+    nper = 1 << max(4, math.floor(math.log2(max(longest // 2, 16))))
     high = 0.5 * float(oscillation_Hz)
     low = fs / nper
     total = np.zeros(nper // 2 + 1)
@@ -199,3 +199,41 @@ def wander_end(swings: ArrayLike, colour: NoiseColour | None, least: int) -> int
     if kept >= a.size or kept < least:
         return None
     return kept
+
+
+def misfit_note(colour: NoiseColour | None, floor: float | None, swings: ArrayLike) -> str:
+    """What a misfit warning says of low-frequency noise at rest ("" for none).
+
+    Parameters
+    ----------
+    colour : NoiseColour or None
+        The noise at rest (:attr:`~bayestribo.signal.decay.EnergyDecay.noise_colour`).
+    floor : float or None
+        The smallest swing analysed where the analysis ended above the noise
+        (:attr:`~bayestribo.signal.decay.EnergyDecay.wander_floor`), else None.
+    swings : array_like
+        The analysed turning points' values about the equilibrium [unit].
+
+    Returns
+    -------
+    str
+        A sentence naming the noise's colour and what it did to the analysis.
+    """
+    if colour is None or not colour.low_frequency:
+        return ""
+    if floor is not None:
+        return (
+            f" The record's noise is {colour.describe()}; the analysis ended at swings "
+            f"of {WANDER_FLOOR:g} times its rms ({floor:.3g}), where its wander is "
+            "small against them: the misfit is not that wander's"
+        )
+    above = int(
+        np.count_nonzero(np.abs(np.asarray(swings, dtype=float)) >= WANDER_FLOOR * colour.rms)
+    )
+    return (
+        f" The record's noise is {colour.describe()}: its wander over seconds is not in "
+        "the noise model and moves the equilibrium and the energy of the smallest swings "
+        f"alike over many increments; only {above} analysed turning point(s) stand "
+        f"{WANDER_FLOOR:g} times its rms above it, too few to end the analysis there: "
+        "record a larger release, or a quieter signal chain"
+    )
