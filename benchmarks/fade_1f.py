@@ -9,8 +9,9 @@ from 1/20 s up, scaled to its rms) and white noise of a quarter of that rms. Cel
 law (``viscous``, ``viscous+coulomb``) × the pink noise's rms (0.1 %, 0.5 % and 2 % of
 the release) × seeds. Each record is fitted with ``bayestribo fit FILE --law LAW
 --json`` by each tree given (the tree of this file and, with ``--base``, another, in
-alternation), and where the fit exits 1 with a warning that advises an option, once
-more with that option (as ``unseen_rigs3.warning_advice`` reads it). Recorded: exit
+alternation, seed by seed across the cells), and then, where a fit exited 1 with a
+warning that advises an option, once more with that option (as
+``unseen_rigs3.warning_advice`` reads it); the results are written as each fit lands. Recorded: exit
 status, whether a warning names the 1/f noise, whether the 95 % intervals of ζ and
 the friction displacement cover the truth, CPU seconds.
 
@@ -124,23 +125,29 @@ def names_colour(stderr: str) -> bool:
     return "1/f" in stderr
 
 
-def one(tree: str, path: Path, truth: dict[str, Any], law: str, timeout: float) -> dict[str, Any]:
-    """Fit ``path`` with the package of ``tree``; on exit 1 follow the advice once."""
+def first_fit(tree: str, path: Path, truth: dict[str, Any], law: str, timeout: float) -> dict:
+    """``bayestribo fit PATH --law LAW --json`` with the package of ``tree``, and the
+    option its warning advises (not yet followed) where it exits 1."""
     env = {**os.environ, "PYTHONPATH": tree, "MPLBACKEND": "Agg"}
     args = ["--law", law]
     rec = fit_record(str(path), args, truth, env, timeout)
     rec["names_1f"] = names_colour(rec["stderr"])
     if rec["rc"] == 1:
-        advice = warning_advice(rec["stderr"], args)
-        rec["advice"] = advice
-        if advice:
-            rest = list(args)
-            if advice[0] in rest:
-                i = rest.index(advice[0])
-                del rest[i : i + 2]
-            rec["followup"] = fit_record(str(path), [*rest, *advice], truth, env, timeout)
-            rec["followup"]["names_1f"] = names_colour(rec["followup"]["stderr"])
+        rec["advice"] = warning_advice(rec["stderr"], args)
     return rec
+
+
+def follow(tree: str, path: Path, truth: dict[str, Any], law: str, rec: dict, timeout: float):
+    """Fit once more with the option the first fit's warning advised (replacing the
+    one given), as a user would; recorded under ``rec["followup"]``."""
+    env = {**os.environ, "PYTHONPATH": tree, "MPLBACKEND": "Agg"}
+    rest = ["--law", law]
+    advice = rec["advice"]
+    if advice[0] in rest:
+        i = rest.index(advice[0])
+        del rest[i : i + 2]
+    rec["followup"] = fit_record(str(path), [*rest, *advice], truth, env, timeout)
+    rec["followup"]["names_1f"] = names_colour(rec["followup"]["stderr"])
 
 
 def answered(rec: dict[str, Any]) -> dict[str, Any]:
@@ -172,6 +179,9 @@ def summary(cases: list[dict[str, Any]], tree: str) -> list[dict[str, Any]]:
                     "final_rc": [r["rc"] for r in final],
                     "named_1f": sum(bool(r.get("names_1f")) for r in rows),
                     "advice_followed": sum("followup" in r for r in rows),
+                    "advice_not_followed": sum(
+                        bool(r.get("advice")) and "followup" not in r for r in rows
+                    ),
                     "intervals": len(cov),
                     "covered": sum(cov),
                     "exit0_missed": sum(
@@ -225,44 +235,61 @@ def main() -> None:
     trees = {"branch": str(ROOT)}
     if a.base:
         trees["main"] = a.base
+    settings = {"seeds": a.seeds, "trees": trees, "levels": LEVELS, "laws": LAWS}
+    cases: list[dict[str, Any]] = []
+
+    def save() -> Path:
+        done = sorted(cases, key=lambda c: (c["law"], c["level"], c["seed"]))
+        return write_results(
+            a.name,
+            {
+                "commit": commit(),
+                "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+                "settings": settings,
+                "trees": list(trees),
+                "summary": {n: summary(done, n) for n in trees},
+                "cases": done,
+            },
+        )
+
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp)
-        jobs = []
-        for law in LAWS:
-            for level in LEVELS:
-                for seed in range(a.seeds):
-                    p, truth = write_record(d, law, level, seed)
-                    jobs.append((law, level, seed, p, truth))
+        # seed by seed across the cells, so that a run cut short holds every cell
+        jobs = [
+            (law, level, seed, *write_record(d, law, level, seed))
+            for seed in range(a.seeds)
+            for law in LAWS
+            for level in LEVELS
+        ]
 
-        def run(job: tuple[Any, ...]) -> dict[str, Any]:
+        def first(job: tuple[Any, ...]) -> dict[str, Any]:
             law, level, seed, p, truth = job
-            rec = {"law": law, "level": level, "seed": seed, "truth": truth}
+            rec = {"law": law, "level": level, "seed": seed, "truth": truth, "path": str(p)}
             # the trees in alternation, the order swapped from one record to the next
             order = list(trees) if seed % 2 == 0 else list(trees)[::-1]
             for name in order:
-                rec[name] = one(trees[name], p, truth, law, a.timeout)
-            print(
-                law,
-                level,
-                seed,
-                {n: (rec[n]["rc"], answered(rec[n])["rc"]) for n in trees},
-                flush=True,
-            )
+                rec[name] = first_fit(trees[name], p, truth, law, a.timeout)
+            print(law, level, seed, {n: rec[n]["rc"] for n in trees}, flush=True)
             return rec
 
+        def followed(item: tuple[dict[str, Any], str]) -> None:
+            rec, name = item
+            follow(trees[name], Path(rec["path"]), rec["truth"], rec["law"], rec[name], a.timeout)
+            print("advice", rec["law"], rec["level"], rec["seed"], name, flush=True)
+
         with ThreadPoolExecutor(a.jobs) as pool:
-            cases = list(pool.map(run, jobs))
-    stamp = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
-    out = {
-        "commit": commit(),
-        "date": stamp,
-        "settings": {"seeds": a.seeds, "trees": trees, "levels": LEVELS, "laws": LAWS},
-        "trees": list(trees),
-        "summary": {n: summary(cases, n) for n in trees},
-        "cases": cases,
-    }
-    print(write_results(a.name, out))
-    print(table(path))
+            for rec in pool.map(first, jobs):
+                cases.append(rec)
+                save_path = save()
+            # then the advice of each exit 1, followed once (the costly part: main's
+            # --law auto), saved as each lands
+            todo = [(rec, n) for rec in cases for n in trees if rec[n].get("advice")]
+            for _ in pool.map(followed, todo):
+                save_path = save()
+    for rec in cases:
+        rec.pop("path", None)
+    print(save_path if not cases else save())
+    print(table(RESULTS / f"{a.name}.json"))
 
 
 if __name__ == "__main__":

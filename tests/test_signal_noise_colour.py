@@ -159,3 +159,21 @@ def test_a_misfit_names_low_frequency_noise_and_what_the_analysis_did():
     few = misfit_note(pink_rest, None, swings)
     expected = int(np.count_nonzero(swings >= WANDER_FLOOR))
     assert f"only {expected} analysed turning point(s)" in few
+
+
+def test_a_stop_in_pink_noise_is_told_from_a_fade():
+    from bayestribo.signal.noise_colour import goes_on
+
+    rng = np.random.default_rng(4)
+    t = np.arange(20000) / FS
+    period = 1.0 / 12.0
+    noise = 2e-6 * pink(t.size, rng)
+    # a friction's stop at 5 s: the rest after it holds the noise alone
+    stopped = np.where(t < 5.0, 3e-5 * np.cos(2 * np.pi * 12.0 * t), 1e-5) + noise
+    assert not goes_on(t, stopped, 5.0, period)
+    # a viscous decay whose swings sank below a threshold at 5 s: it goes on under it
+    faded = 1e-5 * np.exp(-0.75 * (t - 5.0)) * np.cos(2 * np.pi * 12.0 * t) + noise
+    assert goes_on(t, faded, 5.0, period)
+    # no stop, or too short a rest after it to measure the noise on: as found
+    assert goes_on(t, faded, None, period)
+    assert not goes_on(t[:6000], faded[:6000], 5.0, period)

@@ -146,7 +146,13 @@ from bayestribo.signal.motion import (
     motion_span,
     regular_turning_points,
 )
-from bayestribo.signal.noise_colour import WANDER_FLOOR, NoiseColour, noise_colour, wander_end
+from bayestribo.signal.noise_colour import (
+    WANDER_FLOOR,
+    NoiseColour,
+    goes_on,
+    noise_colour,
+    wander_end,
+)
 from bayestribo.signal.peaks import Peaks, estimate_noise, estimate_offset, find_peaks
 from bayestribo.signal.period import MIN_PERIOD_SAMPLES, dominant_period, sample_step
 from bayestribo.signal.quantisation import (
@@ -2075,6 +2081,8 @@ def _analyse(
         truncated = True
     colour = _rest_colour(t, x, v, rest_until, rest_stop, period, derived)
     kept_above = wander_end(window.value, colour, int(min_turning_points))
+    if kept_above is not None and not goes_on(t, x, stop_time, period):
+        kept_above = None  # a stop, not a fade: the rest after it holds no oscillation
     if kept_above is not None and colour is not None:
         window = _head(window, kept_above)
         faded_at = float(window.t[-1])

@@ -25,7 +25,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from bayestribo.signal.spectrum import welch
 
@@ -165,7 +165,7 @@ def noise_colour(
 
 #: Smallest swing analysed above low-frequency noise at rest, in its rms: a decay's
 #: turning points below it are left out (:func:`wander_end`).
-WANDER_FLOOR = float(__import__("os").environ.get("BT_WANDER_FLOOR", "10"))
+WANDER_FLOOR = 10.0
 
 
 def wander_end(swings: ArrayLike, colour: NoiseColour | None, least: int) -> int | None:
@@ -237,3 +237,68 @@ def misfit_note(colour: NoiseColour | None, floor: float | None, swings: ArrayLi
         f"{WANDER_FLOOR:g} times its rms above it, too few to end the analysis there: "
         "record a larger release, or a quieter signal chain"
     )
+
+
+#: Amplitude of the oscillation fitted on the first periods after a stop, over the
+#: median of those fitted on the rest's last half, beyond which the decay goes on under
+#: the noise (a fade, not a stop).
+ON_RATIO = 4.0
+#: Periods of each block on which that oscillation is fitted.
+ON_PERIODS = 8.0
+#: Fewest blocks in the rest's last half for the comparison.
+ON_BLOCKS = 4
+
+
+def _amplitude(s: NDArray, x: NDArray, omega: float) -> float:
+    """Amplitude [unit] of the sinusoid at ``omega`` fitted with a line to ``x``."""
+    design = np.column_stack([np.ones(s.size), s, np.cos(omega * s), np.sin(omega * s)])
+    coef, *_ = np.linalg.lstsq(design, x, rcond=None)
+    return float(np.hypot(coef[2], coef[3]))
+
+
+def goes_on(t: NDArray, x: NDArray, stop_s: float | None, period_s: float) -> bool:
+    """Whether a decay's oscillation goes on after the stop found in it: a fade into
+    the noise, not a stop (a viscous decay never stops).
+
+    A sinusoid at the oscillation's period (with a line) is fitted by least squares to
+    the displacement over blocks of :data:`ON_PERIODS` periods of the rest after
+    ``stop_s`` (from a quarter period after it). The first block's amplitude beyond
+    :data:`ON_RATIO` times the median of the blocks of the rest's last half says the
+    motion goes on: the noise's own amplitude at that period is measured there, whatever
+    its colour (a white-noise standard error took 1/f noise for an oscillation at 5-11
+    of them). A friction's stop leaves the first block as the others (1.2-2.3 times
+    their median on the paper's rig in 1/f noise); a viscous decay that fades below a
+    threshold of its noise leaves one of several times the noise in it.
+
+    Parameters
+    ----------
+    t, x : ndarray
+        Time stamps [s] and displacement [unit] of the whole record.
+    stop_s : float or None
+        The stop found [s]; None for a record that ends in motion (True is returned).
+    period_s : float
+        The oscillation's period [s].
+
+    Returns
+    -------
+    bool
+        False where the rest's last half holds fewer than :data:`ON_BLOCKS` blocks (no
+        measure of the noise there: the stop stands).
+    """
+    if stop_s is None:
+        return True
+    step = ON_PERIODS * period_s
+    first = stop_s + 0.25 * period_s
+    blocks = int((float(t[-1]) - first) // step)
+    late = range(blocks // 2 + blocks % 2, blocks)
+    if len(late) < ON_BLOCKS:
+        return False
+    omega = 2.0 * math.pi / period_s
+
+    def amplitude(k: int) -> float:
+        a = int(np.searchsorted(t, first + k * step, "left"))
+        b = int(np.searchsorted(t, first + (k + 1) * step, "left"))
+        return _amplitude(t[a:b] - t[a], x[a:b], omega)
+
+    noise = float(np.median([amplitude(k) for k in late]))
+    return amplitude(0) > ON_RATIO * noise
