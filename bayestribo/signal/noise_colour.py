@@ -124,6 +124,8 @@ def noise_colour(
     nper = 1 << max(4, math.floor(math.log2(max(longest // 2, 16))))
     high = 0.5 * float(oscillation_Hz)
     low = fs / nper
+    if math.floor(high / low) < MIN_BINS:
+        return None  # too short a rest to resolve the low frequencies: no spectrum
     total = np.zeros(nper // 2 + 1)
     weight = 0
     averages = 0.0
