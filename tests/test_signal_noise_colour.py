@@ -140,6 +140,11 @@ def test_the_fit_of_a_decay_into_pink_noise_covers_and_exits_clean():
     assert not any(issubclass(w.category, MisfitWarning) for w in caught)
     lo, hi = result.interval("zeta", 0.95)
     assert lo <= 0.01 <= hi
+    # the trim is recorded, and said in the text beside the noise
+    said = result.noise["low_frequency"]
+    assert said["slope"] < -0.5 and said["smallest_swing_analysed"] > 0
+    assert said["analysis_end_s"] < 7.0
+    assert "the analysis ends at t =" in result.to_text()
 
 
 def test_a_misfit_names_low_frequency_noise_and_what_the_analysis_did():

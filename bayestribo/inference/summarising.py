@@ -336,6 +336,11 @@ def summary(
             "smallest_swing_analysed": decay.wander_floor,
             "analysis_end_s": decay.end_time,
         }
+        noise_info["description"] += (
+            f"; {decay.noise_colour.name} noise at rest (spectral slope "
+            f"{decay.noise_colour.slope:.2f}): the analysis ends at t = {decay.end_time:.6g} s, "
+            f"the swings below {decay.wander_floor:.3g} left out"
+        )
     diagnostics = {
         **_diagnostics(sampled, checks.misfit),
         "shape_departure": checks.shape.to_dict(),
