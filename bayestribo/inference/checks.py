@@ -58,6 +58,7 @@ from bayestribo.signal.frequency import (
     turning_point_trend,
 )
 from bayestribo.signal.high_pass import CALIBRATED_CORNER, HighPassSign, detect_high_pass
+from bayestribo.signal.noise_colour import misfit_note
 
 __all__ = [
     "FREQUENCY_TREND_CHANGE",
@@ -242,6 +243,9 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
         high_pass=high_pass,
         prior_first=bool(prepared.data.motion_ended) and (not laws or stop is not None),
         stop=stop,
+        noise_note=misfit_note(
+            prepared.decay.noise_colour, prepared.decay.wander_floor, prepared.decay.peaks.value
+        ),
     )
     for entry in at_bound:
         option = widen.get(str(entry["parameter"]))
@@ -751,6 +755,7 @@ def _warn_misfit(
     prior_first: bool = True,
     stop: StopBeyondPrior | None = None,
     high_pass: HighPassSign | None = None,
+    noise_note: str = "",
 ) -> None:
     """Say, with numbers, that the law misfits the run, and what to do (see
     :func:`summarise`); ``half_cycles``: how many the analysis holds (the law-free answer
@@ -770,7 +775,8 @@ def _warn_misfit(
     cause, and the prior that holds it advised first; ``high_pass``: a sensor
     high-pass's sign in the record (:func:`_high_pass_sign`), said with the option that
     undoes it before any other advice (no law holds on a high-passed record), and said
-    alone where the law does not misfit."""
+    alone where the law does not misfit; ``noise_note``: what the noise's colour at rest
+    did (:func:`~bayestribo.signal.noise_colour.misfit_note`), said after the numbers."""
     if high_pass is not None:
         warn(
             f"{name or 'the run'}: {high_pass.advice()}; until then its parameters are not "
@@ -797,6 +803,9 @@ def _warn_misfit(
     how = f"χ² = {chi2:.0f} for {m} increments, p = {misfit_p:.1e}"
     if shaped:
         how = shape.describe() + f"; {how}"
+    # the noise's colour, where it is low-frequency, as a sentence after the numbers
+    then = f".{noise_note}. So" if noise_note else ":"
+    then_compared = f".{noise_note}. So" if noise_note else ";"
     if discrepancy:
         if not shaped:
             return  # white misfit only: the discrepancy's white term carries it
@@ -817,8 +826,8 @@ def _warn_misfit(
         )
         warn(
             f"no law compared holds for {run}: the best, {law}, misfits it beyond its "
-            f"noise ({how}); its parameters are not a measurement of any mechanism and its "
-            f"intervals are too narrow.{held} {law_free}",
+            f"noise ({how}){then_compared} its parameters are not a measurement of any "
+            f"mechanism and its intervals are too narrow.{held} {law_free}",
             MisfitWarning,
         )
         return
@@ -861,7 +870,7 @@ def _warn_misfit(
             "that alone makes a misfit beyond the noise, whatever the law"
         )
     warn(
-        f"the law {law} misfits {run} beyond its noise ({how}): its parameters are not "
+        f"the law {law} misfits {run} beyond its noise ({how}){then} its parameters are not "
         f"a measurement and its intervals are too narrow. {todo}"
         + (
             f". {law_free}"

@@ -335,6 +335,19 @@ def summary(
     agreement = shape_agreement(dissipation, measured)
     warn_shape(name, agreement, posterior.law.name, compared, flagged=checks.flagged)
     noise_info = {**prepared.noise.to_dict(), "description": prepared.noise.describe()}
+    if decay.wander_floor is not None and decay.noise_colour is not None:
+        # the analysis ended above low-frequency noise at rest (signal/noise_colour.py)
+        noise_info["low_frequency"] = {
+            **dataclasses.asdict(decay.noise_colour),
+            "description": decay.noise_colour.describe(),
+            "smallest_swing_analysed": decay.wander_floor,
+            "analysis_end_s": decay.end_time,
+        }
+        noise_info["description"] += (
+            f"; {decay.noise_colour.name} noise at rest (spectral slope "
+            f"{decay.noise_colour.slope:.2f}): the analysis ends at t = {decay.end_time:.6g} s, "
+            f"the swings below {decay.wander_floor:.3g} left out"
+        )
     diagnostics = {
         **_diagnostics(sampled, checks.misfit),
         "shape_departure": checks.shape.to_dict(),

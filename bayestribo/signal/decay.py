@@ -147,6 +147,13 @@ from bayestribo.signal.motion import (
     motion_span,
     regular_turning_points,
 )
+from bayestribo.signal.noise_colour import (
+    WANDER_FLOOR,
+    NoiseColour,
+    goes_on,
+    noise_colour,
+    wander_end,
+)
 from bayestribo.signal.peaks import Peaks, estimate_noise, estimate_offset, find_peaks
 from bayestribo.signal.period import MIN_PERIOD_SAMPLES, dominant_period, sample_step
 from bayestribo.signal.quantisation import (
@@ -299,6 +306,15 @@ class EnergyDecay:
         it is known exactly: a velocity-only record integrated as an oscillator
         (:mod:`bayestribo.signal.integration`); None otherwise (the increments then
         integrate ``energy`` by Simpson's rule).
+    noise_colour : NoiseColour or None
+        Spectral slope of the recorded displacement's noise at rest below the
+        oscillation (:mod:`bayestribo.signal.noise_colour`); None without a rest long
+        enough to measure it.
+    wander_floor : float or None
+        Where the decay faded into low-frequency noise at rest, the smallest swing
+        analysed [length unit]: :data:`~bayestribo.signal.noise_colour.WANDER_FLOOR`
+        times the noise's rms; the turning points below it were left out (a
+        :class:`~bayestribo.errors.FadeWarning` said so). None otherwise.
     """
 
     t: NDArray
@@ -330,6 +346,8 @@ class EnergyDecay:
     irregular_turning_points: int = 0
     restoring: Any = None
     energy_steps: NDArray | None = None
+    noise_colour: NoiseColour | None = None
+    wander_floor: float | None = None
 
     @property
     def tau_end(self) -> float:
@@ -1045,6 +1063,26 @@ def _rest_noise(
         velocity=None if derived == "velocity" else spectrum(v),
         source=" and ".join(names),
     )
+
+
+def _rest_colour(
+    t: NDArray,
+    x: NDArray,
+    v: NDArray,
+    rest_until: float | None,
+    stop: float | None,
+    period: float,
+    derived: str | None,
+) -> NoiseColour | None:
+    """The spectral slope of the recorded displacement's noise at rest below the
+    oscillation (:func:`bayestribo.signal.noise_colour.noise_colour`); None for a
+    displacement integrated from the velocity, or without a rest long enough."""
+    if derived == "displacement":
+        return None
+    parts, _ = _rest_parts(t, rest_until, stop, 0.25 * period)
+    if not parts:
+        return None
+    return noise_colour([x[part] for part in parts], 1.0 / sample_step(t), 1.0 / period)
 
 
 def _check_notch(notch: object) -> None:
@@ -2072,6 +2110,23 @@ def _analyse(
         window = _head(window, kept)
         motion_ended = False
         truncated = True
+    colour = _rest_colour(t, x, v, rest_until, rest_stop, period, derived)
+    kept_above = wander_end(window.value, colour, int(min_turning_points))
+    if kept_above is not None and not goes_on(t, x, stop_time, period):
+        kept_above = None  # a stop, not a fade: the rest after it holds no oscillation
+    if kept_above is not None and colour is not None:
+        window = _head(window, kept_above)
+        faded_at = float(window.t[-1])
+        motion_ended = False
+        warn(
+            f"turning points: the decay fades into {colour.describe()}: its wander moves "
+            "the equilibrium and the energy of the smallest swings alike over many "
+            "increments, which the noise model, spanning a few periods, does not hold; "
+            f"the analysis ends at t = {faded_at:.6g} s, the last turning point whose "
+            f"swing is at least {WANDER_FLOOR:g} times that rms "
+            f"({WANDER_FLOOR * colour.rms:.3g})",
+            FadeWarning,
+        )
     # a coarse displacement's turning points stand on its levels: a decay within a
     # step reads as none there, but its swings then sink below the levels long before
     # the record ends (a driven oscillation's go on to its end)
@@ -2197,4 +2252,6 @@ def _analyse(
         flattened_turning_points=left_out,
         irregular_turning_points=irregular,
         energy_steps=energy_steps,
+        noise_colour=colour,
+        wander_floor=None if kept_above is None else WANDER_FLOOR * colour.rms,
     )
