@@ -96,6 +96,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import warnings
 from dataclasses import dataclass, replace
 from typing import Any, Literal
 
@@ -107,6 +108,7 @@ from scipy.integrate import cumulative_trapezoid
 from bayestribo._clock import clock, on_grid
 from bayestribo._warnings import warn
 from bayestribo.errors import (
+    BinnedRecordWarning,
     ClippingWarning,
     ClockRestartWarning,
     CoarseSignalWarning,
@@ -117,6 +119,7 @@ from bayestribo.errors import (
 )
 from bayestribo.model.plausible import MAX_SPEED
 from bayestribo.model.scaling import Rig, Scaling
+from bayestribo.signal.binning import bin_size, binned
 from bayestribo.signal.clipping import flattened_turning_points, hard_clips
 from bayestribo.signal.coarse import (
     MIN_COARSE_TURNING_POINTS,
@@ -1206,8 +1209,7 @@ def energy_decay(
         if s is not None and float(np.ptp(s)) == 0.0:
             raise RecordingError(f"release: no motion found: the {name} signal is constant")
     x, v = _despiked(t, x, v)
-
-    options = dict(
+    settings: dict[str, Any] = dict(
         jitter=jitter,
         rig=rig,
         skip_oscillations=skip_oscillations,
@@ -1219,6 +1221,85 @@ def energy_decay(
         motion_threshold=motion_threshold,
         linear_spring=linear_spring,
     )
+    bins = raw_refusal = None
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        try:
+            decay = _decay(t, x, v, notch, settings)
+        except RecordingError as refused:
+            raw_refusal = refused
+            bins = _bins(t, x, v, frequency_Hz, refused)
+            if bins is not None:
+                said.clear()  # the raw record's warnings: the binned one is analysed
+    _say(said)
+    if raw_refusal is None:
+        return decay
+    if bins is None:
+        raise raw_refusal
+    # a period of many samples, its swings within reach of the noise per sample: the
+    # record averaged in bins (signal/binning.py), its noise measured anew from them
+    tb, (xb, vb), how = binned(t, (x, v), *bins)
+    try:
+        decay = _decay(tb, xb, vb, notch, settings)
+    except RecordingError as e:
+        raise RecordingError(
+            f"{raw_refusal}; averaged in bins of {how.size} samples ({how.period_samples:.0f} "
+            f"a period), the record is refused too: {e}"
+        ) from raw_refusal
+    warn(
+        f"binned record: on its raw samples the record was refused ({raw_refusal}); its "
+        f"period holds {how.period_samples:.0f} samples, so it was analysed averaged in "
+        f"bins of {how.size} consecutive samples (a noise {math.sqrt(how.size):.3g} times "
+        f"smaller a sample, white as before; the oscillation's gain through a bin, "
+        f"{how.gain:.5f}, divided out): {tb.size} samples {tb[1] - tb[0]:.4g} s apart",
+        BinnedRecordWarning,
+    )
+    return decay
+
+
+#: Refusals of the raw record that averaging in bins may lift: no oscillation above the
+#: noise per sample, too few turning points standing out of it.
+_BINNED_REFUSALS = ("release: no motion found", "turning points:")
+
+
+def _bins(
+    t: NDArray,
+    x: NDArray | None,
+    v: NDArray | None,
+    frequency_Hz: float | None,
+    refused: RecordingError,
+) -> tuple[int, float] | None:
+    """The bin and the period's samples for a record refused on its raw samples, or
+    ``None`` where binning does not apply (another refusal, a period of few samples)."""
+    if not str(refused).startswith(_BINNED_REFUSALS):
+        return None
+    try:
+        period = (
+            1.0 / frequency_Hz
+            if frequency_Hz is not None
+            else dominant_period(t, x if x is not None else v)
+        )
+    except RecordingError:
+        return None
+    per_samples = period / sample_step(t)
+    size = bin_size(per_samples, t.size)
+    return None if size is None else (size, per_samples)
+
+
+def _say(said: list[warnings.WarningMessage]) -> None:
+    """The warnings of an analysis given again (recorded while it ran)."""
+    for w in said:
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+
+
+def _decay(
+    t: NDArray,
+    x: NDArray | None,
+    v: NDArray | None,
+    notch: float | Literal["auto"] | None,
+    options: dict[str, Any],
+) -> EnergyDecay:
+    """:func:`energy_decay` on checked, despiked signals, notched where asked."""
     if notch is None:
         return _analyse(t, x, v, notch_Hz=(), **options)
     # A first analysis finds the rest, where the line is measured.
