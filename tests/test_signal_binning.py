@@ -152,15 +152,21 @@ def test_few_samples_a_period_are_not_binned():
 @pytest.mark.validation
 @pytest.mark.parametrize("x_c", [0.0, 0.002])
 def test_binned_intervals_cover_over_seeds(x_c):
-    """Over 10 seeds a law's 95 % intervals hold ζ (and x_c) in at least 8 (a
-    calibrated interval misses two or more in 10 with probability 0.09)."""
-    covered = 0
+    """Over 10 seeds (noise 5 % of the first amplitude, which main refused in most) at
+    least 8 are answered, and the answers' 95 % intervals hold ζ and x_c together in all
+    but two (at a joint coverage of 90 %, three misses or more in 10 have probability
+    0.07)."""
+    answered = missed = 0
     for seed in range(10):
-        t, x = _record(0.07, x_c, 6.0, 0.007, seed=100 + seed)
+        t, x = _record(0.07, x_c, 6.0, 0.005, seed=100 + seed)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            result = bayestribo.fit(Run(t, x, None, {"length_unit": "arbitrary"}))
+            try:
+                result = bayestribo.fit(Run(t, x, None, {"length_unit": "arbitrary"}))
+            except RecordingError:
+                continue
+        answered += 1
         lo, hi = result.interval("zeta")
         flo, fhi = result.interval("friction_displacement")
-        covered += bool(lo <= 0.07 <= hi and flo <= x_c <= fhi)
-    assert covered >= 8
+        missed += not (lo <= 0.07 <= hi and flo <= x_c <= fhi)
+    assert answered >= 8 and missed <= 2
