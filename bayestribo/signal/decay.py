@@ -1270,9 +1270,16 @@ def _bins(
     refused: RecordingError,
 ) -> tuple[int, float] | None:
     """The bin and the period's samples for a record refused on its raw samples, or
-    ``None`` where binning does not apply (another refusal, a period of few samples)."""
+    ``None`` where binning does not apply: another refusal, a period of few samples, or
+    a channel on coarse steps that its noise does not dither (its rounding is no white
+    noise, and a bin's mean of it is not the motion's: the coarse digitiser's own
+    analysis and refusals hold, :mod:`bayestribo.signal.coarse`)."""
     if not str(refused).startswith(_BINNED_REFUSALS):
         return None
+    for s in (x, v):
+        step = None if s is None else quantisation_step(s)
+        if step is not None and not finely_dithered(s, step):
+            return None
     try:
         period = (
             1.0 / frequency_Hz
