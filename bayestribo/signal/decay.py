@@ -29,6 +29,14 @@ from the end of motion T. A real recording needs some care first, and
   named in an :class:`~bayestribo.signal.motion.IrregularStartWarning` (and the
   equilibrium estimated from the regular ones only); an interval off after two
   regular oscillations is a wiggle of the noise or a missed turning point, refused.
+* **Noisy samples, many a period**: a record refused on its raw samples for no motion
+  or too few turning points standing out of the noise, whose period holds 24 samples
+  or more (a seismometer at 10 Hz with an 8.9 s period, its noise 5-15 % of its
+  swings), is analysed again averaged in bins of consecutive samples that leave 12 a
+  period (:mod:`bayestribo.signal.binning`, a
+  :class:`~bayestribo.errors.BinnedRecordWarning`); its arrays (``t``, ``y``, the
+  turning points' indices) are then the bins'. Refused binned too, the error names both
+  refusals.
 * **First oscillation**: the first ``skip_oscillations`` oscillations after the
   release are disturbed by the magnet and skipped (default one, as in the paper,
   section 2.1); the analysis starts at the sample nearest to the next displacement
@@ -1154,7 +1162,9 @@ def energy_decay(
         and, naming the part of the analysis: "release: no motion found" (no
         oscillation above the noise), "turning points: ..." (too few after the
         skipped ones, or not half a period apart), "energy decay: the oscillation
-        does not decay".
+        does not decay"; the first two, where the record was tried averaged in bins
+        too, followed by "averaged in bins of k samples ..., the record is refused
+        too: ..." and the binned record's refusal.
     """
     stamps = np.asarray(t, dtype=float)
     # a clock that restarts: continued where the signal is contiguous, cut where it
