@@ -21,15 +21,18 @@ __all__ = [
     "FadeWarning",
     "FrequencyTrendWarning",
     "GapWarning",
+    "HighPassWarning",
     "ImplausibleFrictionWarning",
     "LinearSpringWarning",
     "MisfitWarning",
     "MissingDependencyError",
+    "NominalFrequencyWarning",
     "OffsetDriftWarning",
     "PluginWarning",
     "ReadingWarning",
     "RecordingError",
     "RunFormatError",
+    "SeparateMotionWarning",
     "ShapeUnresolvedWarning",
     "ShortAnalysisWarning",
     "SpikeWarning",
@@ -145,6 +148,13 @@ class BinnedRecordWarning(UserWarning):
     the samples a period and the raw record's refusal)."""
 
 
+class SeparateMotionWarning(UserWarning):
+    """The record holds more than one motion, separated by rests (runs recorded back to
+    back, a knock after the stop): the analysis takes the largest and the rests beside
+    it, and leaves the others out (the message names their times and the ``--window``
+    that analyses another)."""
+
+
 class FadeWarning(UserWarning):
     """A decay fades into the noise: its last turning points, of swings within the
     noise's reach, break its half period and are left out; the analysis ends at the
@@ -207,6 +217,14 @@ class ArmNoiseWarning(MisfitWarning):
     The turning points' ΔE(A) is the answer. A misfit: ``fit`` exits 1."""
 
 
+class HighPassWarning(MisfitWarning):
+    """The record bears a sensor high-pass's sign (an AC-coupled channel, a geophone):
+    its swing's centre relaxes from the release toward the rest as exp(-ω_c t)
+    (:func:`bayestribo.signal.high_pass.detect_high_pass`). The message gives the corner
+    frequency the centres give and the option that undoes it (``--sensor-high-pass``).
+    A misfit: ``fit`` exits 1."""
+
+
 class ShortAnalysisWarning(MisfitWarning):
     """The analysis covers less than half of the motion the record holds; the message
     names the analysed span, the motion's span and why."""
@@ -218,3 +236,12 @@ class ImplausibleFrictionWarning(MisfitWarning):
     likely in another unit (grams under ``mass_kg``, millinewtons under ``load_N``).
     The message gives the interval and the load and mass it was computed from. Not a
     measurement: ``fit`` exits 1."""
+
+
+class NominalFrequencyWarning(MisfitWarning):
+    """The natural frequency measured from the record is more than
+    :data:`bayestribo.inference.nominal_frequency.NOMINAL_TOLERANCE` from the nominal
+    ``natural_frequency_Hz`` given with it: the stiffness k = m(2πf)², hence μ_k, takes
+    the measured one, which is wrong where the record's clock is off. The message gives
+    both and the option that reads the record at the nominal frequency. Not a
+    measurement until one of the two is corrected: ``fit`` exits 1."""

@@ -190,6 +190,17 @@ def add_reading_options(parser: argparse.ArgumentParser) -> None:
         + " (default: 1.0 %%; the output says which it took)",
     )
 
+    parser.add_argument(
+        "--sensor-high-pass",
+        type=_high_pass,
+        metavar="HZ[:ORDER[:DAMPING]]",
+        help="the sensor passes no DC (an AC-coupled channel, a geophone, a piezoelectric "
+        "sensor; sidecar 'sensor_high_pass'): its analog high-pass, corner HZ, ORDER 1 (an "
+        "RC coupling, the default) or 2 (a geophone, with its DAMPING, default 0.707), is "
+        "undone on every channel when the run is read, its drift measured at rest; "
+        "said in the output",
+    )
+
 
 def _positive(text: str, expected: str, keyword: str | None = None) -> float | str:
     """A finite number > 0 from ``text``, or ``keyword`` itself; else an
@@ -215,6 +226,28 @@ def _pendulum_radius(text: str) -> float | str:
     return _positive(
         text, "the pendulum's radius at the sensor in metres (> 0), or simple", "simple"
     )
+
+
+def _high_pass(text: str) -> dict[str, Any]:
+    """``--sensor-high-pass`` value ``HZ[:ORDER[:DAMPING]]`` as a declaration
+    (:func:`bayestribo.signal.high_pass.check_high_pass`)."""
+    from bayestribo.signal.high_pass import check_high_pass
+
+    parts = [p.strip() for p in re.split("[:,]", text)]
+    try:
+        if not 1 <= len(parts) <= 3:
+            raise ValueError("expected HZ, HZ:ORDER or HZ:2:DAMPING")
+        spec: dict[str, Any] = {"cutoff_Hz": float(parts[0])}
+        if len(parts) > 1:
+            spec["order"] = int(parts[1])
+        if len(parts) > 2:
+            spec["damping"] = float(parts[2])
+        return check_high_pass(spec)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(
+            f"expected HZ[:ORDER[:DAMPING]] (e.g. 0.5 for one pole at 0.5 Hz, 4.5:2:0.7 for a "
+            f"geophone), got {text!r}: {exc}"
+        ) from None
 
 
 def _window(text: str) -> tuple[float, float]:
@@ -344,6 +377,7 @@ def reading_options(args: argparse.Namespace) -> Any:
             ("restoring", getattr(args, "restoring", None)),
             ("pendulum_radius_m", getattr(args, "pendulum_radius", None)),
             ("sensor_kind", getattr(args, "sensor_kind", None)),
+            ("sensor_high_pass", getattr(args, "sensor_high_pass", None)),
         )
         if value is not None
     }

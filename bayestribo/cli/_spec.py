@@ -159,6 +159,7 @@ def _reading_flags(reading: Mapping[str, Any]) -> list[str]:
         "mass_kg": "--mass",
         "restoring": "--restoring",
         "pendulum_radius_m": "--pendulum-radius",
+        "sensor_high_pass": "--sensor-high-pass",
     }
     flags += [metadata.get(k, k) for k in reading.get("metadata") or {}]
     return flags

@@ -170,6 +170,11 @@ def _text(report: dict[str, Any]) -> str:
         f"{k} {v}" for k, v in report["metadata"].items() if not isinstance(v, dict | list)
     )
     lines.append(f"metadata       {meta or 'none'}")
+    high_pass = report["metadata"].get("high_pass_undone")
+    if high_pass:
+        from bayestribo.io.high_pass import describe as describe_high_pass
+
+        lines.append(f"sensor         {describe_high_pass(high_pass)}")
     ch = report["channels"]
     if ch is not None:
         gain = ch["gain"]

@@ -27,6 +27,7 @@ from bayestribo._warnings import warn
 from bayestribo.errors import (
     ArmNoiseWarning,
     FrequencyTrendWarning,
+    HighPassWarning,
     LinearSpringWarning,
     MisfitWarning,
     PriorBoundWarning,
@@ -56,6 +57,7 @@ from bayestribo.signal.frequency import (
     frequency_trend,
     turning_point_trend,
 )
+from bayestribo.signal.high_pass import CALIBRATED_CORNER, HighPassSign, detect_high_pass
 
 __all__ = [
     "FREQUENCY_TREND_CHANGE",
@@ -179,6 +181,21 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
     shape = shape_departure(posterior, sampled.theta_map)
     half_cycles = int(prepared.decay.peaks.value.size) - 1
     arm = _simple_pendulum_arm(prepared)
+    high_pass = _high_pass_sign(prepared)
+    corner = _high_corner(prepared)
+    if corner is not None:
+        warn(
+            f"{name or 'the run'}: the sensor's high-pass declared at {corner:.2g} times the "
+            f"oscillation's frequency, beyond the {CALIBRATED_CORNER:g} at which undone "
+            "records were measured to give intervals that cover: the inverse multiplies "
+            "the integral's error at the release and the noise's random walk by the corner "
+            "(at 0.3 times the frequency 3 of 8 intervals of ζ missed, their z spread 1.65 "
+            "times the intervals' width), so the "
+            "law's intervals may be too narrow; the energy dissipated per cycle measured "
+            "from the turning points (printed as 'turning points (law-free)') holds "
+            "whatever the law, and a sensor with a lower corner gives a measurement",
+            HighPassWarning,
+        )
     grown = _arm_noise_growth(prepared.run)
     if grown is not None:
         warn(
@@ -222,6 +239,7 @@ def check(prepared: PreparedRun, sampled: Sampled, *, compared: bool = False) ->
         arm=arm,
         grown=grown,
         widen=widen,
+        high_pass=high_pass,
         prior_first=bool(prepared.data.motion_ended) and (not laws or stop is not None),
         stop=stop,
     )
@@ -592,6 +610,32 @@ def _arm_noise_growth(run: Run) -> tuple[float, float] | None:
     return (degrees, grown) if grown > ARM_NOISE_GROWTH else None
 
 
+def _high_corner(prepared: Any) -> float | None:
+    """The declared high-pass's corner over the oscillation's frequency, where it is
+    beyond :data:`~bayestribo.signal.high_pass.CALIBRATED_CORNER`; None otherwise."""
+    undone = dict(prepared.run.metadata).get("high_pass_undone")
+    frequency = prepared.decay.natural_frequency_Hz
+    if not undone or not frequency or not math.isfinite(frequency):
+        return None
+    ratio = float(undone["cutoff_Hz"]) / float(frequency)
+    return ratio if ratio > CALIBRATED_CORNER else None
+
+
+def _high_pass_sign(prepared: Any) -> HighPassSign | None:
+    """A sensor high-pass's sign in the run as recorded (:func:`~bayestribo.signal.
+    high_pass.detect_high_pass`, read from the velocity where it is recorded, else the
+    displacement), for a run that declares none; None otherwise."""
+    run, decay = prepared.run, prepared.decay
+    meta = dict(run.metadata)
+    if decay.turning_times is None or meta.get("sensor_high_pass") is not None:
+        return None
+    velocity = run.velocity is not None
+    signal = run.velocity if velocity else run.displacement
+    if signal is None:
+        return None
+    return detect_high_pass(run.time, signal, decay.turning_times, velocity=velocity)
+
+
 def _simple_pendulum_arm(prepared: Any) -> float | None:
     """The length [m] of a simple pendulum recorded as a length whose half periods follow
     the record's change, for a run in metres not read as an angle; None otherwise."""
@@ -706,6 +750,7 @@ def _warn_misfit(
     widen: Mapping[str, str] | None = None,
     prior_first: bool = True,
     stop: StopBeyondPrior | None = None,
+    high_pass: HighPassSign | None = None,
 ) -> None:
     """Say, with numbers, that the law misfits the run, and what to do (see
     :func:`summarise`); ``half_cycles``: how many the analysis holds (the law-free answer
@@ -722,7 +767,17 @@ def _warn_misfit(
     :func:`misfit_of_the_law`), so the widened prior comes first; otherwise another law
     does, the prior after it; ``stop``: the record's stop needs a μ_s/μ_k beyond its
     prior (:func:`~bayestribo.inference.stop_prior.stop_beyond_prior`), said as the
-    cause, and the prior that holds it advised first."""
+    cause, and the prior that holds it advised first; ``high_pass``: a sensor
+    high-pass's sign in the record (:func:`_high_pass_sign`), said with the option that
+    undoes it before any other advice (no law holds on a high-passed record), and said
+    alone where the law does not misfit."""
+    if high_pass is not None:
+        warn(
+            f"{name or 'the run'}: {high_pass.advice()}; until then its parameters are not "
+            "a measurement (the filter shifts the swing's centre and lowers the gain at the "
+            "oscillation frequency, which biases every friction given as a length)",
+            HighPassWarning,
+        )
     law_free = (
         "The answer is the energy dissipated per cycle measured from the turning points, "
         "whatever the law (result.turning_point_dissipation, printed as 'turning points "
@@ -768,6 +823,8 @@ def _warn_misfit(
         )
         return
     few = half_cycles is not None and half_cycles < FEWEST_HALF_CYCLES
+    if high_pass is not None:
+        return  # said above, with the option that answers it
     todo = (
         "Fit with law='auto' (--law auto): it compares the registered laws and keeps one that holds"
         if arm is None

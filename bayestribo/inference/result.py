@@ -669,6 +669,11 @@ class FitResult:
             from bayestribo.io.acceleration import describe
 
             lines.append(f"velocity  {describe(integrated)}")
+        high_pass = self.metadata.get("high_pass_undone")
+        if high_pass:
+            from bayestribo.io.high_pass import describe as describe_high_pass
+
+            lines.append(f"sensor    {describe_high_pass(high_pass)}")
         arm = self.metadata.get("pendulum_arm")
         if arm:
             from bayestribo.io.pendulum_arm import describe as describe_arm

@@ -35,6 +35,7 @@ from bayestribo.inference.dissipation import (
 )
 from bayestribo.inference.fit_record import FitRecord, plain_data
 from bayestribo.inference.law_free import STAIRCASE, law_free_turning_points, warn_energy_gain
+from bayestribo.inference.nominal_frequency import warn_nominal_frequency
 from bayestribo.inference.plausibility import warn_implausible_friction
 from bayestribo.inference.restoring_error import restoring_error, shifted
 from bayestribo.inference.result import FitResult
@@ -260,6 +261,11 @@ def summary(
         When μ_k's interval lies wholly above any contact's kinetic friction
         coefficient (:mod:`bayestribo.inference.plausibility`): the load or the mass is
         in another unit (a MisfitWarning: the command line exits 1).
+    NominalFrequencyWarning
+        When the natural frequency measured from the record is more than 1 % from the
+        nominal ``natural_frequency_Hz`` given with a mass
+        (:mod:`bayestribo.inference.nominal_frequency`): the stiffness takes the
+        measured one, wrong where the record's clock is off (a MisfitWarning: exit 1).
     PriorBoundWarning
         When a posterior piles on a physical upper bound of its prior
         (:func:`~bayestribo.inference.priors.piled_on_bounds`); the result records it in
@@ -297,6 +303,7 @@ def summary(
     own, own_units = law_quantities(posterior, reported, scale, gain)
     derived = {**derived, **{k: v for k, v in own.items() if k not in derived}}
     warn_implausible_friction(name, derived, metadata)
+    warn_nominal_frequency(name, decay, metadata)
     # the law-free answer's turning points: a coarse displacement's from its staircase
     # (inference/law_free.py); the swings span them
     turning, staircase = law_free_turning_points(prepared)

@@ -23,6 +23,7 @@ from bayestribo._files import atomic_path
 from bayestribo._warnings import warn
 from bayestribo.errors import BayestriboError, ReadingWarning, RecordingError, RunFormatError
 from bayestribo.io.acceleration import integrated_signals
+from bayestribo.io.high_pass import undone as high_pass_undone
 from bayestribo.io.options import READ_OPTIONS, ReadOptions, unknown_options
 from bayestribo.io.pendulum_arm import as_angle
 from bayestribo.io.registry import FileFormat, check_content, format_for, registered_formats
@@ -264,6 +265,7 @@ def _read(path: Path, opts: ReadOptions) -> Run:
     run = on_one_clock(run)  # a clock that restarts within the record, continued or cut
     if opts.window is not None:
         run = _windowed(run, opts.window, where)
+    run = high_pass_undone(run, where)  # a sensor's high-pass, when the metadata declare one
     run = as_angle(run, where)  # a length recorded on a pendulum, when the metadata say so
     if validate:
         try:
@@ -628,7 +630,7 @@ def as_run(
                 f"reading options {sorted(given)} apply to a file, but run is "
                 "already a Run; read the file with these options, or drop them"
             )
-        return as_angle(on_one_clock(run))
+        return as_angle(high_pass_undone(on_one_clock(run)))
     if isinstance(run, str | os.PathLike):
         return _read(Path(run), opts)
     raise BayestriboError(

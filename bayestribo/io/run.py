@@ -219,6 +219,21 @@ METADATA_KEYS: Mapping[str, _Key] = MappingProxyType(
             "'bessel', 'order': 1 to 10, 'cutoff_Hz': > 0}",
             check=lambda value, key, where: _sensor_filter(value, key, where),
         ),
+        "sensor_high_pass": _Key(
+            "plain",
+            "the analog high-pass every recorded channel went through (an AC-coupled "
+            "channel, a geophone, a piezoelectric sensor): {'cutoff_Hz': > 0, 'order': 1 or "
+            "2, 'damping': > 0 (two poles; default 0.707)}, or the corner in Hz for one "
+            "pole; undone when the run is read (--sensor-high-pass), see "
+            "bayestribo.io.high_pass",
+            check=lambda value, key, where: _high_pass(value, key, where),
+        ),
+        "high_pass_undone": _Key(
+            "plain",
+            "how the sensor's high-pass was undone (written by the package, "
+            "bayestribo.io.high_pass): the declaration, the channels and the rests where "
+            "its drift was measured",
+        ),
         "zeta0": _Key(
             "float", "damping ratio of the oscillator without contact ζ₀ [-]", 0.0, high=1.0
         ),
@@ -317,6 +332,17 @@ def _start_time(value: Any, key: str, where: str | None) -> str:
         f"'2026-11-30T09:15:02.120000', got {_shown(value)}",
         where,
     )
+
+
+def _high_pass(value: Any, key: str, where: str | None) -> dict[str, Any]:
+    """Check a ``sensor_high_pass`` value (:func:`bayestribo.signal.high_pass.
+    check_high_pass`)."""
+    from bayestribo.signal.high_pass import check_high_pass
+
+    try:
+        return check_high_pass(value)
+    except ValueError as exc:
+        raise RunFormatError(f"metadata {key!r}: {exc}", where) from None
 
 
 def _restoring(value: Any, key: str, where: str | None) -> str:

@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.errors import RecordingError
-from bayestribo.signal.period import dominant_period, sample_step
+from bayestribo.signal.period import MIN_PERIOD_SAMPLES, dominant_period, sample_step
 
 __all__ = [
     "MOTION_FRACTION",
@@ -685,10 +685,24 @@ def check_channels(run: Recording, where: str | None = None) -> None:
 
 def _check_units(run: Recording, where: str | None) -> None:
     """The displacement must follow the time integral of the velocity, in phase and
-    gain (:func:`channel_consistency`)."""
+    gain (:func:`channel_consistency`); a record sampled too slowly for its oscillation
+    is said to be so first (its integral over a sample is no measure of the channels'
+    units: 2.45 samples a period read as a gain of 2.3)."""
     found = channel_consistency(run)
     if found is None:
         return
+    try:
+        per_period = dominant_period(run.time, run.displacement) / sample_step(run.time)
+    except RecordingError:
+        per_period = math.inf
+    if per_period < MIN_PERIOD_SAMPLES:
+        raise RecordingError(
+            f"the record's dominant period is {per_period:.1f} samples long: its channels "
+            "cannot be compared, nor its turning points located (a free decay needs at "
+            f"least {MIN_PERIOD_SAMPLES} samples per period); record it at a higher sample "
+            "rate, or check that the time column is in the unit its name says",
+            where,
+        )
     correlation, gain = found.correlation, found.gain
     both = f"fields {DISPLACEMENT!r} and {VELOCITY!r}"
     if not (math.isfinite(correlation) and math.isfinite(gain)):

@@ -124,6 +124,7 @@ from bayestribo.errors import (
     GapWarning,
     OffsetDriftWarning,
     RecordingError,
+    SeparateMotionWarning,
 )
 from bayestribo.model.plausible import MAX_SPEED
 from bayestribo.model.scaling import Rig, Scaling
@@ -1753,6 +1754,36 @@ def _analyse(
         periodic=x if x_step is not None and not finely_dithered(x, x_step) else None,
         velocity_alone=x is None,
     )
+    if span.bounds is not None:
+        # other motions than the largest (runs back to back, a knock after the stop):
+        # they are not its rest; the record is analysed again without them
+        lo_b, hi_b = span.bounds
+        spans = ", ".join(f"t = {a:.6g} to {b:.6g} s" for a, b in span.others)
+        warn(
+            f"release: the record holds another motion than its largest ({spans}; another "
+            "release, a knock), which is not a rest: the analysis takes the largest motion "
+            f"and the rests beside it, t = {t[lo_b]:.6g} to {t[hi_b - 1]:.6g} s, and leaves "
+            "the other out; give a window of the record's time (--window T0:T1) to analyse "
+            "another",
+            SeparateMotionWarning,
+        )
+        part = slice(lo_b, hi_b)
+        return _analyse(
+            t[part],
+            None if x is None else x[part],
+            None if v is None else v[part],
+            rig=rig,
+            skip_oscillations=skip_oscillations,
+            use_nominal_frequency=use_nominal_frequency,
+            frequency_Hz=frequency_Hz,
+            jitter=jitter,
+            skip_turning_points=skip_turning_points,
+            min_turning_points=None if least_by_default else min_turning_points,
+            offset=offset,
+            motion_threshold=motion_threshold,
+            notch_Hz=notch_Hz,
+            linear_spring=linear_spring,
+        )
     released_at = span.release_index
     rest_until = None if released_at is None else float(t[released_at])
     # a decay that fades into the noise (a velocity alone): its rest starts where its

@@ -126,6 +126,15 @@ FEW_LEVELS = 32
 #: a millisecond there and a turning point was then missed (measured on
 #: ``benchmarks/coarse_dissipation.py``'s records).
 COARSE_LEVELS = 8
+#: Another run of moving blocks is a separate motion (another release, a knock) when it
+#: spans at least two blocks (three periods) and its oscillation reaches this fraction
+#: of the largest motion's (its blocks' coherent part, rms): a decay's fading tail that
+#: a block of noise cuts off from it is a few hundredths of its release at most.
+SEPARATE_MOTION = 0.1
+#: Blocks (two periods each) of rest kept beside a motion on a side where the record
+#: holds another: the rest's noise is measured on them, and what lies beyond (a mass
+#: pulled back to its hold for the next release) is not rest.
+REST_BESIDE = 4
 #: Default excursion threshold, in rest noise standard deviations, that marks motion
 #: when the release and the end of motion are refined (a Gaussian sample exceeds 8σ
 #: with probability 1e-15).
@@ -178,6 +187,14 @@ class MotionSpan:
         ``velocity_alone``): the end of the last block holding it [s], where ``quiet`` starts;
         ``stop_time`` is then where its swings sink below ``threshold``, not an end of
         motion. ``None`` otherwise.
+    bounds : (int, int) or None
+        Where the record holds other motions than this one, separated from it by rest
+        (:data:`SEPARATE_MOTION`): the samples ``[lo, hi)`` from the end of the one
+        before to the start of the one after, which hold this motion and its rests;
+        ``None`` when it is the record's only motion. The span's other fields are then
+        not to be used: the record is analysed again within the bounds.
+    others : tuple of (float, float)
+        The other motions' spans [s] (their first and last moving blocks).
     """
 
     release_index: int | None
@@ -189,6 +206,8 @@ class MotionSpan:
     threshold: float
     block: int
     fade_time: float | None = None
+    bounds: tuple[int, int] | None = None
+    others: tuple[tuple[float, float], ...] = ()
 
     @property
     def motion_ended(self) -> bool:
@@ -411,6 +430,7 @@ def motion_span(
         while last < moving.size - 1 and (moving[last + 1] or x_moving[last + 1]):
             by_steps = by_steps or not moving[last + 1]
             last += 1
+    bounds, others = _separate_motions(t, moving, var1 - var2, starts, size, first, last)
     moving = np.zeros_like(moving)
     moving[first : last + 1] = True
     quiet = np.zeros(n, bool)
@@ -589,7 +609,49 @@ def motion_span(
         threshold=level_cut,
         block=size,
         fade_time=fade_time,
+        bounds=bounds,
+        others=others,
     )
+
+
+def _separate_motions(
+    t: NDArray,
+    moving: NDArray,
+    coherent: NDArray,
+    starts: NDArray,
+    size: int,
+    first: int,
+    last: int,
+) -> tuple[tuple[int, int] | None, tuple[tuple[float, float], ...]]:
+    """The samples around the motion of blocks ``first`` to ``last`` that hold no other
+    motion (:data:`SEPARATE_MOTION`), and the other motions' spans [s]; ``(None, ())``
+    where there is none. ``coherent``: each block's variance the oscillation explains."""
+    amp = np.sqrt(np.clip(coherent, 0.0, None))
+    largest = float(np.max(amp[first : last + 1]))
+    n = t.size
+    lo, hi = 0, n
+    others: list[tuple[float, float]] = []
+    i = 0
+    while i < moving.size:
+        if not moving[i] or first <= i <= last:
+            i += 1
+            continue
+        j = i
+        while j + 1 < moving.size and moving[j + 1]:
+            j += 1
+        if j > i and float(np.max(amp[i : j + 1])) >= SEPARATE_MOTION * largest:
+            others.append((float(t[starts[i]]), float(t[min(n - 1, int(starts[j]) + size - 1)])))
+            # the time between two motions holds the rig made ready again (a magnet
+            # pulling the mass back to its hold): the rest beside this motion is taken
+            # up to REST_BESIDE blocks from it, which its noise needs at most
+            if j < first:
+                lo = max(lo, int(starts[j]) + size, int(starts[first]) - REST_BESIDE * size)
+            else:
+                hi = min(hi, int(starts[i]), int(starts[last]) + (1 + REST_BESIDE) * size)
+        i = j + 1
+    if not others or hi - lo < size:
+        return None, ()
+    return (lo, hi), tuple(others)
 
 
 #: Largest ratio of the standard deviations of a quiet block's quarters (each about its

@@ -232,8 +232,11 @@ def noise_model(
 
 
 def _integrated_velocity(meta: Mapping[str, Any]) -> dict[str, Any] | None:
-    """The accelerometer integration's noise record in a run's metadata, or None."""
+    """The accelerometer integration's noise record in a run's metadata, or that of a
+    velocity undone of its sensor's high-pass (:mod:`bayestribo.io.high_pass`), or None."""
     record = meta.get("acceleration")
+    if not isinstance(record, Mapping):
+        record = meta.get("high_pass_undone")
     if not isinstance(record, Mapping):
         return None
     noise = record.get("noise")

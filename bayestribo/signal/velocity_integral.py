@@ -218,6 +218,10 @@ def velocity_noise(noise: Mapping[str, Any], count: int, rng: np.random.Generato
     ndarray
         Shape (count, samples): velocity noise [m/s or rad/s] on the record's samples.
     """
+    if noise.get("kind") == "high_pass":
+        from bayestribo.signal.high_pass import high_pass_noise
+
+        return high_pass_noise(noise, count, rng)
     n = int(noise["samples"])
     t = float(noise["start_s"]) + float(noise["step_s"]) * np.arange(n)
     masks = []
