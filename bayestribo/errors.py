@@ -12,6 +12,7 @@ __all__ = [
     "AcquisitionError",
     "ArmNoiseWarning",
     "BayestriboError",
+    "BinnedRecordWarning",
     "ClockRestartWarning",
     "CoarseSignalWarning",
     "ConvergenceWarning",
@@ -138,6 +139,13 @@ class ClockRestartWarning(UserWarning):
 class SpikeWarning(UserWarning):
     """Isolated samples far off their neighbours were left out of the analysis (the
     message names the channel, times and values)."""
+
+
+class BinnedRecordWarning(UserWarning):
+    """A record refused on its raw samples (its swings within ten times its noise per
+    sample, though a period holds many samples) was analysed averaged in bins of
+    consecutive samples (:mod:`bayestribo.signal.binning`; the message names the bin,
+    the samples a period and the raw record's refusal)."""
 
 
 class SeparateMotionWarning(UserWarning):

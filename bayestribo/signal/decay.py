@@ -29,6 +29,14 @@ from the end of motion T. A real recording needs some care first, and
   named in an :class:`~bayestribo.signal.motion.IrregularStartWarning` (and the
   equilibrium estimated from the regular ones only); an interval off after two
   regular oscillations is a wiggle of the noise or a missed turning point, refused.
+* **Noisy samples, many a period**: a record refused on its raw samples for no motion
+  or too few turning points standing out of the noise, whose period holds 24 samples
+  or more (a seismometer at 10 Hz with an 8.9 s period, its noise 5-15 % of its
+  swings), is analysed again averaged in bins of consecutive samples that leave 12 a
+  period (:mod:`bayestribo.signal.binning`, a
+  :class:`~bayestribo.errors.BinnedRecordWarning`); its arrays (``t``, ``y``, the
+  turning points' indices) are then the bins'. Refused binned too, the error names both
+  refusals.
 * **First oscillation**: the first ``skip_oscillations`` oscillations after the
   release are disturbed by the magnet and skipped (default one, as in the paper,
   section 2.1); the analysis starts at the sample nearest to the next displacement
@@ -96,6 +104,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import warnings
 from dataclasses import dataclass, replace
 from typing import Any, Literal
 
@@ -107,6 +116,7 @@ from scipy.integrate import cumulative_trapezoid
 from bayestribo._clock import clock, on_grid
 from bayestribo._warnings import warn
 from bayestribo.errors import (
+    BinnedRecordWarning,
     ClippingWarning,
     ClockRestartWarning,
     CoarseSignalWarning,
@@ -118,6 +128,7 @@ from bayestribo.errors import (
 )
 from bayestribo.model.plausible import MAX_SPEED
 from bayestribo.model.scaling import Rig, Scaling
+from bayestribo.signal.binning import bin_size, binned
 from bayestribo.signal.clipping import flattened_turning_points, hard_clips
 from bayestribo.signal.coarse import (
     MIN_COARSE_TURNING_POINTS,
@@ -1190,7 +1201,9 @@ def energy_decay(
         and, naming the part of the analysis: "release: no motion found" (no
         oscillation above the noise), "turning points: ..." (too few after the
         skipped ones, or not half a period apart), "energy decay: the oscillation
-        does not decay".
+        does not decay"; the first two, where the record was tried averaged in bins
+        too, followed by "averaged in bins of k samples ..., the record is refused
+        too: ..." and the binned record's refusal.
     """
     stamps = np.asarray(t, dtype=float)
     # a clock that restarts: continued where the signal is contiguous, cut where it
@@ -1245,8 +1258,7 @@ def energy_decay(
         if s is not None and float(np.ptp(s)) == 0.0:
             raise RecordingError(f"release: no motion found: the {name} signal is constant")
     x, v = _despiked(t, x, v)
-
-    options = dict(
+    settings: dict[str, Any] = dict(
         jitter=jitter,
         rig=rig,
         skip_oscillations=skip_oscillations,
@@ -1258,6 +1270,92 @@ def energy_decay(
         motion_threshold=motion_threshold,
         linear_spring=linear_spring,
     )
+    bins = raw_refusal = None
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        try:
+            decay = _decay(t, x, v, notch, settings)
+        except RecordingError as refused:
+            raw_refusal = refused
+            bins = _bins(t, x, v, frequency_Hz, refused)
+            if bins is not None:
+                said.clear()  # the raw record's warnings: the binned one is analysed
+    _say(said)
+    if raw_refusal is None:
+        return decay
+    if bins is None:
+        raise raw_refusal
+    # a period of many samples, its swings within reach of the noise per sample: the
+    # record averaged in bins (signal/binning.py), its noise measured anew from them
+    tb, (xb, vb), how = binned(t, (x, v), *bins)
+    try:
+        decay = _decay(tb, xb, vb, notch, settings)
+    except RecordingError as e:
+        raise RecordingError(
+            f"{raw_refusal}; averaged in bins of {how.size} samples ({how.period_samples:.0f} "
+            f"a period), the record is refused too: {e}"
+        ) from raw_refusal
+    warn(
+        f"binned record: on its raw samples the record was refused ({raw_refusal}); its "
+        f"period holds {how.period_samples:.0f} samples, so it was analysed averaged in "
+        f"bins of {how.size} consecutive samples (a noise {math.sqrt(how.size):.3g} times "
+        f"smaller a sample, white as before; the oscillation's gain through a bin, "
+        f"{how.gain:.5f}, divided out): {tb.size} samples {tb[1] - tb[0]:.4g} s apart",
+        BinnedRecordWarning,
+    )
+    return decay
+
+
+#: Refusals of the raw record that averaging in bins may lift: no oscillation above the
+#: noise per sample, too few turning points standing out of it.
+_BINNED_REFUSALS = ("release: no motion found", "turning points:")
+
+
+def _bins(
+    t: NDArray,
+    x: NDArray | None,
+    v: NDArray | None,
+    frequency_Hz: float | None,
+    refused: RecordingError,
+) -> tuple[int, float] | None:
+    """The bin and the period's samples for a record refused on its raw samples, or
+    ``None`` where binning does not apply: another refusal, a period of few samples, or
+    a channel on coarse steps that its noise does not dither (its rounding is no white
+    noise, and a bin's mean of it is not the motion's: the coarse digitiser's own
+    analysis and refusals hold, :mod:`bayestribo.signal.coarse`)."""
+    if not str(refused).startswith(_BINNED_REFUSALS):
+        return None
+    for s in (x, v):
+        step = None if s is None else quantisation_step(s)
+        if step is not None and not finely_dithered(s, step):
+            return None
+    try:
+        period = (
+            1.0 / frequency_Hz
+            if frequency_Hz is not None
+            else dominant_period(t, x if x is not None else v)
+        )
+    except RecordingError:
+        return None
+    per_samples = period / sample_step(t)
+    size = bin_size(per_samples, t.size)
+    return None if size is None else (size, per_samples)
+
+
+def _say(said: list[warnings.WarningMessage]) -> None:
+    """The warnings of an analysis given again (recorded while it ran)."""
+    for w in said:
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+
+
+def _decay(
+    t: NDArray,
+    x: NDArray | None,
+    v: NDArray | None,
+    notch: float | Literal["auto"] | None,
+    options: dict[str, Any],
+) -> EnergyDecay:
+    """:func:`energy_decay` on checked, despiked signals, notched where asked."""
     if notch is None:
         return _analyse(t, x, v, notch_Hz=(), **options)
     # A first analysis finds the rest, where the line is measured.

@@ -39,6 +39,8 @@ QUANTISATION_NOISE_FACTOR = 1.0 / math.sqrt(12.0)
 FINE_DITHER_STEPS = 4.0
 #: Changes needed to call a step.
 _MIN_CHANGES = 20
+#: Changes below this fraction of a channel's largest magnitude are floating-point dust.
+_DUST = 1e-12
 #: Fraction of the changes that must be whole multiples of the step.
 _WHOLE_FRACTION = 0.99
 #: How far from a whole multiple a change may be (rounding of the decimal text).
@@ -78,7 +80,9 @@ def quantisation_step(values: ArrayLike) -> float | None:
         return None
     change = np.diff(x)
     np.abs(change, out=change)
-    change = change[change > 0]
+    # changes at the floating point's resolution are no step (the means of a binned
+    # record's samples differ by such dust where their sums are equal)
+    change = change[change > _DUST * float(np.max(np.abs(x)))]
     if change.size < _MIN_CHANGES:
         return None
     smallest = float(change.min())
