@@ -430,7 +430,7 @@ def motion_span(
         while last < moving.size - 1 and (moving[last + 1] or x_moving[last + 1]):
             by_steps = by_steps or not moving[last + 1]
             last += 1
-    bounds, others = _separate_motions(t, moving, var1 - var2, starts, size, first, last)
+    bounds, others = _separate_motions(t, moving, var1, var2, starts, size, first, last)
     moving = np.zeros_like(moving)
     moving[first : last + 1] = True
     quiet = np.zeros(n, bool)
@@ -617,7 +617,8 @@ def motion_span(
 def _separate_motions(
     t: NDArray,
     moving: NDArray,
-    coherent: NDArray,
+    var1: NDArray,
+    var2: NDArray,
     starts: NDArray,
     size: int,
     first: int,
@@ -625,8 +626,13 @@ def _separate_motions(
 ) -> tuple[tuple[int, int] | None, tuple[tuple[float, float], ...]]:
     """The samples around the motion of blocks ``first`` to ``last`` that hold no other
     motion (:data:`SEPARATE_MOTION`), and the other motions' spans [s]; ``(None, ())``
-    where there is none. ``coherent``: each block's variance the oscillation explains."""
-    amp = np.sqrt(np.clip(coherent, 0.0, None))
+    where there is none. ``var1``, ``var2``: each block's variance about its mean and
+    about the fitted oscillation. Two runs of moving blocks are separate motions only
+    where a block between them is quiet (its whole variance within the same tenth of the
+    largest oscillation): a motion that changes its frequency (a drive let go into the
+    free decay) is not coherent at one period across the change, but it is no rest."""
+    amp = np.sqrt(np.clip(var1 - var2, 0.0, None))
+    spread = np.sqrt(np.clip(var1, 0.0, None))
     largest = float(np.max(amp[first : last + 1]))
     n = t.size
     lo, hi = 0, n
@@ -639,7 +645,9 @@ def _separate_motions(
         j = i
         while j + 1 < moving.size and moving[j + 1]:
             j += 1
-        if j > i and float(np.max(amp[i : j + 1])) >= SEPARATE_MOTION * largest:
+        gap = spread[j + 1 : first] if j < first else spread[last + 1 : i]
+        quiet_between = gap.size > 0 and float(np.min(gap)) <= SEPARATE_MOTION * largest
+        if j > i and quiet_between and float(np.max(amp[i : j + 1])) >= SEPARATE_MOTION * largest:
             others.append((float(t[starts[i]]), float(t[min(n - 1, int(starts[j]) + size - 1)])))
             # the time between two motions holds the rig made ready again (a magnet
             # pulling the mass back to its hold): the rest beside this motion is taken
