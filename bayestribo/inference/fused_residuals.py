@@ -39,7 +39,7 @@ __all__ = ["residual_rows"]
 #: The files whose compiled functions :func:`_rows` calls, and a digest of each
 #: (see :data:`bayestribo.inference.fused.DEPENDS_ON`).
 DEPENDS_ON = {
-    "bayestribo/inference/fused.py": "e944541d7f7a7ef7",
+    "bayestribo/inference/fused.py": "ef7d9216c45d427a",
 }
 
 #: The residual of a point that cannot be evaluated (as :func:`bayestribo.inference.start.refine`).

@@ -39,7 +39,7 @@ __all__ = ["grouped_step", "independence_step"]
 #: The files whose compiled functions :func:`_step` calls, and a digest of each
 #: (see :data:`bayestribo.inference.fused.DEPENDS_ON`).
 DEPENDS_ON = {
-    "bayestribo/inference/fused.py": "e944541d7f7a7ef7",
+    "bayestribo/inference/fused.py": "ef7d9216c45d427a",
     "bayestribo/inference/moves.py": "3e955db75b8e9506",
 }
 
