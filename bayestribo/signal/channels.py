@@ -84,15 +84,22 @@ QUANTISED_WINDOW_STEPS = 1.5
 _SWAP_MIN_ANTICORRELATION = 0.3
 
 
-#: Factors a time column in a common unit needs to reach s (ms, µs).
-_TIME_FACTORS = (1.0, 1e-3, 1e-6)
+#: Factors a time column in a common unit needs to reach s (ms, µs; minutes, hours, and
+#: days: a spreadsheet's date-and-time serial counts days).
+_TIME_FACTORS = (1.0, 1e-3, 1e-6, 60.0, 3600.0, 86400.0)
 #: Factors a length column needs to reach m or m/s: below 1 a column in mm, cm or µm
 #: read as metres; above 1 a column in metres read as mm, cm or µm (a column of metres
 #: labelled mm is scaled by 1e-3 on reading and needs 1000 more); 10 and 0.1 for cm and
 #: mm mistaken for each other. Tried in this order (the common mistakes first).
 _LENGTH_FACTORS = (1.0, 1e-3, 1e-2, 1e-6, 1e3, 1e2, 1e6, 1e-1, 1e1)
 _UNIT_WORDS = {
-    TIME: {1e-3: "time in ms", 1e-6: "time in µs"},
+    TIME: {
+        1e-3: "time in ms",
+        1e-6: "time in µs",
+        60.0: "time in minutes",
+        3600.0: "time in hours",
+        86400.0: "time in days (a spreadsheet's date and time serial)",
+    },
     DISPLACEMENT: {
         1e-2: "displacement in cm",
         1e-3: "displacement in mm",
@@ -326,10 +333,16 @@ def _describe(reading: _Reading, frequency_Hz: float | None) -> str:
     return f"{words}{after}: scale={scale}"
 
 
-def _deciders(metadata: Mapping[str, object], present: list[str]) -> str:
-    """The sidecar keys and checks that would decide between readings."""
+def _deciders(metadata: Mapping[str, object], present: list[str], times: bool = False) -> str:
+    """The sidecar keys and checks that would decide between readings; ``times``: the
+    readings differ in the time's unit, which the rig's stated frequency decides (a
+    reading off it by more than a factor of 2 is not plausible)."""
     keys = [k for n in present for k in _SENSOR_KEYS[n] if _number(metadata, k) is None]
     said = []
+    if times and _number(metadata, "natural_frequency_Hz") is None:
+        said.append(
+            "give the rig's natural_frequency_Hz (--frequency), which decides the time's unit"
+        )
     if keys:
         said.append("state " + " or ".join(keys) + " in the sidecar")
     missing = [k for k in ("mass_kg", "load_N") if _number(metadata, k) is None]
@@ -360,7 +373,8 @@ def _advice(
     frequency = motion.frequency_Hz if motion is not None else None
     said = "likely " + "; or ".join(_describe(r, frequency) for r in fixes[:3])
     if len(fixes) > 1:
-        return f"{said}; the record does not tell which: {_deciders(metadata, present)}"
+        times = len({r.factors.get(TIME, 1.0) for r in fixes[:3]}) > 1
+        return f"{said}; the record does not tell which: {_deciders(metadata, present, times)}"
     ruled_out = [
         r
         for r in readings
