@@ -51,6 +51,7 @@ from bayestribo.io.columns import (
 )
 from bayestribo.io.comment_header import comment_header
 from bayestribo.io.encoder_counts import encoder_advice, encoder_columns, header_and_rows
+from bayestribo.io.footer import without_footer
 from bayestribo.io.gyroscope import gyroscope_columns
 from bayestribo.io.instruments import PREAMBLE_LINES, detect_export, read_export
 from bayestribo.io.repeated_header import without_repeated_header
@@ -1562,6 +1563,7 @@ def parse_lines(
         lines, where, columns, delimiter, decimal
     )
     rows = without_repeated_header(lines[header_lines:], lines[:header_lines], where)
+    rows = without_footer(rows, all_lines, delimiter, where)
     if not rows:
         raise RunFormatError("the file holds a header but no data rows", where)
 
