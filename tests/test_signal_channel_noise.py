@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import scipy.signal
 
-from bayestribo.signal import channel_noise
+from bayestribo.signal import channel_noise, increments
 from bayestribo.signal.channel_noise import recorded_noise, reused_noise
 from bayestribo.signal.increments import increment_draws, increment_weights
 from bayestribo.signal.spectrum import noise_spectrum
@@ -138,8 +139,8 @@ def test_an_accelerometers_draws_and_a_generator_seed_are_not_kept(calls):
 
 def test_the_recipes_used_longest_ago_are_let_go_first(calls, monkeypatch):
     y, yp = motion(0.03)
-    # room for two recipes of 60 replicates
-    monkeypatch.setattr(channel_noise, "KEEP_LIMIT", 2 * 60 * N)
+    # room for two recipes of 60 replicates, each its noise and the noise's derivative
+    monkeypatch.setattr(channel_noise, "KEEP_LIMIT", 2 * 2 * 60 * N)
     fresh = {seed: draws(y, yp, seed=seed) for seed in (1, 2, 3)}
     calls.clear()
     with reused_noise():
@@ -148,4 +149,44 @@ def test_the_recipes_used_longest_ago_are_let_go_first(calls, monkeypatch):
             np.testing.assert_array_equal(draws(y, yp, seed=seed), fresh[seed])
             assert len(calls) == drawn
         kept = channel_noise._KEPT.get()
-        assert sum(entry[2] for entry in kept.values()) <= 2 * 60 * N
+        assert sum(entry[2] for entry in kept.values()) <= 2 * 2 * 60 * N
+
+
+def test_the_derived_velocitys_noise_is_the_filter_of_the_noisy_motion():
+    # the derivative is linear: the motion's plus the noise's (kept with the noise) is
+    # the derivative of the noisy motion, to rounding, edges included
+    y, yp = motion(0.03)
+    got = draws(y, yp, sigma_y=2e-3)
+    filtered = increments._VelocityFilter(TAU, 9)
+    reference = increments._integrate_by_blas(0.5 * (y * y + yp * yp), EDGES, WEIGHTS)
+    noise = np.concatenate(list(recorded_noise(N, 2e-3, n_replicates=60, seed=1, block=25)))
+    noisy = y + noise
+    savgol = scipy.signal.savgol_filter(
+        noisy, 9, 5, deriv=1, delta=float(TAU[1] - TAU[0]), mode="interp", axis=-1
+    )
+    energy = 0.5 * (noisy * noisy + savgol * savgol)
+    want = increments._integrate_by_blas(energy, EDGES, WEIGHTS) - reference
+    np.testing.assert_allclose(filtered(noisy), savgol, rtol=0, atol=1e-12)
+    scale = np.max(np.abs(want))
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * scale)
+    assert np.std(got) > 1e-3 * scale  # the draws are not all zero
+
+
+def test_the_noises_derivative_is_kept_beside_it_and_given_again(calls, monkeypatch):
+    filtered: list[int] = []
+    original = increments._VelocityFilter.__call__
+
+    def counted(self, rows):
+        filtered.append(np.shape(rows)[0] if np.ndim(rows) == 2 else 1)
+        return original(self, rows)
+
+    monkeypatch.setattr(increments._VelocityFilter, "__call__", counted)
+    motions = [motion(0.03), motion(0.01)]
+    with reused_noise():
+        kept = [draws(*m) for m in motions]
+        # the first motion filters itself and every replicate, the second itself alone
+        assert filtered == [1, 25, 25, 10, 1]
+        assert len(calls) == 1
+    fresh = [draws(*m) for m in motions]
+    for a, b in zip(kept, fresh, strict=True):
+        np.testing.assert_array_equal(a, b)

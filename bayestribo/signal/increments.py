@@ -149,7 +149,7 @@ import scipy.signal
 from numpy.typing import NDArray
 from scipy.integrate import cumulative_trapezoid
 
-from bayestribo.signal.channel_noise import recorded_noise
+from bayestribo.signal.channel_noise import derived_noise, recorded_noise
 from bayestribo.signal.coarse import coarse_steps, quantised_increments
 from bayestribo.signal.decay import EnergyDecay, derivative_gain
 from bayestribo.signal.derivative_correlation import derived_velocity_correlation
@@ -389,27 +389,31 @@ def _integrate_by_blas(values: NDArray, edges: NDArray, weights: list[NDArray]) 
     )
 
 
-def _rederive(
-    tau: NDArray,
-    y_noisy: NDArray,
-    yp_noisy: NDArray,
-    y: NDArray,
-    yp: NDArray,
-    derived: str,
-    savgol_window: int | None,
-) -> tuple[NDArray, NDArray]:
-    """Repeat the derivation of the missing channel on perturbed recorded channels
-    (rows of replicates)."""
-    h = float(tau[1] - tau[0])
-    if derived == "velocity":
-        window = min(int(savgol_window or 7), tau.size - (1 - tau.size % 2))
-        yp_new = scipy.signal.savgol_filter(
-            y_noisy, window, 5, deriv=1, delta=h, mode="interp", axis=-1
+class _VelocityFilter:
+    """The Savitzky-Golay derivative that derives the velocity from the displacement
+    (rows of samples at ``tau``), and its settings as a key (``key``): linear in its
+    input, edges included (``mode="interp"`` fits each edge by least squares)."""
+
+    def __init__(self, tau: NDArray, savgol_window: int | None) -> None:
+        self.window = min(int(savgol_window or 7), tau.size - (1 - tau.size % 2))
+        self.step = float(tau[1] - tau[0])
+        self.key = ("savgol", self.window, 5, 1, self.step)
+
+    def __call__(self, y: NDArray) -> NDArray:
+        return scipy.signal.savgol_filter(
+            y, self.window, 5, deriv=1, delta=self.step, mode="interp", axis=-1
         )
-        return y_noisy, yp_new
-    # displacement integrated from the velocity: the equilibrium and its drift (a line
-    # in τ) are estimated from the record's own turning points, so the line the noise's
-    # integral holds goes with them and only its departure from a line remains
+
+
+def _integrated_displacement(
+    tau: NDArray, yp_noisy: NDArray, y: NDArray, yp: NDArray
+) -> tuple[NDArray, NDArray]:
+    """The derivation of a missing displacement repeated on a perturbed velocity (rows
+    of replicates): the displacement and the velocity.
+
+    The equilibrium and its drift (a line in τ) are estimated from the record's own
+    turning points, so the line the noise's integral holds goes with them and only its
+    departure from a line remains."""
     walk = cumulative_trapezoid(yp_noisy - yp, tau, initial=0.0, axis=-1)
     return y + detrended(walk, tau), yp_noisy
 
@@ -873,11 +877,32 @@ def increment_draws(
     draws = np.empty((n_replicates, edges.size - 1))
     integrated = velocity_draws is not None and derived == "displacement"
     first = 0
+    if derived == "velocity":
+        # the derivative is linear: the noisy motion's is the motion's plus the noise's,
+        # which is kept with the noise for the next motion (channel_noise.derived_noise)
+        slope = _VelocityFilter(tau, savgol_window)
+        motion_slope = slope(y)
+        for draw, draw_slope in derived_noise(
+            tau.size,
+            sigma_y,
+            n_replicates=n_replicates,
+            seed=seed,
+            block=_BLOCK,
+            derive=slope,
+            derive_key=slope.key,
+            spectrum=spectrum,
+            spectrum_scale=spectrum_scale,
+        ):
+            count = draw.shape[0]
+            energy = energy_of(y + draw, motion_slope + draw_slope)
+            draws[first : first + count] = integrate_increments(energy, edges, weights) - reference
+            first += count
+        return draws
     # the recorded channel's noise, the same whatever the motion (drawn once per
     # recipe inside bayestribo.signal.channel_noise.reused_noise)
     for draw in recorded_noise(
         tau.size,
-        sigma_y if derived == "velocity" else sigma_yp,
+        sigma_yp,
         n_replicates=n_replicates,
         seed=seed,
         block=_DRAW_BLOCK if integrated else _BLOCK,
@@ -886,10 +911,7 @@ def increment_draws(
         velocity_draws=velocity_draws if integrated else None,
     ):
         count = draw.shape[0]
-        if derived == "velocity":
-            yn, ypn = _rederive(tau, y + draw, yp, y, yp, derived, savgol_window)
-        else:
-            yn, ypn = _rederive(tau, y, yp + draw, y, yp, derived, savgol_window)
+        yn, ypn = _integrated_displacement(tau, yp + draw, y, yp)
         energy = energy_of(yn, ypn)
         draws[first : first + count] = integrate_increments(energy, edges, weights) - reference
         first += count
