@@ -18,7 +18,12 @@ Run (by hand; about 5 minutes a seed on a quiet machine)::
         timeout 3600 python benchmarks/auto_ratio.py --seeds 1 2 3
 
 Writes ``benchmarks/results/auto_ratio.json`` (``--output NAME``: ``NAME.json``).
-Real-corpus recordings whose files are not found are listed as absent.
+Real-corpus recordings whose files are not found are listed as absent. Side by side
+with another commit: run this file with ``PYTHONPATH`` on that commit's worktree at the
+same time (``--output`` another name; the package timed and its commit are recorded),
+then ``python benchmarks/auto_ratio.py --compare NEW.json OLD.json``: the ratios, CPU
+times and laws of both, and how far the posterior means of ``auto``'s answers moved (in
+posterior sds, the same seeds).
 """
 
 from __future__ import annotations
@@ -42,7 +47,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMB
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
-from _machine import provenance, write_results  # noqa: E402
+from _machine import commit, provenance, write_results  # noqa: E402
 
 EXTERNAL = ROOT.parent / "shared" / "external-data"
 
@@ -83,8 +88,9 @@ def commands(external: Path) -> tuple[dict[str, list[str]], list[str]]:
     return out, absent
 
 
-def run(argv: list[str]) -> tuple[int, float, str | None]:
-    """Exit code, process CPU seconds and the law of ``bayestribo fit ARGV --json``."""
+def run(argv: list[str]) -> tuple[int, float, str | None, dict[str, list[float]]]:
+    """Exit code, process CPU seconds, the law and each parameter's posterior mean and
+    sd of ``bayestribo fit ARGV --json``."""
     from bayestribo.cli.main import main
 
     stdout = io.StringIO()
@@ -96,10 +102,16 @@ def run(argv: list[str]) -> tuple[int, float, str | None]:
     ):
         code = main(["fit", *argv, "--json"])
     seconds = time.process_time() - cpu
-    law = None
-    with contextlib.suppress(ValueError, KeyError, TypeError):
-        law = json.loads(stdout.getvalue())["law"]
-    return int(code or 0), seconds, law
+    law, means = None, {}
+    with contextlib.suppress(ValueError, KeyError, TypeError, AttributeError):
+        out = json.loads(stdout.getvalue())
+        law = out["law"]
+        means = {
+            name: [float(p["mean"]), float(p["sd"])]
+            for name, p in (out.get("parameters") or {}).items()
+            if p.get("sampled") and p.get("mean") is not None and p.get("sd") is not None
+        }
+    return int(code or 0), seconds, law, means
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -109,7 +121,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--external", type=Path, default=EXTERNAL)
     parser.add_argument("--only", nargs="*", help="recordings to fit (default: all)")
     parser.add_argument("--output", default="auto_ratio")
+    parser.add_argument(
+        "--compare",
+        nargs=2,
+        type=Path,
+        metavar=("NEW", "OLD"),
+        help="compare two result files (no fitting): writes --output",
+    )
     args = parser.parse_args(argv)
+    if args.compare:
+        return compare(*args.compare, args.output)
     cmds, absent = commands(args.external)
     if args.only:
         cmds = {k: v for k, v in cmds.items() if k in args.only}
@@ -121,8 +142,8 @@ def main(argv: list[str] | None = None) -> int:
     fits: dict[str, list[dict[str, Any]]] = {name: [] for name in cmds}
     for seed in args.seeds:
         for name, cmd in cmds.items():
-            d_code, d_cpu, d_law = run([*cmd, "--seed", str(seed)])
-            a_code, a_cpu, a_law = run([*cmd, "--seed", str(seed), "--law", "auto"])
+            d_code, d_cpu, d_law, _ = run([*cmd, "--seed", str(seed)])
+            a_code, a_cpu, a_law, a_means = run([*cmd, "--seed", str(seed), "--law", "auto"])
             row = {
                 "seed": seed,
                 "default_exit": d_code,
@@ -131,6 +152,7 @@ def main(argv: list[str] | None = None) -> int:
                 "auto_exit": a_code,
                 "auto_cpu_seconds": a_cpu,
                 "auto_law": a_law,
+                "auto_posterior": a_means,
                 "ratio": a_cpu / d_cpu,
             }
             fits[name].append(row)
@@ -151,12 +173,17 @@ def main(argv: list[str] | None = None) -> int:
         for name, rows in fits.items()
         if rows
     }
+    import bayestribo
+
+    package = Path(bayestribo.__file__).resolve().parents[1]
     path = write_results(
         args.output,
         {
             **provenance(
                 "bayestribo.cli.main", {"seeds": args.seeds, "only": args.only}, load_start
             ),
+            "package": str(package),
+            "package_commit": commit(package, short=True),
             "commands": cmds,
             "absent": absent,
             "summary": summary,
@@ -170,6 +197,62 @@ def main(argv: list[str] | None = None) -> int:
             f"default {row['default_cpu_median']:.2f} s  auto {row['auto_cpu_median']:.2f} s  "
             f"{row['auto_laws']} exits {row['auto_exits']}"
         )
+    print(f"wrote {path}")
+    return 0
+
+
+def compare(new_path: Path, old_path: Path, output: str) -> int:
+    """Two result files side by side: per recording the median ratio and CPU of each,
+    the laws, and the largest shift of ``auto``'s posterior means (in the larger
+    posterior sd, per seed the same law in both)."""
+    new, old = (json.loads(Path(p).read_text()) for p in (new_path, old_path))
+    rows: dict[str, Any] = {}
+    for name, fits in new["fits"].items():
+        before = {r["seed"]: r for r in old["fits"].get(name, [])}
+        pairs = [(r, before[r["seed"]]) for r in fits if r["seed"] in before]
+        if not pairs:
+            continue
+        shifts, same = [], True
+        for a, b in pairs:
+            if a["auto_law"] != b["auto_law"]:
+                same = False
+                continue
+            for q, (mean, sd) in a.get("auto_posterior", {}).items():
+                if q in b.get("auto_posterior", {}):
+                    mean_b, sd_b = b["auto_posterior"][q]
+                    scale = max(sd, sd_b)
+                    if scale > 0:
+                        shifts.append((abs(mean - mean_b) / scale, q))
+        worst = max(shifts) if shifts else (0.0, None)
+        rows[name] = {
+            "new_ratio": statistics.median(a["ratio"] for a, _ in pairs),
+            "old_ratio": statistics.median(b["ratio"] for _, b in pairs),
+            "new_auto_cpu": statistics.median(a["auto_cpu_seconds"] for a, _ in pairs),
+            "old_auto_cpu": statistics.median(b["auto_cpu_seconds"] for _, b in pairs),
+            "new_default_cpu": statistics.median(a["default_cpu_seconds"] for a, _ in pairs),
+            "old_default_cpu": statistics.median(b["default_cpu_seconds"] for _, b in pairs),
+            "same_laws": same,
+            "laws": sorted({str(a["auto_law"]) for a, _ in pairs}),
+            "largest_shift_sd": worst[0],
+            "largest_shift_of": worst[1],
+            "seeds": [a["seed"] for a, _ in pairs],
+        }
+        r = rows[name]
+        print(
+            f"{name:<28} ratio {r['old_ratio']:5.1f}x -> {r['new_ratio']:5.1f}x  "
+            f"auto {r['old_auto_cpu']:5.2f} -> {r['new_auto_cpu']:5.2f} s  "
+            f"default {r['old_default_cpu']:4.2f} -> {r['new_default_cpu']:4.2f} s  "
+            f"{'same' if same else 'DIFFERENT'} laws {r['laws']}  "
+            f"shift {r['largest_shift_sd']:.2f} sd ({r['largest_shift_of']})"
+        )
+    path = write_results(
+        output,
+        {
+            "new": {"file": str(new_path), "package_commit": new.get("package_commit")},
+            "old": {"file": str(old_path), "package_commit": old.get("package_commit")},
+            "rows": rows,
+        },
+    )
     print(f"wrote {path}")
     return 0
 

@@ -10,7 +10,6 @@ and check (:func:`bayestribo.inference.auto.fit_auto`).
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import os
 import time
@@ -200,9 +199,10 @@ def fit(
     if isinstance(run, Run) and spec.restoring is not None:
         # a run already read takes the restoring force in its metadata
         run, reading = run.with_metadata(restoring=spec.restoring), spec.read_options
-    # law="auto": every law's second pass, and the first pass, take the recorded
-    # channel's Monte Carlo noise drawn once (bayestribo.signal.channel_noise)
-    with reused_noise() if auto else contextlib.nullcontext():
+    # the first pass and every second pass (each law's of law="auto", each boundary
+    # law's of the default law) take the recorded channel's Monte Carlo noise, and its
+    # derivative, made once (bayestribo.signal.channel_noise): the same numbers
+    with reused_noise():
         prepared = prepare(
             run,
             skip_oscillations=spec.skip_oscillations,

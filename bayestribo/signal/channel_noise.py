@@ -8,13 +8,13 @@ depends on the record and the recipe alone (samples, replicates, seed, noise lev
 spectrum), not on the motion it is added to: the second pass of every law compared on
 one record (:mod:`bayestribo.inference.reweight`) draws the same numbers.
 :func:`recorded_noise` gives them; inside :func:`reused_noise` (a comparison of laws,
-:func:`bayestribo.inference.comparison.compare_prepared`, and ``fit(..., law="auto")``
-from its first pass on) it keeps them, keyed by every input that determines them, so
-that each law's second pass finds them drawn by the first pass. The derivation is
-repeated on each motion as before, so every increment variance is the same, to the
-last bit, as drawing the noise again; what is saved is the drawing, the larger part for
+:func:`bayestribo.inference.comparison.compare_prepared`, and any ``fit`` from its first
+pass on: each law's second pass under ``law="auto"``, each boundary law's of the default
+law) it keeps them, keyed by every input that determines them, so that each second pass
+finds them drawn by the first pass. Every increment variance is the same, to the last
+bit, as drawing the noise again; what is saved is the drawing, the larger part for
 coloured noise (300 replicates of 10,822 samples shaped in frequency on HarmOsc3: 0.39
-of the 0.59 s a second pass took; the rest is the derivative filter, 85 samples wide).
+of the 0.59 s a second pass took; the rest was the derivative filter, 85 samples wide).
 Inside one, at most :data:`KEEP_LIMIT` floats are kept in all, the recipes used longest
 ago let go first (a comparison's laws use one recipe in a row, the verdict's frame and
 each half of the motion theirs after it); outside, nothing is kept.
