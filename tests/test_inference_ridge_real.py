@@ -5,6 +5,8 @@ The AppStat2020 HarmOsc2 recording (position only, arbitrary unit) up to 18.30 s
 default law's seed 1 stopped unconverged there (its ridge's tail left to the DE moves
 a quarter of the steps); the move is taken out when τ shows it does not mix
 (``SamplerSettings.independence_limit``), and the fit converges as main's sampler did.
+Six seeds are fitted: every one converges, and on those where the move was taken out
+the draws kept are all of the DE moves.
 """
 
 from __future__ import annotations
@@ -37,12 +39,26 @@ def _first_half() -> Run:
     )
 
 
+#: Seeds of the default fit tried: the move's failure to mix is a matter of the chain
+#: (seeds 1 and 5 took it out at one commit; seed 5 alone after the derived velocity's
+#: noise was filtered as the motion's plus the noise's, which moves the last digits).
+SEEDS = (1, 2, 3, 4, 5, 6)
+
+
 def test_on_the_ridge_the_move_is_taken_out_and_the_fit_converges():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        result = fit(_first_half(), seed=1)
-    d = result.diagnostics
-    assert result.converged, d["reasons"]
-    assert d["independence_dropped"] is not None and d["independence_weight"] == 0.0
-    assert d["burn"] >= d["independence_dropped"]
-    assert d["ess_min"] >= 1000
+    dropped = 0
+    for seed in SEEDS:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            result = fit(_first_half(), seed=seed)
+        d = result.diagnostics
+        # converged whether or not the move was taken out
+        assert result.converged, (seed, d["reasons"])
+        assert d["ess_min"] >= 1000
+        if d["independence_dropped"] is None:
+            continue
+        dropped += 1
+        assert d["independence_weight"] == 0.0
+        assert d["burn"] >= d["independence_dropped"]
+    # the ridge does show: the move is taken out on some of the seeds
+    assert dropped >= 1

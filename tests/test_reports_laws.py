@@ -64,9 +64,12 @@ def test_friction_share_per_draw_is_the_papers_closed_form(paper_fit):
     expected = 4 * x_c * a / (4 * x_c * a + 2 * math.pi * zeta * a**2)
     assert share.draws.size == zeta.size  # every draw taken
     assert np.median(share.draws) == pytest.approx(np.median(expected), rel=1e-9)
-    # friction's share grows as the swing shrinks
+    # friction's share grows as the swing shrinks: in every draw with a drag, so at the
+    # interval's lower end (the median may sit on the share of 1 of the draws with ζ = 0,
+    # half of them where the boundary law holds, at both swings)
     rows = laws.share_rows(paper_fit)
-    assert rows["smallest swing"].median > rows["largest swing"].median
+    assert rows["smallest swing"].median >= rows["largest swing"].median
+    assert rows["smallest swing"].interval()[0] > rows["largest swing"].interval()[0]
     assert rows["largest swing"].dominant in ("friction", "drag (viscous damping)")
 
 
@@ -125,4 +128,5 @@ def test_a_share_reads_in_the_digits_its_interval_supports_as_its_record_keeps_i
         text = share.text()
         assert text == interval_text(median, low, high)
         shown = [t.strip("[],") for t in text.split()]
-        assert len(set(shown)) == 3 or low == high, text
+        # numbers that differ print differently (a median on an end prints as it)
+        assert len(set(shown)) == len({median, low, high}), text
