@@ -41,6 +41,7 @@ if TYPE_CHECKING:  # defined for each law after this text (see the module notes)
         geometric_rest,
         outside_domain,
         swing_ends,
+        swing_guess,
     )
     from bayestribo.model.laws._creep import overdamped_end
 
@@ -962,7 +963,11 @@ def swing_drops(coef: NDArray, swing: NDArray) -> NDArray:
     aux = (_TABLES, _OFFSETS, np.empty((4, size)))
     out = np.empty((coef.shape[0], swing.size))
     for p in range(coef.shape[0]):
+        # each swing started from the ones solved before on the row (swing_guess)
+        a1 = s1 = a2 = s2 = math.nan
         for j in range(swing.size):
-            a_s, a_e = swing_ends(swing[j], coef[p], aux)
+            guess, slope = swing_guess(swing[j], a1, s1, a2, s2)
+            a_s, a_e = swing_ends(swing[j], coef[p], aux, guess, slope)
+            a2, s2, a1, s1 = a1, s1, swing[j], a_s
             out[p, j] = a_s - a_e
     return out

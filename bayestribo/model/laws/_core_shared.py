@@ -86,17 +86,30 @@ def finish(out: NDArray, tau: NDArray, j: int, c_end: float, total: float, tau_e
 
 
 @numba.njit(cache=True, error_model="numpy", fastmath=_FAST)
-def swing_ends(target: float, c: NDArray, aux: tuple) -> tuple[float, float]:
+def swing_ends(
+    target: float, c: NDArray, aux: tuple, guess: float, slope: float
+) -> tuple[float, float]:
     """The turning points (a_s, a_e) of the half cycle from rest at a_s whose swing
     ½(a_s + a_e) is ``target`` (static friction ignored), a_e from the template's
     ``half_cycle_end(a_s, c, aux)``; NaN for both where no such half cycle exists.
 
-    The secant method on ½(a_s + a_e(a_s)) = A from the fixed point
-    a_s = A + ½ drop(A) (from 2A where the swing's own start does not move)."""
-    e0 = half_cycle_end(target, c, aux)
-    x0 = 2.0 * target if not math.isfinite(e0) else target + 0.5 * (target - e0)
-    f0 = 0.5 * (x0 + half_cycle_end(x0, c, aux)) - target
-    x1 = x0 - f0
+    The secant method on ½(a_s + a_e(a_s)) = A, to 1e-14 of A, from ``guess`` with
+    its first step along ``slope`` ≈ da_s/dA (:func:`swing_guess`, from the swings
+    solved before: one half cycle fewer, and the next ones nearer), or where they are
+    NaN from the fixed point a_s = A + ½ drop(A) (from 2A where the swing's own start
+    does not move)."""
+    x0 = guess
+    e0 = half_cycle_end(x0, c, aux) if math.isfinite(guess) else math.nan
+    if math.isfinite(e0) and math.isfinite(slope):
+        f0 = 0.5 * (x0 + e0) - target
+        if abs(f0) <= 1e-14 * target:
+            return x0, e0
+        x1 = x0 - f0 * slope
+    else:
+        e0 = half_cycle_end(target, c, aux)
+        x0 = 2.0 * target if not math.isfinite(e0) else target + 0.5 * (target - e0)
+        f0 = 0.5 * (x0 + half_cycle_end(x0, c, aux)) - target
+        x1 = x0 - f0
     for _ in range(40):
         end = half_cycle_end(x1, c, aux)
         if not math.isfinite(end):
@@ -112,3 +125,18 @@ def swing_ends(target: float, c: NDArray, aux: tuple) -> tuple[float, float]:
         x0, f0 = x1, f1
         x1 = x2
     return math.nan, math.nan
+
+
+@numba.njit(cache=True, inline="always", error_model="numpy", fastmath=_FAST)
+def swing_guess(target: float, a1: float, s1: float, a2: float, s2: float) -> tuple[float, float]:
+    """A start ``a_s`` for the swing ``target`` and the slope da_s/dA there, from the
+    swings solved before on the same row: ``a1`` -> ``s1`` (the last one) and ``a2``
+    -> ``s2`` (the one before; NaN where there is none). From two, the line through
+    them; from one, the half drop in proportion to the swing; none (or a start NaN):
+    NaN, the secant's own fixed point (:func:`swing_ends`)."""
+    if not (math.isfinite(s1) and a1 > 0.0):
+        return math.nan, math.nan
+    if math.isfinite(s2) and a2 != a1:
+        slope = (s1 - s2) / (a1 - a2)
+        return s1 + slope * (target - a1), slope
+    return target * (s1 / a1), s1 / a1

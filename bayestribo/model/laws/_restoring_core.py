@@ -43,6 +43,7 @@ if TYPE_CHECKING:  # defined for each law and restoring force after this text
         geometric_rest,
         outside_domain,
         swing_ends,
+        swing_guess,
     )
 
     def drag(w: float, c: NDArray) -> float: ...
@@ -422,7 +423,11 @@ def swing_drops(coef: NDArray, k: NDArray, swing: NDArray, steps: int) -> NDArra
     aux = (k, math.pi / steps)
     out = np.empty((coef.shape[0], swing.size))
     for p in range(coef.shape[0]):
+        # each swing started from the ones solved before on the row (swing_guess)
+        a1 = s1 = a2 = s2 = math.nan
         for j in range(swing.size):
-            a_s, a_e = swing_ends(swing[j], coef[p], aux)
+            guess, slope = swing_guess(swing[j], a1, s1, a2, s2)
+            a_s, a_e = swing_ends(swing[j], coef[p], aux, guess, slope)
+            a2, s2, a1, s1 = a1, s1, swing[j], a_s
             out[p, j] = math.nan if math.isnan(a_s) else potential(a_s, k) - potential(a_e, k)
     return out
