@@ -53,7 +53,9 @@ EXTERNAL = ROOT.parent / "shared" / "external-data"
 
 
 def _corpus_module() -> Any:
-    spec = importlib.util.spec_from_file_location("_real_corpus", ROOT / "tests" / "_real_corpus.py")
+    spec = importlib.util.spec_from_file_location(
+        "_real_corpus", ROOT / "tests" / "_real_corpus.py"
+    )
     module = importlib.util.module_from_spec(spec)
     assert spec.loader is not None
     spec.loader.exec_module(module)
