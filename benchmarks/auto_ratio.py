@@ -23,7 +23,9 @@ with another commit: run this file with ``PYTHONPATH`` on that commit's worktree
 same time (``--output`` another name; the package timed and its commit are recorded),
 then ``python benchmarks/auto_ratio.py --compare NEW.json OLD.json``: the ratios, CPU
 times and laws of both, and how far the posterior means of ``auto``'s answers moved (in
-posterior sds, the same seeds).
+posterior sds, the same seeds). ``--every-law``: each candidate law alone
+(``--law NAME``) against the default fit instead (issue 42's second goal, each within
+3x and converged), on the same recordings.
 """
 
 from __future__ import annotations
@@ -92,7 +94,8 @@ def commands(external: Path) -> tuple[dict[str, list[str]], list[str]]:
 
 def run(argv: list[str]) -> tuple[int, float, str | None, dict[str, list[float]]]:
     """Exit code, process CPU seconds, the law and each parameter's posterior mean and
-    sd of ``bayestribo fit ARGV --json``."""
+    sd of ``bayestribo fit ARGV --json`` (and ``"converged"``: the sampler's verdict,
+    under the key ``"_converged"``)."""
     from bayestribo.cli.main import main
 
     stdout = io.StringIO()
@@ -113,6 +116,7 @@ def run(argv: list[str]) -> tuple[int, float, str | None, dict[str, list[float]]
             for name, p in (out.get("parameters") or {}).items()
             if p.get("sampled") and p.get("mean") is not None and p.get("sd") is not None
         }
+        means["_converged"] = bool(out["diagnostics"]["converged"])
     return int(code or 0), seconds, law, means
 
 
@@ -123,6 +127,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--external", type=Path, default=EXTERNAL)
     parser.add_argument("--only", nargs="*", help="recordings to fit (default: all)")
     parser.add_argument("--output", default="auto_ratio")
+    parser.add_argument(
+        "--every-law",
+        action="store_true",
+        help="time every candidate law alone against the default fit instead of auto "
+        "(issue 42's second goal: each within 3x, converged)",
+    )
     parser.add_argument(
         "--compare",
         nargs=2,
@@ -137,6 +147,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.only:
         cmds = {k: v for k, v in cmds.items() if k in args.only}
     load_start = os.getloadavg()
+    if args.every_law:
+        return every_law(cmds, args.seeds, args.output, load_start)
     for name, cmd in cmds.items():  # warm: every kernel compiled or loaded
         run([*cmd, "--seed", "99"])
         run([*cmd, "--seed", "99", "--law", "auto"])
@@ -146,6 +158,7 @@ def main(argv: list[str] | None = None) -> int:
         for name, cmd in cmds.items():
             d_code, d_cpu, d_law, _ = run([*cmd, "--seed", str(seed)])
             a_code, a_cpu, a_law, a_means = run([*cmd, "--seed", str(seed), "--law", "auto"])
+            a_means.pop("_converged", None)
             row = {
                 "seed": seed,
                 "default_exit": d_code,
@@ -199,6 +212,72 @@ def main(argv: list[str] | None = None) -> int:
             f"default {row['default_cpu_median']:.2f} s  auto {row['auto_cpu_median']:.2f} s  "
             f"{row['auto_laws']} exits {row['auto_exits']}"
         )
+    print(f"wrote {path}")
+    return 0
+
+
+def every_law(cmds: dict[str, list[str]], seeds: list[int], output: str, load_start: tuple) -> int:
+    """Every candidate law alone (``--law NAME``) against the default fit, per
+    recording and seed: CPU, exit code, converged, and the ratio to the default fit."""
+    import bayestribo
+    from bayestribo.model.laws.candidates import candidate_laws
+
+    laws = candidate_laws()
+    for name, cmd in cmds.items():  # warm: every law's kernels compiled or loaded
+        run([*cmd, "--seed", "99"])
+        for law in laws:
+            run([*cmd, "--seed", "99", "--law", law])
+        print(f"warm {name}", flush=True)
+    rows: dict[str, list[dict[str, Any]]] = {name: [] for name in cmds}
+    for seed in seeds:
+        for name, cmd in cmds.items():
+            _, d_cpu, _, _ = run([*cmd, "--seed", str(seed)])
+            for law in laws:
+                code, cpu, _, means = run([*cmd, "--seed", str(seed), "--law", law])
+                converged = means.get("_converged")
+                rows[name].append(
+                    {
+                        "seed": seed,
+                        "law": law,
+                        "cpu_seconds": cpu,
+                        "default_cpu_seconds": d_cpu,
+                        "ratio": cpu / d_cpu,
+                        "exit": code,
+                        "converged": converged,
+                    }
+                )
+                print(
+                    f"{name:<28} seed {seed} {law:<28} {cpu:6.2f} s  {cpu / d_cpu:5.1f}x "
+                    f"(default {d_cpu:.2f} s) exit {code} converged {converged}",
+                    flush=True,
+                )
+    summary = {}
+    for name, fits in rows.items():
+        over = sorted({r["law"] for r in fits if r["ratio"] > 3.0})
+        unconverged = sorted({r["law"] for r in fits if r["converged"] is False})
+        summary[name] = {
+            "worst_ratio": max(r["ratio"] for r in fits),
+            "worst_law": max(fits, key=lambda r: r["ratio"])["law"],
+            "over_3x": over,
+            "not_converged": unconverged,
+        }
+        print(
+            f"{name:<28} worst {summary[name]['worst_ratio']:5.1f}x "
+            f"({summary[name]['worst_law']}); over 3x: {over}; not converged: {unconverged}"
+        )
+    package = Path(bayestribo.__file__).resolve().parents[1]
+    path = write_results(
+        output,
+        {
+            **provenance("bayestribo.cli.main", {"seeds": seeds, "every_law": True}, load_start),
+            "package": str(package),
+            "package_commit": commit(package, short=True),
+            "commands": cmds,
+            "laws": list(laws),
+            "summary": summary,
+            "fits": rows,
+        },
+    )
     print(f"wrote {path}")
     return 0
 
