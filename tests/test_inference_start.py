@@ -96,3 +96,42 @@ def test_a_viscous_decay_whose_peak_estimate_has_negative_friction_starts_at_the
     values = dict(zip(post.names, theta, strict=True))
     assert values["zeta"] == pytest.approx(0.002, rel=0.01)
     assert values["mu_k"] < 1e-4  # against 0.03 in the paper: none to speak of
+
+
+def test_an_optimum_a_rounding_above_its_bound_is_on_it(monkeypatch):
+    """An optimum of μ_k that the least squares leave at 1.7e-21 above its bound of zero
+    (a viscous record: a seismometer's, after a change in the last digits of its
+    variances) is on the bound: its Laplace covariance is the one taken at the bound,
+    not the singular matrix's fallback (1e-3 of each value), which started the walkers
+    in a ball so small that the sampler took three times the steps."""
+    from bayestribo.inference import start
+    from tests._sim import simulate_flat
+
+    run = simulate_flat(zeta=0.02, mu_k=0.0, mu_s=0.0, load_N=1.0, motion_duration_s=2.0, seed=3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        prepared = prepare(run, seed=3)
+    posterior = build_posterior(prepared.data)
+    theta, _, _ = maximum_a_posteriori(posterior, prepared.decay)
+    k = posterior.names.index("mu_k")
+    assert theta[k] == 0.0  # this record's optimum is on the bound
+    _, cov_on = refine(posterior, theta)
+
+    real = start._least_squares
+
+    def a_rounding_above(residuals, jacobian, n, method):
+        x, fun, jac = real(residuals, jacobian, n, method)
+        # the optimiser's answer moved a rounding's worth into the support
+        free = [i for i, name in enumerate(posterior.names) if name != "mu_s_ratio"]
+        j = free.index(k)
+        scale = max(abs(theta[k]), 1e-3) * 1e-3
+        x = x.copy()
+        x[j] = (1.7e-21 - theta[k]) / scale
+        return x, fun, jac
+
+    monkeypatch.setattr(start, "_least_squares", a_rounding_above)
+    theta_near, cov_near = refine(posterior, theta)
+    assert theta_near[k] == 0.0
+    sd_on, sd_near = np.sqrt(np.diag(cov_on)), np.sqrt(np.diag(cov_near))
+    z = posterior.names.index("zeta")
+    assert sd_near[z] == pytest.approx(sd_on[z], rel=1e-6)

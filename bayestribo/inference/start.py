@@ -352,6 +352,16 @@ def _rounds(
     return best
 
 
+#: How near a bound, in units of each coordinate's step of the least squares (1e-3 of
+#: its start, at least 1e-6), an optimum is on it: the least squares' own tolerance on
+#: the step, 1e-8. An optimum of μ_k at 1.7e-21 above its bound of zero (a viscous
+#: seismometer record, after a change in the last digits of its increments' variances)
+#: was taken off the bound: the Jacobian's column of a friction a step of 1e-14 does
+#: not move made the Laplace covariance singular, and its fallback (1e-3 of each value)
+#: started the walkers in a ball so small that the sampler took three times the steps.
+BOUND_TOUCH = 1e-8
+
+
 def refine(
     posterior: Posterior,
     theta: NDArray,
@@ -484,12 +494,15 @@ def refine(
     method = "lm" if size + len(gaussian) + bounded.size >= len(free) else "trf"
     x, fun, jac = _least_squares(residuals, jacobian, len(free), method)
     found = theta[free] + x * scale
-    on_bound = (found <= low) | (found >= high)
+    # within the least squares' own tolerance of a bound is on it (module constant)
+    touch = BOUND_TOUCH * scale
+    at_low, at_high = found <= low + touch, found >= high - touch
+    on_bound = at_low | at_high
     if np.any(on_bound):
         # stopped on or beyond a bound: the optimum is on it; its Jacobian is taken
         # there, with the differences stepping into the support (the optimiser's last
         # one may be from beyond the bound, where the residuals do not change)
-        found = np.clip(found, low, high)
+        found = np.where(at_low, low, np.where(at_high, high, found))
         u = (found - theta[free]) / scale
         fun = residual_rows(u[None])[0]
         jac = jacobian(u, np.where(found >= high, -1.0, 1.0))
