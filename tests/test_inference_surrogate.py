@@ -328,7 +328,10 @@ def test_the_dissipation_is_integrated_only_at_the_swings_the_interpolation_miss
     out = dissipation._swing_dissipation(law, swings, values, ref)
     calls_made = list(calls)
     want = rough(swings, values, ref)
-    np.testing.assert_array_equal(out[:, -1], want[:, -1])
+    # integrated: the half cycle of each swing is solved to 1e-14 of it, each from the
+    # swings solved before on its row (model/laws/_core_shared.py swing_guess), so the
+    # swing integrated alone and among the others agree to that, not to the bit
+    np.testing.assert_allclose(out[:, -1], want[:, -1], rtol=1e-12, atol=0.0)
     sd = want[:, :-1].std(axis=0)
     assert np.max(np.abs(out[:, :-1] - want[:, :-1]) / sd) < 1e-2
     assert not np.array_equal(out[:, :-1], want[:, :-1])  # interpolated there
