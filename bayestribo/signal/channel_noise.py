@@ -166,13 +166,10 @@ def derived_noise(
         yield from zip(noise, found, strict=True)
         return
     blocks = tuple(noise)
-    derived = _keep(derived_key, spectrum, tuple(derive(b) for b in blocks), _blocks_size(blocks))
+    derived = _keep(
+        derived_key, spectrum, tuple(derive(b) for b in blocks), n_replicates * n_samples
+    )
     yield from zip(blocks, derived, strict=True)
-
-
-def _blocks_size(blocks: tuple[NDArray, ...]) -> int:
-    """Floats in ``blocks``."""
-    return sum(int(b.size) for b in blocks)
 
 
 def _recipe(
@@ -204,7 +201,7 @@ def _recipe(
     )
 
 
-def _found(key: tuple | None) -> tuple | None:
+def _found(key: tuple | None) -> tuple[NDArray, ...] | None:
     """The blocks kept under ``key``, made the most recently used (the first to be let
     go is the oldest), or None."""
     kept = _KEPT.get()
@@ -214,15 +211,15 @@ def _found(key: tuple | None) -> tuple | None:
     return entry[1]
 
 
-def _keep(key: tuple, spectrum: NoiseSpectrum | None, blocks: tuple, size: int) -> tuple:
-    """Keep ``blocks`` (arrays, or tuples of arrays; ``size`` floats in all) under
-    ``key``, read-only, letting go of the oldest entries to stay within
-    :data:`KEEP_LIMIT`."""
+def _keep(
+    key: tuple, spectrum: NoiseSpectrum | None, blocks: tuple[NDArray, ...], size: int
+) -> tuple[NDArray, ...]:
+    """Keep ``blocks`` (``size`` floats in all) under ``key``, read-only, letting go of
+    the oldest entries to stay within :data:`KEEP_LIMIT`."""
     kept = _KEPT.get()
     assert kept is not None
     for b in blocks:
-        for array in b if isinstance(b, tuple) else (b,):
-            array.flags.writeable = False
+        b.flags.writeable = False
     while kept and sum(entry[2] for entry in kept.values()) + size > KEEP_LIMIT:
         del kept[next(iter(kept))]
     kept[key] = (spectrum, blocks, size)
