@@ -63,6 +63,12 @@ if TYPE_CHECKING:  # defined for each law after this text (see the module notes)
 #: cap of half cycles past the record from the averaged flow of those -steps half
 #: cycles, within _AVERAGED_TOLERANCE of what summing them would give.
 DEFAULT_STEPS = 0
+#: The error of Π, relative to Π(0), that the steps chosen per half cycle (DEFAULT_STEPS)
+#: are set for: measured against 1024 fixed steps, 3e-10 to 5e-9 over the drags and
+#: frictions of tests/test_model_laws_tolerance.py. A caller may allow more
+#: (:meth:`bayestribo.model.laws.Law.pi_grid`'s ``tolerance``, the integrator's
+#: ``error_weight`` = tolerance / BASE_ERROR): the steps fall as its fourth root.
+BASE_ERROR = 2e-9
 # Steps ≈ _STEP_SCALE √ζ_e keep Π within ~2e-9 of Π(0): the error of the scheme measured
 # against the closed form grows as ζ² h⁴ (1.4e-9 at ζ = 0.01 and 48 steps; 2.7e-8 at
 # ζ = 0.2 and 96 steps), so h ∝ ζ^(-1/2) holds it constant.
@@ -122,16 +128,17 @@ def arc_integral(t: float, r: float, mu: float, theta0: float) -> float:
 
 
 @numba.njit(cache=True, inline="always", error_model="numpy", fastmath=_FAST)
-def choose_steps(r: float, c: NDArray, weight: float) -> int:
+def choose_steps(r: float, c: NDArray, weight: float, tail: bool = False) -> int:
     """Index in LADDER of the steps for a half cycle of amplitude r about its centre:
     from the drag's equivalent damping at the peak speed, ζ_e = g(r)/(2r). ``weight``
-    >= 1 is how many times the scheme's usual relative error the half cycle may have
-    (past the record), which divides the steps by its fourth root."""
+    >= 1 is how many times the scheme's usual relative error the half cycle may have,
+    which divides the steps by its fourth root (the error ∝ ζ_e² h⁴); never fewer than
+    _MIN_STEPS, but in a half cycle of the ``tail`` past the record given a weight."""
     zeta_e = drag(r, c) / (2.0 * r) if r > 0.0 else 0.0
     want = _STEP_SCALE * math.sqrt(max(zeta_e, 0.0))
     if weight > 1.0:
         want /= math.sqrt(math.sqrt(weight))
-    else:
+    if not (tail and weight > 1.0):
         want = max(want, _MIN_STEPS)
     for i in range(LADDER.size):
         if LADDER[i] >= want:
@@ -633,6 +640,7 @@ def one(
     offsets: NDArray,
     out: NDArray,
     creep_end: float = math.inf,
+    error_weight: float = 1.0,
 ) -> int:
     n_t = tau.size
     # fixed steps (either sign; see DEFAULT_STEPS), and whether the sum past the record
@@ -697,13 +705,14 @@ def one(
                 steps = fixed
                 table = tables if theta0 == 0.0 else nodes(theta0, steps)
             else:
-                weight = 1.0
+                weight = error_weight
                 past = j >= n_t and math.isinf(tau_end)
-                if past and frictionless and mu == 0.0 and 0.0 < last < before:
+                tail = past and frictionless and mu == 0.0 and 0.0 < last < before
+                if tail:
                     # past the record only the sum counts: each half cycle may be off by
                     # its share of it, over the ~1/(1 - ρ) half cycles that remain
-                    weight = _TAIL_SHARE * (1.0 - last / before) * c_start / last
-                k = choose_steps(r, c, weight)
+                    weight *= _TAIL_SHARE * (1.0 - last / before) * c_start / last
+                k = choose_steps(r, c, weight, tail)
                 steps = LADDER[k]
                 if theta0 == 0.0:
                     table = tables[:, offsets[k] : offsets[k] + 2 * steps + 1]
@@ -845,6 +854,7 @@ def grid(
     tau_end: float,
     steps: int,
     creep_end: float = math.inf,
+    error_weight: float = 1.0,
 ) -> tuple[NDArray, NDArray]:
     out = np.empty((y0.size, tau.size))
     status = np.zeros(y0.size, dtype=np.int64)
@@ -855,7 +865,18 @@ def grid(
         tables, offsets = _TABLES, _OFFSETS
     for p in range(y0.size):
         status[p] = one(
-            tau, y0[p], coef[p], ratio[p], yp0, tau_end, steps, tables, offsets, out[p], creep_end
+            tau,
+            y0[p],
+            coef[p],
+            ratio[p],
+            yp0,
+            tau_end,
+            steps,
+            tables,
+            offsets,
+            out[p],
+            creep_end,
+            error_weight,
         )
     return out, status
 

@@ -81,6 +81,7 @@ from bayestribo.model.laws import _core, _core_shared, _creep, _ladder
 from bayestribo.model.laws.cache import CACHE_ENV, law_cache_dir, load_module
 
 __all__ = [
+    "BASE_ERROR",
     "CACHE_ENV",
     "DEFAULT_STEPS",
     "LADDER",
@@ -90,6 +91,7 @@ __all__ = [
 ]
 
 DEFAULT_STEPS = _core.DEFAULT_STEPS
+BASE_ERROR = _core.BASE_ERROR
 LADDER = _core.LADDER
 
 
@@ -241,11 +243,13 @@ def make_integrator(
     Returns
     -------
     grid : callable
-        ``grid(tau, y0, coef, ratio, yp0, tau_end, steps, creep_end=inf) -> (Π,
-        status)``: ``tau`` sorted (T,), ``y0`` (P,), ``coef`` (P, K), ``ratio`` (P,)
-        the static to kinetic friction ratio, ``steps`` 0 (chosen per half cycle) or
-        fixed (see the module notes for its sign), ``creep_end`` where a creep ends
-        below ``tau_end`` (:meth:`bayestribo.model.laws.Law.pi_grid`); Π of shape (P,
+        ``grid(tau, y0, coef, ratio, yp0, tau_end, steps, creep_end=inf,
+        error_weight=1.0) -> (Π, status)``: ``tau`` sorted (T,), ``y0`` (P,), ``coef``
+        (P, K), ``ratio`` (P,) the static to kinetic friction ratio, ``steps`` 0 (chosen
+        per half cycle) or fixed (see the module notes for its sign), ``creep_end``
+        where a creep ends below ``tau_end``, ``error_weight`` >= 1 how many times the
+        scheme's usual error Π may have where the steps are chosen
+        (:meth:`bayestribo.model.laws.Law.pi_grid`'s ``tolerance``); Π of shape (P,
         T); status (P,) 0 when the motion could be
         integrated, 1 when the drag stops a half cycle before it turns (an overdamped
         arc: that row of Π is NaN).

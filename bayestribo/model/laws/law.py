@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bayestribo.model.laws.base import TERMS, Parameter, PhysicalScale, Term, get_term
-from bayestribo.model.laws.integrator import DEFAULT_STEPS, make_integrator
+from bayestribo.model.laws.integrator import BASE_ERROR, DEFAULT_STEPS, make_integrator
 from bayestribo.model.laws.transforms import SamplingTransform, transform_for
 
 if TYPE_CHECKING:
@@ -282,6 +282,7 @@ class Law:
         method: str = "auto",
         steps: int = DEFAULT_STEPS,
         creep_end: float | None = None,
+        tolerance: float | None = None,
     ) -> NDArray:
         """Π(τ) = ∫_τ^T E on sorted ``tau`` for P parameter sets, shape (P, T).
 
@@ -320,6 +321,17 @@ class Law:
             ``tau_end``: the half cycles run to the end of motion as without it, and
             the closed form and a law on a nonlinear restoring force (no creep) ignore
             it.
+        tolerance : float, optional
+            The error of Π allowed where the integrator chooses its steps (``steps``
+            0), as a fraction of Π(0): the steps fall as its fourth root (the scheme's
+            error ∝ ζ_e² h⁴), never below 32 a half cycle inside the record. ``None``
+            or anything below :data:`~bayestribo.model.laws.integrator.BASE_ERROR`
+            (2e-9): the scheme's usual steps. Measured against fixed steps, the error is
+            within a few times the tolerance (``tests/test_model_laws_tolerance.py``).
+            A likelihood sets it from its increments' noise
+            (:attr:`bayestribo.inference.likelihood.PiLikelihood.integrator_tolerance`).
+            The closed forms and the laws on a nonlinear restoring force (fixed steps)
+            ignore it.
 
         Returns
         -------
@@ -335,6 +347,9 @@ class Law:
         creep = math.inf if creep_end is None else float(creep_end)
         if math.isnan(creep):
             raise ValueError("creep_end must be a time or None, got NaN")
+        weight = 1.0 if tolerance is None else float(tolerance) / BASE_ERROR
+        if not weight > 0.0 or math.isinf(weight):
+            raise ValueError(f"tolerance must be a positive number or None, got {tolerance!r}")
         if method not in ("auto", "closed", "integrate"):
             raise ValueError(f"method must be 'auto', 'closed' or 'integrate', got {method!r}")
         if method == "closed" and not self.closed_form:
@@ -358,7 +373,7 @@ class Law:
         # other processes of a loaded one, 10x slower (tests on two workers, campaigns)
         grid, _, _ = make_integrator(*self._layout[0])
         ratio = self.static_ratio(vals, size)
-        pi, _ = grid(t, y, coef, ratio, float(yp0), end, int(steps), creep)
+        pi, _ = grid(t, y, coef, ratio, float(yp0), end, int(steps), creep, max(weight, 1.0))
         return pi
 
     def turning_points(
