@@ -111,7 +111,7 @@ _LOG_2PI = math.log(2.0 * math.pi)
 #: Legendre terms (degrees 0 .. SHAPE_TERMS - 1) of the shape discrepancy.
 SHAPE_TERMS = 4
 #: The integrator's error allowed in Π (a law without a closed form), as a share of the
-#: smallest noise sd of the increments (:attr:`PiLikelihood.integrator_tolerance`).
+#: smallest noise sd of the increments over √m (:attr:`PiLikelihood.integrator_tolerance`).
 INTEGRATOR_SHARE = 1e-2
 #: Linear nuisances every likelihood has: the equilibrium's offset δ₀ and drift δ₁,
 #: and the noise level's error (standard normal).
@@ -139,10 +139,12 @@ class PiLikelihood:
         and Coulomb friction).
     steps : int
         Runge-Kutta steps per half cycle of the law's integrator where it has no
-        closed form: 0 (the default) chooses them per half cycle for Π within ~2e-9 of
-        Π(0); a small fixed number is the coarse model on which the optimiser's
-        multi-start runs (:func:`bayestribo.inference.start.maximum_a_posteriori`),
-        its sum past the record shortened (:attr:`integrator_steps`).
+        closed form: 0 (the default) chooses them per half cycle for Π within the
+        error its increments' noise allows (:attr:`integrator_tolerance`; ~2e-9 of Π(0)
+        where the noise allows no more); a small fixed number is the coarse model on
+        which the optimiser's multi-start runs
+        (:func:`bayestribo.inference.start.maximum_a_posteriori`), its sum past the
+        record shortened (:attr:`integrator_steps`).
     """
 
     data: PiData
@@ -185,15 +187,21 @@ class PiLikelihood:
         """The error of Π allowed where a law without a closed form is integrated with
         the steps chosen per half cycle (:meth:`bayestribo.model.laws.Law.pi_grid`'s
         ``tolerance``, a fraction of Π(0)): :data:`INTEGRATOR_SHARE` of the smallest
-        noise sd of the increments (with correlated noise, of the covariance's
-        smallest eigenvalue's root) over the observed Π(0).
+        noise sd of the m increments (with correlated noise, of the covariance's
+        smallest eigenvalue's root) over √m, over the observed Π(0).
 
-        The scheme's usual steps hold Π within ~2e-9 of Π(0), 3-6 % of that sd on a
-        vibrometer's record and 1e-7 of it on a seismometer's: on a record as noisy as
-        most, the steps fall as the fourth root of what the noise allows (to at most
-        32 a half cycle), and each increment stays within a few hundredths of its sd
-        of the scheme's. None (the usual steps) for a coarse model of fixed steps, or
-        where the noise or Π(0) is not positive."""
+        An error of the model's increments moves the posterior by at most its length
+        in units of the noise (whitened), which a bias common to all m increments makes
+        √m times one's: at ε/√m of the smallest sd each (ε the share), less than ε sd
+        however the errors line up; the integrator's error is within a few times its
+        tolerance and an increment is a difference of two Π, so the posterior moves by
+        less than about 6ε = 0.06 sd (0.00-0.03 sd measured on real records,
+        ``benchmarks/results/auto_ratio_tolerance_compare.json``). The scheme's usual
+        steps hold Π within ~2e-9 of Π(0), 3-6 % of the smallest sd on a vibrometer's
+        record and 1e-7 of it on a seismometer's: on a record as noisy as most, the
+        steps fall as the fourth root of what the noise allows (to 32 a half cycle at
+        least). None (the usual steps) for a coarse model of fixed steps, or where the
+        noise or Π(0) is not positive."""
         if self.steps:
             return None
         data = self.data
@@ -209,7 +217,7 @@ class PiLikelihood:
         pi0 = float(np.sum(data.increments))
         if not (math.isfinite(smallest) and smallest > 0.0 and math.isfinite(pi0) and pi0 > 0):
             return None
-        return INTEGRATOR_SHARE * math.sqrt(smallest) / pi0
+        return INTEGRATOR_SHARE * math.sqrt(smallest / variance.size) / pi0
 
     @property
     def reference_amplitude(self) -> float:

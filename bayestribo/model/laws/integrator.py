@@ -22,9 +22,13 @@ half cycle's frame. The angle is stretched, ``θ = θ₀ + (π - θ₀) S(ψ)`` 
 zero speed (``|y'|^α``, α not an integer) is still integrated at the method's order:
 S vanishes to third order at both ends. Classical fourth-order Runge-Kutta with a
 number of steps per half cycle chosen from the drag's equivalent damping at the
-half cycle's peak speed, ``ζ_e = g(r)/(2r)``: about ``440 √ζ_e`` steps (24 at least),
+half cycle's peak speed, ``ζ_e = g(r)/(2r)``: about ``440 √ζ_e`` steps (32 at least),
 since the scheme's error grows as ``ζ² h⁴``. The tests hold Π within 1e-8 of Π(0)
-against the closed form and ``solve_ivp``.
+against the closed form and ``solve_ivp``. A caller may allow more error
+(``tolerance``, a fraction of Π(0), of :meth:`bayestribo.model.laws.Law.pi_grid`;
+the likelihood allows a hundredth of its increments' smallest noise sd): the steps
+inside the record fall as its fourth root, to 32 at least (``BASE_ERROR``, 2e-9, is
+the usual steps' error; ``tests/test_model_laws_tolerance.py``).
 
 Π at the grid: the cumulative energy integral ``C(τ) = ∫₀^τ E`` is known at every
 step with its exact derivatives E and E' = -|y'|(g(|y'|) + μ) (the power the forces
