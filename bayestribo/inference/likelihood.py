@@ -91,6 +91,7 @@ from bayestribo.signal.increments import PiData
 
 __all__ = [
     "BASE_NUISANCES",
+    "INTEGRATOR_SHARE",
     "MODELS",
     "NEAR_ZERO",
     "SHAPE_TERMS",
