@@ -196,12 +196,13 @@ class PiLikelihood:
         √m times one's: at ε/√m of the smallest sd each (ε the share), less than ε sd
         however the errors line up; the integrator's error is within a few times its
         tolerance and an increment is a difference of two Π, so the posterior moves by
-        less than about 6ε = 0.06 sd (0.00-0.03 sd measured on real records,
-        ``benchmarks/results/auto_ratio_tolerance_compare.json``). The scheme's usual
-        steps hold Π within ~2e-9 of Π(0), 3-6 % of the smallest sd on a vibrometer's
-        record and 1e-7 of it on a seismometer's: on a record as noisy as most, the
-        steps fall as the fourth root of what the noise allows (to 32 a half cycle at
-        least). None (the usual steps) for a coarse model of fixed steps, or where the
+        less than about 6ε = 0.06 sd (on nine real records' laws the increments move
+        by less than 1e-4 of their sd together, the 32 steps' floor holding the error
+        far below what is allowed: ``benchmarks/results/tolerance_shift.json``). The
+        scheme's usual steps hold Π within ~2e-9 of Π(0), 3-6 % of the smallest sd on
+        a vibrometer's record and 1e-7 of it on a seismometer's: on a record as noisy
+        as most, the steps fall as the fourth root of what the noise allows (to 32 a
+        half cycle at least). None (the usual steps) for a coarse model of fixed steps, or where the
         noise or Π(0) is not positive."""
         if self.steps:
             return None
