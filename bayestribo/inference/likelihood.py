@@ -202,8 +202,8 @@ class PiLikelihood:
         scheme's usual steps hold Π within ~2e-9 of Π(0), 3-6 % of the smallest sd on
         a vibrometer's record and 1e-7 of it on a seismometer's: on a record as noisy
         as most, the steps fall as the fourth root of what the noise allows (to 32 a
-        half cycle at least). None (the usual steps) for a coarse model of fixed steps, or where the
-        noise or Π(0) is not positive."""
+        half cycle at least). None (the usual steps) for a coarse model of fixed
+        steps, or where the noise or Π(0) is not positive."""
         if self.steps:
             return None
         data = self.data

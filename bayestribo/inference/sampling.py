@@ -536,9 +536,10 @@ def effective_sample_size(chain: NDArray) -> NDArray:
     return chain.shape[0] * chain.shape[1] / autocorr_time(chain)
 
 
-#: Beyond ``check_every / CHECK_GROWTH`` steps (1000 at the defaults; the default fit
+#: From ``2 check_every / CHECK_GROWTH`` steps (2000 at the defaults; the default fit
 #: stops before, the population's sampler at about 1500), the checks come every
-#: ``CHECK_GROWTH`` of the steps run so far, in whole ``check_every`` (:func:`check_spacing`).
+#: ``CHECK_GROWTH`` of the steps run so far, in whole ``check_every``
+#: (:func:`check_spacing`).
 CHECK_GROWTH = 0.05
 
 
@@ -547,8 +548,8 @@ def check_spacing(steps: int, check_every: int) -> int:
 
     A check costs in proportion to the chain's length (the autocorrelation's
     transforms of every walker and parameter): checked every ``check_every`` steps, a
-    run of n steps spends ∝ n² on its checks (a ridge walked for 16,000 steps: a third of
-    its time). Every :data:`CHECK_GROWTH` of the steps so far, in whole
+    run of n steps spends ∝ n² on its checks (a ridge walked for 16,000 steps: a third
+    of its time). Every :data:`CHECK_GROWTH` of the steps so far, in whole
     ``check_every``, they cost ∝ n in all, and a run stops at most that share of its
     length after the check that would have stopped it; below 2 ``check_every /
     CHECK_GROWTH`` steps (2000 at the defaults) the checks are as before.
