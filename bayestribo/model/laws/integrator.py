@@ -26,7 +26,7 @@ half cycle's peak speed, ``ζ_e = g(r)/(2r)``: about ``440 √ζ_e`` steps (32 a
 since the scheme's error grows as ``ζ² h⁴``. The tests hold Π within 1e-8 of Π(0)
 against the closed form and ``solve_ivp``. A caller may allow more error
 (``tolerance``, a fraction of Π(0), of :meth:`bayestribo.model.laws.Law.pi_grid`;
-the likelihood allows a hundredth of its increments' smallest noise sd): the steps
+the likelihood allows a hundredth of its increments' smallest noise sd over √m): the steps
 inside the record fall as its fourth root, to 32 at least (``BASE_ERROR``, 2e-9, is
 the usual steps' error; ``tests/test_model_laws_tolerance.py``).
 
