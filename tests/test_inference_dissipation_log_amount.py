@@ -92,3 +92,28 @@ def test_a_tail_the_log_amounts_miss_is_not_taken():
     np.testing.assert_array_equal(held, held_plain)  # nothing taken on the log amounts
     _, (_, plain_true), (_, held_true) = _refits(vals)
     assert held_true.sum() > plain_true.sum()  # where the law is not bent, they are
+
+
+def test_the_band_is_checked_at_its_farthest_draws_too(monkeypatch):
+    """An interpolation that holds at evenly spaced draws and misses at the tail is
+    caught: the band's check includes the draws farthest from the mean, so a ΔE bent
+    only there is followed there, not interpolated through."""
+    law = get_law("power")
+    vals = _draws(n=600, seed=2)
+    names = ["zeta_alpha", "alpha"]
+    x = np.column_stack([vals[n] for n in names])
+    u = (x - x.mean(axis=0)) / (2.0 * x.std(axis=0))
+    far = np.argsort(np.linalg.norm(u, axis=1))[-3:]  # the three farthest draws
+    bent = set(np.round(vals["zeta_alpha"][far], 15))
+    real = type(law).swing_dissipation
+
+    def bent_law(self, amplitudes, values, reference):
+        out = real(self, amplitudes, values, reference)
+        off = [round(float(z), 15) in bent for z in np.atleast_1d(values["zeta_alpha"])]
+        return out * np.where(off, 1.3, 1.0)[:, None]
+
+    monkeypatch.setattr(type(law), "swing_dissipation", bent_law)
+    want = bent_law(law, SWINGS, vals, REFERENCE)
+    got = dissipation._swing_dissipation(law, SWINGS, vals, REFERENCE)
+    sd = want.std(axis=0)
+    assert np.max(np.abs(got[far] - want[far]) / sd) < 1e-2
