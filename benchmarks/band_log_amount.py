@@ -20,13 +20,9 @@ Writes ``benchmarks/results/band_log_amount.json`` (``--output NAME``).
 from __future__ import annotations
 
 import argparse
-import contextlib
-import importlib.util
-import io
 import os
 import sys
 import time
-import warnings
 from pathlib import Path
 from typing import Any
 
@@ -38,22 +34,13 @@ import numpy as np  # noqa: E402
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 from _machine import provenance, write_results  # noqa: E402
+from auto_ratio import EXTERNAL, commands, run  # noqa: E402
 
 CASES = ["seismometer-magnet-5:auto:1", "seismometer-magnet-5:power:1", "HarmOsc2:auto:1"]
 
 
-def _commands() -> dict[str, list[str]]:
-    spec = importlib.util.spec_from_file_location("_auto_ratio", HERE / "auto_ratio.py")
-    module = importlib.util.module_from_spec(spec)
-    assert spec.loader is not None
-    spec.loader.exec_module(module)
-    found, _ = module.commands(module.EXTERNAL)
-    return found
-
-
 def _bands(argv: list[str], law: str, seed: str) -> list[tuple[Any, ...]]:
     """The (law, swings, values, reference) of every band of 1000 draws the fit makes."""
-    from bayestribo.cli.main import main
     from bayestribo.inference import dissipation
 
     captured: list[tuple[Any, ...]] = []
@@ -67,13 +54,7 @@ def _bands(argv: list[str], law: str, seed: str) -> list[tuple[Any, ...]]:
 
     dissipation._swing_dissipation = keep
     try:
-        with (
-            contextlib.redirect_stdout(io.StringIO()),
-            contextlib.redirect_stderr(io.StringIO()),
-            warnings.catch_warnings(),
-        ):
-            warnings.simplefilter("ignore")
-            main(["fit", *argv, "--law", law, "--seed", seed, "--json"])
+        run([*argv, "--law", law, "--seed", seed])
     finally:
         dissipation._swing_dissipation = real
     return captured
@@ -126,14 +107,14 @@ def main() -> None:
     parser.add_argument("--output", default="band_log_amount")
     args = parser.parse_args()
     start = os.getloadavg()
-    commands = _commands()
+    found, _ = commands(EXTERNAL)
     rows = []
     for case in args.cases:
         name, law, seed = case.split(":")
-        if name not in commands:
+        if name not in found:
             print(f"{name}: absent", flush=True)
             continue
-        for band in _bands(commands[name], law, seed):
+        for band in _bands(found[name], law, seed):
             rows.append({"case": case, **measure(name, band)})
     payload = {**provenance(__file__, {"cases": args.cases}, start), "bands": rows}
     print(f"wrote {write_results(args.output, payload)}")

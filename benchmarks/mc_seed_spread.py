@@ -24,14 +24,10 @@ recording and law run (results of earlier runs in the file are kept).
 from __future__ import annotations
 
 import argparse
-import contextlib
-import io
 import json
 import os
 import statistics
 import sys
-import time
-import warnings
 from pathlib import Path
 from typing import Any
 
@@ -41,7 +37,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMB
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 from _machine import RESULTS, commit, write_results  # noqa: E402
-from auto_ratio import EXTERNAL, commands  # noqa: E402
+from auto_ratio import EXTERNAL, commands, run  # noqa: E402
 
 #: Multiplier of k in the seed's change (the golden ratio's 32-bit hash constant).
 SPREAD = 0x9E3779B1
@@ -51,38 +47,19 @@ def fit_with_seed(argv: list[str], k: int) -> dict[str, Any]:
     """``bayestribo fit ARGV --json`` with the noise Monte Carlo's seed changed by k."""
     import bayestribo.inference.preparation as preparation
     import bayestribo.inference.restoring_error as restoring_error
-    from bayestribo.cli.main import main
 
     original = preparation.data_seed
 
     def seeded(decay: Any) -> int:
         return original(decay) ^ ((k * SPREAD) & 0xFFFFFFFF)
 
-    stdout = io.StringIO()
     try:
         preparation.data_seed = restoring_error.data_seed = seeded
-        cpu = time.process_time()
-        with (
-            contextlib.redirect_stdout(stdout),
-            contextlib.redirect_stderr(io.StringIO()),
-            warnings.catch_warnings(),
-        ):
-            code = main(["fit", *argv, "--json"])
-        seconds = time.process_time() - cpu
+        code, seconds, law, posterior = run(argv)
     finally:
         preparation.data_seed = restoring_error.data_seed = original
-    out = json.loads(stdout.getvalue())
-    return {
-        "k": k,
-        "exit": int(code or 0),
-        "cpu_seconds": seconds,
-        "law": out["law"],
-        "posterior": {
-            name: [float(p["mean"]), float(p["sd"])]
-            for name, p in out["parameters"].items()
-            if p.get("sampled") and p.get("mean") is not None and p.get("sd") is not None
-        },
-    }
+    posterior.pop("_converged", None)
+    return {"k": k, "exit": code, "cpu_seconds": seconds, "law": law, "posterior": posterior}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -26,9 +26,6 @@ Writes ``benchmarks/results/tolerance_shift.json`` (``--output NAME``).
 from __future__ import annotations
 
 import argparse
-import contextlib
-import importlib.util
-import io
 import os
 import sys
 import time
@@ -44,6 +41,7 @@ import numpy as np  # noqa: E402
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 from _machine import provenance, write_results  # noqa: E402
+from auto_ratio import EXTERNAL, commands, run  # noqa: E402
 
 PAIRS = [
     "seismometer-magnet-10:coulomb+power",
@@ -58,19 +56,9 @@ PAIRS = [
 ]
 
 
-def _commands() -> dict[str, list[str]]:
-    spec = importlib.util.spec_from_file_location("_auto_ratio", HERE / "auto_ratio.py")
-    module = importlib.util.module_from_spec(spec)
-    assert spec.loader is not None
-    spec.loader.exec_module(module)
-    found, _ = module.commands(module.EXTERNAL)
-    return found
-
-
 def _prepared(argv: list[str]) -> Any:
     """The preparation a default fit of this command makes."""
     import bayestribo.inference.fitting as fitting
-    from bayestribo.cli.main import main
 
     captured: list[Any] = []
     real = fitting.prepare
@@ -82,13 +70,7 @@ def _prepared(argv: list[str]) -> Any:
 
     fitting.prepare = keep  # the name the fit calls
     try:
-        with (
-            contextlib.redirect_stdout(io.StringIO()),
-            contextlib.redirect_stderr(io.StringIO()),
-            warnings.catch_warnings(),
-        ):
-            warnings.simplefilter("ignore")
-            main(["fit", *argv, "--law", "viscous", "--seed", "1", "--json"])
+        run([*argv, "--law", "viscous", "--seed", "1"])
     finally:
         fitting.prepare = real
     return captured[0]
@@ -162,14 +144,14 @@ def main() -> None:
     parser.add_argument("--output", default="tolerance_shift")
     args = parser.parse_args()
     start = os.getloadavg()
-    commands = _commands()
+    found, _ = commands(EXTERNAL)
     rows = []
     for pair in args.pairs:
         name, law = pair.split(":")
-        if name not in commands:
+        if name not in found:
             print(f"{name}: absent", flush=True)
             continue
-        rows.append(measure(name, law, commands[name]))
+        rows.append(measure(name, law, found[name]))
     payload = {**provenance(__file__, {"pairs": args.pairs}, start), "pairs": rows}
     path = write_results(args.output, payload)
     print(f"wrote {path}")
