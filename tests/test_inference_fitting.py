@@ -381,6 +381,41 @@ def test_a_frequency_that_changes_with_amplitude_is_reported():
         assert abs(fit(plain, seed=1, max_steps=3000).frequency_trend["z"]) < 4
 
 
+def test_the_pointwise_log_likelihood_and_predictive_are_computed_when_read():
+    # A fit's summaries use neither the pointwise log-likelihood (PSIS-LOO's input) nor
+    # the posterior predictive Π (the fit plot's): each is computed when first read,
+    # from the draws and the generator as the fit left them, so the order they are read
+    # in does not change them; a result sent to another process (a campaign's workers)
+    # carries them as values.
+    import pickle
+
+    run = RUNS / "glycerol-N0.31-r1.csv"
+    result, again = fit(run, seed=4), fit(run, seed=4)
+    draws, other = result._draws, again._draws
+    for name in ("log_likelihood", "posterior_predictive"):
+        assert callable(draws.__dict__[f"_{name}"]), name  # not computed by the fit
+    sent = pickle.loads(pickle.dumps(draws))
+    assert all(
+        isinstance(sent.__dict__[f"_{n}"], np.ndarray)
+        for n in ("log_likelihood", "posterior_predictive")
+    )
+    values, predictive = draws.log_likelihood, draws.posterior_predictive
+    assert draws.__dict__["_log_likelihood"] is values  # computed once
+    n_chain, n_draw = draws.posterior["zeta"].shape
+    m = json.loads(draws.attrs["diagnostics_json"])["n_increments"]
+    assert values.shape == (n_chain, n_draw, m) and np.all(np.isfinite(values))
+    assert predictive.shape == (1, 400, m) == (1, 400, draws.observed.size)
+    assert np.all(np.isfinite(predictive))
+    # read in the other order on a fit of the same seed: the same arrays
+    np.testing.assert_array_equal(other.posterior_predictive, predictive)
+    np.testing.assert_array_equal(other.log_likelihood, values)
+    np.testing.assert_array_equal(sent.log_likelihood, values)
+    np.testing.assert_array_equal(sent.posterior_predictive, predictive)
+    idata = result.idata
+    np.testing.assert_array_equal(idata.log_likelihood["pi"].values, values)
+    np.testing.assert_array_equal(idata.posterior_predictive["pi"].values, predictive)
+
+
 def test_a_fresh_result_makes_its_inference_data_on_first_use():
     # A fit holds numpy arrays (FitDraws) and builds the ArviZ InferenceData only when
     # asked: the summaries are the same before and after, and attributes set before

@@ -6,7 +6,10 @@
 * :func:`pointwise_log_likelihood`: the log-likelihood of each Π increment for each
   draw (for PSIS-LOO);
 * :func:`fit_draws`: the groups of a fit (posterior, pointwise log-likelihood,
-  posterior predictive Π, observed Π) as numpy arrays, a :class:`FitDraws`;
+  posterior predictive Π, observed Π) as numpy arrays, a :class:`FitDraws`, whose
+  pointwise log-likelihood (PSIS-LOO's input) and posterior predictive Π (the fit
+  plot's) are computed when first read: a fit's summaries use neither, and together
+  they cost about a tenth of a default fit;
 * :func:`inference_data`: the same as an ArviZ InferenceData
   (:meth:`FitDraws.to_inference_data`), built only when asked for: ArviZ, xarray and
   pandas take longer to import than a fit takes to run.
@@ -14,9 +17,12 @@
 
 from __future__ import annotations
 
+import copy
+import dataclasses
 import warnings
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -203,6 +209,10 @@ def _predictive_pi(
     return np.cumsum(replicated[:, ::-1], axis=1)[:, ::-1]
 
 
+#: The fields of :class:`FitDraws` that may be computed when first read.
+_DEFERRED = ("log_likelihood", "posterior_predictive")
+
+
 @dataclass
 class FitDraws:
     """The groups of a fit's InferenceData as numpy arrays, before ArviZ is imported.
@@ -218,6 +228,10 @@ class FitDraws:
         Pointwise log-likelihood of each Π increment, shape (chain, draw, increment).
     posterior_predictive : ndarray
         Replicated Π on the grid, shape (1, draw, grid).
+
+    ``log_likelihood`` and ``posterior_predictive`` are each given as an array, or as a
+    function of no arguments that computes it (:func:`fit_draws`), called when the
+    attribute is first read and its array kept; a FitDraws is pickled with the arrays.
     observed : ndarray
         Observed Π on the grid.
     grid : ndarray
@@ -237,6 +251,21 @@ class FitDraws:
     grid: NDArray
     log_prob: NDArray | None = None
     walker_acceptance: NDArray | None = None
+
+    def with_attrs(self, attrs: Mapping[str, Any]) -> FitDraws:
+        """These draws with the posterior group's attributes ``attrs`` (a pointwise
+        log-likelihood not yet computed stays so: ``dataclasses.replace`` would compute
+        it)."""
+        deferred = {k: self.__dict__[f"_{k}"] for k in _DEFERRED}
+        new = dataclasses.replace(self, **deferred)
+        new.attrs = dict(attrs)
+        return new
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = dict(self.__dict__)
+        for name in _DEFERRED:
+            state[f"_{name}"] = getattr(self, name)  # computed, not the function
+        return state
 
     def sample_stats(self) -> dict[str, NDArray]:
         """The sampler's statistics per draw, shape (chain, draw) each: ``lp`` (log
@@ -293,6 +322,32 @@ class FitDraws:
         return idata
 
 
+class _Deferred:
+    """A field of :class:`FitDraws` given as an array or as a function of no arguments
+    that computes it, called when the field is first read (its array then kept)."""
+
+    def __init__(self, name: str) -> None:
+        self.key = f"_{name}"
+        self.__doc__ = f"{name} (see the class; computed when first read)."
+
+    def __get__(self, draws: FitDraws | None, owner: type | None = None) -> Any:
+        if draws is None:
+            return self
+        value = draws.__dict__[self.key]
+        if callable(value):
+            value = draws.__dict__[self.key] = value()
+        return value
+
+    def __set__(self, draws: FitDraws, value: NDArray | Callable[[], NDArray]) -> None:
+        draws.__dict__[self.key] = value
+
+
+# set after the dataclass is made (in the class body they would be the fields'
+# defaults): its __init__ then stores the array or the function through them
+FitDraws.log_likelihood = _Deferred("log_likelihood")  # type: ignore[assignment]
+FitDraws.posterior_predictive = _Deferred("posterior_predictive")  # type: ignore[assignment]
+
+
 def fit_draws(
     posterior: Posterior,
     chains: NDArray,
@@ -314,7 +369,8 @@ def fit_draws(
     derived : mapping
         Flat draws of each reported quantity (:func:`derived_quantities`).
     rng : numpy.random.Generator
-        Source of the posterior predictive draws.
+        Source of the posterior predictive draws: a copy of it as it is at this call
+        makes them when they are first read (``rng`` itself is not advanced).
     attrs : mapping
         Attributes of the posterior group (run, settings, diagnostics as JSON).
     log_prob : ndarray, optional
@@ -325,13 +381,19 @@ def fit_draws(
     Returns
     -------
     FitDraws
-        The posterior draws shaped (chain, draw), the pointwise log-likelihood, the
-        posterior predictive and the observed Π.
+        The posterior draws shaped (chain, draw), the pointwise log-likelihood and
+        the posterior predictive (each computed when first read) and the observed Π.
     """
     data = posterior.likelihood.data
     n_chain, n_draw, _ = chains.shape
-    pointwise = pointwise_log_likelihood(posterior, chains)
-    pi_rep = _predictive_pi(posterior, chains.reshape(n_chain * n_draw, -1), data, rng)
+    # both computed when first read (the summaries use neither), from copies of the
+    # chains and of the generator as they are now: the same arrays as if made now
+    chains = np.array(chains)
+    own = copy.deepcopy(rng)
+    pointwise = partial(pointwise_log_likelihood, posterior, chains)
+
+    def predictive() -> NDArray:
+        return _predictive_pi(posterior, chains.reshape(n_chain * n_draw, -1), data, own)[None]
 
     def shaped(values: NDArray) -> NDArray:
         return values.reshape(n_chain, n_draw, *values.shape[1:])
@@ -340,7 +402,7 @@ def fit_draws(
         posterior={k: shaped(v) for k, v in derived.items()},
         attrs=dict(attrs),
         log_likelihood=pointwise,
-        posterior_predictive=pi_rep[None, :, :],
+        posterior_predictive=predictive,
         observed=data.pi,
         grid=data.tau_grid[:-1],
         log_prob=None if log_prob is None else np.asarray(log_prob, dtype=float),

@@ -176,7 +176,7 @@ class Summary:
 
     def result(self) -> FitResult:
         """The :class:`FitResult`: the draws, with the record as their attributes."""
-        return FitResult(draws=dataclasses.replace(self.draws, attrs=self.record.to_attrs()))
+        return FitResult(draws=self.draws.with_attrs(self.record.to_attrs()))
 
 
 def summarise(
