@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from bayestribo.errors import RunFormatError
@@ -129,6 +129,9 @@ ANY_JSON = st.recursive(
 
 @settings(max_examples=300, deadline=None)
 @given(value=ANY_JSON, depth=st.integers(min_value=0, max_value=3000))
+# found by this test: a high-pass corner no float holds raised OverflowError
+@example(value={"sensor_high_pass": 10**400}, depth=0)
+@example(value={"sensor_high_pass": {"cutoff_Hz": 1, "order": 2, "damping": 10**400}}, depth=0)
 def test_any_json_value_is_read_or_refused_with_the_packages_error(tmp_path_factory, value, depth):
     text = "[" * depth + json.dumps(value) + "]" * depth
     if depth % 2:  # under a known key, as deep as it goes

@@ -97,6 +97,22 @@ def test_a_declaration_is_checked_and_normalised():
     assert high_pass_gain({"cutoff_Hz": 0.5}, 3.0) == pytest.approx(6 / math.sqrt(37))
 
 
+@pytest.mark.parametrize(
+    ("spec", "field"),
+    [
+        (10**400, "cutoff_Hz"),  # an int no float holds (a sidecar's JSON may hold one)
+        ({"cutoff_Hz": 10**5000}, "cutoff_Hz"),  # beyond int-to-text conversion as well
+        ({"cutoff_Hz": 1, "order": 2, "damping": -(10**400)}, "damping"),
+        ({"cutoff_Hz": True}, "cutoff_Hz"),
+        ({"cutoff_Hz": float("inf")}, "cutoff_Hz"),
+    ],
+)
+def test_a_number_no_float_holds_is_refused_naming_its_field(spec, field):
+    with pytest.raises(ValueError, match=rf"'{field}' must be") as caught:
+        check_high_pass(spec)
+    assert len(str(caught.value)) < 200  # the number shortened, not printed whole
+
+
 @pytest.mark.parametrize("order", [1, 2])
 def test_the_inverse_gives_the_motion_before_the_filter(order):
     t, y, v = _recorded(0.5 if order == 1 else 0.9, order, noise=0.0)

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from bayestribo._text import shown
 from bayestribo.errors import MetadataWarning, RecordingError, RunFormatError
 from bayestribo.model.scaling import Rig, Scaling
 from bayestribo.signal.frequency import oscillation_frequency
@@ -288,7 +289,7 @@ def _data_file(value: Any, key: str, where: str | None) -> dict[str, Any]:
     if not isinstance(value, Mapping) or not value:
         raise RunFormatError(
             f"metadata {key!r}: expected {{'samples': N, 'sha256': '64 hex digits'}}, got "
-            f"{_shown(value)}",
+            f"{shown(value)}",
             where,
         )
     extra = sorted(set(value) - {"samples", "sha256"})
@@ -301,7 +302,7 @@ def _data_file(value: Any, key: str, where: str | None) -> dict[str, Any]:
         isinstance(samples, bool) or not isinstance(samples, int) or samples < 0
     ):
         raise RunFormatError(
-            f"metadata '{key}.samples': expected an integer >= 0, got {_shown(samples)}", where
+            f"metadata '{key}.samples': expected an integer >= 0, got {shown(samples)}", where
         )
     digest = value.get("sha256")
     if digest is not None and not (
@@ -310,7 +311,7 @@ def _data_file(value: Any, key: str, where: str | None) -> dict[str, Any]:
         and all(c in "0123456789abcdef" for c in digest.lower())
     ):
         raise RunFormatError(
-            f"metadata '{key}.sha256': expected 64 hexadecimal digits, got {_shown(digest)}",
+            f"metadata '{key}.sha256': expected 64 hexadecimal digits, got {shown(digest)}",
             where,
         )
     return {k: (v.lower() if k == "sha256" else v) for k, v in value.items() if v is not None}
@@ -329,7 +330,7 @@ def _start_time(value: Any, key: str, where: str | None) -> str:
             return value
     raise RunFormatError(
         f"metadata {key!r}: expected a date and time in ISO 8601 text, such as "
-        f"'2026-11-30T09:15:02.120000', got {_shown(value)}",
+        f"'2026-11-30T09:15:02.120000', got {shown(value)}",
         where,
     )
 
@@ -381,7 +382,7 @@ def _pendulum_radius(value: Any, key: str, where: str | None) -> float | str:
         raise RunFormatError(
             f"metadata {key!r}: expected the pendulum's radius at the sensor in metres, "
             f"0 < r <= 1000, or {SIMPLE!r} for a simple pendulum (r = g/ω₀²), got "
-            f"{_shown(value)}",
+            f"{shown(value)}",
             where,
         )
     return radius
@@ -458,22 +459,13 @@ def _plain(value: Any, key: str, where: str | None) -> Any:
     )
 
 
-def _shown(value: Any) -> str:
-    """A value for a message, shortened (a sidecar may hold a number of 400 digits)."""
-    try:
-        text = repr(value)
-    except ValueError:  # an integer beyond Python's string conversion limit
-        return "a number too long to show"
-    return text if len(text) <= 60 else text[:57] + "..."
-
-
 def _typed(key: str, spec: _Key, value: Any, where: str | None) -> Any:
     """Check and normalise the value of a known metadata key."""
     if value is None:
         return None
     bad = RunFormatError(
         f"metadata {key!r} ({spec.description}): expected {spec.expected()}, "
-        f"got {type(value).__name__} {_shown(value)}",
+        f"got {type(value).__name__} {shown(value)}",
         where,
     )
     if spec.kind == "plain":

@@ -43,6 +43,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import cumulative_trapezoid
 
+from bayestribo._text import shown
+
 __all__ = [
     "CALIBRATED_CORNER",
     "DEFAULT_DAMPING",
@@ -85,6 +87,17 @@ CALIBRATED_CORNER = 0.1
 _FEWEST_TURNING_POINTS = 12
 
 
+def _number(value: Any) -> float:
+    """``value`` as a float: NaN for anything but an int or float (a bool included), and
+    for an int too large for a float (a sidecar's JSON may hold one of 400 digits)."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return math.nan
+    try:
+        return float(value)
+    except OverflowError:
+        return math.nan
+
+
 def check_high_pass(spec: Any) -> dict[str, Any]:
     """Check a high-pass declaration and return it normalised.
 
@@ -110,7 +123,7 @@ def check_high_pass(spec: Any) -> dict[str, Any]:
     if not isinstance(spec, Mapping):
         raise ValueError(
             "expected a mapping {'cutoff_Hz': HZ, 'order': 1 or 2, 'damping': ζ} or a corner "
-            f"frequency in Hz, got {spec!r}"
+            f"frequency in Hz, got {shown(spec)}"
         )
     unknown = set(spec) - {"cutoff_Hz", "order", "damping"}
     if unknown:
@@ -118,27 +131,19 @@ def check_high_pass(spec: Any) -> dict[str, Any]:
             f"unknown field(s) {sorted(unknown)}; expected 'cutoff_Hz', 'order' and 'damping'"
         )
     cutoff = spec.get("cutoff_Hz")
-    if (
-        isinstance(cutoff, bool)
-        or not isinstance(cutoff, int | float)
-        or not (math.isfinite(cutoff) and 0 < cutoff <= 1e6)
-    ):
-        raise ValueError(f"'cutoff_Hz' must be a positive number [Hz], got {cutoff!r}")
+    if not 0 < _number(cutoff) <= 1e6:
+        raise ValueError(f"'cutoff_Hz' must be a positive number [Hz], got {shown(cutoff)}")
     order = spec.get("order", 1)
     if isinstance(order, bool) or order not in (1, 2):
-        raise ValueError(f"'order' must be 1 or 2 (poles), got {order!r}")
+        raise ValueError(f"'order' must be 1 or 2 (poles), got {shown(order)}")
     out: dict[str, Any] = {"cutoff_Hz": float(cutoff), "order": int(order)}
     damping = spec.get("damping")
     if damping is not None and order == 1:
         raise ValueError("'damping' is a two-pole high-pass's; give 'order': 2 with it")
     if order == 2:
         damping = DEFAULT_DAMPING if damping is None else damping
-        if (
-            isinstance(damping, bool)
-            or not isinstance(damping, int | float)
-            or not (math.isfinite(damping) and 0 < damping <= 10)
-        ):
-            raise ValueError(f"'damping' must be a number in (0, 10], got {damping!r}")
+        if not 0 < _number(damping) <= 10:
+            raise ValueError(f"'damping' must be a number in (0, 10], got {shown(damping)}")
         out["damping"] = float(damping)
     return out
 
