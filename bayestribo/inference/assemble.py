@@ -228,10 +228,6 @@ class FitDraws:
         Pointwise log-likelihood of each Π increment, shape (chain, draw, increment).
     posterior_predictive : ndarray
         Replicated Π on the grid, shape (1, draw, grid).
-
-    ``log_likelihood`` and ``posterior_predictive`` are each given as an array, or as a
-    function of no arguments that computes it (:func:`fit_draws`), called when the
-    attribute is first read and its array kept; a FitDraws is pickled with the arrays.
     observed : ndarray
         Observed Π on the grid.
     grid : ndarray
@@ -241,6 +237,12 @@ class FitDraws:
         draw) (unnormalised; the surrogate's where the fit sampled one).
     walker_acceptance : ndarray or None
         emcee's acceptance fraction of each walker, shape (chain, walker).
+
+    Notes
+    -----
+    ``log_likelihood`` and ``posterior_predictive`` are each given as an array, or as a
+    function of no arguments that computes it (:func:`fit_draws`), called when the
+    attribute is first read and its array kept; a FitDraws is pickled with the arrays.
     """
 
     posterior: dict[str, NDArray]
@@ -253,9 +255,8 @@ class FitDraws:
     walker_acceptance: NDArray | None = None
 
     def with_attrs(self, attrs: Mapping[str, Any]) -> FitDraws:
-        """These draws with the posterior group's attributes ``attrs`` (a pointwise
-        log-likelihood not yet computed stays so: ``dataclasses.replace`` would compute
-        it)."""
+        """These draws with the posterior group's attributes ``attrs``; a field not
+        computed yet stays so (``dataclasses.replace`` alone would compute it)."""
         deferred = {k: self.__dict__[f"_{k}"] for k in _DEFERRED}
         new = dataclasses.replace(self, **deferred)
         new.attrs = dict(attrs)

@@ -562,9 +562,17 @@ def without_trailing_delimiter(lines: list[tuple[int, str]]) -> list[tuple[int, 
         ``lines`` itself when nothing is taken off, else new lines.
     """
     for mark in _TRAILING:
-        holding = [_line_end(line, mark) for _, line in lines if mark in line]
-        if len(holding) >= 2 and all(line.endswith(mark) for line in holding):
-            return [(n, _line_end(line, mark)[:-1] if mark in line else line) for n, line in lines]
+        holding = 0
+        for _, line in lines:
+            if mark in line:
+                if not _line_end(line, mark).endswith(mark):
+                    break  # a line holds it and does not end with it
+                holding += 1
+        else:
+            if holding >= 2:
+                return [
+                    (n, _line_end(line, mark)[:-1] if mark in line else line) for n, line in lines
+                ]
     return lines
 
 
@@ -1207,12 +1215,14 @@ def _read_streamed(
         return None
     if any(mark in text for mark in _OTHER_LINE_BREAKS):
         return None  # str.splitlines would count lines the parsers do not
-    comments = [n for n, line in enumerate(head_lines, start=1) if line.lstrip().startswith("#")]
-    lines = [
-        (n, line)
-        for n, line in enumerate(head_lines, start=1)
-        if line.strip() and not line.lstrip().startswith("#")
-    ]
+    last_comment = 0  # the last comment line's number (0: none)
+    lines = []  # the lines neither blank nor comments, with their numbers
+    for n, line in enumerate(head_lines, start=1):
+        content = line.lstrip()
+        if content.startswith("#"):
+            last_comment = n
+        elif content:
+            lines.append((n, line))
     if len(lines) < 3 or without_trailing_delimiter(lines) is not lines:
         return None  # (a delimiter ending every line: the line-by-line reader drops it)
     with warnings.catch_warnings():
@@ -1228,7 +1238,7 @@ def _read_streamed(
     if header_lines >= len(lines) or decimal != ".":
         return None
     skip = lines[header_lines][0] - 1  # physical lines before the first row of numbers
-    if comments and comments[-1] > skip:
+    if last_comment > skip:
         return None  # a comment among the rows: the line-by-line reader leaves it out
     keep = [(i, n) for i, n in enumerate(names) if n != IGNORE]
     data = _read_large(path, delimiter, skip, len(names)) if not complete else None
