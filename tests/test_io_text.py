@@ -7,6 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 from _paths import APPSTAT
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from bayestribo import read_run
 from bayestribo.errors import ReadingWarning, RunFormatError
@@ -470,3 +472,32 @@ def test_a_video_trackers_t_x_y_columns_are_named_with_the_columns_that_read_the
     assert "columns=['time_s', 'ignore', 'displacement_m'] if along y" in str(caught.value)
     run = read_run(path, columns=along_x, validate=False)
     np.testing.assert_allclose(run.displacement, x, rtol=1e-6)
+
+
+def _trailing_rule(lines: list[tuple[int, str]]) -> list[tuple[int, str]]:
+    """The trailing-delimiter rule written plainly (``without_trailing_delimiter``'s
+    docstring): for the first delimiter that at least two lines hold and every line
+    holding it ends with, that delimiter taken off the end of each line holding it."""
+    from bayestribo.io.text import _TRAILING, _line_end
+
+    for mark in _TRAILING:
+        holding = [_line_end(line, mark) for _, line in lines if mark in line]
+        if len(holding) >= 2 and all(line.endswith(mark) for line in holding):
+            return [(n, _line_end(line, mark)[:-1] if mark in line else line) for n, line in lines]
+    return lines
+
+
+@settings(max_examples=500, deadline=None)
+@given(
+    st.lists(
+        st.text(alphabet=["1", ",", ";", "\t", " ", "a", "\r", ".", '"'], max_size=8),
+        max_size=8,
+    )
+)
+def test_the_trailing_delimiter_rule_is_the_plain_one_on_any_lines(texts):
+    from bayestribo.io.text import without_trailing_delimiter
+
+    lines = list(enumerate(texts, start=1))
+    got, expected = without_trailing_delimiter(lines), _trailing_rule(lines)
+    assert got == expected
+    assert (got is lines) == (expected is lines)  # unchanged lines: the same list
