@@ -146,6 +146,31 @@ def test_any_json_value_is_read_or_refused_with_the_packages_error(tmp_path_fact
         assert isinstance(metadata, dict)
 
 
+@pytest.mark.parametrize("key", sorted(METADATA_KEYS))
+def test_every_known_key_refuses_numbers_no_float_holds_with_the_packages_error(tmp_path, key):
+    # an integer of 400 or 5000 digits (JSON allows any), bare, in a list, in a mapping
+    # under the high-pass's field and under another: read, or refused naming the file,
+    # never an OverflowError or ValueError from a conversion
+    import sys
+
+    limit = sys.get_int_max_str_digits()
+    sys.set_int_max_str_digits(0)  # to write 10**5000 as JSON
+    try:
+        for value in (10**400, -(10**400), 10**5000, [10**400], {"cutoff_Hz": 10**400}):
+            path = tmp_path / "r.json"
+            path.write_text(json.dumps({key: value}))
+            sys.set_int_max_str_digits(limit)
+            try:
+                metadata = read_sidecar(path)
+            except RunFormatError as exc:
+                assert len(str(exc)) < 2000  # the number shortened in the message
+            else:
+                assert isinstance(metadata, dict)
+            sys.set_int_max_str_digits(0)
+    finally:
+        sys.set_int_max_str_digits(limit)
+
+
 @pytest.mark.parametrize(
     ("key", "value"),
     [
