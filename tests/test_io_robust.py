@@ -99,6 +99,99 @@ def test_a_mat_variable_claiming_too_many_samples_is_refused_from_its_header(
         read_run(path)
 
 
+@pytest.mark.parametrize("compress", [False, True])
+def test_a_mat_array_whose_header_misstates_its_data_is_refused_not_read(
+    tmp_path: Path, run, compress: bool
+) -> None:
+    # scipy.io.loadmat trusts an array's flags: a real array flagged complex (its
+    # imaginary part missing) or stated sparse is read past its element's end, which
+    # crashed the interpreter (SIGSEGV, scipy 1.17: found by benchmarks/fuzz.py), and a
+    # class no MATLAB file has raised UnboundLocalError. Each is read here in a child
+    # process, so that a crash fails this test instead of ending the run.
+    import subprocess
+    import sys
+    import zlib
+
+    import scipy.io
+
+    whole = tmp_path / "whole.mat"
+    data = {"time_s": run.time, "displacement_m": run.displacement}
+    scipy.io.savemat(whole, data, do_compression=False)
+    raw = whole.read_bytes()
+    assert raw[136:140] == bytes([6, 0, 0, 0])  # the first array's flags (little-endian)
+    files = []
+    for name, offset, byte in (("complex", 145, 0x08), ("sparse", 144, 5), ("class", 144, 255)):
+        damaged = bytearray(raw)
+        damaged[offset] = damaged[offset] | byte if name == "complex" else byte
+        if compress:  # the first variable as miCOMPRESSED, as MATLAB writes it
+            size = 8 + int.from_bytes(damaged[132:136], "little")
+            packed = zlib.compress(bytes(damaged[128 : 128 + size]))
+            element = (15).to_bytes(4, "little") + len(packed).to_bytes(4, "little") + packed
+            damaged = damaged[:128] + element + damaged[128 + size :]
+        path = tmp_path / f"{name}.mat"
+        path.write_bytes(bytes(damaged))
+        files.append(str(path))
+    child = (
+        "import sys\n"
+        "from bayestribo import read_run\n"
+        "from bayestribo.errors import RunFormatError\n"
+        "for path in sys.argv[1:]:\n"
+        "    try:\n"
+        "        read_run(path)\n"
+        "        print('read', path)\n"
+        "    except RunFormatError as exc:\n"
+        "        print('refused', exc)\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", child, *files], capture_output=True, text=True, timeout=300
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    lines = done.stdout.splitlines()
+    assert len(lines) == 3 and all(line.startswith("refused") for line in lines), lines
+    assert "'time_s'" in lines[0] and "MATLAB" in lines[0]
+    assert "class 255, not a MATLAB class" in lines[2]
+
+
+def test_the_mat_header_walk_refuses_no_file_matlab_wrote() -> None:
+    # SciPy's own test files, written by MATLAB 4 to 7.4 on several platforms (complex,
+    # sparse, cell, structure and object arrays, strings, function handles, big- and
+    # little-endian): the header walk refuses only those loadmat cannot read either.
+    import subprocess
+    import sys
+
+    import scipy.io
+
+    from bayestribo.io.mat_headers import DamagedHeader, declared_bytes, v5_variables
+
+    files = sorted((Path(scipy.io.__file__).parent / "matlab" / "tests" / "data").glob("*.mat"))
+    if not files:
+        pytest.skip("this SciPy has no test files")
+    refused = []
+    for path in files:
+        with path.open("rb") as fh:
+            try:
+                for variable in list(v5_variables(fh)):
+                    declared_bytes(fh, variable, 1 << 34)
+            except DamagedHeader:
+                refused.append(str(path))
+    assert len(refused) < len(files) // 4  # most of them walked
+    child = (
+        "import sys, warnings\n"
+        "import scipy.io\n"
+        "warnings.simplefilter('ignore')\n"
+        "for path in sys.argv[1:]:\n"
+        "    try:\n"
+        "        scipy.io.loadmat(path)\n"
+        "        print('loads', path)\n"
+        "    except Exception:\n"
+        "        pass\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", child, *refused], capture_output=True, text=True, timeout=300
+    )
+    assert done.returncode == 0 and not done.stdout, (done.stdout, done.stderr[-1000:])
+
+
 def test_a_broken_workbook_is_refused(tmp_path: Path, run) -> None:
     openpyxl = pytest.importorskip("openpyxl")
     import zipfile

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import struct
 import zlib
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Collection, Iterator
 from dataclasses import dataclass
 from typing import BinaryIO
 
@@ -30,6 +30,15 @@ MI_MATRIX, MI_COMPRESSED = 14, 15
 MX_CELL, MX_STRUCT, MX_OBJECT, MX_CHAR, MX_SPARSE = 1, 2, 3, 4, 5
 #: Numeric classes (double to uint64); a logical array is a uint8 array with a flag.
 MX_NUMERIC = range(6, 16)
+#: Every array class a v5 file may hold (16, a function handle, and 17, an opaque
+#: object such as a string or table, are read by ``loadmat`` as objects).
+MX_CLASSES = range(1, 18)
+#: Bytes of one value of each numeric data type (miINT8 to miUINT64) [bytes].
+NUMERIC_BYTES = {1: 1, 2: 1, 3: 2, 4: 2, 5: 4, 6: 4, 7: 4, 9: 8, 12: 8, 13: 8}
+#: Integer data types (miINT8 to miUINT32, miINT64, miUINT64).
+INTEGER_TYPES = frozenset({1, 2, 3, 4, 5, 6, 12, 13})
+#: Data types of a character array's text (the integer types and miUTF8 to miUTF32).
+CHAR_TYPES = frozenset({1, 2, 3, 4, 5, 6, 16, 17, 18})
 #: Bytes a character takes once loaded (numpy's ``U`` strings) [bytes].
 CHAR_BYTES = 4
 #: Bytes an element of a cell or structure array takes (an object pointer) [bytes].
@@ -163,8 +172,9 @@ class _Walk:
         self.declared += n
         self.check(self.declared)
 
-    def matrix(self, nbytes: int, depth: int) -> str:
-        """Walk one miMATRIX element's content (``nbytes`` long); return its name."""
+    def matrix(self, nbytes: int, depth: int, label: str = "") -> str:
+        """Walk one miMATRIX element's content (``nbytes`` long); return its name
+        (``label``, where it is in its structure or cell, for an unnamed one)."""
         if nbytes == 0:
             return ""
         if depth > MAX_DEPTH:
@@ -176,25 +186,37 @@ class _Walk:
         word, nzmax = struct.unpack(self.e + "II", flags[:8])
         cls, is_complex = word & 0xFF, bool(word & 0x800)
         dtype, dims_raw = self.element()
-        if dtype != MI_INT32 or len(dims_raw) % 4:
+        if dtype not in (MI_INT32, MI_UINT32) or len(dims_raw) % 4:
             raise DamagedHeader("array dimensions are not int32")
-        dims = struct.unpack(f"{self.e}{len(dims_raw) // 4}i", dims_raw)
+        # int32 by the format; uint32 as some writers store them, which loadmat reads
+        kind = "i" if dtype == MI_INT32 else "I"
+        dims = struct.unpack(f"{self.e}{len(dims_raw) // 4}{kind}", dims_raw)
         if any(d < 0 for d in dims):
             raise DamagedHeader(f"negative array dimensions {dims}")
         count = 1
         for d in dims:
             count *= d
         _, name_raw = self.element()
-        name = name_raw.decode("latin-1")
+        name = name_raw.decode("latin-1") or label
+        if cls not in MX_CLASSES:
+            raise DamagedHeader(f"array {name!r} of class {cls}, not a MATLAB class")
+        parts = 2 if is_complex else 1
         if cls in MX_NUMERIC:
-            self.add(count * FLOAT_BYTES * (2 if is_complex else 1))
+            self.add(count * FLOAT_BYTES * parts)
+            for _part in range(parts):  # the real part, then the imaginary one
+                self.data(name, NUMERIC_BYTES.keys(), count)
         elif cls == MX_CHAR:
             self.add(count * CHAR_BYTES)
+            self.data(name, CHAR_TYPES, None)
         elif cls == MX_SPARSE:
             columns = dims[1] if len(dims) > 1 else 1
-            self.add(nzmax * (FLOAT_BYTES * (2 if is_complex else 1) + 4) + (columns + 1) * 4)
+            self.add(nzmax * (FLOAT_BYTES * parts + 4) + (columns + 1) * 4)
+            self.data(name, INTEGER_TYPES, None)  # row indices
+            self.data(name, INTEGER_TYPES, columns + 1)  # column starts
+            for _part in range(parts):
+                self.data(name, NUMERIC_BYTES.keys(), None)
         elif cls in (MX_CELL, MX_STRUCT, MX_OBJECT):
-            fields = 1
+            fields, labels = 1, [""]
             if cls != MX_CELL:
                 if cls == MX_OBJECT:
                     self.element()  # class name
@@ -202,15 +224,38 @@ class _Walk:
                 (length,) = struct.unpack(self.e + "i", length_raw[:4].ljust(4, b"\0"))
                 _, names = self.element()
                 fields = len(names) // length if length > 0 else 0
+                labels = [
+                    "." + names[k * length : (k + 1) * length].split(b"\0")[0].decode("latin-1")
+                    for k in range(fields)
+                ]
             self.add(count * fields * OBJECT_BYTES)
-            for _ in range(count * fields):
+            for j in range(count * fields):
                 mdtype, sub, _small = self.tag()
                 if mdtype != MI_MATRIX:
                     raise DamagedHeader(f"an element of type {mdtype} inside {name!r}")
-                self.matrix(sub, depth + 1)
+                where = f"{{{j + 1}}}" if cls == MX_CELL else labels[j % fields]
+                if cls != MX_CELL and count > 1:
+                    where = f"({j // fields + 1}){where}"
+                self.matrix(sub, depth + 1, name + where)
         used = self.s.position - start
+        if used > nbytes:
+            raise DamagedHeader(f"array {name!r} holds more than its {nbytes} bytes")
         self.s.skip(nbytes - used)
         return name
+
+    def data(self, name: str, types: Collection[int], count: int | None) -> None:
+        """Skip one data element of array ``name``, refused unless of one of ``types``
+        and, with ``count``, holding exactly that many values (``loadmat`` reads what
+        the array's header says is there: a part missing, or of another size, is read
+        past the element's end, which has crashed the interpreter)."""
+        mdtype, nbytes, small = self.tag()
+        size = NUMERIC_BYTES.get(mdtype, 1)
+        if mdtype not in types or (count is not None and nbytes != count * size):
+            held = f"{nbytes} bytes of type {mdtype}"
+            wanted = "" if count is None else f" for {count} values"
+            raise DamagedHeader(f"the data of array {name!r}: {held}{wanted}")
+        if small is None:
+            self.s.skip(nbytes + (-nbytes % 8))
 
 
 def _endian(header: bytes) -> str | None:
