@@ -9,11 +9,13 @@ repeated, 4- and 8-byte fields overwritten with huge values (sizes a header clai
 numbers replaced by ``nan``, ``inf``, ``1e308``, ``-`` or nothing, an empty file; and
 sidecars with absurd values (1e308, 1e-320, -1, text, lists, nesting) and misspelt keys.
 
-Each mutant is read in a worker process (``read_run`` with the seed's options, then
+Each mutant is read in a reading process (``read_run`` with the seed's options, then
 ``describe_file`` and the ``inspect`` command's code) under an address-space limit and
-an alarm. Counted per reader: read, refused with the package's error, other exceptions
-(each named with its type and the mutation: the goal is none), reads whose resident
-memory grew by more than 300 MB, timeouts.
+an alarm; a process reads up to 200 mutants in turn, saying which it starts, so that
+one that dies on a mutant (a library's crash) names it, and a fresh process goes on.
+Counted per reader: read, refused with the package's error, other exceptions (each
+named with its type and the mutation: the goal is none), reads whose resident memory
+grew by more than 300 MB, timeouts, crashes.
 
 Run: ``python benchmarks/fuzz.py --mutants 4200``; prints a table and writes
 ``benchmarks/results/fuzz.json``.
@@ -24,21 +26,23 @@ from __future__ import annotations
 import argparse
 import collections
 import json
-import multiprocessing
 import os
 import random
 import re
 import resource
 import signal
+import subprocess
 import sys
 import tempfile
+import threading
 import time
 import traceback
 from pathlib import Path
 from typing import Any
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _machine import write_results
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+from _machine import write_results  # noqa: E402
 
 #: Largest growth of a worker's resident memory over one read [MB] (the goal).
 MEMORY_GOAL_MB = 300.0
@@ -390,6 +394,80 @@ def _init() -> None:
     import bayestribo.io  # noqa: F401
 
 
+#: Mutants a reading process reads before a fresh one takes over (its peak memory is
+#: the measure of a read's growth).
+PER_PROCESS = 200
+
+_CHILD = """
+import json, sys
+sys.path.insert(0, sys.argv[1])
+import fuzz
+fuzz._init()
+items = json.load(open(sys.argv[2]))
+for i in map(int, sys.argv[3:]):
+    print("start", i, flush=True)
+    print("done", i, json.dumps(fuzz._task(items[i])), flush=True)
+"""
+
+
+def _drive(items: list[dict[str, Any]], workers: int, listing: Path) -> list[dict[str, Any]]:
+    """Every mutant read in reading processes, ``workers`` at a time, each process
+    reading up to :data:`PER_PROCESS` of them in turn and saying which it starts: a
+    process that dies on one (a library's crash, SIGSEGV) is counted against that
+    mutant as a ``crash``, and a new process goes on from the next."""
+    listing.write_text(json.dumps(items))
+    results: list[dict[str, Any] | None] = [None] * len(items)
+    shares = [list(range(w, len(items), workers)) for w in range(workers)]
+
+    def work(share: list[int]) -> None:
+        while share:
+            batch, share[:] = share[:PER_PROCESS], share[PER_PROCESS:]
+            while batch:
+                command = [sys.executable, "-c", _CHILD, str(HERE), str(listing)]
+                try:
+                    done = subprocess.run(
+                        [*command, *map(str, batch)],
+                        capture_output=True,
+                        text=True,
+                        timeout=60 + 2 * ALARM_S * len(batch),
+                    )
+                    stdout, code = done.stdout, done.returncode
+                except subprocess.TimeoutExpired as hung:  # past every read's alarm
+                    stdout, code = (hung.stdout or b"").decode(errors="replace"), "hung"
+                started = None
+                for line in stdout.splitlines():
+                    word, index, *rest = line.split(" ", 2)
+                    if word == "start":
+                        started = int(index)
+                    elif word == "done":
+                        results[int(index)] = json.loads(rest[0])
+                        started = None
+                batch = [i for i in batch if results[i] is None]
+                if started is None or code == 0:
+                    if batch:  # the process ended before its batch, not on a mutant
+                        raise RuntimeError(f"a reading process ended early (exit {code})")
+                    break
+                item = items[started]
+                results[started] = {
+                    "reader": item["reader"],
+                    "seed": item["seed"],
+                    "mutation": item["mutation"],
+                    "outcome": "crash",
+                    "detail": f"the reading process died (exit {code}): {item['path']}",
+                    "growth_MB": 0.0,
+                    "peak_MB": 0.0,
+                    "seconds": float("nan"),
+                }
+                batch = [i for i in batch if i != started]
+
+    threads = [threading.Thread(target=work, args=(share,)) for share in shares]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    return [r for r in results if r is not None]
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--mutants", type=int, default=4200)
@@ -429,9 +507,7 @@ def main() -> None:
                     "mutation": how,
                 }
             )
-        context = multiprocessing.get_context("forkserver")
-        with context.Pool(args.workers, initializer=_init, maxtasksperchild=200) as pool:
-            results = pool.map(_task, items, chunksize=8)
+        results = _drive(items, args.workers, folder / "items.json")
     wall = time.perf_counter() - start
     table: dict[str, collections.Counter] = collections.defaultdict(collections.Counter)
     for r in results:
@@ -444,6 +520,7 @@ def main() -> None:
         "other exception",
         "memory error",
         "timeout",
+        "crash",
         "over 300 MB",
     ]
     print(f"{'seed file':18s} " + " ".join(f"{o:>15s}" for o in outcomes))
@@ -453,7 +530,11 @@ def main() -> None:
     for counts in table.values():
         total.update(counts)
     print(f"{'all':18s} " + " ".join(f"{total[o]:15d}" for o in outcomes))
-    escapes = [r for r in results if r["outcome"] in ("other exception", "memory error", "timeout")]
+    escapes = [
+        r
+        for r in results
+        if r["outcome"] in ("other exception", "memory error", "timeout", "crash")
+    ]
     largest = sorted(results, key=lambda r: -r["growth_MB"])[:10]
     slowest = sorted(results, key=lambda r: -r["seconds"])[:5]
     for r in escapes[:20]:
@@ -483,7 +564,8 @@ def main() -> None:
             "escapes": escapes,
             "largest_memory_growth": largest,
             "slowest": slowest,
-            "goal": "0 other exceptions, memory errors or timeouts; no read growing by 300 MB",
+            "goal": "0 other exceptions, memory errors, timeouts or crashes; no read growing by "
+            "300 MB",
         },
     )
 
