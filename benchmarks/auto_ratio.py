@@ -23,9 +23,9 @@ with another commit: run this file with ``PYTHONPATH`` on that commit's worktree
 same time (``--output`` another name; the package timed and its commit are recorded),
 then ``python benchmarks/auto_ratio.py --compare NEW.json OLD.json``: the ratios, CPU
 times and laws of both, and how far the posterior means of ``auto``'s answers moved (in
-posterior sds, the same seeds). ``--every-law``: each candidate law alone
-(``--law NAME``) against the default fit instead (issue 42's second goal, each within
-3x and converged), on the same recordings.
+posterior sds, the same seeds), written to ``NEW_compare.json``. ``--every-law``: each
+candidate law alone (``--law NAME``) against the default fit instead (issue 42's second
+goal, each within 3x and converged), on the same recordings (``every_law.json``).
 """
 
 from __future__ import annotations
@@ -126,7 +126,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3])
     parser.add_argument("--external", type=Path, default=EXTERNAL)
     parser.add_argument("--only", nargs="*", help="recordings to fit (default: all)")
-    parser.add_argument("--output", default="auto_ratio")
+    parser.add_argument(
+        "--output",
+        help="results/OUTPUT.json (default auto_ratio, every_law with --every-law, and "
+        "NEW_compare with --compare)",
+    )
     parser.add_argument(
         "--every-law",
         action="store_true",
@@ -142,13 +146,13 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = parser.parse_args(argv)
     if args.compare:
-        return compare(*args.compare, args.output)
+        return compare(*args.compare, args.output or f"{args.compare[0].stem}_compare")
     cmds, absent = commands(args.external)
     if args.only:
         cmds = {k: v for k, v in cmds.items() if k in args.only}
     load_start = os.getloadavg()
     if args.every_law:
-        return every_law(cmds, args.seeds, args.output, load_start)
+        return every_law(cmds, args.seeds, args.output or "every_law", load_start)
     for name, cmd in cmds.items():  # warm: every kernel compiled or loaded
         run([*cmd, "--seed", "99"])
         run([*cmd, "--seed", "99", "--law", "auto"])
@@ -192,7 +196,7 @@ def main(argv: list[str] | None = None) -> int:
 
     package = Path(bayestribo.__file__).resolve().parents[1]
     path = write_results(
-        args.output,
+        args.output or "auto_ratio",
         {
             **provenance(
                 "bayestribo.cli.main", {"seeds": args.seeds, "only": args.only}, load_start
