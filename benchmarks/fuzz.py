@@ -2,7 +2,8 @@
 
 Seed files of every registered format are written from one simulated run (the
 canonical CSV and its JSON sidecar, a CSV whose header names units, a Tektronix and a
-LabVIEW ``.lvm`` export, an Excel workbook, UFF 58b, TDMS, MATLAB v5 and v7.3, HDF5),
+LabVIEW ``.lvm`` export, an Excel workbook, UFF 58b, TDMS, MATLAB v5 and v7.3, HDF5,
+a NumPy ``.npz`` archive and ``.npy`` array, a 16-bit WAV file),
 each with the reading options that read it right. ``--mutants`` mutants are drawn
 from them, seeded: bytes flipped, the file cut short, bytes inserted or deleted, a block
 repeated, 4- and 8-byte fields overwritten with huge values (sizes a header claims),
@@ -232,6 +233,25 @@ def write_seeds(folder: Path) -> list[dict[str, Any]]:
         group.create_dataset("displacement", data=1e6 * x).attrs["units"] = "um"
         group.create_dataset("velocity", data=v).attrs["units"] = "m/s"
     add("HDF5", "hdf5", h5, {"group": "run1"}, ["--group", "run1"])
+    npz = folder / "arrays.npz"
+    np.savez_compressed(npz, time_s=t, displacement_mm=1e3 * x, velocity_m_per_s=v)
+    add("NumPy .npz", "npz", npz, {}, [])
+    npy = folder / "frames.npy"  # one array, its columns named
+    np.save(npy, np.column_stack([t, x, v]))
+    columns = ["time_s", "displacement_m", "velocity_m_per_s"]
+    add("NumPy .npy", "npz", npy, {"columns": columns}, ["--columns", *columns])
+    import scipy.io.wavfile
+
+    wav = folder / "sound.wav"  # 16-bit PCM, one channel: fractions of full scale
+    pcm = np.round(x / np.abs(x).max() * 3e4).astype(np.int16)
+    scipy.io.wavfile.write(wav, round(1.0 / (t[1] - t[0])), pcm)
+    add(
+        "WAV",
+        "wav",
+        wav,
+        {"channels": {"displacement_m": "0"}, "metadata": {"length_unit": "arbitrary"}},
+        ["--channel", "displacement_m=0", "--length-unit", "arbitrary"],
+    )
     return seeds
 
 
