@@ -20,6 +20,7 @@ import emcee
 import numpy as np
 import pytest
 import scipy.stats
+from _paths import RUNS
 
 from bayestribo.errors import BayestriboError
 from bayestribo.inference.moves import DESnookerMove, GroupedDEMove, GroupedDESnookerMove
@@ -194,6 +195,26 @@ def test_ensembles_stuck_in_separate_modes_are_not_converged():
         run.reasons
     )
     assert np.all(run.rhat > 1.1)
+
+
+@pytest.mark.parametrize("walkers", [3, 4, 7])
+def test_fewer_walkers_than_twice_the_parameters_is_an_error_naming_the_option(walkers):
+    # an ensemble of fewer walkers does not span the posterior: emcee refused it with a
+    # RuntimeError deep in a fit, or the fit went on to fail on too few draws
+    settings = SamplerSettings(n_walkers=walkers, n_ensembles=2, max_steps=200)
+    start = 0.01 * np.random.default_rng(3).standard_normal((2, walkers, 4))
+    with pytest.raises(
+        BayestriboError, match=r"n_walkers \(--walkers\): .* 4 sampled .* 8 walkers"
+    ):
+        run_ensembles(lambda x: -0.5 * np.sum(x * x, axis=1), start, settings, seed=1)
+
+
+def test_a_fit_with_too_few_walkers_is_refused_naming_the_option(capsys):
+    from bayestribo.cli.main import main
+
+    code = main(["fit", str(RUNS / "glycerol-N0.31-r1.csv"), "--walkers", "4"])
+    assert code == 2
+    assert "--walkers" in capsys.readouterr().err
 
 
 def test_a_nan_log_probability_is_an_error_naming_the_parameters():

@@ -623,6 +623,13 @@ def run_ensembles(
         )
     n_ens, n_walkers, ndim = initial.shape
     labels = _labels(names if names is not None else getattr(log_prob, "names", []), ndim)
+    if n_walkers < 2 * ndim:
+        # emcee's moves need two walkers a coordinate (an ensemble of fewer does not
+        # span the posterior; emcee itself refuses with a RuntimeError)
+        raise BayestriboError(
+            f"n_walkers (--walkers): expected at least twice the {ndim} sampled parameters "
+            f"({', '.join(labels)}), {2 * ndim} walkers per ensemble, got {n_walkers}"
+        )
     checked = _nan_checked(log_prob, labels)
     if settings.moves == "grouped" and n_walkers % 4 == 0 and n_walkers >= 2 * ndim:
         ensembles: _Ensembles = _Grouped(checked, initial, seed)
