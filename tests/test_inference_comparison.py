@@ -84,6 +84,15 @@ def test_a_fixed_parameter_is_the_full_posterior_at_that_value_without_its_prior
         build_posterior(prepared.data, fixed={"zeta": 0.0}, priors={"zeta": full.priors["zeta"]})
     with pytest.raises(BayestriboError, match="fixed: unknown parameter 'eta'"):
         build_posterior(prepared.data, fixed={"eta": 0.0})
+    # outside what the law means: a negative friction would feed the motion
+    for name, value, support in (
+        ("mu_k", -1.0, r"\[0, inf\]"),
+        ("zeta", 1.5, r"\[0, 1\]"),
+        ("mu_s_ratio", 0.5, r"\[1, inf\]"),
+    ):
+        with pytest.raises(BayestriboError, match=rf"fixed \(--fix\): {name} .* {support}"):
+            build_posterior(prepared.data, fixed={name: value})
+    assert build_posterior(prepared.data, fixed={"mu_k": 0.0, "mu_s_ratio": 1.0}).fixed
 
 
 def test_unknown_or_single_laws_are_refused():

@@ -85,6 +85,14 @@ class Posterior:
                 raise BayestriboError(f"fixed: {name!r} is also sampled (it has a prior)")
             if not math.isfinite(value):
                 raise BayestriboError(f"fixed: {name} must be a finite number, got {value!r}")
+        for parameter in getattr(self.likelihood.law, "parameters", ()):
+            value = fixed.get(parameter.name)
+            if value is not None and not parameter.low <= value <= parameter.high:
+                # outside what the law means (a negative friction feeds the motion)
+                raise BayestriboError(
+                    f"fixed (--fix): {parameter.name} ({parameter.label}) must lie in "
+                    f"[{parameter.low:g}, {parameter.high:g}], got {value:g}"
+                )
         unknown = [n for n in self.priors.names if n not in known]
         if unknown:
             raise BayestriboError(f"priors: unknown parameter(s) {unknown}; expected {known}")
