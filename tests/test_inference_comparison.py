@@ -16,6 +16,7 @@ from bayestribo import simulate
 from bayestribo.errors import BayestriboError
 from bayestribo.inference import build_posterior, prepare
 from bayestribo.inference.comparison import LAWS, compare_dissipation_laws
+from bayestribo.inference.priors import Normal, Uniform
 
 DATA = RUNS
 needs_data = pytest.mark.skipif(not DATA.is_dir(), reason="bundled data/ folder not present")
@@ -93,6 +94,17 @@ def test_a_fixed_parameter_is_the_full_posterior_at_that_value_without_its_prior
         with pytest.raises(BayestriboError, match=rf"fixed \(--fix\): {name} .* {support}"):
             build_posterior(prepared.data, fixed={name: value})
     assert build_posterior(prepared.data, fixed={"mu_k": 0.0, "mu_s_ratio": 1.0}).fixed
+    # a prior reaching where the law is not defined: the closed form's Π is NaN for an
+    # overdamped ζ, and the fit ended in a NaNLogProbabilityError's traceback
+    for name, prior in (
+        ("mu_k", Uniform(-1.0, 1.0)),
+        ("zeta", Uniform(0.5, 2.0)),
+        ("mu_s_ratio", Uniform(0.5, 2.0)),
+        ("zeta", Normal(0.02, 0.05)),
+    ):
+        with pytest.raises(BayestriboError, match=rf"priors \(--prior\): {name}=.* reaches beyond"):
+            build_posterior(prepared.data, priors={name: prior})
+    assert build_posterior(prepared.data, priors={"zeta": Normal(0.02, 0.001)}).priors
 
 
 def test_unknown_or_single_laws_are_refused():

@@ -146,6 +146,26 @@ def _no_load_result() -> FitResult:
     )
 
 
+def test_diagnostics_the_sampler_could_not_define_read_undefined_in_the_text() -> None:
+    # a chain that did not move leaves τ, the ESS and R-hat undefined (None): the text
+    # says so, where formatting None raised TypeError after the fit had run
+    import json
+
+    result = _no_load_result()
+    result.attrs["diagnostics_json"] = json.dumps(
+        {
+            "converged": False,
+            "reasons": ["a chain did not move"],
+            "n_walkers": 8,
+            "autocorr_time_max": None,
+            "ess_min": None,
+            "rhat_max": float("nan"),
+        }
+    )
+    text = result.to_text()
+    assert "τ_max undefined, ESS_min undefined, R-hat_max undefined" in text
+
+
 def test_without_a_load_the_friction_displacement_is_the_sampled_friction() -> None:
     result = _no_load_result()
     summary = result.summary()

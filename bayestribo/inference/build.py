@@ -13,7 +13,7 @@ from collections.abc import Mapping
 from bayestribo.errors import BayestriboError
 from bayestribo.inference.likelihood import MODELS, PiLikelihood
 from bayestribo.inference.posterior import Posterior
-from bayestribo.inference.priors import Prior, PriorSet, default_priors
+from bayestribo.inference.priors import Normal, Prior, PriorSet, default_priors
 from bayestribo.model.laws import Law, get_law
 from bayestribo.signal.increments import PiData
 
@@ -102,6 +102,7 @@ def build_posterior(
             prior_set = prior_set.replace(**dict(priors))
         except ValueError as exc:
             raise BayestriboError(f"priors: {exc} (law {the_law.name})") from None
+        _check_support(prior_set, the_law)
     if fixed:
         prior_set = PriorSet({n: p for n, p in prior_set.priors.items() if n not in fixed})
     likelihood = PiLikelihood(
@@ -112,3 +113,33 @@ def build_posterior(
         law=the_law,
     )
     return Posterior(prior_set, likelihood, fixed)
+
+
+#: Prior mass a Normal prior may put outside its parameter's support (where the law
+#: is not defined: a negative friction, an overdamped ζ above 1).
+OUTSIDE_MASS = 1e-6
+
+
+def _check_support(prior_set: PriorSet, law: Law) -> None:
+    """Refuse a prior given for a law's parameter that reaches beyond the parameter's
+    support: a uniform one whose bounds do, or a normal one with more than
+    :data:`OUTSIDE_MASS` of its mass there."""
+    from scipy.special import ndtr
+
+    for parameter in law.parameters:
+        prior = prior_set.priors.get(parameter.name)
+        if prior is None:
+            continue
+        low, high = parameter.low, parameter.high
+        if isinstance(prior, Normal):
+            below = ndtr((low - prior.mu) / prior.sigma) if math.isfinite(low) else 0.0
+            above = ndtr((prior.mu - high) / prior.sigma) if math.isfinite(high) else 0.0
+            beyond = below + above > OUTSIDE_MASS
+        else:
+            beyond = getattr(prior, "low", low) < low or getattr(prior, "high", high) > high
+        if beyond:
+            raise BayestriboError(
+                f"priors (--prior): {parameter.name}={prior.describe()} reaches beyond "
+                f"[{low:g}, {high:g}], where the law {law.name} defines {parameter.name} "
+                f"({parameter.label}); give a prior within it"
+            )

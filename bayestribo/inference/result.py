@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import warnings
 from collections.abc import Mapping
 from pathlib import Path
@@ -641,8 +642,9 @@ class FitResult:
         lines.append(
             f"sampler   {status}; {count(d.get('n_walkers'), 'walker')} × "
             f"{count(d.get('n_ensembles'), 'ensemble')} × {count(d.get('n_steps'), 'step')}, "
-            f"τ_max {d.get('autocorr_time_max', 0):.1f}, "
-            f"ESS_min {d.get('ess_min', 0):.0f}, R-hat_max {d.get('rhat_max', 0):.4f}"
+            f"τ_max {_number(d.get('autocorr_time_max'), '.1f')}, "
+            f"ESS_min {_number(d.get('ess_min'), '.0f')}, "
+            f"R-hat_max {_number(d.get('rhat_max'), '.4f')}"
         )
         shape = d.get("shape_departure") or {}
         if shape.get("p_value") is not None and shape["p_value"] < 1e-3:
@@ -898,3 +900,11 @@ class FitResult:
             idata = az.from_netcdf(str(path), engine=NETCDF_ENGINE)
         idata.load()
         return cls(idata)
+
+
+def _number(value: Any, spec: str) -> str:
+    """A diagnostic for the text: ``value`` formatted, or "undefined" where the sampler
+    could not define it (None or NaN: a chain that did not move)."""
+    if value is None or not math.isfinite(float(value)):
+        return "undefined"
+    return format(float(value), spec)
