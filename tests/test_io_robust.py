@@ -99,6 +99,39 @@ def test_a_mat_variable_claiming_too_many_samples_is_refused_from_its_header(
         read_run(path)
 
 
+_CHILD = """
+import importlib, sys, warnings
+warnings.simplefilter("ignore")
+def named(text):
+    module, name = text.split(":")
+    return getattr(importlib.import_module(module), name)
+call, error = named(sys.argv[1]), named(sys.argv[2])
+for path in sys.argv[3:]:
+    try:
+        call(path)
+        print("read", path)
+    except error as exc:
+        print("refused", exc)
+"""
+
+
+def _read_each_in_a_child(call: str, error: str, paths: list[str]) -> list[str]:
+    """``call`` ("module:function") on each of ``paths`` in one child process, a line
+    each: "read PATH", or "refused MESSAGE" where it raised ``error``. A crash of the
+    child (a library's SIGSEGV) fails the calling test instead of ending the run."""
+    import subprocess
+    import sys
+
+    done = subprocess.run(
+        [sys.executable, "-c", _CHILD, call, error, *paths],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 0, (done.returncode, done.stderr[-2000:])
+    return done.stdout.splitlines()
+
+
 @pytest.mark.parametrize("compress", [False, True])
 def test_a_mat_array_whose_header_misstates_its_data_is_refused_not_read(
     tmp_path: Path, run, compress: bool
@@ -108,8 +141,6 @@ def test_a_mat_array_whose_header_misstates_its_data_is_refused_not_read(
     # crashed the interpreter (SIGSEGV, scipy 1.17: found by benchmarks/fuzz.py), and a
     # class no MATLAB file has raised UnboundLocalError. Each is read here in a child
     # process, so that a crash fails this test instead of ending the run.
-    import subprocess
-    import sys
     import zlib
 
     import scipy.io
@@ -131,22 +162,7 @@ def test_a_mat_array_whose_header_misstates_its_data_is_refused_not_read(
         path = tmp_path / f"{name}.mat"
         path.write_bytes(bytes(damaged))
         files.append(str(path))
-    child = (
-        "import sys\n"
-        "from bayestribo import read_run\n"
-        "from bayestribo.errors import RunFormatError\n"
-        "for path in sys.argv[1:]:\n"
-        "    try:\n"
-        "        read_run(path)\n"
-        "        print('read', path)\n"
-        "    except RunFormatError as exc:\n"
-        "        print('refused', exc)\n"
-    )
-    done = subprocess.run(
-        [sys.executable, "-c", child, *files], capture_output=True, text=True, timeout=300
-    )
-    assert done.returncode == 0, done.stderr[-2000:]
-    lines = done.stdout.splitlines()
+    lines = _read_each_in_a_child("bayestribo:read_run", "bayestribo.errors:RunFormatError", files)
     assert len(lines) == 3 and all(line.startswith("refused") for line in lines), lines
     assert "'time_s'" in lines[0] and "MATLAB" in lines[0]
     assert "class 255, not a MATLAB class" in lines[2]
@@ -156,9 +172,6 @@ def test_the_mat_header_walk_refuses_no_file_matlab_wrote() -> None:
     # SciPy's own test files, written by MATLAB 4 to 7.4 on several platforms (complex,
     # sparse, cell, structure and object arrays, strings, function handles, big- and
     # little-endian): the header walk refuses only those loadmat cannot read either.
-    import subprocess
-    import sys
-
     import scipy.io
 
     from bayestribo.io.mat_headers import DamagedHeader, declared_bytes, v5_variables
@@ -175,21 +188,8 @@ def test_the_mat_header_walk_refuses_no_file_matlab_wrote() -> None:
             except DamagedHeader:
                 refused.append(str(path))
     assert len(refused) < len(files) // 4  # most of them walked
-    child = (
-        "import sys, warnings\n"
-        "import scipy.io\n"
-        "warnings.simplefilter('ignore')\n"
-        "for path in sys.argv[1:]:\n"
-        "    try:\n"
-        "        scipy.io.loadmat(path)\n"
-        "        print('loads', path)\n"
-        "    except Exception:\n"
-        "        pass\n"
-    )
-    done = subprocess.run(
-        [sys.executable, "-c", child, *refused], capture_output=True, text=True, timeout=300
-    )
-    assert done.returncode == 0 and not done.stdout, (done.stdout, done.stderr[-1000:])
+    lines = _read_each_in_a_child("scipy.io:loadmat", "builtins:Exception", refused)
+    assert all(line.startswith("refused") for line in lines), lines
 
 
 def test_a_broken_workbook_is_refused(tmp_path: Path, run) -> None:
