@@ -182,3 +182,35 @@ def test_without_a_load_the_friction_displacement_is_the_sampled_friction() -> N
     table = result._table_lines(0.95)
     row = next(line for line in table if line.startswith("friction as displacement x_c"))
     assert "signal unit" in row
+
+
+def test_a_law_fitted_at_no_loss_has_an_undefined_slope_in_the_text() -> None:
+    # a law whose ΔE(A) is zero at every swing (fitted at its null: η = 0 on a record
+    # whose energy hardly falls) has no log-log slope, stored as None: the text says
+    # "undefined" where formatting None raised TypeError after `--law auto` had run
+    import json
+
+    result = _no_load_result()
+    result.attrs["shape_agreement_json"] = json.dumps(
+        {
+            "max_percent": 100.0,
+            "rms_percent": 100.0,
+            "max_z": 0.5,
+            "law_slope": None,
+            "measured_slope": 1.0,
+            "measured_slope_se": None,
+            "same_shape": True,
+        }
+    )
+    text = result.to_text()
+    assert "ΔE(A) of the law as A^undefined, of the turning points as A^1.00 ± undefined" in text
+    row = {
+        "max_percent": 100.0,
+        "law_slope": None,
+        "measured_slope": 1.0,
+        "measured_slope_se": 17.0,
+        "same_shape": True,
+    }
+    lines = result._departure_lines({"hysteretic": row, "viscous": {**row, "law_slope": 2.0}})
+    assert any("hysteretic" in line and "slope undefined" in line for line in lines)
+    assert any("viscous" in line and "slope 2.00" in line for line in lines)

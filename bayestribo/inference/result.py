@@ -712,9 +712,10 @@ class FitResult:
         agreement = self._attr("shape_agreement_json", None)
         if agreement:
             lines.append(
-                f"shape     ΔE(A) of the law as A^{agreement['law_slope']:.2f}, of the turning "
-                f"points as A^{agreement['measured_slope']:.2f} ± "
-                f"{agreement['measured_slope_se']:.2f}; the law departs from them by up to "
+                f"shape     ΔE(A) of the law as A^{_number(agreement['law_slope'], '.2f')}, of "
+                f"the turning points as A^{_number(agreement['measured_slope'], '.2f')} ± "
+                f"{_number(agreement['measured_slope_se'], '.2f')}; the law departs from "
+                "them by up to "
                 f"{agreement['max_percent']:.3g} %"
                 + ("" if agreement["same_shape"] else ": ANOTHER SHAPE")
             )
@@ -791,14 +792,15 @@ class FitResult:
         out = [
             "          how close each law came to the turning points' ΔE(A) (largest "
             "departure over the swings; log-log slope, the turning points' "
-            f"{first['measured_slope']:.2f} ± {first['measured_slope_se']:.2f}):"
+            f"{_number(first['measured_slope'], '.2f')} ± "
+            f"{_number(first['measured_slope_se'], '.2f')}):"
         ]
         width = max(len(law) for law in rows)
         for law, d in sorted(rows.items(), key=lambda item: item[1]["max_percent"]):
             shape = "" if d["same_shape"] else "  another shape"
             out.append(
                 f"            {law:<{width}}  {d['max_percent']:8.3g} %   slope "
-                f"{d['law_slope']:.2f}{shape}"
+                f"{_number(d['law_slope'], '.2f')}{shape}"
             )
         return out
 
@@ -903,8 +905,9 @@ class FitResult:
 
 
 def _number(value: Any, spec: str) -> str:
-    """A diagnostic for the text: ``value`` formatted, or "undefined" where the sampler
-    could not define it (None or NaN: a chain that did not move)."""
+    """A number for the text: ``value`` formatted, or "undefined" where it is not
+    defined (None or NaN: a chain that did not move; the log-log slope of a ΔE(A) that
+    is zero at every swing, a law fitted at no loss)."""
     if value is None or not math.isfinite(float(value)):
         return "undefined"
     return format(float(value), spec)
