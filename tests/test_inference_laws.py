@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import warnings
 
 import numpy as np
@@ -63,12 +64,19 @@ def test_the_printed_dissipation_rows_are_aligned(drag_fit, unit, monkeypatch):
     amplitude = list(band["amplitude"])
     amplitude[0], amplitude[len(amplitude) // 2], amplitude[-1] = 0.0928, 0.3847, 1.258
     band["amplitude"] = amplitude
+    # and a value at its bound, whose text ("0 (at the bound)") is as wide as the column
+    # it is right-aligned in: it ran into the swing ("A = 0.1557 rad0 (at the bound)")
+    band["mean"] = [0.0, *list(band["mean"])[1:]]
+    band["interval"] = [[0.0, *list(band["interval"][0])[1:]], list(band["interval"][1])]
     monkeypatch.setattr(type(result), "dissipation", property(lambda self: band))
     rows = [line for line in result.to_text().splitlines() if line.startswith("    A = ")]
     assert len(rows) >= 4  # the law's and the turning points', at three swings each
     # every value starts in the same column, whatever the digits of the amplitude
     starts = {line.index("[") for line in rows}
     assert len(starts) == 1
+    # two spaces at least between the swing's unit and its value
+    assert any("(at the bound)" in line for line in rows)
+    assert all(re.match(rf"    A = \S+ {re.escape(unit)}  +\S", line) for line in rows), rows
 
 
 def test_the_default_law_misfits_the_drag_and_its_dissipation_differs(drag_run, drag_fit):

@@ -831,16 +831,22 @@ class FitResult:
         picks = sorted({len(amp) - 1, len(amp) // 2, 0}, reverse=True)
         swings = {i: f"A = {amp[i]:.4g} {d['amplitude_unit']}" for i in picks}
         width = max(len(s) for s in swings.values())
+        cells: list[tuple[str, list[tuple[str, str, str]]]] = []
         for label, band in rows:
-            out.append(f"  {label}")
             mean, (lo, hi) = band["mean"], band["interval"]
+            row = []
             for i in picks:
                 if mean[i] is None or lo[i] is None or hi[i] is None:
                     continue
-                # the value right-aligned, so every interval starts in one column
                 centre, _, rest = interval_text(mean[i], lo[i], hi[i]).partition(" [")
-                bracket = f" [{rest}" if rest else ""
-                out.append(f"    {swings[i]:<{width}}{centre:>16}{bracket}")
+                row.append((swings[i], centre, f" [{rest}" if rest else ""))
+            cells.append((label, row))
+        # the value right-aligned, so every interval starts in one column, two spaces
+        # at least from the swing ("0 (at the bound)" fills 16)
+        right = max([len(c) for _, row in cells for _, c, _ in row] + [14]) + 2
+        for label, row in cells:
+            out.append(f"  {label}")
+            out.extend(f"    {swing:<{width}}{centre:>{right}}{b}" for swing, centre, b in row)
         return out
 
     def __repr__(self) -> str:
