@@ -41,7 +41,9 @@ command, the ratios fit / warm fit and help / import numpy (also as the median o
 ratios within each round), and whether the two trees print the same fit.
 
 Run: ``python benchmarks/cli_startup.py --baseline /tmp/startup-base``; writes
-``benchmarks/results/cli_startup.json``.
+``benchmarks/results/cli_startup.json``. ``--run FILE --fit-args "OPTIONS"``: another
+recording and the fit command's options (``--law``, ``--columns``, ...); the warm fit is
+then the command itself, run in the worker with its text discarded.
 """
 
 from __future__ import annotations
@@ -51,6 +53,7 @@ import compileall
 import os
 import random
 import resource
+import shlex
 import statistics
 import subprocess
 import sys
@@ -114,15 +117,23 @@ BREAKDOWN = {
 #: A long-lived worker: one warm fit of the run per line read, its CPU and wall times
 #: printed.
 WORKER = """
-import sys, time, warnings
+import contextlib, io, sys, time, warnings
 warnings.simplefilter("ignore")
 import bayestribo
-run = sys.argv[1]
-bayestribo.fit(run)  # warm-up: imports, numba caches, first-call work
+run, options = sys.argv[1], sys.argv[2:]
+def once():
+    if not options:
+        return bayestribo.fit(run)
+    # the command's options (--fit-args): the command itself, in process, its text
+    # discarded
+    from bayestribo.cli import main
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        main(["fit", run, *options])
+once()  # warm-up: imports, numba caches, first-call work
 print("ready", flush=True)
 for line in sys.stdin:
     cpu, wall = time.process_time(), time.perf_counter()
-    bayestribo.fit(run)
+    once()
     print(time.process_time() - cpu, time.perf_counter() - wall, flush=True)
 """
 
@@ -149,9 +160,9 @@ def _timed(
 class WarmFit:
     """A worker process on ``tree`` that fits ``run`` in process on request."""
 
-    def __init__(self, tree: Path, run: Path, cwd: str) -> None:
+    def __init__(self, tree: Path, run: Path, cwd: str, options: list[str] | None = None) -> None:
         self.proc = subprocess.Popen(
-            [sys.executable, "-c", WORKER, str(run)],
+            [sys.executable, "-c", WORKER, str(run), *(options or [])],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             text=True,
@@ -174,14 +185,14 @@ class WarmFit:
         self.proc.wait()
 
 
-def commands(run: Path) -> dict[str, list[str]]:
-    """The fresh-process commands of a round, by name."""
+def commands(run: Path, options: list[str] | None = None) -> dict[str, list[str]]:
+    """The fresh-process commands of a round, by name (``options``: the fit's)."""
     py = sys.executable
     return {
         "help": [py, "-c", CONSOLE, "--help"],
         **{f"help_{sub}": [py, "-c", CONSOLE, sub, "--help"] for sub in COMMANDS},
         "import_numpy": [py, "-c", "import numpy"],
-        "fit": [py, "-c", CONSOLE, "fit", str(run)],
+        "fit": [py, "-c", CONSOLE, "fit", str(run), *(options or [])],
         "import_fit_libraries": [py, "-c", FLOOR],
         "import_floor": [py, "-c", FLOOR_NO_SIGNAL],
         "import_floor_frozen": [py, "-c", FLOOR_FROZEN],
@@ -223,13 +234,20 @@ def main() -> None:
     parser.add_argument("--run", type=Path, default=RUN, help="the run to fit")
     parser.add_argument("--baseline", type=Path, help="a worktree of an older commit")
     parser.add_argument("--output", default="cli_startup", help="results/<OUTPUT>.json")
+    parser.add_argument(
+        "--fit-args",
+        default="",
+        help='options of the fit command (one string, e.g. "--law coulomb+quadratic"); '
+        "the warm fit is then the command itself run in the worker",
+    )
     args = parser.parse_args()
+    options = shlex.split(args.fit_args)
 
     trees = {"current": REPO}
     if args.baseline is not None:
         trees["baseline"] = args.baseline.resolve()
     run = args.run.resolve()
-    cmds = commands(run)
+    cmds = commands(run, options)
     cpu: dict[str, dict[str, list[float]]] = {t: {c: [] for c in cmds} for t in trees}
     wall: dict[str, dict[str, list[float]]] = {t: {c: [] for c in cmds} for t in trees}
     warm_cpu: dict[str, list[float]] = {t: [] for t in trees}
@@ -244,7 +262,7 @@ def main() -> None:
                     raise SystemExit(f"{name}: {cmd[3:]} failed:\n{done.stderr}")
             _, _, done = _timed(cmds["fit"], tree, cwd)
             outputs[name] = done.stdout
-        workers = {name: WarmFit(tree, run, cwd) for name, tree in trees.items()}
+        workers = {name: WarmFit(tree, run, cwd, options) for name, tree in trees.items()}
         load = []
         try:
             order = random.Random(0)
@@ -276,13 +294,17 @@ def main() -> None:
             "help": "bayestribo --help",
             **{f"help_{sub}": f"bayestribo {sub} --help" for sub in COMMANDS},
             "import_numpy": 'python -c "import numpy"',
-            "fit": f"bayestribo fit {run.name}",
+            "fit": " ".join(["bayestribo fit", run.name, *options]),
             "import_fit_libraries": f'python -c "{FLOOR}"',
             "import_floor": f'python -c "{FLOOR_NO_SIGNAL}"',
             "import_floor_frozen": f'python -c "{FLOOR_FROZEN}"',
             "import_fit": f'python -c "{FIT_IMPORTS}"',
             **{name: f'python -c "{code}"' for name, code in BREAKDOWN.items()},
-            "warm_fit": "bayestribo.fit(RUN) in a process that fitted it before",
+            "warm_fit": (
+                "bayestribo.fit(RUN) in a process that fitted it before"
+                if not options
+                else "the fit command run in a process that ran it before, its text discarded"
+            ),
         },
         "bytecode": "compiled before the rounds (compileall); PYTHONDONTWRITEBYTECODE="
         + os.environ.get("PYTHONDONTWRITEBYTECODE", ""),

@@ -170,22 +170,50 @@ def test_psis_loo_is_arvizs_loo(case):
     assert loo.relative_efficiency(chains[:1]) == 1.0
 
 
-def test_psis_of_regular_rows_does_not_import_arviz():
-    """Rows whose tails have no ties are smoothed without ArviZ, which takes seconds
-    to import (a fit's importance correction smooths one such row); the smoothing
-    against ArviZ's own is :func:`test_psis_loo_is_arvizs_loo`'s."""
+def test_psis_does_not_import_arviz():
+    """Rows are smoothed without ArviZ, which takes seconds to import (a fit's
+    importance correction smooths one row of a surrogate's draws): regular rows, rows
+    with ties at the cut (a walker that stayed put repeats its weight: on a seismometer
+    record a correction's first such row cost 1.3 s of import) and rows whose tail is
+    too short; the smoothing against ArviZ's own is
+    :func:`test_psis_loo_is_arvizs_loo`'s and
+    :func:`test_a_row_with_ties_at_its_cut_is_smoothed_as_arviz_smooths_it`'s."""
     import subprocess
     import sys
 
     code = (
         "import sys, numpy as np\n"
         "from bayestribo.inference.loo import psis\n"
-        "x, k = psis(np.random.default_rng(0).normal(size=(2, 2000)), 1.0)\n"
+        "rows = np.random.default_rng(0).normal(size=(3, 2000))\n"
+        "rows[1, 1000:1600] = rows[1, 1000]  # ties at the cut\n"
+        "x, k = psis(rows, 1.0)\n"
         "assert np.all(np.isfinite(x)) and np.all(np.isfinite(k))\n"
+        "x, k = psis(rows[:, :12], 1.0)  # a tail of 3\n"
+        "assert np.all(np.isfinite(x)) and np.all(np.isinf(k))\n"
         "print('arviz' in sys.modules)\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_a_row_with_ties_at_its_cut_is_smoothed_as_arviz_smooths_it(seed):
+    from arviz.stats.stats import _psislw
+
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(20, 3000))
+    row = rng.standard_t(3, size=n) * rng.uniform(0.1, 5.0)
+    for _ in range(int(rng.integers(1, 6))):  # walkers that stayed put
+        a = int(rng.integers(0, n))
+        row[a : a + int(rng.integers(1, 40))] = row[a]
+    if seed % 10 == 0:
+        row[:] = row[0]
+    cutoff_ind = -int(np.ceil(min(n / 5.0, 3 * (n / rng.uniform(0.2, 1.0)) ** 0.5))) - 1
+    cutoffmin = np.log(np.finfo(float).tiny)
+    expected, k_expected = _psislw(row.copy(), cutoff_ind, cutoffmin, True)
+    got, k = loo._psis_row(row.copy(), cutoff_ind, cutoffmin)
+    assert k == pytest.approx(k_expected, rel=1e-12) or (np.isinf(k) and np.isinf(k_expected))
+    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12)
 
 
 def _scattered(scale: float):

@@ -40,6 +40,7 @@ on a record of several hundred increments per grid was a tenth of ``law="auto"``
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Callable, Mapping
 from typing import Any
@@ -343,15 +344,32 @@ def psis(log_weights: NDArray, reff: float) -> tuple[NDArray, NDArray]:
             block[block > 0] = 0.0
             x[rows_fitted] = block
     x -= _logsumexp_rows(x)[:, None]
-    irregular = np.flatnonzero(~regular | (tail <= 4))
-    if irregular.size:
-        # imported only here: ArviZ takes seconds to import, and a fit that smooths
-        # importance weights (inference/correction.py) rarely meets such a row
-        from arviz.stats.stats import _psislw
-    for i in irregular:
-        # ties at the cut, or too short a tail: ArviZ's own row function
-        row = np.array(log_weights[i], dtype=float)
-        x[i], k[i] = _psislw(row, cutoff_ind, cutoffmin, True)
+    for i in np.flatnonzero(~regular | (tail <= 4)):
+        # ties at the cut (a walker that stayed put repeats its weight), or too short a
+        # tail: ArviZ's row function, written out (ArviZ takes seconds to import)
+        x[i], k[i] = _psis_row(np.array(log_weights[i], dtype=float), cutoff_ind, cutoffmin)
+    return x, k
+
+
+def _psis_row(x: NDArray, cutoff_ind: int, cutoffmin: float) -> tuple[NDArray, float]:
+    """One row smoothed as ArviZ's ``_psislw`` does it (normalised): the tail is every
+    weight above the one at ``cutoff_ind`` of the sorted row, however many ties there
+    are at that cut. ``x`` is changed in place."""
+    x -= np.max(x)
+    cut = max(float(x[np.argsort(x)[cutoff_ind]]), cutoffmin)
+    exp_cut = np.exp(cut)
+    (in_tail,) = np.where(x > cut)
+    k = math.inf
+    if in_tail.size > 4:
+        order = np.argsort(x[in_tail])
+        sample = np.exp(x[in_tail][order]) - exp_cut
+        k_row, sigma = _gpdfit_rows(sample[None, :])
+        k = float(k_row[0])
+        if math.isfinite(k):
+            probs = np.arange(0.5, in_tail.size) / in_tail.size
+            x[in_tail[order]] = np.log(_gpinv_rows(probs, k_row, sigma)[0] + exp_cut)
+            x[x > 0] = 0.0
+    x -= _logsumexp_rows(x[None, :])[0]
     return x, k
 
 
