@@ -119,8 +119,6 @@ def test_the_verdict_between_laws_the_data_cannot_split_is_not_the_seeds():
     """Laws within the PSIS-LOO noise of the best: the simplest adequate one, then the
     order compared; when none is adequate, the simplest converged one (the rank among
     them is noise: the seed used to choose)."""
-    import pandas as pd
-
     from bayestribo.inference.choice import verdict_of
 
     laws = ["viscous", "coulomb", "viscous+coulomb", "coulomb+hysteretic"]
@@ -133,12 +131,12 @@ def test_the_verdict_between_laws_the_data_cannot_split_is_not_the_seeds():
 
     # the best is coulomb+hysteretic by noise; viscous+coulomb is as good and first
     rows = table(True, [50.0, 60.0, 0.3, 0.0])
-    frame = pd.DataFrame(index=["coulomb+hysteretic", "viscous+coulomb", "viscous", "coulomb"])
+    frame = {law: {} for law in ["coulomb+hysteretic", "viscous+coulomb", "viscous", "coulomb"]}
     best, as_good, verdict, ok = verdict_of(laws, rows, frame)
     assert (best, verdict, ok) == ("coulomb+hysteretic", "viscous+coulomb", True)
     assert as_good == ["viscous+coulomb", "coulomb+hysteretic"]
     # none adequate: not the best by noise, the simplest of those as good
     rows = table(False, [0.5, 0.0, 1.0, 80.0])
-    frame = pd.DataFrame(index=["coulomb", "viscous", "viscous+coulomb", "coulomb+hysteretic"])
+    frame = {law: {} for law in ["coulomb", "viscous", "viscous+coulomb", "coulomb+hysteretic"]}
     _, as_good, verdict, ok = verdict_of(laws, rows, frame)
     assert verdict == "viscous" and not ok

@@ -123,13 +123,66 @@ def test_the_frame_of_precomputed_loos_is_arvizs_comparison():
         }
         expected = az.compare(idatas, ic="loo")
     frame = loo.loo_frame(loos)
-    assert list(frame.index) == list(expected.index)
-    for key in ("elpd_loo", "p_loo", "elpd_diff", "se", "dse"):
-        np.testing.assert_allclose(frame[key].astype(float), expected[key].astype(float))
+    assert list(frame) == list(expected.index)
+    for key in ("rank", "elpd_loo", "p_loo", "elpd_diff", "weight", "se", "dse", "warning"):
+        np.testing.assert_allclose(
+            [frame[law][key] for law in frame], expected[key].astype(float), rtol=1e-10
+        )
     assert loo.pareto_k_max(loos["a"]) == float(np.max(loos["a"].pareto_k))
     alone = loo.loo_frame({"a": loos["a"]})
-    assert list(alone.index) == ["a"] and alone.loc["a", "elpd_diff"] == 0.0
-    assert alone.loc["a", "elpd_loo"] == float(loos["a"]["elpd_loo"])
+    assert list(alone) == ["a"] and alone["a"]["elpd_diff"] == 0.0
+    assert alone["a"]["elpd_loo"] == float(loos["a"]["elpd_loo"]) and alone["a"]["weight"] == 1
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_comparison_of_several_laws_is_arvizs(seed):
+    # three to five laws whose pointwise densities differ by draws of several sizes:
+    # the ranks, differences and their errors, and the stacking weights (a constrained
+    # optimisation) as arviz.compare gives them
+    rng = np.random.default_rng(seed)
+    m = int(rng.integers(5, 200))
+    laws = [f"law{i}" for i in range(int(rng.integers(3, 6)))]
+    loos = {}
+    for i, law in enumerate(laws):
+        ll = -0.5 * (rng.normal(size=(2, 300, m)) * (1.0 + 0.3 * i)) ** 2 - 0.1 * i
+        chains = 0.1 * rng.normal(size=(2, 300, 2)).cumsum(axis=1)
+        loos[law] = (ll, chains)
+    ours = {law: loo.psis_loo(ll, loo.relative_efficiency(c)) for law, (ll, c) in loos.items()}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # ArviZ's own use of pandas
+        expected = az.compare({law: _arviz_loo(ll, c) for law, (ll, c) in loos.items()}, ic="loo")
+    frame = loo.loo_frame(ours)
+    assert list(frame) == list(expected.index)
+    for key in ("rank", "elpd_loo", "p_loo", "elpd_diff", "weight", "se", "dse"):
+        np.testing.assert_allclose(
+            [frame[law][key] for law in frame],
+            expected[key].astype(float),
+            rtol=1e-9,
+            atol=1e-9,
+            err_msg=key,
+        )
+
+
+@pytest.mark.parametrize("case", ["autocorrelated", "white", "constant", "short", "with a NaN"])
+def test_the_effective_sample_size_of_the_mean_is_arvizs(case):
+    from bayestribo.inference.loo_compare import ess_mean
+
+    rng = np.random.default_rng(7)
+    draws = {
+        "autocorrelated": 0.1 * rng.normal(size=(4, 501)).cumsum(axis=1),
+        "white": rng.normal(size=(2, 800)),
+        "constant": np.full((2, 50), 3.0),
+        "short": rng.normal(size=(2, 3)),
+        "with a NaN": np.where(np.arange(100) == 7, np.nan, rng.normal(size=(2, 100))),
+    }[case]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        expected = float(az.ess(draws, method="mean"))
+    got = ess_mean(draws)
+    if np.isnan(expected):
+        assert np.isnan(got)
+    else:
+        assert got == pytest.approx(expected, rel=1e-12)
 
 
 def _arviz_loo(ll, chains):
@@ -165,8 +218,8 @@ def test_psis_loo_is_arvizs_loo(case):
         assert float(got[key]) == pytest.approx(float(expected[key]), rel=1e-10, abs=1e-10)
     for key in ("n_samples", "n_data_points", "warning", "scale"):
         assert got[key] == expected[key]
-    np.testing.assert_allclose(got["loo_i"].values, expected["loo_i"].values, rtol=1e-10)
-    np.testing.assert_allclose(got["pareto_k"].values, expected["pareto_k"].values, rtol=1e-10)
+    np.testing.assert_allclose(got["loo_i"], expected["loo_i"].values, rtol=1e-10)
+    np.testing.assert_allclose(got["pareto_k"], expected["pareto_k"].values, rtol=1e-10)
     assert loo.relative_efficiency(chains[:1]) == 1.0
 
 

@@ -60,12 +60,13 @@ def complexity(law: str) -> tuple[int, int]:
 
 
 def verdict_of(
-    laws: Sequence[str], table: dict[str, dict[str, Any]], frame: Any
+    laws: Sequence[str], table: dict[str, dict[str, Any]], frame: Mapping[str, Any]
 ) -> tuple[str, list[str], str, bool]:
     """Best law, the laws as good as the best, the simplest adequate of those, and
-    whether it is adequate."""
+    whether it is adequate (``frame``: the laws' PSIS-LOO rows, best first,
+    :func:`bayestribo.inference.loo.loo_frame`)."""
     differences = {law: (table[law]["elpd_diff"], table[law]["dse"]) for law in laws}
-    return choose_law(laws, str(frame.index[0]), differences, table)
+    return choose_law(laws, next(iter(frame)), differences, table)
 
 
 def choose_law(

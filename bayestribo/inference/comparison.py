@@ -635,8 +635,8 @@ def compare_prepared(
             f"laws: fewer than two of {laws} could be fitted: " + "; ".join(notes)
         )
     frame = loo_frame(loos)
-    for law, row in frame.iterrows():
-        table[str(law)].update(
+    for law, row in frame.items():
+        table[law].update(
             {
                 key: float(row[key])
                 for key in ("rank", "elpd_loo", "p_loo", "elpd_diff", "weight", "se", "dse")

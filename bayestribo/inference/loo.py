@@ -41,14 +41,13 @@ on a record of several hundred increments per grid was a tenth of ``law="auto"``
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Callable, Mapping
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from bayestribo.inference.assemble import pointwise_log_likelihood
+from bayestribo.inference.loo_compare import LooResult, compare, ess_mean
 from bayestribo.inference.types import Sampled
 
 __all__ = [
@@ -178,8 +177,8 @@ def surrogate_shift(
     return float(np.mean(first)), se, 0.5 * float(np.mean(second))
 
 
-def law_loo(sampled: Sampled, pointwise: NDArray | None = None) -> Any:
-    """PSIS-LOO of one sampled law, its pointwise values kept (an ArviZ ``ELPDData``).
+def law_loo(sampled: Sampled, pointwise: NDArray | None = None) -> LooResult:
+    """PSIS-LOO of one sampled law, its pointwise values kept.
 
     Parameters
     ----------
@@ -191,7 +190,7 @@ def law_loo(sampled: Sampled, pointwise: NDArray | None = None) -> Any:
 
     Returns
     -------
-    ELPDData
+    LooResult
         :func:`psis_loo` of the pointwise log-likelihood with the relative efficiency
         of the chains (:func:`relative_efficiency`). A high Pareto k is reported by the
         comparison, not warned here.
@@ -203,26 +202,23 @@ def law_loo(sampled: Sampled, pointwise: NDArray | None = None) -> Any:
 
 def relative_efficiency(chains: NDArray) -> float:
     """The draws' mean effective sample size over their number: ArviZ's ``reff`` of
-    :func:`arviz.loo` (the "mean" ESS of each coordinate, averaged; 1 for one chain).
+    :func:`arviz.loo` (the "mean" ESS of each coordinate, averaged; 1 for one chain),
+    computed without ArviZ (:func:`~bayestribo.inference.loo_compare.ess_mean`).
 
     Parameters
     ----------
     chains : ndarray
         Draws of shape (chains, draws, d).
     """
-    import arviz as az
-
     chains = np.asarray(chains, dtype=float)
     n_chains, n_draws, d = chains.shape
     if n_chains == 1:
         return 1.0
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        ess = [float(az.ess(chains[..., i], method="mean")) for i in range(d)]
+    ess = [ess_mean(chains[..., i]) for i in range(d)]
     return float(np.mean(ess)) / (n_chains * n_draws)
 
 
-def psis_loo(log_likelihood: NDArray, reff: float) -> Any:
+def psis_loo(log_likelihood: NDArray, reff: float) -> LooResult:
     """PSIS-LOO from a pointwise log-likelihood, as :func:`arviz.loo` computes it
     (``pointwise=True``, log scale), with the Pareto smoothing of every increment's
     weights at once (:func:`psis`) rather than one increment at a time.
@@ -236,14 +232,12 @@ def psis_loo(log_likelihood: NDArray, reff: float) -> Any:
 
     Returns
     -------
-    ELPDData
+    LooResult
         ``elpd_loo``, ``se``, ``p_loo``, ``n_samples``, ``n_data_points``,
         ``warning`` (a Pareto k above ``good_k``), ``loo_i`` and ``pareto_k`` (per
-        increment), ``scale`` ("log") and ``good_k``, as :func:`arviz.loo` gives them.
+        increment), ``scale`` ("log") and ``good_k``, as :func:`arviz.loo` gives them
+        (:class:`~bayestribo.inference.loo_compare.LooResult`, read by key).
     """
-    import xarray as xr
-    from arviz import ELPDData
-
     ll = np.asarray(log_likelihood, dtype=float)
     ll = ll.reshape(-1, ll.shape[-1]).T  # (m, samples), samples in chain-major order
     m, n_samples = ll.shape
@@ -253,32 +247,17 @@ def psis_loo(log_likelihood: NDArray, reff: float) -> Any:
     se = float((m * np.var(loo_i)) ** 0.5)
     lppd = float(np.sum(_logsumexp_rows(ll) - np.log(n_samples)))
     good_k = min(1.0 - 1.0 / np.log10(n_samples), 0.7)
-    dims = ["pi_dim_0"]
-    return ELPDData(
-        data=[
-            elpd,
-            se,
-            lppd - elpd,
-            n_samples,
-            m,
-            bool(np.any(pareto_k > good_k)),
-            xr.DataArray(loo_i, dims=dims, name="loo_i"),
-            xr.DataArray(pareto_k, dims=dims, name="pareto_shape"),
-            "log",
-            good_k,
-        ],
-        index=[
-            "elpd_loo",
-            "se",
-            "p_loo",
-            "n_samples",
-            "n_data_points",
-            "warning",
-            "loo_i",
-            "pareto_k",
-            "scale",
-            "good_k",
-        ],
+    return LooResult(
+        elpd_loo=elpd,
+        se=se,
+        p_loo=lppd - elpd,
+        n_samples=n_samples,
+        n_data_points=m,
+        warning=bool(np.any(pareto_k > good_k)),
+        loo_i=loo_i,
+        pareto_k=pareto_k,
+        scale="log",
+        good_k=good_k,
     )
 
 
@@ -410,41 +389,24 @@ def _gpinv_rows(probs: NDArray, kappa: NDArray, sigma: NDArray) -> NDArray:
     return np.where((sigma > 0)[:, None], x, np.nan)
 
 
-def pareto_k_max(loo: Any) -> float:
+def pareto_k_max(loo: LooResult) -> float:
     """Largest Pareto k of a law's PSIS-LOO (:func:`law_loo`)."""
     return float(np.max(np.asarray(loo.pareto_k)))
 
 
-def loo_frame(loos: Mapping[str, Any]) -> Any:
-    """The laws' PSIS-LOO compared (:func:`arviz.compare` of :func:`law_loo`'s
-    results); one law alone is its own best.
+def loo_frame(loos: Mapping[str, LooResult]) -> dict[str, dict[str, float]]:
+    """The laws' PSIS-LOO compared, as :func:`arviz.compare` compares them
+    (:func:`~bayestribo.inference.loo_compare.compare`); one law alone is its own best.
 
     Parameters
     ----------
-    loos : mapping of str to ELPDData
+    loos : mapping of str to LooResult
         Each law's PSIS-LOO, pointwise.
 
     Returns
     -------
-    pandas.DataFrame
-        One row per law, best first: ``rank``, ``elpd_loo``, ``p_loo``, ``elpd_diff``,
-        ``weight``, ``se``, ``dse``.
+    dict
+        Law -> its row, best first: ``rank``, ``elpd_loo``, ``p_loo``, ``elpd_diff``,
+        ``weight``, ``se``, ``dse``, ``warning``.
     """
-    import arviz as az
-    import pandas as pd
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        if len(loos) >= 2:
-            return az.compare(dict(loos), ic="loo")
-    ((law, loo),) = loos.items()
-    row = {
-        "rank": 0.0,
-        "elpd_loo": float(loo["elpd_loo"]),
-        "p_loo": float(loo["p_loo"]),
-        "elpd_diff": 0.0,
-        "weight": 1.0,
-        "se": float(loo["se"]),
-        "dse": 0.0,
-    }
-    return pd.DataFrame([row], index=[law])
+    return compare(loos)
