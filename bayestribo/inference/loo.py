@@ -29,9 +29,10 @@ draws, 99 increments): the check's sums up to 0.22 at 8 draws (1.1 over all draw
 the shift −0.016 (−0.0162 to first order), estimated at 32 draws within 0.03 of it
 in 200 random placements (sd 0.010); every draw integrated there took 0.42 s.
 
-:func:`law_loo` is one law's PSIS-LOO (its pointwise values kept, for
-:func:`arviz.compare`), :func:`loo_frame` the laws' comparison from them: each law's
-PSIS-LOO is computed once. :func:`psis_loo` computes it as :func:`arviz.loo` does, to
+:func:`law_loo` is one law's PSIS-LOO (its pointwise values kept), :func:`loo_frame`
+the laws' comparison from them, as :func:`arviz.compare` makes it
+(:mod:`bayestribo.inference.loo_compare`, without importing ArviZ): each law's PSIS-LOO
+is computed once. :func:`psis_loo` computes it as :func:`arviz.loo` does, to
 rounding (``tests/test_inference_loo.py``), with the Pareto smoothing of all increments
 at once (:func:`psis`) where ArviZ fits one increment at a time: 3-4 times faster (5
 ms against 21 ms for 31 increments and 1800 draws, 72 against 229 ms for 738), which
