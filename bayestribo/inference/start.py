@@ -35,7 +35,11 @@ from it (:func:`initial_walkers`). How the optimum is found:
    within one Laplace sd of an optimum found before; the distinct optima within
    ``2 d + 10`` of the best coarse log density (``d`` the coarse model's error there)
    are each polished with the exact integrator, and the best is kept.
-4. Walkers are drawn from that Gaussian (μ_s/μ_k uniformly over the ratios within
+4. Every law nests the motion without dissipation: on a record that ends in motion
+   (where that motion's Π is finite) it is evaluated, y0 at its least-squares value,
+   and the least squares start from it too where it beats the best optimum
+   (``_null_start``), so that no optimum is below it.
+5. Walkers are drawn from that Gaussian (μ_s/μ_k uniformly over the ratios within
    0.5 of the best log density), each kept only if its log density is within
    ``d + 10`` of the best, so that every ensemble starts in the typical set.
 """
