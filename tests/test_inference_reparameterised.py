@@ -31,9 +31,10 @@ def _prior_box(rng: np.random.Generator, n: int) -> np.ndarray:
     )
 
 
-def test_the_loss_share_transform_inverts_and_its_jacobian_is_the_determinant():
+@pytest.mark.parametrize("ended", [True, False])
+def test_the_loss_share_transform_inverts_and_its_jacobian_is_the_determinant(ended):
     rng = np.random.default_rng(1)
-    transform = LossShare(reference=0.7, lowest=0.1)
+    transform = LossShare(reference=0.7, lowest=0.1, ended=ended)
     assert isinstance(transform, SamplingTransform)
     theta = _prior_box(rng, 40)[:, :4]
     u = transform.from_law(theta)
@@ -61,6 +62,13 @@ def test_alpha_on_its_bound_maps_to_finite_coordinates():
 
 def test_a_law_holding_the_terms_declares_the_transform_where_they_are_sampled():
     assert isinstance(get_law("coulomb+power").sampling_transform(NAMES, 1.0, 0.2), LossShare)
+    # the static friction sampled where the record holds its end of motion, else the
+    # ratio (a record in motion to its end holds no stick)
+    assert get_law("coulomb+power").sampling_transform(NAMES, 1.0, 0.2).names[1] == (
+        "static_friction"
+    )
+    in_motion = get_law("coulomb+power").sampling_transform(NAMES, 1.0, 0.2, ended=False)
+    assert in_motion.names[1] == "static_ratio"
     assert isinstance(
         get_law("viscous+coulomb+power").sampling_transform(("zeta", *NAMES), 1.0, 0.2),
         LossShare,
@@ -152,10 +160,11 @@ def _shifts(draws: np.ndarray, ref: np.ndarray, weights: np.ndarray) -> np.ndarr
     return np.abs(cols.mean(axis=0) - mean) / sd
 
 
-def test_sampling_in_the_transform_gives_the_posterior_and_without_its_jacobian_does_not():
+@pytest.mark.parametrize("ended", [True, False])
+def test_sampling_in_the_transform_gives_the_posterior_and_without_its_jacobian_does_not(ended):
     rng = np.random.default_rng(11)
     target = _LShaped()
-    transform = LossShare(reference=1.0, lowest=0.2)
+    transform = LossShare(reference=1.0, lowest=0.2, ended=ended)
     ref, weights = _reference(target, rng)
     assert 1.0 / np.sum(weights**2) > 3000  # the reference's own effective size
     # walkers start at reference draws (from the posterior, as a fit's start near it)
@@ -261,5 +270,5 @@ def test_a_run_not_converged_says_which_coordinates_its_reasons_name():
     run = density.law_run(sampled)
     assert run.reasons[: len(sampled.reasons)] == sampled.reasons
     said = run.reasons[-1]
-    assert all(name in said for name in LossShare.names + LossShare.law_names)
+    assert all(name in said for name in density.transform.names + LossShare.law_names)
     assert run.names == NAMES

@@ -53,6 +53,7 @@ def reparameterised(posterior) -> Reparameterised | None:
         posterior.names,
         posterior.likelihood.reference_amplitude,
         lowest_amplitude(posterior),
+        bool(getattr(posterior.likelihood.data, "motion_ended", True)),
     )
     return None if transform is None else Reparameterised(posterior, transform)
 

@@ -154,7 +154,7 @@ class Law:
         return self if restoring == self.restoring else replace(self, restoring=restoring)
 
     def sampling_transform(
-        self, sampled: Sequence[str], reference: float, lowest: float
+        self, sampled: Sequence[str], reference: float, lowest: float, ended: bool = True
     ) -> SamplingTransform | None:
         """The coordinates this law's posterior is sampled in, or None (its own).
 
@@ -166,6 +166,8 @@ class Law:
         reference, lowest : float
             The reference amplitude of the law's parameters and the record's smallest
             amplitude (dimensionless).
+        ended : bool
+            Whether the record holds the end of the motion.
 
         Returns
         -------
@@ -173,7 +175,7 @@ class Law:
             The registered transform of a set of this law's terms
             (:mod:`bayestribo.model.laws.transforms`).
         """
-        return transform_for(self.term_names, sampled, reference, lowest)
+        return transform_for(self.term_names, sampled, reference, lowest, ended)
 
     @property
     def closed_form(self) -> bool:

@@ -70,10 +70,11 @@ class SamplingTransform(Protocol):
         ...
 
 
-#: ``factory(reference, lowest) -> SamplingTransform``: a transform for one record,
-#: from the reference amplitude of the law's parameters and the smallest amplitude
-#: of the record (both dimensionless, lowest <= reference).
-TransformFactory = Callable[[float, float], SamplingTransform]
+#: ``factory(reference, lowest, ended) -> SamplingTransform``: a transform for one
+#: record, from the reference amplitude of the law's parameters, the smallest amplitude
+#: of the record (both dimensionless, lowest <= reference) and whether the record
+#: holds the motion's end (its last turning point stuck, or decayed into the noise).
+TransformFactory = Callable[[float, float, bool], SamplingTransform]
 
 #: The registered transforms, by the set of terms they belong to.
 TRANSFORMS: dict[frozenset[str], TransformFactory] = {}
@@ -88,7 +89,7 @@ def register_transform(terms: Sequence[str], factory: TransformFactory) -> Trans
         The terms whose parameters it replaces (a law with all of them is sampled in
         its coordinates).
     factory : callable
-        ``factory(reference, lowest) -> SamplingTransform``.
+        ``factory(reference, lowest, ended) -> SamplingTransform``.
 
     Returns
     -------
@@ -108,7 +109,11 @@ def register_transform(terms: Sequence[str], factory: TransformFactory) -> Trans
 
 
 def transform_for(
-    term_names: Sequence[str], sampled: Sequence[str], reference: float, lowest: float
+    term_names: Sequence[str],
+    sampled: Sequence[str],
+    reference: float,
+    lowest: float,
+    ended: bool = True,
 ) -> SamplingTransform | None:
     """The sampling transform of a law, or None where it has none.
 
@@ -122,6 +127,8 @@ def transform_for(
     reference, lowest : float
         The reference amplitude of the law's parameters and the record's smallest
         amplitude (dimensionless).
+    ended : bool
+        Whether the record holds the end of the motion.
 
     Returns
     -------
@@ -132,7 +139,7 @@ def transform_for(
     have = set(term_names)
     for terms, factory in TRANSFORMS.items():
         if terms <= have:
-            transform = factory(float(reference), float(lowest))
+            transform = factory(float(reference), float(lowest), bool(ended))
             if set(transform.law_names) <= set(sampled):
                 return transform
     return None
