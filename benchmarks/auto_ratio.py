@@ -25,7 +25,10 @@ then ``python benchmarks/auto_ratio.py --compare NEW.json OLD.json``: the ratios
 times and laws of both, and how far the posterior means of ``auto``'s answers moved (in
 posterior sds, the same seeds), written to ``NEW_compare.json``. ``--every-law``: each
 candidate law alone (``--law NAME``) against the default fit instead (issue 42's second
-goal, each within 3x and converged), on the same recordings (``every_law.json``).
+goal, each within 3x and converged), on the same recordings (``every_law.json``);
+``--laws NAME ...`` those laws only. ``--compare`` of two ``--every-law`` files: per
+recording and law the CPU, ratios, convergence and the largest shift of a posterior
+mean between the same seeds.
 """
 
 from __future__ import annotations
@@ -138,6 +141,11 @@ def main(argv: list[str] | None = None) -> int:
         "(issue 42's second goal: each within 3x, converged)",
     )
     parser.add_argument(
+        "--laws",
+        nargs="*",
+        help="with --every-law: these candidate laws only (default: every one)",
+    )
+    parser.add_argument(
         "--compare",
         nargs=2,
         type=Path,
@@ -152,7 +160,9 @@ def main(argv: list[str] | None = None) -> int:
         cmds = {k: v for k, v in cmds.items() if k in args.only}
     load_start = os.getloadavg()
     if args.every_law:
-        return every_law(cmds, args.seeds, args.output or "every_law", load_start)
+        return every_law(
+            cmds, args.seeds, args.output or "every_law", load_start, only_laws=args.laws
+        )
     for name, cmd in cmds.items():  # warm: every kernel compiled or loaded
         run([*cmd, "--seed", "99"])
         run([*cmd, "--seed", "99", "--law", "auto"])
@@ -220,13 +230,20 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-def every_law(cmds: dict[str, list[str]], seeds: list[int], output: str, load_start: tuple) -> int:
+def every_law(
+    cmds: dict[str, list[str]],
+    seeds: list[int],
+    output: str,
+    load_start: tuple,
+    only_laws: list[str] | None = None,
+) -> int:
     """Every candidate law alone (``--law NAME``) against the default fit, per
-    recording and seed: CPU, exit code, converged, and the ratio to the default fit."""
+    recording and seed: CPU, exit code, converged, the ratio to the default fit and the
+    posterior mean and sd of each sampled parameter (``only_laws``: these laws)."""
     import bayestribo
     from bayestribo.model.laws.candidates import candidate_laws
 
-    laws = candidate_laws()
+    laws = [law for law in candidate_laws() if not only_laws or law in only_laws]
     for name, cmd in cmds.items():  # warm: every law's kernels loaded (auto optimises all)
         run([*cmd, "--seed", "99"])
         run([*cmd, "--seed", "99", "--law", "auto"])
@@ -237,7 +254,7 @@ def every_law(cmds: dict[str, list[str]], seeds: list[int], output: str, load_st
             _, d_cpu, _, _ = run([*cmd, "--seed", str(seed)])
             for law in laws:
                 code, cpu, _, means = run([*cmd, "--seed", str(seed), "--law", law])
-                converged = means.get("_converged")
+                converged = means.pop("_converged", None)
                 rows[name].append(
                     {
                         "seed": seed,
@@ -247,6 +264,7 @@ def every_law(cmds: dict[str, list[str]], seeds: list[int], output: str, load_st
                         "ratio": cpu / d_cpu,
                         "exit": code,
                         "converged": converged,
+                        "posterior": means,
                     }
                 )
                 print(
@@ -290,6 +308,8 @@ def compare(new_path: Path, old_path: Path, output: str) -> int:
     the laws, and the largest shift of ``auto``'s posterior means (in the larger
     posterior sd, per seed the same law in both)."""
     new, old = (json.loads(Path(p).read_text()) for p in (new_path, old_path))
+    if "laws" in new and "laws" in old:
+        return _compare_every_law(new, old, new_path, old_path, output)
     rows: dict[str, Any] = {}
     for name, fits in new["fits"].items():
         before = {r["seed"]: r for r in old["fits"].get(name, [])}
@@ -329,6 +349,60 @@ def compare(new_path: Path, old_path: Path, output: str) -> int:
             f"{'same' if same else 'DIFFERENT'} laws {r['laws']}  "
             f"shift {r['largest_shift_sd']:.2f} sd ({r['largest_shift_of']})"
         )
+    path = write_results(
+        output,
+        {
+            "new": {"file": str(new_path), "package_commit": new.get("package_commit")},
+            "old": {"file": str(old_path), "package_commit": old.get("package_commit")},
+            "rows": rows,
+        },
+    )
+    print(f"wrote {path}")
+    return 0
+
+
+def _compare_every_law(
+    new: dict[str, Any], old: dict[str, Any], new_path: Path, old_path: Path, output: str
+) -> int:
+    """Two ``--every-law`` files side by side: per recording and law, the median CPU
+    and ratio of each, the fits converged, and the largest shift of a posterior mean
+    between the same seeds (in the larger posterior sd)."""
+    rows: dict[str, Any] = {}
+    for name, fits in new["fits"].items():
+        before = {(r["seed"], r["law"]): r for r in old["fits"].get(name, [])}
+        for law in sorted({r["law"] for r in fits}):
+            pairs = [(r, before.get((r["seed"], law))) for r in fits if r["law"] == law]
+            pairs = [(a, b) for a, b in pairs if b is not None]
+            if not pairs:
+                continue
+            shifts = []
+            for a, b in pairs:
+                for q, (mean, sd) in (a.get("posterior") or {}).items():
+                    if q in (b.get("posterior") or {}):
+                        mean_b, sd_b = b["posterior"][q]
+                        if max(sd, sd_b) > 0:
+                            shifts.append((abs(mean - mean_b) / max(sd, sd_b), q))
+            worst = max(shifts) if shifts else (None, None)
+            key = f"{name} | {law}"
+            rows[key] = {
+                "new_cpu": statistics.median(a["cpu_seconds"] for a, _ in pairs),
+                "old_cpu": statistics.median(b["cpu_seconds"] for _, b in pairs),
+                "new_ratio": statistics.median(a["ratio"] for a, _ in pairs),
+                "old_ratio": statistics.median(b["ratio"] for _, b in pairs),
+                "new_converged": [a["converged"] for a, _ in pairs],
+                "old_converged": [b["converged"] for _, b in pairs],
+                "largest_shift_sd": worst[0],
+                "largest_shift_of": worst[1],
+                "seeds": [a["seed"] for a, _ in pairs],
+            }
+            r = rows[key]
+            shift = "n/a" if r["largest_shift_sd"] is None else f"{r['largest_shift_sd']:.2f} sd"
+            print(
+                f"{key:<50} {r['old_cpu']:6.2f} -> {r['new_cpu']:6.2f} s  "
+                f"{r['old_ratio']:5.1f}x -> {r['new_ratio']:5.1f}x  converged "
+                f"{r['old_converged']} -> {r['new_converged']}  shift {shift} "
+                f"({r['largest_shift_of']})"
+            )
     path = write_results(
         output,
         {
