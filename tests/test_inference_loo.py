@@ -269,6 +269,31 @@ def test_a_row_with_ties_at_its_cut_is_smoothed_as_arviz_smooths_it(seed):
     np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12)
 
 
+def test_the_laws_comparison_imports_neither_arviz_nor_pandas():
+    """``law="auto"``'s PSIS-LOO, the draws' relative efficiency and the comparison
+    (:mod:`bayestribo.inference.loo_compare`) are computed without ArviZ, xarray or
+    pandas, which took 2.3 s of a command-line ``--law auto``'s 6.8 s to import; the
+    values against ArviZ's are the tests above."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, numpy as np\n"
+        "import bayestribo.inference.auto, bayestribo.inference.comparison\n"
+        "from bayestribo.inference import loo\n"
+        "rng = np.random.default_rng(0)\n"
+        "chains = 0.1 * rng.normal(size=(2, 300, 3)).cumsum(axis=1)\n"
+        "loos = {law: loo.psis_loo(-0.5 * rng.normal(size=(2, 300, 20)) ** 2 - i,\n"
+        "                          loo.relative_efficiency(chains))\n"
+        "        for i, law in enumerate(['a', 'b', 'c'])}\n"
+        "frame = loo.loo_frame(loos)\n"
+        "assert list(frame) == ['a', 'b', 'c'], frame\n"
+        "print([m for m in ('arviz', 'xarray', 'pandas') if m in sys.modules])\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
+
+
 def _scattered(scale: float):
     """A stub whose surrogate errs by ``scale`` times the draw's centred second
     coordinate at every increment: of either sign from draw to draw, the sum over the
