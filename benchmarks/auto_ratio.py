@@ -316,18 +316,11 @@ def compare(new_path: Path, old_path: Path, output: str) -> int:
         pairs = [(r, before[r["seed"]]) for r in fits if r["seed"] in before]
         if not pairs:
             continue
-        shifts, same = [], True
-        for a, b in pairs:
-            if a["auto_law"] != b["auto_law"]:
-                same = False
-                continue
-            for q, (mean, sd) in a.get("auto_posterior", {}).items():
-                if q in b.get("auto_posterior", {}):
-                    mean_b, sd_b = b["auto_posterior"][q]
-                    scale = max(sd, sd_b)
-                    if scale > 0:
-                        shifts.append((abs(mean - mean_b) / scale, q))
-        worst = max(shifts) if shifts else (0.0, None)
+        same = all(a["auto_law"] == b["auto_law"] for a, b in pairs)
+        worst = _largest_shift(
+            [(a, b) for a, b in pairs if a["auto_law"] == b["auto_law"]], "auto_posterior"
+        )
+        worst = worst if worst[0] is not None else (0.0, None)
         rows[name] = {
             "new_ratio": statistics.median(a["ratio"] for a, _ in pairs),
             "old_ratio": statistics.median(b["ratio"] for _, b in pairs),
@@ -349,16 +342,7 @@ def compare(new_path: Path, old_path: Path, output: str) -> int:
             f"{'same' if same else 'DIFFERENT'} laws {r['laws']}  "
             f"shift {r['largest_shift_sd']:.2f} sd ({r['largest_shift_of']})"
         )
-    path = write_results(
-        output,
-        {
-            "new": {"file": str(new_path), "package_commit": new.get("package_commit")},
-            "old": {"file": str(old_path), "package_commit": old.get("package_commit")},
-            "rows": rows,
-        },
-    )
-    print(f"wrote {path}")
-    return 0
+    return _write_comparison(new, old, new_path, old_path, rows, output)
 
 
 def _compare_every_law(
@@ -375,14 +359,7 @@ def _compare_every_law(
             pairs = [(a, b) for a, b in pairs if b is not None]
             if not pairs:
                 continue
-            shifts = []
-            for a, b in pairs:
-                for q, (mean, sd) in (a.get("posterior") or {}).items():
-                    if q in (b.get("posterior") or {}):
-                        mean_b, sd_b = b["posterior"][q]
-                        if max(sd, sd_b) > 0:
-                            shifts.append((abs(mean - mean_b) / max(sd, sd_b), q))
-            worst = max(shifts) if shifts else (None, None)
+            worst = _largest_shift(pairs, "posterior")
             key = f"{name} | {law}"
             rows[key] = {
                 "new_cpu": statistics.median(a["cpu_seconds"] for a, _ in pairs),
@@ -403,6 +380,32 @@ def _compare_every_law(
                 f"{r['old_converged']} -> {r['new_converged']}  shift {shift} "
                 f"({r['largest_shift_of']})"
             )
+    return _write_comparison(new, old, new_path, old_path, rows, output)
+
+
+def _largest_shift(pairs: list[tuple[dict, dict]], key: str) -> tuple[float | None, str | None]:
+    """The largest difference of a posterior mean (rows' ``key``: name -> [mean, sd])
+    between the two fits of each pair, in the larger of their sds, and its parameter;
+    (None, None) where no parameter is in both."""
+    shifts = []
+    for a, b in pairs:
+        for q, (mean, sd) in (a.get(key) or {}).items():
+            if q in (b.get(key) or {}):
+                mean_b, sd_b = b[key][q]
+                if max(sd, sd_b) > 0:
+                    shifts.append((abs(mean - mean_b) / max(sd, sd_b), q))
+    return max(shifts) if shifts else (None, None)
+
+
+def _write_comparison(
+    new: dict[str, Any],
+    old: dict[str, Any],
+    new_path: Path,
+    old_path: Path,
+    rows: dict[str, Any],
+    output: str,
+) -> int:
+    """The comparison's rows written with the two files they compare."""
     path = write_results(
         output,
         {

@@ -12,7 +12,7 @@ sampled ``quadratic+hysteretic`` from such a point for ten seconds.
 
 The record here is simulated independently (``scipy.integrate.solve_ivp``): a lightly
 damped oscillator recorded in motion to its end, its observed amplitude then misstated
-by half, as the trap above.
+by half, as the trap above; every candidate law of ``law="auto"`` and the law-free fit.
 """
 
 from __future__ import annotations
@@ -76,7 +76,7 @@ def _null_best(posterior) -> float:
     return -float(found.fun)
 
 
-@pytest.mark.parametrize("law", auto_laws())
+@pytest.mark.parametrize("law", [*auto_laws(), "free"])
 def test_the_optimum_is_no_worse_than_the_motion_without_a_loss(prepared, law):
     # the record's observed amplitude misstated by half: the first guesses start there
     data = dataclasses.replace(prepared.data, y0=0.5 * prepared.data.y0)
@@ -86,6 +86,6 @@ def test_the_optimum_is_no_worse_than_the_motion_without_a_loss(prepared, law):
         theta, _, _ = maximum_a_posteriori(posterior, prepared.decay)
     lp = float(posterior(theta[None])[0])
     null = _null_best(posterior)
-    # the motion without a loss misfits this decay (χ² in the millions): the optimum
-    # is far above it, and cannot be below it
-    assert lp >= null - 1e-6 * abs(null), (law, lp, null)
+    # the motion without a loss misfits this decay (its log density 1.4e5 below the
+    # optima): the optimum is above it, and cannot be below it
+    assert lp > null, (law, lp, null)

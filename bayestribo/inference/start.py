@@ -303,12 +303,9 @@ def _optimise(
     """
     names = posterior.names
     values = {
-        **{p.name: p.null for p in posterior.law.parameters},
-        "zeta": 0.0,
+        **_nulls(posterior),
         "y0": posterior.likelihood.data.y0,
         "mu_s_ratio": 1.2 if ratio is None else ratio,
-        "log10_discrepancy": -5.0,
-        "log10_shape": -5.0,
         **guess,
     }
     theta = _vector(posterior, _into_support(posterior, {n: values[n] for n in names}))
@@ -320,6 +317,17 @@ def _optimise(
         return _rounds(posterior, theta, has_ratio, near)
     except _Joined as joined:
         return joined.optimum
+
+
+def _nulls(posterior: Posterior) -> dict[str, float]:
+    """Every law parameter at its null (no force), ζ at zero and the discrepancy
+    scales negligible: what a start does not set otherwise."""
+    return {
+        **{p.name: p.null for p in posterior.law.parameters},
+        "zeta": 0.0,
+        "log10_discrepancy": -5.0,
+        "log10_shape": -5.0,
+    }
 
 
 def _rounds(
@@ -756,8 +764,7 @@ def _null_start(posterior: Posterior, best_lp: float) -> NDArray | None:
         # rest is infinite, never the optimum
         return None
     names = posterior.names
-    values = {p.name: p.null for p in posterior.law.parameters}
-    values.update({"zeta": 0.0, "log10_discrepancy": -5.0, "log10_shape": -5.0})
+    values = _nulls(posterior)
     if "mu_s_ratio" in names:
         values["mu_s_ratio"] = float(np.median(_ratio_grid(posterior)))
     row = _vector(posterior, {n: values.get(n, 0.0) for n in names})
@@ -767,7 +774,7 @@ def _null_start(posterior: Posterior, best_lp: float) -> NDArray | None:
         row[j] = min(max(row[j], low), high)
     if "y0" in names:
         i = names.index("y0")
-        y0 = float(posterior.likelihood.data.y0)
+        y0 = float(data.y0)
         if not (np.isfinite(y0) and y0 != 0.0):
             return None
         # Without a loss the energy is constant and the model's increments scale as
