@@ -243,6 +243,11 @@ def every_law(
     import bayestribo
     from bayestribo.model.laws.candidates import candidate_laws
 
+    unknown = sorted(set(only_laws or ()) - set(candidate_laws()))
+    if unknown:
+        raise SystemExit(
+            f"--laws: {unknown} are not candidate laws; expected some of {list(candidate_laws())}"
+        )
     laws = [law for law in candidate_laws() if not only_laws or law in only_laws]
     for name, cmd in cmds.items():  # warm: every law's kernels loaded (auto optimises all)
         run([*cmd, "--seed", "99"])
