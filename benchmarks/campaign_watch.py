@@ -24,7 +24,7 @@ and the medians of the ratios latency / warm fit. The machine is shared with oth
 users: medians, and the load averages at the start and the end.
 
 Run: ``python benchmarks/campaign_watch.py``; writes
-``benchmarks/results/campaign_watch.json``.
+``benchmarks/results/campaign_watch.json`` (``--output NAME``: ``NAME.json``).
 """
 
 from __future__ import annotations
@@ -138,6 +138,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--settle", type=float, default=1.0, help="--settle of the watch [s]")
     parser.add_argument("--no-write", action="store_true", help="print, do not write results")
+    parser.add_argument("--output", default="campaign_watch", help="results/<OUTPUT>.json")
     args = parser.parse_args(argv)
     load_start = os.getloadavg()
     rows: list[dict[str, Any]] = []
@@ -200,7 +201,7 @@ def main(argv: list[str] | None = None) -> int:
     }
     print(json.dumps(summary, indent=2))
     if not args.no_write:
-        print(f"written to {write_results('campaign_watch', result)}")
+        print(f"written to {write_results(args.output, result)}")
     return 0
 
 

@@ -9,11 +9,13 @@ velocity-zero events, then integrating E on the grid (cumulative trapezoid on a 
 output); and, as the floor of any closed form, ``np.exp`` + ``np.sin`` on as many
 points (64 × 256). All in one run, so the ratios are side by side.
 
-Run: ``python benchmarks/forward.py``; writes ``benchmarks/results/forward.json``.
+Run: ``python benchmarks/forward.py``; writes ``benchmarks/results/forward.json``
+(``--output NAME``: ``NAME.json``).
 """
 
 from __future__ import annotations
 
+import argparse
 import math
 import time
 
@@ -49,7 +51,10 @@ def ode_pi_on_grid(tau: np.ndarray, y0: float, zeta: float, mu_k: float, mu_s: f
     return np.interp(tau, fine, tail)
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--output", default="forward", help="results/<OUTPUT>.json")
+    args = parser.parse_args(argv)
     rng = np.random.default_rng(2010)
     walkers = 64
     zeta = rng.uniform(0.02, 0.028, (walkers, 1))
@@ -124,7 +129,7 @@ def main() -> None:
     )
     print(f"max |Π_ode - Π_exact| / Π(0) = {agreement:.1e}")
     path = write_results(
-        "forward",
+        args.output,
         {
             "grid_points": GRID,
             "walkers": walkers,
