@@ -134,6 +134,8 @@ def test_a_linear_oscillator_reports_the_viscous_law_mixed_in(tmp_path) -> None:
     assert lo <= zeta <= hi
     assert "boundary  no friction" in result.to_text()
     assert result.to_dict()["boundary"]["mixed"] == ["mu_k"]
+    # the log density of every draw, those mixed in included, computed when read
+    assert np.all(np.isfinite(result.idata.sample_stats["lp"].values))
 
 
 def test_a_record_that_cannot_tell_the_two_apart_mixes_both(tmp_path) -> None:

@@ -4,6 +4,7 @@ draws, the nested laws' own averaging, and fits of laws other than the default."
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -169,6 +170,44 @@ def test_a_three_term_law_averages_its_nested_laws_over_their_own_boundaries() -
     assert np.mean(c2 == 0) == pytest.approx(0.75, abs=0.025)
     assert np.mean((zeta == 0) & (c2 == 0)) == pytest.approx(0.5, abs=0.025)
     assert np.all(mu_k > 0)
+
+
+@dataclass
+class _Counting(_Posterior):
+    """A posterior that counts the draws it is evaluated at (its density: their sum)."""
+
+    evaluated: list = field(default_factory=list)
+
+    def __call__(self, theta: np.ndarray) -> np.ndarray:
+        self.evaluated.append(len(theta))
+        return np.sum(theta, axis=1)
+
+
+def test_the_density_at_the_draws_mixed_in_is_computed_where_it_is_read() -> None:
+    """The mixture does not evaluate the full posterior at the nested laws' draws (the
+    exact integration of each, for a law without a closed form); ``run.log_prob`` is
+    NaN exactly there and the sampler's elsewhere, and ``log_prob_deferred`` fills them
+    with the full posterior's density at the mixture's own draws."""
+    full = _sampled("viscous+quadratic", 0)
+    counting = _Counting(full.posterior.law, full.posterior.names, full.posterior.priors)
+    known = np.arange(4000.0).reshape(2, 2000)
+    full = dataclasses.replace(
+        full, posterior=counting, run=dataclasses.replace(full.run, log_prob=known)
+    )
+    mixed, record = boundary_mixture(
+        full, lambda law: _sampled(law, 7), lambda: np.random.default_rng(5)
+    )
+    assert record["mixed"] and counting.evaluated == []
+    names = full.posterior.names
+    flat = mixed.run.chains.reshape(-1, len(names))
+    changed = np.any(flat != full.run.chains.reshape(-1, len(names)), axis=1)
+    lp = mixed.run.log_prob.reshape(-1)
+    np.testing.assert_array_equal(np.isnan(lp), changed)
+    np.testing.assert_array_equal(lp[~changed], known.reshape(-1)[~changed])
+    filled = mixed.log_prob_deferred().reshape(-1)
+    assert counting.evaluated == [int(changed.sum())]
+    np.testing.assert_array_equal(filled[changed], flat[changed].sum(axis=1))
+    np.testing.assert_array_equal(filled[~changed], known.reshape(-1)[~changed])
 
 
 def test_a_law_whose_amounts_are_clear_is_left_alone() -> None:

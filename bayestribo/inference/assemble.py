@@ -210,7 +210,7 @@ def _predictive_pi(
 
 
 #: The fields of :class:`FitDraws` that may be computed when first read.
-_DEFERRED = ("log_likelihood", "posterior_predictive")
+_DEFERRED = ("log_likelihood", "posterior_predictive", "log_prob")
 
 
 @dataclass
@@ -234,15 +234,17 @@ class FitDraws:
         τ of the grid points (the coordinate ``grid``).
     log_prob : ndarray or None
         Log posterior density of each draw as the sampler saw it, shape (chain,
-        draw) (unnormalised; the surrogate's where the fit sampled one).
+        draw) (unnormalised; the surrogate's where the fit sampled one; at a draw of a
+        nested law mixed in at a boundary, the full law's posterior evaluated there).
     walker_acceptance : ndarray or None
         emcee's acceptance fraction of each walker, shape (chain, walker).
 
     Notes
     -----
-    ``log_likelihood`` and ``posterior_predictive`` are each given as an array, or as a
-    function of no arguments that computes it (:func:`fit_draws`), called when the
-    attribute is first read and its array kept; a FitDraws is pickled with the arrays.
+    ``log_likelihood``, ``posterior_predictive`` and ``log_prob`` are each given as an
+    array, or as a function of no arguments that computes it (:func:`fit_draws`),
+    called when the attribute is first read and its array kept; a FitDraws is pickled
+    with the arrays.
     """
 
     posterior: dict[str, NDArray]
@@ -347,6 +349,7 @@ class _Deferred:
 # defaults): its __init__ then stores the array or the function through them
 FitDraws.log_likelihood = _Deferred("log_likelihood")  # type: ignore[assignment]
 FitDraws.posterior_predictive = _Deferred("posterior_predictive")  # type: ignore[assignment]
+FitDraws.log_prob = _Deferred("log_prob")  # type: ignore[assignment]
 
 
 def fit_draws(
@@ -356,7 +359,7 @@ def fit_draws(
     rng: np.random.Generator,
     attrs: Mapping[str, Any],
     *,
-    log_prob: NDArray | None = None,
+    log_prob: NDArray | Callable[[], NDArray] | None = None,
     walker_acceptance: NDArray | None = None,
 ) -> FitDraws:
     """The groups of a fit's InferenceData, as numpy arrays.
@@ -374,8 +377,10 @@ def fit_draws(
         makes them when they are first read (``rng`` itself is not advanced).
     attrs : mapping
         Attributes of the posterior group (run, settings, diagnostics as JSON).
-    log_prob : ndarray, optional
-        Log posterior density of each draw, shape (chains, draws).
+    log_prob : ndarray or callable, optional
+        Log posterior density of each draw, shape (chains, draws); or a function of no
+        arguments that gives it, called when first read (draws mixed in after
+        sampling, :mod:`bayestribo.inference.boundary`).
     walker_acceptance : ndarray, optional
         Acceptance fraction of each walker, shape (chains, walkers).
 
@@ -406,7 +411,7 @@ def fit_draws(
         posterior_predictive=predictive,
         observed=data.pi,
         grid=data.tau_grid[:-1],
-        log_prob=None if log_prob is None else np.asarray(log_prob, dtype=float),
+        log_prob=log_prob if log_prob is None or callable(log_prob) else np.asarray(log_prob, "f8"),
         walker_acceptance=walker_acceptance,
     )
 

@@ -417,6 +417,8 @@ def summary(
     # surrogate's where its check passed (inference/surrogate.py)
     # the sampler's own statistics (ArviZ's sample_stats), where they match the draws
     lp = run.log_prob if np.shape(run.log_prob) == run.chains.shape[:2] else None
+    if lp is not None and sampled.log_prob_deferred is not None:
+        lp = sampled.log_prob_deferred  # draws mixed in at a boundary: computed when read
     draws = fit_draws(
         sampled.draws_posterior,
         run.chains,

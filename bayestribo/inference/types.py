@@ -9,6 +9,7 @@ thresholds several stages share live here too.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -130,6 +131,12 @@ class Sampled:
         draws, m), where the sampler computed it already (draws of a surrogate
         corrected by their importance weights, :mod:`bayestribo.inference.correction`);
         PSIS-LOO takes it (:func:`bayestribo.inference.loo.sampled_pointwise`).
+    log_prob_deferred : callable or None
+        Where some draws were set after sampling (a nested law's draws mixed in at a
+        boundary, :mod:`bayestribo.inference.boundary`): a function of no arguments that
+        gives the log posterior density of every draw, shape (chains, draws), the
+        draws set there evaluated when it is called; ``run.log_prob`` holds NaN at
+        them meanwhile. None: ``run.log_prob`` is complete.
     """
 
     posterior: Posterior
@@ -139,6 +146,7 @@ class Sampled:
     surrogate: SurrogateCheck | None = None
     surrogate_posterior: Posterior | None = None
     pointwise: NDArray | None = field(default=None, repr=False, compare=False)
+    log_prob_deferred: Callable[[], NDArray] | None = field(default=None, repr=False, compare=False)
 
     @property
     def draws_posterior(self) -> Posterior:
