@@ -6,7 +6,11 @@ default law's seed 1 stopped unconverged there (its ridge's tail left to the DE 
 a quarter of the steps); the move is taken out when τ shows it does not mix
 (``SamplerSettings.independence_limit``), and the fit converges as main's sampler did.
 Six seeds are fitted: every one converges, and on those where the move was taken out
-the draws kept are all of the DE moves.
+the draws kept are all of the DE moves. Which seeds take it out is a matter of the
+chain's last bits (none of the six on some CPUs, whose SIMD kernels round differently):
+that a move past the limit is taken out, and the draws after it sample the target, is
+tested where the limit is forced (``tests/test_inference_independence_limit.py``; and on
+a synthetic curved ridge among the validation checks).
 """
 
 from __future__ import annotations
@@ -41,12 +45,12 @@ def _first_half() -> Run:
 
 #: Seeds of the default fit tried: the move's failure to mix is a matter of the chain
 #: (seeds 1 and 5 took it out at one commit; seed 5 alone after the derived velocity's
-#: noise was filtered as the motion's plus the noise's, which moves the last digits).
+#: noise was filtered as the motion's plus the noise's, which moves the last digits;
+#: none on an AVX-512 machine).
 SEEDS = (1, 2, 3, 4, 5, 6)
 
 
-def test_on_the_ridge_the_move_is_taken_out_and_the_fit_converges():
-    dropped = 0
+def test_on_the_ridge_the_fit_converges_with_or_without_the_move():
     for seed in SEEDS:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -55,10 +59,6 @@ def test_on_the_ridge_the_move_is_taken_out_and_the_fit_converges():
         # converged whether or not the move was taken out
         assert result.converged, (seed, d["reasons"])
         assert d["ess_min"] >= 1000
-        if d["independence_dropped"] is None:
-            continue
-        dropped += 1
-        assert d["independence_weight"] == 0.0
-        assert d["burn"] >= d["independence_dropped"]
-    # the ridge does show: the move is taken out on some of the seeds
-    assert dropped >= 1
+        if d["independence_dropped"] is not None:
+            assert d["independence_weight"] == 0.0
+            assert d["burn"] >= d["independence_dropped"]
