@@ -20,19 +20,18 @@ def _fixture() -> tuple[np.ndarray, np.ndarray, list[dict]]:
     return data["before"], data["creep"], json.loads(str(data["cases"]))
 
 
-# A process that compiles a law afresh (no entry in the law cache) and one that loads it
-# from the cache differ by 1 ulp on one row of the grid (``cubic``, y'0 = 0.9, row 18), on
-# main as on this tree: rows may be that far off, that few of them.
-_ULP_ROWS = 2
+#: How far a row may move on another CPU, relative to its Π(0): the fixture was made on
+#: an AVX-512 machine, and a law compiled for another (AVX2: numba's pow and exp, numpy's
+#: SIMD kernels) rounds each step's last bit otherwise, which an integration carries to
+#: at most ~1e-14 of Π(0) (64 ulp, the power laws); a creep's ∫E moves a row by 1e-10
+#: and more. On one machine a row is the same to the bit, or 1 ulp (a law compiled
+#: afresh or loaded from the cache, ``cubic`` row 18).
+_CPU_REL = 1e-13
 
 
-def _same(now: np.ndarray, before: np.ndarray) -> bool | None:
-    """True when equal to the bit, None when within 1 ulp, False otherwise."""
-    if np.array_equal(now, before):
-        return True
-    if np.all(np.abs(now - before) <= np.spacing(np.abs(before))):
-        return None
-    return False
+def _kept(now: np.ndarray, before: np.ndarray) -> bool:
+    """Equal within :data:`_CPU_REL` of the row's Π(0)."""
+    return bool(np.all(np.abs(now - before) <= _CPU_REL * abs(before[0])))
 
 
 def _now(case: dict, creep_end: float | None = None) -> np.ndarray:
@@ -54,16 +53,15 @@ def _now(case: dict, creep_end: float | None = None) -> np.ndarray:
     )
 
 
-def test_every_row_defined_before_is_the_same_to_the_bit():
+def test_every_row_defined_before_is_the_same():
     """Every row the older tree left finite, and did not end by a creep, is the same
-    to the bit (or within 1 ulp, at most two rows: see _ULP_ROWS); a row it ended by a
-    creep whose ∫E it took from the quasi-static balance (at most 1e-8 of Π(0), within
-    a factor 2) moves by at most 3e-8 of Π(0);
-    a row it left NaN may now be finite (a creep integrated), never the other way."""
+    (to the bit on the fixture's machine; within :data:`_CPU_REL` on another CPU); a row
+    it ended by a creep whose ∫E it took from the quasi-static balance (at most 1e-8 of
+    Π(0), within a factor 2) moves by at most 3e-8 of Π(0); a row it left NaN may now be
+    finite (a creep integrated), never the other way."""
     before, creep, cases = _fixture()
     finite_before = np.isfinite(before).all(axis=-1)
     same = 0
-    ulp = 0
     for b, case in enumerate(cases):
         now = _now(case)
         for r in range(ROWS):
@@ -73,11 +71,8 @@ def test_every_row_defined_before_is_the_same_to_the_bit():
             if creep[b, r]:
                 assert np.max(np.abs(now[r] - before[b, r])) <= 3e-8 * before[b, r, 0]
             else:
-                kept = _same(now[r], before[b, r])
-                assert kept is not False, (case["law"], case, r)
-                same += kept is True
-                ulp += kept is None
-    assert ulp <= _ULP_ROWS
+                assert _kept(now[r], before[b, r]), (case["law"], case, r)
+                same += 1
     # the grid holds rows of every kind: most defined before, some refused
     assert same > 0.7 * finite_before.size
     assert (~finite_before).sum() > 0
@@ -86,14 +81,11 @@ def test_every_row_defined_before_is_the_same_to_the_bit():
 def test_a_creep_end_moves_no_row_defined_before():
     """A creep's end inside the grid (τ = 50, where a record's motion would have been
     seen to stop) moves no row the older tree left finite and did not end by a creep,
-    of any law, setting or method: only a creep reads it."""
+    of any law, setting or method, by a bit: only a creep reads it."""
     before, creep, cases = _fixture()
     keep = np.isfinite(before).all(axis=-1) & ~creep
-    ulp = 0
     for b, case in enumerate(cases):
+        without = _now(case)
         now = _now(case, creep_end=50.0)
         for r in np.flatnonzero(keep[b]):
-            kept = _same(now[r], before[b, r])
-            assert kept is not False, (case["law"], case, r)
-            ulp += kept is None
-    assert ulp <= _ULP_ROWS
+            np.testing.assert_array_equal(now[r], without[r], err_msg=f"{case} row {r}")
