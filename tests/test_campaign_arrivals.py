@@ -174,3 +174,21 @@ def test_a_file_is_given_each_time_it_rests_for_the_settle_interval(gaps):
             clock.now += gap
             given.append(arrivals.poll() == [path])
         assert given == [gap >= SETTLE for gap in gaps]
+
+
+def test_the_next_file_due_is_told_in_seconds_from_the_clock(tmp_path):
+    """A waiting loop can sleep until the soonest file waiting may have settled."""
+    arrivals, clock = _arrivals(tmp_path)
+    assert arrivals.next_due() is None  # nothing seen
+    _run(tmp_path, "first")
+    assert arrivals.poll() == []
+    clock.now += 0.5
+    assert arrivals.next_due() == SETTLE - 0.5
+    _run(tmp_path, "second")
+    assert arrivals.poll() == []
+    clock.now += 1.0
+    assert arrivals.next_due() == SETTLE - 1.5  # the first one's, the sooner
+    clock.now += 10 * SETTLE
+    assert arrivals.next_due() == 0.0  # overdue: due now
+    assert arrivals.poll() == [tmp_path / "first.csv", tmp_path / "second.csv"]
+    assert arrivals.next_due() is None  # given: none waits

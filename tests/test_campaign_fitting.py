@@ -346,3 +346,29 @@ def test_a_fit_whose_run_has_no_run_id_is_named_by_its_identity(tmp_path):
     assert [o.name for o in outcomes] == ["run7", "with-id"]
     assert outcomes[0].result.attrs["run_name"] == "run7"
     assert outcomes[1].result.attrs["run_name"] == str(paths[1])
+
+
+def test_each_outcome_is_announced_as_kept_before_it_is_recorded():
+    """``announce`` sees each outcome with its result as ``keep`` keeps it, before the
+    callback sees the whole result (a watch prints the answer, then saves the fit)."""
+    events: list[tuple[str, str, object]] = []
+
+    def whole_fit(run: Any, *, seed: int) -> _Whole:
+        return _Whole(run_identity(run))
+
+    with ThreadPoolExecutor(1) as pool:
+        outcomes = fit_many(
+            RUNS,
+            pool,
+            function=whole_fit,
+            progress=False,
+            announce=lambda o: events.append(("announce", o.name, o.result)),
+            callback=lambda o: events.append(("callback", o.name, o.result)),
+            keep=lambda result: f"digest of {result.name}",
+        )
+    names = [run_identity(r) for r in RUNS]
+    for name, outcome in zip(names, outcomes, strict=True):
+        mine = [(what, result) for what, n, result in events if n == name]
+        assert [what for what, _ in mine] == ["announce", "callback"]
+        assert mine[0][1] == f"digest of {name}" == outcome.result
+        assert isinstance(mine[1][1], _Whole) and mine[1][1].name == name

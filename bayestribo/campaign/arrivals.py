@@ -143,6 +143,17 @@ class Arrivals:
             p for p, (state, _) in self._seen.items() if p not in self._given and state[1]
         )
 
+    def next_due(self) -> float | None:
+        """Seconds until the soonest run file seen and not complete has kept its state
+        for ``settle_s`` (0 when one has already); None when none is waiting."""
+        now = self._clock()
+        waits = [
+            first + self.settle_s - now
+            for p, (state, first) in self._seen.items()
+            if p not in self._given and state[1]
+        ]
+        return max(0.0, min(waits)) if waits else None
+
     def poll(self) -> list[Path]:
         """Walk the folder once; the run files that became complete, in name order."""
         now = self._clock()

@@ -247,6 +247,7 @@ def fit_many(
     names: Sequence[str] | None = None,
     run_kwargs: Sequence[Mapping[str, Any]] | None = None,
     keep: Callable[[Any], Any] | None = None,
+    announce: Callable[[RunOutcome], None] | None = None,
     **fit_kwargs: Any,
 ) -> list[RunOutcome]:
     """Fit every run, in parallel, each with its own seed from the campaign seed.
@@ -284,9 +285,13 @@ def fit_many(
         order of ``runs``), over ``fit_kwargs``.
     keep : callable, optional
         What the outcomes hold of each result: ``keep(result)``, applied in the calling
-        process after ``callback`` saw the whole result (e.g.
+        process (``callback`` still sees the whole result; e.g.
         :func:`bayestribo.campaign.digest.digest_fit`, so that memory does not grow
         with the number of runs). Default: the result itself.
+    announce : callable, optional
+        Called in the calling process with each :class:`RunOutcome` as it completes,
+        its result as ``keep`` keeps it, before ``callback`` (a caller that shows each
+        answer does not wait for its recording).
     **fit_kwargs
         Passed to ``function`` for every run.
 
@@ -348,11 +353,15 @@ def fit_many(
                 _name_by_identity(result, names[i])
             outcome = RunOutcome(names[i], seeds[i], result, error, tb, elapsed)
             bar.update(outcome.ok)
+            kept = outcome
+            if keep is not None and outcome.ok:
+                kept = dataclasses.replace(outcome, result=keep(outcome.result))
+            if announce is not None:
+                announce(kept)
             if callback is not None:
                 callback(outcome)
-            if keep is not None and outcome.ok:
-                outcome = dataclasses.replace(outcome, result=keep(outcome.result))
-            outcomes[i] = outcome
+            outcomes[i] = kept
+            del kept
             del result, outcome, future
     except BaseException:
         for future in futures:
@@ -431,6 +440,7 @@ def fit_catalogued(
     progress_stream: IO[str] | None = None,
     root: str | os.PathLike[str] | None = None,
     keep: Callable[[Any], Any] | None = None,
+    announce: Callable[[RunOutcome], None] | None = None,
     **fit_kwargs: Any,
 ) -> list[RunOutcome]:
     """Fit run files with :func:`fit_many`, recording each fit in a results catalog.
@@ -462,6 +472,9 @@ def fit_catalogued(
     root : path-like, optional
         The campaign folder (default: the files' common folder), for the identities of
         files whose stems clash.
+    announce : callable, optional
+        As in :func:`fit_many`: each new fit's outcome as soon as it is fitted, before
+        it is saved and recorded (its final outcome says when that failed).
     **fit_kwargs
         As in :func:`fit_many`: with the default fit, a ``spec``
         (:class:`~bayestribo.inference.spec.FitSpec`) and keywords of
@@ -636,6 +649,7 @@ def fit_catalogued(
             names=[names[i] for i in todo],
             run_kwargs=[run_kwargs[i] for i in todo],
             keep=keep,
+            announce=announce,
             **fit_kwargs,
         )
         if todo

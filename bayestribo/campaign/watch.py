@@ -2,16 +2,21 @@
 
 :class:`CampaignWatch` keeps warm worker processes (the package, the numba kernels and
 the sampler imported and compiled once, by a warm-up fit of a simulated run) and a
-loop in the calling thread that polls the folder (:class:`~.arrivals.Arrivals`), sends
-each run file to a worker as soon as it is complete, and with each answer
+loop in the calling thread that looks at the folder (:class:`~.arrivals.Arrivals`) when
+the system says something changed there (:class:`~.wakeup.Wakeup`) and at least every
+``poll_s``, sends each run file to a worker as soon as it is complete, and with each
+answer
 
+* prints one line (:meth:`~.watchpage.Answer.line`) as soon as the fit is back from its
+  worker, then rewrites the live page (:mod:`~.watchpage`, milliseconds) and its status
+  file;
 * records the fit in the catalog (:func:`~.fitting.fit_catalogued`: the same catalog,
   fit files and cache as ``bayestribo campaign``, so a watched run is not fitted again
   by a later campaign with the same settings). A run's identity is its file stem, as
   in a campaign whose stems are unique: a second file of one stem in another
-  sub-folder is refused by the catalog, and its line says so;
-* prints one line (:meth:`~.watchpage.Answer.line`), then rewrites the live page
-  (:mod:`~.watchpage`, milliseconds) and its status file.
+  sub-folder is refused by the catalog, and its line says so. The fit is saved and
+  recorded by its fitter thread after its line is printed; where that fails, a second
+  line says so and the page shows the run as failed.
 
 The populations of repeats take longer than a fit: they are computed in a background
 thread when the fit queue is empty, or at most every ``population_every_s`` while
@@ -37,7 +42,13 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable, Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
+from concurrent.futures import (
+    FIRST_COMPLETED,
+    Future,
+    InvalidStateError,
+    ThreadPoolExecutor,
+    wait,
+)
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -45,6 +56,7 @@ from typing import IO, Any
 
 from bayestribo.campaign.arrivals import Arrivals
 from bayestribo.campaign.lock import write_atomic
+from bayestribo.campaign.wakeup import Wakeup
 from bayestribo.campaign.watchpage import Answer, PageState, render_page, status
 from bayestribo.errors import BayestriboError
 
@@ -76,7 +88,9 @@ class WatchOptions:
         A file without a manifest is complete once its size and modification time
         have not changed for this long [s].
     poll_s : float
-        Interval between two looks at the folder [s].
+        Longest interval between two looks at the folder [s]: it is also looked at as
+        soon as the system reports a change there (:mod:`~.wakeup`), and when a file
+        waiting to settle is due.
     max_runs : int or None
         Stop after this many answers (failures included; runs already in the folder
         when the watch starts count too).
@@ -149,6 +163,12 @@ def answer_of(outcome: Any, path: Path) -> Answer:
         fit_s=float(outcome.elapsed_s),
         cached=outcome.cached,
     )
+
+
+def _resolve(future: Future[Any], value: Any) -> None:
+    """Resolve ``future`` with ``value`` unless it is resolved already."""
+    with contextlib.suppress(InvalidStateError):  # resolved or cancelled
+        future.set_result(value)
 
 
 def _in_background(function: Callable[..., Any], *args: Any) -> Future[Any]:
@@ -268,6 +288,11 @@ class CampaignWatch:
         self._pool: Any = None
         self._queue: deque[Path] = deque()
         self._running: dict[Future[Any], Path] = {}
+        # each running fit's answer, announced before it is saved and recorded
+        self._announcing: dict[Path, Future[Any]] = {}
+        # the runs answered from their announcement: whether that answer was a fit
+        self._announced: dict[Path, bool] = {}
+        self._wakeup: Wakeup | None = None
         self._warming: set[Future[Any]] = set()
         self._population: Future[Any] | None = None
         self._population_started = 0
@@ -285,7 +310,7 @@ class CampaignWatch:
             prob=self.prob,
             answers=list(self.answers.values()),
             waiting=[str(p) for p in waiting],
-            fitting=[str(p) for p in self._running.values()],
+            fitting=[str(p) for p in self._running.values() if p not in self._announced],
             populations=self._populations,
             trends=self._trends,
             report_command=f"bayestribo report {self.out}",
@@ -307,13 +332,17 @@ class CampaignWatch:
         """Rewrite the page now if the fit queue is empty or the page is
         ``page_every_s`` old; otherwise later, when one of these holds."""
         self._page_stale = True
-        idle = not self._queue and not self._running
+        # a fit answered and being saved keeps no answer from the page
+        saving = all(p in self._announced for p in self._running.values())
+        idle = not self._queue and saving
         if idle or time.monotonic() - self._last_page >= self.options.page_every_s:
             self.write_page()
 
     # -- fits ---------------------------------------------------------------------------
-    def _fit(self, pool: Any, path: Path) -> Any:
-        """Fitter thread: fit one run file on the warm pool, recorded in the catalog."""
+    def _fit(self, pool: Any, path: Path, announced: Future[Any]) -> Any:
+        """Fitter thread: fit one run file on the warm pool, recorded in the catalog;
+        ``announced`` is resolved with its outcome as soon as the fit is back, before
+        it is saved and recorded."""
         from bayestribo.campaign.digest import digest_fit
         from bayestribo.campaign.fitting import fit_catalogued
 
@@ -327,11 +356,26 @@ class CampaignWatch:
             progress=False,
             root=self.folder,
             keep=keep,
+            announce=functools.partial(_resolve, announced),
             spec=self.spec,
         )
         return outcome
 
-    def _answer(self, path: Path, outcome: Any) -> None:
+    def _finished(self, path: Path, outcome: Any) -> bool:
+        """A fit saved and recorded (or not): answered now unless its announcement
+        was, and again where it was answered as a fit and could not be recorded.
+        True when a line was printed."""
+        self._announcing.pop(path, None)
+        announced = self._announced.pop(path, None)
+        if announced is None:
+            self._answer(path, outcome)
+        elif announced and not outcome.ok:
+            self._answer(path, outcome, count=False)
+        else:
+            return False
+        return True
+
+    def _answer(self, path: Path, outcome: Any, *, count: bool = True) -> None:
         answer = answer_of(outcome, path)
         key = str(path)
         self.answers.pop(key, None)  # a new version of a run goes to the end
@@ -340,7 +384,7 @@ class CampaignWatch:
             self.digests[key] = outcome.result
         else:
             self.digests.pop(key, None)
-        self.n_answered += 1
+        self.n_answered += count
         text = json.dumps(answer.to_dict()) if self.json_lines else answer.line()
         print(text, file=self.stream, flush=True)
 
@@ -429,6 +473,7 @@ class CampaignWatch:
         interrupted = False
         try:
             self._warm()
+            self._watch_events()
             self.say(f"live page: {self.page.resolve().as_uri()}")
             while self.stopped_by is None:
                 self._step(fitters)
@@ -445,12 +490,17 @@ class CampaignWatch:
             # a fit that finished is saved and recorded by its thread: waited for
             fitters.shutdown(wait=True, cancel_futures=True)
             self._pool.shutdown(wait=True, cancel_futures=True)
-            if interrupted:
-                # the fits that ended as the watch stopped are recorded: said too
-                for future, path in self._running.items():
-                    ended = future.done() and not future.cancelled()
-                    if ended and future.exception() is None and future.result().ok:
-                        self._answer(path, future.result())
+            if self._wakeup is not None:
+                self._wakeup.stop()
+            for future, path in self._running.items():
+                if not future.done() or future.cancelled() or future.exception() is not None:
+                    continue
+                if path in self._announced:
+                    # answered: a recording that failed is said
+                    self._finished(path, future.result())
+                elif interrupted and future.result().ok:
+                    # the fits that ended as the watch stopped are recorded: said too
+                    self._answer(path, future.result())
         if not interrupted:
             # the last answers in the populations too, before the page is final; after
             # Ctrl-C a population under way is not waited for (its daemon thread writes
@@ -464,6 +514,21 @@ class CampaignWatch:
             return 130
         bad = any(not a.ok or not a.converged for a in self.answers.values())
         return 1 if bad else 0
+
+    def _watch_events(self) -> None:
+        """Wake on the folder's changes (its output folder and catalog left out); where
+        the system gives none, the folder is polled alone, and the user told."""
+        catalog = str(self.catalog)
+        own = [self.out, *(catalog + end for end in ("", "-journal", "-wal", "-shm"))]
+        wakeup = Wakeup(self.folder, exclude=own)
+        reason = wakeup.start()
+        if reason is None:
+            self._wakeup = wakeup
+        else:
+            self.say(
+                f"no change events from {self.folder} ({reason}): looking at it every "
+                f"{self.options.poll_s:g} s (--poll)"
+            )
 
     def _new_pool(self) -> Any:
         """The warm workers' pool (forkserver on Linux: workers start clean of this
@@ -497,33 +562,52 @@ class CampaignWatch:
         if opts.timeout_s is not None and time.monotonic() - self._start >= opts.timeout_s:
             self.stopped_by = f"stopped after --timeout {opts.timeout_s:g} s"
             return
+        # armed before the look: a change after it wakes the wait below
+        changed = self._wakeup.armed() if self._wakeup is not None else None
         fresh = self.arrivals.poll()
         busy = set(self._running.values())
         self._queue.extend(p for p in fresh if p not in self._queue and p not in busy)
         started = False
         while self._queue and len(self._running) < opts.workers and not self._warming:
             path = self._queue.popleft()
-            self._running[fitters.submit(self._fit, self._pool, path)] = path
+            announced: Future[Any] = Future()
+            self._announcing[path] = announced
+            self._running[fitters.submit(self._fit, self._pool, path, announced)] = path
             started = True
         if fresh or started:
             self._refresh_page()
-        watched = set(self._running) | self._warming
+        watched = set(self._running) | set(self._announcing.values()) | self._warming
         if self._population is not None:
             watched.add(self._population)
+        if changed is not None:
+            watched.add(changed)
+        # the next look: at a change, when a file waiting to settle is due, at the
+        # watch's end, and at the latest after poll_s
+        waits = [opts.poll_s, self.arrivals.next_due()]
+        if opts.timeout_s is not None:
+            waits.append(opts.timeout_s - (time.monotonic() - self._start))
+        if self._page_stale:
+            waits.append(opts.page_every_s - (time.monotonic() - self._last_page))
+        timeout = max(0.0, min(w for w in waits if w is not None))
         if watched:
-            done, _ = wait(watched, timeout=opts.poll_s, return_when=FIRST_COMPLETED)
+            done, _ = wait(watched, timeout=timeout, return_when=FIRST_COMPLETED)
         else:
-            time.sleep(opts.poll_s)
+            time.sleep(timeout)
             done = set()
         self._warmed(done & self._warming)
         answered = False
+        for path, future in list(self._announcing.items()):
+            if self.stopped_by is None and future.done():
+                del self._announcing[path]
+                outcome = future.result()
+                self._answer(path, outcome)
+                self._announced[path] = outcome.ok
+                answered = True
+                self._count_answers()
         for future in [f for f in done if f in self._running]:
-            path = self._running.pop(future)
-            self._answer(path, future.result())
-            answered = True
-            if opts.max_runs is not None and self.n_answered >= opts.max_runs:
-                self.stopped_by = f"stopped after --max-runs {opts.max_runs}"
-                break
+            if self.stopped_by is None or self._running[future] in self._announced:
+                answered |= self._finished(self._running.pop(future), future.result())
+                self._count_answers()
         if answered:
             self._changed = True
             self._refresh_page()
@@ -542,6 +626,12 @@ class CampaignWatch:
             self._populations_due()
         if self._page_stale:
             self._refresh_page()
+
+    def _count_answers(self) -> None:
+        """Stop once ``max_runs`` runs are answered."""
+        most = self.options.max_runs
+        if self.stopped_by is None and most is not None and self.n_answered >= most:
+            self.stopped_by = f"stopped after --max-runs {most}"
 
     def _warmed(self, done: set[Future[Any]]) -> None:
         for future in done:

@@ -85,7 +85,9 @@ def add_watch_options(parser: argparse.ArgumentParser) -> None:
         type=_seconds,
         default=default.poll_s,
         metavar="SECONDS",
-        help="interval between looks at DIR",
+        help="longest interval between looks at DIR (it is looked at as soon as the "
+        "system reports a change there; this is the fallback where it reports none, "
+        "e.g. a network share)",
     )
     g.add_argument(
         "--max-runs",
