@@ -17,10 +17,12 @@ from pathlib import Path
 
 import pytest
 from watchdog.events import (
+    DirCreatedEvent,
     DirModifiedEvent,
     FileClosedEvent,
     FileClosedNoWriteEvent,
     FileCreatedEvent,
+    FileDeletedEvent,
     FileModifiedEvent,
     FileMovedEvent,
     FileOpenedEvent,
@@ -61,11 +63,13 @@ def test_a_file_landing_in_the_folder_resolves_the_armed_future(tmp_path):
     ("kind", "paths"),
     [
         (FileCreatedEvent, ["run.csv"]),
-        (FileModifiedEvent, ["sub/run.csv"]),
-        (FileClosedEvent, ["run.csv"]),
-        (DirModifiedEvent, ["sub"]),
-        (FileMovedEvent, [".staging/run.csv", "run.csv"]),
+        (FileCreatedEvent, ["sub/run.csv"]),
+        (FileClosedEvent, ["run.csv"]),  # closed after writing
+        (FileDeletedEvent, ["run.csv"]),
+        (DirCreatedEvent, ["sub"]),
+        (FileMovedEvent, [".staging/run.csv", "run.csv"]),  # the acquisition's rename
         (FileMovedEvent, ["out/run.csv", "run.csv"]),  # out of the output folder
+        (FileMovedEvent, ["run.csv", ".trash/run.csv"]),  # away into a hidden folder
         (FileCreatedEvent, ["out-2/run.csv"]),  # beside the output folder, not in it
         (FileCreatedEvent, ["catalog.sqlite.csv"]),
     ],
@@ -79,14 +83,18 @@ def test_changes_in_the_folder_wake(tmp_path, kind, paths):
     [
         (FileOpenedEvent, ["run.csv"]),  # a fit reading a run
         (FileClosedNoWriteEvent, ["run.csv"]),
+        (FileModifiedEvent, ["run.csv"]),  # each write of a file streamed in
+        (DirModifiedEvent, ["sub"]),
+        (FileCreatedEvent, [".run.staging-1/run.csv"]),  # the acquisition's staging
+        (FileClosedEvent, ["sub/.hidden.csv"]),
         (FileModifiedEvent, ["out/watch.html"]),  # the watch's own page
         (FileMovedEvent, ["out/.watch.html.tmp", "out/watch.html"]),
         (FileCreatedEvent, ["out/fits/run.nc"]),
-        (FileModifiedEvent, ["catalog.sqlite"]),
+        (FileClosedEvent, ["catalog.sqlite"]),
         (FileCreatedEvent, ["catalog.sqlite-journal"]),
     ],
 )
-def test_reads_and_the_watchs_own_files_do_not_wake(tmp_path, kind, paths):
+def test_reads_writes_hidden_names_and_the_watchs_own_files_do_not_wake(tmp_path, kind, paths):
     assert not _handled(tmp_path, kind, paths).done()
 
 

@@ -131,15 +131,18 @@ def _sha256(path: Path) -> str:
 
 
 def _write_slowly(path: Path, chunks: int = 8, pause_s: float = 0.2) -> None:
-    """The bundled run's rows appended in chunks, a pause after each (well within the
-    watch's settle interval)."""
+    """The bundled run's rows written in chunks into a file held open, a pause after
+    each (well within the watch's settle interval): the watch hears of the file's
+    creation and of its close, not of each write, and must look again when it is due
+    to have settled."""
     path.with_suffix(".json").write_text(_sidecar(path.stem), encoding="utf-8")
     data = SLOW_SOURCE.read_bytes()
     step = len(data) // chunks + 1
-    for i in range(0, len(data), step):
-        with open(path, "ab") as fh:
+    with open(path, "wb") as fh:
+        for i in range(0, len(data), step):
             fh.write(data[i : i + step])
-        time.sleep(pause_s)
+            fh.flush()
+            time.sleep(pause_s)
 
 
 def _acquire(folder: Path, run_id: str, zeta: float) -> subprocess.Popen:

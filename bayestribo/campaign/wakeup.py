@@ -9,9 +9,14 @@ removed there. Polling stays the watch's fallback (:class:`~.watch.WatchOptions`
 containers' mounts) are still looked at every ``poll_s``, and a folder whose observer
 cannot start is watched by polling alone, with the reason.
 
-Events under the excluded paths (the campaign's own output folder and catalog, which the
-watch itself writes) and opening or closing a file without writing it (the fits reading
-the runs) do not wake the loop.
+A file created, closed after writing, renamed or removed wakes the loop; each write
+into a file does not (a recording streamed in would wake it thousands of times a
+second; its close does, and a file written in place is looked at again when it is due
+to have settled), nor does opening or closing a file without writing it (the fits
+reading the runs), nor anything under a hidden name (the acquisition's staging
+folders, which the watch never looks into; their rename into place wakes it) or under
+the excluded paths (the campaign's own output folder and catalog, which the watch
+itself writes).
 """
 
 from __future__ import annotations
@@ -25,8 +30,9 @@ from typing import Any
 
 __all__ = ["Wakeup"]
 
-#: Event types that change nothing in the folder.
-_READS = frozenset({"opened", "closed_no_write"})
+#: Event types that do not wake the loop: reads, and each write into a file (its close
+#: does).
+_QUIET = frozenset({"opened", "closed_no_write", "modified"})
 
 
 class Wakeup:
@@ -96,15 +102,19 @@ class Wakeup:
             observer.join(timeout=5.0)
 
     def _event(self, event: Any) -> None:
-        if event.event_type in _READS:
+        if event.event_type in _QUIET:
             return
         paths = [event.src_path, getattr(event, "dest_path", "") or ""]
-        if all(not p or self._excluded(os.fsdecode(p)) for p in paths):
+        if all(not p or self._ignored(os.fsdecode(p)) for p in paths):
             return
         with self._lock:
             if not self._future.done():
                 self._future.set_result(None)
 
-    def _excluded(self, path: str) -> bool:
+    def _ignored(self, path: str) -> bool:
+        """Under an excluded path, or under a hidden name inside the folder."""
         path = os.path.abspath(path)
-        return any(path == p or path.startswith(p + os.sep) for p in self._exclude)
+        if any(path == p or path.startswith(p + os.sep) for p in self._exclude):
+            return True
+        inside = os.path.relpath(path, os.path.abspath(self.folder))
+        return any(part.startswith(".") for part in Path(inside).parts if part != "..")
