@@ -266,6 +266,19 @@ class _Whole:
         self.name = name
 
 
+def _fit_digested(function: Any, **hooks: Any) -> list[RunOutcome]:
+    """``fit_many`` of RUNS on one thread, each result kept as ``digest of <name>``."""
+    with ThreadPoolExecutor(1) as pool:
+        return fit_many(
+            RUNS,
+            pool,
+            function=function,
+            progress=False,
+            keep=lambda result: f"digest of {result.name}",
+            **hooks,
+        )
+
+
 def test_fit_many_holds_only_what_keep_returns_while_it_runs():
     """A campaign's memory does not grow with its runs: once a result has been seen by
     the callback and digested, nothing in fit_many holds it any more."""
@@ -286,15 +299,7 @@ def test_fit_many_holds_only_what_keep_returns_while_it_runs():
         alive_at_callbacks.append([name for name in handled if refs[name]() is not None])
         handled.append(outcome.name)
 
-    with ThreadPoolExecutor(1) as pool:
-        outcomes = fit_many(
-            RUNS,
-            pool,
-            function=whole_fit,
-            progress=False,
-            callback=callback,
-            keep=lambda result: f"digest of {result.name}",
-        )
+    outcomes = _fit_digested(whole_fit, callback=callback)
     assert [o.result for o in outcomes] == [f"digest of {run_identity(r)}" for r in RUNS]
     # no result handled before is alive when the next one arrives
     assert alive_at_callbacks == [[]] * len(RUNS), alive_at_callbacks
@@ -356,16 +361,11 @@ def test_each_outcome_is_announced_as_kept_before_it_is_recorded():
     def whole_fit(run: Any, *, seed: int) -> _Whole:
         return _Whole(run_identity(run))
 
-    with ThreadPoolExecutor(1) as pool:
-        outcomes = fit_many(
-            RUNS,
-            pool,
-            function=whole_fit,
-            progress=False,
-            announce=lambda o: events.append(("announce", o.name, o.result)),
-            callback=lambda o: events.append(("callback", o.name, o.result)),
-            keep=lambda result: f"digest of {result.name}",
-        )
+    outcomes = _fit_digested(
+        whole_fit,
+        announce=lambda o: events.append(("announce", o.name, o.result)),
+        callback=lambda o: events.append(("callback", o.name, o.result)),
+    )
     names = [run_identity(r) for r in RUNS]
     for name, outcome in zip(names, outcomes, strict=True):
         mine = [(what, result) for what, n, result in events if n == name]

@@ -53,6 +53,7 @@ class Wakeup:
         exclude: Collection[str | os.PathLike[str]] = (),
     ) -> None:
         self.folder = Path(folder)
+        self._root = os.path.abspath(self.folder)
         self._exclude = tuple(os.path.abspath(p) for p in exclude)
         self._lock = threading.Lock()
         self._future: Future[None] = Future()
@@ -116,5 +117,8 @@ class Wakeup:
         path = os.path.abspath(path)
         if any(path == p or path.startswith(p + os.sep) for p in self._exclude):
             return True
-        inside = os.path.relpath(path, os.path.abspath(self.folder))
+        try:
+            inside = os.path.relpath(path, self._root)
+        except ValueError:  # another drive (Windows): not in the folder
+            return True
         return any(part.startswith(".") for part in Path(inside).parts if part != "..")
