@@ -160,6 +160,7 @@ from bayestribo.inference.types import MISFIT_P, PreparedRun, Sampled
 from bayestribo.io.options import ReadOptions
 from bayestribo.io.run import Run
 from bayestribo.model.laws import Law, get_law
+from bayestribo.model.laws.ahead import AheadCompiler, compile_ahead
 from bayestribo.signal.channel_noise import reused_noise
 from bayestribo.signal.increments import PiData
 
@@ -361,6 +362,46 @@ def compare_prepared(
         raise BayestriboError(f"laws: expected two or more laws to compare, got {laws}")
     for law in laws:
         law_of(law)
+    # the laws not in the law cache compiled by worker processes while the comparison
+    # goes on (model/laws/ahead.py)
+    with compile_ahead() as ahead:
+        return _compare_prepared(
+            ahead,
+            prepared,
+            laws,
+            seed=seed,
+            model=model,
+            settings=settings,
+            discrepancy=discrepancy,
+            law_free=law_free,
+            rivals=rivals,
+            screening=screening,
+            progress=progress,
+            starts=starts,
+            settle_adequate=settle_adequate,
+            at_optima=at_optima,
+        )
+
+
+def _compare_prepared(
+    ahead: AheadCompiler,
+    prepared: PreparedRun,
+    laws: list[str],
+    *,
+    seed: int | None,
+    model: str,
+    settings: SamplerSettings | None,
+    discrepancy: bool,
+    law_free: bool,
+    rivals: bool,
+    screening: bool,
+    progress: Callable[[str], None] | None,
+    starts: Mapping[str, Mapping[str, float]] | None,
+    settle_adequate: bool,
+    at_optima: dict[str, LawOptimum] | None,
+) -> tuple[LawComparison, dict[str, Sampled]]:
+    """:func:`compare_prepared` on its checked arguments, the laws it takes to their
+    optima compiled ahead by ``ahead``'s workers."""
     settings = settings or SamplerSettings()
     say = progress or (lambda text: None)
     root = np.random.SeedSequence(seed)
@@ -543,6 +584,12 @@ def compare_prepared(
                 "screen": {"stage": "turning points", **early[law]},
             }
     first = [law for law in ordered if law not in table]
+    compiling = ahead.submit([law_of(law) for law in first])
+    if compiling:
+        say(
+            f"compiling {compiling} of the laws on their first use, in {ahead.workers} "
+            "worker processes (kept in the law cache for later runs)"
+        )
     if len(first) < len(ordered):
         say(
             f"{len(ordered) - len(first)} of {len(ordered)} laws cannot follow the turning "

@@ -79,10 +79,11 @@ import inspect
 import sys
 from collections.abc import Callable, Mapping
 from functools import cache
+from pathlib import Path
 from types import ModuleType
 
 from bayestribo.model.laws import _core, _core_shared, _creep, _ladder
-from bayestribo.model.laws.cache import CACHE_ENV, law_cache_dir, load_module
+from bayestribo.model.laws.cache import CACHE_ENV, NUMBA_FOLDER, law_cache_dir, load_module
 
 __all__ = [
     "BASE_ERROR",
@@ -90,7 +91,9 @@ __all__ = [
     "DEFAULT_STEPS",
     "LADDER",
     "compiled_law",
+    "in_cache",
     "law_cache_dir",
+    "law_module",
     "make_integrator",
 ]
 
@@ -191,12 +194,47 @@ def _law_source(
     return text, {}, True
 
 
+def _module_name(text: str) -> str:
+    """The module name of one law's text (:func:`_law_source`): its digest."""
+    return f"bayestribo_law_{hashlib.sha1(text.encode()).hexdigest()[:20]}"
+
+
 def _load(text: str, namespace: Mapping[str, object], cacheable: bool) -> ModuleType:
     """Execute one law's module text (:func:`_law_source`) in the law cache, or, when it
-    may not be cached, in a temporary folder with ``namespace`` set first."""
-    digest = hashlib.sha1(text.encode()).hexdigest()[:20]
+    may not be cached, in a temporary folder with ``namespace`` set first. A law a
+    worker process is compiling into the cache (:mod:`.ahead`) is waited for first."""
+    name = _module_name(text)
     folder = law_cache_dir() if cacheable else None
-    return load_module(f"bayestribo_law_{digest}", text, folder, namespace)
+    if folder is not None:
+        from bayestribo.model.laws.ahead import wait_for
+
+        wait_for(name)
+    return load_module(name, text, folder, namespace)
+
+
+@cache
+def law_module(
+    drags: tuple,
+    drag_offsets: tuple,
+    drag_sizes: tuple,
+    frictions: tuple,
+    friction_offsets: tuple,
+    friction_sizes: tuple,
+) -> str | None:
+    """The name of one law's module in the law cache (arguments as
+    :func:`make_integrator`'s), or None when the law may not be cached (a term whose
+    force cannot be imported by name)."""
+    layout = (drags, drag_offsets, drag_sizes, frictions, friction_offsets, friction_sizes)
+    text, _, cacheable = _law_source(_core, layout, parts=(_creep,))
+    return _module_name(text) if cacheable else None
+
+
+def in_cache(name: str, folder: Path, entries: tuple[str, ...]) -> bool:
+    """Whether numba's files of each of the functions ``entries`` of the law module
+    ``name`` are in the law cache ``folder`` (compiled by some process before; whether
+    they match this machine and numba is numba's to decide as it loads them)."""
+    numba_folder = folder / NUMBA_FOLDER
+    return all(any(numba_folder.glob(f"{name}.{entry}-*.nbi")) for entry in entries)
 
 
 @cache

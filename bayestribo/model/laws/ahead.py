@@ -1,0 +1,246 @@
+"""Laws compiled ahead: the integrators a comparison will need, compiled into the law
+cache by worker processes while the command goes on.
+
+``--law auto`` compares a dozen laws. On a fresh machine each law's integrator
+(:mod:`.integrator`) is compiled on its first use, some 15 s of CPU each, one after the
+other in the command's process: the first ``auto`` on a new install took minutes.
+:func:`compile_ahead` hands the laws whose compiled code is not in the law cache to
+worker processes (as many as the CPUs, at most :data:`WORKERS_ENV`; 0 none), one law a
+worker at a time in the order the command will need them, while the command goes on
+with its own work. Where it reaches a law a worker is compiling, it waits for that
+worker and loads the law from the cache (:func:`wait_for`, called as a law's module is
+loaded); a law no worker has begun it takes back and compiles itself, as without
+workers. A worker compiles the law's module
+from the same generated text with the same numba, so the code loaded is the code the
+command would have compiled: the answers are the same to the bit
+(``tests/test_model_laws_ahead.py``).
+
+No workers are started for a law cache that is not usable (every process compiles its
+laws then), on one CPU, inside a worker process (a campaign's fits, which are parallel
+already), or for laws whose terms cannot be imported by name (defined in ``__main__``:
+compiled in the command's process, as before). Workers end with the command
+(:func:`bayestribo._workers.process_pool`); one still compiling when the comparison ends
+is stopped, leaving no partial file numba would load (each cache file is written whole
+and checked against its SHA-256 before it is read, :mod:`.cache`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import multiprocessing
+import os
+import sys
+import threading
+from collections import deque
+from collections.abc import Iterator, Sequence
+from concurrent.futures import Future
+from pathlib import Path
+from typing import Any
+
+from bayestribo.errors import BayestriboError
+
+__all__ = [
+    "WORKERS_ENV",
+    "AheadCompiler",
+    "compile_ahead",
+    "entry_points",
+    "wait_for",
+    "worker_count",
+]
+
+#: Environment variable: at most this many worker processes compile laws ahead (0:
+#: none, each law compiled by the command as it needs it).
+WORKERS_ENV = "BAYESTRIBO_COMPILE_WORKERS"
+
+
+def worker_count(laws: int) -> int:
+    """How many workers compile ``laws`` laws ahead: as many as the CPUs this process
+    may use (the command mostly waits for them), at most ``laws`` and at most
+    :data:`WORKERS_ENV`; none on one CPU or inside a worker process.
+
+    Raises
+    ------
+    BayestriboError
+        If :data:`WORKERS_ENV` is set to anything but a whole number >= 0.
+    """
+    text = os.environ.get(WORKERS_ENV, "").strip()
+    limit = None
+    if text:
+        try:
+            limit = int(text)
+        except ValueError:
+            limit = -1
+        if limit < 0:
+            raise BayestriboError(
+                f"{WORKERS_ENV}: expected a whole number of worker processes >= 0, got {text!r}"
+            )
+    if multiprocessing.parent_process() is not None:
+        return 0
+    try:
+        cpus = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        cpus = os.cpu_count() or 1
+    count = min(cpus, laws) if cpus > 1 else 0
+    if limit is not None:
+        count = min(count, limit)
+    return max(count, 0)
+
+
+def entry_points(law: object) -> tuple[str, ...]:
+    """The compiled functions of a law's module that fits call: the turning points
+    (:meth:`~.law.Law.turning_points`), and for a law without a closed form Π
+    (:meth:`~.law.Law.pi_grid`) and the swings' dissipation
+    (:meth:`~.law.Law.swing_dissipation`) too."""
+    if law.closed_form:  # type: ignore[attr-defined]
+        return ("turns",)
+    return ("grid", "turns", "swing_drops")
+
+
+def _pending(laws: Sequence[object], folder: Path) -> list[tuple[str, str]]:
+    """``(module name, law name)`` of each law whose module may be cached and is not,
+    in the order given, each module once."""
+    from bayestribo.model.laws.integrator import in_cache, law_module
+
+    out: dict[str, str] = {}
+    for law in laws:
+        if getattr(law, "restoring", None) is not None:
+            continue  # the laws on a nonlinear spring compile other modules
+        name = law_module(*law._layout[0])  # type: ignore[attr-defined]
+        if name is None or name in out or in_cache(name, folder, entry_points(law)):
+            continue
+        out[name] = law.name  # type: ignore[attr-defined]
+    return list(out.items())
+
+
+def _compile(law: str, folder: str, module: str) -> str:
+    """In a worker: compile the functions of the law named ``law`` that fits call
+    (:func:`entry_points`) into the law cache ``folder`` by calling each once, with
+    small arguments of the types a fit passes; the module's name back. Raises when the
+    law made here is not the module asked for (a term registered in the command
+    alone), so that the command compiles it."""
+    import numpy as np
+
+    from bayestribo.model.laws import get_law
+    from bayestribo.model.laws.cache import CACHE_ENV
+    from bayestribo.model.laws.integrator import law_module
+
+    os.environ[CACHE_ENV] = folder
+    the_law = get_law(law)
+    made = law_module(*the_law._layout[0])
+    if made != module:
+        raise RuntimeError(f"law {law} is {made} here, not {module}")
+    values = {p.name: p.null if p.null is not None else p.low for p in the_law.parameters}
+    rows = {k: np.array([v]) for k, v in values.items()}
+    tau = np.linspace(0.0, 4.0 * np.pi, 5)
+    entries = entry_points(the_law)
+    if "grid" in entries:
+        the_law.pi_grid(tau, rows, np.array([1.0]), tau_end=float(tau[-1]), method="integrate")
+    the_law.turning_points(values, 1.0, tau_max=float(tau[-1]), max_count=4)
+    if "swing_drops" in entries:
+        the_law.swing_dissipation(np.array([0.5]), rows, 1.0)
+    return module
+
+
+def wait_for(module: str) -> None:
+    """Before the law module ``module`` is loaded: where a worker is compiling it, wait
+    until it is done (the module then loads from the cache); where no worker has begun
+    it, take it back, to be compiled here. A worker that failed leaves it to be
+    compiled here too."""
+    for ahead in list(_active):
+        ahead.wait_for(module)
+
+
+#: The compilers of the blocks now open (:func:`compile_ahead`).
+_active: list[AheadCompiler] = []
+
+
+class AheadCompiler:
+    """Laws handed to worker processes to compile, at most one a worker at a time, in
+    the order given; the rest wait here, where the command may take one back
+    (:meth:`wait_for`). Made by :func:`compile_ahead`."""
+
+    def __init__(self, folder: Path | None) -> None:
+        self.folder = folder
+        self.workers = 0
+        self._executor: Any = None
+        self._waiting: deque[tuple[str, str]] = deque()  # (module, law) not yet handed out
+        self._running: dict[str, Future] = {}
+        self._lock = threading.Lock()
+
+    def submit(self, laws: Sequence[object]) -> int:
+        """Hand the laws ``laws`` (in the order the command needs them) that are not in
+        the law cache to workers, starting them where none run; how many of them are
+        new to the workers (0 where no worker runs)."""
+        if self.folder is None:
+            return 0
+        with self._lock:
+            known = {m for m, _ in self._waiting} | set(self._running)
+            new = [(m, law) for m, law in _pending(laws, self.folder) if m not in known]
+            self._waiting.extend(new)
+            if self._executor is None and new:
+                self.workers = worker_count(len(self._waiting))
+                if self.workers > 0:
+                    from bayestribo._workers import process_pool
+
+                    method = "forkserver" if sys.platform.startswith("linux") else None
+                    self._executor = process_pool(self.workers, method=method)
+            self._hand_out()
+        return len(new) if self._executor is not None else 0
+
+    def _hand_out(self) -> None:
+        # with the lock held: a law to each idle worker
+        if self._executor is None:
+            return
+        while self._waiting and len(self._running) < self.workers:
+            module, law = self._waiting.popleft()
+            try:
+                future = self._executor.submit(_compile, law, str(self.folder), module)
+            except RuntimeError:  # the pool is shut down or broken: compiled here
+                self._waiting.clear()
+                return
+            self._running[module] = future
+            future.add_done_callback(lambda _, module=module: self._done(module))
+
+    def _done(self, module: str) -> None:
+        with self._lock:
+            self._running.pop(module, None)
+            self._hand_out()
+
+    def wait_for(self, module: str) -> None:
+        """Wait for ``module`` where a worker compiles it; take it back where it waits
+        to be handed out."""
+        with self._lock:
+            self._waiting = deque(item for item in self._waiting if item[0] != module)
+            future = self._running.get(module)
+        if future is not None:
+            with contextlib.suppress(Exception):
+                future.result()
+
+    def close(self) -> None:
+        """Stop handing out laws and end the workers (one still compiling is stopped)."""
+        with self._lock:
+            self._waiting.clear()
+            executor, self._executor = self._executor, None
+        if executor is not None:
+            from bayestribo._workers import stop_workers
+
+            stop_workers(executor)
+            executor.shutdown(wait=True, cancel_futures=True)
+
+
+@contextlib.contextmanager
+def compile_ahead(laws: Sequence[object] = ()) -> Iterator[AheadCompiler]:
+    """Within the block, worker processes compile the laws ``laws``
+    (:class:`~.law.Law`, in the order the block needs them), and any the block hands
+    to :meth:`AheadCompiler.submit`, that are not in the law cache (module notes).
+    Yields the :class:`AheadCompiler`."""
+    from bayestribo.model.laws.cache import law_cache_dir
+
+    ahead = AheadCompiler(law_cache_dir())
+    _active.append(ahead)
+    try:
+        ahead.submit(laws)
+        yield ahead
+    finally:
+        _active.remove(ahead)
+        ahead.close()
