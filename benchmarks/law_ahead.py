@@ -110,8 +110,15 @@ def main(argv: list[str] | None = None) -> int:
             same = "answer" in one and one.get("answer") == other.get("answer")
             for m in modes:
                 pair[m].pop("answer", None)
-            rows.append({"run": run.name, "round": k, "same_answer": same,
-                         "one_by_one": one, "ahead": other})
+            rows.append(
+                {
+                    "run": run.name,
+                    "round": k,
+                    "same_answer": same,
+                    "one_by_one": one,
+                    "ahead": other,
+                }
+            )
             print(json.dumps(rows[-1]), flush=True)
     summary = {}
     for run in args.runs:
@@ -123,7 +130,9 @@ def main(argv: list[str] | None = None) -> int:
             "ahead_wall_s": ahead,
             "ratio_ahead_to_one_by_one": ahead / serial,
             "answers_same_every_round": all(r["same_answer"] for r in mine),
-            "exit_codes": sorted({r[m]["exit_code"] for r in mine for m in ("one_by_one", "ahead")}),
+            "exit_codes": sorted(
+                {r[m]["exit_code"] for r in mine for m in ("one_by_one", "ahead")}
+            ),
         }
     path = write_results(
         args.output,
