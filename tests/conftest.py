@@ -12,6 +12,7 @@ The report tests share one rendering of each report kind (``single_run_report``,
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from pathlib import Path
 
@@ -21,6 +22,11 @@ from _paths import APPSTAT, DATA, RUNS
 from _renderings import ACQUISITION_SETTINGS, Rendering, render
 
 from bayestribo import Run, read_run
+
+# The suite's own workers (pytest -n) use the cores: a comparison in a test compiles its
+# laws itself rather than in more processes of its own, which tests with stand-in fits
+# would start for laws they never use (tests/test_model_laws_ahead.py sets its own).
+os.environ.setdefault("BAYESTRIBO_COMPILE_WORKERS", "0")
 
 
 @pytest.hookimpl(optionalhook=True)

@@ -19,8 +19,8 @@ No workers are started for a law cache that is not usable (every process compile
 laws then), on one CPU, inside a worker process (a campaign's fits, which are parallel
 already), or for laws whose terms cannot be imported by name (defined in ``__main__``:
 compiled in the command's process, as before). Workers end with the command
-(:func:`bayestribo._workers.process_pool`); one still compiling when the comparison ends
-is stopped, leaving no partial file numba would load (each cache file is written whole
+(:func:`bayestribo._workers.die_with_parent`); one still compiling when the comparison
+ends is stopped, leaving no partial file numba would load (each cache file is written whole
 and checked against its SHA-256 before it is read, :mod:`.cache`).
 """
 
@@ -29,13 +29,12 @@ from __future__ import annotations
 import contextlib
 import multiprocessing
 import os
+import subprocess
 import sys
 import threading
 from collections import deque
 from collections.abc import Iterator, Sequence
-from concurrent.futures import Future
 from pathlib import Path
-from typing import Any
 
 from bayestribo.errors import BayestriboError
 
@@ -43,6 +42,7 @@ __all__ = [
     "WORKERS_ENV",
     "AheadCompiler",
     "compile_ahead",
+    "compile_law",
     "entry_points",
     "wait_for",
     "worker_count",
@@ -112,7 +112,7 @@ def _pending(laws: Sequence[object], folder: Path) -> list[tuple[str, str]]:
     return list(out.items())
 
 
-def _compile(law: str, folder: str, module: str) -> str:
+def compile_law(law: str, folder: str, module: str) -> str:
     """In a worker: compile the functions of the law named ``law`` that fits call
     (:func:`entry_points`) into the law cache ``folder`` by calling each once, with
     small arguments of the types a fit passes; the module's name back. Raises when the
@@ -150,21 +150,41 @@ def wait_for(module: str) -> None:
         ahead.wait_for(module)
 
 
+def _end(process: subprocess.Popen) -> None:
+    """End a worker: its input closed (it ends when done), killed if it is not."""
+    with contextlib.suppress(OSError, ValueError, AttributeError):
+        process.stdin.close()  # type: ignore[union-attr]
+    with contextlib.suppress(subprocess.TimeoutExpired):
+        process.wait(timeout=5)
+    if process.poll() is None:
+        with contextlib.suppress(OSError):
+            process.kill()
+        process.wait()
+
+
 #: The compilers of the blocks now open (:func:`compile_ahead`).
 _active: list[AheadCompiler] = []
 
 
 class AheadCompiler:
-    """Laws handed to worker processes to compile, at most one a worker at a time, in
-    the order given; the rest wait here, where the command may take one back
-    (:meth:`wait_for`). Made by :func:`compile_ahead`."""
+    """Laws handed to worker processes to compile, one law a worker at a time, in the
+    order given; the rest wait here, where the command may take one back
+    (:meth:`wait_for`). Made by :func:`compile_ahead`.
+
+    Each worker is a fresh ``python -m bayestribo.model.laws._ahead_worker`` fed law
+    names on its standard input by a thread of the command (not :mod:`multiprocessing`,
+    whose workers import the command's main script again: a script that calls ``fit``
+    without a ``__main__`` guard would run once more in each).
+    """
 
     def __init__(self, folder: Path | None) -> None:
         self.folder = folder
         self.workers = 0
-        self._executor: Any = None
         self._waiting: deque[tuple[str, str]] = deque()  # (module, law) not yet handed out
-        self._running: dict[str, Future] = {}
+        self._running: dict[str, threading.Event] = {}
+        self._feeders: list[threading.Thread] = []
+        self._processes: list[subprocess.Popen] = []
+        self._closed = False
         self._lock = threading.Lock()
 
     def submit(self, laws: Sequence[object]) -> int:
@@ -174,58 +194,97 @@ class AheadCompiler:
         if self.folder is None:
             return 0
         with self._lock:
+            if self._closed:
+                return 0
             known = {m for m, _ in self._waiting} | set(self._running)
             new = [(m, law) for m, law in _pending(laws, self.folder) if m not in known]
+            if not new:
+                return 0
+            if not self.workers:
+                self.workers = worker_count(len(new))
+            if not self.workers:
+                return 0
             self._waiting.extend(new)
-            if self._executor is None and new:
-                self.workers = worker_count(len(self._waiting))
-                if self.workers > 0:
-                    from bayestribo._workers import process_pool
+            self._feeders = [t for t in self._feeders if t.is_alive()]
+            for _ in range(min(self.workers - len(self._feeders), len(self._waiting))):
+                feeder = threading.Thread(target=self._feed, daemon=True, name="law-ahead")
+                self._feeders.append(feeder)
+                feeder.start()
+        return len(new)
 
-                    method = "forkserver" if sys.platform.startswith("linux") else None
-                    self._executor = process_pool(self.workers, method=method)
-            self._hand_out()
-        return len(new) if self._executor is not None else 0
+    def _worker(self) -> subprocess.Popen:
+        import bayestribo
+        from bayestribo.model.laws.cache import CACHE_ENV
 
-    def _hand_out(self) -> None:
-        # with the lock held: a law to each idle worker
-        if self._executor is None:
-            return
-        while self._waiting and len(self._running) < self.workers:
-            module, law = self._waiting.popleft()
-            try:
-                future = self._executor.submit(_compile, law, str(self.folder), module)
-            except RuntimeError:  # the pool is shut down or broken: compiled here
-                self._waiting.clear()
-                return
-            self._running[module] = future
-            future.add_done_callback(lambda _, module=module: self._done(module))
+        home = str(Path(bayestribo.__file__).resolve().parent.parent)
+        path = os.pathsep.join(p for p in (home, os.environ.get("PYTHONPATH")) if p)
+        env = {**os.environ, CACHE_ENV: str(self.folder), "PYTHONPATH": path}
+        env[WORKERS_ENV] = "0"
+        return subprocess.Popen(
+            [sys.executable, "-m", "bayestribo.model.laws._ahead_worker", str(os.getpid())],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+            env=env,
+            text=True,
+        )
 
-    def _done(self, module: str) -> None:
-        with self._lock:
-            self._running.pop(module, None)
-            self._hand_out()
+    def _feed(self) -> None:
+        # one worker process: a law at a time from the front of the waiting ones
+        process = None
+        try:
+            while True:
+                with self._lock:
+                    if self._closed or not self._waiting:
+                        return
+                    module, law = self._waiting.popleft()
+                    done = self._running[module] = threading.Event()
+                reply = ""
+                try:
+                    if process is None:
+                        process = self._worker()
+                        with self._lock:
+                            self._processes.append(process)
+                            if self._closed:
+                                return
+                    assert process.stdin is not None and process.stdout is not None
+                    process.stdin.write(f"{law}\t{module}\n")
+                    process.stdin.flush()
+                    reply = process.stdout.readline()
+                except (OSError, ValueError):
+                    pass
+                finally:
+                    with self._lock:
+                        self._running.pop(module, None)
+                    done.set()
+                if not reply:  # the worker ended: the laws left are compiled here
+                    return
+        finally:
+            if process is not None:
+                _end(process)
 
     def wait_for(self, module: str) -> None:
         """Wait for ``module`` where a worker compiles it; take it back where it waits
         to be handed out."""
         with self._lock:
             self._waiting = deque(item for item in self._waiting if item[0] != module)
-            future = self._running.get(module)
-        if future is not None:
-            with contextlib.suppress(Exception):
-                future.result()
+            done = self._running.get(module)
+        if done is not None:
+            done.wait()
 
     def close(self) -> None:
-        """Stop handing out laws and end the workers (one still compiling is stopped)."""
+        """Stop handing out laws and end the workers (one still compiling is stopped:
+        numba writes each file whole, and a file without its record is never loaded)."""
         with self._lock:
+            self._closed = True
             self._waiting.clear()
-            executor, self._executor = self._executor, None
-        if executor is not None:
-            from bayestribo._workers import stop_workers
-
-            stop_workers(executor)
-            executor.shutdown(wait=True, cancel_futures=True)
+            processes, feeders = list(self._processes), list(self._feeders)
+        for process in processes:
+            if process.poll() is None:
+                with contextlib.suppress(OSError):
+                    process.kill()
+        for feeder in feeders:
+            feeder.join()
 
 
 @contextlib.contextmanager
