@@ -34,7 +34,7 @@ from bayestribo.model.laws.integrator import in_cache, law_module, make_integrat
 from bayestribo.model.laws.cache import law_cache_dir
 laws = [get_law("coulomb"), get_law("viscous")]
 names = [law_module(*law._layout[0]) for law in laws]
-before = [in_cache(n, law_cache_dir(), ("turns",)) for n in names]
+before = [f"{n}.turns" in in_cache(law_cache_dir()) for n in names]
 with compile_ahead() as compiler:
     handed = compiler.submit(laws)
     workers = compiler.workers
@@ -47,7 +47,7 @@ with compile_ahead() as again:
     handed_again = again.submit(laws)
 print(json.dumps({
     "before": before,
-    "after": [in_cache(n, law_cache_dir(), ("turns",)) for n in names],
+    "after": [f"{n}.turns" in in_cache(law_cache_dir()) for n in names],
     "handed": handed, "workers": workers, "handed_again": handed_again,
     "hits": [sum(t.stats.cache_hits.values()) for t in turns],
     "misses": [sum(t.stats.cache_misses.values()) for t in turns],

@@ -10,18 +10,18 @@ worker at a time in the order the command will need them, while the command goes
 with its own work. Where it reaches a law a worker is compiling, it waits for that
 worker and loads the law from the cache (:func:`wait_for`, called as a law's module is
 loaded); a law no worker has begun it takes back and compiles itself, as without
-workers. A worker compiles the law's module
-from the same generated text with the same numba, so the code loaded is the code the
-command would have compiled: the answers are the same to the bit
-(``tests/test_model_laws_ahead.py``).
+workers. A worker compiles the law's module from the same generated text with the same
+numba, so the code loaded is the code the command would have compiled: the answers are
+the same to the bit (``benchmarks/law_ahead.py``; ``tests/test_model_laws_ahead.py``
+checks that the command loads what a worker compiled and compiles nothing again).
 
 No workers are started for a law cache that is not usable (every process compiles its
 laws then), on one CPU, inside a worker process (a campaign's fits, which are parallel
 already), or for laws whose terms cannot be imported by name (defined in ``__main__``:
 compiled in the command's process, as before). Workers end with the command
 (:func:`bayestribo._workers.die_with_parent`); one still compiling when the comparison
-ends is stopped, leaving no partial file numba would load (each cache file is written whole
-and checked against its SHA-256 before it is read, :mod:`.cache`).
+ends is stopped, leaving no partial file numba would load (each cache file is written
+whole and checked against its SHA-256 before it is read, :mod:`.cache`).
 """
 
 from __future__ import annotations
@@ -102,11 +102,14 @@ def _pending(laws: Sequence[object], folder: Path) -> list[tuple[str, str]]:
     from bayestribo.model.laws.integrator import in_cache, law_module
 
     out: dict[str, str] = {}
+    compiled = in_cache(folder)
     for law in laws:
         if getattr(law, "restoring", None) is not None:
             continue  # the laws on a nonlinear spring compile other modules
         name = law_module(*law._layout[0])  # type: ignore[attr-defined]
-        if name is None or name in out or in_cache(name, folder, entry_points(law)):
+        if name is None or name in out:
+            continue
+        if all(f"{name}.{entry}" in compiled for entry in entry_points(law)):
             continue
         out[name] = law.name  # type: ignore[attr-defined]
     return list(out.items())

@@ -76,6 +76,7 @@ from __future__ import annotations
 
 import hashlib
 import inspect
+import os
 import sys
 from collections.abc import Callable, Mapping
 from functools import cache
@@ -229,12 +230,15 @@ def law_module(
     return _module_name(text) if cacheable else None
 
 
-def in_cache(name: str, folder: Path, entries: tuple[str, ...]) -> bool:
-    """Whether numba's files of each of the functions ``entries`` of the law module
-    ``name`` are in the law cache ``folder`` (compiled by some process before; whether
-    they match this machine and numba is numba's to decide as it loads them)."""
-    numba_folder = folder / NUMBA_FOLDER
-    return all(any(numba_folder.glob(f"{name}.{entry}-*.nbi")) for entry in entries)
+def in_cache(folder: Path) -> set[str]:
+    """The compiled functions numba keeps in the law cache ``folder``, each as
+    ``<module>.<function>`` (compiled by some process before; whether they match this
+    machine and numba is numba's to decide as it loads them)."""
+    try:
+        files = os.listdir(folder / NUMBA_FOLDER)
+    except OSError:
+        return set()
+    return {f.rsplit("-", 1)[0] for f in files if f.endswith(".nbi")}
 
 
 @cache
