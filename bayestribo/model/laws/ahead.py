@@ -210,7 +210,13 @@ class AheadCompiler:
             self._waiting.extend(new)
             self._feeders = [t for t in self._feeders if t.is_alive()]
             for _ in range(min(self.workers - len(self._feeders), len(self._waiting))):
-                feeder = threading.Thread(target=self._feed, daemon=True, name="law-ahead")
+                # each new worker's first law is marked as begun here, before its thread
+                # runs: the command waits for it from now on, never takes it back
+                first = self._waiting.popleft()
+                self._running[first[0]] = threading.Event()
+                feeder = threading.Thread(
+                    target=self._feed, args=(first,), daemon=True, name="law-ahead"
+                )
                 self._feeders.append(feeder)
                 feeder.start()
         return len(new)
@@ -232,16 +238,16 @@ class AheadCompiler:
             text=True,
         )
 
-    def _feed(self) -> None:
-        # one worker process: a law at a time from the front of the waiting ones
+    def _feed(self, first: tuple[str, str]) -> None:
+        # one worker process: its first law, then the next from the front of the waiting
+        # ones, marked as begun before the last one is said to be done (the command,
+        # woken by that, then waits for the next rather than taking it back)
         process = None
+        module, law = first
         try:
-            while True:
+            while module:
                 with self._lock:
-                    if self._closed or not self._waiting:
-                        return
-                    module, law = self._waiting.popleft()
-                    done = self._running[module] = threading.Event()
+                    done = self._running[module]
                 reply = ""
                 try:
                     if process is None:
@@ -259,9 +265,12 @@ class AheadCompiler:
                 finally:
                     with self._lock:
                         self._running.pop(module, None)
+                        module, law = "", ""
+                        # a worker that ended leaves the laws still waiting to the command
+                        if reply and not self._closed and self._waiting:
+                            module, law = self._waiting.popleft()
+                            self._running[module] = threading.Event()
                     done.set()
-                if not reply:  # the worker ended: the laws left are compiled here
-                    return
         finally:
             if process is not None:
                 _end(process)
