@@ -10,7 +10,9 @@ import queue
 import subprocess
 import sys
 import threading
+from concurrent.futures import Future
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -214,3 +216,73 @@ def test_a_law_with_a_force_defined_in_main_is_left_to_the_command(
     with ahead.compile_ahead([local]) as compiler:
         assert compiler.workers == 0
     assert one_worker.sent == []
+
+
+def test_wait_all_returns_when_the_workers_have_compiled_every_law(one_worker: _Worker) -> None:
+    laws = [get_law("quadratic"), get_law("power")]
+    for law in laws:
+        one_worker.answers.put(f"ok {_module(law.name)}\n")
+    with ahead.compile_ahead() as compiler:
+        assert compiler.submit(laws) == 2
+        compiler.wait_all()
+        assert one_worker.sent == ["quadratic", "power"]
+        assert compiler._running == {} and not compiler._waiting
+
+
+class _SerialPool:
+    """Runs each task as it is submitted, recording the order of events."""
+
+    def __init__(self, events: list[str]) -> None:
+        self.events = events
+
+    def submit(self, fn: Any, *args: Any) -> Future:
+        self.events.append("fit")
+        future: Future = Future()
+        future.set_result(fn(*args))
+        return future
+
+    def shutdown(self, wait: bool = True, cancel_futures: bool = False) -> None:
+        pass
+
+
+@pytest.mark.parametrize(
+    ("workers", "given", "first"), [(2, False, True), (1, False, False), (2, True, False)]
+)
+def test_a_campaigns_laws_are_compiled_before_its_fits_where_its_own_pool_runs_them(
+    monkeypatch: pytest.MonkeyPatch, workers: int, given: bool, first: bool
+) -> None:
+    from bayestribo.campaign import fitting
+
+    events: list[str] = []
+    asked: list[list] = []
+
+    def compile_first(kwargs_list: list, stream: Any, say: bool) -> None:
+        events.append("compile")
+        asked.append(kwargs_list)
+
+    pool = _SerialPool(events)
+    monkeypatch.setattr(fitting, "_compile_laws_first", compile_first)
+    monkeypatch.setattr(fitting, "process_pool", lambda *a, **k: pool)
+    run = REPO / "data" / "runs" / "glycerol-N0.31-r1.csv"
+    (outcome,) = fitting.fit_many(
+        [run], pool if given else None, max_workers=workers, progress=False, law="coulomb"
+    )
+    assert outcome.ok
+    assert events == (["compile", "fit"] if first else ["fit"])
+    if first:
+        assert asked == [[{"law": "coulomb"}]]
+
+
+def test_the_laws_a_campaigns_fits_compile() -> None:
+    from bayestribo.campaign.fitting import _fit_laws
+    from bayestribo.inference.comparison import auto_laws
+    from bayestribo.inference.spec import FitSpec
+
+    names = [law.name for law in _fit_laws([{"spec": FitSpec.of({"law": "auto"})}])]
+    assert sorted(names) == sorted(auto_laws()) and names[0] == "viscous"
+    assert [law.name for law in _fit_laws([{"spec": FitSpec.of({})}])] == ["viscous+coulomb"]
+    two = _fit_laws([{"law": "power"}, {"law": "quadratic"}, {"law": "power"}])
+    assert [law.name for law in two] == ["quadratic", "power"]  # smallest first, once each
+    # on a nonlinear spring (other modules), or a law not understood (the fit says why)
+    assert _fit_laws([{"spec": FitSpec.of({"law": "auto", "restoring": "duffing"})}]) == []
+    assert _fit_laws([{"law": "no-such-term"}, {"spec": {"law": 3}}]) == []

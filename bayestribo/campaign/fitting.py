@@ -271,7 +271,11 @@ def fit_many(
         Workers of the default process pool; default one per core. The pool starts
         its workers with the ``forkserver`` method (safe with threads), so a script
         that calls :func:`fit_many` must guard its top level with
-        ``if __name__ == "__main__":``.
+        ``if __name__ == "__main__":``. With its own pool of two or more workers and
+        the default ``function``, the laws the fits will need that the law cache lacks
+        (every law of ``law="auto"``) are compiled first, once each, by as many
+        worker processes (:mod:`bayestribo.model.laws.ahead`), not by every fit's
+        worker at once.
     progress : bool
         Show a progress line on ``progress_stream`` (default standard error).
     callback : callable, optional
@@ -326,6 +330,10 @@ def fit_many(
         _check_keywords(fit, fit_kwargs)
         function = _default_fit
     own = executor is None
+    if own and function is _default_fit and (max_workers or os.cpu_count() or 1) > 1:
+        # the laws not yet compiled, compiled once by as many workers before the fits
+        # (each fit would otherwise compile each law it needs, in every worker at once)
+        _compile_laws_first([fit_kwargs, *(run_kwargs or [])], progress_stream, progress)
     if own:
         workers = max_workers or os.cpu_count() or 1
         # forkserver: workers start from a clean process, safe when the caller runs
@@ -378,6 +386,59 @@ def fit_many(
         if own:
             executor.shutdown(wait=True, cancel_futures=True)
     return [o for o in outcomes if o is not None]
+
+
+def _fit_laws(kwargs_list: Sequence[Mapping[str, Any]]) -> list[Any]:
+    """The laws the fits with these keyword arguments compile (:class:`~bayestribo.
+    model.laws.Law`, smallest first): every law ``law="auto"`` compares, or the law
+    given (the default law where none is); none for fits on a nonlinear spring (other
+    modules) or where a law or specification is not understood (the fit says why)."""
+    from bayestribo.inference.choice import complexity, law_of
+    from bayestribo.inference.comparison import auto_laws
+    from bayestribo.inference.spec import FitSpec
+    from bayestribo.model.laws.law import DEFAULT_LAW
+
+    names: dict[str, None] = {}
+    for kwargs in kwargs_list:
+        try:
+            spec = FitSpec.of(kwargs["spec"]) if kwargs.get("spec") is not None else None
+        except Exception:
+            continue
+        law = kwargs.get("law", spec.law if spec is not None else None)
+        restoring = kwargs.get("restoring", spec.restoring if spec is not None else None)
+        if restoring is not None or not (law is None or isinstance(law, str)):
+            continue
+        for name in auto_laws() if law == "auto" else [law or DEFAULT_LAW]:
+            names.setdefault(name)
+    laws = []
+    for name in names:
+        try:
+            laws.append(law_of(name))
+        except BayestriboError:
+            continue
+    return sorted(laws, key=lambda law: complexity(law.name))
+
+
+def _compile_laws_first(
+    kwargs_list: Sequence[Mapping[str, Any]], stream: IO[str] | None, say: bool
+) -> None:
+    """Compile the fits' laws missing from the law cache in worker processes, as many
+    as the CPUs, and wait for them (:mod:`bayestribo.model.laws.ahead`)."""
+    from bayestribo.model.laws.ahead import compile_ahead
+
+    laws = _fit_laws(kwargs_list)
+    if not laws:
+        return
+    with compile_ahead() as ahead:
+        count = ahead.submit(laws)
+        if count and say:
+            print(
+                f"compiling {count} laws on their first use, in {ahead.workers} worker "
+                "processes (kept in the law cache for later runs)",
+                file=stream or sys.stderr,
+                flush=True,
+            )
+        ahead.wait_all()
 
 
 @contextmanager

@@ -284,6 +284,16 @@ class AheadCompiler:
         if done is not None:
             done.wait()
 
+    def wait_all(self) -> None:
+        """Wait until the workers have compiled every law handed to them (laws a worker
+        that ended left waiting are left to whoever needs them)."""
+        while True:
+            with self._lock:
+                done = next(iter(self._running.values()), None)
+            if done is None:
+                return
+            done.wait()
+
     def close(self) -> None:
         """Stop handing out laws and end the workers (one still compiling is stopped:
         numba writes each file whole, and a file without its record is never loaded)."""
