@@ -20,6 +20,11 @@ Run (by hand, some 4 minutes a round on two cores)::
 
     timeout 3600 python benchmarks/law_ahead.py --repeats 2 --warm-up
 
+``--campaign``: each of ``--runs`` is a folder, and the command is ``bayestribo campaign
+DIR --law auto --json --workers 2 --no-figures`` (a campaign's own pool: the laws
+compiled first by the workers, or by each fit's worker as it needs them); the answers
+compared are the campaign's JSON without its timing fields and output paths.
+
 Writes ``benchmarks/results/law_ahead.json`` (``--output NAME``: ``NAME.json``).
 """
 
@@ -55,18 +60,25 @@ def _untimed(value: Any) -> Any:
     return value
 
 
-def measure(run: Path, workers: str | None) -> dict[str, Any]:
-    """One ``fit RUN --law auto --json`` in a fresh process with an empty law cache;
+def measure(run: Path, workers: str | None, campaign: bool = False) -> dict[str, Any]:
+    """One ``fit RUN --law auto --json`` (``campaign``: ``campaign RUN --law auto --json
+    --workers 2`` on the folder ``RUN``) in a fresh process with an empty law cache;
     ``workers`` the value of ``BAYESTRIBO_COMPILE_WORKERS`` (None: unset)."""
     cache = tempfile.mkdtemp(prefix="bayestribo-law-ahead-")
     env = {**os.environ, "BAYESTRIBO_CACHE_DIR": cache}
     env.pop("BAYESTRIBO_COMPILE_WORKERS", None)
     if workers is not None:
         env["BAYESTRIBO_COMPILE_WORKERS"] = workers
+    command = ["fit", str(run), "--law", "auto", "--json"]
+    out = ""
+    if campaign:
+        out = tempfile.mkdtemp(prefix="bayestribo-law-ahead-out-")
+        command = ["campaign", str(run), "--law", "auto", "--json", "--workers", "2"]
+        command += ["--out", out, "--no-figures"]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     done = subprocess.run(
-        [sys.executable, "-m", "bayestribo", "fit", str(run), "--law", "auto", "--json"],
+        [sys.executable, "-m", "bayestribo", *command],
         env=env,
         capture_output=True,
         text=True,
@@ -81,12 +93,17 @@ def measure(run: Path, workers: str | None) -> dict[str, Any]:
         "cpu_s_with_workers": (after.ru_utime - before.ru_utime)
         + (after.ru_stime - before.ru_stime),
     }
+    text = done.stdout.replace(out, "OUT") if campaign else done.stdout
     try:
-        answer = json.loads(done.stdout)
+        answer = json.loads(text)
     except json.JSONDecodeError:
         out["error"] = done.stderr[-2000:]
         return out
-    out["law"] = answer.get("law")
+    if campaign:
+        runs = answer.get("runs") if isinstance(answer, dict) else None
+        out["laws"] = sorted({str(r.get("law")) for r in runs or [] if isinstance(r, dict)})
+    else:
+        out["law"] = answer.get("law")
     out["answer"] = _untimed(answer)
     return out
 
@@ -97,16 +114,21 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--runs", nargs="+", type=Path, default=RUNS)
     parser.add_argument("--repeats", type=int, default=2)
     parser.add_argument("--warm-up", action="store_true", help="an untimed run first")
+    parser.add_argument(
+        "--campaign",
+        action="store_true",
+        help="each of --runs a folder: bayestribo campaign DIR --law auto --workers 2",
+    )
     parser.add_argument("--output", default="law_ahead")
     args = parser.parse_args(argv)
     if args.warm_up:
-        measure(args.runs[0], None)
+        measure(args.runs[0], None, args.campaign)
     load_start = os.getloadavg()
     rows: list[dict[str, Any]] = []
     for run in args.runs:
         for k in range(args.repeats):
             modes: list[str | None] = ["0", None] if k % 2 == 0 else [None, "0"]
-            pair = {m: measure(run, m) for m in modes}
+            pair = {m: measure(run, m, args.campaign) for m in modes}
             one, other = pair["0"], pair[None]
             same = "answer" in one and one.get("answer") == other.get("answer")
             for m in modes:
