@@ -70,11 +70,11 @@ def measure(run: Path, workers: str | None, campaign: bool = False) -> dict[str,
     if workers is not None:
         env["BAYESTRIBO_COMPILE_WORKERS"] = workers
     command = ["fit", str(run), "--law", "auto", "--json"]
-    out = ""
+    out_dir = ""
     if campaign:
-        out = tempfile.mkdtemp(prefix="bayestribo-law-ahead-out-")
+        out_dir = tempfile.mkdtemp(prefix="bayestribo-law-ahead-out-")
         command = ["campaign", str(run), "--law", "auto", "--json", "--workers", "2"]
-        command += ["--out", out, "--no-figures"]
+        command += ["--out", out_dir, "--no-figures"]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     done = subprocess.run(
@@ -93,7 +93,7 @@ def measure(run: Path, workers: str | None, campaign: bool = False) -> dict[str,
         "cpu_s_with_workers": (after.ru_utime - before.ru_utime)
         + (after.ru_stime - before.ru_stime),
     }
-    text = done.stdout.replace(out, "OUT") if campaign else done.stdout
+    text = done.stdout.replace(out_dir, "OUT") if campaign else done.stdout
     try:
         answer = json.loads(text)
     except json.JSONDecodeError:
