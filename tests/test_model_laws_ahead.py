@@ -256,12 +256,13 @@ def test_a_campaigns_laws_are_compiled_before_its_fits_where_its_own_pool_runs_t
     events: list[str] = []
     asked: list[list] = []
 
-    def compile_first(kwargs_list: list, stream: Any, say: bool) -> None:
+    def compile_first(kwargs_list: list, say: Any) -> int:
         events.append("compile")
         asked.append(kwargs_list)
+        return 0
 
     pool = _SerialPool(events)
-    monkeypatch.setattr(fitting, "_compile_laws_first", compile_first)
+    monkeypatch.setattr(fitting, "compile_laws_first", compile_first)
     monkeypatch.setattr(fitting, "process_pool", lambda *a, **k: pool)
     run = REPO / "data" / "runs" / "glycerol-N0.31-r1.csv"
     (outcome,) = fitting.fit_many(
@@ -286,3 +287,44 @@ def test_the_laws_a_campaigns_fits_compile() -> None:
     # on a nonlinear spring (other modules), or a law not understood (the fit says why)
     assert _fit_laws([{"spec": FitSpec.of({"law": "auto", "restoring": "duffing"})}]) == []
     assert _fit_laws([{"law": "no-such-term"}, {"spec": {"law": 3}}]) == []
+
+
+@pytest.mark.parametrize(("workers", "first"), [(2, True), (1, False)])
+def test_a_watch_has_its_laws_compiled_before_its_workers_warm_up(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, workers: int, first: bool
+) -> None:
+    import io
+
+    from bayestribo.campaign import fitting
+    from bayestribo.campaign.watch import CampaignWatch, WatchOptions
+    from bayestribo.inference.spec import FitSpec
+
+    events: list[str] = []
+    spec = FitSpec.of({"law": "auto"})
+
+    def compile_first(kwargs_list: list, say: Any) -> int:
+        assert kwargs_list == [{"spec": spec}]
+        events.append("compile")
+        return 0
+
+    class Pool:
+        def submit(self, fn: Any, *args: Any) -> Future:
+            events.append("warm-up")
+            return Future()
+
+    monkeypatch.setattr(fitting, "compile_laws_first", compile_first)
+    watch = CampaignWatch(
+        tmp_path,
+        tmp_path / "out",
+        tmp_path / "out" / "catalog.sqlite",
+        spec,
+        WatchOptions(workers=workers),
+        by=("load_N",),
+        suffixes=[".csv"],
+        stream=io.StringIO(),
+        say=lambda message: None,
+        warm_up=lambda spec: None,
+    )
+    watch._pool = Pool()
+    watch._warm()
+    assert events == (["compile"] if first else []) + ["warm-up"] * workers

@@ -333,7 +333,12 @@ def fit_many(
     if own and function is _default_fit and (max_workers or os.cpu_count() or 1) > 1:
         # the laws not yet compiled, compiled once by as many workers before the fits
         # (each fit would otherwise compile each law it needs, in every worker at once)
-        _compile_laws_first([fit_kwargs, *(run_kwargs or [])], progress_stream, progress)
+        compile_laws_first(
+            [fit_kwargs, *(run_kwargs or [])],
+            (lambda text: print(text, file=progress_stream or sys.stderr, flush=True))
+            if progress
+            else None,
+        )
     if own:
         workers = max_workers or os.cpu_count() or 1
         # forkserver: workers start from a clean process, safe when the caller runs
@@ -419,26 +424,41 @@ def _fit_laws(kwargs_list: Sequence[Mapping[str, Any]]) -> list[Any]:
     return sorted(laws, key=lambda law: complexity(law.name))
 
 
-def _compile_laws_first(
-    kwargs_list: Sequence[Mapping[str, Any]], stream: IO[str] | None, say: bool
-) -> None:
-    """Compile the fits' laws missing from the law cache in worker processes, as many
-    as the CPUs, and wait for them (:mod:`bayestribo.model.laws.ahead`)."""
+def compile_laws_first(
+    kwargs_list: Sequence[Mapping[str, Any]], say: Callable[[str], None] | None = None
+) -> int:
+    """Compile the laws that fits with these keyword arguments of
+    :func:`bayestribo.inference.fit` need and the law cache lacks, in worker processes,
+    as many as the CPUs (:mod:`bayestribo.model.laws.ahead`), and wait for them:
+    before a pool's workers fit, each of which would otherwise compile every law it
+    needs, all of them the same laws at once.
+
+    Parameters
+    ----------
+    kwargs_list : sequence of mappings
+        The fits' keyword arguments (``law``, ``restoring`` or ``spec``).
+    say : callable, optional
+        Called with one line when laws are compiled.
+
+    Returns
+    -------
+    int
+        The number of laws compiled by the workers (0: none missing, or no workers).
+    """
     from bayestribo.model.laws.ahead import compile_ahead
 
     laws = _fit_laws(kwargs_list)
     if not laws:
-        return
+        return 0
     with compile_ahead() as ahead:
         count = ahead.submit(laws)
-        if count and say:
-            print(
+        if count and say is not None:
+            say(
                 f"compiling {count} laws on their first use, in {ahead.workers} worker "
-                "processes (kept in the law cache for later runs)",
-                file=stream or sys.stderr,
-                flush=True,
+                "processes (kept in the law cache for later runs)"
             )
         ahead.wait_all()
+    return count
 
 
 @contextmanager

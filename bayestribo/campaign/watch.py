@@ -545,6 +545,12 @@ class CampaignWatch:
         if self.warm_up is None:
             self._state = "watching"
         else:
+            if self.options.workers > 1:
+                # the laws the fits need compiled once, by as many workers, before each
+                # worker's warm-up would compile them all (fitting.compile_laws_first)
+                from bayestribo.campaign.fitting import compile_laws_first
+
+                compile_laws_first([{"spec": self.spec}], self.say)
             workers = range(self.options.workers)
             self._warming = {self._pool.submit(self.warm_up, self.spec) for _ in workers}
             self.say("warming up the fit (imports and compiled kernels) ...")
