@@ -282,6 +282,9 @@ def test_the_laws_a_campaigns_fits_compile() -> None:
     names = [law.name for law in _fit_laws([{"spec": FitSpec.of({"law": "auto"})}])]
     assert sorted(names) == sorted(auto_laws()) and names[0] == "viscous"
     assert [law.name for law in _fit_laws([{"spec": FitSpec.of({})}])] == ["viscous+coulomb"]
+    # a keyword at its default leaves the specification's law, as fit does
+    spec = FitSpec.of({"law": "quadratic"})
+    assert [law.name for law in _fit_laws([{"spec": spec, "law": None}])] == ["quadratic"]
     two = _fit_laws([{"law": "power"}, {"law": "quadratic"}, {"law": "power"}])
     assert [law.name for law in two] == ["quadratic", "power"]  # smallest first, once each
     # on a nonlinear spring (other modules), or a law not understood (the fit says why)

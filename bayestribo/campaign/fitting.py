@@ -409,8 +409,11 @@ def _fit_laws(kwargs_list: Sequence[Mapping[str, Any]]) -> list[Any]:
             spec = FitSpec.of(kwargs["spec"]) if kwargs.get("spec") is not None else None
         except Exception:
             continue
-        law = kwargs.get("law", spec.law if spec is not None else None)
-        restoring = kwargs.get("restoring", spec.restoring if spec is not None else None)
+        # a keyword at its default (None) leaves the specification's field, as in fit
+        law = kwargs.get("law")
+        law = spec.law if law is None and spec is not None else law
+        restoring = kwargs.get("restoring")
+        restoring = spec.restoring if restoring is None and spec is not None else restoring
         if restoring is not None or not (law is None or isinstance(law, str)):
             continue
         for name in auto_laws() if law == "auto" else [law or DEFAULT_LAW]:
