@@ -32,11 +32,11 @@ with open("runs.txt", "a") as mark:  # a script without a __main__ guard: run on
     mark.write("ran\n")
 from bayestribo.model.laws import get_law
 from bayestribo.model.laws.ahead import compile_ahead
-from bayestribo.model.laws.integrator import in_cache, law_module, make_integrator
+from bayestribo.model.laws.integrator import cached_functions, law_module, make_integrator
 from bayestribo.model.laws.cache import law_cache_dir
 laws = [get_law("coulomb"), get_law("viscous")]
-names = [law_module(*law._layout[0]) for law in laws]
-before = [f"{n}.turns" in in_cache(law_cache_dir()) for n in names]
+names = [law_module(law._layout[0]) for law in laws]
+before = [f"{n}.turns" in cached_functions(law_cache_dir()) for n in names]
 with compile_ahead() as compiler:
     handed = compiler.submit(laws)
     workers = compiler.workers
@@ -49,7 +49,7 @@ with compile_ahead() as again:
     handed_again = again.submit(laws)
 print(json.dumps({
     "before": before,
-    "after": [f"{n}.turns" in in_cache(law_cache_dir()) for n in names],
+    "after": [f"{n}.turns" in cached_functions(law_cache_dir()) for n in names],
     "handed": handed, "workers": workers, "handed_again": handed_again,
     "hits": [sum(t.stats.cache_hits.values()) for t in turns],
     "misses": [sum(t.stats.cache_misses.values()) for t in turns],
@@ -142,7 +142,7 @@ def one_worker(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> _Worker:
 
 
 def _module(name: str) -> str:
-    module = law_module(*get_law(name)._layout[0])
+    module = law_module(get_law(name)._layout[0])
     assert module is not None
     return module
 
@@ -212,7 +212,7 @@ def test_a_law_with_a_force_defined_in_main_is_left_to_the_command(
         return 0.0
 
     local = Law((dataclasses.replace(QUADRATIC, force=force),))
-    assert law_module(*local._layout[0]) is None
+    assert law_module(local._layout[0]) is None
     with ahead.compile_ahead([local]) as compiler:
         assert compiler.workers == 0
     assert one_worker.sent == []

@@ -330,7 +330,8 @@ def fit_many(
         _check_keywords(fit, fit_kwargs)
         function = _default_fit
     own = executor is None
-    if own and function is _default_fit and (max_workers or os.cpu_count() or 1) > 1:
+    workers = max_workers or os.cpu_count() or 1
+    if own and function is _default_fit and workers > 1:
         # the laws not yet compiled, compiled once by as many workers before the fits
         # (each fit would otherwise compile each law it needs, in every worker at once)
         compile_laws_first(
@@ -340,7 +341,6 @@ def fit_many(
             else None,
         )
     if own:
-        workers = max_workers or os.cpu_count() or 1
         # forkserver: workers start from a clean process, safe when the caller runs
         # threads (progress bars, a Dask client, a GUI).
         # Workers end with this process, however it ends (bayestribo._workers).

@@ -9,7 +9,6 @@ or with the process ``PARENT_PID``.
 
 from __future__ import annotations
 
-import os
 import sys
 
 
@@ -17,14 +16,12 @@ def main(argv: list[str]) -> int:
     """Serve the laws read from standard input (module notes)."""
     from bayestribo._workers import die_with_parent
     from bayestribo.model.laws.ahead import compile_law
-    from bayestribo.model.laws.cache import CACHE_ENV
 
     die_with_parent(int(argv[0]))
-    folder = os.environ[CACHE_ENV]
     for line in sys.stdin:
         law, _, module = line.rstrip("\n").partition("\t")
         try:
-            compile_law(law, folder, module)
+            compile_law(law, module)
         except Exception as exc:  # the command compiles the law itself
             why = " ".join(str(exc).split())
             print(f"failed {module} {type(exc).__name__}: {why}", flush=True)

@@ -99,14 +99,14 @@ def entry_points(law: object) -> tuple[str, ...]:
 def _pending(laws: Sequence[object], folder: Path) -> list[tuple[str, str]]:
     """``(module name, law name)`` of each law whose module may be cached and is not,
     in the order given, each module once."""
-    from bayestribo.model.laws.integrator import in_cache, law_module
+    from bayestribo.model.laws.integrator import cached_functions, law_module
 
     out: dict[str, str] = {}
-    compiled = in_cache(folder)
+    compiled = cached_functions(folder)
     for law in laws:
         if getattr(law, "restoring", None) is not None:
             continue  # the laws on a nonlinear spring compile other modules
-        name = law_module(*law._layout[0])  # type: ignore[attr-defined]
+        name = law_module(law._layout[0])  # type: ignore[attr-defined]
         if name is None or name in out:
             continue
         if all(f"{name}.{entry}" in compiled for entry in entry_points(law)):
@@ -115,21 +115,19 @@ def _pending(laws: Sequence[object], folder: Path) -> list[tuple[str, str]]:
     return list(out.items())
 
 
-def compile_law(law: str, folder: str, module: str) -> str:
-    """In a worker: compile the functions of the law named ``law`` that fits call
-    (:func:`entry_points`) into the law cache ``folder`` by calling each once, with
-    small arguments of the types a fit passes; the module's name back. Raises when the
-    law made here is not the module asked for (a term registered in the command
-    alone), so that the command compiles it."""
+def compile_law(law: str, module: str) -> str:
+    """In a worker, its law cache in the environment (``BAYESTRIBO_CACHE_DIR``): compile
+    the functions of the law named ``law`` that fits call (:func:`entry_points`) by
+    calling each once, with small arguments of the types a fit passes; the module's
+    name back. Raises when the law made here is not the module asked for (a term
+    registered in the command alone), so that the command compiles it."""
     import numpy as np
 
     from bayestribo.model.laws import get_law
-    from bayestribo.model.laws.cache import CACHE_ENV
     from bayestribo.model.laws.integrator import law_module
 
-    os.environ[CACHE_ENV] = folder
     the_law = get_law(law)
-    made = law_module(*the_law._layout[0])
+    made = law_module(the_law._layout[0])
     if made != module:
         raise RuntimeError(f"law {law} is {made} here, not {module}")
     values = {p.name: p.null if p.null is not None else p.low for p in the_law.parameters}

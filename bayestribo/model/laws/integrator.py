@@ -91,8 +91,8 @@ __all__ = [
     "CACHE_ENV",
     "DEFAULT_STEPS",
     "LADDER",
+    "cached_functions",
     "compiled_law",
-    "in_cache",
     "law_cache_dir",
     "law_module",
     "make_integrator",
@@ -214,23 +214,21 @@ def _load(text: str, namespace: Mapping[str, object], cacheable: bool) -> Module
 
 
 @cache
-def law_module(
-    drags: tuple,
-    drag_offsets: tuple,
-    drag_sizes: tuple,
-    frictions: tuple,
-    friction_offsets: tuple,
-    friction_sizes: tuple,
-) -> str | None:
-    """The name of one law's module in the law cache (arguments as
-    :func:`make_integrator`'s), or None when the law may not be cached (a term whose
-    force cannot be imported by name)."""
-    layout = (drags, drag_offsets, drag_sizes, frictions, friction_offsets, friction_sizes)
-    text, _, cacheable = _law_source(_core, layout, parts=(_creep,))
+def _law_text(layout: tuple) -> tuple[str, dict[str, object], bool]:
+    """:func:`_law_source` of the template :mod:`._core` (with :mod:`._creep`) for one
+    law's ``layout`` (:func:`make_integrator`'s arguments in a tuple), made once."""
+    return _law_source(_core, layout, parts=(_creep,))
+
+
+def law_module(layout: tuple) -> str | None:
+    """The name of one law's module in the law cache (``layout``: :func:`make_integrator`'s
+    arguments in a tuple), or None when the law may not be cached (a term whose force
+    cannot be imported by name)."""
+    text, _, cacheable = _law_text(layout)
     return _module_name(text) if cacheable else None
 
 
-def in_cache(folder: Path) -> set[str]:
+def cached_functions(folder: Path) -> set[str]:
     """The compiled functions numba keeps in the law cache ``folder``, each as
     ``<module>.<function>`` (compiled by some process before; whether they match this
     machine and numba is numba's to decide as it loads them)."""
@@ -255,7 +253,7 @@ def compiled_law(
     law's forces; arguments as :func:`make_integrator`'s), whose functions the
     tests call one by one (the averaged tail against the half cycles' sum)."""
     layout = (drags, drag_offsets, drag_sizes, frictions, friction_offsets, friction_sizes)
-    return _load(*_law_source(_core, layout, parts=(_creep,)))
+    return _load(*_law_text(layout))
 
 
 @cache
