@@ -22,6 +22,7 @@ from bayestribo.errors import FrequencyTrendWarning, MisfitWarning, RecordingErr
 from bayestribo.io.run import Run
 from bayestribo.io.validation import validate_run
 from bayestribo.model.restoring import get_restoring
+from bayestribo.model.restoring.duffing import fit_beta
 
 pytestmark = pytest.mark.filterwarnings("ignore::FutureWarning")
 
@@ -219,3 +220,43 @@ def test_a_pendulums_energies_take_its_small_swings_stiffness():
     law = np.asarray(result.dissipation["mean"])
     measured = np.asarray(result.turning_point_dissipation["mean"])
     assert np.all(np.abs(law / measured - 1.0) < 0.01)
+
+
+@pytest.mark.parametrize("beta", [0.6, -0.3])
+def test_beta_is_measured_on_a_clock_of_unix_time(beta):
+    """A DAQ's time column in Unix seconds (1.4e9 s): β from the same turning times
+    as from a clock started at zero, with its standard error (the least squares'
+    step of t₀ was tens of seconds there, and β stayed at its start of 0 with an
+    infinite standard error; a seismometer's softening spring crashed the printout)."""
+    w = 2 * math.pi * 0.5
+    sol = solve_ivp(
+        lambda _t, u: [u[1], -2 * 0.01 * w * u[1] - w * w * (u[0] + beta * u[0] ** 3)],
+        (0.0, 40.0),
+        [1.0, 0.0],
+        events=lambda _t, u: u[1],
+        rtol=1e-11,
+        atol=1e-13,
+    )
+    times, values = sol.t_events[0], sol.y_events[0][:, 0]
+    jitter = np.random.default_rng(3).normal(0.0, 1e-4, times.size)
+    at_zero = fit_beta(times + jitter, values)
+    at_unix = fit_beta(times + jitter + 1_406_722_067.411, values)
+    assert at_zero[0] == pytest.approx(beta, rel=0.05)
+    assert math.isfinite(at_unix[1]) and at_unix[1] > 0.0
+    assert at_unix[0] == pytest.approx(at_zero[0], abs=at_zero[1])
+
+
+def test_a_beta_without_a_standard_error_is_printed(monkeypatch):
+    """Where the half periods leave β's standard error undefined (a singular Jacobian:
+    infinite, null in the record) the result still prints, and says so (it raised
+    TypeError formatting None)."""
+    import bayestribo.model.restoring.duffing as duffing_module
+
+    monkeypatch.setattr(duffing_module, "fit_beta", lambda times, values: (0.0, math.inf))
+    t, x, _, _ = _duffing()
+    run = Run(t, x, metadata={"length_unit": "arbitrary", "restoring": "duffing"})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = fit(run, law="viscous", seed=1, grid_points=32)
+    assert result._attr("restoring_json")["beta_se"] is None
+    assert "β = 0 (its standard error undefined)" in result.to_text()

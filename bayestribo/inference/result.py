@@ -688,9 +688,11 @@ class FitResult:
         elif spring and spring.get("name") not in (None, "linear"):
             text = f"restoring {chosen['description'] if chosen else spring['name']}"
             if "beta" in spring:
-                text += (
-                    f", β = {spring['beta']:.4g} ± {spring['beta_se']:.2g} (from the half periods)"
-                )
+                se = spring.get("beta_se")
+                # a standard error the half periods do not define (a singular Jacobian)
+                # is null in the record
+                spread = f" ± {se:.2g}" if se is not None else " (its standard error undefined)"
+                text += f", β = {spring['beta']:.4g}{spread} (from the half periods)"
             error = spring.get("error")
             if error:
                 shares = [

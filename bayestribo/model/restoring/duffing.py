@@ -84,6 +84,10 @@ def fit_beta(times: ArrayLike, values: ArrayLike) -> tuple[float, float]:
     y = np.abs(np.asarray(values, dtype=float))
     if t.size < 5 or t.size != y.size:
         raise ValueError("fit_beta: expected five or more turning times and values")
+    # from the first turning time: the least squares' steps are relative to each
+    # unknown, and a clock of Unix time (1.4e9 s) made t₀'s step tens of seconds and
+    # left β at its start with a singular Jacobian
+    t = t - t[0]
     swing = 0.5 * (y[1:] + y[:-1])
     half = float(np.median(np.diff(t)))
     scale = 1.0 / float(np.max(swing)) ** 2  # β in units of 1/A_max²
