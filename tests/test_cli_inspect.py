@@ -89,3 +89,21 @@ def test_swapped_channels_are_refused_naming_both(tmp_path, run, capsys):
     assert main(["inspect", str(swapped)]) == 2
     err = capsys.readouterr().err
     assert "'displacement_m' and 'velocity_m_per_s'" in err and "swapped" in err
+
+
+def test_times_on_a_clock_of_unix_seconds_are_told_apart(tmp_path, run, capsys):
+    # a DAQ's time column in Unix seconds: six digits printed every time as 1.40672e+09
+    offset = 1_406_722_067.411
+    shifted = Run(run.time + offset, run.displacement, run.velocity, dict(run.metadata))
+    path = write_run(shifted, tmp_path / "unix.csv")
+    got = _inspect([str(path)], capsys)
+    release = got["decay"]["release_time_s"]
+    assert main(["inspect", str(path)]) == 0
+    text = capsys.readouterr().out
+    line = next(x for x in text.splitlines() if x.startswith("release"))
+    # to a ten-thousandth of the record's duration, and how far into the record
+    duration = got["samples"]["duration_s"]
+    assert abs(float(line.split("=")[1].split()[0]) - release) <= 1e-4 * duration
+    into = float(line.split("(")[1].split()[0])
+    assert into == pytest.approx(release - got["samples"]["start_s"], rel=1e-5)
+    assert "the pin" not in text
