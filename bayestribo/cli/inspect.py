@@ -137,21 +137,8 @@ def _number(value: float | None, digits: int = 6) -> str:
     return "—" if value is None else f"{value:.{digits}g}"
 
 
-def _time(value: float | None, start: float, duration: float) -> str:
-    """A time stamp [s] to a ten-thousandth of the record's ``duration`` (six digits
-    did not tell 1.40672e+09 s from another time of a clock of Unix seconds), and how
-    far into the record it is where the clock does not start near zero."""
-    if value is None:
-        return "— s"
-    resolution = 1e-4 * duration if duration > 0 else 1e-6
-    digits = max(6, math.ceil(math.log10(max(abs(value), resolution) / resolution)) + 1)
-    text = f"{value:.{digits}g} s"
-    if abs(start) > duration:
-        text += f" ({_number(value - start)} s into the record)"
-    return text
-
-
 def _text(report: dict[str, Any]) -> str:
+    from bayestribo._stamps import stamp
     from bayestribo.cli.decay import mains_note
 
     reading = report["reading"]
@@ -167,7 +154,7 @@ def _text(report: dict[str, Any]) -> str:
     s = report["samples"]
     lines.append(
         f"samples        {s['n']} at {_number(s['sample_rate_Hz'])} Hz, "
-        f"{_number(s['duration_s'])} s from t = {_time(s['start_s'], 0.0, s['duration_s'])}"
+        f"{_number(s['duration_s'])} s from t = {stamp(s['start_s'], s['duration_s'])}"
     )
     start, duration = s["start_s"], s["duration_s"]
     si = reading["units"] == "SI"
@@ -209,13 +196,13 @@ def _text(report: dict[str, Any]) -> str:
     if "error" in decay:
         lines.append(f"analysis       not possible: {decay['error']}")
         return "\n".join(lines)
-    lines.append(f"release        t = {_time(decay['release_time_s'], start, duration)}")
+    lines.append(f"release        t = {stamp(decay['release_time_s'], duration, start)}")
     ended = (
         "motion ended" if decay["motion_ended"] else "the record ends while the oscillator moves"
     )
     lines.append(
-        f"analysed       {_time(decay['start_time_s'], start, duration)} to "
-        f"{_time(decay['end_time_s'], start, duration)} ({ended})"
+        f"analysed       {stamp(decay['start_time_s'], duration, start)} to "
+        f"{stamp(decay['end_time_s'], duration, start)} ({ended})"
     )
     nominal = decay["nominal_frequency_Hz"]
     extra = "" if nominal is None else f" (nominal {_number(nominal, 5)} Hz)"

@@ -38,6 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from bayestribo._stamps import stamp
 from bayestribo.errors import CreepWarning
 from bayestribo.signal.peaks import estimate_noise
 
@@ -81,7 +82,8 @@ class Creep:
     def describe(self) -> str:
         """One sentence for the warning: the times, the drift and its speed."""
         return (
-            f"from t = {self.start:.6g} s to {self.end:.6g} s the displacement moves at "
+            f"from t = {stamp(self.start, self.end - self.start)} to "
+            f"{stamp(self.end, self.end - self.start)} the displacement moves at "
             f"{self.slope:.3g} per s ({self.slope_z:.0f} standard errors of its noise) and "
             f"the velocity's mean is {self.mean_velocity:.3g} ({self.velocity_z:.0f} "
             "standard errors): the mass creeps on after its last half cycle"

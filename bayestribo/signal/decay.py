@@ -114,6 +114,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import cumulative_trapezoid
 
 from bayestribo._clock import clock, on_grid
+from bayestribo._stamps import stamp
 from bayestribo._warnings import warn
 from bayestribo.errors import (
     BinnedRecordWarning,
@@ -978,10 +979,12 @@ def _offset_drift(
     if z <= OFFSET_DRIFT_Z:
         return None
     t0, t1 = float(np.mean(t[:head])), float(np.mean(t[tail:]))
+    origin, span = float(t[0]), float(t[-1] - t[0])
     warn(
         f"velocity offset: the velocity, recorded alone, rests at {before:.4g} before the "
-        f"release (to t = {float(t[head - 1]):.6g} s) and at {after:.4g} after the motion "
-        f"(from t = {float(t[tail]):.6g} s), {z:.0f} standard errors of its noise apart: "
+        f"release (to t = {stamp(float(t[head - 1]), span, origin)}) and at {after:.4g} "
+        f"after the motion (from t = {stamp(float(t[tail]), span, origin)}), {z:.0f} "
+        "standard errors of its noise apart: "
         "its offset drifts. It is taken off as the line between the two rests, but the "
         "drift's wander between them, integrated into the displacement, moves it off its "
         "equilibrium, which the noise model does not hold: the intervals are not "
@@ -2296,9 +2299,11 @@ def _analyse(
         if faded_at is None
         else (
             f"its velocity's swing over a period is within {2 * FADE * RESOLVED_STEPS:g} "
-            f"of its steps of {v_step:.3g} from t = {coarse_cut:.6g} s on"
+            f"of its steps of {v_step:.3g} from t = "
+            f"{stamp(coarse_cut, float(t[-1] - t[0]), float(t[0]))} on"
             if coarse_cut is not None
-            else f"the decay fades into the noise after t = {faded_at:.6g} s"
+            else "the decay fades into the noise after t = "
+            f"{stamp(faded_at, float(t[-1] - t[0]), float(t[0]))}"
         ),
     )
     sl = slice(start, stop)
