@@ -354,3 +354,45 @@ def test_a_surrogate_shift_with_an_exact_value_outside_the_support_is_infinite()
         return out
 
     assert loo.surrogate_shift(approx, flat, outside, 1.0) == (np.inf, np.inf, np.inf)
+
+
+def _loo_of(pointwise):
+    from bayestribo.inference.loo_compare import LooResult
+
+    loo_i = np.asarray(pointwise, dtype=float)
+    return LooResult(
+        elpd_loo=float(loo_i.sum()),
+        se=float(np.sqrt(loo_i.size * np.var(loo_i))),
+        p_loo=1.0,
+        n_samples=1000,
+        n_data_points=loo_i.size,
+        warning=False,
+        loo_i=loo_i,
+        pareto_k=np.zeros(loo_i.size),
+        scale="log",
+        good_k=0.7,
+    )
+
+
+def test_stacking_weights_of_laws_that_all_misfit_by_far():
+    """Every law misfits a record by thousands of log units an increment (a seismometer
+    whose period changes with its swing): exp(loo_i) underflows to 0 for all of them,
+    where the stacking took log 0 and 0/0 (numpy's RuntimeWarnings, a NaN gradient).
+    The weights do not depend on adding a constant to each increment's row, so they are
+    those of the same rows raised into exp's range."""
+    import warnings
+
+    from bayestribo.inference.loo_compare import compare
+
+    rng = np.random.default_rng(5)
+    base = rng.normal(0.0, 1.0, (45, 3)) + np.array([0.0, -0.3, -1.0])
+    offset = -5000.0 - 100.0 * rng.random(45)[:, None]
+    far = {f"law{j}": _loo_of(base[:, j] + offset[:, 0]) for j in range(3)}
+    near = {f"law{j}": _loo_of(base[:, j]) for j in range(3)}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        got = compare(far)
+    want = compare(near)
+    weights = np.array([got[f"law{j}"]["weight"] for j in range(3)])
+    assert np.all(np.isfinite(weights)) and weights.sum() == pytest.approx(1.0)
+    np.testing.assert_allclose(weights, [want[f"law{j}"]["weight"] for j in range(3)], atol=1e-6)

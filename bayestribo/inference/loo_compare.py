@@ -162,6 +162,9 @@ class LooResult(Mapping):
         return tuple(f.name for f in fields(cls))
 
 
+#: The largest exponent of the stacking weights' gradient (below exp's overflow).
+_MAX_EXPONENT = 700.0
+
 #: The columns of a comparison's rows (:func:`compare`), as ``arviz.compare`` names them.
 COLUMNS = ("rank", "elpd_loo", "p_loo", "elpd_diff", "weight", "se", "dse", "warning")
 
@@ -189,6 +192,7 @@ def compare(loos: Mapping[str, LooResult]) -> dict[str, dict[str, float]]:
         If the laws' PSIS-LOO are over different numbers of increments.
     """
     from scipy.optimize import Bounds, LinearConstraint, minimize
+    from scipy.special import logsumexp
 
     names = sorted(loos, key=lambda law: -float(loos[law]["elpd_loo"]))
     pointwise = [np.ravel(np.asarray(loos[law]["loo_i"], dtype=float)) for law in names]
@@ -199,13 +203,22 @@ def compare(loos: Mapping[str, LooResult]) -> dict[str, dict[str, float]]:
     if cols == 1:
         weights = np.ones(1)
     else:
-        exp_pointwise = np.exp(matrix)
+        # ArviZ's score, -Σ_i log Σ_j w_j exp(loo_ij), and its gradient, taken in logs:
+        # exp(loo_ij) underflows to 0 for every law of a record that all laws misfit
+        # (loo_ij of -1e3 and below), where ArviZ's then takes log 0 and 0/0 (numpy's
+        # warnings, and a gradient of NaN)
+        def mixture(w: NDArray) -> NDArray:
+            with np.errstate(divide="ignore"):
+                return logsumexp(matrix + np.log(w), axis=1)
 
         def log_score(w: NDArray) -> float:
-            return -np.sum(np.log(exp_pointwise @ w))
+            return -float(np.sum(mixture(w)))
 
         def gradient(w: NDArray) -> NDArray:
-            return -np.sum(exp_pointwise / (exp_pointwise @ w)[:, np.newaxis], axis=0)
+            # exp(loo_ij - log Σ_k w_k exp(loo_ik)), capped below overflow where the
+            # weights leave out the law that holds an increment far better
+            share = np.minimum(matrix - mixture(w)[:, np.newaxis], _MAX_EXPONENT)
+            return -np.sum(np.exp(share), axis=0)
 
         weights = minimize(
             fun=log_score,
