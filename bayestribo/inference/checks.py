@@ -559,9 +559,10 @@ def _warn_frequency_trend(
                     for force, left in spring.left.items()
                     if force != "linear" and left is not None
                 )
-                + "): it is not the spring's (a frequency that drifts in time, a change "
-                "that is not monotonic in the swing), so naming a restoring force does not "
-                "answer it, and the nuisance carries it"
+                + "): it is none of theirs (a frequency that drifts in time, a change "
+                "that is not monotonic in the swing, a spring that stiffens or softens "
+                "otherwise than as the cube of the swing), so naming a registered restoring "
+                "force does not answer it, and the nuisance carries it"
             )
         if chosen and restoring is None:
             like = " (on the linear spring that --restoring auto took)"

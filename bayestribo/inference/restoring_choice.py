@@ -251,8 +251,9 @@ def choose_restoring(
             if best == "linear"
             else f"; the {_noun(best)}, which leaves the least, is taken"
         )
-        + ". A change the forms cannot follow is not the spring's (a frequency that drifts "
-        "in time, a change that is not monotonic in the swing): the fit carries it as a "
+        + ". A change the forms cannot follow is none of theirs (a frequency that drifts "
+        "in time, a change that is not monotonic in the swing, a spring that stiffens or "
+        "softens otherwise than as the cube of the swing): the fit carries it as a "
         "frequency nuisance" + (f"; {hint}" if hint else "")
     )
     warn(text, FrequencyTrendWarning)
