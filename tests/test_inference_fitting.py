@@ -269,7 +269,10 @@ def test_misfit_is_flagged():
 
     assert not get_law(followed.law).closed_form
     alone = fit(run, seed=5, law=followed.law, max_steps=6000)
-    assert followed.attrs["omega"] == alone.attrs["omega"]
+    # the comparison takes a law of several terms to its optimum from its nested laws'
+    # optima, the law alone from the first guesses: the optima agree to the least
+    # squares' tolerance (1e-8), and so the frames found from them
+    assert followed.attrs["omega"] == pytest.approx(alone.attrs["omega"], rel=1e-8, abs=0)
     for name in get_law(followed.law).parameter_names:
         a, b = followed.samples(name), alone.samples(name)
         assert abs(a.mean() - b.mean()) < 0.2 * a.std(), name

@@ -137,8 +137,10 @@ def fit(
         which and why); when none of them is adequate, the law-free ``"free"`` law
         (ΔE(A) any increasing polynomial of degree 1-4) is fitted too. The result is
         the chosen law's fit with every one of its terms (on a run with contact, what
-        ``law=<its name>`` gives); a law without a closed form is fitted again in its
-        own frame, from the optimiser's optimum.
+        ``law=<its name>`` gives, from the comparison's optimum: for a law of several
+        terms, the best reached from its nested laws' optima, which agrees with the
+        first guesses' to the least squares' tolerance or is higher); a law without a
+        closed form is fitted again in its own frame, from that optimum.
     law_progress : callable, optional
         With ``law="auto"``: called with one line of text per law as the comparison
         goes (its optimum; then its sampling, or why it is not sampled).

@@ -6,7 +6,9 @@ the prior's shape. Quoting ``0.056 [0.030, 0.082]`` for it reads as a measuremen
 test here compares the draws of the sampled parameter that sets a quantity's spread
 with that parameter's prior restricted to the range the draws cover (the data may rule
 part of the prior out): a Kolmogorov–Smirnov distance of at most :data:`FLAT_KS` means
-the data set a range, not a value, and the quantity is shown as a bound by the fit's
+the data set a range, not a value; so does a static friction whose density at its
+prior's lower end is at least half its highest (:func:`end_density`: a soft upper edge,
+the lower side the prior's). The quantity is then shown as a bound by the fit's
 table and the reports alike, and every machine-readable summary says the same
 (:func:`bound_interval`: its interval runs from the lowest value the prior allows to the
 one-sided bound, ``kind`` ``"bound"``), so that no central interval of a prior excludes a
@@ -21,9 +23,11 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 __all__ = [
+    "END_DENSITY",
     "FLAT_KS",
     "SPREAD_OF",
     "bound_interval",
+    "end_density",
     "is_bound",
     "is_flat",
     "prior_end",
@@ -35,6 +39,16 @@ __all__ = [
 #: (a bound), not a value. A normal posterior is about 0.2 from the uniform over its
 #: draws' range; flat draws about 1/√(effective sample size).
 FLAT_KS = 0.1
+
+#: A static friction whose density at its prior's lower end (μ_s/μ_k = 1) is at least
+#: this share of its highest is bounded by the data from above only (:func:`is_bound`):
+#: a record that never sticks, where a turning point that did not stick bounds μ_s and
+#: the last ones, too small to tell a stick from one more small half cycle, leave a soft
+#: edge that is not flat (a torsion wheel's record: 0.67, μ_s/μ_k printed 2.8 [1.1, 4.4]
+#: where only < 4.2 was measured).
+END_DENSITY = 0.5
+#: Bins of :func:`end_density`.
+_END_BINS = 10
 
 #: The draws reach the prior's lower end when their lowest is within this share of their
 #: range from it: the interval of a bound then starts at the prior's end itself (μ_s/μ_k
@@ -132,10 +146,49 @@ def prior_end(result: Any, name: str) -> float | None:
 def is_bound(result: Any, name: str) -> bool:
     """Whether ``name`` is not constrained by the data: its posterior is flat over its
     prior (:func:`prior_flatness` at most :data:`FLAT_KS`) from the prior's lower end
-    (:func:`prior_end`) up to a bound. A posterior flat between two ends the data set (a
-    stop that bounds μ_s/μ_k from both sides) is a range the data measured, not a
-    bound."""
-    return is_flat(prior_flatness(result, name)) and prior_end(result, name) is not None
+    (:func:`prior_end`) up to a bound; for the static friction (μ_s/μ_k and what it
+    sets), also where its density at the prior's lower end is at least
+    :data:`END_DENSITY` of its highest (:func:`end_density`): the data bound it from
+    above and leave its lower side to the prior. A posterior flat between two ends the
+    data set (a stop that bounds μ_s/μ_k from both sides) is a range the data measured,
+    not a bound."""
+    if prior_end(result, name) is None:
+        return False
+    if is_flat(prior_flatness(result, name)):
+        return True
+    if SPREAD_OF.get(name, name) != "mu_s_ratio":
+        return False
+    share = end_density(result, name)
+    return share is not None and share >= END_DENSITY
+
+
+def end_density(result: Any, name: str) -> float | None:
+    """The density of the draws of the parameter that sets ``name``'s spread at its
+    prior's lower end, over their highest: the first of :data:`_END_BINS` equal bins
+    from that end to the draws' 99th percentile against the fullest (None where the
+    prior has no lower end the draws reach).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from types import SimpleNamespace as R
+    >>> from bayestribo.inference.priors import PriorSet, Uniform
+    >>> rng = np.random.default_rng(0)
+    >>> falling = 1.0 + 3.5 * np.sqrt(rng.uniform(0.0, 1.0, 4000))  # rising from the end
+    >>> fit = R(priors=PriorSet({"mu_s_ratio": Uniform(1.0, 10.0)}), samples=lambda n: falling)
+    >>> round(end_density(fit, "mu_s_ratio"), 1)
+    0.1
+    """
+    start = prior_end(result, name)
+    if start is None:
+        return None
+    sampled = SPREAD_OF.get(name, name)
+    draws = np.asarray(result.samples(sampled), dtype=float).ravel()
+    top = float(np.quantile(draws, 0.99))
+    if not top > start:
+        return None
+    counts, _ = np.histogram(draws, bins=_END_BINS, range=(start, top))
+    return float(counts[0] / counts.max()) if counts.max() > 0 else None
 
 
 def bound_interval(
