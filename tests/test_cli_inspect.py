@@ -107,3 +107,24 @@ def test_times_on_a_clock_of_unix_seconds_are_told_apart(tmp_path, run, capsys):
     into = float(line.split("(")[1].split()[0])
     assert into == pytest.approx(release - got["samples"]["start_s"], rel=1e-5)
     assert "the pin" not in text
+
+
+def test_an_angle_record_without_a_rest_is_described_in_its_own_terms(tmp_path, run, capsys):
+    # a torsion oscillator's angle in radians, recorded only while it moves
+    sim = run.metadata["simulation"]
+    moving = (run.time > sim["release_time_s"] + 0.005) & (run.time < run.time[0] + 0.3)
+    path = tmp_path / "angle.csv"
+    angle = 200.0 * run.displacement[moving]  # about half a radian
+    np.savetxt(path, np.column_stack([run.time[moving], angle]), delimiter=",", fmt="%.9g")
+    path.write_text("time_s,angle_rad\n" + path.read_text())
+    assert main(["inspect", str(path)]) == 0
+    text = capsys.readouterr().out
+    lines = {line[:14].strip(): line[14:].strip() for line in text.splitlines()}
+    assert lines["signals"].startswith("time_s, angle_rad")
+    assert lines["friction as"] == "friction angle"
+    # no rest: the noise from the signal's differences, said so, no "0 samples"
+    assert lines["noise"].startswith("angle ") and "no rest in the record" in lines["noise"]
+    assert "0 samples" not in text
+    # the oscillation left out after the release is said, with the option that keeps it
+    assert "1 oscillation after the release left out" in lines["analysed"]
+    assert "--skip 0 keeps it" in lines["analysed"]

@@ -128,9 +128,16 @@ def inspection(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
         return report, False
     report["decay"] = summary(decay, str(args.run))
     report["decay"]["friction_reported_as"] = (
-        "mu_k" if decay.scaling.friction_defined else "friction displacement"
+        "mu_k"
+        if decay.scaling.friction_defined
+        else ("friction angle" if recording.length_unit == "rad" else "friction displacement")
     )
+    report["decay"]["skipped_oscillations"] = int(args.skip)
     return report, True
+
+
+#: The signals of a record in radians, by the names the text shows them with.
+_ANGLE_NAMES = {"displacement_m": "angle_rad", "velocity_m_per_s": "angular_velocity_rad_per_s"}
 
 
 def _number(value: float | None, digits: int = 6) -> str:
@@ -149,7 +156,10 @@ def _text(report: dict[str, Any]) -> str:
             f"{c['label']} [{c['unit']}]" if c["unit"] else c["label"] for c in reading["columns"]
         )
         lines.append(f"file columns   {cols}")
-    lines.append(f"signals        {', '.join(reading['signals'])} ({reading['units']})")
+    signals = reading["signals"]
+    if reading["units"].startswith("angles"):
+        signals = [_ANGLE_NAMES.get(name, name) for name in signals]
+    lines.append(f"signals        {', '.join(signals)} ({reading['units']})")
     lines.append(f"sidecar        {reading['sidecar'] or 'none'}")
     s = report["samples"]
     lines.append(
@@ -200,6 +210,12 @@ def _text(report: dict[str, Any]) -> str:
     ended = (
         "motion ended" if decay["motion_ended"] else "the record ends while the oscillator moves"
     )
+    skipped = decay.get("skipped_oscillations", 0)
+    if skipped:
+        ended += (
+            f"; {skipped} oscillation{'s' if skipped > 1 else ''} after the release left "
+            f"out, the release's transient (--skip 0 keeps {'them' if skipped > 1 else 'it'})"
+        )
     lines.append(
         f"analysed       {stamp(decay['start_time_s'], duration, start)} to "
         f"{stamp(decay['end_time_s'], duration, start)} ({ended})"
@@ -208,9 +224,15 @@ def _text(report: dict[str, Any]) -> str:
     extra = "" if nominal is None else f" (nominal {_number(nominal, 5)} Hz)"
     lines.append(f"frequency      {_number(decay['natural_frequency_Hz'])} Hz measured{extra}")
     noise = decay["noise"]
+    where = (
+        f"{noise['source']}, {noise['n_samples']} samples"
+        if noise["n_samples"]
+        else f"measured in {noise['source']}: no rest in the record"
+    )
     lines.append(
-        f"noise at rest  displacement {_number(noise['displacement'], 3)}, velocity "
-        f"{_number(noise['velocity'], 3)} ({noise['source']}, {noise['n_samples']} samples)"
+        f"{'noise at rest' if noise['n_samples'] else 'noise':14s} "
+        f"{'angle' if reading['units'].startswith('angles') else 'displacement'} "
+        f"{_number(noise['displacement'], 3)}, velocity {_number(noise['velocity'], 3)} ({where})"
     )
     if decay["derived_channel"]:
         lines.append(f"derived        {decay['derived_channel']} (from the other channel)")

@@ -808,6 +808,7 @@ def check_plausible_motion(run: Recording, where: str | None = None) -> None:
     advice = _advice(readings, motion, metadata, present, explain=False)
     raise RecordingError(
         f"plausibility: {reason}: {advice or 'give each column its unit'}; or length_unit "
-        "'arbitrary' when the unit is not known",
+        "'arbitrary' when the unit is not known (pixels of a video track not calibrated "
+        "to a length, counts of an uncalibrated sensor)",
         where,
     )
