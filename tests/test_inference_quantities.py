@@ -37,6 +37,28 @@ def test_the_displacement_takes_the_runs_unit() -> None:
     assert angle["friction_displacement"].unit == "rad"
 
 
+def test_y0_is_a_displacement_in_the_signals_unit_unless_scaled_by_the_load() -> None:
+    # without a load and a mass, ℓ is one unit of the signal: y₀ is the displacement at
+    # the window's start in that unit (it was labelled a dimensionless amplitude: 3.3e6
+    # "dimensionless" for a seismometer in counts, negative for another)
+    for metadata, unit in (
+        ({"length_unit": "arbitrary"}, "signal length unit"),
+        ({"length_unit": "rad"}, "rad"),
+        ({"length_unit": "m"}, "m"),
+        ({"length_unit": "m", "load_N": 0.0, "mass_kg": 0.035}, "m"),
+        ({"length_unit": "arbitrary", "load_N": 0.3, "mass_kg": 0.035}, "signal length unit"),
+    ):
+        y0 = describe(["y0"], law="viscous+coulomb", metadata=metadata)["y0"]
+        assert (y0.label, y0.unit) == ("displacement at the window's start", unit), metadata
+    # with both, y = x/ℓ, ℓ = N/k: a number
+    scaled = describe(
+        ["y0"],
+        law="viscous+coulomb",
+        metadata={"length_unit": "m", "load_N": 0.31, "mass_kg": 0.035},
+    )["y0"]
+    assert scaled.unit == "1" and "x₀/ℓ" in scaled.label
+
+
 def test_units_recorded_by_the_fit_win_and_unknown_names_keep_their_name() -> None:
     quantities = describe(
         ["c2", "c2_SI", "mystery"], law="viscous+quadratic", units={"c2_SI": "kg/m"}

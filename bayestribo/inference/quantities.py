@@ -48,7 +48,7 @@ DERIVED: dict[str, tuple[str, str, str]] = {
     "static_friction_torque": ("T_s", "static friction torque", "N m"),
     "zeta_k": ("ζ_k", "viscous damping ratio of the contact (ζ − ζ₀)", "1"),
     "d_k": ("d_k", "damping of the contact per unit load", "s/m"),
-    "y0": ("y₀", "scaled amplitude at the window's start", "1"),
+    "y0": ("y₀", "scaled displacement at the window's start (x₀/ℓ)", "1"),
     "log10_discrepancy": ("log₁₀ σ_d", "model discrepancy scale", "1"),
     "log10_shape": ("log₁₀ σ_s", "shape discrepancy scale", "1"),
 }
@@ -120,6 +120,16 @@ def unit_words(unit: str | None) -> str:
         return "dimensionless"
     text = str(unit).replace("signal length unit", "signal unit").replace("^2", "²")
     return f"{text} (y = x/ℓ)" if text.startswith("1/y") else text
+
+
+def _scaled_by_load(metadata: dict[str, Any], length: str) -> bool:
+    """Whether y = x/ℓ is scaled by ℓ = N/k: a run in metres with a load and a mass
+    (:meth:`bayestribo.model.scaling.Rig.scaling`); else ℓ is one unit of the signal."""
+    try:
+        load = float(metadata.get("load_N") or 0.0)
+    except (TypeError, ValueError):
+        return False
+    return length == "m" and load > 0.0 and metadata.get("mass_kg") is not None
 
 
 def _length_unit(metadata: dict[str, Any]) -> str:
@@ -208,6 +218,10 @@ def describe(
         unit = recorded.get(name, unit)
         if unit == "length":
             unit = length
+        if name == "y0" and not _scaled_by_load(metadata, length):
+            # ℓ is one unit of the signal (no load and mass to make N/k): y₀ is the
+            # displacement itself, in the signal's unit
+            label, unit = "displacement at the window's start", length
         out[name] = Quantity(name, symbol, label, unit, name in sampled)
     return out
 
