@@ -11,7 +11,7 @@ PACKAGE = Path(bayestribo.__file__).resolve().parent
 
 #: What each part of the package may import (besides itself), as drawn in
 #: docs/architecture.md. The shared bottom (errors, summary, _optional, _text, _plural,
-#: _clock, _workers) is open to all.
+#: _clock, _stamps, _workers, ...) is open to all.
 BOTTOM = {
     "errors",
     "summary",
@@ -19,6 +19,7 @@ BOTTOM = {
     "_text",
     "_plural",
     "_clock",
+    "_stamps",
     "_workers",
     "_warnings",
     "_lazy",
