@@ -273,7 +273,9 @@ def _optimise(
             optimum = better_optimum(
                 posterior, maximum_from(posterior, theta, prepared.decay), nested
             )
-    elif (starts := nested_starts(law, prepared, optima)) is not None:
+    elif (starts := nested_starts(law, prepared, optima)) is not None and all(
+        name in start for start in starts for name in posterior.names
+    ):
         optimum = maximum_from_starts(posterior, starts, prepared.decay)
     else:
         optimum = find_optimum(posterior, prepared.decay, also_start_at=nested)
