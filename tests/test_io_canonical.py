@@ -145,6 +145,28 @@ def test_sidecar_not_utf8_raises(tmp_path: Path) -> None:
         read_run(path)
 
 
+@pytest.mark.parametrize(
+    ("suffix", "says"),
+    [
+        (".trk", r"Tracker .* File > Export > Data .* --length-unit arbitrary .*pixels"),
+        (".trz", r"Tracker"),
+        (".cmbl", r"Logger Pro .* Export As"),
+        (".cap", r"Capstone .* Export Data"),
+        (".phyphox", r"phyphox .* holds no measurement"),
+    ],
+)
+def test_a_teaching_labs_project_file_is_refused_with_its_export(
+    tmp_path: Path, suffix: str, says: str
+) -> None:
+    # a teaching lab's program saves its own project; the refusal names how that
+    # program writes the data as text (a Tracker project was refused with a list of
+    # suffixes only)
+    path = tmp_path / f"damping{suffix}"
+    path.write_text('<?xml version="1.0" encoding="UTF-8"?>\n<object/>\n')
+    with pytest.raises(RunFormatError, match=says):
+        read_run(path)
+
+
 def test_write_needs_csv_suffix_and_read_needs_known_type(tmp_path: Path) -> None:
     with pytest.raises(RunFormatError, match=r"\.csv"):
         write_run(_run(), tmp_path / "r.txt.gz")

@@ -393,10 +393,29 @@ def get_format(name: str, where: str | None = None) -> FileFormat:
 
 
 #: Suffixes of files the package does not read, with what to do instead.
+#: What a Tracker project's refusal says (its positions are in pixels of the video,
+#: its calibration in the project: the exported table is in the calibrated unit).
+_TRACKER = (
+    "a Tracker video-analysis project is not read; in Tracker, File > Export > Data "
+    "writes the track's t and x (and y) as delimited text in the unit of its calibration: "
+    "read that with --columns naming each with its unit (time_s, displacement_cm, ...), "
+    "or with --length-unit arbitrary where the video was not calibrated (pixels)"
+)
 _NOT_READ = {
     ".xls": "the old binary Excel format is not read; save the sheet as .xlsx or as CSV",
     ".ods": "OpenDocument sheets are not read; save the sheet as .xlsx or as CSV",
     ".numbers": "Numbers files are not read; export the sheet as CSV",
+    # the projects of a teaching lab's programs: their data are exported as text
+    ".trk": _TRACKER,
+    ".trz": _TRACKER,
+    ".cmbl": "a Vernier Logger Pro file is not read; export its data as text (File > "
+    "Export As > Text or CSV) and read that with --columns naming each column's unit",
+    ".gambl": "a Vernier Graphical Analysis file is not read; export its data as CSV and "
+    "read that with --columns naming each column's unit",
+    ".cap": "a PASCO Capstone project is not read; export its data as CSV (File > Export "
+    "Data), which is read as it is",
+    ".phyphox": "a phyphox experiment file holds no measurement; export the data from "
+    "the app as CSV (the menu's Export data) and read that",
 }
 
 
