@@ -27,9 +27,13 @@ def stamp(value: float | None, span: float, origin: float | None = None) -> str:
     '1406722069.807 s (2.3961 s into the record)'
     >>> stamp(0.25, 2.0)
     '0.25 s'
+    >>> stamp(float("nan"), 2.0)
+    'nan s'
     """
     if value is None:
         return "— s"
+    if not math.isfinite(value):
+        return f"{value} s"
     resolution = 1e-4 * span if span > 0 and math.isfinite(span) else 1e-6
     digits = max(6, math.ceil(math.log10(max(abs(value), resolution) / resolution)) + 1)
     text = f"{value:.{digits}g} s"
