@@ -208,8 +208,9 @@ def compare(loos: Mapping[str, LooResult]) -> dict[str, dict[str, float]]:
         # (loo_ij of -1e3 and below), where ArviZ's then takes log 0 and 0/0 (numpy's
         # warnings, and a gradient of NaN)
         def mixture(w: NDArray) -> NDArray:
+            # a weight the optimiser steps a rounding below its bound of 0 is 0
             with np.errstate(divide="ignore"):
-                return logsumexp(matrix + np.log(w), axis=1)
+                return logsumexp(matrix + np.log(np.maximum(w, 0.0)), axis=1)
 
         def log_score(w: NDArray) -> float:
             return -float(np.sum(mixture(w)))
