@@ -34,9 +34,13 @@ def stamp(value: float | None, span: float, origin: float | None = None) -> str:
         return "— s"
     if not math.isfinite(value):
         return f"{value} s"
+    span = abs(span)
     resolution = 1e-4 * span if span > 0 and math.isfinite(span) else 1e-6
-    digits = max(6, math.ceil(math.log10(max(abs(value), resolution) / resolution)) + 1)
-    text = f"{value:.{digits}g} s"
+    # at most the 17 digits a double holds
+    decades = math.log10(max(abs(value), resolution)) - math.log10(resolution)
+    digits = min(17, max(6, math.ceil(decades) + 1))
+    # the shortest text that reads back as the value where a double's digits run out
+    text = f"{value!r} s" if digits >= 16 else f"{value:.{digits}g} s"
     if origin is not None and abs(origin) > span:
         text += f" ({value - origin:.6g} s into the record)"
     return text

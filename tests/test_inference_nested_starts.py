@@ -116,3 +116,29 @@ def test_the_comparison_takes_a_law_of_two_terms_from_its_nested_optima(
     # a law of one term still starts from the first guesses
     with pytest.raises(AssertionError, match="multi-start"):
         comparison._optimise("hysteretic", prepared, "exact", False, dict(one_term_optima))
+
+
+def test_a_start_whose_optimum_has_no_density_leaves_the_others_to_win(
+    prepared, one_term_optima, monkeypatch
+):
+    # the first start's optimum is not finite (NaN compared as the best kept every later
+    # one out, and the fit fell back to the multi-start): the second start's optimum wins
+    import bayestribo.inference.start as start_module
+
+    posterior = comparison._posterior("viscous+quadratic", prepared.data, "exact", False)
+    starts = nested_starts("viscous+quadratic", prepared, one_term_optima)
+    expected, _, _ = maximum_from_starts(posterior, starts[1:], prepared.decay)
+    real = start_module._optimise
+    calls = []
+
+    def first_fails(*args, **kwargs):
+        theta, cov, lp = real(*args, **kwargs)
+        calls.append(lp)
+        return (theta, cov, np.nan) if len(calls) == 1 else (theta, cov, lp)
+
+    monkeypatch.setattr(start_module, "_optimise", first_fails)
+    monkeypatch.setattr(
+        start_module, "maximum_a_posteriori", lambda *a: pytest.fail("fell back to the guesses")
+    )
+    theta, _, _ = maximum_from_starts(posterior, starts, prepared.decay)
+    np.testing.assert_array_equal(theta, expected)

@@ -41,15 +41,19 @@ def test_y0_is_a_displacement_in_the_signals_unit_unless_scaled_by_the_load() ->
     # without a load and a mass, ℓ is one unit of the signal: y₀ is the displacement at
     # the window's start in that unit (it was labelled a dimensionless amplitude: 3.3e6
     # "dimensionless" for a seismometer in counts, negative for another)
-    for metadata, unit in (
-        ({"length_unit": "arbitrary"}, "signal length unit"),
-        ({"length_unit": "rad"}, "rad"),
-        ({"length_unit": "m"}, "m"),
-        ({"length_unit": "m", "load_N": 0.0, "mass_kg": 0.035}, "m"),
-        ({"length_unit": "arbitrary", "load_N": 0.3, "mass_kg": 0.035}, "signal length unit"),
+    for metadata, what, unit in (
+        ({"length_unit": "arbitrary"}, "displacement", "signal length unit"),
+        ({"length_unit": "rad"}, "angle", "rad"),
+        ({"length_unit": "m"}, "displacement", "m"),
+        ({"length_unit": "m", "load_N": 0.0, "mass_kg": 0.035}, "displacement", "m"),
+        (
+            {"length_unit": "arbitrary", "load_N": 0.3, "mass_kg": 0.035},
+            "displacement",
+            "signal length unit",
+        ),
     ):
         y0 = describe(["y0"], law="viscous+coulomb", metadata=metadata)["y0"]
-        assert (y0.label, y0.unit) == ("displacement at the window's start", unit), metadata
+        assert (y0.label, y0.unit) == (f"{what} at the window's start", unit), metadata
     # with both, y = x/ℓ, ℓ = N/k: a number
     scaled = describe(
         ["y0"],

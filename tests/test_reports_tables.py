@@ -144,6 +144,22 @@ def test_a_posterior_flat_over_its_prior_is_shown_as_a_bound_not_a_measurement()
     )
 
 
+def test_a_static_friction_bounded_from_above_only_is_shown_as_a_bound():
+    import numpy as np
+
+    # highest at the prior's lower end, a soft fall to 0.6: not flat (the KS test misses
+    # it), but the data bound it from above only (inference/flatness.py, end_density);
+    # the fit's summary made it a bound, the report's table printed a measurement
+    rng = np.random.default_rng(2)
+    x = rng.uniform(0.0, 0.6, 40000)
+    falling = x[rng.uniform(0.0, 1.0, x.size) < 1.0 - x / 0.6][:4000]
+    fit = _Fit(falling)
+    assert tables.prior_flatness(fit, "mu_s") > tables.FLAT_KS
+    text = tables.quantity_text(fit, "mu_s", _summary(falling))
+    assert text.startswith("not constrained by the data: μ_s < ")
+    assert "bounded from above only" in text
+
+
 def test_a_quantity_without_a_prior_of_its_own_has_no_flatness():
     assert tables.prior_flatness(_Fit([0.1, 0.2, 0.3]), "no_such_quantity") is None
 

@@ -132,12 +132,21 @@ def inspection(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
         if decay.scaling.friction_defined
         else ("friction angle" if recording.length_unit == "rad" else "friction displacement")
     )
-    report["decay"]["skipped_oscillations"] = int(args.skip)
+    # the oscillations between the release and the analysis: --skip's, and any the
+    # analysis left out after them (an irregular or clipped start, said in its warning)
+    decay_report = report["decay"]
+    keys = ("start_time_s", "release_time_s", "natural_frequency_Hz")
+    times = [decay_report.get(k) for k in keys]
+    left = (times[0] - times[1]) * times[2] if None not in times else math.nan
+    decay_report["skipped_oscillations"] = max(0, round(left)) if math.isfinite(left) else 0
+    decay_report["skip_asked"] = int(args.skip)
     return report, True
 
 
 #: The signals of a record in radians, by the names the text shows them with.
 _ANGLE_NAMES = {"displacement_m": "angle_rad", "velocity_m_per_s": "angular_velocity_rad_per_s"}
+#: ... and of a record in an arbitrary unit of length.
+_UNITLESS_NAMES = {"displacement_m": "displacement", "velocity_m_per_s": "velocity"}
 
 
 def _number(value: float | None, digits: int = 6) -> str:
@@ -159,6 +168,8 @@ def _text(report: dict[str, Any]) -> str:
     signals = reading["signals"]
     if reading["units"].startswith("angles"):
         signals = [_ANGLE_NAMES.get(name, name) for name in signals]
+    elif reading["units"] != "SI":  # no unit of length: the quantities by name alone
+        signals = [_UNITLESS_NAMES.get(name, name) for name in signals]
     lines.append(f"signals        {', '.join(signals)} ({reading['units']})")
     lines.append(f"sidecar        {reading['sidecar'] or 'none'}")
     s = report["samples"]
@@ -210,12 +221,16 @@ def _text(report: dict[str, Any]) -> str:
     ended = (
         "motion ended" if decay["motion_ended"] else "the record ends while the oscillator moves"
     )
-    skipped = decay.get("skipped_oscillations", 0)
+    skipped, asked = decay.get("skipped_oscillations", 0), decay.get("skip_asked", 0)
     if skipped:
-        ended += (
-            f"; {skipped} oscillation{'s' if skipped > 1 else ''} after the release left "
-            f"out, the release's transient (--skip 0 keeps {'them' if skipped > 1 else 'it'})"
-        )
+        ended += f"; {skipped} oscillation{'s' if skipped > 1 else ''} after the release left out"
+        if asked and skipped <= asked:
+            them = "them" if skipped > 1 else "it"
+            ended += f", the release's transient (--skip 0 keeps {them})"
+        elif asked:
+            ended += f" ({asked} by --skip, the others by the analysis, as its warning says)"
+        else:
+            ended += " by the analysis, as its warning says"
     lines.append(
         f"analysed       {stamp(decay['start_time_s'], duration, start)} to "
         f"{stamp(decay['end_time_s'], duration, start)} ({ended})"

@@ -274,7 +274,7 @@ def _optimise(
                 posterior, maximum_from(posterior, theta, prepared.decay), nested
             )
     elif (starts := nested_starts(law, prepared, optima)) is not None and all(
-        name in start for start in starts for name in posterior.names
+        name in nested_law for nested_law in starts for name in posterior.names
     ):
         optimum = maximum_from_starts(posterior, starts, prepared.decay)
     else:

@@ -218,7 +218,8 @@ def compare(loos: Mapping[str, LooResult]) -> dict[str, dict[str, float]]:
         def gradient(w: NDArray) -> NDArray:
             # exp(loo_ij - log Σ_k w_k exp(loo_ik)), capped below overflow where the
             # weights leave out the law that holds an increment far better
-            share = np.minimum(matrix - mixture(w)[:, np.newaxis], _MAX_EXPONENT)
+            cap = _MAX_EXPONENT - math.log(matrix.shape[0])  # the sum stays finite too
+            share = np.minimum(matrix - mixture(w)[:, np.newaxis], cap)
             return -np.sum(np.exp(share), axis=0)
 
         weights = minimize(

@@ -220,8 +220,9 @@ def describe(
             unit = length
         if name == "y0" and not _scaled_by_load(metadata, length):
             # ℓ is one unit of the signal (no load and mass to make N/k): y₀ is the
-            # displacement itself, in the signal's unit
-            label, unit = "displacement at the window's start", length
+            # displacement (an angle in radians) itself, in the signal's unit
+            what = "angle" if length == "rad" else "displacement"
+            label, unit = f"{what} at the window's start", length
         out[name] = Quantity(name, symbol, label, unit, name in sampled)
     return out
 

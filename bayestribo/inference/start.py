@@ -945,6 +945,8 @@ def maximum_from_starts(
     for start in starts:
         values = {name: float(start[name]) for name in posterior.names}
         found = _optimise(posterior, values, ratio=values.get("mu_s_ratio"))
+        if not np.isfinite(found[2]):
+            continue  # a start whose optimum has no density leaves the others to win
         if best is None or found[2] > best[2]:
             best = found
     if best is None or not np.isfinite(best[2]):

@@ -16,7 +16,14 @@ from typing import Any
 
 from bayestribo._plural import count
 from bayestribo.inference.flatness import FLAT_KS as _FLAT_KS
-from bayestribo.inference.flatness import SPREAD_OF, is_flat, prior_end, prior_flatness
+from bayestribo.inference.flatness import (
+    SPREAD_OF,
+    end_density,
+    is_bound,
+    is_flat,
+    prior_end,
+    prior_flatness,
+)
 from bayestribo.inference.quantities import unit_words
 from bayestribo.summary import NUMERICAL_ZERO, interval_text, probability_text
 
@@ -322,6 +329,15 @@ def quantity_text(result: Any, name: str, summary: Any) -> str:
         return (
             f"not constrained by the data: {symbol} < {summary.high:.2g} (the posterior is its "
             f"prior's up to there: Kolmogorov–Smirnov distance {distance:.2f})"
+        )
+    if is_bound(result, name):
+        # a static friction the data bound from above only (its density at the prior's
+        # lower end at least half its highest: inference/flatness.py, end_density)
+        symbol = _symbols(result).get(name, name)
+        share = end_density(result, name)
+        return (
+            f"not constrained by the data: {symbol} < {summary.high:.2g} (bounded from above "
+            f"only: its density at the prior's lower end {share:.2f} of its highest)"
         )
     return interval_text(summary.mean, *summary.interval)
 
