@@ -68,7 +68,7 @@ def test_other_names_are_picked_with_channels_as_on_the_command_line(
     assert "--channel t=t --channel x=x" in capsys.readouterr().err
     cli = ["--channel", "t=t", "--channel", "x=x", "--length-unit", "arbitrary"]
     assert main(["inspect", str(path), *cli]) == 0
-    assert "time_s, displacement_m (arbitrary length unit)" in capsys.readouterr().out
+    assert "time_s, displacement (arbitrary length unit)" in capsys.readouterr().out
 
 
 def test_an_acceleration_alone_is_picked_with_channels(tmp_path, decay) -> None:
