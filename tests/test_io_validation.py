@@ -441,3 +441,37 @@ def test_nan_cells_name_every_sample_and_deleting_their_rows_reads_the_run(tmp_p
     assert run.n_samples == good.n_samples - 3
     with pytest.warns(GapWarning, match="3 gap"):
         energy_decay(run.time, run.displacement, run.velocity, rig=run.rig())
+
+
+def _encoder_pendulum(scale: float) -> Run:
+    """An independent pendulum decay (solve_ivp: θ'' = -ω² sin θ - 2ζωθ' - μ sgn θ'),
+    released at 68°, logged at 50 Hz, its angle multiplied by ``scale`` (degrees: 180/π)."""
+    from scipy.integrate import solve_ivp
+
+    w = 2 * np.pi * 0.72
+    t = np.arange(0.0, 30.0, 0.02)
+
+    def rhs(_t, u):
+        return [u[1], -w * w * np.sin(u[0]) - 2 * 0.01 * w * u[1] - 0.05 * np.sign(u[1])]
+
+    sol = solve_ivp(rhs, (0.0, t[-1]), [np.radians(68.0), 0.0], t_eval=t, rtol=1e-9, atol=1e-11)
+    return Run(t, scale * sol.y[0], metadata={"length_unit": "rad"})
+
+
+def test_degrees_read_as_radians_are_refused_naming_the_degrees() -> None:
+    # an encoder's degrees with a column named angle_rad: 68 "rad", fitted as 11 turns
+    # each way without a word before
+    degrees = _encoder_pendulum(180.0 / np.pi)
+    refused = r"plausibility: the angle swings by 6\d\.\d rad .*likely degrees.*angle_deg"
+    with pytest.raises(RecordingError, match=refused):
+        validate_run(degrees)
+    validate_run(_encoder_pendulum(1.0))  # the same decay in radians passes
+
+
+def test_a_pendulum_whose_angle_turns_over_is_refused_cleanly() -> None:
+    # with a pendulum's restoring force the potential raised ValueError deep in the fit;
+    # now a clean refusal before it, naming the angle in degrees as the likely cause
+    run = _encoder_pendulum(3.0)  # 204°: beyond π, within a turn
+    run = Run(run.time, run.displacement, metadata={"length_unit": "rad", "restoring": "pendulum"})
+    with pytest.raises(RecordingError, match=r"beyond π, where a pendulum turns over.*angle_deg"):
+        validate_run(run)

@@ -38,6 +38,8 @@ the restart, cut where it jumps, and said).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -153,6 +155,18 @@ def _check_restoring(run: Run, where: str | None) -> None:
             "(columns named angle_deg, angle_rad, ..., or length_unit 'rad')",
             where,
         )
+    if restoring.angle and run.displacement is not None:
+        swing = 0.5 * float(np.ptp(run.displacement))
+        if swing >= math.pi:
+            # beyond π a pendulum turns over: not a free decay's swing (its potential
+            # raised ValueError from deep inside the fit)
+            raise _fail(
+                f"metadata 'restoring' is {restoring.name!r}, but the angle swings by "
+                f"{swing:.3g} rad ({math.degrees(swing):.4g}°), beyond π, where a pendulum "
+                "turns over; if the angles are in degrees, name the column angle_deg "
+                "(--columns ... angle_deg)",
+                where,
+            )
 
 
 def _check_time(run: Run, where: str | None, time_rtol: float) -> float:

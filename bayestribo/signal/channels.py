@@ -756,6 +756,34 @@ def _check_units(run: Recording, where: str | None) -> None:
         )
 
 
+#: The largest swing of an angle a free decay makes [rad]: a turn each way (a pendulum
+#: turns over at π; a balance wheel swings to about 270°).
+MAX_ANGLE_SWING = 2.0 * math.pi
+
+
+def _check_angle_swing(run: Recording, where: str | None) -> None:
+    """Refuse a run in radians whose angle swings by more than :data:`MAX_ANGLE_SWING`:
+    degrees read as radians (an encoder's 68° read as 68 rad, fitted as 11 turns each way
+    without a word), naming the column name and the scale that read them as degrees."""
+    if run.length_unit != "rad" or run.displacement is None:
+        return
+    angle = np.asarray(run.displacement, dtype=float)
+    finite = angle[np.isfinite(angle)]
+    if finite.size < 2:
+        return
+    swing = 0.5 * float(np.ptp(finite))
+    if swing <= MAX_ANGLE_SWING:
+        return
+    raise RecordingError(
+        f"plausibility: the angle swings by {swing:.3g} rad ({swing / (2 * math.pi):.3g} "
+        f"turns each way), more than a free decay's {MAX_ANGLE_SWING:.3g} rad (a turn): "
+        f"likely degrees ({math.radians(swing):.3g} rad): name the column angle_deg "
+        f"(--columns ... angle_deg), or --scale x={math.pi / 180:.10g}; a swing of more "
+        "than a turn in radians is read with --length-unit arbitrary",
+        where,
+    )
+
+
 def check_plausible_motion(run: Recording, where: str | None = None) -> None:
     """Refuse a run in metres whose motion no rig makes (a frequency outside
     :data:`~bayestribo.model.plausible.FREQUENCY_RANGE_HZ`, a peak speed above
@@ -788,6 +816,7 @@ def check_plausible_motion(run: Recording, where: str | None = None) -> None:
         range or resolution it violates) and the units that would make the motion a
         rig's.
     """
+    _check_angle_swing(run, where)
     motion = _motion(run)
     if motion is None or not motion.swing > 0:
         return
