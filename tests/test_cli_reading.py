@@ -115,3 +115,20 @@ def test_a_header_without_units_is_answered_with_the_columns_that_read_it(tmp_pa
     # the advice, followed, reads the run in the units it names
     assert main(["inspect", str(path), "--columns", "t", "x", "v", "-"]) == 0
     assert "time_s, displacement_m, velocity_m_per_s (SI)" in capsys.readouterr().out
+
+
+def test_an_angle_without_a_unit_is_advised_in_radians_and_in_degrees(tmp_path, capsys):
+    # an encoder's log "Time,Angle" in degrees: the advice named angle_rad alone, which
+    # read the degrees as radians
+    import numpy as np
+
+    from bayestribo.cli import main
+
+    t = np.arange(0.0, 20.0, 0.02)
+    angle = 68.0 * np.exp(-0.02 * t) * np.cos(2 * np.pi * 0.72 * t)
+    path = tmp_path / "encoder.csv"
+    np.savetxt(path, np.column_stack([t, angle]), delimiter=",", header="Time,Angle", comments="")
+    assert main(["fit", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "--columns t angle_rad if the file is in s and radians" in err
+    assert "--columns t angle_deg if in degrees" in err

@@ -87,6 +87,11 @@ __all__ = [
 _DELIMITERS = (",", ";", "\t")
 
 
+#: The canonical names of a rotation in degrees (:func:`_read`'s advice for a header
+#: without units).
+_IN_DEGREES = {"angle_rad": "angle_deg", "angular_velocity_rad_per_s": "angular_velocity_deg_per_s"}
+
+
 def _split(line: str, delimiter: str | None) -> list[str]:
     if delimiter is None:
         return line.split()
@@ -710,9 +715,14 @@ def _header(
             raise RunFormatError(f"{exc.message}; {_pixel_advice(labels)}", where) from None
         if "has no unit" not in exc.message or si is None:
             raise
+        if any(name in ANGULAR for name in si):
+            # an angle: its degrees as likely as its radians (an encoder's, a video's)
+            degrees = [_IN_DEGREES.get(name, name) for name in si]
+            units = f"columns={si} if the file is in s and radians, columns={degrees} if in degrees"
+        else:
+            units = f"columns={si} if the file is in s, m and m/s"
         raise RunFormatError(
-            f"{exc.message}; or name every column in file order, for instance "
-            f"columns={si} if the file is in s, m and m/s",
+            f"{exc.message}; or name every column in file order, for instance {units}",
             where,
         ) from None
     if other:
