@@ -132,3 +132,48 @@ def test_an_angle_without_a_unit_is_advised_in_radians_and_in_degrees(tmp_path, 
     err = capsys.readouterr().err
     assert "--columns t angle_rad if the file is in s and radians" in err
     assert "--columns t angle_deg if in degrees" in err
+
+
+def test_decay_takes_the_named_restoring_forces_potential(tmp_path, capsys):
+    # `decay --restoring pendulum` printed E(τ) on the linear spring, y²/2, as without it
+    import json
+
+    import numpy as np
+    from scipy.integrate import solve_ivp
+
+    from bayestribo.cli import main
+
+    w = 2 * np.pi * 0.72
+    t = np.arange(0.0, 20.0, 0.005)
+    sol = solve_ivp(
+        lambda _t, u: [u[1], -w * w * np.sin(u[0]) - 2 * 0.01 * w * u[1]],
+        (0.0, t[-1]),
+        [1.1, 0.0],
+        t_eval=t,
+        rtol=1e-10,
+        atol=1e-12,
+    )
+    path = tmp_path / "pendulum.csv"
+    np.savetxt(
+        path,
+        np.column_stack([t, np.degrees(sol.y[0])]),
+        delimiter=",",
+        header="time_s,angle_deg",
+        comments="",
+    )
+    runs = {}
+    for extra in ([], ["--restoring", "pendulum"]):
+        assert main(["decay", str(path), "--json", *extra]) in (0, 1)
+        runs[bool(extra)] = json.loads(capsys.readouterr().out)
+    linear, pendulum = runs[False], runs[True]
+    assert linear["energy"].startswith("(y² + y'²)/2")
+    assert pendulum["energy"].startswith("½y'² + V(y), the potential of the pendulum")
+    # the same y₀, at a turning point; E there the pendulum's 1 - cos y₀, not y₀²/2
+    assert pendulum["y0"] == linear["y0"]
+    y0 = abs(pendulum["y0"])
+    assert main(["decay", str(path), "--restoring", "pendulum"]) in (0, 1)
+    rows = capsys.readouterr().out.split("Π(τ)")[1].split()
+    energy0 = float(rows[1])  # τ, E(τ), Π(τ) of the first row
+    assert energy0 == pytest.approx(1.0 - np.cos(y0), rel=0.01)
+    assert abs(energy0 - 0.5 * y0 * y0) > 0.05 * energy0
+    assert pendulum["pi0"] < linear["pi0"]

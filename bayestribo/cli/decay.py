@@ -12,7 +12,13 @@ import argparse
 import json
 from typing import Any
 
-from bayestribo.cli._common import add_notch_option, add_run_arguments, read_run_from_args
+from bayestribo.cli._common import (
+    CommandLineError,
+    add_notch_option,
+    add_run_arguments,
+    cli_message,
+    read_run_from_args,
+)
 
 __all__ = ["register"]
 
@@ -87,7 +93,9 @@ def run(args: argparse.Namespace) -> int:
 
     import numpy as np
 
-    from bayestribo.errors import ShortAnalysisWarning
+    from bayestribo.errors import BayestriboError, ShortAnalysisWarning
+    from bayestribo.inference.preparation import run_restoring, with_restoring
+    from bayestribo.model.restoring import AUTO
     from bayestribo.signal.decay import energy_decay
 
     recording = read_run_from_args(args)
@@ -101,10 +109,26 @@ def run(args: argparse.Namespace) -> int:
             skip_oscillations=args.skip,
             notch=args.notch,
         )
+        # E(τ) and Π(τ) with the restoring force's potential, as fit takes them
+        # (E = ½y'² + V(y)); "auto" is chosen by fit, from the half periods
+        restoring_name = dict(recording.metadata).get("restoring")
+        force = None
+        if restoring_name not in (None, AUTO):
+            try:
+                force = run_restoring(recording, decay)
+            except BayestriboError as exc:
+                raise CommandLineError(cli_message(str(exc))) from None
+            decay = with_restoring(decay, force)
     for w in caught:
         warnings.showwarning(w.message, w.category, w.filename, w.lineno)
     status = int(any(issubclass(w.category, ShortAnalysisWarning) for w in caught))
     info = summary(decay, args.run)
+    info["energy"] = (
+        "½y'² + V(y), the potential of the " + force.name
+        if force is not None
+        else "(y² + y'²)/2, the linear spring's"
+        + ("; --restoring auto is chosen by fit" if restoring_name == AUTO else "")
+    )
     rows = np.linspace(0, decay.tau.size - 1, max(args.points, 2)).astype(int)
     if args.json:
         info["tau"] = decay.tau[rows].tolist()
@@ -112,6 +136,8 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(info, indent=2))
         return status
     unit = "μ_k (y = kx/N)" if decay.scaling.friction_defined else "friction displacement"
+    if not decay.scaling.friction_defined and recording.length_unit == "rad":
+        unit = "friction angle"
     print(f"run            {args.run}")
     print(
         f"analysed       {decay.start_time:.6g} s to {decay.end_time:.6g} s "
@@ -132,6 +158,7 @@ def run(args: argparse.Namespace) -> int:
     note = mains_note(info)
     if note is not None:
         print(f"mains          {note}")
+    print(f"energy         E = {info['energy']}")
     print(f"y0             {decay.y0:.6g}")
     print(f"{'τ':>12} {'E(τ)':>14} {'Π(τ)':>14}")
     for i in rows:

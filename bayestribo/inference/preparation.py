@@ -45,6 +45,7 @@ __all__ = [
     "prepare_part",
     "reframe",
     "regrid",
+    "run_restoring",
     "small_swing_frequency",
     "with_restoring",
 ]
@@ -87,7 +88,7 @@ def _linear_spring(run: Run) -> bool:
     return get_restoring(dict(run.metadata).get("restoring")).kernels is None
 
 
-def _run_restoring(run: Run, decay: EnergyDecay) -> Any:
+def run_restoring(run: Run, decay: EnergyDecay) -> Any:
     """The run's nonlinear restoring force (its metadata's ``restoring``), its
     parameters measured from the turning points where it has any, as the energy and the
     laws take it; None for the linear spring.
@@ -316,7 +317,7 @@ def prepare(
         else:
             for w in held or ():
                 warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    restoring = None if linear else _run_restoring(recording, decay)
+    restoring = None if linear else run_restoring(recording, decay)
     if restoring is not None:
         # the small swings' frequency scales time (τ = ω₀t), in which V is written
         measured_in = decay.scaling.length_scale
