@@ -475,3 +475,14 @@ def test_a_pendulum_whose_angle_turns_over_is_refused_cleanly() -> None:
     run = Run(run.time, run.displacement, metadata={"length_unit": "rad", "restoring": "pendulum"})
     with pytest.raises(RecordingError, match=r"beyond π, where a pendulum turns over.*angle_deg"):
         validate_run(run)
+
+
+def test_an_angular_velocity_in_degrees_read_as_radians_is_refused() -> None:
+    # a rate gyro's deg/s labelled rad/s: the angle it integrates to swings by 68 "rad"
+    run = _encoder_pendulum(180.0 / np.pi)
+    velocity = np.gradient(run.displacement, run.time)
+    alone = Run(run.time, None, velocity, metadata={"length_unit": "rad"})
+    with pytest.raises(RecordingError, match=r"plausibility: the angle swings by .*angle_deg"):
+        validate_run(alone)
+    in_radians = Run(run.time, None, velocity * np.pi / 180.0, metadata={"length_unit": "rad"})
+    validate_run(in_radians)

@@ -762,16 +762,29 @@ MAX_ANGLE_SWING = 2.0 * math.pi
 
 
 def _check_angle_swing(run: Recording, where: str | None) -> None:
-    """Refuse a run in radians whose angle swings by more than :data:`MAX_ANGLE_SWING`:
-    degrees read as radians (an encoder's 68° read as 68 rad, fitted as 11 turns each way
-    without a word), naming the column name and the scale that read them as degrees."""
-    if run.length_unit != "rad" or run.displacement is None:
+    """Refuse a run in radians whose angle swings by more than :data:`MAX_ANGLE_SWING`
+    (from the angle, or from an angular velocity alone over 2πf): degrees read as radians
+    (an encoder's 68° read as 68 rad, fitted as 11 turns each way without a word), naming
+    the column name and the scale that read them as degrees."""
+    if run.length_unit != "rad":
         return
-    angle = np.asarray(run.displacement, dtype=float)
-    finite = angle[np.isfinite(angle)]
+    recorded = run.displacement if run.displacement is not None else run.velocity
+    if recorded is None:
+        return
+    values = np.asarray(recorded, dtype=float)
+    finite = values[np.isfinite(values)]
     if finite.size < 2:
         return
     swing = 0.5 * float(np.ptp(finite))
+    if run.displacement is None:
+        # an angular velocity alone: its swing over 2πf is the angle's
+        try:
+            period = dominant_period(run.time, values)
+        except RecordingError:
+            return
+        if not period > 0:
+            return
+        swing *= period / (2.0 * math.pi)
     if swing <= MAX_ANGLE_SWING:
         return
     raise RecordingError(
