@@ -38,29 +38,37 @@ def test_the_displacement_takes_the_runs_unit() -> None:
 
 
 def test_y0_is_a_displacement_in_the_signals_unit_unless_scaled_by_the_load() -> None:
-    # without a load and a mass, ℓ is one unit of the signal: y₀ is the displacement at
-    # the window's start in that unit (it was labelled a dimensionless amplitude: 3.3e6
-    # "dimensionless" for a seismometer in counts, negative for another)
+    # where the fit did not scale y = x/ℓ by ℓ = N/k, ℓ is one unit of the signal: y₀ is
+    # the displacement at the window's start in that unit (it was labelled a
+    # dimensionless amplitude: 3.3e6 "dimensionless" for a seismometer in counts)
     for metadata, what, unit in (
         ({"length_unit": "arbitrary"}, "displacement", "signal length unit"),
         ({"length_unit": "rad"}, "angle", "rad"),
         ({"length_unit": "m"}, "displacement", "m"),
-        ({"length_unit": "m", "load_N": 0.0, "mass_kg": 0.035}, "displacement", "m"),
-        (
-            {"length_unit": "arbitrary", "load_N": 0.3, "mass_kg": 0.035},
-            "displacement",
-            "signal length unit",
-        ),
     ):
         y0 = describe(["y0"], law="viscous+coulomb", metadata=metadata)["y0"]
         assert (y0.label, y0.unit) == (f"{what} at the window's start", unit), metadata
-    # with both, y = x/ℓ, ℓ = N/k: a number
+    # scaled by the load: y = x/ℓ, a number
     scaled = describe(
-        ["y0"],
-        law="viscous+coulomb",
-        metadata={"length_unit": "m", "load_N": 0.31, "mass_kg": 0.035},
+        ["y0"], law="viscous+coulomb", metadata={"length_unit": "m"}, friction_defined=True
     )["y0"]
     assert scaled.unit == "1" and "x₀/ℓ" in scaled.label
+
+
+def test_y0_follows_the_fits_own_scaling():
+    # a fit with a load and a mass (the bundled run) scales y by N/k, one in air (no
+    # load) does not: the label is the fit's record, not a rule made again from metadata
+    import warnings
+
+    from bayestribo import fit, simulate
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        loaded = fit(simulate(seed=3), seed=1, max_steps=600)
+        air = fit(simulate(seed=3).with_metadata(load_N=0.0), seed=1, max_steps=600)
+    assert loaded.quantity_info()["y0"].unit == "1"
+    assert air.quantity_info()["y0"].label == "displacement at the window's start"
+    assert air.quantity_info()["y0"].unit == "m"
 
 
 def test_units_recorded_by_the_fit_win_and_unknown_names_keep_their_name() -> None:

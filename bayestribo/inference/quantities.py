@@ -122,16 +122,6 @@ def unit_words(unit: str | None) -> str:
     return f"{text} (y = x/ℓ)" if text.startswith("1/y") else text
 
 
-def _scaled_by_load(metadata: dict[str, Any], length: str) -> bool:
-    """Whether y = x/ℓ is scaled by ℓ = N/k: a run in metres with a load and a mass
-    (:meth:`bayestribo.model.scaling.Rig.scaling`); else ℓ is one unit of the signal."""
-    try:
-        load = float(metadata.get("load_N") or 0.0)
-    except (TypeError, ValueError):
-        return False
-    return length == "m" and load > 0.0 and metadata.get("mass_kg") is not None
-
-
 def _length_unit(metadata: dict[str, Any]) -> str:
     unit = metadata.get("length_unit", "m") or "m"
     return {"m": "m", "rad": "rad"}.get(unit, "signal length unit")
@@ -176,6 +166,7 @@ def describe(
     metadata: dict[str, Any] | None = None,
     units: dict[str, str] | None = None,
     sampled: set[str] | frozenset[str] = frozenset(),
+    friction_defined: bool = False,
 ) -> dict[str, Quantity]:
     """What each of ``names`` is, for a fit of ``law``.
 
@@ -192,6 +183,10 @@ def describe(
         what the run's metadata gave); these win over the registry's.
     sampled : set of str
         Names of the sampled coordinates.
+    friction_defined : bool
+        Whether the fit scaled y = x/ℓ by ℓ = N/k (its rig's load and mass,
+        :meth:`bayestribo.model.scaling.Rig.scaling`); else ℓ is one unit of the signal
+        and y₀ is the displacement (an angle in radians) in the signal's unit.
 
     Returns
     -------
@@ -218,7 +213,7 @@ def describe(
         unit = recorded.get(name, unit)
         if unit == "length":
             unit = length
-        if name == "y0" and not _scaled_by_load(metadata, length):
+        if name == "y0" and not friction_defined:
             # ℓ is one unit of the signal (no load and mass to make N/k): y₀ is the
             # displacement (an angle in radians) itself, in the signal's unit
             what = "angle" if length == "rad" else "displacement"

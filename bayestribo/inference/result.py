@@ -367,6 +367,7 @@ class FitResult:
             metadata=self.metadata,
             units=self._attr("units_json", {}) or {},
             sampled=self._sampled_names(),
+            friction_defined=self._friction_defined,
         )
 
     def summary(self, prob: float = 0.95) -> dict[str, QuantitySummary]:
