@@ -43,20 +43,6 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 from _machine import provenance, write_results  # noqa: E402
 
-LAWS = [
-    "viscous",
-    "coulomb",
-    "quadratic",
-    "power",
-    "hysteretic",
-    "viscous+coulomb",
-    "viscous+quadratic",
-    "coulomb+quadratic",
-    "coulomb+power",
-    "coulomb+hysteretic",
-    "quadratic+hysteretic",
-    "viscous+coulomb+quadratic",
-]
 #: Log densities within this are the same optimum (the least squares' tolerance).
 SAME = 0.01
 
@@ -70,6 +56,7 @@ def one_recording(argv: list[str]) -> list[dict[str, Any]]:
     from bayestribo.cli._common import read_run_from_args
     from bayestribo.cli.main import build_parser
     from bayestribo.inference import comparison
+    from bayestribo.inference.choice import complexity
     from bayestribo.inference.pipeline import prepare
     from bayestribo.inference.reduction import law_of, nested_start, nested_starts
     from bayestribo.inference.start import find_optimum, maximum_from_starts
@@ -82,7 +69,7 @@ def one_recording(argv: list[str]) -> list[dict[str, Any]]:
     prepared = prepare(run)
     optima: dict[str, dict[str, float]] = {}
     rows = []
-    for law in LAWS:
+    for law in sorted(comparison.auto_laws(), key=complexity):  # as the comparison does
         posterior = comparison._posterior(law, prepared.data, "exact", False)
         cpu = time.process_time()
         multi = find_optimum(
@@ -166,7 +153,10 @@ def main(argv: list[str] | None = None) -> int:
         "cpu_ratio_range": [ratios[0], ratios[-1]] if ratios else None,
     }
     print(json.dumps(summary, indent=1))
-    settings = {"laws": LAWS, "same_within": SAME}
+    from bayestribo.inference.choice import complexity
+    from bayestribo.inference.comparison import auto_laws
+
+    settings = {"laws": sorted(auto_laws(), key=complexity), "same_within": SAME}
     write_results(
         args.output,
         {

@@ -55,7 +55,7 @@ recordings the speed goals take (the rotary pendulum's on its restoring force), 
 seven laws of two or three terms reached an optimum as good as the multi-start's
 (within 0.01 of log density) on 128 of the 133 and a better one on 5 (by 0.01 to 3.9),
 where the multi-start's first guesses stopped short, in 0.38 of its CPU time over all
-(0.04-0.80 a law; ``benchmarks/nested_starts.py``).
+(0.03-0.78 a law; ``benchmarks/nested_starts.py``).
 
 Reduction. A law whose extra terms the data put at zero at its optimum (within
 :data:`~bayestribo.inference.reduction.REDUCTION_LOSS` of log density) *reduces* to the
