@@ -249,3 +249,62 @@ def test_a_half_weighted_by_the_sampler_is_not_weighted_again(monkeypatch):
     assert d.shape == (200, 2)
     _, w = halves_module._draws(sampled, prepared, amplitude, 100)
     assert asked == [100] and np.all(w == 1.0)
+
+
+def test_a_half_whose_weights_still_do_not_hold_is_fitted_again_once_and_named(
+    constant, monkeypatch
+):
+    # the first half's plain fit still returns a surrogate's run whose weights do not
+    # hold (a run on a ridge the half does not identify): fitting it again with the
+    # same seed gives the same draws, so it is fitted once more at most, and the note
+    # says which half and why, not that no swing was left to compare
+    import dataclasses
+
+    from bayestribo.inference.surrogate import SurrogateCheck
+
+    calls = []
+    plain = halves_module.sample_law
+
+    def sample_law(part, *args, weighted=0, **kwargs):
+        first = part.run.time[0] == constant.run.time[0]
+        calls.append((first, weighted))
+        prepared, sampled = plain(part, *args, weighted=weighted, **kwargs)
+        if first:
+            failed = SurrogateCheck(128, 0.9, 0.9, 2)
+            sampled = dataclasses.replace(
+                sampled, surrogate=failed, surrogate_posterior=sampled.posterior
+            )
+        return prepared, sampled
+
+    monkeypatch.setattr(halves_module, "sample_law", sample_law)
+    monkeypatch.setattr(halves_module, "weights_at", lambda *args: None)
+    h = law_halves(constant, "viscous+coulomb", seed=1)
+    assert calls == [(True, N_FIRST_DRAWS), (False, N_FIRST_DRAWS), (True, 0)]
+    assert not h.tested
+    assert "first half's draws are not compared" in h.note and "weights" in h.note
+    assert "no swing" not in h.note
+
+
+def test_a_half_stopped_on_a_ridge_ends_the_check_before_the_other_half(constant, monkeypatch):
+    # the first half's run stopped on a ridge that half does not identify: its draws
+    # measure no ΔE(A) to compare; the second half is not fitted, and the note gives
+    # the run's reasons
+    import dataclasses
+
+    calls = []
+    plain = halves_module.sample_law
+
+    def sample_law(*args, weighted=0, **kwargs):
+        calls.append(weighted)
+        prepared, sampled = plain(*args, weighted=weighted, **kwargs)
+        run = dataclasses.replace(
+            sampled.run, ridge=True, converged=False, reasons=["stopped at 900 steps: (why)"]
+        )
+        return prepared, dataclasses.replace(sampled, run=run)
+
+    monkeypatch.setattr(halves_module, "sample_law", sample_law)
+    h = law_halves(constant, "viscous+coulomb", seed=1)
+    assert calls == [N_FIRST_DRAWS]
+    assert not h.tested
+    assert h.note.startswith("the first half's fit stopped on a ridge")
+    assert "stopped at 900 steps: (why)" in h.note

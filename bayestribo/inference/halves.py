@@ -60,7 +60,13 @@ uses are weighted by exact over surrogate density
 (:func:`bayestribo.inference.correction.weights_at`), their effective number Kish's,
 which the limits keep the weighted means' Monte Carlo error.
 Where the weights of the draws used do not hold, that half is fitted again as a fit of
-the law alone is (resampled, or sampled further), with its own seed.
+the law alone is (resampled, or sampled further), with its own seed, once: where its
+weights still do not hold (the same seed gives the same draws), the halves are not
+compared, and the note says which half and why. A half whose run stopped on a ridge
+that half does not identify (:func:`bayestribo.inference.sampling.run_ensembles`'s
+``unidentified``: coulomb+power on half of the galileo-encoder-17s pendulum, a friction
+at zero and μ_s/μ_k free) measures no ΔE(A) to compare: the check ends there, before
+the other half is fitted, its note giving the run's reasons.
 
 A run too short to split (fewer than :data:`MIN_HALF_CYCLES` half cycles in a half),
 or a half that cannot be prepared or fitted, is not tested; the result says why.
@@ -234,24 +240,44 @@ def law_halves(
         return sampled, half, 0.5 * (own[1:] + own[:-1]) if own.size > 1 else own
 
     halves = []
-    for i in range(len(bounds)):
+    for i, which in enumerate(("first", "second")):
         try:
             halves.append(fit_half(i, weighted=N_FIRST_DRAWS))
         except BayestriboError as exc:
-            which = "first" if not halves else "second"
             return LawHalves(
                 the_law.name, False, cut_time, note=f"the {which} half was not fitted: {exc}"
             )
+        if halves[i][0].run.ridge:
+            # stopped on a ridge the half does not identify (its reasons say which):
+            # its draws measure no ΔE(A) to compare, the other half is not fitted
+            return LawHalves(the_law.name, False, cut_time, note=_ridge_note(which, halves[i][0]))
+    refitted: set[int] = set()
     for count in (N_FIRST_DRAWS, N_DRAWS):
         compared = None
-        for _ in range(len(halves) + 1):
+        while compared is None:
             try:
                 compared = _compared(halves, amplitude, count)
-                break
             except _Unweighable as exc:
+                i = exc.args[1]
+                which = ("first", "second")[i]
+                if i in refitted:
+                    # fitted as a fit of the law alone is, its draws still the
+                    # surrogate's and their weights not reliable (a run stopped on a
+                    # ridge the half does not identify): the same fit again gives the
+                    # same draws
+                    return LawHalves(
+                        the_law.name, False, cut_time, note=_unweighable_note(which, halves[i][0])
+                    )
                 # that half's surrogate run resampled by its importance weights at every
                 # draw, or sampled further, as a fit of the law alone does (same seed)
-                halves[exc.args[1]] = fit_half(exc.args[1], weighted=0)
+                refitted.add(i)
+                try:
+                    halves[i] = fit_half(i, weighted=0)
+                except BayestriboError as err:
+                    note = f"the {which} half was not fitted: {err}"
+                    return LawHalves(the_law.name, False, cut_time, note=note)
+                continue
+            break
         if compared is None:
             return LawHalves(
                 the_law.name,
@@ -288,6 +314,26 @@ def law_halves(
         difference.p_value,
         agree=not (difference.p_value < HALVES_P),
     )
+
+
+def _ridge_note(which: str, sampled: Any) -> str:
+    """Why the halves are not compared: the ``which`` half's run stopped on a ridge."""
+    reasons = "; ".join(sampled.run.reasons[:2])
+    return f"the {which} half's fit stopped on a ridge that half does not identify ({reasons})"
+
+
+def _unweighable_note(which: str, sampled: Any) -> str:
+    """Why the ``which`` half's draws are not compared: its surrogate posterior's
+    importance weights are not reliable, even after a fit of the law alone (and why
+    its run stopped, where it did not converge)."""
+    note = (
+        f"the {which} half's draws are not compared: they are its quadratic surrogate's, "
+        "whose importance weights to the exact posterior are not reliable"
+    )
+    run = sampled.run
+    if not run.converged and run.reasons:
+        note += f" (its run did not converge: {run.reasons[0]})"
+    return note
 
 
 def _compared(
