@@ -75,3 +75,8 @@ def stub_fits(
     )
     monkeypatch.setattr(comparison, "turning_point_screen", lambda prepared, laws: {})
     return sampled
+
+
+def stub_prepared(n: int = N) -> SimpleNamespace:
+    """A prepared run as the stubbed comparison reads it: a name and ``n`` increments."""
+    return SimpleNamespace(name="stub", data=SimpleNamespace(increments=np.zeros(n)))

@@ -7,7 +7,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from _comparison_stubs import N, _Posterior, lpd_shifted, stub_fits
+from _comparison_stubs import N, _Posterior, lpd_shifted, stub_fits, stub_prepared
 
 from bayestribo.inference import comparison
 from bayestribo.inference.choice import law_of
@@ -76,7 +76,7 @@ def test_a_law_that_reduces_to_a_sampled_law_never_has_its_second_pass_made(monk
     _reduces_to_viscous(monkeypatch)
     lines: list[str] = []
     c, runs = compare_prepared(
-        SimpleNamespace(name="stub"), list(shifts), seed=1, rivals=False, progress=lines.append
+        stub_prepared(), list(shifts), seed=1, rivals=False, progress=lines.append
     )
     assert sampled == ["viscous"] == list(runs)
     assert sorted(made) == ["coulomb", "viscous"]
@@ -95,7 +95,7 @@ def test_a_law_that_is_a_screened_law_at_its_optimum_is_screened_as_before(monke
     sampled = stub_fits(monkeypatch, shifts, spread=spread)
     made = _lazy_optima(monkeypatch, shifts, spread)
     _reduces_to_viscous(monkeypatch)
-    c, runs = compare_prepared(SimpleNamespace(name="stub"), list(shifts), seed=1, rivals=False)
+    c, runs = compare_prepared(stub_prepared(), list(shifts), seed=1, rivals=False)
     assert sampled == ["viscous+coulomb"] == list(runs)
     assert sorted(made) == sorted(shifts)
     assert c.screened == ["viscous", "viscous+quadratic"]

@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 from pathlib import Path
-from types import SimpleNamespace
 
 import pytest
-from _comparison_stubs import stub_fits
+from _comparison_stubs import stub_fits, stub_prepared
 
 from bayestribo.inference import comparison
 from bayestribo.inference.comparison import compare_prepared
@@ -28,7 +27,7 @@ def test_every_laws_optimum_in_a_comparison_shares_the_kept_noise(monkeypatch):
 
     monkeypatch.setattr(comparison, "_optimise", optimise)
     assert channel_noise._KEPT.get() is None
-    compare_prepared(SimpleNamespace(name="stub"), list(shifts), seed=1, rivals=False)
+    compare_prepared(stub_prepared(), list(shifts), seed=1, rivals=False)
     assert len(seen) == len(shifts)
     assert seen[0] is not None and all(kept is seen[0] for kept in seen)
     # released once the comparison is done
@@ -47,7 +46,7 @@ def test_a_fit_keeps_the_first_passes_noise_for_its_second_passes(monkeypatch, l
 
     def prepare(run, **kwargs):
         seen["prepare"] = channel_noise._KEPT.get()
-        return SimpleNamespace(name="stub")
+        return stub_prepared()
 
     def stop(name):
         def record(*args, **kwargs):

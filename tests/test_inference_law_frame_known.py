@@ -8,7 +8,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from _comparison_stubs import stub_fits
+from _comparison_stubs import stub_fits, stub_prepared
 
 from bayestribo.inference import comparison, law_frame, prepare
 from bayestribo.inference.law_frame import posterior_like, sample_in_law_frame
@@ -115,7 +115,7 @@ def test_the_comparison_hands_over_every_law_it_took_to_its_optimum(monkeypatch)
     stub_fits(monkeypatch, shifts)
     at_optima: dict = {}
     c, runs = comparison.compare_prepared(
-        SimpleNamespace(name="stub"), list(shifts), seed=1, rivals=False, at_optima=at_optima
+        stub_prepared(), list(shifts), seed=1, rivals=False, at_optima=at_optima
     )
     assert set(at_optima) == set(shifts)
     assert all(isinstance(at, LawOptimum) and at.law == law for law, at in at_optima.items())

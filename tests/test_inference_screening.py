@@ -4,11 +4,10 @@ sampled (:func:`bayestribo.inference.screening.screen`), on stubs of the fits.""
 from __future__ import annotations
 
 import argparse
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from _comparison_stubs import N, lpd_shifted, stub_fits
+from _comparison_stubs import N, lpd_shifted, stub_fits, stub_prepared
 
 from bayestribo.inference import comparison
 from bayestribo.inference.choice import SMALL_ELPD_DIFFERENCE
@@ -57,7 +56,7 @@ def test_only_the_laws_that_can_still_win_are_sampled(monkeypatch):
     shifts = {"viscous": 5000.0, "coulomb": 2.0, "viscous+coulomb": 0.0, "quadratic": 900.0}
     sampled = stub_fits(monkeypatch, shifts)
     lines: list[str] = []
-    prepared = SimpleNamespace(name="stub")
+    prepared = stub_prepared()
     c, runs = compare_prepared(prepared, list(shifts), seed=1, rivals=False, progress=lines.append)
     assert sorted(sampled) == ["coulomb", "viscous+coulomb"] == sorted(runs)
     assert c.screened == ["viscous", "quadratic"]
@@ -79,14 +78,12 @@ def test_only_the_laws_that_can_still_win_are_sampled(monkeypatch):
 def test_one_law_left_after_screening_is_the_verdict(monkeypatch):
     shifts = {"viscous": 5000.0, "viscous+coulomb": 0.0}
     sampled = stub_fits(monkeypatch, shifts)
-    c, _ = compare_prepared(SimpleNamespace(name="stub"), list(shifts), seed=1, rivals=False)
+    c, _ = compare_prepared(stub_prepared(), list(shifts), seed=1, rivals=False)
     assert sampled == ["viscous+coulomb"] and c.verdict == "viscous+coulomb"
     assert c.table["viscous+coulomb"]["elpd_diff"] == 0.0
     # without screening every law is sampled
     sampled.clear()
-    compare_prepared(
-        SimpleNamespace(name="stub"), list(shifts), seed=1, rivals=False, screening=False
-    )
+    compare_prepared(stub_prepared(), list(shifts), seed=1, rivals=False, screening=False)
     assert sampled == ["viscous", "viscous+coulomb"]
 
 
@@ -197,7 +194,7 @@ def test_a_law_that_reduces_to_a_screened_law_is_not_sampled(monkeypatch):
     monkeypatch.setattr(comparison, "reduction_among", among)
     lines: list[str] = []
     c, runs = compare_prepared(
-        SimpleNamespace(name="stub"), list(shifts), seed=1, rivals=False, progress=lines.append
+        stub_prepared(), list(shifts), seed=1, rivals=False, progress=lines.append
     )
     assert sampled == ["viscous+coulomb"] == list(runs)
     # asked at each optimum of the laws it nests (whose second pass may wait), then by
@@ -219,7 +216,37 @@ def test_without_screening_a_law_that_reduces_to_a_far_law_is_sampled(monkeypatc
     shifts = {"viscous": 5000.0, "viscous+quadratic": 2000.0, "viscous+coulomb": 0.0}
     sampled = stub_fits(monkeypatch, shifts)
     monkeypatch.setattr(comparison, "reduction_among", lambda *args: ("viscous", ["quadratic"]))
-    c, _ = compare_prepared(
-        SimpleNamespace(name="stub"), list(shifts), seed=1, rivals=False, screening=False
-    )
+    c, _ = compare_prepared(stub_prepared(), list(shifts), seed=1, rivals=False, screening=False)
     assert sorted(sampled) == sorted(shifts) and c.screened == []
+
+
+@pytest.mark.filterwarnings("ignore")
+def test_a_law_with_as_many_parameters_as_increments_is_screened_out_and_named(monkeypatch):
+    # 3 increments: viscous (1 stub parameter) and coulomb (2) are sampled; viscous+coulomb
+    # and coulomb+hysteretic (3 each) are not identified by them: not sampled, their rows
+    # say why, and the comparison's text names them apart from laws too far behind
+    shifts = {"viscous": 0.0, "coulomb": 1.0, "viscous+coulomb": 0.0, "coulomb+hysteretic": 0.0}
+    sampled = stub_fits(monkeypatch, shifts)
+    lines: list[str] = []
+    c, runs = compare_prepared(
+        stub_prepared(3), list(shifts), seed=1, rivals=False, progress=lines.append
+    )
+    assert sorted(sampled) == ["coulomb", "viscous"] == sorted(runs)
+    assert c.screened == ["viscous+coulomb", "coulomb+hysteretic"]
+    for law in c.screened:
+        row = c.table[law]
+        assert row["sampled"] is False and row["screen"]["stage"] == "increments"
+        assert "3 increments" in row["screen"]["reason"] and "adequate" in row
+    text = c.describe()
+    assert "2 not sampled, with as many parameters as the record has increments" in text
+    assert "too far behind" not in text
+    assert any("3 increments, which do not identify them" in line for line in lines)
+
+
+@pytest.mark.filterwarnings("ignore")
+def test_laws_all_outnumbered_are_all_sampled(monkeypatch):
+    # with 1 increment every law has as many parameters: none is left out for it
+    shifts = {"viscous": 0.0, "coulomb": 1.0}
+    sampled = stub_fits(monkeypatch, shifts)
+    c, _ = compare_prepared(stub_prepared(1), list(shifts), seed=1, rivals=False)
+    assert sorted(sampled) == ["coulomb", "viscous"] and c.screened == []

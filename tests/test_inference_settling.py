@@ -8,7 +8,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from _comparison_stubs import N, lpd_shifted, stub_fits
+from _comparison_stubs import N, lpd_shifted, stub_fits, stub_prepared
 
 from bayestribo.inference import comparison
 from bayestribo.inference.choice import SMALL_ELPD_DIFFERENCE
@@ -59,7 +59,7 @@ def test_a_law_that_could_be_chosen_is_sampled():
 
 def _compare(shifts, adequate=(), screening=True, lines=None):
     return compare_prepared(
-        SimpleNamespace(name="stub"),
+        stub_prepared(),
         list(shifts),
         seed=1,
         rivals=False,
@@ -149,7 +149,7 @@ def test_adequate_laws_are_settled_in_the_rivals_comparison_alone(monkeypatch):
     assert sampled == list(shifts) and c.settled == []
     sampled.clear()
     c, _ = compare_prepared(
-        SimpleNamespace(name="stub"), list(shifts), seed=1, rivals=False, settle_adequate=True
+        stub_prepared(), list(shifts), seed=1, rivals=False, settle_adequate=True
     )
     assert sampled == ["viscous+coulomb"] and c.settled == ["coulomb+power"]
     assert c.verdict == "viscous+coulomb" and c.as_good == list(shifts)
@@ -167,7 +167,7 @@ def test_the_rivals_comparison_has_its_progress_line(monkeypatch):
 
     monkeypatch.setattr(comparison, "_compare_rivals", rivals)
     lines: list[str] = []
-    compare_prepared(SimpleNamespace(name="stub"), list(shifts), seed=1, progress=lines.append)
+    compare_prepared(stub_prepared(), list(shifts), seed=1, progress=lines.append)
     assert asked == [list(shifts)]
     assert lines[-1] == (
         "comparing viscous+coulomb with coulomb+hysteretic again on 4 increments per half cycle"
@@ -199,7 +199,7 @@ def test_an_adequate_law_clearly_behind_is_settled_and_still_counts_as_holding(m
     # nothing, and it still keeps the law-free fit away (no stub answers for "free")
     shifts = {"viscous": 0.0, "coulomb": 9.0}
     sampled = stub_fits(monkeypatch, shifts, adequate={"coulomb"})
-    c, _ = compare_prepared(SimpleNamespace(name="stub"), list(shifts), seed=1, law_free=True)
+    c, _ = compare_prepared(stub_prepared(), list(shifts), seed=1, law_free=True)
     assert sampled == ["viscous"] and c.settled == ["coulomb"]
     assert c.table["coulomb"]["settle"]["as_good"] is False
     assert c.verdict == "viscous" and not c.adequate and c.as_good == ["viscous"]

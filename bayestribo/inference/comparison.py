@@ -79,9 +79,15 @@ predictive density estimated at its optimum falls far behind the best one's, is
 *screened out*, not sampled and not compared by PSIS-LOO
 (:mod:`bayestribo.inference.screening`); so is a law that is, at its optimum, a law
 screened out (its extra terms at zero, the rule of Reduction) and whose own estimate
-is clearly behind the best's (``screen`` says ``reduces_to``); its row says
-``screened`` and ``screen``, with the misfit checks at its optimum, and the
-comparison's text names it.
+is clearly behind the best's (``screen`` says ``reduces_to``); so is a law with at
+least as many sampled parameters as the record has increments
+(:func:`~bayestribo.inference.identifiability.too_few_increments`; ``screen`` says
+stage ``increments``), where a law with fewer is left: its increments leave the
+parameters free to trade along a ridge, which the sampler walks towards its ceiling
+(``coulomb+hysteretic`` on the 4 increments of the bicycle wheel's axial gyro, 7.5 s
+and not converged), and PSIS-LOO, leaving out one of as few increments as parameters,
+does not estimate how it predicts. Its row says ``screened`` and ``screen``, with the
+misfit checks at its optimum, and the comparison's text names it.
 
 Settling. The laws left are sampled, the verdict their optima predict first and the
 others smallest first (:func:`bayestribo.inference.settling.sampling_order`), and
@@ -156,6 +162,7 @@ from bayestribo.inference.choice import (
     tie_key,
     verdict_of,
 )
+from bayestribo.inference.identifiability import too_few_increments
 from bayestribo.inference.loo import law_loo, loo_frame, pareto_k_max
 from bayestribo.inference.posterior import Posterior
 from bayestribo.inference.preparation import prepare, regrid
@@ -658,6 +665,11 @@ def _compare_prepared(
         )
     screened = [law for law in ordered if table.get(law, {}).get("screened")]
     survivors = [law for law in ordered if law in found and law not in screened]
+    if screening:
+        survivors = _outnumbered_out(
+            survivors, found, prepared, table, unsampled, at_optimum, spent, say
+        )
+        screened = [law for law in ordered if table.get(law, {}).get("screened")]
     if screening and len(survivors) > 1:
         # the verdict the optima predict first: the laws after it are judged against it
         survivors = sampling_order(
@@ -760,6 +772,51 @@ def _compare_prepared(
         settled=[law for law in rank if law in settled],
     )
     return comparison, runs
+
+
+def _outnumbered_out(
+    survivors: list[str],
+    found: Mapping[str, LawOptimum],
+    prepared: PreparedRun,
+    table: dict[str, dict[str, Any]],
+    unsampled: Callable[[str, Posterior, NDArray, dict], dict],
+    at_optimum: Callable[[str], dict[str, Any]],
+    spent: Mapping[str, tuple[float, float]],
+    say: Callable[[str], None],
+) -> list[str]:
+    """The laws left to sample once those with at least as many sampled parameters as
+    the record's increments are screened out (module notes, Screening): their
+    increments leave the parameters free to trade along a ridge, which the sampler
+    walks to its ceiling, and PSIS-LOO, leaving out one of as few increments as
+    parameters, does not estimate how the law predicts. Their rows say ``screened``
+    and ``screen`` (stage ``increments``, with the reason), the misfit checks at their
+    optimum. Where every law left is outnumbered they are all sampled, as before."""
+    n_increments = int(np.asarray(prepared.data.increments).size)
+    if n_increments < 1:
+        return survivors
+    reasons = {
+        law: reason
+        for law in survivors
+        if (reason := too_few_increments(found[law].posterior.names, n_increments, law))
+    }
+    if not reasons or len(reasons) == len(survivors):
+        return survivors
+    for law, reason in reasons.items():
+        at = found[law]
+        theta = np.asarray(at.second_optimum[0], dtype=float)
+        table[law] = {
+            **unsampled(law, at.second, theta, at_optimum(law)),
+            "screened": True,
+            "screen": {"stage": "increments", "reason": reason},
+            "seconds": spent[law][0],
+            "cpu_seconds": spent[law][1],
+        }
+    say(
+        f"{len(reasons)} of {len(survivors)} laws have as many parameters as the record's "
+        f"{n_increments} increments, which do not identify them (not sampled): "
+        + ", ".join(reasons)
+    )
+    return [law for law in survivors if law not in reasons]
 
 
 def _screen_optima(

@@ -61,8 +61,9 @@ class LawComparison:
         notes); its table row says ``reduces_to``, ``terms_at_zero`` and
         ``sampled`` False.
     screened : list of str
-        Laws screened out at their optimum: too far behind the best to win (module
-        notes, Screening), not sampled; their rows say ``screened`` and ``screen``
+        Laws screened out at their optimum: too far behind the best to win, or with
+        as many sampled parameters as the record's increments (module notes,
+        Screening), not sampled; their rows say ``screened`` and ``screen``
         (the estimate at the optimum and the limit it passed).
     settled : list of str
         Laws not sampled because they could no longer change the choice, judged at
@@ -90,10 +91,21 @@ class LawComparison:
         text = self._choice()
         if self.equivalent:
             text += "; " + _equivalence_text(self.equivalent, self.table)
-        if self.screened:
+        outnumbered = [
+            law
+            for law in self.screened
+            if (self.table.get(law, {}).get("screen") or {}).get("stage") == "increments"
+        ]
+        behind = [law for law in self.screened if law not in outnumbered]
+        if behind:
             text += (
-                f"; {len(self.screened)} not sampled, too far behind the best to win "
-                f"(screened): {', '.join(self.screened)}"
+                f"; {len(behind)} not sampled, too far behind the best to win "
+                f"(screened): {', '.join(behind)}"
+            )
+        if outnumbered:
+            text += (
+                f"; {len(outnumbered)} not sampled, with as many parameters as the record "
+                f"has increments, which do not identify them (screened): {', '.join(outnumbered)}"
             )
         if self.settled:
             text += (
