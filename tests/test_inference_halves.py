@@ -298,7 +298,14 @@ def test_a_half_stopped_on_a_ridge_ends_the_check_before_the_other_half(constant
         calls.append(weighted)
         prepared, sampled = plain(*args, weighted=weighted, **kwargs)
         run = dataclasses.replace(
-            sampled.run, ridge=True, converged=False, reasons=["stopped at 900 steps: (why)"]
+            sampled.run,
+            ridge=True,
+            converged=False,
+            reasons=[
+                "stopped at 900 steps: (why)",
+                "μ_k (mu_k) reaches 0 (...) and the walkers cross a ridge, not a mode; the "
+                "coulomb term can be left out: fit law='viscous' (--law viscous)",
+            ],
         )
         return prepared, dataclasses.replace(sampled, run=run)
 
@@ -308,3 +315,6 @@ def test_a_half_stopped_on_a_ridge_ends_the_check_before_the_other_half(constant
     assert not h.tested
     assert h.note.startswith("the first half's fit stopped on a ridge")
     assert "stopped at 900 steps: (why)" in h.note
+    # the half's advice to leave a term out is not the whole record's: not repeated
+    assert h.note.endswith("the walkers cross a ridge, not a mode)")
+    assert "left out" not in h.note and "--law" not in h.note

@@ -75,6 +75,7 @@ or a half that cannot be prepared or fitted, is not tested; the result says why.
 from __future__ import annotations
 
 import math
+import re
 import warnings
 from typing import Any
 
@@ -112,6 +113,10 @@ N_DRAWS = 1000
 #: the :data:`N_DRAWS` are not evaluated.
 N_FIRST_DRAWS = 200
 
+
+#: The advice of :func:`~bayestribo.inference.identifiability.unidentified_reasons`
+#: to fit a law without a term, at the end of a reason.
+_LEAVE_OUT = re.compile(r"; the [\w+-]+ term can be left out: .*$")
 
 #: One half's ΔE(A) draws, their importance weights (None: equal) and effective number.
 Side = tuple[NDArray, NDArray | None, float]
@@ -318,7 +323,9 @@ def law_halves(
 
 def _ridge_note(which: str, sampled: Any) -> str:
     """Why the halves are not compared: the ``which`` half's run stopped on a ridge."""
-    reasons = "; ".join(sampled.run.reasons[:2])
+    # the advice to leave a term out is the half's, not the whole record's (which
+    # the law fits with it): it is not repeated here
+    reasons = "; ".join(_LEAVE_OUT.sub("", reason) for reason in sampled.run.reasons[:2])
     return f"the {which} half's fit stopped on a ridge that half does not identify ({reasons})"
 
 
