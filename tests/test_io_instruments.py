@@ -227,3 +227,31 @@ def test_the_command_line_reads_an_export_and_names_the_options(tmp_path, run, c
     assert main(argv) == 0
     got = json.loads(capsys.readouterr().out)
     assert got["natural_frequency_Hz"] == pytest.approx(32.6, rel=2e-3)
+
+
+@pytest.mark.parametrize("x_columns", ["One", "No"])
+def test_an_lvm_channel_whose_label_states_its_unit_is_read_in_that_unit(tmp_path, run, x_columns):
+    # a LabVIEW file without Y_Unit_Label whose labels end with the unit, as exports
+    # that set the channel names do: read in that unit with no options, the roles
+    # named with the same unit agree with it, and volts in a label still need a scale
+    text = _lvm(run, x_columns).replace("Y_Unit_Label\tVolts\tVolts\n", "")
+    text = text.replace("\tUntitled\tUntitled 1\t", "\tDisplacement (mm)\tVelocity [mm/s]\t")
+    text = text.replace("Untitled\tUntitled 1\t", "Displacement (mm)\tVelocity [mm/s]\t")
+    rows = text.splitlines()
+    first = next(i for i, r in enumerate(rows) if "Displacement (mm)" in r) + 1
+    xv, vv = _volts(run)
+    mm = (1e3 * X_PER_V, 1e3 * V_PER_V)
+    for k, row in enumerate(rows[first:]):
+        fields = row.split("\t")
+        fields[-2] = f"{xv[k] * mm[0]:.12e}"
+        fields[-1] = f"{vv[k] * mm[1]:.12e}"
+        rows[first + k] = "\t".join(fields)
+    path = _write(tmp_path, "named.lvm", "\n".join(rows))
+    assert "Y_Unit_Label" not in path.read_text(encoding="utf-8")
+    _same_run(read_run(path, metadata=dict(run.metadata)), run)
+    roles = ["displacement_mm", "velocity_mm_per_s"]
+    roles = roles if x_columns == "No" else ["time_s", *roles]
+    _same_run(read_run(path, columns=roles, metadata=dict(run.metadata)), run)
+    volts = _write(tmp_path, "volts.lvm", "\n".join(rows).replace("(mm)", "(V)"))
+    with pytest.raises(RunFormatError, match="sensitivity"):
+        read_run(volts, metadata=dict(run.metadata))

@@ -31,6 +31,7 @@ LabVIEW                ``.lvm`` measurement files: ``LabVIEW Measurement`` heade
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -339,6 +340,15 @@ def _picoscope(lines: Sequence[str], where: str) -> InstrumentExport | None:
 
 
 _LVM_SEPARATORS = {"tab": "\t", "comma": ",", "semicolon": ";", "space": None}
+#: A unit at the end of a channel's label, in parentheses or brackets: "Displacement (mm)".
+_LABEL_UNIT = re.compile(r"[(\[]\s*([^()\[\]]+?)\s*[)\]]\s*$")
+
+
+def _label_unit(label: str) -> str:
+    """The unit a channel's label ends with ("Displacement (mm)": "mm"), where the
+    export's header gives none (a LabVIEW file without Y_Unit_Label); "" if none."""
+    found = _LABEL_UNIT.search(label)
+    return found.group(1) if found else ""
 
 
 def _lvm(lines: Sequence[str], where: str) -> InstrumentExport | None:
@@ -417,7 +427,7 @@ def _lvm(lines: Sequence[str], where: str) -> InstrumentExport | None:
                 where,
             )
         for j, column in enumerate(channel_columns):
-            units[column] = y_units[j] if j < len(y_units) else ""
+            units[column] = (y_units[j] if j < len(y_units) else "") or _label_unit(labels[column])
         return InstrumentExport(
             "LabVIEW LVM",
             labels,
@@ -432,7 +442,7 @@ def _lvm(lines: Sequence[str], where: str) -> InstrumentExport | None:
         )
     units[channel_columns[0]] = "s"
     for j, column in enumerate(channel_columns[1:]):
-        units[column] = y_units[j] if j < len(y_units) else ""
+        units[column] = (y_units[j] if j < len(y_units) else "") or _label_unit(labels[column])
     return InstrumentExport(
         "LabVIEW LVM",
         labels,
