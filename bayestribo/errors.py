@@ -98,8 +98,9 @@ class LinearSpringWarning(FrequencyTrendWarning, MisfitWarning):
 
 
 class ReadingWarning(UserWarning):
-    """A file was read with rows left out (empty cells at its start or end): the
-    message names the lines and the columns."""
+    """A file was read with rows left out (empty cells at its start or end, or rows
+    that repeat the one before exactly): the message names the lines or samples and
+    the columns."""
 
 
 class MetadataWarning(UserWarning):

@@ -486,3 +486,43 @@ def test_an_angular_velocity_in_degrees_read_as_radians_is_refused() -> None:
         validate_run(alone)
     in_radians = Run(run.time, None, velocity * np.pi / 180.0, metadata={"length_unit": "rad"})
     validate_run(in_radians)
+
+
+def test_a_row_written_twice_is_read_once_and_said(tmp_path):
+    # rows that repeat the one before exactly (a logger that wrote them twice) hold
+    # nothing new: each is read once, with a warning naming how many and the first
+    from bayestribo.errors import ReadingWarning
+
+    run = simulate(seed=5)
+    path = tmp_path / "run.csv"
+    write_run(run, path)
+    lines = path.read_text().splitlines()
+    header = next(i for i, line in enumerate(lines) if line.startswith("time_s"))
+    doubled = [*lines[: header + 60], lines[header + 59], *lines[header + 60 :]]
+    doubled = [*doubled[: header + 301], doubled[header + 300], *doubled[header + 301 :]]
+    twice = tmp_path / "twice.csv"
+    twice.write_text("\n".join(doubled) + "\n")
+    with pytest.warns(ReadingWarning, match=r"2 samples repeat the one before exactly.*sample 59"):
+        got = read_run(twice)
+    clean = read_run(path)
+    np.testing.assert_array_equal(got.time, clean.time)
+    np.testing.assert_array_equal(got.displacement, clean.displacement)
+    np.testing.assert_array_equal(got.velocity, clean.velocity)
+    # a Run given as it is gets the same
+    from bayestribo.io import as_run
+
+    repeated = Run(
+        np.insert(clean.time, 60, clean.time[59]),
+        np.insert(clean.displacement, 60, clean.displacement[59]),
+        np.insert(clean.velocity, 60, clean.velocity[59]),
+        dict(clean.metadata),
+    )
+    with pytest.warns(ReadingWarning, match="1 sample repeat"):
+        np.testing.assert_array_equal(as_run(repeated).time, clean.time)
+
+
+def test_a_repeated_stamp_with_other_values_is_refused_naming_both_samples():
+    run = simulate(seed=5)
+    bad = _replace(run, time=_with(run.time, 100, run.time[99]))
+    with pytest.raises(RecordingError, match=r"sample 100 .* with other values than sample 99"):
+        validate_run(bad)

@@ -39,7 +39,7 @@ from bayestribo.io.sidecar import (
 )
 from bayestribo.io.stamped_lines import START_TIME
 from bayestribo.io.text import FILE_COLUMNS, PREAMBLE_RATE, StatedRate, write_csv
-from bayestribo.io.validation import on_one_clock, validate_run
+from bayestribo.io.validation import on_one_clock, validate_run, without_repeated_samples
 
 __all__ = ["READ_OPTIONS", "ReadOptions", "as_run", "format_of", "read_run", "write_run"]
 
@@ -262,6 +262,7 @@ def _read(path: Path, opts: ReadOptions) -> Run:
         source=where,
     )
     del signals  # the reader's arrays: the run holds its own copies
+    run = without_repeated_samples(run)  # a row written twice, read once
     run = on_one_clock(run)  # a clock that restarts within the record, continued or cut
     if opts.window is not None:
         run = _windowed(run, opts.window, where)
@@ -630,7 +631,7 @@ def as_run(
                 f"reading options {sorted(given)} apply to a file, but run is "
                 "already a Run; read the file with these options, or drop them"
             )
-        return as_angle(high_pass_undone(on_one_clock(run)))
+        return as_angle(high_pass_undone(on_one_clock(without_repeated_samples(run))))
     if isinstance(run, str | os.PathLike):
         return _read(Path(run), opts)
     raise BayestriboError(

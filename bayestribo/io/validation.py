@@ -58,6 +58,7 @@ __all__ = [
     "check_channels",
     "on_one_clock",
     "validate_run",
+    "without_repeated_samples",
 ]
 
 #: Moved to :mod:`bayestribo.signal.channels`: still importable from here, with a
@@ -175,9 +176,20 @@ def _check_time(run: Run, where: str | None, time_rtol: float) -> float:
     bad = np.flatnonzero(step <= 0.0)
     if bad.size:
         i = int(bad[0]) + 1
+        repeated = ""
+        if step[i - 1] == 0.0:
+            # a row written twice is read once (without_repeated_samples): this one's
+            # values differ from the sample before
+            repeated = (
+                f" with other values than sample {i - 1} ({bad.size} such step"
+                f"{'s' if bad.size > 1 else ''}): two samples at one instant, of which the "
+                "record cannot be told; expected one sample a time stamp (a logger's "
+                "interleaved or resent rows: export the record again, or --window to a "
+                "part without them)"
+            )
         raise _fail(
             f"field {TIME!r} is not strictly increasing: sample {i} (t = {t[i]!r} s) follows "
-            f"t = {t[i - 1]!r} s; expected increasing time stamps",
+            f"t = {t[i - 1]!r} s{repeated or '; expected increasing time stamps'}",
             where,
         )
     median = sample_step(t, step)  # remembered for the checks and the fit that follow
@@ -338,6 +350,63 @@ def validate_run(
     check_channels(run, where)
     check_plausible_motion(run, where)
     return given
+
+
+def without_repeated_samples(run: Run, *, say: bool = True) -> Run:
+    """The run without the samples that repeat the one before exactly.
+
+    A logger that writes a row twice gives a sample with the time stamp and every
+    channel's value of the one before: it holds nothing the first does not, and each
+    such sample is read once. A repeated time stamp with another value in any channel
+    is left for :func:`validate_run` to refuse (two samples at one instant: which one
+    is the record cannot be told).
+
+    Parameters
+    ----------
+    run : Run
+        The run as read.
+    say : bool
+        Warn how many samples were read once, and the first of them
+        (:class:`~bayestribo.errors.ReadingWarning`).
+
+    Returns
+    -------
+    Run
+        ``run`` itself where no sample repeats the one before.
+    """
+    from bayestribo._stamps import stamp
+    from bayestribo.errors import ReadingWarning
+
+    t = np.asarray(run.time)
+    same = np.diff(t) == 0.0
+    if not same.any():
+        return run
+    channels = [c for c in (run.displacement, run.velocity) if c is not None]
+    for c in channels:
+        c = np.asarray(c)
+        same &= (np.diff(c) == 0.0) | (np.isnan(c[1:]) & np.isnan(c[:-1]))
+    if not same.any():
+        return run
+    repeats = np.flatnonzero(same) + 1
+    if say:
+        where = f"{run.source}: " if run.source else ""
+        first = int(repeats[0])
+        at = stamp(float(t[first]), float(t[-1] - t[0]), float(t[0]))
+        warn(
+            f"{where}{repeats.size} sample{'s' if repeats.size > 1 else ''} repeat the one "
+            f"before exactly (the same time stamp and value in every channel: a row "
+            f"written twice), the first sample {first} at t = {at}; each is read once",
+            ReadingWarning,
+        )
+    keep = np.ones(t.size, dtype=bool)
+    keep[repeats] = False
+    return Run(
+        t[keep],
+        None if run.displacement is None else np.asarray(run.displacement)[keep],
+        None if run.velocity is None else np.asarray(run.velocity)[keep],
+        dict(run.metadata),
+        source=run.source,
+    )
 
 
 def on_one_clock(run: Run, *, say: bool = True) -> Run:
