@@ -21,6 +21,20 @@ def test_the_step_of_rounded_values_is_found(step):
     assert quantisation_step(x) == pytest.approx(step, rel=1e-9)
 
 
+@pytest.mark.parametrize(("bits", "span", "decimals"), [(12, 4.0, 6), (10, 2.0, 6), (12, 1.0, 7)])
+def test_a_step_that_is_no_round_number_written_in_decimals_is_found(bits, span, decimals):
+    # an ADC's step in the file's unit (4 mm over 12 bits: 0.9765625 µm) written with a
+    # few decimals: the smallest change carries the text's rounding, which a change of
+    # fifty or more steps a sample multiplies; the step is refined from the changes
+    step = span / 2**bits
+    rng = np.random.default_rng(3)
+    t = np.arange(4000) / 400.0
+    motion = 0.45 * span * np.exp(-0.2 * t) * np.cos(2 * np.pi * 10.0 * t)
+    x = np.round(np.round(motion / step + 0.2 * rng.normal(size=t.size)) * step, decimals)
+    assert np.max(np.abs(np.diff(x))) / step > 50
+    assert quantisation_step(x) == pytest.approx(step, rel=1e-5)
+
+
 def test_continuous_values_have_no_step():
     rng = np.random.default_rng(2)
     assert quantisation_step(rng.normal(0, 1e-6, 1000)) is None

@@ -45,6 +45,9 @@ _DUST = 1e-12
 _WHOLE_FRACTION = 0.99
 #: How far from a whole multiple a change may be (rounding of the decimal text).
 _TOLERANCE = 1e-3
+#: How far from a whole multiple a change may be to be assigned it while the step is
+#: refined (:func:`_refined`).
+_ASSIGN = 0.25
 #: The smallest change may be up to this many steps.
 _MAX_DIVISOR = 10
 
@@ -94,9 +97,18 @@ def quantisation_step(values: ArrayLike) -> float | None:
     # the smallest change may be several steps (no sample moved by one): try its
     # whole fractions, largest step first
     for k in range(1, _MAX_DIVISOR + 1):
-        step = smallest / k
+        # the smallest change carries the decimal text's rounding, which a change of
+        # many steps multiplies (a 12-bit step of 0.9765625 µm written in mm with six
+        # decimals, 160 steps a sample): the step is refined from the changes of a few
+        # steps first, then of more, before the changes are judged against it
+        step = _refined(head, smallest / k, allowed)
+        if step is None:
+            continue
         missed = np.count_nonzero(np.abs(head / step - np.round(head / step)) > _TOLERANCE)
         if missed > allowed + 1:
+            continue
+        step = _refined(change, step, allowed)
+        if step is None:
             continue
         ratio = change / step
         whole = np.abs(ratio - np.round(ratio)) <= _TOLERANCE
@@ -105,6 +117,27 @@ def quantisation_step(values: ArrayLike) -> float | None:
             n = np.round(ratio)
             return float(round(float(np.sum(change) / np.sum(n)), 15))
     return None
+
+
+def _refined(change: np.ndarray, step: float, allowed: float) -> float | None:
+    """``step`` refined from the changes of at most 4, 16, 64, ... steps in turn (each
+    the sum of the changes over the sum of their whole multiples), or None where more
+    than ``allowed`` + 1 of those changes are not within a quarter step of a whole
+    multiple of it (no multiple to assign them; whether the changes are whole
+    multiples within :data:`_TOLERANCE` is judged after, against the refined step)."""
+    limit = 4.0
+    while True:
+        ratio = change / step
+        near = ratio <= limit + 0.5
+        n = np.round(ratio[near])
+        if np.count_nonzero(np.abs(ratio[near] - n) > _ASSIGN) > allowed + 1:
+            return None
+        total = float(np.sum(n))
+        if total > 0:
+            step = float(np.sum(change[near])) / total
+        if near.all():
+            return step
+        limit *= 4.0
 
 
 def finely_dithered(values: ArrayLike, step: float | None) -> bool:
