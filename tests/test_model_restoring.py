@@ -260,3 +260,25 @@ def test_a_beta_without_a_standard_error_is_printed(monkeypatch):
         result = fit(run, law="viscous", seed=1, grid_points=32)
     assert result._attr("restoring_json")["beta_se"] is None
     assert "β = 0 (its standard error undefined)" in result.to_text()
+
+
+def test_a_duffing_spring_of_a_record_in_metres_is_a_restoring_force():
+    # β = 0.1 per mm² in metres is 1e5 per m²: βy² = 0.1 at y = 1e-3 m, which is no
+    # longer "near zero"; V(y) is y²/2 near zero on the force's own scale
+    from bayestribo.model.restoring.duffing import duffing
+
+    force = duffing(1e5)
+    assert force.parameters["beta"] == 1e5
+    np.testing.assert_allclose(force.potential(1e-3), 0.5e-6 + 0.25e5 * 1e-12)
+
+
+def test_a_potential_that_is_not_y2_over_2_near_zero_is_refused():
+    from bayestribo.model.restoring.base import RestoringForce
+
+    with pytest.raises(ValueError, match="V\\(y\\) must be y²/2 near y = 0"):
+        RestoringForce(
+            name="stiff",
+            description="twice the spring",
+            potential=lambda y: y * y,
+            half_period_ratio=lambda a: np.ones_like(a),
+        )
