@@ -135,11 +135,6 @@ SEPARATE_MOTION = 0.1
 #: holds another: the rest's noise is measured on them, and what lies beyond (a mass
 #: pulled back to its hold for the next release) is not rest.
 REST_BESIDE = 4
-#: Excursion of the velocity's mean over an eighth of a period, in that mean's white
-#: noise σ/√samples, that marks a last half cycle once the displacement recorded beside
-#: the velocity shows the oscillator moved after the stop :data:`THRESHOLD` found
-#: (:func:`_missed_half_cycle`; at 3, noise at rest reached it within a period).
-MISSED_THRESHOLD = 5.0
 #: Default excursion threshold, in rest noise standard deviations, that marks motion
 #: when the release and the end of motion are refined (a Gaussian sample exceeds 8σ
 #: with probability 1e-15).
@@ -337,76 +332,6 @@ def _root(t: NDArray, s: NDArray, level: float, lo: int, hi: int, near: int) -> 
     return origin + r * scale
 
 
-def _missed_half_cycle(
-    t: NDArray,
-    v: NDArray,
-    x: NDArray,
-    stop: int,
-    level: float,
-    sigma: float,
-    hi: int,
-    size: int,
-) -> tuple[int, float] | None:
-    """The end of a last half cycle the velocity's threshold missed, or None.
-
-    A stuck oscillator rests where it stopped: the displacement recorded beside the
-    velocity stays at its level at the stop. Where its median over a sixteenth of a
-    period about the stop is farther than :data:`DISPLACEMENT_THRESHOLD` times its
-    rest noise from the rest level after it (the median of the block after the next;
-    the noise of a sample, not the levels' standard errors, which a noise that wanders
-    — 1/f, a filter's — exceeds), the motion went on: a last half cycle whose velocity
-    peaked below the threshold (a swing of ten displacement σ peaks at five velocity σ
-    at 5 kHz and 20 Hz), which the threshold put into the rest, so that the oscillator
-    seemed stuck at the turning point before it (μ_s/μ_k 3.0 [2.0, 4.0] where it was 1,
-    exit 0). The
-    end of motion is then the velocity's crossing of its rest level after the last
-    excursion of its mean over an eighth of a period beyond :data:`MISSED_THRESHOLD`
-    times that mean's white noise (a lobe of one sign stands out of noise averaged
-    down, a sample of noise does not), provided the displacement rests at its level
-    after it.
-    """
-    n = t.size
-    rest = x[stop + 1 : min(n, stop + 1 + size)]
-    if rest.size < max(8, size // 4):
-        return None
-    quarter = max(3, round(0.125 * size))  # a quarter period: samples about the stop
-    at_stop = float(np.median(x[max(0, stop - quarter // 4) : stop + quarter // 4 + 1]))
-    after = np.r_[np.zeros(stop + 1, bool), np.ones(n - stop - 1, bool)]
-    sigma_x = block_noise(t, x, after, size) or block_noise(t, x, after, n - stop - 1)
-    if not sigma_x:
-        return None
-    # the rest level a block after the stop, past any half cycle missed (or the block
-    # after the stop where the record ends sooner)
-    later = x[min(n, stop + 1 + size) : min(n, stop + 1 + 2 * size)]
-    level_x = float(np.median(later if later.size >= rest.size // 2 else rest))
-    # the rest noise of a sample, not the levels' standard errors: a noise that
-    # wanders (1/f, a filter's) moves a level by more than its white standard error
-    if abs(at_stop - level_x) <= DISPLACEMENT_THRESHOLD * sigma_x:
-        return None
-    # the half cycle after the stop (half a period, and a quarter's margin), in the
-    # velocity averaged over an eighth of a period: a lobe of one sign stands out of
-    # the white noise averaged down by √(samples), a sample of noise does not
-    fit_len = max(9, round(0.5 * size / 8.0))
-    skip = fit_len // 3
-    window = v[stop + 1 : min(hi, stop + 1 + size // 4 + quarter)] - level
-    if window.size < fit_len:
-        return None
-    mean = np.convolve(window, np.full(fit_len, 1.0 / fit_len), mode="valid")
-    out = np.flatnonzero(np.abs(mean) > MISSED_THRESHOLD * sigma / math.sqrt(fit_len))
-    if not out.size:
-        return None
-    i = stop + 1 + int(out[-1]) + fit_len // 2
-    crossing = _root(t, v, level, max(0, i + 1 - fit_len), i + 1 - skip, i)
-    if crossing is None or not t[max(0, i - skip)] <= crossing <= t[min(n - 1, i + skip)]:
-        crossing = float(t[i])
-    index = int(np.searchsorted(t, crossing, side="right")) - 1
-    # the displacement rests at its level from there on (else not a stop either)
-    settled = x[min(n - 1, index + quarter) : min(n, index + quarter + size // 2)]
-    if settled.size and abs(float(np.median(settled)) - level_x) > DISPLACEMENT_THRESHOLD * sigma_x:
-        return None
-    return index, float(crossing)
-
-
 def motion_span(
     t: ArrayLike,
     velocity: ArrayLike,
@@ -416,7 +341,6 @@ def motion_span(
     displacement: ArrayLike | None = None,
     periodic: ArrayLike | None = None,
     velocity_alone: bool = False,
-    beside: ArrayLike | None = None,
 ) -> MotionSpan:
     """Release, end of motion and rest of a free-decay record (see the module notes).
 
@@ -447,11 +371,6 @@ def motion_span(
         or fades into the noise (a viscous decay never stops), and find a rest before
         the release that is shorter than a period (the integral's wander there would
         give turning points); see the module notes. Default False.
-    beside : array_like, optional
-        The displacement [unit] recorded beside a recorded ``velocity``: where it does
-        not rest at its level at the stop the velocity's threshold found (a last half
-        cycle whose velocity stayed below ``threshold`` σ), the end of motion is that
-        half cycle's (see the module notes).
 
     Returns
     -------
@@ -603,12 +522,6 @@ def motion_span(
             stop_index = int(np.searchsorted(t, stop_time, side="right")) - 1
         if by_velocity and stop_index is not None:
             fade_time = _fade_time(t, v, stop_index, size, period, tail_start)
-        if recorded and beside is not None and stop_index is not None:
-            later = _missed_half_cycle(
-                t, v, np.asarray(beside, dtype=float), stop_index, level, sigma, hi, size
-            )
-            if later is not None:
-                stop_index, stop_time = later
         if stop_index is not None:
             rest = stop_index + 1 if fade_time is None else tail_start
             quiet[rest + max(1, size // 8) :] = True
