@@ -40,8 +40,8 @@ def test_numpy_scalars_in_messages_print_as_numbers():
 
 def test_an_error_with_numbers_prints_them_as_numbers(tmp_path, capsys):
     t = np.arange(2000) / 1e4
-    t[1000] = t[999]  # a repeated time stamp
     x = 1e-3 * np.cos(2 * np.pi * 32.6 * t) * np.exp(-t)
+    t[1000] = t[999]  # a repeated time stamp with another value (a row written twice is read once)
     path = tmp_path / "bad.csv"
     rows = "\n".join(f"{a:.17g},{b:.17g}" for a, b in zip(t, x, strict=True))
     path.write_text("time_s,displacement_m\n" + rows + "\n", encoding="utf-8")
