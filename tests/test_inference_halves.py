@@ -303,8 +303,9 @@ def test_a_half_stopped_on_a_ridge_ends_the_check_before_the_other_half(constant
             converged=False,
             reasons=[
                 "stopped at 900 steps: (why)",
-                "μ_k (mu_k) reaches 0 (...) and the walkers cross a ridge, not a mode; the "
-                "coulomb term can be left out: fit law='viscous' (--law viscous)",
+                "μ_k (mu_k) reaches 0 (...), so this record does not identify μ_s/μ_k and "
+                "the walkers cross a ridge, not a mode; the coulomb term can be left out: "
+                "fit law='viscous' (--law viscous)",
             ],
         )
         return prepared, dataclasses.replace(sampled, run=run)
@@ -318,3 +319,4 @@ def test_a_half_stopped_on_a_ridge_ends_the_check_before_the_other_half(constant
     # the half's advice to leave a term out is not the whole record's: not repeated
     assert h.note.endswith("the walkers cross a ridge, not a mode)")
     assert "left out" not in h.note and "--law" not in h.note
+    assert "the half does not identify μ_s/μ_k" in h.note and "this record" not in h.note

@@ -325,7 +325,10 @@ def _ridge_note(which: str, sampled: Any) -> str:
     """Why the halves are not compared: the ``which`` half's run stopped on a ridge."""
     # the advice to leave a term out is the half's, not the whole record's (which
     # the law fits with it): it is not repeated here
-    reasons = "; ".join(_LEAVE_OUT.sub("", reason) for reason in sampled.run.reasons[:2])
+    reasons = "; ".join(
+        _LEAVE_OUT.sub("", reason).replace("this record does not", "the half does not")
+        for reason in sampled.run.reasons[:2]
+    )
     return f"the {which} half's fit stopped on a ridge that half does not identify ({reasons})"
 
 
