@@ -180,16 +180,17 @@ def _check_time(run: Run, where: str | None, time_rtol: float) -> float:
         if step[i - 1] == 0.0:
             # a row written twice is read once (without_repeated_samples): this one's
             # values differ from the sample before
+            same = int(np.count_nonzero(step == 0.0))
             repeated = (
-                f" with other values than sample {i - 1} ({bad.size} such step"
-                f"{'s' if bad.size > 1 else ''}): two samples at one instant, of which the "
+                f" with other values than sample {i - 1} ({same} stamp"
+                f"{'s' if same > 1 else ''} repeated so): two samples at one instant, of which the "
                 "record cannot be told; expected one sample a time stamp (a logger's "
                 "interleaved or resent rows: export the record again, or --window to a "
                 "part without them)"
             )
         raise _fail(
-            f"field {TIME!r} is not strictly increasing: sample {i} (t = {t[i]!r} s) follows "
-            f"t = {t[i - 1]!r} s{repeated or '; expected increasing time stamps'}",
+            f"field {TIME!r} is not strictly increasing: sample {i} (t = {float(t[i])!r} s) "
+            f"follows t = {float(t[i - 1])!r} s{repeated or '; expected increasing time stamps'}",
             where,
         )
     median = sample_step(t, step)  # remembered for the checks and the fit that follow
