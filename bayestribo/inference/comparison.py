@@ -86,9 +86,10 @@ stage ``increments``), where a law with fewer is left: its increments leave the
 parameters free to trade along a ridge, which the sampler walks towards its ceiling
 (``coulomb+hysteretic`` on the 4 increments of the bicycle wheel's axial gyro, not
 converged; ``law="auto"`` there 9.3 s of CPU with it sampled, 2.5 s without,
-``benchmarks/results/speed_goals_auto_compare.json``), and PSIS-LOO, leaving out one of as few increments as parameters,
-does not estimate how it predicts. Its row says ``screened`` and ``screen``, with the
-misfit checks at its optimum, and the comparison's text names it.
+``benchmarks/results/speed_goals_auto_compare.json``), and PSIS-LOO, leaving out one
+of as few increments as parameters, does not estimate how it predicts. Its row says
+``screened`` and ``screen``, with the misfit checks at its optimum, and the
+comparison's text names it.
 
 Settling. The laws left are sampled, the verdict their optima predict first and the
 others smallest first (:func:`bayestribo.inference.settling.sampling_order`), and
