@@ -4,9 +4,9 @@ describes.
 Independent records (``tests/_pendulum_decay.py``, ``solve_ivp`` half cycle by half
 cycle with sticking) of a linear spring with viscous damping and Coulomb friction, slow
 (0.7 Hz) and fast (3 Hz), angle and velocity with 1 mrad and 4 mrad/s of noise. The
-slow motion creeps into its stop: the record's detected end, its last sample beyond the
-threshold of motion, comes a few tenths of a second before the closed-form stop, and
-the model's end is predicted the same way.
+slow motion creeps into its stop: its last sample beyond the threshold of motion comes
+a few tenths of a second before the closed-form stop, and the model's end is predicted
+the same way (moved to the stop where the displacement there is seen off its rest).
 """
 
 from __future__ import annotations
@@ -55,8 +55,12 @@ def test_the_law_on_a_linear_spring_passes_its_end_of_motion_and_peaks(name):
 
 def test_the_slow_springs_predicted_end_comes_before_its_stop():
     # the closed-form stop of the same draws (Eq. 8, from where the fit starts them)
-    # lies past the predicted end by more than the end's resolution: the prediction is
-    # where the record would show its end, not the stop
+    # lies past the predicted end by more than the end's resolution where the draw's
+    # motion creeps into it under the threshold of motion, its displacement there
+    # within 5 σ of its rest: the prediction is where the record would show its end,
+    # not the stop. A draw whose displacement at its last excursion is farther from
+    # the rest is seen moving on to its stop (signal.motion._missed_half_cycle): its
+    # end is the stop itself
     from bayestribo.adequacy import draws_from_least_squares, extinction_check
     from bayestribo.adequacy.segments import whole_decay_fit
     from bayestribo.adequacy.windows import analysed_decay
@@ -69,5 +73,8 @@ def test_the_slow_springs_predicted_end_comes_before_its_stop():
     stop = stop_time(sign * draws.y0, draws.zeta, draws.mu, draws.mu, float(decay.yp[0]))
     stop = np.asarray(stop) / decay.scaling.omega
     assert np.all(np.isfinite(extinction.exact))
-    assert np.all(extinction.exact + extinction.resolution < stop)
+    creeps = np.abs(stop - extinction.exact) > 1e-9
+    assert np.mean(creeps) > 0.5
+    assert np.all(extinction.exact[creeps] + extinction.resolution < stop[creeps])
     assert float(np.median(stop - extinction.exact)) > 0.1
+    assert extinction.consistent()

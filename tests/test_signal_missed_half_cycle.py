@@ -1,13 +1,12 @@
 """A last half cycle whose velocity stays below the end-of-motion threshold, seen in
-the displacement recorded beside it: a known fault, recorded here as a strict xfail.
+the displacement recorded beside it.
 
 The end of motion is the velocity's last excursion beyond 8 σ (bayestribo.signal.motion);
-a last half cycle below it is taken for rest, the oscillator seems stuck at the turning
-point before, and μ_s/μ_k comes out 3.0 [2.0, 4.0] where it is 1, exit 0. Ending the
-motion where the displacement recorded beside the velocity rests (tried: the stop
-then moves to the true last turning point on these records) moves the end that the
-adequacy checks' predicted end of motion and halves expect (tests/
-test_adequacy_restoring.py, the pendulum and Duffing records), which must move with it.
+a last half cycle below it was taken for rest, the oscillator seemed stuck at the
+turning point before, and μ_s/μ_k came out 3.0 [2.0, 4.0] where it is 1, exit 0. The
+displacement recorded beside the velocity, off its rest there, now moves the end to the
+last half cycle's (``_missed_half_cycle``), and the adequacy checks' predicted end moves
+with it (``adequacy/extinction.py``, ``tests/test_adequacy_restoring.py``).
 
 The records come from the independent solve_ivp simulator of ``tests/_law_recording.py``:
 viscous damping and Coulomb friction with μ_s = μ_k, 20 Hz, 5 kHz, noise 1 µm and
@@ -17,6 +16,9 @@ viscous damping and Coulomb friction with μ_s = μ_k, 20 Hz, 5 kHz, noise 1 µm
 
 from __future__ import annotations
 
+import contextlib
+import io
+import json
 import math
 import warnings
 
@@ -24,6 +26,8 @@ import numpy as np
 import pytest
 from _law_recording import law_recording
 
+from bayestribo.cli import main
+from bayestribo.io import write_run
 from bayestribo.signal.decay import energy_decay
 
 W = 2 * math.pi * 20.0
@@ -47,10 +51,6 @@ def _records(xc: float, noise: bool):
     )
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="known fault: a last half cycle under the velocity's threshold is taken for rest",
-)
 @pytest.mark.parametrize(("xc", "swing_um"), [(5.286e-6, 10.0), (5.4e-6, 14.4)])
 def test_the_end_of_motion_is_the_last_half_cycles_not_the_one_before(xc, swing_um):
     clean = _records(xc, noise=False)
@@ -66,3 +66,21 @@ def test_the_end_of_motion_is_the_last_half_cycles_not_the_one_before(xc, swing_
     # before: the stop at the turning point before (a half period, 25 ms, early), and
     # μ_s/μ_k 3.0 [2.0, 4.0] where it is 1, exit 0
     assert decay.stop_time == pytest.approx(last, abs=3e-3)
+
+
+def test_the_fit_of_a_record_whose_last_half_cycle_is_missed_covers_mus_over_muk(tmp_path):
+    # the user's command on the record with a 10 µm last swing: μ_s/μ_k = 1 inside its
+    # interval (was 3.0 [2.0, 4.0], exit 0), ζ and the friction displacement too
+    path = tmp_path / "missed.csv"
+    write_run(_records(5.286e-6, noise=True), path)
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        status = main(["fit", str(path), "--json"])
+    assert status == 0
+    found = json.loads(buf.getvalue())["parameters"]
+    lo, hi = found["mu_s_ratio"]["interval"]
+    assert lo <= 1.0 <= hi
+    lo, hi = found["zeta"]["interval"]
+    assert lo <= 0.005 <= hi
+    lo, hi = found["friction_displacement"]["interval"]
+    assert lo <= 5.286e-6 <= hi

@@ -17,7 +17,13 @@ acceleration there is the spring's force less the friction's, small on a slow
 oscillator), so that sample comes before the stop itself, on a linear spring of 0.7 Hz
 with 4 mrad/s of noise by 0.1-0.8 s. The detected end is the last excursion's, moved to
 the root of the velocity's line before it, so the predicted interval is widened by that
-line's reach (or two sample periods, whichever is longer).
+line's reach (or two sample periods, whichever is longer). Where a displacement is
+recorded beside the velocity and it is off its rest at that last excursion, the record
+shows the motion going on, and its end is the end of the half cycle it sees
+(:func:`bayestribo.signal.motion._missed_half_cycle`: the turning point after the
+excursion, or the one after that where the velocity's lobe between them stands out of
+its noise averaged over an eighth of a period); the model's end moves the same way
+(:func:`_moved`).
 
 On a nonlinear restoring force (a decay whose ``restoring`` is set) the exact model is
 the law's motion on that force (:func:`bayestribo.adequacy.restoring.chains`: the
@@ -257,8 +263,8 @@ def extinction_check(
         note = (
             f"averaged Eq. 38 not evaluated (the linear spring's averaged motion: it has "
             f"no form on {force_text(decay.restoring)}); the exact model's end is where "
-            "its motion last exceeds the record's threshold of motion, as the record's is "
-            "detected"
+            "its motion last exceeds the record's threshold of motion, or the end of the "
+            "half cycle the record would show after it, as the record's is detected"
         )
     return ExtinctionCheck(
         measured=None if measured is None else float(measured),
@@ -288,7 +294,8 @@ def _restoring_stop(decay: EnergyDecay, draws: ParameterDraws, rng: np.random.Ge
     or its displacement departs from its rest by more than
     :data:`~bayestribo.signal.motion.DISPLACEMENT_THRESHOLD` times the displacement
     noise (a derived velocity); the samples at the record's rate, at a phase drawn per
-    draw; ``inf`` when the motion goes on past :data:`RECORDS_FOLLOWED` record lengths.
+    draw; moved to a turning point after it as the record's end is (:func:`_moved`);
+    ``inf`` when the motion goes on past :data:`RECORDS_FOLLOWED` record lengths.
 
     The motion creeps into its stop (its acceleration there is the spring's force less
     the friction's, small on a slow oscillator): the last sample beyond the threshold
@@ -311,6 +318,10 @@ def _restoring_stop(decay: EnergyDecay, draws: ParameterDraws, rng: np.random.Ge
     phase = rng.uniform(0.0, dt, len(chain))
     rest = np.array([c[1][-1] for c in chain])
     found = np.zeros(len(chain), dtype=bool)
+    at_back = np.zeros(len(chain), dtype=int)
+    gate = _beside(decay) if by_velocity else None
+    lobe = np.zeros((LAST_HALF_CYCLES, len(chain)), dtype=bool)
+    at_out = np.zeros(len(chain))
     for back in range(1, LAST_HALF_CYCLES + 1):
         todo = stopped & ~found & np.array([c[1].size > back for c in chain])
         if not np.any(todo):
@@ -345,6 +356,30 @@ def _restoring_stop(decay: EnergyDecay, draws: ParameterDraws, rng: np.random.Ge
         last = count - 1 - np.argmax(beyond[:, ::-1], axis=1)
         out[index[hit]] = (t0 + since[np.arange(index.size), last])[hit]
         found[index[hit]] = True
+        at_back[index[hit]] = back
+        if gate is not None:
+            lobe[back - 1, index] = _lobe(value, inside, noise, gate[1])
+            rows = np.arange(index.size)[hit]
+            at_last = since[rows, last[hit]][:, None]
+            y_last = hermite(h, y.reshape(g, -1), yp.reshape(g, -1), at_last, rows[:, None])
+            at_out[index[hit]] = y_last[:, 0] - rest[index[hit]]
+    if gate is None:
+        return out
+    # the end moved from the last excursion to the turning point after it, or to the end
+    # of the half cycle after that one, whose velocity the threshold missed
+    for back in range(1, LAST_HALF_CYCLES + 1):
+        index = np.flatnonzero(at_back == back)
+        if index.size == 0:
+            continue
+        at_turn = np.array([chain[i][1][-back] for i in index]) - rest[index]
+        at_next = np.zeros(index.size)
+        seen = np.zeros(index.size, dtype=bool)
+        if back > 1:
+            at_next = np.array([chain[i][1][-back + 1] for i in index]) - rest[index]
+            seen = lobe[back - 2, index]
+        to_turn, to_next = _moved(at_out[index], at_turn, at_next, seen, gate, rng)
+        out[index[to_turn]] = np.array([chain[i][0][-back] for i in index[to_turn]])
+        out[index[to_next]] = np.array([chain[i][0][-back + 1] for i in index[to_next]])
     return out
 
 
@@ -360,6 +395,56 @@ def _detection(decay: EnergyDecay) -> tuple[bool, float, float]:
     return by_velocity, noise, (THRESHOLD if by_velocity else DISPLACEMENT_THRESHOLD) * noise
 
 
+def _beside(decay: EnergyDecay) -> tuple[float, int] | None:
+    """How a last half cycle missed by the velocity's threshold is found in the record
+    (:func:`bayestribo.signal.motion._missed_half_cycle`): the displacement's noise [-]
+    and the samples in an eighth of a period, where a displacement is recorded beside
+    the velocity; None where it is not (a derived channel)."""
+    if decay.derived_channel is not None or not decay.noise_y:
+        return None
+    dt = float(np.median(np.diff(decay.t)))
+    size = max(8, round(4.0 * decay.peaks.half_period / dt))
+    return float(decay.noise_y), max(3, round(size / 16.0))
+
+
+def _lobe(value: NDArray, inside: NDArray, noise: float, eighth: int) -> NDArray:
+    """Per row: whether the mean of ``value`` (a half cycle's velocity at the record's
+    samples, with noise) over ``eighth`` consecutive samples ``inside`` it exceeds
+    :data:`~bayestribo.signal.motion.MISSED_THRESHOLD` times that mean's noise, as the
+    record's missed half cycle is found."""
+    from bayestribo.signal.motion import MISSED_THRESHOLD
+
+    if value.shape[1] < eighth:
+        return np.zeros(value.shape[0], dtype=bool)
+    total = np.cumsum(np.where(inside, value, 0.0), axis=1)
+    total = np.concatenate([np.zeros((value.shape[0], 1)), total], axis=1)
+    mean = (total[:, eighth:] - total[:, :-eighth]) / eighth
+    return np.any(np.abs(mean) > MISSED_THRESHOLD * noise / math.sqrt(eighth), axis=1)
+
+
+def _moved(
+    at_out: NDArray, at_turn: NDArray, at_next: NDArray, lobe: NDArray, gate: tuple[float, int], rng
+) -> tuple[NDArray, NDArray]:
+    """Where the record's end moves from its last excursion beyond the threshold, as
+    :func:`bayestribo.signal.motion._missed_half_cycle` moves it: where the displacement
+    there (``at_out``, about the rest; its median over an eighth of a period, noise
+    drawn) is beyond :data:`~bayestribo.signal.motion.DISPLACEMENT_THRESHOLD` times its
+    noise, to the turning point after it, or to the end of the half cycle after that one
+    where its velocity lobe is seen (``lobe``); in either case only where the
+    displacement at the new end (``at_turn``, ``at_next``) is within the threshold of
+    the rest. Returns the masks of the draws moved to the turning point and to the end
+    of the half cycle after it."""
+    from bayestribo.signal.motion import DISPLACEMENT_THRESHOLD
+
+    noise_y, eighth = gate
+    limit = DISPLACEMENT_THRESHOLD * noise_y
+    drawn = 1.25 * noise_y / math.sqrt(eighth) * rng.standard_normal(at_out.shape)
+    off = np.abs(at_out + drawn) > limit
+    to_next = off & lobe & (np.abs(at_next) <= limit)
+    to_turn = off & ~lobe & (np.abs(at_turn) <= limit)
+    return to_turn, to_next
+
+
 #: At most this many values of the model's motion evaluated at once by
 #: :func:`_linear_stop` (draws times samples).
 CHUNK_VALUES = 1_000_000
@@ -372,8 +457,9 @@ def _linear_stop(decay: EnergyDecay, draws: ParameterDraws, rng: np.random.Gener
     record's noise drawn on it, exceeds the threshold of motion (a recorded velocity),
     or its displacement departs from its rest by more than the displacement's
     threshold (a derived velocity); searched over the :data:`LAST_HALF_CYCLES` half
-    cycles before the stop (the stop itself when none exceeds it there); ``inf`` for a
-    draw that never stops.
+    cycles before the stop (the stop itself when none exceeds it there), moved to a
+    turning point after it as the record's end is (:func:`_moved`); ``inf`` for a draw
+    that never stops.
 
     The model starts where the fits start it (:func:`~bayestribo.adequacy.segments.
     whole_decay_fit`, the Bayesian likelihood): at the decay's first sample, at ``y0``
@@ -417,4 +503,33 @@ def _linear_stop(decay: EnergyDecay, draws: ParameterDraws, rng: np.random.Gener
         hit = beyond.any(axis=1)
         at = count - 1 - np.argmax(beyond[:, ::-1], axis=1)
         out[rows[hit]] = k[np.flatnonzero(hit), at[hit]] * dt
+    gate = _beside(decay) if by_velocity else None
+    if gate is None:
+        return out
+    # a half cycle after the last excursion, missed by the threshold, found in the
+    # displacement beside the velocity: the end moves to its end (turning points are
+    # half a damped period apart, Eq. 13)
+    half = np.pi / np.sqrt(1.0 - zeta * zeta)
+    ends = np.asarray(stop_time(y0, zeta, mu, mu_s, yp0), dtype=float)
+    rows = np.flatnonzero(np.isfinite(ends) & (out < ends))
+    if rows.size == 0:
+        return out
+    # the turning point after the last excursion, and the half cycle after it
+    turn = ends[rows] - np.floor((ends[rows] - out[rows]) / half[rows]) * half[rows]
+    after = np.minimum(turn + half[rows], ends[rows])
+    args = (y0[rows], zeta[rows], mu[rows], mu_s[rows], yp0)
+    at_out = exact_response(out[rows], *args)[0] - rest[rows]
+    at_turn = exact_response(turn, *args)[0] - rest[rows]
+    at_next = exact_response(after, *args)[0] - rest[rows]
+    first = np.ceil(turn / dt)
+    count = int(np.max(np.floor(after / dt) - first)) + 1
+    k = first[:, None] + np.arange(max(count, 1))[None, :]
+    column = tuple(a[:, None] if np.ndim(a) else a for a in args)
+    _, yp = exact_response(k * dt, *column)
+    inside = k * dt <= after[:, None]
+    lobe = _lobe(yp + noise * rng.standard_normal(yp.shape), inside, noise, gate[1])
+    lobe &= turn < ends[rows]
+    to_turn, to_next = _moved(at_out, at_turn, at_next, lobe, gate, rng)
+    out[rows[to_turn]] = turn[to_turn]
+    out[rows[to_next]] = after[to_next]
     return out

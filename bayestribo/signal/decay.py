@@ -1794,6 +1794,7 @@ def _analyse(
         # shorter than a block as motion, and the stop was not found
         periodic=x if x_step is not None and not finely_dithered(x, x_step) else None,
         velocity_alone=x is None,
+        beside=x if v is not None else None,
     )
     if span.bounds is not None:
         # other motions than the largest (runs back to back, a knock after the stop):

@@ -29,6 +29,14 @@ the rig's frequency**.
   last (first) eighth of a period on the moving side, a third of it away from the
   crossing (where an anti-alias filter rounds the corner), not by waiting for the
   noise to cross it.
+* **A last half cycle under the threshold**: a displacement recorded beside the
+  velocity (``beside``) that is not at its rest where the threshold ended the motion
+  shows the motion going on (a last swing of ten displacement σ peaks at five velocity
+  σ). The end of motion is then the end of the last lobe of the velocity, averaged over
+  an eighth of a period, that stands out of that mean's noise: half a period after the
+  crossing that starts it, from the crossings' spacing before it
+  (:func:`_missed_half_cycle`). Before, the oscillator seemed stuck a half cycle early,
+  and μ_s/μ_k came out 3.0 [2.0, 4.0] where it was 1, exit 0.
 * A **quantised displacement** (given as ``periodic``) is judged the same way, on its
   own blocks, with the sinusoid's first three harmonics: a swing of a few steps, or
   below one, toggles the displacement between levels at the oscillation frequency
@@ -86,6 +94,7 @@ wiggle of the noise or a missed turning point.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, replace
 
@@ -135,6 +144,11 @@ SEPARATE_MOTION = 0.1
 #: holds another: the rest's noise is measured on them, and what lies beyond (a mass
 #: pulled back to its hold for the next release) is not rest.
 REST_BESIDE = 4
+#: Excursion of the velocity's mean over an eighth of a period, in that mean's white
+#: noise σ/√samples, that marks a last half cycle once the displacement recorded beside
+#: the velocity shows the oscillator moved after the stop :data:`THRESHOLD` found
+#: (:func:`_missed_half_cycle`; at 3, noise at rest reached it within a period).
+MISSED_THRESHOLD = 5.0
 #: Default excursion threshold, in rest noise standard deviations, that marks motion
 #: when the release and the end of motion are refined (a Gaussian sample exceeds 8σ
 #: with probability 1e-15).
@@ -332,6 +346,150 @@ def _root(t: NDArray, s: NDArray, level: float, lo: int, hi: int, near: int) -> 
     return origin + r * scale
 
 
+def _missed_half_cycle(
+    t: NDArray,
+    v: NDArray,
+    x: NDArray,
+    stop: int,
+    stop_time: float,
+    level: float,
+    sigma: float,
+    size: int,
+) -> tuple[int, float] | None:
+    """The end of a last half cycle the velocity's threshold missed, or None.
+
+    A stuck oscillator rests where it stopped: the displacement recorded beside the
+    velocity stays at its level at the stop. Where its median over an eighth of a
+    period about the stop found is farther than :data:`DISPLACEMENT_THRESHOLD` times
+    its rest noise from the rest level after it (both measured on the rest a block
+    after the stop, past any half cycle missed; the noise of a sample, not the level's
+    standard error, which a noise that wanders — 1/f, a filter's — exceeds), the motion
+    went on: a last half cycle whose velocity peaked below the threshold (a swing of
+    ten displacement σ peaks at five velocity σ at 5 kHz and 20 Hz), which the
+    threshold put into the rest, so that the oscillator seemed stuck at the turning
+    point before it (μ_s/μ_k 3.0 [2.0, 4.0] where it was 1, exit 0); or a last half
+    cycle whose excursion the threshold caught but whose end it could not place.
+
+    The velocity averaged over an eighth of a period (a centred mean: it keeps the
+    crossing of a line where it is) is cut at its crossings of the rest level into
+    lobes, from two periods before the stop found to three quarters of one after it; a
+    lobe whose mean exceeds :data:`MISSED_THRESHOLD` times that mean's white noise is
+    motion (a lobe of one sign stands out of noise averaged down by √samples, a sample
+    of noise does not). The last such lobe ends where the oscillator sticks: half a
+    period after the crossing that starts it (turning points are half a damped period
+    apart whatever the friction, Eq. 13; the half period is the slope of the crossings
+    between lobes before it against their count), not at the velocity's own return to its level,
+    which is in its noise.
+    """
+    n = t.size
+    if n - stop - 1 < max(8, size // 4):
+        return None
+    eighth = max(3, round(size / 16.0))  # an eighth of a period
+    at_stop = float(np.median(x[max(0, stop - eighth // 2) : stop + eighth // 2 + 1]))
+    # the rest a block after the stop (the block right after holds the half cycle, if
+    # one was missed); the block after the stop where the record ends sooner
+    start = stop + 1 + size
+    if n - start >= size:
+        later = np.r_[np.zeros(start, bool), np.ones(n - start, bool)]
+        sigma_x = block_noise(t, x, later, size)
+        level_x = float(np.median(x[start : start + size]))
+    else:
+        after = np.r_[np.zeros(stop + 1, bool), np.ones(n - stop - 1, bool)]
+        sigma_x = block_noise(t, x, after, min(size, n - stop - 1))
+        level_x = float(np.median(x[stop + 1 : stop + 1 + size]))
+    if not sigma_x or abs(at_stop - level_x) <= DISPLACEMENT_THRESHOLD * sigma_x:
+        return None
+    crossings, lobes = _lobes(t, v - level, stop, size, eighth, sigma)
+    found = np.flatnonzero(lobes)
+    if not found.size or found[-1] == 0:
+        return None
+    last = int(found[-1])
+    # the crossings between two lobes of motion up to the last lobe's start: their
+    # slope against their count is the half period (half a block where fewer than two)
+    run = [last - 1]
+    while run[-1] > 0 and lobes[run[-1] - 1]:
+        run.append(run[-1] - 1)
+    between = np.array([crossings[k] for k in reversed(run)])
+    half = 0.25 * size * float(t[-1] - t[0]) / (n - 1)
+    if between.size >= 2:
+        half = float(np.polyfit(np.arange(between.size), between, 1)[0])
+    end_time = crossings[last - 1] + half
+    if not end_time > stop_time:
+        return None
+    index = int(np.searchsorted(t, end_time, side="right")) - 1
+    if index >= n - 1:
+        return None
+    # the displacement rests at its level from there on (else not a stop either)
+    settled = x[min(n - 1, index + eighth) : min(n, index + eighth + size // 4)]
+    if settled.size and abs(float(np.median(settled)) - level_x) > DISPLACEMENT_THRESHOLD * sigma_x:
+        return None
+    return index, end_time
+
+
+def _lobes(
+    t: NDArray, u: NDArray, stop: int, size: int, eighth: int, sigma: float
+) -> tuple[list[float], NDArray]:
+    """The crossings of zero [s] by ``u`` averaged over ``eighth`` samples (centred),
+    from a block before sample ``stop`` to three eighths of one after it, a
+    crossing within a quarter period of the one before left out (the noise's, near a
+    turning point); and per lobe between them (one more than the crossings, the first
+    and last open), whether its mean exceeds :data:`MISSED_THRESHOLD` times the
+    mean's white noise ``sigma``/√``eighth``."""
+    lo = max(0, stop + 1 - size - eighth)
+    hi = min(t.size, stop + 1 + size // 4 + size // 8)
+    kernel = np.full(eighth, 1.0 / eighth)
+    s = np.convolve(u[lo:hi], kernel, mode="valid")
+    tt = np.convolve(t[lo:hi], kernel, mode="valid")
+    dt = float(t[-1] - t[0]) / (t.size - 1)
+    quarter = 0.125 * size * dt
+    crossings: list[float] = []
+    cut: list[int] = []
+    for k in np.flatnonzero(np.signbit(s[:-1]) != np.signbit(s[1:])).tolist():
+        a, b = float(s[k]), float(s[k + 1])
+        tc = float(tt[k] + (tt[k + 1] - tt[k]) * a / (a - b)) if a != b else float(tt[k])
+        if not crossings or tc - crossings[-1] > quarter:
+            crossings.append(tc)
+            cut.append(k + 1)
+    edges = [0, *cut, s.size]
+    limit = MISSED_THRESHOLD * sigma / math.sqrt(eighth)
+    lobes = np.array([bool(np.any(np.abs(s[a:b]) > limit)) for a, b in itertools.pairwise(edges)])
+    # the frequency of the lobes' arcs: their crossings' spacing (the mean's bias is
+    # about the same at each), else the block's two periods
+    inner = [c for k, c in enumerate(crossings) if lobes[k] and lobes[k + 1]]
+    omega = 4.0 * math.pi / (size * dt)
+    if len(inner) >= 2:
+        omega = math.pi / float(np.polyfit(np.arange(len(inner)), inner, 1)[0])
+    return [_crossing(t, u, c, eighth, omega) for c in crossings], lobes
+
+
+def _crossing(t: NDArray, u: NDArray, near: float, eighth: int, omega: float) -> float:
+    """The crossing of zero by ``u`` whose centred mean over ``eighth`` samples crosses
+    at ``near`` [s], from the samples before it. A turning point's velocity is not odd
+    about it (friction adds to the spring's force before it and takes from it after,
+    Ω²(|x| ± x_c)): the mean crosses up to half its window late, half a window where the
+    oscillator sticks. The quarter period of samples before that reach is an arc of a
+    sinusoid at ``omega`` [rad/s] (the half cycle's motion about its centre): the zero
+    of the sinusoid fitted to it by least squares is the crossing, kept where it lands
+    within the reach and a sample of ``near``."""
+    dt = float(t[-1] - t[0]) / (t.size - 1)
+    half = 0.5 * eighth * dt
+    hi = int(np.searchsorted(t, near - half, side="right"))
+    lo = max(0, hi - 2 * eighth)
+    if hi - lo < 4 or not omega > 0.0:
+        return near
+    s = t[lo:hi] - t[hi - 1]
+    basis = np.column_stack([np.sin(omega * s), np.cos(omega * s)])
+    (a, b), *_ = np.linalg.lstsq(basis, u[lo:hi], rcond=None)
+    # a sin ωs + b cos ωs = 0: s = atan2(-b, a)/ω modulo π/ω, the one nearest ``near``
+    first = math.atan2(-b, a) / omega
+    step = math.pi / omega
+    target = near - float(t[hi - 1])
+    root = float(t[hi - 1]) + first + step * round((target - first) / step)
+    if not near - half - dt <= root <= near + dt:
+        return near
+    return root
+
+
 def motion_span(
     t: ArrayLike,
     velocity: ArrayLike,
@@ -341,6 +499,7 @@ def motion_span(
     displacement: ArrayLike | None = None,
     periodic: ArrayLike | None = None,
     velocity_alone: bool = False,
+    beside: ArrayLike | None = None,
 ) -> MotionSpan:
     """Release, end of motion and rest of a free-decay record (see the module notes).
 
@@ -371,6 +530,11 @@ def motion_span(
         or fades into the noise (a viscous decay never stops), and find a rest before
         the release that is shorter than a period (the integral's wander there would
         give turning points); see the module notes. Default False.
+    beside : array_like, optional
+        The displacement [unit] recorded beside a recorded ``velocity``: where it does
+        not rest at its level at the stop the velocity's threshold found (a last half
+        cycle whose velocity stayed below ``threshold`` σ), the end of motion is that
+        half cycle's (see the module notes).
 
     Returns
     -------
@@ -522,6 +686,19 @@ def motion_span(
             stop_index = int(np.searchsorted(t, stop_time, side="right")) - 1
         if by_velocity and stop_index is not None:
             fade_time = _fade_time(t, v, stop_index, size, period, tail_start)
+        if recorded and beside is not None and stop_index is not None:
+            later = _missed_half_cycle(
+                t,
+                v,
+                np.asarray(beside, dtype=float),
+                stop_index,
+                stop_time,
+                level,
+                sigma,
+                size,
+            )
+            if later is not None:
+                stop_index, stop_time = later
         if stop_index is not None:
             rest = stop_index + 1 if fade_time is None else tail_start
             quiet[rest + max(1, size // 8) :] = True
