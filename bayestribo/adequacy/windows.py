@@ -49,6 +49,7 @@ from bayestribo.adequacy.segments import (
     whole_decay_fit,
 )
 from bayestribo.errors import BayestriboError, RecordingError
+from bayestribo.io.acceleration import motion_edges
 from bayestribo.signal.decay import EnergyDecay, energy_decay
 from bayestribo.summary import ParameterSummary
 
@@ -93,7 +94,12 @@ def analysed_decay(run: Any, *, skip_oscillations: int = 1) -> EnergyDecay:
     if nonlinear(run):
         return restoring_decay(run, skip_oscillations=skip_oscillations)
     return energy_decay(
-        run.time, run.displacement, run.velocity, rig=run.rig(), skip_oscillations=skip_oscillations
+        run.time,
+        run.displacement,
+        run.velocity,
+        rig=run.rig(),
+        skip_oscillations=skip_oscillations,
+        acceleration_edges=motion_edges(dict(run.metadata)),
     )
 
 

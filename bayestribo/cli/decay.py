@@ -95,6 +95,7 @@ def run(args: argparse.Namespace) -> int:
 
     from bayestribo.errors import BayestriboError, ShortAnalysisWarning
     from bayestribo.inference.preparation import run_restoring, with_restoring
+    from bayestribo.io.acceleration import motion_edges
     from bayestribo.model.restoring import AUTO
     from bayestribo.signal.decay import energy_decay
 
@@ -108,6 +109,7 @@ def run(args: argparse.Namespace) -> int:
             rig=recording.rig(),
             skip_oscillations=args.skip,
             notch=args.notch,
+            acceleration_edges=motion_edges(dict(recording.metadata)),
         )
         # E(τ) and Π(τ) with the restoring force's potential, as fit takes them
         # (E = ½y'² + V(y)); "auto" is chosen by fit, from the half periods

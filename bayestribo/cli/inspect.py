@@ -80,6 +80,7 @@ def inspection(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
     from bayestribo import __version__
     from bayestribo.cli.decay import summary
     from bayestribo.errors import BayestriboError
+    from bayestribo.io.acceleration import motion_edges
     from bayestribo.io.layout import describe_file
     from bayestribo.signal.channels import channel_consistency
     from bayestribo.signal.decay import energy_decay
@@ -122,6 +123,7 @@ def inspection(args: argparse.Namespace) -> tuple[dict[str, Any], bool]:
             rig=recording.rig(),
             skip_oscillations=args.skip,
             notch=args.notch,
+            acceleration_edges=motion_edges(dict(recording.metadata)),
         )
     except BayestriboError as exc:
         report["decay"] = {"error": cli_message(str(exc))}

@@ -25,6 +25,7 @@ from bayestribo.errors import BayestriboError
 from bayestribo.inference.calibration import calibrate_channels
 from bayestribo.inference.restoring_choice import AUTO, choose_restoring
 from bayestribo.inference.types import PreparedRun
+from bayestribo.io.acceleration import motion_edges
 from bayestribo.io.files import as_run
 from bayestribo.io.options import ReadOptions
 from bayestribo.io.run import Run
@@ -288,6 +289,7 @@ def prepare(
             skip_oscillations=skip_oscillations,
             notch=notch,
             linear_spring=linear_spring,
+            acceleration_edges=motion_edges(dict(recording.metadata)),
         )
 
     with warnings.catch_warnings(record=True) if auto else contextlib.nullcontext() as held:
@@ -330,6 +332,7 @@ def prepare(
             notch=notch,
             frequency_Hz=small_swing_frequency(decay, restoring),
             linear_spring=False,
+            acceleration_edges=motion_edges(dict(recording.metadata)),
         )
         # y's unit N/k moved with the frequency: the force's coefficients follow it
         restoring = rescaled(restoring, decay.scaling.length_scale / measured_in)
@@ -407,6 +410,7 @@ def reframe(
         notch=old.notch_Hz[0] if old.notch_Hz else None,
         frequency_Hz=frequency_Hz,
         linear_spring=old.restoring is None,
+        acceleration_edges=motion_edges(dict(run.metadata)),
     )
     force = old.restoring if restoring is None else restoring
     force = rescaled(force, decay.scaling.length_scale / old.scaling.length_scale)
@@ -494,6 +498,7 @@ def prepare_part(prepared: PreparedRun, start: int, stop: int) -> PreparedRun:
         notch=old.notch_Hz[0] if old.notch_Hz else None,
         frequency_Hz=None if old.restoring is None else old.scaling.omega / (2.0 * math.pi),
         linear_spring=old.restoring is None,
+        acceleration_edges=motion_edges(dict(run.metadata)),
     )
     decay = with_restoring(
         decay, rescaled(old.restoring, decay.scaling.length_scale / old.scaling.length_scale)

@@ -50,6 +50,15 @@ integrated once, at read time (:func:`integrate_acceleration`):
    high-pass takes it, at f_c = 0.3 f to confine what it does there to fewer cycles
    (its gain 0.992 at f divided out), and the record says so.
 
+**The release and the stop** are the acceleration's (:attr:`Integration.release_s`,
+``stop_s``, :func:`motion_edges`): its noise is white, while the integral's wanders next
+to the stop beyond its rest noise, so that the velocity seemed to move on after it (its
+last turning points the noise's), or its levels next to the edges were taken for an
+offset that drifts. Last swings whose acceleration peaks under the threshold of motion
+(a few friction displacements at a slow rig's frequency) are found as lobes of its mean
+over an eighth of a period (:func:`bayestribo.signal.motion.lobes_after_stop`): the
+stop is never put before the turning point where the oscillator sticks.
+
 **Its noise.** The velocity's noise is the sensor's through these steps: a random walk
 held at the rests by the drift's line and free between them, of which the high-pass
 keeps a part near its cut-off, so that in the motion it is larger than at rest (2.7
@@ -125,6 +134,7 @@ __all__ = [
     "from_acceleration",
     "integrate_acceleration",
     "integrated_signals",
+    "motion_edges",
     "principal_axis",
     "velocity_noise",
 ]
@@ -172,6 +182,16 @@ class Integration:
         The high-pass's gain at ``frequency_Hz`` (divided out).
     drift_from : str
         How the drift was removed, in words.
+    noise : dict or None
+        The integration's linear steps, for its noise (:func:`bayestribo.signal.
+        velocity_integral.velocity_noise`); None without rest enough to measure it.
+    release_s, stop_s : float or None
+        The release and the end of motion [s] as the acceleration shows them (its noise
+        is white: :func:`bayestribo.signal.motion.motion_span` on it); None where the
+        record starts or ends in motion, or fades into the noise. The integral's
+        noise, a random walk held at the rests, wanders well beyond its rest noise
+        next to them, so that the velocity would show motion where the acceleration
+        shows none (:func:`motion_edges`).
     """
 
     velocity: NDArray
@@ -185,6 +205,8 @@ class Integration:
     gain_at_frequency: float
     drift_from: str
     noise: dict[str, Any] | None = None
+    release_s: float | None = None
+    stop_s: float | None = None
 
     def record(self) -> dict[str, Any]:
         """The metadata record (plain data) of the integration."""
@@ -205,6 +227,8 @@ class Integration:
             "drift": self.drift_from,
             "method": "frequency-domain integral V = A / (i 2 pi f), zero-padded",
             **({} if self.noise is None else {"noise": self.noise}),
+            "release_s": self.release_s,
+            "stop_s": self.stop_s,
         }
 
     def note(self, unit: str) -> str:
@@ -241,18 +265,24 @@ def describe(record: Mapping[str, Any]) -> str:
 
 def _rest(
     t: NDArray, a: NDArray, period: float
-) -> tuple[NDArray, NDArray, float | None, float | None]:
+) -> tuple[NDArray, NDArray, float | None, float | None, bool]:
     """Samples at rest before the release and after the stop (two masks), half a period
-    away from the motion, and the times of the release and of the stop (None where the
-    record starts or ends in motion). A decay that fades into the noise has no sharp
-    stop: a period after its last excursion beyond 5σ of the rest is taken, when the
-    record goes on four periods beyond it."""
-    from bayestribo.signal.motion import motion_span
+    away from the motion, the times of the release and of the stop (None where the
+    record starts or ends in motion), and whether that stop is the motion's end. A decay
+    that fades into the noise has no sharp stop: a period after its last excursion
+    beyond 5σ of the rest is taken (not an end: False), when the record goes on four
+    periods beyond it."""
+    from bayestribo.signal.motion import lobes_after_stop, motion_span
 
     span = motion_span(t, a - np.median(a), period)
     quiet = np.array(span.quiet, dtype=bool)
     moving = np.flatnonzero(~quiet)
     release, stop = span.release_time, span.stop_time
+    if stop is not None:
+        # last swings whose acceleration peaks under the threshold: lobes of the white
+        # noise's mean over an eighth of a period (signal.motion.lobes_after_stop)
+        stop = lobes_after_stop(t, a, stop, span.noise, period)
+        quiet = quiet & ~((t >= span.stop_time) & (t <= stop + 0.125 * period))
     if moving.size and release is None and quiet[0]:
         release = float(t[moving[0]])
     if stop is None and release is not None:
@@ -268,7 +298,7 @@ def _rest(
     after = none
     if stop is not None:
         after = (t > stop + margin) & (quiet if span.stop_time is not None else True)
-    return before, after, release, stop
+    return before, after, release, stop, span.stop_time is not None
 
 
 def integrate_acceleration(
@@ -315,7 +345,7 @@ def integrate_acceleration(
     rough = np.cumsum(a - a.mean()) * dt  # a velocity with a drift: the period only
     try:
         period = dominant_period(t, rough)
-        before, after, release, stop = _rest(t, a, period)
+        before, after, release, stop, stopped = _rest(t, a, period)
     except RecordingError as exc:
         raise RecordingError(
             f"{column}: {exc.message}; no free decay in the acceleration"
@@ -391,7 +421,29 @@ def integrate_acceleration(
         gain_at_frequency=at_frequency,
         drift_from=drift_from,
         noise=noise,
+        release_s=release if any(name == "the release" for name, _ in edges) else None,
+        stop_s=stop if stopped and any(name == "the stop" for name, _ in edges) else None,
     )
+
+
+def motion_edges(metadata: Mapping[str, Any]) -> tuple[float | None, float | None] | None:
+    """The release and the end of motion [s] of a run integrated from an acceleration,
+    as its acceleration shows them (:attr:`Integration.release_s`, ``stop_s``; either
+    None where the record has none); None for a run not integrated so, or recorded
+    before these were kept.
+
+    Parameters
+    ----------
+    metadata : mapping
+        The run's metadata (its ``acceleration`` record).
+    """
+    record = metadata.get("acceleration") if metadata else None
+    if not isinstance(record, Mapping) or ("release_s" not in record and "stop_s" not in record):
+        return None
+    edges = tuple(
+        None if record.get(key) is None else float(record[key]) for key in ("release_s", "stop_s")
+    )
+    return None if edges == (None, None) else edges
 
 
 def _runs(mask: NDArray) -> list[list[int]]:

@@ -154,6 +154,7 @@ from bayestribo.signal.motion import (
     SPACING_TOLERANCE,
     THRESHOLD,
     IrregularStartWarning,
+    MotionSpan,
     RegularTurningPoints,
     block_noise,
     motion_span,
@@ -1123,6 +1124,7 @@ def energy_decay(
     motion_threshold: float = THRESHOLD,
     frequency_Hz: float | None = None,
     linear_spring: bool = True,
+    acceleration_edges: tuple[float | None, float | None] | None = None,
 ) -> EnergyDecay:
     """Energy decay curve and Π(τ) of a free-decay recording (Eq. 6, 26, 39).
 
@@ -1192,6 +1194,19 @@ def energy_decay(
         Duffing spring): its first half periods differ from the later ones and its peaks
         are not a linear oscillator's by the force itself, so that neither leaves
         turning points out (as an irregular start or soft clipping).
+    acceleration_edges : (float or None, float or None), optional
+        For a velocity integrated from an acceleration (alone): the release and the end
+        of motion [s] as the acceleration shows them
+        (:func:`bayestribo.io.acceleration.motion_edges`; either None: found in the
+        velocity). The acceleration's noise is white, while the integral's, a random
+        walk held at the rests and free next to them, wanders well beyond its rest
+        noise there, and the velocity seemed to move on after the stop (on a 60 Hz
+        decay, 11 to 30 ms late, its last turning points the noise's: μ_s/μ_k 4.0
+        [2.9, 5.0] where it was 1). The integral's drift was taken off at the rests:
+        its offset there is zero by construction, and none is measured or taken off
+        (its levels next to the edges differ by the integration's error at the edges,
+        which the rest's noise does not measure: an offset said to drift by 18 standard
+        errors where there is none).
 
     Returns
     -------
@@ -1272,6 +1287,7 @@ def energy_decay(
         offset=offset,
         motion_threshold=motion_threshold,
         linear_spring=linear_spring,
+        acceleration_edges=acceleration_edges,
     )
     bins = raw_refusal = None
     with warnings.catch_warnings(record=True) as said:
@@ -1744,6 +1760,23 @@ def _rest_mask(t: NDArray, first: EnergyDecay) -> NDArray:
     return _quiet_segments(t, rest_until, stop, margin)
 
 
+def _with_edges(
+    t: NDArray, span: MotionSpan, edges: tuple[float | None, float | None]
+) -> MotionSpan:
+    """``span`` with its release and end of motion where another channel shows them
+    (``edges`` [s], each None to keep the span's; one outside the record is not
+    used): an end so given is the motion's, not a fade."""
+    release, stop = edges
+    changes: dict[str, Any] = {}
+    if release is not None and t[0] < release < t[-1]:
+        index = int(np.searchsorted(t, release, side="right")) - 1
+        changes.update(release_index=index, release_time=float(release))
+    if stop is not None and t[0] < stop < t[-1]:
+        index = int(np.searchsorted(t, stop, side="right")) - 1
+        changes.update(stop_index=index, stop_time=float(stop), fade_time=None)
+    return replace(span, **changes) if changes else span
+
+
 def _analyse(
     t: NDArray,
     x: NDArray | None,
@@ -1760,6 +1793,7 @@ def _analyse(
     motion_threshold: float,
     notch_Hz: tuple[float, ...],
     linear_spring: bool = True,
+    acceleration_edges: tuple[float | None, float | None] | None = None,
 ) -> EnergyDecay:
     """:func:`energy_decay` on checked (and notched) signals."""
     least_by_default = min_turning_points is None
@@ -1825,7 +1859,10 @@ def _analyse(
             motion_threshold=motion_threshold,
             notch_Hz=notch_Hz,
             linear_spring=linear_spring,
+            acceleration_edges=acceleration_edges,
         )
+    if acceleration_edges is not None and x is None:
+        span = _with_edges(t, span, acceleration_edges)
     released_at = span.release_index
     rest_until = None if released_at is None else float(t[released_at])
     # a decay that fades into the noise (a velocity alone): its rest starts where its
@@ -1838,7 +1875,7 @@ def _analyse(
     if x is None:
         derived = "displacement"
         at_rest = _rest_samples(v, t, rest_until, stop_time, 0.0)
-        if at_rest.size >= MIN_QUIET_SAMPLES:
+        if at_rest.size >= MIN_QUIET_SAMPLES and acceleration_edges is None:
             velocity_offset = float(np.median(at_rest))
             drifting = _offset_drift(t, v, rest_until, stop_time, span.noise)
             v = v - (velocity_offset if drifting is None else drifting)
