@@ -84,3 +84,31 @@ def test_the_fit_of_a_record_whose_last_half_cycle_is_missed_covers_mus_over_muk
     assert lo <= 0.005 <= hi
     lo, hi = found["friction_displacement"]["interval"]
     assert lo <= 5.286e-6 <= hi
+
+
+def test_a_velocity_recorded_alone_ends_at_its_last_half_cycle_too(tmp_path):
+    # the same record with its velocity alone (a vibrometer's velocity output, a
+    # seismometer's coil): no displacement shows the motion went on, the half cycle's
+    # lobe itself does, against the noise of the velocity's mean measured at rest (was:
+    # μ_s/μ_k 2.9 [2.0, 3.9] where it is 1, exit 0)
+    from bayestribo.io.run import Run
+
+    full = _records(5.286e-6, noise=True)
+    path = tmp_path / "velocity.csv"
+    write_run(Run(full.time, None, full.velocity, metadata=dict(full.metadata)), path)
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        status = main(["fit", str(path), "--json"])
+    assert status == 0
+    found = json.loads(buf.getvalue())["parameters"]
+    lo, hi = found["mu_s_ratio"]["interval"]
+    assert lo <= 1.0 <= hi
+    # and the adequacy checks' predicted end of motion moves with it (its model's last
+    # half cycle seen as the record's is): the end of motion passes
+    from bayestribo.adequacy import check_adequacy
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        report = check_adequacy(str(path))
+    passed = {c["key"]: c["passed"] for c in report.checks}
+    assert passed["extinction"] is True, report.extinction.statement

@@ -320,6 +320,7 @@ def _restoring_stop(decay: EnergyDecay, draws: ParameterDraws, rng: np.random.Ge
     found = np.zeros(len(chain), dtype=bool)
     at_back = np.zeros(len(chain), dtype=int)
     gate = _beside(decay) if by_velocity else None
+    alone = _alone(decay)
     lobe = np.zeros((LAST_HALF_CYCLES, len(chain)), dtype=bool)
     at_out = np.zeros(len(chain))
     for back in range(1, LAST_HALF_CYCLES + 1):
@@ -357,6 +358,8 @@ def _restoring_stop(decay: EnergyDecay, draws: ParameterDraws, rng: np.random.Ge
         out[index[hit]] = (t0 + since[np.arange(index.size), last])[hit]
         found[index[hit]] = True
         at_back[index[hit]] = back
+        if alone is not None and by_velocity:
+            lobe[back - 1, index] = _lobe(value, inside, noise, alone)
         if gate is not None:
             lobe[back - 1, index] = _lobe(value, inside, noise, gate[1])
             rows = np.arange(index.size)[hit]
@@ -364,6 +367,10 @@ def _restoring_stop(decay: EnergyDecay, draws: ParameterDraws, rng: np.random.Ge
             y_last = hermite(h, y.reshape(g, -1), yp.reshape(g, -1), at_last, rows[:, None])
             at_out[index[hit]] = y_last[:, 0] - rest[index[hit]]
     if gate is None:
+        if alone is not None:
+            # the last half cycle after the last excursion, its lobe seen
+            index = np.flatnonzero((at_back == 2) & lobe[0])
+            out[index] = np.array([chain[i][0][-1] for i in index])
         return out
     # the end moved from the last excursion to the turning point after it, or to the end
     # of the half cycle after that one, whose velocity the threshold missed
@@ -405,6 +412,18 @@ def _beside(decay: EnergyDecay) -> tuple[float, int] | None:
     dt = float(np.median(np.diff(decay.t)))
     size = max(8, round(4.0 * decay.peaks.half_period / dt))
     return float(decay.noise_y), max(3, round(size / 16.0))
+
+
+def _alone(decay: EnergyDecay) -> int | None:
+    """The samples in an eighth of a period where the record is a velocity alone whose
+    end is found as :func:`bayestribo.signal.motion._missed_alone` finds it (one more
+    half cycle where its lobe stands out of the noise of the velocity's mean); None
+    otherwise."""
+    if decay.derived_channel != "displacement":
+        return None
+    dt = float(np.median(np.diff(decay.t)))
+    size = max(8, round(4.0 * decay.peaks.half_period / dt))
+    return max(3, round(size / 16.0))
 
 
 def _lobe(value: NDArray, inside: NDArray, noise: float, eighth: int) -> NDArray:
@@ -504,7 +523,8 @@ def _linear_stop(decay: EnergyDecay, draws: ParameterDraws, rng: np.random.Gener
         at = count - 1 - np.argmax(beyond[:, ::-1], axis=1)
         out[rows[hit]] = k[np.flatnonzero(hit), at[hit]] * dt
     gate = _beside(decay) if by_velocity else None
-    if gate is None:
+    alone = _alone(decay)
+    if gate is None and alone is None:
         return out
     # a half cycle after the last excursion, missed by the threshold, found in the
     # displacement beside the velocity: the end moves to its end (turning points are
@@ -527,8 +547,14 @@ def _linear_stop(decay: EnergyDecay, draws: ParameterDraws, rng: np.random.Gener
     column = tuple(a[:, None] if np.ndim(a) else a for a in args)
     _, yp = exact_response(k * dt, *column)
     inside = k * dt <= after[:, None]
-    lobe = _lobe(yp + noise * rng.standard_normal(yp.shape), inside, noise, gate[1])
+    eighth = gate[1] if gate is not None else int(alone or 3)
+    lobe = _lobe(yp + noise * rng.standard_normal(yp.shape), inside, noise, eighth)
     lobe &= turn < ends[rows]
+    if gate is None:
+        # a velocity alone: its last half cycle, its lobe seen
+        last = lobe & (after >= ends[rows])
+        out[rows[last]] = after[last]
+        return out
     to_turn, to_next = _moved(at_out, at_turn, at_next, lobe, gate, rng)
     out[rows[to_turn]] = turn[to_turn]
     out[rows[to_next]] = after[to_next]

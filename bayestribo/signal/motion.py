@@ -36,7 +36,11 @@ the rig's frequency**.
   an eighth of a period, that stands out of that mean's noise: half a period after the
   crossing that starts it, from the crossings' spacing before it
   (:func:`_missed_half_cycle`). Before, the oscillator seemed stuck a half cycle early,
-  and μ_s/μ_k came out 3.0 [2.0, 4.0] where it was 1, exit 0.
+  and μ_s/μ_k came out 3.0 [2.0, 4.0] where it was 1, exit 0. A velocity recorded alone
+  (``velocity_alone``) whose oscillation stops (no fade) ends at one more half cycle
+  where that lobe itself stands out of the noise of the velocity's mean, measured on
+  the rest a block later, not taken as white (:func:`_missed_alone`; was μ_s/μ_k 2.9
+  [2.0, 3.9] where it was 1, exit 0).
 * A **quantised displacement** (given as ``periodic``) is judged the same way, on its
   own blocks, with the sinusoid's first three harmonics: a swing of a few steps, or
   below one, toggles the displacement between levels at the oscillation frequency
@@ -400,22 +404,8 @@ def _missed_half_cycle(
         level_x = float(np.median(x[stop + 1 : stop + 1 + size]))
     if not sigma_x or abs(at_stop - level_x) <= DISPLACEMENT_THRESHOLD * sigma_x:
         return None
-    crossings, lobes = _lobes(t, v - level, stop, size, eighth, sigma)
-    found = np.flatnonzero(lobes)
-    if not found.size or found[-1] == 0:
-        return None
-    last = int(found[-1])
-    # the crossings between two lobes of motion up to the last lobe's start: their
-    # slope against their count is the half period (half a block where fewer than two)
-    run = [last - 1]
-    while run[-1] > 0 and lobes[run[-1] - 1]:
-        run.append(run[-1] - 1)
-    between = np.array([crossings[k] for k in reversed(run)])
-    half = 0.25 * size * float(t[-1] - t[0]) / (n - 1)
-    if between.size >= 2:
-        half = float(np.polyfit(np.arange(between.size), between, 1)[0])
-    end_time = crossings[last - 1] + half
-    if not end_time > stop_time:
+    end_time = _last_lobe_end(t, v - level, stop, size, eighth, sigma / math.sqrt(eighth))
+    if end_time is None or not end_time > stop_time:
         return None
     index = int(np.searchsorted(t, end_time, side="right")) - 1
     if index >= n - 1:
@@ -427,15 +417,66 @@ def _missed_half_cycle(
     return index, end_time
 
 
+def _last_lobe_end(
+    t: NDArray, u: NDArray, stop: int, size: int, eighth: int, mean_noise: float
+) -> float | None:
+    """Where the last lobe of ``u`` (the velocity about its rest level) standing out
+    of its mean's noise ``mean_noise`` ends [s] (:func:`_lobes`): half a period after
+    the crossing that starts it, the half period the slope of the crossings between
+    lobes before it against their count (half a block where fewer than two); None
+    where no lobe but the first stands out."""
+    crossings, lobes = _lobes(t, u, stop, size, eighth, mean_noise)
+    found = np.flatnonzero(lobes)
+    if not found.size or found[-1] == 0:
+        return None
+    last = int(found[-1])
+    run = [last - 1]
+    while run[-1] > 0 and lobes[run[-1] - 1]:
+        run.append(run[-1] - 1)
+    between = np.array([crossings[k] for k in reversed(run)])
+    half = 0.25 * size * float(t[-1] - t[0]) / (t.size - 1)
+    if between.size >= 2:
+        half = float(np.polyfit(np.arange(between.size), between, 1)[0])
+    return crossings[last - 1] + half
+
+
+def _missed_alone(
+    t: NDArray, v: NDArray, stop: int, stop_time: float, level: float, sigma: float, size: int
+) -> tuple[int, float] | None:
+    """The end of a last half cycle the threshold missed in a velocity recorded alone,
+    or None (:func:`_missed_half_cycle` without a displacement to show the motion went
+    on: the lobe itself must stand out of the noise of the velocity's mean over an
+    eighth of a period, measured on the rest a block after the stop where the record
+    holds two blocks of it, not taken as white: a coloured noise's mean over many
+    samples is not √samples smaller). Only a lobe starting at the stop (within a
+    quarter period) counts: one more half cycle, the oscillator sticking at its end,
+    which must be followed by rest (no further lobe)."""
+    n = t.size
+    eighth = max(3, round(size / 16.0))
+    start = stop + 1 + size
+    if n - start < 2 * size:
+        return None
+    rest = np.convolve(v[start:] - level, np.full(eighth, 1.0 / eighth), mode="valid")
+    mean_noise = max(sigma / math.sqrt(eighth), float(np.std(rest)))
+    end_time = _last_lobe_end(t, v - level, stop, size, eighth, mean_noise)
+    dt = float(t[-1] - t[0]) / (n - 1)
+    if end_time is None or not end_time > stop_time + 0.125 * size * dt:
+        return None
+    if end_time > stop_time + 0.375 * size * dt:  # more than one half cycle on
+        return None
+    index = int(np.searchsorted(t, end_time, side="right")) - 1
+    return (index, end_time) if index < n - 1 else None
+
+
 def _lobes(
-    t: NDArray, u: NDArray, stop: int, size: int, eighth: int, sigma: float
+    t: NDArray, u: NDArray, stop: int, size: int, eighth: int, mean_noise: float
 ) -> tuple[list[float], NDArray]:
     """The crossings of zero [s] by ``u`` averaged over ``eighth`` samples (centred),
     from a block before sample ``stop`` to three eighths of one after it, a
     crossing within a quarter period of the one before left out (the noise's, near a
     turning point); and per lobe between them (one more than the crossings, the first
     and last open), whether its mean exceeds :data:`MISSED_THRESHOLD` times the
-    mean's white noise ``sigma``/√``eighth``."""
+    mean's noise ``mean_noise`` (white: σ/√``eighth``)."""
     lo = max(0, stop + 1 - size - eighth)
     hi = min(t.size, stop + 1 + size // 4 + size // 8)
     kernel = np.full(eighth, 1.0 / eighth)
@@ -452,7 +493,7 @@ def _lobes(
             crossings.append(tc)
             cut.append(k + 1)
     edges = [0, *cut, s.size]
-    limit = MISSED_THRESHOLD * sigma / math.sqrt(eighth)
+    limit = MISSED_THRESHOLD * mean_noise
     lobes = np.array([bool(np.any(np.abs(s[a:b]) > limit)) for a, b in itertools.pairwise(edges)])
     # the frequency of the lobes' arcs: their crossings' spacing (the mean's bias is
     # about the same at each), else the block's two periods
@@ -749,6 +790,10 @@ def motion_span(
             stop_index = int(np.searchsorted(t, stop_time, side="right")) - 1
         if by_velocity and stop_index is not None:
             fade_time = _fade_time(t, v, stop_index, size, period, tail_start)
+        if by_velocity and fade_time is None and stop_index is not None:
+            later = _missed_alone(t, v, stop_index, stop_time, level, sigma, size)
+            if later is not None:
+                stop_index, stop_time = later
         if recorded and beside is not None and stop_index is not None:
             later = _missed_half_cycle(
                 t,
