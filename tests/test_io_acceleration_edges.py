@@ -95,3 +95,34 @@ def test_the_fit_covers_the_truth_and_says_nothing_wrong(files, name):
         lo, hi = found[key]["interval"]
         assert lo <= truth <= hi, (key, found[key])
     assert not math.isnan(found["zeta"]["mean"])
+
+
+def test_a_mains_line_on_the_acceleration_leaves_the_fade_a_fade(tmp_path):
+    # the slow decay under a 50 Hz line of 2.5 times the noise: the acceleration's
+    # threshold stops 0.1 s before the last swings, where the velocity sees its swings
+    # fade into the noise; taken for the stop, μ_s/μ_k came out 7.3 [1.8, 9.9] where it
+    # is 1, exit 0. The fade is kept: μ_s/μ_k unconstrained, ζ and x_c covered
+    case, seed = CASES["slow"]
+    t, a, _, _ = accelerometer(case, seed)
+    a = a + 2.5 * case.noise * np.sin(2.0 * math.pi * 50.0 * t + 0.3)
+    path = tmp_path / "hum.csv"
+    np.savetxt(
+        path,
+        np.column_stack([t, a]),
+        delimiter=",",
+        header="time_s,acceleration_m_per_s2",
+        comments="",
+    )
+    buf = io.StringIO()
+    with warnings.catch_warnings(), contextlib.redirect_stdout(buf):
+        warnings.simplefilter("ignore")
+        status = main(["fit", str(path), "--json"])
+    assert status == 0
+    found = json.loads(buf.getvalue())["parameters"]
+    for key, truth in (
+        ("zeta", case.zeta),
+        ("friction_displacement", case.friction),
+        ("mu_s_ratio", 1.0),
+    ):
+        lo, hi = found[key]["interval"]
+        assert lo <= truth <= hi, (key, found[key])

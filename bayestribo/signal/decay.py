@@ -1765,15 +1765,19 @@ def _with_edges(
 ) -> MotionSpan:
     """``span`` with its release and end of motion where another channel shows them
     (``edges`` [s], each None to keep the span's; one outside the record is not
-    used): an end so given is the motion's, not a fade."""
+    used). The end is moved only where the span itself ends in a stop: where it finds
+    the oscillation fading into the noise, or going on to the record's end, that is
+    kept (an acceleration under a mains line 2.5 times its noise showed a stop 0.1 s
+    before the last swings, and μ_s/μ_k came out 7.3 [1.8, 9.9] where it is 1: the
+    fade leaves it unconstrained)."""
     release, stop = edges
     changes: dict[str, Any] = {}
     if release is not None and t[0] < release < t[-1]:
         index = int(np.searchsorted(t, release, side="right")) - 1
         changes.update(release_index=index, release_time=float(release))
-    if stop is not None and t[0] < stop < t[-1]:
+    if stop is not None and t[0] < stop < t[-1] and span.motion_ended:
         index = int(np.searchsorted(t, stop, side="right")) - 1
-        changes.update(stop_index=index, stop_time=float(stop), fade_time=None)
+        changes.update(stop_index=index, stop_time=float(stop))
     return replace(span, **changes) if changes else span
 
 

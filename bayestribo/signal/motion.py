@@ -154,6 +154,9 @@ REST_BESIDE = 4
 #: the velocity shows the oscillator moved after the stop :data:`THRESHOLD` found
 #: (:func:`_missed_half_cycle`; at 3, noise at rest reached it within a period).
 MISSED_THRESHOLD = 5.0
+#: Periods after the end its threshold found within which :func:`lobes_after_stop`
+#: looks for last swings under it (a slow rig's last four half cycles of a few σ).
+LOBES_REACH = 3.0
 #: Default excursion threshold, in rest noise standard deviations, that marks motion
 #: when the release and the end of motion are refined (a Gaussian sample exceeds 8σ
 #: with probability 1e-15).
@@ -545,10 +548,13 @@ def lobes_after_stop(
     the threshold was last crossed, several friction displacements out (μ_s/μ_k 9.0
     [6.7, 9.9] where it was 1, exit 0). Such a lobe stands out of the noise averaged
     over an eighth of a period (its mean beyond :data:`MISSED_THRESHOLD` times the
-    mean's white noise ``noise``/√samples; a chance of 6e-7 per window for noise
-    alone): while one does within three quarters of a period after the end, the end
-    moves to the last sample of the last such window (late by an eighth of a period at
-    most, never early: the sticking turning point stays inside the motion).
+    mean's noise: ``noise``/√samples for white noise, a chance of 6e-7 per window for
+    noise alone; the standard deviation of the mean over the rest beyond
+    :data:`LOBES_REACH` periods where that is larger, a noise that is not white): while
+    one does within three quarters of a period after the end, up to
+    :data:`LOBES_REACH` periods after the threshold's, the end moves to the last sample
+    of the last such window (late by an eighth of a period at most, never early: the
+    sticking turning point stays inside the motion).
 
     Parameters
     ----------
@@ -577,10 +583,20 @@ def lobes_after_stop(
     if not noise > 0.0 or stop < 0 or n - stop - 1 < reach + eighth:
         return stop_time
     level = float(np.median(s[stop + 1 :]))
-    limit = MISSED_THRESHOLD * noise / math.sqrt(eighth)
     kernel = np.full(eighth, 1.0 / eighth)
+    # the mean's noise measured on the rest beyond the reach of the lobes looked for
+    # (LOBES_REACH periods after the end), where it holds two periods: a noise that is
+    # not white (mains hum, 1/f) is not √samples smaller in the mean, and its lobes would
+    # carry the end through the rest
+    mean_noise = noise / math.sqrt(eighth)
+    far = stop + 1 + round((LOBES_REACH + 1.0) * period / dt)
+    if n - far >= round(2.0 * period / dt):
+        rest = np.convolve(s[far:] - level, kernel, mode="valid")
+        mean_noise = max(mean_noise, float(np.std(rest)))
+    limit = MISSED_THRESHOLD * mean_noise
+    last = stop + round(LOBES_REACH * period / dt)
     end = stop_time
-    while True:
+    while stop < last:
         window = s[stop + 1 : min(n, stop + 1 + reach)] - level
         if window.size < eighth:
             return end
@@ -592,6 +608,7 @@ def lobes_after_stop(
         if stop >= n - 1:
             return end
         end = float(t[stop])
+    return end
 
 
 def motion_span(
