@@ -33,7 +33,7 @@ from bayestribo.signal.decay import energy_decay
 W = 2 * math.pi * 20.0
 
 
-def _records(xc: float, noise: bool):
+def _records(xc: float, noise: bool, velocity_noise: float = 1.0):
     kw = dict(
         friction=xc * W**2,
         static_ratio=1.0,
@@ -47,7 +47,10 @@ def _records(xc: float, noise: bool):
     )
     scale = 1.0 if noise else 1e-6
     return law_recording(
-        lambda v: 2 * 0.005 * W * v, noise_x=1e-6 * scale, noise_v=1.26e-4 * scale, **kw
+        lambda v: 2 * 0.005 * W * v,
+        noise_x=1e-6 * scale,
+        noise_v=1.26e-4 * scale * velocity_noise,
+        **kw,
     )
 
 
@@ -112,3 +115,17 @@ def test_a_velocity_recorded_alone_ends_at_its_last_half_cycle_too(tmp_path):
         report = check_adequacy(str(path))
     passed = {c["key"]: c["passed"] for c in report.checks}
     assert passed["extinction"] is True, report.extinction.statement
+
+
+def test_a_noisy_velocity_beside_the_displacement_does_not_hide_the_last_half_cycle():
+    # twice the velocity's noise (its threshold then stops inside the half cycle before
+    # the last, where the displacement is near the swing's centre, 3.8 σ from the rest):
+    # the displacement's turning point after it is off the rest, and the end moves on
+    # (was: 35 ms early, a half cycle and more)
+    clean = _records(5.286e-6, noise=False)
+    moving = np.flatnonzero(np.abs(clean.velocity) > 1e-8)
+    run = _records(5.286e-6, noise=True, velocity_noise=2.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        decay = energy_decay(run.time, run.displacement, run.velocity)
+    assert decay.stop_time == pytest.approx(float(clean.time[moving[-1]]), abs=3e-3)

@@ -446,9 +446,10 @@ def _moved(
 ) -> tuple[NDArray, NDArray]:
     """Where the record's end moves from its last excursion beyond the threshold, as
     :func:`bayestribo.signal.motion._missed_half_cycle` moves it: where the displacement
-    there (``at_out``, about the rest; its median over an eighth of a period, noise
-    drawn) is beyond :data:`~bayestribo.signal.motion.DISPLACEMENT_THRESHOLD` times its
-    noise, to the turning point after it, or to the end of the half cycle after that one
+    there or at the turning point after it (``at_out``, ``at_turn``, about the rest; a
+    median over an eighth of a period, noise drawn) is beyond
+    :data:`~bayestribo.signal.motion.DISPLACEMENT_THRESHOLD` times its noise, to that
+    turning point, or to the end of the half cycle after that one
     where its velocity lobe is seen (``lobe``); in either case only where the
     displacement at the new end (``at_turn``, ``at_next``) is within the threshold of
     the rest. Returns the masks of the draws moved to the turning point and to the end
@@ -458,7 +459,10 @@ def _moved(
     noise_y, eighth = gate
     limit = DISPLACEMENT_THRESHOLD * noise_y
     drawn = 1.25 * noise_y / math.sqrt(eighth) * rng.standard_normal(at_out.shape)
-    off = np.abs(at_out + drawn) > limit
+    # the displacement's farthest from the rest from the excursion on: there, or at the
+    # turning point after it
+    farthest = np.where(np.abs(at_out) > np.abs(at_turn), at_out, at_turn)
+    off = np.abs(farthest + drawn) > limit
     to_next = off & lobe & (np.abs(at_next) <= limit)
     to_turn = off & ~lobe & (np.abs(at_turn) <= limit)
     return to_turn, to_next

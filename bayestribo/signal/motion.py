@@ -367,16 +367,17 @@ def _missed_half_cycle(
     """The end of a last half cycle the velocity's threshold missed, or None.
 
     A stuck oscillator rests where it stopped: the displacement recorded beside the
-    velocity stays at its level at the stop. Where its median over an eighth of a
-    period about the stop found is farther than :data:`DISPLACEMENT_THRESHOLD` times
-    its rest noise from the rest level after it (both measured on the rest a block
-    after the stop, past any half cycle missed; the noise of a sample, not the level's
-    standard error, which a noise that wanders — 1/f, a filter's — exceeds), the motion
-    went on: a last half cycle whose velocity peaked below the threshold (a swing of
-    ten displacement σ peaks at five velocity σ at 5 kHz and 20 Hz), which the
-    threshold put into the rest, so that the oscillator seemed stuck at the turning
-    point before it (μ_s/μ_k 3.0 [2.0, 4.0] where it was 1, exit 0); or a last half
-    cycle whose excursion the threshold caught but whose end it could not place.
+    velocity stays at its level from the stop on. Where one of its medians over eighths
+    of a period, from the stop found to three quarters of a period after it, is farther
+    than :data:`DISPLACEMENT_THRESHOLD` times its rest noise from the rest level after
+    it (both measured on the rest a block after the stop, past any half cycle missed;
+    the noise of a sample, not the level's standard error, which a noise that wanders —
+    1/f, a filter's — exceeds), the motion went on: a last half cycle whose velocity
+    peaked below the threshold (a swing of ten displacement σ peaks at five velocity σ
+    at 5 kHz and 20 Hz), which the threshold put into the rest, so that the oscillator
+    seemed stuck at the turning point before it (μ_s/μ_k 3.0 [2.0, 4.0] where it was 1,
+    exit 0); or a last half cycle whose excursion the threshold caught but whose end it
+    could not place.
 
     The velocity averaged over an eighth of a period (a centred mean: it keeps the
     crossing of a line where it is) is cut at its crossings of the rest level into
@@ -393,7 +394,12 @@ def _missed_half_cycle(
     if n - stop - 1 < max(8, size // 4):
         return None
     eighth = max(3, round(size / 16.0))  # an eighth of a period
-    at_stop = float(np.median(x[max(0, stop - eighth // 2) : stop + eighth // 2 + 1]))
+    # the displacement from the stop found on, to the end of the half cycle after it:
+    # its medians over eighths of a period (where the threshold's stop lies inside a
+    # half cycle, the displacement there is near the swing's centre, and the turning
+    # point after it is off the rest)
+    ahead = x[max(0, stop - eighth // 2) : min(n, stop + 1 + size // 4 + size // 8)]
+    chunks = ahead[: ahead.size // eighth * eighth].reshape(-1, eighth)
     # the rest a block after the stop (the block right after holds the half cycle, if
     # one was missed); the block after the stop where the record ends sooner
     start = stop + 1 + size
@@ -405,7 +411,10 @@ def _missed_half_cycle(
         after = np.r_[np.zeros(stop + 1, bool), np.ones(n - stop - 1, bool)]
         sigma_x = block_noise(t, x, after, min(size, n - stop - 1))
         level_x = float(np.median(x[stop + 1 : stop + 1 + size]))
-    if not sigma_x or abs(at_stop - level_x) <= DISPLACEMENT_THRESHOLD * sigma_x:
+    if not sigma_x or not chunks.size:
+        return None
+    off = float(np.max(np.abs(np.median(chunks, axis=1) - level_x)))
+    if off <= DISPLACEMENT_THRESHOLD * sigma_x:
         return None
     end_time = _last_lobe_end(t, v - level, stop, size, eighth, sigma / math.sqrt(eighth))
     if end_time is None or not end_time > stop_time:
