@@ -18,12 +18,16 @@ oscillator), so that sample comes before the stop itself, on a linear spring of 
 with 4 mrad/s of noise by 0.1-0.8 s. The detected end is the last excursion's, moved to
 the root of the velocity's line before it, so the predicted interval is widened by that
 line's reach (or two sample periods, whichever is longer). Where a displacement is
-recorded beside the velocity and it is off its rest at that last excursion, the record
-shows the motion going on, and its end is the end of the half cycle it sees
-(:func:`bayestribo.signal.motion._missed_half_cycle`: the turning point after the
-excursion, or the one after that where the velocity's lobe between them stands out of
+recorded beside the velocity and it is off its rest at that last excursion or at the
+turning point after it, the record shows the motion going on, and its end is the end of
+the half cycle it sees (:func:`bayestribo.signal.motion._missed_half_cycle`: that
+turning point, or the one after it where the velocity's lobe between them stands out of
 its noise averaged over an eighth of a period); the model's end moves the same way
-(:func:`_moved`).
+(:func:`_moved`). A velocity recorded alone ends one half cycle later where that half
+cycle's lobe stands out so (:func:`bayestribo.signal.motion._missed_alone`), and the
+model's end likewise, its lobe judged against the white noise's mean (the record's
+against the mean's noise measured at rest, larger for a coloured noise: the prediction
+may then run half a cycle past the record's end).
 
 On a nonlinear restoring force (a decay whose ``restoring`` is set) the exact model is
 the law's motion on that force (:func:`bayestribo.adequacy.restoring.chains`: the
