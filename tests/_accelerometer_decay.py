@@ -1,12 +1,11 @@
 """An accelerometer's record of a free decay with viscous damping and Coulomb friction,
-integrated with ``solve_ivp`` independently of the package's models.
+from the independent ``solve_ivp`` simulator of ``tests/_law_recording.py``.
 
-x'' = -2ζΩx' - Ω²(x + x_c sgn x'), held at x₀ and released at ``hold``; each half cycle
-(one sign of x') is integrated to its turning point (an event on x' = 0), and the
-motion stops at the first turning point inside the friction band |x| <= x_c (static
-friction equal to kinetic). The acceleration is sampled as an integrating anti-alias
-filter samples it, its mean over each sample interval ((v(t + Δt/2) - v(t - Δt/2))/Δt,
-from the motion solved on a grid of half the step), with white noise.
+x'' = -2ζΩx' - Ω²(x + x_c sgn x'), held at x₀ and released at ``hold``, sticking at the
+first turning point inside the friction band |x| <= x_c (static friction equal to
+kinetic). The acceleration is sampled as an integrating anti-alias filter samples it,
+its mean over each sample interval ((v(t + Δt/2) - v(t - Δt/2))/Δt, from the motion
+recorded at twice the rate with noise of 1e-15), with white noise.
 """
 
 from __future__ import annotations
@@ -15,8 +14,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from _law_recording import law_recording
 from numpy.typing import NDArray
-from scipy.integrate import solve_ivp
 
 
 @dataclass(frozen=True)
@@ -34,50 +33,28 @@ class Decay:
     noise: float = 0.02
 
 
-def _motion(case: Decay, t: NDArray) -> tuple[NDArray, NDArray, float]:
-    """Displacement and velocity at times ``t``, and the time the motion stops [s]."""
-    w = 2.0 * math.pi * case.f0
-    x = np.full(t.size, case.x0)
-    v = np.zeros(t.size)
-    y, t0 = case.x0, case.hold
-    filled = int(np.searchsorted(t, case.hold, side="left"))
-    while filled < t.size:
-        if abs(y) <= case.friction:
-            x[filled:] = y
-            return x, v, t0
-        sgn = -1.0 if y > 0 else 1.0
-
-        def rhs(_t: float, u: NDArray, sgn: float = sgn) -> list[float]:
-            return [u[1], -2.0 * case.zeta * w * u[1] - w * w * (u[0] + sgn * case.friction)]
-
-        def turned(_t: float, u: NDArray) -> float:
-            return u[1]
-
-        turned.terminal, turned.direction = True, -sgn
-        sol = solve_ivp(
-            rhs,
-            (t0, t0 + 1.0 / case.f0),
-            [y, 0.0],
-            method="DOP853",
-            rtol=1e-11,
-            atol=1e-15,
-            events=turned,
-            dense_output=True,
-        )
-        t1 = float(sol.t_events[0][0])
-        stop = int(np.searchsorted(t, t1, side="right"))
-        x[filled:stop], v[filled:stop] = sol.sol(t[filled:stop])
-        filled, y, t0 = stop, float(sol.y_events[0][0][0]), t1
-    return x, v, math.inf
-
-
 def accelerometer(case: Decay, seed: int) -> tuple[NDArray, NDArray, NDArray, float]:
     """Time [s], measured acceleration [m/s²], true velocity [m/s] at those times, and
-    the time the motion stops [s] (inf: it goes on past the record)."""
-    dt = 1.0 / case.rate
-    fine = np.arange(0.0, case.duration + dt, 0.5 * dt)
-    _, v, stopped = _motion(case, fine)
-    t = fine[1:-1:2]  # centres of the sample intervals [k Δt, (k + 1) Δt]
-    a = (v[2::2] - v[0:-2:2])[: t.size] / dt
+    the time the motion stops [s] (to half a sample step; inf: it goes on past the
+    record)."""
+    omega = 2.0 * math.pi * case.f0
+    fine = law_recording(
+        lambda v: 2.0 * case.zeta * omega * v,
+        friction=case.friction * omega**2,
+        static_ratio=1.0,
+        x0=case.x0,
+        frequency_Hz=case.f0,
+        load_N=None,
+        sample_rate_Hz=2.0 * case.rate,
+        noise_x=1e-15,  # the least resolution a run takes: no noise to speak of
+        noise_v=1e-15,
+        rest_before_s=case.hold,
+        duration_s=case.duration - case.hold,
+    )
+    tf, v = fine.time, fine.velocity
+    moving = np.flatnonzero(np.abs(v) > 1e-12)
+    stopped = math.inf if moving[-1] >= v.size - 2 else float(tf[moving[-1] + 1])
+    t = tf[1:-1:2]  # centres of the sample intervals [k Δt, (k + 1) Δt]
+    a = (v[2::2] - v[0:-2:2])[: t.size] * case.rate
     rng = np.random.default_rng(seed)
     return t, a + rng.normal(0.0, case.noise, t.size), v[1:-1:2], stopped

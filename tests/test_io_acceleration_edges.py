@@ -30,11 +30,11 @@ from bayestribo.cli import main
 from bayestribo.io import read_run
 from bayestribo.io.acceleration import motion_edges
 
-#: (record, noise seed): a 60 Hz decay over nine cycles that sticks (its velocity's
-#: offset was said to drift, exit 1, on 2 of seeds 1-6, this one among them); a 20 Hz
-#: decay whose last swings, 2-10 µm, peak at 1.5-8 σ of the acceleration (its offset
-#: said to drift and μ_s/μ_k 4.7 [2.1, 9.6] where it is 1; with the acceleration's stop
-#: but not its lobes, 9.0 [6.7, 9.9], exit 0).
+#: (record, noise seed): a 60 Hz decay over nine cycles that sticks (before the
+#: acceleration's edges, its velocity's offset was said to drift, exit 1, on this seed);
+#: a 20 Hz decay whose last swings, 2-10 µm, peak at 1.5-8 σ of the acceleration (before:
+#: its offset said to drift and μ_s/μ_k 4.8 [1.5, 9.8] where it is 1, exit 1; with the
+#: acceleration's stop but not its lobes, 9.0 [6.7, 9.9] on another draw, exit 0).
 CASES = {
     "fast": (Decay(), 1),
     "slow": (Decay(f0=20.0, zeta=0.005, friction=1e-6, x0=2e-4, hold=0.5, duration=2.5), 3),
@@ -126,3 +126,13 @@ def test_a_mains_line_on_the_acceleration_leaves_the_fade_a_fade(tmp_path):
     ):
         lo, hi = found[key]["interval"]
         assert lo <= truth <= hi, (key, found[key])
+
+
+@pytest.mark.parametrize("bad", ["soon", float("nan"), True, [1.0]])
+def test_an_edge_that_is_not_a_number_is_refused_naming_the_field(bad):
+    from bayestribo.errors import RunFormatError
+
+    with pytest.raises(RunFormatError, match=r"acceleration\.stop_s"):
+        motion_edges({"acceleration": {"release_s": 0.3, "stop_s": bad}})
+    assert motion_edges({"acceleration": {"release_s": 0.3, "stop_s": None}}) == (0.3, None)
+    assert motion_edges({"acceleration": {"column": "a"}}) is None

@@ -436,14 +436,30 @@ def motion_edges(metadata: Mapping[str, Any]) -> tuple[float | None, float | Non
     ----------
     metadata : mapping
         The run's metadata (its ``acceleration`` record).
+
+    Raises
+    ------
+    RunFormatError
+        ``acceleration.release_s`` or ``stop_s`` present but not a finite number (a
+        hand-edited or foreign sidecar).
     """
     record = metadata.get("acceleration") if metadata else None
     if not isinstance(record, Mapping) or ("release_s" not in record and "stop_s" not in record):
         return None
-    edges = tuple(
-        None if record.get(key) is None else float(record[key]) for key in ("release_s", "stop_s")
-    )
-    return None if edges == (None, None) else edges
+    edges: list[float | None] = []
+    for key in ("release_s", "stop_s"):
+        value = record.get(key)
+        if value is None:
+            edges.append(None)
+            continue
+        number = isinstance(value, int | float) and not isinstance(value, bool)
+        if not number or not math.isfinite(value):
+            raise RunFormatError(
+                f"metadata 'acceleration.{key}' (the {key[:-2]} time the acceleration "
+                f"shows [s]): expected a finite number or null, got {value!r}"
+            )
+        edges.append(float(value))
+    return None if edges == [None, None] else (edges[0], edges[1])
 
 
 def _runs(mask: NDArray) -> list[list[int]]:

@@ -429,6 +429,18 @@ def _missed_half_cycle(
     return index, end_time
 
 
+def _mean_noise(rest: NDArray, eighth: int, sigma: float) -> float:
+    """The noise of a channel's mean over ``eighth`` samples: its white noise's,
+    ``sigma``/√``eighth``, or the standard deviation of that mean over ``rest`` (samples
+    at rest, about their level; none: white) where that is larger, a noise that is not
+    white (mains hum, 1/f, an integral's) not being √samples smaller in the mean."""
+    white = sigma / math.sqrt(eighth)
+    if rest.size < 2 * eighth:
+        return white
+    means = np.convolve(rest, np.full(eighth, 1.0 / eighth), mode="valid")
+    return max(white, float(np.std(means)))
+
+
 def _last_lobe_end(
     t: NDArray, u: NDArray, stop: int, size: int, eighth: int, mean_noise: float
 ) -> float | None:
@@ -468,8 +480,7 @@ def _missed_alone(
     start = stop + 1 + size
     if n - start < 2 * size:
         return None
-    rest = np.convolve(v[start:] - level, np.full(eighth, 1.0 / eighth), mode="valid")
-    mean_noise = max(sigma / math.sqrt(eighth), float(np.std(rest)))
+    mean_noise = _mean_noise(v[start:] - level, eighth, sigma)
     end_time = _last_lobe_end(t, v - level, stop, size, eighth, mean_noise)
     dt = float(t[-1] - t[0]) / (n - 1)
     if end_time is None or not end_time > stop_time + 0.125 * size * dt:
@@ -597,11 +608,9 @@ def lobes_after_stop(
     # (LOBES_REACH periods after the end), where it holds two periods: a noise that is
     # not white (mains hum, 1/f) is not √samples smaller in the mean, and its lobes would
     # carry the end through the rest
-    mean_noise = noise / math.sqrt(eighth)
     far = stop + 1 + round((LOBES_REACH + 1.0) * period / dt)
-    if n - far >= round(2.0 * period / dt):
-        rest = np.convolve(s[far:] - level, kernel, mode="valid")
-        mean_noise = max(mean_noise, float(np.std(rest)))
+    rest = s[far:] - level if n - far >= round(2.0 * period / dt) else s[:0]
+    mean_noise = _mean_noise(rest, eighth, noise)
     limit = MISSED_THRESHOLD * mean_noise
     last = stop + round(LOBES_REACH * period / dt)
     end = stop_time
