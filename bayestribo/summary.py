@@ -44,8 +44,11 @@ class ParameterSummary:
     mean, sd, median : float
         In the quantity's own unit.
     interval : tuple of float
-        (low, high): equal-tailed credible interval for posterior samples, or the
-        normal-approximation confidence interval of a classical estimate.
+        (low, high): equal-tailed credible interval for posterior samples (a static
+        friction whose lower quantile lies on the step of its posterior that starts at
+        its prior's end: from that end, :func:`bayestribo.inference.flatness.
+        end_interval`), or the normal-approximation confidence interval of a classical
+        estimate.
     prob : float
         Probability of ``interval``.
     kind : {"posterior", "normal", "bound"}

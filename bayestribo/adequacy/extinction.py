@@ -24,7 +24,9 @@ the half cycle it sees (:func:`bayestribo.signal.motion._missed_half_cycle`: tha
 turning point, or the one after it where the velocity's lobe between them stands out of
 its noise averaged over an eighth of a period); the model's end moves the same way
 (:func:`_moved`). A velocity recorded alone ends one half cycle later where that half
-cycle's lobe stands out so (:func:`bayestribo.signal.motion._missed_alone`), and the
+cycle's lobe stands out so (:func:`bayestribo.signal.motion._missed_alone`), as does
+a velocity whose displacement beside it does not show that half cycle (its turning
+point and rest on one side, within the displacement's threshold of each other), and the
 model's end likewise, its lobe judged against the white noise's mean (the record's
 against the mean's noise measured at rest, larger for a coloured noise: the prediction
 may then run half a cycle past the record's end).
@@ -564,6 +566,10 @@ def _linear_stop(decay: EnergyDecay, draws: ParameterDraws, rng: np.random.Gener
         out[rows[last]] = after[last]
         return out
     to_turn, to_next = _moved(at_out, at_turn, at_next, lobe, gate, rng)
+    # where the displacement does not move it, the velocity's lobe alone does, as it
+    # would a velocity recorded alone (the record's end likewise)
+    last = ~to_turn & ~to_next & lobe & (after >= ends[rows])
     out[rows[to_turn]] = turn[to_turn]
     out[rows[to_next]] = after[to_next]
+    out[rows[last]] = after[last]
     return out

@@ -221,7 +221,7 @@ def _summary(
     it, ``kind`` ``"bound"`` and the interval from the prior's lower end to the bound
     (:func:`~bayestribo.inference.flatness.bound_interval`), never a central interval
     of a prior."""
-    from bayestribo.inference.flatness import bound_interval
+    from bayestribo.inference.flatness import bound_interval, end_interval
 
     out = summarize(values, prob)
     if not (np.isfinite(factor) and factor > 0):
@@ -233,6 +233,13 @@ def _summary(
     if bound is not None:
         out["interval"] = [float(factor * bound[0]), float(factor * bound[1])]
         out["kind"] = "bound"
+        return out
+    try:
+        reach = end_interval(result, parameter, np.asarray(values) / factor, prob)
+    except (KeyError, ValueError, AttributeError):
+        return out
+    if reach is not None:
+        out["interval"] = [float(factor * reach[0]), float(factor * reach[1])]
     return out
 
 

@@ -28,6 +28,7 @@ __all__ = [
     "SPREAD_OF",
     "bound_interval",
     "end_density",
+    "end_interval",
     "is_bound",
     "is_flat",
     "prior_end",
@@ -47,6 +48,12 @@ FLAT_KS = 0.1
 #: edge that is not flat (a torsion wheel's record: 0.67, μ_s/μ_k printed 2.8 [1.1, 4.4]
 #: where only < 4.2 was measured).
 END_DENSITY = 0.5
+#: The static friction's lower quantile lies on the step that starts at its prior's end
+#: (:func:`end_interval`) when the draws' density from that end to the quantile is at least
+#: this share of their density over as wide a span just above the quantile: no rise at
+#: the quantile, one flat step (a density rising from the end as (x - 1) gives 1/3).
+SAME_STEP = 0.5
+
 #: Bins of :func:`end_density`.
 _END_BINS = 10
 
@@ -249,3 +256,83 @@ def bound_interval(
     if spread.shape != x.shape or not np.all(spread > 0):
         return float(x.min()), high
     return float(np.quantile(x * (start / spread), (1 - prob) / 2)), high
+
+
+def end_interval(
+    result: Any, name: str, draws: ArrayLike, prob: float = 0.95
+) -> tuple[float, float] | None:
+    """The interval of probability at least ``prob`` of a static friction whose lower
+    quantile lies on the step of its posterior that starts at its prior's lower end;
+    None otherwise (and for every other quantity).
+
+    The likelihood of μ_s/μ_k is a staircase: the model's motion, and so Π, changes with
+    it only where it crosses the stop ratio |Y_n|/μ(|Y_n|) of a turning point, and is
+    flat in between (:func:`bayestribo.inference.surrogate.stop_ratios`). Where the record
+    cannot tell at which of its last small turning points the oscillator stuck, several
+    steps hold posterior mass, the lowest one starting at the prior's end (μ_s/μ_k = 1);
+    an equal-tailed interval then cuts that step at its lower quantile, and excludes
+    values the data support as well as the quantile itself, the prior's end among them
+    (a 20 Hz accelerometer record whose truth is 1: 3.3 [1.2, 6.0], its density at 1 a
+    third of its highest). The step is found in the draws: their density from the prior's
+    end to the lower quantile is at least :data:`SAME_STEP` of theirs over as wide a span
+    above it (no rise between). The interval then runs from the prior's end (as
+    :func:`bound_interval`'s lower end, for a quantity the sampled parameter sets) to the
+    upper ``(1 + prob) / 2`` quantile: its probability is ``prob`` and the lower tail's.
+    A quantity the data do not constrain at all (:func:`is_bound`) is
+    :func:`bound_interval`'s.
+
+    Parameters
+    ----------
+    result : FitResult
+        A fit (its ``priors`` and ``samples``).
+    name : str
+        The quantity.
+    draws : array_like
+        Its draws (any shape), in the order of the sampled parameter's.
+    prob : float
+        Probability of the equal-tailed interval extended.
+
+    Returns
+    -------
+    (float, float) or None
+        (low, high) in the quantity's unit.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from types import SimpleNamespace as R
+    >>> from bayestribo.inference.priors import PriorSet, Uniform
+    >>> rng = np.random.default_rng(0)
+    >>> steps = np.concatenate([rng.uniform(1.0, 2.0, 600), rng.uniform(2.0, 4.3, 3400)])
+    >>> fit = R(priors=PriorSet({"mu_s_ratio": Uniform(1.0, 10.0)}), samples=lambda n: steps)
+    >>> low, high = end_interval(fit, "mu_s_ratio", steps)
+    >>> float(low), round(float(high), 1)
+    (1.0, 4.2)
+    >>> rising = 1.0 + 3.5 * np.sqrt(rng.uniform(0.0, 1.0, 4000))  # density grows from 1
+    >>> fit = R(priors=PriorSet({"mu_s_ratio": Uniform(1.0, 10.0)}), samples=lambda n: rising)
+    >>> end_interval(fit, "mu_s_ratio", rising) is None
+    True
+    """
+    sampled = SPREAD_OF.get(name, name)
+    if sampled != "mu_s_ratio" or is_bound(result, name):
+        return None
+    start = prior_end(result, name)
+    if start is None:
+        return None
+    spread = np.asarray(result.samples(sampled), dtype=float).ravel()
+    tail = (1.0 - prob) / 2.0
+    low = float(np.quantile(spread, tail))
+    width = low - start
+    if not width > 0.0:
+        return None
+    below = np.count_nonzero(spread <= low)
+    above = np.count_nonzero((spread > low) & (spread <= low + width))
+    if below < SAME_STEP * above:
+        return None
+    x = np.asarray(draws, dtype=float).ravel()
+    high = float(np.quantile(x, 1.0 - tail))
+    if sampled == name:
+        return start, high
+    if spread.shape != x.shape or not np.all(spread > 0):
+        return float(x.min()), high
+    return float(np.quantile(x * (start / spread), tail)), high

@@ -840,6 +840,11 @@ def motion_span(
                 sigma,
                 size,
             )
+            if later is None and fade_time is None:
+                # the displacement's turning point within its threshold of the rest (a
+                # last half cycle on the same side, from between x_c and 2x_c to its
+                # rest): the velocity's lobe alone, as a velocity recorded alone
+                later = _missed_alone(t, v, stop_index, stop_time, level, sigma, size)
             if later is not None:
                 stop_index, stop_time = later
         if stop_index is not None:
