@@ -599,8 +599,11 @@ def run_ensembles(
         the record does not identify (a ridge, not a mode; empty when they do not:
         :func:`bayestribo.inference.identifiability.unidentified_reasons`). Where it
         gives reasons at a check at which the rule needs more steps than the ceiling
-        even at the τ measured so far (which short chains underestimate), the run
-        stops there, not converged, instead of walking the ridge to the ceiling.
+        even at the τ measured so far (which short chains underestimate), or would at
+        the ceiling where τ grows in proportion to the chain (:func:`_ridge_growth`), or
+        where the ensembles' disagreement has not shrunk over a doubling of the steps
+        since the rule was met (:func:`_rhat_stalled`), the run stops there, not
+        converged, instead of walking the ridge to the ceiling.
 
     Returns
     -------
@@ -650,6 +653,8 @@ def run_ensembles(
     span = settings.settle_steps  # the span τ is judged settled over
     extended: int | None = None  # a burn-in extended past a transient
     hopeless: list[str] = []  # why a run on a ridge was stopped before its ceiling
+    # the first check at which the rule was met and the ensembles disagreed
+    stalled_from: tuple[int, int, int, NDArray] | None = None
     skip = 0  # the end of a transient found at the start of the draws (steps)
     floor = 0  # the adaptation phase, never kept (inference/independence.py)
     independence = (0.0, float("nan"))  # the move's weight and expected acceptance
@@ -702,6 +707,7 @@ def run_ensembles(
                 independence = (0.0, independence[1])
                 dropped = floor = steps
                 history, enough, settled, skip, last_rhat = [], False, False, 0, None
+                stalled_from = None
                 tau = np.full(ndim, np.inf)
                 continue
             burn = math.ceil(2 * np.max(tau))
@@ -721,19 +727,26 @@ def run_ensembles(
             history.append(now)
             enough = steps - burn >= multiple * np.max(tau)
             need = burn + multiple * np.max(tau)
-            if unidentified is not None and not enough and need > settings.max_steps:
-                # the rule cannot be met by the ceiling: where the draws show why (a
-                # ridge the record does not identify), the run stops here
-                kept = ensembles.flat(min(burn, steps - 1), 1)[0]
-                unseen = unidentified(kept.reshape(-1, ndim))
-                if unseen:
-                    hopeless = [
+            why = None
+            if unidentified is not None and not enough:
+                if need > settings.max_steps:
+                    why = (
                         f"stopped at {steps} steps: the rule needs at least {need:.0f} "
                         f"(burn-in and {multiple:g} autocorrelation times "
                         f"of {np.max(tau):.0f} steps), beyond the ceiling of "
-                        f"{settings.max_steps}",
-                        *unseen,
-                    ]
+                        f"{settings.max_steps}"
+                    )
+                else:
+                    why = _ridge_growth(history, multiple, settings.max_steps)
+            elif unidentified is not None and stalled_from is not None:
+                why = _rhat_stalled(stalled_from, last_rhat, labels)
+            if why is not None:
+                # the rule cannot be met by the ceiling: where the draws show why (a
+                # ridge the record does not identify), the run stops here
+                kept = ensembles.flat(min(burn, steps - 1), 1)[0]
+                unseen = unidentified(kept.reshape(-1, ndim)) if unidentified else []
+                if unseen:
+                    hopeless = [why, *unseen]
                     break
             if bar is not None:
                 need = int(burn + multiple * np.max(tau))
@@ -753,6 +766,8 @@ def run_ensembles(
                     last_rhat = past
                     extended = past[1]
                     break
+                if stalled_from is None:
+                    stalled_from = last_rhat
     finally:
         if bar is not None:
             bar.close()
@@ -812,6 +827,73 @@ def run_ensembles(
         independence=independence[0],
         independence_acceptance=independence[1],
         independence_dropped=dropped,
+    )
+
+
+#: τ grows in proportion to the chain (a ridge's random walk) when it grew as the steps
+#: to at least this power over their last doubling (:func:`_ridge_growth`); a posterior
+#: settling to its τ grows slower (a real ridge that converged: 0.6-0.75 at its worst).
+RIDGE_POWER = 0.8
+#: ... and only from this many steps on (a start's transient grows τ faster, early).
+RIDGE_MIN_STEPS = 2000
+#: The ensembles' disagreement has stalled when max(R-hat - 1) is still at least this
+#: share of its value where the rule was first met, twice the steps on (:func:`_rhat_stalled`).
+RHAT_STALLED = 0.8
+
+
+def _ridge_growth(history: Sequence[TauCheck], multiple: float, ceiling: int) -> str | None:
+    """Why the rule cannot be met by ``ceiling`` where τ grows with the chain, or None.
+
+    On a ridge the record does not identify the walkers' random walk has no τ of its
+    own: the estimate grows with the chain, and at the ceiling's length the rule (burn-in
+    of 2τ and ``multiple`` τ) needs more than the ceiling whenever τ is more than a
+    ``1 / (2 + multiple)`` share of the chain. Where the last check's τ grew as the steps
+    to at least :data:`RIDGE_POWER` since the check at half its steps or fewer (from
+    :data:`RIDGE_MIN_STEPS` on), τ is carried to the ceiling at that power; None where
+    the rule would still be met there (or τ settles)."""
+    if len(history) < 2 or history[-1].steps < RIDGE_MIN_STEPS:
+        return None
+    now = history[-1]
+    earlier = [h for h in history[:-1] if h.steps <= now.steps / 2]
+    if not earlier:
+        return None
+    then = earlier[-1]
+    t_now, t_then = float(np.max(now.tau)), float(np.max(then.tau))
+    if not (t_then > 0.0 and t_now > t_then):
+        return None
+    power = math.log(t_now / t_then) / math.log(now.steps / then.steps)
+    if power < RIDGE_POWER:
+        return None
+    at_ceiling = t_now * (ceiling / now.steps) ** min(power, 1.0)
+    need = (2.0 + multiple) * at_ceiling
+    if need <= ceiling:
+        return None
+    return (
+        f"stopped at {now.steps} steps: the autocorrelation time grows with the chain "
+        f"({t_then:.0f} steps at {then.steps}, {t_now:.0f} at {now.steps}), as on a "
+        f"ridge; at that rate the rule (burn-in and {multiple:g} autocorrelation times) "
+        f"would need {need:.0f} steps at the ceiling of {ceiling}"
+    )
+
+
+def _rhat_stalled(
+    first: tuple[int, int, int, NDArray],
+    last: tuple[int, int, int, NDArray] | None,
+    labels: Sequence[str],
+) -> str | None:
+    """Why the ensembles will not agree by the ceiling, or None: at twice the steps
+    at which the rule was first met with R-hat over its bound (``first``), the largest
+    R-hat - 1 (``last``) still at least :data:`RHAT_STALLED` of what it was there."""
+    if last is None or last[0] < 2 * first[0]:
+        return None
+    was, now = float(np.max(first[3]) - 1.0), float(np.max(last[3]) - 1.0)
+    if not (was > 0.0 and now >= RHAT_STALLED * was):
+        return None
+    worst = labels[int(np.argmax(last[3]))]
+    return (
+        f"stopped at {last[0]} steps: the ensembles still disagree (R-hat of {worst} "
+        f"{1.0 + now:.3f}, {1.0 + was:.3f} at {first[0]} steps, where the autocorrelation "
+        "rule was first met), as on a ridge"
     )
 
 
