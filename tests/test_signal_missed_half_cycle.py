@@ -54,6 +54,24 @@ def _records(xc: float, noise: bool, velocity_noise: float = 1.0):
     )
 
 
+def _covers_ratio_and_passes_the_end(path) -> None:
+    """The user's command on ``path``: exit 0, μ_s/μ_k = 1 inside its interval; and the
+    adequacy checks' end of motion passes (the predicted end moves as the record's)."""
+    from bayestribo.adequacy import check_adequacy
+
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        status = main(["fit", str(path), "--json"])
+    assert status == 0
+    lo, hi = json.loads(buf.getvalue())["parameters"]["mu_s_ratio"]["interval"]
+    assert lo <= 1.0 <= hi
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        report = check_adequacy(str(path))
+    passed = {c["key"]: c["passed"] for c in report.checks}
+    assert passed["extinction"] is True, report.extinction.statement
+
+
 @pytest.mark.parametrize(("xc", "swing_um"), [(5.286e-6, 10.0), (5.4e-6, 14.4)])
 def test_the_end_of_motion_is_the_last_half_cycles_not_the_one_before(xc, swing_um):
     clean = _records(xc, noise=False)
@@ -99,22 +117,9 @@ def test_a_velocity_recorded_alone_ends_at_its_last_half_cycle_too(tmp_path):
     full = _records(5.286e-6, noise=True)
     path = tmp_path / "velocity.csv"
     write_run(Run(full.time, None, full.velocity, metadata=dict(full.metadata)), path)
-    buf = io.StringIO()
-    with contextlib.redirect_stdout(buf):
-        status = main(["fit", str(path), "--json"])
-    assert status == 0
-    found = json.loads(buf.getvalue())["parameters"]
-    lo, hi = found["mu_s_ratio"]["interval"]
-    assert lo <= 1.0 <= hi
-    # and the adequacy checks' predicted end of motion moves with it (its model's last
-    # half cycle seen as the record's is): the end of motion passes
-    from bayestribo.adequacy import check_adequacy
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        report = check_adequacy(str(path))
-    passed = {c["key"]: c["passed"] for c in report.checks}
-    assert passed["extinction"] is True, report.extinction.statement
+    # covered, and the adequacy checks' predicted end of motion moves with it (its
+    # model's last half cycle seen as the record's is): the end of motion passes
+    _covers_ratio_and_passes_the_end(path)
 
 
 def test_a_noisy_velocity_beside_the_displacement_does_not_hide_the_last_half_cycle():
@@ -166,18 +171,4 @@ def test_a_last_half_cycle_the_displacement_does_not_show_is_found_in_the_veloci
     assert decay.stop_time == pytest.approx(float(clean.time[moving[-1]]), abs=3e-3)
     path = tmp_path / "same_side.csv"
     write_run(run, path)
-    buf = io.StringIO()
-    with contextlib.redirect_stdout(buf):
-        status = main(["fit", str(path), "--json"])
-    assert status == 0
-    found = json.loads(buf.getvalue())["parameters"]
-    lo, hi = found["mu_s_ratio"]["interval"]
-    assert lo <= 1.0 <= hi
-    # the predicted end of motion moves as the record's does: the check passes
-    from bayestribo.adequacy import check_adequacy
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        report = check_adequacy(str(path))
-    passed = {c["key"]: c["passed"] for c in report.checks}
-    assert passed["extinction"] is True, report.extinction.statement
+    _covers_ratio_and_passes_the_end(path)

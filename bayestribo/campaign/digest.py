@@ -220,26 +220,21 @@ def _summary(
     own (:meth:`bayestribo.inference.FitResult.summary`): where the data do not constrain
     it, ``kind`` ``"bound"`` and the interval from the prior's lower end to the bound
     (:func:`~bayestribo.inference.flatness.bound_interval`), never a central interval
-    of a prior."""
-    from bayestribo.inference.flatness import bound_interval, end_interval
+    of a prior; a static friction whose lowest step starts at its prior's end, its
+    interval from there (:func:`~bayestribo.inference.flatness.prior_end_interval`)."""
+    from bayestribo.inference.flatness import prior_end_interval
 
     out = summarize(values, prob)
     if not (np.isfinite(factor) and factor > 0):
         return out
     try:
-        bound = bound_interval(result, parameter, np.asarray(values) / factor, prob)
+        from_end = prior_end_interval(result, parameter, np.asarray(values) / factor, prob)
     except (KeyError, ValueError, AttributeError):
         return out
-    if bound is not None:
-        out["interval"] = [float(factor * bound[0]), float(factor * bound[1])]
-        out["kind"] = "bound"
-        return out
-    try:
-        reach = end_interval(result, parameter, np.asarray(values) / factor, prob)
-    except (KeyError, ValueError, AttributeError):
-        return out
-    if reach is not None:
-        out["interval"] = [float(factor * reach[0]), float(factor * reach[1])]
+    if from_end is not None:
+        (low, high), kind = from_end
+        out["interval"] = [float(factor * low), float(factor * high)]
+        out["kind"] = kind
     return out
 
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
     "END_DENSITY",
@@ -32,6 +32,7 @@ __all__ = [
     "is_bound",
     "is_flat",
     "prior_end",
+    "prior_end_interval",
     "prior_flatness",
 ]
 
@@ -248,14 +249,21 @@ def bound_interval(
     start = prior_end(result, name)
     assert start is not None  # is_bound
     x = np.asarray(draws, dtype=float).ravel()
-    high = float(np.quantile(x, prob))
+    return _lower_end(result, name, x, start, (1 - prob) / 2), float(np.quantile(x, prob))
+
+
+def _lower_end(result: Any, name: str, x: NDArray, start: float, tail: float) -> float:
+    """The lower end of an interval from the prior's end ``start`` of the parameter that
+    sets ``name``'s spread: ``start`` itself for that parameter; for a quantity it
+    multiplies (μ_s = (μ_s/μ_k) μ_k), the lower ``tail`` quantile of the quantity at the
+    prior's end, ``x`` its draws."""
     sampled = SPREAD_OF.get(name, name)
     if sampled == name:
-        return start, high
+        return start
     spread = np.asarray(result.samples(sampled), dtype=float).ravel()
     if spread.shape != x.shape or not np.all(spread > 0):
-        return float(x.min()), high
-    return float(np.quantile(x * (start / spread), (1 - prob) / 2)), high
+        return float(x.min())
+    return float(np.quantile(x * (start / spread), tail))
 
 
 def end_interval(
@@ -330,9 +338,18 @@ def end_interval(
     if below < SAME_STEP * above:
         return None
     x = np.asarray(draws, dtype=float).ravel()
-    high = float(np.quantile(x, 1.0 - tail))
-    if sampled == name:
-        return start, high
-    if spread.shape != x.shape or not np.all(spread > 0):
-        return float(x.min()), high
-    return float(np.quantile(x * (start / spread), tail)), high
+    return _lower_end(result, name, x, start, tail), float(np.quantile(x, 1.0 - tail))
+
+
+def prior_end_interval(
+    result: Any, name: str, draws: ArrayLike, prob: float = 0.95
+) -> tuple[tuple[float, float], str] | None:
+    """The interval of ``name`` that runs from its prior's lower end, and its kind:
+    :func:`bound_interval`'s (``"bound"``) for a quantity the data do not constrain,
+    else :func:`end_interval`'s (``"posterior"``) for a static friction whose lowest step
+    starts there; None where the equal-tailed interval stands."""
+    bound = bound_interval(result, name, draws, prob)
+    if bound is not None:
+        return bound, "bound"
+    reach = end_interval(result, name, draws, prob)
+    return None if reach is None else (reach, "posterior")

@@ -324,15 +324,15 @@ class FitResult:
         gives it: equal-tailed, or, for a quantity the data do not constrain, from its
         prior's lower end to the one-sided bound
         (:func:`~bayestribo.inference.flatness.bound_interval`)."""
-        from bayestribo.inference.flatness import bound_interval, end_interval
+        from bayestribo.inference.flatness import prior_end_interval
 
         check_prob(prob)
         draws = self.samples(name)
         fit = SimpleNamespace(priors=self.priors, samples=self.samples)
-        bound = bound_interval(fit, name, draws, prob)
-        if bound is None:
-            bound = end_interval(fit, name, draws, prob)
-        return bound if bound is not None else ParameterSummary.from_samples(draws, prob).interval
+        from_end = prior_end_interval(fit, name, draws, prob)
+        if from_end is not None:
+            return from_end[0]
+        return ParameterSummary.from_samples(draws, prob).interval
 
     def _summary_names(self) -> list[str]:
         """Every quantity of the posterior group, in the order of the summaries: those
@@ -404,7 +404,7 @@ class FitResult:
             If ``prob`` is not in (0, 1).
         """
         check_prob(prob)
-        from bayestribo.inference.flatness import bound_interval, end_interval
+        from bayestribo.inference.flatness import prior_end_interval
 
         n_walkers = self.diagnostics.get("n_walkers")
         # the priors read once (each reading parses them), the draws as they are
@@ -413,15 +413,11 @@ class FitResult:
         for name, q in self.quantity_info().items():
             draws = self._chains(name)
             s = QuantitySummary.of(q, draws, prob, n_walkers)
-            bound = bound_interval(fit, name, draws, prob)
-            if bound is not None:  # the prior's, up to a bound: never a central interval
-                s = dataclasses.replace(s, interval=bound, kind="bound")
-            else:
-                # a static friction whose lowest step starts at the prior's end: the
-                # interval from that end (inference/flatness.py, end_interval)
-                reach = end_interval(fit, name, draws, prob)
-                if reach is not None:
-                    s = dataclasses.replace(s, interval=reach)
+            # the prior's, up to a bound (never a central interval), or a static
+            # friction's from the prior's end where its lowest step starts there
+            from_end = prior_end_interval(fit, name, draws, prob)
+            if from_end is not None:
+                s = dataclasses.replace(s, interval=from_end[0], kind=from_end[1])
             out[name] = s
         return out
 
